@@ -1,0 +1,266 @@
+"""Gauss-Newton / Levenberg-Marquardt least squares: the engine every solver uses.
+
+The engine adjusts a *functional model* ``l + v = f(x)`` with weights ``P = diag(1/σ²)``.
+A problem supplies ``model(x) -> (f, J)`` with f of shape (n,) and J of shape (n, u)
+(dense ndarray or ``scipy.sparse``). The engine iterates
+
+    N Δx = Jᵀ P (l − f),   N = Jᵀ P J (+ λ diag N for Levenberg-Marquardt)
+
+until the corrections are negligible against the parameters' own precision, then
+computes σ̂0, the cofactor matrix, redundancy numbers and normalised residuals.
+Large block problems use the Schur-complement path in :mod:`orientviz.adjust.normal`
+and return the same :class:`~orientviz.adjust.result.Adjustment`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse as sp
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import InputError, NotDeterminableError
+from .rank import raise_if_singular
+from .result import Adjustment, Iteration
+
+F64 = NDArray[np.float64]
+Model = Callable[[F64], tuple[F64, "F64 | sp.spmatrix"]]
+
+#: Dense cofactor matrices are computed up to this many unknowns.
+DENSE_LIMIT: int = 3000
+
+
+def _normal(J, p: F64, r: F64):
+    if sp.issparse(J):
+        JP = J.T.multiply(p) if hasattr(J.T, "multiply") else J.T @ sp.diags(p)
+        JP = sp.csr_matrix(JP)
+        return (JP @ J).toarray() if J.shape[1] <= DENSE_LIMIT else sp.csc_matrix(JP @ J), JP @ r
+    JP = J.T * p
+    return JP @ J, JP @ r
+
+
+def _solve(N, b: F64, names: list[str], context: str) -> F64:
+    if sp.issparse(N):
+        from scipy.sparse.linalg import splu
+
+        try:
+            return splu(sp.csc_matrix(N)).solve(b)
+        except RuntimeError:
+            raise_if_singular(N.toarray(), names, context)
+            raise
+    try:
+        c, low = scipy.linalg.cho_factor(N, check_finite=False)
+        x = scipy.linalg.cho_solve((c, low), b, check_finite=False)
+        if np.all(np.isfinite(x)):
+            # guard against near-singular matrices Cholesky happens to factor
+            d = np.sqrt(np.abs(np.diag(N)))
+            d[d == 0] = 1.0
+            if np.linalg.cond(N / np.outer(d, d)) < 1e12:
+                return x
+    except (np.linalg.LinAlgError, scipy.linalg.LinAlgError):
+        pass
+    raise_if_singular(N, names, context)
+    return np.linalg.lstsq(N, b, rcond=None)[0]
+
+
+def _step(model, x, l, p, N, b, lam, cost, free_idx, u_all, upd, free_names, context):
+    """One Gauss-Newton step, or a Levenberg-Marquardt step with λ adapted until the cost drops."""
+    diagN = N.diagonal() if sp.issparse(N) else np.diag(N)
+    while True:
+        if lam > 0:
+            Nd = N + (sp.diags(lam * diagN) if sp.issparse(N) else np.diag(lam * diagN))
+        else:
+            Nd = N
+        dxf = _solve(Nd, b, free_names, context)
+        dx = np.zeros(u_all)
+        dx[free_idx] = dxf
+        x_try = upd(x, dx)
+        f_try, J_try = model(x_try)
+        r_try = l - f_try
+        c_try = float(r_try @ (p * r_try))
+        if lam == 0:
+            return dx, dxf, x_try, f_try, J_try, r_try, c_try, lam
+        if (np.isfinite(c_try) and c_try <= cost) or lam > 1e10:
+            return dx, dxf, x_try, f_try, J_try, r_try, c_try, max(lam / 10.0, 1e-12)
+        lam *= 10.0
+
+
+def gauss_newton(
+    model: Model,
+    x0: ArrayLike,
+    observations: ArrayLike,
+    sigma: ArrayLike = 1.0,
+    *,
+    names: list[str] | None = None,
+    blocks: dict[str, slice] | None = None,
+    obs_labels: list[str] | None = None,
+    fixed: ArrayLike | None = None,
+    damping: str = "none",
+    lambda0: float = 1e-3,
+    max_iter: int = 50,
+    tol: float = 1e-6,
+    xtol: ArrayLike | None = None,
+    stop: Callable[[Iteration, Iteration], bool] | None = None,
+    update: Callable[[F64, F64], F64] | None = None,
+    precision: bool = True,
+    context: str = "",
+) -> Adjustment:
+    """Adjust ``l + v = f(x)`` by Gauss-Newton, optionally damped (Levenberg-Marquardt).
+
+    Parameters
+    ----------
+    model : callable
+        ``model(x) -> (f, J)``: computed observations (n,) and Jacobian (n, u), dense
+        or sparse, in the observations' units per parameter unit.
+    x0 : array_like, shape (u,)
+        Approximate values.
+    observations : array_like, shape (n,)
+        Observed values l.
+    sigma : float or array_like, shape (n,)
+        A-priori standard deviations (weights 1/σ²), same units as l.
+    names : list of str, optional
+        Parameter names for reports and diagnostics (default ``p0, p1, …``).
+    blocks : dict of str to slice, optional
+        Named parameter groups, copied into the result.
+    obs_labels : list of str, optional
+        A label per observation.
+    fixed : array_like of bool, shape (u,), optional
+        Parameters held at their approximate values.
+    damping : {"none", "lm"}
+        Pure Gauss-Newton or Levenberg-Marquardt (Marquardt's diagonal scaling).
+    lambda0 : float
+        Initial λ for ``"lm"``.
+    max_iter : int
+        Maximum number of steps.
+    tol : float
+        Stop when every |Δx_i| < tol · σ_i, σ_i = √(N⁻¹)_ii the parameter's a-priori
+        standard deviation (a parameter-based rule: the step no longer changes anything
+        measurable).
+    xtol : array_like, shape (u,), optional
+        Absolute thresholds per parameter instead of ``tol`` (e.g. 0.5 mm, 1 cc).
+    stop : callable, optional
+        ``stop(previous, current) -> bool``, a custom stopping rule (e.g. a paper's).
+    update : callable, optional
+        ``update(x, dx) -> x_new`` (default ``x + dx``).
+    precision : bool
+        Compute cofactors, redundancy numbers and normalised residuals.
+    context : str
+        Prefix for error messages (e.g. the task's name).
+
+    Returns
+    -------
+    Adjustment
+
+    Raises
+    ------
+    NotDeterminableError
+        If the normal matrix is singular; the message names the parameters involved.
+    """
+    x = np.array(x0, dtype=float).reshape(-1)
+    l = np.asarray(observations, dtype=float).reshape(-1)
+    n, u_all = l.shape[0], x.shape[0]
+    s = np.broadcast_to(np.asarray(sigma, dtype=float), (n,)).copy()
+    if not np.all(np.isfinite(s)) or np.any(s <= 0):
+        raise InputError("expected positive finite a-priori σ for every observation")
+    if not np.all(np.isfinite(x)):
+        raise InputError("expected finite approximate values, got NaN or inf")
+    if not np.all(np.isfinite(l)):
+        raise InputError("expected finite observations, got NaN or inf")
+    p = 1.0 / s**2
+    names = list(names) if names is not None else [f"p{i}" for i in range(u_all)]
+    free = np.ones(u_all, bool) if fixed is None else ~np.asarray(fixed, bool).reshape(-1)
+    free_idx = np.flatnonzero(free)
+    free_names = [names[i] for i in free_idx]
+    upd = update or (lambda a, b: a + b)
+    xt = None if xtol is None else np.broadcast_to(np.asarray(xtol, float), (u_all,))[free_idx]
+
+    f, J = model(x)
+    r = l - f
+    cost = float(r @ (p * r))
+    dof = n - free_idx.size
+
+    def s0(c: float) -> float:
+        return float(np.sqrt(c / dof)) if dof > 0 else float("nan")
+
+    history = [Iteration(0, x.copy(), None, s0(cost), cost)]
+    lam = lambda0 if damping == "lm" else 0.0
+    converged, reason = False, f"reached the maximum of {max_iter} iterations"
+    if damping not in ("none", "lm"):
+        raise InputError(f"expected damping 'none' or 'lm', got {damping!r}")
+    N = None
+    for it in range(1, max_iter + 1):
+        Jf = J[:, free_idx]
+        N, b = _normal(Jf, p, r)
+        if it == 1:
+            dense = N.toarray() if sp.issparse(N) else N
+            if dense.shape[0] <= DENSE_LIMIT:
+                raise_if_singular(dense, free_names, context)
+        try:
+            step = _step(model, x, l, p, N, b, lam, cost, free_idx, u_all, upd, free_names, context)
+        except NotDeterminableError as exc:
+            if it == 1:
+                raise
+            reason = f"diverged: the normal matrix became singular in iteration {it} ({exc})"
+            break
+        dx, dxf, x_try, f_try, J_try, r_try, c_try, lam = step
+        if not np.all(np.isfinite(f_try)):
+            reason = f"the model became undefined (NaN/inf) in iteration {it}"
+            break
+        diagN = N.diagonal() if sp.issparse(N) else np.diag(N)
+        sig_apriori = 1.0 / np.sqrt(np.where(diagN > 0, diagN, np.inf))
+        rel = np.abs(dxf) / np.where(sig_apriori > 0, sig_apriori, 1.0)
+        x, f, J, r, cost = x_try, f_try, J_try, r_try, c_try
+        rec = Iteration(it, x.copy(), dx, s0(cost), cost, lam, float(rel.max(initial=0.0)))
+        history.append(rec)
+        if stop is not None:
+            if stop(history[-2], rec):
+                converged, reason = True, f"the custom stopping rule was met after {it} iterations"
+                break
+        elif xt is not None:
+            if np.all(np.abs(dxf) <= xt):
+                converged, reason = True, f"all corrections below xtol after {it} iterations"
+                break
+        elif rel.max(initial=0.0) < tol:
+            converged = True
+            reason = f"corrections below {tol:g} σ after {it} iterations"
+            break
+    result = Adjustment(
+        x=x,
+        names=names,
+        sigma0=s0(cost),
+        redundancy=dof,
+        residuals=-r,
+        sigma_obs=s,
+        converged=converged,
+        reason=reason,
+        history=history,
+        blocks=dict(blocks or {}),
+        obs_labels=obs_labels,
+    )
+    if precision:
+        add_precision(result, J[:, free_idx], p, free_idx, u_all)
+    return result
+
+
+def add_precision(result: Adjustment, Jf, p: F64, free_idx: NDArray[np.int64], u_all: int) -> None:
+    """Fill cofactors, redundancy numbers and normalised residuals of a dense problem."""
+    if free_idx.size > DENSE_LIMIT:
+        return
+    Jd = Jf.toarray() if sp.issparse(Jf) else np.asarray(Jf)
+    N = (Jd.T * p) @ Jd
+    try:
+        Qf = scipy.linalg.cho_solve(scipy.linalg.cho_factor(N), np.eye(N.shape[0]))
+    except (np.linalg.LinAlgError, scipy.linalg.LinAlgError):
+        Qf = np.linalg.pinv(N)
+    Q = np.zeros((u_all, u_all))
+    Q[np.ix_(free_idx, free_idx)] = Qf
+    result.cofactor = Q
+    # redundancy numbers r_i = 1 − p_i (J Q Jᵀ)_ii
+    h = np.einsum("ij,jk,ik->i", Jd, Qf, Jd) * p
+    rn = np.clip(1.0 - h, 0.0, 1.0)
+    result.redundancy_numbers = rn
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w = result.residuals / (result.sigma_obs * np.sqrt(rn))
+    result.normalized_residuals = np.where(rn > 1e-10, w, np.nan)

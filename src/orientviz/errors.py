@@ -1,0 +1,74 @@
+"""The exceptions orientviz raises on purpose.
+
+* :class:`InputError` — the input is wrong (a file, a shape, an id). The command line
+  prints its one-line message and exits with code 2.
+* :class:`AdjustmentError` — the input is well formed but the adjustment cannot be
+  done: a datum defect, parameters that are not determinable, a breakdown. Exit code 3.
+
+Both derive from :class:`OrientvizError`; :class:`InputError` is also a ``ValueError``
+so that ``check_*`` validators can be caught either way.
+"""
+
+from __future__ import annotations
+
+
+class OrientvizError(Exception):
+    """Base class of orientviz's deliberate errors."""
+
+    exit_code = 1
+
+
+class InputError(OrientvizError, ValueError):
+    """Bad input: names the source, the place and what is wrong.
+
+    Parameters
+    ----------
+    message : str
+        What is wrong, e.g. ``"expected 3 coordinates, got 2"``.
+    source : str, optional
+        The file (or other source) the input came from.
+    where : str, optional
+        The place inside it, e.g. ``"observations[12].x"`` or ``"line 7"``.
+    """
+
+    exit_code = 2
+
+    def __init__(self, message: str, source: str | None = None, where: str | None = None):
+        self.message = message
+        self.source = source
+        self.where = where
+        super().__init__(self.one_line())
+
+    def one_line(self) -> str:
+        """``"file: place: message"``, omitting what is unknown."""
+        parts = [p for p in (self.source, self.where) if p]
+        return ": ".join(parts + [self.message])
+
+
+class AdjustmentError(OrientvizError):
+    """The adjustment could not be carried out (exit code 3)."""
+
+    exit_code = 3
+
+
+class NotDeterminableError(AdjustmentError):
+    """Some parameters are not determinable from the observations.
+
+    Parameters
+    ----------
+    message : str
+        Explanation for the user.
+    parameters : list of str
+        Names of the parameters involved in the rank defect.
+    defect : int
+        Number of missing ranks (e.g. 7 for a free 3D network).
+    """
+
+    def __init__(self, message: str, parameters: list[str] | None = None, defect: int = 0):
+        self.parameters = list(parameters or [])
+        self.defect = int(defect)
+        super().__init__(message)
+
+
+class DatumDefectError(NotDeterminableError):
+    """The datum is not defined: translation, rotation or scale are free."""
