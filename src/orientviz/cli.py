@@ -51,6 +51,22 @@ def _parser() -> argparse.ArgumentParser:
     v.add_argument("--port", type=int, default=8080)
     v.add_argument("--export", metavar="FILE.html", default=None)
 
+    b = sub.add_parser(
+        "import-bal",
+        help="convert a BAL file to an orientviz problem file",
+        epilog="example: orientviz import-bal problem.txt -o block.json",
+    )
+    b.add_argument("file")
+    b.add_argument("-o", "--output", required=True)
+
+    c = sub.add_parser(
+        "import-colmap",
+        help="convert a COLMAP text model to a problem file",
+        epilog="example: orientviz import-colmap sparse/0 -o block.json",
+    )
+    c.add_argument("directory")
+    c.add_argument("-o", "--output", required=True)
+
     r = sub.add_parser(
         "reproduce",
         help="print a paper's table beside orientviz's result",
@@ -80,9 +96,32 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
-def _not_yet(name: str) -> int:
-    print(f"orientviz {name}: not yet available in this version", file=sys.stderr)
-    return 2
+#: command → (module, function); each function takes the parsed arguments, returns an exit code
+COMMANDS: dict[str, tuple[str, str]] = {
+    "solve": ("orientviz.io.solve", "run_from_cli"),
+    "view": ("orientviz.viewer.app", "run_from_cli"),
+    "import-bal": ("orientviz.io.bal", "run_from_cli"),
+    "import-colmap": ("orientviz.io.colmap", "run_from_cli"),
+}
+
+
+def _dispatch(args: argparse.Namespace) -> int:
+    import importlib
+
+    module, func = COMMANDS[args.command]
+    try:
+        mod = importlib.import_module(module)
+    except ModuleNotFoundError as exc:
+        if exc.name and exc.name.startswith("orientviz"):
+            print(f"orientviz {args.command}: not yet available in this version", file=sys.stderr)
+            return 2
+        print(
+            f"orientviz {args.command}: missing dependency {exc.name!r}; "
+            'install with: pip install -e ".[all]"',
+            file=sys.stderr,
+        )
+        return 2
+    return int(getattr(mod, func)(args))
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -91,10 +130,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         if args.command == "reproduce":
             return _cmd_reproduce(args)
-        if args.command == "solve":
-            return _not_yet("solve")
-        if args.command == "view":
-            return _not_yet("view")
+        if args.command in COMMANDS:
+            return _dispatch(args)
         _parser().print_help()
         return 0
     except OrientvizError as exc:
