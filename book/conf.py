@@ -1,5 +1,5 @@
-"""Sphinx configuration of the orientviz book (built offline: `python -m orientviz.book` or
-`sphinx-build -b html book book/_build/html`).
+"""Sphinx configuration of the orientviz book, built offline with
+`python -m sphinx -b html book book/_build/html`.
 
 The lesson notebooks live in ../notebooks; they are copied into lessons/ before each
 build and executed by myst-nb, so the book always shows fresh results. Math is rendered
@@ -33,7 +33,7 @@ extensions = [
     "sphinx-mathjax-offline",
 ]
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
-source_suffix = {".md": "myst-nb", ".ipynb": "myst-nb"}
+source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
 exclude_patterns = ["_build", "**.ipynb_checkpoints", "jupyter_execute"]
 
 # Execute every lesson during the build; a failing cell fails the build and names it.
