@@ -1,0 +1,407 @@
+"""COLMAP text models (cameras.txt, images.txt, points3D.txt) ↔ :class:`~orientviz.model.Block`.
+
+Conventions
+-----------
+COLMAP stores world → camera poses ``X_cam = R_cw X + t`` with quaternion
+``(qw, qx, qy, qz)``, a camera frame with x right, y *down*, z forward, and pixel
+coordinates with the origin at the upper-left corner of the image (the centre of the
+first pixel at (0.5, 0.5)). orientviz uses the photogrammetric frame (x right, y *up*,
+viewing along −z), image coordinates in mm and R image → object. Hence
+
+    R_orientviz = R_cwᵀ · diag(1, −1, −1),   X0 = −R_cwᵀ t,
+    x_mm = (u − cx) · p,   y_mm = −(v − cy) · p,   c = f · p,
+
+with a nominal pixel size ``p`` in mm (default 0.01 mm = 10 µm; it only scales image
+units, the adjustment is unchanged). Lens distortion of the COLMAP camera models
+(SIMPLE_RADIAL, RADIAL, OPENCV) is removed from the observations at import (iterative
+inversion), so the Block holds distortion-free image coordinates; the parameters are
+kept in ``block.meta["colmap_cameras"]`` and restored on export. Angles come out in the
+block's sequence (ω-φ-κ by default).
+
+Broken files raise :class:`~orientviz.errors.InputError` naming the file and line.
+"""
+
+from __future__ import annotations
+
+import argparse
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import InputError
+from ..model import CHECK, CONTROL, Block
+from ..rotation import opk_from_matrix
+
+FLIP = np.diag([1.0, -1.0, -1.0])
+
+#: COLMAP camera models understood here: name → parameter names.
+CAMERA_MODELS: dict[str, tuple[str, ...]] = {
+    "SIMPLE_PINHOLE": ("f", "cx", "cy"),
+    "PINHOLE": ("fx", "fy", "cx", "cy"),
+    "SIMPLE_RADIAL": ("f", "cx", "cy", "k"),
+    "RADIAL": ("f", "cx", "cy", "k1", "k2"),
+    "OPENCV": ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"),
+}
+
+
+@dataclass
+class _Camera:
+    model: str
+    width: int
+    height: int
+    params: NDArray[np.float64]
+
+    def focal(self) -> float:
+        p = dict(zip(CAMERA_MODELS[self.model], self.params))
+        return float(p.get("f", 0.5 * (p.get("fx", 0.0) + p.get("fy", 0.0))))
+
+    def principal_point(self) -> tuple[float, float]:
+        p = dict(zip(CAMERA_MODELS[self.model], self.params))
+        return float(p["cx"]), float(p["cy"])
+
+    def distortion(self) -> tuple[float, float, float, float]:
+        """k1, k2, p1, p2 (zeros where the model has none)."""
+        p = dict(zip(CAMERA_MODELS[self.model], self.params))
+        return (p.get("k", p.get("k1", 0.0)), p.get("k2", 0.0), p.get("p1", 0.0), p.get("p2", 0.0))
+
+
+def _lines(path: Path):
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError("file not found", source=str(path)) from None
+    except UnicodeDecodeError as exc:
+        raise InputError(f"not a text file ({exc.reason})", source=str(path)) from None
+    for no, line in enumerate(text.splitlines(), start=1):
+        s = line.strip()
+        if s and not s.startswith("#"):
+            yield no, s
+
+
+def _numbers(path: Path, no: int, fields: list[str], kinds: str, what: str) -> list:
+    if len(fields) < len(kinds):
+        raise InputError(
+            f"expected {what} with {len(kinds)} fields, got {len(fields)}",
+            source=str(path),
+            where=f"line {no}",
+        )
+    out = []
+    for i, (f, k) in enumerate(zip(fields, kinds)):
+        try:
+            v = int(f) if k == "i" else float(f) if k == "f" else f
+        except ValueError:
+            raise InputError(
+                f"field {i + 1} of {what}: expected {'an integer' if k == 'i' else 'a number'}, "
+                f"got {f!r}",
+                source=str(path),
+                where=f"line {no}",
+            ) from None
+        if k == "f" and not np.isfinite(v):
+            raise InputError(
+                f"field {i + 1} of {what}: expected a finite number, got {f!r}",
+                source=str(path),
+                where=f"line {no}",
+            )
+        out.append(v)
+    return out
+
+
+def _read_cameras(path: Path) -> dict[int, _Camera]:
+    cams: dict[int, _Camera] = {}
+    for no, line in _lines(path):
+        f = line.split()
+        cid, model, w, h = _numbers(path, no, f, "isii", "a camera")
+        if model not in CAMERA_MODELS:
+            raise InputError(
+                f"camera model {model!r} is not supported (supported: {', '.join(CAMERA_MODELS)})",
+                source=str(path),
+                where=f"line {no}",
+            )
+        names = CAMERA_MODELS[model]
+        params = _numbers(path, no, f[4:], "f" * len(names), f"{model} parameters")
+        if len(f) - 4 != len(names):
+            raise InputError(
+                f"{model} has {len(names)} parameters, got {len(f) - 4}",
+                source=str(path),
+                where=f"line {no}",
+            )
+        if cid in cams:
+            raise InputError(f"duplicate camera id {cid}", source=str(path), where=f"line {no}")
+        cams[cid] = _Camera(model, w, h, np.array(params))
+    if not cams:
+        raise InputError("no cameras", source=str(path))
+    return cams
+
+
+def _undistort(cam: _Camera, uv: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Remove COLMAP's radial/tangential distortion from pixel coordinates."""
+    k1, k2, p1, p2 = cam.distortion()
+    if k1 == k2 == p1 == p2 == 0.0:
+        return uv
+    p = dict(zip(CAMERA_MODELS[cam.model], cam.params))
+    fx = p.get("fx", p.get("f"))
+    fy = p.get("fy", p.get("f"))
+    cx, cy = cam.principal_point()
+    d = np.column_stack([(uv[:, 0] - cx) / fx, (uv[:, 1] - cy) / fy])
+    u = d.copy()
+    for _ in range(20):  # fixed-point inversion of x_d = x (1 + k1 r² + k2 r⁴) + tangential
+        x, y = u[:, 0], u[:, 1]
+        r2 = x * x + y * y
+        radial = k1 * r2 + k2 * r2 * r2
+        dx = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
+        dy = y * radial + 2 * p2 * x * y + p1 * (r2 + 2 * y * y)
+        u = d - np.column_stack([dx, dy])
+    return np.column_stack([u[:, 0] * fx + cx, u[:, 1] * fy + cy])
+
+
+def read_colmap(
+    directory: str | Path,
+    *,
+    pixel_size_mm: float = 0.01,
+    sigma_px: float = 1.0,
+    sequence: str = "opk",
+) -> Block:
+    """Read a COLMAP text model into a Block.
+
+    Parameters
+    ----------
+    directory : str or Path
+        Folder with ``cameras.txt``, ``images.txt`` and ``points3D.txt``.
+    pixel_size_mm : float, default 0.01
+        Nominal pixel size in mm used to express image coordinates in mm.
+    sigma_px : float, default 1.0
+        A-priori σ of the image coordinates in pixels.
+    sequence : {"opk", "pok"}
+        Rotation sequence for the returned angles.
+
+    Returns
+    -------
+    Block
+        All points as tie points (COLMAP has no control); object units are COLMAP's.
+    """
+    d = Path(directory)
+    if not d.is_dir():
+        raise InputError(
+            "expected a directory with cameras.txt, images.txt, points3D.txt", source=str(d)
+        )
+    cams = _read_cameras(d / "cameras.txt")
+    cam_ids = sorted(cams)
+    cam_index = {c: i for i, c in enumerate(cam_ids)}
+
+    pts_path = d / "points3D.txt"
+    pid, xyz = [], []
+    for no, line in _lines(pts_path):
+        f = line.split()
+        vals = _numbers(pts_path, no, f, "ifff", "a 3D point")
+        pid.append(vals[0])
+        xyz.append(vals[1:4])
+    if len(set(pid)) != len(pid):
+        raise InputError("duplicate point id", source=str(pts_path))
+    p_index = {p: i for i, p in enumerate(pid)}
+
+    img_path = d / "images.txt"
+    lines = list(_lines(img_path))
+    # images.txt: two lines per image; the second (the 2D points) may be empty, which the
+    # comment-stripping reader drops, so read by position in the raw text instead.
+    raw = img_path.read_text(encoding="utf-8").splitlines()
+    body = [(no, s) for no, s in enumerate(raw, start=1) if not s.strip().startswith("#")]
+    image_ids, names, cam_of, X0s, Rs = [], [], [], [], []
+    oi, op, uv = [], [], []
+    k = 0
+    while k < len(body):
+        no, s = body[k]
+        if not s.strip():
+            k += 1
+            continue
+        f = s.split()
+        iid, qw, qx, qy, qz, tx, ty, tz, cid = _numbers(img_path, no, f, "ifffffffi", "an image")
+        name = f[9] if len(f) > 9 else str(iid)
+        if cid not in cams:
+            raise InputError(f"unknown camera id {cid}", source=str(img_path), where=f"line {no}")
+        q = np.array([qw, qx, qy, qz])
+        if not 0.5 < np.linalg.norm(q) < 2.0:
+            raise InputError(
+                "quaternion is not normalised", source=str(img_path), where=f"line {no}"
+            )
+        q = q / np.linalg.norm(q)
+        w, x, y, z = q
+        Rcw = np.array(
+            [
+                [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+            ]
+        )
+        t = np.array([tx, ty, tz])
+        image_ids.append(iid)
+        names.append(name)
+        cam_of.append(cam_index[cid])
+        X0s.append(-Rcw.T @ t)
+        Rs.append(Rcw.T @ FLIP)
+        pts_line = body[k + 1] if k + 1 < len(body) else (no + 1, "")
+        f2 = pts_line[1].split()
+        if len(f2) % 3:
+            raise InputError(
+                "expected triplets X Y POINT3D_ID",
+                source=str(img_path),
+                where=f"line {pts_line[0]}",
+            )
+        img_idx = len(image_ids) - 1
+        for j in range(0, len(f2), 3):
+            u, v, p3 = _numbers(img_path, pts_line[0], f2[j : j + 3], "ffi", "a 2D point")
+            if p3 == -1:
+                continue
+            if p3 not in p_index:
+                raise InputError(
+                    f"unknown POINT3D_ID {p3}", source=str(img_path), where=f"line {pts_line[0]}"
+                )
+            oi.append(img_idx)
+            op.append(p_index[p3])
+            uv.append((u, v))
+        k += 2
+    del lines
+    if len(set(image_ids)) != len(image_ids):
+        raise InputError("duplicate image id", source=str(img_path))
+    if not image_ids:
+        raise InputError("no images", source=str(img_path))
+    uv_arr = np.array(uv, dtype=float).reshape(-1, 2)
+    oi_arr = np.array(oi, dtype=np.int64)
+    cam_arr = np.array(cam_of, dtype=np.int64)
+    xy = np.empty_like(uv_arr)
+    for ci, cid in enumerate(cam_ids):
+        sel = cam_arr[oi_arr] == ci
+        cam = cams[cid]
+        und = _undistort(cam, uv_arr[sel])
+        cx, cy = cam.principal_point()
+        xy[sel, 0] = (und[:, 0] - cx) * pixel_size_mm
+        xy[sel, 1] = -(und[:, 1] - cy) * pixel_size_mm
+    R = np.array(Rs)
+    ang = np.column_stack(opk_from_matrix(R, sequence))
+    block = Block.from_arrays(
+        camera_c=[cams[c].focal() * pixel_size_mm for c in cam_ids],
+        camera_format_mm=[
+            (cams[c].width * pixel_size_mm, cams[c].height * pixel_size_mm) for c in cam_ids
+        ],
+        camera_ids=[str(c) for c in cam_ids],
+        image_camera=cam_arr,
+        X0=np.array(X0s),
+        angles=ang,
+        image_ids=[str(i) for i in image_ids],
+        xyz=np.array(xyz, dtype=float).reshape(-1, 3),
+        point_ids=[str(p) for p in pid],
+        obs_image=oi_arr,
+        obs_point=np.array(op, dtype=np.int64),
+        obs_xy=xy,
+        obs_sigma=sigma_px * pixel_size_mm,
+        sequence=sequence,
+        meta={
+            "source": str(d),
+            "format": "colmap-text",
+            "pixel_size_mm": pixel_size_mm,
+            "image_names": names,
+            "colmap_cameras": {
+                str(c): {
+                    "model": cams[c].model,
+                    "width": cams[c].width,
+                    "height": cams[c].height,
+                    "params": cams[c].params.tolist(),
+                }
+                for c in cam_ids
+            },
+        },
+    )
+    return block
+
+
+def write_colmap(
+    block: Block, directory: str | Path, *, pixel_size_mm: float | None = None
+) -> None:
+    """Write a Block as a COLMAP text model (PINHOLE cameras unless the block came from COLMAP).
+
+    Image coordinates are written distortion-free (the COLMAP camera is written as
+    PINHOLE/SIMPLE_PINHOLE); object coordinates are written as they are.
+    """
+    d = Path(directory)
+    d.mkdir(parents=True, exist_ok=True)
+    p = float(pixel_size_mm or block.meta.get("pixel_size_mm", 0.01))
+    cams = block.cameras
+    lines = [
+        "# Camera list with one line of data per camera:",
+        "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]",
+    ]
+    for i in range(len(cams)):
+        w = int(round(cams.format_mm[i, 0] / p))
+        h = int(round(cams.format_mm[i, 1] / p))
+        f = cams.c[i] / p
+        cx = w / 2 + cams.x0[i] / p
+        cy = h / 2 - cams.y0[i] / p
+        lines.append(f"{i + 1} SIMPLE_PINHOLE {w} {h} {f:.10g} {cx:.10g} {cy:.10g}")
+    tmp = {}
+    tmp["cameras.txt"] = "\n".join(lines) + "\n"
+    R = block.rotations()
+    obs = block.observations
+    order = np.argsort(obs.image, kind="stable")
+    starts = np.searchsorted(obs.image[order], np.arange(block.n_images + 1))
+    lines = [
+        "# Image list with two lines of data per image:",
+        "#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME",
+        "#   POINTS2D[] as (X, Y, POINT3D_ID)",
+    ]
+    from scipy.spatial.transform import Rotation
+
+    track: dict[int, list[tuple[int, int]]] = {}
+    for i in range(block.n_images):
+        Rcw = FLIP @ R[i].T
+        t = -Rcw @ block.images.X0[i]
+        qx, qy, qz, qw = Rotation.from_matrix(Rcw).as_quat()
+        cam = block.images.camera[i]
+        w = cams.format_mm[cam, 0] / p
+        h = cams.format_mm[cam, 1] / p
+        cx = w / 2 + cams.x0[cam] / p
+        cy = h / 2 - cams.y0[cam] / p
+        name = (
+            block.meta.get("image_names", block.images.ids)[i]
+            if "image_names" in block.meta
+            else block.images.ids[i]
+        )
+        lines.append(
+            f"{i + 1} {qw:.12g} {qx:.12g} {qy:.12g} {qz:.12g} {t[0]:.12g} {t[1]:.12g} {t[2]:.12g} {cam + 1} {name}"
+        )
+        sel = order[starts[i] : starts[i + 1]]
+        parts = []
+        for k2, j in enumerate(sel):
+            u = obs.xy[j, 0] / p + cx - cams.x0[cam] / p
+            v = -obs.xy[j, 1] / p + cy + cams.y0[cam] / p
+            parts.append(f"{u:.6f} {v:.6f} {obs.point[j] + 1}")
+            track.setdefault(int(obs.point[j]), []).append((i + 1, k2))
+        lines.append(" ".join(parts))
+    tmp["images.txt"] = "\n".join(lines) + "\n"
+    lines = [
+        "# 3D point list with one line of data per point:",
+        "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)",
+    ]
+    colour = {0: "200 200 200", CONTROL: "230 60 60", CHECK: "60 120 230"}
+    for j in range(block.n_points):
+        X = block.points.xyz[j]
+        tr = " ".join(f"{a} {b}" for a, b in track.get(j, []))
+        lines.append(
+            f"{j + 1} {X[0]:.10g} {X[1]:.10g} {X[2]:.10g} {colour[int(block.points.role[j])]} 0 {tr}"
+        )
+    tmp["points3D.txt"] = "\n".join(lines) + "\n"
+    for name, text in tmp.items():  # write each file atomically
+        target = d / name
+        part = target.with_suffix(".txt.part")
+        part.write_text(text, encoding="utf-8")
+        part.replace(target)
+
+
+def run_from_cli(args: argparse.Namespace) -> int:
+    """``orientviz import-colmap DIR -o OUT.json``: convert a COLMAP text model."""
+    block = read_colmap(args.directory)
+    from .problem import write_problem  # the problem-file writer (orientviz/1)
+
+    write_problem({"kind": "block", "block": block}, args.output)
+    print(f"wrote {args.output}: {block.summary()}")
+    return 0
