@@ -77,7 +77,9 @@ class Adjustment:
     cofactor : ndarray, shape (u, u) or None
         Q_xx = N⁻¹ for small problems; ``cofactor_blocks`` for large ones.
     cofactor_blocks : dict
-        Requested diagonal blocks of Q_xx by block name (large problems).
+        Diagonal blocks of Q_xx by block name for large problems: a stack of shape
+        (k, b, b), e.g. ``"exterior"`` (m, 6, 6) per image and ``"points"`` (p, 3, 3)
+        per point, or a square matrix (u_block, u_block).
     converged : bool
         Whether the stopping rule was met.
     reason : str
@@ -168,7 +170,8 @@ class Adjustment:
         out = np.full(self.n_unknowns, np.nan)
         for name, Q in self.cofactor_blocks.items():
             if name in self.blocks:
-                d = np.diag(Q) if Q.ndim == 2 else Q.reshape(-1)
+                # a square matrix for the whole block, or a stack (k, b, b) of diagonal blocks
+                d = np.diag(Q) if Q.ndim == 2 else np.einsum("nii->ni", Q).reshape(-1)
                 out[self.blocks[name]] = s0 * np.sqrt(np.clip(d, 0.0, None))
         return out
 
