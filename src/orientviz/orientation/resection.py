@@ -1,0 +1,375 @@
+"""Space resection: the exterior orientation of one image from control points.
+
+Conventions (see :mod:`orientviz.camera`): image coordinates in mm, object coordinates
+in m, ``R`` turns image-frame vectors into the object frame, angles ω, φ, κ in radians
+in the sequence ``"opk"`` (R = R_ω R_φ R_κ) unless ``sequence="pok"`` (R = R_φ R_ω R_κ).
+
+Two steps, as in practice:
+
+1. :func:`resection_closed_form` — the classic three-point solution (after Grunert,
+   1841). The image rays of three points enclose known angles; with the known distances
+   between the points the law of cosines gives three equations in the three ray
+   lengths. Writing the lengths as s2 = u·s1 and s3 = v·s1 eliminates s1 and u and leaves
+   a polynomial of degree 4 in v, so there are up to four real solutions. Each gives
+   the three points in the camera frame; the rigid transformation from camera to
+   object frame (:func:`~orientviz.orientation.absolute.similarity_closed_form`, scale 1)
+   then yields X0 and R. A fourth point (or all further points) picks the right one.
+2. :func:`resection` — collinearity least squares on the engine with precision,
+   optionally with the interior orientation (x0, y0, c) as unknowns.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.polynomial import polynomial as P
+from numpy.typing import ArrayLike, NDArray
+
+from ..adjust import Adjustment, gauss_newton
+from ..camera import FrameCamera, collinearity_jacobian, project
+from ..errors import InputError, NotDeterminableError
+from ..model import check_image_points, check_points
+from ..rotation import check_sequence, matrix_from_opk, opk_from_matrix
+from .absolute import _spread_rank, similarity_closed_form
+
+F64 = NDArray[np.float64]
+
+#: Names of the exterior orientation unknowns, then of the optional interior ones.
+EXTERIOR_NAMES: tuple[str, ...] = ("X0", "Y0", "Z0", "omega", "phi", "kappa")
+INTERIOR_NAMES: tuple[str, ...] = ("x0", "y0", "c")
+
+
+@dataclass(frozen=True)
+class ResectionCandidate:
+    """One solution of the three-point resection.
+
+    Attributes
+    ----------
+    X0 : ndarray, shape (3,)
+        Projection centre in m.
+    R : ndarray, shape (3, 3)
+        Rotation image → object.
+    distances : ndarray, shape (3,)
+        Distances from the projection centre to the three points in m.
+    rms : float
+        RMS image residual (mm) over the check points used to rank the candidates
+        (NaN if there were none).
+    """
+
+    X0: F64
+    R: F64
+    distances: F64
+    rms: float
+
+    def angles(self, sequence: str = "opk") -> F64:
+        """ω, φ, κ in radians in the given sequence."""
+        return np.array([float(a) for a in opk_from_matrix(self.R, sequence)])
+
+
+def _camera(camera: FrameCamera | float) -> FrameCamera:
+    if isinstance(camera, FrameCamera):
+        return camera
+    try:
+        return FrameCamera(c=float(camera))
+    except (TypeError, ValueError) as exc:
+        raise InputError(
+            f"camera: expected a FrameCamera or a principal distance c in mm ({exc})"
+        ) from None
+
+
+def _check_pairs(image_points: ArrayLike, object_points: ArrayLike) -> tuple[F64, F64]:
+    try:
+        xy = check_image_points(image_points)
+        X = check_points(object_points, "object points")
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+    if xy.shape[0] != X.shape[0]:
+        raise InputError(
+            f"expected as many image points as object points, got {xy.shape[0]} and {X.shape[0]}"
+        )
+    return xy, X
+
+
+def grunert_distances(directions: ArrayLike, points: ArrayLike) -> F64:
+    """Ray lengths of the three-point resection (Grunert): all real, positive solutions.
+
+    Parameters
+    ----------
+    directions : array_like, shape (3, 3)
+        Ray directions to the three points in any common frame (need not be unit).
+    points : array_like, shape (3, 3)
+        The three object points in m.
+
+    Returns
+    -------
+    ndarray, shape (k, 3)
+        Distances (s1, s2, s3) in m, k = 0 … 4 solutions.
+    """
+    d = np.asarray(directions, dtype=float)
+    d = d / np.linalg.norm(d, axis=1, keepdims=True)
+    X = np.asarray(points, dtype=float)
+    ca, cb, cg = d[1] @ d[2], d[0] @ d[2], d[0] @ d[1]  # angles at the centre: 23, 13, 12
+    a2 = np.sum((X[1] - X[2]) ** 2)
+    b2 = np.sum((X[0] - X[2]) ** 2)
+    c2 = np.sum((X[0] - X[1]) ** 2)
+    q = np.array([1.0, -2.0 * cb, 1.0])  # 1 + v² − 2v cos β (coefficients in v, ascending)
+    # eliminate u² between the two equations quadratic in u:  u = N(v) / D(v)
+    N = (a2 - c2) * q + b2 * np.array([1.0, 0.0, -1.0])
+    D = np.array([2.0 * b2 * cg, -2.0 * b2 * ca])
+    # c² q D² = b² (D² + N² − 2 cos γ N D): a quartic in v
+    quartic = P.polysub(
+        c2 * P.polymul(q, P.polymul(D, D)),
+        b2 * P.polysub(P.polyadd(P.polymul(D, D), P.polymul(N, N)), 2.0 * cg * P.polymul(N, D)),
+    )
+    scale = np.abs(quartic).max()
+    if scale == 0:
+        return np.zeros((0, 3))
+    roots = P.polyroots(quartic / scale)
+    out = []
+    for r in roots:
+        if abs(r.imag) > 1e-6 * max(1.0, abs(r.real)):
+            continue
+        v = r.real
+        den = P.polyval(v, D)
+        if v <= 0 or abs(den) < 1e-12 * b2:
+            continue
+        u = P.polyval(v, N) / den
+        s1sq = b2 / P.polyval(v, q)
+        if u <= 0 or s1sq <= 0:
+            continue
+        s1 = np.sqrt(s1sq)
+        out.append((s1, u * s1, v * s1))
+    if not out:
+        return np.zeros((0, 3))
+    sol = np.array(out)
+    # polish each solution with a few Newton steps on the three cosine-law equations
+    return np.array([_polish(s, d, X) for s in sol])
+
+
+def _polish(s: F64, d: F64, X: F64, steps: int = 3) -> F64:
+    pairs = ((1, 2), (0, 2), (0, 1))
+    for _ in range(steps):
+        F = np.array(
+            [
+                s[i] ** 2 + s[j] ** 2 - 2 * s[i] * s[j] * (d[i] @ d[j]) - np.sum((X[i] - X[j]) ** 2)
+                for i, j in pairs
+            ]
+        )
+        J = np.zeros((3, 3))
+        for r, (i, j) in enumerate(pairs):
+            J[r, i] = 2 * s[i] - 2 * s[j] * (d[i] @ d[j])
+            J[r, j] = 2 * s[j] - 2 * s[i] * (d[i] @ d[j])
+        try:
+            s = s - np.linalg.solve(J, F)
+        except np.linalg.LinAlgError:
+            break
+    return s
+
+
+def _pick_three(xy: F64) -> tuple[int, int, int]:
+    """Three image points spanning a large triangle (first, farthest, largest area)."""
+    i = 0
+    j = int(np.argmax(np.sum((xy - xy[i]) ** 2, axis=1)))
+    e = xy[j] - xy[i]
+    area = np.abs(e[0] * (xy[:, 1] - xy[i, 1]) - e[1] * (xy[:, 0] - xy[i, 0]))
+    k = int(np.argmax(area))
+    i = int(np.argmax(np.sum((xy - xy[j]) ** 2, axis=1)))  # re-anchor on the far end
+    return i, j, k if k not in (i, j) else int(np.argsort(-area)[1])
+
+
+def resection_closed_form(
+    image_points: ArrayLike,
+    object_points: ArrayLike,
+    camera: FrameCamera | float,
+    *,
+    use: tuple[int, int, int] | None = None,
+) -> list[ResectionCandidate]:
+    """All solutions of the three-point space resection, best first.
+
+    Parameters
+    ----------
+    image_points : array_like, shape (n, 2)
+        Image coordinates in mm, n ≥ 3.
+    object_points : array_like, shape (n, 3)
+        Object coordinates in m.
+    camera : FrameCamera or float
+        Interior orientation (or just c in mm, principal point at 0).
+    use : tuple of 3 int, optional
+        Indices of the three points that define the solution; default a well-spread
+        triple. All other points rank the candidates by their RMS image residual.
+
+    Returns
+    -------
+    list of ResectionCandidate
+        Up to four candidates with the points in front of the camera, sorted by the RMS
+        of the other points (or by input order if n = 3; then the choice is ambiguous).
+
+    Raises
+    ------
+    NotDeterminableError
+        Fewer than 3 points, three collinear points, or no real solution.
+    """
+    xy, X = _check_pairs(image_points, object_points)
+    cam = _camera(camera)
+    if xy.shape[0] < 3:
+        raise NotDeterminableError(
+            f"space resection: needs at least 3 control points, got {xy.shape[0]}",
+            parameters=list(EXTERIOR_NAMES),
+        )
+    idx = _pick_three(xy) if use is None else tuple(int(i) for i in use)
+    if len(set(idx)) != 3:
+        raise InputError(f"use: expected three different point indices, got {idx}")
+    sel = np.array(idx)
+    if _spread_rank(X[sel]) < 2:
+        raise NotDeterminableError(
+            "space resection: the three control points are collinear",
+            parameters=list(EXTERIOR_NAMES),
+        )
+    dirs = np.column_stack([xy[sel, 0] - cam.x0, xy[sel, 1] - cam.y0, np.full(3, -cam.c)])
+    unit = dirs / np.linalg.norm(dirs, axis=1, keepdims=True)
+    sols = grunert_distances(unit, X[sel])
+    others = np.setdiff1d(np.arange(xy.shape[0]), sel)
+    cands = []
+    for s in sols:
+        rigid = similarity_closed_form(unit * s[:, None], X[sel], scale=False)
+        X0, R = rigid.t, rigid.R
+        w = (X - X0) @ R[:, 2]
+        if np.any(w >= 0):  # some control point behind the camera
+            continue
+        rms = float("nan")
+        if others.size:
+            r = project(X[others], X0, R, cam.c, cam.x0, cam.y0) - xy[others]
+            rms = float(np.sqrt(np.mean(r**2)))
+        cands.append(ResectionCandidate(X0, R, s, rms))
+    if not cands:
+        raise NotDeterminableError(
+            "space resection: the three-point solution has no real solution in front of the camera",
+            parameters=list(EXTERIOR_NAMES),
+        )
+    cands.sort(key=lambda c: np.nan_to_num(c.rms, nan=0.0))
+    return cands
+
+
+def resection(
+    image_points: ArrayLike,
+    object_points: ArrayLike,
+    camera: FrameCamera | float,
+    *,
+    sigma: ArrayLike = 0.005,
+    sequence: str = "opk",
+    interior: bool | tuple[str, ...] = False,
+    start: tuple[ArrayLike, ArrayLike] | None = None,
+    point_ids: list[str] | None = None,
+    max_iter: int = 30,
+) -> Adjustment:
+    """Least-squares space resection (collinearity) with precision.
+
+    Parameters
+    ----------
+    image_points : array_like, shape (n, 2)
+        Observed image coordinates in mm.
+    object_points : array_like, shape (n, 3)
+        Control points in m (errorless).
+    camera : FrameCamera or float
+        Interior orientation (x0, y0, c in mm), or just c.
+    sigma : float or array_like, shape (n,) or (n, 2), default 0.005
+        A-priori σ of the image coordinates in mm (5 µm).
+    sequence : {"opk", "pok"}, default "opk"
+        Rotation sequence of the estimated angles.
+    interior : bool or tuple of str, default False
+        ``True`` estimates x0, y0 and c too (needs ≥ 5 points, not all in one plane
+        for c); or a subset such as ``("c",)``.
+    start : (X0, angles), optional
+        Approximate projection centre (m) and ω, φ, κ (rad, ``sequence``); default the
+        best three-point closed-form candidate.
+    point_ids : list of str, optional
+        Names for residual labels.
+    max_iter : int, default 30
+
+    Returns
+    -------
+    Adjustment
+        ``names`` ``("X0", "Y0", "Z0", "omega", "phi", "kappa")`` (+ ``"x0"``, ``"y0"``,
+        ``"c"``), in m, rad, mm; residuals ``v = f(x̂) − l`` in mm, labelled
+        ``"<id>/x"``; ``extra``: ``"R"``, ``"candidates"`` (closed-form solutions),
+        ``"camera"`` (FrameCamera with the estimated interior), ``"sequence"``,
+        ``"residuals_xy"`` ((n, 2) mm).
+
+    Raises
+    ------
+    InputError
+        Wrong shapes or σ.
+    NotDeterminableError
+        Too few or collinear points, or interior parameters not separable from the
+        exterior ones (e.g. c with flat control).
+    """
+    seq = check_sequence(sequence)
+    xy, X = _check_pairs(image_points, object_points)
+    cam = _camera(camera)
+    n = xy.shape[0]
+    est = INTERIOR_NAMES if interior is True else (tuple(interior) if interior else ())
+    bad = [e for e in est if e not in INTERIOR_NAMES]
+    if bad:
+        raise InputError(f"interior: expected names out of {INTERIOR_NAMES}, got {bad}")
+    u = 6 + len(est)
+    if 2 * n < u:
+        raise NotDeterminableError(
+            f"space resection: {u} unknowns need at least {(u + 1) // 2} points, got {n}",
+            parameters=list(EXTERIOR_NAMES) + list(est),
+        )
+    sg = np.asarray(sigma, dtype=float)
+    try:
+        sg = np.broadcast_to(sg[:, None] if sg.ndim == 1 else sg, (n, 2)).reshape(-1)
+    except ValueError:
+        raise InputError(
+            f"sigma: expected a float, shape ({n},) or ({n}, 2), got {sg.shape}"
+        ) from None
+    cands: list[ResectionCandidate] = []
+    if start is None:
+        cands = resection_closed_form(xy, X, cam)
+        X0s, ang0 = cands[0].X0, cands[0].angles(seq)
+    else:
+        X0s, ang0 = np.asarray(start[0], float).reshape(3), np.asarray(start[1], float).reshape(3)
+    x0 = np.concatenate([X0s, ang0, [cam.x0, cam.y0, cam.c]])
+    fixed = np.array([False] * 6 + [name not in est for name in INTERIOR_NAMES])
+    ids = [str(i) for i in range(n)] if point_ids is None else [str(i) for i in point_ids]
+    labels = [f"{i}/{a}" for i in ids for a in "xy"]
+
+    def model(p: F64):
+        f, Je, _, Ji = collinearity_jacobian(X, p[:3], p[3:6], p[8], p[6], p[7], seq)
+        J = np.concatenate([Je, Ji], axis=2).reshape(2 * n, 9)
+        return f.reshape(-1), J
+
+    res = gauss_newton(
+        model, x0, xy.reshape(-1), sg, names=list(EXTERIOR_NAMES + INTERIOR_NAMES),
+        blocks={"exterior": slice(0, 6), "interior": slice(6, 9)}, obs_labels=labels,
+        fixed=fixed, max_iter=max_iter, context="space resection",
+    )  # fmt: skip
+    if not est:  # report only what was estimated
+        keep = slice(0, 6)
+        res.x, res.names = res.x[keep], res.names[:6]
+        res.blocks = {"exterior": keep}
+        if res.cofactor is not None:
+            res.cofactor = res.cofactor[keep, keep]
+        for h in res.history:
+            h.x = h.x[keep]
+            h.dx = None if h.dx is None else h.dx[keep]
+        x_int = x0[6:]
+    else:
+        x_int = res.x[6:9]
+
+    res.extra.update(
+        R=matrix_from_opk(*res.x[3:6], seq),
+        candidates=cands,
+        camera=FrameCamera(
+            c=float(x_int[2]),
+            x0=float(x_int[0]),
+            y0=float(x_int[1]),
+            format_mm=cam.format_mm,
+            name=cam.name,
+        ),
+        sequence=seq,
+        residuals_xy=res.residuals.reshape(n, 2),
+    )
+    return res

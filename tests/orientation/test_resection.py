@@ -1,0 +1,169 @@
+"""Space resection: Grunert's three-point solution and collinearity least squares."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from single_image_data import C_MM, ground_points, vertical_image
+
+from orientviz.camera import FrameCamera, project
+from orientviz.errors import InputError, NotDeterminableError
+from orientviz.orientation.resection import grunert_distances, resection, resection_closed_form
+from orientviz.rotation import matrix_from_opk
+
+
+def test_closed_form_finds_truth_first_with_fourth_point():
+    X0, ang, R = vertical_image()
+    rng = np.random.default_rng(0)
+    X = ground_points(rng, 8)
+    xy = project(X, X0, R, C_MM)
+    cands = resection_closed_form(xy, X, C_MM)
+    assert 1 <= len(cands) <= 4
+    np.testing.assert_allclose(cands[0].X0, X0, atol=1e-7)
+    np.testing.assert_allclose(cands[0].R, R, atol=1e-10)
+    assert cands[0].rms < 1e-9
+    assert all(c.rms > 1e-3 for c in cands[1:])  # the others misfit the remaining points
+
+
+def test_three_points_truth_among_candidates():
+    X0, _, R = vertical_image()
+    X = ground_points(np.random.default_rng(1), 3)
+    cands = resection_closed_form(project(X, X0, R, C_MM), X, C_MM)
+    err = [np.linalg.norm(c.X0 - X0) for c in cands]
+    assert min(err) < 1e-6
+    for c in cands:  # every candidate reproduces the three image points exactly
+        np.testing.assert_allclose(project(X, c.X0, c.R, C_MM), project(X, X0, R, C_MM), atol=1e-9)
+
+
+def test_grunert_distances_exact():
+    rng = np.random.default_rng(2)
+    X = ground_points(rng, 3)
+    C = np.array([100.0, 50.0, 900.0])
+    d = X - C
+    sols = grunert_distances(d, X)
+    true = np.linalg.norm(d, axis=1)
+    assert np.min(np.abs(sols - true).max(axis=1)) < 1e-8
+
+
+def test_least_squares_noise_free_exact():
+    X0, ang, R = vertical_image()
+    X = ground_points(np.random.default_rng(3), 10)
+    res = resection(project(X, X0, R, C_MM), X, C_MM)
+    np.testing.assert_allclose(res.x, np.r_[X0, ang], atol=1e-8)
+    assert res.names == ["X0", "Y0", "Z0", "omega", "phi", "kappa"]
+    assert res.redundancy == 20 - 6 and res.cofactor.shape == (6, 6)
+
+
+@pytest.mark.parametrize("sequence", ["opk", "pok"])
+def test_least_squares_sequences(sequence):
+    X0, _, R = vertical_image()
+    X = ground_points(np.random.default_rng(4), 6)
+    res = resection(project(X, X0, R, C_MM), X, C_MM, sequence=sequence)
+    np.testing.assert_allclose(res.extra["R"], R, atol=1e-10)
+
+
+def test_noisy_precision_and_sigma0():
+    # 200 replicas, σ = 5 µm, r = 2·12 − 6 = 18: mean σ̂0² has standard error
+    # sqrt(2/(18·200)) ≈ 0.024, bound 0.1 ≈ 4σ; true errors over a-priori σ: |z| < 4.5.
+    X0, ang, R = vertical_image()
+    rng = np.random.default_rng(5)
+    X = ground_points(rng, 12)
+    xy = project(X, X0, R, C_MM)
+    s02, zmax = [], 0.0
+    for _ in range(200):
+        res = resection(xy + rng.normal(0, 0.005, xy.shape), X, C_MM, sigma=0.005)
+        s02.append(res.sigma0**2)
+        zmax = max(zmax, np.max(np.abs(res.x - np.r_[X0, ang]) / res.std(a_posteriori=False)))
+    assert abs(np.mean(s02) - 1) < 0.1
+    assert zmax < 4.5
+
+
+def test_correlation_X0_phi_is_high_for_vertical_image():
+    # the classic: a shift along X and a tilt φ move the image points almost alike
+    X0, _, R = vertical_image()
+    X = ground_points(np.random.default_rng(6), 9, relief=20.0)
+    res = resection(project(X, X0, R, C_MM), X, C_MM)
+    C = res.correlations()
+    assert abs(C[res.index("Y0"), res.index("omega")]) > 0.9
+    assert abs(C[res.index("X0"), res.index("phi")]) > 0.9
+
+
+def test_interior_orientation_estimated_with_relief():
+    rng = np.random.default_rng(7)
+    X = ground_points(rng, 20, relief=400.0)
+    cam = FrameCamera(c=150.0, x0=0.01, y0=-0.02)
+    X0, ang = np.array([0.0, 0.0, 1200.0]), np.array([0.01, 0.02, 0.3])
+    R = matrix_from_opk(*ang)
+    xy = project(X, X0, R, cam.c, cam.x0, cam.y0)
+    res = resection(xy, X, FrameCamera(c=152.0), interior=True)
+    np.testing.assert_allclose(res.x, np.r_[X0, ang, 0.01, -0.02, 150.0], atol=1e-7)
+    assert res.extra["camera"].c == pytest.approx(150.0)
+
+
+def test_interior_with_flat_control_is_not_determinable():
+    # flat control: c and Z0 (and x0/φ, y0/ω) cannot be separated
+    rng = np.random.default_rng(8)
+    X = ground_points(rng, 12, relief=0.0)
+    X0, R = np.array([0.0, 0.0, 1500.0]), np.eye(3)
+    xy = project(X, X0, R, C_MM)
+    with pytest.raises(NotDeterminableError) as exc:
+        resection(xy, X, C_MM, interior=True, start=(X0, np.zeros(3)))
+    assert "c" in exc.value.parameters and "Z0" in exc.value.parameters
+
+
+def test_jacobian_against_finite_differences():
+    from orientviz.camera import collinearity_jacobian
+
+    X0, ang, _ = vertical_image()
+    X = ground_points(np.random.default_rng(9), 4)
+    p = np.r_[X0, ang, 0.0, 0.0, C_MM]
+
+    def f(q):
+        return collinearity_jacobian(X, q[:3], q[3:6], q[8], q[6], q[7])[0].reshape(-1)
+
+    _, Je, _, Ji = collinearity_jacobian(X, X0, ang, C_MM)
+    J = np.concatenate([Je, Ji], axis=2).reshape(-1, 9)
+    for k in range(9):
+        h = 1e-6 if k in (3, 4, 5) else 1e-3
+        dp = np.zeros(9)
+        dp[k] = h
+        fd = (f(p + dp) - f(p - dp)) / (2 * h)
+        # central differences: truncation ~h²·f''' far below 1e-6 of |J| (≤ ~200 mm/rad)
+        np.testing.assert_allclose(J[:, k], fd, rtol=1e-5, atol=1e-7)
+
+
+def test_bad_input_and_degenerate():
+    X0, _, R = vertical_image()
+    X = ground_points(np.random.default_rng(10), 5)
+    xy = project(X, X0, R, C_MM)
+    with pytest.raises(InputError, match="as many"):
+        resection(xy[:4], X, C_MM)
+    with pytest.raises(InputError, match="shape"):
+        resection(xy[:, :1], X, C_MM)
+    with pytest.raises(NotDeterminableError, match="at least"):
+        resection(xy[:2], X[:2], C_MM)
+    line = np.column_stack([np.linspace(-300, 300, 4), np.linspace(-100, 200, 4), np.zeros(4)])
+    with pytest.raises(NotDeterminableError, match="collinear"):
+        resection(project(line, X0, R, C_MM), line, C_MM)
+    with pytest.raises(InputError, match="interior"):
+        resection(xy, X, C_MM, interior=("f",))
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    kappa=st.floats(-np.pi, np.pi),
+    omega=st.floats(-0.3, 0.3),
+    phi=st.floats(-0.3, 0.3),
+    seed=st.integers(0, 2**16),
+)
+def test_property_closed_form_then_ls_recovers_pose(kappa, omega, phi, seed):
+    rng = np.random.default_rng(seed)
+    X = ground_points(rng, 6)
+    X0 = np.array([rng.uniform(-200, 200), rng.uniform(-200, 200), rng.uniform(900, 3000)])
+    R = matrix_from_opk(omega, phi, kappa)
+    xy = project(X, X0, R, C_MM)
+    res = resection(xy, X, C_MM)
+    np.testing.assert_allclose(res.extra["R"], R, atol=1e-8)
+    np.testing.assert_allclose(res.x[:3], X0, atol=1e-5)
