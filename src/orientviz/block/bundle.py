@@ -1,0 +1,422 @@
+"""Bundle block adjustment: all image bundles of a block at once (collinearity).
+
+Every image ray ``x_obs + v = project(X, X0, R(ω, φ, κ), c, x0, y0) + A(x_obs)·a`` (see
+:mod:`orientviz.camera`: image plane at z = −c, mm; R image → object with the block's
+rotation sequence, ``"opk"`` R = R_ω R_φ R_κ or ``"pok"`` R = R_φ R_ω R_κ) is one
+observation equation; the unknowns are the exterior orientations (X0, Y0, Z0 in m,
+ω, φ, κ in rad), the object points (m) and optional additional parameters ``a`` of
+self-calibration shared by groups of images. Control coordinates are fixed or
+weighted pseudo-observations, observed projection centres/attitudes
+(``images.X0_obs``/``X0_sigma``, ``angles_obs``/``angles_sigma``) weighted ones.
+
+Solution: Gauss-Newton on the normal equations with the points eliminated by the Schur
+complement (:mod:`orientviz.adjust.normal`), a Levenberg-Marquardt fallback when a step
+would increase vᵀPv, and a parameter-based stopping rule: stop when every correction
+is below ``tol`` times the parameter's a-priori (conditional) σ = 1/√N_ii. The cost
+alone is a poor criterion in large blocks: their weak bending modes barely change it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..adjust.normal import (
+    ReducedStructure,
+    assemble_blocks,
+    factor_reduced,
+    geometric_orderings,
+    inv3,
+)
+from ..adjust.result import Adjustment, Iteration
+from ..errors import InputError, NotDeterminableError
+from ..model import Block
+from .bundle_checks import check_connected, check_datum, check_determinable, point_setup
+from .bundle_kernel import collinearity_block, project_block
+
+F64 = NDArray[np.float64]
+EXTERIOR_NAMES = ("X0", "Y0", "Z0", "omega", "phi", "kappa")
+#: Blocks up to this many images keep the full parameter vector in every history record.
+HISTORY_X_LIMIT: int = 500
+
+
+@dataclass
+class _State:
+    X0: F64
+    angles: F64
+    xyz: F64  # all points (p, 3)
+    ap: F64  # (q,)
+
+
+def _wrap(a: F64) -> F64:
+    return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+class BundleProblem:
+    """The constant part of a bundle adjustment: indices, weights, structure.
+
+    Built by :func:`bundle_adjust`; exposed so that benchmarks and the precision module
+    can reuse it. Not part of the stable API.
+    """
+
+    def __init__(
+        self, block, setup, *, additional=None, ap_group=None, ap_sigma=None, solver="banded"
+    ):
+        self.block = block
+        self.setup = setup
+        img, obs = block.images, block.observations
+        m = block.n_images
+        self.m = m
+        self.uobs = np.flatnonzero(setup.used_obs)
+        self.oi = obs.image[self.uobs]
+        self.opt = obs.point[self.uobs]
+        self.l = obs.xy[self.uobs]
+        self.sw = 1.0 / obs.sigma[self.uobs]
+        cam = img.camera
+        cams = block.cameras
+        self.c, self.x0, self.y0 = cams.c[cam], cams.x0[cam], cams.y0[cam]
+        self.var_pts = np.flatnonzero(setup.unknown)
+        self.pt_col = -np.ones(block.n_points, np.int64)
+        self.pt_col[self.var_pts] = np.arange(self.var_pts.size)
+        self.ocol = self.pt_col[self.opt]
+        orders = geometric_orderings(img.X0) if solver == "banded" else []
+        self.struct = ReducedStructure(
+            self.oi, self.ocol, m, self.var_pts.size, solver=solver, orderings=orders
+        )
+        # pseudo-observations of points
+        ps = setup.prior_sigma[self.var_pts]
+        self.prior_w = np.where(np.isfinite(ps), 1.0 / ps**2, 0.0)
+        self.prior_l = np.nan_to_num(setup.known[self.var_pts])
+
+        # observed exterior orientation
+        def _eo_w(o, s):
+            ok = np.isfinite(o) & np.isfinite(s) & (s > 0)
+            return np.where(ok, 1.0 / np.where(ok, s, 1.0) ** 2, 0.0), np.nan_to_num(o)
+
+        self.X0_w, self.X0_l = _eo_w(img.X0_obs, img.X0_sigma)
+        self.ang_w, self.ang_l = _eo_w(img.angles_obs, img.angles_sigma)
+        # additional parameters
+        self.k = 0
+        self.G = 0
+        if additional is not None:
+            A = np.asarray(additional.design(self.l), dtype=float)
+            if A.ndim != 3 or A.shape[:2] != (self.l.shape[0], 2):
+                raise InputError(f"additional.design: expected shape (n, 2, k), got {A.shape}")
+            self.k = A.shape[2]
+            grp = np.zeros(m, np.int64) if ap_group is None else np.asarray(ap_group, np.int64)
+            if grp.shape != (m,) or grp.min() < 0:
+                raise InputError(f"ap_group: expected {m} non-negative group indices")
+            self.G = int(grp.max()) + 1
+            self.grp = grp
+            self.A = A
+            self.Aw = A * self.sw[:, :, None]
+            s = np.inf if ap_sigma is None else ap_sigma
+            s = np.broadcast_to(np.asarray(s, dtype=float), (self.k,))
+            self.ap_w = np.tile(np.where(np.isfinite(s) & (s > 0), 1.0 / s**2, 0.0), self.G)
+            self.ap_names = [f"{nm}@g{g}" for g in range(self.G) for nm in additional.names]
+        self.q = self.k * self.G
+        n_pseudo = int((self.prior_w > 0).sum() + (self.X0_w > 0).sum() + (self.ang_w > 0).sum())
+        n_pseudo += int((self.ap_w > 0).sum()) if self.q else 0
+        self.n_eq = 2 * self.uobs.size + n_pseudo
+        self.n_unknowns = 6 * m + 3 * self.var_pts.size + self.q
+        self.redundancy = self.n_eq - self.n_unknowns
+
+    # ----------------------------------------------------------------- model
+    def residuals(self, st: _State, jac: bool):
+        """Weighted misclosures l − f (n, 2)·(1/σ), with Jacobians if ``jac``."""
+        xyz = st.xyz[self.opt]
+        seq = self.block.sequence
+        if jac:
+            f, Je, Jp = collinearity_block(
+                st.X0, st.angles, self.c, self.x0, self.y0, self.oi, xyz, seq
+            )
+        else:
+            f = project_block(st.X0, st.angles, self.c, self.x0, self.y0, self.oi, xyz, seq)
+            Je = Jp = None
+        if self.q:
+            f = f + np.einsum(
+                "nij,nj->ni", self.A, st.ap.reshape(self.G, self.k)[self.grp[self.oi]]
+            )
+        return (self.l - f) * self.sw, Je, Jp
+
+    def cost(self, st: _State, rw: F64) -> float:
+        c = float(np.sum(rw**2))
+        d = self.prior_l - st.xyz[self.var_pts]
+        c += float(np.sum(self.prior_w * d**2))
+        c += float(np.sum(self.X0_w * (self.X0_l - st.X0) ** 2))
+        c += float(np.sum(self.ang_w * _wrap(self.ang_l - st.angles) ** 2))
+        if self.q:
+            c += float(np.sum(self.ap_w * st.ap**2))
+        return c
+
+    # ----------------------------------------------------------------- normal equations
+    def normal(self, st: _State, rw: F64, Je: F64, Jp: F64, lam: float = 0.0) -> dict:
+        """Blocks of the normal equations and the Schur complement (see adjust.normal)."""
+        S = self.struct
+        sw = self.sw[:, :, None]
+        Jew, Jpw = Je * sw, Jp * sw
+        JeT = Jew.transpose(0, 2, 1)
+        U_obs = JeT @ Jew
+        bc_obs = np.einsum("nki,nk->ni", Jew, rw)
+        U = np.zeros((self.m, 6, 6))
+        U[S.cam_present] = np.add.reduceat(U_obs[S.cam_order], S.cam_starts, axis=0)
+        bc = np.zeros((self.m, 6))
+        bc[S.cam_present] = np.add.reduceat(bc_obs[S.cam_order], S.cam_starts, axis=0)
+        U[:, [0, 1, 2], [0, 1, 2]] += self.X0_w
+        bc[:, :3] += self.X0_w * (self.X0_l - st.X0)
+        U[:, [3, 4, 5], [3, 4, 5]] += self.ang_w
+        bc[:, 3:] += self.ang_w * _wrap(self.ang_l - st.angles)
+        vo = S.pt_obs
+        V_obs = Jpw[vo].transpose(0, 2, 1) @ Jpw[vo]
+        bp_obs = np.einsum("nki,nk->ni", Jpw[vo], rw[vo])
+        V = np.add.reduceat(V_obs, S.pt_starts, axis=0)
+        bp = np.add.reduceat(bp_obs, S.pt_starts, axis=0)
+        i3 = [0, 1, 2]
+        V[:, i3, i3] += self.prior_w
+        bp += self.prior_w * (self.prior_l - st.xyz[self.var_pts])
+        diagU = U[:, range(6), range(6)].copy()
+        diagV = V[:, i3, i3].copy()
+        if lam > 0:
+            U[:, range(6), range(6)] *= 1.0 + lam
+            V[:, i3, i3] *= 1.0 + lam
+        Vinv = inv3(V)
+        W = np.zeros((Je.shape[0], 6, 3))
+        W[vo] = JeT[vo] @ Jpw[vo]
+        T = np.zeros_like(W)
+        T[vo] = W[vo] @ Vinv[self.ocol[vo]]
+        contrib = T[S.pair_a] @ W[S.pair_b].transpose(0, 2, 1)
+        blocks = assemble_blocks(S, U, contrib)
+        Tb = np.zeros((Je.shape[0], 6))
+        Tb[vo] = np.einsum("nij,nj->ni", T[vo], bp[self.ocol[vo]])
+        red = bc.copy()
+        red[S.cam_present] -= np.add.reduceat(Tb[S.cam_order], S.cam_starts, axis=0)
+        out = dict(
+            blocks=blocks, rhs=red.reshape(-1), Vinv=Vinv, W=W, T=T, bp=bp, diagU=diagU, diagV=diagV
+        )
+        if self.q:
+            out.update(self._ap_normal(st, rw, Jew, Jpw, W, T, Vinv, bp, lam))
+        return out
+
+    def _ap_normal(self, st, rw, Jew, Jpw, W, T, Vinv, bp, lam) -> dict:
+        S, k, G, m = self.struct, self.k, self.G, self.m
+        go = self.grp[self.oi]
+        Aw = self.Aw
+        E3 = np.zeros((m, G, 6, k))
+        Ed = np.add.reduceat((Jew.transpose(0, 2, 1) @ Aw)[S.cam_order], S.cam_starts, axis=0)
+        E3[S.cam_present, self.grp[S.cam_present]] += Ed
+        vo = S.pt_obs
+        Wap = np.zeros((Aw.shape[0], k, 3))
+        Wap[vo] = Aw[vo].transpose(0, 2, 1) @ Jpw[vo]
+        Tap = np.zeros_like(Wap)
+        Tap[vo] = Wap[vo] @ Vinv[self.ocol[vo]]
+        a, b = S.all_pairs
+        np.add.at(E3, (self.oi[a], go[b]), -(T[a] @ Wap[b].transpose(0, 2, 1)))
+        F4 = np.zeros((G, G, k, k))
+        np.add.at(F4, (go, go), Aw.transpose(0, 2, 1) @ Aw)
+        np.add.at(F4, (go[a], go[b]), -(Tap[a] @ Wap[b].transpose(0, 2, 1)))
+        F = F4.transpose(0, 2, 1, 3).reshape(self.q, self.q)
+        F[np.diag_indices(self.q)] += self.ap_w
+        diagF = np.diag(F).copy()
+        if lam > 0:
+            F[np.diag_indices(self.q)] *= 1.0 + lam
+        ba2 = np.zeros((G, k))
+        np.add.at(ba2, go, np.einsum("nki,nk->ni", Aw, rw))
+        np.add.at(ba2, go[vo], -np.einsum("nij,nj->ni", Tap[vo], bp[self.ocol[vo]]))
+        ba = ba2.reshape(-1) - self.ap_w * st.ap
+        E = E3.transpose(0, 2, 1, 3).reshape(6 * m, self.q)
+        return dict(E=E, F=F, ba=ba, Wap=Wap, diagF=diagF)
+
+    def solve(self, ne: dict, names: list[str]):
+        """Corrections (dc (m, 6), dp (p_var, 3), da (q,)) and the factor of S."""
+        fac = factor_reduced(self.struct, ne["blocks"], names)
+        if self.q:
+            Y = fac.solve(ne["E"])
+            Fs = ne["F"] - ne["E"].T @ Y
+            z = fac.solve(ne["rhs"])
+            try:
+                da = np.linalg.solve(Fs, ne["ba"] - ne["E"].T @ z)
+            except np.linalg.LinAlgError:
+                raise NotDeterminableError(
+                    "the additional parameters are not determinable (singular); give ap_sigma",
+                    parameters=list(self.ap_names),
+                ) from None
+            dc = z - Y @ da
+            ne.update(Y=Y, Fs=Fs)
+        else:
+            dc = fac.solve(ne["rhs"])
+            da = np.zeros(0)
+        dc = dc.reshape(self.m, 6)
+        S = self.struct
+        vo = S.pt_obs
+        t = np.einsum("nji,nj->ni", ne["W"][vo], dc[self.oi[vo]])
+        if self.q:
+            da_o = da.reshape(self.G, self.k)[self.grp[self.oi[vo]]]
+            t += np.einsum("nji,nj->ni", ne["Wap"][vo], da_o)
+        red = ne["bp"] - np.add.reduceat(t, S.pt_starts, axis=0)
+        dp = np.einsum("nij,nj->ni", ne["Vinv"], red)
+        return dc, dp, da, fac
+
+    def apply(self, st: _State, dc: F64, dp: F64, da: F64) -> _State:
+        xyz = st.xyz.copy()
+        xyz[self.var_pts] += dp
+        return _State(st.X0 + dc[:, :3], st.angles + dc[:, 3:], xyz, st.ap + da)
+
+    def names(self) -> list[str]:
+        b = self.block
+        out = [f"{i}.{n}" for i in b.images.ids for n in EXTERIOR_NAMES]
+        out += [f"{i}.{c}" for i in b.points.ids for c in ("X", "Y", "Z")]
+        return out + (list(self.ap_names) if self.q else [])
+
+    def flat(self, st: _State) -> F64:
+        return np.concatenate([np.hstack([st.X0, st.angles]).ravel(), st.xyz.ravel(), st.ap])
+
+
+def bundle_adjust(
+    block: Block,
+    *,
+    control: str = "fixed",
+    max_iter: int = 30,
+    tol: float = 1e-3,
+    additional=None,
+    ap_group=None,
+    ap_sigma=None,
+    precision: bool = True,
+    callback: Callable[[Iteration], object] | None = None,
+    solver: str = "banded",
+    history_x: bool | None = None,
+) -> Adjustment:
+    """Adjust a block by the bundle method (see module docstring for the model).
+
+    Parameters
+    ----------
+    block : Block
+        Approximate values in ``images.X0``/``angles`` (rad, ``block.sequence``) and
+        ``points.xyz`` (m); see :func:`orientviz.block.approximate.approximate_values`.
+    control : {"fixed", "weighted"}
+        ``"fixed"``: every given coordinate of a control point is held fixed.
+        ``"weighted"``: given coordinates with ``points.sigma`` > 0 are observations
+        with that σ (m), σ = 0 still fixes. Check points (role 2) are left out and
+        intersected afterwards with the adjusted orientations.
+    max_iter : int
+        Maximum number of Gauss-Newton steps.
+    tol : float
+        Stop when every |correction| < tol · (a-priori conditional σ = 1/√N_ii).
+    additional : AdditionalParameters, optional
+        Self-calibration set (``design(xy) -> (n, 2, k)`` in mm per unit, evaluated at the
+        observed coordinates): ``x_obs + v = project(...) + A(x_obs)·a``.
+    ap_group : array_like of int, shape (m,), optional
+        Group of each image for the additional parameters (default: one group).
+    ap_sigma : float or array_like (k,), optional
+        σ of the pseudo-observations a = 0 (units of the parameters); None = free.
+    precision : bool
+        Compute per-image 6×6 and per-point 3×3 cofactor blocks, redundancy numbers and
+        normalised residuals (:mod:`orientviz.adjust.precision`).
+    callback : callable, optional
+        Called with each new :class:`Iteration`.
+    solver : {"banded", "splu", "dense"}
+        Solver of the reduced camera system (:mod:`orientviz.adjust.normal`).
+    history_x : bool, optional
+        Keep the full parameter vector per iteration (default: blocks ≤ 500 images);
+        otherwise ``Iteration.x`` is empty.
+
+    Returns
+    -------
+    Adjustment
+        Blocks ``"exterior"`` ((m, 6): X0, Y0, Z0 m, ω, φ, κ rad), ``"points"`` ((p, 3) m;
+        fixed control at its given value, check points intersected) and
+        ``"additional"``; residuals v = f − l: the 2n image coordinates (x, y per
+        observation, mm) first, then the pseudo-observations. ``extra`` holds
+        ``check_rms`` (m, X/Y/Z), ``check_points``, ``used_obs``, ``solver``.
+    """
+    setup = point_setup(block, control)
+    check_determinable(block, setup)
+    check_connected(block, setup)
+    check_datum(block, setup)
+    prob = BundleProblem(
+        block, setup, additional=additional, ap_group=ap_group, ap_sigma=ap_sigma, solver=solver
+    )
+    names = prob.names()
+    red_names = names[: 6 * prob.m]
+    xyz0 = block.points.xyz.copy()
+    fixed = setup.fixed
+    xyz0[fixed] = np.where(np.isfinite(setup.known[fixed]), setup.known[fixed], xyz0[fixed])
+    st = _State(block.images.X0.copy(), block.images.angles.copy(), xyz0, np.zeros(prob.q))
+    keep_x = (block.n_images <= HISTORY_X_LIMIT) if history_x is None else bool(history_x)
+    dof = prob.redundancy
+
+    def s0(c):
+        return float(np.sqrt(c / dof)) if dof > 0 else float("nan")
+
+    rw, Je, Jp = prob.residuals(st, jac=True)
+    cost = prob.cost(st, rw)
+    history = [Iteration(0, prob.flat(st) if keep_x else np.empty(0), None, s0(cost), cost)]
+    lam, converged = 0.0, False
+    reason = f"reached the maximum of {max_iter} iterations"
+    for it in range(1, max_iter + 1):
+        while True:
+            ne = prob.normal(st, rw, Je, Jp, lam)
+            try:
+                dc, dp, da, fac = prob.solve(ne, red_names)
+            except NotDeterminableError:
+                if it == 1 and lam == 0:
+                    raise
+                lam = max(10 * lam, 1e-3)
+                if lam > 1e8:
+                    raise
+                continue
+            new = prob.apply(st, dc, dp, da)
+            rw_n, Je_n, Jp_n = prob.residuals(new, jac=True)
+            c_new = prob.cost(new, rw_n)
+            if np.isfinite(c_new) and c_new <= cost * (1 + 1e-12) + 1e-12:
+                break
+            lam = max(10 * lam, 1e-4)
+            if lam > 1e8:
+                reason = f"no step decreases vᵀPv in iteration {it} (damping exhausted)"
+                break
+        if lam > 1e8:
+            break
+        # parameter-based stopping: corrections in units of the conditional σ
+        rel = max(
+            float(np.max(np.abs(dc) * np.sqrt(ne["diagU"]), initial=0.0)),
+            float(np.max(np.abs(dp) * np.sqrt(ne["diagV"]), initial=0.0)),
+            float(np.max(np.abs(da) * np.sqrt(ne["diagF"]), initial=0.0)) if prob.q else 0.0,
+        )
+        dx = np.concatenate([dc.ravel(), dp.ravel(), da]) if keep_x else None
+        st, rw, Je, Jp, cost = new, rw_n, Je_n, Jp_n, c_new
+        rec = Iteration(it, prob.flat(st) if keep_x else np.empty(0), dx, s0(cost), cost, lam, rel)
+        history.append(rec)
+        if callback is not None:
+            callback(rec)
+        lam = lam / 10 if lam > 1e-6 else 0.0
+        if rel < tol:
+            converged, reason = True, f"corrections below {tol:g} σ after {it} iterations"
+            break
+    return _finish(
+        block,
+        prob,
+        st,
+        rw,
+        Je,
+        Jp,
+        cost,
+        names,
+        history,
+        converged,
+        reason,
+        precision,
+        dof,
+        s0(cost),
+    )
+
+
+def _finish(
+    block, prob, st, rw, Je, Jp, cost, names, history, converged, reason, precision, dof, sigma0
+):
+    from .bundle_result import finish_result
+
+    return finish_result(
+        block, prob, st, rw, Je, Jp, names, history, converged, reason, precision, dof, sigma0
+    )

@@ -1,0 +1,177 @@
+"""Assemble the :class:`Adjustment` of a bundle adjustment; check points.
+
+Residual order (v = f − l): the image coordinates of *all* observations of the block
+(x, y per observation, mm; rays to check points included but not adjusted — their
+redundancy numbers are NaN), then the pseudo-observations of weighted control
+coordinates (m), observed projection centres (m), attitudes (rad) and additional
+parameters. ``extra["obs_slices"]`` names these ranges.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..adjust.result import Adjustment
+from ..model import CHECK
+from .bundle_kernel import collinearity_block, project_block
+
+F64 = NDArray[np.float64]
+
+
+def intersect_points(
+    block,
+    X0: F64,
+    angles: F64,
+    points: NDArray[np.int64],
+    start: F64,
+    obs_mask: NDArray[np.bool_],
+    iterations: int = 8,
+) -> F64:
+    """Forward intersection (least squares, vectorised over points) with fixed orientations.
+
+    Parameters
+    ----------
+    block : Block
+    X0, angles : ndarray, shape (m, 3)
+        Orientations (m, rad; ``block.sequence``).
+    points : ndarray of int
+        Indices of the points to intersect.
+    start : ndarray, shape (len(points), 3)
+        Starting coordinates in m.
+    obs_mask : ndarray of bool, shape (n,)
+        Observations that may be used.
+
+    Returns
+    -------
+    ndarray, shape (len(points), 3)
+        Intersected coordinates in m (NaN for points with fewer than two rays).
+    """
+    obs = block.observations
+    col = -np.ones(block.n_points, np.int64)
+    col[points] = np.arange(points.size)
+    sel = np.flatnonzero(obs_mask & (col[obs.point] >= 0))
+    xyz = start.astype(float).copy()
+    out = np.full_like(xyz, np.nan)
+    if sel.size == 0:
+        return out
+    cam = block.images.camera
+    c, x0, y0 = (getattr(block.cameras, k)[cam] for k in ("c", "x0", "y0"))
+    pc = col[obs.point[sel]]
+    sw = 1.0 / obs.sigma[sel]
+    for _ in range(iterations):
+        f, _, Jp = collinearity_block(
+            X0, angles, c, x0, y0, obs.image[sel], xyz[pc], block.sequence
+        )
+        Jw = Jp * sw[:, :, None]
+        rw = (obs.xy[sel] - f) * sw
+        N = np.zeros((points.size, 3, 3))
+        b = np.zeros((points.size, 3))
+        np.add.at(N, pc, Jw.transpose(0, 2, 1) @ Jw)
+        np.add.at(b, pc, np.einsum("nki,nk->ni", Jw, rw))
+        ok = np.linalg.det(N) > 1e-12 * np.einsum("nii->n", N) ** 3
+        d = np.zeros_like(b)
+        d[ok] = np.linalg.solve(N[ok], b[ok][:, :, None])[:, :, 0]
+        xyz += d
+        if np.max(np.abs(d), initial=0.0) < 1e-9:
+            break
+    rays = np.bincount(pc, minlength=points.size)
+    out[rays >= 2] = xyz[rays >= 2]
+    return out
+
+
+def finish_result(
+    block, prob, st, rw, Je, Jp, names, history, converged, reason, precision, dof, sigma0
+) -> Adjustment:
+    m, p, n = block.n_images, block.n_points, block.n_observations
+    setup = prob.setup
+    xyz = st.xyz.copy()
+    # check points: intersect with the adjusted orientations from their own rays
+    chk = np.flatnonzero(block.points.role == CHECK)
+    extra: dict = {
+        "solver": prob.struct.solver,
+        "used_obs": setup.used_obs,
+        "reduced_info": dict(prob.struct.info),
+    }
+    if chk.size:
+        start = np.where(
+            np.isfinite(block.points.xyz[chk]), block.points.xyz[chk], block.points.xyz_known[chk]
+        )
+        xyz[chk] = intersect_points(block, st.X0, st.angles, chk, start, np.ones(n, bool))
+        d = xyz[chk] - block.points.xyz_known[chk]
+        good = np.isfinite(d).all(axis=1)
+        extra["check_points"] = {"ids": [block.points.ids[i] for i in chk], "difference_m": d}
+        extra["check_rms"] = (
+            np.sqrt(np.mean(d[good] ** 2, axis=0)) if good.any() else np.full(3, np.nan)
+        )
+    # residuals of all image observations (v = f − l)
+    obs = block.observations
+    fa = _project_all(block, st, xyz, prob)
+    v_img = (fa - obs.xy).reshape(-1)
+    s_img = obs.sigma.reshape(-1)
+    parts_v, parts_s, slices = [v_img], [s_img], {"image": slice(0, 2 * n)}
+    pos = 2 * n
+
+    def add(name, v, s):
+        nonlocal pos
+        parts_v.append(v)
+        parts_s.append(s)
+        slices[name] = slice(pos, pos + v.size)
+        pos += v.size
+
+    w = prob.prior_w > 0
+    add("control", (st.xyz[prob.var_pts] - prob.prior_l)[w], 1 / np.sqrt(prob.prior_w[w]))
+    w = prob.X0_w > 0
+    add("X0_obs", (st.X0 - prob.X0_l)[w], 1 / np.sqrt(prob.X0_w[w]))
+    w = prob.ang_w > 0
+    from .bundle import _wrap
+
+    add("angles_obs", _wrap(st.angles - prob.ang_l)[w], 1 / np.sqrt(prob.ang_w[w]))
+    if prob.q:
+        w = prob.ap_w > 0
+        add("additional", st.ap[w], 1 / np.sqrt(prob.ap_w[w]))
+    extra["obs_slices"] = slices
+    blocks = {"exterior": slice(0, 6 * m), "points": slice(6 * m, 6 * m + 3 * p)}
+    if prob.q:
+        blocks["additional"] = slice(6 * m + 3 * p, 6 * m + 3 * p + prob.q)
+    x = np.concatenate([np.hstack([st.X0, st.angles]).ravel(), xyz.ravel(), st.ap])
+    res = Adjustment(
+        x=x,
+        names=names,
+        sigma0=sigma0,
+        redundancy=int(dof),
+        residuals=np.concatenate(parts_v),
+        sigma_obs=np.concatenate(parts_s),
+        converged=converged,
+        reason=reason,
+        history=history,
+        blocks=blocks,
+        extra=extra,
+    )
+    res.extra["exterior"] = np.hstack([st.X0, st.angles])
+    res.extra["points"] = xyz
+    if precision:
+        from ..adjust.precision import bundle_precision
+
+        bundle_precision(res, prob, st, rw, Je, Jp)
+    return res
+
+
+def _project_all(block, st, xyz, prob) -> F64:
+    cam = block.images.camera
+    obs = block.observations
+    f = project_block(
+        st.X0,
+        st.angles,
+        block.cameras.c[cam],
+        block.cameras.x0[cam],
+        block.cameras.y0[cam],
+        obs.image,
+        xyz[obs.point],
+        block.sequence,
+    )
+    if prob.q:
+        f[prob.uobs] += np.einsum(
+            "nij,nj->ni", prob.A, st.ap.reshape(prob.G, prob.k)[prob.grp[prob.oi]]
+        )
+    return f
