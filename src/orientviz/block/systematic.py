@@ -180,6 +180,11 @@ def trapezoid(um: float = 5.0, ref_mm: float = HALF_FORMAT_MM, axis: str = "x"):
     ``Δx = p x², Δy = p x y`` (``axis="x"``: the image gets wider towards +x) or
     ``Δx = p x y, Δy = p y²`` (``axis="y"``), with ``p = um / ref²``: the second-order
     terms of a small projective change of the image plane.
+
+    To first order such an error equals a small tilt of the image, so the orientation
+    absorbs it: a stereo model of two images with the same trapezoid error shows no
+    deformation (:func:`orientviz.block.deformation.model_field` gives ~0). It matters
+    when it differs between the images (:class:`PerGroup`, film rolls).
     """
     p = um * 1e-3 / ref_mm**2
     if axis not in ("x", "y"):

@@ -1,0 +1,76 @@
+"""Image and model deformation fields: closed-form twist/bending, absorption, animation."""
+
+import numpy as np
+import pytest
+
+from orientviz.block import systematic as se
+from orientviz.block.additional import Ebner12
+from orientviz.block.deformation import animate, frames, image_field, model_field
+from orientviz.errors import InputError
+
+
+def _fit_height(f):
+    x, y = f.xyz[:, 0] - f.xyz[:, 0].mean(), f.xyz[:, 1]
+    M = np.column_stack([np.ones_like(x), x, y, x * y, y * y, x * x])
+    return np.linalg.lstsq(M, f.d[:, 2], rcond=None)[0]
+
+
+def test_twist_survives_orientation_with_the_closed_form_size():
+    f = model_field(se.model_twist(8.0, base_mm=92.0), scale=10_000.0)
+    a, b, s = 0.008 / (92.0**2 * 110.0), 92.0, 10_000.0
+    # Δh = (H/B) · Δp_x(ground) = (H/B) · 2ab · X · Y · 1000/s  (X, Y in m)
+    pred = f.height_m / f.base_m * 2 * a * b * 1000.0 / s
+    coef = _fit_height(f)
+    # linearised parallax formula vs rigorous orientation: agree to < 0.1 %
+    assert coef[3] == pytest.approx(pred, rel=1e-3)
+    assert np.abs(coef[[1, 2, 4, 5]]).max() < 1e-3 * abs(pred) * 1e3  # no tilt/bending left
+
+
+def test_bending_across_the_flight_line():
+    f = model_field(se.model_bending(8.0, base_mm=92.0))
+    a, b = 0.008 / (92.0 * 110.0**2), 92.0
+    pred = f.height_m / f.base_m * a * b * 1000.0 / 10_000.0
+    assert _fit_height(f)[4] == pytest.approx(pred, rel=1e-3)
+
+
+def test_error_free_images_give_no_deformation_and_trapezoid_is_absorbed():
+    assert np.abs(model_field(None).d).max() < 1e-8
+    # a projective (trapezoid) image error equals a tilt: relative orientation absorbs it
+    assert np.abs(model_field(se.trapezoid(8.0)).d).max() < 1e-4  # m, vs ~cm for affinity
+    assert model_field(se.affinity(8.0, 0.0)).rms()[0] > 0.01
+
+
+def test_correcting_with_the_true_field_removes_the_deformation():
+    err = se.typical(10.0)
+    raw = model_field(err)
+    cor = model_field(err, correction=err)
+    # the correction is evaluated at the observed (not true) coordinates: second order
+    assert np.abs(cor.d).max() < 1e-3 * np.abs(raw.d).max()
+    assert "self-calibrated" in cor.name
+
+
+def test_image_field_of_error_models_and_parameters():
+    f = image_field(se.affinity(8.0, 0.0), half_mm=110.0, n=11)
+    assert f.max_um == pytest.approx(8.0)
+    assert f.xy.reshape(*f.shape, 2).shape == (11, 11, 2)
+    p = np.zeros(12)
+    p[0] = 5.0  # b1 = 5 µm
+    g = image_field((Ebner12(b=92.0), p), half_mm=92.0, n=3)
+    # b1: Δx = 5u, Δy = −5v µm: largest at the grid corner u = v = ±1
+    assert g.max_um == pytest.approx(5.0 * np.sqrt(2.0))
+    with pytest.raises(InputError, match="expected a callable"):
+        image_field(42)
+
+
+def test_animation_interpolates_between_the_fields():
+    a = model_field(se.affinity(8.0, 0.0), n=5)
+    b = model_field(se.affinity(2.0, 0.0), n=5)
+    np.testing.assert_allclose(animate(a, b, 0.0, 100.0), a.xyz + 100.0 * a.d)
+    np.testing.assert_allclose(animate(a, b, 1.0, 100.0), b.xyz + 100.0 * b.d)
+    fr = frames(a, b, n_frames=5, exaggeration=100.0)
+    assert fr.shape == (5, 25, 3)
+    np.testing.assert_allclose(fr[2], a.xyz + 50.0 * (a.d + b.d))
+    with pytest.raises(InputError, match="same grid"):
+        animate(a, model_field(None, n=3), 0.5)
+    with pytest.raises(InputError, match=r"t in \[0, 1\]"):
+        animate(a, b, 1.5)
