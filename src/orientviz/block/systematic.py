@@ -97,10 +97,11 @@ class Sum(_Base):
     """The sum of several error models."""
 
     parts: list
+    label: str = ""
 
     @property
     def name(self) -> str:
-        return " + ".join(p.name for p in self.parts)
+        return self.label or " + ".join(p.name for p in self.parts)
 
     def __call__(self, xy: ArrayLike, image_index: ArrayLike) -> F64:
         xy = _xy(xy)
@@ -171,7 +172,7 @@ def affinity(scale_um: float = 6.0, shear_um: float = 3.0, ref_mm: float = HALF_
     def f(xy: F64) -> F64:
         return np.column_stack([a * xy[:, 0], s * xy[:, 0]])
 
-    return ImageError(f"affinity {scale_um:g}/{shear_um:g} µm", f)
+    return ImageError(f"affinity {scale_um:.3g}/{shear_um:.3g} µm", f)
 
 
 def trapezoid(um: float = 5.0, ref_mm: float = HALF_FORMAT_MM, axis: str = "x"):
@@ -196,7 +197,7 @@ def trapezoid(um: float = 5.0, ref_mm: float = HALF_FORMAT_MM, axis: str = "x"):
             return np.column_stack([p * x * x, p * x * y])
         return np.column_stack([p * x * y, p * y * y])
 
-    return ImageError(f"trapezoid {um:g} µm ({axis})", f)
+    return ImageError(f"trapezoid {um:.3g} µm ({axis})", f)
 
 
 def radial(um: float = 7.0, ref_mm: float = 150.0, k2_fraction: float = -0.5):
@@ -220,7 +221,7 @@ def radial(um: float = 7.0, ref_mm: float = 150.0, k2_fraction: float = -0.5):
         r2 = np.sum(xy * xy, axis=1)
         return xy * (k1 * r2 + k2 * r2 * r2)[:, None]
 
-    return ImageError(f"radial {um:g} µm", f)
+    return ImageError(f"radial {um:.3g} µm", f)
 
 
 def decentering(um: float = 3.0, ref_mm: float = 150.0, angle_deg: float = 30.0):
@@ -239,7 +240,7 @@ def decentering(um: float = 3.0, ref_mm: float = 150.0, angle_deg: float = 30.0)
             [p1 * (r2 + 2 * x * x) + 2 * p2 * x * y, p2 * (r2 + 2 * y * y) + 2 * p1 * x * y]
         )
 
-    return ImageError(f"decentering {um:g} µm", f)
+    return ImageError(f"decentering {um:.3g} µm", f)
 
 
 def model_twist(um: float = 8.0, base_mm: float = 92.0, ref_mm: float = HALF_FORMAT_MM):
@@ -263,7 +264,7 @@ def model_twist(um: float = 8.0, base_mm: float = 92.0, ref_mm: float = HALF_FOR
         x, y = xy[:, 0], xy[:, 1]
         return np.column_stack([a * x * x * y, np.zeros_like(x)])
 
-    return ImageError(f"model twist {um:g} µm", f)
+    return ImageError(f"model twist {um:.3g} µm", f)
 
 
 def model_bending(um: float = 8.0, base_mm: float = 92.0, ref_mm: float = HALF_FORMAT_MM):
@@ -278,7 +279,7 @@ def model_bending(um: float = 8.0, base_mm: float = 92.0, ref_mm: float = HALF_F
         x, y = xy[:, 0], xy[:, 1]
         return np.column_stack([a * x * y * y, np.zeros_like(x)])
 
-    return ImageError(f"model bending {um:g} µm", f)
+    return ImageError(f"model bending {um:.3g} µm", f)
 
 
 @dataclass
@@ -358,7 +359,9 @@ def typical(strength_um: float = 10.0) -> Sum:
         decentering(0.15 * s),
         model_twist(0.3 * s),
     ]
-    return Sum(scaled)
+    return Sum(
+        scaled, f"typical {strength_um:g} µm (affinity, trapezoid, radial, decentering, twist)"
+    )
 
 
 def magnitude_um(model: Callable, half_mm: float = HALF_FORMAT_MM, n: int = 23) -> float:

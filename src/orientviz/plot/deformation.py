@@ -1,0 +1,152 @@
+"""Figures of image and model deformation (Ackermann's Bild 6), from the data of
+:mod:`orientviz.block.deformation`.
+
+Image fields: x along the flight direction, mm; vectors exaggerated so that µm become
+visible. Model fields: object frame in m (X along the base), planimetric vectors
+exaggerated, heights as coloured contours in cm.
+"""
+
+from __future__ import annotations
+
+import textwrap
+
+import numpy as np
+
+
+def _axes(ax, **kw):
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        fig, ax = plt.subplots(**kw)
+        return fig, ax
+    return ax.figure, ax
+
+
+def plot_image_field(field, *, ax=None, exaggeration: float | None = None, title=None):
+    """Quiver plot of an :class:`~orientviz.block.deformation.ImageField`.
+
+    Parameters
+    ----------
+    field : ImageField
+        Grid positions (mm) and error vectors (mm).
+    ax : matplotlib Axes, optional
+        Axes to draw into; a new figure if None.
+    exaggeration : float, optional
+        Vector exaggeration; default: the largest vector drawn as 1/8 of the grid width.
+    title : str, optional
+        Title (default: the field's name and largest error in µm).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, ax = _axes(ax, figsize=(5, 5))
+    width = float(np.ptp(field.xy[:, 0])) or 1.0
+    big = max(float(np.max(np.hypot(field.d[:, 0], field.d[:, 1]), initial=0.0)), 1e-12)
+    ex = exaggeration if exaggeration is not None else width / 8.0 / big
+    ax.quiver(
+        field.xy[:, 0], field.xy[:, 1], ex * field.d[:, 0], ex * field.d[:, 1],
+        angles="xy", scale_units="xy", scale=1.0, color="#c0392b", width=0.004,
+    )  # fmt: skip
+    ax.plot(field.xy[:, 0], field.xy[:, 1], ".", color="0.5", ms=3)
+    h = 0.5 * width
+    ax.plot([-h, h, h, -h, -h], [-h, -h, h, h, -h], color="0.3", lw=0.8)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [mm] (flight direction)")
+    ax.set_ylabel("y [mm]")
+    name = textwrap.shorten(field.name, 60)
+    ax.set_title(title or f"{name}\nmax {field.max_um:.1f} µm, vectors ×{ex:.0f}", fontsize=9)
+    return fig
+
+
+def plot_model_field(
+    field, *, component: str = "planimetry", ax=None, exaggeration=None, title=None
+):
+    """One component of a :class:`~orientviz.block.deformation.ModelField`.
+
+    Parameters
+    ----------
+    field : ModelField
+        Ground grid (m) and deformation (m).
+    component : {"planimetry", "height"}
+        Planimetric vectors (ΔX, ΔY) or height deformation ΔZ as filled contours (cm).
+    ax : matplotlib Axes, optional
+        Axes to draw into; a new figure if None.
+    exaggeration : float, optional
+        Planimetric vector exaggeration (default: largest vector = 1/8 of the model width).
+    title : str, optional
+        Title (default: the field's name, component and RMS).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, ax = _axes(ax, figsize=(5, 5))
+    X, Y = field.xyz[:, 0], field.xyz[:, 1]
+    rms = field.rms() * 100.0
+    if component == "planimetry":
+        width = float(np.ptp(X)) or 1.0
+        big = max(float(np.max(np.hypot(field.d[:, 0], field.d[:, 1]), initial=0.0)), 1e-12)
+        ex = exaggeration if exaggeration is not None else width / 8.0 / big
+        ax.quiver(
+            X, Y, ex * field.d[:, 0], ex * field.d[:, 1],
+            angles="xy", scale_units="xy", scale=1.0, color="#2874a6", width=0.008,
+        )  # fmt: skip
+        ax.plot(X, Y, ".", color="0.5", ms=3)
+        sub = f"plan: RMS X {rms[0]:.1f} / Y {rms[1]:.1f} cm, ×{ex:.0f}"
+    elif component == "height":
+        r, c = field.shape
+        dz = field.d[:, 2].reshape(r, c) * 100.0
+        lim = max(float(np.max(np.abs(dz))), 1e-9)
+        cs = ax.contourf(
+            X.reshape(r, c), Y.reshape(r, c), dz, levels=np.linspace(-lim, lim, 17), cmap="RdBu_r"
+        )
+        fig.colorbar(cs, ax=ax, label="ΔZ [cm]", shrink=0.8)
+        ax.plot(X, Y, ".", color="0.3", ms=2)
+        sub = f"height, RMS Z {rms[2]:.1f} cm"
+    else:
+        from ..errors import InputError
+
+        raise InputError(f"component: expected 'planimetry' or 'height', got {component!r}")
+    ax.set_aspect("equal")
+    ax.set_xlabel("X [m] (along the base)")
+    ax.set_ylabel("Y [m]")
+    ax.set_title(title or f"{textwrap.shorten(field.name, 60)}\n{sub}", fontsize=9)
+    return fig
+
+
+def plot_deformation_comparison(without, with_, *, axes=None, exaggeration=None):
+    """2 × 2 figure: planimetry and height of a model, without and with self-calibration.
+
+    Parameters
+    ----------
+    without, with_ : ModelField
+        The same model oriented from raw and from self-calibrated image coordinates.
+    axes : array of 4 matplotlib Axes, optional
+        Axes to draw into (row-major: plan without, plan with, height without, height
+        with); a new figure if None.
+    exaggeration : float, optional
+        Common planimetric exaggeration (default: from the field *without*).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    if axes is None:
+        fig, axes = plt.subplots(2, 2, figsize=(10, 9))
+    axes = np.asarray(axes).ravel()
+    if exaggeration is None:
+        width = float(np.ptp(without.xyz[:, 0])) or 1.0
+        big = max(float(np.max(np.hypot(without.d[:, 0], without.d[:, 1]))), 1e-12)
+        exaggeration = width / 8.0 / big
+    for k, (f, label) in enumerate(((without, "without"), (with_, "with self-calibration"))):
+        plot_model_field(f, component="planimetry", ax=axes[k], exaggeration=exaggeration)
+        plot_model_field(f, component="height", ax=axes[2 + k])
+        axes[k].set_title(f"{label}: " + axes[k].get_title().split("\n")[-1], fontsize=9)
+        axes[2 + k].set_title(f"{label}: " + axes[2 + k].get_title().split("\n")[-1], fontsize=9)
+    fig = axes[0].figure
+    fig.suptitle(f"model deformation — {textwrap.shorten(without.name, 80)}", fontsize=10)
+    fig.tight_layout()
+    return fig
