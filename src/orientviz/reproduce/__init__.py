@@ -12,7 +12,13 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 #: name → ("module", "function", one-line description)
-REGISTRY: dict[str, tuple[str, str, str]] = {}
+REGISTRY: dict[str, tuple[str, str, str]] = {
+    "kovarik": (
+        "orientviz.reproduce.kovarik",
+        "table",
+        "Kovarik 1968: passes of numerical relative orientation vs relief, wrong ordinate",
+    ),
+}
 
 
 @dataclass

@@ -1,0 +1,504 @@
+"""A simulated analog stereo plotter for the numerical relative orientation of a pair.
+
+The plotter holds two projectors. The left one is fixed in the true orientation of the
+left photograph (a dependent pair); the right one has the counters ``by, bz`` (mm) and
+``ω, φ, κ`` (radians inside; centesimal minutes on the dials), turned through the
+instrument's own axes: ``sequence="pok"`` (φ primary, then ω, then κ, as in Wild
+instruments: R = R_φ R_ω R_κ) by default. The frame and the sign of p_y are those of
+:mod:`orientviz.orientation.relative` (X along the base, Y left, Z up, model points at
+Z < 0, p_y = Y_left − Y_right = the *by reading* that clears the parallax).
+
+A *pass* (Kovarik 1968) reads ``by`` and ``z`` at the points of a scheme, computes the
+corrections with a chosen formula and applies them through the counters; every pass is
+kept in :attr:`AnalogPlotter.history`. Formulas (:data:`FORMULAS`):
+
+``"exact"``     least squares of the linearised equation with the read heights z_i and the
+                plan positions of the points (the exact linearisation);
+``"kovarik9"``  Kovarik's closed form for 9 points in mountainous terrain, with his
+                constant k = ordinate / c (edge points assumed at Y/Z = ∓k);
+``"flat"``      the same least squares with one common height (Hallert's flat terrain);
+``"preorient"`` the simple pre-orientation formulas with round constants
+                (:mod:`orientviz.orientation.preorient`).
+
+The true pair (two images' orientation, terrain points, image coordinates) comes from
+:func:`true_pair`; :meth:`TruePair.scene` gives everything a 3D viewer needs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..camera import project
+from ..errors import InputError
+from ..rotation import check_sequence, matrix_from_opk, matrix_from_rotvec, opk_from_matrix
+from ..units import RHO_C
+from .relative import DEPENDENT, PairState, design_dependent, y_parallax
+from .schemes import Scheme, get_scheme, kovarik_nine_point, least_squares_elements
+
+F64 = NDArray[np.float64]
+
+FORMULAS: tuple[str, ...] = ("exact", "kovarik9", "flat", "preorient")
+
+
+@dataclass(frozen=True)
+class PlotterConfig:
+    """Geometry of the simulated instrument and photographs.
+
+    Attributes
+    ----------
+    c : float
+        Principal distance, mm (wide angle 152.7).
+    format_mm : float
+        Side of the square image format, mm (230).
+    image_base : float
+        Base in the image, mm (about 92 at 60 % forward overlap).
+    model_base : float
+        Model base b in machine mm (Kovarik's constant 220.7).
+    ordinate : float
+        Image ordinate of the scheme's edge rows, mm; k = ordinate / c.
+    relief : float
+        Relative relief: (highest − lowest terrain point) / projection distance.
+    sequence : str
+        Instrument axes: ``"pok"`` (φ primary, Wild) or ``"opk"``.
+    sigma_by, sigma_z : float
+        Reading noise of the by and z counters, machine mm.
+    placement : str
+        ``"plan"`` (points set by the X, Y counters) or ``"ratio"`` (at Y/Z = ∓k).
+    apply : str
+        ``"counters"``: corrections are added to the dials (the instrument's axes are
+        ignored, as at the desk); ``"axes"``: they are converted to dial values through
+        the instrument's axes (Bernhard's correction, exact).
+    """
+
+    c: float = 152.7
+    format_mm: float = 230.0
+    image_base: float = 92.0
+    model_base: float = 220.7
+    ordinate: float = 100.0
+    relief: float = 0.10
+    sequence: str = "pok"
+    sigma_by: float = 0.005
+    sigma_z: float = 0.02
+    placement: str = "plan"
+    apply: str = "counters"
+
+    @property
+    def scale(self) -> float:
+        """Machine mm per image mm (model base / image base)."""
+        return self.model_base / self.image_base
+
+    @property
+    def projection_distance(self) -> float:
+        """|Z| of the reference plane in machine mm (scale × c)."""
+        return self.scale * self.c
+
+    @property
+    def k(self) -> float:
+        """Kovarik's k = |y|/|z| of the edge rows (ordinate / c)."""
+        return self.ordinate / self.c
+
+    def check(self) -> PlotterConfig:
+        for name in ("c", "format_mm", "image_base", "model_base", "ordinate"):
+            v = getattr(self, name)
+            if not np.isfinite(v) or v <= 0:
+                raise InputError(f"expected a positive {name} in mm, got {v}")
+        if not 0 <= self.relief < 1:
+            raise InputError(f"expected a relative relief in [0, 1), got {self.relief}")
+        if self.sigma_by < 0 or self.sigma_z < 0:
+            raise InputError("expected non-negative reading noise")
+        check_sequence(self.sequence)
+        if self.placement not in ("plan", "ratio"):
+            raise InputError(f"expected placement 'plan' or 'ratio', got {self.placement!r}")
+        if self.apply not in ("counters", "axes"):
+            raise InputError(f"expected apply 'counters' or 'axes', got {self.apply!r}")
+        return self
+
+
+@dataclass
+class TruePair:
+    """The photographed truth: terrain and the true relative orientation.
+
+    Attributes
+    ----------
+    config : PlotterConfig
+    elements : ndarray, shape (5,)
+        True by, bz (machine mm) and ω, φ, κ (radians, ``config.sequence``) of the right
+        image relative to the left one (left: R = I at the origin).
+    terrain : dict
+        Parameters of the smooth terrain: ``"centres"`` (m, 2), ``"widths"`` (m,),
+        ``"weights"`` (m,), ``"offset"``, ``"gain"``.
+    """
+
+    config: PlotterConfig
+    elements: F64
+    terrain: dict = field(repr=False)
+
+    def height(self, X: ArrayLike, Y: ArrayLike) -> F64:
+        """Terrain height Z (machine mm, negative) at plan positions X, Y."""
+        X, Y = np.broadcast_arrays(np.asarray(X, float), np.asarray(Y, float))
+        t = self.terrain
+        dx = X[..., None] - t["centres"][:, 0]
+        dy = Y[..., None] - t["centres"][:, 1]
+        f = np.sum(t["weights"] * np.exp(-(dx**2 + dy**2) / t["widths"] ** 2), axis=-1)
+        H = self.config.projection_distance
+        return -H + self.config.relief * H * (f - t["offset"]) * t["gain"]
+
+    @property
+    def state(self) -> PairState:
+        """The true orientation as a :class:`PairState`."""
+        return PairState.from_elements(
+            self.elements, self.config.model_base, "dependent", self.config.sequence
+        )
+
+    def images(self, points: ArrayLike) -> tuple[F64, F64]:
+        """Image coordinates (mm) of model points (n, 3) in the left and right photograph."""
+        st, c = self.state, self.config.c
+        xy1 = project(points, np.zeros(3), np.eye(3), c)
+        xy2 = project(points, st.base, matrix_from_opk(*st.angles_right, sequence=st.sequence), c)
+        return xy1, xy2
+
+    def scene(self, n_grid: int = 21) -> dict:
+        """Everything a 3D view of the pair needs (machine mm, radians).
+
+        Returns
+        -------
+        dict
+            ``"centres"`` (2, 3) projection centres; ``"rotations"`` (2, 3, 3), image →
+            model; ``"c"``; ``"format_mm"``; ``"terrain"`` (n_grid², 3) grid points over
+            the model area; ``"xy_left"``, ``"xy_right"`` their image coordinates (mm);
+            ``"elements"`` the true by, bz, ω, φ, κ and ``"sequence"``.
+        """
+        cfg = self.config
+        b, d = cfg.model_base, cfg.ordinate * cfg.scale
+        X, Y = np.meshgrid(np.linspace(-0.1 * b, 1.1 * b, n_grid), np.linspace(-d, d, n_grid))
+        P = np.column_stack([X.ravel(), Y.ravel(), self.height(X, Y).ravel()])
+        xy1, xy2 = self.images(P)
+        st = self.state
+        R2 = matrix_from_opk(*st.angles_right, sequence=st.sequence)
+        return {
+            "centres": np.array([np.zeros(3), st.base]),
+            "rotations": np.array([np.eye(3), R2]),
+            "c": cfg.c,
+            "format_mm": cfg.format_mm,
+            "terrain": P,
+            "xy_left": xy1,
+            "xy_right": xy2,
+            "elements": self.elements.copy(),
+            "sequence": st.sequence,
+        }
+
+
+def true_pair(
+    config: PlotterConfig | None = None,
+    *,
+    rng: np.random.Generator,
+    start_c: tuple[float, float] = (100.0, 150.0),
+    start_mm: tuple[float, float] = (1.0, 3.0),
+    elements: ArrayLike | None = None,
+    n_hills: int = 6,
+) -> TruePair:
+    """A random true pair over smooth terrain of the configured relative relief.
+
+    Parameters
+    ----------
+    config : PlotterConfig, optional
+    rng : numpy.random.Generator
+        Source of the terrain and of the true elements.
+    start_c : (float, float)
+        Range of |ω|, |φ|, |κ| of the right image, centesimal minutes (random signs):
+        with the plotter at zero these are the first corrections (Kovarik: 100–150 c).
+    start_mm : (float, float)
+        Range of |by|, |bz|, machine mm.
+    elements : array_like, shape (5,), optional
+        True by, bz (mm), ω, φ, κ (rad) instead of random ones.
+    n_hills : int
+        Number of Gaussian hills making up the terrain.
+
+    Returns
+    -------
+    TruePair
+    """
+    cfg = (config or PlotterConfig()).check()
+    b, d = cfg.model_base, cfg.ordinate * cfg.scale
+    m = max(int(n_hills), 1)
+    centres = np.column_stack(
+        [rng.uniform(-0.2 * b, 1.2 * b, m), rng.uniform(-1.2 * d, 1.2 * d, m)]
+    )
+    widths = rng.uniform(0.3, 0.8, m) * b
+    weights = rng.uniform(-1, 1, m)
+    terrain = {"centres": centres, "widths": widths, "weights": weights, "offset": 0.0, "gain": 1.0}
+    pair = TruePair(cfg, np.zeros(5), terrain)
+    # normalise: heights span exactly relief × H over the model area
+    X, Y = np.meshgrid(np.linspace(0, b, 41), np.linspace(-d, d, 41))
+    H = cfg.projection_distance
+    f = (pair.height(X, Y) + H) / (cfg.relief * H) if cfg.relief > 0 else np.zeros(1)
+    span = float(f.max() - f.min())
+    if cfg.relief > 0 and span > 0:
+        terrain["offset"] = float(0.5 * (f.max() + f.min()))
+        terrain["gain"] = 1.0 / span
+    if elements is None:
+        s = rng.choice([-1.0, 1.0], 5)
+        e = np.empty(5)
+        e[:2] = s[:2] * rng.uniform(*start_mm, 2)
+        e[2:] = s[2:] * rng.uniform(*start_c, 3) / RHO_C
+    else:
+        e = np.asarray(elements, dtype=float).reshape(5)
+    pair.elements = e
+    return pair
+
+
+@dataclass
+class Readings:
+    """by and z read at the scheme points (machine mm; plan positions X, Y nominal)."""
+
+    scheme: Scheme
+    X: F64
+    Y: F64
+    by: F64
+    z: F64
+    parallax: F64
+
+
+@dataclass
+class PassRecord:
+    """One pass: readings, computed corrections, the dials and the true errors after it.
+
+    Attributes
+    ----------
+    index : int
+        1, 2, … in the order of the passes.
+    formula : str
+    readings : Readings
+    corrections : ndarray, shape (5,)
+        dby, dbz (mm), dω, dφ, dκ (rad), orientviz senses.
+    settings_after : ndarray, shape (5,)
+        Dials after applying them (by, bz mm; ω, φ, κ rad in the instrument's sequence).
+    error_after : ndarray, shape (5,)
+        Dials minus the truth after the pass.
+    """
+
+    index: int
+    formula: str
+    readings: Readings
+    corrections: F64
+    settings_after: F64
+    error_after: F64
+
+    @property
+    def max_rotation_c(self) -> float:
+        """Largest |rotation correction| in centesimal minutes."""
+        return float(np.abs(self.corrections[2:]).max() * RHO_C)
+
+    @property
+    def max_base_mm(self) -> float:
+        """Largest |dby|, |dbz| in machine mm."""
+        return float(np.abs(self.corrections[:2]).max())
+
+    @property
+    def rms_parallax(self) -> float:
+        """RMS of the parallaxes read in this pass (machine mm)."""
+        return float(np.sqrt(np.mean(self.readings.parallax**2)))
+
+
+@dataclass
+class OrientationRun:
+    """The passes of one relative orientation and whether (when) it converged."""
+
+    passes: list[PassRecord]
+    converged: bool
+    tol_c: float
+    tol_mm: float
+
+    @property
+    def n_passes(self) -> int:
+        """Passes read and computed, the last one (with negligible corrections) included."""
+        return len(self.passes)
+
+    def corrections_c(self) -> F64:
+        """Largest rotation correction per pass, centesimal minutes."""
+        return np.array([p.max_rotation_c for p in self.passes])
+
+
+class AnalogPlotter:
+    """The instrument: dials, readings at scheme points, passes.
+
+    Parameters
+    ----------
+    pair : TruePair
+        The photographs (their true orientation and terrain).
+    scheme : Scheme or str
+        Point scheme read in each pass (default Kovarik's nine points).
+    settings : array_like, shape (5,), optional
+        Initial dials by, bz (mm), ω, φ, κ (rad); default all zero (no pre-orientation).
+    rng : numpy.random.Generator, optional
+        Source of the reading noise; required if the configured noise is not zero.
+    """
+
+    def __init__(
+        self,
+        pair: TruePair,
+        scheme: Scheme | str = "kovarik9",
+        settings: ArrayLike | None = None,
+        rng: np.random.Generator | None = None,
+    ) -> None:
+        self.pair = pair
+        self.config = pair.config.check()
+        self.scheme = get_scheme(scheme)
+        self.settings = (
+            np.zeros(5) if settings is None else np.asarray(settings, float).reshape(5).copy()
+        )
+        if rng is None and (self.config.sigma_by > 0 or self.config.sigma_z > 0):
+            raise InputError("reading noise is configured: pass rng=np.random.default_rng(seed)")
+        self.rng = rng
+        self.history: list[PassRecord] = []
+
+    # -------------------------------------------------------------- state
+    @property
+    def state(self) -> PairState:
+        return PairState.from_elements(
+            self.settings, self.config.model_base, "dependent", self.config.sequence
+        )
+
+    @property
+    def error(self) -> F64:
+        """Dials minus the truth (by, bz mm; ω, φ, κ rad)."""
+        return self.settings - self.pair.elements
+
+    def scheme_points(self, scheme: Scheme | str | None = None) -> tuple[F64, F64, F64]:
+        """Nominal plan positions and true terrain heights of the scheme points (machine mm)."""
+        sch = self.scheme if scheme is None else get_scheme(scheme)
+        cfg = self.config
+        H = cfg.projection_distance
+        X, Y, _ = sch.model_points(cfg.model_base, cfg.k * H, -H, placement="plan")
+        if cfg.placement == "ratio":
+            # along the ray of constant image ordinate: Y/Z = ∓k at the terrain height
+            Z = -H * np.ones_like(X)
+            for _ in range(20):
+                Z = self.pair.height(X, Y)
+                Y = sch.v * cfg.k * np.abs(Z)
+        return X, Y, self.pair.height(X, Y)
+
+    def parallax_at(self, points: ArrayLike) -> tuple[F64, F64]:
+        """Noise-free y-parallaxes (mm) and model points at true terrain points (n, 3)."""
+        xy1, xy2 = self.pair.images(points)
+        return y_parallax(xy1, xy2, self.config.c, self.state)
+
+    def read(self, scheme: Scheme | str | None = None) -> Readings:
+        """Read by and z at every point of the scheme (with the configured noise)."""
+        sch = self.scheme if scheme is None else get_scheme(scheme)
+        X, Y, Z = self.scheme_points(sch)
+        p, pts = self.parallax_at(np.column_stack([X, Y, Z]))
+        z = pts[:, 2].copy()
+        if self.rng is not None:
+            p = (
+                p + self.rng.normal(0.0, self.config.sigma_by, p.shape)
+                if self.config.sigma_by
+                else p
+            )
+            z = z + self.rng.normal(0.0, self.config.sigma_z, z.shape) if self.config.sigma_z else z
+        return Readings(sch, X, Y, self.settings[0] + p, z, p)
+
+    # -------------------------------------------------------------- formulas
+    def corrections(
+        self, readings: Readings, formula: str = "exact", k: float | None = None
+    ) -> F64:
+        """Corrections dby, dbz (mm), dω, dφ, dκ (rad, orientviz senses) from readings.
+
+        Parameters
+        ----------
+        readings : Readings
+        formula : {"exact", "kovarik9", "flat", "preorient"}
+        k : float, optional
+            The k = ordinate/c the formula's constants were computed with (default the
+            configured one; Kovarik's wrong-ordinate experiment uses another).
+        """
+        cfg = self.config
+        b, H = cfg.model_base, cfg.projection_distance
+        kk = cfg.k if k is None else float(k)
+        p = readings.by - self.settings[0]
+        if formula == "exact":
+            return least_squares_elements(
+                design_dependent(readings.X, readings.Y, readings.z, b), p
+            )
+        if formula == "flat":
+            Y = readings.scheme.v * kk * H
+            return least_squares_elements(design_dependent(readings.X, Y, -H, b), p)
+        if formula == "kovarik9":
+            if readings.scheme.name != "kovarik9":
+                raise InputError(
+                    f"Kovarik's formula needs the 9-point scheme, not {readings.scheme.name}"
+                )
+            return kovarik_nine_point(p, readings.z, b, kk)
+        if formula == "preorient":
+            from .preorient import preorientation_corrections
+
+            return preorientation_corrections(p, readings.z, readings.scheme, b)
+        raise InputError(f"unknown formula {formula!r}; known: {', '.join(FORMULAS)}")
+
+    def apply(self, d: ArrayLike) -> None:
+        """Apply corrections (dby, dbz mm, dω, dφ, dκ rad about the model axes) to the dials."""
+        d = np.asarray(d, dtype=float).reshape(5)
+        self.settings[:2] += d[:2]
+        if self.config.apply == "counters":
+            self.settings[2:] += d[2:]
+            return
+        seq = self.config.sequence
+        R = matrix_from_opk(*self.settings[2:], sequence=seq)
+        R_new = matrix_from_rotvec(d[2:]) @ R
+        self.settings[2:] = np.array(opk_from_matrix(R_new, seq), dtype=float)
+
+    def run_pass(self, formula: str = "exact", k: float | None = None) -> PassRecord:
+        """Read, compute, apply; append and return the :class:`PassRecord`."""
+        r = self.read()
+        d = self.corrections(r, formula, k)
+        self.apply(d)
+        rec = PassRecord(
+            len(self.history) + 1, formula, r, d, self.settings.copy(), self.error.copy()
+        )
+        self.history.append(rec)
+        return rec
+
+    def orient(
+        self,
+        formula: str = "exact",
+        *,
+        k: float | None = None,
+        max_passes: int = 30,
+        tol_c: float = 1.0,
+        tol_mm: float = 0.05,
+    ) -> OrientationRun:
+        """Repeat passes until one yields negligible corrections.
+
+        Converged (Kovarik's practice) means: a pass computes rotations all below
+        ``tol_c`` centesimal minutes and base corrections below ``tol_mm`` — what single
+        by readings with the configured noise can no longer resolve. That pass is
+        counted (it had to be read to know); its small corrections are applied too.
+        """
+        start = len(self.history)
+        for _ in range(int(max_passes)):
+            rec = self.run_pass(formula, k)
+            if rec.max_rotation_c < tol_c and rec.max_base_mm < tol_mm:
+                return OrientationRun(self.history[start:], True, tol_c, tol_mm)
+        return OrientationRun(self.history[start:], False, tol_c, tol_mm)
+
+
+def config_with(config: PlotterConfig | None = None, **changes) -> PlotterConfig:
+    """A checked copy of ``config`` with some fields changed."""
+    return replace(config or PlotterConfig(), **changes).check()
+
+
+__all__ = [
+    "FORMULAS",
+    "DEPENDENT",
+    "PlotterConfig",
+    "TruePair",
+    "true_pair",
+    "Readings",
+    "PassRecord",
+    "OrientationRun",
+    "AnalogPlotter",
+    "config_with",
+]
