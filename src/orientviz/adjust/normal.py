@@ -180,7 +180,8 @@ class ReducedStructure:
         keep = oc[a] <= oc[b]
         self.pair_a, self.pair_b = a[keep], b[keep]
         self.pair_pt = op[self.pair_a]
-        self.all_pairs = (a, b)  # needed only for group parameters
+        self.all_pairs = (a, b)  # all ordered pairs, grouped by a (for precision, APs)
+        self.all_pairs_starts = np.cumsum(rep) - rep  # start of each a-group, pt_obs order
         # unique 6×6 blocks (i ≤ k), diagonal blocks always present
         m = self.n_cam
         keys = np.concatenate([oc[self.pair_a] * m + oc[self.pair_b], np.arange(m) * (m + 1)])

@@ -1,0 +1,139 @@
+"""Precision of the bundle (orientviz.adjust.precision) against the dense full inverse."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from orientviz.adjust.precision import banded_selected_inverse
+from orientviz.block.bundle import bundle_adjust
+from orientviz.block.simulate import simulate_block
+from orientviz.camera import collinearity_jacobian
+
+
+class Affinity:
+    """A tiny additional-parameter set for the tests: affinity and shear, µm at x = 100 mm."""
+
+    name = "affinity"
+    names = ["a1", "a2"]
+
+    def design(self, xy):
+        A = np.zeros((xy.shape[0], 2, 2))
+        A[:, 0, 0] = 1e-3 * xy[:, 0] / 100.0  # Δx = a1 · x
+        A[:, 1, 0] = -1e-3 * xy[:, 1] / 100.0  # Δy = −a1 · y (affinity, not a scale)
+        A[:, 1, 1] = 1e-3 * xy[:, 0] / 100.0  # Δy = a2 · x (shear)
+        return A
+
+
+def dense_reference(res, block, control_sigma=None, additional=None, ap_group=None, ap_sigma=None):
+    """Full Jacobian at the solution, N = JᵀPJ and Q = N⁻¹ (unknowns: images, free points, APs)."""
+    m = block.n_images
+    ext = res["exterior"].reshape(m, 6)
+    pts = res["points"].reshape(-1, 3)
+    obs = block.observations
+    free = np.flatnonzero(block.points.role == 0)
+    if control_sigma is not None:
+        free = np.flatnonzero(block.points.role != 2)
+    col = -np.ones(block.n_points, int)
+    col[free] = np.arange(free.size)
+    used = np.flatnonzero(block.points.role[obs.point] != 2)
+    cam = block.images.camera[obs.image[used]]
+    _, Je, Jp, _ = collinearity_jacobian(
+        pts[obs.point[used]],
+        ext[obs.image[used], :3],
+        ext[obs.image[used], 3:],
+        block.cameras.c[cam],
+        block.cameras.x0[cam],
+        block.cameras.y0[cam],
+        block.sequence,
+    )
+    k = 0 if additional is None else len(additional.names)
+    G = 0 if additional is None else int(np.max(ap_group)) + 1
+    u = 6 * m + 3 * free.size + k * G
+    J = np.zeros((2 * used.size, u))
+    for r, o in enumerate(used):
+        i = obs.image[o]
+        J[2 * r : 2 * r + 2, 6 * i : 6 * i + 6] = Je[r]
+        if col[obs.point[o]] >= 0:
+            c0 = 6 * m + 3 * col[obs.point[o]]
+            J[2 * r : 2 * r + 2, c0 : c0 + 3] = Jp[r]
+        if k:
+            g = ap_group[i]
+            c0 = 6 * m + 3 * free.size + k * g
+            J[2 * r : 2 * r + 2, c0 : c0 + k] = additional.design(obs.xy[o][None])[0]
+    p = (1.0 / obs.sigma[used] ** 2).reshape(-1)
+    N = J.T @ (p[:, None] * J)
+    if control_sigma is not None:
+        ctrl = np.flatnonzero(block.points.role == 1)
+        idx = (6 * m + 3 * col[ctrl][:, None] + np.arange(3)).ravel()
+        N[idx, idx] += 1.0 / control_sigma**2
+    if k and ap_sigma is not None:
+        idx = np.arange(6 * m + 3 * free.size, u)
+        N[idx, idx] += 1.0 / ap_sigma**2
+    Q = np.linalg.inv(N)
+    r = 1.0 - p * np.einsum("ij,jk,ik->i", J, Q, J)
+    return Q, free, used, r
+
+
+@pytest.mark.parametrize("case", ["fixed", "weighted", "ap"])
+def test_precision_equals_dense_inverse(case):
+    sim = simulate_block(2, 4, rng=11, extra=6, n_check=2)
+    block = sim.block
+    kw = {}
+    csig = None
+    if case == "weighted":
+        csig = 0.03
+        block.points.sigma[block.points.role == 1] = csig
+        kw["control"] = "weighted"
+    if case == "ap":
+        kw.update(additional=Affinity(), ap_group=np.arange(block.n_images) % 2, ap_sigma=50.0)
+    res = bundle_adjust(block, **kw)
+    Q, free, used, r_ref = dense_reference(
+        res, block, csig, kw.get("additional"), kw.get("ap_group"), kw.get("ap_sigma")
+    )
+    m = block.n_images
+    ext_blocks = np.stack([Q[6 * i : 6 * i + 6, 6 * i : 6 * i + 6] for i in range(m)])
+    # exact algebra on a well-conditioned system: agreement to rounding
+    np.testing.assert_allclose(
+        res.cofactor_blocks["exterior"], ext_blocks, rtol=1e-7, atol=1e-9 * np.abs(ext_blocks).max()
+    )
+    pt_blocks = np.stack(
+        [
+            Q[6 * m + 3 * j : 6 * m + 3 * j + 3, 6 * m + 3 * j : 6 * m + 3 * j + 3]
+            for j in range(free.size)
+        ]
+    )
+    np.testing.assert_allclose(
+        res.cofactor_blocks["points"][free],
+        pt_blocks,
+        rtol=1e-7,
+        atol=1e-9 * np.abs(pt_blocks).max(),
+    )
+    rn = res.redundancy_numbers[: 2 * block.n_observations].reshape(-1, 2)
+    np.testing.assert_allclose(rn[used].reshape(-1), r_ref, atol=1e-8)
+    # the redundancy numbers add up to the redundancy (Σ r_i = n − u)
+    assert np.isclose(np.nansum(res.redundancy_numbers), res.redundancy, atol=1e-6)
+    if case == "ap":
+        q0 = 6 * m + 3 * free.size
+        np.testing.assert_allclose(res.cofactor_blocks["additional"], Q[q0:, q0:], rtol=1e-7)
+
+
+def test_banded_selected_inverse_matches_dense():
+    rng = np.random.default_rng(5)
+    n, kd = 230, 17
+    A = np.zeros((n, n))
+    for d in range(kd + 1):
+        v = rng.normal(size=n - d)
+        A[np.arange(d, n), np.arange(n - d)] = v
+    S = A @ A.T + n * np.eye(n)  # banded with half-bandwidth 2·kd
+    kd2 = 2 * kd
+    ab = np.zeros((kd2 + 1, n))
+    for d in range(kd2 + 1):
+        ab[d, : n - d] = np.diagonal(S, -d)
+    import scipy.linalg
+
+    cb = scipy.linalg.cholesky_banded(ab, lower=True)
+    Zb = banded_selected_inverse(cb, nb=16)
+    Z = np.linalg.inv(S)
+    for d in range(kd2 + 1):
+        np.testing.assert_allclose(Zb[: n - d, d], np.diagonal(Z, d), rtol=1e-9, atol=1e-13)
