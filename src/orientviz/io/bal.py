@@ -1,0 +1,265 @@
+"""BAL files ("Bundle Adjustment in the Large", Agarwal et al.): read, write, import.
+
+The text format::
+
+    <n_cameras> <n_points> <n_observations>
+    <camera> <point> <x> <y>                 × n_observations   (pixels)
+    <r1> <r2> <r3> <t1> <t2> <t3> <f> <k1> <k2>   × n_cameras (one number per line)
+    <X> <Y> <Z>                              × n_points      (one number per line)
+
+Camera model (as written by the peer bench's ``make_block.py``): ``P = R_bal·X + t``
+with R_bal from the angle-axis vector r (Rodrigues), ``p = −P / P_z``,
+``x_px = f · (1 + k1·|p|² + k2·|p|⁴) · p`` — origin at the image centre, y up, the
+camera looking along −z. This *is* the photogrammetric camera of
+:mod:`orientviz.camera`, so no axis flip is needed:
+
+* R (image → object) = R_balᵀ; ω, φ, κ follow from R in the block's sequence
+  (default ``"opk"``: R = R_ω R_φ R_κ),
+* X0 = −R_balᵀ t (m, or whatever length unit the file uses),
+* c = f · pixel size (mm), image coordinates x_mm = x_px · pixel size.
+
+A BAL file carries no pixel size; the default 0.010 mm (10 µm) is the bench's. Radial
+distortion (k1, k2 ≠ 0) is removed from the observations at import (iteratively,
+normalised coordinates), so the block holds distortion-free coordinates. BAL has no
+control points: an imported block is a free network (7 datum parameters) until control
+is added.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import InputError
+from ..model import Block
+from ..rotation import matrix_from_opk, matrix_from_rotvec, opk_from_matrix, rotvec_from_matrix
+
+F64 = NDArray[np.float64]
+#: Pixel size (mm) assumed when none is given: 10 µm, as in the peer bench.
+DEFAULT_PIXEL_MM: float = 0.010
+
+
+def _numbers(lines: list[str], first: int, count: int, source: str, what: str) -> tuple[F64, int]:
+    """Parse ``count`` numbers from ``lines[first:]``; return them and the next line index."""
+    out: list[str] = []
+    i = first
+    while len(out) < count and i < len(lines):
+        out.extend(lines[i].split())
+        i += 1
+    if len(out) < count:
+        raise InputError(
+            f"expected {count} numbers for {what}, the file ends after {len(out)}",
+            source,
+            f"line {i}",
+        )
+    try:
+        arr = np.array(out[:count], dtype=float)
+    except ValueError:
+        k = next(j for j, t in enumerate(out[:count]) if not _is_float(t))
+        raise InputError(
+            f"expected a number in {what}, got {out[k]!r}",
+            source,
+            f"line {_line_of(lines, first, k)}",
+        ) from None
+    bad = np.flatnonzero(~np.isfinite(arr))
+    if bad.size:
+        k = int(bad[0])
+        raise InputError(
+            f"expected a finite number in {what}, got {out[k]!r}",
+            source,
+            f"line {_line_of(lines, first, k)}",
+        )
+    return arr, i
+
+
+def _is_float(t: str) -> bool:
+    try:
+        float(t)
+    except ValueError:
+        return False
+    return True
+
+
+def _line_of(lines: list[str], first: int, k: int) -> int:
+    """1-based line number of the k-th token counted from ``lines[first]``."""
+    seen = 0
+    for i in range(first, len(lines)):
+        seen += len(lines[i].split())
+        if seen > k:
+            return i + 1
+    return len(lines)
+
+
+def read_bal(
+    path: str | os.PathLike[str],
+    *,
+    pixel_size_mm: float = DEFAULT_PIXEL_MM,
+    sigma_px: float = 1.0,
+    sequence: str = "opk",
+) -> Block:
+    """Read a BAL file into a :class:`~orientviz.model.Block` (all points tie points).
+
+    Parameters
+    ----------
+    path : path-like
+        The BAL text file.
+    pixel_size_mm : float
+        Size of one pixel in mm (default 0.010 mm).
+    sigma_px : float
+        A-priori σ of the image coordinates in pixels (default 1 px).
+    sequence : {"opk", "pok"}
+        Rotation sequence of the block's angles.
+
+    Returns
+    -------
+    Block
+        One camera per distinct f (c = f · pixel size, mm), image coordinates in mm,
+        X0 and points in the file's length unit (m for the bench), angles in rad.
+
+    Raises
+    ------
+    InputError
+        Naming the file and line of a broken header, observation or parameter.
+    """
+    source = str(path)
+    if not (np.isfinite(pixel_size_mm) and pixel_size_mm > 0):
+        raise InputError(f"expected a pixel size > 0 mm, got {pixel_size_mm}", source)
+    try:
+        lines = Path(path).read_text().splitlines()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(
+            f"cannot read the BAL file ({exc.__class__.__name__}: {exc})", source
+        ) from None
+    head = lines[0].split() if lines else []
+    try:
+        nc, npt, nobs = (int(v) for v in head)
+    except ValueError:
+        raise InputError(
+            f"expected a header '<cameras> <points> <observations>', got {' '.join(head)!r}",
+            source,
+            "line 1",
+        ) from None
+    if min(nc, npt, nobs) < 0:
+        raise InputError("expected non-negative counts in the header", source, "line 1")
+    if len(lines) < 1 + nobs:
+        raise InputError(
+            f"expected {nobs} observation lines, the file ends at line {len(lines)}",
+            source,
+            f"line {len(lines)}",
+        )
+    obs_lines = lines[1 : 1 + nobs]
+    counts = np.array([len(ln.split()) for ln in obs_lines])
+    wrong = np.flatnonzero(counts != 4)
+    if wrong.size:
+        k = int(wrong[0])
+        raise InputError(
+            f"expected 4 values '<camera> <point> <x> <y>', got {counts[k]}",
+            source,
+            f"line {k + 2}",
+        )
+    obs, _ = _numbers(lines, 1, 4 * nobs, source, "the observations")
+    obs = obs.reshape(nobs, 4)
+    ci, pi = obs[:, 0], obs[:, 1]
+    for name, idx, n in (("camera", ci, nc), ("point", pi, npt)):
+        bad = np.flatnonzero((idx != np.round(idx)) | (idx < 0) | (idx >= n))
+        if bad.size:
+            k = int(bad[0])
+            raise InputError(
+                f"expected a {name} index in [0, {n}), got {obs_lines[k].split()[0 if name == 'camera' else 1]}",
+                source,
+                f"line {k + 2}",
+            )
+    cams, nxt = _numbers(lines, 1 + nobs, 9 * nc, source, "the camera parameters")
+    pts, nxt = _numbers(lines, nxt, 3 * npt, source, "the points")
+    cams = cams.reshape(nc, 9)
+    f = cams[:, 6]
+    bad = np.flatnonzero(~(f > 0))
+    if bad.size:
+        raise InputError(
+            f"expected a focal length f > 0 px, got {f[bad[0]]} (camera {bad[0]})", source
+        )
+    Rb = matrix_from_rotvec(cams[:, :3])
+    R = np.swapaxes(Rb, 1, 2)
+    X0 = -np.einsum("nij,nj->ni", R, cams[:, 3:6])
+    om, ph, ka = opk_from_matrix(R, sequence)
+    # one camera per distinct principal distance
+    fu, cam_of = np.unique(f, return_inverse=True)
+    ci = ci.astype(np.int64)
+    xy = obs[:, 2:4]
+    k1, k2 = cams[ci, 7], cams[ci, 8]
+    if np.any(k1 != 0) or np.any(k2 != 0):
+        xy = _undistort(xy / f[ci][:, None], k1, k2) * f[ci][:, None]
+    return Block.from_arrays(
+        camera_c=fu * pixel_size_mm,
+        image_camera=cam_of,
+        X0=X0,
+        angles=np.column_stack([om, ph, ka]),
+        xyz=pts.reshape(npt, 3),
+        obs_image=ci,
+        obs_point=pi.astype(np.int64),
+        obs_xy=xy * pixel_size_mm,
+        obs_sigma=sigma_px * pixel_size_mm,
+        sequence=sequence,
+        meta={"source": source, "format": "BAL", "pixel_size_mm": pixel_size_mm},
+    )
+
+
+def _undistort(pd: F64, k1: F64, k2: F64, iterations: int = 20) -> F64:
+    """Invert p_d = (1 + k1 r² + k2 r⁴) p for normalised coordinates (fixed point)."""
+    p = pd.copy()
+    for _ in range(iterations):
+        r2 = np.sum(p**2, axis=1)
+        p = pd / (1.0 + k1 * r2 + k2 * r2**2)[:, None]
+    return p
+
+
+def write_bal(
+    block: Block, path: str | os.PathLike[str], *, pixel_size_mm: float = DEFAULT_PIXEL_MM
+) -> Path:
+    """Write a block as a BAL file (k1 = k2 = 0; principal points must be 0).
+
+    Inverse of :func:`read_bal`: image coordinates mm → px, R_bal = Rᵀ as angle-axis,
+    t = −R_bal X0, f = c / pixel size.
+    """
+    cam = block.images.camera
+    if np.any(block.cameras.x0 != 0) or np.any(block.cameras.y0 != 0):
+        raise InputError("BAL has no principal point: expected x0 = y0 = 0 for every camera")
+    a = block.images.angles
+    R = matrix_from_opk(a[:, 0], a[:, 1], a[:, 2], block.sequence)
+    Rb = np.swapaxes(R, 1, 2)
+    t = -np.einsum("nij,nj->ni", Rb, block.images.X0)
+    f = block.cameras.c[cam] / pixel_size_mm
+    params = np.column_stack([rotvec_from_matrix(Rb), t, f, np.zeros((len(f), 2))])
+    obs = block.observations
+    xy = obs.xy / pixel_size_mm
+    with open(path, "w") as fh:
+        fh.write(f"{block.n_images} {block.n_points} {block.n_observations}\n")
+        fh.write(
+            "".join(
+                f"{c} {p} {x:.9f} {y:.9f}\n"
+                for c, p, x, y in zip(
+                    obs.image.tolist(), obs.point.tolist(), xy[:, 0].tolist(), xy[:, 1].tolist()
+                )
+            )
+        )
+        fh.write("".join(f"{v:.17g}\n" for v in params.ravel().tolist()))
+        fh.write("".join(f"{v:.17g}\n" for v in block.points.xyz.ravel().tolist()))
+    return Path(path)
+
+
+def run_from_cli(args: argparse.Namespace) -> int:
+    """``orientviz import-bal FILE -o OUT.json``: convert a BAL file to a problem file."""
+    block = read_bal(args.file)
+    from .problem import write_problem
+
+    write_problem({"kind": "block", "block": block, "name": Path(args.file).stem}, args.output)
+    print(
+        f"wrote {args.output}: {block.n_images} images, {block.n_points} points, "
+        f"{block.n_observations} observations (pixel size {DEFAULT_PIXEL_MM} mm assumed; "
+        "no control points: add control before adjusting)"
+    )
+    return 0
