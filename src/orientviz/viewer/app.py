@@ -1,0 +1,281 @@
+"""The orientviz viewer application: a viser server with a block scene and its GUI.
+
+Use it from the command line (``orientviz view [FILE | DEMO] [--host] [--port]
+[--export FILE.html]``), or from Python / a notebook::
+
+    from orientviz.viewer import open_viewer
+    app = open_viewer(block, port=8080)      # a Block, (Block, Adjustment) or a demo name
+    app.show()                               # inline in Jupyter (an IFrame of the live server)
+    app.export_html("block.html")            # a self-contained static snapshot
+
+The server binds to 127.0.0.1 unless ``host`` is given. Errors while loading or while
+adjusting are shown in the viewer (a message in the panel and a notification) and on
+the terminal; the server keeps running.
+"""
+
+from __future__ import annotations
+
+import argparse
+import socket
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+from ..errors import InputError, OrientvizError
+from ..model import Block
+
+DEFAULT_DEMO = "block"
+
+
+def port_is_free(host: str, port: int) -> bool:
+    """True if a TCP server could bind ``(host, port)`` now (port 0 is always free)."""
+    if port == 0:
+        return True
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        try:
+            s.bind((host, port))
+        except OSError:
+            return False
+    return True
+
+
+class ViewerApp:
+    """A running viewer: viser server, scene and GUI for one block (or demo).
+
+    Parameters
+    ----------
+    content : Block, tuple (Block, Adjustment), Demo, str or None
+        What to show: a block (start values), a block with its adjustment, a
+        :class:`~orientviz.viewer.demos.Demo`, a demo name or a problem file path.
+        None shows an empty scene (e.g. after a load error, see ``error``).
+    host : str
+        Interface to bind (default 127.0.0.1, local only).
+    port : int
+        TCP port (0 = any free port).
+    error : str, optional
+        A message to show at start (e.g. why a file could not be loaded).
+    verbose : bool
+        Print the URL to open.
+
+    Raises
+    ------
+    InputError
+        If the port is already in use.
+    """
+
+    def __init__(
+        self,
+        content: Any = None,
+        *,
+        host: str = "127.0.0.1",
+        port: int = 8080,
+        error: str | None = None,
+        verbose: bool = True,
+    ) -> None:
+        import viser
+
+        if not port_is_free(host, port):
+            raise InputError(f"port {port} on {host} is already in use; choose another with --port")
+        self.server = viser.ViserServer(host=host, port=port, label="orientviz", verbose=False)
+        if port and self.server.get_port() != port:  # lost a race for the port
+            self.server.stop()
+            raise InputError(f"port {port} on {host} is already in use; choose another with --port")
+        self.host, self.port = host, self.server.get_port()
+        self.verbose = verbose
+        self.scene = None
+        self.panel = None
+        self.demo = None
+        self.extra: dict[str, Any] = {}
+        self.messages: list[str] = []
+        self._message_md = self.server.gui.add_markdown("")
+        self._message_md.visible = False
+        if verbose:
+            print(f"orientviz viewer: open {self.url} in a browser (Ctrl-C to stop)", flush=True)
+        if error:
+            self.report(error)
+        if content is not None:
+            try:
+                self.load(content)
+            except (OrientvizError, ValueError, OSError, KeyError) as exc:
+                self.report(
+                    str(exc) if isinstance(exc, OrientvizError) else f"{type(exc).__name__}: {exc}"
+                )
+
+    # ------------------------------------------------------------------ content
+    @property
+    def url(self) -> str:
+        """The address to open in a browser."""
+        return f"http://{self.host}:{self.port}"
+
+    def load(self, content: Any) -> None:
+        """Build the scene and GUI for ``content`` (see the class docstring)."""
+        from .demos import DEMOS, Demo, demo_from_block, load_demo
+
+        if isinstance(content, str | Path):
+            name = str(content)
+            demo = load_demo(name) if name in DEMOS else demo_from_file(name)
+        elif isinstance(content, Demo):
+            demo = content
+        elif isinstance(content, Block):
+            demo = demo_from_block(content)
+        elif isinstance(content, tuple) and len(content) == 2 and isinstance(content[0], Block):
+            demo = demo_from_block(content[0], content[1])
+        else:
+            raise InputError(
+                f"cannot show a {type(content).__name__}; expected a Block, (Block, Adjustment) or a demo name"
+            )
+        self.demo = demo
+        self._build(demo)
+
+    def _build(self, demo: Any) -> None:
+        from .block_geometry import BlockGeometry
+        from .panel import BlockPanel
+        from .scene import BlockScene
+
+        gui = self.server.gui
+        gui.add_markdown(f"### {demo.title}\n{demo.description}")
+        if demo.state is not None:
+            geo = BlockGeometry(demo.state)
+            self.scene = BlockScene(self.server.scene, geo).build()
+            self.panel = BlockPanel(self.server, self.scene, self.report).build()
+            self._set_camera(*geo.default_camera(), geo.frame.size)
+        if demo.extra is not None:
+            self.extra = demo.extra(self) or {}
+            cam = self.extra.get("camera")
+            if cam is not None and demo.state is None:
+                self._set_camera(*cam)
+
+    def _set_camera(self, position: Any, look_at: Any, size: float) -> None:
+        cam = self.server.initial_camera
+        cam.position = tuple(float(v) for v in position)
+        cam.look_at = tuple(float(v) for v in look_at)
+        cam.up = (0.0, 0.0, 1.0)
+        cam.near = max(size * 1e-4, 1e-3)
+        cam.far = size * 20.0
+
+    # ------------------------------------------------------------------ messages
+    def guard(self, fn: Any) -> Any:
+        """Wrap a GUI callback so that an exception is reported, not raised."""
+        if self.panel is not None:
+            return self.panel.guard(fn)
+
+        def wrapped(*args: Any) -> None:
+            try:
+                fn(*args)
+            except Exception as exc:  # shown to the user, the server keeps running
+                self.report(f"{type(exc).__name__}: {exc}")
+
+        return wrapped
+
+    def report(self, message: str) -> None:
+        """Show an error in the panel, as a notification and on the terminal."""
+        self.messages.append(message)
+        print(f"orientviz view: {message}", file=sys.stderr, flush=True)
+        self._message_md.content = "**⚠ " + message.replace("\n", "  \n") + "**"
+        self._message_md.visible = True
+        for client in self.server.get_clients().values():
+            try:
+                client.add_notification("orientviz", message, color="red", auto_close_seconds=15.0)
+            except Exception:  # a client that just went away
+                pass
+
+    # ------------------------------------------------------------------ output
+    def export_html(self, path: str | Path) -> Path:
+        """Write a self-contained static HTML snapshot of the scene (no server needed).
+
+        Uses viser's own serializer (``scene.as_html``): the viser client with the
+        recorded scene embedded (GUI controls are not part of a static snapshot).
+        """
+        path = Path(path)
+        html = self.server.scene.as_html()
+        path.write_text(html, encoding="utf-8")
+        return path
+
+    def show(self, height: int = 600) -> Any:
+        """Display the live viewer inline in Jupyter (an IFrame of the server URL)."""
+        from IPython.display import IFrame, display
+
+        frame = IFrame(self.url, width="100%", height=height)
+        display(frame)
+        return frame
+
+    def stop(self) -> None:
+        """Stop the server."""
+        self.server.stop()
+
+    def wait(self) -> None:
+        """Block until Ctrl-C, then stop the server."""
+        try:
+            while True:
+                time.sleep(0.5)
+        except KeyboardInterrupt:
+            print("\norientviz viewer: stopped", file=sys.stderr)
+        finally:
+            self.stop()
+
+
+def demo_from_file(path: str) -> Any:
+    """Load a problem file into a demo (a block file; other kinds are not shown yet)."""
+    from .demos import demo_from_block
+
+    p = Path(path)
+    if not p.exists():
+        raise InputError("no such file or demo (demos: block, pair, radar)", source=path)
+    try:
+        from ..io.problem import load_problem  # type: ignore[attr-defined]
+    except ImportError as exc:
+        raise InputError(f"cannot read problem files in this version ({exc})", source=path) from exc
+    problem = load_problem(p)
+    block = getattr(problem, "block", problem)
+    if not isinstance(block, Block):
+        raise InputError(
+            f"the viewer shows block problems; this is a {type(problem).__name__}", source=path
+        )
+    return demo_from_block(block, title=p.name)
+
+
+def open_viewer(
+    content: Any = DEFAULT_DEMO, host: str = "127.0.0.1", port: int = 8080, **kw: Any
+) -> ViewerApp:
+    """Start a viewer on ``content`` (Block, (Block, Adjustment), demo name or file) and return it."""
+    return ViewerApp(content, host=host, port=port, **kw)
+
+
+def export_html(content: Any, path: str | Path) -> Path:
+    """Build the scene of ``content`` on a private server and write a static HTML snapshot."""
+    app = ViewerApp(content, host="127.0.0.1", port=0, verbose=False)
+    try:
+        if app.messages:
+            raise InputError(app.messages[0])
+        return app.export_html(path)
+    finally:
+        app.stop()
+
+
+def run_from_cli(args: argparse.Namespace) -> int:
+    """``orientviz view [FILE | DEMO] [--host] [--port] [--export FILE.html]``; returns the exit code."""
+    target = args.target or DEFAULT_DEMO
+    if getattr(args, "export", None):
+        try:
+            out = export_html(target, args.export)
+        except OrientvizError as exc:
+            print(f"orientviz view: {exc}", file=sys.stderr)
+            return exc.exit_code
+        print(f"orientviz view: wrote {out}")
+        return 0
+    try:
+        app = ViewerApp(target, host=args.host, port=args.port)
+    except InputError as exc:
+        print(f"orientviz view: {exc}", file=sys.stderr)
+        return 2
+    stop = threading.Event()
+    try:
+        while not stop.wait(0.5):
+            pass
+    except KeyboardInterrupt:
+        print("\norientviz view: stopped", file=sys.stderr)
+    finally:
+        app.stop()
+    return 0

@@ -1,0 +1,281 @@
+"""Scene content of a block, as plain arrays: what the viewer draws, without viser.
+
+:class:`BlockGeometry` turns a :class:`~orientviz.viewer.state.BlockState` into the
+arrays of the scene nodes (frustum poses, points by role, rays, residual vectors,
+strips, model footprints, error ellipsoids), all in the scene frame
+(object coordinates − :attr:`SceneFrame.origin`, m). :mod:`orientviz.viewer.scene`
+only hands these arrays to viser.
+
+Residual vectors: each observation draws a segment from its object point towards the
+place where the *observed* ray passes at the point's depth
+(:func:`~orientviz.viewer.geometry.residual_offsets`), multiplied by the exaggeration.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..model import CHECK, CONTROL, TIE
+from . import geometry as g
+from .state import BlockState
+
+F64 = NDArray[np.float64]
+
+#: RGB colours (0-255) readable on viser's light background.
+COLORS: dict[str, tuple[int, int, int]] = {
+    "tie": (70, 80, 100),
+    "control": (220, 40, 40),
+    "check": (20, 150, 60),
+    "frustum": (40, 70, 160),
+    "selected": (250, 130, 0),
+    "ray": (120, 150, 200),
+    "ray_selected": (250, 150, 40),
+    "strip": (110, 60, 160),
+    "model": (150, 150, 150),
+    "ellipsoid": (230, 80, 200),
+    "deformation": (0, 140, 170),
+}
+
+#: Point-cloud node name per role.
+ROLE_NODES = {TIE: "tie", CONTROL: "control", CHECK: "check"}
+
+#: |w| (or |v|/σ) at which the residual colour ramp saturates (red).
+SCORE_RED: float = 4.0
+
+
+class BlockGeometry:
+    """Arrays for the scene of a block, in the scene frame.
+
+    Parameters
+    ----------
+    state : BlockState
+        The block being shown.
+    frame : SceneFrame, optional
+        Scene frame; by default centred on the block's points and projection centres.
+
+    Attributes
+    ----------
+    frame : SceneFrame
+    spacing : float
+        Typical distance between neighbouring object points (m); sets point sizes.
+    height : float
+        Typical height of the cameras above the points (m); sets the frustum depth.
+    frustum_depth : float
+        Drawn depth of the frustums (m).
+    point_size : float
+        Point size in scene units (m).
+    """
+
+    def __init__(self, state: BlockState, frame: g.SceneFrame | None = None) -> None:
+        self.state = state
+        b = state.block
+        both = np.vstack([b.points.xyz, b.images.X0]) if b.n_points else b.images.X0
+        self.frame = frame or g.SceneFrame.around(both)
+        self.spacing = g.typical_spacing(b.points.xyz) if b.n_points > 1 else self.frame.size / 10
+        if b.n_points and b.n_images:
+            h = float(np.median(b.images.X0[:, 2]) - np.median(b.points.xyz[:, 2]))
+        else:
+            h = 0.0
+        self.height = h if h > 0 else self.frame.size / 5
+        # about a quarter of the base between neighbouring cameras, never larger than H/4
+        cam_sp = g.typical_spacing(b.images.X0) if b.n_images > 1 else self.height
+        self.frustum_depth = float(min(0.25 * self.height, 0.6 * cam_sp))
+        self.point_size = float(np.clip(0.12 * self.spacing, 1e-6, None))
+
+    # ------------------------------------------------------------------ cameras
+    def strip_of_images(self) -> NDArray[np.int64]:
+        """Strip index of each image (−1 = none)."""
+        return self.state.block.images.strip
+
+    def frustum_poses(self) -> tuple[F64, F64]:
+        """Positions (m, 3) in the scene frame and viser quaternions (m, 4) of the frustums.
+
+        The quaternion is that of R·diag(1, −1, −1): viser's camera frame (OpenCV: x
+        right, y down, z forward) from orientviz's image frame (x, y, looking along −z).
+        """
+        b = self.state.block
+        return self.frame.to_scene(b.images.X0), g.wxyz_from_matrix(b.rotations() @ g.FLIP)
+
+    def frustum_corners(self, images: NDArray[np.int64] | None = None) -> F64:
+        """Apex and corners (k, 5, 3) of the frustums of ``images`` (default all), scene frame."""
+        b = self.state.block
+        idx = np.arange(b.n_images) if images is None else np.asarray(images).reshape(-1)
+        cam = b.images.camera[idx]
+        C = g.frustum_corners(
+            b.images.X0[idx],
+            b.rotations()[idx],
+            b.cameras.c[cam],
+            b.cameras.format_mm[cam],
+            self.frustum_depth,
+        )
+        return self.frame.to_scene(C)
+
+    def viser_frustum_args(
+        self, camera: int = 0
+    ) -> tuple[float, float, tuple[float, float, float]]:
+        """(fov, aspect, scale) for viser's frustum of camera ``camera`` at :attr:`frustum_depth`."""
+        cams = self.state.block.cameras
+        return g.viser_frustum(cams.c[camera], cams.format_mm[camera], self.frustum_depth)
+
+    # ------------------------------------------------------------------ points
+    def points_by_role(self) -> dict[str, F64]:
+        """Scene coordinates (k, 3) of tie, control and check points."""
+        b = self.state.block
+        P = self.frame.to_scene(b.points.xyz)
+        return {name: P[b.points.role == r] for r, name in ROLE_NODES.items()}
+
+    # ------------------------------------------------------------------ rays
+    def rays(self, image: int | None = None) -> F64:
+        """Ray segments projection centre → point (k, 2, 3), of one image or all."""
+        b = self.state.block
+        o = b.observations
+        sel = slice(None) if image is None else (o.image == image)
+        return self.frame.to_scene(
+            g.ray_segments(b.images.X0[o.image[sel]], b.points.xyz[o.point[sel]])
+        )
+
+    # ------------------------------------------------------------------ residuals
+    def residual_offsets(self, misclosure: F64 | None = None) -> F64:
+        """Object-space offsets (n, 3) in m of the observed rays from their points."""
+        b = self.state.block
+        o = b.observations
+        e = self.state.misclosure() if misclosure is None else misclosure
+        cam = b.images.camera[o.image]
+        return g.residual_offsets(
+            b.points.xyz[o.point], b.images.X0[o.image], b.rotations()[o.image], b.cameras.c[cam], e
+        )
+
+    def residuals(
+        self, exaggeration: float, misclosure: F64 | None = None, scores: F64 | None = None
+    ) -> tuple[F64, NDArray[np.uint8]]:
+        """Residual vectors (n, 2, 3) in the scene frame, and their colours (n, 2, 3) uint8.
+
+        Parameters
+        ----------
+        exaggeration : float
+            Factor applied to the object-space offsets.
+        misclosure : ndarray, shape (n, 2), optional
+            Precomputed misclosures in mm (default: computed from the state).
+        scores : ndarray, shape (n,), optional
+            Precomputed scores (default: :meth:`BlockState.scores`) for the colours.
+        """
+        b = self.state.block
+        e = self.state.misclosure() if misclosure is None else misclosure
+        s = self.state.scores(e)[0] if scores is None else scores
+        seg = g.vector_segments(
+            self.frame.to_scene(b.points.xyz[b.observations.point]),
+            self.residual_offsets(e),
+            exaggeration,
+        )
+        col = g.ramp(s, SCORE_RED)
+        return seg, np.repeat(col[:, None, :], 2, axis=1)
+
+    def auto_exaggeration(self, misclosure: F64 | None = None) -> float:
+        """An exaggeration that draws the median residual about a third of a point spacing."""
+        off = np.linalg.norm(self.residual_offsets(misclosure), axis=1)
+        med = float(np.median(off)) if off.size else 0.0
+        if med <= 0:
+            return 1.0
+        k = float(np.clip(0.33 * self.spacing / med, 1.0, 1e6))  # exact data: at most 10⁶
+        return float(10 ** (np.round(np.log10(k) * 4) / 4))
+
+    # ------------------------------------------------------------------ strips, models
+    def strip_lines(self) -> F64:
+        """Segments joining consecutive projection centres of each strip (k, 2, 3)."""
+        b = self.state.block
+        return self.frame.to_scene(g.polyline_segments(b.images.X0, b.images.strip))
+
+    def model_outlines(self) -> F64:
+        """Ground outlines of the models (consecutive images of a strip) as segments.
+
+        A model's outline is the overlap of its two image footprints on the plane of the
+        median point height, approximated by the axis-aligned intersection of the two
+        footprints' bounding rectangles (exact for vertical images flown along X or Y).
+        """
+        b = self.state.block
+        if b.n_points == 0:
+            return np.zeros((0, 2, 3))
+        z = float(np.median(b.points.xyz[:, 2]))
+        cam = b.images.camera
+        fp = g.footprints(b.images.X0, b.rotations(), b.cameras.c[cam], b.cameras.format_mm[cam], z)
+        strip = b.images.strip
+        order = np.argsort(strip, kind="stable")
+        left, right = order[:-1], order[1:]
+        keep = (strip[left] == strip[right]) & (strip[left] >= 0)
+        left, right = left[keep], right[keep]
+        lo = np.maximum(np.nanmin(fp[left, :, :2], axis=1), np.nanmin(fp[right, :, :2], axis=1))
+        hi = np.minimum(np.nanmax(fp[left, :, :2], axis=1), np.nanmax(fp[right, :, :2], axis=1))
+        ok = np.all(hi > lo, axis=1)
+        lo, hi = lo[ok], hi[ok]
+        quad = np.empty((lo.shape[0], 4, 3))
+        quad[:, :, 2] = z
+        quad[:, 0, :2] = lo
+        quad[:, 1, 0], quad[:, 1, 1] = hi[:, 0], lo[:, 1]
+        quad[:, 2, :2] = hi
+        quad[:, 3, 0], quad[:, 3, 1] = lo[:, 0], hi[:, 1]
+        # shrink slightly so neighbouring models stay apart
+        centre = quad.mean(axis=1, keepdims=True)
+        quad = centre + 0.97 * (quad - centre)
+        return self.frame.to_scene(g.loop_segments(quad))
+
+    # ------------------------------------------------------------------ precision
+    def point_covariances(self) -> tuple[NDArray[np.int64], F64] | None:
+        """Indices and covariances (k, 3, 3) m² of the points, from the adjustment.
+
+        Uses the dense cofactor matrix or ``cofactor_blocks["points"]`` (shape (p, 3, 3))
+        scaled by σ̂0². None if the adjustment has neither.
+        """
+        res = self.state.result
+        if res is None or "points" not in res.blocks:
+            return None
+        p = self.state.block.n_points
+        s0 = res.sigma0 if np.isfinite(res.sigma0) and res.redundancy > 0 else 1.0
+        if res.cofactor is not None:
+            sl = res.blocks["points"]
+            idx = np.arange(sl.start, sl.stop).reshape(p, 3)
+            Q = res.cofactor[idx[:, :, None], idx[:, None, :]]
+        elif res.cofactor_blocks.get("points") is not None and np.shape(
+            res.cofactor_blocks["points"]
+        ) == (p, 3, 3):
+            Q = np.asarray(res.cofactor_blocks["points"])
+        else:
+            return None
+        ok = np.einsum("nii->n", Q) > 0
+        return np.flatnonzero(ok), s0**2 * Q[ok]
+
+    def ellipsoids(
+        self, limit: int = 3000, subdivisions: int = 1
+    ) -> tuple[F64, NDArray[np.int32], float] | None:
+        """One mesh of error ellipsoids (vertices, faces) and the exaggeration used.
+
+        The exaggeration makes the median ellipsoid (largest semi-axis) half a point
+        spacing; only the ``limit`` points with the largest ellipsoids are drawn.
+        """
+        cov = self.point_covariances()
+        if cov is None or cov[0].size == 0:
+            return None
+        idx, S = cov
+        big = np.sqrt(np.linalg.eigvalsh(S)[:, -1])
+        if idx.size > limit:
+            keep = np.argsort(-big)[:limit]
+            idx, S, big = idx[keep], S[keep], big[keep]
+        med = float(np.median(big))
+        k = 0.5 * self.spacing / med if med > 0 else 1.0
+        centers = self.frame.to_scene(self.state.block.points.xyz[idx])
+        v, f = g.ellipsoid_mesh(centers, S, k, subdivisions)
+        return v, f, k
+
+    # ------------------------------------------------------------------ camera
+    def default_camera(self) -> tuple[F64, F64]:
+        """(position, look_at) in the scene frame: an oblique view onto the whole block."""
+        b = self.state.block
+        P = self.frame.to_scene(np.vstack([b.points.xyz, b.images.X0]))
+        lo, hi = P.min(axis=0), P.max(axis=0)
+        centre = (lo + hi) / 2
+        centre[2] = (
+            float(np.median(self.frame.to_scene(b.points.xyz)[:, 2])) if b.n_points else centre[2]
+        )
+        ext = max(hi[0] - lo[0], hi[1] - lo[1], 1e-3)
+        pos = centre + np.array([-0.45, -1.25, 0.95]) * ext
+        return pos, centre

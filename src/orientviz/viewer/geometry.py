@@ -1,0 +1,534 @@
+"""Pure geometry for the 3D viewer: frustums, rays, residual vectors, meshes, circles.
+
+Nothing here imports viser; every function takes and returns numpy arrays so that the
+scene content can be tested (and timed) without a browser. All functions are
+vectorised over images, observations or points.
+
+Conventions
+-----------
+* Object coordinates in m, right-handed, Z up (:mod:`orientviz.camera`). The viewer
+  draws in a *scene frame* that is the object frame shifted by an origin
+  (:class:`SceneFrame`), because the browser renders in float32 and block coordinates
+  of 10⁵ m would lose the centimetres.
+* Image coordinates in mm; a camera looks along −z of its image frame, R (image →
+  object) from :mod:`orientviz.rotation` (ω-φ-κ: R = R_ω R_φ R_κ, or φ-ω-κ by name).
+* Line segments are arrays of shape (n, 2, 3): start and end point of each segment.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+F64 = NDArray[np.float64]
+
+#: R_cv = R · FLIP turns the orientviz image frame (x right, y up, looking along −z) into
+#: the OpenCV camera frame viser uses (x right, y down, looking along +z).
+FLIP: F64 = np.diag([1.0, -1.0, -1.0])
+
+
+@dataclass(frozen=True)
+class SceneFrame:
+    """The local frame the viewer draws in: ``scene = object − origin`` (m).
+
+    Attributes
+    ----------
+    origin : ndarray, shape (3,)
+        Object coordinates (m) of the scene origin, rounded to whole metres.
+    size : float
+        A length that characterises the scene (m): the larger horizontal extent of
+        the content, used to scale point sizes, frustums and the default camera.
+    """
+
+    origin: F64
+    size: float
+
+    @classmethod
+    def around(cls, points: ArrayLike) -> SceneFrame:
+        """Frame centred on the bounding box of ``points`` (n, 3) m."""
+        P = np.asarray(points, dtype=float).reshape(-1, 3)
+        P = P[np.all(np.isfinite(P), axis=1)]
+        if P.shape[0] == 0:
+            return cls(np.zeros(3), 1.0)
+        lo, hi = P.min(axis=0), P.max(axis=0)
+        size = float(max(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-3))
+        return cls(np.round((lo + hi) / 2.0), size)
+
+    def to_scene(self, xyz: ArrayLike) -> F64:
+        """Object coordinates (…, 3) m → scene coordinates (…, 3) m."""
+        return np.asarray(xyz, dtype=float) - self.origin
+
+
+# --------------------------------------------------------------------------- rotations
+def wxyz_from_matrix(R: ArrayLike) -> F64:
+    """Unit quaternions (w, x, y, z) of rotation matrices (…, 3, 3), w ≥ 0.
+
+    Shepperd's method, vectorised: the largest of the four squared components is
+    computed from the trace and the others from the off-diagonal sums.
+    """
+    R = np.asarray(R, dtype=float)
+    m = R.reshape(-1, 3, 3)
+    t = np.stack(
+        [
+            1.0 + m[:, 0, 0] + m[:, 1, 1] + m[:, 2, 2],
+            1.0 + m[:, 0, 0] - m[:, 1, 1] - m[:, 2, 2],
+            1.0 - m[:, 0, 0] + m[:, 1, 1] - m[:, 2, 2],
+            1.0 - m[:, 0, 0] - m[:, 1, 1] + m[:, 2, 2],
+        ],
+        axis=1,
+    )
+    k = np.argmax(t, axis=1)
+    q = np.empty((m.shape[0], 4))
+    s = np.sqrt(np.maximum(t[np.arange(m.shape[0]), k], 1e-300)) * 2.0  # s = 4·|q_k|
+    a, b, c = m[:, 2, 1] - m[:, 1, 2], m[:, 0, 2] - m[:, 2, 0], m[:, 1, 0] - m[:, 0, 1]
+    d, e, f = m[:, 0, 1] + m[:, 1, 0], m[:, 0, 2] + m[:, 2, 0], m[:, 1, 2] + m[:, 2, 1]
+    cases = [
+        np.stack([s / 4, a / s, b / s, c / s], axis=1),
+        np.stack([a / s, s / 4, d / s, e / s], axis=1),
+        np.stack([b / s, d / s, s / 4, f / s], axis=1),
+        np.stack([c / s, e / s, f / s, s / 4], axis=1),
+    ]
+    for j in range(4):
+        q[k == j] = cases[j][k == j]
+    q *= np.where(q[:, :1] < 0, -1.0, 1.0)
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    return q.reshape(R.shape[:-2] + (4,))
+
+
+def matrix_from_wxyz(q: ArrayLike) -> F64:
+    """Rotation matrices (…, 3, 3) of unit quaternions (…, 4) in (w, x, y, z) order."""
+    q = np.asarray(q, dtype=float)
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    out = np.empty(q.shape[:-1] + (3, 3))
+    out[..., 0, 0] = 1 - 2 * (y * y + z * z)
+    out[..., 0, 1] = 2 * (x * y - w * z)
+    out[..., 0, 2] = 2 * (x * z + w * y)
+    out[..., 1, 0] = 2 * (x * y + w * z)
+    out[..., 1, 1] = 1 - 2 * (x * x + z * z)
+    out[..., 1, 2] = 2 * (y * z - w * x)
+    out[..., 2, 0] = 2 * (x * z - w * y)
+    out[..., 2, 1] = 2 * (y * z + w * x)
+    out[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    return out
+
+
+# --------------------------------------------------------------------------- cameras
+def frustum_corners(
+    X0: ArrayLike,
+    R: ArrayLike,
+    c: ArrayLike,
+    format_mm: ArrayLike,
+    depth: float,
+    x0: ArrayLike = 0.0,
+    y0: ArrayLike = 0.0,
+) -> F64:
+    """Apex and image corners of camera frustums, drawn at ``depth`` metres.
+
+    The image plane (z = −c in the image frame) is scaled so that it lies ``depth``
+    metres from the projection centre: corner = X0 + R·(x − x0, y − y0, −c)·depth/c.
+
+    Parameters
+    ----------
+    X0 : array_like, shape (m, 3)
+        Projection centres in m.
+    R : array_like, shape (m, 3, 3)
+        Rotations image → object.
+    c : array_like, shape (m,)
+        Principal distances in mm.
+    format_mm : array_like, shape (m, 2) or (2,)
+        Image format (width along x, height along y) in mm.
+    depth : float
+        Drawn distance of the image plane from the apex in m.
+    x0, y0 : float or array_like, shape (m,)
+        Principal point in mm (the apex sits above it).
+
+    Returns
+    -------
+    ndarray, shape (m, 5, 3)
+        Apex, then the corners (+x,+y), (−x,+y), (−x,−y), (+x,−y) in object coordinates.
+    """
+    X0 = np.asarray(X0, dtype=float).reshape(-1, 3)
+    m = X0.shape[0]
+    R = np.broadcast_to(np.asarray(R, dtype=float), (m, 3, 3))
+    c = np.broadcast_to(np.asarray(c, dtype=float), (m,))
+    fmt = np.broadcast_to(np.asarray(format_mm, dtype=float), (m, 2))
+    sx = np.array([1.0, -1.0, -1.0, 1.0])
+    sy = np.array([1.0, 1.0, -1.0, -1.0])
+    img = np.empty((m, 4, 3))
+    img[..., 0] = sx * fmt[:, :1] / 2 - np.broadcast_to(np.asarray(x0, float), (m,))[:, None]
+    img[..., 1] = sy * fmt[:, 1:] / 2 - np.broadcast_to(np.asarray(y0, float), (m,))[:, None]
+    img[..., 2] = -c[:, None]
+    img *= (depth / c)[:, None, None]
+    out = np.empty((m, 5, 3))
+    out[:, 0] = X0
+    out[:, 1:] = X0[:, None, :] + np.einsum("mij,mkj->mki", R, img)
+    return out
+
+
+def frustum_segments(corners: ArrayLike) -> F64:
+    """Line segments (8 per camera) of frustums from :func:`frustum_corners`.
+
+    Returns
+    -------
+    ndarray, shape (m·8, 2, 3)
+        Per camera: four edges apex → corner, then the four edges of the image rectangle.
+    """
+    C = np.asarray(corners, dtype=float)
+    m = C.shape[0]
+    seg = np.empty((m, 8, 2, 3))
+    seg[:, :4, 0] = C[:, :1]
+    seg[:, :4, 1] = C[:, 1:]
+    seg[:, 4:, 0] = C[:, 1:]
+    seg[:, 4:, 1] = C[:, [2, 3, 4, 1]]
+    return seg.reshape(m * 8, 2, 3)
+
+
+def viser_frustum(
+    c: float, format_mm: ArrayLike, depth: float
+) -> tuple[float, float, tuple[float, float, float]]:
+    """Arguments ``(fov, aspect, scale)`` that make viser draw a frustum ``depth`` m deep.
+
+    viser's client normalises the frustum volume: for a vertical field of view ``fov``
+    and ``aspect`` = width/height it draws the image rectangle at
+    z = scale / cbrt(tan(fov/2)² · aspect / 3). This inverts that so that the drawn
+    image plane lies ``depth`` m in front of the apex, exactly as
+    :func:`frustum_corners` (principal-point offsets are not drawn by viser).
+
+    Parameters
+    ----------
+    c : float
+        Principal distance in mm.
+    format_mm : array_like, shape (2,)
+        Image width (along x) and height (along y) in mm.
+    depth : float
+        Distance of the drawn image plane from the apex in m.
+
+    Returns
+    -------
+    fov : float
+        Vertical field of view in rad, 2·atan(height / 2c).
+    aspect : float
+        Width / height.
+    scale : tuple of float
+        Per-axis scale to pass to ``add_camera_frustum``.
+    """
+    w, h = (float(v) for v in np.asarray(format_mm, dtype=float).reshape(2))
+    fov = 2.0 * float(np.arctan(h / (2.0 * c)))
+    aspect = w / h
+    y = np.tan(fov / 2.0)
+    volume_scale = float(np.cbrt(y * y * aspect / 3.0))
+    s = depth * volume_scale
+    return fov, aspect, (s, s, s)
+
+
+def ray_segments(X0: ArrayLike, points: ArrayLike) -> F64:
+    """Segments from projection centres to object points, shape (n, 2, 3)."""
+    A = np.asarray(X0, dtype=float).reshape(-1, 3)
+    B = np.asarray(points, dtype=float).reshape(-1, 3)
+    return np.stack(np.broadcast_arrays(A, B), axis=1)
+
+
+def residual_offsets(
+    points: ArrayLike, X0: ArrayLike, R: ArrayLike, c: ArrayLike, misclosure: ArrayLike
+) -> F64:
+    """Where the *observed* ray passes a point: an image misclosure carried to object space.
+
+    For a point at depth w (third component of Rᵀ(X − X0), negative in front of the
+    camera) an image displacement (dx, dy) mm moves the ray sideways by
+    R·(dx, dy, 0)·(−w/c) metres at the point's depth (the local image scale).
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 3)
+        Object points in m.
+    X0 : array_like, shape (n, 3)
+        Projection centre of each observation's image, m.
+    R : array_like, shape (n, 3, 3)
+        Rotation (image → object) of each observation's image.
+    c : array_like, shape (n,)
+        Principal distances in mm.
+    misclosure : array_like, shape (n, 2)
+        Observed minus computed image coordinates in mm (``Block.residuals()``).
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        Offsets in m from the point to the observed ray, at the point's depth.
+    """
+    P = np.asarray(points, dtype=float)
+    R = np.asarray(R, dtype=float)
+    d = P - np.asarray(X0, dtype=float)
+    w = np.einsum("nji,nj->ni", R, d)[:, 2]
+    e = np.asarray(misclosure, dtype=float)
+    local = np.zeros((P.shape[0], 3))
+    local[:, :2] = e * (-w / np.asarray(c, dtype=float))[:, None]
+    return np.einsum("nij,nj->ni", R, local)
+
+
+def vector_segments(start: ArrayLike, offset: ArrayLike, exaggeration: float = 1.0) -> F64:
+    """Segments from ``start`` (n, 3) to ``start + exaggeration·offset``, shape (n, 2, 3)."""
+    S = np.asarray(start, dtype=float).reshape(-1, 3)
+    out = np.empty((S.shape[0], 2, 3))
+    out[:, 0] = S
+    out[:, 1] = S + exaggeration * np.asarray(offset, dtype=float).reshape(-1, 3)
+    return out
+
+
+def arrow_segments(
+    start: ArrayLike, vector: ArrayLike, head: float = 0.25, up: ArrayLike = (0.0, 0.0, 1.0)
+) -> F64:
+    """Arrows as line segments: a shaft and two head strokes each, shape (n·3, 2, 3).
+
+    Parameters
+    ----------
+    start : array_like, shape (n, 3)
+        Arrow tails (m).
+    vector : array_like, shape (n, 3)
+        Arrow vectors (m); zero vectors give degenerate (zero-length) arrows.
+    head : float
+        Head length as a fraction of the arrow length.
+    up : array_like, shape (3,)
+        The head strokes lie in the plane of the vector and this direction (or X if
+        parallel).
+    """
+    S = np.asarray(start, dtype=float).reshape(-1, 3)
+    V = np.asarray(vector, dtype=float).reshape(-1, 3)
+    E = S + V
+    u = np.broadcast_to(np.asarray(up, dtype=float), V.shape)
+    side = np.cross(V, u)
+    bad = np.linalg.norm(side, axis=1) < 1e-12 * (np.linalg.norm(V, axis=1) + 1e-300)
+    side[bad] = np.cross(V[bad], [1.0, 0.0, 0.0])
+    n = np.linalg.norm(side, axis=1, keepdims=True)
+    side = np.divide(side, n, out=np.zeros_like(side), where=n > 0)
+    L = np.linalg.norm(V, axis=1, keepdims=True)
+    back = -V * head
+    wing = side * L * head * 0.5
+    out = np.empty((S.shape[0], 3, 2, 3))
+    out[:, 0, 0], out[:, 0, 1] = S, E
+    out[:, 1, 0], out[:, 1, 1] = E, E + back + wing
+    out[:, 2, 0], out[:, 2, 1] = E, E + back - wing
+    return out.reshape(-1, 2, 3)
+
+
+def closest_points_of_rays(
+    O1: ArrayLike, d1: ArrayLike, O2: ArrayLike, d2: ArrayLike
+) -> tuple[F64, F64]:
+    """Closest points of two families of rays Oᵢ + tᵢ·dᵢ (vectorised, m).
+
+    The gap between the two points is the part of the ray pair that a stereo model
+    cannot close: its component across the base is the y-parallax of the pair.
+    Parallel rays give the feet of the perpendicular from O1.
+
+    Returns
+    -------
+    P1, P2 : ndarray, shape (n, 3)
+        The closest point on ray 1 and on ray 2.
+    """
+    O1, d1, O2, d2 = (np.asarray(a, dtype=float).reshape(-1, 3) for a in (O1, d1, O2, d2))
+    w0 = O1 - O2
+    a = np.einsum("ij,ij->i", d1, d1)
+    b = np.einsum("ij,ij->i", d1, d2)
+    c = np.einsum("ij,ij->i", d2, d2)
+    d = np.einsum("ij,ij->i", d1, w0)
+    e = np.einsum("ij,ij->i", d2, w0)
+    den = a * c - b * b
+    par = den <= 1e-12 * a * c
+    safe = np.where(par, 1.0, den)
+    t1 = np.where(par, 0.0, (b * e - c * d) / safe)
+    t2 = np.where(par, e / c, (a * e - b * d) / safe)
+    return O1 + t1[:, None] * d1, O2 + t2[:, None] * d2
+
+
+# --------------------------------------------------------------------------- strips
+def polyline_segments(points: ArrayLike, groups: ArrayLike) -> F64:
+    """Segments joining consecutive points of each group (in the given order).
+
+    Parameters
+    ----------
+    points : array_like, shape (m, 3)
+    groups : array_like of int, shape (m,)
+        Group label per point (e.g. the strip of each image); −1 = no group.
+
+    Returns
+    -------
+    ndarray, shape (k, 2, 3)
+    """
+    P = np.asarray(points, dtype=float).reshape(-1, 3)
+    g = np.asarray(groups).reshape(-1)
+    order = np.argsort(g, kind="stable")
+    Ps, gs = P[order], g[order]
+    same = (gs[1:] == gs[:-1]) & (gs[1:] >= 0)
+    return np.stack([Ps[:-1][same], Ps[1:][same]], axis=1)
+
+
+def footprints(
+    X0: ArrayLike, R: ArrayLike, c: ArrayLike, format_mm: ArrayLike, ground_z: float
+) -> F64:
+    """Image corners projected onto the horizontal plane Z = ``ground_z`` (m).
+
+    Returns
+    -------
+    ndarray, shape (m, 4, 3)
+        Ground corners in the order of :func:`frustum_corners`; NaN where a corner ray
+        does not reach the plane (looking upwards).
+    """
+    corners = frustum_corners(X0, R, c, format_mm, 1.0)
+    apex = corners[:, :1]
+    d = corners[:, 1:] - apex
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (ground_z - apex[..., 2]) / d[..., 2]
+    t = np.where(t > 0, t, np.nan)
+    return apex + t[..., None] * d
+
+
+def loop_segments(polygons: ArrayLike) -> F64:
+    """Closed outlines of polygons (m, k, 3) as segments (m·k, 2, 3)."""
+    Q = np.asarray(polygons, dtype=float)
+    return np.stack([Q, np.roll(Q, -1, axis=1)], axis=2).reshape(-1, 2, 3)
+
+
+# --------------------------------------------------------------------------- colours
+def ramp(values: ArrayLike, vmax: float, stops: ArrayLike | None = None) -> NDArray[np.uint8]:
+    """Map values in [0, vmax] to RGB (uint8) along a colour ramp (default green→amber→red).
+
+    Parameters
+    ----------
+    values : array_like, shape (n,)
+        Non-negative values, e.g. |normalised residual|; NaN is drawn grey.
+    vmax : float
+        Value that maps to the last stop; larger values saturate.
+    stops : array_like, shape (k, 3), optional
+        RGB stops (0-255), evenly spaced over [0, vmax].
+    """
+    S = np.asarray(
+        [[40, 160, 80], [240, 170, 20], [210, 30, 30]] if stops is None else stops, dtype=float
+    )
+    v = np.asarray(values, dtype=float).reshape(-1)
+    t = np.clip(np.nan_to_num(v / max(vmax, 1e-300), nan=0.0), 0.0, 1.0) * (len(S) - 1)
+    i = np.minimum(t.astype(int), len(S) - 2)
+    f = (t - i)[:, None]
+    out = S[i] * (1 - f) + S[i + 1] * f
+    out[np.isnan(v)] = 150.0
+    return np.round(out).astype(np.uint8)
+
+
+# --------------------------------------------------------------------------- meshes
+def icosphere(subdivisions: int = 1) -> tuple[F64, NDArray[np.int32]]:
+    """Unit icosphere: vertices (v, 3) on the unit sphere and triangles (f, 3)."""
+    t = (1.0 + 5.0**0.5) / 2.0
+    V = [
+        [-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0],
+        [0, -1, t], [0, 1, t], [0, -1, -t], [0, 1, -t],
+        [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1],
+    ]  # fmt: skip
+    F = [
+        [0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11],
+        [1, 5, 9], [5, 11, 4], [11, 10, 2], [10, 7, 6], [7, 1, 8],
+        [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9],
+        [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1],
+    ]  # fmt: skip
+    verts = [np.array(v, dtype=float) / np.linalg.norm(v) for v in V]
+    faces = F
+    for _ in range(subdivisions):
+        cache: dict[tuple[int, int], int] = {}
+
+        def mid(a: int, b: int, cache: dict[tuple[int, int], int] = cache) -> int:
+            key = (min(a, b), max(a, b))
+            if key not in cache:
+                p = verts[a] + verts[b]
+                verts.append(p / np.linalg.norm(p))
+                cache[key] = len(verts) - 1
+            return cache[key]
+
+        new = []
+        for a, b, c in faces:
+            ab, bc, ca = mid(a, b), mid(b, c), mid(c, a)
+            new += [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
+        faces = new
+    return np.array(verts), np.array(faces, dtype=np.int32)
+
+
+def ellipsoid_mesh(
+    centers: ArrayLike, covariances: ArrayLike, scale: float = 1.0, subdivisions: int = 1
+) -> tuple[F64, NDArray[np.int32]]:
+    """One mesh holding the error ellipsoids of many points.
+
+    The ellipsoid of a point is {X : (X − c)ᵀ Σ⁻¹ (X − c) = scale²}, i.e. the unit
+    sphere mapped by scale · L with Σ = L Lᵀ (eigen-decomposition, negative
+    eigenvalues clipped to 0).
+
+    Parameters
+    ----------
+    centers : array_like, shape (n, 3)
+        Centres in m.
+    covariances : array_like, shape (n, 3, 3)
+        Covariance matrices in m².
+    scale : float
+        Exaggeration (and confidence factor), e.g. 1 for the 1σ ellipsoid × 1.
+    subdivisions : int
+        Icosphere refinement (1 → 42 vertices per ellipsoid).
+
+    Returns
+    -------
+    vertices : ndarray, shape (n·v, 3)
+    faces : ndarray of int32, shape (n·f, 3)
+    """
+    C = np.asarray(centers, dtype=float).reshape(-1, 3)
+    S = np.asarray(covariances, dtype=float).reshape(-1, 3, 3)
+    ev, U = np.linalg.eigh(0.5 * (S + np.swapaxes(S, 1, 2)))
+    L = U * np.sqrt(np.clip(ev, 0.0, None))[:, None, :]
+    sv, sf = icosphere(subdivisions)
+    verts = C[:, None, :] + scale * np.einsum("nij,vj->nvi", L, sv)
+    faces = sf[None, :, :] + (np.arange(C.shape[0]) * sv.shape[0])[:, None, None]
+    return verts.reshape(-1, 3), faces.reshape(-1, 3).astype(np.int32)
+
+
+# --------------------------------------------------------------------------- circles, spheres
+def circle_segments(centers: ArrayLike, normals: ArrayLike, radii: ArrayLike, n: int = 96) -> F64:
+    """Circles (centre, plane normal, radius) as closed polylines, shape (k·n, 2, 3)."""
+    C = np.asarray(centers, dtype=float).reshape(-1, 3)
+    N = np.broadcast_to(np.asarray(normals, dtype=float), C.shape).copy()
+    N /= np.linalg.norm(N, axis=1, keepdims=True)
+    r = np.broadcast_to(np.asarray(radii, dtype=float), (C.shape[0],))
+    helper = np.where(np.abs(N[:, 2:3]) < 0.9, [[0.0, 0.0, 1.0]], [[1.0, 0.0, 0.0]])
+    a = np.cross(N, helper)
+    a /= np.linalg.norm(a, axis=1, keepdims=True)
+    b = np.cross(N, a)
+    t = np.linspace(0.0, 2.0 * np.pi, n + 1)
+    ring = (
+        C[:, None, :]
+        + r[:, None, None] * (np.cos(t)[None, :, None] * a[:, None, :])
+        + r[:, None, None] * (np.sin(t)[None, :, None] * b[:, None, :])
+    )
+    return np.stack([ring[:, :-1], ring[:, 1:]], axis=2).reshape(-1, 2, 3)
+
+
+def sphere_wire_segments(
+    centers: ArrayLike, radii: ArrayLike, n_lat: int = 6, n_lon: int = 8, n: int = 64
+) -> F64:
+    """Wireframe spheres: ``n_lat`` parallels and ``n_lon`` meridians each, (k, 2, 3) segments."""
+    C = np.asarray(centers, dtype=float).reshape(-1, 3)
+    r = np.broadcast_to(np.asarray(radii, dtype=float), (C.shape[0],))
+    parts = []
+    for lat in np.linspace(-np.pi / 2, np.pi / 2, n_lat + 2)[1:-1]:
+        cc = C + np.array([0.0, 0.0, 1.0]) * (r * np.sin(lat))[:, None]
+        parts.append(circle_segments(cc, [0.0, 0.0, 1.0], r * np.cos(lat), n))
+    for lon in np.linspace(0.0, np.pi, n_lon, endpoint=False):
+        parts.append(circle_segments(C, [np.sin(lon), -np.cos(lon), 0.0], r, n))
+    return np.concatenate(parts, axis=0)
+
+
+def typical_spacing(points: ArrayLike) -> float:
+    """A typical distance between neighbouring points (m): √(horizontal area / count)."""
+    P = np.asarray(points, dtype=float).reshape(-1, 3)
+    P = P[np.all(np.isfinite(P), axis=1)]
+    if P.shape[0] < 2:
+        return 1.0
+    ext = P.max(axis=0) - P.min(axis=0)
+    area = max(ext[0], 1e-9) * max(ext[1], 1e-9)
+    if ext[0] < 1e-9 or ext[1] < 1e-9:
+        return float(max(ext.max(), 1e-3) / P.shape[0])
+    return float(np.sqrt(area / P.shape[0]))

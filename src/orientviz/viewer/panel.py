@@ -1,0 +1,263 @@
+"""The GUI panel of a block: orientation sliders, adjustment buttons, scrubber, residual list.
+
+All angles on the panel are in gon (slider steps of 1 c = 0.01 gon), positions in m.
+Rotations follow the block's sequence (ω-φ-κ by default, R = R_ω R_φ R_κ). Every
+callback runs through :meth:`BlockPanel.guard`, which turns an exception into a message
+in the panel and on the terminal instead of stopping the server.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from ..units import from_rad, to_rad
+from .scene import BlockScene
+
+ANGLES = ("omega", "phi", "kappa")
+POSITIONS = ("X0", "Y0", "Z0")
+RAY_MODES = ("none", "selected image", "all")
+
+
+class BlockPanel:
+    """GUI controls bound to a :class:`BlockScene`.
+
+    Parameters
+    ----------
+    server : viser.ViserServer
+        The server (for ``gui``, clients and notifications).
+    scene : BlockScene
+        The scene the controls act on (and its state).
+    report : callable
+        ``report(message)``: shows an error message (panel, notification, terminal).
+    """
+
+    def __init__(self, server: Any, scene: BlockScene, report: Callable[[str], None]) -> None:
+        self.server = server
+        self.scene = scene
+        self.state = scene.geo.state
+        self.report = report
+        self.handles: dict[str, Any] = {}
+        self._syncing = False
+        self._lock = threading.RLock()
+        #: wall-clock seconds of the last slider-driven redraw (state change to nodes sent)
+        self.last_redraw_s = float("nan")
+
+    # ------------------------------------------------------------------ helpers
+    def guard(self, fn: Callable[..., Any]) -> Callable[..., Any]:
+        """Wrap a callback: exceptions become a reported message; re-entry while syncing is ignored."""
+
+        def wrapped(*args: Any) -> None:
+            if self._syncing:
+                return
+            try:
+                with self._lock:
+                    fn(*args)
+            except Exception as exc:  # shown to the user, the server keeps running
+                self.report(f"{type(exc).__name__}: {exc}")
+
+        return wrapped
+
+    # ------------------------------------------------------------------ building
+    def build(self) -> BlockPanel:
+        gui, b, h = self.server.gui, self.state.block, self.handles
+        geo = self.scene.geo
+        with gui.add_folder("Image orientation"):
+            m = b.n_images
+            h["image"] = gui.add_slider("image #", 0, max(m - 1, 1), 1, 0, disabled=m < 2)
+            h["image_id"] = gui.add_markdown("")
+            span = float(10 ** np.round(np.log10(max(0.03 * geo.height, 1.0))))  # 1, 10, 100 m
+            for name in POSITIONS:
+                h[name] = gui.add_slider(
+                    f"{name} [m]", -span, span, 0.1, 0.0, hint="position of the projection centre"
+                )
+            for name in ANGLES:
+                h[name] = gui.add_slider(
+                    f"{name} [gon]", -2.0, 2.0, 0.01, 0.0, hint="slider step 1 c = 0.01 gon"
+                )
+        with gui.add_folder("Adjustment"):
+            h["step"] = gui.add_button("one iteration")
+            h["run"] = gui.add_button("run to convergence")
+            h["reset"] = gui.add_button("reset")
+            h["iteration"] = gui.add_slider("iteration", 0, 1, 1, 0, disabled=True)
+            h["stats"] = gui.add_markdown("")
+        with gui.add_folder("Largest residuals"):
+            h["largest"] = gui.add_dropdown("observation", ("—",))
+            h["fly"] = gui.add_button("fly to")
+        with gui.add_folder("Display"):
+            k0 = math.log10(self.scene.exaggeration)
+            h["exaggeration"] = gui.add_slider(
+                "log10 residual ×", round(k0 - 3, 1), round(k0 + 3, 1), 0.05, round(k0, 2)
+            )
+            h["rays"] = gui.add_dropdown("rays", RAY_MODES, initial_value="selected image")
+            for key, on in (
+                ("frustums", True), ("points", True), ("residuals", True),
+                ("strips", True), ("models", False), ("ellipsoids", True),
+            ):  # fmt: skip
+                h[f"show_{key}"] = gui.add_checkbox(key, on)
+        self._bind()
+        self.scene.on_image_click = self.guard(self._select_from_click)
+        self.select(0)
+        self.refresh()
+        return self
+
+    def _bind(self) -> None:
+        h = self.handles
+        h["image"].on_update(self.guard(lambda _e: self.select(int(h["image"].value))))
+        for name in POSITIONS + ANGLES:
+            h[name].on_update(self.guard(lambda _e: self.apply_sliders()))
+        h["step"].on_click(self.guard(lambda _e: self.adjust(1)))
+        h["run"].on_click(self.guard(lambda _e: self.adjust(50)))
+        h["reset"].on_click(self.guard(lambda _e: self.reset()))
+        h["iteration"].on_update(self.guard(lambda _e: self.replay(int(h["iteration"].value))))
+        h["fly"].on_click(self.guard(lambda _e: self.fly_to_selected()))
+        h["largest"].on_update(self.guard(lambda _e: self.fly_to_selected()))
+        h["exaggeration"].on_update(
+            self.guard(lambda _e: self.set_exaggeration(10 ** float(h["exaggeration"].value)))
+        )
+        h["rays"].on_update(self.guard(lambda _e: self.scene.set_rays(str(h["rays"].value))))
+        for key in ("frustums", "points", "residuals", "strips", "models", "ellipsoids"):
+            h[f"show_{key}"].on_update(
+                self.guard(
+                    lambda _e, k=key: self.scene.set_visible(
+                        k, bool(self.handles[f"show_{k}"].value)
+                    )
+                )
+            )
+
+    # ------------------------------------------------------------------ actions
+    def _select_from_click(self, k: int) -> None:
+        self.handles["image"].value = k  # triggers select()
+
+    def select(self, k: int) -> None:
+        """Select image ``k``: centre the sliders on its orientation, show its rays."""
+        b = self.state.block
+        self.scene.select(k)
+        self._base = (b.images.X0[k].copy(), b.images.angles[k].copy())
+        self._syncing = True
+        try:
+            for name in POSITIONS + ANGLES:
+                self.handles[name].value = 0.0
+        finally:
+            self._syncing = False
+        ang = from_rad(b.images.angles[k], "gon")
+        self.handles["image_id"].content = (
+            f"**{b.images.ids[k]}** (strip {b.images.strip[k]}) — sliders are changes of "
+            f"X0 = ({b.images.X0[k, 0]:.1f}, {b.images.X0[k, 1]:.1f}, {b.images.X0[k, 2]:.1f}) m, "
+            f"ω φ κ = ({ang[0]:.4f}, {ang[1]:.4f}, {ang[2]:.4f}) gon"
+        )
+
+    def apply_sliders(self) -> None:
+        """Set the selected image's orientation from the sliders and redraw at once."""
+        t = time.perf_counter()
+        k = self.scene.selected
+        X0, ang = self._base
+        dX = np.array([float(self.handles[n].value) for n in POSITIONS])
+        dA = to_rad(np.array([float(self.handles[n].value) for n in ANGLES]), "gon")
+        self.state.set_exterior(k, X0 + dX, ang + dA)
+        self.scene.update([k])
+        self.refresh(full=False)
+        self.last_redraw_s = time.perf_counter() - t
+
+    def adjust(self, max_iter: int) -> None:
+        """One iteration (``max_iter=1``) or a run to convergence from the current state."""
+        res = self.state.step(max_iter)
+        self.scene.update()
+        self.scene.update_ellipsoids()
+        self.select(self.scene.selected)
+        self.refresh()
+        if not res.converged and max_iter > 1:
+            self.report(f"the adjustment did not converge: {res.reason}")
+
+    def reset(self) -> None:
+        self.state.reset()
+        self.scene.update()
+        self.scene.update_ellipsoids()
+        self.select(self.scene.selected)
+        self.refresh()
+
+    def replay(self, k: int) -> None:
+        """Show history record ``k`` (the iteration scrubber)."""
+        self.state.replay(k)
+        self.scene.update()
+        self.select(self.scene.selected)
+        self.refresh(full=False)
+
+    def set_exaggeration(self, k: float) -> None:
+        self.scene.set_exaggeration(k)
+        self.refresh(full=False)
+
+    # ------------------------------------------------------------------ read-outs
+    def refresh(self, full: bool = True) -> None:
+        """Update σ0, the list of largest residuals and (``full``) the scrubber range."""
+        st, h = self.state, self.handles
+        e = st.misclosure()
+        scores, kind = st.scores(e)
+        n_hist = len(st.history)
+        if full:
+            self._syncing = True
+            try:
+                h["iteration"].max = max(n_hist - 1, 1)
+                h["iteration"].value = st.cursor
+                h["iteration"].disabled = n_hist < 2
+            finally:
+                self._syncing = False
+        res = st.result
+        lines = [
+            f"σ0 of the current state: **{st.sigma0(e):.3f}** (redundancy {st.redundancy()})",
+            f"state: {st.history[st.cursor].label}"
+            + ("" if st.at_result or st.cursor == 0 else " (moved)"),
+            f"max {kind}: {np.nanmax(scores, initial=0.0):.2f} · residual exaggeration ×{self.scene.exaggeration:.3g}",
+        ]
+        if res is not None:
+            lines.append(
+                f"last adjustment: σ̂0 = {res.sigma0:.3f}, {res.iterations} it., {res.reason}"
+            )
+        if getattr(self.scene, "ellipsoid_scale", None) and "ellipsoids" in self.scene.nodes:
+            lines.append(f"error ellipsoids ×{self.scene.ellipsoid_scale:.3g}")
+        h["stats"].content = "  \n".join(lines)
+        # the list of largest residuals follows every change
+        top = st.largest(10, scores)
+        self._top = [int(j) for j in top]
+        labels = tuple(
+            f"{i + 1}. {st.observation_label(j)}  {kind} = {scores[j]:.2f}"
+            for i, j in enumerate(self._top)
+        ) or ("—",)
+        self._syncing = True
+        try:
+            h["largest"].options = labels
+            h["largest"].value = labels[0]
+        finally:
+            self._syncing = False
+
+    def fly_to_selected(self) -> None:
+        """Move every client's camera to the observation chosen in the residual list."""
+        label = str(self.handles["largest"].value)
+        if not getattr(self, "_top", None) or label == "—":
+            return
+        j = self._top[int(label.split(".")[0]) - 1]
+        self.fly_to_observation(j)
+
+    def fly_to_observation(self, j: int) -> None:
+        """Select the observation's image and fly the camera to its point."""
+        b = self.state.block
+        img = int(b.observations.image[j])
+        self.handles["image"].value = img
+        target = self.scene.geo.frame.to_scene(b.points.xyz[b.observations.point[j]])
+        d = 8.0 * self.scene.geo.spacing
+        for client in self.server.get_clients().values():
+            start_pos = np.asarray(client.camera.position, dtype=float)
+            start_look = np.asarray(client.camera.look_at, dtype=float)
+            end_pos = target + np.array([-0.3, -1.0, 0.9]) * d
+            for t in np.linspace(0.0, 1.0, 12)[1:]:
+                s = t * t * (3 - 2 * t)
+                with client.atomic():
+                    client.camera.look_at = start_look + s * (target - start_look)
+                    client.camera.position = start_pos + s * (end_pos - start_pos)
+                time.sleep(0.02)
+        self.fly_target = target

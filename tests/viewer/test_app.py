@@ -1,0 +1,142 @@
+"""The viewer application without a browser: CLI, errors, export, panel actions."""
+
+import argparse
+import socket
+
+import numpy as np
+import pytest
+
+from orientviz.units import to_rad
+from orientviz.viewer.adjuster import small_bundle
+from orientviz.viewer.app import ViewerApp, port_is_free, run_from_cli
+from orientviz.viewer.demos import demo_from_block
+
+pytest.importorskip("viser")
+
+
+def args(**kw):
+    base = dict(target=None, host="127.0.0.1", port=0, export=None)
+    base.update(kw)
+    return argparse.Namespace(**base)
+
+
+@pytest.fixture
+def app(block):
+    rng = np.random.default_rng(8)
+    block.observations.xy += rng.normal(0, 0.005, block.observations.xy.shape)  # 5 µm noise
+    block.images.X0 += rng.normal(0, 3.0, block.images.X0.shape)  # start errors, 3 m
+    demo = demo_from_block(block)
+    demo.state.adjuster = small_bundle
+    a = ViewerApp(demo, port=0, verbose=False)
+    yield a
+    a.stop()
+
+
+def test_port_in_use_is_one_line_and_exit_2(capsys):
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen(1)
+        port = s.getsockname()[1]
+        assert not port_is_free("127.0.0.1", port)
+        code = run_from_cli(args(target="block", port=port))
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert (
+        err
+        == f"orientviz view: port {port} on 127.0.0.1 is already in use; choose another with --port"
+    )
+
+
+def test_bad_file_is_reported_in_viewer_not_raised(tmp_path, capsys):
+    bad = tmp_path / "broken.json"
+    bad.write_text("{ not json")
+    a = ViewerApp(str(bad), port=0, verbose=False)
+    try:
+        assert a.messages, "the load error must be shown"
+        assert "broken.json" in a.messages[0]
+        assert a._message_md.visible and "broken.json" in a._message_md.content
+        assert "broken.json" in capsys.readouterr().err
+    finally:
+        a.stop()
+
+
+def test_unknown_target_export_exits_2(tmp_path, capsys):
+    code = run_from_cli(
+        args(target=str(tmp_path / "missing.json"), export=str(tmp_path / "x.html"))
+    )
+    assert code == 2
+    assert "missing.json" in capsys.readouterr().err
+    assert not (tmp_path / "x.html").exists()
+
+
+def test_export_html_is_self_contained(tmp_path, block):
+    out = tmp_path / "block.html"
+    a = ViewerApp(demo_from_block(block), port=0, verbose=False)
+    try:
+        a.export_html(out)
+    finally:
+        a.stop()
+    html = out.read_text()
+    assert "__VISER_EMBED_DATA__" in html  # the scene is embedded
+    assert "ws://" not in html.split("__VISER_EMBED_DATA__")[1][:100]
+    assert "<script" in html and 'src="http' not in html  # no external scripts
+
+
+def test_slider_moves_image_and_redraws(app):
+    p = app.panel
+    st = app.demo.state
+    before = np.asarray(app.scene.nodes["residuals"].points).copy()
+    a0 = st.block.images.angles[0].copy()
+    p.handles["phi"].value = 0.25  # gon
+    np.testing.assert_allclose(
+        st.block.images.angles[0], a0 + [0, to_rad(0.25, "gon"), 0], atol=1e-15
+    )
+    after = np.asarray(app.scene.nodes["residuals"].points)
+    assert np.any(np.abs(after - before) > 0)
+    assert p.last_redraw_s < 1.0
+
+
+def test_adjust_scrub_reset(app):
+    p, st = app.panel, app.demo.state
+    p.handles["step"].value = None  # a click on "one iteration", from Python
+    assert len(st.history) == 2 and st.cursor == 1
+    p.adjust(50)
+    n = len(st.history)
+    assert n > 2 and st.result.converged
+    assert p.handles["iteration"].max == n - 1
+    p.handles["iteration"].value = 0  # scrub back to the start values
+    np.testing.assert_allclose(st.block.images.X0, st.block0.images.X0)
+    p.handles["iteration"].value = n - 1
+    np.testing.assert_allclose(st.block.images.X0, st.history[-1].X0)
+    assert st.at_result
+    p.reset()
+    assert len(st.history) == 1
+
+
+def test_failing_adjustment_is_reported(block):
+    def broken(b, max_iter):
+        raise np.linalg.LinAlgError("singular matrix")
+
+    demo = demo_from_block(block)
+    demo.state.adjuster = broken
+    a = ViewerApp(demo, port=0, verbose=False)
+    try:
+        a.panel.guard(lambda: a.panel.adjust(1))()
+        assert a.messages and "singular matrix" in a.messages[-1]
+    finally:
+        a.stop()
+
+
+def test_largest_residual_list_and_fly_to(app):
+    st = app.demo.state
+    st.block.observations.xy[7] += [0.2, 0.0]  # a blunder of 200 µm in observation 7
+    app.panel.refresh()
+    labels = app.panel.handles["largest"].options
+    scores, kind = st.scores()
+    assert kind == "|v|/σ"
+    order = np.argsort(-scores)[: len(labels)]
+    assert [lab.split()[1] for lab in labels] == [st.observation_label(j) for j in order]
+    app.panel.fly_to_observation(7)
+    assert app.panel.handles["image"].value == int(st.block.observations.image[7])
+    target = app.panel.fly_target + app.scene.geo.frame.origin
+    np.testing.assert_allclose(target, st.block.points.xyz[st.block.observations.point[7]])

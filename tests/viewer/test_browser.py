@@ -1,0 +1,78 @@
+"""The viewer in a real headless Chromium: it renders, and a slider moved in the page
+re-orients the image on the Python side and redraws the residuals."""
+
+import time
+
+import numpy as np
+import pytest
+
+from orientviz.units import to_rad
+from orientviz.viewer.adjuster import small_bundle
+from orientviz.viewer.app import ViewerApp
+from orientviz.viewer.demos import demo_from_block
+
+pytestmark = pytest.mark.browser
+
+SHOT = "/tmp/orientviz_viewer_browser.png"
+
+
+def wait_for(predicate, timeout=30.0, step=0.1):
+    """Poll ``predicate`` until it is true or ``timeout`` seconds have passed."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        time.sleep(step)
+    return False
+
+
+def slider_thumb(page, label):
+    """The draggable thumb (role=slider) of the GUI slider labelled ``label``."""
+    row = page.locator("div", has=page.locator("label", has_text=label)).filter(
+        has=page.locator("[role=slider]")
+    )
+    return row.last.locator("[role=slider]").first
+
+
+def test_viewer_renders_and_slider_updates_python(browser_page, block):
+    from PIL import Image
+
+    rng = np.random.default_rng(2)
+    block.observations.xy += rng.normal(0, 0.005, block.observations.xy.shape)
+    demo = demo_from_block(block)
+    demo.state.adjuster = small_bundle
+    app = ViewerApp(demo, port=0, verbose=False)
+    try:
+        page = browser_page
+        page.goto(app.url)
+        page.wait_for_selector("[role=slider]", timeout=30_000)
+        assert wait_for(lambda: len(app.server.get_clients()) > 0), "the page never connected"
+        time.sleep(3.0)  # let the scene arrive and render
+        page.screenshot(path=SHOT)
+        img = np.asarray(Image.open(SHOT).convert("RGB"), dtype=float)
+        scene = img[:, : int(img.shape[1] * 0.7)]  # left of the GUI panel
+        background = np.median(scene.reshape(-1, 3), axis=0)
+        drawn = np.mean(np.abs(scene - background).sum(axis=2) > 60)
+        # not blank: frustums, points and residuals cover a visible part of the view
+        assert scene.std() > 10
+        assert drawn > 0.005, f"only {drawn:.4f} of the scene pixels differ from the background"
+
+        st = app.demo.state
+        before = np.asarray(app.scene.nodes["residuals"].points).copy()
+        omega0 = st.block.images.angles[0, 0]
+        thumb = slider_thumb(page, "omega [gon]")
+        thumb.focus()
+        for _ in range(5):
+            thumb.press("ArrowRight")  # 5 steps of 1 c
+        ok = wait_for(lambda: abs(app.panel.handles["omega"].value - 0.05) < 1e-9, timeout=20)
+        assert ok, f"slider value on the Python side: {app.panel.handles['omega'].value}"
+        assert wait_for(
+            lambda: abs(st.block.images.angles[0, 0] - (omega0 + to_rad(0.05, "gon"))) < 1e-12
+        )
+        after = np.asarray(app.scene.nodes["residuals"].points)
+        changed = np.any(np.abs(after - before) > 0, axis=(1, 2))
+        # exactly the rays of image 0 got new residual vectors
+        np.testing.assert_array_equal(changed, st.block.observations.image == 0)
+        page.screenshot(path=SHOT.replace(".png", "_after.png"))
+    finally:
+        app.stop()
