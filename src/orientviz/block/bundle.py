@@ -332,8 +332,8 @@ def bundle_adjust(
         ``check_rms`` (m, X/Y/Z), ``check_points``, ``used_obs``, ``solver``.
     """
     setup = point_setup(block, control)
-    check_determinable(block, setup)
     check_connected(block, setup)
+    check_determinable(block, setup)
     check_datum(block, setup)
     prob = BundleProblem(
         block, setup, additional=additional, ap_group=ap_group, ap_sigma=ap_sigma, solver=solver
@@ -384,7 +384,11 @@ def bundle_adjust(
             float(np.max(np.abs(dp) * np.sqrt(ne["diagV"]), initial=0.0)),
             float(np.max(np.abs(da) * np.sqrt(ne["diagF"]), initial=0.0)) if prob.q else 0.0,
         )
-        dx = np.concatenate([dc.ravel(), dp.ravel(), da]) if keep_x else None
+        dx = None
+        if keep_x:  # same layout as x: zeros for fixed points
+            dpa = np.zeros((block.n_points, 3))
+            dpa[prob.var_pts] = dp
+            dx = np.concatenate([dc.ravel(), dpa.ravel(), da])
         st, rw, Je, Jp, cost = new, rw_n, Je_n, Jp_n, c_new
         rec = Iteration(it, prob.flat(st) if keep_x else np.empty(0), dx, s0(cost), cost, lam, rel)
         history.append(rec)
