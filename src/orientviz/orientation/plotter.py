@@ -386,6 +386,22 @@ class AnalogPlotter:
         xy1, xy2 = self.pair.images(points)
         return y_parallax(xy1, xy2, self.config.c, self.state)
 
+    def parallax_field(self, nx: int = 11, ny: int = 9) -> tuple[F64, F64, F64]:
+        """Noise-free y-parallaxes over the model area (for arrows in a figure).
+
+        Returns
+        -------
+        X, Y, p : ndarray, shape (ny, nx)
+            Plan grid over X ∈ [0, b], Y ∈ [−d, d] (machine mm) and the parallax p_y
+            (mm) of the terrain point there under the current dials.
+        """
+        cfg = self.config
+        d = cfg.k * cfg.projection_distance
+        X, Y = np.meshgrid(np.linspace(0, cfg.model_base, nx), np.linspace(-d, d, ny))
+        P = np.column_stack([X.ravel(), Y.ravel(), self.pair.height(X, Y).ravel()])
+        p, _ = self.parallax_at(P)
+        return X, Y, p.reshape(X.shape)
+
     def read(self, scheme: Scheme | str | None = None) -> Readings:
         """Read by and z at every point of the scheme (with the configured noise)."""
         sch = self.scheme if scheme is None else get_scheme(scheme)

@@ -1,0 +1,255 @@
+"""The virtual plotter: turn the dials, watch the y-parallaxes, let the desk computer pass.
+
+:class:`VirtualPlotter` holds the logic (no ipywidgets, no matplotlib: tests call its
+methods with slider values and look at the returned :class:`PlotterView`);
+:func:`plotter_app` wires sliders for by, bz (mm) and ω, φ, κ (centesimal minutes), a
+"one pass" button, the scheme and formula menus and the pass log to it, and redraws
+the parallax field with :func:`orientviz.plot.relative.plot_parallax_field`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..orientation.plotter import FORMULAS, AnalogPlotter, Readings, config_with, true_pair
+from ..orientation.schemes import get_scheme
+from ..units import RHO_C
+
+F64 = NDArray[np.float64]
+
+#: Scheme menu: name → label.
+SCHEME_CHOICES = {
+    "gruber6": "Gruber, 6 points",
+    "kovarik9": "Hallert/Kovarik, 9 points",
+    "schmid3": "Schmid, 15 points",
+}
+#: Formula menu: name → label.
+FORMULA_CHOICES = {
+    "exact": "exact linearisation (least squares)",
+    "kovarik9": "Kovarik 9-point closed form",
+    "flat": "flat terrain (Hallert)",
+    "preorient": "pre-orientation, round constants",
+}
+
+
+@dataclass
+class PlotterView:
+    """What the widget shows after an action.
+
+    Attributes
+    ----------
+    X, Y, p : ndarray, shape (ny, nx)
+        Parallax field: plan grid (machine mm) and p_y (mm).
+    readings : Readings
+        Noise-free readings at the current scheme's points.
+    dials : dict
+        ``by``, ``bz`` (mm), ``omega``, ``phi``, ``kappa`` (c) — slider values.
+    error : dict
+        The same, dials minus truth.
+    log : list of str
+        One line per pass.
+    rms : float
+        RMS parallax over the field, mm.
+    """
+
+    X: F64
+    Y: F64
+    p: F64
+    readings: Readings
+    dials: dict
+    error: dict
+    log: list[str]
+    rms: float
+
+
+def _as_dict(v: F64) -> dict:
+    return {
+        "by": float(v[0]),
+        "bz": float(v[1]),
+        "omega": float(v[2] * RHO_C),
+        "phi": float(v[3] * RHO_C),
+        "kappa": float(v[4] * RHO_C),
+    }
+
+
+class VirtualPlotter:
+    """The logic behind the virtual plotter widget.
+
+    Parameters
+    ----------
+    relief : float
+        Relative relief of the random terrain.
+    seed : int
+        Seed of terrain, true orientation and reading noise.
+    scheme : str
+        Key of :data:`SCHEME_CHOICES`.
+    formula : str
+        Key of :data:`FORMULA_CHOICES`.
+    sigma_by : float
+        Reading noise of a pass, machine mm.
+    grid : (int, int)
+        Arrows along X and Y.
+    """
+
+    def __init__(
+        self,
+        relief: float = 0.10,
+        seed: int = 0,
+        scheme: str = "kovarik9",
+        formula: str = "kovarik9",
+        sigma_by: float = 0.005,
+        grid: tuple[int, int] = (11, 9),
+    ) -> None:
+        self.grid = grid
+        self.scheme = scheme
+        self.formula = formula
+        self.reset(relief, seed, sigma_by)
+
+    # ---------------------------------------------------------------- actions
+    def reset(
+        self, relief: float | None = None, seed: int | None = None, sigma_by: float | None = None
+    ) -> PlotterView:
+        """New terrain and true orientation; dials at zero, log cleared."""
+        self.relief = self.__dict__.get("relief", 0.1) if relief is None else float(relief)
+        self.seed = self.__dict__.get("seed", 0) if seed is None else int(seed)
+        self.sigma_by = (
+            self.__dict__.get("sigma_by", 0.005) if sigma_by is None else float(sigma_by)
+        )
+        rng = np.random.default_rng(self.seed)
+        cfg = config_with(relief=self.relief, sigma_by=self.sigma_by, sigma_z=4 * self.sigma_by)
+        self.plotter = AnalogPlotter(true_pair(cfg, rng=rng), self.scheme, rng=rng)
+        self.log: list[str] = []
+        return self.view()
+
+    def set_dials(
+        self, by: float, bz: float, omega: float, phi: float, kappa: float
+    ) -> PlotterView:
+        """Set the dials from slider values: by, bz in mm; ω, φ, κ in centesimal minutes."""
+        self.plotter.settings = np.array([by, bz, omega / RHO_C, phi / RHO_C, kappa / RHO_C], float)
+        return self.view()
+
+    def set_scheme(self, scheme: str) -> PlotterView:
+        """Choose the point scheme read by a pass (a key of :data:`SCHEME_CHOICES`)."""
+        self.plotter.scheme = get_scheme(scheme)
+        self.scheme = scheme
+        return self.view()
+
+    def set_formula(self, formula: str) -> PlotterView:
+        """Choose the formula of the desk computer (a key of :data:`FORMULA_CHOICES`)."""
+        if formula not in FORMULAS:
+            from ..errors import InputError
+
+            raise InputError(f"unknown formula {formula!r}; known: {', '.join(FORMULAS)}")
+        self.formula = formula
+        return self.view()
+
+    def one_pass(self) -> PlotterView:
+        """One numerical pass: read by and z, compute, apply; appends to the log."""
+        rec = self.plotter.run_pass(self.formula)
+        err = self.plotter.error
+        self.log.append(
+            f"pass {len(self.log) + 1} ({self.formula}, {self.plotter.scheme.name}): "
+            f"rms p_y read {rec.rms_parallax * 1000:.0f} µm, largest rotation correction "
+            f"{rec.max_rotation_c:.2f} c → remaining error {np.abs(err[2:]).max() * RHO_C:.2f} c"
+        )
+        return self.view()
+
+    # ---------------------------------------------------------------- state
+    def view(self) -> PlotterView:
+        """The current field, readings, dials and log."""
+        X, Y, p = self.plotter.parallax_field(*self.grid)
+        rng, self.plotter.rng = self.plotter.rng, None
+        cfg = self.plotter.config
+        try:
+            # noise-free readings for the display (the pass itself reads with noise)
+            self.plotter.config = config_with(cfg, sigma_by=0.0, sigma_z=0.0)
+            r = self.plotter.read()
+        finally:
+            self.plotter.config, self.plotter.rng = cfg, rng
+        return PlotterView(
+            X, Y, p, r,
+            _as_dict(self.plotter.settings),
+            _as_dict(self.plotter.error),
+            list(self.log),
+            float(np.sqrt(np.mean(p**2))),
+        )  # fmt: skip
+
+
+def plotter_app(relief: float = 0.10, seed: int = 0):
+    """The ipywidgets app around :class:`VirtualPlotter`; returns the widget box."""
+    import ipywidgets as W
+    import matplotlib.pyplot as plt
+
+    from ..plot.relative import plot_parallax_field, update_parallax_field
+
+    vp = VirtualPlotter(relief=relief, seed=seed)
+    v0 = vp.view()
+    sliders = {
+        "by": W.FloatSlider(min=-5, max=5, step=0.01, description="by [mm]"),
+        "bz": W.FloatSlider(min=-5, max=5, step=0.01, description="bz [mm]"),
+        "omega": W.FloatSlider(min=-300, max=300, step=0.5, description="ω [c]"),
+        "phi": W.FloatSlider(min=-300, max=300, step=0.5, description="φ [c]"),
+        "kappa": W.FloatSlider(min=-300, max=300, step=0.5, description="κ [c]"),
+    }
+    scheme = W.Dropdown(
+        options=[(v, k) for k, v in SCHEME_CHOICES.items()], value="kovarik9", description="scheme"
+    )
+    formula = W.Dropdown(
+        options=[(v, k) for k, v in FORMULA_CHOICES.items()],
+        value="kovarik9",
+        description="formula",
+    )
+    button = W.Button(description="one pass (desk computer)")
+    log = W.Textarea(value="", layout=W.Layout(width="95%", height="120px"), disabled=True)
+    status = W.HTML()
+    out = W.Output()
+    import matplotlib as mpl
+    from IPython.display import display
+
+    live = any(k in mpl.get_backend().lower() for k in ("ipympl", "widget", "nbagg"))
+    fig, ax = plt.subplots(figsize=(7, 5))
+    plot_parallax_field(v0, ax=ax)
+    if live:
+        with out:
+            plt.show()
+    else:
+        plt.close(fig)  # inline backend: re-displayed by show()
+    busy = {"on": False}
+
+    def show(v):
+        update_parallax_field(ax, v)
+        if live:
+            fig.canvas.draw_idle()
+        else:
+            with out:
+                out.clear_output(wait=True)
+                display(fig)
+        log.value = "\n".join(v.log)
+        status.value = f"rms parallax over the model: <b>{v.rms * 1000:.0f} µm</b>"
+
+    def on_slider(_):
+        if busy["on"]:
+            return
+        show(vp.set_dials(*(s.value for s in sliders.values())))
+
+    def on_pass(_):
+        v = vp.one_pass()
+        busy["on"] = True
+        try:
+            for k, s in sliders.items():
+                s.value = v.dials[k]
+        finally:
+            busy["on"] = False
+        show(v)
+
+    for s in sliders.values():
+        s.observe(on_slider, names="value")
+    scheme.observe(lambda ch: show(vp.set_scheme(ch["new"])), names="value")
+    formula.observe(lambda ch: show(vp.set_formula(ch["new"])), names="value")
+    button.on_click(on_pass)
+    show(v0)
+    controls = W.VBox([*sliders.values(), scheme, formula, button, status])
+    return W.VBox([W.HBox([controls, out]), log])
