@@ -35,9 +35,10 @@ def _parser() -> argparse.ArgumentParser:
         "solve",
         help="adjust a problem file and report",
         description="Adjust a problem file (orientviz/1 JSON) and report.",
-        epilog="example: orientviz solve datasets/similarity_example.json --json",
+        epilog="example: orientviz solve similarity_example --json   (a file or a shipped "
+        "example: block_strip, block_compact, resection_example, intersection_example)",
     )
-    s.add_argument("file")
+    s.add_argument("file", help="problem file, or the name of a shipped example")
     s.add_argument("--method", choices=["bundle", "models", "polynomial"], default=None)
     s.add_argument("--json", action="store_true", help="print the result as JSON")
 

@@ -1,0 +1,1 @@
+"""Data shipped with orientviz: example problem files (``examples/``, see MANIFEST.json)."""

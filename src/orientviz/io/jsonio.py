@@ -1,0 +1,345 @@
+"""Strict JSON reading, JSON Schema validation and atomic writing for problem files.
+
+Python's :mod:`json` is lenient where a problem file must not be: it accepts ``NaN``,
+``Infinity`` and ``1e999`` (which becomes ``inf``) and silently keeps the last of two
+equal keys. :func:`parse_json` rejects all three and reports *where* they are, as a
+path like ``observations[12].x``. Schema errors are turned into the same one-line form.
+Nothing here uses ``pickle`` or ``eval``.
+
+Places inside a document are written as paths: ``points[3].X`` (array index in brackets,
+object key after a dot); :func:`format_path` builds them from ``jsonschema``'s paths.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+import tempfile
+from collections.abc import Iterable
+from functools import cache
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from ..errors import InputError
+
+#: Base URI of the schemas shipped in ``orientviz/io/schema`` (used for ``$ref`` only,
+#: nothing is fetched).
+SCHEMA_BASE = "https://orientviz.invalid/schema/1/"
+
+
+class _NonFinite:
+    """Placeholder for NaN/Infinity found while parsing (reported with its path later)."""
+
+    def __init__(self, token: str) -> None:
+        self.token = token
+
+    def __repr__(self) -> str:  # pragma: no cover - debugging aid
+        return self.token
+
+
+class _DuplicateKeys(dict):
+    """A JSON object that contained the same key twice (``duplicates`` lists them)."""
+
+    duplicates: list[str]
+
+
+def _pairs_hook(pairs: list[tuple[str, Any]]) -> dict:
+    seen: dict[str, Any] = {}
+    dup: list[str] = []
+    for k, v in pairs:
+        if k in seen:
+            dup.append(k)
+        seen[k] = v
+    if dup:
+        out = _DuplicateKeys(seen)
+        out.duplicates = dup
+        return out
+    return seen
+
+
+def _parse_float(text: str) -> float | _NonFinite:
+    value = float(text)
+    return value if math.isfinite(value) else _NonFinite(text)
+
+
+def format_path(path: Iterable[str | int]) -> str:
+    """Format a JSON path as ``observations[12].x`` (empty string for the document)."""
+    out = ""
+    for part in path:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        else:
+            out += f".{part}" if out else str(part)
+    return out
+
+
+def _find_bad(node: Any, path: list[str | int]) -> tuple[list[str | int], str] | None:
+    """First NaN/inf placeholder or duplicated key in document order."""
+    if isinstance(node, _NonFinite):
+        return path, (
+            f"{node.token} is not a finite number (JSON has no NaN or Infinity; "
+            "leave the field out or use null where that is allowed)"
+        )
+    if isinstance(node, dict):
+        if isinstance(node, _DuplicateKeys):
+            return path, f"duplicate key {node.duplicates[0]!r} in one object"
+        for k, v in node.items():
+            hit = _find_bad(v, path + [k])
+            if hit:
+                return hit
+    elif isinstance(node, list):
+        for i, v in enumerate(node):
+            hit = _find_bad(v, path + [i])
+            if hit:
+                return hit
+    return None
+
+
+def parse_json(text: str, source: str) -> Any:
+    """Parse JSON text strictly.
+
+    Parameters
+    ----------
+    text : str
+        The document.
+    source : str
+        Name of the file (for messages).
+
+    Returns
+    -------
+    object
+        The parsed document (dicts, lists, str, int, float, bool, None).
+
+    Raises
+    ------
+    InputError
+        ``"<source>: line 3, column 7: malformed JSON: Expecting ',' delimiter"``, or the
+        path of a NaN/Infinity/overflowing number or of a duplicated key.
+    """
+    try:
+        doc = json.loads(
+            text,
+            parse_constant=_NonFinite,
+            parse_float=_parse_float,
+            object_pairs_hook=_pairs_hook,
+        )
+    except json.JSONDecodeError as exc:
+        raise InputError(
+            f"malformed JSON: {exc.msg}", source, f"line {exc.lineno}, column {exc.colno}"
+        ) from None
+    except RecursionError:
+        raise InputError("malformed JSON: nested too deeply", source) from None
+    bad = _find_bad(doc, [])
+    if bad is not None:
+        raise InputError(bad[1], source, format_path(bad[0]) or "document")
+    return doc
+
+
+def read_json_file(path: str | os.PathLike[str]) -> Any:
+    """Read and strictly parse a JSON file; every failure is an :class:`InputError`."""
+    p = Path(path)
+    source = str(path)
+    try:
+        raw = p.read_bytes()
+    except FileNotFoundError:
+        raise InputError("no such file", source) from None
+    except IsADirectoryError:
+        raise InputError("is a directory, expected a JSON problem file", source) from None
+    except OSError as exc:
+        raise InputError(f"cannot read: {exc.strerror or exc}", source) from None
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise InputError(
+            f"not UTF-8 text (byte {exc.start}): expected a JSON problem file", source
+        ) from None
+    return parse_json(text, source)
+
+
+# --------------------------------------------------------------------------- schemas
+@cache
+def load_schema(name: str) -> dict[str, Any]:
+    """A schema shipped in ``orientviz/io/schema/<name>`` (parsed once)."""
+    res = resources.files("orientviz.io").joinpath("schema", name)
+    return json.loads(res.read_text(encoding="utf-8"))
+
+
+@cache
+def _registry():
+    from referencing import Registry, Resource
+
+    folder = resources.files("orientviz.io").joinpath("schema")
+    entries = []
+    for item in folder.iterdir():
+        if item.name.endswith(".json"):
+            schema = json.loads(item.read_text(encoding="utf-8"))
+            entries.append((SCHEMA_BASE + item.name, Resource.from_contents(schema)))
+    return Registry().with_resources(entries)
+
+
+@cache
+def validator_for(name: str):
+    """A Draft 2020-12 validator for schema file ``name`` (with ``$ref`` resolution)."""
+    from jsonschema import Draft202012Validator
+
+    schema = load_schema(name)
+    Draft202012Validator.check_schema(schema)
+    return Draft202012Validator(schema, registry=_registry())
+
+
+def _json_type(value: Any) -> str:
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "a boolean"
+    if isinstance(value, (int, float)):
+        return "a number"
+    if isinstance(value, str):
+        return "a string"
+    if isinstance(value, list):
+        return "an array"
+    return "an object"
+
+
+def _short(value: Any, limit: int = 40) -> str:
+    text = json.dumps(value, default=str)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _describe(error) -> tuple[list[str | int], str]:
+    """Turn a jsonschema ValidationError into (path, one-line message)."""
+    path = list(error.absolute_path)
+    v, inst, arg = error.validator, error.instance, error.validator_value
+    if v == "required":
+        missing = [k for k in arg if isinstance(inst, dict) and k not in inst]
+        return path, f"missing field {missing[0]!r}" if missing else error.message
+    if v in ("additionalProperties", "unevaluatedProperties"):
+        # jsonschema names the offending keys in its message: "('a', 'b' were unexpected)"
+        found = re.search(r"\((.*) (?:was|were) unexpected\)", error.message)
+        names = re.findall(r"'((?:[^'\\]|\\.)*)'", found.group(1)) if found else []
+        if not names and isinstance(inst, dict):
+            allowed = set(error.schema.get("properties", {}))
+            names = [k for k in inst if k not in allowed]
+        name = names[0] if names else "?"
+        return path + [name], f"unexpected field {name!r}"
+    if v == "type":
+        want = arg if isinstance(arg, str) else " or ".join(arg)
+        return path, f"expected {want}, got {_json_type(inst)} ({_short(inst)})"
+    if v == "enum":
+        opts = ", ".join(json.dumps(a) for a in arg)
+        return path, f"expected one of {opts}, got {_short(inst)}"
+    if v == "const":
+        return path, f"expected {json.dumps(arg)}, got {_short(inst)}"
+    if v in ("minItems", "maxItems"):
+        n = len(inst) if isinstance(inst, list) else "?"
+        word = "at least" if v == "minItems" else "at most"
+        return path, f"expected {word} {arg} item(s), got {n}"
+    if v in ("minimum", "exclusiveMinimum", "maximum", "exclusiveMaximum"):
+        op = {"minimum": "≥", "exclusiveMinimum": ">", "maximum": "≤", "exclusiveMaximum": "<"}
+        return path, f"expected a number {op[v]} {arg}, got {_short(inst)}"
+    if v == "minLength":
+        return path, f"expected a non-empty string, got {_short(inst)}"
+    if v == "minProperties":
+        return path, "expected a non-empty object"
+    return path, error.message if len(error.message) < 120 else error.message[:117] + "..."
+
+
+def _order(error) -> tuple:
+    key = []
+    for part in error.absolute_path:
+        key.append((0, part, "") if isinstance(part, int) else (1, 0, str(part)))
+    # prefer structural problems (missing/extra fields) at the same place
+    rank = 0 if error.validator in ("required", "additionalProperties") else 1
+    return (tuple(key), rank)
+
+
+def validate(doc: Any, schema_name: str, source: str) -> None:
+    """Validate ``doc`` against a shipped schema; raise one :class:`InputError` if invalid.
+
+    The first error in document order is reported, as ``"<source>: <path>: <problem>"``.
+    """
+    errors = list(validator_for(schema_name).iter_errors(doc))
+    if not errors:
+        return
+    # descend into if/then/else and allOf failures to the concrete problem
+    error = min(errors, key=_order)
+    path, message = _describe(error)
+    raise InputError(message, source, format_path(path) or "document")
+
+
+# --------------------------------------------------------------------------- writing
+def _is_flat(node: Any) -> bool:
+    """Scalars, arrays of scalars (or of short arrays) and objects of those: one line."""
+    if isinstance(node, dict):  # a row: scalars and short arrays (a columnar table is not)
+        return all(
+            not isinstance(v, dict) and (not isinstance(v, list) or len(v) <= 3) and _is_flat(v)
+            for v in node.values()
+        )
+    if isinstance(node, list):
+        return all(
+            not isinstance(v, (dict, list))
+            or (
+                isinstance(v, list)
+                and _is_flat(v)
+                and all(not isinstance(e, (list, dict)) for e in v)
+            )
+            for v in node
+        )
+    return True
+
+
+def _dump(node: Any, level: int, indent: int) -> str:
+    one = lambda v: json.dumps(v, ensure_ascii=False, allow_nan=False)  # noqa: E731
+    if _is_flat(node):
+        return one(node)
+    pad, inner = " " * (indent * level), " " * (indent * (level + 1))
+    if isinstance(node, dict):
+        items = [f"{inner}{one(k)}: {_dump(v, level + 1, indent)}" for k, v in node.items()]
+        return "{\n" + ",\n".join(items) + "\n" + pad + "}"
+    items = [f"{inner}{_dump(v, level + 1, indent)}" for v in node]
+    return "[\n" + ",\n".join(items) + "\n" + pad + "]"
+
+
+def dumps_json(doc: Any, *, indent: int | None = 1) -> str:
+    """Serialise a document: one table row (or column) per line, ``allow_nan=False``.
+
+    Objects and arrays that hold only scalars (a row, a column, ``units``) stay on one
+    line; everything else is indented by ``indent`` spaces (None: all on one line).
+    A NaN slipping through is a bug, not output: it raises ``ValueError``.
+    """
+    if indent is None:
+        return json.dumps(doc, ensure_ascii=False, allow_nan=False) + "\n"
+    return _dump(doc, 0, indent) + "\n"
+
+
+def write_atomic(path: str | os.PathLike[str], text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file and an atomic rename.
+
+    Either the complete new file exists afterwards or the old state is untouched; no
+    half-written file is ever left behind.
+    """
+    target = Path(path)
+    folder = target.parent if str(target.parent) else Path(".")
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
+    try:
+        try:  # keep the mode of a file we replace, else the usual 0o666 & ~umask
+            mode = target.stat().st_mode & 0o777
+        except OSError:
+            umask = os.umask(0)
+            os.umask(umask)
+            mode = 0o666 & ~umask
+        os.chmod(tmp, mode)
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, target)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise

@@ -1,0 +1,117 @@
+"""``orientviz solve FILE [--method bundle|models|polynomial] [--json]``.
+
+Loads a problem file, solves it with the solver of its kind and prints a readable
+report or JSON. Exit codes: 0 solved and converged, 2 bad input (one line naming file,
+place and problem), 3 the adjustment is impossible (datum defect, not determinable) or
+did not converge (the report is still printed). Never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+
+import numpy as np
+
+from ..errors import AdjustmentError, InputError
+from .problem import Problem, load_problem
+from .registry import get_kind
+from .report import Solution
+
+
+def solve_problem(problem: Problem, method: str | None = None) -> Solution:
+    """Solve a loaded problem by its kind's solver.
+
+    Parameters
+    ----------
+    problem : Problem
+        From :func:`~orientviz.io.problem.load_problem`.
+    method : str, optional
+        ``"bundle"``, ``"models"`` or ``"polynomial"`` for blocks; None = the default.
+
+    Raises
+    ------
+    InputError
+        If the method does not apply to the kind, or the solver rejects the data.
+    AdjustmentError
+        Datum defect, parameters not determinable, breakdown.
+    """
+    kind = get_kind(problem.kind, problem.source)
+    if method is not None and method not in kind.methods:
+        allowed = ", ".join(kind.methods) if len(kind.methods) > 1 else "none"
+        raise InputError(
+            f"--method {method} does not apply to a {kind.name!r} problem (methods: {allowed})",
+            problem.source,
+        )
+    if kind.solve is None:
+        raise InputError(f"kind {kind.name!r} cannot be solved by this version", problem.source)
+    with np.errstate(all="ignore"):
+        return kind.solve(problem, method)
+
+
+def run_from_cli(args: argparse.Namespace) -> int:
+    """Entry point of ``orientviz solve``; returns the exit code (0, 2 or 3)."""
+    prog = "orientviz solve"
+    try:
+        problem = load_problem(_resolve(args.file))
+        solution = solve_problem(problem, getattr(args, "method", None))
+        text = (
+            json.dumps(solution.as_dict(), indent=1, ensure_ascii=False, allow_nan=False)
+            if getattr(args, "json", False)
+            else solution.as_text()
+        )
+    except InputError as exc:
+        print(f"{prog}: {exc.one_line()}", file=sys.stderr)
+        return 2
+    except ModuleNotFoundError as exc:  # a solver module of this kind is not there (yet)
+        print(
+            f"{prog}: {args.file}: not yet available in this version ({exc.name})", file=sys.stderr
+        )
+        return 2
+    except AdjustmentError as exc:
+        print(f"{prog}: {args.file}: adjustment impossible: {exc}", file=sys.stderr)
+        return 3
+    except (ValueError, TypeError, KeyError) as exc:  # a library check without InputError
+        msg = exc.args[0] if exc.args else type(exc).__name__
+        print(f"{prog}: {args.file}: {msg}", file=sys.stderr)
+        return 2
+    except (np.linalg.LinAlgError, ArithmeticError) as exc:
+        print(f"{prog}: {args.file}: adjustment impossible: {exc}", file=sys.stderr)
+        return 3
+    except RecursionError:
+        print(f"{prog}: {args.file}: the problem is nested too deeply", file=sys.stderr)
+        return 2
+    except MemoryError:
+        print(f"{prog}: {args.file}: the problem is too large for this machine", file=sys.stderr)
+        return 2
+    _print(text)
+    if not solution.adjustment.converged:
+        print(
+            f"{prog}: {args.file}: the adjustment did not converge: {solution.adjustment.reason}",
+            file=sys.stderr,
+        )
+        return 3
+    return 0
+
+
+def _resolve(name: str) -> str:
+    """A path as given, or the file of a shipped dataset if no such path exists."""
+    if os.path.exists(name):
+        return name
+    from .datasets import dataset_path, list_datasets
+
+    if name in list_datasets():
+        return str(dataset_path(name))
+    return name
+
+
+def _print(text: str) -> None:
+    """Print the report; a closed pipe (``| head``) is not an error."""
+    try:
+        sys.stdout.write(text + "\n")
+        sys.stdout.flush()
+    except BrokenPipeError:  # pragma: no cover - depends on the shell
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())

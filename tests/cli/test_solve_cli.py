@@ -1,0 +1,180 @@
+"""``orientviz solve``: reports, JSON keys in the file's units, exit codes, no tracebacks."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from orientviz.cli import main
+from orientviz.io.datasets import dataset_path, list_datasets, load_dataset
+from orientviz.io.problem import Units, dumps_problem, problem_from_block
+from orientviz.io.solve import solve_problem
+
+
+def _solve_json(capsys, *argv):
+    code = main(["solve", *argv, "--json"])
+    out, err = capsys.readouterr()
+    return code, (json.loads(out) if out.strip() else None), err
+
+
+@pytest.mark.parametrize("name", list_datasets())
+def test_every_example_solves(name, capsys):
+    code, out, err = _solve_json(capsys, str(dataset_path(name)))
+    assert code == 0, err
+    for key in ("sigma0", "converged", "iterations", "images", "points", "flagged"):
+        assert key in out
+    assert out["converged"] is True and out["iterations"] >= 1
+    assert out["units"] == load_dataset(name).units.as_dict()
+    # every example is simulated with the σ it states: σ̂0 must be near 1. With r ≥ 8
+    # the 99.9 % range of σ̂0 is about [0.3, 1.8]; the similarity example's control σ
+    # leaves out the model noise (0.01 mm · 5000 = 0.05 m), so its σ̂0 may reach ~1.6.
+    assert 0.3 < out["sigma0"] < 1.8
+
+
+def test_text_report(capsys):
+    code = main(["solve", str(dataset_path("resection_example"))])
+    out, err = capsys.readouterr()
+    assert code == 0 and err == ""
+    for words in ("sigma0 =", "redundancy 10", "converged", "omega phi kappa", "[gon]",
+                  "largest normalised residuals", "flagged"):  # fmt: skip
+        assert words in out
+
+
+def test_dataset_name_instead_of_a_path(capsys):
+    code, out, _ = _solve_json(capsys, "intersection_example")
+    assert code == 0 and out["kind"] == "intersection"
+
+
+def test_resection_recovers_the_simulated_orientation(capsys):
+    """Noise 5 µm: the truth must lie within 4σ of the estimate (σ from the report)."""
+    info = json.loads((dataset_path("resection_example").parent / "MANIFEST.json").read_text())
+    truth = next(d for d in info["datasets"] if d["name"] == "resection_example")["truth"]
+    code, out, _ = _solve_json(capsys, "resection_example")
+    img = out["images"][0]
+    for k, key in enumerate(("X0", "Y0", "Z0")):
+        assert abs(img[key] - truth["X0_m"][k]) < 4 * img["sigma"][key]
+    for k, key in enumerate(("omega", "phi", "kappa")):
+        assert abs(img[key] - truth["omega_phi_kappa_gon"][k]) < 4 * img["sigma"][key]
+
+
+def test_results_are_in_the_file_units(capsys, tmp_path):
+    """The same resection in m/gon and in mm/cc reports the same numbers × 1000 / × 10⁴."""
+    base = load_dataset("resection_example")
+    other = problem_from_block(base.data, kind="resection", units=Units("mm", "cc", "um"))
+    path = tmp_path / "mm.json"
+    path.write_text(dumps_problem(other), encoding="utf-8")
+    _, a, _ = _solve_json(capsys, str(dataset_path("resection_example")))
+    _, b, _ = _solve_json(capsys, str(path))
+    ia, ib = a["images"][0], b["images"][0]
+    # same adjustment up to round-off of the unit conversions (values printed to 15 digits)
+    assert ib["X0"] == pytest.approx(ia["X0"] * 1000.0, rel=1e-9)
+    assert ib["kappa"] == pytest.approx(ia["kappa"] * 1e4, rel=1e-9)
+    assert ib["sigma"]["phi"] == pytest.approx(ia["sigma"]["phi"] * 1e4, rel=1e-5)
+    assert b["sigma0"] == pytest.approx(a["sigma0"], rel=1e-5)
+
+
+def test_similarity_parameters_and_units(capsys):
+    code, out, _ = _solve_json(capsys, "similarity_example")
+    params = {p["name"]: p for p in out["parameters"]}
+    assert params["scale"]["unit"] == "" and params["kappa"]["unit"] == "gon"
+    assert params["tx"]["unit"] == "m"
+    truth = json.loads((dataset_path("similarity_example").parent / "MANIFEST.json").read_text())
+    t = next(d for d in truth["datasets"] if d["name"] == "similarity_example")["truth"]
+    assert abs(params["scale"]["value"] - t["scale"]) < 4 * params["scale"]["sigma"]
+    assert abs(params["kappa"]["value"] - t["kappa_gon"]) < 4 * params["kappa"]["sigma"]
+    roles = {p["id"]: p["role"] for p in out["points"]}
+    assert roles["101"] == "transformed" and roles["100"] == "control"
+
+
+def test_gross_error_is_flagged(capsys, tmp_path):
+    doc = json.loads(dataset_path("resection_example").read_text(encoding="utf-8"))
+    doc["observations"][3]["x"] += 0.060  # 60 µm = 12 σ
+    path = tmp_path / "gross.json"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    code, out, _ = _solve_json(capsys, str(path))
+    assert code == 0
+    assert out["flagged"], "a 12σ error must be flagged"
+    assert out["flagged"][0]["label"] == f"{doc['observations'][3]['point']}/x"
+    assert abs(out["flagged"][0]["w"]) > 3.29
+
+
+def test_bad_input_exit_2_one_line(capsys, tmp_path):
+    path = tmp_path / "bad.json"
+    path.write_text(
+        '{"format": "orientviz/1", "kind": "block", "units": {"length": "ft", "angle": "gon"}}'
+    )
+    code = main(["solve", str(path)])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1
+    assert str(path) in err and "units.length" in err and "ft" in err
+
+
+def test_missing_file_exit_2(capsys, tmp_path):
+    code = main(["solve", str(tmp_path / "nope.json")])
+    _, err = capsys.readouterr()
+    assert code == 2 and "no such file" in err
+
+
+def test_method_does_not_apply(capsys):
+    code = main(["solve", str(dataset_path("similarity_example")), "--method", "bundle"])
+    _, err = capsys.readouterr()
+    assert code == 2 and "does not apply to a 'similarity' problem" in err
+
+
+def test_datum_defect_exit_3(capsys, tmp_path):
+    doc = json.loads(dataset_path("block_strip").read_text(encoding="utf-8"))
+    for p in doc["points"]:
+        if p["role"] == "control":
+            p["role"] = "tie"
+            p.pop("sigma", None)
+    path = tmp_path / "free.json"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    code = main(["solve", str(path)])
+    out, err = capsys.readouterr()
+    assert code == 3 and out == ""
+    assert "7 datum parameter" in err and "free: add control or fix" in err
+    assert err.count("\n") == 1
+
+
+def test_not_converged_exit_3_with_report(capsys, tmp_path):
+    doc = json.loads(dataset_path("resection_example").read_text(encoding="utf-8"))
+    doc["options"] = {"max_iter": 1}
+    path = tmp_path / "one_step.json"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    code, out, err = _solve_json(capsys, str(path))
+    assert code == 3
+    assert out["converged"] is False and out["iterations"] == 1
+    assert "did not converge" in err
+
+
+def test_solve_problem_api_matches_cli(capsys):
+    sol = solve_problem(load_dataset("intersection_example"))
+    _, out, _ = _solve_json(capsys, "intersection_example")
+    assert out["sigma0"] == pytest.approx(sol.adjustment.sigma0, rel=1e-5)
+    xyz = np.array([[p["X"], p["Y"], p["Z"]] for p in out["points"]])
+    np.testing.assert_allclose(xyz, sol.xyz, rtol=0, atol=1e-9)
+
+
+@pytest.mark.skipif(shutil.which("orientviz") is None, reason="orientviz entry point not installed")
+def test_installed_entry_point(tmp_path):
+    """The console script runs the same code (PYTHONPATH points it at this checkout)."""
+    src = str(Path(__file__).resolve().parents[2] / "src")
+    env = dict(os.environ, PYTHONPATH=src + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    exe = shutil.which("orientviz")
+    ok = subprocess.run([exe, "solve", "similarity_example", "--json"], capture_output=True,
+                        text=True, env=env, timeout=120)  # fmt: skip
+    assert ok.returncode == 0, ok.stderr
+    assert json.loads(ok.stdout)["kind"] == "similarity"
+    bad = tmp_path / "bad.json"
+    bad.write_text("{", encoding="utf-8")
+    fail = subprocess.run([exe, "solve", str(bad)], capture_output=True, text=True, env=env,
+                          timeout=120)  # fmt: skip
+    assert fail.returncode == 2
+    assert "Traceback" not in fail.stderr and "malformed JSON" in fail.stderr
