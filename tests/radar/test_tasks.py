@@ -43,7 +43,7 @@ def _assert_exact(res, truth, names):
 def test_calibration_exact(surface):
     P, xy = G.points(surface), G.image_coordinates(surface, 2, rounded=False)
     a = APPROX[2]
-    res = calibrate(P, xy, TRUE[2].with_(x0=a.x0, y0=a.y0, h=a.h, m=a.m, kappa=a.kappa))
+    res = calibrate(P, xy, TRUE[2].with_(x0=a.x0, y0=a.y0, h=a.h, m=a.m, kappa=G.alpha0_approx()))
     _assert_exact(res, TRUE[2], ["x0", "y0", "h", "m", "kappa"])
     assert res.names == ["x0", "y0", "h", "m", "kappa"] and res.redundancy == 45
 

@@ -142,15 +142,14 @@ def images(sequence: str = "pok") -> dict[int, RadarImage]:
 def approximations(sequence: str = "pok") -> dict[int, RadarImage]:
     """The approximations of Fig. 7 (index N) for images 2 and 3.
 
-    The interior approximations (x0N, y0N, hN, mN, α0N = 0.3 gon) serve the calibration
-    and the joint ten-parameter adjustment; the exterior ones are the stations and
-    rotations listed with index N.
+    Interior: x0N, y0N, hN, mN (calibration and the joint ten-parameter adjustment);
+    exterior: the stations and rotations listed with index N (φN = ωN = κN = 0 for
+    image 2). The calibration starts its reference direction α0 (= κ) from
+    α0N = 0.3 gon instead, :func:`alpha0_approx`.
     """
     io = {"x0": 400.0, "y0": 700.0, "h": 15000.0, "m": 1.125}
     return {
-        2: RadarImage(
-            **io, X0=(30000.0, 0.0, -1000.0), kappa=to_rad(0.3, "gon"), sequence=sequence
-        ),
+        2: RadarImage(**io, X0=(30000.0, 0.0, -1000.0), sequence=sequence),
         3: RadarImage(
             **io,
             X0=(25000.0, 10000.0, -500.0),
@@ -160,6 +159,11 @@ def approximations(sequence: str = "pok") -> dict[int, RadarImage]:
             sequence=sequence,
         ),
     }
+
+
+def alpha0_approx() -> float:
+    """α0N = 0.3 gon, the calibration's approximation of the reference direction (rad)."""
+    return to_rad(0.3, "gon")
 
 
 def image_coordinates(name: str, image: int, *, rounded: bool = True, sequence: str = "pok") -> F64:
