@@ -13,6 +13,11 @@ from typing import Any
 
 #: name → ("module", "function", one-line description)
 REGISTRY: dict[str, tuple[str, str, str]] = {
+    "geier": (
+        "orientviz.reproduce.geier",
+        "table",
+        "Geier 1973 Fig. 8: radar panorama orientation tasks on ten surfaces",
+    ),
     "kovarik": (
         "orientviz.reproduce.kovarik",
         "table",
