@@ -110,8 +110,9 @@ def test_resection_and_intersection_state():
 def test_apps_build_without_a_browser():
     pytest.importorskip("ipywidgets")
     from orientviz.widgets.absolute import absolute_app
-    from orientviz.widgets.resection import resection_app
+    from orientviz.widgets.resection import intersection_app, resection_app
     from orientviz.widgets.rotation import rotation_app
 
     for app in (rotation_app(), absolute_app(), resection_app()):
         assert len(app.children) == 2
+    assert len(intersection_app().children) == 3

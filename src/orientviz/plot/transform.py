@@ -31,7 +31,7 @@ def plot_transform_residuals(result, *, scale: float | None = None, ax=None, lab
         Result of ``similarity_transform`` (uses ``extra["transformed"]``,
         ``extra["used"]``, ``extra["residuals_xyz"]``).
     scale : float, optional
-        Exaggeration of the residuals; default so the largest spans ~8 % of the plot.
+        Exaggeration of the residuals; default so the largest spans ~12 % of the plot.
     ax : matplotlib.axes.Axes, optional
     labels : bool, default True
         Write the point ids (from the residual labels).
@@ -51,7 +51,7 @@ def plot_transform_residuals(result, *, scale: float | None = None, ax=None, lab
     span = float(np.ptp(P[:, :2], axis=0).max()) or 1.0
     vmax = float(np.nanmax(np.abs(v))) if np.isfinite(v).any() else 0.0
     if scale is None:
-        scale = 0.08 * span / vmax if vmax > 0 else 1.0
+        scale = 0.12 * span / vmax if vmax > 0 else 1.0
     kinds = control_kind(used)
     for kind, (marker, colour) in MARKERS.items():
         sel = np.array([k == kind for k in kinds])

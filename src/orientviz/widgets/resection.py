@@ -111,3 +111,26 @@ def resection_app():
         w.observe(redraw, names="value")
     redraw()
     return W.HBox([W.VBox([n, relief, sig, seed, text]), out])
+
+
+def intersection_app():
+    """ipywidgets app: a B/H slider → σ of points intersected from a vertical pair."""
+    import ipywidgets as W
+
+    bh = W.FloatSlider(value=0.6, min=0.05, max=1.5, step=0.05, description="B/H",
+                       continuous_update=False)  # fmt: skip
+    sig = W.FloatSlider(value=5.0, min=1.0, max=30.0, description="σ [µm]", continuous_update=False)
+    out = W.Output()
+
+    def redraw(*_):
+        res = intersection_state(bh.value, sigma_um=sig.value)
+        s = res.std()
+        with out:
+            out.clear_output(wait=True)
+            for name, row in zip(("under left image", "midway", "under right image"), s):
+                print(f"{name:18s} σX = {row[0]:.3f}  σY = {row[1]:.3f}  σZ = {row[2]:.3f} m")
+
+    for w in (bh, sig):
+        w.observe(redraw, names="value")
+    redraw()
+    return W.VBox([bh, sig, out])
