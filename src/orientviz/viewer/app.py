@@ -98,7 +98,7 @@ class ViewerApp:
         if content is not None:
             try:
                 self.load(content)
-            except (OrientvizError, ValueError, OSError, KeyError) as exc:
+            except Exception as exc:  # any load failure is shown; the server keeps running
                 self.report(
                     str(exc) if isinstance(exc, OrientvizError) else f"{type(exc).__name__}: {exc}"
                 )

@@ -8,7 +8,6 @@ in the panel and on the terminal instead of stopping the server.
 
 from __future__ import annotations
 
-import math
 import threading
 import time
 from collections.abc import Callable
@@ -90,10 +89,11 @@ class BlockPanel:
             h["largest"] = gui.add_dropdown("observation", ("—",))
             h["fly"] = gui.add_button("fly to")
         with gui.add_folder("Display"):
-            k0 = math.log10(self.scene.exaggeration)
+            self.auto_k = self.scene.exaggeration
             h["exaggeration"] = gui.add_slider(
-                "log10 residual ×", round(k0 - 3, 1), round(k0 + 3, 1), 0.05, round(k0, 2)
-            )
+                "residual × (log10, 0 = auto)", -3.0, 3.0, 0.05, 0.0,
+                hint="0 draws the median residual about a third of a point spacing",
+            )  # fmt: skip
             h["rays"] = gui.add_dropdown("rays", RAY_MODES, initial_value="selected image")
             for key, on in (
                 ("frustums", True), ("points", True), ("residuals", True),
@@ -117,9 +117,7 @@ class BlockPanel:
         h["iteration"].on_update(self.guard(lambda _e: self.replay(int(h["iteration"].value))))
         h["fly"].on_click(self.guard(lambda _e: self.fly_to_selected()))
         h["largest"].on_update(self.guard(lambda _e: self.fly_to_selected()))
-        h["exaggeration"].on_update(
-            self.guard(lambda _e: self.set_exaggeration(10 ** float(h["exaggeration"].value)))
-        )
+        h["exaggeration"].on_update(self.guard(lambda _e: self.set_exaggeration()))
         h["rays"].on_update(self.guard(lambda _e: self.scene.set_rays(str(h["rays"].value))))
         for key in ("frustums", "points", "residuals", "strips", "models", "ellipsoids"):
             h[f"show_{key}"].on_update(
@@ -168,6 +166,7 @@ class BlockPanel:
         """One iteration (``max_iter=1``) or a run to convergence from the current state."""
         res = self.state.step(max_iter)
         self.scene.update()
+        self.set_exaggeration(auto=True)
         self.scene.update_ellipsoids()
         self.select(self.scene.selected)
         self.refresh()
@@ -177,6 +176,7 @@ class BlockPanel:
     def reset(self) -> None:
         self.state.reset()
         self.scene.update()
+        self.set_exaggeration(auto=True)
         self.scene.update_ellipsoids()
         self.select(self.scene.selected)
         self.refresh()
@@ -185,11 +185,15 @@ class BlockPanel:
         """Show history record ``k`` (the iteration scrubber)."""
         self.state.replay(k)
         self.scene.update()
+        self.set_exaggeration(auto=True)
         self.select(self.scene.selected)
         self.refresh(full=False)
 
-    def set_exaggeration(self, k: float) -> None:
-        self.scene.set_exaggeration(k)
+    def set_exaggeration(self, auto: bool = False) -> None:
+        """Exaggeration = automatic value × 10^slider; ``auto`` recomputes the automatic value."""
+        if auto:
+            self.auto_k = self.scene.geo.auto_exaggeration()
+        self.scene.set_exaggeration(self.auto_k * 10 ** float(self.handles["exaggeration"].value))
         self.refresh(full=False)
 
     # ------------------------------------------------------------------ read-outs

@@ -1,0 +1,280 @@
+"""The stereo-pair demo: Kovarik's analog plotter in 3D, with y-parallax arrows.
+
+The pair comes from :mod:`orientviz.orientation.plotter` (a dependent pair: the left
+projector fixed at the origin with R = I, the right one at the base (b, by, bz) turned
+by its dials ω, φ, κ through the instrument's axes, φ-ω-κ by default:
+R = R_φ R_ω R_κ). Model frame: X along the base, Y left, Z up, terrain at Z < 0, all in
+*machine millimetres*.
+
+Scene tree::
+
+    /pair/left, /pair/right        the two projectors (frustums)
+    /pair/terrain                  model points of a grid over the model area
+    /pair/scheme                   the points read in a pass (Kovarik's nine by default)
+    /pair/rays                     rays of both projectors to the scheme points
+    /pair/parallax                 y-parallax arrows, from the left ray to the right
+                                   ray (p_y = Y_left − Y_right), × exaggeration
+
+The panel has the five dials (by, bz in mm; ω, φ, κ in centesimal minutes c), one
+pass / orient to convergence with a chosen formula, a pass scrubber and reset.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..rotation import matrix_from_opk
+from ..units import RHO_C
+from . import geometry as g
+from .block_geometry import COLORS
+
+F64 = NDArray[np.float64]
+
+DIALS = ("by [mm]", "bz [mm]", "omega [c]", "phi [c]", "kappa [c]")
+
+
+def pair_geometry(plotter: Any, n_grid: int = 15) -> dict[str, F64]:
+    """Arrays of the pair scene under the plotter's current dials (machine mm).
+
+    Returns
+    -------
+    dict
+        ``centres`` (2, 3), ``rotations`` (2, 3, 3) image → model, ``terrain`` (g, 3)
+        model points of a grid, ``parallax`` (g,) p_y in mm at them, ``scheme`` (k, 3)
+        model points of the scheme and ``scheme_parallax`` (k,).
+    """
+    cfg = plotter.config
+    st = plotter.state
+    R2 = matrix_from_opk(*st.angles_right, sequence=st.sequence)
+    b, d = cfg.model_base, cfg.k * cfg.projection_distance
+    X, Y = np.meshgrid(np.linspace(0.0, b, n_grid), np.linspace(-d, d, n_grid))
+    P = np.column_stack([X.ravel(), Y.ravel(), plotter.pair.height(X, Y).ravel()])
+    p, pts = plotter.parallax_at(P)
+    Xs, Ys, Zs = plotter.scheme_points()
+    ps, spts = plotter.parallax_at(np.column_stack([Xs, Ys, Zs]))
+    return {
+        "centres": np.array([np.zeros(3), st.base]),
+        "rotations": np.array([np.eye(3), R2]),
+        "terrain": pts,
+        "parallax": p,
+        "scheme": spts,
+        "scheme_parallax": ps,
+    }
+
+
+def parallax_arrows(points: F64, parallax: F64, exaggeration: float) -> F64:
+    """Arrows from the left ray (Y + p/2) to the right ray (Y − p/2), × exaggeration.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3)
+        Model points (the mean Y of the two rays), machine mm.
+    parallax : ndarray, shape (n,)
+        p_y = Y_left − Y_right in machine mm.
+    exaggeration : float
+
+    Returns
+    -------
+    ndarray, shape (3n, 2, 3)
+        Line segments (shaft and two head strokes per arrow).
+    """
+    half = np.zeros_like(points)
+    half[:, 1] = 0.5 * exaggeration * parallax
+    return g.arrow_segments(points + half, -2.0 * half, head=0.3)
+
+
+def pair_demo(rng: np.random.Generator | int = 7) -> Any:
+    """The ``pair`` demo (see the module docstring)."""
+    from ..orientation.plotter import AnalogPlotter, PlotterConfig, true_pair
+    from .demos import Demo
+
+    gen = np.random.default_rng(rng) if isinstance(rng, int) else rng
+    cfg = PlotterConfig(sigma_by=0.0, sigma_z=0.0)
+    pair = true_pair(cfg, rng=gen)
+    plotter = AnalogPlotter(pair)
+    desc = (
+        f"A dependent pair on a simulated analog plotter (c = {cfg.c} mm, model base "
+        f"{cfg.model_base} mm, relief {cfg.relief:.0%}). The right projector starts at zero "
+        "dials, about 100-150 c from the truth. Arrows: y-parallax from the left to the "
+        "right ray. Move the dials, or run passes with Kovarik's nine points."
+    )
+    return Demo(
+        "pair",
+        "Relative orientation of a pair",
+        desc,
+        None,
+        lambda app: PairView(app, plotter).build(),
+    )
+
+
+class PairView:
+    """Nodes and controls of the pair demo."""
+
+    def __init__(self, app: Any, plotter: Any) -> None:
+        self.app, self.plotter = app, plotter
+        self.start = plotter.settings.copy()
+        self.snapshots = [plotter.settings.copy()]
+        self._syncing = False
+
+    def build(self) -> dict:
+        app, pl = self.app, self.plotter
+        sc, gui, cfg = app.server.scene, app.server.gui, pl.config
+        geo = pair_geometry(pl)
+        self.frame = g.SceneFrame.around(np.vstack([geo["terrain"], geo["centres"]]))
+        H = cfg.projection_distance
+        self.depth = 0.22 * H
+        fov, aspect, scale = g.viser_frustum(cfg.c, (cfg.format_mm, cfg.format_mm), self.depth)
+        self.spacing = g.typical_spacing(geo["terrain"])
+        p_scale = float(np.percentile(np.abs(geo["parallax"]), 90)) or 1.0
+        self.k0 = 10 ** np.round(np.log10(0.8 * self.spacing / p_scale))
+        self.k = self.k0
+        self.nodes: dict[str, Any] = {}
+        for name, color in (("left", COLORS["frustum"]), ("right", COLORS["selected"])):
+            self.nodes[name] = sc.add_camera_frustum(
+                f"/pair/{name}", fov=fov, aspect=aspect, scale=scale, color=color,
+                thickness=2.0, thickness_units="screen", cast_shadow=False, receive_shadow=False,
+            )  # fmt: skip
+        ps = 0.15 * self.spacing
+        self.nodes["terrain"] = sc.add_point_cloud(
+            "/pair/terrain", np.zeros((1, 3), np.float32), COLORS["tie"], point_size=ps,
+            point_shape="circle", precision="float32",
+        )  # fmt: skip
+        self.nodes["scheme"] = sc.add_point_cloud(
+            "/pair/scheme", np.zeros((1, 3), np.float32), COLORS["control"], point_size=2.2 * ps,
+            point_shape="diamond", precision="float32",
+        )  # fmt: skip
+        z2 = np.zeros((1, 2, 3), np.float32)
+        self.nodes["rays"] = sc.add_line_segments(
+            "/pair/rays", z2, COLORS["ray"], thickness=1.0, thickness_units="screen"
+        )
+        self.nodes["parallax"] = sc.add_line_segments(
+            "/pair/parallax", z2, COLORS["deformation"], thickness=2.0, thickness_units="screen"
+        )
+        h: dict[str, Any] = {}
+        with gui.add_folder("Dials of the right projector"):
+            for i, label in enumerate(DIALS):
+                lim, step = (5.0, 0.01) if i < 2 else (250.0, 1.0)
+                h[label] = gui.add_slider(label, -lim, lim, step, self._dial(i))
+        with gui.add_folder("Passes"):
+            h["formula"] = gui.add_dropdown("formula", ("exact", "kovarik9", "flat", "preorient"))
+            h["pass"] = gui.add_button("one pass")
+            h["orient"] = gui.add_button("orient to convergence")
+            h["reset"] = gui.add_button("reset")
+            h["scrub"] = gui.add_slider("pass", 0, 1, 1, 0, disabled=True)
+            h["stats"] = gui.add_markdown("")
+        with gui.add_folder("Display"):
+            h["exaggeration"] = gui.add_slider(
+                "log10 parallax ×", float(np.log10(self.k0)) - 2, float(np.log10(self.k0)) + 2,
+                0.05, float(np.log10(self.k0)),
+            )  # fmt: skip
+        self.h = h
+        guard = app.guard
+        for label in DIALS:
+            h[label].on_update(guard(lambda _e: self._from_sliders()))
+        h["pass"].on_click(guard(lambda _e: self._passes(1)))
+        h["orient"].on_click(guard(lambda _e: self._passes(30)))
+        h["reset"].on_click(guard(lambda _e: self._set(self.start, reset=True)))
+        h["scrub"].on_update(
+            guard(lambda _e: self._set(self.snapshots[int(h["scrub"].value)], keep=True))
+        )
+        h["exaggeration"].on_update(guard(lambda _e: self._exaggerate()))
+        self.redraw()
+        pos = self.frame.to_scene(np.array([-0.6 * cfg.model_base, -1.6 * cfg.model_base, 0.3 * H]))
+        look = self.frame.to_scene(np.array([0.5 * cfg.model_base, 0.0, -H]))
+        return {"camera": (pos, look, self.frame.size), "pair": self}
+
+    # ------------------------------------------------------------------ state
+    def _dial(self, i: int) -> float:
+        v = self.plotter.settings[i]
+        return round(float(v if i < 2 else v * RHO_C), 2)
+
+    def _from_sliders(self) -> None:
+        if self._syncing:
+            return
+        s = np.array([float(self.h[lab].value) for lab in DIALS])
+        s[2:] /= RHO_C
+        self.plotter.settings[:] = s
+        self.redraw()
+
+    def _sync_sliders(self) -> None:
+        self._syncing = True
+        try:
+            for i, lab in enumerate(DIALS):
+                self.h[lab].value = self._dial(i)
+        finally:
+            self._syncing = False
+
+    def _set(self, settings: F64, reset: bool = False, keep: bool = False) -> None:
+        if self._syncing:
+            return
+        self.plotter.settings[:] = settings
+        if reset:
+            self.plotter.history.clear()
+            self.snapshots = [settings.copy()]
+        self._sync_sliders()
+        if not keep:
+            self._sync_scrubber()
+        self.redraw()
+
+    def _passes(self, n: int) -> None:
+        formula = str(self.h["formula"].value)
+        if n == 1:
+            self.plotter.run_pass(formula)
+            self.snapshots.append(self.plotter.settings.copy())
+        else:
+            run = self.plotter.orient(formula, max_passes=n)
+            self.snapshots += [p.settings_after.copy() for p in run.passes]
+            if not run.converged:
+                self.app.report(f"no convergence after {run.n_passes} passes with {formula!r}")
+        self._sync_sliders()
+        self._sync_scrubber()
+        self.redraw()
+
+    def _sync_scrubber(self) -> None:
+        self._syncing = True
+        try:
+            n = len(self.snapshots)
+            self.h["scrub"].max = max(n - 1, 1)
+            self.h["scrub"].value = n - 1
+            self.h["scrub"].disabled = n < 2
+        finally:
+            self._syncing = False
+
+    def _exaggerate(self) -> None:
+        self.k = 10 ** float(self.h["exaggeration"].value)
+        self.redraw()
+
+    # ------------------------------------------------------------------ drawing
+    def redraw(self) -> None:
+        """Re-project under the current dials and update every node."""
+        geo = pair_geometry(self.plotter)
+        f = self.frame
+        q = g.wxyz_from_matrix(geo["rotations"] @ g.FLIP)
+        for k, name in enumerate(("left", "right")):
+            self.nodes[name].position = f.to_scene(geo["centres"][k])
+            self.nodes[name].wxyz = q[k]
+        self.nodes["terrain"].points = f.to_scene(geo["terrain"]).astype(np.float32)
+        self.nodes["scheme"].points = f.to_scene(geo["scheme"]).astype(np.float32)
+        S = geo["scheme"]
+        rays = np.concatenate(
+            [g.ray_segments(np.broadcast_to(c, S.shape), S) for c in geo["centres"]]
+        )
+        self.nodes["rays"].points = f.to_scene(rays).astype(np.float32)
+        arrows = parallax_arrows(geo["terrain"], geo["parallax"], self.k)
+        col = g.ramp(
+            np.repeat(np.abs(geo["parallax"]), 3), max(np.abs(geo["parallax"]).max(), 1e-9)
+        )
+        self.nodes["parallax"].points = f.to_scene(arrows).astype(np.float32)
+        self.nodes["parallax"].colors = np.repeat(col[:, None, :], 2, axis=1)
+        err = self.plotter.error
+        rms = float(np.sqrt(np.mean(geo["parallax"] ** 2)))
+        self.h["stats"].content = (
+            f"RMS y-parallax over the model: **{rms * 1000:.1f} µm** (machine)  \n"
+            f"passes: {len(self.plotter.history)} · dials − truth: by {err[0]:+.3f}, bz {err[1]:+.3f} mm; "
+            f"ω {err[2] * RHO_C:+.1f}, φ {err[3] * RHO_C:+.1f}, κ {err[4] * RHO_C:+.1f} c  \n"
+            f"arrows ×{self.k:.3g}"
+        )
+        self.rms = rms

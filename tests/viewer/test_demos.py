@@ -1,0 +1,58 @@
+"""The built-in demos build, and their special geometry (y-parallax, radar) is right."""
+
+import numpy as np
+import pytest
+
+from orientviz.viewer.app import ViewerApp
+from orientviz.viewer.demos import DEMOS, load_demo
+from orientviz.viewer.pair_scene import pair_geometry, parallax_arrows
+from orientviz.viewer.radar_scene import radar_geometry
+
+pytest.importorskip("viser")
+
+
+def test_parallax_arrows_run_from_left_to_right_ray():
+    pts = np.array([[0.0, 10.0, -300.0], [50.0, -20.0, -310.0]])
+    p = np.array([0.2, -0.1])  # p_y = Y_left − Y_right, mm
+    seg = parallax_arrows(pts, p, 10.0)
+    assert seg.shape == (6, 2, 3)
+    shafts = seg[0::3]
+    np.testing.assert_allclose(shafts[:, 0, 1], pts[:, 1] + 5.0 * p)  # left ray, × 10
+    np.testing.assert_allclose(shafts[:, 1, 1], pts[:, 1] - 5.0 * p)  # right ray
+    np.testing.assert_allclose(shafts[:, :, [0, 2]], np.repeat(pts[:, None, [0, 2]], 2, 1))
+
+
+def test_pair_geometry_has_no_parallax_at_the_true_orientation():
+    from orientviz.orientation.plotter import AnalogPlotter, PlotterConfig, true_pair
+
+    pair = true_pair(PlotterConfig(sigma_by=0.0, sigma_z=0.0), rng=np.random.default_rng(1))
+    pl = AnalogPlotter(pair)
+    wrong = pair_geometry(pl)
+    assert np.sqrt(np.mean(wrong["parallax"] ** 2)) > 1e-2  # start: 100-150 c off
+    pl.settings[:] = pair.elements
+    right = pair_geometry(pl)
+    np.testing.assert_allclose(right["parallax"], 0.0, atol=1e-9)
+    np.testing.assert_allclose(right["centres"][1], pl.state.base)
+
+
+def test_radar_candidates_contain_the_station():
+    geo = radar_geometry("fig7", 3, rounded=False)
+    station = geo["stations"][3]
+    d = np.linalg.norm(geo["candidates"] - station, axis=1)
+    assert d.min() < 1e-3  # error-free image coordinates: exact up to rounding of floats
+    # every projection circle passes through its object point and lies on its range sphere
+    r = np.linalg.norm(geo["circles"] - station, axis=2)
+    np.testing.assert_allclose(r, np.broadcast_to(r[:, :1], r.shape), rtol=1e-12)
+    gap = np.min(np.linalg.norm(geo["circles"] - geo["points"][:, None], axis=2), axis=1)
+    # on the circle: the nearest of 96 evenly spaced vertices is within half a chord
+    assert np.all(gap <= r[:, 0] * np.sin(np.pi / 96) + 1e-6)
+
+
+@pytest.mark.parametrize("name", sorted(DEMOS))
+def test_demo_builds_in_the_viewer(name):
+    app = ViewerApp(load_demo(name), port=0, verbose=False)
+    try:
+        assert app.messages == []
+        assert app.server.scene.get_handle_by_name(f"/{'block' if name == 'block' else name}")
+    finally:
+        app.stop()
