@@ -188,11 +188,21 @@ def plotter_app(relief: float = 0.10, seed: int = 0):
     vp = VirtualPlotter(relief=relief, seed=seed)
     v0 = vp.view()
     sliders = {
-        "by": W.FloatSlider(min=-5, max=5, step=0.01, description="by [mm]"),
-        "bz": W.FloatSlider(min=-5, max=5, step=0.01, description="bz [mm]"),
-        "omega": W.FloatSlider(min=-300, max=300, step=0.5, description="ω [c]"),
-        "phi": W.FloatSlider(min=-300, max=300, step=0.5, description="φ [c]"),
-        "kappa": W.FloatSlider(min=-300, max=300, step=0.5, description="κ [c]"),
+        "by": W.FloatSlider(
+            min=-5, max=5, step=0.01, description="by [mm]", continuous_update=False
+        ),
+        "bz": W.FloatSlider(
+            min=-5, max=5, step=0.01, description="bz [mm]", continuous_update=False
+        ),
+        "omega": W.FloatSlider(
+            min=-300, max=300, step=0.5, description="ω [c]", continuous_update=False
+        ),
+        "phi": W.FloatSlider(
+            min=-300, max=300, step=0.5, description="φ [c]", continuous_update=False
+        ),
+        "kappa": W.FloatSlider(
+            min=-300, max=300, step=0.5, description="κ [c]", continuous_update=False
+        ),
     }
     scheme = W.Dropdown(
         options=[(v, k) for k, v in SCHEME_CHOICES.items()], value="kovarik9", description="scheme"
