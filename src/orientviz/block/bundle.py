@@ -41,6 +41,9 @@ F64 = NDArray[np.float64]
 EXTERIOR_NAMES = ("X0", "Y0", "Z0", "omega", "phi", "kappa")
 #: Blocks up to this many images keep the full parameter vector in every history record.
 HISTORY_X_LIMIT: int = 500
+#: Above this start σ0 a singular first normal matrix is blamed on the approximations
+#: (damped steps are tried) rather than reported as a defect at once.
+POOR_START_SIGMA0: float = 30.0
 
 
 @dataclass
@@ -353,7 +356,7 @@ def bundle_adjust(
     rw, Je, Jp = prob.residuals(st, jac=True)
     cost = prob.cost(st, rw)
     history = [Iteration(0, prob.flat(st) if keep_x else np.empty(0), None, s0(cost), cost)]
-    lam, converged = 0.0, False
+    lam, converged, damped_start = 0.0, False, False
     reason = f"reached the maximum of {max_iter} iterations"
     for it in range(1, max_iter + 1):
         while True:
@@ -361,11 +364,16 @@ def bundle_adjust(
             try:
                 dc, dp, da, fac = prob.solve(ne, red_names)
             except NotDeterminableError:
-                if it == 1 and lam == 0:
+                # at a good start a singular S is a real defect; at a poor start (σ0 ≫ 1)
+                # it may be an artefact of the approximations: try damped steps, and
+                # verify the undamped system at the solution (below)
+                if it == 1 and lam == 0 and history[0].sigma0 < POOR_START_SIGMA0:
                     raise
+                damped_start = damped_start or it == 1
                 lam = max(10 * lam, 1e-3)
                 if lam > 1e8:
-                    raise
+                    reason = f"the normal equations stayed singular in iteration {it}"
+                    break
                 continue
             new = prob.apply(st, dc, dp, da)
             rw_n, Je_n, Jp_n = prob.residuals(new, jac=True)
@@ -398,6 +406,16 @@ def bundle_adjust(
         if rel < tol:
             converged, reason = True, f"corrections below {tol:g} σ after {it} iterations"
             break
+    if damped_start:  # a start that needed damping: prove the solution is determinable
+        try:
+            prob.solve(prob.normal(st, rw, Je, Jp), red_names)
+        except NotDeterminableError:
+            converged, precision = False, False
+            reason = (
+                f"no convergence from poor approximate values (start σ0 = {history[0].sigma0:.3g}): "
+                "the normal equations are not positive definite there; compute better "
+                "approximations, e.g. with orientviz.block.approximate.approximate_values"
+            )
     return _finish(
         block,
         prob,

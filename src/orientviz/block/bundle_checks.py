@@ -156,6 +156,15 @@ def datum_defect(block: Block, setup: PointSetup) -> tuple[int, str]:
     ok = np.isfinite(img.X0_obs) & np.isfinite(s) & (s >= 0)
     xy.append(img.X0_obs[ok[:, 0] & ok[:, 1], :2])
     hxy.append(img.X0_obs[ok[:, 2], :2])
+    # an image with observed position *and* attitude fixes translation and rotation;
+    # any further observed coordinate or a second planimetric point fixes the scale
+    a_ok = np.isfinite(img.angles_obs) & np.isfinite(img.angles_sigma) & (img.angles_sigma >= 0)
+    anchor = ok.all(axis=1) & a_ok.all(axis=1)
+    if anchor.any():
+        others = ok.any(axis=1) & (np.arange(len(anchor)) != np.flatnonzero(anchor)[0])
+        if others.any() or ctrl_plan.sum() + ctrl_h.sum() >= 1:
+            return 0, ""
+        return 1, "a second observed position or a control point (scale)"
     plan = np.unique(np.round(np.concatenate(xy), 3), axis=0)
     heights = np.unique(np.round(np.concatenate(hxy), 3), axis=0)
     free = 7
