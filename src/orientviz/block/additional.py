@@ -327,6 +327,11 @@ class APAnalysis:
         Pairs of additional parameters with |ρ| > threshold.
     with_exterior : list of (str, str, float)
         (additional parameter, most correlated exterior/point parameter, ρ) above threshold.
+    undetermined : list of str
+        Parameters the block does not determine: their a-priori σ (σ0 = 1) is above
+        1/√2 of their pseudo-observation's σ, i.e. the observations carry less weight for
+        them than the pseudo-observation p = 0 ± σ. Pairwise correlations miss such
+        dependencies among many parameters.
     warnings : list of str
         Sentences naming over-parameterisation.
     """
@@ -340,6 +345,7 @@ class APAnalysis:
     with_exterior: list[tuple[str, str, float]]
     alpha: float
     threshold: float
+    undetermined: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
 
     def table(self) -> str:
@@ -350,7 +356,9 @@ class APAnalysis:
         return "\n".join(lines + self.warnings)
 
 
-def analyse(adj, *, alpha: float = 0.05, threshold: float = 0.9) -> APAnalysis:
+def analyse(
+    adj, *, alpha: float = 0.05, threshold: float = 0.9, ap_sigma: ArrayLike | None = None
+) -> APAnalysis:
     """Test the additional parameters of a self-calibrating adjustment.
 
     Parameters
@@ -363,6 +371,9 @@ def analyse(adj, *, alpha: float = 0.05, threshold: float = 0.9) -> APAnalysis:
         Significance level of the two-sided test of each parameter against 0.
     threshold : float
         |ρ| above which a pair is reported as over-parameterisation.
+    ap_sigma : float or array_like (k,), optional
+        σ (µm) of the pseudo-observations used in the adjustment; with it, parameters
+        determined only by their pseudo-observation are named (``undetermined``).
     """
     if "additional" not in adj.blocks:
         raise InputError("the adjustment has no additional parameters (block 'additional')")
@@ -402,7 +413,21 @@ def analyse(adj, *, alpha: float = 0.05, threshold: float = 0.9) -> APAnalysis:
                 jmax = int(np.argmax(np.abs(C[a])))
                 if abs(C[a, jmax]) > threshold:
                     with_ext.append((names[a], adj.names[others[jmax]], float(C[a, jmax])))
+    undetermined: list[str] = []
+    if ap_sigma is not None:
+        k = len(idx) // max(1, len({n.split("@")[-1] for n in names}))
+        ps = np.resize(np.broadcast_to(np.asarray(ap_sigma, float), (k,)), len(idx))
+        with np.errstate(invalid="ignore"):
+            undetermined = [
+                n for n, q, p in zip(names, d, ps) if np.isfinite(p) and q > p / np.sqrt(2)
+            ]
     warns = []
+    if undetermined:
+        warns.append(
+            "not determinable by the block (held only by the pseudo-observation): "
+            + ", ".join(undetermined[:8])
+            + (" …" if len(undetermined) > 8 else "")
+        )
     if pairs:
         warns.append(
             "over-parameterised: "
@@ -416,4 +441,6 @@ def analyse(adj, *, alpha: float = 0.05, threshold: float = 0.9) -> APAnalysis:
             + ", ".join(f"{a}~{b} (ρ={r:+.2f})" for a, b, r in with_ext[:6])
             + (" …" if len(with_ext) > 6 else "")
         )
-    return APAnalysis(names, value, sigma, t, sig, pairs, with_ext, alpha, threshold, warns)
+    return APAnalysis(
+        names, value, sigma, t, sig, pairs, with_ext, alpha, threshold, undetermined, warns
+    )

@@ -52,6 +52,7 @@ __all__ = [
     "radial",
     "trapezoid",
     "typical",
+    "unflatness",
 ]
 
 
@@ -280,6 +281,47 @@ def model_bending(um: float = 8.0, base_mm: float = 92.0, ref_mm: float = HALF_F
         return np.column_stack([a * x * y * y, np.zeros_like(x)])
 
     return ImageError(f"model bending {um:.3g} µm", f)
+
+
+def unflatness(um: float = 10.0, c: float = 152.0, shape: str = "trough", half_mm: float = 115.0):
+    """Film unflatness: the film surface stands off the image plane by h(x, y).
+
+    A point on film raised by h (towards the lens) is imaged displaced radially by
+    ``Δ = (x, y) · h / c``. Shapes (h in µm of height, scaled so that the largest image
+    displacement in the usable format is ``um`` µm):
+
+    * ``"trough"`` — film bent along the transport direction x, ``h ∝ 1 − 2 (x/a)²``
+      (a = half the format): x-dependent scale of y, which the two images of a model see
+      differently — a **y-parallax** the orientation cannot remove;
+    * ``"dome"`` — a bulge in the middle, ``h ∝ 1 − (x² + y²)/a²``.
+
+    Parameters
+    ----------
+    um : float
+        Largest displacement in µm over the usable format (±110 mm).
+    c : float
+        Principal distance in mm.
+    shape : {"trough", "dome"}
+    half_mm : float
+        a, half the format in mm.
+    """
+    if shape not in ("trough", "dome"):
+        raise InputError(f"unflatness: expected shape 'trough' or 'dome', got {shape!r}")
+
+    def h(xy: F64) -> F64:
+        u, v = xy[:, 0] / half_mm, xy[:, 1] / half_mm
+        return 1.0 - 2.0 * u * u if shape == "trough" else 1.0 - (u * u + v * v)
+
+    g = np.linspace(-HALF_FORMAT_MM, HALF_FORMAT_MM, 23)
+    gx, gy = np.meshgrid(g, g)
+    grid = np.column_stack([gx.ravel(), gy.ravel()])
+    unit = np.max(np.hypot(*(grid * (h(grid) / c)[:, None]).T))
+    k = um * 1e-3 / unit
+
+    def f(xy: F64) -> F64:
+        return xy * (k * h(xy) / c)[:, None]
+
+    return ImageError(f"unflatness {um:.3g} µm ({shape})", f)
 
 
 @dataclass

@@ -23,6 +23,11 @@ REGISTRY: dict[str, tuple[str, str, str]] = {
         "table",
         "Kovarik 1968: passes of numerical relative orientation vs relief, wrong ordinate",
     ),
+    "selfcal": (
+        "orientviz.reproduce.selfcal",
+        "table",
+        "Ackermann 1974 Tables 3-5: bundle blocks without/with self-calibration",
+    ),
 }
 
 
