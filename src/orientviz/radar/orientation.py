@@ -27,7 +27,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..adjust import Adjustment, gauss_newton
 from ..errors import InputError, NotDeterminableError
-from .ppi import PARAMS, RadarImage, check_image_points, check_points, project_with_jacobian
+from .ppi import (
+    PARAMS,
+    RadarImage,
+    check_image_points,
+    check_points,
+    project_with_jacobian,
+    tolerant,
+)
 from .stopping import geier_iterate
 from .trilateration import sphere_ranges, trilaterate_three
 
@@ -121,7 +128,7 @@ def image_model(
         l = robs
     else:
         l = np.zeros(len(xy_obs))
-    return model, full0[idx], l
+    return tolerant(model, l.size, len(idx)), full0[idx], l
 
 
 def adjust_image(

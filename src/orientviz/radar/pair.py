@@ -38,6 +38,7 @@ from .ppi import (
     check_points,
     project_with_jacobian,
     sphere_radius,
+    tolerant,
 )
 
 F64 = NDArray[np.float64]
@@ -206,17 +207,21 @@ def relative_orientation(
     l = np.concatenate([L1.reshape(-1), L2.reshape(-1)])
     labels = [f"img{j}/{i + 1}/{c}" for j in (1, 2) for i in range(n) for c in "xy"]
     engine.setdefault("tol", 1e-8)
-    res = gauss_newton(
-        model,
-        np.concatenate([full0[idx], X0.reshape(-1)]),
-        l,
-        sigma,
-        names=names,
-        blocks={"image2": slice(0, k), "points": slice(k, k + 3 * n)},
-        obs_labels=labels,
-        context="relative orientation",
-        **engine,
-    )
+    u0 = np.concatenate([full0[idx], X0.reshape(-1)])
+    try:
+        res = gauss_newton(
+            tolerant(model, 4 * n, k + 3 * n),
+            u0,
+            l,
+            sigma,
+            names=names,
+            blocks={"image2": slice(0, k), "points": slice(k, k + 3 * n)},
+            obs_labels=labels,
+            context="relative orientation",
+            **engine,
+        )
+    except NotDeterminableError as exc:
+        raise _orientation_defect(model, u0, free, exc) from None
     p = full0.copy()
     p[idx] = res.x[:k]
     res.extra.update(
@@ -227,6 +232,32 @@ def relative_orientation(
         }
     )
     return res
+
+
+def _orientation_defect(model, u0: F64, free: list[str], exc: NotDeterminableError):
+    """Re-state a singular relative orientation in terms of image 2's parameters.
+
+    The null space spans orientation parameters *and* points; the user needs to know
+    which orientation parameters move in it (the points just follow).
+    """
+    from ..adjust.rank import null_space_of_normal
+
+    _, J = model(u0)
+    null = null_space_of_normal(J.T @ J)
+    k = len(free)
+    if null.shape[1] == 0:
+        return exc
+    share = np.sum(null[:k] ** 2, axis=1)
+    order = np.argsort(-share)
+    names = [free[i] for i in order if share[i] > 1e-6 * max(share.max(), 1e-300)]
+    what = ", ".join(names) if names else "only object points"
+    return NotDeterminableError(
+        f"relative orientation: {null.shape[1]} parameter combination(s) not determinable "
+        f"from the homologous points; image 2 parameters involved: {what} (with the object "
+        "points, which follow them)",
+        names or exc.parameters,
+        null.shape[1],
+    )
 
 
 def absolute_orientation(

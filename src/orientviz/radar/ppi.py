@@ -347,3 +347,24 @@ def back_project(xy: ArrayLike, image: RadarImage, elevation: ArrayLike) -> F64:
     return np.asarray(image.X0, float) + r[:, None] * (
         np.cos(el)[:, None] * e1 + np.sin(el)[:, None] * image.axis
     )
+
+
+def tolerant(model, n_obs: int, n_par: int):
+    """Wrap a model so that, after its first call, impossible geometry gives NaN.
+
+    The first evaluation (at the approximations) raises :class:`InputError` as usual;
+    later ones (during the iteration) return NaN observations instead, which the engine
+    reports as "the model became undefined" — a diverging iteration, not bad input.
+    """
+    state = {"first": True}
+
+    def wrapped(u):
+        if state["first"]:
+            state["first"] = False
+            return model(u)
+        try:
+            return model(u)
+        except InputError:
+            return np.full(n_obs, np.nan), np.zeros((n_obs, n_par))
+
+    return wrapped
