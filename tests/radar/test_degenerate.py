@@ -78,7 +78,6 @@ def test_tangent_line_flagged():
 
 
 def test_weakest_direction_of_near_normal_relative_orientation():
-    P = G.points("plane")
     xy1, xy2 = G.image_coordinates("plane", 1), G.image_coordinates("plane", 2)
     res = relative_orientation(xy1, T[1], xy2, T[2], damping="lm")
     cond, involved = weakest_direction(res, block="image2")
