@@ -120,3 +120,29 @@ def test_degenerate_and_bad_input():
         intersect_points(xy, img, pt, X0, R[:2], C_MM)
     with pytest.raises(InputError):
         intersect_points(xy, img + 5, pt, X0, R, C_MM)
+
+
+def test_symmetric_3x3_helpers_match_numpy():
+    from orientviz.orientation.intersection import (
+        _sym_eig_extremes,
+        _sym_full,
+        _sym_inverse,
+        _sym_outer,
+    )
+
+    rng = np.random.default_rng(6)
+    M = rng.normal(size=(200, 3, 3))
+    S_full = M @ np.swapaxes(M, 1, 2) + 1e-3 * np.eye(3)
+    S = S_full[:, [0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2]]
+    np.testing.assert_allclose(_sym_full(S), S_full)
+    inv, det = _sym_inverse(S)
+    np.testing.assert_allclose(det, np.linalg.det(S_full), rtol=1e-8, atol=1e-10)
+    # inverse of matrices with condition up to ~1e5: agreement to ~1e-8 relative
+    np.testing.assert_allclose(_sym_full(inv), np.linalg.inv(S_full), rtol=1e-7, atol=1e-7)
+    lmin, lmax = _sym_eig_extremes(S)
+    ev = np.linalg.eigvalsh(S_full)
+    np.testing.assert_allclose(lmax, ev[:, 2], rtol=1e-10)
+    # the closed form loses ~1e-15·λmax absolute on λmin: far below the 1e-12 relative test
+    np.testing.assert_allclose(lmin, ev[:, 0], atol=1e-13 * ev[:, 2].max())
+    d = np.array([[0.0, 0.6, 0.8]])
+    np.testing.assert_allclose(_sym_outer(d, d), [[0.0, 0.36, 0.64, 0.0, 0.0, 0.48]])

@@ -101,16 +101,77 @@ def _sum_per_point(values: F64, point: I64, p: int) -> F64:
 
 
 def _point_jacobian(X: F64, X0: F64, R: F64, c: F64, x0: F64, y0: F64) -> tuple[F64, F64]:
-    """Image coordinates (n, 2) and ∂(x, y)/∂(X, Y, Z) (n, 2, 3) for n rays."""
+    """Image coordinates (n, 2) and ∂(x, y)/∂(X, Y, Z) (n, 2, 3) for n rays.
+
+    With (u, v, w) = Rᵀ(X − X0): ∂x/∂X = −(c/w)·R[:, 0] + (c·u/w²)·R[:, 2] (columns of R),
+    ∂y/∂X = −(c/w)·R[:, 1] + (c·v/w²)·R[:, 2].
+    """
     uvw = np.einsum("nji,nj->ni", R, X - X0)
     u, v, w = uvw[:, 0], uvw[:, 1], uvw[:, 2]
-    f = np.column_stack([x0 - c * u / w, y0 - c * v / w])
-    d = np.zeros((X.shape[0], 2, 3))
-    d[:, 0, 0] = -c / w
-    d[:, 0, 2] = c * u / w**2
-    d[:, 1, 1] = -c / w
-    d[:, 1, 2] = c * v / w**2
-    return f, d @ np.swapaxes(R, 1, 2)
+    cw = c / w
+    f = np.empty((X.shape[0], 2))
+    f[:, 0] = x0 - cw * u
+    f[:, 1] = y0 - cw * v
+    J = np.empty((X.shape[0], 2, 3))
+    J[:, 0, :] = -cw[:, None] * R[:, :, 0] + (cw * u / w)[:, None] * R[:, :, 2]
+    J[:, 1, :] = -cw[:, None] * R[:, :, 1] + (cw * v / w)[:, None] * R[:, :, 2]
+    return f, J
+
+
+# Symmetric 3 × 3 matrices of many points are kept as 6 components (xx, yy, zz, xy, xz, yz).
+_I6, _J6 = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])
+
+
+def _sym_outer(a: F64, b: F64) -> F64:
+    """Components of the symmetric part of a bᵀ, shape (n, 6)."""
+    return a[:, _I6] * b[:, _J6]
+
+
+def _sym_full(S: F64) -> F64:
+    out = np.empty((S.shape[0], 3, 3))
+    out[:, _I6, _J6] = S
+    out[:, _J6, _I6] = S
+    return out
+
+
+def _sym_inverse(S: F64) -> tuple[F64, F64]:
+    """Inverse (n, 6) and determinant (n,) of symmetric 3 × 3 matrices via the adjugate."""
+    a, b, c, d, e, f = (S[:, k] for k in range(6))  # [[a, d, e], [d, b, f], [e, f, c]]
+    A = b * c - f * f
+    B = e * f - d * c
+    C = d * f - b * e
+    det = a * A + d * B + e * C
+    adj = np.column_stack([A, a * c - e * e, a * b - d * d, B, C, d * e - a * f])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return adj / det[:, None], det
+
+
+def _sym_apply(S: F64, x: F64) -> F64:
+    """S · x for symmetric S (n, 6) and vectors x (n, 3)."""
+    return np.column_stack(
+        [
+            S[:, 0] * x[:, 0] + S[:, 3] * x[:, 1] + S[:, 4] * x[:, 2],
+            S[:, 3] * x[:, 0] + S[:, 1] * x[:, 1] + S[:, 5] * x[:, 2],
+            S[:, 4] * x[:, 0] + S[:, 5] * x[:, 1] + S[:, 2] * x[:, 2],
+        ]
+    )
+
+
+def _sym_eig_extremes(S: F64) -> tuple[F64, F64]:
+    """Smallest and largest eigenvalue of symmetric 3 × 3 matrices (closed form)."""
+    q = (S[:, 0] + S[:, 1] + S[:, 2]) / 3.0
+    p1 = S[:, 3] ** 2 + S[:, 4] ** 2 + S[:, 5] ** 2
+    p2 = (S[:, 0] - q) ** 2 + (S[:, 1] - q) ** 2 + (S[:, 2] - q) ** 2 + 2.0 * p1
+    pp = np.sqrt(p2 / 6.0)
+    safe = np.where(pp > 0, pp, 1.0)
+    B = S.copy()
+    B[:, :3] -= q[:, None]
+    B /= safe[:, None]
+    _, det = _sym_inverse(B)
+    phi = np.arccos(np.clip(det / 2.0, -1.0, 1.0)) / 3.0
+    lmax = np.where(pp > 0, q + 2.0 * pp * np.cos(phi), q)
+    lmin = np.where(pp > 0, q + 2.0 * pp * np.cos(phi + 2.0 * np.pi / 3.0), q)
+    return lmin, lmax
 
 
 def intersect_points(
@@ -189,12 +250,14 @@ def intersect_points(
     # ---- linear start: Σ (I − d dᵀ) X = Σ (I − d dᵀ) X0
     d = rays(xy, R[img], cc[img], xx0[img], yy0[img])
     d /= np.linalg.norm(d, axis=1, keepdims=True)
-    A = np.eye(3) - d[:, :, None] * d[:, None, :]
+    A = -_sym_outer(d, d)
+    A[:, :3] += 1.0
+    Xi = X0[img]
     As = _sum_per_point(A, pt, p)
-    bs = _sum_per_point(np.einsum("nij,nj->ni", A, X0[img]), pt, p)
+    bs = _sum_per_point(Xi - d * np.sum(d * Xi, axis=1, keepdims=True), pt, p)
     nr = np.bincount(pt, minlength=p)
-    ev = np.linalg.eigvalsh(As) if p else np.zeros((0, 3))
-    ok = (nr >= 2) & (ev[:, 0] > PARALLEL_TOLERANCE * np.maximum(ev[:, 2], 1e-300))
+    lmin, lmax = _sym_eig_extremes(As) if p else (np.zeros(0), np.zeros(0))
+    ok = (nr >= 2) & (lmin > PARALLEL_TOLERANCE * np.maximum(lmax, 1e-300))
     if not ok.all() and on_degenerate == "raise":
         bad = np.flatnonzero(~ok)
         few = bad[nr[bad] < 2]
@@ -209,34 +272,33 @@ def intersect_points(
             parameters=[f"{i}.{a}" for i in bad[:10] for a in "XYZ"],
         )
     X = np.full((p, 3), np.nan)
-    As_ok = np.where(ok[:, None, None], As, np.eye(3))
-    X[ok] = np.linalg.solve(As_ok, bs[..., None])[..., 0][ok]
-    # ---- rigorous collinearity adjustment per point
+    X[ok] = _sym_apply(_sym_inverse(As[ok])[0], bs[ok])
+    # ---- rigorous collinearity adjustment per point (3 × 3 normal equations each)
     wgt = 1.0 / sg**2
     use = ok[pt]
+    pu, iu = pt[use], img[use]
+    X0u, Ru, cu, x0u, y0u, wu, lu = X0[iu], R[iu], cc[iu], xx0[iu], yy0[iu], wgt[use], xy[use]
     it, converged = 0, True
-    N = np.tile(np.eye(3), (p, 1, 1))
+    N = np.zeros((p, 6))
     f = np.full((n, 2), np.nan)
     scale = np.ones(p)
     if use.any():
-        dist = np.linalg.norm(X[pt[use]] - X0[img[use]], axis=1)
-        scale = np.maximum(_sum_per_point(dist, pt[use], p) / np.maximum(nr, 1), 1.0)
+        dist = np.linalg.norm(X[pu] - X0u, axis=1)
+        scale = np.maximum(_sum_per_point(dist, pu, p) / np.maximum(nr, 1), 1.0)
     for it in range(1, max_iter + 2):
-        f_u, J = _point_jacobian(
-            X[pt[use]], X0[img[use]], R[img[use]], cc[img[use]], xx0[img[use]], yy0[img[use]]
-        )
+        f_u, J = _point_jacobian(X[pu], X0u, Ru, cu, x0u, y0u)
         f[use] = f_u
-        JP = np.swapaxes(J, 1, 2) * wgt[use][:, None, :]
-        N = _sum_per_point(JP @ J, pt[use], p)
-        b = _sum_per_point(np.einsum("nij,nj->ni", JP, xy[use] - f_u), pt[use], p)
+        r = lu - f_u
+        J0, J1 = J[:, 0, :], J[:, 1, :]
+        N = _sum_per_point(wu[:, :1] * _sym_outer(J0, J0) + wu[:, 1:] * _sym_outer(J1, J1), pu, p)
         if not rigorous or it > max_iter:
             converged = not rigorous or converged
             it -= 1
             break
-        N_ok = np.where(ok[:, None, None], N, np.eye(3))
-        dx = np.linalg.solve(N_ok, np.where(ok[:, None], b, 0.0)[..., None])[..., 0]
-        X[ok] += dx[ok]
-        if np.all(np.abs(dx[ok]) <= tol * scale[ok, None]):
+        b = _sum_per_point((wu[:, :1] * r[:, :1]) * J0 + (wu[:, 1:] * r[:, 1:]) * J1, pu, p)
+        dx = _sym_apply(_sym_inverse(N[ok])[0], b[ok])
+        X[ok] += dx
+        if np.all(np.abs(dx) <= tol * scale[ok, None]):
             # one more pass evaluates f, J and N at the final X
             rigorous = False
             converged = True
@@ -244,10 +306,10 @@ def intersect_points(
             converged = False
     Q = np.full((p, 3, 3), np.nan)
     if ok.any():
-        Q[ok] = np.linalg.inv(N[ok])
+        Q[ok] = _sym_full(_sym_inverse(N[ok])[0])
     v = f - xy
     red = 2 * nr - 3
-    vpv = _sum_per_point(np.sum(wgt * v**2, axis=1) * use, pt, p)
+    vpv = _sum_per_point(np.sum(wgt * np.nan_to_num(v) ** 2, axis=1) * use, pt, p)
     with np.errstate(invalid="ignore", divide="ignore"):
         s0 = np.where((red > 0) & ok, np.sqrt(vpv / np.maximum(red, 1)), np.nan)
     return Intersection(X, Q, s0, red, nr, v, ok, it, converged)

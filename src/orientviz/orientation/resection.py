@@ -27,11 +27,11 @@ from numpy.polynomial import polynomial as P
 from numpy.typing import ArrayLike, NDArray
 
 from ..adjust import Adjustment, gauss_newton
-from ..camera import FrameCamera, collinearity_jacobian, project
+from ..camera import FrameCamera, project
 from ..errors import InputError, NotDeterminableError
 from ..model import check_image_points, check_points
-from ..rotation import check_sequence, matrix_from_opk, opk_from_matrix
-from .absolute import _spread_rank, similarity_closed_form
+from ..rotation import check_sequence, matrix_derivatives, matrix_from_opk, opk_from_matrix
+from .absolute import _spread_rank
 
 F64 = NDArray[np.float64]
 
@@ -142,29 +142,41 @@ def grunert_distances(directions: ArrayLike, points: ArrayLike) -> F64:
         out.append((s1, u * s1, v * s1))
     if not out:
         return np.zeros((0, 3))
-    sol = np.array(out)
-    # polish each solution with a few Newton steps on the three cosine-law equations
-    return np.array([_polish(s, d, X) for s in sol])
+    # polish all solutions with a few Newton steps on the three cosine-law equations
+    return _polish(np.array(out), d, X)
 
 
-def _polish(s: F64, d: F64, X: F64, steps: int = 3) -> F64:
-    pairs = ((1, 2), (0, 2), (0, 1))
+_PAIRS = (np.array([1, 0, 0]), np.array([2, 2, 1]))  # (i, j) of the equations for a, b, c
+
+
+def _polish(s: F64, d: F64, X: F64, steps: int = 2) -> F64:
+    """Newton steps on s_i² + s_j² − 2 s_i s_j cos_ij = |X_i − X_j|², all solutions (k, 3) at once."""
+    i, j = _PAIRS
+    cos = np.sum(d[i] * d[j], axis=1)
+    dist2 = np.sum((X[i] - X[j]) ** 2, axis=1)
+    rows = np.arange(3)
     for _ in range(steps):
-        F = np.array(
-            [
-                s[i] ** 2 + s[j] ** 2 - 2 * s[i] * s[j] * (d[i] @ d[j]) - np.sum((X[i] - X[j]) ** 2)
-                for i, j in pairs
-            ]
-        )
-        J = np.zeros((3, 3))
-        for r, (i, j) in enumerate(pairs):
-            J[r, i] = 2 * s[i] - 2 * s[j] * (d[i] @ d[j])
-            J[r, j] = 2 * s[j] - 2 * s[i] * (d[i] @ d[j])
-        try:
-            s = s - np.linalg.solve(J, F)
-        except np.linalg.LinAlgError:
+        si, sj = s[:, i], s[:, j]
+        F = si**2 + sj**2 - 2 * si * sj * cos - dist2
+        J = np.zeros((s.shape[0], 3, 3))
+        J[:, rows, i] = 2 * si - 2 * sj * cos
+        J[:, rows, j] = 2 * sj - 2 * si * cos
+        det = np.linalg.det(J)
+        ok = np.abs(det) > 1e-12 * np.abs(J).max(axis=(1, 2)) ** 3
+        if not ok.any():
             break
+        s = s.copy()
+        s[ok] -= np.linalg.solve(J[ok], F[ok][..., None])[..., 0]
     return s
+
+
+def _rigid(a: F64, b: F64) -> tuple[F64, F64]:
+    """Rotation R and translation t with b ≈ R a + t (SVD, det R = +1), no checks."""
+    ac, bc = a.mean(axis=0), b.mean(axis=0)
+    U, _, Vt = np.linalg.svd((b - bc).T @ (a - ac))
+    S = np.array([1.0, 1.0, 1.0 if np.linalg.det(U) * np.linalg.det(Vt) > 0 else -1.0])
+    R = (U * S) @ Vt
+    return R, bc - R @ ac
 
 
 def _pick_three(xy: F64) -> tuple[int, int, int]:
@@ -232,8 +244,7 @@ def resection_closed_form(
     others = np.setdiff1d(np.arange(xy.shape[0]), sel)
     cands = []
     for s in sols:
-        rigid = similarity_closed_form(unit * s[:, None], X[sel], scale=False)
-        X0, R = rigid.t, rigid.R
+        R, X0 = _rigid(unit * s[:, None], X[sel])
         w = (X - X0) @ R[:, 2]
         if np.any(w >= 0):  # some control point behind the camera
             continue
@@ -249,6 +260,50 @@ def resection_closed_form(
         )
     cands.sort(key=lambda c: np.nan_to_num(c.rms, nan=0.0))
     return cands
+
+
+def resection_model(params: ArrayLike, object_points: ArrayLike, sequence: str = "opk"):
+    """Collinearity equations of one image and their Jacobian (one R for all points).
+
+    Parameters
+    ----------
+    params : array_like, shape (9,)
+        X0, Y0, Z0 (m), ω, φ, κ (rad, ``sequence``), x0, y0, c (mm).
+    object_points : array_like, shape (n, 3)
+        Object points in m.
+    sequence : {"opk", "pok"}, default "opk"
+
+    Returns
+    -------
+    f : ndarray, shape (2n,)
+        x1, y1, x2, y2, … in mm.
+    J : ndarray, shape (2n, 9)
+        ∂f/∂params in mm/m, mm/rad and mm/mm.
+    """
+    p = np.asarray(params, dtype=float)
+    X = np.asarray(object_points, dtype=float)
+    n = X.shape[0]
+    R = matrix_from_opk(p[3], p[4], p[5], sequence)
+    dR = matrix_derivatives(p[3], p[4], p[5], sequence)
+    d = X - p[:3]
+    uvw = d @ R
+    u, v, w = uvw[:, 0], uvw[:, 1], uvw[:, 2]
+    c = p[8]
+    f = np.empty((n, 2))
+    f[:, 0] = p[6] - c * u / w
+    f[:, 1] = p[7] - c * v / w
+    g = np.zeros((n, 2, 3))  # ∂(x, y)/∂(u, v, w)
+    g[:, 0, 0] = g[:, 1, 1] = -c / w
+    g[:, 0, 2] = c * u / w**2
+    g[:, 1, 2] = c * v / w**2
+    J = np.zeros((n, 2, 9))
+    J[:, :, :3] = -g @ R.T
+    for k in range(3):
+        J[:, :, 3 + k] = np.einsum("nab,nb->na", g, d @ dR[k])
+    J[:, 0, 6] = J[:, 1, 7] = 1.0
+    J[:, 0, 8] = -u / w
+    J[:, 1, 8] = -v / w
+    return f.reshape(-1), J.reshape(2 * n, 9)
 
 
 def resection(
@@ -337,9 +392,7 @@ def resection(
     labels = [f"{i}/{a}" for i in ids for a in "xy"]
 
     def model(p: F64):
-        f, Je, _, Ji = collinearity_jacobian(X, p[:3], p[3:6], p[8], p[6], p[7], seq)
-        J = np.concatenate([Je, Ji], axis=2).reshape(2 * n, 9)
-        return f.reshape(-1), J
+        return resection_model(p, X, seq)
 
     res = gauss_newton(
         model, x0, xy.reshape(-1), sg, names=list(EXTERIOR_NAMES + INTERIOR_NAMES),
