@@ -81,7 +81,10 @@ def test_figures(tmp_path):
     before = np.array(q.V).copy()
     pr.update_parallax_field(ax, vp.one_pass())
     assert not np.allclose(before, q.V)
-    assert "rms" in ax.get_title()
+    assert "rms" in ax._orientviz_parallax["info"].get_text()
+    # the blitted redraw changes the arrows too
+    pr.blit_parallax_field(ax, vp.one_pass())
+    assert ax._orientviz_parallax["quiver"].get_animated()
     fig.savefig(tmp_path / "field.png")
     fig2 = pr.plot_pass_log(vp.plotter.history)
     assert fig2.axes[0].get_yscale() == "log"

@@ -354,6 +354,7 @@ class AnalogPlotter:
             raise InputError("reading noise is configured: pass rng=np.random.default_rng(seed)")
         self.rng = rng
         self.history: list[PassRecord] = []
+        self._cache: dict = {}
 
     # -------------------------------------------------------------- state
     @property
@@ -386,6 +387,17 @@ class AnalogPlotter:
         xy1, xy2 = self.pair.images(points)
         return y_parallax(xy1, xy2, self.config.c, self.state)
 
+    def _scheme_images(self, sch: Scheme):
+        """Plan positions, heights and true image coordinates of a scheme (cached)."""
+        key = (sch.name, self.config, id(self.pair), self.pair.elements.tobytes())
+        hit = self._cache.get(sch.name)
+        if hit is None or hit[0] != key:
+            X, Y, Z = self.scheme_points(sch)
+            xy1, xy2 = self.pair.images(np.column_stack([X, Y, Z]))
+            hit = (key, X, Y, Z, xy1, xy2)
+            self._cache[sch.name] = hit
+        return hit[1:]
+
     def parallax_field(self, nx: int = 11, ny: int = 9) -> tuple[F64, F64, F64]:
         """Noise-free y-parallaxes over the model area (for arrows in a figure).
 
@@ -405,8 +417,8 @@ class AnalogPlotter:
     def read(self, scheme: Scheme | str | None = None) -> Readings:
         """Read by and z at every point of the scheme (with the configured noise)."""
         sch = self.scheme if scheme is None else get_scheme(scheme)
-        X, Y, Z = self.scheme_points(sch)
-        p, pts = self.parallax_at(np.column_stack([X, Y, Z]))
+        X, Y, _, xy1, xy2 = self._scheme_images(sch)
+        p, pts = y_parallax(xy1, xy2, self.config.c, self.state)
         z = pts[:, 2].copy()
         if self.rng is not None:
             p = (

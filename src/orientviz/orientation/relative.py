@@ -209,11 +209,23 @@ class PairState:
         )
 
 
-def _rays(xy: F64, angles: F64, c: float, sequence: str):
-    d = np.column_stack([xy[:, 0], xy[:, 1], np.full(xy.shape[0], -c)])
+def _rays(xy: F64, angles: F64, c: float, sequence: str, derivatives: bool = True):
+    d = np.empty((xy.shape[0], 3))
+    d[:, :2] = xy
+    d[:, 2] = -c
     R = matrix_from_opk(*angles, sequence=sequence)
+    if not derivatives:
+        return d @ R.T, None
     dR = matrix_derivatives(*angles, sequence=sequence)
     return d @ R.T, [d @ D.T for D in dR]
+
+
+def _cross(a: F64, b: F64) -> F64:
+    out = np.empty_like(a)
+    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return out
 
 
 def y_parallax(
@@ -246,23 +258,26 @@ def y_parallax(
 
 def _parallax_and_jacobian(xy1: F64, xy2: F64, c: float, st: PairState, kind: str | None):
     seq = st.sequence
-    r1, dr1 = _rays(xy1, st.angles_left, c, seq)
-    r2, dr2 = _rays(xy2, st.angles_right, c, seq)
+    need = kind is not None
+    r1, dr1 = _rays(xy1, st.angles_left, c, seq, need and kind == "independent")
+    r2, dr2 = _rays(xy2, st.angles_right, c, seq, need)
     B = st.base
     D = r1[:, 2] * r2[:, 0] - r1[:, 0] * r2[:, 2]
     with np.errstate(divide="ignore", invalid="ignore"):
         lam = (r2[:, 0] * B[2] - r2[:, 2] * B[0]) / D
         mu = (r1[:, 0] * B[2] - r1[:, 2] * B[0]) / D
-    cross = np.cross(r1, r2)
+    cross = _cross(r1, r2)
     p = -(cross @ B) / D
-    pts = np.column_stack(
-        [lam * r1[:, 0], 0.5 * (lam * r1[:, 1] + B[1] + mu * r2[:, 1]), lam * r1[:, 2]]
-    )
+    pts = np.empty((xy1.shape[0], 3))
+    pts[:, 0] = lam * r1[:, 0]
+    pts[:, 1] = 0.5 * (lam * r1[:, 1] + B[1] + mu * r2[:, 1])
+    pts[:, 2] = lam * r1[:, 2]
     if kind is None:
         return p, pts, None
     # dp = −(dg + p dD) / D with g = B·(r1 × r2)
-    Bxr1 = np.cross(B, r1)
-    r2xB = np.cross(r2, B)
+    Bb = np.broadcast_to(B, r1.shape)
+    Bxr1 = _cross(Bb, r1)
+    r2xB = _cross(r2, Bb)
 
     def d_right(dr):
         return -((dr * Bxr1).sum(1) + p * (r1[:, 2] * dr[:, 0] - r1[:, 0] * dr[:, 2])) / D

@@ -200,6 +200,19 @@ def scheme_precision(
 
 
 # ------------------------------------------------------------------ Kovarik's closed form
+#: Points 3-7 and 9 lie on the edge rows (K = 1 + k²); 1, 2, 8 on the base line (K = 1).
+_EDGE9 = np.array([0, 0, 1, 1, 1, 1, 1, 0, 1], bool)
+#: Kovarik's combinations over points 1 … 9: κ (profile 1 − profile 2), φ (3 − 4 − 5 + 6),
+#: bz (upper − lower row), and the printed coefficients of dbz (÷ 12k) and dby (÷ 18).
+_C9 = (
+    np.array([1, -1, 1, -1, 1, -1, 0, 0, 0], float),
+    np.array([0, 0, 1, -1, -1, 1, 0, 0, 0], float),
+    np.array([0, 0, 1, 1, -1, -1, 1, 0, -1], float),
+    np.array([0, 0, 1, -5, -1, 5, -2, 0, 2], float),
+    np.array([-1, 5, -1, 5, -1, 5, 2, 2, 2], float),
+)
+
+
 def kovarik_nine_point(
     by: ArrayLike, z: ArrayLike, b: float, k: float, *, convention: str = "orientviz"
 ) -> F64:
@@ -235,15 +248,8 @@ def kovarik_nine_point(
     if not b or not k:
         raise InputError("expected a non-zero model base b and ordinate ratio k")
     K = 1.0 + k * k
-    Kv = np.array([1, 1, K, K, K, K, K, 1, K])
-    zK = zz * Kv
-    i = lambda *nums: [n - 1 for n in nums]  # noqa: E731 - point numbers → indices
-    ck = np.zeros(9)
-    ck[i(1, 3, 5)], ck[i(2, 4, 6)] = 1, -1  # κ: profile 1 minus profile 2
-    cp = np.zeros(9)
-    cp[i(3, 6)], cp[i(4, 5)] = 1, -1  # φ: 3 − 4 − 5 + 6
-    cz = np.zeros(9)
-    cz[i(3, 4, 7)], cz[i(5, 6, 9)] = 1, -1  # bz: upper minus lower
+    zK = zz * np.where(_EDGE9, K, 1.0)
+    ck, cp, cz, cb, cy = _C9
     Zn = (
         np.sum(zK * (p.mean() - p))
         + (ck @ zK) * (ck @ p) / 6
@@ -256,10 +262,7 @@ def kovarik_nine_point(
     domega = -Zn / Nn
     dphi = (cp @ p + (cp @ zK) * domega) / (2 * b * k)
     dkappa = (ck @ p + (ck @ zK) * domega) / (3 * b)
-    cb = np.zeros(9)
-    cb[i(3, 4, 5, 6, 7, 9)] = [1, -5, -1, 5, -2, 2]
     dbz = (cb @ p + (cb @ zK) * domega) / (12 * k)
-    cy = np.array([-1, 5, -1, 5, -1, 5, 2, 2, 2], float)
     dby = (cy @ p + (cy @ zK) * domega) / 18
     out = np.array([dby, dbz, domega, dphi, dkappa])
     if convention == "kovarik":

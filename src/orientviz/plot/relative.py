@@ -69,15 +69,10 @@ def plot_parallax_field(view, ax=None, *, exaggeration: float | None = None):
     )  # fmt: skip
     r = view.readings
     pts = ax.scatter(r.X, r.Y, s=60, facecolor="none", edgecolor="k", zorder=3)
-    labels = [
-        ax.annotate(
-            "",
-            (x, y),
-            xytext=(7, -3),
-            textcoords="offset points",
-            fontsize=7,
-            bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.7},
-        )
+    for x, y, name in zip(r.X, r.Y, r.scheme.labels):  # static point numbers
+        ax.annotate(name, (x, y), xytext=(-12, 5), textcoords="offset points", fontsize=7)
+    labels = [  # the readings change: few glyphs, no boxes (text dominates redraw time)
+        ax.annotate("", (x, y), xytext=(7, -3), textcoords="offset points", fontsize=7)
         for x, y in zip(r.X, r.Y)
     ]
     b = float(view.X.max())
@@ -88,7 +83,14 @@ def plot_parallax_field(view, ax=None, *, exaggeration: float | None = None):
     d = float(np.abs(view.Y).max())
     ax.set_xlim(-0.1 * b, 1.3 * b)
     ax.set_ylim(-1.25 * d, 1.25 * d)
-    ax._orientviz_parallax = {"quiver": q, "points": pts, "labels": labels, "fixed": exaggeration}
+    info = ax.text(0.01, 0.99, "", transform=ax.transAxes, va="top", fontsize=8)
+    ax.set_title(
+        "y-parallax p_y (red +, blue −) and the readings at the scheme points", fontsize=10
+    )
+    ax._orientviz_parallax = {
+        "quiver": q, "points": pts, "labels": labels, "info": info, "fixed": exaggeration,
+        "background": None,
+    }  # fmt: skip
     update_parallax_field(ax, view)
     return fig
 
@@ -101,14 +103,34 @@ def update_parallax_field(ax, view) -> None:
     a["quiver"].set_UVC(np.zeros(p.size), ex * p)
     a["quiver"].set_color(np.where(p >= 0, "tab:red", "tab:blue"))
     r = view.readings
-    for lab, name, val in zip(a["labels"], r.scheme.labels, r.parallax):
-        lab.set_text(f"{name}: {val * 1000:+.0f} µm")
+    for lab, val in zip(a["labels"], r.parallax):
+        lab.set_text(f"{val * 1000:+.0f}")
     q = a["quiver"]
     q.set_offsets(np.column_stack([view.X.ravel(), view.Y.ravel()]))
-    ax.set_title(
-        f"y-parallax p_y (red +, blue −), arrows ×{ex:g}; rms {view.rms * 1000:.0f} µm",
-        fontsize=10,
-    )
+    a["info"].set_text(f"readings in µm; arrows ×{ex:g}; rms {view.rms * 1000:.0f} µm")
+
+
+def blit_parallax_field(ax, view) -> None:
+    """Fast redraw of :func:`plot_parallax_field`: only arrows, labels and legend text.
+
+    The static parts (axes, ticks, base line, points) are drawn once and kept as a
+    background; each call restores it and draws the changing artists on top
+    (blitting; works with the Agg canvas and with ipympl). The changing artists are
+    then *animated*: use :func:`update_parallax_field` + a normal draw for saving.
+    """
+    a = ax._orientviz_parallax
+    canvas = ax.figure.canvas
+    dynamic = [a["quiver"], a["info"], *a["labels"]]
+    if a["background"] is None:
+        for art in dynamic:
+            art.set_animated(True)
+        canvas.draw()
+        a["background"] = canvas.copy_from_bbox(ax.bbox)
+    update_parallax_field(ax, view)
+    canvas.restore_region(a["background"])
+    for art in dynamic:
+        ax.draw_artist(art)
+    canvas.blit(ax.bbox)
 
 
 def plot_pass_log(runs: Mapping[str, object] | Sequence, ax=None, *, tol_c: float = 1.0):

@@ -183,7 +183,7 @@ def plotter_app(relief: float = 0.10, seed: int = 0):
     import ipywidgets as W
     import matplotlib.pyplot as plt
 
-    from ..plot.relative import plot_parallax_field, update_parallax_field
+    from ..plot.relative import blit_parallax_field, plot_parallax_field, update_parallax_field
 
     vp = VirtualPlotter(relief=relief, seed=seed)
     v0 = vp.view()
@@ -230,10 +230,10 @@ def plotter_app(relief: float = 0.10, seed: int = 0):
     busy = {"on": False}
 
     def show(v):
-        update_parallax_field(ax, v)
         if live:
-            fig.canvas.draw_idle()
+            blit_parallax_field(ax, v)
         else:
+            update_parallax_field(ax, v)
             with out:
                 out.clear_output(wait=True)
                 display(fig)
