@@ -41,7 +41,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InputError
-from ..rotation import check_sequence, matrix_derivatives, matrix_from_opk
+from ..rotation import SEQUENCES, check_sequence
 
 F64 = NDArray[np.float64]
 
@@ -115,7 +115,10 @@ class RadarImage:
     @property
     def R(self) -> F64:
         """Rotation matrix (image → object), columns i, j, k; k is the antenna axis."""
-        return matrix_from_opk(self.omega, self.phi, self.kappa, self.sequence)
+        order = SEQUENCES[check_sequence(self.sequence)]
+        ang = {0: self.omega, 1: self.phi, 2: self.kappa}
+        E = [_elem(a, np.cos(ang[a]), np.sin(ang[a])) for a in order]
+        return E[0] @ E[1] @ E[2]
 
     @property
     def axis(self) -> F64:
@@ -262,10 +265,40 @@ def project_with_jacobian(
     Ji[:, 0, 2], Ji[:, 1, 2] = a * g_h, b * g_h
     Ji[:, 0, 3], Ji[:, 1, 3] = a * g_m, b * g_m
     Ji[:, :, 4:7] = -J_points
-    dRo, dRp, dRk = matrix_derivatives(image.omega, image.phi, image.kappa, image.sequence)
-    for col, dR in ((7, dRp), (8, dRo), (9, dRk)):
+    for col, dR in zip((7, 8, 9), _rotation_derivatives(image)):
         Ji[:, :, col] = np.einsum("nij,nj->ni", Ju, d @ dR)
     return xy, Ji, J_points
+
+
+def _elem(axis: int, c: float, s: float) -> F64:
+    """3×3 elementary rotation (right-handed) about object axis 0/1/2 from cos, sin."""
+    if axis == 0:
+        return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+    if axis == 1:
+        return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def _delem(axis: int, c: float, s: float) -> F64:
+    if axis == 0:
+        return np.array([[0.0, 0.0, 0.0], [0.0, -s, -c], [0.0, c, -s]])
+    if axis == 1:
+        return np.array([[-s, 0.0, c], [0.0, 0.0, 0.0], [-c, 0.0, -s]])
+    return np.array([[-s, -c, 0.0], [c, -s, 0.0], [0.0, 0.0, 0.0]])
+
+
+def _rotation_derivatives(image: RadarImage) -> tuple[F64, F64, F64]:
+    """∂R/∂φ, ∂R/∂ω, ∂R/∂κ of one image (same convention as :mod:`orientviz.rotation`)."""
+    ang = {0: image.omega, 1: image.phi, 2: image.kappa}
+    order = SEQUENCES[check_sequence(image.sequence)]
+    cs = {a: (np.cos(ang[a]), np.sin(ang[a])) for a in order}
+    E = [_elem(a, *cs[a]) for a in order]
+    out = {}
+    for pos, a in enumerate(order):
+        f = list(E)
+        f[pos] = _delem(a, *cs[a])
+        out[a] = f[0] @ f[1] @ f[2]
+    return out[1], out[0], out[2]
 
 
 def image_vector(xy: ArrayLike, image: RadarImage) -> F64:
