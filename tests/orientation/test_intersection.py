@@ -146,3 +146,17 @@ def test_symmetric_3x3_helpers_match_numpy():
     np.testing.assert_allclose(lmin, ev[:, 0], atol=1e-13 * ev[:, 2].max())
     d = np.array([[0.0, 0.6, 0.8]])
     np.testing.assert_allclose(_sym_outer(d, d), [[0.0, 0.36, 0.64, 0.0, 0.0, 0.48]])
+
+
+def test_input_checks_of_indices_and_sigma():
+    rng = np.random.default_rng(7)
+    X0, R = three_images(rng)
+    X = ground_points(rng, 3)
+    xy, img, pt = observe(X, X0, R)
+    with pytest.raises(InputError, match="n_points"):
+        intersect_points(xy, img, pt, X0, R, C_MM, n_points=2)
+    with pytest.raises(InputError, match="sigma"):
+        intersect_points(xy, img, pt, X0, R, C_MM, sigma=0.0)
+    # unobserved extra points are reported, or NaN on request
+    res = intersect_points(xy, img, pt, X0, R, C_MM, n_points=5, on_degenerate="nan")
+    assert res.determinable.tolist() == [True, True, True, False, False]

@@ -168,3 +168,15 @@ def test_property_closed_form_then_ls_recovers_pose(kappa, omega, phi, seed):
     res = resection(xy, X, C_MM)
     np.testing.assert_allclose(res.extra["R"], R, atol=1e-8)
     np.testing.assert_allclose(res.x[:3], X0, atol=1e-5)
+
+
+def test_only_estimated_interior_parameters_are_reported():
+    rng = np.random.default_rng(12)
+    X = ground_points(rng, 12, relief=400.0)
+    X0, R = np.array([0.0, 0.0, 1200.0]), matrix_from_opk(0.01, 0.02, 0.3)
+    xy = project(X, X0, R, 150.0)
+    res = resection(xy, X, FrameCamera(c=151.0), interior=("c",))
+    assert res.names == ["X0", "Y0", "Z0", "omega", "phi", "kappa", "c"]
+    assert res.cofactor.shape == (7, 7) and res.history[-1].x.shape == (7,)
+    assert res["c"] == pytest.approx(150.0, abs=1e-8)
+    assert res.extra["camera"].x0 == 0.0

@@ -245,8 +245,17 @@ def intersect_points(
         raise InputError("forward intersection: expected finite image coordinates")
     p = int(pt.max()) + 1 if n_points is None and n else int(n_points or 0)
     cc, xx0, yy0 = (_as_per_image(v, m, k) for k, v in (("c", c), ("x0", x0), ("y0", y0)))
+    if n and pt.max() >= p:
+        raise InputError(f"forward intersection: point index {pt.max()} ≥ n_points = {p}")
     sg = np.asarray(sigma, dtype=float)
-    sg = np.broadcast_to(sg[:, None] if sg.ndim == 1 else sg, (n, 2))
+    try:
+        sg = np.broadcast_to(sg[:, None] if sg.ndim == 1 else sg, (n, 2))
+    except ValueError:
+        raise InputError(
+            f"sigma: expected a float, shape ({n},) or ({n}, 2), got {sg.shape}"
+        ) from None
+    if not np.all(np.isfinite(sg)) or np.any(sg <= 0):
+        raise InputError("sigma: expected positive finite σ of the image coordinates in mm")
     # ---- linear start: Σ (I − d dᵀ) X = Σ (I − d dᵀ) X0
     d = rays(xy, R[img], cc[img], xx0[img], yy0[img])
     d /= np.linalg.norm(d, axis=1, keepdims=True)

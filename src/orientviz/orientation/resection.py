@@ -346,7 +346,7 @@ def resection(
     -------
     Adjustment
         ``names`` ``("X0", "Y0", "Z0", "omega", "phi", "kappa")`` (+ ``"x0"``, ``"y0"``,
-        ``"c"``), in m, rad, mm; residuals ``v = f(x̂) − l`` in mm, labelled
+        ``"c"`` — only those estimated), in m, rad, mm; residuals ``v = f(x̂) − l`` in mm, labelled
         ``"<id>/x"``; ``extra``: ``"R"``, ``"candidates"`` (closed-form solutions),
         ``"camera"`` (FrameCamera with the estimated interior), ``"sequence"``,
         ``"residuals_xy"`` ((n, 2) mm).
@@ -399,18 +399,18 @@ def resection(
         blocks={"exterior": slice(0, 6), "interior": slice(6, 9)}, obs_labels=labels,
         fixed=fixed, max_iter=max_iter, context="space resection",
     )  # fmt: skip
-    if not est:  # report only what was estimated
-        keep = slice(0, 6)
-        res.x, res.names = res.x[keep], res.names[:6]
-        res.blocks = {"exterior": keep}
-        if res.cofactor is not None:
-            res.cofactor = res.cofactor[keep, keep]
-        for h in res.history:
-            h.x = h.x[keep]
-            h.dx = None if h.dx is None else h.dx[keep]
-        x_int = x0[6:]
-    else:
-        x_int = res.x[6:9]
+    x_int = res.x[6:9].copy()
+    # report only what was estimated: the exterior orientation and the free interior names
+    keep = np.array([*range(6), *(6 + INTERIOR_NAMES.index(e) for e in INTERIOR_NAMES if e in est)])
+    res.x, res.names = res.x[keep], [res.names[k] for k in keep]
+    res.blocks = {"exterior": slice(0, 6)}
+    if est:
+        res.blocks["interior"] = slice(6, keep.size)
+    if res.cofactor is not None:
+        res.cofactor = res.cofactor[np.ix_(keep, keep)]
+    for h in res.history:
+        h.x = h.x[keep]
+        h.dx = None if h.dx is None else h.dx[keep]
 
     res.extra.update(
         R=matrix_from_opk(*res.x[3:6], seq),
