@@ -107,3 +107,24 @@ def test_ellipsoids_after_adjustment(server, block):
     # one ellipsoid (42 vertices) per point that is not fixed control
     free = block.n_points - np.count_nonzero(block.points.role == 1)
     assert v.shape[0] == 42 * free
+
+
+def test_large_blocks_batch_frustums_per_strip(server, block, monkeypatch):
+    import orientviz.viewer.scene as scene_mod
+
+    monkeypatch.setattr(scene_mod, "FRUSTUM_NODE_LIMIT", 2)
+    sc = build(server, block)
+    assert sc.image_nodes == []
+    h0 = server.scene.get_handle_by_name("/block/strip_0/frustums")
+    h1 = server.scene.get_handle_by_name("/block/strip_1/frustums")
+    assert h0 is not None and h1 is not None
+    seg0 = np.asarray(sc.strip_frustums[0][0].points, dtype=float) + sc.geo.frame.origin
+    assert seg0.shape == (3 * 8, 2, 3)  # three images, eight edges each
+    np.testing.assert_allclose(seg0[0, 0], block.images.X0[0], atol=1e-3)  # apex first
+    before1 = np.asarray(sc.strip_frustums[1][0].points).copy()
+    st = sc.geo.state
+    st.set_exterior(0, X0=st.block.images.X0[0] + [0.0, 0.0, 20.0])
+    sc.update([0])
+    seg0 = np.asarray(sc.strip_frustums[0][0].points, dtype=float) + sc.geo.frame.origin
+    np.testing.assert_allclose(seg0[0, 0], st.block.images.X0[0], atol=1e-3)
+    np.testing.assert_array_equal(np.asarray(sc.strip_frustums[1][0].points), before1)

@@ -249,7 +249,7 @@ class BlockGeometry:
     ) -> tuple[F64, NDArray[np.int32], float] | None:
         """One mesh of error ellipsoids (vertices, faces) and the exaggeration used.
 
-        The exaggeration makes the median ellipsoid (largest semi-axis) half a point
+        The exaggeration makes the median ellipsoid (largest semi-axis) 0.3 of a point
         spacing; only the ``limit`` points with the largest ellipsoids are drawn.
         """
         cov = self.point_covariances()
@@ -261,7 +261,7 @@ class BlockGeometry:
             keep = np.argsort(-big)[:limit]
             idx, S, big = idx[keep], S[keep], big[keep]
         med = float(np.median(big))
-        k = 0.5 * self.spacing / med if med > 0 else 1.0
+        k = 0.3 * self.spacing / med if med > 0 else 1.0
         centers = self.frame.to_scene(self.state.block.points.xyz[idx])
         v, f = g.ellipsoid_mesh(centers, S, k, subdivisions)
         return v, f, k
@@ -277,5 +277,5 @@ class BlockGeometry:
             float(np.median(self.frame.to_scene(b.points.xyz)[:, 2])) if b.n_points else centre[2]
         )
         ext = max(hi[0] - lo[0], hi[1] - lo[1], 1e-3)
-        pos = centre + np.array([-0.45, -1.25, 0.95]) * ext
+        pos = centre + np.array([-0.35, -1.0, 0.75]) * ext
         return pos, centre

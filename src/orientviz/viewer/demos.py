@@ -65,7 +65,7 @@ def demo_from_block(block: Block, result: Adjustment | None = None, title: str =
 
 
 def block_demo(
-    rng: np.random.Generator | int = SEED, strips: int = 3, images_per_strip: int = 6
+    rng: np.random.Generator | int = SEED, strips: int = 3, images_per_strip: int = 8
 ) -> Demo:
     """A simulated block with blunders and systematic image errors."""
     from ..block.simulate import simulate_block
@@ -75,7 +75,6 @@ def block_demo(
         strips,
         images_per_strip,
         rng=rng,
-        extra=8,
         gross={"count": 4, "size_mm": 0.04},
         systematic=typical(10.0),
     )

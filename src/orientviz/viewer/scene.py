@@ -2,7 +2,9 @@
 
 Scene tree (stable names; scene frame = object coordinates − origin, m, Z up)::
 
-    /block/strip_<s>/image_<id>   camera frustum of each image (strip −1: /block/images/…)
+    /block/strip_<s>/image_<id>   camera frustum of each image (strip −1: /block/images/…);
+                                  above FRUSTUM_NODE_LIMIT images one node per strip,
+                                  /block/strip_<s>/frustums
     /block/selected               the selected image's frustum, highlighted
     /block/points/tie|control|check
     /block/rays/all               every ray, projection centre → point (hidden by default)
@@ -25,6 +27,9 @@ from typing import Any
 import numpy as np
 
 from .block_geometry import COLORS, BlockGeometry
+
+#: Blocks with more images draw their frustums batched per strip, not one node per image.
+FRUSTUM_NODE_LIMIT = 500
 
 #: Line widths in screen pixels.
 WIDTH = {"frustum": 1.5, "ray": 1.0, "residual": 2.0, "strip": 2.0, "model": 1.0, "selected": 3.0}
@@ -73,6 +78,8 @@ class BlockScene:
         self.rays_mode = "selected image"
         self.nodes: dict[str, Any] = {}
         self.image_nodes: list[Any] = []
+        #: large blocks: strip → (line-segment node of its frustums, image indices)
+        self.strip_frustums: dict[int, tuple[Any, np.ndarray]] = {}
         self.on_image_click = None
         #: functions called after every redraw (e.g. parallax arrows, deformation)
         self.listeners: list = []
@@ -82,29 +89,12 @@ class BlockScene:
         """Create all nodes (in one atomic batch)."""
         geo, sc, r = self.geo, self.scene, self.root
         b = geo.state.block
-        pos, wxyz = geo.frustum_poses()
-        fov, aspect, scale = geo.viser_frustum_args(0)
         names = [image_node_name(s, i, r) for s, i in zip(b.images.strip, b.images.ids)]
-        for k, name in enumerate(names):
-            cam = int(b.images.camera[k])
-            if cam:
-                fov, aspect, scale = geo.viser_frustum_args(cam)
-            h = sc.add_camera_frustum(
-                name,
-                fov=fov,
-                aspect=aspect,
-                scale=scale,
-                color=COLORS["frustum"],
-                thickness=WIDTH["frustum"],
-                thickness_units="screen",
-                wxyz=wxyz[k],
-                position=pos[k],
-                cast_shadow=False,
-                receive_shadow=False,
-            )
-            self.image_nodes.append(h)
-            self._bind_click(h, k)
         self.image_names = names
+        if b.n_images <= FRUSTUM_NODE_LIMIT:
+            self._build_image_nodes(names)
+        else:
+            self._build_strip_frustums()
         ps = geo.point_size
         shapes = {"tie": ("circle", 1.0), "control": ("diamond", 2.0), "check": ("diamond", 2.0)}
         for role, P in geo.points_by_role().items():
@@ -156,6 +146,37 @@ class BlockScene:
         self.update_ellipsoids()
         return self
 
+    def _build_image_nodes(self, names: list[str]) -> None:
+        """One clickable frustum node per image (small and medium blocks)."""
+        geo, b = self.geo, self.geo.state.block
+        pos, wxyz = geo.frustum_poses()
+        for k, name in enumerate(names):
+            fov, aspect, scale = geo.viser_frustum_args(int(b.images.camera[k]))
+            h = self.scene.add_camera_frustum(
+                name, fov=fov, aspect=aspect, scale=scale, color=COLORS["frustum"],
+                thickness=WIDTH["frustum"], thickness_units="screen", wxyz=wxyz[k],
+                position=pos[k], cast_shadow=False, receive_shadow=False,
+            )  # fmt: skip
+            self.image_nodes.append(h)
+            self._bind_click(h, k)
+
+    def _build_strip_frustums(self) -> None:
+        """Large blocks: the frustums of each strip batched into one line-segment node."""
+        b = self.geo.state.block
+        for s in np.unique(b.images.strip):
+            idx = np.flatnonzero(b.images.strip == s)
+            group = f"strip_{int(s)}" if s >= 0 else "images"
+            h = self.scene.add_line_segments(
+                f"{self.root}/{group}/frustums", self._frustum_segments(idx), COLORS["frustum"],
+                thickness=WIDTH["frustum"], thickness_units="screen",
+            )  # fmt: skip
+            self.strip_frustums[int(s)] = (h, idx)
+
+    def _frustum_segments(self, images: np.ndarray) -> np.ndarray:
+        from .geometry import frustum_segments
+
+        return frustum_segments(self.geo.frustum_corners(images)).astype(np.float32)
+
     def _bind_click(self, handle: Any, k: int) -> None:
         def clicked(_event: Any) -> None:
             if self.on_image_click is not None:
@@ -169,7 +190,9 @@ class BlockScene:
     def _strip_labels(self) -> None:
         b = self.geo.state.block
         X = self.geo.frame.to_scene(b.images.X0)
-        for s in np.unique(b.images.strip[b.images.strip >= 0]):
+        strips = np.unique(b.images.strip[b.images.strip >= 0])
+        every = max(1, int(np.ceil(strips.size / 8)))  # at most about eight labels
+        for s in strips[::every]:
             first = X[b.images.strip == s][0]
             self.nodes[f"labels/strip_{s}"] = self.scene.add_label(
                 f"{self.root}/labels/strip_{s}",
@@ -195,11 +218,7 @@ class BlockScene:
         e = geo.state.misclosure()
         scores, kind = geo.state.scores(e)
         seg, col = geo.residuals(self.exaggeration, e, scores)
-        pos, wxyz = geo.frustum_poses()
-        idx = range(len(self.image_nodes)) if images is None else images
-        for k in idx:
-            self.image_nodes[k].position = pos[k]
-            self.image_nodes[k].wxyz = wxyz[k]
+        self._move_frustums(images)
         self.nodes["residuals"].points = seg.astype(np.float32)
         self.nodes["residuals"].colors = col
         self.nodes["selected"].points = self._selected_segments().astype(np.float32)
@@ -216,6 +235,19 @@ class BlockScene:
         for fn in self.listeners:
             fn()
         return {"sigma0": geo.state.sigma0(e), "max_score": float(np.nanmax(scores, initial=0.0))}
+
+    def _move_frustums(self, images: list[int] | None) -> None:
+        if self.image_nodes:
+            pos, wxyz = self.geo.frustum_poses()
+            for k in range(len(self.image_nodes)) if images is None else images:
+                self.image_nodes[k].position = pos[k]
+                self.image_nodes[k].wxyz = wxyz[k]
+            return
+        strips = self.geo.state.block.images.strip
+        touched = None if images is None else {int(strips[k]) for k in images}
+        for s, (h, idx) in self.strip_frustums.items():
+            if touched is None or s in touched:
+                h.points = self._frustum_segments(idx)
 
     def set_exaggeration(self, k: float) -> None:
         """Redraw the residual vectors with exaggeration ``k``."""
@@ -257,7 +289,7 @@ class BlockScene:
     def set_visible(self, key: str, visible: bool) -> None:
         """Show or hide a group: ``"frustums"``, ``"points"``, ``"residuals"``, ``"strips"``, …"""
         if key == "frustums":
-            for h in self.image_nodes:
+            for h in self.image_nodes + [h for h, _ in self.strip_frustums.values()]:
                 h.visible = visible
             return
         for name, h in self.nodes.items():
