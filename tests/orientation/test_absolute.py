@@ -231,3 +231,17 @@ def test_property_recovers_any_transform(omega, phi, kappa, scale, seed):
     np.testing.assert_allclose(cf.apply(x), X, atol=1e-7 * (1 + scale * 100))
     res = similarity_transform(x, X, sigma_target=0.01)
     np.testing.assert_allclose(res.extra["transform"].R, R, atol=1e-9)
+
+
+@pytest.mark.parametrize("tilt_gon", [10.0, 40.0])
+def test_partial_control_start_converges_for_tilted_models(tilt_gon):
+    # the planimetric start assumes ω = φ = 0; Gauss-Newton must still reach the truth
+    rng = np.random.default_rng(13)
+    x = model_points(rng)
+    p = np.array([1000.0, 2000.0, 300.0, to_rad(tilt_gon), to_rad(-tilt_gon), 2.0, 5.0])
+    X = SimilarityTransform.from_params(p).apply(x)
+    X[:4, 2] = np.nan
+    X[4:, :2] = np.nan
+    res = similarity_transform(x, X)
+    assert res.converged
+    np.testing.assert_allclose(res.x, p, atol=1e-9)

@@ -329,7 +329,14 @@ def similarity_transform(
     InputError
         Wrong shapes, non-positive σ.
     NotDeterminableError
-        Too little or collinear control (names the parameters concerned).
+        Too little or collinear control (names the parameters concerned), or a rotation
+        in gimbal lock for the chosen sequence (secondary angle ±100 gon), where the
+        angles cannot be separated — use the other sequence there.
+
+    Notes
+    -----
+    The partial-control start (ω = φ = 0) converged in tests for tilts up to 40 gon;
+    pass ``start`` for models that are tilted more.
     """
     seq = check_sequence(sequence)
     s, t = _check_pair(source, target)

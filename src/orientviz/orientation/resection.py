@@ -358,6 +358,13 @@ def resection(
     NotDeterminableError
         Too few or collinear points, or interior parameters not separable from the
         exterior ones (e.g. c with flat control).
+
+    Notes
+    -----
+    Like every resection, the solution is unstable when the projection centre lies on
+    (or near) the "danger cylinder" through the control points (the circular cylinder
+    through three of them, perpendicular to their plane); the adjustment then reports a
+    singular normal matrix or large standard deviations.
     """
     seq = check_sequence(sequence)
     xy, X = _check_pairs(image_points, object_points)
