@@ -1,0 +1,220 @@
+"""Automatic data cleaning of image blocks: the bundle as a solver for :mod:`adjust.gross`.
+
+Ackermann (1974, §13) reports that a block had to be adjusted 3 to 6 times (or more)
+until manual data cleaning had removed all gross errors, and asks for automatic
+cleaning. :func:`clean_block` does it in one run: it gives the bundle
+(:func:`orientviz.block.bundle.bundle_adjust`) to the generic methods of
+:mod:`orientviz.adjust.gross` — data snooping, robust reweighting (Danish, Huber) or the
+rerun model of manual practice — and eliminates whole image rays (both coordinates of an
+observation) at a time.
+
+Observations of the solver are the 2n image coordinates of the block (x, y of each
+observation, interleaved, mm); a ray is eliminated by leaving it out of the block and
+down-weighted by dividing its σ by √w. A tie point left with fewer than two rays is
+left out too (it carries no redundancy). Each adjustment starts from the previous
+solution (warm start), so that the repeated adjustments of data snooping take one or
+two Gauss-Newton steps each.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..adjust.gross import Cleaning, data_snooping, rerun_cleaning, robust_adjust
+from ..adjust.result import Adjustment
+from ..camera import project
+from ..errors import InputError
+from ..model import CONTROL, Block, Observations, Points
+from ..rotation import matrix_from_opk
+from .bundle import bundle_adjust
+
+F64 = NDArray[np.float64]
+
+__all__ = ["bundle_solver", "clean_block", "cleaned_block", "ray_labels"]
+
+METHODS = ("snooping", "danish", "huber", "reruns")
+
+
+def ray_labels(block: Block) -> list[str]:
+    """``"image/point"`` id of every observation (ray)."""
+    o = block.observations
+    return [f"{block.images.ids[i]}/{block.points.ids[p]}" for i, p in zip(o.image, o.point)]
+
+
+def _subset(
+    block: Block, keep: NDArray[np.bool_], sigma: F64
+) -> tuple[Block, NDArray[np.bool_], NDArray[np.int64]]:
+    """The block with only the kept rays and the points they still determine.
+
+    Tie and check points left with fewer than two rays lose their last ray and leave the
+    block, control points with no ray leave it. Returns the sub-block, the kept-ray mask
+    and the indices (into ``block.points``) of the points kept.
+    """
+    o = block.observations
+    keep = keep.copy()
+    rays = np.bincount(o.point[keep], minlength=block.n_points)
+    lonely = (rays < 2) & (block.points.role != CONTROL)
+    keep &= ~lonely[o.point]
+    rays = np.bincount(o.point[keep], minlength=block.n_points)
+    pts = np.flatnonzero(rays > 0)
+    new = np.full(block.n_points, -1, np.int64)
+    new[pts] = np.arange(pts.size)
+    P = block.points
+    points = Points(
+        [P.ids[i] for i in pts], P.xyz[pts].copy(), P.role[pts].copy(),
+        P.xyz_known[pts].copy(), P.sigma[pts].copy(),
+    )  # fmt: skip
+    obs = Observations(o.image[keep], new[o.point[keep]], o.xy[keep], sigma[keep])
+    return block.with_(points=points, observations=obs), keep, pts
+
+
+def bundle_solver(block: Block, *, warm_start: bool = True, **bundle_options):
+    """A solver ``solve(weights (2n,)) -> Adjustment`` over the image coordinates of a block.
+
+    The returned Adjustment has ``residuals``, ``sigma_obs`` (a-priori σ),
+    ``redundancy_numbers`` and ``normalized_residuals`` for the 2n image coordinates of
+    ``block`` (x, y per observation; left-out rays: residual predicted from the adjusted
+    orientation, redundancy number 0, normalised residual NaN); everything else is the
+    bundle's result, which is also kept whole in ``extra["bundle"]``.
+
+    Parameters
+    ----------
+    block : Block
+        Approximate values and observations.
+    warm_start : bool
+        Start each adjustment from the previous solution.
+    **bundle_options
+        Passed to :func:`bundle_adjust` (``control``, ``additional``, …).
+    """
+    n = block.n_observations
+    state = {"block": block.copy()}
+    sig0 = block.observations.sigma.reshape(-1).copy()
+
+    def solve(weights: F64) -> Adjustment:
+        w = np.broadcast_to(np.asarray(weights, float), (2 * n,)).reshape(n, 2)
+        # a weight below 1e-6 (σ × 1000) counts as eliminated: keeps the normals regular
+        w = np.where(w < 1e-6, 0.0, w)
+        keep = np.all(w > 0, axis=1)
+        with np.errstate(divide="ignore"):
+            sigma = np.where(w > 0, block.observations.sigma / np.sqrt(np.where(w > 0, w, 1)), 1.0)
+        sub, kept, pts = _subset(state["block"], keep, sigma)
+        adj = bundle_adjust(sub, precision=True, **bundle_options)
+        ns = sub.n_observations
+        xyz = state["block"].points.xyz.copy()
+        xyz[pts] = adj.extra["points"]
+        if warm_start and adj.converged:
+            b = state["block"]
+            b.images.X0[:] = adj.extra["exterior"][:, :3]
+            b.images.angles[:] = adj.extra["exterior"][:, 3:]
+            b.points.xyz[pts] = adj.extra["points"]
+        idx = np.flatnonzero(kept)
+        v = np.full((n, 2), np.nan)
+        v[idx] = adj.residuals[: 2 * ns].reshape(ns, 2)
+        gone = np.flatnonzero(~kept)
+        if gone.size:
+            o = block.observations
+            ext = adj.extra["exterior"]
+            cam = block.images.camera[o.image[gone]]
+            R = matrix_from_opk(*ext[o.image[gone], 3:].T, block.sequence)
+            f = project(
+                xyz[o.point[gone]],
+                ext[o.image[gone], :3],
+                R,
+                block.cameras.c[cam],
+                block.cameras.x0[cam],
+                block.cameras.y0[cam],
+            )
+            v[gone] = f - o.xy[gone]
+        rn = np.zeros((n, 2))
+        wn = np.full((n, 2), np.nan)
+        if adj.redundancy_numbers is not None:
+            rn[idx] = np.nan_to_num(adj.redundancy_numbers[: 2 * ns].reshape(ns, 2))
+            wn[idx] = adj.normalized_residuals[: 2 * ns].reshape(ns, 2)
+            # normalised with the a-priori σ of the observation, not the down-weighted one
+            wn[idx] *= sigma[idx] / block.observations.sigma[idx]
+        return replace(
+            adj,
+            residuals=v.reshape(-1),
+            sigma_obs=sig0.copy(),
+            redundancy_numbers=rn.reshape(-1),
+            normalized_residuals=wn.reshape(-1),
+            extra={**adj.extra, "bundle": adj, "kept_rays": kept, "kept_points": pts, "xyz": xyz},
+        )
+
+    return solve
+
+
+def clean_block(
+    block: Block,
+    method: str = "snooping",
+    *,
+    alpha0: float = 0.001,
+    max_fraction: float = 0.1,
+    robust_c: float | None = None,
+    threshold: float = 3.0,
+    one_at_a_time: bool = False,
+    **bundle_options,
+) -> Cleaning:
+    """Clean a block of gross errors automatically, in one run, with a log.
+
+    Parameters
+    ----------
+    block : Block
+        Approximate values and (possibly corrupted) observations.
+    method : {"snooping", "danish", "huber", "reruns"}
+        Baarda's data snooping; robust reweighting (Danish method or Huber) followed by a
+        final adjustment without the rejected rays; or the model of manual practice
+        (:func:`~orientviz.adjust.gross.rerun_cleaning`).
+    alpha0 : float
+        Significance level of the w-test (0.1 %: k = 3.29).
+    max_fraction : float
+        Give up (:class:`~orientviz.adjust.gross.CleaningBreakdown`, with the log) when
+        more than this fraction of the rays would have to be eliminated.
+    robust_c : float, optional
+        Tuning constant of the robust weight function.
+    threshold : float
+        Rejection threshold of the rerun model, in σ̂0.
+    one_at_a_time : bool
+        Data snooping strictly one ray per adjustment (Baarda). Default False: per
+        adjustment every rejected ray that is the worst ray of its point and of its image
+        (blunders in different points and images do not mask each other; far fewer
+        adjustments).
+    **bundle_options
+        Passed to :func:`bundle_adjust`.
+
+    Returns
+    -------
+    Cleaning
+        ``eliminated`` and the log refer to observation (ray) indices of ``block``.
+    """
+    if method not in METHODS:
+        raise InputError(
+            f"unknown cleaning method {method!r}; expected one of {', '.join(METHODS)}"
+        )
+    n = block.n_observations
+    groups = np.repeat(np.arange(n), 2)
+    labels = ray_labels(block)
+    solve = bundle_solver(block, **bundle_options)
+    if method == "snooping":
+        o = block.observations
+        clusters = None if one_at_a_time else [o.point, o.image]
+        return data_snooping(
+            solve, 2 * n, alpha0=alpha0, groups=groups, labels=labels,
+            max_fraction=max_fraction, clusters=clusters,
+        )  # fmt: skip
+    if method == "reruns":
+        return rerun_cleaning(solve, 2 * n, threshold=threshold, groups=groups, labels=labels)
+    return robust_adjust(
+        solve, 2 * n, method=method, c=robust_c, alpha0=alpha0, groups=groups, labels=labels,
+        max_fraction=max_fraction,
+    )  # fmt: skip
+
+
+def cleaned_block(block: Block, cleaning: Cleaning) -> Block:
+    """The block without the rays a cleaning eliminated."""
+    keep = np.ones(block.n_observations, bool)
+    keep[cleaning.eliminated] = False
+    return _subset(block, keep, block.observations.sigma)[0]
