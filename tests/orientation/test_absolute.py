@@ -245,3 +245,18 @@ def test_partial_control_start_converges_for_tilted_models(tilt_gon):
     res = similarity_transform(x, X)
     assert res.converged
     np.testing.assert_allclose(res.x, p, atol=1e-9)
+
+
+def test_gimbal_lock_is_reported_and_other_sequence_works():
+    # φ = 100 gon in ω-φ-κ: ω and κ turn about the same axis, only their sum counts
+    rng = np.random.default_rng(14)
+    x = model_points(rng)
+    p = np.array([1000.0, 2000.0, 300.0, 0.3, np.pi / 2, 0.2, 5.0])
+    X = SimilarityTransform.from_params(p).apply(x)
+    with pytest.raises(NotDeterminableError) as exc:
+        similarity_transform(x, X, sequence="opk")
+    assert set(exc.value.parameters) == {"omega", "kappa"}
+    res = similarity_transform(x, X, sequence="pok")
+    np.testing.assert_allclose(
+        res.extra["transform"].R, SimilarityTransform.from_params(p).R, atol=1e-12
+    )
