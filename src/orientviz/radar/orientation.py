@@ -159,7 +159,8 @@ def adjust_image(
     observe : {"xy", "radial", "tangential"}
         Which image observations enter (see :func:`image_model`).
     sigma : float or array_like
-        A-priori σ of an observation in image metres (weights 1/σ²).
+        A-priori σ of an observation in image metres (weights 1/σ²): one value, one per
+        point (both coordinates) or one per observation.
     task : str
         Name used in messages and in ``result.extra["task"]``.
     labels : sequence of str, optional
@@ -193,6 +194,10 @@ def adjust_image(
             free,
             len(free) - l.size,
         )
+    sig = np.asarray(sigma, dtype=float)
+    if observe == "xy" and sig.ndim == 1 and sig.shape[0] == len(P):
+        sig = np.repeat(sig, 2)  # one σ per point for both coordinates
+    sigma = sig
     labels = list(labels) if labels is not None else [str(i + 1) for i in range(len(P))]
     obs_labels = (
         [f"{p}/{c}" for p in labels for c in ("x", "y")]
