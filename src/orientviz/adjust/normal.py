@@ -286,17 +286,32 @@ class Factor:
         return scipy.linalg.cho_solve((self.data, True), rhs, check_finite=False)
 
 
-def assemble_blocks(st: ReducedStructure, U: F64, contrib: F64) -> F64:
-    """Sum the 6×6 blocks of S: diagonal ``U`` (m, 6, 6) minus pair contributions.
+def assemble_blocks(st: ReducedStructure, U: F64, T: F64, W: F64, chunk: int = 65536) -> F64:
+    """Sum the 6×6 blocks of S = U − Σ W_a V_j⁻¹ W_bᵀ over pairs of rays of a point.
 
-    ``contrib`` (pairs, 6, 6) holds W_a V_j⁻¹ W_bᵀ for the pairs of
-    :attr:`ReducedStructure.pair_a`/``pair_b`` (image of a ≤ image of b).
+    Parameters
+    ----------
+    U : ndarray, shape (m, 6, 6)
+        Diagonal image blocks.
+    T, W : ndarray, shape (n, 6, 3)
+        T_a = W_a V_j⁻¹ and W_a = J_eᵀ P J_p per observation (zero for fixed points).
+    chunk : int
+        Pairs per batch (bounds the memory of the (pairs, 6, 6) products).
     """
     blocks = np.zeros((st.n_blocks, 6, 6))
     blocks[st.diag_block] = U
-    if contrib.shape[0]:
-        summed = np.add.reduceat(contrib, st.pair_starts, axis=0)
-        blocks[st.pair_present] -= summed
+    n = st.pair_a.size
+    seg = np.append(st.pair_starts, n)
+    s0 = 0
+    while s0 < len(st.pair_starts):
+        # whole segments (blocks) per batch: each block is reduced in one piece
+        s1 = int(np.searchsorted(seg, seg[s0] + chunk, side="right")) - 1
+        s1 = max(s1, s0 + 1)
+        a0, a1 = seg[s0], seg[s1]
+        sl = slice(a0, a1)
+        c = T[st.pair_a[sl]] @ W[st.pair_b[sl]].transpose(0, 2, 1)
+        blocks[st.pair_present[s0:s1]] -= np.add.reduceat(c, st.pair_starts[s0:s1] - a0, axis=0)
+        s0 = s1
     return blocks
 
 
