@@ -138,6 +138,18 @@ class LinearSolution:
     factor: Factor
     G: sp.csr_matrix  # C · D⁻¹, (n_models·p, n_scalar)
     D: F64  # (n_scalar,)
+    C: sp.csr_matrix | None = None
+    JmW: sp.csr_matrix | None = None
+    row_scalar: I64 | None = None
+    w: F64 | None = None
+
+    def resolve(self, r: F64) -> tuple[F64, F64]:
+        """Corrections (dθ, dX) for other misclosures ``r`` with the same factorisation
+        (no weighted control); used for repeated simulations of a linear problem."""
+        has = self.row_scalar >= 0
+        bX = np.bincount(self.row_scalar[has], (self.w * r)[has], minlength=self.D.size)
+        dt = self.factor.solve(-(self.JmW @ r) - self.G @ bX)
+        return dt.reshape(self.dtheta.shape), (bX - self.C.T @ dt) / self.D
 
 
 def solve_rows(
@@ -212,7 +224,7 @@ def solve_rows(
     fac = factor_spd(S, names, context)
     dt = fac.solve(bt - G @ bX)
     dX = (bX - C.T @ dt) / D
-    return LinearSolution(dt.reshape(n_models, p), dX, fac, G, D)
+    return LinearSolution(dt.reshape(n_models, p), dX, fac, G, D, C, JmW, row_scalar, w)
 
 
 def scalar_cofactors(sol: LinearSolution, groups: I64, chunk: int = 512) -> F64:

@@ -13,6 +13,11 @@ from typing import Any
 
 #: name → ("module", "function", one-line description)
 REGISTRY: dict[str, tuple[str, str, str]] = {
+    "ebner": (
+        "orientviz.reproduce.ebner",
+        "table",
+        "Ackermann 1974 Bild 3/4 after Ebner: block precision vs strips and height-chain spacing",
+    ),
     "geier": (
         "orientviz.reproduce.geier",
         "table",
