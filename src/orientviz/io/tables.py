@@ -214,5 +214,13 @@ def json_number(value: float, digits: int = 15) -> float | None:
 
 
 def json_numbers(values, digits: int = 15) -> list[float | None]:
-    """:func:`json_number` over a 1-D array."""
-    return [json_number(v, digits) for v in np.asarray(values, dtype=float).reshape(-1)]
+    """:func:`json_number` over a 1-D array (formatted in one C-level pass)."""
+    arr = np.asarray(values, dtype=float).reshape(-1)
+    if arr.size == 0:
+        return []
+    fmt = f"%.{int(digits)}g\n"
+    out: list[float | None] = list(map(float, ((fmt * arr.size) % tuple(arr.tolist())).split()))
+    bad = np.flatnonzero(~np.isfinite(arr))
+    for i in bad:
+        out[i] = None
+    return out
