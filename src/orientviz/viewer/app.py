@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import socket
 import sys
-import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -91,17 +90,20 @@ class ViewerApp:
         self.messages: list[str] = []
         self._message_md = self.server.gui.add_markdown("")
         self._message_md.visible = False
-        if verbose:
-            print(f"orientviz viewer: open {self.url} in a browser (Ctrl-C to stop)", flush=True)
         if error:
             self.report(error)
         if content is not None:
             try:
                 self.load(content)
+            except KeyboardInterrupt:  # Ctrl-C while building: leave no server thread behind
+                self.server.stop()
+                raise
             except Exception as exc:  # any load failure is shown; the server keeps running
                 self.report(
                     str(exc) if isinstance(exc, OrientvizError) else f"{type(exc).__name__}: {exc}"
                 )
+        if verbose:
+            print(f"orientviz viewer: open {self.url} in a browser (Ctrl-C to stop)", flush=True)
 
     # ------------------------------------------------------------------ content
     @property
@@ -111,21 +113,7 @@ class ViewerApp:
 
     def load(self, content: Any) -> None:
         """Build the scene and GUI for ``content`` (see the class docstring)."""
-        from .demos import DEMOS, Demo, demo_from_block, load_demo
-
-        if isinstance(content, str | Path):
-            name = str(content)
-            demo = load_demo(name) if name in DEMOS else demo_from_file(name)
-        elif isinstance(content, Demo):
-            demo = content
-        elif isinstance(content, Block):
-            demo = demo_from_block(content)
-        elif isinstance(content, tuple) and len(content) == 2 and isinstance(content[0], Block):
-            demo = demo_from_block(content[0], content[1])
-        else:
-            raise InputError(
-                f"cannot show a {type(content).__name__}; expected a Block, (Block, Adjustment) or a demo name"
-            )
+        demo = resolve_content(content)
         self.demo = demo
         self._build(demo)
 
@@ -216,6 +204,30 @@ class ViewerApp:
             self.stop()
 
 
+def resolve_content(content: Any) -> Any:
+    """Turn what :class:`ViewerApp` accepts into a :class:`~orientviz.viewer.demos.Demo`.
+
+    Raises
+    ------
+    InputError
+        Unknown demo, unreadable file or an object the viewer cannot show.
+    """
+    from .demos import DEMOS, Demo, demo_from_block, load_demo
+
+    if isinstance(content, str | Path):
+        name = str(content)
+        return load_demo(name) if name in DEMOS else demo_from_file(name)
+    if isinstance(content, Demo):
+        return content
+    if isinstance(content, Block):
+        return demo_from_block(content)
+    if isinstance(content, tuple) and len(content) == 2 and isinstance(content[0], Block):
+        return demo_from_block(content[0], content[1])
+    raise InputError(
+        f"cannot show a {type(content).__name__}; expected a Block, (Block, Adjustment) or a demo name"
+    )
+
+
 def demo_from_file(path: str) -> Any:
     """Load a problem file into a demo (a block file; other kinds are not shown yet)."""
     from .demos import demo_from_block
@@ -245,7 +257,8 @@ def open_viewer(
 
 def export_html(content: Any, path: str | Path) -> Path:
     """Build the scene of ``content`` on a private server and write a static HTML snapshot."""
-    app = ViewerApp(content, host="127.0.0.1", port=0, verbose=False)
+    demo = resolve_content(content)  # load errors are raised here, before any server starts
+    app = ViewerApp(demo, host="127.0.0.1", port=0, verbose=False)
     try:
         if app.messages:
             raise InputError(app.messages[0])
@@ -265,17 +278,17 @@ def run_from_cli(args: argparse.Namespace) -> int:
             return exc.exit_code
         print(f"orientviz view: wrote {out}")
         return 0
+    app = None
     try:
         app = ViewerApp(target, host=args.host, port=args.port)
+        while True:
+            time.sleep(0.5)
     except InputError as exc:
         print(f"orientviz view: {exc}", file=sys.stderr)
         return 2
-    stop = threading.Event()
-    try:
-        while not stop.wait(0.5):
-            pass
     except KeyboardInterrupt:
         print("\norientviz view: stopped", file=sys.stderr)
     finally:
-        app.stop()
+        if app is not None:
+            app.stop()
     return 0
