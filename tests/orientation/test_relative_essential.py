@@ -96,3 +96,47 @@ def test_essential_input_errors():
         es.eight_point(np.zeros((7, 2)), np.zeros((7, 2)), C)
     with pytest.raises(InputError, match="same shape"):
         es.eight_point(np.zeros((9, 2)), np.zeros((8, 2)), C)
+
+
+def test_five_point_minimal_contains_the_truth():
+    # five exact points: the true E is one of the (up to 10) real solutions
+    rng = np.random.default_rng(10)
+    E_true = None
+    for _ in range(5):
+        xy1, xy2, st = _pair(rng, n=5)
+        E_true = es.essential_from_orientation(matrix_from_opk(*TRUE[2:]), st.base)
+        E_true *= np.sqrt(2) / np.linalg.norm(E_true)
+        sols = es.five_point(xy1, xy2, C)
+        assert 1 <= len(sols) <= 10
+        err = min(min(np.abs(E - E_true).max(), np.abs(E + E_true).max()) for E in sols)
+        assert err < 1e-9  # rounding through a 10×10 eigenproblem
+        for E in sols:  # every solution is an essential matrix fitting the five points
+            s = np.linalg.svd(E, compute_uv=False)
+            assert s[2] < 1e-9 and abs(s[0] - s[1]) < 1e-9
+
+
+def test_five_point_route_with_more_points_and_against_opencv():
+    cv2 = pytest.importorskip("cv2")
+    rng = np.random.default_rng(11)
+    xy1, xy2, st = _pair(rng, n=12, noise=0.002)
+    E, R, t = es.five_point_route(xy1, xy2, C)
+    R_true = matrix_from_opk(*TRUE[2:])
+    # 2 µm noise on 12 points: rotation to ~5e-4 rad
+    assert np.abs(R - R_true).max() < 2e-3
+    p1 = np.column_stack([xy1[:, 0] / C, -xy1[:, 1] / C])
+    p2 = np.column_stack([xy2[:, 0] / C, -xy2[:, 1] / C])
+    E_cv, _ = cv2.findEssentialMat(p1, p2, focal=1.0, pp=(0.0, 0.0), method=cv2.LMEDS)
+    _, R_cv, _, _ = cv2.recoverPose(E_cv, p1, p2, focal=1.0, pp=(0.0, 0.0))
+    D = es.D_OPENCV
+    assert np.abs(D @ R_cv.T @ D - R).max() < 2e-3
+    with pytest.raises(InputError, match="5 points"):
+        es.five_point(xy1[:4], xy2[:4], C)
+
+
+def test_route_with_the_five_point_solver():
+    xy1, xy2, _ = _pair(np.random.default_rng(12), n=20)
+    res = es.essential_route(xy1, xy2, C, b=B, solver="five")
+    np.testing.assert_allclose(res.extra["linear"], TRUE, atol=1e-8)
+    np.testing.assert_allclose(res.x, TRUE, atol=1e-10)
+    with pytest.raises(InputError, match="solver"):
+        es.essential_route(xy1, xy2, C, b=B, solver="seven")

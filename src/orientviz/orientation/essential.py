@@ -100,6 +100,132 @@ def eight_point(xy_left: ArrayLike, xy_right: ArrayLike, c: float) -> F64:
     return E / np.linalg.norm(E) * np.sqrt(2.0)
 
 
+# ------------------------------------------------------------------ five-point solver
+#: Monomials of degree ≤ 3 in (x, y, z): the ten of degree 3 first, then the basis of
+#: the quotient ring (x², xy, y², xz, yz, z², x, y, z, 1) used by the action matrix.
+_MONOS = np.array(
+    [(3, 0, 0), (2, 1, 0), (1, 2, 0), (0, 3, 0), (2, 0, 1), (1, 1, 1), (0, 2, 1), (1, 0, 2),
+     (0, 1, 2), (0, 0, 3), (2, 0, 0), (1, 1, 0), (0, 2, 0), (1, 0, 1), (0, 1, 1), (0, 0, 2),
+     (1, 0, 0), (0, 1, 0), (0, 0, 1), (0, 0, 0)]
+)  # fmt: skip
+#: The 20 lattice points (i, j, k) ≥ 0 with i + j + k ≤ 3: unisolvent for cubics.
+_LATTICE = np.array([m for m in np.ndindex(4, 4, 4) if sum(m) <= 3], dtype=float) - 1.0
+_VANDER = np.prod(_LATTICE[:, None, :] ** _MONOS[None, :, :], axis=2)
+#: x times basis monomial k is: ("lead", row of the eliminated cubic) or ("basis", index).
+_ACTION_X = [("lead", 0), ("lead", 1), ("lead", 2), ("lead", 4), ("lead", 5), ("lead", 7),
+             ("basis", 0), ("basis", 1), ("basis", 3), ("basis", 6)]  # fmt: skip
+
+
+def _constraints(E: F64) -> F64:
+    """det E and the nine entries of 2 E Eᵀ E − tr(E Eᵀ) E, for a stack (m, 3, 3)."""
+    EEt = E @ np.swapaxes(E, 1, 2)
+    tr = np.trace(EEt, axis1=1, axis2=2)
+    T = 2.0 * EEt @ E - tr[:, None, None] * E
+    return np.column_stack([np.linalg.det(E), T.reshape(-1, 9)])
+
+
+def five_point(xy_left: ArrayLike, xy_right: ArrayLike, c: float) -> list[F64]:
+    """Essential matrices from five (or more) point pairs: the five-point problem.
+
+    The null space of the coplanarity equations is 4-dimensional for five points,
+    E = x X + y Y + z Z + W; det E = 0 and 2 E Eᵀ E − tr(E Eᵀ) E = 0 give ten cubics in
+    (x, y, z). Their coefficients are interpolated exactly on a 20-point lattice, the ten
+    cubic monomials are eliminated (Gauss-Jordan) and the real eigenvectors of the action
+    matrix of x give up to ten solutions (Stewénius' formulation of Nistér's algorithm).
+    With more than five points the four smallest right singular vectors are used (a
+    least-squares null space).
+
+    Parameters
+    ----------
+    xy_left, xy_right : array_like, shape (n ≥ 5, 2)
+        Image coordinates in mm.
+    c : float
+        Principal distance, mm.
+
+    Returns
+    -------
+    list of ndarray, shape (3, 3)
+        The real solutions E (d1ᵀ E d2 = 0, ‖E‖ = √2), in no particular order.
+    """
+    q1 = _homogeneous(check_points(xy_left, "xy_left"), c)
+    q2 = _homogeneous(check_points(xy_right, "xy_right"), c)
+    if q1.shape != q2.shape:
+        raise InputError(
+            f"expected two point sets of the same shape, got {q1.shape} and {q2.shape}"
+        )
+    if q1.shape[0] < 5:
+        raise InputError(f"the five-point algorithm needs at least 5 points, got {q1.shape[0]}")
+    M = (q1[:, :, None] * q2[:, None, :]).reshape(-1, 9)
+    _, s, Vt = np.linalg.svd(M, full_matrices=M.shape[0] < 9)  # Vt is 9 × 9 either way
+    if np.sum(s > 1e-10 * s[0]) < 5:
+        raise NotDeterminableError(
+            "the points give fewer than 5 independent coplanarity equations",
+            parameters=["E"],
+            defect=1,
+        )
+    X, Y, Z, W = (Vt[k].reshape(3, 3) for k in (5, 6, 7, 8))
+    L = _LATTICE
+    Es = L[:, 0, None, None] * X + L[:, 1, None, None] * Y + L[:, 2, None, None] * Z + W
+    A = np.linalg.solve(_VANDER, _constraints(Es)).T  # (10 equations, 20 monomials)
+    try:
+        B = np.linalg.solve(A[:, :10], A[:, 10:])
+    except np.linalg.LinAlgError:
+        raise NotDeterminableError(
+            "degenerate five-point configuration (the cubic constraints are dependent)",
+            parameters=["E"],
+            defect=1,
+        ) from None
+    Mx = np.zeros((10, 10))
+    for k, (what, j) in enumerate(_ACTION_X):
+        if what == "lead":
+            Mx[k] = -B[j]
+        else:
+            Mx[k, j] = 1.0
+    # Mx b = x b for the basis vector b(x, y, z): b is a right eigenvector
+    w, V = np.linalg.eig(Mx)
+    out = []
+    for i in range(10):
+        v = V[:, i]
+        if abs(w[i].imag) > 1e-8 * max(1.0, abs(w[i])) or abs(v[9]) < 1e-12:
+            continue
+        v = (v / v[9]).real
+        E = v[6] * X + v[7] * Y + v[8] * Z + W
+        out.append(E / np.linalg.norm(E) * np.sqrt(2.0))
+    return out
+
+
+def five_point_route(xy_left: ArrayLike, xy_right: ArrayLike, c: float) -> tuple[F64, F64, F64]:
+    """The five-point solution that fits all points best, with its (R, t).
+
+    Each real solution is decomposed (:func:`decompose_essential`); the candidate with
+    the most points in front of both images and, among those, the smallest RMS of the
+    coplanarity residuals d1ᵀ E d2 / (|d1| |d2|) over all points wins. With exactly five
+    points every real solution fits them exactly and several may have all points in
+    front: the choice is then arbitrary — a sixth point decides.
+
+    Returns
+    -------
+    E, R, t : ndarray
+        Essential matrix, rotation of the right image, unit base direction.
+    """
+    xy1 = check_points(xy_left, "xy_left")
+    xy2 = check_points(xy_right, "xy_right")
+    d1 = np.column_stack([xy1, np.full(len(xy1), -c)])
+    d2 = np.column_stack([xy2, np.full(len(xy2), -c)])
+    n1 = np.linalg.norm(d1, axis=1)
+    n2 = np.linalg.norm(d2, axis=1)
+    best = None
+    for E in five_point(xy1, xy2, c):
+        R, t, n_front = select_by_cheirality(E, xy1, xy2, c)
+        rms = float(np.sqrt(np.mean((np.einsum("ni,ij,nj->n", d1, E, d2) / (n1 * n2)) ** 2)))
+        key = (-n_front, rms)
+        if best is None or key < best[0]:
+            best = (key, E, R, t)
+    if best is None:
+        raise NotDeterminableError("the five-point problem has no real solution here", ["E"], 1)
+    return best[1], best[2], best[3]
+
+
 def decompose_essential(E: ArrayLike) -> list[tuple[F64, F64]]:
     """The four factorisations E ∝ [t]ₓ R: (R, t) with R proper, |t| = 1."""
     U, _, Vt = np.linalg.svd(np.asarray(E, dtype=float))
@@ -166,6 +292,7 @@ def essential_route(
     sequence: str = "opk",
     sigma: float = 0.005,
     refine: bool = True,
+    solver: str = "eight",
 ) -> Adjustment:
     """Relative orientation via the essential matrix, refined by the rigorous model.
 
@@ -184,6 +311,8 @@ def essential_route(
     refine : bool
         Refine with :func:`~orientviz.orientation.relative.relative_orientation`
         (default); otherwise return the linear solution only (no precision).
+    solver : {"eight", "five"}
+        :func:`eight_point` (n ≥ 8) or :func:`five_point_route` (n ≥ 5).
 
     Returns
     -------
@@ -195,8 +324,14 @@ def essential_route(
     seq = check_sequence(sequence)
     xy1 = check_points(xy_left, "xy_left")
     xy2 = check_points(xy_right, "xy_right")
-    E = eight_point(xy1, xy2, c)
-    R, t, n_front = select_by_cheirality(E, xy1, xy2, c)
+    if solver == "eight":
+        E = eight_point(xy1, xy2, c)
+        R, t, n_front = select_by_cheirality(E, xy1, xy2, c)
+    elif solver == "five":
+        E, R, t = five_point_route(xy1, xy2, c)
+        n_front = select_by_cheirality(E, xy1, xy2, c)[2]
+    else:
+        raise InputError(f"expected solver 'eight' or 'five', got {solver!r}")
     if b is None:
         b = float(np.median(xy1[:, 0] - xy2[:, 0]))
     if abs(t[0]) < 1e-6:
