@@ -140,3 +140,35 @@ def test_largest_residual_list_and_fly_to(app):
     assert app.panel.handles["image"].value == int(st.block.observations.image[7])
     target = app.panel.fly_target + app.scene.geo.frame.origin
     np.testing.assert_allclose(target, st.block.points.xyz[st.block.observations.point[7]])
+
+
+def test_shipped_block_file_loads_and_adjusts():
+    from pathlib import Path
+
+    import orientviz
+
+    path = Path(orientviz.__file__).parent / "datasets" / "examples" / "block_strip.json"
+    if not path.exists():
+        pytest.skip("example problem files not shipped in this checkout")
+    a = ViewerApp(str(path), port=0, verbose=False)
+    try:
+        assert a.messages == [] and a.panel is not None
+        a.panel.adjust(50)
+        assert a.messages == [] and a.demo.state.result.converged
+    finally:
+        a.stop()
+
+
+def test_non_block_file_is_reported(tmp_path):
+    from pathlib import Path
+
+    import orientviz
+
+    path = Path(orientviz.__file__).parent / "datasets" / "examples" / "similarity_example.json"
+    if not path.exists():
+        pytest.skip("example problem files not shipped in this checkout")
+    a = ViewerApp(str(path), port=0, verbose=False)
+    try:
+        assert len(a.messages) == 1 and "'similarity' problem" in a.messages[0]
+    finally:
+        a.stop()

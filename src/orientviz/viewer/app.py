@@ -181,8 +181,21 @@ class ViewerApp:
         path.write_text(html, encoding="utf-8")
         return path
 
-    def show(self, height: int = 600) -> Any:
-        """Display the live viewer inline in Jupyter (an IFrame of the server URL)."""
+    def show(self, height: int = 600, static: bool = False) -> Any:
+        """Display the viewer inline in Jupyter.
+
+        Parameters
+        ----------
+        height : int
+            Height in pixels.
+        static : bool
+            False (default): an IFrame of the live server (sliders and buttons work while
+            the kernel runs). True: viser's embedded static snapshot of the scene, which
+            stays in the saved notebook (no controls).
+        """
+        if static:
+            self.server.scene.show(height=height)
+            return None
         from IPython.display import IFrame, display
 
         frame = IFrame(self.url, width="100%", height=height)
@@ -240,12 +253,14 @@ def demo_from_file(path: str) -> Any:
     except ImportError as exc:
         raise InputError(f"cannot read problem files in this version ({exc})", source=path) from exc
     problem = load_problem(p)
-    block = getattr(problem, "block", problem)
+    block = getattr(problem, "data", problem)
     if not isinstance(block, Block):
         raise InputError(
-            f"the viewer shows block problems; this is a {type(problem).__name__}", source=path
+            f"the viewer shows frame-camera problems (blocks); this file is a {problem.kind!r} problem",
+            source=path,
         )
-    return demo_from_block(block, title=p.name)
+    title = problem.name or p.name
+    return demo_from_block(block, title=title)
 
 
 def open_viewer(

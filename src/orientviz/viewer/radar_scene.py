@@ -33,39 +33,45 @@ from .block_geometry import COLORS
 STATION_COLORS = {1: (40, 70, 160), 2: (250, 130, 0), 3: (20, 150, 60)}
 
 
+#: The three grid corners (points 1, 5 and 21 of Fig. 7) whose range spheres are drawn:
+#: a large, well-shaped triangle for the trilateration.
+TRIANGLE: tuple[int, int, int] = (0, 4, 20)
+
+
 def radar_geometry(surface: str = "fig7", image: int = 1, rounded: bool = True) -> dict[str, Any]:
-    """Arrays of the radar scene (object metres).
+    """Arrays of the radar scene (object metres), from :mod:`orientviz.radar.scene`.
 
     Returns
     -------
     dict
         ``points`` (25, 3); ``stations`` {i: (3,)}; ``axes`` {i: (3,)} unit antenna axes;
-        ``circles`` (25, v, 3) projection circles of ``image``; ``triangle`` indices of
-        the three sphere centres; ``radii`` (3,) their slant ranges; ``candidates``
-        (2, 3) below/above; ``discriminant`` (m²).
+        ``references`` {i: (2, 3)} reference-direction segments; ``circles`` (25, v, 3)
+        projection circles of ``image``; ``triangle`` indices of the three sphere
+        centres; ``radii`` (3,) their slant ranges from the image (4b); ``candidates``
+        (2, 3) lower/upper; ``discriminant`` (m²).
     """
     from ..radar import geier1973 as G
-    from ..radar.orientation import _largest_triangle
-    from ..radar.ppi import projection_circle
-    from ..radar.trilateration import sphere_ranges, trilaterate_three
+    from ..radar import scene as RS
+    from ..radar.trilateration import sphere_ranges
 
     P = G.points(surface)
     imgs = G.images()
     xy = G.image_coordinates(surface, image, rounded=rounded)
     im = imgs[image]
-    _, _, circles = projection_circle(xy, im, n_vertices=97)
-    tri = _largest_triangle(P)
-    s = sphere_ranges(xy, im)[tri]
-    lo, hi, disc = trilaterate_three(P[tri], s)
+    circles = RS.circle_scene(xy, im, n_vertices=97)["polylines"]
+    tri = list(TRIANGLE)
+    trila = RS.trilateration_scene(P[tri], sphere_ranges(xy[tri], im))
+    stations = {i: RS.station_scene(r, f"image {i}", axis_length=1.0) for i, r in imgs.items()}
     return {
         "points": P,
-        "stations": {i: np.asarray(r.X0, float) for i, r in imgs.items()},
-        "axes": {i: r.axis for i, r in imgs.items()},
+        "stations": {i: s["station"] for i, s in stations.items()},
+        "axes": {i: s["axis"][1] - s["axis"][0] for i, s in stations.items()},
+        "references": {i: s["reference"] for i, s in stations.items()},
         "circles": circles,
         "triangle": tri,
-        "radii": s,
-        "candidates": np.vstack([lo, hi]),
-        "discriminant": disc,
+        "radii": trila["radii"],
+        "candidates": trila["candidates"],
+        "discriminant": trila["discriminant"],
     }
 
 

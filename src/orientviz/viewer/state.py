@@ -153,7 +153,7 @@ class BlockState:
         n = self.block.n_observations
         w = image_normalized_residuals(self.result, n) if self.at_result else None
         if w is not None:
-            return np.nanmax(np.abs(w), axis=1), "|w|"
+            return np.fmax(np.abs(w[:, 0]), np.abs(w[:, 1])), "|w|"  # NaN where r_i = 0
         e = self.misclosure() if misclosure is None else misclosure
         return np.max(np.abs(e) / self.block.observations.sigma, axis=1), "|v|/σ"
 
