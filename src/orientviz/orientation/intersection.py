@@ -369,8 +369,13 @@ def forward_intersection(
         raise NotDeterminableError(
             f"forward intersection: needs at least 2 rays, got {k}", parameters=["X", "Y", "Z"]
         )
-    X0 = np.asarray(X0, dtype=float).reshape(-1, 3)
-    R = np.asarray(R, dtype=float).reshape(-1, 3, 3)
+    try:
+        X0 = np.asarray(X0, dtype=float).reshape(-1, 3)
+        R = np.asarray(R, dtype=float).reshape(-1, 3, 3)
+    except ValueError as exc:
+        raise InputError(
+            f"forward intersection: expected X0 (k, 3) and R (k, 3, 3): {exc}"
+        ) from None
     if X0.shape[0] != k or R.shape[0] != k:
         raise InputError(f"forward intersection: expected {k} projection centres and rotations")
     cc, xx0, yy0 = (_as_per_image(v, k, n) for n, v in (("c", c), ("x0", x0), ("y0", y0)))
