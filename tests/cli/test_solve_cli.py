@@ -163,7 +163,7 @@ def test_solve_problem_api_matches_cli(capsys):
 
 
 @pytest.mark.skipif(shutil.which("orientviz") is None, reason="orientviz entry point not installed")
-def test_installed_entry_point(tmp_path):
+def test_installed_entry_point():
     """The console script runs the same code (PYTHONPATH points it at this checkout)."""
     src = str(Path(__file__).resolve().parents[2] / "src")
     env = dict(os.environ, PYTHONPATH=src + os.pathsep + os.environ.get("PYTHONPATH", ""))
@@ -171,10 +171,69 @@ def test_installed_entry_point(tmp_path):
     ok = subprocess.run([exe, "solve", "similarity_example", "--json"], capture_output=True,
                         text=True, env=env, timeout=120)  # fmt: skip
     assert ok.returncode == 0, ok.stderr
-    assert json.loads(ok.stdout)["kind"] == "similarity"
-    bad = tmp_path / "bad.json"
-    bad.write_text("{", encoding="utf-8")
-    fail = subprocess.run([exe, "solve", str(bad)], capture_output=True, text=True, env=env,
-                          timeout=120)  # fmt: skip
-    assert fail.returncode == 2
-    assert "Traceback" not in fail.stderr and "malformed JSON" in fail.stderr
+    assert json.loads(ok.stdout)["kind"] == "similarity" and ok.stderr == ""
+
+
+def test_method_models(capsys):
+    code, out, err = _solve_json(capsys, "block_strip", "--method", "models")
+    assert code == 0, err
+    assert out["method"].startswith("models")
+    assert all(img["omega"] is None and img["X0"] is not None for img in out["images"])
+    assert len(out["points"]) == 12
+
+
+def test_method_polynomial_with_degrees(capsys, tmp_path):
+    doc = json.loads(dataset_path("block_strip").read_text(encoding="utf-8"))
+    path = tmp_path / "poly.json"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    # 4 height control points cannot fix 5 coefficients of a degree-2 height polynomial
+    code = main(["solve", str(path), "--method", "polynomial"])
+    _, err = capsys.readouterr()
+    assert code == 3 and "not determinable" in err
+    doc["options"].update(degree_xy=1, degree_z=1)
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    code, out, err = _solve_json(capsys, str(path), "--method", "polynomial")
+    assert code == 0, err
+    assert out["method"] == "polynomial" and out["images"] == []
+    assert any("check points (2)" in n for n in out["notes"])
+
+
+def _strip_approximations(doc: dict) -> dict:
+    for img in doc["images"]:
+        for key in ("X0", "Y0", "Z0", "omega", "phi", "kappa"):
+            img.pop(key, None)
+    for p in doc["points"]:
+        if p["role"] == "tie":
+            for key in ("X", "Y", "Z"):
+                p.pop(key, None)
+    return doc
+
+
+def test_block_without_approximations_reaches_the_same_optimum(capsys, tmp_path):
+    """Images and tie points without start values: orientviz.block.approximate fills them."""
+    from orientviz.block.simulate import simulate_block
+
+    block = simulate_block(1, 3, rng=11, extra="grid").block
+    with_start = tmp_path / "start.json"
+    with_start.write_text(dumps_problem(problem_from_block(block)), encoding="utf-8")
+    doc = _strip_approximations(json.loads(with_start.read_text(encoding="utf-8")))
+    bare_path = tmp_path / "bare.json"
+    bare_path.write_text(json.dumps(doc), encoding="utf-8")
+    code, bare, err = _solve_json(capsys, str(bare_path))
+    assert code == 0, err
+    code, ref, err = _solve_json(capsys, str(with_start))
+    assert code == 0, err
+    a = np.array([[i["X0"], i["Y0"], i["Z0"]] for i in bare["images"]])
+    b = np.array([[i["X0"], i["Y0"], i["Z0"]] for i in ref["images"]])
+    # both stop when corrections are < 1e-3 σ (σ well below 1 m here): same optimum to < 1 mm
+    np.testing.assert_allclose(a, b, rtol=0, atol=1e-3)
+    assert bare["sigma0"] == pytest.approx(ref["sigma0"], rel=1e-4)
+
+
+def test_too_few_points_for_automatic_approximations(capsys, tmp_path):
+    doc = _strip_approximations(json.loads(dataset_path("block_strip").read_text("utf-8")))
+    path = tmp_path / "bare.json"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    code = main(["solve", str(path)])
+    _, err = capsys.readouterr()
+    assert code == 3 and "approximate values" in err and err.count("\n") == 1

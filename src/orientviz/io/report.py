@@ -229,12 +229,9 @@ class Solution:
             for k, ident in enumerate(self.image_ids):
                 X, s = self.X0[k] * L, self.X0_sigma[k] * L
                 a, sa = self.angles[k] * A, self.angles_sigma[k] * A
-                lines.append(
-                    f"  {ident:10s} " + " ".join(f"{X[j]:13.4f} ±{s[j]:8.4f}" for j in range(3))
-                )
-                lines.append(
-                    f"  {'':10s} " + " ".join(f"{a[j]:13.5f} ±{sa[j]:8.5f}" for j in range(3))
-                )
+                lines.append(f"  {ident:10s} " + " ".join(_pm(X[j], s[j], 4) for j in range(3)))
+                if np.any(np.isfinite(a)):
+                    lines.append(f"  {'':10s} " + " ".join(_pm(a[j], sa[j], 5) for j in range(3)))
         if self.point_ids:
             lines.append("")
             lines.append(f"points (X Y Z ± σ [{u.length}]):")
@@ -243,8 +240,8 @@ class Solution:
                 X, s = self.xyz[k] * L, self.xyz_sigma[k] * L
                 role = self.point_roles[k] if k < len(self.point_roles) else ""
                 lines.append(
-                    f"  {self.point_ids[k]:10s} {role:8s} "
-                    + " ".join(f"{X[j]:13.4f} ±{s[j]:8.4f}" for j in range(3))
+                    f"  {self.point_ids[k]:10s} {role:11s} "
+                    + " ".join(_pm(X[j], s[j], 4) for j in range(3))
                 )
             if shown < len(self.point_ids):
                 lines.append(f"  ... {len(self.point_ids) - shown} more (use --json for all)")
@@ -253,7 +250,12 @@ class Solution:
         idx = adj.largest_residuals(largest)
         if idx.size:
             lines.append("")
-            lines.append(f"largest normalised residuals (v [{qu}], w = v / (σ √r)):")
+            if adj.normalized_residuals is None:
+                lines.append(
+                    f"largest residuals (v [{qu}]; this method gives no redundancy numbers):"
+                )
+            else:
+                lines.append(f"largest normalised residuals (v [{qu}], w = v / (σ √r)):")
             w = adj.normalized_residuals
             for i in idx:
                 wi = float("nan") if w is None else float(w[i])
@@ -273,6 +275,8 @@ class Solution:
         return "\n".join(lines)
 
 
-def std_or_nan(adj: Adjustment, sl: slice, shape: tuple[int, ...]) -> F64:
-    """Standard deviations of a parameter block, reshaped (NaN where not computed)."""
-    return adj.std()[sl].reshape(shape)
+def _pm(value: float, sigma: float, digits: int) -> str:
+    """``"  1234.5678 ±   0.0123"``; a value or σ that was not computed prints as a dash."""
+    v = f"{value:13.{digits}f}" if np.isfinite(value) else f"{'—':>13s}"
+    s = f"{sigma:8.{digits}f}" if np.isfinite(sigma) else f"{'—':>8s}"
+    return f"{v} ±{s}"

@@ -7,7 +7,8 @@ intersected from the approximate orientations before the adjustment. Every tie a
 check point needs at least two rays, every control point at least one.
 
 Options: ``control`` (``"fixed"``/``"weighted"``), ``max_iter``, ``tol``, ``critical``,
-``image_sigma``. Methods: ``bundle`` (default), ``models``, ``polynomial`` (the latter
+``image_sigma``; for ``--method models`` ``model_method`` (``"rigorous"``/``"pat-m"``),
+for ``--method polynomial`` ``degree_xy``, ``degree_z``. Methods: ``bundle`` (default), ``models``, ``polynomial`` (the latter
 two when :mod:`orientviz.block.models` / :mod:`orientviz.block.polynomial` exist).
 """
 
@@ -19,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from ...adjust.result import W_CRITICAL
 from ...errors import InputError
 from ...model import CHECK, CONTROL, ROLES, TIE, Block
 from ..problem import Problem, Units
@@ -37,8 +39,11 @@ def load(doc: dict[str, Any], units: Units, source: str) -> Block:
         t, units, source, sequence=doc["sequence"], image_sigma=opts.get("image_sigma")
     )
     im = block.images
-    require_finite(t.images, np.column_stack([im.X0, im.angles]),
-                   ("X0", "Y0", "Z0", "omega", "phi", "kappa"), "an approximate value")  # fmt: skip
+    given = np.isfinite(np.column_stack([im.X0, im.angles]))
+    if given.any() and not given.all():  # all approximations or none (then computed)
+        require_finite(t.images, np.column_stack([im.X0, im.angles]),
+                       ("X0", "Y0", "Z0", "omega", "phi", "kappa"),
+                       "an approximate value (give all images' or none)")  # fmt: skip
     check_rays(block, t.points)
     block.meta["name"] = doc.get("name", "")
     return block
@@ -64,6 +69,21 @@ def check_rays(block: Block, points_table) -> None:
 def dump(block: Block, units: Units, columnar: bool) -> dict[str, Any]:
     """The tables of ``block`` in ``units``."""
     return tables_from_block(block, units, columnar)
+
+
+def approximate(block: Block) -> Block:
+    """Fill in missing approximate values before an adjustment.
+
+    No image approximations at all: everything is computed from scratch by
+    :func:`orientviz.block.approximate.approximate_values` (relative orientation of a
+    seed pair, resections, intersections, a similarity onto the control). Otherwise
+    only tie/check points without coordinates are intersected from the given ones.
+    """
+    if not np.all(np.isfinite(block.images.X0)) or not np.all(np.isfinite(block.images.angles)):
+        from ...block.approximate import approximate_values
+
+        return approximate_values(block)
+    return _approximate_tie_points(block)
 
 
 def _approximate_tie_points(block: Block) -> Block:
@@ -104,12 +124,19 @@ def _call(func, block: Block, options: dict[str, Any], **extra):
 def solve(problem: Problem, method: str | None) -> Solution:
     """Adjust the block by ``method`` and collect the report."""
     method = method or "bundle"
-    block: Block = _approximate_tie_points(problem.data)
-    opts = {k: v for k, v in problem.options.items() if k in ("control", "max_iter", "tol")}
+    block: Block = approximate(problem.data)
+    keys = ("control", "max_iter", "tol", "degree_xy", "degree_z")
+    opts = {k: v for k, v in problem.options.items() if k in keys}
     if method == "bundle":
         from ...block.bundle import bundle_adjust
 
         adj = _call(bundle_adjust, block, opts)
+    elif method == "models":
+        from ...block.models import independent_models
+
+        opts["method"] = problem.options.get("model_method", "rigorous")
+        adj = _call(independent_models, block, opts, precision=True)
+        return solution_from_models(problem, block, adj)
     else:
         module = f"orientviz.block.{method}"
         try:
@@ -126,6 +153,8 @@ def solve(problem: Problem, method: str | None) -> Solution:
         if func is None:
             raise InputError(f"--method {method}: not yet available (no solver in {module})")
         adj = _call(func, block, opts)
+        if "exterior" not in adj.blocks:
+            return solution_from_points(problem, block, adj, method, func)
     return solution_from_block_adjustment(problem, block, adj, method)
 
 
@@ -150,15 +179,7 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
         sxyz = std[adj.blocks["points"]].reshape(p, 3)
     else:
         xyz, sxyz = block.points.xyz, np.full((p, 3), np.nan)
-    notes = []
-    rms = adj.extra.get("check_rms")
-    if rms is not None and np.size(rms) == 3 and np.any(block.points.role == CHECK):
-        L = 1.0 / problem.units.m_per_length
-        r = np.asarray(rms, dtype=float) * L
-        notes.append(
-            f"check points: r.m.s. error X {r[0]:.4g}, Y {r[1]:.4g}, Z {r[2]:.4g} "
-            f"{problem.units.length}"
-        )
+    notes = check_note(problem, block, xyz)
     ties = int(np.sum(block.points.role == TIE))
     notes.append(f"block: {block.summary()} ({ties} tie points)")
     return Solution(
@@ -177,9 +198,105 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
         xyz_sigma=sxyz,
         point_roles=[ROLES[r] for r in block.points.role],
         observation_quantity="image",
-        critical=float(problem.options.get("critical", 3.29)),
+        critical=float(problem.options.get("critical", W_CRITICAL)),
         notes=notes,
     )
+
+
+def check_note(problem: Problem, block: Block, xyz: np.ndarray) -> list[str]:
+    """r.m.s. of estimated minus given coordinates of the check points (file length unit)."""
+    chk = np.flatnonzero(block.points.role == CHECK)
+    if chk.size == 0:
+        return []
+    d = xyz[chk] - block.points.xyz_known[chk]
+    n = np.sum(np.isfinite(d), axis=0)
+    with np.errstate(invalid="ignore"):
+        rms = np.sqrt(np.nansum(d**2, axis=0) / np.maximum(n, 1)) / problem.units.m_per_length
+    rms = np.where(n > 0, rms, np.nan)
+    return [
+        f"check points ({chk.size}): r.m.s. of estimated − given X {rms[0]:.4g}, Y {rms[1]:.4g}, "
+        f"Z {rms[2]:.4g} {problem.units.length}"
+    ]
+
+
+def solution_from_points(problem: Problem, block: Block, adj, method: str, func) -> Solution:
+    """Report of a method that estimates points only (polynomial strip/block adjustment).
+
+    Points come from ``extra["xyz"]`` (all block points), their σ from the ``"points"``
+    block where the method computed cofactors (else not available); no image orientation.
+    """
+    p = block.n_points
+    xyz_sigma = np.full((p, 3), np.nan)
+    if "points" in adj.blocks and "point_index" in adj.extra:
+        idx = np.asarray(adj.extra["point_index"], dtype=np.int64)
+        xyz_sigma[idx] = adj.std()[adj.blocks["points"]].reshape(-1, 3)[: idx.size]
+    passes = inspect.signature(func).parameters.get("iterations")
+    return Solution(
+        kind="block",
+        method=method,
+        adjustment=adj,
+        units=problem.units,
+        sequence=block.sequence,
+        point_ids=list(block.points.ids),
+        xyz=np.asarray(adj.extra["xyz"], dtype=float),
+        xyz_sigma=xyz_sigma,
+        point_roles=[ROLES[r] for r in block.points.role],
+        observation_quantity="length",
+        critical=float(problem.options.get("critical", W_CRITICAL)),
+        notes=[
+            f"{method}: residuals are strip/model coordinates in the object frame; "
+            "image orientations are not estimated by this method"
+        ]
+        + check_note(problem, block, np.asarray(adj.extra["xyz"], dtype=float)),
+        iterations=(
+            int(passes.default)
+            if adj.iterations == 0 and passes is not None and isinstance(passes.default, int)
+            else None
+        ),
+    )
+
+
+def solution_from_models(problem: Problem, block: Block, adj) -> Solution:
+    """Report of an independent-model adjustment: projection centres and points.
+
+    The models' own orientations are not image orientations, so ω, φ, κ of the images
+    are not reported (null); residuals are model coordinates in m.
+    """
+    m, p = block.n_images, block.n_points
+    std = adj.std()
+    tie_std = std[adj.blocks["points"]].reshape(-1, 3)
+    pidx = np.asarray(adj.extra["point_index"], dtype=np.int64)
+    cidx = np.asarray(adj.extra["centre_image"], dtype=np.int64)
+    xyz_sigma = np.full((p, 3), np.nan)
+    xyz_sigma[pidx] = tie_std[: pidx.size]
+    X0_sigma = np.full((m, 3), np.nan)
+    X0_sigma[cidx] = tie_std[pidx.size : pidx.size + cidx.size]
+    sol = Solution(
+        kind="block",
+        method=f"models ({adj.extra.get('method', 'rigorous')})",
+        adjustment=adj,
+        units=problem.units,
+        sequence=block.sequence,
+        image_ids=list(block.images.ids),
+        X0=np.asarray(adj.extra["centres"], dtype=float),
+        angles=np.full((m, 3), np.nan),
+        X0_sigma=X0_sigma,
+        angles_sigma=np.full((m, 3), np.nan),
+        point_ids=list(block.points.ids),
+        xyz=np.asarray(adj.extra["xyz"], dtype=float),
+        xyz_sigma=xyz_sigma,
+        point_roles=[ROLES[r] for r in block.points.role],
+        observation_quantity="length",
+        critical=float(problem.options.get("critical", W_CRITICAL)),
+        notes=[
+            f"independent models: {adj.extra['models'].n_models} models; residuals are model "
+            "coordinates in the object frame; image attitudes are not estimated (null)",
+            f"r.m.s. model residual: XY {adj.extra['rms_xy_m'] / problem.units.m_per_length:.4g}, "
+            f"Z {adj.extra['rms_z_m'] / problem.units.m_per_length:.4g} {problem.units.length}",
+        ]
+        + check_note(problem, block, np.asarray(adj.extra["xyz"], dtype=float)),
+    )
+    return sol
 
 
 KIND = register_kind(
