@@ -257,10 +257,10 @@ def test_intersection_needs_known_orientations():
     assert err.where == "images[1].kappa"
 
 
-def test_block_needs_approximate_orientations():
+def test_block_approximate_orientations_all_or_none():
     doc = _doc()
     doc["images"][2]["Z0"] = None
-    err = _fail(doc, "an approximate value is required")
+    err = _fail(doc, r"an approximate value \(give all images' or none\) is required")
     assert err.where == "images[2].Z0"
 
 
