@@ -148,3 +148,30 @@ def test_condition_needs_six_points_and_geometry():
 def test_kovarik_input_errors():
     with pytest.raises(InputError):
         sch.kovarik_nine_point(np.zeros(6), np.zeros(6), B, K_RATIO)
+
+
+def test_closed_form_equals_least_squares_property():
+    # property: for any heights (±40 % relief), k and base the printed formulas are the
+    # least-squares solution whenever the edge points lie at Y/Z = ∓k
+    hyp = pytest.importorskip("hypothesis")
+    st = hyp.strategies
+
+    @hyp.settings(max_examples=40, deadline=None)
+    @hyp.given(
+        st.lists(st.floats(-0.2, 0.2), min_size=9, max_size=9),
+        st.floats(0.3, 1.2),
+        st.floats(100.0, 400.0),
+        st.lists(st.floats(-1.0, 1.0), min_size=9, max_size=9),
+    )
+    def check(dz, k, b, p):
+        s = sch.kovarik9()
+        Z = Z0 * (1 + np.array(dz))
+        X = s.u * b
+        Y = -s.v * k * Z  # Y/Z = ∓k exactly (upper edge v = +1 at Y > 0)
+        A = rel.design_dependent(X, Y, Z, b)
+        ls = sch.least_squares_elements(A, np.array(p))
+        cf = sch.kovarik_nine_point(np.array(p), Z, b, k)
+        scale = np.abs(ls).max() + 1e-12
+        assert np.abs(cf - ls).max() < 1e-8 * scale + 1e-12
+
+    check()

@@ -208,19 +208,21 @@ class AnalogPlotter:
         p, _ = self.parallax_at(P)
         return X, Y, p.reshape(X.shape)
 
-    def read(self, scheme: Scheme | str | None = None) -> Readings:
-        """Read by and z at every point of the scheme (with the configured noise)."""
+    def read(self, scheme: Scheme | str | None = None, *, noise: bool = True) -> Readings:
+        """Read by and z at every point of the scheme (with the configured noise).
+
+        ``noise=False`` gives the exact readings (for display) and draws nothing from rng.
+        """
         sch = self.scheme if scheme is None else get_scheme(scheme)
         X, Y, _, xy1, xy2 = self._scheme_images(sch)
         p, pts = y_parallax(xy1, xy2, self.config.c, self.state)
         z = pts[:, 2].copy()
-        if self.rng is not None:
-            p = (
-                p + self.rng.normal(0.0, self.config.sigma_by, p.shape)
-                if self.config.sigma_by
-                else p
-            )
-            z = z + self.rng.normal(0.0, self.config.sigma_z, z.shape) if self.config.sigma_z else z
+        cfg = self.config
+        if noise and self.rng is not None:
+            if cfg.sigma_by:
+                p = p + self.rng.normal(0.0, cfg.sigma_by, p.shape)
+            if cfg.sigma_z:
+                z = z + self.rng.normal(0.0, cfg.sigma_z, z.shape)
         return Readings(sch, X, Y, self.settings[0] + p, z, p)
 
     # -------------------------------------------------------------- formulas

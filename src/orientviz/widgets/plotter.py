@@ -161,14 +161,7 @@ class VirtualPlotter:
     def view(self) -> PlotterView:
         """The current field, readings, dials and log."""
         X, Y, p = self.plotter.parallax_field(*self.grid)
-        rng, self.plotter.rng = self.plotter.rng, None
-        cfg = self.plotter.config
-        try:
-            # noise-free readings for the display (the pass itself reads with noise)
-            self.plotter.config = config_with(cfg, sigma_by=0.0, sigma_z=0.0)
-            r = self.plotter.read()
-        finally:
-            self.plotter.config, self.plotter.rng = cfg, rng
+        r = self.plotter.read(noise=False)  # the pass itself reads with noise
         return PlotterView(
             X, Y, p, r,
             _as_dict(self.plotter.settings),
