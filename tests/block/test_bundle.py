@@ -236,3 +236,25 @@ def test_poor_start_reports_non_convergence_not_a_defect():
         assert np.isclose(res.sigma0, good.sigma0, rtol=1e-6)
     else:
         assert "approximate" in res.reason or "iterations" in res.reason
+
+
+def test_observed_projection_centres_give_the_datum():
+    # GNSS-like projection centres (σ = 0.1 m) and no control at all
+    sim = simulate_block(3, 6, rng=17, control="none")
+    b = sim.block.copy()
+    rng = np.random.default_rng(3)
+    b.images.X0_obs = sim.truth.images.X0 + rng.normal(0, 0.1, b.images.X0.shape)
+    b.images.X0_sigma = np.full_like(b.images.X0, 0.1)
+    res = bundle_adjust(b)
+    assert res.converged
+    # r ≈ 1500: σ̂0 within ±4·√(1/(2r)) ≈ ±7 % of 1
+    assert abs(res.sigma0 - 1.0) < 0.08
+    sl = res.extra["obs_slices"]["X0_obs"]
+    assert sl.stop - sl.start == 3 * b.n_images
+    # the centres are pulled to the truth to about their σ, not beyond
+    ext = res["exterior"].reshape(-1, 6)
+    err = np.sqrt(np.mean((ext[:, :3] - sim.truth.images.X0) ** 2))
+    assert err < 0.1
+    # without the observed centres the same block has no datum
+    with pytest.raises(DatumDefectError):
+        bundle_adjust(sim.block)
