@@ -161,7 +161,11 @@ def main() -> None:
         best_ms(tri, args.repeat), np.abs(rig.xyz - tri()).max(),
     ))  # fmt: skip
 
-    print(f"best of {args.repeat} runs, ms (ratio = orientviz / peer)")
+    import os
+
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(f"best of {args.repeat} runs, ms (ratio = orientviz / peer); "
+          f"{os.cpu_count()} CPUs, 1-min load average {load:.1f}")  # fmt: skip
     head = (
         f"{'task':38s} {'peer':26s} {'orientviz':>10s} {'peer':>9s} {'ratio':>7s} {'max |Δ|':>10s}"
     )
