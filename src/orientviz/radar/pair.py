@@ -185,24 +185,9 @@ def relative_orientation(
         if points0 is not None
         else intersect(L1, image1, L2, approx2, refine=True)
     )
-    seq = approx2.sequence
+    model = relative_model(image1, approx2, free, n)
     full0 = approx2.vector()
-    rows = np.arange(n)
-
-    def model(u: F64):
-        p = full0.copy()
-        p[idx] = u[:k]
-        X = u[k:].reshape(n, 3)
-        xa, _, Ja = project_with_jacobian(X, image1)
-        xb, Jib, Jb = project_with_jacobian(X, RadarImage.from_vector(p, seq))
-        J = np.zeros((4 * n, k + 3 * n))
-        cols = k + 3 * rows[:, None] + np.arange(3)[None, :]
-        for c in range(2):
-            J[2 * rows[:, None] + c, cols] = Ja[:, c, :]
-            J[2 * n + 2 * rows + c, :k] = Jib[:, c, idx]
-            J[2 * n + 2 * rows[:, None] + c, cols] = Jb[:, c, :]
-        return np.concatenate([xa.reshape(-1), xb.reshape(-1)]), J
-
+    seq = approx2.sequence
     names = free + [f"P{i + 1}.{c}" for i in range(n) for c in "XYZ"]
     l = np.concatenate([L1.reshape(-1), L2.reshape(-1)])
     labels = [f"img{j}/{i + 1}/{c}" for j in (1, 2) for i in range(n) for c in "xy"]
@@ -258,6 +243,35 @@ def _orientation_defect(model, u0: F64, free: list[str], exc: NotDeterminableErr
         names or exc.parameters,
         null.shape[1],
     )
+
+
+def relative_model(image1: RadarImage, approx2: RadarImage, free: Sequence[str], n: int):
+    """The functional model of a relative orientation with ``n`` homologous points.
+
+    Returns ``model(u) -> (f, J)`` with u = (image 2's free parameters, X1, Y1, Z1, …,
+    Zn) and f = (image-1 coordinates x1, y1, …, then image-2 coordinates), m.
+    """
+    idx = _indices(free)
+    k = len(idx)
+    seq = approx2.sequence
+    full0 = approx2.vector()
+    rows = np.arange(n)
+    cols = k + 3 * rows[:, None] + np.arange(3)[None, :]
+
+    def model(u: F64):
+        p = full0.copy()
+        p[idx] = u[:k]
+        X = u[k:].reshape(n, 3)
+        xa, _, Ja = project_with_jacobian(X, image1)
+        xb, Jib, Jb = project_with_jacobian(X, RadarImage.from_vector(p, seq))
+        J = np.zeros((4 * n, k + 3 * n))
+        for c in range(2):
+            J[2 * rows[:, None] + c, cols] = Ja[:, c, :]
+            J[2 * n + 2 * rows + c, :k] = Jib[:, c, idx]
+            J[2 * n + 2 * rows[:, None] + c, cols] = Jb[:, c, :]
+        return np.concatenate([xa.reshape(-1), xb.reshape(-1)]), J
+
+    return model
 
 
 def absolute_orientation(
