@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from orientviz.cli import main
-from orientviz.io.datasets import dataset_path, list_datasets, load_dataset
+from orientviz.io.datasets import dataset_info, dataset_path, list_datasets, load_dataset
 from orientviz.io.problem import Units, dumps_problem, problem_from_block
 from orientviz.io.solve import solve_problem
 
@@ -31,7 +31,9 @@ def test_every_example_solves(name, capsys):
         assert key in out
     assert out["converged"] is True and out["iterations"] >= 1
     assert out["units"] == load_dataset(name).units.as_dict()
-    # every example is simulated with the σ it states: σ̂0 must be near 1. With r ≥ 8
+    if dataset_info(name)["folder"] != "examples":
+        return  # other folders' datasets: their own tests judge the numbers
+    # every example here is simulated with the σ it states: σ̂0 must be near 1. With r ≥ 8
     # the 99.9 % range of σ̂0 is about [0.3, 1.8]; the similarity example's control σ
     # leaves out the model noise (0.01 mm · 5000 = 0.05 m), so its σ̂0 may reach ~1.6.
     assert 0.3 < out["sigma0"] < 1.8

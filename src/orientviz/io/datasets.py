@@ -4,8 +4,9 @@
 >>> "block_strip" in list_datasets()
 True
 
-Each dataset is an ``orientviz/1`` problem file listed in ``MANIFEST.json`` with its
-source, units, frame and licence (:func:`dataset_info`).
+Each dataset is an ``orientviz/1`` problem file in a folder of ``orientviz/datasets``
+(``examples/``, ``pair/``, ``geier1973/``, …) whose ``MANIFEST.json`` gives its source,
+units, frame and licence (:func:`dataset_info`).
 """
 
 from __future__ import annotations
@@ -20,17 +21,50 @@ from ..errors import InputError
 from .problem import Problem, load_problem
 
 PACKAGE = "orientviz.datasets"
-FOLDER = "examples"
+#: Manifest entries must say these (filled from a folder manifest if an entry lacks them).
+FIELDS = ("source", "units", "frame", "licence")
 
 
-def _folder():
-    return resources.files(PACKAGE).joinpath(FOLDER)
+def _entries(folder) -> list[dict[str, Any]]:
+    """The problem files of one dataset folder, from its ``MANIFEST.json``.
+
+    A manifest ``{"format": "orientviz-datasets/1", "datasets": [...]}`` lists its
+    problem files; any other manifest describes the whole folder, and every
+    ``orientviz/1`` file in it becomes a dataset named after its file.
+    """
+    meta = json.loads(folder.joinpath("MANIFEST.json").read_text(encoding="utf-8"))
+    if isinstance(meta, dict) and isinstance(meta.get("datasets"), list):
+        return [dict(e, folder=folder.name) for e in meta["datasets"]]
+    out = []
+    for item in sorted(folder.iterdir(), key=lambda r: r.name):
+        if not item.name.endswith(".json") or item.name == "MANIFEST.json":
+            continue
+        try:
+            doc = json.loads(item.read_text(encoding="utf-8"))
+        except ValueError:
+            continue
+        if not (isinstance(doc, dict) and doc.get("format") == "orientviz/1"):
+            continue
+        entry = {k: meta.get(k, "") for k in FIELDS} if isinstance(meta, dict) else {}
+        entry.update(
+            name=item.name[: -len(".json")], file=item.name, kind=doc.get("kind", ""),
+            form="readable", description=doc.get("description", ""), units=doc.get("units"),
+            folder=folder.name,
+        )  # fmt: skip
+        out.append(entry)
+    return out
 
 
 @lru_cache(maxsize=1)
 def _manifest() -> dict[str, dict[str, Any]]:
-    text = _folder().joinpath("MANIFEST.json").read_text(encoding="utf-8")
-    return {d["name"]: d for d in json.loads(text)["datasets"]}
+    root = resources.files(PACKAGE)
+    found: dict[str, dict[str, Any]] = {}
+    for folder in sorted((f for f in root.iterdir() if f.is_dir()), key=lambda r: r.name):
+        if not folder.joinpath("MANIFEST.json").is_file():
+            continue
+        for entry in _entries(folder):
+            found.setdefault(entry["name"], entry)  # first folder wins (names are unique)
+    return found
 
 
 def list_datasets() -> list[str]:
@@ -39,7 +73,8 @@ def list_datasets() -> list[str]:
 
 
 def dataset_info(name: str) -> dict[str, Any]:
-    """The manifest entry of ``name``: file, kind, form, description, source, units, frame, licence."""
+    """The manifest entry of ``name``: folder, file, kind, form, description, source, units,
+    frame, licence (and what else the manifest says, e.g. ``truth``)."""
     try:
         return dict(_manifest()[name])
     except KeyError:
@@ -51,7 +86,7 @@ def dataset_info(name: str) -> dict[str, Any]:
 def dataset_path(name: str) -> Path:
     """Path of the problem file of dataset ``name`` (inside the installed package)."""
     info = dataset_info(name)
-    return Path(str(_folder().joinpath(info["file"])))
+    return Path(str(resources.files(PACKAGE).joinpath(info["folder"], info["file"])))
 
 
 def load_dataset(name: str) -> Problem:
