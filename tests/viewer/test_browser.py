@@ -76,3 +76,21 @@ def test_viewer_renders_and_slider_updates_python(browser_page, block):
         page.screenshot(path=SHOT.replace(".png", "_after.png"))
     finally:
         app.stop()
+
+
+def test_exported_html_renders_without_a_server(browser_page, block, tmp_path):
+    from PIL import Image
+
+    from orientviz.viewer.app import export_html
+
+    out = export_html(demo_from_block(block), tmp_path / "snapshot.html")
+    page = browser_page
+    page.goto(out.resolve().as_uri())
+    page.wait_for_selector("canvas", timeout=30_000)
+    time.sleep(4.0)
+    shot = SHOT.replace(".png", "_export.png")
+    page.screenshot(path=shot)
+    img = np.asarray(Image.open(shot).convert("RGB"), dtype=float)
+    background = np.median(img.reshape(-1, 3), axis=0)
+    drawn = np.mean(np.abs(img - background).sum(axis=2) > 60)
+    assert drawn > 0.005, f"only {drawn:.4f} of the pixels differ from the background"

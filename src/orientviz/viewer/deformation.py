@@ -1,14 +1,18 @@
-"""Model deformation: how far the estimated block is from a reference, exaggerated and animated.
+"""Model deformation: how far an estimated block is from a reference, exaggerated and animated.
 
-The reference is a second state of the same points — the truth of a simulation, or
-the result before self-calibration or before a transformation. The scene shows
+The reference is the truth of a simulation (or any second state of the same points).
+Two displacement fields A (t = 0) and B (t = 1), both relative to the reference, are
+morphed: points are drawn at reference + k·((1 − t)·A + t·B). Two comparisons:
 
-* ``/block/deformation/vectors`` — reference → estimate for every point, × k;
-* ``/block/deformation/points`` — the points morphed to reference + t·k·(estimate −
-  reference); the *morph* slider (t ∈ [0, 1]) and *play* animate between the two.
+* *reference → current estimate*: A = 0, B = estimate − reference;
+* *without → with self-calibration*: A and B are the point errors of two bundle
+  adjustments of the start block, without and with an additional-parameter set
+  (Ebner's 12 by default, :mod:`orientviz.block.additional`) — Ackermann's "model
+  deformation" removed (or not) by self-calibration.
 
-k is chosen so that the median displacement is drawn as half a point spacing
-(shown in the panel). Units: m.
+Scene nodes: ``/block/deformation/vectors`` (reference → morphed point) and
+``/block/deformation/points``. k draws the larger median displacement as half a point
+spacing; the panel prints k and the RMS of both fields in m.
 """
 
 from __future__ import annotations
@@ -21,29 +25,56 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..model import Block
-from . import geometry as g
 from .block_geometry import COLORS
 from .state import BlockState
 
 F64 = NDArray[np.float64]
 
-
-def deformation_vectors(estimate: F64, reference: F64) -> F64:
-    """Displacements estimate − reference (p, 3) in m; NaN rows where either is missing."""
-    return np.asarray(estimate, dtype=float) - np.asarray(reference, dtype=float)
+MODES = ("reference → current estimate", "without → with self-calibration")
 
 
-def auto_scale(displacement: F64, spacing: float) -> float:
-    """Exaggeration drawing the median |displacement| as half of ``spacing`` (1 if none)."""
-    d = np.linalg.norm(displacement, axis=1)
-    d = d[np.isfinite(d)]
-    med = float(np.median(d)) if d.size else 0.0
+def auto_scale(*displacements: F64, spacing: float) -> float:
+    """Exaggeration drawing the larger median |displacement| as half of ``spacing`` (1 if none)."""
+    meds = []
+    for d in displacements:
+        n = np.linalg.norm(np.asarray(d, dtype=float), axis=1)
+        n = n[np.isfinite(n)]
+        meds.append(float(np.median(n)) if n.size else 0.0)
+    med = max(meds, default=0.0)
     return 0.5 * spacing / med if med > 0 else 1.0
 
 
-def morph(reference: F64, displacement: F64, t: float, k: float) -> F64:
-    """Points at reference + t·k·displacement (p, 3) m, t ∈ [0, 1]."""
-    return np.asarray(reference, dtype=float) + (t * k) * np.asarray(displacement, dtype=float)
+def morph(reference: F64, A: F64, B: F64, t: float, k: float) -> F64:
+    """Points at reference + k·((1 − t)·A + t·B), shape (p, 3) m, t ∈ [0, 1]."""
+    return np.asarray(reference, float) + k * (
+        (1.0 - t) * np.asarray(A, float) + t * np.asarray(B, float)
+    )
+
+
+def rms(d: F64) -> F64:
+    """RMS per coordinate (3,) of displacements (p, 3), ignoring NaN rows."""
+    return np.sqrt(np.nanmean(np.asarray(d, float) ** 2, axis=0))
+
+
+def self_calibration_fields(
+    start: Block, reference: Block, ap: str = "ebner12"
+) -> tuple[F64, F64, str]:
+    """Point errors (p, 3) m of bundles without and with self-calibration, and a summary line."""
+    from ..block.additional import ap_set
+    from ..block.bundle import bundle_adjust
+
+    p = start.n_points
+    out = []
+    for add in (None, ap_set(ap)):
+        res = bundle_adjust(start, additional=add)
+        out.append((res.x[res.blocks["points"]].reshape(p, 3) - reference.points.xyz, res.sigma0))
+    tie = start.points.role == 0
+    a, b = rms(out[0][0][tie]), rms(out[1][0][tie])
+    line = (
+        f"tie-point RMS error X, Y, Z: without {a[0]:.3f}, {a[1]:.3f}, {a[2]:.3f} m "
+        f"(σ̂0 {out[0][1]:.3f}); with {ap} {b[0]:.3f}, {b[1]:.3f}, {b[2]:.3f} m (σ̂0 {out[1][1]:.3f})"
+    )
+    return out[0][0], out[1][0], line
 
 
 def deformation_extra(state: BlockState, reference: Block):
@@ -55,15 +86,10 @@ def deformation_extra(state: BlockState, reference: Block):
         frame, spacing = scene.geo.frame, scene.geo.spacing
         gui, sc = app.server.gui, app.server.scene
         ctl: dict[str, Any] = {}
-
-        def current() -> tuple[F64, float]:
-            d = deformation_vectors(state.block.points.xyz, ref)
-            return d, auto_scale(d, spacing)
-
-        d, k = current()
+        fields: dict[str, Any] = {"selfcal": None, "line": ""}
         R = frame.to_scene(ref)
         vec = sc.add_line_segments(
-            "/block/deformation/vectors", g.vector_segments(R, d, k).astype(np.float32),
+            "/block/deformation/vectors", np.zeros((1, 2, 3), np.float32),
             COLORS["deformation"], thickness=2.0, thickness_units="screen", visible=False,
         )  # fmt: skip
         pts = sc.add_point_cloud(
@@ -72,20 +98,31 @@ def deformation_extra(state: BlockState, reference: Block):
         )  # fmt: skip
         with gui.add_folder("Deformation", expand_by_default=False):
             ctl["show"] = gui.add_checkbox("show deformation", False)
-            ctl["t"] = gui.add_slider("morph reference → estimate", 0.0, 1.0, 0.01, 1.0)
+            ctl["mode"] = gui.add_dropdown("compare", MODES, initial_value=MODES[0])
+            ctl["t"] = gui.add_slider("morph t", 0.0, 1.0, 0.01, 1.0)
             ctl["play"] = gui.add_button("play")
             ctl["info"] = gui.add_markdown("")
 
+        def current() -> tuple[F64, F64]:
+            if ctl["mode"].value == MODES[1]:
+                if fields["selfcal"] is None:
+                    A, B, fields["line"] = self_calibration_fields(state.block0, reference)
+                    fields["selfcal"] = (A, B)
+                return fields["selfcal"]
+            return np.zeros_like(ref), state.block.points.xyz - ref
+
         def redraw() -> None:
-            d, k = current()
+            A, B = current()
+            k = auto_scale(A, B, spacing=spacing)
             t = float(ctl["t"].value)
-            vec.points = g.vector_segments(R, d, k).astype(np.float32)
-            pts.points = frame.to_scene(morph(ref, d, t, k)).astype(np.float32)
-            rms = np.sqrt(np.nanmean(np.sum(d**2, axis=1)))
-            ctl[
-                "info"
-            ].content = (
-                f"estimate − reference: RMS {rms:.3g} m, drawn ×{k:.3g}; points at t = {t:.2f}"
+            M = morph(ref, A, B, t, k)
+            vec.points = frame.to_scene(np.stack([ref, M], axis=1)).astype(np.float32)
+            pts.points = frame.to_scene(M).astype(np.float32)
+            a, b = rms(A), rms(B)
+            ctl["info"].content = (
+                f"drawn ×{k:.3g}, t = {t:.2f}  \n"
+                f"RMS at t = 0: {np.linalg.norm(a):.3g} m, at t = 1: {np.linalg.norm(b):.3g} m"
+                + (f"  \n{fields['line']}" if ctl["mode"].value == MODES[1] else "")
             )
 
         def show(_e: Any = None) -> None:
@@ -105,10 +142,11 @@ def deformation_extra(state: BlockState, reference: Block):
             threading.Thread(target=run, daemon=True).start()
 
         ctl["show"].on_update(app.guard(show))
+        ctl["mode"].on_update(app.guard(lambda _e: redraw()))
         ctl["t"].on_update(app.guard(lambda _e: redraw()))
         ctl["play"].on_click(app.guard(play))
         scene.listeners.append(redraw)
         redraw()
-        return {"deformation": ctl, "deformation_nodes": (vec, pts)}
+        return {"deformation": ctl, "deformation_nodes": (vec, pts), "deformation_reference": ref}
 
     return build
