@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import NotDeterminableError
 from ..units import RHO_CC
 from . import geier1973 as G
+from .diagnostics import pair_geometry, weakest_direction
 from .orientation import calibrate, exterior, resect_all, rotations, station_by_trilateration
 from .pair import relative_orientation
 from .ppi import PARAMS, RadarImage, project
@@ -74,6 +75,7 @@ class TaskOutcome:
     values: dict[str, float] = field(default_factory=dict)
     status: str = "ok"
     adjustment: Any = None
+    diagnosis: str = ""
 
 
 def rounded_coordinates(xy: ArrayLike, offset: ArrayLike | None = None) -> F64:
@@ -174,6 +176,13 @@ def run_surface(
             C = res.correlations()
             o.values.update(
                 {"r_x/z": abs(C[0, 2]), "r_x/phi": abs(C[0, 3]), "r_z/phi": abs(C[2, 3])}
+            )
+            cond, weak = weakest_direction(res, block="image2")
+            geo = pair_geometry(xy[1], T[1], xy[img], start, res.extra["points"])
+            o.diagnosis = (
+                f"condition number {cond:.3g}, weakest: "
+                + ", ".join(f"{n} {s:.2f}" for n, s in weak[:3])
+                + f"; at the approximations: {geo.summary()}"
             )
         if not res.converged:
             o.status = f"not converged: {res.reason}"

@@ -111,7 +111,8 @@ def table(draws: int = 10, seed: int = 1973, stopping: str = "geier") -> list[Ro
                             label,
                             _short(status),
                             None if ov is None else _fmt(ov, unit),
-                            f"orientviz: {out.status}",
+                            f"orientviz: {out.status}"
+                            + (f"; {out.diagnosis}" if q == "m0" and out.diagnosis else ""),
                         )
                     )
                     continue
