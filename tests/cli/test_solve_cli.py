@@ -239,3 +239,26 @@ def test_too_few_points_for_automatic_approximations(capsys, tmp_path):
     code = main(["solve", str(path)])
     _, err = capsys.readouterr()
     assert code == 3 and "approximate values" in err and err.count("\n") == 1
+
+
+def _write(tmp_path, doc, name="p.json"):
+    path = tmp_path / name
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    return str(path)
+
+
+def test_resection_with_two_points_is_not_determinable(capsys, tmp_path):
+    doc = json.loads(dataset_path("resection_example").read_text(encoding="utf-8"))
+    keep = {doc["points"][0]["id"], doc["points"][1]["id"]}
+    doc["observations"] = [o for o in doc["observations"] if o["point"] in keep]
+    code = main(["solve", _write(tmp_path, doc)])
+    _, err = capsys.readouterr()
+    assert code == 3 and "adjustment impossible" in err and err.count("\n") == 1
+
+
+def test_similarity_with_one_control_point_is_not_determinable(capsys, tmp_path):
+    doc = json.loads(dataset_path("similarity_example").read_text(encoding="utf-8"))
+    doc["target"]["points"] = doc["target"]["points"][:1]
+    code = main(["solve", _write(tmp_path, doc)])
+    _, err = capsys.readouterr()
+    assert code == 3 and "7 parameters need at least 7 control coordinates" in err

@@ -299,3 +299,17 @@ def test_datum_defect_when_the_block_has_no_control():
     problem = loads_problem(json.dumps(doc), SOURCE)
     with pytest.raises(DatumDefectError, match="7 datum parameter.* free: add control or fix"):
         solve_problem(problem)
+
+
+def _nested(depth: int) -> str:
+    text = json.dumps(dict(_doc(), description="@@"))
+    return text.replace('"@@"', "[" * depth + "]" * depth)
+
+
+def test_nested_value_of_the_wrong_type():
+    err = _fail(_nested(50), "expected string, got an array")
+    assert err.where == "description"
+
+
+def test_absurdly_deep_nesting_is_one_line_not_a_recursion_error():
+    _fail(_nested(100_000), "nested too deeply")

@@ -180,7 +180,10 @@ def problem_from_document(doc: Any, source: str = "<document>") -> Problem:
 
 def loads_problem(text: str, source: str = "<string>") -> Problem:
     """Parse and load a problem from JSON text (see :func:`load_problem`)."""
-    return problem_from_document(parse_json(text, source), source)
+    try:
+        return problem_from_document(parse_json(text, source), source)
+    except RecursionError:
+        raise InputError("nested too deeply for a problem file", source) from None
 
 
 def load_problem(path: str | os.PathLike[str]) -> Problem:
@@ -202,7 +205,10 @@ def load_problem(path: str | os.PathLike[str]) -> Problem:
         For every defect of the file; the message names the file, the place (a path such
         as ``observations[12].x``, or line and column of malformed JSON) and the problem.
     """
-    return problem_from_document(read_json_file(path), str(path))
+    try:
+        return problem_from_document(read_json_file(path), str(path))
+    except RecursionError:
+        raise InputError("nested too deeply for a problem file", str(path)) from None
 
 
 def problem_to_document(problem: Problem, *, columnar: bool | None = None) -> dict[str, Any]:
