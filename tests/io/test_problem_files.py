@@ -156,3 +156,12 @@ def test_missing_tie_coordinates_are_allowed_in_a_block():
 
 def test_format_constant():
     assert _doc("block_strip")["format"] == FORMAT == "orientviz/1"
+
+
+def test_package_level_exports():
+    import orientviz.io as io
+
+    assert io.load_problem is load_problem and io.list_datasets is list_datasets
+    assert set(io.__all__) >= {"load_problem", "save_problem", "load_dataset", "solve_problem"}
+    with pytest.raises(AttributeError, match="no attribute 'nothing'"):
+        io.nothing  # noqa: B018

@@ -1,1 +1,37 @@
-"""orientviz.io"""
+"""orientviz.io: problem files (``orientviz/1`` JSON), shipped datasets, BAL and COLMAP.
+
+The common entry points are importable from here (loaded on first use)::
+
+    from orientviz.io import load_problem, save_problem, load_dataset
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+#: name → submodule that defines it
+_EXPORTS = {
+    "Problem": "problem",
+    "Units": "problem",
+    "load_problem": "problem",
+    "loads_problem": "problem",
+    "save_problem": "problem",
+    "write_problem": "problem",
+    "dumps_problem": "problem",
+    "problem_from_block": "problem",
+    "solve_problem": "solve",
+    "list_datasets": "datasets",
+    "load_dataset": "datasets",
+    "dataset_path": "datasets",
+    "dataset_info": "datasets",
+    "available_kinds": "registry",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str) -> Any:
+    if name in _EXPORTS:
+        return getattr(importlib.import_module(f"{__name__}.{_EXPORTS[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
