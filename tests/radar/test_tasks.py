@@ -111,3 +111,28 @@ def test_absolute_orientation_exact_and_no_scale():
     np.testing.assert_allclose(absolute_orientation(x, ctrl).x, res.x, atol=1e-8)
     with pytest.raises(NotDeterminableError, match="6 unknowns"):
         absolute_orientation(x[:1], X[:1])
+
+
+def test_trilateration_candidates_property():
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    coord = st.floats(-50000, 50000, allow_nan=False)
+
+    @settings(max_examples=60, deadline=None, derandomize=True)
+    @given(st.lists(st.tuples(coord, coord, st.floats(-17000, -14000)), min_size=3, max_size=3),
+           st.tuples(coord, coord, st.floats(-2000, 2000)))  # fmt: skip
+    def check(centres, station):
+        C, X = np.array(centres), np.array(station)
+        n = np.cross(C[1] - C[0], C[2] - C[0])
+        scale = max(np.linalg.norm(C[1] - C[0]), np.linalg.norm(C[2] - C[0]), 1.0)
+        if np.linalg.norm(n) < 1e-3 * scale**2:  # skip (nearly) collinear centres
+            return
+        r = np.linalg.norm(C - X, axis=1)
+        lo, hi, disc = trilaterate_three(C, r)
+        # both candidates lie on all three spheres; one of them is the station
+        for q in (lo, hi):
+            np.testing.assert_allclose(np.linalg.norm(C - q, axis=1), r, rtol=1e-7, atol=1e-3)
+        assert min(np.linalg.norm(lo - X), np.linalg.norm(hi - X)) < 1e-3 * max(1.0, r.max() / 1e4)
+
+    check()
