@@ -277,5 +277,5 @@ class BlockGeometry:
             float(np.median(self.frame.to_scene(b.points.xyz)[:, 2])) if b.n_points else centre[2]
         )
         ext = max(hi[0] - lo[0], hi[1] - lo[1], 1e-3)
-        pos = centre + np.array([-0.35, -1.0, 0.75]) * ext
+        pos = centre + np.array([-0.3, -0.85, 0.65]) * ext
         return pos, centre

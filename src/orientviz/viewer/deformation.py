@@ -128,8 +128,9 @@ def deformation_extra(state: BlockState, reference: Block):
         def show(_e: Any = None) -> None:
             on = bool(ctl["show"].value)
             vec.visible = pts.visible = on
-            scene.set_visible("points", not on)
-            scene.set_visible("residuals", not on)
+            for key in ("points", "residuals", "ellipsoids"):
+                box = app.panel.handles.get(f"show_{key}") if app.panel else None
+                scene.set_visible(key, (not on) and (box is None or bool(box.value)))
 
         def play(_e: Any = None) -> None:
             def run() -> None:

@@ -128,9 +128,7 @@ class PairView:
         self.depth = 0.22 * H
         fov, aspect, scale = g.viser_frustum(cfg.c, (cfg.format_mm, cfg.format_mm), self.depth)
         self.spacing = g.typical_spacing(geo["terrain"])
-        p_scale = float(np.percentile(np.abs(geo["parallax"]), 90)) or 1.0
-        self.k0 = 10 ** np.round(np.log10(0.8 * self.spacing / p_scale))
-        self.k = self.k0
+        self.k = self.auto_k(geo["parallax"])
         self.nodes: dict[str, Any] = {}
         for name, color in (("left", COLORS["frustum"]), ("right", COLORS["selected"])):
             self.nodes[name] = sc.add_camera_frustum(
@@ -167,8 +165,8 @@ class PairView:
             h["stats"] = gui.add_markdown("")
         with gui.add_folder("Display"):
             h["exaggeration"] = gui.add_slider(
-                "log10 parallax ×", float(np.log10(self.k0)) - 2, float(np.log10(self.k0)) + 2,
-                0.05, float(np.log10(self.k0)),
+                "parallax × (log10, 0 = auto)", -2.0, 2.0, 0.05, 0.0,
+                hint="0 draws the 90th percentile of |p_y| as 0.8 of a grid spacing",
             )  # fmt: skip
         self.h = h
         guard = app.guard
@@ -182,7 +180,7 @@ class PairView:
         )
         h["exaggeration"].on_update(guard(lambda _e: self._exaggerate()))
         self.redraw()
-        pos = self.frame.to_scene(np.array([-0.6 * cfg.model_base, -1.6 * cfg.model_base, 0.3 * H]))
+        pos = self.frame.to_scene(np.array([-0.9 * cfg.model_base, -1.1 * cfg.model_base, 0.5 * H]))
         look = self.frame.to_scene(np.array([0.5 * cfg.model_base, 0.0, -H]))
         return {"camera": (pos, look, self.frame.size), "pair": self}
 
@@ -243,8 +241,15 @@ class PairView:
         finally:
             self._syncing = False
 
+    def auto_k(self, parallax: F64) -> float:
+        """Exaggeration drawing the 90th percentile of |p_y| as 0.8 of a grid spacing.
+
+        Kept within [1, 10⁵] so that a parallax-free model (rounding noise) shows no arrows.
+        """
+        p90 = float(np.percentile(np.abs(parallax), 90))
+        return float(np.clip(0.8 * self.spacing / p90, 1.0, 1e5)) if p90 > 0 else 1.0
+
     def _exaggerate(self) -> None:
-        self.k = 10 ** float(self.h["exaggeration"].value)
         self.redraw()
 
     # ------------------------------------------------------------------ drawing
@@ -263,6 +268,9 @@ class PairView:
             [g.ray_segments(np.broadcast_to(c, S.shape), S) for c in geo["centres"]]
         )
         self.nodes["rays"].points = f.to_scene(rays).astype(np.float32)
+        slider = self.h.get("exaggeration") if hasattr(self, "h") else None
+        extra = 10 ** float(slider.value) if slider is not None else 1.0
+        self.k = self.auto_k(geo["parallax"]) * extra
         arrows = parallax_arrows(geo["terrain"], geo["parallax"], self.k)
         col = g.ramp(
             np.repeat(np.abs(geo["parallax"]), 3), max(np.abs(geo["parallax"]).max(), 1e-9)
@@ -275,6 +283,6 @@ class PairView:
             f"RMS y-parallax over the model: **{rms * 1000:.1f} µm** (machine)  \n"
             f"passes: {len(self.plotter.history)} · dials − truth: by {err[0]:+.3f}, bz {err[1]:+.3f} mm; "
             f"ω {err[2] * RHO_C:+.1f}, φ {err[3] * RHO_C:+.1f}, κ {err[4] * RHO_C:+.1f} c  \n"
-            f"arrows ×{self.k:.3g}"
+            f"arrows ×{self.k:.3g} (left ray → right ray)"
         )
         self.rms = rms
