@@ -56,3 +56,48 @@ def test_demo_builds_in_the_viewer(name):
         assert app.server.scene.get_handle_by_name(f"/{'block' if name == 'block' else name}")
     finally:
         app.stop()
+
+
+def test_pair_panel_passes_scrub_and_reset():
+    app = ViewerApp(load_demo("pair"), port=0, verbose=False)
+    try:
+        pv = app.extra["pair"]
+        pl = pv.plotter
+        rms0 = pv.rms
+        pv.h["pass"].value = None  # click "one pass"
+        assert len(pl.history) == 1 and pv.rms < rms0
+        # the dial sliders follow the plotter (ω in c)
+        assert pv.h["omega [c]"].value == pytest.approx(round(pl.settings[2] * 20000 / np.pi, 2))
+        pv.h["orient"].value = None  # to convergence
+        assert pv.rms < 1e-3  # below 1 µm machine: no reading noise in the demo
+        n = len(pv.snapshots)
+        assert pv.h["scrub"].max == n - 1
+        pv.h["scrub"].value = 0  # back to the start dials, history kept
+        np.testing.assert_allclose(pl.settings, pv.start)
+        assert len(pv.snapshots) == n
+        pv.h["reset"].value = None
+        assert pl.history == [] and len(pv.snapshots) == 1
+        # a dial moved by hand changes the parallaxes at once
+        before = np.asarray(pv.nodes["parallax"].points).copy()
+        pv.h["kappa [c]"].value = 50.0
+        assert pl.settings[4] == pytest.approx(50.0 * np.pi / 20000)
+        assert np.any(np.asarray(pv.nodes["parallax"].points) != before)
+        assert app.messages == []
+    finally:
+        app.stop()
+
+
+def test_radar_panel_follows_image_and_surface():
+    app = ViewerApp(load_demo("radar"), port=0, verbose=False)
+    try:
+        rv = app.extra["radar"]
+        rv.h["image"].value = "2"
+        rv.h["surface"].value = "sphere150_convex"
+        geo = radar_geometry("sphere150_convex", 2)
+        pts = np.asarray(rv.nodes["points"].points, dtype=float) + rv.frame.origin
+        np.testing.assert_allclose(pts, geo["points"], atol=0.02)  # float32 at ~50 km
+        assert "image 2, surface sphere150_convex" in rv.h["info"].content
+        rv.h["spheres"].value = False
+        assert not rv.nodes["spheres"].visible and not rv.nodes["candidates"].visible
+    finally:
+        app.stop()
