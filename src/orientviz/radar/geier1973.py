@@ -169,8 +169,11 @@ def alpha0_approx() -> float:
 def image_coordinates(name: str, image: int, *, rounded: bool = True, sequence: str = "pok") -> F64:
     """Image coordinates (m, (25, 2)) of surface ``name`` in image 1, 2 or 3.
 
-    ``rounded=True`` rounds them to whole metres as the paper did (half away from zero;
-    no value of the test lies near a half metre, see the tests).
+    ``rounded=True`` rounds them to the nearest whole metre as the paper did (no exact
+    value of image 2 lies within 0.5 mm of a half metre; images 1 and 3 have a few within
+    0.07-0.7 mm, see docs/geier_conventions.md).
     """
+    if image not in (1, 2, 3):
+        raise InputError(f"expected image 1, 2 or 3, got {image!r}")
     xy = project(points(name), images(sequence)[image])
     return np.round(xy) if rounded else xy
