@@ -42,6 +42,9 @@ nb_execution_timeout = 300
 nb_execution_raise_on_error = True
 nb_execution_show_tb = True
 nb_merge_streams = True
+# Widgets need a kernel; the static book shows the figures printed beside them instead.
+# Leaving out the widget manager keeps every page free of CDN scripts (it works offline).
+nb_ipywidgets_js: dict = {}
 
 napoleon_numpy_docstring = True
 napoleon_google_docstring = False
