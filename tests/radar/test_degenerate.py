@@ -67,14 +67,21 @@ def test_near_parallel_planes_flagged_in_the_near_normal_pair():
 
 
 def test_tangent_line_flagged():
-    # a point whose ε-line meets station 1's ray at right angles: tangent to its sphere
+    # ε1 ∩ ε2 through X perpendicular to station 1's ray: the line touches sphere 1.
+    # Image 1: vertical axis at the origin, so ε1 is the plane y = 0 for X below.
     im1 = T[1].with_(kappa=0.0)
-    im2 = im1.with_(X0=(20000.0, 0.0, 0.0), phi=np.pi / 2)  # axis horizontal along X
-    P = np.array([[10000.0, 10000.0, -15000.0], [30000.0, 20000.0, -14000.0]])
+    X = np.array([10000.0, 0.0, -15000.0])
+    d = np.array([15000.0, 0.0, 10000.0]) / np.hypot(15000.0, 10000.0)  # ⟂ X, in y = 0
+    # image 2's axis along d, station off the plane: ε2 is spanned by d and the y axis
+    im2 = im1.with_(
+        X0=tuple(X - 20000.0 * d + [0.0, 5000.0, 0.0]), phi=float(np.arctan2(d[0], d[2]))
+    )
+    P = np.vstack([X, [30000.0, 20000.0, -14000.0]])
     xy1, xy2 = project(P, im1), project(P, im2)
     geo = pair_geometry(xy1, im1, xy2, im2, P)
-    assert geo.tangency1.shape == (2,)
-    np.testing.assert_allclose(intersect(xy1, im1, xy2, im2), P, atol=1e-5)
+    assert geo.tangency1[0] < 1e-9 and geo.weak[0]
+    assert geo.tangency1[1] > 0.05  # the other point is an ordinary one
+    np.testing.assert_allclose(intersect(xy1, im1, xy2, im2)[1], P[1], atol=1e-5)
 
 
 def test_weakest_direction_of_near_normal_relative_orientation():
