@@ -262,3 +262,9 @@ def test_similarity_with_one_control_point_is_not_determinable(capsys, tmp_path)
     code = main(["solve", _write(tmp_path, doc)])
     _, err = capsys.readouterr()
     assert code == 3 and "7 parameters need at least 7 control coordinates" in err
+
+
+def test_unknown_name_lists_the_examples(capsys):
+    code = main(["solve", "blok_strip"])
+    _, err = capsys.readouterr()
+    assert code == 2 and "no shipped example of that name" in err and "block_strip" in err

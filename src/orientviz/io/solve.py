@@ -104,6 +104,11 @@ def _resolve(name: str) -> str:
 
     if name in list_datasets():
         return str(dataset_path(name))
+    if os.sep not in name and not name.endswith(".json"):
+        raise InputError(
+            f"no such file, and no shipped example of that name ({', '.join(list_datasets())})",
+            name,
+        )
     return name
 
 
