@@ -147,15 +147,22 @@ def bundle_precision(res, prob, st, rw, Je, Jp) -> None:
     # point cofactors: Vinv + Σ_ab T_aᵀ Q(i_a, i_b) T_b
     a, b = S.all_pairs
     oi, ocol = prob.oi, prob.ocol
-    idx, tr = _block_lookup(S, oi[a], oi[b])
-    Qab = Zblk[idx]
-    Qab[tr] = Qab[tr].transpose(0, 2, 1)
     T = ne["T"]
-    QT = Qab @ T[b]  # Q(i_a, i_b) T_b, (pairs, 6, 3)
     n_used = oi.size
-    # Q_cp for each observation a: −Σ_b Q(i_a, i_b) T_b  (then add AP part)
+    # Q_cp for each observation a: −Σ_b Q(i_a, i_b) T_b  (then add the AP part);
+    # in batches of whole a-groups to bound the memory of the (pairs, 6, 6) gathers
     Qcp = np.zeros((n_used, 6, 3))
-    Qcp[S.pt_obs] = -np.add.reduceat(QT, S.all_pairs_starts, axis=0)
+    seg = np.append(S.all_pairs_starts, a.size)
+    s0, chunk = 0, 65536
+    while s0 < S.all_pairs_starts.size:
+        s1 = max(int(np.searchsorted(seg, seg[s0] + chunk, side="right")) - 1, s0 + 1)
+        sl = slice(seg[s0], seg[s1])
+        idx, tr = _block_lookup(S, oi[a[sl]], oi[b[sl]])
+        Qab = Zblk[idx]
+        Qab[tr] = Qab[tr].transpose(0, 2, 1)
+        QT = Qab @ T[b[sl]]  # Q(i_a, i_b) T_b
+        Qcp[S.pt_obs[s0:s1]] = -np.add.reduceat(QT, S.all_pairs_starts[s0:s1] - seg[s0], axis=0)
+        s0 = s1
     Vinv = ne["Vinv"]
     vo = S.pt_obs
     if q:

@@ -34,6 +34,9 @@ from ..model import CHECK, CONTROL, Block
 from ..rotation import matrix_from_opk, opk_from_matrix
 
 F64 = NDArray[np.float64]
+#: The oriented part is re-adjusted (model-frame bundle) at the latest after this many
+#: new images, and after every 25 % of growth.
+REFINE_EVERY: int = 48
 
 
 def intersect_rays(X0: F64, d: F64, point: NDArray[np.int64], n_points: int) -> tuple[F64, F64]:
@@ -159,7 +162,10 @@ def approximate_values(block: Block, *, min_points: int = 6) -> Block:
 
     refine()
     while not done.all():
-        if done.sum() >= max(refined_at + 1, 1.25 * refined_at) or done.sum() <= 12:
+        if (
+            done.sum() >= min(max(refined_at + 1, 1.25 * refined_at), refined_at + REFINE_EVERY)
+            or done.sum() <= 12
+        ):
             refine()
         known = np.isfinite(P[op]).all(axis=1)
         score = np.bincount(oi[known], minlength=m).astype(float)
@@ -181,7 +187,7 @@ def approximate_values(block: Block, *, min_points: int = 6) -> Block:
         for st in (start, None):
             try:
                 res = resection(xyc[sel], P[op[sel]], float(c[nxt]), start=st, max_iter=15)
-            except NotDeterminableError:
+            except (NotDeterminableError, np.linalg.LinAlgError, ValueError):
                 continue
             if res.converged:
                 break

@@ -14,6 +14,14 @@ complement (:mod:`orientviz.adjust.normal`), a Levenberg-Marquardt fallback when
 would increase vᵀPv, and a parameter-based stopping rule: stop when every correction
 is below ``tol`` times the parameter's a-priori (conditional) σ = 1/√N_ii. The cost
 alone is a poor criterion in large blocks: their weak bending modes barely change it.
+
+Convergence range (measured on the peer bench's 200-image block, 10 × 20, perimeter
+control): from start errors of 5 m / 1 gon / 5 m (positions / angles / points) 4
+iterations; from 100 m / 10 gon / 100 m 8 iterations, same optimum; from 200 m / 20 gon
+/ 200 m the normal matrix at the start is not even positive definite — damped steps are
+tried, and the result reports ``converged=False`` with a reason that points to
+:func:`orientviz.block.approximate.approximate_values`, after which the bundle converges
+in 3 iterations. (The peers — pycolmap, GTSAM, Ceres, SciPy — diverge there too.)
 """
 
 from __future__ import annotations
