@@ -87,12 +87,19 @@ def plot_cleaning(cleaning, *, truth=None, ax=None, title=None):
     if truth is not None:
         tr = set(np.asarray(truth, int).tolist())
         good = np.array([o in tr for o in obs], bool)
-        missed = len(tr - set(obs.tolist()))
+        gone = set(obs.tolist())
+        kept = cleaning.adjustment.extra.get("kept_rays")
+        if kept is not None:  # rays left out with their point count as removed too
+            gone |= set(np.flatnonzero(~np.asarray(kept, bool)).tolist())
+        missed = len(tr - gone)
     if len(el):
         ax.scatter(it[good], w[good], color="#27ae60", label="gross error found", zorder=3)
         if (~good).any():
             ax.scatter(it[~good], w[~good], color="#c0392b", marker="x", label="false alarm")
     ax.set_yscale("log")
+    from matplotlib.ticker import MaxNLocator
+
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlabel("adjustment" if cleaning.method != "reruns" else "rerun")
     ax.set_ylabel("|w| (test statistic) at elimination")
     ax.legend(fontsize=8)
