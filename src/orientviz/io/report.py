@@ -211,6 +211,8 @@ class Solution:
             f"sigma0 = {adj.sigma0:.4g} (a-posteriori, unit weight)",
             f"{self.n_iterations} iterations, "
             f"{'converged' if adj.converged else 'NOT CONVERGED'}: {adj.reason}",
+            f"units of the file: length {u.length}, image {u.image}, angle {u.angle}; "
+            f"rotation sequence {self.sequence}",
         ]
         if self.parameters:
             lines.append("")
