@@ -165,3 +165,14 @@ def test_package_level_exports():
     assert set(io.__all__) >= {"load_problem", "save_problem", "load_dataset", "solve_problem"}
     with pytest.raises(AttributeError, match="no attribute 'nothing'"):
         io.nothing  # noqa: B018
+
+
+def test_writing_into_a_missing_folder_is_an_input_error(tmp_path):
+    from orientviz.errors import InputError
+
+    p = load_dataset("similarity_example")
+    with pytest.raises(InputError, match="cannot write") as info:
+        save_problem(p, tmp_path / "no" / "such" / "out.json")
+    assert str(tmp_path / "no" / "such" / "out.json") in str(info.value)
+    with pytest.raises(InputError, match="is a directory"):
+        save_problem(p, tmp_path)

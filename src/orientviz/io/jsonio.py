@@ -348,11 +348,17 @@ def write_atomic(path: str | os.PathLike[str], text: str) -> None:
     """Write ``text`` to ``path`` through a temporary file and an atomic rename.
 
     Either the complete new file exists afterwards or the old state is untouched; no
-    half-written file is ever left behind.
+    half-written file is ever left behind. A folder that does not exist or cannot be
+    written is an :class:`InputError` naming the path.
     """
     target = Path(path)
     folder = target.parent if str(target.parent) else Path(".")
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
+    if target.is_dir():
+        raise InputError("is a directory, expected a file name to write", str(path))
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
+    except OSError as exc:
+        raise InputError(f"cannot write: {exc.strerror or exc}", str(path)) from None
     try:
         try:  # keep the mode of a file we replace, else the usual 0o666 & ~umask
             mode = target.stat().st_mode & 0o777
