@@ -31,7 +31,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.stats import norm
+from scipy.special import ndtri
 
 from ..errors import AdjustmentError, InputError, NotDeterminableError
 from .engine import gauss_newton
@@ -62,7 +62,7 @@ def critical_value(alpha0: float = 0.001) -> float:
     """Critical value of the two-sided w-test, ``k = z(1 − α0/2)`` (α0 = 0.001 → 3.29)."""
     if not 0.0 < alpha0 < 1.0:
         raise InputError(f"expected a significance level 0 < alpha0 < 1, got {alpha0}")
-    return float(norm.ppf(1.0 - alpha0 / 2.0))
+    return float(ndtri(1.0 - alpha0 / 2.0))
 
 
 def noncentrality(alpha0: float = 0.001, beta0: float = 0.80) -> float:
@@ -77,7 +77,7 @@ def noncentrality(alpha0: float = 0.001, beta0: float = 0.80) -> float:
     """
     if not 0.0 < beta0 < 1.0:
         raise InputError(f"expected a power 0 < beta0 < 1, got {beta0}")
-    return critical_value(alpha0) + float(norm.ppf(beta0))
+    return critical_value(alpha0) + float(ndtri(beta0))
 
 
 def redundancy_numbers(J: ArrayLike, sigma: ArrayLike) -> F64:

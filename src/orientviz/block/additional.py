@@ -39,7 +39,7 @@ from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.stats import norm
+from scipy.special import ndtri
 
 from ..errors import InputError, NotDeterminableError
 
@@ -393,7 +393,7 @@ def analyse(
     d = np.sqrt(np.clip(np.diag(Qa), 1e-300, None))
     sigma = s0 * d
     t = np.abs(value) / sigma
-    sig = t > float(norm.ppf(1 - alpha / 2))
+    sig = t > float(ndtri(1 - alpha / 2))
     R = Qa / np.outer(d, d)
     i, j = np.triu_indices(len(idx), 1)
     big = np.abs(R[i, j]) > threshold
