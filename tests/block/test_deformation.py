@@ -5,7 +5,7 @@ import pytest
 
 from orientviz.block import systematic as se
 from orientviz.block.additional import Ebner12
-from orientviz.block.deformation import animate, frames, image_field, model_field
+from orientviz.block.deformation import animate, frames, image_field, model_field, model_fields
 from orientviz.errors import InputError
 
 
@@ -74,3 +74,10 @@ def test_animation_interpolates_between_the_fields():
         animate(a, model_field(None, n=3), 0.5)
     with pytest.raises(InputError, match=r"t in \[0, 1\]"):
         animate(a, b, 1.5)
+
+
+def test_per_image_errors_give_per_model_fields():
+    err = se.PerGroup([se.affinity(8.0, 0.0), se.model_twist(8.0)], group=[0, 0, 1, 1])
+    f = model_fields(err, [[0, 1], [2, 3]], n=4)
+    np.testing.assert_allclose(f[0].d, model_field(se.affinity(8.0, 0.0), n=4).d, atol=1e-9)
+    np.testing.assert_allclose(f[1].d, model_field(se.model_twist(8.0), n=4).d, atol=1e-9)

@@ -39,7 +39,15 @@ from ..orientation.absolute import similarity_closed_form
 
 F64 = NDArray[np.float64]
 
-__all__ = ["ImageField", "ModelField", "animate", "frames", "image_field", "model_field"]
+__all__ = [
+    "ImageField",
+    "ModelField",
+    "animate",
+    "frames",
+    "image_field",
+    "model_field",
+    "model_fields",
+]
 
 
 @dataclass
@@ -232,6 +240,20 @@ def model_field(
     if correction is not None:
         name += " (self-calibrated)"
     return ModelField(truth, d, shape, B, H, float(scale), name)
+
+
+def model_fields(error, pairs: ArrayLike, *, correction=None, **options) -> list[ModelField]:
+    """:func:`model_field` for every model (left, right) of a block, e.g. ``layout.models``.
+
+    With per-image errors (:class:`~orientviz.block.systematic.PerGroup`, film
+    deformation) every model gets its own deformation; the ground grid is the same
+    normal-case grid for all (the field describes the images, not the terrain).
+    """
+    P = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    return [
+        model_field(error, left=int(a), right=int(b), correction=correction, **options)
+        for a, b in P
+    ]
 
 
 def animate(without, with_, t: float, exaggeration: float = 1.0) -> F64:
