@@ -10,7 +10,13 @@ Peers in the same run:
 * slider — a full rebuild of the residual, ray and frustum nodes after the change
   (``scene.update()`` with all images) against the incremental update of one image.
 
-Run:  PYTHONPATH=src python benchmarks/bench_viewer.py [--repeat 5]
+With ``--browser`` it also times the round trip in headless Chromium (/usr/bin/chromium):
+an arrow-key press on the ω slider of the 200-image block until the Python side has
+redrawn (includes the websocket and the browser's event handling). In headless Chromium
+with software WebGL (swiftshader) on a loaded machine this is dominated by the browser
+rendering the scene, not by orientviz; compare it with the Python-side redraw.
+
+Run:  PYTHONPATH=src python benchmarks/bench_viewer.py [--repeat 5] [--browser]
 """
 
 from __future__ import annotations
@@ -31,10 +37,52 @@ def timed(fn, repeat: int = 1) -> tuple[float, object]:
     return best, out
 
 
+def browser_round_trip(app, moves: int) -> float:
+    """Median seconds from an arrow key on the ω slider to the Python-side redraw."""
+    import shutil
+    import tempfile
+
+    from playwright.sync_api import sync_playwright
+
+    flags = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+             "--disable-background-networking", "--disable-component-update", "--disable-sync",
+             "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]  # fmt: skip
+    profile = tempfile.mkdtemp(prefix="orientviz-bench-")
+    h = app.panel.handles["omega"]
+    out = []
+    try:
+        with sync_playwright() as p:
+            ctx = p.chromium.launch_persistent_context(
+                profile, executable_path="/usr/bin/chromium", headless=True, args=flags
+            )
+            page = ctx.new_page()
+            page.goto(app.url)
+            page.wait_for_selector("[role=slider]", timeout=60_000)
+            time.sleep(2.0)
+            row = page.locator("div", has=page.locator("label", has_text="omega [gon]"))
+            thumb = (
+                row.filter(has=page.locator("[role=slider]")).last.locator("[role=slider]").first
+            )
+            thumb.focus()
+            for j in range(moves):
+                before = h.value
+                key = "ArrowRight" if j % 2 == 0 else "ArrowLeft"
+                t = time.perf_counter()
+                thumb.press(key)
+                while h.value == before and time.perf_counter() - t < 10:
+                    time.sleep(0.0005)
+                out.append(time.perf_counter() - t)
+            ctx.close()
+    finally:
+        shutil.rmtree(profile, ignore_errors=True)
+    return statistics.median(out)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--moves", type=int, default=30)
+    ap.add_argument("--browser", action="store_true", help="also time the browser round trip")
     a = ap.parse_args()
 
     import viser
@@ -122,6 +170,15 @@ def main() -> None:
             st.set_exterior(57, angles=st.block.images.angles[57] + [to_rad(0.01, "gon"), 0, 0])
             app.scene.update()
             full.append(time.perf_counter() - t)
+        if a.browser:
+            rows.append(
+                (
+                    "slider 200",
+                    "browser: key press → Python redraw (median)",
+                    browser_round_trip(app, a.moves),
+                    "",
+                )
+            )
     finally:
         app.stop()
     med, worst = statistics.median(times), max(times)

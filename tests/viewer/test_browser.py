@@ -74,6 +74,11 @@ def test_viewer_renders_and_slider_updates_python(browser_page, block):
         # exactly the rays of image 0 got new residual vectors
         np.testing.assert_array_equal(changed, st.block.observations.image == 0)
         page.screenshot(path=SHOT.replace(".png", "_after.png"))
+
+        # a button pressed in the page runs one adjustment iteration on the Python side
+        page.get_by_role("button", name="one iteration").click()
+        assert wait_for(lambda: len(st.history) == 2, timeout=30), "no iteration after the click"
+        assert wait_for(lambda: app.panel.handles["iteration"].max == 1)
     finally:
         app.stop()
 
