@@ -46,7 +46,7 @@ def test_truncated_file():
 
 
 def test_not_an_object():
-    _fail("[1, 2, 3]", r"expected a JSON object")
+    _fail("[1, 2, 3]", r"expected a JSON object .* got an array")
 
 
 def test_missing_format():

@@ -33,7 +33,7 @@ from typing import Any
 from ..errors import InputError
 from ..rotation import check_sequence
 from ..units import RHO
-from .jsonio import dumps_json, parse_json, read_json_file, validate, write_atomic
+from .jsonio import _json_type, dumps_json, parse_json, read_json_file, validate, write_atomic
 from .registry import get_kind
 
 #: The format string this version reads and writes.
@@ -141,8 +141,7 @@ def problem_from_document(doc: Any, source: str = "<document>") -> Problem:
     """
     if not isinstance(doc, dict):
         raise InputError(
-            f'expected a JSON object with "format": "{FORMAT}", got '
-            f"{type(doc).__name__ if doc is not None else 'null'}",
+            f'expected a JSON object with "format": "{FORMAT}", got {_json_type(doc)}',
             source,
             "document",
         )
