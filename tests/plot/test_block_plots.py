@@ -1,0 +1,73 @@
+"""Block figures (orientviz.plot.block): they draw what they are given and return a Figure."""
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from orientviz.block.accuracy import height_precision, planimetric_precision  # noqa: E402
+from orientviz.block.simulate import simulate_block  # noqa: E402
+from orientviz.plot.block import (  # noqa: E402
+    plot_block_layout,
+    plot_error_ellipses,
+    plot_error_vectors,
+    plot_height_law,
+    plot_precision_map,
+    plot_strip_law,
+)
+
+
+@pytest.fixture(scope="module")
+def sim():
+    return simulate_block(
+        2, 5, rng=np.random.default_rng(1), extra=None, control="chains", chain_spacing=2, control_spacing=1,
+        control_kind="xy+z", n_check=2,
+    )  # fmt: skip
+
+
+def test_layout_marks_every_control_kind(sim):
+    fig = plot_block_layout(sim)
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    for want in ("strip 0", "strip 1", "XY control", "Z control", "check points", "tie points"):
+        assert want in labels
+    # 10 footprints + model areas drawn as patches
+    assert len(fig.axes[0].patches) >= 10 + 8
+    plt.close(fig)
+
+
+def test_error_vectors_into_given_axes(sim):
+    fig0, ax = plt.subplots()
+    est = sim.truth.points.xyz + 0.01
+    fig = plot_error_vectors(est, sim.truth.points.xyz, ax=ax, control=sim.block.points.role == 1)
+    assert fig is fig0
+    assert "RMS X 0.010 m" in ax.get_title()
+    plt.close(fig)
+
+
+def test_error_ellipses_axes_follow_the_covariance():
+    xy = np.array([[0.0, 0.0], [100.0, 0.0]])
+    cov = np.array([np.diag([4.0, 1.0]), np.diag([1.0, 9.0])])
+    fig = plot_error_ellipses(xy, cov, scale=1.0)
+    coll = fig.axes[0].collections[0]
+    # widths are 2·a (major), heights 2·b (minor) of the unscaled ellipses
+    np.testing.assert_allclose(np.sort(coll._widths * 2), [4.0, 6.0])
+    np.testing.assert_allclose(np.sort(coll._heights * 2), [2.0, 2.0])
+    plt.close(fig)
+
+
+def test_precision_map_and_laws():
+    p = planimetric_precision(2)
+    fig = plot_precision_map(p)
+    assert "μ = " in fig.axes[0].get_title()
+    plt.close(fig)
+    fig = plot_strip_law([planimetric_precision(n) for n in (2, 3)])
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert any("log10" in t for t in labels) and any("< 2" in t for t in labels)
+    plt.close(fig)
+    hs = [height_precision(i, n_strips=2, models_per_strip=8) for i in (2, 4)]
+    fig = plot_height_law(hs)
+    assert len(fig.axes[0].lines) >= 3
+    plt.close(fig)
