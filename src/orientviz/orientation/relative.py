@@ -334,8 +334,7 @@ def y_parallax_jacobian(
         ∂p_y/∂elements (model units per model unit / per radian). Note the sign: a
         correction d clears the parallax when J d ≈ −p_y.
     """
-    names = _elements(kind)
-    del names
+    _elements(kind)  # validates kind
     st = PairState.from_elements(elements, b, kind, check_sequence(sequence))
     p, _, J = _parallax_and_jacobian(
         check_points(xy_left, "xy_left"), check_points(xy_right, "xy_right"), c, st, kind
