@@ -258,3 +258,26 @@ def test_observed_projection_centres_give_the_datum():
     # without the observed centres the same block has no datum
     with pytest.raises(DatumDefectError):
         bundle_adjust(sim.block)
+
+
+def test_reduced_solvers_reach_the_same_solution():
+    sim = simulate_block(2, 5, rng=8)
+    ref = bundle_adjust(sim.block, precision=False, solver="banded")
+    for solver in ("splu", "dense"):
+        res = bundle_adjust(sim.block, precision=False, solver=solver)
+        assert res.iterations == ref.iterations
+        # the same linear systems solved by different factorisations: rounding only
+        np.testing.assert_allclose(res.x, ref.x, rtol=0, atol=1e-7)
+
+
+def test_height_only_control_points_are_held_in_height():
+    sim = simulate_block(3, 6, rng=23, control="chains", control_kind="xyz")
+    b = sim.block.copy()
+    ctrl = np.flatnonzero(b.points.role == 1)
+    inner = ctrl[len(ctrl) // 2 :]  # make half of the control height-only
+    b.points.xyz_known[inner, :2] = np.nan
+    res = bundle_adjust(b, precision=False)
+    pts = res["points"].reshape(-1, 3)
+    # heights stay at the given value (σ 1e-6 m pseudo-observation), X/Y are estimated
+    np.testing.assert_allclose(pts[inner, 2], b.points.xyz_known[inner, 2], atol=1e-5)
+    assert np.abs(pts[inner, :2] - sim.truth.points.xyz[inner, :2]).max() < 0.5

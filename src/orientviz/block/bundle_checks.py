@@ -150,7 +150,9 @@ def datum_defect(block: Block, setup: PointSetup) -> tuple[int, str]:
     ctrl_plan = np.isfinite(known[:, 0]) & np.isfinite(known[:, 1])
     ctrl_h = np.isfinite(known[:, 2])
     xy = [known[ctrl_plan, :2]]
-    hxy = [known[ctrl_h, :2]]
+    # height points without given X, Y: their approximate position decides collinearity
+    hpos = np.where(np.isfinite(known[:, :2]), known[:, :2], block.points.xyz[:, :2])
+    hxy = [hpos[ctrl_h & np.isfinite(hpos).all(axis=1)]]
     img = block.images
     s = img.X0_sigma
     ok = np.isfinite(img.X0_obs) & np.isfinite(s) & (s >= 0)
