@@ -127,3 +127,34 @@ def test_points_in_no_model_stay_nan():
     res = independent_models(b)
     assert np.all(np.isnan(res.extra["xyz"][p]))
     assert np.sum(np.isnan(res.extra["xyz"][:, 0])) == 1
+
+
+def test_noise_free_bundle_and_models_both_give_the_truth():
+    from orientviz.block.bundle import bundle_adjust
+
+    s = noise_free(2, 6)
+    b = bundle_adjust(s.block, precision=False)
+    xb = b.x[b.blocks["points"]].reshape(-1, 3)
+    np.testing.assert_allclose(xb, s.truth.points.xyz, atol=1e-5)
+    m = independent_models(s.block)
+    np.testing.assert_allclose(m.extra["xyz"], xb, atol=1e-5)
+
+
+def test_bundle_and_models_agree_within_their_precision():
+    from orientviz.block.bundle import bundle_adjust
+
+    s = simulate_block(3, 8, rng=np.random.default_rng(7), extra=None, control="chains")
+    b = bundle_adjust(s.block)
+    m = independent_models(s.block, precision=True)
+    tp = m.extra["point_index"]
+    xb = b.x[b.blocks["points"]].reshape(-1, 3)[tp]
+    qb = np.einsum("nii->ni", b.cofactor_blocks["points"])[tp] * b.sigma0**2
+    qm = np.einsum("nii->ni", m.cofactor_blocks["points"][: tp.size]) * m.sigma0**2
+    d = xb - m.extra["xyz"][tp]
+    free = s.block.points.role[tp] == TIE
+    # the two estimates use the same images, so their difference is smaller than the
+    # independent-errors bound 3·sqrt(σ_b² + σ_m²); no point may exceed that bound
+    z = np.abs(d[free]) / np.sqrt(qb[free] + qm[free])
+    assert np.all(z < 3.0), z.max(axis=0)
+    # and the bundle is the more precise method (Ackermann §21: in theory)
+    assert np.mean(qb[free]) < np.mean(qm[free])
