@@ -81,7 +81,7 @@ def test_figures(tmp_path):
     before = np.array(q.V).copy()
     pr.update_parallax_field(ax, vp.one_pass())
     assert not np.allclose(before, q.V)
-    assert "rms" in ax._orientviz_parallax["info"].get_text()
+    assert "rms" in ax._orientviz_parallax["info"].get_text() and "µm" in ax.get_title()
     # the blitted redraw changes the arrows too
     pr.blit_parallax_field(ax, vp.one_pass())
     assert ax._orientviz_parallax["quiver"].get_animated()

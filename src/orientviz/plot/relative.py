@@ -85,7 +85,8 @@ def plot_parallax_field(view, ax=None, *, exaggeration: float | None = None):
     ax.set_ylim(-1.25 * d, 1.25 * d)
     info = ax.text(0.01, 0.99, "", transform=ax.transAxes, va="top", fontsize=8)
     ax.set_title(
-        "y-parallax p_y (red +, blue −) and the readings at the scheme points", fontsize=10
+        "y-parallax p_y (red +, blue −; arrows exaggerated ×N), readings and rms in µm",
+        fontsize=10,
     )
     ax._orientviz_parallax = {
         "quiver": q, "points": pts, "labels": labels, "info": info, "fixed": exaggeration,
@@ -107,7 +108,7 @@ def update_parallax_field(ax, view) -> None:
         lab.set_text(f"{val * 1000:+.0f}")
     q = a["quiver"]
     q.set_offsets(np.column_stack([view.X.ravel(), view.Y.ravel()]))
-    a["info"].set_text(f"readings in µm; arrows ×{ex:g}; rms {view.rms * 1000:.0f} µm")
+    a["info"].set_text(f"×{ex:g} · rms {view.rms * 1000:.0f}")  # few glyphs: fast redraw
 
 
 def blit_parallax_field(ax, view) -> None:
