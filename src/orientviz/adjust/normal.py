@@ -83,7 +83,7 @@ def inv3(A: F64) -> F64:
     return out
 
 
-def geometric_orderings(X0: F64) -> list[I64]:
+def geometric_orderings(X0: F64, pairs: tuple[I64, I64] | None = None) -> list[I64]:
     """Candidate image orders from projection centres (m, 3) in m: numbering across strips.
 
     Ackermann's rule for a narrow band: number the images along the *shorter* way
@@ -93,15 +93,24 @@ def geometric_orderings(X0: F64) -> list[I64]:
     nearest-neighbour distance), and numbered column by column, sorted along the other
     axis inside a column. Both axes are returned.
     """
-    from scipy.spatial import cKDTree
-
     xy = np.asarray(X0, dtype=float)[:, :2]
     if xy.shape[0] < 3:
         return []
     c = xy - xy.mean(axis=0)
     _, _, Vt = np.linalg.svd(c, full_matrices=False)
-    d, _ = cKDTree(xy).query(xy, k=2)
-    base = float(np.median(d[:, 1]))
+    if pairs is not None:  # nearest neighbour among the images sharing points
+        i, k = pairs
+        off = i != k
+        dist = np.hypot(*(xy[i[off]] - xy[k[off]]).T)
+        nn = np.full(xy.shape[0], np.inf)
+        np.minimum.at(nn, i[off], dist)
+        np.minimum.at(nn, k[off], dist)
+        base = float(np.median(nn[np.isfinite(nn)])) if np.isfinite(nn).any() else 0.0
+    else:
+        from scipy.spatial import cKDTree
+
+        d, _ = cKDTree(xy).query(xy, k=2)
+        base = float(np.median(d[:, 1]))
     if not base > 0:
         return []
     out = []
@@ -143,6 +152,8 @@ class ReducedStructure:
     orderings : list of ndarray
         Candidate image orders for ``"banded"`` (e.g. from :func:`geometric_orderings`);
         the one with the smallest bandwidth among these and reverse Cuthill-McKee wins.
+    positions : ndarray, shape (m, 3), optional
+        Projection centres (m): adds the two :func:`geometric_orderings` as candidates.
     """
 
     obs_cam: I64
@@ -152,6 +163,7 @@ class ReducedStructure:
     solver: str = "banded"
     permc_spec: str = "MMD_AT_PLUS_A"
     orderings: list = field(default_factory=list)
+    positions: F64 | None = None
     info: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -217,6 +229,10 @@ class ReducedStructure:
     def _setup_solver(self) -> None:
         m, n = self.n_cam, 6 * self.n_cam
         if self.solver == "banded":
+            if self.positions is not None:
+                self.orderings = list(self.orderings) + geometric_orderings(
+                    self.positions, (self.block_i, self.block_k)
+                )
             rcm = reverse_cuthill_mckee(self.image_graph(), symmetric_mode=True)
             best = None
             for name, perm in [("rcm", rcm)] + [

@@ -34,9 +34,12 @@ from ..model import CHECK, CONTROL, Block
 from ..rotation import matrix_from_opk, opk_from_matrix
 
 F64 = NDArray[np.float64]
-#: The oriented part is re-adjusted (model-frame bundle) at the latest after this many
-#: new images, and after every 25 % of growth.
-REFINE_EVERY: int = 48
+#: The oriented part is re-adjusted (model-frame bundle) after every 25 % of growth, at
+#: the latest after this many new images.
+REFINE_EVERY: int = 100
+#: A resection whose σ̂0 exceeds this (image residuals ≫ their a-priori σ) triggers an
+#: immediate re-adjustment of the oriented part.
+POOR_RESECTION: float = 5.0
 
 
 def intersect_rays(X0: F64, d: F64, point: NDArray[np.int64], n_points: int) -> tuple[F64, F64]:
@@ -63,10 +66,10 @@ def intersect_rays(X0: F64, d: F64, point: NDArray[np.int64], n_points: int) -> 
     """
     u = d / np.linalg.norm(d, axis=1, keepdims=True)
     P = np.eye(3)[None] - u[:, :, None] * u[:, None, :]
-    A = np.zeros((n_points, 3, 3))
-    b = np.zeros((n_points, 3))
-    np.add.at(A, point, P)
-    np.add.at(b, point, np.einsum("nij,nj->ni", P, X0))
+    PX = np.einsum("nij,nj->ni", P, X0)
+    A = np.stack([np.bincount(point, P[:, i, j], n_points) for i in range(3) for j in range(3)], 1)
+    A = A.reshape(n_points, 3, 3)
+    b = np.stack([np.bincount(point, PX[:, i], n_points) for i in range(3)], 1)
     ev = np.linalg.eigvalsh(A)
     cond = ev[:, 0] / np.maximum(ev[:, 2], 1e-300)
     X = np.full((n_points, 3), np.nan)
@@ -135,12 +138,18 @@ def approximate_values(block: Block, *, min_points: int = 6) -> Block:
     done[[i, k]] = True
     P = np.full((p, 3), np.nan)
 
-    def intersect():
+    def intersect(image=None):
+        # (re-)intersect the points of ``image`` (all points if None) from oriented rays
         sel = done[oi]
+        if image is not None:
+            mark = np.zeros(p, bool)
+            mark[op[oi == image]] = True
+            sel &= mark[op]
+        pts, local = np.unique(op[sel], return_inverse=True)
         d = np.einsum("nij,nj->ni", Rm[oi[sel]], np.column_stack([xyc[sel], -c[oi[sel]]]))
-        X, cond = intersect_rays(Xm[oi[sel]], d, op[sel], p)
+        X, cond = intersect_rays(Xm[oi[sel]], d, local, pts.size)
         good = np.isfinite(X).all(axis=1) & (cond > 1e-6)
-        P[good] = X[good]
+        P[pts[good]] = X[good]
 
     intersect()
     anchor = (i, k)
@@ -199,7 +208,9 @@ def approximate_values(block: Block, *, min_points: int = 6) -> Block:
         Rm[nxt] = res.extra["R"]
         Xm[nxt] = res.x[:3]
         done[nxt] = True
-        intersect()
+        intersect(nxt)
+        if res.sigma0 > POOR_RESECTION:  # the chain starts to deteriorate: adjust now
+            refine()
     refine()
     # ---- datum: similarity from the model frame onto the full-XYZ control points
     ctrl = np.flatnonzero(

@@ -36,7 +36,6 @@ from ..adjust.normal import (
     ReducedStructure,
     assemble_blocks,
     factor_reduced,
-    geometric_orderings,
     inv3,
 )
 from ..adjust.result import Adjustment, Iteration
@@ -100,9 +99,13 @@ class BundleProblem:
         self.oi, self.opt = self.oi[order], self.opt[order]
         self.l, self.sw = self.l[order], self.sw[order]
         self.ocol = col[order]
-        orders = geometric_orderings(img.X0) if solver == "banded" else []
         self.struct = ReducedStructure(
-            self.oi, self.ocol, m, self.var_pts.size, solver=solver, orderings=orders
+            self.oi,
+            self.ocol,
+            m,
+            self.var_pts.size,
+            solver=solver,
+            positions=img.X0 if solver == "banded" else None,
         )
         nv = int(np.sum(self.ocol >= 0))
         pv = self.struct.pt_obs
