@@ -124,7 +124,9 @@ def test_columnar_place_is_named_in_columnar_form():
     assert err.where == "observations.point[7]"
 
 
-@pytest.mark.parametrize("token", ["NaN", "Infinity", "-Infinity", "1e999"])
+@pytest.mark.parametrize(
+    "token", ["NaN", "Infinity", "-Infinity", "1e999", "1" + "0" * 400, "9" * 5000]
+)
 def test_non_finite_numbers_are_rejected(token):
     text = json.dumps(_doc())
     marker = '"x": '

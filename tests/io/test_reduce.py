@@ -81,13 +81,17 @@ def test_same_verdict_as_full_validation(form, data):
 
 def test_shipped_schemas_follow_the_reduction_rules():
     """No keyword on long arrays that the reduction cannot honour (see reduce.py)."""
-    forbidden = {"maxItems", "uniqueItems", "contains", "prefixItems", "dependentRequired"}
+    forbidden = {"maxItems", "contains", "prefixItems", "dependentRequired"}
+    scalar = {"string", "number", "integer", "boolean", "null"}
 
     def walk(node, where):
         if isinstance(node, dict):
             if node.get("type") == "array" and "items" in node and "maxItems" not in node:
                 # a table or column: may be long
                 assert not (forbidden & set(node)), (where, forbidden & set(node))
+                if node.get("uniqueItems"):  # kept exact for arrays of scalars only
+                    items = node["items"]
+                    assert "enum" in items or items.get("type") in scalar, where
                 assert node.get("minItems", 0) <= 1, where
             if "enum" in node:
                 assert len(node["enum"]) < 16, where
@@ -97,11 +101,31 @@ def test_shipped_schemas_follow_the_reduction_rules():
             for i, v in enumerate(node):
                 walk(v, f"{where}/{i}")
 
-    for name in ("envelope", "common", "frame", "block", "resection", "intersection",
-                 "similarity"):  # fmt: skip
-        walk(load_schema(f"{name}.json"), name)
+    from importlib import resources
+
+    folder = resources.files("orientviz.io").joinpath("schema")
+    names = sorted(f.name for f in folder.iterdir() if f.name.endswith(".json"))
+    assert {"envelope.json", "block.json", "similarity.json"} <= set(names)
+    for name in names:  # every kind's schema, also those added by other modules
+        walk(load_schema(name), name)
 
 
 @pytest.mark.parametrize("form", ["readable", "columnar"])
 def test_valid_big_document_passes(form):
     validate(_big_docs()[form], "block.json", "big.json")
+
+
+def test_unique_items_keep_their_verdict_on_arrays_of_scalars():
+    from jsonschema import Draft202012Validator
+
+    unique = Draft202012Validator({"type": "array", "uniqueItems": True})
+    cases = [
+        ["c"] * 70 + [1, 1.0],  # duplicates
+        [f"p{i}" for i in range(100)],  # all different
+        [True] + list(range(1, 80)),  # True and 1 differ in JSON
+        list(range(80)) + [5.0],  # 5 and 5.0 are equal in JSON
+    ]
+    for items in cases:
+        reduced, _ = reduce_document(items)
+        assert len(reduced) < len(items)
+        assert unique.is_valid(reduced) == unique.is_valid(items), items[:3]

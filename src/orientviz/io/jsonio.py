@@ -65,6 +65,14 @@ def _parse_float(text: str) -> float | _NonFinite:
     return value if math.isfinite(value) else _NonFinite(text)
 
 
+def _parse_int(text: str) -> int | _NonFinite:
+    """Integers beyond the float range (or too long to convert) are not usable numbers."""
+    if len(text) > 310:
+        return _NonFinite(text[:12] + "...")
+    value = int(text)
+    return value if abs(value) < 1e308 else _NonFinite(text[:12] + "...")
+
+
 def format_path(path: Iterable[str | int]) -> str:
     """Format a JSON path as ``observations[12].x`` (empty string for the document)."""
     out = ""
@@ -124,6 +132,7 @@ def parse_json(text: str, source: str) -> Any:
             text,
             parse_constant=_NonFinite,
             parse_float=_parse_float,
+            parse_int=_parse_int,
             object_pairs_hook=_pairs_hook,
         )
     except json.JSONDecodeError as exc:

@@ -14,11 +14,15 @@ kept item. :func:`reduce_document` keeps, per feature, the first item with the m
 extreme value; the reduced document is valid if and only if the original is. An error
 found in it is mapped back to the original index by :func:`original_path`.
 
+For arrays of scalars the first pair of equal items is kept as well, so ``uniqueItems``
+keeps its verdict there.
+
 Rules for schema authors (checked by ``tests/io/test_reduce.py`` on every shipped
-schema): on arrays longer than :data:`MIN_LENGTH` do not use ``maxItems``, ``minItems``
-above 1, ``uniqueItems``, ``contains``, ``prefixItems`` or ``enum`` with
-≥ :data:`DISTINCT` strings, and no keyword that relates two items or two fields of an
-item (``dependentRequired``, ``if`` on a value). Small arrays are never reduced.
+schema): on arrays that may be longer than :data:`MIN_LENGTH` do not use ``maxItems``,
+``minItems`` above 1, ``contains``, ``prefixItems``, ``uniqueItems`` on arrays of objects
+or arrays, ``enum`` with ≥ :data:`DISTINCT` strings, or any keyword that relates two
+items or two fields of an item (``dependentRequired``, ``if`` on a value). Small arrays
+are never reduced.
 """
 
 from __future__ import annotations
@@ -116,19 +120,46 @@ def _keep_rows(items: list) -> set[int]:
     return out
 
 
+def _first_duplicate(items: list) -> set[int]:
+    """Scalars only: the first pair of equal items in JSON's sense (1 == 1.0, True != 1).
+
+    Keeping such a pair makes ``uniqueItems`` judge the reduced array as the original.
+    """
+    seen: dict[tuple, int] = {}
+    for i, v in enumerate(items):
+        if isinstance(v, bool) or v is None:
+            key: tuple = ("lit", v)
+        elif isinstance(v, (int, float)):
+            key = ("num", float(v))
+        else:
+            key = ("str", v)
+        j = seen.setdefault(key, i)
+        if j != i:
+            return {j, i}
+    return set()
+
+
 def _keep(items: list) -> list[int]:
     """Indices of the items that show every feature of the array (sorted).
 
     Fast paths for columns of numbers or strings and for rows (objects) give the same
-    set of features as :func:`_keep_generic`, which handles everything else.
+    set of features as :func:`_keep_generic`, which handles everything else. For arrays
+    of scalars the first pair of equal items is kept too (for ``uniqueItems``).
     """
     types = set(map(type, items))
+    if types <= {int, float, str, bool, type(None)}:
+        return sorted(set(_keep_scalars(items, types)) | _first_duplicate(items))
+    if types == {dict}:
+        return sorted(_keep_rows(items))
+    return _keep_generic(items)
+
+
+def _keep_scalars(items: list, types: set) -> list[int]:
+    """Representatives of an array of scalars (see :func:`_keep`)."""
     if types <= {int, float}:
         return sorted(_keep_numbers(items))
     if types == {str}:
         return sorted(_keep_strings(items))
-    if types == {dict}:
-        return sorted(_keep_rows(items))
     if types <= {int, float, type(None)}:
         nums = [i for i, v in enumerate(items) if v is not None]
         out = {items.index(None)} | {nums[j] for j in _keep_numbers([items[i] for i in nums])}
