@@ -116,6 +116,8 @@ def independent_models(
         ``extra``: ``"xyz"`` (p, 3) adjusted coordinates of all block points (check
         points by transforming their model coordinates; NaN if in no model),
         ``"centres"`` (m, 3) projection centres, ``"sigma0_m"`` (σ̂0 in m),
+        ``"sigma0_planimetry"``/``"sigma0_height"`` (separate σ̂0 as in PAT-M, unit
+        weight; × ``sigma_model`` gives m),
         ``"rms_xy_m"``, ``"rms_z_m"``, ``"models"`` the ModelSet, ``"method"``.
 
     Raises
@@ -290,6 +292,28 @@ def _params(lam, R, T) -> F64:
     return np.column_stack([T, om, ph, ka, lam])
 
 
+def _separate_sigma0(su: TieSetup, r: F64, w_c: F64) -> tuple[float, float]:
+    """σ̂0 of planimetry and of height as PAT-M reports them (separate redundancies).
+
+    Planimetry: the X, Y residuals of the ground points, redundancy 2·k − 4·n − free X, Y;
+    height: the Z residuals of all rows and the X, Y residuals of the projection centres,
+    redundancy k + 2·k_c − 3·n − free Z − free X, Y of the centres. Unit weight.
+    """
+    pc = su.row_point >= su.tie_points.size
+    g = ~pc
+    n = su.n_models
+    free = su.scalar >= 0
+    n_tie = su.tie_points.size
+    rl = 2 * int(g.sum()) - 4 * n - int(free[:n_tie, :2].sum())
+    rh = (
+        r.shape[0] + 2 * int(pc.sum()) - 3 * n - int(free[:, 2].sum()) - int(free[n_tie:, :2].sum())
+    )
+    vl = float(np.sum(r[g, :2] ** 2 * w_c[:2]))
+    vh = float(np.sum(r[:, 2] ** 2 * w_c[2]) + np.sum(r[pc, :2] ** 2 * w_c[:2]))
+    nan = float("nan")
+    return (math.sqrt(vl / rl) if rl > 0 else nan), (math.sqrt(vh / rh) if rh > 0 else nan)
+
+
 def _result(block, ms, su, lam, R, T, w_c, method, converged, reason, sol, history, precision):
     r, _ = _rows3(su, lam, R, T)
     cost = float(np.sum(r**2 * w_c) + np.sum(su.prior_w * su.prior_e() ** 2))
@@ -306,7 +330,9 @@ def _result(block, ms, su, lam, R, T, w_c, method, converged, reason, sol, histo
         history=history, blocks={"models": slice(0, n7), "points": slice(n7, x.size)},
     )  # fmt: skip
     xyz, centres = su.block_coordinates(block, ms, lam, R, T)
+    s0_l, s0_h = _separate_sigma0(su, r, w_c)
     res.extra.update(
+        sigma0_planimetry=s0_l, sigma0_height=s0_h,
         method=method, models=ms, xyz=xyz, centres=centres, point_index=su.tie_points,
         centre_image=su.centre_images, sigma0_m=s0 * math.sqrt(1.0 / w_c[0]),
         rms_xy_m=float(np.sqrt(np.mean(r[:, :2] ** 2))), rms_z_m=float(np.sqrt(np.mean(r[:, 2] ** 2))),
