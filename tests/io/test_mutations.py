@@ -22,7 +22,7 @@ TEXTS = {n: dataset_path(n).read_text(encoding="utf-8") for n in NAMES}
 
 REPLACEMENTS = [
     None, True, 0, -1, 1e308, -0.0, "NaN", "", "x", [], {}, [1.0], [None, None, None],
-    {"id": "p"}, 3.5, "tie", "control",
+    {"id": "p"}, 3.5, "tie", "control", 10**400, -1e308, "9" * 20, [[[[]]]],
 ]  # fmt: skip
 
 
