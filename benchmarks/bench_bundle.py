@@ -114,6 +114,7 @@ def worker(npz: str, reps: int, precision: bool, solver: str) -> dict:
         solver="orientviz" + ("+prec" if precision else ""),
         wall_s=min(walls),
         wall_med_s=statistics.median(walls),
+        cpu_s=min(cpus),
         iters=res.iterations,
         reps=reps,
         sigma0_orientviz=res.sigma0,
