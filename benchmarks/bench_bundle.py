@@ -64,7 +64,7 @@ def ensure_data(size: str) -> Path:
 
 
 # --------------------------------------------------------------------------- orientviz worker
-def worker(npz: str, reps: int, precision: bool, solver: str) -> dict:
+def worker(npz: str, reps: int, precision: bool, solver: str, control: str = "fixed") -> dict:
     from bench_blocks import load_bench_block
 
     from orientviz.block.bundle import bundle_adjust
@@ -72,8 +72,8 @@ def worker(npz: str, reps: int, precision: bool, solver: str) -> dict:
     from orientviz.rotation import matrix_from_opk, rotvec_from_matrix
 
     rp = _bench_module("run_peers")
-    P = rp.Problem(npz, control="fixed")
-    block, _ = load_bench_block(npz)
+    P = rp.Problem(npz, control=control)
+    block, _ = load_bench_block(npz, control=control)
     arrays = dict(  # the in-memory arrays a user would hold
         camera_c=block.cameras.c,
         camera_format_mm=block.cameras.format_mm[0],
@@ -93,7 +93,7 @@ def worker(npz: str, reps: int, precision: bool, solver: str) -> dict:
     for _ in range(reps):
         t0, c0 = time.perf_counter(), time.process_time()
         b = Block.from_arrays(**arrays)
-        res = bundle_adjust(b, precision=precision, solver=solver)
+        res = bundle_adjust(b, control=control, precision=precision, solver=solver)
         walls.append(time.perf_counter() - t0)
         cpus.append(time.process_time() - c0)
     m = block.n_images
@@ -125,11 +125,14 @@ def worker(npz: str, reps: int, precision: bool, solver: str) -> dict:
     return out
 
 
-def run_orientviz(npz: Path, reps: int, precision: bool, threads: int, solver: str) -> dict:
+def run_orientviz(
+    npz: Path, reps: int, precision: bool, threads: int, solver: str, control: str = "fixed"
+) -> dict:
     env = dict(os.environ)
     for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         env[k] = str(threads)
     cmd = [sys.executable, __file__, "--worker", str(npz), "--reps", str(reps), "--solver", solver]
+    cmd += ["--control", control]
     if precision:
         cmd.append("--precision")
     cp = subprocess.run(cmd, capture_output=True, text=True, env=env)
@@ -139,7 +142,7 @@ def run_orientviz(npz: Path, reps: int, precision: bool, threads: int, solver: s
     return json.loads(lines[-1][9:])
 
 
-def run_peers(npz: Path, peers: str, threads: int) -> list[dict]:
+def run_peers(npz: Path, peers: str, threads: int, control: str = "fixed") -> list[dict]:
     cmd = [
         sys.executable,
         str(BENCH / "run_peers.py"),
@@ -150,6 +153,8 @@ def run_peers(npz: Path, peers: str, threads: int) -> list[dict]:
         str(threads),
         "--json",
         "/tmp/orientviz_bench_peers.json",
+        "--control",
+        control,
     ]
     cp = subprocess.run(cmd, capture_output=True, text=True)
     try:
@@ -169,9 +174,11 @@ def fmt(v, nd=3):
 
 def table(size: str, rows: list[dict]) -> str:
     base = next((r for r in rows if r.get("solver") == "pycolmap" and r.get("wall_s")), None)
+    base = base or next((r for r in rows if r.get("solver") == "gtsam" and r.get("wall_s")), None)
+    peer = base["solver"] if base else "pycolmap"
     head = (
         f"{'solver':18s} {'wall_s':>8s} {'med_s':>8s} {'iters':>5s} {'sigma0':>8s} "
-        f"{'d_ref_mm':>9s} {'ground_m':>8s} {'peak_MB':>8s} {'/pycolmap':>9s}"
+        f"{'d_ref_mm':>9s} {'ground_m':>8s} {'peak_MB':>8s} {'/' + peer:>9s}"
     )
     lines = [f"## {size}", head, "-" * len(head)]
     for r in rows:
@@ -243,6 +250,7 @@ def main(argv=None) -> int:
     ap.add_argument("--ov-threads", type=int, default=1, help="BLAS threads for orientviz")
     ap.add_argument("--reps", type=int, default=5)
     ap.add_argument("--solver", default="banded")
+    ap.add_argument("--control", default="fixed", choices=["fixed", "weighted"])
     ap.add_argument("--reduced", action="store_true", help="compare solvers of S instead")
     ap.add_argument("--dense", action="store_true", help="include dense Cholesky in --reduced")
     ap.add_argument("--worker", help=argparse.SUPPRESS)
@@ -250,7 +258,8 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     if a.worker:
         print(
-            "@@RESULT " + json.dumps(worker(a.worker, a.reps, a.precision, a.solver), default=float)
+            "@@RESULT "
+            + json.dumps(worker(a.worker, a.reps, a.precision, a.solver, a.control), default=float)
         )
         return 0
     print(f"# {time.strftime('%Y-%m-%d %H:%M:%S')}  load average {os.getloadavg()}")
@@ -259,9 +268,11 @@ def main(argv=None) -> int:
             print(reduced_comparison(size, a.reps, a.dense or size != "large"), flush=True)
             continue
         npz = ensure_data(size)
-        rows = run_peers(npz, a.peers, a.threads) if a.peers else []
-        rows.append(run_orientviz(npz, a.reps, False, a.ov_threads, a.solver))
-        rows.append(run_orientviz(npz, max(1, a.reps // 2), True, a.ov_threads, a.solver))
+        rows = run_peers(npz, a.peers, a.threads, a.control) if a.peers else []
+        rows.append(run_orientviz(npz, a.reps, False, a.ov_threads, a.solver, a.control))
+        rows.append(
+            run_orientviz(npz, max(1, a.reps // 2), True, a.ov_threads, a.solver, a.control)
+        )
         print(table(size, rows), flush=True)
         print(f"# orientviz reduced system: {rows[-2].get('reduced')}", flush=True)
         print(
