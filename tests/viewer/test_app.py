@@ -172,3 +172,19 @@ def test_non_block_file_is_reported(tmp_path):
         assert len(a.messages) == 1 and "'similarity' problem" in a.messages[0]
     finally:
         a.stop()
+
+
+def test_result_without_per_iteration_parameters_still_replays(block):
+    from dataclasses import replace
+
+    from orientviz.viewer.state import BlockState
+
+    noisy = block.copy()
+    noisy.images.X0 += 2.0
+    res = small_bundle(noisy)
+    res.history = [replace(it, x=np.zeros(0)) for it in res.history]  # as large bundles do
+    st = BlockState(noisy, res, adjuster=small_bundle)
+    assert [s.label for s in st.history] == ["start", "adjusted"]
+    np.testing.assert_allclose(st.block.images.X0, res["exterior"].reshape(-1, 6)[:, :3])
+    st.replay(0)
+    np.testing.assert_allclose(st.block.images.X0, noisy.images.X0)

@@ -77,10 +77,13 @@ class BlockState:
         """Adopt ``result`` (computed from ``start``) and append its iterations to the history."""
         self.result = result
         del self.history[self.cursor + 1 :]
-        for it in result.history[1:]:
+        kept = [it for it in result.history[1:] if np.size(it.x) == np.size(result.x)]
+        for it in kept:
             self.block = apply_parameters(start, result, it.x)
             self.history.append(self._snap(f"iteration {len(self.history)}", it.sigma0))
         self.block = apply_parameters(start, result)
+        if len(kept) < len(result.history) - 1:  # the solver kept no parameters per iteration
+            self.history.append(self._snap("adjusted", result.sigma0))
         self.cursor = len(self.history) - 1
         self._at_result = True
 
