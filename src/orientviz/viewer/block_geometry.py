@@ -40,7 +40,7 @@ COLORS: dict[str, tuple[int, int, int]] = {
 #: Point-cloud node name per role.
 ROLE_NODES = {TIE: "tie", CONTROL: "control", CHECK: "check"}
 
-#: |w| (or |v|/σ) at which the residual colour ramp saturates (red).
+#: ``|w|`` (or ``|v|/σ``) at which the residual colour ramp saturates (red).
 SCORE_RED: float = 4.0
 
 

@@ -34,7 +34,7 @@ MODES = ("reference → current estimate", "without → with self-calibration")
 
 
 def auto_scale(*displacements: F64, spacing: float) -> float:
-    """Exaggeration drawing the larger median |displacement| as half of ``spacing`` (1 if none)."""
+    """Exaggeration drawing the larger median displacement length as half of ``spacing`` (1 if none)."""
     meds = []
     for d in displacements:
         n = np.linalg.norm(np.asarray(d, dtype=float), axis=1)

@@ -242,7 +242,7 @@ class PairView:
             self._syncing = False
 
     def auto_k(self, parallax: F64) -> float:
-        """Exaggeration drawing the 90th percentile of |p_y| as 0.8 of a grid spacing.
+        """Exaggeration drawing the 90th percentile of ``|p_y|`` as 0.8 of a grid spacing.
 
         Kept within [1, 10⁵] so that a parallax-free model (rounding noise) shows no arrows.
         """

@@ -19,7 +19,7 @@ def ramp(values: ArrayLike, vmax: float, stops: ArrayLike | None = None) -> NDAr
     Parameters
     ----------
     values : array_like, shape (n,)
-        Non-negative values, e.g. |normalised residual|; NaN is drawn grey.
+        Non-negative values, e.g. the size of a normalised residual; NaN is drawn grey.
     vmax : float
         Value that maps to the last stop; larger values saturate.
     stops : array_like, shape (k, 3), optional

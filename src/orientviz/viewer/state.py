@@ -143,9 +143,9 @@ class BlockState:
     def scores(self, misclosure: F64 | None = None) -> tuple[F64, str]:
         """Per-observation size of the residual and what it is.
 
-        At the adjusted state with normalised residuals available: max(|w_x|, |w_y|),
+        At the adjusted state with normalised residuals available: max(``|w_x|``, ``|w_y|``),
         Baarda's w. Otherwise the misclosure in units of its a-priori σ,
-        max(|e_x|/σ_x, |e_y|/σ_y).
+        ``max(|e_x|/σ_x, |e_y|/σ_y)``.
 
         Returns
         -------
