@@ -11,7 +11,7 @@ from orientviz.viewer.adjuster import small_bundle
 from orientviz.viewer.app import ViewerApp
 from orientviz.viewer.demos import demo_from_block
 
-pytestmark = pytest.mark.browser
+pytestmark = [pytest.mark.browser, pytest.mark.slow]  # about 10 s and 6 s with software WebGL
 
 SHOT = "/tmp/orientviz_viewer_browser.png"
 
