@@ -79,6 +79,8 @@ def test_viewer_renders_and_slider_updates_python(browser_page, block):
         page.get_by_role("button", name="one iteration").click()
         assert wait_for(lambda: len(st.history) == 2, timeout=30), "no iteration after the click"
         assert wait_for(lambda: app.panel.handles["iteration"].max == 1)
+        with app.panel._lock:  # let the button's callback finish before the server stops
+            pass
     finally:
         app.stop()
 
