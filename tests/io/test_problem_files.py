@@ -176,3 +176,16 @@ def test_writing_into_a_missing_folder_is_an_input_error(tmp_path):
     assert str(tmp_path / "no" / "such" / "out.json") in str(info.value)
     with pytest.raises(InputError, match="is a directory"):
         save_problem(p, tmp_path)
+
+
+def test_height_only_control_point():
+    """A control point with X, Y null is a height point: X, Y not given, Z fixed (σ 0)."""
+    doc = _doc("block_compact")
+    i = doc["points"]["role"].index("control")
+    doc["points"]["X"][i] = doc["points"]["Y"][i] = None
+    p = loads_problem(json.dumps(doc), "height.json")
+    pts = p.data.points
+    assert np.all(np.isnan(pts.xyz_known[i, :2])) and np.isfinite(pts.xyz_known[i, 2])
+    assert np.all(np.isnan(pts.sigma[i, :2])) and pts.sigma[i, 2] == 0.0
+    again = json.loads(dumps_problem(p))
+    assert again["points"]["X"][i] is None and again["points"]["Z"][i] == doc["points"]["Z"][i]
