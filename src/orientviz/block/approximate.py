@@ -49,7 +49,7 @@ POOR_RESECTION: float = 5.0
 def intersect_rays(X0: F64, d: F64, point: NDArray[np.int64], n_points: int) -> tuple[F64, F64]:
     """Linear least-squares intersection of rays (vectorised over points).
 
-    Minimises Σ |(I − d dᵀ)(X − X0)|² per point (d unit ray directions).
+    Minimises Σ ‖(I − d dᵀ)(X − X0)‖² per point (d unit ray directions).
 
     Parameters
     ----------

@@ -328,7 +328,7 @@ def bundle_adjust(
     max_iter : int
         Maximum number of Gauss-Newton steps.
     tol : float
-        Stop when every |correction| < tol · (a-priori conditional σ = 1/√N_ii). The
+        Stop when every ‖correction‖ < tol · (a-priori conditional σ = 1/√N_ii). The
         conditional σ is much smaller than the real one in a block, so the rule is
         strict: with 5e-3 the bench blocks stop within 0.001 mm of the optimum.
     additional : AdditionalParameters, optional
