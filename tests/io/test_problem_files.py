@@ -189,3 +189,16 @@ def test_height_only_control_point():
     assert np.all(np.isnan(pts.sigma[i, :2])) and pts.sigma[i, 2] == 0.0
     again = json.loads(dumps_problem(p))
     assert again["points"]["X"][i] is None and again["points"]["Z"][i] == doc["points"]["Z"][i]
+
+
+@pytest.mark.parametrize("angle", ["rad", "deg", "gon", "c", "cc"])
+@pytest.mark.parametrize("length,image", [("m", "mm"), ("mm", "um")])
+def test_every_unit_round_trips(angle, length, image):
+    b = load_dataset("block_strip").data
+    p = problem_from_block(b, units=Units(length=length, angle=angle, image=image))
+    back = loads_problem(dumps_problem(p), "u.json").data
+    # one multiplication and one division by the unit factor, 15 written digits: ≤ 1e-14
+    np.testing.assert_allclose(back.images.angles, b.images.angles, rtol=1e-14, atol=1e-18)
+    np.testing.assert_allclose(back.images.X0, b.images.X0, rtol=1e-14)
+    np.testing.assert_allclose(back.observations.sigma, b.observations.sigma, rtol=1e-14)
+    np.testing.assert_array_equal(back.points.role, b.points.role)
