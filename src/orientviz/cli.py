@@ -41,6 +41,13 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("file", help="problem file, or the name of a shipped example")
     s.add_argument("--method", choices=["bundle", "models", "polynomial"], default=None)
     s.add_argument("--json", action="store_true", help="print the result as JSON")
+    s.add_argument(
+        "-o",
+        "--output",
+        metavar="OUT.json",
+        default=None,
+        help="also write the problem with the adjusted values as start values (frame kinds)",
+    )
 
     v = sub.add_parser(
         "view",

@@ -268,3 +268,34 @@ def test_unknown_name_lists_the_examples(capsys):
     code = main(["solve", "blok_strip"])
     _, err = capsys.readouterr()
     assert code == 2 and "no shipped example of that name" in err and "block_strip" in err
+
+
+def test_output_writes_the_adjusted_problem(capsys, tmp_path):
+    out = tmp_path / "adjusted.json"
+    code = main(["solve", "block_strip", "-o", str(out)])
+    capsys.readouterr()
+    assert code == 0
+    before = load_dataset("block_strip").data
+    after = load_problem_file(out).data
+    # the observations are unchanged; the start values are now the adjusted ones
+    np.testing.assert_array_equal(after.observations.xy, before.observations.xy)
+    assert not np.allclose(after.images.X0, before.images.X0, atol=1e-3)
+    code, again, _ = _solve_json(capsys, str(out))
+    assert code == 0
+    # started at the optimum, the bundle stops after its first step with the same σ0
+    _, first, _ = _solve_json(capsys, "block_strip")
+    assert again["sigma0"] == pytest.approx(first["sigma0"], rel=1e-4)
+    assert again["iterations"] <= 2
+
+
+def test_output_refused_for_a_similarity(capsys, tmp_path):
+    code = main(["solve", "similarity_example", "-o", str(tmp_path / "x.json")])
+    _, err = capsys.readouterr()
+    assert code == 2 and "--output writes block" in err
+    assert not (tmp_path / "x.json").exists()
+
+
+def load_problem_file(path):
+    from orientviz.io.problem import load_problem
+
+    return load_problem(path)

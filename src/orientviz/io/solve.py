@@ -16,7 +16,7 @@ import sys
 import numpy as np
 
 from ..errors import AdjustmentError, InputError
-from .problem import Problem, load_problem
+from .problem import Problem, load_problem, save_problem
 from .registry import get_kind
 from .report import Solution
 
@@ -86,6 +86,12 @@ def run_from_cli(args: argparse.Namespace) -> int:
     except MemoryError:
         print(f"{prog}: {args.file}: the problem is too large for this machine", file=sys.stderr)
         return 2
+    if getattr(args, "output", None) and solution.adjustment.converged:
+        try:
+            save_problem(adjusted_problem(problem, solution), args.output)
+        except InputError as exc:
+            print(f"{prog}: {exc.one_line()}", file=sys.stderr)
+            return 2
     _print(text)
     if not solution.adjustment.converged:
         print(
@@ -94,6 +100,40 @@ def run_from_cli(args: argparse.Namespace) -> int:
         )
         return 3
     return 0
+
+
+def adjusted_problem(problem: Problem, solution: Solution) -> Problem:
+    """The problem with the adjusted orientations and points as its values (frame kinds).
+
+    Images take the adjusted X0 and ω, φ, κ where they were estimated, tie points their
+    adjusted coordinates; control and check coordinates and all observations stay as
+    given. Raises :class:`InputError` for kinds without images and points (similarity).
+    """
+    from ..model import TIE, Block
+
+    if not isinstance(problem.data, Block):
+        raise InputError(
+            f"--output writes block, resection and intersection problems, not {problem.kind!r}",
+            problem.source,
+        )
+    block = problem.data.copy()
+    im = {k: i for i, k in enumerate(block.images.ids)}
+    for k, ident in enumerate(solution.image_ids):
+        i = im[ident]
+        if np.all(np.isfinite(solution.X0[k])):
+            block.images.X0[i] = solution.X0[k]
+        if np.all(np.isfinite(solution.angles[k])):
+            block.images.angles[i] = solution.angles[k]
+    pt = {k: i for i, k in enumerate(block.points.ids)}
+    for k, ident in enumerate(solution.point_ids):
+        i = pt[ident]
+        if block.points.role[i] == TIE and np.all(np.isfinite(solution.xyz[k])):
+            block.points.xyz[i] = solution.xyz[k]
+    out = Problem(**{**problem.__dict__, "data": block})
+    out.description = (problem.description + " " if problem.description else "") + (
+        f"[start values adjusted by orientviz solve ({solution.method})]"
+    )
+    return out
 
 
 def _resolve(name: str) -> str:
