@@ -117,7 +117,7 @@ def plot_block_layout(obj, *, ax=None, show_footprints: bool = True, show_models
 
 
 def plot_error_vectors(xyz, reference, *, ax=None, exaggeration: float | None = None,
-                       control=None, title: str | None = None):  # fmt: skip
+                       control=None, zlim: float | None = None, title: str | None = None):  # fmt: skip
     """Planimetric error vectors (arrows) and height errors (colour) of points.
 
     Parameters
@@ -130,6 +130,9 @@ def plot_error_vectors(xyz, reference, *, ax=None, exaggeration: float | None = 
         Arrow exaggeration (default: the largest arrow is 1/15 of the block width).
     control : array_like of bool, shape (p,), optional
         Points drawn as control (squares) instead of arrows.
+    zlim : float, optional
+        Colour range ±zlim (m) of the height errors (default: the largest); give the same
+        ``zlim`` and ``exaggeration`` to compare figures side by side.
     title : str, optional
 
     Returns
@@ -145,7 +148,7 @@ def plot_error_vectors(xyz, reference, *, ax=None, exaggeration: float | None = 
     width = float(np.ptp(ref[ok, 0])) or 1.0
     big = max(float(np.max(np.hypot(d[sel, 0], d[sel, 1]), initial=0.0)), 1e-12)
     ex = exaggeration if exaggeration is not None else width / 15.0 / big
-    lim = float(np.max(np.abs(d[sel, 2]), initial=1e-12))
+    lim = float(zlim) if zlim is not None else float(np.max(np.abs(d[sel, 2]), initial=1e-12))
     sc = ax.scatter(
         ref[sel, 0], ref[sel, 1], c=d[sel, 2], cmap="RdBu_r", vmin=-lim, vmax=lim, s=14, zorder=3
     )
