@@ -2,7 +2,12 @@
 
 Run: ``python benchmarks/bench_relative.py`` (prints a table; nothing is asserted).
 Peers in the same run: numpy least squares for the 9-point solve, OpenCV's
-findEssentialMat + recoverPose (if installed) for the 1 000-point pair.
+findEssentialMat + recoverPose (if installed) for the 1 000-point pair. Note on the
+comparison: OpenCV runs its robust five-point estimator (LMEDS, no outliers here) and
+returns the best minimal-sample solution without a final least-squares step, so its
+angles are less accurate than orientviz's all-point estimates; orientviz's routes are
+not robust to outliers. Ratios are orientviz time / peer time (< 1: orientviz faster).
+Timings depend on the load of the machine (2 shared cores): compare ratios, not ms.
 """
 
 from __future__ import annotations
