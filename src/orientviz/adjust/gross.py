@@ -516,6 +516,7 @@ def robust_adjust(
     max_iter: int = 30,
     tol: float = 1e-3,
     max_fraction: float = 0.2,
+    reinstate: bool = True,
 ) -> Cleaning:
     """Robust adjustment by iteratively reweighted least squares, then a clean final run.
 
@@ -533,6 +534,9 @@ def robust_adjust(
         Weight function and tuning constant (:func:`robust_weights`).
     max_iter, tol
         Limits of the reweighting loop.
+    reinstate : bool
+        After the final run, put back rejected groups whose predicted residual (from the
+        adjustment without the rejected ones) is below k σ, and adjust once more.
     """
     g, ng = _groups(n, groups)
     names = _labels(labels, ng)
@@ -583,6 +587,27 @@ def robust_adjust(
     adj = solve(final)
     count += 1
     _check_converged(adj, log, final, count)
+    if reinstate and bad.size:
+        # predicted residuals of the rejected groups from the clean adjustment: a group
+        # whose |v| / σ stays below k was only dragged along by a neighbouring blunder
+        # (|v|/σ ignores the σ of the prediction: conservative, reinstates fewer)
+        with np.errstate(invalid="ignore"):
+            a = np.abs(np.nan_to_num(adj.residuals / adj.sigma_obs, nan=np.inf))
+        p_g = np.zeros(ng)
+        np.maximum.at(p_g, g, a)
+        back = bad[p_g[bad] <= k]
+        if back.size:
+            for b in back:
+                final[g == b] = 1.0
+                log.append(
+                    LogEntry(int(b), names[b], float(p_g[b]), count, "reinstated",
+                             f"predicted |v|/σ = {p_g[b]:.2f} ≤ k without the gross errors")
+                )  # fmt: skip
+            bad = np.setdiff1d(bad, back, assume_unique=True)
+            bad = bad[np.argsort(-e_g[bad])]
+            adj = solve(final)
+            count += 1
+            _check_converged(adj, log, final, count)
     log.append(LogEntry(-1, "", 0.0, count, "stopped", "final adjustment without gross errors"))
     return Cleaning(adj, final, bad.astype(np.int64), log, count, f"robust ({method})")
 
