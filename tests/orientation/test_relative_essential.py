@@ -140,3 +140,23 @@ def test_route_with_the_five_point_solver():
     np.testing.assert_allclose(res.x, TRUE, atol=1e-10)
     with pytest.raises(InputError, match="solver"):
         es.essential_route(xy1, xy2, C, b=B, solver="seven")
+
+
+def test_large_rotations_in_the_plotter_sequence():
+    # 20-25 gon in φ-ω-κ: the essential matrix starts the rigorous model close enough
+    rng = np.random.default_rng(5)
+    n = 40
+    P = np.column_stack(
+        [
+            rng.uniform(-10, 100, n),
+            rng.uniform(-100, 100, n),
+            -C * (1 + 0.2 * rng.uniform(-1, 1, n)),
+        ]
+    )
+    e = np.array([10.0, -8.0, 0.3, -0.25, 0.4])
+    st = rel.PairState.from_elements(e, B, "dependent", "pok")
+    xy1 = project(P, np.zeros(3), np.eye(3), C)
+    xy2 = project(P, st.base, matrix_from_opk(*e[2:], sequence="pok"), C)
+    res = es.essential_route(xy1, xy2, C, b=B, sequence="pok")
+    assert res.converged and res.iterations <= 4
+    np.testing.assert_allclose(res.x, e, atol=1e-10)
