@@ -37,7 +37,9 @@ class PlotterConfig:
     image_base : float
         Base in the image, mm (about 92 at 60 % forward overlap).
     model_base : float
-        Model base b in machine mm (Kovarik's constant 220.7).
+        Model base b in machine mm (Kovarik's constant 220.7). Together with
+        ``image_base`` it sets the model scale and the projection distance
+        |Z| = model_base / image_base × c (366 mm by default; Kovarik: 350-400 mm).
     ordinate : float
         Image ordinate of the scheme's edge rows, mm; k = ordinate / c.
     relief : float
