@@ -11,7 +11,7 @@ Experiments:
 
 * relief: relative height differences of 6, 10 and 15 % (paper: 2-3, 4 and 5-6 passes,
   corrections shrinking about tenfold per pass), for the exact linearisation, Kovarik's
-  9-point formula and the flat-terrain formula;
+  9-point formula, the flat-terrain formula and the round-constant pre-orientation;
 * wrong ordinate: the 9-point constants computed for 152.7 mm instead of 100 mm (paper:
   about three times as many passes). "Ordinate" read two ways: as the edge rows' image
   ordinate (k = 152.7/152.7 instead of 100/152.7) and as the projection distance (k
@@ -91,7 +91,7 @@ def _fmt_passes(p: np.ndarray) -> str:
     return s
 
 
-def _fmt_corr(corr: list[np.ndarray], upto: int = 4) -> str:
+def _fmt_corr(corr: list[np.ndarray], upto: int = 6) -> str:
     m = max(len(c) for c in corr)
     out = []
     for i in range(min(m, upto)):
@@ -103,7 +103,7 @@ def _fmt_corr(corr: list[np.ndarray], upto: int = 4) -> str:
 def table(n_trials: int = 12, seed: int = 1968) -> list[Row]:
     """Rows of the relief, wrong-ordinate and pre-orientation experiments."""
     rows: list[Row] = []
-    for formula in ("kovarik9", "exact", "flat"):
+    for formula in ("kovarik9", "exact", "flat", "preorient"):
         for relief, paper in RELIEFS:
             r = run_experiment(formula, relief, n_trials=n_trials, seed=seed)
             case = f"relief {relief:.0%}, {formula}"
