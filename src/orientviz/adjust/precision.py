@@ -199,6 +199,10 @@ def bundle_precision(res, prob, st, rw, Je, Jp) -> None:
         Qpa_o = np.take_along_axis(Qpa, np.repeat(sl[vo][:, None, :], 3, 1), axis=2)
         h[vo] += 2 * np.einsum("nki,nij,nkj->nk", Jpw[vo], Qpa_o, Aw[vo])
     r_img = np.clip(1.0 - h, 0.0, 1.0)
+    r_xy = -_offdiag_xy(Jew, Jpw, vo, Qcc_diag[oi], Qpp[ocol[vo]], Qcp[vo])
+    if q:
+        r_xy -= _pair(Aw, Qaa_o, Aw) + _pair(Jew, Qca_o, Aw, sym=True)
+        r_xy[vo] -= _pair(Jpw[vo], Qpa_o, Aw[vo], sym=True)
     n = prob.block.n_observations
     rn = np.full((n, 2), np.nan)
     rn[prob.uobs] = r_img
@@ -230,3 +234,24 @@ def bundle_precision(res, prob, st, rw, Je, Jp) -> None:
     if q:
         res.cofactor_blocks["additional"] = Faa
     res.extra["redundancy_check"] = float(np.nansum(rall))
+    # off-diagonal (x, y) element of P½ Q_vv P½ per image observation: with the diagonal
+    # (the redundancy numbers) the 2×2 block of a ray for 2-D outlier tests
+    rxy = np.full(n, np.nan)
+    rxy[prob.uobs] = r_xy
+    res.extra["redundancy_xy"] = rxy
+
+
+def _pair(A: F64, Q: F64, B: F64, sym: bool = False) -> F64:
+    """Per row n: (A Q Bᵀ)_xy, or (A Q Bᵀ + B Qᵀ Aᵀ)_xy with ``sym``."""
+    out = np.einsum("ni,nij,nj->n", A[:, 0], Q, B[:, 1])
+    if sym:
+        out += np.einsum("ni,nij,nj->n", A[:, 1], Q, B[:, 0])
+    return out
+
+
+def _offdiag_xy(Jew, Jpw, vo, Qcc, Qpp, Qcp) -> F64:
+    """(J Q Jᵀ)_xy of every image observation (weighted Jacobians): orientation,
+    point and the cross terms."""
+    h = _pair(Jew, Qcc, Jew)
+    h[vo] += _pair(Jpw[vo], Qpp, Jpw[vo]) + _pair(Jew[vo], Qcp, Jpw[vo], sym=True)
+    return h
