@@ -43,37 +43,54 @@ F64 = NDArray[np.float64]
 DEFAULT_PIXEL_MM: float = 0.010
 
 
-def _numbers(lines: list[str], first: int, count: int, source: str, what: str) -> tuple[F64, int]:
-    """Parse ``count`` numbers from ``lines[first:]``; return them and the next line index."""
-    out: list[str] = []
-    i = first
-    while len(out) < count and i < len(lines):
-        out.extend(lines[i].split())
-        i += 1
-    if len(out) < count:
-        raise InputError(
-            f"expected {count} numbers for {what}, the file ends after {len(out)}",
-            source,
-            f"line {i}",
-        )
-    try:
-        arr = np.array(out[:count], dtype=float)
-    except ValueError:
-        k = next(j for j, t in enumerate(out[:count]) if not _is_float(t))
-        raise InputError(
-            f"expected a number in {what}, got {out[k]!r}",
-            source,
-            f"line {_line_of(lines, first, k)}",
-        ) from None
-    bad = np.flatnonzero(~np.isfinite(arr))
-    if bad.size:
-        k = int(bad[0])
-        raise InputError(
-            f"expected a finite number in {what}, got {out[k]!r}",
-            source,
-            f"line {_line_of(lines, first, k)}",
-        )
-    return arr, i
+class _Tokens:
+    """All whitespace-separated fields of a BAL file, with the 1-based line of each.
+
+    One reader for every section (observations, cameras, points): it hands out the next
+    fields as numbers and names the line of the first bad one.
+    """
+
+    def __init__(self, lines: list[str], source: str) -> None:
+        fields = [ln.split() for ln in lines]
+        self.source = source
+        self.n_lines = len(lines)
+        self.words = [w for f in fields for w in f]
+        self.line = np.repeat(np.arange(1, len(lines) + 1), [len(f) for f in fields])
+        self.pos = 0
+
+    def fail(self, message: str, k: int | None = None) -> InputError:
+        """An InputError at the line of field ``k`` (default: the last line of the file)."""
+        no = int(self.line[k]) if k is not None and k < self.line.size else self.n_lines
+        return InputError(message, self.source, f"line {max(no, 1)}")
+
+    def first_bad(self, bad: NDArray[np.bool_], start: int, stride: int, message) -> None:
+        """Raise at the first True of ``bad``; item i sits at field ``start + stride·i``."""
+        hit = np.flatnonzero(bad)
+        if hit.size:
+            i = int(hit[0])
+            raise self.fail(message(i), start + stride * i)
+
+    def take(self, count: int, what: str) -> F64:
+        """The next ``count`` fields as finite floats."""
+        first = self.pos
+        if first + count > len(self.words):
+            raise self.fail(
+                f"expected {count} numbers for {what}, the file ends after "
+                f"{len(self.words) - first}"
+            )
+        out = self.words[first : first + count]
+        self.pos += count
+        try:
+            arr = np.array(out, dtype=float)
+        except ValueError:
+            bad = np.array([not _is_float(t) for t in out])
+            self.first_bad(bad, first, 1, lambda i: f"expected a number in {what}, got {out[i]!r}")
+            raise  # pragma: no cover - numpy and float() disagree
+        self.first_bad(
+            ~np.isfinite(arr), first, 1,
+            lambda i: f"expected a finite number in {what}, got {out[i]!r}",
+        )  # fmt: skip
+        return arr
 
 
 def _is_float(t: str) -> bool:
@@ -84,14 +101,52 @@ def _is_float(t: str) -> bool:
     return True
 
 
-def _line_of(lines: list[str], first: int, k: int) -> int:
-    """1-based line number of the k-th token counted from ``lines[first]``."""
-    seen = 0
-    for i in range(first, len(lines)):
-        seen += len(lines[i].split())
-        if seen > k:
-            return i + 1
-    return len(lines)
+def _parse(lines: list[str], source: str) -> tuple[F64, F64, F64]:
+    """Check and split a BAL file: observations (n, 4), camera parameters (m, 9), xyz (p, 3)."""
+    tok = _Tokens(lines, source)
+    head = lines[0].split() if lines else []
+    try:
+        nc, npt, nobs = (int(v) for v in head)
+    except ValueError:
+        raise InputError(
+            f"expected a header '<cameras> <points> <observations>', got {' '.join(head)!r}",
+            source,
+            "line 1",
+        ) from None
+    if min(nc, npt, nobs) < 0:
+        raise InputError("expected non-negative counts in the header", source, "line 1")
+    tok.pos = 3
+    if len(lines) < 1 + nobs:
+        raise tok.fail(f"expected {nobs} observation lines, the file ends at line {len(lines)}")
+    counts = np.array([len(ln.split()) for ln in lines[1 : 1 + nobs]], dtype=np.int64)
+    wrong = np.flatnonzero(counts != 4)
+    if wrong.size:
+        k = int(wrong[0])
+        raise InputError(
+            f"expected 4 values '<camera> <point> <x> <y>', got {counts[k]}", source, f"line {k + 2}"
+        )
+    obs = tok.take(4 * nobs, "the observations").reshape(nobs, 4)
+    for col, name, n in ((0, "camera", nc), (1, "point", npt)):
+        idx = obs[:, col]
+        tok.first_bad(
+            (idx != np.round(idx)) | (idx < 0) | (idx >= n), 3 + col, 4,
+            lambda i: f"expected a {name} index in [0, {n}), got {tok.words[3 + 4 * i + col]}",
+        )  # fmt: skip
+    first_cam = tok.pos
+    cams = tok.take(9 * nc, "the camera parameters").reshape(nc, 9)
+    pts = tok.take(3 * npt, "the points").reshape(npt, 3)
+    if tok.pos < len(tok.words):
+        raise tok.fail(
+            f"expected {tok.pos} numbers for the counts {nc} {npt} {nobs} of the header, "
+            f"the file has {len(tok.words) - tok.pos} more",
+            tok.pos,
+        )
+    tok.first_bad(
+        ~(cams[:, 6] > 0), first_cam + 6, 9,
+        lambda i: f"expected a focal length f > 0 px, got {tok.words[first_cam + 9 * i + 6]} "
+        f"(camera {i})",
+    )  # fmt: skip
+    return obs, cams, pts
 
 
 def read_bal(
@@ -134,54 +189,10 @@ def read_bal(
         raise InputError(
             f"cannot read the BAL file ({exc.__class__.__name__}: {exc})", source
         ) from None
-    head = lines[0].split() if lines else []
-    try:
-        nc, npt, nobs = (int(v) for v in head)
-    except ValueError:
-        raise InputError(
-            f"expected a header '<cameras> <points> <observations>', got {' '.join(head)!r}",
-            source,
-            "line 1",
-        ) from None
-    if min(nc, npt, nobs) < 0:
-        raise InputError("expected non-negative counts in the header", source, "line 1")
-    if len(lines) < 1 + nobs:
-        raise InputError(
-            f"expected {nobs} observation lines, the file ends at line {len(lines)}",
-            source,
-            f"line {len(lines)}",
-        )
-    obs_lines = lines[1 : 1 + nobs]
-    counts = np.array([len(ln.split()) for ln in obs_lines])
-    wrong = np.flatnonzero(counts != 4)
-    if wrong.size:
-        k = int(wrong[0])
-        raise InputError(
-            f"expected 4 values '<camera> <point> <x> <y>', got {counts[k]}",
-            source,
-            f"line {k + 2}",
-        )
-    obs, _ = _numbers(lines, 1, 4 * nobs, source, "the observations")
-    obs = obs.reshape(nobs, 4)
+    obs, cams, pts = _parse(lines, source)
+    npt = pts.shape[0]
     ci, pi = obs[:, 0], obs[:, 1]
-    for name, idx, n in (("camera", ci, nc), ("point", pi, npt)):
-        bad = np.flatnonzero((idx != np.round(idx)) | (idx < 0) | (idx >= n))
-        if bad.size:
-            k = int(bad[0])
-            raise InputError(
-                f"expected a {name} index in [0, {n}), got {obs_lines[k].split()[0 if name == 'camera' else 1]}",
-                source,
-                f"line {k + 2}",
-            )
-    cams, nxt = _numbers(lines, 1 + nobs, 9 * nc, source, "the camera parameters")
-    pts, nxt = _numbers(lines, nxt, 3 * npt, source, "the points")
-    cams = cams.reshape(nc, 9)
     f = cams[:, 6]
-    bad = np.flatnonzero(~(f > 0))
-    if bad.size:
-        raise InputError(
-            f"expected a focal length f > 0 px, got {f[bad[0]]} (camera {bad[0]})", source
-        )
     Rb = matrix_from_rotvec(cams[:, :3])
     R = np.swapaxes(Rb, 1, 2)
     X0 = -np.einsum("nij,nj->ni", R, cams[:, 3:6])

@@ -131,8 +131,43 @@ def _read_cameras(path: Path) -> dict[int, _Camera]:
             raise InputError(f"duplicate camera id {cid}", source=str(path), where=f"line {no}")
         cams[cid] = _Camera(model, w, h, np.array(params))
     if not cams:
-        raise InputError("no cameras", source=str(path))
+        raise InputError("no cameras in the file", source=str(path), where=_end(path))
     return cams
+
+
+def _end(path: Path) -> str:
+    """``"line N"`` of the last line of an existing text file (for "nothing found" errors)."""
+    try:
+        n = len(path.read_text(encoding="utf-8").splitlines())
+    except (OSError, UnicodeDecodeError):
+        n = 0
+    return f"line {max(n, 1)}"
+
+
+def _read_points(path: Path) -> tuple[list[int], list[list[float]], list[tuple[int, list[int]]]]:
+    """POINT3D_ID, X, Y, Z and the TRACK image ids (with the line number) of points3D.txt."""
+    pid: list[int] = []
+    xyz: list[list[float]] = []
+    tracks: list[tuple[int, list[int]]] = []
+    seen: set[int] = set()
+    for no, line in _lines(path):
+        f = line.split()
+        vals = _numbers(path, no, f, "ifff", "a 3D point")
+        if vals[0] in seen:
+            raise InputError(f"duplicate POINT3D_ID {vals[0]}", source=str(path), where=f"line {no}")
+        seen.add(vals[0])
+        track = f[8:]
+        if len(track) % 2:
+            raise InputError(
+                f"expected TRACK[] as pairs IMAGE_ID POINT2D_IDX, got {len(track)} fields",
+                source=str(path),
+                where=f"line {no}",
+            )
+        ids = _numbers(path, no, track, "i" * len(track), "the TRACK") if track else []
+        pid.append(vals[0])
+        xyz.append(vals[1:4])
+        tracks.append((no, ids[0::2]))
+    return pid, xyz, tracks
 
 
 def _undistort(cam: _Camera, uv: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -191,14 +226,7 @@ def read_colmap(
     cam_index = {c: i for i, c in enumerate(cam_ids)}
 
     pts_path = d / "points3D.txt"
-    pid, xyz = [], []
-    for no, line in _lines(pts_path):
-        f = line.split()
-        vals = _numbers(pts_path, no, f, "ifff", "a 3D point")
-        pid.append(vals[0])
-        xyz.append(vals[1:4])
-    if len(set(pid)) != len(pid):
-        raise InputError("duplicate point id", source=str(pts_path))
+    pid, xyz, tracks = _read_points(pts_path)
     p_index = {p: i for i, p in enumerate(pid)}
 
     img_path = d / "images.txt"
@@ -218,6 +246,8 @@ def read_colmap(
         f = s.split()
         iid, qw, qx, qy, qz, tx, ty, tz, cid = _numbers(img_path, no, f, "ifffffffi", "an image")
         name = f[9] if len(f) > 9 else str(iid)
+        if iid in image_ids:
+            raise InputError(f"duplicate IMAGE_ID {iid}", source=str(img_path), where=f"line {no}")
         if cid not in cams:
             raise InputError(f"unknown camera id {cid}", source=str(img_path), where=f"line {no}")
         q = np.array([qw, qx, qy, qz])
@@ -262,10 +292,19 @@ def read_colmap(
             uv.append((u, v))
         k += 2
     del lines
-    if len(set(image_ids)) != len(image_ids):
-        raise InputError("duplicate image id", source=str(img_path))
     if not image_ids:
-        raise InputError("no images", source=str(img_path))
+        raise InputError("no images in the file", source=str(img_path), where=_end(img_path))
+    known = set(image_ids)
+    for no, ids in tracks:
+        dangling = [i for i in ids if i not in known]
+        if dangling:
+            raise InputError(
+                f"TRACK names IMAGE_ID {dangling[0]}, which is not in images.txt",
+                source=str(pts_path),
+                where=f"line {no}",
+            )
+    # readable image ids: COLMAP's image names where they are unique, else its IMAGE_IDs
+    ids = names if len(set(names)) == len(names) else [str(i) for i in image_ids]
     uv_arr = np.array(uv, dtype=float).reshape(-1, 2)
     oi_arr = np.array(oi, dtype=np.int64)
     cam_arr = np.array(cam_of, dtype=np.int64)
@@ -288,7 +327,7 @@ def read_colmap(
         image_camera=cam_arr,
         X0=np.array(X0s),
         angles=ang,
-        image_ids=[str(i) for i in image_ids],
+        image_ids=ids,
         xyz=np.array(xyz, dtype=float).reshape(-1, 3),
         point_ids=[str(p) for p in pid],
         obs_image=oi_arr,
@@ -301,6 +340,7 @@ def read_colmap(
             "format": "colmap-text",
             "pixel_size_mm": pixel_size_mm,
             "image_names": names,
+            "colmap_image_ids": image_ids,
             "colmap_cameras": {
                 str(c): {
                     "model": cams[c].model,
@@ -352,6 +392,8 @@ def write_colmap(
     from scipy.spatial.transform import Rotation
 
     track: dict[int, list[tuple[int, int]]] = {}
+    names = _image_names(block)
+    pids = _point3d_ids(block)
     for i in range(block.n_images):
         Rcw = FLIP @ R[i].T
         t = -Rcw @ block.images.X0[i]
@@ -361,11 +403,7 @@ def write_colmap(
         h = cams.format_mm[cam, 1] / p
         cx = w / 2 + cams.x0[cam] / p
         cy = h / 2 - cams.y0[cam] / p
-        name = (
-            block.meta.get("image_names", block.images.ids)[i]
-            if "image_names" in block.meta
-            else block.images.ids[i]
-        )
+        name = names[i]
         lines.append(
             f"{i + 1} {qw:.12g} {qx:.12g} {qy:.12g} {qz:.12g} {t[0]:.12g} {t[1]:.12g} {t[2]:.12g} {cam + 1} {name}"
         )
@@ -374,7 +412,7 @@ def write_colmap(
         for k2, j in enumerate(sel):
             u = obs.xy[j, 0] / p + cx - cams.x0[cam] / p
             v = -obs.xy[j, 1] / p + cy + cams.y0[cam] / p
-            parts.append(f"{u:.6f} {v:.6f} {obs.point[j] + 1}")
+            parts.append(f"{u:.6f} {v:.6f} {pids[obs.point[j]]}")
             track.setdefault(int(obs.point[j]), []).append((i + 1, k2))
         lines.append(" ".join(parts))
     tmp["images.txt"] = "\n".join(lines) + "\n"
@@ -387,7 +425,7 @@ def write_colmap(
         X = block.points.xyz[j]
         tr = " ".join(f"{a} {b}" for a, b in track.get(j, []))
         lines.append(
-            f"{j + 1} {X[0]:.10g} {X[1]:.10g} {X[2]:.10g} {colour[int(block.points.role[j])]} 0 {tr}"
+            f"{pids[j]} {X[0]:.10g} {X[1]:.10g} {X[2]:.10g} {colour[int(block.points.role[j])]} 0 {tr}"
         )
     tmp["points3D.txt"] = "\n".join(lines) + "\n"
     for name, text in tmp.items():  # write each file atomically
@@ -395,6 +433,27 @@ def write_colmap(
         part = target.with_suffix(".txt.part")
         part.write_text(text, encoding="utf-8")
         part.replace(target)
+
+
+def _image_names(block: Block) -> list[str]:
+    """NAME per image: the block's ids, or COLMAP's names where the ids are its IMAGE_IDs."""
+    ids = list(block.images.ids)
+    names = block.meta.get("image_names")
+    cids = block.meta.get("colmap_image_ids")
+    if names is None or cids is None or len(names) != len(ids) or len(cids) != len(ids):
+        return ids
+    return [n if i == str(c) else i for i, n, c in zip(ids, names, cids)]
+
+
+def _point3d_ids(block: Block) -> list[int]:
+    """POINT3D_ID per point: the ids themselves if they are distinct positive integers, else 1..p."""
+    try:
+        ids = [int(p) for p in block.points.ids]
+    except ValueError:
+        ids = []
+    if len(ids) == block.n_points and min(ids, default=1) > 0 and len(set(ids)) == len(ids):
+        return ids
+    return list(range(1, block.n_points + 1))
 
 
 def run_from_cli(args: argparse.Namespace) -> int:
