@@ -39,7 +39,7 @@ SEQUENCES: dict[str, tuple[int, int, int]] = {"opk": (0, 1, 2), "pok": (1, 0, 2)
 #: Aliases accepted on input.
 _ALIASES = {"omega-phi-kappa": "opk", "phi-omega-kappa": "pok", "ω-φ-κ": "opk", "φ-ω-κ": "pok"}
 
-#: Below this |cos| of the secondary angle the conversion to angles treats the
+#: Below this abs(cos) of the secondary angle the conversion to angles treats the
 #: matrix as gimbal-locked and sets κ = 0.
 GIMBAL_TOLERANCE: float = 1e-9
 

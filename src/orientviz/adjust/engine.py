@@ -135,7 +135,7 @@ def gauss_newton(
     max_iter : int
         Maximum number of steps.
     tol : float
-        Stop when every |Δx_i| < tol · σ_i, σ_i = √(N⁻¹)_ii the parameter's a-priori
+        Stop when every abs(Δx_i) < tol · σ_i, σ_i = √(N⁻¹)_ii the parameter's a-priori
         standard deviation (a parameter-based rule: the step no longer changes anything
         measurable).
     xtol : array_like, shape (u,), optional

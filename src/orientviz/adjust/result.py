@@ -38,7 +38,7 @@ class Iteration:
     damping : float
         Levenberg-Marquardt λ used for the step (0 for pure Gauss-Newton).
     max_correction : float
-        max |dx_i| / σ_i, the correction in units of the parameter's standard deviation.
+        max abs(dx_i) / σ_i, the correction in units of the parameter's standard deviation.
     """
 
     index: int
@@ -183,7 +183,7 @@ class Adjustment:
         return self.cofactor / np.outer(d, d)
 
     def high_correlations(self, threshold: float = 0.9) -> list[tuple[str, str, float]]:
-        """Pairs of parameters with |ρ| ≥ threshold, strongest first."""
+        """Pairs of parameters with abs(ρ) ≥ threshold, strongest first."""
         if self.cofactor is None:
             return []
         C = self.correlations()
@@ -193,7 +193,7 @@ class Adjustment:
         return [(self.names[a], self.names[b], float(r)) for a, b, r in pairs]
 
     def flagged(self, critical: float = W_CRITICAL) -> NDArray[np.int64]:
-        """Observations whose |normalised residual| exceeds ``critical``, largest first."""
+        """Observations whose absolute normalised residual exceeds ``critical``, largest first."""
         if self.normalized_residuals is None:
             return np.zeros(0, dtype=np.int64)
         w = np.abs(np.nan_to_num(self.normalized_residuals, nan=0.0))
@@ -201,7 +201,7 @@ class Adjustment:
         return idx[np.argsort(-w[idx])]
 
     def largest_residuals(self, k: int = 10) -> NDArray[np.int64]:
-        """Indices of the k largest |normalised| (or raw, if none) residuals."""
+        """Indices of the k largest absolute normalised (or raw, if none) residuals."""
         w = self.normalized_residuals if self.normalized_residuals is not None else self.residuals
         w = np.abs(np.nan_to_num(w, nan=0.0))
         return np.argsort(-w)[:k]

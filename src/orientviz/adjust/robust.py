@@ -36,8 +36,8 @@ def robust_weights(e: ArrayLike, method: str = "danish", c: float | None = None)
     e : array_like
         Standardised residuals (dimensionless, ~N(0, 1) for good observations).
     method : {"huber", "danish"}
-        ``"huber"``: w = 1 for |e| ≤ c, c/|e| beyond (c = 1.5): bounded influence.
-        ``"danish"`` (Krarup's Danish method, a continuous form): w = 1 for |e| ≤ c,
+        ``"huber"``: w = 1 for abs(e) ≤ c, c/abs(e) beyond (c = 1.5): bounded influence.
+        ``"danish"`` (Krarup's Danish method, a continuous form): w = 1 for abs(e) ≤ c,
         ``exp(1 − (|e|/c)²)`` beyond (c = 3): large errors lose their weight
         (influence redescends to 0).
     c : float, optional
@@ -70,9 +70,9 @@ def robust_adjust(
     """Robust adjustment by iteratively reweighted least squares, then a clean final run.
 
     Iteration: adjust, standardise each residual with the *first* adjustment's redundancy
-    numbers, ``e_i = v_i / (σ_i √r_i)``, take a group's largest |e| for all its members,
+    numbers, ``e_i = v_i / (σ_i √r_i)``, take a group's largest abs(e) for all its members,
     set weight factors ``robust_weights(e)``, repeat until the factors change by less than
-    ``tol``. Groups with |e| > k = z(1 − α0/2) at the end are declared gross errors,
+    ``tol``. Groups with abs(e) > k = z(1 − α0/2) at the end are declared gross errors,
     eliminated, and a final ordinary adjustment without them gives σ0 and the precision.
 
     Parameters

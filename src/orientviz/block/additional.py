@@ -320,11 +320,11 @@ class APAnalysis:
     value, sigma : ndarray
         Estimates and their standard deviations (µm).
     t : ndarray
-        Test statistic |value| / σ.
+        Test statistic abs(value) / σ.
     significant : ndarray of bool
-        |t| > z(1 − α/2).
+        abs(t) > z(1 − α/2).
     pairs : list of (str, str, float)
-        Pairs of additional parameters with |ρ| > threshold.
+        Pairs of additional parameters with abs(ρ) > threshold.
     with_exterior : list of (str, str, float)
         (additional parameter, most correlated exterior/point parameter, ρ) above threshold.
     undetermined : list of str
@@ -370,7 +370,7 @@ def analyse(
     alpha : float
         Significance level of the two-sided test of each parameter against 0.
     threshold : float
-        |ρ| above which a pair is reported as over-parameterisation.
+        abs(ρ) above which a pair is reported as over-parameterisation.
     ap_sigma : float or array_like (k,), optional
         σ (µm) of the pseudo-observations used in the adjustment; with it, parameters
         determined only by their pseudo-observation are named (``undetermined``).

@@ -73,7 +73,7 @@ class ImageField:
 
     @property
     def max_um(self) -> float:
-        """Largest |Δxy| in µm."""
+        """Largest abs(Δxy) in µm."""
         return float(np.max(np.hypot(self.d[:, 0], self.d[:, 1]), initial=0.0) * 1e3)
 
     @property

@@ -111,7 +111,7 @@ def self_calibrate(
     alpha : float
         Significance level of the parameter tests.
     threshold : float
-        |ρ| above which a pair of parameters counts as over-parameterisation.
+        abs(ρ) above which a pair of parameters counts as over-parameterisation.
     suppress_sigma : float
         σ (µm) that holds a suppressed parameter at 0.
     **bundle_options

@@ -407,7 +407,7 @@ def typical(strength_um: float = 10.0) -> Sum:
 
 
 def magnitude_um(model: Callable, half_mm: float = HALF_FORMAT_MM, n: int = 23) -> float:
-    """Largest |Δxy| in µm of an error model over a grid on the usable format (image 0)."""
+    """Largest abs(Δxy) in µm of an error model over a grid on the usable format (image 0)."""
     g = np.linspace(-half_mm, half_mm, n)
     gx, gy = np.meshgrid(g, g)
     xy = np.column_stack([gx.ravel(), gy.ravel()])

@@ -61,7 +61,7 @@ class Solution:
     observation_quantity : str
         Quantity of the observations (``"image"`` or ``"length"``), for residual units.
     critical : float
-        Critical |normalised residual| for flagging.
+        Critical absolute normalised residual for flagging.
     notes : list of str
         Remarks for the report (e.g. check-point errors).
     iterations : int, optional
@@ -113,7 +113,7 @@ class Solution:
         return labels[i] if labels is not None and i < len(labels) else f"obs[{i}]"
 
     def flagged(self) -> list[dict[str, Any]]:
-        """Observations with |w| above ``critical``, largest first (file units)."""
+        """Observations with abs(w) above ``critical``, largest first (file units)."""
         adj = self.adjustment
         f = self.factor(self.observation_quantity)
         out = []

@@ -199,7 +199,7 @@ def five_point_route(xy_left: ArrayLike, xy_right: ArrayLike, c: float) -> tuple
 
     Each real solution is decomposed (:func:`decompose_essential`); the candidate with
     the most points in front of both images and, among those, the smallest RMS of the
-    coplanarity residuals d1ᵀ E d2 / (|d1| |d2|) over all points wins. With exactly five
+    coplanarity residuals d1ᵀ E d2 / (‖d1‖ ‖d2‖) over all points wins. With exactly five
     points every real solution fits them exactly and several may have all points in
     front: the choice is then arbitrary — a sixth point decides.
 
@@ -227,7 +227,7 @@ def five_point_route(xy_left: ArrayLike, xy_right: ArrayLike, c: float) -> tuple
 
 
 def decompose_essential(E: ArrayLike) -> list[tuple[F64, F64]]:
-    """The four factorisations E ∝ [t]ₓ R: (R, t) with R proper, |t| = 1."""
+    """The four factorisations E ∝ [t]ₓ R: (R, t) with R proper, ‖t‖ = 1."""
     U, _, Vt = np.linalg.svd(np.asarray(E, dtype=float))
     if np.linalg.det(U) < 0:
         U = -U

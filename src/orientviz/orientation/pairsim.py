@@ -39,7 +39,7 @@ class PlotterConfig:
     model_base : float
         Model base b in machine mm (Kovarik's constant 220.7). Together with
         ``image_base`` it sets the model scale and the projection distance
-        |Z| = model_base / image_base × c (366 mm by default; Kovarik: 350-400 mm).
+        abs(Z) = model_base / image_base × c (366 mm by default; Kovarik: 350-400 mm).
     ordinate : float
         Image ordinate of the scheme's edge rows, mm; k = ordinate / c.
     relief : float
@@ -75,12 +75,12 @@ class PlotterConfig:
 
     @property
     def projection_distance(self) -> float:
-        """|Z| of the reference plane in machine mm (scale × c)."""
+        """abs(Z) of the reference plane in machine mm (scale × c)."""
         return self.scale * self.c
 
     @property
     def k(self) -> float:
-        """Kovarik's k = |y|/|z| of the edge rows (ordinate / c)."""
+        """Kovarik's k = abs(y)/abs(z) of the edge rows (ordinate / c)."""
         return self.ordinate / self.c
 
     def check(self) -> PlotterConfig:
@@ -191,10 +191,10 @@ def true_pair(
     rng : numpy.random.Generator
         Source of the terrain and of the true elements.
     start_c : (float, float)
-        Range of |ω|, |φ|, |κ| of the right image, centesimal minutes (random signs):
+        Range of abs(ω), abs(φ), abs(κ) of the right image, centesimal minutes (random signs):
         with the plotter at zero these are the first corrections (Kovarik: 100–150 c).
     start_mm : (float, float)
-        Range of |by|, |bz|, machine mm.
+        Range of abs(by), abs(bz), machine mm.
     elements : array_like, shape (5,), optional
         True by, bz (mm), ω, φ, κ (rad) instead of random ones.
     n_hills : int

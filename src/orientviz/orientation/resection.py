@@ -150,7 +150,7 @@ _PAIRS = (np.array([1, 0, 0]), np.array([2, 2, 1]))  # (i, j) of the equations f
 
 
 def _polish(s: F64, d: F64, X: F64, steps: int = 2) -> F64:
-    """Newton steps on s_i² + s_j² − 2 s_i s_j cos_ij = |X_i − X_j|², all solutions (k, 3) at once."""
+    """Newton steps on s_i² + s_j² − 2 s_i s_j cos_ij = ‖X_i − X_j‖², all solutions (k, 3) at once."""
     i, j = _PAIRS
     cos = np.sum(d[i] * d[j], axis=1)
     dist2 = np.sum((X[i] - X[j]) ** 2, axis=1)

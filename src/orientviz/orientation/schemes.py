@@ -67,7 +67,7 @@ class Scheme:
         b : float
             Model base, model units.
         d : float
-            Ordinate of the edge rows (|Y| at the reference height), model units.
+            Ordinate of the edge rows (abs(Y) at the reference height), model units.
         Z : float or array_like, shape (n,)
             Height of each point (negative), model units.
         placement : {"plan", "ratio"}
@@ -232,7 +232,7 @@ def kovarik_nine_point(
     b : float
         Model base, model units.
     k : float
-        |y|/|z| of the edge points (the ordinate over the projection distance).
+        abs(y)/abs(z) of the edge points (the ordinate over the projection distance).
     convention : {"orientviz", "kovarik"}
         Signs of the returned elements (see ``relative.KOVARIK_SIGNS``).
 
@@ -322,7 +322,7 @@ def condition_misclosure(
         Misclosure, model units.
     sigma_w : float
         Its standard deviation per unit σ of one parallax, ``|a|``; a consistent model
-        has |w| ≲ 3 σ_p |a|.
+        has abs(w) ≲ 3 σ_p abs(a).
     """
     a = condition_equation(X, Y, Z, b)
     return float(a @ np.asarray(p, dtype=float)), float(np.linalg.norm(a))

@@ -59,7 +59,7 @@ def plot_normalized_residuals(adj, *, critical: float = 3.29, ax=None, title=Non
 
 
 def plot_cleaning(cleaning, *, truth=None, ax=None, title=None):
-    """The decisions of a cleaning run: |w| of each eliminated observation by adjustment.
+    """The decisions of a cleaning run: abs(w) of each eliminated observation by adjustment.
 
     Parameters
     ----------

@@ -151,7 +151,7 @@ def plot_trilateration(scene: dict, *, ax=None):
 
 
 def plot_correlations(result, *, names: list[str] | None = None, ax=None):
-    """Correlation matrix of an adjustment as a heat map (|ρ| near 1: weak geometry).
+    """Correlation matrix of an adjustment as a heat map (abs(ρ) near 1: weak geometry).
 
     ``names`` restricts the plot to some parameters (default: all of a small problem,
     or the ``"image2"`` block of a relative orientation).

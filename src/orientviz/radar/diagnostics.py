@@ -36,7 +36,7 @@ class PairGeometry:
     plane_angle : ndarray
         Angle between the planes ε1 and ε2 in rad (0 = parallel: no condition).
     tangency1, tangency2 : ndarray
-        |cos| of the angle between the line ε1 ∩ ε2 and the ray from station 1 (2) to
+        abs(cos) of the angle between the line ε1 ∩ ε2 and the ray from station 1 (2) to
         the point; 0 means the line touches that range sphere.
     circle_misses : ndarray of bool
         Image 1's projection circle does not reach image 2's range sphere (the closed-form

@@ -76,7 +76,7 @@ def image_model(
         Names of the unknowns (out of :data:`~orientviz.radar.ppi.PARAMS`).
     observe : {"xy", "radial", "tangential"}
         ``"xy"``: both image coordinates (2n observations). ``"radial"``: the distance
-        |bvec| from the principal point (n). ``"tangential"``: the component across the
+        ‖bvec‖ from the principal point (n). ``"tangential"``: the component across the
         observed radius (n, observed value 0); it does not depend on the range.
 
     Returns

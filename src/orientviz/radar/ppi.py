@@ -2,7 +2,7 @@
 
 After Geier (1973). A radar antenna turns about a fixed axis through the measuring
 centre (the *station*) X0. For an object point X it records the plane azimuth of X about
-the axis and the slant range s = |X − X0|, reduced "by Pythagoras" with a constant
+the axis and the slant range s = ‖X − X0‖, reduced "by Pythagoras" with a constant
 model parameter h to an *approximate horizontal range*
 
     s_e = sqrt(s² − h²).
@@ -18,8 +18,8 @@ are the image axes in object space, k the antenna's rotation axis) and
 Back-projection (4b, 4c): an image point (x_B, y_B) with the image vector
 ``bvec = (x_B − x0, y_B − y0, 0)`` lies on
 
-* the *range sphere* about X0 with radius sqrt((|bvec|/m)² + h²) (4b; the paper writes
-  |bvec|² + h², i.e. bvec already reduced to object scale — here it is divided by m), and
+* the *range sphere* about X0 with radius sqrt((‖bvec‖/m)² + h²) (4b; the paper writes
+  ‖bvec‖² + h², i.e. bvec already reduced to object scale — here it is divided by m), and
 * the *azimuth plane* through X0 containing the axis k and the direction R·bvec, with
   normal n = R (bvec × e_z) (4c).
 
@@ -155,7 +155,7 @@ def _local(points: F64, image: RadarImage) -> F64:
 
 
 def horizontal_range(points: ArrayLike, image: RadarImage) -> F64:
-    """Approximate horizontal range s_e = sqrt(|X − X0|² − h²) in m, shape (n,).
+    """Approximate horizontal range s_e = sqrt(‖X − X0‖² − h²) in m, shape (n,).
 
     Raises
     ------
@@ -307,13 +307,13 @@ def image_vector(xy: ArrayLike, image: RadarImage) -> F64:
 
 
 def sphere_radius(xy: ArrayLike, image: RadarImage) -> F64:
-    """Radius of the range sphere of each image point (4b): s = sqrt((|bvec|/m)² + h²), m."""
+    """Radius of the range sphere of each image point (4b): s = sqrt((‖bvec‖/m)² + h²), m."""
     bv = image_vector(xy, image) / image.m
     return np.sqrt(np.einsum("ij,ij->i", bv, bv) + image.h**2)
 
 
 def plane_normal(xy: ArrayLike, image: RadarImage) -> F64:
-    """Unit normals n = R (bvec × e_z)/|…| of the azimuth planes (4c), shape (n, 3).
+    """Unit normals n = R (bvec × e_z)/‖…‖ of the azimuth planes (4c), shape (n, 3).
 
     The plane passes through the station X0 and contains the axis k and the object
     direction R·bvec; a point X lies on it when (X − X0)·n = 0.
@@ -327,7 +327,7 @@ def plane_normal(xy: ArrayLike, image: RadarImage) -> F64:
 
 
 def azimuth_direction(xy: ArrayLike, image: RadarImage) -> F64:
-    """Unit vectors R·bvec/|bvec| in object space (the azimuth in the plane ⟂ k), (n, 3)."""
+    """Unit vectors R·bvec/‖bvec‖ in object space (the azimuth in the plane ⟂ k), (n, 3)."""
     bv = image_vector(xy, image)
     loc = np.column_stack([bv, np.zeros(len(bv))])
     return (loc / np.linalg.norm(loc, axis=1)[:, None]) @ image.R.T

@@ -1,6 +1,6 @@
 """Spatial trilateration ("räumlicher Bogenschnitt") of a radar station.
 
-Only the station X0 acts radially: the radial image distance r = |bvec| of a point fixes
+Only the station X0 acts radially: the radial image distance r = ‖bvec‖ of a point fixes
 its slant range s = sqrt((r/m)² + h²) (equation 4b) and so a sphere about the point
 that contains the station. Three spheres meet in two points (real, coincident or
 imaginary); more spheres give a least-squares station.
@@ -27,7 +27,7 @@ COLLINEAR_TOLERANCE: float = 1e-9
 
 
 def sphere_ranges(xy: ArrayLike, image: RadarImage) -> F64:
-    """Slant ranges s = sqrt((|bvec|/m)² + h²) in m from image coordinates (4b)."""
+    """Slant ranges s = sqrt((‖bvec‖/m)² + h²) in m from image coordinates (4b)."""
     return sphere_radius(xy, image)
 
 
