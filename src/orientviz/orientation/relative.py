@@ -1,7 +1,7 @@
 """Relative orientation of a stereo pair from y-parallaxes.
 
-Conventions (used throughout ``relative``, ``schemes`` and ``plotter``)
-----------------------------------------------------------------------
+**Conventions** (used throughout ``relative``, ``schemes`` and ``plotter``).
+
 *Model frame*: origin at the left projection centre O1, X along the base towards the
 right projection centre O2, Y to the left of the flight direction (towards the upper
 image edge), Z up; right-handed. Model points lie *below* the projection centres, so
