@@ -23,7 +23,7 @@ F64 = NDArray[np.float64]
 
 #: Below this angle (rad) between ε1 and ε2 a point counts as weak (≈ 0.6 gon).
 PARALLEL_LIMIT: float = 0.01
-#: Below this |cos| between the ε-line and a station ray the line counts as tangent.
+#: Below this abs(cos) between the ε-line and a station ray the line counts as tangent.
 TANGENT_LIMIT: float = 0.02
 
 
