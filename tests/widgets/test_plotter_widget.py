@@ -97,3 +97,52 @@ def test_app_builds():
 
     box = plotter_app(seed=1)
     assert box.children
+    image = box.children[0].children[1]  # inline backend: the field as a PNG Image widget
+    assert image.format == "png" and bytes(image.value[:8]) == b"\x89PNG\r\n\x1a\n"
+    slider = box.children[0].children[0].children[2]  # ω
+    before = bytes(image.value)
+    slider.value = 40.0
+    assert bytes(image.value) != before
+
+
+def _full_draw_rgba(view):
+    from orientviz.plot import relative as pr
+    from orientviz.widgets.plotter import _field_figure
+
+    fig, ax, _ = _field_figure()
+    pr.plot_parallax_field(view, ax=ax)
+    fig.canvas.draw()
+    return np.asarray(fig.canvas.buffer_rgba()).copy()
+
+
+def test_blitted_png_equals_a_full_draw():
+    """The fast inline redraw shows exactly the pixels a fresh figure would."""
+    pytest.importorskip("matplotlib").use("Agg")
+    PIL = pytest.importorskip("PIL.Image")
+    import io
+
+    from orientviz.plot import relative as pr
+    from orientviz.widgets.plotter import _field_figure
+
+    vp = VirtualPlotter(seed=8)
+    fig, ax, live = _field_figure()
+    assert not live
+    pr.plot_parallax_field(vp.view(), ax=ax)
+    first = pr.parallax_field_png(ax, vp.view())
+    for v in (vp.one_pass(), vp.set_dials(0.5, -0.3, 20.0, -15.0, 8.0), vp.set_scheme("schmid3")):
+        png = pr.parallax_field_png(ax, v)
+        shown = np.asarray(PIL.open(io.BytesIO(png)))
+        np.testing.assert_array_equal(shown, _full_draw_rgba(v))
+    assert png != first
+    assert len(ax._orientviz_parallax["labels"]) == 15  # scheme change: new labels
+
+
+def test_parallax_field_cache_matches_direct_computation():
+    vp = VirtualPlotter(seed=9)
+    vp.set_dials(0.2, 0.1, 30.0, -20.0, 10.0)
+    X, Y, p = vp.plotter.parallax_field(5, 4)
+    P = np.column_stack([X.ravel(), Y.ravel(), vp.plotter.pair.height(X, Y).ravel()])
+    direct, _ = vp.plotter.parallax_at(P)
+    np.testing.assert_allclose(p.ravel(), direct, rtol=0, atol=1e-12)
+    vp.set_dials(0.0, 0.0, 0.0, 0.0, 0.0)  # same cached grid, new dials: new parallaxes
+    assert not np.allclose(vp.plotter.parallax_field(5, 4)[2], p)

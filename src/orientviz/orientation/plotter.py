@@ -192,8 +192,25 @@ class AnalogPlotter:
             self._cache[sch.name] = hit
         return hit[1:]
 
+    def _field_images(self, nx: int, ny: int):
+        """Plan grid and true image coordinates of its terrain points (cached per grid)."""
+        key = ("field", nx, ny, self.config, id(self.pair), self.pair.elements.tobytes())
+        hit = self._cache.get(("field", nx, ny))
+        if hit is None or hit[0] != key:
+            cfg = self.config
+            d = cfg.k * cfg.projection_distance
+            X, Y = np.meshgrid(np.linspace(0, cfg.model_base, nx), np.linspace(-d, d, ny))
+            P = np.column_stack([X.ravel(), Y.ravel(), self.pair.height(X, Y).ravel()])
+            xy1, xy2 = self.pair.images(P)
+            hit = (key, X, Y, xy1, xy2)
+            self._cache[("field", nx, ny)] = hit
+        return hit[1:]
+
     def parallax_field(self, nx: int = 11, ny: int = 9) -> tuple[F64, F64, F64]:
         """Noise-free y-parallaxes over the model area (for arrows in a figure).
+
+        The grid, its terrain heights and image coordinates are computed once per grid
+        size and pair; a call only intersects the rays under the current dials.
 
         Returns
         -------
@@ -201,11 +218,8 @@ class AnalogPlotter:
             Plan grid over X ∈ [0, b], Y ∈ [−d, d] (machine mm) and the parallax p_y
             (mm) of the terrain point there under the current dials.
         """
-        cfg = self.config
-        d = cfg.k * cfg.projection_distance
-        X, Y = np.meshgrid(np.linspace(0, cfg.model_base, nx), np.linspace(-d, d, ny))
-        P = np.column_stack([X.ravel(), Y.ravel(), self.pair.height(X, Y).ravel()])
-        p, _ = self.parallax_at(P)
+        X, Y, xy1, xy2 = self._field_images(int(nx), int(ny))
+        p, _ = y_parallax(xy1, xy2, self.config.c, self.state)
         return X, Y, p.reshape(X.shape)
 
     def read(self, scheme: Scheme | str | None = None, *, noise: bool = True) -> Readings:

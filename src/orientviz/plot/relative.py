@@ -8,11 +8,14 @@ Model coordinates in machine mm, angles in centesimal minutes (c).
 
 from __future__ import annotations
 
+import io
 from collections.abc import Mapping, Sequence
 
 import numpy as np
 
 ELEMENT_LABELS = ("by", "bz", "ω", "φ", "κ")
+#: Arrow colours of the parallax field (RGBA of tab:blue for p < 0, tab:red for p ≥ 0).
+_ARROW_RGBA = np.array([[31, 119, 180, 255], [214, 39, 40, 255]]) / 255.0
 
 
 def _axes(ax, figsize=(7.0, 4.8)):
@@ -62,19 +65,13 @@ def plot_parallax_field(view, ax=None, *, exaggeration: float | None = None):
     """
     fig, ax = _axes(ax)
     ex = _exaggeration(view) if exaggeration is None else float(exaggeration)
-    colors = np.where(view.p.ravel() >= 0, "tab:red", "tab:blue")
+    colors = _ARROW_RGBA[(view.p.ravel() >= 0).astype(np.intp)]
+    # changing artists (zorder 3.5, 4) above the static ones: a blit draws the same image
     q = ax.quiver(
         view.X.ravel(), view.Y.ravel(), np.zeros(view.p.size), ex * view.p.ravel(),
-        color=colors, angles="xy", scale_units="xy", scale=1.0, width=0.004,
+        color=colors, angles="xy", scale_units="xy", scale=1.0, width=0.004, zorder=3.5,
     )  # fmt: skip
-    r = view.readings
-    pts = ax.scatter(r.X, r.Y, s=60, facecolor="none", edgecolor="k", zorder=3)
-    for x, y, name in zip(r.X, r.Y, r.scheme.labels):  # static point numbers
-        ax.annotate(name, (x, y), xytext=(-12, 5), textcoords="offset points", fontsize=7)
-    labels = [  # the readings change: few glyphs, no boxes (text dominates redraw time)
-        ax.annotate("", (x, y), xytext=(7, -3), textcoords="offset points", fontsize=7)
-        for x, y in zip(r.X, r.Y)
-    ]
+    scheme_artists = _draw_scheme(ax, view.readings)
     b = float(view.X.max())
     ax.plot([0, b], [0, 0], "k-", lw=2, alpha=0.4)
     ax.plot([0, b], [0, 0], "ko", ms=6)
@@ -83,31 +80,77 @@ def plot_parallax_field(view, ax=None, *, exaggeration: float | None = None):
     d = float(np.abs(view.Y).max())
     ax.set_xlim(-0.1 * b, 1.3 * b)
     ax.set_ylim(-1.25 * d, 1.25 * d)
-    info = ax.text(0.01, 0.99, "", transform=ax.transAxes, va="top", fontsize=8)
+    info = ax.text(0.01, 0.99, "", transform=ax.transAxes, va="top", fontsize=8, zorder=4)
     ax.set_title(
         "y-parallax p_y (red +, blue −; arrows exaggerated ×N), readings and rms in µm",
         fontsize=10,
     )
     ax._orientviz_parallax = {
-        "quiver": q, "points": pts, "labels": labels, "info": info, "fixed": exaggeration,
-        "background": None,
+        "quiver": q, **scheme_artists, "info": info, "fixed": exaggeration,
+        "background": None, "background_key": None, "grid": (view.X, view.Y),
+        "zeros": np.zeros(view.p.size),
     }  # fmt: skip
     update_parallax_field(ax, view)
     return fig
 
 
+def _draw_scheme(ax, r) -> dict:
+    """Scheme points, their numbers (static) and reading labels (changing) of readings r.
+
+    Labels are plain texts shifted by a few points (cheaper to draw than annotations;
+    text is most of the redraw time).
+    """
+    from matplotlib.transforms import offset_copy
+
+    fig = ax.figure
+    name_at = offset_copy(ax.transData, fig=fig, x=-12, y=5, units="points")
+    value_at = offset_copy(ax.transData, fig=fig, x=7, y=-3, units="points")
+    pts = ax.scatter(r.X, r.Y, s=60, facecolor="none", edgecolor="k", zorder=3)
+    names = [
+        ax.text(x, y, name, transform=name_at, fontsize=7)
+        for x, y, name in zip(r.X, r.Y, r.scheme.labels)
+    ]
+    labels = [ax.text(x, y, "", transform=value_at, fontsize=7, zorder=4) for x, y in zip(r.X, r.Y)]
+    return {"points": pts, "names": names, "labels": labels, "scheme": r.scheme.name}
+
+
+def _redraw_scheme(ax, r) -> None:
+    """Replace the scheme artists after a change of scheme (the blit background too)."""
+    a = ax._orientviz_parallax
+    animated = a["quiver"].get_animated()
+    for art in (a["points"], *a["names"], *a["labels"]):
+        art.remove()
+    a.update(_draw_scheme(ax, r))
+    for lab in a["labels"]:
+        lab.set_animated(animated)
+    a["background"] = None
+
+
 def update_parallax_field(ax, view) -> None:
-    """Redraw the arrows, readings and title of :func:`plot_parallax_field` in place."""
+    """Update the arrows, readings and info text of :func:`plot_parallax_field` in place.
+
+    Only data change: arrow lengths and colours (``set_UVC``, an RGBA array), the texts
+    (``set_text``, changed strings only) and, if the grid is not the one drawn, the
+    arrow positions (``set_offsets``). Nothing is re-created and no layout is run.
+    """
     a = ax._orientviz_parallax
     ex = _exaggeration(view) if a["fixed"] is None else float(a["fixed"])
     p = view.p.ravel()
-    a["quiver"].set_UVC(np.zeros(p.size), ex * p)
-    a["quiver"].set_color(np.where(p >= 0, "tab:red", "tab:blue"))
-    r = view.readings
-    for lab, val in zip(a["labels"], r.parallax):
-        lab.set_text(f"{val * 1000:+.0f}")
     q = a["quiver"]
-    q.set_offsets(np.column_stack([view.X.ravel(), view.Y.ravel()]))
+    if a["zeros"].size != p.size:
+        a["zeros"] = np.zeros(p.size)
+    q.set_UVC(a["zeros"], ex * p)
+    q.set_facecolor(_ARROW_RGBA[(p >= 0).astype(np.intp)])
+    if view.X is not a["grid"][0] or view.Y is not a["grid"][1]:
+        q.set_offsets(np.column_stack([view.X.ravel(), view.Y.ravel()]))
+        a["grid"] = (view.X, view.Y)
+    r = view.readings
+    if r.scheme.name != a["scheme"]:
+        _redraw_scheme(ax, r)
+    for lab, val in zip(a["labels"], r.parallax):
+        text = f"{val * 1000:+.0f}"
+        if lab.get_text() != text:
+            lab.set_text(text)
     a["info"].set_text(f"×{ex:g} · rms {view.rms * 1000:.0f}")  # few glyphs: fast redraw
 
 
@@ -121,17 +164,51 @@ def blit_parallax_field(ax, view) -> None:
     """
     a = ax._orientviz_parallax
     canvas = ax.figure.canvas
+    update_parallax_field(ax, view)  # may replace the scheme artists (new background)
     dynamic = [a["quiver"], a["info"], *a["labels"]]
-    if a["background"] is None:
+    key = (canvas.get_width_height(), ax.figure.dpi, id(canvas))
+    if a["background"] is None or a["background_key"] != key:  # first call, resize, scheme
         for art in dynamic:
             art.set_animated(True)
         canvas.draw()
         a["background"] = canvas.copy_from_bbox(ax.bbox)
-    update_parallax_field(ax, view)
+        a["background_key"] = key
     canvas.restore_region(a["background"])
     for art in dynamic:
         ax.draw_artist(art)
     canvas.blit(ax.bbox)
+
+
+def parallax_field_png(ax, view, *, compress_level: int = 1) -> bytes:
+    """Blit :func:`plot_parallax_field` to ``view`` and return the canvas as PNG bytes.
+
+    For front ends without a live matplotlib canvas (the inline backend): the figure
+    is redrawn by blitting into its Agg buffer (:func:`blit_parallax_field`) and the
+    buffer is encoded directly (Pillow, fast compression), instead of a full
+    ``savefig`` with a tight bounding box. The figure's canvas must be an Agg canvas.
+
+    Parameters
+    ----------
+    ax : matplotlib Axes
+        Made by :func:`plot_parallax_field`.
+    view : PlotterView
+    compress_level : int
+        zlib level 0-9 of the PNG (1: fast, about 2-3 times larger than 9).
+
+    Returns
+    -------
+    bytes
+        The PNG file, for example for ``ipywidgets.Image(value=..., format="png")``.
+    """
+    from PIL import Image
+
+    blit_parallax_field(ax, view)
+    canvas = ax.figure.canvas
+    w, h = canvas.get_width_height(physical=True)
+    img = Image.frombuffer("RGBA", (w, h), canvas.buffer_rgba(), "raw", "RGBA", 0, 1)
+    out = io.BytesIO()
+    img.save(out, format="png", compress_level=int(compress_level))
+    return out.getvalue()
 
 
 def plot_pass_log(runs: Mapping[str, object] | Sequence, ax=None, *, tol_c: float = 1.0):

@@ -4,7 +4,8 @@
 methods with slider values and look at the returned :class:`PlotterView`);
 :func:`plotter_app` wires sliders for by, bz (mm) and ω, φ, κ (centesimal minutes), a
 "one pass" button, the scheme and formula menus and the pass log to it, and redraws
-the parallax field with :func:`orientviz.plot.relative.plot_parallax_field`.
+the parallax field with :func:`orientviz.plot.relative.plot_parallax_field` (redrawn by
+blitting: on the ipympl canvas, or into an Agg buffer shown as PNG in an Image widget).
 """
 
 from __future__ import annotations
@@ -171,12 +172,35 @@ class VirtualPlotter:
         )  # fmt: skip
 
 
+def _field_figure(figsize: tuple[float, float] = (7.0, 5.0)):
+    """Figure and axes for the parallax field; ``live`` if the backend is a widget canvas.
+
+    With ipympl (``%matplotlib widget``) the pyplot figure's canvas is itself a widget
+    and is redrawn by blitting. Otherwise the figure gets a plain Agg canvas outside
+    pyplot (nothing is displayed automatically) and is shown as PNG in an Image widget.
+    """
+    import matplotlib as mpl
+
+    live = any(k in mpl.get_backend().lower() for k in ("ipympl", "widget"))
+    if live:
+        import matplotlib.pyplot as plt
+
+        with plt.ioff():
+            fig, ax = plt.subplots(figsize=figsize, layout="none")
+        return fig, ax, True
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=figsize, layout="none")  # fixed layout: no relayout on updates
+    FigureCanvasAgg(fig)
+    return fig, fig.add_subplot(), False
+
+
 def plotter_app(relief: float = 0.10, seed: int = 0):
     """The ipywidgets app around :class:`VirtualPlotter`; returns the widget box."""
     import ipywidgets as W
-    import matplotlib.pyplot as plt
 
-    from ..plot.relative import blit_parallax_field, plot_parallax_field, update_parallax_field
+    from ..plot.relative import blit_parallax_field, parallax_field_png, plot_parallax_field
 
     vp = VirtualPlotter(relief=relief, seed=seed)
     v0 = vp.view()
@@ -208,28 +232,19 @@ def plotter_app(relief: float = 0.10, seed: int = 0):
     button = W.Button(description="one pass (desk computer)")
     log = W.Textarea(value="", layout=W.Layout(width="95%", height="120px"), disabled=True)
     status = W.HTML()
-    out = W.Output()
-    import matplotlib as mpl
-    from IPython.display import display
-
-    live = any(k in mpl.get_backend().lower() for k in ("ipympl", "widget", "nbagg"))
-    fig, ax = plt.subplots(figsize=(7, 5))
+    fig, ax, live = _field_figure()
     plot_parallax_field(v0, ax=ax)
-    if live:
-        with out:
-            plt.show()
-    else:
-        plt.close(fig)  # inline backend: re-displayed by show()
+    if live:  # ipympl: the canvas is a widget; redraw = blit
+        out = fig.canvas
+    else:  # inline: an Image widget fed with the blitted Agg buffer (no savefig)
+        out = W.Image(format="png")
     busy = {"on": False}
 
     def show(v):
         if live:
             blit_parallax_field(ax, v)
         else:
-            update_parallax_field(ax, v)
-            with out:
-                out.clear_output(wait=True)
-                display(fig)
+            out.value = parallax_field_png(ax, v)
         log.value = "\n".join(v.log)
         status.value = f"rms parallax over the model: <b>{v.rms * 1000:.0f} µm</b>"
 
@@ -255,4 +270,6 @@ def plotter_app(relief: float = 0.10, seed: int = 0):
     button.on_click(on_pass)
     show(v0)
     controls = W.VBox([*sliders.values(), scheme, formula, button, status])
-    return W.VBox([W.HBox([controls, out]), log])
+    box = W.VBox([W.HBox([controls, out]), log])
+    box.figure = fig  # for tests and for saving a snapshot
+    return box
