@@ -1,5 +1,10 @@
 """The ``orientviz`` command line: a thin layer over the library.
 
+Every command is one row of :data:`COMMANDS`: where its code lives (imported only when
+the command runs), a one-line description, its arguments and worked examples. The
+parser and both levels of ``--help`` are built from that table, so a new command is one
+new row.
+
 Exit codes: 0 success, 2 bad input (one line names file, place and problem),
 3 the adjustment could not be done (datum defect, not determinable, no convergence).
 """
@@ -7,85 +12,196 @@ Exit codes: 0 success, 2 bad input (one line names file, place and problem),
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import sys
+import textwrap
 from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
 
 from . import __version__
 from .errors import OrientvizError
 
-EPILOG = """examples:
-  orientviz view                         open the 3D viewer on the default demo
-  orientviz solve block.json --json      adjust a problem file, print JSON
-  orientviz reproduce geier              a paper's table beside orientviz's numbers
-"""
+
+@dataclass(frozen=True)
+class Arg:
+    """One ``add_argument`` call: its names and keyword arguments."""
+
+    names: tuple[str, ...]
+    options: dict[str, Any] = field(default_factory=dict)
+
+
+def arg(*names: str, **options: Any) -> Arg:
+    """Shorthand for :class:`Arg` (the same signature as ``add_argument``)."""
+    return Arg(names, options)
+
+
+@dataclass(frozen=True)
+class Command:
+    """A subcommand of ``orientviz``.
+
+    Attributes
+    ----------
+    module, function : str
+        ``function(args: argparse.Namespace) -> int`` in ``module`` runs the command and
+        returns the exit code; the module is imported only when the command runs.
+    help : str
+        One line for ``orientviz --help``.
+    description : str
+        The paragraph at the top of ``orientviz CMD --help``.
+    examples : tuple of (str, str)
+        ``(invocation, what it does)``; the first one is shown in ``orientviz --help``.
+        Every invocation must parse (tests/cli/test_help.py checks it).
+    arguments : tuple of Arg
+    """
+
+    module: str
+    function: str
+    help: str
+    description: str
+    examples: tuple[tuple[str, str], ...]
+    arguments: tuple[Arg, ...] = ()
+
+
+#: name → Command; the order is the order of ``orientviz --help``
+COMMANDS: dict[str, Command] = {
+    "solve": Command(
+        "orientviz.io.solve",
+        "run_from_cli",
+        help="adjust a problem file (orientviz/1 JSON) and print a report",
+        description="Adjust a problem file (orientviz/1 JSON) and print a report: sigma0, "
+        "redundancy, estimated values with standard deviations, the largest normalised "
+        "residuals. FILE may also be the name of a shipped example (block_strip, "
+        "block_compact, resection_example, intersection_example, similarity_example, "
+        "pair_example, ...). Exit 0 ok, 2 bad input, 3 adjustment impossible.",
+        examples=(
+            ("orientviz solve block_strip", "report on a shipped example block (bundle)"),
+            ("orientviz solve resection_example --json", "the same report as JSON"),
+            ("orientviz solve block_compact --method models", "independent models instead"),
+            ("orientviz solve block.json -o adjusted.json", "also save the adjusted values"),
+        ),
+        arguments=(
+            arg("file", help="problem file, or the name of a shipped example"),
+            arg(
+                "--method",
+                choices=["bundle", "models", "polynomial"],
+                default=None,
+                help="block adjustment method (blocks only; default bundle)",
+            ),
+            arg("--json", action="store_true", help="print the result as JSON"),
+            arg(
+                "-o",
+                "--output",
+                metavar="OUT.json",
+                default=None,
+                help="also write the problem with the adjusted values as start values "
+                "(frame kinds)",
+            ),
+        ),
+    ),
+    "view": Command(
+        "orientviz.viewer.app",
+        "run_from_cli",
+        help="open the 3D viewer (viser, in the browser) on a demo or a problem file",
+        description="Open the 3D viewer on a demo (block, pair, radar) or a problem file and "
+        "serve it on http://HOST:PORT until Ctrl-C; --export writes a static HTML page "
+        "instead.",
+        examples=(
+            ("orientviz view", "the default demo on http://127.0.0.1:8080"),
+            ("orientviz view pair --port 8081", "the relative-orientation demo, another port"),
+            ("orientviz view block.json", "a block problem file"),
+            ("orientviz view radar --export radar.html", "write a static page, no server"),
+        ),
+        arguments=(
+            arg("target", nargs="?", default=None, help="problem file or demo name"),
+            arg("--host", default="127.0.0.1", help="interface to serve on (default 127.0.0.1)"),
+            arg("--port", type=int, default=8080, help="port (default 8080)"),
+            arg("--export", metavar="FILE.html", default=None, help="write a static HTML page"),
+        ),
+    ),
+    "import-bal": Command(
+        "orientviz.io.bal",
+        "run_from_cli",
+        help="convert a BAL (Bundle Adjustment in the Large) file to a problem file",
+        description="Convert a BAL problem (text) to an orientviz/1 block problem file "
+        "(pixel size 0.010 mm, image coordinates undistorted with the file's k1, k2).",
+        examples=(("orientviz import-bal problem-49-7776-pre.txt -o block.json", "convert"),),
+        arguments=(
+            arg("file", help="BAL text file"),
+            arg("-o", "--output", required=True, metavar="OUT.json", help="problem file to write"),
+        ),
+    ),
+    "import-colmap": Command(
+        "orientviz.io.colmap",
+        "run_from_cli",
+        help="convert a COLMAP text model (cameras/images/points3D.txt) to a problem file",
+        description="Convert a COLMAP text model (a folder with cameras.txt, images.txt and "
+        "points3D.txt) to an orientviz/1 block problem file.",
+        examples=(("orientviz import-colmap sparse/0 -o block.json", "convert"),),
+        arguments=(
+            arg("directory", help="folder of the COLMAP text model"),
+            arg("-o", "--output", required=True, metavar="OUT.json", help="problem file to write"),
+        ),
+    ),
+    "reproduce": Command(
+        "orientviz.cli",
+        "run_reproduce",
+        help="print a paper's table beside orientviz's numbers",
+        description="Reproduce a table or figure of one of the source papers and print the "
+        "paper's numbers beside orientviz's. Without NAME: list what can be reproduced.",
+        examples=(
+            ("orientviz reproduce geier", "Geier 1973, Fig. 8: radar orientation tasks"),
+            ("orientviz reproduce", "list the reproductions"),
+            ("orientviz reproduce kovarik --json", "as JSON"),
+        ),
+        arguments=(
+            arg("name", nargs="?", default=None, help="reproduction (omit to list them)"),
+            arg("--json", action="store_true", help="print the rows as JSON"),
+        ),
+    ),
+}
+
+
+def _examples(cmd: Command) -> str:
+    width = max(len(inv) for inv, _ in cmd.examples)
+    rows = "\n".join(f"  {inv:{width}s}   {what}" for inv, what in cmd.examples)
+    return f"examples:\n{rows}\n"
+
+
+def _overview() -> str:
+    width = max(len(n) for n in COMMANDS)
+    rows = []
+    for name, cmd in COMMANDS.items():
+        rows.append(f"  {name:{width}s}   {cmd.help}")
+        rows.append(f"  {'':{width}s}     e.g. {cmd.examples[0][0]}")
+    rows.append("\n'orientviz COMMAND --help' shows a command's options and more examples.")
+    return "commands:\n" + "\n".join(rows) + "\n"
 
 
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="orientviz",
         description="Learn, teach and visually debug photogrammetric orientation.",
-        epilog=EPILOG,
+        epilog=_overview(),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--version", action="version", version=f"orientviz {__version__}")
-    sub = p.add_subparsers(dest="command", metavar="COMMAND")
-
-    s = sub.add_parser(
-        "solve",
-        help="adjust a problem file and report",
-        description="Adjust a problem file (orientviz/1 JSON) and report.",
-        epilog="example: orientviz solve similarity_example --json   (a file or a shipped "
-        "example: block_strip, block_compact, resection_example, intersection_example)",
-    )
-    s.add_argument("file", help="problem file, or the name of a shipped example")
-    s.add_argument("--method", choices=["bundle", "models", "polynomial"], default=None)
-    s.add_argument("--json", action="store_true", help="print the result as JSON")
-    s.add_argument(
-        "-o",
-        "--output",
-        metavar="OUT.json",
-        default=None,
-        help="also write the problem with the adjusted values as start values (frame kinds)",
-    )
-
-    v = sub.add_parser(
-        "view",
-        help="open the 3D viewer (viser) on a file or demo",
-        epilog="example: orientviz view block --port 8081",
-    )
-    v.add_argument("target", nargs="?", default=None, help="problem file or demo name")
-    v.add_argument("--host", default="127.0.0.1")
-    v.add_argument("--port", type=int, default=8080)
-    v.add_argument("--export", metavar="FILE.html", default=None)
-
-    b = sub.add_parser(
-        "import-bal",
-        help="convert a BAL file to an orientviz problem file",
-        epilog="example: orientviz import-bal problem.txt -o block.json",
-    )
-    b.add_argument("file")
-    b.add_argument("-o", "--output", required=True)
-
-    c = sub.add_parser(
-        "import-colmap",
-        help="convert a COLMAP text model to a problem file",
-        epilog="example: orientviz import-colmap sparse/0 -o block.json",
-    )
-    c.add_argument("directory")
-    c.add_argument("-o", "--output", required=True)
-
-    r = sub.add_parser(
-        "reproduce",
-        help="print a paper's table beside orientviz's result",
-        epilog="example: orientviz reproduce geier --json",
-    )
-    r.add_argument("name", nargs="?", default=None)
-    r.add_argument("--json", action="store_true")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND", help="one of the commands below")
+    for name, cmd in COMMANDS.items():
+        s = sub.add_parser(
+            name,
+            description=textwrap.fill(cmd.description, 88),
+            epilog=_examples(cmd),
+            formatter_class=argparse.RawDescriptionHelpFormatter,
+        )
+        for a in cmd.arguments:
+            s.add_argument(*a.names, **a.options)
     return p
 
 
-def _cmd_reproduce(args: argparse.Namespace) -> int:
+def run_reproduce(args: argparse.Namespace) -> int:
+    """``orientviz reproduce [NAME] [--json]``; returns the exit code."""
     from . import reproduce
 
     if args.name is None:
@@ -104,21 +220,10 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
-#: command → (module, function); each function takes the parsed arguments, returns an exit code
-COMMANDS: dict[str, tuple[str, str]] = {
-    "solve": ("orientviz.io.solve", "run_from_cli"),
-    "view": ("orientviz.viewer.app", "run_from_cli"),
-    "import-bal": ("orientviz.io.bal", "run_from_cli"),
-    "import-colmap": ("orientviz.io.colmap", "run_from_cli"),
-}
-
-
 def _dispatch(args: argparse.Namespace) -> int:
-    import importlib
-
-    module, func = COMMANDS[args.command]
+    cmd = COMMANDS[args.command]
     try:
-        mod = importlib.import_module(module)
+        mod = importlib.import_module(cmd.module)
     except ModuleNotFoundError as exc:
         if exc.name and exc.name.startswith("orientviz"):
             print(f"orientviz {args.command}: not yet available in this version", file=sys.stderr)
@@ -129,18 +234,17 @@ def _dispatch(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 2
-    return int(getattr(mod, func)(args))
+    return int(getattr(mod, cmd.function)(args))
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``orientviz`` command; returns the exit code."""
-    args = _parser().parse_args(argv)
+    parser = _parser()
+    args = parser.parse_args(argv)
     try:
-        if args.command == "reproduce":
-            return _cmd_reproduce(args)
         if args.command in COMMANDS:
             return _dispatch(args)
-        _parser().print_help()
+        parser.print_help()
         return 0
     except OrientvizError as exc:
         print(f"orientviz: {exc}", file=sys.stderr)
