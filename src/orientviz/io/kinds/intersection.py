@@ -24,6 +24,7 @@ from ...model import CHECK, ROLES, Block
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
 from ..report import Solution
+from ._checks import reject_first
 from ._frame import block_from_tables, read_frame_tables, require_finite, tables_from_block
 
 
@@ -38,20 +39,13 @@ def load(doc: dict[str, Any], units: Units, source: str) -> Block:
     require_finite(t.images, np.column_stack([im.X0, im.angles]),
                    ("X0", "Y0", "Z0", "omega", "phi", "kappa"), "the known orientation")  # fmt: skip
     rays = block.rays_per_point()
-    few = np.flatnonzero(rays < 2)
-    if few.size:
-        i = int(few[0])
-        raise t.points.fail(
-            i, "id",
-            f"point {block.points.ids[i]!r} is observed in {rays[i]} image(s), an "
-            "intersection needs at least 2 rays",
-        )  # fmt: skip
+    reject_first(
+        t.points, rays < 2, "id",
+        lambda i: f"point {block.points.ids[i]!r} is observed in {rays[i]} image(s), an "
+        "intersection needs at least 2 rays",
+    )  # fmt: skip
     block.meta["name"] = doc.get("name", "")
     return block
-
-
-def dump(block: Block, units: Units, columnar: bool) -> dict[str, Any]:
-    return tables_from_block(block, units, columnar)
 
 
 def _pooled(block: Block, res, ids: list[str]) -> Adjustment:
@@ -152,7 +146,7 @@ KIND = register_kind(
         name="intersection",
         schema="intersection.json",
         load=load,
-        dump=dump,
+        dump=tables_from_block,
         solve=solve,
         description="forward intersection: points from images with known orientation",
         methods=("intersection",),

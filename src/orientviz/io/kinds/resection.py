@@ -18,10 +18,11 @@ from typing import Any
 import numpy as np
 
 from ...errors import InputError
-from ...model import CONTROL, Block
+from ...model import CONTROL, TIE, Block
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
 from ..report import Parameter, Solution
+from ._checks import reject_first
 from ._frame import block_from_tables, read_frame_tables, tables_from_block
 
 
@@ -44,26 +45,17 @@ def load(doc: dict[str, Any], units: Units, source: str) -> Block:
     used = pts.role[block.observations.point] == CONTROL
     partial = np.flatnonzero((pts.role == CONTROL) & ~np.all(np.isfinite(pts.xyz_known), axis=1))
     observed = np.unique(block.observations.point[used])
-    partial = partial[np.isin(partial, observed)]
-    if partial.size:
-        i = int(partial[0])
-        raise t.points.fail(
-            i, "X", f"control point {pts.ids[i]!r} needs X, Y and Z for a resection"
-        )
-    tie = np.flatnonzero(pts.role[block.observations.point] == 0)
-    if tie.size:
-        k = int(tie[0])
-        raise t.observations.fail(
-            k, "point",
-            f"point {pts.ids[block.observations.point[k]]!r} is a tie point; a resection "
-            "uses control points (give its X, Y, Z and role \"control\")",
-        )  # fmt: skip
+    reject_first(
+        t.points, partial[np.isin(partial, observed)], "X",
+        lambda i: f"control point {pts.ids[i]!r} needs X, Y and Z for a resection",
+    )  # fmt: skip
+    reject_first(
+        t.observations, pts.role[block.observations.point] == TIE, "point",
+        lambda k: f"point {pts.ids[block.observations.point[k]]!r} is a tie point; a "
+        "resection uses control points (give its X, Y, Z and role \"control\")",
+    )  # fmt: skip
     block.meta["name"] = doc.get("name", "")
     return block
-
-
-def dump(block: Block, units: Units, columnar: bool) -> dict[str, Any]:
-    return tables_from_block(block, units, columnar)
 
 
 def solve(problem: Problem, method: str | None) -> Solution:
@@ -125,7 +117,7 @@ KIND = register_kind(
         name="resection",
         schema="resection.json",
         load=load,
-        dump=dump,
+        dump=tables_from_block,
         solve=solve,
         description="space resection: one image oriented from control points",
         methods=("resection",),
