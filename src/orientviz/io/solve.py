@@ -1,9 +1,12 @@
-"""``orientviz solve FILE [--method bundle|models|polynomial] [--json]``.
+"""``orientviz solve FILE [--method bundle|models|polynomial] [--json] [--report PATH]``.
 
 Loads a problem file, solves it with the solver of its kind and prints a readable
-report or JSON. Exit codes: 0 solved and converged, 2 bad input (one line naming file,
-place and problem), 3 the adjustment is impossible (datum defect, not determinable) or
-did not converge (the report is still printed). Never a traceback.
+report or JSON. ``--report PATH`` also writes the full adjustment report
+(:func:`orientviz.io.report_html.write_report`): ``*.html`` one self-contained page with
+figures, ``*.txt`` fixed-width text. Exit codes: 0 solved and converged, 2 bad input
+(one line naming file, place and problem; also a report path that cannot be written or
+has another suffix), 3 the adjustment is impossible (datum defect, not determinable) or
+did not converge (the report is still printed and written). Never a traceback.
 """
 
 from __future__ import annotations
@@ -54,7 +57,12 @@ def solve_problem(problem: Problem, method: str | None = None) -> Solution:
 def run_from_cli(args: argparse.Namespace) -> int:
     """Entry point of ``orientviz solve``; returns the exit code (0, 2 or 3)."""
     prog = "orientviz solve"
+    report_path = getattr(args, "report", None)
     try:
+        if report_path:
+            from .report_html import report_format
+
+            report_format(report_path)  # a wrong suffix fails before the adjustment
         problem = load_problem(_resolve(args.file))
         solution = solve_problem(problem, getattr(args, "method", None))
         text = (
@@ -89,6 +97,15 @@ def run_from_cli(args: argparse.Namespace) -> int:
     if getattr(args, "output", None) and solution.adjustment.converged:
         try:
             save_problem(adjusted_problem(problem, solution), args.output)
+        except InputError as exc:
+            print(f"{prog}: {exc.one_line()}", file=sys.stderr)
+            return 2
+    if report_path:
+        try:
+            from .report_html import write_report
+
+            with np.errstate(all="ignore"):
+                write_report(problem, solution, report_path)
         except InputError as exc:
             print(f"{prog}: {exc.one_line()}", file=sys.stderr)
             return 2
