@@ -4,6 +4,7 @@ the affordable ones run and succeed."""
 from __future__ import annotations
 
 import shlex
+import shutil
 
 import pytest
 
@@ -66,35 +67,38 @@ def test_not_run_list_names_real_examples():
 
 
 @pytest.fixture
-def inputs(tmp_path, monkeypatch):
-    """The files the examples name (block.json, a BAL file, a COLMAP model), in a temp cwd."""
+def inputs(tmp_path):
+    """The files the examples name: block.json, a BAL file and a COLMAP model."""
     from orientviz.block.simulate import simulate_block
     from orientviz.io.bal import write_bal
     from orientviz.io.colmap import write_colmap
     from orientviz.io.problem import problem_from_block, save_problem
 
+    folder = tmp_path / "inputs"
+    folder.mkdir()
     block = simulate_block(1, 5, rng=7, control="full").block
-    save_problem(problem_from_block(block), tmp_path / "block.json")
-    write_bal(block, tmp_path / "problem-49-7776-pre.txt")
-    write_colmap(block, tmp_path / "sparse" / "0", pixel_size_mm=0.01)
-    monkeypatch.chdir(tmp_path)
-    return tmp_path
+    save_problem(problem_from_block(block), folder / "block.json")
+    write_bal(block, folder / "problem-49-7776-pre.txt")
+    write_colmap(block, folder / "sparse" / "0", pixel_size_mm=0.01)
+    return folder
 
 
-def test_affordable_examples_run(inputs, capsys):
+def test_affordable_examples_run(inputs, tmp_path, monkeypatch, capsys):
     ran = []
-    for name, invocation in _examples():
+    for k, (name, invocation) in enumerate(_examples()):
         if invocation in NOT_RUN:
             continue
         if name == "view":
             pytest.importorskip("viser")
+        cwd = shutil.copytree(inputs, tmp_path / f"run{k}")  # each example on fresh inputs
+        monkeypatch.chdir(cwd)
         words = shlex.split(invocation)[1:]
-        made = [w for w in words if w.endswith((".json", ".html")) and not (inputs / w).exists()]
+        made = [w for w in words if w.endswith((".json", ".html")) and not (cwd / w).exists()]
         code = main(words)
         out, err = capsys.readouterr()
         assert code == 0, f"{invocation}: exit {code}: {err}"
         assert out.strip(), f"{invocation} printed nothing"
         for w in made:  # the files an example says it writes are there
-            assert (inputs / w).stat().st_size > 0, f"{invocation} did not write {w}"
+            assert (cwd / w).stat().st_size > 0, f"{invocation} did not write {w}"
         ran.append(invocation)
     assert len(ran) + len(NOT_RUN) == len(_examples())
