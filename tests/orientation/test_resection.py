@@ -180,3 +180,74 @@ def test_only_estimated_interior_parameters_are_reported():
     assert res.cofactor.shape == (7, 7) and res.history[-1].x.shape == (7,)
     assert res["c"] == pytest.approx(150.0, abs=1e-8)
     assert res.extra["camera"].x0 == 0.0
+
+
+# --- degenerate input: a clear NotDeterminableError, never numpy's LinAlgError -------------
+_X3 = np.array([[0.0, 0.0, 0.0], [100.0, 0.0, 0.0], [0.0, 100.0, 0.0], [100.0, 100.0, 5.0]])
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_closed_form_all_image_points_at_one_location(n):
+    with pytest.raises(NotDeterminableError, match="1 location") as info:
+        resection_closed_form(np.full((n, 2), 3.0), _X3[:n], C_MM)
+    assert info.value.parameters[:3] == ["X0", "Y0", "Z0"]
+
+
+def test_closed_form_two_rays_in_one_direction():
+    # used to end in "LinAlgError: SVD did not converge" (found by a random sweep)
+    xy = np.array([[50.0, 0.0], [-50.0, -50.0], [0.0, -50.0], [100.0, -50.0], [100.0, -50.0]])
+    X = np.array(
+        [
+            [100.5613032690872, -110.86122162274388, 136.30190619659],
+            [-102.49533502280157, -164.83053985345455, 52.034432760912075],
+            [236.81270481026667, -66.26434144847433, 93.84521740262728],
+            [-111.48443066945354, -35.794518552902815, 154.2464437467255],
+            [-31.559010286789267, 64.30568565771242, -69.48535374232124],
+        ]
+    )
+    try:
+        cands = resection_closed_form(xy, X, C_MM)
+    except NotDeterminableError as exc:
+        assert "X0" in exc.parameters
+    else:
+        assert all(np.all(np.isfinite(c.X0)) for c in cands)
+    with pytest.raises(NotDeterminableError, match="same direction"):
+        resection_closed_form(xy, X, C_MM, use=(0, 3, 4))
+
+
+def test_closed_form_collinear_control_points():
+    xy = np.array([[0.0, 0.0], [10.0, 0.0], [0.0, 10.0], [10.0, 10.0]])
+    X = np.outer([0.0, 1.0, 2.0, 3.0], [100.0, 20.0, 1.0])
+    with pytest.raises(NotDeterminableError, match="collinear"):
+        resection_closed_form(xy, X, C_MM)
+
+
+def test_grunert_degenerate_directions():
+    with pytest.raises(InputError, match="zero"):
+        grunert_distances(np.zeros((3, 3)), _X3[:3])
+    d = np.array([[0.0, 0.0, -1.0], [0.0, 0.0, -1.0], [0.1, 0.0, -1.0]])
+    with pytest.raises(NotDeterminableError, match="rays 1 and 2"):
+        grunert_distances(d, _X3[:3])
+    with pytest.raises(InputError, match="finite"):
+        grunert_distances(np.full((3, 3), np.nan), _X3[:3])
+
+
+def test_closed_form_random_degenerate_sweep_raises_only_orientviz_errors():
+    """Near-collinear control points, clustered or gridded image points: no LinAlgError."""
+    from orientviz.errors import OrientvizError
+
+    rng = np.random.default_rng(11)
+    for t in range(400):
+        n = int(rng.integers(3, 6))
+        X = rng.normal(0, 100, (n, 3))
+        xy = rng.normal(0, 50, (n, 2))
+        if t % 3 == 0:
+            X = np.outer(rng.normal(size=n), rng.normal(size=3)) + rng.normal(0, 1e-9, (n, 3))
+        elif t % 3 == 1:
+            xy = xy[0] + rng.normal(0, 1e-10, (n, 2))
+        else:
+            xy = np.round(xy / 50) * 50
+        try:
+            resection_closed_form(xy, X, C_MM)
+        except OrientvizError:
+            pass

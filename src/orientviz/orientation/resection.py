@@ -105,10 +105,52 @@ def grunert_distances(directions: ArrayLike, points: ArrayLike) -> F64:
     -------
     ndarray, shape (k, 3)
         Distances (s1, s2, s3) in m, k = 0 … 4 solutions.
+
+    Raises
+    ------
+    InputError
+        Wrong shapes, NaN or inf, or a zero direction.
+    NotDeterminableError
+        Two rays in the same direction, or the quartic cannot be solved (degenerate
+        geometry); names the exterior orientation unknowns.
     """
     d = np.asarray(directions, dtype=float)
-    d = d / np.linalg.norm(d, axis=1, keepdims=True)
     X = np.asarray(points, dtype=float)
+    if d.shape != (3, 3) or X.shape != (3, 3):
+        raise InputError(
+            f"grunert_distances: expected directions and points of shape (3, 3), got "
+            f"{d.shape} and {X.shape}"
+        )
+    if not (np.all(np.isfinite(d)) and np.all(np.isfinite(X))):
+        raise InputError("grunert_distances: expected finite directions and points")
+    norm = np.linalg.norm(d, axis=1)
+    if np.any(norm == 0):
+        raise InputError(f"grunert_distances: direction(s) {np.flatnonzero(norm == 0)} are zero")
+    d = d / norm[:, None]
+    _check_distinct_rays(d)
+    try:
+        return _grunert(d, X)
+    except np.linalg.LinAlgError as exc:
+        raise NotDeterminableError(
+            f"space resection: the three-point geometry is degenerate ({exc})",
+            parameters=list(EXTERIOR_NAMES),
+        ) from None
+
+
+def _check_distinct_rays(d: F64, tol: float = 1e-12) -> None:
+    """NotDeterminableError if two unit rays point the same way (one image position)."""
+    for i, j in ((0, 1), (0, 2), (1, 2)):
+        if np.sum((d[i] - d[j]) ** 2) <= tol:
+            raise NotDeterminableError(
+                f"space resection: rays {i + 1} and {j + 1} have the same direction (the "
+                "image points coincide): only two rays, the position and rotation "
+                "(X0, Y0, Z0, omega, phi, kappa) are not determinable",
+                parameters=list(EXTERIOR_NAMES),
+            )
+
+
+def _grunert(d: F64, X: F64) -> F64:
+    """Grunert's quartic for unit rays d and points X (both (3, 3), checked)."""
     ca, cb, cg = d[1] @ d[2], d[0] @ d[2], d[0] @ d[1]  # angles at the centre: 23, 13, 12
     a2 = np.sum((X[1] - X[2]) ** 2)
     b2 = np.sum((X[0] - X[2]) ** 2)
@@ -180,14 +222,16 @@ def _rigid(a: F64, b: F64) -> tuple[F64, F64]:
 
 
 def _pick_three(xy: F64) -> tuple[int, int, int]:
-    """Three image points spanning a large triangle (first, farthest, largest area)."""
-    i = 0
-    j = int(np.argmax(np.sum((xy - xy[i]) ** 2, axis=1)))
+    """Three different image points spanning a large triangle (far pair, largest area).
+
+    Needs at least three distinct image positions (checked by the caller).
+    """
+    j = int(np.argmax(np.sum((xy - xy[0]) ** 2, axis=1)))
+    i = int(np.argmax(np.sum((xy - xy[j]) ** 2, axis=1)))  # re-anchor on the far end
     e = xy[j] - xy[i]
     area = np.abs(e[0] * (xy[:, 1] - xy[i, 1]) - e[1] * (xy[:, 0] - xy[i, 0]))
-    k = int(np.argmax(area))
-    i = int(np.argmax(np.sum((xy - xy[j]) ** 2, axis=1)))  # re-anchor on the far end
-    return i, j, k if k not in (i, j) else int(np.argsort(-area)[1])
+    area[[i, j]] = -1.0
+    return i, j, int(np.argmax(area))
 
 
 def resection_closed_form(
@@ -220,7 +264,10 @@ def resection_closed_form(
     Raises
     ------
     NotDeterminableError
-        Fewer than 3 points, three collinear points, or no real solution.
+        Fewer than 3 points, three collinear control points, image points at fewer
+        than three locations (or two of the three rays in one direction), or no real
+        solution. Names the exterior orientation unknowns; numpy's ``LinAlgError``
+        does not escape.
     """
     xy, X = _check_pairs(image_points, object_points)
     cam = _camera(camera)
@@ -229,7 +276,18 @@ def resection_closed_form(
             f"space resection: needs at least 3 control points, got {xy.shape[0]}",
             parameters=list(EXTERIOR_NAMES),
         )
-    idx = _pick_three(xy) if use is None else tuple(int(i) for i in use)
+    if use is None:
+        distinct = np.unique(xy, axis=0).shape[0]
+        if distinct < 3:
+            raise NotDeterminableError(
+                f"space resection: the {xy.shape[0]} image points lie at {distinct} "
+                "location(s); three rays in different directions are needed, the "
+                "position and rotation (X0, Y0, Z0, omega, phi, kappa) are not determinable",
+                parameters=list(EXTERIOR_NAMES),
+            )
+        idx = _pick_three(xy)
+    else:
+        idx = tuple(int(i) for i in use)
     if len(set(idx)) != 3:
         raise InputError(f"use: expected three different point indices, got {idx}")
     sel = np.array(idx)
@@ -240,11 +298,14 @@ def resection_closed_form(
         )
     dirs = np.column_stack([xy[sel, 0] - cam.x0, xy[sel, 1] - cam.y0, np.full(3, -cam.c)])
     unit = dirs / np.linalg.norm(dirs, axis=1, keepdims=True)
-    sols = grunert_distances(unit, X[sel])
+    sols = grunert_distances(unit, X[sel])  # degenerate rays: NotDeterminableError
     others = np.setdiff1d(np.arange(xy.shape[0]), sel)
     cands = []
     for s in sols:
-        R, X0 = _rigid(unit * s[:, None], X[sel])
+        try:
+            R, X0 = _rigid(unit * s[:, None], X[sel])
+        except np.linalg.LinAlgError:  # SVD did not converge: skip this candidate
+            continue
         w = (X - X0) @ R[:, 2]
         if np.any(w >= 0):  # some control point behind the camera
             continue
