@@ -130,6 +130,12 @@ COMMANDS: dict[str, Command] = {
         arguments=(
             arg("file", help="BAL text file"),
             arg("-o", "--output", required=True, metavar="OUT.json", help="problem file to write"),
+            arg("--control", metavar="CSV", default=None,
+                help="control points: CSV id,X,Y,Z[,sX,sY,sZ,role] keyed by point id"),
+            arg("--pixel-size", type=float, default=None, metavar="MM",
+                help="pixel size in mm (default 0.01)"),
+            arg("--sigma-px", type=float, default=None, metavar="PX",
+                help="a-priori sigma of the image coordinates in pixels (default 1)"),
         ),
     ),
     "import-colmap": Command(
@@ -137,11 +143,39 @@ COMMANDS: dict[str, Command] = {
         "run_from_cli",
         help="convert a COLMAP text model (cameras/images/points3D.txt) to a problem file",
         description="Convert a COLMAP text model (a folder with cameras.txt, images.txt and "
-        "points3D.txt) to an orientviz/1 block problem file.",
+        "points3D.txt) to an orientviz/1 block problem file; --control adds control points "
+        "from a CSV keyed by POINT3D_ID.",
         examples=(("orientviz import-colmap sparse/0 -o block.json", "convert"),),
         arguments=(
             arg("directory", help="folder of the COLMAP text model"),
             arg("-o", "--output", required=True, metavar="OUT.json", help="problem file to write"),
+            arg("--control", metavar="CSV", default=None,
+                help="control points: CSV id,X,Y,Z[,sX,sY,sZ,role] keyed by point id"),
+            arg("--pixel-size", type=float, default=None, metavar="MM",
+                help="pixel size in mm (default 0.01)"),
+            arg("--sigma-px", type=float, default=None, metavar="PX",
+                help="a-priori sigma of the image coordinates in pixels (default 1)"),
+        ),
+    ),
+    "export": Command(
+        "orientviz.io.export",
+        "run_from_cli",
+        help="adjust a block problem file and export the results (JSON, CSV, COLMAP text)",
+        description="Adjust a block problem file by the bundle method and write into DIR: "
+        "adjusted.json (the problem with the adjusted values), images.csv and points.csv "
+        "(values, standard deviations, residuals per image and point) and colmap/ (COLMAP "
+        "text model). --no-adjust exports the file's own values.",
+        examples=(
+            ("orientviz export block_strip -d results", "adjust a shipped example, write all"),
+            ("orientviz export block.json -d results --format csv --no-adjust",
+             "only the CSV tables of the file's values"),
+        ),
+        arguments=(
+            arg("file", help="block problem file, or the name of a shipped example"),
+            arg("-d", "--directory", required=True, metavar="DIR", help="folder to write into"),
+            arg("--format", default="json,csv,colmap",
+                help="comma-separated: json, csv, colmap (default all)"),
+            arg("--no-adjust", action="store_true", help="export the values as they are"),
         ),
     ),
     "reproduce": Command(

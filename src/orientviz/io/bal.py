@@ -123,14 +123,18 @@ def _parse(lines: list[str], source: str) -> tuple[F64, F64, F64]:
     if wrong.size:
         k = int(wrong[0])
         raise InputError(
-            f"expected 4 values '<camera> <point> <x> <y>', got {counts[k]}", source, f"line {k + 2}"
+            f"expected 4 values '<camera> <point> <x> <y>', got {counts[k]}",
+            source,
+            f"line {k + 2}",
         )
     obs = tok.take(4 * nobs, "the observations").reshape(nobs, 4)
     for col, name, n in ((0, "camera", nc), (1, "point", npt)):
         idx = obs[:, col]
         tok.first_bad(
             (idx != np.round(idx)) | (idx < 0) | (idx >= n), 3 + col, 4,
-            lambda i: f"expected a {name} index in [0, {n}), got {tok.words[3 + 4 * i + col]}",
+            lambda i, name=name, n=n, col=col: (
+                f"expected a {name} index in [0, {n}), got {tok.words[3 + 4 * i + col]}"
+            ),
         )  # fmt: skip
     first_cam = tok.pos
     cams = tok.take(9 * nc, "the camera parameters").reshape(nc, 9)
@@ -263,14 +267,12 @@ def write_bal(
 
 
 def run_from_cli(args: argparse.Namespace) -> int:
-    """``orientviz import-bal FILE -o OUT.json``: convert a BAL file to a problem file."""
-    block = read_bal(args.file)
-    from .problem import write_problem
+    """``orientviz import-bal FILE -o OUT.json [--control CSV]``: BAL file → problem file."""
+    from .importing import import_to_problem
 
-    write_problem({"kind": "block", "block": block, "name": Path(args.file).stem}, args.output)
-    print(
-        f"wrote {args.output}: {block.n_images} images, {block.n_points} points, "
-        f"{block.n_observations} observations (pixel size {DEFAULT_PIXEL_MM} mm assumed; "
-        "no control points: add control before adjusting)"
+    return import_to_problem(
+        args,
+        lambda px, sig: read_bal(args.file, pixel_size_mm=px, sigma_px=sig),
+        Path(args.file).stem,
+        default_pixel_mm=DEFAULT_PIXEL_MM,
     )
-    return 0

@@ -154,7 +154,9 @@ def _read_points(path: Path) -> tuple[list[int], list[list[float]], list[tuple[i
         f = line.split()
         vals = _numbers(path, no, f, "ifff", "a 3D point")
         if vals[0] in seen:
-            raise InputError(f"duplicate POINT3D_ID {vals[0]}", source=str(path), where=f"line {no}")
+            raise InputError(
+                f"duplicate POINT3D_ID {vals[0]}", source=str(path), where=f"line {no}"
+            )
         seen.add(vals[0])
         track = f[8:]
         if len(track) % 2:
@@ -457,10 +459,12 @@ def _point3d_ids(block: Block) -> list[int]:
 
 
 def run_from_cli(args: argparse.Namespace) -> int:
-    """``orientviz import-colmap DIR -o OUT.json``: convert a COLMAP text model."""
-    block = read_colmap(args.directory)
-    from .problem import write_problem  # the problem-file writer (orientviz/1)
+    """``orientviz import-colmap DIR -o OUT.json [--control CSV]``: COLMAP text → problem file."""
+    from .importing import import_to_problem
 
-    write_problem({"kind": "block", "block": block}, args.output)
-    print(f"wrote {args.output}: {block.summary()}")
-    return 0
+    return import_to_problem(
+        args,
+        lambda px, sig: read_colmap(args.directory, pixel_size_mm=px, sigma_px=sig),
+        Path(args.directory).resolve().name,
+        default_pixel_mm=0.01,
+    )

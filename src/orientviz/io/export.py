@@ -1,0 +1,128 @@
+"""Export the results of a block adjustment: problem file (JSON), CSV tables, COLMAP text.
+
+:func:`export_results` writes, into one folder,
+
+* ``adjusted.json`` — the problem file (``orientviz/1``, kind ``block``) with the
+  adjusted orientations and tie points as its values: load it with
+  :func:`~orientviz.io.problem.load_problem` or adjust it again with ``orientviz solve``;
+* ``images.csv`` and ``points.csv`` — the tables of :mod:`orientviz.io.results`
+  (values, a-posteriori σ, residuals per image and per point);
+* ``colmap/`` — the adjusted block as a COLMAP text model
+  (:func:`~orientviz.io.colmap.write_colmap`).
+
+``orientviz export FILE -d DIR`` does the same from the command line: it adjusts a
+problem file by the bundle method and writes the results (``--no-adjust`` exports the
+file's values without σ).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from ..adjust.result import Adjustment
+from ..errors import AdjustmentError, InputError
+from ..model import Block
+
+FORMATS = ("json", "csv", "colmap")
+
+
+def export_results(
+    block: Block,
+    adj: Adjustment | None,
+    directory: str | Path,
+    *,
+    formats: tuple[str, ...] | list[str] = FORMATS,
+    name: str = "",
+    angle_unit: str = "gon",
+) -> dict[str, Path]:
+    """Write the results of ``block`` (adjusted by ``adj``) in ``formats`` into ``directory``.
+
+    Parameters
+    ----------
+    block : Block
+        The block that was adjusted (its start values and observations).
+    adj : Adjustment or None
+        Its bundle adjustment; None exports the block's own values (no σ).
+    directory : str or Path
+        Target folder (created if needed).
+    formats : sequence of {"json", "csv", "colmap"}
+        What to write.
+    name : str
+        Name stored in the problem file.
+    angle_unit : str
+        Unit of the angles in the CSV tables (default gon).
+
+    Returns
+    -------
+    dict
+        ``{"json": path, "images_csv": path, "points_csv": path, "colmap": folder}``
+        for what was written.
+    """
+    from .colmap import write_colmap
+    from .problem import write_problem
+    from .results import adjusted_block, image_table, point_table
+
+    unknown = [f for f in formats if f not in FORMATS]
+    if unknown:
+        raise InputError(f"unknown export format {unknown[0]!r}; expected {', '.join(FORMATS)}")
+    d = Path(directory)
+    d.mkdir(parents=True, exist_ok=True)
+    out = block if adj is None else adjusted_block(block, adj)
+    written: dict[str, Path] = {}
+    if "json" in formats:
+        doc = {"kind": "block", "block": out, "name": name or str(block.meta.get("name", ""))}
+        write_problem(doc, d / "adjusted.json")
+        written["json"] = d / "adjusted.json"
+    if "csv" in formats:
+        written["images_csv"] = image_table(block, adj, angle_unit=angle_unit).to_csv(
+            d / "images.csv"
+        )
+        written["points_csv"] = point_table(block, adj).to_csv(d / "points.csv")
+    if "colmap" in formats:
+        write_colmap(out, d / "colmap")
+        written["colmap"] = d / "colmap"
+    return written
+
+
+def run_from_cli(args: argparse.Namespace) -> int:
+    """``orientviz export FILE -d DIR [--format json,csv,colmap] [--no-adjust]``."""
+    from ..block.bundle import bundle_adjust
+    from .kinds.block import approximate
+    from .problem import load_problem
+
+    prog = "orientviz export"
+    try:
+        from .solve import _resolve  # a path, or the name of a shipped example
+
+        problem = load_problem(_resolve(args.file))
+        if not isinstance(problem.data, Block):
+            raise InputError(f"expected a block problem, got kind {problem.kind!r}", args.file)
+        block = problem.data
+        adj = None
+        if not args.no_adjust:
+            block = approximate(block)
+            control = problem.options.get("control", "fixed")
+            adj = bundle_adjust(block, control=control)
+            if not adj.converged:
+                print(
+                    f"{prog}: {args.file}: the adjustment did not converge: {adj.reason}",
+                    file=sys.stderr,
+                )
+                return 3
+        formats = [f.strip() for f in args.format.split(",") if f.strip()]
+        written = export_results(block, adj, args.directory, formats=formats, name=problem.name)
+    except InputError as exc:
+        print(f"{prog}: {exc.one_line()}", file=sys.stderr)
+        return 2
+    except (AdjustmentError, ArithmeticError, np.linalg.LinAlgError) as exc:
+        print(f"{prog}: {args.file}: adjustment impossible: {exc}", file=sys.stderr)
+        return 3
+    for path in written.values():
+        print(f"wrote {path}")
+    if adj is not None:
+        print(f"σ0 = {adj.sigma0:.3f}, redundancy {adj.redundancy}")
+    return 0
