@@ -59,39 +59,30 @@ def precision_table(res: Adjustment) -> str:
     return "\n".join(rows)
 
 
+def _residual_figure(state: tuple[SimilarityExample, Adjustment]):
+    import matplotlib.pyplot as plt
+
+    from ..plot.transform import plot_transform_residuals
+
+    fig, ax = plt.subplots(figsize=(6, 5.5))
+    plot_transform_residuals(state[1], ax=ax)
+    return fig
+
+
 def absolute_app():
     """ipywidgets app around :func:`absolute_state`; returns the widget box."""
     import ipywidgets as W
-    import matplotlib.pyplot as plt
-    from IPython.display import display
 
-    from ..errors import NotDeterminableError
-    from ..plot.transform import plot_transform_residuals
+    from ._app import control_app
 
     layout = W.Dropdown(options=[(v, k) for k, v in LAYOUTS.items()], description="control")
     sigma = W.FloatSlider(value=5.0, min=0.5, max=30.0, step=0.5, description="σ [cm]",
                           continuous_update=False)  # fmt: skip
     seed = W.IntSlider(value=1, min=0, max=50, description="seed", continuous_update=False)
     rigid = W.Checkbox(value=False, description="rigid (scale fixed = 1)")
-    out, text = W.Output(), W.Output()
-
-    def redraw(*_):
-        with text:
-            text.clear_output(wait=True)
-            try:
-                _, res = absolute_state(layout.value, sigma.value, seed.value, rigid.value)
-            except NotDeterminableError as exc:
-                print(f"not determinable: {exc}")
-                return
-            print(precision_table(res))
-        with out:
-            out.clear_output(wait=True)
-            fig, ax = plt.subplots(figsize=(6, 5.5))
-            plot_transform_residuals(res, ax=ax)
-            display(fig)
-            plt.close(fig)
-
-    for w in (layout, sigma, seed, rigid):
-        w.observe(redraw, names="value")
-    redraw()
-    return W.HBox([W.VBox([layout, sigma, seed, rigid, text]), out])
+    return control_app(
+        [layout, sigma, seed, rigid],
+        absolute_state,
+        lambda state: precision_table(state[1]),
+        _residual_figure,
+    )

@@ -70,47 +70,43 @@ def intersection_state(
     return intersect_points(xy, img, pt, X0, R, c, sigma=sigma_um / 1000)
 
 
+def _describe_resection(state: tuple[ResectionExample, Adjustment]) -> str:
+    res = state[1]
+    s = res.std(a_posteriori=False)
+    return (
+        f"σ X0, Y0, Z0 = {s[0]:.3f}, {s[1]:.3f}, {s[2]:.3f} m (a priori)\n"
+        f"σ̂0 = {res.sigma0:.2f}, redundancy {res.redundancy}"
+    )
+
+
+def _resection_figure(state: tuple[ResectionExample, Adjustment]):
+    import matplotlib.pyplot as plt
+
+    from ..plot.image import plot_correlations, plot_image
+
+    ex, res = state
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4.5))
+    plot_image(ex.image_points, residuals=res.extra["residuals_xy"], ax=a1,
+               title="control points and residuals")  # fmt: skip
+    plot_correlations(res, ax=a2)
+    fig.tight_layout()
+    return fig
+
+
 def resection_app():
     """ipywidgets app around :func:`resection_state`; returns the widget box."""
     import ipywidgets as W
-    import matplotlib.pyplot as plt
-    from IPython.display import display
 
-    from ..errors import NotDeterminableError
-    from ..plot.image import plot_correlations, plot_image
+    from ._app import control_app
 
     n = W.IntSlider(value=8, min=3, max=40, description="points", continuous_update=False)
     relief = W.FloatSlider(value=80.0, min=0.0, max=600.0, step=10.0, description="relief [m]",
                            continuous_update=False)  # fmt: skip
     sig = W.FloatSlider(value=5.0, min=1.0, max=30.0, description="σ [µm]", continuous_update=False)
     seed = W.IntSlider(value=1, min=0, max=50, description="seed", continuous_update=False)
-    out, text = W.Output(), W.Output()
-
-    def redraw(*_):
-        with text:
-            text.clear_output(wait=True)
-            try:
-                ex, res = resection_state(n.value, relief.value, sig.value, seed.value)
-            except NotDeterminableError as exc:
-                print(f"not determinable: {exc}")
-                return
-            s = res.std(a_posteriori=False)
-            print(f"σ X0, Y0, Z0 = {s[0]:.3f}, {s[1]:.3f}, {s[2]:.3f} m (a priori)")
-            print(f"σ̂0 = {res.sigma0:.2f}, redundancy {res.redundancy}")
-        with out:
-            out.clear_output(wait=True)
-            fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4.5))
-            plot_image(ex.image_points, residuals=res.extra["residuals_xy"], ax=a1,
-                       title="control points and residuals")  # fmt: skip
-            plot_correlations(res, ax=a2)
-            fig.tight_layout()
-            display(fig)
-            plt.close(fig)
-
-    for w in (n, relief, sig, seed):
-        w.observe(redraw, names="value")
-    redraw()
-    return W.HBox([W.VBox([n, relief, sig, seed, text]), out])
+    return control_app(
+        [n, relief, sig, seed], resection_state, _describe_resection, _resection_figure
+    )
 
 
 def intersection_app():
