@@ -19,8 +19,12 @@ AXIS_COLOURS = ("#c0392b", "#27ae60", "#2874a6")
 IMAGE_COLOUR = "#7d3c98"
 
 
-def _arc(ax3d, centre, axis: int, radius: float, colour: str, label: str) -> None:
-    """A counter-clockwise arc (seen from the positive axis) with an arrow head."""
+def _arc(ax3d, centre, axis: int, radius: float, colour: str, label: str, label_at) -> None:
+    """A counter-clockwise arc (seen from the positive axis) with an arrow head.
+
+    ``label_at`` is the label's offset from ``centre`` (object units), chosen per axis
+    so that the label sits clear of the axis arrow and its letter.
+    """
     t = np.linspace(0.15 * np.pi, 1.75 * np.pi, 60)
     i, j = [(1, 2), (2, 0), (0, 1)][axis]
     pts = np.zeros((t.size, 3))
@@ -30,7 +34,8 @@ def _arc(ax3d, centre, axis: int, radius: float, colour: str, label: str) -> Non
     ax3d.plot(pts[:, 0], pts[:, 1], pts[:, 2], color=colour, lw=1.5)
     tip, before = pts[-1], pts[-6]
     ax3d.quiver(*before, *(tip - before), color=colour, arrow_length_ratio=1.0, lw=1.5)
-    ax3d.text(*(pts[t.size // 2] + 0.08), label, color=colour, fontsize=13)
+    ax3d.text(*(centre + np.asarray(label_at)), label, color=colour, fontsize=13,
+              ha="center", va="center")  # fmt: skip
 
 
 def plot_frames(
@@ -71,10 +76,11 @@ def plot_frames(
         e[k] = 3.0
         ax.quiver(0, 0, 0, *e, color=AXIS_COLOURS[k], arrow_length_ratio=0.08, lw=2)
         ax.text(*(e * 1.07), name, color=AXIS_COLOURS[k], fontsize=13, fontweight="bold")
-        _arc(ax, e * 0.75, k, 0.3, AXIS_COLOURS[k], ("ω", "φ", "κ")[k])
+        label_at = ((0.0, 0.0, 0.62), (0.0, 0.0, 0.62), (-0.55, 0.3, 0.2))[k]
+        _arc(ax, e * 0.6, k, 0.3, AXIS_COLOURS[k], ("ω", "φ", "κ")[k], label_at)
     ax.text2D(
         0.02,
-        0.02,
+        0.01,
         "object frame X, Y, Z (m), Z up; schematic, not to scale",
         transform=ax.transAxes,
         fontsize=9,
@@ -102,13 +108,13 @@ def plot_frames(
     p = X0 + R @ np.array([xy[0], xy[1], -c])
     ax.plot(*np.column_stack([X0, P]), ls="--", color="0.35", lw=1)
     ax.scatter(*P, color="k", s=25)
-    ax.text(*(P + np.array([0.1, 0.0, -0.3])), "P = (X, Y, Z)", fontsize=10)
+    ax.text(*(P + np.array([0.0, 0.12, 0.25])), "P = (X, Y, Z)", fontsize=10)
     ax.scatter(*p, color=IMAGE_COLOUR, s=18)
     ax.text(*(p + np.array([0.15, 0.0, -0.45])), "P' = (x, y)", color=IMAGE_COLOUR, fontsize=10)
     ax.set_xlim(0, 3.3)
     ax.set_ylim(0, 3.3)
-    ax.set_zlim(0, 5.0)
-    ax.set_box_aspect((3.3, 3.3, 5.0))
+    ax.set_zlim(-0.4, 5.0)  # room below the X axis for the footnote
+    ax.set_box_aspect((3.3, 3.3, 5.4))
     ax.view_init(elev=16, azim=-62)
     ax.set_axis_off()
     seq_txt = "R = R_ω R_φ R_κ" if sequence == "opk" else "R = R_φ R_ω R_κ"
@@ -154,7 +160,7 @@ def plot_image_frame(xy=(42.0, -27.0), *, x0: float = 0.0, y0: float = 0.0, ax=N
     )
     ax.text(h * 0.55, 5, "x (flight)", color=IMAGE_COLOUR, fontsize=10)
     ax.text(4, h * 0.84, "y", color=IMAGE_COLOUR, fontsize=10)
-    ax.text(-h * 0.95, -h * 0.93, "z ⊙ towards the viewer (the projection centre)", fontsize=8)
+    ax.text(-h * 0.95, -h * 0.87, "z ⊙ towards the viewer (the projection centre)", fontsize=8)
     ax.plot(x0, y0, marker="x", color="k")
     ax.text(x0 + 3, y0 - 10, "H' (x0, y0)", fontsize=9)
     ax.plot(*xy, marker="o", color="k", ms=4)
