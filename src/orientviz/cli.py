@@ -80,6 +80,7 @@ COMMANDS: dict[str, Command] = {
             ("orientviz solve resection_example --json", "the same report as JSON"),
             ("orientviz solve block_compact --method models", "independent models instead"),
             ("orientviz solve block.json -o adjusted.json", "also save the adjusted values"),
+            ("orientviz solve block_strip --report report.html", "full report (or .txt)"),
         ),
         arguments=(
             arg("file", help="problem file, or the name of a shipped example"),
@@ -97,6 +98,12 @@ COMMANDS: dict[str, Command] = {
                 default=None,
                 help="also write the problem with the adjusted values as start values "
                 "(frame kinds)",
+            ),
+            arg(
+                "--report",
+                metavar="PATH",
+                default=None,
+                help="also write an adjustment report: PATH.html (with figures) or PATH.txt",
             ),
         ),
     ),
