@@ -225,7 +225,7 @@ def chi2_test(sigma0: float, r: int, alpha: float = 0.05) -> dict[str, Any]:
     1 − α/2), the corresponding bounds for σ̂0, ``alpha`` and ``accepted`` (None when
     r = 0 or σ̂0 is not finite).
     """
-    from scipy.stats import chi2
+    from scipy.special import gammaincinv  # scipy.stats would take a second to import
 
     out: dict[str, Any] = {
         "alpha": alpha,
@@ -239,7 +239,8 @@ def chi2_test(sigma0: float, r: int, alpha: float = 0.05) -> dict[str, Any]:
     }
     if r <= 0 or not np.isfinite(sigma0):
         return out
-    lo, hi = chi2.ppf(alpha / 2, r), chi2.ppf(1 - alpha / 2, r)
+    # quantile of χ²(r): P(r/2, x/2) = q  ⇔  x = 2 · P⁻¹(r/2, q)
+    lo, hi = 2.0 * gammaincinv(r / 2, alpha / 2), 2.0 * gammaincinv(r / 2, 1 - alpha / 2)
     T = r * sigma0**2
     out.update(
         T=float(T),
@@ -369,6 +370,12 @@ class _Builder:
         self.warn: list[str] = []
         self.plot: dict[str, Any] = {}
         self.used = _used(self.adj)
+
+    def coverage(self) -> F64:
+        """:func:`image_coverage` of the block, computed once."""
+        if not hasattr(self, "_coverage"):
+            self._coverage = image_coverage(self.block)
+        return self._coverage
 
     # .................................................................. driver
     def run(self) -> Report:
@@ -658,7 +665,7 @@ class _Builder:
         cov = np.full(m, np.nan)
         if blk is not None and len(blk.images) == m:
             npts = blk.points_per_image()
-            cov = image_coverage(blk)
+            cov = self.coverage()
         v = {
             "ids": list(s.image_ids),
             "sigma_X0": sX * lf,
@@ -1096,20 +1103,30 @@ class _Builder:
                 names = adj.names[adj.blocks[bname]]
                 nb = Q.shape[1]
                 fb = free[adj.blocks[bname]].reshape(-1, nb)
-                for k in range(Q.shape[0]):
-                    ok = np.flatnonzero(fb[k])
-                    if ok.size < 2:
-                        continue
-                    C = _corr(Q[k][np.ix_(ok, ok)])
-                    i, j = np.triu_indices(ok.size, k=1)
-                    for a, b_ in zip(i, j):
-                        if abs(C[a, b_]) > thr:
-                            pairs.append(
-                                (names[k * nb + ok[a]], names[k * nb + ok[b_]], float(C[a, b_]))
-                            )
-                    cond = _condition(C)
-                    if cond > NEAR_SINGULAR:
-                        near.append((names[k * nb].split(".")[0], cond))
+                # parameters without a σ (fixed points) get unit variance and no correlation
+                d = np.sqrt(np.clip(np.einsum("kii->ki", Q), 0.0, None))
+                d = np.where(fb & (d > 0), d, 1.0)
+                C = np.where(
+                    fb[:, :, None] & fb[:, None, :], Q / (d[:, :, None] * d[:, None, :]), 0.0
+                )
+                C[:, np.arange(nb), np.arange(nb)] = 1.0
+                i, j = np.triu_indices(nb, k=1)
+                kk, pp = np.nonzero(np.abs(C[:, i, j]) > thr)
+                for k, q in zip(kk, pp):
+                    pairs.append(
+                        (names[k * nb + i[q]], names[k * nb + j[q]], float(C[k, i[q], j[q]]))
+                    )
+                active = np.flatnonzero(fb.sum(axis=1) >= 2)
+                if active.size:
+                    with np.errstate(all="ignore"):
+                        ev = np.linalg.eigvalsh(C[active])
+                    cond = np.where(
+                        ev[:, 0] > 0, ev[:, -1] / np.where(ev[:, 0] > 0, ev[:, 0], 1.0), np.inf
+                    )
+                    for k in active[np.flatnonzero(~(cond <= NEAR_SINGULAR))]:
+                        near.append(
+                            (names[k * nb].split(".")[0], float(cond[np.searchsorted(active, k)]))
+                        )
             pairs.sort(key=lambda t: -abs(t[2]))
         for what, cond in near[:10]:
             self.warn.append(
@@ -1200,7 +1217,7 @@ class _Builder:
                     f"{few.size} image(s) measured in fewer than {FEW_POINTS} "
                     "points (" + self._names(blk.images.ids, few, npts, "points") + ")"
                 )
-            cov = image_coverage(blk)
+            cov = self.coverage()
             poor = np.flatnonzero((cov < POOR_COVERAGE) & (npts >= 3))
             if poor.size:
                 self.warn.append(

@@ -72,14 +72,15 @@ def overview_figure(
     ax = fig.add_subplot()
     foot = overview.get("footprints")
     X0 = np.asarray(overview["X0"], float)
+    many = X0.shape[0] > 60
     if foot is not None:
         ok = np.all(np.isfinite(foot), axis=(1, 2))
         ax.add_collection(
             PolyCollection(
                 foot[ok],
-                facecolor=(0.12, 0.31, 0.47, 0.06),
-                edgecolor=(0.12, 0.31, 0.47, 0.45),
-                linewidth=0.7,
+                facecolor=(0.12, 0.31, 0.47, 0.06 if many else 0.08),
+                edgecolor=(0.12, 0.31, 0.47, 0.18 if many else 0.45),
+                linewidth=0.4 if many else 0.7,
             )
         )
     xy = np.asarray(overview["xy"], float)
@@ -90,8 +91,9 @@ def overview_figure(
     ax.scatter(
         xy[tie, 0],
         xy[tie, 1],
-        s=4 if tie.size > 2000 else 9,
+        s=1 if tie.size > 2000 else 9,
         c=ROLE_COLOURS[0],
+        alpha=0.5 if tie.size > 2000 else 1.0,
         lw=0,
         label=f"tie points ({int(np.sum(role == 0))})",
         zorder=2,
@@ -124,7 +126,7 @@ def overview_figure(
     ax.scatter(
         X0[okc, 0],
         X0[okc, 1],
-        s=14,
+        s=3 if many else 14,
         c=BLUE,
         marker="o",
         lw=0,
@@ -186,6 +188,13 @@ def overview_figure(
                         textcoords="offset points",
                         fontsize=7,
                         color=ROLE_COLOURS[2],
+                        zorder=6,
+                        bbox={
+                            "boxstyle": "round,pad=0.15",
+                            "fc": "white",
+                            "ec": "none",
+                            "alpha": 0.8,
+                        },
                     )
     ax.set_aspect("equal", adjustable="datalim")
     ax.autoscale_view()
@@ -205,8 +214,6 @@ def w_histogram_figure(data: dict[str, Any]):
     data : dict
         ``w`` (n,) normalised residuals of the adjusted observations, ``critical``.
     """
-    from scipy.stats import norm
-
     w = np.asarray(data["w"], float)
     crit = float(data["critical"])
     fig = _figure(9.0, 3.8)
@@ -215,7 +222,13 @@ def w_histogram_figure(data: dict[str, Any]):
     bins = np.linspace(-lim, lim, 61 if w.size > 200 else 31)
     ax.hist(w, bins=bins, color=BLUE, alpha=0.8, label=f"w ({w.size} observations)")
     t = np.linspace(-lim, lim, 300)
-    ax.plot(t, norm.pdf(t) * w.size * (bins[1] - bins[0]), color="k", lw=1.0, label="N(0, 1)")
+    ax.plot(
+        t,
+        np.exp(-0.5 * t**2) / np.sqrt(2 * np.pi) * w.size * (bins[1] - bins[0]),
+        color="k",
+        lw=1.0,
+        label="N(0, 1)",
+    )
     for s in (-1, 1):
         ax.axvline(s * crit, color="#c0392b", lw=1.2, ls="--")
     n_out = int(np.sum(np.abs(w) > crit))
