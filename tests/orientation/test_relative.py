@@ -163,3 +163,81 @@ def test_points_on_the_danger_cylinder():
     with pytest.raises(NotDeterminableError) as exc:
         rel.relative_orientation(xy1, xy2, C, b=B)
     assert {"omega", "by", "bz"} <= set(exc.value.parameters)
+
+
+# --- bad input for every route (item 8 of the issue) ----------------------------------
+def _one_profile(seed=8):
+    rng = np.random.default_rng(seed)
+    return np.column_stack(
+        [np.full(9, 30.0), np.linspace(-90, 90, 9), -C * (1 + 0.1 * rng.uniform(-1, 1, 9))]
+    )
+
+
+def test_independent_pair_bad_input_names_elements():
+    xy1, xy2 = _pair(_one_profile(), np.zeros(5))
+    with pytest.raises(NotDeterminableError) as exc:
+        rel.relative_orientation(xy1, xy2, C, b=B, kind="independent")
+    assert {"phi1", "kappa1", "phi2", "kappa2"} <= set(exc.value.parameters)
+    with pytest.raises(InputError, match="at least 5 points"):
+        rel.relative_orientation(xy1[:4], xy2[:4], C, b=B, kind="independent")
+    with pytest.raises(InputError, match="zero base"):
+        rel.relative_orientation(xy1, xy1.copy(), C, kind="independent")
+
+
+def test_given_zero_base_is_refused():
+    xy1, xy2 = _pair(_terrain(np.random.default_rng(12), 8), np.zeros(5))
+    with pytest.raises(InputError, match="zero base"):
+        rel.relative_orientation(xy1, xy2, C, b=0.0)
+
+
+def test_essential_route_one_profile_and_zero_base():
+    from orientviz.orientation.essential import essential_route
+
+    xy1, xy2 = _pair(_one_profile(), np.zeros(5))
+    for a, b in ((xy1, xy2), (xy1, xy1.copy())):
+        with pytest.raises(NotDeterminableError, match="essential matrix") as exc:
+            essential_route(a, b, C, b=B)
+        assert exc.value.parameters == ["E"]
+
+
+def test_scheme_solution_on_one_profile_names_elements():
+    from orientviz.orientation import schemes as sch
+
+    P = _one_profile()
+    A = rel.design_dependent(P[:, 0], P[:, 1], P[:, 2], B)
+    with pytest.raises(NotDeterminableError) as exc:
+        sch.least_squares_elements(A, np.zeros(9))
+    assert {"by", "kappa", "phi"} <= set(exc.value.parameters)
+
+
+# --- Kovarik's printed signs of bz and κ -------------------------------------------------
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_kovarik_closed_form_with_adopted_signs_clears_a_rigorous_pair(seed):
+    """Corrections from the printed 9-point formulas, mapped with KOVARIK_SIGNS, shrink the
+    rigorous parallaxes of a misoriented pair ~tenfold; with the printed signs taken as
+    orientviz's (no mapping) they do not."""
+    from orientviz.orientation import schemes as sch
+    from orientviz.units import RHO_C
+
+    rng = np.random.default_rng(seed)
+    b, H, k = 220.7, 366.0, 100.0 / 152.7
+    s9 = sch.kovarik9()
+    Z = -H * (1 + 0.1 * rng.uniform(-0.5, 0.5, 9))
+    X, Y, Z = s9.model_points(b, k * H, Z, placement="ratio")
+    P = np.column_stack([X, Y, Z])
+    # true pair: bz and κ large enough that a sign error shows
+    true = np.array([1.0, 2.0, 40.0, -30.0, 50.0]) / np.array([1, 1, RHO_C, RHO_C, RHO_C])
+    st = rel.PairState.from_elements(true, b)
+    xy1 = project(P, np.zeros(3), np.eye(3), 1.0)
+    xy2 = project(P, st.base, matrix_from_opk(*true[2:]), 1.0)
+    zero = rel.PairState.from_elements(np.zeros(5), b)
+    p0, pts = rel.y_parallax(xy1, xy2, 1.0, zero)
+    kov = sch.kovarik_nine_point(p0, pts[:, 2], b, k, convention="kovarik")
+    for signs, shrinks in ((rel.KOVARIK_SIGNS, True), (np.ones(5), False)):
+        d = kov * signs
+        p1, _ = rel.y_parallax(xy1, xy2, 1.0, rel.PairState.from_elements(d, b))
+        ratio = np.sqrt(np.mean(p1**2) / np.mean(p0**2))
+        assert bool(ratio < 0.1) == shrinks, (signs, ratio)
+    # and the mapped corrections approach the true elements
+    d = rel.kovarik_to_orientviz(kov)
+    assert np.all(np.sign(d) == np.sign(true))
