@@ -271,7 +271,7 @@ def plot_passes_vs_relief(table: Mapping[str, tuple], ax=None, *, paper=None):
 
 
 def plot_preorientation_error(out: Mapping[str, np.ndarray], ax=None):
-    """absolute error of Δω and Δφ (c) against the size of the rotations, round vs exact formulas.
+    """Absolute error of Δω and Δφ (c) against the size of the rotations, round vs exact formulas.
 
     Parameters
     ----------
