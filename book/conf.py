@@ -8,6 +8,7 @@ by a bundled MathJax (sphinx-mathjax-offline): no network is needed.
 
 from __future__ import annotations
 
+import os
 import pathlib
 import shutil
 import sys
@@ -15,6 +16,14 @@ import sys
 HERE = pathlib.Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(ROOT / "src"))
+sys.path.insert(0, str(HERE / "_ext"))
+# The kernels that execute the lessons inherit this environment: they import this
+# checkout, whatever is installed, and draw with the inline backend (which emits PNGs),
+# even when the build runs with MPLBACKEND=Agg (then figures would be text only).
+os.environ["PYTHONPATH"] = os.pathsep.join(
+    [str(ROOT / "src")] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
+)
+os.environ["MPLBACKEND"] = "module://matplotlib_inline.backend_inline"
 
 import orientviz  # noqa: E402
 
@@ -27,30 +36,34 @@ extensions = [
     "myst_nb",
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
-    "sphinx.ext.napoleon",
+    "numpydoc",
     "sphinx.ext.viewcode",
     "sphinx.ext.mathjax",
     "sphinx-mathjax-offline",
+    "orientviz_book",  # _ext/: static widget snapshots, failing cells named
 ]
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
 source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
 exclude_patterns = ["_build", "**.ipynb_checkpoints", "jupyter_execute"]
 
-# Execute every lesson during the build; a failing cell fails the build and names it.
+# Execute every lesson during the build; a failing cell fails the build, and the message
+# names the notebook, the cell and its first line (_ext/orientviz_book.py).
 nb_execution_mode = "force"
 nb_execution_timeout = 300
 nb_execution_raise_on_error = True
 nb_execution_show_tb = True
 nb_merge_streams = True
-# Widgets need a kernel; the static book shows the figures printed beside them instead.
+# Widgets need a kernel; the static book shows a snapshot of each widget instead (the
+# figures and text its Output widgets held after execution, _ext/orientviz_book.py).
 # Leaving out the widget manager keeps every page free of CDN scripts (it works offline).
 nb_ipywidgets_js: dict = {}
 
-napoleon_numpy_docstring = True
-napoleon_google_docstring = False
+numpydoc_show_class_members = False  # autosummary lists the members already
+numpydoc_class_members_toctree = False
 autodoc_member_order = "bysource"
-autodoc_typehints = "description"
+autodoc_typehints = "signature"
 autosummary_generate = True
+templates_path = ["_templates"]  # module pages document every member in full (numpydoc)
 
 html_theme = "pydata_sphinx_theme"
 html_title = "orientviz — photogrammetric orientation, visible"
