@@ -48,7 +48,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..adjust.result import Adjustment, Iteration
-from ..errors import InputError
+from ..errors import InputError, NotDeterminableError
 from ..model import CHECK, Block
 from ..rotation import matrix_from_opk, matrix_from_rotvec, opk_from_matrix, skew
 from .model_formation import ModelSet, form_models
@@ -79,6 +79,10 @@ def independent_models(
     max_iter: int | None = None,
     tol: float | None = None,
     precision: bool = False,
+    deformation: str | list[str] | None = None,
+    deformation_group: str = "model",
+    deformation_sigma: float | None = 1000.0,
+    auxiliary: list | None = None,
 ) -> Adjustment:
     """Adjust a block by independent models.
 
@@ -106,6 +110,18 @@ def independent_models(
         quadratically converging rigorous solution, 1e-2 for PAT-M).
     precision : bool
         Compute the 3 × 3 cofactor blocks of all tie points (``cofactor_blocks["points"]``).
+    deformation : str or list of str, optional
+        Model deformation parameters (self-calibration; rigorous method only): a set
+        name or terms of :mod:`orientviz.block.model_deformation_params`.
+    deformation_group : {"model", "strip", "block"} or array_like of int
+        Parameters per model, shared per strip, or one set for the block.
+    deformation_sigma : float or array_like, optional
+        σ in mm of the pseudo-observations p = 0 (default 1000 mm: weak); None = free.
+    auxiliary : list of Auxiliary, optional
+        GNSS / statoscope (projection centres) and APR (tie point heights) data as joint
+        observations with offsets/drifts per strip (:mod:`orientviz.block.auxiliary_obs`;
+        rigorous method, ``use_centres=True`` for gnss/statoscope). With auxiliary data
+        the control check is left to the normal equations (GNSS may give the datum).
 
     Returns
     -------
@@ -119,6 +135,12 @@ def independent_models(
         ``"sigma0_planimetry"``/``"sigma0_height"`` (separate σ̂0 as in PAT-M, unit
         weight; × ``sigma_model`` gives m),
         ``"rms_xy_m"``, ``"rms_z_m"``, ``"models"`` the ModelSet, ``"method"``.
+        With deformation parameters: block ``"additional"`` (mm, group-major),
+        ``extra["deformation"]`` (groups, k), ``"deformation_sigma"``,
+        ``"deformation_analysis"`` (:class:`~.additional.APAnalysis`: t-tests, correlated
+        pairs, correlations with the similarity parameters). With auxiliary data: block
+        ``"auxiliary"``, ``extra["auxiliary"]`` / ``"auxiliary_sigma"`` ({kind: (strips,
+        dims, 1 or 2)} offsets, drifts in m), ``"auxiliary_residuals"`` (m).
 
     Raises
     ------
@@ -134,7 +156,11 @@ def independent_models(
     tol = (1e-4 if method == "rigorous" else 1e-2) if tol is None else float(tol)
     max_iter = (15 if method == "rigorous" else 40) if max_iter is None else int(max_iter)
     su = tie_setup(block, ms, control=control, use_centres=use_centres)
-    check_datum(su, ms, need_xy=True, need_z=True)
+    joint = deformation is not None or bool(auxiliary)
+    if joint and method != "rigorous":
+        raise InputError("deformation parameters and auxiliary data need method='rigorous'")
+    if not auxiliary:
+        check_datum(su, ms, need_xy=True, need_z=True)
     s_xy, s_z = sigma_model if sigma_model is not None else _default_sigma(block, ms)
     n = ms.n_models
     lam = np.ones(n)
@@ -143,6 +169,11 @@ def independent_models(
     su.init_points(lam, R, T)
     w_c = np.array([1 / s_xy**2, 1 / s_xy**2, 1 / s_z**2])
     history: list[Iteration] = []
+    if joint:
+        return _joint(
+            block, ms, su, lam, R, T, w_c, s_xy, tol, max_iter, history, precision,
+            deformation, deformation_group, deformation_sigma, auxiliary,
+        )  # fmt: skip
     if method == "rigorous":
         converged, reason, sol = _rigorous(su, lam, R, T, w_c, s_xy, tol, max_iter, history)
     else:
@@ -150,6 +181,51 @@ def independent_models(
     return _result(
         block, ms, su, lam, R, T, w_c, method, converged, reason, sol, history, precision
     )
+
+
+def _joint(
+    block, ms, su, lam, R, T, w_c, s_xy, tol, max_iter, history, precision,
+    deformation, group, sigma, auxiliary,
+):  # fmt: skip
+    from . import models_joint as mj
+    from .model_deformation_params import model_ap_set
+
+    spec = model_ap_set(deformation) if deformation is not None else None
+    js = mj.joint_setup(block, ms, su, w_c, spec, group, sigma, auxiliary)
+    names = su.param_names(7) + js.names(ms)
+    try:
+        converged, reason, sol, p, g = mj.rigorous_joint(
+            su, js, lam, R, T, w_c, s_xy, tol, max_iter, history, names
+        )
+    except NotDeterminableError as exc:
+        if spec is None or sigma is not None and np.all(np.isfinite(sigma)):
+            raise
+        raise mj.explain_singular(
+            exc,
+            lambda: independent_models(
+                block, models=ms, control=su_control(su), deformation=spec,
+                deformation_group=group, deformation_sigma=1000.0, auxiliary=auxiliary,
+                use_centres=su.centre_images.size > 0,
+            ),
+        ) from None
+    # the base result with the deformed model coordinates of the rows
+    m0 = su.m
+    su.m = mj.deformed(su, js, p)
+    try:
+        res = _result(
+            block, ms, su, lam, R, T, w_c, "rigorous", converged, reason, None, history, False
+        )
+    finally:
+        su.m = m0
+    res = mj.finish_joint(res, block, ms, su, js, lam, R, T, p, g, sol, names, w_c)
+    if precision:
+        res.cofactor_blocks["points"] = mj.point_cofactors(sol, su)
+    return res
+
+
+def su_control(su: TieSetup) -> str:
+    """The control mode a TieSetup was built with (weighted if any prior weight)."""
+    return "weighted" if np.any(su.prior_w > 0) else "fixed"
 
 
 def _rows3(su: TieSetup, lam: F64, R: F64, T: F64):

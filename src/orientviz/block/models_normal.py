@@ -288,3 +288,60 @@ def scalar_cofactors(sol: LinearSolution, groups: I64, chunk: int = 512) -> F64:
         blk *= (valid[:, :, None] & valid[:, None, :]).astype(float)
         out[s0 : s0 + chunk] = blk
     return out
+
+
+def solve_sparse(
+    Ja: sp.spmatrix,
+    row_scalar: I64,
+    sign: F64,
+    w: F64,
+    r: F64,
+    n_scalar: int,
+    *,
+    prior_w: F64 | None = None,
+    prior_e: F64 | None = None,
+    names: list[str] | None = None,
+    context: str = "",
+) -> LinearSolution:
+    """Least-squares corrections for rows ``v = r + Ja[i] · da + sign_i · dX_t``.
+
+    The general form of :func:`solve_rows`: ``Ja`` (sparse, rows × reduced unknowns)
+    may couple any reduced unknowns (model parameters, parameters shared by groups of
+    models, offsets of auxiliary data); every row still has at most one scalar point
+    coordinate t (``row_scalar``, −1 none) with coefficient ``sign`` (−1 for model rows,
+    +1 for direct observations of a coordinate), so the point part stays diagonal and is
+    eliminated.
+
+    Returns
+    -------
+    LinearSolution
+        ``dtheta`` is the flat vector of reduced corrections.
+    """
+    Ja = sp.csr_matrix(Ja)
+    n, na = Ja.shape
+    has = (row_scalar >= 0) & (sign != 0)
+    Jx = sp.csr_matrix(
+        (sign[has], (np.flatnonzero(has), row_scalar[has])), shape=(n, n_scalar)
+    )
+    JaW = sp.csr_matrix(Ja.T.multiply(w[None, :]))
+    U = JaW @ Ja
+    C = sp.csr_matrix(JaW @ Jx)
+    D = np.bincount(row_scalar[has], w[has] * sign[has] ** 2, minlength=n_scalar)
+    bX = -np.bincount(row_scalar[has], (w * r * sign)[has], minlength=n_scalar)
+    if prior_w is not None:
+        D = D + prior_w
+        bX = bX - prior_w * prior_e
+    if np.any(D <= 0):
+        bad = np.flatnonzero(D <= 0)[:5]
+        raise NotDeterminableError(
+            f"{context}: point coordinate(s) without observations: {bad.tolist()}",
+            defect=int(np.sum(D <= 0)),
+        )
+    bt = -(JaW @ r)
+    G = sp.csr_matrix(C.multiply(1.0 / D[None, :]))
+    S = U - G @ C.T
+    names = names or [f"u{k}" for k in range(na)]
+    fac = factor_spd(S, names, context)
+    dt = fac.solve(bt - G @ bX)
+    dX = (bX - C.T @ dt) / D
+    return LinearSolution(dt, dX, fac, G, D, C, JaW, row_scalar, w)
