@@ -141,3 +141,14 @@ def test_preorientation_error_grows_with_rotation():
     # the exact linearisation is exact to first order: its error grows ~ quadratically
     ex = np.abs(out["exact"][:, 1])
     assert ex[2] / ex[1] > 8
+
+
+def test_z_read_only_in_the_first_passes():
+    p = _plotter(6, relief=0.15)
+    run = p.orient("kovarik9", z_reads=2, tol_c=0.0, max_passes=4)
+    z = [r.readings.z for r in run.passes]
+    assert not np.array_equal(z[0], z[1])  # read again in the first repetition
+    np.testing.assert_array_equal(z[2], z[1])  # then re-used
+    np.testing.assert_array_equal(z[3], z[1])
+    with pytest.raises(InputError, match="heights"):
+        p.run_pass("kovarik9", z=np.zeros(3))

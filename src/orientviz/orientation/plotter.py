@@ -288,9 +288,28 @@ class AnalogPlotter:
         R_new = matrix_from_rotvec(d[2:]) @ R
         self.settings[2:] = np.array(opk_from_matrix(R_new, seq), dtype=float)
 
-    def run_pass(self, formula: str = "exact", k: float | None = None) -> PassRecord:
-        """Read, compute, apply; append and return the :class:`PassRecord`."""
+    def run_pass(
+        self, formula: str = "exact", k: float | None = None, *, z: ArrayLike | None = None
+    ) -> PassRecord:
+        """Read, compute, apply; append and return the :class:`PassRecord`.
+
+        Parameters
+        ----------
+        formula : str
+            One of :data:`FORMULAS`.
+        k : float, optional
+            k of the formula's constants (default the configured one).
+        z : array_like, optional
+            Heights to use instead of reading them in this pass (machine mm, one per
+            scheme point): Kovarik's operator read z only in the first two passes and
+            re-used them afterwards.
+        """
         r = self.read()
+        if z is not None:
+            zz = np.asarray(z, dtype=float).reshape(-1)
+            if zz.shape != r.z.shape:
+                raise InputError(f"z: expected {r.z.size} heights, got {zz.size}")
+            r = Readings(r.scheme, r.X, r.Y, r.by, zz, r.parallax)
         d = self.corrections(r, formula, k)
         self.apply(d)
         rec = PassRecord(
@@ -307,6 +326,7 @@ class AnalogPlotter:
         max_passes: int = 30,
         tol_c: float = 1.0,
         tol_mm: float = 0.05,
+        z_reads: int | None = None,
     ) -> OrientationRun:
         """Repeat passes until one yields negligible corrections.
 
@@ -314,10 +334,26 @@ class AnalogPlotter:
         ``tol_c`` centesimal minutes and base corrections below ``tol_mm`` — what single
         by readings with the configured noise can no longer resolve. That pass is
         counted (it had to be read to know); its small corrections are applied too.
+
+        Parameters
+        ----------
+        formula, k
+            As in :meth:`corrections`.
+        max_passes : int
+            Give up (``converged=False``) after this many passes.
+        tol_c, tol_mm : float
+            Convergence thresholds: rotations in centesimal minutes, base in mm.
+        z_reads : int, optional
+            Read z only in the first ``z_reads`` passes and re-use the last read
+            heights afterwards (Kovarik: z read in the first pass and its first
+            repetition, so 2). Default: z read in every pass.
         """
         start = len(self.history)
-        for _ in range(int(max_passes)):
-            rec = self.run_pass(formula, k)
+        z_last = None
+        for i in range(int(max_passes)):
+            stale = z_reads is not None and i >= int(z_reads) and z_last is not None
+            rec = self.run_pass(formula, k, z=z_last if stale else None)
+            z_last = rec.readings.z
             if rec.max_rotation_c < tol_c and rec.max_base_mm < tol_mm:
                 return OrientationRun(self.history[start:], True, tol_c, tol_mm)
         return OrientationRun(self.history[start:], False, tol_c, tol_mm)
