@@ -59,6 +59,7 @@ class _State:
     angles: F64
     xyz: F64  # all points (p, 3)
     ap: F64  # (q,)
+    g: F64 | None = None  # offsets/drifts of auxiliary data (auxiliary_obs)
 
 
 def _wrap(a: F64) -> F64:
@@ -73,8 +74,9 @@ class BundleProblem:
     """
 
     def __init__(
-        self, block, setup, *, additional=None, ap_group=None, ap_sigma=None, solver="banded"
-    ):
+        self, block, setup, *, additional=None, ap_group=None, ap_sigma=None, solver="banded",
+        auxiliary=None,
+    ):  # fmt: skip
         self.block = block
         self.setup = setup
         img, obs = block.images, block.observations
@@ -142,10 +144,19 @@ class BundleProblem:
             self.ap_w = np.tile(np.where(np.isfinite(s) & (s > 0), 1.0 / s**2, 0.0), self.G)
             self.ap_names = [f"{nm}@g{g}" for g in range(self.G) for nm in additional.names]
         self.q = self.k * self.G
+        # auxiliary data as joint observations: hook of orientviz.block.auxiliary_obs
+        self.aux, self.na = None, 0
+        if auxiliary:
+            from .auxiliary_obs import BundleAuxiliary, auxiliary_rows
+
+            if self.q:
+                raise InputError("auxiliary data with additional parameters: not yet")
+            self.aux = BundleAuxiliary(auxiliary_rows(auxiliary, block), self.pt_col)
+            self.na = self.aux.n_global
         n_pseudo = int((self.prior_w > 0).sum() + (self.X0_w > 0).sum() + (self.ang_w > 0).sum())
         n_pseudo += int((self.ap_w > 0).sum()) if self.q else 0
-        self.n_eq = 2 * self.uobs.size + n_pseudo
-        self.n_unknowns = 6 * m + 3 * self.var_pts.size + self.q
+        self.n_eq = 2 * self.uobs.size + n_pseudo + (self.aux.rows.n if self.aux else 0)
+        self.n_unknowns = 6 * m + 3 * self.var_pts.size + self.q + self.na
         self.redundancy = self.n_eq - self.n_unknowns
 
     # ----------------------------------------------------------------- model
@@ -174,6 +185,8 @@ class BundleProblem:
         c += float(np.sum(self.ang_w * _wrap(self.ang_l - st.angles) ** 2))
         if self.q:
             c += float(np.sum(self.ap_w * st.ap**2))
+        if self.aux:
+            c += self.aux.cost(st.X0, st.xyz, st.g)
         return c
 
     # ----------------------------------------------------------------- normal equations
@@ -196,6 +209,8 @@ class BundleProblem:
         bc[:, :3] += self.X0_w * (self.X0_l - st.X0)
         U[:, [3, 4, 5], [3, 4, 5]] += self.ang_w
         bc[:, 3:] += self.ang_w * _wrap(self.ang_l - st.angles)
+        if self.aux:
+            self.aux.add_images(U, bc, st.X0, st.xyz, st.g)
         vo = self.vo
         Jpv = Jpw[vo]
         V = np.add.reduceat(Jpv.transpose(0, 2, 1) @ Jpv, S.pt_starts, axis=0)
@@ -203,6 +218,8 @@ class BundleProblem:
         i3 = [0, 1, 2]
         V[:, i3, i3] += self.prior_w
         bp += self.prior_w * (self.prior_l - st.xyz[self.var_pts])
+        if self.aux:
+            self.aux.add_points(V, bp, st.X0, st.xyz, st.g)
         diagU = U[:, range(6), range(6)].copy()
         diagV = V[:, i3, i3].copy()
         if lam > 0:
@@ -223,6 +240,8 @@ class BundleProblem:
         )
         if self.q:
             out.update(self._ap_normal(st, rw, Jew, Jpw, W, T, Vinv, bp, lam))
+        if self.aux:
+            self.aux.normal(self, st, out, lam)
         return out
 
     def _ap_normal(self, st, rw, Jew, Jpw, W, T, Vinv, bp, lam) -> dict:
@@ -257,6 +276,8 @@ class BundleProblem:
     def solve(self, ne: dict, names: list[str]):
         """Corrections (dc (m, 6), dp (p_var, 3), da (q,)) and the factor of S."""
         fac = factor_reduced(self.struct, ne["blocks"], names)
+        if self.aux:
+            return self.aux.solve(self, fac, ne)
         if self.q:
             Y = fac.solve(ne["E"])
             Fs = ne["F"] - ne["E"].T @ Y
@@ -287,7 +308,9 @@ class BundleProblem:
     def apply(self, st: _State, dc: F64, dp: F64, da: F64) -> _State:
         xyz = st.xyz.copy()
         xyz[self.var_pts] += dp
-        return _State(st.X0 + dc[:, :3], st.angles + dc[:, 3:], xyz, st.ap + da)
+        if self.aux:  # da: the offsets/drifts of the auxiliary data
+            return _State(st.X0 + dc[:, :3], st.angles + dc[:, 3:], xyz, st.ap, st.g + da)
+        return _State(st.X0 + dc[:, :3], st.angles + dc[:, 3:], xyz, st.ap + da, st.g)
 
     def names(self) -> list[str]:
         b = self.block
@@ -312,6 +335,7 @@ def bundle_adjust(
     callback: Callable[[Iteration], object] | None = None,
     solver: str = "banded",
     history_x: bool | None = None,
+    auxiliary: list | None = None,
 ) -> Adjustment:
     """Adjust a block by the bundle method (see module docstring for the model).
 
@@ -348,6 +372,13 @@ def bundle_adjust(
     history_x : bool, optional
         Keep the full parameter vector per iteration (default: blocks ≤ 500 images);
         otherwise ``Iteration.x`` is empty.
+    auxiliary : list of Auxiliary, optional
+        GNSS / statoscope / APR data as joint observations with offset/drift unknowns
+        per strip (:mod:`orientviz.block.auxiliary_obs`; not together with
+        ``additional``). Estimates in ``extra["auxiliary"]``, ``"auxiliary_sigma"``,
+        ``"auxiliary_residuals"``; the datum check is left to the normal equations; the
+        cofactor blocks of orientations and points are not computed yet with auxiliary
+        data (``precision`` is ignored).
 
     Returns
     -------
@@ -361,16 +392,21 @@ def bundle_adjust(
     setup = point_setup(block, control)
     check_connected(block, setup)
     check_determinable(block, setup)
-    check_datum(block, setup)
+    if not auxiliary:
+        check_datum(block, setup)
     prob = BundleProblem(
-        block, setup, additional=additional, ap_group=ap_group, ap_sigma=ap_sigma, solver=solver
-    )
+        block, setup, additional=additional, ap_group=ap_group, ap_sigma=ap_sigma, solver=solver,
+        auxiliary=auxiliary,
+    )  # fmt: skip
     names = prob.names()
     red_names = names[: 6 * prob.m]
     xyz0 = block.points.xyz.copy()
     fixed = setup.fixed
     xyz0[fixed] = np.where(np.isfinite(setup.known[fixed]), setup.known[fixed], xyz0[fixed])
-    st = _State(block.images.X0.copy(), block.images.angles.copy(), xyz0, np.zeros(prob.q))
+    st = _State(
+        block.images.X0.copy(), block.images.angles.copy(), xyz0, np.zeros(prob.q),
+        np.zeros(prob.na),
+    )  # fmt: skip
     keep_x = (block.n_images <= HISTORY_X_LIMIT) if history_x is None else bool(history_x)
     dof = prob.redundancy
 
@@ -414,13 +450,15 @@ def bundle_adjust(
         rel = max(
             float(np.max(np.abs(dc) * np.sqrt(ne["diagU"]), initial=0.0)),
             float(np.max(np.abs(dp) * np.sqrt(ne["diagV"]), initial=0.0)),
-            float(np.max(np.abs(da) * np.sqrt(ne["diagF"]), initial=0.0)) if prob.q else 0.0,
+            float(np.max(np.abs(da) * np.sqrt(ne["diagF"]), initial=0.0))
+            if prob.q or prob.na
+            else 0.0,
         )
         dx = None
         if keep_x:  # same layout as x: zeros for fixed points
             dpa = np.zeros((block.n_points, 3))
             dpa[prob.var_pts] = dp
-            dx = np.concatenate([dc.ravel(), dpa.ravel(), da])
+            dx = np.concatenate([dc.ravel(), dpa.ravel(), da[: prob.q]])
         st, rw, Je, Jp, cost = new, rw_n, Je_n, Jp_n, c_new
         rec = Iteration(it, prob.flat(st) if keep_x else np.empty(0), dx, s0(cost), cost, lam, rel)
         history.append(rec)
@@ -440,7 +478,9 @@ def bundle_adjust(
                 "the normal equations are not positive definite there; compute better "
                 "approximations, e.g. with orientviz.block.approximate.approximate_values"
             )
-    return _finish(
+    if prob.aux:
+        precision = False
+    res = _finish(
         block,
         prob,
         st,
@@ -456,6 +496,11 @@ def bundle_adjust(
         dof,
         s0(cost),
     )
+    if prob.aux:
+        from .auxiliary_obs import finish_bundle
+
+        finish_bundle(res, prob, st, rw, Je, Jp)
+    return res
 
 
 def _finish(
