@@ -4,7 +4,12 @@ import numpy as np
 import pytest
 
 from orientviz.block.additional import ap_set
-from orientviz.block.auxiliary import adjust_with_auxiliary, simulate_auxiliary
+from orientviz.block.auxiliary import (
+    adjust_with_auxiliary,
+    check_errors,
+    height_control_at_ends,
+    simulate_auxiliary,
+)
 from orientviz.block.auxiliary_obs import BundleAuxiliary, auxiliary_rows
 from orientviz.block.bundle import bundle_adjust
 from orientviz.block.models import independent_models
@@ -22,15 +27,9 @@ def case():
         chain_spacing=2, n_check=30,
     )  # fmt: skip
     full = sim.block
-    P = full.points
-    ctrl = np.flatnonzero(P.role == CONTROL)
-    hz = ctrl[np.isfinite(P.xyz_known[ctrl, 2])]
-    X = P.xyz[hz, 0]
-    ends = hz[(X < X.min() + 100) | (X > X.max() - 100)]
-    thin = full.copy()
-    drop = np.setdiff1d(hz, ends)
-    thin.points.xyz_known[drop, 2] = np.nan
-    thin.points.role[drop[~np.isfinite(thin.points.xyz_known[drop, 0])]] = 0
+    thin = height_control_at_ends(full)
+    kept = np.isfinite(thin.points.xyz_known[:, 2]) & (thin.points.role == CONTROL)
+    assert 0 < kept.sum() < 0.5 * np.sum(np.isfinite(full.points.xyz_known[:, 2]))
     rng = np.random.default_rng(1)
     st = simulate_auxiliary(
         sim, "statoscope", rng=rng, sigma=0.3, offset_sigma=20.0, drift_sigma=2.0
@@ -40,9 +39,7 @@ def case():
 
 
 def _check_rms(sim, xyz):
-    chk = sim.block.points.role == 2
-    d = xyz[chk] - sim.truth.points.xyz[chk]
-    return np.sqrt(np.mean(d[:, :2] ** 2)), np.sqrt(np.mean(d[:, 2] ** 2))
+    return check_errors(sim, xyz)
 
 
 def test_rows_and_jacobians_match_finite_differences(case):

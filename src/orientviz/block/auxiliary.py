@@ -17,14 +17,19 @@ the block's existing tables: ``images.X0_obs``/``X0_sigma`` (GNSS, statoscope: o
 given) and height-only weighted control points (APR: ``points.xyz_known[:, 2]`` and
 ``points.sigma[:, 2]``, X and Y not given).
 
-Offsets and drifts per strip: the bundle has no unknowns for them, so
-:func:`adjust_with_auxiliary` estimates them by **alternation** — adjust with the data
-corrected by the current offsets, fit offset (+ drift) per strip to the differences
-between the adjusted and the observed values, correct, repeat until the corrections
-fall below ``tol`` σ (a fixed-point iteration, accelerated by Anderson mixing). Its fixed
-point is the joint least-squares solution; plain alternation needs many rounds when
-offsets and block heights are strongly correlated; the precision of the offsets is not part of the
-bundle's cofactors. A joint adjustment needs a bundle hook for extra unknowns (not yet).
+Offsets and drifts per strip are unknowns of a *joint* adjustment: pass the data as
+``auxiliary=[...]`` to :func:`orientviz.block.bundle.bundle_adjust` or
+:func:`orientviz.block.models.independent_models` (rows, weights and the offset/drift
+unknowns: :mod:`orientviz.block.auxiliary_obs`). That is the way to adjust.
+
+:func:`adjust_with_auxiliary` is kept **for teaching**: it estimates the offsets by
+**alternation** — adjust with the data corrected by the current offsets, fit offset
+(+ drift) per strip to the differences between the adjusted and the observed values,
+correct, repeat until the corrections fall below ``tol`` σ (a fixed-point iteration,
+accelerated by Anderson mixing). Its fixed point is the joint least-squares solution
+(``tests/block/test_auxiliary_obs.py`` compares them); it shows how slowly plain
+alternation converges when offsets and block heights are strongly correlated, and it
+gives no precision of the offsets.
 """
 
 from __future__ import annotations
@@ -244,6 +249,9 @@ def adjust_with_auxiliary(
 ) -> AuxiliaryResult:
     """Bundle adjustment with auxiliary observations, offsets/drifts by alternation.
 
+    For teaching (see the module docstring); the joint adjustment is
+    ``bundle_adjust(block, auxiliary=aux)``.
+
     Parameters
     ----------
     block : Block
@@ -330,3 +338,33 @@ def adjust_with_auxiliary(
             x = g
     params = unpack(x)
     return AuxiliaryResult(adj, params, rounds, converged, history)
+
+
+def height_control_at_ends(block: Block, margin_m: float = 100.0) -> Block:
+    """A copy of ``block`` whose height control is kept only at the two block ends.
+
+    Height coordinates of control points farther than ``margin_m`` (m) from the first
+    and last control column (in X, along the strips) are removed; points left without
+    any given coordinate become tie points. Planimetric control stays.
+    """
+    b = block.copy()
+    P = b.points
+    ctrl = np.flatnonzero(P.role == CONTROL)
+    hz = ctrl[np.isfinite(P.xyz_known[ctrl, 2])]
+    if hz.size == 0:
+        return b
+    X = P.xyz[hz, 0]  # approximate positions: height-only points have no given X
+    drop = hz[(X > X.min() + margin_m) & (X < X.max() - margin_m)]
+    P.xyz_known[drop, 2] = np.nan
+    P.sigma[drop, 2] = np.nan
+    P.role[drop[~np.isfinite(P.xyz_known[drop, 0])]] = TIE
+    return b
+
+
+def check_errors(sim, xyz: F64) -> tuple[float, float]:
+    """RMS errors (m) of the check points of a simulated block: (planimetric per
+    coordinate, height), from adjusted coordinates ``xyz`` (p, 3) of all points."""
+    chk = sim.block.points.role == 2
+    d = xyz[chk] - sim.truth.points.xyz[chk]
+    d = d[np.all(np.isfinite(d), axis=1)]
+    return float(np.sqrt(np.mean(d[:, :2] ** 2))), float(np.sqrt(np.mean(d[:, 2] ** 2)))

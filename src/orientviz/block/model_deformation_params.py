@@ -291,3 +291,15 @@ def group_index(group: str | Sequence[int], model_strip: I64) -> I64:
     if g.shape != (n,) or (n and g.min() < 0):
         raise InputError(f"deformation_group: expected {n} non-negative group indices")
     return np.unique(g, return_inverse=True)[1].astype(np.int64)
+
+
+def deformation_table(adj) -> str:
+    """Plain-text table of the estimated deformation parameters of an adjustment by
+    :func:`orientviz.block.models.independent_models` (value and σ in mm at a model
+    corner, t, significant), followed by the analysis' warnings."""
+    an = adj.extra["deformation_analysis"]
+    w = max([len(n) for n in an.names] + [9])
+    lines = [f"{'parameter':<{w}} {'value mm':>9} {'σ mm':>7} {'t':>6}  significant"]
+    for n, v, s, t, g in zip(an.names, an.value, an.sigma, an.t, an.significant):
+        lines.append(f"{n:<{w}} {v:9.1f} {s:7.1f} {t:6.1f}  {'yes' if g else 'no'}")
+    return "\n".join(lines + list(an.warnings))
