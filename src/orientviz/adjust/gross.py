@@ -310,19 +310,6 @@ def _groups(n: int, groups: ArrayLike | None) -> tuple[NDArray[np.int64], int]:
     return g, int(g.max()) + 1 if n else 0
 
 
-def _group_stat(adj: Adjustment, g: NDArray[np.int64], ng: int) -> tuple[F64, F64]:
-    """Per group: the largest |w| (the w-test) and Σ w² (to rank groups of several members).
-
-    NaN (uncontrolled or eliminated) members count as 0.
-    """
-    if adj.normalized_residuals is None:
-        raise InputError("the solver returned no normalised residuals; cannot test")
-    w = np.abs(np.nan_to_num(np.asarray(adj.normalized_residuals, float), nan=0.0))
-    mx = np.zeros(ng)
-    np.maximum.at(mx, g, w)
-    return mx, np.bincount(g, weights=w * w, minlength=ng)
-
-
 def _labels(labels: list[str] | None, ng: int) -> list[str]:
     return list(labels) if labels is not None else [f"obs{i}" for i in range(ng)]
 
@@ -339,149 +326,15 @@ def _check_converged(adj, log, weights, it):
 
 
 # --------------------------------------------------------------------------- data snooping
-def _select(stat: F64, rank: F64, k: float, clusters: list[NDArray[np.int64]] | None) -> F64:
-    """Groups to eliminate now: the worst one, or every local worst one of the clusters."""
-    cand = np.flatnonzero(stat > k)
-    if cand.size == 0:
-        return cand
-    if clusters is None:
-        return cand[[int(np.argmax(rank[cand]))]]
-    ok = np.ones(cand.size, bool)
-    for cl in clusters:
-        best = np.full(int(cl.max()) + 1, -1.0)
-        np.maximum.at(best, cl[cand], rank[cand])
-        ok &= rank[cand] >= best[cl[cand]]
-    sel = cand[ok]
-    return sel[np.argsort(-rank[sel])]
-
-
-def data_snooping(
-    solve: Solver,
-    n: int,
-    *,
-    alpha0: float = 0.001,
-    groups: ArrayLike | None = None,
-    labels: list[str] | None = None,
-    max_fraction: float = 0.2,
-    weights: ArrayLike | None = None,
-    clusters: list[ArrayLike] | None = None,
-) -> Cleaning:
-    """Baarda's data snooping: eliminate the worst observation, re-adjust, repeat.
-
-    Each adjustment tests every (group of) observation(s) with the w-test; if some |w|
-    exceeds ``k = z(1 − α0/2)`` the worst group — and only that one, because a blunder
-    spreads into the residuals of its neighbours — is eliminated and the adjustment is
-    repeated, until no statistic exceeds k. Groups are ranked by Σ w² of their members
-    (for a ray: both coordinates), tested by their largest |w|.
-
-    With ``clusters`` several groups can go in one adjustment: every rejected group that
-    is the worst of each of its clusters (e.g. for image rays: the worst ray of its point
-    *and* of its image) — blunders far apart do not mask each other, so this takes far
-    fewer adjustments on large blocks and is otherwise the same test.
-
-    Parameters
-    ----------
-    solve : callable
-        ``solve(weights) -> Adjustment`` (see module docstring).
-    n : int
-        Number of observations.
-    alpha0 : float
-        Significance level of the w-test (default 0.1 %, k = 3.29).
-    groups : array_like of int, shape (n,), optional
-        Group index per observation (tested and eliminated together).
-    labels : list of str, optional
-        Label per group for the log.
-    max_fraction : float
-        Stop with :class:`CleaningBreakdown` if more than this fraction of the groups
-        would have to be eliminated: the data are then too bad to clean automatically.
-    weights : array_like, shape (n,), optional
-        Starting weight factors (default all 1).
-    clusters : list of array_like of int, each shape (n_groups,), optional
-        Cluster keys per group (see above); None: one group per adjustment (Baarda).
-
-    Returns
-    -------
-    Cleaning
-
-    Raises
-    ------
-    CleaningBreakdown
-        The adjustment diverged or too many observations were rejected; ``.log`` keeps
-        every decision so far.
-    """
-    g, ng = _groups(n, groups)
-    names = _labels(labels, ng)
-    k = critical_value(alpha0)
-    cl = None if clusters is None else [np.asarray(c, np.int64).reshape(-1) for c in clusters]
-    if cl is not None and any(c.shape != (ng,) or (ng and c.min() < 0) for c in cl):
-        raise InputError(f"clusters: expected arrays of {ng} non-negative keys (one per group)")
-    wts = np.ones(n) if weights is None else np.asarray(weights, float).copy()
-    active = np.ones(ng, bool)
-    active[np.setdiff1d(np.arange(ng), g[wts > 0])] = False
-    log: list[LogEntry] = []
-    eliminated: list[int] = []
-    last_batch: list[int] = []
-    protected = np.zeros(ng, bool)
-    it = 0
-    while True:
-        it += 1
-        try:
-            adj = solve(wts)
-        except NotDeterminableError as exc:
-            if not last_batch:
-                raise
-            # the last elimination took away the only control of some parameters: undo it
-            for last in last_batch:
-                eliminated.remove(last)
-                wts[g == last] = 1.0
-                active[last] = True
-                protected[last] = True
-                log.append(
-                    LogEntry(last, names[last], float("nan"), it, "kept", f"removal leaves {exc}")
-                )
-            last_batch = []
-            continue
-        _check_converged(adj, log, wts, it)
-        stat, rank = _group_stat(adj, g, ng)
-        off = ~active | protected
-        stat[off] = 0.0
-        rank[off] = 0.0
-        batch = _select(stat, rank, k, cl) if ng else np.zeros(0, np.int64)
-        if batch.size == 0:
-            worst = int(np.argmax(stat)) if ng else 0
-            top = float(stat[worst]) if ng else 0.0
-            log.append(
-                LogEntry(worst, names[worst] if ng else "", top, it, "stopped",
-                         f"largest |w| = {top:.2f} ≤ k = {k:.2f}")
-            )  # fmt: skip
-            break
-        if len(eliminated) + batch.size > max_fraction * ng:
-            b0 = int(batch[0])
-            log.append(LogEntry(b0, names[b0], float(stat[b0]), it, "breakdown", ""))
-            raise CleaningBreakdown(
-                f"data snooping would eliminate more than {max_fraction:.0%} of the "
-                f"{ng} observations (still |w| = {stat[b0]:.1f} > {k:.2f}); the data are "
-                f"too contaminated for automatic cleaning — the log keeps "
-                f"{len(eliminated)} eliminations",
-                log,
-                wts,
-            )
-        last_batch = [int(b) for b in batch]
-        for b in last_batch:
-            eliminated.append(b)
-            active[b] = False
-            wts[g == b] = 0.0
-            log.append(
-                LogEntry(b, names[b], float(stat[b]), it, "eliminated",
-                         f"|w| = {stat[b]:.2f} > k = {k:.2f} (α0 = {alpha0:g})")
-            )  # fmt: skip
-    return Cleaning(adj, wts, np.array(eliminated, dtype=np.int64), log, it, "data snooping")
-
-
-# robust reweighting and the rerun model live in .robust (kept importable from here)
+# data snooping lives in .snooping, robust reweighting and the rerun model in .robust
+# (all kept importable from here)
 def __getattr__(name: str):
     if name in ("rerun_cleaning", "robust_adjust", "robust_weights"):
         from . import robust
 
         return getattr(robust, name)
+    if name == "data_snooping":
+        from . import snooping
+
+        return snooping.data_snooping
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -23,19 +23,23 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import NDArray
 
-from ..adjust.gross import Cleaning, data_snooping, rerun_cleaning, robust_adjust
+from ..adjust.gross import Cleaning, rerun_cleaning, robust_adjust
+from ..adjust.snooping import data_snooping
 from ..adjust.result import Adjustment
 from ..camera import project
 from ..errors import InputError
-from ..model import CONTROL, Block, Observations, Points
+from ..model import CHECK, CONTROL, Block, Observations, Points
 from ..rotation import matrix_from_opk
 from .bundle import bundle_adjust
+from .bundle_kernel import collinearity_block
 
 F64 = NDArray[np.float64]
 
 __all__ = ["bundle_solver", "clean_block", "cleaned_block", "ray_labels"]
 
 METHODS = ("snooping", "danish", "huber", "reruns")
+#: Default margin (χ² units) below which two rejected rays of one point are not separable.
+SEPARATION: float = 0.0
 
 
 def ray_labels(block: Block) -> list[str]:
@@ -71,7 +75,52 @@ def _subset(
     return block.with_(points=points, observations=obs), keep, pts
 
 
-def bundle_solver(block: Block, *, warm_start: bool = True, **bundle_options):
+def _local_redundancy(sub, adj, idx, v, sigma, rn, wn, rxy, rays) -> None:
+    """Redundancy blocks and normalised residuals of rays in their point's intersection.
+
+    For each point, ``P½Q_vvP½ = I − J̃(J̃ᵀJ̃)⁻¹J̃ᵀ`` of its forward intersection with
+    the adjusted orientations held fixed (J̃: weighted Jacobian of the image coordinates
+    by the point's X, Y, Z; fixed control points: R = I). This is exact for check points
+    — the bundle intersects them afterwards in just this way — and for adjusted points
+    an upper bound of the redundancy numbers (fixing the orientations adds redundancy),
+    i.e. a lower bound of the normalised residuals. Arrays are filled in place (rows of
+    the full block; ``idx`` maps sub-block rays to them); ``rays`` selects sub-block rays.
+    """
+    o = sub.observations
+    sel = np.flatnonzero(rays)
+    if sel.size == 0:
+        return
+    ext = adj.extra["exterior"]
+    xyz = adj.extra["points"]
+    cam = sub.images.camera
+    c, x0, y0 = (getattr(sub.cameras, k)[cam] for k in ("c", "x0", "y0"))
+    _, _, Jp = collinearity_block(
+        ext[:, :3], ext[:, 3:], c, x0, y0, o.image[sel], xyz[o.point[sel]], sub.sequence
+    )
+    Jw = Jp / sigma[idx[sel]][:, :, None]
+    Jw[sub.points.role[o.point[sel]] == CONTROL] = 0.0
+    upt, col = np.unique(o.point[sel], return_inverse=True)
+    N = np.zeros((upt.size, 3, 3))
+    np.add.at(N, col, Jw.transpose(0, 2, 1) @ Jw)
+    ok = np.linalg.cond(N) < 1e12
+    Ninv = np.zeros_like(N)
+    Ninv[ok] = np.linalg.inv(N[ok])
+    R = np.eye(2) - Jw @ Ninv[col] @ Jw.transpose(0, 2, 1)  # (k, 2, 2)
+    rows = idx[sel]
+    rn[rows] = np.clip(np.stack([R[:, 0, 0], R[:, 1, 1]], 1), 0.0, 1.0)
+    rxy[rows] = R[:, 0, 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        wn[rows] = np.where(rn[rows] > 1e-10, v[rows] / (sigma[rows] * np.sqrt(rn[rows])), np.nan)
+
+
+def bundle_solver(
+    block: Block,
+    *,
+    warm_start: bool = True,
+    check_rays: bool = True,
+    redundancy: str = "exact",
+    **bundle_options,
+):
     """A solver ``solve(weights (2n,)) -> Adjustment`` over the image coordinates of a block.
 
     The returned Adjustment has ``residuals``, ``sigma_obs`` (a-priori σ),
@@ -86,14 +135,27 @@ def bundle_solver(block: Block, *, warm_start: bool = True, **bundle_options):
         Approximate values and observations.
     warm_start : bool
         Start each adjustment from the previous solution.
+    check_rays : bool
+        Also report redundancy numbers and normalised residuals for the rays of check
+        points, from their forward intersection with the adjusted orientations (the way
+        the bundle computes check coordinates), so that cleaning tests them too.
+    redundancy : {"exact", "local"}
+        Default for ``solve(weights, redundancy=None)``: ``"exact"`` redundancy blocks
+        from the bundle's cofactors (:mod:`orientviz.adjust.precision`), or ``"local"``:
+        each point's intersection with the orientations held fixed (no precision
+        computation; an upper bound of r, i.e. abs(w) is not overestimated).
     **bundle_options
         Passed to :func:`bundle_adjust` (``control``, ``additional``, …).
     """
     n = block.n_observations
-    state = {"block": block.copy()}
+    state = {"block": block.copy(), "warm": False}
     sig0 = block.observations.sigma.reshape(-1).copy()
+    default = redundancy
 
-    def solve(weights: F64) -> Adjustment:
+    def solve(weights: F64, redundancy: str | None = None) -> Adjustment:
+        mode = default if redundancy is None else redundancy
+        if mode not in ("exact", "local"):
+            raise InputError(f"unknown redundancy {mode!r}; expected 'exact' or 'local'")
         w = np.broadcast_to(np.asarray(weights, float), (2 * n,)).reshape(n, 2)
         # a weight below 1e-6 (σ × 1000) counts as eliminated: keeps the normals regular
         w = np.where(w < 1e-6, 0.0, w)
@@ -101,11 +163,18 @@ def bundle_solver(block: Block, *, warm_start: bool = True, **bundle_options):
         with np.errstate(divide="ignore"):
             sigma = np.where(w > 0, block.observations.sigma / np.sqrt(np.where(w > 0, w, 1)), 1.0)
         sub, kept, pts = _subset(state["block"], keep, sigma)
-        adj = bundle_adjust(sub, precision=True, **bundle_options)
+        screening = mode == "local" and state["warm"]
+        opts = {**bundle_options, "max_iter": 1} if screening else bundle_options
+        adj = bundle_adjust(sub, precision=mode == "exact", **opts)
+        if screening and not adj.converged and len(adj.history) == 2:
+            # a screening round: one Gauss-Newton step from the previous solution (a few
+            # rays less) is enough to test; the exact round converges fully
+            adj = replace(adj, converged=True, reason="one step from the previous solution")
         ns = sub.n_observations
         xyz = state["block"].points.xyz.copy()
         xyz[pts] = adj.extra["points"]
         if warm_start and adj.converged:
+            state["warm"] = True
             b = state["block"]
             b.images.X0[:] = adj.extra["exterior"][:, :3]
             b.images.angles[:] = adj.extra["exterior"][:, 3:]
@@ -130,18 +199,26 @@ def bundle_solver(block: Block, *, warm_start: bool = True, **bundle_options):
             v[gone] = f - o.xy[gone]
         rn = np.zeros((n, 2))
         wn = np.full((n, 2), np.nan)
-        if adj.redundancy_numbers is not None:
+        rxy = np.zeros(n)
+        chk = sub.points.role[sub.observations.point] == CHECK
+        if mode == "local":
+            _local_redundancy(sub, adj, idx, v, sigma, rn, wn, rxy, ~chk | check_rays)
+        elif adj.redundancy_numbers is not None:
             rn[idx] = np.nan_to_num(adj.redundancy_numbers[: 2 * ns].reshape(ns, 2))
             wn[idx] = adj.normalized_residuals[: 2 * ns].reshape(ns, 2)
-            # normalised with the a-priori σ of the observation, not the down-weighted one
-            wn[idx] *= sigma[idx] / block.observations.sigma[idx]
+            rxy[idx] = np.nan_to_num(adj.extra.get("redundancy_xy", np.zeros(ns)))
+            if check_rays:
+                _local_redundancy(sub, adj, idx, v, sigma, rn, wn, rxy, chk)
+        # normalised with the a-priori σ of the observation, not the down-weighted one
+        wn[idx] *= sigma[idx] / block.observations.sigma[idx]
         return replace(
             adj,
             residuals=v.reshape(-1),
             sigma_obs=sig0.copy(),
             redundancy_numbers=rn.reshape(-1),
             normalized_residuals=wn.reshape(-1),
-            extra={**adj.extra, "bundle": adj, "kept_rays": kept, "kept_points": pts, "xyz": xyz},
+            extra={**adj.extra, "bundle": adj, "kept_rays": kept, "kept_points": pts, "xyz": xyz,
+                   "redundancy_xy": rxy, "redundancy": mode},  # fmt: skip
         )
 
     return solve
@@ -156,6 +233,11 @@ def clean_block(
     robust_c: float | None = None,
     threshold: float = 3.0,
     one_at_a_time: bool = False,
+    image_cluster: bool = True,
+    fast: bool = True,
+    test: str = "2d",
+    separation: float = SEPARATION,
+    check_rays: bool = True,
     **bundle_options,
 ) -> Cleaning:
     """Clean a block of gross errors automatically, in one run, with a log.
@@ -197,13 +279,18 @@ def clean_block(
     n = block.n_observations
     groups = np.repeat(np.arange(n), 2)
     labels = ray_labels(block)
-    solve = bundle_solver(block, **bundle_options)
+    local = fast and method == "snooping"
+    solve = bundle_solver(
+        block, check_rays=check_rays, redundancy="local" if local else "exact", **bundle_options
+    )
     if method == "snooping":
         o = block.observations
-        clusters = None if one_at_a_time else [o.point, o.image]
+        clusters = None if one_at_a_time else [o.point, o.image] if image_cluster else [o.point]
         return data_snooping(
             solve, 2 * n, alpha0=alpha0, groups=groups, labels=labels,
-            max_fraction=max_fraction, clusters=clusters,
+            max_fraction=max_fraction, clusters=clusters, test=test,
+            separate=o.point, separation=separation,
+            solve_exact=(lambda w: solve(w, "exact")) if fast else None,
         )  # fmt: skip
     if method == "reruns":
         return rerun_cleaning(solve, 2 * n, threshold=threshold, groups=groups, labels=labels)
