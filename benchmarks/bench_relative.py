@@ -2,7 +2,8 @@
 
 Run: ``python benchmarks/bench_relative.py`` (prints a table; nothing is asserted).
 Peers in the same run: numpy least squares for the 9-point solve, OpenCV's
-findEssentialMat + recoverPose (if installed) for the 1 000-point pair. Note on the
+findEssentialMat + recoverPose (if installed) for the 1 000-point pair, a bare
+matplotlib figure of the same size (full draw; savefig PNG) for the widget redraw. Note on the
 comparison: OpenCV runs its robust five-point estimator (LMEDS, no outliers here) and
 returns the best minimal-sample solution without a final least-squares step, so its
 angles are less accurate than orientviz's all-point estimates; orientviz's routes are
@@ -132,38 +133,64 @@ def main():
         f"max angle error {np.abs(es.x[2:] - true[2:]).max() * RHO_C:.3f} c, {es.iterations} it.")  # fmt: skip
     # --- widget redraw
     try:
+        import io
+
         import matplotlib
 
         matplotlib.use("Agg")
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+
         from orientviz.plot.relative import (
             blit_parallax_field,
+            parallax_field_png,
             plot_parallax_field,
             update_parallax_field,
         )
-        from orientviz.widgets.plotter import VirtualPlotter
+        from orientviz.widgets.plotter import VirtualPlotter, _field_figure
 
-        vp = VirtualPlotter(seed=2)
-        fig = plot_parallax_field(vp.view())
-        ax = fig.axes[0]
+        vp = VirtualPlotter(seed=2)  # 9-point scheme, 11 × 9 arrows
         vals = iter(np.linspace(-50, 50, 10**6))
 
-        def redraw():
-            v = vp.set_dials(0.0, 0.0, next(vals), 0.0, 0.0)
-            update_parallax_field(ax, v)
+        def new_view():
+            return vp.set_dials(0.0, 0.0, next(vals), 0.0, 0.0)
+
+        # peer: a bare figure of the same size (one line, default ticks)
+        bare = Figure(figsize=(7.0, 5.0), layout="none")
+        FigureCanvasAgg(bare)
+        bare.add_subplot().plot([0, 1], [0, 1])
+        t_bare = best_of(bare.canvas.draw, repeat=3)
+
+        def bare_png():
+            bare.savefig(io.BytesIO(), format="png")
+
+        t_bare_png = best_of(bare_png, repeat=3)
+        row("peer: bare 7x5 in figure, full Agg draw", t_bare)
+        row("peer: bare 7x5 in figure, savefig PNG", t_bare_png)
+        row("widget: new dials -> state (9-point scheme)", best_of(new_view, repeat=3))
+        fig, ax, _ = _field_figure()
+        plot_parallax_field(vp.view(), ax=ax)
+
+        def full():
+            update_parallax_field(ax, new_view())
             fig.canvas.draw()
 
-        t_state = best_of(lambda: vp.set_dials(0.0, 0.0, next(vals), 0.0, 0.0), repeat=3)
-        row("widget: new dials → state (9-point scheme)", t_state)
-        row("widget: state + figure update + full Agg draw", best_of(redraw, repeat=3))
+        def tight_png():  # what display(fig) of the inline backend did before
+            update_parallax_field(ax, new_view())
+            fig.savefig(io.BytesIO(), format="png", bbox_inches="tight")
 
-        def blit():
-            blit_parallax_field(ax, vp.set_dials(0.0, 0.0, next(vals), 0.0, 0.0))
-
-        row(
-            "widget: state + blitted redraw (live backends)",
-            best_of(blit, repeat=3),
-            note="goal < 50 ms",
-        )
+        row("widget (old inline path): state + savefig PNG tight", best_of(tight_png, repeat=3),
+            t_bare_png)  # fmt: skip
+        row("widget: state + update + full Agg draw", best_of(full, repeat=3), t_bare)
+        fig2, ax2, _ = _field_figure()
+        plot_parallax_field(vp.view(), ax=ax2)
+        row("widget (ipympl path): state + blitted redraw",
+            best_of(lambda: blit_parallax_field(ax2, new_view()), repeat=3), t_bare)  # fmt: skip
+        fig3, ax3, _ = _field_figure()
+        plot_parallax_field(vp.view(), ax=ax3)
+        row("widget (inline path): state + blit + PNG for the Image",
+            best_of(lambda: parallax_field_png(ax3, new_view()), repeat=3), t_bare_png,
+            note="goal < 50 ms")  # fmt: skip
     except ImportError:
         print("matplotlib not installed: no redraw timing")
 
