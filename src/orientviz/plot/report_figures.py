@@ -247,7 +247,7 @@ def w_histogram_figure(data: dict[str, Any]):
     return fig
 
 
-def point_precision_figure(data: dict[str, Any], *, max_points: int = 20000):
+def point_precision_figure(data: dict[str, Any], *, max_points: int = 8000):
     """Colour maps of the planimetric σ (r.m.s. of σX, σY) and of σZ of the points.
 
     Parameters
