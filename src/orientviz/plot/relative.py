@@ -193,7 +193,8 @@ def parallax_field_png(ax, view, *, compress_level: int = 1) -> bytes:
         Made by :func:`plot_parallax_field`.
     view : PlotterView
     compress_level : int
-        zlib level 0-9 of the PNG (1: fast, about 2-3 times larger than 9).
+        zlib level 0-9 of the PNG (1: fast; for this figure the file is only about 10 %
+        larger than at the default 6, 0 would be 30 times larger).
 
     Returns
     -------
