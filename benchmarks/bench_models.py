@@ -14,10 +14,18 @@ CPU seconds per model beside Table 2. Peers in the same run:
   on the same 7-parameter problem (points and models as unknowns) — the agreement of
   the solutions and the time ratio.
 
+Extensions in the same run (``--extras``; ``--extras-only`` skips the COED block), on
+a 6 × 20 block with systematic image errors (model bending) and statoscope/APR data:
+the independent-model adjustment without and with model deformation parameters
+(shared by the block, per strip), and without and with auxiliary data as joint
+observations; the bundle without and with the joint auxiliary data, and the alternation
+of :func:`orientviz.block.auxiliary.adjust_with_auxiliary` as the peer of the joint one.
+
 Usage::
 
     python benchmarks/bench_models.py            # best of 3
     python benchmarks/bench_models.py --reps 1 --no-peers
+    python benchmarks/bench_models.py --reps 1 --extras-only
 """
 
 from __future__ import annotations
@@ -137,11 +145,72 @@ def least_squares_peer(reps):
     return ms.n_models, w_ov, w_sp, d, out.nfev
 
 
+def extras(reps) -> None:
+    """Self-calibration and joint auxiliary data: times with vs without, same block."""
+    from orientviz.block import systematic as sy
+    from orientviz.block.auxiliary import (
+        adjust_with_auxiliary,
+        check_errors,
+        height_control_at_ends,
+        simulate_auxiliary,
+    )
+    from orientviz.block.bundle import bundle_adjust
+
+    sim = simulate_block(
+        6, 20, rng=np.random.default_rng(20), control="chains", control_kind="xy+z",
+        chain_spacing=2, n_check=40, systematic=sy.model_bending(15.0), sigma_image_mm=0.003,
+    )  # fmt: skip
+    b = sim.block
+    ms = form_models(b)
+    print(f"# extras: {b.summary()}; {ms.n_models} models; model bending 15 µm, σ 3 µm")
+    print("# case                                   wall_s  iterations  σ0     μxy m  μz m")
+
+    def row(name, fn, xyz_of):
+        res, w, _ = timed(fn, reps)
+        xy, z = check_errors(sim, xyz_of(res))
+        adj = getattr(res, "adjustment", res)
+        # steps of one adjustment, or the bundle adjustments of the alternation
+        its = getattr(res, "rounds", None) or sum(1 for h in adj.history if h.index > 0)
+        print(f"{name:40s} {w:6.2f}  {its:4d}       {adj.sigma0:5.2f}  {xy:.3f}  {z:.3f}")
+        return w
+
+    xyz = lambda r: r.extra["xyz"]  # noqa: E731
+    pts = lambda r: getattr(r, "adjustment", r).extra["points"]  # noqa: E731
+    w0 = row("models, 7 parameters", lambda: independent_models(b, models=ms), xyz)
+    w1 = row("models + deformation (block)", lambda: independent_models(
+        b, models=ms, deformation="classical", deformation_group="block"), xyz)  # fmt: skip
+    w2 = row("models + deformation (strip)", lambda: independent_models(
+        b, models=ms, deformation="classical", deformation_group="strip"), xyz)  # fmt: skip
+    print(f"# self-calibration / plain: block {w1 / w0:.2f}, strip {w2 / w0:.2f}")
+    ends = height_control_at_ends(b)
+    rng = np.random.default_rng(1)
+    stat = simulate_auxiliary(
+        sim, "statoscope", rng=rng, sigma=0.3, offset_sigma=20.0, drift_sigma=2.0
+    )
+    apr = simulate_auxiliary(sim, "apr", rng=rng, sigma=0.5, offset_sigma=20.0)
+    aux = [stat, apr]
+    w3 = row("models, heights at the ends", lambda: independent_models(ends, models=ms), xyz)
+    w4 = row("models, ends + statoscope + APR (joint)", lambda: independent_models(
+        ends, models=ms, auxiliary=aux), xyz)  # fmt: skip
+    w5 = row("bundle, heights at the ends", lambda: bundle_adjust(ends, control="weighted"), pts)
+    w6 = row("bundle, ends + statoscope + APR (joint)", lambda: bundle_adjust(
+        ends, control="weighted", auxiliary=aux), pts)  # fmt: skip
+    w7 = row("bundle, ends + stat. + APR (alternation)", lambda: adjust_with_auxiliary(
+        ends, aux, tol=0.005), pts)  # fmt: skip
+    print(f"# joint auxiliary / plain: models {w4 / w3:.2f}, bundle {w6 / w5:.2f}; "
+          f"alternation / joint (bundle) {w7 / w6:.1f}")  # fmt: skip
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--reps", type=int, default=3)
     ap.add_argument("--no-peers", action="store_true")
+    ap.add_argument("--extras", action="store_true", help="also self-calibration, auxiliary data")
+    ap.add_argument("--extras-only", action="store_true")
     a = ap.parse_args(argv)
+    if a.extras_only:
+        extras(a.reps)
+        return
     t = time.perf_counter()
     sim = simulate_block(43, 52, rng=np.random.default_rng(2193), extra=3)
     t_sim = time.perf_counter() - t
@@ -175,6 +244,8 @@ def main(argv=None) -> None:
         nm, w_ov, w_sp, d, nfev = least_squares_peer(a.reps)
         print(f"# 3 × 8 block ({nm} models): orientviz rigorous {w_ov:.3f} s, scipy least_squares "
               f"{w_sp:.2f} s ({nfev} evaluations), ratio {w_sp / w_ov:.0f}; max coordinate difference {d * 1000:.3f} mm")  # fmt: skip
+    if a.extras:
+        extras(a.reps)
 
 
 if __name__ == "__main__":

@@ -31,6 +31,9 @@ from .model_deformation_params import DeformationField, ModelDeformation, group_
 from .models_normal import scalar_cofactors, solve_sparse
 
 F64 = NDArray[np.float64]
+#: Above this many similarity parameters (7 per model) their correlations with the
+#: deformation parameters are not computed.
+SIMILARITY_CHECK_LIMIT: int = 7 * 1000
 
 
 @dataclasses.dataclass
@@ -310,10 +313,13 @@ def finish_joint(res: Adjustment, block, ms, su, js, lam, R, T, p, g_aux, sol, n
         an = analyse(res, ap_sigma=js.sigma if np.all(np.isfinite(s)) else None)
         # correlations with the similarity parameters of the models
         dq = np.sqrt(np.clip(np.diag(res.cofactor_blocks["additional"]), 1e-300, None))
-        d7 = np.sqrt(np.clip(_diag_inverse(sol, n7), 1e-300, None))
+        # correlations with the similarity parameters need diag(S⁻¹) of all models:
+        # n7 / 256 solves, left out for very large blocks
+        big = n7 > SIMILARITY_CHECK_LIMIT
+        d7 = np.ones(n7) if big else np.sqrt(np.clip(_diag_inverse(sol, n7), 1e-300, None))
         C = qd[:n7] / np.outer(d7, dq)
         sim_names = res.names[:n7]
-        for a in range(js.n_def):
+        for a in range(0 if big else js.n_def):
             jmax = int(np.argmax(np.abs(C[:, a])))
             if abs(C[jmax, a]) > an.threshold:
                 an.with_exterior.append((an.names[a], sim_names[jmax], float(C[jmax, a])))
