@@ -41,9 +41,10 @@ _ALL_RUN = """() => {
   const w = window.jupyterapp.shell.currentWidget;
   const k = w.sessionContext.session.kernel;
   const code = w.content.widgets.filter(c => c.model.type === 'code');
+  const failed = code.some(c => c.model.outputs.toJSON().some(o => o.output_type === 'error'));
   return k.status === 'idle' && code.length > 0
-         && code.every(c => c.model.executionCount !== null);
-}"""
+         && (failed || code.every(c => c.model.executionCount !== null));
+}"""  # true when all cells ran, or when one stopped the run with an error
 _ERRORS = """() => {
   const w = window.jupyterapp.shell.currentWidget;
   const out = [];
@@ -170,7 +171,9 @@ def test_lesson_runs_in_jupyterlab_and_slider_redraws(browser_page, tmp_path):
         moved = time.monotonic()
         changed = False
         while time.monotonic() < deadline:
-            src = app.locator(".widget-output img").first.get_attribute("src", timeout=5000)
+            src = app.locator(".widget-output img").evaluate_all(  # no waiting: poll
+                "els => els.length ? els[0].src : null"
+            )
             if src and src.startswith("data:image/png") and src != before:
                 changed = True
                 break
