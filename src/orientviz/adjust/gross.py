@@ -23,7 +23,7 @@ Statistics (Baarda 1968, a-priori σ0 = 1):
   undetected ``∇_i`` on the parameters ``Δx = Q_xx J_iᵀ p_i ∇_i``.
 
 Observations can be tested in **groups** (e.g. the x and y coordinate of one image ray):
-a group's statistic is the largest |w_i| of its members, and a group is eliminated
+a group's statistic is the largest abs(w_i) of its members, and a group is eliminated
 as a whole.
 """
 
@@ -237,7 +237,7 @@ class LogEntry:
     label : str
         Its label for reports.
     w : float
-        Its test statistic (largest |normalised residual| of the group) at the decision.
+        Its test statistic (largest absolute normalised residual of the group) at the decision.
     iteration : int
         Number of the adjustment after which the decision was taken (1 = the first).
     action : str

@@ -12,13 +12,13 @@ A *pass* (Kovarik 1968) reads ``by`` and ``z`` at the points of a scheme, comput
 corrections with a chosen formula and applies them through the counters; every pass is
 kept in :attr:`AnalogPlotter.history`. Formulas (:data:`FORMULAS`):
 
-``"exact"``     least squares of the linearised equation with the read heights z_i and the
-                plan positions of the points (the exact linearisation);
-``"kovarik9"``  Kovarik's closed form for 9 points in mountainous terrain, with his
-                constant k = ordinate / c (edge points assumed at Y/Z = ∓k);
-``"flat"``      the same least squares with one common height (Hallert's flat terrain);
-``"preorient"`` the simple pre-orientation formulas with round constants
-                (:mod:`orientviz.orientation.preorient`).
+* ``"exact"``: least squares of the linearised equation with the read heights z_i and
+  the plan positions of the points (the exact linearisation);
+* ``"kovarik9"``: Kovarik's closed form for 9 points in mountainous terrain, with his
+  constant k = ordinate / c (edge points assumed at Y/Z = ∓k);
+* ``"flat"``: the same least squares with one common height (Hallert's flat terrain);
+* ``"preorient"``: the simple pre-orientation formulas with round constants
+  (:mod:`orientviz.orientation.preorient`).
 
 The true pair (two images' orientation, terrain points, image coordinates) comes from
 :func:`true_pair` (module :mod:`orientviz.orientation.pairsim`, re-exported here);
@@ -83,12 +83,12 @@ class PassRecord:
 
     @property
     def max_rotation_c(self) -> float:
-        """Largest |rotation correction| in centesimal minutes."""
+        """Largest absolute rotation correction in centesimal minutes."""
         return float(np.abs(self.corrections[2:]).max() * RHO_C)
 
     @property
     def max_base_mm(self) -> float:
-        """Largest |dby|, |dbz| in machine mm."""
+        """Largest abs(dby), abs(dbz) in machine mm."""
         return float(np.abs(self.corrections[:2]).max())
 
     @property
