@@ -106,6 +106,19 @@ def snapshot_of(states: dict[str, dict], model_id: str) -> tuple[list[dict], lis
         name = model.get("model_name", "")
         if name == "OutputModel":
             outputs.extend(s.get("outputs") or [])
+        elif name == "ImageModel":  # the picture is a binary buffer, saved base64-encoded
+            mime = "image/" + {"jpg": "jpeg", "svg": "svg+xml"}.get(
+                s.get("format"), s.get("format") or "png"
+            )
+            for buf in model.get("buffers") or []:
+                if (
+                    buf.get("path") == ["value"]
+                    and buf.get("encoding") == "base64"
+                    and buf.get("data")
+                ):
+                    outputs.append(
+                        {"output_type": "display_data", "metadata": {}, "data": {mime: buf["data"]}}
+                    )
         elif name in ("HTMLModel", "LabelModel", "TextareaModel", "HTMLMathModel"):
             text = html.unescape(_TAG.sub("", str(s.get("value") or ""))).strip()
             if text:
@@ -201,7 +214,9 @@ def _render_widget_view(self, data) -> list[nodes.Element]:
                 )
             )
     for text in texts:
-        box += nodes.literal_block(text, text, classes=["output", "stream"])
+        block = nodes.literal_block(text, text, classes=["output", "stream"])
+        block["language"] = "text"  # a status line or log, not code
+        box += block
     return [box]
 
 

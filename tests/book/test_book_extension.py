@@ -74,6 +74,18 @@ def test_snapshot_collects_outputs_settings_and_text_in_display_order():
     assert "image/png" in outputs[1]["data"]
 
 
+def test_snapshot_shows_an_image_widget_from_its_saved_buffer():
+    states = _states()
+    states["out"] = {
+        "model_name": "ImageModel",
+        "state": {"format": "png", "layout": "IPY_MODEL_x"},
+        "buffers": [{"data": "iVBORw0KGgo=", "encoding": "base64", "path": ["value"]}],
+    }
+    outputs, _, _ = ob.snapshot_of(states, "box")
+    assert outputs[-1]["output_type"] == "display_data"
+    assert outputs[-1]["data"] == {"image/png": "iVBORw0KGgo="}
+
+
 def test_snapshot_of_unknown_or_cyclic_widgets_terminates():
     states = _states()
     states["controls"]["state"]["children"].append("IPY_MODEL_box")  # a cycle
