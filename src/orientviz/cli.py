@@ -64,6 +64,17 @@ class Command:
     arguments: tuple[Arg, ...] = ()
 
 
+#: the options both importers (BAL, COLMAP) take
+IMPORT_OPTIONS: tuple[Arg, ...] = (
+    arg("-o", "--output", required=True, metavar="OUT.json", help="problem file to write"),
+    arg("--control", metavar="CSV", default=None,
+        help="control points: CSV id,X,Y,Z[,sX,sY,sZ,role] keyed by point id"),
+    arg("--pixel-size", type=float, default=None, metavar="MM",
+        help="pixel size in mm (default 0.01)"),
+    arg("--sigma-px", type=float, default=None, metavar="PX",
+        help="a-priori sigma of the image coordinates in pixels (default 1)"),
+)  # fmt: skip
+
 #: name → Command; the order is the order of ``orientviz --help``
 COMMANDS: dict[str, Command] = {
     "solve": Command(
@@ -136,13 +147,7 @@ COMMANDS: dict[str, Command] = {
         examples=(("orientviz import-bal problem-49-7776-pre.txt -o block.json", "convert"),),
         arguments=(
             arg("file", help="BAL text file"),
-            arg("-o", "--output", required=True, metavar="OUT.json", help="problem file to write"),
-            arg("--control", metavar="CSV", default=None,
-                help="control points: CSV id,X,Y,Z[,sX,sY,sZ,role] keyed by point id"),
-            arg("--pixel-size", type=float, default=None, metavar="MM",
-                help="pixel size in mm (default 0.01)"),
-            arg("--sigma-px", type=float, default=None, metavar="PX",
-                help="a-priori sigma of the image coordinates in pixels (default 1)"),
+            *IMPORT_OPTIONS,
         ),
     ),
     "import-colmap": Command(
@@ -155,13 +160,7 @@ COMMANDS: dict[str, Command] = {
         examples=(("orientviz import-colmap sparse/0 -o block.json", "convert"),),
         arguments=(
             arg("directory", help="folder of the COLMAP text model"),
-            arg("-o", "--output", required=True, metavar="OUT.json", help="problem file to write"),
-            arg("--control", metavar="CSV", default=None,
-                help="control points: CSV id,X,Y,Z[,sX,sY,sZ,role] keyed by point id"),
-            arg("--pixel-size", type=float, default=None, metavar="MM",
-                help="pixel size in mm (default 0.01)"),
-            arg("--sigma-px", type=float, default=None, metavar="PX",
-                help="a-priori sigma of the image coordinates in pixels (default 1)"),
+            *IMPORT_OPTIONS,
         ),
     ),
     "export": Command(
@@ -174,14 +173,19 @@ COMMANDS: dict[str, Command] = {
         "text model). --no-adjust exports the file's own values.",
         examples=(
             ("orientviz export block_strip -d results", "adjust a shipped example, write all"),
-            ("orientviz export block.json -d results --format csv --no-adjust",
-             "only the CSV tables of the file's values"),
+            (
+                "orientviz export block.json -d results --format csv --no-adjust",
+                "only the CSV tables of the file's values",
+            ),
         ),
         arguments=(
             arg("file", help="block problem file, or the name of a shipped example"),
             arg("-d", "--directory", required=True, metavar="DIR", help="folder to write into"),
-            arg("--format", default="json,csv,colmap",
-                help="comma-separated: json, csv, colmap (default all)"),
+            arg(
+                "--format",
+                default="json,csv,colmap",
+                help="comma-separated: json, csv, colmap (default all)",
+            ),
             arg("--no-adjust", action="store_true", help="export the values as they are"),
         ),
     ),
