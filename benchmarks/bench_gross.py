@@ -201,7 +201,7 @@ def print_table(title, rows, clean_rates):
         worst = np.max([np.sqrt(r["chk2"] / r["ref2"]) for r in rs], axis=0)
         t = sum(r["time"] for r in rs)
         cr = clean_rates.get(name)
-        crs = (f"{cr[0] / cr[2]:.2%} / {cr[1] / cr[2]:.2%}" if cr else "–")
+        crs = f"{cr[0] / cr[2]:.2%} / {cr[1] / cr[2]:.2%}" if cr else "–"
         print(f"| {name} | {a['n']} | {a['det']} ({a['det'] / a['n']:.1%}) | {a['testable']} "
               f"({a['testable'] / a['n']:.1%}) | {a['det_testable'] / max(a['testable'], 1):.1%} | "
               + " | ".join(str(a[k]) for k in MISS)

@@ -29,7 +29,9 @@ def _lambda(sim):
     idx = sim.info["gross"]["index"]
     r = ref.redundancy_numbers.reshape(n, 2)[idx]
     s = sim.block.observations.sigma[idx]
-    return idx, noncentrality_2d(sim.info["gross"]["error_mm"], s, r, ref.extra["redundancy_xy"][idx])
+    return idx, noncentrality_2d(
+        sim.info["gross"]["error_mm"], s, r, ref.extra["redundancy_xy"][idx]
+    )
 
 
 @pytest.mark.parametrize("fast", [True, False])

@@ -49,7 +49,6 @@ __all__ = [
     "LogEntry",
     "Reliability",
     "critical_value",
-    "data_snooping",
     "engine_solver",
     "noncentrality",
     "redundancy_numbers",
@@ -237,7 +236,8 @@ class LogEntry:
     label : str
         Its label for reports.
     w : float
-        Its test statistic (largest absolute normalised residual of the group) at the decision.
+        Its test statistic at the decision: the largest absolute normalised residual of
+        the group, or √T of the 2-D test (equal to abs(w) with one degree of freedom).
     iteration : int
         Number of the adjustment after which the decision was taken (1 = the first).
     action : str
@@ -283,7 +283,7 @@ class Cleaning:
 
     def table(self) -> str:
         """The log as a plain-text table."""
-        lines = [f"{'iter':>4}  {'obs':>6}  {'label':<18} {'|w|':>7}  action"]
+        lines = [f"{'iter':>4}  {'obs':>6}  {'label':<18} {'|w|,√T':>7}  action"]
         for e in self.log:
             lines.append(
                 f"{e.iteration:>4}  {e.observation:>6}  {e.label:<18} {e.w:7.2f}  "

@@ -208,7 +208,9 @@ def data_snooping(
     def why(b, T, cv, dof):
         if test == "w":
             return f"|w| = {np.sqrt(T[b]):.2f} > k = {np.sqrt(cv[b]):.2f} (α0 = {alpha0:g})"
-        return f"T = {T[b]:.1f} > {cv[b]:.2f} ({dof[b]} dof, B-method α0 = {alpha0:g}, β0 = {beta0:g})"
+        return (
+            f"T = {T[b]:.1f} > {cv[b]:.2f} ({dof[b]} dof, B-method α0 = {alpha0:g}, β0 = {beta0:g})"
+        )
 
     while True:
         it += 1

@@ -24,8 +24,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..adjust.gross import Cleaning, rerun_cleaning, robust_adjust
-from ..adjust.snooping import data_snooping
 from ..adjust.result import Adjustment
+from ..adjust.snooping import data_snooping
 from ..camera import project
 from ..errors import InputError
 from ..model import CHECK, CONTROL, Block, Observations, Points
@@ -217,8 +217,15 @@ def bundle_solver(
             sigma_obs=sig0.copy(),
             redundancy_numbers=rn.reshape(-1),
             normalized_residuals=wn.reshape(-1),
-            extra={**adj.extra, "bundle": adj, "kept_rays": kept, "kept_points": pts, "xyz": xyz,
-                   "redundancy_xy": rxy, "redundancy": mode},  # fmt: skip
+            extra={
+                **adj.extra,
+                "bundle": adj,
+                "kept_rays": kept,
+                "kept_points": pts,
+                "xyz": xyz,
+                "redundancy_xy": rxy,
+                "redundancy": mode,
+            },  # fmt: skip
         )
 
     return solve
