@@ -41,6 +41,8 @@ from ..adjust.normal import (
 from ..adjust.result import Adjustment, Iteration
 from ..errors import InputError, NotDeterminableError
 from ..model import Block
+from .bundle_ap import APStructure, ap_normal, point_ap_term
+from .bundle_border import PCG_STALE_STEPS, solve_bordered, solve_bordered_pcg
 from .bundle_checks import check_connected, check_datum, check_determinable, point_setup
 from .bundle_kernel import collinearity_block, project_block
 
@@ -143,7 +145,14 @@ class BundleProblem:
             s = np.broadcast_to(np.asarray(s, dtype=float), (self.k,))
             self.ap_w = np.tile(np.where(np.isfinite(s) & (s > 0), 1.0 / s**2, 0.0), self.G)
             self.ap_names = [f"{nm}@g{g}" for g in range(self.G) for nm in additional.names]
+            self.ap_struct = APStructure(
+                self.oi, self.ocol, self.struct.pt_obs, self.var_pts.size, grp, self.G, self.Aw
+            )
         self.q = self.k * self.G
+        # the border's solver: Fs formed (and its factor kept as the preconditioner of
+        # the conjugate gradients of later iterations) or solved iteratively
+        self.ap_prec = None
+        self.ap_log: list[str] = []
         # auxiliary data as joint observations: hook of orientviz.block.auxiliary_obs
         self.aux, self.na = None, 0
         if auxiliary:
@@ -239,39 +248,10 @@ class BundleProblem:
             blocks=blocks, rhs=red.reshape(-1), Vinv=Vinv, W=W, T=T, bp=bp, diagU=diagU, diagV=diagV
         )
         if self.q:
-            out.update(self._ap_normal(st, rw, Jew, Jpw, W, T, Vinv, bp, lam))
+            out.update(ap_normal(self, st, rw, Jew, Jpw, T, Vinv, bp, lam))
         if self.aux:
             self.aux.normal(self, st, out, lam)
         return out
-
-    def _ap_normal(self, st, rw, Jew, Jpw, W, T, Vinv, bp, lam) -> dict:
-        S, k, G, m = self.struct, self.k, self.G, self.m
-        go = self.grp[self.oi]
-        Aw = self.Aw
-        E3 = np.zeros((m, G, 6, k))
-        Ed = np.add.reduceat((Jew.transpose(0, 2, 1) @ Aw)[S.cam_order], S.cam_starts, axis=0)
-        E3[S.cam_present, self.grp[S.cam_present]] += Ed
-        vo = S.pt_obs
-        Wap = np.zeros((Aw.shape[0], k, 3))
-        Wap[vo] = Aw[vo].transpose(0, 2, 1) @ Jpw[vo]
-        Tap = np.zeros_like(Wap)
-        Tap[vo] = Wap[vo] @ Vinv[self.ocol[vo]]
-        a, b = S.all_pairs
-        np.add.at(E3, (self.oi[a], go[b]), -(T[a] @ Wap[b].transpose(0, 2, 1)))
-        F4 = np.zeros((G, G, k, k))
-        np.add.at(F4, (go, go), Aw.transpose(0, 2, 1) @ Aw)
-        np.add.at(F4, (go[a], go[b]), -(Tap[a] @ Wap[b].transpose(0, 2, 1)))
-        F = F4.transpose(0, 2, 1, 3).reshape(self.q, self.q)
-        F[np.diag_indices(self.q)] += self.ap_w
-        diagF = np.diag(F).copy()
-        if lam > 0:
-            F[np.diag_indices(self.q)] *= 1.0 + lam
-        ba2 = np.zeros((G, k))
-        np.add.at(ba2, go, np.einsum("nki,nk->ni", Aw, rw))
-        np.add.at(ba2, go[vo], -np.einsum("nij,nj->ni", Tap[vo], bp[self.ocol[vo]]))
-        ba = ba2.reshape(-1) - self.ap_w * st.ap
-        E = E3.transpose(0, 2, 1, 3).reshape(6 * m, self.q)
-        return dict(E=E, F=F, ba=ba, Wap=Wap, diagF=diagF)
 
     def solve(self, ne: dict, names: list[str]):
         """Corrections (dc (m, 6), dp (p_var, 3), da (q,)) and the factor of S."""
@@ -279,18 +259,20 @@ class BundleProblem:
         if self.aux:
             return self.aux.solve(self, fac, ne)
         if self.q:
-            Y = fac.solve(ne["E"])
-            Fs = ne["F"] - ne["E"].T @ Y
-            z = fac.solve(ne["rhs"])
-            try:
-                da = np.linalg.solve(Fs, ne["ba"] - ne["E"].T @ z)
-            except np.linalg.LinAlgError:
-                raise NotDeterminableError(
-                    "the additional parameters are not determinable (singular); give ap_sigma",
-                    parameters=list(self.ap_names),
-                ) from None
-            dc = z - Y @ da
-            ne.update(Y=Y, Fs=Fs)
+            dc = None
+            if self.ap_prec is not None:
+                dc, da, steps = solve_bordered_pcg(
+                    fac, ne["E"], ne["F"], ne["rhs"], ne["ba"], self.ap_prec
+                )
+                self.ap_log.append(f"cg{steps}")
+                if dc is None or steps > PCG_STALE_STEPS:
+                    self.ap_prec = None  # stale preconditioner: form Fs next time
+            if dc is None:
+                dc, da, Fs, self.ap_prec = solve_bordered(
+                    fac, ne["E"], ne["F"], ne["rhs"], ne["ba"], self.ap_names
+                )
+                ne["Fs"] = Fs
+                self.ap_log.append("formed")
         else:
             dc = fac.solve(ne["rhs"])
             da = np.zeros(0)
@@ -298,10 +280,9 @@ class BundleProblem:
         S = self.struct
         vo = S.pt_obs
         t = np.einsum("nji,nj->ni", ne["W"][vo], dc[self.oi[vo]])
-        if self.q:
-            da_o = da.reshape(self.G, self.k)[self.grp[self.oi[vo]]]
-            t += np.einsum("nji,nj->ni", ne["Wap"][vo], da_o)
         red = ne["bp"] - np.add.reduceat(t, S.pt_starts, axis=0)
+        if self.q:
+            red -= point_ap_term(self, ne["H"], da)
         dp = np.einsum("nij,nj->ni", ne["Vinv"], red)
         return dc, dp, da, fac
 

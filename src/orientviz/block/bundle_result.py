@@ -91,7 +91,7 @@ def finish_result(
     extra: dict = {
         "solver": prob.struct.solver,
         "used_obs": setup.used_obs,
-        "reduced_info": dict(prob.struct.info),
+        "reduced_info": dict(prob.struct.info, **_border_info(prob)),
     }
     if chk.size:
         start = np.where(
@@ -175,3 +175,8 @@ def _project_all(block, st, xyz, prob) -> F64:
             "nij,nj->ni", prob.A, st.ap.reshape(prob.G, prob.k)[prob.grp[prob.oi]]
         )
     return f
+
+
+def _border_info(prob) -> dict:
+    """How the additional-parameter border was solved in each solve (formed / cg steps)."""
+    return {"ap_border": list(prob.ap_log)} if prob.q else {}

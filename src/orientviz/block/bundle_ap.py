@@ -1,0 +1,222 @@
+"""Additional parameters in the bundle's normal equations: assembly and bordered solve.
+
+With self-calibration the normal equations of the bundle (see
+:mod:`orientviz.adjust.normal`) gain a border of ``q = G·k`` group parameters ::
+
+    [ S   E ] [dc]   [r ]      S  = reduced camera system (points eliminated)
+    [ Eᵀ  F ] [da] = [ra]      E  = image × parameter coupling, F = parameter block
+
+Both E and F carry, besides their direct terms (Jeᵀ P A, Aᵀ P A), the terms that the
+elimination of the points leaves behind, ``−Σ_j W_j V_j⁻¹ H_jᵀ`` and ``−Σ_j H_j V_j⁻¹
+H_jᵀ``. They are assembled here per *(point, group)* pair — all rays of a point that
+lie in images of one group share the parameter columns, so their ``Aᵀ P J_p`` products
+are summed first (``H``) — and with segment sums over index orders that are computed
+once per problem (:class:`APStructure`) and applied as sparse 0/1 products; no
+``np.add.at``.
+
+How the border is then eliminated: :mod:`orientviz.block.bundle_border`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+F64 = NDArray[np.float64]
+I64 = NDArray[np.int64]
+
+
+def _summation(keys: I64) -> tuple[sp.csr_matrix, I64]:
+    """Sparse 0/1 matrix that sums the rows with equal key, and the sorted distinct keys.
+
+    ``M @ X`` (X of len(keys) rows) adds up the rows of every key — a segment sum that
+    SciPy's sparse product does faster than ``np.add.reduceat`` or ``np.add.at``.
+    """
+    uk, inv = np.unique(keys, return_inverse=True)
+    M = sp.csr_matrix(
+        (np.ones(keys.size), (inv.ravel(), np.arange(keys.size))), shape=(uk.size, keys.size)
+    )
+    return M, uk
+
+
+def _ssum(M: sp.csr_matrix, X: F64) -> F64:
+    """Row sums by :func:`_summation` of X (N, a, b) → (K, a, b)."""
+    return np.asarray(M @ X.reshape(X.shape[0], -1)).reshape((M.shape[0],) + X.shape[1:])
+
+
+class APStructure:
+    """Index orders for the additional-parameter terms (constant over the iterations).
+
+    Parameters
+    ----------
+    oi : ndarray of int, shape (n,)
+        Image of each used observation.
+    ocol : ndarray of int, shape (n,)
+        Point unknown of each observation (−1 for fixed points).
+    pt_obs : ndarray of int
+        Observations of point unknowns, sorted by point (``ReducedStructure.pt_obs``).
+    n_pt : int
+        Number of point unknowns (each has at least one observation).
+    grp : ndarray of int, shape (m,)
+        Group of each image.
+    G : int
+        Number of groups.
+    Aw : ndarray, shape (n, 2, k)
+        Design matrix of the parameters, weighted (rows · 1/σ).
+    """
+
+    def __init__(
+        self, oi: I64, ocol: I64, pt_obs: I64, n_pt: int, grp: I64, G: int, Aw: F64
+    ) -> None:
+        self.G = G
+        n = oi.size
+        go = grp[oi]
+        # observations by group (direct F and ba terms)
+        self.sum_grp, self.grp_present = _summation(go)
+        # the direct F term Σ Aᵀ P A does not change over the iterations
+        self.F_direct = _ssum(self.sum_grp, Aw.transpose(0, 2, 1) @ Aw)
+
+        # (point, group) pairs: rays of one point in images of one group
+        vo = pt_obs
+        pgkey = ocol[vo] * G + go[vo]
+        uk, inv = np.unique(pgkey, return_inverse=True)
+        inv = inv.ravel()
+        self.sum_pg = sp.csr_matrix(
+            (np.ones(vo.size), (inv, vo)), shape=(uk.size, n)
+        )  # sums per-observation rows (all n) of the rays of each pair
+        self.pg_pt, self.pg_grp = uk // G, uk % G
+        npg = uk.size
+        # point → its range of (point, group) pairs (pairs are sorted by point)
+        first = np.searchsorted(self.pg_pt, np.arange(n_pt))
+        count = np.diff(np.r_[first, npg])
+        self.sum_pt = sp.csr_matrix((np.ones(npg), (self.pg_pt, np.arange(npg))), shape=(n_pt, npg))
+        # per image, its rays side by side (padded with a zero ray n): the image's own
+        # group's E block is then one small matrix product per image (BLAS)
+        m = grp.size
+        cnt = np.bincount(oi, minlength=m)
+        order = np.argsort(oi, kind="stable")
+        pos = np.arange(n) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+        self.pad = np.full((m, max(int(cnt.max(initial=0)), 1)), n, np.int64)
+        self.pad[oi[order], pos] = order
+        k = Aw.shape[2]
+        L = self.pad.shape[1]
+        self.Aw_pad = np.concatenate([Aw, np.zeros((1, 2, k))])[self.pad].reshape(m, 2 * L, k)
+        # (point, group) pair of each ray's own group (npg: none, fixed point)
+        own = np.full(n + 1, npg, np.int64)
+        own[vo] = np.searchsorted(uk, pgkey)
+        self.own_pg_pad = own[self.pad]
+        # E correction in the *other* groups of a ray's point (rays of points in the
+        # overlap of two groups): every such pair, summed per (image, group)
+        a = vo
+        ca = count[ocol[a]]
+        e_obs = np.repeat(a, ca)
+        off = np.arange(e_obs.size) - np.repeat(np.cumsum(ca) - ca, ca)
+        e_pg = np.repeat(first[ocol[a]], ca) + off
+        other = self.pg_grp[e_pg] != go[e_obs]
+        self.e_obs, self.e_pg = e_obs[other], e_pg[other]
+        self.sum_e, self.e_key = _summation(oi[self.e_obs] * G + self.pg_grp[self.e_pg])
+        # F correction: within a group one product per group over its pairs; between
+        # groups (points in the overlap of two groups) pair by pair
+        self.pg_by_grp = np.argsort(self.pg_grp, kind="stable")
+        self.pg_grp_starts = np.searchsorted(self.pg_grp[self.pg_by_grp], np.arange(G + 1))
+        c1 = count[self.pg_pt]
+        f1 = np.repeat(np.arange(npg), c1)
+        off = np.arange(f1.size) - np.repeat(np.cumsum(c1) - c1, c1)
+        f2 = np.repeat(first[self.pg_pt], c1) + off
+        cross = f1 != f2
+        self.f_1, self.f_2 = f1[cross], f2[cross]
+        self.sum_f, self.f_key = _summation(self.pg_grp[self.f_1] * G + self.pg_grp[self.f_2])
+        # (point, group) pairs by group (ba correction); observations by point
+        self.sum_pgg, self.pgg_present = _summation(self.pg_grp)
+
+
+def ap_normal(
+    prob,
+    st,
+    rw: F64,
+    Jew: F64,
+    Jpw: F64,
+    T: F64,
+    Vinv: F64,
+    bp: F64,
+    lam: float,
+) -> dict:
+    """Border of the normal equations: E (6m, q), F (q, q), ba (q,) and helpers.
+
+    Parameters
+    ----------
+    prob : BundleProblem
+        With ``Aw`` (n, 2, k) weighted design, ``ap_struct`` (:class:`APStructure`).
+    st : bundle state (``st.ap`` the current parameters).
+    rw : ndarray, shape (n, 2)
+        Weighted misclosures.
+    Jew, Jpw : ndarray, shapes (n, 2, 6), (n, 2, 3)
+        Weighted Jacobians.
+    T : ndarray, shape (n, 6, 3)
+        W_a V_j⁻¹ per observation (zero for fixed points).
+    Vinv : ndarray, shape (p, 3, 3)
+        Inverse point blocks.
+    bp : ndarray, shape (p, 3)
+        Point right-hand sides.
+    lam : float
+        Levenberg-Marquardt damping of the diagonal of F.
+
+    Returns
+    -------
+    dict
+        ``E``, ``F`` (damped), ``ba``, ``diagF`` (undamped diagonal), ``H`` (per (point,
+        group) pair, for the back-substitution) and ``Wap`` (per ray, for the precision).
+    """
+    A, k, G, m = prob.ap_struct, prob.k, prob.G, prob.m
+    Aw = prob.Aw
+    AwT = Aw.transpose(0, 2, 1)
+    ba2 = np.zeros((G, k))
+    ba2[A.grp_present] = A.sum_grp @ np.einsum("nki,nk->ni", Aw, rw)
+    # point-elimination terms, per (point, group) pair: H = Σ Aᵀ P J_p over its rays
+    Wap = AwT @ Jpw  # (n, k, 3); rows of fixed points are never used
+    H = _ssum(A.sum_pg, Wap)  # (npg, k, 3)
+    HV = H @ Vinv[A.pg_pt]  # H V⁻¹
+    hb = np.einsum("nij,nj->ni", HV, bp[A.pg_pt])
+    ba2[A.pgg_present] -= A.sum_pgg @ hb
+    ba = ba2.reshape(-1) - prob.ap_w * st.ap
+    # E: per image, its own group's block Σ (J_eᵀ P A − T Hᵀ) as one product per image
+    L = A.pad.shape[1]
+    Jpad = np.concatenate([Jew, np.zeros((1, 2, 6))])[A.pad].reshape(m, 2 * L, 6)
+    # T Hᵀ summed over the image's rays: (3L × 6)ᵀ (3L × k) per image, gathered in place
+    Tt = np.concatenate([T.transpose(0, 2, 1), np.zeros((1, 3, 6))])[A.pad].reshape(m, 3 * L, 6)
+    Ht = np.concatenate([H.transpose(0, 2, 1), np.zeros((1, 3, k))])[A.own_pg_pad]
+    E4 = np.zeros((m, 6, G, k))
+    E4[np.arange(m), :, prob.grp] = np.matmul(Jpad.transpose(0, 2, 1), A.Aw_pad) - np.matmul(
+        Tt.transpose(0, 2, 1), Ht.reshape(m, 3 * L, k)
+    )
+    # ... and the blocks of the other groups that its points reach
+    if A.e_key.size:
+        Ec = _ssum(A.sum_e, T[A.e_obs] @ H[A.e_pg].transpose(0, 2, 1))
+        ki, gi = np.divmod(A.e_key, G)
+        E4[ki, :, gi] -= Ec
+    # F: direct term (constant: A is evaluated at the observed coordinates) − Σ H V⁻¹ Hᵀ
+    F4 = np.zeros((G, G, k, k))
+    F4[A.grp_present, A.grp_present] = A.F_direct
+    HVg = HV[A.pg_by_grp].transpose(1, 0, 2)  # (k, npg, 3), pairs grouped by group
+    Hg = H[A.pg_by_grp].transpose(1, 0, 2)
+    for g in range(G):
+        a, b = A.pg_grp_starts[g], A.pg_grp_starts[g + 1]
+        if b > a:
+            F4[g, g] -= HVg[:, a:b].reshape(k, -1) @ Hg[:, a:b].reshape(k, -1).T
+    if A.f_key.size:
+        Fc = _ssum(A.sum_f, HV[A.f_1] @ H[A.f_2].transpose(0, 2, 1))
+        F4.reshape(G * G, k, k)[A.f_key] -= Fc
+    F = F4.transpose(0, 2, 1, 3).reshape(prob.q, prob.q)
+    F[np.diag_indices(prob.q)] += prob.ap_w
+    diagF = np.diag(F).copy()
+    if lam > 0:
+        F[np.diag_indices(prob.q)] *= 1.0 + lam
+    return dict(E=E4.reshape(6 * m, prob.q), F=F, ba=ba, H=H, Wap=Wap, diagF=diagF)
+
+
+def point_ap_term(prob, H: F64, da: F64) -> F64:
+    """Σ over a point's (point, group) pairs of Hᵀ·da_g, shape (p, 3)."""
+    A = prob.ap_struct
+    t = np.einsum("nji,nj->ni", H, da.reshape(prob.G, prob.k)[A.pg_grp])
+    return A.sum_pt @ t
