@@ -281,3 +281,44 @@ def test_height_only_control_points_are_held_in_height():
     # heights stay at the given value (σ 1e-6 m pseudo-observation), X/Y are estimated
     np.testing.assert_allclose(pts[inner, 2], b.points.xyz_known[inner, 2], atol=1e-5)
     assert np.abs(pts[inner, :2] - sim.truth.points.xyz[inner, :2]).max() < 0.5
+
+
+def _z_only_centres(block, truth, sigma=0.1):
+    """Statoscope-like observations: Z0 observed, X0/Y0 not (NaN value and σ)."""
+    b = block.copy()
+    b.images.X0_obs = np.full_like(b.images.X0, np.nan)
+    b.images.X0_sigma = np.full_like(b.images.X0, np.nan)
+    b.images.X0_obs[:, 2] = truth.images.X0[:, 2]
+    b.images.X0_sigma[:, 2] = sigma
+    return b
+
+
+def test_height_only_datum_is_diagnosed_not_a_linalg_error():
+    from orientviz.block.bundle_checks import datum_defect, point_setup
+
+    sim = simulate_block(3, 6, rng=17, control="none")
+    b = _z_only_centres(sim.block, sim.truth)
+    # heights from the centres fix shift Z and both tilts; planimetry stays free
+    with pytest.raises(DatumDefectError, match="4 datum") as info:
+        bundle_adjust(b)
+    assert info.value.parameters == [
+        "datum: shift X", "datum: shift Y", "datum: rotation κ", "datum: scale",
+    ]  # fmt: skip
+    # height-only control points whose approximate X, Y are unknown too
+    sim2 = simulate_block(3, 6, rng=17, control="perimeter")
+    b2 = sim2.block.copy()
+    ctrl = np.flatnonzero(b2.points.role == 1)
+    b2.points.xyz_known[ctrl, :2] = np.nan
+    b2.points.xyz[ctrl[:3], :2] = np.nan
+    free, missing = datum_defect(b2, point_setup(b2, "fixed"))
+    assert free == 4 and "planimetric" in missing
+
+
+def test_planimetric_control_and_z_only_centres_give_the_datum():
+    sim = simulate_block(3, 6, rng=17, control="perimeter")
+    b = _z_only_centres(sim.block, sim.truth)
+    ctrl = np.flatnonzero(b.points.role == 1)
+    b.points.xyz_known[ctrl, 2] = np.nan  # control in X, Y only; heights from the centres
+    res = bundle_adjust(b, precision=False)
+    assert res.converged
+    assert abs(res.sigma0 - 1.0) < 0.1

@@ -141,23 +141,38 @@ def datum_defect(block: Block, setup: PointSetup) -> tuple[int, str]:
     """Number of free datum parameters (0…7) and what is missing.
 
     Counts control information: planimetric (X, Y) and height (Z) points that are
-    given (fixed or weighted), plus observed projection centres. A 3D similarity datum
-    needs ≥ 2 planimetric points (shift X, Y, rotation κ, scale) and ≥ 3 non-collinear
-    heights (shift Z, tilts ω, φ). This is a necessary-condition count, not a proof of
-    regularity; the solver still diagnoses a singular system.
+    given (fixed or weighted), plus observed projection centres (each coordinate on its
+    own: a Z-only observation is a height). A 3D similarity datum needs ≥ 2 planimetric
+    points (shift X, Y, rotation κ, scale) and ≥ 3 non-collinear heights (shift Z, tilts
+    ω, φ). A height without given X, Y is placed at its approximate position (points:
+    ``points.xyz``, centres: ``images.X0``); heights without any finite position cannot
+    help against the tilts and are not counted for them. This is a necessary-condition
+    count, not a proof of regularity; the solver still diagnoses a singular system.
     """
+    free, missing = _datum_elements(block, setup)
+    return len(free), "; ".join(missing)
+
+
+def _finite_rows(a: F64) -> F64:
+    return a[np.isfinite(a).all(axis=1)]
+
+
+def _datum_elements(block: Block, setup: PointSetup) -> tuple[list[str], list[str]]:
+    """(free datum elements by name, what would fix them) — see :func:`datum_defect`."""
     known = setup.known
     ctrl_plan = np.isfinite(known[:, 0]) & np.isfinite(known[:, 1])
     ctrl_h = np.isfinite(known[:, 2])
     xy = [known[ctrl_plan, :2]]
     # height points without given X, Y: their approximate position decides collinearity
     hpos = np.where(np.isfinite(known[:, :2]), known[:, :2], block.points.xyz[:, :2])
-    hxy = [hpos[ctrl_h & np.isfinite(hpos).all(axis=1)]]
+    hxy = [hpos[ctrl_h]]
     img = block.images
     s = img.X0_sigma
     ok = np.isfinite(img.X0_obs) & np.isfinite(s) & (s >= 0)
     xy.append(img.X0_obs[ok[:, 0] & ok[:, 1], :2])
-    hxy.append(img.X0_obs[ok[:, 2], :2])
+    cpos = np.where(ok[:, :2], img.X0_obs[:, :2], img.X0[:, :2])
+    n_h = int(ctrl_h.sum() + ok[:, 2].sum())  # every height, positioned or not
+    hxy.append(cpos[ok[:, 2]])
     # an image with observed position *and* attitude fixes translation and rotation;
     # any further observed coordinate or a second planimetric point fixes the scale
     a_ok = np.isfinite(img.angles_obs) & np.isfinite(img.angles_sigma) & (img.angles_sigma >= 0)
@@ -165,31 +180,34 @@ def datum_defect(block: Block, setup: PointSetup) -> tuple[int, str]:
     if anchor.any():
         others = ok.any(axis=1) & (np.arange(len(anchor)) != np.flatnonzero(anchor)[0])
         if others.any() or ctrl_plan.sum() + ctrl_h.sum() >= 1:
-            return 0, ""
-        return 1, "a second observed position or a control point (scale)"
-    plan = np.unique(np.round(np.concatenate(xy), 3), axis=0)
-    heights = np.unique(np.round(np.concatenate(hxy), 3), axis=0)
-    free = 7
+            return [], []
+        return ["scale"], ["a second observed position or a control point (scale)"]
+    plan = np.unique(np.round(_finite_rows(np.concatenate(xy)), 3), axis=0)
+    heights = np.unique(np.round(_finite_rows(np.concatenate(hxy)), 3), axis=0)
+    free: list[str] = []
     missing = []
-    if len(plan) >= 1:
-        free -= 2
-    if len(plan) >= 2:
-        free -= 2
-    else:
+    if len(plan) == 0:
+        free += ["shift X", "shift Y"]
+    if len(plan) < 2:
+        free += ["rotation κ", "scale"]
         missing.append("≥ 2 planimetric control points (shift, rotation κ, scale)")
-    if len(heights) >= 1:
-        free -= 1
+    if n_h == 0:
+        free.append("shift Z")
     if len(heights) >= 3 and _not_collinear(heights):
-        free -= 2
+        pass
     elif len(heights) >= 2:
-        free -= 1
+        free.append("tilt about the line of the height points")
         missing.append("a third height point off the line of the others (tilt)")
     else:
+        free += ["tilt ω", "tilt φ"]
         missing.append("≥ 3 non-collinear height control points (height, tilts ω and φ)")
-    return free, "; ".join(missing)
+    return free, missing
 
 
 def _not_collinear(xy: F64) -> bool:
+    xy = _finite_rows(xy)
+    if xy.shape[0] < 3:
+        return False
     c = xy - xy.mean(axis=0)
     sv = np.linalg.svd(c, compute_uv=False)
     return bool(sv.shape[0] >= 2 and sv[1] > 1e-3 * max(sv[0], 1e-12))
@@ -197,10 +215,11 @@ def _not_collinear(xy: F64) -> bool:
 
 def check_datum(block: Block, setup: PointSetup) -> None:
     """Raise :class:`DatumDefectError` if control and observed centres leave the datum free."""
-    free, missing = datum_defect(block, setup)
-    if free > 0:
+    free, missing = _datum_elements(block, setup)
+    if free:
         raise DatumDefectError(
-            f"{free} datum parameter(s) are free: add control or fix them — missing {missing}",
-            parameters=["datum"],
-            defect=free,
+            f"{len(free)} datum parameter(s) are free: add control or fix them — missing "
+            f"{'; '.join(missing)} (undetermined: {', '.join(free)})",
+            parameters=[f"datum: {f}" for f in free],
+            defect=len(free),
         )
