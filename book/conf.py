@@ -1,5 +1,8 @@
 """Sphinx configuration of the orientviz book, built offline with
-`python -m sphinx -b html book book/_build/html`.
+`python -m sphinx -b html book book/_build/html` (tests/book/test_book.py builds it too).
+
+For quick layout work without executing the notebooks (no outputs, no snapshots):
+`python -m sphinx -b html -D nb_execution_mode=off book /tmp/book`.
 
 The lesson notebooks live in ../notebooks; they are copied into lessons/ before each
 build and executed by myst-nb, so the book always shows fresh results. Math is rendered
@@ -61,14 +64,19 @@ nb_ipywidgets_js: dict = {}
 numpydoc_show_class_members = False  # autosummary lists the members already
 numpydoc_class_members_toctree = False
 autodoc_member_order = "bysource"
-autodoc_typehints = "signature"
+autodoc_typehints = "none"  # the numpydoc Parameters give the types; expanded ArrayLike unions are unreadable
 autosummary_generate = True
 templates_path = ["_templates"]  # module pages document every member in full (numpydoc)
 
 html_theme = "pydata_sphinx_theme"
-html_title = "orientviz — photogrammetric orientation, visible"
+html_title = "orientviz"
 html_static_path = ["_static"]
-html_theme_options = {"navigation_depth": 2, "show_toc_level": 2}
+html_theme_options = {
+    "navigation_depth": 2,
+    "show_toc_level": 2,
+    "header_links_before_dropdown": 5,
+    "navbar_align": "left",
+}
 # no external fonts, analytics or CDN assets: the book must work offline
 html_theme_options["icon_links"] = []
 
