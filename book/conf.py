@@ -64,7 +64,8 @@ nb_ipywidgets_js: dict = {}
 numpydoc_show_class_members = False  # autosummary lists the members already
 numpydoc_class_members_toctree = False
 autodoc_member_order = "bysource"
-autodoc_typehints = "none"  # the numpydoc Parameters give the types; expanded ArrayLike unions are unreadable
+# the numpydoc Parameters give the types; expanded ArrayLike unions are unreadable
+autodoc_typehints = "none"
 autosummary_generate = True
 templates_path = ["_templates"]  # module pages document every member in full (numpydoc)
 
