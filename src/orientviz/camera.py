@@ -159,32 +159,73 @@ def collinearity_jacobian(
     ang = np.broadcast_to(np.asarray(angles, dtype=float), (n, 3))
     c = np.broadcast_to(np.asarray(c, dtype=float), (n,))
     R = matrix_from_opk(ang[:, 0], ang[:, 1], ang[:, 2], sequence)
-    dR = matrix_derivatives(ang[:, 0], ang[:, 1], ang[:, 2], sequence)
-    d = P - X0
-    uvw = np.einsum("nji,nj->ni", R, d)
-    u, v, w = uvw[:, 0], uvw[:, 1], uvw[:, 2]
+    dR = np.stack(matrix_derivatives(ang[:, 0], ang[:, 1], ang[:, 2], sequence), 1)
+    dxy, J_point, J_angles, uvw = collinearity_partials(P - X0, R, dR, c)
     xy = np.empty((n, 2))
-    xy[:, 0] = np.broadcast_to(np.asarray(x0, dtype=float), (n,)) - c * u / w
-    xy[:, 1] = np.broadcast_to(np.asarray(y0, dtype=float), (n,)) - c * v / w
-    # d(x, y) / d(u, v, w)
-    dxy_duvw = np.zeros((n, 2, 3))
-    dxy_duvw[:, 0, 0] = -c / w
-    dxy_duvw[:, 0, 2] = c * u / w**2
-    dxy_duvw[:, 1, 1] = -c / w
-    dxy_duvw[:, 1, 2] = c * v / w**2
-    Rt = np.swapaxes(R, 1, 2)
-    J_point = dxy_duvw @ Rt
+    xy[:, 0] = np.broadcast_to(np.asarray(x0, dtype=float), (n,)) + dxy[:, 0]
+    xy[:, 1] = np.broadcast_to(np.asarray(y0, dtype=float), (n,)) + dxy[:, 1]
     J_ext = np.empty((n, 2, 6))
     J_ext[:, :, :3] = -J_point
-    for k in range(3):
-        duvw = np.einsum("nji,nj->ni", dR[k], d)
-        J_ext[:, :, 3 + k] = np.einsum("nab,nb->na", dxy_duvw, duvw)
+    J_ext[:, :, 3:] = J_angles
     J_int = np.zeros((n, 2, 3))
     J_int[:, 0, 0] = 1.0
     J_int[:, 1, 1] = 1.0
-    J_int[:, 0, 2] = -u / w
-    J_int[:, 1, 2] = -v / w
+    J_int[:, 0, 2] = -uvw[:, 0] / uvw[:, 2]
+    J_int[:, 1, 2] = -uvw[:, 1] / uvw[:, 2]
     return xy, J_ext, J_point, J_int
+
+
+def collinearity_partials(d: F64, R: F64, dR: F64, c: F64) -> tuple[F64, F64, F64, F64]:
+    """The derivative chain of the collinearity equations, vectorised over n rays.
+
+    Shared by :func:`collinearity_jacobian` and the bundle's kernel
+    (:mod:`orientviz.block.bundle_kernel`, which gathers R and dR per image).
+
+    Parameters
+    ----------
+    d : ndarray, shape (n, 3)
+        X − X0 in m.
+    R : ndarray, shape (n, 3, 3)
+        Rotations image → object.
+    dR : ndarray, shape (n, 3, 3, 3)
+        ∂R/∂ω, ∂R/∂φ, ∂R/∂κ stacked on axis 1 (per radian).
+    c : ndarray, shape (n,)
+        Principal distances in mm.
+
+    Returns
+    -------
+    dxy : ndarray, shape (n, 2)
+        −c·(u, v)/w: the image coordinates relative to the principal point, mm.
+    J_point : ndarray, shape (n, 2, 3)
+        ∂(x, y)/∂(X, Y, Z) in mm/m (∂/∂X0 is its negative).
+    J_angles : ndarray, shape (n, 2, 3)
+        ∂(x, y)/∂(ω, φ, κ) in mm/rad.
+    uvw : ndarray, shape (n, 3)
+        Rᵀ d.
+
+    Notes
+    -----
+    With a = −c/w and b = c·(u, v)/w²: ∂(x, y)/∂(u, v, w) = [[a, 0, b_u], [0, a, b_v]],
+    ∂(u, v, w)/∂X = Rᵀ and ∂(u, v, w)/∂θ = (∂R/∂θ)ᵀ d.
+    """
+    uvw = np.einsum("nji,nj->ni", R, d)
+    u, v, w = uvw[:, 0], uvw[:, 1], uvw[:, 2]
+    a = -c / w
+    n = d.shape[0]
+    dxy = np.empty((n, 2))
+    dxy[:, 0] = a * u
+    dxy[:, 1] = a * v
+    bu = -a * u / w  # c u / w²
+    bv = -a * v / w
+    # rows of Rᵀ are the columns of R
+    Jp = np.empty((n, 2, 3))
+    Jp[:, 0] = a[:, None] * R[:, :, 0] + bu[:, None] * R[:, :, 2]
+    Jp[:, 1] = a[:, None] * R[:, :, 1] + bv[:, None] * R[:, :, 2]
+    duvw = np.einsum("nkji,nj->nki", dR, d)  # (n, 3 angles, 3 components)
+    Ja = np.empty((n, 2, 3))
+    Ja[:, 0] = a[:, None] * duvw[:, :, 0] + bu[:, None] * duvw[:, :, 2]
+    Ja[:, 1] = a[:, None] * duvw[:, :, 1] + bv[:, None] * duvw[:, :, 2]
+    return dxy, Jp, Ja, uvw
 
 
 def rays(

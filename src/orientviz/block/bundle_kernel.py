@@ -2,9 +2,10 @@
 
 The same equations as :func:`orientviz.camera.collinearity_jacobian` (image plane at
 z = −c, R image → object, ``x = x0 − c·u/w``, ``y = y0 − c·v/w`` with
-(u, v, w) = Rᵀ (X − X0)), but the rotation matrices and their derivatives are computed
-once per *image* and gathered per observation, which is what a block with 100 000
-observations and 2 000 images needs. Rotation sequence ``"opk"`` (R = R_ω R_φ R_κ) or
+(u, v, w) = Rᵀ (X − X0)) and the same derivative chain
+(:func:`orientviz.camera.collinearity_partials`), but the rotation matrices and their
+derivatives are computed once per *image* and gathered per observation, which is what
+a block with 100 000 observations and 2 000 images needs. Rotation sequence ``"opk"`` (R = R_ω R_φ R_κ) or
 ``"pok"`` (R = R_φ R_ω R_κ), see :mod:`orientviz.rotation`.
 """
 
@@ -13,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ..camera import collinearity_partials, project
 from ..rotation import matrix_derivatives, matrix_from_opk
 
 F64 = NDArray[np.float64]
@@ -45,13 +47,8 @@ def project_block(
     sequence : {"opk", "pok"}
     """
     R = matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2], sequence)
-    d = xyz - X0[obs_image]
-    uvw = np.einsum("nji,nj->ni", R[obs_image], d)
-    out = np.empty((d.shape[0], 2))
-    cw = -c[obs_image] / uvw[:, 2]
-    out[:, 0] = x0[obs_image] + cw * uvw[:, 0]
-    out[:, 1] = y0[obs_image] + cw * uvw[:, 1]
-    return out
+    oi = obs_image
+    return project(xyz, X0[oi], R[oi], c[oi], x0[oi], y0[oi])
 
 
 def collinearity_block(
@@ -79,26 +76,12 @@ def collinearity_block(
     """
     R = matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2], sequence)
     dR = np.stack(matrix_derivatives(angles[:, 0], angles[:, 1], angles[:, 2], sequence), 1)
-    n = obs_image.shape[0]
-    d = xyz - X0[obs_image]
-    Ri = R[obs_image]
-    uvw = np.einsum("nji,nj->ni", Ri, d)
-    u, v, w = uvw[:, 0], uvw[:, 1], uvw[:, 2]
-    ci = c[obs_image]
-    a = -ci / w
-    xy = np.empty((n, 2))
-    xy[:, 0] = x0[obs_image] + a * u
-    xy[:, 1] = y0[obs_image] + a * v
-    bu = -a * u / w  # c u / w²
-    bv = -a * v / w
-    # ∂(x, y)/∂X = a·R[:, :, 0|1] + b·R[:, :, 2]   (columns of R = rows of Rᵀ)
-    Jp = np.empty((n, 2, 3))
-    Jp[:, 0] = a[:, None] * Ri[:, :, 0] + bu[:, None] * Ri[:, :, 2]
-    Jp[:, 1] = a[:, None] * Ri[:, :, 1] + bv[:, None] * Ri[:, :, 2]
-    Je = np.empty((n, 2, 6))
+    oi = obs_image
+    dxy, Jp, Ja, _ = collinearity_partials(xyz - X0[oi], R[oi], dR[oi], c[oi])
+    xy = np.empty_like(dxy)
+    xy[:, 0] = x0[oi] + dxy[:, 0]
+    xy[:, 1] = y0[oi] + dxy[:, 1]
+    Je = np.empty((oi.shape[0], 2, 6))
     Je[:, :, :3] = -Jp
-    # ∂uvw/∂θ_k = dR_kᵀ d  → (n, 3 angles, 3 components)
-    duvw = np.einsum("nkji,nj->nki", dR[obs_image], d)
-    Je[:, 0, 3:] = a[:, None] * duvw[:, :, 0] + bu[:, None] * duvw[:, :, 2]
-    Je[:, 1, 3:] = a[:, None] * duvw[:, :, 1] + bv[:, None] * duvw[:, :, 2]
+    Je[:, :, 3:] = Ja
     return xy, Je, Jp
