@@ -6,7 +6,7 @@ from scipy.special import chdtr
 
 from orientviz.adjust.gross import noncentrality
 from orientviz.adjust.gross2d import critical_values_2d, noncentrality_2d, statistic_2d
-from orientviz.block.cleaning import bundle_solver, clean_block, ray_labels
+from orientviz.block.cleaning import _check_ray_tests, bundle_solver, clean_block, ray_labels
 from orientviz.block.simulate import simulate_block
 from orientviz.model import CHECK, TIE
 
@@ -94,10 +94,22 @@ def test_check_point_rays_are_tested_in_their_intersection(sim):
     o = b.observations
     chk = b.points.role[o.point] == CHECK
     r = adj.redundancy_numbers.reshape(n, 2)
-    # forward intersection of k rays: 2k − 3 redundancy per check point
+    assert np.isfinite(adj.normalized_residuals.reshape(n, 2)[chk & (r > 0).all(1)]).all()
+    assert ((r[chk] >= 0) & (r[chk] <= 1)).all()
+    # with error-free orientations (Q_ee = 0) the test is that of a forward intersection
+    # of k rays: redundancy numbers sum to 2k − 3 per check point
+    keys, blocks = adj.extra["exterior_pairs"]
+    rn, wn, rxy = np.zeros((n, 2)), np.full((n, 2), np.nan), np.zeros(n)
+    v = adj.residuals.reshape(n, 2)
+    _check_ray_tests(b, adj, np.arange(n), v, o.sigma, rn, wn, rxy, chk, (keys, 0 * blocks))
     for p in np.unique(o.point[chk]):
         rays = o.point == p
-        assert r[rays].sum() == pytest.approx(2 * rays.sum() - 3, abs=1e-6)
+        assert rn[rays].sum() == pytest.approx(2 * rays.sum() - 3, abs=1e-6)
+    # the orientations' errors enlarge the residuals' variance: smaller statistics
+    T0, _ = statistic_2d((np.nan_to_num(wn) * np.sqrt(rn))[chk], rn[chk], rxy[chk])
+    z = np.nan_to_num(adj.normalized_residuals).reshape(n, 2) * np.sqrt(r)
+    T1, _ = statistic_2d(z[chk], r[chk], adj.extra["redundancy_xy"][chk])
+    assert T1.sum() < T0.sum()
     # local redundancy (orientations held fixed) bounds the exact one from above
     loc = solve(np.ones(2 * n), "local")
     tie = b.points.role[o.point] == TIE

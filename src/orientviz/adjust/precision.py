@@ -230,6 +230,8 @@ def bundle_precision(res, prob, st, rw, Je, Jp) -> None:
     Qp_all[prob.var_pts] = Qpp
     Qp_all[prob.block.points.role == 2] = np.nan
     res.cofactor_blocks["exterior"] = Qcc_diag
+    # Q_cc of every image pair (i ≤ k) that shares a point: key i·m + k (sorted), blocks
+    res.extra["exterior_pairs"] = (S.block_i * m + S.block_k, Zblk)
     res.cofactor_blocks["points"] = Qp_all
     if q:
         res.cofactor_blocks["additional"] = Faa

@@ -22,6 +22,7 @@ from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.sparse.csgraph import connected_components
 
 from ..adjust.gross import Cleaning, rerun_cleaning, robust_adjust
 from ..adjust.result import Adjustment
@@ -80,10 +81,9 @@ def _local_redundancy(sub, adj, idx, v, sigma, rn, wn, rxy, rays) -> None:
 
     For each point, ``P½Q_vvP½ = I − J̃(J̃ᵀJ̃)⁻¹J̃ᵀ`` of its forward intersection with
     the adjusted orientations held fixed (J̃: weighted Jacobian of the image coordinates
-    by the point's X, Y, Z; fixed control points: R = I). This is exact for check points
-    — the bundle intersects them afterwards in just this way — and for adjusted points
-    an upper bound of the redundancy numbers (fixing the orientations adds redundancy),
-    i.e. a lower bound of the normalised residuals. Arrays are filled in place (rows of
+    by the point's X, Y, Z; fixed control points: R = I). For adjusted points this is an
+    upper bound of the exact redundancy numbers (fixing the orientations adds
+    redundancy), i.e. abs(w) is not overestimated. Arrays are filled in place (rows of
     the full block; ``idx`` maps sub-block rays to them); ``rays`` selects sub-block rays.
     """
     o = sub.observations
@@ -111,6 +111,78 @@ def _local_redundancy(sub, adj, idx, v, sigma, rn, wn, rxy, rays) -> None:
     rxy[rows] = R[:, 0, 1]
     with np.errstate(divide="ignore", invalid="ignore"):
         wn[rows] = np.where(rn[rows] > 1e-10, v[rows] / (sigma[rows] * np.sqrt(rn[rows])), np.nan)
+
+
+def _check_ray_tests(sub, adj, idx, v, sigma, rn, wn, rxy, rays, pairs) -> None:
+    """Test quantities of the rays of check points, with the orientations' uncertainty.
+
+    The bundle intersects a check point afterwards from its own rays with the adjusted
+    orientations, which carry errors of their own: the rays' residuals have the
+    covariance ``C = diag(σ²) + J_e Q_ee J_eᵀ`` (Q_ee: cofactors of the orientations
+    of the images involved *with their correlations*, a-priori σ0 = 1; a common error
+    of all of them only moves the point). In that model (intersection weighted with
+    C⁻¹, one linear step from the bundle's point) the 2-D test of ray a uses
+    ``g = (C⁻¹v)_a`` and ``M = (C⁻¹Q_vvC⁻¹)_aa``, ``T = gᵀM⁻¹g``; they are stored scaled
+    by the ray's σ (z = σ·g, R = σMσ), so that with C = diag(σ²) they are the usual
+    residuals and redundancy blocks. ``pairs`` = (sorted keys i·m + k, blocks (6, 6))
+    of Q_ee for image pairs i ≤ k; pairs not listed count as uncorrelated.
+    """
+    o = sub.observations
+    sel = np.flatnonzero(rays)
+    if sel.size == 0:
+        return
+    keys, blocks = pairs
+    m = sub.n_images
+    ext = adj.extra["exterior"]
+    xyz = adj.extra["points"]
+    cam = sub.images.camera
+    c, x0, y0 = (getattr(sub.cameras, k)[cam] for k in ("c", "x0", "y0"))
+    _, Je, Jp = collinearity_block(
+        ext[:, :3], ext[:, 3:], c, x0, y0, o.image[sel], xyz[o.point[sel]], sub.sequence
+    )
+    for p in np.unique(o.point[sel]):
+        k = np.flatnonzero(o.point[sel] == p)
+        if k.size < 2:
+            continue
+        img = o.image[sel[k]]
+        rows = idx[sel[k]]
+        s = sigma[rows].reshape(-1)
+        lo, hi = np.minimum.outer(img, img), np.maximum.outer(img, img)
+        pos = np.clip(np.searchsorted(keys, lo * m + hi), 0, keys.size - 1)
+        known = keys[pos] == lo * m + hi
+        if not known.all():
+            # some image pairs share no adjusted point (their Q_ee block is not computed):
+            # keep the correlations only inside groups where all are known (a principal
+            # block-diagonal part of a covariance matrix is a covariance matrix again),
+            # i.e. neglect those between groups — the test becomes conservative
+            _, grp = connected_components(known, directed=False)
+            same = grp[:, None] == grp[None, :]
+            if not known[same].all():
+                same = np.eye(k.size, dtype=bool)
+            known &= same
+        Q = np.where(known[:, :, None, None], blocks[pos], 0.0)
+        Q = np.where((img[:, None] > img[None, :])[:, :, None, None], Q.swapaxes(2, 3), Q)
+        E = Je[k]  # (k, 2, 6)
+        C = np.einsum("aij,abjl,bml->aibm", E, Q, E).reshape(2 * k.size, 2 * k.size)
+        C += np.diag(s**2)
+        J = Jp[k].reshape(-1, 3)
+        Ci = np.linalg.inv(C)
+        N = J.T @ Ci @ J
+        if np.linalg.cond(N) > 1e12:
+            continue
+        Ninv = np.linalg.inv(N)
+        vv = v[rows].reshape(-1)
+        vv = vv - J @ (Ninv @ (J.T @ Ci @ vv))
+        g = Ci @ vv
+        M = Ci @ (C - J @ Ninv @ J.T) @ Ci
+        for a, row in enumerate(rows):
+            sa = s[2 * a : 2 * a + 2]
+            Ma = M[2 * a : 2 * a + 2, 2 * a : 2 * a + 2] * np.outer(sa, sa)
+            za = g[2 * a : 2 * a + 2] * sa
+            rn[row] = np.clip(np.diag(Ma), 0.0, 1.0)
+            rxy[row] = Ma[0, 1]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                wn[row] = np.where(rn[row] > 1e-10, za / np.sqrt(rn[row]), np.nan)
 
 
 def bundle_solver(
@@ -202,13 +274,15 @@ def bundle_solver(
         rxy = np.zeros(n)
         chk = sub.points.role[sub.observations.point] == CHECK
         if mode == "local":
-            _local_redundancy(sub, adj, idx, v, sigma, rn, wn, rxy, ~chk | check_rays)
+            _local_redundancy(sub, adj, idx, v, sigma, rn, wn, rxy, ~chk)
         elif adj.redundancy_numbers is not None:
             rn[idx] = np.nan_to_num(adj.redundancy_numbers[: 2 * ns].reshape(ns, 2))
             wn[idx] = adj.normalized_residuals[: 2 * ns].reshape(ns, 2)
             rxy[idx] = np.nan_to_num(adj.extra.get("redundancy_xy", np.zeros(ns)))
-            if check_rays:
-                _local_redundancy(sub, adj, idx, v, sigma, rn, wn, rxy, chk)
+            state["pairs"] = adj.extra.get("exterior_pairs")
+        if check_rays and state.get("pairs") is not None:
+            # check rays: tested once the orientations' precision is known (exact round)
+            _check_ray_tests(sub, adj, idx, v, sigma, rn, wn, rxy, chk, state["pairs"])
         # normalised with the a-priori σ of the observation, not the down-weighted one
         wn[idx] *= sigma[idx] / block.observations.sigma[idx]
         return replace(
