@@ -30,8 +30,8 @@ What reproduces and what not (seed 1; ``orientviz reproduce selfcal``):
   unflatness trough, not a low-order polynomial) survives Ebner's 12 parameters.
   Oberschwaben's 5.7 → 3.4 µm needs sqrt(5.7² − 3.4²) ≈ 4.6 µm rms visible *and*
   modelled — about twice what any 10 µm field of these types leaves, i.e. maximal
-  errors of ~18 µm or more (row "conclusion"), against the paper's own "maximal values around 10 µm"
-  (§25). We therefore keep the 10 µm field and do not tune it; the case "errors ×3"
+  errors of ~18 µm or more (row "conclusion"), against the paper's own "maximal values
+  around 10 µm" (§25). We therefore keep the 10 µm field and do not tune it; the case "errors ×3"
   shows that such a field does give σ0 near 5-6 µm (6.6 → 4.3 µm). The paper's other
   bundle projects in Table 5 agree with the 10 µm simulation: Jämijärvi 5.4 → 5.1 µm,
   Steinbergen 5.9 → 5.3 and 5.2 → 5.1 µm; the large drop is Oberschwaben's alone (its
