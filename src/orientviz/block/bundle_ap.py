@@ -40,6 +40,14 @@ def _summation(keys: I64) -> tuple[sp.csr_matrix, I64]:
     return M, uk
 
 
+def _zero_row(X: F64) -> F64:
+    """X with a row of zeros appended (the target of padding indices), in one pass."""
+    out = np.empty((X.shape[0] + 1,) + X.shape[1:])
+    out[:-1] = X
+    out[-1] = 0.0
+    return out
+
+
 def _ssum(M: sp.csr_matrix, X: F64) -> F64:
     """Row sums by :func:`_summation` of X (N, a, b) → (K, a, b)."""
     return np.asarray(M @ X.reshape(X.shape[0], -1)).reshape((M.shape[0],) + X.shape[1:])
@@ -182,10 +190,10 @@ def ap_normal(
     ba = ba2.reshape(-1) - prob.ap_w * st.ap
     # E: per image, its own group's block Σ (J_eᵀ P A − T Hᵀ) as one product per image
     L = A.pad.shape[1]
-    Jpad = np.concatenate([Jew, np.zeros((1, 2, 6))])[A.pad].reshape(m, 2 * L, 6)
+    Jpad = _zero_row(Jew)[A.pad].reshape(m, 2 * L, 6)
     # T Hᵀ summed over the image's rays: (3L × 6)ᵀ (3L × k) per image, gathered in place
-    Tt = np.concatenate([T.transpose(0, 2, 1), np.zeros((1, 3, 6))])[A.pad].reshape(m, 3 * L, 6)
-    Ht = np.concatenate([H.transpose(0, 2, 1), np.zeros((1, 3, k))])[A.own_pg_pad]
+    Tt = _zero_row(T.transpose(0, 2, 1))[A.pad].reshape(m, 3 * L, 6)
+    Ht = _zero_row(H.transpose(0, 2, 1))[A.own_pg_pad]
     E4 = np.zeros((m, 6, G, k))
     E4[np.arange(m), :, prob.grp] = np.matmul(Jpad.transpose(0, 2, 1), A.Aw_pad) - np.matmul(
         Tt.transpose(0, 2, 1), Ht.reshape(m, 3 * L, k)
