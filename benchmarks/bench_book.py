@@ -19,6 +19,7 @@ Run:  PYTHONPATH=src python benchmarks/bench_book.py [--notebooks-only | --book-
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import re
 import shutil
@@ -43,10 +44,29 @@ def _env() -> dict:
     return env
 
 
+@functools.cache
+def _book_extension():
+    """book/_ext/orientviz_book.py, for its workaround of a stall in nbclient (#312)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "orientviz_book", ROOT / "book" / "_ext" / "orientviz_book.py"
+    )
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def time_notebook(path: Path) -> tuple[float, float, str]:
-    """Seconds to execute ``path`` in a fresh kernel; the slowest cell (s, first line)."""
+    """Seconds to execute ``path`` in a fresh kernel; the slowest cell (s, first line).
+
+    Uses the book's shell-polling workaround, as the book build does: without it a cell
+    with an Output widget can sleep until the cell timeout (jupyter/nbclient#312).
+    """
     import nbclient
     import nbformat
+
+    _book_extension().patch_shell_polling()
 
     nb = nbformat.read(path, as_version=4)
     with tempfile.TemporaryDirectory(prefix="orientviz-bench-nb-") as tmp:

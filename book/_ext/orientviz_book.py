@@ -9,6 +9,8 @@ Two things myst-nb does not do on its own:
   *static snapshot*: the figures and text its Output widgets held when the cell ran,
   with the control settings as a caption. This works for every widget, the lesson
   apps of :mod:`orientviz.widgets` as well as ``ipywidgets.interact`` cells.
+* **A stalled execution.** :func:`patch_shell_polling` works around a lost wake-up in
+  nbclient's handling of Output widgets that could stall a lesson for minutes.
 * **Failing notebooks.** With ``nb_execution_raise_on_error = True`` myst-nb stops
   the build with the notebook path only; :func:`describe_failure` adds the cell
   number, its first line and the error, and the build stops with that message
@@ -300,18 +302,62 @@ def _start_client(self):
         ) from exc
 
 
+# --------------------------------------------------------------------------- a stall
+#: Longest single wait (s) for a reply on the kernel's shell channel, see _sliced_get_msg.
+POLL_SLICE_S = 1.0
+
+
+async def _sliced_get_msg(self, timeout: float | None = None):
+    """Wait for a shell message in short polls instead of one long one.
+
+    nbclient mirrors Output widgets by *sending* state updates on the shell channel
+    while it *waits* on the same channel for the cell's execute_reply. With ZeroMQ's
+    edge-triggered notifications the send can swallow the wake-up of the wait: the
+    reply is there, but the poll sleeps until its timeout (nb_execution_timeout, 300 s)
+    and only then finds it (jupyter/nbclient#312). Lesson cells with widget apps
+    stalled the book build this way for ~300 s in two builds out of four. Polling in
+    slices of POLL_SLICE_S bounds such a stall to about a second; a real timeout is
+    still reported at the original deadline.
+    """
+    from queue import Empty
+    from time import monotonic
+
+    deadline = None if timeout is None else monotonic() + timeout
+    while True:
+        step = (
+            POLL_SLICE_S
+            if deadline is None
+            else min(POLL_SLICE_S, max(0.0, deadline - monotonic()))
+        )
+        try:
+            return await _ORIGINAL["get_msg"](self, timeout=step)
+        except Empty:
+            if deadline is not None and monotonic() >= deadline:
+                raise
+
+
 _ORIGINAL: dict[str, Any] = {}
+
+
+def patch_shell_polling() -> None:
+    """Install :func:`_sliced_get_msg` on jupyter_client's asyncio channel (idempotent)."""
+    from jupyter_client.channels import AsyncZMQSocketChannel
+
+    if "get_msg" not in _ORIGINAL:
+        _ORIGINAL["get_msg"] = AsyncZMQSocketChannel.get_msg
+        AsyncZMQSocketChannel.get_msg = _sliced_get_msg
 
 
 def _patch() -> None:
     from myst_nb.core.execute.direct import NotebookClientDirect
     from myst_nb.core.render import NbElementRenderer
 
-    if not _ORIGINAL:
+    if "render_widget_view" not in _ORIGINAL:
         _ORIGINAL["render_widget_view"] = NbElementRenderer.render_widget_view
         _ORIGINAL["start_client"] = NotebookClientDirect.start_client
         NbElementRenderer.render_widget_view = _render_widget_view
         NotebookClientDirect.start_client = _start_client
+    patch_shell_polling()
 
 
 class _SnapshotFinder(HTMLParser):

@@ -32,6 +32,12 @@ def _load_extension():
     return module
 
 
+def docstring_warnings(log: str) -> list[str]:
+    """Sphinx warnings/errors raised by the package's docstrings (API reference pages)."""
+    where = re.compile(r"(src/orientviz/|api/generated/).*(WARNING|ERROR):")
+    return [line for line in log.splitlines() if where.search(line)]
+
+
 def check_widget_snapshots(out: pathlib.Path) -> None:
     """Every widget on a lesson page is shown as a static snapshot with its figure or text."""
     ob = _load_extension()
@@ -64,6 +70,8 @@ def test_book_builds_offline(tmp_path):
         timeout=1200,
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
+    bad_docstrings = docstring_warnings(proc.stderr)
+    assert not bad_docstrings, "warnings from docstrings:\n" + "\n".join(bad_docstrings[:10])
     pages = {p.relative_to(out).as_posix() for p in out.rglob("*.html")}
     for chapter in (
         "index.html",

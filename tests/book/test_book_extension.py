@@ -202,3 +202,41 @@ def test_failing_book_build_names_notebook_and_cell(tmp_path):
     assert "cell 2 (code cell 2" in err
     assert "first line: y = x / 0  # this cell fails" in err
     assert "ZeroDivisionError" in err
+
+
+def test_sliced_shell_polling_finds_a_late_message_and_keeps_the_deadline(monkeypatch):
+    """The workaround for nbclient#312 polls in short slices but times out as before."""
+    import asyncio
+    import time
+    from queue import Empty
+
+    monkeypatch.setattr(ob, "POLL_SLICE_S", 0.05)
+    calls = []
+
+    async def fake_get_msg(self, timeout=None):
+        calls.append(timeout)
+        await asyncio.sleep(timeout)
+        if self.ready_after is not None and len(calls) > self.ready_after:
+            return {"msg": "reply"}
+        raise Empty
+
+    monkeypatch.setitem(ob._ORIGINAL, "get_msg", fake_get_msg)
+
+    class Channel:
+        def __init__(self, ready_after):
+            self.ready_after = ready_after
+
+    # the message shows up at the fourth short poll, long before the 5 s deadline
+    t = time.monotonic()
+    assert asyncio.run(ob._sliced_get_msg(Channel(3), timeout=5.0)) == {"msg": "reply"}
+    assert time.monotonic() - t < 1.0
+    assert len(calls) == 4 and max(calls) <= 0.05
+    # no message at all: Empty at the deadline, not before
+    calls.clear()
+    t = time.monotonic()
+    with pytest.raises(Empty):
+        asyncio.run(ob._sliced_get_msg(Channel(None), timeout=0.3))
+    assert 0.28 <= time.monotonic() - t < 1.0
+    # no timeout: keeps polling until the message comes
+    calls.clear()
+    assert asyncio.run(ob._sliced_get_msg(Channel(2), timeout=None)) == {"msg": "reply"}
