@@ -42,7 +42,12 @@ from ..adjust.result import Adjustment, Iteration
 from ..errors import InputError, NotDeterminableError
 from ..model import Block
 from .bundle_ap import APStructure, ap_normal, point_ap_term
-from .bundle_border import PCG_STALE_STEPS, solve_bordered, solve_bordered_pcg
+from .bundle_border import (
+    PCG_STALE_STEPS,
+    form_preconditioner,
+    solve_bordered,
+    solve_bordered_pcg,
+)
 from .bundle_checks import check_connected, check_datum, check_determinable, point_setup
 from .bundle_kernel import collinearity_block, project_block
 
@@ -53,6 +58,11 @@ HISTORY_X_LIMIT: int = 500
 #: Above this start σ0 a singular first normal matrix is blamed on the approximations
 #: (damped steps are tried) rather than reported as a defect at once.
 POOR_START_SIGMA0: float = 30.0
+#: The border E, F of the additional parameters is reused in the next iteration when the
+#: last step moved no projection centre or point by more than this fraction of the
+#: median ray length and no angle by more than this (rad): the Jacobians then change by
+#: about as little (1e-4 relative), less than the tolerance of the border's solve.
+AP_REUSE: float = 1e-4
 
 
 @dataclass
@@ -153,6 +163,12 @@ class BundleProblem:
         # the conjugate gradients of later iterations) or solved iteratively
         self.ap_prec = None
         self.ap_log: list[str] = []
+        self.ap_hold = False  # this iteration keeps the parameters at their values
+        # E, F of the last iteration: reused while the geometry stands still (AP_REUSE)
+        self.ap_border = None
+        self.ap_reuse = False
+        d = block.points.xyz[self.opt] - img.X0[self.oi]
+        self.ray_length = float(np.nanmedian(np.linalg.norm(d, axis=1))) if d.size else 1.0
         # auxiliary data as joint observations: hook of orientviz.block.auxiliary_obs
         self.aux, self.na = None, 0
         if auxiliary:
@@ -248,7 +264,13 @@ class BundleProblem:
             blocks=blocks, rhs=red.reshape(-1), Vinv=Vinv, W=W, T=T, bp=bp, diagU=diagU, diagV=diagV
         )
         if self.q:
-            out.update(ap_normal(self, st, rw, Jew, Jpw, T, Vinv, bp, lam))
+            if self.ap_hold:
+                out["diagF"] = np.ones(self.q)
+            else:
+                border = self.ap_border if self.ap_reuse else None
+                out.update(ap_normal(self, st, rw, Jew, Jpw, T, Vinv, bp, lam, border))
+                self.ap_border = (out["E"], out["F0"])
+                out["reused"] = border is not None
         if self.aux:
             self.aux.normal(self, st, out, lam)
         return out
@@ -260,11 +282,19 @@ class BundleProblem:
             return self.aux.solve(self, fac, ne)
         if self.q:
             dc = None
+            if self.ap_hold:
+                dc, da = fac.solve(ne["rhs"]), np.zeros(self.q)
+                self.ap_log.append("held")
+                return self._back(ne, dc, da, fac)
+            tag = "E,F reused, " if ne.get("reused") else ""
+            if self.ap_prec is None:
+                self.ap_prec = form_preconditioner(fac, ne["E"], ne["F"])
+                tag += "Fs formed (float32), " if self.ap_prec is not None else ""
             if self.ap_prec is not None:
                 dc, da, steps = solve_bordered_pcg(
                     fac, ne["E"], ne["F"], ne["rhs"], ne["ba"], self.ap_prec
                 )
-                self.ap_log.append(f"cg{steps}")
+                self.ap_log.append(tag + f"cg{steps}")
                 if dc is None or steps > PCG_STALE_STEPS:
                     self.ap_prec = None  # stale preconditioner: form Fs next time
             if dc is None:
@@ -272,16 +302,20 @@ class BundleProblem:
                     fac, ne["E"], ne["F"], ne["rhs"], ne["ba"], self.ap_names
                 )
                 ne["Fs"] = Fs
-                self.ap_log.append("formed")
+                self.ap_log.append("Fs formed")
         else:
             dc = fac.solve(ne["rhs"])
             da = np.zeros(0)
+        return self._back(ne, dc, da, fac)
+
+    def _back(self, ne: dict, dc: F64, da: F64, fac):
+        """Back-substitution of the points; returns (dc, dp, da, fac)."""
         dc = dc.reshape(self.m, 6)
         S = self.struct
         vo = S.pt_obs
         t = np.einsum("nji,nj->ni", ne["W"][vo], dc[self.oi[vo]])
         red = ne["bp"] - np.add.reduceat(t, S.pt_starts, axis=0)
-        if self.q:
+        if self.q and not self.ap_hold:
             red -= point_ap_term(self, ne["H"], da)
         dp = np.einsum("nij,nj->ni", ne["Vinv"], red)
         return dc, dp, da, fac
@@ -399,7 +433,14 @@ def bundle_adjust(
     history = [Iteration(0, prob.flat(st) if keep_x else np.empty(0), None, s0(cost), cost)]
     lam, converged, damped_start = 0.0, False, False
     reason = f"reached the maximum of {max_iter} iterations"
+    # additional parameters model image errors of a few µm: from approximations whose
+    # misclosures are far larger (σ0 ≥ POOR_START_SIGMA0) the first step is taken with
+    # the parameters held at their values — it costs no border, and the parameters do
+    # not absorb errors of the approximations (the first joint step then starts close)
+    hold_first = bool(prob.q) and history[0].sigma0 >= POOR_START_SIGMA0
+    first = 2 if hold_first else 1  # the first iteration that solves the full system
     for it in range(1, max_iter + 1):
+        prob.ap_hold = hold_first and it == 1
         while True:
             ne = prob.normal(st, rw, Je, Jp, lam)
             try:
@@ -408,9 +449,9 @@ def bundle_adjust(
                 # at a good start a singular S is a real defect; at a poor start (σ0 ≫ 1)
                 # it may be an artefact of the approximations: try damped steps, and
                 # verify the undamped system at the solution (below)
-                if it == 1 and lam == 0 and history[0].sigma0 < POOR_START_SIGMA0:
+                if it == first and lam == 0 and history[-1].sigma0 < POOR_START_SIGMA0:
                     raise
-                damped_start = damped_start or it == 1
+                damped_start = damped_start or it <= first
                 lam = max(10 * lam, 1e-3)
                 if lam > 1e8:
                     reason = f"the normal equations stayed singular in iteration {it}"
@@ -441,14 +482,23 @@ def bundle_adjust(
             dpa[prob.var_pts] = dp
             dx = np.concatenate([dc.ravel(), dpa.ravel(), da[: prob.q]])
         st, rw, Je, Jp, cost = new, rw_n, Je_n, Jp_n, c_new
+        if prob.q:
+            L = AP_REUSE * prob.ray_length
+            prob.ap_reuse = (
+                not prob.ap_hold
+                and float(np.max(np.abs(dc[:, :3]), initial=0.0)) < L
+                and float(np.max(np.abs(dc[:, 3:]), initial=0.0)) < AP_REUSE
+                and float(np.max(np.abs(dp), initial=0.0)) < L
+            )
         rec = Iteration(it, prob.flat(st) if keep_x else np.empty(0), dx, s0(cost), cost, lam, rel)
         history.append(rec)
         if callback is not None:
             callback(rec)
         lam = lam / 10 if lam > 1e-6 else 0.0
-        if rel < tol:
+        if rel < tol and not prob.ap_hold:
             converged, reason = True, f"corrections below {tol:g} σ after {it} iterations"
             break
+    prob.ap_hold = prob.ap_reuse = False
     if damped_start:  # a start that needed damping: prove the solution is determinable
         try:
             prob.solve(prob.normal(st, rw, Je, Jp), red_names)

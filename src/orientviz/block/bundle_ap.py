@@ -149,6 +149,7 @@ def ap_normal(
     Vinv: F64,
     bp: F64,
     lam: float,
+    border: tuple[F64, F64] | None = None,
 ) -> dict:
     """Border of the normal equations: E (6m, q), F (q, q), ba (q,) and helpers.
 
@@ -169,12 +170,16 @@ def ap_normal(
         Point right-hand sides.
     lam : float
         Levenberg-Marquardt damping of the diagonal of F.
+    border : (E, F0), optional
+        E and the undamped F of an earlier iteration to use instead of forming them (the
+        right-hand side ``ba`` and ``H`` are always of this iteration).
 
     Returns
     -------
     dict
-        ``E``, ``F`` (damped), ``ba``, ``diagF`` (undamped diagonal), ``H`` (per (point,
-        group) pair, for the back-substitution) and ``Wap`` (per ray, for the precision).
+        ``E``, ``F`` (damped), ``F0`` (undamped), ``ba``, ``diagF`` (undamped diagonal),
+        ``H`` (per (point, group) pair, for the back-substitution) and ``Wap`` (per ray,
+        for the precision).
     """
     A, k, G, m = prob.ap_struct, prob.k, prob.G, prob.m
     Aw = prob.Aw
@@ -188,6 +193,9 @@ def ap_normal(
     hb = np.einsum("nij,nj->ni", HV, bp[A.pg_pt])
     ba2[A.pgg_present] -= A.sum_pgg @ hb
     ba = ba2.reshape(-1) - prob.ap_w * st.ap
+    if border is not None:
+        E, F0 = border
+        return _damped(dict(E=E, F0=F0, ba=ba, H=H, Wap=Wap), lam)
     # E: per image, its own group's block Σ (J_eᵀ P A − T Hᵀ) as one product per image
     L = A.pad.shape[1]
     Jpad = _zero_row(Jew)[A.pad].reshape(m, 2 * L, 6)
@@ -215,12 +223,20 @@ def ap_normal(
     if A.f_key.size:
         Fc = _ssum(A.sum_f, HV[A.f_1] @ H[A.f_2].transpose(0, 2, 1))
         F4.reshape(G * G, k, k)[A.f_key] -= Fc
-    F = F4.transpose(0, 2, 1, 3).reshape(prob.q, prob.q)
-    F[np.diag_indices(prob.q)] += prob.ap_w
-    diagF = np.diag(F).copy()
+    F0 = F4.transpose(0, 2, 1, 3).reshape(prob.q, prob.q)
+    F0[np.diag_indices(prob.q)] += prob.ap_w
+    return _damped(dict(E=E4.reshape(6 * m, prob.q), F0=F0, ba=ba, H=H, Wap=Wap), lam)
+
+
+def _damped(out: dict, lam: float) -> dict:
+    """Add ``F`` (F0 with its diagonal × (1 + lam)) and ``diagF`` (F0's diagonal)."""
+    F0 = out["F0"]
+    out["diagF"] = np.diag(F0).copy()
+    F = F0.copy() if lam > 0 else F0
     if lam > 0:
-        F[np.diag_indices(prob.q)] *= 1.0 + lam
-    return dict(E=E4.reshape(6 * m, prob.q), F=F, ba=ba, H=H, Wap=Wap, diagF=diagF)
+        F[np.diag_indices(F.shape[0])] *= 1.0 + lam
+    out["F"] = F
+    return out
 
 
 def point_ap_term(prob, H: F64, da: F64) -> F64:

@@ -56,7 +56,7 @@ def _skewed_block(L: F64, r0: int, r1: int, c0: int) -> F64:
     """
     kd = L.shape[0] - 1
     w, h = r1 - c0, r1 - r0
-    P = np.zeros((2 * w + kd + 1 + h, w))
+    P = np.zeros((2 * w + kd + 1 + h, w), dtype=L.dtype)
     P[w : w + kd + 1] = L[:, c0:r1]
     base = (w + r0 - c0) * w
     view = as_strided(
@@ -72,7 +72,7 @@ def band_forward_solve(L: F64, B: F64) -> F64:
     ----------
     L : ndarray, shape (kd + 1, n)
         ``L[d, j]`` = L(j + d, j), as returned by ``scipy.linalg.cholesky_banded(...,
-        lower=True)``.
+        lower=True)``; float64 or float32 (the computation follows its type).
     B : ndarray, shape (n, r)
         Right-hand sides.
 
@@ -91,22 +91,23 @@ def band_forward_solve(L: F64, B: F64) -> F64:
     kd = L.shape[0] - 1
     n = L.shape[1]
     nb = kd + 1
-    X = np.empty((n, B.shape[1]))
+    X = np.empty((n, B.shape[1]), dtype=L.dtype)
+    trmm, trsm = _blas.get_blas_funcs(("trmm", "trsm"), (L,))
     for r0 in range(0, n, nb):
         r1 = min(r0 + nb, n)
         c0 = max(r0 - nb, 0)
         M = _skewed_block(L, r0, r1, c0)
-        rhs = np.array(B[r0:r1], order="C")
+        rhs = np.array(B[r0:r1], order="C", dtype=L.dtype)
         if r0 > c0:
             off = M[:, : r0 - c0]
             if r1 - r0 == nb:  # Xᵀ_I−1 L_I,I−1ᵀ with L_I,I−1ᵀ strictly lower triangular
-                t = _blas.dtrmm(1.0, off.T, X[c0:r0].T, side=1, lower=1)
+                t = trmm(1.0, off.T, X[c0:r0].T, side=1, lower=1)
                 rhs -= t.T
             else:
                 rhs -= off @ X[c0:r0]
         # X_Iᵀ = rhsᵀ L_IIᵀ⁻¹ (L_IIᵀ upper triangular)
         d = np.ascontiguousarray(M[:, r0 - c0 :])
-        X[r0:r1] = _blas.dtrsm(1.0, d.T, rhs.T, side=1, lower=0).T
+        X[r0:r1] = trsm(1.0, d.T, rhs.T, side=1, lower=0).T
     return X
 
 
@@ -151,6 +152,27 @@ def solve_bordered(fac, E: F64, F: F64, rhs: F64, ba: F64, names: list[str]):
     da = scipy.linalg.cho_solve(c, ra, check_finite=False)
     dc = fac.solve(rhs - E @ da)
     return dc, da, Fs, c
+
+
+def form_preconditioner(fac, E: F64, F: F64):
+    """Cholesky factor of Fs = F − Eᵀ S⁻¹ E computed in single precision, or None.
+
+    Only a preconditioner (:func:`solve_bordered_pcg` solves the exact system): the
+    forward solve Z = L⁻¹ E, the dominant cost, runs at twice the float64 speed; the
+    rounding (≈ 1e-7 relative, amplified by the cancellation in F − ZᵀZ) only adds a
+    step or two to the conjugate gradients. None for non-banded factors or if the
+    single-precision Fs is not positive definite (the caller then forms Fs exactly).
+    """
+    if fac.kind != "banded":
+        return None
+    p = fac.structure.scalar_perm
+    Z = band_forward_solve(fac.data.astype(np.float32), E[p].astype(np.float32))
+    Fs = F - _blas.ssyrk(1.0, Z.T).astype(float)
+    Fs = np.triu(Fs) + np.triu(Fs, 1).T  # the upper triangle of F − ZᵀZ, symmetrised
+    try:
+        return scipy.linalg.cho_factor(Fs, lower=True, check_finite=False)
+    except (np.linalg.LinAlgError, scipy.linalg.LinAlgError):
+        return None
 
 
 def solve_bordered_pcg(fac, E: F64, F: F64, rhs: F64, ba: F64, prec, tol: float = PCG_TOL):
