@@ -30,6 +30,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..adjust.normal import (
@@ -151,6 +152,12 @@ class BundleProblem:
             self.grp = grp
             self.A = A
             self.Aw = A * self.sw[:, :, None]
+            # A as a sparse (2n, G·k) matrix: the model term A·a of all rays in one product
+            cols = (np.repeat(grp[self.oi], 2)[:, None] * self.k + np.arange(self.k)).ravel()
+            rows = np.repeat(np.arange(2 * self.l.shape[0]), self.k)
+            self.A_csr = sp.csr_matrix(
+                (A.reshape(-1), (rows, cols)), shape=(2 * self.l.shape[0], self.G * self.k)
+            )
             s = np.inf if ap_sigma is None else ap_sigma
             s = np.broadcast_to(np.asarray(s, dtype=float), (self.k,))
             self.ap_w = np.tile(np.where(np.isfinite(s) & (s > 0), 1.0 / s**2, 0.0), self.G)
@@ -197,9 +204,7 @@ class BundleProblem:
             f = project_block(st.X0, st.angles, self.c, self.x0, self.y0, self.oi, xyz, seq)
             Je = Jp = None
         if self.q:
-            f = f + np.einsum(
-                "nij,nj->ni", self.A, st.ap.reshape(self.G, self.k)[self.grp[self.oi]]
-            )
+            f = f + (self.A_csr @ st.ap).reshape(-1, 2)
         return (self.l - f) * self.sw, Je, Jp
 
     def cost(self, st: _State, rw: F64) -> float:

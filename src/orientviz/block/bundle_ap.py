@@ -82,8 +82,14 @@ class APStructure:
         go = grp[oi]
         # observations by group (direct F and ba terms)
         self.sum_grp, self.grp_present = _summation(go)
-        # the direct F term Σ Aᵀ P A does not change over the iterations
-        self.F_direct = _ssum(self.sum_grp, Aw.transpose(0, 2, 1) @ Aw)
+        # the direct F term Σ Aᵀ P A does not change over the iterations: one product
+        # per group over its rays
+        order = np.argsort(go, kind="stable")
+        bounds = np.searchsorted(go[order], self.grp_present.tolist() + [G])
+        Ao = Aw[order].reshape(-1, Aw.shape[2])
+        self.F_direct = np.stack(
+            [Ao[2 * a : 2 * b].T @ Ao[2 * a : 2 * b] for a, b in zip(bounds[:-1], bounds[1:])]
+        )
 
         # (point, group) pairs: rays of one point in images of one group
         vo = pt_obs
