@@ -182,7 +182,8 @@ def run_method(name, block, info):
     else:
         try:
             c = clean_block(block, **METHODS[name])
-        except CleaningBreakdown:  # gave up: nothing cleaned, the plain bundle stands
+        except (CleaningBreakdown, np.linalg.LinAlgError):
+            # gave up (or the weights made the normals singular): nothing cleaned
             c = None
         if c is None:
             excluded = np.zeros(info["n"], bool)
