@@ -7,20 +7,28 @@ With self-calibration the reduced camera system S (points eliminated, see
     [ Eᵀ  F ] [da] = [ra]
 
 which is eliminated by block elimination: ``Fs = F − Eᵀ S⁻¹ E``, ``Fs da = ra − Eᵀ S⁻¹ r``,
-``dc = S⁻¹ (r − E da)``. Two ways, chosen by the bundle per iteration:
+``dc = S⁻¹ (r − E da)``. The pieces:
 
-* :func:`solve_bordered` forms Fs. With the banded factor S = L Lᵀ only the forward
-  half is needed, ``Z = L⁻¹ E`` and ``Fs = F − ZᵀZ``; :func:`band_forward_solve` does
-  it block-wise with dense triangular solves and products (BLAS level 3) instead of
-  LAPACK's column-by-column banded solve. Still, for q ≈ the band width it costs about
-  twice the factorisation of S (2·n·kd·q against n·kd² flops).
+* :func:`solve_bordered` forms Fs exactly. With the banded factor S = L Lᵀ only the
+  forward half is needed, ``Z = L⁻¹ E`` and ``Fs = F − ZᵀZ``; :func:`band_forward_solve`
+  does it block-wise with dense triangular solves and products (BLAS level 3) instead
+  of LAPACK's column-by-column banded solve. Still, for q ≈ the band width it costs
+  about twice the factorisation of S (2·n·kd·q against n·kd² flops).
+* :func:`form_preconditioner` forms the same Fs in single precision (half the time),
+  only to precondition:
 * :func:`solve_bordered_pcg` solves ``Fs da = …`` by conjugate gradients, applying
   Fs = F − Eᵀ S⁻¹ E to a vector (one banded solve with S and two products with the
-  dense E per step) and preconditioned with the Cholesky factor of an Fs formed in an
-  earlier iteration. The geometry hardly changes between Gauss-Newton iterations, so that
-  factor is an excellent preconditioner: on the bench's 2 100-image block with 12
-  parameters per strip the eigenvalues of Fs_old⁻¹·Fs stay within [0.74, 1.05] from
-  the first iteration on, and a handful of steps reach the tolerance.
+  dense E per step), preconditioned with the Cholesky factor of an Fs formed once. The
+  geometry hardly changes between Gauss-Newton iterations, so that factor stays an
+  excellent preconditioner: on the bench's 2 100-image block with 12 parameters per
+  strip the eigenvalues of Fs_old⁻¹·Fs stay within [0.74, 1.05] even between the start
+  values and the solution, and 1-2 steps reach the tolerance.
+
+The bundle (:meth:`orientviz.block.bundle.BundleProblem.solve`) forms the preconditioner
+in the first iteration that solves for the parameters, uses the conjugate gradients from
+then on, forms Fs anew when they need more than :data:`PCG_STALE_STEPS` steps, and falls
+back to the exact :func:`solve_bordered` (which also names a singular border) when they
+fail. ``extra["reduced_info"]["ap_border"]`` of the result logs what each solve did.
 
 Measured with ``python benchmarks/bench_selfcal.py`` (see ``benchmarks/README.md``).
 """
@@ -166,7 +174,7 @@ def form_preconditioner(fac, E: F64, F: F64):
     if fac.kind != "banded":
         return None
     p = fac.structure.scalar_perm
-    Z = band_forward_solve(fac.data.astype(np.float32), E[p].astype(np.float32))
+    Z = band_forward_solve(fac.data.astype(np.float32), E.astype(np.float32)[p])
     Fs = F - _blas.ssyrk(1.0, Z.T).astype(float)
     Fs = np.triu(Fs) + np.triu(Fs, 1).T  # the upper triangle of F − ZᵀZ, symmetrised
     try:
