@@ -4,10 +4,24 @@ from __future__ import annotations
 
 import json
 import pathlib
+import sys
 
 import pytest
 
-NOTEBOOKS = sorted((pathlib.Path(__file__).parents[2] / "notebooks").glob("*.ipynb"))
+ROOT = pathlib.Path(__file__).parents[2]
+NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
+
+
+def _patch_shell_polling() -> None:
+    """Use the book's workaround for nbclient's lost shell wake-up (see book/_ext)."""
+    sys.path.insert(0, str(ROOT / "book" / "_ext"))
+    try:
+        from orientviz_book import patch_shell_polling
+    except ImportError:  # no Sphinx/docutils: run unpatched (a stall then ends at the timeout)
+        return
+    finally:
+        sys.path.pop(0)
+    patch_shell_polling()
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
@@ -25,6 +39,7 @@ def test_notebook_runs(path, tmp_path, monkeypatch):
     nbformat = pytest.importorskip("nbformat")
     nbclient = pytest.importorskip("nbclient")
     monkeypatch.setenv("MPLBACKEND", "Agg")
+    _patch_shell_polling()
     nb = nbformat.read(path, as_version=4)
     client = nbclient.NotebookClient(
         nb, timeout=300, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}}
