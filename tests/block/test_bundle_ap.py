@@ -149,3 +149,19 @@ def test_conjugate_gradients_with_an_old_preconditioner_reach_the_dense_step(sol
         )
         assert steps2 <= steps
         np.testing.assert_allclose(da2, ref[-prob.q :], rtol=1e-6, atol=1e-8 * np.abs(ref).max())
+
+
+def test_border_blocks_apply_like_the_dense_border():
+    prob, _ = _problem()
+    block = prob.block
+    st = _State(block.images.X0, block.images.angles, block.points.xyz, np.zeros(prob.q))
+    rw, Je, Jp = prob.residuals(st, jac=True)
+    ne = prob.normal(st, rw, Je, Jp)
+    Eb = ne["E_border"]
+    E = ne["E"]  # formed on demand from the blocks
+    assert E.shape == (6 * prob.m, prob.q)
+    assert Eb.other.shape[0] > 0  # points in two strips: blocks outside the own group
+    rng = np.random.default_rng(2)
+    v, y = rng.normal(size=prob.q), rng.normal(size=6 * prob.m)
+    np.testing.assert_allclose(Eb @ v, E @ v, rtol=1e-12, atol=1e-12 * np.abs(E @ v).max())
+    np.testing.assert_allclose(Eb.T @ y, E.T @ y, rtol=1e-12, atol=1e-12 * np.abs(E.T @ y).max())

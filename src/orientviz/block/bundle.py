@@ -90,6 +90,18 @@ def _wrap(a: F64) -> F64:
     return (a + np.pi) % (2 * np.pi) - np.pi
 
 
+class _NormalEquations(dict):
+    """The blocks of :meth:`BundleProblem.normal`; ``["E"]`` (the border of the additional
+    parameters as a (6m, q) array, e.g. for :mod:`orientviz.adjust.precision`) is formed
+    from ``["E_border"]`` when first asked for."""
+
+    def __missing__(self, key):
+        if key == "E" and "E_border" in self:
+            self["E"] = self["E_border"].dense()
+            return self["E"]
+        raise KeyError(key)
+
+
 class BundleProblem:
     """The constant part of a bundle adjustment: indices, weights, structure.
 
@@ -277,7 +289,7 @@ class BundleProblem:
         Tb[vo] = np.einsum("nij,nj->ni", T[vo], bp[self.ocol[vo]])
         red = bc.copy()
         red[S.cam_present] -= np.add.reduceat(Tb[S.cam_order], S.cam_starts, axis=0)
-        out = dict(
+        out = _NormalEquations(
             blocks=blocks, rhs=red.reshape(-1), Vinv=Vinv, W=W, T=T, bp=bp, diagU=diagU, diagV=diagV
         )
         if self.q:
@@ -286,7 +298,8 @@ class BundleProblem:
             else:
                 border = self.ap_border if self.ap_reuse else None
                 out.update(ap_normal(self, st, rw, Jew, Jpw, T, Vinv, bp, lam, border))
-                self.ap_border = (out["E"], out["F0"])
+                out["E_border"] = out.pop("E")  # blocks; out["E"] forms the array on demand
+                self.ap_border = (out["E_border"], out["F0"])
                 out["reused"] = border is not None
         if self.aux:
             self.aux.normal(self, st, out, lam)
@@ -305,11 +318,11 @@ class BundleProblem:
                 return self._back(ne, dc, da, fac)
             tag = "E,F reused, " if ne.get("reused") else ""
             if self.ap_prec is None:
-                self.ap_prec = form_preconditioner(fac, ne["E"], ne["F"])
+                self.ap_prec = form_preconditioner(fac, ne["E_border"], ne["F"])
                 tag += "Fs formed (float32), " if self.ap_prec is not None else ""
             if self.ap_prec is not None:
                 dc, da, steps = solve_bordered_pcg(
-                    fac, ne["E"], ne["F"], ne["rhs"], ne["ba"], self.ap_prec
+                    fac, ne["E_border"], ne["F"], ne["rhs"], ne["ba"], self.ap_prec
                 )
                 self.ap_log.append(tag + f"cg{steps}")
                 if dc is None or steps > PCG_STALE_STEPS:

@@ -130,6 +130,12 @@ class APStructure:
         other = self.pg_grp[e_pg] != go[e_obs]
         self.e_obs, self.e_pg = e_obs[other], e_pg[other]
         self.sum_e, self.e_key = _summation(oi[self.e_obs] * G + self.pg_grp[self.e_pg])
+        # block sums of E @ v and Eᵀ @ y: other blocks → their image, images and other
+        # blocks → their group
+        K, ki, gi = self.e_key.size, self.e_key // G, self.e_key % G
+        self.sum_other_img = sp.csr_matrix((np.ones(K), (ki, np.arange(K))), shape=(m, K))
+        self.sum_other_grp = sp.csr_matrix((np.ones(K), (gi, np.arange(K))), shape=(G, K))
+        self.sum_img_grp = sp.csr_matrix((np.ones(m), (grp, np.arange(m))), shape=(G, m))
         # F correction: within a group one product per group over its pairs; between
         # groups (points in the overlap of two groups) pair by pair
         self.pg_by_grp = np.argsort(self.pg_grp, kind="stable")
@@ -208,15 +214,15 @@ def ap_normal(
     # T Hᵀ summed over the image's rays: (3L × 6)ᵀ (3L × k) per image, gathered in place
     Tt = _zero_row(T.transpose(0, 2, 1))[A.pad].reshape(m, 3 * L, 6)
     Ht = _zero_row(H.transpose(0, 2, 1))[A.own_pg_pad]
-    E4 = np.zeros((m, 6, G, k))
-    E4[np.arange(m), :, prob.grp] = np.matmul(Jpad.transpose(0, 2, 1), A.Aw_pad) - np.matmul(
+    own = np.matmul(Jpad.transpose(0, 2, 1), A.Aw_pad) - np.matmul(
         Tt.transpose(0, 2, 1), Ht.reshape(m, 3 * L, k)
     )
     # ... and the blocks of the other groups that its points reach
     if A.e_key.size:
-        Ec = _ssum(A.sum_e, T[A.e_obs] @ H[A.e_pg].transpose(0, 2, 1))
-        ki, gi = np.divmod(A.e_key, G)
-        E4[ki, :, gi] -= Ec
+        other = -_ssum(A.sum_e, T[A.e_obs] @ H[A.e_pg].transpose(0, 2, 1))
+    else:
+        other = np.zeros((0, 6, k))
+    E = BorderE(own, other, prob.grp, A)
     # F: direct term (constant: A is evaluated at the observed coordinates) − Σ H V⁻¹ Hᵀ
     F4 = np.zeros((G, G, k, k))
     F4[A.grp_present, A.grp_present] = A.F_direct
@@ -231,7 +237,67 @@ def ap_normal(
         F4.reshape(G * G, k, k)[A.f_key] -= Fc
     F0 = F4.transpose(0, 2, 1, 3).reshape(prob.q, prob.q)
     F0[np.diag_indices(prob.q)] += prob.ap_w
-    return _damped(dict(E=E4.reshape(6 * m, prob.q), F0=F0, ba=ba, H=H, Wap=Wap), lam)
+    return _damped(dict(E=E, F0=F0, ba=ba, H=H, Wap=Wap), lam)
+
+
+class BorderE:
+    """The border E (6m, q) by blocks: each image's 6 × k block of its own group and the
+    blocks of the other groups its points reach (a few per cent of E's entries).
+
+    ``E @ v``, ``E.T @ y`` work on the blocks; :meth:`dense` forms the array (kept).
+    """
+
+    def __init__(self, own: F64, other: F64, grp, structure: APStructure) -> None:
+        self.own, self.other, self.grp, self.s = own, other, grp, structure
+        m, _, k = own.shape
+        self.k, self.m = k, m
+        self.shape = (6 * m, structure.G * k)
+        self._dense: F64 | None = None
+
+    def __matmul__(self, v: F64) -> F64:
+        vg = v.reshape(self.s.G, self.k)
+        out = np.einsum("mrk,mk->mr", self.own, vg[self.grp])
+        if self.other.shape[0]:
+            ki, gi = np.divmod(self.s.e_key, self.s.G)
+            out += self.s.sum_other_img @ np.einsum("nrk,nk->nr", self.other, vg[gi])
+        return out.reshape(-1)
+
+    @property
+    def T(self) -> _BorderET:
+        return _BorderET(self)
+
+    def dense(self) -> F64:
+        """E as a (6m, q) array."""
+        if self._dense is None:
+            G, k, m = self.s.G, self.k, self.m
+            E4 = np.zeros((m, 6, G, k))
+            E4[np.arange(m), :, self.grp] = self.own
+            if self.other.shape[0]:
+                ki, gi = np.divmod(self.s.e_key, G)
+                E4[ki, :, gi] += self.other
+            self._dense = E4.reshape(6 * m, G * k)
+        return self._dense
+
+
+class _BorderET:
+    """Eᵀ of a :class:`BorderE`: ``E.T @ y``."""
+
+    def __init__(self, E: BorderE) -> None:
+        self.E = E
+
+    def __matmul__(self, y: F64) -> F64:
+        E, s = self.E, self.E.s
+        y6 = y.reshape(E.m, 6)
+        out = s.sum_img_grp @ np.einsum("mrk,mr->mk", E.own, y6)
+        if E.other.shape[0]:
+            ki, _ = np.divmod(s.e_key, s.G)
+            out += s.sum_other_grp @ np.einsum("nrk,nr->nk", E.other, y6[ki])
+        return out.reshape(-1)
+
+
+def dense(E) -> F64:
+    """E as an array (a :class:`BorderE` or already an array)."""
+    return E.dense() if isinstance(E, BorderE) else E
 
 
 def _damped(out: dict, lam: float) -> dict:

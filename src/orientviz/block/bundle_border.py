@@ -42,6 +42,7 @@ from numpy.lib.stride_tricks import as_strided
 from numpy.typing import NDArray
 
 from ..errors import NotDeterminableError
+from .bundle_ap import dense
 
 F64 = NDArray[np.float64]
 
@@ -138,6 +139,7 @@ def solve_bordered(fac, E: F64, F: F64, rhs: F64, ba: F64, names: list[str]):
     names : list of str
         Names of the parameters of the border (for the error message).
     """
+    E = dense(E)
     if fac.kind == "banded":
         p = fac.structure.scalar_perm
         B = np.empty((E.shape[0], E.shape[1] + 1))
@@ -174,7 +176,7 @@ def form_preconditioner(fac, E: F64, F: F64):
     if fac.kind != "banded":
         return None
     p = fac.structure.scalar_perm
-    Z = band_forward_solve(fac.data.astype(np.float32), E.astype(np.float32)[p])
+    Z = band_forward_solve(fac.data.astype(np.float32), dense(E).astype(np.float32)[p])
     Fs = F - _blas.ssyrk(1.0, Z.T).astype(float)
     Fs = np.triu(Fs) + np.triu(Fs, 1).T  # the upper triangle of F − ZᵀZ, symmetrised
     try:
@@ -190,8 +192,10 @@ def solve_bordered_pcg(fac, E: F64, F: F64, rhs: F64, ba: F64, prec, tol: float 
     ----------
     fac : orientviz.adjust.normal.Factor
         Factor of S.
-    E, F, rhs, ba : ndarray
-        Border blocks and right-hand sides of this iteration.
+    E : ndarray or orientviz.block.bundle_ap.BorderE
+        Border of this iteration (only ``E @ v`` and ``E.T @ y`` are used).
+    F, rhs, ba : ndarray
+        Parameter block and right-hand sides of this iteration.
     prec : tuple
         ``scipy.linalg.cho_factor`` of an earlier Fs (the preconditioner).
     tol : float
