@@ -213,7 +213,8 @@ def ap_normal(
     Jpad = _zero_row(Jew)[A.pad].reshape(m, 2 * L, 6)
     # T Hᵀ summed over the image's rays: (3L × 6)ᵀ (3L × k) per image, gathered in place
     Tt = _zero_row(T.transpose(0, 2, 1))[A.pad].reshape(m, 3 * L, 6)
-    Ht = _zero_row(H.transpose(0, 2, 1))[A.own_pg_pad]
+    Htz = _zero_row(H.transpose(0, 2, 1))  # (npg + 1, 3, k): Hᵀ per pair, and a zero
+    Ht = Htz[A.own_pg_pad]
     own = np.matmul(Jpad.transpose(0, 2, 1), A.Aw_pad) - np.matmul(
         Tt.transpose(0, 2, 1), Ht.reshape(m, 3 * L, k)
     )
@@ -226,12 +227,13 @@ def ap_normal(
     # F: direct term (constant: A is evaluated at the observed coordinates) − Σ H V⁻¹ Hᵀ
     F4 = np.zeros((G, G, k, k))
     F4[A.grp_present, A.grp_present] = A.F_direct
-    HVg = HV[A.pg_by_grp].transpose(1, 0, 2)  # (k, npg, 3), pairs grouped by group
-    Hg = H[A.pg_by_grp].transpose(1, 0, 2)
+    # within a group: Σ (Hᵀ)ᵀ (V⁻¹ Hᵀ) over its pairs as one product, pairs in group order
+    Htg = Htz[A.pg_by_grp]  # (npg, 3, k)
+    VHtg = Vinv[A.pg_pt[A.pg_by_grp]] @ Htg
     for g in range(G):
         a, b = A.pg_grp_starts[g], A.pg_grp_starts[g + 1]
         if b > a:
-            F4[g, g] -= HVg[:, a:b].reshape(k, -1) @ Hg[:, a:b].reshape(k, -1).T
+            F4[g, g] -= Htg[a:b].reshape(-1, k).T @ VHtg[a:b].reshape(-1, k)
     if A.f_key.size:
         Fc = _ssum(A.sum_f, HV[A.f_1] @ H[A.f_2].transpose(0, 2, 1))
         F4.reshape(G * G, k, k)[A.f_key] -= Fc
