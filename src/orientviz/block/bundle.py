@@ -41,7 +41,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..adjust.normal import (
@@ -53,13 +52,8 @@ from ..adjust.normal import (
 from ..adjust.result import Adjustment, Iteration
 from ..errors import InputError, NotDeterminableError
 from ..model import Block
-from .bundle_ap import APStructure, ap_normal, point_ap_term
-from .bundle_border import (
-    PCG_STALE_STEPS,
-    form_preconditioner,
-    solve_bordered,
-    solve_bordered_pcg,
-)
+from .bundle_ap import NormalEquations, ap_normal, point_ap_term, setup_additional
+from .bundle_border import solve_border
 from .bundle_checks import check_connected, check_datum, check_determinable, point_setup
 from .bundle_kernel import collinearity_block, project_block
 
@@ -88,18 +82,6 @@ class _State:
 
 def _wrap(a: F64) -> F64:
     return (a + np.pi) % (2 * np.pi) - np.pi
-
-
-class _NormalEquations(dict):
-    """The blocks of :meth:`BundleProblem.normal`; ``["E"]`` (the border of the additional
-    parameters as a (6m, q) array, e.g. for :mod:`orientviz.adjust.precision`) is formed
-    from ``["E_border"]`` when first asked for."""
-
-    def __missing__(self, key):
-        if key == "E" and "E_border" in self:
-            self["E"] = self["E_border"].dense()
-            return self["E"]
-        raise KeyError(key)
 
 
 class BundleProblem:
@@ -160,46 +142,9 @@ class BundleProblem:
 
         self.X0_w, self.X0_l = _eo_w(img.X0_obs, img.X0_sigma)
         self.ang_w, self.ang_l = _eo_w(img.angles_obs, img.angles_sigma)
-        # additional parameters
-        self.k = 0
-        self.G = 0
-        if additional is not None:
-            A = np.asarray(additional.design(self.l), dtype=float)
-            if A.ndim != 3 or A.shape[:2] != (self.l.shape[0], 2):
-                raise InputError(f"additional.design: expected shape (n, 2, k), got {A.shape}")
-            self.k = A.shape[2]
-            grp = np.zeros(m, np.int64) if ap_group is None else np.asarray(ap_group, np.int64)
-            if grp.shape != (m,) or grp.min() < 0:
-                raise InputError(f"ap_group: expected {m} non-negative group indices")
-            self.G = int(grp.max()) + 1
-            self.grp = grp
-            self.A = A
-            self.Aw = A * self.sw[:, :, None]
-            # A as a sparse (2n, G·k) matrix: the model term A·a of all rays in one product
-            n2 = 2 * self.l.shape[0]  # k entries per row, in column order: CSR directly
-            cols = (np.repeat(grp[self.oi], 2)[:, None] * self.k + np.arange(self.k)).ravel()
-            self.A_csr = sp.csr_matrix(
-                (A.reshape(-1), cols, np.arange(0, n2 * self.k + 1, self.k)),
-                shape=(n2, self.G * self.k),
-            )
-            s = np.inf if ap_sigma is None else ap_sigma
-            s = np.broadcast_to(np.asarray(s, dtype=float), (self.k,))
-            self.ap_w = np.tile(np.where(np.isfinite(s) & (s > 0), 1.0 / s**2, 0.0), self.G)
-            self.ap_names = [f"{nm}@g{g}" for g in range(self.G) for nm in additional.names]
-            self.ap_struct = APStructure(
-                self.oi, self.ocol, self.struct.pt_obs, self.var_pts.size, grp, self.G, self.Aw
-            )
+        # additional parameters (k per group, G groups): see bundle_ap.setup_additional
+        setup_additional(self, additional, ap_group, ap_sigma)
         self.q = self.k * self.G
-        # the border's solver: Fs formed (and its factor kept as the preconditioner of
-        # the conjugate gradients of later iterations) or solved iteratively
-        self.ap_prec = None
-        self.ap_log: list[str] = []
-        self.ap_hold = False  # this iteration keeps the parameters at their values
-        # E, F of the last iteration: reused while the geometry stands still (AP_REUSE)
-        self.ap_border = None
-        self.ap_reuse = False
-        d = block.points.xyz[self.opt] - img.X0[self.oi]
-        self.ray_length = float(np.nanmedian(np.linalg.norm(d, axis=1))) if d.size else 1.0
         # auxiliary data as joint observations: hook of orientviz.block.auxiliary_obs
         self.aux, self.na = None, 0
         if auxiliary:
@@ -289,7 +234,7 @@ class BundleProblem:
         Tb[vo] = np.einsum("nij,nj->ni", T[vo], bp[self.ocol[vo]])
         red = bc.copy()
         red[S.cam_present] -= np.add.reduceat(Tb[S.cam_order], S.cam_starts, axis=0)
-        out = _NormalEquations(
+        out = NormalEquations(
             blocks=blocks, rhs=red.reshape(-1), Vinv=Vinv, W=W, T=T, bp=bp, diagU=diagU, diagV=diagV
         )
         if self.q:
@@ -311,28 +256,7 @@ class BundleProblem:
         if self.aux:
             return self.aux.solve(self, fac, ne)
         if self.q:
-            dc = None
-            if self.ap_hold:
-                dc, da = fac.solve(ne["rhs"]), np.zeros(self.q)
-                self.ap_log.append("held")
-                return self._back(ne, dc, da, fac)
-            tag = "E,F reused, " if ne.get("reused") else ""
-            if self.ap_prec is None:
-                self.ap_prec = form_preconditioner(fac, ne["E_border"], ne["F"])
-                tag += "Fs formed (float32), " if self.ap_prec is not None else ""
-            if self.ap_prec is not None:
-                dc, da, steps = solve_bordered_pcg(
-                    fac, ne["E_border"], ne["F"], ne["rhs"], ne["ba"], self.ap_prec
-                )
-                self.ap_log.append(tag + f"cg{steps}")
-                if dc is None or steps > PCG_STALE_STEPS:
-                    self.ap_prec = None  # stale preconditioner: form Fs next time
-            if dc is None:
-                dc, da, Fs, self.ap_prec = solve_bordered(
-                    fac, ne["E"], ne["F"], ne["rhs"], ne["ba"], self.ap_names
-                )
-                ne["Fs"] = Fs
-                self.ap_log.append("Fs formed")
+            dc, da = solve_border(self, ne, fac)
         else:
             dc = fac.solve(ne["rhs"])
             da = np.zeros(0)

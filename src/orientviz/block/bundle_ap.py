@@ -23,8 +23,61 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
+from ..errors import InputError
+
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
+
+
+def setup_additional(prob, additional, ap_group, ap_sigma) -> None:
+    """Set a :class:`~orientviz.block.bundle.BundleProblem`'s additional-parameter part.
+
+    Sets ``k``, ``G`` (0 without parameters), ``grp``, ``A`` (n, 2, k) and ``Aw``
+    (weighted), ``A_csr`` (A as a sparse (2n, G·k) matrix: the model term A·a of all rays
+    in one product), ``ap_w`` (weights of the pseudo-observations), ``ap_names``,
+    ``ap_struct`` and the state of the border's solver (``ap_prec``, ``ap_log``,
+    ``ap_hold``, ``ap_border``, ``ap_reuse``, ``ray_length``).
+    """
+    prob.k = prob.G = 0
+    prob.ap_prec, prob.ap_log, prob.ap_hold = None, [], False
+    prob.ap_border, prob.ap_reuse = None, False
+    if additional is None:
+        return
+    m, n = prob.m, prob.l.shape[0]
+    A = np.asarray(additional.design(prob.l), dtype=float)
+    if A.ndim != 3 or A.shape[:2] != (n, 2):
+        raise InputError(f"additional.design: expected shape (n, 2, k), got {A.shape}")
+    k = prob.k = A.shape[2]
+    grp = np.zeros(m, np.int64) if ap_group is None else np.asarray(ap_group, np.int64)
+    if grp.shape != (m,) or grp.min() < 0:
+        raise InputError(f"ap_group: expected {m} non-negative group indices")
+    G = prob.G = int(grp.max()) + 1
+    prob.grp, prob.A, prob.Aw = grp, A, A * prob.sw[:, :, None]
+    cols = (np.repeat(grp[prob.oi], 2)[:, None] * k + np.arange(k)).ravel()
+    prob.A_csr = sp.csr_matrix(  # k entries per row, in column order: CSR directly
+        (A.reshape(-1), cols, np.arange(0, 2 * n * k + 1, k)), shape=(2 * n, G * k)
+    )
+    s = np.inf if ap_sigma is None else ap_sigma
+    s = np.broadcast_to(np.asarray(s, dtype=float), (k,))
+    prob.ap_w = np.tile(np.where(np.isfinite(s) & (s > 0), 1.0 / s**2, 0.0), G)
+    prob.ap_names = [f"{nm}@g{g}" for g in range(G) for nm in additional.names]
+    prob.ap_struct = APStructure(
+        prob.oi, prob.ocol, prob.struct.pt_obs, prob.var_pts.size, grp, G, prob.Aw
+    )
+    d = prob.block.points.xyz[prob.opt] - prob.block.images.X0[prob.oi]
+    prob.ray_length = float(np.nanmedian(np.linalg.norm(d, axis=1))) if d.size else 1.0
+
+
+class NormalEquations(dict):
+    """The blocks of ``BundleProblem.normal``; ``["E"]`` (the border of the additional
+    parameters as a (6m, q) array, e.g. for :mod:`orientviz.adjust.precision`) is formed
+    from ``["E_border"]`` (:class:`BorderE`) when first asked for."""
+
+    def __missing__(self, key):
+        if key == "E" and "E_border" in self:
+            self["E"] = self["E_border"].dense()
+            return self["E"]
+        raise KeyError(key)
 
 
 def _summation(keys: I64) -> tuple[sp.csr_matrix, I64]:

@@ -239,3 +239,35 @@ def solve_bordered_pcg(fac, E: F64, F: F64, rhs: F64, ba: F64, prec, tol: float 
         rho = rho_new
     dc = z0 - fac.solve(E @ x)
     return dc, x, steps
+
+
+def solve_border(prob, ne: dict, fac) -> tuple[F64, F64]:
+    """The bundle's solve with additional parameters: (dc (6m,), da (q,)).
+
+    Held parameters (``prob.ap_hold``): the plain step, da = 0. Otherwise conjugate
+    gradients with the preconditioner (formed in single precision on first use, formed
+    anew after :data:`PCG_STALE_STEPS` steps) and, if they fail, the exact
+    :func:`solve_bordered`. Appends what it did to ``prob.ap_log``.
+    """
+    if prob.ap_hold:
+        prob.ap_log.append("held")
+        return fac.solve(ne["rhs"]), np.zeros(prob.q)
+    dc = None
+    tag = "E,F reused, " if ne.get("reused") else ""
+    if prob.ap_prec is None:
+        prob.ap_prec = form_preconditioner(fac, ne["E_border"], ne["F"])
+        tag += "Fs formed (float32), " if prob.ap_prec is not None else ""
+    if prob.ap_prec is not None:
+        dc, da, steps = solve_bordered_pcg(
+            fac, ne["E_border"], ne["F"], ne["rhs"], ne["ba"], prob.ap_prec
+        )
+        prob.ap_log.append(tag + f"cg{steps}")
+        if dc is None or steps > PCG_STALE_STEPS:
+            prob.ap_prec = None  # stale preconditioner: form Fs next time
+    if dc is None:
+        dc, da, Fs, prob.ap_prec = solve_bordered(
+            fac, ne["E"], ne["F"], ne["rhs"], ne["ba"], prob.ap_names
+        )
+        ne["Fs"] = Fs
+        prob.ap_log.append("Fs formed")
+    return dc, da
