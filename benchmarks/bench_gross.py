@@ -48,16 +48,13 @@ import numpy as np  # noqa: E402
 import scipy.sparse as sp  # noqa: E402
 from scipy.optimize import least_squares  # noqa: E402
 
-from orientviz.adjust.gross import (  # noqa: E402
-    CleaningBreakdown,
-    critical_value,
-    noncentrality,
-)
+from orientviz.adjust.gross import critical_value, noncentrality  # noqa: E402
 from orientviz.adjust.gross2d import noncentrality_2d  # noqa: E402
 from orientviz.block.bundle import bundle_adjust  # noqa: E402
 from orientviz.block.cleaning import bundle_solver, clean_block  # noqa: E402
 from orientviz.block.simulate import simulate_block  # noqa: E402
 from orientviz.camera import project  # noqa: E402
+from orientviz.errors import AdjustmentError  # noqa: E402
 from orientviz.model import CHECK, CONTROL  # noqa: E402
 from orientviz.rotation import matrix_from_opk  # noqa: E402
 
@@ -182,8 +179,9 @@ def run_method(name, block, info):
     else:
         try:
             c = clean_block(block, **METHODS[name])
-        except (CleaningBreakdown, np.linalg.LinAlgError):
-            # gave up (or the weights made the normals singular): nothing cleaned
+        except (AdjustmentError, np.linalg.LinAlgError):
+            # gave up (CleaningBreakdown), or the weights made the block singular or
+            # disconnected: nothing cleaned, the plain bundle stands
             c = None
         if c is None:
             excluded = np.zeros(info["n"], bool)
