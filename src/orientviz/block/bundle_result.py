@@ -10,6 +10,7 @@ parameters. ``extra["obs_slices"]`` names these ranges.
 from __future__ import annotations
 
 import numpy as np
+import scipy.linalg
 from numpy.typing import NDArray
 
 from ..adjust.result import Adjustment
@@ -153,7 +154,17 @@ def finish_result(
     if precision:
         from ..adjust.precision import bundle_precision
 
-        bundle_precision(res, prob, st, rw, Je, Jp)
+        try:
+            bundle_precision(res, prob, st, rw, Je, Jp)
+        except (np.linalg.LinAlgError, scipy.linalg.LinAlgError, ValueError) as exc:
+            # only reachable from a state the iterations did not settle (diverged start
+            # values leave singular or non-finite point blocks): keep the result, say why
+            # it carries no precision instead of letting a numerical error escape
+            if converged:
+                raise
+            res.extra["precision_error"] = (
+                f"no precision at the last (not converged) state: {type(exc).__name__}: {exc}"
+            )
     return res
 
 
