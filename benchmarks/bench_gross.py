@@ -202,10 +202,13 @@ def run_method(name, block, info):
 
 def error_free_rate(clean, name):
     """False alarms on the error-free block: rays excluded and tests that rejected."""
-    c = clean_block(clean.block, **METHODS[name])
+    try:
+        c = clean_block(clean.block, **METHODS[name])
+    except AdjustmentError:  # counted apart (weak blocks: an image left undeterminable)
+        return 0, 0, 0, 1
     excluded = int((~c.adjustment.extra["kept_rays"]).sum())
     rejected = sum(1 for e in c.log if e.action == "eliminated")
-    return excluded, rejected, clean.block.n_observations
+    return excluded, rejected, clean.block.n_observations, 0
 
 
 def print_table(title, rows, clean_rates):
@@ -222,6 +225,8 @@ def print_table(title, rows, clean_rates):
         t = sum(r["time"] for r in rs)
         cr = clean_rates.get(name)
         crs = f"{cr[0] / cr[2]:.2%} / {cr[1] / cr[2]:.2%}" if cr else "–"
+        if cr and cr[3]:
+            crs += f" ({cr[3]} block(s) failed)"
         print(f"| {name} | {a['n']} | {a['det']} ({a['det'] / a['n']:.1%}) | {a['testable']} "
               f"({a['testable'] / a['n']:.1%}) | {a['det_testable'] / max(a['testable'], 1):.1%} | "
               + " | ".join(str(a[k]) for k in MISS)
@@ -243,8 +248,8 @@ def quality(seeds, strips, images, tie):
             rows.setdefault(name, []).append(run_method(name, b, info))
         for name in ("snooping w-test", "snooping 2-D, no separ.", "snooping 2-D (default)"):
             e = error_free_rate(clean, name)
-            acc = clean_rates.setdefault(name, [0, 0, 0])
-            for k in range(3):
+            acc = clean_rates.setdefault(name, [0, 0, 0, 0])
+            for k in range(4):
                 acc[k] += e[k]
     g = np.array(geom, float)
     print_table(
