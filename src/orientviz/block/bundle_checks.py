@@ -213,8 +213,75 @@ def _not_collinear(xy: F64) -> bool:
     return bool(sv.shape[0] >= 2 and sv[1] > 1e-3 * max(sv[0], 1e-12))
 
 
+def image_condition_deficit(block: Block, setup: PointSetup) -> NDArray[np.int_]:
+    """Per image: how many of its 6 orientation parameters its rays cannot determine.
+
+    Hold every other image fixed. A ray of image i to a point that is determined without
+    i (fixed, or with its other rays and priors giving ≥ 3 conditions) yields 2
+    conditions; a point with one other ray can still slide along that ray (1 unknown
+    more), a point with no other ray keeps all three coordinates free (minus priors).
+    Observed exterior coordinates add one condition each. If the unknowns
+    (6 + the points' remaining freedoms) exceed the conditions, the normal equations of
+    the whole block have a null vector: that image moves, those points slide along their
+    other rays, nothing else changes. The typical case is an image whose other points
+    are check points (their rays do not enter the adjustment): two intersected points and
+    one two-ray point give 2 + 2 + 1 = 5 conditions for 6 unknowns.
+
+    Parameters
+    ----------
+    block : Block
+    setup : PointSetup
+
+    Returns
+    -------
+    ndarray of int, shape (m,)
+        Lower bound of the rank defect per image (0 where the count is satisfied; a
+        count, not a proof of regularity).
+    """
+    obs = block.observations
+    u = setup.used_obs
+    img, pt = obs.image[u], obs.point[u]
+    m, p = block.n_images, block.n_points
+    rays = np.bincount(pt, minlength=p)
+    k = np.isfinite(setup.prior_sigma).sum(axis=1)  # coordinates with a prior
+    # freedom of the point for this ray: 3 − priors − 2 × (its rays in other images)
+    free = np.where(setup.unknown[pt], np.maximum(0, 3 - k[pt] - 2 * (rays[pt] - 1)), 0)
+    unknowns = 6 + np.bincount(img, weights=free, minlength=m)
+    img_tab = block.images
+    eo = (np.isfinite(img_tab.X0_obs) & np.isfinite(img_tab.X0_sigma)).sum(axis=1)
+    eo = eo + (np.isfinite(img_tab.angles_obs) & np.isfinite(img_tab.angles_sigma)).sum(axis=1)
+    conditions = 2 * np.bincount(img, minlength=m) + eo
+    return np.maximum(0, unknowns - conditions).astype(int)
+
+
+def check_image_conditions(block: Block, setup: PointSetup) -> None:
+    """Raise :class:`NotDeterminableError` for images whose rays leave the orientation free.
+
+    See :func:`image_condition_deficit`. Not applied with auxiliary (GNSS, APR)
+    observations, which may supply the missing conditions.
+    """
+    deficit = image_condition_deficit(block, setup)
+    bad = np.flatnonzero(deficit)
+    if bad.size:
+        ids = [block.images.ids[i] for i in bad[:8]]
+        more = f" and {bad.size - 8} more" if bad.size > 8 else ""
+        raise NotDeterminableError(
+            f"{bad.size} image(s) have fewer conditions than orientation unknowns "
+            f"(rays to intersected or control points count 2, to two-ray points 1; rays of "
+            f"check points do not enter): {', '.join(ids)}{more}; measure further tie or "
+            "control points in them, or use fewer check points there",
+            parameters=[f"{i}.X0" for i in ids],
+            defect=int(deficit.sum()),
+        )
+
+
 def check_datum(block: Block, setup: PointSetup) -> None:
-    """Raise :class:`DatumDefectError` if control and observed centres leave the datum free."""
+    """Raise if control and observed centres leave the datum free, or an image is free.
+
+    :class:`NotDeterminableError` from :func:`check_image_conditions` first (the count of
+    conditions per image), then :class:`DatumDefectError` if the datum is free.
+    """
+    check_image_conditions(block, setup)
     free, missing = _datum_elements(block, setup)
     if free:
         raise DatumDefectError(

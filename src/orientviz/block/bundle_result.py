@@ -14,6 +14,7 @@ import scipy.linalg
 from numpy.typing import NDArray
 
 from ..adjust.result import Adjustment
+from ..errors import NotDeterminableError
 from ..model import CHECK
 from .bundle_kernel import collinearity_block, project_block
 
@@ -161,7 +162,16 @@ def finish_result(
             # values leave singular or non-finite point blocks): keep the result, say why
             # it carries no precision instead of letting a numerical error escape
             if converged:
-                raise
+                # a converged state with a singular reduced system: the count checks
+                # before the iterations (bundle_checks) missed a geometric defect; name
+                # the parameters instead of ending in a numerical error
+                from ..adjust.normal import raise_not_determinable
+
+                blocks = prob.normal(st, rw, Je, Jp)["blocks"]
+                try:
+                    raise_not_determinable(prob.struct, blocks, names[: 6 * prob.m], str(exc))
+                except NotDeterminableError as err:
+                    raise err from exc
             res.extra["precision_error"] = (
                 f"no precision at the last (not converged) state: {type(exc).__name__}: {exc}"
             )
