@@ -2,6 +2,7 @@
 
 Run:  python benchmarks/bench_gross.py [--seeds 1 2 …] [--strips 4] [--images 10]
                                         [--tie grid|gruber] [--large 30 70] [--reps 1]
+                                        [--no-large | --large-only]
 
 Part 1 — quality (pooled over seeds): blocks from
 :func:`orientviz.block.simulate.simulate_block` (σ = 5 µm, 60 %/20 % overlap, XYZ
@@ -320,9 +321,10 @@ def main() -> None:
     ap.add_argument("--large", type=int, nargs=2, default=[30, 70], metavar=("STRIPS", "IMAGES"))
     ap.add_argument("--reps", type=int, default=1)
     ap.add_argument("--no-large", action="store_true")
+    ap.add_argument("--large-only", action="store_true", help="only part 2 (time, large block)")
     a = ap.parse_args()
     print(f"load average at start: {os.getloadavg()[0]:.1f}")
-    for tie in ("grid", "gruber") if a.tie == "both" else (a.tie,):
+    for tie in () if a.large_only else ("grid", "gruber") if a.tie == "both" else (a.tie,):
         seeds = a.seeds if tie == "grid" else list(range(1, a.gruber_seeds + 1))
         quality(seeds, a.strips, a.images, tie)
     if not a.no_large:

@@ -181,28 +181,29 @@ def bundle_precision(res, prob, st, rw, Je, Jp) -> None:
             np.add.reduceat(Qca[oi[vo]].transpose(0, 2, 1) @ T[vo], S.pt_starts, axis=0) + Faa @ hb
         )
         Qpp -= hb.transpose(0, 2, 1) @ Qap
-    # redundancy numbers of the image coordinates: 1 − p (J Q Jᵀ)_kk
+    # 2×2 block of P½ J Q Jᵀ P½ per image observation (batched products, no full Q):
+    # redundancy numbers r = 1 − diagonal, off-diagonal of P½ Q_vv P½ = −(J Q Jᵀ)_xy
     sw = prob.sw
     Jew = Je * sw[:, :, None]
     Jpw = Jp * sw[:, :, None]
-    h = np.einsum("nki,nij,nkj->nk", Jew, Qcc_diag[oi], Jew)
-    h[vo] += np.einsum("nki,nij,nkj->nk", Jpw[vo], Qpp[ocol[vo]], Jpw[vo])
-    h[vo] += 2 * np.einsum("nki,nij,nkj->nk", Jew[vo], Qcp[vo], Jpw[vo])
+    H = (Jew @ Qcc_diag[oi]) @ Jew.transpose(0, 2, 1)
+    Jpv = Jpw[vo]
+    C = (Jew[vo] @ Qcp[vo]) @ Jpv.transpose(0, 2, 1)
+    H[vo] += (Jpv @ Qpp[ocol[vo]]) @ Jpv.transpose(0, 2, 1) + C + C.transpose(0, 2, 1)
     if q:
         Aw = prob.Aw
         sl = np.arange(prob.k)[None, :] + prob.k * prob.grp[oi][:, None]  # (n, k)
         Qaa_o = Faa[sl[:, :, None], sl[:, None, :]]
         Qca_o = np.take_along_axis(Qca[oi], np.repeat(sl[:, None, :], 6, 1), axis=2)
-        h += np.einsum("nki,nij,nkj->nk", Aw, Qaa_o, Aw)
-        h += 2 * np.einsum("nki,nij,nkj->nk", Jew, Qca_o, Aw)
+        AwT = Aw.transpose(0, 2, 1)
+        C = (Jew @ Qca_o) @ AwT
+        H += (Aw @ Qaa_o) @ AwT + C + C.transpose(0, 2, 1)
         Qpa = Qap.transpose(0, 2, 1)[ocol[vo]]  # (nv, 3, q)
         Qpa_o = np.take_along_axis(Qpa, np.repeat(sl[vo][:, None, :], 3, 1), axis=2)
-        h[vo] += 2 * np.einsum("nki,nij,nkj->nk", Jpw[vo], Qpa_o, Aw[vo])
-    r_img = np.clip(1.0 - h, 0.0, 1.0)
-    r_xy = -_offdiag_xy(Jew, Jpw, vo, Qcc_diag[oi], Qpp[ocol[vo]], Qcp[vo])
-    if q:
-        r_xy -= _pair(Aw, Qaa_o, Aw) + _pair(Jew, Qca_o, Aw, sym=True)
-        r_xy[vo] -= _pair(Jpw[vo], Qpa_o, Aw[vo], sym=True)
+        C = (Jpv @ Qpa_o) @ AwT[vo]
+        H[vo] += C + C.transpose(0, 2, 1)
+    r_img = np.clip(1.0 - np.stack([H[:, 0, 0], H[:, 1, 1]], 1), 0.0, 1.0)
+    r_xy = -H[:, 0, 1]
     n = prob.block.n_observations
     rn = np.full((n, 2), np.nan)
     rn[prob.uobs] = r_img
@@ -242,18 +243,3 @@ def bundle_precision(res, prob, st, rw, Je, Jp) -> None:
     rxy[prob.uobs] = r_xy
     res.extra["redundancy_xy"] = rxy
 
-
-def _pair(A: F64, Q: F64, B: F64, sym: bool = False) -> F64:
-    """Per row n: (A Q Bᵀ)_xy, or (A Q Bᵀ + B Qᵀ Aᵀ)_xy with ``sym``."""
-    out = np.einsum("ni,nij,nj->n", A[:, 0], Q, B[:, 1])
-    if sym:
-        out += np.einsum("ni,nij,nj->n", A[:, 1], Q, B[:, 0])
-    return out
-
-
-def _offdiag_xy(Jew, Jpw, vo, Qcc, Qpp, Qcp) -> F64:
-    """(J Q Jᵀ)_xy of every image observation (weighted Jacobians): orientation,
-    point and the cross terms."""
-    h = _pair(Jew, Qcc, Jew)
-    h[vo] += _pair(Jpw[vo], Qpp, Jpw[vo]) + _pair(Jew[vo], Qcp, Jpw[vo], sym=True)
-    return h

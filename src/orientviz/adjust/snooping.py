@@ -104,6 +104,8 @@ def data_snooping(
     separate: ArrayLike | None = None,
     separation: float = 0.0,
     solve_exact: Solver | None = None,
+    exact_first: bool = False,
+    exact_when_few: float = 0.0,
 ) -> Cleaning:
     """Baarda's data snooping: eliminate the worst observation, re-adjust, repeat.
 
@@ -166,6 +168,15 @@ def data_snooping(
         exact ones (e.g. redundancy numbers from a local model): when its tests reject
         nothing, the adjustment is repeated with ``solve_exact`` and tested again, and
         the run ends only when an exact adjustment rejects nothing.
+    exact_first : bool
+        With ``solve_exact``: the first adjustment is exact too (a solver may then
+        use its redundancy numbers to sharpen the later screening rounds, as
+        :func:`orientviz.block.cleaning.bundle_solver` does).
+    exact_when_few : float
+        With ``solve_exact``: after an adjustment that eliminated fewer groups than this
+        fraction of the most any adjustment has eliminated, the next one is exact at once
+        (near the end a screening round mostly finds nothing and only delays the exact
+        one; default 0: screening after every elimination).
 
     Returns
     -------
@@ -203,7 +214,8 @@ def data_snooping(
     last_batch: list[int] = []
     protected = np.zeros(ng, bool)
     it = 0
-    exact = solve_exact is None
+    exact = solve_exact is None or exact_first
+    most = 0
 
     def why(b, T, cv, dof):
         if test == "w":
@@ -260,8 +272,9 @@ def data_snooping(
                 log,
                 wts,
             )
-        exact = solve_exact is None
         last_batch = [int(b) for b in batch] + [b for _, b in pairs]
+        most = max(most, len(last_batch))
+        exact = solve_exact is None or len(last_batch) < exact_when_few * most
         for b in last_batch:
             eliminated.append(b)
             active[b] = False

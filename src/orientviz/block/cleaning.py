@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 from scipy.sparse.csgraph import connected_components
 
 from ..adjust.gross import Cleaning, rerun_cleaning, robust_adjust
+from ..adjust.normal import inv3
 from ..adjust.result import Adjustment
 from ..adjust.snooping import data_snooping
 from ..camera import project
@@ -41,6 +42,9 @@ __all__ = ["bundle_solver", "clean_block", "cleaned_block", "ray_labels"]
 METHODS = ("snooping", "danish", "huber", "reruns")
 #: Default margin (χ² units) below which two rejected rays of one point are not separable.
 SEPARATION: float = 2.0
+#: Fast data snooping: after a round that eliminated fewer rays than this fraction of
+#: the largest round, the next adjustment is exact (see ``data_snooping``).
+EXACT_WHEN_FEW: float = 0.01
 
 
 def ray_labels(block: Block) -> list[str]:
@@ -100,17 +104,60 @@ def _local_redundancy(sub, adj, idx, v, sigma, rn, wn, rxy, rays) -> None:
     Jw = Jp / sigma[idx[sel]][:, :, None]
     Jw[sub.points.role[o.point[sel]] == CONTROL] = 0.0
     upt, col = np.unique(o.point[sel], return_inverse=True)
-    N = np.zeros((upt.size, 3, 3))
-    np.add.at(N, col, Jw.transpose(0, 2, 1) @ Jw)
-    ok = np.linalg.cond(N) < 1e12
+    JtJ = (Jw.transpose(0, 2, 1) @ Jw).reshape(-1, 9)
+    N = np.stack([np.bincount(col, JtJ[:, k], upt.size) for k in range(9)], 1).reshape(-1, 3, 3)
+    # condition bound of a symmetric positive semi-definite 3×3 matrix without an SVD:
+    # λmax ≤ tr, λmin ≥ det / (λmax λmid) ≥ 4 det / tr², so cond ≤ tr³ / (4 det)
+    tr = np.einsum("nii->n", N)
+    a, b, c, d, e, f = (N[:, i, j] for i, j in ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)))
+    det = a * (d * f - e * e) - b * (b * f - c * e) + c * (b * e - c * d)
+    ok = (det > 0) & (tr**3 < 4e12 * det)
     Ninv = np.zeros_like(N)
-    Ninv[ok] = np.linalg.inv(N[ok])
+    Ninv[ok] = inv3(N[ok])
     R = np.eye(2) - Jw @ Ninv[col] @ Jw.transpose(0, 2, 1)  # (k, 2, 2)
     rows = idx[sel]
     rn[rows] = np.clip(np.stack([R[:, 0, 0], R[:, 1, 1]], 1), 0.0, 1.0)
     rxy[rows] = R[:, 0, 1]
     with np.errstate(divide="ignore", invalid="ignore"):
         wn[rows] = np.where(rn[rows] > 1e-10, v[rows] / (sigma[rows] * np.sqrt(rn[rows])), np.nan)
+
+
+def _use_earlier_exact(exact, w, rows, v, sigma, rn, wn, rxy) -> None:
+    """Screening statistics from the redundancy blocks of the last exact adjustment.
+
+    Leaving observations out can only enlarge the cofactors of the unknowns, so the
+    redundancy block ``R = I − P½ A Q Aᵀ P½`` of every remaining ray can only shrink
+    (in the Loewner order): blocks of an earlier exact adjustment whose rays included
+    the present ones (same weights for the ray, no weight larger elsewhere) are upper
+    bounds of the present exact blocks, just as the point-local ones are. Each ray takes
+    the one of the two bounds that gives the larger 2-D statistic (or the lower rank),
+    so the screening test is never above the exact one (up to the change of the
+    linearisation point) but finds most of what the exact test finds: the local bound
+    misses errors where the orientations are weak. Arrays are updated in place (rows of
+    the full block; ``rows``: the tested rays of the present adjustment).
+    """
+    if exact is None or rows.size == 0:
+        return
+    from ..adjust.gross2d import statistic_2d
+
+    ex_rows, ex_rn, ex_rxy, ex_w = exact
+    if np.any(w > ex_w):
+        return
+    pos = np.full(w.shape[0], -1)
+    pos[ex_rows] = np.arange(ex_rows.size)
+    rows = rows[(pos[rows] >= 0) & np.all(w[rows] == ex_w[rows], axis=1)]
+    if rows.size == 0:
+        return
+    z = v[rows] / sigma[rows]
+    r_old, c_old = ex_rn[pos[rows]], ex_rxy[pos[rows]]
+    T_loc, d_loc = statistic_2d(z, rn[rows], rxy[rows])
+    T_old, d_old = statistic_2d(z, r_old, c_old)
+    take = (d_old < d_loc) | ((d_old == d_loc) & (T_old > T_loc))
+    rows, r_old = rows[take], r_old[take]
+    rn[rows] = r_old
+    rxy[rows] = c_old[take]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        wn[rows] = np.where(r_old > 1e-10, v[rows] / (sigma[rows] * np.sqrt(r_old)), np.nan)
 
 
 def _check_ray_tests(sub, adj, idx, v, sigma, rn, wn, rxy, rays, pairs) -> None:
@@ -275,11 +322,14 @@ def bundle_solver(
         chk = sub.points.role[sub.observations.point] == CHECK
         if mode == "local":
             _local_redundancy(sub, adj, idx, v, sigma, rn, wn, rxy, ~chk)
+            _use_earlier_exact(state.get("exact"), w, idx[~chk], v, sigma, rn, wn, rxy)
         elif adj.redundancy_numbers is not None:
             rn[idx] = np.nan_to_num(adj.redundancy_numbers[: 2 * ns].reshape(ns, 2))
             wn[idx] = adj.normalized_residuals[: 2 * ns].reshape(ns, 2)
             rxy[idx] = np.nan_to_num(adj.extra.get("redundancy_xy", np.zeros(ns)))
             state["pairs"] = adj.extra.get("exterior_pairs")
+            rays = idx[~chk]
+            state["exact"] = (rays, rn[rays].copy(), rxy[rays].copy(), w.copy())
         if check_rays and state.get("pairs") is not None:
             # check rays: tested once the orientations' precision is known (exact round)
             _check_ray_tests(sub, adj, idx, v, sigma, rn, wn, rxy, chk, state["pairs"])
@@ -389,7 +439,8 @@ def clean_block(
             solve, 2 * n, alpha0=alpha0, groups=groups, labels=labels,
             max_fraction=max_fraction, clusters=clusters, test=test,
             separate=o.point, separation=separation,
-            solve_exact=(lambda w: solve(w, "exact")) if fast else None,
+            solve_exact=(lambda w: solve(w, "exact")) if fast else None, exact_first=fast,
+            exact_when_few=EXACT_WHEN_FEW if fast else 0.0,
         )  # fmt: skip
     if method == "reruns":
         return rerun_cleaning(solve, 2 * n, threshold=threshold, groups=groups, labels=labels)
