@@ -118,7 +118,8 @@ def test_precision_equals_dense_inverse(case):
         np.testing.assert_allclose(res.cofactor_blocks["additional"], Q[q0:, q0:], rtol=1e-7)
 
 
-def test_banded_selected_inverse_matches_dense():
+@pytest.mark.parametrize("nb", [16, 96])  # 96: block rows wider than the band (kd = 34)
+def test_banded_selected_inverse_matches_dense(nb):
     rng = np.random.default_rng(5)
     n, kd = 230, 17
     A = np.zeros((n, n))
@@ -133,7 +134,7 @@ def test_banded_selected_inverse_matches_dense():
     import scipy.linalg
 
     cb = scipy.linalg.cholesky_banded(ab, lower=True)
-    Zb = banded_selected_inverse(cb, nb=16)
+    Zb = banded_selected_inverse(cb, nb=nb)
     Z = np.linalg.inv(S)
     for d in range(kd2 + 1):
         np.testing.assert_allclose(Zb[: n - d, d], np.diagonal(Z, d), rtol=1e-9, atol=1e-13)

@@ -56,36 +56,37 @@ def banded_selected_inverse(cb: F64, nb: int = TAKAHASHI_BLOCK) -> F64:
     kd = cb.shape[0] - 1
     n = cb.shape[1]
     Zb = np.zeros((n, kd + 1))
-    starts = list(range(0, n, nb))
-    for i0 in reversed(starts):
+    # Z over the rows/columns [i0, b1) of the current block row and its band, kept dense
+    # (with kd + 1 zero columns on the right, so that the band rows are a strided view);
+    # the next block row (above) finds its Z_BB as the leading part of this window
+    win = np.zeros((0, kd + 1))
+    for i0 in reversed(range(0, n, nb)):
         i1 = min(i0 + nb, n)
         b1 = min(i1 - 1 + kd, n - 1) + 1
+        ni, nbb = i1 - i0, b1 - i1
         I = np.arange(i0, i1)
         B = np.arange(i1, b1)
         # L_II (lower triangular) and L_BI from the band storage
         dII = I[:, None] - I[None, :]
-        LII = np.where(dII >= 0, cb[np.clip(dII, 0, kd), I[None, :]], 0.0)
+        # (outside the band L is zero: this matters when the block is wider than kd)
+        LII = np.where((dII >= 0) & (dII <= kd), cb[np.clip(dII, 0, kd), I[None, :]], 0.0)
         dBI = B[:, None] - I[None, :]
-        okBI = dBI <= kd
-        LBI = np.where(okBI, cb[np.clip(dBI, 0, kd), I[None, :]], 0.0)
-        LIIinv = scipy.linalg.solve_triangular(LII, np.eye(I.size), lower=True)
-        if B.size:
-            lo = np.minimum(B[:, None], B[None, :])
-            d = np.abs(B[:, None] - B[None, :])
-            ZBB = Zb[lo, d]
+        LBI = np.where(dBI <= kd, cb[np.clip(dBI, 0, kd), I[None, :]], 0.0)
+        LIIinv = scipy.linalg.solve_triangular(LII, np.eye(ni), lower=True)
+        w = ni + nbb
+        new = np.zeros((w, w + kd + 1))
+        if nbb:
+            ZBB = win[:nbb, :nbb]
             ZIB = -LIIinv.T @ (LBI.T @ ZBB)
-            ZII = LIIinv.T @ (LIIinv - LBI.T @ ZIB.T)
+            new[:ni, ni:w] = ZIB
+            new[ni:w, :ni] = ZIB.T
+            new[ni:w, ni:w] = ZBB
+            new[:ni, :ni] = LIIinv.T @ (LIIinv - LBI.T @ ZIB.T)
         else:
-            ZIB = np.zeros((I.size, 0))
-            ZII = LIIinv.T @ LIIinv
-        Zall = np.hstack([ZII, ZIB])  # rows I, columns i0 … b1−1
-        r = np.arange(I.size)[:, None]
-        dd = np.arange(kd + 1)[None, :]
-        col = r + dd  # local column of Z[i, i + d]
-        ok = col < Zall.shape[1]
-        Zb[I[:, None].repeat(kd + 1, 1)[ok], np.broadcast_to(dd, ok.shape)[ok]] = Zall[
-            np.broadcast_to(r, ok.shape)[ok], col[ok]
-        ]
+            new[:ni, :ni] = LIIinv.T @ LIIinv
+        win = new
+        st0, st1 = win.strides
+        Zb[i0:i1] = np.lib.stride_tricks.as_strided(win, shape=(ni, kd + 1), strides=(st0 + st1, st1))
     return Zb
 
 

@@ -80,8 +80,11 @@ def _partners(batch, stat, crit, rank, key, margin: float) -> list[tuple[int, in
     if key is None or margin <= 0:
         return out
     chosen = set(int(a) for a in batch)
+    rej = np.flatnonzero(stat > crit)
+    rej = rej[np.argsort(key[rej], kind="stable")]  # rejected groups by key, index order
+    rkey = key[rej]
     for a in batch:
-        same = np.flatnonzero((key == key[a]) & (stat > crit))
+        same = rej[np.searchsorted(rkey, key[a]) : np.searchsorted(rkey, key[a], "right")]
         for b in same:
             if int(b) not in chosen and rank[a] - rank[b] < margin:
                 chosen.add(int(b))
@@ -207,6 +210,12 @@ def data_snooping(
     if key is not None and key.shape != (ng,):
         raise InputError(f"separate: expected {ng} keys (one per group), got {key.shape}")
     wts = np.ones(n) if weights is None else np.asarray(weights, float).copy()
+    by_group = np.argsort(g, kind="stable")
+    g_start = np.searchsorted(g[by_group], np.arange(ng + 1))
+
+    def members(b: int) -> NDArray[np.int64]:
+        return by_group[g_start[b] : g_start[b + 1]]
+
     active = np.ones(ng, bool)
     active[np.setdiff1d(np.arange(ng), g[wts > 0])] = False
     log: list[LogEntry] = []
@@ -234,7 +243,7 @@ def data_snooping(
             # the last elimination took away the only control of some parameters: undo it
             for last in last_batch:
                 eliminated.remove(last)
-                wts[g == last] = 1.0
+                wts[members(last)] = 1.0
                 active[last] = True
                 protected[last] = True
                 log.append(
@@ -278,7 +287,7 @@ def data_snooping(
         for b in last_batch:
             eliminated.append(b)
             active[b] = False
-            wts[g == b] = 0.0
+            wts[members(b)] = 0.0
         for b in batch:
             log.append(
                 LogEntry(int(b), names[b], float(np.sqrt(T[b])), it, "eliminated", why(b, T, cv, dof))

@@ -103,9 +103,10 @@ def _local_redundancy(sub, adj, idx, v, sigma, rn, wn, rxy, rays) -> None:
     )
     Jw = Jp / sigma[idx[sel]][:, :, None]
     Jw[sub.points.role[o.point[sel]] == CONTROL] = 0.0
-    upt, col = np.unique(o.point[sel], return_inverse=True)
+    col = o.point[sel]
     JtJ = (Jw.transpose(0, 2, 1) @ Jw).reshape(-1, 9)
-    N = np.stack([np.bincount(col, JtJ[:, k], upt.size) for k in range(9)], 1).reshape(-1, 3, 3)
+    N = np.stack([np.bincount(col, JtJ[:, k], sub.n_points) for k in range(9)], 1)
+    N = N.reshape(-1, 3, 3)
     # condition bound of a symmetric positive semi-definite 3×3 matrix without an SVD:
     # λmax ≤ tr, λmin ≥ det / (λmax λmid) ≥ 4 det / tr², so cond ≤ tr³ / (4 det)
     tr = np.einsum("nii->n", N)
