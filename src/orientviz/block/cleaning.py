@@ -45,6 +45,12 @@ SEPARATION: float = 2.0
 #: Fast data snooping: after a round that eliminated fewer rays than this fraction of
 #: the largest round, the next adjustment is exact (see ``data_snooping``).
 EXACT_WHEN_FEW: float = 0.01
+#: Fast data snooping on blocks of at least this many images: first adjustment exact,
+#: screening sharpened with its redundancy blocks, next round exact when few went (see
+#: ``clean_block``). Smaller blocks keep the plain point-local screening: their exact
+#: rounds cost little, and in weak blocks (Gruber points only) the sharper screening
+#: raised the false alarms of the w-test and the worst check-point ratio (bench_gross).
+SHARP_SCREENING_MIN_IMAGES: int = 500
 
 
 def ray_labels(block: Block) -> list[str]:
@@ -239,6 +245,7 @@ def bundle_solver(
     warm_start: bool = True,
     check_rays: bool = True,
     redundancy: str = "exact",
+    sharpen: bool = False,
     **bundle_options,
 ):
     """A solver ``solve(weights (2n,)) -> Adjustment`` over the image coordinates of a block.
@@ -264,6 +271,10 @@ def bundle_solver(
         from the bundle's cofactors (:mod:`orientviz.adjust.precision`), or ``"local"``:
         each point's intersection with the orientations held fixed (no precision
         computation; an upper bound of r, i.e. abs(w) is not overestimated).
+    sharpen : bool
+        In ``"local"`` rounds take, per ray, the sharper of the point-local redundancy
+        block and the one of the last exact round (both are upper bounds of the
+        present exact block; see :func:`_use_earlier_exact`).
     **bundle_options
         Passed to :func:`bundle_adjust` (``control``, ``additional``, …).
     """
@@ -323,7 +334,8 @@ def bundle_solver(
         chk = sub.points.role[sub.observations.point] == CHECK
         if mode == "local":
             _local_redundancy(sub, adj, idx, v, sigma, rn, wn, rxy, ~chk)
-            _use_earlier_exact(state.get("exact"), w, idx[~chk], v, sigma, rn, wn, rxy)
+            if sharpen:
+                _use_earlier_exact(state.get("exact"), w, idx[~chk], v, sigma, rn, wn, rxy)
         elif adj.redundancy_numbers is not None:
             rn[idx] = np.nan_to_num(adj.redundancy_numbers[: 2 * ns].reshape(ns, 2))
             wn[idx] = adj.normalized_residuals[: 2 * ns].reshape(ns, 2)
@@ -404,7 +416,10 @@ def clean_block(
         Screening rounds with the point-local redundancy numbers (orientations held
         fixed: abs(w) never overestimated, no precision computation, one Gauss-Newton
         step each) and an exact round before stopping (default True). False: every round
-        exact.
+        exact. On blocks of ``SHARP_SCREENING_MIN_IMAGES`` (500) images or more the first
+        round is exact too, the screening takes per ray the sharper of the local and the
+        last exact redundancy block, and after a round that eliminated fewer than
+        ``EXACT_WHEN_FEW`` (1 %) of the largest round's rays the next one is exact.
     test : {"2d", "w"}
         2-D test per image point (default) or the w-test per coordinate.
     separation : float
@@ -430,8 +445,10 @@ def clean_block(
     groups = np.repeat(np.arange(n), 2)
     labels = ray_labels(block)
     local = fast and method == "snooping"
+    sharp = local and block.n_images >= SHARP_SCREENING_MIN_IMAGES
     solve = bundle_solver(
-        block, check_rays=check_rays, redundancy="local" if local else "exact", **bundle_options
+        block, check_rays=check_rays, redundancy="local" if local else "exact", sharpen=sharp,
+        **bundle_options,
     )
     if method == "snooping":
         o = block.observations
@@ -440,8 +457,8 @@ def clean_block(
             solve, 2 * n, alpha0=alpha0, groups=groups, labels=labels,
             max_fraction=max_fraction, clusters=clusters, test=test,
             separate=o.point, separation=separation,
-            solve_exact=(lambda w: solve(w, "exact")) if fast else None, exact_first=fast,
-            exact_when_few=EXACT_WHEN_FEW if fast else 0.0,
+            solve_exact=(lambda w: solve(w, "exact")) if fast else None, exact_first=sharp,
+            exact_when_few=EXACT_WHEN_FEW if sharp else 0.0,
         )  # fmt: skip
     if method == "reruns":
         return rerun_cleaning(solve, 2 * n, threshold=threshold, groups=groups, labels=labels)
