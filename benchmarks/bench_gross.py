@@ -263,7 +263,7 @@ def quality(seeds, strips, images, tie):
         f"rays in 2-ray points {g[:, 0].mean():.1%}, errors on check-point rays "
         f"{int(g[:, 1].sum())}"
         + (
-            f"; seeds {skipped} skipped: the error-free bundle with precision fails"
+            f"; seeds {skipped} skipped: the error-free bundle fails (not determinable)"
             if skipped
             else ""
         ),
