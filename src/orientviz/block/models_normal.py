@@ -226,32 +226,14 @@ def solve_rows(
     cols = (row_model[:, None] * p + np.arange(p)[None, :]).ravel()
     rows = np.repeat(np.arange(n), p)
     Jm = sp.csr_matrix((J.ravel(), (rows, cols)), shape=(n, nt))
-    has = row_scalar >= 0
-    Jx = sp.csr_matrix(
-        (-np.ones(int(has.sum())), (np.flatnonzero(has), row_scalar[has])), shape=(n, n_scalar)
-    )
-    JmW = sp.csr_matrix(Jm.T.multiply(w[None, :]))
-    U = JmW @ Jm
-    C = sp.csr_matrix(JmW @ Jx)
-    D = np.bincount(row_scalar[has], w[has], minlength=n_scalar)
-    bX = np.bincount(row_scalar[has], (w * r)[has], minlength=n_scalar)  # −Jxᵀ W r
-    if prior_w is not None:
-        D = D + prior_w
-        bX = bX - prior_w * prior_e
-    if np.any(D <= 0):
-        bad = np.flatnonzero(D <= 0)[:5]
-        raise NotDeterminableError(
-            f"{context}: point coordinate(s) without observations: {bad.tolist()}",
-            defect=int(np.sum(D <= 0)),
-        )
-    bt = -(JmW @ r)
-    G = sp.csr_matrix(C.multiply(1.0 / D[None, :]))
-    S = U - G @ C.T
-    names = names or [f"model{k // p}.p{k % p}" for k in range(nt)]
-    fac = factor_spd(S, names, context)
-    dt = fac.solve(bt - G @ bX)
-    dX = (bX - C.T @ dt) / D
-    return LinearSolution(dt.reshape(n_models, p), dX, fac, G, D, C, JmW, row_scalar, w)
+    sol = solve_sparse(
+        Jm, row_scalar, -np.ones(n), w, r, n_scalar,
+        prior_w=prior_w, prior_e=prior_e,
+        names=names or [f"model{k // p}.p{k % p}" for k in range(nt)],
+        context=context,
+    )  # fmt: skip
+    sol.dtheta = sol.dtheta.reshape(n_models, p)
+    return sol
 
 
 def scalar_cofactors(sol: LinearSolution, groups: I64, chunk: int = 512) -> F64:
