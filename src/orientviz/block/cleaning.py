@@ -100,13 +100,7 @@ def _local_redundancy(sub, adj, idx, v, sigma, rn, wn, rxy, rays) -> None:
     sel = np.flatnonzero(rays)
     if sel.size == 0:
         return
-    ext = adj.extra["exterior"]
-    xyz = adj.extra["points"]
-    cam = sub.images.camera
-    c, x0, y0 = (getattr(sub.cameras, k)[cam] for k in ("c", "x0", "y0"))
-    _, _, Jp = collinearity_block(
-        ext[:, :3], ext[:, 3:], c, x0, y0, o.image[sel], xyz[o.point[sel]], sub.sequence
-    )
+    _, Jp = _ray_jacobians(sub, adj, sel)
     Jw = Jp / sigma[idx[sel]][:, :, None]
     Jw[sub.points.role[o.point[sel]] == CONTROL] = 0.0
     col = o.point[sel]
@@ -187,13 +181,7 @@ def _check_ray_tests(sub, adj, idx, v, sigma, rn, wn, rxy, rays, pairs) -> None:
         return
     keys, blocks = pairs
     m = sub.n_images
-    ext = adj.extra["exterior"]
-    xyz = adj.extra["points"]
-    cam = sub.images.camera
-    c, x0, y0 = (getattr(sub.cameras, k)[cam] for k in ("c", "x0", "y0"))
-    _, Je, Jp = collinearity_block(
-        ext[:, :3], ext[:, 3:], c, x0, y0, o.image[sel], xyz[o.point[sel]], sub.sequence
-    )
+    Je, Jp = _ray_jacobians(sub, adj, sel)
     for p in np.unique(o.point[sel]):
         k = np.flatnonzero(o.point[sel] == p)
         if k.size < 2:
@@ -473,3 +461,16 @@ def cleaned_block(block: Block, cleaning: Cleaning) -> Block:
     keep = np.ones(block.n_observations, bool)
     keep[cleaning.eliminated] = False
     return _subset(block, keep, block.observations.sigma)[0]
+
+
+def _ray_jacobians(sub: Block, adj: Adjustment, sel: NDArray[np.int64]) -> tuple:
+    """Collinearity derivatives (by orientation, by point) of rays ``sel`` at the adjusted state."""
+    o = sub.observations
+    ext = adj.extra["exterior"]
+    cam = sub.images.camera
+    c, x0, y0 = (getattr(sub.cameras, k)[cam] for k in ("c", "x0", "y0"))
+    _, Je, Jp = collinearity_block(
+        ext[:, :3], ext[:, 3:], c, x0, y0, o.image[sel], adj.extra["points"][o.point[sel]],
+        sub.sequence,
+    )  # fmt: skip
+    return Je, Jp
