@@ -61,3 +61,22 @@ def test_columnar_tables_name_the_column_form(tmp_path):
     doc["points"]["role"][1] = "tie"
     e = _error(doc)
     assert e.where.startswith("observations.point[") and "tie point" in str(e)
+
+
+@pytest.mark.parametrize("bad", [1e308, -1e20, 1.5])
+def test_strip_numbers_must_be_whole_and_bounded(bad):
+    """A strip number like 1e308 once escaped as OverflowError (found by test_mutations)."""
+    doc = _doc("block_compact")
+    doc["images"]["strip"][2] = bad
+    e = _error(doc)
+    assert e.where == "images.strip[2]"
+    # 1.5 is refused by the schema ("integer"), huge whole floats by the loader
+    assert "whole number" in str(e) or "expected integer" in str(e)
+
+
+def test_strip_numbers_read_back():
+    doc = _doc("block_compact")
+    doc["images"]["strip"][0] = None
+    doc["images"]["strip"][1] = 7.0  # a float that is a whole number is a strip number
+    p = loads_problem(json.dumps(doc), "f.json")
+    assert p.data.images.strip[0] == -1 and p.data.images.strip[1] == 7

@@ -77,6 +77,24 @@ class Table:
         col = self.columns[field]
         return np.array([np.nan if v is None else float(v) for v in col], dtype=float) * scale
 
+    def ints(self, field: str, missing: int = -1) -> NDArray[np.int64]:
+        """A column of whole numbers (e.g. strip numbers); JSON ``null`` becomes ``missing``.
+
+        A number that is not whole or lies outside ± 2⁵³ (where floats stop counting in
+        ones; JSON readers may have parsed it as a float) names its place.
+        """
+        out = np.empty(self.n, dtype=np.int64)
+        for i, v in enumerate(self.columns[field]):
+            if v is None:
+                out[i] = missing
+                continue
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or v != v:
+                raise self.fail(i, field, f"expected a whole number, got {v!r}")
+            if abs(v) > 2**53 or int(v) != v:
+                raise self.fail(i, field, f"expected a whole number within ±2^53, got {v!r}")
+            out[i] = int(v)
+        return out
+
     def vectors(self, field: str, size: int, scale: float = 1.0) -> NDArray[np.float64]:
         """A column whose cells are a number or an array of ``size`` numbers (or null).
 

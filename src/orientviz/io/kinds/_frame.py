@@ -112,7 +112,7 @@ def block_from_tables(
         ap_set=[""] * t.cameras.n,
     )
     im = t.images
-    strip = np.array([-1 if s is None else int(s) for s in im.columns["strip"]], dtype=np.int64)
+    strip = im.ints("strip")
     images = Images(
         ids=im.strings("id"),
         camera=im.lookup("camera", cam_idx, "camera"),
