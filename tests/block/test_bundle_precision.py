@@ -25,11 +25,16 @@ class Affinity:
         return A
 
 
-def dense_reference(res, block, control_sigma=None, additional=None, ap_group=None, ap_sigma=None):
-    """Full Jacobian at the solution, N = JᵀPJ and Q = N⁻¹ (unknowns: images, free points, APs)."""
+def dense_reference(
+    res, block, control_sigma=None, additional=None, ap_group=None, ap_sigma=None, x=None
+):
+    """Full Jacobian, N = JᵀPJ and Q = N⁻¹ (unknowns: images, free points, APs).
+
+    Evaluated at the solution, or at the parameter vector ``x`` (layout of ``res.x``).
+    """
     m = block.n_images
-    ext = res["exterior"].reshape(m, 6)
-    pts = res["points"].reshape(-1, 3)
+    ext = res["exterior"].reshape(m, 6) if x is None else x[: 6 * m].reshape(m, 6)
+    pts = res["points"].reshape(-1, 3) if x is None else x[6 * m :].reshape(-1, 3)[: block.n_points]
     obs = block.observations
     free = np.flatnonzero(block.points.role == 0)
     if control_sigma is not None:
@@ -88,8 +93,11 @@ def test_precision_equals_dense_inverse(case):
     if case == "ap":
         kw.update(additional=Affinity(), ap_group=np.arange(block.n_images) % 2, ap_sigma=50.0)
     res = bundle_adjust(block, **kw)
+    # without additional parameters the cofactors are those of the last linearisation
+    # point (the state before the final correction, whose normal equations are reused)
+    x_lin = res.history[-2].x if case != "ap" else None
     Q, free, used, r_ref = dense_reference(
-        res, block, csig, kw.get("additional"), kw.get("ap_group"), kw.get("ap_sigma")
+        res, block, csig, kw.get("additional"), kw.get("ap_group"), kw.get("ap_sigma"), x_lin
     )
     m = block.n_images
     ext_blocks = np.stack([Q[6 * i : 6 * i + 6, 6 * i : 6 * i + 6] for i in range(m)])
@@ -138,3 +146,21 @@ def test_banded_selected_inverse_matches_dense(nb):
     Z = np.linalg.inv(S)
     for d in range(kd2 + 1):
         np.testing.assert_allclose(Zb[: n - d, d], np.diagonal(Z, d), rtol=1e-9, atol=1e-13)
+
+
+def test_precision_at_last_linearisation_is_that_of_the_solution():
+    """The reused linearisation differs from the solution by less than the stopping rule."""
+    sim = simulate_block(2, 4, rng=11, extra=6, n_check=2)
+    res = bundle_adjust(sim.block)
+    assert len(res.history) >= 3  # at least two corrections: the last one is tiny
+    Q_final = dense_reference(res, sim.block)[0]
+    Q_lin = dense_reference(res, sim.block, x=res.history[-2].x)[0]
+    m = sim.block.n_images
+    ext = np.stack([Q_final[6 * i : 6 * i + 6, 6 * i : 6 * i + 6] for i in range(m)])
+    got = res.cofactor_blocks["exterior"]
+    lin = np.stack([Q_lin[6 * i : 6 * i + 6, 6 * i : 6 * i + 6] for i in range(m)])
+    np.testing.assert_allclose(got, lin, rtol=1e-7, atol=1e-9 * np.abs(lin).max())
+    # σ of the orientations at the solution and at the reused point: same to 1e-5
+    np.testing.assert_allclose(
+        np.sqrt(np.einsum("nii->ni", got)), np.sqrt(np.einsum("nii->ni", ext)), rtol=1e-5
+    )

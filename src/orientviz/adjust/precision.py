@@ -90,8 +90,12 @@ def banded_selected_inverse(cb: F64, nb: int = TAKAHASHI_BLOCK) -> F64:
     return Zb
 
 
-def reduced_inverse_blocks(st: ReducedStructure, blocks: F64) -> F64:
-    """The 6×6 blocks of Z = S⁻¹ at the structure's blocks (i ≤ k), shape (nb, 6, 6)."""
+def reduced_inverse_blocks(st: ReducedStructure, blocks: F64, fac=None) -> F64:
+    """The 6×6 blocks of Z = S⁻¹ at the structure's blocks (i ≤ k), shape (nb, 6, 6).
+
+    ``fac`` is an existing factor of S (from :func:`orientviz.adjust.normal.factor_reduced`
+    on the same blocks); the banded path then skips the factorisation.
+    """
     n = st.n_reduced
     r6 = np.arange(6)
     if n <= DENSE_INVERSE_LIMIT or st.solver != "banded":
@@ -104,7 +108,8 @@ def reduced_inverse_blocks(st: ReducedStructure, blocks: F64) -> F64:
         rows = 6 * st.block_i[:, None, None] + r6[None, :, None]
         cols = 6 * st.block_k[:, None, None] + r6[None, None, :]
         return Z[rows, cols]
-    fac = factor_reduced(st, blocks)
+    if fac is None or fac.kind != "banded":
+        fac = factor_reduced(st, blocks)
     Zb = banded_selected_inverse(fac.data)
     p = st.pos_img
     rows = 6 * p[st.block_i][:, None, None] + r6[None, :, None]
@@ -122,7 +127,7 @@ def _block_lookup(st: ReducedStructure, ca, cb_):
     return idx, ca > cb_
 
 
-def bundle_precision(res, prob, st, rw, Je, Jp) -> None:
+def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     """Fill ``res`` with cofactor blocks, redundancy numbers and normalised residuals.
 
     Parameters
@@ -131,11 +136,21 @@ def bundle_precision(res, prob, st, rw, Je, Jp) -> None:
         The bundle result (residual order as in :mod:`orientviz.block.bundle_result`).
     prob : BundleProblem
     st : state at the solution; rw, Je, Jp : weighted misclosures and Jacobians there.
+    lin : tuple, optional
+        ``(ne, fac, Je, Jp)`` of the last Gauss-Newton iteration — its normal equations,
+        the factor of its reduced system and the Jacobians they were built from. The
+        cofactors are then those of that linearisation point, which the final
+        correction moved by less than the stopping tolerance (a few thousandths of a
+        conditional σ); the normal equations are not built and factored again.
     """
     S = prob.struct
-    ne = prob.normal(st, rw, Je, Jp)
+    fac = None
+    if lin is not None:
+        ne, fac, Je, Jp = lin
+    else:
+        ne = prob.normal(st, rw, Je, Jp)
     blocks = ne["blocks"]
-    Zblk = reduced_inverse_blocks(S, blocks)
+    Zblk = reduced_inverse_blocks(S, blocks, fac)
     m, q = prob.m, prob.q
     if q:
         fac = factor_reduced(S, blocks)

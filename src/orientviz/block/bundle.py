@@ -393,8 +393,10 @@ def bundle_adjust(
     # not absorb errors of the approximations (the first joint step then starts close)
     hold_first = bool(prob.q) and history[0].sigma0 >= POOR_START_SIGMA0
     first = 2 if hold_first else 1  # the first iteration that solves the full system
+    lin = None  # (normal equations, factor, Jacobians) of the last plain undamped step
     for it in range(1, max_iter + 1):
         prob.ap_hold = hold_first and it == 1
+        lin = None  # released before the next normal equations are built
         while True:
             ne = prob.normal(st, rw, Je, Jp, lam)
             try:
@@ -435,6 +437,9 @@ def bundle_adjust(
             dpa = np.zeros((block.n_points, 3))
             dpa[prob.var_pts] = dp
             dx = np.concatenate([dc.ravel(), dpa.ravel(), da[: prob.q]])
+        # the precision may reuse this linearisation when it is the converged one
+        if precision and lam == 0 and not (prob.q or prob.aux):
+            lin = (ne, fac, Je, Jp)
         st, rw, Je, Jp, cost = new, rw_n, Je_n, Jp_n, c_new
         if prob.q:
             L = AP_REUSE * prob.ray_length
@@ -453,6 +458,8 @@ def bundle_adjust(
             converged, reason = True, f"corrections below {tol:g} σ after {it} iterations"
             break
     prob.ap_hold = prob.ap_reuse = False
+    if not converged:
+        lin = None
     if damped_start:  # a start that needed damping: prove the solution is determinable
         try:
             prob.solve(prob.normal(st, rw, Je, Jp), red_names)
@@ -480,6 +487,7 @@ def bundle_adjust(
         precision,
         dof,
         s0(cost),
+        lin,
     )
     if prob.aux:
         from .auxiliary_obs import finish_bundle
@@ -489,10 +497,12 @@ def bundle_adjust(
 
 
 def _finish(
-    block, prob, st, rw, Je, Jp, cost, names, history, converged, reason, precision, dof, sigma0
-):
+    block, prob, st, rw, Je, Jp, cost, names, history, converged, reason, precision, dof, sigma0,
+    lin=None,
+):  # fmt: skip
     from .bundle_result import finish_result
 
     return finish_result(
-        block, prob, st, rw, Je, Jp, names, history, converged, reason, precision, dof, sigma0
-    )
+        block, prob, st, rw, Je, Jp, names, history, converged, reason, precision, dof, sigma0,
+        lin=lin,
+    )  # fmt: skip

@@ -83,8 +83,9 @@ def intersect_points(
 
 
 def finish_result(
-    block, prob, st, rw, Je, Jp, names, history, converged, reason, precision, dof, sigma0
-) -> Adjustment:
+    block, prob, st, rw, Je, Jp, names, history, converged, reason, precision, dof, sigma0,
+    lin=None,
+) -> Adjustment:  # fmt: skip
     m, p, n = block.n_images, block.n_points, block.n_observations
     setup = prob.setup
     xyz = st.xyz.copy()
@@ -156,7 +157,7 @@ def finish_result(
         from ..adjust.precision import bundle_precision
 
         try:
-            bundle_precision(res, prob, st, rw, Je, Jp)
+            bundle_precision(res, prob, st, rw, Je, Jp, lin)
         except (np.linalg.LinAlgError, scipy.linalg.LinAlgError, ValueError) as exc:
             # only reachable from a state the iterations did not settle (diverged start
             # values leave singular or non-finite point blocks): keep the result, say why
