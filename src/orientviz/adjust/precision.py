@@ -56,37 +56,57 @@ def banded_selected_inverse(cb: F64, nb: int = TAKAHASHI_BLOCK) -> F64:
     kd = cb.shape[0] - 1
     n = cb.shape[1]
     Zb = np.zeros((n, kd + 1))
+    # L as skewed views of the band storage padded with nb zero rows on both sides:
+    # element (r, c) of a block of L is cbp[pad + row − col, col], an affine address
+    pad = nb
+    cbp = np.zeros((kd + 1 + 2 * pad, n))
+    cbp[pad : pad + kd + 1] = cb
+    s0, s1 = cbp.strides
+
+    def L_block(r0: int, r1: int, c0: int, c1: int) -> F64:
+        start = (pad + r0 - c0) * s0 + c0 * s1
+        view = np.lib.stride_tricks.as_strided(
+            cbp[start // s0 :].reshape(-1)[(start % s0) // cbp.itemsize :],
+            shape=(r1 - r0, c1 - c0),
+            strides=(s0, s1 - s0),
+            writeable=False,
+        )
+        return view
+
     # Z over the rows/columns [i0, b1) of the current block row and its band, kept dense
     # (with kd + 1 zero columns on the right, so that the band rows are a strided view);
-    # the next block row (above) finds its Z_BB as the leading part of this window
-    win = np.zeros((0, kd + 1))
-    for i0 in reversed(range(0, n, nb)):
+    # the next block row (above) finds its Z_BB as the leading part of this window.
+    # Two buffers take turns (the extra columns stay zero: they are never written).
+    size = nb + kd
+    bufs = [np.zeros((size, size + kd + 1)), np.zeros((size, size + kd + 1))]
+    win = bufs[1][:0, :0]
+    for k, i0 in enumerate(reversed(range(0, n, nb))):
         i1 = min(i0 + nb, n)
         b1 = min(i1 - 1 + kd, n - 1) + 1
         ni, nbb = i1 - i0, b1 - i1
-        I = np.arange(i0, i1)
-        B = np.arange(i1, b1)
-        # L_II (lower triangular) and L_BI from the band storage
-        dII = I[:, None] - I[None, :]
-        # (outside the band L is zero: this matters when the block is wider than kd)
-        LII = np.where((dII >= 0) & (dII <= kd), cb[np.clip(dII, 0, kd), I[None, :]], 0.0)
-        dBI = B[:, None] - I[None, :]
-        LBI = np.where(dBI <= kd, cb[np.clip(dBI, 0, kd), I[None, :]], 0.0)
+        # L_II (lower triangular; entries above the diagonal or beyond the band read
+        # the zero padding) and L_BI
+        LII = np.tril(L_block(i0, i1, i0, i1))
+        LBI = L_block(i1, b1, i0, i1)
         LIIinv = scipy.linalg.solve_triangular(LII, np.eye(ni), lower=True)
         w = ni + nbb
-        new = np.zeros((w, w + kd + 1))
+        buf = bufs[k % 2]
+        new = buf[:w, : w + kd + 1]
         if nbb:
             ZBB = win[:nbb, :nbb]
             ZIB = -LIIinv.T @ (LBI.T @ ZBB)
+            new[ni:w, ni:w] = ZBB
             new[:ni, ni:w] = ZIB
             new[ni:w, :ni] = ZIB.T
-            new[ni:w, ni:w] = ZBB
             new[:ni, :ni] = LIIinv.T @ (LIIinv - LBI.T @ ZIB.T)
         else:
             new[:ni, :ni] = LIIinv.T @ LIIinv
         win = new
-        st0, st1 = win.strides
-        Zb[i0:i1] = np.lib.stride_tricks.as_strided(win, shape=(ni, kd + 1), strides=(st0 + st1, st1))
+        buf[:ni, w : ni + kd + 1] = 0.0  # read by the band view below (stale otherwise)
+        st0, st1 = buf.strides
+        Zb[i0:i1] = np.lib.stride_tricks.as_strided(
+            buf, shape=(ni, kd + 1), strides=(st0 + st1, st1)
+        )
     return Zb
 
 
@@ -168,14 +188,15 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     # Q_cp for each observation a: −Σ_b Q(i_a, i_b) T_b  (then add the AP part);
     # in batches of whole a-groups to bound the memory of the (pairs, 6, 6) gathers
     Qcp = np.zeros((n_used, 6, 3))
+    # blocks and their transposes side by side: one gather per pair, no masked transpose
+    Zboth = np.concatenate([Zblk, Zblk.transpose(0, 2, 1)])
     seg = np.append(S.all_pairs_starts, a.size)
     s0, chunk = 0, 65536
     while s0 < S.all_pairs_starts.size:
         s1 = max(int(np.searchsorted(seg, seg[s0] + chunk, side="right")) - 1, s0 + 1)
         sl = slice(seg[s0], seg[s1])
         idx, tr = _block_lookup(S, oi[a[sl]], oi[b[sl]])
-        Qab = Zblk[idx]
-        Qab[tr] = Qab[tr].transpose(0, 2, 1)
+        Qab = Zboth[idx + tr * Zblk.shape[0]]
         QT = Qab @ T[b[sl]]  # Q(i_a, i_b) T_b
         Qcp[S.pt_obs[s0:s1]] = -np.add.reduceat(QT, S.all_pairs_starts[s0:s1] - seg[s0], axis=0)
         s0 = s1

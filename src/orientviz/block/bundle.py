@@ -414,7 +414,10 @@ def bundle_adjust(
                     break
                 continue
             new = prob.apply(st, dc, dp, da)
-            rw_n, Je_n, Jp_n = prob.residuals(new, jac=True)
+            # derivatives at the new state: for the next iteration, the precision or
+            # the check of a damped start (not after the last step of a screening run)
+            need = it < max_iter or precision or damped_start or prob.aux is not None
+            rw_n, Je_n, Jp_n = prob.residuals(new, jac=need)
             c_new = prob.cost(new, rw_n)
             if np.isfinite(c_new) and c_new <= cost * (1 + 1e-12) + 1e-12:
                 break
