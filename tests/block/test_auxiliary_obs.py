@@ -3,7 +3,6 @@
 import numpy as np
 import pytest
 
-from orientviz.block.additional import ap_set
 from orientviz.block.auxiliary import (
     adjust_with_auxiliary,
     check_errors,
@@ -134,5 +133,3 @@ def test_bad_auxiliary_input(case):
         auxiliary_rows([st, st], thin)
     with pytest.raises(InputError, match="rigorous"):
         independent_models(thin, auxiliary=[st], method="pat-m")
-    with pytest.raises(InputError, match="additional parameters"):
-        bundle_adjust(thin, auxiliary=[st], additional=ap_set("ebner12"), ap_sigma=10.0)

@@ -172,13 +172,16 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     blocks = ne["blocks"]
     Zblk = reduced_inverse_blocks(S, blocks, fac)
     m, q = prob.m, prob.q
-    if q:
+    aux = getattr(prob, "aux", None)
+    nb = q + (prob.na if aux else 0)  # border: additional parameters, auxiliary offsets
+    if nb:
         fac = factor_reduced(S, blocks)
-        Y = fac.solve(ne["E"])
-        Faa = np.linalg.inv(ne["F"] - ne["E"].T @ Y)  # Q_aa
-        Y3 = Y.reshape(m, 6, q)
+        E, F = aux.border(prob, ne) if aux else (ne["E"], ne["F"])
+        Y = fac.solve(E)
+        Faa = np.linalg.inv(F - E.T @ Y)  # Q_aa (of the whole border)
+        Y3 = Y.reshape(m, 6, nb)
         Zblk = Zblk + Y3[S.block_i] @ Faa @ Y3[S.block_k].transpose(0, 2, 1)
-        Qca = -(Y3 @ Faa)  # (m, 6, q)
+        Qca = -(Y3 @ Faa)  # (m, 6, nb)
     Qcc_diag = Zblk[S.diag_block]
     # point cofactors: Vinv + Σ_ab T_aᵀ Q(i_a, i_b) T_b
     a, b = S.all_pairs
@@ -202,18 +205,22 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
         s0 = s1
     Vinv = ne["Vinv"]
     vo = S.pt_obs
+    if nb:
+        hb = np.zeros((S.n_pt, nb, 3))  # Σ_b Tap_b placed in its group columns
     if q:
-        hb = np.zeros((S.n_pt, q, 3))  # Σ_b Tap_b placed in its group columns
         Tap = np.zeros((n_used, prob.k, 3))
         Tap[vo] = ne["Wap"][vo] @ Vinv[ocol[vo]]
         g = prob.grp[oi[vo]]
-        hv = hb.reshape(S.n_pt, prob.G, prob.k, 3)
-        np.add.at(hv, (ocol[vo], g), Tap[vo])
+        cols = g[:, None] * prob.k + np.arange(prob.k)
+        np.add.at(hb, (ocol[vo][:, None], cols), Tap[vo])
+    if nb:
+        if aux:
+            aux.point_border(prob, ne, hb)
         Qcp[vo] -= Qca[oi[vo]] @ hb[ocol[vo]]
     # Q_pp,j = V_j⁻¹ − Σ_b T_bᵀ Q_cp(i_b, j) − h_jᵀ Q_ap,j
     Qpp = Vinv + np.add.reduceat(T[vo].transpose(0, 2, 1) @ (-Qcp[vo]), S.pt_starts, axis=0)
-    if q:
-        # Q_ap,j = −(Σ_b Q_ca(i_b)ᵀ T_b + Q_aa h_j)   (q, 3) per point
+    if nb:
+        # Q_ap,j = −(Σ_b Q_ca(i_b)ᵀ T_b + Q_aa h_j)   (nb, 3) per point
         Qap = -(
             np.add.reduceat(Qca[oi[vo]].transpose(0, 2, 1) @ T[vo], S.pt_starts, axis=0) + Faa @ hb
         )
@@ -256,7 +263,7 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     out_r.append((1.0 - prob.ang_w * cdiag[:, 3:])[w])
     if q:
         w = prob.ap_w > 0
-        out_r.append((1.0 - prob.ap_w * np.diag(Faa))[w])
+        out_r.append((1.0 - prob.ap_w * np.diag(Faa)[:q])[w])
     rall = np.concatenate(out_r)
     res.redundancy_numbers = rall
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -272,7 +279,11 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     res.extra["exterior_pairs"] = (S.block_i * m + S.block_k, Zblk)
     res.cofactor_blocks["points"] = Qp_all
     if q:
-        res.cofactor_blocks["additional"] = Faa
+        res.cofactor_blocks["additional"] = Faa[:q, :q]
+    if aux:  # redundancy numbers of the auxiliary rows, cofactors of the offsets
+        if not nb:
+            Qca, Qap, Faa = np.zeros((m, 6, 0)), np.zeros((S.n_pt, 0, 3)), np.zeros((0, 0))
+        aux.precision(res, Qcc_diag, Qpp, Qca, Qap, Faa)
     res.extra["redundancy_check"] = float(np.nansum(rall))
     # off-diagonal (x, y) element of P½ Q_vv P½ per image observation: with the diagonal
     # (the redundancy numbers) the 2×2 block of a ray for 2-D outlier tests

@@ -31,7 +31,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..adjust.normal import factor_reduced
-from ..errors import InputError, NotDeterminableError
+from ..errors import InputError
+from . import auxiliary_border as _ab
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -191,9 +192,9 @@ class BundleAuxiliary:
 
     Rows on projection centres add to the 6 × 6 image blocks of the normal matrix, rows
     on points to the 3 × 3 point blocks (before the points are eliminated), and the
-    offsets/drifts join the additional-parameter block of the bundle (after the
-    self-calibration parameters, if any). Built with :meth:`bind` from the bundle's
-    problem; all methods take the bundle's current state arrays.
+    offsets/drifts border the reduced camera system together with the self-calibration
+    parameters, if any (after them; :mod:`orientviz.block.auxiliary_border`). All
+    methods take the bundle's current state arrays.
     """
 
     def __init__(self, rows: AuxRows, pt_col: I64):
@@ -277,56 +278,91 @@ class BundleAuxiliary:
         return dict(E=E, F=F, b=b, Pg=Pg, diag=diag)
 
     def normal(self, prob, st, ne: dict, lam: float = 0.0) -> None:
-        """Put the globals' bordered block into the bundle's normal equations ``ne``."""
+        """Put the globals' bordered block into the bundle's normal equations ``ne``.
+
+        Stored as ``ne["aux"]`` (see :meth:`reduce`; with additional parameters also
+        their coupling ``"Fag"`` (q, na), :mod:`orientviz.block.auxiliary_border`);
+        ``ne["diagF"]`` is extended by the globals' diagonal (the stopping rule reads
+        the corrections (da, dg) in one vector).
+        """
         a = self.reduce(prob, st.X0, st.xyz, st.g, ne, lam)
-        ne.update(E=a["E"], F=a["F"], ba=a["b"], diagF=a["diag"], Pg=a["Pg"])
+        if prob.q and not prob.ap_hold:
+            a["Fag"] = _ab.ap_aux_coupling(prob, ne, a["Pg"])
+        ne["aux"] = a
+        ne["diagF"] = np.concatenate([ne.get("diagF", np.zeros(0)), a["diag"]])
 
     def solve(self, prob, fac, ne: dict):
-        """Corrections (dc (m, 6), dp (p_var, 3), dg (na,), fac) of the bordered system.
+        """Corrections (dc (m, 6), dp (p_var, 3), (da, dg) (q + na,), fac) of the
+        bordered system; the additional parameters' corrections da come first (zero
+        while they are held).
 
         Raises
         ------
         NotDeterminableError
-            If the offsets/drifts are not determinable (naming them).
+            If the offsets/drifts (with the additional parameters) are not determinable
+            (naming them).
         """
-        E, F = ne["E"], ne["F"]
-        Y = fac.solve(E)
-        Fs = F - E.T @ Y
-        z = fac.solve(ne["rhs"])
-        d = np.sqrt(np.abs(np.diag(Fs))) + 1e-300
-        try:
-            c = np.linalg.cholesky(Fs / np.outer(d, d))
-            ok = np.min(np.diag(c)) ** 2 > 1e-12
-        except np.linalg.LinAlgError:
-            ok = False
-        if not ok:
-            raise NotDeterminableError(
-                "the offsets/drifts of the auxiliary data are not determinable by this block "
-                "(give control or absolute data)",
-                parameters=list(self.rows.names),
-            )
-        dg = np.linalg.solve(Fs, ne["ba"] - E.T @ z)
-        dc = (z - Y @ dg).reshape(prob.m, 6)
-        ne["Fs"] = Fs
-        S = prob.struct
-        vo = S.pt_obs
-        t = np.einsum("nji,nj->ni", ne["W"][vo], dc[prob.oi[vo]])
-        red = ne["bp"] - np.add.reduceat(t, S.pt_starts, axis=0) - ne["Pg"] @ dg
-        dp = np.einsum("nij,nj->ni", ne["Vinv"], red)
-        return dc, dp, dg, fac
+        dc, da, dg = _ab.solve_joint(prob, fac, ne)
+        if not da.size:
+            da = np.zeros(prob.q)
+        dc, dp, da, fac = prob._back(ne, dc, da, fac)
+        dp -= np.einsum("nij,nj->ni", ne["Vinv"], ne["aux"]["Pg"] @ dg)
+        return dc, dp, np.concatenate([da, dg]), fac
+
+    def border(self, prob, ne: dict) -> tuple[F64, F64]:
+        """The joint border of the point-reduced system: E (6m, q + na), F (q + na, q + na)."""
+        return _ab.border(prob, ne)[:2]
+
+    def point_border(self, prob, ne: dict, hb: F64) -> None:
+        """Fill g's columns ``hb[:, q:]`` (p_var, na, 3) of the points' border term."""
+        hb[:, prob.q :] = _ab.point_border(ne)
+
+    def precision(self, res, Qcc: F64, Qpp: F64, Qcb: F64, Qbp: F64, Qbb: F64) -> None:
+        """Redundancy numbers of the rows (``extra["auxiliary_redundancy"]``, appended to
+        the result's by :func:`finish_bundle`) and ``cofactor_blocks["auxiliary"]``.
+
+        Cofactor blocks as in :func:`orientviz.block.auxiliary_border.auxiliary_redundancy`.
+        """
+        na = self.n_global
+        res.extra["auxiliary_redundancy"] = _ab.auxiliary_redundancy(self, Qcc, Qpp, Qcb, Qbp, Qbb)
+        res.cofactor_blocks["auxiliary"] = Qbb[Qbb.shape[0] - na :, Qbb.shape[0] - na :]
 
 
 def finish_bundle(res, prob, st, rw, Je, Jp) -> None:
-    """Add the auxiliary estimates, their σ and residuals to a bundle result."""
+    """Add the auxiliary estimates, their σ and residuals to a bundle result.
+
+    The auxiliary rows are appended to the result's observations (after the
+    pseudo-observations; ``extra["obs_slices"]["auxiliary"]``, m): ``residuals``,
+    ``sigma_obs`` and — when the precision was computed — ``redundancy_numbers`` and
+    ``normalized_residuals``. ``cofactor_blocks["auxiliary"]`` is the cofactor matrix of
+    the offsets/drifts (m², marginal: with the orientations, points and additional
+    parameters adjusted together).
+    """
     aux = prob.aux
-    ne = prob.normal(st, rw, Je, Jp)
-    fac = factor_reduced(prob.struct, ne["blocks"], [str(i) for i in range(6 * prob.m)])
-    aux.solve(prob, fac, ne)
-    Qg = np.linalg.inv(ne["Fs"])
+    Qg = res.cofactor_blocks.get("auxiliary")
+    if Qg is None:  # no precision run: the border of the solution alone
+        ne = prob.normal(st, rw, Je, Jp)
+        fac = factor_reduced(prob.struct, ne["blocks"], [str(i) for i in range(6 * prob.m)])
+        aux.solve(prob, fac, ne)
+        Qg = np.linalg.inv(ne["Fs_aux"])[prob.q :, prob.q :]
+        res.cofactor_blocks["auxiliary"] = Qg
     s0 = res.sigma0 if np.isfinite(res.sigma0) else 1.0
+    v = aux.residuals(st.X0, st.xyz, st.g)
     res.extra["auxiliary"] = aux.rows.split_globals(st.g)
     res.extra["auxiliary_sigma"] = aux.rows.split_globals(s0 * np.sqrt(np.diag(Qg)))
-    res.extra["auxiliary_residuals"] = aux.residuals(st.X0, st.xyz, st.g)
+    res.extra["auxiliary_residuals"] = v
     res.extra["auxiliary_labels"] = aux.rows.labels
     res.extra["auxiliary_names"] = list(aux.rows.names)
-    res.cofactor_blocks["auxiliary"] = Qg
+    # the rows as observations of the result, after the pseudo-observations
+    n0 = res.residuals.size
+    sig = 1.0 / np.sqrt(aux.rows.w)
+    res.extra.setdefault("obs_slices", {})["auxiliary"] = slice(n0, n0 + v.size)
+    res.residuals = np.concatenate([res.residuals, v])
+    res.sigma_obs = np.concatenate([res.sigma_obs, sig])
+    r = res.extra.pop("auxiliary_redundancy", None)
+    if r is not None and res.redundancy_numbers is not None:
+        res.redundancy_numbers = np.concatenate([res.redundancy_numbers, r])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            w = np.where(r > 1e-10, v / (sig * np.sqrt(r)), np.nan)
+        res.normalized_residuals = np.concatenate([res.normalized_residuals, w])
+        res.extra["redundancy_check"] = float(np.nansum(res.redundancy_numbers))

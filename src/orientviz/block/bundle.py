@@ -50,7 +50,7 @@ from ..adjust.normal import (
     inv3,
 )
 from ..adjust.result import Adjustment, Iteration
-from ..errors import InputError, NotDeterminableError
+from ..errors import NotDeterminableError
 from ..model import Block
 from .bundle_ap import NormalEquations, ap_normal, point_ap_term, setup_additional
 from .bundle_border import solve_border
@@ -150,8 +150,6 @@ class BundleProblem:
         if auxiliary:
             from .auxiliary_obs import BundleAuxiliary, auxiliary_rows
 
-            if self.q:
-                raise InputError("auxiliary data with additional parameters: not yet")
             self.aux = BundleAuxiliary(auxiliary_rows(auxiliary, block), self.pt_col)
             self.na = self.aux.n_global
         n_pseudo = int((self.prior_w > 0).sum() + (self.X0_w > 0).sum() + (self.ang_w > 0).sum())
@@ -277,8 +275,11 @@ class BundleProblem:
     def apply(self, st: _State, dc: F64, dp: F64, da: F64) -> _State:
         xyz = st.xyz.copy()
         xyz[self.var_pts] += dp
-        if self.aux:  # da: the offsets/drifts of the auxiliary data
-            return _State(st.X0 + dc[:, :3], st.angles + dc[:, 3:], xyz, st.ap, st.g + da)
+        if self.aux:  # da: the additional parameters, then the auxiliary offsets/drifts
+            q = self.q
+            return _State(
+                st.X0 + dc[:, :3], st.angles + dc[:, 3:], xyz, st.ap + da[:q], st.g + da[q:]
+            )
         return _State(st.X0 + dc[:, :3], st.angles + dc[:, 3:], xyz, st.ap + da, st.g)
 
     def names(self) -> list[str]:
@@ -343,11 +344,15 @@ def bundle_adjust(
         otherwise ``Iteration.x`` is empty.
     auxiliary : list of Auxiliary, optional
         GNSS / statoscope / APR data as joint observations with offset/drift unknowns
-        per strip (:mod:`orientviz.block.auxiliary_obs`; not together with
-        ``additional``). Estimates in ``extra["auxiliary"]``, ``"auxiliary_sigma"``,
-        ``"auxiliary_residuals"``; the datum check is left to the normal equations; the
-        cofactor blocks of orientations and points are not computed yet with auxiliary
-        data (``precision`` is ignored).
+        per strip (:mod:`orientviz.block.auxiliary_obs`), also together with
+        ``additional`` (both border the reduced system:
+        :mod:`orientviz.block.auxiliary_border`). Estimates in ``extra["auxiliary"]``,
+        ``"auxiliary_sigma"`` (m), ``cofactor_blocks["auxiliary"]``; the rows are
+        appended to the observations (``extra["obs_slices"]["auxiliary"]``, m; also
+        ``extra["auxiliary_residuals"]``) and with ``precision`` get redundancy numbers
+        and normalised residuals; the cofactor blocks of orientations and points then
+        include the uncertainty of the offsets/drifts. The datum check is left to the
+        normal equations.
 
     Returns
     -------
@@ -473,8 +478,6 @@ def bundle_adjust(
                 "the normal equations are not positive definite there; compute better "
                 "approximations, e.g. with orientviz.block.approximate.approximate_values"
             )
-    if prob.aux:
-        precision = False
     res = _finish(
         block,
         prob,
