@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from orientviz.block.auxiliary import adjust_with_auxiliary, simulate_auxiliary
+from orientviz.block.auxiliary import adjust_with_auxiliary, check_errors, simulate_auxiliary
+from orientviz.block.bundle import bundle_adjust
 from orientviz.block.simulate import simulate_block
 from orientviz.errors import InputError
 
@@ -49,3 +50,33 @@ def test_absolute_statoscope_needs_one_round_and_conflicts_are_rejected(sim):
     g = simulate_auxiliary(sim, "gnss", rng=np.random.default_rng(2))
     with pytest.raises(InputError, match="both observe Z0"):
         adjust_with_auxiliary(sim.block, [st, g])
+
+
+def test_check_errors_of_bundle_and_model_results_and_of_coordinates(sim):
+    import dataclasses
+
+    from orientviz.block.models import independent_models
+
+    # a bundle result: its check points are intersected from their own rays; the
+    # errors against the truth must agree with the bundle's own check statistics
+    adj = bundle_adjust(sim.block)
+    xy, z = check_errors(sim, adj)
+    c = adj.extra["check_rms"]  # per coordinate X, Y, Z against the given check values
+    assert xy == pytest.approx(np.sqrt((c[0] ** 2 + c[1] ** 2) / 2.0), rel=1e-12)
+    assert z == pytest.approx(c[2], rel=1e-12)
+    # the same from the coordinate array, and by hand from the truth
+    assert check_errors(sim, adj.extra["points"]) == (xy, z)
+    chk = sim.block.points.role == 2
+    d = adj.extra["points"][chk] - sim.truth.points.xyz[chk]
+    assert z == pytest.approx(np.sqrt(np.mean(d[:, 2] ** 2)))
+    # an independent-model result (extra["xyz"])
+    im = independent_models(sim.block)
+    xy_m, z_m = check_errors(sim, im)
+    assert (xy_m, z_m) == check_errors(sim, im.extra["xyz"])
+    assert np.isfinite(xy_m) and 0 < z_m
+    # the truth itself has no error; garbage is refused with a message
+    assert check_errors(sim, sim.truth.points.xyz) == (0.0, 0.0)
+    with pytest.raises(InputError, match="adjusted points"):
+        check_errors(sim, dataclasses.replace(adj, extra={}))
+    with pytest.raises(InputError, match="all"):
+        check_errors(sim, sim.truth.points.xyz[:-1])

@@ -62,3 +62,63 @@ def test_gross_figures(tmp_path):
     fig = plot_reliability(reliability(adj))
     fig.savefig(tmp_path / "reliability.png")
     plt.close("all")
+
+
+def test_deformation_frame_of_model_fields(tmp_path):
+    import matplotlib.pyplot as plt
+    from matplotlib.quiver import Quiver
+
+    from orientviz.plot.deformation import plot_deformation_frame
+
+    err = se.typical(10.0) + se.unflatness(8.0)
+    raw, cal = model_field(err, n=5), model_field(err, correction=se.typical(10.0), n=5)
+    ex = 2000.0
+    for t, d in ((0.0, raw.d), (1.0, cal.d), (0.5, 0.5 * (raw.d + cal.d))):
+        fig = plot_deformation_frame(raw, cal, t, exaggeration=ex)
+        ax = fig.axes[0]
+        (q,) = [c for c in ax.collections if isinstance(c, Quiver)]
+        assert q.N == raw.xyz.shape[0] == 25  # one arrow per grid point
+        # arrows start on the grid (m) and are the exaggerated planimetric deformation
+        np.testing.assert_allclose(q.X, raw.xyz[:, 0])
+        np.testing.assert_allclose(q.U, ex * d[:, 0], atol=1e-9)
+        np.testing.assert_allclose(q.V, ex * d[:, 1], atol=1e-9)
+        # points coloured by the true ΔZ (cm) on one scale for every frame
+        (pts,) = [c for c in ax.collections if not isinstance(c, Quiver)]
+        np.testing.assert_allclose(pts.get_array(), d[:, 2] * 100.0)
+        lim = 100.0 * max(np.abs(raw.d[:, 2]).max(), np.abs(cal.d[:, 2]).max())
+        assert pts.get_clim() == pytest.approx((-lim, lim))
+        # data limits in m: the model area (a few km at 1 : 10 000), not mm
+        x0, x1 = ax.get_xlim()
+        assert x0 <= raw.xyz[:, 0].min() and x1 >= raw.xyz[:, 0].max()
+        assert 500.0 < x1 - x0 < 3000.0
+        assert "[m]" in ax.get_xlabel() and f"{t:.2f}" in ax.get_title()
+        assert fig.axes[1].get_ylabel() == "ΔZ [cm]"  # the colour bar
+    fig.savefig(tmp_path / "frame.png")
+    with pytest.raises(InputError, match="t in"):
+        plot_deformation_frame(raw, cal, 1.5)
+    with pytest.raises(InputError, match="same grid"):
+        plot_deformation_frame(raw, model_field(err, n=4), 0.0)
+    plt.close("all")
+
+
+def test_deformation_frame_of_image_fields():
+    import matplotlib.pyplot as plt
+    from matplotlib.quiver import Quiver
+
+    from orientviz.plot.deformation import plot_deformation_frame
+
+    a, b = image_field(se.radial(8.0), n=7), image_field(se.affinity(3.0, 1.0), n=7)
+    fig = plot_deformation_frame(a, b, 0.0)
+    ax = fig.axes[0]
+    (q,) = [c for c in ax.collections if isinstance(c, Quiver)]
+    assert q.N == 49
+    # default exaggeration: the largest vector of the field at t = 0 is 1/8 of the width
+    length = np.hypot(q.U, q.V)
+    assert length.max() == pytest.approx(220.0 / 8.0)
+    # the image format in mm (± 110 mm), not m or µm
+    x0, x1 = ax.get_xlim()
+    assert x0 <= -110.0 and x1 >= 110.0 and x1 - x0 < 300.0
+    assert "[mm]" in ax.get_xlabel()
+    (pts,) = [c for c in ax.collections if not isinstance(c, Quiver)]
+    np.testing.assert_allclose(pts.get_array(), np.hypot(a.d[:, 0], a.d[:, 1]) * 1e3)
+    plt.close("all")

@@ -47,7 +47,14 @@ from .bundle import bundle_adjust
 F64 = NDArray[np.float64]
 KINDS = ("gnss", "statoscope", "apr")
 
-__all__ = ["Auxiliary", "AuxiliaryResult", "adjust_with_auxiliary", "simulate_auxiliary"]
+__all__ = [
+    "Auxiliary",
+    "AuxiliaryResult",
+    "adjust_with_auxiliary",
+    "check_errors",
+    "height_control_at_ends",
+    "simulate_auxiliary",
+]
 
 
 @dataclass
@@ -361,10 +368,54 @@ def height_control_at_ends(block: Block, margin_m: float = 100.0) -> Block:
     return b
 
 
-def check_errors(sim, xyz: F64) -> tuple[float, float]:
-    """RMS errors (m) of the check points of a simulated block: (planimetric per
-    coordinate, height), from adjusted coordinates ``xyz`` (p, 3) of all points."""
+def check_errors(sim, result: F64 | Adjustment) -> tuple[float, float]:
+    """RMS true errors of the check points of a simulated block.
+
+    Parameters
+    ----------
+    sim : SimulatedBlock
+        The simulated block (:func:`orientviz.block.simulate.simulate_block`): its
+        ``block`` names the check points (role 2), its ``truth`` holds their true
+        coordinates.
+    result : ndarray, shape (p, 3), or Adjustment
+        Adjusted coordinates of all points of the block in m, or an adjustment of it:
+        a bundle result (:func:`orientviz.block.bundle.bundle_adjust`, check points
+        intersected from their own rays, ``extra["points"]``) or an independent-model
+        result (:func:`orientviz.block.models.independent_models`, ``extra["xyz"]``).
+
+    Returns
+    -------
+    mu_xy : float
+        RMS planimetric error per coordinate, sqrt(mean(ΔX² and ΔY²)), in m.
+    mu_z : float
+        RMS height error in m.
+
+    Raises
+    ------
+    InputError
+        If the adjustment carries no point coordinates, their number does not match the
+        block, or no check point has finite coordinates.
+    """
+    if isinstance(result, Adjustment):
+        extra = result.extra
+        key = "xyz" if "xyz" in extra else "points" if "points" in extra else None
+        if key is None:
+            raise InputError(
+                "check_errors: the adjustment has no adjusted points "
+                '(expected extra["xyz"] or extra["points"])'
+            )
+        xyz = np.asarray(extra[key], dtype=float)
+    else:
+        xyz = np.asarray(result, dtype=float)
+    truth = sim.truth.points.xyz
+    if xyz.shape != truth.shape:
+        raise InputError(
+            f"check_errors: expected coordinates of all {truth.shape[0]} points, shape "
+            f"{truth.shape}, got {xyz.shape}"
+        )
     chk = sim.block.points.role == 2
-    d = xyz[chk] - sim.truth.points.xyz[chk]
+    d = xyz[chk] - truth[chk]
     d = d[np.all(np.isfinite(d), axis=1)]
+    if d.size == 0:
+        raise InputError("check_errors: the block has no check point with finite coordinates")
     return float(np.sqrt(np.mean(d[:, :2] ** 2))), float(np.sqrt(np.mean(d[:, 2] ** 2)))

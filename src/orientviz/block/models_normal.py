@@ -158,25 +158,70 @@ def factor_spd(S: sp.spmatrix, names: list[str], context: str = "", solver: str 
 
 @dataclass
 class LinearSolution:
-    """Corrections and the pieces needed for precision."""
+    """Corrections and the pieces needed for precision and for :meth:`resolve`.
 
-    dtheta: F64  # (n_models, p)
+    Rows read ``v = r + Ja · dθ + sign · dX_t`` (:func:`solve_sparse`); ``sign``,
+    ``row_scalar`` and ``w`` are kept per row so that other misclosures can be solved
+    with the same factorisation.
+    """
+
+    dtheta: F64  # (n_models, p) or flat (n_reduced,)
     dX: F64  # (n_scalar,)
     factor: Factor
-    G: sp.csr_matrix  # C · D⁻¹, (n_models·p, n_scalar)
-    D: F64  # (n_scalar,)
+    G: sp.csr_matrix  # C · D⁻¹, (n_reduced, n_scalar)
+    D: F64  # (n_scalar,) diagonal of the point part, prior weights included
     C: sp.csr_matrix | None = None
     JmW: sp.csr_matrix | None = None
     row_scalar: I64 | None = None
     w: F64 | None = None
+    sign: F64 | None = None  # (n,) coefficient of the scalar unknown of each row
+    prior_w: F64 | None = None  # (n_scalar,) weights of the scalar pseudo-observations
 
-    def resolve(self, r: F64) -> tuple[F64, F64]:
-        """Corrections (dθ, dX) for other misclosures ``r`` with the same factorisation
-        (no weighted control); used for repeated simulations of a linear problem."""
-        has = self.row_scalar >= 0
-        bX = np.bincount(self.row_scalar[has], (self.w * r)[has], minlength=self.D.size)
+    def resolve(self, r: F64, prior_e: F64 | None = None) -> tuple[F64, F64]:
+        """Corrections (dθ, dX) for other misclosures with the same factorisation.
+
+        Used for repeated simulations of a linear problem. The normal matrix (design,
+        weights, signs of the scalar unknowns, prior weights) is the one factored by
+        :func:`solve_sparse`; only the right-hand side changes.
+
+        Parameters
+        ----------
+        r : ndarray, shape (n,)
+            Misclosures f(x) − l of the rows, in the units of the rows.
+        prior_e : ndarray, shape (n_scalar,), optional
+            Misclosures X − X_given of the pseudo-observations of the scalar unknowns
+            (weighted control); None = 0 (the prior weights still count in the normal
+            matrix).
+
+        Returns
+        -------
+        dtheta : ndarray
+            Reduced corrections, shaped like :attr:`dtheta`.
+        dX : ndarray, shape (n_scalar,)
+            Corrections of the scalar unknowns.
+
+        Raises
+        ------
+        ValueError
+            If the solution does not carry the row data (not made by
+            :func:`solve_sparse`) or ``r`` has the wrong length.
+        """
+        if self.row_scalar is None or self.w is None or self.sign is None or self.C is None:
+            raise ValueError("resolve: this LinearSolution carries no row data (sign, w)")
+        r = np.asarray(r, dtype=float)
+        if r.shape != self.w.shape:
+            raise ValueError(f"resolve: expected {self.w.size} misclosures, got {r.shape}")
+        bX = _scalar_rhs(self.row_scalar, self.sign, self.w, r, self.D.size)
+        if prior_e is not None and self.prior_w is not None:
+            bX = bX - self.prior_w * np.asarray(prior_e, dtype=float)
         dt = self.factor.solve(-(self.JmW @ r) - self.G @ bX)
         return dt.reshape(self.dtheta.shape), (bX - self.C.T @ dt) / self.D
+
+
+def _scalar_rhs(row_scalar: I64, sign: F64, w: F64, r: F64, n_scalar: int) -> F64:
+    """Right-hand side −Σ w·sign·r of the scalar unknowns (rows without one skipped)."""
+    has = (row_scalar >= 0) & (sign != 0)
+    return -np.bincount(row_scalar[has], (w * r * sign)[has], minlength=n_scalar)
 
 
 def solve_rows(
@@ -301,6 +346,7 @@ def solve_sparse(
     """
     Ja = sp.csr_matrix(Ja)
     n, na = Ja.shape
+    sign = np.broadcast_to(np.asarray(sign, dtype=float), (n,)).copy()
     has = (row_scalar >= 0) & (sign != 0)
     Jx = sp.csr_matrix(
         (sign[has], (np.flatnonzero(has), row_scalar[has])), shape=(n, n_scalar)
@@ -309,7 +355,7 @@ def solve_sparse(
     U = JaW @ Ja
     C = sp.csr_matrix(JaW @ Jx)
     D = np.bincount(row_scalar[has], w[has] * sign[has] ** 2, minlength=n_scalar)
-    bX = -np.bincount(row_scalar[has], (w * r * sign)[has], minlength=n_scalar)
+    bX = _scalar_rhs(row_scalar, sign, w, r, n_scalar)
     if prior_w is not None:
         D = D + prior_w
         bX = bX - prior_w * prior_e
@@ -326,4 +372,4 @@ def solve_sparse(
     fac = factor_spd(S, names, context)
     dt = fac.solve(bt - G @ bX)
     dX = (bX - C.T @ dt) / D
-    return LinearSolution(dt, dX, fac, G, D, C, JaW, row_scalar, w)
+    return LinearSolution(dt, dX, fac, G, D, C, JaW, row_scalar, w, sign, prior_w)

@@ -3,7 +3,8 @@
 
 Image fields: x along the flight direction, mm; vectors exaggerated so that µm become
 visible. Model fields: object frame in m (X along the base), planimetric vectors
-exaggerated, heights as coloured contours in cm.
+exaggerated, heights as coloured contours in cm. :func:`plot_deformation_frame` draws one
+frame of the animation between a field without and with self-calibration.
 """
 
 from __future__ import annotations
@@ -149,4 +150,92 @@ def plot_deformation_comparison(without, with_, *, axes=None, exaggeration=None)
     fig = axes[0].figure
     fig.suptitle(f"model deformation — {textwrap.shorten(without.name, 80)}", fontsize=10)
     fig.tight_layout()
+    return fig
+
+
+def plot_deformation_frame(
+    without,
+    with_,
+    t: float,
+    *,
+    exaggeration: float | None = None,
+    ax=None,
+    title: str | None = None,
+):
+    """One frame of the animation between two deformation fields of the same grid.
+
+    The frame is :func:`orientviz.block.deformation.animate` at ``t``: every grid point
+    moved by ``exaggeration · ((1 − t) · d_without + t · d_with)``. Arrows go from the
+    grid point to its exaggerated position (one arrow per grid point); the moved points
+    are coloured by the deformation at ``t`` in true size — ΔZ in cm for a model field,
+    the vector length in µm for an image field — on a colour scale fixed by both fields,
+    so that frames of different t compare directly.
+
+    Parameters
+    ----------
+    without, with_ : ModelField or ImageField
+        The fields without (t = 0) and with (t = 1) self-calibration, on the same grid
+        (:func:`orientviz.block.deformation.model_field`, ``image_field``). Model
+        fields: ground points and deformation in m; image fields: mm.
+    t : float
+        Position between the two states, 0 ≤ t ≤ 1.
+    exaggeration : float, optional
+        Factor on the deformation (dimensionless). Default: the largest planimetric
+        vector of ``without`` drawn at 1/8 of the grid width (the same for every t).
+    ax : matplotlib Axes, optional
+        Axes to draw into; a new figure if None.
+    title : str, optional
+        Title (default: t and the exaggeration).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Raises
+    ------
+    InputError
+        If the fields lie on different grids or t is outside [0, 1] (from ``animate``).
+    """
+    from ..block.deformation import ImageField, animate
+
+    image = isinstance(without, ImageField)
+    base = without.xy if image else without.xyz
+    if exaggeration is None:
+        width = float(np.ptp(base[:, 0])) or 1.0
+        big = max(float(np.max(np.hypot(without.d[:, 0], without.d[:, 1]), initial=0.0)), 1e-12)
+        exaggeration = width / 8.0 / big
+    moved = animate(without, with_, float(t), float(exaggeration))
+    d = (1.0 - float(t)) * without.d + float(t) * with_.d  # true size at t
+    if image:
+        value = np.hypot(d[:, 0], d[:, 1]) * 1e3
+        top = max(
+            float(np.max(np.hypot(f.d[:, 0], f.d[:, 1]), initial=0.0)) for f in (without, with_)
+        )
+        clim, cmap, label, unit = (0.0, max(top * 1e3, 1e-9)), "viridis", "abs(Δxy) [µm]", "mm"
+    else:
+        value = d[:, 2] * 100.0
+        top = max(float(np.max(np.abs(f.d[:, 2]), initial=0.0)) for f in (without, with_))
+        lim = max(top * 100.0, 1e-9)
+        clim, cmap, label, unit = (-lim, lim), "RdBu_r", "ΔZ [cm]", "m"
+    fig, ax = _axes(ax, figsize=(5.5, 4.5))
+    ax.quiver(
+        base[:, 0], base[:, 1], moved[:, 0] - base[:, 0], moved[:, 1] - base[:, 1],
+        angles="xy", scale_units="xy", scale=1.0, color="0.35", width=0.004,
+    )  # fmt: skip
+    pts = ax.scatter(
+        moved[:, 0], moved[:, 1], c=value, cmap=cmap, vmin=clim[0], vmax=clim[1], s=28,
+        edgecolors="0.2", linewidths=0.4, zorder=3,
+    )  # fmt: skip
+    fig.colorbar(pts, ax=ax, label=label, shrink=0.85)
+    ax.set_aspect("equal")
+    if image:
+        ax.set_xlabel(f"x [{unit}] (flight direction)")
+        ax.set_ylabel(f"y [{unit}]")
+    else:
+        ax.set_xlabel(f"X [{unit}] (along the base)")
+        ax.set_ylabel(f"Y [{unit}]")
+    ax.set_title(
+        title or f"t = {float(t):.2f} (0 without, 1 with self-calibration), ×{exaggeration:.0f}",
+        fontsize=9,
+    )
     return fig
