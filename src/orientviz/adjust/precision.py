@@ -10,7 +10,10 @@ pairs that share a point, i.e. inside the band of S:
 * Q_pp,j = V_j⁻¹ + Σ_a Σ_b T_aᵀ Q_cc(i_a, i_b) T_b   (T_a = W_a V_j⁻¹, rays a, b of j),
 * Q_cp(i, j) = −Σ_b Q_cc(i, i_b) T_b,
 * redundancy number of an image coordinate r = 1 − p · (J Q Jᵀ)_kk, and the
-  normalised residual w = v / (σ √r) (Baarda, a-priori σ0 = 1).
+  normalised residual w = v / (σ √r) (Baarda, a-priori σ0 = 1),
+* the gains of a ray on its own image and point, K = Q_(·, ray) Jᵀ P½ (6×2 and 3×2):
+  a bias ∇ (mm) of the ray moves them by K P½ ∇ (external reliability,
+  :mod:`orientviz.block.reliability`).
 
 Z inside the band is computed by the block form of Takahashi's recursion on the banded
 Cholesky factor L (S = L Lᵀ): for a block row I with the rows B below it in the band,
@@ -150,6 +153,11 @@ def _block_lookup(st: ReducedStructure, ca, cb_):
 def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     """Fill ``res`` with cofactor blocks, redundancy numbers and normalised residuals.
 
+    Also ``extra["redundancy_xy"]`` (n,) and ``extra["ray_gains"]`` = ``{"exterior":
+    (n, 6, 2), "points": (n, 3, 2)}`` per image observation (NaN for unused rays; zero
+    point gains for fixed points): the change of the ray's image orientation (m, rad) and
+    point (m) per unit change of its x, y in units of their σ.
+
     Parameters
     ----------
     res : Adjustment
@@ -247,6 +255,17 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
         C = (Jpv @ Qpa_o) @ AwT[vo]
         H[vo] += C + C.transpose(0, 2, 1)
     r_img = np.clip(1.0 - np.stack([H[:, 0, 0], H[:, 1, 1]], 1), 0.0, 1.0)
+    # gains of each ray on its own image and point: K = Q_(·, ray) Jwᵀ, i.e. the change
+    # of the estimates per σ-normalised change of the ray's x, y (external reliability)
+    JewT = Jew.transpose(0, 2, 1)
+    Ke = Qcc_diag[oi] @ JewT
+    Kp = np.zeros((n_used, 3, 2))
+    JpvT = Jpv.transpose(0, 2, 1)
+    Ke[vo] += Qcp[vo] @ JpvT
+    Kp[vo] = Qcp[vo].transpose(0, 2, 1) @ JewT[vo] + Qpp[ocol[vo]] @ JpvT
+    if q:
+        Ke += Qca_o @ AwT
+        Kp[vo] += Qpa_o @ AwT[vo]
     r_xy = -H[:, 0, 1]
     n = prob.block.n_observations
     rn = np.full((n, 2), np.nan)
@@ -290,4 +309,8 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     rxy = np.full(n, np.nan)
     rxy[prob.uobs] = r_xy
     res.extra["redundancy_xy"] = rxy
-
+    gain_e = np.full((n, 6, 2), np.nan)
+    gain_e[prob.uobs] = Ke
+    gain_p = np.full((n, 3, 2), np.nan)
+    gain_p[prob.uobs] = Kp
+    res.extra["ray_gains"] = {"exterior": gain_e, "points": gain_p}
