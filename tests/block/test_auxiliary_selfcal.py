@@ -214,7 +214,7 @@ def test_joint_step_equals_the_dense_step(case, kind, held):
     else:
         ref = dense.step(x0)
     assert np.abs(ref).max() > 1.0  # a real step (metres), not a converged state
-    np.testing.assert_allclose(got, ref, rtol=0, atol=1e-8 * np.abs(ref).max())
+    np.testing.assert_allclose(got, ref, rtol=0, atol=1e-9 * np.abs(ref).max())
 
 
 @pytest.fixture(scope="module")
@@ -307,6 +307,29 @@ def test_precision_with_auxiliary_data_equals_the_dense_inverse(joint):
     s = res.sigma_obs[sl["auxiliary"]]
     np.testing.assert_allclose(res.normalized_residuals[sl["auxiliary"]], v / (s * np.sqrt(r_aux)))
     assert res.residuals.size == res.sigma_obs.size == rn.size == res.normalized_residuals.size
+
+
+def test_ray_gains_with_auxiliary_data_equal_the_dense_inverse(joint):
+    """``extra["ray_gains"]`` (external reliability of the rays) = Q Jᵀ P½ per ray."""
+    res, dense, x_ref, _ = joint
+    _, J = dense.system(x_ref)
+    Q = np.linalg.inv(J.T @ J)
+    obs, m = dense.block.observations, dense.block.n_images
+    u = dense.used
+    QJ = np.stack([Q @ J[2 * k : 2 * k + 2].T for k in range(u.size)])  # (rays, unknowns, 2)
+    ie = 6 * obs.image[u][:, None] + np.arange(6)
+    ref_e = np.take_along_axis(QJ, ie[:, :, None], axis=1)
+    got_e = res.extra["ray_gains"]["exterior"][u]
+    for sl in (slice(0, 3), slice(3, 6)):  # m and rad
+        ref = ref_e[:, sl]
+        np.testing.assert_allclose(got_e[:, sl], ref, rtol=0, atol=1e-9 * np.abs(ref).max())
+    c = dense.col[obs.point[u]]
+    v = c >= 0
+    ip = 6 * m + 3 * c[v][:, None] + np.arange(3)
+    ref_p = np.take_along_axis(QJ[v], ip[:, :, None], axis=1)
+    got_p = res.extra["ray_gains"]["points"][u]
+    np.testing.assert_allclose(got_p[v], ref_p, rtol=0, atol=1e-9 * np.abs(ref_p).max())
+    assert np.all(got_p[~v] == 0.0)  # fixed points do not move
 
 
 @pytest.mark.parametrize("kind", ["stat+apr", "gnss"])
