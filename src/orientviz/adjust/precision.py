@@ -18,6 +18,14 @@ Z_IB = −L_II⁻ᵀ L_BIᵀ Z_BB and Z_II = L_II⁻ᵀ (L_II⁻¹ − L_BIᵀ Z
 factorisation (n·b²), so all numbers here are exact — no approximation. For small
 reduced systems (≤ 3 000 unknowns) the dense inverse is used instead.
 
+With self-calibration parameters the border's terms come from
+:mod:`orientviz.block.bundle_precision_ap`: Y = S⁻¹E by two banded triangular solves
+with all q columns (BLAS level 3, the same factor as the selected inverse), the
+correction Y F̃⁻¹ Yᵀ only at the needed 6×6 blocks, and the point and ray terms per
+(point, group) pair with k columns instead of q (a point's rays lie in one or two
+groups). On the bench's 2 100-image block with 12 parameters per strip this took the
+precision from 20.7 s to about 2 s (``benchmarks/bench_selfcal.py``).
+
 Units: cofactors in the parameters' units squared (m², rad², m·rad); multiply by σ̂0²
 for covariances.
 """
@@ -86,31 +94,57 @@ def banded_selected_inverse(cb: F64, nb: int = TAKAHASHI_BLOCK) -> F64:
             new[:ni, :ni] = LIIinv.T @ LIIinv
         win = new
         st0, st1 = win.strides
-        Zb[i0:i1] = np.lib.stride_tricks.as_strided(win, shape=(ni, kd + 1), strides=(st0 + st1, st1))
+        Zb[i0:i1] = np.lib.stride_tricks.as_strided(
+            win, shape=(ni, kd + 1), strides=(st0 + st1, st1)
+        )
     return Zb
+
+
+class ReducedInverse:
+    """The inverse of the reduced system S where the precision needs it.
+
+    ``blocks``: the 6×6 blocks of Z = S⁻¹ at the structure's blocks (i ≤ k), shape
+    (nb, 6, 6); :meth:`border` gives S⁻¹E for a border E (self-calibration) from the same
+    factorisation.
+    """
+
+    def __init__(self, st: ReducedStructure, blocks: F64) -> None:
+        n = st.n_reduced
+        r6 = np.arange(6)
+        self._Z = self._fac = None
+        if n <= DENSE_INVERSE_LIMIT or st.solver != "banded":
+            if n > DENSE_INVERSE_LIMIT:
+                st = ReducedStructure(st.obs_cam, st.obs_pt, st.n_cam, st.n_pt, solver="banded")
+            else:
+                S = dense_matrix(st, blocks)
+                c = scipy.linalg.cho_factor(S, lower=True)
+                Z = self._Z = scipy.linalg.cho_solve(c, np.eye(n))
+                rows = 6 * st.block_i[:, None, None] + r6[None, :, None]
+                cols = 6 * st.block_k[:, None, None] + r6[None, None, :]
+                self.blocks = Z[rows, cols]
+                return
+        fac = self._fac = factor_reduced(st, blocks)
+        Zb = banded_selected_inverse(fac.data)
+        p = st.pos_img
+        rows = 6 * p[st.block_i][:, None, None] + r6[None, :, None]
+        cols = 6 * p[st.block_k][:, None, None] + r6[None, None, :]
+        lo, hi = np.minimum(rows, cols), np.maximum(rows, cols)
+        self.blocks = Zb[lo, hi - lo]
+
+    def border(self, E: F64) -> tuple[F64, F64]:
+        """Y = S⁻¹ E (6m, q) and Eᵀ S⁻¹ E (q, q) for a border E (6m, q)."""
+        if self._Z is not None:
+            Y = self._Z @ E
+            EtY = E.T @ Y
+            return Y, 0.5 * (EtY + EtY.T)
+        from ..block.bundle_precision_ap import banded_border
+
+        return banded_border(self._fac.data, self._fac.structure.scalar_perm, E)
 
 
 def reduced_inverse_blocks(st: ReducedStructure, blocks: F64) -> F64:
     """The 6×6 blocks of Z = S⁻¹ at the structure's blocks (i ≤ k), shape (nb, 6, 6)."""
-    n = st.n_reduced
-    r6 = np.arange(6)
-    if n <= DENSE_INVERSE_LIMIT or st.solver != "banded":
-        if n > DENSE_INVERSE_LIMIT:
-            st = ReducedStructure(st.obs_cam, st.obs_pt, st.n_cam, st.n_pt, solver="banded")
-            return reduced_inverse_blocks(st, blocks)
-        S = dense_matrix(st, blocks)
-        c = scipy.linalg.cho_factor(S, lower=True)
-        Z = scipy.linalg.cho_solve(c, np.eye(n))
-        rows = 6 * st.block_i[:, None, None] + r6[None, :, None]
-        cols = 6 * st.block_k[:, None, None] + r6[None, None, :]
-        return Z[rows, cols]
-    fac = factor_reduced(st, blocks)
-    Zb = banded_selected_inverse(fac.data)
-    p = st.pos_img
-    rows = 6 * p[st.block_i][:, None, None] + r6[None, :, None]
-    cols = 6 * p[st.block_k][:, None, None] + r6[None, None, :]
-    lo, hi = np.minimum(rows, cols), np.maximum(rows, cols)
-    return Zb[lo, hi - lo]
+    return ReducedInverse(st, blocks).blocks
 
 
 def _block_lookup(st: ReducedStructure, ca, cb_):
@@ -135,15 +169,14 @@ def bundle_precision(res, prob, st, rw, Je, Jp) -> None:
     S = prob.struct
     ne = prob.normal(st, rw, Je, Jp)
     blocks = ne["blocks"]
-    Zblk = reduced_inverse_blocks(S, blocks)
+    inverse = ReducedInverse(S, blocks)
+    Zblk = inverse.blocks
     m, q = prob.m, prob.q
     if q:
-        fac = factor_reduced(S, blocks)
-        Y = fac.solve(ne["E"])
-        Faa = np.linalg.inv(ne["F"] - ne["E"].T @ Y)  # Q_aa
-        Y3 = Y.reshape(m, 6, q)
-        Zblk = Zblk + Y3[S.block_i] @ Faa @ Y3[S.block_k].transpose(0, 2, 1)
-        Qca = -(Y3 @ Faa)  # (m, 6, q)
+        from ..block.bundle_precision_ap import border_inverse
+
+        Faa, Qca3, dQ = border_inverse(inverse, ne["E"], ne["F"], S)
+        Zblk = Zblk + dQ
     Qcc_diag = Zblk[S.diag_block]
     # point cofactors: Vinv + Σ_ab T_aᵀ Q(i_a, i_b) T_b
     a, b = S.all_pairs
@@ -166,43 +199,25 @@ def bundle_precision(res, prob, st, rw, Je, Jp) -> None:
         s0 = s1
     Vinv = ne["Vinv"]
     vo = S.pt_obs
-    if q:
-        hb = np.zeros((S.n_pt, q, 3))  # Σ_b Tap_b placed in its group columns
-        Tap = np.zeros((n_used, prob.k, 3))
-        Tap[vo] = ne["Wap"][vo] @ Vinv[ocol[vo]]
-        g = prob.grp[oi[vo]]
-        hv = hb.reshape(S.n_pt, prob.G, prob.k, 3)
-        np.add.at(hv, (ocol[vo], g), Tap[vo])
-        Qcp[vo] -= Qca[oi[vo]] @ hb[ocol[vo]]
     # Q_pp,j = V_j⁻¹ − Σ_b T_bᵀ Q_cp(i_b, j) − h_jᵀ Q_ap,j
-    Qpp = Vinv + np.add.reduceat(T[vo].transpose(0, 2, 1) @ (-Qcp[vo]), S.pt_starts, axis=0)
-    if q:
-        # Q_ap,j = −(Σ_b Q_ca(i_b)ᵀ T_b + Q_aa h_j)   (q, 3) per point
-        Qap = -(
-            np.add.reduceat(Qca[oi[vo]].transpose(0, 2, 1) @ T[vo], S.pt_starts, axis=0) + Faa @ hb
-        )
-        Qpp -= hb.transpose(0, 2, 1) @ Qap
-    # 2×2 block of P½ J Q Jᵀ P½ per image observation (batched products, no full Q):
-    # redundancy numbers r = 1 − diagonal, off-diagonal of P½ Q_vv P½ = −(J Q Jᵀ)_xy
     sw = prob.sw
     Jew = Je * sw[:, :, None]
     Jpw = Jp * sw[:, :, None]
+    if q:  # the parameters' terms, sparse by (ray, group) and (point, group) pairs
+        from ..block.bundle_precision_ap import point_terms
+
+        dQpp, _, Hray = point_terms(prob, ne, Faa, Qca3, Qcp, Jew, Jpw)
+    Qpp = Vinv + np.add.reduceat(T[vo].transpose(0, 2, 1) @ (-Qcp[vo]), S.pt_starts, axis=0)
+    if q:
+        Qpp -= dQpp
+    # 2×2 block of P½ J Q Jᵀ P½ per image observation (batched products, no full Q):
+    # redundancy numbers r = 1 − diagonal, off-diagonal of P½ Q_vv P½ = −(J Q Jᵀ)_xy
     H = (Jew @ Qcc_diag[oi]) @ Jew.transpose(0, 2, 1)
     Jpv = Jpw[vo]
     C = (Jew[vo] @ Qcp[vo]) @ Jpv.transpose(0, 2, 1)
     H[vo] += (Jpv @ Qpp[ocol[vo]]) @ Jpv.transpose(0, 2, 1) + C + C.transpose(0, 2, 1)
     if q:
-        Aw = prob.Aw
-        sl = np.arange(prob.k)[None, :] + prob.k * prob.grp[oi][:, None]  # (n, k)
-        Qaa_o = Faa[sl[:, :, None], sl[:, None, :]]
-        Qca_o = np.take_along_axis(Qca[oi], np.repeat(sl[:, None, :], 6, 1), axis=2)
-        AwT = Aw.transpose(0, 2, 1)
-        C = (Jew @ Qca_o) @ AwT
-        H += (Aw @ Qaa_o) @ AwT + C + C.transpose(0, 2, 1)
-        Qpa = Qap.transpose(0, 2, 1)[ocol[vo]]  # (nv, 3, q)
-        Qpa_o = np.take_along_axis(Qpa, np.repeat(sl[vo][:, None, :], 3, 1), axis=2)
-        C = (Jpv @ Qpa_o) @ AwT[vo]
-        H[vo] += C + C.transpose(0, 2, 1)
+        H += Hray
     r_img = np.clip(1.0 - np.stack([H[:, 0, 0], H[:, 1, 1]], 1), 0.0, 1.0)
     r_xy = -H[:, 0, 1]
     n = prob.block.n_observations
@@ -243,4 +258,3 @@ def bundle_precision(res, prob, st, rw, Je, Jp) -> None:
     rxy = np.full(n, np.nan)
     rxy[prob.uobs] = r_xy
     res.extra["redundancy_xy"] = rxy
-

@@ -120,6 +120,57 @@ def band_forward_solve(L: F64, B: F64) -> F64:
     return X
 
 
+def band_backward_solve(L: F64, B: F64) -> F64:
+    """X = L⁻ᵀ B for a lower-banded triangular L in LAPACK lower band storage.
+
+    The transposed counterpart of :func:`band_forward_solve` (same storage, same
+    blocking), so that ``band_backward_solve(L, band_forward_solve(L, B))`` = S⁻¹ B for
+    S = L Lᵀ with BLAS level-3 work only.
+
+    Parameters
+    ----------
+    L : ndarray, shape (kd + 1, n)
+        ``L[d, j]`` = L(j + d, j) (``scipy.linalg.cholesky_banded(..., lower=True)``).
+    B : ndarray, shape (n, r)
+        Right-hand sides.
+
+    Returns
+    -------
+    ndarray, shape (n, r), C order
+
+    Notes
+    -----
+    Row blocks of nb = kd + 1 rows from the bottom: X_I = L_IIᵀ⁻¹ (B_I − L_JIᵀ X_J) with J
+    the block below I; L_JI is strictly upper triangular (``dtrmm``), L_II lower
+    (``dtrsm`` with the transposed matrix).
+    """
+    kd = L.shape[0] - 1
+    n = L.shape[1]
+    nb = kd + 1
+    X = np.empty((n, B.shape[1]), dtype=L.dtype)
+    trmm, trsm = _blas.get_blas_funcs(("trmm", "trsm"), (L,))
+    M_below = None  # rows of the block below (J), columns from this block's start
+    for r0 in reversed(range(0, n, nb)):
+        r1 = min(r0 + nb, n)
+        c0 = max(r0 - nb, 0)
+        M = _skewed_block(L, r0, r1, c0)  # [L_I,I−1  L_II]
+        rhs = np.array(B[r0:r1], order="C", dtype=L.dtype)
+        if r1 < n:
+            r2 = min(r1 + nb, n)
+            off = M_below[:, : r1 - r0]  # L_JI, rows r1:r2 (I is a full block here)
+            if r2 - r1 == nb:  # (X_Jᵀ L_JI)ᵀ, L_JIᵀ strictly lower
+                t = trmm(1.0, off.T, X[r1:r2].T, side=1, lower=1, trans_a=1)
+                rhs -= t.T
+            else:
+                rhs -= off.T @ X[r1:r2]
+        M_below = M
+        d = np.ascontiguousarray(M[:, r0 - c0 :])  # L_II
+        # X_Iᵀ = rhsᵀ L_II⁻¹: BLAS sees the C-ordered d as its transpose (upper), hence
+        # trans_a
+        X[r0:r1] = trsm(1.0, d.T, rhs.T, side=1, lower=0, trans_a=1).T
+    return X
+
+
 def _not_determinable(names):
     return NotDeterminableError(
         "the additional parameters are not determinable (singular); give ap_sigma",
