@@ -42,7 +42,7 @@ from numpy.lib.stride_tricks import as_strided
 from numpy.typing import NDArray
 
 from ..errors import NotDeterminableError
-from .bundle_ap import dense
+from .bundle_ap import BorderE, dense
 
 F64 = NDArray[np.float64]
 
@@ -226,8 +226,11 @@ def form_preconditioner(fac, E: F64, F: F64):
     """
     if fac.kind != "banded":
         return None
-    p = fac.structure.scalar_perm
-    Z = band_forward_solve(fac.data.astype(np.float32), dense(E).astype(np.float32)[p])
+    if isinstance(E, BorderE):  # formed in single precision and row order at once
+        E32 = E.permuted(fac.structure.pos_img)
+    else:
+        E32 = dense(E).astype(np.float32)[fac.structure.scalar_perm]
+    Z = band_forward_solve(fac.data.astype(np.float32), E32)
     Fs = F - _blas.ssyrk(1.0, Z.T).astype(float)
     Fs = np.triu(Fs) + np.triu(Fs, 1).T  # the upper triangle of F − ZᵀZ, symmetrised
     try:
@@ -263,8 +266,13 @@ def solve_bordered_pcg(fac, E: F64, F: F64, rhs: F64, ba: F64, prec, tol: float 
     z0 = fac.solve(rhs)
     ra = ba - E.T @ z0
 
+    # S⁻¹E d of every step is kept as a sum α·S⁻¹E d, so that S⁻¹E x (for dc) costs
+    # no extra banded solve
+    SEx = np.zeros_like(z0)
+
     def Fs(v):
-        return F @ v - E.T @ fac.solve(E @ v)
+        u = fac.solve(E @ v)
+        return F @ v - E.T @ u, u
 
     x = np.zeros_like(ra)
     r = ra.copy()
@@ -277,18 +285,19 @@ def solve_bordered_pcg(fac, E: F64, F: F64, rhs: F64, ba: F64, prec, tol: float 
         if steps == PCG_MAX_STEPS:
             return None, None, steps
         steps += 1
-        w = Fs(d)
+        w, u = Fs(d)
         dw = float(d @ w)
         if not dw > 0:
             return None, None, steps
         alpha = rho / dw
         x += alpha * d
+        SEx += alpha * u
         r -= alpha * w
         y = scipy.linalg.cho_solve(prec, r, check_finite=False)
         rho_new = float(r @ y)
         d = y + (rho_new / rho) * d
         rho = rho_new
-    dc = z0 - fac.solve(E @ x)
+    dc = z0 - SEx
     return dc, x, steps
 
 

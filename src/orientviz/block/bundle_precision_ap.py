@@ -149,15 +149,8 @@ def ray_group_pairs(prob) -> RayGroupPairs:
     pg = np.repeat(first[prob.ocol[vo]], c) + (np.arange(ray.size) - np.repeat(starts, c))
     own_mask = A.pg_grp[pg] == prob.grp[prob.oi[ray]]
     own = pg[own_mask]  # exactly one per ray: its own group is one of its point's
-    c1 = count[A.pg_pt]
-    s1 = np.cumsum(c1) - c1
-    f1 = np.repeat(np.arange(npg), c1)
-    f2 = np.repeat(first[A.pg_pt], c1) + (np.arange(f1.size) - np.repeat(s1, c1))
-    fkey = A.pg_grp[f1] * prob.G + A.pg_grp[f2]
-    o = np.argsort(fkey, kind="stable")
-    f1, f2, fkey = f1[o], f2[o], fkey[o]
-    f_groups, f_first = np.unique(fkey, return_index=True)
-    f_bounds = np.r_[f_first, fkey.size]
+    # pairs of (point, group) pairs of one point, by their groups: as for F's correction
+    f1, f2, f_groups, f_bounds = A.f_1, A.f_2, A.f_key, A.f_bounds
 
     def summation(rows, n_rows):
         return sp.csr_matrix(
