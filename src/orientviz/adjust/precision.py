@@ -112,6 +112,7 @@ class ReducedInverse:
         n = st.n_reduced
         r6 = np.arange(6)
         self._Z = self._fac = None
+        self._m = st.n_cam
         if n <= DENSE_INVERSE_LIMIT or st.solver != "banded":
             if n > DENSE_INVERSE_LIMIT:
                 st = ReducedStructure(st.obs_cam, st.obs_pt, st.n_cam, st.n_pt, solver="banded")
@@ -131,15 +132,26 @@ class ReducedInverse:
         lo, hi = np.minimum(rows, cols), np.maximum(rows, cols)
         self.blocks = Zb[lo, hi - lo]
 
-    def border(self, E: F64) -> tuple[F64, F64]:
-        """Y = S⁻¹ E (6m, q) and Eᵀ S⁻¹ E (q, q) for a border E (6m, q)."""
+    def border(self, E) -> tuple[F64, F64, NDArray[np.int64]]:
+        """S⁻¹E and Eᵀ S⁻¹ E for a border E (6m, q): ``(Y3, EtY, row)``.
+
+        ``Y3`` (m, 6, q) holds the 6 rows of image i at ``Y3[row[i]]`` (the banded
+        factor's image order: no reordering pass over the (6m, q) array). ``E`` is an
+        array or a :class:`~orientviz.block.bundle_ap.BorderE`.
+        """
+        m = self._m
         if self._Z is not None:
+            from ..block.bundle_ap import dense
+
+            E = dense(E)
             Y = self._Z @ E
             EtY = E.T @ Y
-            return Y, 0.5 * (EtY + EtY.T)
+            return Y.reshape(m, 6, -1), 0.5 * (EtY + EtY.T), np.arange(m)
         from ..block.bundle_precision_ap import banded_border
 
-        return banded_border(self._fac.data, self._fac.structure.scalar_perm, E)
+        st = self._fac.structure
+        Yp, EtY = banded_border(self._fac.data, st.scalar_perm, E, st.pos_img)
+        return Yp.reshape(m, 6, -1), EtY, st.pos_img
 
 
 def reduced_inverse_blocks(st: ReducedStructure, blocks: F64) -> F64:
@@ -175,7 +187,8 @@ def bundle_precision(res, prob, st, rw, Je, Jp) -> None:
     if q:
         from ..block.bundle_precision_ap import border_inverse
 
-        Faa, Qca3, dQ = border_inverse(inverse, ne["E"], ne["F"], S)
+        E = ne["E_border"] if "E_border" in ne else ne["E"]
+        Faa, Qca3, dQ = border_inverse(inverse, E, ne["F"], S)
         Zblk = Zblk + dQ
     Qcc_diag = Zblk[S.diag_block]
     # point cofactors: Vinv + Σ_ab T_aᵀ Q(i_a, i_b) T_b

@@ -179,13 +179,12 @@ class APStructure:
         # is then a CSC matrix, whose product scatters each ray into its pair
         var = self.own_pg < npg
         nvar = int(var.sum())
-        cols = self.own_pg[var][:, None, None] * k + np.arange(k)
+        it = np.int32 if max(2 * nvar * k, npg * k) < 2**31 else np.int64
+        cols = self.own_pg[var].astype(it)[:, None, None] * it(k) + np.arange(k, dtype=it)
+        indptr = np.zeros(2 * n + 1, it)
+        np.cumsum(np.repeat(np.where(var, k, 0).astype(it), 2), out=indptr[1:])
         Mt = sp.csr_matrix(
-            (
-                Aw[var].reshape(-1),
-                np.broadcast_to(cols, (nvar, 2, k)).reshape(-1),
-                np.r_[0, np.cumsum(np.repeat(np.where(var, k, 0), 2))],
-            ),
+            (Aw[var].reshape(-1), np.broadcast_to(cols, (nvar, 2, k)).reshape(-1), indptr),
             shape=(2 * n, npg * k),
         )
         self.H_design = Mt.T

@@ -60,16 +60,20 @@ def _skewed_block(L: F64, r0: int, r1: int, c0: int) -> F64:
     """Dense rows r0:r1, columns c0:r1 of a lower band matrix in LAPACK band storage.
 
     Element (i, j) of the block is band entry d = (r0 + i) − (c0 + j) of column c0 + j;
-    a skewed strided view of a zero-padded copy of the band columns reads them all at
-    once, entries outside the band (d < 0 or d > kd) landing in the padding.
+    a skewed strided view of a copy of the band columns, with zero rows for the
+    diagonals d outside the band (d < 0 or d > kd), reads them all at once.
     """
     kd = L.shape[0] - 1
     w, h = r1 - c0, r1 - r0
-    P = np.zeros((2 * w + kd + 1 + h, w), dtype=L.dtype)
-    P[w : w + kd + 1] = L[:, c0:r1]
-    base = (w + r0 - c0) * w
+    dmin, dmax = r0 - c0 - (w - 1), r0 - c0 + h - 1  # diagonals the block touches
+    P = np.empty((dmax - dmin + 1, w), dtype=L.dtype)  # row d − dmin holds diagonal d
+    lo, hi = max(dmin, 0), min(dmax, kd)
+    P[: lo - dmin] = 0.0
+    P[lo - dmin : hi - dmin + 1] = L[lo : hi + 1, c0:r1]
+    P[hi - dmin + 1 :] = 0.0
+    # (i, j) → row d − dmin = w − 1 + i − j, column j
     view = as_strided(
-        P.reshape(-1)[base:], shape=(h, w), strides=(w * P.itemsize, -(w - 1) * P.itemsize)
+        P.reshape(-1)[(w - 1) * w :], shape=(h, w), strides=(w * P.itemsize, -(w - 1) * P.itemsize)
     )
     return view.copy()
 

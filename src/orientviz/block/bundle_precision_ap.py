@@ -46,7 +46,7 @@ def border_inverse(inverse, E: F64, F: F64, st) -> tuple[F64, F64, F64]:
     ----------
     inverse : orientviz.adjust.precision.ReducedInverse
         The inverse of S (dense or its banded Cholesky factor).
-    E : ndarray, shape (6m, q)
+    E : ndarray, shape (6m, q), or orientviz.block.bundle_ap.BorderE
         Border (points eliminated).
     F : ndarray, shape (q, q)
         Parameter block (points eliminated, pseudo-observations included).
@@ -60,76 +60,81 @@ def border_inverse(inverse, E: F64, F: F64, st) -> tuple[F64, F64, F64]:
     dQcc : ndarray, shape (n_blocks, 6, 6)
         (Y Q_aa Yᵀ) at the blocks (block_i, block_k).
     """
-    Y, EtY = inverse.border(E)
+    Y3, EtY, row = inverse.border(E)
     Fs = F - EtY
     c = scipy.linalg.cho_factor(Fs, lower=True, check_finite=False)
     Qaa = scipy.linalg.cho_solve(c, np.eye(F.shape[0]), check_finite=False)
     Qaa = 0.5 * (Qaa + Qaa.T)
     m, q = st.n_cam, F.shape[0]
-    Qca = -(Y @ Qaa)
-    Y3, Qca3 = Y.reshape(m, 6, q), Qca.reshape(m, 6, q)
+    Qca3 = -(Y3.reshape(-1, q) @ Qaa).reshape(m, 6, q)[row]  # in image order
     dQ = np.empty((st.n_blocks, 6, 6))
     seg = np.searchsorted(st.block_i, np.arange(m + 1))
     for i in range(m):
         a, b = seg[i], seg[i + 1]
         if b > a:  # Y_i Q_aa Y_kᵀ = −Q_ca,i Y_kᵀ for all blocks (i, k) in one product
-            P = Qca3[i] @ Y3[st.block_k[a:b]].reshape(-1, q).T  # (6, 6·nk)
+            P = Qca3[i] @ Y3[row[st.block_k[a:b]]].reshape(-1, q).T  # (6, 6·nk)
             dQ[a:b] = -P.reshape(6, b - a, 6).transpose(1, 0, 2)
     return Qaa, Qca3, dQ
 
 
-def banded_border(L: F64, perm: I64, E: F64) -> tuple[F64, F64]:
-    """Y = S⁻¹ E and Eᵀ S⁻¹ E from the banded Cholesky factor L of S (rows permuted).
+def banded_border(L: F64, perm: I64, E, pos: I64) -> tuple[F64, F64]:
+    """S⁻¹ E and Eᵀ S⁻¹ E from the banded Cholesky factor L of S (rows permuted).
 
     Parameters
     ----------
     L : ndarray, shape (kd + 1, n)
         Lower band factor of S[perm][:, perm].
     perm : ndarray of int, shape (n,)
-        Scalar permutation of the factor.
-    E : ndarray, shape (n, q)
+        Scalar permutation of the factor (6 rows per image).
+    E : ndarray, shape (n, q), or orientviz.block.bundle_ap.BorderE
+    pos : ndarray of int, shape (m,)
+        Position of each image in the factor's order (``perm`` by images).
 
     Returns
     -------
-    Y : ndarray, shape (n, q)
+    Yp : ndarray, shape (n, q)
+        S⁻¹ E in the factor's row order: ``Yp[k] = (S⁻¹E)[perm[k]]``.
     EtY : ndarray, shape (q, q)
         Eᵀ S⁻¹ E = ZᵀZ with Z = L⁻¹ E (symmetric by construction).
     """
-    Z = band_forward_solve(L, E[perm])
+    from .bundle_ap import BorderE
+
+    Ep = E.permuted(pos, np.float64) if isinstance(E, BorderE) else E[perm]
+    Z = band_forward_solve(L, Ep)
+    del Ep
     C = scipy.linalg.blas.dsyrk(1.0, Z.T)  # upper triangle of ZᵀZ
     EtY = np.triu(C) + np.triu(C, 1).T
-    Yp = band_backward_solve(L, Z)
-    Y = np.empty_like(Yp)
-    Y[perm] = Yp
-    return Y, EtY
+    return band_backward_solve(L, Z), EtY
 
 
 @dataclass
 class RayGroupPairs:
-    """Index pairs of the sparse parameter terms (constant for a problem).
+    """Index maps of the sparse parameter terms (constant for a problem).
 
-    ``ray``/``pg``: every (ray of a point unknown, (point, group) pair of that point),
-    sorted by ray in ``pt_obs`` order; ``sum_ray``/``sum_pg``: sparse sums of per-pair
-    rows by ray (in ``pt_obs`` order) and by ``pg``; ``own``: the (point, group) pair of
-    each ray's own group (per ray of ``pt_obs``); ``f1``/``f2``: all ordered pairs of
-    (point, group) pairs of the same point, sorted by the groups (g1, g2) of the two,
-    ``f_bounds`` the runs of one (g1, g2) with ``f_groups`` their groups, ``sum_f`` the
-    sparse sum by ``f1``; ``by_group``: all used rays ordered by group with
-    ``group_starts``.
+    The rays of an image in their own group are handled in the per-image padded layout
+    of :class:`~orientviz.block.bundle_ap.APStructure` (``pad``, (m, L)): ``slot`` is
+    each ray's place in it (i·L + column), ``sum_own`` sums the padded slots by the own
+    (point, group) pair of their ray. The rays whose point also lies in *other* groups
+    (``APStructure.e_obs``, ``e_pg``) are summed by ``sum_e_ray`` (into all n rays) and
+    ``sum_e_pg`` (into the pairs); ``sum_f`` sums the (point, group) pairs of one point
+    (``APStructure.f_1``, ``f_2``) by ``f_1``; ``by_group``/``group_starts``: the rays
+    ordered by group.
     """
 
-    ray: I64
-    pg: I64
-    sum_ray: sp.csr_matrix
-    sum_pg: sp.csr_matrix
-    own: I64
-    f1: I64
-    f2: I64
-    f_bounds: I64
-    f_groups: I64
+    slot: I64
+    sum_own: sp.csr_matrix
+    sum_e_ray: sp.csr_matrix
+    sum_e_pg: sp.csr_matrix
     sum_f: sp.csr_matrix
     by_group: I64
     group_starts: I64
+
+
+def _summation(rows: I64, n_rows: int) -> sp.csr_matrix:
+    """Sparse 0/1 matrix that adds the entries with equal ``rows`` value."""
+    return sp.csr_matrix(
+        (np.ones(rows.size), (rows, np.arange(rows.size))), shape=(n_rows, rows.size)
+    )
 
 
 def ray_group_pairs(prob) -> RayGroupPairs:
@@ -137,34 +142,29 @@ def ray_group_pairs(prob) -> RayGroupPairs:
     cached = getattr(prob, "_ap_precision_pairs", None)
     if cached is not None:
         return cached
-    A, S = prob.ap_struct, prob.struct
-    n_pt = prob.var_pts.size
-    npg = A.pg_pt.size
-    first = np.searchsorted(A.pg_pt, np.arange(n_pt))
-    count = np.diff(np.r_[first, npg])
-    vo = S.pt_obs
-    c = count[prob.ocol[vo]]
-    starts = np.cumsum(c) - c
-    ray = np.repeat(vo, c)
-    pg = np.repeat(first[prob.ocol[vo]], c) + (np.arange(ray.size) - np.repeat(starts, c))
-    own_mask = A.pg_grp[pg] == prob.grp[prob.oi[ray]]
-    own = pg[own_mask]  # exactly one per ray: its own group is one of its point's
-    # pairs of (point, group) pairs of one point, by their groups: as for F's correction
-    f1, f2, f_groups, f_bounds = A.f_1, A.f_2, A.f_key, A.f_bounds
-
-    def summation(rows, n_rows):
-        return sp.csr_matrix(
-            (np.ones(rows.size), (rows, np.arange(rows.size))), shape=(n_rows, rows.size)
-        )
-
-    sum_ray = summation(np.repeat(np.arange(vo.size), c), vo.size)
-    sum_pg = summation(pg, npg)
-    sum_f = summation(f1, npg)
+    A = prob.ap_struct
+    n, npg = prob.oi.size, A.pg_pt.size
+    pad = A.pad.reshape(-1)
+    slot = np.zeros(n + 1, np.int64)
+    slot[pad] = np.arange(pad.size)  # the padding entries (n) land in slot[n], unused
+    real = pad < n
+    own_slot = np.full(pad.size, npg, np.int64)
+    own_slot[real] = A.own_pg[pad[real]]
+    ok = own_slot < npg  # slots of rays of point unknowns
+    sum_own = sp.csr_matrix(
+        (np.ones(int(ok.sum())), (own_slot[ok], np.flatnonzero(ok))), shape=(npg, pad.size)
+    )
     go = prob.grp[prob.oi]
     by_group = np.argsort(go, kind="stable")
     group_starts = np.searchsorted(go[by_group], np.arange(prob.G + 1))
     out = RayGroupPairs(
-        ray, pg, sum_ray, sum_pg, own, f1, f2, f_bounds, f_groups, sum_f, by_group, group_starts
+        slot[:n],
+        sum_own,
+        _summation(A.e_obs, n),
+        _summation(A.e_pg, npg),
+        _summation(A.f_1, npg),
+        by_group,
+        group_starts,
     )
     prob._ap_precision_pairs = out
     return out
@@ -198,23 +198,37 @@ def point_terms(prob, ne, Qaa: F64, Qca3: F64, Qcp: F64, Jew: F64, Jpw: F64):
     A, S = prob.ap_struct, prob.struct
     R = ray_group_pairs(prob)
     G, k, m = prob.G, prob.k, prob.m
+    n, L = prob.oi.size, A.pad.shape[1]
     Vinv, T = ne["Vinv"], ne["T"]
     HV = ne["H"] @ Vinv[A.pg_pt]  # (npg, k, 3): H V⁻¹, the point's coupling with group g
     Qca4 = Qca3.reshape(m, 6, G, k)
+    Qca_own = Qca4[np.arange(m), :, prob.grp, :]  # (m, 6, k): each image's own group
     oi = prob.oi
-    # Q_ca restricted to (ray, group of its point): (pairs, 6, k)
-    Qg = Qca4[oi[R.ray], :, A.pg_grp[R.pg], :]
-    # Q_cp(i_a, j) −= Σ_e Q_ca(i_a, g_e) HV_e
-    t = Qg @ HV[R.pg]
-    Qcp[S.pt_obs] -= (R.sum_ray @ t.reshape(t.shape[0], -1)).reshape(-1, 6, 3)
-    # Q_ap,e = −(Σ_b Q_ca(i_b, g_e)ᵀ T_b + Σ_e' Q_aa(g_e, g_e') HV_e')
-    t = Qg.transpose(0, 2, 1) @ T[R.ray]
-    Qap = R.sum_pg @ t.reshape(t.shape[0], -1)
+    # own group, per image in the padded layout (Q_ca,own of the image broadcast over
+    # its rays; zero rows for padding and fixed points)
+    HVz = np.concatenate([HV, np.zeros((1, k, 3))])
+    own_ext = np.r_[A.own_pg, HV.shape[0]]
+    HVp = HVz[own_ext[A.pad]]  # (m, L, k, 3)
+    Tp = np.concatenate([T, np.zeros((1, 6, 3))])[A.pad]  # (m, L, 6, 3)
+    # Q_cp(i_a, j) −= Σ_e Q_ca(i_a, g_e) HV_e: own group ...
+    t = np.matmul(Qca_own[:, None], HVp).reshape(m * L, 6, 3)[R.slot]
+    # ... and the other groups of the ray's point
+    Qg = Qca4[oi[A.e_obs], :, A.pg_grp[A.e_pg], :]  # (pairs, 6, k)
+    if A.e_obs.size:
+        t += (R.sum_e_ray @ (Qg @ HV[A.e_pg]).reshape(A.e_obs.size, -1)).reshape(n, 6, 3)
+    vo = S.pt_obs
+    Qcp[vo] -= t[vo]
+    # Q_ap,e = −(Σ_b Q_ca(i_b, g_e)ᵀ T_b + Σ_e' Q_aa(g_e, g_e') HV_e'): own group ...
+    t = np.matmul(Qca_own.transpose(0, 2, 1)[:, None], Tp).reshape(m * L, k * 3)
+    Qap = R.sum_own @ t
+    # ... and the pairs of other groups
+    if A.e_obs.size:
+        Qap += R.sum_e_pg @ (Qg.transpose(0, 2, 1) @ T[A.e_obs]).reshape(A.e_obs.size, -1)
     Qap = Qap.reshape(-1, k, 3)
     # the second sum: one product per pair of groups (g_e, g_e') over all its pairs
-    t = np.empty((R.f1.size, k, 3))
-    HV2 = HV[R.f2]
-    for key, a, b in zip(R.f_groups, R.f_bounds[:-1], R.f_bounds[1:]):
+    t = np.empty((A.f_1.size, k, 3))
+    HV2 = HV[A.f_2]
+    for key, a, b in zip(A.f_key, A.f_bounds[:-1], A.f_bounds[1:]):
         g1, g2 = divmod(int(key), G)
         Fb = Qaa[g1 * k : (g1 + 1) * k, g2 * k : (g2 + 1) * k]
         t[a:b] = (
@@ -229,17 +243,15 @@ def point_terms(prob, ne, Qaa: F64, Qca3: F64, Qcp: F64, Jew: F64, Jpw: F64):
     # rays: A Q_aa Aᵀ + 2 sym(J_e Q_ca Aᵀ) (+ 2 sym(J_p Q_pa Aᵀ) for point unknowns),
     # all in the ray's own group's k columns
     Aw = prob.Aw
-    grp = prob.grp
     AQ = np.empty_like(Aw)
     for g in range(G):
         idx = R.by_group[R.group_starts[g] : R.group_starts[g + 1]]
         if idx.size:
             Fg = Qaa[g * k : (g + 1) * k, g * k : (g + 1) * k]
             AQ[idx] = (Aw[idx].reshape(-1, k) @ Fg).reshape(-1, 2, k)
-    Qca_own = Qca4[np.arange(m), :, grp, :]  # (m, 6, k): each image's own group
-    JQ = Jew @ Qca_own[oi]
-    vo = S.pt_obs
-    JQ[vo] += Jpw[vo] @ Qap[R.own].transpose(0, 2, 1)
+    Jpad = Jew[A.pad0].reshape(m, 2 * L, 6)  # J_e Q_ca,own per image, then per ray
+    JQ = np.matmul(Jpad, Qca_own).reshape(m * L, 2, k)[R.slot]
+    JQ[vo] += Jpw[vo] @ Qap[A.own_pg[vo]].transpose(0, 2, 1)
     AwT = Aw.transpose(0, 2, 1)
     C = JQ @ AwT
     Hray = AQ @ AwT + C + C.transpose(0, 2, 1)
