@@ -211,7 +211,7 @@ def bundle_precision(res, prob, st, rw, Je, Jp) -> None:
         Qcp[S.pt_obs[s0:s1]] = -np.add.reduceat(QT, S.all_pairs_starts[s0:s1] - seg[s0], axis=0)
         s0 = s1
     Vinv = ne["Vinv"]
-    vo = S.pt_obs
+    vo = prob.vo  # the rays of point unknowns in point order (a slice when they come first)
     # Q_pp,j = V_j⁻¹ − Σ_b T_bᵀ Q_cp(i_b, j) − h_jᵀ Q_ap,j
     sw = prob.sw
     Jew = Je * sw[:, :, None]

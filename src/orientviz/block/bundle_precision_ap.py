@@ -216,7 +216,7 @@ def point_terms(prob, ne, Qaa: F64, Qca3: F64, Qcp: F64, Jew: F64, Jpw: F64):
     Qg = Qca4[oi[A.e_obs], :, A.pg_grp[A.e_pg], :]  # (pairs, 6, k)
     if A.e_obs.size:
         t += (R.sum_e_ray @ (Qg @ HV[A.e_pg]).reshape(A.e_obs.size, -1)).reshape(n, 6, 3)
-    vo = S.pt_obs
+    vo = prob.vo  # rays of point unknowns in point order (a slice when they come first)
     Qcp[vo] -= t[vo]
     # Q_ap,e = −(Σ_b Q_ca(i_b, g_e)ᵀ T_b + Σ_e' Q_aa(g_e, g_e') HV_e'): own group ...
     t = np.matmul(Qca_own.transpose(0, 2, 1)[:, None], Tp).reshape(m * L, k * 3)
@@ -254,5 +254,6 @@ def point_terms(prob, ne, Qaa: F64, Qca3: F64, Qcp: F64, Jew: F64, Jpw: F64):
     JQ[vo] += Jpw[vo] @ Qap[A.own_pg[vo]].transpose(0, 2, 1)
     AwT = Aw.transpose(0, 2, 1)
     C = JQ @ AwT
-    Hray = AQ @ AwT + C + C.transpose(0, 2, 1)
+    AQ += JQ  # (A Q_aa + J Q) Aᵀ + (J Q Aᵀ)ᵀ
+    Hray = AQ @ AwT + C.transpose(0, 2, 1)
     return dQpp, Qap, Hray
