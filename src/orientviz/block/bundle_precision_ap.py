@@ -195,7 +195,7 @@ def point_terms(prob, ne, Qaa: F64, Qca3: F64, Qcp: F64, Jew: F64, Jpw: F64):
     Hray : ndarray, shape (n, 2, 2)
         The parameter terms of J Q Jᵀ per ray (to add).
     """
-    A, S = prob.ap_struct, prob.struct
+    A = prob.ap_struct
     R = ray_group_pairs(prob)
     G, k, m = prob.G, prob.k, prob.m
     n, L = prob.oi.size, A.pad.shape[1]
