@@ -226,17 +226,16 @@ def point_terms(prob, ne, Qaa: F64, Qca3: F64, Qcp: F64, Jew: F64, Jpw: F64):
         Qap += R.sum_e_pg @ (Qg.transpose(0, 2, 1) @ T[A.e_obs]).reshape(A.e_obs.size, -1)
     Qap = Qap.reshape(-1, k, 3)
     # the second sum: one product per pair of groups (g_e, g_e') over all its pairs
-    t = np.empty((A.f_1.size, k, 3))
-    HV2 = HV[A.f_2]
+    # (transposed: (HV_e'ᵀ Q_aa(g_e', g_e)) (3 × k) per pair, all pairs of (g1, g2) in one
+    # product (Q_aa symmetric: Q_aa(g_e, g_e')ᵀ = Q_aa(g_e', g_e)))
+    HVT2 = np.ascontiguousarray(HV.transpose(0, 2, 1))[A.f_2]  # (pairs, 3, k)
+    t = np.empty_like(HVT2)
     for key, a, b in zip(A.f_key, A.f_bounds[:-1], A.f_bounds[1:]):
         g1, g2 = divmod(int(key), G)
-        Fb = Qaa[g1 * k : (g1 + 1) * k, g2 * k : (g2 + 1) * k]
-        t[a:b] = (
-            (Fb @ HV2[a:b].transpose(1, 0, 2).reshape(k, -1))
-            .reshape(k, b - a, 3)
-            .transpose(1, 0, 2)
-        )
-    Qap = -(Qap + (R.sum_f @ t.reshape(t.shape[0], -1)).reshape(-1, k, 3))
+        Fb = Qaa[g2 * k : (g2 + 1) * k, g1 * k : (g1 + 1) * k]
+        t[a:b] = (HVT2[a:b].reshape(-1, k) @ Fb).reshape(-1, 3, k)
+    tsum = (R.sum_f @ t.reshape(t.shape[0], -1)).reshape(-1, 3, k)
+    Qap = -(Qap + tsum.transpose(0, 2, 1))
     # Q_pp −= Σ_e HV_eᵀ Q_ap,e, per point
     t = HV.transpose(0, 2, 1) @ Qap
     dQpp = (A.sum_pt @ t.reshape(t.shape[0], -1)).reshape(-1, 3, 3)
