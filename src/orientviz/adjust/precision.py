@@ -24,7 +24,8 @@ with all q columns (BLAS level 3, the same factor as the selected inverse), the
 correction Y F̃⁻¹ Yᵀ only at the needed 6×6 blocks, and the point and ray terms per
 (point, group) pair with k columns instead of q (a point's rays lie in one or two
 groups). On the bench's 2 100-image block with 12 parameters per strip this took the
-precision from 20.7 s to about 2 s (``benchmarks/bench_selfcal.py``).
+precision from about 19-30 s (load dependent) to about 1.9 s, against 0.8 s without
+parameters (``python benchmarks/bench_selfcal.py --precision``).
 
 Units: cofactors in the parameters' units squared (m², rad², m·rad); multiply by σ̂0²
 for covariances.
