@@ -12,6 +12,13 @@ hits both; ``ratio`` = best self-cal / best plain (also the ratio of the medians
 threads are pinned to 1 (``--threads``), as in ``bench_bundle.py``. The block comes from
 the shared bench (``make_block.py``, see ``bench_bundle.py``); its image errors are random
 only, so the parameters stay near 0 — the cost of the algebra is what is measured.
+
+``--precision`` adds a second table: the same two runs with ``precision=True`` (cofactor
+blocks, redundancy numbers; :mod:`orientviz.adjust.precision`), timed in the same
+repetitions. ``prec_ratio`` = self-cal with precision / plain with precision (best);
+``prec_extra`` = what the precision adds to the self-calibrating bundle, in units of the
+plain bundle without precision: (best self-cal with − best self-cal without) / best plain
+without. Issue 5's target for it is about 1.
 """
 
 from __future__ import annotations
@@ -34,6 +41,9 @@ def main(argv=None) -> int:
     ap.add_argument("--reps", type=int, default=3)
     ap.add_argument("--set", default="ebner12", help="additional-parameter set")
     ap.add_argument("--threads", type=int, default=1, help="BLAS threads")
+    ap.add_argument(
+        "--precision", action="store_true", help="also time precision=True (plain and self-cal)"
+    )
     a = ap.parse_args(argv)
     for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ[k] = str(a.threads)  # before numpy is imported
@@ -52,19 +62,25 @@ def main(argv=None) -> int:
     )
     print(head + "\n" + "-" * len(head))
     aps = ap_set(a.set)
+    rows_prec = []
     for size in a.sizes.split(","):
         block, _ = load_bench_block(ensure_data(size))
-        grp = block.images.strip
-        tp, ts, cp, cs = [], [], [], []
-        for _ in range(a.reps):
-            t0, c0 = time.perf_counter(), time.process_time()
-            rp = bundle_adjust(block, precision=False)
-            tp.append(time.perf_counter() - t0)
-            cp.append(time.process_time() - c0)
-            t0, c0 = time.perf_counter(), time.process_time()
-            rs = bundle_adjust(block, precision=False, additional=aps, ap_group=grp, ap_sigma=10.0)
-            ts.append(time.perf_counter() - t0)
-            cs.append(time.process_time() - c0)
+        kw_sc = dict(additional=aps, ap_group=block.images.strip, ap_sigma=10.0)
+        runs = [("plain", False, {}), ("sc", False, kw_sc)]
+        if a.precision:
+            runs += [("plain", True, {}), ("sc", True, kw_sc)]
+        wall = {(name, p): [] for name, p, _ in runs}
+        cpu = {(name, p): [] for name, p, _ in runs}
+        res = {}
+        for _ in range(a.reps):  # alternating, so that a change of load hits all runs
+            for name, prec, kw in runs:
+                t0, c0 = time.perf_counter(), time.process_time()
+                res[name, prec] = bundle_adjust(block, precision=prec, **kw)
+                wall[name, prec].append(time.perf_counter() - t0)
+                cpu[name, prec].append(time.process_time() - c0)
+        tp, ts = wall["plain", False], wall["sc", False]
+        cp, cs = cpu["plain", False], cpu["sc", False]
+        rp, rs = res["plain", False], res["sc", False]
         q = rs.blocks["additional"].stop - rs.blocks["additional"].start
         print(
             f"{size:7s} {block.n_images:6d} {q:4d} {min(tp):8.3f} {min(ts):9.3f} "
@@ -73,6 +89,21 @@ def main(argv=None) -> int:
             f"{rp.iterations:8d} {rs.iterations:5d} {rs.sigma0:9.4f}",
             flush=True,
         )
+        if a.precision:
+            pp, ps = wall["plain", True], wall["sc", True]
+            extra = [(b - c) / min(tp) for b, c in zip(ps, ts)]  # per repetition
+            rows_prec.append(
+                f"{size:7s} {min(pp):8.3f} {min(ps):9.3f} {min(ps) / min(pp):10.2f} "
+                f"{statistics.median(ps) / statistics.median(pp):14.2f} "
+                f"{(min(ps) - min(ts)) / min(tp):10.2f} {statistics.median(extra):15.2f}"
+            )
+    if rows_prec:
+        head = (
+            f"{'size':7s} {'plain_ps':>8s} {'selfcal_ps':>9s} {'prec_ratio':>10s} "
+            f"{'prec_ratio_med':>14s} {'prec_extra':>10s} {'prec_extra_med':>15s}"
+        )
+        print("\nwith precision=True (same repetitions)\n" + head + "\n" + "-" * len(head))
+        print("\n".join(rows_prec))
     print(f"# load average now {os.getloadavg()}")
     return 0
 

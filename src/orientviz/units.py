@@ -16,7 +16,7 @@ The ρ constants are the number of units per radian, as in the classical formula
 from __future__ import annotations
 
 import math
-from typing import Literal, Union
+from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -38,7 +38,7 @@ RHO_CC: float = 2_000_000.0 / math.pi
 #: Units per radian, by unit name.
 RHO: dict[str, float] = {"rad": 1.0, "deg": RHO_DEG, "gon": RHO_GON, "c": RHO_C, "cc": RHO_CC}
 
-Number = Union[float, NDArray[np.floating]]
+Number = float | NDArray[np.floating]
 
 
 def check_angle_unit(unit: str) -> str:

@@ -5,7 +5,14 @@ import pytest
 
 from orientviz.block import systematic as se
 from orientviz.block.additional import Ebner12
-from orientviz.block.deformation import animate, frames, image_field, model_field, model_fields
+from orientviz.block.deformation import (
+    animate,
+    frames,
+    image_field,
+    model_field,
+    model_fields,
+    split_field,
+)
 from orientviz.errors import InputError
 
 
@@ -81,3 +88,48 @@ def test_per_image_errors_give_per_model_fields():
     f = model_fields(err, [[0, 1], [2, 3]], n=4)
     np.testing.assert_allclose(f[0].d, model_field(se.affinity(8.0, 0.0), n=4).d, atol=1e-9)
     np.testing.assert_allclose(f[1].d, model_field(se.model_twist(8.0), n=4).d, atol=1e-9)
+
+
+def test_split_of_a_field_inside_the_span_recovers_its_parameters():
+    p = np.array([3.0, -2.0, 0.0, 1.5, 0.0, 4.0, 0.0, -6.0, 0.0, 0.0, 2.5, 0.0])  # µm
+    eb = Ebner12()
+    inside = se.ImageError("ebner field", lambda xy: eb.correction(xy, p))
+    s = split_field(inside, eb, n=9)
+    np.testing.assert_allclose(s.params, p, atol=1e-9)
+    np.testing.assert_allclose(s.orientation, 0.0, atol=1e-12)
+    np.testing.assert_allclose(s.share, 1.0, atol=1e-12)
+    assert s.rms_um[2] < 1e-9 * s.rms_um[0]
+    # a pure scale + rotation of the image is the orientation's, not the set's
+    eo = se.ImageError(
+        "scale", lambda xy: 1e-4 * np.column_stack([xy[:, 0] - xy[:, 1], xy[:, 1] + xy[:, 0]])
+    )
+    s2 = split_field(eo, eb, n=9)
+    np.testing.assert_allclose(s2.params, 0.0, atol=1e-9)
+    np.testing.assert_allclose(s2.share, 1.0, atol=1e-12)
+
+
+def test_split_of_the_film_trough_matches_a_polynomial_fit_per_coordinate():
+    tr = se.unflatness(8.0)
+    s = split_field(tr, Ebner12(), n=15)
+    g = image_field(tr, n=15)
+    # Ebner's 12 terms and the 6 orientation deformations span every Δx and Δy of degree
+    # ≤ 2 in x and in y; the trough's Δx depends on x alone, so its best fit is the
+    # quadratic polynomial in x through the grid values, and its Δy (y times a quadratic
+    # in x) is inside the span
+    x, dx = g.xy[:, 0], g.d[:, 0]
+    r = dx - np.polyval(np.polyfit(x, dx, 2), x)
+    assert s.share[0] == pytest.approx(1.0 - r @ r / (dx @ dx), rel=1e-9)
+    assert s.share[1] == pytest.approx(1.0, abs=1e-12)
+    assert 0.0 < s.share[0] < 0.5  # the cubic term: mostly outside the set
+    # the two parts add up to the field everywhere, also off the grid
+    xy = np.array([[13.0, -71.0], [-105.0, 98.0], [0.5, 3.0]])
+    img = np.zeros(3, np.int64)
+    np.testing.assert_allclose(s.described(xy, img) + s.remainder(xy, img), tr(xy, img), atol=1e-15)
+    # a perfect self-calibration leaves the model the remainder's deformation (the
+    # correction is evaluated at the observed coordinates: second order)
+    left = model_field(tr, correction=s.described, n=5)
+    np.testing.assert_allclose(
+        left.d, model_field(s.remainder, n=5).d, atol=1e-3 * np.abs(left.d).max()
+    )
+    with pytest.raises(InputError, match="n ≥ 3"):
+        split_field(tr, Ebner12(), n=2)

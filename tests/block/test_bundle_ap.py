@@ -10,6 +10,7 @@ from orientviz.adjust.normal import factor_reduced
 from orientviz.block.additional import ap_set
 from orientviz.block.bundle import BundleProblem, _State
 from orientviz.block.bundle_border import (
+    band_backward_solve,
     band_forward_solve,
     form_preconditioner,
     solve_bordered,
@@ -97,6 +98,25 @@ def test_band_forward_solve_equals_dense_triangular_solve():
     X32 = band_forward_solve(L.astype(np.float32), B)
     assert X32.dtype == np.float32
     np.testing.assert_allclose(X32, ref, rtol=1e-4, atol=1e-5 * np.abs(ref).max())
+
+
+@pytest.mark.parametrize(("n", "kd"), [(53, 7), (48, 7), (5, 4)])  # last block partial,
+def test_band_backward_solve_equals_dense_triangular_solve(n, kd):  # all full, one block
+    rng = np.random.default_rng(7)
+    S = np.zeros((n, n))
+    for d in range(kd + 1):
+        S[np.arange(d, n), np.arange(n - d)] = rng.normal(size=n - d)
+    S = S @ S.T + n * np.eye(n)
+    band = np.zeros((kd + 1, n))
+    for d in range(kd + 1):
+        band[d, : n - d] = np.diag(S, -d)
+    L = scipy.linalg.cholesky_banded(band, lower=True)
+    B = rng.normal(size=(n, 3))
+    ref = scipy.linalg.solve_triangular(np.linalg.cholesky(S), B, lower=True, trans="T")
+    np.testing.assert_allclose(band_backward_solve(L, B), ref, rtol=1e-10, atol=1e-12)
+    # forward then backward: S⁻¹ B
+    X = band_backward_solve(L, band_forward_solve(L, B))
+    np.testing.assert_allclose(X, np.linalg.solve(S, B), rtol=1e-10, atol=1e-12)
 
 
 def _problem(solver="banded"):

@@ -164,3 +164,65 @@ def test_precision_at_last_linearisation_is_that_of_the_solution():
     np.testing.assert_allclose(
         np.sqrt(np.einsum("nii->ni", got)), np.sqrt(np.einsum("nii->ni", ext)), rtol=1e-5
     )
+
+
+def _assert_cofactors_close(got, ref, rtol):
+    """Cofactor blocks (..., a, b) equal to ``rtol`` in units of σ_i σ_j (scale-free).
+
+    Entries are compared relative to sqrt(Q_ii Q_jj) of the reference, i.e. as
+    correlation-scaled cofactors: an element of 1e-12 m·rad next to σ's of 1e-3 m and
+    1e-5 rad is judged on that scale, not on its own.
+    """
+    da = np.sqrt(np.einsum("...ii->...i", ref))
+    scale = da[..., :, None] * da[..., None, :]
+    err = np.abs(got - ref) / scale
+    assert np.max(err) <= rtol, f"max scaled difference {np.max(err):.3g} > {rtol:g}"
+
+
+def _cross_scale(Q, i, j):
+    """sqrt(Q_ii Q_jj) for the off-diagonal block of rows i, columns j."""
+    d = np.sqrt(np.diag(Q))
+    return d[i][:, None] * d[j][None, :]
+
+
+@pytest.mark.parametrize("path", ["dense", "banded"])
+def test_precision_with_strip_parameters_equals_dense_inverse(path, monkeypatch):
+    """Ebner's 12 parameters per strip (3 strips): the sparse-by-group parameter terms and,
+    with ``path="banded"``, the banded border solves against the full dense inverse."""
+    import orientviz.adjust.precision as precision
+    from orientviz.block.additional import ap_set
+
+    if path == "banded":  # the banded selected inverse and banded solves even when small
+        monkeypatch.setattr(precision, "DENSE_INVERSE_LIMIT", 0)
+    sim = simulate_block(3, 5, rng=21, extra=6, n_check=2)
+    block = sim.block
+    aps = ap_set("ebner12")
+    grp = block.images.strip
+    res = bundle_adjust(block, additional=aps, ap_group=grp, ap_sigma=10.0)
+    assert res.converged
+    Q, free, used, r_ref = dense_reference(res, block, None, aps, grp, 10.0)
+    m = block.n_images
+    ext = np.stack([Q[6 * i : 6 * i + 6, 6 * i : 6 * i + 6] for i in range(m)])
+    tol = 1e-9
+    _assert_cofactors_close(res.cofactor_blocks["exterior"], ext, tol)
+    o = 6 * m
+    pts = np.stack(
+        [Q[o + 3 * j : o + 3 * j + 3, o + 3 * j : o + 3 * j + 3] for j in range(free.size)]
+    )
+    _assert_cofactors_close(res.cofactor_blocks["points"][free], pts, tol)
+    q0 = 6 * m + 3 * free.size
+    _assert_cofactors_close(res.cofactor_blocks["additional"], Q[q0:, q0:], tol)
+    # image-pair blocks of Q_cc (used by the 2-D tests of check rays)
+    keys, blocks = res.extra["exterior_pairs"]
+    r6 = np.arange(6)
+    for key, blk in zip(keys, blocks):
+        i, j = divmod(int(key), m)
+        ref = Q[6 * i : 6 * i + 6, 6 * j : 6 * j + 6]
+        err = np.abs(blk - ref) / _cross_scale(Q, 6 * i + r6, 6 * j + r6)
+        assert err.max() <= tol, (i, j, err.max())
+    rn = res.redundancy_numbers[: 2 * block.n_observations].reshape(-1, 2)
+    np.testing.assert_allclose(rn[used].reshape(-1), r_ref, rtol=0, atol=tol)
+    # pseudo-observations of the parameters: r = 1 − p·Q_aa,ii
+    r_ap = res.redundancy_numbers[res.extra["obs_slices"]["additional"]]
+    np.testing.assert_allclose(r_ap, 1.0 - np.diag(Q[q0:, q0:]) / 10.0**2, rtol=0, atol=tol)
+    assert np.isclose(np.nansum(res.redundancy_numbers), res.redundancy, rtol=0, atol=1e-8)

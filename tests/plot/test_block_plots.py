@@ -12,6 +12,7 @@ from orientviz.block.accuracy import height_precision, planimetric_precision  # 
 from orientviz.block.simulate import simulate_block  # noqa: E402
 from orientviz.plot.block import (  # noqa: E402
     plot_block_layout,
+    plot_check_heights,
     plot_error_ellipses,
     plot_error_vectors,
     plot_height_law,
@@ -89,4 +90,39 @@ def test_widget_app_builds():
 
     box = block_app()
     assert len(box.children) == 2
+    plt.close("all")
+
+
+def test_check_heights_draw_each_result_at_the_true_x():
+    from orientviz.block.bundle import bundle_adjust
+    from orientviz.errors import InputError
+
+    s = simulate_block(2, 5, rng=4, n_check=8)
+    truth = s.truth.points.xyz
+    chk = np.flatnonzero(s.block.points.role == 2)
+    wave = truth.copy()
+    wave[:, 2] += 0.3 * np.sin(truth[:, 0] / 1000.0)  # m, a known height error along X
+    gap = wave.copy()
+    gap[chk[0]] = np.nan  # a check point without coordinates is left out
+    adj = bundle_adjust(s.block)
+    fig = plot_check_heights(s, {"wave": wave, "gap": gap, "bundle": adj})
+    ax = fig.axes[0]
+    lines = [ln for ln in ax.get_lines() if ln.get_marker() not in ("None", None, "")]
+    assert len(lines) == 3
+    np.testing.assert_allclose(lines[0].get_xdata(), truth[chk, 0] / 1000.0)  # km
+    np.testing.assert_allclose(lines[0].get_ydata(), 0.3 * np.sin(truth[chk, 0] / 1000.0))
+    np.testing.assert_allclose(lines[1].get_xdata(), truth[chk[1:], 0] / 1000.0)
+    d_bundle = adj.extra["points"][chk, 2] - truth[chk, 2]
+    np.testing.assert_allclose(lines[2].get_ydata(), d_bundle)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    mu = np.sqrt(np.mean((0.3 * np.sin(truth[chk, 0] / 1000.0)) ** 2))
+    assert labels[0] == f"wave (μz {mu:.2f} m)" and labels[2].startswith("bundle (μz ")
+    assert ax.get_xlabel() == "X along the strips [km]" and "[m]" in ax.get_ylabel()
+    x0, x1 = ax.get_xlim()
+    assert x0 <= truth[chk, 0].min() / 1000.0 and x1 >= truth[chk, 0].max() / 1000.0
+    assert x1 - x0 < 20.0  # km, not m
+    y0, y1 = ax.get_ylim()
+    assert y0 < -0.2 and y1 > 0.2
+    with pytest.raises(InputError, match="expected coordinates of all"):
+        plot_check_heights(s, {"short": truth[:-1]})
     plt.close("all")

@@ -122,3 +122,45 @@ def test_deformation_frame_of_image_fields():
     (pts,) = [c for c in ax.collections if not isinstance(c, Quiver)]
     np.testing.assert_allclose(pts.get_array(), np.hypot(a.d[:, 0], a.d[:, 1]) * 1e3)
     plt.close("all")
+
+
+def test_field_split_panels_share_one_exaggeration(tmp_path):
+    import matplotlib.pyplot as plt
+    from matplotlib.quiver import Quiver
+
+    from orientviz.block.additional import Ebner12
+    from orientviz.block.deformation import split_field
+    from orientviz.plot.deformation import plot_field_split
+
+    tr = se.unflatness(8.0)
+    s = split_field(tr, Ebner12(), n=9)
+    fig = plot_field_split(s)
+    axes = fig.axes
+    assert len(axes) == 3
+    quivers = [[c for c in ax.collections if isinstance(c, Quiver)][0] for ax in axes]
+    ex = 220.0 / 8.0 / np.hypot(s.grid.d[:, 0], s.grid.d[:, 1]).max()
+    part = s.described(s.grid.xy, np.zeros(81, np.int64))
+    for q, d in zip(quivers, (s.grid.d, part, s.grid.d - part)):
+        assert q.N == 81
+        np.testing.assert_allclose(q.U, ex * d[:, 0], rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(q.V, ex * d[:, 1], rtol=1e-12, atol=1e-12)
+    # described + remainder arrows add up to the field's
+    np.testing.assert_allclose(quivers[1].U + quivers[2].U, quivers[0].U, atol=1e-9)
+    for ax, q in zip(axes, quivers):
+        x0, x1 = ax.get_xlim()  # the image format in mm, one frame for all panels
+        y0, y1 = ax.get_ylim()
+        assert (x0, x1, y0, y1) == pytest.approx((*axes[0].get_xlim(), *axes[0].get_ylim()))
+        assert x0 <= -110.0 and x1 >= 110.0 and x1 - x0 < 300.0
+        # every arrow tip lies inside the axes
+        assert x0 <= (q.X + q.U).min() and (q.X + q.U).max() <= x1
+        assert y0 <= (q.Y + q.V).min() and (q.Y + q.V).max() <= y1
+        assert "[mm]" in ax.get_xlabel() and "[mm]" in ax.get_ylabel()
+    assert "described" in axes[1].get_title() and "remainder" in axes[2].get_title()
+    assert f"{s.rms_um[2]:.2f} µm" in axes[2].get_title()
+    assert f"{100 * s.share[0]:.0f} %" in axes[1].get_title()
+    fig.savefig(tmp_path / "split.png")
+    # a given exaggeration is used as it is
+    fig2 = plot_field_split(s, exaggeration=1000.0)
+    q = [c for c in fig2.axes[0].collections if isinstance(c, Quiver)][0]
+    np.testing.assert_allclose(q.U, 1000.0 * s.grid.d[:, 0], atol=1e-12)
+    plt.close("all")

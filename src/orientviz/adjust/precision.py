@@ -21,6 +21,15 @@ Z_IB = −L_II⁻ᵀ L_BIᵀ Z_BB and Z_II = L_II⁻ᵀ (L_II⁻¹ − L_BIᵀ Z
 factorisation (n·b²), so all numbers here are exact — no approximation. For small
 reduced systems (≤ 3 000 unknowns) the dense inverse is used instead.
 
+With self-calibration parameters the border's terms come from
+:mod:`orientviz.block.bundle_precision_ap`: Y = S⁻¹E by two banded triangular solves
+with all q columns (BLAS level 3, the same factor as the selected inverse), the
+correction Y F̃⁻¹ Yᵀ only at the needed 6×6 blocks, and the point and ray terms per
+(point, group) pair with k columns instead of q (a point's rays lie in one or two
+groups). On the bench's 2 100-image block with 12 parameters per strip this took the
+precision from about 19-30 s (load dependent) to about 1.9 s, against 0.8 s without
+parameters (``python benchmarks/bench_selfcal.py --precision``).
+
 Units: cofactors in the parameters' units squared (m², rad², m·rad); multiply by σ̂0²
 for covariances.
 """
@@ -113,32 +122,67 @@ def banded_selected_inverse(cb: F64, nb: int = TAKAHASHI_BLOCK) -> F64:
     return Zb
 
 
-def reduced_inverse_blocks(st: ReducedStructure, blocks: F64, fac=None) -> F64:
-    """The 6×6 blocks of Z = S⁻¹ at the structure's blocks (i ≤ k), shape (nb, 6, 6).
+class ReducedInverse:
+    """The inverse of the reduced system S where the precision needs it.
 
-    ``fac`` is an existing factor of S (from :func:`orientviz.adjust.normal.factor_reduced`
-    on the same blocks); the banded path then skips the factorisation.
+    ``blocks``: the 6×6 blocks of Z = S⁻¹ at the structure's blocks (i ≤ k), shape
+    (nb, 6, 6); :meth:`border` gives S⁻¹E for a border E (self-calibration) from the same
+    factorisation. ``fac``: an existing banded factor of S (from
+    :func:`orientviz.adjust.normal.factor_reduced` on the same blocks), then not
+    factored again.
     """
-    n = st.n_reduced
-    r6 = np.arange(6)
-    if n <= DENSE_INVERSE_LIMIT or st.solver != "banded":
-        if n > DENSE_INVERSE_LIMIT:
-            st = ReducedStructure(st.obs_cam, st.obs_pt, st.n_cam, st.n_pt, solver="banded")
-            return reduced_inverse_blocks(st, blocks)
-        S = dense_matrix(st, blocks)
-        c = scipy.linalg.cho_factor(S, lower=True)
-        Z = scipy.linalg.cho_solve(c, np.eye(n))
-        rows = 6 * st.block_i[:, None, None] + r6[None, :, None]
-        cols = 6 * st.block_k[:, None, None] + r6[None, None, :]
-        return Z[rows, cols]
-    if fac is None or fac.kind != "banded":
-        fac = factor_reduced(st, blocks)
-    Zb = banded_selected_inverse(fac.data)
-    p = st.pos_img
-    rows = 6 * p[st.block_i][:, None, None] + r6[None, :, None]
-    cols = 6 * p[st.block_k][:, None, None] + r6[None, None, :]
-    lo, hi = np.minimum(rows, cols), np.maximum(rows, cols)
-    return Zb[lo, hi - lo]
+
+    def __init__(self, st: ReducedStructure, blocks: F64, fac=None) -> None:
+        n = st.n_reduced
+        r6 = np.arange(6)
+        self._Z = self._fac = None
+        self._m = st.n_cam
+        if n <= DENSE_INVERSE_LIMIT or st.solver != "banded":
+            if n > DENSE_INVERSE_LIMIT:
+                st = ReducedStructure(st.obs_cam, st.obs_pt, st.n_cam, st.n_pt, solver="banded")
+            else:
+                S = dense_matrix(st, blocks)
+                c = scipy.linalg.cho_factor(S, lower=True)
+                Z = self._Z = scipy.linalg.cho_solve(c, np.eye(n))
+                rows = 6 * st.block_i[:, None, None] + r6[None, :, None]
+                cols = 6 * st.block_k[:, None, None] + r6[None, None, :]
+                self.blocks = Z[rows, cols]
+                return
+        if fac is None or fac.kind != "banded":
+            fac = factor_reduced(st, blocks)
+        self._fac = fac
+        Zb = banded_selected_inverse(fac.data)
+        p = st.pos_img
+        rows = 6 * p[st.block_i][:, None, None] + r6[None, :, None]
+        cols = 6 * p[st.block_k][:, None, None] + r6[None, None, :]
+        lo, hi = np.minimum(rows, cols), np.maximum(rows, cols)
+        self.blocks = Zb[lo, hi - lo]
+
+    def border(self, E) -> tuple[F64, F64, NDArray[np.int64]]:
+        """S⁻¹E and Eᵀ S⁻¹ E for a border E (6m, q): ``(Y3, EtY, row)``.
+
+        ``Y3`` (m, 6, q) holds the 6 rows of image i at ``Y3[row[i]]`` (the banded
+        factor's image order: no reordering pass over the (6m, q) array). ``E`` is an
+        array or a :class:`~orientviz.block.bundle_ap.BorderE`.
+        """
+        m = self._m
+        if self._Z is not None:
+            from ..block.bundle_ap import dense
+
+            E = dense(E)
+            Y = self._Z @ E
+            EtY = E.T @ Y
+            return Y.reshape(m, 6, -1), 0.5 * (EtY + EtY.T), np.arange(m)
+        from ..block.bundle_precision_ap import banded_border
+
+        st = self._fac.structure
+        Yp, EtY = banded_border(self._fac.data, st.scalar_perm, E, st.pos_img)
+        return Yp.reshape(m, 6, -1), EtY, st.pos_img
+
+
+def reduced_inverse_blocks(st: ReducedStructure, blocks: F64, fac=None) -> F64:
+    """The 6×6 blocks of Z = S⁻¹ at the structure's blocks (i ≤ k), shape (nb, 6, 6)."""
+    return ReducedInverse(st, blocks, fac).blocks
 
 
 def _block_lookup(st: ReducedStructure, ca, cb_):
@@ -178,14 +222,21 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     else:
         ne = prob.normal(st, rw, Je, Jp)
     blocks = ne["blocks"]
-    Zblk = reduced_inverse_blocks(S, blocks, fac)
+    inverse = ReducedInverse(S, blocks, fac)
+    Zblk = inverse.blocks
     m, q = prob.m, prob.q
     aux = getattr(prob, "aux", None)
     nb = q + (prob.na if aux else 0)  # border: additional parameters, auxiliary offsets
-    if nb:
-        fac = factor_reduced(S, blocks)
-        E, F = aux.border(prob, ne) if aux else (ne["E"], ne["F"])
-        Y = fac.solve(E)
+    fast_ap = bool(q) and not aux
+    if fast_ap:  # parameters only: the banded border path (bundle_precision_ap)
+        from ..block.bundle_precision_ap import border_inverse
+
+        E = ne["E_border"] if "E_border" in ne else ne["E"]
+        Faa, Qca3, dQ = border_inverse(inverse, E, ne["F"], S)
+        Zblk = Zblk + dQ
+    elif nb:  # auxiliary offsets/drifts (and parameters): the whole border densely
+        E, F = aux.border(prob, ne)
+        Y = factor_reduced(S, blocks).solve(E)
         Faa = np.linalg.inv(F - E.T @ Y)  # Q_aa (of the whole border)
         Y3 = Y.reshape(m, 6, nb)
         Zblk = Zblk + Y3[S.block_i] @ Faa @ Y3[S.block_k].transpose(0, 2, 1)
@@ -212,22 +263,28 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
         Qcp[S.pt_obs[s0:s1]] = -np.add.reduceat(QT, S.all_pairs_starts[s0:s1] - seg[s0], axis=0)
         s0 = s1
     Vinv = ne["Vinv"]
-    vo = S.pt_obs
-    if nb:
+    vo = prob.vo  # the rays of point unknowns in point order (a slice when they come first)
+    sw = prob.sw
+    Jew = Je * sw[:, :, None]
+    Jpw = Jp * sw[:, :, None]
+    if fast_ap:  # the parameters' terms, sparse by (ray, group) and (point, group) pairs
+        from ..block.bundle_precision_ap import point_terms
+
+        dQpp, Qap_pg, Hray = point_terms(prob, ne, Faa, Qca3, Qcp, Jew, Jpw)
+    elif nb:
         hb = np.zeros((S.n_pt, nb, 3))  # Σ_b Tap_b placed in its group columns
-    if q:
-        Tap = np.zeros((n_used, prob.k, 3))
-        Tap[vo] = ne["Wap"][vo] @ Vinv[ocol[vo]]
-        g = prob.grp[oi[vo]]
-        cols = g[:, None] * prob.k + np.arange(prob.k)
-        np.add.at(hb, (ocol[vo][:, None], cols), Tap[vo])
-    if nb:
-        if aux:
-            aux.point_border(prob, ne, hb)
+        if q:
+            Tap = (prob.Aw[vo].transpose(0, 2, 1) @ Jpw[vo]) @ Vinv[ocol[vo]]
+            g = prob.grp[oi[vo]]
+            cols = g[:, None] * prob.k + np.arange(prob.k)
+            np.add.at(hb, (ocol[vo][:, None], cols), Tap)
+        aux.point_border(prob, ne, hb)
         Qcp[vo] -= Qca[oi[vo]] @ hb[ocol[vo]]
     # Q_pp,j = V_j⁻¹ − Σ_b T_bᵀ Q_cp(i_b, j) − h_jᵀ Q_ap,j
     Qpp = Vinv + np.add.reduceat(T[vo].transpose(0, 2, 1) @ (-Qcp[vo]), S.pt_starts, axis=0)
-    if nb:
+    if fast_ap:
+        Qpp -= dQpp
+    elif nb:
         # Q_ap,j = −(Σ_b Q_ca(i_b)ᵀ T_b + Q_aa h_j)   (nb, 3) per point
         Qap = -(
             np.add.reduceat(Qca[oi[vo]].transpose(0, 2, 1) @ T[vo], S.pt_starts, axis=0) + Faa @ hb
@@ -235,14 +292,13 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
         Qpp -= hb.transpose(0, 2, 1) @ Qap
     # 2×2 block of P½ J Q Jᵀ P½ per image observation (batched products, no full Q):
     # redundancy numbers r = 1 − diagonal, off-diagonal of P½ Q_vv P½ = −(J Q Jᵀ)_xy
-    sw = prob.sw
-    Jew = Je * sw[:, :, None]
-    Jpw = Jp * sw[:, :, None]
     H = (Jew @ Qcc_diag[oi]) @ Jew.transpose(0, 2, 1)
     Jpv = Jpw[vo]
     C = (Jew[vo] @ Qcp[vo]) @ Jpv.transpose(0, 2, 1)
     H[vo] += (Jpv @ Qpp[ocol[vo]]) @ Jpv.transpose(0, 2, 1) + C + C.transpose(0, 2, 1)
-    if q:
+    if fast_ap:
+        H += Hray
+    elif q:  # the parameters' terms of the rays, from the dense border cofactors
         Aw = prob.Aw
         sl = np.arange(prob.k)[None, :] + prob.k * prob.grp[oi][:, None]  # (n, k)
         Qaa_o = Faa[sl[:, :, None], sl[:, None, :]]
@@ -250,7 +306,7 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
         AwT = Aw.transpose(0, 2, 1)
         C = (Jew @ Qca_o) @ AwT
         H += (Aw @ Qaa_o) @ AwT + C + C.transpose(0, 2, 1)
-        Qpa = Qap.transpose(0, 2, 1)[ocol[vo]]  # (nv, 3, q)
+        Qpa = Qap.transpose(0, 2, 1)[ocol[vo]]  # (nv, 3, nb)
         Qpa_o = np.take_along_axis(Qpa, np.repeat(sl[vo][:, None, :], 3, 1), axis=2)
         C = (Jpv @ Qpa_o) @ AwT[vo]
         H[vo] += C + C.transpose(0, 2, 1)
@@ -263,7 +319,11 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     JpvT = Jpv.transpose(0, 2, 1)
     Ke[vo] += Qcp[vo] @ JpvT
     Kp[vo] = Qcp[vo].transpose(0, 2, 1) @ JewT[vo] + Qpp[ocol[vo]] @ JpvT
-    if q:
+    if q:  # Q_ca, Q_pa in the ray's own group's k columns, times its design
+        if fast_ap:
+            Qca_o = Qca3.reshape(m, 6, prob.G, prob.k)[np.arange(m), :, prob.grp, :][oi]
+            Qpa_o = Qap_pg[prob.ap_struct.own_pg[vo]].transpose(0, 2, 1)
+            AwT = prob.Aw.transpose(0, 2, 1)
         Ke += Qca_o @ AwT
         Kp[vo] += Qpa_o @ AwT[vo]
     r_xy = -H[:, 0, 1]

@@ -51,6 +51,7 @@ __all__ = [
     "Auxiliary",
     "AuxiliaryResult",
     "adjust_with_auxiliary",
+    "check_differences",
     "check_errors",
     "height_control_at_ends",
     "simulate_auxiliary",
@@ -368,8 +369,8 @@ def height_control_at_ends(block: Block, margin_m: float = 100.0) -> Block:
     return b
 
 
-def check_errors(sim, result: F64 | Adjustment) -> tuple[float, float]:
-    """RMS true errors of the check points of a simulated block.
+def check_differences(sim, result: F64 | Adjustment) -> tuple[NDArray[np.int64], F64]:
+    """True errors of the check points of a simulated block, point by point.
 
     Parameters
     ----------
@@ -385,10 +386,11 @@ def check_errors(sim, result: F64 | Adjustment) -> tuple[float, float]:
 
     Returns
     -------
-    mu_xy : float
-        RMS planimetric error per coordinate, sqrt(mean(ΔX² and ΔY²)), in m.
-    mu_z : float
-        RMS height error in m.
+    index : ndarray of int, shape (k,)
+        Point indices (rows of ``sim.block.points``) of the check points with finite
+        coordinates.
+    d : ndarray, shape (k, 3)
+        Adjusted minus true coordinates (ΔX, ΔY, ΔZ) in m.
 
     Raises
     ------
@@ -413,9 +415,37 @@ def check_errors(sim, result: F64 | Adjustment) -> tuple[float, float]:
             f"check_errors: expected coordinates of all {truth.shape[0]} points, shape "
             f"{truth.shape}, got {xyz.shape}"
         )
-    chk = sim.block.points.role == 2
+    chk = np.flatnonzero(sim.block.points.role == 2)
     d = xyz[chk] - truth[chk]
-    d = d[np.all(np.isfinite(d), axis=1)]
-    if d.size == 0:
+    ok = np.all(np.isfinite(d), axis=1)
+    if not ok.any():
         raise InputError("check_errors: the block has no check point with finite coordinates")
+    return chk[ok], d[ok]
+
+
+def check_errors(sim, result: F64 | Adjustment) -> tuple[float, float]:
+    """RMS true errors of the check points of a simulated block.
+
+    Parameters
+    ----------
+    sim : SimulatedBlock
+        The simulated block; see :func:`check_differences`.
+    result : ndarray, shape (p, 3), or Adjustment
+        Adjusted coordinates of all points in m, or a bundle or independent-model
+        adjustment of the block; see :func:`check_differences`.
+
+    Returns
+    -------
+    mu_xy : float
+        RMS planimetric error per coordinate, sqrt(mean(ΔX² and ΔY²)), in m.
+    mu_z : float
+        RMS height error in m.
+
+    Raises
+    ------
+    InputError
+        If the adjustment carries no point coordinates, their number does not match the
+        block, or no check point has finite coordinates.
+    """
+    _, d = check_differences(sim, result)
     return float(np.sqrt(np.mean(d[:, :2] ** 2))), float(np.sqrt(np.mean(d[:, 2] ** 2)))

@@ -31,8 +31,10 @@ absorb the errors of the approximations. E and F are reused in the next iteratio
 the last step moved nothing by more than :data:`AP_REUSE` of the ray length (the
 Jacobians then change by less than the tolerance of the border's solve). On the bench's
 2 100-image block with 12 parameters per strip (q = 360) the self-calibrating bundle
-takes the same 4 iterations as the plain one, in 1.4-1.5 times its time
-(``python benchmarks/bench_selfcal.py``).
+takes the same 4 iterations as the plain one, in about 1.25 times its time (best of 7,
+1.23-1.34 median at load 1-2; ``python benchmarks/bench_selfcal.py``); with
+``precision=True`` the cofactors add about 1.25-1.4 times a plain bundle's time on top
+(:mod:`orientviz.block.bundle_precision_ap`).
 """
 
 from __future__ import annotations

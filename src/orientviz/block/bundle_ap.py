@@ -134,7 +134,7 @@ class APStructure:
         n = oi.size
         go = grp[oi]
         # observations by group (direct F and ba terms)
-        self.sum_grp, self.grp_present = _summation(go)
+        self.grp_present = np.unique(go)
         # the direct F term Σ Aᵀ P A does not change over the iterations: one product
         # per group over its rays
         order = np.argsort(go, kind="stable")
@@ -149,9 +149,7 @@ class APStructure:
         pgkey = ocol[vo] * G + go[vo]
         uk, inv = np.unique(pgkey, return_inverse=True)
         inv = inv.ravel()
-        self.sum_pg = sp.csr_matrix(
-            (np.ones(vo.size), (inv, vo)), shape=(uk.size, n)
-        )  # sums per-observation rows (all n) of the rays of each pair
+        k = Aw.shape[2]
         self.pg_pt, self.pg_grp = uk // G, uk % G
         npg = uk.size
         # point → its range of (point, group) pairs (pairs are sorted by point)
@@ -166,13 +164,30 @@ class APStructure:
         pos = np.arange(n) - np.repeat(np.cumsum(cnt) - cnt, cnt)
         self.pad = np.full((m, max(int(cnt.max(initial=0)), 1)), n, np.int64)
         self.pad[oi[order], pos] = order
-        k = Aw.shape[2]
         L = self.pad.shape[1]
-        self.Aw_pad = np.concatenate([Aw, np.zeros((1, 2, k))])[self.pad].reshape(m, 2 * L, k)
+        self.L = L
+        # the same slots pointing at ray 0 instead of the padding ray: a gather of a
+        # per-ray array through it needs no appended zero row, where the partner (the
+        # reduced design, gathered through ``pad``) is zero for padded slots
+        self.pad0 = np.where(self.pad < n, self.pad, 0)
         # (point, group) pair of each ray's own group (npg: none, fixed point)
-        own = np.full(n + 1, npg, np.int64)
-        own[vo] = np.searchsorted(uk, pgkey)
-        self.own_pg_pad = own[self.pad]
+        self.own_pg = np.full(n, npg, np.int64)
+        self.own_pg[vo] = np.searchsorted(uk, pgkey)
+        # H = Σ Aᵀ P J_p per pair as one sparse product with the (2n, 3) weighted point
+        # Jacobian: Mᵀ (2n, npg·k) holds in row 2·ray + coordinate the ray's weighted
+        # design at the columns of its own pair (k per row: CSR formed directly); M = Mᵀ.T
+        # is then a CSC matrix, whose product scatters each ray into its pair
+        var = self.own_pg < npg
+        nvar = int(var.sum())
+        it = np.int32 if max(2 * nvar * k, npg * k) < 2**31 else np.int64
+        cols = self.own_pg[var].astype(it)[:, None, None] * it(k) + np.arange(k, dtype=it)
+        indptr = np.zeros(2 * n + 1, it)
+        np.cumsum(np.repeat(np.where(var, k, 0).astype(it), 2), out=indptr[1:])
+        Mt = sp.csr_matrix(
+            (Aw[var].reshape(-1), np.broadcast_to(cols, (nvar, 2, k)).reshape(-1), indptr),
+            shape=(2 * n, npg * k),
+        )
+        self.H_design = Mt.T
         # E correction in the *other* groups of a ray's point (rays of points in the
         # overlap of two groups): every such pair, summed per (image, group)
         a = vo
@@ -189,17 +204,18 @@ class APStructure:
         self.sum_other_img = sp.csr_matrix((np.ones(K), (ki, np.arange(K))), shape=(m, K))
         self.sum_other_grp = sp.csr_matrix((np.ones(K), (gi, np.arange(K))), shape=(G, K))
         self.sum_img_grp = sp.csr_matrix((np.ones(m), (grp, np.arange(m))), shape=(G, m))
-        # F correction: within a group one product per group over its pairs; between
-        # groups (points in the overlap of two groups) pair by pair
-        self.pg_by_grp = np.argsort(self.pg_grp, kind="stable")
-        self.pg_grp_starts = np.searchsorted(self.pg_grp[self.pg_by_grp], np.arange(G + 1))
         c1 = count[self.pg_pt]
         f1 = np.repeat(np.arange(npg), c1)
         off = np.arange(f1.size) - np.repeat(np.cumsum(c1) - c1, c1)
         f2 = np.repeat(first[self.pg_pt], c1) + off
-        cross = f1 != f2
-        self.f_1, self.f_2 = f1[cross], f2[cross]
-        self.sum_f, self.f_key = _summation(self.pg_grp[self.f_1] * G + self.pg_grp[self.f_2])
+        # all ordered pairs of (point, group) pairs of one point (a pair with itself
+        # included), sorted by their groups (g1, g2): F's correction is one product per
+        # (g1, g2) over its pairs (g1 = g2: the pairs of one group with themselves)
+        fkey = self.pg_grp[f1] * G + self.pg_grp[f2]
+        o = np.argsort(fkey, kind="stable")
+        self.f_1, self.f_2 = f1[o], f2[o]
+        self.f_key, first_f = np.unique(fkey[o], return_index=True)
+        self.f_bounds = np.r_[first_f, o.size]
         # (point, group) pairs by group (ba correction); observations by point
         self.sum_pgg, self.pgg_present = _summation(self.pg_grp)
 
@@ -243,34 +259,34 @@ def ap_normal(
     -------
     dict
         ``E``, ``F`` (damped), ``F0`` (undamped), ``ba``, ``diagF`` (undamped diagonal),
-        ``H`` (per (point, group) pair, for the back-substitution) and ``Wap`` (per ray,
-        for the precision).
+        ``H`` (per (point, group) pair, k × 3: Σ Aᵀ P J_p over the pair's rays; for the
+        back-substitution and the precision).
     """
     A, k, G, m = prob.ap_struct, prob.k, prob.G, prob.m
-    Aw = prob.Aw
-    AwT = Aw.transpose(0, 2, 1)
-    ba2 = np.zeros((G, k))
-    ba2[A.grp_present] = A.sum_grp @ np.einsum("nki,nk->ni", Aw, rw)
+    # Aᵀ P (l − f) = Aᵀ (rw / σ): the unweighted design times the weighted misclosures
+    ba2 = (prob.A_csr.T @ (rw * prob.sw).reshape(-1)).reshape(G, k)
     # point-elimination terms, per (point, group) pair: H = Σ Aᵀ P J_p over its rays
-    Wap = AwT @ Jpw  # (n, k, 3); rows of fixed points are never used
-    H = _ssum(A.sum_pg, Wap)  # (npg, k, 3)
+    H = (A.H_design @ Jpw.reshape(-1, 3)).reshape(-1, k, 3)  # (npg, k, 3)
     HV = H @ Vinv[A.pg_pt]  # H V⁻¹
-    hb = np.einsum("nij,nj->ni", HV, bp[A.pg_pt])
+    hb = (HV @ bp[A.pg_pt][:, :, None])[:, :, 0]
     ba2[A.pgg_present] -= A.sum_pgg @ hb
     ba = ba2.reshape(-1) - prob.ap_w * st.ap
     if border is not None:
         E, F0 = border
-        return _damped(dict(E=E, F0=F0, ba=ba, H=H, Wap=Wap), lam)
-    # E: per image, its own group's block Σ (J_eᵀ P A − T Hᵀ) as one product per image
-    L = A.pad.shape[1]
-    Jpad = _zero_row(Jew)[A.pad].reshape(m, 2 * L, 6)
-    # T Hᵀ summed over the image's rays: (3L × 6)ᵀ (3L × k) per image, gathered in place
-    Tt = _zero_row(T.transpose(0, 2, 1))[A.pad].reshape(m, 3 * L, 6)
-    Htz = _zero_row(H.transpose(0, 2, 1))  # (npg + 1, 3, k): Hᵀ per pair, and a zero
-    Ht = Htz[A.own_pg_pad]
-    own = np.matmul(Jpad.transpose(0, 2, 1), A.Aw_pad) - np.matmul(
-        Tt.transpose(0, 2, 1), Ht.reshape(m, 3 * L, k)
-    )
+        return _damped(dict(E=E, F0=F0, ba=ba, H=H), lam)
+    # E: per image, its own group's block Σ_a (J_eᵀ P A − T Hᵀ) = Σ_a J_eᵀ P½ Ã with the
+    # reduced design Ã = P½ (A − J_p V⁻¹ Hᵀ) of each ray (T = J_eᵀ P J_p V⁻¹, H of the
+    # ray's own (point, group) pair): one (6 × 2L)(2L × k) product per image
+    n, L = Jew.shape[0], A.L
+    VHt = np.empty((H.shape[0] + 1, 3, k))  # V⁻¹ Hᵀ = (H V⁻¹)ᵀ (V⁻¹ symmetric), and a zero
+    VHt[:-1] = HV.transpose(0, 2, 1)
+    VHt[-1] = 0.0
+    At = np.empty((n + 1, 2, k))  # the reduced design and a zero ray for the padding
+    np.matmul(Jpw, VHt[A.own_pg], out=At[:-1])
+    np.subtract(prob.Aw, At[:-1], out=At[:-1])
+    At[-1] = 0.0
+    Jpad = Jew[A.pad0].reshape(m, 2 * L, 6)  # padded slots: any ray, times a zero ray
+    own = np.matmul(Jpad.transpose(0, 2, 1), At[A.pad].reshape(m, 2 * L, k))
     # ... and the blocks of the other groups that its points reach
     if A.e_key.size:
         other = -_ssum(A.sum_e, T[A.e_obs] @ H[A.e_pg].transpose(0, 2, 1))
@@ -280,19 +296,15 @@ def ap_normal(
     # F: direct term (constant: A is evaluated at the observed coordinates) − Σ H V⁻¹ Hᵀ
     F4 = np.zeros((G, G, k, k))
     F4[A.grp_present, A.grp_present] = A.F_direct
-    # within a group: Σ (Hᵀ)ᵀ (V⁻¹ Hᵀ) over its pairs as one product, pairs in group order
-    Htg = Htz[A.pg_by_grp]  # (npg, 3, k)
-    VHtg = Vinv[A.pg_pt[A.pg_by_grp]] @ Htg
-    for g in range(G):
-        a, b = A.pg_grp_starts[g], A.pg_grp_starts[g + 1]
-        if b > a:
-            F4[g, g] -= Htg[a:b].reshape(-1, k).T @ VHtg[a:b].reshape(-1, k)
-    if A.f_key.size:
-        Fc = _ssum(A.sum_f, HV[A.f_1] @ H[A.f_2].transpose(0, 2, 1))
-        F4.reshape(G * G, k, k)[A.f_key] -= Fc
+    # − Σ H_e V⁻¹ H_e'ᵀ over the pairs (e, e') of one point, one product per (g1, g2):
+    # (V⁻¹ Hᵀ)ᵀ of e (3 × k) with Hᵀ of e' (3 × k)
+    Htz = np.ascontiguousarray(H.transpose(0, 2, 1))
+    F4g = F4.reshape(G * G, k, k)
+    for key, a, b in zip(A.f_key, A.f_bounds[:-1], A.f_bounds[1:]):
+        F4g[key] -= VHt[A.f_1[a:b]].reshape(-1, k).T @ Htz[A.f_2[a:b]].reshape(-1, k)
     F0 = F4.transpose(0, 2, 1, 3).reshape(prob.q, prob.q)
     F0[np.diag_indices(prob.q)] += prob.ap_w
-    return _damped(dict(E=E, F0=F0, ba=ba, H=H, Wap=Wap), lam)
+    return _damped(dict(E=E, F0=F0, ba=ba, H=H), lam)
 
 
 class BorderE:
@@ -332,6 +344,21 @@ class BorderE:
                 E4[ki, :, gi] += self.other
             self._dense = E4.reshape(6 * m, G * k)
         return self._dense
+
+    def permuted(self, pos, dtype=np.float32) -> NDArray:
+        """E with its image row blocks moved to ``pos`` (E[p] for the scalar permutation
+        p of image order ``perm``, ``pos[perm] = arange(m)``), formed in ``dtype`` directly.
+
+        The other groups' blocks never overlap an image's own group block, so every
+        entry is one block's value rounded once: equal to ``dense()[p].astype(dtype)``.
+        """
+        G, k, m = self.s.G, self.k, self.m
+        E4 = np.zeros((m, 6, G, k), dtype)
+        E4[pos, :, self.grp] = self.own
+        if self.other.shape[0]:
+            ki, gi = np.divmod(self.s.e_key, G)
+            E4[pos[ki], :, gi] = self.other
+        return E4.reshape(6 * m, G * k)
 
 
 class _BorderET:

@@ -42,7 +42,7 @@ from numpy.lib.stride_tricks import as_strided
 from numpy.typing import NDArray
 
 from ..errors import NotDeterminableError
-from .bundle_ap import dense
+from .bundle_ap import BorderE, dense
 
 F64 = NDArray[np.float64]
 
@@ -60,16 +60,20 @@ def _skewed_block(L: F64, r0: int, r1: int, c0: int) -> F64:
     """Dense rows r0:r1, columns c0:r1 of a lower band matrix in LAPACK band storage.
 
     Element (i, j) of the block is band entry d = (r0 + i) − (c0 + j) of column c0 + j;
-    a skewed strided view of a zero-padded copy of the band columns reads them all at
-    once, entries outside the band (d < 0 or d > kd) landing in the padding.
+    a skewed strided view of a copy of the band columns, with zero rows for the
+    diagonals d outside the band (d < 0 or d > kd), reads them all at once.
     """
     kd = L.shape[0] - 1
     w, h = r1 - c0, r1 - r0
-    P = np.zeros((2 * w + kd + 1 + h, w), dtype=L.dtype)
-    P[w : w + kd + 1] = L[:, c0:r1]
-    base = (w + r0 - c0) * w
+    dmin, dmax = r0 - c0 - (w - 1), r0 - c0 + h - 1  # diagonals the block touches
+    P = np.empty((dmax - dmin + 1, w), dtype=L.dtype)  # row d − dmin holds diagonal d
+    lo, hi = max(dmin, 0), min(dmax, kd)
+    P[: lo - dmin] = 0.0
+    P[lo - dmin : hi - dmin + 1] = L[lo : hi + 1, c0:r1]
+    P[hi - dmin + 1 :] = 0.0
+    # (i, j) → row d − dmin = w − 1 + i − j, column j
     view = as_strided(
-        P.reshape(-1)[base:], shape=(h, w), strides=(w * P.itemsize, -(w - 1) * P.itemsize)
+        P.reshape(-1)[(w - 1) * w :], shape=(h, w), strides=(w * P.itemsize, -(w - 1) * P.itemsize)
     )
     return view.copy()
 
@@ -117,6 +121,57 @@ def band_forward_solve(L: F64, B: F64) -> F64:
         # X_Iᵀ = rhsᵀ L_IIᵀ⁻¹ (L_IIᵀ upper triangular)
         d = np.ascontiguousarray(M[:, r0 - c0 :])
         X[r0:r1] = trsm(1.0, d.T, rhs.T, side=1, lower=0).T
+    return X
+
+
+def band_backward_solve(L: F64, B: F64) -> F64:
+    """X = L⁻ᵀ B for a lower-banded triangular L in LAPACK lower band storage.
+
+    The transposed counterpart of :func:`band_forward_solve` (same storage, same
+    blocking), so that ``band_backward_solve(L, band_forward_solve(L, B))`` = S⁻¹ B for
+    S = L Lᵀ with BLAS level-3 work only.
+
+    Parameters
+    ----------
+    L : ndarray, shape (kd + 1, n)
+        ``L[d, j]`` = L(j + d, j) (``scipy.linalg.cholesky_banded(..., lower=True)``).
+    B : ndarray, shape (n, r)
+        Right-hand sides.
+
+    Returns
+    -------
+    ndarray, shape (n, r), C order
+
+    Notes
+    -----
+    Row blocks of nb = kd + 1 rows from the bottom: X_I = L_IIᵀ⁻¹ (B_I − L_JIᵀ X_J) with J
+    the block below I; L_JI is strictly upper triangular (``dtrmm``), L_II lower
+    (``dtrsm`` with the transposed matrix).
+    """
+    kd = L.shape[0] - 1
+    n = L.shape[1]
+    nb = kd + 1
+    X = np.empty((n, B.shape[1]), dtype=L.dtype)
+    trmm, trsm = _blas.get_blas_funcs(("trmm", "trsm"), (L,))
+    M_below = None  # rows of the block below (J), columns from this block's start
+    for r0 in reversed(range(0, n, nb)):
+        r1 = min(r0 + nb, n)
+        c0 = max(r0 - nb, 0)
+        M = _skewed_block(L, r0, r1, c0)  # [L_I,I−1  L_II]
+        rhs = np.array(B[r0:r1], order="C", dtype=L.dtype)
+        if r1 < n:
+            r2 = min(r1 + nb, n)
+            off = M_below[:, : r1 - r0]  # L_JI, rows r1:r2 (I is a full block here)
+            if r2 - r1 == nb:  # (X_Jᵀ L_JI)ᵀ, L_JIᵀ strictly lower
+                t = trmm(1.0, off.T, X[r1:r2].T, side=1, lower=1, trans_a=1)
+                rhs -= t.T
+            else:
+                rhs -= off.T @ X[r1:r2]
+        M_below = M
+        d = np.ascontiguousarray(M[:, r0 - c0 :])  # L_II
+        # X_Iᵀ = rhsᵀ L_II⁻¹: BLAS sees the C-ordered d as its transpose (upper), hence
+        # trans_a
+        X[r0:r1] = trsm(1.0, d.T, rhs.T, side=1, lower=0, trans_a=1).T
     return X
 
 
@@ -175,8 +230,11 @@ def form_preconditioner(fac, E: F64, F: F64):
     """
     if fac.kind != "banded":
         return None
-    p = fac.structure.scalar_perm
-    Z = band_forward_solve(fac.data.astype(np.float32), dense(E).astype(np.float32)[p])
+    if isinstance(E, BorderE):  # formed in single precision and row order at once
+        E32 = E.permuted(fac.structure.pos_img)
+    else:
+        E32 = dense(E).astype(np.float32)[fac.structure.scalar_perm]
+    Z = band_forward_solve(fac.data.astype(np.float32), E32)
     Fs = F - _blas.ssyrk(1.0, Z.T).astype(float)
     Fs = np.triu(Fs) + np.triu(Fs, 1).T  # the upper triangle of F − ZᵀZ, symmetrised
     try:
@@ -212,8 +270,13 @@ def solve_bordered_pcg(fac, E: F64, F: F64, rhs: F64, ba: F64, prec, tol: float 
     z0 = fac.solve(rhs)
     ra = ba - E.T @ z0
 
+    # S⁻¹E d of every step is kept as a sum α·S⁻¹E d, so that S⁻¹E x (for dc) costs
+    # no extra banded solve
+    SEx = np.zeros_like(z0)
+
     def Fs(v):
-        return F @ v - E.T @ fac.solve(E @ v)
+        u = fac.solve(E @ v)
+        return F @ v - E.T @ u, u
 
     x = np.zeros_like(ra)
     r = ra.copy()
@@ -226,18 +289,19 @@ def solve_bordered_pcg(fac, E: F64, F: F64, rhs: F64, ba: F64, prec, tol: float 
         if steps == PCG_MAX_STEPS:
             return None, None, steps
         steps += 1
-        w = Fs(d)
+        w, u = Fs(d)
         dw = float(d @ w)
         if not dw > 0:
             return None, None, steps
         alpha = rho / dw
         x += alpha * d
+        SEx += alpha * u
         r -= alpha * w
         y = scipy.linalg.cho_solve(prec, r, check_finite=False)
         rho_new = float(r @ y)
         d = y + (rho_new / rho) * d
         rho = rho_new
-    dc = z0 - fac.solve(E @ x)
+    dc = z0 - SEx
     return dc, x, steps
 
 

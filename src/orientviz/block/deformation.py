@@ -17,6 +17,11 @@ for the 3D viewer:
   absolute orientation can remove: affinity and trapezoid in planimetry, twist and
   bending in height.
 
+:func:`split_field` asks how much of an image error field an additional-parameter set
+can describe at all: a least-squares fit of the set's terms (and of the six image
+deformations the exterior orientation makes itself) on a grid over the format splits the
+field into a described part and a remainder that no value of the parameters removes.
+
 :func:`animate` and :func:`frames` turn two fields (without and with self-calibration)
 into exaggerated point positions for a parameter t ∈ [0, 1]: t = 0 without, t = 1 with.
 
@@ -36,10 +41,13 @@ from ..adjust import gauss_newton
 from ..camera import collinearity_jacobian, project
 from ..errors import InputError
 from ..orientation.absolute import similarity_closed_form
+from .additional import _eo_deformations
+from .systematic import ImageError
 
 F64 = NDArray[np.float64]
 
 __all__ = [
+    "FieldSplit",
     "ImageField",
     "ModelField",
     "animate",
@@ -47,6 +55,7 @@ __all__ = [
     "image_field",
     "model_field",
     "model_fields",
+    "split_field",
 ]
 
 
@@ -152,6 +161,136 @@ def image_field(error, *, image: int = 0, half_mm: float = 110.0, n: int = 11) -
     xy, shape = _grid((-half_mm, half_mm), half_mm, int(n))
     d = np.asarray(fn(xy, np.full(xy.shape[0], int(image), np.int64)), float)
     return ImageField(xy, d, shape, getattr(error, "name", "estimated additional parameters"))
+
+
+@dataclass
+class FieldSplit:
+    """An image error field split into what a parameter set describes and the rest.
+
+    Attributes
+    ----------
+    name : str
+        The field's and the set's names.
+    params : ndarray, shape (k,)
+        Least-squares values of the set's parameters in µm (the set's units).
+    orientation : ndarray, shape (6,) or None
+        Coefficients of the six exterior-orientation deformations (mm at u = x/b = 1,
+        order of :func:`orientviz.block.additional._eo_deformations`: shift x, shift y,
+        scale, rotation, two projective tilts); None if they were not included.
+    share : ndarray, shape (3,)
+        Share of the field's sum of squares on the grid that the fit describes, for x,
+        y and both coordinates (1 = all of it, 0 = none; NaN for a coordinate that is
+        zero everywhere).
+    rms_um : ndarray, shape (3,)
+        RMS over the grid in µm of the field, the described part and the remainder
+        (vector lengths).
+    described, remainder : ImageError
+        Error models (``(xy_mm, image) -> Δxy_mm``) of the described part (set terms
+        plus orientation deformations) and of ``field − described``; defined everywhere,
+        e.g. for :func:`model_field`.
+    grid : ImageField
+        The field on the grid used for the fit.
+    """
+
+    name: str
+    params: F64
+    orientation: F64 | None
+    share: F64
+    rms_um: F64
+    described: ImageError
+    remainder: ImageError
+    grid: ImageField
+
+
+def split_field(
+    error,
+    aps,
+    *,
+    orientation: bool = True,
+    image: int = 0,
+    half_mm: float = 110.0,
+    n: int = 23,
+) -> FieldSplit:
+    """Split an image error field into the part a parameter set describes and the rest.
+
+    The field Δ(x, y) is sampled on the n × n grid of :func:`image_field` and fitted by
+    least squares (both coordinates at once) with the columns of ``aps.design`` and,
+    with ``orientation=True``, the six image deformations that the exterior orientation
+    produces itself (shifts, scale, rotation, projective tilts: every self-calibrating
+    adjustment absorbs them without additional parameters). The remainder is what no
+    value of the parameters can remove, e.g. a cubic term in x for Ebner's set.
+
+    Parameters
+    ----------
+    error : callable
+        Image error model ``error(xy_mm, image_index) -> Δxy_mm``
+        (:mod:`orientviz.block.systematic`).
+    aps : AdditionalParameters
+        The parameter set (``design(xy) -> (n, 2, k)`` mm per µm), e.g. ``Ebner12()``.
+    orientation : bool
+        Also fit the six exterior-orientation deformations (scaled with u = x/b, b =
+        ``aps.b`` if the set has one, else ``half_mm``).
+    image : int
+        Image index passed to the error model.
+    half_mm : float
+        Half the grid width in mm (default: the usable 23 cm format, ±110 mm).
+    n : int
+        Grid points per side (n ≥ 3).
+
+    Returns
+    -------
+    FieldSplit
+        Parameters, shares and the two parts as error models.
+
+    Raises
+    ------
+    InputError
+        If n < 3 or the error model is not callable.
+    """
+    if int(n) < 3:
+        raise InputError(f"split_field: expected n ≥ 3 grid points per side, got {n}")
+    if not callable(error):
+        raise InputError("split_field: expected an error model (xy_mm, image) -> Δxy_mm")
+    grid = image_field(error, image=image, half_mm=half_mm, n=int(n))
+    b = float(getattr(aps, "b", half_mm))
+    k = len(aps.names)
+
+    def columns(xy: F64) -> F64:
+        A = np.asarray(aps.design(xy), float)  # (N, 2, k) mm per µm
+        if orientation:
+            A = np.concatenate([A, _eo_deformations(xy[:, 0] / b, xy[:, 1] / b)], axis=2)
+        return A
+
+    A = columns(grid.xy)
+    coef, *_ = np.linalg.lstsq(A.reshape(-1, A.shape[2]), grid.d.reshape(-1), rcond=None)
+
+    def fitted(xy: F64) -> F64:
+        return columns(np.asarray(xy, float)) @ coef
+
+    part = fitted(grid.xy)
+    rest = grid.d - part
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ss = np.sum(grid.d**2, axis=0)
+        share = 1.0 - np.sum(rest**2, axis=0) / np.where(ss > 0, ss, np.nan)
+        total = 1.0 - np.sum(rest**2) / np.sum(ss) if np.sum(ss) > 0 else np.nan
+    rms = [float(np.sqrt(np.mean(np.sum(v**2, axis=1))) * 1e3) for v in (grid.d, part, rest)]
+    fn = _error_fn(error)
+    label = f"{getattr(error, 'name', 'image errors')} / {getattr(aps, 'name', 'set')}"
+    described = ImageError(f"{label}: described", fitted)
+    remainder = ImageError(
+        f"{label}: remainder",
+        lambda xy: fn(xy, np.full(xy.shape[0], int(image), np.int64)) - fitted(xy),
+    )
+    return FieldSplit(
+        label,
+        coef[:k],
+        coef[k:] if orientation else None,
+        np.array([*share, total]),
+        np.array(rms),
+        described,
+        remainder,
+        grid,
+    )
 
 
 def model_field(

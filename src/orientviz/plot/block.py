@@ -345,3 +345,47 @@ def plot_height_law(precisions, *, ax=None, title: str | None = None):
     ax.set_title(title or "height precision of independent-model blocks", fontsize=10)
     fig.tight_layout()
     return fig
+
+
+def plot_check_heights(sim, results, *, ax=None, title: str | None = None):
+    """Height errors of the check points along the strips, one marker series per result.
+
+    Each result's check points are compared with the truth of the simulated block
+    (:func:`orientviz.block.auxiliary.check_differences`) and drawn at their true X:
+    strip bending between sparse height control shows as a wave along X.
+
+    Parameters
+    ----------
+    sim : SimulatedBlock
+        The simulated block (:func:`orientviz.block.simulate.simulate_block`); X is
+        taken from its truth (m, drawn in km).
+    results : mapping of str to Adjustment or ndarray (p, 3)
+        Label → bundle or independent-model adjustment of the block, or adjusted
+        coordinates of all points in m.
+    ax : matplotlib Axes, optional
+        Axes to draw into; a new figure if None.
+    title : str, optional
+        Title (default: "height errors at the check points").
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        ΔZ (adjusted − true) in m against X in km; the legend gives each result's
+        μz (RMS ΔZ) in m.
+    """
+    from ..block.auxiliary import check_differences
+
+    fig, ax = _axes(ax, figsize=(8, 3.5))
+    markers = "os^Dvx+"
+    for k, (label, result) in enumerate(dict(results).items()):
+        idx, d = check_differences(sim, result)
+        x = sim.truth.points.xyz[idx, 0] / 1000.0
+        mu_z = float(np.sqrt(np.mean(d[:, 2] ** 2)))
+        ax.plot(x, d[:, 2], markers[k % len(markers)], ms=5, label=f"{label} (μz {mu_z:.2f} m)")
+    ax.axhline(0.0, color="k", lw=0.8)
+    ax.set_xlabel("X along the strips [km]")
+    ax.set_ylabel("ΔZ at check points [m]")
+    ax.legend(fontsize=8)
+    ax.set_title(title or "height errors at the check points", fontsize=10)
+    fig.tight_layout()
+    return fig

@@ -52,6 +52,10 @@ def plot_image_field(field, *, ax=None, exaggeration: float | None = None, title
     ax.plot(field.xy[:, 0], field.xy[:, 1], ".", color="0.5", ms=3)
     h = 0.5 * width
     ax.plot([-h, h, h, -h, -h], [-h, -h, h, h, -h], color="0.3", lw=0.8)
+    tips = np.vstack([field.xy, field.xy + ex * field.d])  # keep every arrow inside
+    pad = 0.03 * width
+    ax.set_xlim(min(tips[:, 0].min(), -h) - pad, max(tips[:, 0].max(), h) + pad)
+    ax.set_ylim(min(tips[:, 1].min(), -h) - pad, max(tips[:, 1].max(), h) + pad)
     ax.set_aspect("equal")
     ax.set_xlabel("x [mm] (flight direction)")
     ax.set_ylabel("y [mm]")
@@ -238,4 +242,63 @@ def plot_deformation_frame(
         title or f"t = {float(t):.2f} (0 without, 1 with self-calibration), ×{exaggeration:.0f}",
         fontsize=9,
     )
+    return fig
+
+
+def plot_field_split(split, *, axes=None, exaggeration: float | None = None):
+    """Three quiver panels of a :class:`~orientviz.block.deformation.FieldSplit`.
+
+    The image error field, the part the parameter set (with the orientation
+    deformations) describes and the remainder, all with one exaggeration so that the
+    arrows compare directly.
+
+    Parameters
+    ----------
+    split : FieldSplit
+        From :func:`orientviz.block.deformation.split_field` (grid in mm, vectors in mm).
+    axes : sequence of 3 matplotlib Axes, optional
+        Axes to draw into; a new 1 × 3 figure if None.
+    exaggeration : float, optional
+        Vector exaggeration (dimensionless); default: the largest vector of the whole
+        field drawn at 1/8 of the grid width.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    from ..block.deformation import ImageField
+
+    if axes is None:
+        _, axes = plt.subplots(1, 3, figsize=(14, 4.8))
+    axes = np.asarray(axes).ravel()
+    g = split.grid
+    if exaggeration is None:
+        width = float(np.ptp(g.xy[:, 0])) or 1.0
+        big = max(float(np.max(np.hypot(g.d[:, 0], g.d[:, 1]), initial=0.0)), 1e-12)
+        exaggeration = width / 8.0 / big
+    part = np.asarray(split.described(g.xy, np.zeros(g.xy.shape[0], np.int64)), float)
+    sx, sy, _ = np.asarray(split.share) * 100.0
+    panels = (
+        (g.d, f"field: RMS {split.rms_um[0]:.2f} µm"),
+        (
+            part,
+            f"described: RMS {split.rms_um[1]:.2f} µm\n(share of squares x {sx:.0f} %, y {sy:.0f} %)",
+        ),
+        (g.d - part, f"remainder: RMS {split.rms_um[2]:.2f} µm"),
+    )
+    for ax, (d, title) in zip(axes, panels):
+        plot_image_field(
+            ImageField(g.xy, d, g.shape, g.name), ax=ax, exaggeration=exaggeration,
+            title=f"{title}, ×{exaggeration:.0f}",
+        )  # fmt: skip
+    lo = np.min([[ax.get_xlim()[0], ax.get_ylim()[0]] for ax in axes[:3]], axis=0)
+    hi = np.max([[ax.get_xlim()[1], ax.get_ylim()[1]] for ax in axes[:3]], axis=0)
+    for ax in axes[:3]:  # one frame for all panels
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(lo[1], hi[1])
+    fig = axes[0].figure
+    fig.suptitle(textwrap.shorten(split.name, 90), fontsize=10)
+    fig.tight_layout()
     return fig

@@ -48,6 +48,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..block import systematic as se
+from ..block.auxiliary import check_errors
 from ..block.bundle import bundle_adjust
 from ..block.selfcal import self_calibrate
 from ..block.simulate import simulate_block
@@ -88,11 +89,6 @@ def systematic_field(factor: float = 1.0):
     return se.typical(10.0 * factor) + se.unflatness(8.0 * factor)
 
 
-def _mu(adj) -> tuple[float, float]:
-    c = adj.extra["check_rms"]
-    return float(np.hypot(c[0], c[1]) / np.sqrt(2.0)), float(c[2])
-
-
 def run_case(
     side: float,
     spacing: int,
@@ -107,13 +103,19 @@ def run_case(
         n_check=n_check, control="perimeter", control_spacing=spacing,
         sigma_image_mm=NOISE_UM * 1e-3, side_overlap=side,
     )  # fmt: skip
-    ref = bundle_adjust(simulate_block(strips, images, rng=seed, **kw).block)
+    clean = simulate_block(strips, images, rng=seed, **kw)
+    ref = bundle_adjust(clean.block)
     sim = simulate_block(strips, images, rng=seed, systematic=systematic_field(factor), **kw)
     plain = bundle_adjust(sim.block)
     sc = self_calibrate(sim.block, "ebner12", ap_sigma=10.0)
     out = {"scale": sim.spec["scale"]}
-    for key, adj in (("reference", ref), ("without", plain), ("with", sc.adjustment)):
-        out[key] = dict(sigma0=adj.sigma0 * NOISE_UM, mu=_mu(adj), converged=adj.converged)
+    for key, s, adj in (
+        ("reference", clean, ref),
+        ("without", sim, plain),
+        ("with", sim, sc.adjustment),
+    ):
+        mu = check_errors(s, adj)  # RMS true errors of the check points (m)
+        out[key] = dict(sigma0=adj.sigma0 * NOISE_UM, mu=mu, converged=adj.converged)
     out["kept"] = sc.kept
     return out
 
