@@ -290,12 +290,19 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
             np.add.reduceat(Qca[oi[vo]].transpose(0, 2, 1) @ T[vo], S.pt_starts, axis=0) + Faa @ hb
         )
         Qpp -= hb.transpose(0, 2, 1) @ Qap
-    # 2×2 block of P½ J Q Jᵀ P½ per image observation (batched products, no full Q):
-    # redundancy numbers r = 1 − diagonal, off-diagonal of P½ Q_vv P½ = −(J Q Jᵀ)_xy
-    H = (Jew @ Qcc_diag[oi]) @ Jew.transpose(0, 2, 1)
+    # gains of each ray on its own image and point, K = Q_(·, ray) Jwᵀ: the change of the
+    # estimates per σ-normalised change of the ray's x, y (external reliability); first
+    # without the parameters' terms
     Jpv = Jpw[vo]
-    C = (Jew[vo] @ Qcp[vo]) @ Jpv.transpose(0, 2, 1)
-    H[vo] += (Jpv @ Qpp[ocol[vo]]) @ Jpv.transpose(0, 2, 1) + C + C.transpose(0, 2, 1)
+    JewT, JpvT = Jew.transpose(0, 2, 1), Jpv.transpose(0, 2, 1)
+    Ke = Qcc_diag[oi] @ JewT
+    Ke[vo] += Qcp[vo] @ JpvT
+    Kp = np.zeros((n_used, 3, 2))
+    Kp[vo] = Qcp[vo].transpose(0, 2, 1) @ JewT[vo] + Qpp[ocol[vo]] @ JpvT
+    # 2×2 block of P½ J Q Jᵀ P½ per image observation = Jw K (batched products, no full
+    # Q): redundancy numbers r = 1 − diagonal, off-diagonal of P½ Q_vv P½ = −(J Q Jᵀ)_xy
+    H = Jew @ Ke
+    H[vo] += Jpv @ Kp[vo]
     if fast_ap:
         H += Hray
     elif q:  # the parameters' terms of the rays, from the dense border cofactors
@@ -311,22 +318,14 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
         C = (Jpv @ Qpa_o) @ AwT[vo]
         H[vo] += C + C.transpose(0, 2, 1)
     r_img = np.clip(1.0 - np.stack([H[:, 0, 0], H[:, 1, 1]], 1), 0.0, 1.0)
-    # gains of each ray on its own image and point: K = Q_(·, ray) Jwᵀ, i.e. the change
-    # of the estimates per σ-normalised change of the ray's x, y (external reliability)
-    JewT = Jew.transpose(0, 2, 1)
-    Ke = Qcc_diag[oi] @ JewT
-    Kp = np.zeros((n_used, 3, 2))
-    JpvT = Jpv.transpose(0, 2, 1)
-    Ke[vo] += Qcp[vo] @ JpvT
-    Kp[vo] = Qcp[vo].transpose(0, 2, 1) @ JewT[vo] + Qpp[ocol[vo]] @ JpvT
-    if q:  # Q_ca, Q_pa in the ray's own group's k columns, times its design
+    if q:  # the gains' terms of Q_ca, Q_pa in the ray's own group's k columns
         if fast_ap:
             Qca_o = Qca3.reshape(m, 6, prob.G, prob.k)[np.arange(m), :, prob.grp, :][oi]
             Qpa_o = Qap_pg[prob.ap_struct.own_pg[vo]].transpose(0, 2, 1)
             AwT = prob.Aw.transpose(0, 2, 1)
         Ke += Qca_o @ AwT
         Kp[vo] += Qpa_o @ AwT[vo]
-    r_xy = -H[:, 0, 1]
+    r_xy = -0.5 * (H[:, 0, 1] + H[:, 1, 0])
     n = prob.block.n_observations
     rn = np.full((n, 2), np.nan)
     rn[prob.uobs] = r_img
