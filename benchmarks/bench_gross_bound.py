@@ -19,10 +19,10 @@ import sys
 for _v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_v, "1")
 
+import bench_gross as bg  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy.stats import ncx2  # noqa: E402
 
-import bench_gross as bg  # noqa: E402
 from orientviz.adjust.gross2d import critical_values_2d, statistic_2d  # noqa: E402
 from orientviz.block.cleaning import bundle_solver  # noqa: E402
 
