@@ -6,7 +6,7 @@
 * ``docs/figures/viewer.png``: the 3D viewer on its default demo (what ``orientviz view``
   shows), served on 127.0.0.1 and photographed in headless Chromium (playwright with
   /usr/bin/chromium and the test suite's Chromium flags; software WebGL).
-* ``docs/figures/lesson_block_errors.png``: the figure of lesson 05 that sets the
+* ``docs/figures/lesson_block_errors.png``: the figure of lesson 08 that sets the
   polynomial method beside independent models (true errors of the tie points), made
   with :func:`orientviz.plot.block.plot_error_vectors` on the lesson's own block.
 
@@ -129,7 +129,7 @@ def viewer_figure(
 
 
 def lesson_figure(path: pathlib.Path) -> None:
-    """Lesson 05: true errors of the tie points, polynomial method vs independent models."""
+    """Lesson 08: true errors of the tie points, polynomial method vs independent models."""
     import matplotlib
 
     matplotlib.use("Agg")

@@ -12,7 +12,7 @@ from orientviz.io.control import apply_control, read_control
 
 def test_diverged_start_values_give_a_result_without_precision(tmp_path):
     # seed 1 of the small debug example: one image turned by 200 gon and shifted ~300 m,
-    # which drives the iterations to a state with singular point blocks (found in lesson 10)
+    # which drives the iterations to a state with singular point blocks (found in lesson 15)
     make_debug_example(tmp_path, rng=1, strips=2, images_per_strip=4)
     block = read_colmap(tmp_path / "colmap", pixel_size_mm=0.01)
     block = apply_control(block, read_control(tmp_path / "control.csv")) or block

@@ -1,7 +1,7 @@
 """A lesson, for real: JupyterLab on 127.0.0.1, the notebook run in headless Chromium,
 a slider moved with the keyboard, and the figure seen to change.
 
-The server runs in a temporary root holding a copy of lesson 01, with its own config,
+The server runs in a temporary root holding a copy of lesson 02, with its own config,
 data, runtime, settings and workspace directories (nothing of the user's Jupyter setup is
 read or written). JupyterLab is asked to expose its application object
 (``--LabApp.expose_app_in_browser``) so that the test can wait on the kernel's state and
@@ -25,7 +25,7 @@ import pytest
 from conftest import free_port
 
 ROOT = pathlib.Path(__file__).parents[2]
-LESSON = "01_rotations_and_collinearity.ipynb"
+LESSON = "02_rotations_and_collinearity.ipynb"
 OVERALL_S = 180.0  # generous: a cold start on a busy 2-core machine
 STEP_MS = 120_000
 

@@ -1,6 +1,6 @@
 """A "real-looking" adjustment to debug: a COLMAP text model, a BAL file and control.
 
-orientviz ships no real image blocks, so lesson 10 (debugging an adjustment) builds
+orientviz ships no real image blocks, so lesson 15 (debugging an adjustment) builds
 one: a simulated aerial block (:func:`~orientviz.block.simulate.simulate_block`, c =
 152 mm, 1 : 10 000, 5 µm noise) written out as files the way another program would
 hand them over, with the faults a real job has:
