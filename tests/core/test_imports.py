@@ -14,6 +14,7 @@ CORE = [
     "orientviz.block",
     "orientviz.radar",
     "orientviz.io",
+    "orientviz.report",
     "orientviz.cli",
 ]
 

@@ -14,8 +14,8 @@ from orientviz.io.colmap import read_colmap
 from orientviz.io.control import ControlPoints, apply_control, read_control, write_control
 from orientviz.io.export import export_results
 from orientviz.io.problem import load_problem
-from orientviz.io.results import image_table, point_table, read_csv_table
 from orientviz.model import CHECK, CONTROL
+from orientviz.report import image_table, point_table, read_csv_table
 
 
 @pytest.fixture(scope="module")

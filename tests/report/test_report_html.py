@@ -16,9 +16,8 @@ from test_report_sections import (
 )
 
 from orientviz.io.problem import load_problem
-from orientviz.io.report_html import html_report, write_report
-from orientviz.io.report_sections import build_report
 from orientviz.io.solve import _resolve, solve_problem
+from orientviz.report import build_report, html_report, write_report
 
 pytest.importorskip("matplotlib")
 

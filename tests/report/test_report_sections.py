@@ -12,10 +12,9 @@ import pytest
 
 from orientviz.io.datasets import list_datasets
 from orientviz.io.problem import load_problem, problem_from_block
-from orientviz.io.report_sections import build_report, chi2_test, intersection_angles
-from orientviz.io.report_text import text_report
 from orientviz.io.solve import _resolve, solve_problem
 from orientviz.model import CHECK, TIE, Block
+from orientviz.report import build_report, chi2_test, intersection_angles, text_report
 
 BLOCK_SECTIONS = [
     "summary",
@@ -219,7 +218,7 @@ def test_core_report_does_not_import_matplotlib(tmp_path):
         "import sys\n"
         "from orientviz.io.problem import load_problem\n"
         "from orientviz.io.solve import solve_problem, _resolve\n"
-        "import orientviz.io.report_html as h\n"
+        "import orientviz.report as h\n"
         "p = load_problem(_resolve('block_strip'))\n"
         f"h.write_report(p, solve_problem(p), r'{tmp_path / 'r.txt'}')\n"
         "assert 'matplotlib' not in sys.modules, 'matplotlib imported'\n"
