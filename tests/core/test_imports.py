@@ -15,6 +15,7 @@ CORE = [
     "orientviz.radar",
     "orientviz.io",
     "orientviz.cli",
+    "orientviz.exercises",
 ]
 
 
