@@ -18,6 +18,7 @@ CORE = [
     "orientviz.io",
     "orientviz.report",
     "orientviz.cli",
+    "orientviz.exercises",
 ]
 
 
