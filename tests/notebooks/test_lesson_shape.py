@@ -33,7 +33,6 @@ PENDING = {
     "00_tour",
     "01_least_squares",
     "03_dlt_and_interior_orientation",
-    "04_resection_and_intersection",
     "05_relative_orientation",
     "06_epipolar_geometry",
     "07_absolute_orientation",
