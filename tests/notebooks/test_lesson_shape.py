@@ -38,7 +38,6 @@ PENDING = {
     "05_relative_orientation",
     "06_epipolar_geometry",
     "07_absolute_orientation",
-    "08_block_triangulation",
     "09_datum",
     "10_sparse_normal_equations",
     "11_self_calibration",

@@ -11,7 +11,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from orientviz.exercises._local import as_array, call, ok, rel_err
+from orientviz.exercises._common import CheckFailed, call, compare, relative_error, success
 
 
 def _rodrigues(axis, angle: float) -> np.ndarray:
@@ -35,40 +35,40 @@ def _similarity_cases(rng: np.random.Generator):
     return cases
 
 
+def _triple(out) -> tuple[float, np.ndarray, np.ndarray]:
+    try:
+        s_hat, R_hat, t_hat = out
+        return float(s_hat), np.asarray(R_hat, float), np.asarray(t_hat, float)
+    except (TypeError, ValueError):
+        raise CheckFailed("return the three values (scale, R, t)") from None
+
+
 def check_similarity(fn: Callable) -> None:
     """Check ``fn(x, X) -> (scale, R, t)`` with ``X = t + scale · R · x`` (closed form)."""
     rng = np.random.default_rng(807)  # the flat case makes numpy's SVD return a reflection
     for n_case, (x, X, s, R, t) in enumerate(_similarity_cases(rng), start=1):
-        out = call(fn, x.copy(), X.copy())
-        try:
-            s_hat, R_hat, t_hat = out
-        except (TypeError, ValueError):
-            raise AssertionError("return the three values (scale, R, t)") from None
-        s_hat = float(as_array(s_hat, (), "scale"))
-        R_hat = as_array(R_hat, (3, 3), "R")
-        t_hat = as_array(t_hat, (3,), "t")
+        s_hat, R_hat, t_hat = _triple(call(fn, x.copy(), X.copy(), what="similarity_7"))
         what = "the flat model (all z equal)" if n_case == 2 else "a hilly model"
-        if np.linalg.det(R_hat) < 0:
-            raise AssertionError(
+        if R_hat.shape == (3, 3) and np.linalg.det(R_hat) < 0:
+            raise CheckFailed(
                 f"R is a reflection (det R = {np.linalg.det(R_hat):+.3f}) for {what}: with "
                 "coplanar points the SVD leaves the sign of the third axis open; multiply the "
-                "last column of V by det(V Uᵀ)"
+                "last column of V by det(V Uᵀ)",
+                error=relative_error(R_hat, R),
+                tolerance=1e-8,
             )
-        if abs(s_hat * s - 1) < 1e-6 and s != 1:
-            raise AssertionError(f"scale = {s_hat:.5f} is the inverse of the true {s:.4f}")
-        if np.allclose(R_hat, R.T, atol=1e-6):
-            raise AssertionError("R equals the transpose of the true rotation (model → object wanted)")
-        if rel_err(R_hat, R) > 1e-8 or abs(s_hat - s) > 1e-8 * s:
-            raise AssertionError(
-                f"{what}: scale {s_hat:.6f} (true {s:.6f}), R off by "
-                f"{np.abs(R_hat - R).max():.2e}; did you reduce both point sets to their centroids?"
-            )
-        if rel_err(t_hat, t) > 1e-9:
-            raise AssertionError(
-                f"scale and R are right but t is off by {np.abs(t_hat - t).max():.3f} m: "
-                "t = X̄ − scale · R · x̄"
-            )
-    ok("scale, R and t of two error-free models (one of them flat) recovered exactly")
+        compare(f"scale ({what})", s_hat, s, rtol=1e-8, wrong=[("the inverse of the scale", 1 / s)])
+        compare(
+            f"R ({what})",
+            R_hat,
+            R,
+            rtol=1e-8,
+            wrong=[("R maps object → model: the transpose", R.T)],
+        )
+        compare(
+            f"t ({what})", t_hat, t, rtol=1e-9, wrong=[("t = X̄ without − scale · R · x̄", X.mean(0))]
+        )
+    success("scale, R and t of two error-free models (one of them flat) recovered exactly")
 
 
 def check_sigma0(fn: Callable) -> None:
@@ -81,20 +81,23 @@ def check_sigma0(fn: Callable) -> None:
     n = len(x)
     v = t + s * x @ R.T - X
     want = float(np.sqrt(np.sum(v**2) / sigma**2 / (3 * n - 7)))
-    got = float(as_array(call(fn, x, X, s, R, t, sigma), (), "σ̂0"))
-    if abs(got - want) <= 1e-9 * want:
-        ok(f"σ̂0 = {got:.4f} with r = 3n − 7 = {3 * n - 7}")
-        return
-    hints = {
-        "divided by n·3 instead of the redundancy 3n − 7": want * np.sqrt((3 * n - 7) / (3 * n)),
-        "divided by n − 7 (points, not coordinates)": want * np.sqrt((3 * n - 7) / (n - 7)),
-        "forgot to divide the residuals by σ (metres, not unit weight)": want * sigma,
-        "returned σ̂0² instead of σ̂0": want**2,
-    }
-    for why, value in hints.items():
-        if abs(got - value) <= 1e-6 * abs(value):
-            raise AssertionError(f"σ̂0 = {got:.4f}, expected {want:.4f}: {why}")
-    raise AssertionError(f"σ̂0 = {got:.4f}, expected {want:.4f} = √(vᵀv / σ² / (3n − 7))")
+    got = call(fn, x, X, s, R, t, sigma, what="sigma0_similarity")
+    compare(
+        "σ̂0",
+        got,
+        want,
+        rtol=1e-9,
+        wrong=[
+            (
+                "divided by 3n instead of the redundancy 3n − 7",
+                want * np.sqrt((3 * n - 7) / (3 * n)),
+            ),
+            ("divided by n − 7 (points, not coordinates)", want * np.sqrt((3 * n - 7) / (n - 7))),
+            ("forgot to divide the residuals by σ (metres, not unit weight)", want * sigma),
+            ("σ̂0² instead of σ̂0", want**2),
+        ],
+    )
+    success(f"σ̂0 = {float(got):.4f} with r = 3n − 7 = {3 * n - 7}")
 
 
 def check_conformal(fn: Callable) -> None:
@@ -106,39 +109,50 @@ def check_conformal(fn: Callable) -> None:
         c[1] += 1.0  # mostly a scale and a rotation
         z = xy[:, 0] + 1j * xy[:, 1]
         Z = np.polyval(c[::-1], z)
-        got = np.asarray(call(fn, xy.copy(), np.column_stack([Z.real, Z.imag]), degree))
-        if got.shape != (degree + 1,):
-            raise AssertionError(f"expected {degree + 1} complex coefficients for degree {degree}, got shape {got.shape}")
-        if np.allclose(got, c, rtol=1e-8, atol=1e-8):
-            continue
-        if np.allclose(got[::-1], c, rtol=1e-8, atol=1e-8):
-            raise AssertionError("coefficients in the wrong order: give c0 (the shift) first")
-        if np.allclose(got, np.conj(c), rtol=1e-6, atol=1e-6):
-            raise AssertionError("complex conjugates: the coordinates were paired as x − iy")
-        raise AssertionError(
-            f"degree {degree}: coefficients off by {np.abs(got - c).max():.3g}; use the columns "
-            "1, z, z², … with z = x + iy and one complex least-squares solve"
+        got = np.asarray(
+            call(fn, xy.copy(), np.column_stack([Z.real, Z.imag]), degree, what="conformal_fit")
         )
-    ok("the conformal polynomials of degree 2 and 3 recovered exactly")
+        pair = lambda c_: np.column_stack([np.real(c_), np.imag(c_)])  # noqa: E731
+        if got.shape != c.shape:
+            raise CheckFailed(
+                f"expected {degree + 1} complex coefficients for degree {degree}, got shape {got.shape}"
+            )
+        compare(
+            f"coefficients (degree {degree}) as (real, imaginary)",
+            pair(got),
+            pair(c),
+            rtol=1e-8,
+            wrong=[
+                ("the wrong order: give c0 (the shift) first", pair(c[::-1])),
+                ("complex conjugates: the coordinates were paired as x − iy", pair(np.conj(c))),
+            ],
+        )
+    success("the conformal polynomials of degree 2 and 3 recovered exactly")
 
 
 def check_log_law(fn: Callable) -> None:
     """Check ``fn(n_s, mu) -> (a, b)`` for the law μ = a + b · log10(n_s)."""
     n_s = np.array([2, 3, 4, 6, 8, 12, 20])
     a, b = 0.62, 0.71
-    out = call(fn, n_s.copy(), a + b * np.log10(n_s))
-    got = as_array(out, (2,), "(a, b)")
-    if np.allclose(got, [a, b], atol=1e-9):
-        ok(f"a = {got[0]:.3f}, b = {got[1]:.3f}: a straight line over log10 n_s")
-        return
-    if np.allclose(got, [b, a], atol=1e-9):
-        raise AssertionError("(a, b) swapped: return the constant a first")
-    if abs(got[1] * np.log(10) - b) < 1e-6:
-        raise AssertionError(f"b = {got[1]:.4f} is b/ln 10: natural logarithm instead of log10")
-    raise AssertionError(
-        f"(a, b) = ({got[0]:.4f}, {got[1]:.4f}), expected ({a}, {b}): fit a straight line to "
-        "μ over log10(n_s), not over n_s"
+    out = call(fn, n_s.copy(), a + b * np.log10(n_s), what="log_law")
+    compare(
+        "(a, b)",
+        out,
+        [a, b],
+        rtol=1e-9,
+        wrong=[
+            ("(a, b) swapped: return the constant a first", [b, a]),
+            (
+                "b/ln 10: the natural logarithm instead of log10",
+                np.linalg.lstsq(
+                    np.column_stack([np.ones(n_s.size), np.log(n_s)]),
+                    a + b * np.log10(n_s),
+                    rcond=None,
+                )[0],
+            ),
+        ],
     )
+    success(f"a = {a:.3f}, b = {b:.3f}: a straight line over log10 n_s")
 
 
 # ---------------------------------------------------------------------- solutions
@@ -216,20 +230,29 @@ MUTANTS = {
         "t without the rotation": _t_from_origin,
     },
     "check_sigma0": {
-        "divide by 3n": lambda x, X, s, R, t, sg: _sigma0(x, X, s, R, t, sg) * np.sqrt((3 * len(x) - 7) / (3 * len(x))),
+        "divide by 3n": lambda x, X, s, R, t, sg: (
+            _sigma0(x, X, s, R, t, sg) * np.sqrt((3 * len(x) - 7) / (3 * len(x)))
+        ),
         "metres": lambda x, X, s, R, t, sg: _sigma0(x, X, s, R, t, sg) * sg,
         "squared": lambda x, X, s, R, t, sg: _sigma0(x, X, s, R, t, sg) ** 2,
         "transpose": lambda x, X, s, R, t, sg: _sigma0(x, X, s, R.T, t, sg),
     },
     "check_conformal": {
         "reversed": lambda xy, XY, d: _conformal(xy, XY, d)[::-1],
-        "no constant": lambda xy, XY, d: np.r_[0, np.linalg.lstsq(
-            np.column_stack([(xy[:, 0] + 1j * xy[:, 1]) ** k for k in range(1, d + 1)]),
-            XY[:, 0] + 1j * XY[:, 1], rcond=None)[0]],
+        "no constant": lambda xy, XY, d: np.r_[
+            0,
+            np.linalg.lstsq(
+                np.column_stack([(xy[:, 0] + 1j * xy[:, 1]) ** k for k in range(1, d + 1)]),
+                XY[:, 0] + 1j * XY[:, 1],
+                rcond=None,
+            )[0],
+        ],
         "conjugate pairing": lambda xy, XY, d: _conformal(xy * [1, -1], XY, d),
     },
     "check_log_law": {
-        "natural log": lambda n, mu: np.linalg.lstsq(np.column_stack([np.ones(len(n)), np.log(n)]), mu, rcond=None)[0],
+        "natural log": lambda n, mu: np.linalg.lstsq(
+            np.column_stack([np.ones(len(n)), np.log(n)]), mu, rcond=None
+        )[0],
         "linear": lambda n, mu: np.polyfit(n, mu, 1)[::-1],
         "swapped": lambda n, mu: _log_law(n, mu)[::-1],
     },
