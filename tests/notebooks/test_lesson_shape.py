@@ -32,7 +32,6 @@ NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
 PENDING = {
     "00_tour",
     "01_least_squares",
-    "02_rotations_and_collinearity",
     "03_dlt_and_interior_orientation",
     "04_resection_and_intersection",
     "05_relative_orientation",
