@@ -23,9 +23,9 @@ import numpy as np
 from ...adjust.result import W_CRITICAL
 from ...errors import InputError
 from ...model import CHECK, CONTROL, ROLES, TIE, Block
+from ...report import Solution
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
-from ..report import Solution
 from ._frame import block_from_tables, read_frame_tables, require_finite, tables_from_block
 
 METHODS = ("bundle", "models", "polynomial")
