@@ -318,7 +318,7 @@ def compare(
     if g.size > 12:
         detail = ""
     msg = f"{name}: wrong (relative difference {err:.3g}, allowed {rtol:.1g})"
-    msg += f" — {text}." if text else "."
+    msg += (f" — {text}" + ("" if text.endswith(("?", ".")) else ".")) if text else "."
     raise CheckFailed(msg + detail, error=err, tolerance=rtol)
 
 
