@@ -60,7 +60,7 @@ def plot_image_field(field, *, ax=None, exaggeration: float | None = None, title
     ax.set_xlabel("x [mm] (flight direction)")
     ax.set_ylabel("y [mm]")
     name = textwrap.shorten(field.name, 60)
-    ax.set_title(title or f"{name}\nmax {field.max_um:.1f} µm, vectors ×{ex:.0f}", fontsize=9)
+    ax.set_title(title or f"{name}\nmax {field.max_um:.1f} µm, vectors ×{ex:.0f}", fontsize=10)
     return fig
 
 
@@ -116,7 +116,7 @@ def plot_model_field(
     ax.set_aspect("equal")
     ax.set_xlabel("X [m] (along the base)")
     ax.set_ylabel("Y [m]")
-    ax.set_title(title or f"{textwrap.shorten(field.name, 60)}\n{sub}", fontsize=9)
+    ax.set_title(title or f"{textwrap.shorten(field.name, 60)}\n{sub}", fontsize=10)
     return fig
 
 
@@ -149,8 +149,8 @@ def plot_deformation_comparison(without, with_, *, axes=None, exaggeration=None)
     for k, (f, label) in enumerate(((without, "without"), (with_, "with self-calibration"))):
         plot_model_field(f, component="planimetry", ax=axes[k], exaggeration=exaggeration)
         plot_model_field(f, component="height", ax=axes[2 + k])
-        axes[k].set_title(f"{label}: " + axes[k].get_title().split("\n")[-1], fontsize=9)
-        axes[2 + k].set_title(f"{label}: " + axes[2 + k].get_title().split("\n")[-1], fontsize=9)
+        axes[k].set_title(f"{label}: " + axes[k].get_title().split("\n")[-1], fontsize=10)
+        axes[2 + k].set_title(f"{label}: " + axes[2 + k].get_title().split("\n")[-1], fontsize=10)
     fig = axes[0].figure
     fig.suptitle(f"model deformation — {textwrap.shorten(without.name, 80)}", fontsize=10)
     fig.tight_layout()
@@ -240,7 +240,7 @@ def plot_deformation_frame(
         ax.set_ylabel(f"Y [{unit}]")
     ax.set_title(
         title or f"t = {float(t):.2f} (0 without, 1 with self-calibration), ×{exaggeration:.0f}",
-        fontsize=9,
+        fontsize=10,
     )
     return fig
 
