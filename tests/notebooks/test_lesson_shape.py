@@ -31,8 +31,6 @@ NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
 #: Notebooks (stems) not yet converted to the lesson shape. Shrink it; never grow it.
 PENDING = {
     "00_tour",
-    "03_dlt_and_interior_orientation",
-    "04_resection_and_intersection",
     "05_relative_orientation",
     "06_epipolar_geometry",
     "07_absolute_orientation",
