@@ -36,7 +36,6 @@ PENDING = {
     "07_absolute_orientation",
     "09_datum",
     "10_sparse_normal_equations",
-    "12_gross_errors",
     "13_auxiliary_data",
     "14_radar_panorama",
     "15_debug_your_adjustment",
