@@ -53,8 +53,8 @@ def plot_normalized_residuals(adj, *, critical: float = 3.29, ax=None, title=Non
     ax.set_yscale("symlog", linthresh=1.0)
     ax.set_xlabel("normalised residual w = v / (σ √r)")
     ax.set_ylabel("count")
-    ax.legend(fontsize=8)
-    ax.set_title(title or f"{n_out} beyond ±{critical:.2f}", fontsize=9)
+    ax.legend(fontsize=10)
+    ax.set_title(title or f"{n_out} beyond ±{critical:.2f}", fontsize=10)
     return fig
 
 
@@ -102,11 +102,11 @@ def plot_cleaning(cleaning, *, truth=None, ax=None, title=None):
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlabel("adjustment" if cleaning.method != "reruns" else "rerun")
     ax.set_ylabel("|w| (test statistic) at elimination")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=10)
     default = f"{cleaning.method}: {len(el)} eliminated in {cleaning.adjustments} adjustments" + (
         f", {missed} missed" if truth is not None else ""
     )
-    ax.set_title(title or default, fontsize=9)
+    ax.set_title(title or default, fontsize=10)
     return fig
 
 
@@ -140,7 +140,7 @@ def plot_reliability(rel, *, ax=None, sigma_unit: float = 1.0, unit: str = "", t
         title
         or f"α0 = {rel.alpha0:g}, β0 = {rel.beta0:g}: δ0 = {rel.delta0:.2f}; "
         f"{int((~ok).sum())} uncontrolled",
-        fontsize=9,
+        fontsize=10,
     )
     return fig
 
@@ -239,12 +239,12 @@ def plot_reliability_map(
     ax.set_aspect("equal")
     ax.set_xlabel("X [m]")
     ax.set_ylabel("Y [m]")
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.12), ncol=2, frameon=False)
+    ax.legend(fontsize=10, loc="upper left", bbox_to_anchor=(0.0, -0.12), ncol=2, frameon=False)
     ax.set_title(
         title
         or f"reliability of the rays (α0 = {rel.alpha0:g}, β0 = {rel.beta0:g}, δ0 = "
         f"{rel.delta0:.2f})",
-        fontsize=9,
+        fontsize=10,
     )
     return fig
 
@@ -284,9 +284,9 @@ def plot_mdb_histogram(rel, block, *, ax=None, title=None):
     blind = int((rel.used & ~rel.testable).sum())
     ax.set_xlabel("MDB along the weakest direction [µm]")
     ax.set_ylabel("rays")
-    ax.legend(fontsize=7, title="testable rays of points with", title_fontsize=7)
+    ax.legend(fontsize=10, title="testable rays of points with", title_fontsize=10)
     ax.set_title(
-        title or f"{int(ok.sum())} testable rays; {blind} not testable (MDB infinite)", fontsize=9
+        title or f"{int(ok.sum())} testable rays; {blind} not testable (MDB infinite)", fontsize=10
     )
     return fig
 

@@ -14,9 +14,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..adjust.result import Adjustment
+from ..io.problem import Problem
 from ..model import Block
-from .problem import Problem
-from .report import Solution
+from ._solution import Solution
 
 F64 = NDArray[np.float64]
 
