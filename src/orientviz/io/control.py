@@ -138,13 +138,16 @@ def csv_rows(stream, source: str) -> list[list[str]]:
     a broken quote is one :class:`InputError` naming the line."""
     reader = csv.reader(stream)
     rows: list[list[str]] = []
-    try:
-        for row in reader:
-            rows.append(row)
-    except csv.Error as exc:
-        raise InputError(
-            f"not a readable CSV row ({exc})", source, f"line {reader.line_num}"
-        ) from None
+    with stream:
+        try:
+            for row in reader:
+                rows.append(row)
+        except csv.Error as exc:
+            where = f"line {reader.line_num}"
+            raise InputError(f"not a readable CSV row ({exc})", source, where) from None
+        except UnicodeDecodeError as exc:
+            where = f"line {reader.line_num + 1}"
+            raise InputError(f"not UTF-8 text ({exc.reason})", source, where) from None
     return rows
 
 

@@ -31,6 +31,7 @@ from ..errors import InputError
 DEFAULT_MAX_BYTES: int = 512 * 2**20
 
 _limit: contextvars.ContextVar[int] = contextvars.ContextVar("max_input", default=DEFAULT_MAX_BYTES)
+_explicit: contextvars.ContextVar[bool] = contextvars.ContextVar("max_input_given", default=False)
 _inputs: contextvars.ContextVar[frozenset[tuple[int, int]]] = contextvars.ContextVar(
     "inputs", default=frozenset()
 )
@@ -49,11 +50,13 @@ def input_limit(max_bytes: int | None) -> Iterator[None]:
     """
     t1 = _limit.set(DEFAULT_MAX_BYTES if max_bytes is None else int(max_bytes))
     t2 = _inputs.set(frozenset())
+    t3 = _explicit.set(max_bytes is not None)
     try:
         yield
     finally:
         _limit.reset(t1)
         _inputs.reset(t2)
+        _explicit.reset(t3)
 
 
 def parse_size(text: str) -> int:
@@ -84,7 +87,9 @@ def _kind(mode: int) -> str:
     return "not a regular file"
 
 
-def check_input_file(path: str | os.PathLike[str], what: str = "an input file") -> Path:
+def check_input_file(
+    path: str | os.PathLike[str], what: str = "an input file", *, capped: bool = True
+) -> Path:
     """Check that ``path`` is a readable regular file within the size limit.
 
     Parameters
@@ -93,6 +98,9 @@ def check_input_file(path: str | os.PathLike[str], what: str = "an input file") 
         The file as the user named it (symlinks are followed and judged by their target).
     what : str
         What was expected, for the message (``"a BAL text file"``).
+    capped : bool
+        True: the limit is ``--max-size`` or the default 512 MB. False (streaming readers
+        whose memory does not grow with the file): only a ``--max-size`` the user gave.
 
     Returns
     -------
@@ -115,7 +123,7 @@ def check_input_file(path: str | os.PathLike[str], what: str = "an input file") 
     if not stat.S_ISREG(st.st_mode):
         raise InputError(f"is {_kind(st.st_mode)}, expected {what}", source)
     limit = max_input_bytes()
-    if st.st_size > limit:
+    if (capped or _explicit.get()) and st.st_size > limit:
         raise InputError(
             f"is {_megabytes(st.st_size)}, larger than the limit of {_megabytes(limit)} "
             "(raise it with --max-size)",
@@ -163,12 +171,23 @@ def read_input_text(
 
 
 def open_input_text(
-    path: str | os.PathLike[str], what: str = "a text file", encoding: str = "utf-8"
+    path: str | os.PathLike[str],
+    what: str = "a text file",
+    encoding: str = "utf-8",
+    *,
+    capped: bool = True,
 ) -> IO[str]:
-    """A text stream of a checked input file (``newline=""``, for :mod:`csv`)."""
-    import io
+    """An open text stream (``newline=""``, for :mod:`csv`) of a checked input file.
 
-    return io.StringIO(read_input_text(path, what, encoding), newline="")
+    For streaming readers: iterate it and turn a ``UnicodeDecodeError`` into an
+    :class:`InputError` with the line (see :func:`orientviz.io.control.csv_rows`).
+    ``capped=False``: only a ``--max-size`` the user gave limits the size.
+    """
+    p = check_input_file(path, what, capped=capped)
+    try:
+        return open(p, encoding=encoding, newline="")
+    except OSError as exc:
+        raise InputError(f"cannot read: {exc.strerror or exc}", str(path)) from None
 
 
 # --------------------------------------------------------------------------- writing

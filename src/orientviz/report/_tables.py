@@ -82,7 +82,7 @@ class ResultTable:
         """Write the table as CSV (header ``name[unit]``; NaN as an empty cell), atomically."""
         import io
 
-        from .safeio import write_atomic
+        from ..io.safeio import write_atomic
 
         fh = io.StringIO(newline="")
         w = csv.writer(fh)
@@ -242,8 +242,8 @@ def read_csv_table(path: str | os.PathLike[str]) -> dict[str, list[str]]:
     Header names keep their unit suffix (``"X0[m]"``). Raises :class:`InputError`
     naming the file and line for rows with the wrong number of cells.
     """
-    from .control import csv_rows
-    from .safeio import open_input_text
+    from ..io.control import csv_rows
+    from ..io.safeio import open_input_text
 
     source = str(path)
     rows = csv_rows(open_input_text(path, "a CSV table"), source)
