@@ -35,7 +35,6 @@ PENDING = {
     "07_absolute_orientation",
     "09_datum",
     "10_sparse_normal_equations",
-    "11_self_calibration",
     "12_gross_errors",
     "13_auxiliary_data",
     "14_radar_panorama",
