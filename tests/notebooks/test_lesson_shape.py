@@ -34,7 +34,6 @@ PENDING = {
     "03_dlt_and_interior_orientation",
     "05_relative_orientation",
     "06_epipolar_geometry",
-    "07_absolute_orientation",
     "09_datum",
     "10_sparse_normal_equations",
     "11_self_calibration",
