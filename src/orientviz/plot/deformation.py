@@ -140,7 +140,7 @@ def plot_deformation_comparison(without, with_, *, axes=None, exaggeration=None)
     import matplotlib.pyplot as plt
 
     if axes is None:
-        fig, axes = plt.subplots(2, 2, figsize=(10, 9))
+        fig, axes = plt.subplots(2, 2, figsize=(9, 8.2))
     axes = np.asarray(axes).ravel()
     if exaggeration is None:
         width = float(np.ptp(without.xyz[:, 0])) or 1.0
@@ -271,7 +271,7 @@ def plot_field_split(split, *, axes=None, exaggeration: float | None = None):
     from ..block.deformation import ImageField
 
     if axes is None:
-        _, axes = plt.subplots(1, 3, figsize=(14, 4.8))
+        _, axes = plt.subplots(1, 3, figsize=(9.6, 3.9))
     axes = np.asarray(axes).ravel()
     g = split.grid
     if exaggeration is None:
