@@ -32,8 +32,6 @@ NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
 PENDING = {
     "00_tour",
     "05_relative_orientation",
-    "06_epipolar_geometry",
-    "07_absolute_orientation",
     "09_datum",
     "10_sparse_normal_equations",
     "13_auxiliary_data",
