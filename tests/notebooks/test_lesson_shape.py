@@ -32,11 +32,8 @@ NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
 PENDING = {
     "00_tour",
     "05_relative_orientation",
-    "06_epipolar_geometry",
-    "07_absolute_orientation",
     "09_datum",
     "10_sparse_normal_equations",
-    "12_gross_errors",
     "13_auxiliary_data",
     "14_radar_panorama",
     "15_debug_your_adjustment",
