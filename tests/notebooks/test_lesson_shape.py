@@ -31,7 +31,6 @@ NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
 #: Notebooks (stems) not yet converted to the lesson shape. Shrink it; never grow it.
 PENDING = {
     "00_tour",
-    "05_relative_orientation",
     "06_epipolar_geometry",
     "09_datum",
     "10_sparse_normal_equations",
