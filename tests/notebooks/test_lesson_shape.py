@@ -32,7 +32,6 @@ NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
 PENDING = {
     "00_tour",
     "05_relative_orientation",
-    "09_datum",
     "10_sparse_normal_equations",
     "12_gross_errors",
     "13_auxiliary_data",
