@@ -33,8 +33,6 @@ PENDING = {
     "00_tour",
     "05_relative_orientation",
     "10_sparse_normal_equations",
-    "12_gross_errors",
-    "13_auxiliary_data",
     "14_radar_panorama",
     "15_debug_your_adjustment",
 }
