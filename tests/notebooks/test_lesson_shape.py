@@ -34,7 +34,6 @@ PENDING = {
     "05_relative_orientation",
     "09_datum",
     "10_sparse_normal_equations",
-    "14_radar_panorama",
     "15_debug_your_adjustment",
 }
 
