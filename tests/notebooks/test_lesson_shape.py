@@ -31,7 +31,6 @@ NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
 #: Notebooks (stems) not yet converted to the lesson shape. Shrink it; never grow it.
 PENDING = {
     "10_sparse_normal_equations",
-    "14_radar_panorama",
     "15_debug_your_adjustment",
 }
 
