@@ -32,7 +32,6 @@ NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
 PENDING = {
     "00_tour",
     "05_relative_orientation",
-    "10_sparse_normal_equations",
     "14_radar_panorama",
     "15_debug_your_adjustment",
 }
