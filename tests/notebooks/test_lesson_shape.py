@@ -32,7 +32,6 @@ NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
 PENDING = {
     "00_tour",
     "10_sparse_normal_equations",
-    "15_debug_your_adjustment",
 }
 
 DISPLAY = re.compile(r"\$\$(.+?)\$\$", re.S)
