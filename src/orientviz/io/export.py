@@ -5,7 +5,7 @@
 * ``adjusted.json`` — the problem file (``orientviz/1``, kind ``block``) with the
   adjusted orientations and tie points as its values: load it with
   :func:`~orientviz.io.problem.load_problem` or adjust it again with ``orientviz solve``;
-* ``images.csv`` and ``points.csv`` — the tables of :mod:`orientviz.io.results`
+* ``images.csv`` and ``points.csv`` — the tables of :mod:`orientviz.report`
   (values, a-posteriori σ, residuals per image and per point);
 * ``colmap/`` — the adjusted block as a COLMAP text model
   (:func:`~orientviz.io.colmap.write_colmap`).
@@ -62,15 +62,16 @@ def export_results(
         ``{"json": path, "images_csv": path, "points_csv": path, "colmap": folder}``
         for what was written.
     """
+    from ..report import adjusted_block, image_table, point_table
     from .colmap import write_colmap
     from .problem import write_problem
-    from .results import adjusted_block, image_table, point_table
 
     unknown = [f for f in formats if f not in FORMATS]
     if unknown:
         raise InputError(f"unknown export format {unknown[0]!r}; expected {', '.join(FORMATS)}")
-    d = Path(directory)
-    d.mkdir(parents=True, exist_ok=True)
+    from .safeio import prepare_output_dir
+
+    d = prepare_output_dir(directory)
     out = block if adj is None else adjusted_block(block, adj)
     written: dict[str, Path] = {}
     if "json" in formats:

@@ -2,7 +2,7 @@
 
 Loads a problem file, solves it with the solver of its kind and prints a readable
 report or JSON. ``--report PATH`` also writes the full adjustment report
-(:func:`orientviz.io.report_html.write_report`): ``*.html`` one self-contained page with
+(:func:`orientviz.report.write_report`): ``*.html`` one self-contained page with
 figures, ``*.txt`` fixed-width text. Exit codes: 0 solved and converged, 2 bad input
 (one line naming file, place and problem; also a report path that cannot be written or
 has another suffix), 3 the adjustment is impossible (datum defect, not determinable) or
@@ -19,9 +19,9 @@ import sys
 import numpy as np
 
 from ..errors import AdjustmentError, InputError
+from ..report import Solution
 from .problem import Problem, load_problem, save_problem
 from .registry import get_kind
-from .report import Solution
 
 
 def solve_problem(problem: Problem, method: str | None = None) -> Solution:
@@ -50,8 +50,32 @@ def solve_problem(problem: Problem, method: str | None = None) -> Solution:
         )
     if kind.solve is None:
         raise InputError(f"kind {kind.name!r} cannot be solved by this version", problem.source)
+    warnings = check_geometry(problem)
     with np.errstate(all="ignore"):
-        return kind.solve(problem, method)
+        solution = kind.solve(problem, method)
+    solution.notes.extend(f"warning: {f.message}" for f in warnings)
+    return solution
+
+
+def check_geometry(problem: Problem) -> list:
+    """The plausibility checks (:mod:`orientviz.plausibility`) of a frame problem.
+
+    Raises the first fatal finding (InputError naming the file and place, or
+    AdjustmentError); returns the warnings (also logged). Other kinds: no checks.
+    """
+    from ..model import Block
+    from ..plausibility import check_block, raise_for
+
+    if not isinstance(problem.data, Block):
+        return []
+    if problem.columnar:
+        place = lambda k: f"observations.x[{k}]"  # noqa: E731
+    else:
+        place = lambda k: f"observations[{k}]"  # noqa: E731
+    findings = check_block(
+        problem.data, exterior_unknown=problem.kind != "intersection", place=place
+    )
+    return raise_for(findings, problem.source)
 
 
 def run_from_cli(args: argparse.Namespace) -> int:
@@ -60,7 +84,7 @@ def run_from_cli(args: argparse.Namespace) -> int:
     report_path = getattr(args, "report", None)
     try:
         if report_path:
-            from .report_html import report_format
+            from ..report import report_format
 
             report_format(report_path)  # a wrong suffix fails before the adjustment
         problem = load_problem(_resolve(args.file))
@@ -71,6 +95,8 @@ def run_from_cli(args: argparse.Namespace) -> int:
             else solution.as_text()
         )
     except InputError as exc:
+        if not exc.source:  # a solver's check: the file is the user's
+            exc = InputError(exc.message, args.file, exc.where)
         print(f"{prog}: {exc.one_line()}", file=sys.stderr)
         return 2
     except ModuleNotFoundError as exc:  # a solver module of this kind is not there (yet)
@@ -102,7 +128,7 @@ def run_from_cli(args: argparse.Namespace) -> int:
             return 2
     if report_path:
         try:
-            from .report_html import write_report
+            from ..report import write_report
 
             with np.errstate(all="ignore"):
                 write_report(problem, solution, report_path)
@@ -110,6 +136,9 @@ def run_from_cli(args: argparse.Namespace) -> int:
             print(f"{prog}: {exc.one_line()}", file=sys.stderr)
             return 2
     _print(text)
+    for note in solution.notes:
+        if note.startswith("warning: "):
+            print(f"{prog}: warning: {args.file}: {note[9:]}", file=sys.stderr)
     if not solution.adjustment.converged:
         print(
             f"{prog}: {args.file}: the adjustment did not converge: {solution.adjustment.reason}",

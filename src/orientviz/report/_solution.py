@@ -1,0 +1,284 @@
+"""What ``orientviz solve`` reports: a :class:`Solution` as text or as JSON.
+
+Every number is converted to the units of the problem file: lengths in ``units.length``,
+angles in ``units.angle``, image residuals in ``units.image``. Standard deviations are
+a-posteriori (scaled with σ̂0) when the redundancy is positive, a-priori otherwise.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..adjust.result import W_CRITICAL, Adjustment
+from ..io.problem import Units
+from ..io.tables import json_number
+
+F64 = NDArray[np.float64]
+
+
+@dataclass
+class Parameter:
+    """A named estimate with its σ, in internal units, and what kind of quantity it is.
+
+    ``quantity`` is ``"length"`` (m), ``"angle"`` (rad), ``"image"`` (mm) or ``"1"``
+    (dimensionless, e.g. a scale factor).
+    """
+
+    name: str
+    value: float
+    sigma: float
+    quantity: str
+
+
+@dataclass
+class Solution:
+    """A solved problem, ready for reporting.
+
+    Attributes
+    ----------
+    kind, method : str
+        The problem kind and the method used (``"bundle"``, ``"resection"``, …).
+    adjustment : Adjustment
+        The solver's result.
+    units : Units
+        The problem file's units (reports use them).
+    image_ids : list of str
+        Images whose orientation was estimated (may be empty).
+    X0, angles, X0_sigma, angles_sigma : ndarray, shape (m, 3)
+        Projection centres (m) and ω, φ, κ (rad) with their σ.
+    point_ids : list of str
+        Points whose coordinates were estimated or transformed.
+    xyz, xyz_sigma : ndarray, shape (p, 3)
+        Point coordinates (m) and σ (m).
+    point_roles : list of str
+        Role of each point (tie/control/check/transformed).
+    parameters : list of Parameter
+        Other estimates (transformation parameters, …).
+    observation_quantity : str
+        Quantity of the observations (``"image"`` or ``"length"``), for residual units.
+    critical : float
+        Critical absolute normalised residual for flagging.
+    notes : list of str
+        Remarks for the report (e.g. check-point errors).
+    iterations : int, optional
+        Number of iterations when the adjustment's history does not hold them.
+    """
+
+    kind: str
+    method: str
+    adjustment: Adjustment
+    units: Units
+    sequence: str = "opk"
+    image_ids: list[str] = field(default_factory=list)
+    X0: F64 = field(default_factory=lambda: np.zeros((0, 3)))
+    angles: F64 = field(default_factory=lambda: np.zeros((0, 3)))
+    X0_sigma: F64 = field(default_factory=lambda: np.zeros((0, 3)))
+    angles_sigma: F64 = field(default_factory=lambda: np.zeros((0, 3)))
+    point_ids: list[str] = field(default_factory=list)
+    xyz: F64 = field(default_factory=lambda: np.zeros((0, 3)))
+    xyz_sigma: F64 = field(default_factory=lambda: np.zeros((0, 3)))
+    point_roles: list[str] = field(default_factory=list)
+    parameters: list[Parameter] = field(default_factory=list)
+    observation_quantity: str = "image"
+    critical: float = W_CRITICAL
+    notes: list[str] = field(default_factory=list)
+    iterations: int | None = None
+
+    @property
+    def n_iterations(self) -> int:
+        """Iterations taken (the solver's own count if it gave one, else the history's)."""
+        return int(self.adjustment.iterations if self.iterations is None else self.iterations)
+
+    # ------------------------------------------------------------------ units
+    def factor(self, quantity: str) -> float:
+        """Multiply an internal value of ``quantity`` by this to get file units."""
+        u = self.units
+        return {
+            "length": 1.0 / u.m_per_length,
+            "angle": 1.0 / u.rad_per_angle,
+            "image": 1.0 / u.mm_per_image,
+            "1": 1.0,
+        }[quantity]
+
+    def unit_name(self, quantity: str) -> str:
+        u = self.units
+        return {"length": u.length, "angle": u.angle, "image": u.image, "1": ""}[quantity]
+
+    def label(self, i: int) -> str:
+        labels = self.adjustment.obs_labels
+        return labels[i] if labels is not None and i < len(labels) else f"obs[{i}]"
+
+    def flagged(self) -> list[dict[str, Any]]:
+        """Observations with abs(w) above ``critical``, largest first (file units)."""
+        adj = self.adjustment
+        f = self.factor(self.observation_quantity)
+        out = []
+        for i in adj.flagged(self.critical):
+            out.append(
+                {
+                    "index": int(i),
+                    "label": self.label(int(i)),
+                    "v": json_number(adj.residuals[i] * f, 6),
+                    "w": json_number(adj.normalized_residuals[i], 4),
+                }
+            )
+        return out
+
+    # ------------------------------------------------------------------ JSON
+    def as_dict(self) -> dict[str, Any]:
+        """The JSON report (see ``orientviz solve --json``)."""
+        adj = self.adjustment
+        L, A = self.factor("length"), self.factor("angle")
+        num = json_number
+        images = []
+        for k, ident in enumerate(self.image_ids):
+            X, a = self.X0[k] * L, self.angles[k] * A
+            sX, sa = self.X0_sigma[k] * L, self.angles_sigma[k] * A
+            images.append(
+                {
+                    "id": ident,
+                    "X0": num(X[0]),
+                    "Y0": num(X[1]),
+                    "Z0": num(X[2]),
+                    "omega": num(a[0]),
+                    "phi": num(a[1]),
+                    "kappa": num(a[2]),
+                    "sigma": {
+                        "X0": num(sX[0], 6),
+                        "Y0": num(sX[1], 6),
+                        "Z0": num(sX[2], 6),
+                        "omega": num(sa[0], 6),
+                        "phi": num(sa[1], 6),
+                        "kappa": num(sa[2], 6),
+                    },
+                }
+            )
+        points = []
+        for k, ident in enumerate(self.point_ids):
+            X, s = self.xyz[k] * L, self.xyz_sigma[k] * L
+            points.append(
+                {
+                    "id": ident,
+                    "role": self.point_roles[k] if k < len(self.point_roles) else "",
+                    "X": num(X[0]),
+                    "Y": num(X[1]),
+                    "Z": num(X[2]),
+                    "sigma": {"X": num(s[0], 6), "Y": num(s[1], 6), "Z": num(s[2], 6)},
+                }
+            )
+        params = [
+            {
+                "name": p.name,
+                "value": num(p.value * self.factor(p.quantity)),
+                "sigma": num(p.sigma * self.factor(p.quantity), 6),
+                "unit": self.unit_name(p.quantity),
+            }
+            for p in self.parameters
+        ]
+        return {
+            "kind": self.kind,
+            "method": self.method,
+            "units": self.units.as_dict(),
+            "sequence": self.sequence,
+            "sigma0": num(adj.sigma0, 6),
+            "redundancy": int(adj.redundancy),
+            "observations": int(adj.n_observations),
+            "unknowns": int(adj.n_unknowns),
+            "iterations": self.n_iterations,
+            "converged": bool(adj.converged),
+            "reason": adj.reason,
+            "images": images,
+            "points": points,
+            "parameters": params,
+            "flagged": self.flagged(),
+            "critical": self.critical,
+            "notes": list(self.notes),
+        }
+
+    # ------------------------------------------------------------------ text
+    def as_text(self, largest: int = 5) -> str:
+        """A readable report: σ0, redundancy, iterations, parameters ± σ, residuals."""
+        adj = self.adjustment
+        u = self.units
+        L, A = self.factor("length"), self.factor("angle")
+        lines = [
+            f"{self.kind} ({self.method}): {adj.n_observations} observations, "
+            f"{adj.n_unknowns} unknowns, redundancy {adj.redundancy}",
+            f"sigma0 = {adj.sigma0:.4g} (a-posteriori, unit weight)",
+            f"{self.n_iterations} iterations, "
+            f"{'converged' if adj.converged else 'NOT CONVERGED'}: {adj.reason}",
+            f"units of the file: length {u.length}, image {u.image}, angle {u.angle}; "
+            f"rotation sequence {self.sequence}",
+        ]
+        if self.parameters:
+            lines.append("")
+            lines.append("parameters:")
+            for p in self.parameters:
+                f, un = self.factor(p.quantity), self.unit_name(p.quantity)
+                lines.append(
+                    f"  {p.name:12s} {p.value * f:16.6f} ± {p.sigma * f:.3g} {un}".rstrip()
+                )
+        if self.image_ids:
+            lines.append("")
+            lines.append(
+                f"images (X0 Y0 Z0 ± σ [{u.length}], omega phi kappa ± σ [{u.angle}], "
+                f"sequence {self.sequence}):"
+            )
+            for k, ident in enumerate(self.image_ids):
+                X, s = self.X0[k] * L, self.X0_sigma[k] * L
+                a, sa = self.angles[k] * A, self.angles_sigma[k] * A
+                lines.append(f"  {ident:10s} " + " ".join(_pm(X[j], s[j], 4) for j in range(3)))
+                if np.any(np.isfinite(a)):
+                    lines.append(f"  {'':10s} " + " ".join(_pm(a[j], sa[j], 5) for j in range(3)))
+        if self.point_ids:
+            lines.append("")
+            lines.append(f"points (X Y Z ± σ [{u.length}]):")
+            shown = min(len(self.point_ids), 30)
+            for k in range(shown):
+                X, s = self.xyz[k] * L, self.xyz_sigma[k] * L
+                role = self.point_roles[k] if k < len(self.point_roles) else ""
+                lines.append(
+                    f"  {self.point_ids[k]:10s} {role:11s} "
+                    + " ".join(_pm(X[j], s[j], 4) for j in range(3))
+                )
+            if shown < len(self.point_ids):
+                lines.append(f"  ... {len(self.point_ids) - shown} more (use --json for all)")
+        qu = self.unit_name(self.observation_quantity)
+        f = self.factor(self.observation_quantity)
+        idx = adj.largest_residuals(largest)
+        if idx.size:
+            lines.append("")
+            if adj.normalized_residuals is None:
+                lines.append(
+                    f"largest residuals (v [{qu}]; this method gives no redundancy numbers):"
+                )
+            else:
+                lines.append(f"largest normalised residuals (v [{qu}], w = v / (σ √r)):")
+            w = adj.normalized_residuals
+            for i in idx:
+                wi = float("nan") if w is None else float(w[i])
+                lines.append(
+                    f"  {self.label(int(i)):24s} v = {adj.residuals[i] * f:10.4g}  w = {wi:7.2f}"
+                )
+        flagged = self.flagged()
+        lines.append("")
+        if flagged:
+            lines.append(f"flagged (|w| > {self.critical:g}): {len(flagged)} observation(s)")
+            for item in flagged[:20]:
+                lines.append(f"  {item['label']:24s} w = {item['w']}")
+        else:
+            lines.append(f"flagged (|w| > {self.critical:g}): none")
+        for note in self.notes:
+            lines.append(note)
+        return "\n".join(lines)
+
+
+def _pm(value: float, sigma: float, digits: int) -> str:
+    """``"  1234.5678 ±   0.0123"``; a value or σ that was not computed prints as a dash."""
+    v = f"{value:13.{digits}f}" if np.isfinite(value) else f"{'—':>13s}"
+    s = f"{sigma:8.{digits}f}" if np.isfinite(sigma) else f"{'—':>8s}"
+    return f"{v} ±{s}"

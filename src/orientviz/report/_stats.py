@@ -1,0 +1,158 @@
+"""Numbers behind the report's tests and warnings: χ² test of σ0, intersection angles,
+image coverage, which observations were adjusted, correlation matrices.
+
+All functions work on plain arrays and :class:`~orientviz.model.Block` tables; none
+imports matplotlib.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..adjust.result import Adjustment
+from ..io.problem import Problem
+from ..model import Block
+from ._solution import Solution
+
+F64 = NDArray[np.float64]
+
+
+# --------------------------------------------------------------------------- helpers
+def used_observations(adj: Adjustment) -> NDArray[np.bool_]:
+    """Observations that took part in the adjustment (finite redundancy number)."""
+    if adj.redundancy_numbers is None:
+        return np.ones(adj.n_observations, bool)
+    return np.isfinite(adj.redundancy_numbers)
+
+
+def image_slice(adj: Adjustment, solution: Solution) -> slice:
+    """The range of image-coordinate observations in the observation vector."""
+    sl = adj.extra.get("obs_slices", {}).get("image") if isinstance(adj.extra, dict) else None
+    if sl is not None:
+        return sl
+    return slice(0, adj.n_observations) if solution.observation_quantity == "image" else slice(0, 0)
+
+
+def split_label(label: str) -> tuple[str, str, str]:
+    """(image, point, component) from labels such as ``img/pt/x``, ``pt/x`` or ``name``."""
+    parts = label.split("/")
+    if len(parts) >= 3:
+        return parts[0], "/".join(parts[1:-1]), parts[-1]
+    if len(parts) == 2:
+        return "", parts[0], parts[1]
+    return "", "", label
+
+
+def chi2_test(sigma0: float, r: int, alpha: float = 0.05) -> dict[str, Any]:
+    """Global test of σ̂0 against the a-priori σ0 = 1: T = r σ̂0² ~ χ²(r), two-sided.
+
+    Returns a dict with ``T``, ``lower``/``upper`` (quantiles of χ²(r) at α/2 and
+    1 − α/2), the corresponding bounds for σ̂0, ``alpha`` and ``accepted`` (None when
+    r = 0 or σ̂0 is not finite).
+    """
+    from scipy.special import gammaincinv  # scipy.stats would take a second to import
+
+    out: dict[str, Any] = {
+        "alpha": alpha,
+        "r": int(r),
+        "T": float("nan"),
+        "lower": float("nan"),
+        "upper": float("nan"),
+        "sigma0_lower": float("nan"),
+        "sigma0_upper": float("nan"),
+        "accepted": None,
+    }
+    if r <= 0 or not np.isfinite(sigma0):
+        return out
+    # quantile of χ²(r): P(r/2, x/2) = q  ⇔  x = 2 · P⁻¹(r/2, q)
+    lo, hi = 2.0 * gammaincinv(r / 2, alpha / 2), 2.0 * gammaincinv(r / 2, 1 - alpha / 2)
+    T = r * sigma0**2
+    out.update(
+        T=float(T),
+        lower=float(lo),
+        upper=float(hi),
+        sigma0_lower=math.sqrt(lo / r),
+        sigma0_upper=math.sqrt(hi / r),
+        accepted=bool(lo <= T <= hi),
+    )
+    return out
+
+
+def intersection_angles(block: Block, X0: F64, xyz: F64) -> F64:
+    """Largest angle (rad) between two rays of each point; NaN for points with < 2 rays.
+
+    Parameters
+    ----------
+    block : Block
+        For the observations (which image sees which point).
+    X0 : ndarray, shape (m, 3)
+        Projection centres, m.
+    xyz : ndarray, shape (p, 3)
+        Point coordinates, m.
+    """
+    obs = block.observations
+    out = np.full(block.n_points, np.nan)
+    if len(obs) == 0:
+        return out
+    order = np.argsort(obs.point, kind="stable")
+    pt = obs.point[order]
+    d = xyz[pt] - X0[obs.image[order]]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        d = d / np.linalg.norm(d, axis=1, keepdims=True)
+    counts = np.bincount(pt, minlength=block.n_points)
+    kmax = int(counts.max(initial=0))
+    best = np.full(block.n_points, -np.inf)
+    for off in range(1, kmax):
+        same = pt[:-off] == pt[off:]
+        if not same.any():
+            break
+        cosang = np.clip(np.einsum("ij,ij->i", d[:-off][same], d[off:][same]), -1.0, 1.0)
+        ang = np.arccos(cosang)
+        np.maximum.at(best, pt[:-off][same], ang)
+    ok = np.isfinite(best)
+    out[ok] = best[ok]
+    return out
+
+
+def image_coverage(block: Block) -> F64:
+    """Area of the convex hull of each image's measured points over the format area (0…1)."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    obs = block.observations
+    cov = np.zeros(block.n_images)
+    fmt_area = np.prod(block.cameras.format_mm[block.images.camera], axis=1)
+    order = np.argsort(obs.image, kind="stable")
+    starts = np.searchsorted(obs.image[order], np.arange(block.n_images + 1))
+    for i in range(block.n_images):
+        xy = obs.xy[order[starts[i] : starts[i + 1]]]
+        xy = xy[np.all(np.isfinite(xy), axis=1)]
+        if xy.shape[0] < 3 or not fmt_area[i] > 0:
+            continue
+        try:
+            cov[i] = ConvexHull(xy).volume / fmt_area[i]
+        except (QhullError, ValueError):
+            cov[i] = 0.0
+    return cov
+
+
+def block_of(problem: Problem) -> Block | None:
+    """The problem's :class:`~orientviz.model.Block`, or None for kinds without one."""
+    return problem.data if isinstance(problem.data, Block) else None
+
+
+def condition_number(C: F64) -> float:
+    """Condition number of a correlation matrix (inf if singular)."""
+    ev = np.linalg.eigvalsh(C)
+    if not np.all(np.isfinite(ev)):
+        return float("inf")
+    return float(ev[-1] / ev[0]) if ev[0] > 0 else float("inf")
+
+
+def correlation_matrix(Q: F64) -> F64:
+    """ρ_ij = Q_ij / sqrt(Q_ii Q_jj) of a cofactor matrix."""
+    d = np.sqrt(np.clip(np.diag(Q), 1e-300, None))
+    return Q / np.outer(d, d)
