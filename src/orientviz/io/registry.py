@@ -3,7 +3,7 @@
 A *kind* (``"block"``, ``"similarity"``, …) is one module ``orientviz/io/kinds/<kind>.py``
 that calls :func:`register_kind` at import time, plus a schema
 ``orientviz/io/schema/<kind>.json``. :func:`get_kind` imports the module on first use, so
-adding a kind needs no edit anywhere else. See DEVELOPERS.md, "Problem files".
+adding a kind needs no edit anywhere else. See book/api/contracts.md, "Problem files".
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 Every function returns dicts of numpy arrays in object metres (right-handed, Z up) so
 that :mod:`orientviz.viewer` can draw them in viser and :mod:`orientviz.plot.radar` in
-matplotlib. Stable keys (the "Radar scene data" contract in DEVELOPERS.md):
+matplotlib. Stable keys (the "Radar scene data" contract, book/api/contracts.md):
 
 ``station_scene(image, name)`` →
     ``{"name", "station" (3,), "axis" (2, 3) segment along k, "reference" (2, 3)
