@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from orientviz.block import Block
 from orientviz.errors import InputError
 from orientviz.io.bal import read_bal, write_bal
-from orientviz.model import Block
 from orientviz.rotation import matrix_from_rotvec
 
 MAKE_BLOCK = Path("/work/shared/bench/make_block.py")

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from orientviz.block import Block
 from orientviz.errors import InputError
 from orientviz.io.colmap import read_colmap, write_colmap
-from orientviz.model import Block
 from orientviz.rotation import matrix_from_opk
 
 

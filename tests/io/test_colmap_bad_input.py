@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from orientviz.block.simulate import simulate_block
 from orientviz.cli import main
 from orientviz.errors import InputError
 from orientviz.io.colmap import read_colmap, write_colmap
+from orientviz.simulate import simulate_block
 
 
 @pytest.fixture(scope="module")

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from orientviz.block.bundle import bundle_adjust
-from orientviz.block.simulate import simulate_block
+from orientviz.block import CHECK, CONTROL
+from orientviz.bundle import bundle_adjust
 from orientviz.cli import main
 from orientviz.datasets.debug_example import make_debug_example
 from orientviz.errors import InputError
@@ -15,7 +15,7 @@ from orientviz.io.control import ControlPoints, apply_control, read_control, wri
 from orientviz.io.export import export_results
 from orientviz.io.problem import load_problem
 from orientviz.io.results import image_table, point_table, read_csv_table
-from orientviz.model import CHECK, CONTROL
+from orientviz.simulate import simulate_block
 
 
 @pytest.fixture(scope="module")

@@ -10,12 +10,12 @@ import sys
 import numpy as np
 import pytest
 
+from orientviz.block import CHECK, TIE, Block
 from orientviz.io.datasets import list_datasets
 from orientviz.io.problem import load_problem, problem_from_block
 from orientviz.io.report_sections import build_report, chi2_test, intersection_angles
 from orientviz.io.report_text import text_report
 from orientviz.io.solve import _resolve, solve_problem
-from orientviz.model import CHECK, TIE, Block
 
 BLOCK_SECTIONS = [
     "summary",
@@ -131,7 +131,7 @@ def test_check_point_rms_equals_recomputed_value(strip):
 
 
 def test_largest_normalised_residual_is_the_injected_blunder():
-    from orientviz.block.simulate import simulate_block
+    from orientviz.simulate import simulate_block
 
     clean = simulate_block(2, 6, rng=7, n_check=2).block
     rays = clean.rays_per_point()

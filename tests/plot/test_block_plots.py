@@ -8,8 +8,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from orientviz.block.accuracy import height_precision, planimetric_precision  # noqa: E402
-from orientviz.block.simulate import simulate_block  # noqa: E402
 from orientviz.plot.block import (  # noqa: E402
     plot_block_layout,
     plot_check_heights,
@@ -19,6 +17,7 @@ from orientviz.plot.block import (  # noqa: E402
     plot_precision_map,
     plot_strip_law,
 )
+from orientviz.simulate import height_precision, planimetric_precision, simulate_block
 
 
 @pytest.fixture(scope="module")
@@ -94,7 +93,7 @@ def test_widget_app_builds():
 
 
 def test_check_heights_draw_each_result_at_the_true_x():
-    from orientviz.block.bundle import bundle_adjust
+    from orientviz.bundle import bundle_adjust
     from orientviz.errors import InputError
 
     s = simulate_block(2, 5, rng=4, n_check=8)

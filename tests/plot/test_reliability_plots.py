@@ -7,15 +7,14 @@ matplotlib.use("Agg")
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from orientviz.block.bundle import bundle_adjust  # noqa: E402
-from orientviz.block.reliability import ray_reliability  # noqa: E402
-from orientviz.block.simulate import simulate_block  # noqa: E402
+from orientviz.bundle import bundle_adjust, ray_reliability
 from orientviz.errors import InputError  # noqa: E402
 from orientviz.plot.gross import (  # noqa: E402
     plot_block_reliability,
     plot_mdb_histogram,
     plot_reliability_map,
 )
+from orientviz.simulate import simulate_block
 
 
 @pytest.fixture(scope="module")

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
+from orientviz.block import Block
 from orientviz.camera import project
-from orientviz.model import Block
 from orientviz.rotation import matrix_from_opk
 
 

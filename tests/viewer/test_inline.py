@@ -10,7 +10,7 @@ import pytest
 pytest.importorskip("viser")
 pytest.importorskip("matplotlib")
 
-from orientviz.block.simulate import simulate_block  # noqa: E402
+from orientviz.simulate import simulate_block
 from orientviz.viewer.inline import scene_figure, show_inline  # noqa: E402
 
 

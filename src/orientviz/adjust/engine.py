@@ -8,7 +8,7 @@ A problem supplies ``model(x) -> (f, J)`` with f of shape (n,) and J of shape (n
 
 until the corrections are negligible against the parameters' own precision, then
 computes σ̂0, the cofactor matrix, redundancy numbers and normalised residuals.
-Large block problems use the Schur-complement path in :mod:`orientviz.adjust.normal`
+Large block problems use the Schur-complement path in :mod:`orientviz.bundle._reduced`
 and return the same :class:`~orientviz.adjust.result.Adjustment`.
 """
 

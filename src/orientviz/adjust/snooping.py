@@ -174,7 +174,7 @@ def data_snooping(
     exact_first : bool
         With ``solve_exact``: the first adjustment is exact too (a solver may then
         use its redundancy numbers to sharpen the later screening rounds, as
-        :func:`orientviz.block.cleaning.bundle_solver` does).
+        :func:`orientviz.bundle.bundle_solver` does).
     exact_when_few : float
         With ``solve_exact``: after an adjustment that eliminated fewer groups than this
         fraction of the most any adjustment has eliminated, the next one is exact at once

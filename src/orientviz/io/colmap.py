@@ -1,4 +1,4 @@
-"""COLMAP text models (cameras.txt, images.txt, points3D.txt) ↔ :class:`~orientviz.model.Block`.
+"""COLMAP text models (cameras.txt, images.txt, points3D.txt) ↔ :class:`~orientviz.block.Block`.
 
 Conventions
 -----------
@@ -30,8 +30,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from ..block import CHECK, CONTROL, Block
 from ..errors import InputError
-from ..model import CHECK, CONTROL, Block
 from ..rotation import opk_from_matrix
 
 FLIP = np.diag([1.0, -1.0, -1.0])

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from ..model import CHECK, CONTROL
+from ..block import CHECK, CONTROL
 from ..units import RHO
 from .report_model import (
     FEW_POINTS,

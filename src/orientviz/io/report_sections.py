@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from ..model import CHECK, CONTROL, TIE
+from ..block import CHECK, CONTROL, TIE
 from .problem import Problem
 from .report import Solution
 from .report_model import (
@@ -378,7 +378,7 @@ class _Builder(PrecisionSections, QualitySections):
     # .................................................................. overview data
     def _overview_data(self) -> None:
         blk, s = self.block, self.s
-        from ..block.layout import block_layout
+        from ..block import block_layout
 
         b2 = blk.copy()
         if s.image_ids and len(s.image_ids) == blk.n_images:

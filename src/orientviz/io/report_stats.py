@@ -1,7 +1,7 @@
 """Numbers behind the report's tests and warnings: χ² test of σ0, intersection angles,
 image coverage, which observations were adjusted, correlation matrices.
 
-All functions work on plain arrays and :class:`~orientviz.model.Block` tables; none
+All functions work on plain arrays and :class:`~orientviz.block.Block` tables; none
 imports matplotlib.
 """
 
@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..adjust.result import Adjustment
-from ..model import Block
+from ..block import Block
 from .problem import Problem
 from .report import Solution
 
@@ -140,7 +140,7 @@ def image_coverage(block: Block) -> F64:
 
 
 def block_of(problem: Problem) -> Block | None:
-    """The problem's :class:`~orientviz.model.Block`, or None for kinds without one."""
+    """The problem's :class:`~orientviz.block.Block`, or None for kinds without one."""
     return problem.data if isinstance(problem.data, Block) else None
 
 

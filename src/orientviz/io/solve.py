@@ -126,7 +126,7 @@ def adjusted_problem(problem: Problem, solution: Solution) -> Problem:
     adjusted coordinates; control and check coordinates and all observations stay as
     given. Raises :class:`InputError` for kinds without images and points (similarity).
     """
-    from ..model import TIE, Block
+    from ..block import TIE, Block
 
     if not isinstance(problem.data, Block):
         raise InputError(

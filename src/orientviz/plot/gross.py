@@ -166,7 +166,7 @@ def plot_reliability_map(
     Parameters
     ----------
     rel : RayReliability
-        From :func:`orientviz.block.reliability.ray_reliability`.
+        From :func:`orientviz.bundle.ray_reliability`.
     block : Block
         The adjusted block (footprints from ``images.strip``; point positions).
     xyz : array_like, shape (p, 3), optional
@@ -194,7 +194,7 @@ def plot_reliability_map(
     if layout:
         from matplotlib.patches import Polygon
 
-        from ..block.layout import block_layout
+        from ..block import block_layout
 
         lay = block_layout(block)
         for k, imgs in enumerate(lay.strips):
@@ -255,7 +255,7 @@ def plot_mdb_histogram(rel, block, *, ax=None, title=None):
     Parameters
     ----------
     rel : RayReliability
-        From :func:`orientviz.block.reliability.ray_reliability`.
+        From :func:`orientviz.bundle.ray_reliability`.
     block : Block
         The adjusted block (for the number of rays per point).
     ax : matplotlib Axes, optional

@@ -11,7 +11,7 @@ in §17-19), so the paper's numbers are the printed claims:
   for wide-angle images, c = 152 mm).
 
 orientviz computes the theoretical values from the inverse normal matrices
-(:mod:`orientviz.block.accuracy`: planimetric 4-parameter and height 3-parameter
+(:mod:`orientviz.simulate`: planimetric 4-parameter and height 3-parameter
 independent-model blocks, σ0 = model-coordinate σ) and sets an empirical value beside them:
 the RMS true error over repeated simulations with random model-coordinate errors, and,
 for two small blocks, the whole chain from simulated image coordinates (relative
@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..block.accuracy import fit_log_law, height_precision, planimetric_precision
+from ..simulate import fit_log_law, height_precision, planimetric_precision
 from . import Row
 
 #: Strip numbers of the planimetric law (square blocks, 2·n_s models per strip).
@@ -38,9 +38,9 @@ SIGMA0_HEIGHT_PERMILLE = 0.015 / 152.0 * 1000.0
 
 
 def _pipeline_rows(rng: np.random.Generator) -> list[Row]:
-    from ..block.models import independent_models
-    from ..block.simulate import simulate_block
-    from ..model import TIE
+    from ..block import TIE
+    from ..independent_models import independent_models
+    from ..simulate import simulate_block
 
     rows = []
     for ns in (2, 4):
@@ -70,9 +70,9 @@ def _pipeline_rows(rng: np.random.Generator) -> list[Row]:
 def _sigma0_rows(rng: np.random.Generator) -> list[Row]:
     """§20: σ0 of independent models (planimetry, model coordinates at image scale) vs
     σ0 of the bundle (image coordinates) on the same simulated blocks."""
-    from ..block.bundle import bundle_adjust
-    from ..block.models import independent_models
-    from ..block.simulate import simulate_block
+    from ..bundle import bundle_adjust
+    from ..independent_models import independent_models
+    from ..simulate import simulate_block
 
     ratios, heights = [], []
     for _ in range(3):

@@ -9,7 +9,7 @@ check point needs at least two rays, every control point at least one.
 Options: ``control`` (``"fixed"``/``"weighted"``), ``max_iter``, ``tol``, ``critical``,
 ``image_sigma``; for ``--method models`` ``model_method`` (``"rigorous"``/``"pat-m"``),
 for ``--method polynomial`` ``degree_xy``, ``degree_z``. Methods: ``bundle`` (default), ``models``, ``polynomial`` (the latter
-two when :mod:`orientviz.block.models` / :mod:`orientviz.block.polynomial` exist).
+two when :mod:`orientviz.independent_models` / :mod:`orientviz.polynomial` exist).
 """
 
 from __future__ import annotations
@@ -21,8 +21,8 @@ from typing import Any
 import numpy as np
 
 from ...adjust.result import W_CRITICAL
+from ...block import CHECK, CONTROL, ROLES, TIE, Block
 from ...errors import InputError
-from ...model import CHECK, CONTROL, ROLES, TIE, Block
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
 from ..report import Solution
@@ -75,12 +75,12 @@ def approximate(block: Block) -> Block:
     """Fill in missing approximate values before an adjustment.
 
     No image approximations at all: everything is computed from scratch by
-    :func:`orientviz.block.approximate.approximate_values` (relative orientation of a
+    :func:`orientviz.block.approximate_values` (relative orientation of a
     seed pair, resections, intersections, a similarity onto the control). Otherwise
     only tie/check points without coordinates are intersected from the given ones.
     """
     if not np.all(np.isfinite(block.images.X0)) or not np.all(np.isfinite(block.images.angles)):
-        from ...block.approximate import approximate_values
+        from ...block import approximate_values
 
         return approximate_values(block)
     return _approximate_tie_points(block)
@@ -128,11 +128,11 @@ def solve(problem: Problem, method: str | None) -> Solution:
     keys = ("control", "max_iter", "tol", "degree_xy", "degree_z")
     opts = {k: v for k, v in problem.options.items() if k in keys}
     if method == "bundle":
-        from ...block.bundle import bundle_adjust
+        from ...bundle import bundle_adjust
 
         adj = _call(bundle_adjust, block, opts)
     elif method == "models":
-        from ...block.models import independent_models
+        from ...independent_models import independent_models
 
         opts["method"] = problem.options.get("model_method", "rigorous")
         adj = _call(independent_models, block, opts, precision=True)

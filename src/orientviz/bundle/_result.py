@@ -1,0 +1,165 @@
+"""Assemble the :class:`Adjustment` of a bundle adjustment; check points.
+
+Residual order (v = f − l): the image coordinates of *all* observations of the block
+(x, y per observation, mm; rays to check points included but not adjusted — their
+redundancy numbers are NaN), then the pseudo-observations of weighted control
+coordinates (m), observed projection centres (m), attitudes (rad) and additional
+parameters. ``extra["obs_slices"]`` names these ranges.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import NDArray
+
+from ..adjust.result import Adjustment
+from ..block import CHECK
+from ..errors import NotDeterminableError
+from ..orientation.intersection import intersect_points
+from ..rotation import matrix_from_opk
+from ._kernel import project_block
+
+F64 = NDArray[np.float64]
+
+
+def _intersect_check_points(block, X0: F64, angles: F64, chk: NDArray[np.int64]) -> F64:
+    """Check points intersected from their own rays with the adjusted orientations (m).
+
+    Least-squares forward intersection (:func:`orientviz.orientation.intersection.intersect_points`),
+    NaN for points with fewer than two rays or parallel rays.
+    """
+    obs = block.observations
+    col = -np.ones(block.n_points, np.int64)
+    col[chk] = np.arange(chk.size)
+    sel = np.flatnonzero(col[obs.point] >= 0)
+    out = np.full((chk.size, 3), np.nan)
+    if sel.size == 0:
+        return out
+    cam = block.images.camera
+    res = intersect_points(
+        obs.xy[sel], obs.image[sel], col[obs.point[sel]], X0,
+        matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2], block.sequence),
+        block.cameras.c[cam], block.cameras.x0[cam], block.cameras.y0[cam],
+        sigma=obs.sigma[sel], n_points=chk.size, on_degenerate="nan",
+    )  # fmt: skip
+    return res.xyz
+
+
+def finish_result(
+    block, prob, st, rw, Je, Jp, names, history, converged, reason, precision, dof, sigma0,
+    lin=None,
+) -> Adjustment:  # fmt: skip
+    m, p, n = block.n_images, block.n_points, block.n_observations
+    setup = prob.setup
+    xyz = st.xyz.copy()
+    # check points: intersect with the adjusted orientations from their own rays
+    chk = np.flatnonzero(block.points.role == CHECK)
+    extra: dict = {
+        "solver": prob.struct.solver,
+        "used_obs": setup.used_obs,
+        "reduced_info": dict(prob.struct.info, **_border_info(prob)),
+    }
+    if chk.size:
+        xyz[chk] = _intersect_check_points(block, st.X0, st.angles, chk)
+        d = xyz[chk] - block.points.xyz_known[chk]
+        good = np.isfinite(d).all(axis=1)
+        extra["check_points"] = {"ids": [block.points.ids[i] for i in chk], "difference_m": d}
+        extra["check_rms"] = (
+            np.sqrt(np.mean(d[good] ** 2, axis=0)) if good.any() else np.full(3, np.nan)
+        )
+    # residuals of all image observations (v = f − l)
+    obs = block.observations
+    fa = _project_all(block, st, xyz, prob)
+    v_img = (fa - obs.xy).reshape(-1)
+    s_img = obs.sigma.reshape(-1)
+    parts_v, parts_s, slices = [v_img], [s_img], {"image": slice(0, 2 * n)}
+    pos = 2 * n
+
+    def add(name, v, s):
+        nonlocal pos
+        parts_v.append(v)
+        parts_s.append(s)
+        slices[name] = slice(pos, pos + v.size)
+        pos += v.size
+
+    w = prob.prior_w > 0
+    add("control", (st.xyz[prob.var_pts] - prob.prior_l)[w], 1 / np.sqrt(prob.prior_w[w]))
+    w = prob.X0_w > 0
+    add("X0_obs", (st.X0 - prob.X0_l)[w], 1 / np.sqrt(prob.X0_w[w]))
+    w = prob.ang_w > 0
+    from ._adjust import _wrap
+
+    add("angles_obs", _wrap(st.angles - prob.ang_l)[w], 1 / np.sqrt(prob.ang_w[w]))
+    if prob.q:
+        w = prob.ap_w > 0
+        add("additional", st.ap[w], 1 / np.sqrt(prob.ap_w[w]))
+    extra["obs_slices"] = slices
+    blocks = {"exterior": slice(0, 6 * m), "points": slice(6 * m, 6 * m + 3 * p)}
+    if prob.q:
+        blocks["additional"] = slice(6 * m + 3 * p, 6 * m + 3 * p + prob.q)
+    x = np.concatenate([np.hstack([st.X0, st.angles]).ravel(), xyz.ravel(), st.ap])
+    res = Adjustment(
+        x=x,
+        names=names,
+        sigma0=sigma0,
+        redundancy=int(dof),
+        residuals=np.concatenate(parts_v),
+        sigma_obs=np.concatenate(parts_s),
+        converged=converged,
+        reason=reason,
+        history=history,
+        blocks=blocks,
+        extra=extra,
+    )
+    res.extra["exterior"] = np.hstack([st.X0, st.angles])
+    res.extra["points"] = xyz
+    if precision:
+        from ._precision import bundle_precision
+
+        try:
+            bundle_precision(res, prob, st, rw, Je, Jp, lin)
+        except (np.linalg.LinAlgError, scipy.linalg.LinAlgError, ValueError) as exc:
+            # only reachable from a state the iterations did not settle (diverged start
+            # values leave singular or non-finite point blocks): keep the result, say why
+            # it carries no precision instead of letting a numerical error escape
+            if converged:
+                # a converged state with a singular reduced system: the count checks
+                # before the iterations (bundle_checks) missed a geometric defect; name
+                # the parameters instead of ending in a numerical error
+                from ._reduced import raise_not_determinable
+
+                blocks = prob.normal(st, rw, Je, Jp)["blocks"]
+                try:
+                    raise_not_determinable(prob.struct, blocks, names[: 6 * prob.m], str(exc))
+                except NotDeterminableError as err:
+                    raise err from exc
+            res.extra["precision_error"] = (
+                f"no precision at the last (not converged) state: {type(exc).__name__}: {exc}"
+            )
+    return res
+
+
+def _project_all(block, st, xyz, prob) -> F64:
+    cam = block.images.camera
+    obs = block.observations
+    f = project_block(
+        st.X0,
+        st.angles,
+        block.cameras.c[cam],
+        block.cameras.x0[cam],
+        block.cameras.y0[cam],
+        obs.image,
+        xyz[obs.point],
+        block.sequence,
+    )
+    if prob.q:
+        f[prob.uobs] += np.einsum(
+            "nij,nj->ni", prob.A, st.ap.reshape(prob.G, prob.k)[prob.grp[prob.oi]]
+        )
+    return f
+
+
+def _border_info(prob) -> dict:
+    """How the additional-parameter border was solved in each solve (formed / cg steps)."""
+    return {"ap_border": list(prob.ap_log)} if prob.q else {}
