@@ -67,8 +67,8 @@ def ensure_data(size: str) -> Path:
 def worker(npz: str, reps: int, precision: bool, solver: str, control: str = "fixed") -> dict:
     from bench_blocks import load_bench_block
 
-    from orientviz.block.bundle import bundle_adjust
-    from orientviz.model import Block
+    from orientviz.block import Block
+    from orientviz.bundle import bundle_adjust
     from orientviz.rotation import matrix_from_opk, rotvec_from_matrix
 
     rp = _bench_module("run_peers")
@@ -197,9 +197,8 @@ def reduced_comparison(size: str, reps: int, dense: bool) -> str:
     """Time factor + solve of the same reduced system S with each solver/ordering."""
     from bench_blocks import load_bench_block
 
-    from orientviz.adjust.normal import ReducedStructure, factor_reduced
-    from orientviz.block.bundle import BundleProblem, _State
-    from orientviz.block.bundle_checks import point_setup
+    from orientviz.bundle import BundleProblem, ReducedStructure, factor_reduced, point_setup
+    from orientviz.bundle._adjust import _State
 
     block, _ = load_bench_block(ensure_data(size))
     prob = BundleProblem(block, point_setup(block, "fixed"))

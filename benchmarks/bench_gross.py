@@ -5,7 +5,7 @@ Run:  python benchmarks/bench_gross.py [--seeds 1 2 …] [--strips 4] [--images 
                                         [--no-large | --large-only]
 
 Part 1 — quality (pooled over seeds): blocks from
-:func:`orientviz.block.simulate.simulate_block` (σ = 5 µm, 60 %/20 % overlap, XYZ
+:func:`orientviz.simulate.simulate_block` (σ = 5 µm, 60 %/20 % overlap, XYZ
 perimeter control, 30 check points) with 1 % of the rays corrupted by 4-50 σ
 (20-250 µm, random direction). ``--tie grid`` (default) has the Gruber points plus a
 30 mm grid of tie points — the uniform spread of automatic tie points, where about 60 %
@@ -51,13 +51,12 @@ from scipy.optimize import least_squares  # noqa: E402
 
 from orientviz.adjust.gross import critical_value, noncentrality  # noqa: E402
 from orientviz.adjust.gross2d import noncentrality_2d  # noqa: E402
-from orientviz.block.bundle import bundle_adjust  # noqa: E402
-from orientviz.block.cleaning import bundle_solver, clean_block  # noqa: E402
-from orientviz.block.simulate import simulate_block  # noqa: E402
+from orientviz.block import CHECK, CONTROL
+from orientviz.bundle import bundle_adjust, bundle_solver, clean_block
 from orientviz.camera import project  # noqa: E402
 from orientviz.errors import AdjustmentError  # noqa: E402
-from orientviz.model import CHECK, CONTROL  # noqa: E402
 from orientviz.rotation import matrix_from_opk  # noqa: E402
+from orientviz.simulate import simulate_block
 
 SIGMA_MM = 0.005
 METHODS = {

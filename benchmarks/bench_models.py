@@ -19,7 +19,7 @@ a 6 × 20 block with systematic image errors (model bending) and statoscope/APR 
 the independent-model adjustment without and with model deformation parameters
 (shared by the block, per strip), and without and with auxiliary data as joint
 observations; the bundle without and with the joint auxiliary data, and the alternation
-of :func:`orientviz.block.auxiliary.adjust_with_auxiliary` as the peer of the joint one.
+of :func:`orientviz.bundle.adjust_with_auxiliary` as the peer of the joint one.
 
 Usage::
 
@@ -36,9 +36,8 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from orientviz.block.model_formation import form_models
-from orientviz.block.models import independent_models
-from orientviz.block.simulate import simulate_block
+from orientviz.independent_models import form_models, independent_models
+from orientviz.simulate import simulate_block
 
 TABLE2 = {
     "CDC 6600": 0.85, "CDC 6400": 3.2, "IBM 360/50": 20.0, "IBM 360/65": 5.1,
@@ -60,9 +59,9 @@ def timed(fn, reps):
 def reduced_system_peer(sim, ms):
     """CPU time of one factorisation of the reduced system: SuperLU (minimum degree, the
     default) vs reverse Cuthill-McKee + banded Cholesky (Ackermann's bandwidth idea)."""
-    import orientviz.block.models_normal as mn
-    from orientviz.block.models import _rows3
-    from orientviz.block.models_setup import tie_setup
+    from orientviz.independent_models import _normal as mn
+    from orientviz.independent_models import tie_setup
+    from orientviz.independent_models._adjust import _rows3
 
     su = tie_setup(sim.block, ms)
     n = ms.n_models
@@ -101,8 +100,8 @@ def least_squares_peer(reps):
     """orientviz vs scipy.optimize.least_squares on a 3 × 8 block (7 p. per model)."""
     from scipy.optimize import least_squares
 
-    from orientviz.block.models import _rows3
-    from orientviz.block.models_setup import tie_setup
+    from orientviz.independent_models import tie_setup
+    from orientviz.independent_models._adjust import _rows3
     from orientviz.rotation import matrix_from_rotvec
 
     sim = simulate_block(3, 8, rng=np.random.default_rng(3), extra=3)
@@ -147,14 +146,9 @@ def least_squares_peer(reps):
 
 def extras(reps) -> None:
     """Self-calibration and joint auxiliary data: times with vs without, same block."""
-    from orientviz.block import systematic as sy
-    from orientviz.block.auxiliary import (
-        adjust_with_auxiliary,
-        check_errors,
-        height_control_at_ends,
-        simulate_auxiliary,
-    )
-    from orientviz.block.bundle import bundle_adjust
+    from orientviz.bundle import adjust_with_auxiliary, bundle_adjust
+    from orientviz.simulate import check_errors, height_control_at_ends, simulate_auxiliary
+    from orientviz.simulate import systematic as sy
 
     sim = simulate_block(
         6, 20, rng=np.random.default_rng(20), control="chains", control_kind="xy+z",

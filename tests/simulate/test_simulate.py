@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from orientviz.block import CHECK, CONTROL
+from orientviz.block import CHECK, CONTROL, block_layout
 from orientviz.errors import InputError
-from orientviz.simulate import block_layout, simulate_block
+from orientviz.simulate import simulate_block
 
 
 def small(**kw):

@@ -8,13 +8,12 @@ check point needs at least two rays, every control point at least one.
 
 Options: ``control`` (``"fixed"``/``"weighted"``), ``max_iter``, ``tol``, ``critical``,
 ``image_sigma``; for ``--method models`` ``model_method`` (``"rigorous"``/``"pat-m"``),
-for ``--method polynomial`` ``degree_xy``, ``degree_z``. Methods: ``bundle`` (default), ``models``, ``polynomial`` (the latter
-two when :mod:`orientviz.independent_models` / :mod:`orientviz.polynomial` exist).
+for ``--method polynomial`` ``degree_xy``, ``degree_z``. Methods: ``bundle`` (default), ``models``, ``polynomial``
+(:mod:`orientviz.independent_models`, :mod:`orientviz.polynomial`).
 """
 
 from __future__ import annotations
 
-import importlib
 import inspect
 from typing import Any
 
@@ -138,20 +137,8 @@ def solve(problem: Problem, method: str | None) -> Solution:
         adj = _call(independent_models, block, opts, precision=True)
         return solution_from_models(problem, block, adj)
     else:
-        module = f"orientviz.block.{method}"
-        try:
-            mod = importlib.import_module(module)
-        except ModuleNotFoundError as exc:
-            if exc.name and exc.name.startswith("orientviz"):
-                raise InputError(
-                    f"--method {method}: not yet available in this version of orientviz "
-                    "(use --method bundle)",
-                    problem.source,
-                ) from None
-            raise
-        func = getattr(mod, f"{method}_adjust", None) or getattr(mod, "adjust", None)
-        if func is None:
-            raise InputError(f"--method {method}: not yet available (no solver in {module})")
+        from ...polynomial import polynomial_adjust as func
+
         adj = _call(func, block, opts)
         if "exterior" not in adj.blocks:
             return solution_from_points(problem, block, adj, method, func)
