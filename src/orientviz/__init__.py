@@ -1,7 +1,40 @@
 """orientviz — learn, teach and visually debug photogrammetric orientation.
 
-The core (this package without :mod:`orientviz.plot`, :mod:`orientviz.widgets` and
-:mod:`orientviz.viewer`) depends on numpy and scipy only; importing it stays fast.
+``import orientviz as ov`` gives the front door: the names a first script needs,
+loaded on first use (``import orientviz`` itself loads neither numpy nor any
+solver, plotting or GUI library)::
+
+    import numpy as np
+    import orientviz as ov
+
+    sim = ov.simulate_block(2, 6, rng=np.random.default_rng(1))
+    adj = ov.bundle_adjust(sim.block)
+    print(adj.summary())
+    ov.view((sim.block, adj))          # the 3D viewer; viser is imported only here
+
+The face, by task:
+
+* problem files and data: :func:`load_problem`, :func:`save_problem`,
+  :func:`load_dataset`, :func:`solve_problem`, :func:`read_colmap`,
+  :func:`write_report`, :class:`Problem`;
+* conventions: :func:`to_rad`, :func:`from_rad`, :func:`matrix_from_opk`,
+  :func:`opk_from_matrix`, :class:`FrameCamera`, :func:`project`;
+* the block (the set of images and points): :class:`Block`, :func:`simulate_block`,
+  :class:`SimulatedBlock`;
+* single pairs and images: :func:`relative_orientation` (the stereo model),
+  :func:`similarity_transform` (absolute orientation), :func:`resection`,
+  :func:`intersect_points`;
+* aerotriangulation: :func:`bundle_adjust`, :func:`self_calibrate`,
+  :func:`clean_block` (gross errors), :func:`independent_models`;
+* results: :class:`Adjustment`, :class:`Iteration`, :class:`Intersection`;
+* the viewer: :func:`view`;
+* errors: :class:`OrientvizError`, :class:`InputError`, :class:`AdjustmentError`,
+  :class:`NotDeterminableError`.
+
+Everything else lives in the subpackages (:mod:`orientviz.adjust`,
+:mod:`orientviz.orientation`, :mod:`orientviz.block`, :mod:`orientviz.radar`,
+:mod:`orientviz.io`, :mod:`orientviz.report`, :mod:`orientviz.plot`,
+:mod:`orientviz.widgets`, :mod:`orientviz.viewer`).
 
 Conventions: object space in m (right-handed, Z up), image coordinates in mm,
 angles in rad inside the code (gon/c/cc at the edges), rotations R = R_ω R_φ R_κ by
@@ -10,8 +43,123 @@ default. See :mod:`orientviz.units`, :mod:`orientviz.rotation`, :mod:`orientviz.
 
 from __future__ import annotations
 
-__version__ = "0.1.0"
+import importlib
+from typing import TYPE_CHECKING, Any
 
 from .errors import AdjustmentError, InputError, NotDeterminableError, OrientvizError
 
-__all__ = ["AdjustmentError", "InputError", "NotDeterminableError", "OrientvizError", "__version__"]
+__version__ = "0.1.0"
+
+#: name on the face → the module (relative to this package) that defines it
+_FACE: dict[str, str] = {
+    # problem files and data
+    "Problem": ".io.problem",
+    "load_problem": ".io.problem",
+    "save_problem": ".io.problem",
+    "load_dataset": ".io.datasets",
+    "solve_problem": ".io.solve",
+    "read_colmap": ".io.colmap",
+    "write_report": ".report",
+    # conventions
+    "to_rad": ".units",
+    "from_rad": ".units",
+    "matrix_from_opk": ".rotation",
+    "opk_from_matrix": ".rotation",
+    "FrameCamera": ".camera",
+    "project": ".camera",
+    # the block
+    "Block": ".block",
+    "simulate_block": ".simulate",
+    "SimulatedBlock": ".simulate",
+    # single pairs and images
+    "relative_orientation": ".orientation.relative",
+    "similarity_transform": ".orientation.absolute",
+    "resection": ".orientation.resection",
+    "intersect_points": ".orientation.intersection",
+    # aerotriangulation
+    "bundle_adjust": ".bundle",
+    "self_calibrate": ".bundle",
+    "clean_block": ".bundle",
+    "independent_models": ".independent_models",
+    # results
+    "Adjustment": ".adjust.result",
+    "Iteration": ".adjust.result",
+    "Intersection": ".orientation.intersection",
+}
+
+__all__ = sorted(
+    [
+        *_FACE,
+        "view",
+        "AdjustmentError",
+        "InputError",
+        "NotDeterminableError",
+        "OrientvizError",
+        "__version__",
+    ]
+)
+
+
+def view(
+    content: Any = "block", *, host: str = "127.0.0.1", port: int = 8080, **options: Any
+) -> Any:
+    """Open the 3D viewer (viser) on ``content`` and return the running app.
+
+    viser and the scene code are imported here, on the call, never by ``import
+    orientviz``.
+
+    Parameters
+    ----------
+    content : Block, tuple (Block, Adjustment), str
+        A block (drawn at its current values), a block with its adjustment (residuals,
+        ellipsoids, the iteration scrubber), a demo name (``"block"``, ``"pair"``,
+        ``"radar"``) or the path of a problem file.
+    host : str
+        Interface to bind; 127.0.0.1 (this computer only) unless asked otherwise.
+    port : int
+        TCP port; 0 takes any free port (see ``app.url``).
+    **options
+        Passed to :class:`orientviz.viewer.app.ViewerApp` (e.g. ``verbose=False``).
+
+    Returns
+    -------
+    orientviz.viewer.app.ViewerApp
+        ``app.url`` to open in a browser, ``app.show()`` inline in Jupyter,
+        ``app.export_html(path)`` a static snapshot, ``app.stop()`` to end it.
+    """
+    from .viewer.app import open_viewer
+
+    return open_viewer(content, host=host, port=port, **options)
+
+
+def __getattr__(name: str) -> Any:
+    module = _FACE.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value  # later look-ups skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    return list(__all__)
+
+
+if TYPE_CHECKING:  # for type checkers and editors; nothing is imported at run time
+    from .adjust.result import Adjustment, Iteration
+    from .block import Block
+    from .bundle import bundle_adjust, clean_block, self_calibrate
+    from .camera import FrameCamera, project
+    from .independent_models import independent_models
+    from .io.colmap import read_colmap
+    from .io.datasets import load_dataset
+    from .io.problem import Problem, load_problem, save_problem
+    from .io.solve import solve_problem
+    from .orientation.absolute import similarity_transform
+    from .orientation.intersection import Intersection, intersect_points
+    from .orientation.relative import relative_orientation
+    from .orientation.resection import resection
+    from .report import write_report
+    from .rotation import matrix_from_opk, opk_from_matrix
+    from .simulate import SimulatedBlock, simulate_block
+    from .units import from_rad, to_rad

@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import orientviz as ov
 from orientviz.cli import main
-from orientviz.io.datasets import dataset_info, dataset_path, list_datasets, load_dataset
+from orientviz.io.datasets import dataset_info, dataset_path, list_datasets
 from orientviz.io.problem import Units, dumps_problem, problem_from_block
-from orientviz.io.solve import solve_problem
 
 
 def _solve_json(capsys, *argv):
@@ -30,7 +30,7 @@ def test_every_example_solves(name, capsys):
     for key in ("sigma0", "converged", "iterations", "images", "points", "flagged"):
         assert key in out
     assert out["converged"] is True and out["iterations"] >= 1
-    assert out["units"] == load_dataset(name).units.as_dict()
+    assert out["units"] == ov.load_dataset(name).units.as_dict()
     if dataset_info(name)["folder"] != "examples":
         return  # other folders' datasets: their own tests judge the numbers
     # every example here is simulated with the σ it states: σ̂0 must be near 1. With r ≥ 8
@@ -67,7 +67,7 @@ def test_resection_recovers_the_simulated_orientation(capsys):
 
 def test_results_are_in_the_file_units(capsys, tmp_path):
     """The same resection in m/gon and in mm/cc reports the same numbers × 1000 / × 10⁴."""
-    base = load_dataset("resection_example")
+    base = ov.load_dataset("resection_example")
     other = problem_from_block(base.data, kind="resection", units=Units("mm", "cc", "um"))
     path = tmp_path / "mm.json"
     path.write_text(dumps_problem(other), encoding="utf-8")
@@ -157,7 +157,7 @@ def test_not_converged_exit_3_with_report(capsys, tmp_path):
 
 
 def test_solve_problem_api_matches_cli(capsys):
-    sol = solve_problem(load_dataset("intersection_example"))
+    sol = ov.solve_problem(ov.load_dataset("intersection_example"))
     _, out, _ = _solve_json(capsys, "intersection_example")
     assert out["sigma0"] == pytest.approx(sol.adjustment.sigma0, rel=1e-5)
     xyz = np.array([[p["X"], p["Y"], p["Z"]] for p in out["points"]])
@@ -275,7 +275,7 @@ def test_output_writes_the_adjusted_problem(capsys, tmp_path):
     code = main(["solve", "block_strip", "-o", str(out)])
     capsys.readouterr()
     assert code == 0
-    before = load_dataset("block_strip").data
+    before = ov.load_dataset("block_strip").data
     after = load_problem_file(out).data
     # the observations are unchanged; the start values are now the adjusted ones
     np.testing.assert_array_equal(after.observations.xy, before.observations.xy)

@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
+import orientviz as ov
 from orientviz.adjust import gauss_newton
-from orientviz.errors import NotDeterminableError
 
 T = np.linspace(0, 1, 30)
 
@@ -51,7 +51,7 @@ def test_rank_defect_names_parameters():
         f, J = _model(x[:3])
         return f + x[3], np.column_stack([J, np.ones_like(T)])
 
-    with pytest.raises(NotDeterminableError) as info:
+    with pytest.raises(ov.NotDeterminableError) as info:
         gauss_newton(m2, [1.0, -0.5, 0.0, 0.0], _data(), 0.01, names=["a", "b", "c", "d"])
     assert set(info.value.parameters) == {"c", "d"}
     assert info.value.defect == 1

@@ -3,13 +3,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+import orientviz as ov
 from orientviz.rotation import (
     check_rotation_matrix,
     convert_sequence,
     matrix_derivatives,
-    matrix_from_opk,
     matrix_from_rotvec,
-    opk_from_matrix,
     rotvec_from_matrix,
 )
 
@@ -28,21 +27,21 @@ def test_opk_matrix_written_out():
             [sw * sk - cw * sp * ck, sw * ck + cw * sp * sk, cw * cp],
         ]
     )
-    np.testing.assert_allclose(matrix_from_opk(w, p, k), expected, atol=1e-15)
+    np.testing.assert_allclose(ov.matrix_from_opk(w, p, k), expected, atol=1e-15)
 
 
 def test_pok_is_phi_first():
     w, p, k = 0.1, -0.2, 0.3
-    Rw = matrix_from_opk(w, 0, 0)
-    Rp = matrix_from_opk(0, p, 0)
-    Rk = matrix_from_opk(0, 0, k)
-    np.testing.assert_allclose(matrix_from_opk(w, p, k, "pok"), Rp @ Rw @ Rk, atol=1e-15)
-    np.testing.assert_allclose(matrix_from_opk(w, p, k, "opk"), Rw @ Rp @ Rk, atol=1e-15)
+    Rw = ov.matrix_from_opk(w, 0, 0)
+    Rp = ov.matrix_from_opk(0, p, 0)
+    Rk = ov.matrix_from_opk(0, 0, k)
+    np.testing.assert_allclose(ov.matrix_from_opk(w, p, k, "pok"), Rp @ Rw @ Rk, atol=1e-15)
+    np.testing.assert_allclose(ov.matrix_from_opk(w, p, k, "opk"), Rw @ Rp @ Rk, atol=1e-15)
 
 
 def test_small_rotation_signs():
     # a positive omega turns +Y towards +Z (right-handed about X)
-    R = matrix_from_opk(0.01, 0, 0)
+    R = ov.matrix_from_opk(0.01, 0, 0)
     assert R[2, 1] > 0 and R[1, 2] < 0
 
 
@@ -51,9 +50,9 @@ def test_small_rotation_signs():
 @given(w=angle, p=st.floats(-1.5, 1.5), k=angle)
 def test_round_trip(seq, w, p, k):
     angles = (w, p, k) if seq == "opk" else (p, w, k)  # secondary angle in (-pi/2, pi/2)
-    R = matrix_from_opk(*angles, sequence=seq)
-    back = opk_from_matrix(R, seq)
-    np.testing.assert_allclose(matrix_from_opk(*back, sequence=seq), R, atol=1e-12)
+    R = ov.matrix_from_opk(*angles, sequence=seq)
+    back = ov.opk_from_matrix(R, seq)
+    np.testing.assert_allclose(ov.matrix_from_opk(*back, sequence=seq), R, atol=1e-12)
     np.testing.assert_allclose(back, angles, atol=1e-9)
 
 
@@ -67,9 +66,9 @@ def test_derivatives_match_finite_differences(seq, w, p, k):
     for i in range(3):
         e = np.zeros(3)
         e[i] = h
-        fd = (matrix_from_opk(*(a + e), sequence=seq) - matrix_from_opk(*(a - e), sequence=seq)) / (
-            2 * h
-        )
+        fd = (
+            ov.matrix_from_opk(*(a + e), sequence=seq) - ov.matrix_from_opk(*(a - e), sequence=seq)
+        ) / (2 * h)
         np.testing.assert_allclose(d[i], fd, atol=1e-8)
 
 
@@ -83,23 +82,23 @@ def test_derivatives_match_finite_differences(seq, w, p, k):
     ],
 )
 def test_gimbal_lock_gives_same_matrix(seq, angles):
-    R = matrix_from_opk(*angles, sequence=seq)
-    back = opk_from_matrix(R, seq)
+    R = ov.matrix_from_opk(*angles, sequence=seq)
+    back = ov.opk_from_matrix(R, seq)
     assert back[2] == 0.0  # kappa set to zero by convention
-    np.testing.assert_allclose(matrix_from_opk(*back, sequence=seq), R, atol=1e-12)
+    np.testing.assert_allclose(ov.matrix_from_opk(*back, sequence=seq), R, atol=1e-12)
 
 
 def test_vectorised_and_conversion():
     rng = np.random.default_rng(0)
     a = rng.uniform(-1, 1, (5, 3))
-    R = matrix_from_opk(a[:, 0], a[:, 1], a[:, 2])
+    R = ov.matrix_from_opk(a[:, 0], a[:, 1], a[:, 2])
     assert R.shape == (5, 3, 3)
     b = convert_sequence(a[:, 0], a[:, 1], a[:, 2], "opk", "pok")
-    np.testing.assert_allclose(matrix_from_opk(*b, sequence="pok"), R, atol=1e-12)
+    np.testing.assert_allclose(ov.matrix_from_opk(*b, sequence="pok"), R, atol=1e-12)
 
 
 def test_rotvec_round_trip_near_pi():
-    R = matrix_from_opk(0.01, -0.02, np.pi - 1e-9)
+    R = ov.matrix_from_opk(0.01, -0.02, np.pi - 1e-9)
     np.testing.assert_allclose(matrix_from_rotvec(rotvec_from_matrix(R)), R, atol=1e-9)
 
 
@@ -119,4 +118,4 @@ def test_check_rotation_matrix_messages(bad, msg):
 
 def test_unknown_sequence():
     with pytest.raises(ValueError, match="expected a rotation sequence"):
-        matrix_from_opk(0, 0, 0, "kpo")
+        ov.matrix_from_opk(0, 0, 0, "kpo")

@@ -7,10 +7,10 @@ import json
 
 import pytest
 
-from orientviz.errors import DatumDefectError, InputError
+import orientviz as ov
+from orientviz.errors import DatumDefectError
 from orientviz.io.datasets import dataset_path
-from orientviz.io.problem import load_problem, loads_problem
-from orientviz.io.solve import solve_problem
+from orientviz.io.problem import loads_problem
 
 SOURCE = "bad.json"
 
@@ -19,9 +19,9 @@ def _doc(name: str = "block_strip") -> dict:
     return json.loads(dataset_path(name).read_text(encoding="utf-8"))
 
 
-def _fail(doc_or_text, match: str) -> InputError:
+def _fail(doc_or_text, match: str) -> ov.InputError:
     text = doc_or_text if isinstance(doc_or_text, str) else json.dumps(doc_or_text)
-    with pytest.raises(InputError, match=match) as info:
+    with pytest.raises(ov.InputError, match=match) as info:
         loads_problem(text, SOURCE)
     err = info.value
     line = str(err)
@@ -281,15 +281,15 @@ def test_similarity_zero_sigma_is_named():
 
 
 def test_file_errors(tmp_path):
-    with pytest.raises(InputError, match="no such file") as info:
-        load_problem(tmp_path / "missing.json")
+    with pytest.raises(ov.InputError, match="no such file") as info:
+        ov.load_problem(tmp_path / "missing.json")
     assert str(tmp_path / "missing.json") in str(info.value)
-    with pytest.raises(InputError, match="is a directory"):
-        load_problem(tmp_path)
+    with pytest.raises(ov.InputError, match="is a directory"):
+        ov.load_problem(tmp_path)
     binary = tmp_path / "image.json"
     binary.write_bytes(b"\x89PNG\r\n\x1a\n\xff\xfe")
-    with pytest.raises(InputError, match="not UTF-8"):
-        load_problem(binary)
+    with pytest.raises(ov.InputError, match="not UTF-8"):
+        ov.load_problem(binary)
 
 
 def test_datum_defect_when_the_block_has_no_control():
@@ -300,7 +300,7 @@ def test_datum_defect_when_the_block_has_no_control():
             p.pop("sigma", None)
     problem = loads_problem(json.dumps(doc), SOURCE)
     with pytest.raises(DatumDefectError, match="7 datum parameter.* free: add control or fix"):
-        solve_problem(problem)
+        ov.solve_problem(problem)
 
 
 def _nested(depth: int) -> str:

@@ -10,8 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from orientviz.block import Block
-from orientviz.errors import InputError
+import orientviz as ov
 from orientviz.io.bal import read_bal, write_bal
 from orientviz.rotation import matrix_from_rotvec
 
@@ -102,14 +101,14 @@ def test_write_read_round_trip(tmp_path):
 def test_broken_files_name_file_and_line(tmp_path, text, where):
     path = tmp_path / "broken.bal"
     path.write_text(text)
-    with pytest.raises(InputError) as info:
+    with pytest.raises(ov.InputError) as info:
         read_bal(path)
     msg = str(info.value)
     assert "broken.bal" in msg and where in msg
 
 
 def test_missing_file_is_input_error(tmp_path):
-    with pytest.raises(InputError, match="cannot read"):
+    with pytest.raises(ov.InputError, match="cannot read"):
         read_bal(tmp_path / "nope.bal")
 
 
@@ -142,5 +141,5 @@ def test_cli_import_bal_writes_problem_file(tmp_path):
     out = tmp_path / "scene.json"
     assert main(["import-bal", str(path), "-o", str(out)]) == 0
     block = load_problem(out).data
-    assert isinstance(block, Block)
+    assert isinstance(block, ov.Block)
     np.testing.assert_allclose(block.images.X0, X0, atol=1e-6)

@@ -5,10 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from orientviz.block import Block
-from orientviz.errors import InputError
-from orientviz.io.colmap import read_colmap, write_colmap
-from orientviz.rotation import matrix_from_opk
+import orientviz as ov
+from orientviz.io.colmap import write_colmap
 
 
 def _block(rng):
@@ -17,7 +15,7 @@ def _block(rng):
     xyz = np.column_stack(
         [rng.uniform(300, 1500, 40), rng.uniform(-600, 600, 40), rng.uniform(0, 100, 40)]
     )
-    R = matrix_from_opk(ang[:, 0], ang[:, 1], ang[:, 2])
+    R = ov.matrix_from_opk(ang[:, 0], ang[:, 1], ang[:, 2])
     from orientviz.camera import project
 
     oi, op, xy = [], [], []
@@ -27,7 +25,7 @@ def _block(rng):
         oi += [i] * int(ok.sum())
         op += list(np.flatnonzero(ok))
         xy.append(p[ok])
-    return Block.from_arrays(
+    return ov.Block.from_arrays(
         camera_c=[152.0],
         image_camera=[0, 0, 0],
         X0=X0,
@@ -67,7 +65,7 @@ def test_round_trip_and_colmap_projection(tmp_path):
             assert Xc[2] > 0  # in front of the camera, COLMAP looks along +z
             assert u == pytest.approx(f * Xc[0] / Xc[2] + cx, abs=1e-5)
             assert v == pytest.approx(f * Xc[1] / Xc[2] + cy, abs=1e-5)
-    back = read_colmap(tmp_path, pixel_size_mm=0.01)
+    back = ov.read_colmap(tmp_path, pixel_size_mm=0.01)
     np.testing.assert_allclose(back.images.X0, b.images.X0, atol=1e-6)
     np.testing.assert_allclose(back.rotations(), b.rotations(), atol=1e-9)
     np.testing.assert_allclose(back.points.xyz, b.points.xyz, atol=1e-6)
@@ -101,7 +99,7 @@ def test_distortion_is_removed_at_import(tmp_path):
         a[:, 0], a[:, 1] = xd * f + cx, yd * f + cy
         out.append(" ".join(f"{u:.8f} {v:.8f} {int(p)}" for u, v, p in a))
     (tmp_path / "images.txt").write_text("\n".join(out) + "\n")
-    back = read_colmap(tmp_path, pixel_size_mm=0.01)
+    back = ov.read_colmap(tmp_path, pixel_size_mm=0.01)
     # undistortion recovers the pinhole observations to well below a micrometre
     np.testing.assert_allclose(back.residuals(), 0.0, atol=1e-4)
 
@@ -118,11 +116,11 @@ def test_distortion_is_removed_at_import(tmp_path):
 def test_broken_files_name_file_and_line(tmp_path, name, content, where):
     write_colmap(_block(np.random.default_rng(3)), tmp_path)
     (tmp_path / name).write_text(content)
-    with pytest.raises(InputError) as info:
-        read_colmap(tmp_path)
+    with pytest.raises(ov.InputError) as info:
+        ov.read_colmap(tmp_path)
     assert name in str(info.value) and where in str(info.value)
 
 
 def test_missing_directory(tmp_path):
-    with pytest.raises(InputError, match="expected a directory"):
-        read_colmap(tmp_path / "nope")
+    with pytest.raises(ov.InputError, match="expected a directory"):
+        ov.read_colmap(tmp_path / "nope")

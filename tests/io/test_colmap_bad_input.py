@@ -5,16 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import orientviz as ov
 from orientviz.cli import main
-from orientviz.errors import InputError
-from orientviz.io.colmap import read_colmap, write_colmap
-from orientviz.simulate import simulate_block
+from orientviz.io.colmap import write_colmap
 
 
 @pytest.fixture(scope="module")
 def model(tmp_path_factory):
     d = tmp_path_factory.mktemp("colmap")
-    write_colmap(simulate_block(1, 3, rng=1).block, d)
+    write_colmap(ov.simulate_block(1, 3, rng=1).block, d)
     return {
         n: (d / n).read_text().splitlines() for n in ("cameras.txt", "images.txt", "points3D.txt")
     }
@@ -101,8 +100,8 @@ def test_broken_model_names_file_and_line(model, tmp_path, capsys, case):
     text, line = _edit(files[name], name, fn)
     for n, lines in files.items():
         (tmp_path / n).write_text(text if n == name else "\n".join(lines) + "\n")
-    with pytest.raises(InputError) as info:
-        read_colmap(tmp_path)
+    with pytest.raises(ov.InputError) as info:
+        ov.read_colmap(tmp_path)
     msg = str(info.value)
     assert msg.startswith(str(tmp_path / name)), msg
     assert f"line {line}:" in msg and words in msg, msg
@@ -117,12 +116,12 @@ def test_empty_files_name_a_line(model, tmp_path):
     for n, lines in model.items():
         (tmp_path / n).write_text("\n".join(lines) + "\n")
     (tmp_path / "images.txt").write_text("# nothing\n")
-    with pytest.raises(InputError, match=r"images.txt: line 1: no images"):
-        read_colmap(tmp_path)
+    with pytest.raises(ov.InputError, match=r"images.txt: line 1: no images"):
+        ov.read_colmap(tmp_path)
 
 
 def test_clean_model_reads(model, tmp_path):
     for n, lines in model.items():
         (tmp_path / n).write_text("\n".join(lines) + "\n")
-    b = read_colmap(tmp_path)
+    b = ov.read_colmap(tmp_path)
     assert b.n_images == 3 and np.all(np.isfinite(b.observations.xy))

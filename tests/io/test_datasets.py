@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from orientviz.errors import InputError
-from orientviz.io.datasets import dataset_info, dataset_path, list_datasets, load_dataset
+import orientviz as ov
+from orientviz.io.datasets import dataset_info, dataset_path, list_datasets
 from orientviz.io.problem import dumps_problem
 
 tomllib = pytest.importorskip("tomllib")  # Python ≥ 3.11
@@ -32,13 +32,13 @@ def test_manifest_lists_every_example_with_source_units_frame_licence():
         info = dataset_info(name)
         for key in ("source", "units", "frame", "licence", "description", "form", "kind"):
             assert info[key], f"{name}: empty {key}"
-        assert load_dataset(name).kind == info["kind"]
+        assert ov.load_dataset(name).kind == info["kind"]
 
 
 def test_one_compact_and_several_readable_blocks():
     forms = {n: dataset_info(n)["form"] for n in EXPECTED}
     assert forms["block_compact"] == "columnar" and forms["block_strip"] == "readable"
-    assert load_dataset("block_compact").columnar and not load_dataset("block_strip").columnar
+    assert ov.load_dataset("block_compact").columnar and not ov.load_dataset("block_strip").columnar
 
 
 def test_files_are_found_through_importlib_resources():
@@ -67,7 +67,7 @@ def test_package_data_patterns_cover_the_files():
 
 
 def test_unknown_dataset():
-    with pytest.raises(InputError, match="unknown dataset 'nope' \\(available: "):
+    with pytest.raises(ov.InputError, match="unknown dataset 'nope' \\(available: "):
         dataset_path("nope")
 
 
@@ -97,8 +97,8 @@ def test_examples_stay_small():
 
 def test_loaded_examples_are_consistent_blocks():
     for name in ("block_strip", "block_compact", "resection_example", "intersection_example"):
-        b = load_dataset(name).data
+        b = ov.load_dataset(name).data
         assert b.n_observations > 0
         assert np.all(b.observations.sigma > 0)
         # written σ round-trips through the file unit (mm) exactly
-        assert json.loads(dumps_problem(load_dataset(name)))["units"]["image"] == "mm"
+        assert json.loads(dumps_problem(ov.load_dataset(name)))["units"]["image"] == "mm"

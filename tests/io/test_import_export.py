@@ -5,23 +5,19 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import orientviz as ov
 from orientviz.block import CHECK, CONTROL
-from orientviz.bundle import bundle_adjust
 from orientviz.cli import main
 from orientviz.datasets.debug_example import make_debug_example
-from orientviz.errors import InputError
-from orientviz.io.colmap import read_colmap
 from orientviz.io.control import ControlPoints, apply_control, read_control, write_control
 from orientviz.io.export import export_results
-from orientviz.io.problem import load_problem
-from orientviz.io.results import image_table, point_table, read_csv_table
-from orientviz.simulate import simulate_block
+from orientviz.report import image_table, point_table, read_csv_table
 
 
 @pytest.fixture(scope="module")
 def adjusted():
-    sim = simulate_block(2, 4, rng=3)
-    return sim.block, bundle_adjust(sim.block)
+    sim = ov.simulate_block(2, 4, rng=3)
+    return sim.block, ov.bundle_adjust(sim.block)
 
 
 def test_tables_agree_with_the_adjustment(adjusted):
@@ -61,9 +57,9 @@ def test_export_round_trip(adjusted, tmp_path):
     block, adj = adjusted
     out = export_results(block, adj, tmp_path)
     ext = adj.x[adj.blocks["exterior"]].reshape(-1, 6)
-    again = load_problem(out["json"]).data
+    again = ov.load_problem(out["json"]).data
     np.testing.assert_allclose(again.images.X0, ext[:, :3], atol=1e-6)
-    col = read_colmap(out["colmap"])
+    col = ov.read_colmap(out["colmap"])
     np.testing.assert_allclose(col.images.X0, ext[:, :3], atol=1e-5)
     assert list(col.images.ids) == list(block.images.ids)
     assert list(col.points.ids) == [str(j + 1) for j in range(block.n_points)]
@@ -71,7 +67,7 @@ def test_export_round_trip(adjusted, tmp_path):
     assert csv["id"] == list(block.points.ids)
     xyz = adj.x[adj.blocks["points"]].reshape(-1, 3)
     np.testing.assert_allclose(np.array(csv["Z[m]"], float), xyz[:, 2], rtol=1e-15)
-    with pytest.raises(InputError, match="unknown export format"):
+    with pytest.raises(ov.InputError, match="unknown export format"):
         export_results(block, adj, tmp_path, formats=["xlsx"])
 
 
@@ -85,7 +81,7 @@ def test_control_file_round_trip_and_errors(tmp_path):
     back = read_control(path)
     assert back.ids == ["5", "9"] and back.role.tolist() == [CONTROL, CHECK]
     np.testing.assert_array_equal(back.xyz, cp.xyz)
-    block = simulate_block(1, 3, rng=2, control="none").block
+    block = ov.simulate_block(1, 3, rng=2, control="none").block
     block.points.ids = [str(j + 1) for j in range(block.n_points)]
     b = apply_control(block, back)
     assert b.points.role[4] == CONTROL and b.points.role[8] == CHECK
@@ -98,16 +94,16 @@ def test_control_file_round_trip_and_errors(tmp_path):
                        ("7,1,2", "cells"),
                        ("7,,,,0,0,0,control", "no coordinate")):  # fmt: skip
         path.write_text("\n".join([*lines, bad]) + "\n")
-        with pytest.raises(InputError, match=rf"c.csv: line 4: .*{words}"):
+        with pytest.raises(ov.InputError, match=rf"c.csv: line 4: .*{words}"):
             read_control(path)
     path.write_text("\n".join([lines[0], "99999,1,2,3,0,0,0,control"]) + "\n")
-    with pytest.raises(InputError, match=r"c.csv: line 2: point '99999' is not in the block"):
+    with pytest.raises(ov.InputError, match=r"c.csv: line 2: point '99999' is not in the block"):
         apply_control(block, read_control(path))
 
 
 def test_debug_example_carries_its_faults(tmp_path):
     ex = make_debug_example(tmp_path, rng=5, strips=2, images_per_strip=4, blunders=2)
-    b = read_colmap(ex.colmap)
+    b = ov.read_colmap(ex.colmap)
     truth = ex.truth
     i = b.image_index(ex.bad_image)
     assert np.linalg.norm(b.images.X0[i] - truth.images.X0[i]) > 100
@@ -148,7 +144,7 @@ def test_cli_import_with_control_then_export(tmp_path, capsys):
         )
         == 0
     )
-    block = load_problem(out).data
+    block = ov.load_problem(out).data
     assert np.sum(block.points.role == CONTROL) == len(read_control(ex.control).ids)
     assert np.allclose(block.observations.sigma, 0.005)
     # the misplaced image stops the bundle: exit 3, nothing written

@@ -8,11 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import orientviz as ov
 from orientviz.cli import main
-from orientviz.errors import InputError
-from orientviz.io.problem import dumps_problem, load_problem, loads_problem
+from orientviz.io.problem import dumps_problem, loads_problem
 from orientviz.io.registry import get_kind
-from orientviz.io.solve import solve_problem
 
 HERE = Path(__file__).resolve().parents[2] / "src" / "orientviz" / "datasets" / "pair"
 EXAMPLE = HERE / "pair_example.json"
@@ -31,7 +30,7 @@ def test_example_is_reproducible(tmp_path):
 
 def test_round_trip_both_forms():
     text = EXAMPLE.read_text(encoding="utf-8")
-    problem = load_problem(EXAMPLE)
+    problem = ov.load_problem(EXAMPLE)
     assert dumps_problem(problem) == text
     columnar = dumps_problem(problem, columnar=True)
     back = loads_problem(columnar, "columnar.json")
@@ -40,7 +39,7 @@ def test_round_trip_both_forms():
 
 def test_solve_recovers_the_truth_within_its_precision():
     truth = json.loads((HERE / "MANIFEST.json").read_text())["datasets"][0]["truth"]
-    sol = solve_problem(load_problem(EXAMPLE))
+    sol = ov.solve_problem(ov.load_problem(EXAMPLE))
     p = {q.name: q for q in sol.parameters}
     f = sol.factor("angle")
     # 3 µm image noise, 25 points: every element within 4 σ of the simulated truth
@@ -55,12 +54,12 @@ def test_solve_recovers_the_truth_within_its_precision():
 def test_essential_route_and_independent_elements():
     doc = _doc()
     doc["options"]["route"] = "essential"
-    a = solve_problem(loads_problem(json.dumps(doc), "e.json"))
-    b = solve_problem(load_problem(EXAMPLE))
+    a = ov.solve_problem(loads_problem(json.dumps(doc), "e.json"))
+    b = ov.solve_problem(ov.load_problem(EXAMPLE))
     np.testing.assert_allclose(a.adjustment.x, b.adjustment.x, atol=1e-9)
     doc = _doc()
     doc["options"]["elements"] = "independent"
-    c = solve_problem(loads_problem(json.dumps(doc), "i.json"))
+    c = ov.solve_problem(loads_problem(json.dumps(doc), "i.json"))
     assert [q.name for q in c.parameters][1:] == ["phi1", "kappa1", "phi2", "omega2", "kappa2"]
     # same five degrees of freedom, but the y-parallax is measured in a model frame
     # turned by the ~1.5 gon of the left image: σ0 agrees to second order (~1e-4)
@@ -86,8 +85,8 @@ def test_cli_solve(capsys):
 def test_bad_input_names_the_place(mutate, where):
     doc = _doc()
     mutate(doc)
-    with pytest.raises(InputError) as exc:
-        solve_problem(loads_problem(json.dumps(doc), "bad.json"))
+    with pytest.raises(ov.InputError) as exc:
+        ov.solve_problem(loads_problem(json.dumps(doc), "bad.json"))
     assert "bad.json" in str(exc.value)
     assert where.split("/")[0].split("[")[0].split(".")[0] in str(exc.value)
 

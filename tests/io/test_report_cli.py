@@ -6,8 +6,8 @@ import json
 
 import pytest
 
+import orientviz as ov
 from orientviz.cli import main
-from orientviz.io.problem import load_problem, save_problem
 from orientviz.io.solve import _resolve
 
 
@@ -55,9 +55,9 @@ def test_bad_report_path_is_one_line_and_exit_2(tmp_path, capsys, target):
 
 
 def test_not_converged_still_writes_the_report_and_exits_3(tmp_path, capsys):
-    problem = load_problem(_resolve("block_compact"))
+    problem = ov.load_problem(_resolve("block_compact"))
     problem.options["max_iter"] = 1
-    src = save_problem(problem, tmp_path / "one_step.json")
+    src = ov.save_problem(problem, tmp_path / "one_step.json")
     report = tmp_path / "r.txt"
     rc, _, err = run(capsys, "solve", str(src), "--report", str(report))
     assert rc == 3

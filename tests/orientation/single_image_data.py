@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from orientviz.rotation import matrix_from_opk
+import orientviz as ov
 
 C_MM = 152.7
 
@@ -20,4 +20,4 @@ def vertical_image():
     """A near-vertical image 1500 m above ground: (X0 m, angles rad, R)."""
     X0 = np.array([30.0, -20.0, 1500.0])
     ang = np.array([0.02, -0.03, 1.2])
-    return X0, ang, matrix_from_opk(*ang)
+    return X0, ang, ov.matrix_from_opk(*ang)

@@ -7,17 +7,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from orientviz.errors import InputError, NotDeterminableError
+import orientviz as ov
 from orientviz.orientation.absolute import (
     SimilarityTransform,
     similarity_closed_form,
     similarity_model,
-    similarity_transform,
 )
-from orientviz.rotation import matrix_from_opk
-from orientviz.units import to_rad
 
-TRUE = np.array([5000.0, 3000.0, 420.0, to_rad(1.2), to_rad(-2.5), to_rad(137.0), 12.5])
+TRUE = np.array([5000.0, 3000.0, 420.0, ov.to_rad(1.2), ov.to_rad(-2.5), ov.to_rad(137.0), 12.5])
 
 
 def model_points(rng, n=8):
@@ -37,7 +34,7 @@ def test_noise_free_exact(sequence):
     np.testing.assert_allclose(cf.R, tf.R, atol=1e-12)
     np.testing.assert_allclose(cf.scale, tf.scale, rtol=1e-12)
     np.testing.assert_allclose(cf.t, tf.t, atol=1e-8)
-    res = similarity_transform(x, X, sequence=sequence)
+    res = ov.similarity_transform(x, X, sequence=sequence)
     np.testing.assert_allclose(res.x, TRUE, atol=1e-9)
     assert res.converged and res.redundancy == 3 * 8 - 7
     assert np.abs(res.residuals).max() < 1e-8
@@ -53,7 +50,7 @@ def test_rigid_noise_free_exact():
     cf = similarity_closed_form(x, X, scale=False)
     assert cf.scale == 1.0
     np.testing.assert_allclose(cf.R, tf.R, atol=1e-12)
-    res = similarity_transform(x, X, rigid=True)
+    res = ov.similarity_transform(x, X, rigid=True)
     np.testing.assert_allclose(res.x, p, atol=1e-9)
     assert res.redundancy == 24 - 6
     assert res.std()[6] == 0.0  # scale held fixed
@@ -94,7 +91,7 @@ def test_closed_form_equals_least_squares_for_equal_weights():
     x = model_points(rng, 12)
     X = SimilarityTransform.from_params(TRUE).apply(x) + rng.normal(0, 0.05, (12, 3))
     cf = similarity_closed_form(x, X)
-    res = similarity_transform(x, X, sigma_target=0.05)
+    res = ov.similarity_transform(x, X, sigma_target=0.05)
     # tolerance: 1e-6 of the parameters' σ (the engine's stopping rule)
     np.testing.assert_allclose(res.x, cf.params(), atol=1e-6 * res.std().max())
 
@@ -108,7 +105,7 @@ def test_noisy_within_precision_and_sigma0_statistics():
     X = SimilarityTransform.from_params(TRUE).apply(x)
     s02, zmax = [], 0.0
     for _ in range(300):
-        res = similarity_transform(x, X + rng.normal(0, 0.02, X.shape), sigma_target=0.02)
+        res = ov.similarity_transform(x, X + rng.normal(0, 0.02, X.shape), sigma_target=0.02)
         s02.append(res.sigma0**2)
         zmax = max(zmax, np.max(np.abs(res.x - TRUE) / res.std(a_posteriori=False)))
     assert abs(np.mean(s02) - 1.0) < 0.1
@@ -138,7 +135,7 @@ def test_partial_control_height_and_planimetry():
     Xp = X.copy()
     Xp[2:4, :2] = np.nan  # height-only points
     Xp[4:6, 2] = np.nan  # planimetry-only points
-    res = similarity_transform(x, Xp)
+    res = ov.similarity_transform(x, Xp)
     np.testing.assert_allclose(res.x, TRUE, atol=1e-8)
     assert res.redundancy == 6 + 2 + 4 - 7
     assert np.isnan(res.extra["residuals_xyz"][2, 0])
@@ -151,7 +148,7 @@ def test_minimal_classic_layout_two_full_one_height():
     x = model_points(rng, 3)
     X = SimilarityTransform.from_params(TRUE).apply(x)
     X[2, :2] = np.nan
-    res = similarity_transform(x, X)
+    res = ov.similarity_transform(x, X)
     assert res.redundancy == 0
     np.testing.assert_allclose(res.x, TRUE, atol=1e-8)
 
@@ -160,8 +157,8 @@ def test_sigma_source_tiny_equals_classic():
     rng = np.random.default_rng(10)
     x = model_points(rng)
     X = SimilarityTransform.from_params(TRUE).apply(x) + rng.normal(0, 0.02, (8, 3))
-    classic = similarity_transform(x, X, sigma_target=0.02)
-    both = similarity_transform(x, X, sigma_target=0.02, sigma_source=1e-7)
+    classic = ov.similarity_transform(x, X, sigma_target=0.02)
+    both = ov.similarity_transform(x, X, sigma_target=0.02, sigma_source=1e-7)
     # model σ 1e-7 units ≈ 1.25e-6 m after scaling, 1e-4 of the control σ: agreement to ~1e-4 σ
     np.testing.assert_allclose(both.x[:7], classic.x, atol=1e-3 * classic.std().max())
     assert both.n_unknowns == 7 + 24 and both.redundancy == classic.redundancy
@@ -177,7 +174,9 @@ def test_sigma_source_noisy_model_sigma0():
     for _ in range(100):
         xn = x + rng.normal(0, 0.002, x.shape)  # model units; × 12.5 = 2.5 cm
         Xn = X + rng.normal(0, 0.02, X.shape)
-        s02.append(similarity_transform(xn, Xn, sigma_target=0.02, sigma_source=0.002).sigma0 ** 2)
+        s02.append(
+            ov.similarity_transform(xn, Xn, sigma_target=0.02, sigma_source=0.002).sigma0 ** 2
+        )
     assert abs(np.mean(s02) - 1.0) < 0.15
 
 
@@ -185,27 +184,27 @@ def test_bad_input_and_degenerate():
     rng = np.random.default_rng(12)
     x = model_points(rng, 5)
     X = SimilarityTransform.from_params(TRUE).apply(x)
-    with pytest.raises(InputError, match="expected shape"):
-        similarity_transform(x[:, :2], X)
-    with pytest.raises(InputError, match="like the source"):
+    with pytest.raises(ov.InputError, match="expected shape"):
+        ov.similarity_transform(x[:, :2], X)
+    with pytest.raises(ov.InputError, match="like the source"):
         similarity_closed_form(x, X[:4])
-    with pytest.raises(InputError, match="σ > 0"):
-        similarity_transform(x, X, sigma_target=0.0)
-    with pytest.raises(NotDeterminableError, match="at least 3"):
+    with pytest.raises(ov.InputError, match="σ > 0"):
+        ov.similarity_transform(x, X, sigma_target=0.0)
+    with pytest.raises(ov.NotDeterminableError, match="at least 3"):
         similarity_closed_form(x[:2], X[:2])
     line = np.outer(np.arange(5.0), [1.0, 2.0, 0.5])
-    with pytest.raises(NotDeterminableError, match="collinear"):
+    with pytest.raises(ov.NotDeterminableError, match="collinear"):
         similarity_closed_form(line, SimilarityTransform.from_params(TRUE).apply(line))
-    with pytest.raises(NotDeterminableError) as exc:
-        similarity_transform(line, SimilarityTransform.from_params(TRUE).apply(line))
+    with pytest.raises(ov.NotDeterminableError) as exc:
+        ov.similarity_transform(line, SimilarityTransform.from_params(TRUE).apply(line))
     assert exc.value.parameters
-    with pytest.raises(NotDeterminableError, match="at least 7 control coordinates"):
-        similarity_transform(x, np.where([[True, True, False]], np.nan, X))  # 5 heights
+    with pytest.raises(ov.NotDeterminableError, match="at least 7 control coordinates"):
+        ov.similarity_transform(x, np.where([[True, True, False]], np.nan, X))  # 5 heights
     x8 = model_points(rng, 8)
     only_heights = SimilarityTransform.from_params(TRUE).apply(x8)
     only_heights[:, :2] = np.nan
-    with pytest.raises(NotDeterminableError, match="planimetric"):
-        similarity_transform(x8, only_heights)
+    with pytest.raises(ov.NotDeterminableError, match="planimetric"):
+        ov.similarity_transform(x8, only_heights)
 
 
 angles = st.floats(-np.pi, np.pi, allow_nan=False)
@@ -222,14 +221,14 @@ angles = st.floats(-np.pi, np.pi, allow_nan=False)
 def test_property_recovers_any_transform(omega, phi, kappa, scale, seed):
     rng = np.random.default_rng(seed)
     x = model_points(rng, 6)
-    R = matrix_from_opk(omega, phi, kappa)
+    R = ov.matrix_from_opk(omega, phi, kappa)
     t = rng.uniform(-1e4, 1e4, 3)
     X = t + scale * x @ R.T
     cf = similarity_closed_form(x, X)
     np.testing.assert_allclose(cf.R, R, atol=1e-9)
     np.testing.assert_allclose(cf.scale, scale, rtol=1e-9)
     np.testing.assert_allclose(cf.apply(x), X, atol=1e-7 * (1 + scale * 100))
-    res = similarity_transform(x, X, sigma_target=0.01)
+    res = ov.similarity_transform(x, X, sigma_target=0.01)
     np.testing.assert_allclose(res.extra["transform"].R, R, atol=1e-9)
 
 
@@ -238,11 +237,11 @@ def test_partial_control_start_converges_for_tilted_models(tilt_gon):
     # the planimetric start assumes ω = φ = 0; Gauss-Newton must still reach the truth
     rng = np.random.default_rng(13)
     x = model_points(rng)
-    p = np.array([1000.0, 2000.0, 300.0, to_rad(tilt_gon), to_rad(-tilt_gon), 2.0, 5.0])
+    p = np.array([1000.0, 2000.0, 300.0, ov.to_rad(tilt_gon), ov.to_rad(-tilt_gon), 2.0, 5.0])
     X = SimilarityTransform.from_params(p).apply(x)
     X[:4, 2] = np.nan
     X[4:, :2] = np.nan
-    res = similarity_transform(x, X)
+    res = ov.similarity_transform(x, X)
     assert res.converged
     np.testing.assert_allclose(res.x, p, atol=1e-9)
 
@@ -253,10 +252,10 @@ def test_gimbal_lock_is_reported_and_other_sequence_works():
     x = model_points(rng)
     p = np.array([1000.0, 2000.0, 300.0, 0.3, np.pi / 2, 0.2, 5.0])
     X = SimilarityTransform.from_params(p).apply(x)
-    with pytest.raises(NotDeterminableError) as exc:
-        similarity_transform(x, X, sequence="opk")
+    with pytest.raises(ov.NotDeterminableError) as exc:
+        ov.similarity_transform(x, X, sequence="opk")
     assert set(exc.value.parameters) == {"omega", "kappa"}
-    res = similarity_transform(x, X, sequence="pok")
+    res = ov.similarity_transform(x, X, sequence="pok")
     np.testing.assert_allclose(
         res.extra["transform"].R, SimilarityTransform.from_params(p).R, atol=1e-12
     )

@@ -6,22 +6,20 @@ import numpy as np
 import pytest
 from single_image_data import C_MM, ground_points
 
-from orientviz.camera import project
-from orientviz.errors import InputError, NotDeterminableError
-from orientviz.orientation.intersection import forward_intersection, intersect_points
-from orientviz.rotation import matrix_from_opk
+import orientviz as ov
+from orientviz.orientation.intersection import forward_intersection
 
 
 def three_images(rng):
     X0 = np.array([[-300.0, 0, 1500], [300, 0, 1500], [0, 250, 1520]])
     ang = rng.normal(0, 0.02, (3, 3))
-    return X0, matrix_from_opk(ang[:, 0], ang[:, 1], ang[:, 2])
+    return X0, ov.matrix_from_opk(ang[:, 0], ang[:, 1], ang[:, 2])
 
 
 def observe(X, X0, R):
     p, m = X.shape[0], X0.shape[0]
     img, pt = np.repeat(np.arange(m), p), np.tile(np.arange(p), m)
-    return project(X[pt], X0[img], R[img], C_MM), img, pt
+    return ov.project(X[pt], X0[img], R[img], C_MM), img, pt
 
 
 def test_noise_free_exact_many_points():
@@ -29,10 +27,10 @@ def test_noise_free_exact_many_points():
     X0, R = three_images(rng)
     X = ground_points(rng, 500)
     xy, img, pt = observe(X, X0, R)
-    res = intersect_points(xy, img, pt, X0, R, C_MM)
+    res = ov.intersect_points(xy, img, pt, X0, R, C_MM)
     np.testing.assert_allclose(res.xyz, X, atol=1e-8)
     assert res.converged and np.all(res.redundancy == 3) and np.all(res.n_rays == 3)
-    lin = intersect_points(xy, img, pt, X0, R, C_MM, rigorous=False)
+    lin = ov.intersect_points(xy, img, pt, X0, R, C_MM, rigorous=False)
     np.testing.assert_allclose(lin.xyz, X, atol=1e-8)  # exact rays meet in one point
 
 
@@ -44,7 +42,7 @@ def test_noisy_precision_matches_errors():
     X0, R = three_images(rng)
     X = ground_points(rng, 2000)
     xy, img, pt = observe(X, X0, R)
-    res = intersect_points(xy + rng.normal(0, 0.005, xy.shape), img, pt, X0, R, C_MM)
+    res = ov.intersect_points(xy + rng.normal(0, 0.005, xy.shape), img, pt, X0, R, C_MM)
     z = (res.xyz - X) / res.std()
     assert np.all(np.abs(z.std(axis=0) - 1) < 0.08)
     pooled = np.sum(res.sigma0**2 * res.redundancy) / res.redundancy.sum()
@@ -57,7 +55,7 @@ def test_matches_engine_single_point():
     X = ground_points(rng, 4)
     xy, img, pt = observe(X, X0, R)
     xy = xy + rng.normal(0, 0.005, xy.shape)
-    many = intersect_points(xy, img, pt, X0, R, C_MM)
+    many = ov.intersect_points(xy, img, pt, X0, R, C_MM)
     for k in range(4):
         one = forward_intersection(xy[pt == k], X0, R, C_MM)
         # both minimise the same vᵀPv; agreement to the engine's stopping rule (1e-6 σ)
@@ -74,7 +72,7 @@ def test_height_precision_grows_with_smaller_base():
         X0 = np.array([[-base / 2, 0, 1500.0], [base / 2, 0, 1500.0]])
         R = np.stack([np.eye(3), np.eye(3)])
         xy, img, pt = observe(X, X0, R)
-        out.append(intersect_points(xy, img, pt, X0, R, C_MM).std()[0, 2])
+        out.append(ov.intersect_points(xy, img, pt, X0, R, C_MM).std()[0, 2])
     assert out[1] / out[0] == pytest.approx(2.0, rel=0.02)
     # σ_Z = (H/B)·(H/c)·σ_px with σ_px = √2·σ_x; H/c in m per mm, σ_x in mm → m
     expected = 1500 / 600 * 1500 / C_MM * 0.005 * np.sqrt(2)
@@ -105,21 +103,21 @@ def test_degenerate_and_bad_input():
     X = ground_points(rng, 3)
     xy, img, pt = observe(X, X0, R)
     keep = ~((pt == 1) & (img > 0))  # point 1 seen only once
-    with pytest.raises(NotDeterminableError, match="fewer than 2 rays for point"):
-        intersect_points(xy[keep], img[keep], pt[keep], X0, R, C_MM)
-    nanres = intersect_points(xy[keep], img[keep], pt[keep], X0, R, C_MM, on_degenerate="nan")
+    with pytest.raises(ov.NotDeterminableError, match="fewer than 2 rays for point"):
+        ov.intersect_points(xy[keep], img[keep], pt[keep], X0, R, C_MM)
+    nanres = ov.intersect_points(xy[keep], img[keep], pt[keep], X0, R, C_MM, on_degenerate="nan")
     assert np.isnan(nanres.xyz[1]).all() and np.isfinite(nanres.xyz[[0, 2]]).all()
     # parallel rays: the same ray from two places along it
     Xc = np.array([[0.0, 0.0, 1500.0], [0.0, 0.0, 1000.0]])
     Rr = np.stack([np.eye(3)] * 2)
-    with pytest.raises(NotDeterminableError, match="parallel"):
+    with pytest.raises(ov.NotDeterminableError, match="parallel"):
         forward_intersection(np.zeros((2, 2)), Xc, Rr, C_MM)
-    with pytest.raises(NotDeterminableError, match="at least 2"):
+    with pytest.raises(ov.NotDeterminableError, match="at least 2"):
         forward_intersection(np.zeros((1, 2)), Xc[:1], Rr[:1], C_MM)
-    with pytest.raises(InputError):
-        intersect_points(xy, img, pt, X0, R[:2], C_MM)
-    with pytest.raises(InputError):
-        intersect_points(xy, img + 5, pt, X0, R, C_MM)
+    with pytest.raises(ov.InputError):
+        ov.intersect_points(xy, img, pt, X0, R[:2], C_MM)
+    with pytest.raises(ov.InputError):
+        ov.intersect_points(xy, img + 5, pt, X0, R, C_MM)
 
 
 def test_symmetric_3x3_helpers_match_numpy():
@@ -153,10 +151,10 @@ def test_input_checks_of_indices_and_sigma():
     X0, R = three_images(rng)
     X = ground_points(rng, 3)
     xy, img, pt = observe(X, X0, R)
-    with pytest.raises(InputError, match="n_points"):
-        intersect_points(xy, img, pt, X0, R, C_MM, n_points=2)
-    with pytest.raises(InputError, match="sigma"):
-        intersect_points(xy, img, pt, X0, R, C_MM, sigma=0.0)
+    with pytest.raises(ov.InputError, match="n_points"):
+        ov.intersect_points(xy, img, pt, X0, R, C_MM, n_points=2)
+    with pytest.raises(ov.InputError, match="sigma"):
+        ov.intersect_points(xy, img, pt, X0, R, C_MM, sigma=0.0)
     # unobserved extra points are reported, or NaN on request
-    res = intersect_points(xy, img, pt, X0, R, C_MM, n_points=5, on_degenerate="nan")
+    res = ov.intersect_points(xy, img, pt, X0, R, C_MM, n_points=5, on_degenerate="nan")
     assert res.determinable.tolist() == [True, True, True, False, False]

@@ -5,11 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from orientviz.camera import project
-from orientviz.errors import InputError
+import orientviz as ov
 from orientviz.orientation import essential as es
 from orientviz.orientation import relative as rel
-from orientviz.rotation import matrix_from_opk
 
 C, B = 152.7, 92.0
 TRUE = np.array([1.5, -2.0, 0.03, -0.02, 0.04])  # by, bz (mm), ω, φ, κ (rad)
@@ -24,8 +22,8 @@ def _pair(rng, n=60, noise=0.0):
         ]
     )
     st = rel.PairState.from_elements(TRUE, B)
-    xy1 = project(P, np.zeros(3), np.eye(3), C)
-    xy2 = project(P, st.base, matrix_from_opk(*TRUE[2:]), C)
+    xy1 = ov.project(P, np.zeros(3), np.eye(3), C)
+    xy2 = ov.project(P, st.base, ov.matrix_from_opk(*TRUE[2:]), C)
     if noise:
         xy1 = xy1 + rng.normal(0, noise, xy1.shape)
         xy2 = xy2 + rng.normal(0, noise, xy2.shape)
@@ -39,7 +37,7 @@ def test_noise_free_essential_and_decomposition():
     d2 = np.column_stack([xy2, np.full(len(xy2), -C)])
     # rays of ~200 mm: the constraint vanishes to rounding
     assert np.abs(np.einsum("ni,ij,nj->n", d1, E, d2)).max() < 1e-8
-    E_true = es.essential_from_orientation(matrix_from_opk(*TRUE[2:]), st.base)
+    E_true = es.essential_from_orientation(ov.matrix_from_opk(*TRUE[2:]), st.base)
     E_true *= np.sqrt(2) / np.linalg.norm(E_true)
     assert min(np.abs(E - E_true).max(), np.abs(E + E_true).max()) < 1e-10
     R, t, n_front = es.select_by_cheirality(E, xy1, xy2, C)
@@ -50,7 +48,7 @@ def test_noise_free_essential_and_decomposition():
         l1, l2 = es.depths(xy1, xy2, C, Rc, tc)
         counts.append(int(np.sum((l1 > 0) & (l2 > 0))))
     assert sorted(counts)[-2] < len(xy1)
-    np.testing.assert_allclose(R, matrix_from_opk(*TRUE[2:]), atol=1e-12)
+    np.testing.assert_allclose(R, ov.matrix_from_opk(*TRUE[2:]), atol=1e-12)
     np.testing.assert_allclose(t, st.base / np.linalg.norm(st.base), atol=1e-12)
 
 
@@ -83,7 +81,7 @@ def test_against_opencv():
     B_cv = -R2_cv @ (D @ t_cv.ravel())
     ours = es.essential_route(xy1, xy2, C, b=B, refine=False)
     R_ours, t_ours = ours.extra["R_linear"], ours.extra["t_linear"]
-    R_true = matrix_from_opk(*TRUE[2:])
+    R_true = ov.matrix_from_opk(*TRUE[2:])
     # 3 µm noise on 100 points: rotations to ~1e-4 rad, base direction ~1e-3
     for R, t in ((R_ours, t_ours), (R2_cv, B_cv / np.linalg.norm(B_cv))):
         assert np.abs(R - R_true).max() < 5e-4
@@ -92,9 +90,9 @@ def test_against_opencv():
 
 
 def test_essential_input_errors():
-    with pytest.raises(InputError, match="8 points"):
+    with pytest.raises(ov.InputError, match="8 points"):
         es.eight_point(np.zeros((7, 2)), np.zeros((7, 2)), C)
-    with pytest.raises(InputError, match="same shape"):
+    with pytest.raises(ov.InputError, match="same shape"):
         es.eight_point(np.zeros((9, 2)), np.zeros((8, 2)), C)
 
 
@@ -104,7 +102,7 @@ def test_five_point_minimal_contains_the_truth():
     E_true = None
     for _ in range(5):
         xy1, xy2, st = _pair(rng, n=5)
-        E_true = es.essential_from_orientation(matrix_from_opk(*TRUE[2:]), st.base)
+        E_true = es.essential_from_orientation(ov.matrix_from_opk(*TRUE[2:]), st.base)
         E_true *= np.sqrt(2) / np.linalg.norm(E_true)
         sols = es.five_point(xy1, xy2, C)
         assert 1 <= len(sols) <= 10
@@ -120,7 +118,7 @@ def test_five_point_route_with_more_points_and_against_opencv():
     rng = np.random.default_rng(11)
     xy1, xy2, st = _pair(rng, n=12, noise=0.002)
     E, R, t = es.five_point_route(xy1, xy2, C)
-    R_true = matrix_from_opk(*TRUE[2:])
+    R_true = ov.matrix_from_opk(*TRUE[2:])
     # 2 µm noise on 12 points: rotation to ~5e-4 rad
     assert np.abs(R - R_true).max() < 2e-3
     p1 = np.column_stack([xy1[:, 0] / C, -xy1[:, 1] / C])
@@ -129,7 +127,7 @@ def test_five_point_route_with_more_points_and_against_opencv():
     _, R_cv, _, _ = cv2.recoverPose(E_cv, p1, p2, focal=1.0, pp=(0.0, 0.0))
     D = es.D_OPENCV
     assert np.abs(D @ R_cv.T @ D - R).max() < 2e-3
-    with pytest.raises(InputError, match="5 points"):
+    with pytest.raises(ov.InputError, match="5 points"):
         es.five_point(xy1[:4], xy2[:4], C)
 
 
@@ -138,7 +136,7 @@ def test_route_with_the_five_point_solver():
     res = es.essential_route(xy1, xy2, C, b=B, solver="five")
     np.testing.assert_allclose(res.extra["linear"], TRUE, atol=1e-8)
     np.testing.assert_allclose(res.x, TRUE, atol=1e-10)
-    with pytest.raises(InputError, match="solver"):
+    with pytest.raises(ov.InputError, match="solver"):
         es.essential_route(xy1, xy2, C, b=B, solver="seven")
 
 
@@ -155,8 +153,8 @@ def test_large_rotations_in_the_plotter_sequence():
     )
     e = np.array([10.0, -8.0, 0.3, -0.25, 0.4])
     st = rel.PairState.from_elements(e, B, "dependent", "pok")
-    xy1 = project(P, np.zeros(3), np.eye(3), C)
-    xy2 = project(P, st.base, matrix_from_opk(*e[2:], sequence="pok"), C)
+    xy1 = ov.project(P, np.zeros(3), np.eye(3), C)
+    xy2 = ov.project(P, st.base, ov.matrix_from_opk(*e[2:], sequence="pok"), C)
     res = es.essential_route(xy1, xy2, C, b=B, sequence="pok")
     assert res.converged and res.iterations <= 4
     np.testing.assert_allclose(res.x, e, atol=1e-10)

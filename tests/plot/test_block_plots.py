@@ -8,6 +8,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
+import orientviz as ov
 from orientviz.plot.block import (  # noqa: E402
     plot_block_layout,
     plot_check_heights,
@@ -17,12 +18,12 @@ from orientviz.plot.block import (  # noqa: E402
     plot_precision_map,
     plot_strip_law,
 )
-from orientviz.simulate import height_precision, planimetric_precision, simulate_block
+from orientviz.simulate import height_precision, planimetric_precision
 
 
 @pytest.fixture(scope="module")
 def sim():
-    return simulate_block(
+    return ov.simulate_block(
         2, 5, rng=np.random.default_rng(1), extra=None, control="chains", chain_spacing=2, control_spacing=1,
         control_kind="xy+z", n_check=2,
     )  # fmt: skip
@@ -96,7 +97,7 @@ def test_check_heights_draw_each_result_at_the_true_x():
     from orientviz.bundle import bundle_adjust
     from orientviz.errors import InputError
 
-    s = simulate_block(2, 5, rng=4, n_check=8)
+    s = ov.simulate_block(2, 5, rng=4, n_check=8)
     truth = s.truth.points.xyz
     chk = np.flatnonzero(s.block.points.role == 2)
     wave = truth.copy()

@@ -10,14 +10,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from orientviz.camera import project  # noqa: E402
-from orientviz.orientation.absolute import similarity_transform  # noqa: E402
+import orientviz as ov
 from orientviz.orientation.examples import LAYOUTS, house, similarity_example  # noqa: E402
 from orientviz.plot.conventions import plot_conventions, plot_frames, plot_image_frame  # noqa: E402
 from orientviz.plot.image import plot_correlations, plot_image  # noqa: E402
 from orientviz.plot.transform import control_kind, plot_transform_residuals  # noqa: E402
-from orientviz.rotation import matrix_from_opk  # noqa: E402
-from orientviz.units import to_rad  # noqa: E402
 from orientviz.widgets.absolute import absolute_state, precision_table  # noqa: E402
 from orientviz.widgets.resection import intersection_state, resection_state  # noqa: E402
 from orientviz.widgets.rotation import describe, rotation_state  # noqa: E402
@@ -41,7 +38,7 @@ def test_conventions_figure_and_given_axes():
 
 def test_plot_image_draws_edges_and_residual_arrows():
     pts, edges = house()
-    xy = project(pts, [0, 0, 150.0], np.eye(3), 152.7)
+    xy = ov.project(pts, [0, 0, 150.0], np.eye(3), 152.7)
     fig = plot_image(xy, edges=edges, residuals=np.full_like(xy, 0.004), labels=list("abcdefghij"))
     ax = fig.axes[0]
     assert len(ax.collections) == 2  # wireframe + quiver
@@ -50,7 +47,7 @@ def test_plot_image_draws_edges_and_residual_arrows():
 
 def test_plot_transform_residuals_and_correlations():
     ex = similarity_example("separate", 0.05, rng=np.random.default_rng(0))
-    res = similarity_transform(ex.source, ex.target, sigma_target=0.05, point_ids=ex.ids)
+    res = ov.similarity_transform(ex.source, ex.target, sigma_target=0.05, point_ids=ex.ids)
     fig = plot_transform_residuals(res)
     ax = fig.axes[0]
     assert {t.get_text() for t in ax.texts} >= {"P1", "P5"}
@@ -61,10 +58,12 @@ def test_plot_transform_residuals_and_correlations():
 
 def test_rotation_state_matches_library_and_sequences():
     st = rotation_state(10.0, -20.0, 150.0, unit="gon", sequence="opk")
-    np.testing.assert_allclose(st.R, matrix_from_opk(to_rad(10.0), to_rad(-20.0), to_rad(150.0)))
+    np.testing.assert_allclose(
+        st.R, ov.matrix_from_opk(ov.to_rad(10.0), ov.to_rad(-20.0), ov.to_rad(150.0))
+    )
     # the same matrix rebuilt from the other sequence's angles
-    a = to_rad(st.angles_other, "gon")
-    np.testing.assert_allclose(matrix_from_opk(*a, "pok"), st.R, atol=1e-12)
+    a = ov.to_rad(st.angles_other, "gon")
+    np.testing.assert_allclose(ov.matrix_from_opk(*a, "pok"), st.R, atol=1e-12)
     assert not st.gimbal_lock
     assert "φ-ω-κ" in describe(st)
     # vertical view: the house ridge (points 8, 9) images along y, symmetric about x = 0

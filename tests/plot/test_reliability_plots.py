@@ -7,20 +7,19 @@ matplotlib.use("Agg")
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from orientviz.bundle import bundle_adjust, ray_reliability
-from orientviz.errors import InputError  # noqa: E402
+import orientviz as ov
+from orientviz.bundle import ray_reliability
 from orientviz.plot.gross import (  # noqa: E402
     plot_block_reliability,
     plot_mdb_histogram,
     plot_reliability_map,
 )
-from orientviz.simulate import simulate_block
 
 
 @pytest.fixture(scope="module")
 def case():
-    sim = simulate_block(3, 5, rng=4, n_check=6)
-    adj = bundle_adjust(sim.block)
+    sim = ov.simulate_block(3, 5, rng=4, n_check=6)
+    adj = ov.bundle_adjust(sim.block)
     return sim.block, adj, ray_reliability(adj, sim.block)
 
 
@@ -36,7 +35,7 @@ def test_map_marks_the_untestable_points(case, tmp_path):
     assert "µm" in fig.axes[1].get_ylabel()  # the colour bar
     fig2 = plot_reliability_map(rel, block, quantity="shift", layout=False)
     assert "cm" in fig2.axes[1].get_ylabel()
-    with pytest.raises(InputError, match="quantity"):
+    with pytest.raises(ov.InputError, match="quantity"):
         plot_reliability_map(rel, block, quantity="redundancy")
     fig3 = plot_mdb_histogram(rel, block)
     n_blind = int((rel.used & ~rel.testable).sum())

@@ -228,7 +228,9 @@ def approximate_values(block: Block, *, min_points: int = 6) -> Block:
             "for the similarity transformation into object space"
         )
     T = similarity_closed_form(P[ctrl], block.points.xyz_known[ctrl])
-    missing = ~np.isfinite(P).all(axis=1) & (block.points.role != CHECK)
+    # a control point with given X, Y, Z needs no intersection (one ray suffices)
+    given_xyz = (block.points.role == CONTROL) & np.isfinite(block.points.xyz_known).all(axis=1)
+    missing = ~np.isfinite(P).all(axis=1) & (block.points.role != CHECK) & ~given_xyz
     if missing.any():
         ids = [block.points.ids[j] for j in np.flatnonzero(missing)[:8]]
         raise NotDeterminableError(

@@ -185,7 +185,7 @@ class BundleProblem:
 
     # ----------------------------------------------------------------- normal equations
     def normal(self, st: _State, rw: F64, Je: F64, Jp: F64, lam: float = 0.0) -> dict:
-        """Blocks of the normal equations and the Schur complement (see adjust.normal)."""
+        """Blocks of the normal equations and the Schur complement (see bundle._reduced)."""
         S = self.struct
         sw = self.sw[:, :, None]
         Jew, Jpw = Je * sw, Jp * sw

@@ -5,7 +5,7 @@
 * ``adjusted.json`` — the problem file (``orientviz/1``, kind ``block``) with the
   adjusted orientations and tie points as its values: load it with
   :func:`~orientviz.io.problem.load_problem` or adjust it again with ``orientviz solve``;
-* ``images.csv`` and ``points.csv`` — the tables of :mod:`orientviz.io.results`
+* ``images.csv`` and ``points.csv`` — the tables of :mod:`orientviz.report`
   (values, a-posteriori σ, residuals per image and per point);
 * ``colmap/`` — the adjusted block as a COLMAP text model
   (:func:`~orientviz.io.colmap.write_colmap`).
@@ -62,9 +62,9 @@ def export_results(
         ``{"json": path, "images_csv": path, "points_csv": path, "colmap": folder}``
         for what was written.
     """
+    from ..report import adjusted_block, image_table, point_table
     from .colmap import write_colmap
     from .problem import write_problem
-    from .results import adjusted_block, image_table, point_table
 
     unknown = [f for f in formats if f not in FORMATS]
     if unknown:

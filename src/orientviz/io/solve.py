@@ -2,7 +2,7 @@
 
 Loads a problem file, solves it with the solver of its kind and prints a readable
 report or JSON. ``--report PATH`` also writes the full adjustment report
-(:func:`orientviz.io.report_html.write_report`): ``*.html`` one self-contained page with
+(:func:`orientviz.report.write_report`): ``*.html`` one self-contained page with
 figures, ``*.txt`` fixed-width text. Exit codes: 0 solved and converged, 2 bad input
 (one line naming file, place and problem; also a report path that cannot be written or
 has another suffix), 3 the adjustment is impossible (datum defect, not determinable) or
@@ -19,9 +19,9 @@ import sys
 import numpy as np
 
 from ..errors import AdjustmentError, InputError
+from ..report import Solution
 from .problem import Problem, load_problem, save_problem
 from .registry import get_kind
-from .report import Solution
 
 
 def solve_problem(problem: Problem, method: str | None = None) -> Solution:
@@ -60,7 +60,7 @@ def run_from_cli(args: argparse.Namespace) -> int:
     report_path = getattr(args, "report", None)
     try:
         if report_path:
-            from .report_html import report_format
+            from ..report import report_format
 
             report_format(report_path)  # a wrong suffix fails before the adjustment
         problem = load_problem(_resolve(args.file))
@@ -102,7 +102,7 @@ def run_from_cli(args: argparse.Namespace) -> int:
             return 2
     if report_path:
         try:
-            from .report_html import write_report
+            from ..report import write_report
 
             with np.errstate(all="ignore"):
                 write_report(problem, solution, report_path)

@@ -1,6 +1,6 @@
 """Figures of the adjustment report (``orientviz solve FILE --report report.html``).
 
-Each function takes the plain arrays that :func:`orientviz.io.report_sections.build_report`
+Each function takes the plain arrays that :func:`orientviz.report.build_report`
 collects in ``Report.plot`` and returns a :class:`matplotlib.figure.Figure` (built
 without pyplot, so no global figure state and no GUI backend). :func:`report_figures`
 makes all that apply; :func:`png_bytes` encodes one. Big blocks are thinned to at most
@@ -342,7 +342,7 @@ def report_figures(plot: dict[str, Any], names: list[str], dpi: int = 90) -> dic
     Parameters
     ----------
     plot : dict
-        ``Report.plot`` of :func:`orientviz.io.report_sections.build_report`.
+        ``Report.plot`` of :func:`orientviz.report.build_report`.
     names : list of str
         Figure names (keys of :data:`FIGURES`).
     dpi : int

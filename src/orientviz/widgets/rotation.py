@@ -106,7 +106,8 @@ def describe(state: RotationState) -> str:
     lines = ["R (image → object) =", np.array2string(state.R, precision=4, suppress_small=True)]
     lines.append(f"same R in {other}: ω = {a[0]:.4f}, φ = {a[1]:.4f}, κ = {a[2]:.4f} {state.unit}")
     if state.gimbal_lock:
-        lines.append("gimbal lock: the secondary angle is ±100 gon — only ω ± κ is defined")
+        primary = "ω" if state.sequence == "opk" else "φ"
+        lines.append(f"gimbal lock: the secondary angle is ±100 gon — {primary} and κ turn about one axis, only {primary} ± κ is defined")
     return "\n".join(lines)
 
 

@@ -6,7 +6,10 @@ orientations (X0, Y0, Z0, ω, φ, κ); tie points may leave X, Y, Z out, they ar
 intersected from the approximate orientations before the adjustment. Every tie and
 check point needs at least two rays, every control point at least one.
 
-Options: ``control`` (``"fixed"``/``"weighted"``), ``max_iter``, ``tol``, ``critical``,
+Options: ``control`` (``"fixed"``/``"weighted"``), ``check_points``
+(``"independent"``: check points and their rays stay out of the adjustment, the points
+are intersected afterwards; ``"rays"``: their rays are adjusted like tie points and only
+their given coordinates are withheld, as DBAT does), ``max_iter``, ``tol``, ``critical``,
 ``image_sigma``; for ``--method models`` ``model_method`` (``"rigorous"``/``"pat-m"``),
 for ``--method polynomial`` ``degree_xy``, ``degree_z``. Methods: ``bundle`` (default), ``models``, ``polynomial``
 (:mod:`orientviz.independent_models`, :mod:`orientviz.polynomial`).
@@ -22,9 +25,9 @@ import numpy as np
 from ...adjust.result import W_CRITICAL
 from ...block import CHECK, CONTROL, ROLES, TIE, Block
 from ...errors import InputError
+from ...report import Solution
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
-from ..report import Solution
 from ._frame import block_from_tables, read_frame_tables, require_finite, tables_from_block
 
 METHODS = ("bundle", "models", "polynomial")
@@ -120,6 +123,33 @@ def _call(func, block: Block, options: dict[str, Any], **extra):
     return func(block, **kw)
 
 
+#: ``options.check_points``: how check points enter the adjustment.
+CHECK_MODES = {
+    "independent": "check points independent: their rays are left out of the adjustment, "
+    "the points are intersected afterwards from the adjusted orientations",
+    "rays": "check points keep their image rays in the adjustment (as DBAT does); only "
+    "their given coordinates are withheld",
+}
+
+
+def check_mode(problem: Problem) -> str:
+    """The problem's check-point handling, ``"independent"`` (default) or ``"rays"``."""
+    return str(problem.options.get("check_points", "independent"))
+
+
+def with_check_rays(block: Block) -> Block:
+    """A copy in which check points are tie points: their rays are adjusted, their given
+    coordinates withheld (the caller compares the estimates with them afterwards)."""
+    chk = block.points.role == CHECK
+    if not chk.any():
+        return block
+    out = block.copy()
+    out.points.role[chk] = TIE
+    out.points.xyz_known[chk] = np.nan
+    out.points.sigma[chk] = np.nan
+    return out
+
+
 def solve(problem: Problem, method: str | None) -> Solution:
     """Adjust the block by ``method`` and collect the report."""
     method = method or "bundle"
@@ -129,7 +159,8 @@ def solve(problem: Problem, method: str | None) -> Solution:
     if method == "bundle":
         from ...bundle import bundle_adjust
 
-        adj = _call(bundle_adjust, block, opts)
+        rays = check_mode(problem) == "rays"
+        adj = _call(bundle_adjust, with_check_rays(block) if rays else block, opts)
     elif method == "models":
         from ...independent_models import independent_models
 
@@ -167,6 +198,9 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
     else:
         xyz, sxyz = block.points.xyz, np.full((p, 3), np.nan)
     notes = check_note(problem, block, xyz)
+    if np.any(block.points.role == CHECK):
+        mode = check_mode(problem) if method == "bundle" else "independent"
+        notes.insert(0, CHECK_MODES[mode] + f" (options.check_points = {mode!r})")
     ties = int(np.sum(block.points.role == TIE))
     notes.append(f"block: {block.summary()} ({ties} tie points)")
     return Solution(

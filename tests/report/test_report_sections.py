@@ -10,12 +10,12 @@ import sys
 import numpy as np
 import pytest
 
-from orientviz.block import CHECK, TIE, Block
+import orientviz as ov
+from orientviz.block import CHECK, TIE
 from orientviz.io.datasets import list_datasets
-from orientviz.io.problem import load_problem, problem_from_block
-from orientviz.io.report_sections import build_report, chi2_test, intersection_angles
-from orientviz.io.report_text import text_report
-from orientviz.io.solve import _resolve, solve_problem
+from orientviz.io.problem import problem_from_block
+from orientviz.io.solve import _resolve
+from orientviz.report import build_report, chi2_test, intersection_angles, text_report
 
 BLOCK_SECTIONS = [
     "summary",
@@ -31,8 +31,8 @@ BLOCK_SECTIONS = [
 
 
 def solved(name: str):
-    problem = load_problem(_resolve(name))
-    return problem, solve_problem(problem)
+    problem = ov.load_problem(_resolve(name))
+    return problem, ov.solve_problem(problem)
 
 
 @pytest.fixture(scope="module")
@@ -59,7 +59,7 @@ def table_row(text: str, first_cell: str) -> list[str]:
 def independent_sigma0_and_r(problem, solution) -> tuple[float, int]:
     """σ0 and r of a bundle with fixed control, from residuals, σ and the block tables."""
     adj = solution.adjustment
-    block: Block = problem.data
+    block: ov.Block = problem.data
     used = np.isfinite(adj.redundancy_numbers)  # rays of check points are not adjusted
     n_tie = int(np.sum(block.points.role == TIE))
     r = int(used.sum()) - (6 * block.n_images + 3 * n_tie)
@@ -68,7 +68,7 @@ def independent_sigma0_and_r(problem, solution) -> tuple[float, int]:
 
 
 def independent_check_rms_mm(problem, solution) -> np.ndarray:
-    block: Block = problem.data
+    block: ov.Block = problem.data
     chk = np.flatnonzero(block.points.role == CHECK)
     pos = {k: i for i, k in enumerate(solution.point_ids)}
     est = solution.xyz[[pos[block.points.ids[i]] for i in chk]]
@@ -145,7 +145,7 @@ def test_largest_normalised_residual_is_the_injected_blunder():
 
     sim = simulate_block(2, 6, rng=7, n_check=2, gross=blunder)
     problem = problem_from_block(sim.block, name="blunder")
-    solution = solve_problem(problem)
+    solution = ov.solve_problem(problem)
     report = build_report(problem, solution)
     top = report.section("residuals").values["largest"][0]
     assert top["index"] == 2 * ray  # x of the corrupted ray (x/y interleaved)
@@ -199,7 +199,7 @@ def test_chi2_bounds_match_scipy():
 def test_intersection_angles_of_a_known_geometry():
     # two images 200 m apart at 1000 m over a point below their midpoint; a third point
     # seen by one image only has no angle
-    block = Block.from_arrays(
+    block = ov.Block.from_arrays(
         camera_c=[150.0],
         image_camera=[0, 0],
         X0=[[-100.0, 0.0, 1000.0], [100.0, 0.0, 1000.0]],
@@ -219,7 +219,7 @@ def test_core_report_does_not_import_matplotlib(tmp_path):
         "import sys\n"
         "from orientviz.io.problem import load_problem\n"
         "from orientviz.io.solve import solve_problem, _resolve\n"
-        "import orientviz.io.report_html as h\n"
+        "import orientviz.report as h\n"
         "p = load_problem(_resolve('block_strip'))\n"
         f"h.write_report(p, solve_problem(p), r'{tmp_path / 'r.txt'}')\n"
         "assert 'matplotlib' not in sys.modules, 'matplotlib imported'\n"

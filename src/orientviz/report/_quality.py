@@ -1,7 +1,7 @@
 """Sections of the report on quality: largest normalised residuals, high correlations,
 warnings on geometry.
 
-A mixin of the report builder (:mod:`orientviz.io.report_sections`); it uses the
+A mixin of the report builder (:mod:`orientviz.report._sections`); it uses the
 builder's ``p``, ``s``, ``adj``, ``block``, ``used``, ``largest``, ``correlation``,
 ``warn``, ``plot`` and ``coverage()``.
 """
@@ -14,7 +14,7 @@ import numpy as np
 
 from ..block import CHECK, CONTROL
 from ..units import RHO
-from .report_model import (
+from ._model import (
     FEW_POINTS,
     MAX_ROWS,
     NEAR_SINGULAR,
@@ -26,7 +26,7 @@ from .report_model import (
     fmt,
     fmt_g,
 )
-from .report_stats import condition_number, correlation_matrix, intersection_angles, split_label
+from ._stats import condition_number, correlation_matrix, intersection_angles, split_label
 
 
 class QualitySections:

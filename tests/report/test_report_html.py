@@ -15,10 +15,9 @@ from test_report_sections import (
     independent_sigma0_and_r,
 )
 
-from orientviz.io.problem import load_problem
-from orientviz.io.report_html import html_report, write_report
-from orientviz.io.report_sections import build_report
-from orientviz.io.solve import _resolve, solve_problem
+import orientviz as ov
+from orientviz.io.solve import _resolve
+from orientviz.report import build_report, html_report
 
 pytest.importorskip("matplotlib")
 
@@ -74,9 +73,9 @@ def kv(p: Collect, label: str) -> str:
 
 @pytest.fixture(scope="module")
 def strip_html(tmp_path_factory):
-    problem = load_problem(_resolve("block_strip"))
-    solution = solve_problem(problem)
-    path = write_report(problem, solution, tmp_path_factory.mktemp("r") / "report.html")
+    problem = ov.load_problem(_resolve("block_strip"))
+    solution = ov.solve_problem(problem)
+    path = ov.write_report(problem, solution, tmp_path_factory.mktemp("r") / "report.html")
     return problem, solution, path.read_text(encoding="utf-8"), path
 
 
@@ -115,15 +114,15 @@ def test_html_has_every_section_and_the_recomputed_numbers(strip_html):
 
 
 def test_block_compact_report_is_small(tmp_path):
-    problem = load_problem(_resolve("block_compact"))
-    path = write_report(problem, solve_problem(problem), tmp_path / "c.html")
+    problem = ov.load_problem(_resolve("block_compact"))
+    path = ov.write_report(problem, ov.solve_problem(problem), tmp_path / "c.html")
     assert 0 < path.stat().st_size < 2_000_000
     parse(path.read_text(encoding="utf-8"))
 
 
 def test_all_text_is_escaped():
-    problem = load_problem(_resolve("resection_example"))
-    solution = solve_problem(problem)
+    problem = ov.load_problem(_resolve("resection_example"))
+    solution = ov.solve_problem(problem)
     problem.name = "<script>alert('x')</script> & <b>"
     problem.description = 'say "hi" <img src=http://example.com/x.png>'
     text = html_report(build_report(problem, solution), figures=False)
@@ -134,10 +133,10 @@ def test_all_text_is_escaped():
 
 
 def test_without_matplotlib_the_report_says_figures_are_omitted(monkeypatch, tmp_path):
-    problem = load_problem(_resolve("block_strip"))
-    solution = solve_problem(problem)
+    problem = ov.load_problem(_resolve("block_strip"))
+    solution = ov.solve_problem(problem)
     monkeypatch.setitem(sys.modules, "orientviz.plot.report_figures", None)  # import fails
-    path = write_report(problem, solution, tmp_path / "nofig.html")
+    path = ov.write_report(problem, solution, tmp_path / "nofig.html")
     text = path.read_text(encoding="utf-8")
     p = parse(text)
     assert not [t for t, _ in p.tags if t == "img"]
@@ -151,8 +150,8 @@ def test_big_block_is_thinned_and_stays_small(tmp_path):
 
     sim = simulate_block(4, 12, rng=5, n_check=4)
     problem = problem_from_block(sim.block, name="sim")
-    solution = solve_problem(problem)
-    path = write_report(problem, solution, tmp_path / "big.html")
+    solution = ov.solve_problem(problem)
+    path = ov.write_report(problem, solution, tmp_path / "big.html")
     p = parse(path.read_text(encoding="utf-8"))
     assert path.stat().st_size < 2_000_000
     # every image is in the exterior-orientation table (48 < the row limit)

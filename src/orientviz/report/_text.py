@@ -1,6 +1,6 @@
 """The adjustment report as plain text: numbered sections and fixed-width tables.
 
-Lays out a :class:`~orientviz.io.report_sections.Report` in the manner of a classic
+Lays out a :class:`~orientviz.report.Report` in the manner of a classic
 aerotriangulation protocol (one column per quantity, units in the headings). No figures;
 the content is the same as that of the HTML report.
 """
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import textwrap
 
-from .report_sections import Report, Section, Table
+from ._model import Report, Section, Table
 
 #: Width of the rules between sections.
 WIDTH: int = 100
@@ -85,7 +85,7 @@ def text_report(report: Report, version: str = "") -> str:
     Parameters
     ----------
     report : Report
-        From :func:`~orientviz.io.report_sections.build_report`.
+        From :func:`~orientviz.report.build_report`.
     version : str
         Program version for the header ("" = none).
 

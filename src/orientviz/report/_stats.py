@@ -15,8 +15,8 @@ from numpy.typing import NDArray
 
 from ..adjust.result import Adjustment
 from ..block import Block
-from .problem import Problem
-from .report import Solution
+from ..io.problem import Problem
+from ._solution import Solution
 
 F64 = NDArray[np.float64]
 

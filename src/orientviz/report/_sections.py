@@ -3,8 +3,8 @@
 :func:`build_report` turns a solved problem into a :class:`Report`: an ordered list of
 :class:`Section` objects, each with key/value lines, tables of already formatted cells,
 the raw numbers behind them (``values``, plain floats and arrays) and the names of the
-figures that belong to it. The renderers (:mod:`orientviz.io.report_text`,
-:mod:`orientviz.io.report_html`) only lay this out; nothing here imports matplotlib.
+figures that belong to it. The renderers (:mod:`orientviz.report._text`,
+:mod:`orientviz.report._html`) only lay this out; nothing here imports matplotlib.
 
 Sections, in the order of a classic aerotriangulation protocol: ``summary``, ``sigma0``
 (σ̂0 with its χ² test), ``redundancy``, ``parameters`` (transformation/interior
@@ -26,9 +26,8 @@ from typing import Any
 import numpy as np
 
 from ..block import CHECK, CONTROL, TIE
-from .problem import Problem
-from .report import Solution
-from .report_model import (
+from ..io.problem import Problem
+from ._model import (
     R_LOW,
     Report,
     Section,
@@ -37,9 +36,10 @@ from .report_model import (
     fmt,
     fmt_g,
 )
-from .report_precision import PrecisionSections
-from .report_quality import QualitySections
-from .report_stats import (
+from ._precision import PrecisionSections
+from ._quality import QualitySections
+from ._solution import Solution
+from ._stats import (
     F64,
     block_of,
     chi2_test,

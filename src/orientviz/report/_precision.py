@@ -1,6 +1,6 @@
 """Sections of the report on precision: per image, per point, check points.
 
-A mixin of the report builder (:mod:`orientviz.io.report_sections`); it uses the
+A mixin of the report builder (:mod:`orientviz.report._sections`); it uses the
 builder's ``p`` (problem), ``s`` (solution), ``adj``, ``block``, ``used``, ``worst``,
 ``warn`` and ``plot``.
 """
@@ -12,8 +12,8 @@ from typing import Any
 import numpy as np
 
 from ..block import CHECK
-from .report_model import MAX_ROWS, Section, Table, angle_unit, decimals, fmt, length_unit
-from .report_stats import F64, image_slice
+from ._model import MAX_ROWS, Section, Table, angle_unit, decimals, fmt, length_unit
+from ._stats import F64, image_slice
 
 
 class PrecisionSections:

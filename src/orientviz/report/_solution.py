@@ -14,8 +14,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..adjust.result import W_CRITICAL, Adjustment
-from .problem import Units
-from .tables import json_number
+from ..io.problem import Units
+from ..io.tables import json_number
 
 F64 = NDArray[np.float64]
 

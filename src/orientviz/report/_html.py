@@ -6,8 +6,8 @@ HTML-escaped. matplotlib is imported only when figures are requested; without it
 report is written without figures and says so.
 
 :func:`write_report` is the one entry point for programs and lessons: it builds the
-sections (:mod:`orientviz.io.report_sections`) and writes HTML or plain text
-(:mod:`orientviz.io.report_text`) by the suffix of the path.
+sections (:mod:`orientviz.report._sections`) and writes HTML or plain text
+(:mod:`orientviz.report._text`) by the suffix of the path.
 """
 
 from __future__ import annotations
@@ -21,10 +21,11 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from .problem import Problem
-from .report import Solution
-from .report_sections import Report, Section, Table, build_report
-from .report_text import text_report
+from ..io.problem import Problem
+from ._model import Report, Section, Table
+from ._sections import build_report
+from ._solution import Solution
+from ._text import text_report
 
 #: Suffixes :func:`write_report` understands.
 FORMATS: dict[str, str] = {".html": "html", ".htm": "html", ".txt": "text"}
@@ -201,7 +202,7 @@ def html_report(report: Report, *, figures: bool = True, version: str = "", dpi:
     Parameters
     ----------
     report : Report
-        From :func:`~orientviz.io.report_sections.build_report`.
+        From :func:`~orientviz.report.build_report`.
     figures : bool
         Embed the figures (needs matplotlib; without it the report says they are omitted).
     version : str
@@ -313,7 +314,7 @@ def write_report(
     >>> write_report(problem, solve_problem(problem), "at.html")  # doctest: +SKIP
     """
     from .. import __version__
-    from .jsonio import write_atomic
+    from ..io.jsonio import write_atomic
 
     kind = report_format(path)
     report = build_report(problem, solution, largest=largest, correlation=correlation, alpha=alpha)

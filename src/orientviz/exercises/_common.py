@@ -1,0 +1,350 @@
+"""Shared helpers for the lesson checkers (see :mod:`orientviz.exercises`).
+
+Every checker follows one recipe: build fresh inputs from its own seeded generator
+(:func:`rng_for`), call the student's function through :func:`call`, compare the answer
+with an independent oracle through :func:`compare` (which names the plausible mistake:
+transpose, sign, angle unit, scale), and print :func:`success` when all is well.
+
+A failed check raises :class:`CheckFailed`, an :class:`AssertionError` that also carries
+the relative error found and the tolerance used, so that the tests in
+``tests/exercises`` can demand that each mutant misses by far more than the tolerance.
+"""
+
+from __future__ import annotations
+
+import math
+import zlib
+from collections.abc import Callable, Iterable
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "ANGLE_FACTORS",
+    "CheckFailed",
+    "NotWrittenError",
+    "angle_unit_diagnosis",
+    "call",
+    "compare",
+    "diagnose",
+    "is_sign_flip",
+    "is_transpose",
+    "relative_error",
+    "rejection",
+    "rng_for",
+    "scale_diagnosis",
+    "show_mistake",
+    "success",
+]
+
+#: Size of one unit in radians (rad, deg, gon, c, cc), for the angle-unit diagnosis.
+ANGLE_FACTORS: dict[str, float] = {
+    "rad": 1.0,
+    "deg": math.pi / 180.0,
+    "gon": math.pi / 200.0,
+}
+
+
+class CheckFailed(AssertionError):
+    """A check found a wrong answer.
+
+    Attributes
+    ----------
+    error : float
+        Relative error of the answer against the oracle (``inf`` for a wrong shape,
+        a missing answer or a non-finite value).
+    tolerance : float
+        The relative tolerance the check allowed.
+    """
+
+    def __init__(self, message: str, error: float = math.inf, tolerance: float = 0.0) -> None:
+        super().__init__(message)
+        self.error = float(error)
+        self.tolerance = float(tolerance)
+
+
+class NotWrittenError(CheckFailed):
+    """The exercise's blank is still empty (``raise NotImplementedError``, ``...`` or ``None``)."""
+
+
+def rng_for(name: str, salt: int = 0) -> np.random.Generator:
+    """A generator seeded from a checker's name: fresh inputs, the same on every run.
+
+    Parameters
+    ----------
+    name : str
+        The checker's name, e.g. ``"lesson02.check_rotation"``.
+    salt : int, optional
+        A further integer to draw a second, independent set of inputs.
+
+    Returns
+    -------
+    numpy.random.Generator
+    """
+    return np.random.default_rng([zlib.crc32(name.encode("utf-8")), int(salt)])
+
+
+def call(func: Any, *args: Any, what: str = "your function", **kwargs: Any) -> Any:
+    """Call the student's function and turn an unwritten blank into a clear message.
+
+    Parameters
+    ----------
+    func : callable or None or Ellipsis
+        The student's answer.
+    *args, **kwargs
+        Passed to ``func``.
+    what : str, optional
+        How the message names the function.
+
+    Returns
+    -------
+    Any
+        What ``func`` returned.
+
+    Raises
+    ------
+    NotWrittenError
+        If ``func`` is ``None``/``...``, raises ``NotImplementedError`` or returns ``None``
+        or ``...``.
+    CheckFailed
+        If ``func`` is not callable.
+    """
+    if func is None or func is Ellipsis:
+        raise NotWrittenError(f"{what}: not written yet (the blank is still empty).")
+    if not callable(func):
+        raise CheckFailed(f"{what}: expected a function, got {type(func).__name__}.")
+    try:
+        out = func(*args, **kwargs)
+    except NotImplementedError:
+        raise NotWrittenError(f"{what}: not written yet (it still raises NotImplementedError).") from None
+    if out is None or out is Ellipsis:
+        raise NotWrittenError(f"{what}: not written yet (it returns {out!r}; a `return` missing?).")
+    return out
+
+
+def success(message: str) -> None:
+    """Print the short success line of a check (``✓ message``)."""
+    print(f"✓ {message}")
+
+
+def relative_error(got: ArrayLike, expected: ArrayLike, scale: float | None = None) -> float:
+    """Largest absolute difference divided by a scale (default: largest |expected|, at least 1e-300).
+
+    Parameters
+    ----------
+    got, expected : array_like
+        Arrays of one shape.
+    scale : float, optional
+        The reference size; by default ``max(|expected|)``.
+
+    Returns
+    -------
+    float
+        ``max|got - expected| / scale``; ``inf`` if ``got`` is not finite.
+    """
+    g = np.asarray(got, dtype=float)
+    e = np.asarray(expected, dtype=float)
+    if not np.all(np.isfinite(g)):
+        return math.inf
+    ref = float(np.max(np.abs(e))) if scale is None else float(scale)
+    return float(np.max(np.abs(g - e), initial=0.0)) / max(ref, 1e-300)
+
+
+def is_transpose(got: ArrayLike, expected: ArrayLike, rtol: float = 1e-6) -> bool:
+    """True if ``got`` equals the transpose of the square matrix ``expected`` (and it is not symmetric)."""
+    g = np.asarray(got, dtype=float)
+    e = np.asarray(expected, dtype=float)
+    if g.ndim < 2 or g.shape != e.shape or g.shape[-1] != g.shape[-2]:
+        return False
+    eT = np.swapaxes(e, -1, -2)
+    return relative_error(g, eT) <= rtol and relative_error(e, eT) > rtol
+
+
+def is_sign_flip(got: ArrayLike, expected: ArrayLike, rtol: float = 1e-6) -> bool:
+    """True if ``got`` equals ``-expected`` (and ``expected`` is not zero)."""
+    g = np.asarray(got, dtype=float)
+    e = np.asarray(expected, dtype=float)
+    return g.shape == e.shape and relative_error(g, -e) <= rtol and float(np.max(np.abs(e), initial=0.0)) > 0
+
+
+def _ratio(got: NDArray[np.float64], expected: NDArray[np.float64]) -> float | None:
+    """The common factor got/expected if one fits all entries within 1e-6 (else None)."""
+    mask = np.abs(expected) > 1e-12 * max(float(np.max(np.abs(expected), initial=0.0)), 1e-300)
+    if not np.any(mask):
+        return None
+    k = float(np.median(got[mask] / expected[mask]))
+    if k == 0.0 or relative_error(got, k * expected) > 1e-6:
+        return None
+    return k
+
+
+def angle_unit_diagnosis(got: ArrayLike, expected: ArrayLike, unit: str = "gon") -> str | None:
+    """Name an angle-unit mistake: ``got`` equals ``expected`` (in ``unit``) read in another unit.
+
+    Parameters
+    ----------
+    got : array_like
+        The student's angles.
+    expected : array_like
+        The oracle's angles, in ``unit``.
+    unit : {"gon", "deg", "rad"}
+        The unit the exercise asks for.
+
+    Returns
+    -------
+    str or None
+        e.g. ``"off by a factor 0.9: degrees instead of gon?"``, or None if no unit fits.
+    """
+    g = np.asarray(got, dtype=float)
+    e = np.asarray(expected, dtype=float)
+    if g.shape != e.shape:
+        return None
+    k = _ratio(g, e)
+    if k is None:
+        return None
+    names = {"rad": "radians", "deg": "degrees", "gon": "gon"}
+    for other, size in ANGLE_FACTORS.items():
+        if other == unit:
+            continue
+        factor = ANGLE_FACTORS[unit] / size  # the same angle counted in `other` units
+        if abs(k / factor - 1.0) < 1e-6:
+            return f"off by a factor {factor:.4g}: {names[other]} instead of {names[unit]}?"
+    return None
+
+
+def scale_diagnosis(got: ArrayLike, expected: ArrayLike) -> str | None:
+    """Name a common factor between ``got`` and ``expected`` (e.g. a forgotten 1/n or weight)."""
+    g = np.asarray(got, dtype=float)
+    e = np.asarray(expected, dtype=float)
+    if g.shape != e.shape:
+        return None
+    k = _ratio(g, e)
+    if k is None or abs(k - 1.0) < 1e-9:
+        return None
+    if abs(k + 1.0) < 1e-6:
+        return "the sign is wrong throughout"
+    return f"off by a common factor {k:.6g}"
+
+
+def diagnose(
+    got: ArrayLike,
+    expected: ArrayLike,
+    unit: str | None = None,
+    wrong: Iterable[tuple[str, ArrayLike]] = (),
+    rtol: float = 1e-6,
+) -> str:
+    """Name the most plausible mistake that turns ``expected`` into ``got``.
+
+    Parameters
+    ----------
+    got, expected : array_like
+        The answer and the oracle.
+    unit : str, optional
+        If the values are angles in this unit, try the other units.
+    wrong : iterable of (str, array_like)
+        Lesson-specific wrong answers, as (diagnosis, value): if ``got`` matches a value,
+        that diagnosis is returned. They are tried first.
+    rtol : float
+        Tolerance for a match.
+
+    Returns
+    -------
+    str
+        The diagnosis, or ``""`` if none fits.
+    """
+    g = np.asarray(got, dtype=float)
+    for text, value in wrong:
+        v = np.asarray(value, dtype=float)
+        if v.shape == g.shape and relative_error(g, v) <= rtol:
+            return text
+    if is_transpose(g, expected, rtol):
+        return "it equals the transpose of the right answer"
+    if is_sign_flip(g, expected, rtol):
+        return "it equals the right answer with the opposite sign"
+    if unit is not None:
+        text = angle_unit_diagnosis(g, expected, unit)
+        if text:
+            return text
+    return scale_diagnosis(g, expected) or ""
+
+
+def compare(
+    name: str,
+    got: ArrayLike,
+    expected: ArrayLike,
+    rtol: float = 1e-6,
+    unit: str | None = None,
+    wrong: Iterable[tuple[str, ArrayLike]] = (),
+    scale: float | None = None,
+) -> float:
+    """Compare an answer with the oracle; raise :class:`CheckFailed` with a diagnosis if it differs.
+
+    Parameters
+    ----------
+    name : str
+        What is compared (used in the message), e.g. ``"R(ω, φ, κ)"``.
+    got, expected : array_like
+        The answer and the oracle's value.
+    rtol : float
+        Allowed ``max|got - expected| / scale``.
+    unit : str, optional
+        The angle unit of ``expected`` if the values are angles (enables the unit diagnosis).
+    wrong : iterable of (str, array_like)
+        Lesson-specific wrong answers with their diagnosis (see :func:`diagnose`).
+    scale : float, optional
+        Reference size for the relative error (default: largest |expected|).
+
+    Returns
+    -------
+    float
+        The relative error found (≤ ``rtol``).
+    """
+    e = np.asarray(expected, dtype=float)
+    try:
+        g = np.asarray(got, dtype=float)
+    except (TypeError, ValueError):
+        raise CheckFailed(f"{name}: expected numbers of shape {e.shape}, got {type(got).__name__}.") from None
+    if g.shape != e.shape:
+        hint = " (a transposed vector?)" if sorted(g.shape) == sorted(e.shape) else ""
+        raise CheckFailed(f"{name}: expected shape {e.shape}, got {g.shape}{hint}.", tolerance=rtol)
+    err = relative_error(g, e, scale)
+    if err <= rtol:
+        return err
+    wrong = list(wrong)
+    text = diagnose(g, e, unit=unit, wrong=wrong, rtol=max(rtol, 1e-6))
+    with np.printoptions(precision=6, suppress=True):
+        detail = f"\n  yours:    {np.array2string(g, prefix='  yours:    ')}\n  expected: {np.array2string(e, prefix='  expected: ')}"
+    if g.size > 12:
+        detail = ""
+    msg = f"{name}: wrong (relative difference {err:.3g}, allowed {rtol:.1g})"
+    msg += (f" — {text}" + ("" if text.endswith(("?", ".")) else ".")) if text else "."
+    raise CheckFailed(msg + detail, error=err, tolerance=rtol)
+
+
+def rejection(check: Callable[[Any], Any], answer: Any) -> CheckFailed | None:
+    """Run ``check(answer)`` silently; return the :class:`CheckFailed` it raised, or None if it passed.
+
+    Used by ``tests/exercises`` and by notebooks that show a wrong answer's message.
+    """
+    import contextlib
+    import io
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        try:
+            check(answer)
+        except CheckFailed as exc:
+            return exc
+    return None
+
+
+def show_mistake(check: Callable[[Any], Any], answer: Any) -> None:
+    """Print what ``check`` says about a (deliberately) wrong answer, without raising.
+
+    Notebooks use this to show a checker's diagnosis without an error cell in the book.
+    """
+    exc = rejection(check, answer)
+    if exc is None:
+        print("(this answer passes the check)")
+    else:
+        print(f"✗ {exc}")

@@ -1,0 +1,224 @@
+"""Checkers for lesson 02, rotations and the collinearity equations.
+
+Oracles (never :func:`orientviz.rotation.matrix_from_opk` or :func:`orientviz.camera.project`):
+rotations are built here from Rodrigues' formula about the object axes, and image points
+are made backwards: a ray ``X = X0 + λ R (x − x0, y − y0, −c)`` through a chosen image
+point gives an object point whose image is known exactly.
+
+Angles are in gon (400 gon to the circle), rotations R = R_ω R_φ R_κ (image → object).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ._common import call, compare, rng_for, success
+
+__all__ = [
+    "MUTANTS",
+    "SOLUTIONS",
+    "check_collinearity",
+    "check_gimbal",
+    "check_ground_point",
+    "check_opk_from_matrix",
+    "check_rotation",
+]
+
+F64 = NDArray[np.float64]
+GON = np.pi / 200.0
+
+
+def _axis_rotation(axis: F64, angle: float) -> F64:
+    """Rodrigues: rotation by ``angle`` (rad, right-handed) about the unit vector ``axis``."""
+    k = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)
+
+
+def _rodrigues_opk(omega: float, phi: float, kappa: float, unit: float = GON, order: str = "opk") -> F64:
+    """The oracle: R = R_X(ω) R_Y(φ) R_Z(κ) as a product of Rodrigues rotations (angles × unit → rad)."""
+    rot = {
+        "o": _axis_rotation(np.array([1.0, 0, 0]), omega * unit),
+        "p": _axis_rotation(np.array([0, 1.0, 0]), phi * unit),
+        "k": _axis_rotation(np.array([0, 0, 1.0]), kappa * unit),
+    }
+    return rot[order[0]] @ rot[order[1]] @ rot[order[2]]
+
+
+def check_rotation(R_opk: Callable[[float, float, float], F64]) -> None:
+    """``R_opk(omega, phi, kappa)`` (gon) must return R = R_ω R_φ R_κ, shape (3, 3)."""
+    # a case by hand: κ = 100 gon alone turns image x into object Y
+    hand = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    got = call(R_opk, 0.0, 0.0, 100.0, what="R_opk")
+    compare("R_opk(0, 0, 100 gon)", got, hand, rtol=1e-9,
+            wrong=[("the angle was read as degrees, not gon", _rodrigues_opk(0, 0, 100, np.pi / 180))])
+    rng = rng_for("lesson02.check_rotation")
+    for angles in ([12.0, -31.0, 57.0], list(rng.uniform(-150, 150, 3))):
+        w, p, k = (float(a) for a in angles)
+        truth = _rodrigues_opk(w, p, k)
+        sign_phi = _rodrigues_opk(w, -p, k)  # a flipped sine in R_φ turns φ into −φ
+        wrong = [
+            ("the angles were read as degrees, not gon", _rodrigues_opk(w, p, k, np.pi / 180)),
+            ("the angles were read as radians, not gon", _rodrigues_opk(w, p, k, 1.0)),
+            ("this is R_φ R_ω R_κ (φ-ω-κ), not R_ω R_φ R_κ", _rodrigues_opk(w, p, k, order="pok")),
+            ("this is R_κ R_φ R_ω (the factors in reverse order)", _rodrigues_opk(w, p, k, order="kpo")),
+            ("the sine terms of R_φ have the wrong signs", sign_phi),
+        ]
+        got = call(R_opk, w, p, k, what="R_opk")
+        compare(f"R_opk({w:.3f}, {p:.3f}, {k:.3f} gon)", got, truth, rtol=1e-9, wrong=wrong)
+    success("R = R_ω R_φ R_κ from gon, as Rodrigues' rotations about X, Y, Z give it")
+
+
+def _rays_to_points(xy: F64, X0: F64, R: F64, c: float, x0: float, y0: float, depth: F64) -> F64:
+    """Object points on the rays of ``xy`` at ``depth`` (m along −w): the oracle's scene."""
+    d = np.column_stack([xy[:, 0] - x0, xy[:, 1] - y0, np.full(len(xy), -c)]) / c
+    return X0 + depth[:, None] * (d @ R.T)
+
+
+def check_collinearity(collinearity: Callable[..., F64]) -> None:
+    """``collinearity(X, X0, R, c, x0, y0)`` must return the image coordinates (n, 2) in mm."""
+    rng = rng_for("lesson02.check_collinearity")
+    R = _rodrigues_opk(*rng.uniform(-15, 15, 2), rng.uniform(-200, 200))
+    X0 = np.array([512.0, -230.0, 1480.0])
+    c, x0, y0 = 152.7, 0.013, -0.021
+    xy = rng.uniform(-110, 110, (8, 2))
+    X = _rays_to_points(xy, X0, R, c, x0, y0, rng.uniform(1300, 1600, 8))
+    uvw_R = (X - X0) @ R.T  # R instead of Rᵀ
+    uvw = (X - X0) @ R
+    wrong = [
+        ("you turned the vector with R instead of Rᵀ", np.column_stack([x0 - c * uvw_R[:, 0] / uvw_R[:, 2], y0 - c * uvw_R[:, 1] / uvw_R[:, 2]])),
+        ("the sign of c is wrong (x = x0 + c u/w?)", np.column_stack([x0 + c * uvw[:, 0] / uvw[:, 2], y0 + c * uvw[:, 1] / uvw[:, 2]])),
+        ("the principal point x0, y0 is missing", xy - [x0, y0]),
+        ("x and y are swapped", xy[:, ::-1]),
+    ]
+    got = call(collinearity, X, X0, R, c, x0, y0, what="collinearity")
+    compare("image coordinates [mm]", got, xy, rtol=1e-9, scale=100.0, wrong=wrong)
+    success("collinearity: the image points lie where their rays were drawn from")
+
+
+def _R_pair(omega: float, kappa: float, phi: float) -> F64:
+    return _rodrigues_opk(omega, phi, kappa)
+
+
+def check_gimbal(locked_omega: Callable[[float, float, float], float]) -> None:
+    """``locked_omega(omega, kappa, phi)`` (gon, φ = ±100) must return ω' with R(ω', φ, 0) = R(ω, φ, κ)."""
+    rng = rng_for("lesson02.check_gimbal")
+    for phi in (100.0, -100.0):
+        w, k = (float(a) for a in rng.uniform(-60, 60, 2))
+        got = float(call(locked_omega, w, k, phi, what="locked_omega"))
+        truth = _R_pair(w, k, phi)
+        wrong = [
+            ("at this φ the matrix depends on ω − κ, not ω + κ" if phi < 0 else "at φ = +100 gon it is ω + κ, not ω − κ",
+             _R_pair(w + k if phi < 0 else w - k, 0.0, phi)),
+            ("κ is missing: at φ = ±100 gon κ turns about the same axis as ω", _R_pair(w, 0.0, phi)),
+        ]
+        compare(f"R(ω', {phi:+.0f}, 0) for ω = {w:.3f}, κ = {k:.3f} gon", _R_pair(got, 0.0, phi), truth, rtol=1e-9, wrong=wrong)
+    success("at φ = ±100 gon only ω ± κ counts: ω and κ turn about the same axis")
+
+
+def check_opk_from_matrix(angles_from_R: Callable[[F64], ArrayLike]) -> None:
+    """``angles_from_R(R)`` must return (ω, φ, κ) in gon with R = R_ω R_φ R_κ, |φ| < 100 gon."""
+    rng = rng_for("lesson02.check_opk_from_matrix")
+    for _ in range(3):
+        truth = np.array([rng.uniform(-180, 180), rng.uniform(-90, 90), rng.uniform(-180, 180)])
+        R = _rodrigues_opk(*truth)
+        got = call(angles_from_R, R, what="angles_from_R")
+        wrong = [("these are the angles of Rᵀ", _opk_of(R.T)), ("the sign of ω is wrong", truth * [-1, 1, 1]),
+                 ("the sign of κ is wrong", truth * [1, 1, -1])]
+        compare("(ω, φ, κ) [gon]", got, truth, rtol=1e-9, unit="gon", wrong=wrong, scale=200.0)
+    success("ω, φ, κ read back from R (in gon)")
+
+
+def _opk_of(R: F64) -> F64:
+    """ω, φ, κ (gon) of R = R_ω R_φ R_κ — used only to name the 'transposed' mistake."""
+    phi = np.arcsin(np.clip(R[0, 2], -1, 1))
+    return np.array([np.arctan2(-R[1, 2], R[2, 2]), phi, np.arctan2(-R[0, 1], R[0, 0])]) / GON
+
+
+def check_ground_point(ground_point: Callable[..., F64]) -> None:
+    """``ground_point(xy, X0, R, c, Z)`` must return the object points (n, 3) on the plane Z."""
+    rng = rng_for("lesson02.check_ground_point")
+    R = _rodrigues_opk(*rng.uniform(-10, 10, 2), rng.uniform(-200, 200))
+    X0 = np.array([1200.0, 830.0, 1620.0])
+    c, Z = 152.7, 212.0
+    truth = np.column_stack([rng.uniform(500, 1900, 6), rng.uniform(200, 1500, 6), np.full(6, Z)])
+    uvw = (truth - X0) @ R
+    xy = -c * uvw[:, :2] / uvw[:, 2:]
+
+    def plane(Rm: F64, cc: float) -> F64:
+        d = np.column_stack([xy, np.full(len(xy), -cc)]) @ Rm.T
+        return X0 + ((Z - X0[2]) / d[:, 2])[:, None] * d
+
+    wrong = [("the image vector was turned with Rᵀ instead of R", plane(R.T, c)),
+             ("the image vector needs z = −c, not +c", plane(R, -c))]
+    got = call(ground_point, xy, X0, R, c, Z, what="ground_point")
+    compare("ground points [m]", got, truth, rtol=1e-9, scale=1000.0, wrong=wrong)
+    success("ground points: the rays meet the plane where the points were")
+
+
+# ---------------------------------------------------------------- solutions and mutants
+
+
+def _sol_rotation(omega: float, phi: float, kappa: float) -> F64:
+    w, p, k = np.array([omega, phi, kappa]) * GON
+    Rw = np.array([[1, 0, 0], [0, np.cos(w), -np.sin(w)], [0, np.sin(w), np.cos(w)]])
+    Rp = np.array([[np.cos(p), 0, np.sin(p)], [0, 1, 0], [-np.sin(p), 0, np.cos(p)]])
+    Rk = np.array([[np.cos(k), -np.sin(k), 0], [np.sin(k), np.cos(k), 0], [0, 0, 1]])
+    return Rw @ Rp @ Rk
+
+
+def _sol_collinearity(X, X0, R, c, x0, y0):
+    u, v, w = ((np.asarray(X) - X0) @ R).T
+    return np.column_stack([x0 - c * u / w, y0 - c * v / w])
+
+
+def _sol_gimbal(omega, kappa, phi):
+    return omega + np.sign(phi) * kappa
+
+
+def _sol_opk(R):
+    return np.array([np.arctan2(-R[1, 2], R[2, 2]), np.arcsin(R[0, 2]), np.arctan2(-R[0, 1], R[0, 0])]) / GON
+
+
+def _sol_ground(xy, X0, R, c, Z):
+    d = np.column_stack([xy, np.full(len(xy), -c)]) @ R.T
+    return X0 + ((Z - X0[2]) / d[:, 2])[:, None] * d
+
+
+SOLUTIONS = {
+    "check_rotation": _sol_rotation,
+    "check_collinearity": _sol_collinearity,
+    "check_gimbal": _sol_gimbal,
+    "check_opk_from_matrix": _sol_opk,
+    "check_ground_point": _sol_ground,
+}
+
+MUTANTS = {
+    "check_rotation": {
+        "transpose": lambda w, p, k: _sol_rotation(w, p, k).T,
+        "degrees": lambda w, p, k: _sol_rotation(w * 200 / 180, p * 200 / 180, k * 200 / 180),
+        "phi-omega-kappa order": lambda w, p, k: _sol_rotation(0, p, 0) @ _sol_rotation(w, 0, 0) @ _sol_rotation(0, 0, k),
+        "flipped sine in R_phi": lambda w, p, k: _sol_rotation(w, 0, 0) @ _sol_rotation(0, -p, 0) @ _sol_rotation(0, 0, k),
+    },
+    "check_collinearity": {
+        "R instead of R^T": lambda X, X0, R, c, x0, y0: _sol_collinearity(X, X0, R.T, c, x0, y0),
+        "sign of c": lambda X, X0, R, c, x0, y0: _sol_collinearity(X, X0, R, -c, x0, y0),
+        "no principal point": lambda X, X0, R, c, x0, y0: _sol_collinearity(X, X0, R, c, 0.0, 0.0),
+    },
+    "check_gimbal": {
+        "omega minus kappa": lambda w, k, p: w - np.sign(p) * k,
+        "kappa forgotten": lambda w, k, p: w,
+    },
+    "check_opk_from_matrix": {
+        "radians": lambda R: _sol_opk(R) * GON,
+        "degrees": lambda R: _sol_opk(R) * 0.9,
+        "transpose": lambda R: _sol_opk(R.T),
+    },
+    "check_ground_point": {
+        "R^T instead of R": lambda xy, X0, R, c, Z: _sol_ground(xy, X0, R.T, c, Z),
+        "+c": lambda xy, X0, R, c, Z: _sol_ground(xy, X0, R, -c, Z),
+    },
+}

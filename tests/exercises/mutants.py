@@ -1,0 +1,58 @@
+"""The one test every lesson's checker module gets: solutions pass, mutants fail by far.
+
+``tests/exercises/test_lessonNN.py`` calls :func:`assert_module_checks` on its module.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+from types import ModuleType
+
+from orientviz.exercises._common import CheckFailed, NotWrittenError
+
+#: A mutant must miss by at least this many times the checker's tolerance.
+MARGIN = 100.0
+
+
+def assert_module_checks(module: ModuleType) -> None:
+    """Every ``SOLUTIONS`` entry passes its checker, every ``MUTANTS`` entry is rejected.
+
+    A rejection must be a :class:`CheckFailed` (not a crash) whose relative error is at least
+    ``MARGIN`` times the tolerance; a blank (``None`` / ``raise NotImplementedError``) must
+    get "not written yet".
+    """
+    solutions, mutants = module.SOLUTIONS, module.MUTANTS
+    assert solutions, f"{module.__name__}: no SOLUTIONS"
+    assert set(mutants) <= set(solutions), "a mutant without a solution"
+    for name, solution in solutions.items():
+        check = getattr(module, name)
+        buf = io.StringIO()
+        with contextlib.redirect_stdout(buf):
+            check(solution)
+        assert buf.getvalue().startswith("✓"), f"{name}: the solution passes without the ✓ line"
+        assert mutants.get(name), f"{name}: no mutants"
+
+        def blank(*args, **kwargs):
+            raise NotImplementedError
+
+        for empty in (None, blank):
+            try:
+                check(empty)
+            except NotWrittenError as exc:
+                assert "not written yet" in str(exc)
+            else:  # pragma: no cover - the assertion message is the report
+                raise AssertionError(f"{name}: an empty blank is not answered with 'not written yet'")
+        for label, mutant in mutants[name].items():
+            with contextlib.redirect_stdout(io.StringIO()):
+                try:
+                    check(mutant)
+                except NotWrittenError:  # pragma: no cover
+                    raise AssertionError(f"{name}/{label}: a mutant is reported as 'not written'") from None
+                except CheckFailed as exc:
+                    assert math.isinf(exc.error) or exc.error >= MARGIN * exc.tolerance, (
+                        f"{name}/{label}: rejected only by {exc.error:.3g} (tolerance {exc.tolerance:.3g})"
+                    )
+                    continue
+            raise AssertionError(f"{name}/{label}: the mutant passes the check")

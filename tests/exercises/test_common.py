@@ -1,0 +1,101 @@
+"""The shared checker helpers diagnose the mistakes they claim to."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from orientviz.exercises._common import (
+    CheckFailed,
+    NotWrittenError,
+    angle_unit_diagnosis,
+    call,
+    compare,
+    diagnose,
+    rejection,
+    rng_for,
+    show_mistake,
+)
+
+
+def test_rng_for_is_reproducible_and_distinct():
+    a = rng_for("lesson02.check_rotation").normal(size=3)
+    b = rng_for("lesson02.check_rotation").normal(size=3)
+    c = rng_for("lesson02.check_rotation", salt=1).normal(size=3)
+    d = rng_for("lesson04.check_rotation").normal(size=3)
+    assert np.array_equal(a, b)
+    assert not np.allclose(a, c) and not np.allclose(a, d)
+
+
+def test_call_reports_blanks():
+    def unwritten(x):
+        raise NotImplementedError
+
+    def no_return(x):
+        x + 1
+
+    for f in (None, ..., unwritten, no_return):
+        with pytest.raises(NotWrittenError, match="not written yet"):
+            call(f, 1)
+    with pytest.raises(CheckFailed, match="expected a function"):
+        call(3.0, 1)
+    assert call(lambda x: x + 1, 1) == 2
+
+
+@pytest.mark.parametrize(
+    ("factor", "unit", "words"),
+    [
+        (180 / 200, "gon", "degrees instead of gon"),
+        (200 / np.pi, "rad", "gon instead of radians"),
+        (180 / np.pi, "rad", "degrees instead of radians"),
+        (np.pi / 200, "gon", "radians instead of gon"),
+        (200 / 180, "deg", "gon instead of degrees"),
+    ],
+)
+def test_angle_unit_diagnosis(factor, unit, words):
+    expected = np.array([12.0, -31.0, 57.0])
+    text = angle_unit_diagnosis(expected * factor, expected, unit)
+    assert text is not None and words in text
+
+
+def test_angle_unit_diagnosis_stays_silent_on_other_errors():
+    expected = np.array([12.0, -31.0, 57.0])
+    assert angle_unit_diagnosis(expected + 1.0, expected, "gon") is None
+    assert angle_unit_diagnosis(expected * 0.5, expected, "gon") is None
+
+
+def test_diagnose_transpose_sign_scale_and_custom():
+    R = np.array([[0.0, -1.0, 0.2], [1.0, 0.0, 0.3], [0.1, 0.4, 1.0]])
+    assert "transpose" in diagnose(R.T, R)
+    assert "opposite sign" in diagnose(-R, R)
+    assert "common factor 2" in diagnose(2 * R, R)
+    assert diagnose(R + 1, R, wrong=[("weights forgotten", R + 1)]) == "weights forgotten"
+    assert diagnose(R + np.eye(3), R) == ""
+
+
+def test_compare_passes_within_tolerance_and_carries_the_error():
+    x = np.array([1.0, 2.0, 3.0])
+    assert compare("x", x * (1 + 1e-9), x) < 1e-8
+    with pytest.raises(CheckFailed) as info:
+        compare("angles", x * 0.9, x, rtol=1e-6, unit="gon")
+    assert "degrees instead of gon" in str(info.value)
+    assert info.value.error == pytest.approx(0.3 / 3.0)
+    assert info.value.tolerance == 1e-6
+    with pytest.raises(CheckFailed, match="shape"):
+        compare("x", x[:2], x)
+    with pytest.raises(CheckFailed) as info:
+        compare("x", [np.nan, 1, 2], x)
+    assert math.isinf(info.value.error)
+
+
+def test_rejection_and_show_mistake(capsys):
+    def check(v):
+        compare("v", v, [1.0, 2.0])
+        print("✓ fine")
+
+    assert rejection(check, [1.0, 2.0]) is None
+    assert isinstance(rejection(check, [2.0, 1.0]), CheckFailed)
+    show_mistake(check, [-1.0, -2.0])
+    assert capsys.readouterr().out.startswith("✗ v: wrong")

@@ -1,0 +1,92 @@
+"""The strip tool writes student copies in which no solution line survives."""
+
+from __future__ import annotations
+
+import json
+import pathlib
+
+import pytest
+
+from orientviz.exercises.strip import BEGIN, END, MD_BEGIN, MD_END, main, strip_notebook, strip_source
+
+ROOT = pathlib.Path(__file__).parents[2]
+NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
+
+
+def _source(cell):
+    src = cell.get("source", "")
+    return "".join(src) if isinstance(src, list) else src
+
+
+def _solution_lines(text, begin, end):
+    """Non-blank lines inside solution blocks that do not also occur outside them."""
+    inside, body, outside = False, set(), set()
+    for line in text.splitlines():
+        s = line.strip()
+        if s == begin:
+            inside = True
+        elif s == end:
+            inside = False
+        elif s:
+            (body if inside else outside).add(s)
+    return body - outside
+
+
+def test_strip_source_keeps_indentation_and_context():
+    src = f"def f(x):\n    '''doc'''\n    {BEGIN}\n    y = 2 * x\n    return y\n    {END}\n\nprint(f)\n"
+    out, n = strip_source(src)
+    assert n == 1
+    assert out == "def f(x):\n    '''doc'''\n    raise NotImplementedError\n\nprint(f)\n"
+    ns = {}
+    exec(compile(out.replace("print(f)", ""), "<cell>", "exec"), ns)
+    with pytest.raises(NotImplementedError):
+        ns["f"](1)
+
+
+def test_strip_source_markdown_and_errors():
+    out, n = strip_source(f"Why?\n{MD_BEGIN}\nBecause.\n{MD_END}\n", markdown=True)
+    assert n == 1 and "Because" not in out and "*(your answer)*" in out
+    for bad in (f"{BEGIN}\nx\n", f"x\n{END}\n", f"{BEGIN}\n{BEGIN}\n{END}\n"):
+        with pytest.raises(ValueError):
+            strip_source(bad)
+
+
+def test_strip_notebook_unhides_and_clears():
+    cell = {
+        "cell_type": "code",
+        "source": [f"{BEGIN}\n", "x = 1\n", f"{END}\n"],
+        "metadata": {"tags": ["hide-cell"], "mystnb": {"code_prompt_show": "Show"}, "jupyter": {"source_hidden": True}},
+        "outputs": [{"output_type": "stream", "name": "stdout", "text": "1"}],
+        "execution_count": 3,
+    }
+    student, n = strip_notebook({"cells": [cell], "metadata": {}, "nbformat": 4, "nbformat_minor": 5})
+    out = student["cells"][0]
+    assert n == 1 and out["source"] == "raise NotImplementedError\n"
+    assert out["metadata"] == {} and out["outputs"] == [] and out["execution_count"] is None
+    assert cell["execution_count"] == 3  # the original is untouched
+
+
+@pytest.mark.skipif(not NOTEBOOKS, reason="no notebooks")
+def test_no_solution_line_survives_in_the_student_copies(tmp_path, capsys):
+    assert main([str(ROOT / "notebooks"), str(tmp_path)]) == 0
+    for path in NOTEBOOKS:
+        original = json.loads(path.read_text(encoding="utf-8"))
+        student = json.loads((tmp_path / path.name).read_text(encoding="utf-8"))
+        assert len(student["cells"]) == len(original["cells"])
+        n_blocks = 0
+        for a, b in zip(original["cells"], student["cells"]):
+            md = a["cell_type"] == "markdown"
+            begin, end = (MD_BEGIN, MD_END) if md else (BEGIN, END)
+            text, stripped = _source(a), _source(b)
+            n_blocks += text.count(begin)
+            assert begin not in stripped and end not in stripped, path.name
+            kept = {line.strip() for line in stripped.splitlines()}
+            leaked = _solution_lines(text, begin, end) & kept
+            assert not leaked, f"{path.name}: solution lines survive: {sorted(leaked)[:3]}"
+        assert sum(_source(c).count("raise NotImplementedError") for c in student["cells"]) >= n_blocks
+
+
+def test_main_usage_errors(tmp_path, capsys):
+    assert main([]) == 2
+    assert main([str(tmp_path / "missing.ipynb"), str(tmp_path / "out")]) == 1
+    assert main([str(ROOT / "notebooks"), str(ROOT / "notebooks")]) == 1
