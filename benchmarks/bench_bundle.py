@@ -197,15 +197,20 @@ def reduced_comparison(size: str, reps: int, dense: bool) -> str:
     """Time factor + solve of the same reduced system S with each solver/ordering."""
     from bench_blocks import load_bench_block
 
-    from orientviz.bundle import BundleProblem, ReducedStructure, factor_reduced, point_setup
-    from orientviz.bundle._adjust import _State
+    from orientviz.bundle import (
+        BundleProblem,
+        BundleState,
+        ReducedStructure,
+        factor_reduced,
+        point_setup,
+    )
 
     block, _ = load_bench_block(ensure_data(size))
     prob = BundleProblem(block, point_setup(block, "fixed"))
-    st = _State(block.images.X0, block.images.angles, block.points.xyz, np.zeros(0))
+    st = BundleState(block.images.X0, block.images.angles, block.points.xyz, np.zeros(0))
     rw, Je, Jp = prob.residuals(st, jac=True)
     ne = prob.normal(st, rw, Je, Jp)
-    base = prob.struct
+    base = prob.reduced
     variants = [
         ("banded, across-strip order", dict(solver="banded", orderings=list(base.orderings))),
         ("banded, RCM only", dict(solver="banded", orderings=[])),
@@ -228,7 +233,7 @@ def reduced_comparison(size: str, reps: int, dense: bool) -> str:
         times = []
         for _ in range(reps):
             t0 = time.perf_counter()
-            x = factor_reduced(S, ne["blocks"]).solve(ne["rhs"])
+            x = factor_reduced(S, ne.blocks).solve(ne.rhs)
             times.append(time.perf_counter() - t0)
         ref = x if ref is None else ref
         bw = S.info.get("bandwidth_images", "-")

@@ -36,8 +36,8 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from orientviz.independent_models import form_models, independent_models
 from orientviz.simulate import simulate_block
+from orientviz.stereo_models import form_models, independent_models
 
 TABLE2 = {
     "CDC 6600": 0.85, "CDC 6400": 3.2, "IBM 360/50": 20.0, "IBM 360/65": 5.1,
@@ -59,9 +59,9 @@ def timed(fn, reps):
 def reduced_system_peer(sim, ms):
     """CPU time of one factorisation of the reduced system: SuperLU (minimum degree, the
     default) vs reverse Cuthill-McKee + banded Cholesky (Ackermann's bandwidth idea)."""
-    from orientviz.independent_models import _normal as mn
-    from orientviz.independent_models import tie_setup
-    from orientviz.independent_models._adjust import _rows3
+    from orientviz.stereo_models import _normal as mn
+    from orientviz.stereo_models import tie_setup
+    from orientviz.stereo_models._adjust import _rows3
 
     su = tie_setup(sim.block, ms)
     n = ms.n_models
@@ -100,9 +100,9 @@ def least_squares_peer(reps):
     """orientviz vs scipy.optimize.least_squares on a 3 × 8 block (7 p. per model)."""
     from scipy.optimize import least_squares
 
-    from orientviz.independent_models import tie_setup
-    from orientviz.independent_models._adjust import _rows3
     from orientviz.rotation import matrix_from_rotvec
+    from orientviz.stereo_models import tie_setup
+    from orientviz.stereo_models._adjust import _rows3
 
     sim = simulate_block(3, 8, rng=np.random.default_rng(3), extra=3)
     ms = form_models(sim.block)

@@ -137,10 +137,10 @@ def lesson_figure(path: pathlib.Path) -> None:
     from PIL import Image
 
     from orientviz.block import TIE
-    from orientviz.independent_models import independent_models
     from orientviz.plot.block import plot_error_vectors
     from orientviz.polynomial import polynomial_adjust
     from orientviz.simulate import simulate_block
+    from orientviz.stereo_models import independent_models
 
     # the lesson's block: 3 strips of 8 images, control chains every 4 bases
     sim = simulate_block(3, 8, rng=np.random.default_rng(5), extra=None,

@@ -80,7 +80,7 @@ _FACE: dict[str, str] = {
     "bundle_adjust": ".bundle",
     "self_calibrate": ".bundle",
     "clean_block": ".bundle",
-    "independent_models": ".independent_models",
+    "independent_models": ".stereo_models",
     # results
     "Adjustment": ".adjust.result",
     "Iteration": ".adjust.result",
@@ -150,7 +150,6 @@ if TYPE_CHECKING:  # for type checkers and editors; nothing is imported at run t
     from .block import Block
     from .bundle import bundle_adjust, clean_block, self_calibrate
     from .camera import FrameCamera, project
-    from .independent_models import independent_models
     from .io.colmap import read_colmap
     from .io.datasets import load_dataset
     from .io.problem import Problem, load_problem, save_problem
@@ -162,4 +161,5 @@ if TYPE_CHECKING:  # for type checkers and editors; nothing is imported at run t
     from .report import write_report
     from .rotation import matrix_from_opk, opk_from_matrix
     from .simulate import SimulatedBlock, simulate_block
+    from .stereo_models import independent_models
     from .units import from_rad, to_rad

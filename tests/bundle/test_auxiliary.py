@@ -54,7 +54,7 @@ def test_absolute_statoscope_needs_one_round_and_conflicts_are_rejected(sim):
 def test_check_errors_of_bundle_and_model_results_and_of_coordinates(sim):
     import dataclasses
 
-    from orientviz.independent_models import independent_models
+    from orientviz.stereo_models import independent_models
 
     # a bundle result: its check points are intersected from their own rays; the
     # errors against the truth must agree with the bundle's own check statistics

@@ -6,13 +6,13 @@ import pytest
 from orientviz.block import CONTROL
 from orientviz.bundle import BundleAuxiliary, adjust_with_auxiliary, auxiliary_rows, bundle_adjust
 from orientviz.errors import InputError, NotDeterminableError
-from orientviz.independent_models import independent_models
 from orientviz.simulate import (
     check_errors,
     height_control_at_ends,
     simulate_auxiliary,
     simulate_block,
 )
+from orientviz.stereo_models import independent_models
 
 
 @pytest.fixture(scope="module")

@@ -17,12 +17,12 @@ import pytest
 from orientviz.block import CHECK, CONTROL, TIE
 from orientviz.bundle import (
     BundleProblem,
+    BundleState,
     adjust_with_auxiliary,
     ap_set,
     bundle_adjust,
     point_setup,
 )
-from orientviz.bundle._adjust import _State
 from orientviz.camera import collinearity_jacobian
 from orientviz.simulate import height_control_at_ends, simulate_auxiliary, simulate_block
 
@@ -186,9 +186,9 @@ def test_joint_step_equals_the_dense_step(case, kind, held):
     prob = _problem(block, aux, aps, grp)
     dense = Dense(block, aux, aps, grp)
     assert prob.q == dense.q > 0 and prob.na == len(dense.gnames)
-    assert np.array_equal(prob.var_pts, dense.var)
+    assert np.array_equal(prob.points.unknown, dense.var)
     rng = np.random.default_rng(3)
-    st = _State(
+    st = BundleState(
         block.images.X0.copy(), block.images.angles.copy(), block.points.xyz.copy(),
         rng.normal(0, 3, prob.q), rng.normal(0, 2, prob.na),
     )  # fmt: skip
@@ -196,11 +196,11 @@ def test_joint_step_equals_the_dense_step(case, kind, held):
     st.xyz[fixed] = np.where(
         np.isfinite(block.points.xyz_known[fixed]), block.points.xyz_known[fixed], st.xyz[fixed]
     )
-    prob.ap_hold = held
+    prob.border.hold = held
     rw, Je, Jp = prob.residuals(st, jac=True)
     ne = prob.normal(st, rw, Je, Jp)
     dc, dp, d, _ = prob.solve(ne, prob.names()[: 6 * prob.m])
-    assert d.size == prob.q + prob.na and ne["diagF"].size == d.size
+    assert d.size == prob.q + prob.na and ne.diagF.size == d.size
     names = prob.aux.rows.names
     x0 = dense.from_bundle(np.hstack([st.X0, st.angles]), st.xyz, st.ap, st.g, names)
     got = dense.from_bundle(dc, np.zeros_like(st.xyz), d[: prob.q], d[prob.q :], names)

@@ -8,6 +8,7 @@ import scipy.linalg
 
 from orientviz.bundle import (
     BundleProblem,
+    BundleState,
     ap_set,
     band_backward_solve,
     band_forward_solve,
@@ -17,7 +18,6 @@ from orientviz.bundle import (
     solve_bordered,
     solve_bordered_pcg,
 )
-from orientviz.bundle._adjust import _State
 from orientviz.camera import collinearity_jacobian
 from orientviz.simulate import simulate_block
 
@@ -25,34 +25,36 @@ from orientviz.simulate import simulate_block
 def _dense_step(prob, st, aps):
     """Gauss-Newton step from the full weighted Jacobian (images, free points, APs)."""
     block = prob.block
-    m, pv, q, k = prob.m, prob.var_pts.size, prob.q, prob.k
-    xyz = st.xyz[prob.opt]
+    m, pv, q, k = prob.m, prob.points.unknown.size, prob.q, prob.ap.k
+    xyz = st.xyz[prob.obs.point]
     _, Je, Jp, _ = collinearity_jacobian(
-        xyz, st.X0[prob.oi], st.angles[prob.oi], prob.c[prob.oi], prob.x0[prob.oi],
-        prob.y0[prob.oi], block.sequence,
+        xyz, st.X0[prob.obs.image], st.angles[prob.obs.image], prob.interior.c[prob.obs.image], prob.interior.x0[prob.obs.image],
+        prob.interior.y0[prob.obs.image], block.sequence,
     )  # fmt: skip
-    n = prob.oi.size
+    n = prob.obs.image.size
     J = np.zeros((2 * n, 6 * m + 3 * pv + q))
-    A = aps.design(prob.l)
+    A = aps.design(prob.obs.xy)
     for r in range(n):
         rows = slice(2 * r, 2 * r + 2)
-        J[rows, 6 * prob.oi[r] : 6 * prob.oi[r] + 6] = Je[r]
-        if prob.ocol[r] >= 0:
-            c0 = 6 * m + 3 * prob.ocol[r]
+        J[rows, 6 * prob.obs.image[r] : 6 * prob.obs.image[r] + 6] = Je[r]
+        if prob.obs.column[r] >= 0:
+            c0 = 6 * m + 3 * prob.obs.column[r]
             J[rows, c0 : c0 + 3] = Jp[r]
-        c0 = 6 * m + 3 * pv + k * prob.grp[prob.oi[r]]
+        c0 = 6 * m + 3 * pv + k * prob.ap.group[prob.obs.image[r]]
         J[rows, c0 : c0 + k] = A[r]
     rw, _, _ = prob.residuals(st, jac=False)
-    Jw = J * prob.sw.reshape(-1)[:, None]
+    Jw = J * prob.obs.weight.reshape(-1)[:, None]
     N = Jw.T @ Jw
     b = Jw.T @ rw.reshape(-1)
     # pseudo-observations: weighted control coordinates and the parameters a = 0 ± σ
     idx = 6 * m + np.arange(3 * pv)
-    N[idx, idx] += prob.prior_w.reshape(-1)
-    b[idx] += (prob.prior_w * (prob.prior_l - st.xyz[prob.var_pts])).reshape(-1)
+    N[idx, idx] += prob.points.prior_w.reshape(-1)
+    b[idx] += (prob.points.prior_w * (prob.points.prior_obs - st.xyz[prob.points.unknown])).reshape(
+        -1
+    )
     idx = 6 * m + 3 * pv + np.arange(q)
-    N[idx, idx] += prob.ap_w
-    b[idx] -= prob.ap_w * st.ap
+    N[idx, idx] += prob.ap.w
+    b[idx] -= prob.ap.w * st.ap
     return np.linalg.solve(N, b)
 
 
@@ -65,16 +67,18 @@ def test_step_with_group_parameters_equals_dense_solution(solver):
         block, point_setup(block, "weighted"), additional=aps, ap_group=block.images.strip,
         ap_sigma=10.0, solver=solver,
     )  # fmt: skip
-    assert prob.G == 3 and prob.prior_w.any()
+    assert prob.ap.G == 3 and prob.points.prior_w.any()
     rng = np.random.default_rng(3)
-    st = _State(block.images.X0, block.images.angles, block.points.xyz, rng.normal(0, 3, prob.q))
+    st = BundleState(
+        block.images.X0, block.images.angles, block.points.xyz, rng.normal(0, 3, prob.q)
+    )
     rw, Je, Jp = prob.residuals(st, jac=True)
     ne = prob.normal(st, rw, Je, Jp)
     # the exact path (Fs formed; the bundle takes it when no preconditioner exists or the
     # conjugate gradients stall)
-    fac = factor_reduced(prob.struct, ne["blocks"], prob.names()[: 6 * prob.m])
-    dc, da, _, _ = solve_bordered(fac, ne["E"], ne["F"], ne["rhs"], ne["ba"], prob.ap_names)
-    dc, dp, da, _ = prob._back(ne, dc, da, fac)
+    fac = factor_reduced(prob.reduced, ne.blocks, prob.names()[: 6 * prob.m])
+    dc, da, _, _ = solve_bordered(fac, ne.ap.E, ne.ap.F, ne.rhs, ne.ap.ba, prob.ap.names)
+    dc, dp, da, _ = prob.back_substitute(ne, dc, da, fac)
     ref = _dense_step(prob, st, aps)
     got = np.concatenate([dc.ravel(), dp.ravel(), da])
     np.testing.assert_allclose(got, ref, rtol=1e-6, atol=1e-8 * np.abs(ref).max())
@@ -138,20 +142,22 @@ def test_conjugate_gradients_with_an_old_preconditioner_reach_the_dense_step(sol
     names = prob.names()[: 6 * prob.m]
     # preconditioner: Fs formed at a different state (start values rotated by ~0.3 gon)
     rng = np.random.default_rng(4)
-    old = _State(
+    old = BundleState(
         block.images.X0 + rng.normal(0, 2, (prob.m, 3)),
         block.images.angles + rng.normal(0, 0.005, (prob.m, 3)),
         block.points.xyz, np.zeros(prob.q),
     )  # fmt: skip
     rw, Je, Jp = prob.residuals(old, jac=True)
     prob.solve(prob.normal(old, rw, Je, Jp), names)
-    assert prob.ap_prec is not None and "formed" in prob.ap_log[0]
-    st = _State(block.images.X0, block.images.angles, block.points.xyz, rng.normal(0, 3, prob.q))
+    assert prob.border.preconditioner is not None and "formed" in prob.border.log[0]
+    st = BundleState(
+        block.images.X0, block.images.angles, block.points.xyz, rng.normal(0, 3, prob.q)
+    )
     rw, Je, Jp = prob.residuals(st, jac=True)
     ne = prob.normal(st, rw, Je, Jp)
-    fac = factor_reduced(prob.struct, ne["blocks"], names)
+    fac = factor_reduced(prob.reduced, ne.blocks, names)
     dc, da, steps = solve_bordered_pcg(
-        fac, ne["E"], ne["F"], ne["rhs"], ne["ba"], prob.ap_prec, tol=1e-12
+        fac, ne.ap.E, ne.ap.F, ne.rhs, ne.ap.ba, prob.border.preconditioner, tol=1e-12
     )
     assert 1 < steps < 40
     ref = _dense_step(prob, st, aps)
@@ -160,13 +166,13 @@ def test_conjugate_gradients_with_an_old_preconditioner_reach_the_dense_step(sol
     np.testing.assert_allclose(da, ref[-prob.q :], rtol=1e-6, atol=1e-8 * np.abs(ref).max())
     # the bundle's own step (default tolerance) takes the iterative path
     prob.solve(ne, names)
-    assert prob.ap_log[-1].startswith("cg")
+    assert prob.border.log[-1].startswith("cg")
     # the single-precision preconditioner of this very system: CG converges in very few
     # steps to the same step
     if solver == "banded":
-        prec = form_preconditioner(fac, ne["E"], ne["F"])
+        prec = form_preconditioner(fac, ne.ap.E, ne.ap.F)
         dc2, da2, steps2 = solve_bordered_pcg(
-            fac, ne["E"], ne["F"], ne["rhs"], ne["ba"], prec, tol=1e-12
+            fac, ne.ap.E, ne.ap.F, ne.rhs, ne.ap.ba, prec, tol=1e-12
         )
         assert steps2 <= steps
         np.testing.assert_allclose(da2, ref[-prob.q :], rtol=1e-6, atol=1e-8 * np.abs(ref).max())
@@ -175,11 +181,11 @@ def test_conjugate_gradients_with_an_old_preconditioner_reach_the_dense_step(sol
 def test_border_blocks_apply_like_the_dense_border():
     prob, _ = _problem()
     block = prob.block
-    st = _State(block.images.X0, block.images.angles, block.points.xyz, np.zeros(prob.q))
+    st = BundleState(block.images.X0, block.images.angles, block.points.xyz, np.zeros(prob.q))
     rw, Je, Jp = prob.residuals(st, jac=True)
     ne = prob.normal(st, rw, Je, Jp)
-    Eb = ne["E_border"]
-    E = ne["E"]  # formed on demand from the blocks
+    Eb = ne.ap.E_border
+    E = ne.ap.E  # formed on demand from the blocks
     assert E.shape == (6 * prob.m, prob.q)
     assert Eb.other.shape[0] > 0  # points in two strips: blocks outside the own group
     rng = np.random.default_rng(2)

@@ -5,8 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from orientviz.bundle import SOLVERS, BundleProblem, geometric_orderings, inv3, point_setup
-from orientviz.bundle._adjust import _State
+from orientviz.bundle import (
+    SOLVERS,
+    BundleProblem,
+    BundleState,
+    geometric_orderings,
+    inv3,
+    point_setup,
+)
 from orientviz.camera import collinearity_jacobian
 from orientviz.errors import NotDeterminableError
 from orientviz.simulate import simulate_block
@@ -17,7 +23,7 @@ def _problem(solver="banded", strips=2, n=4, control="fixed", seed=3):
     block = sim.block
     setup = point_setup(block, control)
     prob = BundleProblem(block, setup, solver=solver)
-    st = _State(
+    st = BundleState(
         block.images.X0.copy(), block.images.angles.copy(), block.points.xyz.copy(), np.zeros(0)
     )
     return block, prob, st
@@ -26,7 +32,7 @@ def _problem(solver="banded", strips=2, n=4, control="fixed", seed=3):
 def _dense_full_solution(block, prob, st):
     """Gauss-Newton step from the full (not reduced) normal equations, built densely."""
     obs = block.observations
-    u = prob.uobs
+    u = prob.obs.index
     cam = block.images.camera[obs.image[u]]
     xy, Je, Jp, _ = collinearity_jacobian(
         st.xyz[obs.point[u]],
@@ -37,12 +43,12 @@ def _dense_full_solution(block, prob, st):
         block.cameras.y0[cam],
         block.sequence,
     )
-    n, m, pv = u.size, block.n_images, prob.var_pts.size
+    n, m, pv = u.size, block.n_images, prob.points.unknown.size
     J = np.zeros((2 * n, 6 * m + 3 * pv))
     for i in range(n):
         ci = obs.image[u[i]]
         J[2 * i : 2 * i + 2, 6 * ci : 6 * ci + 6] = Je[i]
-        col = prob.pt_col[obs.point[u[i]]]
+        col = prob.points.column[obs.point[u[i]]]
         if col >= 0:
             J[2 * i : 2 * i + 2, 6 * m + 3 * col : 6 * m + 3 * col + 3] = Jp[i]
     w = (1.0 / obs.sigma[u] ** 2).reshape(-1)
@@ -50,10 +56,10 @@ def _dense_full_solution(block, prob, st):
     N = J.T @ (w[:, None] * J)
     b = J.T @ (w * r)
     # control pseudo-observations of unknown points (weighted control)
-    pw = prob.prior_w.reshape(-1)
+    pw = prob.points.prior_w.reshape(-1)
     idx = 6 * m + np.arange(3 * pv)
     N[idx, idx] += pw
-    b[idx] += pw * (prob.prior_l - st.xyz[prob.var_pts]).reshape(-1)
+    b[idx] += pw * (prob.points.prior_obs - st.xyz[prob.points.unknown]).reshape(-1)
     return np.linalg.solve(N, b)
 
 
@@ -90,7 +96,7 @@ def test_geometric_ordering_numbers_across_strips():
 
 def test_banded_ordering_beats_or_equals_rcm():
     _, prob, _ = _problem("banded", strips=3, n=8)
-    info = prob.struct.info
+    info = prob.reduced.info
     assert info["bandwidth_images"] <= info["bandwidth_rcm"]
 
 
@@ -99,8 +105,8 @@ def test_singular_reduced_system_names_parameters():
     rw, Je, Jp = prob.residuals(st, jac=True)
     ne = prob.normal(st, rw, Je, Jp)
     # remove everything that determines image 0's κ: a zero row/column in S
-    ne["blocks"][:, 5, :] = 0.0
-    ne["blocks"][:, :, 5] = 0.0
+    ne.blocks[:, 5, :] = 0.0
+    ne.blocks[:, :, 5] = 0.0
     with pytest.raises(NotDeterminableError) as info:
         prob.solve(ne, prob.names()[: 6 * prob.m])
     assert any(p.endswith(".kappa") for p in info.value.parameters)

@@ -18,7 +18,7 @@ CORE = [
     "orientviz.adjust",
     "orientviz.orientation",
     "orientviz.bundle",
-    "orientviz.independent_models",
+    "orientviz.stereo_models",
     "orientviz.polynomial",
     "orientviz.simulate",
     "orientviz.radar",

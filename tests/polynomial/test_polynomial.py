@@ -5,11 +5,11 @@ import pytest
 
 from orientviz.block import TIE, Observations
 from orientviz.errors import InputError, NotDeterminableError
-from orientviz.independent_models import form_models, independent_models
 from orientviz.orientation.absolute import similarity_closed_form
 from orientviz.orientation.relative import relative_orientation
 from orientviz.polynomial import form_strips, polynomial_adjust
 from orientviz.simulate import simulate_block
+from orientviz.stereo_models import form_models, independent_models
 
 
 def noise_free(strips=2, images=6, **kw):

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from orientviz.independent_models import scalar_cofactors, solve_rows
 from orientviz.simulate import fit_log_law, height_precision, planimetric_precision
+from orientviz.stereo_models import scalar_cofactors, solve_rows
 
 
 def test_schur_cofactors_equal_the_dense_inverse():

@@ -11,7 +11,7 @@ together. This package holds its data model and what is computed from the data a
 * :func:`approximate_values` (approximations from scratch);
 * :class:`Auxiliary` (GNSS / statoscope / APR observations with strip offsets).
 
-The adjustments live elsewhere: :mod:`orientviz.bundle`, :mod:`orientviz.independent_models`,
+The adjustments live elsewhere: :mod:`orientviz.bundle`, :mod:`orientviz.stereo_models`,
 :mod:`orientviz.polynomial`; simulated blocks come from :mod:`orientviz.simulate`.
 """
 

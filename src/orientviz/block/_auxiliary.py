@@ -11,7 +11,7 @@ affected per strip by an unknown offset (and optionally a linear drift with time
 
 :class:`Auxiliary` only describes the data. The joint adjustment (rows, weights and
 the offset/drift unknowns) is done by :func:`orientviz.bundle.bundle_adjust` or
-:func:`orientviz.independent_models.independent_models` with ``auxiliary=[...]``;
+:func:`orientviz.stereo_models.independent_models` with ``auxiliary=[...]``;
 simulated data come from :func:`orientviz.simulate.simulate_auxiliary`.
 """
 

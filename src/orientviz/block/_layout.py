@@ -1,6 +1,6 @@
 """Block layout: strips, models (pairs of consecutive images), footprints, control layouts.
 
-Used by the simulator, the model methods (:mod:`orientviz.independent_models`,
+Used by the simulator, the model methods (:mod:`orientviz.stereo_models`,
 :mod:`orientviz.polynomial`), the plots and the viewer. Object frame in m, Z up;
 rotations R = R_ω·R_φ·R_κ (the block's ``sequence``).
 """

@@ -25,7 +25,7 @@ exported too (second group of ``__all__``).
 """
 
 from ._additional import AdditionalParameters, APAnalysis, Brown, Ebner12, Gruen44, analyse, ap_set
-from ._adjust import BundleProblem, bundle_adjust
+from ._adjust import bundle_adjust
 from ._alternation import AuxiliaryResult, adjust_with_auxiliary
 from ._auxiliary import AuxRows, BundleAuxiliary, auxiliary_rows
 from ._border import (
@@ -38,15 +38,36 @@ from ._border import (
 from ._checks import PointSetup, datum_defect, image_condition_deficit, point_setup
 from ._cleaning import bundle_solver, clean_block, cleaned_block, ray_labels
 from ._kernel import collinearity_block, project_block
+from ._normal import APBorder, AuxBorder, NormalEquations
+from ._parts import (
+    AdditionalBlock,
+    BorderSolver,
+    ExteriorBlock,
+    ImageObservations,
+    InteriorOrientation,
+    PointBlock,
+)
 from ._precision import banded_selected_inverse
+from ._problem import BundleProblem
 from ._reduced import SOLVERS, ReducedStructure, factor_reduced, geometric_orderings, inv3
 from ._reliability import RayReliability, ray_reliability
 from ._selfcal import SelfCalibration, self_calibrate
+from ._state import BundleState
 
 __all__ = [
     # the adjustment and its companions
     "bundle_adjust",
     "BundleProblem",
+    "BundleState",
+    "NormalEquations",
+    "APBorder",
+    "AuxBorder",
+    "ImageObservations",
+    "InteriorOrientation",
+    "ExteriorBlock",
+    "PointBlock",
+    "AdditionalBlock",
+    "BorderSolver",
     "AdditionalParameters",
     "APAnalysis",
     "Brown",

@@ -23,61 +23,10 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ..errors import InputError
+from ._normal import APBorder
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
-
-
-def setup_additional(prob, additional, ap_group, ap_sigma) -> None:
-    """Set a :class:`~orientviz.bundle.BundleProblem`'s additional-parameter part.
-
-    Sets ``k``, ``G`` (0 without parameters), ``grp``, ``A`` (n, 2, k) and ``Aw``
-    (weighted), ``A_csr`` (A as a sparse (2n, G·k) matrix: the model term A·a of all rays
-    in one product), ``ap_w`` (weights of the pseudo-observations), ``ap_names``,
-    ``ap_struct`` and the state of the border's solver (``ap_prec``, ``ap_log``,
-    ``ap_hold``, ``ap_border``, ``ap_reuse``, ``ray_length``).
-    """
-    prob.k = prob.G = 0
-    prob.ap_prec, prob.ap_log, prob.ap_hold = None, [], False
-    prob.ap_border, prob.ap_reuse = None, False
-    if additional is None:
-        return
-    m, n = prob.m, prob.l.shape[0]
-    A = np.asarray(additional.design(prob.l), dtype=float)
-    if A.ndim != 3 or A.shape[:2] != (n, 2):
-        raise InputError(f"additional.design: expected shape (n, 2, k), got {A.shape}")
-    k = prob.k = A.shape[2]
-    grp = np.zeros(m, np.int64) if ap_group is None else np.asarray(ap_group, np.int64)
-    if grp.shape != (m,) or grp.min() < 0:
-        raise InputError(f"ap_group: expected {m} non-negative group indices")
-    G = prob.G = int(grp.max()) + 1
-    prob.grp, prob.A, prob.Aw = grp, A, A * prob.sw[:, :, None]
-    cols = (np.repeat(grp[prob.oi], 2)[:, None] * k + np.arange(k)).ravel()
-    prob.A_csr = sp.csr_matrix(  # k entries per row, in column order: CSR directly
-        (A.reshape(-1), cols, np.arange(0, 2 * n * k + 1, k)), shape=(2 * n, G * k)
-    )
-    s = np.inf if ap_sigma is None else ap_sigma
-    s = np.broadcast_to(np.asarray(s, dtype=float), (k,))
-    prob.ap_w = np.tile(np.where(np.isfinite(s) & (s > 0), 1.0 / s**2, 0.0), G)
-    prob.ap_names = [f"{nm}@g{g}" for g in range(G) for nm in additional.names]
-    prob.ap_struct = APStructure(
-        prob.oi, prob.ocol, prob.struct.pt_obs, prob.var_pts.size, grp, G, prob.Aw
-    )
-    d = prob.block.points.xyz[prob.opt] - prob.block.images.X0[prob.oi]
-    prob.ray_length = float(np.nanmedian(np.linalg.norm(d, axis=1))) if d.size else 1.0
-
-
-class NormalEquations(dict):
-    """The blocks of ``BundleProblem.normal``; ``["E"]`` (the border of the additional
-    parameters as a (6m, q) array, e.g. for :mod:`orientviz.bundle._precision`) is formed
-    from ``["E_border"]`` (:class:`BorderE`) when first asked for."""
-
-    def __missing__(self, key):
-        if key == "E" and "E_border" in self:
-            self["E"] = self["E_border"].dense()
-            return self["E"]
-        raise KeyError(key)
 
 
 def _summation(keys: I64) -> tuple[sp.csr_matrix, I64]:
@@ -231,7 +180,7 @@ def ap_normal(
     bp: F64,
     lam: float,
     border: tuple[F64, F64] | None = None,
-) -> dict:
+) -> APBorder:
     """Border of the normal equations: E (6m, q), F (q, q), ba (q,) and helpers.
 
     Parameters
@@ -257,23 +206,23 @@ def ap_normal(
 
     Returns
     -------
-    dict
-        ``E``, ``F`` (damped), ``F0`` (undamped), ``ba``, ``diagF`` (undamped diagonal),
-        ``H`` (per (point, group) pair, k × 3: Σ Aᵀ P J_p over the pair's rays; for the
+    APBorder
+        ``E_border`` (E by blocks), ``F`` (damped), ``F0`` (undamped), ``ba``, ``H`` (per
+        (point, group) pair, k × 3: Σ Aᵀ P J_p over the pair's rays; for the
         back-substitution and the precision).
     """
-    A, k, G, m = prob.ap_struct, prob.k, prob.G, prob.m
+    A, k, G, m = prob.ap.structure, prob.ap.k, prob.ap.G, prob.m
     # Aᵀ P (l − f) = Aᵀ (rw / σ): the unweighted design times the weighted misclosures
-    ba2 = (prob.A_csr.T @ (rw * prob.sw).reshape(-1)).reshape(G, k)
+    ba2 = (prob.ap.A_csr.T @ (rw * prob.obs.weight).reshape(-1)).reshape(G, k)
     # point-elimination terms, per (point, group) pair: H = Σ Aᵀ P J_p over its rays
     H = (A.H_design @ Jpw.reshape(-1, 3)).reshape(-1, k, 3)  # (npg, k, 3)
     HV = H @ Vinv[A.pg_pt]  # H V⁻¹
     hb = (HV @ bp[A.pg_pt][:, :, None])[:, :, 0]
     ba2[A.pgg_present] -= A.sum_pgg @ hb
-    ba = ba2.reshape(-1) - prob.ap_w * st.ap
+    ba = ba2.reshape(-1) - prob.ap.w * st.ap
     if border is not None:
         E, F0 = border
-        return _damped(dict(E=E, F0=F0, ba=ba, H=H), lam)
+        return _damped(E, F0, ba, H, lam)
     # E: per image, its own group's block Σ_a (J_eᵀ P A − T Hᵀ) = Σ_a J_eᵀ P½ Ã with the
     # reduced design Ã = P½ (A − J_p V⁻¹ Hᵀ) of each ray (T = J_eᵀ P J_p V⁻¹, H of the
     # ray's own (point, group) pair): one (6 × 2L)(2L × k) product per image
@@ -283,7 +232,7 @@ def ap_normal(
     VHt[-1] = 0.0
     At = np.empty((n + 1, 2, k))  # the reduced design and a zero ray for the padding
     np.matmul(Jpw, VHt[A.own_pg], out=At[:-1])
-    np.subtract(prob.Aw, At[:-1], out=At[:-1])
+    np.subtract(prob.ap.Aw, At[:-1], out=At[:-1])
     At[-1] = 0.0
     Jpad = Jew[A.pad0].reshape(m, 2 * L, 6)  # padded slots: any ray, times a zero ray
     own = np.matmul(Jpad.transpose(0, 2, 1), At[A.pad].reshape(m, 2 * L, k))
@@ -292,7 +241,7 @@ def ap_normal(
         other = -_ssum(A.sum_e, T[A.e_obs] @ H[A.e_pg].transpose(0, 2, 1))
     else:
         other = np.zeros((0, 6, k))
-    E = BorderE(own, other, prob.grp, A)
+    E = BorderE(own, other, prob.ap.group, A)
     # F: direct term (constant: A is evaluated at the observed coordinates) − Σ H V⁻¹ Hᵀ
     F4 = np.zeros((G, G, k, k))
     F4[A.grp_present, A.grp_present] = A.F_direct
@@ -303,8 +252,8 @@ def ap_normal(
     for key, a, b in zip(A.f_key, A.f_bounds[:-1], A.f_bounds[1:]):
         F4g[key] -= VHt[A.f_1[a:b]].reshape(-1, k).T @ Htz[A.f_2[a:b]].reshape(-1, k)
     F0 = F4.transpose(0, 2, 1, 3).reshape(prob.q, prob.q)
-    F0[np.diag_indices(prob.q)] += prob.ap_w
-    return _damped(dict(E=E, F0=F0, ba=ba, H=H), lam)
+    F0[np.diag_indices(prob.q)] += prob.ap.w
+    return _damped(E, F0, ba, H, lam)
 
 
 class BorderE:
@@ -382,19 +331,16 @@ def dense(E) -> F64:
     return E.dense() if isinstance(E, BorderE) else E
 
 
-def _damped(out: dict, lam: float) -> dict:
-    """Add ``F`` (F0 with its diagonal × (1 + lam)) and ``diagF`` (F0's diagonal)."""
-    F0 = out["F0"]
-    out["diagF"] = np.diag(F0).copy()
+def _damped(E, F0: F64, ba: F64, H: F64, lam: float) -> APBorder:
+    """The border with ``F`` = F0 with its diagonal × (1 + lam)."""
     F = F0.copy() if lam > 0 else F0
     if lam > 0:
         F[np.diag_indices(F.shape[0])] *= 1.0 + lam
-    out["F"] = F
-    return out
+    return APBorder(E, F0, F, ba, H)
 
 
 def point_ap_term(prob, H: F64, da: F64) -> F64:
     """Σ over a point's (point, group) pairs of Hᵀ·da_g, shape (p, 3)."""
-    A = prob.ap_struct
-    t = np.einsum("nji,nj->ni", H, da.reshape(prob.G, prob.k)[A.pg_grp])
+    A = prob.ap.structure
+    t = np.einsum("nji,nj->ni", H, da.reshape(prob.ap.G, prob.ap.k)[A.pg_grp])
     return A.sum_pt @ t

@@ -10,7 +10,7 @@ the strip, t ∈ [0, 1] ::
 The offsets o and drifts d are extra unknowns of the adjustment ("globals"), shared by
 all observations of a strip; with ``offsets=False`` the data are absolute and enter
 without them (e.g. GNSS that fixes the datum). The rows are linear: ∂v/∂X_e[c] = 1,
-∂v/∂o = 1, ∂v/∂d = t. Both :func:`orientviz.independent_models.independent_models` (on the
+∂v/∂o = 1, ∂v/∂d = t. Both :func:`orientviz.stereo_models.independent_models` (on the
 scalar point/centre unknowns) and :func:`orientviz.bundle.bundle_adjust` (on the
 exterior-orientation and point unknowns) assemble them into their normal equations.
 
@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 
 from ..errors import InputError
 from . import _auxiliary_border as _ab
+from ._normal import AuxBorder, NormalEquations
 from ._reduced import factor_reduced
 
 F64 = NDArray[np.float64]
@@ -252,46 +253,48 @@ class BundleAuxiliary:
         b = -(wJ.T @ self.residuals(X0, xyz, g))
         return E, P, F, b
 
-    def reduce(self, prob, X0: F64, xyz: F64, g: F64, ne: dict, lam: float = 0.0) -> dict:
+    def reduce(
+        self, prob, X0: F64, xyz: F64, g: F64, ne: NormalEquations, lam: float = 0.0
+    ) -> AuxBorder:
         """The globals' part of the point-reduced normal equations.
 
         Returns ``E`` (6m, na) camera coupling, ``F`` (na, na), ``b`` (na,), ``Pg``
         (p_var, 3, na) point coupling (for the back substitution) and ``diag`` (undamped
         diagonal of F).
         """
-        S = prob.struct
-        n_pts = prob.var_pts.size
+        S = prob.reduced
+        n_pts = prob.points.unknown.size
         E, P, F, b = self.global_blocks(prob.m, n_pts, X0, xyz, g)
         Pg = P.reshape(n_pts, 3, -1)
-        Vinv, T = ne["Vinv"], ne["T"]
+        Vinv, T = ne.Vinv, ne.T
         pts = np.unique(self.pcol[~self.img])
         if pts.size:
             VP = Vinv[pts] @ Pg[pts]  # (k, 3, na)
             F -= np.einsum("kia,kib->ab", Pg[pts], VP)
-            b -= np.einsum("kia,ki->a", VP, ne["bp"][pts])
+            b -= np.einsum("kia,ki->a", VP, ne.bp[pts])
             vo = S.pt_obs
-            o = vo[np.isin(prob.ocol[vo], pts)]
-            np.add.at(E.reshape(prob.m, 6, -1), prob.oi[o], -(T[o] @ Pg[prob.ocol[o]]))
+            o = vo[np.isin(prob.obs.column[vo], pts)]
+            np.add.at(E.reshape(prob.m, 6, -1), prob.obs.image[o], -(T[o] @ Pg[prob.obs.column[o]]))
         diag = np.diag(F).copy()
         if lam > 0:
             F[np.diag_indices_from(F)] *= 1.0 + lam
-        return dict(E=E, F=F, b=b, Pg=Pg, diag=diag)
+        return AuxBorder(E=E, F=F, b=b, Pg=Pg, diag=diag)
 
-    def normal(self, prob, st, ne: dict, lam: float = 0.0) -> None:
+    def normal(self, prob, st, ne: NormalEquations, lam: float = 0.0) -> None:
         """Put the globals' bordered block into the bundle's normal equations ``ne``.
 
-        Stored as ``ne["aux"]`` (see :meth:`reduce`; with additional parameters also
+        Stored as ``ne.aux`` (see :meth:`reduce`; with additional parameters also
         their coupling ``"Fag"`` (q, na), :mod:`orientviz.bundle._auxiliary_border`);
-        ``ne["diagF"]`` is extended by the globals' diagonal (the stopping rule reads
+        ``ne.diagF`` is extended by the globals' diagonal (the stopping rule reads
         the corrections (da, dg) in one vector).
         """
         a = self.reduce(prob, st.X0, st.xyz, st.g, ne, lam)
-        if prob.q and not prob.ap_hold:
-            a["Fag"] = _ab.ap_aux_coupling(prob, ne, a["Pg"])
-        ne["aux"] = a
-        ne["diagF"] = np.concatenate([ne.get("diagF", np.zeros(0)), a["diag"]])
+        if prob.q and not prob.border.hold:
+            a.Fag = _ab.ap_aux_coupling(prob, ne, a.Pg)
+        ne.aux = a
+        ne.diagF = np.concatenate([ne.diagF, a.diag])
 
-    def solve(self, prob, fac, ne: dict):
+    def solve(self, prob, fac, ne: NormalEquations):
         """Corrections (dc (m, 6), dp (p_var, 3), (da, dg) (q + na,), fac) of the
         bordered system; the additional parameters' corrections da come first (zero
         while they are held).
@@ -305,15 +308,15 @@ class BundleAuxiliary:
         dc, da, dg = _ab.solve_joint(prob, fac, ne)
         if not da.size:
             da = np.zeros(prob.q)
-        dc, dp, da, fac = prob._back(ne, dc, da, fac)
-        dp -= np.einsum("nij,nj->ni", ne["Vinv"], ne["aux"]["Pg"] @ dg)
+        dc, dp, da, fac = prob.back_substitute(ne, dc, da, fac)
+        dp -= np.einsum("nij,nj->ni", ne.Vinv, ne.aux.Pg @ dg)
         return dc, dp, np.concatenate([da, dg]), fac
 
-    def border(self, prob, ne: dict) -> tuple[F64, F64]:
+    def border(self, prob, ne: NormalEquations) -> tuple[F64, F64]:
         """The joint border of the point-reduced system: E (6m, q + na), F (q + na, q + na)."""
         return _ab.border(prob, ne)[:2]
 
-    def point_border(self, prob, ne: dict, hb: F64) -> None:
+    def point_border(self, prob, ne: NormalEquations, hb: F64) -> None:
         """Fill g's columns ``hb[:, q:]`` (p_var, na, 3) of the points' border term."""
         hb[:, prob.q :] = _ab.point_border(ne)
 
@@ -342,9 +345,9 @@ def finish_bundle(res, prob, st, rw, Je, Jp) -> None:
     Qg = res.cofactor_blocks.get("auxiliary")
     if Qg is None:  # no precision run: the border of the solution alone
         ne = prob.normal(st, rw, Je, Jp)
-        fac = factor_reduced(prob.struct, ne["blocks"], [str(i) for i in range(6 * prob.m)])
+        fac = factor_reduced(prob.reduced, ne.blocks, [str(i) for i in range(6 * prob.m)])
         aux.solve(prob, fac, ne)
-        Qg = np.linalg.inv(ne["Fs_aux"])[prob.q :, prob.q :]
+        Qg = np.linalg.inv(ne.Fs_aux)[prob.q :, prob.q :]
         res.cofactor_blocks["auxiliary"] = Qg
     s0 = res.sigma0 if np.isfinite(res.sigma0) else 1.0
     v = aux.residuals(st.X0, st.xyz, st.g)

@@ -31,11 +31,12 @@ from numpy.typing import NDArray
 from ..errors import NotDeterminableError
 from ._ap_normal import dense
 from ._border import solve_bordered
+from ._normal import NormalEquations
 
 F64 = NDArray[np.float64]
 
 
-def ap_aux_coupling(prob, ne: dict, Pg: F64) -> F64:
+def ap_aux_coupling(prob, ne: NormalEquations, Pg: F64) -> F64:
     """F_ag (q, na): the parameters' coupling with the offsets/drifts through the points.
 
     Parameters
@@ -48,36 +49,36 @@ def ap_aux_coupling(prob, ne: dict, Pg: F64) -> F64:
     Pg : ndarray, shape (p_var, 3, na)
         Coupling of each point unknown with the offsets/drifts (APR rows), 1/m².
     """
-    A = prob.ap_struct
+    A = prob.ap.structure
     na = Pg.shape[2]
-    out = np.zeros((prob.G, prob.k, na))
+    out = np.zeros((prob.ap.G, prob.ap.k, na))
     has = np.any(Pg != 0.0, axis=(1, 2))
     sel = np.flatnonzero(has[A.pg_pt])
     if sel.size:
         pt = A.pg_pt[sel]
-        c = ne["H"][sel] @ (ne["Vinv"][pt] @ Pg[pt])  # (s, k, na)
+        c = ne.ap.H[sel] @ (ne.Vinv[pt] @ Pg[pt])  # (s, k, na)
         np.add.at(out, A.pg_grp[sel], -c)
     return out.reshape(prob.q, na)
 
 
-def border(prob, ne: dict) -> tuple[F64, F64, F64]:
+def border(prob, ne: NormalEquations) -> tuple[F64, F64, F64]:
     """The joint border: E (6m, q + na), F (q + na, q + na) and its right side (q + na,).
 
     Without additional parameters (or with them held) the border is g's alone.
     """
-    a = ne["aux"]
-    if not prob.q or prob.ap_hold:
-        return a["E"], a["F"], a["b"]
-    Ea = dense(ne["E_border"]) if "E_border" in ne else ne["E"]
-    E = np.hstack([Ea, a["E"]])
-    F = np.block([[ne["F"], a["Fag"]], [a["Fag"].T, a["F"]]])
-    return E, F, np.concatenate([ne["ba"], a["b"]])
+    a = ne.aux
+    if not prob.q or prob.border.hold:
+        return a.E, a.F, a.b
+    Ea = dense(ne.ap.E_border) if ne.ap is not None else ne.ap.E
+    E = np.hstack([Ea, a.E])
+    F = np.block([[ne.ap.F, a.Fag], [a.Fag.T, a.F]])
+    return E, F, np.concatenate([ne.ap.ba, a.b])
 
 
 def _not_determinable(prob) -> NotDeterminableError:
     names = list(prob.aux.rows.names)
-    if prob.q and not prob.ap_hold:
-        names = list(prob.ap_names) + names
+    if prob.q and not prob.border.hold:
+        names = list(prob.ap.names) + names
     return NotDeterminableError(
         "the offsets/drifts of the auxiliary data (with the additional parameters, if any) "
         "are not determinable by this block (give control, absolute data or ap_sigma)",
@@ -85,8 +86,8 @@ def _not_determinable(prob) -> NotDeterminableError:
     )
 
 
-def solve_joint(prob, fac, ne: dict) -> tuple[F64, F64, F64]:
-    """Solve the bordered system: (dc (6m,), da (q,), dg (na,)); stores ``ne["Fs_aux"]``.
+def solve_joint(prob, fac, ne: NormalEquations) -> tuple[F64, F64, F64]:
+    """Solve the bordered system: (dc (6m,), da (q,), dg (na,)); stores ``ne.Fs_aux``.
 
     Raises
     ------
@@ -95,10 +96,10 @@ def solve_joint(prob, fac, ne: dict) -> tuple[F64, F64, F64]:
     """
     E, F, rb = border(prob, ne)
     if not rb.size:  # absolute data only (no offsets) and no parameters
-        ne["Fs_aux"] = np.zeros((0, 0))
-        return fac.solve(ne["rhs"]), np.zeros(0), np.zeros(0)
+        ne.Fs_aux = np.zeros((0, 0))
+        return fac.solve(ne.rhs), np.zeros(0), np.zeros(0)
     try:
-        dc, db, Fs, _ = solve_bordered(fac, E, F, ne["rhs"], rb, prob.aux.rows.names)
+        dc, db, Fs, _ = solve_bordered(fac, E, F, ne.rhs, rb, prob.aux.rows.names)
     except NotDeterminableError:
         raise _not_determinable(prob) from None
     # a scaled Cholesky factor: a nearly singular border (e.g. offsets without any
@@ -111,15 +112,15 @@ def solve_joint(prob, fac, ne: dict) -> tuple[F64, F64, F64]:
         ok = False
     if not ok:
         raise _not_determinable(prob)
-    ne["Fs_aux"] = Fs
+    ne.Fs_aux = Fs
     q = db.size - prob.aux.n_global
     return dc, db[:q], db[q:]
 
 
-def point_border(ne: dict) -> F64:
+def point_border(ne: NormalEquations) -> F64:
     """g's columns of h_j = (point–border coupling)ᵀ V_j⁻¹, shape (p_var, na, 3)."""
-    Pg = ne["aux"]["Pg"]
-    return Pg.transpose(0, 2, 1) @ ne["Vinv"]
+    Pg = ne.aux.Pg
+    return Pg.transpose(0, 2, 1) @ ne.Vinv
 
 
 def auxiliary_redundancy(aux, Qcc: F64, Qpp: F64, Qcb: F64, Qbp: F64, Qbb: F64) -> F64:

@@ -43,6 +43,7 @@ from numpy.typing import NDArray
 
 from ..errors import NotDeterminableError
 from ._ap_normal import BorderE, dense
+from ._normal import NormalEquations
 
 F64 = NDArray[np.float64]
 
@@ -305,33 +306,33 @@ def solve_bordered_pcg(fac, E: F64, F: F64, rhs: F64, ba: F64, prec, tol: float 
     return dc, x, steps
 
 
-def solve_border(prob, ne: dict, fac) -> tuple[F64, F64]:
+def solve_border(prob, ne: NormalEquations, fac) -> tuple[F64, F64]:
     """The bundle's solve with additional parameters: (dc (6m,), da (q,)).
 
-    Held parameters (``prob.ap_hold``): the plain step, da = 0. Otherwise conjugate
+    Held parameters (``prob.border.hold``): the plain step, da = 0. Otherwise conjugate
     gradients with the preconditioner (formed in single precision on first use, formed
     anew after :data:`PCG_STALE_STEPS` steps) and, if they fail, the exact
-    :func:`solve_bordered`. Appends what it did to ``prob.ap_log``.
+    :func:`solve_bordered`. Appends what it did to ``prob.border.log``.
     """
-    if prob.ap_hold:
-        prob.ap_log.append("held")
-        return fac.solve(ne["rhs"]), np.zeros(prob.q)
+    if prob.border.hold:
+        prob.border.log.append("held")
+        return fac.solve(ne.rhs), np.zeros(prob.q)
     dc = None
-    tag = "E,F reused, " if ne.get("reused") else ""
-    if prob.ap_prec is None:
-        prob.ap_prec = form_preconditioner(fac, ne["E_border"], ne["F"])
-        tag += "Fs formed (float32), " if prob.ap_prec is not None else ""
-    if prob.ap_prec is not None:
+    tag = "E,F reused, " if ne.ap.reused else ""
+    if prob.border.preconditioner is None:
+        prob.border.preconditioner = form_preconditioner(fac, ne.ap.E_border, ne.ap.F)
+        tag += "Fs formed (float32), " if prob.border.preconditioner is not None else ""
+    if prob.border.preconditioner is not None:
         dc, da, steps = solve_bordered_pcg(
-            fac, ne["E_border"], ne["F"], ne["rhs"], ne["ba"], prob.ap_prec
+            fac, ne.ap.E_border, ne.ap.F, ne.rhs, ne.ap.ba, prob.border.preconditioner
         )
-        prob.ap_log.append(tag + f"cg{steps}")
+        prob.border.log.append(tag + f"cg{steps}")
         if dc is None or steps > PCG_STALE_STEPS:
-            prob.ap_prec = None  # stale preconditioner: form Fs next time
+            prob.border.preconditioner = None  # stale preconditioner: form Fs next time
     if dc is None:
-        dc, da, Fs, prob.ap_prec = solve_bordered(
-            fac, ne["E"], ne["F"], ne["rhs"], ne["ba"], prob.ap_names
+        dc, da, Fs, prob.border.preconditioner = solve_bordered(
+            fac, ne.ap.E, ne.ap.F, ne.rhs, ne.ap.ba, prob.ap.names
         )
-        ne["Fs"] = Fs
-        prob.ap_log.append("Fs formed")
+        ne.Fs = Fs
+        prob.border.log.append("Fs formed")
     return dc, da

@@ -215,13 +215,13 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
         correction moved by less than the stopping tolerance (a few thousandths of a
         conditional σ); the normal equations are not built and factored again.
     """
-    S = prob.struct
+    S = prob.reduced
     fac = None
     if lin is not None:
         ne, fac, Je, Jp = lin
     else:
         ne = prob.normal(st, rw, Je, Jp)
-    blocks = ne["blocks"]
+    blocks = ne.blocks
     inverse = ReducedInverse(S, blocks, fac)
     Zblk = inverse.blocks
     m, q = prob.m, prob.q
@@ -231,8 +231,8 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     if fast_ap:  # parameters only: the banded border path (bundle_precision_ap)
         from ._precision_ap import border_inverse
 
-        E = ne["E_border"] if "E_border" in ne else ne["E"]
-        Faa, Qca3, dQ = border_inverse(inverse, E, ne["F"], S)
+        E = ne.ap.E_border if ne.ap is not None else ne.ap.E
+        Faa, Qca3, dQ = border_inverse(inverse, E, ne.ap.F, S)
         Zblk = Zblk + dQ
     elif nb:  # auxiliary offsets/drifts (and parameters): the whole border densely
         E, F = aux.border(prob, ne)
@@ -244,8 +244,8 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     Qcc_diag = Zblk[S.diag_block]
     # point cofactors: Vinv + Σ_ab T_aᵀ Q(i_a, i_b) T_b
     a, b = S.all_pairs
-    oi, ocol = prob.oi, prob.ocol
-    T = ne["T"]
+    oi, ocol = prob.obs.image, prob.obs.column
+    T = ne.T
     n_used = oi.size
     # Q_cp for each observation a: −Σ_b Q(i_a, i_b) T_b  (then add the AP part);
     # in batches of whole a-groups to bound the memory of the (pairs, 6, 6) gathers
@@ -262,9 +262,11 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
         QT = Qab @ T[b[sl]]  # Q(i_a, i_b) T_b
         Qcp[S.pt_obs[s0:s1]] = -np.add.reduceat(QT, S.all_pairs_starts[s0:s1] - seg[s0], axis=0)
         s0 = s1
-    Vinv = ne["Vinv"]
-    vo = prob.vo  # the rays of point unknowns in point order (a slice when they come first)
-    sw = prob.sw
+    Vinv = ne.Vinv
+    vo = (
+        prob.obs.var_rays
+    )  # the rays of point unknowns in point order (a slice when they come first)
+    sw = prob.obs.weight
     Jew = Je * sw[:, :, None]
     Jpw = Jp * sw[:, :, None]
     if fast_ap:  # the parameters' terms, sparse by (ray, group) and (point, group) pairs
@@ -274,9 +276,9 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     elif nb:
         hb = np.zeros((S.n_pt, nb, 3))  # Σ_b Tap_b placed in its group columns
         if q:
-            Tap = (prob.Aw[vo].transpose(0, 2, 1) @ Jpw[vo]) @ Vinv[ocol[vo]]
-            g = prob.grp[oi[vo]]
-            cols = g[:, None] * prob.k + np.arange(prob.k)
+            Tap = (prob.ap.Aw[vo].transpose(0, 2, 1) @ Jpw[vo]) @ Vinv[ocol[vo]]
+            g = prob.ap.group[oi[vo]]
+            cols = g[:, None] * prob.ap.k + np.arange(prob.ap.k)
             np.add.at(hb, (ocol[vo][:, None], cols), Tap)
         aux.point_border(prob, ne, hb)
         Qcp[vo] -= Qca[oi[vo]] @ hb[ocol[vo]]
@@ -306,8 +308,8 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     if fast_ap:
         H += Hray
     elif q:  # the parameters' terms of the rays, from the dense border cofactors
-        Aw = prob.Aw
-        sl = np.arange(prob.k)[None, :] + prob.k * prob.grp[oi][:, None]  # (n, k)
+        Aw = prob.ap.Aw
+        sl = np.arange(prob.ap.k)[None, :] + prob.ap.k * prob.ap.group[oi][:, None]  # (n, k)
         Qaa_o = Faa[sl[:, :, None], sl[:, None, :]]
         Qca_o = np.take_along_axis(Qca[oi], np.repeat(sl[:, None, :], 6, 1), axis=2)
         AwT = Aw.transpose(0, 2, 1)
@@ -320,28 +322,28 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     r_img = np.clip(1.0 - np.stack([H[:, 0, 0], H[:, 1, 1]], 1), 0.0, 1.0)
     if q:  # the gains' terms of Q_ca, Q_pa in the ray's own group's k columns
         if fast_ap:
-            Qca_o = Qca3.reshape(m, 6, prob.G, prob.k)[np.arange(m), :, prob.grp, :][oi]
-            Qpa_o = Qap_pg[prob.ap_struct.own_pg[vo]].transpose(0, 2, 1)
-            AwT = prob.Aw.transpose(0, 2, 1)
+            Qca_o = Qca3.reshape(m, 6, prob.ap.G, prob.ap.k)[np.arange(m), :, prob.ap.group, :][oi]
+            Qpa_o = Qap_pg[prob.ap.structure.own_pg[vo]].transpose(0, 2, 1)
+            AwT = prob.ap.Aw.transpose(0, 2, 1)
         Ke += Qca_o @ AwT
         Kp[vo] += Qpa_o @ AwT[vo]
     r_xy = -0.5 * (H[:, 0, 1] + H[:, 1, 0])
     n = prob.block.n_observations
     rn = np.full((n, 2), np.nan)
-    rn[prob.uobs] = r_img
+    rn[prob.obs.index] = r_img
     out_r = [rn.reshape(-1)]
     # pseudo-observations
-    w = prob.prior_w > 0
+    w = prob.points.prior_w > 0
     pdiag = np.einsum("nii->ni", Qpp)
-    out_r.append((1.0 - prob.prior_w * pdiag)[w])
+    out_r.append((1.0 - prob.points.prior_w * pdiag)[w])
     cdiag = np.einsum("nii->ni", Qcc_diag)
-    w = prob.X0_w > 0
-    out_r.append((1.0 - prob.X0_w * cdiag[:, :3])[w])
-    w = prob.ang_w > 0
-    out_r.append((1.0 - prob.ang_w * cdiag[:, 3:])[w])
+    w = prob.exterior.X0_w > 0
+    out_r.append((1.0 - prob.exterior.X0_w * cdiag[:, :3])[w])
+    w = prob.exterior.angles_w > 0
+    out_r.append((1.0 - prob.exterior.angles_w * cdiag[:, 3:])[w])
     if q:
-        w = prob.ap_w > 0
-        out_r.append((1.0 - prob.ap_w * np.diag(Faa)[:q])[w])
+        w = prob.ap.w > 0
+        out_r.append((1.0 - prob.ap.w * np.diag(Faa)[:q])[w])
     rall = np.concatenate(out_r)
     res.redundancy_numbers = rall
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -350,7 +352,7 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     # cofactor blocks by result block
     p = prob.block.n_points
     Qp_all = np.zeros((p, 3, 3))
-    Qp_all[prob.var_pts] = Qpp
+    Qp_all[prob.points.unknown] = Qpp
     Qp_all[prob.block.points.role == 2] = np.nan
     res.cofactor_blocks["exterior"] = Qcc_diag
     # Q_cc of every image pair (i ≤ k) that shares a point: key i·m + k (sorted), blocks
@@ -366,10 +368,10 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     # off-diagonal (x, y) element of P½ Q_vv P½ per image observation: with the diagonal
     # (the redundancy numbers) the 2×2 block of a ray for 2-D outlier tests
     rxy = np.full(n, np.nan)
-    rxy[prob.uobs] = r_xy
+    rxy[prob.obs.index] = r_xy
     res.extra["redundancy_xy"] = rxy
     gain_e = np.full((n, 6, 2), np.nan)
-    gain_e[prob.uobs] = Ke
+    gain_e[prob.obs.index] = Ke
     gain_p = np.full((n, 3, 2), np.nan)
-    gain_p[prob.uobs] = Kp
+    gain_p[prob.obs.index] = Kp
     res.extra["ray_gains"] = {"exterior": gain_e, "points": gain_p}

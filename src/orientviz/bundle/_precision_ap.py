@@ -142,8 +142,8 @@ def ray_group_pairs(prob) -> RayGroupPairs:
     cached = getattr(prob, "_ap_precision_pairs", None)
     if cached is not None:
         return cached
-    A = prob.ap_struct
-    n, npg = prob.oi.size, A.pg_pt.size
+    A = prob.ap.structure
+    n, npg = prob.obs.image.size, A.pg_pt.size
     pad = A.pad.reshape(-1)
     slot = np.zeros(n + 1, np.int64)
     slot[pad] = np.arange(pad.size)  # the padding entries (n) land in slot[n], unused
@@ -154,9 +154,9 @@ def ray_group_pairs(prob) -> RayGroupPairs:
     sum_own = sp.csr_matrix(
         (np.ones(int(ok.sum())), (own_slot[ok], np.flatnonzero(ok))), shape=(npg, pad.size)
     )
-    go = prob.grp[prob.oi]
+    go = prob.ap.group[prob.obs.image]
     by_group = np.argsort(go, kind="stable")
-    group_starts = np.searchsorted(go[by_group], np.arange(prob.G + 1))
+    group_starts = np.searchsorted(go[by_group], np.arange(prob.ap.G + 1))
     out = RayGroupPairs(
         slot[:n],
         sum_own,
@@ -166,7 +166,7 @@ def ray_group_pairs(prob) -> RayGroupPairs:
         by_group,
         group_starts,
     )
-    prob._ap_precision_pairs = out
+    prob.ray_groups = out
     return out
 
 
@@ -195,15 +195,15 @@ def point_terms(prob, ne, Qaa: F64, Qca3: F64, Qcp: F64, Jew: F64, Jpw: F64):
     Hray : ndarray, shape (n, 2, 2)
         The parameter terms of J Q Jᵀ per ray (to add).
     """
-    A = prob.ap_struct
+    A = prob.ap.structure
     R = ray_group_pairs(prob)
-    G, k, m = prob.G, prob.k, prob.m
-    n, L = prob.oi.size, A.pad.shape[1]
-    Vinv, T = ne["Vinv"], ne["T"]
-    HV = ne["H"] @ Vinv[A.pg_pt]  # (npg, k, 3): H V⁻¹, the point's coupling with group g
+    G, k, m = prob.ap.G, prob.ap.k, prob.m
+    n, L = prob.obs.image.size, A.pad.shape[1]
+    Vinv, T = ne.Vinv, ne.T
+    HV = ne.ap.H @ Vinv[A.pg_pt]  # (npg, k, 3): H V⁻¹, the point's coupling with group g
     Qca4 = Qca3.reshape(m, 6, G, k)
-    Qca_own = Qca4[np.arange(m), :, prob.grp, :]  # (m, 6, k): each image's own group
-    oi = prob.oi
+    Qca_own = Qca4[np.arange(m), :, prob.ap.group, :]  # (m, 6, k): each image's own group
+    oi = prob.obs.image
     # own group, per image in the padded layout (Q_ca,own of the image broadcast over
     # its rays; zero rows for padding and fixed points)
     HVz = np.concatenate([HV, np.zeros((1, k, 3))])
@@ -216,7 +216,7 @@ def point_terms(prob, ne, Qaa: F64, Qca3: F64, Qcp: F64, Jew: F64, Jpw: F64):
     Qg = Qca4[oi[A.e_obs], :, A.pg_grp[A.e_pg], :]  # (pairs, 6, k)
     if A.e_obs.size:
         t += (R.sum_e_ray @ (Qg @ HV[A.e_pg]).reshape(A.e_obs.size, -1)).reshape(n, 6, 3)
-    vo = prob.vo  # rays of point unknowns in point order (a slice when they come first)
+    vo = prob.obs.var_rays  # rays of point unknowns in point order (a slice when they come first)
     Qcp[vo] -= t[vo]
     # Q_ap,e = −(Σ_b Q_ca(i_b, g_e)ᵀ T_b + Σ_e' Q_aa(g_e, g_e') HV_e'): own group ...
     t = np.matmul(Qca_own.transpose(0, 2, 1)[:, None], Tp).reshape(m * L, k * 3)
@@ -241,7 +241,7 @@ def point_terms(prob, ne, Qaa: F64, Qca3: F64, Qcp: F64, Jew: F64, Jpw: F64):
     dQpp = (A.sum_pt @ t.reshape(t.shape[0], -1)).reshape(-1, 3, 3)
     # rays: A Q_aa Aᵀ + 2 sym(J_e Q_ca Aᵀ) (+ 2 sym(J_p Q_pa Aᵀ) for point unknowns),
     # all in the ray's own group's k columns
-    Aw = prob.Aw
+    Aw = prob.ap.Aw
     AQ = np.empty_like(Aw)
     for g in range(G):
         idx = R.by_group[R.group_starts[g] : R.group_starts[g + 1]]

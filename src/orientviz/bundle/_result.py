@@ -19,6 +19,7 @@ from ..errors import NotDeterminableError
 from ..orientation.intersection import intersect_points
 from ..rotation import matrix_from_opk
 from ._kernel import project_block
+from ._state import wrap
 
 F64 = NDArray[np.float64]
 
@@ -56,9 +57,9 @@ def finish_result(
     # check points: intersect with the adjusted orientations from their own rays
     chk = np.flatnonzero(block.points.role == CHECK)
     extra: dict = {
-        "solver": prob.struct.solver,
+        "solver": prob.reduced.solver,
         "used_obs": setup.used_obs,
-        "reduced_info": dict(prob.struct.info, **_border_info(prob)),
+        "reduced_info": dict(prob.reduced.info, **_border_info(prob)),
     }
     if chk.size:
         xyz[chk] = _intersect_check_points(block, st.X0, st.angles, chk)
@@ -83,17 +84,23 @@ def finish_result(
         slices[name] = slice(pos, pos + v.size)
         pos += v.size
 
-    w = prob.prior_w > 0
-    add("control", (st.xyz[prob.var_pts] - prob.prior_l)[w], 1 / np.sqrt(prob.prior_w[w]))
-    w = prob.X0_w > 0
-    add("X0_obs", (st.X0 - prob.X0_l)[w], 1 / np.sqrt(prob.X0_w[w]))
-    w = prob.ang_w > 0
-    from ._adjust import _wrap
-
-    add("angles_obs", _wrap(st.angles - prob.ang_l)[w], 1 / np.sqrt(prob.ang_w[w]))
+    w = prob.points.prior_w > 0
+    add(
+        "control",
+        (st.xyz[prob.points.unknown] - prob.points.prior_obs)[w],
+        1 / np.sqrt(prob.points.prior_w[w]),
+    )
+    w = prob.exterior.X0_w > 0
+    add("X0_obs", (st.X0 - prob.exterior.X0_obs)[w], 1 / np.sqrt(prob.exterior.X0_w[w]))
+    w = prob.exterior.angles_w > 0
+    add(
+        "angles_obs",
+        wrap(st.angles - prob.exterior.angles_obs)[w],
+        1 / np.sqrt(prob.exterior.angles_w[w]),
+    )
     if prob.q:
-        w = prob.ap_w > 0
-        add("additional", st.ap[w], 1 / np.sqrt(prob.ap_w[w]))
+        w = prob.ap.w > 0
+        add("additional", st.ap[w], 1 / np.sqrt(prob.ap.w[w]))
     extra["obs_slices"] = slices
     blocks = {"exterior": slice(0, 6 * m), "points": slice(6 * m, 6 * m + 3 * p)}
     if prob.q:
@@ -129,9 +136,9 @@ def finish_result(
                 # the parameters instead of ending in a numerical error
                 from ._reduced import raise_not_determinable
 
-                blocks = prob.normal(st, rw, Je, Jp)["blocks"]
+                blocks = prob.normal(st, rw, Je, Jp).blocks
                 try:
-                    raise_not_determinable(prob.struct, blocks, names[: 6 * prob.m], str(exc))
+                    raise_not_determinable(prob.reduced, blocks, names[: 6 * prob.m], str(exc))
                 except NotDeterminableError as err:
                     raise err from exc
             res.extra["precision_error"] = (
@@ -154,12 +161,14 @@ def _project_all(block, st, xyz, prob) -> F64:
         block.sequence,
     )
     if prob.q:
-        f[prob.uobs] += np.einsum(
-            "nij,nj->ni", prob.A, st.ap.reshape(prob.G, prob.k)[prob.grp[prob.oi]]
+        f[prob.obs.index] += np.einsum(
+            "nij,nj->ni",
+            prob.ap.A,
+            st.ap.reshape(prob.ap.G, prob.ap.k)[prob.ap.group[prob.obs.image]],
         )
     return f
 
 
 def _border_info(prob) -> dict:
     """How the additional-parameter border was solved in each solve (formed / cg steps)."""
-    return {"ap_border": list(prob.ap_log)} if prob.q else {}
+    return {"ap_border": list(prob.border.log)} if prob.q else {}

@@ -41,9 +41,9 @@ from numpy.typing import NDArray
 from ..adjust.result import Adjustment
 from ..block import CHECK, CONTROL, Block
 from ..errors import InputError, NotDeterminableError
-from ..independent_models import ModelSet, form_models, solve_rows
 from ..orientation.absolute import similarity_closed_form
 from ..rotation import matrix_from_opk
+from ..stereo_models import ModelSet, form_models, solve_rows
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]

@@ -39,8 +39,8 @@ SIGMA0_HEIGHT_PERMILLE = 0.015 / 152.0 * 1000.0
 
 def _pipeline_rows(rng: np.random.Generator) -> list[Row]:
     from ..block import TIE
-    from ..independent_models import independent_models
     from ..simulate import simulate_block
+    from ..stereo_models import independent_models
 
     rows = []
     for ns in (2, 4):
@@ -71,8 +71,8 @@ def _sigma0_rows(rng: np.random.Generator) -> list[Row]:
     """§20: σ0 of independent models (planimetry, model coordinates at image scale) vs
     σ0 of the bundle (image coordinates) on the same simulated blocks."""
     from ..bundle import bundle_adjust
-    from ..independent_models import independent_models
     from ..simulate import simulate_block
+    from ..stereo_models import independent_models
 
     ratios, heights = [], []
     for _ in range(3):

@@ -12,7 +12,7 @@ accuracy under purely random, uncorrelated errors of the model coordinates:
   the block height is as good as a single model (≈ 0.1 ‰ of the flying height).
 
 Both are computed here the way the theory does it: from the inverse of the normal
-matrix of the *linear* model-block adjustments of :mod:`orientviz.independent_models`:
+matrix of the *linear* model-block adjustments of :mod:`orientviz.stereo_models`:
 
 * planimetry: a 4-parameter similarity per model, X = a x − b y + X0, Y = b x + a y + Y0,
   on the standard (Gruber) points of the models, *without* projection centres; every
@@ -23,7 +23,7 @@ matrix of the *linear* model-block adjustments of :mod:`orientviz.independent_mo
   tilt; without this consecutive models could turn about their common line of points,
   which lies right below their common centre); every model coordinate has σ0; Z control
   fixed. This is the height step of the PAT-M iteration
-  (:func:`orientviz.independent_models.independent_models`, ``method="pat-m"``).
+  (:func:`orientviz.stereo_models.independent_models`, ``method="pat-m"``).
 
 The geometry comes from :func:`~orientviz.simulate.simulate_block` (flat terrain,
 exact flight plan, 60 % / 20 % overlap, wide angle); μ values are RMS over all
@@ -39,8 +39,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..block import CONTROL
-from ..independent_models import scalar_cofactors, solve_rows
-from ..independent_models._formation import _pairs
+from ..stereo_models import scalar_cofactors, solve_rows
+from ..stereo_models._formation import _pairs
 from ._block import simulate_block
 
 F64 = NDArray[np.float64]

@@ -135,7 +135,7 @@ def check_differences(sim, result: F64 | Adjustment) -> tuple[NDArray[np.int64],
         Adjusted coordinates of all points of the block in m, or an adjustment of it:
         a bundle result (:func:`orientviz.bundle.bundle_adjust`, check points
         intersected from their own rays, ``extra["points"]``) or an independent-model
-        result (:func:`orientviz.independent_models.independent_models`, ``extra["xyz"]``).
+        result (:func:`orientviz.stereo_models.independent_models`, ``extra["xyz"]``).
 
     Returns
     -------

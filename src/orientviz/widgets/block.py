@@ -80,7 +80,7 @@ def block_state(
     )  # fmt: skip
     t = time.perf_counter()
     if method in ("rigorous", "pat-m"):
-        from ..independent_models import independent_models
+        from ..stereo_models import independent_models
 
         res = independent_models(sim.block, method=method)
         xyz = res.extra["xyz"]

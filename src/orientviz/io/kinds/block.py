@@ -12,7 +12,7 @@ are intersected afterwards; ``"rays"``: their rays are adjusted like tie points 
 their given coordinates are withheld, as DBAT does), ``max_iter``, ``tol``, ``critical``,
 ``image_sigma``; for ``--method models`` ``model_method`` (``"rigorous"``/``"pat-m"``),
 for ``--method polynomial`` ``degree_xy``, ``degree_z``. Methods: ``bundle`` (default), ``models``, ``polynomial``
-(:mod:`orientviz.independent_models`, :mod:`orientviz.polynomial`).
+(:mod:`orientviz.stereo_models`, :mod:`orientviz.polynomial`).
 """
 
 from __future__ import annotations
@@ -162,7 +162,7 @@ def solve(problem: Problem, method: str | None) -> Solution:
         rays = check_mode(problem) == "rays"
         adj = _call(bundle_adjust, with_check_rays(block) if rays else block, opts)
     elif method == "models":
-        from ...independent_models import independent_models
+        from ...stereo_models import independent_models
 
         opts["method"] = problem.options.get("model_method", "rigorous")
         adj = _call(independent_models, block, opts, precision=True)

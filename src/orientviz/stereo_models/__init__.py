@@ -1,4 +1,4 @@
-"""Block adjustment with independent (stereo) models.
+"""Block adjustment with independent models: the stereo models of a block, joined in 3-D.
 
 "Model" means one thing in orientviz: the stereo model, formed by the relative
 orientation of two consecutive images of a strip. This package forms all models of a

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from orientviz.independent_models import solve_rows, solve_sparse
+from orientviz.stereo_models import solve_rows, solve_sparse
 
 
 def _mixed_system(seed: int = 3):

@@ -16,7 +16,7 @@ Two solvers are offered:
   increment about the current R_j, scale λ_j, translation T_j) in one Gauss-Newton
   adjustment; the point coordinates are eliminated (their normal matrix is diagonal) and
   the sparse reduced system of the 7·n model parameters is solved
-  (:mod:`orientviz.independent_models._normal`).
+  (:mod:`orientviz.stereo_models._normal`).
 * ``method="pat-m"``: the planimetry/height iteration of PAT-M (Ackermann, Ebner, Klein):
   a planimetric 4-parameter similarity per model (scale, rotation about the vertical,
   X and Y shift) with planimetric control, then a height adjustment with 3 parameters per
@@ -112,7 +112,7 @@ def independent_models(
         Compute the 3 × 3 cofactor blocks of all tie points (``cofactor_blocks["points"]``).
     deformation : str or list of str, optional
         Model deformation parameters (self-calibration; rigorous method only): a set
-        name or terms of :mod:`orientviz.independent_models._deformation`.
+        name or terms of :mod:`orientviz.stereo_models._deformation`.
     deformation_group : {"model", "strip", "block"} or array_like of int
         Parameters per model, shared per strip, or one set for the block.
     deformation_sigma : float or array_like, optional

@@ -6,7 +6,10 @@ import numpy as np
 import pytest
 
 from orientviz.errors import InputError, NotDeterminableError
-from orientviz.independent_models import (
+from orientviz.rotation import matrix_from_rotvec
+from orientviz.simulate import simulate_block
+from orientviz.simulate import systematic as sy
+from orientviz.stereo_models import (
     MODEL_SETS,
     TERMS,
     deformed,
@@ -18,9 +21,6 @@ from orientviz.independent_models import (
     similarity_columns,
     tie_setup,
 )
-from orientviz.rotation import matrix_from_rotvec
-from orientviz.simulate import simulate_block
-from orientviz.simulate import systematic as sy
 
 W3 = np.array([1.0, 1.0, 0.25])
 

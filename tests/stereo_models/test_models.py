@@ -1,12 +1,12 @@
-"""Independent models: model formation and the block adjustment (orientviz.independent_models)."""
+"""Independent models: model formation and the block adjustment (orientviz.stereo_models)."""
 
 import numpy as np
 import pytest
 
 from orientviz.block import CONTROL, TIE, Observations
 from orientviz.errors import DatumDefectError, InputError, NotDeterminableError
-from orientviz.independent_models import form_models, independent_models, model_to_object
 from orientviz.simulate import simulate_block
+from orientviz.stereo_models import form_models, independent_models, model_to_object
 
 
 def noise_free(strips=3, images=8, **kw):
@@ -57,7 +57,7 @@ def test_planimetric_check_point_errors_match_the_predicted_precision():
     assert 0.8 < ratio[0] < 1.25 and 0.8 < ratio[1] < 1.25, ratio
     # Heights come out worse than predicted (ratio ~1.5): the method treats model
     # coordinates as uncorrelated, but a model's heights share its relative-orientation
-    # errors. Documented in the lesson and in orientviz.independent_models.
+    # errors. Documented in the lesson and in orientviz.stereo_models.
 
 
 def test_rigorous_and_patm_agree_in_planimetry():

@@ -295,7 +295,7 @@ def group_index(group: str | Sequence[int], model_strip: I64) -> I64:
 
 def deformation_table(adj) -> str:
     """Plain-text table of the estimated deformation parameters of an adjustment by
-    :func:`orientviz.independent_models.independent_models` (value and σ in mm at a model
+    :func:`orientviz.stereo_models.independent_models` (value and σ in mm at a model
     corner, t, significant), followed by the analysis' warnings."""
     an = adj.extra["deformation_analysis"]
     w = max([len(n) for n in an.names] + [9])

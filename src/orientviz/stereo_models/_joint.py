@@ -1,8 +1,8 @@
 """Independent models with extra unknowns: model deformation parameters and auxiliary data.
 
-The rigorous 7-parameter adjustment of :mod:`orientviz.independent_models`, extended by
+The rigorous 7-parameter adjustment of :mod:`orientviz.stereo_models`, extended by
 
-* model deformation parameters p (:mod:`orientviz.independent_models._deformation`) per
+* model deformation parameters p (:mod:`orientviz.stereo_models._deformation`) per
   model, strip or block: the model coordinates carry the deformation A(m)·p, so
   ``X + v = λ R (m − A(m)·p) + T``, with pseudo-observations p = 0 ± σ (mm);
 * auxiliary observations (:mod:`orientviz.bundle._auxiliary`) of projection centres
@@ -83,7 +83,7 @@ def _group_labels(group, ms) -> list[str]:
 
 
 def joint_setup(block, ms, su, w_c, deformation, group, sigma, auxiliary) -> JointSetup:
-    """Fields, groups and auxiliary rows (see :func:`orientviz.independent_models.independent_models`)."""
+    """Fields, groups and auxiliary rows (see :func:`orientviz.stereo_models.independent_models`)."""
     n_rows = su.row_model.size
     ground = su.row_point < su.tie_points.size
     if deformation is not None:

@@ -1,6 +1,6 @@
 """Bookkeeping of model blocks: tie points, control coordinates, datum and connectivity checks.
 
-Used by :mod:`orientviz.independent_models` (independent models) and
+Used by :mod:`orientviz.stereo_models` (independent models) and
 :mod:`orientviz.polynomial` (strips). Object coordinates in m.
 """
 
