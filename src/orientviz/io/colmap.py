@@ -35,6 +35,8 @@ from ..errors import InputError
 from ..rotation import opk_from_matrix
 
 FLIP = np.diag([1.0, -1.0, -1.0])
+#: Coordinates and translations beyond ± this are refused (not adjustable in doubles).
+MAX_VALUE: float = 1e15
 
 #: COLMAP camera models understood here: name → parameter names.
 CAMERA_MODELS: dict[str, tuple[str, ...]] = {
@@ -67,13 +69,15 @@ class _Camera:
         return (p.get("k", p.get("k1", 0.0)), p.get("k2", 0.0), p.get("p1", 0.0), p.get("p2", 0.0))
 
 
+def _read(path: Path) -> str:
+    """The text of a model file, checked (:func:`~orientviz.io.safeio.read_input_text`)."""
+    from .safeio import read_input_text
+
+    return read_input_text(path, f"a COLMAP text file {path.name}")
+
+
 def _lines(path: Path):
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError("file not found", source=str(path)) from None
-    except UnicodeDecodeError as exc:
-        raise InputError(f"not a text file ({exc.reason})", source=str(path)) from None
+    text = _read(path)
     for no, line in enumerate(text.splitlines(), start=1):
         s = line.strip()
         if s and not s.startswith("#"):
@@ -129,17 +133,46 @@ def _read_cameras(path: Path) -> dict[int, _Camera]:
             )
         if cid in cams:
             raise InputError(f"duplicate camera id {cid}", source=str(path), where=f"line {no}")
-        cams[cid] = _Camera(model, w, h, np.array(params))
+        cam = _Camera(model, w, h, np.array(params))
+        bad = _camera_problem(cam)
+        if bad:
+            raise InputError(f"camera {cid}: {bad}", source=str(path), where=f"line {no}")
+        cams[cid] = cam
     if not cams:
         raise InputError("no cameras in the file", source=str(path), where=_end(path))
     return cams
 
 
+def _camera_problem(cam: _Camera) -> str | None:
+    """Why a camera cannot be used (sizes, focal length), or None."""
+    if not (0 < cam.width < 10**7 and 0 < cam.height < 10**7):
+        return f"expected WIDTH and HEIGHT of 1..10^7 pixels, got {cam.width} {cam.height}"
+    p = dict(zip(CAMERA_MODELS[cam.model], cam.params))
+    for name in ("f", "fx", "fy"):
+        if name in p and not 0 < p[name] < 1e12:
+            return f"expected a focal length {name} > 0 px (below 1e12), got {p[name]:g}"
+    for name in ("cx", "cy"):
+        if abs(p[name]) > 1e12:
+            return f"principal point {name} = {p[name]:g} px lies far outside the image"
+    return None
+
+
+def _refuse_nonfinite(values: NDArray[np.float64], lines: list[int], path: Path, what: str):
+    """Values that overflowed in the conversion (e.g. ±1e308 in a file) name their line."""
+    bad = np.flatnonzero(~np.all(np.isfinite(values.reshape(len(values), -1)), axis=1))
+    if bad.size:
+        raise InputError(
+            f"the {what} overflows after conversion (a value near ±1e308 in the file?)",
+            source=str(path),
+            where=f"line {lines[int(bad[0])]}",
+        )
+
+
 def _end(path: Path) -> str:
     """``"line N"`` of the last line of an existing text file (for "nothing found" errors)."""
     try:
-        n = len(path.read_text(encoding="utf-8").splitlines())
-    except (OSError, UnicodeDecodeError):
+        n = len(_read(path).splitlines())
+    except InputError:
         n = 0
     return f"line {max(n, 1)}"
 
@@ -153,6 +186,18 @@ def _read_points(path: Path) -> tuple[list[int], list[list[float]], list[tuple[i
     for no, line in _lines(path):
         f = line.split()
         vals = _numbers(path, no, f, "ifff", "a 3D point")
+        if max(abs(v) for v in vals[1:4]) > MAX_VALUE:
+            raise InputError(
+                f"a coordinate beyond ±{MAX_VALUE:g}: not a position",
+                source=str(path),
+                where=f"line {no}",
+            )
+        if vals[0] < 0:
+            raise InputError(
+                f"POINT3D_ID {vals[0]}: expected an id ≥ 0 (-1 is COLMAP's 'no 3D point')",
+                source=str(path),
+                where=f"line {no}",
+            )
         if vals[0] in seen:
             raise InputError(
                 f"duplicate POINT3D_ID {vals[0]}", source=str(path), where=f"line {no}"
@@ -235,10 +280,10 @@ def read_colmap(
     lines = list(_lines(img_path))
     # images.txt: two lines per image; the second (the 2D points) may be empty, which the
     # comment-stripping reader drops, so read by position in the raw text instead.
-    raw = img_path.read_text(encoding="utf-8").splitlines()
+    raw = _read(img_path).splitlines()
     body = [(no, s) for no, s in enumerate(raw, start=1) if not s.strip().startswith("#")]
-    image_ids, names, cam_of, X0s, Rs = [], [], [], [], []
-    oi, op, uv = [], [], []
+    image_ids, names, cam_of, X0s, Rs, img_lines = [], [], [], [], [], []
+    oi, op, uv, obs_lines = [], [], [], []
     k = 0
     while k < len(body):
         no, s = body[k]
@@ -252,6 +297,12 @@ def read_colmap(
             raise InputError(f"duplicate IMAGE_ID {iid}", source=str(img_path), where=f"line {no}")
         if cid not in cams:
             raise InputError(f"unknown camera id {cid}", source=str(img_path), where=f"line {no}")
+        if max(abs(tx), abs(ty), abs(tz)) > MAX_VALUE:
+            raise InputError(
+                f"translation beyond ±{MAX_VALUE:g}: not a position",
+                source=str(img_path),
+                where=f"line {no}",
+            )
         q = np.array([qw, qx, qy, qz])
         if not 0.5 < np.linalg.norm(q) < 2.0:
             raise InputError(
@@ -268,6 +319,7 @@ def read_colmap(
         )
         t = np.array([tx, ty, tz])
         image_ids.append(iid)
+        img_lines.append(no)
         names.append(name)
         cam_of.append(cam_index[cid])
         X0s.append(-Rcw.T @ t)
@@ -285,11 +337,20 @@ def read_colmap(
             u, v, p3 = _numbers(img_path, pts_line[0], f2[j : j + 3], "ffi", "a 2D point")
             if p3 == -1:
                 continue
+            cam = cams[cid]
+            if not (abs(u) <= 100 * cam.width and abs(v) <= 100 * cam.height):
+                raise InputError(
+                    f"2D point ({u:g}, {v:g}) px lies far outside the {cam.width} × "
+                    f"{cam.height} image",
+                    source=str(img_path),
+                    where=f"line {pts_line[0]}",
+                )
             if p3 not in p_index:
                 raise InputError(
                     f"unknown POINT3D_ID {p3}", source=str(img_path), where=f"line {pts_line[0]}"
                 )
             oi.append(img_idx)
+            obs_lines.append(pts_line[0])
             op.append(p_index[p3])
             uv.append((u, v))
         k += 2
@@ -318,6 +379,8 @@ def read_colmap(
         cx, cy = cam.principal_point()
         xy[sel, 0] = (und[:, 0] - cx) * pixel_size_mm
         xy[sel, 1] = -(und[:, 1] - cy) * pixel_size_mm
+    _refuse_nonfinite(np.array(X0s).reshape(-1, 3), img_lines, img_path, "projection centre")
+    _refuse_nonfinite(xy, obs_lines, img_path, "image point (mm)")
     R = np.array(Rs)
     ang = np.column_stack(opk_from_matrix(R, sequence))
     block = Block.from_arrays(
@@ -365,8 +428,9 @@ def write_colmap(
     Image coordinates are written distortion-free (the COLMAP camera is written as
     PINHOLE/SIMPLE_PINHOLE); object coordinates are written as they are.
     """
-    d = Path(directory)
-    d.mkdir(parents=True, exist_ok=True)
+    from .safeio import prepare_output_dir, write_atomic
+
+    d = prepare_output_dir(directory)
     p = float(pixel_size_mm or block.meta.get("pixel_size_mm", 0.01))
     cams = block.cameras
     lines = [
@@ -431,10 +495,7 @@ def write_colmap(
         )
     tmp["points3D.txt"] = "\n".join(lines) + "\n"
     for name, text in tmp.items():  # write each file atomically
-        target = d / name
-        part = target.with_suffix(".txt.part")
-        part.write_text(text, encoding="utf-8")
-        part.replace(target)
+        write_atomic(d / name, text)
 
 
 def _image_names(block: Block) -> list[str]:

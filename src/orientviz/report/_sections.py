@@ -27,7 +27,7 @@ import numpy as np
 
 from ..block import CHECK, CONTROL, TIE
 from ..io.problem import Problem
-from ._model import (
+from ._document import (
     R_LOW,
     Report,
     Section,
