@@ -119,7 +119,7 @@ def worker(npz: str, reps: int, precision: bool, solver: str, control: str = "fi
         reps=reps,
         sigma0_orientviz=res.sigma0,
         converged=res.converged,
-        reduced=res.extra["reduced_info"],
+        reduced=res.reduced_info,
         peak_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
     )
     return out

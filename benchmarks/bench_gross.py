@@ -136,12 +136,12 @@ def truth_info(clean, dirty):
     idx = dirty.info["gross"]["index"]
     err = dirty.info["gross"]["error_mm"]
     r = ref.redundancy_numbers.reshape(n, 2)[idx]
-    lam = noncentrality_2d(err, b.observations.sigma[idx], r, ref.extra["redundancy_xy"][idx])
+    lam = noncentrality_2d(err, b.observations.sigma[idx], r, ref.redundancy_xy[idx])
     rays = b.rays_per_point()[b.observations.point[idx]]
     return dict(
         idx=idx, size=np.hypot(*err.T) / SIGMA_MM, lam=lam, rays=rays,
         check=b.points.role[b.observations.point[idx]] == CHECK,
-        ref_rms=ref.extra["check_rms"], n=n,
+        ref_rms=ref.check_rms, n=n,
     )  # fmt: skip
 
 
@@ -185,11 +185,11 @@ def run_method(name, block, info):
             c = None
         if c is None:
             excluded = np.zeros(info["n"], bool)
-            chk2 = bundle_adjust(block).extra["check_rms"] ** 2
+            chk2 = bundle_adjust(block).check_rms ** 2
             nadj, elim, broke = 0, np.zeros(0, int), 1
         else:
             excluded = ~c.adjustment.extra["kept_rays"]
-            chk2 = c.adjustment.extra["check_rms"] ** 2
+            chk2 = c.adjustment.check_rms**2
             nadj, elim, broke = c.adjustments, c.eliminated, 0
     dt = time.perf_counter() - t
     good = np.ones(info["n"], bool)
@@ -292,7 +292,7 @@ def large(strips, images, reps):
     good[info["idx"]] = False
     excluded = ~c.adjustment.extra["kept_rays"]
     row = classify(info, excluded, c.eliminated, b)
-    ratio = c.adjustment.extra["check_rms"] / info["ref_rms"]
+    ratio = c.adjustment.check_rms / info["ref_rms"]
     print(f"\nPart 2: {strips} × {images} = {b.n_images} images, {b.n_observations} rays, "
           f"{info['idx'].size} errors, median of {reps}, load {os.getloadavg()[0]:.1f}")  # fmt: skip
     print(f"  quality (snooping 2-D, default): ≥6σ {row['n']}, detected {row['det'] / row['n']:.1%}, "

@@ -42,7 +42,7 @@ def main() -> None:
         n = dirty.block.n_observations
         ref = bundle_solver(clean.block)(np.ones(2 * n))
         r = np.nan_to_num(ref.redundancy_numbers.reshape(n, 2)[info["idx"]])
-        rxy = np.nan_to_num(ref.extra["redundancy_xy"][info["idx"]])
+        rxy = np.nan_to_num(ref.redundancy_xy[info["idx"]])
         _, dof = statistic_2d(np.zeros_like(r), r, rxy)
         for size, lam, d in zip(info["size"], info["lam"], dof):
             if size >= 6:

@@ -169,7 +169,7 @@ def extras(reps) -> None:
         return w
 
     xyz = lambda r: r.extra["xyz"]  # noqa: E731
-    pts = lambda r: getattr(r, "adjustment", r).extra["points"]  # noqa: E731
+    pts = lambda r: getattr(r, "adjustment", r).points  # noqa: E731
     w0 = row("models, 7 parameters", lambda: independent_models(b, models=ms), xyz)
     w1 = row("models + deformation (block)", lambda: independent_models(
         b, models=ms, deformation="classical", deformation_group="block"), xyz)  # fmt: skip

@@ -44,7 +44,7 @@ def test_absolute_statoscope_needs_one_round_and_conflicts_are_rejected(sim):
     r = adjust_with_auxiliary(sim.block, [st])
     assert r.rounds == 1 and r.converged and r.adjustment.converged
     # Z0 observed: the adjusted centres agree with the data within a few σ (0.5 m)
-    dz = r.adjustment.extra["exterior"][:, 2] - st.values
+    dz = r.adjustment.exterior[:, 2] - st.values
     assert np.abs(dz).max() < 2.0
     g = simulate_auxiliary(sim, "gnss", rng=np.random.default_rng(2))
     with pytest.raises(InputError, match="both observe Z0"):
@@ -60,13 +60,13 @@ def test_check_errors_of_bundle_and_model_results_and_of_coordinates(sim):
     # errors against the truth must agree with the bundle's own check statistics
     adj = bundle_adjust(sim.block)
     xy, z = check_errors(sim, adj)
-    c = adj.extra["check_rms"]  # per coordinate X, Y, Z against the given check values
+    c = adj.check_rms  # per coordinate X, Y, Z against the given check values
     assert xy == pytest.approx(np.sqrt((c[0] ** 2 + c[1] ** 2) / 2.0), rel=1e-12)
     assert z == pytest.approx(c[2], rel=1e-12)
     # the same from the coordinate array, and by hand from the truth
-    assert check_errors(sim, adj.extra["points"]) == (xy, z)
+    assert check_errors(sim, adj.points) == (xy, z)
     chk = sim.block.points.role == 2
-    d = adj.extra["points"][chk] - sim.truth.points.xyz[chk]
+    d = adj.points[chk] - sim.truth.points.xyz[chk]
     assert z == pytest.approx(np.sqrt(np.mean(d[:, 2] ** 2)))
     # an independent-model result (extra["xyz"])
     im = independent_models(sim.block)
@@ -76,6 +76,6 @@ def test_check_errors_of_bundle_and_model_results_and_of_coordinates(sim):
     # the truth itself has no error; garbage is refused with a message
     assert check_errors(sim, sim.truth.points.xyz) == (0.0, 0.0)
     with pytest.raises(InputError, match="adjusted points"):
-        check_errors(sim, dataclasses.replace(adj, extra={}))
+        check_errors(sim, dataclasses.replace(adj, points=None))
     with pytest.raises(InputError, match="all"):
         check_errors(sim, sim.truth.points.xyz[:-1])

@@ -115,10 +115,10 @@ def test_joint_bundle_equals_the_alternation_and_is_one_adjustment(case):
     alt = adjust_with_auxiliary(thin, [st, apr], tol=0.005)
     assert joint.converged and alt.converged and alt.rounds > 1
     for kind in ("statoscope", "apr"):
-        np.testing.assert_allclose(joint.extra["auxiliary"][kind], alt.offsets[kind], atol=0.03)
-    d = joint.extra["points"] - alt.adjustment.extra["points"]
+        np.testing.assert_allclose(joint.auxiliary.offsets[kind], alt.offsets[kind], atol=0.03)
+    d = joint.points - alt.adjustment.points
     assert np.nanmax(np.abs(d)) < 0.05
-    sig = joint.extra["auxiliary_sigma"]["statoscope"]
+    sig = joint.auxiliary.sigma["statoscope"]
     assert np.all(np.isfinite(sig)) and np.all(sig > 0)
 
 

@@ -237,12 +237,12 @@ def joint(case):
 
 def _bundle_x(res, dense):
     m = dense.block.n_images
-    ext = res.extra["exterior"]
-    xyz = res.extra["points"]
+    ext = res.exterior
+    xyz = res.points
     ap = res.x[res.blocks["additional"]]
     gd = {}
-    for kind, arr in res.extra["auxiliary"].items():
-        names = [n for n in res.extra["auxiliary_names"] if n.startswith(kind + ".")]
+    for kind, arr in res.auxiliary.offsets.items():
+        names = [n for n in res.auxiliary.names if n.startswith(kind + ".")]
         # names run strip-major, then offset/drift, then coordinate: arr (strips, dims, npar)
         flat = arr.transpose(0, 2, 1).reshape(-1)
         gd.update(zip(names, flat, strict=True))
@@ -283,14 +283,14 @@ def test_precision_with_auxiliary_data_equals_the_dense_inverse(joint):
     close(res.cofactor_blocks["points"][dense.var], pts)
     close(res.cofactor_blocks["additional"], Q[dense.o_ap : dense.o_g, dense.o_ap : dense.o_g])
     # offsets/drifts: the bundle's order mapped onto the dense one
-    perm = [res.extra["auxiliary_names"].index(n) for n in dense.gnames]
+    perm = [res.auxiliary.names.index(n) for n in dense.gnames]
     Qg = res.cofactor_blocks["auxiliary"][np.ix_(perm, perm)]
     close(Qg, Q[dense.o_g :, dense.o_g :])
     # redundancy numbers: image rays (used ones), parameter pseudo-observations, aux rows
     ref_r = 1.0 - np.einsum("ij,jk,ik->i", J, Q, J)
     n_img = 2 * dense.block.n_observations
     rn = res.redundancy_numbers
-    sl = res.extra["obs_slices"]
+    sl = res.obs_slices
     rimg = rn[:n_img].reshape(-1, 2)[dense.used].reshape(-1)
     n_used = 2 * dense.used.size
     np.testing.assert_allclose(rimg, ref_r[:n_used], rtol=0, atol=1e-9)
@@ -300,10 +300,10 @@ def test_precision_with_auxiliary_data_equals_the_dense_inverse(joint):
     assert r_aux.size == sum(a.index.size for a in aux) and np.all((r_aux > 0) & (r_aux < 1))
     # Σ r = n − u, over all observations of the joint adjustment
     assert np.nansum(rn) == pytest.approx(res.redundancy, abs=1e-6)
-    assert res.extra["redundancy_check"] == pytest.approx(res.redundancy, abs=1e-6)
+    assert res.redundancy_check == pytest.approx(res.redundancy, abs=1e-6)
     # residuals and normalised residuals of the aux rows: same length, v / (σ √r)
     v = res.residuals[sl["auxiliary"]]
-    np.testing.assert_allclose(v, res.extra["auxiliary_residuals"])
+    np.testing.assert_allclose(v, res.auxiliary.residuals)
     s = res.sigma_obs[sl["auxiliary"]]
     np.testing.assert_allclose(res.normalized_residuals[sl["auxiliary"]], v / (s * np.sqrt(r_aux)))
     assert res.residuals.size == res.sigma_obs.size == rn.size == res.normalized_residuals.size
@@ -319,7 +319,7 @@ def test_ray_gains_with_auxiliary_data_equal_the_dense_inverse(joint):
     QJ = np.stack([Q @ J[2 * k : 2 * k + 2].T for k in range(u.size)])  # (rays, unknowns, 2)
     ie = 6 * obs.image[u][:, None] + np.arange(6)
     ref_e = np.take_along_axis(QJ, ie[:, :, None], axis=1)
-    got_e = res.extra["ray_gains"]["exterior"][u]
+    got_e = res.ray_gains.exterior[u]
     for sl in (slice(0, 3), slice(3, 6)):  # m and rad
         ref = ref_e[:, sl]
         np.testing.assert_allclose(got_e[:, sl], ref, rtol=0, atol=1e-9 * np.abs(ref).max())
@@ -327,7 +327,7 @@ def test_ray_gains_with_auxiliary_data_equal_the_dense_inverse(joint):
     v = c >= 0
     ip = 6 * m + 3 * c[v][:, None] + np.arange(3)
     ref_p = np.take_along_axis(QJ[v], ip[:, :, None], axis=1)
-    got_p = res.extra["ray_gains"]["points"][u]
+    got_p = res.ray_gains.points[u]
     np.testing.assert_allclose(got_p[v], ref_p, rtol=0, atol=1e-9 * np.abs(ref_p).max())
     assert np.all(got_p[~v] == 0.0)  # fixed points do not move
 
@@ -347,7 +347,7 @@ def test_precision_without_parameters_equals_the_dense_inverse(case, kind):
         res.cofactor_blocks["exterior"], ext, rtol=1e-9, atol=1e-9 * np.abs(ext).max()
     )
     ref_r = 1.0 - np.einsum("ij,jk,ik->i", J, Q, J)
-    sl = res.extra["obs_slices"]
+    sl = res.obs_slices
     np.testing.assert_allclose(
         res.redundancy_numbers[sl["auxiliary"]], ref_r[2 * dense.used.size :], atol=1e-9
     )
@@ -357,11 +357,11 @@ def test_precision_without_parameters_equals_the_dense_inverse(case, kind):
 
 def _bundle_x_plain(res, dense):
     gd = {}
-    for kind, arr in res.extra["auxiliary"].items():
-        names = [n for n in res.extra["auxiliary_names"] if n.startswith(kind + ".")]
+    for kind, arr in res.auxiliary.offsets.items():
+        names = [n for n in res.auxiliary.names if n.startswith(kind + ".")]
         gd.update(zip(names, arr.transpose(0, 2, 1).reshape(-1), strict=True))
     return dense.from_bundle(
-        res.extra["exterior"], res.extra["points"], np.zeros(0),
+        res.exterior, res.points, np.zeros(0),
         np.asarray([gd[n] for n in dense.gnames]), dense.gnames,
     )  # fmt: skip
 
@@ -375,8 +375,8 @@ def test_joint_with_parameters_equals_the_alternation(case):
     alt = adjust_with_auxiliary(block, aux, tol=0.005, **kw)
     assert joint.converged and alt.converged and alt.rounds > 1
     for kind in ("statoscope", "apr"):
-        np.testing.assert_allclose(joint.extra["auxiliary"][kind], alt.offsets[kind], atol=0.03)
-    d = joint.extra["points"] - alt.adjustment.extra["points"]
+        np.testing.assert_allclose(joint.auxiliary.offsets[kind], alt.offsets[kind], atol=0.03)
+    d = joint.points - alt.adjustment.points
     assert np.nanmax(np.abs(d)) < 0.05
     a = joint.blocks["additional"]
     da = joint.x[a] - alt.adjustment.x[a]

@@ -92,7 +92,7 @@ def test_noisy_block_statistics_and_check_points():
     assert abs(np.sqrt(np.mean(w[used] ** 2)) - 1.0) < 0.06
     # check points: RMS differences against the truth are of the size of the predicted σ
     # of the (equally intersected) tie points; 24 points → ±15 % sampling error per axis
-    rms = res.extra["check_rms"]
+    rms = res.check_rms
     tie = sim.block.points.role == 0
     sig = np.sqrt(
         np.mean(res.std().reshape(-1)[res.blocks["points"]].reshape(-1, 3)[tie] ** 2, axis=0)
@@ -100,7 +100,7 @@ def test_noisy_block_statistics_and_check_points():
     ratio = rms / sig
     assert np.all((ratio > 0.5) & (ratio < 2.0)), ratio
     # check points did not enter the adjustment
-    assert not res.extra["used_obs"][sim.block.points.role[sim.block.observations.point] == 2].any()
+    assert not res.used_obs[sim.block.points.role[sim.block.observations.point] == 2].any()
 
 
 def test_history_replays_the_iterations():
@@ -130,7 +130,7 @@ def test_weighted_control_differs_from_fixed_and_is_consistent():
     # a weighted control point adds 3 unknowns and 3 pseudo-observations: same redundancy
     assert weighted.redundancy == fixed.redundancy
     # pseudo-observation residuals are reported after the image residuals
-    sl = weighted.extra["obs_slices"]["control"]
+    sl = weighted.obs_slices["control"]
     assert sl.stop - sl.start == 3 * int(ctrl.sum())
 
 
@@ -248,7 +248,7 @@ def test_observed_projection_centres_give_the_datum():
     assert res.converged
     # r ≈ 1500: σ̂0 within ±4·√(1/(2r)) ≈ ±7 % of 1
     assert abs(res.sigma0 - 1.0) < 0.08
-    sl = res.extra["obs_slices"]["X0_obs"]
+    sl = res.obs_slices["X0_obs"]
     assert sl.stop - sl.start == 3 * b.n_images
     # the centres are pulled to the truth to about their σ, not beyond
     ext = res["exterior"].reshape(-1, 6)

@@ -20,5 +20,5 @@ def test_diverged_start_values_give_a_result_without_precision(tmp_path):
         warnings.simplefilter("ignore", RuntimeWarning)
         adj = bundle_adjust(block)
     assert not adj.converged
-    assert "not converged" in adj.extra["precision_error"]
+    assert "not converged" in adj.precision_error
     assert adj.sigma0 > 10  # the misplaced image is still there

@@ -58,7 +58,7 @@ def test_the_count_names_a_real_null_space(monkeypatch, seed):
     assert adj.converged
     sd = np.sqrt(np.einsum("mii->mi", adj.cofactor_blocks["exterior"])[:, :3]) * adj.sigma0
     i = list(block.images.ids).index(flagged[0])
-    extent = np.ptp(adj.extra["exterior"][:, :3], axis=0).max()
+    extent = np.ptp(adj.exterior[:, :3], axis=0).max()
     assert sd[i].max() > extent
     assert np.delete(sd, i, axis=0).max() < 0.01 * extent
 

@@ -212,7 +212,7 @@ def test_precision_with_strip_parameters_equals_dense_inverse(path, monkeypatch)
     q0 = 6 * m + 3 * free.size
     _assert_cofactors_close(res.cofactor_blocks["additional"], Q[q0:, q0:], tol)
     # image-pair blocks of Q_cc (used by the 2-D tests of check rays)
-    keys, blocks = res.extra["exterior_pairs"]
+    keys, blocks = res.exterior_pairs.keys, res.exterior_pairs.blocks
     r6 = np.arange(6)
     for key, blk in zip(keys, blocks):
         i, j = divmod(int(key), m)
@@ -222,6 +222,6 @@ def test_precision_with_strip_parameters_equals_dense_inverse(path, monkeypatch)
     rn = res.redundancy_numbers[: 2 * block.n_observations].reshape(-1, 2)
     np.testing.assert_allclose(rn[used].reshape(-1), r_ref, rtol=0, atol=tol)
     # pseudo-observations of the parameters: r = 1 − p·Q_aa,ii
-    r_ap = res.redundancy_numbers[res.extra["obs_slices"]["additional"]]
+    r_ap = res.redundancy_numbers[res.obs_slices["additional"]]
     np.testing.assert_allclose(r_ap, 1.0 - np.diag(Q[q0:, q0:]) / 10.0**2, rtol=0, atol=tol)
     assert np.isclose(np.nansum(res.redundancy_numbers), res.redundancy, rtol=0, atol=1e-8)

@@ -7,7 +7,7 @@ from scipy.special import chdtr
 from orientviz.adjust.gross import noncentrality
 from orientviz.adjust.gross2d import critical_values_2d, noncentrality_2d, statistic_2d
 from orientviz.block import CHECK, TIE
-from orientviz.bundle import bundle_solver, clean_block, ray_labels
+from orientviz.bundle import ExteriorPairs, bundle_solver, clean_block, ray_labels
 from orientviz.bundle._cleaning import _check_ray_tests
 from orientviz.simulate import simulate_block
 
@@ -30,9 +30,7 @@ def _lambda(sim):
     idx = sim.info["gross"]["index"]
     r = ref.redundancy_numbers.reshape(n, 2)[idx]
     s = sim.block.observations.sigma[idx]
-    return idx, noncentrality_2d(
-        sim.info["gross"]["error_mm"], s, r, ref.extra["redundancy_xy"][idx]
-    )
+    return idx, noncentrality_2d(sim.info["gross"]["error_mm"], s, r, ref.redundancy_xy[idx])
 
 
 @pytest.mark.parametrize("fast", [True, False])
@@ -71,7 +69,7 @@ def test_error_free_block_false_alarms_within_binomial_bound(clean):
     adj = bundle_solver(b)(np.ones(2 * n))
     r = adj.redundancy_numbers.reshape(n, 2)
     z = np.nan_to_num(adj.normalized_residuals).reshape(n, 2) * np.sqrt(r)
-    T, dof = statistic_2d(z, r, adj.extra["redundancy_xy"])
+    T, dof = statistic_2d(z, r, adj.redundancy_xy)
     # calibration: T is χ² with 1 or 2 dof (means 1 and 2; sd of the mean ≈ 0.05-0.1)
     assert T[dof == 2].mean() == pytest.approx(2.0, abs=0.2)
     assert T[dof == 1].mean() == pytest.approx(1.0, abs=0.2)
@@ -99,17 +97,19 @@ def test_check_point_rays_are_tested_in_their_intersection(sim):
     assert ((r[chk] >= 0) & (r[chk] <= 1)).all()
     # with error-free orientations (Q_ee = 0) the test is that of a forward intersection
     # of k rays: redundancy numbers sum to 2k − 3 per check point
-    keys, blocks = adj.extra["exterior_pairs"]
+    keys, blocks = adj.exterior_pairs.keys, adj.exterior_pairs.blocks
     rn, wn, rxy = np.zeros((n, 2)), np.full((n, 2), np.nan), np.zeros(n)
     v = adj.residuals.reshape(n, 2)
-    _check_ray_tests(b, adj, np.arange(n), v, o.sigma, rn, wn, rxy, chk, (keys, 0 * blocks))
+    _check_ray_tests(
+        b, adj, np.arange(n), v, o.sigma, rn, wn, rxy, chk, ExteriorPairs(keys, 0 * blocks)
+    )
     for p in np.unique(o.point[chk]):
         rays = o.point == p
         assert rn[rays].sum() == pytest.approx(2 * rays.sum() - 3, abs=1e-6)
     # the orientations' errors enlarge the residuals' variance: smaller statistics
     T0, _ = statistic_2d((np.nan_to_num(wn) * np.sqrt(rn))[chk], rn[chk], rxy[chk])
     z = np.nan_to_num(adj.normalized_residuals).reshape(n, 2) * np.sqrt(r)
-    T1, _ = statistic_2d(z[chk], r[chk], adj.extra["redundancy_xy"][chk])
+    T1, _ = statistic_2d(z[chk], r[chk], adj.redundancy_xy[chk])
     assert T1.sum() < T0.sum()
     # local redundancy (orientations held fixed) bounds the exact one from above
     loc = solve(np.ones(2 * n), "local")

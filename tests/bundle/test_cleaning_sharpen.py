@@ -12,7 +12,7 @@ from orientviz.simulate import simulate_block
 def _T(adj):
     r = np.nan_to_num(adj.redundancy_numbers).reshape(-1, 2)
     z = np.nan_to_num(adj.normalized_residuals).reshape(-1, 2) * np.sqrt(r)
-    return statistic_2d(z, r, np.nan_to_num(adj.extra["redundancy_xy"]))[0]
+    return statistic_2d(z, r, np.nan_to_num(adj.redundancy_xy))[0]
 
 
 def test_sharpened_screening_is_bounded_by_the_exact_test():

@@ -81,12 +81,12 @@ def test_weak_direction_mdb_has_noncentrality_delta0_squared(setup):
     a1 = _adjust_with_bias(block, kw, j, EPS * rel.bias_weak[j])
     z = (a1.residuals[: 2 * n] / a1.sigma_obs[: 2 * n]).reshape(n, 2)
     r = adj.redundancy_numbers[: 2 * n].reshape(n, 2)
-    T, dof = statistic_2d(z[[j]], r[[j]], adj.extra["redundancy_xy"][[j]])
+    T, dof = statistic_2d(z[[j]], r[[j]], adj.redundancy_xy[[j]])
     assert dof[0] == 2
     np.testing.assert_allclose(T[0] / EPS**2, rel.delta0**2, rtol=1e-6)
     # the formula of gross2d gives the same, and the MDB follows δ0 σ / √r_min
     sig = block.observations.sigma[[j]]
-    lam = noncentrality_2d(rel.bias_weak[[j]], sig, r[[j]], adj.extra["redundancy_xy"][[j]])
+    lam = noncentrality_2d(rel.bias_weak[[j]], sig, r[[j]], adj.redundancy_xy[[j]])
     np.testing.assert_allclose(lam[0], noncentrality() ** 2, rtol=1e-10)
     np.testing.assert_allclose(rel.mdb_weak[j], rel.delta0 * sig[0, 0] / np.sqrt(rel.r_min[j]))
     assert rel.mdb_strong[j] < rel.mdb_weak[j]
@@ -128,7 +128,7 @@ def test_largest_shift_on_the_mdb_ellipse(setup):
     Kp, Kc = Kp @ E.T, Kc @ E.T  # responses to the unit biases of x and y (E orthonormal)
     # biases e(θ) with eᵀ R e = δ0², R from the adjustment
     r = adj.redundancy_numbers[: 2 * n].reshape(n, 2)[j]
-    R = np.array([[r[0], adj.extra["redundancy_xy"][j]], [adj.extra["redundancy_xy"][j], r[1]]])
+    R = np.array([[r[0], adj.redundancy_xy[j]], [adj.redundancy_xy[j], r[1]]])
     t = np.linspace(0.0, np.pi, 7200, endpoint=False)
     d = np.stack([np.cos(t), np.sin(t)])
     d = d * rel.delta0 / np.sqrt(np.einsum("it,ij,jt->t", d, R, d))
@@ -149,7 +149,7 @@ def test_full_size_mdb_is_found_at_delta0_to_second_order():
     a1 = _adjust_with_bias(block, kw, j, rel.bias_weak[j])
     z = (a1.residuals[: 2 * n] / a1.sigma_obs[: 2 * n]).reshape(n, 2)
     r = adj.redundancy_numbers[: 2 * n].reshape(n, 2)
-    T, _ = statistic_2d(z[[j]], r[[j]], adj.extra["redundancy_xy"][[j]])
+    T, _ = statistic_2d(z[[j]], r[[j]], adj.redundancy_xy[[j]])
     assert T[0] == pytest.approx(rel.delta0**2, rel=2e-3)
     dp, _ = _shifts(adj, a1, block, j)
     np.testing.assert_allclose(dp, rel.point_shift[j], atol=2e-3 * np.linalg.norm(dp))

@@ -112,7 +112,7 @@ def test_check_heights_draw_each_result_at_the_true_x():
     np.testing.assert_allclose(lines[0].get_xdata(), truth[chk, 0] / 1000.0)  # km
     np.testing.assert_allclose(lines[0].get_ydata(), 0.3 * np.sin(truth[chk, 0] / 1000.0))
     np.testing.assert_allclose(lines[1].get_xdata(), truth[chk[1:], 0] / 1000.0)
-    d_bundle = adj.extra["points"][chk, 2] - truth[chk, 2]
+    d_bundle = adj.points[chk, 2] - truth[chk, 2]
     np.testing.assert_allclose(lines[2].get_ydata(), d_bundle)
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     mu = np.sqrt(np.mean((0.3 * np.sin(truth[chk, 0] / 1000.0)) ** 2))

@@ -126,7 +126,7 @@ def test_check_point_rms_equals_recomputed_value(strip):
     assert printed == pytest.approx(rms, abs=0.051)  # printed with 0.1 mm
     # and the bundle's own check-point computation agrees
     assert np.asarray(report.section("check").values["rms_m"]) * 1000 == pytest.approx(
-        solution.adjustment.extra["check_rms"] * 1000, abs=1e-6
+        solution.adjustment.check_rms * 1000, abs=1e-6
     )
 
 

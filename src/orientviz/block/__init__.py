@@ -9,7 +9,9 @@ together. This package holds its data model and what is computed from the data a
 * :func:`block_layout` → :class:`BlockLayout` (strips, stereo models = consecutive
   image pairs of a strip, footprints) and :func:`control_positions`;
 * :func:`approximate_values` (approximations from scratch);
-* :class:`Auxiliary` (GNSS / statoscope / APR observations with strip offsets).
+* :class:`Auxiliary` (GNSS / statoscope / APR observations with strip offsets);
+* what a block adjustment returns, whatever the method: :class:`BlockAdjustment`
+  (exterior (m, 6), points (p, 3), :class:`CheckPoints`, :class:`AuxiliaryEstimates`).
 
 The adjustments live elsewhere: :mod:`orientviz.bundle`, :mod:`orientviz.stereo_models`,
 :mod:`orientviz.polynomial`; simulated blocks come from :mod:`orientviz.simulate`.
@@ -18,6 +20,7 @@ The adjustments live elsewhere: :mod:`orientviz.bundle`, :mod:`orientviz.stereo_
 from ._approximate import approximate_values, intersect_rays
 from ._auxiliary import KINDS, Auxiliary, strip_time
 from ._layout import CONTROL_LAYOUTS, BlockLayout, block_layout, control_positions
+from ._result import AuxiliaryEstimates, BlockAdjustment, CheckPoints
 from ._tables import (
     CHECK,
     CONTROL,
@@ -42,6 +45,9 @@ __all__ = [
     "ROLES",
     "TIE",
     "Auxiliary",
+    "AuxiliaryEstimates",
+    "BlockAdjustment",
+    "CheckPoints",
     "Block",
     "BlockLayout",
     "Cameras",

@@ -51,12 +51,16 @@ from ._precision import banded_selected_inverse
 from ._problem import BundleProblem
 from ._reduced import SOLVERS, ReducedStructure, factor_reduced, geometric_orderings, inv3
 from ._reliability import RayReliability, ray_reliability
+from ._result import BundleResult, ExteriorPairs, RayGains
 from ._selfcal import SelfCalibration, self_calibrate
 from ._state import BundleState
 
 __all__ = [
     # the adjustment and its companions
     "bundle_adjust",
+    "BundleResult",
+    "RayGains",
+    "ExteriorPairs",
     "BundleProblem",
     "BundleState",
     "NormalEquations",

@@ -45,11 +45,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..adjust.loop import Damping, Evaluation, Step, StopRule, iterate
-from ..adjust.result import Adjustment, Iteration
+from ..adjust.result import Iteration
 from ..block import Block
 from ..errors import NotDeterminableError
 from ._checks import check_connected, check_datum, check_determinable, point_setup
 from ._problem import BundleProblem
+from ._result import BundleResult
 from ._state import BundleState
 
 F64 = NDArray[np.float64]
@@ -79,7 +80,7 @@ def bundle_adjust(
     solver: str = "banded",
     history_x: bool | None = None,
     auxiliary: list | None = None,
-) -> Adjustment:
+) -> BundleResult:
     """Adjust a block by the bundle method (see module docstring for the model).
 
     Parameters
@@ -119,22 +120,25 @@ def bundle_adjust(
         GNSS / statoscope / APR data as joint observations with offset/drift unknowns
         per strip (:mod:`orientviz.bundle._auxiliary`), also together with
         ``additional`` (both border the reduced system:
-        :mod:`orientviz.bundle._auxiliary_border`). Estimates in ``extra["auxiliary"]``,
-        ``"auxiliary_sigma"`` (m), ``cofactor_blocks["auxiliary"]``; the rows are
-        appended to the observations (``extra["obs_slices"]["auxiliary"]``, m; also
-        ``extra["auxiliary_residuals"]``) and with ``precision`` get redundancy numbers
+        :mod:`orientviz.bundle._auxiliary_border`). Estimates in ``result.auxiliary``
+        (:class:`~orientviz.block.AuxiliaryEstimates`: offsets, sigma (m), residuals),
+        ``cofactor_blocks["auxiliary"]``; the rows are appended to the observations
+        (``obs_slices["auxiliary"]``, m) and with ``precision`` get redundancy numbers
         and normalised residuals; the cofactor blocks of orientations and points then
         include the uncertainty of the offsets/drifts. The datum check is left to the
         normal equations.
 
     Returns
     -------
-    Adjustment
-        Blocks ``"exterior"`` ((m, 6): X0, Y0, Z0 m, ω, φ, κ rad), ``"points"`` ((p, 3) m;
-        fixed control at its given value, check points intersected) and
-        ``"additional"``; residuals v = f − l: the 2n image coordinates (x, y per
-        observation, mm) first, then the pseudo-observations. ``extra`` holds
-        ``check_rms`` (m, X/Y/Z), ``check_points``, ``used_obs``, ``solver``.
+    BundleResult
+        Typed fields ``exterior`` ((m, 6): X0, Y0, Z0 m, ω, φ, κ rad), ``points`` ((p, 3)
+        m; fixed control at its given value, check points intersected), ``additional``
+        (q,), ``check_points`` (:class:`~orientviz.block.CheckPoints`, ``check_rms`` m
+        X/Y/Z), ``auxiliary``, ``used_obs``, ``solver``, ``reduced_info``, and with the
+        precision ``ray_gains``, ``exterior_pairs``, ``redundancy_xy``; parameter
+        blocks ``"exterior"``, ``"points"``, ``"additional"`` of ``x``; residuals
+        v = f − l: the 2n image coordinates (x, y per observation, mm) first, then the
+        pseudo-observations (``obs_slices`` names the ranges).
     """
     setup = point_setup(block, control)
     check_connected(block, setup)

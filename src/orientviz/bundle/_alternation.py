@@ -169,7 +169,7 @@ def adjust_with_auxiliary(
         adj = bundle_adjust(_apply(block, aux, corr), **opts)
         if converged:
             break
-        ext, pts = adj.extra["exterior"], adj.extra["points"]
+        ext, pts = adj.exterior, adj.points
         g = []
         for a in est:
             if a.kind == "gnss":

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from ..block import AuxiliaryEstimates
 from ..errors import InputError
 from . import _auxiliary_border as _ab
 from ._normal import AuxBorder, NormalEquations
@@ -321,13 +322,14 @@ class BundleAuxiliary:
         hb[:, prob.q :] = _ab.point_border(ne)
 
     def precision(self, res, Qcc: F64, Qpp: F64, Qcb: F64, Qbp: F64, Qbb: F64) -> None:
-        """Redundancy numbers of the rows (``extra["auxiliary_redundancy"]``, appended to
-        the result's by :func:`finish_bundle`) and ``cofactor_blocks["auxiliary"]``.
+        """Redundancy numbers of the rows (``res.auxiliary.redundancy``, appended to the
+        result's by :func:`finish_bundle`) and ``cofactor_blocks["auxiliary"]``.
 
         Cofactor blocks as in :func:`orientviz.bundle._auxiliary_border.auxiliary_redundancy`.
         """
         na = self.n_global
-        res.extra["auxiliary_redundancy"] = _ab.auxiliary_redundancy(self, Qcc, Qpp, Qcb, Qbp, Qbb)
+        r = _ab.auxiliary_redundancy(self, Qcc, Qpp, Qcb, Qbp, Qbb)
+        res.auxiliary = AuxiliaryEstimates({}, {}, np.zeros(0), [], redundancy=r)
         res.cofactor_blocks["auxiliary"] = Qbb[Qbb.shape[0] - na :, Qbb.shape[0] - na :]
 
 
@@ -335,7 +337,7 @@ def finish_bundle(res, prob, st, rw, Je, Jp) -> None:
     """Add the auxiliary estimates, their σ and residuals to a bundle result.
 
     The auxiliary rows are appended to the result's observations (after the
-    pseudo-observations; ``extra["obs_slices"]["auxiliary"]``, m): ``residuals``,
+    pseudo-observations; ``obs_slices["auxiliary"]``, m): ``residuals``,
     ``sigma_obs`` and — when the precision was computed — ``redundancy_numbers`` and
     ``normalized_residuals``. ``cofactor_blocks["auxiliary"]`` is the cofactor matrix of
     the offsets/drifts (m², marginal: with the orientations, points and additional
@@ -351,21 +353,24 @@ def finish_bundle(res, prob, st, rw, Je, Jp) -> None:
         res.cofactor_blocks["auxiliary"] = Qg
     s0 = res.sigma0 if np.isfinite(res.sigma0) else 1.0
     v = aux.residuals(st.X0, st.xyz, st.g)
-    res.extra["auxiliary"] = aux.rows.split_globals(st.g)
-    res.extra["auxiliary_sigma"] = aux.rows.split_globals(s0 * np.sqrt(np.diag(Qg)))
-    res.extra["auxiliary_residuals"] = v
-    res.extra["auxiliary_labels"] = aux.rows.labels
-    res.extra["auxiliary_names"] = list(aux.rows.names)
+    r = res.auxiliary.redundancy if res.auxiliary is not None else None
+    res.auxiliary = AuxiliaryEstimates(
+        aux.rows.split_globals(st.g),
+        aux.rows.split_globals(s0 * np.sqrt(np.diag(Qg))),
+        v,
+        aux.rows.labels,
+        list(aux.rows.names),
+        r,
+    )
     # the rows as observations of the result, after the pseudo-observations
     n0 = res.residuals.size
     sig = 1.0 / np.sqrt(aux.rows.w)
-    res.extra.setdefault("obs_slices", {})["auxiliary"] = slice(n0, n0 + v.size)
+    res.obs_slices["auxiliary"] = slice(n0, n0 + v.size)
     res.residuals = np.concatenate([res.residuals, v])
     res.sigma_obs = np.concatenate([res.sigma_obs, sig])
-    r = res.extra.pop("auxiliary_redundancy", None)
     if r is not None and res.redundancy_numbers is not None:
         res.redundancy_numbers = np.concatenate([res.redundancy_numbers, r])
         with np.errstate(divide="ignore", invalid="ignore"):
             w = np.where(r > 1e-10, v / (sig * np.sqrt(r)), np.nan)
         res.normalized_residuals = np.concatenate([res.normalized_residuals, w])
-        res.extra["redundancy_check"] = float(np.nansum(res.redundancy_numbers))
+        res.redundancy_check = float(np.nansum(res.redundancy_numbers))

@@ -28,7 +28,7 @@ The bundle (:meth:`orientviz.bundle.BundleProblem.solve`) forms the precondition
 in the first iteration that solves for the parameters, uses the conjugate gradients from
 then on, forms Fs anew when they need more than :data:`PCG_STALE_STEPS` steps, and falls
 back to the exact :func:`solve_bordered` (which also names a singular border) when they
-fail. ``extra["reduced_info"]["ap_border"]`` of the result logs what each solve did.
+fail. ``BundleResult.reduced_info["ap_border"]`` of the result logs what each solve did.
 
 Measured with ``python benchmarks/bench_selfcal.py`` (see ``benchmarks/README.md``).
 """

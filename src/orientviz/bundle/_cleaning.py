@@ -172,14 +172,14 @@ def _check_ray_tests(sub, adj, idx, v, sigma, rn, wn, rxy, rays, pairs) -> None:
     C⁻¹, one linear step from the bundle's point) the 2-D test of ray a uses
     ``g = (C⁻¹v)_a`` and ``M = (C⁻¹Q_vvC⁻¹)_aa``, ``T = gᵀM⁻¹g``; they are stored scaled
     by the ray's σ (z = σ·g, R = σMσ), so that with C = diag(σ²) they are the usual
-    residuals and redundancy blocks. ``pairs`` = (sorted keys i·m + k, blocks (6, 6))
+    residuals and redundancy blocks. ``pairs`` (:class:`ExteriorPairs`: sorted keys i·m + k, blocks (6, 6))
     of Q_ee for image pairs i ≤ k; pairs not listed count as uncorrelated.
     """
     o = sub.observations
     sel = np.flatnonzero(rays)
     if sel.size == 0:
         return
-    keys, blocks = pairs
+    keys, blocks = pairs.keys, pairs.blocks
     m = sub.n_images
     Je, Jp = _ray_jacobians(sub, adj, sel)
     for p in np.unique(o.point[sel]):
@@ -291,20 +291,20 @@ def bundle_solver(
             adj = replace(adj, converged=True, reason="one step from the previous solution")
         ns = sub.n_observations
         xyz = state["block"].points.xyz.copy()
-        xyz[pts] = adj.extra["points"]
+        xyz[pts] = adj.points
         if warm_start and adj.converged:
             state["warm"] = True
             b = state["block"]
-            b.images.X0[:] = adj.extra["exterior"][:, :3]
-            b.images.angles[:] = adj.extra["exterior"][:, 3:]
-            b.points.xyz[pts] = adj.extra["points"]
+            b.images.X0[:] = adj.exterior[:, :3]
+            b.images.angles[:] = adj.exterior[:, 3:]
+            b.points.xyz[pts] = adj.points
         idx = np.flatnonzero(kept)
         v = np.full((n, 2), np.nan)
         v[idx] = adj.residuals[: 2 * ns].reshape(ns, 2)
         gone = np.flatnonzero(~kept)
         if gone.size:
             o = block.observations
-            ext = adj.extra["exterior"]
+            ext = adj.exterior
             cam = block.images.camera[o.image[gone]]
             R = matrix_from_opk(*ext[o.image[gone], 3:].T, block.sequence)
             f = project(
@@ -327,8 +327,10 @@ def bundle_solver(
         elif adj.redundancy_numbers is not None:
             rn[idx] = np.nan_to_num(adj.redundancy_numbers[: 2 * ns].reshape(ns, 2))
             wn[idx] = adj.normalized_residuals[: 2 * ns].reshape(ns, 2)
-            rxy[idx] = np.nan_to_num(adj.extra.get("redundancy_xy", np.zeros(ns)))
-            state["pairs"] = adj.extra.get("exterior_pairs")
+            rxy[idx] = np.nan_to_num(
+                adj.redundancy_xy if adj.redundancy_xy is not None else np.zeros(ns)
+            )
+            state["pairs"] = adj.exterior_pairs
             rays = idx[~chk]
             state["exact"] = (rays, rn[rays].copy(), rxy[rays].copy(), w.copy())
         if check_rays and state.get("pairs") is not None:
@@ -342,13 +344,13 @@ def bundle_solver(
             sigma_obs=sig0.copy(),
             redundancy_numbers=rn.reshape(-1),
             normalized_residuals=wn.reshape(-1),
+            redundancy_xy=rxy,
             extra={
                 **adj.extra,
                 "bundle": adj,
                 "kept_rays": kept,
                 "kept_points": pts,
                 "xyz": xyz,
-                "redundancy_xy": rxy,
                 "redundancy": mode,
             },  # fmt: skip
         )
@@ -469,11 +471,11 @@ def cleaned_block(block: Block, cleaning: Cleaning) -> Block:
 def _ray_jacobians(sub: Block, adj: Adjustment, sel: NDArray[np.int64]) -> tuple:
     """Collinearity derivatives (by orientation, by point) of rays ``sel`` at the adjusted state."""
     o = sub.observations
-    ext = adj.extra["exterior"]
+    ext = adj.exterior
     cam = sub.images.camera
     c, x0, y0 = (getattr(sub.cameras, k)[cam] for k in ("c", "x0", "y0"))
     _, Je, Jp = collinearity_block(
-        ext[:, :3], ext[:, 3:], c, x0, y0, o.image[sel], adj.extra["points"][o.point[sel]],
+        ext[:, :3], ext[:, 3:], c, x0, y0, o.image[sel], adj.points[o.point[sel]],
         sub.sequence,
     )  # fmt: skip
     return Je, Jp

@@ -41,6 +41,7 @@ import scipy.linalg
 from numpy.typing import NDArray
 
 from ._reduced import ReducedStructure, dense_matrix, factor_reduced
+from ._result import ExteriorPairs, RayGains
 
 F64 = NDArray[np.float64]
 #: Up to this many reduced unknowns Z = S⁻¹ is computed densely.
@@ -197,8 +198,8 @@ def _block_lookup(st: ReducedStructure, ca, cb_):
 def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     """Fill ``res`` with cofactor blocks, redundancy numbers and normalised residuals.
 
-    Also ``extra["redundancy_xy"]`` (n,) and ``extra["ray_gains"]`` = ``{"exterior":
-    (n, 6, 2), "points": (n, 3, 2)}`` per image observation (NaN for unused rays; zero
+    Also ``redundancy_xy`` (n,) and ``ray_gains`` = ``RayGains(exterior (n, 6, 2),
+    points (n, 3, 2))`` per image observation (NaN for unused rays; zero
     point gains for fixed points): the change of the ray's image orientation (m, rad) and
     point (m) per unit change of its x, y in units of their σ.
 
@@ -356,7 +357,7 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     Qp_all[prob.block.points.role == 2] = np.nan
     res.cofactor_blocks["exterior"] = Qcc_diag
     # Q_cc of every image pair (i ≤ k) that shares a point: key i·m + k (sorted), blocks
-    res.extra["exterior_pairs"] = (S.block_i * m + S.block_k, Zblk)
+    res.exterior_pairs = ExteriorPairs(S.block_i * m + S.block_k, Zblk)
     res.cofactor_blocks["points"] = Qp_all
     if q:
         res.cofactor_blocks["additional"] = Faa[:q, :q]
@@ -364,14 +365,14 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
         if not nb:
             Qca, Qap, Faa = np.zeros((m, 6, 0)), np.zeros((S.n_pt, 0, 3)), np.zeros((0, 0))
         aux.precision(res, Qcc_diag, Qpp, Qca, Qap, Faa)
-    res.extra["redundancy_check"] = float(np.nansum(rall))
+    res.redundancy_check = float(np.nansum(rall))
     # off-diagonal (x, y) element of P½ Q_vv P½ per image observation: with the diagonal
     # (the redundancy numbers) the 2×2 block of a ray for 2-D outlier tests
     rxy = np.full(n, np.nan)
     rxy[prob.obs.index] = r_xy
-    res.extra["redundancy_xy"] = rxy
+    res.redundancy_xy = rxy
     gain_e = np.full((n, 6, 2), np.nan)
     gain_e[prob.obs.index] = Ke
     gain_p = np.full((n, 3, 2), np.nan)
     gain_p[prob.obs.index] = Kp
-    res.extra["ray_gains"] = {"exterior": gain_e, "points": gain_p}
+    res.ray_gains = RayGains(gain_e, gain_p)

@@ -2,7 +2,7 @@
 
 A gross error of an image point is a 2-vector ∇ (mm). With e = P½ ∇ (the error in units
 of the a-priori σ) and R the 2×2 block of P½ Q_vv P½ of the ray (diagonal: the redundancy
-numbers r_x, r_y; off-diagonal ``extra["redundancy_xy"]``), the 2-D test of
+numbers r_x, r_y; off-diagonal ``redundancy_xy``), the 2-D test of
 :mod:`orientviz.adjust.gross2d` sees the non-centrality λ = eᵀ R e. Over the directions of
 the image plane λ is smallest along the eigenvector of the smaller eigenvalue r_min of R
 and largest along that of r_max, so the *minimal detectable bias* (Baarda, λ = δ0²) is
@@ -16,7 +16,7 @@ overlap of a strip — controls that direction too.
 
 External reliability: an undetected bias moves the estimates by Δx̂ = Q Jᵀ P ∇. The
 bundle keeps, per ray, the gains K = Q_(·, ray) Jᵀ P½ on the ray's own image orientation
-(6×2) and point (3×2) (``extra["ray_gains"]``, :mod:`orientviz.bundle._precision`), so
+(6×2) and point (3×2) (``BundleResult.ray_gains``, :mod:`orientviz.bundle._precision`), so
 Δpoint = K_p e and Δorientation = K_e e. Reported here: the shifts caused by the MDB
 along the weakest direction, the largest shift caused by any bias on the MDB ellipse
 eᵀ R e = δ0², and Baarda's dimensionless δ̄0 = δ0 √((1 − r_min) / r_min), the largest
@@ -183,8 +183,7 @@ def ray_reliability(
     ----------
     adj : Adjustment
         Result of :func:`orientviz.bundle.bundle_adjust` with ``precision=True``
-        (needs the redundancy numbers, ``extra["redundancy_xy"]`` and
-        ``extra["ray_gains"]``).
+        (needs the redundancy numbers, ``redundancy_xy`` and ``ray_gains``).
     block : Block
         The adjusted block (its observations give image, point and σ of each ray).
     alpha0, beta0 : float
@@ -202,21 +201,21 @@ def ray_reliability(
     InputError
         If the adjustment lacks the precision results or does not belong to ``block``.
     """
-    gains = adj.extra.get("ray_gains")
-    if adj.redundancy_numbers is None or gains is None or "redundancy_xy" not in adj.extra:
+    gains = getattr(adj, "ray_gains", None)
+    if adj.redundancy_numbers is None or gains is None or adj.redundancy_xy is None:
         raise InputError(
             "ray_reliability needs a bundle_adjust result with precision=True "
-            "(redundancy numbers, extra['redundancy_xy'] and extra['ray_gains'])"
+            "(redundancy numbers, redundancy_xy and ray_gains)"
         )
     obs = block.observations
     n = block.n_observations
-    if gains["points"].shape[0] != n:
+    if gains.points.shape[0] != n:
         raise InputError(
-            f"the adjustment has {gains['points'].shape[0]} rays, the block {n}: "
+            f"the adjustment has {gains.points.shape[0]} rays, the block {n}: "
             "pass the block that was adjusted"
         )
     rn = np.asarray(adj.redundancy_numbers[: 2 * n], float).reshape(n, 2)
-    rxy = np.asarray(adj.extra["redundancy_xy"], float)
+    rxy = np.asarray(adj.redundancy_xy, float)
     used = np.isfinite(rn).all(1) & np.isfinite(rxy)
     a, b, c = np.where(used, rn[:, 0], 0.0), np.where(used, rn[:, 1], 0.0), np.where(used, rxy, 0.0)
     lo, hi, u = _sym2_eig(a, b, c)
@@ -237,8 +236,8 @@ def ray_reliability(
         np.where(used, x, nan) for x in (mdb_weak, mdb_strong, external)
     )
     e_weak[~testable] = np.nan
-    Kp = np.nan_to_num(np.asarray(gains["points"], float))
-    Ke = np.nan_to_num(np.asarray(gains["exterior"], float))
+    Kp = np.nan_to_num(np.asarray(gains.points, float))
+    Ke = np.nan_to_num(np.asarray(gains.exterior, float))
     point_shift = np.einsum("nij,nj->ni", Kp, e_weak)
     exterior_shift = np.einsum("nij,nj->ni", Ke, e_weak)
     pmax, cmax = np.full(n, np.inf), np.full(n, np.inf)

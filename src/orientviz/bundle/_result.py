@@ -4,17 +4,19 @@ Residual order (v = f − l): the image coordinates of *all* observations of the
 (x, y per observation, mm; rays to check points included but not adjusted — their
 redundancy numbers are NaN), then the pseudo-observations of weighted control
 coordinates (m), observed projection centres (m), attitudes (rad) and additional
-parameters. ``extra["obs_slices"]`` names these ranges.
+parameters; ``obs_slices`` names these ranges.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
 
-from ..adjust.result import Adjustment
-from ..block import CHECK
+from ..block import CHECK, BlockAdjustment, CheckPoints
 from ..errors import NotDeterminableError
 from ..orientation.intersection import intersect_points
 from ..rotation import matrix_from_opk
@@ -22,6 +24,81 @@ from ._kernel import project_block
 from ._state import wrap
 
 F64 = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class RayGains:
+    """How a bias of each ray moves its own image and point (external reliability).
+
+    K = Q_(·, ray) Jᵀ P½ per image observation: a bias ∇ (mm) of the ray moves its
+    image's exterior orientation by K_e P½ ∇ and its point by K_p P½ ∇ (NaN for rays
+    not in the adjustment).
+
+    Attributes
+    ----------
+    exterior : ndarray, shape (n, 6, 2)
+        Change of X0 (m), ω φ κ (rad) per σ of the ray's x, y.
+    points : ndarray, shape (n, 3, 2)
+        Change of X, Y, Z (m) per σ of the ray's x, y.
+    """
+
+    exterior: F64
+    points: F64
+
+
+@dataclass(frozen=True)
+class ExteriorPairs:
+    """Cofactor blocks Q_cc of the image pairs that share a point (2-D tests of check rays).
+
+    Attributes
+    ----------
+    keys : ndarray of int
+        i·m + k for the pairs i ≤ k (sorted).
+    blocks : ndarray, shape (pairs, 6, 6)
+        Their 6 × 6 cofactor blocks (m², m·rad, rad²).
+    """
+
+    keys: NDArray[np.int64]
+    blocks: F64
+
+
+@dataclass
+class BundleResult(BlockAdjustment):
+    """What :func:`orientviz.bundle.bundle_adjust` returns.
+
+    Besides the fields of :class:`~orientviz.block.BlockAdjustment` (``exterior`` (m, 6),
+    ``points`` (p, 3), ``check_points``, ``auxiliary``) and of
+    :class:`~orientviz.adjust.result.Adjustment`:
+
+    Attributes
+    ----------
+    additional : ndarray, shape (q,)
+        Additional parameters, group-major (units of the set, e.g. µm); empty without.
+    used_obs : ndarray of bool, shape (n,)
+        Image observations that entered the adjustment (rays of check points do not).
+    solver : str
+        Solver of the reduced camera system (``"banded"``, ``"splu"``, ``"dense"``).
+    reduced_info : dict
+        Diagnostics of the reduced system (ordering, bandwidths) and, with additional
+        parameters, ``"ap_border"``: how each solve of their border went.
+    ray_gains : RayGains or None
+        With the precision: gains of each ray on its image and point.
+    exterior_pairs : ExteriorPairs or None
+        With the precision: Q_cc of the image pairs sharing a point.
+    redundancy_check : float or None
+        Σ of the redundancy numbers (equals the redundancy), with the precision.
+    precision_error : str or None
+        Why a not converged result carries no precision.
+    """
+
+    additional: F64 = field(default_factory=lambda: np.zeros(0))
+    used_obs: NDArray[np.bool_] | None = None
+    solver: str = ""
+    reduced_info: dict[str, Any] = field(default_factory=dict)
+    ray_gains: RayGains | None = None
+    exterior_pairs: ExteriorPairs | None = None
+    redundancy_check: float | None = None
+    precision_error: str | None = None
 
 
 def _intersect_check_points(block, X0: F64, angles: F64, chk: NDArray[np.int64]) -> F64:
@@ -50,25 +127,19 @@ def _intersect_check_points(block, X0: F64, angles: F64, chk: NDArray[np.int64])
 def finish_result(
     block, prob, st, rw, Je, Jp, names, history, converged, reason, precision, dof, sigma0,
     lin=None,
-) -> Adjustment:  # fmt: skip
+) -> BundleResult:  # fmt: skip
     m, p, n = block.n_images, block.n_points, block.n_observations
     setup = prob.setup
     xyz = st.xyz.copy()
     # check points: intersect with the adjusted orientations from their own rays
     chk = np.flatnonzero(block.points.role == CHECK)
-    extra: dict = {
-        "solver": prob.reduced.solver,
-        "used_obs": setup.used_obs,
-        "reduced_info": dict(prob.reduced.info, **_border_info(prob)),
-    }
+    check = None
     if chk.size:
         xyz[chk] = _intersect_check_points(block, st.X0, st.angles, chk)
         d = xyz[chk] - block.points.xyz_known[chk]
         good = np.isfinite(d).all(axis=1)
-        extra["check_points"] = {"ids": [block.points.ids[i] for i in chk], "difference_m": d}
-        extra["check_rms"] = (
-            np.sqrt(np.mean(d[good] ** 2, axis=0)) if good.any() else np.full(3, np.nan)
-        )
+        rms = np.sqrt(np.mean(d[good] ** 2, axis=0)) if good.any() else np.full(3, np.nan)
+        check = CheckPoints(chk, [block.points.ids[i] for i in chk], d, rms)
     # residuals of all image observations (v = f − l)
     obs = block.observations
     fa = _project_all(block, st, xyz, prob)
@@ -101,12 +172,11 @@ def finish_result(
     if prob.q:
         w = prob.ap.w > 0
         add("additional", st.ap[w], 1 / np.sqrt(prob.ap.w[w]))
-    extra["obs_slices"] = slices
     blocks = {"exterior": slice(0, 6 * m), "points": slice(6 * m, 6 * m + 3 * p)}
     if prob.q:
         blocks["additional"] = slice(6 * m + 3 * p, 6 * m + 3 * p + prob.q)
     x = np.concatenate([np.hstack([st.X0, st.angles]).ravel(), xyz.ravel(), st.ap])
-    res = Adjustment(
+    res = BundleResult(
         x=x,
         names=names,
         sigma0=sigma0,
@@ -117,10 +187,15 @@ def finish_result(
         reason=reason,
         history=history,
         blocks=blocks,
-        extra=extra,
+        obs_slices=slices,
+        exterior=np.hstack([st.X0, st.angles]),
+        points=xyz,
+        check_points=check,
+        additional=st.ap.copy(),
+        used_obs=setup.used_obs,
+        solver=prob.reduced.solver,
+        reduced_info=dict(prob.reduced.info, **_border_info(prob)),
     )
-    res.extra["exterior"] = np.hstack([st.X0, st.angles])
-    res.extra["points"] = xyz
     if precision:
         from ._precision import bundle_precision
 
@@ -141,7 +216,7 @@ def finish_result(
                     raise_not_determinable(prob.reduced, blocks, names[: 6 * prob.m], str(exc))
                 except NotDeterminableError as err:
                     raise err from exc
-            res.extra["precision_error"] = (
+            res.precision_error = (
                 f"no precision at the last (not converged) state: {type(exc).__name__}: {exc}"
             )
     return res

@@ -63,7 +63,7 @@ def check_geometry(problem: Problem) -> list:
     Raises the first fatal finding (InputError naming the file and place, or
     AdjustmentError); returns the warnings (also logged). Other kinds: no checks.
     """
-    from ..model import Block
+    from ..block import Block
     from ..plausibility import check_block, raise_for
 
     if not isinstance(problem.data, Block):

@@ -130,7 +130,7 @@ class _Builder(PrecisionSections, QualitySections):
         n_excl = adj.n_observations - n_used
         r = int(adj.redundancy)
         u = n_used - r
-        slices = adj.extra.get("obs_slices", {}) if isinstance(adj.extra, dict) else {}
+        slices = adj.obs_slices
         pseudo = {k: sl.stop - sl.start for k, sl in slices.items() if k != "image"}
         n_constr = int(sum(pseudo.values()))
         blk = self.block

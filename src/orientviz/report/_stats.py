@@ -31,7 +31,7 @@ def used_observations(adj: Adjustment) -> NDArray[np.bool_]:
 
 def image_slice(adj: Adjustment, solution: Solution) -> slice:
     """The range of image-coordinate observations in the observation vector."""
-    sl = adj.extra.get("obs_slices", {}).get("image") if isinstance(adj.extra, dict) else None
+    sl = adj.obs_slices.get("image")
     if sl is not None:
         return sl
     return slice(0, adj.n_observations) if solution.observation_quantity == "image" else slice(0, 0)

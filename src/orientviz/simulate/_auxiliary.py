@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..adjust.result import Adjustment
-from ..block import CONTROL, KINDS, TIE, Auxiliary, Block, strip_time
+from ..block import CONTROL, KINDS, TIE, Auxiliary, Block, BlockAdjustment, strip_time
 from ..errors import InputError
 
 F64 = NDArray[np.float64]
@@ -134,7 +134,7 @@ def check_differences(sim, result: F64 | Adjustment) -> tuple[NDArray[np.int64],
     result : ndarray, shape (p, 3), or Adjustment
         Adjusted coordinates of all points of the block in m, or an adjustment of it:
         a bundle result (:func:`orientviz.bundle.bundle_adjust`, check points
-        intersected from their own rays, ``extra["points"]``) or an independent-model
+        intersected from their own rays, ``points``) or an independent-model
         result (:func:`orientviz.stereo_models.independent_models`, ``extra["xyz"]``).
 
     Returns
@@ -151,15 +151,15 @@ def check_differences(sim, result: F64 | Adjustment) -> tuple[NDArray[np.int64],
         If the adjustment carries no point coordinates, their number does not match the
         block, or no check point has finite coordinates.
     """
-    if isinstance(result, Adjustment):
-        extra = result.extra
-        key = "xyz" if "xyz" in extra else "points" if "points" in extra else None
-        if key is None:
+    if isinstance(result, BlockAdjustment) and result.points is not None:
+        xyz = np.asarray(result.points, dtype=float)
+    elif isinstance(result, Adjustment):
+        if "xyz" not in result.extra:
             raise InputError(
                 "check_errors: the adjustment has no adjusted points "
-                '(expected extra["xyz"] or extra["points"])'
+                '(expected a block adjustment with points or extra["xyz"])'
             )
-        xyz = np.asarray(extra[key], dtype=float)
+        xyz = np.asarray(result.extra["xyz"], dtype=float)
     else:
         xyz = np.asarray(result, dtype=float)
     truth = sim.truth.points.xyz
