@@ -292,7 +292,7 @@ def plot_mdb_histogram(rel, block, *, ax=None, title=None):
 
 
 def plot_block_reliability(rel, block, *, xyz=None, quantity: str = "mdb", title=None):
-    """The reliability map of a block next to the MDB histogram of its rays.
+    """The reliability map of a block above the MDB histogram of its rays (book column width).
 
     Parameters
     ----------
@@ -311,9 +311,7 @@ def plot_block_reliability(rel, block, *, xyz=None, quantity: str = "mdb", title
     """
     import matplotlib.pyplot as plt
 
-    fig, (a1, a2) = plt.subplots(
-        1, 2, figsize=(13, 5.5), width_ratios=[1.9, 1], layout="constrained"
-    )
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8.5, 10), height_ratios=[1.6, 1], layout="constrained")
     plot_reliability_map(rel, block, xyz=xyz, quantity=quantity, ax=a1)
     plot_mdb_histogram(rel, block, ax=a2)
     if title:
