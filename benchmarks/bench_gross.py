@@ -188,7 +188,7 @@ def run_method(name, block, info):
             chk2 = bundle_adjust(block).check_rms ** 2
             nadj, elim, broke = 0, np.zeros(0, int), 1
         else:
-            excluded = ~c.adjustment.extra["kept_rays"]
+            excluded = ~c.adjustment.subset.kept_rays
             chk2 = c.adjustment.check_rms**2
             nadj, elim, broke = c.adjustments, c.eliminated, 0
     dt = time.perf_counter() - t
@@ -206,7 +206,7 @@ def error_free_rate(clean, name):
         c = clean_block(clean.block, **METHODS[name])
     except AdjustmentError:  # counted apart (weak blocks: an image left undeterminable)
         return 0, 0, 0, 1
-    excluded = int((~c.adjustment.extra["kept_rays"]).sum())
+    excluded = int((~c.adjustment.subset.kept_rays).sum())
     rejected = sum(1 for e in c.log if e.action == "eliminated")
     return excluded, rejected, clean.block.n_observations, 0
 
@@ -290,7 +290,7 @@ def large(strips, images, reps):
     info = truth_info(clean, dirty)
     good = np.ones(info["n"], bool)
     good[info["idx"]] = False
-    excluded = ~c.adjustment.extra["kept_rays"]
+    excluded = ~c.adjustment.subset.kept_rays
     row = classify(info, excluded, c.eliminated, b)
     ratio = c.adjustment.check_rms / info["ref_rms"]
     print(f"\nPart 2: {strips} × {images} = {b.n_images} images, {b.n_observations} rays, "

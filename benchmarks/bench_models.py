@@ -113,7 +113,7 @@ def least_squares_peer(reps):
     su.init_points(np.ones(n), R0, T0)
     X0 = su.X.copy()
     free = su.scalar >= 0
-    sxy, sz = res.extra["sigma_model"]
+    sxy, sz = res.sigma_model
     wsq = np.array([1 / sxy, 1 / sxy, 1 / sz])
 
     def fun(p):
@@ -140,7 +140,7 @@ def least_squares_peer(reps):
     )
     w_sp = time.perf_counter() - t
     su.X[free] = out.x[7 * n :]
-    d = np.abs(su.X[: su.tie_points.size] - res.extra["xyz"][su.tie_points]).max()
+    d = np.abs(su.X[: su.tie_points.size] - res.points[su.tie_points]).max()
     return ms.n_models, w_ov, w_sp, d, out.nfev
 
 
@@ -168,7 +168,7 @@ def extras(reps) -> None:
         print(f"{name:40s} {w:6.2f}  {its:4d}       {adj.sigma0:5.2f}  {xy:.3f}  {z:.3f}")
         return w
 
-    xyz = lambda r: r.extra["xyz"]  # noqa: E731
+    xyz = lambda r: r.points  # noqa: E731
     pts = lambda r: getattr(r, "adjustment", r).points  # noqa: E731
     w0 = row("models, 7 parameters", lambda: independent_models(b, models=ms), xyz)
     w1 = row("models + deformation (block)", lambda: independent_models(
@@ -220,7 +220,7 @@ def main(argv=None) -> None:
     for method in ("rigorous", "pat-m"):
         res, w, c = timed(lambda m=method: independent_models(b, models=ms, method=m), a.reps)
         results[method] = res
-        e = res.extra["xyz"] - sim.truth.points.xyz
+        e = res.points - sim.truth.points.xyz
         print(f"adjustment {method:9s}          {w:7.2f} {c:7.2f}   {c / ms.n_models:.5f}      "
               f"{len(res.history)}   (σ0 {res.sigma0:.2f}, RMS error xy {np.sqrt(np.nanmean(e[:, :2] ** 2)):.3f} m, "
               f"z {np.sqrt(np.nanmean(e[:, 2] ** 2)):.3f} m)")  # fmt: skip

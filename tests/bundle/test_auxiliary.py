@@ -71,7 +71,7 @@ def test_check_errors_of_bundle_and_model_results_and_of_coordinates(sim):
     # an independent-model result (extra["xyz"])
     im = independent_models(sim.block)
     xy_m, z_m = check_errors(sim, im)
-    assert (xy_m, z_m) == check_errors(sim, im.extra["xyz"])
+    assert (xy_m, z_m) == check_errors(sim, im.points)
     assert np.isfinite(xy_m) and 0 < z_m
     # the truth itself has no error; garbage is refused with a message
     assert check_errors(sim, sim.truth.points.xyz) == (0.0, 0.0)

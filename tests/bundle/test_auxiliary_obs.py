@@ -77,18 +77,18 @@ def test_rows_and_jacobians_match_finite_differences(case):
 
 def test_statoscope_and_apr_replace_height_chains_in_independent_models(case):
     sim, full, thin, st, apr = case
-    z_full = _check_rms(sim, independent_models(full).extra["xyz"])[1]
-    z_ends = _check_rms(sim, independent_models(thin).extra["xyz"])[1]
+    z_full = _check_rms(sim, independent_models(full).points)[1]
+    z_ends = _check_rms(sim, independent_models(thin).points)[1]
     res = independent_models(thin, auxiliary=[st, apr])
     assert res.converged
-    z_aux = _check_rms(sim, res.extra["xyz"])[1]
+    z_aux = _check_rms(sim, res.points)[1]
     # Ackermann §19: the auxiliary data take over most of the interior height control
     assert z_full < z_ends and z_aux < 0.6 * z_ends
     # the statoscope offsets come back (4 strips, 20 m σ), to a few dm
-    est = res.extra["auxiliary"]["statoscope"][:, 0, 0]
+    est = res.auxiliary.offsets["statoscope"][:, 0, 0]
     np.testing.assert_allclose(est, st.truth["offset"][:, 0], atol=1.0)
-    assert res.extra["auxiliary_sigma"]["statoscope"].shape == (4, 1, 2)
-    assert res.extra["auxiliary_residuals"].size == st.index.size + apr.index.size
+    assert res.auxiliary.sigma["statoscope"].shape == (4, 1, 2)
+    assert res.auxiliary.residuals.size == st.index.size + apr.index.size
 
 
 def test_gnss_alone_gives_the_datum_and_offsets_without_control_do_not(case):
@@ -102,7 +102,7 @@ def test_gnss_alone_gives_the_datum_and_offsets_without_control_do_not(case):
     )
     res = independent_models(free, auxiliary=[g])
     assert res.converged
-    xy, z = _check_rms(sim, res.extra["xyz"])
+    xy, z = _check_rms(sim, res.points)
     assert xy < 0.15 and z < 0.2
     g2 = simulate_auxiliary(sim, "gnss", rng=rng, sigma=0.1, offset_sigma=0.5)
     with pytest.raises(NotDeterminableError):

@@ -28,7 +28,7 @@ def test_solver_reports_all_rays_and_drops_lonely_points(sim):
     rays = np.flatnonzero(b.observations.point == pt)
     w[rays[0]] = 0.0
     adj = solve(w.reshape(-1))
-    kept = adj.extra["kept_rays"]
+    kept = adj.subset.kept_rays
     assert not kept[rays].any() and kept.sum() == n - 2
     assert np.isnan(adj.normalized_residuals.reshape(n, 2)[rays]).all()
     assert adj.redundancy_numbers.reshape(n, 2)[rays].sum() == 0.0
@@ -38,7 +38,7 @@ def test_solver_reports_all_rays_and_drops_lonely_points(sim):
 def test_data_snooping_removes_the_blunders(sim, one):
     g = set(sim.info["gross"]["index"].tolist())
     c = clean_block(sim.block, "snooping", one_at_a_time=one)
-    excluded = set(np.flatnonzero(~c.adjustment.extra["kept_rays"]).tolist())
+    excluded = set(np.flatnonzero(~c.adjustment.subset.kept_rays).tolist())
     # one blunder (47 µm, in a weakly controlled direction) stays below k for this seed
     assert len(g - excluded) <= 1
     # the rest of the data is clean: σ0 back to the 5 µm noise (±3 % for ~1400 rays)
@@ -49,7 +49,7 @@ def test_data_snooping_removes_the_blunders(sim, one):
         exact = clean_block(sim.block, "snooping", fast=False)  # every round exact
         assert exact.adjustments <= 6
     clean = cleaned_block(sim.block, c)
-    assert clean.n_observations == int(c.adjustment.extra["kept_rays"].sum())
+    assert clean.n_observations == int(c.adjustment.subset.kept_rays.sum())
 
 
 @pytest.mark.slow
@@ -57,7 +57,7 @@ def test_robust_and_reruns_run_and_log(sim):
     g = set(sim.info["gross"]["index"].tolist())
     for method in ("danish", "reruns"):
         c = clean_block(sim.block, method)
-        excluded = set(np.flatnonzero(~c.adjustment.extra["kept_rays"]).tolist())
+        excluded = set(np.flatnonzero(~c.adjustment.subset.kept_rays).tolist())
         assert len(g - excluded) <= 1
         assert c.adjustment.sigma0 < 1.1
 

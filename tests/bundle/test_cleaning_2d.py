@@ -39,7 +39,7 @@ def test_every_testable_blunder_is_removed(sim, fast):
     testable = idx[lam >= noncentrality() ** 2]
     assert testable.size >= 10  # the test is not vacuous
     c = clean_block(sim.block, "snooping", fast=fast)
-    kept = c.adjustment.extra["kept_rays"]
+    kept = c.adjustment.subset.kept_rays
     assert not kept[testable].any()
     # after cleaning the data fit the 5 µm noise again
     assert c.adjustment.sigma0 == pytest.approx(1.0, abs=0.06)
@@ -81,7 +81,7 @@ def test_error_free_block_false_alarms_within_binomial_bound(clean):
     tests = n
     mean, sd = tests * p, np.sqrt(tests * p * (1 - p))
     assert rejected <= mean + 4 * sd  # ≈ 1e-4 one-sided
-    excluded = (~c.adjustment.extra["kept_rays"]).sum()
+    excluded = (~c.adjustment.subset.kept_rays).sum()
     assert excluded <= 2 * (mean + 4 * sd)  # a 2-ray point takes its second ray along
 
 
@@ -123,5 +123,5 @@ def test_check_point_rays_are_tested_in_their_intersection(sim):
     bad = b.copy()
     bad.observations.xy[j] += [0.06, -0.04]
     c = clean_block(bad, "snooping")
-    assert not c.adjustment.extra["kept_rays"][j]
-    assert clean_block(bad, "snooping", check_rays=False).adjustment.extra["kept_rays"][j]
+    assert not c.adjustment.subset.kept_rays[j]
+    assert clean_block(bad, "snooping", check_rays=False).adjustment.subset.kept_rays[j]

@@ -44,7 +44,7 @@ def test_noise_free_block_gives_the_truth(degree):
     s = noise_free(2, 7, control="chains", chain_spacing=2)
     res = polynomial_adjust(s.block, degree_xy=degree, degree_z=degree, iterations=5)
     # the passes converge linearly (about 30 × per pass on this block)
-    np.testing.assert_allclose(res.extra["xyz"], s.truth.points.xyz, atol=1e-5)
+    np.testing.assert_allclose(res.points, s.truth.points.xyz, atol=1e-5)
 
 
 def test_block_polynomials_are_weaker_than_independent_models():
@@ -56,8 +56,8 @@ def test_block_polynomials_are_weaker_than_independent_models():
         free = s.block.points.role == TIE
         p = polynomial_adjust(s.block, degree_xy=3, degree_z=3)
         m = independent_models(s.block)
-        e_poly.append(np.nanmean((p.extra["xyz"] - s.truth.points.xyz)[free] ** 2, axis=0))
-        e_mod.append(np.nanmean((m.extra["xyz"] - s.truth.points.xyz)[free] ** 2, axis=0))
+        e_poly.append(np.nanmean((p.points - s.truth.points.xyz)[free] ** 2, axis=0))
+        e_mod.append(np.nanmean((m.points - s.truth.points.xyz)[free] ** 2, axis=0))
     rp, rm = np.sqrt(np.mean(e_poly, axis=0)), np.sqrt(np.mean(e_mod, axis=0))
     assert rp[2] > 2 * rm[2]  # heights: several times worse (5.3 m vs 1.1 m on 4 × 13 blocks)
     assert np.all(rp[:2] > rm[:2])  # planimetry: 0.09-0.10 m vs 0.08 m on 4 × 13 blocks

@@ -100,10 +100,10 @@ def test_known_model_deformation_is_recovered_noise_free():
     # the adjustment fits the fields on the *deformed* models, which shifts their
     # normalisation and projection slightly: the parameters come back to 1 % of the
     # largest one, the residuals and point errors shrink by well over an order
-    np.testing.assert_allclose(res.extra["deformation"][0], p_true, atol=0.6)
+    np.testing.assert_allclose(res.deformation.values[0], p_true, atol=0.6)
     assert res.sigma0 < 0.02 * plain.sigma0
-    err = np.nanmax(np.abs(res.extra["xyz"] - sim.truth.points.xyz))
-    assert np.nanmax(np.abs(plain.extra["xyz"] - sim.truth.points.xyz)) > 10 * err
+    err = np.nanmax(np.abs(res.points - sim.truth.points.xyz))
+    assert np.nanmax(np.abs(plain.points - sim.truth.points.xyz)) > 10 * err
 
 
 @pytest.mark.parametrize("error", ["twist", "bend"])
@@ -116,7 +116,7 @@ def test_model_self_calibration_lowers_sigma0_and_check_errors(error):
     chk = sim.block.points.role == 2
 
     def rms(r):
-        d = r.extra["xyz"][chk] - sim.truth.points.xyz[chk]
+        d = r.points[chk] - sim.truth.points.xyz[chk]
         return np.sqrt(np.mean(np.sum(d**2, axis=1)))
 
     plain = independent_models(sim.block)
@@ -124,7 +124,7 @@ def test_model_self_calibration_lowers_sigma0_and_check_errors(error):
     assert cal.converged
     assert cal.sigma0 < 0.8 * plain.sigma0
     assert rms(cal) < 0.9 * rms(plain)
-    an = cal.extra["deformation_analysis"]
+    an = cal.deformation.analysis
     term = {"twist": "twist", "bend": "bend_across"}[error]
     assert an.significant[an.names.index(f"{term}@block")]
 
@@ -162,6 +162,6 @@ def test_non_determinable_sets_name_the_correlated_pairs():
     assert "correlated:" in msg and "~" in msg and "ρ=" in msg
     # with weak pseudo-observations the same set adjusts and the analysis names them
     res = independent_models(sim.block, deformation="all", deformation_group="block")
-    assert "height_scale@block" in res.extra["deformation_analysis"].undetermined
-    assert res.extra["deformation_sigma"].shape == (1, len(TERMS))
+    assert "height_scale@block" in res.deformation.analysis.undetermined
+    assert res.deformation.sigma.shape == (1, len(TERMS))
     assert deformed is not None

@@ -34,8 +34,8 @@ def test_noise_free_block_gives_the_truth(method):
     s = noise_free(2, 6)
     res = independent_models(s.block, method=method)
     assert res.converged
-    np.testing.assert_allclose(res.extra["xyz"], s.truth.points.xyz, atol=1e-6)
-    centres = res.extra["centres"]
+    np.testing.assert_allclose(res.points, s.truth.points.xyz, atol=1e-6)
+    centres = res.centres
     np.testing.assert_allclose(centres, s.truth.images.X0, atol=1e-6)
 
 
@@ -47,9 +47,9 @@ def test_planimetric_check_point_errors_match_the_predicted_precision():
     for seed in range(10):
         s = simulate_block(3, 6, rng=np.random.default_rng(seed), extra=None)
         res = independent_models(s.block, precision=True)
-        tp = res.extra["point_index"]
+        tp = res.point_index
         free = s.block.points.role[tp] == TIE
-        e = (res.extra["xyz"][tp] - s.truth.points.xyz[tp])[free]
+        e = (res.points[tp] - s.truth.points.xyz[tp])[free]
         Q = res.cofactor_blocks["points"][: tp.size][free]
         num += np.sum(e**2, axis=0)
         den += np.sum(np.einsum("nii->ni", Q), axis=0) * res.sigma0**2
@@ -64,9 +64,9 @@ def test_rigorous_and_patm_agree_in_planimetry():
     s = simulate_block(3, 8, rng=np.random.default_rng(4), extra=None, control="chains")
     a = independent_models(s.block, method="rigorous", precision=True)
     b = independent_models(s.block, method="pat-m")
-    tp = a.extra["point_index"]
+    tp = a.point_index
     sd = np.sqrt(np.einsum("nii->ni", a.cofactor_blocks["points"][: tp.size])) * a.sigma0
-    d = a.extra["xyz"][tp] - b.extra["xyz"][tp]
+    d = a.points[tp] - b.points[tp]
     # the two estimators differ by less than 3 σ of the rigorous planimetry
     assert np.all(np.abs(d[:, :2]) < 3 * sd[:, :2] + 1e-9)
 
@@ -124,8 +124,8 @@ def test_points_in_no_model_stay_nan():
     keep = np.setdiff1d(np.arange(len(o)), rows[1:])
     b.observations = Observations(o.image[keep], o.point[keep], o.xy[keep], o.sigma[keep])
     res = independent_models(b)
-    assert np.all(np.isnan(res.extra["xyz"][p]))
-    assert np.sum(np.isnan(res.extra["xyz"][:, 0])) == 1
+    assert np.all(np.isnan(res.points[p]))
+    assert np.sum(np.isnan(res.points[:, 0])) == 1
 
 
 def test_noise_free_bundle_and_models_both_give_the_truth():
@@ -136,7 +136,7 @@ def test_noise_free_bundle_and_models_both_give_the_truth():
     xb = b.x[b.blocks["points"]].reshape(-1, 3)
     np.testing.assert_allclose(xb, s.truth.points.xyz, atol=1e-5)
     m = independent_models(s.block)
-    np.testing.assert_allclose(m.extra["xyz"], xb, atol=1e-5)
+    np.testing.assert_allclose(m.points, xb, atol=1e-5)
 
 
 def test_bundle_and_models_agree_within_their_precision():
@@ -145,11 +145,11 @@ def test_bundle_and_models_agree_within_their_precision():
     s = simulate_block(3, 8, rng=np.random.default_rng(7), extra=None, control="chains")
     b = bundle_adjust(s.block)
     m = independent_models(s.block, precision=True)
-    tp = m.extra["point_index"]
+    tp = m.point_index
     xb = b.x[b.blocks["points"]].reshape(-1, 3)[tp]
     qb = np.einsum("nii->ni", b.cofactor_blocks["points"])[tp] * b.sigma0**2
     qm = np.einsum("nii->ni", m.cofactor_blocks["points"][: tp.size]) * m.sigma0**2
-    d = xb - m.extra["xyz"][tp]
+    d = xb - m.points[tp]
     free = s.block.points.role[tp] == TIE
     # the two estimates use the same images, so their difference is smaller than the
     # independent-errors bound 3·sqrt(σ_b² + σ_m²); no point may exceed that bound

@@ -20,7 +20,7 @@ The adjustments live elsewhere: :mod:`orientviz.bundle`, :mod:`orientviz.stereo_
 from ._approximate import approximate_values, intersect_rays
 from ._auxiliary import KINDS, Auxiliary, strip_time
 from ._layout import CONTROL_LAYOUTS, BlockLayout, block_layout, control_positions
-from ._result import AuxiliaryEstimates, BlockAdjustment, CheckPoints
+from ._result import AuxiliaryEstimates, BlockAdjustment, CheckPoints, check_points_of
 from ._tables import (
     CHECK,
     CONTROL,
@@ -59,6 +59,7 @@ __all__ = [
     "check_array",
     "check_image_points",
     "check_points",
+    "check_points_of",
     "control_positions",
     "index_ids",
     "intersect_rays",

@@ -107,3 +107,17 @@ class BlockAdjustment(Adjustment):
     def check_rms(self) -> F64:
         """RMS of the check-point differences in X, Y, Z (m); NaN without check points."""
         return self.check_points.rms if self.check_points is not None else np.full(3, np.nan)
+
+
+def check_points_of(block, xyz: F64) -> CheckPoints | None:
+    """The check points of ``block`` compared with adjusted coordinates ``xyz`` (p, 3) m.
+
+    Returns None if the block has no check points.
+    """
+    chk = np.flatnonzero(block.points.role == 2)
+    if not chk.size:
+        return None
+    d = xyz[chk] - block.points.xyz_known[chk]
+    good = np.isfinite(d).all(axis=1)
+    rms = np.sqrt(np.mean(d[good] ** 2, axis=0)) if good.any() else np.full(3, np.nan)
+    return CheckPoints(chk, [block.points.ids[i] for i in chk], d, rms)

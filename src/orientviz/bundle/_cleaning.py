@@ -34,6 +34,7 @@ from ..rotation import matrix_from_opk
 from ._adjust import bundle_adjust
 from ._kernel import collinearity_block
 from ._reduced import inv3
+from ._result import RaySubset
 
 F64 = NDArray[np.float64]
 
@@ -242,7 +243,8 @@ def bundle_solver(
     ``redundancy_numbers`` and ``normalized_residuals`` for the 2n image coordinates of
     ``block`` (x, y per observation; left-out rays: residual predicted from the adjusted
     orientation, redundancy number 0, normalised residual NaN); everything else is the
-    bundle's result, which is also kept whole in ``extra["bundle"]``.
+    bundle's result (``points``: all block points; ``subset``: the rays adjusted and the
+    sub-block's own bundle).
 
     Parameters
     ----------
@@ -345,14 +347,8 @@ def bundle_solver(
             redundancy_numbers=rn.reshape(-1),
             normalized_residuals=wn.reshape(-1),
             redundancy_xy=rxy,
-            extra={
-                **adj.extra,
-                "bundle": adj,
-                "kept_rays": kept,
-                "kept_points": pts,
-                "xyz": xyz,
-                "redundancy": mode,
-            },  # fmt: skip
+            points=xyz,
+            subset=RaySubset(kept, pts, mode, adj),
         )
 
     return solve

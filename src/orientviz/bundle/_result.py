@@ -16,7 +16,7 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
 
-from ..block import CHECK, BlockAdjustment, CheckPoints
+from ..block import CHECK, BlockAdjustment, check_points_of
 from ..errors import NotDeterminableError
 from ..orientation.intersection import intersect_points
 from ..rotation import matrix_from_opk
@@ -62,6 +62,28 @@ class ExteriorPairs:
     blocks: F64
 
 
+@dataclass(frozen=True)
+class RaySubset:
+    """A gross-error solver's round: the bundle of the block without the rejected rays.
+
+    Attributes
+    ----------
+    kept_rays : ndarray of bool, shape (n,)
+        Rays of the block that were adjusted.
+    kept_points : ndarray of int
+        Block index of each point of the adjusted sub-block.
+    redundancy : str
+        How the redundancy numbers were obtained: ``"exact"`` or ``"local"``.
+    adjustment : BundleResult
+        The bundle of the sub-block itself.
+    """
+
+    kept_rays: NDArray[np.bool_]
+    kept_points: NDArray[np.int64]
+    redundancy: str
+    adjustment: Any
+
+
 @dataclass
 class BundleResult(BlockAdjustment):
     """What :func:`orientviz.bundle.bundle_adjust` returns.
@@ -89,6 +111,9 @@ class BundleResult(BlockAdjustment):
         Σ of the redundancy numbers (equals the redundancy), with the precision.
     precision_error : str or None
         Why a not converged result carries no precision.
+    subset : RaySubset or None
+        For the rounds of :func:`orientviz.bundle.bundle_solver`: which rays were adjusted
+        (``points`` then holds all block points, dropped ones from their rays).
     """
 
     additional: F64 = field(default_factory=lambda: np.zeros(0))
@@ -99,6 +124,7 @@ class BundleResult(BlockAdjustment):
     exterior_pairs: ExteriorPairs | None = None
     redundancy_check: float | None = None
     precision_error: str | None = None
+    subset: RaySubset | None = None
 
 
 def _intersect_check_points(block, X0: F64, angles: F64, chk: NDArray[np.int64]) -> F64:
@@ -133,13 +159,9 @@ def finish_result(
     xyz = st.xyz.copy()
     # check points: intersect with the adjusted orientations from their own rays
     chk = np.flatnonzero(block.points.role == CHECK)
-    check = None
     if chk.size:
         xyz[chk] = _intersect_check_points(block, st.X0, st.angles, chk)
-        d = xyz[chk] - block.points.xyz_known[chk]
-        good = np.isfinite(d).all(axis=1)
-        rms = np.sqrt(np.mean(d[good] ** 2, axis=0)) if good.any() else np.full(3, np.nan)
-        check = CheckPoints(chk, [block.points.ids[i] for i in chk], d, rms)
+    check = check_points_of(block, xyz)
     # residuals of all image observations (v = f − l)
     obs = block.observations
     fa = _project_all(block, st, xyz, prob)

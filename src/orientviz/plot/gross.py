@@ -88,7 +88,7 @@ def plot_cleaning(cleaning, *, truth=None, ax=None, title=None):
         tr = set(np.asarray(truth, int).tolist())
         good = np.array([o in tr for o in obs], bool)
         gone = set(obs.tolist())
-        kept = cleaning.adjustment.extra.get("kept_rays")
+        kept = cleaning.adjustment.subset.kept_rays
         if kept is not None:  # rays left out with their point count as removed too
             gone |= set(np.flatnonzero(~np.asarray(kept, bool)).tolist())
         missed = len(tr - gone)
@@ -311,7 +311,9 @@ def plot_block_reliability(rel, block, *, xyz=None, quantity: str = "mdb", title
     """
     import matplotlib.pyplot as plt
 
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8.5, 10), height_ratios=[1.6, 1], layout="constrained")
+    fig, (a1, a2) = plt.subplots(
+        2, 1, figsize=(8.5, 10), height_ratios=[1.6, 1], layout="constrained"
+    )
     plot_reliability_map(rel, block, xyz=xyz, quantity=quantity, ax=a1)
     plot_mdb_histogram(rel, block, ax=a2)
     if title:

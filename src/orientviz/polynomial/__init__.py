@@ -5,6 +5,6 @@ adjusted by conformal planimetric and height polynomials per strip
 (:func:`polynomial_adjust`). The method lives in the private ``_adjust``.
 """
 
-from ._adjust import Strip, form_strips, polynomial_adjust
+from ._adjust import PolynomialResult, Strip, form_strips, polynomial_adjust
 
-__all__ = ["Strip", "form_strips", "polynomial_adjust"]
+__all__ = ["PolynomialResult", "Strip", "form_strips", "polynomial_adjust"]

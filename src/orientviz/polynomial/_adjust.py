@@ -33,13 +33,12 @@ methods for single strips with minimal control, clearly worse for blocks.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..adjust.result import Adjustment
-from ..block import CHECK, CONTROL, Block
+from ..block import CHECK, CONTROL, Block, BlockAdjustment, check_points_of
 from ..errors import InputError, NotDeterminableError
 from ..orientation.absolute import similarity_closed_form
 from ..rotation import matrix_from_opk
@@ -49,6 +48,33 @@ F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
 #: Length unit of the polynomial variables u, v (m).
 L_M: float = 1000.0
+
+
+@dataclass
+class PolynomialResult(BlockAdjustment):
+    """The result of :func:`polynomial_adjust` (``exterior`` is None: no image orientation).
+
+    Attributes
+    ----------
+    strips : list of Strip
+        The strips that were adjusted.
+    degree_xy, degree_z : int
+        Degrees of the planimetric and height polynomials.
+    sigma0_xy, sigma0_z : float
+        σ̂0 of the planimetric and height adjustments.
+    sigma_strip : tuple of float
+        A-priori σ of strip coordinates (planimetry, height), m.
+    point_index : ndarray of int
+        Block index of each point unknown (the ``"points"`` block of x).
+    """
+
+    strips: list = field(default_factory=list)
+    degree_xy: int = 0
+    degree_z: int = 0
+    sigma0_xy: float = math.nan
+    sigma0_z: float = math.nan
+    sigma_strip: tuple[float, float] = (math.nan, math.nan)
+    point_index: I64 | None = None
 
 
 @dataclass
@@ -165,7 +191,7 @@ def polynomial_adjust(
     strips: list[Strip] | None = None,
     sigma_strip: tuple[float, float] | None = None,
     iterations: int = 3,
-) -> Adjustment:
+) -> PolynomialResult:
     """Polynomial block adjustment of the strips of a block (see the module docstring).
 
     Parameters
@@ -190,10 +216,10 @@ def polynomial_adjust(
     Adjustment
         ``x``: planimetric coefficients (a0, b0, a1, b1, …) of every strip, then the
         height coefficients (c0 … c_d, e0 … e_{d−1}), then X, Y, Z of the tie points;
-        residuals v = polynomial(strip coordinates) − X (m). ``extra["xyz"]`` (p, 3):
-        adjusted coordinates of all block points (check points from their strip
-        coordinates; NaN if in no strip); ``extra["strips"]``, ``extra["sigma0_xy"]``,
-        ``extra["sigma0_z"]``.
+        residuals v = polynomial(strip coordinates) − X (m). A :class:`PolynomialResult`:
+        ``points`` (p, 3): adjusted coordinates of all block points (check points from
+        their strip coordinates; NaN if in no strip); ``check_points``, ``strips``,
+        ``sigma0_xy``, ``sigma0_z``.
 
     Raises
     ------
@@ -214,11 +240,11 @@ def polynomial_adjust(
     target = block.points.xyz
     for _ in range(max(1, int(iterations))):
         out = _adjust_once(block, strips, target, degree_xy, degree_z, sigma_strip, base)
-        target = np.where(np.isnan(out.extra["xyz"]), block.points.xyz, out.extra["xyz"])
+        target = np.where(np.isnan(out.points), block.points.xyz, out.points)
     return out
 
 
-def _adjust_once(block, strips, target, degree_xy, degree_z, sigma_strip, base) -> Adjustment:
+def _adjust_once(block, strips, target, degree_xy, degree_z, sigma_strip, base) -> PolynomialResult:
     pts = block.points
     # strip → near the object frame (closed-form similarity to the target coordinates)
     rows_s, rows_p, rows_x = [], [], []
@@ -309,13 +335,11 @@ def _adjust_once(block, strips, target, degree_xy, degree_z, sigma_strip, base) 
         + results["height"][4]
         + [f"{pts.ids[i]}.{c}" for i in tie for c in "XYZ"]
     )
-    out = Adjustment(
+    return PolynomialResult(
         x=xvec, names=names, sigma0=s0, redundancy=int(dof), residuals=resid,
         sigma_obs=1.0 / np.sqrt(wts), converged=True, reason="linear adjustments (one step each)",
         history=[], blocks={"planimetry": slice(0, n1), "height": slice(n1, n1 + n2), "points": slice(n1 + n2, xvec.size)},
+        points=xyz, check_points=check_points_of(block, xyz), strips=strips, degree_xy=degree_xy,
+        degree_z=degree_z, sigma0_xy=s0_part["planimetry"], sigma0_z=s0_part["height"],
+        sigma_strip=(s_xy, s_z), point_index=tie,
     )  # fmt: skip
-    out.extra.update(
-        xyz=xyz, strips=strips, degree_xy=degree_xy, degree_z=degree_z, sigma0_xy=s0_part["planimetry"],
-        sigma0_z=s0_part["height"], sigma_strip=(s_xy, s_z), point_index=tie,
-    )  # fmt: skip
-    return out

@@ -67,9 +67,9 @@ def _pipeline_rows(rng: np.random.Generator) -> list[Row]:
                 ns, 2 * ns + 1, rng=rng, extra=None, control="perimeter", control_spacing=2
             )
             res = independent_models(sim.block, precision=True)
-            tp = res.extra["point_index"]
+            tp = res.point_index
             free = sim.block.points.role[tp] == TIE
-            e = (res.extra["xyz"][tp] - sim.truth.points.xyz[tp])[free, :2]
+            e = (res.points[tp] - sim.truth.points.xyz[tp])[free, :2]
             q = np.einsum("nii->ni", res.cofactor_blocks["points"][: tp.size])[free, :2]
             num += float(np.sum(e**2))
             den += float(np.sum(q)) * res.sigma0**2
@@ -102,11 +102,9 @@ def _sigma0_rows(rng: np.random.Generator, P: dict) -> list[Row]:
         s_img_um = 1000.0 * float(np.median(sim.block.observations.sigma))
         b = bundle_adjust(sim.block, precision=False)
         m = independent_models(sim.block, method="pat-m")
-        sxy, sz = m.extra["sigma_model"]
-        ratios.append(
-            m.extra["sigma0_planimetry"] * sxy / (b.sigma0 * s_img_um * 1e-6 * sim.spec["scale"])
-        )
-        heights.append(m.extra["sigma0_height"] * sz / sim.spec["scale"] * 1e6)
+        sxy, sz = m.sigma_model
+        ratios.append(m.sigma0_planimetry * sxy / (b.sigma0 * s_img_um * 1e-6 * sim.spec["scale"]))
+        heights.append(m.sigma0_height * sz / sim.spec["scale"] * 1e6)
     return [
         Row(
             "§20", "same blocks, 5 µm image noise (3 × 4 × 10 images)",

@@ -135,7 +135,7 @@ def check_differences(sim, result: F64 | Adjustment) -> tuple[NDArray[np.int64],
         Adjusted coordinates of all points of the block in m, or an adjustment of it:
         a bundle result (:func:`orientviz.bundle.bundle_adjust`, check points
         intersected from their own rays, ``points``) or an independent-model
-        result (:func:`orientviz.stereo_models.independent_models`, ``extra["xyz"]``).
+        result (:func:`orientviz.stereo_models.independent_models`, ``points``).
 
     Returns
     -------
@@ -151,15 +151,13 @@ def check_differences(sim, result: F64 | Adjustment) -> tuple[NDArray[np.int64],
         If the adjustment carries no point coordinates, their number does not match the
         block, or no check point has finite coordinates.
     """
-    if isinstance(result, BlockAdjustment) and result.points is not None:
-        xyz = np.asarray(result.points, dtype=float)
-    elif isinstance(result, Adjustment):
-        if "xyz" not in result.extra:
+    if isinstance(result, Adjustment):
+        if not isinstance(result, BlockAdjustment) or result.points is None:
             raise InputError(
                 "check_errors: the adjustment has no adjusted points "
-                '(expected a block adjustment with points or extra["xyz"])'
+                "(expected a block adjustment with points)"
             )
-        xyz = np.asarray(result.extra["xyz"], dtype=float)
+        xyz = np.asarray(result.points, dtype=float)
     else:
         xyz = np.asarray(result, dtype=float)
     truth = sim.truth.points.xyz

@@ -24,10 +24,13 @@ from ._deformation import (
 from ._formation import ModelSet, form_models, model_to_object
 from ._joint import deformed, joint_setup, model_rows
 from ._normal import LinearSolution, scalar_cofactors, solve_rows, solve_sparse
+from ._result import DeformationEstimates, ModelsResult
 from ._setup import TieSetup, tie_setup
 
 __all__ = [
     "independent_models",
+    "ModelsResult",
+    "DeformationEstimates",
     "ModelSet",
     "form_models",
     "model_to_object",

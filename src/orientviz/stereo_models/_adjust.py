@@ -47,12 +47,13 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from ..adjust.result import Adjustment, Iteration
-from ..block import CHECK, Block
+from ..adjust.result import Iteration
+from ..block import Block, check_points_of
 from ..errors import InputError, NotDeterminableError
 from ..rotation import matrix_from_opk, matrix_from_rotvec, opk_from_matrix, skew
 from ._formation import ModelSet, form_models
 from ._normal import scalar_cofactors, solve_rows
+from ._result import ModelsResult
 from ._setup import TieSetup, check_datum, tie_setup
 
 F64 = NDArray[np.float64]
@@ -83,7 +84,7 @@ def independent_models(
     deformation_group: str = "model",
     deformation_sigma: float | None = 1000.0,
     auxiliary: list | None = None,
-) -> Adjustment:
+) -> ModelsResult:
     """Adjust a block by independent models.
 
     Parameters
@@ -125,22 +126,21 @@ def independent_models(
 
     Returns
     -------
-    Adjustment
+    ModelsResult
         ``x``: 7 parameters per model (X0, Y0, Z0 in m; ω, φ, κ in rad of R_j, sequence
-        ω-φ-κ; λ) then X, Y, Z of every tie point (block points in ``extra["point_index"]``,
-        then the projection centres of the images in ``extra["centre_image"]``).
-        ``extra``: ``"xyz"`` (p, 3) adjusted coordinates of all block points (check
-        points by transforming their model coordinates; NaN if in no model),
-        ``"centres"`` (m, 3) projection centres, ``"sigma0_m"`` (σ̂0 in m),
-        ``"sigma0_planimetry"``/``"sigma0_height"`` (separate σ̂0 as in PAT-M, unit
-        weight; × ``sigma_model`` gives m),
-        ``"rms_xy_m"``, ``"rms_z_m"``, ``"models"`` the ModelSet, ``"method"``.
-        With deformation parameters: block ``"additional"`` (mm, group-major),
-        ``extra["deformation"]`` (groups, k), ``"deformation_sigma"``,
-        ``"deformation_analysis"`` (:class:`~.additional.APAnalysis`: t-tests, correlated
+        ω-φ-κ; λ) then X, Y, Z of every tie point (block points in ``point_index``,
+        then the projection centres of the images in ``centre_image``). Typed fields:
+        ``points`` (p, 3) adjusted coordinates of all block points (check points by
+        transforming their model coordinates; NaN if in no model), ``check_points``,
+        ``centres`` (m, 3) projection centres, ``sigma0_m`` (σ̂0 in m),
+        ``sigma0_planimetry``/``sigma0_height`` (separate σ̂0 as in PAT-M, unit weight;
+        × ``sigma_model`` gives m), ``rms_xy_m``, ``rms_z_m``, ``models`` (the ModelSet),
+        ``method``. With deformation parameters: block ``"additional"`` (mm,
+        group-major) and ``deformation`` (:class:`DeformationEstimates`: values (groups,
+        k), sigma, analysis — :class:`~orientviz.bundle.APAnalysis`: t-tests, correlated
         pairs, correlations with the similarity parameters). With auxiliary data: block
-        ``"auxiliary"``, ``extra["auxiliary"]`` / ``"auxiliary_sigma"`` ({kind: (strips,
-        dims, 1 or 2)} offsets, drifts in m), ``"auxiliary_residuals"`` (m).
+        ``"auxiliary"`` and ``auxiliary`` (:class:`~orientviz.block.AuxiliaryEstimates`:
+        offsets, sigma {kind: (strips, dims, 1 or 2)} m, residuals m).
 
     Raises
     ------
@@ -405,19 +405,18 @@ def _result(block, ms, su, lam, R, T, w_c, method, converged, reason, sol, histo
     names = [
         f"{mid}.{e}" for mid in ms.ids for e in ("X0", "Y0", "Z0", "omega", "phi", "kappa", "scale")
     ] + [f"{pid}.{c}" for pid in su.point_names for c in "XYZ"]
-    res = Adjustment(
+    xyz, centres = su.block_coordinates(block, ms, lam, R, T)
+    s0_l, s0_h = _separate_sigma0(su, r, w_c)
+    res = ModelsResult(
         x=x, names=names, sigma0=s0, redundancy=dof, residuals=r.ravel(),
         sigma_obs=np.tile(1.0 / np.sqrt(w_c), r.shape[0]), converged=converged, reason=reason,
         history=history, blocks={"models": slice(0, n7), "points": slice(n7, x.size)},
-    )  # fmt: skip
-    xyz, centres = su.block_coordinates(block, ms, lam, R, T)
-    s0_l, s0_h = _separate_sigma0(su, r, w_c)
-    res.extra.update(
+        points=xyz, check_points=check_points_of(block, xyz),
         sigma0_planimetry=s0_l, sigma0_height=s0_h,
-        method=method, models=ms, xyz=xyz, centres=centres, point_index=su.tie_points,
+        method=method, models=ms, centres=centres, point_index=su.tie_points,
         centre_image=su.centre_images, sigma0_m=s0 * math.sqrt(1.0 / w_c[0]),
         rms_xy_m=float(np.sqrt(np.mean(r[:, :2] ** 2))), rms_z_m=float(np.sqrt(np.mean(r[:, 2] ** 2))),
-        sigma_model=(1 / math.sqrt(w_c[0]), 1 / math.sqrt(w_c[2])), check=block.points.role == CHECK,
+        sigma_model=(1 / math.sqrt(w_c[0]), 1 / math.sqrt(w_c[2])),
     )  # fmt: skip
     if precision and method == "rigorous" and sol is not None:
         res.cofactor_blocks["points"] = scalar_cofactors(sol, su.scalar)

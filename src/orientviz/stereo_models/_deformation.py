@@ -297,7 +297,7 @@ def deformation_table(adj) -> str:
     """Plain-text table of the estimated deformation parameters of an adjustment by
     :func:`orientviz.stereo_models.independent_models` (value and σ in mm at a model
     corner, t, significant), followed by the analysis' warnings."""
-    an = adj.extra["deformation_analysis"]
+    an = adj.deformation.analysis
     w = max([len(n) for n in an.names] + [9])
     lines = [f"{'parameter':<{w}} {'value mm':>9} {'σ mm':>7} {'t':>6}  significant"]
     for n, v, s, t, g in zip(an.names, an.value, an.sigma, an.t, an.significant):

@@ -22,12 +22,14 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ..adjust.result import Adjustment, Iteration
+from ..adjust.result import Iteration
+from ..block import AuxiliaryEstimates, check_points_of
 from ..bundle import AuxRows, analyse, auxiliary_rows
 from ..errors import InputError, NotDeterminableError
 from ..rotation import matrix_from_rotvec, skew
 from ._deformation import DeformationField, ModelDeformation, group_index
 from ._normal import scalar_cofactors, solve_sparse
+from ._result import DeformationEstimates, ModelsResult
 
 F64 = NDArray[np.float64]
 #: Above this many similarity parameters (7 per model) their correlations with the
@@ -262,11 +264,11 @@ def explain_singular(exc: NotDeterminableError, retry) -> NotDeterminableError:
     """A NotDeterminableError naming the correlated deformation pairs of a regularised run.
 
     ``retry()`` runs the same adjustment with weak pseudo-observations (σ = 1000 mm) and
-    returns its Adjustment (with ``extra["deformation_analysis"]``).
+    returns its result (with ``deformation.analysis``).
     """
     try:
         trial = retry()
-        an = trial.extra["deformation_analysis"]
+        an = trial.deformation.analysis
         pairs = ", ".join(f"{a}~{b} (ρ={r:+.3f})" for a, b, r in an.pairs[:6])
         pairs += (", " if pairs else "") + ", ".join(
             f"{a}~{b} (ρ={r:+.3f})" for a, b, r in an.with_exterior[:6]
@@ -286,7 +288,7 @@ def explain_singular(exc: NotDeterminableError, retry) -> NotDeterminableError:
     )
 
 
-def finish_joint(res: Adjustment, block, ms, su, js, lam, R, T, p, g_aux, sol, names, w_c):
+def finish_joint(res: ModelsResult, block, ms, su, js, lam, R, T, p, g_aux, sol, names, w_c):
     """Add the extra unknowns, their precision and the analysis to a models result."""
     n = su.n_models
     n7 = 7 * n
@@ -302,7 +304,7 @@ def finish_joint(res: Adjustment, block, ms, su, js, lam, R, T, p, g_aux, sol, n
     dof = joint_redundancy(su, js)
     res.redundancy = dof
     res.sigma0 = math.sqrt(cost / dof) if dof > 0 else float("nan")
-    res.extra["sigma0_m"] = res.sigma0 / math.sqrt(w_c[0])
+    res.sigma0_m = res.sigma0 / math.sqrt(w_c[0])
     q_idx = np.arange(n7, n7 + js.n_def + js.n_aux)
     Q = sol.factor.solve(np.eye(sol.factor.scale.size)[:, q_idx]) if q_idx.size else None
     if js.n_def:
@@ -327,18 +329,23 @@ def finish_joint(res: Adjustment, block, ms, su, js, lam, R, T, p, g_aux, sol, n
                 "not separable from the similarity: "
                 + ", ".join(f"{a}~{b} (ρ={r:+.2f})" for a, b, r in an.with_exterior[:6])
             )
-        res.extra["deformation"] = p.reshape(js.n_groups, js.q)
-        res.extra["deformation_sigma"] = res.sigma0 * dq.reshape(js.n_groups, js.q)
-        res.extra["deformation_analysis"] = an
-        res.extra["deformation_groups"] = js.group
-        res.extra["deformation_set"] = js.deform
+        res.deformation = DeformationEstimates(
+            p.reshape(js.n_groups, js.q),
+            res.sigma0 * dq.reshape(js.n_groups, js.q),
+            an,
+            js.group,
+            js.deform,
+        )
     if js.n_aux:
         qa = Q[n7 + js.n_def :, js.n_def :]
         res.cofactor_blocks["auxiliary"] = qa
-        res.extra["auxiliary"] = js.aux.split_globals(g_aux)
-        res.extra["auxiliary_sigma"] = js.aux.split_globals(res.sigma0 * np.sqrt(np.diag(qa)))
-        res.extra["auxiliary_residuals"] = aux_residuals(su, js, g_aux)
-        res.extra["auxiliary_labels"] = js.aux.labels
+        res.auxiliary = AuxiliaryEstimates(
+            js.aux.split_globals(g_aux),
+            js.aux.split_globals(res.sigma0 * np.sqrt(np.diag(qa))),
+            aux_residuals(su, js, g_aux),
+            js.aux.labels,
+            list(js.aux.names),
+        )
     # check points: transform their deformed model coordinates
     if js.q:
         fld = js.field
@@ -349,7 +356,8 @@ def finish_joint(res: Adjustment, block, ms, su, js, lam, R, T, p, g_aux, sol, n
             - np.einsum("nik,nk->ni", A, p.reshape(js.n_groups, js.q)[js.group[ms.point_model]]),
         )
         xyz, _ = su.block_coordinates(block, ms_d, lam, R, T)
-        res.extra["xyz"] = xyz
+        res.points = xyz
+        res.check_points = check_points_of(block, xyz)
     return res
 
 

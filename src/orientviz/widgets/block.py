@@ -83,12 +83,12 @@ def block_state(
         from ..stereo_models import independent_models
 
         res = independent_models(sim.block, method=method)
-        xyz = res.extra["xyz"]
+        xyz = res.points
     elif method == "polynomial":
         from ..polynomial import polynomial_adjust
 
         res = polynomial_adjust(sim.block, degree_xy=3, degree_z=3)
-        xyz = res.extra["xyz"]
+        xyz = res.points
     elif method == "bundle":
         from ..bundle import bundle_adjust
 

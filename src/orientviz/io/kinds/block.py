@@ -243,13 +243,13 @@ def check_note(problem: Problem, block: Block, xyz: np.ndarray) -> list[str]:
 def solution_from_points(problem: Problem, block: Block, adj, method: str, func) -> Solution:
     """Report of a method that estimates points only (polynomial strip/block adjustment).
 
-    Points come from ``extra["xyz"]`` (all block points), their σ from the ``"points"``
+    Points come from ``points`` (all block points), their σ from the ``"points"``
     block where the method computed cofactors (else not available); no image orientation.
     """
     p = block.n_points
     xyz_sigma = np.full((p, 3), np.nan)
-    if "points" in adj.blocks and "point_index" in adj.extra:
-        idx = np.asarray(adj.extra["point_index"], dtype=np.int64)
+    if "points" in adj.blocks and getattr(adj, "point_index", None) is not None:
+        idx = np.asarray(adj.point_index, dtype=np.int64)
         xyz_sigma[idx] = adj.std()[adj.blocks["points"]].reshape(-1, 3)[: idx.size]
     passes = inspect.signature(func).parameters.get("iterations")
     return Solution(
@@ -259,7 +259,7 @@ def solution_from_points(problem: Problem, block: Block, adj, method: str, func)
         units=problem.units,
         sequence=block.sequence,
         point_ids=list(block.points.ids),
-        xyz=np.asarray(adj.extra["xyz"], dtype=float),
+        xyz=np.asarray(adj.points, dtype=float),
         xyz_sigma=xyz_sigma,
         point_roles=[ROLES[r] for r in block.points.role],
         observation_quantity="length",
@@ -268,7 +268,7 @@ def solution_from_points(problem: Problem, block: Block, adj, method: str, func)
             f"{method}: residuals are strip/model coordinates in the object frame; "
             "image orientations are not estimated by this method"
         ]
-        + check_note(problem, block, np.asarray(adj.extra["xyz"], dtype=float)),
+        + check_note(problem, block, np.asarray(adj.points, dtype=float)),
         iterations=(
             int(passes.default)
             if adj.iterations == 0 and passes is not None and isinstance(passes.default, int)
@@ -286,36 +286,36 @@ def solution_from_models(problem: Problem, block: Block, adj) -> Solution:
     m, p = block.n_images, block.n_points
     std = adj.std()
     tie_std = std[adj.blocks["points"]].reshape(-1, 3)
-    pidx = np.asarray(adj.extra["point_index"], dtype=np.int64)
-    cidx = np.asarray(adj.extra["centre_image"], dtype=np.int64)
+    pidx = np.asarray(adj.point_index, dtype=np.int64)
+    cidx = np.asarray(adj.centre_image, dtype=np.int64)
     xyz_sigma = np.full((p, 3), np.nan)
     xyz_sigma[pidx] = tie_std[: pidx.size]
     X0_sigma = np.full((m, 3), np.nan)
     X0_sigma[cidx] = tie_std[pidx.size : pidx.size + cidx.size]
     sol = Solution(
         kind="block",
-        method=f"models ({adj.extra.get('method', 'rigorous')})",
+        method=f"models ({adj.method})",
         adjustment=adj,
         units=problem.units,
         sequence=block.sequence,
         image_ids=list(block.images.ids),
-        X0=np.asarray(adj.extra["centres"], dtype=float),
+        X0=np.asarray(adj.centres, dtype=float),
         angles=np.full((m, 3), np.nan),
         X0_sigma=X0_sigma,
         angles_sigma=np.full((m, 3), np.nan),
         point_ids=list(block.points.ids),
-        xyz=np.asarray(adj.extra["xyz"], dtype=float),
+        xyz=np.asarray(adj.points, dtype=float),
         xyz_sigma=xyz_sigma,
         point_roles=[ROLES[r] for r in block.points.role],
         observation_quantity="length",
         critical=float(problem.options.get("critical", W_CRITICAL)),
         notes=[
-            f"independent models: {adj.extra['models'].n_models} models; residuals are model "
+            f"independent models: {adj.models.n_models} models; residuals are model "
             "coordinates in the object frame; image attitudes are not estimated (null)",
-            f"r.m.s. model residual: XY {adj.extra['rms_xy_m'] / problem.units.m_per_length:.4g}, "
-            f"Z {adj.extra['rms_z_m'] / problem.units.m_per_length:.4g} {problem.units.length}",
+            f"r.m.s. model residual: XY {adj.rms_xy_m / problem.units.m_per_length:.4g}, "
+            f"Z {adj.rms_z_m / problem.units.m_per_length:.4g} {problem.units.length}",
         ]
-        + check_note(problem, block, np.asarray(adj.extra["xyz"], dtype=float)),
+        + check_note(problem, block, np.asarray(adj.points, dtype=float)),
     )
     return sol
 
