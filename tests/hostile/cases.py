@@ -315,6 +315,18 @@ def problem_files() -> list[Case]:
 
     c.append(Case("solve/similarity/1e308-with-report", similarity_report, 2, ("beyond",),
                   "s.json"))  # fmt: skip
+    empties = "[" + "{}," * 700_000 + "{}]"
+    c.append(Case("solve/block/dense-structure", _problem(I.BLOCK, None, raw=empties), 2,
+                  ("structure",), I.BLOCK))  # fmt: skip
+
+    def export_far(f: Path) -> list[str]:
+        d = I.doc(I.BLOCK)
+        d["observations"][5]["x"] = -1e308
+        (f / I.BLOCK).write_text(json.dumps(d), encoding="utf-8")
+        return ["export", str(f / I.BLOCK), "-d", str(f / "out")]
+
+    c.append(Case("export/geometry/x-minus-1e308", export_far, 2, ("observations[5]",),
+                  I.BLOCK))  # fmt: skip
     big_description = _set(("description",), "d" * 200_000)
     c.append(Case("solve/block/long-description", _problem(I.BLOCK, big_description), 2,
                   ("characters",), I.BLOCK))  # fmt: skip

@@ -182,7 +182,29 @@ def read_json_file(path: str | os.PathLike[str]) -> Any:
 
     source = str(path)
     raw = read_input_bytes(path, "a JSON problem file")
+    _refuse_dense_structure(raw, source)
     return parse_json(decode_text(raw, source, "a JSON problem file", "utf-8-sig"), source)
+
+
+#: Python needs about this many bytes per JSON object or array (an empty dict: 64).
+_BYTES_PER_CONTAINER = 64
+
+
+def _refuse_dense_structure(raw: bytes, source: str) -> None:
+    """Refuse a file whose objects/arrays would need > 10 × its size in memory.
+
+    A problem file has one object per table row (≥ 30 bytes each); ``[{},{},…]`` has one
+    per 3 bytes and would take 20 × the file in Python objects. Files under 1 MB pass.
+    """
+    if len(raw) < 2**20:
+        return
+    n = raw.count(b"{") + raw.count(b"[")
+    if n * _BYTES_PER_CONTAINER > 10 * len(raw):
+        raise InputError(
+            f"{n} JSON objects/arrays in {len(raw)} bytes: far more structure than a problem "
+            f"file has (reading it would take about {n * _BYTES_PER_CONTAINER / 2**20:.0f} MB)",
+            source,
+        )
 
 
 # --------------------------------------------------------------------------- schemas
