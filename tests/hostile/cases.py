@@ -139,9 +139,12 @@ def garbage_files() -> list[Case]:
 def arguments() -> list[Case]:
     """Numbers and choices on the command line, refused by the parser (exit 2)."""
     out = []
-    bad_numbers = ["-0.01", "0", "nan", "inf", "-inf", "1e999", "abc"]
+    bad_numbers = ["-0.01", "0", "nan", "inf", "-inf", "1e999", "abc", "1e-320", "1e300"]
     for cmd, rel in (("import-bal", I.BAL), ("import-colmap", "sparse")):
-        for opt, values in (("--pixel-size", bad_numbers), ("--sigma-px", ["-1", "0", "nan"])):
+        for opt, values in (
+            ("--pixel-size", bad_numbers),
+            ("--sigma-px", ["-1", "0", "nan", "1e-320"]),
+        ):
             for v in values:
 
                 def make(f: Path, cmd=cmd, rel=rel, opt=opt, v=v) -> list[str]:

@@ -102,31 +102,52 @@ def text_problem(text: str, limit: int = MAX_TEXT_LENGTH) -> str | None:
     return None
 
 
+_PLAIN = (float, int, bool, type(None))
+
+
 def _find_bad(node: Any, path: list[str | int]) -> tuple[list[str | int], str] | None:
     """First NaN/inf placeholder, duplicated key or unusable text in document order."""
-    if isinstance(node, str):
+    hit = _bad(node)
+    if hit is None:
+        return None
+    rev, message = hit
+    return path + rev[::-1], message
+
+
+def _bad(node: Any) -> tuple[list[str | int], str] | None:
+    """The walk of :func:`_find_bad`: the path comes back reversed (built only on a hit)."""
+    t = type(node)
+    if t is str:
+        if node.isascii() and len(node) <= MAX_TEXT_LENGTH:  # the usual case, inline
+            return None
         why = text_problem(node)
-        return (path, why) if why else None
-    if isinstance(node, _NonFinite):
-        return path, (
+        return ([], why) if why else None
+    if t is _NonFinite:
+        return [], (
             f"{node.token} is not a finite number (JSON has no NaN or Infinity; "
             "leave the field out or use null where that is allowed)"
         )
-    if isinstance(node, dict):
-        if isinstance(node, _DuplicateKeys):
-            return path, f"duplicate key {node.duplicates[0]!r} in one object"
+    if t is dict or t is _DuplicateKeys:
+        if t is _DuplicateKeys:
+            return [], f"duplicate key {node.duplicates[0]!r} in one object"
         for k, v in node.items():
-            why = text_problem(k, 1000)
-            if why:
-                shown = k[:40].encode("utf-8", "backslashreplace").decode()
-                return path + [shown], f"key with {why}"
-            hit = _find_bad(v, path + [k])
+            if not (k.isascii() and len(k) <= 1000):
+                why = text_problem(k, 1000)
+                if why:
+                    return [k[:40].encode("utf-8", "backslashreplace").decode()], f"key with {why}"
+            if type(v) in _PLAIN:
+                continue
+            hit = _bad(v)
             if hit:
+                hit[0].append(k)
                 return hit
-    elif isinstance(node, list):
+    elif t is list:
         for i, v in enumerate(node):
-            hit = _find_bad(v, path + [i])
+            if type(v) in _PLAIN:
+                continue
+            hit = _bad(v)
             if hit:
+                hit[0].append(i)
                 return hit
     return None
 
