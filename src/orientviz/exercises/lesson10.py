@@ -115,7 +115,7 @@ def _bandwidth(P, mode="ok"):
 
 
 def check_bandwidth(fn) -> None:
-    """``fn(P) -> b``: the half-bandwidth of a symmetric pattern: the largest |i − k| of a
+    """``fn(P) -> b``: the half-bandwidth of a symmetric pattern: the largest abs(i − k) of a
     non-zero entry (0 for a diagonal matrix)."""
     rng = rng_for("lesson10.check_bandwidth")
     for n, p in ((12, 0.15), (20, 0.08), (9, 0.3)):

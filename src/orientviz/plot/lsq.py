@@ -21,7 +21,7 @@ def plot_ellipse_check(samples: ArrayLike, estimate: ArrayLike, cov: ArrayLike, 
     estimate : array_like, shape (2,)
         Centre of the ellipses (the true value or one estimate), in ``unit``.
     cov : array_like, shape (2, 2)
-        Predicted covariance (σ0² Q), ``unit``².
+        Predicted covariance (σ0² Q), in ``unit`` squared.
     ax : matplotlib Axes, optional
     unit : str
         Unit of the coordinates, for the labels.
