@@ -107,10 +107,10 @@ def _draw_scheme(ax, r) -> dict:
     value_at = offset_copy(ax.transData, fig=fig, x=7, y=-3, units="points")
     pts = ax.scatter(r.X, r.Y, s=60, facecolor="none", edgecolor="k", zorder=3)
     names = [
-        ax.text(x, y, name, transform=name_at, fontsize=7)
+        ax.text(x, y, name, transform=name_at, fontsize=8)
         for x, y, name in zip(r.X, r.Y, r.scheme.labels)
     ]
-    labels = [ax.text(x, y, "", transform=value_at, fontsize=7, zorder=4) for x, y in zip(r.X, r.Y)]
+    labels = [ax.text(x, y, "", transform=value_at, fontsize=8, zorder=4) for x, y in zip(r.X, r.Y)]
     return {"points": pts, "names": names, "labels": labels, "scheme": r.scheme.name}
 
 
