@@ -293,6 +293,12 @@ def read_colmap(
         f = s.split()
         iid, qw, qx, qy, qz, tx, ty, tz, cid = _numbers(img_path, no, f, "ifffffffi", "an image")
         name = f[9] if len(f) > 9 else str(iid)
+        if len(name) > 256:
+            raise InputError(
+                f"image NAME of {len(name)} characters, expected at most 256",
+                source=str(img_path),
+                where=f"line {no}",
+            )
         if iid in image_ids:
             raise InputError(f"duplicate IMAGE_ID {iid}", source=str(img_path), where=f"line {no}")
         if cid not in cams:
