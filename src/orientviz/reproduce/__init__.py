@@ -13,6 +13,11 @@ from typing import Any
 
 #: name → ("module", "function", one-line description)
 REGISTRY: dict[str, tuple[str, str, str]] = {
+    "dbat-sxb": (
+        "orientviz.reproduce.dbat_sxb",
+        "table",
+        "Börlin & Grussenmeyer, DBAT: the aerial block sxb (5 images, weighted control, check points)",
+    ),
     "ebner": (
         "orientviz.reproduce.ebner",
         "table",
