@@ -7,6 +7,10 @@ new row.
 
 Exit codes: 0 success, 2 bad input (one line names file, place and problem),
 3 the adjustment could not be done (datum defect, not determinable, no convergence).
+Every command ends with one of them and one line on stderr, never a traceback (unless
+``--debug``). Numbers on the command line are checked by the parser
+(:func:`finite_float`, :func:`positive_float`), input files by
+:mod:`orientviz.io.safeio` (regular files under ``--max-size``).
 """
 
 from __future__ import annotations
@@ -14,6 +18,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import math
 import sys
 import textwrap
 from collections.abc import Sequence
@@ -35,6 +40,48 @@ class Arg:
 def arg(*names: str, **options: Any) -> Arg:
     """Shorthand for :class:`Arg` (the same signature as ``add_argument``)."""
     return Arg(names, options)
+
+
+def finite_float(text: str) -> float:
+    """An argparse type: a finite number (``nan``, ``inf``, ``1e999`` are refused)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return value
+
+
+def positive_float(text: str) -> float:
+    """An argparse type: a finite number > 0."""
+    value = finite_float(text)
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
+    return value
+
+
+def port_number(text: str) -> int:
+    """An argparse type: a TCP port 0–65535 (0 = any free port)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a port number, got {text!r}") from None
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"expected a port in 0..65535, got {text!r}")
+    return value
+
+
+def byte_size(text: str) -> int:
+    """An argparse type: a size such as ``200M``, ``2G`` or ``4096`` (bytes)."""
+    from .io.safeio import parse_size
+
+    try:
+        return parse_size(text)
+    except (ValueError, IndexError):
+        raise argparse.ArgumentTypeError(
+            f"expected a size such as 200M or 2G, got {text!r}"
+        ) from None
 
 
 @dataclass(frozen=True)
@@ -69,9 +116,9 @@ IMPORT_OPTIONS: tuple[Arg, ...] = (
     arg("-o", "--output", required=True, metavar="OUT.json", help="problem file to write"),
     arg("--control", metavar="CSV", default=None,
         help="control points: CSV id,X,Y,Z[,sX,sY,sZ,role] keyed by point id"),
-    arg("--pixel-size", type=float, default=None, metavar="MM",
+    arg("--pixel-size", type=positive_float, default=None, metavar="MM",
         help="pixel size in mm (default 0.01)"),
-    arg("--sigma-px", type=float, default=None, metavar="PX",
+    arg("--sigma-px", type=positive_float, default=None, metavar="PX",
         help="a-priori sigma of the image coordinates in pixels (default 1)"),
 )  # fmt: skip
 
@@ -134,7 +181,7 @@ COMMANDS: dict[str, Command] = {
         arguments=(
             arg("target", nargs="?", default=None, help="problem file or demo name"),
             arg("--host", default="127.0.0.1", help="interface to serve on (default 127.0.0.1)"),
-            arg("--port", type=int, default=8080, help="port (default 8080)"),
+            arg("--port", type=port_number, default=8080, help="port (default 8080)"),
             arg("--export", metavar="FILE.html", default=None, help="write a static HTML page"),
         ),
     ),
@@ -224,15 +271,36 @@ def _overview() -> str:
     return "commands:\n" + "\n".join(rows) + "\n"
 
 
+#: options every command takes (added to each subcommand's parser)
+COMMON_OPTIONS: tuple[Arg, ...] = (
+    arg("--debug", action="store_true",
+        help="show the Python traceback of an unexpected error (for bug reports)"),
+    arg("--max-size", type=byte_size, default=None, metavar="SIZE",
+        help="largest input file to read, e.g. 200M or 2G (default 512M)"),
+)  # fmt: skip
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line on stderr (exit code 2)."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(2, f"{self.prog}: {message} (see {self.prog} --help)\n")
+
+
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="orientviz",
         description="Learn, teach and visually debug photogrammetric orientation.",
         epilog=_overview(),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--version", action="version", version=f"orientviz {__version__}")
-    sub = p.add_subparsers(dest="command", metavar="COMMAND", help="one of the commands below")
+    sub = p.add_subparsers(
+        dest="command",
+        metavar="COMMAND",
+        help="one of the commands below",
+        parser_class=_Parser,
+    )
     for name, cmd in COMMANDS.items():
         s = sub.add_parser(
             name,
@@ -240,7 +308,7 @@ def _parser() -> argparse.ArgumentParser:
             epilog=_examples(cmd),
             formatter_class=argparse.RawDescriptionHelpFormatter,
         )
-        for a in cmd.arguments:
+        for a in (*cmd.arguments, *COMMON_OPTIONS):
             s.add_argument(*a.names, **a.options)
     return p
 
@@ -283,17 +351,59 @@ def _dispatch(args: argparse.Namespace) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``orientviz`` command; returns the exit code."""
+    """Entry point of the ``orientviz`` command; returns the exit code (0, 2 or 3).
+
+    Bad input ends with exit code 2, an impossible adjustment with 3, each with one line
+    on stderr. An error nobody foresaw is reported in one line too (exit 3, "internal
+    error"), with the traceback only under ``--debug``.
+    """
+    from .io.safeio import input_limit
+
     parser = _parser()
     args = parser.parse_args(argv)
-    try:
-        if args.command in COMMANDS:
-            return _dispatch(args)
+    if args.command not in COMMANDS:
         parser.print_help()
         return 0
+    debug = bool(getattr(args, "debug", False))
+    prog = f"orientviz {args.command}"
+    try:
+        with input_limit(getattr(args, "max_size", None)):
+            return _dispatch(args)
     except OrientvizError as exc:
-        print(f"orientviz: {exc}", file=sys.stderr)
+        print(f"{prog}: {_one_line(str(exc))}", file=sys.stderr)
         return exc.exit_code
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return 3
+    except MemoryError:
+        if debug:
+            raise
+        print(
+            f"{prog}: the input is too large for this machine's memory "
+            "(use a smaller file or --max-size to refuse such files early)",
+            file=sys.stderr,
+        )
+        return 2
+    except RecursionError:
+        if debug:
+            raise
+        print(f"{prog}: the input is nested too deeply", file=sys.stderr)
+        return 2
+    except Exception as exc:  # the safety net: one line, never a traceback
+        if debug:
+            raise
+        print(
+            f"{prog}: internal error: {type(exc).__name__}: {_one_line(str(exc))} "
+            "(a bug in orientviz; rerun with --debug and report the traceback)",
+            file=sys.stderr,
+        )
+        return 3
+
+
+def _one_line(text: str, limit: int = 1000) -> str:
+    from .errors import printable
+
+    return printable(text, limit)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -40,9 +40,21 @@ class InputError(OrientvizError, ValueError):
         super().__init__(self.one_line())
 
     def one_line(self) -> str:
-        """``"file: place: message"``, omitting what is unknown."""
-        parts = [p for p in (self.source, self.where) if p]
-        return ": ".join(parts + [self.message])
+        """``"file: place: message"``, omitting what is unknown.
+
+        Always one printable line: line breaks become spaces, characters that cannot be
+        encoded (lone surrogates) are shown as escapes, and user text longer than 300
+        characters is shortened.
+        """
+        parts = [printable(p, 300) for p in (self.source, self.where) if p]
+        return ": ".join(parts + [printable(self.message, 1000)])
+
+
+def printable(text: object, limit: int = 300) -> str:
+    """``text`` as one printable line of at most ``limit`` characters (for messages)."""
+    flat = " ".join(str(text).split())
+    flat = flat.encode("utf-8", "backslashreplace").decode("utf-8")
+    return flat if len(flat) <= limit else flat[: limit - 3] + "..."
 
 
 class AdjustmentError(OrientvizError):

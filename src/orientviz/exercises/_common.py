@@ -220,7 +220,7 @@ def scale_diagnosis(got: ArrayLike, expected: ArrayLike) -> str | None:
     if g.shape != e.shape:
         return None
     k = _ratio(g, e)
-    if k is None or abs(k - 1.0) < 1e-9:
+    if k is None or abs(k - 1.0) < 1e-6:
         return None
     if abs(k + 1.0) < 1e-6:
         return "the sign is wrong throughout"

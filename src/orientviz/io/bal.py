@@ -41,6 +41,10 @@ from ..rotation import matrix_from_opk, matrix_from_rotvec, opk_from_matrix, rot
 F64 = NDArray[np.float64]
 #: Pixel size (mm) assumed when none is given: 10 µm, as in the peer bench.
 DEFAULT_PIXEL_MM: float = 0.010
+#: Image coordinates beyond ± this many pixels are refused (no sensor is that large).
+MAX_PIXELS: float = 1e7
+#: Camera parameters and coordinates beyond ± this are refused (not adjustable in doubles).
+MAX_VALUE: float = 1e15
 
 
 class _Tokens:
@@ -136,9 +140,21 @@ def _parse(lines: list[str], source: str) -> tuple[F64, F64, F64]:
                 f"expected a {name} index in [0, {n}), got {tok.words[3 + 4 * i + col]}"
             ),
         )  # fmt: skip
+    tok.first_bad(
+        np.any(np.abs(obs[:, 2:4]) > MAX_PIXELS, axis=1), 5, 4,
+        lambda i: f"image coordinate beyond ±{MAX_PIXELS:g} px: not a pixel position",
+    )  # fmt: skip
     first_cam = tok.pos
     cams = tok.take(9 * nc, "the camera parameters").reshape(nc, 9)
     pts = tok.take(3 * npt, "the points").reshape(npt, 3)
+    tok.first_bad(
+        np.any(np.abs(cams) > MAX_VALUE, axis=1), first_cam, 9,
+        lambda i: f"camera {i}: a parameter beyond ±{MAX_VALUE:g}",
+    )  # fmt: skip
+    tok.first_bad(
+        np.any(np.abs(pts) > MAX_VALUE, axis=1), first_cam + 9 * nc, 3,
+        lambda i: f"point {i}: a coordinate beyond ±{MAX_VALUE:g}",
+    )  # fmt: skip
     if tok.pos < len(tok.words):
         raise tok.fail(
             f"expected {tok.pos} numbers for the counts {nc} {npt} {nobs} of the header, "
@@ -187,12 +203,11 @@ def read_bal(
     source = str(path)
     if not (np.isfinite(pixel_size_mm) and pixel_size_mm > 0):
         raise InputError(f"expected a pixel size > 0 mm, got {pixel_size_mm}", source)
-    try:
-        lines = Path(path).read_text().splitlines()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(
-            f"cannot read the BAL file ({exc.__class__.__name__}: {exc})", source
-        ) from None
+    if not (np.isfinite(sigma_px) and sigma_px > 0):
+        raise InputError(f"expected an image σ > 0 px, got {sigma_px}", source)
+    from .safeio import read_input_text
+
+    lines = read_input_text(path, "a BAL text file").splitlines()
     obs, cams, pts = _parse(lines, source)
     npt = pts.shape[0]
     ci, pi = obs[:, 0], obs[:, 1]
@@ -251,19 +266,22 @@ def write_bal(
     params = np.column_stack([rotvec_from_matrix(Rb), t, f, np.zeros((len(f), 2))])
     obs = block.observations
     xy = obs.xy / pixel_size_mm
-    with open(path, "w") as fh:
-        fh.write(f"{block.n_images} {block.n_points} {block.n_observations}\n")
-        fh.write(
-            "".join(
+    from .safeio import write_atomic
+
+    text = "".join(
+        [
+            f"{block.n_images} {block.n_points} {block.n_observations}\n",
+            *(
                 f"{c} {p} {x:.9f} {y:.9f}\n"
                 for c, p, x, y in zip(
                     obs.image.tolist(), obs.point.tolist(), xy[:, 0].tolist(), xy[:, 1].tolist()
                 )
-            )
-        )
-        fh.write("".join(f"{v:.17g}\n" for v in params.ravel().tolist()))
-        fh.write("".join(f"{v:.17g}\n" for v in block.points.xyz.ravel().tolist()))
-    return Path(path)
+            ),
+            *(f"{v:.17g}\n" for v in params.ravel().tolist()),
+            *(f"{v:.17g}\n" for v in block.points.xyz.ravel().tolist()),
+        ]
+    )
+    return write_atomic(path, text)
 
 
 def run_from_cli(args: argparse.Namespace) -> int:

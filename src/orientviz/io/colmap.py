@@ -243,8 +243,9 @@ def write_colmap(
     Image coordinates are written distortion-free (the COLMAP camera is written as
     PINHOLE/SIMPLE_PINHOLE); object coordinates are written as they are.
     """
-    d = Path(directory)
-    d.mkdir(parents=True, exist_ok=True)
+    from .safeio import prepare_output_dir, write_atomic
+
+    d = prepare_output_dir(directory)
     p = float(pixel_size_mm or block.meta.get("pixel_size_mm", 0.01))
     cams = block.cameras
     lines = [
@@ -309,10 +310,7 @@ def write_colmap(
         )
     tmp["points3D.txt"] = "\n".join(lines) + "\n"
     for name, text in tmp.items():  # write each file atomically
-        target = d / name
-        part = target.with_suffix(".txt.part")
-        part.write_text(text, encoding="utf-8")
-        part.replace(target)
+        write_atomic(d / name, text)
 
 
 def _image_names(block: Block) -> list[str]:

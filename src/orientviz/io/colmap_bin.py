@@ -25,7 +25,18 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from .colmap_text import CAMERA_MODELS, MODEL_BY_ID, OTHER_MODELS, ColmapCamera, ColmapModel
+from .colmap_text import (
+    CAMERA_MODELS,
+    MAX_IMAGE_SIZES,
+    MAX_VALUE,
+    MODEL_BY_ID,
+    OTHER_MODELS,
+    ColmapCamera,
+    ColmapModel,
+    camera_problem,
+    checked_file,
+    pose_problem,
+)
 
 KEYPOINT = np.dtype([("x", "<f8"), ("y", "<f8"), ("id", "<i8")])
 TRACK = np.dtype([("image", "<u4"), ("idx", "<u4")])
@@ -36,6 +47,7 @@ class _Reader:
 
     def __init__(self, path: Path):
         self.path = path
+        checked_file(path, f"a COLMAP binary file {path.name}")
         try:
             with open(path, "rb") as f:
                 size = f.seek(0, 2)
@@ -92,9 +104,11 @@ def read_cameras_bin(path: Path) -> dict[int, ColmapCamera]:
         params = np.array(r.take(f"<{k}d", f"the {model} parameters"))
         if cid in cams:
             raise r.fail(f"duplicate camera id {cid}", at)
-        if not np.all(np.isfinite(params)):
-            raise r.fail(f"camera {cid}: parameters must be finite", at)
-        cams[cid] = ColmapCamera(model, int(w), int(h), params)
+        cam = ColmapCamera(model, int(w), int(h), params)
+        bad = camera_problem(cam)
+        if bad:
+            raise r.fail(f"camera {cid}: {bad}", at)
+        cams[cid] = cam
     r.done()
     if not cams:
         raise r.fail("no cameras in the file")
@@ -126,8 +140,10 @@ def read_points_bin(path: Path) -> tuple[np.ndarray, np.ndarray, set[int]]:
     )
     image = raw[at[:, None] + np.arange(4)].copy().view("<u4").ravel()
     track_images = set(np.unique(image).tolist())
-    if not np.all(np.isfinite(xyz)):
-        raise r.fail("X, Y, Z must be finite", 8)
+    bad = np.flatnonzero(~np.all(np.isfinite(xyz) & (np.abs(xyz) <= MAX_VALUE), axis=1))
+    if bad.size:
+        raise r.fail(f"3D point {int(ids[bad[0]])}: X, Y, Z must be finite and within "
+                     f"±{MAX_VALUE:g}", int(offs[bad[0]]) - 43)  # fmt: skip
     s = np.sort(ids)
     dup = np.flatnonzero(np.diff(s) == 0)
     if dup.size:
@@ -135,7 +151,7 @@ def read_points_bin(path: Path) -> tuple[np.ndarray, np.ndarray, set[int]]:
     return ids, xyz, track_images
 
 
-def read_images_bin(path: Path, point_ids: np.ndarray) -> dict:
+def read_images_bin(path: Path, point_ids: np.ndarray, cams: dict[int, ColmapCamera]) -> dict:
     r = _Reader(path)
     (n,) = r.take("<Q", "the number of images")
     ids = np.empty(n, dtype=np.int64)
@@ -149,19 +165,25 @@ def read_images_bin(path: Path, point_ids: np.ndarray) -> dict:
         vals = r.take("<I7dI", "an image")
         ids[k], pose[k], cam[k] = vals[0], vals[1:8], vals[8]
         names.append(r.name())
+        bad = pose_problem(np.array(vals[1:5]), np.array(vals[5:8]))
+        if bad:
+            raise r.fail(f"image {vals[0]}: {bad}", at)
+        if vals[8] not in cams:
+            raise r.fail(f"image {vals[0]}: unknown camera id {vals[8]}", at)
+        lim = MAX_IMAGE_SIZES * np.array([cams[vals[8]].width, cams[vals[8]].height])
         (m,) = r.take("<Q", "the number of keypoints")
         kp = r.array(KEYPOINT, m, "the keypoints")
         keep = kp[kp["id"] != -1]
         if np.any(keep["id"] < 0):
             raise r.fail(f"image {vals[0]}: POINT3D_ID must be -1 or ≥ 0", at)
         pid = keep["id"].astype(np.int64)
-        pos = np.searchsorted(sorted_ids, pid)
-        bad = (pos >= sorted_ids.size) | (sorted_ids[np.minimum(pos, max(sorted_ids.size - 1, 0))] != pid) if sorted_ids.size else np.ones(pid.size, bool)
+        pos = np.minimum(np.searchsorted(sorted_ids, pid), max(sorted_ids.size - 1, 0))
+        bad = sorted_ids[pos] != pid if sorted_ids.size else np.ones(pid.size, bool)
         if np.any(bad):
             raise r.fail(f"image {vals[0]}: unknown POINT3D_ID {int(pid[np.argmax(bad)])}", at)
         uv = np.column_stack([keep["x"], keep["y"]])
-        if not np.all(np.isfinite(uv)):
-            raise r.fail(f"image {vals[0]}: keypoint coordinates must be finite", at)
+        if not np.all(np.isfinite(uv) & (np.abs(uv) <= lim)):
+            raise r.fail(f"image {vals[0]}: keypoints must be finite and near the image", at)
         obs_image.append(np.full(pid.size, k, dtype=np.int64))
         obs_uv.append(uv)
         obs_pid.append(pid)
@@ -184,10 +206,7 @@ def read_binary_model(directory: Path) -> ColmapModel:
     cams = read_cameras_bin(directory / "cameras.bin")
     pid, xyz, track_images = read_points_bin(directory / "points3D.bin")
     img_path = directory / "images.bin"
-    im = read_images_bin(img_path, pid)
-    unknown_cam = sorted(set(im["camera"].tolist()) - set(cams))
-    if unknown_cam:
-        raise InputError(f"unknown camera id {unknown_cam[0]}", source=str(img_path))
+    im = read_images_bin(img_path, pid, cams)
     dangling = sorted(track_images - set(im["image_ids"].tolist()))
     if dangling:
         raise InputError(f"TRACK names IMAGE_ID {dangling[0]}, which is not in images.bin",

@@ -36,6 +36,44 @@ OTHER_MODELS = {5: "OPENCV_FISHEYE", 6: "FULL_OPENCV", 7: "FOV", 8: "SIMPLE_RADI
                 9: "RADIAL_FISHEYE", 10: "THIN_PRISM_FISHEYE"}  # fmt: skip
 
 
+#: Coordinates and translations beyond ± this are refused (not adjustable in doubles).
+MAX_VALUE: float = 1e15
+#: Keypoints farther than this many image sizes outside the image are refused.
+MAX_IMAGE_SIZES: float = 100.0
+
+
+def checked_file(path: Path, what: str, *, capped: bool = False) -> Path:
+    """:func:`orientviz.io.safeio.check_input_file` (streaming readers are not capped)."""
+    from .safeio import check_input_file
+
+    return check_input_file(path, what, capped=capped)
+
+
+def camera_problem(cam: "ColmapCamera") -> str | None:
+    """Why a camera cannot be used (sizes, focal length, principal point), or None."""
+    if not (0 < cam.width < 10**7 and 0 < cam.height < 10**7):
+        return f"expected WIDTH and HEIGHT of 1..10^7 pixels, got {cam.width} {cam.height}"
+    p = cam.named()
+    for name in ("f", "fx", "fy"):
+        if name in p and not 0 < p[name] < 1e12:
+            return f"expected a focal length {name} > 0 px (below 1e12), got {p[name]:g}"
+    for name in ("cx", "cy"):
+        if not abs(p[name]) <= 1e12:
+            return f"principal point {name} = {p[name]:g} px lies far outside the image"
+    if not np.all(np.isfinite(cam.params)):
+        return "expected finite parameters"
+    return None
+
+
+def pose_problem(q: F64, t: F64) -> str | None:
+    """Why an image pose cannot be used (quaternion not normalised, huge translation)."""
+    if not np.all(np.isfinite(t)) or np.max(np.abs(t)) > MAX_VALUE:
+        return f"translation beyond ±{MAX_VALUE:g}: not a position"
+    if not 0.5 < np.linalg.norm(q) < 2.0:
+        return "quaternion is not normalised"
+    return None
+
+
 @dataclass
 class ColmapCamera:
     """One COLMAP camera: model name, image size (px) and parameters (px)."""
@@ -93,6 +131,7 @@ def _numbers(path: Path, line: int, fields: list[str], kinds: str, what: str) ->
 
 def _lines(path: Path):
     """(line number, text) of the non-comment, non-blank lines of a small file."""
+    checked_file(path, f"a COLMAP text file {path.name}", capped=True)
     for chunk in line_chunks(path):
         ends = np.flatnonzero(chunk.buf == 10)
         a = 0
@@ -120,7 +159,11 @@ def read_cameras_text(path: Path) -> dict[int, ColmapCamera]:
             raise _fail(path, no, f"{model} has {len(names)} parameters, got {len(f) - 4}")
         if cid in cams:
             raise _fail(path, no, f"duplicate camera id {cid}")
-        cams[cid] = ColmapCamera(model, w, h, np.array(params))
+        cam = ColmapCamera(model, w, h, np.array(params))
+        bad = camera_problem(cam)
+        if bad:
+            raise _fail(path, no, f"camera {cid}: {bad}")
+        cams[cid] = cam
     if not cams:
         raise _fail(path, last, "no cameras in the file")
     return cams
@@ -130,6 +173,7 @@ def read_points_text(path: Path) -> tuple[I64, F64, dict[int, int]]:
     """points3D.txt: ids, XYZ and, per image id named in a TRACK, the first line naming it."""
     ids, xyz, where, track_first = [], [], [], {}
     seen_lines = 0
+    checked_file(path, "a COLMAP text file points3D.txt")
     for chunk in line_chunks(path):
         t = tokenize(chunk.buf)
         first = t.first_of_line()
@@ -157,6 +201,15 @@ def read_points_text(path: Path) -> tuple[I64, F64, dict[int, int]]:
         nonfinite = np.flatnonzero(~np.isfinite(X)) // 3
         if nonfinite.size:
             raise _fail(path, chunk.first_line + int(lines[nonfinite[0]]), "X, Y, Z must be finite")
+        huge = np.flatnonzero(np.abs(X) > MAX_VALUE) // 3
+        if huge.size:
+            raise _fail(path, chunk.first_line + int(lines[huge[0]]),
+                        f"a coordinate beyond ±{MAX_VALUE:g}: not a position")  # fmt: skip
+        negative = np.flatnonzero(pid < 0)
+        if negative.size:
+            raise _fail(path, chunk.first_line + int(lines[negative[0]]),
+                        f"POINT3D_ID {int(pid[negative[0]])}: expected an id ≥ 0 "
+                        "(-1 is COLMAP's 'no 3D point')")  # fmt: skip
         ids.append(pid)
         xyz.append(X.reshape(-1, 3))
         where.append(chunk.first_line + lines)
@@ -177,9 +230,11 @@ def read_points_text(path: Path) -> tuple[I64, F64, dict[int, int]]:
     return pid, (np.concatenate(xyz) if xyz else np.zeros((0, 3))), track_first
 
 
-def read_images_text(path: Path, point_ids: I64) -> dict:
+def read_images_text(path: Path, point_ids: I64, cams: dict[int, ColmapCamera]) -> dict:
     """images.txt: image records and the matched keypoints only (one pass, chunked)."""
+    checked_file(path, "a COLMAP text file images.txt")
     sorted_ids = np.sort(point_ids)
+    limit: list[tuple[float, float]] = []  # per image: |u|, |v| limits (px)
     recs: list[tuple] = []
     obs_image, obs_uv, obs_pid = [], [], []
     expect_header = True
@@ -203,6 +258,13 @@ def read_images_text(path: Path, point_ids: I64) -> dict:
                 f = _text(chunk, int(start), int(end)).split()
                 vals = _numbers(path, no, f, "ifffffffi", "an image")
                 name = " ".join(f[9:]) if len(f) > 9 else str(vals[0])
+                bad = pose_problem(np.array(vals[1:5]), np.array(vals[5:8]))
+                if bad:
+                    raise _fail(path, no, bad)
+                cam = cams.get(vals[8])
+                if cam is None:
+                    raise _fail(path, no, f"unknown camera id {vals[8]}")
+                limit.append((MAX_IMAGE_SIZES * cam.width, MAX_IMAGE_SIZES * cam.height))
                 recs.append((vals, name, no))
                 last_header_line = no
                 expect_header = False
@@ -236,13 +298,21 @@ def read_images_text(path: Path, point_ids: I64) -> dict:
         if not np.all(np.isfinite(uv)):
             at = uv_tok[np.flatnonzero(~np.isfinite(uv))[0]]
             raise _fail(path, chunk.first_line + int(t.line[at]), "X, Y must be finite")
-        pos = np.searchsorted(sorted_ids, pid)
-        unknown = np.flatnonzero((pos >= sorted_ids.size) | (sorted_ids[np.minimum(pos, sorted_ids.size - 1)] != pid))
+        uv = uv.reshape(-1, 2)
+        lim = np.asarray(limit)[of_line[t.line[keep]]]
+        far = np.flatnonzero(np.any(np.abs(uv) > lim, axis=1))
+        if far.size:
+            k = int(far[0])
+            raise _fail(path, chunk.first_line + int(t.line[keep[k]]),
+                        f"2D point ({uv[k, 0]:g}, {uv[k, 1]:g}) px lies far outside the image")  # fmt: skip
+        pos = np.minimum(np.searchsorted(sorted_ids, pid), max(sorted_ids.size - 1, 0))
+        found = sorted_ids[pos] == pid if sorted_ids.size else np.zeros(pid.size, bool)
+        unknown = np.flatnonzero(~found)
         if unknown.size:
             at = keep[unknown[0]]
             raise _fail(path, chunk.first_line + int(t.line[at]), f"unknown POINT3D_ID {int(pid[unknown[0]])}")
         obs_image.append(of_line[t.line[keep]])
-        obs_uv.append(uv.reshape(-1, 2))
+        obs_uv.append(uv)
         obs_pid.append(pid)
     if not recs:
         raise _fail(path, max(last_header_line, 1), "no images in the file")
@@ -273,10 +343,7 @@ def read_text_model(directory: Path) -> ColmapModel:
     pts_path = directory / "points3D.txt"
     pid, xyz, track_first = read_points_text(pts_path)
     img_path = directory / "images.txt"
-    im = read_images_text(img_path, pid)
-    for cid, line in zip(im["camera"].tolist(), im["lines"]):
-        if cid not in cams:
-            raise _fail(img_path, line, f"unknown camera id {cid}")
+    im = read_images_text(img_path, pid, cams)
     known = set(im["image_ids"].tolist())
     for iid, line in sorted(track_first.items(), key=lambda kv: kv[1]):
         if iid not in known:

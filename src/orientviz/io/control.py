@@ -67,14 +67,10 @@ def read_control(path: str | os.PathLike[str]) -> ControlPoints:
         Naming the file and line: missing columns, wrong cell counts, non-numbers,
         negative σ, unknown roles, duplicate ids, points without any coordinate.
     """
+    from .safeio import open_input_text
+
     source = str(path)
-    try:
-        with open(path, newline="", encoding="utf-8") as fh:
-            rows = list(csv.reader(fh))
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(
-            f"cannot read the control file ({exc.__class__.__name__})", source
-        ) from None
+    rows = csv_rows(open_input_text(path, "a control CSV file"), source)
     if not rows:
         raise InputError("empty control file, expected a header id,X,Y,Z", source, "line 1")
     head = [h.strip() for h in rows[0]]
@@ -95,6 +91,10 @@ def read_control(path: str | os.PathLike[str]) -> ControlPoints:
         ident = r[col["id"]].strip()
         if not ident:
             raise InputError("empty id", source, f"line {no}")
+        if len(ident) > 256:
+            raise InputError(
+                f"an id of {len(ident)} characters, expected at most 256", source, f"line {no}"
+            )
         if ident in ids:
             raise InputError(f"duplicate id {ident!r}", source, f"line {no}")
         p = [_num(r[col[c]], c, source, no, np.nan) for c in "XYZ"]
@@ -118,14 +118,37 @@ def read_control(path: str | os.PathLike[str]) -> ControlPoints:
 
 
 def write_control(path: str | os.PathLike[str], control: ControlPoints) -> None:
-    """Write ``control`` as a control CSV (inverse of :func:`read_control`)."""
-    with open(path, "w", newline="", encoding="utf-8") as fh:
-        w = csv.writer(fh)
-        w.writerow([*REQUIRED, *OPTIONAL])
-        for i, ident in enumerate(control.ids):
-            cells = ["" if not np.isfinite(v) else repr(float(v)) for v in control.xyz[i]]
-            sig = [repr(float(v)) for v in control.sigma[i]]
-            w.writerow([ident, *cells, *sig, "check" if control.role[i] == CHECK else "control"])
+    """Write ``control`` as a control CSV (inverse of :func:`read_control`), atomically."""
+    import io
+
+    from .safeio import write_atomic
+
+    fh = io.StringIO(newline="")
+    w = csv.writer(fh)
+    w.writerow([*REQUIRED, *OPTIONAL])
+    for i, ident in enumerate(control.ids):
+        cells = ["" if not np.isfinite(v) else repr(float(v)) for v in control.xyz[i]]
+        sig = [repr(float(v)) for v in control.sigma[i]]
+        w.writerow([ident, *cells, *sig, "check" if control.role[i] == CHECK else "control"])
+    write_atomic(path, fh.getvalue())
+
+
+def csv_rows(stream, source: str) -> list[list[str]]:
+    """All rows of a CSV stream; a cell beyond the csv module's field limit, a NUL byte or
+    a broken quote is one :class:`InputError` naming the line."""
+    reader = csv.reader(stream)
+    rows: list[list[str]] = []
+    with stream:
+        try:
+            for row in reader:
+                rows.append(row)
+        except csv.Error as exc:
+            where = f"line {reader.line_num}"
+            raise InputError(f"not a readable CSV row ({exc})", source, where) from None
+        except UnicodeDecodeError as exc:
+            where = f"line {reader.line_num + 1}"
+            raise InputError(f"not UTF-8 text ({exc.reason})", source, where) from None
+    return rows
 
 
 def apply_control(block: Block, control: ControlPoints) -> Block:

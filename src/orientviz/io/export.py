@@ -69,8 +69,9 @@ def export_results(
     unknown = [f for f in formats if f not in FORMATS]
     if unknown:
         raise InputError(f"unknown export format {unknown[0]!r}; expected {', '.join(FORMATS)}")
-    d = Path(directory)
-    d.mkdir(parents=True, exist_ok=True)
+    from .safeio import prepare_output_dir
+
+    d = prepare_output_dir(directory)
     out = block if adj is None else adjusted_block(block, adj)
     written: dict[str, Path] = {}
     if "json" in formats:

@@ -47,6 +47,11 @@ def import_to_problem(
             {"kind": "block", "block": block, "name": name, "options": options}, args.output
         )
     except InputError as exc:
+        if exc.source == "<written document>":  # a value the schema refuses after conversion
+            exc = InputError(
+                f"a converted value is out of range ({exc.where}: {exc.message})",
+                str(getattr(args, "file", None) or getattr(args, "directory", "")),
+            )
         print(f"{prog}: {exc.one_line()}", file=sys.stderr)
         return 2
     n_control = int(np.sum(block.points.role == CONTROL))

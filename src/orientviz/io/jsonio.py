@@ -16,11 +16,9 @@ import json
 import math
 import os
 import re
-import tempfile
 from collections.abc import Iterable
 from functools import cache
 from importlib import resources
-from pathlib import Path
 from typing import Any
 
 from ..errors import InputError
@@ -84,8 +82,31 @@ def format_path(path: Iterable[str | int]) -> str:
     return out
 
 
+#: Longest string accepted anywhere in a problem file (characters); ids are shorter still
+#: (:data:`orientviz.io.tables.MAX_ID_LENGTH`).
+MAX_TEXT_LENGTH = 100_000
+
+
+def text_problem(text: str, limit: int = MAX_TEXT_LENGTH) -> str | None:
+    """Why ``text`` cannot be used (too long, a lone UTF-16 surrogate), or None."""
+    if len(text) > limit:
+        return f"a text of {len(text)} characters, expected at most {limit}"
+    if not text.isascii():
+        try:
+            text.encode("utf-8")
+        except UnicodeEncodeError as exc:
+            return (
+                f"a character that is not valid Unicode text ({text[exc.start]!r} at "
+                f"position {exc.start}: a lone UTF-16 surrogate)"
+            )
+    return None
+
+
 def _find_bad(node: Any, path: list[str | int]) -> tuple[list[str | int], str] | None:
-    """First NaN/inf placeholder or duplicated key in document order."""
+    """First NaN/inf placeholder, duplicated key or unusable text in document order."""
+    if isinstance(node, str):
+        why = text_problem(node)
+        return (path, why) if why else None
     if isinstance(node, _NonFinite):
         return path, (
             f"{node.token} is not a finite number (JSON has no NaN or Infinity; "
@@ -95,6 +116,10 @@ def _find_bad(node: Any, path: list[str | int]) -> tuple[list[str | int], str] |
         if isinstance(node, _DuplicateKeys):
             return path, f"duplicate key {node.duplicates[0]!r} in one object"
         for k, v in node.items():
+            why = text_problem(k, 1000)
+            if why:
+                shown = k[:40].encode("utf-8", "backslashreplace").decode()
+                return path + [shown], f"key with {why}"
             hit = _find_bad(v, path + [k])
             if hit:
                 return hit
@@ -148,24 +173,16 @@ def parse_json(text: str, source: str) -> Any:
 
 
 def read_json_file(path: str | os.PathLike[str]) -> Any:
-    """Read and strictly parse a JSON file; every failure is an :class:`InputError`."""
-    p = Path(path)
+    """Read and strictly parse a JSON file; every failure is an :class:`InputError`.
+
+    The file is checked first (:func:`orientviz.io.safeio.check_input_file`: a regular
+    file within the size limit).
+    """
+    from .safeio import decode_text, read_input_bytes
+
     source = str(path)
-    try:
-        raw = p.read_bytes()
-    except FileNotFoundError:
-        raise InputError("no such file", source) from None
-    except IsADirectoryError:
-        raise InputError("is a directory, expected a JSON problem file", source) from None
-    except OSError as exc:
-        raise InputError(f"cannot read: {exc.strerror or exc}", source) from None
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise InputError(
-            f"not UTF-8 text (byte {exc.start}): expected a JSON problem file", source
-        ) from None
-    return parse_json(text, source)
+    raw = read_input_bytes(path, "a JSON problem file")
+    return parse_json(decode_text(raw, source, "a JSON problem file", "utf-8-sig"), source)
 
 
 # --------------------------------------------------------------------------- schemas
@@ -354,36 +371,7 @@ def dumps_json(doc: Any, *, indent: int | None = 1) -> str:
 
 
 def write_atomic(path: str | os.PathLike[str], text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file and an atomic rename.
+    """Write ``text`` atomically (see :func:`orientviz.io.safeio.write_atomic`)."""
+    from .safeio import write_atomic as _write
 
-    Either the complete new file exists afterwards or the old state is untouched; no
-    half-written file is ever left behind. A folder that does not exist or cannot be
-    written is an :class:`InputError` naming the path.
-    """
-    target = Path(path)
-    folder = target.parent if str(target.parent) else Path(".")
-    if target.is_dir():
-        raise InputError("is a directory, expected a file name to write", str(path))
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
-    except OSError as exc:
-        raise InputError(f"cannot write: {exc.strerror or exc}", str(path)) from None
-    try:
-        try:  # keep the mode of a file we replace, else the usual 0o666 & ~umask
-            mode = target.stat().st_mode & 0o777
-        except OSError:
-            umask = os.umask(0)
-            os.umask(umask)
-            mode = 0o666 & ~umask
-        os.chmod(tmp, mode)
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, target)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+    _write(path, text)

@@ -50,8 +50,32 @@ def solve_problem(problem: Problem, method: str | None = None) -> Solution:
         )
     if kind.solve is None:
         raise InputError(f"kind {kind.name!r} cannot be solved by this version", problem.source)
+    warnings = check_geometry(problem)
     with np.errstate(all="ignore"):
-        return kind.solve(problem, method)
+        solution = kind.solve(problem, method)
+    solution.notes.extend(f"warning: {f.message}" for f in warnings)
+    return solution
+
+
+def check_geometry(problem: Problem) -> list:
+    """The plausibility checks (:mod:`orientviz.plausibility`) of a frame problem.
+
+    Raises the first fatal finding (InputError naming the file and place, or
+    AdjustmentError); returns the warnings (also logged). Other kinds: no checks.
+    """
+    from ..model import Block
+    from ..plausibility import check_block, raise_for
+
+    if not isinstance(problem.data, Block):
+        return []
+    if problem.columnar:
+        place = lambda k: f"observations.x[{k}]"  # noqa: E731
+    else:
+        place = lambda k: f"observations[{k}]"  # noqa: E731
+    findings = check_block(
+        problem.data, exterior_unknown=problem.kind != "intersection", place=place
+    )
+    return raise_for(findings, problem.source)
 
 
 def run_from_cli(args: argparse.Namespace) -> int:
@@ -71,6 +95,8 @@ def run_from_cli(args: argparse.Namespace) -> int:
             else solution.as_text()
         )
     except InputError as exc:
+        if not exc.source:  # a solver's check: the file is the user's
+            exc = InputError(exc.message, args.file, exc.where)
         print(f"{prog}: {exc.one_line()}", file=sys.stderr)
         return 2
     except ModuleNotFoundError as exc:  # a solver module of this kind is not there (yet)
@@ -110,6 +136,9 @@ def run_from_cli(args: argparse.Namespace) -> int:
             print(f"{prog}: {exc.one_line()}", file=sys.stderr)
             return 2
     _print(text)
+    for note in solution.notes:
+        if note.startswith("warning: "):
+            print(f"{prog}: warning: {args.file}: {note[9:]}", file=sys.stderr)
     if not solution.adjustment.converged:
         print(
             f"{prog}: {args.file}: the adjustment did not converge: {solution.adjustment.reason}",

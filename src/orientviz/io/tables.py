@@ -27,6 +27,8 @@ from ..errors import InputError
 
 #: Marker for a field without default (it must be present).
 REQUIRED = object()
+#: Longest id (characters) of an image, point or camera.
+MAX_ID_LENGTH = 256
 
 
 @dataclass
@@ -116,6 +118,10 @@ class Table:
         """Map the ids in ``field`` to row numbers, rejecting duplicates with their place."""
         seen: dict[str, int] = {}
         for i, key in enumerate(self.strings(field)):
+            if len(key) > MAX_ID_LENGTH:
+                raise self.fail(
+                    i, field, f"an id of {len(key)} characters, expected at most {MAX_ID_LENGTH}"
+                )
             if key in seen:
                 raise self.fail(
                     i,

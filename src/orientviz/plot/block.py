@@ -107,7 +107,7 @@ def plot_block_layout(obj, *, ax=None, show_footprints: bool = True, show_models
     ax.set_aspect("equal")
     ax.set_xlabel("X [m]")
     ax.set_ylabel("Y [m]")
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.legend(fontsize=10, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ns = len(lay.strips)
     ax.set_title(
         title or f"{ns} strips, {block.n_images} images, {lay.n_models} models", fontsize=10
@@ -158,7 +158,7 @@ def plot_error_vectors(xyz, reference, *, ax=None, exaggeration: float | None = 
         ax.plot(
             ref[ctrl & ok, 0], ref[ctrl & ok, 1], "s", color=COLORS["xyz"], ms=6, label="control"
         )
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=10)
     fig.colorbar(sc, ax=ax, label="ΔZ [m]", shrink=0.8)
     rms = np.sqrt(np.mean(d[sel] ** 2, axis=0)) if np.any(sel) else np.zeros(3)
     ax.set_aspect("equal")
@@ -167,7 +167,7 @@ def plot_error_vectors(xyz, reference, *, ax=None, exaggeration: float | None = 
     ax.set_title(
         title
         or f"errors: RMS X {rms[0]:.3f} m, Y {rms[1]:.3f} m, Z {rms[2]:.3f} m; arrows ×{ex:.0f}",
-        fontsize=9,
+        fontsize=10,
     )
     fig.tight_layout()
     return fig
@@ -213,14 +213,14 @@ def plot_error_ellipses(xy, cov, *, ax=None, scale: float | None = None, control
     if control_xy is not None and len(control_xy):
         c = np.asarray(control_xy, float)
         ax.plot(c[:, 0], c[:, 1], "s", color=COLORS["xyz"], ms=5, label="control")
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=10)
     ax.set_aspect("equal")
     ax.autoscale_view()
     ax.set_xlabel("X [m]")
     ax.set_ylabel("Y [m]")
     ax.set_title(
         title or f"standard error ellipses ×{s:.0f} (largest semi-axis {a.max(initial=0):.3f} m)",
-        fontsize=9,
+        fontsize=10,
     )
     fig.tight_layout()
     return fig
@@ -249,7 +249,7 @@ def plot_precision_map(prec, *, ax=None, title: str | None = None):
             mfc="none",
             label="control",
         )
-        ax.legend(fontsize=7, loc="upper right")
+        ax.legend(fontsize=10, loc="upper right")
     lab = "σ_xy / σ0" if prec.kind == "planimetry" else "σ_z / σ0"
     fig.colorbar(sc, ax=ax, label=lab, shrink=0.8)
     ax.set_aspect("equal")
@@ -263,7 +263,7 @@ def plot_precision_map(prec, *, ax=None, title: str | None = None):
     ax.set_title(
         title
         or f"{prec.kind}: {prec.n_strips} strips, {prec.n_models} models, {what}; μ = {prec.mu:.2f} σ0",
-        fontsize=9,
+        fontsize=10,
     )
     fig.tight_layout()
     return fig
@@ -316,7 +316,7 @@ def plot_strip_law(precisions, *, ax=None, fit: bool = True, title: str | None =
     ax.set_xlabel("number of strips n_s (square block)")
     ax.set_ylabel("μ_xy / σ0")
     ax.set_ylim(0, 2.2)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=10, loc="lower right", ncol=2)
     ax.set_title(title or "planimetric precision of independent-model blocks", fontsize=10)
     fig.tight_layout()
     return fig
@@ -341,7 +341,7 @@ def plot_height_law(precisions, *, ax=None, title: str | None = None):
     ax.axhline(1.0, color="0.4", ls=":", lw=0.8, label="single model (σ0)")
     ax.set_xlabel("spacing i of the height-control chains [bases]")
     ax.set_ylabel("σ / σ0")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=10)
     ax.set_title(title or "height precision of independent-model blocks", fontsize=10)
     fig.tight_layout()
     return fig
@@ -385,7 +385,7 @@ def plot_check_heights(sim, results, *, ax=None, title: str | None = None):
     ax.axhline(0.0, color="k", lw=0.8)
     ax.set_xlabel("X along the strips [km]")
     ax.set_ylabel("ΔZ at check points [m]")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=10)
     ax.set_title(title or "height errors at the check points", fontsize=10)
     fig.tight_layout()
     return fig

@@ -60,7 +60,7 @@ def plot_image_field(field, *, ax=None, exaggeration: float | None = None, title
     ax.set_xlabel("x [mm] (flight direction)")
     ax.set_ylabel("y [mm]")
     name = textwrap.shorten(field.name, 60)
-    ax.set_title(title or f"{name}\nmax {field.max_um:.1f} µm, vectors ×{ex:.0f}", fontsize=9)
+    ax.set_title(title or f"{name}\nmax {field.max_um:.1f} µm, vectors ×{ex:.0f}", fontsize=10)
     return fig
 
 
@@ -116,7 +116,7 @@ def plot_model_field(
     ax.set_aspect("equal")
     ax.set_xlabel("X [m] (along the base)")
     ax.set_ylabel("Y [m]")
-    ax.set_title(title or f"{textwrap.shorten(field.name, 60)}\n{sub}", fontsize=9)
+    ax.set_title(title or f"{textwrap.shorten(field.name, 60)}\n{sub}", fontsize=10)
     return fig
 
 
@@ -140,7 +140,7 @@ def plot_deformation_comparison(without, with_, *, axes=None, exaggeration=None)
     import matplotlib.pyplot as plt
 
     if axes is None:
-        fig, axes = plt.subplots(2, 2, figsize=(10, 9))
+        fig, axes = plt.subplots(2, 2, figsize=(9, 8.2))
     axes = np.asarray(axes).ravel()
     if exaggeration is None:
         width = float(np.ptp(without.xyz[:, 0])) or 1.0
@@ -149,8 +149,8 @@ def plot_deformation_comparison(without, with_, *, axes=None, exaggeration=None)
     for k, (f, label) in enumerate(((without, "without"), (with_, "with self-calibration"))):
         plot_model_field(f, component="planimetry", ax=axes[k], exaggeration=exaggeration)
         plot_model_field(f, component="height", ax=axes[2 + k])
-        axes[k].set_title(f"{label}: " + axes[k].get_title().split("\n")[-1], fontsize=9)
-        axes[2 + k].set_title(f"{label}: " + axes[2 + k].get_title().split("\n")[-1], fontsize=9)
+        axes[k].set_title(f"{label}: " + axes[k].get_title().split("\n")[-1], fontsize=10)
+        axes[2 + k].set_title(f"{label}: " + axes[2 + k].get_title().split("\n")[-1], fontsize=10)
     fig = axes[0].figure
     fig.suptitle(f"model deformation — {textwrap.shorten(without.name, 80)}", fontsize=10)
     fig.tight_layout()
@@ -240,7 +240,7 @@ def plot_deformation_frame(
         ax.set_ylabel(f"Y [{unit}]")
     ax.set_title(
         title or f"t = {float(t):.2f} (0 without, 1 with self-calibration), ×{exaggeration:.0f}",
-        fontsize=9,
+        fontsize=10,
     )
     return fig
 
@@ -271,7 +271,7 @@ def plot_field_split(split, *, axes=None, exaggeration: float | None = None):
     from ..block.deformation import ImageField
 
     if axes is None:
-        _, axes = plt.subplots(1, 3, figsize=(14, 4.8))
+        _, axes = plt.subplots(1, 3, figsize=(9.6, 3.9))
     axes = np.asarray(axes).ravel()
     g = split.grid
     if exaggeration is None:

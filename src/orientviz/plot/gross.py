@@ -53,8 +53,8 @@ def plot_normalized_residuals(adj, *, critical: float = 3.29, ax=None, title=Non
     ax.set_yscale("symlog", linthresh=1.0)
     ax.set_xlabel("normalised residual w = v / (σ √r)")
     ax.set_ylabel("count")
-    ax.legend(fontsize=8)
-    ax.set_title(title or f"{n_out} beyond ±{critical:.2f}", fontsize=9)
+    ax.legend(fontsize=10)
+    ax.set_title(title or f"{n_out} beyond ±{critical:.2f}", fontsize=10)
     return fig
 
 
@@ -102,11 +102,11 @@ def plot_cleaning(cleaning, *, truth=None, ax=None, title=None):
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlabel("adjustment" if cleaning.method != "reruns" else "rerun")
     ax.set_ylabel("|w| (test statistic) at elimination")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=10)
     default = f"{cleaning.method}: {len(el)} eliminated in {cleaning.adjustments} adjustments" + (
         f", {missed} missed" if truth is not None else ""
     )
-    ax.set_title(title or default, fontsize=9)
+    ax.set_title(title or default, fontsize=10)
     return fig
 
 
@@ -140,7 +140,7 @@ def plot_reliability(rel, *, ax=None, sigma_unit: float = 1.0, unit: str = "", t
         title
         or f"α0 = {rel.alpha0:g}, β0 = {rel.beta0:g}: δ0 = {rel.delta0:.2f}; "
         f"{int((~ok).sum())} uncontrolled",
-        fontsize=9,
+        fontsize=10,
     )
     return fig
 
@@ -239,12 +239,12 @@ def plot_reliability_map(
     ax.set_aspect("equal")
     ax.set_xlabel("X [m]")
     ax.set_ylabel("Y [m]")
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.12), ncol=2, frameon=False)
+    ax.legend(fontsize=10, loc="upper left", bbox_to_anchor=(0.0, -0.12), ncol=2, frameon=False)
     ax.set_title(
         title
         or f"reliability of the rays (α0 = {rel.alpha0:g}, β0 = {rel.beta0:g}, δ0 = "
         f"{rel.delta0:.2f})",
-        fontsize=9,
+        fontsize=10,
     )
     return fig
 
@@ -284,15 +284,15 @@ def plot_mdb_histogram(rel, block, *, ax=None, title=None):
     blind = int((rel.used & ~rel.testable).sum())
     ax.set_xlabel("MDB along the weakest direction [µm]")
     ax.set_ylabel("rays")
-    ax.legend(fontsize=7, title="testable rays of points with", title_fontsize=7)
+    ax.legend(fontsize=10, title="testable rays of points with", title_fontsize=10)
     ax.set_title(
-        title or f"{int(ok.sum())} testable rays; {blind} not testable (MDB infinite)", fontsize=9
+        title or f"{int(ok.sum())} testable rays; {blind} not testable (MDB infinite)", fontsize=10
     )
     return fig
 
 
 def plot_block_reliability(rel, block, *, xyz=None, quantity: str = "mdb", title=None):
-    """The reliability map of a block next to the MDB histogram of its rays.
+    """The reliability map of a block above the MDB histogram of its rays (book column width).
 
     Parameters
     ----------
@@ -311,9 +311,7 @@ def plot_block_reliability(rel, block, *, xyz=None, quantity: str = "mdb", title
     """
     import matplotlib.pyplot as plt
 
-    fig, (a1, a2) = plt.subplots(
-        1, 2, figsize=(13, 5.5), width_ratios=[1.9, 1], layout="constrained"
-    )
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8.5, 10), height_ratios=[1.6, 1], layout="constrained")
     plot_reliability_map(rel, block, xyz=xyz, quantity=quantity, ax=a1)
     plot_mdb_histogram(rel, block, ax=a2)
     if title:

@@ -55,7 +55,7 @@ def plot_image(
     ax.plot(xy[:, 0], xy[:, 1], "o", ms=4, color="C0", label="image points")
     if labels:
         for i, (x, y) in enumerate(xy):
-            ax.annotate(str(i + 1), (x, y), xytext=(3, 3), textcoords="offset points", fontsize=7)
+            ax.annotate(str(i + 1), (x, y), xytext=(3, 3), textcoords="offset points", fontsize=10)
     if image is not None:
         c = np.array([image.x0, image.y0])
         ax.plot(*c, "+", ms=12, color="k", label="principal point")
@@ -72,7 +72,7 @@ def plot_image(
     ax.set_aspect("equal")
     ax.set_xlabel("x_B [m]")
     ax.set_ylabel("y_B [m]")
-    ax.legend(loc="best", fontsize=8)
+    ax.legend(loc="best", fontsize=10)
     return fig
 
 
@@ -106,7 +106,7 @@ def plot_scene_3d(
         ax.scatter(*st["station"], color=c, s=40, marker="^")
         ax.plot(*st["axis"].T, color=c, lw=2)
         ax.plot(*st["reference"].T, color=c, lw=1, ls="--")
-        ax.text(*st["station"], f" {st['name']}", color=c, fontsize=8)
+        ax.text(*st["station"], f" {st['name']}", color=c, fontsize=10)
     for k, cs in enumerate(circles or []):
         for poly in cs["polylines"]:
             ax.plot(*poly.T, color=f"C{k}", lw=0.5, alpha=0.5)
@@ -117,7 +117,7 @@ def plot_scene_3d(
         Cd = np.asarray(candidates, float)
         ax.scatter(Cd[:, 0], Cd[:, 1], Cd[:, 2], color="C3", s=60, marker="*")
         for q, name in zip(Cd, ("candidate 1", "candidate 2")):
-            ax.text(*q, f" {name}", color="C3", fontsize=8)
+            ax.text(*q, f" {name}", color="C3", fontsize=10)
     _equal_3d(ax)
     ax.set_xlabel("X [m]")
     ax.set_ylabel("Y [m]")
@@ -168,7 +168,7 @@ def plot_correlations(result, *, names: list[str] | None = None, ax=None):
     ax.set_yticks(range(len(names)), names)
     for i in range(len(names)):
         for j in range(len(names)):
-            ax.text(j, i, f"{C[i, j]:.2f}", ha="center", va="center", fontsize=7)
+            ax.text(j, i, f"{C[i, j]:.2f}", ha="center", va="center", fontsize=10)
     fig.colorbar(im, ax=ax, label="correlation ρ")
     return fig
 
@@ -196,9 +196,9 @@ def plot_fig8(
         yerr=None if spread is None else np.asarray(spread, float), capsize=3,
     )  # fmt: skip
     ax.axhline(0, color="k", lw=0.6)
-    ax.set_xticks(x, columns or [str(i + 1) for i in x], rotation=30, ha="right", fontsize=8)
+    ax.set_xticks(x, columns or [str(i + 1) for i in x], rotation=30, ha="right", fontsize=10)
     ax.set_ylabel(unit)
     ax.set_title(title)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=10)
     fig.tight_layout()
     return fig

@@ -23,8 +23,8 @@ Examples
 
 from __future__ import annotations
 
+from ._document import Report, Section, Table
 from ._html import FORMATS, html_report, report_format, write_report
-from ._model import Report, Section, Table
 from ._sections import build_report
 from ._solution import Parameter, Solution
 from ._stats import chi2_test, image_coverage, intersection_angles

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..io.problem import Problem
-from ._model import Report, Section, Table
+from ._document import Report, Section, Table
 from ._sections import build_report
 from ._solution import Solution
 from ._text import text_report

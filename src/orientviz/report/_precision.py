@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from ..model import CHECK
-from ._model import MAX_ROWS, Section, Table, angle_unit, decimals, fmt, length_unit
+from ._document import MAX_ROWS, Section, Table, angle_unit, decimals, fmt, length_unit
 from ._stats import F64, image_slice
 
 

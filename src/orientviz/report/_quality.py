@@ -14,7 +14,7 @@ import numpy as np
 
 from ..model import CHECK, CONTROL
 from ..units import RHO
-from ._model import (
+from ._document import (
     FEW_POINTS,
     MAX_ROWS,
     NEAR_SINGULAR,

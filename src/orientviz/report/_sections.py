@@ -27,7 +27,7 @@ import numpy as np
 
 from ..io.problem import Problem
 from ..model import CHECK, CONTROL, TIE
-from ._model import (
+from ._document import (
     R_LOW,
     Report,
     Section,

@@ -80,20 +80,18 @@ class ResultTable:
 
     def to_csv(self, path: str | os.PathLike[str]) -> Path:
         """Write the table as CSV (header ``name[unit]``; NaN as an empty cell), atomically."""
-        path = Path(path)
-        part = path.with_name(path.name + ".part")
-        with open(part, "w", newline="", encoding="utf-8") as fh:
-            w = csv.writer(fh)
-            w.writerow(
-                [
-                    f"{c}[{u}]" if u else c
-                    for c, u in ((c, self.units.get(c, "")) for c in self.columns)
-                ]
-            )
-            for i in range(len(self)):
-                w.writerow([_cell(self.columns[c][i]) for c in self.columns])
-        part.replace(path)
-        return path
+        import io
+
+        from ..io.safeio import write_atomic
+
+        fh = io.StringIO(newline="")
+        w = csv.writer(fh)
+        w.writerow(
+            [f"{c}[{u}]" if u else c for c, u in ((c, self.units.get(c, "")) for c in self.columns)]
+        )
+        for i in range(len(self)):
+            w.writerow([_cell(self.columns[c][i]) for c in self.columns])
+        return write_atomic(path, fh.getvalue())
 
 
 def _fmt(v, digits: int) -> str:
@@ -244,12 +242,11 @@ def read_csv_table(path: str | os.PathLike[str]) -> dict[str, list[str]]:
     Header names keep their unit suffix (``"X0[m]"``). Raises :class:`InputError`
     naming the file and line for rows with the wrong number of cells.
     """
+    from ..io.control import csv_rows
+    from ..io.safeio import open_input_text
+
     source = str(path)
-    try:
-        with open(path, newline="", encoding="utf-8") as fh:
-            rows = list(csv.reader(fh))
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read the CSV file ({exc.__class__.__name__})", source) from None
+    rows = csv_rows(open_input_text(path, "a CSV table"), source)
     if not rows:
         raise InputError("empty CSV file, expected a header", source, "line 1")
     head = rows[0]

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import textwrap
 
-from ._model import Report, Section, Table
+from ._document import Report, Section, Table
 
 #: Width of the rules between sections.
 WIDTH: int = 100

@@ -176,10 +176,9 @@ class ViewerApp:
         Uses viser's own serializer (``scene.as_html``): the viser client with the
         recorded scene embedded (GUI controls are not part of a static snapshot).
         """
-        path = Path(path)
-        html = self.server.scene.as_html()
-        path.write_text(html, encoding="utf-8")
-        return path
+        from ..io.safeio import write_atomic
+
+        return write_atomic(path, self.server.scene.as_html())
 
     def show(self, height: int = 600, static: bool = False) -> Any:
         """Display the viewer inline in Jupyter.

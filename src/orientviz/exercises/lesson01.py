@@ -1,0 +1,274 @@
+"""Checkers for lesson 01 (least squares: weights, σ0, error ellipses, the χ² test, Gauss-Newton).
+
+Oracles: the weighted mean written out by hand; the error ellipse found by brute force
+(the standard deviation sqrt(uᵀCu) in 200 001 directions u); the χ² quantiles of
+``scipy.stats.chi2``; a Gauss-Newton step built from a central-difference Jacobian.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._common import CheckFailed, call, compare, rng_for, success
+
+# --------------------------------------------------------------------- weighted mean
+
+
+def _weighted_mean(h, sigma):
+    p = 1.0 / np.asarray(sigma, float) ** 2
+    m = float(np.sum(p * h) / np.sum(p))
+    v = m - np.asarray(h, float)
+    return m, math.sqrt(float(np.sum(p * v * v)) / (len(h) - 1))
+
+
+def _wm_unweighted(h, sigma):
+    m = float(np.mean(h))
+    v = m - np.asarray(h, float)
+    p = 1.0 / np.asarray(sigma, float) ** 2
+    return m, math.sqrt(float(np.sum(p * v * v)) / (len(h) - 1))
+
+
+def _wm_one_over_sigma(h, sigma):
+    p = 1.0 / np.asarray(sigma, float)
+    m = float(np.sum(p * h) / np.sum(p))
+    v = m - np.asarray(h, float)
+    return m, math.sqrt(float(np.sum(p * v * v)) / (len(h) - 1))
+
+
+def _wm_divide_by_n(h, sigma):
+    m, s0 = _weighted_mean(h, sigma)
+    return m, s0 * math.sqrt((len(h) - 1) / len(h))
+
+
+def _wm_no_weights_in_sigma0(h, sigma):
+    m, _ = _weighted_mean(h, sigma)
+    v = m - np.asarray(h, float)
+    return m, math.sqrt(float(np.sum(v * v)) / (len(h) - 1))
+
+
+def check_weighted_mean(fn) -> None:
+    """``fn(h, sigma) -> (mean, sigma0)``: weighted mean of heights h (m) with a-priori
+    σ (m), and σ̂0 = √(vᵀPv / r) with P = diag(1/σ²) (σ0 = 1 a priori, so σ̂0 has no unit)."""
+    rng = rng_for("lesson01.check_weighted_mean")
+    for n in (3, 5):
+        sigma = rng.uniform(0.02, 0.12, n)
+        h = 412.40 + rng.normal(0.0, 1.0, n) * sigma * 1.7
+        got = call(fn, h.copy(), sigma.copy(), what="weighted_mean")
+        if np.ndim(got) != 1 or len(got) != 2:
+            raise CheckFailed("weighted_mean: return two numbers, (mean, sigma0)")
+        want = _weighted_mean(h, sigma)
+        wrong = [
+            ("the weights are forgotten (plain mean)", _wm_unweighted(h, sigma)),
+            ("weights 1/σ instead of 1/σ²", _wm_one_over_sigma(h, sigma)),
+            ("vᵀPv divided by n instead of the redundancy r = n − 1", _wm_divide_by_n(h, sigma)),
+            ("σ0 from vᵀv without the weights", _wm_no_weights_in_sigma0(h, sigma)),
+        ]
+        compare(f"the mean of {n} heights [m]", got[0], want[0], rtol=1e-10,
+                wrong=[(t, w[0]) for t, w in wrong])
+        compare(f"σ̂0 of {n} heights", got[1], want[1], rtol=1e-8, wrong=[(t, w[1]) for t, w in wrong])
+    success("weighted mean and σ̂0 agree with the hand formulas for 3 and 5 heights")
+
+
+# --------------------------------------------------------------------- error ellipse
+
+
+def _ellipse_brute(C):
+    t = np.linspace(-np.pi / 2, np.pi / 2, 200_001)
+    u = np.stack([np.cos(t), np.sin(t)])
+    s = np.sqrt(np.einsum("in,ij,jn->n", u, C, u))
+    i, j = int(np.argmax(s)), int(np.argmin(s))
+    return float(s[i]), float(s[j]), float(t[i])
+
+
+def _ellipse(C):
+    w, V = np.linalg.eigh(C)
+    a, b = math.sqrt(w[1]), math.sqrt(w[0])
+    th = math.atan2(V[1, 1], V[0, 1])
+    return a, b, th
+
+
+def _ellipse_variances(C):
+    a, b, th = _ellipse(C)
+    return a * a, b * b, th
+
+
+def _ellipse_minor_direction(C):
+    a, b, th = _ellipse(C)
+    return a, b, th + np.pi / 2
+
+
+def _ellipse_degrees(C):
+    a, b, th = _ellipse(C)
+    return a, b, math.degrees(th)
+
+
+def _ellipse_no_half(C):
+    a, b, _ = _ellipse(C)
+    return a, b, math.atan2(2 * C[0, 1], C[0, 0] - C[1, 1])
+
+
+def _angle_diff(t1, t2):
+    """Difference of two axis directions (mod π), rad."""
+    d = (t1 - t2 + np.pi / 2) % np.pi - np.pi / 2
+    return abs(d)
+
+
+def check_error_ellipse(fn) -> None:
+    """``fn(C) -> (a, b, theta)``: semi-axes (a ≥ b, units of √C) and the angle of the
+    major axis from the x axis (rad, counter-clockwise) of the standard ellipse of C."""
+    rng = rng_for("lesson01.check_error_ellipse")
+    for _ in range(3):
+        sx, sy = rng.uniform(0.004, 0.02, 2)
+        rho = rng.uniform(-0.8, 0.8)
+        C = np.array([[sx * sx, rho * sx * sy], [rho * sx * sy, sy * sy]])
+        got = tuple(float(g) for g in call(fn, C.copy(), what="ellipse"))
+        a, b, th = _ellipse_brute(C)
+        err_ab = float(np.max(np.abs(np.subtract(got[:2], (a, b))))) / a
+        err_th = _angle_diff(got[2], th)
+        if err_ab <= 1e-6 and err_th <= 1e-4:
+            continue
+        error = max(err_ab / 1e-6, err_th / 1e-4) * 1e-6
+        for label, m in (
+            ("variances instead of standard deviations (take the square roots)", _ellipse_variances),
+            ("the angle of the minor axis, not the major one", _ellipse_minor_direction),
+            ("the angle in degrees: give it in radians", _ellipse_degrees),
+            ("2θ, not θ: tan 2θ = 2σxy/(σx² − σy²), halve the angle", _ellipse_no_half),
+        ):
+            w = m(C)
+            if np.allclose(got[:2], w[:2], rtol=1e-6) and _angle_diff(got[2], w[2]) < 1e-4:
+                raise CheckFailed(f"error ellipse of C = {np.round(C * 1e6, 2).tolist()} · 1e-6: {label}",
+                                  error, 1e-6)  # fmt: skip
+        raise CheckFailed(
+            f"error ellipse of C = {np.round(C * 1e6, 2).tolist()} · 1e-6: expected a = {a:.6g}, "
+            f"b = {b:.6g}, θ = {th:.5f} rad, got {got}", error, 1e-6
+        )
+    success("semi-axes and direction agree with a brute-force search over 200 001 directions")
+
+
+# --------------------------------------------------------------------- χ² test of σ0
+
+
+def _bounds(r, alpha):
+    from scipy.stats import chi2
+
+    return (math.sqrt(chi2.ppf(alpha / 2, r) / r), math.sqrt(chi2.ppf(1 - alpha / 2, r) / r))
+
+
+def _bounds_no_sqrt(r, alpha):
+    lo, hi = _bounds(r, alpha)
+    return lo * lo, hi * hi
+
+
+def _bounds_one_sided(r, alpha):
+    from scipy.stats import chi2
+
+    return (math.sqrt(chi2.ppf(alpha, r) / r), math.sqrt(chi2.ppf(1 - alpha, r) / r))
+
+
+def _bounds_not_divided(r, alpha):
+    from scipy.stats import chi2
+
+    return (math.sqrt(chi2.ppf(alpha / 2, r)), math.sqrt(chi2.ppf(1 - alpha / 2, r)))
+
+
+def check_sigma0_bounds(fn) -> None:
+    """``fn(r, alpha) -> (lower, upper)``: the range of σ̂0/σ0 accepted by the two-sided
+    χ² test at level alpha with r degrees of freedom (r σ̂0²/σ0² ~ χ²(r))."""
+    for r, alpha in ((7, 0.05), (40, 0.01), (3, 0.10)):
+        got = tuple(float(g) for g in call(fn, r, alpha, what="sigma0_bounds"))
+        wrong = [
+            ("these are bounds for σ̂0², not σ̂0 (take the square roots)", _bounds_no_sqrt(r, alpha)),
+            ("one-sided quantiles α and 1 − α: a two-sided test puts α/2 in each tail",
+             _bounds_one_sided(r, alpha)),
+            ("the χ² quantiles are not divided by r (T = r σ̂0²/σ0²)", _bounds_not_divided(r, alpha)),
+        ]  # fmt: skip
+        compare(f"bounds for r = {r}, α = {alpha}", got, _bounds(r, alpha), rtol=1e-6, wrong=wrong)
+    success("bounds agree with scipy.stats.chi2 for r = 7, 40, 3")
+
+
+# --------------------------------------------------------------------- Gauss-Newton step
+
+
+def _distances(x, stations):
+    return np.linalg.norm(np.asarray(x, float)[None, :] - stations, axis=1)
+
+
+def _gn_step_numeric(x, stations, s, sigma):
+    x = np.asarray(x, float)
+    h = 1e-6
+    J = np.empty((len(s), 2))
+    for k in range(2):
+        e = np.zeros(2)
+        e[k] = h
+        J[:, k] = (_distances(x + e, stations) - _distances(x - e, stations)) / (2 * h)
+    P = np.diag(1.0 / np.asarray(sigma, float) ** 2)
+    dx = np.linalg.solve(J.T @ P @ J, J.T @ P @ (s - _distances(x, stations)))
+    return x + dx
+
+
+def _gn_step(x, stations, s, sigma, sign=1.0, weights=True, unit=True):
+    x = np.asarray(x, float)
+    f = _distances(x, stations)
+    J = (x[None, :] - stations) / (f[:, None] if unit else 1.0)
+    p = 1.0 / np.asarray(sigma, float) ** 2 if weights else np.ones(len(s))
+    dx = np.linalg.solve(J.T @ (p[:, None] * J), J.T @ (p * (s - f)))
+    return x + sign * dx
+
+
+def check_gauss_newton_step(fn) -> None:
+    """``fn(x, stations, s, sigma) -> x_new``: one Gauss-Newton step of a 2-D point
+    (m) from measured distances s (m, σ in m) to known stations (k, 2)."""
+    rng = rng_for("lesson01.check_gauss_newton_step")
+    stations = np.array([[0.0, 0.0], [820.0, 40.0], [300.0, 910.0], [-250.0, 500.0]])
+    truth = np.array([310.0, 360.0])
+    sigma = np.array([0.004, 0.012, 0.006, 0.02])
+    s = _distances(truth, stations) + rng.normal(0, 1, 4) * sigma
+    x = truth + np.array([7.0, -4.0])
+    got = np.asarray(call(fn, x.copy(), stations.copy(), s.copy(), sigma.copy(), what="gn_step"), float)
+    want = _gn_step_numeric(x, stations, s, sigma)
+    wrong = [
+        ("the correction is subtracted: N Δx = JᵀP(l − f(x)), then x + Δx",
+         _gn_step(x, stations, s, sigma, sign=-1)),
+        ("the weights are forgotten", _gn_step(x, stations, s, sigma, weights=False)),
+        ("the Jacobian rows are not unit vectors: ∂s_i/∂X = (X − X_i)/s_i",
+         _gn_step(x, stations, s, sigma, unit=False)),
+    ]  # fmt: skip
+    # 1e-9 of the coordinates ≈ 0.4 µm: the numerical Jacobian's own error is far smaller
+    compare("the point after one step [m]", got, want, rtol=1e-9, wrong=wrong)
+    success(f"one step from 8 m off lands {np.linalg.norm(got - truth) * 1000:.1f} mm from the truth, "
+       "as a step with a numerical Jacobian does")
+
+
+SOLUTIONS = {
+    "check_weighted_mean": _weighted_mean,
+    "check_error_ellipse": _ellipse,
+    "check_sigma0_bounds": _bounds,
+    "check_gauss_newton_step": lambda x, st, s, sig: _gn_step(x, st, s, sig),
+}
+
+MUTANTS = {
+    "check_weighted_mean": {
+        "unweighted": _wm_unweighted,
+        "one_over_sigma": _wm_one_over_sigma,
+        "divide_by_n": _wm_divide_by_n,
+        "sigma0_unweighted": _wm_no_weights_in_sigma0,
+    },
+    "check_error_ellipse": {
+        "variances": _ellipse_variances,
+        "minor_direction": _ellipse_minor_direction,
+        "degrees": _ellipse_degrees,
+        "no_half": _ellipse_no_half,
+    },
+    "check_sigma0_bounds": {
+        "no_sqrt": _bounds_no_sqrt,
+        "one_sided": _bounds_one_sided,
+        "not_divided": _bounds_not_divided,
+    },
+    "check_gauss_newton_step": {
+        "minus": lambda x, st, s, sig: _gn_step(x, st, s, sig, sign=-1),
+        "no_weights": lambda x, st, s, sig: _gn_step(x, st, s, sig, weights=False),
+        "not_unit": lambda x, st, s, sig: _gn_step(x, st, s, sig, unit=False),
+    },
+}

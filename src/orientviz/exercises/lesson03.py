@@ -1,0 +1,187 @@
+"""Checkers for lesson 03 (DLT and interior orientation).
+
+Oracles: error-free simulated images of a 3-D test field with a known camera (X0, R, c,
+x0, y0); the true DLT parameters are built from them by hand (P = K Rᵀ [I | −X0],
+scaled to P[2, 3] = 1), never by the library's estimator.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..rotation import matrix_from_opk
+from ._common import CheckFailed, call, compare, rng_for, success
+
+
+def _scene(rng, affine=False):
+    """A camera 7 m in front of a 6 × 4 × 2.5 m test field; its true P and image points."""
+    X = rng.uniform([-3.0, -2.0, 0.0], [3.0, 2.0, 2.5], (10, 3))
+    X0 = np.array([rng.uniform(-1, 1), -7.0 + rng.uniform(-0.5, 0.5), rng.uniform(1.0, 2.0)])
+    ang = np.array([1.45 + rng.uniform(-0.1, 0.1), rng.uniform(-0.2, 0.2), rng.uniform(-0.3, 0.3)])
+    c, x0, y0 = rng.uniform(20.0, 35.0), rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3)
+    R = matrix_from_opk(*ang)
+    K = np.array([[-c, 0.0, x0], [0.0, -c, y0], [0.0, 0.0, 1.0]])
+    if affine:
+        K[1, 1] *= 1.003
+        K[0, 1] = 0.002 * K[1, 1]
+    P = K @ R.T @ np.hstack([np.eye(3), -X0[:, None]])
+    P = P / P[2, 3]
+    h = np.column_stack([X, np.ones(len(X))]) @ P.T
+    xy = h[:, :2] / h[:, 2:]
+    return X, xy, P, X0, (c, x0, y0)
+
+
+# --------------------------------------------------------------------- the DLT rows
+
+
+def _rows(X, xy, cross=-1.0, swap=False, stacked=False):
+    n = len(X)
+    one = np.ones((n, 1))
+    ax = np.hstack([X, one, np.zeros((n, 4)), cross * (xy[:, 1:] if swap else xy[:, :1]) * X])
+    ay = np.hstack([np.zeros((n, 4)), X, one, cross * (xy[:, :1] if swap else xy[:, 1:]) * X])
+    if stacked:
+        return np.vstack([ax, ay]), np.concatenate([xy[:, 0], xy[:, 1]])
+    A = np.empty((2 * n, 11))
+    A[0::2], A[1::2] = ax, ay
+    return A, xy.reshape(-1)
+
+
+def check_dlt_rows(fn) -> None:
+    """``fn(X, xy) -> (A, b)``: the linear DLT system, rows x1, y1, x2, y2, …, unknowns
+    L1…L11; the true L of an error-free image must satisfy A L = b."""
+    rng = rng_for("lesson03.check_dlt_rows")
+    X, xy, P, _, _ = _scene(rng)
+    got = call(fn, X.copy(), xy.copy(), what="dlt_rows")
+    if not isinstance(got, tuple) or len(got) != 2:
+        raise CheckFailed("dlt_rows: return the pair (A, b)")
+    A, b = (np.asarray(g, dtype=float) for g in got)
+    L = P.reshape(-1)[:11]
+    want_A, want_b = _rows(X, xy)
+    compare("b (observed x1, y1, x2, …) [mm]", b, want_b, rtol=1e-12,
+            wrong=[("b holds all x first, then all y: interleave x1, y1, x2, y2, …",
+                    np.concatenate([xy[:, 0], xy[:, 1]]))])  # fmt: skip
+    compare(
+        "A",
+        A,
+        want_A,
+        rtol=1e-12,
+        wrong=[
+            ("the last three columns need a minus sign: x (L9 X + L10 Y + L11 Z + 1) moved "
+             "to the left side", _rows(X, xy, cross=1.0)[0]),
+            ("x and y are swapped in the last three columns (the x row has −x·X, −x·Y, −x·Z)",
+             _rows(X, xy, swap=True)[0]),
+            ("rows all x first, then all y: interleave x1, y1, x2, y2, …",
+             _rows(X, xy, stacked=True)[0]),
+        ],
+    )  # fmt: skip
+    resid = float(np.max(np.abs(A @ L - b)))
+    success(f"A L − b = {resid:.1e} mm for the true L of an error-free image of 10 points")
+
+
+# --------------------------------------------------------------------- projection centre
+
+
+def _centre(L):
+    P = np.append(np.asarray(L, float), 1.0).reshape(3, 4)
+    return -np.linalg.solve(P[:, :3], P[:, 3])
+
+
+def _centre_plus(L):
+    return -_centre(L)
+
+
+def _centre_transpose(L):
+    P = np.append(np.asarray(L, float), 1.0).reshape(3, 4)
+    return -np.linalg.solve(P[:, :3].T, P[:, 3])
+
+
+def _centre_no_one(L):
+    P = np.append(np.asarray(L, float), 0.0).reshape(3, 4)
+    return -np.linalg.solve(P[:, :3], P[:, 3])
+
+
+def check_projection_centre(fn) -> None:
+    """``fn(L) -> X0``: the projection centre (m) contained in eleven DLT parameters."""
+    for salt in range(2):
+        X, xy, P, X0, _ = _scene(rng_for("lesson03.check_projection_centre", salt))
+        L = P.reshape(-1)[:11]
+        got = call(fn, L.copy(), what="projection_centre")
+        compare("X0 [m]", got, X0, rtol=1e-9, wrong=[
+            ("the sign is wrong: P (X0, 1)ᵀ = 0 gives M X0 = −p4", _centre_plus(L)),
+            ("M is transposed: solve M X0 = −p4 with M the left 3×3 of P (rows L1…L3, L5…L7, L9…L11)",
+             _centre_transpose(L)),
+            ("the last element of P (the 1 after L11) is missing from p4", _centre_no_one(L)),
+        ])  # fmt: skip
+    success("X0 agrees with the camera that took the simulated images (two cameras)")
+
+
+# --------------------------------------------------------------------- interior orientation
+
+
+def _interior(L):
+    P = np.append(np.asarray(L, float), 1.0).reshape(3, 4)
+    m1, m2, m3 = P[0, :3], P[1, :3], P[2, :3]
+    q = m3 @ m3
+    x0, y0 = m1 @ m3 / q, m2 @ m3 / q
+    c = np.sqrt(m1 @ m1 / q - x0 * x0)
+    return np.array([c, x0, y0])
+
+
+def _interior_unnormalised(L):
+    P = np.append(np.asarray(L, float), 1.0).reshape(3, 4)
+    m1, m2, m3 = P[0, :3], P[1, :3], P[2, :3]
+    x0, y0 = m1 @ m3, m2 @ m3
+    return np.array([np.sqrt(m1 @ m1 / (m3 @ m3) - x0 * x0 / (m3 @ m3) ** 2), x0, y0])
+
+
+def _interior_no_x0(L):
+    P = np.append(np.asarray(L, float), 1.0).reshape(3, 4)
+    m1, m2, m3 = P[0, :3], P[1, :3], P[2, :3]
+    q = m3 @ m3
+    return np.array([np.sqrt(m1 @ m1 / q), m1 @ m3 / q, m2 @ m3 / q])
+
+
+def _interior_swapped(L):
+    c, x0, y0 = _interior(L)
+    return np.array([c, y0, x0])
+
+
+def check_interior_from_dlt(fn) -> None:
+    """``fn(L) -> (c, x0, y0)`` in mm from the DLT of a camera with square pixels and no
+    shear (then the two affine parameters are zero)."""
+    for salt in range(2):
+        X, xy, P, X0, io = _scene(rng_for("lesson03.check_interior_from_dlt", salt))
+        L = P.reshape(-1)[:11]
+        got = np.asarray(call(fn, L.copy(), what="interior_from_dlt"), dtype=float)
+        compare("(c, x0, y0) [mm]", got, np.array(io), rtol=1e-9, wrong=[
+            ("x0 and y0 need the division by |m3|² (P is scaled so that P[2, 3] = 1, not |m3| = 1)",
+             _interior_unnormalised(L)),
+            ("|m1|²/|m3|² = c² + x0²: subtract x0² before the square root", _interior_no_x0(L)),
+            ("x0 and y0 are swapped: x0 comes from the first row m1", _interior_swapped(L)),
+        ])  # fmt: skip
+    success("c, x0, y0 agree with the simulated camera (two cameras)")
+
+
+SOLUTIONS = {
+    "check_dlt_rows": lambda X, xy: _rows(X, xy),
+    "check_projection_centre": _centre,
+    "check_interior_from_dlt": _interior,
+}
+
+MUTANTS = {
+    "check_dlt_rows": {
+        "plus_sign": lambda X, xy: _rows(X, xy, cross=1.0),
+        "swap_xy": lambda X, xy: _rows(X, xy, swap=True),
+        "stacked": lambda X, xy: _rows(X, xy, stacked=True),
+    },
+    "check_projection_centre": {
+        "plus": _centre_plus,
+        "transpose": _centre_transpose,
+        "no_one": _centre_no_one,
+    },
+    "check_interior_from_dlt": {
+        "unnormalised": _interior_unnormalised,
+        "no_x0": _interior_no_x0,
+        "swapped": _interior_swapped,
+    },
+}

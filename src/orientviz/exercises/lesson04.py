@@ -1,0 +1,265 @@
+"""Checkers for lesson 04, space resection and forward intersection.
+
+Oracles (never :func:`orientviz.orientation.resection.resection` or
+:func:`orientviz.orientation.intersection.intersect_points`):
+
+* the resection: :func:`scipy.optimize.least_squares` on the checker's own collinearity
+  residuals (an independent minimiser), and error-free simulated truth;
+* two rays: a scene built around a known common perpendicular, so the midpoint is known;
+* partial derivatives: central differences of the checker's own collinearity;
+* the normal-case precision: the covariance of a two-ray intersection from numerical
+  derivatives;
+* one weighted Gauss-Newton step: the weighted least-squares problem solved by QR
+  (``numpy.linalg.lstsq`` on √P A), not by normal equations.
+
+Units: object space m, image mm, angles rad, σ of image coordinates mm.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import least_squares
+
+from ._common import CheckFailed, call, compare, rng_for, success
+from .lesson02 import _rodrigues_opk
+
+__all__ = [
+    "MUTANTS",
+    "SOLUTIONS",
+    "check_design_X0",
+    "check_normal_step",
+    "check_resection",
+    "check_sigma_Z",
+    "check_two_rays",
+]
+
+F64 = NDArray[np.float64]
+
+
+def _R(angles_rad: F64) -> F64:
+    return _rodrigues_opk(*angles_rad, unit=1.0)
+
+
+def _project(X: F64, X0: F64, R: F64, c: float) -> F64:
+    uvw = (X - X0) @ R
+    return -c * uvw[:, :2] / uvw[:, 2:]
+
+
+def _scene(rng: np.random.Generator, n: int = 9) -> tuple[F64, F64, F64, F64]:
+    """Control points, true parameters (X0, angles in rad) and error-free image points."""
+    X = np.column_stack([rng.uniform(-900, 900, n), rng.uniform(-900, 900, n), rng.uniform(0, 150, n)])
+    p = np.array([35.0, -22.0, 1500.0, *rng.uniform(-0.04, 0.04, 2), rng.uniform(-3, 3)])
+    xy = _project(X, p[:3], _R(p[3:]), 152.7)
+    return X, p, xy, np.array(152.7)
+
+
+def check_resection(resection_gn: Callable[..., tuple[F64, float]]) -> None:
+    """``resection_gn(xy, X, c, sigma, p0)`` must return (p̂, σ̂0), p = (X0, Y0, Z0, ω, φ, κ) in m, rad."""
+    rng = rng_for("lesson04.check_resection")
+    X, truth, xy, c = _scene(rng)
+    start = truth + np.array([40.0, -30.0, 25.0, 0.02, -0.015, 0.03])
+    # 1. error-free image points: the truth must come back, with σ̂0 ≈ 0
+    out = call(resection_gn, xy, X, float(c), 0.005, start.copy(), what="resection_gn")
+    p, s0 = np.asarray(out[0], dtype=float), float(out[1])
+    try:
+        compare("X0, Y0, Z0 [m] from error-free points", p[:3], truth[:3], rtol=1e-6, scale=1.0)
+        compare("ω, φ, κ [rad] from error-free points", p[3:], truth[3:], rtol=1e-9, scale=1.0)
+    except CheckFailed as exc:
+        hint = "\n  (the start was 40 m and ~1 gon off: iterate until the corrections are tiny, and add dx to p)"
+        raise CheckFailed(str(exc) + hint, exc.error, exc.tolerance) from None
+    # 2. noisy, unequal σ: p̂ and σ̂0 against scipy's minimiser of the weighted residuals
+    sigma = np.where(np.arange(len(X)) % 2 == 0, 0.003, 0.009)[:, None] * np.ones((1, 2))
+    noisy = xy + rng.normal(0.0, 1.0, xy.shape) * sigma
+
+    def weighted(q: F64) -> F64:
+        return ((_project(X, q[:3], _R(q[3:]), float(c)) - noisy) / sigma).ravel()
+
+    ref = least_squares(weighted, start, x_scale=np.array([1, 1, 1, 1e-3, 1e-3, 1e-3]), xtol=1e-15, ftol=1e-15, gtol=1e-15).x
+    r = noisy.size - 6
+    s0_ref = float(np.sqrt(np.sum(weighted(ref) ** 2) / r))
+    plain = least_squares(lambda q: weighted(q) * sigma.ravel(), start, x_scale=np.array([1, 1, 1, 1e-3, 1e-3, 1e-3]),
+                          xtol=1e-15, ftol=1e-15, gtol=1e-15).x
+    s0_unweighted = float(np.sqrt(np.sum((weighted(plain) * sigma.ravel()) ** 2) / r))
+    out = call(resection_gn, noisy, X, float(c), sigma, start.copy(), what="resection_gn")
+    p, s0 = np.asarray(out[0], dtype=float), float(out[1])
+    wrong = [("σ̂0 without weights (in mm): weight each residual with 1/σ²", s0_unweighted),
+             ("σ̂0 divided by n, not by the redundancy r = 2n − 6", s0_ref * np.sqrt(r / noisy.size))]
+    compare("σ̂0 (noisy points, unequal σ)", s0, s0_ref, rtol=1e-4, wrong=wrong)
+    compare("X0, Y0, Z0 [m] (noisy points, unequal σ)", p[:3], ref[:3], rtol=1e-5, scale=1.0)
+    compare("ω, φ, κ [rad] (noisy points, unequal σ)", p[3:], ref[3:], rtol=1e-8, scale=1.0)
+    success(f"resection: the truth from error-free points; σ̂0 = {s0:.3f} as an independent minimiser finds it")
+
+
+def check_two_rays(intersect_two_rays: Callable[[F64, F64, F64, F64], F64]) -> None:
+    """``intersect_two_rays(X01, d1, X02, d2)`` must return the midpoint of the shortest segment (3,)."""
+    rng = rng_for("lesson04.check_two_rays")
+    for _ in range(3):
+        P = rng.uniform(-500, 500, 3) + [0, 0, 200]
+        d1, d2 = rng.normal(size=3), rng.normal(size=3)
+        d1[2], d2[2] = -abs(d1[2]) - 1, -abs(d2[2]) - 1
+        n = np.cross(d1, d2)
+        n /= np.linalg.norm(n)
+        h = rng.uniform(0.05, 0.5)  # half the gap between the rays, m
+        Q1, Q2 = P + h * n, P - h * n
+        X01, X02 = Q1 - rng.uniform(800, 1500) * d1, Q2 - rng.uniform(800, 1500) * d2
+        got = call(intersect_two_rays, X01.copy(), d1 * 3.0, X02.copy(), d2 * 0.5, what="intersect_two_rays")
+        wrong = [("this is the point on ray 1, not the midpoint", Q1), ("this is the point on ray 2, not the midpoint", Q2)]
+        compare("midpoint [m]", got, P, rtol=1e-9, scale=1.0, wrong=wrong)
+    success("two rays: the midpoint of their common perpendicular (direction lengths do not matter)")
+
+
+def _numeric_design(X: F64, X0: F64, R: F64, c: float, h: float = 1e-3) -> F64:
+    cols = []
+    for k in range(3):
+        e = np.zeros(3)
+        e[k] = h
+        cols.append(((_project(X, X0 + e, R, c) - _project(X, X0 - e, R, c)) / (2 * h)).ravel())
+    return np.column_stack(cols)
+
+
+def check_design_X0(design_X0: Callable[[F64, F64, F64, float], F64]) -> None:
+    """``design_X0(X, X0, R, c)`` must return ∂(x1, y1, x2, y2, …)/∂(X0, Y0, Z0), shape (2n, 3), mm/m."""
+    rng = rng_for("lesson04.check_design_X0")
+    X, p, _, c = _scene(rng, 5)
+    R = _R(p[3:] * 20)  # a strongly tilted image, so that R and Rᵀ differ clearly
+    X0 = p[:3]
+    truth = _numeric_design(X, X0, R, float(c))
+    got = call(design_X0, X, X0, R, float(c), what="design_X0")
+    order = np.vstack([truth[0::2], truth[1::2]])
+    wrong = [("these are the derivatives by the point X, not by X0 (sign)", -truth),
+             ("the rows must alternate x1, y1, x2, y2, …", order),
+             ("the columns are by R instead of Rᵀ", _numeric_design(X, X0, R.T, float(c)))]
+    compare("∂(x, y)/∂X0 [mm/m]", got, truth, rtol=1e-6, wrong=wrong)
+    success("design matrix for X0, Y0, Z0 agrees with numerical derivatives")
+
+
+def check_sigma_Z(sigma_Z: Callable[[float, float, float, float], float]) -> None:
+    """``sigma_Z(B, H, c, sigma_x)`` (m, m, mm, mm) must return σ of the height of a normal-case point, m."""
+    rng = rng_for("lesson04.check_sigma_Z")
+    for _ in range(2):
+        B, H, c, sx = rng.uniform(300, 900), rng.uniform(800, 3000), 152.7, rng.uniform(0.003, 0.008)
+        # a ground point midway, seen in two vertical images; covariance of its intersection
+        P = np.array([[B / 2, 0.0, 0.0]])
+        X01, X02 = np.array([0.0, 0, H]), np.array([B, 0, H])
+        A = []
+        for X0 in (X01, X02):
+            cols = []
+            for k in range(3):
+                e = np.zeros(3)
+                e[k] = 1e-3
+                cols.append(((_project(P + e, X0, np.eye(3), c) - _project(P - e, X0, np.eye(3), c)) / 2e-3).ravel())
+            A.append(np.column_stack(cols))
+        A = np.vstack(A) / sx
+        truth = float(np.sqrt(np.linalg.inv(A.T @ A)[2, 2]))
+        got = float(call(sigma_Z, B, H, c, sx, what="sigma_Z"))
+        wrong = [("√2 is missing: the x-parallax has two measured coordinates", truth / np.sqrt(2)),
+                 ("σ_x must be in mm here (5 µm = 0.005 mm), not µm", truth * 1000.0)]
+        compare(f"σ_Z for B = {B:.0f} m, H = {H:.0f} m [m]", got, truth, rtol=1e-6, wrong=wrong)
+    success("σ_Z = (H/B)(H/c)·√2·σ_x, as the covariance of the two-ray intersection says")
+
+
+def check_normal_step(normal_step: Callable[[F64, F64, F64], F64]) -> None:
+    """``normal_step(A, dl, P)`` must return dx solving (AᵀPA) dx = AᵀP dl (P diagonal, given as a vector)."""
+    rng = rng_for("lesson04.check_normal_step")
+    A = rng.normal(size=(12, 4))
+    dl = rng.normal(size=12)
+    P = np.exp(rng.uniform(-3, 3, 12))  # weights differing up to a factor 400
+    w = np.sqrt(P)
+    truth = np.linalg.lstsq(A * w[:, None], dl * w, rcond=None)[0]
+    unweighted = np.linalg.lstsq(A, dl, rcond=None)[0]
+    sqrt_w = np.linalg.lstsq(A * P[:, None] ** 0.25, dl * P ** 0.25, rcond=None)[0]
+    got = call(normal_step, A, dl, P, what="normal_step")
+    wrong = [("the weights P are missing", unweighted), ("this weights with √P (1/σ instead of 1/σ²)", sqrt_w)]
+    compare("dx", got, truth, rtol=1e-8, wrong=wrong)
+    if got.shape != (4,):  # pragma: no cover - compare already checked the shape
+        raise CheckFailed("dx: expected shape (4,)")
+    success("dx: the weighted least-squares step, as a QR solution of √P A dx = √P dl gives it")
+
+
+# ---------------------------------------------------------------- solutions and mutants
+
+
+def _sol_resection(xy, X, c, sigma, p0, n_iter=10, weighted=True, divide_by_n=False):
+    p = np.array(p0, dtype=float)
+    s = np.broadcast_to(np.asarray(sigma, dtype=float), xy.shape).ravel() if weighted else np.ones(xy.size)
+    for _ in range(n_iter):
+        f = lambda q: _project(X, q[:3], _R(q[3:]), c).ravel()  # noqa: E731
+        dl = xy.ravel() - f(p)
+        A = np.column_stack([(f(p + h) - f(p - h)) / (2e-6) for h in np.eye(6) * 1e-6])
+        dx = np.linalg.solve((A / s[:, None] ** 2).T @ A, (A / s[:, None] ** 2).T @ dl)
+        p = p + dx
+    v = f(p) - xy.ravel()
+    r = xy.size if divide_by_n else xy.size - 6
+    return p, float(np.sqrt(np.sum((v / s) ** 2) / r))
+
+
+def _sol_two_rays(X01, d1, X02, d2):
+    b = X02 - X01
+    N = np.array([[d1 @ d1, -d1 @ d2], [-d1 @ d2, d2 @ d2]])
+    lam1, lam2 = np.linalg.solve(N, [d1 @ b, -d2 @ b])
+    return (X01 + lam1 * d1 + X02 + lam2 * d2) / 2
+
+
+def _two_rays_plus(X01, d1, X02, d2):
+    """A mutant: +d1ᵀd2 off the diagonal of the 2×2 normal matrix."""
+    b = X02 - X01
+    N = np.array([[d1 @ d1, d1 @ d2], [d1 @ d2, d2 @ d2]])
+    lam1, lam2 = np.linalg.solve(N, [d1 @ b, -d2 @ b])
+    return (X01 + lam1 * d1 + X02 + lam2 * d2) / 2
+
+
+def _sol_design_X0(X, X0, R, c):
+    u, v, w = ((X - X0) @ R).T
+    A = np.empty((2 * len(X), 3))
+    A[0::2] = c * (R[:, 0][None, :] * w[:, None] - R[:, 2][None, :] * u[:, None]) / w[:, None] ** 2
+    A[1::2] = c * (R[:, 1][None, :] * w[:, None] - R[:, 2][None, :] * v[:, None]) / w[:, None] ** 2
+    return A
+
+
+def _sol_sigma_Z(B, H, c, sigma_x):
+    return (H / B) * (H / c) * np.sqrt(2) * sigma_x
+
+
+def _sol_normal_step(A, dl, P):
+    N = A.T @ (P[:, None] * A)
+    return np.linalg.solve(N, A.T @ (P * dl))
+
+
+SOLUTIONS = {
+    "check_resection": _sol_resection,
+    "check_two_rays": _sol_two_rays,
+    "check_design_X0": _sol_design_X0,
+    "check_sigma_Z": _sol_sigma_Z,
+    "check_normal_step": _sol_normal_step,
+}
+
+MUTANTS = {
+    "check_resection": {
+        "weights forgotten": lambda *a: _sol_resection(*a, weighted=False),
+        "divides by n": lambda *a: _sol_resection(*a, divide_by_n=True),
+        "one iteration": lambda *a: _sol_resection(*a, n_iter=1),
+    },
+    "check_two_rays": {
+        "point on ray 1": lambda X01, d1, X02, d2: X01 + np.linalg.solve(
+            np.array([[d1 @ d1, -d1 @ d2], [-d1 @ d2, d2 @ d2]]), [d1 @ (X02 - X01), -d2 @ (X02 - X01)])[0] * d1,
+        "sign of the cross term": lambda X01, d1, X02, d2: _two_rays_plus(X01, d1, X02, d2),
+    },
+    "check_design_X0": {
+        "by X, not X0": lambda X, X0, R, c: -_sol_design_X0(X, X0, R, c),
+        "R^T": lambda X, X0, R, c: _sol_design_X0(X, X0, R.T, c),
+        "rows x.. then y..": lambda X, X0, R, c: np.vstack([_sol_design_X0(X, X0, R, c)[0::2], _sol_design_X0(X, X0, R, c)[1::2]]),
+    },
+    "check_sigma_Z": {
+        "no sqrt 2": lambda B, H, c, s: (H / B) * (H / c) * s,
+        "H/B once": lambda B, H, c, s: (H / c) * np.sqrt(2) * s,
+        "micrometres": lambda B, H, c, s: _sol_sigma_Z(B, H, c, s * 1000),
+    },
+    "check_normal_step": {
+        "weights forgotten": lambda A, dl, P: _sol_normal_step(A, dl, np.ones_like(P)),
+        "sqrt of the weights": lambda A, dl, P: _sol_normal_step(A, dl, np.sqrt(P)),
+        "sign": lambda A, dl, P: -_sol_normal_step(A, dl, P),
+    },
+}

@@ -1,0 +1,145 @@
+"""Checkers for lesson 06 (epipolar geometry and normalised images).
+
+Oracles: error-free simulated pairs (known R1, R2, B, model points): coplanarity of the
+true rays; the epipolar line checked by brute force — two points on the left ray at
+different depths projected into the right image must lie on it; model points compared
+with the simulated truth.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..camera import project
+from ..rotation import matrix_from_opk
+from ._common import CheckFailed, call, compare, rng_for, success
+
+
+def _skew(v):
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+def _pair(rng):
+    c = rng.uniform(100.0, 160.0)
+    b = rng.uniform(70.0, 100.0)
+    B = np.array([b, rng.uniform(-4, 4), rng.uniform(-4, 4)])
+    R2 = matrix_from_opk(*rng.uniform(-0.05, 0.05, 3))
+    n = 8
+    P = np.column_stack([rng.uniform(-10, b + 10, n), rng.uniform(-80, 80, n), -c + rng.uniform(-20, 20, n)])
+    xy1 = project(P, np.zeros(3), np.eye(3), c)
+    xy2 = project(P, B, R2, c)
+    return c, B, R2, P, xy1, xy2
+
+
+# --------------------------------------------------------------------- E
+
+
+def _essential(R2, B):
+    return _skew(B) @ R2
+
+
+def check_essential(fn) -> None:
+    """``fn(R2, B) -> E``: E = [B]ₓ R2 for a left bundle R1 = I (d1ᵀ E d2 = 0)."""
+    for salt in range(2):
+        c, B, R2, P, xy1, xy2 = _pair(rng_for("lesson06.check_essential", salt))
+        E = np.asarray(call(fn, R2.copy(), B.copy(), what="essential"), dtype=float)
+        want = _skew(B) @ R2
+        compare("E", E, want, rtol=1e-12, wrong=[
+            ("the factors are swapped: E = [B]ₓ R2, not R2 [B]ₓ", R2 @ _skew(B)),
+            ("R2 is transposed: the rays of the right image enter as R2 d2", _skew(B) @ R2.T),
+            ("the cross-product matrix is transposed: [B]ₓ v must equal B × v", _skew(B).T @ R2),
+        ])  # fmt: skip
+        d1 = np.column_stack([xy1, np.full(len(xy1), -c)])
+        d2 = np.column_stack([xy2, np.full(len(xy2), -c)])
+        cop = np.einsum("ni,ij,nj->n", d1, E, d2)
+    success(f"E = [B]ₓ R2; the true rays are coplanar: max |d1ᵀ E d2| = {np.max(np.abs(cop)):.1e} mm³")
+
+
+# --------------------------------------------------------------------- epipolar line
+
+
+def _line(E, xy1, c, transpose=True, with_c=True, normalise=True):
+    d1 = np.array([xy1[0], xy1[1], -c])
+    g = (E.T @ d1) if transpose else (E @ d1)
+    line = np.array([g[0], g[1], (-c if with_c else 1.0) * g[2]])
+    return line / np.hypot(line[0], line[1]) if normalise else line
+
+
+def check_epipolar_line(fn) -> None:
+    """``fn(E, xy1, c) -> (a, b, d)``: the epipolar line a x + b y + d = 0 in the right
+    image (mm) of the left point xy1, with a² + b² = 1."""
+    for salt in range(3):
+        c, B, R2, P, xy1, xy2 = _pair(rng_for("lesson06.check_epipolar_line", salt))
+        E = _skew(B) @ R2
+        k = salt % len(xy1)
+        line = np.asarray(call(fn, E.copy(), xy1[k].copy(), c, what="epipolar_line"), dtype=float)
+        if line.shape != (3,):
+            raise CheckFailed(f"epipolar_line: expected three numbers (a, b, d), got shape {line.shape}")
+        compare("a² + b²", line[0] ** 2 + line[1] ** 2, 1.0, rtol=1e-9,
+                wrong=[("normalise the line: divide (a, b, d) by √(a² + b²)",
+                        float(np.sum(_line(E, xy1[k], c, normalise=False)[:2] ** 2)))])  # fmt: skip
+        # brute force: two points on the left ray, at 0.6 and 1.4 times the model depth
+        ray = np.array([xy1[k, 0], xy1[k, 1], -c])
+        on_ray = np.array([ray * s for s in (0.6 * P[k, 2] / -c, 1.4 * P[k, 2] / -c)])
+        q = project(on_ray, B, R2, c)
+        dist = q @ line[:2] + line[2]
+        wrong = []
+        for text, kw in (("E is used instead of Eᵀ: the line is g = Eᵀ d1", {"transpose": False}),
+                         ("the third coefficient is −c g2 (the ray is (x, y, −c))", {"with_c": False})):
+            m = _line(E, xy1[k], c, **kw)
+            wrong.append((text, q @ m[:2] + m[2]))
+        compare("distances of two projected points of the left ray from your line [mm]", dist,
+                np.zeros(2), rtol=1e-9, scale=1.0, wrong=wrong)  # fmt: skip
+    success("your lines pass through the right-image projections of points on the left rays")
+
+
+# --------------------------------------------------------------------- normal case
+
+
+def _points(n1, n2, c, b, sign=1.0, zsign=-1.0, use_y=False):
+    px = sign * ((n1[:, 1] - n2[:, 1]) if use_y else (n1[:, 0] - n2[:, 0]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lam = b / px
+    return np.column_stack([lam * n1[:, 0], lam * 0.5 * (n1[:, 1] + n2[:, 1]), zsign * lam * c])
+
+
+def check_normal_case_points(fn) -> None:
+    """``fn(n1, n2, c, b) -> points``: model points (n, 3) of a pair in the normal case
+    (left centre at 0, right at (b, 0, 0), both images level), Z < 0 below the base."""
+    rng = rng_for("lesson06.check_normal_case_points")
+    c, b = rng.uniform(100, 160), rng.uniform(70, 100)
+    n = 7
+    P = np.column_stack([rng.uniform(-10, b + 10, n), rng.uniform(-80, 80, n), -c + rng.uniform(-25, 25, n)])
+    n1 = project(P, np.zeros(3), np.eye(3), c)
+    n2 = project(P, np.array([b, 0.0, 0.0]), np.eye(3), c)
+    got = np.asarray(call(fn, n1.copy(), n2.copy(), c, b, what="normal_case_points"), dtype=float)
+    compare("model points", got, P, rtol=1e-9, wrong=[
+        ("the x-parallax is x1' − x2' (positive for points below the base)", _points(n1, n2, c, b, sign=-1.0)),
+        ("Z = −λ c: the points lie below the projection centres", _points(n1, n2, c, b, zsign=1.0)),
+    ])  # fmt: skip
+    success(f"{n} model points from x-parallaxes agree with the simulated terrain")
+
+
+SOLUTIONS = {
+    "check_essential": _essential,
+    "check_epipolar_line": lambda E, xy1, c: _line(E, xy1, c),
+    "check_normal_case_points": lambda n1, n2, c, b: _points(n1, n2, c, b),
+}
+
+MUTANTS = {
+    "check_essential": {
+        "swapped": lambda R2, B: R2 @ _skew(B),
+        "transposed_R": lambda R2, B: _skew(B) @ R2.T,
+        "skew_transposed": lambda R2, B: _skew(B).T @ R2,
+    },
+    "check_epipolar_line": {
+        "E_not_transposed": lambda E, xy1, c: _line(E, xy1, c, transpose=False),
+        "no_c": lambda E, xy1, c: _line(E, xy1, c, with_c=False),
+        "not_normalised": lambda E, xy1, c: _line(E, xy1, c, normalise=False),
+    },
+    "check_normal_case_points": {
+        "parallax_sign": lambda n1, n2, c, b: _points(n1, n2, c, b, sign=-1.0),
+        "z_sign": lambda n1, n2, c, b: _points(n1, n2, c, b, zsign=1.0),
+        "y_parallax": lambda n1, n2, c, b: _points(n1, n2, c, b, use_y=True),
+    },
+}

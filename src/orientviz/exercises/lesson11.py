@@ -1,0 +1,291 @@
+"""Checkers for lesson 11, systematic image errors and self-calibration.
+
+Oracles: error-free simulated distortion with known coefficients, the cofactor matrix
+from numerical second derivatives of the sum of squares, scipy's normal quantile, and a
+QR projection for the share of a field that a parameter set describes — never the
+library's ``self_calibrate``, ``analyse`` or ``split_field``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from scipy.stats import norm
+
+from orientviz.exercises._common import CheckFailed, call, compare, rng_for, success
+
+
+def _points(rng: np.random.Generator, n: int) -> np.ndarray:
+    """Image points (mm) spread over a 230 mm format, not symmetric."""
+    return rng.uniform(-110.0, 110.0, (n, 2))
+
+
+def _radial(xy: np.ndarray, k: np.ndarray) -> np.ndarray:
+    r2 = np.sum(xy**2, axis=1)
+    return xy * (k[0] * r2 + (k[1] * r2**2 if len(k) > 1 else 0.0))[:, None]
+
+
+def check_fit_k1(fn: Callable) -> None:
+    """Check ``fn(xy, d) -> (k1, sigma0)`` for d = k1 r² (x, y) + noise (mm, mm⁻², mm)."""
+    rng = rng_for("lesson11.check_fit_k1")
+    xy = _points(rng, 14)
+    k1 = 2.5e-9  # mm⁻²: 8.4 µm at r = 150 mm
+    d = _radial(xy, np.array([k1])) + rng.normal(0.0, 0.0015, xy.shape)
+    out = call(fn, xy.copy(), d.copy(), what="fit_k1")
+    try:
+        k_hat, s0 = (float(v) for v in out)
+    except (TypeError, ValueError):
+        raise CheckFailed("return two numbers (k1, sigma0)") from None
+    # oracle: the sum of squares is a parabola in k1; three values give its vertex
+    a = (xy * np.sum(xy**2, axis=1)[:, None]).ravel()
+    ks = np.array([0.0, 1e-9, 2e-9])
+    cost = [np.sum((k * a - d.ravel()) ** 2) for k in ks]
+    c2, c1, c0 = np.polyfit(ks, cost, 2)
+    k_best = -c1 / (2 * c2)
+    s_best = np.sqrt((c0 - c1**2 / (4 * c2)) / (d.size - 1))
+    u = 1e-10  # compare in units of 1e-10 mm⁻²
+    compare(
+        "k1 [1e-10 mm⁻²]",
+        k_hat / u,
+        k_best / u,
+        rtol=1e-6,
+        wrong=[
+            (
+                "only the x equations were used",
+                np.dot(a[0::2], d[:, 0]) / np.dot(a[0::2], a[0::2]) / u,
+            ),
+        ],
+    )
+    compare(
+        "σ0 [µm]",
+        s0 * 1000,
+        s_best * 1000,
+        rtol=1e-6,
+        wrong=[
+            (
+                "divided by the number of coordinates 2n, not by the redundancy 2n − 1",
+                1000 * s_best * np.sqrt((d.size - 1) / d.size),
+            ),
+            ("σ0² instead of σ0", 1000 * s_best**2),
+        ],
+    )
+    success(f"k1 = {k_hat:.4g} mm⁻², σ0 = {s0 * 1000:.2f} µm (redundancy 2n − 1 = {d.size - 1})")
+
+
+def check_fit_k1k2(fn: Callable) -> None:
+    """Check ``fn(xy, d) -> (k, Q)``: k = (k1, k2) of d = (k1 r² + k2 r⁴)(x, y), Q = N⁻¹."""
+    rng = rng_for("lesson11.check_fit_k1k2")
+    xy = _points(rng, 16)
+    k = np.array([6.0e-10, -1.1e-14])
+    d = _radial(xy, k)  # error-free: the solution must be exact
+    out = call(fn, xy.copy(), d.copy(), what="fit_k1k2")
+    try:
+        k_hat, Q = out
+    except (TypeError, ValueError):
+        raise CheckFailed("return two things: k (2,) and Q (2, 2)") from None
+    scale = np.array([1e-10, 1e-14])  # compare k1 in 1e-10 mm⁻², k2 in 1e-14 mm⁻⁴
+    k_hat = np.asarray(k_hat, float)
+    compare(
+        "(k1 / 1e-10, k2 / 1e-14)",
+        k_hat / scale if k_hat.shape == (2,) else k_hat,
+        k / scale,
+        rtol=1e-6,
+        wrong=[("(k2, k1): the order is k1 first", k[::-1] / scale)],
+    )
+    # oracle for Q: N is the Hessian of ½ vᵀv (numerical second differences), Q = N⁻¹
+
+    def half_ss(p):
+        return 0.5 * np.sum((_radial(xy, p) - d) ** 2)
+
+    H = np.empty((2, 2))
+    for i in range(2):
+        for j in range(2):
+            ei, ej = np.eye(2)[i] * scale[i], np.eye(2)[j] * scale[j]
+            H[i, j] = (
+                half_ss(k + ei + ej)
+                - half_ss(k + ei - ej)
+                - half_ss(k - ei + ej)
+                + half_ss(k - ei - ej)
+            ) / (4 * scale[i] * scale[j])
+    Q_ref = np.linalg.inv(H)
+    Qs = np.asarray(Q, float)
+    if Qs.shape == (2, 2) and np.allclose(
+        Qs / np.abs(H).max(), H / np.abs(H).max(), rtol=1e-4, atol=1e-6
+    ):
+        raise CheckFailed(
+            "Q equals N itself: the cofactor matrix is N⁻¹", error=np.inf, tolerance=1e-4
+        )
+    # compare scaled so that both entries count (k1 and k2 differ by 10⁴ in size)
+    Dq = np.diag(1 / np.sqrt(np.diag(Q_ref)))
+    compare("Q scaled to unit diagonal", Dq @ Qs @ Dq, Dq @ Q_ref @ Dq, rtol=1e-4)
+    rho = Q_ref[0, 1] / np.sqrt(Q_ref[0, 0] * Q_ref[1, 1])
+    success(f"k1, k2 exact; Q = N⁻¹ right; correlation of k1 and k2: {rho:+.3f}")
+
+
+def check_significant(fn: Callable) -> None:
+    """Check ``fn(values, sigmas, alpha) -> bool array``: two-sided test |p|/σ_p > z(1 − α/2)."""
+    values = np.array([2.1, -3.4, 0.52, 1.7, -0.9, 7.0, 1.5])  # µm
+    sigmas = np.array([1.0, 1.2, 0.24, 0.95, 0.41, 6.0, 1.0])  # µm
+    alpha = 0.05
+    t = np.abs(values) / sigmas
+    want = t > norm.ppf(1 - alpha / 2)
+    got = np.asarray(call(fn, values.copy(), sigmas.copy(), alpha, what="significant"))
+    if got.shape != want.shape:
+        raise CheckFailed(
+            f"expected one decision per parameter, shape {want.shape}, got {got.shape}"
+        )
+    got = got.astype(bool)
+    if np.array_equal(got, want):
+        success(
+            f"t = {np.round(t, 2).tolist()}, k = {norm.ppf(1 - alpha / 2):.3f}: {got.astype(int).tolist()}"
+        )
+        return
+    wrong = {
+        "a one-sided critical value (1.645): the test is two-sided": t > norm.ppf(1 - alpha),
+        "the sign was kept: test |value| / σ": values / sigmas > norm.ppf(1 - alpha / 2),
+        "the value was not divided by its σ": np.abs(values) > norm.ppf(1 - alpha / 2),
+        "t² was compared with k": t**2 > norm.ppf(1 - alpha / 2),
+    }
+    why = next(
+        (w for w, v in wrong.items() if np.array_equal(got, v)),
+        "compare t = |value|/σ with z(1 − α/2)",
+    )
+    raise CheckFailed(
+        f"decisions {got.astype(int).tolist()}, expected {want.astype(int).tolist()}: {why}",
+        error=np.inf,
+        tolerance=0.0,
+    )
+
+
+def check_described_share(fn: Callable) -> None:
+    """Check ``fn(A, d) -> (share_x, share_y)``: one joint fit d ≈ A p, shares of Σd² per axis."""
+    rng = rng_for("lesson11.check_described_share")
+    n, k = 40, 4
+    A = rng.normal(size=(n, 2, k))
+    d = np.einsum("nik,k->ni", A, rng.normal(size=k)) + rng.normal(0, 0.7, (n, 2)) * [1.0, 0.3]
+    Qm, _ = np.linalg.qr(A.reshape(2 * n, k))  # oracle: orthogonal projection by QR
+    rest = (d.ravel() - Qm @ (Qm.T @ d.ravel())).reshape(n, 2)
+    want = 1 - np.sum(rest**2, axis=0) / np.sum(d**2, axis=0)
+    got = call(fn, A.copy(), d.copy(), what="described_share")
+    sep = []
+    for i in range(2):  # x and y fitted separately
+        Ai = A[:, i, :]
+        r_i = d[:, i] - Ai @ np.linalg.lstsq(Ai, d[:, i], rcond=None)[0]
+        sep.append(1 - np.sum(r_i**2) / np.sum(d[:, i] ** 2))
+    both = 1 - np.sum(rest**2) / np.sum(d**2)
+    compare(
+        "(share x, share y)",
+        got,
+        want,
+        rtol=1e-9,
+        wrong=[
+            ("the remainder's share (1 − described)", 1 - want),
+            ("x and y fitted separately: the parameters are shared by both coordinates", sep),
+            ("one share for x and y together", [both, both]),
+        ],
+    )
+    success(f"described: x {want[0]:.1%}, y {want[1]:.1%}")
+
+
+# ---------------------------------------------------------------------- solutions
+
+
+def _fit_k1(xy, d):
+    a = (xy * np.sum(xy**2, axis=1)[:, None]).ravel()
+    k1 = a @ d.ravel() / (a @ a)
+    v = k1 * a - d.ravel()
+    return k1, np.sqrt(v @ v / (a.size - 1))
+
+
+def _fit_k1k2(xy, d):
+    r2 = np.sum(xy**2, axis=1)
+    A = np.stack([(xy * r2[:, None]).ravel(), (xy * (r2**2)[:, None]).ravel()], axis=1)
+    N = A.T @ A
+    return np.linalg.solve(N, A.T @ d.ravel()), np.linalg.inv(N)
+
+
+def _significant(values, sigmas, alpha):
+    return np.abs(values) / sigmas > norm.ppf(1 - alpha / 2)
+
+
+def _described_share(A, d):
+    n, _, k = A.shape
+    p = np.linalg.lstsq(A.reshape(2 * n, k), d.ravel(), rcond=None)[0]
+    rest = d - A @ p
+    return 1 - np.sum(rest**2, axis=0) / np.sum(d**2, axis=0)
+
+
+def _k1_x_only(xy, d):
+    a = xy[:, 0] * np.sum(xy**2, axis=1)
+    k1 = a @ d[:, 0] / (a @ a)
+    v = k1 * (xy * np.sum(xy**2, axis=1)[:, None]).ravel() - d.ravel()
+    return k1, np.sqrt(v @ v / (d.size - 1))
+
+
+def _k1k2_x_only(xy, d):
+    r2 = np.sum(xy**2, axis=1)
+    A = np.stack([xy[:, 0] * r2, xy[:, 0] * r2**2], axis=1)
+    N = A.T @ A
+    return np.linalg.solve(N, A.T @ d[:, 0]), np.linalg.inv(N)
+
+
+def _k1k2_r(xy, d):
+    r = np.sqrt(np.sum(xy**2, axis=1))
+    A = np.stack([(xy * r[:, None]).ravel(), (xy * (r**3)[:, None]).ravel()], axis=1)
+    N = A.T @ A
+    return np.linalg.solve(N, A.T @ d.ravel()), np.linalg.inv(N)
+
+
+def _share_separate(A, d):
+    out = []
+    for i in range(2):
+        r_i = d[:, i] - A[:, i, :] @ np.linalg.lstsq(A[:, i, :], d[:, i], rcond=None)[0]
+        out.append(1 - np.sum(r_i**2) / np.sum(d[:, i] ** 2))
+    return np.array(out)
+
+
+SOLUTIONS = {
+    "check_fit_k1": _fit_k1,
+    "check_fit_k1k2": _fit_k1k2,
+    "check_significant": _significant,
+    "check_described_share": _described_share,
+}
+
+MUTANTS = {
+    "check_fit_k1": {
+        "x equations only": _k1_x_only,
+        "divide by 2n": lambda xy, d: (
+            _fit_k1(xy, d)[0],
+            _fit_k1(xy, d)[1] * np.sqrt((d.size - 1) / d.size),
+        ),
+        "r instead of r²": lambda xy, d: _fit_k1(
+            xy / np.sqrt(np.sum(xy**2, axis=1))[:, None] ** 0.5, d
+        ),
+        "σ0 squared": lambda xy, d: (_fit_k1(xy, d)[0], _fit_k1(xy, d)[1] ** 2),
+    },
+    "check_fit_k1k2": {
+        "Q = N": lambda xy, d: (_fit_k1k2(xy, d)[0], np.linalg.inv(_fit_k1k2(xy, d)[1])),
+        "x equations only": _k1k2_x_only,
+        "r and r³ columns": _k1k2_r,
+        "swapped": lambda xy, d: (_fit_k1k2(xy, d)[0][::-1], _fit_k1k2(xy, d)[1]),
+    },
+    "check_significant": {
+        "one-sided": lambda v, s, a: np.abs(v) / s > norm.ppf(1 - a),
+        "signed": lambda v, s, a: v / s > norm.ppf(1 - a / 2),
+        "not divided by σ": lambda v, s, a: np.abs(v) > norm.ppf(1 - a / 2),
+        "t squared": lambda v, s, a: (v / s) ** 2 > norm.ppf(1 - a / 2),
+    },
+    "check_described_share": {
+        "remainder": lambda A, d: 1 - _described_share(A, d),
+        "separate fits": _share_separate,
+        "pooled": lambda A, d: np.full(
+            2,
+            1
+            - np.sum(
+                (d - A @ np.linalg.lstsq(A.reshape(-1, A.shape[2]), d.ravel(), rcond=None)[0]) ** 2
+            )
+            / np.sum(d**2),
+        ),
+    },
+}

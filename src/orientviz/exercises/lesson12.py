@@ -1,0 +1,225 @@
+"""Checkers for lesson 12, gross errors: normalised residuals, data snooping, reliability.
+
+Oracles: redundancy numbers from leave-one-out adjustments (the residual of an observation
+is r_i times its residual when it is left out), scipy's normal quantiles, and the shift of
+the unknowns by brute force (adjust with and without the error) — never the library's
+``gauss_newton``, ``data_snooping`` or ``reliability``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from scipy.stats import norm
+
+from orientviz.exercises._common import CheckFailed, call, compare, rng_for, success
+
+
+def _wls(A: np.ndarray, l: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+    """Weighted least squares by scaling the rows (x̂)."""
+    return np.linalg.lstsq(A / sigma[:, None], l / sigma, rcond=None)[0]
+
+
+def _oracle_w(A, l, sigma):
+    """v, r by leave-one-out, w = v/(σ √r)."""
+    v = A @ _wls(A, l, sigma) - l
+    r = np.empty(len(l))
+    for i in range(len(l)):
+        keep = np.arange(len(l)) != i
+        e_out = l[i] - A[i] @ _wls(A[keep], l[keep], sigma[keep])  # residual when left out
+        r[i] = -v[i] / e_out
+    return v, r, v / (sigma * np.sqrt(r))
+
+
+def _line(rng, n=12, blunder=None):
+    """A straight line with unequal σ, points bunched at one end (unequal redundancy)."""
+    t = np.sort(np.r_[rng.uniform(0, 3, n - 2), 9.0, 10.0])
+    A = np.column_stack([np.ones(n), t, t**2 / 10])
+    sigma = rng.uniform(0.5, 2.0, n)
+    l = A @ [1.0, 0.5, -0.3] + rng.normal(0, sigma)
+    if blunder is not None:
+        i, size = blunder
+        l[i] += size * sigma[i]
+    return A, l, sigma
+
+
+def check_normalized(fn: Callable) -> None:
+    """Check ``fn(A, l, sigma) -> (v, r, w)``: residuals v = A x̂ − l, redundancy numbers, w."""
+    rng = rng_for("lesson12.check_normalized")
+    A, l, sigma = _line(rng)
+    v, r, w = _oracle_w(A, l, sigma)
+    out = call(fn, A.copy(), l.copy(), sigma.copy(), what="normalized")
+    try:
+        v_got, r_got, w_got = (np.asarray(a, float) for a in out)
+    except (TypeError, ValueError):
+        raise CheckFailed("return three arrays (v, r, w)") from None
+    vu = A @ np.linalg.lstsq(A, l, rcond=None)[0] - l
+    compare("v", v_got, v, rtol=1e-8, wrong=[("the weights were forgotten (unweighted fit)", vu)])
+    Hu = A @ np.linalg.solve(A.T @ A, A.T)
+    compare(
+        "r",
+        r_got,
+        r,
+        rtol=1e-8,
+        wrong=[
+            ("that is 1 − r, the share of the observation in its own fit (h_ii)", 1 - r),
+            ("the weights were forgotten in Q_vv P", 1 - np.diag(Hu)),
+        ],
+    )
+    compare(
+        "w",
+        w_got,
+        w,
+        rtol=1e-8,
+        wrong=[
+            ("v/σ: the √r is missing", v / sigma),
+            ("v/(σ r): r instead of √r", v / (sigma * r)),
+            ("v/√r: σ is missing", v / np.sqrt(r)),
+        ],
+    )
+    success(f"v, r and w right; Σr = {r.sum():.3f} = n − u = {len(l) - A.shape[1]}")
+
+
+def check_snoop_round(fn: Callable) -> None:
+    """Check ``fn(A, l, sigma, k) -> index``: the observation with the largest |w| if > k, else −1."""
+    rng = rng_for("lesson12.check_snoop_round")
+    k = norm.ppf(1 - 0.001 / 2)
+    cases = [_line(rng, blunder=(11, -6.0)), _line(rng), _line(rng, blunder=(2, 9.0))]
+    for n_case, (A, l, sigma) in enumerate(cases, start=1):
+        _, r, w = _oracle_w(A, l, sigma)
+        i = int(np.argmax(np.abs(w)))
+        want = i if abs(w[i]) > k else -1
+        got = call(fn, A.copy(), l.copy(), sigma.copy(), k, what="snoop_round")
+        got = int(got)
+        if got == want:
+            continue
+        v = A @ _wls(A, l, sigma) - l
+        why = {
+            int(np.argmax(w)): "the largest w with its sign: test |w|",
+            int(np.argmax(np.abs(v))): "the largest |v|, not the largest normalised residual |w|",
+            int(
+                np.argmax(np.abs(v) / sigma)
+            ): "the largest |v|/σ, not the largest normalised residual |w|",
+        }.get(got, "")
+        if want == -1:
+            why = f"max |w| = {abs(w[i]):.2f} is below k = {k:.2f}: nothing is rejected (return −1)"
+        raise CheckFailed(
+            f"case {n_case}: got {got}, expected {want}" + (f" — {why}" if why else "")
+        )
+    success(f"one round of data snooping right in {len(cases)} cases (k = {k:.2f})")
+
+
+def check_mdb(fn: Callable) -> None:
+    """Check ``fn(sigma, r, alpha0, beta0) -> MDB``: δ0 σ / √r, δ0 = z(1 − α0/2) + z(β0)."""
+    sigma = np.array([0.005, 0.005, 0.008, 0.003])
+    r = np.array([0.25, 0.81, 0.5, 0.12])
+    for alpha0, beta0 in ((0.001, 0.80), (0.05, 0.90)):
+        d0 = norm.ppf(1 - alpha0 / 2) + norm.ppf(beta0)
+        want = d0 * sigma / np.sqrt(r)
+        got = call(fn, sigma.copy(), r.copy(), alpha0, beta0, what="mdb")
+        compare(
+            f"MDB (α0 = {alpha0}, β0 = {beta0})",
+            got,
+            want,
+            rtol=1e-6,
+            wrong=[
+                ("σ/r: r instead of √r", d0 * sigma / r),
+                ("one-sided α0", (norm.ppf(1 - alpha0) + norm.ppf(beta0)) * sigma / np.sqrt(r)),
+                ("δ0 without the power term z(β0)", norm.ppf(1 - alpha0 / 2) * sigma / np.sqrt(r)),
+                ("σ √r instead of σ / √r", d0 * sigma * np.sqrt(r)),
+            ],
+        )
+    success(f"MDB right; δ0(0.1 %, 80 %) = {norm.ppf(1 - 0.0005) + norm.ppf(0.8):.3f}")
+
+
+def check_external(fn: Callable) -> None:
+    """Check ``fn(A, sigma, i, nabla) -> Δx̂``: what an undetected error ∇ in l_i does to x̂."""
+    rng = rng_for("lesson12.check_external")
+    A, l, sigma = _line(rng)
+    for i, nabla in ((11, 3.0), (4, -2.5)):
+        e = np.zeros(len(l))
+        e[i] = nabla
+        want = _wls(A, l + e, sigma) - _wls(A, l, sigma)  # brute force: adjust twice
+        got = call(fn, A.copy(), sigma.copy(), i, nabla, what="external")
+        N = A.T @ (A / sigma[:, None] ** 2)
+        compare(
+            f"Δx̂ for an error in l[{i}]",
+            got,
+            want,
+            rtol=1e-8,
+            wrong=[
+                ("the weights were forgotten", np.linalg.solve(A.T @ A, A.T @ e)),
+                ("N instead of N⁻¹", N @ (A.T @ (e / sigma**2))),
+            ],
+        )
+    success("the shift of the unknowns by an undetected error is right")
+
+
+# ---------------------------------------------------------------------- solutions
+
+
+def _normalized(A, l, sigma):
+    P = np.diag(1 / sigma**2)
+    N = A.T @ P @ A
+    v = A @ np.linalg.solve(N, A.T @ P @ l) - l
+    Qvv = np.diag(sigma**2) - A @ np.linalg.solve(N, A.T)
+    r = np.diag(Qvv @ P)
+    return v, r, v / (sigma * np.sqrt(r))
+
+
+def _snoop_round(A, l, sigma, k):
+    _, _, w = _normalized(A, l, sigma)
+    i = int(np.argmax(np.abs(w)))
+    return i if abs(w[i]) > k else -1
+
+
+def _mdb(sigma, r, alpha0, beta0):
+    return (norm.ppf(1 - alpha0 / 2) + norm.ppf(beta0)) * sigma / np.sqrt(r)
+
+
+def _external(A, sigma, i, nabla):
+    P = np.diag(1 / sigma**2)
+    e = np.zeros(len(sigma))
+    e[i] = nabla
+    return np.linalg.solve(A.T @ P @ A, A.T @ P @ e)
+
+
+def _snoop_v(A, l, sigma, k):
+    v, _, w = _normalized(A, l, sigma)
+    i = int(np.argmax(np.abs(v) / sigma))
+    return i if abs(w[i]) > k else -1
+
+
+SOLUTIONS = {
+    "check_normalized": _normalized,
+    "check_snoop_round": _snoop_round,
+    "check_mdb": _mdb,
+    "check_external": _external,
+}
+
+MUTANTS = {
+    "check_normalized": {
+        "no sqrt r": lambda A, l, s: (lambda v, r, w: (v, r, v / s))(*_normalized(A, l, s)),
+        "r not sqrt": lambda A, l, s: (lambda v, r, w: (v, r, v / (s * r)))(*_normalized(A, l, s)),
+        "1 - r": lambda A, l, s: (lambda v, r, w: (v, 1 - r, w))(*_normalized(A, l, s)),
+        "unweighted": lambda A, l, s: _normalized(A, l, np.ones_like(s)),
+    },
+    "check_snoop_round": {
+        "largest v/σ": _snoop_v,
+        "no threshold": lambda A, l, s, k: _snoop_round(A, l, s, 0.0),
+        "signed": lambda A, l, s, k: (lambda w: int(np.argmax(w)) if w.max() > k else -1)(
+            _normalized(A, l, s)[2]
+        ),
+    },
+    "check_mdb": {
+        "r not sqrt": lambda s, r, a, b: (norm.ppf(1 - a / 2) + norm.ppf(b)) * s / r,
+        "one-sided": lambda s, r, a, b: (norm.ppf(1 - a) + norm.ppf(b)) * s / np.sqrt(r),
+        "no power": lambda s, r, a, b: norm.ppf(1 - a / 2) * s / np.sqrt(r),
+    },
+    "check_external": {
+        "sign": lambda A, s, i, nb: -_external(A, s, i, nb),
+        "unweighted": lambda A, s, i, nb: _external(A, np.ones_like(s), i, nb),
+        "N not inverted": lambda A, s, i, nb: (A.T @ A / 1.0) @ _external(A, s, i, nb),
+    },
+}

@@ -1,0 +1,245 @@
+"""Checkers for lesson 13, auxiliary data (statoscope, APR, GNSS) in the adjustment.
+
+Oracles: the normal equations of the stacked system formed from scratch, numerical
+derivatives of the observation function, the straight-line regression formulas written
+out, and the covariance of differences written by hand — never the library's
+``auxiliary_rows`` or ``bundle_adjust(..., auxiliary=...)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from orientviz.exercises._common import CheckFailed, call, compare, rng_for, success
+
+
+def check_statoscope_row(fn: Callable) -> None:
+    """Check ``fn(N, n, k, o_col, s, sigma) -> (N, n)``: add the row s + v = Z_k + o."""
+    rng = rng_for("lesson13.check_statoscope_row")
+    u, rows = 7, 12
+    A0 = rng.normal(size=(rows, u))
+    P0 = np.diag(rng.uniform(0.5, 4.0, rows))
+    l0 = rng.normal(size=rows)
+    N0, n0 = A0.T @ P0 @ A0, A0.T @ P0 @ l0
+    k, o_col, s, sigma = 2, 6, 1843.7, 0.4
+    a = np.zeros(u)
+    a[k], a[o_col] = 1.0, 1.0
+    A, l = np.vstack([A0, a]), np.r_[l0, s]  # oracle: the stacked system from scratch
+    P = np.diag(np.r_[np.diag(P0), 1 / sigma**2])
+    N_ref, n_ref = A.T @ P @ A, A.T @ P @ l
+    out = call(fn, N0.copy(), n0.copy(), k, o_col, s, sigma, what="add_statoscope_row")
+    try:
+        N, n = (np.asarray(x, float) for x in out)
+    except (TypeError, ValueError):
+        raise CheckFailed("return the two updated arrays (N, n)") from None
+    am = a.copy()
+    am[o_col] = -1.0
+    compare(
+        "N",
+        N,
+        N_ref,
+        rtol=1e-10,
+        wrong=[
+            ("the weight 1/σ² is missing", N0 + np.outer(a, a)),
+            ("1/σ instead of 1/σ²", N0 + np.outer(a, a) / sigma),
+            ("the offset enters with a minus sign (s = Z − o)", N0 + np.outer(am, am) / sigma**2),
+            (
+                "only the diagonal was updated: the row couples Z_k and the offset",
+                N0 + np.diag(a) / sigma**2,
+            ),
+        ],
+    )
+    compare(
+        "n",
+        n,
+        n_ref,
+        rtol=1e-10,
+        wrong=[
+            ("the weight 1/σ² is missing in n", n0 + a * s),
+            ("the sign of the reading is wrong in n", n0 - a * s / sigma**2),
+        ],
+    )
+    success("N and n equal the normal equations of the stacked system")
+
+
+def check_difference_covariance(fn: Callable) -> None:
+    """Check ``fn(sigma, m) -> C``: covariance of the m − 1 differences of m equal-σ readings."""
+    for sigma, m in ((0.3, 6), (1.2, 4)):
+        C = np.zeros((m - 1, m - 1))  # oracle: written by hand
+        for i in range(m - 1):
+            C[i, i] = 2 * sigma**2
+            if i + 1 < m - 1:
+                C[i, i + 1] = C[i + 1, i] = -(sigma**2)
+        got = call(fn, sigma, m, what="difference_covariance")
+        compare(
+            f"C (σ = {sigma}, m = {m})",
+            got,
+            C,
+            rtol=1e-12,
+            wrong=[
+                (
+                    "the differences are not independent: neighbours share a reading",
+                    2 * sigma**2 * np.eye(m - 1),
+                ),
+                ("each difference has the variance 2σ², not σ²", C / 2),
+                ("neighbouring differences are negatively correlated", np.abs(C)),
+            ],
+        )
+    success("covariance of consecutive differences: 2σ² on the diagonal, −σ² beside it")
+
+
+def check_gnss_rows(fn: Callable) -> None:
+    """Check ``fn(k, t, strip, m, n_strips) -> A (3, u)``: ∂(X0_k + o_s + t d_s)/∂x.
+
+    Unknowns x = [X0 of the m images (m × 3, image-major), offsets (n_strips × 3),
+    drifts (n_strips × 3)].
+    """
+    m, n_strips = 5, 3
+    u = 3 * m + 6 * n_strips
+    rng = rng_for("lesson13.check_gnss_rows")
+    x = rng.normal(size=u)
+
+    def f(x, k, t, s):  # the observation function, written out
+        X0 = x[: 3 * m].reshape(m, 3)
+        o = x[3 * m : 3 * m + 3 * n_strips].reshape(n_strips, 3)
+        d = x[3 * m + 3 * n_strips :].reshape(n_strips, 3)
+        return X0[k] + o[s] + t * d[s]
+
+    for k, t, s in ((3, 42.5, 2), (0, -7.0, 1)):
+        J = np.empty((3, u))  # oracle: central differences
+        for j in range(u):
+            e = np.zeros(u)
+            e[j] = 1e-3
+            J[:, j] = (f(x + e, k, t, s) - f(x - e, k, t, s)) / 2e-3
+        got = call(fn, k, t, s, m, n_strips, what="gnss_rows")
+        no_drift = J.copy()
+        no_drift[:, 3 * m + 3 * n_strips :] = 0
+        compare(
+            f"rows of image {k} (t = {t} s, strip {s})",
+            got,
+            J,
+            rtol=1e-8,
+            wrong=[
+                ("the drift columns are missing (offset only)", no_drift),
+                ("the drift column holds 1, not the time t", np.where(np.isclose(J, t), 1.0, J)),
+            ],
+        )
+    success("the three GNSS rows have 1 at X0, Y0, Z0 and the strip's offsets, t at its drifts")
+
+
+def check_offset_drift(fn: Callable) -> None:
+    """Check ``fn(t, s, Z, sigma) -> (o, d, sigma_o, sigma_d)`` for s − Z = o + d t (one strip)."""
+    t = np.array([0.0, 8.0, 16.0, 24.0, 32.0, 40.0, 48.0])
+    Z = 1520.0 + np.array([0.4, -1.2, 0.3, 2.0, -0.7, 0.1, 0.9])
+    o, d, sigma = -4.3, 0.021, 0.35
+    s = Z + o + d * t  # error-free: o and d must come out exactly
+    out = call(fn, t.copy(), s.copy(), Z.copy(), sigma, what="offset_drift")
+    got = np.asarray(out, float)
+    tc = t - t.mean()
+    s_d = sigma / np.sqrt(np.sum(tc**2))  # regression formulas by hand
+    s_o = sigma * np.sqrt(1 / t.size + t.mean() ** 2 / np.sum(tc**2))
+    compare(
+        "(o, d, σ_o, σ_d)",
+        got,
+        [o, d, s_o, s_d],
+        rtol=1e-8,
+        wrong=[
+            ("the drift was ignored", [np.mean(s - Z), 0.0, sigma / np.sqrt(t.size), 0.0]),
+            (
+                "σ_o = σ/√m ignores the correlation with the drift",
+                [o, d, sigma / np.sqrt(t.size), s_d],
+            ),
+            ("σ_d from Σt², t not reduced to its mean", [o, d, s_o, sigma / np.sqrt(np.sum(t**2))]),
+        ],
+        scale=1.0,
+    )
+    success(
+        f"o = {got[0]:.3f} m, d = {got[1]:.4f} m/s, σ_o = {got[2]:.3f} m, σ_d = {got[3]:.4f} m/s"
+    )
+
+
+# ---------------------------------------------------------------------- solutions
+
+
+def _statoscope_row(N, n, k, o_col, s, sigma):
+    a = np.zeros(len(n))
+    a[k], a[o_col] = 1.0, 1.0
+    return N + np.outer(a, a) / sigma**2, n + a * s / sigma**2
+
+
+def _difference_covariance(sigma, m):
+    D = np.eye(m)[1:] - np.eye(m)[:-1]
+    return sigma**2 * D @ D.T
+
+
+def _gnss_rows(k, t, strip, m, n_strips):
+    A = np.zeros((3, 3 * m + 6 * n_strips))
+    A[:, 3 * k : 3 * k + 3] = np.eye(3)
+    A[:, 3 * m + 3 * strip : 3 * m + 3 * strip + 3] = np.eye(3)
+    A[:, 3 * m + 3 * n_strips + 3 * strip : 3 * m + 3 * n_strips + 3 * strip + 3] = t * np.eye(3)
+    return A
+
+
+def _offset_drift(t, s, Z, sigma):
+    A = np.column_stack([np.ones_like(t), t])
+    Q = np.linalg.inv(A.T @ A)
+    o, d = Q @ A.T @ (s - Z)
+    return o, d, sigma * np.sqrt(Q[0, 0]), sigma * np.sqrt(Q[1, 1])
+
+
+SOLUTIONS = {
+    "check_statoscope_row": _statoscope_row,
+    "check_difference_covariance": _difference_covariance,
+    "check_gnss_rows": _gnss_rows,
+    "check_offset_drift": _offset_drift,
+}
+
+
+def _row_with(a_o: float, w: Callable[[float], float], sign_n: float = 1.0):
+    def fn(N, n, k, o_col, s, sigma):
+        a = np.zeros(len(n))
+        a[k], a[o_col] = 1.0, a_o
+        return N + np.outer(a, a) * w(sigma), n + sign_n * a * s * w(sigma)
+
+    return fn
+
+
+MUTANTS = {
+    "check_statoscope_row": {
+        "no weight": _row_with(1.0, lambda s: 1.0),
+        "1/σ": _row_with(1.0, lambda s: 1 / s),
+        "minus offset": _row_with(-1.0, lambda s: 1 / s**2),
+        "n sign": _row_with(1.0, lambda s: 1 / s**2, -1.0),
+        "diagonal only": lambda N, n, k, o, s, sg: (
+            N + np.diag(np.eye(len(n))[k] + np.eye(len(n))[o]) / sg**2,
+            _statoscope_row(N, n, k, o, s, sg)[1],
+        ),
+    },
+    "check_difference_covariance": {
+        "independent": lambda sg, m: 2 * sg**2 * np.eye(m - 1),
+        "sigma squared": lambda sg, m: _difference_covariance(sg, m) / 2,
+        "positive": lambda sg, m: np.abs(_difference_covariance(sg, m)),
+    },
+    "check_gnss_rows": {
+        "no drift": lambda k, t, s, m, ns: _gnss_rows(k, 0.0, s, m, ns),
+        "drift 1": lambda k, t, s, m, ns: _gnss_rows(k, 1.0, s, m, ns),
+        "wrong strip": lambda k, t, s, m, ns: _gnss_rows(k, t, (s + 1) % ns, m, ns),
+        "minus offset": lambda k, t, s, m, ns: (
+            _gnss_rows(k, t, s, m, ns) * np.r_[np.ones(3 * m), -np.ones(3 * ns), np.ones(3 * ns)]
+        ),
+    },
+    "check_offset_drift": {
+        "no drift": lambda t, s, Z, sg: (np.mean(s - Z), 0.0, sg / np.sqrt(t.size), 0.0),
+        "sigma_o naive": lambda t, s, Z, sg: (
+            *_offset_drift(t, s, Z, sg)[:2],
+            sg / np.sqrt(t.size),
+            _offset_drift(t, s, Z, sg)[3],
+        ),
+        "uncentred": lambda t, s, Z, sg: (
+            *_offset_drift(t, s, Z, sg)[:3],
+            sg / np.sqrt(np.sum(t**2)),
+        ),
+    },
+}

@@ -1,0 +1,267 @@
+"""Geometry that cannot be right, found before an adjustment starts.
+
+A problem file can be valid JSON with valid numbers and still describe a geometry no
+camera ever saw: points behind the cameras, rays that meet at a glancing angle, an image
+with fewer observations than unknowns, an image coordinate of −1e308 mm or a point a
+million block widths away. :func:`check_block` finds these in one vectorised pass over
+the block's tables (no loop over images or points) and returns :class:`Finding` records
+in the user's ids; :func:`raise_for` turns the fatal ones into the usual exceptions
+(``InputError``, exit code 2, for values that cannot be data; ``AdjustmentError``, exit
+code 3, for a geometry that cannot give a meaningful adjustment). Warnings are left to
+the caller: the command line prints them, the report lists them, and they are logged on
+the ``"orientviz"`` logger.
+
+Conventions as everywhere: object space m, Z up; image coordinates mm; the camera looks
+along its −z axis (image plane at z = −c), R image → object.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .errors import AdjustmentError, InputError
+from .model import CONTROL, Block
+
+log = logging.getLogger("orientviz")
+
+#: An image coordinate farther than this many half-formats from the principal point
+#: cannot be a measurement in that image.
+IMAGE_FACTOR: float = 10.0
+#: A point or projection centre farther than this many block sizes from the block's
+#: median is reported (warning).
+EXTENT_FACTOR: float = 100.0
+#: ... and beyond this many metres from the median it is not a coordinate (error).
+ABSURD_M: float = 1e12
+#: Rays of a point that all lie within this angle (degrees) give a weak intersection.
+MIN_ANGLE_DEG: float = 2.0
+#: At most this many ids are named in one message.
+NAMED = 5
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One implausible geometry.
+
+    Attributes
+    ----------
+    level : {"warning", "error"}
+        ``"error"``: the adjustment cannot be meaningful (see :func:`raise_for`).
+    check : str
+        ``"image-outside"``, ``"far-away"``, ``"behind"``, ``"weak-intersection"``,
+        ``"few-observations"``.
+    message : str
+        One line in the user's ids, saying what to do.
+    count : int
+        How many observations, points or images are affected.
+    place : str
+        Where in the file the first one is (``"observations[12]"``), or ``""``.
+    exit_code : int
+        2 (bad input) or 3 (adjustment impossible) for errors.
+    """
+
+    level: str
+    check: str
+    message: str
+    count: int = 1
+    place: str = ""
+    exit_code: int = field(default=3)
+
+
+def _names(ids: list[str], idx: NDArray[np.intp]) -> str:
+    shown = ", ".join(repr(ids[int(i)]) for i in idx[:NAMED])
+    more = f" and {idx.size - NAMED} more" if idx.size > NAMED else ""
+    return shown + more
+
+
+def _rotations(block: Block) -> NDArray[np.float64]:
+    from .rotation import matrix_from_opk
+
+    a = block.images.angles
+    return matrix_from_opk(a[:, 0], a[:, 1], a[:, 2], block.sequence)
+
+
+def check_block(
+    block: Block,
+    *,
+    exterior_unknown: bool = True,
+    place: Callable[[int], str] | None = None,
+    min_angle_deg: float = MIN_ANGLE_DEG,
+) -> list[Finding]:
+    """Find geometry that cannot be right in a block (vectorised, no adjustment).
+
+    Parameters
+    ----------
+    block : Block
+        Cameras, images (approximate or known orientation), points, observations (mm, m,
+        rad). NaN values (not yet approximated) are skipped.
+    exterior_unknown : bool
+        Whether the images' orientations are unknowns (block, resection) or given
+        (intersection); only then is the number of observations per image checked.
+    place : callable, optional
+        ``place(k) -> "observations[k]"``: how the file names observation ``k``.
+    min_angle_deg : float
+        Rays of a tie or check point all within this angle (degrees) are reported.
+
+    Returns
+    -------
+    list of Finding
+        Errors first, then warnings.
+    """
+    place = place or (lambda k: f"observation {k}")
+    out: list[Finding] = []
+    obs, im, pts, cams = block.observations, block.images, block.points, block.cameras
+    n_obs = obs.image.size
+    cam = im.camera[obs.image] if n_obs else np.zeros(0, dtype=np.intp)
+    with np.errstate(all="ignore"):
+        # --- image coordinates beyond the image ------------------------------------
+        half = np.nanmax(np.column_stack([cams.format_mm / 2, cams.c[:, None]]), axis=1)
+        half = np.where(np.isfinite(half) & (half > 0), half, 115.0)
+        dx = obs.xy - np.column_stack([cams.x0, cams.y0])[cam]
+        outside = np.flatnonzero(np.any(~(np.abs(dx) <= IMAGE_FACTOR * half[cam, None]), axis=1))
+        if outside.size:
+            k = int(outside[0])
+            axis = "x" if not abs(dx[k, 0]) <= IMAGE_FACTOR * half[cam[k]] else "y"
+            value = obs.xy[k, 0 if axis == "x" else 1]
+            out.append(
+                Finding(
+                    "error",
+                    "image-outside",
+                    f"{axis} = {value:.6g} mm of point {pts.ids[obs.point[k]]!r} in image "
+                    f"{im.ids[obs.image[k]]!r} lies far outside the image (half format "
+                    f"{half[cam[k]]:.4g} mm); correct the value or its unit"
+                    + (f" ({outside.size} such observations)" if outside.size > 1 else ""),
+                    outside.size,
+                    place(k),
+                    2,
+                )
+            )
+        # --- coordinates far from the block -----------------------------------------
+        xyz = np.where(np.isfinite(pts.xyz_known), pts.xyz_known, pts.xyz)
+        allc = np.concatenate([xyz, im.X0])
+        fin = np.all(np.isfinite(allc), axis=1)
+        if fin.sum() >= 2:
+            centre = np.median(allc[fin], axis=0)
+            lo, hi = np.percentile(allc[fin], [10, 90], axis=0)
+            size = max(float(np.max(hi - lo)), 1.0)
+            dist = np.max(np.abs(allc - centre), axis=1)
+            far = np.flatnonzero(fin & (dist > EXTENT_FACTOR * size))
+            if far.size:
+                absurd = bool(np.any(dist[far] > ABSURD_M))
+                n_p = pts.ids.__len__()
+                names = [f"point {pts.ids[i]!r}" if i < n_p else f"image {im.ids[i - n_p]!r}"
+                         for i in far[:NAMED].tolist()]  # fmt: skip
+                more = f" and {far.size - NAMED} more" if far.size > NAMED else ""
+                out.append(
+                    Finding(
+                        "error" if absurd else "warning",
+                        "far-away",
+                        f"{', '.join(names)}{more} lie(s) {dist[far[0]]:.3g} m from the "
+                        f"block's centre, far outside its extent of about {size:.3g} m; "
+                        "check the coordinates and their unit",
+                        far.size,
+                        "",
+                        2,
+                    )
+                )
+        if n_obs == 0:
+            return _sorted(out)
+        R = _rotations(block)
+        # --- points behind the camera -----------------------------------------------
+        d = np.einsum("nji,nj->ni", R[obs.image], xyz[obs.point] - im.X0[obs.image])
+        known = np.isfinite(d[:, 2])
+        behind = known & (d[:, 2] >= 0)
+        if behind.any():
+            n_b, n_k = int(behind.sum()), int(known.sum())
+            imgs = np.unique(obs.image[behind])
+            fatal = n_b * 2 > n_k
+            out.append(
+                Finding(
+                    "error" if fatal else "warning",
+                    "behind",
+                    f"{n_b} of {n_k} rays have their point behind the camera (images "
+                    f"{_names(im.ids, imgs)}): the camera looks along its −z axis with Z up; "
+                    "check the heights, the flying height and the angles",
+                    n_b,
+                    place(int(np.flatnonzero(behind)[0])),
+                    3,
+                )
+            )
+        # --- fewer observations than unknowns per image ----------------------------
+        if exterior_unknown:
+            rays = np.bincount(obs.image, minlength=len(im.ids))
+            extra = np.sum(np.isfinite(im.X0_obs), axis=1) + np.sum(
+                np.isfinite(im.angles_obs), axis=1
+            )
+            few = np.flatnonzero(2 * rays + extra < 6)
+            if few.size:
+                i = int(few[0])
+                out.append(
+                    Finding(
+                        "error",
+                        "few-observations",
+                        f"image(s) {_names(im.ids, few)} have fewer observations than the 6 "
+                        f"unknowns of an orientation (image {im.ids[i]!r}: {rays[i]} points = "
+                        f"{2 * rays[i] + extra[i]} observations); measure at least 3 points "
+                        "in every image or remove it",
+                        few.size,
+                        "",
+                        3,
+                    )
+                )
+        # --- weak intersections ------------------------------------------------------
+        ray = np.einsum(
+            "nij,nj->ni",
+            R[obs.image],
+            np.column_stack([dx, -np.broadcast_to(cams.c[cam], (n_obs,))]),
+        )
+        ray /= np.linalg.norm(ray, axis=1, keepdims=True)
+        use = np.all(np.isfinite(ray), axis=1) & (pts.role[obs.point] != CONTROL)
+        p = obs.point[use]
+        n_p = len(pts.ids)
+        count = np.bincount(p, minlength=n_p)
+        mean = np.column_stack(
+            [np.bincount(p, ray[use, k], minlength=n_p) for k in range(3)]
+        ).astype(float)
+        mean /= np.linalg.norm(mean, axis=1, keepdims=True)
+        cos = np.einsum("ni,ni->n", ray[use], mean[p])
+        min_cos = np.ones(n_p)
+        np.minimum.at(min_cos, p, cos)
+        # the largest angle between two rays is at most twice the largest angle to the mean
+        spread = 2 * np.degrees(np.arccos(np.clip(min_cos, -1.0, 1.0)))
+        weak = np.flatnonzero((count >= 2) & (spread < min_angle_deg))
+        if weak.size:
+            out.append(
+                Finding(
+                    "warning",
+                    "weak-intersection",
+                    f"{weak.size} point(s) ({_names(pts.ids, weak)}) are seen by rays that meet "
+                    f"at less than {min_angle_deg:g}°: their position along the rays is "
+                    "hardly determined; add images with a longer base",
+                    weak.size,
+                )
+            )
+    return _sorted(out)
+
+
+def _sorted(findings: list[Finding]) -> list[Finding]:
+    return sorted(findings, key=lambda f: (f.level != "error", f.exit_code == 3))
+
+
+def raise_for(findings: list[Finding], source: str | None) -> list[Finding]:
+    """Raise the first error (exit 2 as InputError, 3 as AdjustmentError); log and return
+    the warnings."""
+    for f in findings:
+        if f.level != "error":
+            continue
+        if f.exit_code == 2:
+            raise InputError(f.message, source, f.place or None)
+        raise AdjustmentError(f.message)
+    warnings = [f for f in findings if f.level == "warning"]
+    for f in warnings:
+        log.warning("%s: %s", source or "block", f.message)
+    return warnings

@@ -1,0 +1,143 @@
+"""Figure sizes and font sizes that stay readable in the book's column.
+
+The book shows a figure as a PNG (matplotlib's inline backend: 100 dpi, tight bounding
+box) scaled down to the width of its text column, about :data:`COLUMN_PX` pixels. A
+text of ``s`` points in a figure ``W`` inches wide is then drawn
+
+    h = s/72 · 100 · min(1, COLUMN_PX / (100 W))   pixels high (the em size),
+
+so what decides readability is the ratio of font size to figure width, not the dpi:
+a 13-inch figure with 7-point labels ends up at 5 px. The rules, used by every
+function in :mod:`orientviz.plot` and :mod:`orientviz.widgets`:
+
+* figures are at most :data:`MAX_WIDTH_IN` wide (:func:`figure_size` caps wider
+  requests and keeps the aspect ratio);
+* text sizes come from :data:`FONT` (no size below :data:`MIN_FONT_PT`), so at the
+  largest width every text is at least :data:`MIN_TEXT_PX` pixels in the column.
+
+:func:`text_sizes_px` measures a finished figure the way the book shows it; the tests
+in ``tests/book`` and ``tests/plot`` use it on every figure function.
+"""
+
+from __future__ import annotations
+
+from contextlib import contextmanager
+
+import numpy as np
+
+#: Width of the book's text column in CSS pixels (pydata theme, 1280-px window).
+COLUMN_PX: int = 700
+#: Resolution of the PNGs the book embeds (matplotlib_inline: figure.dpi = 100).
+BOOK_DPI: float = 100.0
+#: Widest figure, in inches: one that fills the column without being scaled down.
+MAX_WIDTH_IN: float = 7.0
+#: Smallest readable text height in the column, px.
+MIN_TEXT_PX: float = 10.0
+#: Smallest font size, pt: MIN_TEXT_PX at MAX_WIDTH_IN (7.2 pt), rounded up.
+MIN_FONT_PT: float = 8.0
+#: Font sizes (pt) by role.
+FONT: dict[str, float] = {
+    "title": 11.0,
+    "suptitle": 12.0,
+    "label": 10.0,
+    "tick": 9.0,
+    "legend": 9.0,
+    "note": 9.0,
+    "small": MIN_FONT_PT,
+}
+
+#: rc settings applied while a figure is created by :func:`new_figure`.
+RC: dict[str, object] = {
+    "font.size": FONT["label"],
+    "axes.titlesize": FONT["title"],
+    "axes.labelsize": FONT["label"],
+    "xtick.labelsize": FONT["tick"],
+    "ytick.labelsize": FONT["tick"],
+    "legend.fontsize": FONT["legend"],
+    "legend.title_fontsize": FONT["legend"],
+    "figure.titlesize": FONT["suptitle"],
+}
+
+
+def figure_size(width: float, height: float) -> tuple[float, float]:
+    """``(width, height)`` in inches, scaled down to at most :data:`MAX_WIDTH_IN` wide."""
+    if width <= MAX_WIDTH_IN:
+        return (float(width), float(height))
+    f = MAX_WIDTH_IN / width
+    return (MAX_WIDTH_IN, float(height) * f)
+
+
+@contextmanager
+def book_rc():
+    """Context in which new figures, axes and texts use :data:`RC` (readable sizes)."""
+    import matplotlib as mpl
+
+    with mpl.rc_context(RC):
+        yield
+
+
+def new_figure(figsize: tuple[float, float] = (MAX_WIDTH_IN, 4.5), *, nrows: int = 1,
+               ncols: int = 1, projection: str | None = None, **kwargs):  # fmt: skip
+    """A new figure with axes, sized by :func:`figure_size` and fonts by :data:`RC`.
+
+    Parameters
+    ----------
+    figsize : (float, float)
+        Wished size in inches; wider than :data:`MAX_WIDTH_IN` is scaled down.
+    nrows, ncols : int
+        Subplot grid (as :func:`matplotlib.pyplot.subplots`).
+    projection : str, optional
+        e.g. ``"3d"``: one axes with this projection (nrows = ncols = 1).
+    **kwargs
+        Passed to :func:`matplotlib.pyplot.subplots` (``width_ratios``, ``layout``…).
+
+    Returns
+    -------
+    (Figure, Axes or ndarray of Axes)
+    """
+    import matplotlib.pyplot as plt
+
+    size = figure_size(*figsize)
+    with book_rc():
+        if projection is not None:
+            fig = plt.figure(figsize=size)
+            return fig, fig.add_subplot(projection=projection)
+        return plt.subplots(nrows, ncols, figsize=size, **kwargs)
+
+
+def text_sizes_px(fig, *, column_px: float = COLUMN_PX, dpi: float = BOOK_DPI) -> list[tuple[float, str]]:
+    """Height (px) of every visible, non-empty text of ``fig`` as shown in the book.
+
+    The figure is rendered as the book renders it (``dpi``, tight bounding box); the
+    PNG is scaled to ``column_px`` if wider. Returns ``(px, text)`` pairs, smallest first.
+    """
+    import io
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
+    buf.seek(0)
+    width_px = _png_width(buf.getvalue())
+    scale = min(1.0, column_px / width_px)
+    out = []
+    for t in fig.findobj(lambda a: hasattr(a, "get_fontsize") and hasattr(a, "get_text")):
+        if not t.get_visible() or not str(t.get_text()).strip():
+            continue
+        if not _on_figure(t, fig):
+            continue
+        out.append((float(t.get_fontsize()) / 72.0 * dpi * scale, str(t.get_text())))
+    return sorted(out)
+
+
+def _png_width(data: bytes) -> int:
+    # PNG: 8-byte signature, then the IHDR chunk with width, height (big-endian)
+    return int.from_bytes(data[16:20], "big")
+
+
+def _on_figure(text, fig) -> bool:
+    """False for tick labels outside their axis' view (matplotlib keeps spare ones)."""
+    try:
+        bb = text.get_window_extent(renderer=fig.canvas.get_renderer())
+    except Exception:  # texts without a renderer position (e.g. unused offsets)
+        return False
+    fb = fig.bbox
+    return bool(np.isfinite([bb.x0, bb.y0]).all() and bb.width > 0 and bb.x1 > fb.x0 - 1e3)

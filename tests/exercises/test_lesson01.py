@@ -1,0 +1,11 @@
+"""Lesson 01's checkers pass the solutions and reject every plausible wrong answer by far."""
+
+from __future__ import annotations
+
+from orientviz.exercises import lesson01
+
+from mutants import assert_module_checks
+
+
+def test_lesson01_checks():
+    assert_module_checks(lesson01)
