@@ -60,56 +60,74 @@ def _rotation_cw(q: NDArray[np.float64]) -> NDArray[np.float64]:
     )
 
 
-def _distort(cam: ColmapCamera, xn: NDArray[np.float64]) -> NDArray[np.float64]:
-    """COLMAP's forward distortion of normalised coordinates (x right, y down)."""
+def _coefficients(cam: ColmapCamera) -> tuple[float, float, float, float]:
+    """k1, k2, p1, p2 of COLMAP's distortion (zeros where the model has none)."""
     p = cam.named()
-    k1 = p.get("k", p.get("k1", 0.0))
-    k2, p1, p2 = p.get("k2", 0.0), p.get("p1", 0.0), p.get("p2", 0.0)
+    return p.get("k", p.get("k1", 0.0)), p.get("k2", 0.0), p.get("p1", 0.0), p.get("p2", 0.0)
+
+
+def _distort(cam: ColmapCamera, xn: NDArray[np.float64], jacobian: bool = False):
+    """COLMAP's forward distortion of normalised coordinates (x right, y down), and its
+    2 × 2 Jacobian (∂x_d/∂x, ∂x_d/∂y, ∂y_d/∂x, ∂y_d/∂y) when asked."""
+    k1, k2, p1, p2 = _coefficients(cam)
     x, y = xn[:, 0], xn[:, 1]
     r2 = x * x + y * y
-    radial = k1 * r2 + k2 * r2 * r2
-    return np.column_stack(
-        [
-            x + x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x),
-            y + y * radial + 2 * p2 * x * y + p1 * (r2 + 2 * y * y),
-        ]
-    )
+    radial = 1.0 + k1 * r2 + k2 * r2 * r2
+    xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
+    yd = y * radial + 2 * p2 * x * y + p1 * (r2 + 2 * y * y)
+    if not jacobian:
+        return np.column_stack([xd, yd])
+    g = 2.0 * (k1 + 2.0 * k2 * r2)
+    j = (radial + g * x * x + 2 * p1 * y + 6 * p2 * x, g * x * y + 2 * p1 * x + 2 * p2 * y,
+         g * x * y + 2 * p2 * y + 2 * p1 * x, radial + g * y * y + 2 * p2 * x + 6 * p1 * y)  # fmt: skip
+    return xd, yd, j
+
+
+#: Observations undistorted per batch (bounds the temporaries of the Newton iteration).
+UNDISTORT_BATCH: int = 1 << 18
 
 
 def normalised(cam: ColmapCamera, uv: NDArray[np.float64], source: str = "") -> NDArray[np.float64]:
     """Undistorted normalised coordinates (x right, y down) of pixel observations ``uv``.
 
     ``(u − cx)/fx, (v − cy)/fy`` with COLMAP's distortion (SIMPLE_RADIAL, RADIAL,
-    OPENCV) inverted by Newton's method with a numerical 2 × 2 Jacobian, to
-    :data:`UNDISTORT_TOL_PX` (px); an observation that does not converge raises
-    ``InputError`` (distortion too strong to invert there).
+    OPENCV) inverted by Newton's method (analytic 2 × 2 Jacobian) to
+    :data:`UNDISTORT_TOL_PX` (px), in batches of :data:`UNDISTORT_BATCH`; an observation
+    that does not converge raises ``InputError`` (distortion too strong to invert there).
     """
     p = cam.named()
     fx, fy = p.get("fx", p.get("f")), p.get("fy", p.get("f"))
-    d = np.column_stack([(uv[:, 0] - p["cx"]) / fx, (uv[:, 1] - p["cy"]) / fy])
-    if not any(p.get(k, 0.0) for k in ("k", "k1", "k2", "p1", "p2")):
-        return d
-    x = d.copy()
+    out = np.empty_like(uv, dtype=float)
+    out[:, 0] = (uv[:, 0] - p["cx"]) / fx
+    out[:, 1] = (uv[:, 1] - p["cy"]) / fy
+    if not any(_coefficients(cam)):
+        return out
     tol = UNDISTORT_TOL_PX / max(fx, fy)
-    h = 1e-7
-    for _ in range(50):
-        f = _distort(cam, x) - d
-        if np.all(np.abs(f) < tol):
-            break
-        jx = (_distort(cam, x + [h, 0.0]) - _distort(cam, x - [h, 0.0])) / (2 * h)
-        jy = (_distort(cam, x + [0.0, h]) - _distort(cam, x - [0.0, h])) / (2 * h)
-        det = jx[:, 0] * jy[:, 1] - jy[:, 0] * jx[:, 1]
-        det = np.where(np.abs(det) < 1e-12, 1e-12, det)
-        x[:, 0] -= (jy[:, 1] * f[:, 0] - jy[:, 0] * f[:, 1]) / det
-        x[:, 1] -= (-jx[:, 1] * f[:, 0] + jx[:, 0] * f[:, 1]) / det
-    bad = np.flatnonzero(np.any(np.abs(_distort(cam, x) - d) >= tol, axis=1) | ~np.isfinite(x).all(1))
-    if bad.size:
-        raise InputError(
-            f"{cam.model} camera: the lens distortion cannot be inverted at pixel "
-            f"({uv[bad[0], 0]:.1f}, {uv[bad[0], 1]:.1f}) ({bad.size} observation(s))",
-            source=source,
-        )
-    return x
+    for a in range(0, len(out), UNDISTORT_BATCH):
+        d = out[a : a + UNDISTORT_BATCH].copy()
+        x = d.copy()
+        active = np.arange(len(d))
+        for _ in range(30):
+            xd, yd, (a11, a12, a21, a22) = _distort(cam, x[active], jacobian=True)
+            fx_, fy_ = xd - d[active, 0], yd - d[active, 1]
+            done = (np.abs(fx_) < tol) & (np.abs(fy_) < tol)
+            det = a11 * a22 - a12 * a21
+            det = np.where(np.abs(det) < 1e-12, 1e-12, det)
+            x[active, 0] -= np.where(done, 0.0, (a22 * fx_ - a12 * fy_) / det)
+            x[active, 1] -= np.where(done, 0.0, (-a21 * fx_ + a11 * fy_) / det)
+            active = active[~done]
+            if active.size == 0:
+                break
+        bad = np.flatnonzero(np.any(np.abs(_distort(cam, x) - d) >= tol, axis=1) | ~np.isfinite(x).all(1))
+        if bad.size:
+            u = uv[a + bad[0]]
+            raise InputError(
+                f"{cam.model} camera: the lens distortion cannot be inverted at pixel "
+                f"({u[0]:.1f}, {u[1]:.1f}) ({bad.size} observation(s))",
+                source=source,
+            )
+        out[a : a + UNDISTORT_BATCH] = x
+    return out
 
 
 def block_from_colmap(
@@ -148,10 +166,11 @@ def block_from_colmap(
         fx, fy = p.get("fx", p.get("f")), p.get("fy", p.get("f"))
         c = fx * pixel_size_mm
         c_mm.append(c)
-        sel = cam_arr[model.obs_image] == ci
+        sel = slice(None) if len(cam_ids) == 1 else cam_arr[model.obs_image] == ci
         xn = normalised(cam, model.obs_uv[sel], model.source.get("images", ""))
-        xy[sel, 0] = xn[:, 0] * c
-        xy[sel, 1] = -xn[:, 1] * c
+        xn *= [c, -c]
+        xy[sel] = xn
+        del xn
         sigma[sel] = sigma_px * pixel_size_mm * np.array([1.0, fx / fy])
     pid_index = np.argsort(model.point_ids, kind="stable")
     obs_point = pid_index[np.searchsorted(model.point_ids[pid_index], model.obs_point)]

@@ -21,7 +21,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import NDArray
 
 #: Bytes read per chunk (a chunk grows to the end of its last line).
-CHUNK_BYTES: int = 32 << 20
+CHUNK_BYTES: int = 16 << 20
 I64 = NDArray[np.int64]
 _POW10 = 10 ** np.arange(19, dtype=np.int64)
 _P10F = 10.0 ** np.arange(20)
