@@ -172,8 +172,7 @@ def block_from_colmap(
         xy[sel] = xn
         del xn
         sigma[sel] = sigma_px * pixel_size_mm * np.array([1.0, fx / fy])
-    pid_index = np.argsort(model.point_ids, kind="stable")
-    obs_point = pid_index[np.searchsorted(model.point_ids[pid_index], model.obs_point)]
+    obs_point = model.obs_point  # indices into model.point_ids
     names = list(model.names)
     ids = names if len(set(names)) == len(names) else [str(i) for i in model.image_ids]
     return Block.from_arrays(

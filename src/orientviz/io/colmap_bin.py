@@ -33,6 +33,7 @@ from .colmap_text import (
     OTHER_MODELS,
     ColmapCamera,
     ColmapModel,
+    IdIndex,
     camera_problem,
     checked_file,
     pose_problem,
@@ -118,23 +119,29 @@ def read_cameras_bin(path: Path) -> dict[int, ColmapCamera]:
 def read_points_bin(path: Path) -> tuple[np.ndarray, np.ndarray, set[int]]:
     r = _Reader(path)
     (n,) = r.take("<Q", "the number of points")
-    ids = np.empty(n, dtype=np.int64)
-    xyz = np.empty((n, 3))
-    offs = np.empty(n, dtype=np.int64)
-    lens = np.empty(n, dtype=np.int64)
-    head = struct.Struct("<Q3d3BdQ")
+    head = 51  # uint64 id, 3 float64, 3 uint8, float64 error, uint64 track length
     buf, size = r.buf, len(r.buf)
-    for k in range(n):  # headers only; the tracks are gathered below in one go
-        if r.pos + head.size > size:
+    starts = [0] * n
+    lengths = [0] * n
+    pos = r.pos
+    from_bytes = int.from_bytes
+    for k in range(n):  # only the record lengths; the fields are gathered below
+        if pos + head > size:
+            r.pos = pos
             raise r.fail("file ends inside a 3D point (truncated)")
-        pid, X, Y, Z, _, _, _, _, length = head.unpack_from(buf, r.pos)
-        ids[k], xyz[k] = pid, (X, Y, Z)
-        offs[k], lens[k] = r.pos + head.size, length
-        r.pos += head.size + TRACK.itemsize * length
-        if r.pos > size:
-            raise r.fail("file ends inside a TRACK (truncated)", int(offs[k]))
+        length = from_bytes(buf[pos + 43 : pos + 51], "little")
+        starts[k], lengths[k] = pos, length
+        pos += head + TRACK.itemsize * length
+        if pos > size:
+            raise r.fail("file ends inside a TRACK (truncated)", starts[k])
+    r.pos = pos
     r.done()
     raw = np.frombuffer(buf, dtype=np.uint8) if size else np.zeros(0, np.uint8)
+    at0 = np.array(starts, dtype=np.int64)
+    ids = raw[at0[:, None] + np.arange(8)].copy().view("<u8").ravel().astype(np.int64)
+    xyz = raw[at0[:, None] + 8 + np.arange(24)].copy().view("<f8").reshape(-1, 3)
+    offs = at0 + head
+    lens = np.array(lengths, dtype=np.int64)
     at = np.repeat(offs, lens) + TRACK.itemsize * (
         np.arange(int(lens.sum())) - np.repeat(np.cumsum(lens) - lens, lens)
     )
@@ -159,7 +166,7 @@ def read_images_bin(path: Path, point_ids: np.ndarray, cams: dict[int, ColmapCam
     cam = np.empty(n, dtype=np.int64)
     names: list[str] = []
     obs_image, obs_uv, obs_pid = [], [], []
-    sorted_ids = np.sort(point_ids)
+    lookup = IdIndex(point_ids)
     for k in range(n):
         at = r.pos
         vals = r.take("<I7dI", "an image")
@@ -177,16 +184,15 @@ def read_images_bin(path: Path, point_ids: np.ndarray, cams: dict[int, ColmapCam
         if np.any(keep["id"] < 0):
             raise r.fail(f"image {vals[0]}: POINT3D_ID must be -1 or ≥ 0", at)
         pid = keep["id"].astype(np.int64)
-        pos = np.minimum(np.searchsorted(sorted_ids, pid), max(sorted_ids.size - 1, 0))
-        bad = sorted_ids[pos] != pid if sorted_ids.size else np.ones(pid.size, bool)
-        if np.any(bad):
-            raise r.fail(f"image {vals[0]}: unknown POINT3D_ID {int(pid[np.argmax(bad)])}", at)
+        index = lookup.index(pid)
+        if np.any(index < 0):
+            raise r.fail(f"image {vals[0]}: unknown POINT3D_ID {int(pid[np.argmax(index < 0)])}", at)
         uv = np.column_stack([keep["x"], keep["y"]])
         if not np.all(np.isfinite(uv) & (np.abs(uv) <= lim)):
             raise r.fail(f"image {vals[0]}: keypoints must be finite and near the image", at)
         obs_image.append(np.full(pid.size, k, dtype=np.int64))
         obs_uv.append(uv)
-        obs_pid.append(pid)
+        obs_pid.append(index)  # the index of the point (its POINT3D_ID is point_ids[i])
     r.done()
     if n == 0:
         raise r.fail("no images in the file")
@@ -233,9 +239,10 @@ def write_binary_model(model: ColmapModel, directory: Path) -> None:
         out.append(struct.pack("<I7dI", iid, *model.qvec[k], *model.tvec[k], int(model.image_camera[k])))
         out.append(model.names[k].encode() + b"\0" + struct.pack("<Q", sel.size))
         kp = np.zeros(sel.size, KEYPOINT)
-        kp["x"], kp["y"], kp["id"] = model.obs_uv[sel, 0], model.obs_uv[sel, 1], model.obs_point[sel]
+        pids = model.point_ids[model.obs_point[sel]]
+        kp["x"], kp["y"], kp["id"] = model.obs_uv[sel, 0], model.obs_uv[sel, 1], pids
         out.append(kp.tobytes())
-        for j, p in enumerate(model.obs_point[sel].tolist()):
+        for j, p in enumerate(pids.tolist()):
             tracks.setdefault(p, []).append((iid, j))
     (directory / "images.bin").write_bytes(b"".join(out))
     out = [struct.pack("<Q", model.point_ids.size)]

@@ -74,6 +74,33 @@ def pose_problem(q: F64, t: F64) -> str | None:
     return None
 
 
+class IdIndex:
+    """Index of integer ids: ``index(q)`` → position of each id in ``ids`` (−1 if unknown).
+
+    A direct lookup table when the ids are dense enough (max id < 8 × count + 2²⁰),
+    else a binary search of the sorted ids (queries sorted first, for the cache).
+    """
+
+    def __init__(self, ids: I64):
+        self.ids = ids
+        top = int(ids.max()) if ids.size else -1
+        self.table = None
+        if ids.size == 0 or (int(ids.min()) >= 0 and top < 8 * ids.size + (1 << 20)):
+            self.table = np.full(top + 2, -1, dtype=np.int64)
+            self.table[ids] = np.arange(ids.size)
+        else:
+            self.order = np.argsort(ids, kind="stable")
+            self.sorted = ids[self.order]
+
+    def index(self, q: I64) -> I64:
+        if self.table is not None:
+            ok = (q >= 0) & (q < self.table.size - 1)
+            return np.where(ok, self.table[np.where(ok, q, self.table.size - 1)], -1)
+        pos = np.minimum(np.searchsorted(self.sorted, q), max(self.sorted.size - 1, 0))
+        found = self.sorted[pos] == q if self.sorted.size else np.zeros(q.size, bool)
+        return np.where(found, self.order[pos] if self.sorted.size else -1, -1)
+
+
 @dataclass
 class ColmapCamera:
     """One COLMAP camera: model name, image size (px) and parameters (px)."""
@@ -99,7 +126,7 @@ class ColmapModel:
     image_camera: I64  # camera id per image
     obs_image: I64  # index into the images
     obs_uv: F64  # (n, 2) px
-    obs_point: I64  # POINT3D_ID
+    obs_point: I64  # index into point_ids
     point_ids: I64
     xyz: F64
     source: dict[str, str] = field(default_factory=dict)
@@ -233,7 +260,7 @@ def read_points_text(path: Path) -> tuple[I64, F64, dict[int, int]]:
 def read_images_text(path: Path, point_ids: I64, cams: dict[int, ColmapCamera]) -> dict:
     """images.txt: image records and the matched keypoints only (one pass, chunked)."""
     checked_file(path, "a COLMAP text file images.txt")
-    sorted_ids = np.sort(point_ids)
+    lookup = IdIndex(point_ids)
     limit: list[tuple[float, float]] = []  # per image: |u|, |v| limits (px)
     recs: list[tuple] = []
     obs_image, obs_uv, obs_pid = [], [], []
@@ -305,15 +332,14 @@ def read_images_text(path: Path, point_ids: I64, cams: dict[int, ColmapCamera]) 
             k = int(far[0])
             raise _fail(path, chunk.first_line + int(t.line[keep[k]]),
                         f"2D point ({uv[k, 0]:g}, {uv[k, 1]:g}) px lies far outside the image")  # fmt: skip
-        pos = np.minimum(np.searchsorted(sorted_ids, pid), max(sorted_ids.size - 1, 0))
-        found = sorted_ids[pos] == pid if sorted_ids.size else np.zeros(pid.size, bool)
-        unknown = np.flatnonzero(~found)
+        where_ = lookup.index(pid)
+        unknown = np.flatnonzero(where_ < 0)
         if unknown.size:
             at = keep[unknown[0]]
             raise _fail(path, chunk.first_line + int(t.line[at]), f"unknown POINT3D_ID {int(pid[unknown[0]])}")
         obs_image.append(of_line[t.line[keep]])
         obs_uv.append(uv)
-        obs_pid.append(pid)
+        obs_pid.append(where_)  # the index of the point (its POINT3D_ID is point_ids[i])
     if not recs:
         raise _fail(path, max(last_header_line, 1), "no images in the file")
     vals = np.array([r[0][:8] for r in recs], dtype=float)
