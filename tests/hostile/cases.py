@@ -299,6 +299,15 @@ def problem_files() -> list[Case]:
                           (), name))  # fmt: skip
         deep = "[" * 100_000 + "]" * 100_000
         c.append(Case(f"solve/{kind}/nested-deeply", _problem(name, None, raw=deep), 2, (), name))
+
+    def similarity_report(f: Path) -> list[str]:  # found by test_properties
+        d = I.doc("similarity_example.json")
+        d["target"]["points"][0]["X"] = 1e308
+        (f / "s.json").write_text(json.dumps(d), encoding="utf-8")
+        return ["solve", str(f / "s.json"), "--report", str(f / "r.html")]
+
+    c.append(Case("solve/similarity/1e308-with-report", similarity_report, 2, ("beyond",),
+                  "s.json"))  # fmt: skip
     big_description = _set(("description",), "d" * 200_000)
     c.append(Case("solve/block/long-description", _problem(I.BLOCK, big_description), 2,
                   ("characters",), I.BLOCK))  # fmt: skip
@@ -459,6 +468,7 @@ def bal_files() -> list[Case]:
         "header-negative": line(0, "-1 5 5"),
         "header-huge-counts": line(0, "1000000000 1000000000 1000000000"),
         "header-text": line(0, "cameras points observations"),
+        "header-400-digits": line(0, "9" * 400 + " 1 1"),
         "observation-minus-1e308": lambda t: (
             "\n".join(
                 [
@@ -554,29 +564,70 @@ def geometry() -> list[Case]:
 
 
 # --------------------------------------------------------------------------- successes
+def _rename(d: dict, table: str, ref: str, k: int, value: str) -> None:
+    """Rename row ``k`` of ``table`` (images/points) and its observations."""
+    old = d[table][k]["id"]
+    d[table][k]["id"] = value
+    for o in d["observations"]:
+        if o[ref] == old:
+            o[ref] = value
+
+
+def _no_raw(text: str, name: str):
+    def post(folder: Path) -> None:
+        html = (folder / name).read_text(encoding="utf-8")
+        assert text not in html, f"{text!r} reached the HTML unescaped"
+
+    return post
+
+
 def accepted() -> list[Case]:
     """Hostile-looking but legal input: must succeed (exit 0) and write only its outputs."""
     c = []
 
-    def ids(value: str, extra=()):
+    def ids(table: str, value: str, extra=()):
         def make(f: Path) -> list[str]:
             d = I.doc(I.BLOCK)
-            old = d["points"][0]["id"]
-            d["points"][0]["id"] = value
-            for o in d["observations"]:
-                if o["point"] == old:
-                    o["point"] = value
+            _rename(d, table, "point" if table == "points" else "image", 0, value)
             (f / I.BLOCK).write_text(json.dumps(d), encoding="utf-8")
             return ["solve", str(f / I.BLOCK), *[str(f / e) if "." in e else e for e in extra]]
 
         return make
 
-    for what, value in (("mathtext", r"$\undefinedmacro$"), ("html", "<script>x</script>&"),
-                        ("newline", "a\nb"), ("dollar", "$"), ("percent-braces", "%s{0}")):  # fmt: skip
-        c.append(Case(f"solve/accepted/id-{what}", ids(value, ("--report", "r.html")), 0,
-                      outputs=("r.html",)))  # fmt: skip
-    c.append(Case("solve/accepted/id-mathtext-txt", ids(r"$\frac{$", ("--report", "r.txt")), 0,
-                  outputs=("r.txt",)))  # fmt: skip
+    for table in ("images", "points"):
+        for what, value in (("mathtext", r"$\undefinedmacro$"), ("html", "<script>x</script>&"),
+                            ("newline", "a\nb"), ("dollar", "$"), ("percent-braces", "%s{0}"),
+                            ("mathtext-frac", r"$\frac{$")):  # fmt: skip
+            post = _no_raw("<script>x</script>", "r.html") if what == "html" else None
+            c.append(Case(f"solve/accepted/{table}-id-{what}",
+                          ids(table, value, ("--report", "r.html")), 0, outputs=("r.html",),
+                          post=post))  # fmt: skip
+    c.append(Case("solve/accepted/id-mathtext-txt", ids("images", r"$\frac{$",
+                  ("--report", "r.txt")), 0, outputs=("r.txt",)))  # fmt: skip
+    models = ids("images", r"$\undefinedmacro$", ("--method", "models", "--report", "r.html"))
+    c.append(Case("solve/accepted/models-report-with-control", models, 0, outputs=("r.html",)))
+
+    def shipped(f: Path) -> list[str]:
+        return ["export", "block_strip", "-d", str(f / "out"), "--no-adjust"]
+
+    c.append(Case("export/accepted/shipped-example", shipped, 0, outputs=("out",)))
+
+    def bal_ok(f: Path) -> list[str]:
+        _all_inputs(f)
+        lines = (f / I.CONTROL).read_text().splitlines()
+        rows = [f"pt{int(r.split(',', 1)[0]) - 1},{r.split(',', 1)[1]}" for r in lines[1:]]
+        (f / I.CONTROL).write_text("\n".join([lines[0], *rows]) + "\n")
+        return ["import-bal", str(f / I.BAL), "--control", str(f / I.CONTROL), "-o",
+                str(f / "o.json")]  # fmt: skip
+
+    c.append(Case("import-bal/accepted/with-control", bal_ok, 0, outputs=("o.json",)))
+
+    def colmap_ok(f: Path) -> list[str]:
+        _all_inputs(f)
+        return ["import-colmap", str(f / "sparse"), "--control", str(f / I.CONTROL), "-o",
+                str(f / "o.json")]  # fmt: skip
+
+    c.append(Case("import-colmap/accepted/with-control", colmap_ok, 0, outputs=("o.json",)))
     return c
 
 

@@ -67,7 +67,9 @@ def check_geometry(problem: Problem) -> list:
     from ..plausibility import check_block, raise_for
 
     if not isinstance(problem.data, Block):
-        return []
+        from ..plausibility import check_magnitudes
+
+        return raise_for(check_magnitudes(problem.data), problem.source)
     if problem.columnar:
         place = lambda k: f"observations.x[{k}]"  # noqa: E731
     else:
@@ -136,9 +138,10 @@ def run_from_cli(args: argparse.Namespace) -> int:
             print(f"{prog}: {exc.one_line()}", file=sys.stderr)
             return 2
     _print(text)
-    for note in solution.notes:
-        if note.startswith("warning: "):
-            print(f"{prog}: warning: {args.file}: {note[9:]}", file=sys.stderr)
+    if solution.adjustment.converged:  # on failure one line only (the report lists them)
+        for note in solution.notes:
+            if note.startswith("warning: "):
+                print(f"{prog}: warning: {args.file}: {note[9:]}", file=sys.stderr)
     if not solution.adjustment.converged:
         print(
             f"{prog}: {args.file}: the adjustment did not converge: {solution.adjustment.reason}",

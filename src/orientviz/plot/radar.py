@@ -168,7 +168,8 @@ def plot_correlations(result, *, names: list[str] | None = None, ax=None):
     ax.set_yticks(range(len(names)), names)
     for i in range(len(names)):
         for j in range(len(names)):
-            ax.text(j, i, f"{C[i, j]:.2f}", ha="center", va="center", fontsize=10)
+            ink = "white" if abs(C[i, j]) > 0.6 else "black"  # readable on the dark ends of the map
+            ax.text(j, i, f"{C[i, j]:.2f}", ha="center", va="center", fontsize=10, color=ink)
     fig.colorbar(im, ax=ax, label="correlation ρ")
     return fig
 

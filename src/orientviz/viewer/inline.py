@@ -94,7 +94,7 @@ def scene_figure(
     ax.set_zlabel("Z [m]")
     kind = demo.state.scores()[1]
     ax.set_title(title or f"{demo.title}: residual vectors ×{k:,.0f}, colour = {kind} (red ≥ 4)")
-    ax.legend(loc="upper left", fontsize=8)
+    ax.legend(loc="upper left", fontsize=10)
     return fig
 
 

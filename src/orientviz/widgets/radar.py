@@ -135,6 +135,32 @@ class RadarSliders:
         return out
 
 
+def arrow_scale(xy: np.ndarray, d: np.ndarray, share: float = 0.12) -> float:
+    """A round exaggeration (1, 2 or 5 × 10^k) that draws the longest arrow at ``share`` of the image.
+
+    Parameters
+    ----------
+    xy : ndarray, shape (n, 2)
+        Image coordinates (image m).
+    d : ndarray, shape (n, 2)
+        Discrepancies (image m).
+    share : float
+        Length of the longest arrow as a share of the image's extent.
+
+    Returns
+    -------
+    float
+        The factor (1 when there are no discrepancies).
+    """
+    longest = float(np.max(np.linalg.norm(d, axis=1), initial=0.0))
+    extent = float(np.max(np.ptp(xy, axis=0))) if len(xy) else 0.0
+    if longest <= 0 or extent <= 0:
+        return 1.0
+    target = share * extent / longest
+    k = 10.0 ** np.floor(np.log10(target))
+    return float(max(f * k for f in (1.0, 2.0, 5.0) if f * k <= target))
+
+
 def radar_app(state: RadarSliders | None = None):  # pragma: no cover - needs a kernel
     """An ipywidgets app: ten sliders, the image with discrepancy arrows, a solve button."""
     import ipywidgets as w
@@ -159,16 +185,12 @@ def radar_app(state: RadarSliders | None = None):  # pragma: no cover - needs a 
             out.clear_output(wait=True)
             fig, ax = plt.subplots(figsize=(6, 5))
             d = state.discrepancies()
-            plot_image(
-                state.image_coordinates(),
-                state.current(),
-                residuals=d,
-                scale=2.0,
-                ax=ax,
-                labels=False,
-            )
+            xy = state.image_coordinates()
+            scale = arrow_scale(xy, d)
+            plot_image(xy, state.current(), residuals=d, scale=scale, ax=ax, labels=False)
             ax.set_title(
-                f"slider image vs observed: rms {np.sqrt((d**2).mean()):.2f} m (arrows × 2)"
+                f"slider image vs observed: rms {np.sqrt((d**2).mean()):.2f} m (arrows × {scale:g})",
+                fontsize=10,
             )
             plt.show()
 

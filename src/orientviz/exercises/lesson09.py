@@ -1,0 +1,220 @@
+"""Checkers for lesson 09 (the datum: free networks, S-transformation, estimable quantities).
+
+Oracles: a numerical Jacobian of the distances (central differences) for the null space;
+the bordered normal equations solved directly with the new datum's constraints for the
+S-transformation; the σ of a distance from the numerical Jacobian row and the full
+cofactor matrix, in a datum the student's function never saw.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._common import CheckFailed, call, compare, rng_for, success
+
+
+def _network(rng):
+    p = 6
+    xy = np.column_stack([rng.uniform(0, 900, p), rng.uniform(0, 800, p)])
+    i, j = np.triu_indices(p, 1)
+    pairs = np.column_stack([i, j])
+    return xy, pairs
+
+
+def _distances(x, pairs):
+    xy = x.reshape(-1, 2)
+    return np.linalg.norm(xy[pairs[:, 1]] - xy[pairs[:, 0]], axis=1)
+
+
+def _jacobian(x, pairs, h=1e-5):
+    J = np.empty((len(pairs), x.size))
+    for k in range(x.size):
+        e = np.zeros(x.size)
+        e[k] = h
+        J[:, k] = (_distances(x + e, pairs) - _distances(x - e, pairs)) / (2 * h)
+    return J
+
+
+# --------------------------------------------------------------------- null space
+
+
+def _helmert(xy, rot=(-1, 1), translations=True, scale_instead=False):
+    p = len(xy)
+    c = xy - xy.mean(axis=0)
+    cols = []
+    if translations:
+        cols += [np.tile([1.0, 0.0], p), np.tile([0.0, 1.0], p)]
+    if scale_instead:
+        cols.append(c.reshape(-1))
+    else:
+        cols.append(np.column_stack([rot[0] * c[:, 1], rot[1] * c[:, 0]]).reshape(-1))
+    return np.column_stack(cols)
+
+
+def check_helmert_columns(fn) -> None:
+    """``fn(xy) -> G`` (2p, 3): columns that move a planar distance network (unknowns x1,
+    y1, x2, …) without changing any distance; together they must span the whole defect."""
+    for salt in range(2):
+        xy, pairs = _network(rng_for("lesson09.check_helmert_columns", salt))
+        G = np.asarray(call(fn, xy.copy(), what="helmert_columns"), dtype=float)
+        if G.shape != (xy.size, 3):
+            raise CheckFailed(f"G: expected shape ({xy.size}, 3) — two shifts and one rotation — got {G.shape}")
+        J = _jacobian(xy.reshape(-1), pairs)
+        Gn = G / np.maximum(np.linalg.norm(G, axis=0), 1e-300)
+        change = np.abs(J @ Gn).max(axis=0)  # distance change per unit move, each column
+        bad = int(np.argmax(change))
+        if change[bad] > 1e-8:
+            err = float(change[bad])
+            hint = ""
+            if bad == 2 or np.linalg.matrix_rank(G) == 3:
+                hint = (" — a rotation moves point (x, y) by (−y, x) (about the centroid or the origin);"
+                        " (x, y) itself is a change of scale, which the distances see")
+            raise CheckFailed(f"G: column {bad + 1} changes the distances by {err:.3g} per unit{hint}", err, 1e-8)
+        sv = np.linalg.svd(Gn, compute_uv=False)
+        if sv[-1] < 1e-6 * sv[0]:
+            raise CheckFailed("G: the three columns are not independent (rank < 3): the defect is not covered",
+                              1.0 / max(sv[-1] / sv[0], 1e-300) * 1e-6, 1e-6)  # fmt: skip
+    success("J G = 0 with a numerical Jacobian of all distances, rank 3")
+
+
+# --------------------------------------------------------------------- S-transformation
+
+
+def _problem(rng):
+    xy, pairs = _network(rng)
+    x0 = xy.reshape(-1)
+    sig = 0.004
+    l = _distances(x0, pairs) + rng.normal(0, sig, len(pairs))
+    d = xy[pairs[:, 1]] - xy[pairs[:, 0]]
+    u = d / np.linalg.norm(d, axis=1)[:, None]
+    J = np.zeros((len(pairs), x0.size))
+    r = np.arange(len(pairs))
+    for k in range(2):
+        J[r, 2 * pairs[:, 1] + k], J[r, 2 * pairs[:, 0] + k] = u[:, k], -u[:, k]
+    N, b = J.T @ J / sig**2, J.T @ (l - _distances(x0, pairs)) / sig**2
+    G = _helmert(xy)
+    G = G / np.linalg.norm(G, axis=0)
+    return xy, N, b, G
+
+
+def _bordered(N, b, G, e):
+    u, d = G.shape
+    EG = G * e[:, None] * np.sqrt(np.trace(N) / u)
+    M = np.block([[N, EG], [EG.T, np.zeros((d, d))]])
+    Mi = np.linalg.inv(M)
+    return Mi[:u, :u] @ b, Mi[:u, :u]
+
+
+def _sel(p, pts):
+    e = np.zeros(p)
+    e[list(pts)] = 1.0
+    return np.repeat(e, 2)
+
+
+def _s_matrix(G, e):
+    GtE = G.T * e
+    return np.eye(len(e)) - G @ np.linalg.solve(GtE @ G, GtE)
+
+
+def _s_transform(x, Q, G, pts, mode="ok"):
+    e = _sel(len(x) // 2, pts) if mode != "all" else np.ones(len(x))
+    S = _s_matrix(G, e)
+    if mode == "no_St":
+        return S @ x, S @ Q
+    if mode == "x_only":
+        return S @ x, Q
+    return S @ x, S @ Q @ S.T
+
+
+def check_s_transform(fn) -> None:
+    """``fn(x, Q, G, datum_points) -> (x_new, Q_new)``: corrections and cofactors of a free
+    network moved from the inner-constraint datum into the datum of ``datum_points``."""
+    rng = rng_for("lesson09.check_s_transform")
+    xy, N, b, G = _problem(rng)
+    p = len(xy)
+    xA, QA = _bordered(N, b, G, np.ones(2 * p))
+    pts = [1, 4]
+    xB, QB = _bordered(N, b, G, _sel(p, pts))
+    got = call(fn, xA.copy(), QA.copy(), G.copy(), list(pts), what="s_transform")
+    if not isinstance(got, tuple) or len(got) != 2:
+        raise CheckFailed("s_transform: return the pair (x_new, Q_new)")
+    x_new, Q_new = (np.asarray(g, dtype=float) for g in got)
+    compare("x_new [m]", x_new, xB, rtol=1e-8, wrong=[
+        ("E selects all points: the datum points are only " + str(pts), _s_transform(xA, QA, G, pts, "all")[0]),
+    ])  # fmt: skip
+    compare("Q_new", Q_new, QB, rtol=1e-8, wrong=[
+        ("Q_new = S Q Sᵀ, not S Q", _s_transform(xA, QA, G, pts, "no_St")[1]),
+        ("Q must be transformed too: Q_new = S Q Sᵀ", QA),
+        ("E selects all points: the datum points are only " + str(pts), _s_transform(xA, QA, G, pts, "all")[1]),
+    ])  # fmt: skip
+    success("S-transformed x and Q equal a new adjustment with the datum on points 2 and 5")
+
+
+# --------------------------------------------------------------------- estimable σ
+
+
+def _dist_std(xy, Q, i, j, mode="ok"):
+    d = xy[j] - xy[i]
+    u = d / np.linalg.norm(d)
+    f = np.zeros(xy.size)
+    f[2 * j : 2 * j + 2], f[2 * i : 2 * i + 2] = u, -u
+    if mode == "diag":
+        return float(np.sqrt(f**2 @ np.diag(Q)))
+    if mode == "blocks":
+        Qb = np.zeros_like(Q)
+        for k in (i, j):
+            Qb[2 * k : 2 * k + 2, 2 * k : 2 * k + 2] = Q[2 * k : 2 * k + 2, 2 * k : 2 * k + 2]
+        return float(np.sqrt(f @ Qb @ f))
+    if mode == "var":
+        return float(f @ Q @ f)
+    return float(np.sqrt(f @ Q @ f))
+
+
+def check_distance_std(fn) -> None:
+    """``fn(xy, Q, i, j) -> sigma``: σ (m) of the adjusted distance between points i and j
+    from the coordinates xy (p, 2) and their covariance Q (2p, 2p)."""
+    rng = rng_for("lesson09.check_distance_std")
+    xy, N, b, G = _problem(rng)
+    p = len(xy)
+    _, QA = _bordered(N, b, G, np.ones(2 * p))
+    _, QB = _bordered(N, b, G, _sel(p, [0, 3]))
+    i, j = 2, 5
+    # oracle: numerical Jacobian row of this distance, full Q of a datum not given to fn
+    pair = np.array([[i, j]])
+    Jr = _jacobian(xy.reshape(-1), pair)[0]
+    want = float(np.sqrt(Jr @ QB @ Jr))
+    got = float(call(fn, xy.copy(), QA.copy(), i, j, what="distance_std"))
+    compare(f"σ of the distance {i + 1}–{j + 1} [m]", got, want, rtol=1e-6, wrong=[
+        ("the covariances are left out (only the diagonal of Q)", _dist_std(xy, QA, i, j, "diag")),
+        ("the covariance between the two points is left out (only their 2×2 blocks)",
+         _dist_std(xy, QA, i, j, "blocks")),
+        ("this is the variance: take the square root", _dist_std(xy, QA, i, j, "var")),
+    ])  # fmt: skip
+    got_b = float(call(fn, xy.copy(), QB.copy(), i, j, what="distance_std"))
+    compare("the same σ in another datum", got_b, want, rtol=1e-6)
+    success(f"σ = {want * 1000:.2f} mm in two datums: a distance is estimable")
+
+
+SOLUTIONS = {
+    "check_helmert_columns": lambda xy: _helmert(xy),
+    "check_s_transform": lambda x, Q, G, pts: _s_transform(x, Q, G, pts),
+    "check_distance_std": lambda xy, Q, i, j: _dist_std(xy, Q, i, j),
+}
+
+MUTANTS = {
+    "check_helmert_columns": {
+        "rotation_yx": lambda xy: _helmert(xy, rot=(1, 1)),
+        "scale_for_rotation": lambda xy: _helmert(xy, scale_instead=True),
+        "no_translations": lambda xy: _helmert(xy, translations=False),
+    },
+    "check_s_transform": {
+        "all_points": lambda x, Q, G, pts: _s_transform(x, Q, G, pts, "all"),
+        "no_St": lambda x, Q, G, pts: _s_transform(x, Q, G, pts, "no_St"),
+        "Q_unchanged": lambda x, Q, G, pts: _s_transform(x, Q, G, pts, "x_only"),
+    },
+    "check_distance_std": {
+        "diag": lambda xy, Q, i, j: _dist_std(xy, Q, i, j, "diag"),
+        "blocks": lambda xy, Q, i, j: _dist_std(xy, Q, i, j, "blocks"),
+        "variance": lambda xy, Q, i, j: _dist_std(xy, Q, i, j, "var"),
+    },
+}

@@ -1,0 +1,250 @@
+"""Checkers for lesson 14, the radar panorama image (Geier 1973).
+
+Oracles: object points built *backwards* from chosen image coordinates, elevations and
+ranges (so the image, the slant ranges and the station are known exactly), the mirror
+image of a station in the plane of three points, and the true station of error-free
+ranges — never the library's ``project``, ``sphere_radius`` or ``trilaterate_three``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from orientviz.exercises._common import CheckFailed, call, compare, rng_for, success
+
+
+def _rodrigues(axis, angle: float) -> np.ndarray:
+    k = np.asarray(axis, float) / np.linalg.norm(axis)
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+
+def _scene(rng: np.random.Generator, n: int = 9):
+    """A station, a tilted axis and object points made from image coordinates (image m)."""
+    X0 = np.array([30054.0, 28.0, 1039.9])
+    R = _rodrigues([0.3, -0.7, 0.2], 0.05) @ _rodrigues([0, 0, 1], 0.9)
+    h, m, x0, y0 = 1520.0, 1.1264, 434.2, 716.8
+    theta = rng.uniform(-np.pi, np.pi, n)  # azimuths about the axis
+    rho = rng.uniform(8000.0, 40000.0, n)  # image radii, image m
+    s_e = rho / m
+    s = np.sqrt(s_e**2 + h**2)  # slant range by Geier's Pythagoras
+    c = -rng.uniform(0.02, 0.08, n) * s  # below the station, along the axis
+    horiz = np.sqrt(s**2 - c**2)
+    local = np.column_stack([horiz * np.cos(theta), horiz * np.sin(theta), c])
+    P = X0 + local @ R.T
+    xy = np.column_stack([x0 + rho * np.cos(theta), y0 + rho * np.sin(theta)])
+    return dict(P=P, X0=X0, R=R, h=h, m=m, x0=x0, y0=y0, xy=xy, s=s)
+
+
+def check_ppi_image(fn: Callable) -> None:
+    """Check ``fn(P, X0, R, h, m, x0, y0) -> xy``: Geier's mapping equations (4a)."""
+    sc = _scene(rng_for("lesson14.check_ppi_image"))
+    got = call(
+        fn,
+        sc["P"].copy(),
+        sc["X0"].copy(),
+        sc["R"].copy(),
+        sc["h"],
+        sc["m"],
+        sc["x0"],
+        sc["y0"],
+        what="ppi_image",
+    )
+    d = sc["P"] - sc["X0"]
+    loc = d @ sc["R"]
+    hor = np.hypot(loc[:, 0], loc[:, 1])
+    pp = np.array([sc["x0"], sc["y0"]])
+    wrong_true = pp + sc["m"] * loc[:, :2]  # the true horizontal range: no h
+    loc_t = d @ sc["R"].T
+    s_e = np.sqrt(np.sum(d**2, axis=1) - sc["h"] ** 2)
+    wrong_R = (
+        pp + sc["m"] * s_e[:, None] * loc_t[:, :2] / np.hypot(loc_t[:, 0], loc_t[:, 1])[:, None]
+    )
+    wrong_pp = sc["xy"] - pp
+    wrong_hor = pp + sc["m"] * np.sqrt(hor**2 - sc["h"] ** 2)[:, None] * loc[:, :2] / hor[:, None]
+    compare(
+        "image coordinates [image m]",
+        got,
+        sc["xy"],
+        rtol=1e-9,
+        scale=1000.0,
+        wrong=[
+            (
+                "the true horizontal distance √(a² + b²) was plotted, not s_e = √(s² − h²)",
+                wrong_true,
+            ),
+            ("R (X − X0) instead of Rᵀ (X − X0): the rotation goes image → object", wrong_R),
+            ("the principal point (x0, y0) was not added", wrong_pp),
+            ("h was subtracted from the horizontal distance, not from the slant range", wrong_hor),
+        ],
+    )
+    success("the image of points built backwards from their image coordinates comes out exactly")
+
+
+def check_sphere_radius(fn: Callable) -> None:
+    """Check ``fn(xy, x0, y0, m, h) -> s``: the radius of the range sphere (4b)."""
+    sc = _scene(rng_for("lesson14.check_sphere_radius"))
+    got = call(fn, sc["xy"].copy(), sc["x0"], sc["y0"], sc["m"], sc["h"], what="sphere_radius")
+    b = np.linalg.norm(sc["xy"] - [sc["x0"], sc["y0"]], axis=1)
+    want = np.linalg.norm(sc["P"] - sc["X0"], axis=1)  # the true slant ranges
+    compare(
+        "slant range s [m]",
+        got,
+        want,
+        rtol=1e-9,
+        wrong=[
+            (
+                "|b|·m instead of |b|/m: the image scale multiplies",
+                np.sqrt((b * sc["m"]) ** 2 + sc["h"] ** 2),
+            ),
+            ("h was forgotten (that is s_e)", b / sc["m"]),
+            (
+                "the principal point was not subtracted",
+                np.sqrt((np.linalg.norm(sc["xy"], axis=1) / sc["m"]) ** 2 + sc["h"] ** 2),
+            ),
+        ],
+    )
+    success("the range spheres pass exactly through the object points")
+
+
+def _mirror(C: np.ndarray, X: np.ndarray) -> np.ndarray:
+    n = np.cross(C[1] - C[0], C[2] - C[0])
+    n /= np.linalg.norm(n)
+    return X - 2 * ((X - C[0]) @ n) * n
+
+
+def check_trilaterate(fn: Callable) -> None:
+    """Check ``fn(C, r) -> (below, above)``: both points at distances r from the centres C."""
+    rng = rng_for("lesson14.check_trilaterate")
+    for _ in range(3):
+        C = np.column_stack(
+            [rng.uniform(-6000, 6000, 3), rng.uniform(-6000, 6000, 3), rng.uniform(-150, 250, 3)]
+        )
+        X = np.array([rng.uniform(20000, 35000), rng.uniform(-3000, 3000), rng.uniform(800, 1500)])
+        r = np.linalg.norm(C - X, axis=1)
+        other = _mirror(C, X)
+        below, above = (X, other) if X[2] < other[2] else (other, X)
+        out = call(fn, C.copy(), r.copy(), what="trilaterate")
+        try:
+            b, a = (np.asarray(v, float) for v in out)
+        except (TypeError, ValueError):
+            raise CheckFailed("return two points (below, above)") from None
+        compare(
+            "(below, above)",
+            np.array([b, a]),
+            np.array([below, above]),
+            rtol=1e-8,
+            scale=1000.0,
+            wrong=[
+                ("(above, below): give the lower candidate first", np.array([above, below])),
+                (
+                    "both candidates are the same point: take ±√ of the discriminant",
+                    np.array([below, below]),
+                ),
+                (
+                    "both candidates are the same point: take ±√ of the discriminant",
+                    np.array([above, above]),
+                ),
+            ],
+        )
+    success("both candidates of three spheres found, ordered by Z")
+
+
+def check_station_ls(fn: Callable) -> None:
+    """Check ``fn(C, s, X_start) -> X``: the station from n ≥ 4 ranges by Gauss-Newton."""
+    rng = rng_for("lesson14.check_station_ls")
+    C = np.column_stack(
+        [rng.uniform(-6000, 6000, 7), rng.uniform(-6000, 6000, 7), rng.uniform(-100, 300, 7)]
+    )
+    X = np.array([30054.5, 28.2, 1039.9])
+    s = np.linalg.norm(C - X, axis=1)  # error-free ranges: the station must come out exactly
+    start = X + [420.0, -310.0, 260.0]
+    got = call(fn, C.copy(), s.copy(), start.copy(), what="station_ls")
+    mirror = _mirror(C[:3], X)  # near the mirror if the iteration slid below the points
+    compare(
+        "station [m]",
+        got,
+        X,
+        rtol=1e-9,
+        scale=1000.0,
+        wrong=[
+            ("the start value itself: no iteration took place", start),
+        ],
+    )
+    if np.linalg.norm(np.asarray(got) - mirror) < 1.0:  # pragma: no cover - compare raised already
+        raise CheckFailed("the mirror image below the points: start above the terrain")
+    success("the station from 7 error-free ranges recovered exactly")
+
+
+# ---------------------------------------------------------------------- solutions
+
+
+def _ppi_image(P, X0, R, h, m, x0, y0):
+    abc = (P - X0) @ R  # rows: Rᵀ (X − X0)
+    s_e = np.sqrt(np.sum((P - X0) ** 2, axis=1) - h**2)
+    hor = np.hypot(abc[:, 0], abc[:, 1])
+    return np.column_stack([x0 + m * s_e * abc[:, 0] / hor, y0 + m * s_e * abc[:, 1] / hor])
+
+
+def _sphere_radius(xy, x0, y0, m, h):
+    b = np.linalg.norm(xy - [x0, y0], axis=1)
+    return np.sqrt((b / m) ** 2 + h**2)
+
+
+def _trilaterate(C, r):
+    e1 = (C[1] - C[0]) / np.linalg.norm(C[1] - C[0])
+    w = C[2] - C[0]
+    i = e1 @ w
+    e2 = (w - i * e1) / np.linalg.norm(w - i * e1)
+    e3 = np.cross(e1, e2)
+    d, j = np.linalg.norm(C[1] - C[0]), e2 @ w
+    x = (r[0] ** 2 - r[1] ** 2 + d**2) / (2 * d)
+    y = (r[0] ** 2 - r[2] ** 2 + i**2 + j**2 - 2 * i * x) / (2 * j)
+    z = np.sqrt(max(r[0] ** 2 - x**2 - y**2, 0.0))
+    p1, p2 = C[0] + x * e1 + y * e2 + z * e3, C[0] + x * e1 + y * e2 - z * e3
+    return (p1, p2) if p1[2] < p2[2] else (p2, p1)
+
+
+def _station_ls(C, s, X, iterations=10, sign=1.0):
+    X = np.asarray(X, float).copy()
+    for _ in range(iterations):
+        d = X - C
+        rho = np.linalg.norm(d, axis=1)
+        J = sign * d / rho[:, None]
+        X = X + np.linalg.lstsq(J, s - rho, rcond=None)[0]
+    return X
+
+
+SOLUTIONS = {
+    "check_ppi_image": _ppi_image,
+    "check_sphere_radius": _sphere_radius,
+    "check_trilaterate": _trilaterate,
+    "check_station_ls": _station_ls,
+}
+
+MUTANTS = {
+    "check_ppi_image": {
+        "true horizontal range": lambda P, X0, R, h, m, x0, y0: (
+            np.array([x0, y0]) + m * ((P - X0) @ R)[:, :2]
+        ),
+        "R not transposed": lambda P, X0, R, h, m, x0, y0: _ppi_image(P, X0, R.T, h, m, x0, y0),
+        "no principal point": lambda P, X0, R, h, m, x0, y0: _ppi_image(P, X0, R, h, m, 0.0, 0.0),
+        "1/m": lambda P, X0, R, h, m, x0, y0: _ppi_image(P, X0, R, h, 1 / m, x0, y0),
+    },
+    "check_sphere_radius": {
+        "times m": lambda xy, x0, y0, m, h: _sphere_radius(xy, x0, y0, 1 / m, h),
+        "no h": lambda xy, x0, y0, m, h: _sphere_radius(xy, x0, y0, m, 0.0),
+        "no principal point": lambda xy, x0, y0, m, h: _sphere_radius(xy, 0.0, 0.0, m, h),
+    },
+    "check_trilaterate": {
+        "swapped": lambda C, r: _trilaterate(C, r)[::-1],
+        "one root": lambda C, r: (_trilaterate(C, r)[1], _trilaterate(C, r)[1]),
+    },
+    "check_station_ls": {
+        "no iteration": lambda C, s, X: np.asarray(X, float),
+        "one step": lambda C, s, X: _station_ls(C, s, X, iterations=1),
+        "Jacobian sign": lambda C, s, X: _station_ls(C, s, X, sign=-1.0),
+    },
+}

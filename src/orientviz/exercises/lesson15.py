@@ -1,0 +1,205 @@
+"""Checkers for lesson 15, debugging an adjustment someone hands you.
+
+Oracles: residual fields built from known shift, scale and rotation; pixel coordinates
+built backwards from chosen photo coordinates; scipy's χ² quantiles; RMS values computed
+image by image in a plain loop — never the library's ``read_colmap``, ``image_table`` or
+report functions.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from scipy.stats import chi2, norm
+
+from orientviz.exercises._common import CheckFailed, call, compare, rng_for, success
+
+
+def check_residual_pattern(fn: Callable) -> None:
+    """Check ``fn(xy, v) -> (shift (2,), scale, rotation)`` for v = t + λ·xy + ρ·(−y, x)."""
+    rng = rng_for("lesson15.check_residual_pattern")
+    for t, lam, rho in (([0.012, -0.031], 0.004, 0.0021), ([-0.2, 0.05], -1.99, -0.0007)):
+        xy = rng.uniform(-110, 110, (15, 2))
+        v = np.asarray(t) + lam * xy + rho * np.column_stack([-xy[:, 1], xy[:, 0]])
+        out = call(fn, xy.copy(), v.copy(), what="residual_pattern")
+        try:
+            shift, scale, rot = out
+            got = np.r_[np.asarray(shift, float).ravel(), float(scale), float(rot)]
+        except (TypeError, ValueError):
+            raise CheckFailed("return (shift (2,), scale, rotation)") from None
+        want = np.r_[t, lam, rho]
+        compare(
+            "(shift x, shift y, scale, rotation)",
+            got,
+            want,
+            rtol=1e-9,
+            scale=1.0,
+            wrong=[
+                (
+                    "the rotation has the wrong sign: (−y, x) is a positive turn",
+                    np.r_[t, lam, -rho],
+                ),
+                ("scale and rotation swapped", np.r_[t, rho, lam]),
+            ],
+        )
+    success("shift, scale and rotation of two residual fields recovered exactly")
+
+
+def check_colmap_to_photo(fn: Callable) -> None:
+    """Check ``fn(uv, cx, cy, pixel_mm) -> xy``: COLMAP pixels to photo coordinates in mm."""
+    rng = rng_for("lesson15.check_colmap_to_photo")
+    cx, cy, p = 2011.4, 1498.7, 0.0052
+    xy = rng.uniform(-10.0, 10.0, (8, 2))  # mm, y up
+    uv = np.column_stack(
+        [cx + xy[:, 0] / p, cy - xy[:, 1] / p]
+    )  # built backwards: v grows downwards
+    got = call(fn, uv.copy(), cx, cy, p, what="colmap_to_photo")
+    compare(
+        "photo coordinates [mm]",
+        got,
+        xy,
+        rtol=1e-10,
+        scale=10.0,
+        wrong=[
+            ("y is not flipped: COLMAP's v grows downwards, photo y upwards", xy * [1, -1]),
+            ("cx and cy swapped", np.column_stack([(uv[:, 0] - cy) * p, -(uv[:, 1] - cx) * p])),
+            (
+                "divided by the pixel size instead of multiplied",
+                np.column_stack([(uv[:, 0] - cx) / p, -(uv[:, 1] - cy) / p]),
+            ),
+        ],
+    )
+    success("pixels → mm with the principal point, the pixel size and y upwards")
+
+
+def check_sigma0_interval(fn: Callable) -> None:
+    """Check ``fn(vPv, r, alpha) -> (sigma0, lo, hi)``: σ̂0 and the two-sided χ² interval for σ̂0."""
+    for vPv, r, alpha in ((19.3, 12, 0.05), (734.0, 718, 0.01)):
+        s0 = np.sqrt(vPv / r)
+        lo, hi = np.sqrt(chi2.ppf(alpha / 2, r) / r), np.sqrt(chi2.ppf(1 - alpha / 2, r) / r)
+        got = call(fn, vPv, r, alpha, what="sigma0_interval")
+        z = norm.ppf(1 - alpha / 2)
+        compare(
+            f"(σ̂0, lower, upper) for r = {r}",
+            got,
+            [s0, lo, hi],
+            rtol=1e-9,
+            wrong=[
+                (
+                    "one-sided bounds (α instead of α/2)",
+                    [s0, np.sqrt(chi2.ppf(alpha, r) / r), np.sqrt(chi2.ppf(1 - alpha, r) / r)],
+                ),
+                ("bounds for σ̂0² (the square root is missing)", [s0, lo**2, hi**2]),
+                (
+                    "the normal approximation 1 ± z/√(2r) (poor for small r)",
+                    [s0, 1 - z / np.sqrt(2 * r), 1 + z / np.sqrt(2 * r)],
+                ),
+            ],
+        )
+    success("σ̂0 and its χ² acceptance interval right (also for a small redundancy)")
+
+
+def check_rms_per_image(fn: Callable) -> None:
+    """Check ``fn(image, v, m) -> (m, 2)``: RMS of the x and y residuals of each image."""
+    rng = rng_for("lesson15.check_rms_per_image")
+    m = 5
+    image = rng.integers(0, m, 60)
+    v = rng.normal(0.0, 1.0, (60, 2)) * [2.0, 0.5] + [0.8, -0.3]
+    want = np.empty((m, 2))
+    for i in range(m):  # by hand
+        for k in range(2):
+            vals = [v[j, k] for j in range(len(image)) if image[j] == i]
+            want[i, k] = np.sqrt(sum(x * x for x in vals) / len(vals))
+    got = call(fn, image.copy(), v.copy(), m, what="rms_per_image")
+    mean = np.array([[v[image == i, k].mean() for k in range(2)] for i in range(m)])
+    std = np.array([[v[image == i, k].std() for k in range(2)] for i in range(m)])
+    compare(
+        "RMS per image",
+        got,
+        want,
+        rtol=1e-10,
+        wrong=[
+            ("the mean residual, not the root mean square", mean),
+            (
+                "the standard deviation: the mean was removed, but a shift is part of the pattern",
+                std,
+            ),
+            ("one RMS for all images", np.tile(np.sqrt(np.mean(v**2, axis=0)), (m, 1))),
+        ],
+    )
+    success("RMS of x and y residuals per image right")
+
+
+# ---------------------------------------------------------------------- solutions
+
+
+def _pattern(xy, v):
+    A = np.zeros((2 * len(xy), 4))
+    A[0::2, 0], A[1::2, 1] = 1.0, 1.0
+    A[0::2, 2], A[1::2, 2] = xy[:, 0], xy[:, 1]
+    A[0::2, 3], A[1::2, 3] = -xy[:, 1], xy[:, 0]
+    p = np.linalg.lstsq(A, v.ravel(), rcond=None)[0]
+    return p[:2], p[2], p[3]
+
+
+def _colmap_to_photo(uv, cx, cy, p):
+    return np.column_stack([(uv[:, 0] - cx) * p, -(uv[:, 1] - cy) * p])
+
+
+def _sigma0_interval(vPv, r, alpha):
+    return (
+        np.sqrt(vPv / r),
+        np.sqrt(chi2.ppf(alpha / 2, r) / r),
+        np.sqrt(chi2.ppf(1 - alpha / 2, r) / r),
+    )
+
+
+def _rms_per_image(image, v, m):
+    return np.array([np.sqrt(np.mean(v[image == i] ** 2, axis=0)) for i in range(m)])
+
+
+SOLUTIONS = {
+    "check_residual_pattern": _pattern,
+    "check_colmap_to_photo": _colmap_to_photo,
+    "check_sigma0_interval": _sigma0_interval,
+    "check_rms_per_image": _rms_per_image,
+}
+
+MUTANTS = {
+    "check_residual_pattern": {
+        "rotation sign": lambda xy, v: (lambda t, s, r: (t, s, -r))(*_pattern(xy, v)),
+        "swapped": lambda xy, v: (lambda t, s, r: (t, r, s))(*_pattern(xy, v)),
+        "x only": lambda xy, v: (
+            np.linalg.lstsq(
+                np.column_stack([np.ones(len(xy)), xy[:, 0], -xy[:, 1]]), v[:, 0], rcond=None
+            )[0][0]
+            * np.ones(2),
+            *np.linalg.lstsq(
+                np.column_stack([np.ones(len(xy)), xy[:, 0], -xy[:, 1]]), v[:, 0], rcond=None
+            )[0][1:],
+        ),
+    },
+    "check_colmap_to_photo": {
+        "no flip": lambda uv, cx, cy, p: _colmap_to_photo(uv, cx, cy, p) * [1, -1],
+        "swapped": lambda uv, cx, cy, p: _colmap_to_photo(uv, cy, cx, p),
+        "divided": lambda uv, cx, cy, p: _colmap_to_photo(uv, cx, cy, 1 / p),
+    },
+    "check_sigma0_interval": {
+        "one-sided": lambda q, r, a: _sigma0_interval(q, r, 2 * a),
+        "squared": lambda q, r, a: (lambda s, lo, hi: (s, lo**2, hi**2))(
+            *_sigma0_interval(q, r, a)
+        ),
+        "normal": lambda q, r, a: (
+            np.sqrt(q / r),
+            1 - norm.ppf(1 - a / 2) / np.sqrt(2 * r),
+            1 + norm.ppf(1 - a / 2) / np.sqrt(2 * r),
+        ),
+        "dof n": lambda q, r, a: _sigma0_interval(q, r + 40, a),
+    },
+    "check_rms_per_image": {
+        "mean": lambda image, v, m: np.array([np.mean(v[image == i], axis=0) for i in range(m)]),
+        "std": lambda image, v, m: np.array([np.std(v[image == i], axis=0) for i in range(m)]),
+        "global": lambda image, v, m: np.tile(np.sqrt(np.mean(v**2, axis=0)), (m, 1)),
+    },
+}
