@@ -24,6 +24,11 @@ REGISTRY: dict[str, tuple[str, str, str]] = {
         "table",
         "Börlin & Grussenmeyer, DBAT: the aerial block sxb (5 images, weighted control, check points)",
     ),
+    "dbat-camcal": (
+        "orientviz.reproduce.dbat_camcal",
+        "table",
+        "Börlin & Grussenmeyer, DBAT: camera calibration (21 images, backward lens model)",
+    ),
     "ebner": (
         "orientviz.reproduce.ebner",
         "table",

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from . import Row
-from .dbat_report import EO_FIELDS, read_report, report_values
+from .dbat_report import EO_FIELDS, as_printed, read_report, report_values
 
 IO_NAMES = ("c", "px", "py", "as", "K1", "K2", "K3", "P1", "P2")
 #: report key → position in the interior-orientation vector
@@ -45,14 +45,20 @@ def _folder():
     return dataset_path("dbat_sxb").parent / "camcal"
 
 
-def paper_values() -> dict[str, str]:
+def paper_values() -> dict[str, str | float]:
     """DBAT's published numbers (PhotoModeler-export route), strings as printed."""
     return copy.deepcopy(_published())
 
 
 @lru_cache(maxsize=1)
-def _published() -> dict[str, str]:
-    return report_values(read_report(_folder() / "camcal-dbatreport.txt"))
+def _published() -> dict[str, str | float]:
+    return as_printed(report_values(read_report(_folder() / "camcal-dbatreport.txt")))[0]
+
+
+@lru_cache(maxsize=1)
+def _decimals() -> dict[str, int]:
+    """Decimals of the numbers DBAT printed in exponent notation (from its report)."""
+    return as_printed(report_values(read_report(_folder() / "camcal-dbatreport.txt")))[1]
 
 
 def _setup():
@@ -167,6 +173,14 @@ def ours() -> dict[str, float]:
     for key, k in IO_KEYS.items():
         out[f"camera||{key}"] = float(adj.x[k])
         out[f"camera||σ {key}"] = float(std[k])
+    rho = adj.correlations()[:9, :9]
+    short = [k.split()[0] for k in IO_KEYS]
+    for a in range(9):
+        for b in range(a + 1, 9):
+            out[f"camera||correlation {short[a]}-{short[b]} [%]"] = 100.0 * float(rho[a, b])
+    n = adj.residuals.size // 2
+    v = adj.residuals.reshape(n, 2) / d["pixel_mm"]
+    out["residuals||overall point RMS [px]"] = float(np.sqrt(np.mean(np.sum(v**2, axis=1))))
     m = len(img_ids)
     eo = adj.x[9 : 9 + 6 * m].reshape(m, 6)
     seo = std[9 : 9 + 6 * m].reshape(m, 6)
@@ -180,6 +194,22 @@ def ours() -> dict[str, float]:
     return out
 
 
+@lru_cache(maxsize=1)
+def _script_route() -> dict[str, str]:
+    """DBAT's report of the same adjustment through its script route (``report.txt``)."""
+    return report_values(read_report(_folder() / "report.txt"))
+
+
+def _note(key: str, value: float | None) -> str:
+    if value is None:
+        return "not computed by orientviz"
+    other = _script_route().get(key)
+    mine = report_values(read_report(_folder() / "camcal-dbatreport.txt")).get(key)
+    if other is not None and mine is not None and other != mine:
+        return f"DBAT's script route prints {other} (two DBAT runs differ in this digit)"
+    return ""
+
+
 def table(*, paper: dict[str, Any] | None = None) -> list[Row]:
     """One row per published number of DBAT's calibration report, orientviz's beside it."""
     paper = paper_values() if paper is None else paper
@@ -189,7 +219,7 @@ def table(*, paper: dict[str, Any] | None = None) -> list[Row]:
         section, case, quantity = key.split("|")
         value = mine.get(key)
         rows.append(Row(section, case, quantity, printed,
-                        None if value is None else f"{value:.6g}",
-                        note="" if value is not None else "not computed by orientviz",
-                        label="predicted", value=value, key=key, group=section))  # fmt: skip
+                        None if value is None else f"{value:.7g}", note=_note(key, value),
+                        label="predicted", value=value, key=key, group=section,
+                        decimals=_decimals().get(key) if isinstance(printed, float) else None))  # fmt: skip
     return rows

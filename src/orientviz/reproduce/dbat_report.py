@@ -10,6 +10,7 @@ each value as the printed string (its digits are the reproduction's tolerance).
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -116,6 +117,8 @@ def report_values(root: Node) -> dict[str, str]:
     cam = info.find("Cameras:")
     if cam.field("Calibration") == "yes":
         camera = cam.children[1]
+        short: dict[str, str] = {}
+        corr: list[tuple[str, str, str]] = []
         for prefix, name in (
             ("Camera Constant", "c [mm]"), ("px", "px [mm]"), ("py", "py [mm]"),
             ("as", "as"), ("K1", "K1 [mm^-3]"), ("K2", "K2 [mm^-5]"), ("K3", "K3 [mm^-7]"),
@@ -127,6 +130,17 @@ def report_values(root: Node) -> dict[str, str]:
                 out[f"camera||σ {name}"] = node.field("Deviation")
             except KeyError:
                 pass
+            short[prefix] = name.split()[0]
+            for c in node.children:
+                if c.text.startswith("Correlations over 95%:"):
+                    for item in c.value.rstrip(".").split(","):
+                        other, pct = item.strip().split(":")
+                        corr.append((short[prefix], other, pct.rstrip("%")))
+        order = list(short.values())
+        for a, b, pct in corr:
+            if b in order:
+                a, b = sorted((a, b), key=order.index)
+                out.setdefault(f"camera||correlation {a}-{b} [%]", pct)
     photos = info.find("Precisions / Standard Deviations:", "Photograph Standard Deviations:")
     for k, photo in enumerate(photos.children, start=1):
         case = f"photo {k} ({photo.value})"
@@ -147,9 +161,10 @@ def report_values(root: Node) -> dict[str, str]:
     for section, heading in (("control", "Ctrl measurements"), ("check", "Check measurements")):
         try:
             node = quality.child(heading)
+            posterior = node.child("Posterior")
         except KeyError:
             continue
-        for row in node.child("Posterior").table():
+        for row in posterior.table():
             case = f"point {row['id']} ({row['label']})"
             for a in "xyz":
                 out[f"{section}|{case}|{a.upper()} [m]"] = row[a]
@@ -163,3 +178,25 @@ def report_values(root: Node) -> dict[str, str]:
             out["check statistics||max 3-D difference [m]"] = delta.field("Max")
             out["check statistics||RMS 3-D difference [m]"] = delta.field("RMS")
     return out
+
+
+_EXP = re.compile(r"^([+-]?)(\d+)(?:\.(\d+))?e([+-]?\d+)$")
+
+
+def as_printed(values: dict[str, str]) -> tuple[dict[str, str | float], dict[str, int]]:
+    """The report's values for the reproduction rows, and the decimals DBAT printed.
+
+    Plain decimals stay strings (their digits are the tolerance); numbers DBAT printed in
+    exponent notation (``%g``: ``-4.51351e-05``) become floats with the number of decimals
+    they were printed to (``-4.51351e-05`` → 10), so that the rows' flags can read them.
+    """
+    out: dict[str, str | float] = {}
+    decimals: dict[str, int] = {}
+    for key, text in values.items():
+        m = _EXP.match(text)
+        if m:
+            out[key] = float(text)
+            decimals[key] = max(len(m.group(3) or "") - int(m.group(4)), 0)
+        else:
+            out[key] = text
+    return out, decimals

@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from . import Row
-from .dbat_report import EO_FIELDS, read_report, report_values
+from .dbat_report import EO_FIELDS, as_printed, read_report, report_values
 
 DATASET = "dbat_sxb"
 #: the a-priori σ of the marked image points (px), DBAT's unit of "Sigma0 (pixels)"
@@ -47,14 +47,21 @@ def _report_path():
     return dataset_path(DATASET).parent / "sxb" / "report.txt"
 
 
-def paper_values() -> dict[str, str]:
-    """DBAT's published numbers (strings as printed), keyed ``section|case|quantity``."""
+def paper_values() -> dict[str, str | float]:
+    """DBAT's published numbers as printed (strings; exponent notation as floats, see
+    :func:`~orientviz.reproduce.dbat_report.as_printed`), keyed ``section|case|quantity``."""
     return copy.deepcopy(_published())
 
 
 @lru_cache(maxsize=1)
-def _published() -> dict[str, str]:
-    return report_values(read_report(_report_path()))
+def _published() -> dict[str, str | float]:
+    return as_printed(report_values(read_report(_report_path())))[0]
+
+
+@lru_cache(maxsize=1)
+def _decimals() -> dict[str, int]:
+    """Decimals of the numbers DBAT printed in exponent notation (from its report)."""
+    return as_printed(report_values(read_report(_report_path())))[1]
 
 
 @lru_cache(maxsize=2)
@@ -167,6 +174,7 @@ def table(*, paper: dict[str, Any] | None = None) -> list[Row]:
                 note=_stopping_note(key, printed, value, converged.get(key)),
                 label="predicted",
                 value=value,
+                decimals=_decimals().get(key) if isinstance(printed, float) else None,
                 key=key,
                 group=section,
             )
@@ -174,7 +182,7 @@ def table(*, paper: dict[str, Any] | None = None) -> list[Row]:
     return rows
 
 
-def _stopping_note(key: str, printed: str, value: float | None, converged: float | None) -> str:
+def _stopping_note(key: str, printed, value: float | None, converged: float | None) -> str:
     """Say so where the printed last digit depends on when the iterations stop.
 
     Compares orientviz's default run with a run to :data:`CONVERGED_TOL`: if the two
@@ -183,7 +191,8 @@ def _stopping_note(key: str, printed: str, value: float | None, converged: float
     """
     if value is None or converged is None:
         return "not computed by orientviz"
-    decimals = len(printed.split(".")[1]) if "." in printed else 0
+    text = str(printed)
+    decimals = _decimals().get(key, len(text.split(".")[1]) if "." in text else 0)
     if round(value, decimals) == round(converged, decimals):
         return ""
     return (
