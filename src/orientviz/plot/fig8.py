@@ -19,6 +19,12 @@ _SHORT = {
     "cyl_y150_concave": "cy150∪", "cyl_x150_concave": "cx150∪", "sphere300_concave": "sph300∪",
     "cyl_x300_concave": "cx300∪",
 }  # fmt: skip
+_TASK = {
+    "trilateration": "2a trilat.", "rotations": "2b rotations", "exterior": "2c exterior\n(fitted)",
+    "relative_near_normal": "4a relative\n1-2", "all_ten": "3 all ten", "calibration":
+    "1 calibration\n(fitted)", "relative_general": "4a relative\n1-3",
+}  # fmt: skip
+_CLIP = 12.0
 
 
 def plot_rounding_distribution(dist, paper: dict, task: str, *, quantities=None, fig=None):
@@ -79,9 +85,10 @@ def plot_rounding_distribution(dist, paper: dict, task: str, *, quantities=None,
         ax.set_xticks(x)
         ax.set_xticklabels([_SHORT.get(s, s) for s in dist.surfaces], rotation=60, fontsize=9)
         ax.tick_params(labelbottom=True)
-    axes[0][0].legend(fontsize=8, loc="best")
     fig.suptitle(f"Fig. 8, {task}: paper vs {dist.n_draws} rounding draws", fontsize=11)
-    fig.tight_layout()
+    fig.legend(*axes[0][0].get_legend_handles_labels(), loc="upper center", ncol=3, fontsize=8,
+               frameon=False, bbox_to_anchor=(0.5, 0.955))  # fmt: skip
+    fig.tight_layout(rect=(0, 0, 1, 0.92))
     return fig
 
 
@@ -103,7 +110,7 @@ def plot_positions(positions: dict, *, ax=None):
     import matplotlib.pyplot as plt
 
     if ax is None:
-        fig, ax = plt.subplots(figsize=(7.0, 3.4))
+        fig, ax = plt.subplots(figsize=(7.0, 3.8))
     else:
         fig = ax.figure
     tasks = list(positions)
@@ -111,16 +118,24 @@ def plot_positions(positions: dict, *, ax=None):
     for i, t in enumerate(tasks):
         z = np.concatenate([np.ravel(v) for q, v in positions[t].items() if not q.startswith("r_")])
         z = z[np.isfinite(z)]
-        ax.plot(i + rng.uniform(-0.25, 0.25, z.size), z, ".", color="C3", ms=3, alpha=0.6)
+        x = i + rng.uniform(-0.25, 0.25, z.size)
+        inside = np.abs(z) <= _CLIP
+        ax.plot(x[inside], z[inside], ".", color="C3", ms=3, alpha=0.6)
+        ax.plot(x[~inside], np.sign(z[~inside]) * (_CLIP - 0.4), "^", color="C3", ms=3)
+        for sgn in (1.0, -1.0):
+            n_out = int(np.sum(z * sgn > _CLIP))
+            if n_out:
+                ax.annotate(f"{n_out} beyond", (i, sgn * (_CLIP - 1.6)), ha="center",
+                            va="center", fontsize=8, color="C3")  # fmt: skip
         rms = float(np.sqrt(np.mean(z**2))) if z.size else np.nan
         ax.hlines(rms, i - 0.35, i + 0.35, color="k", lw=2)
         ax.annotate(f"rms {rms:.1f}σ", (i, rms), xytext=(0, 4), textcoords="offset points",
                     ha="center", fontsize=9)  # fmt: skip
     ax.axhspan(-2, 2, color="C2", alpha=0.12, label="±2σ: one more rounding draw")
     ax.set_xticks(range(len(tasks)))
-    ax.set_xticklabels(tasks, rotation=15, fontsize=9)
+    ax.set_xticklabels([_TASK.get(t, t) for t in tasks], fontsize=9)
     ax.set_ylabel("(paper − mean) / σ of the draws", fontsize=10)
-    ax.set_ylim(-12, 12)
+    ax.set_ylim(-_CLIP, _CLIP)
     ax.legend(fontsize=8, loc="lower right")
     ax.set_title("Fig. 8: where the paper's values lie in orientviz's rounding spread",
                  fontsize=11)  # fmt: skip
