@@ -28,6 +28,7 @@ from ..errors import InputError
 from .colmap_text import (
     CAMERA_MODELS,
     MAX_IMAGE_SIZES,
+    MAX_NAME,
     MAX_VALUE,
     MODEL_BY_ID,
     OTHER_MODELS,
@@ -172,6 +173,8 @@ def read_images_bin(path: Path, point_ids: np.ndarray, cams: dict[int, ColmapCam
         vals = r.take("<I7dI", "an image")
         ids[k], pose[k], cam[k] = vals[0], vals[1:8], vals[8]
         names.append(r.name())
+        if len(names[-1]) > MAX_NAME:
+            raise r.fail(f"image {vals[0]}: NAME of {len(names[-1])} characters, expected at most {MAX_NAME}", at)
         bad = pose_problem(np.array(vals[1:5]), np.array(vals[5:8]))
         if bad:
             raise r.fail(f"image {vals[0]}: {bad}", at)

@@ -38,6 +38,8 @@ OTHER_MODELS = {5: "OPENCV_FISHEYE", 6: "FULL_OPENCV", 7: "FOV", 8: "SIMPLE_RADI
 
 #: Coordinates and translations beyond ± this are refused (not adjustable in doubles).
 MAX_VALUE: float = 1e15
+#: Longest image NAME accepted (characters).
+MAX_NAME: int = 256
 #: Keypoints farther than this many image sizes outside the image are refused.
 MAX_IMAGE_SIZES: float = 100.0
 
@@ -285,6 +287,8 @@ def read_images_text(path: Path, point_ids: I64, cams: dict[int, ColmapCamera]) 
                 f = _text(chunk, int(start), int(end)).split()
                 vals = _numbers(path, no, f, "ifffffffi", "an image")
                 name = " ".join(f[9:]) if len(f) > 9 else str(vals[0])
+                if len(name) > MAX_NAME:
+                    raise _fail(path, no, f"image NAME of {len(name)} characters, expected at most {MAX_NAME}")
                 bad = pose_problem(np.array(vals[1:5]), np.array(vals[5:8]))
                 if bad:
                     raise _fail(path, no, bad)
