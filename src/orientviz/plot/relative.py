@@ -13,16 +13,17 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from .style import subplots
+
 ELEMENT_LABELS = ("by", "bz", "ω", "φ", "κ")
 #: Arrow colours of the parallax field (RGBA of tab:blue for p < 0, tab:red for p ≥ 0).
 _ARROW_RGBA = np.array([[31, 119, 180, 255], [214, 39, 40, 255]]) / 255.0
 
 
 def _axes(ax, figsize=(7.0, 4.8)):
-    import matplotlib.pyplot as plt
 
     if ax is None:
-        fig, ax = plt.subplots(figsize=figsize)
+        fig, ax = subplots(figsize=figsize)
         return fig, ax
     return ax.figure, ax
 

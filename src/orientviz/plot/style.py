@@ -115,7 +115,9 @@ def new_figure(figsize: tuple[float, float] = (MAX_WIDTH_IN, 4.5), *, nrows: int
         return plt.subplots(nrows, ncols, figsize=size, **kwargs)
 
 
-def text_sizes_px(fig, *, column_px: float = COLUMN_PX, dpi: float = BOOK_DPI) -> list[tuple[float, str]]:
+def text_sizes_px(
+    fig, *, column_px: float = COLUMN_PX, dpi: float = BOOK_DPI
+) -> list[tuple[float, str]]:
     """Height (px) of every visible, non-empty text of ``fig`` as shown in the book.
 
     The figure is rendered as the book renders it (``dpi``, tight bounding box); the
@@ -151,3 +153,80 @@ def _on_figure(text, fig) -> bool:
         return False
     fb = fig.bbox
     return bool(np.isfinite([bb.x0, bb.y0]).all() and bb.width > 0 and bb.x1 > fb.x0 - 1e3)
+
+
+def subplots(*args, figsize: tuple[float, float] | None = None, **kwargs):
+    """:func:`matplotlib.pyplot.subplots` with the book's rules: width capped by
+    :func:`figure_size`, text sizes from :data:`RC`. Every figure of :mod:`orientviz.plot`
+    and :mod:`orientviz.widgets` is made here or by :func:`figure`."""
+    import matplotlib.pyplot as plt
+
+    size = figure_size(*(figsize or (6.4, 4.8)))
+    with book_rc():
+        return plt.subplots(*args, figsize=size, **kwargs)
+
+
+def figure(figsize: tuple[float, float] | None = None, **kwargs):
+    """:func:`matplotlib.pyplot.figure` with the book's rules (see :func:`subplots`)."""
+    import matplotlib.pyplot as plt
+
+    size = figure_size(*(figsize or (6.4, 4.8)))
+    with book_rc():
+        return plt.figure(figsize=size, **kwargs)
+
+
+def audit_figures(path: str, label: str) -> bool:
+    """Record the text sizes of every figure an IPython kernel displays (for the book's test).
+
+    Wraps the kernel's PNG formatter of matplotlib figures: before a figure is shown,
+    one JSON line ``{"notebook", "index", "min_px", "text", "width_px", "figsize_in"}`` is
+    appended to ``path`` (:func:`text_sizes_px` at the book's column width). Figures shown
+    inside widgets' Output areas pass the same formatter. The book's ``conf.py`` installs
+    it in a removed first cell when ``ORIENTVIZ_FIGURE_AUDIT`` names a file.
+
+    Returns
+    -------
+    bool
+        False outside IPython (nothing installed).
+    """
+    import json
+
+    try:
+        from IPython import get_ipython
+    except ImportError:  # pragma: no cover - IPython is there when a kernel runs this
+        return False
+    ip = get_ipython()
+    if ip is None:
+        return False
+    import matplotlib.pyplot as plt  # activates the inline backend and its formatters
+    from matplotlib.figure import Figure
+
+    plt.close(plt.figure())  # the inline backend registers its formatters on first use
+    fmt = ip.display_formatter.formatters["image/png"]
+    try:
+        original = fmt.lookup_by_type(Figure)
+    except KeyError:  # a backend without PNG display: nothing is shown, nothing to measure
+        return False
+    count = {"n": 0}
+
+    def measured(fig, *args, **kwargs):
+        sizes = text_sizes_px(fig)
+        import io
+
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=BOOK_DPI, bbox_inches="tight")
+        rec = {
+            "notebook": label,
+            "index": count["n"],
+            "min_px": sizes[0][0] if sizes else None,
+            "text": sizes[0][1][:60] if sizes else "",
+            "width_px": _png_width(buf.getvalue()),
+            "figsize_in": [float(v) for v in fig.get_size_inches()],
+        }
+        count["n"] += 1
+        with open(path, "a", encoding="utf-8") as f:
+            f.write(json.dumps(rec, ensure_ascii=False) + "\n")
+        return original(fig, *args, **kwargs)
+
+    fmt.for_type(Figure, measured)
+    return True
