@@ -78,7 +78,7 @@ def check_redundancy(redundancy: Callable[[int, int, int, int], int]) -> None:
 
 
 def check_critical_value(critical_w: Callable[[float], float]) -> None:
-    """``critical_w(alpha)`` must return k with P(|w| > k) = α for a standard normal w (two-sided)."""
+    """``critical_w(alpha)`` must return k with P(abs(w) > k) = α for a standard normal w (two-sided)."""
     for alpha in (0.001, 0.05, 0.0027):
         truth = float(norm.isf(alpha / 2))
         wrong = [

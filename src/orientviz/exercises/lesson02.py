@@ -151,7 +151,7 @@ def check_gimbal(locked_omega: Callable[[float, float, float], float]) -> None:
 
 
 def check_opk_from_matrix(angles_from_R: Callable[[F64], ArrayLike]) -> None:
-    """``angles_from_R(R)`` must return (ω, φ, κ) in gon with R = R_ω R_φ R_κ, |φ| < 100 gon."""
+    """``angles_from_R(R)`` must return (ω, φ, κ) in gon with R = R_ω R_φ R_κ, abs(φ) < 100 gon."""
     rng = rng_for("lesson02.check_opk_from_matrix")
     for _ in range(3):
         truth = np.array([rng.uniform(-180, 180), rng.uniform(-90, 90), rng.uniform(-180, 180)])
