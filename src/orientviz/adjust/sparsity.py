@@ -88,7 +88,7 @@ class BundleNormal:
         return N, np.concatenate([self.bc, self.bp])
 
 
-def bundle_normal_blocks(block: "Block") -> BundleNormal:
+def bundle_normal_blocks(block: Block) -> BundleNormal:
     """Assemble the normal-equation blocks of ``block`` at its current values.
 
     Points whose three coordinates all have σ = 0 (fixed control) are not unknowns.
