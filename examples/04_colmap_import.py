@@ -1,9 +1,9 @@
-"""04 — A COLMAP model in: import a reconstruction and adjust it with control.
+"""04 — A COLMAP reconstruction in: import it and adjust it with control.
 
 COLMAP writes a reconstruction as three text files: ``cameras.txt`` (the intrinsics in
 pixels), ``images.txt`` (one world → camera pose per image as a quaternion and a
 translation, then the measured 2-D points) and ``points3D.txt`` (the points with their
-tracks). This example writes such a model itself — four images of a drone flight 100 m
+tracks). This example writes such a reconstruction itself — four images of a drone flight 100 m
 over a field, 0.5 px of measuring noise, the poses and points as a reconstruction would
 leave them (a little off) — into a temporary folder, then imports it with
 :func:`orientviz.read_colmap`.
@@ -12,7 +12,7 @@ The import turns COLMAP's conventions into orientviz's (R image → object, imag
 mm with a nominal pixel size of 10 µm); the first check is that the imported projection
 centres are the ones written. COLMAP has no control points, so the block has no datum:
 four of its points get their known coordinates (fixed control) and the bundle
-adjustment then fits the model to them.
+adjustment then fits the block to them.
 
 Run: ``python examples/04_colmap_import.py``
 """
@@ -46,8 +46,8 @@ def quaternion_from_matrix(R: np.ndarray) -> np.ndarray:
     return q if q[0] >= 0 else -q
 
 
-def write_model(folder: Path, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """Write a small COLMAP text model.
+def write_reconstruction(folder: Path, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Write a small COLMAP reconstruction (text format).
 
     Returns the projection centres as written (4, 3) and the true points (60, 3), in m.
     """
@@ -103,7 +103,7 @@ def main() -> None:
     rng = np.random.default_rng(4)
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        X0_written, points_true = write_model(folder, rng)
+        X0_written, points_true = write_reconstruction(folder, rng)
         print("wrote", ", ".join(sorted(p.name for p in folder.iterdir())))
         block = ov.read_colmap(folder, pixel_size_mm=0.01, sigma_px=0.5)
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from orientviz.errors import InputError, NotDeterminableError
+import orientviz as ov
 from orientviz.radar import geier1973 as G
 from orientviz.radar.diagnostics import pair_geometry, weakest_direction
 from orientviz.radar.orientation import calibrate, exterior, station_by_trilateration
@@ -16,7 +16,7 @@ T = G.images()
 
 def test_three_collinear_points_trilateration():
     P = np.array([[0.0, 0.0, -15000.0], [10000.0, 0.0, -15000.0], [20000.0, 0.0, -15000.0]])
-    with pytest.raises(NotDeterminableError) as exc:
+    with pytest.raises(ov.NotDeterminableError) as exc:
         trilaterate_three(P, [20000.0, 21000.0, 22000.0])
     assert exc.value.parameters == ["X0", "Y0", "Z0"] and "one line" in str(exc.value)
 
@@ -25,20 +25,20 @@ def test_points_on_a_line_least_squares_names_station():
     # five points on one line: the station may turn about it
     P = np.column_stack([np.linspace(-20000, 20000, 5), np.zeros(5), np.full(5, -15000.0)])
     xy = project(P, T[2])
-    with pytest.raises(NotDeterminableError) as exc:
+    with pytest.raises(ov.NotDeterminableError) as exc:
         station_by_trilateration(P, xy, T[2])
     assert set(exc.value.parameters) & {"Y0", "Z0"}
 
 
 def test_fewer_observations_than_unknowns():
     P, xy = G.points("fig7")[:2], G.image_coordinates("fig7", 2)[:2]
-    with pytest.raises(NotDeterminableError, match="4 observations for 5 unknowns") as exc:
+    with pytest.raises(ov.NotDeterminableError, match="4 observations for 5 unknowns") as exc:
         calibrate(P, xy, T[2])
     assert exc.value.parameters == ["x0", "y0", "h", "m", "kappa"]
-    with pytest.raises(NotDeterminableError, match="need at least 3"):
+    with pytest.raises(ov.NotDeterminableError, match="need at least 3"):
         station_by_trilateration(P, xy, T[2])
     xy1 = G.image_coordinates("fig7", 1)[:5]
-    with pytest.raises(NotDeterminableError, match="5 homologous points"):
+    with pytest.raises(ov.NotDeterminableError, match="5 homologous points"):
         relative_orientation(xy1, T[1], G.image_coordinates("fig7", 2)[:5], T[2])
 
 
@@ -51,7 +51,7 @@ def test_coincident_azimuth_planes_relative_orientation_singular():
     xy1, xy2 = project(P, T[1]), project(P, im2)
     geo = pair_geometry(xy1, T[1], xy2, im2, P)
     assert np.all(geo.plane_angle < 1e-9) and geo.weak.all()
-    with pytest.raises(NotDeterminableError) as exc:
+    with pytest.raises(ov.NotDeterminableError) as exc:
         relative_orientation(xy1, T[1], xy2, im2.with_(kappa=0.01), points0=P)
     assert exc.value.defect >= 1 and "Z0" in exc.value.parameters
 
@@ -95,5 +95,5 @@ def test_weakest_direction_of_near_normal_relative_orientation():
 
 def test_bad_observe_and_stopping_names():
     P, xy = G.points("fig7"), G.image_coordinates("fig7", 2)
-    with pytest.raises(InputError, match="stopping"):
+    with pytest.raises(ov.InputError, match="stopping"):
         exterior(P, xy, T[2], stopping="never")

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from orientviz.errors import InputError
+import orientviz as ov
 from orientviz.radar import geier1973 as G
 from orientviz.radar.ppi import (
     PARAMS,
@@ -80,11 +80,11 @@ def test_jacobian_matches_central_differences(sequence):
 
 def test_bad_input_is_one_line():
     im = G.images()[1]
-    with pytest.raises(InputError, match="shape"):
+    with pytest.raises(ov.InputError, match="shape"):
         project(np.zeros((3, 2)), im)
-    with pytest.raises(InputError, match="closer to the station"):
+    with pytest.raises(ov.InputError, match="closer to the station"):
         project([[10.0, 0.0, -10.0]], im)
-    with pytest.raises(InputError, match="rotation axis"):
+    with pytest.raises(ov.InputError, match="rotation axis"):
         project([[0.0, 0.0, -20000.0]], im)
-    with pytest.raises(InputError, match="10 radar parameters"):
+    with pytest.raises(ov.InputError, match="10 radar parameters"):
         RadarImage.from_vector(np.zeros(9))

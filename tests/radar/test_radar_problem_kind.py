@@ -6,10 +6,10 @@ from importlib import resources
 import numpy as np
 import pytest
 
-from orientviz.errors import InputError
+import orientviz as ov
 from orientviz.io.jsonio import validator_for
 from orientviz.io.kinds.radar import radar_problem_from_geier
-from orientviz.io.problem import dumps_problem, load_problem, loads_problem
+from orientviz.io.problem import dumps_problem, loads_problem
 from orientviz.io.registry import available_kinds, get_kind
 from orientviz.radar import geier1973 as G
 from orientviz.radar.data import DATASET
@@ -30,7 +30,7 @@ def test_kind_is_registered():
 @pytest.mark.parametrize("name", EXAMPLES)
 def test_example_round_trips_in_both_forms(name):
     text = _path(name).read_text(encoding="utf-8")
-    p = load_problem(str(_path(name)))
+    p = ov.load_problem(str(_path(name)))
     assert dumps_problem(p) == text
     columnar = dumps_problem(p, columnar=True)
     back = loads_problem(columnar, "columnar.json")
@@ -40,7 +40,7 @@ def test_example_round_trips_in_both_forms(name):
 
 
 def test_solve_equals_the_library_call():
-    p = load_problem(str(_path("fig7_calibration_problem.json")))
+    p = ov.load_problem(str(_path("fig7_calibration_problem.json")))
     sol = get_kind("radar").solve(p, None)
     A = G.approximations()[2]
     direct = calibrate(
@@ -54,7 +54,7 @@ def test_solve_equals_the_library_call():
 
 
 def test_relative_problem_solves():
-    p = load_problem(str(_path("fig7_relative_problem.json")))
+    p = ov.load_problem(str(_path("fig7_relative_problem.json")))
     sol = get_kind("radar").solve(p, None)
     assert sol.adjustment.redundancy == 25 - 6 and sol.adjustment.converged
     assert len(sol.point_ids) == 25 and sol.xyz.shape == (25, 3)
@@ -73,7 +73,7 @@ def test_relative_problem_solves():
 def test_bad_input_names_the_place(mutate, where):
     doc = radar_problem_from_geier("fig7", "calibration")
     mutate(doc)
-    with pytest.raises(InputError) as exc:
+    with pytest.raises(ov.InputError) as exc:
         loads_problem(json.dumps(doc), "bad.json")
     msg = str(exc.value)
     assert msg.startswith("bad.json") and where.split("[")[0].split("/")[0] in msg

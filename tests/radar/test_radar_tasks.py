@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from orientviz.errors import NotDeterminableError
+import orientviz as ov
 from orientviz.radar import geier1973 as G
 from orientviz.radar.orientation import (
     calibrate,
@@ -15,7 +15,6 @@ from orientviz.radar.orientation import (
 from orientviz.radar.pair import absolute_orientation, intersect, relative_orientation
 from orientviz.radar.ppi import PARAMS
 from orientviz.radar.trilateration import trilaterate_three
-from orientviz.rotation import matrix_from_opk
 
 TRUE = G.images()
 APPROX = G.approximations()
@@ -101,7 +100,7 @@ def test_intersection_and_relative_orientation_exact():
 def test_absolute_orientation_exact_and_no_scale():
     rng = np.random.default_rng(7)
     x = rng.uniform(-5000, 5000, (6, 3))
-    R = matrix_from_opk(0.02, -0.03, 0.4, "pok")
+    R = ov.matrix_from_opk(0.02, -0.03, 0.4, "pok")
     T = np.array([1000.0, -200.0, 50.0])
     X = T + x @ R.T
     res = absolute_orientation(x, X)
@@ -109,7 +108,7 @@ def test_absolute_orientation_exact_and_no_scale():
     ctrl = X.copy()
     ctrl[2:, :2] = np.nan  # 2 full points + heights only
     np.testing.assert_allclose(absolute_orientation(x, ctrl).x, res.x, atol=1e-8)
-    with pytest.raises(NotDeterminableError, match="6 unknowns"):
+    with pytest.raises(ov.NotDeterminableError, match="6 unknowns"):
         absolute_orientation(x[:1], X[:1])
 
 

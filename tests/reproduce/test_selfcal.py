@@ -53,6 +53,21 @@ def test_a_set_the_block_cannot_determine_is_named():
 
 
 @pytest.mark.slow
+def test_printed_values_are_illustrative_and_not_met():
+    """The paper's blocks are real, orientviz's simulated: every printed σ0 and μ is set
+    beside the simulated one as an illustration. None of the 30 is met to the printed
+    digits (reason: other blocks, other errors — the book's reproductions chapter); the
+    test fails if one starts to match."""
+    from orientviz.reproduce import selfcal
+
+    rows = selfcal.table()
+    flagged = [r for r in rows if r.match is not None]
+    assert len(flagged) == 30 and all(r.label == "illustrative" for r in flagged)
+    assert [r.key for r in flagged if r.match] == []
+    assert {r.key for r in flagged} == set(selfcal.paper_values())
+
+
+@pytest.mark.slow
 def test_cli_table_runs_and_is_json(capsys):
     from orientviz.cli import main
 

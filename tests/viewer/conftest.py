@@ -3,12 +3,10 @@
 import numpy as np
 import pytest
 
-from orientviz.camera import project
-from orientviz.model import Block
-from orientviz.rotation import matrix_from_opk
+import orientviz as ov
 
 
-def tiny_block(rng: np.random.Generator, noise_mm: float = 0.0) -> Block:
+def tiny_block(rng: np.random.Generator, noise_mm: float = 0.0) -> ov.Block:
     """Two strips of three vertical images over a 5 × 4 grid of points (4 control)."""
     c, H = 152.0, 1520.0
     X0 = np.array([[x, y, H] for y in (0.0, 1000.0) for x in (0.0, 900.0, 1800.0)])
@@ -16,10 +14,10 @@ def tiny_block(rng: np.random.Generator, noise_mm: float = 0.0) -> Block:
     angles = rng.normal(0, 0.005, (6, 3))
     gx, gy = np.meshgrid(np.linspace(-300, 2100, 5), np.linspace(-300, 1300, 4))
     xyz = np.column_stack([gx.ravel(), gy.ravel(), rng.uniform(0, 80, gx.size)])
-    R = matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2])
+    R = ov.matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2])
     oi, op, xy = [], [], []
     for i in range(6):
-        p = project(xyz, X0[i], R[i], c)
+        p = ov.project(xyz, X0[i], R[i], c)
         ok = np.all(np.abs(p) < 110.0, axis=1)
         oi += [i] * int(ok.sum())
         op += list(np.flatnonzero(ok))
@@ -28,7 +26,7 @@ def tiny_block(rng: np.random.Generator, noise_mm: float = 0.0) -> Block:
     role = np.zeros(len(xyz), int)
     role[[0, 4, 15, 19]] = 1
     role[9] = 2
-    return Block.from_arrays(
+    return ov.Block.from_arrays(
         camera_c=[c], image_camera=np.zeros(6, int), X0=X0, angles=angles, xyz=xyz,
         obs_image=oi, obs_point=op, obs_xy=xy, role=role, strip=[0, 0, 0, 1, 1, 1],
     )  # fmt: skip

@@ -6,7 +6,7 @@ import socket
 import numpy as np
 import pytest
 
-from orientviz.units import to_rad
+import orientviz as ov
 from orientviz.viewer.adjuster import small_bundle
 from orientviz.viewer.app import ViewerApp, port_is_free, run_from_cli
 from orientviz.viewer.demos import demo_from_block
@@ -89,7 +89,7 @@ def test_slider_moves_image_and_redraws(app):
     a0 = st.block.images.angles[0].copy()
     p.handles["phi"].value = 0.25  # gon
     np.testing.assert_allclose(
-        st.block.images.angles[0], a0 + [0, to_rad(0.25, "gon"), 0], atol=1e-15
+        st.block.images.angles[0], a0 + [0, ov.to_rad(0.25, "gon"), 0], atol=1e-15
     )
     after = np.asarray(app.scene.nodes["residuals"].points)
     assert np.any(np.abs(after - before) > 0)

@@ -6,7 +6,7 @@ import time
 import numpy as np
 import pytest
 
-from orientviz.units import to_rad
+import orientviz as ov
 from orientviz.viewer.adjuster import small_bundle
 from orientviz.viewer.app import ViewerApp
 from orientviz.viewer.demos import demo_from_block
@@ -67,7 +67,7 @@ def test_viewer_renders_and_slider_updates_python(browser_page, block):
         ok = wait_for(lambda: abs(app.panel.handles["omega"].value - 0.05) < 1e-9, timeout=20)
         assert ok, f"slider value on the Python side: {app.panel.handles['omega'].value}"
         assert wait_for(
-            lambda: abs(st.block.images.angles[0, 0] - (omega0 + to_rad(0.05, "gon"))) < 1e-12
+            lambda: abs(st.block.images.angles[0, 0] - (omega0 + ov.to_rad(0.05, "gon"))) < 1e-12
         )
         after = np.asarray(app.scene.nodes["residuals"].points)
         changed = np.any(np.abs(after - before) > 0, axis=(1, 2))

@@ -3,8 +3,7 @@
 import numpy as np
 import pytest
 
-from orientviz.camera import project
-from orientviz.rotation import matrix_from_opk
+import orientviz as ov
 from orientviz.viewer import geometry as g
 
 
@@ -15,7 +14,7 @@ def rng():
 
 def random_rotations(rng, m):
     a = rng.uniform(-0.3, 0.3, (m, 3))
-    return matrix_from_opk(a[:, 0], a[:, 1], a[:, 2])
+    return ov.matrix_from_opk(a[:, 0], a[:, 1], a[:, 2])
 
 
 def test_quaternion_roundtrip(rng):
@@ -36,7 +35,7 @@ def test_frustum_apex_and_corners(rng):
     np.testing.assert_allclose(C[:, 0], X0)  # apex at the projection centre
     # each corner projects back to the image corner (x, y) = (±115, ±115) mm
     for k in range(4):
-        xy = project(C[k, 1:], X0[k], R[k], c)
+        xy = ov.project(C[k, 1:], X0[k], R[k], c)
         np.testing.assert_allclose(np.abs(xy), 115.0, atol=1e-9)
         # and lies at depth `depth` along the viewing direction (−z of the image frame)
         w = (C[k, 1:] - X0[k]) @ R[k]
@@ -68,13 +67,13 @@ def test_residual_offsets_put_the_observed_ray_through_the_offset_point(rng):
     R = random_rotations(rng, 1)[0]
     P = np.column_stack([rng.uniform(-500, 500, (n, 2)), rng.uniform(-50, 50, n)])
     c = 152.0
-    xy = project(P, X0, R, c)
+    xy = ov.project(P, X0, R, c)
     e = rng.normal(0, 0.01, (n, 2))  # misclosure observed − computed, mm
     off = g.residual_offsets(
         P, np.broadcast_to(X0, (n, 3)), np.broadcast_to(R, (n, 3, 3)), np.full(n, c), e
     )
     # the offset point lies at the same depth and images exactly at the observed coordinates
-    np.testing.assert_allclose(project(P + off, X0, R, c), xy + e, atol=1e-9)
+    np.testing.assert_allclose(ov.project(P + off, X0, R, c), xy + e, atol=1e-9)
     np.testing.assert_allclose(((P + off - X0) @ R)[:, 2], ((P - X0) @ R)[:, 2], atol=1e-9)
 
 

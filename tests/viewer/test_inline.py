@@ -10,13 +10,13 @@ import pytest
 pytest.importorskip("viser")
 pytest.importorskip("matplotlib")
 
-from orientviz.block.simulate import simulate_block  # noqa: E402
+import orientviz as ov
 from orientviz.viewer.inline import scene_figure, show_inline  # noqa: E402
 
 
 @pytest.fixture(scope="module")
 def block():
-    return simulate_block(1, 4, rng=4, gross={"count": 1, "size_mm": 0.05}).block
+    return ov.simulate_block(1, 4, rng=4, gross={"count": 1, "size_mm": 0.05}).block
 
 
 def test_scene_figure_draws_cameras_points_and_residuals(block):

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from orientviz.units import to_rad
+import orientviz as ov
 from orientviz.viewer.block_geometry import BlockGeometry
 from orientviz.viewer.geometry import FLIP, matrix_from_wxyz
 from orientviz.viewer.scene import BlockScene, image_node_name
@@ -49,7 +49,7 @@ def test_points_by_role_in_scene_frame(server, block):
 
 def test_residual_vectors_scale_with_exaggeration(server, block):
     state_block = block.copy()
-    state_block.images.angles[2, 0] += to_rad(0.05, "gon")  # misorient image 2 by 5 c
+    state_block.images.angles[2, 0] += ov.to_rad(0.05, "gon")  # misorient image 2 by 5 c
     sc = build(server, state_block, exaggeration=100.0)
     seg1 = np.asarray(sc.nodes["residuals"].points, dtype=float)
     sc.set_exaggeration(300.0)

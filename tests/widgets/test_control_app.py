@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from orientviz.errors import NotDeterminableError
+import orientviz as ov
 
 W = pytest.importorskip("ipywidgets")
 pytest.importorskip("matplotlib")
@@ -20,7 +20,7 @@ def _spy_app():
     def compute(a, b):
         calls["compute"].append((a, b))
         if a < 0:
-            raise NotDeterminableError("negative a", parameters=["a"])
+            raise ov.NotDeterminableError("negative a", parameters=["a"])
         return a * b
 
     def describe(state):

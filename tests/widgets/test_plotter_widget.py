@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from orientviz.errors import InputError
+import orientviz as ov
 from orientviz.units import RHO_C
 from orientviz.widgets.plotter import FORMULA_CHOICES, SCHEME_CHOICES, VirtualPlotter
 
@@ -49,7 +49,7 @@ def test_every_scheme_and_formula_or_a_clear_error(scheme, formula):
     vp.set_scheme(scheme)
     vp.set_formula(formula)
     if formula == "kovarik9" and scheme != "kovarik9":
-        with pytest.raises(InputError, match="9-point"):
+        with pytest.raises(ov.InputError, match="9-point"):
             vp.one_pass()
         return
     v = vp.one_pass()
@@ -58,7 +58,7 @@ def test_every_scheme_and_formula_or_a_clear_error(scheme, formula):
 
 
 def test_unknown_formula():
-    with pytest.raises(InputError):
+    with pytest.raises(ov.InputError):
         VirtualPlotter().set_formula("guess")
 
 

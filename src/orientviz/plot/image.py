@@ -78,7 +78,7 @@ def plot_image(
         )  # fmt: skip
     if labels is not None:
         for (x, y), lab in zip(xy, labels):
-            ax.text(x + 2, y + 2, str(lab), fontsize=7)
+            ax.text(x + 2, y + 2, str(lab), fontsize=8)
     pad = 0.05 * max(w, h)
     ax.set_xlim(-w - pad, w + pad)
     ax.set_ylim(-h - pad, h + pad)
@@ -121,7 +121,7 @@ def plot_correlations(result, *, names: list[str] | None = None, ax=None, annota
     if annotate:
         for i in range(len(names)):
             for j in range(len(names)):
-                ax.text(j, i, f"{C[i, j]:.2f}", ha="center", va="center", fontsize=7,
+                ax.text(j, i, f"{C[i, j]:.2f}", ha="center", va="center", fontsize=8,
                         color="white" if abs(C[i, j]) > 0.6 else "black")  # fmt: skip
     fig.colorbar(im, ax=ax, shrink=0.8, label="correlation ρ")
     return fig

@@ -69,11 +69,21 @@ def figure_size(width: float, height: float) -> tuple[float, float]:
 
 @contextmanager
 def book_rc():
-    """Context in which new figures, axes and texts use :data:`RC` (readable sizes)."""
+    """Context in which new figures, axes and texts use :data:`RC` (readable sizes).
+
+    Only the keys of :data:`RC` are set and restored. (``matplotlib.rc_context`` restores
+    *every* setting, ``interactive`` included: a figure that activates the inline backend
+    inside it would switch interactive mode off again, and later figures of the notebook
+    would no longer be shown.)
+    """
     import matplotlib as mpl
 
-    with mpl.rc_context(RC):
+    saved = {k: mpl.rcParams[k] for k in RC}
+    mpl.rcParams.update(RC)
+    try:
         yield
+    finally:
+        mpl.rcParams.update(saved)
 
 
 def new_figure(figsize: tuple[float, float] = (MAX_WIDTH_IN, 4.5), *, nrows: int = 1,

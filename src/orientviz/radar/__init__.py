@@ -9,7 +9,8 @@ Modules (import them directly; nothing heavy is imported here):
 * :mod:`~orientviz.radar.trilateration` — the closed-form three-sphere intersection;
 * :mod:`~orientviz.radar.pair` — intersection, relative and absolute orientation;
 * :mod:`~orientviz.radar.diagnostics` — weak pair geometry, weakest parameter direction;
-* :mod:`~orientviz.radar.stopping` — the stopping rule that reproduces the paper;
+* :mod:`~orientviz.radar.stopping` — a stopping rule reconstructed from Fig. 8 (fitted);
+* :mod:`~orientviz.radar.rounding` — Fig. 8 against the spread of many roundings;
 * :mod:`~orientviz.radar.geier1973`, :mod:`~orientviz.radar.data`,
   :mod:`~orientviz.radar.fig8` — the paper's test data, the shipped dataset, Fig. 8;
 * :mod:`~orientviz.radar.scene` — plain scene data for the viewer.

@@ -1,4 +1,5 @@
-"""Geier's test (Fig. 8): every task on every surface, as the paper ran it.
+"""Geier's test (Fig. 8): every task on every surface, with the conventions established in
+docs/geier_conventions.md (some of them fitted on the printed numbers).
 
 For each of the ten surfaces (:data:`~orientviz.radar.geier1973.COLUMNS`) the image
 coordinates of the 25 points in images 1-3 are computed without error and rounded to
@@ -107,6 +108,10 @@ def run_surface(
     offsets: ArrayLike | None = None,
     stopping: str = "geier",
     tasks: tuple[str, ...] | None = None,
+    sequence: str = "pok",
+    dz: float = 0.0,
+    truth: dict[int, RadarImage] | None = None,
+    rel: float | None = None,
 ) -> dict[str, TaskOutcome]:
     """Run the tasks of Fig. 8 on one surface.
 
@@ -123,14 +128,26 @@ def run_surface(
         Stopping rule of the single-image tasks (see :mod:`orientviz.radar.stopping`).
     tasks : tuple of str, optional
         A subset of :data:`TASKS`.
+    sequence : {"pok", "opk"}
+        Rotation sequence of the true images and of the adjustment (the conventions page:
+        "pok" is the one chosen by matching the calibration; "opk" for the sensitivity).
+    dz : float
+        Shift of all 25 heights of the surface, m (sensitivity of the chosen heights).
+    truth : dict of int to RadarImage, optional
+        True images 1-3 instead of Fig. 7's (sensitivity of the angle inputs).
+    rel : float, optional
+        Threshold of the reconstructed stopping rule (default
+        :data:`~orientviz.radar.stopping.GEIER_RELATIVE_M0`).
 
     Returns
     -------
     dict of str to TaskOutcome
     """
     tasks = tuple(TASKS) if tasks is None else tasks
-    T, A = G.images(), G.approximations()
-    P = G.points(surface)
+    T = G.images(sequence) if truth is None else truth
+    A = G.approximations(sequence)
+    P = G.points(surface) + np.array([0.0, 0.0, float(dz)])
+    kw = {} if rel is None or stopping != "geier" else {"rel": float(rel)}
     off = np.zeros((3, 2)) if offsets is None else np.asarray(offsets, float).reshape(3, 2)
     xy = {}
     for i in (1, 2, 3):
@@ -144,7 +161,7 @@ def run_surface(
         try:
             if task == "calibration":
                 start = T[2].with_(x0=a2.x0, y0=a2.y0, h=a2.h, m=a2.m, kappa=G.alpha0_approx())
-                res = calibrate(P, xy[2], start, stopping=stopping)
+                res = calibrate(P, xy[2], start, stopping=stopping, **kw)
             elif task == "trilateration":
                 res = station_by_trilateration(P, xy[2], T[2].with_(X0=a2.X0))
             elif task == "rotations":
@@ -153,11 +170,11 @@ def run_surface(
                     if "trilateration" in out
                     else T[2].X0
                 )
-                res = rotations(P, xy[2], ext2.with_(X0=X0), stopping=stopping)
+                res = rotations(P, xy[2], ext2.with_(X0=X0), stopping=stopping, **kw)
             elif task == "exterior":
-                res = exterior(P, xy[2], ext2, stopping=stopping)
+                res = exterior(P, xy[2], ext2, stopping=stopping, **kw)
             elif task == "all_ten":
-                res = resect_all(P, xy[3], a3, stopping=stopping)
+                res = resect_all(P, xy[3], a3, stopping=stopping, **kw)
             elif task in ("relative_near_normal", "relative_general"):
                 img = 2 if task == "relative_near_normal" else 3
                 start = (

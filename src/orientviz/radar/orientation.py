@@ -166,8 +166,8 @@ def adjust_image(
     labels : sequence of str, optional
         Point labels for the observation labels.
     stopping : {"converge", "geier"}
-        Iterate to convergence (the engine's rule; default) or stop by the rule that
-        reproduces the paper's printed numbers (:mod:`orientviz.radar.stopping`).
+        Iterate to convergence (the engine's rule; default) or stop by the rule
+        reconstructed by matching Geier's Fig. 8 (:mod:`orientviz.radar.stopping`).
     **engine
         Passed on to :func:`~orientviz.adjust.gauss_newton` (``tol``, ``xtol``, ``stop``,
         ``max_iter``, ``damping``).

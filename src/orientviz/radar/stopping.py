@@ -1,8 +1,10 @@
-"""The iteration stopping rule that reproduces Geier's (1973) printed results.
+"""A stopping rule reconstructed from Geier's (1973) Fig. 8 — not a rule the paper states.
 
-Reconstructed from the numbers of Fig. 8 (docs/geier_conventions.md): after each
-solution of the linearised system the program compares the mean error of unit weight
-of the *linearised* problem, m0 = sqrt(vᵀv / r) with v = A·Δx − (l − f), with that of
+The paper does not describe when its iteration stopped. This rule was reconstructed by
+matching the printed calibration and exterior-orientation numbers of Fig. 8
+(docs/geier_conventions.md §6); it is therefore *fitted*, and ``orientviz reproduce
+geier`` labels the rows it was fitted on so. The rule: after each solution of the
+linearised system, compare the mean error of unit weight of the *linearised* problem, m0 = sqrt(vᵀv / r) with v = A·Δx − (l − f), with that of
 the previous iteration:
 
 1. if m0 changed by less than ``rel`` (0.1 %) of itself, the correction is applied and
@@ -48,7 +50,7 @@ def geier_iterate(
     context: str = "",
     **engine,
 ) -> Adjustment:
-    """Gauss-Newton with Geier's stopping rule (see the module docstring).
+    """Gauss-Newton with the stopping rule reconstructed from Fig. 8 (module docstring).
 
     Parameters
     ----------
@@ -118,7 +120,7 @@ def geier_iterate(
     res = gauss_newton(model, u, l, sigma, names=names, max_iter=0, context=context, **engine)
     res.history = history
     res.converged = converged
-    res.reason = f"Geier's stopping rule: {rule}"
+    res.reason = f"stopping rule reconstructed from Geier's Fig. 8: {rule}"
     res.extra["m0_linearized"] = m0_lin
     res.extra["rule"] = rule
     return res

@@ -1,15 +1,21 @@
 """Reproductions of the papers' numbers: ``orientviz reproduce NAME``.
 
-Each entry of :data:`REGISTRY` names a function ``table(**options) -> list[Row]``.
-A row compares one number of a paper with orientviz's value for it; rows with no
-paper value (``paper=None``) show what orientviz adds. Modules are imported lazily.
+Each entry of :data:`REGISTRY` names a module with a function ``table(*, paper=None,
+**options) -> list[Row]`` and a function ``paper_values() -> dict[str, value]`` (the
+stored table of the paper's printed values, keyed by :attr:`Row.key`; ``table(paper=…)``
+reads a changed copy, so a test can perturb it and see the flags follow and nothing else
+move). A row compares one number of a paper with orientviz's value for it, with a label
+(predicted / fitted / illustrative) and a flag read from the paper's value
+(:mod:`orientviz.reproduce.rows`); rows with no paper value (``paper=None``) show what
+orientviz adds. Modules are imported lazily.
 """
 
 from __future__ import annotations
 
 import importlib
-from dataclasses import asdict, dataclass
 from typing import Any
+
+from .rows import LABELS, Row, counts, counts_line, format_rows, match, printed
 
 #: name → ("module", "function", one-line description)
 REGISTRY: dict[str, tuple[str, str, str]] = {
@@ -36,37 +42,6 @@ REGISTRY: dict[str, tuple[str, str, str]] = {
 }
 
 
-@dataclass
-class Row:
-    """One compared number.
-
-    Attributes
-    ----------
-    task : str
-        The paper's task or table, e.g. ``"calibration"``, ``"Table 3"``.
-    case : str
-        The column / configuration, e.g. ``"plane"``, ``"relief 10 %"``.
-    quantity : str
-        What is compared, with its unit, e.g. ``"m0 [m]"``.
-    paper : float, str or None
-        The paper's value as printed (None if the paper gives none).
-    orientviz : float, str or None
-        orientviz's value.
-    note : str
-        Why it differs, or how it was obtained.
-    """
-
-    task: str
-    case: str
-    quantity: str
-    paper: Any
-    orientviz: Any
-    note: str = ""
-
-    def as_dict(self) -> dict[str, Any]:
-        return asdict(self)
-
-
 def available() -> dict[str, str]:
     """Names of the reproductions with their descriptions."""
     return {k: v[2] for k, v in sorted(REGISTRY.items())}
@@ -81,26 +56,23 @@ def run(name: str, **options: Any) -> list[Row]:
     return getattr(importlib.import_module(module), func)(**options)
 
 
-def format_rows(rows: list[Row]) -> str:
-    """Plain-text table of rows for the terminal."""
+def paper_values(name: str) -> dict[str, Any]:
+    """A fresh copy of the stored paper values of reproduction ``name`` (by row key)."""
+    if name not in REGISTRY:
+        raise KeyError(f"unknown reproduction {name!r}; available: {', '.join(sorted(REGISTRY))}")
+    return importlib.import_module(REGISTRY[name][0]).paper_values()
 
-    def fmt(v: Any) -> str:
-        if v is None:
-            return "—"
-        if isinstance(v, float):
-            return f"{v:.6g}"
-        return str(v)
 
-    header = ("task", "case", "quantity", "paper", "orientviz", "note")
-    cells = [header] + [
-        (r.task, r.case, r.quantity, fmt(r.paper), fmt(r.orientviz), r.note) for r in rows
-    ]
-    widths = [max(len(c[i]) for c in cells) for i in range(5)]
-    lines = []
-    for k, c in enumerate(cells):
-        lines.append(
-            "  ".join(c[i].ljust(widths[i]) for i in range(5)) + ("  " + c[5] if c[5] else "")
-        )
-        if k == 0:
-            lines.append("  ".join("-" * w for w in widths))
-    return "\n".join(lines)
+__all__ = [
+    "LABELS",
+    "REGISTRY",
+    "Row",
+    "available",
+    "counts",
+    "counts_line",
+    "format_rows",
+    "match",
+    "paper_values",
+    "printed",
+    "run",
+]

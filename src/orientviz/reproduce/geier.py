@@ -1,19 +1,34 @@
 """``orientviz reproduce geier``: Geier (1973) Fig. 8 beside orientviz's numbers.
 
 For every task and every one of the ten surfaces the paper's printed true error (or m0,
-or correlation) is set beside orientviz's value rounded to the paper's digits. The note
-says whether it matches to the printed digits, and otherwise how far it is off compared
-with the spread that the rounding of the image coordinates alone causes (a Monte Carlo
-over random sub-metre shifts of the rounding grid, seeded) and why.
+or correlation) is set beside orientviz's value; the flag says whether orientviz's value
+rounded to the paper's printed digits equals it (:mod:`orientviz.reproduce.rows`).
+
+Labels (docs/geier_conventions.md says how each choice was made and how sensitive the
+counts are to it, :mod:`orientviz.reproduce.geier_sensitivity`):
+
+* calibration (image 2): **fitted** — the rotation order, the surfaces' heights, the
+  stopping rule, the use of the printed gon values and the sign of the true error were
+  chosen by matching these very numbers;
+* exterior orientation, six jointly (image 2): **fitted** — the threshold of the
+  reconstructed stopping rule was bracketed with these numbers (and the surfaces and
+  rotation order chosen with the calibration of the same columns);
+* the other tasks (trilateration, rotations, all ten parameters, both relative
+  orientations): **predicted** — nothing was chosen by matching them.
+
+The note of a row gives, where the Monte Carlo is run (``draws > 0``), the standard
+deviation of orientviz's value over random shifts of the rounding grid.
 """
 
 from __future__ import annotations
+
+import copy
 
 import numpy as np
 
 from ..radar import fig8
 from ..radar.data import load_fig8_paper
-from . import Row
+from .rows import Row
 
 #: Decimals the paper prints, by unit.
 DECIMALS = {"m": 2, "1e-6": 0, "cc": 0, "1": 3}
@@ -28,10 +43,27 @@ TASK_LABELS = {
     "relative_general": "4a relative orientation, images 1-3",
 }
 
-#: Why a task is expected to reproduce only in magnitude (shown where numbers differ).
+#: Choices fitted on each task's numbers (tasks not listed: predicted).
+FITTED: dict[str, tuple[str, ...]] = {
+    "calibration": (
+        "rotation order",
+        "surface depth",
+        "stopping rule",
+        "printed-gon angles",
+        "sign of the true error",
+    ),
+    "exterior": ("stopping rule",),
+}
+#: Counting group of each task.
+GROUP = {"calibration": "calibration", "exterior": "exterior"}
+OTHER = "other tasks"
+
+#: Why a task reproduces only in part (shown in the task's summary row).
 WHY = {
-    "calibration": "paper's stopping rule (orientviz.radar.stopping) reproduces all columns",
-    "exterior": "paper's stopping rule; see docs/geier_conventions.md for column 10's m0",
+    "calibration": "with the fitted conventions and the reconstructed stopping rule "
+    "(orientviz.radar.stopping)",
+    "exterior": "reconstructed stopping rule; column 10's m0 is 0.3254 (see "
+    "docs/geier_conventions.md)",
     "trilateration": (
         "the paper does not give its observation model for the separate station; orientviz "
         "adjusts the radial image distances"
@@ -52,10 +84,26 @@ WHY = {
 }
 
 
-def _short(status: str | None) -> str:
-    if not status:
-        return "—"
-    return "singular matrix" if "singul" in status else "no usable solution"
+def paper_values() -> dict[str, object]:
+    """Fig. 8 as printed, by row key ``"task|column|quantity"`` (a fresh copy).
+
+    Numbers are floats/ints in the paper's units (digits by unit: :data:`DECIMALS`);
+    the two blank columns of the general relative orientation are ``"no solution
+    (…)"`` under the key ``"relative_general|column|solution"``.
+    """
+    paper = load_fig8_paper()
+    out: dict[str, object] = {}
+    for task, qs in paper["tasks"].items():
+        for j, col in enumerate(paper["columns"]):
+            status = paper.get("status", {}).get(task, {}).get(col)
+            if status:
+                short = status.split(" (")[0]
+                out[f"{task}|{col}|solution"] = f"no solution ({short})"
+                continue
+            for q, values in qs.items():
+                if values[j] is not None:
+                    out[f"{task}|{col}|{q}"] = values[j]
+    return copy.deepcopy(out)
 
 
 def _fmt(v: float, unit: str) -> float:
@@ -64,7 +112,15 @@ def _fmt(v: float, unit: str) -> float:
     return 0.0 if r == 0 else r
 
 
-def table(draws: int = 10, seed: int = 1973, stopping: str = "geier") -> list[Row]:
+def _label(task: str) -> tuple[str, tuple[str, ...], str]:
+    if task in FITTED:
+        return "fitted", FITTED[task], GROUP[task]
+    return "predicted", (), OTHER
+
+
+def table(
+    draws: int = 10, seed: int = 1973, stopping: str = "geier", *, paper: dict | None = None
+) -> list[Row]:
     """Rows comparing Fig. 8 with orientviz.
 
     Parameters
@@ -74,71 +130,86 @@ def table(draws: int = 10, seed: int = 1973, stopping: str = "geier") -> list[Ro
     seed : int
         Seed of the random generator of the Monte Carlo.
     stopping : {"geier", "converge"}
-        Stopping rule of the single-image tasks.
+        Stopping rule of the single-image tasks ("geier": the rule reconstructed from
+        Fig. 8, :mod:`orientviz.radar.stopping`).
+    paper : dict, optional
+        The paper's values by row key (default :func:`paper_values`).
 
     Returns
     -------
     list of Row
-        One row per printed number, then one summary row per task.
+        One row per printed number (one per blank column), then one summary row per task.
     """
-    paper = load_fig8_paper()
-    cols = paper["columns"]
-    heads = [f"{i + 1} {h}" for i, h in enumerate(paper["headings"])]
     results = fig8.run_all(stopping=stopping)
+    cols = load_fig8_paper()["columns"]
     rng = np.random.default_rng(seed)
     spread = (
         {s: fig8.rounding_spread(s, rng=rng, draws=draws, tasks=tuple(fig8.TASKS)) for s in cols}
         if draws > 0
         else {}
     )
+    return rows_from_results(results, paper, spread)
+
+
+def rows_from_results(
+    results: dict, paper: dict | None = None, spread: dict | None = None
+) -> list[Row]:
+    """The rows of :func:`table` for given task outcomes (e.g. under other conventions).
+
+    Parameters
+    ----------
+    results : dict
+        column → task → :class:`~orientviz.radar.fig8.TaskOutcome`
+        (:func:`orientviz.radar.fig8.run_all`).
+    paper : dict, optional
+        The paper's values by row key (default :func:`paper_values`).
+    spread : dict, optional
+        column → task → quantity → (mean, σ) over rounding draws, shown in the notes.
+    """
+    pv_all = paper_values() if paper is None else paper
+    spread = spread or {}
+    fig = load_fig8_paper()
+    cols = fig["columns"]
+    heads = [f"{i + 1} {h}" for i, h in enumerate(fig["headings"])]
     rows: list[Row] = []
-    summary: dict[str, list[int]] = {}
-    for task, qs in paper["tasks"].items():
-        hit = summary.setdefault(task, [0, 0])
+    for task, qs in fig["tasks"].items():
+        label, fitted, group = _label(task)
+        first = len(rows)
         for j, col in enumerate(cols):
             out = results[col][task]
-            status = paper.get("status", {}).get(task, {}).get(col)
-            for q, values in qs.items():
-                unit = paper["units"][q]
-                label = f"{q} [{unit}]"
-                pv = values[j]
+            key = f"{task}|{col}|solution"
+            if key in pv_all:
+                failed = out.status != "ok" and "not determinable" in out.status
+                rows.append(
+                    Row(TASK_LABELS[task], heads[j], "solution", pv_all[key],
+                        "none" if failed else "solved", f"orientviz: {out.status}",
+                        label=label, fitted=fitted, group=group, key=key,
+                        value=None if failed else 1.0)
+                )  # fmt: skip
+                continue
+            for q in qs:
+                key = f"{task}|{col}|{q}"
+                if key not in pv_all:
+                    continue
+                unit = fig["units"][q]
                 ov = out.values.get(q)
-                if pv is None:
-                    rows.append(
-                        Row(
-                            TASK_LABELS[task],
-                            heads[j],
-                            label,
-                            _short(status),
-                            None if ov is None else _fmt(ov, unit),
-                            f"orientviz: {out.status}"
-                            + (f"; {out.diagnosis}" if q == "m0" and out.diagnosis else ""),
-                        )
-                    )
-                    continue
-                if ov is None:
-                    rows.append(Row(TASK_LABELS[task], heads[j], label, pv, None, out.status))
-                    continue
-                mine = _fmt(ov, unit)
-                hit[1] += 1
-                if abs(mine - pv) < 0.5 * 10.0 ** -DECIMALS[unit] + 1e-12:
-                    hit[0] += 1
-                    note = "matches the printed digits"
-                else:
-                    note = f"differs by {mine - pv:+.{DECIMALS[unit]}f}"
+                note = "" if out.status == "ok" else out.status
                 sd = spread.get(col, {}).get(task, {}).get(q)
                 if sd is not None:
-                    note += f"; rounding spread σ = {sd[1]:.{DECIMALS[unit] + 1}f}"
-                rows.append(Row(TASK_LABELS[task], heads[j], label, pv, mine, note))
-    for task, (k, n) in summary.items():
+                    note += (
+                        "; " if note else ""
+                    ) + f"rounding spread σ = {sd[1]:.{DECIMALS[unit] + 1}f}"
+                rows.append(
+                    Row(TASK_LABELS[task], heads[j], f"{q} [{unit}]", pv_all[key],
+                        None if ov is None else _fmt(ov, unit), note, label=label,
+                        value=None if ov is None else float(ov), decimals=DECIMALS[unit],
+                        fitted=fitted, group=group, key=key)
+                )  # fmt: skip
+        mine = [r for r in rows[first:] if r.match is not None]
+        k = sum(bool(r.match) for r in mine)
         rows.append(
-            Row(
-                TASK_LABELS[task],
-                "all columns",
-                "numbers matching the printed digits",
-                n,
-                k,
-                "" if k == n else WHY[task],
-            )
-        )
+            Row(TASK_LABELS[task], "all columns", "numbers matching the printed digits", None,
+                None, f"{k}/{len(mine)} {label}" + (f" ({', '.join(fitted)})" if fitted else "")
+                + "; " + WHY[task])
+        )  # fmt: skip
     return rows

@@ -16,7 +16,7 @@ uses metres; ``units.image`` does not apply), the scale m is a pure number, angl
 ``calibration`` (x0, y0, h, m, κ of one image), ``trilateration`` (X0 from the ranges),
 ``rotations`` (φ, ω, κ), ``exterior`` (six), ``all`` (ten), ``relative`` (the second of
 two images against the first, fixed; ``options.free`` may add its interior orientation).
-``options.stopping`` = ``"geier"`` uses the paper's stopping rule.
+``options.stopping`` = ``"geier"`` uses the stopping rule reconstructed from Geier's Fig. 8.
 """
 
 from __future__ import annotations

@@ -1,0 +1,155 @@
+"""Checkers for lesson 10 (sparse normal equations: Schur complement, back-substitution, bandwidth).
+
+Oracles: the whole normal system solved densely (numpy) for the reduction and the
+back-substitution; a double loop over all matrix entries for the bandwidth.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._common import CheckFailed, call, compare, rng_for, success
+
+
+def _system(rng, m=4, q=7):
+    """A random normal system with bundle structure: m image blocks (6), q point blocks (3)."""
+    sees = rng.random((m, q)) < 0.6
+    sees[rng.integers(0, m, q), np.arange(q)] = True
+    sees[np.arange(m), rng.integers(0, q, m)] = True
+    U = np.zeros((6 * m, 6 * m))
+    V = np.zeros((3 * q, 3 * q))
+    W = np.zeros((6 * m, 3 * q))
+    for i in range(m):
+        for j in range(q):
+            if sees[i, j]:
+                J = rng.normal(size=(2, 9))
+                A, B = J[:, :6], J[:, 6:]
+                U[6 * i : 6 * i + 6, 6 * i : 6 * i + 6] += A.T @ A
+                V[3 * j : 3 * j + 3, 3 * j : 3 * j + 3] += B.T @ B
+                W[6 * i : 6 * i + 6, 3 * j : 3 * j + 3] += A.T @ B
+    U += np.eye(6 * m) * 2.0  # control and other images: U regular
+    V += np.eye(3 * q) * 0.5
+    bc, bp = rng.normal(size=6 * m), rng.normal(size=3 * q)
+    return U, W, V, bc, bp
+
+
+def _reduce(U, W, V, bc, bp, mode="ok"):
+    Vi = np.linalg.inv(V) if mode != "no_inverse" else V
+    S = U - W @ Vi @ W.T if mode != "plus" else U + W @ Vi @ W.T
+    r = bc - W @ Vi @ bp if mode != "rhs" else bc
+    return S, r
+
+
+def check_reduce(fn) -> None:
+    """``fn(U, W, V, bc, bp) -> (S, r)``: the reduced system S dc = r of the orientation
+    unknowns (Schur complement of the point block V)."""
+    U, W, V, bc, bp = _system(rng_for("lesson10.check_reduce"))
+    got = call(fn, U.copy(), W.copy(), V.copy(), bc.copy(), bp.copy(), what="reduce")
+    if not isinstance(got, tuple) or len(got) != 2:
+        raise CheckFailed("reduce: return the pair (S, r)")
+    S, r = (np.asarray(g, dtype=float) for g in got)
+    N = np.block([[U, W], [W.T, V]])
+    want_dc = np.linalg.solve(N, np.concatenate([bc, bp]))[: len(bc)]
+    wS, wr = _reduce(U, W, V, bc, bp)
+    compare("S", S, wS, rtol=1e-10, wrong=[
+        ("S = U − W V⁻¹ Wᵀ: the sign is wrong", _reduce(U, W, V, bc, bp, "plus")[0]),
+        ("V must be inverted: S = U − W V⁻¹ Wᵀ", _reduce(U, W, V, bc, bp, "no_inverse")[0]),
+    ])  # fmt: skip
+    compare("r", r, wr, rtol=1e-10, wrong=[
+        ("the right side is reduced too: r = bc − W V⁻¹ bp", bc),
+        ("V must be inverted in r too: r = bc − W V⁻¹ bp", _reduce(U, W, V, bc, bp, "no_inverse")[1]),
+    ])  # fmt: skip
+    dc = np.linalg.solve(S, r)
+    compare("dc from your S, r against the whole system solved densely", dc, want_dc, rtol=1e-8)
+    success("S dc = r gives the orientation unknowns of the whole system")
+
+
+def _back(V, W, bp, dc, mode="ok"):
+    if mode == "no_coupling":
+        return np.linalg.solve(V, bp)
+    if mode == "plus":
+        return np.linalg.solve(V, bp + W.T @ dc)
+    if mode == "no_inverse":
+        return V @ (bp - W.T @ dc)
+    return np.linalg.solve(V, bp - W.T @ dc)
+
+
+def check_back_substitute(fn) -> None:
+    """``fn(V, W, bp, dc) -> dp``: the point unknowns once the orientation unknowns dc are known."""
+    U, W, V, bc, bp = _system(rng_for("lesson10.check_back_substitute"), m=3, q=6)
+    N = np.block([[U, W], [W.T, V]])
+    x = np.linalg.solve(N, np.concatenate([bc, bp]))
+    dc, want = x[: len(bc)], x[len(bc) :]
+    got = np.asarray(call(fn, V.copy(), W.copy(), bp.copy(), dc.copy(), what="back_substitute"), dtype=float)
+    compare("dp", got, want, rtol=1e-9, wrong=[
+        ("the coupling Wᵀ dc is missing: dp = V⁻¹ (bp − Wᵀ dc)", _back(V, W, bp, dc, "no_coupling")),
+        ("the sign of Wᵀ dc is wrong: dp = V⁻¹ (bp − Wᵀ dc)", _back(V, W, bp, dc, "plus")),
+        ("V multiplies instead of being inverted: dp = V⁻¹ (bp − Wᵀ dc)", _back(V, W, bp, dc, "no_inverse")),
+    ])  # fmt: skip
+    success("dp equals the point part of the whole system solved densely")
+
+
+def _band_loops(P):
+    b = 0
+    n = len(P)
+    for i in range(n):
+        for k in range(n):
+            if P[i][k] and abs(i - k) > b:
+                b = abs(i - k)
+    return b
+
+
+def _bandwidth(P, mode="ok"):
+    P = np.asarray(P, dtype=bool)
+    i, k = np.nonzero(P)
+    b = int(np.max(np.abs(i - k), initial=0))
+    if mode == "full":
+        return 2 * b + 1
+    if mode == "with_diagonal":
+        return b + 1
+    if mode == "row_count":
+        return int(P.sum(axis=1).max()) - 1
+    return b
+
+
+def check_bandwidth(fn) -> None:
+    """``fn(P) -> b``: the half-bandwidth of a symmetric pattern: the largest |i − k| of a
+    non-zero entry (0 for a diagonal matrix)."""
+    rng = rng_for("lesson10.check_bandwidth")
+    for n, p in ((12, 0.15), (20, 0.08), (9, 0.3)):
+        A = rng.random((n, n)) < p
+        P = A | A.T | np.eye(n, dtype=bool)
+        got = call(fn, P.copy(), what="bandwidth")
+        want = _band_loops(P.tolist())
+        compare(f"bandwidth of a {n}×{n} pattern", float(got), float(want), rtol=1e-12, wrong=[
+            ("this is the full width 2b + 1; the half-bandwidth is b = max |i − k|", float(_bandwidth(P, "full"))),
+            ("the diagonal is not counted: b = max |i − k|", float(_bandwidth(P, "with_diagonal"))),
+            ("the number of non-zeros in a row is not the bandwidth: zeros inside the band count too",
+             float(_bandwidth(P, "row_count"))),
+        ])  # fmt: skip
+    success("bandwidths agree with a double loop over three patterns")
+
+
+SOLUTIONS = {
+    "check_reduce": lambda U, W, V, bc, bp: _reduce(U, W, V, bc, bp),
+    "check_back_substitute": lambda V, W, bp, dc: _back(V, W, bp, dc),
+    "check_bandwidth": lambda P: _bandwidth(P),
+}
+
+MUTANTS = {
+    "check_reduce": {
+        "plus": lambda U, W, V, bc, bp: _reduce(U, W, V, bc, bp, "plus"),
+        "rhs_not_reduced": lambda U, W, V, bc, bp: _reduce(U, W, V, bc, bp, "rhs"),
+        "no_inverse": lambda U, W, V, bc, bp: _reduce(U, W, V, bc, bp, "no_inverse"),
+    },
+    "check_back_substitute": {
+        "no_coupling": lambda V, W, bp, dc: _back(V, W, bp, dc, "no_coupling"),
+        "plus": lambda V, W, bp, dc: _back(V, W, bp, dc, "plus"),
+        "no_inverse": lambda V, W, bp, dc: _back(V, W, bp, dc, "no_inverse"),
+    },
+    "check_bandwidth": {
+        "full": lambda P: _bandwidth(P, "full"),
+        "with_diagonal": lambda P: _bandwidth(P, "with_diagonal"),
+        "row_count": lambda P: _bandwidth(P, "row_count"),
+    },
+}

@@ -1,0 +1,11 @@
+"""Lesson 10's checkers pass the solutions and reject every plausible wrong answer by far."""
+
+from __future__ import annotations
+
+from mutants import assert_module_checks
+
+from orientviz.exercises import lesson10
+
+
+def test_lesson10_checks():
+    assert_module_checks(lesson10)
