@@ -73,13 +73,13 @@ def plot_rounding_distribution(dist, paper: dict, task: str, *, quantities=None,
         axes[k // ncol][k % ncol].set_visible(False)
     for ax in axes[-1]:
         ax.set_xticks(x)
-        ax.set_xticklabels([_SHORT.get(s, s) for s in dist.surfaces], rotation=60, fontsize=9)
+        ax.set_xticklabels([_SHORT.get(s, s) for s in dist.surfaces], rotation=60, fontsize=10)
     if n > ncol and ncol == 2 and n % 2 == 1:
         ax = axes[-2][1]
         ax.set_xticks(x)
-        ax.set_xticklabels([_SHORT.get(s, s) for s in dist.surfaces], rotation=60, fontsize=9)
+        ax.set_xticklabels([_SHORT.get(s, s) for s in dist.surfaces], rotation=60, fontsize=10)
         ax.tick_params(labelbottom=True)
-    axes[0][0].legend(fontsize=8, loc="best")
+    axes[0][0].legend(fontsize=10, loc="best")
     fig.suptitle(f"Fig. 8, {task}: paper vs {dist.n_draws} rounding draws", fontsize=11)
     fig.tight_layout()
     return fig
@@ -115,13 +115,13 @@ def plot_positions(positions: dict, *, ax=None):
         rms = float(np.sqrt(np.mean(z**2))) if z.size else np.nan
         ax.hlines(rms, i - 0.35, i + 0.35, color="k", lw=2)
         ax.annotate(f"rms {rms:.1f}σ", (i, rms), xytext=(0, 4), textcoords="offset points",
-                    ha="center", fontsize=9)  # fmt: skip
+                    ha="center", fontsize=10)  # fmt: skip
     ax.axhspan(-2, 2, color="C2", alpha=0.12, label="±2σ: one more rounding draw")
     ax.set_xticks(range(len(tasks)))
-    ax.set_xticklabels(tasks, rotation=15, fontsize=9)
+    ax.set_xticklabels(tasks, rotation=15, fontsize=10)
     ax.set_ylabel("(paper − mean) / σ of the draws", fontsize=10)
     ax.set_ylim(-12, 12)
-    ax.legend(fontsize=8, loc="lower right")
+    ax.legend(fontsize=10, loc="lower right")
     ax.set_title("Fig. 8: where the paper's values lie in orientviz's rounding spread",
                  fontsize=11)  # fmt: skip
     fig.tight_layout()
