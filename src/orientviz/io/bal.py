@@ -119,6 +119,8 @@ def _parse(lines: list[str], source: str) -> tuple[F64, F64, F64]:
         ) from None
     if min(nc, npt, nobs) < 0:
         raise InputError("expected non-negative counts in the header", source, "line 1")
+    if max(nc, npt, nobs) > 10**9:
+        raise InputError("expected counts below 10^9 in the header", source, "line 1")
     tok.pos = 3
     if len(lines) < 1 + nobs:
         raise tok.fail(f"expected {nobs} observation lines, the file ends at line {len(lines)}")

@@ -298,8 +298,9 @@ class QualitySections:
         if s.kind == "block" and "points" in self.adj.blocks:
             pb = self.adj.blocks["points"]
             nb = bad[pb].reshape(-1, 3)
-            nb[roles == CHECK] = False  # check points are not unknowns
-            bad[pb] = nb.reshape(-1)
+            if nb.shape[0] == roles.size:  # the bundle: all points (models: tie points only)
+                nb[roles == CHECK] = False  # check points are not unknowns
+                bad[pb] = nb.reshape(-1)
         if np.any(bad) and s.method == "bundle":
             names = [self.adj.names[i] for i in np.flatnonzero(bad)[:5]]
             self.warn.append(
