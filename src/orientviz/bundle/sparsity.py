@@ -18,12 +18,15 @@ common point, and a Cholesky factor of S fills the band between its outermost no
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..block import Block
 from ..camera import collinearity_jacobian
+
+if TYPE_CHECKING:  # annotations only
+    from ..block import Block
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -152,7 +155,7 @@ def reduced_pattern(obs_image: ArrayLike, obs_unknown: ArrayLike, n_images: int)
 
 
 def bandwidth(pattern: ArrayLike, order: ArrayLike | None = None) -> int:
-    """Half-bandwidth max |i − k| over the non-zeros of a symmetric pattern (in blocks),
+    """Half-bandwidth max abs(i − k) over the non-zeros of a symmetric pattern (in blocks),
     after renumbering by ``order`` (new position → old index)."""
     P = np.asarray(pattern, dtype=bool)
     if order is not None:
