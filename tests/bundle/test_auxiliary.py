@@ -68,7 +68,7 @@ def test_check_errors_of_bundle_and_model_results_and_of_coordinates(sim):
     chk = sim.block.points.role == 2
     d = adj.points[chk] - sim.truth.points.xyz[chk]
     assert z == pytest.approx(np.sqrt(np.mean(d[:, 2] ** 2)))
-    # an independent-model result (extra["xyz"])
+    # an independent-model result (its points)
     im = independent_models(sim.block)
     xy_m, z_m = check_errors(sim, im)
     assert (xy_m, z_m) == check_errors(sim, im.points)

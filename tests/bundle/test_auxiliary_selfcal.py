@@ -310,7 +310,7 @@ def test_precision_with_auxiliary_data_equals_the_dense_inverse(joint):
 
 
 def test_ray_gains_with_auxiliary_data_equal_the_dense_inverse(joint):
-    """``extra["ray_gains"]`` (external reliability of the rays) = Q Jᵀ P½ per ray."""
+    """``ray_gains`` (external reliability of the rays) = Q Jᵀ P½ per ray."""
     res, dense, x_ref, _ = joint
     _, J = dense.system(x_ref)
     Q = np.linalg.inv(J.T @ J)
