@@ -234,11 +234,14 @@ def iterate(
         return float(np.sqrt(c / redundancy)) if redundancy > 0 else float("nan")
 
     stop = stop if stop is not None else StopRule()
-    ev = problem.evaluate(state, True)
-    history = [Iteration(0, problem.snapshot(state), None, s0(ev.cost), ev.cost)]
+    run = Run(
+        state, problem.evaluate(state, True), reason=f"reached the maximum of {max_iter} iterations"
+    )
+    cost0 = run.evaluation.cost
+    history = run.history
+    history.append(Iteration(0, problem.snapshot(state), None, s0(cost0), cost0))
     kind = damping.kind
     lam = damping.lambda0 if kind == "lm" else 0.0
-    run = Run(state, ev, history, reason=f"reached the maximum of {max_iter} iterations")
     for it in range(1, max_iter + 1):
         if on_iteration is not None:
             on_iteration(it)
@@ -259,6 +262,8 @@ def iterate(
         history.append(rec)
         if on_accept is not None:
             on_accept(it, step, lam_used, ev_old)
+        # release the previous linearisation before the next one is formed (memory)
+        del ev_old, outcome
         if callback is not None:
             callback(rec)
         lam = lam_next

@@ -171,6 +171,7 @@ def bundle_adjust(
     # the parameters held at their values — it costs no border, and the parameters do
     # not absorb errors of the approximations (the first joint step then starts close)
     hold_first = bool(prob.q) and s0(ev0.cost) >= POOR_START_SIGMA0
+    del ev0  # the loop takes it over (and releases it after the first step)
     steps.hold_first = hold_first
     run = iterate(
         steps,
