@@ -89,7 +89,8 @@ def plot_cleaning(cleaning, *, truth=None, ax=None, title=None):
         tr = set(np.asarray(truth, int).tolist())
         good = np.array([o in tr for o in obs], bool)
         gone = set(obs.tolist())
-        kept = cleaning.adjustment.subset.kept_rays
+        subset = getattr(cleaning.adjustment, "subset", None)  # a bundle_solver round
+        kept = subset.kept_rays if subset is not None else None
         if kept is not None:  # rays left out with their point count as removed too
             gone |= set(np.flatnonzero(~np.asarray(kept, bool)).tolist())
         missed = len(tr - gone)
