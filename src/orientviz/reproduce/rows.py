@@ -226,8 +226,14 @@ def format_rows(rows: list[Row]) -> str:
         return "—" if r.match is None else ("yes" if r.match else "no")
 
     header = ("task", "case", "quantity", "paper", "orientviz", "label", "match", "note")
+
+    def digits(r: Row, v: Any) -> str:
+        if r.decimals is not None and isinstance(v, (int, float)):
+            return printed(float(v), r.decimals)  # as printed: 0.30, not 0.3
+        return fmt(v)
+
     cells = [header] + [
-        (r.task, r.case, r.quantity, fmt(r.paper), fmt(r.orientviz), r.label or "—", flag(r),
+        (r.task, r.case, r.quantity, digits(r, r.paper), digits(r, r.orientviz), r.label or "—", flag(r),
          r.note)
         for r in rows
     ]  # fmt: skip
