@@ -210,6 +210,36 @@ COMMANDS: dict[str, Command] = {
             *IMPORT_OPTIONS,
         ),
     ),
+    "import-csv": Command(
+        "orientviz.io.measurements",
+        "run_from_cli",
+        help="convert image measurements from a CSV table (image,point,x,y[,sigma]) to a problem file",
+        description="Convert image measurements (a CSV with header image,point,x,y[,sigma], "
+        "one row per image point, e.g. a PhotoModeler/DBAT table) of one camera to an "
+        "orientviz/1 block problem file. --units px (default): pixels from the upper-left "
+        "corner, y down, converted with --pixel-size; --principal-point PX PY in mm from "
+        "that corner (PY down). --units mm: orientviz's image frame (mm, y up). "
+        "--control adds control/check points (CSV id,X,Y,Z[,sX,sY,sZ,role]); the "
+        "orientations are computed by `orientviz solve`. --sigma-px is the sigma in the "
+        "file's unit where a row gives none.",
+        examples=(
+            ("orientviz import-csv marks.csv --c 123.9392 --pixel-size 0.006 "
+             "--principal-point 26.577 38.811 --control control.csv -o block.json",
+             "pixel measurements of an aerial camera with control"),
+        ),  # fmt: skip
+        arguments=(
+            arg("file", help="measurement CSV: image,point,x,y[,sigma]"),
+            arg("--c", type=positive_float, required=True, metavar="MM",
+                help="principal distance in mm"),
+            arg("--units", choices=["px", "mm"], default="px",
+                help="unit and frame of x, y (default px: upper-left origin, y down)"),
+            arg("--principal-point", type=finite_float, nargs=2, default=None, metavar=("PX", "PY"),
+                help="principal point in mm (px units: from the upper-left corner, PY down)"),
+            arg("--format", type=positive_float, nargs=2, default=None, metavar=("W", "H"),
+                help="image format in mm (default: the extent of the measurements)"),
+            *IMPORT_OPTIONS,
+        ),  # fmt: skip
+    ),
     "export": Command(
         "orientviz.io.export",
         "run_from_cli",

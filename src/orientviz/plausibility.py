@@ -28,6 +28,7 @@ from .errors import AdjustmentError, InputError
 from .model import CONTROL, Block
 
 log = logging.getLogger("orientviz")
+log.addHandler(logging.NullHandler())  # a library logs; the application decides where to
 
 #: An image coordinate farther than this many half-formats from the principal point
 #: cannot be a measurement in that image.

@@ -7,8 +7,8 @@ import pytest
 
 import orientviz as ov
 from orientviz.adjust.sparsity import (
-    block_pattern,
     bandwidth,
+    block_pattern,
     bundle_normal_blocks,
     cholesky_fill,
     reduced_pattern,
@@ -28,7 +28,9 @@ def test_one_dense_step_equals_the_bundles_first_iteration(small):
     m = nb.n_images
     res = ov.bundle_adjust(sim.block, max_iter=1, precision=False)
     got = res.x[res.blocks["exterior"]].reshape(-1, 6)
-    np.testing.assert_allclose(got[:, :3], sim.block.images.X0 + d[: 6 * m].reshape(-1, 6)[:, :3], atol=1e-6)
+    np.testing.assert_allclose(
+        got[:, :3], sim.block.images.X0 + d[: 6 * m].reshape(-1, 6)[:, :3], atol=1e-6
+    )
 
 
 def test_patterns_match_the_non_zeros(small):
@@ -59,4 +61,6 @@ def test_symbolic_fill_equals_a_numerical_factor_and_bandwidth_counts_offsets():
         b = max(abs(i - k) for i in range(15) for k in range(15) if P[i, k])
         assert bandwidth(P) == b
         o = rng.permutation(15)
-        assert bandwidth(P, o) == max(abs(i - k) for i in range(15) for k in range(15) if P[o[i], o[k]])
+        assert bandwidth(P, o) == max(
+            abs(i - k) for i in range(15) for k in range(15) if P[o[i], o[k]]
+        )

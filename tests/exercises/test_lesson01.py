@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from orientviz.exercises import lesson01
-
 from mutants import assert_module_checks
+
+from orientviz.exercises import lesson01
 
 
 def test_lesson01_checks():

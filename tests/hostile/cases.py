@@ -21,6 +21,7 @@ INPUT_SLOTS = {
     "solve": (I.BLOCK, lambda f, p: ["solve", p]),
     "export": (I.BLOCK, lambda f, p: ["export", p, "-d", str(f / "out")]),
     "view": (I.BLOCK, lambda f, p: ["view", p, "--export", str(f / "v.html")]),
+    "view-server": (I.BLOCK, lambda f, p: ["view", p, "--port", "0"]),  # must not serve
     "import-bal": (I.BAL, lambda f, p: ["import-bal", p, "-o", str(f / "o.json")]),
     "import-colmap/cameras": (
         "sparse/cameras.txt",
@@ -165,6 +166,12 @@ def arguments() -> list[Case]:
             return ["solve", str(f / I.BLOCK), f"--max-size={v}"]
 
         out.append(Case(f"solve/argument/max-size={v}", make, 2, (v,), "--max-size"))
+    for what, name in (("unknown", "nosuchpaper"), ("surrogate", "\udc80"),
+                       ("long", "x" * 5000), ("mathtext", "$\\a$")):  # fmt: skip
+        out.append(Case(f"reproduce/argument/{what}", lambda f, n=name: ["reproduce", n], 2,
+                        (), None))  # fmt: skip
+    out.append(Case("orientviz/argument/unknown-command", lambda f: ["frobnicate"], 2,
+                    ("frobnicate",), None))  # fmt: skip
     out.append(
         Case(
             "solve/argument/method",
@@ -399,6 +406,7 @@ def colmap_models() -> list[Case]:
         c.append(Case(f"import-colmap/cameras/{what}", _colmap("cameras.txt", _field(0, field,
                       value)), 2, ("line",), cam))  # fmt: skip
     for what, field, value in (("tx-1e308", 5, "1e308"), ("quaternion-zero", 1, "0"),
+                               ("name-100k", 9, "n" * 100_000),
                                ("camera-unknown", 8, "99"), ("image-id-text", 0, "one")):  # fmt: skip
 
         def edit(text, field=field, value=value, what=what):
@@ -554,6 +562,36 @@ def geometry() -> list[Case]:
     c.append(Case("solve/geometry/image-with-two-points", _block_edit(two_points), 3,
                   ("fewer",), I.BLOCK))  # fmt: skip
 
+    def check_far(d):  # a check point's given X a thousand km off: warned, still solved
+        p = next((p for p in d["points"] if p.get("role") == "check"), None)
+        if p is None:
+            p = d["points"][1]
+            p["role"] = "check"
+        p["X"] = p.get("X", 0.0) + 1e6
+
+    c.append(Case("solve/geometry/check-point-far-away", _block_edit(check_far), 0,
+                  warns=True))  # fmt: skip
+
+    def pair_points(edit):
+        def make(f: Path) -> list[str]:
+            d = I.doc("pair_example.json")
+            edit(d)
+            (f / "pair.json").write_text(json.dumps(d), encoding="utf-8")
+            return ["solve", str(f / "pair.json")]
+
+        return make
+
+    def same_point(d):  # every point the same: no relative orientation
+        for p in d["points"][1:]:
+            p.update({k: d["points"][0][k] for k in ("xl", "yl", "xr", "yr")})
+
+    def four_points(d):
+        d["points"] = d["points"][:4]
+
+    for what, edit, code, says in (("all-points-equal", same_point, 3, "not determinable"),
+                                   ("four-points", four_points, 2, "at least 5")):  # fmt: skip
+        c.append(Case(f"solve/pair/{what}", pair_points(edit), code, (says,), "pair.json"))
+
     def lost_tie(d):  # the last image's rays removed: tie points left with one ray
         img = d["images"][-1]["id"]
         d["observations"] = [o for o in d["observations"] if o["image"] != img]
@@ -594,14 +632,21 @@ def accepted() -> list[Case]:
 
         return make
 
-    for table in ("images", "points"):
-        for what, value in (("mathtext", r"$\undefinedmacro$"), ("html", "<script>x</script>&"),
-                            ("newline", "a\nb"), ("dollar", "$"), ("percent-braces", "%s{0}"),
-                            ("mathtext-frac", r"$\frac{$")):  # fmt: skip
+    kinds = {  # figures draw image ids; point ids reach the tables (HTML escaping)
+        "images": ("mathtext", "mathtext-frac", "html", "newline"),
+        "points": ("mathtext", "html"),
+    }
+    values = {"mathtext": r"$\undefinedmacro$", "html": "<script>x</script>&",
+              "newline": "a\nb", "mathtext-frac": r"$\frac{$"}  # fmt: skip
+    for table, whats in kinds.items():
+        for what in whats:
             post = _no_raw("<script>x</script>", "r.html") if what == "html" else None
             c.append(Case(f"solve/accepted/{table}-id-{what}",
-                          ids(table, value, ("--report", "r.html")), 0, outputs=("r.html",),
-                          post=post))  # fmt: skip
+                          ids(table, values[what], ("--report", "r.html")), 0,
+                          outputs=("r.html",), post=post))  # fmt: skip
+    for what, value in (("dollar", "$"), ("percent-braces", "%s{0}")):
+        c.append(Case(f"solve/accepted/images-id-{what}-txt", ids("images", value,
+                      ("--report", "r.txt")), 0, outputs=("r.txt",)))  # fmt: skip
     c.append(Case("solve/accepted/id-mathtext-txt", ids("images", r"$\frac{$",
                   ("--report", "r.txt")), 0, outputs=("r.txt",)))  # fmt: skip
     models = ids("images", r"$\undefinedmacro$", ("--method", "models", "--report", "r.html"))

@@ -21,7 +21,9 @@ def test_true_camera_is_a_candidate(height, offset):
     xy = ov.project(TRIANGLE, X0, np.eye(3), 152.7)
     cands = resection_closed_form(xy, TRIANGLE, 152.7)
     assert 1 <= len(cands) <= 4
-    assert any(np.allclose(c.X0, X0, atol=1e-5) and np.allclose(c.R, np.eye(3), atol=1e-8) for c in cands)
+    assert any(
+        np.allclose(c.X0, X0, atol=1e-5) and np.allclose(c.R, np.eye(3), atol=1e-8) for c in cands
+    )
     positions = np.array([c.X0 for c in cands])
     gaps = np.linalg.norm(positions[:, None] - positions[None], axis=-1) + np.eye(len(cands)) * 1e9
     assert gaps.min() > 1e-3  # no candidate twice

@@ -152,7 +152,7 @@ def reduced_pattern(obs_image: ArrayLike, obs_unknown: ArrayLike, n_images: int)
 
 
 def bandwidth(pattern: ArrayLike, order: ArrayLike | None = None) -> int:
-    """Half-bandwidth max |i − k| over the non-zeros of a symmetric pattern (in blocks),
+    """Half-bandwidth max abs(i − k) over the non-zeros of a symmetric pattern (in blocks),
     after renumbering by ``order`` (new position → old index)."""
     P = np.asarray(pattern, dtype=bool)
     if order is not None:

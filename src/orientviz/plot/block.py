@@ -10,16 +10,16 @@ from __future__ import annotations
 import numpy as np
 
 from ..model import CHECK, CONTROL
+from .style import subplots
 
 #: Colours of control kinds and roles.
 COLORS = {"xyz": "#c0392b", "xy": "#2471a3", "z": "#27ae60", "check": "#8e44ad", "tie": "0.55"}
 
 
 def _axes(ax, figsize=(7, 5)):
-    import matplotlib.pyplot as plt
 
     if ax is None:
-        fig, ax = plt.subplots(figsize=figsize)
+        fig, ax = subplots(figsize=figsize)
         return fig, ax
     return ax.figure, ax
 

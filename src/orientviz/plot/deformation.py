@@ -13,12 +13,13 @@ import textwrap
 
 import numpy as np
 
+from .style import subplots
+
 
 def _axes(ax, **kw):
-    import matplotlib.pyplot as plt
 
     if ax is None:
-        fig, ax = plt.subplots(**kw)
+        fig, ax = subplots(**kw)
         return fig, ax
     return ax.figure, ax
 
@@ -137,10 +138,9 @@ def plot_deformation_comparison(without, with_, *, axes=None, exaggeration=None)
     -------
     matplotlib.figure.Figure
     """
-    import matplotlib.pyplot as plt
 
     if axes is None:
-        fig, axes = plt.subplots(2, 2, figsize=(9, 8.2))
+        fig, axes = subplots(2, 2, figsize=(9, 8.2))
     axes = np.asarray(axes).ravel()
     if exaggeration is None:
         width = float(np.ptp(without.xyz[:, 0])) or 1.0
@@ -266,12 +266,11 @@ def plot_field_split(split, *, axes=None, exaggeration: float | None = None):
     -------
     matplotlib.figure.Figure
     """
-    import matplotlib.pyplot as plt
 
     from ..block.deformation import ImageField
 
     if axes is None:
-        _, axes = plt.subplots(1, 3, figsize=(9.6, 3.9))
+        _, axes = subplots(1, 3, figsize=(9.6, 3.9))
     axes = np.asarray(axes).ravel()
     g = split.grid
     if exaggeration is None:

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .style import figure, subplots
+
 _SHORT = {
     "fig7": "Fig.7", "plane": "plane", "sphere150_convex": "sph150∩",
     "cyl_y150_convex": "cy150∩", "cyl_x150_convex": "cx150∩", "sphere150_concave": "sph150∪",
@@ -46,7 +48,6 @@ def plot_rounding_distribution(dist, paper: dict, task: str, *, quantities=None,
     matplotlib.figure.Figure
         One panel per quantity, the ten surfaces along x, values in the paper's units.
     """
-    import matplotlib.pyplot as plt
 
     from ..radar.fig8 import UNITS
 
@@ -55,7 +56,7 @@ def plot_rounding_distribution(dist, paper: dict, task: str, *, quantities=None,
     ncol = 2 if n > 3 else 1
     nrow = int(np.ceil(n / ncol))
     if fig is None:
-        fig = plt.figure(figsize=(7.0, 1.9 * nrow + 0.6))
+        fig = figure(figsize=(7.0, 1.9 * nrow + 0.6))
     axes = fig.subplots(nrow, ncol, squeeze=False, sharex=True)
     cols = list(paper["columns"])
     x = np.arange(len(dist.surfaces))
@@ -107,10 +108,9 @@ def plot_positions(positions: dict, *, ax=None):
         Every printed number as a dot at its position (in σ of the draws), the rms per
         task as a bar, and the band ±2σ that one more draw would fall in 95 % of the time.
     """
-    import matplotlib.pyplot as plt
 
     if ax is None:
-        fig, ax = plt.subplots(figsize=(7.0, 3.8))
+        fig, ax = subplots(figsize=(7.0, 3.8))
     else:
         fig = ax.figure
     tasks = list(positions)

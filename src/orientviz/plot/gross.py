@@ -8,12 +8,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from .style import subplots
+
 
 def _axes(ax, **kw):
-    import matplotlib.pyplot as plt
 
     if ax is None:
-        return plt.subplots(**kw)
+        return subplots(**kw)
     return ax.figure, ax
 
 
@@ -309,9 +310,8 @@ def plot_block_reliability(rel, block, *, xyz=None, quantity: str = "mdb", title
     -------
     matplotlib.figure.Figure
     """
-    import matplotlib.pyplot as plt
 
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8.5, 10), height_ratios=[1.6, 1], layout="constrained")
+    fig, (a1, a2) = subplots(2, 1, figsize=(8.5, 10), height_ratios=[1.6, 1], layout="constrained")
     plot_reliability_map(rel, block, xyz=xyz, quantity=quantity, ax=a1)
     plot_mdb_histogram(rel, block, ax=a2)
     if title:

@@ -154,7 +154,7 @@ def overview_figure(
                 X0[k, :2],
                 xytext=(3, 3),
                 textcoords="offset points",
-                fontsize=7,
+                fontsize=8,
                 color=BLUE,
             )
     allxy = np.vstack([xy[good], X0[okc, :2]] + ([foot.reshape(-1, 2)] if foot is not None else []))
@@ -204,7 +204,7 @@ def overview_figure(
                         cxy[k],
                         xytext=(5, -10),
                         textcoords="offset points",
-                        fontsize=7,
+                        fontsize=8,
                         color=ROLE_COLOURS[2],
                         zorder=6,
                         bbox={
@@ -332,7 +332,7 @@ def image_sigma_figure(data: dict[str, Any]):
         ax.legend(fontsize=8, frameon=False, loc="upper left", bbox_to_anchor=(1.005, 1.0))
         ax.grid(True, axis="y", lw=0.3, alpha=0.5)
     if m <= 40:
-        axs[1].set_xticks(x, [plain_text(i) for i in ids], rotation=90 if m > 8 else 0, fontsize=7)
+        axs[1].set_xticks(x, [plain_text(i) for i in ids], rotation=90 if m > 8 else 0, fontsize=8)
     else:
         axs[1].set_xlabel("image (index)")
     fig.suptitle("Precision of the exterior orientation per image (a posteriori)", fontsize=11)

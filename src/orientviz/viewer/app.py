@@ -294,7 +294,8 @@ def run_from_cli(args: argparse.Namespace) -> int:
         return 0
     app = None
     try:
-        app = ViewerApp(target, host=args.host, port=args.port)
+        content = resolve_content(target)  # a bad file is refused before a server starts
+        app = ViewerApp(content, host=args.host, port=args.port)
         while True:
             time.sleep(0.5)
     except InputError as exc:

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..block.simulate import SimulatedBlock, simulate_block
 from ..model import TIE
+from ..plot.style import subplots
 
 METHODS = {
     "independent models (7 p.)": "rigorous",
@@ -133,7 +134,7 @@ def block_app():
             print(st.summary())
         with out:
             out.clear_output(wait=True)
-            fig, axs = plt.subplots(1, 2, figsize=(12, 4.5))
+            fig, axs = subplots(1, 2, figsize=(12, 4.5))
             plot_block_layout(st.sim, ax=axs[0], show_footprints=False)
             ctrl = st.sim.block.points.role != TIE
             plot_error_vectors(st.xyz, st.sim.truth.points.xyz, ax=axs[1], control=ctrl)
