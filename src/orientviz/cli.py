@@ -61,6 +61,22 @@ def positive_float(text: str) -> float:
     return value
 
 
+def float_between(low: float, high: float, unit: str = ""):
+    """An argparse type: a finite number in [low, high] (``unit`` for the message)."""
+
+    def parse(text: str) -> float:
+        value = finite_float(text)
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(
+                f"expected a number from {low:g} to {high:g}{' ' + unit if unit else ''}, "
+                f"got {text!r}"
+            )
+        return value
+
+    parse.__name__ = f"float_between({low:g}, {high:g})"
+    return parse
+
+
 def iteration_count(text: str) -> int:
     """An argparse type: a number of iterations 1–1000."""
     try:
@@ -127,9 +143,9 @@ IMPORT_OPTIONS: tuple[Arg, ...] = (
     arg("-o", "--output", required=True, metavar="OUT.json", help="problem file to write"),
     arg("--control", metavar="CSV", default=None,
         help="control points: CSV id,X,Y,Z[,sX,sY,sZ,role] keyed by point id"),
-    arg("--pixel-size", type=positive_float, default=None, metavar="MM",
+    arg("--pixel-size", type=float_between(1e-5, 10.0, "mm"), default=None, metavar="MM",
         help="pixel size in mm (default 0.01)"),
-    arg("--sigma-px", type=positive_float, default=None, metavar="PX",
+    arg("--sigma-px", type=float_between(1e-6, 1e6, "px"), default=None, metavar="PX",
         help="a-priori sigma of the image coordinates in pixels (default 1)"),
 )  # fmt: skip
 

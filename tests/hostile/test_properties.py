@@ -168,3 +168,46 @@ def test_mutated_problem_files(name, pick, value, report):
         _run(folder, argv, {0, 2, 3})
     finally:
         shutil.rmtree(folder)
+
+
+@SETTINGS
+@given(
+    file=st.sampled_from(["cameras.bin", "images.bin", "points3D.bin"]),
+    at=st.integers(0, 10**6),
+    data=st.binary(min_size=1, max_size=16),
+    how=st.sampled_from(["overwrite", "overwrite", "insert", "truncate"]),
+)
+def test_mutated_binary_colmap_models(file, at, data, how):
+    folder = Path(tempfile.mkdtemp(prefix="hostile-colmap-bin-"))
+    try:
+        I.write_binary(folder)
+        p = folder / "sparse_bin" / file
+        raw = p.read_bytes()
+        k = at % (len(raw) + 1)
+        if how == "overwrite":
+            raw = raw[:k] + data + raw[k + len(data) :]
+        elif how == "insert":
+            raw = raw[:k] + data + raw[k:]
+        else:
+            raw = raw[:k]
+        p.write_bytes(raw)
+        _run(folder, ["import-colmap", str(folder / "sparse_bin"), "-o", str(folder / "o.json")],
+             {0, 2})  # fmt: skip
+    finally:
+        shutil.rmtree(folder)
+
+
+@SETTINGS
+@given(m=MUTATION)
+def test_mutated_measurement_csv(m):
+    folder = Path(tempfile.mkdtemp(prefix="hostile-marks-"))
+    try:
+        I.write(folder, I.MARKS)
+        p = folder / I.MARKS
+        line, word, token, how = m
+        text = p.read_text().replace(",", " , ")
+        p.write_text(_tokens_mutated(text, line, word, token, how).replace(" , ", ","))
+        argv = ["import-csv", str(p), "--units", "mm", "--c", "152", "-o", str(folder / "o.json")]
+        _run(folder, argv, {0, 2})
+    finally:
+        shutil.rmtree(folder)

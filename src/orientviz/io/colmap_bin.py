@@ -71,6 +71,14 @@ class _Reader:
         self.pos += n
         return out
 
+    def count(self, what: str, min_record: int) -> int:
+        """The record count at the start of the file, at most what the bytes can hold."""
+        (n,) = self.take("<Q", f"the number of {what}")
+        most = (len(self.buf) - self.pos) // min_record
+        if n > most:
+            raise self.fail(f"announces {n} {what}, the file holds at most {most}", 0)
+        return n
+
     def array(self, dtype: np.dtype, count: int, what: str) -> np.ndarray:
         n = dtype.itemsize * count
         if count < 0 or self.pos + n > len(self.buf):
@@ -94,7 +102,7 @@ class _Reader:
 
 def read_cameras_bin(path: Path) -> dict[int, ColmapCamera]:
     r = _Reader(path)
-    (n,) = r.take("<Q", "the number of cameras")
+    n = r.count("cameras", 24)
     cams: dict[int, ColmapCamera] = {}
     for _ in range(n):
         at = r.pos
@@ -121,7 +129,7 @@ def read_cameras_bin(path: Path) -> dict[int, ColmapCamera]:
 
 def read_points_bin(path: Path) -> tuple[np.ndarray, np.ndarray, set[int]]:
     r = _Reader(path)
-    (n,) = r.take("<Q", "the number of points")
+    n = r.count("points", 51)
     head = 51  # uint64 id, 3 float64, 3 uint8, float64 error, uint64 track length
     buf, size = r.buf, len(r.buf)
     starts = [0] * n
@@ -163,7 +171,7 @@ def read_points_bin(path: Path) -> tuple[np.ndarray, np.ndarray, set[int]]:
 
 def read_images_bin(path: Path, point_ids: np.ndarray, cams: dict[int, ColmapCamera]) -> dict:
     r = _Reader(path)
-    (n,) = r.take("<Q", "the number of images")
+    n = r.count("images", 73)
     ids = np.empty(n, dtype=np.int64)
     pose = np.empty((n, 7))
     cam = np.empty(n, dtype=np.int64)
