@@ -154,6 +154,8 @@ def _numbers(path: Path, line: int, fields: list[str], kinds: str, what: str) ->
             raise _fail(
                 path, line, f"field {i + 1} of {what}: expected {kind}, got {f!r}"
             ) from None
+        if k == "i" and not -(2**63) <= v < 2**63:
+            raise _fail(path, line, f"field {i + 1} of {what}: integer {f[:20]}… out of range")
         if k == "f" and not np.isfinite(v):
             raise _fail(path, line, f"field {i + 1} of {what}: expected a finite number, got {f!r}")
         out.append(v)
