@@ -241,6 +241,16 @@ def outputs() -> list[Case]:
 
     c.append(Case("export/directory/the-input", export_onto_input, 2, (), I.BLOCK))
 
+    def export_over_input(f: Path) -> list[str]:  # the input is DIR/adjusted.json itself
+        (f / "res").mkdir()
+        I.write(f / "res", I.BLOCK)
+        (f / "res" / I.BLOCK).rename(f / "res" / "adjusted.json")
+        return ["export", str(f / "res" / "adjusted.json"), "-d", str(f / "res"), "--format",
+                "json"]  # fmt: skip
+
+    c.append(Case("export/directory/holds-the-input", export_over_input, 2, ("refusing",),
+                  "res/adjusted.json"))  # fmt: skip
+
     def import_onto(cmd: str, rel: str, target: str):
         def make(f: Path) -> list[str]:
             _all_inputs(f)
