@@ -101,18 +101,13 @@ def _approximate_tie_points(block: Block) -> Block:
     missing = np.flatnonzero(~np.all(np.isfinite(block.points.xyz), axis=1))
     if missing.size == 0:
         return block
-    from ...orientation.intersection import intersect_points
+    from ._align import intersect_from_orientations
 
-    obs = block.observations
-    sel = np.isin(obs.point, missing)
-    cam = block.images.camera
-    res = intersect_points(
-        obs.xy[sel], obs.image[sel], obs.point[sel], block.images.X0, block.rotations(),
-        block.cameras.c[cam], block.cameras.x0[cam], block.cameras.y0[cam],
-        sigma=obs.sigma[sel], n_points=block.n_points, on_degenerate="nan",
-    )  # fmt: skip
+    mask = np.zeros(block.n_points, bool)
+    mask[missing] = True
+    xyz = intersect_from_orientations(block, mask)
     block = block.copy()
-    block.points.xyz[missing] = res.xyz[missing]
+    block.points.xyz[missing] = xyz[missing]
     still = missing[~np.all(np.isfinite(block.points.xyz[missing]), axis=1)]
     if still.size:
         raise InputError(
