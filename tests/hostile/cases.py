@@ -611,8 +611,12 @@ def geometry() -> list[Case]:
             p["role"] = "check"
         p["X"] = p.get("X", 0.0) + 1e6
 
-    c.append(Case("solve/geometry/check-point-far-away", _block_edit(check_far), 0,
-                  warns=True))  # fmt: skip
+    def warned_in_report(folder: Path) -> None:
+        assert "far outside its extent" in (folder / "r.txt").read_text(encoding="utf-8")
+
+    c.append(Case("solve/geometry/check-point-far-away",
+                  _block_edit(check_far, ("--report", "r.txt")), 0, warns=True,
+                  outputs=("r.txt",), post=warned_in_report))  # fmt: skip
 
     def pair_points(edit):
         def make(f: Path) -> list[str]:
