@@ -222,7 +222,7 @@ def _labels(block: Block, n: int, slices: dict | None = None) -> list[str]:
 
 #: "The model does not fit the data" when σ0 exceeds this and …
 MISFIT_SIGMA0: float = 3.0
-#: … at least this share of the image coordinates is flagged (|w| > critical).
+#: … at least this share of the image coordinates is flagged (abs(w) > critical).
 MISFIT_FLAGGED: float = 0.2
 
 
