@@ -61,6 +61,33 @@ def positive_float(text: str) -> float:
     return value
 
 
+def float_between(low: float, high: float, unit: str = ""):
+    """An argparse type: a finite number in [low, high] (``unit`` for the message)."""
+
+    def parse(text: str) -> float:
+        value = finite_float(text)
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(
+                f"expected a number from {low:g} to {high:g}{' ' + unit if unit else ''}, "
+                f"got {text!r}"
+            )
+        return value
+
+    parse.__name__ = f"float_between({low:g}, {high:g})"
+    return parse
+
+
+def iteration_count(text: str) -> int:
+    """An argparse type: a number of iterations 1–1000."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if not 1 <= value <= 1000:
+        raise argparse.ArgumentTypeError(f"expected 1..1000 iterations, got {text!r}")
+    return value
+
+
 def port_number(text: str) -> int:
     """An argparse type: a TCP port 0–65535 (0 = any free port)."""
     try:
@@ -116,9 +143,9 @@ IMPORT_OPTIONS: tuple[Arg, ...] = (
     arg("-o", "--output", required=True, metavar="OUT.json", help="problem file to write"),
     arg("--control", metavar="CSV", default=None,
         help="control points: CSV id,X,Y,Z[,sX,sY,sZ,role] keyed by point id"),
-    arg("--pixel-size", type=positive_float, default=None, metavar="MM",
+    arg("--pixel-size", type=float_between(1e-5, 10.0, "mm"), default=None, metavar="MM",
         help="pixel size in mm (default 0.01)"),
-    arg("--sigma-px", type=positive_float, default=None, metavar="PX",
+    arg("--sigma-px", type=float_between(1e-6, 1e6, "px"), default=None, metavar="PX",
         help="a-priori sigma of the image coordinates in pixels (default 1)"),
 )  # fmt: skip
 
@@ -139,6 +166,8 @@ COMMANDS: dict[str, Command] = {
             ("orientviz solve block_compact --method models", "independent models instead"),
             ("orientviz solve block.json -o adjusted.json", "also save the adjusted values"),
             ("orientviz solve block_strip --report report.html", "full report (or .txt)"),
+            ("orientviz solve dbat_sxb --max-iter 50 --tol 1e-6", "solver options (override "
+             "options.max_iter / options.tol of the file)"),
         ),
         arguments=(
             arg("file", help="problem file, or the name of a shipped example"),
@@ -149,6 +178,11 @@ COMMANDS: dict[str, Command] = {
                 help="block adjustment method (blocks only; default bundle)",
             ),
             arg("--json", action="store_true", help="print the result as JSON"),
+            arg("--max-iter", type=iteration_count, default=None, metavar="N",
+                help="maximum number of iterations (overrides options.max_iter of the file)"),
+            arg("--tol", type=positive_float, default=None, metavar="T",
+                help="stop when every correction is below T times its sigma (overrides "
+                "options.tol; default 5e-3 for blocks)"),
             arg(
                 "-o",
                 "--output",

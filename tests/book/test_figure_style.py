@@ -1,9 +1,10 @@
 """Figures readable in the book's column: the rules of orientviz.plot.style, measured.
 
-The book embeds each figure as a 100-dpi PNG, scaled down to the column (~700 px). A text
-of s pt in a figure W in wide is then s/72 · 100 · min(1, 700/(100 W)) px high: the
-book-wide cause of unreadable figures was 11–14-inch figures with 7–9 pt labels. Every
-figure of plot/ and widgets/ is now made by plot.style (width capped at 7 in, text sizes
+The book embeds each figure as a 100-dpi PNG, scaled down to the column (624 px). A text
+of s pt in a figure W in wide is then s/72 · 100 · min(1, 624/(100 W)) px high (624 px:
+the column in a 1280-px window): the book-wide cause of unreadable figures was 11–14-inch
+figures with 7–9 pt labels. Every figure of plot/ and widgets/ is now made by plot.style
+(width capped at 6.2 in, text sizes
 from one table); these tests keep it so. The built book is measured figure by figure in
 tests/book/test_book.py (ORIENTVIZ_FIGURE_AUDIT).
 """
@@ -62,7 +63,8 @@ def test_figures_are_made_by_the_style_module(path):
 def test_the_rule_itself_a_7_inch_figure_with_the_smallest_font_is_readable():
     px = style.MIN_FONT_PT / 72 * style.BOOK_DPI * min(1, style.COLUMN_PX / (style.BOOK_DPI * style.MAX_WIDTH_IN))
     assert px >= style.MIN_TEXT_PX
-    assert style.figure_size(14.0, 5.0) == (style.MAX_WIDTH_IN, 2.5)
+    w, h = style.figure_size(14.0, 5.0)
+    assert w == style.MAX_WIDTH_IN and h == pytest.approx(5.0 * style.MAX_WIDTH_IN / 14.0)
     assert style.figure_size(5.0, 4.0) == (5.0, 4.0)
 
 

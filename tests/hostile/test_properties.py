@@ -10,6 +10,7 @@ nothing left behind on failure; inputs never changed. The "ci" profile
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shutil
@@ -85,48 +86,56 @@ MUTATION = st.tuples(
 )
 
 
+@contextlib.contextmanager
+def _folder(prefix: str):
+    folder = Path(tempfile.mkdtemp(prefix=f"hostile-{prefix}-"))
+    try:
+        yield folder
+    finally:
+        shutil.rmtree(folder)
+
+
+def _mutated_text_run(kind: str, names: tuple[str, ...], target: str, m, argv, cells=False):
+    """Write ``names``, mutate file ``target`` by ``m`` (CSV: cell-wise), run ``argv(folder)``."""
+    with _folder(kind) as folder:
+        I.write(folder, *names)
+        p = folder / target
+        text = p.read_text().replace(",", " , ") if cells else p.read_text()
+        text = _tokens_mutated(text, *m)
+        p.write_text(text.replace(" , ", ",") if cells else text, encoding="utf-8")
+        _run(folder, argv(folder), {0, 2})
+
+
+def _import_colmap(folder: Path, *extra: str) -> list[str]:
+    return ["import-colmap", str(folder / "sparse"), *extra, "-o", str(folder / "o.json")]
+
+
 @SETTINGS
 @given(file=st.sampled_from(["cameras.txt", "images.txt", "points3D.txt"]), m=MUTATION)
 def test_mutated_colmap_models(file, m):
-    folder = Path(tempfile.mkdtemp(prefix="hostile-colmap-"))
-    try:
-        I.write(folder, I.COLMAP)
-        p = folder / "sparse" / file
-        p.write_text(_tokens_mutated(p.read_text(), *m), encoding="utf-8")
-        _run(folder, ["import-colmap", str(folder / "sparse"), "-o", str(folder / "o.json")],
-             {0, 2})  # fmt: skip
-    finally:
-        shutil.rmtree(folder)
+    _mutated_text_run("colmap", (I.COLMAP,), f"sparse/{file}", m, _import_colmap)
 
 
 @SETTINGS
 @given(m=MUTATION)
 def test_mutated_bal_files(m):
-    folder = Path(tempfile.mkdtemp(prefix="hostile-bal-"))
-    try:
-        I.write(folder, I.BAL)
-        p = folder / I.BAL
-        p.write_text(_tokens_mutated(p.read_text(), *m), encoding="utf-8")
-        _run(folder, ["import-bal", str(p), "-o", str(folder / "o.json")], {0, 2})
-    finally:
-        shutil.rmtree(folder)
+    _mutated_text_run("bal", (I.BAL,), I.BAL, m,
+                      lambda f: ["import-bal", str(f / I.BAL), "-o", str(f / "o.json")])  # fmt: skip
 
 
 @SETTINGS
 @given(m=MUTATION)
 def test_mutated_control_csv(m):
-    folder = Path(tempfile.mkdtemp(prefix="hostile-csv-"))
-    try:
-        I.write(folder, I.COLMAP, I.CONTROL)
-        p = folder / I.CONTROL
-        line, word, token, how = m
-        text = p.read_text().replace(",", " , ")  # tokens = cells
-        p.write_text(_tokens_mutated(text, line, word, token, how).replace(" , ", ","))
-        argv = ["import-colmap", str(folder / "sparse"), "--control", str(p), "-o",
-                str(folder / "o.json")]  # fmt: skip
-        _run(folder, argv, {0, 2})
-    finally:
-        shutil.rmtree(folder)
+    _mutated_text_run("csv", (I.COLMAP, I.CONTROL), I.CONTROL, m,
+                      lambda f: _import_colmap(f, "--control", str(f / I.CONTROL)), cells=True)  # fmt: skip
+
+
+@SETTINGS
+@given(m=MUTATION)
+def test_mutated_measurement_csv(m):
+    _mutated_text_run("marks", (I.MARKS,), I.MARKS, m,
+                      lambda f: ["import-csv", str(f / I.MARKS), "--units", "mm", "--c", "152",
+                                 "-o", str(f / "o.json")], cells=True)  # fmt: skip
 
 
 def _paths(node, prefix=()):
@@ -152,8 +161,7 @@ PROBLEMS = [I.BLOCK, I.COLUMNAR, "resection_example.json", "intersection_example
     report=st.booleans(),
 )
 def test_mutated_problem_files(name, pick, value, report):
-    folder = Path(tempfile.mkdtemp(prefix="hostile-json-"))
-    try:
+    with _folder("json") as folder:
         doc = I.doc(name)
         paths = [p for p in _paths(doc) if p]
         path = paths[pick % len(paths)]
@@ -166,5 +174,27 @@ def test_mutated_problem_files(name, pick, value, report):
         if report:
             argv += ["--report", str(folder / "r.html")]
         _run(folder, argv, {0, 2, 3})
-    finally:
-        shutil.rmtree(folder)
+
+
+@SETTINGS
+@given(
+    file=st.sampled_from(["cameras.bin", "images.bin", "points3D.bin"]),
+    at=st.integers(0, 10**6),
+    data=st.binary(min_size=1, max_size=16),
+    how=st.sampled_from(["overwrite", "overwrite", "insert", "truncate"]),
+)
+def test_mutated_binary_colmap_models(file, at, data, how):
+    with _folder("colmap-bin") as folder:
+        I.write_binary(folder)
+        p = folder / "sparse_bin" / file
+        raw = p.read_bytes()
+        k = at % (len(raw) + 1)
+        if how == "overwrite":
+            raw = raw[:k] + data + raw[k + len(data) :]
+        elif how == "insert":
+            raw = raw[:k] + data + raw[k:]
+        else:
+            raw = raw[:k]
+        p.write_bytes(raw)
+        _run(folder, ["import-colmap", str(folder / "sparse_bin"), "-o", str(folder / "o.json")],
+             {0, 2})  # fmt: skip

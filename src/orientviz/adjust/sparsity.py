@@ -18,12 +18,15 @@ common point, and a Cholesky factor of S fills the band between its outermost no
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..camera import collinearity_jacobian
-from ..model import Block
+
+if TYPE_CHECKING:  # the engine's package does not depend on the block's at run time
+    from ..model import Block
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]

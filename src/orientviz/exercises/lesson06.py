@@ -123,6 +123,11 @@ def check_normal_case_points(fn) -> None:
     n1 = project(P, np.zeros(3), np.eye(3), c)
     n2 = project(P, np.array([b, 0.0, 0.0]), np.eye(3), c)
     got = np.asarray(call(fn, n1.copy(), n2.copy(), c, b, what="normal_case_points"), dtype=float)
+    if got.shape == P.shape and not np.all(np.isfinite(got)):
+        raise CheckFailed(
+            "model points: not finite — a division by y1' − y2', which is zero in the normal "
+            "case: depth comes from the x-parallax x1' − x2'"
+        )
     compare("model points", got, P, rtol=1e-9, wrong=[
         ("the x-parallax is x1' − x2' (positive for points below the base)", _points(n1, n2, c, b, sign=-1.0)),
         ("Z = −λ c: the points lie below the projection centres", _points(n1, n2, c, b, zsign=1.0)),

@@ -59,7 +59,9 @@ class _Reader:
         self.pos = 0
 
     def fail(self, msg: str, at: int | None = None) -> InputError:
-        return InputError(msg, source=str(self.path), where=f"byte {self.pos if at is None else at}")
+        return InputError(
+            msg, source=str(self.path), where=f"byte {self.pos if at is None else at}"
+        )
 
     def take(self, fmt: str, what: str) -> tuple:
         n = struct.calcsize(fmt)
@@ -68,6 +70,14 @@ class _Reader:
         out = struct.unpack_from(fmt, self.buf, self.pos)
         self.pos += n
         return out
+
+    def count(self, what: str, min_record: int) -> int:
+        """The record count at the start of the file, at most what the bytes can hold."""
+        (n,) = self.take("<Q", f"the number of {what}")
+        most = (len(self.buf) - self.pos) // min_record
+        if n > most:
+            raise self.fail(f"announces {n} {what}, the file holds at most {most}", 0)
+        return n
 
     def array(self, dtype: np.dtype, count: int, what: str) -> np.ndarray:
         n = dtype.itemsize * count
@@ -92,7 +102,7 @@ class _Reader:
 
 def read_cameras_bin(path: Path) -> dict[int, ColmapCamera]:
     r = _Reader(path)
-    (n,) = r.take("<Q", "the number of cameras")
+    n = r.count("cameras", 24)
     cams: dict[int, ColmapCamera] = {}
     for _ in range(n):
         at = r.pos
@@ -119,7 +129,7 @@ def read_cameras_bin(path: Path) -> dict[int, ColmapCamera]:
 
 def read_points_bin(path: Path) -> tuple[np.ndarray, np.ndarray, set[int]]:
     r = _Reader(path)
-    (n,) = r.take("<Q", "the number of points")
+    n = r.count("points", 51)
     head = 51  # uint64 id, 3 float64, 3 uint8, float64 error, uint64 track length
     buf, size = r.buf, len(r.buf)
     starts = [0] * n
@@ -161,7 +171,7 @@ def read_points_bin(path: Path) -> tuple[np.ndarray, np.ndarray, set[int]]:
 
 def read_images_bin(path: Path, point_ids: np.ndarray, cams: dict[int, ColmapCamera]) -> dict:
     r = _Reader(path)
-    (n,) = r.take("<Q", "the number of images")
+    n = r.count("images", 73)
     ids = np.empty(n, dtype=np.int64)
     pose = np.empty((n, 7))
     cam = np.empty(n, dtype=np.int64)
@@ -174,7 +184,10 @@ def read_images_bin(path: Path, point_ids: np.ndarray, cams: dict[int, ColmapCam
         ids[k], pose[k], cam[k] = vals[0], vals[1:8], vals[8]
         names.append(r.name())
         if len(names[-1]) > MAX_NAME:
-            raise r.fail(f"image {vals[0]}: NAME of {len(names[-1])} characters, expected at most {MAX_NAME}", at)
+            raise r.fail(
+                f"image {vals[0]}: NAME of {len(names[-1])} characters, expected at most {MAX_NAME}",
+                at,
+            )
         bad = pose_problem(np.array(vals[1:5]), np.array(vals[5:8]))
         if bad:
             raise r.fail(f"image {vals[0]}: {bad}", at)
@@ -189,7 +202,9 @@ def read_images_bin(path: Path, point_ids: np.ndarray, cams: dict[int, ColmapCam
         pid = keep["id"].astype(np.int64)
         index = lookup.index(pid)
         if np.any(index < 0):
-            raise r.fail(f"image {vals[0]}: unknown POINT3D_ID {int(pid[np.argmax(index < 0)])}", at)
+            raise r.fail(
+                f"image {vals[0]}: unknown POINT3D_ID {int(pid[np.argmax(index < 0)])}", at
+            )
         uv = np.column_stack([keep["x"], keep["y"]])
         if not np.all(np.isfinite(uv) & (np.abs(uv) <= lim)):
             raise r.fail(f"image {vals[0]}: keypoints must be finite and near the image", at)
@@ -239,7 +254,9 @@ def write_binary_model(model: ColmapModel, directory: Path) -> None:
     tracks: dict[int, list[tuple[int, int]]] = {}
     for k, iid in enumerate(model.image_ids.tolist()):
         sel = np.flatnonzero(model.obs_image == k)
-        out.append(struct.pack("<I7dI", iid, *model.qvec[k], *model.tvec[k], int(model.image_camera[k])))
+        out.append(
+            struct.pack("<I7dI", iid, *model.qvec[k], *model.tvec[k], int(model.image_camera[k]))
+        )
         out.append(model.names[k].encode() + b"\0" + struct.pack("<Q", sel.size))
         kp = np.zeros(sel.size, KEYPOINT)
         pids = model.point_ids[model.obs_point[sel]]

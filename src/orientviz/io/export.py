@@ -105,6 +105,10 @@ def run_from_cli(args: argparse.Namespace) -> int:
         block = problem.data
         adj = None
         if not args.no_adjust:
+            from .solve import check_geometry
+
+            for f in check_geometry(problem):  # errors raise; warnings are printed
+                print(f"{prog}: warning: {args.file}: {f.message}", file=sys.stderr)
             block = approximate(block)
             control = problem.options.get("control", "fixed")
             adj = bundle_adjust(block, control=control)

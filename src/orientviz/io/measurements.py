@@ -41,6 +41,8 @@ from ..model import Block
 
 F64 = NDArray[np.float64]
 REQUIRED = ("image", "point", "x", "y")
+#: Image coordinates beyond ± this (px or mm) are refused.
+MAX_COORDINATE: float = 1e7
 
 
 @dataclass
@@ -57,19 +59,10 @@ class Measurements:
 
 def read_measurements(path: str | os.PathLike[str]) -> Measurements:
     """Read a measurement CSV (header ``image,point,x,y[,sigma]``), checked line by line."""
-    from .control import _num, csv_rows
-    from .safeio import open_input_text
+    from .control import _num, csv_table
 
     source = str(path)
-    rows = csv_rows(open_input_text(path, "a measurement CSV file"), source)
-    if not rows:
-        raise InputError("empty file, expected a header image,point,x,y[,sigma]", source, "line 1")
-    head = [h.strip() for h in rows[0]]
-    missing = [c for c in REQUIRED if c not in head]
-    if missing:
-        raise InputError(f"expected columns {', '.join(REQUIRED)}[, sigma]; missing "
-                         f"{', '.join(missing)}", source, "line 1")  # fmt: skip
-    col = {h: j for j, h in enumerate(head)}
+    rows, head, col = csv_table(path, "a measurement CSV file", REQUIRED, "empty file", "[,sigma]")
     img, pt, xy, sig, lines = [], [], [], [], []
     seen: dict[tuple[str, str], int] = {}
     for no, r in enumerate(rows[1:], start=2):
@@ -80,6 +73,8 @@ def read_measurements(path: str | os.PathLike[str]) -> Measurements:
         i, p = r[col["image"]].strip(), r[col["point"]].strip()
         if not i or not p:
             raise InputError("empty image or point id", source, f"line {no}")
+        if max(len(i), len(p)) > 256:
+            raise InputError("an id of more than 256 characters", source, f"line {no}")
         if (i, p) in seen:
             raise InputError(f"point {p!r} measured twice in image {i!r} (also line "
                              f"{seen[(i, p)]})", source, f"line {no}")  # fmt: skip
@@ -88,6 +83,9 @@ def read_measurements(path: str | os.PathLike[str]) -> Measurements:
         y = _num(r[col["y"]], "y", source, no, np.nan)
         if not (np.isfinite(x) and np.isfinite(y)):
             raise InputError("x and y are required", source, f"line {no}")
+        if max(abs(x), abs(y)) > MAX_COORDINATE:
+            raise InputError(f"x, y beyond ±{MAX_COORDINATE:g} (px or mm): not an image "
+                             "position", source, f"line {no}")  # fmt: skip
         s = _num(r[col["sigma"]], "sigma", source, no, np.nan) if "sigma" in col else np.nan
         if s <= 0:
             raise InputError(f"sigma: expected > 0, got {s:g}", source, f"line {no}")

@@ -7,7 +7,7 @@ text of ``s`` points in a figure ``W`` inches wide is then drawn
     h = s/72 · 100 · min(1, COLUMN_PX / (100 W))   pixels high (the em size),
 
 so what decides readability is the ratio of font size to figure width, not the dpi:
-a 13-inch figure with 7-point labels ends up at 5 px. The rules, used by every
+a 13-inch figure with 7-point labels ends up at 4.7 px. The rules, used by every
 function in :mod:`orientviz.plot` and :mod:`orientviz.widgets`:
 
 * figures are at most :data:`MAX_WIDTH_IN` wide (:func:`figure_size` caps wider
@@ -15,8 +15,9 @@ function in :mod:`orientviz.plot` and :mod:`orientviz.widgets`:
 * text sizes come from :data:`FONT` (no size below :data:`MIN_FONT_PT`), so at the
   largest width every text is at least :data:`MIN_TEXT_PX` pixels in the column.
 
-:func:`text_sizes_px` measures a finished figure the way the book shows it; the tests
-in ``tests/book`` and ``tests/plot`` use it on every figure function.
+:func:`text_sizes_px` measures a finished figure the way the book shows it;
+``tests/book`` uses it on the lesson figures and, through :func:`audit_figures` in the
+book build, on every figure a lesson shows (widget snapshots included).
 """
 
 from __future__ import annotations
@@ -25,15 +26,17 @@ from contextlib import contextmanager
 
 import numpy as np
 
-#: Width of the book's text column in CSS pixels (pydata theme, 1280-px window).
-COLUMN_PX: int = 700
+#: Width of the book's text column in CSS pixels: 624 px measured in a 1280-px wide
+#: browser window (pydata theme with both sidebars; 690 px at 1024 and at ≥ 1440 px).
+COLUMN_PX: int = 624
 #: Resolution of the PNGs the book embeds (matplotlib_inline: figure.dpi = 100).
 BOOK_DPI: float = 100.0
 #: Widest figure, in inches: one that fills the column without being scaled down.
-MAX_WIDTH_IN: float = 7.0
+MAX_WIDTH_IN: float = 6.2
 #: Smallest readable text height in the column, px.
 MIN_TEXT_PX: float = 10.0
-#: Smallest font size, pt: MIN_TEXT_PX at MAX_WIDTH_IN (7.2 pt), rounded up.
+#: Smallest font size, pt: 8 pt is 11.1 px unscaled, and still 10 px when a tight bounding
+#: box (labels outside the axes) makes a MAX_WIDTH_IN figure 690 px wide.
 MIN_FONT_PT: float = 8.0
 #: Font sizes (pt) by role.
 FONT: dict[str, float] = {

@@ -79,13 +79,20 @@ def approximate(block: Block) -> Block:
 
     No image approximations at all: everything is computed from scratch by
     :func:`orientviz.block.approximate.approximate_values` (relative orientation of a
-    seed pair, resections, intersections, a similarity onto the control). Otherwise
-    only tie/check points without coordinates are intersected from the given ones.
+    seed pair, resections, intersections, a similarity onto the control). Otherwise the
+    given orientations are first carried into the control's frame when they are in
+    another one (:func:`._align.align_to_control`, a 7-parameter similarity), and tie/check
+    points without coordinates are intersected from them.
     """
     if not np.all(np.isfinite(block.images.X0)) or not np.all(np.isfinite(block.images.angles)):
         from ...block.approximate import approximate_values
 
         return approximate_values(block)
+    from ._align import align_to_control
+
+    block, alignment = align_to_control(block)
+    if alignment.applied:
+        block.meta = dict(block.meta, alignment=alignment.note())
     return _approximate_tie_points(block)
 
 
@@ -94,18 +101,13 @@ def _approximate_tie_points(block: Block) -> Block:
     missing = np.flatnonzero(~np.all(np.isfinite(block.points.xyz), axis=1))
     if missing.size == 0:
         return block
-    from ...orientation.intersection import intersect_points
+    from ._align import intersect_from_orientations
 
-    obs = block.observations
-    sel = np.isin(obs.point, missing)
-    cam = block.images.camera
-    res = intersect_points(
-        obs.xy[sel], obs.image[sel], obs.point[sel], block.images.X0, block.rotations(),
-        block.cameras.c[cam], block.cameras.x0[cam], block.cameras.y0[cam],
-        sigma=obs.sigma[sel], n_points=block.n_points, on_degenerate="nan",
-    )  # fmt: skip
+    mask = np.zeros(block.n_points, bool)
+    mask[missing] = True
+    xyz = intersect_from_orientations(block, mask)
     block = block.copy()
-    block.points.xyz[missing] = res.xyz[missing]
+    block.points.xyz[missing] = xyz[missing]
     still = missing[~np.all(np.isfinite(block.points.xyz[missing]), axis=1)]
     if still.size:
         raise InputError(
@@ -189,19 +191,69 @@ def solve(problem: Problem, method: str | None) -> Solution:
     return solution_from_block_adjustment(problem, block, adj, method)
 
 
-def _labels(block: Block, n: int) -> list[str]:
+def _labels(block: Block, n: int, slices: dict | None = None) -> list[str]:
+    """A label per residual in the user's ids: ``image/point/x``, ``point/X`` (control
+    coordinates), ``image/X0_obs``…, ``image/omega_obs``…, ``additional[k]``."""
     obs = block.observations
     im, pt = block.images.ids, block.points.ids
     base = [f"{im[i]}/{pt[p]}" for i, p in zip(obs.image, obs.point)]
     labels = [f"{b}/{a}" for b in base for a in "xy"]
-    return labels[:n] + [f"pseudo[{k}]" for k in range(max(n - len(labels), 0))]
+    slices = slices or {}
+    pts, imgs = block.points, block.images
+    named = {
+        "control": [f"{pt[p]}/{'XYZ'[c]}" for p in range(len(pt)) for c in range(3)
+                    if pts.role[p] == CONTROL and pts.sigma[p, c] > 0],
+        "X0_obs": [f"{im[i]}/{n_}_obs" for i in range(len(im)) for c, n_ in enumerate(("X0", "Y0", "Z0"))
+                   if imgs.X0_sigma[i, c] > 0],
+        "angles_obs": [f"{im[i]}/{n_}_obs" for i in range(len(im))
+                       for c, n_ in enumerate(("omega", "phi", "kappa")) if imgs.angles_sigma[i, c] > 0],
+    }  # fmt: skip
+    out = labels[:n] + [""] * max(n - len(labels), 0)
+    for name, sl in slices.items():
+        if name == "image" or not isinstance(sl, slice):
+            continue
+        k = sl.stop - sl.start
+        mine = named.get(name)
+        if mine is None or len(mine) != k:
+            mine = [f"{name}[{j}]" for j in range(k)]
+        out[sl] = mine
+    return [lab or f"observation {j}" for j, lab in enumerate(out)]
+
+
+#: "The model does not fit the data" when σ0 exceeds this and …
+MISFIT_SIGMA0: float = 3.0
+#: … at least this share of the image coordinates is flagged (abs(w) > critical).
+MISFIT_FLAGGED: float = 0.2
+
+
+def misfit_warning(adj, n_image: int, critical: float) -> str | None:
+    """A warning when σ0 ≫ 1 and a large share of the image coordinates is flagged.
+
+    Such a solve "converges" to the best fit of a model that does not hold; the likely
+    causes are named instead of reporting it as a result.
+    """
+    w = np.asarray(adj.normalized_residuals, dtype=float)[: 2 * n_image]
+    w = w[np.isfinite(w)]
+    if w.size == 0 or not adj.sigma0 > MISFIT_SIGMA0:
+        return None
+    share = float(np.mean(np.abs(w) > critical))
+    if share < MISFIT_FLAGGED:
+        return None
+    return (
+        f"warning: the model does not fit the data: sigma0 = {adj.sigma0:.4g} with "
+        f"{share:.0%} of the image coordinates flagged (|w| > {critical:g}). Likely causes: "
+        "lens distortion or other interior-orientation terms missing from the model, image "
+        "coordinates in the wrong unit or with a wrong pixel size, a wrong principal "
+        "distance, or σ of the image coordinates far too small. The estimates are the best "
+        "fit of a model that does not hold"
+    )
 
 
 def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: str) -> Solution:
     """Turn a block adjustment (blocks ``exterior`` (m, 6) and ``points`` (p, 3)) into a report."""
     m, p = block.n_images, block.n_points
     if adj.obs_labels is None or len(adj.obs_labels) != adj.n_observations:
-        adj.obs_labels = _labels(block, adj.n_observations)
+        adj.obs_labels = _labels(block, adj.n_observations, adj.extra.get("obs_slices"))
     std = adj.std()
     ext = adj.x[adj.blocks["exterior"]].reshape(m, 6)
     sext = std[adj.blocks["exterior"]].reshape(m, 6)
@@ -211,6 +263,13 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
     else:
         xyz, sxyz = block.points.xyz, np.full((p, 3), np.nan)
     notes = check_note(problem, block, xyz)
+    critical = float(problem.options.get("critical", W_CRITICAL))
+    misfit = misfit_warning(adj, len(block.observations), critical)
+    if misfit:
+        notes.insert(0, misfit)
+        adj.reason = f"{adj.reason}; BUT THE MODEL DOES NOT FIT THE DATA (see the warning)"
+    if block.meta.get("alignment"):
+        notes.insert(0, block.meta["alignment"])
     if np.any(block.points.role == CHECK):
         mode = check_mode(problem) if method == "bundle" else "independent"
         notes.insert(0, CHECK_MODES[mode] + f" (options.check_points = {mode!r})")
