@@ -222,7 +222,7 @@ def _labels(block: Block, n: int, slices: dict | None = None) -> list[str]:
 
 #: "The model does not fit the data" when σ0 exceeds this and …
 MISFIT_SIGMA0: float = 3.0
-#: … at least this share of the image coordinates is flagged (|w| > critical).
+#: … at least this share of the image coordinates is flagged (abs(w) > critical).
 MISFIT_FLAGGED: float = 0.2
 
 
@@ -253,7 +253,8 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
     """Turn a block adjustment (blocks ``exterior`` (m, 6) and ``points`` (p, 3)) into a report."""
     m, p = block.n_images, block.n_points
     if adj.obs_labels is None or len(adj.obs_labels) != adj.n_observations:
-        adj.obs_labels = _labels(block, adj.n_observations, adj.extra.get("obs_slices"))
+        slices = getattr(adj, "obs_slices", None) or adj.extra.get("obs_slices")  # typed or extra
+        adj.obs_labels = _labels(block, adj.n_observations, slices)
     std = adj.std()
     ext = adj.x[adj.blocks["exterior"]].reshape(m, 6)
     sext = std[adj.blocks["exterior"]].reshape(m, 6)
