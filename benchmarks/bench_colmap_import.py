@@ -65,12 +65,18 @@ print(json.dumps({{"wall_s": wall, "cpu_s": cpu, "peak_over_base_mb": peak - bas
 """
 
 
-def generate(directory: Path, size_mb: float, keypoints: int, matched: float, seed: int = 1) -> dict:
+def generate(
+    directory: Path, size_mb: float, keypoints: int, matched: float, seed: int = 1
+) -> dict:
     """Write the text and binary model; return its counts (reuses an existing one)."""
     meta_path = directory / "model.json"
     if meta_path.exists():
         meta = json.loads(meta_path.read_text())
-        if meta["size_mb"] == size_mb and meta["keypoints"] == keypoints and meta["matched"] == matched:
+        if (
+            meta["size_mb"] == size_mb
+            and meta["keypoints"] == keypoints
+            and meta["matched"] == matched
+        ):
             return meta
     rng = np.random.default_rng(seed)
     directory.mkdir(parents=True, exist_ok=True)
@@ -94,7 +100,9 @@ def generate(directory: Path, size_mb: float, keypoints: int, matched: float, se
             q = rng.normal(size=4)
             q /= np.linalg.norm(q)
             t = rng.normal(size=3)
-            f.write(f"{i + 1} {q[0]} {q[1]} {q[2]} {q[3]} {t[0]} {t[1]} {t[2]} 1 img_{i:05d}.jpg\n".encode())
+            f.write(
+                f"{i + 1} {q[0]} {q[1]} {q[2]} {q[3]} {t[0]} {t[1]} {t[2]} 1 img_{i:05d}.jpg\n".encode()
+            )
             line = pool[rng.integers(0, pool.size, keypoints)]
             pts = rng.choice(n_points, n_match, replace=False) + 1
             slots = rng.choice(keypoints, n_match, replace=False)
@@ -112,7 +120,9 @@ def generate(directory: Path, size_mb: float, keypoints: int, matched: float, se
         for p in range(n_points):
             tr = op[starts[p] : starts[p + 1], 0]
             track = " ".join(f"{i} 0" for i in tr.tolist())
-            f.write(f"{p + 1} {xyz[p, 0]} {xyz[p, 1]} {xyz[p, 2]} 128 128 128 0.5 {track}\n".encode())
+            f.write(
+                f"{p + 1} {xyz[p, 0]} {xyz[p, 1]} {xyz[p, 2]} 128 128 128 0.5 {track}\n".encode()
+            )
     sys.path.insert(0, str(HERE.parent / "src"))
     from orientviz.io.colmap_bin import write_binary_model
     from orientviz.io.colmap_text import read_text_model
@@ -153,7 +163,9 @@ def main(argv: list[str] | None = None) -> int:
         d = directory / ("binary" if kind == "binary" else "text")
         res[kind] = run(kind, d)
     base = res.get("before")
-    print("| reader | wall_s | cpu_s | peak over start MB | kept MB | peak − kept MB | observations | cpu / before | peak / before |")
+    print(
+        "| reader | wall_s | cpu_s | peak over start MB | kept MB | peak − kept MB | observations | cpu / before | peak / before |"
+    )
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for kind, r in res.items():
         ratio = f"{r['cpu_s'] / base['cpu_s']:.3f}" if base else "—"

@@ -234,10 +234,13 @@ COMMANDS: dict[str, Command] = {
     "import-colmap": Command(
         "orientviz.io.colmap",
         "run_from_cli",
-        help="convert a COLMAP text model (cameras/images/points3D.txt) to a problem file",
-        description="Convert a COLMAP text model (a folder with cameras.txt, images.txt and "
-        "points3D.txt) to an orientviz/1 block problem file; --control adds control points "
-        "from a CSV keyed by POINT3D_ID.",
+        help="convert a COLMAP model (text or binary) to a problem file",
+        description="Convert a COLMAP model (a folder with cameras.txt, images.txt and "
+        "points3D.txt, or cameras.bin, images.bin and points3D.bin) to an orientviz/1 block "
+        "problem file, keeping only keypoints matched to a 3D point; SIMPLE_PINHOLE, "
+        "PINHOLE, SIMPLE_RADIAL, RADIAL and OPENCV cameras are mapped exactly (distortion "
+        "removed with COLMAP's parameters, fx and fy kept apart); --control adds control "
+        "points from a CSV keyed by POINT3D_ID.",
         examples=(("orientviz import-colmap sparse/0 -o block.json", "convert"),),
         arguments=(
             arg("directory", help="folder of the COLMAP text model"),

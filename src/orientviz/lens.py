@@ -60,7 +60,9 @@ class BackwardLens:
     @classmethod
     def from_vector(cls, p: ArrayLike) -> BackwardLens:
         v = np.asarray(p, dtype=float)
-        return cls(v[0], v[1], v[2], tuple(v[4:7]), tuple(v[7:9]), v[3], v[9] if v.size > 9 else 0.0)
+        return cls(
+            v[0], v[1], v[2], tuple(v[4:7]), tuple(v[7:9]), v[3], v[9] if v.size > 9 else 0.0
+        )
 
     def vector(self) -> F64:
         return np.array([self.c, self.px, self.py, self.aspect, *self.K, *self.P, self.skew])

@@ -29,8 +29,13 @@ def test_jacobian_matches_central_differences():
         a, b = v.copy(), v.copy()
         a[i] += h
         b[i] -= h
-        num = (backward_ideal(m, BackwardLens.from_vector(a)) - backward_ideal(m, BackwardLens.from_vector(b))) / (2 * h)
-        assert np.allclose(J[:, :, k], num, rtol=1e-5, atol=1e-6 * np.abs(num).max()), k  # FD noise ~1e-8
+        num = (
+            backward_ideal(m, BackwardLens.from_vector(a))
+            - backward_ideal(m, BackwardLens.from_vector(b))
+        ) / (2 * h)
+        assert np.allclose(J[:, :, k], num, rtol=1e-5, atol=1e-6 * np.abs(num).max()), (
+            k
+        )  # FD noise ~1e-8
 
 
 def test_no_distortion_is_the_plain_centred_point():

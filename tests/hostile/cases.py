@@ -86,6 +86,8 @@ def _replace_with(kind: str):
             pass
         elif kind == "dangling-link":
             path.symlink_to(path.parent / "nowhere")
+        elif kind == "symlink-loop":
+            path.symlink_to(path)
         elif kind == "empty":
             path.write_bytes(b"")
         elif kind == "binary":
@@ -105,6 +107,7 @@ SPECIAL = {
     "urandom": "is a device",
     "missing": "no such file",
     "dangling-link": "no such file",
+    "symlink-loop": "cannot open",
 }
 
 
@@ -153,6 +156,21 @@ def garbage_files() -> list[Case]:
 
 
 # --------------------------------------------------------------------------- arguments
+def long_names() -> list[Case]:
+    """A path longer than the system allows, for every input slot."""
+    out = []
+    for slot, (_rel, argv) in INPUT_SLOTS.items():
+        if "/" in slot:
+            continue
+
+        def make(f: Path, argv=argv) -> list[str]:
+            _all_inputs(f)
+            return argv(f, str(f / ("n" * 300) / ("m" * 300) / "x.json"))
+
+        out.append(Case(f"{slot}/special/name-too-long", make, 2, (), None))
+    return out
+
+
 def arguments() -> list[Case]:
     """Numbers and choices on the command line, refused by the parser (exit 2)."""
     out = []
@@ -611,8 +629,12 @@ def geometry() -> list[Case]:
             p["role"] = "check"
         p["X"] = p.get("X", 0.0) + 1e6
 
-    c.append(Case("solve/geometry/check-point-far-away", _block_edit(check_far), 0,
-                  warns=True))  # fmt: skip
+    def warned_in_report(folder: Path) -> None:
+        assert "far outside its extent" in (folder / "r.txt").read_text(encoding="utf-8")
+
+    c.append(Case("solve/geometry/check-point-far-away",
+                  _block_edit(check_far, ("--report", "r.txt")), 0, warns=True,
+                  outputs=("r.txt",), post=warned_in_report))  # fmt: skip
 
     def pair_points(edit):
         def make(f: Path) -> list[str]:
@@ -812,7 +834,7 @@ def measurement_csv() -> list[Case]:
 
 def all_cases() -> list[Case]:
     return [
-        *special_files(), *garbage_files(), *arguments(), *outputs(), *problem_files(),
+        *special_files(), *garbage_files(), *long_names(), *arguments(), *outputs(), *problem_files(),
         *csv_files(), *colmap_models(), *bal_files(), *geometry(), *accepted(),
         *binary_models(), *measurement_csv(),
     ]  # fmt: skip

@@ -92,3 +92,14 @@ def test_a_point_far_away_is_a_warning_and_an_absurd_one_an_error(sim):
     assert _checks(b)["far-away"].level == "warning"
     b.points.xyz[3] = 1e14
     assert _checks(b)["far-away"].level == "error"
+
+
+def test_warnings_are_logged_and_errors_raised_in_order(sim, caplog):
+    b = sim.block.copy()
+    b.points.xyz[3] += 1e6
+    with caplog.at_level("WARNING", logger="orientviz"):
+        warnings = raise_for(check_block(b), "f.json")
+    assert "far-away" in [w.check for w in warnings]
+    assert any(
+        "far outside" in r.getMessage() and "f.json" in r.getMessage() for r in caplog.records
+    )

@@ -22,7 +22,9 @@ def _moved(block):
     """The block's approximations carried into an arbitrary frame (a COLMAP-like model)."""
     c = block.copy()
     c.images.X0 = T.apply(block.images.X0)
-    c.images.angles = np.column_stack(opk_from_matrix(T.R[None] @ block.rotations(), block.sequence))
+    c.images.angles = np.column_stack(
+        opk_from_matrix(T.R[None] @ block.rotations(), block.sequence)
+    )
     tie = c.points.role == TIE
     c.points.xyz[tie] = T.apply(block.points.xyz[tie])
     return c

@@ -65,7 +65,10 @@ def _scene(tmp_path: Path, model: str, params: dict, *, unmatched: int = 50, rng
                       " ".join(trip[k] for k in order)]  # fmt: skip
         truth.append((X0, R_ov))
     tracks = [" ".join(f"{i + 1} {k}" for i in range(3)) for k in range(len(X))]
-    pts = [f"{k + 1} {x!r} {y!r} {z!r} 1 2 3 0.1 {tr}" for k, ((x, y, z), tr) in enumerate(zip(X.tolist(), tracks))]
+    pts = [
+        f"{k + 1} {x!r} {y!r} {z!r} 1 2 3 0.1 {tr}"
+        for k, ((x, y, z), tr) in enumerate(zip(X.tolist(), tracks))
+    ]
     d = tmp_path / "model"
     d.mkdir()
     (d / "cameras.txt").write_text("# cameras\n" + cam_line + "\n")

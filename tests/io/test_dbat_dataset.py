@@ -81,7 +81,9 @@ def test_the_block_has_dbats_counts_and_conventions():
     assert sorted(chk) == ["351", "410"]
     # pixel → mm: x = col · 0.006, y = −row · 0.006; the first marked point of image 8811
     i = block.image_index("8811")
-    k = np.flatnonzero((block.observations.image == i) & (block.observations.point == block.point_index("317")))
+    k = np.flatnonzero(
+        (block.observations.image == i) & (block.observations.point == block.point_index("317"))
+    )
     assert np.allclose(block.observations.xy[k], [[5007.6667 * 0.006, -7275.6667 * 0.006]])
     assert np.isclose(block.cameras.y0[0], -38.811) and np.isclose(block.cameras.c[0], 123.9392)
     sig = np.unique(block.observations.sigma)

@@ -136,7 +136,11 @@ def sxb_camera(xml_path: Path) -> dict[str, Any]:
         files[(f.text or "").strip()] = float(f.get("sxy", "nan"))
     out["image_sigma_px"] = files
     checks = root.find("input/check_pts/filter")
-    out["check_ids"] = [s.strip() for s in (checks.get("id", "") if checks is not None else "").split(",") if s.strip()]
+    out["check_ids"] = [
+        s.strip()
+        for s in (checks.get("id", "") if checks is not None else "").split(",")
+        if s.strip()
+    ]
     return out
 
 
@@ -189,13 +193,15 @@ def sxb_problem(root: Path) -> tuple[dict[str, Any], dict[str, Any]]:
         "units": {"length": "m", "image": "mm", "angle": "deg"},
         "sequence": "opk",
         "options": {"control": "weighted", "check_points": "rays", "max_iter": 20},
-        "cameras": [{
-            "id": "aerial",
-            "c": cam["c_mm"],
-            "x0": cam["pp_mm"][0],
-            "y0": -cam["pp_mm"][1],
-            "format": cam["sensor_mm"],
-        }],  # fmt: skip
+        "cameras": [
+            {
+                "id": "aerial",
+                "c": cam["c_mm"],
+                "x0": cam["pp_mm"][0],
+                "y0": -cam["pp_mm"][1],
+                "format": cam["sensor_mm"],
+            }
+        ],  # fmt: skip
         "images": [{"id": name, "camera": "aerial"} for name in images.values()],
         "points": points,
         "observations": observations,
@@ -235,7 +241,10 @@ def read_camcal(folder: Path) -> dict[str, Any]:
         "focal_mm": float(cam.findtext("focal", "")),
         "images": {row[0]: Path(row[1]).name for row in _rows(folder / "images.txt")},
         "marks": [(m[0], m[1], float(m[2]), float(m[3]), float(m[4])) for m in marks],
-        "control": {r[0]: (float(r[2]), float(r[3]), float(r[4])) for r in _rows(folder / "camcal-fixed.txt")},
+        "control": {
+            r[0]: (float(r[2]), float(r[3]), float(r[4]))
+            for r in _rows(folder / "camcal-fixed.txt")
+        },
     }
 
 
@@ -316,7 +325,9 @@ def main(argv: list[str] | None = None) -> int:
         prog="python -m orientviz.datasets.make_dbat",
         description="Convert DBAT's sxb block (and camera calibration) into orientviz datasets.",
     )
-    parser.add_argument("dbat", type=Path, help="path of a DBAT checkout (github.com/niclasborlin/dbat)")
+    parser.add_argument(
+        "dbat", type=Path, help="path of a DBAT checkout (github.com/niclasborlin/dbat)"
+    )
     parser.add_argument("-o", "--out", type=Path, default=HERE, help="output folder")
     args = parser.parse_args(argv)
     try:

@@ -131,7 +131,7 @@ def success(message: str) -> None:
 
 
 def relative_error(got: ArrayLike, expected: ArrayLike, scale: float | None = None) -> float:
-    """Largest absolute difference divided by a scale (default: largest |expected|, at least 1e-300).
+    """Largest absolute difference divided by a scale (default: the largest abs(expected), at least 1e-300).
 
     Parameters
     ----------
@@ -299,7 +299,7 @@ def compare(
     wrong : iterable of (str, array_like)
         Lesson-specific wrong answers with their diagnosis (see :func:`diagnose`).
     scale : float, optional
-        Reference size for the relative error (default: largest |expected|).
+        Reference size for the relative error (default: the largest abs(expected)).
 
     Returns
     -------

@@ -58,6 +58,12 @@ def _scene(rng: np.random.Generator, n: int = 9) -> tuple[F64, F64, F64, F64]:
     return X, p, xy, np.array(152.7)
 
 
+def _minimise(fun: Callable[[F64], F64], start: F64) -> F64:
+    """The oracle's minimiser: scipy's trust-region least squares, run to machine precision."""
+    scale = np.array([1, 1, 1, 1e-3, 1e-3, 1e-3])
+    return least_squares(fun, start, x_scale=scale, xtol=1e-15, ftol=1e-15, gtol=1e-15).x
+
+
 def check_resection(resection_gn: Callable[..., tuple[F64, float]]) -> None:
     """``resection_gn(xy, X, c, sigma, p0)`` must return (p̂, σ̂0), p = (X0, Y0, Z0, ω, φ, κ) in m, rad."""
     rng = rng_for("lesson04.check_resection")
@@ -79,24 +85,10 @@ def check_resection(resection_gn: Callable[..., tuple[F64, float]]) -> None:
     def weighted(q: F64) -> F64:
         return ((_project(X, q[:3], _R(q[3:]), float(c)) - noisy) / sigma).ravel()
 
-    ref = least_squares(
-        weighted,
-        start,
-        x_scale=np.array([1, 1, 1, 1e-3, 1e-3, 1e-3]),
-        xtol=1e-15,
-        ftol=1e-15,
-        gtol=1e-15,
-    ).x
+    ref = _minimise(weighted, start)
     r = noisy.size - 6
     s0_ref = float(np.sqrt(np.sum(weighted(ref) ** 2) / r))
-    plain = least_squares(
-        lambda q: weighted(q) * sigma.ravel(),
-        start,
-        x_scale=np.array([1, 1, 1, 1e-3, 1e-3, 1e-3]),
-        xtol=1e-15,
-        ftol=1e-15,
-        gtol=1e-15,
-    ).x
+    plain = _minimise(lambda q: weighted(q) * sigma.ravel(), start)
     s0_unweighted = float(np.sqrt(np.sum((weighted(plain) * sigma.ravel()) ** 2) / r))
     out = call(resection_gn, noisy, X, float(c), sigma, start.copy(), what="resection_gn")
     p, s0 = np.asarray(out[0], dtype=float), float(out[1])

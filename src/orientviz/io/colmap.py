@@ -118,7 +118,9 @@ def normalised(cam: ColmapCamera, uv: NDArray[np.float64], source: str = "") -> 
             active = active[~done]
             if active.size == 0:
                 break
-        bad = np.flatnonzero(np.any(np.abs(_distort(cam, x) - d) >= tol, axis=1) | ~np.isfinite(x).all(1))
+        bad = np.flatnonzero(
+            np.any(np.abs(_distort(cam, x) - d) >= tol, axis=1) | ~np.isfinite(x).all(1)
+        )
         if bad.size:
             u = uv[a + bad[0]]
             raise InputError(
@@ -150,7 +152,8 @@ def block_from_colmap(
     if np.any(~((norm > 0.5) & (norm < 2.0))):
         k = int(np.flatnonzero(~((norm > 0.5) & (norm < 2.0)))[0])
         raise InputError(
-            f"image {model.names[k]!r}: quaternion is not normalised", source=model.source.get("images", "")
+            f"image {model.names[k]!r}: quaternion is not normalised",
+            source=model.source.get("images", ""),
         )
     Rcw = _rotation_cw(q / norm[:, None])
     X0 = -np.einsum("nji,nj->ni", Rcw, model.tvec)
@@ -199,8 +202,12 @@ def block_from_colmap(
             "image_names": names,
             "colmap_image_ids": model.image_ids.tolist(),
             "colmap_cameras": {
-                str(c): {"model": cams[c].model, "width": cams[c].width,
-                         "height": cams[c].height, "params": cams[c].params.tolist()}
+                str(c): {
+                    "model": cams[c].model,
+                    "width": cams[c].width,
+                    "height": cams[c].height,
+                    "params": cams[c].params.tolist(),
+                }
                 for c in cam_ids
             },  # fmt: skip
         },
@@ -250,7 +257,9 @@ def read_colmap(
 
         model = read_binary_model(d)
     model.source["directory"] = str(d)
-    return block_from_colmap(model, pixel_size_mm=pixel_size_mm, sigma_px=sigma_px, sequence=sequence)
+    return block_from_colmap(
+        model, pixel_size_mm=pixel_size_mm, sigma_px=sigma_px, sequence=sequence
+    )
 
 
 def write_colmap(

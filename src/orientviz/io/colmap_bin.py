@@ -59,7 +59,9 @@ class _Reader:
         self.pos = 0
 
     def fail(self, msg: str, at: int | None = None) -> InputError:
-        return InputError(msg, source=str(self.path), where=f"byte {self.pos if at is None else at}")
+        return InputError(
+            msg, source=str(self.path), where=f"byte {self.pos if at is None else at}"
+        )
 
     def take(self, fmt: str, what: str) -> tuple:
         n = struct.calcsize(fmt)
@@ -182,7 +184,10 @@ def read_images_bin(path: Path, point_ids: np.ndarray, cams: dict[int, ColmapCam
         ids[k], pose[k], cam[k] = vals[0], vals[1:8], vals[8]
         names.append(r.name())
         if len(names[-1]) > MAX_NAME:
-            raise r.fail(f"image {vals[0]}: NAME of {len(names[-1])} characters, expected at most {MAX_NAME}", at)
+            raise r.fail(
+                f"image {vals[0]}: NAME of {len(names[-1])} characters, expected at most {MAX_NAME}",
+                at,
+            )
         bad = pose_problem(np.array(vals[1:5]), np.array(vals[5:8]))
         if bad:
             raise r.fail(f"image {vals[0]}: {bad}", at)
@@ -197,7 +202,9 @@ def read_images_bin(path: Path, point_ids: np.ndarray, cams: dict[int, ColmapCam
         pid = keep["id"].astype(np.int64)
         index = lookup.index(pid)
         if np.any(index < 0):
-            raise r.fail(f"image {vals[0]}: unknown POINT3D_ID {int(pid[np.argmax(index < 0)])}", at)
+            raise r.fail(
+                f"image {vals[0]}: unknown POINT3D_ID {int(pid[np.argmax(index < 0)])}", at
+            )
         uv = np.column_stack([keep["x"], keep["y"]])
         if not np.all(np.isfinite(uv) & (np.abs(uv) <= lim)):
             raise r.fail(f"image {vals[0]}: keypoints must be finite and near the image", at)
@@ -247,7 +254,9 @@ def write_binary_model(model: ColmapModel, directory: Path) -> None:
     tracks: dict[int, list[tuple[int, int]]] = {}
     for k, iid in enumerate(model.image_ids.tolist()):
         sel = np.flatnonzero(model.obs_image == k)
-        out.append(struct.pack("<I7dI", iid, *model.qvec[k], *model.tvec[k], int(model.image_camera[k])))
+        out.append(
+            struct.pack("<I7dI", iid, *model.qvec[k], *model.tvec[k], int(model.image_camera[k]))
+        )
         out.append(model.names[k].encode() + b"\0" + struct.pack("<Q", sel.size))
         kp = np.zeros(sel.size, KEYPOINT)
         pids = model.point_ids[model.obs_point[sel]]

@@ -156,7 +156,9 @@ def parse_numbers(
     d = M - np.uint8(_ZERO)
     isdot = d == np.uint8(_DOT - _ZERO + 256)
     n_dots = isdot.sum(axis=1)
-    slow = ((d > 9) & ~isdot).any(axis=1) | (n_dots > 1) | (lens > W) | (lens - n_dots - signed == 0)
+    slow = (
+        ((d > 9) & ~isdot).any(axis=1) | (n_dots > 1) | (lens > W) | (lens - n_dots - signed == 0)
+    )
     if integer:
         slow |= n_dots > 0
     d[isdot] = 0

@@ -51,7 +51,7 @@ def checked_file(path: Path, what: str, *, capped: bool = False) -> Path:
     return check_input_file(path, what, capped=capped)
 
 
-def camera_problem(cam: "ColmapCamera") -> str | None:
+def camera_problem(cam: ColmapCamera) -> str | None:
     """Why a camera cannot be used (sizes, focal length, principal point), or None."""
     if not (0 < cam.width < 10**7 and 0 < cam.height < 10**7):
         return f"expected WIDTH and HEIGHT of 1..10^7 pixels, got {cam.width} {cam.height}"
@@ -151,7 +151,11 @@ def _numbers(path: Path, line: int, fields: list[str], kinds: str, what: str) ->
             v = int(f) if k == "i" else float(f) if k == "f" else f
         except ValueError:
             kind = "an integer" if k == "i" else "a number"
-            raise _fail(path, line, f"field {i + 1} of {what}: expected {kind}, got {f!r}") from None
+            raise _fail(
+                path, line, f"field {i + 1} of {what}: expected {kind}, got {f!r}"
+            ) from None
+        if k == "i" and not -(2**63) <= v < 2**63:
+            raise _fail(path, line, f"field {i + 1} of {what}: integer {f[:20]}… out of range")
         if k == "f" and not np.isfinite(v):
             raise _fail(path, line, f"field {i + 1} of {what}: expected a finite number, got {f!r}")
         out.append(v)
@@ -245,7 +249,9 @@ def read_points_text(path: Path) -> tuple[I64, F64, dict[int, int]]:
         sel = strided(f0, count[lines], 8, 2)  # track image ids: tokens 8, 10, 12, …
         img, bad = parse_numbers(chunk.buf, t.start[sel], t.end[sel], integer=True)
         if bad.size:
-            raise _fail(path, chunk.first_line + int(t.line[sel[bad[0]]]), "TRACK: expected integers")
+            raise _fail(
+                path, chunk.first_line + int(t.line[sel[bad[0]]]), "TRACK: expected integers"
+            )
         uniq, at = np.unique(img, return_index=True)
         for u, a in zip(uniq.tolist(), at.tolist()):
             track_first.setdefault(u, chunk.first_line + int(t.line[sel[a]]))
@@ -288,7 +294,11 @@ def read_images_text(path: Path, point_ids: I64, cams: dict[int, ColmapCamera]) 
                 vals = _numbers(path, no, f, "ifffffffi", "an image")
                 name = " ".join(f[9:]) if len(f) > 9 else str(vals[0])
                 if len(name) > MAX_NAME:
-                    raise _fail(path, no, f"image NAME of {len(name)} characters, expected at most {MAX_NAME}")
+                    raise _fail(
+                        path,
+                        no,
+                        f"image NAME of {len(name)} characters, expected at most {MAX_NAME}",
+                    )
                 bad = pose_problem(np.array(vals[1:5]), np.array(vals[5:8]))
                 if bad:
                     raise _fail(path, no, bad)
@@ -314,7 +324,9 @@ def read_images_text(path: Path, point_ids: I64, cams: dict[int, ColmapCamera]) 
         pid_tok = strided(first[pl], count[pl], 2, 3)
         minus = buf[t.start[pid_tok]] == 45
         unmatched = pid_tok[minus]
-        odd = unmatched[(t.end[unmatched] - t.start[unmatched] != 2) | (buf[t.start[unmatched] + 1] != 49)]
+        odd = unmatched[
+            (t.end[unmatched] - t.start[unmatched] != 2) | (buf[t.start[unmatched] + 1] != 49)
+        ]
         if odd.size:
             raise _fail(path, chunk.first_line + int(t.line[odd[0]]),
                         "POINT3D_ID must be -1 (unmatched) or a point id ≥ 0")  # fmt: skip
@@ -340,7 +352,11 @@ def read_images_text(path: Path, point_ids: I64, cams: dict[int, ColmapCamera]) 
         unknown = np.flatnonzero(where_ < 0)
         if unknown.size:
             at = keep[unknown[0]]
-            raise _fail(path, chunk.first_line + int(t.line[at]), f"unknown POINT3D_ID {int(pid[unknown[0]])}")
+            raise _fail(
+                path,
+                chunk.first_line + int(t.line[at]),
+                f"unknown POINT3D_ID {int(pid[unknown[0]])}",
+            )
         obs_image.append(of_line[t.line[keep]])
         obs_uv.append(uv)
         obs_pid.append(where_)  # the index of the point (its POINT3D_ID is point_ids[i])
@@ -353,7 +369,7 @@ def read_images_text(path: Path, point_ids: I64, cams: dict[int, ColmapCamera]) 
     if dup.size:
         again = [r for r in recs if r[0][0] == order[dup[0]]][1]
         raise _fail(path, again[2], f"duplicate IMAGE_ID {int(order[dup[0]])}")
-    cat = (lambda a, shape: np.concatenate(a) if a else np.zeros(shape))  # noqa: E731
+    cat = lambda a, shape: np.concatenate(a) if a else np.zeros(shape)  # noqa: E731
     return {
         "image_ids": ids,
         "qvec": vals[:, 1:5],

@@ -59,19 +59,10 @@ class Measurements:
 
 def read_measurements(path: str | os.PathLike[str]) -> Measurements:
     """Read a measurement CSV (header ``image,point,x,y[,sigma]``), checked line by line."""
-    from .control import _num, csv_rows
-    from .safeio import open_input_text
+    from .control import _num, csv_table
 
     source = str(path)
-    rows = csv_rows(open_input_text(path, "a measurement CSV file"), source)
-    if not rows:
-        raise InputError("empty file, expected a header image,point,x,y[,sigma]", source, "line 1")
-    head = [h.strip() for h in rows[0]]
-    missing = [c for c in REQUIRED if c not in head]
-    if missing:
-        raise InputError(f"expected columns {', '.join(REQUIRED)}[, sigma]; missing "
-                         f"{', '.join(missing)}", source, "line 1")  # fmt: skip
-    col = {h: j for j, h in enumerate(head)}
+    rows, head, col = csv_table(path, "a measurement CSV file", REQUIRED, "empty file", "[,sigma]")
     img, pt, xy, sig, lines = [], [], [], [], []
     seen: dict[tuple[str, str], int] = {}
     for no, r in enumerate(rows[1:], start=2):

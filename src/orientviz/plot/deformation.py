@@ -24,7 +24,14 @@ def _axes(ax, **kw):
     return ax.figure, ax
 
 
-def plot_image_field(field, *, ax=None, exaggeration: float | None = None, title=None):
+def plot_image_field(
+    field,
+    *,
+    ax=None,
+    exaggeration: float | None = None,
+    title=None,
+    xlabel: str = "x [mm] (flight direction)",
+):
     """Quiver plot of an :class:`~orientviz.simulate.ImageField`.
 
     Parameters
@@ -37,6 +44,8 @@ def plot_image_field(field, *, ax=None, exaggeration: float | None = None, title
         Vector exaggeration; default: the largest vector drawn as 1/8 of the grid width.
     title : str, optional
         Title (default: the field's name and largest error in µm).
+    xlabel : str, optional
+        Label of the x axis (a terrestrial camera has no flight direction).
 
     Returns
     -------
@@ -51,14 +60,14 @@ def plot_image_field(field, *, ax=None, exaggeration: float | None = None, title
         angles="xy", scale_units="xy", scale=1.0, color="#c0392b", width=0.004,
     )  # fmt: skip
     ax.plot(field.xy[:, 0], field.xy[:, 1], ".", color="0.5", ms=3)
-    h = 0.5 * width
-    ax.plot([-h, h, h, -h, -h], [-h, -h, h, h, -h], color="0.3", lw=0.8)
+    (xa, ya), (xb, yb) = field.xy.min(axis=0), field.xy.max(axis=0)  # the format: the grid's extent
+    ax.plot([xa, xb, xb, xa, xa], [ya, ya, yb, yb, ya], color="0.3", lw=0.8)
     tips = np.vstack([field.xy, field.xy + ex * field.d])  # keep every arrow inside
     pad = 0.03 * width
-    ax.set_xlim(min(tips[:, 0].min(), -h) - pad, max(tips[:, 0].max(), h) + pad)
-    ax.set_ylim(min(tips[:, 1].min(), -h) - pad, max(tips[:, 1].max(), h) + pad)
+    ax.set_xlim(min(tips[:, 0].min(), xa) - pad, max(tips[:, 0].max(), xb) + pad)
+    ax.set_ylim(min(tips[:, 1].min(), ya) - pad, max(tips[:, 1].max(), yb) + pad)
     ax.set_aspect("equal")
-    ax.set_xlabel("x [mm] (flight direction)")
+    ax.set_xlabel(xlabel)
     ax.set_ylabel("y [mm]")
     name = textwrap.shorten(field.name, 60)
     ax.set_title(title or f"{name}\nmax {field.max_um:.1f} µm, vectors ×{ex:.0f}", fontsize=10)

@@ -241,7 +241,7 @@ def plot_reliability_map(
     ax.set_aspect("equal")
     ax.set_xlabel("X [m]")
     ax.set_ylabel("Y [m]")
-    ax.legend(fontsize=10, loc="upper left", bbox_to_anchor=(0.0, -0.12), ncol=2, frameon=False)
+    ax.legend(fontsize=10, loc="upper left", bbox_to_anchor=(0.0, -0.12), ncol=1, frameon=False)
     ax.set_title(
         title
         or f"reliability of the rays (α0 = {rel.alpha0:g}, β0 = {rel.beta0:g}, δ0 = "

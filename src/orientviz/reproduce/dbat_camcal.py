@@ -37,6 +37,8 @@ IO_KEYS = {"c [mm]": 0, "px [mm]": 1, "py [mm]": 2, "as": 3, "K1 [mm^-3]": 4, "K
            "K3 [mm^-7]": 6, "P1 [mm^-3]": 7, "P2 [mm^-3]": 8}  # fmt: skip
 #: The acceptance of the issue for the stations: within this fraction of DBAT's σ.
 STATION_SIGMA_FRACTION = 0.05
+#: Gauss-Newton steps (the start from the resections is close enough; DBAT: "gna", 9 steps)
+DAMPING = "none"
 
 
 def _folder():
@@ -151,7 +153,7 @@ def adjust():
              + [f"{q}.{a}" for q in pts for a in "XYZ"])  # fmt: skip
     f = _model(measured, im, pt, is_ctrl, ctrl_xyz, m, len(pts))
     adj = gauss_newton(
-        f, x0, np.zeros(sigma.size), sigma, names=names, damping="lm", max_iter=50, tol=1e-8,
+        f, x0, np.zeros(sigma.size), sigma, names=names, damping=DAMPING, max_iter=50, tol=1e-8,
         blocks={"interior": slice(0, 9), "exterior": slice(9, 9 + 6 * m), "points": slice(9 + 6 * m, None)},
         context="dbat-camcal",
     )  # fmt: skip

@@ -102,7 +102,7 @@ def ours(tol: float | None = None) -> dict[str, float]:
     names = info["image_files"]  # DBAT's image number → file stem
     Q = adj.cofactor_blocks["exterior"]
     order = [3, 4, 5, 0, 1, 2]  # DBAT's order ω φ κ X Y Z → orientviz's X0 Y0 Z0 ω φ κ
-    for k, (num, stem) in enumerate(names.items()):
+    for num, stem in names.items():
         i = list(sol.image_ids).index(stem)
         case = f"photo {num} ({stem}.jpg)"
         vals = np.r_[np.degrees(sol.angles[i]), sol.X0[i]]  # the Solution holds rad, m

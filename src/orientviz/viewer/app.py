@@ -16,6 +16,7 @@ the terminal; the server keeps running.
 from __future__ import annotations
 
 import argparse
+import os
 import socket
 import sys
 import time
@@ -245,7 +246,7 @@ def demo_from_file(path: str) -> Any:
     from .demos import demo_from_block
 
     p = Path(path)
-    if not p.exists():
+    if not os.path.lexists(path):  # never raises (a name too long is simply not there)
         raise InputError("no such file or demo (demos: block, pair, radar)", source=path)
     try:
         from ..io.problem import load_problem  # type: ignore[attr-defined]

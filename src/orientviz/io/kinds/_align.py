@@ -47,26 +47,33 @@ class Alignment:
         )
 
 
+def intersect_from_orientations(block: Block, points: np.ndarray) -> np.ndarray:
+    """XYZ (p, 3) m of the points ``points`` (bool mask) intersected from the block's given
+    orientations (NaN where fewer than two rays or parallel ones)."""
+    from ...orientation.intersection import intersect_points
+
+    obs = block.observations
+    sel = points[obs.point]
+    cam = block.images.camera
+    return intersect_points(
+        obs.xy[sel], obs.image[sel], obs.point[sel], block.images.X0, block.rotations(),
+        block.cameras.c[cam], block.cameras.x0[cam], block.cameras.y0[cam],
+        sigma=obs.sigma[sel], n_points=block.n_points, on_degenerate="nan",
+    ).xyz  # fmt: skip
+
+
 def align_to_control(block: Block) -> tuple[Block, Alignment]:
     """``block`` in the control's frame if its approximations are in another one."""
     from ...orientation.absolute import similarity_closed_form
-    from ...orientation.intersection import intersect_points
 
     pts = block.points
     full = (pts.role == CONTROL) & np.isfinite(pts.xyz_known).all(axis=1)
     if not full.any():
         return block, Alignment(False)
-    obs = block.observations
-    sel = full[obs.point]
-    cam = block.images.camera
-    res = intersect_points(
-        obs.xy[sel], obs.image[sel], obs.point[sel], block.images.X0, block.rotations(),
-        block.cameras.c[cam], block.cameras.x0[cam], block.cameras.y0[cam],
-        sigma=obs.sigma[sel], n_points=block.n_points, on_degenerate="nan",
-    )  # fmt: skip
-    use = full & np.isfinite(res.xyz).all(axis=1)  # control seen in ≥ 2 images
+    xyz = intersect_from_orientations(block, full)
+    use = full & np.isfinite(xyz).all(axis=1)  # control seen in ≥ 2 images
     known = pts.xyz_known[use]
-    approx = res.xyz[use]
+    approx = xyz[use]
     extent = float(np.max(np.ptp(known, axis=0))) if use.sum() > 1 else 0.0
     misfit = float(np.sqrt(np.mean(np.sum((approx - known) ** 2, axis=1)))) if use.any() else 0.0
     scale_ok = extent > 0 and misfit <= FRAME_MISFIT * extent
@@ -103,4 +110,3 @@ def _collinear(xyz: np.ndarray) -> bool:
         return True
     s = np.linalg.svd(xyz - xyz.mean(axis=0), compute_uv=False)
     return bool(s[1] <= 1e-6 * max(s[0], 1e-300))
-

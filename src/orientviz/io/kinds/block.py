@@ -100,18 +100,13 @@ def _approximate_tie_points(block: Block) -> Block:
     missing = np.flatnonzero(~np.all(np.isfinite(block.points.xyz), axis=1))
     if missing.size == 0:
         return block
-    from ...orientation.intersection import intersect_points
+    from ._align import intersect_from_orientations
 
-    obs = block.observations
-    sel = np.isin(obs.point, missing)
-    cam = block.images.camera
-    res = intersect_points(
-        obs.xy[sel], obs.image[sel], obs.point[sel], block.images.X0, block.rotations(),
-        block.cameras.c[cam], block.cameras.x0[cam], block.cameras.y0[cam],
-        sigma=obs.sigma[sel], n_points=block.n_points, on_degenerate="nan",
-    )  # fmt: skip
+    mask = np.zeros(block.n_points, bool)
+    mask[missing] = True
+    xyz = intersect_from_orientations(block, mask)
     block = block.copy()
-    block.points.xyz[missing] = res.xyz[missing]
+    block.points.xyz[missing] = xyz[missing]
     still = missing[~np.all(np.isfinite(block.points.xyz[missing]), axis=1)]
     if still.size:
         raise InputError(
@@ -214,7 +209,7 @@ def _labels(block: Block, n: int, slices: dict | None = None) -> list[str]:
 
 #: "The model does not fit the data" when σ0 exceeds this and …
 MISFIT_SIGMA0: float = 3.0
-#: … at least this share of the image coordinates is flagged (|w| > critical).
+#: … at least this share of the image coordinates is flagged (abs(w) > critical).
 MISFIT_FLAGGED: float = 0.2
 
 
@@ -245,7 +240,8 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
     """Turn a block adjustment (blocks ``exterior`` (m, 6) and ``points`` (p, 3)) into a report."""
     m, p = block.n_images, block.n_points
     if adj.obs_labels is None or len(adj.obs_labels) != adj.n_observations:
-        adj.obs_labels = _labels(block, adj.n_observations, adj.obs_slices)
+        slices = adj.obs_slices
+        adj.obs_labels = _labels(block, adj.n_observations, slices)
     std = adj.std()
     ext = adj.x[adj.blocks["exterior"]].reshape(m, 6)
     sext = std[adj.blocks["exterior"]].reshape(m, 6)
