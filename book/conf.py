@@ -11,6 +11,7 @@ by a bundled MathJax (sphinx-mathjax-offline): no network is needed.
 
 from __future__ import annotations
 
+import json
 import os
 import pathlib
 import shutil
@@ -82,6 +83,27 @@ html_theme_options = {
 html_theme_options["icon_links"] = []
 
 
+#: With ORIENTVIZ_FIGURE_AUDIT=<file>, every lesson copy starts with a removed cell that
+#: records the text sizes of each figure it shows (orientviz.plot.style.audit_figures);
+#: tests/book/test_book.py reads the file to check that figures are readable in the column.
+AUDIT = os.environ.get("ORIENTVIZ_FIGURE_AUDIT", "")
+
+
+def _audit_cell(name: str) -> dict:
+    src = (
+        "from orientviz.plot.style import audit_figures\n"
+        f"_ = audit_figures({AUDIT!r}, {name!r})"
+    )
+    return {
+        "cell_type": "code",
+        "execution_count": None,
+        "id": "orientviz-figure-audit",
+        "metadata": {"tags": ["remove-cell"]},
+        "outputs": [],
+        "source": src,
+    }
+
+
 def _copy_lessons(app) -> None:
     """Copy ../notebooks/*.ipynb into lessons/ so Sphinx can read them (srcdir only)."""
     target = HERE / "lessons"
@@ -91,7 +113,12 @@ def _copy_lessons(app) -> None:
         if old.name not in wanted:
             old.unlink()
     for nb in sorted((ROOT / "notebooks").glob("*.ipynb")):
-        shutil.copy2(nb, target / nb.name)
+        if AUDIT:
+            data = json.loads(nb.read_text(encoding="utf-8"))
+            data["cells"].insert(0, _audit_cell(nb.stem))
+            (target / nb.name).write_text(json.dumps(data, ensure_ascii=False), encoding="utf-8")
+        else:
+            shutil.copy2(nb, target / nb.name)
 
 
 def setup(app):

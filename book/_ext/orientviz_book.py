@@ -159,6 +159,20 @@ def _merge_streams(outputs: list[dict]) -> list[dict]:
     return merged
 
 
+def snapshot_errors(outputs: list[dict]) -> list[str]:
+    """``"Name: value"`` of every error output among a widget's outputs.
+
+    An exception inside a widget callback does not fail its cell: the Output widget keeps
+    the traceback, and the snapshot would show it on the built page. The book refuses to
+    build instead (:func:`_render_widget_view`), naming the notebook and the cell.
+    """
+    return [
+        f"{o.get('ename', 'Error')}: {o.get('evalue', '')}"
+        for o in outputs
+        if o.get("output_type") == "error"
+    ]
+
+
 #: Mime types a snapshot may show, best first (never a nested live widget).
 SNAPSHOT_MIME = (
     "image/svg+xml",
@@ -182,6 +196,14 @@ def _render_widget_view(self, data) -> list[nodes.Element]:
     if model_id not in states:
         return _ORIGINAL["render_widget_view"](self, data)
     outputs, settings, texts = snapshot_of(states, model_id)
+    failed = snapshot_errors(outputs)
+    if failed:
+        document = getattr(self.renderer, "document", None)
+        source = document.get("source", "?") if document is not None else "?"
+        raise NotebookExecutionFailed(
+            f"{source}\n  cell {data.cell_index}: a widget's output area holds an error "
+            f"(the cell itself ran): {failed[0]}"
+        )
     box = nodes.container(classes=[SNAPSHOT_CLASS])
     caption = "Static snapshot of an interactive widget (run the notebook to use it)"
     if settings:

@@ -61,6 +61,33 @@ def positive_float(text: str) -> float:
     return value
 
 
+def float_between(low: float, high: float, unit: str = ""):
+    """An argparse type: a finite number in [low, high] (``unit`` for the message)."""
+
+    def parse(text: str) -> float:
+        value = finite_float(text)
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(
+                f"expected a number from {low:g} to {high:g}{' ' + unit if unit else ''}, "
+                f"got {text!r}"
+            )
+        return value
+
+    parse.__name__ = f"float_between({low:g}, {high:g})"
+    return parse
+
+
+def iteration_count(text: str) -> int:
+    """An argparse type: a number of iterations 1–1000."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if not 1 <= value <= 1000:
+        raise argparse.ArgumentTypeError(f"expected 1..1000 iterations, got {text!r}")
+    return value
+
+
 def port_number(text: str) -> int:
     """An argparse type: a TCP port 0–65535 (0 = any free port)."""
     try:
@@ -116,9 +143,9 @@ IMPORT_OPTIONS: tuple[Arg, ...] = (
     arg("-o", "--output", required=True, metavar="OUT.json", help="problem file to write"),
     arg("--control", metavar="CSV", default=None,
         help="control points: CSV id,X,Y,Z[,sX,sY,sZ,role] keyed by point id"),
-    arg("--pixel-size", type=positive_float, default=None, metavar="MM",
+    arg("--pixel-size", type=float_between(1e-5, 10.0, "mm"), default=None, metavar="MM",
         help="pixel size in mm (default 0.01)"),
-    arg("--sigma-px", type=positive_float, default=None, metavar="PX",
+    arg("--sigma-px", type=float_between(1e-6, 1e6, "px"), default=None, metavar="PX",
         help="a-priori sigma of the image coordinates in pixels (default 1)"),
 )  # fmt: skip
 
@@ -139,6 +166,8 @@ COMMANDS: dict[str, Command] = {
             ("orientviz solve block_compact --method models", "independent models instead"),
             ("orientviz solve block.json -o adjusted.json", "also save the adjusted values"),
             ("orientviz solve block_strip --report report.html", "full report (or .txt)"),
+            ("orientviz solve dbat_sxb --max-iter 50 --tol 1e-6", "solver options (override "
+             "options.max_iter / options.tol of the file)"),
         ),
         arguments=(
             arg("file", help="problem file, or the name of a shipped example"),
@@ -149,6 +178,11 @@ COMMANDS: dict[str, Command] = {
                 help="block adjustment method (blocks only; default bundle)",
             ),
             arg("--json", action="store_true", help="print the result as JSON"),
+            arg("--max-iter", type=iteration_count, default=None, metavar="N",
+                help="maximum number of iterations (overrides options.max_iter of the file)"),
+            arg("--tol", type=positive_float, default=None, metavar="T",
+                help="stop when every correction is below T times its sigma (overrides "
+                "options.tol; default 5e-3 for blocks)"),
             arg(
                 "-o",
                 "--output",
@@ -200,15 +234,48 @@ COMMANDS: dict[str, Command] = {
     "import-colmap": Command(
         "orientviz.io.colmap",
         "run_from_cli",
-        help="convert a COLMAP text model (cameras/images/points3D.txt) to a problem file",
-        description="Convert a COLMAP text model (a folder with cameras.txt, images.txt and "
-        "points3D.txt) to an orientviz/1 block problem file; --control adds control points "
-        "from a CSV keyed by POINT3D_ID.",
+        help="convert a COLMAP model (text or binary) to a problem file",
+        description="Convert a COLMAP model (a folder with cameras.txt, images.txt and "
+        "points3D.txt, or cameras.bin, images.bin and points3D.bin) to an orientviz/1 block "
+        "problem file, keeping only keypoints matched to a 3D point; SIMPLE_PINHOLE, "
+        "PINHOLE, SIMPLE_RADIAL, RADIAL and OPENCV cameras are mapped exactly (distortion "
+        "removed with COLMAP's parameters, fx and fy kept apart); --control adds control "
+        "points from a CSV keyed by POINT3D_ID.",
         examples=(("orientviz import-colmap sparse/0 -o block.json", "convert"),),
         arguments=(
             arg("directory", help="folder of the COLMAP text model"),
             *IMPORT_OPTIONS,
         ),
+    ),
+    "import-csv": Command(
+        "orientviz.io.measurements",
+        "run_from_cli",
+        help="convert image measurements from a CSV table (image,point,x,y[,sigma]) to a problem file",
+        description="Convert image measurements (a CSV with header image,point,x,y[,sigma], "
+        "one row per image point, e.g. a PhotoModeler/DBAT table) of one camera to an "
+        "orientviz/1 block problem file. --units px (default): pixels from the upper-left "
+        "corner, y down, converted with --pixel-size; --principal-point PX PY in mm from "
+        "that corner (PY down). --units mm: orientviz's image frame (mm, y up). "
+        "--control adds control/check points (CSV id,X,Y,Z[,sX,sY,sZ,role]); the "
+        "orientations are computed by `orientviz solve`. --sigma-px is the sigma in the "
+        "file's unit where a row gives none.",
+        examples=(
+            ("orientviz import-csv marks.csv --c 123.9392 --pixel-size 0.006 "
+             "--principal-point 26.577 38.811 --control control.csv -o block.json",
+             "pixel measurements of an aerial camera with control"),
+        ),  # fmt: skip
+        arguments=(
+            arg("file", help="measurement CSV: image,point,x,y[,sigma]"),
+            arg("--c", type=positive_float, required=True, metavar="MM",
+                help="principal distance in mm"),
+            arg("--units", choices=["px", "mm"], default="px",
+                help="unit and frame of x, y (default px: upper-left origin, y down)"),
+            arg("--principal-point", type=finite_float, nargs=2, default=None, metavar=("PX", "PY"),
+                help="principal point in mm (px units: from the upper-left corner, PY down)"),
+            arg("--format", type=positive_float, nargs=2, default=None, metavar=("W", "H"),
+                help="image format in mm (default: the extent of the measurements)"),
+            *IMPORT_OPTIONS,
+        ),  # fmt: skip
     ),
     "export": Command(
         "orientviz.io.export",

@@ -24,10 +24,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from .block import CONTROL, Block
 from .errors import AdjustmentError, InputError
-from .model import CONTROL, Block
 
 log = logging.getLogger("orientviz")
+log.addHandler(logging.NullHandler())  # a library logs; the application decides where to
 
 #: An image coordinate farther than this many half-formats from the principal point
 #: cannot be a measurement in that image.
@@ -246,6 +247,36 @@ def check_block(
                 )
             )
     return _sorted(out)
+
+
+def check_magnitudes(data: object, limit: float = ABSURD_M) -> list[Finding]:
+    """Numbers beyond ± ``limit`` in the float arrays of a non-frame problem's data.
+
+    Looks at the data object's attributes and one level below (e.g. a similarity's
+    ``source.xyz``); NaN (not given) is ignored. Returns errors (exit code 2).
+    """
+    out = []
+    for name, value in vars(data).items():
+        inner = vars(value).items() if hasattr(value, "__dict__") else [("", value)]
+        for sub, arr in inner:
+            if not isinstance(arr, np.ndarray) or arr.dtype.kind != "f":
+                continue
+            with np.errstate(invalid="ignore"):
+                big = np.flatnonzero(np.abs(arr.reshape(-1)) > limit)
+            if big.size:
+                what = f"{name}.{sub}" if sub else name
+                out.append(
+                    Finding(
+                        "error",
+                        "far-away",
+                        f"a value of {arr.reshape(-1)[big[0]]:.3g} in {what}: beyond ±{limit:g} "
+                        "(m, mm or rad); check the value and its unit",
+                        big.size,
+                        "",
+                        2,
+                    )
+                )
+    return out
 
 
 def _sorted(findings: list[Finding]) -> list[Finding]:

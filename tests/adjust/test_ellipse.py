@@ -7,7 +7,12 @@ import math
 import numpy as np
 import pytest
 
-from orientviz.adjust.ellipse import confidence_scale, ellipse_outline, error_ellipse, inside_fraction
+from orientviz.adjust.ellipse import (
+    confidence_scale,
+    ellipse_outline,
+    error_ellipse,
+    inside_fraction,
+)
 from orientviz.errors import InputError
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import os
 import pathlib
 import re
 import subprocess
@@ -59,15 +60,61 @@ def check_widget_snapshots(out: pathlib.Path) -> None:
         assert len(with_figure) >= len(shown), f"{nb_path.name}: an app snapshot without its figure"
 
 
+#: Error output on a built page: a traceback (myst-nb's class) or its first line.
+ERROR_MARKS = ('class="output traceback', "Traceback (most recent call last)")
+#: An iframe to a local server (a viewer that is gone when the page is read).
+LOCAL_IFRAME = re.compile(r"<iframe[^>]+src=[\"']https?://(127\.0\.0\.1|localhost|0\.0\.0\.0)", re.I)
+
+
+def check_no_error_output(out: pathlib.Path) -> None:
+    """No page shows an error (also inside widget snapshots) or embeds a local server."""
+    for page in sorted(out.rglob("*.html")):
+        text = page.read_text(encoding="utf-8")
+        rel = page.relative_to(out).as_posix()
+        for mark in ERROR_MARKS:
+            assert mark not in text, f"{rel}: error output on the page ({mark!r})"
+        assert not LOCAL_IFRAME.search(text), f"{rel}: an iframe to a local server"
+
+
+def check_figure_audit(audit: pathlib.Path) -> list[dict]:
+    """Every figure a lesson showed is readable in the column (plot/style.py's measure)."""
+    from orientviz.plot.style import MIN_TEXT_PX
+
+    records = [json.loads(line) for line in audit.read_text(encoding="utf-8").splitlines()]
+    lessons = {p.stem for p in (ROOT / "notebooks").glob("*.ipynb")}
+    assert records and {r["notebook"] for r in records} <= lessons
+    small = [r for r in records if r["min_px"] is not None and r["min_px"] < MIN_TEXT_PX]
+    assert not small, "figures with text below {} px in the column:\n".format(MIN_TEXT_PX) + "\n".join(
+        f"  {r['notebook']} figure {r['index']}: {r['min_px']:.1f} px ({r['text']!r}), "
+        f"{r['figsize_in'][0]:.1f} in wide, PNG {r['width_px']} px"
+        for r in small
+    )
+    return records
+
+
+def test_introduction_lists_every_lesson_by_its_number():
+    text = (ROOT / "book/chapters/introduction.md").read_text(encoding="utf-8")
+    listed = re.findall(r"^\| (\d\d) \|", text, re.M)
+    files = sorted(p.stem[:2] for p in (ROOT / "notebooks").glob("*.ipynb"))
+    assert listed == files
+    teaching = (ROOT / "book/chapters/teaching.md").read_text(encoding="utf-8")
+    assert "python -m orientviz.exercises.strip" in teaching
+    for stem in files:
+        assert re.search(rf"\b{stem}\b", teaching), f"lesson {stem} missing from the teachers' chapter"
+
+
 @pytest.mark.slow
 def test_book_builds_offline(tmp_path):
     pytest.importorskip("myst_nb")
     out = tmp_path / "html"
+    audit = tmp_path / "figure-audit.jsonl"
+    env = dict(os.environ, ORIENTVIZ_FIGURE_AUDIT=str(audit))
     proc = subprocess.run(
         [sys.executable, "-m", "sphinx", "-b", "html", "-q", str(ROOT / "book"), str(out)],
         capture_output=True,
         text=True,
-        timeout=1200,
+        timeout=1500,
+        env=env,
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
     bad_docstrings = docstring_warnings(proc.stderr)
@@ -80,6 +127,7 @@ def test_book_builds_offline(tmp_path):
         "chapters/bibliography.html",
         "chapters/command_line.html",
         "chapters/reproductions.html",
+        "chapters/teaching.html",
         "api/index.html",
     ):
         assert chapter in pages, f"missing {chapter}"
@@ -95,3 +143,5 @@ def test_book_builds_offline(tmp_path):
     assert with_math, "no page loads the bundled MathJax"
     assert (out / "_static" / "mathjax").is_dir()
     check_widget_snapshots(out)
+    check_no_error_output(out)
+    check_figure_audit(audit)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import shlex
 import shutil
 
+import numpy as np
 import pytest
 
 from orientviz import cli
@@ -69,10 +70,10 @@ def test_not_run_list_names_real_examples():
 @pytest.fixture
 def inputs(tmp_path):
     """The files the examples name: block.json, a BAL file and a COLMAP model."""
-    from orientviz.block.simulate import simulate_block
     from orientviz.io.bal import write_bal
     from orientviz.io.colmap import write_colmap
     from orientviz.io.problem import problem_from_block, save_problem
+    from orientviz.simulate import simulate_block
 
     folder = tmp_path / "inputs"
     folder.mkdir()
@@ -80,6 +81,18 @@ def inputs(tmp_path):
     save_problem(problem_from_block(block), folder / "block.json")
     write_bal(block, folder / "problem-49-7776-pre.txt")
     write_colmap(block, folder / "sparse" / "0", pixel_size_mm=0.01)
+    obs = block.observations  # import-csv: a measurement table in pixels and a control CSV
+    rows = ["image,point,x,y"] + [
+        f"{block.images.ids[i]},{block.points.ids[p]},{x / 0.006},{-y / 0.006}"
+        for i, p, (x, y) in zip(obs.image, obs.point, obs.xy)
+    ]
+    (folder / "marks.csv").write_text("\n".join(rows) + "\n")
+    ctrl = ["id,X,Y,Z"] + [
+        f"{block.points.ids[k]},{X},{Y},{Z}"
+        for k, (X, Y, Z) in enumerate(block.points.xyz_known)
+        if np.all(np.isfinite((X, Y, Z)))
+    ]
+    (folder / "control.csv").write_text("\n".join(ctrl) + "\n")
     return folder
 
 

@@ -43,16 +43,32 @@ def assert_module_checks(module: ModuleType) -> None:
             except NotWrittenError as exc:
                 assert "not written yet" in str(exc)
             else:  # pragma: no cover - the assertion message is the report
-                raise AssertionError(f"{name}: an empty blank is not answered with 'not written yet'")
+                raise AssertionError(
+                    f"{name}: an empty blank is not answered with 'not written yet'"
+                )
         for label, mutant in mutants[name].items():
             with contextlib.redirect_stdout(io.StringIO()):
                 try:
                     check(mutant)
                 except NotWrittenError:  # pragma: no cover
-                    raise AssertionError(f"{name}/{label}: a mutant is reported as 'not written'") from None
+                    raise AssertionError(
+                        f"{name}/{label}: a mutant is reported as 'not written'"
+                    ) from None
                 except CheckFailed as exc:
                     assert math.isinf(exc.error) or exc.error >= MARGIN * exc.tolerance, (
                         f"{name}/{label}: rejected only by {exc.error:.3g} (tolerance {exc.tolerance:.3g})"
                     )
                     continue
             raise AssertionError(f"{name}/{label}: the mutant passes the check")
+
+
+def assert_diagnoses(module: ModuleType, expected: dict[tuple[str, str], str]) -> None:
+    """Each named mutant is rejected with a message containing the expected diagnosis.
+
+    ``expected`` maps (checker name, mutant label) to a piece of the message.
+    """
+    from orientviz.exercises._common import rejection
+
+    for (name, label), text in expected.items():
+        exc = rejection(getattr(module, name), module.MUTANTS[name][label])
+        assert exc is not None and text in str(exc), f"{name}/{label}: expected {text!r} in {exc}"

@@ -1,9 +1,8 @@
 """Lesson 00 checkers: solutions pass, plausible mistakes are rejected with a diagnosis."""
 
-from mutants import assert_module_checks
+from mutants import assert_diagnoses, assert_module_checks
 
 from orientviz.exercises import lesson00
-from orientviz.exercises._common import rejection
 
 
 def test_solutions_pass_and_mutants_fail():
@@ -11,9 +10,13 @@ def test_solutions_pass_and_mutants_fail():
 
 
 def test_diagnoses_name_the_mistake():
-    m = lesson00.MUTANTS
-    assert "weights are missing" in str(rejection(lesson00.check_sigma0, m["check_sigma0"]["no weights"]))
-    assert "redundancy r" in str(rejection(lesson00.check_sigma0, m["check_sigma0"]["divides by n"]))
-    assert "two observations" in str(rejection(lesson00.check_redundancy, m["check_redundancy"]["one observation per ray"]))
-    assert "one-sided" in str(rejection(lesson00.check_critical_value, m["check_critical_value"]["one-sided"]))
-    assert "need the weights" in str(rejection(lesson00.check_normalized, m["check_normalized"]["unweighted r"]))
+    assert_diagnoses(
+        lesson00,
+        {
+            ("check_sigma0", "no weights"): "weights are missing",
+            ("check_sigma0", "divides by n"): "redundancy r",
+            ("check_redundancy", "one observation per ray"): "two observations",
+            ("check_critical_value", "one-sided"): "one-sided",
+            ("check_normalized", "unweighted r"): "need the weights",
+        },
+    )

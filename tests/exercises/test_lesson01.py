@@ -1,11 +1,34 @@
-"""Lesson 01's checkers pass the solutions and reject every plausible wrong answer by far."""
+"""Lesson 01 (least squares): solutions pass, every plausible mistake is rejected by far
+and named in the message."""
 
 from __future__ import annotations
 
-from orientviz.exercises import lesson01
+from mutants import assert_diagnoses, assert_module_checks
 
-from mutants import assert_module_checks
+from orientviz.exercises import lesson01
 
 
 def test_lesson01_checks():
     assert_module_checks(lesson01)
+
+
+def test_lesson01_diagnoses_name_the_mistake():
+    assert_diagnoses(
+        lesson01,
+        {
+            ("check_weighted_mean", "unweighted"): "weights are forgotten",
+            ("check_weighted_mean", "one_over_sigma"): "1/σ instead of 1/σ²",
+            ("check_weighted_mean", "divide_by_n"): "divided by n",
+            ("check_weighted_mean", "sigma0_unweighted"): "without the weights",
+            ("check_error_ellipse", "variances"): "variances instead of standard deviations",
+            ("check_error_ellipse", "minor_direction"): "minor axis",
+            ("check_error_ellipse", "degrees"): "degrees",
+            ("check_error_ellipse", "no_half"): "halve the angle",
+            ("check_sigma0_bounds", "no_sqrt"): "square roots",
+            ("check_sigma0_bounds", "one_sided"): "α/2 in each tail",
+            ("check_sigma0_bounds", "not_divided"): "not divided by r",
+            ("check_gauss_newton_step", "minus"): "subtracted",
+            ("check_gauss_newton_step", "no_weights"): "weights are forgotten",
+            ("check_gauss_newton_step", "not_unit"): "not unit vectors",
+        },
+    )

@@ -1,11 +1,29 @@
-"""Lesson 03's checkers pass the solutions and reject every plausible wrong answer by far."""
+"""Lesson 03 (DLT and interior orientation): solutions pass, every plausible mistake is rejected by far
+and named in the message."""
 
 from __future__ import annotations
 
-from mutants import assert_module_checks
+from mutants import assert_diagnoses, assert_module_checks
 
 from orientviz.exercises import lesson03
 
 
 def test_lesson03_checks():
     assert_module_checks(lesson03)
+
+
+def test_lesson03_diagnoses_name_the_mistake():
+    assert_diagnoses(
+        lesson03,
+        {
+            ("check_dlt_rows", "plus_sign"): "minus sign",
+            ("check_dlt_rows", "swap_xy"): "swapped",
+            ("check_dlt_rows", "stacked"): "interleave",
+            ("check_projection_centre", "plus"): "sign is wrong",
+            ("check_projection_centre", "transpose"): "transposed",
+            ("check_projection_centre", "no_one"): "the 1 after L11",
+            ("check_interior_from_dlt", "unnormalised"): "division by |m3|²",
+            ("check_interior_from_dlt", "no_x0"): "subtract x0²",
+            ("check_interior_from_dlt", "swapped"): "swapped",
+        },
+    )

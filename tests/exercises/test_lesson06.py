@@ -1,11 +1,29 @@
-"""Lesson 06's checkers pass the solutions and reject every plausible wrong answer by far."""
+"""Lesson 06 (epipolar geometry): solutions pass, every plausible mistake is rejected by far
+and named in the message."""
 
 from __future__ import annotations
 
-from mutants import assert_module_checks
+from mutants import assert_diagnoses, assert_module_checks
 
 from orientviz.exercises import lesson06
 
 
 def test_lesson06_checks():
     assert_module_checks(lesson06)
+
+
+def test_lesson06_diagnoses_name_the_mistake():
+    assert_diagnoses(
+        lesson06,
+        {
+            ("check_essential", "swapped"): "factors are swapped",
+            ("check_essential", "transposed_R"): "R2 is transposed",
+            ("check_essential", "skew_transposed"): "cross-product matrix is transposed",
+            ("check_epipolar_line", "E_not_transposed"): "instead of Eᵀ",
+            ("check_epipolar_line", "no_c"): "−c g2",
+            ("check_epipolar_line", "not_normalised"): "normalise the line",
+            ("check_normal_case_points", "parallax_sign"): "x1' − x2'",
+            ("check_normal_case_points", "z_sign"): "below the projection centres",
+            ("check_normal_case_points", "y_parallax"): "x-parallax",
+        },
+    )

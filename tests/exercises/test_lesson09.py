@@ -1,11 +1,29 @@
-"""Lesson 09's checkers pass the solutions and reject every plausible wrong answer by far."""
+"""Lesson 09 (the datum): solutions pass, every plausible mistake is rejected by far
+and named in the message."""
 
 from __future__ import annotations
 
-from mutants import assert_module_checks
+from mutants import assert_diagnoses, assert_module_checks
 
 from orientviz.exercises import lesson09
 
 
 def test_lesson09_checks():
     assert_module_checks(lesson09)
+
+
+def test_lesson09_diagnoses_name_the_mistake():
+    assert_diagnoses(
+        lesson09,
+        {
+            ("check_helmert_columns", "rotation_yx"): "(−y, x)",
+            ("check_helmert_columns", "scale_for_rotation"): "change of scale",
+            ("check_helmert_columns", "no_translations"): "two shifts and one rotation",
+            ("check_s_transform", "all_points"): "datum points are only",
+            ("check_s_transform", "no_St"): "not S Q",
+            ("check_s_transform", "Q_unchanged"): "Q must be transformed",
+            ("check_distance_std", "diag"): "only the diagonal",
+            ("check_distance_std", "blocks"): "only their 2×2 blocks",
+            ("check_distance_std", "variance"): "square root",
+        },
+    )

@@ -1,11 +1,29 @@
-"""Lesson 10's checkers pass the solutions and reject every plausible wrong answer by far."""
+"""Lesson 10 (sparse normal equations): solutions pass, every plausible mistake is rejected by far
+and named in the message."""
 
 from __future__ import annotations
 
-from mutants import assert_module_checks
+from mutants import assert_diagnoses, assert_module_checks
 
 from orientviz.exercises import lesson10
 
 
 def test_lesson10_checks():
     assert_module_checks(lesson10)
+
+
+def test_lesson10_diagnoses_name_the_mistake():
+    assert_diagnoses(
+        lesson10,
+        {
+            ("check_reduce", "plus"): "sign is wrong",
+            ("check_reduce", "rhs_not_reduced"): "right side is reduced too",
+            ("check_reduce", "no_inverse"): "V must be inverted",
+            ("check_back_substitute", "no_coupling"): "coupling Wᵀ dc is missing",
+            ("check_back_substitute", "plus"): "sign of Wᵀ dc",
+            ("check_back_substitute", "no_inverse"): "multiplies instead",
+            ("check_bandwidth", "full"): "full width",
+            ("check_bandwidth", "with_diagonal"): "diagonal is not counted",
+            ("check_bandwidth", "row_count"): "zeros inside the band",
+        },
+    )

@@ -7,7 +7,15 @@ import pathlib
 
 import pytest
 
-from orientviz.exercises.strip import BEGIN, END, MD_BEGIN, MD_END, main, strip_notebook, strip_source
+from orientviz.exercises.strip import (
+    BEGIN,
+    END,
+    MD_BEGIN,
+    MD_END,
+    main,
+    strip_notebook,
+    strip_source,
+)
 
 ROOT = pathlib.Path(__file__).parents[2]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))

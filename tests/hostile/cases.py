@@ -21,6 +21,7 @@ INPUT_SLOTS = {
     "solve": (I.BLOCK, lambda f, p: ["solve", p]),
     "export": (I.BLOCK, lambda f, p: ["export", p, "-d", str(f / "out")]),
     "view": (I.BLOCK, lambda f, p: ["view", p, "--export", str(f / "v.html")]),
+    "view-server": (I.BLOCK, lambda f, p: ["view", p, "--port", "0"]),  # must not serve
     "import-bal": (I.BAL, lambda f, p: ["import-bal", p, "-o", str(f / "o.json")]),
     "import-colmap/cameras": (
         "sparse/cameras.txt",
@@ -33,6 +34,18 @@ INPUT_SLOTS = {
     "import-colmap/points": (
         "sparse/points3D.txt",
         lambda f, p: ["import-colmap", str(f / "sparse"), "-o", str(f / "o.json")],
+    ),
+    "import-colmap-bin/cameras": (
+        "sparse_bin/cameras.bin",
+        lambda f, p: ["import-colmap", str(f / "sparse_bin"), "-o", str(f / "o.json")],
+    ),
+    "import-colmap-bin/points": (
+        "sparse_bin/points3D.bin",
+        lambda f, p: ["import-colmap", str(f / "sparse_bin"), "-o", str(f / "o.json")],
+    ),
+    "import-csv": (
+        I.MARKS,
+        lambda f, p: ["import-csv", p, "--units", "mm", "--c", "152", "-o", str(f / "o.json")],
     ),
     "import-bal/control": (
         I.CONTROL,
@@ -53,7 +66,8 @@ INPUT_SLOTS = {
 
 
 def _all_inputs(folder: Path) -> None:
-    I.write(folder, I.BLOCK, I.BAL, I.COLMAP, I.CONTROL)
+    I.write(folder, I.BLOCK, I.BAL, I.COLMAP, I.CONTROL, I.MARKS)
+    I.write_binary(folder)
 
 
 def _replace_with(kind: str):
@@ -72,6 +86,8 @@ def _replace_with(kind: str):
             pass
         elif kind == "dangling-link":
             path.symlink_to(path.parent / "nowhere")
+        elif kind == "symlink-loop":
+            path.symlink_to(path)
         elif kind == "empty":
             path.write_bytes(b"")
         elif kind == "binary":
@@ -91,6 +107,7 @@ SPECIAL = {
     "urandom": "is a device",
     "missing": "no such file",
     "dangling-link": "no such file",
+    "symlink-loop": "cannot open",
 }
 
 
@@ -120,27 +137,49 @@ def garbage_files() -> list[Case]:
                 _replace_with(kind)(f / rel)
                 return argv(f, str(f / rel))
 
-            names = "sparse" if slot.startswith("import-colmap/") and "control" not in slot else rel
+            colmap = slot.startswith(("import-colmap/", "import-colmap-bin/"))
+            names = rel.split("/")[0] if colmap and "control" not in slot else rel
             out.append(Case(f"{slot}/garbage/{kind}", make, 2, (), names))
 
-        if slot in ("import-colmap/images", "import-colmap/points") or "control" in slot:
+        if slot in ("import-colmap/images", "import-colmap/points", "import-colmap-bin/points") or (
+            "control" in slot
+        ):
             continue  # another file is read first
 
         def big(f: Path, rel=rel, argv=argv) -> list[str]:
             _all_inputs(f)
             return [*argv(f, str(f / rel)), "--max-size", "100"]
 
-        out.append(Case(f"{slot}/size/over-max-size", big, 2, ("--max-size",), rel))
+        names = "sparse_bin" if slot.startswith("import-colmap-bin") else rel
+        out.append(Case(f"{slot}/size/over-max-size", big, 2, ("--max-size",), names))
     return out
 
 
 # --------------------------------------------------------------------------- arguments
+def long_names() -> list[Case]:
+    """A path longer than the system allows, for every input slot."""
+    out = []
+    for slot, (_rel, argv) in INPUT_SLOTS.items():
+        if "/" in slot:
+            continue
+
+        def make(f: Path, argv=argv) -> list[str]:
+            _all_inputs(f)
+            return argv(f, str(f / ("n" * 300) / ("m" * 300) / "x.json"))
+
+        out.append(Case(f"{slot}/special/name-too-long", make, 2, (), None))
+    return out
+
+
 def arguments() -> list[Case]:
     """Numbers and choices on the command line, refused by the parser (exit 2)."""
     out = []
-    bad_numbers = ["-0.01", "0", "nan", "inf", "-inf", "1e999", "abc"]
+    bad_numbers = ["-0.01", "0", "nan", "inf", "-inf", "1e999", "abc", "1e-320", "1e300"]
     for cmd, rel in (("import-bal", I.BAL), ("import-colmap", "sparse")):
-        for opt, values in (("--pixel-size", bad_numbers), ("--sigma-px", ["-1", "0", "nan"])):
+        for opt, values in (
+            ("--pixel-size", bad_numbers),
+            ("--sigma-px", ["-1", "0", "nan", "1e-320"]),
+        ):
             for v in values:
 
                 def make(f: Path, cmd=cmd, rel=rel, opt=opt, v=v) -> list[str]:
@@ -165,6 +204,12 @@ def arguments() -> list[Case]:
             return ["solve", str(f / I.BLOCK), f"--max-size={v}"]
 
         out.append(Case(f"solve/argument/max-size={v}", make, 2, (v,), "--max-size"))
+    for what, name in (("unknown", "nosuchpaper"), ("surrogate", "\udc80"),
+                       ("long", "x" * 5000), ("mathtext", "$\\a$")):  # fmt: skip
+        out.append(Case(f"reproduce/argument/{what}", lambda f, n=name: ["reproduce", n], 2,
+                        (), None))  # fmt: skip
+    out.append(Case("orientviz/argument/unknown-command", lambda f: ["frobnicate"], 2,
+                    ("frobnicate",), None))  # fmt: skip
     out.append(
         Case(
             "solve/argument/method",
@@ -213,6 +258,16 @@ def outputs() -> list[Case]:
         return ["export", str(f / I.BLOCK), "-d", str(f / I.BLOCK)]
 
     c.append(Case("export/directory/the-input", export_onto_input, 2, (), I.BLOCK))
+
+    def export_over_input(f: Path) -> list[str]:  # the input is DIR/adjusted.json itself
+        (f / "res").mkdir()
+        I.write(f / "res", I.BLOCK)
+        (f / "res" / I.BLOCK).rename(f / "res" / "adjusted.json")
+        return ["export", str(f / "res" / "adjusted.json"), "-d", str(f / "res"), "--format",
+                "json"]  # fmt: skip
+
+    c.append(Case("export/directory/holds-the-input", export_over_input, 2, ("refusing",),
+                  "res/adjusted.json"))  # fmt: skip
 
     def import_onto(cmd: str, rel: str, target: str):
         def make(f: Path) -> list[str]:
@@ -299,6 +354,27 @@ def problem_files() -> list[Case]:
                           (), name))  # fmt: skip
         deep = "[" * 100_000 + "]" * 100_000
         c.append(Case(f"solve/{kind}/nested-deeply", _problem(name, None, raw=deep), 2, (), name))
+
+    def similarity_report(f: Path) -> list[str]:  # found by test_properties
+        d = I.doc("similarity_example.json")
+        d["target"]["points"][0]["X"] = 1e308
+        (f / "s.json").write_text(json.dumps(d), encoding="utf-8")
+        return ["solve", str(f / "s.json"), "--report", str(f / "r.html")]
+
+    c.append(Case("solve/similarity/1e308-with-report", similarity_report, 2, ("beyond",),
+                  "s.json"))  # fmt: skip
+    empties = "[" + "{}," * 700_000 + "{}]"
+    c.append(Case("solve/block/dense-structure", _problem(I.BLOCK, None, raw=empties), 2,
+                  ("structure",), I.BLOCK))  # fmt: skip
+
+    def export_far(f: Path) -> list[str]:
+        d = I.doc(I.BLOCK)
+        d["observations"][5]["x"] = -1e308
+        (f / I.BLOCK).write_text(json.dumps(d), encoding="utf-8")
+        return ["export", str(f / I.BLOCK), "-d", str(f / "out")]
+
+    c.append(Case("export/geometry/x-minus-1e308", export_far, 2, ("observations[5]",),
+                  I.BLOCK))  # fmt: skip
     big_description = _set(("description",), "d" * 200_000)
     c.append(Case("solve/block/long-description", _problem(I.BLOCK, big_description), 2,
                   ("characters",), I.BLOCK))  # fmt: skip
@@ -390,6 +466,7 @@ def colmap_models() -> list[Case]:
         c.append(Case(f"import-colmap/cameras/{what}", _colmap("cameras.txt", _field(0, field,
                       value)), 2, ("line",), cam))  # fmt: skip
     for what, field, value in (("tx-1e308", 5, "1e308"), ("quaternion-zero", 1, "0"),
+                               ("name-100k", 9, "n" * 100_000),
                                ("camera-unknown", 8, "99"), ("image-id-text", 0, "one")):  # fmt: skip
 
         def edit(text, field=field, value=value, what=what):
@@ -459,6 +536,7 @@ def bal_files() -> list[Case]:
         "header-negative": line(0, "-1 5 5"),
         "header-huge-counts": line(0, "1000000000 1000000000 1000000000"),
         "header-text": line(0, "cameras points observations"),
+        "header-400-digits": line(0, "9" * 400 + " 1 1"),
         "observation-minus-1e308": lambda t: (
             "\n".join(
                 [
@@ -544,6 +622,40 @@ def geometry() -> list[Case]:
     c.append(Case("solve/geometry/image-with-two-points", _block_edit(two_points), 3,
                   ("fewer",), I.BLOCK))  # fmt: skip
 
+    def check_far(d):  # a check point's given X a thousand km off: warned, still solved
+        p = next((p for p in d["points"] if p.get("role") == "check"), None)
+        if p is None:
+            p = d["points"][1]
+            p["role"] = "check"
+        p["X"] = p.get("X", 0.0) + 1e6
+
+    def warned_in_report(folder: Path) -> None:
+        assert "far outside its extent" in (folder / "r.txt").read_text(encoding="utf-8")
+
+    c.append(Case("solve/geometry/check-point-far-away",
+                  _block_edit(check_far, ("--report", "r.txt")), 0, warns=True,
+                  outputs=("r.txt",), post=warned_in_report))  # fmt: skip
+
+    def pair_points(edit):
+        def make(f: Path) -> list[str]:
+            d = I.doc("pair_example.json")
+            edit(d)
+            (f / "pair.json").write_text(json.dumps(d), encoding="utf-8")
+            return ["solve", str(f / "pair.json")]
+
+        return make
+
+    def same_point(d):  # every point the same: no relative orientation
+        for p in d["points"][1:]:
+            p.update({k: d["points"][0][k] for k in ("xl", "yl", "xr", "yr")})
+
+    def four_points(d):
+        d["points"] = d["points"][:4]
+
+    for what, edit, code, says in (("all-points-equal", same_point, 3, "not determinable"),
+                                   ("four-points", four_points, 2, "at least 5")):  # fmt: skip
+        c.append(Case(f"solve/pair/{what}", pair_points(edit), code, (says,), "pair.json"))
+
     def lost_tie(d):  # the last image's rays removed: tie points left with one ray
         img = d["images"][-1]["id"]
         d["observations"] = [o for o in d["observations"] if o["image"] != img]
@@ -554,36 +666,177 @@ def geometry() -> list[Case]:
 
 
 # --------------------------------------------------------------------------- successes
+def _rename(d: dict, table: str, ref: str, k: int, value: str) -> None:
+    """Rename row ``k`` of ``table`` (images/points) and its observations."""
+    old = d[table][k]["id"]
+    d[table][k]["id"] = value
+    for o in d["observations"]:
+        if o[ref] == old:
+            o[ref] = value
+
+
+def _no_raw(text: str, name: str):
+    def post(folder: Path) -> None:
+        html = (folder / name).read_text(encoding="utf-8")
+        assert text not in html, f"{text!r} reached the HTML unescaped"
+
+    return post
+
+
 def accepted() -> list[Case]:
     """Hostile-looking but legal input: must succeed (exit 0) and write only its outputs."""
     c = []
 
-    def ids(value: str, extra=()):
+    def ids(table: str, value: str, extra=()):
         def make(f: Path) -> list[str]:
             d = I.doc(I.BLOCK)
-            old = d["points"][0]["id"]
-            d["points"][0]["id"] = value
-            for o in d["observations"]:
-                if o["point"] == old:
-                    o["point"] = value
+            _rename(d, table, "point" if table == "points" else "image", 0, value)
             (f / I.BLOCK).write_text(json.dumps(d), encoding="utf-8")
             return ["solve", str(f / I.BLOCK), *[str(f / e) if "." in e else e for e in extra]]
 
         return make
 
-    for what, value in (("mathtext", r"$\undefinedmacro$"), ("html", "<script>x</script>&"),
-                        ("newline", "a\nb"), ("dollar", "$"), ("percent-braces", "%s{0}")):  # fmt: skip
-        c.append(Case(f"solve/accepted/id-{what}", ids(value, ("--report", "r.html")), 0,
-                      outputs=("r.html",)))  # fmt: skip
-    c.append(Case("solve/accepted/id-mathtext-txt", ids(r"$\frac{$", ("--report", "r.txt")), 0,
-                  outputs=("r.txt",)))  # fmt: skip
+    kinds = {  # figures draw image ids; point ids reach the tables (HTML escaping)
+        "images": ("mathtext", "mathtext-frac", "html", "newline"),
+        "points": ("mathtext", "html"),
+    }
+    values = {"mathtext": r"$\undefinedmacro$", "html": "<script>x</script>&",
+              "newline": "a\nb", "mathtext-frac": r"$\frac{$"}  # fmt: skip
+    for table, whats in kinds.items():
+        for what in whats:
+            post = _no_raw("<script>x</script>", "r.html") if what == "html" else None
+            c.append(Case(f"solve/accepted/{table}-id-{what}",
+                          ids(table, values[what], ("--report", "r.html")), 0,
+                          outputs=("r.html",), post=post))  # fmt: skip
+    for what, value in (("dollar", "$"), ("percent-braces", "%s{0}")):
+        c.append(Case(f"solve/accepted/images-id-{what}-txt", ids("images", value,
+                      ("--report", "r.txt")), 0, outputs=("r.txt",)))  # fmt: skip
+    c.append(Case("solve/accepted/id-mathtext-txt", ids("images", r"$\frac{$",
+                  ("--report", "r.txt")), 0, outputs=("r.txt",)))  # fmt: skip
+    models = ids("images", r"$\undefinedmacro$", ("--method", "models", "--report", "r.html"))
+    c.append(Case("solve/accepted/models-report-with-control", models, 0, outputs=("r.html",)))
+
+    def shipped(f: Path) -> list[str]:
+        return ["export", "block_strip", "-d", str(f / "out"), "--no-adjust"]
+
+    c.append(Case("export/accepted/shipped-example", shipped, 0, outputs=("out",)))
+
+    def bal_ok(f: Path) -> list[str]:
+        _all_inputs(f)
+        lines = (f / I.CONTROL).read_text().splitlines()
+        rows = [f"pt{int(r.split(',', 1)[0]) - 1},{r.split(',', 1)[1]}" for r in lines[1:]]
+        (f / I.CONTROL).write_text("\n".join([lines[0], *rows]) + "\n")
+        return ["import-bal", str(f / I.BAL), "--control", str(f / I.CONTROL), "-o",
+                str(f / "o.json")]  # fmt: skip
+
+    c.append(Case("import-bal/accepted/with-control", bal_ok, 0, outputs=("o.json",)))
+
+    def colmap_ok(f: Path) -> list[str]:
+        _all_inputs(f)
+        return ["import-colmap", str(f / "sparse"), "--control", str(f / I.CONTROL), "-o",
+                str(f / "o.json")]  # fmt: skip
+
+    c.append(Case("import-colmap/accepted/with-control", colmap_ok, 0, outputs=("o.json",)))
     return c
+
+
+# --------------------------------------------------------------------------- binary COLMAP
+def _binary(file: str, edit):
+    def make(f: Path) -> list[str]:
+        _all_inputs(f)
+        p = f / "sparse_bin" / file
+        p.write_bytes(edit(p.read_bytes()))
+        return ["import-colmap", str(f / "sparse_bin"), "-o", str(f / "o.json")]
+
+    return make
+
+
+def _put(offset: int, fmt: str, *values):
+    import struct
+
+    def edit(data: bytes) -> bytes:
+        packed = struct.pack(fmt, *values)
+        return data[:offset] + packed + data[offset + len(packed) :]
+
+    return edit
+
+
+def binary_models() -> list[Case]:
+    """COLMAP binary models: counts, sizes, ids, non-finite and overflowing values, cuts.
+
+    Offsets: cameras.bin ``n`` 0, id 8, model 12, width 16, height 24, params 32;
+    points3D.bin ``n`` 0, id 8, X 16; images.bin ``n`` 0, id 8, qvec 12, tvec 44.
+    """
+    edits = {
+        "cameras.bin": {
+            "count-2^62": _put(0, "<Q", 2**62), "model-99": _put(12, "<i", 99),
+            "width-0": _put(16, "<Q", 0), "focal-nan": _put(32, "<d", float("nan")),
+            "focal-negative": _put(32, "<d", -800.0), "cut-20": lambda d: d[:20],
+        },
+        "points3D.bin": {
+            "count-2^62": _put(0, "<Q", 2**62), "x-nan": _put(16, "<d", float("nan")),
+            "x-1e308": _put(16, "<d", 1e308), "id-minus-1": _put(8, "<Q", 2**64 - 1),
+            "cut-half": lambda d: d[: len(d) // 2],
+        },
+        "images.bin": {
+            "count-2^62": _put(0, "<Q", 2**62), "quaternion-zero": _put(12, "<4d", 0, 0, 0, 0),
+            "t-1e308": _put(44, "<3d", 1e308, 1e308, 1e308), "cut-30": lambda d: d[:30],
+            "cut-half": lambda d: d[: len(d) // 2],
+            "no-nul": lambda d: d[:68] + b"x" * (len(d) - 68),
+        },
+    }  # fmt: skip
+    out = []
+    for file, cases in edits.items():
+        for what, edit in cases.items():
+            out.append(Case(f"import-colmap-bin/{file.split('.')[0]}/{what}", _binary(file, edit),
+                            2, (), "sparse_bin"))  # fmt: skip
+    return out
+
+
+# --------------------------------------------------------------------------- measurement CSV
+def measurement_csv() -> list[Case]:
+    """``import-csv`` tables: cells, numbers, ids, options."""
+    good = I.base()[I.MARKS].splitlines()
+    head, row = good[0], good[1]
+    img, pt = row.split(",")[:2]
+    bodies = {
+        "cell-over-field-limit": f"{head}\n{img},{pt},{'9' * 200_000},1\n",
+        "nul-byte": f"{head}\n{img},{pt},1\x00,2\n",
+        "x-nan": f"{head}\n{img},{pt},nan,2\n",
+        "x-1e308": "\n".join([head, f"{img},{pt},1e308,2", *good[2:]]) + "\n",
+        "megabyte-id": f"{head}\n{'i' * 100_000},{pt},1,2\n",
+        "ragged": f"{head}\n{img},{pt},1\n",
+        "no-header": "\n".join(good[1:]) + "\n",
+        "duplicate": "\n".join([head, row, row, *good[2:]]) + "\n",
+        "sigma-negative": "image,point,x,y,sigma\n" + f"{row},-1\n",
+    }
+    out = []
+    for what, text in bodies.items():
+
+        def make(f: Path, text=text) -> list[str]:
+            (f / I.MARKS).write_text(text, encoding="utf-8")
+            return ["import-csv", str(f / I.MARKS), "--units", "mm", "--c", "152", "-o",
+                    str(f / "o.json")]  # fmt: skip
+
+        out.append(Case(f"import-csv/csv/{what}", make, 2, ("line",), I.MARKS))
+    for what, extra in (("c-zero", ["--c", "0"]), ("c-nan", ["--c", "nan"]),
+                        ("format-negative", ["--format", "-1", "2"]),
+                        ("principal-point-inf", ["--principal-point", "inf", "0"])):  # fmt: skip
+
+        def make_opt(f: Path, extra=extra) -> list[str]:
+            I.write(f, I.MARKS)
+            return ["import-csv", str(f / I.MARKS), "--units", "mm", "--c", "152", "-o",
+                    str(f / "o.json"), *extra]  # fmt: skip
+
+        out.append(Case(f"import-csv/argument/{what}", make_opt, 2, (), extra[0]))
+    return out
 
 
 def all_cases() -> list[Case]:
     return [
-        *special_files(), *garbage_files(), *arguments(), *outputs(), *problem_files(),
+        *special_files(), *garbage_files(), *long_names(), *arguments(), *outputs(), *problem_files(),
         *csv_files(), *colmap_models(), *bal_files(), *geometry(), *accepted(),
+        *binary_models(), *measurement_csv(),
     ]  # fmt: skip
 
 

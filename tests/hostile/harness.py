@@ -54,6 +54,8 @@ class Case:
         Files/folders (relative) a successful run may create.
     warns : bool
         Exit 0 with warning lines on stderr (each one line, "warning" in it).
+    post : callable, optional
+        ``post(folder)`` checks the outputs of a successful run (e.g. HTML escaping).
     """
 
     name: str
@@ -63,7 +65,7 @@ class Case:
     names: str | None = None
     outputs: tuple[str, ...] = ()
     warns: bool = False
-    tags: tuple[str, ...] = field(default=())
+    post: Callable[[Path], None] | None = field(default=None)
 
     def __str__(self) -> str:  # pytest id
         return self.name
@@ -149,6 +151,8 @@ def check_case(case: Case, folder: Path) -> None:
             assert lines and all("warning" in ln for ln in lines), context
         else:
             assert not lines, context
+        if case.post is not None:
+            case.post(folder)
         return
     assert not new, f"a failed run left {new}\n{context}"
     assert len(lines) == 1, f"expected one line on stderr, got {len(lines)}\n{context}"

@@ -13,6 +13,8 @@ from functools import cache
 from pathlib import Path
 
 BLOCK = "block.json"
+COLMAP_BIN = "sparse_bin"
+MARKS = "marks.csv"
 COLUMNAR = "columnar.json"
 BAL = "block.bal"
 COLMAP = "sparse"
@@ -24,13 +26,13 @@ def base() -> dict[str, str]:
     """name → text of each valid input (COLMAP files as ``sparse/<file>``)."""
     import tempfile
 
-    from orientviz.block.simulate import simulate_block
+    from orientviz.block import CONTROL as ROLE_CONTROL
     from orientviz.io.bal import write_bal
     from orientviz.io.colmap import write_colmap
     from orientviz.io.control import ControlPoints, write_control
     from orientviz.io.datasets import dataset_path
     from orientviz.io.problem import dumps_problem, problem_from_block
-    from orientviz.model import CONTROL as ROLE_CONTROL
+    from orientviz.simulate import simulate_block
 
     sim = simulate_block(1, 5, rng=7, control="full")
     block = sim.block
@@ -53,6 +55,11 @@ def base() -> dict[str, str]:
         write_colmap(free, t / COLMAP)
         for f in ("cameras.txt", "images.txt", "points3D.txt"):
             out[f"{COLMAP}/{f}"] = (t / COLMAP / f).read_text()
+        obs = free.observations
+        out[MARKS] = "image,point,x,y\n" + "".join(
+            f"{free.images.ids[i]},{free.points.ids[j]},{x:.6f},{y:.6f}\n"
+            for i, j, (x, y) in zip(obs.image, obs.point, obs.xy)
+        )
         ctl = [i for i in range(block.n_points) if block.points.role[i] == ROLE_CONTROL]
         cp = ControlPoints(
             [str(i + 1) for i in ctl],
@@ -63,6 +70,35 @@ def base() -> dict[str, str]:
         write_control(t / CONTROL, cp)
         out[CONTROL] = (t / CONTROL).read_text()
     return out
+
+
+@cache
+def base_binary() -> dict[str, bytes]:
+    """The COLMAP model of :func:`base` in COLMAP's binary layout (``sparse_bin/<file>``)."""
+    import tempfile
+
+    from orientviz.io.colmap_bin import write_binary_model
+    from orientviz.io.colmap_text import read_text_model
+
+    texts = base()
+    with tempfile.TemporaryDirectory() as tmp:
+        t = Path(tmp)
+        (t / COLMAP).mkdir()
+        for f in ("cameras.txt", "images.txt", "points3D.txt"):
+            (t / COLMAP / f).write_text(texts[f"{COLMAP}/{f}"])
+        write_binary_model(read_text_model(t / COLMAP), t / COLMAP_BIN)
+        return {
+            f"{COLMAP_BIN}/{f}": (t / COLMAP_BIN / f).read_bytes()
+            for f in ("cameras.bin", "images.bin", "points3D.bin")
+        }
+
+
+def write_binary(folder: Path) -> None:
+    """Write the binary COLMAP model into ``folder/sparse_bin``."""
+    for name, data in base_binary().items():
+        p = folder / name
+        p.parent.mkdir(parents=True, exist_ok=True)
+        p.write_bytes(data)
 
 
 def write(folder: Path, *names: str, **replace: str) -> None:

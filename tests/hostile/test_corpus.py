@@ -11,7 +11,7 @@ from .harness import check_case
 def test_corpus_is_large_and_covers_every_command():
     assert len(CASES) >= 100
     commands = {c.name.split("/")[0] for c in CASES}
-    assert commands >= {"solve", "export", "view", "import-bal", "import-colmap"}
+    assert commands >= {"solve", "export", "view", "import-bal", "import-colmap", "reproduce"}
     assert len({c.name for c in CASES}) == len(CASES)
 
 

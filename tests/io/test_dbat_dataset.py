@@ -9,11 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from orientviz.block import CHECK, CONTROL, TIE
 from orientviz.datasets import make_dbat
 from orientviz.io.datasets import dataset_info, dataset_path, load_dataset
 from orientviz.io.kinds.block import approximate, solve, with_check_rays
 from orientviz.io.problem import loads_problem
-from orientviz.model import CHECK, CONTROL, TIE
 
 FOLDER = dataset_path("dbat_sxb").parent
 
@@ -25,6 +25,13 @@ def _fake_checkout(tmp_path: Path) -> Path:
         target = root / make_dbat.SXB / name
         target.parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(FOLDER / "sxb" / Path(name).name, target)
+    for name in make_dbat.CAMCAL_FILES:
+        target = root / make_dbat.CAMCAL / name
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(FOLDER / "camcal" / Path(name).name, target)
+    report = root / make_dbat.CAMCAL_REPORT
+    report.parent.mkdir(parents=True, exist_ok=True)
+    shutil.copyfile(FOLDER / "camcal" / "camcal-dbatreport.txt", report)
     shutil.copyfile(FOLDER / "LICENSE.txt", root / "LICENSE.txt")
     return root
 
@@ -34,6 +41,17 @@ def test_the_shipped_problem_is_what_the_script_makes_of_dbats_files(tmp_path):
     assert make_dbat.main([str(_fake_checkout(tmp_path)), "-o", str(out)]) == 0
     for name in ("dbat_sxb.json", "MANIFEST.json", "CITATION.md", "LICENSE.txt"):
         assert (out / name).read_bytes() == (FOLDER / name).read_bytes(), name
+    shipped = sorted(p.relative_to(FOLDER) for p in FOLDER.rglob("*") if p.is_file())
+    made = sorted(p.relative_to(out) for p in out.rglob("*") if p.is_file())
+    assert made == shipped  # nothing shipped that the script does not make
+
+
+def test_the_camera_calibration_demo_reads_as_dbat_describes_it():
+    d = make_dbat.read_camcal(FOLDER / "camcal")
+    assert d["image_px"] == [2272, 1704] and len(d["images"]) == 21
+    assert len(d["marks"]) == 2074 and len(d["control"]) == 4  # 4148 image coordinates
+    assert d["pixel_mm"] == pytest.approx(5.43764 / 1704)
+    assert {m[4] for m in d["marks"]} == {0.1}  # σ 0.1 px
 
 
 def test_the_script_refuses_a_folder_that_is_not_dbat(tmp_path, capsys):
@@ -63,7 +81,9 @@ def test_the_block_has_dbats_counts_and_conventions():
     assert sorted(chk) == ["351", "410"]
     # pixel → mm: x = col · 0.006, y = −row · 0.006; the first marked point of image 8811
     i = block.image_index("8811")
-    k = np.flatnonzero((block.observations.image == i) & (block.observations.point == block.point_index("317")))
+    k = np.flatnonzero(
+        (block.observations.image == i) & (block.observations.point == block.point_index("317"))
+    )
     assert np.allclose(block.observations.xy[k], [[5007.6667 * 0.006, -7275.6667 * 0.006]])
     assert np.isclose(block.cameras.y0[0], -38.811) and np.isclose(block.cameras.c[0], 123.9392)
     sig = np.unique(block.observations.sigma)

@@ -74,7 +74,9 @@ def test_affine_fiducial_transformation_recovers_scales_rotation_shear():
     machine = (cal - t) @ np.linalg.inv(A).T
     res = fiducial_transformation(machine, cal)
     g = affine_parameters(res.x)
-    np.testing.assert_allclose([g.scale_x, g.scale_y, g.rotation, g.shear], [sx, sy, al, k], atol=1e-12)
+    np.testing.assert_allclose(
+        [g.scale_x, g.scale_y, g.rotation, g.shear], [sx, sy, al, k], atol=1e-12
+    )
     np.testing.assert_allclose(apply_interior(res.x, machine), cal, atol=1e-10)
     assert res.redundancy == 16 - 6
     sim = fiducial_transformation(machine, cal, model="similarity")

@@ -21,7 +21,9 @@ from orientviz.rotation import matrix_from_opk
 def _pair(seed=0):
     rng = np.random.default_rng(seed)
     c = 152.0
-    P = np.column_stack([rng.uniform(-10, 100, 20), rng.uniform(-90, 90, 20), -c + rng.uniform(-15, 15, 20)])
+    P = np.column_stack(
+        [rng.uniform(-10, 100, 20), rng.uniform(-90, 90, 20), -c + rng.uniform(-15, 15, 20)]
+    )
     B = np.array([92.0, 3.0, -2.0])
     R1, R2 = matrix_from_opk(0.01, -0.02, 0.015), matrix_from_opk(-0.02, 0.03, 0.04)
     return c, P, B, R1, R2, project(P, np.zeros(3), R1, c), project(P, B, R2, c)

@@ -18,11 +18,15 @@ from orientviz.cli import main
 from orientviz.reproduce import kovarik
 
 
-def test_table_runs_and_has_the_experiments():
+def test_every_paper_number_is_a_labelled_flagged_row():
     rows = kovarik.table(n_trials=3)
     tasks = {r.task for r in rows}
-    assert {"relief", "wrong ordinate", "pre-orientation"} <= tasks
-    assert all(r.orientviz is not None for r in rows)
+    assert {"relief", "pass scheme", "wrong ordinate", "pre-orientation"} <= tasks
+    with_paper = [r for r in rows if r.paper is not None]
+    assert {r.key for r in with_paper} == set(kovarik.paper_values())
+    for r in with_paper:
+        assert r.label in ("predicted", "fitted") and r.match is not None and r.rule, r.key
+        assert r.paper == kovarik.PAPER[r.key]
 
 
 def test_relief_law_and_tenfold_shrinkage():
@@ -43,7 +47,15 @@ def test_wrong_ordinate_law():
 def test_cli_json(capsys):
     assert main(["reproduce", "kovarik", "--json"]) == 0
     rows = json.loads(capsys.readouterr().out)
-    assert any(r["task"] == "wrong ordinate" for r in rows)
+    flagged = {
+        r["key"]: r
+        for r in rows
+        if r["match"] is not None and not r["group"].startswith("sensitivity")
+    }
+    assert flagged["relief|6%|passes"]["label"] == "predicted"
+    assert flagged["relief|6%|passes"]["match"] is True  # 3.0 passes, printed 2-3
+    assert flagged["relief|10%|passes"]["match"] is False  # 3.0 passes, printed 4
+    assert flagged["wrong ordinate|ratio"]["fitted"] == ["reading of 'Ordinatenwert'"]
 
 
 #: Predicted rows that do not reproduce (key → reason); everything else predicted matches.

@@ -27,7 +27,9 @@ def distance_model(pairs: ArrayLike) -> Callable[[F64], tuple[F64, F64]]:
     """
     P = np.asarray(pairs, dtype=int)
     if P.ndim != 2 or P.shape[1] != 2 or np.any(P[:, 0] == P[:, 1]):
-        raise InputError(f"expected pairs of two different point indices, shape (k, 2), got {P.shape}")
+        raise InputError(
+            f"expected pairs of two different point indices, shape (k, 2), got {P.shape}"
+        )
 
     def model(x: F64) -> tuple[F64, F64]:
         xy = np.asarray(x, dtype=float).reshape(-1, 2)

@@ -12,6 +12,11 @@ used or shipped). It writes ``orientviz/datasets/dbat/``:
   their rays).
 * ``sxb/`` — DBAT's own input files and its report (``report.txt``, the published
   numbers of ``orientviz reproduce dbat-sxb``), unchanged.
+* ``camcal/`` — DBAT's camera calibration demo (``data/script/camcaldemo``: 21 images of
+  a target sheet by an Olympus C4040Z, 7.3 mm, 2074 image points, 4 fixed control
+  points) and the report of its PhotoModeler-export route
+  (``data/dbat/dbatexports/camcal-dbatreport.txt``), unchanged; :func:`read_camcal`
+  reads it (``orientviz reproduce dbat-camcal``).
 * ``LICENSE.txt`` (DBAT's licence, verbatim), ``CITATION.md`` and ``MANIFEST.json``.
 
 Conversions (DBAT's conventions, read from its camera model): image coordinates are
@@ -46,6 +51,18 @@ SXB_FILES = (
     "reference/sxb-control.txt",
     "result/report.txt",
 )
+
+#: DBAT's camera calibration demo (script version) and the report of its pmexport route.
+CAMCAL = "data/script/camcaldemo"
+CAMCAL_FILES = (
+    "camcaldemo.xml",
+    "c4040z.xml",
+    "images/images.txt",
+    "measurements/markpts.txt",
+    "reference/camcal-fixed.txt",
+    "result/report.txt",
+)
+CAMCAL_REPORT = "data/dbat/dbatexports/camcal-dbatreport.txt"
 
 CITATION = """\
 # Citing the DBAT data
@@ -119,7 +136,11 @@ def sxb_camera(xml_path: Path) -> dict[str, Any]:
         files[(f.text or "").strip()] = float(f.get("sxy", "nan"))
     out["image_sigma_px"] = files
     checks = root.find("input/check_pts/filter")
-    out["check_ids"] = [s.strip() for s in (checks.get("id", "") if checks is not None else "").split(",") if s.strip()]
+    out["check_ids"] = [
+        s.strip()
+        for s in (checks.get("id", "") if checks is not None else "").split(",")
+        if s.strip()
+    ]
     return out
 
 
@@ -172,13 +193,15 @@ def sxb_problem(root: Path) -> tuple[dict[str, Any], dict[str, Any]]:
         "units": {"length": "m", "image": "mm", "angle": "deg"},
         "sequence": "opk",
         "options": {"control": "weighted", "check_points": "rays", "max_iter": 20},
-        "cameras": [{
-            "id": "aerial",
-            "c": cam["c_mm"],
-            "x0": cam["pp_mm"][0],
-            "y0": -cam["pp_mm"][1],
-            "format": cam["sensor_mm"],
-        }],  # fmt: skip
+        "cameras": [
+            {
+                "id": "aerial",
+                "c": cam["c_mm"],
+                "x0": cam["pp_mm"][0],
+                "y0": -cam["pp_mm"][1],
+                "format": cam["sensor_mm"],
+            }
+        ],  # fmt: skip
         "images": [{"id": name, "camera": "aerial"} for name in images.values()],
         "points": points,
         "observations": observations,
@@ -192,6 +215,37 @@ def sxb_problem(root: Path) -> tuple[dict[str, Any], dict[str, Any]]:
         "images": images,
     }
     return doc, facts
+
+
+def read_camcal(folder: Path) -> dict[str, Any]:
+    """DBAT's camera calibration demo from its script files in ``folder`` (copied flat).
+
+    Returns the camera (sensor height mm, image size px, nominal focal length mm; the
+    sensor width follows from square pixels, as DBAT's ``auto``), the image names, the
+    marked points (image number, point id, column, row px, σ px) and the control points
+    (id → X, Y, Z m, held fixed by DBAT's script).
+    """
+    root = ET.parse(folder / "camcaldemo.xml").getroot()
+    cam = root.find("input/cameras/camera")
+    if cam is None:
+        raise ValueError(f"{folder}: no camera in camcaldemo.xml")
+    sensor = cam.findtext("sensor", "").split(",")
+    image = [int(v) for v in _numbers(cam.findtext("image", ""))]
+    height = float(sensor[1])
+    pixel = height / image[1]
+    marks = _rows(folder / "markpts.txt")
+    return {
+        "image_px": image,
+        "pixel_mm": pixel,
+        "sensor_mm": [image[0] * pixel, height],
+        "focal_mm": float(cam.findtext("focal", "")),
+        "images": {row[0]: Path(row[1]).name for row in _rows(folder / "images.txt")},
+        "marks": [(m[0], m[1], float(m[2]), float(m[3]), float(m[4])) for m in marks],
+        "control": {
+            r[0]: (float(r[2]), float(r[3]), float(r[4]))
+            for r in _rows(folder / "camcal-fixed.txt")
+        },
+    }
 
 
 def make(dbat: Path, out: Path = HERE) -> list[Path]:
@@ -209,6 +263,13 @@ def make(dbat: Path, out: Path = HERE) -> list[Path]:
         target = out / "sxb" / Path(name).name
         shutil.copyfile(dbat / SXB / name, target)
         written.append(target)
+    (out / "camcal").mkdir(exist_ok=True)
+    for name in CAMCAL_FILES:
+        target = out / "camcal" / Path(name).name
+        shutil.copyfile(dbat / CAMCAL / name, target)
+        written.append(target)
+    shutil.copyfile(dbat / CAMCAL_REPORT, out / "camcal" / "camcal-dbatreport.txt")
+    written.append(out / "camcal" / "camcal-dbatreport.txt")
     doc, facts = sxb_problem(dbat)
     # through orientviz's own reader and writer: validated, and in the canonical form
     text = dumps_problem(loads_problem(json.dumps(doc), "dbat_sxb.json"))
@@ -264,7 +325,9 @@ def main(argv: list[str] | None = None) -> int:
         prog="python -m orientviz.datasets.make_dbat",
         description="Convert DBAT's sxb block (and camera calibration) into orientviz datasets.",
     )
-    parser.add_argument("dbat", type=Path, help="path of a DBAT checkout (github.com/niclasborlin/dbat)")
+    parser.add_argument(
+        "dbat", type=Path, help="path of a DBAT checkout (github.com/niclasborlin/dbat)"
+    )
     parser.add_argument("-o", "--out", type=Path, default=HERE, help="output folder")
     args = parser.parse_args(argv)
     try:

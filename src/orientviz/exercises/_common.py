@@ -117,7 +117,9 @@ def call(func: Any, *args: Any, what: str = "your function", **kwargs: Any) -> A
     try:
         out = func(*args, **kwargs)
     except NotImplementedError:
-        raise NotWrittenError(f"{what}: not written yet (it still raises NotImplementedError).") from None
+        raise NotWrittenError(
+            f"{what}: not written yet (it still raises NotImplementedError)."
+        ) from None
     if out is None or out is Ellipsis:
         raise NotWrittenError(f"{what}: not written yet (it returns {out!r}; a `return` missing?).")
     return out
@@ -129,7 +131,7 @@ def success(message: str) -> None:
 
 
 def relative_error(got: ArrayLike, expected: ArrayLike, scale: float | None = None) -> float:
-    """Largest absolute difference divided by a scale (default: largest |expected|, at least 1e-300).
+    """Largest absolute difference divided by a scale (default: the largest abs(expected), at least 1e-300).
 
     Parameters
     ----------
@@ -165,7 +167,11 @@ def is_sign_flip(got: ArrayLike, expected: ArrayLike, rtol: float = 1e-6) -> boo
     """True if ``got`` equals ``-expected`` (and ``expected`` is not zero)."""
     g = np.asarray(got, dtype=float)
     e = np.asarray(expected, dtype=float)
-    return g.shape == e.shape and relative_error(g, -e) <= rtol and float(np.max(np.abs(e), initial=0.0)) > 0
+    return (
+        g.shape == e.shape
+        and relative_error(g, -e) <= rtol
+        and float(np.max(np.abs(e), initial=0.0)) > 0
+    )
 
 
 def _ratio(got: NDArray[np.float64], expected: NDArray[np.float64]) -> float | None:
@@ -293,7 +299,7 @@ def compare(
     wrong : iterable of (str, array_like)
         Lesson-specific wrong answers with their diagnosis (see :func:`diagnose`).
     scale : float, optional
-        Reference size for the relative error (default: largest |expected|).
+        Reference size for the relative error (default: the largest abs(expected)).
 
     Returns
     -------
@@ -304,7 +310,9 @@ def compare(
     try:
         g = np.asarray(got, dtype=float)
     except (TypeError, ValueError):
-        raise CheckFailed(f"{name}: expected numbers of shape {e.shape}, got {type(got).__name__}.") from None
+        raise CheckFailed(
+            f"{name}: expected numbers of shape {e.shape}, got {type(got).__name__}."
+        ) from None
     if g.shape != e.shape:
         hint = " (a transposed vector?)" if sorted(g.shape) == sorted(e.shape) else ""
         raise CheckFailed(f"{name}: expected shape {e.shape}, got {g.shape}{hint}.", tolerance=rtol)

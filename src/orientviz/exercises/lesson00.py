@@ -21,7 +21,14 @@ from scipy.stats import norm
 
 from ._common import call, compare, rng_for, success
 
-__all__ = ["MUTANTS", "SOLUTIONS", "check_critical_value", "check_normalized", "check_redundancy", "check_sigma0"]
+__all__ = [
+    "MUTANTS",
+    "SOLUTIONS",
+    "check_critical_value",
+    "check_normalized",
+    "check_redundancy",
+    "check_sigma0",
+]
 
 F64 = NDArray[np.float64]
 
@@ -33,10 +40,12 @@ def check_sigma0(sigma0: Callable[[F64, F64, int], float]) -> None:
     sigma = np.where(np.arange(n) % 3 == 0, 0.003, 0.008)
     v = rng.normal(0, 1, n) * sigma * 1.3
     truth = float(np.sqrt(np.sum((v / sigma) ** 2) / r))
-    wrong = [("the weights are missing: divide each residual by its σ", np.sqrt(np.sum(v**2) / r)),
-             ("divided by n, not by the redundancy r", truth * np.sqrt(r / n)),
-             ("the square root is missing (this is σ̂0²)", truth**2),
-             ("weights 1/σ instead of 1/σ²", np.sqrt(np.sum(v**2 / sigma) / r))]
+    wrong = [
+        ("the weights are missing: divide each residual by its σ", np.sqrt(np.sum(v**2) / r)),
+        ("divided by n, not by the redundancy r", truth * np.sqrt(r / n)),
+        ("the square root is missing (this is σ̂0²)", truth**2),
+        ("weights 1/σ instead of 1/σ²", np.sqrt(np.sum(v**2 / sigma) / r)),
+    ]
     got = float(call(sigma0, v.copy(), sigma.copy(), r, what="sigma0"))
     compare("σ̂0", got, truth, rtol=1e-9, wrong=wrong)
     success(f"σ̂0 = √(vᵀPv / r) = {got:.3f}")
@@ -44,23 +53,38 @@ def check_sigma0(sigma0: Callable[[F64, F64, int], float]) -> None:
 
 def check_redundancy(redundancy: Callable[[int, int, int, int], int]) -> None:
     """``redundancy(n_images, n_tie, n_control, n_rays)`` of a bundle with fixed control points."""
-    cases = [(2, 6, 4, 20), (18, 380, 8, 1021), (7, 45, 6, 190)]  # the first by hand: 40 − 12 − 18 = 10
+    cases = [
+        (2, 6, 4, 20),
+        (18, 380, 8, 1021),
+        (7, 45, 6, 190),
+    ]  # the first by hand: 40 − 12 − 18 = 10
     for m, t, k, n in cases:
         truth = 2 * n - 6 * m - 3 * t
-        wrong = [("each ray gives two observations, x and y", n - 6 * m - 3 * t),
-                 ("fixed control points are not unknowns", 2 * n - 6 * m - 3 * (t + k)),
-                 ("an image has 6 orientation unknowns (X0, Y0, Z0, ω, φ, κ)", 2 * n - 7 * m - 3 * t)]
+        wrong = [
+            ("each ray gives two observations, x and y", n - 6 * m - 3 * t),
+            ("fixed control points are not unknowns", 2 * n - 6 * m - 3 * (t + k)),
+            ("an image has 6 orientation unknowns (X0, Y0, Z0, ω, φ, κ)", 2 * n - 7 * m - 3 * t),
+        ]
         got = call(redundancy, m, t, k, n, what="redundancy")
-        compare(f"redundancy of {m} images, {t} tie points, {n} rays", got, truth, rtol=1e-12, scale=1.0, wrong=wrong)
+        compare(
+            f"redundancy of {m} images, {t} tie points, {n} rays",
+            got,
+            truth,
+            rtol=1e-12,
+            scale=1.0,
+            wrong=wrong,
+        )
     success("redundancy r = 2·rays − 6·images − 3·tie points")
 
 
 def check_critical_value(critical_w: Callable[[float], float]) -> None:
-    """``critical_w(alpha)`` must return k with P(|w| > k) = α for a standard normal w (two-sided)."""
+    """``critical_w(alpha)`` must return k with P(abs(w) > k) = α for a standard normal w (two-sided)."""
     for alpha in (0.001, 0.05, 0.0027):
         truth = float(norm.isf(alpha / 2))
-        wrong = [("one-sided: |w| > k has α/2 in each tail", float(norm.isf(alpha))),
-                 ("α is a fraction (0.001 = 0.1 %), not a percentage", float(norm.isf(alpha / 200)))]
+        wrong = [
+            ("one-sided: |w| > k has α/2 in each tail", float(norm.isf(alpha))),
+            ("α is a fraction (0.001 = 0.1 %), not a percentage", float(norm.isf(alpha / 200))),
+        ]
         got = float(call(critical_w, alpha, what="critical_w"))
         compare(f"k for α = {alpha}", got, truth, rtol=1e-6, wrong=wrong)
     success("critical value: 3.29 for α = 0.1 %, 1.96 for 5 %")
@@ -87,12 +111,19 @@ def check_normalized(normalized: Callable[[F64, F64, F64], F64]) -> None:
     truth = v / (sigma * np.sqrt(r))
     Qu, _ = np.linalg.qr(A)
     r_unweighted = 1.0 - np.sum(Qu**2, axis=1)
-    wrong = [("divide by σ·√r_i, not by σ alone (v/σ ignores the redundancy numbers)", v / sigma),
-             ("the square root of r_i is missing", v / (sigma * r)),
-             ("the redundancy numbers need the weights: r_i = 1 − (A N⁻¹ Aᵀ P)_ii", v / (sigma * np.sqrt(r_unweighted)))]
+    wrong = [
+        ("divide by σ·√r_i, not by σ alone (v/σ ignores the redundancy numbers)", v / sigma),
+        ("the square root of r_i is missing", v / (sigma * r)),
+        (
+            "the redundancy numbers need the weights: r_i = 1 − (A N⁻¹ Aᵀ P)_ii",
+            v / (sigma * np.sqrt(r_unweighted)),
+        ),
+    ]
     got = call(normalized, A.copy(), v.copy(), sigma.copy(), what="normalized")
     compare("normalised residuals w", got, truth, rtol=1e-8, wrong=wrong)
-    success(f"normalised residuals; the largest |w| = {np.abs(got).max():.2f} sits on the blunder (observation {int(np.argmax(np.abs(got)))})")
+    success(
+        f"normalised residuals; the largest |w| = {np.abs(got).max():.2f} sits on the blunder (observation {int(np.argmax(np.abs(got)))})"
+    )
 
 
 # ---------------------------------------------------------------- solutions and mutants
@@ -146,6 +177,8 @@ MUTANTS = {
     "check_normalized": {
         "v/sigma": lambda A, v, s: v / s,
         "no sqrt": lambda A, v, s: v / (s * _redundancy_numbers(A, s)),
-        "unweighted r": lambda A, v, s: v / (s * np.sqrt(_redundancy_numbers(A, s, weighted=False))),
+        "unweighted r": lambda A, v, s: (
+            v / (s * np.sqrt(_redundancy_numbers(A, s, weighted=False)))
+        ),
     },
 }

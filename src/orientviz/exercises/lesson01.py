@@ -65,9 +65,16 @@ def check_weighted_mean(fn) -> None:
             ("vᵀPv divided by n instead of the redundancy r = n − 1", _wm_divide_by_n(h, sigma)),
             ("σ0 from vᵀv without the weights", _wm_no_weights_in_sigma0(h, sigma)),
         ]
-        compare(f"the mean of {n} heights [m]", got[0], want[0], rtol=1e-10,
-                wrong=[(t, w[0]) for t, w in wrong])
-        compare(f"σ̂0 of {n} heights", got[1], want[1], rtol=1e-8, wrong=[(t, w[1]) for t, w in wrong])
+        compare(
+            f"the mean of {n} heights [m]",
+            got[0],
+            want[0],
+            rtol=1e-10,
+            wrong=[(t, w[0]) for t, w in wrong],
+        )
+        compare(
+            f"σ̂0 of {n} heights", got[1], want[1], rtol=1e-8, wrong=[(t, w[1]) for t, w in wrong]
+        )
     success("weighted mean and σ̂0 agree with the hand formulas for 3 and 5 heights")
 
 
@@ -131,7 +138,10 @@ def check_error_ellipse(fn) -> None:
             continue
         error = max(err_ab / 1e-6, err_th / 1e-4) * 1e-6
         for label, m in (
-            ("variances instead of standard deviations (take the square roots)", _ellipse_variances),
+            (
+                "variances instead of standard deviations (take the square roots)",
+                _ellipse_variances,
+            ),
             ("the angle of the minor axis, not the major one", _ellipse_minor_direction),
             ("the angle in degrees: give it in radians", _ellipse_degrees),
             ("2θ, not θ: tan 2θ = 2σxy/(σx² − σy²), halve the angle", _ellipse_no_half),
@@ -142,7 +152,9 @@ def check_error_ellipse(fn) -> None:
                                   error, 1e-6)  # fmt: skip
         raise CheckFailed(
             f"error ellipse of C = {np.round(C * 1e6, 2).tolist()} · 1e-6: expected a = {a:.6g}, "
-            f"b = {b:.6g}, θ = {th:.5f} rad, got {got}", error, 1e-6
+            f"b = {b:.6g}, θ = {th:.5f} rad, got {got}",
+            error,
+            1e-6,
         )
     success("semi-axes and direction agree with a brute-force search over 200 001 directions")
 
@@ -226,7 +238,9 @@ def check_gauss_newton_step(fn) -> None:
     sigma = np.array([0.004, 0.012, 0.006, 0.02])
     s = _distances(truth, stations) + rng.normal(0, 1, 4) * sigma
     x = truth + np.array([7.0, -4.0])
-    got = np.asarray(call(fn, x.copy(), stations.copy(), s.copy(), sigma.copy(), what="gn_step"), float)
+    got = np.asarray(
+        call(fn, x.copy(), stations.copy(), s.copy(), sigma.copy(), what="gn_step"), float
+    )
     want = _gn_step_numeric(x, stations, s, sigma)
     wrong = [
         ("the correction is subtracted: N Δx = JᵀP(l − f(x)), then x + Δx",
@@ -237,8 +251,10 @@ def check_gauss_newton_step(fn) -> None:
     ]  # fmt: skip
     # 1e-9 of the coordinates ≈ 0.4 µm: the numerical Jacobian's own error is far smaller
     compare("the point after one step [m]", got, want, rtol=1e-9, wrong=wrong)
-    success(f"one step from 8 m off lands {np.linalg.norm(got - truth) * 1000:.1f} mm from the truth, "
-       "as a step with a numerical Jacobian does")
+    success(
+        f"one step from 8 m off lands {np.linalg.norm(got - truth) * 1000:.1f} mm from the truth, "
+        "as a step with a numerical Jacobian does"
+    )
 
 
 SOLUTIONS = {

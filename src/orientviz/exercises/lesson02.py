@@ -38,7 +38,9 @@ def _axis_rotation(axis: F64, angle: float) -> F64:
     return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)
 
 
-def _rodrigues_opk(omega: float, phi: float, kappa: float, unit: float = GON, order: str = "opk") -> F64:
+def _rodrigues_opk(
+    omega: float, phi: float, kappa: float, unit: float = GON, order: str = "opk"
+) -> F64:
     """The oracle: R = R_X(ω) R_Y(φ) R_Z(κ) as a product of Rodrigues rotations (angles × unit → rad)."""
     rot = {
         "o": _axis_rotation(np.array([1.0, 0, 0]), omega * unit),
@@ -53,8 +55,13 @@ def check_rotation(R_opk: Callable[[float, float, float], F64]) -> None:
     # a case by hand: κ = 100 gon alone turns image x into object Y
     hand = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
     got = call(R_opk, 0.0, 0.0, 100.0, what="R_opk")
-    compare("R_opk(0, 0, 100 gon)", got, hand, rtol=1e-9,
-            wrong=[("the angle was read as degrees, not gon", _rodrigues_opk(0, 0, 100, np.pi / 180))])
+    compare(
+        "R_opk(0, 0, 100 gon)",
+        got,
+        hand,
+        rtol=1e-9,
+        wrong=[("the angle was read as degrees, not gon", _rodrigues_opk(0, 0, 100, np.pi / 180))],
+    )
     rng = rng_for("lesson02.check_rotation")
     for angles in ([12.0, -31.0, 57.0], list(rng.uniform(-150, 150, 3))):
         w, p, k = (float(a) for a in angles)
@@ -64,7 +71,10 @@ def check_rotation(R_opk: Callable[[float, float, float], F64]) -> None:
             ("the angles were read as degrees, not gon", _rodrigues_opk(w, p, k, np.pi / 180)),
             ("the angles were read as radians, not gon", _rodrigues_opk(w, p, k, 1.0)),
             ("this is R_φ R_ω R_κ (φ-ω-κ), not R_ω R_φ R_κ", _rodrigues_opk(w, p, k, order="pok")),
-            ("this is R_κ R_φ R_ω (the factors in reverse order)", _rodrigues_opk(w, p, k, order="kpo")),
+            (
+                "this is R_κ R_φ R_ω (the factors in reverse order)",
+                _rodrigues_opk(w, p, k, order="kpo"),
+            ),
             ("the sine terms of R_φ have the wrong signs", sign_phi),
         ]
         got = call(R_opk, w, p, k, what="R_opk")
@@ -89,8 +99,16 @@ def check_collinearity(collinearity: Callable[..., F64]) -> None:
     uvw_R = (X - X0) @ R.T  # R instead of Rᵀ
     uvw = (X - X0) @ R
     wrong = [
-        ("you turned the vector with R instead of Rᵀ", np.column_stack([x0 - c * uvw_R[:, 0] / uvw_R[:, 2], y0 - c * uvw_R[:, 1] / uvw_R[:, 2]])),
-        ("the sign of c is wrong (x = x0 + c u/w?)", np.column_stack([x0 + c * uvw[:, 0] / uvw[:, 2], y0 + c * uvw[:, 1] / uvw[:, 2]])),
+        (
+            "you turned the vector with R instead of Rᵀ",
+            np.column_stack(
+                [x0 - c * uvw_R[:, 0] / uvw_R[:, 2], y0 - c * uvw_R[:, 1] / uvw_R[:, 2]]
+            ),
+        ),
+        (
+            "the sign of c is wrong (x = x0 + c u/w?)",
+            np.column_stack([x0 + c * uvw[:, 0] / uvw[:, 2], y0 + c * uvw[:, 1] / uvw[:, 2]]),
+        ),
         ("the principal point x0, y0 is missing", xy - [x0, y0]),
         ("x and y are swapped", xy[:, ::-1]),
     ]
@@ -111,23 +129,39 @@ def check_gimbal(locked_omega: Callable[[float, float, float], float]) -> None:
         got = float(call(locked_omega, w, k, phi, what="locked_omega"))
         truth = _R_pair(w, k, phi)
         wrong = [
-            ("at this φ the matrix depends on ω − κ, not ω + κ" if phi < 0 else "at φ = +100 gon it is ω + κ, not ω − κ",
-             _R_pair(w + k if phi < 0 else w - k, 0.0, phi)),
-            ("κ is missing: at φ = ±100 gon κ turns about the same axis as ω", _R_pair(w, 0.0, phi)),
+            (
+                "at this φ the matrix depends on ω − κ, not ω + κ"
+                if phi < 0
+                else "at φ = +100 gon it is ω + κ, not ω − κ",
+                _R_pair(w + k if phi < 0 else w - k, 0.0, phi),
+            ),
+            (
+                "κ is missing: at φ = ±100 gon κ turns about the same axis as ω",
+                _R_pair(w, 0.0, phi),
+            ),
         ]
-        compare(f"R(ω', {phi:+.0f}, 0) for ω = {w:.3f}, κ = {k:.3f} gon", _R_pair(got, 0.0, phi), truth, rtol=1e-9, wrong=wrong)
+        compare(
+            f"R(ω', {phi:+.0f}, 0) for ω = {w:.3f}, κ = {k:.3f} gon",
+            _R_pair(got, 0.0, phi),
+            truth,
+            rtol=1e-9,
+            wrong=wrong,
+        )
     success("at φ = ±100 gon only ω ± κ counts: ω and κ turn about the same axis")
 
 
 def check_opk_from_matrix(angles_from_R: Callable[[F64], ArrayLike]) -> None:
-    """``angles_from_R(R)`` must return (ω, φ, κ) in gon with R = R_ω R_φ R_κ, |φ| < 100 gon."""
+    """``angles_from_R(R)`` must return (ω, φ, κ) in gon with R = R_ω R_φ R_κ, abs(φ) < 100 gon."""
     rng = rng_for("lesson02.check_opk_from_matrix")
     for _ in range(3):
         truth = np.array([rng.uniform(-180, 180), rng.uniform(-90, 90), rng.uniform(-180, 180)])
         R = _rodrigues_opk(*truth)
         got = call(angles_from_R, R, what="angles_from_R")
-        wrong = [("these are the angles of Rᵀ", _opk_of(R.T)), ("the sign of ω is wrong", truth * [-1, 1, 1]),
-                 ("the sign of κ is wrong", truth * [1, 1, -1])]
+        wrong = [
+            ("these are the angles of Rᵀ", _opk_of(R.T)),
+            ("the sign of ω is wrong", truth * [-1, 1, 1]),
+            ("the sign of κ is wrong", truth * [1, 1, -1]),
+        ]
         compare("(ω, φ, κ) [gon]", got, truth, rtol=1e-9, unit="gon", wrong=wrong, scale=200.0)
     success("ω, φ, κ read back from R (in gon)")
 
@@ -152,8 +186,10 @@ def check_ground_point(ground_point: Callable[..., F64]) -> None:
         d = np.column_stack([xy, np.full(len(xy), -cc)]) @ Rm.T
         return X0 + ((Z - X0[2]) / d[:, 2])[:, None] * d
 
-    wrong = [("the image vector was turned with Rᵀ instead of R", plane(R.T, c)),
-             ("the image vector needs z = −c, not +c", plane(R, -c))]
+    wrong = [
+        ("the image vector was turned with Rᵀ instead of R", plane(R.T, c)),
+        ("the image vector needs z = −c, not +c", plane(R, -c)),
+    ]
     got = call(ground_point, xy, X0, R, c, Z, what="ground_point")
     compare("ground points [m]", got, truth, rtol=1e-9, scale=1000.0, wrong=wrong)
     success("ground points: the rays meet the plane where the points were")
@@ -180,7 +216,10 @@ def _sol_gimbal(omega, kappa, phi):
 
 
 def _sol_opk(R):
-    return np.array([np.arctan2(-R[1, 2], R[2, 2]), np.arcsin(R[0, 2]), np.arctan2(-R[0, 1], R[0, 0])]) / GON
+    return (
+        np.array([np.arctan2(-R[1, 2], R[2, 2]), np.arcsin(R[0, 2]), np.arctan2(-R[0, 1], R[0, 0])])
+        / GON
+    )
 
 
 def _sol_ground(xy, X0, R, c, Z):
@@ -200,8 +239,12 @@ MUTANTS = {
     "check_rotation": {
         "transpose": lambda w, p, k: _sol_rotation(w, p, k).T,
         "degrees": lambda w, p, k: _sol_rotation(w * 200 / 180, p * 200 / 180, k * 200 / 180),
-        "phi-omega-kappa order": lambda w, p, k: _sol_rotation(0, p, 0) @ _sol_rotation(w, 0, 0) @ _sol_rotation(0, 0, k),
-        "flipped sine in R_phi": lambda w, p, k: _sol_rotation(w, 0, 0) @ _sol_rotation(0, -p, 0) @ _sol_rotation(0, 0, k),
+        "phi-omega-kappa order": lambda w, p, k: (
+            _sol_rotation(0, p, 0) @ _sol_rotation(w, 0, 0) @ _sol_rotation(0, 0, k)
+        ),
+        "flipped sine in R_phi": lambda w, p, k: (
+            _sol_rotation(w, 0, 0) @ _sol_rotation(0, -p, 0) @ _sol_rotation(0, 0, k)
+        ),
     },
     "check_collinearity": {
         "R instead of R^T": lambda X, X0, R, c, x0, y0: _sol_collinearity(X, X0, R.T, c, x0, y0),

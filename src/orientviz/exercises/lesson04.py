@@ -50,10 +50,18 @@ def _project(X: F64, X0: F64, R: F64, c: float) -> F64:
 
 def _scene(rng: np.random.Generator, n: int = 9) -> tuple[F64, F64, F64, F64]:
     """Control points, true parameters (X0, angles in rad) and error-free image points."""
-    X = np.column_stack([rng.uniform(-900, 900, n), rng.uniform(-900, 900, n), rng.uniform(0, 150, n)])
+    X = np.column_stack(
+        [rng.uniform(-900, 900, n), rng.uniform(-900, 900, n), rng.uniform(0, 150, n)]
+    )
     p = np.array([35.0, -22.0, 1500.0, *rng.uniform(-0.04, 0.04, 2), rng.uniform(-3, 3)])
     xy = _project(X, p[:3], _R(p[3:]), 152.7)
     return X, p, xy, np.array(152.7)
+
+
+def _minimise(fun: Callable[[F64], F64], start: F64) -> F64:
+    """The oracle's minimiser: scipy's trust-region least squares, run to machine precision."""
+    scale = np.array([1, 1, 1, 1e-3, 1e-3, 1e-3])
+    return least_squares(fun, start, x_scale=scale, xtol=1e-15, ftol=1e-15, gtol=1e-15).x
 
 
 def check_resection(resection_gn: Callable[..., tuple[F64, float]]) -> None:
@@ -77,20 +85,23 @@ def check_resection(resection_gn: Callable[..., tuple[F64, float]]) -> None:
     def weighted(q: F64) -> F64:
         return ((_project(X, q[:3], _R(q[3:]), float(c)) - noisy) / sigma).ravel()
 
-    ref = least_squares(weighted, start, x_scale=np.array([1, 1, 1, 1e-3, 1e-3, 1e-3]), xtol=1e-15, ftol=1e-15, gtol=1e-15).x
+    ref = _minimise(weighted, start)
     r = noisy.size - 6
     s0_ref = float(np.sqrt(np.sum(weighted(ref) ** 2) / r))
-    plain = least_squares(lambda q: weighted(q) * sigma.ravel(), start, x_scale=np.array([1, 1, 1, 1e-3, 1e-3, 1e-3]),
-                          xtol=1e-15, ftol=1e-15, gtol=1e-15).x
+    plain = _minimise(lambda q: weighted(q) * sigma.ravel(), start)
     s0_unweighted = float(np.sqrt(np.sum((weighted(plain) * sigma.ravel()) ** 2) / r))
     out = call(resection_gn, noisy, X, float(c), sigma, start.copy(), what="resection_gn")
     p, s0 = np.asarray(out[0], dtype=float), float(out[1])
-    wrong = [("σ̂0 without weights (in mm): weight each residual with 1/σ²", s0_unweighted),
-             ("σ̂0 divided by n, not by the redundancy r = 2n − 6", s0_ref * np.sqrt(r / noisy.size))]
+    wrong = [
+        ("σ̂0 without weights (in mm): weight each residual with 1/σ²", s0_unweighted),
+        ("σ̂0 divided by n, not by the redundancy r = 2n − 6", s0_ref * np.sqrt(r / noisy.size)),
+    ]
     compare("σ̂0 (noisy points, unequal σ)", s0, s0_ref, rtol=1e-4, wrong=wrong)
     compare("X0, Y0, Z0 [m] (noisy points, unequal σ)", p[:3], ref[:3], rtol=1e-5, scale=1.0)
     compare("ω, φ, κ [rad] (noisy points, unequal σ)", p[3:], ref[3:], rtol=1e-8, scale=1.0)
-    success(f"resection: the truth from error-free points; σ̂0 = {s0:.3f} as an independent minimiser finds it")
+    success(
+        f"resection: the truth from error-free points; σ̂0 = {s0:.3f} as an independent minimiser finds it"
+    )
 
 
 def check_two_rays(intersect_two_rays: Callable[[F64, F64, F64, F64], F64]) -> None:
@@ -105,10 +116,22 @@ def check_two_rays(intersect_two_rays: Callable[[F64, F64, F64, F64], F64]) -> N
         h = rng.uniform(0.05, 0.5)  # half the gap between the rays, m
         Q1, Q2 = P + h * n, P - h * n
         X01, X02 = Q1 - rng.uniform(800, 1500) * d1, Q2 - rng.uniform(800, 1500) * d2
-        got = call(intersect_two_rays, X01.copy(), d1 * 3.0, X02.copy(), d2 * 0.5, what="intersect_two_rays")
-        wrong = [("this is the point on ray 1, not the midpoint", Q1), ("this is the point on ray 2, not the midpoint", Q2)]
+        got = call(
+            intersect_two_rays,
+            X01.copy(),
+            d1 * 3.0,
+            X02.copy(),
+            d2 * 0.5,
+            what="intersect_two_rays",
+        )
+        wrong = [
+            ("this is the point on ray 1, not the midpoint", Q1),
+            ("this is the point on ray 2, not the midpoint", Q2),
+        ]
         compare("midpoint [m]", got, P, rtol=1e-9, scale=1.0, wrong=wrong)
-    success("two rays: the midpoint of their common perpendicular (direction lengths do not matter)")
+    success(
+        "two rays: the midpoint of their common perpendicular (direction lengths do not matter)"
+    )
 
 
 def _numeric_design(X: F64, X0: F64, R: F64, c: float, h: float = 1e-3) -> F64:
@@ -129,9 +152,11 @@ def check_design_X0(design_X0: Callable[[F64, F64, F64, float], F64]) -> None:
     truth = _numeric_design(X, X0, R, float(c))
     got = call(design_X0, X, X0, R, float(c), what="design_X0")
     order = np.vstack([truth[0::2], truth[1::2]])
-    wrong = [("these are the derivatives by the point X, not by X0 (sign)", -truth),
-             ("the rows must alternate x1, y1, x2, y2, …", order),
-             ("the columns are by R instead of Rᵀ", _numeric_design(X, X0, R.T, float(c)))]
+    wrong = [
+        ("these are the derivatives by the point X, not by X0 (sign)", -truth),
+        ("the rows must alternate x1, y1, x2, y2, …", order),
+        ("the columns are by R instead of Rᵀ", _numeric_design(X, X0, R.T, float(c))),
+    ]
     compare("∂(x, y)/∂X0 [mm/m]", got, truth, rtol=1e-6, wrong=wrong)
     success("design matrix for X0, Y0, Z0 agrees with numerical derivatives")
 
@@ -140,7 +165,12 @@ def check_sigma_Z(sigma_Z: Callable[[float, float, float, float], float]) -> Non
     """``sigma_Z(B, H, c, sigma_x)`` (m, m, mm, mm) must return σ of the height of a normal-case point, m."""
     rng = rng_for("lesson04.check_sigma_Z")
     for _ in range(2):
-        B, H, c, sx = rng.uniform(300, 900), rng.uniform(800, 3000), 152.7, rng.uniform(0.003, 0.008)
+        B, H, c, sx = (
+            rng.uniform(300, 900),
+            rng.uniform(800, 3000),
+            152.7,
+            rng.uniform(0.003, 0.008),
+        )
         # a ground point midway, seen in two vertical images; covariance of its intersection
         P = np.array([[B / 2, 0.0, 0.0]])
         X01, X02 = np.array([0.0, 0, H]), np.array([B, 0, H])
@@ -150,13 +180,20 @@ def check_sigma_Z(sigma_Z: Callable[[float, float, float, float], float]) -> Non
             for k in range(3):
                 e = np.zeros(3)
                 e[k] = 1e-3
-                cols.append(((_project(P + e, X0, np.eye(3), c) - _project(P - e, X0, np.eye(3), c)) / 2e-3).ravel())
+                cols.append(
+                    (
+                        (_project(P + e, X0, np.eye(3), c) - _project(P - e, X0, np.eye(3), c))
+                        / 2e-3
+                    ).ravel()
+                )
             A.append(np.column_stack(cols))
         A = np.vstack(A) / sx
         truth = float(np.sqrt(np.linalg.inv(A.T @ A)[2, 2]))
         got = float(call(sigma_Z, B, H, c, sx, what="sigma_Z"))
-        wrong = [("√2 is missing: the x-parallax has two measured coordinates", truth / np.sqrt(2)),
-                 ("σ_x must be in mm here (5 µm = 0.005 mm), not µm", truth * 1000.0)]
+        wrong = [
+            ("√2 is missing: the x-parallax has two measured coordinates", truth / np.sqrt(2)),
+            ("σ_x must be in mm here (5 µm = 0.005 mm), not µm", truth * 1000.0),
+        ]
         compare(f"σ_Z for B = {B:.0f} m, H = {H:.0f} m [m]", got, truth, rtol=1e-6, wrong=wrong)
     success("σ_Z = (H/B)(H/c)·√2·σ_x, as the covariance of the two-ray intersection says")
 
@@ -170,9 +207,12 @@ def check_normal_step(normal_step: Callable[[F64, F64, F64], F64]) -> None:
     w = np.sqrt(P)
     truth = np.linalg.lstsq(A * w[:, None], dl * w, rcond=None)[0]
     unweighted = np.linalg.lstsq(A, dl, rcond=None)[0]
-    sqrt_w = np.linalg.lstsq(A * P[:, None] ** 0.25, dl * P ** 0.25, rcond=None)[0]
+    sqrt_w = np.linalg.lstsq(A * P[:, None] ** 0.25, dl * P**0.25, rcond=None)[0]
     got = call(normal_step, A, dl, P, what="normal_step")
-    wrong = [("the weights P are missing", unweighted), ("this weights with √P (1/σ instead of 1/σ²)", sqrt_w)]
+    wrong = [
+        ("the weights P are missing", unweighted),
+        ("this weights with √P (1/σ instead of 1/σ²)", sqrt_w),
+    ]
     compare("dx", got, truth, rtol=1e-8, wrong=wrong)
     if got.shape != (4,):  # pragma: no cover - compare already checked the shape
         raise CheckFailed("dx: expected shape (4,)")
@@ -184,7 +224,11 @@ def check_normal_step(normal_step: Callable[[F64, F64, F64], F64]) -> None:
 
 def _sol_resection(xy, X, c, sigma, p0, n_iter=10, weighted=True, divide_by_n=False):
     p = np.array(p0, dtype=float)
-    s = np.broadcast_to(np.asarray(sigma, dtype=float), xy.shape).ravel() if weighted else np.ones(xy.size)
+    s = (
+        np.broadcast_to(np.asarray(sigma, dtype=float), xy.shape).ravel()
+        if weighted
+        else np.ones(xy.size)
+    )
     for _ in range(n_iter):
         f = lambda q: _project(X, q[:3], _R(q[3:]), c).ravel()  # noqa: E731
         dl = xy.ravel() - f(p)
@@ -243,14 +287,22 @@ MUTANTS = {
         "one iteration": lambda *a: _sol_resection(*a, n_iter=1),
     },
     "check_two_rays": {
-        "point on ray 1": lambda X01, d1, X02, d2: X01 + np.linalg.solve(
-            np.array([[d1 @ d1, -d1 @ d2], [-d1 @ d2, d2 @ d2]]), [d1 @ (X02 - X01), -d2 @ (X02 - X01)])[0] * d1,
+        "point on ray 1": lambda X01, d1, X02, d2: (
+            X01
+            + np.linalg.solve(
+                np.array([[d1 @ d1, -d1 @ d2], [-d1 @ d2, d2 @ d2]]),
+                [d1 @ (X02 - X01), -d2 @ (X02 - X01)],
+            )[0]
+            * d1
+        ),
         "sign of the cross term": lambda X01, d1, X02, d2: _two_rays_plus(X01, d1, X02, d2),
     },
     "check_design_X0": {
         "by X, not X0": lambda X, X0, R, c: -_sol_design_X0(X, X0, R, c),
         "R^T": lambda X, X0, R, c: _sol_design_X0(X, X0, R.T, c),
-        "rows x.. then y..": lambda X, X0, R, c: np.vstack([_sol_design_X0(X, X0, R, c)[0::2], _sol_design_X0(X, X0, R, c)[1::2]]),
+        "rows x.. then y..": lambda X, X0, R, c: np.vstack(
+            [_sol_design_X0(X, X0, R, c)[0::2], _sol_design_X0(X, X0, R, c)[1::2]]
+        ),
     },
     "check_sigma_Z": {
         "no sqrt 2": lambda B, H, c, s: (H / B) * (H / c) * s,

@@ -24,7 +24,15 @@ from numpy.typing import NDArray
 from ._common import call, compare, rng_for, success
 from .lesson02 import _rodrigues_opk
 
-__all__ = ["MUTANTS", "SOLUTIONS", "check_condition", "check_design", "check_parallax", "check_scheme_sigma", "check_six_point"]
+__all__ = [
+    "MUTANTS",
+    "SOLUTIONS",
+    "check_condition",
+    "check_design",
+    "check_parallax",
+    "check_scheme_sigma",
+    "check_six_point",
+]
 
 F64 = NDArray[np.float64]
 GON = np.pi / 200.0
@@ -41,11 +49,22 @@ def _rigorous_parallax(P: F64, e: F64, b: float, c: float = 152.7) -> F64:
 
 
 def _numeric_design(P: F64, b: float, h: float = 1e-7) -> F64:
-    return np.column_stack([(_rigorous_parallax(P, e, b) - _rigorous_parallax(P, -e, b)) / (2 * h) for e in np.eye(5) * h])
+    return np.column_stack(
+        [
+            (_rigorous_parallax(P, e, b) - _rigorous_parallax(P, -e, b)) / (2 * h)
+            for e in np.eye(5) * h
+        ]
+    )
 
 
 def _points(rng: np.random.Generator, n: int, b: float, relief: float = 0.15) -> F64:
-    return np.column_stack([rng.uniform(0, b, n), rng.uniform(-100, 100, n), -152.7 * (1 + relief * rng.uniform(-0.5, 0.5, n))])
+    return np.column_stack(
+        [
+            rng.uniform(0, b, n),
+            rng.uniform(-100, 100, n),
+            -152.7 * (1 + relief * rng.uniform(-0.5, 0.5, n)),
+        ]
+    )
 
 
 def check_design(design_dependent: Callable[[F64, F64, F64, float], F64]) -> None:
@@ -54,10 +73,17 @@ def check_design(design_dependent: Callable[[F64, F64, F64, float], F64]) -> Non
     b = 92.0
     P = _points(rng, 7, b)
     truth = _numeric_design(P, b)
-    got = call(design_dependent, P[:, 0].copy(), P[:, 1].copy(), P[:, 2].copy(), b, what="design_dependent")
-    wrong = [("it is p = y″ − y′ with the opposite sign throughout", -truth),
-             ("the φ and κ columns are swapped", truth[:, [0, 1, 2, 4, 3]]),
-             ("Kovarik's signs: his bz and κ are counted the other way round", truth * [1, -1, 1, 1, -1])]
+    got = call(
+        design_dependent, P[:, 0].copy(), P[:, 1].copy(), P[:, 2].copy(), b, what="design_dependent"
+    )
+    wrong = [
+        ("it is p = y″ − y′ with the opposite sign throughout", -truth),
+        ("the φ and κ columns are swapped", truth[:, [0, 1, 2, 4, 3]]),
+        (
+            "Kovarik's signs: his bz and κ are counted the other way round",
+            truth * [1, -1, 1, 1, -1],
+        ),
+    ]
     compare("∂p_y/∂(by, bz, ω, φ, κ)", got, truth, rtol=1e-5, wrong=wrong)
     success("design matrix: each column is the derivative of the rigorous y-parallax")
 
@@ -69,19 +95,28 @@ def check_parallax(y_parallax: Callable[[F64, F64, float], F64]) -> None:
     P = _points(rng, 6, b)
     gap = rng.uniform(-0.3, 0.3, 6)
     xy1 = -c * P[:, :2] / P[:, 2:]
-    Q = P + np.column_stack([np.zeros(6), gap, np.zeros(6)]) - [b, 0, 0]  # the right ray passes Y + gap
+    Q = (
+        P + np.column_stack([np.zeros(6), gap, np.zeros(6)]) - [b, 0, 0]
+    )  # the right ray passes Y + gap
     xy2 = -c * Q[:, :2] / Q[:, 2:]
     truth = -gap  # Y_left − Y_right
     got = call(y_parallax, xy1.copy(), xy2.copy(), b, what="y_parallax")
-    wrong = [("this is Y_right − Y_left", gap),
-             ("y′ − y″ is an image difference: scale it to the model with λ = b / (x′ − x″)", xy1[:, 1] - xy2[:, 1])]
+    wrong = [
+        ("this is Y_right − Y_left", gap),
+        (
+            "y′ − y″ is an image difference: scale it to the model with λ = b / (x′ − x″)",
+            xy1[:, 1] - xy2[:, 1],
+        ),
+    ]
     compare("p_y [model mm]", got, truth, rtol=1e-9, scale=0.3, wrong=wrong)
     success("y-parallax read where the two rays meet in the XZ projection")
 
 
 def _gruber(b: float, d: float, h: float) -> F64:
     """Gruber's six points: profiles X = 0 and X = b, rows Y = 0, +d, −d, flat at Z = −h."""
-    return np.array([[0, 0, -h], [b, 0, -h], [0, d, -h], [b, d, -h], [0, -d, -h], [b, -d, -h]], dtype=float)
+    return np.array(
+        [[0, 0, -h], [b, 0, -h], [0, d, -h], [b, d, -h], [0, -d, -h], [b, -d, -h]], dtype=float
+    )
 
 
 def check_six_point(six_point: Callable[[F64, float, float, float], F64]) -> None:
@@ -90,16 +125,21 @@ def check_six_point(six_point: Callable[[F64, float, float, float], F64]) -> Non
     Points as in Gruber's scheme (see :func:`_gruber`); p_y = A d exactly (linear equation).
     """
     rng = rng_for("lesson05.check_six_point")
-    for b, d, h in ((92.0, 100.0, 152.7), (220.7, 110.0, 366.0)):  # image scale, then a plotter model
+    for b, d, h in (
+        (92.0, 100.0, 152.7),
+        (220.7, 110.0, 366.0),
+    ):  # image scale, then a plotter model
         P = _gruber(b, d, h)
         A = _numeric_design(P, b)
         truth = np.r_[rng.uniform(-0.5, 0.5, 2), rng.uniform(-0.5, 0.5, 3)]  # mm, gon
         p = A @ (truth * [1, 1, GON, GON, GON])
         got = call(six_point, p.copy(), b, d, h, what="six_point")
-        wrong = [("the parallaxes were taken as y″ − y′ (all signs flipped)", -truth),
-                 ("the angles are in degrees, not gon", truth * [1, 1, 0.9, 0.9, 0.9]),
-                 ("the angles are in radians, not gon", truth * [1, 1, GON, GON, GON]),
-                 ("φ and κ are swapped", truth[[0, 1, 2, 4, 3]])]
+        wrong = [
+            ("the parallaxes were taken as y″ − y′ (all signs flipped)", -truth),
+            ("the angles are in degrees, not gon", truth * [1, 1, 0.9, 0.9, 0.9]),
+            ("the angles are in radians, not gon", truth * [1, 1, GON, GON, GON]),
+            ("φ and κ are swapped", truth[[0, 1, 2, 4, 3]]),
+        ]
         compare(f"(by, bz, ω, φ, κ) for b = {b} mm", got, truth, rtol=1e-6, wrong=wrong, scale=1.0)
     success("six points: the five elements come back exactly, on a model you had not seen too")
 
@@ -123,11 +163,36 @@ def check_condition(misclosure: Callable[[F64, F64, F64, F64, float], float]) ->
         flat = np.array([2.0, -2.0, -1.0, 1.0, -1.0, 1.0])
         p = A @ (rng.uniform(-0.5, 0.5, 5) * [1, 1, 0.01, 0.01, 0.01])
         k = int(rng.integers(1, 6))
-        for label, pp in (("a consistent model", p), (f"point {k + 1} misread by 50 µm", p + 0.05 * np.eye(6)[k])):
-            got = float(call(misclosure, pp.copy(), P[:, 0].copy(), P[:, 1].copy(), P[:, 2].copy(), b, what="misclosure"))
-            wrong = [("this is the flat-terrain form: with relief use the null vector of your design matrix", flat @ pp),
-                     ("normalise the condition so that the coefficient of p1 is +2", -(w @ pp))]
-            compare(f"misclosure for {label}, relief {relief:.0%}", got, w @ pp, rtol=1e-6, scale=0.05, wrong=wrong)
+        for label, pp in (
+            ("a consistent model", p),
+            (f"point {k + 1} misread by 50 µm", p + 0.05 * np.eye(6)[k]),
+        ):
+            got = float(
+                call(
+                    misclosure,
+                    pp.copy(),
+                    P[:, 0].copy(),
+                    P[:, 1].copy(),
+                    P[:, 2].copy(),
+                    b,
+                    what="misclosure",
+                )
+            )
+            wrong = [
+                (
+                    "this is the flat-terrain form: with relief use the null vector of your design matrix",
+                    flat @ pp,
+                ),
+                ("normalise the condition so that the coefficient of p1 is +2", -(w @ pp)),
+            ]
+            compare(
+                f"misclosure for {label}, relief {relief:.0%}",
+                got,
+                w @ pp,
+                rtol=1e-6,
+                scale=0.05,
+                wrong=wrong,
+            )
     success("condition: zero for a consistent model, and it shows a misread parallax")
 
 
@@ -135,15 +200,24 @@ def check_scheme_sigma(scheme_sigma: Callable[[F64, F64, F64, float, float], F64
     """``scheme_sigma(X, Y, Z, b, sigma)`` must return σ of (by, bz, ω, φ, κ) [model mm, rad]."""
     rng = rng_for("lesson05.check_scheme_sigma")
     b, d, h = 220.7, 110.0, 366.0
-    P = np.vstack([_gruber_relief(rng, b, d, h, 0.1), [[b / 2, 0, -h], [b / 2, d, -h], [b / 2, -d, -h]]])
+    P = np.vstack(
+        [_gruber_relief(rng, b, d, h, 0.1), [[b / 2, 0, -h], [b / 2, d, -h], [b / 2, -d, -h]]]
+    )
     A = _numeric_design(P, b)
     sigma = 0.005
     Q = np.linalg.inv(A.T @ A)
     truth = sigma * np.sqrt(np.diag(Q))
-    got = call(scheme_sigma, P[:, 0].copy(), P[:, 1].copy(), P[:, 2].copy(), b, sigma, what="scheme_sigma")
-    wrong = [("take the diagonal of (AᵀA)⁻¹, not the inverse of the diagonal of AᵀA", sigma / np.sqrt(np.diag(A.T @ A))),
-             ("the square root is missing (these are variances)", sigma**2 * np.diag(Q)),
-             ("multiply by σ, not σ²", sigma**2 * np.sqrt(np.diag(Q)))]
+    got = call(
+        scheme_sigma, P[:, 0].copy(), P[:, 1].copy(), P[:, 2].copy(), b, sigma, what="scheme_sigma"
+    )
+    wrong = [
+        (
+            "take the diagonal of (AᵀA)⁻¹, not the inverse of the diagonal of AᵀA",
+            sigma / np.sqrt(np.diag(A.T @ A)),
+        ),
+        ("the square root is missing (these are variances)", sigma**2 * np.diag(Q)),
+        ("multiply by σ, not σ²", sigma**2 * np.sqrt(np.diag(Q))),
+    ]
     compare("σ of (by, bz, ω, φ, κ)", got, truth, rtol=1e-5, wrong=wrong)
     success("scheme precision: σ √diag((AᵀA)⁻¹)")
 
@@ -191,8 +265,10 @@ MUTANTS = {
         "y'' - y'": lambda X, Y, Z, b: -_sol_design(X, Y, Z, b),
         "phi and kappa swapped": lambda X, Y, Z, b: _sol_design(X, Y, Z, b)[:, [0, 1, 2, 4, 3]],
         "Kovarik signs": lambda X, Y, Z, b: _sol_design(X, Y, Z, b) * [1, -1, 1, 1, -1],
-        "1 - Y^2/Z^2": lambda X, Y, Z, b: _sol_design(X, Y, Z, b) - np.column_stack(
-            [0 * X, 0 * X, -2 * Z * (Y / Z) ** 2, 0 * X, 0 * X]),
+        "1 - Y^2/Z^2": lambda X, Y, Z, b: (
+            _sol_design(X, Y, Z, b)
+            - np.column_stack([0 * X, 0 * X, -2 * Z * (Y / Z) ** 2, 0 * X, 0 * X])
+        ),
     },
     "check_parallax": {
         "Y_right - Y_left": lambda xy1, xy2, b: -_sol_parallax(xy1, xy2, b),
@@ -204,11 +280,15 @@ MUTANTS = {
         "phi and kappa swapped": lambda p, b, d, h: _sol_six_point(p, b, d, h)[[0, 1, 2, 4, 3]],
     },
     "check_condition": {
-        "flat form with relief": lambda p, X, Y, Z, b: np.array([2.0, -2.0, -1.0, 1.0, -1.0, 1.0]) @ p,
+        "flat form with relief": lambda p, X, Y, Z, b: (
+            np.array([2.0, -2.0, -1.0, 1.0, -1.0, 1.0]) @ p
+        ),
         "sign": lambda p, X, Y, Z, b: -_sol_condition(p, X, Y, Z, b),
     },
     "check_scheme_sigma": {
-        "inverse of the diagonal": lambda X, Y, Z, b, s: s / np.sqrt(np.diag(_sol_design(X, Y, Z, b).T @ _sol_design(X, Y, Z, b))),
+        "inverse of the diagonal": lambda X, Y, Z, b, s: (
+            s / np.sqrt(np.diag(_sol_design(X, Y, Z, b).T @ _sol_design(X, Y, Z, b)))
+        ),
         "variances": lambda X, Y, Z, b, s: _sol_scheme_sigma(X, Y, Z, b, s) ** 2,
         "sigma squared": lambda X, Y, Z, b, s: s * _sol_scheme_sigma(X, Y, Z, b, s),
     },

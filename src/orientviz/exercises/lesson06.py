@@ -25,7 +25,9 @@ def _pair(rng):
     B = np.array([b, rng.uniform(-4, 4), rng.uniform(-4, 4)])
     R2 = matrix_from_opk(*rng.uniform(-0.05, 0.05, 3))
     n = 8
-    P = np.column_stack([rng.uniform(-10, b + 10, n), rng.uniform(-80, 80, n), -c + rng.uniform(-20, 20, n)])
+    P = np.column_stack(
+        [rng.uniform(-10, b + 10, n), rng.uniform(-80, 80, n), -c + rng.uniform(-20, 20, n)]
+    )
     xy1 = project(P, np.zeros(3), np.eye(3), c)
     xy2 = project(P, B, R2, c)
     return c, B, R2, P, xy1, xy2
@@ -52,7 +54,9 @@ def check_essential(fn) -> None:
         d1 = np.column_stack([xy1, np.full(len(xy1), -c)])
         d2 = np.column_stack([xy2, np.full(len(xy2), -c)])
         cop = np.einsum("ni,ij,nj->n", d1, E, d2)
-    success(f"E = [B]ₓ R2; the true rays are coplanar: max |d1ᵀ E d2| = {np.max(np.abs(cop)):.1e} mm³")
+    success(
+        f"E = [B]ₓ R2; the true rays are coplanar: max |d1ᵀ E d2| = {np.max(np.abs(cop)):.1e} mm³"
+    )
 
 
 # --------------------------------------------------------------------- epipolar line
@@ -74,7 +78,9 @@ def check_epipolar_line(fn) -> None:
         k = salt % len(xy1)
         line = np.asarray(call(fn, E.copy(), xy1[k].copy(), c, what="epipolar_line"), dtype=float)
         if line.shape != (3,):
-            raise CheckFailed(f"epipolar_line: expected three numbers (a, b, d), got shape {line.shape}")
+            raise CheckFailed(
+                f"epipolar_line: expected three numbers (a, b, d), got shape {line.shape}"
+            )
         compare("a² + b²", line[0] ** 2 + line[1] ** 2, 1.0, rtol=1e-9,
                 wrong=[("normalise the line: divide (a, b, d) by √(a² + b²)",
                         float(np.sum(_line(E, xy1[k], c, normalise=False)[:2] ** 2)))])  # fmt: skip
@@ -84,8 +90,10 @@ def check_epipolar_line(fn) -> None:
         q = project(on_ray, B, R2, c)
         dist = q @ line[:2] + line[2]
         wrong = []
-        for text, kw in (("E is used instead of Eᵀ: the line is g = Eᵀ d1", {"transpose": False}),
-                         ("the third coefficient is −c g2 (the ray is (x, y, −c))", {"with_c": False})):
+        for text, kw in (
+            ("E is used instead of Eᵀ: the line is g = Eᵀ d1", {"transpose": False}),
+            ("the third coefficient is −c g2 (the ray is (x, y, −c))", {"with_c": False}),
+        ):
             m = _line(E, xy1[k], c, **kw)
             wrong.append((text, q @ m[:2] + m[2]))
         compare("distances of two projected points of the left ray from your line [mm]", dist,
@@ -109,10 +117,17 @@ def check_normal_case_points(fn) -> None:
     rng = rng_for("lesson06.check_normal_case_points")
     c, b = rng.uniform(100, 160), rng.uniform(70, 100)
     n = 7
-    P = np.column_stack([rng.uniform(-10, b + 10, n), rng.uniform(-80, 80, n), -c + rng.uniform(-25, 25, n)])
+    P = np.column_stack(
+        [rng.uniform(-10, b + 10, n), rng.uniform(-80, 80, n), -c + rng.uniform(-25, 25, n)]
+    )
     n1 = project(P, np.zeros(3), np.eye(3), c)
     n2 = project(P, np.array([b, 0.0, 0.0]), np.eye(3), c)
     got = np.asarray(call(fn, n1.copy(), n2.copy(), c, b, what="normal_case_points"), dtype=float)
+    if got.shape == P.shape and not np.all(np.isfinite(got)):
+        raise CheckFailed(
+            "model points: not finite — a division by y1' − y2', which is zero in the normal "
+            "case: depth comes from the x-parallax x1' − x2'"
+        )
     compare("model points", got, P, rtol=1e-9, wrong=[
         ("the x-parallax is x1' − x2' (positive for points below the base)", _points(n1, n2, c, b, sign=-1.0)),
         ("Z = −λ c: the points lie below the projection centres", _points(n1, n2, c, b, zsign=1.0)),

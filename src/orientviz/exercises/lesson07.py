@@ -22,7 +22,14 @@ from scipy.optimize import least_squares
 from ._common import CheckFailed, call, compare, rng_for, success
 from .lesson02 import _axis_rotation
 
-__all__ = ["MUTANTS", "SOLUTIONS", "check_design", "check_model_coordinates", "check_sigma_scale", "check_similarity"]
+__all__ = [
+    "MUTANTS",
+    "SOLUTIONS",
+    "check_design",
+    "check_model_coordinates",
+    "check_sigma_scale",
+    "check_similarity",
+]
 
 F64 = NDArray[np.float64]
 
@@ -34,7 +41,9 @@ def _rotvec(a: F64) -> F64:
 
 def _model(rng: np.random.Generator, n: int = 6) -> tuple[F64, float, F64, F64]:
     """Model points (model mm, with relief), and a true scale, rotation, translation."""
-    x = np.column_stack([rng.uniform(-100, 100, n), rng.uniform(-100, 100, n), rng.uniform(-8, 8, n)]) + [20.0, -15.0, 30.0]
+    x = np.column_stack(
+        [rng.uniform(-100, 100, n), rng.uniform(-100, 100, n), rng.uniform(-8, 8, n)]
+    ) + [20.0, -15.0, 30.0]
     m = rng.uniform(8, 12)
     R = _rotvec(rng.normal(0, 0.6, 3))
     T = np.array([512_000.0, 5_402_000.0, 600.0]) + rng.uniform(-500, 500, 3)
@@ -55,15 +64,31 @@ def check_similarity(similarity_svd: Callable[[F64, F64], tuple[float, F64, F64]
     x, m, R, T = _model(rng)
     X = T + m * x @ R.T
     # 1. error-free control: the truth
-    gm, gR, gT = _unpack(call(similarity_svd, x.copy(), X.copy(), what="similarity_svd"), "similarity_svd")
-    compare("R (error-free control)", gR, R, rtol=1e-9, wrong=[("this is Rᵀ: R = V Uᵀ turns model into object vectors", R.T)])
+    gm, gR, gT = _unpack(
+        call(similarity_svd, x.copy(), X.copy(), what="similarity_svd"), "similarity_svd"
+    )
+    compare(
+        "R (error-free control)",
+        gR,
+        R,
+        rtol=1e-9,
+        wrong=[("this is Rᵀ: R = V Uᵀ turns model into object vectors", R.T)],
+    )
     compare("m (error-free control)", gm, m, rtol=1e-9)
-    compare("T (error-free control) [m]", gT, T, rtol=1e-9, scale=1000.0,
-            wrong=[("T = X̄ − m R x̄: the scale m is missing", T + (m - 1) * R @ x.mean(0))])
+    compare(
+        "T (error-free control) [m]",
+        gT,
+        T,
+        rtol=1e-9,
+        scale=1000.0,
+        wrong=[("T = X̄ − m R x̄: the scale m is missing", T + (m - 1) * R @ x.mean(0))],
+    )
     # 2. noisy control: the least-squares optimum
     Xn = X + rng.normal(0, 10.0, X.shape)  # large noise: the symmetric scale then differs clearly
 
-    off = np.round(Xn[0])  # the minimiser works near the origin (5·10⁶ m coordinates spoil its steps)
+    off = np.round(
+        Xn[0]
+    )  # the minimiser works near the origin (5·10⁶ m coordinates spoil its steps)
 
     def resid(q: F64) -> F64:
         return (q[:3] + q[6] * x @ _rotvec(q[3:6]).T - (Xn - off)).ravel()
@@ -74,18 +99,35 @@ def check_similarity(similarity_svd: Callable[[F64, F64], tuple[float, F64, F64]
     ref[:3] += off
     xc, Xc = x - x.mean(0), Xn - Xn.mean(0)
     sym = float(np.sqrt((Xc**2).sum() / (xc**2).sum()))
-    gm, gR, gT = _unpack(call(similarity_svd, x.copy(), Xn.copy(), what="similarity_svd"), "similarity_svd")
-    compare("m (noisy control)", gm, ref[6], rtol=1e-8,
-            wrong=[("this is the symmetric scale √(Σ|X̃|²/Σ|x̃|²), not the least-squares one tr(SD)/Σ|x̃|²", sym)])
+    gm, gR, gT = _unpack(
+        call(similarity_svd, x.copy(), Xn.copy(), what="similarity_svd"), "similarity_svd"
+    )
+    compare(
+        "m (noisy control)",
+        gm,
+        ref[6],
+        rtol=1e-8,
+        wrong=[
+            (
+                "this is the symmetric scale √(Σ|X̃|²/Σ|x̃|²), not the least-squares one tr(SD)/Σ|x̃|²",
+                sym,
+            )
+        ],
+    )
     compare("R (noisy control)", gR, _rotvec(ref[3:6]), rtol=1e-7)
     compare("T (noisy control) [m]", gT, ref[:3], rtol=1e-7, scale=1000.0)
     # 3. a mirrored model: the best *rotation* must still have det +1
     Xm = X * [1, 1, -1] + rng.normal(0, 0.5, X.shape)
-    gm, gR, gT = _unpack(call(similarity_svd, x.copy(), Xm, what="similarity_svd"), "similarity_svd")
+    gm, gR, gT = _unpack(
+        call(similarity_svd, x.copy(), Xm, what="similarity_svd"), "similarity_svd"
+    )
     det = float(np.linalg.det(gR))
     if abs(det - 1.0) > 1e-9:
-        raise CheckFailed(f"R for a mirrored model has det {det:+.3f}: fix the sign with D = diag(1, 1, det(V Uᵀ))",
-                          error=abs(det - 1.0), tolerance=1e-9)
+        raise CheckFailed(
+            f"R for a mirrored model has det {det:+.3f}: fix the sign with D = diag(1, 1, det(V Uᵀ))",
+            error=abs(det - 1.0),
+            tolerance=1e-9,
+        )
     success("similarity from the SVD: the truth, the least-squares optimum, and det R = +1")
 
 
@@ -104,8 +146,11 @@ def check_model_coordinates(to_model: Callable[[F64, float, F64, F64], F64]) -> 
     x, m, R, T = _model(rng, 5)
     X = T + m * x @ R.T
     got = call(to_model, X.copy(), m, R.copy(), T.copy(), what="to_model")
-    wrong = [("turn back with Rᵀ, not R", ((X - T) @ R.T) / m), ("divide by m, do not multiply", m * (X - T) @ R),
-             ("subtract T first", (X @ R) / m)]
+    wrong = [
+        ("turn back with Rᵀ, not R", ((X - T) @ R.T) / m),
+        ("divide by m, do not multiply", m * (X - T) @ R),
+        ("subtract T first", (X @ R) / m),
+    ]
     compare("model coordinates", got, x, rtol=1e-9, wrong=wrong)
     success("model coordinates x = Rᵀ (X − T) / m")
 
@@ -131,8 +176,10 @@ def check_design(design: Callable[[F64, float, F64], F64]) -> None:
     flip[:, 3:6] *= -1
     nom = truth.copy()
     nom[:, 3:6] /= m
-    wrong = [("the rotation columns have the wrong sign: d(Rx) = α × Rx = −[Rx]ₓ α", flip),
-             ("the rotation columns need the scale m", nom)]
+    wrong = [
+        ("the rotation columns have the wrong sign: d(Rx) = α × Rx = −[Rx]ₓ α", flip),
+        ("the rotation columns need the scale m", nom),
+    ]
     compare("design matrix", got, truth, rtol=1e-6, wrong=wrong)
     success("design matrix of the similarity agrees with numerical derivatives")
 
@@ -147,9 +194,20 @@ def check_sigma_scale(sigma_scale: Callable[[F64, float], float]) -> None:
         truth = float(np.sqrt(np.linalg.inv(A.T @ A)[6, 6]))
         uncentred = sigma / np.sqrt((x**2).sum())
         got = float(call(sigma_scale, x.copy(), sigma, what="sigma_scale"))
-        compare("σ_m", got, truth, rtol=1e-6,
-                wrong=[("centre the model coordinates first (x̃ = x − x̄): only then is m uncorrelated", uncentred),
-                       ("σ² instead of σ", truth * sigma), ("the square root is missing", truth**2)])
+        compare(
+            "σ_m",
+            got,
+            truth,
+            rtol=1e-6,
+            wrong=[
+                (
+                    "centre the model coordinates first (x̃ = x − x̄): only then is m uncorrelated",
+                    uncentred,
+                ),
+                ("σ² instead of σ", truth * sigma),
+                ("the square root is missing", truth**2),
+            ],
+        )
     success("σ_m = σ / √Σ|x̃|²: at the centroid the scale is uncorrelated with T and R")
 
 
@@ -162,7 +220,11 @@ def _sol_similarity(x, X, fix=True, symmetric=False, transpose=False):
     U, S, Vt = np.linalg.svd(xc.T @ Xc)
     D = np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T)) if fix else 1.0])
     R = Vt.T @ D @ U.T
-    m = np.sqrt((Xc**2).sum() / (xc**2).sum()) if symmetric else np.trace(np.diag(S) @ D) / (xc**2).sum()
+    m = (
+        np.sqrt((Xc**2).sum() / (xc**2).sum())
+        if symmetric
+        else np.trace(np.diag(S) @ D) / (xc**2).sum()
+    )
     if transpose:
         R = R.T
     return m, R, Xm - m * R @ xm
@@ -176,9 +238,11 @@ def _sol_design(x, m, R):
     Rx = x @ R.T
     A = np.zeros((3 * len(x), 7))
     for i, p in enumerate(Rx):
-        A[3 * i:3 * i + 3, :3] = np.eye(3)
-        A[3 * i:3 * i + 3, 3:6] = -m * np.array([[0, -p[2], p[1]], [p[2], 0, -p[0]], [-p[1], p[0], 0]])
-        A[3 * i:3 * i + 3, 6] = p
+        A[3 * i : 3 * i + 3, :3] = np.eye(3)
+        A[3 * i : 3 * i + 3, 3:6] = -m * np.array(
+            [[0, -p[2], p[1]], [p[2], 0, -p[0]], [-p[1], p[0], 0]]
+        )
+        A[3 * i : 3 * i + 3, 6] = p
     return A
 
 
@@ -198,7 +262,9 @@ MUTANTS = {
         "transpose": lambda x, X: _sol_similarity(x, X, transpose=True),
         "no reflection fix": lambda x, X: _sol_similarity(x, X, fix=False),
         "symmetric scale": lambda x, X: _sol_similarity(x, X, symmetric=True),
-        "T without scale": lambda x, X: (lambda m, R, T: (m, R, X.mean(0) - R @ x.mean(0)))(*_sol_similarity(x, X)),
+        "T without scale": lambda x, X: (lambda m, R, T: (m, R, X.mean(0) - R @ x.mean(0)))(
+            *_sol_similarity(x, X)
+        ),
     },
     "check_model_coordinates": {
         "R instead of R^T": lambda X, m, R, T: (X - T) @ R.T / m,
@@ -206,8 +272,12 @@ MUTANTS = {
         "T forgotten": lambda X, m, R, T: X @ R / m,
     },
     "check_design": {
-        "sign of the rotation columns": lambda x, m, R: _sol_design(x, m, R) * np.r_[1, 1, 1, -1, -1, -1, 1],
-        "m forgotten": lambda x, m, R: _sol_design(x, m, R) * np.r_[1, 1, 1, 1 / m, 1 / m, 1 / m, 1],
+        "sign of the rotation columns": lambda x, m, R: (
+            _sol_design(x, m, R) * np.r_[1, 1, 1, -1, -1, -1, 1]
+        ),
+        "m forgotten": lambda x, m, R: (
+            _sol_design(x, m, R) * np.r_[1, 1, 1, 1 / m, 1 / m, 1 / m, 1]
+        ),
         "scale column times m": lambda x, m, R: _sol_design(x, m, R) * np.r_[1, 1, 1, 1, 1, 1, m],
     },
     "check_sigma_scale": {

@@ -58,7 +58,9 @@ def check_helmert_columns(fn) -> None:
         xy, pairs = _network(rng_for("lesson09.check_helmert_columns", salt))
         G = np.asarray(call(fn, xy.copy(), what="helmert_columns"), dtype=float)
         if G.shape != (xy.size, 3):
-            raise CheckFailed(f"G: expected shape ({xy.size}, 3) — two shifts and one rotation — got {G.shape}")
+            raise CheckFailed(
+                f"G: expected shape ({xy.size}, 3) — two shifts and one rotation — got {G.shape}"
+            )
         J = _jacobian(xy.reshape(-1), pairs)
         Gn = G / np.maximum(np.linalg.norm(G, axis=0), 1e-300)
         change = np.abs(J @ Gn).max(axis=0)  # distance change per unit move, each column
@@ -67,9 +69,13 @@ def check_helmert_columns(fn) -> None:
             err = float(change[bad])
             hint = ""
             if bad == 2 or np.linalg.matrix_rank(G) == 3:
-                hint = (" — a rotation moves point (x, y) by (−y, x) (about the centroid or the origin);"
-                        " (x, y) itself is a change of scale, which the distances see")
-            raise CheckFailed(f"G: column {bad + 1} changes the distances by {err:.3g} per unit{hint}", err, 1e-8)
+                hint = (
+                    " — a rotation moves point (x, y) by (−y, x) (about the centroid or the origin);"
+                    " (x, y) itself is a change of scale, which the distances see"
+                )
+            raise CheckFailed(
+                f"G: column {bad + 1} changes the distances by {err:.3g} per unit{hint}", err, 1e-8
+            )
         sv = np.linalg.svd(Gn, compute_uv=False)
         if sv[-1] < 1e-6 * sv[0]:
             raise CheckFailed("G: the three columns are not independent (rank < 3): the defect is not covered",

@@ -80,7 +80,9 @@ def check_back_substitute(fn) -> None:
     N = np.block([[U, W], [W.T, V]])
     x = np.linalg.solve(N, np.concatenate([bc, bp]))
     dc, want = x[: len(bc)], x[len(bc) :]
-    got = np.asarray(call(fn, V.copy(), W.copy(), bp.copy(), dc.copy(), what="back_substitute"), dtype=float)
+    got = np.asarray(
+        call(fn, V.copy(), W.copy(), bp.copy(), dc.copy(), what="back_substitute"), dtype=float
+    )
     compare("dp", got, want, rtol=1e-9, wrong=[
         ("the coupling Wᵀ dc is missing: dp = V⁻¹ (bp − Wᵀ dc)", _back(V, W, bp, dc, "no_coupling")),
         ("the sign of Wᵀ dc is wrong: dp = V⁻¹ (bp − Wᵀ dc)", _back(V, W, bp, dc, "plus")),
@@ -113,7 +115,7 @@ def _bandwidth(P, mode="ok"):
 
 
 def check_bandwidth(fn) -> None:
-    """``fn(P) -> b``: the half-bandwidth of a symmetric pattern: the largest |i − k| of a
+    """``fn(P) -> b``: the half-bandwidth of a symmetric pattern: the largest abs(i − k) of a
     non-zero entry (0 for a diagonal matrix)."""
     rng = rng_for("lesson10.check_bandwidth")
     for n, p in ((12, 0.15), (20, 0.08), (9, 0.3)):

@@ -124,7 +124,7 @@ def check_fit_k1k2(fn: Callable) -> None:
 
 
 def check_significant(fn: Callable) -> None:
-    """Check ``fn(values, sigmas, alpha) -> bool array``: two-sided test |p|/σ_p > z(1 − α/2)."""
+    """Check ``fn(values, sigmas, alpha) -> bool array``: two-sided test abs(p)/σ_p > z(1 − α/2)."""
     values = np.array([2.1, -3.4, 0.52, 1.7, -0.9, 7.0, 1.5])  # µm
     sigmas = np.array([1.0, 1.2, 0.24, 0.95, 0.41, 6.0, 1.0])  # µm
     alpha = 0.05

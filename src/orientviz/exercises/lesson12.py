@@ -82,7 +82,7 @@ def check_normalized(fn: Callable) -> None:
 
 
 def check_snoop_round(fn: Callable) -> None:
-    """Check ``fn(A, l, sigma, k) -> index``: the observation with the largest |w| if > k, else −1."""
+    """Check ``fn(A, l, sigma, k) -> index``: the observation with the largest abs(w) if > k, else −1."""
     rng = rng_for("lesson12.check_snoop_round")
     k = norm.ppf(1 - 0.001 / 2)
     cases = [_line(rng, blunder=(11, -6.0)), _line(rng), _line(rng, blunder=(2, 9.0))]

@@ -110,7 +110,10 @@ def main(argv: list[str] | None = None) -> int:
     """Command line: ``strip SRC OUTDIR`` (SRC a notebook or a folder of notebooks)."""
     args = sys.argv[1:] if argv is None else argv
     if len(args) != 2:
-        print("usage: python -m orientviz.exercises.strip SRC(.ipynb or folder) OUTDIR", file=sys.stderr)
+        print(
+            "usage: python -m orientviz.exercises.strip SRC(.ipynb or folder) OUTDIR",
+            file=sys.stderr,
+        )
         return 2
     src, outdir = pathlib.Path(args[0]), pathlib.Path(args[1])
     paths = sorted(src.glob("*.ipynb")) if src.is_dir() else [src]

@@ -34,8 +34,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from ..block import Block
 from ..errors import InputError
-from ..model import Block
 from ..rotation import matrix_from_opk, matrix_from_rotvec, opk_from_matrix, rotvec_from_matrix
 
 F64 = NDArray[np.float64]
@@ -119,6 +119,8 @@ def _parse(lines: list[str], source: str) -> tuple[F64, F64, F64]:
         ) from None
     if min(nc, npt, nobs) < 0:
         raise InputError("expected non-negative counts in the header", source, "line 1")
+    if max(nc, npt, nobs) > 10**9:
+        raise InputError("expected counts below 10^9 in the header", source, "line 1")
     tok.pos = 3
     if len(lines) < 1 + nobs:
         raise tok.fail(f"expected {nobs} observation lines, the file ends at line {len(lines)}")
@@ -176,7 +178,7 @@ def read_bal(
     sigma_px: float = 1.0,
     sequence: str = "opk",
 ) -> Block:
-    """Read a BAL file into a :class:`~orientviz.model.Block` (all points tie points).
+    """Read a BAL file into a :class:`~orientviz.block.Block` (all points tie points).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""COLMAP text models (cameras.txt, images.txt, points3D.txt) ↔ :class:`~orientviz.model.Block`.
+"""COLMAP models (text or binary) ↔ :class:`~orientviz.block.Block`.
 
 Conventions
 -----------
@@ -9,233 +9,209 @@ first pixel at (0.5, 0.5)). orientviz uses the photogrammetric frame (x right, y
 viewing along −z), image coordinates in mm and R image → object. Hence
 
     R_orientviz = R_cwᵀ · diag(1, −1, −1),   X0 = −R_cwᵀ t,
-    x_mm = (u − cx) · p,   y_mm = −(v − cy) · p,   c = f · p,
+    x_mm = x_n · c,   y_mm = −y_n · c,   c = fx · p,
 
-with a nominal pixel size ``p`` in mm (default 0.01 mm = 10 µm; it only scales image
-units, the adjustment is unchanged). Lens distortion of the COLMAP camera models
-(SIMPLE_RADIAL, RADIAL, OPENCV) is removed from the observations at import (iterative
-inversion), so the Block holds distortion-free image coordinates; the parameters are
-kept in ``block.meta["colmap_cameras"]`` and restored on export. Angles come out in the
-block's sequence (ω-φ-κ by default).
+where (x_n, y_n) are COLMAP's undistorted normalised coordinates ((u − cx)/fx,
+(v − cy)/fy before distortion) and ``p`` a nominal pixel size in mm (default 0.01 mm;
+it only scales image units, the adjustment is unchanged). The mapping is exact for the
+supported models (SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV): the lens
+distortion, with COLMAP's fixed parameters, is inverted at import (Newton, to 1e-10 px)
+and fx ≠ fy stays in the data (y_n is in units of fy; nothing is averaged). The
+parameters are kept in ``block.meta["colmap_cameras"]``; :func:`write_colmap` writes
+the distortion-free equivalent (SIMPLE_PINHOLE). Angles come out in the block's
+sequence (ω-φ-κ by default). The text files are read in one streaming pass keeping only
+matched keypoints (:mod:`orientviz.io.colmap_text`); the binary files by
+:mod:`orientviz.io.colmap_bin`.
 
-Broken files raise :class:`~orientviz.errors.InputError` naming the file and line.
+Broken files raise :class:`~orientviz.errors.InputError` naming the file and line
+(binary files: the byte offset).
 """
 
 from __future__ import annotations
 
 import argparse
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ..block import CHECK, CONTROL, Block
 from ..errors import InputError
-from ..model import CHECK, CONTROL, Block
 from ..rotation import opk_from_matrix
+from .colmap_text import CAMERA_MODELS, ColmapCamera, ColmapModel, read_text_model
+
+__all__ = ["CAMERA_MODELS", "block_from_colmap", "read_colmap", "write_colmap"]
 
 FLIP = np.diag([1.0, -1.0, -1.0])
-#: Coordinates and translations beyond ± this are refused (not adjustable in doubles).
-MAX_VALUE: float = 1e15
-
-#: COLMAP camera models understood here: name → parameter names.
-CAMERA_MODELS: dict[str, tuple[str, ...]] = {
-    "SIMPLE_PINHOLE": ("f", "cx", "cy"),
-    "PINHOLE": ("fx", "fy", "cx", "cy"),
-    "SIMPLE_RADIAL": ("f", "cx", "cy", "k"),
-    "RADIAL": ("f", "cx", "cy", "k1", "k2"),
-    "OPENCV": ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"),
-}
+#: The undistortion of an observation is iterated until it changes by less than this (px).
+UNDISTORT_TOL_PX: float = 1e-10
 
 
-@dataclass
-class _Camera:
-    model: str
-    width: int
-    height: int
-    params: NDArray[np.float64]
-
-    def focal(self) -> float:
-        p = dict(zip(CAMERA_MODELS[self.model], self.params))
-        return float(p.get("f", 0.5 * (p.get("fx", 0.0) + p.get("fy", 0.0))))
-
-    def principal_point(self) -> tuple[float, float]:
-        p = dict(zip(CAMERA_MODELS[self.model], self.params))
-        return float(p["cx"]), float(p["cy"])
-
-    def distortion(self) -> tuple[float, float, float, float]:
-        """k1, k2, p1, p2 (zeros where the model has none)."""
-        p = dict(zip(CAMERA_MODELS[self.model], self.params))
-        return (p.get("k", p.get("k1", 0.0)), p.get("k2", 0.0), p.get("p1", 0.0), p.get("p2", 0.0))
+def _rotation_cw(q: NDArray[np.float64]) -> NDArray[np.float64]:
+    """World → camera rotations (m, 3, 3) from unit quaternions (m, 4) ``qw qx qy qz``."""
+    w, x, y, z = q.T
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        axis=1,
+    )
 
 
-def _read(path: Path) -> str:
-    """The text of a model file, checked (:func:`~orientviz.io.safeio.read_input_text`)."""
-    from .safeio import read_input_text
-
-    return read_input_text(path, f"a COLMAP text file {path.name}")
-
-
-def _lines(path: Path):
-    text = _read(path)
-    for no, line in enumerate(text.splitlines(), start=1):
-        s = line.strip()
-        if s and not s.startswith("#"):
-            yield no, s
+def _coefficients(cam: ColmapCamera) -> tuple[float, float, float, float]:
+    """k1, k2, p1, p2 of COLMAP's distortion (zeros where the model has none)."""
+    p = cam.named()
+    return p.get("k", p.get("k1", 0.0)), p.get("k2", 0.0), p.get("p1", 0.0), p.get("p2", 0.0)
 
 
-def _numbers(path: Path, no: int, fields: list[str], kinds: str, what: str) -> list:
-    if len(fields) < len(kinds):
-        raise InputError(
-            f"expected {what} with {len(kinds)} fields, got {len(fields)}",
-            source=str(path),
-            where=f"line {no}",
+def _distort(cam: ColmapCamera, xn: NDArray[np.float64], jacobian: bool = False):
+    """COLMAP's forward distortion of normalised coordinates (x right, y down), and its
+    2 × 2 Jacobian (∂x_d/∂x, ∂x_d/∂y, ∂y_d/∂x, ∂y_d/∂y) when asked."""
+    k1, k2, p1, p2 = _coefficients(cam)
+    x, y = xn[:, 0], xn[:, 1]
+    r2 = x * x + y * y
+    radial = 1.0 + k1 * r2 + k2 * r2 * r2
+    xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
+    yd = y * radial + 2 * p2 * x * y + p1 * (r2 + 2 * y * y)
+    if not jacobian:
+        return np.column_stack([xd, yd])
+    g = 2.0 * (k1 + 2.0 * k2 * r2)
+    j = (radial + g * x * x + 2 * p1 * y + 6 * p2 * x, g * x * y + 2 * p1 * x + 2 * p2 * y,
+         g * x * y + 2 * p2 * y + 2 * p1 * x, radial + g * y * y + 2 * p2 * x + 6 * p1 * y)  # fmt: skip
+    return xd, yd, j
+
+
+#: Observations undistorted per batch (bounds the temporaries of the Newton iteration).
+UNDISTORT_BATCH: int = 1 << 18
+
+
+def normalised(cam: ColmapCamera, uv: NDArray[np.float64], source: str = "") -> NDArray[np.float64]:
+    """Undistorted normalised coordinates (x right, y down) of pixel observations ``uv``.
+
+    ``(u − cx)/fx, (v − cy)/fy`` with COLMAP's distortion (SIMPLE_RADIAL, RADIAL,
+    OPENCV) inverted by Newton's method (analytic 2 × 2 Jacobian) to
+    :data:`UNDISTORT_TOL_PX` (px), in batches of :data:`UNDISTORT_BATCH`; an observation
+    that does not converge raises ``InputError`` (distortion too strong to invert there).
+    """
+    p = cam.named()
+    fx, fy = p.get("fx", p.get("f")), p.get("fy", p.get("f"))
+    out = np.empty_like(uv, dtype=float)
+    out[:, 0] = (uv[:, 0] - p["cx"]) / fx
+    out[:, 1] = (uv[:, 1] - p["cy"]) / fy
+    if not any(_coefficients(cam)):
+        return out
+    tol = UNDISTORT_TOL_PX / max(fx, fy)
+    for a in range(0, len(out), UNDISTORT_BATCH):
+        d = out[a : a + UNDISTORT_BATCH].copy()
+        x = d.copy()
+        active = np.arange(len(d))
+        for _ in range(30):
+            xd, yd, (a11, a12, a21, a22) = _distort(cam, x[active], jacobian=True)
+            fx_, fy_ = xd - d[active, 0], yd - d[active, 1]
+            done = (np.abs(fx_) < tol) & (np.abs(fy_) < tol)
+            det = a11 * a22 - a12 * a21
+            det = np.where(np.abs(det) < 1e-12, 1e-12, det)
+            x[active, 0] -= np.where(done, 0.0, (a22 * fx_ - a12 * fy_) / det)
+            x[active, 1] -= np.where(done, 0.0, (-a21 * fx_ + a11 * fy_) / det)
+            active = active[~done]
+            if active.size == 0:
+                break
+        bad = np.flatnonzero(
+            np.any(np.abs(_distort(cam, x) - d) >= tol, axis=1) | ~np.isfinite(x).all(1)
         )
-    out = []
-    for i, (f, k) in enumerate(zip(fields, kinds)):
-        try:
-            v = int(f) if k == "i" else float(f) if k == "f" else f
-        except ValueError:
+        if bad.size:
+            u = uv[a + bad[0]]
             raise InputError(
-                f"field {i + 1} of {what}: expected {'an integer' if k == 'i' else 'a number'}, "
-                f"got {f!r}",
-                source=str(path),
-                where=f"line {no}",
-            ) from None
-        if k == "f" and not np.isfinite(v):
-            raise InputError(
-                f"field {i + 1} of {what}: expected a finite number, got {f!r}",
-                source=str(path),
-                where=f"line {no}",
+                f"{cam.model} camera: the lens distortion cannot be inverted at pixel "
+                f"({u[0]:.1f}, {u[1]:.1f}) ({bad.size} observation(s))",
+                source=source,
             )
-        out.append(v)
+        out[a : a + UNDISTORT_BATCH] = x
     return out
 
 
-def _read_cameras(path: Path) -> dict[int, _Camera]:
-    cams: dict[int, _Camera] = {}
-    for no, line in _lines(path):
-        f = line.split()
-        cid, model, w, h = _numbers(path, no, f, "isii", "a camera")
-        if model not in CAMERA_MODELS:
-            raise InputError(
-                f"camera model {model!r} is not supported (supported: {', '.join(CAMERA_MODELS)})",
-                source=str(path),
-                where=f"line {no}",
-            )
-        names = CAMERA_MODELS[model]
-        params = _numbers(path, no, f[4:], "f" * len(names), f"{model} parameters")
-        if len(f) - 4 != len(names):
-            raise InputError(
-                f"{model} has {len(names)} parameters, got {len(f) - 4}",
-                source=str(path),
-                where=f"line {no}",
-            )
-        if cid in cams:
-            raise InputError(f"duplicate camera id {cid}", source=str(path), where=f"line {no}")
-        cam = _Camera(model, w, h, np.array(params))
-        bad = _camera_problem(cam)
-        if bad:
-            raise InputError(f"camera {cid}: {bad}", source=str(path), where=f"line {no}")
-        cams[cid] = cam
-    if not cams:
-        raise InputError("no cameras in the file", source=str(path), where=_end(path))
-    return cams
+def block_from_colmap(
+    model: ColmapModel, *, pixel_size_mm: float = 0.01, sigma_px: float = 1.0, sequence: str = "opk"
+) -> Block:
+    """Convert a :class:`ColmapModel` (text or binary) into a Block, exactly.
 
-
-def _camera_problem(cam: _Camera) -> str | None:
-    """Why a camera cannot be used (sizes, focal length), or None."""
-    if not (0 < cam.width < 10**7 and 0 < cam.height < 10**7):
-        return f"expected WIDTH and HEIGHT of 1..10^7 pixels, got {cam.width} {cam.height}"
-    p = dict(zip(CAMERA_MODELS[cam.model], cam.params))
-    for name in ("f", "fx", "fy"):
-        if name in p and not 0 < p[name] < 1e12:
-            return f"expected a focal length {name} > 0 px (below 1e12), got {p[name]:g}"
-    for name in ("cx", "cy"):
-        if abs(p[name]) > 1e12:
-            return f"principal point {name} = {p[name]:g} px lies far outside the image"
-    return None
-
-
-def _refuse_nonfinite(values: NDArray[np.float64], lines: list[int], path: Path, what: str):
-    """Values that overflowed in the conversion (e.g. ±1e308 in a file) name their line."""
-    bad = np.flatnonzero(~np.all(np.isfinite(values.reshape(len(values), -1)), axis=1))
-    if bad.size:
+    Each camera becomes a distortion-free camera with c = fx · p and the principal point
+    at the origin: observations are undistorted (COLMAP's own distortion model, fixed
+    parameters) and expressed as x = x_n · c, y = −y_n · c (mm). A camera with fx ≠ fy
+    (PINHOLE, OPENCV) keeps its affinity exactly: y_n = (v − cy)/fy carries it, so the
+    y-coordinates are in units of fx (σ_y = σ_px · p · fx/fy); nothing is averaged.
+    The COLMAP parameters are kept in ``block.meta["colmap_cameras"]``.
+    """
+    cams = model.cameras
+    cam_ids = sorted(cams)
+    cam_index = {c: i for i, c in enumerate(cam_ids)}
+    q = model.qvec
+    norm = np.linalg.norm(q, axis=1)
+    if np.any(~((norm > 0.5) & (norm < 2.0))):
+        k = int(np.flatnonzero(~((norm > 0.5) & (norm < 2.0)))[0])
         raise InputError(
-            f"the {what} overflows after conversion (a value near ±1e308 in the file?)",
-            source=str(path),
-            where=f"line {lines[int(bad[0])]}",
+            f"image {model.names[k]!r}: quaternion is not normalised",
+            source=model.source.get("images", ""),
         )
-
-
-def _end(path: Path) -> str:
-    """``"line N"`` of the last line of an existing text file (for "nothing found" errors)."""
-    try:
-        n = len(_read(path).splitlines())
-    except InputError:
-        n = 0
-    return f"line {max(n, 1)}"
-
-
-def _read_points(path: Path) -> tuple[list[int], list[list[float]], list[tuple[int, list[int]]]]:
-    """POINT3D_ID, X, Y, Z and the TRACK image ids (with the line number) of points3D.txt."""
-    pid: list[int] = []
-    xyz: list[list[float]] = []
-    tracks: list[tuple[int, list[int]]] = []
-    seen: set[int] = set()
-    for no, line in _lines(path):
-        f = line.split()
-        vals = _numbers(path, no, f, "ifff", "a 3D point")
-        if max(abs(v) for v in vals[1:4]) > MAX_VALUE:
-            raise InputError(
-                f"a coordinate beyond ±{MAX_VALUE:g}: not a position",
-                source=str(path),
-                where=f"line {no}",
-            )
-        if vals[0] < 0:
-            raise InputError(
-                f"POINT3D_ID {vals[0]}: expected an id ≥ 0 (-1 is COLMAP's 'no 3D point')",
-                source=str(path),
-                where=f"line {no}",
-            )
-        if vals[0] in seen:
-            raise InputError(
-                f"duplicate POINT3D_ID {vals[0]}", source=str(path), where=f"line {no}"
-            )
-        seen.add(vals[0])
-        track = f[8:]
-        if len(track) % 2:
-            raise InputError(
-                f"expected TRACK[] as pairs IMAGE_ID POINT2D_IDX, got {len(track)} fields",
-                source=str(path),
-                where=f"line {no}",
-            )
-        ids = _numbers(path, no, track, "i" * len(track), "the TRACK") if track else []
-        pid.append(vals[0])
-        xyz.append(vals[1:4])
-        tracks.append((no, ids[0::2]))
-    return pid, xyz, tracks
-
-
-def _undistort(cam: _Camera, uv: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Remove COLMAP's radial/tangential distortion from pixel coordinates."""
-    k1, k2, p1, p2 = cam.distortion()
-    if k1 == k2 == p1 == p2 == 0.0:
-        return uv
-    p = dict(zip(CAMERA_MODELS[cam.model], cam.params))
-    fx = p.get("fx", p.get("f"))
-    fy = p.get("fy", p.get("f"))
-    cx, cy = cam.principal_point()
-    d = np.column_stack([(uv[:, 0] - cx) / fx, (uv[:, 1] - cy) / fy])
-    u = d.copy()
-    for _ in range(20):  # fixed-point inversion of x_d = x (1 + k1 r² + k2 r⁴) + tangential
-        x, y = u[:, 0], u[:, 1]
-        r2 = x * x + y * y
-        radial = k1 * r2 + k2 * r2 * r2
-        dx = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
-        dy = y * radial + 2 * p2 * x * y + p1 * (r2 + 2 * y * y)
-        u = d - np.column_stack([dx, dy])
-    return np.column_stack([u[:, 0] * fx + cx, u[:, 1] * fy + cy])
+    Rcw = _rotation_cw(q / norm[:, None])
+    X0 = -np.einsum("nji,nj->ni", Rcw, model.tvec)
+    R = np.transpose(Rcw, (0, 2, 1)) @ FLIP
+    cam_arr = np.array([cam_index[int(c)] for c in model.image_camera], dtype=np.int64)
+    n = model.obs_image.size
+    xy = np.empty((n, 2))
+    sigma = np.empty((n, 2))
+    c_mm = []
+    for ci, cid in enumerate(cam_ids):
+        cam = cams[cid]
+        p = cam.named()
+        fx, fy = p.get("fx", p.get("f")), p.get("fy", p.get("f"))
+        c = fx * pixel_size_mm
+        c_mm.append(c)
+        sel = slice(None) if len(cam_ids) == 1 else cam_arr[model.obs_image] == ci
+        xn = normalised(cam, model.obs_uv[sel], model.source.get("images", ""))
+        xn *= [c, -c]
+        xy[sel] = xn
+        del xn
+        sigma[sel] = sigma_px * pixel_size_mm * np.array([1.0, fx / fy])
+    obs_point = model.obs_point  # indices into model.point_ids
+    names = list(model.names)
+    ids = names if len(set(names)) == len(names) else [str(i) for i in model.image_ids]
+    return Block.from_arrays(
+        camera_c=c_mm,
+        camera_format_mm=[
+            (cams[c].width * pixel_size_mm, cams[c].height * pixel_size_mm) for c in cam_ids
+        ],
+        camera_ids=[str(c) for c in cam_ids],
+        image_camera=cam_arr,
+        X0=X0,
+        angles=np.column_stack(opk_from_matrix(R, sequence)).reshape(-1, 3),
+        image_ids=ids,
+        xyz=model.xyz.reshape(-1, 3),
+        point_ids=[str(p) for p in model.point_ids.tolist()],
+        obs_image=model.obs_image,
+        obs_point=obs_point,
+        obs_xy=xy,
+        obs_sigma=sigma,
+        sequence=sequence,
+        meta={
+            "source": model.source.get("directory", ""),
+            "format": model.source.get("format", ""),
+            "pixel_size_mm": pixel_size_mm,
+            "image_names": names,
+            "colmap_image_ids": model.image_ids.tolist(),
+            "colmap_cameras": {
+                str(c): {
+                    "model": cams[c].model,
+                    "width": cams[c].width,
+                    "height": cams[c].height,
+                    "params": cams[c].params.tolist(),
+                }
+                for c in cam_ids
+            },  # fmt: skip
+        },
+    )
 
 
 def read_colmap(
@@ -245,12 +221,14 @@ def read_colmap(
     sigma_px: float = 1.0,
     sequence: str = "opk",
 ) -> Block:
-    """Read a COLMAP text model into a Block.
+    """Read a COLMAP model (text or binary) into a Block.
 
     Parameters
     ----------
     directory : str or Path
-        Folder with ``cameras.txt``, ``images.txt`` and ``points3D.txt``.
+        Folder with ``cameras.txt``, ``images.txt`` and ``points3D.txt`` or with
+        ``cameras.bin``, ``images.bin`` and ``points3D.bin`` (text is read when both are
+        present).
     pixel_size_mm : float, default 0.01
         Nominal pixel size in mm used to express image coordinates in mm.
     sigma_px : float, default 1.0
@@ -261,163 +239,27 @@ def read_colmap(
     Returns
     -------
     Block
-        All points as tie points (COLMAP has no control); object units are COLMAP's.
+        All points as tie points (COLMAP has no control); object units are COLMAP's;
+        image ids are COLMAP's NAMEs when unique (else IMAGE_IDs), point ids POINT3D_IDs.
+        Only keypoints matched to a 3D point are kept.
     """
     d = Path(directory)
     if not d.is_dir():
         raise InputError(
-            "expected a directory with cameras.txt, images.txt, points3D.txt", source=str(d)
+            "expected a directory with cameras.txt, images.txt, points3D.txt "
+            "(or cameras.bin, images.bin, points3D.bin)",
+            source=str(d),
         )
-    cams = _read_cameras(d / "cameras.txt")
-    cam_ids = sorted(cams)
-    cam_index = {c: i for i, c in enumerate(cam_ids)}
+    if (d / "images.txt").exists() or not (d / "images.bin").exists():
+        model = read_text_model(d)
+    else:
+        from .colmap_bin import read_binary_model
 
-    pts_path = d / "points3D.txt"
-    pid, xyz, tracks = _read_points(pts_path)
-    p_index = {p: i for i, p in enumerate(pid)}
-
-    img_path = d / "images.txt"
-    lines = list(_lines(img_path))
-    # images.txt: two lines per image; the second (the 2D points) may be empty, which the
-    # comment-stripping reader drops, so read by position in the raw text instead.
-    raw = _read(img_path).splitlines()
-    body = [(no, s) for no, s in enumerate(raw, start=1) if not s.strip().startswith("#")]
-    image_ids, names, cam_of, X0s, Rs, img_lines = [], [], [], [], [], []
-    oi, op, uv, obs_lines = [], [], [], []
-    k = 0
-    while k < len(body):
-        no, s = body[k]
-        if not s.strip():
-            k += 1
-            continue
-        f = s.split()
-        iid, qw, qx, qy, qz, tx, ty, tz, cid = _numbers(img_path, no, f, "ifffffffi", "an image")
-        name = f[9] if len(f) > 9 else str(iid)
-        if iid in image_ids:
-            raise InputError(f"duplicate IMAGE_ID {iid}", source=str(img_path), where=f"line {no}")
-        if cid not in cams:
-            raise InputError(f"unknown camera id {cid}", source=str(img_path), where=f"line {no}")
-        if max(abs(tx), abs(ty), abs(tz)) > MAX_VALUE:
-            raise InputError(
-                f"translation beyond ±{MAX_VALUE:g}: not a position",
-                source=str(img_path),
-                where=f"line {no}",
-            )
-        q = np.array([qw, qx, qy, qz])
-        if not 0.5 < np.linalg.norm(q) < 2.0:
-            raise InputError(
-                "quaternion is not normalised", source=str(img_path), where=f"line {no}"
-            )
-        q = q / np.linalg.norm(q)
-        w, x, y, z = q
-        Rcw = np.array(
-            [
-                [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-            ]
-        )
-        t = np.array([tx, ty, tz])
-        image_ids.append(iid)
-        img_lines.append(no)
-        names.append(name)
-        cam_of.append(cam_index[cid])
-        X0s.append(-Rcw.T @ t)
-        Rs.append(Rcw.T @ FLIP)
-        pts_line = body[k + 1] if k + 1 < len(body) else (no + 1, "")
-        f2 = pts_line[1].split()
-        if len(f2) % 3:
-            raise InputError(
-                "expected triplets X Y POINT3D_ID",
-                source=str(img_path),
-                where=f"line {pts_line[0]}",
-            )
-        img_idx = len(image_ids) - 1
-        for j in range(0, len(f2), 3):
-            u, v, p3 = _numbers(img_path, pts_line[0], f2[j : j + 3], "ffi", "a 2D point")
-            if p3 == -1:
-                continue
-            cam = cams[cid]
-            if not (abs(u) <= 100 * cam.width and abs(v) <= 100 * cam.height):
-                raise InputError(
-                    f"2D point ({u:g}, {v:g}) px lies far outside the {cam.width} × "
-                    f"{cam.height} image",
-                    source=str(img_path),
-                    where=f"line {pts_line[0]}",
-                )
-            if p3 not in p_index:
-                raise InputError(
-                    f"unknown POINT3D_ID {p3}", source=str(img_path), where=f"line {pts_line[0]}"
-                )
-            oi.append(img_idx)
-            obs_lines.append(pts_line[0])
-            op.append(p_index[p3])
-            uv.append((u, v))
-        k += 2
-    del lines
-    if not image_ids:
-        raise InputError("no images in the file", source=str(img_path), where=_end(img_path))
-    known = set(image_ids)
-    for no, ids in tracks:
-        dangling = [i for i in ids if i not in known]
-        if dangling:
-            raise InputError(
-                f"TRACK names IMAGE_ID {dangling[0]}, which is not in images.txt",
-                source=str(pts_path),
-                where=f"line {no}",
-            )
-    # readable image ids: COLMAP's image names where they are unique, else its IMAGE_IDs
-    ids = names if len(set(names)) == len(names) else [str(i) for i in image_ids]
-    uv_arr = np.array(uv, dtype=float).reshape(-1, 2)
-    oi_arr = np.array(oi, dtype=np.int64)
-    cam_arr = np.array(cam_of, dtype=np.int64)
-    xy = np.empty_like(uv_arr)
-    for ci, cid in enumerate(cam_ids):
-        sel = cam_arr[oi_arr] == ci
-        cam = cams[cid]
-        und = _undistort(cam, uv_arr[sel])
-        cx, cy = cam.principal_point()
-        xy[sel, 0] = (und[:, 0] - cx) * pixel_size_mm
-        xy[sel, 1] = -(und[:, 1] - cy) * pixel_size_mm
-    _refuse_nonfinite(np.array(X0s).reshape(-1, 3), img_lines, img_path, "projection centre")
-    _refuse_nonfinite(xy, obs_lines, img_path, "image point (mm)")
-    R = np.array(Rs)
-    ang = np.column_stack(opk_from_matrix(R, sequence))
-    block = Block.from_arrays(
-        camera_c=[cams[c].focal() * pixel_size_mm for c in cam_ids],
-        camera_format_mm=[
-            (cams[c].width * pixel_size_mm, cams[c].height * pixel_size_mm) for c in cam_ids
-        ],
-        camera_ids=[str(c) for c in cam_ids],
-        image_camera=cam_arr,
-        X0=np.array(X0s),
-        angles=ang,
-        image_ids=ids,
-        xyz=np.array(xyz, dtype=float).reshape(-1, 3),
-        point_ids=[str(p) for p in pid],
-        obs_image=oi_arr,
-        obs_point=np.array(op, dtype=np.int64),
-        obs_xy=xy,
-        obs_sigma=sigma_px * pixel_size_mm,
-        sequence=sequence,
-        meta={
-            "source": str(d),
-            "format": "colmap-text",
-            "pixel_size_mm": pixel_size_mm,
-            "image_names": names,
-            "colmap_image_ids": image_ids,
-            "colmap_cameras": {
-                str(c): {
-                    "model": cams[c].model,
-                    "width": cams[c].width,
-                    "height": cams[c].height,
-                    "params": cams[c].params.tolist(),
-                }
-                for c in cam_ids
-            },
-        },
+        model = read_binary_model(d)
+    model.source["directory"] = str(d)
+    return block_from_colmap(
+        model, pixel_size_mm=pixel_size_mm, sigma_px=sigma_px, sequence=sequence
     )
-    return block
 
 
 def write_colmap(

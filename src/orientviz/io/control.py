@@ -23,8 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..block import CHECK, CONTROL, Block
 from ..errors import InputError
-from ..model import CHECK, CONTROL, Block
 
 F64 = NDArray[np.float64]
 
@@ -67,21 +67,9 @@ def read_control(path: str | os.PathLike[str]) -> ControlPoints:
         Naming the file and line: missing columns, wrong cell counts, non-numbers,
         negative σ, unknown roles, duplicate ids, points without any coordinate.
     """
-    from .safeio import open_input_text
 
     source = str(path)
-    rows = csv_rows(open_input_text(path, "a control CSV file"), source)
-    if not rows:
-        raise InputError("empty control file, expected a header id,X,Y,Z", source, "line 1")
-    head = [h.strip() for h in rows[0]]
-    missing = [c for c in REQUIRED if c not in head]
-    if missing:
-        raise InputError(
-            f"expected columns {', '.join(REQUIRED)}; missing {', '.join(missing)}",
-            source,
-            "line 1",
-        )
-    col = {h: j for j, h in enumerate(head)}
+    rows, head, col = csv_table(path, "a control CSV file", REQUIRED, "empty control file")
     ids, xyz, sig, role, lines = [], [], [], [], []
     for no, r in enumerate(rows[1:], start=2):
         if not any(c.strip() for c in r):
@@ -131,6 +119,31 @@ def write_control(path: str | os.PathLike[str], control: ControlPoints) -> None:
         sig = [repr(float(v)) for v in control.sigma[i]]
         w.writerow([ident, *cells, *sig, "check" if control.role[i] == CHECK else "control"])
     write_atomic(path, fh.getvalue())
+
+
+def csv_table(
+    path: str | os.PathLike[str],
+    what: str,
+    required: tuple[str, ...],
+    empty: str,
+    optional: str = "",
+) -> tuple[list[list[str]], list[str], dict[str, int]]:
+    """Rows, header and column index of a CSV with the ``required`` columns (InputError at
+    line 1 naming what is missing; ``optional`` is shown in the expected header)."""
+    from .safeio import open_input_text
+
+    source = str(path)
+    rows = csv_rows(open_input_text(path, what), source)
+    if not rows:
+        raise InputError(
+            f"{empty}, expected a header {','.join(required)}{optional}", source, "line 1"
+        )
+    head = [h.strip() for h in rows[0]]
+    missing = [c for c in required if c not in head]
+    if missing:
+        raise InputError(f"expected columns {', '.join(required)}{optional}; missing "
+                         f"{', '.join(missing)}", source, "line 1")  # fmt: skip
+    return rows, head, {h: j for j, h in enumerate(head)}
 
 
 def csv_rows(stream, source: str) -> list[list[str]]:

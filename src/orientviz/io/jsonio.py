@@ -102,31 +102,52 @@ def text_problem(text: str, limit: int = MAX_TEXT_LENGTH) -> str | None:
     return None
 
 
+_PLAIN = (float, int, bool, type(None))
+
+
 def _find_bad(node: Any, path: list[str | int]) -> tuple[list[str | int], str] | None:
     """First NaN/inf placeholder, duplicated key or unusable text in document order."""
-    if isinstance(node, str):
+    hit = _bad(node)
+    if hit is None:
+        return None
+    rev, message = hit
+    return path + rev[::-1], message
+
+
+def _bad(node: Any) -> tuple[list[str | int], str] | None:
+    """The walk of :func:`_find_bad`: the path comes back reversed (built only on a hit)."""
+    t = type(node)
+    if t is str:
+        if node.isascii() and len(node) <= MAX_TEXT_LENGTH:  # the usual case, inline
+            return None
         why = text_problem(node)
-        return (path, why) if why else None
-    if isinstance(node, _NonFinite):
-        return path, (
+        return ([], why) if why else None
+    if t is _NonFinite:
+        return [], (
             f"{node.token} is not a finite number (JSON has no NaN or Infinity; "
             "leave the field out or use null where that is allowed)"
         )
-    if isinstance(node, dict):
-        if isinstance(node, _DuplicateKeys):
-            return path, f"duplicate key {node.duplicates[0]!r} in one object"
+    if t is dict or t is _DuplicateKeys:
+        if t is _DuplicateKeys:
+            return [], f"duplicate key {node.duplicates[0]!r} in one object"
         for k, v in node.items():
-            why = text_problem(k, 1000)
-            if why:
-                shown = k[:40].encode("utf-8", "backslashreplace").decode()
-                return path + [shown], f"key with {why}"
-            hit = _find_bad(v, path + [k])
+            if not (k.isascii() and len(k) <= 1000):
+                why = text_problem(k, 1000)
+                if why:
+                    return [k[:40].encode("utf-8", "backslashreplace").decode()], f"key with {why}"
+            if type(v) in _PLAIN:
+                continue
+            hit = _bad(v)
             if hit:
+                hit[0].append(k)
                 return hit
-    elif isinstance(node, list):
+    elif t is list:
         for i, v in enumerate(node):
-            hit = _find_bad(v, path + [i])
+            if type(v) in _PLAIN:
+                continue
+            hit = _bad(v)
             if hit:
+                hit[0].append(i)
                 return hit
     return None
 
@@ -182,7 +203,29 @@ def read_json_file(path: str | os.PathLike[str]) -> Any:
 
     source = str(path)
     raw = read_input_bytes(path, "a JSON problem file")
+    _refuse_dense_structure(raw, source)
     return parse_json(decode_text(raw, source, "a JSON problem file", "utf-8-sig"), source)
+
+
+#: Python needs about this many bytes per JSON object or array (an empty dict: 64).
+_BYTES_PER_CONTAINER = 64
+
+
+def _refuse_dense_structure(raw: bytes, source: str) -> None:
+    """Refuse a file whose objects/arrays would need > 10 × its size in memory.
+
+    A problem file has one object per table row (≥ 30 bytes each); ``[{},{},…]`` has one
+    per 3 bytes and would take 20 × the file in Python objects. Files under 1 MB pass.
+    """
+    if len(raw) < 2**20:
+        return
+    n = raw.count(b"{") + raw.count(b"[")
+    if n * _BYTES_PER_CONTAINER > 10 * len(raw):
+        raise InputError(
+            f"{n} JSON objects/arrays in {len(raw)} bytes: far more structure than a problem "
+            f"file has (reading it would take about {n * _BYTES_PER_CONTAINER / 2**20:.0f} MB)",
+            source,
+        )
 
 
 # --------------------------------------------------------------------------- schemas

@@ -63,11 +63,13 @@ def check_geometry(problem: Problem) -> list:
     Raises the first fatal finding (InputError naming the file and place, or
     AdjustmentError); returns the warnings (also logged). Other kinds: no checks.
     """
-    from ..model import Block
+    from ..block import Block
     from ..plausibility import check_block, raise_for
 
     if not isinstance(problem.data, Block):
-        return []
+        from ..plausibility import check_magnitudes
+
+        return raise_for(check_magnitudes(problem.data), problem.source)
     if problem.columnar:
         place = lambda k: f"observations.x[{k}]"  # noqa: E731
     else:
@@ -88,6 +90,9 @@ def run_from_cli(args: argparse.Namespace) -> int:
 
             report_format(report_path)  # a wrong suffix fails before the adjustment
         problem = load_problem(_resolve(args.file))
+        for name in ("max_iter", "tol"):  # solver options of the command line win
+            if getattr(args, name, None) is not None:
+                problem.options = dict(problem.options, **{name: getattr(args, name)})
         solution = solve_problem(problem, getattr(args, "method", None))
         text = (
             json.dumps(solution.as_dict(), indent=1, ensure_ascii=False, allow_nan=False)
@@ -136,9 +141,10 @@ def run_from_cli(args: argparse.Namespace) -> int:
             print(f"{prog}: {exc.one_line()}", file=sys.stderr)
             return 2
     _print(text)
-    for note in solution.notes:
-        if note.startswith("warning: "):
-            print(f"{prog}: warning: {args.file}: {note[9:]}", file=sys.stderr)
+    if solution.adjustment.converged:  # on failure one line only (the report lists them)
+        for note in solution.notes:
+            if note.startswith("warning: "):
+                print(f"{prog}: warning: {args.file}: {note[9:]}", file=sys.stderr)
     if not solution.adjustment.converged:
         print(
             f"{prog}: {args.file}: the adjustment did not converge: {solution.adjustment.reason}",
@@ -155,7 +161,7 @@ def adjusted_problem(problem: Problem, solution: Solution) -> Problem:
     adjusted coordinates; control and check coordinates and all observations stay as
     given. Raises :class:`InputError` for kinds without images and points (similarity).
     """
-    from ..model import TIE, Block
+    from ..block import TIE, Block
 
     if not isinstance(problem.data, Block):
         raise InputError(

@@ -84,7 +84,9 @@ def fiducial_transformation(machine: ArrayLike, calibrated: ArrayLike, *, model:
     A = interior_design(m, model)
     need = {"affine": 3, "similarity": 2}[model]
     if len(m) < need:
-        raise InputError(f"the {model} transformation needs at least {need} fiducials, got {len(m)}")
+        raise InputError(
+            f"the {model} transformation needs at least {need} fiducials, got {len(m)}"
+        )
     x0 = np.zeros(A.shape[1])
     return gauss_newton(lambda x: (A @ x, A), x0, xy.reshape(-1), sigma, names=NAMES[model],
                         max_iter=3, context=f"{model} fiducial transformation")  # fmt: skip

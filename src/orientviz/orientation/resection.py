@@ -27,9 +27,9 @@ from numpy.polynomial import polynomial as P
 from numpy.typing import ArrayLike, NDArray
 
 from ..adjust import Adjustment, gauss_newton
+from ..block import check_image_points, check_points
 from ..camera import FrameCamera, project
 from ..errors import InputError, NotDeterminableError
-from ..model import check_image_points, check_points
 from ..rotation import check_sequence, matrix_derivatives, matrix_from_opk, opk_from_matrix
 from .absolute import _spread_rank
 
@@ -173,19 +173,28 @@ def _grunert(d: F64, X: F64) -> F64:
         if abs(r.imag) > 1e-6 * max(1.0, abs(r.real)):
             continue
         v = r.real
+        s1sq = b2 / P.polyval(v, q) if P.polyval(v, q) > 0 else -1.0
+        if v <= 0 or s1sq <= 0:
+            continue
         den = P.polyval(v, D)
-        if v <= 0 or abs(den) < 1e-12 * b2:
-            continue
-        u = P.polyval(v, N) / den
-        s1sq = b2 / P.polyval(v, q)
-        if u <= 0 or s1sq <= 0:
-            continue
+        if abs(den) > 1e-6 * (abs(D[0]) + abs(D[1] * v)):
+            us = [P.polyval(v, N) / den]
+        else:  # u = N/D is 0/0 (symmetric rays, s1 = s2 = s3, a double root): u from the c-equation
+            disc = cg * cg - 1.0 + c2 / s1sq
+            us = [cg + sg * np.sqrt(max(disc, 0.0)) for sg in (1.0, -1.0)] if disc > -1e-6 else []
+            us = [u for u in us if abs(u * u + v * v - 2 * u * v * ca - a2 / s1sq) <= 1e-5 * (1 + a2 / s1sq)]
         s1 = np.sqrt(s1sq)
-        out.append((s1, u * s1, v * s1))
+        out.extend((s1, u * s1, v * s1) for u in us if u > 0)
     if not out:
         return np.zeros((0, 3))
-    # polish all solutions with a few Newton steps on the three cosine-law equations
-    return _polish(np.array(out), d, X)
+    # polish all solutions with a few Newton steps on the three cosine-law equations;
+    # near a double root two roots polish to one solution: keep it once
+    s = _polish(np.array(out), d, X)
+    keep: list[F64] = []
+    for row in s:
+        if not any(np.allclose(row, k, rtol=1e-6, atol=0.0) for k in keep):
+            keep.append(row)
+    return np.array(keep)
 
 
 _PAIRS = (np.array([1, 0, 0]), np.array([2, 2, 1]))  # (i, j) of the equations for a, b, c

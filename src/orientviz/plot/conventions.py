@@ -13,6 +13,7 @@ import numpy as np
 
 from ..camera import project
 from ..rotation import matrix_from_opk
+from .style import figure, subplots
 
 #: Colours of the object axes X, Y, Z and of the image frame.
 AXIS_COLOURS = ("#c0392b", "#27ae60", "#2874a6")
@@ -61,10 +62,9 @@ def plot_frames(
     -------
     matplotlib.figure.Figure
     """
-    import matplotlib.pyplot as plt
 
     if ax is None:
-        fig = plt.figure(figsize=(7, 6))
+        fig = figure(figsize=(7, 6))
         ax = fig.add_subplot(projection="3d")
     fig = ax.figure
     R = matrix_from_opk(omega, phi, kappa, sequence)
@@ -140,7 +140,7 @@ def plot_image_frame(xy=(42.0, -27.0), *, x0: float = 0.0, y0: float = 0.0, ax=N
     import matplotlib.pyplot as plt
 
     if ax is None:
-        _, ax = plt.subplots(figsize=(4.5, 4.5))
+        _, ax = subplots(figsize=(4.5, 4.5))
     fig = ax.figure
     h = 115.0
     ax.add_patch(plt.Rectangle((-h, -h), 2 * h, 2 * h, fill=False, color="0.3"))
@@ -190,10 +190,9 @@ def plot_conventions(omega: float = 0.12, phi: float = -0.10, kappa: float = 0.3
     -------
     matplotlib.figure.Figure
     """
-    import matplotlib.pyplot as plt
 
     if fig is None:
-        fig = plt.figure(figsize=(11, 5.5))
+        fig = figure(figsize=(11, 5.5))
     grid = fig.add_gridspec(1, 2, width_ratios=(1.25, 1.0))
     ax3 = fig.add_subplot(grid[0], projection="3d")
     ax2 = fig.add_subplot(grid[1])

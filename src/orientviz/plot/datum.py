@@ -49,13 +49,17 @@ def plot_datum_ellipses(xy: ArrayLike, pairs: ArrayLike, cofactors: dict[str, Ar
         for i in range(len(p)):
             ring = ellipse_outline(p[i], B[i] * ex**2)
             ax.plot(ring[:, 0], ring[:, 1], color="#1f4e79", lw=1.6)
-            ax.annotate(str(i + 1), p[i], xytext=(-10, 5), textcoords="offset points", fontsize=FONT["note"])
+            ax.annotate(
+                str(i + 1), p[i], xytext=(-10, 5), textcoords="offset points", fontsize=FONT["note"]
+            )
         ax.plot(p[:, 0], p[:, 1], "o", color="k", ms=3)
         if datum_points and name in datum_points:
             d = np.asarray(datum_points[name], dtype=int)
             ax.plot(p[d, 0], p[d, 1], "s", mfc="none", mec="#c0392b", ms=11, mew=2)
         a = error_ellipse(B).a
-        ax.set_title(f"{name}\nlargest a = {1000 * float(np.max(a)):.1f} m{unit}", fontsize=FONT["title"])
+        ax.set_title(
+            f"{name}\nlargest a = {1000 * float(np.max(a)):.1f} m{unit}", fontsize=FONT["title"]
+        )
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xticks([])
         ax.set_yticks([])

@@ -1,5 +1,5 @@
 """Figures of image and model deformation (Ackermann's Bild 6), from the data of
-:mod:`orientviz.block.deformation`.
+:mod:`orientviz.simulate`.
 
 Image fields: x along the flight direction, mm; vectors exaggerated so that µm become
 visible. Model fields: object frame in m (X along the base), planimetric vectors
@@ -13,18 +13,26 @@ import textwrap
 
 import numpy as np
 
+from .style import subplots
+
 
 def _axes(ax, **kw):
-    import matplotlib.pyplot as plt
 
     if ax is None:
-        fig, ax = plt.subplots(**kw)
+        fig, ax = subplots(**kw)
         return fig, ax
     return ax.figure, ax
 
 
-def plot_image_field(field, *, ax=None, exaggeration: float | None = None, title=None):
-    """Quiver plot of an :class:`~orientviz.block.deformation.ImageField`.
+def plot_image_field(
+    field,
+    *,
+    ax=None,
+    exaggeration: float | None = None,
+    title=None,
+    xlabel: str = "x [mm] (flight direction)",
+):
+    """Quiver plot of an :class:`~orientviz.simulate.ImageField`.
 
     Parameters
     ----------
@@ -36,6 +44,8 @@ def plot_image_field(field, *, ax=None, exaggeration: float | None = None, title
         Vector exaggeration; default: the largest vector drawn as 1/8 of the grid width.
     title : str, optional
         Title (default: the field's name and largest error in µm).
+    xlabel : str, optional
+        Label of the x axis (a terrestrial camera has no flight direction).
 
     Returns
     -------
@@ -50,14 +60,14 @@ def plot_image_field(field, *, ax=None, exaggeration: float | None = None, title
         angles="xy", scale_units="xy", scale=1.0, color="#c0392b", width=0.004,
     )  # fmt: skip
     ax.plot(field.xy[:, 0], field.xy[:, 1], ".", color="0.5", ms=3)
-    h = 0.5 * width
-    ax.plot([-h, h, h, -h, -h], [-h, -h, h, h, -h], color="0.3", lw=0.8)
+    (xa, ya), (xb, yb) = field.xy.min(axis=0), field.xy.max(axis=0)  # the format: the grid's extent
+    ax.plot([xa, xb, xb, xa, xa], [ya, ya, yb, yb, ya], color="0.3", lw=0.8)
     tips = np.vstack([field.xy, field.xy + ex * field.d])  # keep every arrow inside
     pad = 0.03 * width
-    ax.set_xlim(min(tips[:, 0].min(), -h) - pad, max(tips[:, 0].max(), h) + pad)
-    ax.set_ylim(min(tips[:, 1].min(), -h) - pad, max(tips[:, 1].max(), h) + pad)
+    ax.set_xlim(min(tips[:, 0].min(), xa) - pad, max(tips[:, 0].max(), xb) + pad)
+    ax.set_ylim(min(tips[:, 1].min(), ya) - pad, max(tips[:, 1].max(), yb) + pad)
     ax.set_aspect("equal")
-    ax.set_xlabel("x [mm] (flight direction)")
+    ax.set_xlabel(xlabel)
     ax.set_ylabel("y [mm]")
     name = textwrap.shorten(field.name, 60)
     ax.set_title(title or f"{name}\nmax {field.max_um:.1f} µm, vectors ×{ex:.0f}", fontsize=10)
@@ -67,7 +77,7 @@ def plot_image_field(field, *, ax=None, exaggeration: float | None = None, title
 def plot_model_field(
     field, *, component: str = "planimetry", ax=None, exaggeration=None, title=None
 ):
-    """One component of a :class:`~orientviz.block.deformation.ModelField`.
+    """One component of a :class:`~orientviz.simulate.ModelField`.
 
     Parameters
     ----------
@@ -137,10 +147,9 @@ def plot_deformation_comparison(without, with_, *, axes=None, exaggeration=None)
     -------
     matplotlib.figure.Figure
     """
-    import matplotlib.pyplot as plt
 
     if axes is None:
-        fig, axes = plt.subplots(2, 2, figsize=(9, 8.2))
+        fig, axes = subplots(2, 2, figsize=(9, 8.2))
     axes = np.asarray(axes).ravel()
     if exaggeration is None:
         width = float(np.ptp(without.xyz[:, 0])) or 1.0
@@ -168,7 +177,7 @@ def plot_deformation_frame(
 ):
     """One frame of the animation between two deformation fields of the same grid.
 
-    The frame is :func:`orientviz.block.deformation.animate` at ``t``: every grid point
+    The frame is :func:`orientviz.simulate.animate` at ``t``: every grid point
     moved by ``exaggeration · ((1 − t) · d_without + t · d_with)``. Arrows go from the
     grid point to its exaggerated position (one arrow per grid point); the moved points
     are coloured by the deformation at ``t`` in true size — ΔZ in cm for a model field,
@@ -179,7 +188,7 @@ def plot_deformation_frame(
     ----------
     without, with_ : ModelField or ImageField
         The fields without (t = 0) and with (t = 1) self-calibration, on the same grid
-        (:func:`orientviz.block.deformation.model_field`, ``image_field``). Model
+        (:func:`orientviz.simulate.model_field`, ``image_field``). Model
         fields: ground points and deformation in m; image fields: mm.
     t : float
         Position between the two states, 0 ≤ t ≤ 1.
@@ -200,7 +209,7 @@ def plot_deformation_frame(
     InputError
         If the fields lie on different grids or t is outside [0, 1] (from ``animate``).
     """
-    from ..block.deformation import ImageField, animate
+    from ..simulate import ImageField, animate
 
     image = isinstance(without, ImageField)
     base = without.xy if image else without.xyz
@@ -246,7 +255,7 @@ def plot_deformation_frame(
 
 
 def plot_field_split(split, *, axes=None, exaggeration: float | None = None):
-    """Three quiver panels of a :class:`~orientviz.block.deformation.FieldSplit`.
+    """Three quiver panels of a :class:`~orientviz.simulate.FieldSplit`.
 
     The image error field, the part the parameter set (with the orientation
     deformations) describes and the remainder, all with one exaggeration so that the
@@ -255,7 +264,7 @@ def plot_field_split(split, *, axes=None, exaggeration: float | None = None):
     Parameters
     ----------
     split : FieldSplit
-        From :func:`orientviz.block.deformation.split_field` (grid in mm, vectors in mm).
+        From :func:`orientviz.simulate.split_field` (grid in mm, vectors in mm).
     axes : sequence of 3 matplotlib Axes, optional
         Axes to draw into; a new 1 × 3 figure if None.
     exaggeration : float, optional
@@ -266,12 +275,11 @@ def plot_field_split(split, *, axes=None, exaggeration: float | None = None):
     -------
     matplotlib.figure.Figure
     """
-    import matplotlib.pyplot as plt
 
-    from ..block.deformation import ImageField
+    from ..simulate import ImageField
 
     if axes is None:
-        _, axes = plt.subplots(1, 3, figsize=(9.6, 3.9))
+        _, axes = subplots(1, 3, figsize=(9.6, 3.9))
     axes = np.asarray(axes).ravel()
     g = split.grid
     if exaggeration is None:

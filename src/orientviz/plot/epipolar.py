@@ -51,7 +51,12 @@ def plot_epipolar_lines(xy_left: ArrayLike, xy_right: ArrayLike, E: ArrayLike, c
         a2.annotate(str(k + 1), p2[k], xytext=(4, 4), textcoords="offset points",
                     fontsize=FONT["note"], color=col)  # fmt: skip
     for ax, name in ((a1, "left image: points"), (a2, "right image: epipolar lines")):
-        ax.plot([-half, half, half, -half, -half], [-half, -half, half, half, -half], color="0.4", lw=0.8)
+        ax.plot(
+            [-half, half, half, -half, -half],
+            [-half, -half, half, half, -half],
+            color="0.4",
+            lw=0.8,
+        )
         ax.set_xlim(-1.1 * half, 1.1 * half)
         ax.set_ylim(-1.1 * half, 1.1 * half)
         ax.set_aspect("equal")

@@ -8,12 +8,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from .style import subplots
+
 
 def _axes(ax, **kw):
-    import matplotlib.pyplot as plt
 
     if ax is None:
-        return plt.subplots(**kw)
+        return subplots(**kw)
     return ax.figure, ax
 
 
@@ -88,7 +89,8 @@ def plot_cleaning(cleaning, *, truth=None, ax=None, title=None):
         tr = set(np.asarray(truth, int).tolist())
         good = np.array([o in tr for o in obs], bool)
         gone = set(obs.tolist())
-        kept = cleaning.adjustment.extra.get("kept_rays")
+        subset = getattr(cleaning.adjustment, "subset", None)  # a bundle_solver round
+        kept = subset.kept_rays if subset is not None else None
         if kept is not None:  # rays left out with their point count as removed too
             gone |= set(np.flatnonzero(~np.asarray(kept, bool)).tolist())
         missed = len(tr - gone)
@@ -166,7 +168,7 @@ def plot_reliability_map(
     Parameters
     ----------
     rel : RayReliability
-        From :func:`orientviz.block.reliability.ray_reliability`.
+        From :func:`orientviz.bundle.ray_reliability`.
     block : Block
         The adjusted block (footprints from ``images.strip``; point positions).
     xyz : array_like, shape (p, 3), optional
@@ -194,7 +196,7 @@ def plot_reliability_map(
     if layout:
         from matplotlib.patches import Polygon
 
-        from ..block.layout import block_layout
+        from ..block import block_layout
 
         lay = block_layout(block)
         for k, imgs in enumerate(lay.strips):
@@ -239,7 +241,7 @@ def plot_reliability_map(
     ax.set_aspect("equal")
     ax.set_xlabel("X [m]")
     ax.set_ylabel("Y [m]")
-    ax.legend(fontsize=10, loc="upper left", bbox_to_anchor=(0.0, -0.12), ncol=2, frameon=False)
+    ax.legend(fontsize=10, loc="upper left", bbox_to_anchor=(0.0, -0.12), ncol=1, frameon=False)
     ax.set_title(
         title
         or f"reliability of the rays (α0 = {rel.alpha0:g}, β0 = {rel.beta0:g}, δ0 = "
@@ -255,7 +257,7 @@ def plot_mdb_histogram(rel, block, *, ax=None, title=None):
     Parameters
     ----------
     rel : RayReliability
-        From :func:`orientviz.block.reliability.ray_reliability`.
+        From :func:`orientviz.bundle.ray_reliability`.
     block : Block
         The adjusted block (for the number of rays per point).
     ax : matplotlib Axes, optional
@@ -309,9 +311,8 @@ def plot_block_reliability(rel, block, *, xyz=None, quantity: str = "mdb", title
     -------
     matplotlib.figure.Figure
     """
-    import matplotlib.pyplot as plt
 
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8.5, 10), height_ratios=[1.6, 1], layout="constrained")
+    fig, (a1, a2) = subplots(2, 1, figsize=(8.5, 10), height_ratios=[1.6, 1], layout="constrained")
     plot_reliability_map(rel, block, xyz=xyz, quantity=quantity, ax=a1)
     plot_mdb_histogram(rel, block, ax=a2)
     if title:

@@ -10,6 +10,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .style import subplots
+
 
 def plot_image(
     xy: ArrayLike,
@@ -52,7 +54,7 @@ def plot_image(
 
     xy = np.asarray(xy, dtype=float).reshape(-1, 2)
     if ax is None:
-        _, ax = plt.subplots(figsize=(5, 5))
+        _, ax = subplots(figsize=(5, 5))
     fig = ax.figure
     w, h = format_mm[0] / 2, format_mm[1] / 2
     ax.add_patch(plt.Rectangle((-w, -h), 2 * w, 2 * h, fill=False, color="0.5", lw=1))
@@ -107,13 +109,12 @@ def plot_correlations(result, *, names: list[str] | None = None, ax=None, annota
     -------
     matplotlib.figure.Figure
     """
-    import matplotlib.pyplot as plt
 
     names = list(result.names) if names is None else list(names)
     idx = [result.index(n) for n in names]
     C = result.correlations()[np.ix_(idx, idx)]
     if ax is None:
-        _, ax = plt.subplots(figsize=(0.6 * len(names) + 2, 0.6 * len(names) + 1.5))
+        _, ax = subplots(figsize=(0.6 * len(names) + 2, 0.6 * len(names) + 1.5))
     fig = ax.figure
     im = ax.imshow(C, cmap="RdBu_r", vmin=-1, vmax=1)
     ax.set_xticks(range(len(names)), names, rotation=45, ha="right")

@@ -45,6 +45,8 @@ def plot_fiducial_residuals(calibrated: ArrayLike, residuals: dict[str, ArrayLik
         ax.set_xlabel("x [mm]", fontsize=FONT["label"])
         ax.tick_params(labelsize=FONT["tick"])
     axes[0, 0].set_ylabel("y [mm]", fontsize=FONT["label"])
-    fig.suptitle(title or f"residuals at the fiducial marks (vectors ×{ex:.0f})", fontsize=FONT["suptitle"])
+    fig.suptitle(
+        title or f"residuals at the fiducial marks (vectors ×{ex:.0f})", fontsize=FONT["suptitle"]
+    )
     fig.tight_layout()
     return fig

@@ -21,7 +21,7 @@ def plot_ellipse_check(samples: ArrayLike, estimate: ArrayLike, cov: ArrayLike, 
     estimate : array_like, shape (2,)
         Centre of the ellipses (the true value or one estimate), in ``unit``.
     cov : array_like, shape (2, 2)
-        Predicted covariance (σ0² Q), ``unit``².
+        Predicted covariance (σ0² Q), in ``unit`` squared.
     ax : matplotlib Axes, optional
     unit : str
         Unit of the coordinates, for the labels.
@@ -47,7 +47,13 @@ def plot_ellipse_check(samples: ArrayLike, estimate: ArrayLike, cov: ArrayLike, 
     ax.plot(s[:, 0], s[:, 1], ".", ms=3, color="0.55", label=f"{len(s)} repetitions")
     e1 = ellipse_outline(c, C, 1.0)
     ep = ellipse_outline(c, C, k)
-    ax.plot(e1[:, 0], e1[:, 1], color="#1f4e79", lw=2, label=f"standard ellipse: {100 * f1:.1f} % inside")
+    ax.plot(
+        e1[:, 0],
+        e1[:, 1],
+        color="#1f4e79",
+        lw=2,
+        label=f"standard ellipse: {100 * f1:.1f} % inside",
+    )
     ax.plot(ep[:, 0], ep[:, 1], color="#c0392b", lw=2,
             label=f"{100 * p:.0f} % ellipse (×{k:.2f}): {100 * fp:.1f} % inside")  # fmt: skip
     ax.plot(*c[:2], "+", color="k", ms=12, mew=2)
@@ -58,7 +64,8 @@ def plot_ellipse_check(samples: ArrayLike, estimate: ArrayLike, cov: ArrayLike, 
     ax.tick_params(labelsize=FONT["tick"])
     ax.legend(fontsize=FONT["legend"], loc="upper left", framealpha=0.9)
     ax.set_title(
-        title or f"a = {float(e.a):.3g} {unit}, b = {float(e.b):.3g} {unit}, "
+        title
+        or f"a = {float(e.a):.3g} {unit}, b = {float(e.b):.3g} {unit}, "
         f"θ = {np.degrees(float(e.theta)):.1f}°",
         fontsize=FONT["title"],
     )

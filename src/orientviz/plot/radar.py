@@ -12,13 +12,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .style import figure
+
 
 def _axes(ax, projection: str | None = None, figsize=(6.0, 5.0)):
-    import matplotlib.pyplot as plt
 
     if ax is not None:
         return ax.figure, ax
-    fig = plt.figure(figsize=figsize)
+    fig = figure(figsize=figsize)
     return fig, fig.add_subplot(111, projection=projection)
 
 

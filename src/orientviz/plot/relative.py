@@ -13,16 +13,17 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from .style import subplots
+
 ELEMENT_LABELS = ("by", "bz", "ω", "φ", "κ")
 #: Arrow colours of the parallax field (RGBA of tab:blue for p < 0, tab:red for p ≥ 0).
 _ARROW_RGBA = np.array([[31, 119, 180, 255], [214, 39, 40, 255]]) / 255.0
 
 
 def _axes(ax, figsize=(7.0, 4.8)):
-    import matplotlib.pyplot as plt
 
     if ax is None:
-        fig, ax = plt.subplots(figsize=figsize)
+        fig, ax = subplots(figsize=figsize)
         return fig, ax
     return ax.figure, ax
 
@@ -107,10 +108,10 @@ def _draw_scheme(ax, r) -> dict:
     value_at = offset_copy(ax.transData, fig=fig, x=7, y=-3, units="points")
     pts = ax.scatter(r.X, r.Y, s=60, facecolor="none", edgecolor="k", zorder=3)
     names = [
-        ax.text(x, y, name, transform=name_at, fontsize=7)
+        ax.text(x, y, name, transform=name_at, fontsize=8)
         for x, y, name in zip(r.X, r.Y, r.scheme.labels)
     ]
-    labels = [ax.text(x, y, "", transform=value_at, fontsize=7, zorder=4) for x, y in zip(r.X, r.Y)]
+    labels = [ax.text(x, y, "", transform=value_at, fontsize=8, zorder=4) for x, y in zip(r.X, r.Y)]
     return {"points": pts, "names": names, "labels": labels, "scheme": r.scheme.name}
 
 

@@ -21,6 +21,19 @@ ROLE_COLOURS = {0: "0.6", 1: "#c0392b", 2: "#8e44ad"}
 BLUE = "#1f4e79"
 
 
+def plain_text(text: object, limit: int = 40) -> str:
+    """A user's id as literal figure text: ``$`` escaped (no mathtext), one line, short.
+
+    matplotlib reads a text with two ``$`` as mathtext, so an id such as
+    ``$\\undefinedmacro$`` would stop the figure; ids come from the user's files.
+    """
+    flat = " ".join(str(text).split())
+    flat = flat.encode("utf-8", "backslashreplace").decode("utf-8")
+    if len(flat) > limit:
+        flat = flat[: limit - 1] + "…"
+    return flat.replace("$", r"\$")
+
+
 def _figure(w: float = 9.0, h: float = 5.2):
     from matplotlib.figure import Figure
 
@@ -137,7 +150,12 @@ def overview_figure(
     if 0 < len(ids) <= 24:
         for k in np.flatnonzero(okc):
             ax.annotate(
-                ids[k], X0[k, :2], xytext=(3, 3), textcoords="offset points", fontsize=7, color=BLUE
+                plain_text(ids[k]),
+                X0[k, :2],
+                xytext=(3, 3),
+                textcoords="offset points",
+                fontsize=8,
+                color=BLUE,
             )
     allxy = np.vstack([xy[good], X0[okc, :2]] + ([foot.reshape(-1, 2)] if foot is not None else []))
     allxy = allxy[np.all(np.isfinite(allxy), axis=1)]
@@ -186,7 +204,7 @@ def overview_figure(
                         cxy[k],
                         xytext=(5, -10),
                         textcoords="offset points",
-                        fontsize=7,
+                        fontsize=8,
                         color=ROLE_COLOURS[2],
                         zorder=6,
                         bbox={
@@ -215,10 +233,11 @@ def w_histogram_figure(data: dict[str, Any]):
         ``w`` (n,) normalised residuals of the adjusted observations, ``critical``.
     """
     w = np.asarray(data["w"], float)
+    w = w[np.isfinite(w)]
     crit = float(data["critical"])
     fig = _figure(9.0, 3.8)
     ax = fig.add_subplot()
-    lim = max(crit * 1.3, float(np.max(np.abs(w), initial=0.0)) * 1.05, 4.0)
+    lim = min(max(crit * 1.3, float(np.max(np.abs(w), initial=0.0)) * 1.05, 4.0), 1e9)
     bins = np.linspace(-lim, lim, 61 if w.size > 200 else 31)
     ax.hist(w, bins=bins, color=BLUE, alpha=0.8, label=f"w ({w.size} observations)")
     t = np.linspace(-lim, lim, 300)
@@ -313,7 +332,7 @@ def image_sigma_figure(data: dict[str, Any]):
         ax.legend(fontsize=8, frameon=False, loc="upper left", bbox_to_anchor=(1.005, 1.0))
         ax.grid(True, axis="y", lw=0.3, alpha=0.5)
     if m <= 40:
-        axs[1].set_xticks(x, ids, rotation=90 if m > 8 else 0, fontsize=7)
+        axs[1].set_xticks(x, [plain_text(i) for i in ids], rotation=90 if m > 8 else 0, fontsize=8)
     else:
         axs[1].set_xlabel("image (index)")
     fig.suptitle("Precision of the exterior orientation per image (a posteriori)", fontsize=11)

@@ -6,6 +6,8 @@ every simulated plotter variant (:func:`orientviz.reproduce.kovarik_misses.varia
 
 from __future__ import annotations
 
+from .style import figure
+
 
 def plot_kovarik_variants(results: dict, paper: dict, *, fig=None):
     """Pass counts and the error a pass leaves, paper against simulated plotter variants.
@@ -25,12 +27,11 @@ def plot_kovarik_variants(results: dict, paper: dict, *, fig=None):
         ratio of the 2nd to the 1st pass's correction (log scale; paper: what its pass
         counts imply per relief, and the band its 2nd-pass scheme implies).
     """
-    import matplotlib.pyplot as plt
 
     from ..reproduce.kovarik_misses import PAPER_RELIEFS, needed_leftover
 
     if fig is None:
-        fig = plt.figure(figsize=(7.0, 4.6))
+        fig = figure(figsize=(7.0, 4.6))
     ax1, ax2 = fig.subplots(1, 2)
     styles = ["-", "--", "-.", ":"]
     for i, (name, r) in enumerate(results.items()):

@@ -7,7 +7,7 @@ text of ``s`` points in a figure ``W`` inches wide is then drawn
     h = s/72 · 100 · min(1, COLUMN_PX / (100 W))   pixels high (the em size),
 
 so what decides readability is the ratio of font size to figure width, not the dpi:
-a 13-inch figure with 7-point labels ends up at 5 px. The rules, used by every
+a 13-inch figure with 7-point labels ends up at 4.7 px. The rules, used by every
 function in :mod:`orientviz.plot` and :mod:`orientviz.widgets`:
 
 * figures are at most :data:`MAX_WIDTH_IN` wide (:func:`figure_size` caps wider
@@ -15,8 +15,9 @@ function in :mod:`orientviz.plot` and :mod:`orientviz.widgets`:
 * text sizes come from :data:`FONT` (no size below :data:`MIN_FONT_PT`), so at the
   largest width every text is at least :data:`MIN_TEXT_PX` pixels in the column.
 
-:func:`text_sizes_px` measures a finished figure the way the book shows it; the tests
-in ``tests/book`` and ``tests/plot`` use it on every figure function.
+:func:`text_sizes_px` measures a finished figure the way the book shows it;
+``tests/book`` uses it on the lesson figures and, through :func:`audit_figures` in the
+book build, on every figure a lesson shows (widget snapshots included).
 """
 
 from __future__ import annotations
@@ -25,15 +26,17 @@ from contextlib import contextmanager
 
 import numpy as np
 
-#: Width of the book's text column in CSS pixels (pydata theme, 1280-px window).
-COLUMN_PX: int = 700
+#: Width of the book's text column in CSS pixels: 624 px measured in a 1280-px wide
+#: browser window (pydata theme with both sidebars; 690 px at 1024 and at ≥ 1440 px).
+COLUMN_PX: int = 624
 #: Resolution of the PNGs the book embeds (matplotlib_inline: figure.dpi = 100).
 BOOK_DPI: float = 100.0
 #: Widest figure, in inches: one that fills the column without being scaled down.
-MAX_WIDTH_IN: float = 7.0
+MAX_WIDTH_IN: float = 6.2
 #: Smallest readable text height in the column, px.
 MIN_TEXT_PX: float = 10.0
-#: Smallest font size, pt: MIN_TEXT_PX at MAX_WIDTH_IN (7.2 pt), rounded up.
+#: Smallest font size, pt: 8 pt is 11.1 px unscaled, and still 10 px when a tight bounding
+#: box (labels outside the axes) makes a MAX_WIDTH_IN figure 690 px wide.
 MIN_FONT_PT: float = 8.0
 #: Font sizes (pt) by role.
 FONT: dict[str, float] = {
@@ -115,7 +118,9 @@ def new_figure(figsize: tuple[float, float] = (MAX_WIDTH_IN, 4.5), *, nrows: int
         return plt.subplots(nrows, ncols, figsize=size, **kwargs)
 
 
-def text_sizes_px(fig, *, column_px: float = COLUMN_PX, dpi: float = BOOK_DPI) -> list[tuple[float, str]]:
+def text_sizes_px(
+    fig, *, column_px: float = COLUMN_PX, dpi: float = BOOK_DPI
+) -> list[tuple[float, str]]:
     """Height (px) of every visible, non-empty text of ``fig`` as shown in the book.
 
     The figure is rendered as the book renders it (``dpi``, tight bounding box); the
@@ -151,3 +156,80 @@ def _on_figure(text, fig) -> bool:
         return False
     fb = fig.bbox
     return bool(np.isfinite([bb.x0, bb.y0]).all() and bb.width > 0 and bb.x1 > fb.x0 - 1e3)
+
+
+def subplots(*args, figsize: tuple[float, float] | None = None, **kwargs):
+    """:func:`matplotlib.pyplot.subplots` with the book's rules: width capped by
+    :func:`figure_size`, text sizes from :data:`RC`. Every figure of :mod:`orientviz.plot`
+    and :mod:`orientviz.widgets` is made here or by :func:`figure`."""
+    import matplotlib.pyplot as plt
+
+    size = figure_size(*(figsize or (6.4, 4.8)))
+    with book_rc():
+        return plt.subplots(*args, figsize=size, **kwargs)
+
+
+def figure(figsize: tuple[float, float] | None = None, **kwargs):
+    """:func:`matplotlib.pyplot.figure` with the book's rules (see :func:`subplots`)."""
+    import matplotlib.pyplot as plt
+
+    size = figure_size(*(figsize or (6.4, 4.8)))
+    with book_rc():
+        return plt.figure(figsize=size, **kwargs)
+
+
+def audit_figures(path: str, label: str) -> bool:
+    """Record the text sizes of every figure an IPython kernel displays (for the book's test).
+
+    Wraps the kernel's PNG formatter of matplotlib figures: before a figure is shown,
+    one JSON line ``{"notebook", "index", "min_px", "text", "width_px", "figsize_in"}`` is
+    appended to ``path`` (:func:`text_sizes_px` at the book's column width). Figures shown
+    inside widgets' Output areas pass the same formatter. The book's ``conf.py`` installs
+    it in a removed first cell when ``ORIENTVIZ_FIGURE_AUDIT`` names a file.
+
+    Returns
+    -------
+    bool
+        False outside IPython (nothing installed).
+    """
+    import json
+
+    try:
+        from IPython import get_ipython
+    except ImportError:  # pragma: no cover - IPython is there when a kernel runs this
+        return False
+    ip = get_ipython()
+    if ip is None:
+        return False
+    import matplotlib.pyplot as plt  # activates the inline backend and its formatters
+    from matplotlib.figure import Figure
+
+    plt.close(plt.figure())  # the inline backend registers its formatters on first use
+    fmt = ip.display_formatter.formatters["image/png"]
+    try:
+        original = fmt.lookup_by_type(Figure)
+    except KeyError:  # a backend without PNG display: nothing is shown, nothing to measure
+        return False
+    count = {"n": 0}
+
+    def measured(fig, *args, **kwargs):
+        sizes = text_sizes_px(fig)
+        import io
+
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=BOOK_DPI, bbox_inches="tight")
+        rec = {
+            "notebook": label,
+            "index": count["n"],
+            "min_px": sizes[0][0] if sizes else None,
+            "text": sizes[0][1][:60] if sizes else "",
+            "width_px": _png_width(buf.getvalue()),
+            "figsize_in": [float(v) for v in fig.get_size_inches()],
+        }
+        count["n"] += 1
+        with open(path, "a", encoding="utf-8") as f:
+            f.write(json.dumps(rec, ensure_ascii=False) + "\n")
+        return original(fig, *args, **kwargs)
+
+    fmt.for_type(Figure, measured)
+    return True

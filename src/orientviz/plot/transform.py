@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .style import subplots
+
 #: Marker per kind of control point: full XYZ, planimetric XY, height Z.
 MARKERS = {"XYZ": ("^", "#2874a6"), "XY": ("s", "#27ae60"), "Z": ("o", "#d35400")}
 
@@ -40,13 +42,12 @@ def plot_transform_residuals(result, *, scale: float | None = None, ax=None, lab
     -------
     matplotlib.figure.Figure
     """
-    import matplotlib.pyplot as plt
 
     P = np.asarray(result.extra["transformed"])
     used = np.asarray(result.extra["used"])
     v = np.asarray(result.extra["residuals_xyz"])
     if ax is None:
-        _, ax = plt.subplots(figsize=(6, 5.5))
+        _, ax = subplots(figsize=(6, 5.5))
     fig = ax.figure
     span = float(np.ptp(P[:, :2], axis=0).max()) or 1.0
     vmax = float(np.nanmax(np.abs(v))) if np.isfinite(v).any() else 0.0

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from ..model import CHECK, CONTROL
+from ..block import CHECK, CONTROL
 from ..units import RHO
 from ._document import (
     FEW_POINTS,
@@ -43,9 +43,7 @@ class QualitySections:
         vd = 2 if img_q else 4  # decimals of v and σ
         blk = self.block
         block_obs = (
-            blk is not None
-            and s.kind == "block"
-            and adj.extra.get("obs_slices", {}).get("image") is not None
+            blk is not None and s.kind == "block" and adj.obs_slices.get("image") is not None
         )
         rows, marked, recs = [], [], []
         idx = adj.largest_residuals(k)
@@ -298,8 +296,9 @@ class QualitySections:
         if s.kind == "block" and "points" in self.adj.blocks:
             pb = self.adj.blocks["points"]
             nb = bad[pb].reshape(-1, 3)
-            nb[roles == CHECK] = False  # check points are not unknowns
-            bad[pb] = nb.reshape(-1)
+            if nb.shape[0] == roles.size:  # the bundle: all points (models: tie points only)
+                nb[roles == CHECK] = False  # check points are not unknowns
+                bad[pb] = nb.reshape(-1)
         if np.any(bad) and s.method == "bundle":
             names = [self.adj.names[i] for i in np.flatnonzero(bad)[:5]]
             self.warn.append(

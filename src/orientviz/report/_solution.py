@@ -184,7 +184,7 @@ class Solution:
             "method": self.method,
             "units": self.units.as_dict(),
             "sequence": self.sequence,
-            "sigma0": num(adj.sigma0, 6),
+            "sigma0": num(adj.sigma0, 17),  # full precision (issue #14)
             "redundancy": int(adj.redundancy),
             "observations": int(adj.n_observations),
             "unknowns": int(adj.n_unknowns),

@@ -19,6 +19,16 @@ from .rows import LABELS, Row, counts, counts_line, format_rows, match, printed
 
 #: name → ("module", "function", one-line description)
 REGISTRY: dict[str, tuple[str, str, str]] = {
+    "dbat-sxb": (
+        "orientviz.reproduce.dbat_sxb",
+        "table",
+        "Börlin & Grussenmeyer, DBAT: the aerial block sxb (5 images, weighted control, check points)",
+    ),
+    "dbat-camcal": (
+        "orientviz.reproduce.dbat_camcal",
+        "table",
+        "Börlin & Grussenmeyer, DBAT: camera calibration (21 images, backward lens model)",
+    ),
     "ebner": (
         "orientviz.reproduce.ebner",
         "table",

@@ -82,6 +82,7 @@ def run_experiment(
     tol_c: float = 1.0,
     z_reads: int | None = 2,
     start_c: tuple[float, float] | None = None,
+    first_c: tuple[float, float] = (100.0, 150.0),
     **config,
 ) -> dict:
     """Orient ``n_trials`` random pairs; return pass counts and per-pass corrections.
@@ -104,6 +105,9 @@ def run_experiment(
         Pre-oriented start: the dials start at the truth plus rotation errors of random
         sign and size uniform in ``start_c`` (c) and base errors of the equivalent
         parallax. Default: dials at zero (minimal pre-orientation, 100-150 c).
+    first_c : (float, float)
+        Size of the true rotations (c) from which the dials at zero start: the first
+        corrections (Kovarik: 100-150 c; a fitted setting, see the sensitivity rows).
     **config
         Changes to :class:`~orientviz.orientation.plotter.PlotterConfig`.
 
@@ -117,7 +121,7 @@ def run_experiment(
     passes, corr, conv = [], [], []
     for t in range(n_trials):
         rng = np.random.default_rng(seed + t)
-        pair = true_pair(config_with(relief=relief, **config), rng=rng)
+        pair = true_pair(config_with(relief=relief, **config), rng=rng, start_c=first_c)
         plotter = AnalogPlotter(pair, "kovarik9", rng=rng)
         if start_c is not None:
             plotter.settings = pair.elements + _start_error(pair, start_c, rng)

@@ -131,4 +131,52 @@ def needed_leftover(paper: dict[str, str]) -> dict[str, tuple[float, float]]:
     return out
 
 
-__all__ = ["VARIANTS", "PAPER_RELIEFS", "VariantResult", "variants", "needed_leftover"]
+def start_sensitivity(
+    sizes=((50.0, 100.0), (100.0, 150.0), (150.0, 250.0), (250.0, 400.0)),
+    reliefs=PAPER_RELIEFS,
+    *,
+    n_trials: int = 12,
+    seed: int = 1968,
+) -> list[dict]:
+    """How the results depend on the one fitted setting, the size of the start error.
+
+    Parameters
+    ----------
+    sizes : sequence of (float, float)
+        Ranges of the true rotations (c) the dials at zero start from (the paper: first
+        corrections of 100-150 c).
+    reliefs : sequence of float
+    n_trials, seed
+        As in :func:`~orientviz.reproduce.kovarik.run_experiment`.
+
+    Returns
+    -------
+    list of dict
+        Per size and relief: ``size``, ``relief``, ``passes`` (mean), ``first_c`` and
+        ``second_c`` (median largest rotation of passes 1 and 2, c).
+    """
+    out = []
+    for size in sizes:
+        for r in reliefs:
+            res = run_experiment("kovarik9", r, n_trials=n_trials, seed=seed, first_c=size)
+            c = res["corrections_c"]
+            out.append(
+                {
+                    "size": tuple(size),
+                    "relief": float(r),
+                    "passes": float(np.mean(res["passes"])),
+                    "first_c": float(np.median([x[0] for x in c])),
+                    "second_c": float(np.median([x[1] for x in c if len(x) > 1])),
+                }
+            )
+    return out
+
+
+__all__ = [
+    "VARIANTS",
+    "PAPER_RELIEFS",
+    "VariantResult",
+    "variants",
+    "needed_leftover",
+    "start_sensitivity",
+]

@@ -17,7 +17,8 @@ rules that hold for all of them:
   when orientviz's value rounded to the printed digits equals it; a printed range
   ``"a-b"`` when the rounded value lies in it; ``"about X"`` when the value rounded to
   X's digits is X; ``"10^n"`` (a power of ten, "um eine Zehner-Potenz") when the value
-  rounded in log10 is n; ``"< X"`` / ``"> X"`` when the paper's own inequality holds.
+  rounded in log10 is n; ``"a → b"`` (a pattern: a change) when orientviz's ratio
+  after/before goes the same way; ``"< X"`` / ``"> X"`` when the paper's own inequality holds.
   No window is fixed in the code: change the paper's value and the flag follows.
 * **Counts** — :func:`counts` groups the flagged rows by :attr:`Row.group` and label,
   e.g. ``"calibration 60/60 (fitted: rotation order, surface depth, stopping rule)"``.
@@ -57,6 +58,7 @@ def match(paper: Any, value: Any, decimals: int | None = None) -> tuple[bool | N
     paper : str, float or None
         The paper's value as printed: a number (``"0.32"``, ``-2``; with ``decimals`` if
         given as a float), a range ``"2-3"``, ``"about 3"``, a power of ten ``"10^-1"``,
+        a change ``"5.7 → 3.4"`` (``value`` is then orientviz's ratio after/before),
         an inequality ``"< 2"``, or ``"no solution"`` (matched when orientviz has
         none either). Text after ``" ("`` is a comment.
     value : float
@@ -103,6 +105,14 @@ def match(paper: Any, value: Any, decimals: int | None = None) -> tuple[bool | N
         n = int(m.group(1).replace("−", "-"))
         ok = v > 0 and round(math.log10(v)) == n
         return ok, f"power of ten: round(log10) equals {n}"
+    if m := re.fullmatch(rf"({_NUM})\s*(?:→|->)\s*({_NUM})", text):
+        (p0, _), (p1, d1) = _num(m.group(1)), _num(m.group(2))
+        if p1 == p0:
+            ok = printed(p0 * v, d1) == printed(p0, d1)
+            return ok, "the paper's value is unchanged: orientviz's ratio keeps it at its digits"
+        ok = (v < 1.0) if p1 < p0 else (v > 1.0)
+        way = "falls" if p1 < p0 else "rises"
+        return ok, f"direction: the paper's value {way}; orientviz's ratio after/before agrees"
     if m := re.fullmatch(rf"([<>])\s*({_NUM})", text):
         p, _ = _num(m.group(2))
         ok = v < p if m.group(1) == "<" else v > p
@@ -226,8 +236,14 @@ def format_rows(rows: list[Row]) -> str:
         return "—" if r.match is None else ("yes" if r.match else "no")
 
     header = ("task", "case", "quantity", "paper", "orientviz", "label", "match", "note")
+
+    def digits(r: Row, v: Any) -> str:
+        if r.decimals is not None and isinstance(v, (int, float)):
+            return printed(float(v), r.decimals)  # as printed: 0.30, not 0.3
+        return fmt(v)
+
     cells = [header] + [
-        (r.task, r.case, r.quantity, fmt(r.paper), fmt(r.orientviz), r.label or "—", flag(r),
+        (r.task, r.case, r.quantity, digits(r, r.paper), digits(r, r.orientviz), r.label or "—", flag(r),
          r.note)
         for r in rows
     ]  # fmt: skip

@@ -1,16 +1,16 @@
 """``orientviz reproduce selfcal``: the pattern of Ackermann's Tables 3-5 (self-calibration).
 
 The paper's blocks are real; their image errors are unknown. orientviz reproduces the
-*pattern* with simulated blocks (:func:`orientviz.block.simulate.simulate_block`, 4 strips
+*pattern* with simulated blocks (:func:`orientviz.simulate.simulate_block`, 4 strips
 of 10 wide-angle images at 1 : 10 000, relief 10 %): random image noise σ = 3 µm (what
 the paper's best self-calibrated σ0 reach, §27) plus a fixed systematic field of a
 "typical" camera-film combination — affinity, trapezoid, radial and decentering
-distortion, model twist (:func:`orientviz.block.systematic.typical`, 10 µm) and a film
+distortion, model twist (:func:`orientviz.simulate.systematic.typical`, 10 µm) and a film
 unflatness trough (8 µm) — the same in every image. Each block is adjusted three
 times by the bundle method: without systematic errors (the reference), with them
 without self-calibration, and with them with self-calibration (Ebner's 12 parameters,
 pseudo-observations 0 ± 10 µm, insignificant and over-correlated parameters suppressed:
-:func:`orientviz.block.selfcal.self_calibrate`). Check points (40 standard tie points,
+:func:`orientviz.bundle.self_calibrate`). Check points (40 standard tie points,
 not used as control) give μ.
 
 Cases: 20 % side overlap with perimeter control every 2, 4 and 8 bases (dense, normal,
@@ -54,11 +54,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..block import systematic as se
-from ..block.auxiliary import check_errors
-from ..block.bundle import bundle_adjust
-from ..block.selfcal import self_calibrate
-from ..block.simulate import simulate_block
+from ..bundle import bundle_adjust, self_calibrate
+from ..simulate import check_errors, simulate_block
+from ..simulate import systematic as se
 from .rows import Row
 
 #: The paper's other bundle projects with and without self-calibration (Table 5): σ0 µm.
@@ -86,6 +84,13 @@ PAPER: dict[str, str] = {
     "Jämijärvi q=60%|mu_xy|without": "2.6", "Jämijärvi q=60%|mu_xy|with": "1.9",
     "Jämijärvi q=60%|mu_z|without": "3.3", "Jämijärvi q=60%|mu_z|with": "3.1",
 }  # fmt: skip
+#: The same printed pairs as changes (the pattern rows: does orientviz's change go the
+#: paper's way?). tests/reproduce/test_selfcal.py checks they equal the pairs above.
+for _proj in ("Oberschwaben q=20%", "Jämijärvi q=60%"):
+    for _q in ("sigma0", "mu_xy", "mu_z"):
+        PAPER[f"{_proj}|{_q}|change"] = (
+            f"{PAPER[f'{_proj}|{_q}|without']} → {PAPER[f'{_proj}|{_q}|with']}"
+        )
 
 
 def paper_values() -> dict[str, str]:
@@ -241,6 +246,11 @@ def table(seed: int = 1, *, paper: dict | None = None) -> list[Row]:
         rows.append(Row("Table 5", case, "σ0 [µm] with self-cal.", P[k1], round(s["sigma0"], 2),
                         f"Ebner 12, kept {', '.join(r['kept']) or 'none'}", value=s["sigma0"],
                         key=k1, **ill))  # fmt: skip
+        kc = f"{proj}|sigma0|change"
+        rows.append(Row("Table 5 pattern", case, "σ0 without → with self-cal. (direction)",
+                        P[kc], f"{w['sigma0']:.2f} → {s['sigma0']:.2f}",
+                        "does σ0 change the paper's way?", value=s["sigma0"] / w["sigma0"],
+                        key=kc, **ill))  # fmt: skip
         for j, q in ((0, "xy"), (1, "z")):
             kw_, ks_ = f"{proj}|mu_{q}|without", f"{proj}|mu_{q}|with"
             rows.append(Row("Table 5", case, f"μ{q} [cm] without", P[kw_],
@@ -249,6 +259,11 @@ def table(seed: int = 1, *, paper: dict | None = None) -> list[Row]:
                             value=100 * w["mu"][j], key=kw_, **ill))  # fmt: skip
             rows.append(Row("Table 5", case, f"μ{q} [cm] with self-cal.", P[ks_],
                             round(100 * s["mu"][j], 1), value=100 * s["mu"][j], key=ks_, **ill))  # fmt: skip
+            kc = f"{proj}|mu_{q}|change"
+            rows.append(Row("Table 5 pattern", case, f"μ{q} without → with self-cal. (direction)",
+                            P[kc], f"{100 * w['mu'][j]:.1f} → {100 * s['mu'][j]:.1f}",
+                            "does the accuracy change the paper's way?",
+                            value=s["mu"][j] / max(w["mu"][j], 1e-12), key=kc, **ill))  # fmt: skip
             gain = w["mu"][j] / max(s["mu"][j], 1e-12)
             pw, ps = _pair(P, proj, f"mu_{q}")
             rows.append(Row("Table 5", case, f"gain μ{q} without/with", None, round(gain, 2),

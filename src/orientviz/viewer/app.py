@@ -16,14 +16,15 @@ the terminal; the server keeps running.
 from __future__ import annotations
 
 import argparse
+import os
 import socket
 import sys
 import time
 from pathlib import Path
 from typing import Any
 
+from ..block import Block
 from ..errors import InputError, OrientvizError
-from ..model import Block
 
 DEFAULT_DEMO = "block"
 
@@ -245,7 +246,7 @@ def demo_from_file(path: str) -> Any:
     from .demos import demo_from_block
 
     p = Path(path)
-    if not p.exists():
+    if not os.path.lexists(path):  # never raises (a name too long is simply not there)
         raise InputError("no such file or demo (demos: block, pair, radar)", source=path)
     try:
         from ..io.problem import load_problem  # type: ignore[attr-defined]
@@ -294,7 +295,8 @@ def run_from_cli(args: argparse.Namespace) -> int:
         return 0
     app = None
     try:
-        app = ViewerApp(target, host=args.host, port=args.port)
+        content = resolve_content(target)  # a bad file is refused before a server starts
+        app = ViewerApp(content, host=args.host, port=args.port)
         while True:
             time.sleep(0.5)
     except InputError as exc:

@@ -11,6 +11,7 @@ import numpy as np
 from ..adjust import Adjustment
 from ..orientation.absolute import similarity_transform
 from ..orientation.examples import LAYOUTS, SimilarityExample, similarity_example
+from ..plot.style import subplots
 from ..units import RHO_CC
 
 
@@ -60,11 +61,10 @@ def precision_table(res: Adjustment) -> str:
 
 
 def _residual_figure(state: tuple[SimilarityExample, Adjustment]):
-    import matplotlib.pyplot as plt
 
     from ..plot.transform import plot_transform_residuals
 
-    fig, ax = plt.subplots(figsize=(6, 5.5))
+    fig, ax = subplots(figsize=(6, 5.5))
     plot_transform_residuals(state[1], ax=ax)
     return fig
 

@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 from ..orientation.plotter import FORMULAS, AnalogPlotter, Readings, config_with, true_pair
 from ..orientation.schemes import get_scheme
+from ..plot.style import subplots
 from ..units import RHO_C
 
 F64 = NDArray[np.float64]
@@ -186,7 +187,7 @@ def _field_figure(figsize: tuple[float, float] = (7.0, 5.0)):
         import matplotlib.pyplot as plt
 
         with plt.ioff():
-            fig, ax = plt.subplots(figsize=figsize, layout="none")
+            fig, ax = subplots(figsize=figsize, layout="none")
         return fig, ax, True
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure

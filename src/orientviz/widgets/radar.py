@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..plot.style import subplots
 from ..radar import geier1973 as G
 from ..radar.orientation import adjust_image
 from ..radar.ppi import PARAMS, RadarImage, project
@@ -183,7 +184,7 @@ def radar_app(state: RadarSliders | None = None):  # pragma: no cover - needs a 
     def redraw(*_):
         with out:
             out.clear_output(wait=True)
-            fig, ax = plt.subplots(figsize=(6, 5))
+            fig, ax = subplots(figsize=(6, 5))
             d = state.discrepancies()
             xy = state.image_coordinates()
             scale = arrow_scale(xy, d)

@@ -12,6 +12,7 @@ from ..adjust import Adjustment
 from ..orientation.examples import ResectionExample, resection_example
 from ..orientation.intersection import Intersection, intersect_points
 from ..orientation.resection import resection
+from ..plot.style import subplots
 from ..rotation import matrix_from_opk
 
 
@@ -80,12 +81,11 @@ def _describe_resection(state: tuple[ResectionExample, Adjustment]) -> str:
 
 
 def _resection_figure(state: tuple[ResectionExample, Adjustment]):
-    import matplotlib.pyplot as plt
 
     from ..plot.image import plot_correlations, plot_image
 
     ex, res = state
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(7.0, 3.6))  # the book column: no down-scaling
+    fig, (a1, a2) = subplots(1, 2, figsize=(7.0, 3.6))  # the book column: no down-scaling
     plot_image(ex.image_points, residuals=res.extra["residuals_xy"], ax=a1,
                title="control points and residuals")  # fmt: skip
     plot_correlations(res, ax=a2)

@@ -14,6 +14,7 @@ from numpy.typing import NDArray
 
 from ..camera import project
 from ..orientation.examples import ground_grid, house
+from ..plot.style import subplots
 from ..rotation import GIMBAL_TOLERANCE, check_sequence, matrix_from_opk, opk_from_matrix
 from ..units import from_rad, to_rad
 
@@ -132,7 +133,7 @@ def rotation_app(sequence: str = "opk"):
         st = rotation_state(*(s.value for s in sliders.values()), sequence=seq.value)
         with out:
             out.clear_output(wait=True)
-            fig, ax = plt.subplots(figsize=(5, 5))
+            fig, ax = subplots(figsize=(5, 5))
             plot_image(st.xy, edges=st.edges, ax=ax, title="image of a house (c = 152.7 mm)")
             display(fig)
             plt.close(fig)
