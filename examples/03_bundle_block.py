@@ -26,11 +26,12 @@ def main() -> None:
     print(adj.summary())
 
     # adjusted points (p, 3) m and their a-posteriori σ from the 3 × 3 cofactor blocks
-    xyz = adj.x[adj.blocks["points"]].reshape(-1, 3)
+    # (adj is a BundleResult: exterior (m, 6), points (p, 3), check_points, history, …)
+    xyz = adj.points
     Q = adj.cofactor_blocks["points"]  # (p, 3, 3), m² per unit weight
     sigma_xyz = adj.sigma0 * np.sqrt(np.diagonal(Q, axis1=1, axis2=2))
 
-    tie = block.points.role == 0  # 0 tie, 1 control, 2 check
+    tie = block.points.role == 0  # 0 tie, 1 control, 2 check (orientviz.block.TIE, …)
     err = (xyz - sim.truth.points.xyz)[tie]
     rms_true = np.sqrt(np.mean(err**2, axis=0))
     rms_sigma = np.sqrt(np.mean(sigma_xyz[tie] ** 2, axis=0))

@@ -128,7 +128,7 @@ def main() -> None:
 
     adj = ov.bundle_adjust(block)
     print(adj.summary())
-    xyz = adj.x[adj.blocks["points"]].reshape(-1, 3)
+    xyz = adj.points
     tie = block.points.role == 0
     rms = np.sqrt(np.mean((xyz - truth)[tie] ** 2, axis=0))
     print(f"tie points vs the truth, RMS: X {rms[0]:.3f}  Y {rms[1]:.3f}  Z {rms[2]:.3f} m")

@@ -12,29 +12,38 @@ solver, plotting or GUI library)::
     print(adj.summary())
     ov.view((sim.block, adj))          # the 3D viewer; viser is imported only here
 
-The face, by task:
+The face, by task (each name links to where it lives and is documented):
 
-* problem files and data: :func:`load_problem`, :func:`save_problem`,
-  :func:`load_dataset`, :func:`solve_problem`, :func:`read_colmap`,
-  :func:`write_report`, :class:`Problem`;
-* conventions: :func:`to_rad`, :func:`from_rad`, :func:`matrix_from_opk`,
-  :func:`opk_from_matrix`, :class:`FrameCamera`, :func:`project`;
-* the block (the set of images and points): :class:`Block`, :func:`simulate_block`,
-  :class:`SimulatedBlock`;
-* single pairs and images: :func:`relative_orientation` (the stereo model),
-  :func:`similarity_transform` (absolute orientation), :func:`resection`,
-  :func:`intersect_points`;
-* aerotriangulation: :func:`bundle_adjust`, :func:`self_calibrate`,
-  :func:`clean_block` (gross errors), :func:`independent_models`;
-* results: :class:`Adjustment`, :class:`Iteration`, :class:`Intersection`;
+* problem files and data: :func:`~orientviz.io.problem.load_problem`,
+  :func:`~orientviz.io.problem.save_problem`, :func:`~orientviz.io.datasets.load_dataset`,
+  :func:`~orientviz.io.solve.solve_problem`, :func:`~orientviz.io.colmap.read_colmap`,
+  :func:`~orientviz.report.write_report`, :class:`~orientviz.io.problem.Problem`;
+* conventions: :func:`~orientviz.units.to_rad`, :func:`~orientviz.units.from_rad`,
+  :func:`~orientviz.rotation.matrix_from_opk`, :func:`~orientviz.rotation.opk_from_matrix`,
+  :class:`~orientviz.camera.FrameCamera`, :func:`~orientviz.camera.project`;
+* the block (the set of images and points): :class:`~orientviz.block.Block`,
+  :func:`~orientviz.simulate.simulate_block`, :class:`~orientviz.simulate.SimulatedBlock`;
+* single images and pairs: :func:`~orientviz.orientation.relative.relative_orientation`
+  (the stereo model), :func:`~orientviz.orientation.absolute.similarity_transform`
+  (absolute orientation), :func:`~orientviz.orientation.resection.resection`,
+  :func:`~orientviz.orientation.intersection.intersect_points`;
+* aerotriangulation: :func:`~orientviz.bundle.bundle_adjust`,
+  :func:`~orientviz.bundle.self_calibrate`, :func:`~orientviz.bundle.clean_block` (gross
+  errors), :func:`~orientviz.stereo_models.independent_models`;
+* results: :class:`~orientviz.adjust.result.Adjustment` (every solver),
+  :class:`~orientviz.bundle.BundleResult` (the bundle's, with exterior orientations,
+  points and check points), :class:`~orientviz.adjust.result.Iteration` (one step of the
+  history), :class:`~orientviz.orientation.intersection.Intersection`;
 * the viewer: :func:`view`;
-* errors: :class:`OrientvizError`, :class:`InputError`, :class:`AdjustmentError`,
-  :class:`NotDeterminableError`.
+* errors: :class:`~orientviz.errors.OrientvizError`, :class:`~orientviz.errors.InputError`,
+  :class:`~orientviz.errors.AdjustmentError`, :class:`~orientviz.errors.NotDeterminableError`.
 
-Everything else lives in the subpackages (:mod:`orientviz.adjust`,
-:mod:`orientviz.orientation`, :mod:`orientviz.block`, :mod:`orientviz.radar`,
+Everything else lives in the subpackages (:mod:`orientviz.block`, :mod:`orientviz.adjust`,
+:mod:`orientviz.orientation`, :mod:`orientviz.bundle`, :mod:`orientviz.stereo_models`,
+:mod:`orientviz.polynomial`, :mod:`orientviz.simulate`, :mod:`orientviz.radar`,
 :mod:`orientviz.io`, :mod:`orientviz.report`, :mod:`orientviz.plot`,
-:mod:`orientviz.widgets`, :mod:`orientviz.viewer`).
+:mod:`orientviz.widgets`, :mod:`orientviz.viewer`); numbered scripts to copy from are
+in ``examples/`` of the repository.
 
 Conventions: object space in m (right-handed, Z up), image coordinates in mm,
 angles in rad inside the code (gon/c/cc at the edges), rotations R = R_ω R_φ R_κ by
@@ -84,20 +93,48 @@ _FACE: dict[str, str] = {
     # results
     "Adjustment": ".adjust.result",
     "Iteration": ".adjust.result",
+    "BundleResult": ".bundle",
     "Intersection": ".orientation.intersection",
 }
 
-__all__ = sorted(
-    [
-        *_FACE,
-        "view",
-        "AdjustmentError",
-        "InputError",
-        "NotDeterminableError",
-        "OrientvizError",
-        "__version__",
-    ]
-)
+#: the face (a literal list, so that tools see it; tests/core/test_imports.py checks it
+#: against _FACE)
+__all__ = [
+    "Adjustment",
+    "AdjustmentError",
+    "Block",
+    "BundleResult",
+    "FrameCamera",
+    "InputError",
+    "Intersection",
+    "Iteration",
+    "NotDeterminableError",
+    "OrientvizError",
+    "Problem",
+    "SimulatedBlock",
+    "__version__",
+    "bundle_adjust",
+    "clean_block",
+    "from_rad",
+    "independent_models",
+    "intersect_points",
+    "load_dataset",
+    "load_problem",
+    "matrix_from_opk",
+    "opk_from_matrix",
+    "project",
+    "read_colmap",
+    "relative_orientation",
+    "resection",
+    "save_problem",
+    "self_calibrate",
+    "similarity_transform",
+    "simulate_block",
+    "solve_problem",
+    "to_rad",
+    "view",
+    "write_report",
+]
 
 
 def view(
@@ -148,7 +185,7 @@ def __dir__() -> list[str]:
 if TYPE_CHECKING:  # for type checkers and editors; nothing is imported at run time
     from .adjust.result import Adjustment, Iteration
     from .block import Block
-    from .bundle import bundle_adjust, clean_block, self_calibrate
+    from .bundle import BundleResult, bundle_adjust, clean_block, self_calibrate
     from .camera import FrameCamera, project
     from .io.colmap import read_colmap
     from .io.datasets import load_dataset

@@ -76,6 +76,14 @@ def test_every_face_name_resolves_and_has_a_docstring():
     import orientviz as ov
 
     assert ov.__all__ == sorted(set(ov.__all__))
+    assert set(ov.__all__) == set(ov._FACE) | {
+        "view",
+        "AdjustmentError",
+        "InputError",
+        "NotDeterminableError",
+        "OrientvizError",
+        "__version__",
+    }
     assert 20 <= len(ov.__all__) <= 36
     for name in ov.__all__:
         obj = getattr(ov, name)

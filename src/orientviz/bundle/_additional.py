@@ -7,7 +7,7 @@ correction that is linear in a few parameters shared by a group of images::
 
 ``A`` is evaluated at the *observed* image coordinates (x along the flight direction,
 mm, from the principal point), so it is constant during the iterations. Every set here
-follows the :class:`AdditionalParameters` protocol of DEVELOPERS.md: ``name``, ``names``
+follows the :class:`AdditionalParameters` protocol (book/api/contracts.md): ``name``, ``names``
 and ``design(xy) -> (n, 2, k)`` in mm per unit of the parameter. The parameters are
 scaled so that **one unit is 1 µm** of image error at a reference point (stated per
 set): estimates, σ and pseudo-observation σ (``ap_sigma``) all read in µm.
@@ -59,7 +59,7 @@ __all__ = [
 
 
 class AdditionalParameters(Protocol):
-    """The contract of DEVELOPERS.md ("Additional parameters")."""
+    """The contract of book/api/contracts.md ("Additional parameters")."""
 
     name: str
     names: list[str]

@@ -1,7 +1,7 @@
 """How the viewer adjusts a block and reads an :class:`Adjustment` back into a Block.
 
 The viewer does not hold a solver of its own. It calls
-:func:`orientviz.bundle.bundle_adjust` (DEVELOPERS.md, "Bundle") when that module
+:func:`orientviz.bundle.bundle_adjust` (book/api/contracts.md, "Bundle") when that module
 is installed. Until it is, and for blocks it cannot take, :func:`small_bundle` is a
 plain dense bundle on the shared engine (:func:`orientviz.adjust.gauss_newton`) for the
 tiny demo blocks (a few images): enough to step through iterations in the viewer.
