@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from orientviz.model import Block
+from orientviz.block import Block
 from orientviz.units import to_rad
 
 BENCH_DIR = Path("/work/shared/bench")

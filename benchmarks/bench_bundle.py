@@ -67,8 +67,8 @@ def ensure_data(size: str) -> Path:
 def worker(npz: str, reps: int, precision: bool, solver: str, control: str = "fixed") -> dict:
     from bench_blocks import load_bench_block
 
-    from orientviz.block.bundle import bundle_adjust
-    from orientviz.model import Block
+    from orientviz.block import Block
+    from orientviz.bundle import bundle_adjust
     from orientviz.rotation import matrix_from_opk, rotvec_from_matrix
 
     rp = _bench_module("run_peers")
@@ -119,7 +119,7 @@ def worker(npz: str, reps: int, precision: bool, solver: str, control: str = "fi
         reps=reps,
         sigma0_orientviz=res.sigma0,
         converged=res.converged,
-        reduced=res.extra["reduced_info"],
+        reduced=res.reduced_info,
         peak_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
     )
     return out
@@ -197,16 +197,20 @@ def reduced_comparison(size: str, reps: int, dense: bool) -> str:
     """Time factor + solve of the same reduced system S with each solver/ordering."""
     from bench_blocks import load_bench_block
 
-    from orientviz.adjust.normal import ReducedStructure, factor_reduced
-    from orientviz.block.bundle import BundleProblem, _State
-    from orientviz.block.bundle_checks import point_setup
+    from orientviz.bundle import (
+        BundleProblem,
+        BundleState,
+        ReducedStructure,
+        factor_reduced,
+        point_setup,
+    )
 
     block, _ = load_bench_block(ensure_data(size))
     prob = BundleProblem(block, point_setup(block, "fixed"))
-    st = _State(block.images.X0, block.images.angles, block.points.xyz, np.zeros(0))
+    st = BundleState(block.images.X0, block.images.angles, block.points.xyz, np.zeros(0))
     rw, Je, Jp = prob.residuals(st, jac=True)
     ne = prob.normal(st, rw, Je, Jp)
-    base = prob.struct
+    base = prob.reduced
     variants = [
         ("banded, across-strip order", dict(solver="banded", orderings=list(base.orderings))),
         ("banded, RCM only", dict(solver="banded", orderings=[])),
@@ -229,7 +233,7 @@ def reduced_comparison(size: str, reps: int, dense: bool) -> str:
         times = []
         for _ in range(reps):
             t0 = time.perf_counter()
-            x = factor_reduced(S, ne["blocks"]).solve(ne["rhs"])
+            x = factor_reduced(S, ne.blocks).solve(ne.rhs)
             times.append(time.perf_counter() - t0)
         ref = x if ref is None else ref
         bw = S.info.get("bandwidth_images", "-")

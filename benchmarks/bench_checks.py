@@ -41,7 +41,7 @@ def main() -> None:
     from bench_blocks import load_bench_block
     from bench_bundle import ensure_data
 
-    from orientviz.block.bundle import bundle_adjust
+    from orientviz.bundle import bundle_adjust
     from orientviz.plausibility import check_block
 
     print(f"{'block':8s} {'images':>6s} {'rays':>8s} {'checks ms':>10s} {'solve ms':>10s} "

@@ -5,7 +5,7 @@ Run:  python benchmarks/bench_gross.py [--seeds 1 2 …] [--strips 4] [--images 
                                         [--no-large | --large-only]
 
 Part 1 — quality (pooled over seeds): blocks from
-:func:`orientviz.block.simulate.simulate_block` (σ = 5 µm, 60 %/20 % overlap, XYZ
+:func:`orientviz.simulate.simulate_block` (σ = 5 µm, 60 %/20 % overlap, XYZ
 perimeter control, 30 check points) with 1 % of the rays corrupted by 4-50 σ
 (20-250 µm, random direction). ``--tie grid`` (default) has the Gruber points plus a
 30 mm grid of tie points — the uniform spread of automatic tie points, where about 60 %
@@ -51,13 +51,12 @@ from scipy.optimize import least_squares  # noqa: E402
 
 from orientviz.adjust.gross import critical_value, noncentrality  # noqa: E402
 from orientviz.adjust.gross2d import noncentrality_2d  # noqa: E402
-from orientviz.block.bundle import bundle_adjust  # noqa: E402
-from orientviz.block.cleaning import bundle_solver, clean_block  # noqa: E402
-from orientviz.block.simulate import simulate_block  # noqa: E402
+from orientviz.block import CHECK, CONTROL
+from orientviz.bundle import bundle_adjust, bundle_solver, clean_block
 from orientviz.camera import project  # noqa: E402
 from orientviz.errors import AdjustmentError  # noqa: E402
-from orientviz.model import CHECK, CONTROL  # noqa: E402
 from orientviz.rotation import matrix_from_opk  # noqa: E402
+from orientviz.simulate import simulate_block
 
 SIGMA_MM = 0.005
 METHODS = {
@@ -137,12 +136,12 @@ def truth_info(clean, dirty):
     idx = dirty.info["gross"]["index"]
     err = dirty.info["gross"]["error_mm"]
     r = ref.redundancy_numbers.reshape(n, 2)[idx]
-    lam = noncentrality_2d(err, b.observations.sigma[idx], r, ref.extra["redundancy_xy"][idx])
+    lam = noncentrality_2d(err, b.observations.sigma[idx], r, ref.redundancy_xy[idx])
     rays = b.rays_per_point()[b.observations.point[idx]]
     return dict(
         idx=idx, size=np.hypot(*err.T) / SIGMA_MM, lam=lam, rays=rays,
         check=b.points.role[b.observations.point[idx]] == CHECK,
-        ref_rms=ref.extra["check_rms"], n=n,
+        ref_rms=ref.check_rms, n=n,
     )  # fmt: skip
 
 
@@ -186,11 +185,11 @@ def run_method(name, block, info):
             c = None
         if c is None:
             excluded = np.zeros(info["n"], bool)
-            chk2 = bundle_adjust(block).extra["check_rms"] ** 2
+            chk2 = bundle_adjust(block).check_rms ** 2
             nadj, elim, broke = 0, np.zeros(0, int), 1
         else:
-            excluded = ~c.adjustment.extra["kept_rays"]
-            chk2 = c.adjustment.extra["check_rms"] ** 2
+            excluded = ~c.adjustment.subset.kept_rays
+            chk2 = c.adjustment.check_rms**2
             nadj, elim, broke = c.adjustments, c.eliminated, 0
     dt = time.perf_counter() - t
     good = np.ones(info["n"], bool)
@@ -207,7 +206,7 @@ def error_free_rate(clean, name):
         c = clean_block(clean.block, **METHODS[name])
     except AdjustmentError:  # counted apart (weak blocks: an image left undeterminable)
         return 0, 0, 0, 1
-    excluded = int((~c.adjustment.extra["kept_rays"]).sum())
+    excluded = int((~c.adjustment.subset.kept_rays).sum())
     rejected = sum(1 for e in c.log if e.action == "eliminated")
     return excluded, rejected, clean.block.n_observations, 0
 
@@ -291,9 +290,9 @@ def large(strips, images, reps):
     info = truth_info(clean, dirty)
     good = np.ones(info["n"], bool)
     good[info["idx"]] = False
-    excluded = ~c.adjustment.extra["kept_rays"]
+    excluded = ~c.adjustment.subset.kept_rays
     row = classify(info, excluded, c.eliminated, b)
-    ratio = c.adjustment.extra["check_rms"] / info["ref_rms"]
+    ratio = c.adjustment.check_rms / info["ref_rms"]
     print(f"\nPart 2: {strips} × {images} = {b.n_images} images, {b.n_observations} rays, "
           f"{info['idx'].size} errors, median of {reps}, load {os.getloadavg()[0]:.1f}")  # fmt: skip
     print(f"  quality (snooping 2-D, default): ≥6σ {row['n']}, detected {row['det'] / row['n']:.1%}, "

@@ -24,7 +24,7 @@ import numpy as np  # noqa: E402
 from scipy.stats import ncx2  # noqa: E402
 
 from orientviz.adjust.gross2d import critical_values_2d, statistic_2d  # noqa: E402
-from orientviz.block.cleaning import bundle_solver  # noqa: E402
+from orientviz.bundle import bundle_solver
 
 
 def main() -> None:
@@ -42,7 +42,7 @@ def main() -> None:
         n = dirty.block.n_observations
         ref = bundle_solver(clean.block)(np.ones(2 * n))
         r = np.nan_to_num(ref.redundancy_numbers.reshape(n, 2)[info["idx"]])
-        rxy = np.nan_to_num(ref.extra["redundancy_xy"][info["idx"]])
+        rxy = np.nan_to_num(ref.redundancy_xy[info["idx"]])
         _, dof = statistic_2d(np.zeros_like(r), r, rxy)
         for size, lam, d in zip(info["size"], info["lam"], dof):
             if size >= 6:

@@ -19,7 +19,7 @@ a 6 × 20 block with systematic image errors (model bending) and statoscope/APR 
 the independent-model adjustment without and with model deformation parameters
 (shared by the block, per strip), and without and with auxiliary data as joint
 observations; the bundle without and with the joint auxiliary data, and the alternation
-of :func:`orientviz.block.auxiliary.adjust_with_auxiliary` as the peer of the joint one.
+of :func:`orientviz.bundle.adjust_with_auxiliary` as the peer of the joint one.
 
 Usage::
 
@@ -36,9 +36,8 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from orientviz.block.model_formation import form_models
-from orientviz.block.models import independent_models
-from orientviz.block.simulate import simulate_block
+from orientviz.simulate import simulate_block
+from orientviz.stereo_models import form_models, independent_models
 
 TABLE2 = {
     "CDC 6600": 0.85, "CDC 6400": 3.2, "IBM 360/50": 20.0, "IBM 360/65": 5.1,
@@ -60,9 +59,9 @@ def timed(fn, reps):
 def reduced_system_peer(sim, ms):
     """CPU time of one factorisation of the reduced system: SuperLU (minimum degree, the
     default) vs reverse Cuthill-McKee + banded Cholesky (Ackermann's bandwidth idea)."""
-    import orientviz.block.models_normal as mn
-    from orientviz.block.models import _rows3
-    from orientviz.block.models_setup import tie_setup
+    from orientviz.stereo_models import _normal as mn
+    from orientviz.stereo_models import tie_setup
+    from orientviz.stereo_models._adjust import _rows3
 
     su = tie_setup(sim.block, ms)
     n = ms.n_models
@@ -101,9 +100,9 @@ def least_squares_peer(reps):
     """orientviz vs scipy.optimize.least_squares on a 3 × 8 block (7 p. per model)."""
     from scipy.optimize import least_squares
 
-    from orientviz.block.models import _rows3
-    from orientviz.block.models_setup import tie_setup
     from orientviz.rotation import matrix_from_rotvec
+    from orientviz.stereo_models import tie_setup
+    from orientviz.stereo_models._adjust import _rows3
 
     sim = simulate_block(3, 8, rng=np.random.default_rng(3), extra=3)
     ms = form_models(sim.block)
@@ -114,7 +113,7 @@ def least_squares_peer(reps):
     su.init_points(np.ones(n), R0, T0)
     X0 = su.X.copy()
     free = su.scalar >= 0
-    sxy, sz = res.extra["sigma_model"]
+    sxy, sz = res.sigma_model
     wsq = np.array([1 / sxy, 1 / sxy, 1 / sz])
 
     def fun(p):
@@ -141,20 +140,15 @@ def least_squares_peer(reps):
     )
     w_sp = time.perf_counter() - t
     su.X[free] = out.x[7 * n :]
-    d = np.abs(su.X[: su.tie_points.size] - res.extra["xyz"][su.tie_points]).max()
+    d = np.abs(su.X[: su.tie_points.size] - res.points[su.tie_points]).max()
     return ms.n_models, w_ov, w_sp, d, out.nfev
 
 
 def extras(reps) -> None:
     """Self-calibration and joint auxiliary data: times with vs without, same block."""
-    from orientviz.block import systematic as sy
-    from orientviz.block.auxiliary import (
-        adjust_with_auxiliary,
-        check_errors,
-        height_control_at_ends,
-        simulate_auxiliary,
-    )
-    from orientviz.block.bundle import bundle_adjust
+    from orientviz.bundle import adjust_with_auxiliary, bundle_adjust
+    from orientviz.simulate import check_errors, height_control_at_ends, simulate_auxiliary
+    from orientviz.simulate import systematic as sy
 
     sim = simulate_block(
         6, 20, rng=np.random.default_rng(20), control="chains", control_kind="xy+z",
@@ -174,8 +168,8 @@ def extras(reps) -> None:
         print(f"{name:40s} {w:6.2f}  {its:4d}       {adj.sigma0:5.2f}  {xy:.3f}  {z:.3f}")
         return w
 
-    xyz = lambda r: r.extra["xyz"]  # noqa: E731
-    pts = lambda r: getattr(r, "adjustment", r).extra["points"]  # noqa: E731
+    xyz = lambda r: r.points  # noqa: E731
+    pts = lambda r: getattr(r, "adjustment", r).points  # noqa: E731
     w0 = row("models, 7 parameters", lambda: independent_models(b, models=ms), xyz)
     w1 = row("models + deformation (block)", lambda: independent_models(
         b, models=ms, deformation="classical", deformation_group="block"), xyz)  # fmt: skip
@@ -226,7 +220,7 @@ def main(argv=None) -> None:
     for method in ("rigorous", "pat-m"):
         res, w, c = timed(lambda m=method: independent_models(b, models=ms, method=m), a.reps)
         results[method] = res
-        e = res.extra["xyz"] - sim.truth.points.xyz
+        e = res.points - sim.truth.points.xyz
         print(f"adjustment {method:9s}          {w:7.2f} {c:7.2f}   {c / ms.n_models:.5f}      "
               f"{len(res.history)}   (σ0 {res.sigma0:.2f}, RMS error xy {np.sqrt(np.nanmean(e[:, :2] ** 2)):.3f} m, "
               f"z {np.sqrt(np.nanmean(e[:, 2] ** 2)):.3f} m)")  # fmt: skip

@@ -3,7 +3,7 @@
     python benchmarks/bench_problem_files.py                 # 4x10 and 10x20 image blocks
     python benchmarks/bench_problem_files.py --sizes 20x50   # ~60 000 observations
 
-For each simulated block (orientviz.block.simulate, seed 3) and each table form
+For each simulated block (orientviz.simulate, seed 3) and each table form
 (readable rows / compact columns) the table lists, best of ``--repeat`` runs in this
 process (imports warmed up first):
 
@@ -26,9 +26,9 @@ import time
 
 import numpy as np
 
-from orientviz.block.simulate import simulate_block
 from orientviz.io.jsonio import validator_for
 from orientviz.io.problem import dumps_problem, loads_problem, problem_from_block
+from orientviz.simulate import simulate_block
 
 
 def best(repeat: int, func, *args, **kwargs) -> float:

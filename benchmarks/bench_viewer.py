@@ -87,7 +87,7 @@ def main() -> None:
 
     import viser
 
-    from orientviz.block.simulate import simulate_block
+    from orientviz.simulate import simulate_block
     from orientviz.units import to_rad
     from orientviz.viewer.app import ViewerApp
     from orientviz.viewer.block_geometry import BlockGeometry

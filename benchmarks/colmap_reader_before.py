@@ -6,15 +6,14 @@ every keypoint of images.txt in Python and the file twice. Not used by orientviz
 
 from __future__ import annotations
 
-import argparse
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
+from orientviz.block import Block
 from orientviz.errors import InputError
-from orientviz.model import Block
 from orientviz.rotation import opk_from_matrix
 
 FLIP = np.diag([1.0, -1.0, -1.0])

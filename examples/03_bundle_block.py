@@ -41,7 +41,7 @@ def main() -> None:
     ratio = rms_true / rms_sigma
     print(f"true / predicted: {ratio[0]:.2f} {ratio[1]:.2f} {ratio[2]:.2f}")
 
-    check = adj.extra["check_rms"]  # check points, intersected after the adjustment
+    check = adj.check_rms  # check points, intersected after the adjustment
     print(f"check points RMS: X {check[0]:.3f}  Y {check[1]:.3f}  Z {check[2]:.3f} m")
     print(f"sigma0 = {adj.sigma0:.3f}  redundancy = {adj.redundancy}")
 

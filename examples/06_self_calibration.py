@@ -40,11 +40,11 @@ def main() -> None:
     adj = sc.adjustment
 
     for name, a in (("plain bundle", plain), ("self-calibration", adj)):
-        rms = a.extra["check_rms"]
+        rms = a.check_rms
         print(
             f"{name:17s} σ̂0 {a.sigma0:5.2f}   check points RMS X {rms[0]:.3f}  Y {rms[1]:.3f}  Z {rms[2]:.3f} m"
         )
-    z_plain, z_sc = plain.extra["check_rms"][2], adj.extra["check_rms"][2]
+    z_plain, z_sc = plain.check_rms[2], adj.check_rms[2]
     print(f"check heights: self-calibration / plain = {z_sc / z_plain:.2f}")
     print(f"sigma0 = {adj.sigma0:.3f}  redundancy = {adj.redundancy}")
 

@@ -136,17 +136,17 @@ def lesson_figure(path: pathlib.Path) -> None:
     import matplotlib.pyplot as plt
     from PIL import Image
 
-    from orientviz.block.models import independent_models
-    from orientviz.block.polynomial import polynomial_adjust
-    from orientviz.block.simulate import simulate_block
-    from orientviz.model import TIE
+    from orientviz.block import TIE
     from orientviz.plot.block import plot_error_vectors
+    from orientviz.polynomial import polynomial_adjust
+    from orientviz.simulate import simulate_block
+    from orientviz.stereo_models import independent_models
 
     # the lesson's block: 3 strips of 8 images, control chains every 4 bases
     sim = simulate_block(3, 8, rng=np.random.default_rng(5), extra=None,
                          control="chains", control_spacing=4, chain_spacing=4)  # fmt: skip
-    poly = polynomial_adjust(sim.block, degree_xy=3, degree_z=3).extra["xyz"]
-    models = independent_models(sim.block).extra["xyz"]
+    poly = polynomial_adjust(sim.block, degree_xy=3, degree_z=3).points
+    models = independent_models(sim.block).points
     fig, axs = plt.subplots(1, 2, figsize=(13, 4.5))
     same = dict(control=sim.block.points.role != TIE, zlim=1.5, exaggeration=5000)
     plot_error_vectors(poly, sim.truth.points.xyz, ax=axs[0],

@@ -68,19 +68,19 @@ _FACE: dict[str, str] = {
     "FrameCamera": ".camera",
     "project": ".camera",
     # the block
-    "Block": ".model",
-    "simulate_block": ".block.simulate",
-    "SimulatedBlock": ".block.simulate",
+    "Block": ".block",
+    "simulate_block": ".simulate",
+    "SimulatedBlock": ".simulate",
     # single pairs and images
     "relative_orientation": ".orientation.relative",
     "similarity_transform": ".orientation.absolute",
     "resection": ".orientation.resection",
     "intersect_points": ".orientation.intersection",
     # aerotriangulation
-    "bundle_adjust": ".block.bundle",
-    "self_calibrate": ".block.selfcal",
-    "clean_block": ".block.cleaning",
-    "independent_models": ".block.models",
+    "bundle_adjust": ".bundle",
+    "self_calibrate": ".bundle",
+    "clean_block": ".bundle",
+    "independent_models": ".stereo_models",
     # results
     "Adjustment": ".adjust.result",
     "Iteration": ".adjust.result",
@@ -100,7 +100,9 @@ __all__ = sorted(
 )
 
 
-def view(content: Any = "block", *, host: str = "127.0.0.1", port: int = 8080, **options: Any) -> Any:
+def view(
+    content: Any = "block", *, host: str = "127.0.0.1", port: int = 8080, **options: Any
+) -> Any:
     """Open the 3D viewer (viser) on ``content`` and return the running app.
 
     viser and the scene code are imported here, on the call, never by ``import
@@ -145,21 +147,19 @@ def __dir__() -> list[str]:
 
 if TYPE_CHECKING:  # for type checkers and editors; nothing is imported at run time
     from .adjust.result import Adjustment, Iteration
-    from .block.bundle import bundle_adjust
-    from .block.cleaning import clean_block
-    from .block.models import independent_models
-    from .block.selfcal import self_calibrate
-    from .block.simulate import SimulatedBlock, simulate_block
+    from .block import Block
+    from .bundle import bundle_adjust, clean_block, self_calibrate
     from .camera import FrameCamera, project
     from .io.colmap import read_colmap
     from .io.datasets import load_dataset
     from .io.problem import Problem, load_problem, save_problem
     from .io.solve import solve_problem
-    from .model import Block
     from .orientation.absolute import similarity_transform
     from .orientation.intersection import Intersection, intersect_points
     from .orientation.relative import relative_orientation
     from .orientation.resection import resection
     from .report import write_report
     from .rotation import matrix_from_opk, opk_from_matrix
+    from .simulate import SimulatedBlock, simulate_block
+    from .stereo_models import independent_models
     from .units import from_rad, to_rad

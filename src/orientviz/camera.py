@@ -179,7 +179,7 @@ def collinearity_partials(d: F64, R: F64, dR: F64, c: F64) -> tuple[F64, F64, F6
     """The derivative chain of the collinearity equations, vectorised over n rays.
 
     Shared by :func:`collinearity_jacobian` and the bundle's kernel
-    (:mod:`orientviz.block.bundle_kernel`, which gathers R and dR per image).
+    (:mod:`orientviz.bundle._kernel`, which gathers R and dR per image).
 
     Parameters
     ----------

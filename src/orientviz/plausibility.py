@@ -24,8 +24,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from .block import CONTROL, Block
 from .errors import AdjustmentError, InputError
-from .model import CONTROL, Block
 
 log = logging.getLogger("orientviz")
 log.addHandler(logging.NullHandler())  # a library logs; the application decides where to

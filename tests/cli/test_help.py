@@ -70,10 +70,10 @@ def test_not_run_list_names_real_examples():
 @pytest.fixture
 def inputs(tmp_path):
     """The files the examples name: block.json, a BAL file and a COLMAP model."""
-    from orientviz.block.simulate import simulate_block
     from orientviz.io.bal import write_bal
     from orientviz.io.colmap import write_colmap
     from orientviz.io.problem import problem_from_block, save_problem
+    from orientviz.simulate import simulate_block
 
     folder = tmp_path / "inputs"
     folder.mkdir()

@@ -212,8 +212,8 @@ def _strip_approximations(doc: dict) -> dict:
 
 
 def test_block_without_approximations_reaches_the_same_optimum(capsys, tmp_path):
-    """Images and tie points without start values: orientviz.block.approximate fills them."""
-    from orientviz.block.simulate import simulate_block
+    """Images and tie points without start values: orientviz.block fills them."""
+    from orientviz.simulate import simulate_block
 
     block = simulate_block(1, 3, rng=11, extra="grid").block
     with_start = tmp_path / "start.json"

@@ -1,19 +1,26 @@
 """The core imports neither matplotlib, ipywidgets nor viser (and stays fast)."""
 
+import ast
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
+
+SRC = Path(__file__).resolve().parents[2] / "src" / "orientviz"
 
 CORE = [
     "orientviz",
     "orientviz.units",
     "orientviz.rotation",
     "orientviz.camera",
-    "orientviz.model",
+    "orientviz.block",
     "orientviz.adjust",
     "orientviz.orientation",
-    "orientviz.block",
+    "orientviz.bundle",
+    "orientviz.stereo_models",
+    "orientviz.polynomial",
+    "orientviz.simulate",
     "orientviz.radar",
     "orientviz.io",
     "orientviz.report",
@@ -85,3 +92,65 @@ def test_unknown_face_name_is_an_attribute_error():
 
     with pytest.raises(AttributeError, match="no_such_name"):
         ov.no_such_name  # noqa: B018
+
+
+#: What each layer may import from orientviz (dependencies point down): the engine knows
+#: nothing of blocks, bundles or model methods; the block's data model knows no solver.
+LAYERS = {
+    "adjust": {"errors", "units"},
+    "block": {"errors", "units", "rotation", "camera", "adjust", "orientation", "bundle"},
+}
+#: Imports that are allowed only inside functions (run time, not import time).
+LAZY_ONLY = {"block": {"orientation", "bundle"}}
+
+
+def _orientviz_imports(path: Path) -> list[tuple[str, bool]]:
+    """Top-level orientviz subpackages/modules imported by a file, and whether at module level."""
+    tree = ast.parse(path.read_text())
+    pkg = path.relative_to(SRC).with_suffix("").parts[:-1]
+    out = []
+    top = {id(n) for n in tree.body}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = list(pkg[: len(pkg) - node.level + 1])
+                parts = base + (node.module.split(".") if node.module else [])
+                if not parts:  # from . import x at the package root
+                    parts = [node.names[0].name]
+            elif node.module and node.module.startswith("orientviz."):
+                parts = node.module.split(".")[1:]
+            else:
+                continue
+            out.append((parts[0], id(node) in top))
+        elif isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name.startswith("orientviz."):
+                    out.append((a.name.split(".")[1], id(node) in top))
+    return out
+
+
+def test_dependencies_point_down():
+    bad = []
+    for layer, allowed in LAYERS.items():
+        for path in sorted((SRC / layer).rglob("*.py")):
+            for target, at_top in _orientviz_imports(path):
+                if target == layer:
+                    continue
+                lazy = LAZY_ONLY.get(layer, set())
+                if target not in allowed or (at_top and target in lazy):
+                    bad.append(f"{path.relative_to(SRC)} imports orientviz.{target}")
+    assert not bad, "imports against the direction of the layers:\n" + "\n".join(bad)
+
+
+def test_dependency_check_sees_an_upward_import(tmp_path, monkeypatch):
+    # the checker itself must catch an upward import (a test that cannot fail is no test)
+    fake = tmp_path / "adjust"
+    fake.mkdir()
+    (fake / "bad.py").write_text("from ..bundle import bundle_adjust\n")
+    monkeypatch.setattr(sys.modules[__name__], "SRC", tmp_path)
+    try:
+        test_dependencies_point_down()
+    except AssertionError as exc:
+        assert "adjust/bad.py imports orientviz.bundle" in str(exc)
+    else:
+        raise AssertionError("the dependency check missed an upward import")

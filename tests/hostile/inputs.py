@@ -26,13 +26,13 @@ def base() -> dict[str, str]:
     """name → text of each valid input (COLMAP files as ``sparse/<file>``)."""
     import tempfile
 
-    from orientviz.block.simulate import simulate_block
+    from orientviz.block import CONTROL as ROLE_CONTROL
     from orientviz.io.bal import write_bal
     from orientviz.io.colmap import write_colmap
     from orientviz.io.control import ControlPoints, write_control
     from orientviz.io.datasets import dataset_path
     from orientviz.io.problem import dumps_problem, problem_from_block
-    from orientviz.model import CONTROL as ROLE_CONTROL
+    from orientviz.simulate import simulate_block
 
     sim = simulate_block(1, 5, rng=7, control="full")
     block = sim.block

@@ -11,7 +11,7 @@ from orientviz.plausibility import check_block, raise_for
 
 @pytest.fixture(scope="module")
 def sim():
-    from orientviz.block.simulate import simulate_block
+    from orientviz.simulate import simulate_block
 
     return simulate_block(2, 6, rng=3, control="perimeter", n_check=2)
 

@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 import orientviz as ov
-from orientviz.block.bundle import bundle_adjust
+from orientviz.block import CONTROL, TIE
+from orientviz.bundle import bundle_adjust
 from orientviz.errors import InputError
 from orientviz.io.kinds._align import align_to_control
 from orientviz.io.kinds.block import solve
 from orientviz.io.problem import dumps_problem, loads_problem, problem_from_block
-from orientviz.model import CONTROL, TIE
 from orientviz.orientation.absolute import SimilarityTransform
 from orientviz.rotation import matrix_from_opk, opk_from_matrix
 

@@ -74,7 +74,7 @@ def test_unknown_dataset():
 def test_generator_is_deterministic_and_reproduces_the_small_examples(tmp_path):
     """The seeded generator rewrites the non-block examples byte for byte.
 
-    (The block examples come from ``orientviz.block.simulate``, owned elsewhere; for them
+    (The block examples come from ``orientviz.simulate``, owned elsewhere; for them
     only the structure is compared, so that a change of the simulator does not break this.)
     """
     from orientviz.datasets.make_examples import main

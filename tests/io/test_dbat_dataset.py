@@ -9,11 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from orientviz.block import CHECK, CONTROL, TIE
 from orientviz.datasets import make_dbat
 from orientviz.io.datasets import dataset_info, dataset_path, load_dataset
 from orientviz.io.kinds.block import approximate, solve, with_check_rays
 from orientviz.io.problem import loads_problem
-from orientviz.model import CHECK, CONTROL, TIE
 
 FOLDER = dataset_path("dbat_sxb").parent
 

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 import orientviz as ov
+from orientviz.block import CHECK, CONTROL
 from orientviz.cli import main
 from orientviz.datasets.debug_example import make_debug_example
 from orientviz.io.control import ControlPoints, apply_control, read_control, write_control
 from orientviz.io.export import export_results
-from orientviz.model import CHECK, CONTROL
 from orientviz.report import image_table, point_table, read_csv_table
 
 

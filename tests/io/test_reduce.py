@@ -17,7 +17,7 @@ from orientviz.io.reduce import MIN_LENGTH, reduce_document
 
 @cache
 def _big_docs() -> dict[str, dict]:
-    from orientviz.block.simulate import simulate_block
+    from orientviz.simulate import simulate_block
 
     block = simulate_block(2, 6, rng=7, extra=None, n_check=2).block
     assert block.n_observations > MIN_LENGTH

@@ -9,7 +9,6 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 import orientviz as ov
-from orientviz.block.accuracy import height_precision, planimetric_precision  # noqa: E402
 from orientviz.plot.block import (  # noqa: E402
     plot_block_layout,
     plot_check_heights,
@@ -19,6 +18,7 @@ from orientviz.plot.block import (  # noqa: E402
     plot_precision_map,
     plot_strip_law,
 )
+from orientviz.simulate import height_precision, planimetric_precision
 
 
 @pytest.fixture(scope="module")
@@ -94,7 +94,7 @@ def test_widget_app_builds():
 
 
 def test_check_heights_draw_each_result_at_the_true_x():
-    from orientviz.block.bundle import bundle_adjust
+    from orientviz.bundle import bundle_adjust
     from orientviz.errors import InputError
 
     s = ov.simulate_block(2, 5, rng=4, n_check=8)
@@ -112,7 +112,7 @@ def test_check_heights_draw_each_result_at_the_true_x():
     np.testing.assert_allclose(lines[0].get_xdata(), truth[chk, 0] / 1000.0)  # km
     np.testing.assert_allclose(lines[0].get_ydata(), 0.3 * np.sin(truth[chk, 0] / 1000.0))
     np.testing.assert_allclose(lines[1].get_xdata(), truth[chk[1:], 0] / 1000.0)
-    d_bundle = adj.extra["points"][chk, 2] - truth[chk, 2]
+    d_bundle = adj.points[chk, 2] - truth[chk, 2]
     np.testing.assert_allclose(lines[2].get_ydata(), d_bundle)
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     mu = np.sqrt(np.mean((0.3 * np.sin(truth[chk, 0] / 1000.0)) ** 2))

@@ -9,8 +9,6 @@ import pytest  # noqa: E402
 
 from orientviz.adjust import gauss_newton  # noqa: E402
 from orientviz.adjust.gross import data_snooping, engine_solver, reliability  # noqa: E402
-from orientviz.block import systematic as se  # noqa: E402
-from orientviz.block.deformation import image_field, model_field  # noqa: E402
 from orientviz.errors import InputError  # noqa: E402
 from orientviz.plot.deformation import (  # noqa: E402
     plot_deformation_comparison,
@@ -22,6 +20,8 @@ from orientviz.plot.gross import (  # noqa: E402
     plot_normalized_residuals,
     plot_reliability,
 )
+from orientviz.simulate import image_field, model_field
+from orientviz.simulate import systematic as se
 
 T = np.linspace(0, 10, 40)
 
@@ -128,9 +128,9 @@ def test_field_split_panels_share_one_exaggeration(tmp_path):
     import matplotlib.pyplot as plt
     from matplotlib.quiver import Quiver
 
-    from orientviz.block.additional import Ebner12
-    from orientviz.block.deformation import split_field
+    from orientviz.bundle import Ebner12
     from orientviz.plot.deformation import plot_field_split
+    from orientviz.simulate import split_field
 
     tr = se.unflatness(8.0)
     s = split_field(tr, Ebner12(), n=9)

@@ -8,7 +8,7 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 import orientviz as ov
-from orientviz.block.reliability import ray_reliability  # noqa: E402
+from orientviz.bundle import ray_reliability
 from orientviz.plot.gross import (  # noqa: E402
     plot_block_reliability,
     plot_mdb_histogram,

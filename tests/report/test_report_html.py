@@ -145,8 +145,8 @@ def test_without_matplotlib_the_report_says_figures_are_omitted(monkeypatch, tmp
 
 
 def test_big_block_is_thinned_and_stays_small(tmp_path):
-    from orientviz.block.simulate import simulate_block
     from orientviz.io.problem import problem_from_block
+    from orientviz.simulate import simulate_block
 
     sim = simulate_block(4, 12, rng=5, n_check=4)
     problem = problem_from_block(sim.block, name="sim")

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 import orientviz as ov
+from orientviz.block import CHECK, TIE
 from orientviz.io.datasets import list_datasets
 from orientviz.io.problem import problem_from_block
 from orientviz.io.solve import _resolve
-from orientviz.model import CHECK, TIE
 from orientviz.report import build_report, chi2_test, intersection_angles, text_report
 
 BLOCK_SECTIONS = [
@@ -126,12 +126,12 @@ def test_check_point_rms_equals_recomputed_value(strip):
     assert printed == pytest.approx(rms, abs=0.051)  # printed with 0.1 mm
     # and the bundle's own check-point computation agrees
     assert np.asarray(report.section("check").values["rms_m"]) * 1000 == pytest.approx(
-        solution.adjustment.extra["check_rms"] * 1000, abs=1e-6
+        solution.adjustment.check_rms * 1000, abs=1e-6
     )
 
 
 def test_largest_normalised_residual_is_the_injected_blunder():
-    from orientviz.block.simulate import simulate_block
+    from orientviz.simulate import simulate_block
 
     clean = simulate_block(2, 6, rng=7, n_check=2).block
     rays = clean.rays_per_point()

@@ -5,10 +5,10 @@ import json
 import numpy as np
 import pytest
 
-from orientviz.block.selfcal import self_calibrate
-from orientviz.block.simulate import simulate_block
+from orientviz.bundle import self_calibrate
 from orientviz.errors import InputError, NotDeterminableError
 from orientviz.reproduce.selfcal import NOISE_UM, run_case, systematic_field
+from orientviz.simulate import simulate_block
 
 
 def test_direction_of_the_improvement_on_a_small_block():
@@ -101,8 +101,8 @@ def test_cli_table_runs_and_is_json(capsys):
 
 
 def test_sigma0_sees_only_what_orientations_and_points_do_not_absorb():
-    from orientviz.block import systematic as se
     from orientviz.reproduce.selfcal import visible_part
+    from orientviz.simulate import systematic as se
 
     # a model twist (Δx = a·x²·y) is in Ebner's set: visible without, gone with
     w, s = visible_part(se.model_twist(10.0))

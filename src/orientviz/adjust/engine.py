@@ -8,7 +8,7 @@ A problem supplies ``model(x) -> (f, J)`` with f of shape (n,) and J of shape (n
 
 until the corrections are negligible against the parameters' own precision, then
 computes σ̂0, the cofactor matrix, redundancy numbers and normalised residuals.
-Large block problems use the Schur-complement path in :mod:`orientviz.adjust.normal`
+Large block problems use the Schur-complement path in :mod:`orientviz.bundle._reduced`
 and return the same :class:`~orientviz.adjust.result.Adjustment`.
 """
 
@@ -21,7 +21,8 @@ import scipy.linalg
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import InputError, NotDeterminableError
+from ..errors import InputError
+from .loop import Damping, Evaluation, Step, StopRule, iterate
 from .rank import raise_if_singular
 from .result import Adjustment, Iteration
 
@@ -65,26 +66,49 @@ def _solve(N, b: F64, names: list[str], context: str) -> F64:
     return np.linalg.lstsq(N, b, rcond=None)[0]
 
 
-def _step(model, x, l, p, N, b, lam, cost, free_idx, u_all, upd, free_names, context):
-    """One Gauss-Newton step, or a Levenberg-Marquardt step with λ adapted until the cost drops."""
-    diagN = N.diagonal() if sp.issparse(N) else np.diag(N)
-    while True:
+class _DenseProblem:
+    """``l + v = f(x)`` with a dense or sparse Jacobian, for :func:`iterate`.
+
+    The iterate is the parameter vector x (u,); the normal matrix of an evaluation is
+    formed once and kept with it (the damped retries of one iteration reuse it).
+    """
+
+    def __init__(self, model, l, p, free_idx, u_all, upd, free_names, context):
+        self.model, self.l, self.p = model, l, p
+        self.free_idx, self.u_all, self.upd = free_idx, u_all, upd
+        self.free_names, self.context = free_names, context
+
+    def evaluate(self, x: F64, jacobian: bool) -> Evaluation:
+        f, J = self.model(x)
+        r = self.l - f
+        cost = float(r @ (self.p * r))
+        return Evaluation(cost, bool(np.all(np.isfinite(f))), {"f": f, "J": J, "r": r})
+
+    def solve(self, x: F64, ev: Evaluation, lam: float, iteration: int) -> Step:
+        d = ev.data
+        if "N" not in d:
+            d["N"], d["b"] = _normal(d["J"][:, self.free_idx], self.p, d["r"])
+            if iteration == 1:
+                N = d["N"]
+                dense = N.toarray() if sp.issparse(N) else N
+                if dense.shape[0] <= DENSE_LIMIT:
+                    raise_if_singular(dense, self.free_names, self.context)
+        N, b = d["N"], d["b"]
+        diagN = N.diagonal() if sp.issparse(N) else np.diag(N)
         if lam > 0:
-            Nd = N + (sp.diags(lam * diagN) if sp.issparse(N) else np.diag(lam * diagN))
-        else:
-            Nd = N
-        dxf = _solve(Nd, b, free_names, context)
-        dx = np.zeros(u_all)
-        dx[free_idx] = dxf
-        x_try = upd(x, dx)
-        f_try, J_try = model(x_try)
-        r_try = l - f_try
-        c_try = float(r_try @ (p * r_try))
-        if lam == 0:
-            return dx, dxf, x_try, f_try, J_try, r_try, c_try, lam
-        if (np.isfinite(c_try) and c_try <= cost) or lam > 1e10:
-            return dx, dxf, x_try, f_try, J_try, r_try, c_try, max(lam / 10.0, 1e-12)
-        lam *= 10.0
+            N = N + (sp.diags(lam * diagN) if sp.issparse(N) else np.diag(lam * diagN))
+        dxf = _solve(N, b, self.free_names, self.context)
+        dx = np.zeros(self.u_all)
+        dx[self.free_idx] = dxf
+        sig_apriori = 1.0 / np.sqrt(np.where(diagN > 0, diagN, np.inf))
+        rel = np.abs(dxf) / np.where(sig_apriori > 0, sig_apriori, 1.0)
+        return Step(float(rel.max(initial=0.0)), dx, dxf)
+
+    def apply(self, x: F64, step: Step) -> F64:
+        return self.upd(x, step.dx)
+
+    def snapshot(self, x: F64) -> F64:
+        return x.copy()
 
 
 def gauss_newton(
@@ -106,6 +130,7 @@ def gauss_newton(
     update: Callable[[F64, F64], F64] | None = None,
     precision: bool = True,
     context: str = "",
+    callback: Callable[[Iteration], object] | None = None,
 ) -> Adjustment:
     """Adjust ``l + v = f(x)`` by Gauss-Newton, optionally damped (Levenberg-Marquardt).
 
@@ -148,6 +173,8 @@ def gauss_newton(
         Compute cofactors, redundancy numbers and normalised residuals.
     context : str
         Prefix for error messages (e.g. the task's name).
+    callback : callable, optional
+        Called with each new :class:`Iteration` (per-step hook).
 
     Returns
     -------
@@ -176,56 +203,27 @@ def gauss_newton(
     upd = update or (lambda a, b: a + b)
     xt = None if xtol is None else np.broadcast_to(np.asarray(xtol, float), (u_all,))[free_idx]
 
-    f, J = model(x)
-    r = l - f
-    cost = float(r @ (p * r))
     dof = n - free_idx.size
+    problem = _DenseProblem(model, l, p, free_idx, u_all, upd, free_names, context)
+    rule = StopRule(tol=tol, custom=stop)
+    if stop is None and xt is not None:
+        rule.step_test = lambda step: bool(np.all(np.abs(step.data) <= xt))
+    run = iterate(
+        problem,
+        x,
+        redundancy=dof,
+        damping=Damping(damping, lambda0=lambda0),
+        stop=rule,
+        max_iter=max_iter,
+        callback=callback,
+    )
+    x, converged, reason, history = run.state, run.converged, run.reason, run.history
+    J, r = run.evaluation.data["J"], run.evaluation.data["r"]
 
     def s0(c: float) -> float:
         return float(np.sqrt(c / dof)) if dof > 0 else float("nan")
 
-    history = [Iteration(0, x.copy(), None, s0(cost), cost)]
-    lam = lambda0 if damping == "lm" else 0.0
-    converged, reason = False, f"reached the maximum of {max_iter} iterations"
-    if damping not in ("none", "lm"):
-        raise InputError(f"expected damping 'none' or 'lm', got {damping!r}")
-    N = None
-    for it in range(1, max_iter + 1):
-        Jf = J[:, free_idx]
-        N, b = _normal(Jf, p, r)
-        if it == 1:
-            dense = N.toarray() if sp.issparse(N) else N
-            if dense.shape[0] <= DENSE_LIMIT:
-                raise_if_singular(dense, free_names, context)
-        try:
-            step = _step(model, x, l, p, N, b, lam, cost, free_idx, u_all, upd, free_names, context)
-        except NotDeterminableError as exc:
-            if it == 1:
-                raise
-            reason = f"diverged: the normal matrix became singular in iteration {it} ({exc})"
-            break
-        dx, dxf, x_try, f_try, J_try, r_try, c_try, lam = step
-        if not np.all(np.isfinite(f_try)):
-            reason = f"the model became undefined (NaN/inf) in iteration {it}"
-            break
-        diagN = N.diagonal() if sp.issparse(N) else np.diag(N)
-        sig_apriori = 1.0 / np.sqrt(np.where(diagN > 0, diagN, np.inf))
-        rel = np.abs(dxf) / np.where(sig_apriori > 0, sig_apriori, 1.0)
-        x, f, J, r, cost = x_try, f_try, J_try, r_try, c_try
-        rec = Iteration(it, x.copy(), dx, s0(cost), cost, lam, float(rel.max(initial=0.0)))
-        history.append(rec)
-        if stop is not None:
-            if stop(history[-2], rec):
-                converged, reason = True, f"the custom stopping rule was met after {it} iterations"
-                break
-        elif xt is not None:
-            if np.all(np.abs(dxf) <= xt):
-                converged, reason = True, f"all corrections below xtol after {it} iterations"
-                break
-        elif rel.max(initial=0.0) < tol:
-            converged = True
-            reason = f"corrections below {tol:g} σ after {it} iterations"
-            break
+    cost = run.evaluation.cost
     result = Adjustment(
         x=x,
         names=names,

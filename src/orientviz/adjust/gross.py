@@ -10,7 +10,7 @@ and the returned :class:`~orientviz.adjust.result.Adjustment` reports residuals,
 redundancy numbers and normalised residuals for all n observations (eliminated ones get
 redundancy number 0 and a NaN normalised residual). :func:`engine_solver` builds such a
 solver for a problem of :func:`orientviz.adjust.gauss_newton`; the block bundle gets one in
-:mod:`orientviz.block.cleaning`.
+:mod:`orientviz.bundle`.
 
 Statistics (Baarda 1968, a-priori σ0 = 1):
 

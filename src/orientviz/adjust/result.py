@@ -88,6 +88,12 @@ class Adjustment:
         Index 0 is the start; one record per step.
     obs_labels : list of str or None
         A label per observation for reports (e.g. ``"img3/pt12/x"``).
+    obs_slices : dict of str to slice
+        Named ranges of the observations (e.g. ``"image"``: the image coordinates,
+        ``"control"``: pseudo-observations of control points); empty if one kind.
+    redundancy_xy : ndarray, shape (n/2,) or None
+        For observations that come in (x, y) pairs 2i, 2i+1: the off-diagonal of
+        P½ Q_vv P½ per pair (the 2-D tests of :mod:`orientviz.adjust.snooping`).
     extra : dict
         Task-specific results (candidates, transformed points, …).
     """
@@ -107,6 +113,8 @@ class Adjustment:
     cofactor: F64 | None = None
     cofactor_blocks: dict[str, F64] = field(default_factory=dict)
     obs_labels: list[str] | None = None
+    obs_slices: dict[str, slice] = field(default_factory=dict)
+    redundancy_xy: F64 | None = None
     extra: dict[str, Any] = field(default_factory=dict)
 
     # ------------------------------------------------------------------ access

@@ -48,9 +48,9 @@ def _statistics(adj: Adjustment, g, ng: int, test: str, crit: dict[int, float]):
         return T, np.full(ng, crit[1]), rank, np.ones(ng, np.int64)
     from .gross2d import statistic_2d
 
-    rxy = adj.extra.get("redundancy_xy")
+    rxy = adj.redundancy_xy
     if rxy is None or adj.normalized_residuals is None:
-        raise InputError("the 2-D test needs normalised residuals and extra['redundancy_xy']")
+        raise InputError("the 2-D test needs normalised residuals and redundancy_xy")
     r = np.nan_to_num(np.asarray(adj.redundancy_numbers, float))
     z = np.nan_to_num(np.asarray(adj.normalized_residuals, float)) * np.sqrt(r)
     T, dof = statistic_2d(z.reshape(-1, 2), r.reshape(-1, 2), np.nan_to_num(rxy))
@@ -124,7 +124,7 @@ def data_snooping(
     * ``"2d"``: observations come in (x, y) pairs ``2i, 2i + 1`` (one group per pair);
       each pair is tested with the 2-D statistic T = zᵀR⁻¹z
       (:func:`orientviz.adjust.gross2d.statistic_2d`; the solver's Adjustment must
-      carry ``extra["redundancy_xy"]`` (n/2,)) against the B-method critical value of
+      carry ``redundancy_xy`` (n/2,)) against the B-method critical value of
       its rank (1 or 2 dof, common power β0) and ranked by T, the decrease of vᵀPv
       when the pair is left out.
 
@@ -174,7 +174,7 @@ def data_snooping(
     exact_first : bool
         With ``solve_exact``: the first adjustment is exact too (a solver may then
         use its redundancy numbers to sharpen the later screening rounds, as
-        :func:`orientviz.block.cleaning.bundle_solver` does).
+        :func:`orientviz.bundle.bundle_solver` does).
     exact_when_few : float
         With ``solve_exact``: after an adjustment that eliminated fewer groups than this
         fraction of the most any adjustment has eliminated, the next one is exact at once

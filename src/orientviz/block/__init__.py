@@ -1,1 +1,67 @@
-"""orientviz.block"""
+"""The block: cameras, images, points and image observations (and what describes them).
+
+"Block" means one thing in orientviz: the set of images and points that are adjusted
+together. This package holds its data model and what is computed from the data alone:
+
+* :class:`Block` with its tables :class:`Cameras`, :class:`Images`, :class:`Points`,
+  :class:`Observations` (structure of arrays; m, mm, rad) and the point roles
+  :data:`TIE`, :data:`CONTROL`, :data:`CHECK`;
+* :func:`block_layout` → :class:`BlockLayout` (strips, stereo models = consecutive
+  image pairs of a strip, footprints) and :func:`control_positions`;
+* :func:`approximate_values` (approximations from scratch);
+* :class:`Auxiliary` (GNSS / statoscope / APR observations with strip offsets);
+* what a block adjustment returns, whatever the method: :class:`BlockAdjustment`
+  (exterior (m, 6), points (p, 3), :class:`CheckPoints`, :class:`AuxiliaryEstimates`).
+
+The adjustments live elsewhere: :mod:`orientviz.bundle`, :mod:`orientviz.stereo_models`,
+:mod:`orientviz.polynomial`; simulated blocks come from :mod:`orientviz.simulate`.
+"""
+
+from ._approximate import approximate_values, intersect_rays
+from ._auxiliary import KINDS, Auxiliary, strip_time
+from ._layout import CONTROL_LAYOUTS, BlockLayout, block_layout, control_positions
+from ._result import AuxiliaryEstimates, BlockAdjustment, CheckPoints, check_points_of
+from ._tables import (
+    CHECK,
+    CONTROL,
+    ROLES,
+    TIE,
+    Block,
+    Cameras,
+    Images,
+    Observations,
+    Points,
+    check_array,
+    check_image_points,
+    check_points,
+    index_ids,
+)
+
+__all__ = [
+    "CHECK",
+    "CONTROL",
+    "CONTROL_LAYOUTS",
+    "KINDS",
+    "ROLES",
+    "TIE",
+    "Auxiliary",
+    "AuxiliaryEstimates",
+    "BlockAdjustment",
+    "CheckPoints",
+    "Block",
+    "BlockLayout",
+    "Cameras",
+    "Images",
+    "Observations",
+    "Points",
+    "approximate_values",
+    "block_layout",
+    "check_array",
+    "check_image_points",
+    "check_points",
+    "check_points_of",
+    "control_positions",
+    "index_ids",
+    "intersect_rays",
+    "strip_time",
+]

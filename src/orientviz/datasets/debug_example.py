@@ -1,7 +1,7 @@
 """A "real-looking" adjustment to debug: a COLMAP text model, a BAL file and control.
 
 orientviz ships no real image blocks, so lesson 15 (debugging an adjustment) builds
-one: a simulated aerial block (:func:`~orientviz.block.simulate.simulate_block`, c =
+one: a simulated aerial block (:func:`~orientviz.simulate.simulate_block`, c =
 152 mm, 1 : 10 000, 5 µm noise) written out as files the way another program would
 hand them over, with the faults a real job has:
 
@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..model import CONTROL, Block
+from ..block import CONTROL, Block
 
 #: default seed: the same files every time
 SEED = 2024
@@ -87,10 +87,10 @@ def make_debug_example(
     -------
     DebugExample
     """
-    from ..block.simulate import simulate_block
     from ..io.bal import write_bal
     from ..io.colmap import write_colmap
     from ..io.control import ControlPoints, write_control
+    from ..simulate import simulate_block
 
     d = Path(directory)
     d.mkdir(parents=True, exist_ok=True)

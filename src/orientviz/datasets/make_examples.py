@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..block import Block, Cameras, Images, Observations, Points
 from ..camera import project
-from ..model import Block, Cameras, Images, Observations, Points
 from ..rotation import matrix_from_opk
 from ..units import to_rad
 
@@ -139,7 +139,7 @@ def intersection_example(rng: np.random.Generator) -> tuple[Block, dict]:
 
 
 def _rounded_sim(strips: int, images: int, rng: np.random.Generator, **kw) -> Block:
-    from ..block.simulate import simulate_block
+    from ..simulate import simulate_block
 
     sim = simulate_block(strips, images, rng=rng, **kw)
     b = sim.block

@@ -34,8 +34,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from ..block import Block
 from ..errors import InputError
-from ..model import Block
 from ..rotation import matrix_from_opk, matrix_from_rotvec, opk_from_matrix, rotvec_from_matrix
 
 F64 = NDArray[np.float64]
@@ -178,7 +178,7 @@ def read_bal(
     sigma_px: float = 1.0,
     sequence: str = "opk",
 ) -> Block:
-    """Read a BAL file into a :class:`~orientviz.model.Block` (all points tie points).
+    """Read a BAL file into a :class:`~orientviz.block.Block` (all points tie points).
 
     Parameters
     ----------

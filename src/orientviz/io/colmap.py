@@ -1,4 +1,4 @@
-"""COLMAP models (text or binary) ↔ :class:`~orientviz.model.Block`.
+"""COLMAP models (text or binary) ↔ :class:`~orientviz.block.Block`.
 
 Conventions
 -----------
@@ -35,8 +35,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from ..block import CHECK, CONTROL, Block
 from ..errors import InputError
-from ..model import CHECK, CONTROL, Block
 from ..rotation import opk_from_matrix
 from .colmap_text import CAMERA_MODELS, ColmapCamera, ColmapModel, read_text_model
 

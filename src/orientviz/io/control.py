@@ -23,8 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..block import CHECK, CONTROL, Block
 from ..errors import InputError
-from ..model import CHECK, CONTROL, Block
 
 F64 = NDArray[np.float64]
 

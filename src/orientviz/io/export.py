@@ -24,8 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from ..adjust.result import Adjustment
+from ..block import Block
 from ..errors import AdjustmentError, InputError
-from ..model import Block
 
 FORMATS = ("json", "csv", "colmap")
 
@@ -91,7 +91,7 @@ def export_results(
 
 def run_from_cli(args: argparse.Namespace) -> int:
     """``orientviz export FILE -d DIR [--format json,csv,colmap] [--no-adjust]``."""
-    from ..block.bundle import bundle_adjust
+    from ..bundle import bundle_adjust
     from .kinds.block import approximate
     from .problem import load_problem
 

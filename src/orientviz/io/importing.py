@@ -1,6 +1,6 @@
 """The shared part of ``orientviz import-colmap`` and ``orientviz import-bal``.
 
-Both read a foreign model into a :class:`~orientviz.model.Block`, optionally add control
+Both read a foreign model into a :class:`~orientviz.block.Block`, optionally add control
 points from a CSV (:mod:`orientviz.io.control`) and write an ``orientviz/1`` block
 problem file. Bad input ends with one line naming file and line, exit code 2.
 """
@@ -13,8 +13,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ..block import CONTROL, Block
 from ..errors import InputError
-from ..model import CONTROL, Block
 
 
 def import_to_problem(

@@ -36,8 +36,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..block import Block
 from ..errors import InputError
-from ..model import Block
 
 F64 = NDArray[np.float64]
 REQUIRED = ("image", "point", "x", "y")

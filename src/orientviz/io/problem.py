@@ -92,7 +92,7 @@ class Problem:
     kind : str
         ``"block"``, ``"resection"``, ``"intersection"``, ``"similarity"``, …
     data : object
-        The kind's data (a :class:`~orientviz.model.Block` for the frame kinds, a
+        The kind's data (a :class:`~orientviz.block.Block` for the frame kinds, a
         :class:`~orientviz.io.kinds.similarity.SimilarityData` for similarity), in m,
         mm and rad.
     units : Units
@@ -265,7 +265,7 @@ def problem_from_block(
     options: dict[str, Any] | None = None,
     columnar: bool | None = None,
 ) -> Problem:
-    """Wrap a :class:`~orientviz.model.Block` as a problem (default units m, mm, gon).
+    """Wrap a :class:`~orientviz.block.Block` as a problem (default units m, mm, gon).
 
     ``columnar`` defaults to the compact form for blocks with more than 1000 observations.
     """

@@ -63,7 +63,7 @@ def check_geometry(problem: Problem) -> list:
     Raises the first fatal finding (InputError naming the file and place, or
     AdjustmentError); returns the warnings (also logged). Other kinds: no checks.
     """
-    from ..model import Block
+    from ..block import Block
     from ..plausibility import check_block, raise_for
 
     if not isinstance(problem.data, Block):
@@ -161,7 +161,7 @@ def adjusted_problem(problem: Problem, solution: Solution) -> Problem:
     adjusted coordinates; control and check coordinates and all observations stay as
     given. Raises :class:`InputError` for kinds without images and points (similarity).
     """
-    from ..model import TIE, Block
+    from ..block import TIE, Block
 
     if not isinstance(problem.data, Block):
         raise InputError(

@@ -27,9 +27,9 @@ from numpy.polynomial import polynomial as P
 from numpy.typing import ArrayLike, NDArray
 
 from ..adjust import Adjustment, gauss_newton
+from ..block import check_image_points, check_points
 from ..camera import FrameCamera, project
 from ..errors import InputError, NotDeterminableError
-from ..model import check_image_points, check_points
 from ..rotation import check_sequence, matrix_derivatives, matrix_from_opk, opk_from_matrix
 from .absolute import _spread_rank
 

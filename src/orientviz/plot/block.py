@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model import CHECK, CONTROL
+from ..block import CHECK, CONTROL
 from .style import subplots
 
 #: Colours of control kinds and roles.
@@ -25,7 +25,7 @@ def _axes(ax, figsize=(7, 5)):
 
 
 def _block_and_layout(obj):
-    from ..block.layout import block_layout
+    from ..block import block_layout
 
     block = getattr(obj, "truth", obj)
     layout = getattr(obj, "layout", None) or block_layout(block)
@@ -227,7 +227,7 @@ def plot_error_ellipses(xy, cov, *, ax=None, scale: float | None = None, control
 
 
 def plot_precision_map(prec, *, ax=None, title: str | None = None):
-    """Map of the standard deviations of a :class:`~orientviz.block.accuracy.BlockPrecision`.
+    """Map of the standard deviations of a :class:`~orientviz.simulate.BlockPrecision`.
 
     Planimetry: colour = √((σ_X² + σ_Y²)/2)/σ0; height: σ_Z/σ0; control marked.
 
@@ -283,7 +283,7 @@ def plot_strip_law(precisions, *, ax=None, fit: bool = True, title: str | None =
     -------
     matplotlib.figure.Figure
     """
-    from ..block.accuracy import fit_log_law
+    from ..simulate import fit_log_law
 
     fig, ax = _axes(ax, figsize=(6, 4))
     for k in sorted({p.spacing for p in precisions}):
@@ -351,13 +351,13 @@ def plot_check_heights(sim, results, *, ax=None, title: str | None = None):
     """Height errors of the check points along the strips, one marker series per result.
 
     Each result's check points are compared with the truth of the simulated block
-    (:func:`orientviz.block.auxiliary.check_differences`) and drawn at their true X:
+    (:func:`orientviz.simulate.check_differences`) and drawn at their true X:
     strip bending between sparse height control shows as a wave along X.
 
     Parameters
     ----------
     sim : SimulatedBlock
-        The simulated block (:func:`orientviz.block.simulate.simulate_block`); X is
+        The simulated block (:func:`orientviz.simulate.simulate_block`); X is
         taken from its truth (m, drawn in km).
     results : mapping of str to Adjustment or ndarray (p, 3)
         Label → bundle or independent-model adjustment of the block, or adjusted
@@ -373,7 +373,7 @@ def plot_check_heights(sim, results, *, ax=None, title: str | None = None):
         ΔZ (adjusted − true) in m against X in km; the legend gives each result's
         μz (RMS ΔZ) in m.
     """
-    from ..block.auxiliary import check_differences
+    from ..simulate import check_differences
 
     fig, ax = _axes(ax, figsize=(8, 3.5))
     markers = "os^Dvx+"

@@ -1,5 +1,5 @@
 """Figures of image and model deformation (Ackermann's Bild 6), from the data of
-:mod:`orientviz.block.deformation`.
+:mod:`orientviz.simulate`.
 
 Image fields: x along the flight direction, mm; vectors exaggerated so that µm become
 visible. Model fields: object frame in m (X along the base), planimetric vectors
@@ -32,7 +32,7 @@ def plot_image_field(
     title=None,
     xlabel: str = "x [mm] (flight direction)",
 ):
-    """Quiver plot of an :class:`~orientviz.block.deformation.ImageField`.
+    """Quiver plot of an :class:`~orientviz.simulate.ImageField`.
 
     Parameters
     ----------
@@ -77,7 +77,7 @@ def plot_image_field(
 def plot_model_field(
     field, *, component: str = "planimetry", ax=None, exaggeration=None, title=None
 ):
-    """One component of a :class:`~orientviz.block.deformation.ModelField`.
+    """One component of a :class:`~orientviz.simulate.ModelField`.
 
     Parameters
     ----------
@@ -177,7 +177,7 @@ def plot_deformation_frame(
 ):
     """One frame of the animation between two deformation fields of the same grid.
 
-    The frame is :func:`orientviz.block.deformation.animate` at ``t``: every grid point
+    The frame is :func:`orientviz.simulate.animate` at ``t``: every grid point
     moved by ``exaggeration · ((1 − t) · d_without + t · d_with)``. Arrows go from the
     grid point to its exaggerated position (one arrow per grid point); the moved points
     are coloured by the deformation at ``t`` in true size — ΔZ in cm for a model field,
@@ -188,7 +188,7 @@ def plot_deformation_frame(
     ----------
     without, with_ : ModelField or ImageField
         The fields without (t = 0) and with (t = 1) self-calibration, on the same grid
-        (:func:`orientviz.block.deformation.model_field`, ``image_field``). Model
+        (:func:`orientviz.simulate.model_field`, ``image_field``). Model
         fields: ground points and deformation in m; image fields: mm.
     t : float
         Position between the two states, 0 ≤ t ≤ 1.
@@ -209,7 +209,7 @@ def plot_deformation_frame(
     InputError
         If the fields lie on different grids or t is outside [0, 1] (from ``animate``).
     """
-    from ..block.deformation import ImageField, animate
+    from ..simulate import ImageField, animate
 
     image = isinstance(without, ImageField)
     base = without.xy if image else without.xyz
@@ -255,7 +255,7 @@ def plot_deformation_frame(
 
 
 def plot_field_split(split, *, axes=None, exaggeration: float | None = None):
-    """Three quiver panels of a :class:`~orientviz.block.deformation.FieldSplit`.
+    """Three quiver panels of a :class:`~orientviz.simulate.FieldSplit`.
 
     The image error field, the part the parameter set (with the orientation
     deformations) describes and the remainder, all with one exaggeration so that the
@@ -264,7 +264,7 @@ def plot_field_split(split, *, axes=None, exaggeration: float | None = None):
     Parameters
     ----------
     split : FieldSplit
-        From :func:`orientviz.block.deformation.split_field` (grid in mm, vectors in mm).
+        From :func:`orientviz.simulate.split_field` (grid in mm, vectors in mm).
     axes : sequence of 3 matplotlib Axes, optional
         Axes to draw into; a new 1 × 3 figure if None.
     exaggeration : float, optional
@@ -276,7 +276,7 @@ def plot_field_split(split, *, axes=None, exaggeration: float | None = None):
     matplotlib.figure.Figure
     """
 
-    from ..block.deformation import ImageField
+    from ..simulate import ImageField
 
     if axes is None:
         _, axes = subplots(1, 3, figsize=(9.6, 3.9))

@@ -89,7 +89,8 @@ def plot_cleaning(cleaning, *, truth=None, ax=None, title=None):
         tr = set(np.asarray(truth, int).tolist())
         good = np.array([o in tr for o in obs], bool)
         gone = set(obs.tolist())
-        kept = cleaning.adjustment.extra.get("kept_rays")
+        subset = getattr(cleaning.adjustment, "subset", None)  # a bundle_solver round
+        kept = subset.kept_rays if subset is not None else None
         if kept is not None:  # rays left out with their point count as removed too
             gone |= set(np.flatnonzero(~np.asarray(kept, bool)).tolist())
         missed = len(tr - gone)
@@ -167,7 +168,7 @@ def plot_reliability_map(
     Parameters
     ----------
     rel : RayReliability
-        From :func:`orientviz.block.reliability.ray_reliability`.
+        From :func:`orientviz.bundle.ray_reliability`.
     block : Block
         The adjusted block (footprints from ``images.strip``; point positions).
     xyz : array_like, shape (p, 3), optional
@@ -195,7 +196,7 @@ def plot_reliability_map(
     if layout:
         from matplotlib.patches import Polygon
 
-        from ..block.layout import block_layout
+        from ..block import block_layout
 
         lay = block_layout(block)
         for k, imgs in enumerate(lay.strips):
@@ -256,7 +257,7 @@ def plot_mdb_histogram(rel, block, *, ax=None, title=None):
     Parameters
     ----------
     rel : RayReliability
-        From :func:`orientviz.block.reliability.ray_reliability`.
+        From :func:`orientviz.bundle.ray_reliability`.
     block : Block
         The adjusted block (for the number of rays per point).
     ax : matplotlib Axes, optional

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..adjust.sparsity import bandwidth, cholesky_fill
+from ..bundle.sparsity import bandwidth, cholesky_fill
 from .style import FONT, new_figure
 
 
@@ -15,7 +15,7 @@ def plot_normal_pattern(pattern: ArrayLike, n_images: int, *, ax=None, title: st
     Parameters
     ----------
     pattern : array_like of bool, shape (m + q, m + q)
-        Block pattern (:func:`orientviz.adjust.sparsity.block_pattern`), drawn with each
+        Block pattern (:func:`orientviz.bundle.sparsity.block_pattern`), drawn with each
         image block 6 and each point block 3 unknowns wide.
     n_images : int
         m, the number of image blocks (the rest are points).

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from ..model import CHECK
+from ..block import CHECK
 from ._document import MAX_ROWS, Section, Table, angle_unit, decimals, fmt, length_unit
 from ._stats import F64, image_slice
 

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from ..model import CHECK, CONTROL
+from ..block import CHECK, CONTROL
 from ..units import RHO
 from ._document import (
     FEW_POINTS,
@@ -43,9 +43,7 @@ class QualitySections:
         vd = 2 if img_q else 4  # decimals of v and σ
         blk = self.block
         block_obs = (
-            blk is not None
-            and s.kind == "block"
-            and adj.extra.get("obs_slices", {}).get("image") is not None
+            blk is not None and s.kind == "block" and adj.obs_slices.get("image") is not None
         )
         rows, marked, recs = [], [], []
         idx = adj.largest_residuals(k)

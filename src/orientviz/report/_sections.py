@@ -25,8 +25,8 @@ from typing import Any
 
 import numpy as np
 
+from ..block import CHECK, CONTROL, TIE
 from ..io.problem import Problem
-from ..model import CHECK, CONTROL, TIE
 from ._document import (
     R_LOW,
     Report,
@@ -130,7 +130,7 @@ class _Builder(PrecisionSections, QualitySections):
         n_excl = adj.n_observations - n_used
         r = int(adj.redundancy)
         u = n_used - r
-        slices = adj.extra.get("obs_slices", {}) if isinstance(adj.extra, dict) else {}
+        slices = adj.obs_slices
         pseudo = {k: sl.stop - sl.start for k, sl in slices.items() if k != "image"}
         n_constr = int(sum(pseudo.values()))
         blk = self.block
@@ -378,7 +378,7 @@ class _Builder(PrecisionSections, QualitySections):
     # .................................................................. overview data
     def _overview_data(self) -> None:
         blk, s = self.block, self.s
-        from ..block.layout import block_layout
+        from ..block import block_layout
 
         b2 = blk.copy()
         if s.image_ids and len(s.image_ids) == blk.n_images:

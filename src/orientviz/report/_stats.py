@@ -1,7 +1,7 @@
 """Numbers behind the report's tests and warnings: χ² test of σ0, intersection angles,
 image coverage, which observations were adjusted, correlation matrices.
 
-All functions work on plain arrays and :class:`~orientviz.model.Block` tables; none
+All functions work on plain arrays and :class:`~orientviz.block.Block` tables; none
 imports matplotlib.
 """
 
@@ -14,8 +14,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..adjust.result import Adjustment
+from ..block import Block
 from ..io.problem import Problem
-from ..model import Block
 from ._solution import Solution
 
 F64 = NDArray[np.float64]
@@ -31,7 +31,7 @@ def used_observations(adj: Adjustment) -> NDArray[np.bool_]:
 
 def image_slice(adj: Adjustment, solution: Solution) -> slice:
     """The range of image-coordinate observations in the observation vector."""
-    sl = adj.extra.get("obs_slices", {}).get("image") if isinstance(adj.extra, dict) else None
+    sl = adj.obs_slices.get("image")
     if sl is not None:
         return sl
     return slice(0, adj.n_observations) if solution.observation_quantity == "image" else slice(0, 0)
@@ -140,7 +140,7 @@ def image_coverage(block: Block) -> F64:
 
 
 def block_of(problem: Problem) -> Block | None:
-    """The problem's :class:`~orientviz.model.Block`, or None for kinds without one."""
+    """The problem's :class:`~orientviz.block.Block`, or None for kinds without one."""
     return problem.data if isinstance(problem.data, Block) else None
 
 

@@ -23,8 +23,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..adjust.result import Adjustment
+from ..block import ROLES, Block
 from ..errors import InputError
-from ..model import ROLES, Block
 from ..units import from_rad
 
 F64 = NDArray[np.float64]

@@ -11,7 +11,7 @@ in §17-19), so the paper's numbers are the printed claims:
   for wide-angle images, c = 152 mm).
 
 orientviz computes the theoretical values from the inverse normal matrices
-(:mod:`orientviz.block.accuracy`: planimetric 4-parameter and height 3-parameter
+(:mod:`orientviz.simulate`: planimetric 4-parameter and height 3-parameter
 independent-model blocks, σ0 = model-coordinate σ) and sets an empirical value beside them:
 the RMS true error over repeated simulations with random model-coordinate errors, and,
 for two small blocks, the whole chain from simulated image coordinates (relative
@@ -32,7 +32,7 @@ import copy
 
 import numpy as np
 
-from ..block.accuracy import fit_log_law, height_precision, planimetric_precision
+from ..simulate import fit_log_law, height_precision, planimetric_precision
 from .rows import Row
 
 #: The paper's printed claims, by row key (Ackermann 1974 §17, §19-20).
@@ -55,9 +55,9 @@ SIGMA0_HEIGHT_PERMILLE = 0.015 / 152.0 * 1000.0
 
 
 def _pipeline_rows(rng: np.random.Generator) -> list[Row]:
-    from ..block.models import independent_models
-    from ..block.simulate import simulate_block
-    from ..model import TIE
+    from ..block import TIE
+    from ..simulate import simulate_block
+    from ..stereo_models import independent_models
 
     rows = []
     for ns in (2, 4):
@@ -67,9 +67,9 @@ def _pipeline_rows(rng: np.random.Generator) -> list[Row]:
                 ns, 2 * ns + 1, rng=rng, extra=None, control="perimeter", control_spacing=2
             )
             res = independent_models(sim.block, precision=True)
-            tp = res.extra["point_index"]
+            tp = res.point_index
             free = sim.block.points.role[tp] == TIE
-            e = (res.extra["xyz"][tp] - sim.truth.points.xyz[tp])[free, :2]
+            e = (res.points[tp] - sim.truth.points.xyz[tp])[free, :2]
             q = np.einsum("nii->ni", res.cofactor_blocks["points"][: tp.size])[free, :2]
             num += float(np.sum(e**2))
             den += float(np.sum(q)) * res.sigma0**2
@@ -92,9 +92,9 @@ def paper_values() -> dict[str, str]:
 def _sigma0_rows(rng: np.random.Generator, P: dict) -> list[Row]:
     """§20: σ0 of independent models (planimetry, model coordinates at image scale) vs
     σ0 of the bundle (image coordinates) on the same simulated blocks."""
-    from ..block.bundle import bundle_adjust
-    from ..block.models import independent_models
-    from ..block.simulate import simulate_block
+    from ..bundle import bundle_adjust
+    from ..simulate import simulate_block
+    from ..stereo_models import independent_models
 
     ratios, heights = [], []
     for _ in range(3):
@@ -102,11 +102,9 @@ def _sigma0_rows(rng: np.random.Generator, P: dict) -> list[Row]:
         s_img_um = 1000.0 * float(np.median(sim.block.observations.sigma))
         b = bundle_adjust(sim.block, precision=False)
         m = independent_models(sim.block, method="pat-m")
-        sxy, sz = m.extra["sigma_model"]
-        ratios.append(
-            m.extra["sigma0_planimetry"] * sxy / (b.sigma0 * s_img_um * 1e-6 * sim.spec["scale"])
-        )
-        heights.append(m.extra["sigma0_height"] * sz / sim.spec["scale"] * 1e6)
+        sxy, sz = m.sigma_model
+        ratios.append(m.sigma0_planimetry * sxy / (b.sigma0 * s_img_um * 1e-6 * sim.spec["scale"]))
+        heights.append(m.sigma0_height * sz / sim.spec["scale"] * 1e6)
     return [
         Row(
             "§20", "same blocks, 5 µm image noise (3 × 4 × 10 images)",

@@ -1,16 +1,16 @@
 """``orientviz reproduce selfcal``: the pattern of Ackermann's Tables 3-5 (self-calibration).
 
 The paper's blocks are real; their image errors are unknown. orientviz reproduces the
-*pattern* with simulated blocks (:func:`orientviz.block.simulate.simulate_block`, 4 strips
+*pattern* with simulated blocks (:func:`orientviz.simulate.simulate_block`, 4 strips
 of 10 wide-angle images at 1 : 10 000, relief 10 %): random image noise σ = 3 µm (what
 the paper's best self-calibrated σ0 reach, §27) plus a fixed systematic field of a
 "typical" camera-film combination — affinity, trapezoid, radial and decentering
-distortion, model twist (:func:`orientviz.block.systematic.typical`, 10 µm) and a film
+distortion, model twist (:func:`orientviz.simulate.systematic.typical`, 10 µm) and a film
 unflatness trough (8 µm) — the same in every image. Each block is adjusted three
 times by the bundle method: without systematic errors (the reference), with them
 without self-calibration, and with them with self-calibration (Ebner's 12 parameters,
 pseudo-observations 0 ± 10 µm, insignificant and over-correlated parameters suppressed:
-:func:`orientviz.block.selfcal.self_calibrate`). Check points (40 standard tie points,
+:func:`orientviz.bundle.self_calibrate`). Check points (40 standard tie points,
 not used as control) give μ.
 
 Cases: 20 % side overlap with perimeter control every 2, 4 and 8 bases (dense, normal,
@@ -54,11 +54,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..block import systematic as se
-from ..block.auxiliary import check_errors
-from ..block.bundle import bundle_adjust
-from ..block.selfcal import self_calibrate
-from ..block.simulate import simulate_block
+from ..bundle import bundle_adjust, self_calibrate
+from ..simulate import check_errors, simulate_block
+from ..simulate import systematic as se
 from .rows import Row
 
 #: The paper's other bundle projects with and without self-calibration (Table 5): σ0 µm.

@@ -1,7 +1,7 @@
 """How the viewer adjusts a block and reads an :class:`Adjustment` back into a Block.
 
 The viewer does not hold a solver of its own. It calls
-:func:`orientviz.block.bundle.bundle_adjust` (DEVELOPERS.md, "Bundle") when that module
+:func:`orientviz.bundle.bundle_adjust` (DEVELOPERS.md, "Bundle") when that module
 is installed. Until it is, and for blocks it cannot take, :func:`small_bundle` is a
 plain dense bundle on the shared engine (:func:`orientviz.adjust.gauss_newton`) for the
 tiny demo blocks (a few images): enough to step through iterations in the viewer.
@@ -19,9 +19,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..adjust import Adjustment, gauss_newton
+from ..block import Block
 from ..camera import collinearity_jacobian
 from ..errors import InputError
-from ..model import Block
 
 Adjuster = Callable[[Block, int], Adjustment]
 
@@ -143,9 +143,9 @@ def small_bundle(block: Block, max_iter: int = 20) -> Adjustment:
 
 
 def default_adjuster() -> Adjuster:
-    """The bundle to use: ``orientviz.block.bundle.bundle_adjust`` if present, else the fallback."""
+    """The bundle to use: ``orientviz.bundle.bundle_adjust`` if present, else the fallback."""
     try:
-        from ..block.bundle import bundle_adjust  # type: ignore[import-not-found]
+        from ..bundle import bundle_adjust
     except ImportError:
         return small_bundle
 

@@ -23,8 +23,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from ..block import Block
 from ..errors import InputError, OrientvizError
-from ..model import Block
 
 DEFAULT_DEMO = "block"
 

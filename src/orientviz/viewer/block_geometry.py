@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..model import CHECK, CONTROL, TIE
+from ..block import CHECK, CONTROL, TIE
 from . import geometry as g
 from .state import BlockState
 

@@ -7,7 +7,7 @@ morphed: points are drawn at reference + k·((1 − t)·A + t·B). Two compariso
 * *reference → current estimate*: A = 0, B = estimate − reference;
 * *without → with self-calibration*: A and B are the point errors of two bundle
   adjustments of the start block, without and with an additional-parameter set
-  (Ebner's 12 by default, :mod:`orientviz.block.additional`) — Ackermann's "model
+  (Ebner's 12 by default, :mod:`orientviz.bundle`) — Ackermann's "model
   deformation" removed (or not) by self-calibration.
 
 Scene nodes: ``/block/deformation/vectors`` (reference → morphed point) and
@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..model import Block
+from ..block import Block
 from .block_geometry import COLORS
 from .state import BlockState
 
@@ -60,8 +60,7 @@ def self_calibration_fields(
     start: Block, reference: Block, ap: str = "ebner12"
 ) -> tuple[F64, F64, str]:
     """Point errors (p, 3) m of bundles without and with self-calibration, and a summary line."""
-    from ..block.additional import ap_set
-    from ..block.bundle import bundle_adjust
+    from ..bundle import ap_set, bundle_adjust
 
     p = start.n_points
     out = []

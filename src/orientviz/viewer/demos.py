@@ -1,8 +1,8 @@
 """Built-in viewer demos: ``block``, ``pair`` and ``radar`` (``orientviz view DEMO``).
 
-* ``block`` — a simulated block (:func:`orientviz.block.simulate.simulate_block`) with
+* ``block`` — a simulated block (:func:`orientviz.simulate.simulate_block`) with
   gross errors (blunders) and systematic image errors (Ackermann's ~10 µm,
-  :func:`orientviz.block.systematic.typical`); its truth drives the deformation view.
+  :func:`orientviz.simulate.systematic.typical`); its truth drives the deformation view.
 * ``pair`` — a stereo pair with Kovarik's camera (c = 152.7 mm, 23 × 23 cm) whose right
   image is slightly misoriented: the y-parallax arrows show the gaps between the rays.
 * ``radar`` — Geier's radar panorama geometry: stations, range spheres, projection
@@ -21,8 +21,8 @@ from typing import Any
 import numpy as np
 
 from ..adjust import Adjustment
+from ..block import Block
 from ..errors import InputError
-from ..model import Block
 from .state import BlockState
 
 #: default seed of the demos (deterministic scenes)
@@ -68,8 +68,8 @@ def block_demo(
     rng: np.random.Generator | int = SEED, strips: int = 3, images_per_strip: int = 8
 ) -> Demo:
     """A simulated block with blunders and systematic image errors."""
-    from ..block.simulate import simulate_block
-    from ..block.systematic import typical
+    from ..simulate import simulate_block
+    from ..simulate.systematic import typical
 
     sim = simulate_block(
         strips,

@@ -17,8 +17,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..adjust import Adjustment
+from ..block import Block
 from ..errors import InputError
-from ..model import Block
 from .adjuster import Adjuster, apply_parameters, default_adjuster, image_normalized_residuals
 
 F64 = NDArray[np.float64]

@@ -11,9 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..block.simulate import SimulatedBlock, simulate_block
-from ..model import TIE
+from ..block import TIE
 from ..plot.style import subplots
+from ..simulate import SimulatedBlock, simulate_block
 
 METHODS = {
     "independent models (7 p.)": "rigorous",
@@ -63,7 +63,7 @@ def block_state(
     side_overlap : float
         0.2 or 0.6.
     control : str
-        Control layout of :func:`~orientviz.block.simulate.simulate_block`.
+        Control layout of :func:`~orientviz.simulate.simulate_block`.
     spacing : int
         Control (and chain) spacing in bases.
     method : {"rigorous", "pat-m", "polynomial", "bundle"}
@@ -81,17 +81,17 @@ def block_state(
     )  # fmt: skip
     t = time.perf_counter()
     if method in ("rigorous", "pat-m"):
-        from ..block.models import independent_models
+        from ..stereo_models import independent_models
 
         res = independent_models(sim.block, method=method)
-        xyz = res.extra["xyz"]
+        xyz = res.points
     elif method == "polynomial":
-        from ..block.polynomial import polynomial_adjust
+        from ..polynomial import polynomial_adjust
 
         res = polynomial_adjust(sim.block, degree_xy=3, degree_z=3)
-        xyz = res.extra["xyz"]
+        xyz = res.points
     elif method == "bundle":
-        from ..block.bundle import bundle_adjust
+        from ..bundle import bundle_adjust
 
         res = bundle_adjust(sim.block, precision=False)
         xyz = res.x[res.blocks["points"]].reshape(-1, 3)

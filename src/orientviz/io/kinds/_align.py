@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...block import CONTROL, Block
 from ...errors import InputError
-from ...model import CONTROL, Block
 from ...rotation import opk_from_matrix
 
 #: The frames differ when the control misfits the approximations by more than this share

@@ -1,7 +1,7 @@
 """Tables shared by the frame-camera kinds (``block``, ``resection``, ``intersection``).
 
 The four tables ``cameras``, ``images``, ``points`` and ``observations`` (schema
-``frame.json``) are read into a :class:`~orientviz.model.Block` in internal units
+``frame.json``) are read into a :class:`~orientviz.block.Block` in internal units
 (object space m, image mm, angles rad) and written back in the file's units.
 
 Fields (file units in brackets; see ``orientviz/io/schema/frame.json``):
@@ -23,8 +23,8 @@ from typing import Any
 
 import numpy as np
 
+from ...block import CONTROL, ROLES, Block, Cameras, Images, Observations, Points
 from ...errors import InputError
-from ...model import CONTROL, ROLES, Block, Cameras, Images, Observations, Points
 from ..problem import Units
 from ..tables import REQUIRED, Table, json_numbers, read_table, write_table
 

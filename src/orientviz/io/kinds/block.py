@@ -11,21 +11,20 @@ Options: ``control`` (``"fixed"``/``"weighted"``), ``check_points``
 are intersected afterwards; ``"rays"``: their rays are adjusted like tie points and only
 their given coordinates are withheld, as DBAT does), ``max_iter``, ``tol``, ``critical``,
 ``image_sigma``; for ``--method models`` ``model_method`` (``"rigorous"``/``"pat-m"``),
-for ``--method polynomial`` ``degree_xy``, ``degree_z``. Methods: ``bundle`` (default), ``models``, ``polynomial`` (the latter
-two when :mod:`orientviz.block.models` / :mod:`orientviz.block.polynomial` exist).
+for ``--method polynomial`` ``degree_xy``, ``degree_z``. Methods: ``bundle`` (default), ``models``, ``polynomial``
+(:mod:`orientviz.stereo_models`, :mod:`orientviz.polynomial`).
 """
 
 from __future__ import annotations
 
-import importlib
 import inspect
 from typing import Any
 
 import numpy as np
 
 from ...adjust.result import W_CRITICAL
+from ...block import CHECK, CONTROL, ROLES, TIE, Block
 from ...errors import InputError
-from ...model import CHECK, CONTROL, ROLES, TIE, Block
 from ...report import Solution
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
@@ -78,14 +77,14 @@ def approximate(block: Block) -> Block:
     """Fill in missing approximate values before an adjustment.
 
     No image approximations at all: everything is computed from scratch by
-    :func:`orientviz.block.approximate.approximate_values` (relative orientation of a
+    :func:`orientviz.block.approximate_values` (relative orientation of a
     seed pair, resections, intersections, a similarity onto the control). Otherwise the
     given orientations are first carried into the control's frame when they are in
     another one (:func:`._align.align_to_control`, a 7-parameter similarity), and tie/check
     points without coordinates are intersected from them.
     """
     if not np.all(np.isfinite(block.images.X0)) or not np.all(np.isfinite(block.images.angles)):
-        from ...block.approximate import approximate_values
+        from ...block import approximate_values
 
         return approximate_values(block)
     from ._align import align_to_control
@@ -160,31 +159,19 @@ def solve(problem: Problem, method: str | None) -> Solution:
     keys = ("control", "max_iter", "tol", "degree_xy", "degree_z")
     opts = {k: v for k, v in problem.options.items() if k in keys}
     if method == "bundle":
-        from ...block.bundle import bundle_adjust
+        from ...bundle import bundle_adjust
 
         rays = check_mode(problem) == "rays"
         adj = _call(bundle_adjust, with_check_rays(block) if rays else block, opts)
     elif method == "models":
-        from ...block.models import independent_models
+        from ...stereo_models import independent_models
 
         opts["method"] = problem.options.get("model_method", "rigorous")
         adj = _call(independent_models, block, opts, precision=True)
         return solution_from_models(problem, block, adj)
     else:
-        module = f"orientviz.block.{method}"
-        try:
-            mod = importlib.import_module(module)
-        except ModuleNotFoundError as exc:
-            if exc.name and exc.name.startswith("orientviz"):
-                raise InputError(
-                    f"--method {method}: not yet available in this version of orientviz "
-                    "(use --method bundle)",
-                    problem.source,
-                ) from None
-            raise
-        func = getattr(mod, f"{method}_adjust", None) or getattr(mod, "adjust", None)
-        if func is None:
-            raise InputError(f"--method {method}: not yet available (no solver in {module})")
+        from ...polynomial import polynomial_adjust as func
+
         adj = _call(func, block, opts)
         if "exterior" not in adj.blocks:
             return solution_from_points(problem, block, adj, method, func)
@@ -253,7 +240,7 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
     """Turn a block adjustment (blocks ``exterior`` (m, 6) and ``points`` (p, 3)) into a report."""
     m, p = block.n_images, block.n_points
     if adj.obs_labels is None or len(adj.obs_labels) != adj.n_observations:
-        slices = getattr(adj, "obs_slices", None) or adj.extra.get("obs_slices")  # typed or extra
+        slices = adj.obs_slices
         adj.obs_labels = _labels(block, adj.n_observations, slices)
     std = adj.std()
     ext = adj.x[adj.blocks["exterior"]].reshape(m, 6)
@@ -316,13 +303,13 @@ def check_note(problem: Problem, block: Block, xyz: np.ndarray) -> list[str]:
 def solution_from_points(problem: Problem, block: Block, adj, method: str, func) -> Solution:
     """Report of a method that estimates points only (polynomial strip/block adjustment).
 
-    Points come from ``extra["xyz"]`` (all block points), their σ from the ``"points"``
+    Points come from ``points`` (all block points), their σ from the ``"points"``
     block where the method computed cofactors (else not available); no image orientation.
     """
     p = block.n_points
     xyz_sigma = np.full((p, 3), np.nan)
-    if "points" in adj.blocks and "point_index" in adj.extra:
-        idx = np.asarray(adj.extra["point_index"], dtype=np.int64)
+    if "points" in adj.blocks and getattr(adj, "point_index", None) is not None:
+        idx = np.asarray(adj.point_index, dtype=np.int64)
         xyz_sigma[idx] = adj.std()[adj.blocks["points"]].reshape(-1, 3)[: idx.size]
     passes = inspect.signature(func).parameters.get("iterations")
     return Solution(
@@ -332,7 +319,7 @@ def solution_from_points(problem: Problem, block: Block, adj, method: str, func)
         units=problem.units,
         sequence=block.sequence,
         point_ids=list(block.points.ids),
-        xyz=np.asarray(adj.extra["xyz"], dtype=float),
+        xyz=np.asarray(adj.points, dtype=float),
         xyz_sigma=xyz_sigma,
         point_roles=[ROLES[r] for r in block.points.role],
         observation_quantity="length",
@@ -341,7 +328,7 @@ def solution_from_points(problem: Problem, block: Block, adj, method: str, func)
             f"{method}: residuals are strip/model coordinates in the object frame; "
             "image orientations are not estimated by this method"
         ]
-        + check_note(problem, block, np.asarray(adj.extra["xyz"], dtype=float)),
+        + check_note(problem, block, np.asarray(adj.points, dtype=float)),
         iterations=(
             int(passes.default)
             if adj.iterations == 0 and passes is not None and isinstance(passes.default, int)
@@ -359,36 +346,36 @@ def solution_from_models(problem: Problem, block: Block, adj) -> Solution:
     m, p = block.n_images, block.n_points
     std = adj.std()
     tie_std = std[adj.blocks["points"]].reshape(-1, 3)
-    pidx = np.asarray(adj.extra["point_index"], dtype=np.int64)
-    cidx = np.asarray(adj.extra["centre_image"], dtype=np.int64)
+    pidx = np.asarray(adj.point_index, dtype=np.int64)
+    cidx = np.asarray(adj.centre_image, dtype=np.int64)
     xyz_sigma = np.full((p, 3), np.nan)
     xyz_sigma[pidx] = tie_std[: pidx.size]
     X0_sigma = np.full((m, 3), np.nan)
     X0_sigma[cidx] = tie_std[pidx.size : pidx.size + cidx.size]
     sol = Solution(
         kind="block",
-        method=f"models ({adj.extra.get('method', 'rigorous')})",
+        method=f"models ({adj.method})",
         adjustment=adj,
         units=problem.units,
         sequence=block.sequence,
         image_ids=list(block.images.ids),
-        X0=np.asarray(adj.extra["centres"], dtype=float),
+        X0=np.asarray(adj.centres, dtype=float),
         angles=np.full((m, 3), np.nan),
         X0_sigma=X0_sigma,
         angles_sigma=np.full((m, 3), np.nan),
         point_ids=list(block.points.ids),
-        xyz=np.asarray(adj.extra["xyz"], dtype=float),
+        xyz=np.asarray(adj.points, dtype=float),
         xyz_sigma=xyz_sigma,
         point_roles=[ROLES[r] for r in block.points.role],
         observation_quantity="length",
         critical=float(problem.options.get("critical", W_CRITICAL)),
         notes=[
-            f"independent models: {adj.extra['models'].n_models} models; residuals are model "
+            f"independent models: {adj.models.n_models} models; residuals are model "
             "coordinates in the object frame; image attitudes are not estimated (null)",
-            f"r.m.s. model residual: XY {adj.extra['rms_xy_m'] / problem.units.m_per_length:.4g}, "
-            f"Z {adj.extra['rms_z_m'] / problem.units.m_per_length:.4g} {problem.units.length}",
+            f"r.m.s. model residual: XY {adj.rms_xy_m / problem.units.m_per_length:.4g}, "
+            f"Z {adj.rms_z_m / problem.units.m_per_length:.4g} {problem.units.length}",
         ]
-        + check_note(problem, block, np.asarray(adj.extra["xyz"], dtype=float)),
+        + check_note(problem, block, np.asarray(adj.points, dtype=float)),
     )
     return sol
 

@@ -19,8 +19,8 @@ from typing import Any
 import numpy as np
 
 from ...adjust.result import W_CRITICAL, Adjustment, Iteration
+from ...block import CHECK, ROLES, Block
 from ...errors import NotDeterminableError
-from ...model import CHECK, ROLES, Block
 from ...report import Solution
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind

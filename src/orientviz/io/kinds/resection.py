@@ -17,8 +17,8 @@ from typing import Any
 
 import numpy as np
 
+from ...block import CONTROL, TIE, Block
 from ...errors import InputError
-from ...model import CONTROL, TIE, Block
 from ...report import Parameter, Solution
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind

@@ -1,0 +1,285 @@
+"""The bundle problem: its parts, its linearisation and its step.
+
+:class:`BundleProblem` holds what is constant during a bundle adjustment, composed of
+the parts in :mod:`orientviz.bundle._parts`. For an iterate
+(:class:`~orientviz.bundle._state.BundleState`) it computes the weighted misclosures and
+Jacobians (:meth:`BundleProblem.residuals`), vᵀPv (:meth:`~BundleProblem.cost`), the
+normal equations with the points eliminated by the Schur complement
+(:meth:`~BundleProblem.normal` → :class:`~orientviz.bundle._normal.NormalEquations`),
+the step (:meth:`~BundleProblem.solve`, bordered by additional parameters and auxiliary
+offsets) and the next iterate (:meth:`~BundleProblem.apply`). The iteration itself is
+the engine's (:func:`orientviz.adjust.engine.iterate`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..block import Block
+from ._ap_normal import ap_normal, point_ap_term
+from ._auxiliary import BundleAuxiliary, auxiliary_rows
+from ._border import solve_border
+from ._checks import PointSetup
+from ._kernel import collinearity_block, project_block
+from ._normal import NormalEquations
+from ._parts import (
+    BorderSolver,
+    additional_block,
+    exterior_block,
+    image_observations,
+    interior_orientation,
+    point_block,
+    with_var_rays,
+)
+from ._reduced import ReducedStructure, assemble_blocks, factor_reduced, inv3
+from ._state import BundleState, wrap
+
+F64 = NDArray[np.float64]
+EXTERIOR_NAMES = ("X0", "Y0", "Z0", "omega", "phi", "kappa")
+
+
+class BundleProblem:
+    """One bundle adjustment, composed of small parts (constant over the iterations).
+
+    Attributes
+    ----------
+    block : Block
+        The block (approximate values, observations).
+    setup : PointSetup
+        How each point enters (fixed, unknown, weighted).
+    obs : ImageObservations
+        The rays that enter, in point order.
+    interior : InteriorOrientation
+        c, x0, y0 per image (mm).
+    exterior : ExteriorBlock
+        Observed projection centres/attitudes (weights, values).
+    points : PointBlock
+        Point unknowns and their coordinate pseudo-observations.
+    ap : AdditionalBlock
+        Self-calibration parameters (empty: ``q == 0``).
+    aux : BundleAuxiliary or None
+        GNSS / statoscope / APR rows and their offsets/drifts.
+    reduced : ReducedStructure
+        Structure, ordering and solver of the reduced camera system.
+    border : BorderSolver
+        What the border's solve remembers between iterations.
+    n_eq, n_unknowns, redundancy : int
+        Counts of equations (observations and pseudo-observations) and unknowns.
+
+    The iterate is a :class:`~orientviz.bundle._state.BundleState`; the methods take it
+    as an argument: :meth:`residuals`, :meth:`cost`, :meth:`normal` (→
+    :class:`NormalEquations`), :meth:`solve`, :meth:`apply`.
+    """
+
+    def __init__(
+        self,
+        block: Block,
+        setup: PointSetup,
+        *,
+        additional=None,
+        ap_group=None,
+        ap_sigma=None,
+        solver: str = "banded",
+        auxiliary: list | None = None,
+    ) -> None:
+        self.block = block
+        self.setup = setup
+        self.points = point_block(block, setup)
+        obs = image_observations(block, setup, self.points.column)
+        self.reduced = ReducedStructure(
+            obs.image,
+            obs.column,
+            block.n_images,
+            self.points.n,
+            solver=solver,
+            positions=block.images.X0 if solver == "banded" else None,
+        )
+        self.obs = with_var_rays(obs, self.reduced)
+        self.interior = interior_orientation(block)
+        self.exterior = exterior_block(block)
+        self.ap = additional_block(
+            block, self.obs, self.points, self.reduced, additional, ap_group, ap_sigma
+        )
+        self.border = BorderSolver()
+        #: per (point, group) pairs of rays for the precision with parameters (a cache)
+        self.ray_groups = None
+        self.aux: BundleAuxiliary | None = None
+        if auxiliary:
+            self.aux = BundleAuxiliary(auxiliary_rows(auxiliary, block), self.points.column)
+        n_pseudo = int(
+            (self.points.prior_w > 0).sum()
+            + (self.exterior.X0_w > 0).sum()
+            + (self.exterior.angles_w > 0).sum()
+        )
+        n_pseudo += int((self.ap.w > 0).sum()) if self.q else 0
+        self.n_eq = 2 * self.obs.n + n_pseudo + (self.aux.rows.n if self.aux else 0)
+        self.n_unknowns = 6 * self.m + 3 * self.points.n + self.q + self.na
+        self.redundancy = self.n_eq - self.n_unknowns
+
+    @property
+    def m(self) -> int:
+        """Number of images."""
+        return self.block.n_images
+
+    @property
+    def q(self) -> int:
+        """Number of additional parameters."""
+        return self.ap.q
+
+    @property
+    def na(self) -> int:
+        """Number of auxiliary offsets/drifts."""
+        return self.aux.n_global if self.aux is not None else 0
+
+    # ----------------------------------------------------------------- model
+    def residuals(self, st: BundleState, jac: bool):
+        """Weighted misclosures l − f (n, 2)·(1/σ), with Jacobians if ``jac``."""
+        xyz = st.xyz[self.obs.point]
+        seq = self.block.sequence
+        if jac:
+            f, Je, Jp = collinearity_block(
+                st.X0,
+                st.angles,
+                self.interior.c,
+                self.interior.x0,
+                self.interior.y0,
+                self.obs.image,
+                xyz,
+                seq,
+            )
+        else:
+            f = project_block(
+                st.X0,
+                st.angles,
+                self.interior.c,
+                self.interior.x0,
+                self.interior.y0,
+                self.obs.image,
+                xyz,
+                seq,
+            )
+            Je = Jp = None
+        if self.q:
+            f = f + (self.ap.A_csr @ st.ap).reshape(-1, 2)
+        return (self.obs.xy - f) * self.obs.weight, Je, Jp
+
+    def cost(self, st: BundleState, rw: F64) -> float:
+        c = float(np.sum(rw**2))
+        d = self.points.prior_obs - st.xyz[self.points.unknown]
+        c += float(np.sum(self.points.prior_w * d**2))
+        c += float(np.sum(self.exterior.X0_w * (self.exterior.X0_obs - st.X0) ** 2))
+        c += float(np.sum(self.exterior.angles_w * wrap(self.exterior.angles_obs - st.angles) ** 2))
+        if self.q:
+            c += float(np.sum(self.ap.w * st.ap**2))
+        if self.aux:
+            c += self.aux.cost(st.X0, st.xyz, st.g)
+        return c
+
+    # ----------------------------------------------------------------- normal equations
+    def normal(
+        self, st: BundleState, rw: F64, Je: F64, Jp: F64, lam: float = 0.0
+    ) -> NormalEquations:
+        """Blocks of the normal equations and the Schur complement (see bundle._reduced)."""
+        S = self.reduced
+        sw = self.obs.weight[:, :, None]
+        Jew, Jpw = Je * sw, Jp * sw
+        # image blocks: gather the (n, 2, 6) Jacobian by image, then reduce
+        Jc = Jew[S.cam_order]
+        JcT = Jc.transpose(0, 2, 1)
+        U = np.zeros((self.m, 6, 6))
+        U[S.cam_present] = np.add.reduceat(JcT @ Jc, S.cam_starts, axis=0)
+        bc = np.zeros((self.m, 6))
+        bc[S.cam_present] = np.add.reduceat(
+            np.einsum("nki,nk->ni", Jc, rw[S.cam_order]), S.cam_starts, axis=0
+        )
+        del Jc, JcT
+        U[:, [0, 1, 2], [0, 1, 2]] += self.exterior.X0_w
+        bc[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
+        U[:, [3, 4, 5], [3, 4, 5]] += self.exterior.angles_w
+        bc[:, 3:] += self.exterior.angles_w * wrap(self.exterior.angles_obs - st.angles)
+        if self.aux:
+            self.aux.add_images(U, bc, st.X0, st.xyz, st.g)
+        vo = self.obs.var_rays
+        Jpv = Jpw[vo]
+        V = np.add.reduceat(Jpv.transpose(0, 2, 1) @ Jpv, S.pt_starts, axis=0)
+        bp = np.add.reduceat(np.einsum("nki,nk->ni", Jpv, rw[vo]), S.pt_starts, axis=0)
+        i3 = [0, 1, 2]
+        V[:, i3, i3] += self.points.prior_w
+        bp += self.points.prior_w * (self.points.prior_obs - st.xyz[self.points.unknown])
+        if self.aux:
+            self.aux.add_points(V, bp, st.X0, st.xyz, st.g)
+        diagU = U[:, range(6), range(6)].copy()
+        diagV = V[:, i3, i3].copy()
+        if lam > 0:
+            U[:, range(6), range(6)] *= 1.0 + lam
+            V[:, i3, i3] *= 1.0 + lam
+        Vinv = inv3(V)
+        W = np.zeros((Je.shape[0], 6, 3))
+        W[vo] = Jew[vo].transpose(0, 2, 1) @ Jpv
+        T = np.zeros_like(W)
+        T[vo] = W[vo] @ Vinv[self.obs.column[vo]]
+        blocks = assemble_blocks(S, U, T, W)
+        Tb = np.zeros((Je.shape[0], 6))
+        Tb[vo] = np.einsum("nij,nj->ni", T[vo], bp[self.obs.column[vo]])
+        red = bc.copy()
+        red[S.cam_present] -= np.add.reduceat(Tb[S.cam_order], S.cam_starts, axis=0)
+        out = NormalEquations(
+            blocks=blocks, rhs=red.reshape(-1), Vinv=Vinv, W=W, T=T, bp=bp, diagU=diagU, diagV=diagV
+        )
+        if self.q:
+            if self.border.hold:
+                out.diagF = np.ones(self.q)
+            else:
+                border = self.border.border if self.border.reuse else None
+                out.ap = ap_normal(self, st, rw, Jew, Jpw, T, Vinv, bp, lam, border)
+                out.ap.reused = border is not None
+                out.diagF = np.diag(out.ap.F0).copy()
+                self.border.border = (out.ap.E_border, out.ap.F0)
+        if self.aux:
+            self.aux.normal(self, st, out, lam)
+        return out
+
+    def solve(self, ne: NormalEquations, names: list[str]):
+        """Corrections (dc (m, 6), dp (p_var, 3), da (q,)) and the factor of S."""
+        fac = factor_reduced(self.reduced, ne.blocks, names)
+        if self.aux:
+            return self.aux.solve(self, fac, ne)
+        if self.q:
+            dc, da = solve_border(self, ne, fac)
+        else:
+            dc = fac.solve(ne.rhs)
+            da = np.zeros(0)
+        return self.back_substitute(ne, dc, da, fac)
+
+    def back_substitute(self, ne: NormalEquations, dc: F64, da: F64, fac):
+        """Back-substitution of the points; returns (dc, dp, da, fac)."""
+        dc = dc.reshape(self.m, 6)
+        S = self.reduced
+        vo = S.pt_obs
+        t = np.einsum("nji,nj->ni", ne.W[vo], dc[self.obs.image[vo]])
+        red = ne.bp - np.add.reduceat(t, S.pt_starts, axis=0)
+        if self.q and not self.border.hold:
+            red -= point_ap_term(self, ne.ap.H, da)
+        dp = np.einsum("nij,nj->ni", ne.Vinv, red)
+        return dc, dp, da, fac
+
+    def apply(self, st: BundleState, dc: F64, dp: F64, da: F64) -> BundleState:
+        xyz = st.xyz.copy()
+        xyz[self.points.unknown] += dp
+        if self.aux:  # da: the additional parameters, then the auxiliary offsets/drifts
+            q = self.q
+            return BundleState(
+                st.X0 + dc[:, :3], st.angles + dc[:, 3:], xyz, st.ap + da[:q], st.g + da[q:]
+            )
+        return BundleState(st.X0 + dc[:, :3], st.angles + dc[:, 3:], xyz, st.ap + da, st.g)
+
+    def names(self) -> list[str]:
+        b = self.block
+        out = [f"{i}.{n}" for i in b.images.ids for n in EXTERIOR_NAMES]
+        out += [f"{i}.{c}" for i in b.points.ids for c in ("X", "Y", "Z")]
+        return out + (list(self.ap.names) if self.q else [])
+
+    def flat(self, st: BundleState) -> F64:
+        """The parameter vector of ``st`` (exterior, points, additional parameters)."""
+        return st.flat()

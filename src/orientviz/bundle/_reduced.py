@@ -1,0 +1,408 @@
+"""Sparse normal equations of block problems: Schur complement and the reduced system.
+
+A bundle block has three kinds of unknowns: 6 exterior-orientation elements per image
+(X0, Y0, Z0 in m, ω, φ, κ in rad), 3 coordinates per object point (m) and, optionally,
+``q`` group parameters (additional parameters of self-calibration). The normal
+equations ::
+
+    [ U   W   E  ] [dc]   [bc]
+    [ Wᵀ  V   Gᵀ ] [dp] = [bp]        U: 6×6 blocks (images), V: 3×3 blocks (points)
+    [ Eᵀ  G   F  ] [da]   [ba]
+
+are never formed as a whole. The point blocks V_j are inverted (vectorised 3×3
+inverses) and eliminated — the *Schur complement* — which leaves the reduced camera
+system ::
+
+    S dc = bc − W V⁻¹ bp,     S = U − W V⁻¹ Wᵀ,
+
+a sparse matrix of 6×6 blocks: block (i, k) is non-zero only if images i and k see a
+common point. The group parameters border it (``E``, ``F``) and are eliminated with a
+few extra solves. After solving, the points follow by back-substitution
+dp_j = V_j⁻¹ (bp_j − Σ W_ajᵀ dc_a − Σ G_ajᵀ da).
+
+Solvers of the reduced system (:data:`SOLVERS`), measured in
+``benchmarks/bench_bundle.py --reduced`` on the bench's 200- and 2 100-image blocks:
+
+* ``"banded"`` (**default**) — Ackermann's bandwidth minimisation: the images are
+  renumbered so that S becomes a narrow band, which is factored by LAPACK's banded
+  Cholesky (``scipy.linalg.cholesky_banded``, cost ∝ n·b², b the half-bandwidth). The
+  numbering is the better (smaller measured bandwidth) of reverse Cuthill-McKee and a
+  numbering *across* the strips from the projection centres
+  (:func:`geometric_orderings`). On the bench's 30 × 70 block: bandwidth 61 images
+  across the strips against 118 for RCM; factor + solve 0.08 s against 0.22 s (RCM),
+  0.35 s (SuperLU) and 16.6 s (dense); on the 10 × 20 block 0.002 s against 0.003,
+  0.010 and 0.021 s (``benchmarks/README.md``).
+* ``"splu"`` — SuperLU with a fill-reducing column ordering (``permc_spec``, default
+  MMD_AT_PLUS_A), symmetric mode.
+* ``"dense"`` — dense Cholesky, O(n³): fine for a few hundred images.
+
+Singular systems never surface as ``LinAlgError``: :func:`raise_not_determinable`
+names the parameters (null-space analysis for small systems, the failing pivot for
+large ones).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse as sp
+from numpy.typing import NDArray
+from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+from ..adjust.rank import describe_defect, null_space_of_normal
+from ..errors import NotDeterminableError
+
+F64 = NDArray[np.float64]
+I64 = NDArray[np.int64]
+
+#: Names of the reduced-system solvers; the first is the default.
+SOLVERS: tuple[str, ...] = ("banded", "splu", "dense")
+#: Reduced systems up to this many unknowns are diagnosed with a dense null space.
+DENSE_DIAGNOSIS_LIMIT: int = 3000
+
+
+def inv3(A: F64) -> F64:
+    """Vectorised inverse of symmetric 3×3 matrices (n, 3, 3) by the adjugate.
+
+    Raises ``ZeroDivisionError``-free: singular blocks give inf/NaN that callers check.
+    """
+    a, b, c = A[:, 0, 0], A[:, 0, 1], A[:, 0, 2]
+    d, e, f = A[:, 1, 1], A[:, 1, 2], A[:, 2, 2]
+    c00 = d * f - e * e
+    c01 = c * e - b * f
+    c02 = b * e - c * d
+    det = a * c00 + b * c01 + c * c02
+    out = np.empty_like(A)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = 1.0 / det
+        out[:, 0, 0] = c00 * r
+        out[:, 0, 1] = out[:, 1, 0] = c01 * r
+        out[:, 0, 2] = out[:, 2, 0] = c02 * r
+        out[:, 1, 1] = (a * f - c * c) * r
+        out[:, 1, 2] = out[:, 2, 1] = (b * c - a * e) * r
+        out[:, 2, 2] = (a * d - b * b) * r
+    return out
+
+
+def geometric_orderings(X0: F64, pairs: tuple[I64, I64] | None = None) -> list[I64]:
+    """Candidate image orders from projection centres (m, 3) in m: numbering across strips.
+
+    Ackermann's rule for a narrow band: number the images along the *shorter* way
+    through the block. The centres are projected on their two principal horizontal
+    axes; along one axis the images are grouped into columns wherever consecutive
+    coordinates jump by more than half the typical image spacing (median
+    nearest-neighbour distance), and numbered column by column, sorted along the other
+    axis inside a column. Both axes are returned.
+    """
+    xy = np.asarray(X0, dtype=float)[:, :2]
+    if xy.shape[0] < 3:
+        return []
+    c = xy - xy.mean(axis=0)
+    _, _, Vt = np.linalg.svd(c, full_matrices=False)
+    if pairs is not None:  # nearest neighbour among the images sharing points
+        i, k = pairs
+        off = i != k
+        dist = np.hypot(*(xy[i[off]] - xy[k[off]]).T)
+        nn = np.full(xy.shape[0], np.inf)
+        np.minimum.at(nn, i[off], dist)
+        np.minimum.at(nn, k[off], dist)
+        base = float(np.median(nn[np.isfinite(nn)])) if np.isfinite(nn).any() else 0.0
+    else:
+        from scipy.spatial import cKDTree
+
+        d, _ = cKDTree(xy).query(xy, k=2)
+        base = float(np.median(d[:, 1]))
+    if not base > 0:
+        return []
+    out = []
+    for ax in (0, 1):
+        a = c @ Vt[ax]
+        b = c @ Vt[1 - ax]
+        o = np.argsort(a, kind="stable")
+        col = np.empty(a.size, np.int64)
+        col[o] = np.cumsum(np.concatenate([[0], np.diff(a[o]) > 0.5 * base]))
+        out.append(np.lexsort((b, col)).astype(np.int64))
+    return out
+
+
+def _segments(keys: I64, n: int) -> tuple[I64, I64, I64]:
+    """Stable order by ``keys`` and the start of each non-empty segment, plus its key."""
+    order = np.argsort(keys, kind="stable")
+    counts = np.bincount(keys, minlength=n)
+    present = np.flatnonzero(counts)
+    starts = (np.cumsum(counts) - counts)[present]
+    return order, starts, present
+
+
+@dataclass
+class ReducedStructure:
+    """Everything about a block problem's sparsity that stays fixed over the iterations.
+
+    Parameters
+    ----------
+    obs_cam : ndarray of int, shape (n,)
+        Image (camera-block) index of each observation.
+    obs_pt : ndarray of int, shape (n,)
+        Index of the point unknown of each observation, −1 if the point is fixed.
+    n_cam, n_pt : int
+        Numbers of images and of point unknowns.
+    solver : {"banded", "splu", "dense"}
+        Solver of the reduced system.
+    permc_spec : str
+        SuperLU column ordering for ``"splu"``.
+    orderings : list of ndarray
+        Candidate image orders for ``"banded"`` (e.g. from :func:`geometric_orderings`);
+        the one with the smallest bandwidth among these and reverse Cuthill-McKee wins.
+    positions : ndarray, shape (m, 3), optional
+        Projection centres (m): adds the two :func:`geometric_orderings` as candidates.
+    """
+
+    obs_cam: I64
+    obs_pt: I64
+    n_cam: int
+    n_pt: int
+    solver: str = "banded"
+    permc_spec: str = "MMD_AT_PLUS_A"
+    orderings: list = field(default_factory=list)
+    positions: F64 | None = None
+    info: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.solver not in SOLVERS:
+            raise ValueError(
+                f"expected a reduced-system solver out of {SOLVERS}, got {self.solver!r}"
+            )
+        oc, op = self.obs_cam, self.obs_pt
+        self.cam_order, self.cam_starts, self.cam_present = _segments(oc, self.n_cam)
+        var = np.flatnonzero(op >= 0)
+        self.var_obs = var
+        o, s, present = _segments(op[var], self.n_pt)
+        if present.size != self.n_pt:
+            missing = np.setdiff1d(np.arange(self.n_pt), present)
+            raise ValueError(f"point unknowns without observations: {missing[:5].tolist()}")
+        self.pt_obs = var[o]  # observation indices sorted by point
+        self.pt_starts = s
+        k = np.diff(np.append(s, self.pt_obs.size))
+        # all ordered pairs (a, b) of observations of the same point
+        g = np.repeat(np.arange(self.n_pt), k)  # point of each sorted obs
+        rep = k[g]
+        A = np.repeat(np.arange(self.pt_obs.size), rep)
+        off = np.arange(A.size) - np.repeat(np.cumsum(rep) - rep, rep)
+        B = s[g[A]] + off
+        a, b = self.pt_obs[A], self.pt_obs[B]
+        keep = oc[a] <= oc[b]
+        self.pair_a, self.pair_b = a[keep], b[keep]
+        self.pair_pt = op[self.pair_a]
+        self.all_pairs = (a, b)  # all ordered pairs, grouped by a (for precision, APs)
+        self.all_pairs_starts = np.cumsum(rep) - rep  # start of each a-group, pt_obs order
+        # unique 6×6 blocks (i ≤ k), diagonal blocks always present
+        m = self.n_cam
+        keys = np.concatenate([oc[self.pair_a] * m + oc[self.pair_b], np.arange(m) * (m + 1)])
+        ukeys, inv = np.unique(keys, return_inverse=True)
+        self.block_i, self.block_k = ukeys // m, ukeys % m
+        self.n_blocks = ukeys.size
+        pair_block = inv[: self.pair_a.size]
+        self.diag_block = inv[self.pair_a.size :]
+        order, self.pair_starts, self.pair_present = _segments(pair_block, self.n_blocks)
+        # store the pairs sorted by block so that their contributions are born sorted
+        self.pair_a, self.pair_b, self.pair_pt = (
+            self.pair_a[order],
+            self.pair_b[order],
+            self.pair_pt[order],
+        )
+        self._setup_solver()
+
+    # ------------------------------------------------------------ layout of S
+    def image_graph(self) -> sp.csr_matrix:
+        """Adjacency (m, m) of images that share an unknown point (plus the diagonal)."""
+        m = self.n_cam
+        g = sp.coo_matrix((np.ones(self.n_blocks), (self.block_i, self.block_k)), shape=(m, m))
+        return (g + g.T).tocsr()
+
+    def _scalar_entries(self, perm_pos: I64) -> tuple[I64, I64, I64]:
+        """Scalar (row, col) of every entry of every block, block-major, and its block."""
+        r6 = np.arange(6)
+        bi, bk = perm_pos[self.block_i], perm_pos[self.block_k]
+        rows = (6 * bi)[:, None, None] + r6[None, :, None] + 0 * r6[None, None, :]
+        cols = (6 * bk)[:, None, None] + 0 * r6[None, :, None] + r6[None, None, :]
+        return rows.reshape(-1), cols.reshape(-1), np.repeat(np.arange(self.n_blocks), 36)
+
+    def _setup_solver(self) -> None:
+        m, n = self.n_cam, 6 * self.n_cam
+        if self.solver == "banded":
+            if self.positions is not None:
+                self.orderings = list(self.orderings) + geometric_orderings(
+                    self.positions, (self.block_i, self.block_k)
+                )
+            rcm = reverse_cuthill_mckee(self.image_graph(), symmetric_mode=True)
+            best = None
+            for name, perm in [("rcm", rcm)] + [
+                (f"geometric{i}", o) for i, o in enumerate(self.orderings)
+            ]:
+                perm = np.asarray(perm, np.int64)
+                if perm.shape != (m,) or np.unique(perm).size != m:
+                    continue
+                pos = np.empty(m, np.int64)
+                pos[perm] = np.arange(m)
+                bw = int(np.max(np.abs(pos[self.block_i] - pos[self.block_k]), initial=0))
+                self.info[f"bandwidth_{name}"] = bw
+                if best is None or bw < best[0]:
+                    best = (bw, name, perm, pos)
+            bw_img, name, perm, pos = best
+            self.perm_img, self.pos_img = perm, pos
+            self.info["ordering"] = name
+            self.kd = 6 * bw_img + 5
+            rows, cols, _ = self._scalar_entries(pos)
+            flat = np.arange(rows.size)
+            lower = rows >= cols  # block entries that fall into the lower band
+            self.band_src = flat[lower]
+            self.band_dst = (rows[lower] - cols[lower]) * n + cols[lower]
+            upper = (rows < cols) & (self.block_i != self.block_k).repeat(36)
+            self.band_src_t = flat[upper]  # mirrored into the lower band
+            self.band_dst_t = (cols[upper] - rows[upper]) * n + rows[upper]
+            self.scalar_perm = (6 * perm[:, None] + np.arange(6)).reshape(-1)
+            self.info.update(bandwidth_images=bw_img, kd=self.kd)
+        elif self.solver == "splu":
+            ident = np.arange(m)
+            rows, cols, _ = self._scalar_entries(ident)
+            off = np.repeat(self.block_i != self.block_k, 36)
+            r = np.concatenate([rows, cols[off]])
+            c = np.concatenate([cols, rows[off]])
+            src = np.concatenate([np.arange(rows.size), np.flatnonzero(off)])
+            A = sp.csc_matrix((np.arange(1, r.size + 1, dtype=float), (r, c)), shape=(n, n))
+            self.csc_indices, self.csc_indptr = A.indices, A.indptr
+            self.csc_src = src[A.data.astype(np.int64) - 1]
+            self.info.update(nnz=int(r.size))
+        else:
+            rows, cols, _ = self._scalar_entries(np.arange(m))
+            self.dense_rc = (rows, cols)
+
+    @property
+    def n_reduced(self) -> int:
+        return 6 * self.n_cam
+
+
+@dataclass
+class Factor:
+    """A factorisation of the reduced matrix S with ``solve(rhs)`` for (n,) or (n, k)."""
+
+    structure: ReducedStructure
+    kind: str
+    data: object
+
+    def solve(self, rhs: F64) -> F64:
+        st = self.structure
+        if self.kind == "banded":
+            p = st.scalar_perm
+            z = scipy.linalg.cho_solve_banded((self.data, True), rhs[p], check_finite=False)
+            out = np.empty_like(z)
+            out[p] = z
+            return out
+        if self.kind == "splu":
+            return self.data.solve(rhs)
+        return scipy.linalg.cho_solve((self.data, True), rhs, check_finite=False)
+
+
+def assemble_blocks(st: ReducedStructure, U: F64, T: F64, W: F64, chunk: int = 65536) -> F64:
+    """Sum the 6×6 blocks of S = U − Σ W_a V_j⁻¹ W_bᵀ over pairs of rays of a point.
+
+    Parameters
+    ----------
+    U : ndarray, shape (m, 6, 6)
+        Diagonal image blocks.
+    T, W : ndarray, shape (n, 6, 3)
+        T_a = W_a V_j⁻¹ and W_a = J_eᵀ P J_p per observation (zero for fixed points).
+    chunk : int
+        Pairs per batch (bounds the memory of the (pairs, 6, 6) products).
+    """
+    blocks = np.zeros((st.n_blocks, 6, 6))
+    blocks[st.diag_block] = U
+    n = st.pair_a.size
+    seg = np.append(st.pair_starts, n)
+    s0 = 0
+    while s0 < len(st.pair_starts):
+        # whole segments (blocks) per batch: each block is reduced in one piece
+        s1 = int(np.searchsorted(seg, seg[s0] + chunk, side="right")) - 1
+        s1 = max(s1, s0 + 1)
+        a0, a1 = seg[s0], seg[s1]
+        sl = slice(a0, a1)
+        c = T[st.pair_a[sl]] @ W[st.pair_b[sl]].transpose(0, 2, 1)
+        blocks[st.pair_present[s0:s1]] -= np.add.reduceat(c, st.pair_starts[s0:s1] - a0, axis=0)
+        s0 = s1
+    return blocks
+
+
+def factor_reduced(st: ReducedStructure, blocks: F64, names: list[str] | None = None) -> Factor:
+    """Factor S given its 6×6 blocks; a singular S raises :class:`NotDeterminableError`."""
+    n = st.n_reduced
+    flat = blocks.reshape(-1)
+    try:
+        if st.solver == "banded":
+            ab = np.zeros((st.kd + 1) * n)
+            ab[st.band_dst] = flat[st.band_src]
+            ab[st.band_dst_t] = flat[st.band_src_t]
+            c = scipy.linalg.cholesky_banded(
+                ab.reshape(st.kd + 1, n), lower=True, overwrite_ab=True, check_finite=False
+            )
+            return Factor(st, "banded", c)
+        if st.solver == "splu":
+            A = sp.csc_matrix((flat[st.csc_src], st.csc_indices, st.csc_indptr), shape=(n, n))
+            lu = sp.linalg.splu(
+                A,
+                permc_spec=st.permc_spec,
+                diag_pivot_thresh=0.0,
+                options={"SymmetricMode": True},
+            )
+            if not np.all(np.abs(lu.U.diagonal()) > 1e-12 * np.abs(A.diagonal()).max()):
+                raise np.linalg.LinAlgError("zero pivot")
+            return Factor(st, "splu", lu)
+        S = dense_matrix(st, blocks)
+        return Factor(st, "dense", scipy.linalg.cholesky(S, lower=True, check_finite=False))
+    except (np.linalg.LinAlgError, scipy.linalg.LinAlgError, RuntimeError, ValueError) as exc:
+        raise_not_determinable(st, blocks, names, str(exc))
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+def dense_matrix(st: ReducedStructure, blocks: F64) -> F64:
+    """The reduced matrix S as a dense (6m, 6m) array (original image order)."""
+    n = st.n_reduced
+    S = np.zeros((n, n))
+    m = np.arange(st.n_cam)
+    rows, cols, _ = st._scalar_entries(m)
+    vals = blocks.reshape(-1)
+    S[rows, cols] = vals
+    S[cols, rows] = vals
+    return S
+
+
+def raise_not_determinable(
+    st: ReducedStructure, blocks: F64, names: list[str] | None, detail: str = ""
+) -> None:
+    """Raise :class:`NotDeterminableError` naming the parameters of a singular S."""
+    n = st.n_reduced
+    names = names or [f"c{i}" for i in range(n)]
+    if n <= DENSE_DIAGNOSIS_LIMIT:
+        null = null_space_of_normal(dense_matrix(st, blocks))
+        if null.shape[1]:
+            involved = describe_defect(names, null)
+            raise NotDeterminableError(
+                f"{null.shape[1]} parameter combination(s) of the image orientations are not "
+                f"determinable from the observations; involved: {', '.join(involved)}",
+                parameters=involved,
+                defect=null.shape[1],
+            )
+    where = ""
+    if st.solver == "banded" and "minor" in detail:
+        digits = [int(t) for t in detail.replace("-", " ").split() if t.isdigit()]
+        if digits:
+            scalar = int(st.scalar_perm[min(digits[0] - 1, n - 1)])
+            where = f" (the elimination broke down at {names[scalar]})"
+    raise NotDeterminableError(
+        "the reduced normal equations of the image orientations are singular or "
+        f"numerically not positive definite{where}; check the datum and weakly connected "
+        "images",
+        parameters=[],
+        defect=0,
+    )

@@ -1,0 +1,271 @@
+"""Assemble the :class:`Adjustment` of a bundle adjustment; check points.
+
+Residual order (v = f − l): the image coordinates of *all* observations of the block
+(x, y per observation, mm; rays to check points included but not adjusted — their
+redundancy numbers are NaN), then the pseudo-observations of weighted control
+coordinates (m), observed projection centres (m), attitudes (rad) and additional
+parameters; ``obs_slices`` names these ranges.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import NDArray
+
+from ..block import CHECK, BlockAdjustment, check_points_of
+from ..errors import NotDeterminableError
+from ..orientation.intersection import intersect_points
+from ..rotation import matrix_from_opk
+from ._kernel import project_block
+from ._state import wrap
+
+F64 = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class RayGains:
+    """How a bias of each ray moves its own image and point (external reliability).
+
+    K = Q_(·, ray) Jᵀ P½ per image observation: a bias ∇ (mm) of the ray moves its
+    image's exterior orientation by K_e P½ ∇ and its point by K_p P½ ∇ (NaN for rays
+    not in the adjustment).
+
+    Attributes
+    ----------
+    exterior : ndarray, shape (n, 6, 2)
+        Change of X0 (m), ω φ κ (rad) per σ of the ray's x, y.
+    points : ndarray, shape (n, 3, 2)
+        Change of X, Y, Z (m) per σ of the ray's x, y.
+    """
+
+    exterior: F64
+    points: F64
+
+
+@dataclass(frozen=True)
+class ExteriorPairs:
+    """Cofactor blocks Q_cc of the image pairs that share a point (2-D tests of check rays).
+
+    Attributes
+    ----------
+    keys : ndarray of int
+        i·m + k for the pairs i ≤ k (sorted).
+    blocks : ndarray, shape (pairs, 6, 6)
+        Their 6 × 6 cofactor blocks (m², m·rad, rad²).
+    """
+
+    keys: NDArray[np.int64]
+    blocks: F64
+
+
+@dataclass(frozen=True)
+class RaySubset:
+    """A gross-error solver's round: the bundle of the block without the rejected rays.
+
+    Attributes
+    ----------
+    kept_rays : ndarray of bool, shape (n,)
+        Rays of the block that were adjusted.
+    kept_points : ndarray of int
+        Block index of each point of the adjusted sub-block.
+    redundancy : str
+        How the redundancy numbers were obtained: ``"exact"`` or ``"local"``.
+    adjustment : BundleResult
+        The bundle of the sub-block itself.
+    """
+
+    kept_rays: NDArray[np.bool_]
+    kept_points: NDArray[np.int64]
+    redundancy: str
+    adjustment: Any
+
+
+@dataclass
+class BundleResult(BlockAdjustment):
+    """What :func:`orientviz.bundle.bundle_adjust` returns.
+
+    Besides the fields of :class:`~orientviz.block.BlockAdjustment` (``exterior`` (m, 6),
+    ``points`` (p, 3), ``check_points``, ``auxiliary``) and of
+    :class:`~orientviz.adjust.result.Adjustment`:
+
+    Attributes
+    ----------
+    additional : ndarray, shape (q,)
+        Additional parameters, group-major (units of the set, e.g. µm); empty without.
+    used_obs : ndarray of bool, shape (n,)
+        Image observations that entered the adjustment (rays of check points do not).
+    solver : str
+        Solver of the reduced camera system (``"banded"``, ``"splu"``, ``"dense"``).
+    reduced_info : dict
+        Diagnostics of the reduced system (ordering, bandwidths) and, with additional
+        parameters, ``"ap_border"``: how each solve of their border went.
+    ray_gains : RayGains or None
+        With the precision: gains of each ray on its image and point.
+    exterior_pairs : ExteriorPairs or None
+        With the precision: Q_cc of the image pairs sharing a point.
+    redundancy_check : float or None
+        Σ of the redundancy numbers (equals the redundancy), with the precision.
+    precision_error : str or None
+        Why a not converged result carries no precision.
+    subset : RaySubset or None
+        For the rounds of :func:`orientviz.bundle.bundle_solver`: which rays were adjusted
+        (``points`` then holds all block points, dropped ones from their rays).
+    """
+
+    additional: F64 = field(default_factory=lambda: np.zeros(0))
+    used_obs: NDArray[np.bool_] | None = None
+    solver: str = ""
+    reduced_info: dict[str, Any] = field(default_factory=dict)
+    ray_gains: RayGains | None = None
+    exterior_pairs: ExteriorPairs | None = None
+    redundancy_check: float | None = None
+    precision_error: str | None = None
+    subset: RaySubset | None = None
+
+
+def _intersect_check_points(block, X0: F64, angles: F64, chk: NDArray[np.int64]) -> F64:
+    """Check points intersected from their own rays with the adjusted orientations (m).
+
+    Least-squares forward intersection (:func:`orientviz.orientation.intersection.intersect_points`),
+    NaN for points with fewer than two rays or parallel rays.
+    """
+    obs = block.observations
+    col = -np.ones(block.n_points, np.int64)
+    col[chk] = np.arange(chk.size)
+    sel = np.flatnonzero(col[obs.point] >= 0)
+    out = np.full((chk.size, 3), np.nan)
+    if sel.size == 0:
+        return out
+    cam = block.images.camera
+    res = intersect_points(
+        obs.xy[sel], obs.image[sel], col[obs.point[sel]], X0,
+        matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2], block.sequence),
+        block.cameras.c[cam], block.cameras.x0[cam], block.cameras.y0[cam],
+        sigma=obs.sigma[sel], n_points=chk.size, on_degenerate="nan",
+    )  # fmt: skip
+    return res.xyz
+
+
+def finish_result(
+    block, prob, st, rw, Je, Jp, names, history, converged, reason, precision, dof, sigma0,
+    lin=None,
+) -> BundleResult:  # fmt: skip
+    m, p, n = block.n_images, block.n_points, block.n_observations
+    setup = prob.setup
+    xyz = st.xyz.copy()
+    # check points: intersect with the adjusted orientations from their own rays
+    chk = np.flatnonzero(block.points.role == CHECK)
+    if chk.size:
+        xyz[chk] = _intersect_check_points(block, st.X0, st.angles, chk)
+    check = check_points_of(block, xyz)
+    # residuals of all image observations (v = f − l)
+    obs = block.observations
+    fa = _project_all(block, st, xyz, prob)
+    v_img = (fa - obs.xy).reshape(-1)
+    s_img = obs.sigma.reshape(-1)
+    parts_v, parts_s, slices = [v_img], [s_img], {"image": slice(0, 2 * n)}
+    pos = 2 * n
+
+    def add(name, v, s):
+        nonlocal pos
+        parts_v.append(v)
+        parts_s.append(s)
+        slices[name] = slice(pos, pos + v.size)
+        pos += v.size
+
+    w = prob.points.prior_w > 0
+    add(
+        "control",
+        (st.xyz[prob.points.unknown] - prob.points.prior_obs)[w],
+        1 / np.sqrt(prob.points.prior_w[w]),
+    )
+    w = prob.exterior.X0_w > 0
+    add("X0_obs", (st.X0 - prob.exterior.X0_obs)[w], 1 / np.sqrt(prob.exterior.X0_w[w]))
+    w = prob.exterior.angles_w > 0
+    add(
+        "angles_obs",
+        wrap(st.angles - prob.exterior.angles_obs)[w],
+        1 / np.sqrt(prob.exterior.angles_w[w]),
+    )
+    if prob.q:
+        w = prob.ap.w > 0
+        add("additional", st.ap[w], 1 / np.sqrt(prob.ap.w[w]))
+    blocks = {"exterior": slice(0, 6 * m), "points": slice(6 * m, 6 * m + 3 * p)}
+    if prob.q:
+        blocks["additional"] = slice(6 * m + 3 * p, 6 * m + 3 * p + prob.q)
+    x = np.concatenate([np.hstack([st.X0, st.angles]).ravel(), xyz.ravel(), st.ap])
+    res = BundleResult(
+        x=x,
+        names=names,
+        sigma0=sigma0,
+        redundancy=int(dof),
+        residuals=np.concatenate(parts_v),
+        sigma_obs=np.concatenate(parts_s),
+        converged=converged,
+        reason=reason,
+        history=history,
+        blocks=blocks,
+        obs_slices=slices,
+        exterior=np.hstack([st.X0, st.angles]),
+        points=xyz,
+        check_points=check,
+        additional=st.ap.copy(),
+        used_obs=setup.used_obs,
+        solver=prob.reduced.solver,
+        reduced_info=dict(prob.reduced.info, **_border_info(prob)),
+    )
+    if precision:
+        from ._precision import bundle_precision
+
+        try:
+            bundle_precision(res, prob, st, rw, Je, Jp, lin)
+        except (np.linalg.LinAlgError, scipy.linalg.LinAlgError, ValueError) as exc:
+            # only reachable from a state the iterations did not settle (diverged start
+            # values leave singular or non-finite point blocks): keep the result, say why
+            # it carries no precision instead of letting a numerical error escape
+            if converged:
+                # a converged state with a singular reduced system: the count checks
+                # before the iterations (bundle_checks) missed a geometric defect; name
+                # the parameters instead of ending in a numerical error
+                from ._reduced import raise_not_determinable
+
+                blocks = prob.normal(st, rw, Je, Jp).blocks
+                try:
+                    raise_not_determinable(prob.reduced, blocks, names[: 6 * prob.m], str(exc))
+                except NotDeterminableError as err:
+                    raise err from exc
+            res.precision_error = (
+                f"no precision at the last (not converged) state: {type(exc).__name__}: {exc}"
+            )
+    return res
+
+
+def _project_all(block, st, xyz, prob) -> F64:
+    cam = block.images.camera
+    obs = block.observations
+    f = project_block(
+        st.X0,
+        st.angles,
+        block.cameras.c[cam],
+        block.cameras.x0[cam],
+        block.cameras.y0[cam],
+        obs.image,
+        xyz[obs.point],
+        block.sequence,
+    )
+    if prob.q:
+        f[prob.obs.index] += np.einsum(
+            "nij,nj->ni",
+            prob.ap.A,
+            st.ap.reshape(prob.ap.G, prob.ap.k)[prob.ap.group[prob.obs.image]],
+        )
+    return f
+
+
+def _border_info(prob) -> dict:
+    """How the additional-parameter border was solved in each solve (formed / cg steps)."""
+    return {"ap_border": list(prob.border.log)} if prob.q else {}

@@ -1,0 +1,172 @@
+"""Self-calibrating bundle adjustment with parameter selection (a thin layer over the bundle).
+
+:func:`self_calibrate` runs :func:`orientviz.bundle.bundle_adjust` with an
+additional-parameter set (``additional=``; the bundle solves for the parameters itself)
+and adds what practice needs around it (Ackermann §26: determinability of the
+parameters; pseudo-observations against singularity):
+
+1. adjust with all parameters of the set, each protected by a pseudo-observation
+   ``p = 0 ± ap_sigma`` (µm);
+2. test every parameter (:func:`orientviz.bundle.analyse`): parameters the
+   block does not determine (held only by their pseudo-observation), parameters that are
+   insignificant in every image group, and the weaker partner of every pair correlated
+   above ``threshold``, are *suppressed* — their pseudo-observation σ is set to
+   ``suppress_sigma`` so they stay (practically) at 0;
+3. adjust again with the kept parameters.
+
+If the set is not determinable at all (singular even with the pseudo-observations, or
+without them), :class:`~orientviz.errors.NotDeterminableError` names the correlated
+pairs found in a regularised trial run.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..adjust.result import Adjustment
+from ..block import Block
+from ..errors import InputError, NotDeterminableError
+from ._additional import APAnalysis, analyse, ap_set
+from ._adjust import bundle_adjust
+
+__all__ = ["SelfCalibration", "self_calibrate"]
+
+
+@dataclass
+class SelfCalibration:
+    """Result of :func:`self_calibrate`.
+
+    Attributes
+    ----------
+    adjustment : Adjustment
+        The final adjustment (kept parameters free within ``ap_sigma``).
+    first : Adjustment
+        The adjustment with all parameters.
+    analysis : APAnalysis
+        Tests of the first adjustment (the basis of the selection).
+    final_analysis : APAnalysis
+        Tests of the final adjustment.
+    aps : AdditionalParameters
+        The parameter set.
+    kept, suppressed : list of str
+        Parameter names (of the set, without group suffix) kept free and suppressed.
+    reasons : dict of str to str
+        Why each suppressed parameter was suppressed.
+    """
+
+    adjustment: Adjustment
+    first: Adjustment
+    analysis: APAnalysis
+    final_analysis: APAnalysis
+    aps: object
+    kept: list[str]
+    suppressed: list[str]
+    reasons: dict[str, str] = field(default_factory=dict)
+
+    def summary(self) -> str:
+        """A few lines: σ0 before/after selection, kept and suppressed parameters."""
+        lines = [
+            f"{self.aps.name}: σ0 {self.first.sigma0:.3f} (all {len(self.aps.names)}) → "
+            f"{self.adjustment.sigma0:.3f} (kept {len(self.kept)}) [a-priori units]",
+            "kept: " + (", ".join(self.kept) or "none"),
+        ]
+        lines += [f"suppressed {k}: {v}" for k, v in self.reasons.items()]
+        return "\n".join(lines)
+
+
+def _base(name: str) -> str:
+    return name.split("@", 1)[0]
+
+
+def self_calibrate(
+    block: Block,
+    additional="ebner12",
+    *,
+    ap_group: ArrayLike | None = None,
+    ap_sigma: float = 10.0,
+    select: bool = True,
+    alpha: float = 0.05,
+    threshold: float = 0.9,
+    suppress_sigma: float = 1e-3,
+    **bundle_options,
+) -> SelfCalibration:
+    """Self-calibrating bundle adjustment with significance-based parameter selection.
+
+    Parameters
+    ----------
+    block : Block
+        Approximate values and observations (see :func:`bundle_adjust`).
+    additional : str or AdditionalParameters
+        ``"ebner12"``, ``"brown"``, ``"gruen44"`` or a set object.
+    ap_group : array_like of int, shape (m,), optional
+        Image → group of the additional parameters (default: one group for all images).
+    ap_sigma : float
+        σ (µm) of the pseudo-observations p = 0 of kept parameters (default 10 µm, about
+        the size of the errors expected; protects against singularity).
+    select : bool
+        Suppress insignificant and over-correlated parameters and adjust again.
+    alpha : float
+        Significance level of the parameter tests.
+    threshold : float
+        abs(ρ) above which a pair of parameters counts as over-parameterisation.
+    suppress_sigma : float
+        σ (µm) that holds a suppressed parameter at 0.
+    **bundle_options
+        Passed to :func:`bundle_adjust` (``control``, ``max_iter``, …).
+
+    Raises
+    ------
+    InputError
+        Unknown set name or a non-positive ``ap_sigma``.
+    NotDeterminableError
+        The set is not determinable by the block; the message names correlated pairs.
+    """
+    aps = ap_set(additional) if isinstance(additional, str) else additional
+    if not (np.isfinite(ap_sigma) and ap_sigma > 0):
+        raise InputError(f"ap_sigma: expected a positive σ in µm, got {ap_sigma}")
+    opts = dict(bundle_options, precision=True)
+    try:
+        first = bundle_adjust(block, additional=aps, ap_group=ap_group, ap_sigma=ap_sigma, **opts)
+    except NotDeterminableError as exc:
+        raise _explain(block, aps, ap_group, exc, opts) from None
+    an = analyse(first, alpha=alpha, threshold=threshold, ap_sigma=ap_sigma)
+    if not select:
+        return SelfCalibration(first, first, an, an, aps, list(aps.names), [], {})
+    reasons: dict[str, str] = {}
+    sig_any = {n: False for n in aps.names}
+    t_max = {n: 0.0 for n in aps.names}
+    for nm, s, t in zip(an.names, an.significant, an.t):
+        b = _base(nm)
+        sig_any[b] |= bool(s)
+        t_max[b] = max(t_max[b], float(t))
+    for nm in an.undetermined:
+        reasons.setdefault(_base(nm), "not determinable by the block (σ ≈ its pseudo-observation)")
+    for b in aps.names:
+        if not sig_any[b] and b not in reasons:
+            reasons[b] = f"not significant (largest t = {t_max[b]:.1f})"
+    for a, b, r in an.pairs:
+        weak = min((_base(a), _base(b)), key=lambda n: t_max[n])
+        if weak not in reasons and _base(a) != _base(b):
+            other = _base(b) if weak == _base(a) else _base(a)
+            reasons[weak] = f"correlated with {other} (ρ = {r:+.2f})"
+    sigma = np.array([suppress_sigma if n in reasons else ap_sigma for n in aps.names])
+    final = bundle_adjust(block, additional=aps, ap_group=ap_group, ap_sigma=sigma, **opts)
+    kept = [n for n in aps.names if n not in reasons]
+    fa = analyse(final, alpha=alpha, threshold=threshold)
+    return SelfCalibration(final, first, an, fa, aps, kept, [n for n in reasons], reasons)
+
+
+def _explain(block, aps, ap_group, exc, opts) -> NotDeterminableError:
+    """A NotDeterminableError naming the correlated pairs of a regularised trial run."""
+    try:
+        trial = bundle_adjust(block, additional=aps, ap_group=ap_group, ap_sigma=1e3, **opts)
+        an = analyse(trial, threshold=0.9)
+        pairs = ", ".join(f"{a}~{b} (ρ={r:+.3f})" for a, b, r in an.pairs[:6])
+    except NotDeterminableError:
+        pairs = ""
+    msg = f"the additional parameters '{aps.name}' are not determinable by this block"
+    msg += f"; correlated: {pairs}" if pairs else f" ({exc})"
+    return NotDeterminableError(msg + "; give ap_sigma or a smaller set", list(aps.names))
