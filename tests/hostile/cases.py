@@ -23,26 +23,6 @@ INPUT_SLOTS = {
     "view": (I.BLOCK, lambda f, p: ["view", p, "--export", str(f / "v.html")]),
     "view-server": (I.BLOCK, lambda f, p: ["view", p, "--port", "0"]),  # must not serve
     "import-bal": (I.BAL, lambda f, p: ["import-bal", p, "-o", str(f / "o.json")]),
-    "import-colmap/cameras": (
-        "sparse/cameras.txt",
-        lambda f, p: ["import-colmap", str(f / "sparse"), "-o", str(f / "o.json")],
-    ),
-    "import-colmap/images": (
-        "sparse/images.txt",
-        lambda f, p: ["import-colmap", str(f / "sparse"), "-o", str(f / "o.json")],
-    ),
-    "import-colmap/points": (
-        "sparse/points3D.txt",
-        lambda f, p: ["import-colmap", str(f / "sparse"), "-o", str(f / "o.json")],
-    ),
-    "import-colmap-bin/cameras": (
-        "sparse_bin/cameras.bin",
-        lambda f, p: ["import-colmap", str(f / "sparse_bin"), "-o", str(f / "o.json")],
-    ),
-    "import-colmap-bin/points": (
-        "sparse_bin/points3D.bin",
-        lambda f, p: ["import-colmap", str(f / "sparse_bin"), "-o", str(f / "o.json")],
-    ),
     "import-csv": (
         I.MARKS,
         lambda f, p: ["import-csv", p, "--units", "mm", "--c", "152", "-o", str(f / "o.json")],
@@ -63,6 +43,14 @@ INPUT_SLOTS = {
         ],
     ),  # fmt: skip
 }
+for _folder, _files in (("sparse", ("cameras.txt", "images.txt", "points3D.txt")),
+                        ("sparse_bin", ("cameras.bin", "points3D.bin"))):  # fmt: skip
+    for _file in _files:
+        _slot = "import-colmap" + ("-bin" if _folder.endswith("bin") else "")
+        INPUT_SLOTS[f"{_slot}/{_file.split('.')[0].removesuffix('3D')}"] = (
+            f"{_folder}/{_file}",
+            lambda f, p, d=_folder: ["import-colmap", str(f / d), "-o", str(f / "o.json")],
+        )
 
 
 def _all_inputs(folder: Path) -> None:
