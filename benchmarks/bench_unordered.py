@@ -17,7 +17,8 @@ fixed in both, the intrinsics are constant, the datum comes from the control.
 Every solve runs in its own fresh worker process (honest peak RSS, ``ru_maxrss``):
 ``wall`` = orientviz ``bundle_adjust(precision=False)`` on the imported Block (the
 import itself is not timed), or pycolmap's adjuster set-up + ``solve()`` with
-SPARSE_SCHUR, function tolerance 1e-10 (as in the shared peer bench). Best of ``--reps``.
+SPARSE_SCHUR, function tolerance 1e-10 (as in the shared peer bench), 1 thread each.
+Best of ``--reps``; peak MB = the worker's VmHWM (interpreter and libraries included).
 The same optimum is checked on the results: σ0 of both (pycolmap's from its final
 cost, 2·cost / σ² / redundancy), and the largest difference of projection centres and
 of tie points between the two solutions, in units of the scene (about 5 units across).
@@ -141,6 +142,14 @@ def perturb(block, rng: np.random.Generator, angle_deg: float = 20.0, shift: flo
 
 # --------------------------------------------------------------------------- workers
 def _peak_mb() -> float:
+    """Peak resident memory of this process in MB (VmHWM: ``ru_maxrss`` would carry the
+    parent's resident size at the fork across ``exec``)."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
