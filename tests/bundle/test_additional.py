@@ -3,11 +3,10 @@
 import numpy as np
 import pytest
 
+import orientviz as ov
 from orientviz.adjust import gauss_newton
 from orientviz.bundle import Brown, Ebner12, Gruen44, analyse, ap_set
 from orientviz.bundle._additional import _eo_deformations
-from orientviz.camera import project
-from orientviz.errors import InputError
 
 
 def _grid(n, b=92.0):
@@ -38,9 +37,9 @@ def test_brown_principal_distance_term_is_the_exact_derivative():
     rng = np.random.default_rng(2)
     pts = np.column_stack([rng.uniform(-700, 700, 20), rng.uniform(-700, 700, 20), np.zeros(20)])
     X0, R, c = np.array([0.0, 0.0, 1520.0]), np.eye(3), 152.0
-    xy = project(pts, X0, R, c)
+    xy = ov.project(pts, X0, R, c)
     dc_um = 20.0
-    shift = project(pts, X0, R, c + dc_um * 1e-3) - xy
+    shift = ov.project(pts, X0, R, c + dc_um * 1e-3) - xy
     A = Brown(c=c).design(xy)
     # x is linear in c, so the column at the *projected* coordinates is exact; the
     # difference of two ~100 mm doubles carries ~1e-14 mm of round-off
@@ -58,14 +57,14 @@ def test_brown_radial_and_decentering_terms():
 
 
 def test_unknown_names_and_bad_input_are_one_line_errors():
-    with pytest.raises(InputError, match="unknown additional-parameter set 'foo'; expected one"):
+    with pytest.raises(ov.InputError, match="unknown additional-parameter set 'foo'; expected one"):
         ap_set("foo")
     assert ap_set("Ebner-12").name == "ebner12" and ap_set("gruen44", b=80.0).b == 80.0
-    with pytest.raises(InputError, match="brown"):
+    with pytest.raises(ov.InputError, match="brown"):
         ap_set("brown", bogus=1)
-    with pytest.raises(InputError, match=r"\(n, 2\)"):
+    with pytest.raises(ov.InputError, match=r"\(n, 2\)"):
         Ebner12().design(np.zeros((4, 3)))
-    with pytest.raises(InputError, match="expected 12 parameters"):
+    with pytest.raises(ov.InputError, match="expected 12 parameters"):
         Ebner12().correction(np.zeros((1, 2)), np.zeros(3))
 
 
@@ -112,5 +111,5 @@ def test_over_parameterisation_is_named():
 
 def test_analyse_needs_additional_parameters():
     adj = gauss_newton(lambda x: (x, np.eye(2)), [0.0, 0.0], [1.0, 2.0], 1.0)
-    with pytest.raises(InputError, match="no additional parameters"):
+    with pytest.raises(ov.InputError, match="no additional parameters"):
         analyse(adj)

@@ -3,14 +3,14 @@
 import numpy as np
 import pytest
 
-from orientviz.bundle import adjust_with_auxiliary, bundle_adjust
-from orientviz.errors import InputError
-from orientviz.simulate import check_errors, simulate_auxiliary, simulate_block
+import orientviz as ov
+from orientviz.bundle import adjust_with_auxiliary
+from orientviz.simulate import check_errors, simulate_auxiliary
 
 
 @pytest.fixture(scope="module")
 def sim():
-    return simulate_block(2, 6, rng=3, control="perimeter", control_spacing=2, n_check=10)
+    return ov.simulate_block(2, 6, rng=3, control="perimeter", control_spacing=2, n_check=10)
 
 
 def test_simulated_data_are_the_truth_plus_offsets(sim):
@@ -21,7 +21,7 @@ def test_simulated_data_are_the_truth_plus_offsets(sim):
     off = a.truth["offset"][a.strip, 0]
     np.testing.assert_allclose(a.values - off, sim.truth.points.xyz[a.index, 2], atol=1e-6)
     assert np.unique(a.index).size == a.index.size and a.index.size >= 8
-    with pytest.raises(InputError, match="unknown auxiliary data"):
+    with pytest.raises(ov.InputError, match="unknown auxiliary data"):
         simulate_auxiliary(sim, "laser", rng=rng)
 
 
@@ -47,7 +47,7 @@ def test_absolute_statoscope_needs_one_round_and_conflicts_are_rejected(sim):
     dz = r.adjustment.exterior[:, 2] - st.values
     assert np.abs(dz).max() < 2.0
     g = simulate_auxiliary(sim, "gnss", rng=np.random.default_rng(2))
-    with pytest.raises(InputError, match="both observe Z0"):
+    with pytest.raises(ov.InputError, match="both observe Z0"):
         adjust_with_auxiliary(sim.block, [st, g])
 
 
@@ -58,7 +58,7 @@ def test_check_errors_of_bundle_and_model_results_and_of_coordinates(sim):
 
     # a bundle result: its check points are intersected from their own rays; the
     # errors against the truth must agree with the bundle's own check statistics
-    adj = bundle_adjust(sim.block)
+    adj = ov.bundle_adjust(sim.block)
     xy, z = check_errors(sim, adj)
     c = adj.check_rms  # per coordinate X, Y, Z against the given check values
     assert xy == pytest.approx(np.sqrt((c[0] ** 2 + c[1] ** 2) / 2.0), rel=1e-12)
@@ -75,7 +75,7 @@ def test_check_errors_of_bundle_and_model_results_and_of_coordinates(sim):
     assert np.isfinite(xy_m) and 0 < z_m
     # the truth itself has no error; garbage is refused with a message
     assert check_errors(sim, sim.truth.points.xyz) == (0.0, 0.0)
-    with pytest.raises(InputError, match="adjusted points"):
+    with pytest.raises(ov.InputError, match="adjusted points"):
         check_errors(sim, dataclasses.replace(adj, points=None))
-    with pytest.raises(InputError, match="all"):
+    with pytest.raises(ov.InputError, match="all"):
         check_errors(sim, sim.truth.points.xyz[:-1])

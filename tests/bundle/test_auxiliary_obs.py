@@ -3,23 +3,17 @@
 import numpy as np
 import pytest
 
+import orientviz as ov
 from orientviz.block import CONTROL
-from orientviz.bundle import BundleAuxiliary, adjust_with_auxiliary, auxiliary_rows, bundle_adjust
-from orientviz.errors import InputError, NotDeterminableError
-from orientviz.simulate import (
-    check_errors,
-    height_control_at_ends,
-    simulate_auxiliary,
-    simulate_block,
-)
-from orientviz.stereo_models import independent_models
+from orientviz.bundle import BundleAuxiliary, adjust_with_auxiliary, auxiliary_rows
+from orientviz.simulate import check_errors, height_control_at_ends, simulate_auxiliary
 
 
 @pytest.fixture(scope="module")
 def case():
     """4 × 16 block: planimetric perimeter control; height control in chains every 2
     bases ("full"), or only in the two end chains ("ends"); statoscope and APR data."""
-    sim = simulate_block(
+    sim = ov.simulate_block(
         4, 16, rng=np.random.default_rng(8), control="chains", control_kind="xy+z",
         chain_spacing=2, n_check=30,
     )  # fmt: skip
@@ -77,9 +71,9 @@ def test_rows_and_jacobians_match_finite_differences(case):
 
 def test_statoscope_and_apr_replace_height_chains_in_independent_models(case):
     sim, full, thin, st, apr = case
-    z_full = _check_rms(sim, independent_models(full).points)[1]
-    z_ends = _check_rms(sim, independent_models(thin).points)[1]
-    res = independent_models(thin, auxiliary=[st, apr])
+    z_full = _check_rms(sim, ov.independent_models(full).points)[1]
+    z_ends = _check_rms(sim, ov.independent_models(thin).points)[1]
+    res = ov.independent_models(thin, auxiliary=[st, apr])
     assert res.converged
     z_aux = _check_rms(sim, res.points)[1]
     # Ackermann §19: the auxiliary data take over most of the interior height control
@@ -100,18 +94,18 @@ def test_gnss_alone_gives_the_datum_and_offsets_without_control_do_not(case):
     g = simulate_auxiliary(
         sim, "gnss", rng=rng, sigma=0.1, offset_sigma=0.0, estimate_offsets=False
     )
-    res = independent_models(free, auxiliary=[g])
+    res = ov.independent_models(free, auxiliary=[g])
     assert res.converged
     xy, z = _check_rms(sim, res.points)
     assert xy < 0.15 and z < 0.2
     g2 = simulate_auxiliary(sim, "gnss", rng=rng, sigma=0.1, offset_sigma=0.5)
-    with pytest.raises(NotDeterminableError):
-        independent_models(free, auxiliary=[g2])
+    with pytest.raises(ov.NotDeterminableError):
+        ov.independent_models(free, auxiliary=[g2])
 
 
 def test_joint_bundle_equals_the_alternation_and_is_one_adjustment(case):
     sim, full, thin, st, apr = case
-    joint = bundle_adjust(thin, control="weighted", auxiliary=[st, apr])
+    joint = ov.bundle_adjust(thin, control="weighted", auxiliary=[st, apr])
     alt = adjust_with_auxiliary(thin, [st, apr], tol=0.005)
     assert joint.converged and alt.converged and alt.rounds > 1
     for kind in ("statoscope", "apr"):
@@ -125,9 +119,9 @@ def test_joint_bundle_equals_the_alternation_and_is_one_adjustment(case):
 def test_bad_auxiliary_input(case):
     sim, full, thin, st, apr = case
     g = simulate_auxiliary(sim, "gnss", rng=np.random.default_rng(2))
-    with pytest.raises(InputError, match="both observe Z0"):
-        independent_models(thin, auxiliary=[st, g])
-    with pytest.raises(InputError, match="at most one each"):
+    with pytest.raises(ov.InputError, match="both observe Z0"):
+        ov.independent_models(thin, auxiliary=[st, g])
+    with pytest.raises(ov.InputError, match="at most one each"):
         auxiliary_rows([st, st], thin)
-    with pytest.raises(InputError, match="rigorous"):
-        independent_models(thin, auxiliary=[st], method="pat-m")
+    with pytest.raises(ov.InputError, match="rigorous"):
+        ov.independent_models(thin, auxiliary=[st], method="pat-m")

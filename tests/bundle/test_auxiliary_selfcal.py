@@ -14,17 +14,11 @@ import re
 import numpy as np
 import pytest
 
+import orientviz as ov
 from orientviz.block import CHECK, CONTROL, TIE
-from orientviz.bundle import (
-    BundleProblem,
-    BundleState,
-    adjust_with_auxiliary,
-    ap_set,
-    bundle_adjust,
-    point_setup,
-)
+from orientviz.bundle import BundleProblem, BundleState, adjust_with_auxiliary, ap_set, point_setup
 from orientviz.camera import collinearity_jacobian
-from orientviz.simulate import height_control_at_ends, simulate_auxiliary, simulate_block
+from orientviz.simulate import height_control_at_ends, simulate_auxiliary
 
 AP_SIGMA = 10.0  # µm
 
@@ -34,7 +28,7 @@ def case():
     """2 × 6 block, full control only in the chains at both ends (the others made tie
     points); statoscope (offset and drift per strip), APR (offset per strip), absolute
     GNSS."""
-    sim = simulate_block(
+    sim = ov.simulate_block(
         2, 6, rng=np.random.default_rng(8), control="chains", control_kind="xy+z",
         chain_spacing=2, n_check=6,
     )  # fmt: skip
@@ -223,7 +217,7 @@ def joint(case):
     Gauss-Newton solution of the same model from the same start."""
     sim, block, auxs = case
     aux, aps, grp = auxs["stat+apr"], ap_set("ebner12"), block.images.strip
-    res = bundle_adjust(
+    res = ov.bundle_adjust(
         block, additional=aps, ap_group=grp, ap_sigma=AP_SIGMA, auxiliary=aux, tol=1e-9
     )
     dense = Dense(block, aux, aps, grp)
@@ -337,7 +331,7 @@ def test_precision_without_parameters_equals_the_dense_inverse(case, kind):
     """Auxiliary data alone (no self-calibration), also absolute GNSS (no offsets)."""
     sim, block, auxs = case
     aux = auxs[kind]
-    res = bundle_adjust(block, auxiliary=aux, tol=1e-9)
+    res = ov.bundle_adjust(block, auxiliary=aux, tol=1e-9)
     dense = Dense(block, aux, None, None)
     r, J = dense.system(_bundle_x_plain(res, dense))
     Q = np.linalg.inv(J.T @ J)
@@ -371,7 +365,7 @@ def test_joint_with_parameters_equals_the_alternation(case):
     sim, block, auxs = case
     aux, aps, grp = auxs["stat+apr"], ap_set("ebner12"), block.images.strip
     kw = dict(additional=aps, ap_group=grp, ap_sigma=AP_SIGMA)
-    joint = bundle_adjust(block, control="weighted", auxiliary=aux, **kw)
+    joint = ov.bundle_adjust(block, control="weighted", auxiliary=aux, **kw)
     alt = adjust_with_auxiliary(block, aux, tol=0.005, **kw)
     assert joint.converged and alt.converged and alt.rounds > 1
     for kind in ("statoscope", "apr"):

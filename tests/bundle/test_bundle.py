@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from orientviz.bundle import bundle_adjust, collinearity_block
+import orientviz as ov
+from orientviz.bundle import collinearity_block
 from orientviz.camera import collinearity_jacobian
-from orientviz.errors import DatumDefectError, NotDeterminableError
-from orientviz.simulate import simulate_block
+from orientviz.errors import DatumDefectError
 
 GON = np.pi / 200
 
@@ -60,8 +60,8 @@ def test_kernel_jacobian_matches_finite_differences(sequence):
 
 
 def test_noise_free_block_returns_truth():
-    sim = simulate_block(3, 6, rng=21, sigma_image_mm=0.0)
-    res = bundle_adjust(sim.block, precision=False)
+    sim = ov.simulate_block(3, 6, rng=21, sigma_image_mm=0.0)
+    res = ov.bundle_adjust(sim.block, precision=False)
     assert res.converged
     m = sim.block.n_images
     ext = res["exterior"].reshape(m, 6)
@@ -75,8 +75,8 @@ def test_noise_free_block_returns_truth():
 
 
 def test_noisy_block_statistics_and_check_points():
-    sim = simulate_block(3, 8, rng=7, n_check=24)
-    res = bundle_adjust(sim.block)
+    sim = ov.simulate_block(3, 8, rng=7, n_check=24)
+    res = ov.bundle_adjust(sim.block)
     assert res.converged and res.iterations <= 8
     # σ̂0² ~ χ²_r / r: with r ≈ 3000 its standard deviation is √(2/r) ≈ 2.6 % → 4σ band
     assert abs(res.sigma0 - 1.0) < 4 * np.sqrt(0.5 / res.redundancy)
@@ -104,9 +104,9 @@ def test_noisy_block_statistics_and_check_points():
 
 
 def test_history_replays_the_iterations():
-    sim = simulate_block(2, 5, rng=1)
+    sim = ov.simulate_block(2, 5, rng=1)
     seen = []
-    res = bundle_adjust(sim.block, precision=False, callback=seen.append)
+    res = ov.bundle_adjust(sim.block, precision=False, callback=seen.append)
     assert len(res.history) == res.iterations + 1 == len(seen) + 1
     for a, b in zip(res.history[:-1], res.history[1:]):
         np.testing.assert_allclose(a.x + b.dx, b.x)
@@ -115,9 +115,9 @@ def test_history_replays_the_iterations():
 
 
 def test_weighted_control_differs_from_fixed_and_is_consistent():
-    sim = simulate_block(3, 6, rng=5, control_noise=0.05, control_sigma=0.05)
-    fixed = bundle_adjust(sim.block, control="fixed", precision=False)
-    weighted = bundle_adjust(sim.block, control="weighted")
+    sim = ov.simulate_block(3, 6, rng=5, control_noise=0.05, control_sigma=0.05)
+    fixed = ov.bundle_adjust(sim.block, control="fixed", precision=False)
+    weighted = ov.bundle_adjust(sim.block, control="weighted")
     ctrl = sim.block.points.role == 1
     pts_f = fixed["points"].reshape(-1, 3)
     pts_w = weighted["points"].reshape(-1, 3)
@@ -135,13 +135,13 @@ def test_weighted_control_differs_from_fixed_and_is_consistent():
 
 
 def test_datum_defect_is_named():
-    sim = simulate_block(2, 4, rng=2, control="none")
+    sim = ov.simulate_block(2, 4, rng=2, control="none")
     with pytest.raises(DatumDefectError, match="7 datum parameter"):
-        bundle_adjust(sim.block)
+        ov.bundle_adjust(sim.block)
 
 
 def test_one_ray_points_and_disconnected_blocks_are_named():
-    sim = simulate_block(2, 4, rng=2)
+    sim = ov.simulate_block(2, 4, rng=2)
     b = sim.block.copy()
     obs = b.observations
     tie = np.flatnonzero(b.points.role[obs.point] == 0)
@@ -150,10 +150,10 @@ def test_one_ray_points_and_disconnected_blocks_are_named():
     from orientviz.block import Observations
 
     b.observations = Observations(obs.image[keep], obs.point[keep], obs.xy[keep], obs.sigma[keep])
-    with pytest.raises(NotDeterminableError, match=b.points.ids[pt]):
-        bundle_adjust(b)
+    with pytest.raises(ov.NotDeterminableError, match=b.points.ids[pt]):
+        ov.bundle_adjust(b)
     # cut a strip of 7 images between image 1 and 2: drop every point seen on both sides
-    sim = simulate_block(1, 7, rng=3)
+    sim = ov.simulate_block(1, 7, rng=3)
     b = sim.block.copy()
     obs = b.observations
     left = np.isin(obs.image, [0, 1])
@@ -161,8 +161,8 @@ def test_one_ray_points_and_disconnected_blocks_are_named():
     seen_r = np.bincount(obs.point[~left], minlength=b.n_points) > 0
     keep = ~(seen_l & seen_r)[obs.point]
     b.observations = Observations(obs.image[keep], obs.point[keep], obs.xy[keep], obs.sigma[keep])
-    with pytest.raises(NotDeterminableError, match="disconnected") as info:
-        bundle_adjust(b)
+    with pytest.raises(ov.NotDeterminableError, match="disconnected") as info:
+        ov.bundle_adjust(b)
     assert b.images.ids[1] in str(info.value)
 
 
@@ -188,9 +188,9 @@ def test_self_calibration_recovers_a_simulated_affinity():
         # the model is x_obs + v = f + A a, so the observations carry +A a
         return np.einsum("nij,j->ni", ap.design(xy), true)
 
-    sim = simulate_block(3, 6, rng=9, systematic=systematic)
-    plain = bundle_adjust(sim.block, precision=False)
-    cal = bundle_adjust(sim.block, additional=ap, ap_sigma=100.0)
+    sim = ov.simulate_block(3, 6, rng=9, systematic=systematic)
+    plain = ov.bundle_adjust(sim.block, precision=False)
+    cal = ov.bundle_adjust(sim.block, additional=ap, ap_sigma=100.0)
     est = cal["additional"]
     sd = cal.std()[cal.blocks["additional"]]
     assert np.all(np.abs(est - true) < 4 * sd), (est, sd)
@@ -198,7 +198,7 @@ def test_self_calibration_recovers_a_simulated_affinity():
     assert abs(cal.sigma0 - 1.0) < 0.1
     # one group per strip: three sets of parameters
     grp = sim.block.images.strip
-    per_strip = bundle_adjust(
+    per_strip = ov.bundle_adjust(
         sim.block, additional=ap, ap_group=grp, ap_sigma=100.0, precision=False
     )
     assert per_strip["additional"].shape == (6,)
@@ -207,8 +207,8 @@ def test_self_calibration_recovers_a_simulated_affinity():
 def test_approximate_values_from_scratch_reach_the_same_optimum():
     from orientviz.block import approximate_values
 
-    sim = simulate_block(3, 6, rng=13)
-    ref = bundle_adjust(sim.block, precision=False)
+    sim = ov.simulate_block(3, 6, rng=13)
+    ref = ov.bundle_adjust(sim.block, precision=False)
     scrambled = sim.block.copy()
     scrambled.images.X0[:] = 0.0  # nothing of the stored approximations is used
     scrambled.images.angles[:] = 0.0
@@ -217,7 +217,7 @@ def test_approximate_values_from_scratch_reach_the_same_optimum():
     # the chain of resections/intersections lands within metres and centigon of the truth
     assert np.abs(approx.images.X0 - sim.truth.images.X0).max() < 10.0
     assert np.abs(_wrap(approx.images.angles - sim.truth.images.angles)).max() < 0.5 * GON
-    res = bundle_adjust(approx, precision=False)
+    res = ov.bundle_adjust(approx, precision=False)
     assert res.converged
     # same least-squares optimum: agreement far below the point precision (cm)
     np.testing.assert_allclose(res["points"], ref["points"], atol=1e-4)
@@ -225,13 +225,13 @@ def test_approximate_values_from_scratch_reach_the_same_optimum():
 
 
 def test_poor_start_reports_non_convergence_not_a_defect():
-    sim = simulate_block(2, 6, rng=4, start_error=(300.0, 30 * GON, 300.0))
+    sim = ov.simulate_block(2, 6, rng=4, start_error=(300.0, 30 * GON, 300.0))
     try:
-        res = bundle_adjust(sim.block, precision=False, max_iter=15)
-    except NotDeterminableError as exc:  # pragma: no cover - must not be blamed on geometry
+        res = ov.bundle_adjust(sim.block, precision=False, max_iter=15)
+    except ov.NotDeterminableError as exc:  # pragma: no cover - must not be blamed on geometry
         pytest.fail(f"poor approximations reported as a defect: {exc}")
     if res.converged:  # converging is fine too; then it must be the true optimum
-        good = bundle_adjust(sim.block.with_(images=sim.truth.images), precision=False)
+        good = ov.bundle_adjust(sim.block.with_(images=sim.truth.images), precision=False)
         assert np.isclose(res.sigma0, good.sigma0, rtol=1e-6)
     else:
         assert "approximate" in res.reason or "iterations" in res.reason
@@ -239,12 +239,12 @@ def test_poor_start_reports_non_convergence_not_a_defect():
 
 def test_observed_projection_centres_give_the_datum():
     # GNSS-like projection centres (σ = 0.1 m) and no control at all
-    sim = simulate_block(3, 6, rng=17, control="none")
+    sim = ov.simulate_block(3, 6, rng=17, control="none")
     b = sim.block.copy()
     rng = np.random.default_rng(3)
     b.images.X0_obs = sim.truth.images.X0 + rng.normal(0, 0.1, b.images.X0.shape)
     b.images.X0_sigma = np.full_like(b.images.X0, 0.1)
-    res = bundle_adjust(b)
+    res = ov.bundle_adjust(b)
     assert res.converged
     # r ≈ 1500: σ̂0 within ±4·√(1/(2r)) ≈ ±7 % of 1
     assert abs(res.sigma0 - 1.0) < 0.08
@@ -256,26 +256,26 @@ def test_observed_projection_centres_give_the_datum():
     assert err < 0.1
     # without the observed centres the same block has no datum
     with pytest.raises(DatumDefectError):
-        bundle_adjust(sim.block)
+        ov.bundle_adjust(sim.block)
 
 
 def test_reduced_solvers_reach_the_same_solution():
-    sim = simulate_block(2, 5, rng=8)
-    ref = bundle_adjust(sim.block, precision=False, solver="banded")
+    sim = ov.simulate_block(2, 5, rng=8)
+    ref = ov.bundle_adjust(sim.block, precision=False, solver="banded")
     for solver in ("splu", "dense"):
-        res = bundle_adjust(sim.block, precision=False, solver=solver)
+        res = ov.bundle_adjust(sim.block, precision=False, solver=solver)
         assert res.iterations == ref.iterations
         # the same linear systems solved by different factorisations: rounding only
         np.testing.assert_allclose(res.x, ref.x, rtol=0, atol=1e-7)
 
 
 def test_height_only_control_points_are_held_in_height():
-    sim = simulate_block(3, 6, rng=23, control="chains", control_kind="xyz")
+    sim = ov.simulate_block(3, 6, rng=23, control="chains", control_kind="xyz")
     b = sim.block.copy()
     ctrl = np.flatnonzero(b.points.role == 1)
     inner = ctrl[len(ctrl) // 2 :]  # make half of the control height-only
     b.points.xyz_known[inner, :2] = np.nan
-    res = bundle_adjust(b, precision=False)
+    res = ov.bundle_adjust(b, precision=False)
     pts = res["points"].reshape(-1, 3)
     # heights stay at the given value (σ 1e-6 m pseudo-observation), X/Y are estimated
     np.testing.assert_allclose(pts[inner, 2], b.points.xyz_known[inner, 2], atol=1e-5)
@@ -295,16 +295,16 @@ def _z_only_centres(block, truth, sigma=0.1):
 def test_height_only_datum_is_diagnosed_not_a_linalg_error():
     from orientviz.bundle import datum_defect, point_setup
 
-    sim = simulate_block(3, 6, rng=17, control="none")
+    sim = ov.simulate_block(3, 6, rng=17, control="none")
     b = _z_only_centres(sim.block, sim.truth)
     # heights from the centres fix shift Z and both tilts; planimetry stays free
     with pytest.raises(DatumDefectError, match="4 datum") as info:
-        bundle_adjust(b)
+        ov.bundle_adjust(b)
     assert info.value.parameters == [
         "datum: shift X", "datum: shift Y", "datum: rotation κ", "datum: scale",
     ]  # fmt: skip
     # height-only control points whose approximate X, Y are unknown too
-    sim2 = simulate_block(3, 6, rng=17, control="perimeter")
+    sim2 = ov.simulate_block(3, 6, rng=17, control="perimeter")
     b2 = sim2.block.copy()
     ctrl = np.flatnonzero(b2.points.role == 1)
     b2.points.xyz_known[ctrl, :2] = np.nan
@@ -314,10 +314,10 @@ def test_height_only_datum_is_diagnosed_not_a_linalg_error():
 
 
 def test_planimetric_control_and_z_only_centres_give_the_datum():
-    sim = simulate_block(3, 6, rng=17, control="perimeter")
+    sim = ov.simulate_block(3, 6, rng=17, control="perimeter")
     b = _z_only_centres(sim.block, sim.truth)
     ctrl = np.flatnonzero(b.points.role == 1)
     b.points.xyz_known[ctrl, 2] = np.nan  # control in X, Y only; heights from the centres
-    res = bundle_adjust(b, precision=False)
+    res = ov.bundle_adjust(b, precision=False)
     assert res.converged
     assert abs(res.sigma0 - 1.0) < 0.1

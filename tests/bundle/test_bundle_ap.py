@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
+import orientviz as ov
 from orientviz.bundle import (
     BundleProblem,
     BundleState,
@@ -19,7 +20,6 @@ from orientviz.bundle import (
     solve_bordered_pcg,
 )
 from orientviz.camera import collinearity_jacobian
-from orientviz.simulate import simulate_block
 
 
 def _dense_step(prob, st, aps):
@@ -60,7 +60,7 @@ def _dense_step(prob, st, aps):
 
 @pytest.mark.parametrize("solver", ["banded", "splu", "dense"])
 def test_step_with_group_parameters_equals_dense_solution(solver):
-    sim = simulate_block(3, 5, rng=21, extra=6, control_sigma=0.05)
+    sim = ov.simulate_block(3, 5, rng=21, extra=6, control_sigma=0.05)
     block = sim.block
     aps = ap_set("ebner12")
     prob = BundleProblem(
@@ -125,7 +125,7 @@ def test_band_backward_solve_equals_dense_triangular_solve(n, kd):  # all full, 
 
 
 def _problem(solver="banded"):
-    sim = simulate_block(3, 5, rng=21, extra=6, control_sigma=0.05)
+    sim = ov.simulate_block(3, 5, rng=21, extra=6, control_sigma=0.05)
     block = sim.block
     aps = ap_set("ebner12")
     prob = BundleProblem(

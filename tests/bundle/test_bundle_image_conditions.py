@@ -12,15 +12,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import orientviz as ov
 from orientviz.bundle import _adjust as bundle_mod
-from orientviz.bundle import bundle_adjust, image_condition_deficit, point_setup
-from orientviz.errors import NotDeterminableError
-from orientviz.simulate import simulate_block
+from orientviz.bundle import image_condition_deficit, point_setup
 
 
 def _gruber_block(seed: int):
     # the benchmark's Gruber-only variant: tie points only at the Gruber positions
-    return simulate_block(4, 10, rng=seed, n_check=10, control="perimeter", extra=None).block
+    return ov.simulate_block(4, 10, rng=seed, n_check=10, control="perimeter", extra=None).block
 
 
 def _flagged(block) -> list[str]:
@@ -33,8 +32,8 @@ def test_weak_image_is_named_before_the_iterations(seed):
     block = _gruber_block(seed)
     flagged = _flagged(block)
     assert flagged
-    with pytest.raises(NotDeterminableError) as exc:
-        bundle_adjust(block)
+    with pytest.raises(ov.NotDeterminableError) as exc:
+        ov.bundle_adjust(block)
     assert [p.split(".")[0] for p in exc.value.parameters] == flagged
     assert exc.value.defect >= 1
 
@@ -51,8 +50,8 @@ def test_the_count_names_a_real_null_space(monkeypatch, seed):
     flagged = _flagged(block)
     monkeypatch.setattr(bundle_mod, "check_datum", lambda b, s: None)
     try:
-        adj = bundle_adjust(block)
-    except NotDeterminableError as exc:
+        adj = ov.bundle_adjust(block)
+    except ov.NotDeterminableError as exc:
         assert {p.split(".")[0] for p in exc.parameters} == set(flagged)
         return
     assert adj.converged
@@ -65,6 +64,6 @@ def test_the_count_names_a_real_null_space(monkeypatch, seed):
 
 @pytest.mark.parametrize("seed", [1, 2])
 def test_healthy_blocks_pass_the_count(seed):
-    for block in (_gruber_block(seed), simulate_block(4, 10, rng=seed).block):
+    for block in (_gruber_block(seed), ov.simulate_block(4, 10, rng=seed).block):
         assert not _flagged(block)
-        assert bundle_adjust(block).converged
+        assert ov.bundle_adjust(block).converged

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from orientviz.bundle import banded_selected_inverse, bundle_adjust
+import orientviz as ov
+from orientviz.bundle import banded_selected_inverse
 from orientviz.camera import collinearity_jacobian
-from orientviz.simulate import simulate_block
 
 
 class Affinity:
@@ -81,7 +81,7 @@ def dense_reference(
 
 @pytest.mark.parametrize("case", ["fixed", "weighted", "ap"])
 def test_precision_equals_dense_inverse(case):
-    sim = simulate_block(2, 4, rng=11, extra=6, n_check=2)
+    sim = ov.simulate_block(2, 4, rng=11, extra=6, n_check=2)
     block = sim.block
     kw = {}
     csig = None
@@ -91,7 +91,7 @@ def test_precision_equals_dense_inverse(case):
         kw["control"] = "weighted"
     if case == "ap":
         kw.update(additional=Affinity(), ap_group=np.arange(block.n_images) % 2, ap_sigma=50.0)
-    res = bundle_adjust(block, **kw)
+    res = ov.bundle_adjust(block, **kw)
     # without additional parameters the cofactors are those of the last linearisation
     # point (the state before the final correction, whose normal equations are reused)
     x_lin = res.history[-2].x if case != "ap" else None
@@ -149,8 +149,8 @@ def test_banded_selected_inverse_matches_dense(nb):
 
 def test_precision_at_last_linearisation_is_that_of_the_solution():
     """The reused linearisation differs from the solution by less than the stopping rule."""
-    sim = simulate_block(2, 4, rng=11, extra=6, n_check=2)
-    res = bundle_adjust(sim.block)
+    sim = ov.simulate_block(2, 4, rng=11, extra=6, n_check=2)
+    res = ov.bundle_adjust(sim.block)
     assert len(res.history) >= 3  # at least two corrections: the last one is tiny
     Q_final = dense_reference(res, sim.block)[0]
     Q_lin = dense_reference(res, sim.block, x=res.history[-2].x)[0]
@@ -193,11 +193,11 @@ def test_precision_with_strip_parameters_equals_dense_inverse(path, monkeypatch)
 
     if path == "banded":  # the banded selected inverse and banded solves even when small
         monkeypatch.setattr(precision, "DENSE_INVERSE_LIMIT", 0)
-    sim = simulate_block(3, 5, rng=21, extra=6, n_check=2)
+    sim = ov.simulate_block(3, 5, rng=21, extra=6, n_check=2)
     block = sim.block
     aps = ap_set("ebner12")
     grp = block.images.strip
-    res = bundle_adjust(block, additional=aps, ap_group=grp, ap_sigma=10.0)
+    res = ov.bundle_adjust(block, additional=aps, ap_group=grp, ap_sigma=10.0)
     assert res.converged
     Q, free, used, r_ref = dense_reference(res, block, None, aps, grp, 10.0)
     m = block.n_images

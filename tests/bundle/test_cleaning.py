@@ -3,16 +3,15 @@
 import numpy as np
 import pytest
 
+import orientviz as ov
 from orientviz.adjust.gross import CleaningBreakdown
-from orientviz.bundle import bundle_adjust, bundle_solver, clean_block, cleaned_block
-from orientviz.errors import InputError
-from orientviz.simulate import simulate_block
+from orientviz.bundle import bundle_solver, cleaned_block
 
 
 @pytest.fixture(scope="module")
 def sim():
     # 12 blunders of 30-250 µm (6-50 σ) among ~1400 rays
-    return simulate_block(3, 8, rng=4, gross={"count": 12, "size_mm": (0.03, 0.25)}, n_check=20)
+    return ov.simulate_block(3, 8, rng=4, gross={"count": 12, "size_mm": (0.03, 0.25)}, n_check=20)
 
 
 def test_solver_reports_all_rays_and_drops_lonely_points(sim):
@@ -20,7 +19,7 @@ def test_solver_reports_all_rays_and_drops_lonely_points(sim):
     n = b.n_observations
     solve = bundle_solver(b)
     full = solve(np.ones(2 * n))
-    plain = bundle_adjust(b)
+    plain = ov.bundle_adjust(b)
     np.testing.assert_allclose(full.residuals, plain.residuals[: 2 * n], atol=1e-9)
     w = np.ones((n, 2))
     # a 2-ray tie point: eliminating one ray takes the whole point out
@@ -37,7 +36,7 @@ def test_solver_reports_all_rays_and_drops_lonely_points(sim):
 @pytest.mark.parametrize("one", [True, False])
 def test_data_snooping_removes_the_blunders(sim, one):
     g = set(sim.info["gross"]["index"].tolist())
-    c = clean_block(sim.block, "snooping", one_at_a_time=one)
+    c = ov.clean_block(sim.block, "snooping", one_at_a_time=one)
     excluded = set(np.flatnonzero(~c.adjustment.subset.kept_rays).tolist())
     # one blunder (47 µm, in a weakly controlled direction) stays below k for this seed
     assert len(g - excluded) <= 1
@@ -46,7 +45,7 @@ def test_data_snooping_removes_the_blunders(sim, one):
     assert c.log[-1].action == "stopped"
     assert all(e.label.count("/") == 1 for e in c.log if e.action == "eliminated")
     if not one:  # several rays per adjustment: far fewer adjustments
-        exact = clean_block(sim.block, "snooping", fast=False)  # every round exact
+        exact = ov.clean_block(sim.block, "snooping", fast=False)  # every round exact
         assert exact.adjustments <= 6
     clean = cleaned_block(sim.block, c)
     assert clean.n_observations == int(c.adjustment.subset.kept_rays.sum())
@@ -56,16 +55,16 @@ def test_data_snooping_removes_the_blunders(sim, one):
 def test_robust_and_reruns_run_and_log(sim):
     g = set(sim.info["gross"]["index"].tolist())
     for method in ("danish", "reruns"):
-        c = clean_block(sim.block, method)
+        c = ov.clean_block(sim.block, method)
         excluded = set(np.flatnonzero(~c.adjustment.subset.kept_rays).tolist())
         assert len(g - excluded) <= 1
         assert c.adjustment.sigma0 < 1.1
 
 
 def test_bad_method_and_breakdown():
-    sim = simulate_block(2, 4, rng=1, extra=None, gross={"fraction": 0.4, "size_mm": 0.2})
-    with pytest.raises(InputError, match="unknown cleaning method"):
-        clean_block(sim.block, "magic")
+    sim = ov.simulate_block(2, 4, rng=1, extra=None, gross={"fraction": 0.4, "size_mm": 0.2})
+    with pytest.raises(ov.InputError, match="unknown cleaning method"):
+        ov.clean_block(sim.block, "magic")
     with pytest.raises(CleaningBreakdown) as info:
-        clean_block(sim.block, "snooping", max_fraction=0.1)
+        ov.clean_block(sim.block, "snooping", max_fraction=0.1)
     assert info.value.log and info.value.log[-1].action in ("breakdown", "kept", "eliminated")

@@ -4,23 +4,23 @@ import numpy as np
 import pytest
 from scipy.special import chdtr
 
+import orientviz as ov
 from orientviz.adjust.gross import noncentrality
 from orientviz.adjust.gross2d import critical_values_2d, noncentrality_2d, statistic_2d
 from orientviz.block import CHECK, TIE
-from orientviz.bundle import ExteriorPairs, bundle_solver, clean_block, ray_labels
+from orientviz.bundle import ExteriorPairs, bundle_solver, ray_labels
 from orientviz.bundle._cleaning import _check_ray_tests
-from orientviz.simulate import simulate_block
 
 
 @pytest.fixture(scope="module")
 def sim():
     # 16 blunders of 20-250 µm (4-50 σ) among ~1400 rays; 20 check points
-    return simulate_block(3, 8, rng=7, gross={"count": 16, "size_mm": (0.02, 0.25)}, n_check=20)
+    return ov.simulate_block(3, 8, rng=7, gross={"count": 16, "size_mm": (0.02, 0.25)}, n_check=20)
 
 
 @pytest.fixture(scope="module")
 def clean():
-    return simulate_block(4, 10, rng=11, n_check=30)
+    return ov.simulate_block(4, 10, rng=11, n_check=30)
 
 
 def _lambda(sim):
@@ -38,7 +38,7 @@ def test_every_testable_blunder_is_removed(sim, fast):
     idx, lam = _lambda(sim)
     testable = idx[lam >= noncentrality() ** 2]
     assert testable.size >= 10  # the test is not vacuous
-    c = clean_block(sim.block, "snooping", fast=fast)
+    c = ov.clean_block(sim.block, "snooping", fast=fast)
     kept = c.adjustment.subset.kept_rays
     assert not kept[testable].any()
     # after cleaning the data fit the 5 µm noise again
@@ -50,7 +50,7 @@ def test_every_testable_blunder_is_removed(sim, fast):
 
 
 def test_log_names_each_removed_ray_with_its_statistic(sim):
-    c = clean_block(sim.block, "snooping")
+    c = ov.clean_block(sim.block, "snooping")
     labels = ray_labels(sim.block)
     crit = critical_values_2d()
     elim = [e for e in c.log if e.action == "eliminated"]
@@ -74,7 +74,7 @@ def test_error_free_block_false_alarms_within_binomial_bound(clean):
     assert T[dof == 2].mean() == pytest.approx(2.0, abs=0.2)
     assert T[dof == 1].mean() == pytest.approx(1.0, abs=0.2)
     crit = critical_values_2d()
-    c = clean_block(b, "snooping")
+    c = ov.clean_block(b, "snooping")
     rejected = sum(1 for e in c.log if e.action == "eliminated")
     # tests made: one per ray (the two rays of a 2-ray point give the same statistic)
     p = 1.0 - chdtr(2, crit[2])  # the larger of the two levels (0.28 %)
@@ -122,6 +122,6 @@ def test_check_point_rays_are_tested_in_their_intersection(sim):
     j = np.flatnonzero(o.point == p)[1]
     bad = b.copy()
     bad.observations.xy[j] += [0.06, -0.04]
-    c = clean_block(bad, "snooping")
+    c = ov.clean_block(bad, "snooping")
     assert not c.adjustment.subset.kept_rays[j]
-    assert clean_block(bad, "snooping", check_rays=False).adjustment.subset.kept_rays[j]
+    assert ov.clean_block(bad, "snooping", check_rays=False).adjustment.subset.kept_rays[j]

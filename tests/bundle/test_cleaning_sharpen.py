@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+import orientviz as ov
 from orientviz.adjust.gross2d import statistic_2d
 from orientviz.bundle import bundle_solver
-from orientviz.simulate import simulate_block
 
 
 def _T(adj):
@@ -16,7 +16,7 @@ def _T(adj):
 
 
 def test_sharpened_screening_is_bounded_by_the_exact_test():
-    sim = simulate_block(4, 10, rng=3, n_check=0, gross={"count": 6, "size_mm": (0.05, 0.2)})
+    sim = ov.simulate_block(4, 10, rng=3, n_check=0, gross={"count": 6, "size_mm": (0.05, 0.2)})
     block = sim.block
     n = block.n_observations
     sharp = bundle_solver(block, redundancy="local", sharpen=True)

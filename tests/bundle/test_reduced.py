@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import orientviz as ov
 from orientviz.bundle import (
     SOLVERS,
     BundleProblem,
@@ -14,12 +15,10 @@ from orientviz.bundle import (
     point_setup,
 )
 from orientviz.camera import collinearity_jacobian
-from orientviz.errors import NotDeterminableError
-from orientviz.simulate import simulate_block
 
 
 def _problem(solver="banded", strips=2, n=4, control="fixed", seed=3):
-    sim = simulate_block(strips, n, rng=seed, extra=8, control="perimeter")
+    sim = ov.simulate_block(strips, n, rng=seed, extra=8, control="perimeter")
     block = sim.block
     setup = point_setup(block, control)
     prob = BundleProblem(block, setup, solver=solver)
@@ -107,6 +106,6 @@ def test_singular_reduced_system_names_parameters():
     # remove everything that determines image 0's κ: a zero row/column in S
     ne.blocks[:, 5, :] = 0.0
     ne.blocks[:, :, 5] = 0.0
-    with pytest.raises(NotDeterminableError) as info:
+    with pytest.raises(ov.NotDeterminableError) as info:
         prob.solve(ne, prob.names()[: 6 * prob.m])
     assert any(p.endswith(".kappa") for p in info.value.parameters)

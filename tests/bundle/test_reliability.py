@@ -13,13 +13,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import orientviz as ov
 from orientviz.adjust.gross import noncentrality
 from orientviz.adjust.gross2d import noncentrality_2d, statistic_2d
 from orientviz.block import TIE
-from orientviz.bundle import bundle_adjust, ray_reliability
-from orientviz.errors import InputError
-from orientviz.rotation import matrix_from_opk
-from orientviz.simulate import simulate_block
+from orientviz.bundle import ray_reliability
 
 EPS = 1e-4  # bias = EPS × MDB: first-order regime
 TOL = 1e-10  # bundle stopping rule (fraction of the conditional σ)
@@ -40,7 +38,7 @@ class Affinity:
 
 
 def _case(case):
-    sim = simulate_block(2, 4, rng=11, extra=6, n_check=2)
+    sim = ov.simulate_block(2, 4, rng=11, extra=6, n_check=2)
     block = sim.truth.copy()
     kw = {"tol": TOL}
     if case == "weighted":
@@ -54,7 +52,7 @@ def _case(case):
 def _adjust_with_bias(block, kw, j, bias):
     b = block.copy()
     b.observations.xy[j] += bias
-    return bundle_adjust(b, **kw)
+    return ov.bundle_adjust(b, **kw)
 
 
 def _shifts(a0, a1, block, j):
@@ -68,7 +66,7 @@ def _shifts(a0, a1, block, j):
 @pytest.fixture(scope="module", params=["fixed", "weighted", "ap"])
 def setup(request):
     block, kw = _case(request.param)
-    adj = bundle_adjust(block, **kw)
+    adj = ov.bundle_adjust(block, **kw)
     rel = ray_reliability(adj, block)
     k = block.rays_per_point()[rel.point]
     tie3 = np.flatnonzero(rel.testable & (block.points.role[rel.point] == TIE) & (k == 3))
@@ -142,7 +140,7 @@ def test_largest_shift_on_the_mdb_ellipse(setup):
 
 def test_full_size_mdb_is_found_at_delta0_to_second_order():
     block, kw = _case("fixed")
-    adj = bundle_adjust(block, **kw)
+    adj = ov.bundle_adjust(block, **kw)
     rel = ray_reliability(adj, block)
     n = block.n_observations
     j = np.flatnonzero(rel.testable & (block.points.role[rel.point] == TIE))[0]
@@ -157,7 +155,7 @@ def test_full_size_mdb_is_found_at_delta0_to_second_order():
 
 def test_two_ray_points_are_blind_along_the_base():
     block, kw = _case("fixed")
-    adj = bundle_adjust(block, **kw)
+    adj = ov.bundle_adjust(block, **kw)
     rel = ray_reliability(adj, block)
     n = block.n_observations
     k = block.rays_per_point()[rel.point]
@@ -170,7 +168,7 @@ def test_two_ray_points_are_blind_along_the_base():
     o = block.observations
     for j in np.flatnonzero(two):
         i, other = o.image[j], o.image[(o.point == o.point[j]) & (o.image != o.image[j])][0]
-        R = matrix_from_opk(*block.images.angles[i], sequence=block.sequence)
+        R = ov.matrix_from_opk(*block.images.angles[i], sequence=block.sequence)
         base = (R.T @ (block.images.X0[other] - block.images.X0[i]))[:2]
         assert abs(rel.weak_direction[j] @ base) / np.linalg.norm(base) > 0.99
     # brute force: 30 µm along it leaves every residual as it was, yet moves the point
@@ -183,8 +181,8 @@ def test_two_ray_points_are_blind_along_the_base():
 
 
 def test_unused_rays_fixed_points_and_per_point_summary():
-    sim = simulate_block(3, 6, rng=4, n_check=6)
-    adj = bundle_adjust(sim.block)
+    sim = ov.simulate_block(3, 6, rng=4, n_check=6)
+    adj = ov.bundle_adjust(sim.block)
     rel = ray_reliability(adj, sim.block)
     o = sim.block.observations
     chk = sim.block.points.role[o.point] == 2
@@ -197,14 +195,14 @@ def test_unused_rays_fixed_points_and_per_point_summary():
     for p in np.unique(o.point[rel.used])[:20]:
         assert worst[p] == np.max(rel.mdb_weak[(o.point == p) & rel.used])
     assert np.isnan(worst[np.unique(o.point[chk])]).all()
-    with pytest.raises(InputError):
+    with pytest.raises(ov.InputError):
         rel.by_point(rel.mdb_weak, sim.block.n_points, reduce="mean")
 
 
 def test_bad_input():
-    sim = simulate_block(2, 4, rng=11)
-    with pytest.raises(InputError, match="precision=True"):
-        ray_reliability(bundle_adjust(sim.block, precision=False), sim.block)
-    other = simulate_block(2, 5, rng=11)
-    with pytest.raises(InputError, match="rays"):
-        ray_reliability(bundle_adjust(sim.block), other.block)
+    sim = ov.simulate_block(2, 4, rng=11)
+    with pytest.raises(ov.InputError, match="precision=True"):
+        ray_reliability(ov.bundle_adjust(sim.block, precision=False), sim.block)
+    other = ov.simulate_block(2, 5, rng=11)
+    with pytest.raises(ov.InputError, match="rays"):
+        ray_reliability(ov.bundle_adjust(sim.block), other.block)

@@ -3,18 +3,18 @@
 import numpy as np
 import pytest
 
+import orientviz as ov
 from orientviz.block import TIE, Observations
-from orientviz.errors import InputError, NotDeterminableError
 from orientviz.orientation.absolute import similarity_closed_form
-from orientviz.orientation.relative import relative_orientation
 from orientviz.polynomial import form_strips, polynomial_adjust
-from orientviz.simulate import simulate_block
-from orientviz.stereo_models import form_models, independent_models
+from orientviz.stereo_models import form_models
 
 
 def noise_free(strips=2, images=6, **kw):
     kw.setdefault("extra", None)
-    return simulate_block(strips, images, rng=np.random.default_rng(21), sigma_image_mm=0.0, **kw)
+    return ov.simulate_block(
+        strips, images, rng=np.random.default_rng(21), sigma_image_mm=0.0, **kw
+    )
 
 
 def test_model_elements_agree_with_the_relative_orientation_module():
@@ -26,7 +26,7 @@ def test_model_elements_agree_with_the_relative_orientation_module():
     xl = np.array([o.xy[(o.image == left) & (o.point == p)][0] for p in common])
     xr = np.array([o.xy[(o.image == right) & (o.point == p)][0] for p in common])
     b = ms.centres[0, 1, 0]
-    res = relative_orientation(xl, xr, s.block.cameras.c[0], kind="dependent", b=b)
+    res = ov.relative_orientation(xl, xr, s.block.cameras.c[0], kind="dependent", b=b)
     # same dependent-pair convention: O2 = (b, by, bz), R2 = R(ω, φ, κ); error-free images
     np.testing.assert_allclose(res.x[:5], ms.elements[0], atol=1e-8)
 
@@ -52,10 +52,10 @@ def test_block_polynomials_are_weaker_than_independent_models():
     # rigorous ones; perimeter control only, 3 strips. Mean over 2 blocks.
     e_poly, e_mod = [], []
     for seed in range(2):
-        s = simulate_block(3, 13, rng=np.random.default_rng(seed), extra=None, control_spacing=4)
+        s = ov.simulate_block(3, 13, rng=np.random.default_rng(seed), extra=None, control_spacing=4)
         free = s.block.points.role == TIE
         p = polynomial_adjust(s.block, degree_xy=3, degree_z=3)
-        m = independent_models(s.block)
+        m = ov.independent_models(s.block)
         e_poly.append(np.nanmean((p.points - s.truth.points.xyz)[free] ** 2, axis=0))
         e_mod.append(np.nanmean((m.points - s.truth.points.xyz)[free] ** 2, axis=0))
     rp, rm = np.sqrt(np.mean(e_poly, axis=0)), np.sqrt(np.mean(e_mod, axis=0))
@@ -65,18 +65,18 @@ def test_block_polynomials_are_weaker_than_independent_models():
 
 def test_bad_degree():
     s = noise_free(1, 4)
-    with pytest.raises(InputError):
+    with pytest.raises(ov.InputError):
         polynomial_adjust(s.block, degree_xy=7)
 
 
 def test_broken_strip_is_named():
-    s = simulate_block(1, 5, rng=np.random.default_rng(3), extra="grid", sigma_image_mm=0.0)
+    s = ov.simulate_block(1, 5, rng=np.random.default_rng(3), extra="grid", sigma_image_mm=0.0)
     b = s.block.copy()
     o = b.observations
     # image 2 loses every point that image 0 sees: models (0,1) and (1,2) share nothing
     seen0 = np.unique(o.point[o.image == 0])
     keep = ~((o.image == 2) & np.isin(o.point, seen0))
     b.observations = Observations(o.image[keep], o.point[keep], o.xy[keep], o.sigma[keep])
-    with pytest.raises(NotDeterminableError) as exc:
+    with pytest.raises(ov.NotDeterminableError) as exc:
         form_strips(b)
     assert "s00_000+s00_001" in str(exc.value) and "s00_001+s00_002" in str(exc.value)

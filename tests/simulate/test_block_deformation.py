@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
+import orientviz as ov
 from orientviz.bundle import Ebner12
-from orientviz.errors import InputError
 from orientviz.simulate import animate, frames, image_field, model_field, model_fields, split_field
 from orientviz.simulate import systematic as se
 
@@ -58,7 +58,7 @@ def test_image_field_of_error_models_and_parameters():
     g = image_field((Ebner12(b=92.0), p), half_mm=92.0, n=3)
     # b1: Δx = 5u, Δy = −5v µm: largest at the grid corner u = v = ±1
     assert g.max_um == pytest.approx(5.0 * np.sqrt(2.0))
-    with pytest.raises(InputError, match="expected a callable"):
+    with pytest.raises(ov.InputError, match="expected a callable"):
         image_field(42)
 
 
@@ -70,9 +70,9 @@ def test_animation_interpolates_between_the_fields():
     fr = frames(a, b, n_frames=5, exaggeration=100.0)
     assert fr.shape == (5, 25, 3)
     np.testing.assert_allclose(fr[2], a.xyz + 50.0 * (a.d + b.d))
-    with pytest.raises(InputError, match="same grid"):
+    with pytest.raises(ov.InputError, match="same grid"):
         animate(a, model_field(None, n=3), 0.5)
-    with pytest.raises(InputError, match=r"t in \[0, 1\]"):
+    with pytest.raises(ov.InputError, match=r"t in \[0, 1\]"):
         animate(a, b, 1.5)
 
 
@@ -124,5 +124,5 @@ def test_split_of_the_film_trough_matches_a_polynomial_fit_per_coordinate():
     np.testing.assert_allclose(
         left.d, model_field(s.remainder, n=5).d, atol=1e-3 * np.abs(left.d).max()
     )
-    with pytest.raises(InputError, match="n ≥ 3"):
+    with pytest.raises(ov.InputError, match="n ≥ 3"):
         split_field(tr, Ebner12(), n=2)

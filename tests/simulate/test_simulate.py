@@ -5,14 +5,13 @@ import math
 import numpy as np
 import pytest
 
+import orientviz as ov
 from orientviz.block import CHECK, CONTROL, block_layout
-from orientviz.errors import InputError
-from orientviz.simulate import simulate_block
 
 
 def small(**kw):
     kw.setdefault("rng", np.random.default_rng(7))
-    return simulate_block(3, 8, **kw)
+    return ov.simulate_block(3, 8, **kw)
 
 
 def test_deterministic_for_a_seed():
@@ -46,7 +45,7 @@ def test_default_geometry_matches_the_bench_blocks():
 
 
 def test_truth_is_error_free_and_noise_has_the_given_sigma():
-    s = simulate_block(6, 12, rng=np.random.default_rng(1))
+    s = ov.simulate_block(6, 12, rng=np.random.default_rng(1))
     np.testing.assert_array_equal(s.truth.residuals(), 0.0)
     e = s.block.observations.xy - s.truth.observations.xy
     n = e.size
@@ -57,7 +56,7 @@ def test_truth_is_error_free_and_noise_has_the_given_sigma():
 
 
 def test_every_point_has_two_rays_and_every_model_six_standard_points():
-    s = simulate_block(3, 8, rng=np.random.default_rng(2), extra=None)
+    s = ov.simulate_block(3, 8, rng=np.random.default_rng(2), extra=None)
     b = s.block
     assert b.rays_per_point().min() >= 2
     obs = b.observations
@@ -72,14 +71,14 @@ def test_every_point_has_two_rays_and_every_model_six_standard_points():
     [("corners", {}, 4), ("perimeter", {"control_spacing": 4}, 8), ("none", {}, 0)],
 )
 def test_control_layouts(control, kw, expected):
-    s = simulate_block(3, 8, rng=np.random.default_rng(2), extra=None, control=control, **kw)
+    s = ov.simulate_block(3, 8, rng=np.random.default_rng(2), extra=None, control=control, **kw)
     ctrl = s.block.points.role == CONTROL
     assert ctrl.sum() == expected
     np.testing.assert_array_equal(s.block.points.xyz[ctrl], s.truth.points.xyz[ctrl])
 
 
 def test_chains_xy_plus_z():
-    s = simulate_block(
+    s = ov.simulate_block(
         3, 9, rng=np.random.default_rng(2), extra=None, control="chains", chain_spacing=4,
         control_spacing=3, control_kind="xy+z",
     )  # fmt: skip
@@ -96,7 +95,7 @@ def test_chains_xy_plus_z():
 
 
 def test_check_points_are_given_but_not_control():
-    s = simulate_block(3, 8, rng=np.random.default_rng(2), n_check=5)
+    s = ov.simulate_block(3, 8, rng=np.random.default_rng(2), n_check=5)
     chk = s.block.points.role == CHECK
     assert chk.sum() == 5
     np.testing.assert_array_equal(s.block.points.xyz_known[chk], s.truth.points.xyz[chk])
@@ -106,7 +105,7 @@ def test_gross_and_systematic_hooks_are_recorded():
     def radial(xy, image):
         return 1e-4 * xy * (np.sum(xy**2, axis=1, keepdims=True) / 100.0**2)
 
-    s = simulate_block(
+    s = ov.simulate_block(
         3, 8, rng=np.random.default_rng(5), sigma_image_mm=0.0, gross={"count": 7, "size_mm": 0.1},
         systematic=radial,
     )  # fmt: skip
@@ -120,7 +119,7 @@ def test_gross_and_systematic_hooks_are_recorded():
 
 
 def test_layout_footprints_and_superwide_camera():
-    s = simulate_block(
+    s = ov.simulate_block(
         2,
         5,
         rng=np.random.default_rng(1),
@@ -149,6 +148,6 @@ def test_layout_footprints_and_superwide_camera():
 )
 def test_bad_input_gives_one_clear_line(kw):
     kw.setdefault("rng", np.random.default_rng(0))
-    with pytest.raises(InputError) as exc:
-        simulate_block(2, 4, **kw)
+    with pytest.raises(ov.InputError) as exc:
+        ov.simulate_block(2, 4, **kw)
     assert "\n" not in str(exc.value)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from orientviz.errors import InputError
+import orientviz as ov
 from orientviz.simulate import systematic as se
 
 XY = np.array([[110.0, 0.0], [0.0, 110.0], [-80.0, 60.0], [0.0, 0.0]])
@@ -59,7 +59,7 @@ def test_sum_per_group_and_typical_magnitude():
     pg = se.PerGroup([a, None], group=[0, 1, 0])
     d = pg(np.array([[110.0, 0], [110.0, 0], [55.0, 0]]), [0, 1, 2])
     np.testing.assert_allclose(d[:, 0], [0.005, 0.0, 0.0025])
-    with pytest.raises(InputError, match="only 2 models"):
+    with pytest.raises(ov.InputError, match="only 2 models"):
         se.PerGroup([a, None], group=[0, 2])
     # the error fields are linear in their amplitudes, so the scaling is exact
     assert se.magnitude_um(se.typical(10.0)) == pytest.approx(10.0, rel=1e-9)
@@ -76,14 +76,14 @@ def test_film_deformation_differs_per_image_with_the_requested_rms():
     # 400 images x 144 points: the sample rms is within a few % of 2 µm
     assert np.sqrt(np.mean(d**2)) * 1e3 == pytest.approx(2.0, rel=0.1)
     assert not np.allclose(d[0], d[1])
-    with pytest.raises(InputError, match="defined for 400 images"):
+    with pytest.raises(ov.InputError, match="defined for 400 images"):
         fd(xy[:1], [400])
 
 
 def test_bad_coordinates_are_rejected():
-    with pytest.raises(InputError, match=r"expected shape \(n, 2\)"):
+    with pytest.raises(ov.InputError, match=r"expected shape \(n, 2\)"):
         se.affinity()(np.zeros((3, 3)), [0, 0, 0])
-    with pytest.raises(InputError, match="axis"):
+    with pytest.raises(ov.InputError, match="axis"):
         se.trapezoid(axis="z")
 
 

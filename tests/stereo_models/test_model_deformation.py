@@ -5,16 +5,14 @@ import dataclasses
 import numpy as np
 import pytest
 
-from orientviz.errors import InputError, NotDeterminableError
+import orientviz as ov
 from orientviz.rotation import matrix_from_rotvec
-from orientviz.simulate import simulate_block
 from orientviz.simulate import systematic as sy
 from orientviz.stereo_models import (
     MODEL_SETS,
     TERMS,
     deformed,
     form_models,
-    independent_models,
     joint_setup,
     model_ap_set,
     model_rows,
@@ -27,7 +25,7 @@ W3 = np.array([1.0, 1.0, 0.25])
 
 @pytest.fixture(scope="module")
 def small():
-    return simulate_block(2, 6, rng=np.random.default_rng(3), control="chains")
+    return ov.simulate_block(2, 6, rng=np.random.default_rng(3), control="chains")
 
 
 def test_fields_are_orthogonal_to_the_similarity(small):
@@ -83,7 +81,7 @@ def test_jacobians_match_finite_differences(small):
 
 def test_known_model_deformation_is_recovered_noise_free():
     """Deform the models by a known block-wide field; the adjustment finds it again."""
-    sim = simulate_block(3, 8, rng=np.random.default_rng(11), sigma_image_mm=0.0)
+    sim = ov.simulate_block(3, 8, rng=np.random.default_rng(11), sigma_image_mm=0.0)
     ms = form_models(sim.block)
     su = tie_setup(sim.block, ms)
     ground = su.row_point < su.tie_points.size
@@ -92,8 +90,8 @@ def test_known_model_deformation_is_recovered_noise_free():
     p_true = np.array([40.0, -25.0, 30.0, 20.0, -60.0, 35.0, -45.0])  # mm at a corner
     A = fld.evaluate(ms.xyz, ms.point_model)
     ms_d = dataclasses.replace(ms, xyz=ms.xyz + A @ p_true)
-    plain = independent_models(sim.block, models=ms_d)
-    res = independent_models(
+    plain = ov.independent_models(sim.block, models=ms_d)
+    res = ov.independent_models(
         sim.block, models=ms_d, deformation=spec, deformation_group="block", deformation_sigma=None
     )
     assert res.converged
@@ -109,7 +107,7 @@ def test_known_model_deformation_is_recovered_noise_free():
 @pytest.mark.parametrize("error", ["twist", "bend"])
 def test_model_self_calibration_lowers_sigma0_and_check_errors(error):
     make = {"twist": sy.model_twist, "bend": sy.model_bending}[error]
-    sim = simulate_block(
+    sim = ov.simulate_block(
         4, 12, rng=np.random.default_rng(5), control="chains", control_spacing=2, n_check=40,
         systematic=make(15.0), sigma_image_mm=0.003,
     )  # fmt: skip
@@ -119,8 +117,8 @@ def test_model_self_calibration_lowers_sigma0_and_check_errors(error):
         d = r.points[chk] - sim.truth.points.xyz[chk]
         return np.sqrt(np.mean(np.sum(d**2, axis=1)))
 
-    plain = independent_models(sim.block)
-    cal = independent_models(sim.block, deformation="classical", deformation_group="block")
+    plain = ov.independent_models(sim.block)
+    cal = ov.independent_models(sim.block, deformation="classical", deformation_group="block")
     assert cal.converged
     assert cal.sigma0 < 0.8 * plain.sigma0
     assert rms(cal) < 0.9 * rms(plain)
@@ -130,38 +128,38 @@ def test_model_self_calibration_lowers_sigma0_and_check_errors(error):
 
 
 def test_unknown_sets_terms_and_groups_are_named(small):
-    with pytest.raises(InputError) as e:
-        independent_models(small.block, deformation="ebner12")
+    with pytest.raises(ov.InputError) as e:
+        ov.independent_models(small.block, deformation="ebner12")
     for name in list(MODEL_SETS) + ["twist"]:
         assert name in str(e.value)
-    with pytest.raises(InputError, match="unknown model deformation term.*'torsion'"):
+    with pytest.raises(ov.InputError, match="unknown model deformation term.*'torsion'"):
         model_ap_set(["twist", "torsion"])
-    with pytest.raises(InputError, match="distinct"):
+    with pytest.raises(ov.InputError, match="distinct"):
         model_ap_set(["twist", "twist"])
-    with pytest.raises(InputError, match="deformation_group"):
-        independent_models(small.block, deformation="height", deformation_group="image")
-    with pytest.raises(InputError, match="rigorous"):
-        independent_models(small.block, deformation="height", method="pat-m")
+    with pytest.raises(ov.InputError, match="deformation_group"):
+        ov.independent_models(small.block, deformation="height", deformation_group="image")
+    with pytest.raises(ov.InputError, match="rigorous"):
+        ov.independent_models(small.block, deformation="height", method="pat-m")
 
 
 def test_non_determinable_sets_name_the_correlated_pairs():
     # flat ground and standard points only: a height scale is no parameter at all, and
     # free per-model parameters are tied to the similarity of the neighbours
-    sim = simulate_block(
+    sim = ov.simulate_block(
         2, 6, rng=np.random.default_rng(3), control="chains", extra=None, relief=0.0
     )
     with pytest.raises(
-        NotDeterminableError, match="held only by the pseudo-observation: height_scale@block"
+        ov.NotDeterminableError, match="held only by the pseudo-observation: height_scale@block"
     ):
-        independent_models(
+        ov.independent_models(
             sim.block, deformation="all", deformation_group="block", deformation_sigma=None
         )
-    with pytest.raises(NotDeterminableError) as e:
-        independent_models(sim.block, deformation="all", deformation_sigma=None)
+    with pytest.raises(ov.NotDeterminableError) as e:
+        ov.independent_models(sim.block, deformation="all", deformation_sigma=None)
     msg = str(e.value)
     assert "correlated:" in msg and "~" in msg and "ρ=" in msg
     # with weak pseudo-observations the same set adjusts and the analysis names them
-    res = independent_models(sim.block, deformation="all", deformation_group="block")
+    res = ov.independent_models(sim.block, deformation="all", deformation_group="block")
     assert "height_scale@block" in res.deformation.analysis.undetermined
     assert res.deformation.sigma.shape == (1, len(TERMS))
     assert deformed is not None

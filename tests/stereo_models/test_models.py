@@ -3,15 +3,17 @@
 import numpy as np
 import pytest
 
+import orientviz as ov
 from orientviz.block import CONTROL, TIE, Observations
-from orientviz.errors import DatumDefectError, InputError, NotDeterminableError
-from orientviz.simulate import simulate_block
-from orientviz.stereo_models import form_models, independent_models, model_to_object
+from orientviz.errors import DatumDefectError
+from orientviz.stereo_models import form_models, model_to_object
 
 
 def noise_free(strips=3, images=8, **kw):
     kw.setdefault("extra", None)
-    return simulate_block(strips, images, rng=np.random.default_rng(11), sigma_image_mm=0.0, **kw)
+    return ov.simulate_block(
+        strips, images, rng=np.random.default_rng(11), sigma_image_mm=0.0, **kw
+    )
 
 
 def test_model_formation_reproduces_the_true_model_exactly():
@@ -32,7 +34,7 @@ def test_model_formation_reproduces_the_true_model_exactly():
 @pytest.mark.parametrize("method", ["rigorous", "pat-m"])
 def test_noise_free_block_gives_the_truth(method):
     s = noise_free(2, 6)
-    res = independent_models(s.block, method=method)
+    res = ov.independent_models(s.block, method=method)
     assert res.converged
     np.testing.assert_allclose(res.points, s.truth.points.xyz, atol=1e-6)
     centres = res.centres
@@ -45,8 +47,8 @@ def test_planimetric_check_point_errors_match_the_predicted_precision():
     # sample is a few hundred: the ratio of RMS values scatters by ~10 %; allow 25 %.
     num, den = np.zeros(3), np.zeros(3)
     for seed in range(10):
-        s = simulate_block(3, 6, rng=np.random.default_rng(seed), extra=None)
-        res = independent_models(s.block, precision=True)
+        s = ov.simulate_block(3, 6, rng=np.random.default_rng(seed), extra=None)
+        res = ov.independent_models(s.block, precision=True)
         tp = res.point_index
         free = s.block.points.role[tp] == TIE
         e = (res.points[tp] - s.truth.points.xyz[tp])[free]
@@ -61,9 +63,9 @@ def test_planimetric_check_point_errors_match_the_predicted_precision():
 
 
 def test_rigorous_and_patm_agree_in_planimetry():
-    s = simulate_block(3, 8, rng=np.random.default_rng(4), extra=None, control="chains")
-    a = independent_models(s.block, method="rigorous", precision=True)
-    b = independent_models(s.block, method="pat-m")
+    s = ov.simulate_block(3, 8, rng=np.random.default_rng(4), extra=None, control="chains")
+    a = ov.independent_models(s.block, method="rigorous", precision=True)
+    b = ov.independent_models(s.block, method="pat-m")
     tp = a.point_index
     sd = np.sqrt(np.einsum("nii->ni", a.cofactor_blocks["points"][: tp.size])) * a.sigma0
     d = a.points[tp] - b.points[tp]
@@ -73,16 +75,16 @@ def test_rigorous_and_patm_agree_in_planimetry():
 
 def test_bad_method_and_control():
     s = noise_free(1, 4)
-    with pytest.raises(InputError):
-        independent_models(s.block, method="bundle")
-    with pytest.raises(InputError):
-        independent_models(s.block, control="loose")
+    with pytest.raises(ov.InputError):
+        ov.independent_models(s.block, method="bundle")
+    with pytest.raises(ov.InputError):
+        ov.independent_models(s.block, control="loose")
 
 
 def test_block_without_control_is_a_datum_defect():
     s = noise_free(2, 5, control="none")
     with pytest.raises(DatumDefectError) as exc:
-        independent_models(s.block)
+        ov.independent_models(s.block)
     msg = str(exc.value)
     assert "\n" not in msg and "0 planimetric control" in msg
 
@@ -95,7 +97,7 @@ def test_disconnected_block_names_its_parts():
     b.points.role[second] = TIE
     b.points.xyz_known[second] = np.nan
     with pytest.raises(DatumDefectError) as exc:
-        independent_models(b)
+        ov.independent_models(b)
     msg = str(exc.value)
     assert "2 unconnected parts" in msg and "part 2" in msg and "s01_000+s01_001" in msg
     assert "\n" not in msg
@@ -109,7 +111,7 @@ def test_model_with_too_few_points_is_named():
     drop = img1[4:]  # keep only 4 points of image 1
     keep = np.setdiff1d(np.arange(len(o)), drop)
     b.observations = Observations(o.image[keep], o.point[keep], o.xy[keep], o.sigma[keep])
-    with pytest.raises(NotDeterminableError) as exc:
+    with pytest.raises(ov.NotDeterminableError) as exc:
         form_models(b)
     assert "s00_000+s00_001" in str(exc.value) and "\n" not in str(exc.value)
 
@@ -123,7 +125,7 @@ def test_points_in_no_model_stay_nan():
     rows = np.flatnonzero(o.point == p)
     keep = np.setdiff1d(np.arange(len(o)), rows[1:])
     b.observations = Observations(o.image[keep], o.point[keep], o.xy[keep], o.sigma[keep])
-    res = independent_models(b)
+    res = ov.independent_models(b)
     assert np.all(np.isnan(res.points[p]))
     assert np.sum(np.isnan(res.points[:, 0])) == 1
 
@@ -135,16 +137,16 @@ def test_noise_free_bundle_and_models_both_give_the_truth():
     b = bundle_adjust(s.block, precision=False)
     xb = b.x[b.blocks["points"]].reshape(-1, 3)
     np.testing.assert_allclose(xb, s.truth.points.xyz, atol=1e-5)
-    m = independent_models(s.block)
+    m = ov.independent_models(s.block)
     np.testing.assert_allclose(m.points, xb, atol=1e-5)
 
 
 def test_bundle_and_models_agree_within_their_precision():
     from orientviz.bundle import bundle_adjust
 
-    s = simulate_block(3, 8, rng=np.random.default_rng(7), extra=None, control="chains")
+    s = ov.simulate_block(3, 8, rng=np.random.default_rng(7), extra=None, control="chains")
     b = bundle_adjust(s.block)
-    m = independent_models(s.block, precision=True)
+    m = ov.independent_models(s.block, precision=True)
     tp = m.point_index
     xb = b.x[b.blocks["points"]].reshape(-1, 3)[tp]
     qb = np.einsum("nii->ni", b.cofactor_blocks["points"])[tp] * b.sigma0**2
