@@ -121,5 +121,14 @@ def _copy_lessons(app) -> None:
             shutil.copy2(nb, target / nb.name)
 
 
+def _clear_generated(app) -> None:
+    """Remove the API pages autosummary wrote in an earlier build (before it writes them
+    again): a module that was moved or deleted since would otherwise keep a stale page that
+    is in no toctree (a warning the book's test counts)."""
+    for old in (HERE / "api" / "generated").glob("*.rst"):
+        old.unlink()
+
+
 def setup(app):
+    app.connect("builder-inited", _clear_generated, priority=100)  # before autosummary (500)
     app.connect("builder-inited", _copy_lessons)
