@@ -71,10 +71,24 @@ def plot_image(
             scale=1.0 / scale, color="C3", width=0.004, label=f"residuals × {scale:g}",
         )  # fmt: skip
     ax.set_aspect("equal")
-    ax.set_xlabel("x_B [m]")
-    ax.set_ylabel("y_B [m]")
+    _image_axes_labels(ax, np.abs(xy).max())
     ax.legend(loc="best", fontsize=10)
     return fig
+
+
+def _image_axes_labels(ax, extent: float) -> None:
+    """Label the image axes in m, or in km (ticks thinned) when the image spans > 5 km."""
+    if extent <= 5000.0:
+        ax.set_xlabel("x_B [m]")
+        ax.set_ylabel("y_B [m]")
+        return
+    from matplotlib.ticker import FuncFormatter, MaxNLocator
+
+    for axis in (ax.xaxis, ax.yaxis):
+        axis.set_major_locator(MaxNLocator(nbins=6))
+        axis.set_major_formatter(FuncFormatter(lambda v, _pos: f"{v / 1000:g}"))
+    ax.set_xlabel("x_B [km]")
+    ax.set_ylabel("y_B [km]")
 
 
 def _equal_3d(ax) -> None:
