@@ -135,30 +135,12 @@ class BundleProblem:
     # ----------------------------------------------------------------- model
     def residuals(self, st: BundleState, jac: bool):
         """Weighted misclosures l − f (n, 2)·(1/σ), with Jacobians if ``jac``."""
-        xyz = st.xyz[self.obs.point]
-        seq = self.block.sequence
+        io = self.interior
+        args = (st.X0, st.angles, io.c, io.x0, io.y0, self.obs.image, st.xyz[self.obs.point])
         if jac:
-            f, Je, Jp = collinearity_block(
-                st.X0,
-                st.angles,
-                self.interior.c,
-                self.interior.x0,
-                self.interior.y0,
-                self.obs.image,
-                xyz,
-                seq,
-            )
+            f, Je, Jp = collinearity_block(*args, self.block.sequence)
         else:
-            f = project_block(
-                st.X0,
-                st.angles,
-                self.interior.c,
-                self.interior.x0,
-                self.interior.y0,
-                self.obs.image,
-                xyz,
-                seq,
-            )
+            f = project_block(*args, self.block.sequence)
             Je = Jp = None
         if self.q:
             f = f + (self.ap.A_csr @ st.ap).reshape(-1, 2)
