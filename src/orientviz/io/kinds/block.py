@@ -28,6 +28,7 @@ from ...errors import InputError
 from ...report import Solution
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
+from ._diverge import divergence_note
 from ._frame import block_from_tables, read_frame_tables, require_finite, tables_from_block
 
 METHODS = ("bundle", "models", "polynomial")
@@ -178,22 +179,29 @@ def solve(problem: Problem, method: str | None) -> Solution:
     return solution_from_block_adjustment(problem, block, adj, method)
 
 
-def _labels(block: Block, n: int, slices: dict | None = None) -> list[str]:
+def _labels(
+    block: Block,
+    n: int,
+    slices: dict | None = None,
+    control: str = "weighted",
+    more: dict[str, list[str]] | None = None,
+) -> list[str]:
     """A label per residual in the user's ids: ``image/point/x``, ``point/X`` (control
-    coordinates), ``image/X0_obs``…, ``image/omega_obs``…, ``additional[k]``."""
+    coordinates), ``image/X0_obs``…, ``image/omega_obs``…, names of the additional
+    parameters or auxiliary rows given in ``more`` (never an internal index)."""
     obs = block.observations
     im, pt = block.images.ids, block.points.ids
     base = [f"{im[i]}/{pt[p]}" for i, p in zip(obs.image, obs.point)]
     labels = [f"{b}/{a}" for b in base for a in "xy"]
     slices = slices or {}
-    pts, imgs = block.points, block.images
+    imgs = block.images
     named = {
-        "control": [f"{pt[p]}/{'XYZ'[c]}" for p in range(len(pt)) for c in range(3)
-                    if pts.role[p] == CONTROL and pts.sigma[p, c] > 0],
+        "control": _control_labels(block, control),
         "X0_obs": [f"{im[i]}/{n_}_obs" for i in range(len(im)) for c, n_ in enumerate(("X0", "Y0", "Z0"))
                    if imgs.X0_sigma[i, c] > 0],
         "angles_obs": [f"{im[i]}/{n_}_obs" for i in range(len(im))
                        for c, n_ in enumerate(("omega", "phi", "kappa")) if imgs.angles_sigma[i, c] > 0],
+        **(more or {}),
     }  # fmt: skip
     out = labels[:n] + [""] * max(n - len(labels), 0)
     for name, sl in slices.items():
@@ -202,9 +210,21 @@ def _labels(block: Block, n: int, slices: dict | None = None) -> list[str]:
         k = sl.stop - sl.start
         mine = named.get(name)
         if mine is None or len(mine) != k:
-            mine = [f"{name}[{j}]" for j in range(k)]
+            words = {"control": "control coordinate", "additional": "additional parameter"}
+            mine = [f"{words.get(name, name)} no. {j + 1} of {k}" for j in range(k)]
         out[sl] = mine
-    return [lab or f"observation {j}" for j, lab in enumerate(out)]
+    return [lab or f"observation no. {j + 1}" for j, lab in enumerate(out)]
+
+
+def _control_labels(block: Block, control: str) -> list[str]:
+    """``point/X`` for each coordinate pseudo-observation of the bundle, in its order
+    (unknown points in block order, then X, Y, Z; see ``bundle._checks.point_setup``)."""
+    from ...bundle._checks import point_setup
+
+    setup = point_setup(block, control)
+    pt = block.points.ids
+    return [f"{pt[p]}/{'XYZ'[c]}" for p in np.flatnonzero(setup.unknown) for c in range(3)
+            if np.isfinite(setup.prior_sigma[p, c])]  # fmt: skip
 
 
 #: "The model does not fit the data" when σ0 exceeds this and …
@@ -240,8 +260,13 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
     """Turn a block adjustment (blocks ``exterior`` (m, 6) and ``points`` (p, 3)) into a report."""
     m, p = block.n_images, block.n_points
     if adj.obs_labels is None or len(adj.obs_labels) != adj.n_observations:
-        slices = adj.obs_slices
-        adj.obs_labels = _labels(block, adj.n_observations, slices)
+        more = {}
+        if "additional" in adj.blocks:
+            more["additional"] = [f"{nm}_obs" for nm in adj.names[adj.blocks["additional"]]]
+        if getattr(adj, "auxiliary", None) is not None and adj.auxiliary.labels:
+            more["auxiliary"] = list(adj.auxiliary.labels)
+        control = str(problem.options.get("control", "weighted"))
+        adj.obs_labels = _labels(block, adj.n_observations, adj.obs_slices, control, more)
     std = adj.std()
     ext = adj.x[adj.blocks["exterior"]].reshape(m, 6)
     sext = std[adj.blocks["exterior"]].reshape(m, 6)
@@ -258,6 +283,9 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
         adj.reason = f"{adj.reason}; BUT THE MODEL DOES NOT FIT THE DATA (see the warning)"
     if block.meta.get("alignment"):
         notes.insert(0, block.meta["alignment"])
+    moved = divergence_note(block, adj, problem.units.m_per_length, problem.units.length)
+    if moved:
+        notes.insert(0, moved)
     if np.any(block.points.role == CHECK):
         mode = check_mode(problem) if method == "bundle" else "independent"
         notes.insert(0, CHECK_MODES[mode] + f" (options.check_points = {mode!r})")
