@@ -74,7 +74,7 @@ def dump(block: Block, units: Units, columnar: bool) -> dict[str, Any]:
     return tables_from_block(block, units, columnar)
 
 
-def approximate(block: Block) -> Block:
+def approximate(block: Block, frame: str = "control") -> Block:
     """Fill in missing approximate values before an adjustment.
 
     No image approximations at all: everything is computed from scratch by
@@ -82,12 +82,13 @@ def approximate(block: Block) -> Block:
     seed pair, resections, intersections, a similarity onto the control). Otherwise the
     given orientations are first carried into the control's frame when they are in
     another one (:func:`._align.align_to_control`, a 7-parameter similarity), and tie/check
-    points without coordinates are intersected from them.
+    points without coordinates are intersected from them. ``frame="model"`` (a free
+    network): computed approximations stay in the seed pair's model frame.
     """
     if not np.all(np.isfinite(block.images.X0)) or not np.all(np.isfinite(block.images.angles)):
         from ...block import approximate_values
 
-        return approximate_values(block)
+        return approximate_values(block, frame=frame)
     from ._align import align_to_control
 
     block, alignment = align_to_control(block)
@@ -154,16 +155,53 @@ def with_check_rays(block: Block) -> Block:
 
 
 def solve(problem: Problem, method: str | None) -> Solution:
-    """Adjust the block by ``method`` and collect the report."""
+    """Adjust the block by ``method`` and collect the report.
+
+    Datum options (:mod:`._datum`): ``free`` (a free network, minimum constraints) and
+    ``fix`` (images/points held at their given values); ``robust`` (``"huber"``,
+    ``"cauchy"``) with ``robust_scale`` reweights the bundle (:mod:`._robust`).
+    """
+    from ._datum import apply_fix, free_network, minimum_datum, parse_fix
+
     method = method or "bundle"
-    block: Block = approximate(problem.data)
+    o = problem.options
+    loss = str(o.get("robust", "none"))
+    if loss != "none" and method != "bundle":
+        raise InputError(f"robust = {loss!r} applies to the bundle only, not --method {method}",
+                         problem.source, "options.robust")  # fmt: skip
+    fix = parse_fix(o.get("fix"), problem.source)
+    free = bool(o.get("free", False))
+    block: Block = problem.data
+    datum_notes = []
+    if free:
+        block, note = free_network(block)
+        datum_notes += [note] if note else []
+    block = approximate(block, frame="model" if free else "control")
+    if free and not fix:
+        block, note = minimum_datum(block)
+        datum_notes.append(note)
+    elif fix:
+        block = apply_fix(block, fix)
+        datum_notes.append("datum: " + ", ".join(i + (":" + ",".join(p) if p else "") for i, p in fix)
+                           + " held at the given values" + (" (free network otherwise)" if free else ""))  # fmt: skip
     keys = ("control", "max_iter", "tol", "degree_xy", "degree_z")
-    opts = {k: v for k, v in problem.options.items() if k in keys}
+    opts = {k: v for k, v in o.items() if k in keys}
     if method == "bundle":
         from ...bundle import bundle_adjust
 
         rays = check_mode(problem) == "rays"
-        adj = _call(bundle_adjust, with_check_rays(block) if rays else block, opts)
+        run_block = with_check_rays(block) if rays else block
+        if loss == "none":
+            adj = _call(bundle_adjust, run_block, opts)
+        else:
+            from ._robust import robust_bundle
+
+            adj, run = robust_bundle(run_block, loss, o.get("robust_scale"),
+                                     lambda b: _call(bundle_adjust, b, opts))  # fmt: skip
+            datum_notes.append(run.note(run_block))
+        sol = solution_from_block_adjustment(problem, block, adj, method)
+        sol.notes[:0] = datum_notes
+        return sol
     elif method == "models":
         from ...stereo_models import independent_models
 
