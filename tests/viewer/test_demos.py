@@ -87,6 +87,37 @@ def test_pair_panel_passes_scrub_and_reset():
         app.stop()
 
 
+def test_pair_selected_point_rays_gap_plane_and_normalised_images_follow_the_dials():
+    app = ViewerApp(load_demo("pair"), port=0, verbose=False)
+    try:
+        pv = app.extra["pair"]
+        assert pv.selected() == 0 and pv.nodes["gap"].visible
+        gap0 = pv.point["gap_length"]
+        seg = np.asarray(pv.nodes["gap"].points, dtype=float)[0] + pv.frame.origin
+        assert np.linalg.norm(seg[1] - seg[0]) == pytest.approx(gap0, rel=1e-4)
+        assert "shortest segment" in pv.h["point_info"].content
+        pv.h["point"].value = "5"
+        assert pv.selected() == 4 and pv.point["gap_length"] != gap0
+        plane = np.asarray(pv.nodes["epipolar_plane"].vertices, dtype=float) + pv.frame.origin
+        np.testing.assert_allclose(plane, pv.point["plane"], atol=1e-3)
+        pv.h["plane"].value = False
+        assert not pv.nodes["epipolar_plane"].visible
+        # the normalised images appear on request and follow the dials
+        assert not pv.h["picture"].visible
+        pv.h["normalised"].value = True
+        assert pv.h["picture"].visible and pv.h["picture_folder"].visible
+        first = pv.picture.copy()
+        pv.h["orient"].value = None  # to convergence: rows line up, the gap closes
+        assert pv.point["gap_length"] < 1e-3  # from ~10 mm to below 1 µm (machine)
+        np.testing.assert_allclose(pv.norm["p_y"], 0.0, atol=1e-3)
+        assert pv.picture.shape == first.shape and np.any(pv.picture != first)
+        pv.h["point"].value = "none"
+        assert not pv.nodes["gap"].visible and pv.point is None
+        assert app.messages == []
+    finally:
+        app.stop()
+
+
 def test_radar_panel_follows_image_target_and_surface():
     app = ViewerApp(load_demo("radar"), port=0, verbose=False)
     try:
