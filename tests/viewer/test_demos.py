@@ -87,7 +87,38 @@ def test_pair_panel_passes_scrub_and_reset():
         app.stop()
 
 
-def test_radar_panel_follows_image_and_surface():
+def test_pair_selected_point_rays_gap_plane_and_normalised_images_follow_the_dials():
+    app = ViewerApp(load_demo("pair"), port=0, verbose=False)
+    try:
+        pv = app.extra["pair"]
+        assert pv.selected() == 0 and pv.nodes["gap"].visible
+        gap0 = pv.point["gap_length"]
+        seg = np.asarray(pv.nodes["gap"].points, dtype=float)[0] + pv.frame.origin
+        assert np.linalg.norm(seg[1] - seg[0]) == pytest.approx(gap0, rel=1e-4)
+        assert "shortest segment" in pv.h["point_info"].content
+        pv.h["point"].value = "5"
+        assert pv.selected() == 4 and pv.point["gap_length"] != gap0
+        plane = np.asarray(pv.nodes["epipolar_plane"].vertices, dtype=float) + pv.frame.origin
+        np.testing.assert_allclose(plane, pv.point["plane"], atol=1e-3)
+        pv.h["plane"].value = False
+        assert not pv.nodes["epipolar_plane"].visible
+        # the normalised images appear on request and follow the dials
+        assert not pv.h["picture"].visible
+        pv.h["normalised"].value = True
+        assert pv.h["picture"].visible and pv.h["picture_folder"].visible
+        first = pv.picture.copy()
+        pv.h["orient"].value = None  # to convergence: rows line up, the gap closes
+        assert pv.point["gap_length"] < 1e-3  # from ~10 mm to below 1 µm (machine)
+        np.testing.assert_allclose(pv.norm["p_y"], 0.0, atol=1e-3)
+        assert pv.picture.shape == first.shape and np.any(pv.picture != first)
+        pv.h["point"].value = "none"
+        assert not pv.nodes["gap"].visible and pv.point is None
+        assert app.messages == []
+    finally:
+        app.stop()
+
+
+def test_radar_panel_follows_image_target_and_surface():
     app = ViewerApp(load_demo("radar"), port=0, verbose=False)
     try:
         rv = app.extra["radar"]
@@ -97,7 +128,28 @@ def test_radar_panel_follows_image_and_surface():
         pts = np.asarray(rv.nodes["points"].points, dtype=float) + rv.frame.origin
         np.testing.assert_allclose(pts, geo["points"], atol=0.02)  # float32 at ~50 km
         assert "image 2, surface sphere150_convex" in rv.h["info"].content
+        # only the selected image is drawn in full, the others are faded
+        assert rv.nodes["station_2"].opacity is None and rv.nodes["axis_2"].visible
+        assert rv.nodes["station_1"].opacity < 1 and not rv.nodes["axis_1"].visible
+        # the construction follows the target: the slant range runs station → target
+        rv.h["target"].value = "7"
+        seg = np.asarray(rv.nodes["slant_range"].points, dtype=float)[0] + rv.frame.origin
+        np.testing.assert_allclose(seg[0], geo["stations"][2], atol=0.02)
+        np.testing.assert_allclose(seg[1], geo["points"][6], atol=0.02)
+        from orientviz.radar.ppi import sphere_radius
+
+        # the slant range of the (rounded) image point: 4b
+        assert rv.construction["s"] == pytest.approx(sphere_radius(geo["xy"][6:7], geo["image"])[0])
+        assert "target 7" in rv.h["info"].content
+        # the shaded caps lie on the trilateration spheres of the selected image
+        cap = np.asarray(rv.nodes["sphere_0"].vertices, dtype=float) + rv.frame.origin
+        r = np.linalg.norm(cap - geo["points"][geo["triangle"][0]], axis=1)
+        np.testing.assert_allclose(r, geo["radii"][0], rtol=1e-5)
         rv.h["spheres"].value = False
-        assert not rv.nodes["spheres"].visible and not rv.nodes["candidates"].visible
+        assert not rv.nodes["sphere_0"].visible and not rv.nodes["candidates"].visible
+        rv.h["construction"].value = False
+        assert not rv.nodes["circle"].visible and not rv.nodes["ground_plane"].visible
+        assert "slant-range circle" in rv.h["legend"].content
+        assert app.messages == []
     finally:
         app.stop()

@@ -21,7 +21,7 @@ from ._ap_normal import ap_normal, point_ap_term
 from ._auxiliary import BundleAuxiliary, auxiliary_rows
 from ._border import solve_border
 from ._checks import PointSetup
-from ._kernel import collinearity_block, project_block
+from ._kernel import collinearity_block, normalised_block, project_block
 from ._normal import NormalEquations
 from ._parts import (
     BorderSolver,
@@ -103,6 +103,7 @@ class BundleProblem:
             block, self.obs, self.points, self.reduced, additional, ap_group, ap_sigma
         )
         self.border = BorderSolver()
+        self._design_at: BundleState | None = None  # iterate of a lens model's design
         #: per (point, group) pairs of rays for the precision with parameters (a cache)
         self.ray_groups = None
         self.aux: BundleAuxiliary | None = None
@@ -136,6 +137,8 @@ class BundleProblem:
     # ----------------------------------------------------------------- model
     def residuals(self, st: BundleState, jac: bool):
         """Weighted misclosures l − f (n, 2)·(1/σ), with Jacobians if ``jac``."""
+        if self.ap.lens is not None:
+            return self._lens_residuals(st, jac)
         io = self.interior
         args = (st.X0, st.angles, io.c, io.x0, io.y0, self.obs.image, st.xyz[self.obs.point])
         if jac:
@@ -146,6 +149,26 @@ class BundleProblem:
         if self.q:
             f = f + (self.ap.A_csr @ st.ap).reshape(-1, 2)
         return (self.obs.xy - f) * self.obs.weight, Je, Jp
+
+    def _lens_residuals(self, st: BundleState, jac: bool):
+        """Misclosures and Jacobians through the camera model (:mod:`._lens`); with
+        ``jac`` the design of its parameters at ``st`` becomes the problem's."""
+        obs, lens = self.obs, self.ap.lens
+        nrm, Je, Jp = normalised_block(
+            st.X0, st.angles, obs.image, st.xyz[obs.point], self.block.sequence, jac
+        )
+        f, M, A = lens.evaluate(st.ap, self.ap.group[obs.image], nrm, obs.xy, jac)
+        if jac:
+            Je, Jp = M @ Je, M @ Jp
+            if self.q:
+                self.ap = self.ap.with_design(A, obs.weight)
+                self._design_at = st
+        return (obs.xy - f) * obs.weight, Je, Jp
+
+    def design_at(self, st: BundleState) -> None:
+        """Make the camera model's design the one at ``st`` (no-op for linear sets)."""
+        if self.ap.lens is not None and self.q and self._design_at is not st:
+            self._lens_residuals(st, True)
 
     def cost(self, st: BundleState, rw: F64) -> float:
         c = float(np.sum(rw**2))
@@ -165,6 +188,7 @@ class BundleProblem:
     ) -> NormalEquations:
         """Blocks of the normal equations and the Schur complement (see bundle._reduced)."""
         S = self.reduced
+        self.design_at(st)
         sw = self.obs.weight[:, :, None]
         Jew, Jpw = Je * sw, Jp * sw
         # image blocks: gather the (n, 2, 6) Jacobian by image, then reduce

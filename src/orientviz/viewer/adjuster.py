@@ -23,7 +23,9 @@ from ..block import Block
 from ..camera import collinearity_jacobian
 from ..errors import InputError
 
-Adjuster = Callable[[Block, int], Adjustment]
+#: ``adjuster(block, max_iter) -> Adjustment``; adjusters that can skip the precision
+#: also take ``precision=False`` (the viewer's quick re-solve after an action).
+Adjuster = Callable[..., Adjustment]
 
 #: :func:`small_bundle` refuses blocks with more unknowns than this (dense precision).
 SMALL_LIMIT = 3000
@@ -53,7 +55,7 @@ def apply_parameters(block: Block, result: Adjustment, x: np.ndarray | None = No
     return out
 
 
-def small_bundle(block: Block, max_iter: int = 20) -> Adjustment:
+def small_bundle(block: Block, max_iter: int = 20, precision: bool = True) -> Adjustment:
     """A dense collinearity bundle for small blocks (fallback for the viewer's demos).
 
     Control coordinates with σ = 0 are held fixed, σ > 0 enter as weighted
@@ -65,6 +67,8 @@ def small_bundle(block: Block, max_iter: int = 20) -> Adjustment:
         Start values and observations (mm, m, rad).
     max_iter : int
         Maximum number of Gauss-Newton steps (1 = a single step).
+    precision : bool
+        Accepted for the adjuster protocol; the dense precision is always computed.
 
     Returns
     -------
@@ -149,11 +153,8 @@ def default_adjuster() -> Adjuster:
     except ImportError:
         return small_bundle
 
-    def adjust(block: Block, max_iter: int) -> Adjustment:
-        try:
-            return bundle_adjust(block, max_iter=max_iter, history_x=True)
-        except (ImportError, TypeError):  # bundle module still incomplete: use the fallback
-            return small_bundle(block, max_iter)
+    def adjust(block: Block, max_iter: int, precision: bool = True) -> Adjustment:
+        return bundle_adjust(block, max_iter=max_iter, history_x=True, precision=precision)
 
     return adjust
 

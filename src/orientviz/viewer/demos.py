@@ -84,7 +84,9 @@ def block_demo(
     desc = (
         f"{sim.block.summary()}. Simulated with {n_gross} blunders (40 µm) and systematic "
         "image errors of about 10 µm. Press *run to convergence*, then look at the largest "
-        "residuals; *reset* starts again from the approximate values."
+        "residuals, *colour by quality* and the worst images; switch a ray or an image off "
+        "under *act on the adjustment* (undo / rewind in the list of changes); *reset* "
+        "starts again from the approximate values."
     )
     from .deformation import deformation_extra
 

@@ -14,9 +14,17 @@ Scene tree::
     /pair/rays                     rays of both projectors to the scheme points
     /pair/parallax                 y-parallax arrows, from the left ray to the right
                                    ray (p_y = Y_left − Y_right), × exaggeration
+    /pair/selected/rays            the two rays of the selected scheme point
+    /pair/selected/gap             their shortest connecting segment (to scale)
+    /pair/selected/closest         its two ends
+    /pair/selected/epipolar_plane  the epipolar plane of the left ray (O1, O2, d1)
 
 The panel has the five dials (by, bz in mm; ω, φ, κ in centesimal minutes c), one
-pass / orient to convergence with a chosen formula, a pass scrubber and reset.
+pass / orient to convergence with a chosen formula, a pass scrubber and reset; a chosen
+point with its gap and plane (:func:`~orientviz.viewer.pair_rays.point_rays`), and on
+request the normalised (epipolar) images of the pair as a picture beside the scene
+(:func:`~orientviz.viewer.epipolar_picture.normalised_picture`). Everything follows the
+dials live.
 """
 
 from __future__ import annotations
@@ -30,10 +38,13 @@ from ..rotation import matrix_from_opk
 from ..units import RHO_C
 from . import geometry as g
 from .block_geometry import COLORS
+from .epipolar_picture import normalised_picture
+from .pair_rays import normalised_pair, plane_mesh, point_rays
 
 F64 = NDArray[np.float64]
 
 DIALS = ("by [mm]", "bz [mm]", "omega [c]", "phi [c]", "kappa [c]")
+LEFT_RAY, RIGHT_RAY, GAP = (40, 70, 160), (250, 130, 0), (200, 0, 130)
 
 
 def pair_geometry(plotter: Any, n_grid: int = 15) -> dict[str, F64]:
@@ -63,6 +74,11 @@ def pair_geometry(plotter: Any, n_grid: int = 15) -> dict[str, F64]:
         "scheme": spts,
         "scheme_parallax": ps,
     }
+
+
+def length_text(mm: float) -> str:
+    """A length in machine mm as µm below 1 mm, else in mm (signed, e.g. ``+957 µm``)."""
+    return f"{mm * 1000:+.0f} µm" if abs(mm) < 1.0 else f"{mm:+.2f} mm"
 
 
 def parallax_arrows(points: F64, parallax: F64, exaggeration: float) -> F64:
@@ -151,6 +167,7 @@ class PairView:
         self.nodes["parallax"] = sc.add_line_segments(
             "/pair/parallax", z2, COLORS["deformation"], thickness=2.0, thickness_units="screen"
         )
+        self._build_selection_nodes(sc, ps)
         h: dict[str, Any] = {}
         with gui.add_folder("Dials of the right projector"):
             for i, label in enumerate(DIALS):
@@ -163,11 +180,23 @@ class PairView:
             h["reset"] = gui.add_button("reset")
             h["scrub"] = gui.add_slider("pass", 0, 1, 1, 0, disabled=True)
             h["stats"] = gui.add_markdown("")
+        with gui.add_folder("Selected point"):
+            names = tuple(str(i + 1) for i in range(len(geo["scheme"])))
+            h["point"] = gui.add_dropdown("scheme point", ("none", *names), initial_value="1")
+            h["plane"] = gui.add_checkbox("epipolar plane of the left ray", True)
+            h["point_info"] = gui.add_markdown("")
         with gui.add_folder("Display"):
             h["exaggeration"] = gui.add_slider(
                 "parallax × (log10, 0 = auto)", -2.0, 2.0, 0.05, 0.0,
                 hint="0 draws the 90th percentile of |p_y| as 0.8 of a grid spacing",
             )  # fmt: skip
+            h["normalised"] = gui.add_checkbox(
+                "normalised images", False,
+                hint="the pair re-projected to the normal case: epipolar lines are rows",
+            )  # fmt: skip
+        with gui.add_folder("Normalised (epipolar) images", visible=False) as h["picture_folder"]:
+            h["picture"] = gui.add_image(np.full((8, 8, 3), 255, np.uint8), visible=False)
+            h["picture_info"] = gui.add_markdown("", visible=False)
         self.h = h
         guard = app.guard
         for label in DIALS:
@@ -179,10 +208,32 @@ class PairView:
             guard(lambda _e: self._set(self.snapshots[int(h["scrub"].value)], keep=True))
         )
         h["exaggeration"].on_update(guard(lambda _e: self._exaggerate()))
+        for key in ("point", "plane", "normalised"):
+            h[key].on_update(guard(lambda _e: self.redraw()))
         self.redraw()
         pos = self.frame.to_scene(np.array([-0.9 * cfg.model_base, -1.1 * cfg.model_base, 0.5 * H]))
         look = self.frame.to_scene(np.array([0.5 * cfg.model_base, 0.0, -H]))
         return {"camera": (pos, look, self.frame.size), "pair": self}
+
+    def _build_selection_nodes(self, sc: Any, ps: float) -> None:
+        z2 = np.zeros((2, 2, 3), np.float32)
+        self.nodes["sel_rays"] = sc.add_line_segments(
+            "/pair/selected/rays", z2, np.array([[LEFT_RAY] * 2, [RIGHT_RAY] * 2], np.uint8),
+            thickness=3.0, thickness_units="screen",
+        )  # fmt: skip
+        self.nodes["gap"] = sc.add_line_segments(
+            "/pair/selected/gap", z2[:1], GAP, thickness=5.0, thickness_units="screen"
+        )
+        self.nodes["closest"] = sc.add_point_cloud(
+            "/pair/selected/closest", np.zeros((2, 3), np.float32),
+            np.array([LEFT_RAY, RIGHT_RAY], np.uint8), point_size=1.5 * ps,
+            point_shape="circle", precision="float32",
+        )  # fmt: skip
+        V, F = plane_mesh(np.eye(4, 3))
+        self.nodes["epipolar_plane"] = sc.add_mesh_simple(
+            "/pair/selected/epipolar_plane", V.astype(np.float32), F, color=LEFT_RAY,
+            opacity=0.22, side="double", cast_shadow=False, receive_shadow=False,
+        )  # fmt: skip
 
     # ------------------------------------------------------------------ state
     def _dial(self, i: int) -> float:
@@ -286,3 +337,58 @@ class PairView:
             f"arrows ×{self.k:.3g} (left ray → right ray)"
         )
         self.rms = rms
+        if hasattr(self, "h"):
+            self._draw_selection(geo)
+            self._draw_picture(geo)
+
+    def selected(self) -> int | None:
+        """Index of the selected scheme point, or None."""
+        v = str(self.h["point"].value)
+        return None if v == "none" else int(v) - 1
+
+    def _draw_selection(self, geo: dict) -> None:
+        i = self.selected()
+        nodes = ("sel_rays", "gap", "closest", "epipolar_plane")
+        if i is None:
+            for key in nodes:
+                self.nodes[key].visible = False
+            self.h["point_info"].content = "Choose a scheme point to see its two rays."
+            self.point = None
+            return
+        X, Y, Z = self.plotter.scheme_points()
+        self.point = pr = point_rays(self.plotter, (X[i], Y[i], Z[i]))
+        f = self.frame
+        self.nodes["sel_rays"].points = f.to_scene(pr["rays"]).astype(np.float32)
+        self.nodes["gap"].points = f.to_scene(pr["closest"][None]).astype(np.float32)
+        self.nodes["closest"].points = f.to_scene(pr["closest"]).astype(np.float32)
+        self.nodes["epipolar_plane"].vertices = f.to_scene(pr["plane"]).astype(np.float32)
+        for key in nodes[:3]:
+            self.nodes[key].visible = True
+        self.nodes["epipolar_plane"].visible = bool(self.h["plane"].value)
+        gap = ", ".join(length_text(v) for v in pr["gap"])
+        self.h["point_info"].content = (
+            f"point {i + 1}: left ray (blue), right ray (orange), the shortest segment between "
+            f"them (magenta) **{length_text(pr['gap_length']).lstrip('+')}** = ({gap}); "
+            f"y-parallax p_y = {length_text(pr['p_y'])} (machine).  \n"
+            f"The right ray passes {length_text(pr['right_off_plane'])} off the epipolar plane "
+            "of the left ray (through O1, O2 and the left ray): 0 when the pair is oriented."
+        )
+
+    def _draw_picture(self, geo: dict) -> None:
+        show = bool(self.h["normalised"].value)
+        for key in ("picture_folder", "picture", "picture_info"):
+            self.h[key].visible = show
+        if not show:
+            return
+        X, Y, Z = self.plotter.scheme_points()
+        norm = normalised_pair(self.plotter, np.column_stack([X, Y, Z]))
+        pic, k = normalised_picture(norm, self.selected())
+        self.h["picture"].image = pic
+        rms = float(np.sqrt(np.mean(norm["p_y"] ** 2)))
+        self.h["picture_info"].content = (
+            f"The scheme points in the normalised images (c = {norm['c']} mm): epipolar lines "
+            f"are rows (orange: the selected point's). Bars: y₁′ − y₂′ × {k:.3g}, "
+            f"RMS {length_text(rms).lstrip('+')} (image)."
+        )
+        self.picture = pic
+        self.norm = norm

@@ -100,6 +100,11 @@ class BlockPanel:
                 ("strips", True), ("models", False), ("ellipsoids", True),
             ):  # fmt: skip
                 h[f"show_{key}"] = gui.add_checkbox(key, on)
+        from .panel_act import ActControls
+        from .panel_quality import QualityControls
+
+        self.quality = QualityControls(self).build()
+        self.act = ActControls(self).build()
         self._bind()
         self.scene.on_image_click = self.guard(self._select_from_click)
         self.select(0)
@@ -144,6 +149,8 @@ class BlockPanel:
         finally:
             self._syncing = False
         ang = from_rad(b.images.angles[k], "gon")
+        if getattr(self, "act", None) is not None:
+            self.act.refresh()
         self.handles["image_id"].content = (
             f"**{b.images.ids[k]}** (strip {b.images.strip[k]}) — sliders are changes of "
             f"X0 = ({b.images.X0[k, 0]:.1f}, {b.images.X0[k, 1]:.1f}, {b.images.X0[k, 2]:.1f}) m, "
@@ -165,6 +172,9 @@ class BlockPanel:
     def adjust(self, max_iter: int) -> None:
         """One iteration (``max_iter=1``) or a run to convergence from the current state."""
         res = self.state.step(max_iter)
+        self.state.record(
+            "one iteration" if max_iter == 1 else f"adjusted ({res.iterations} iterations)"
+        )
         self.scene.update()
         self.set_exaggeration(auto=True)
         self.scene.update_ellipsoids()
@@ -197,8 +207,9 @@ class BlockPanel:
         self.refresh(full=False)
 
     # ------------------------------------------------------------------ read-outs
-    def refresh(self, full: bool = True) -> None:
-        """Update σ0, the list of largest residuals and (``full``) the scrubber range."""
+    def refresh(self, full: bool = True, quality: bool = True) -> None:
+        """Update σ0, the list of largest residuals, (``full``) the scrubber range and
+        (``quality``) the quality colours and the list of changes."""
         st, h = self.state, self.handles
         e = st.misclosure()
         scores, kind = st.scores(e)
@@ -238,6 +249,9 @@ class BlockPanel:
             h["largest"].value = labels[0]
         finally:
             self._syncing = False
+        if full and quality and getattr(self, "quality", None) is not None:
+            self.quality.recolour()
+            self.act.refresh()
 
     def fly_to_selected(self) -> None:
         """Move every client's camera to the observation chosen in the residual list."""
@@ -252,8 +266,32 @@ class BlockPanel:
         b = self.state.block
         img = int(b.observations.image[j])
         self.handles["image"].value = img
-        target = self.scene.geo.frame.to_scene(b.points.xyz[b.observations.point[j]])
-        d = 8.0 * self.scene.geo.spacing
+        self.fly_to(self.scene.geo.frame.to_scene(b.points.xyz[b.observations.point[j]]))
+
+    def fly_to_image(self, i: int) -> None:
+        """Select image ``i`` and fly the camera to its projection centre's footprint."""
+        b = self.state.block
+        self.handles["image"].value = int(i)
+        target = self.scene.geo.frame.to_scene(b.images.X0[i]) - [
+            0.0,
+            0.0,
+            0.5 * self.scene.geo.height,
+        ]
+        self.fly_to(target, 1.5 * self.scene.geo.height)
+
+    def fly_to_point(self, k: int) -> None:
+        """Select point ``k`` (marked, with its rays) and fly the camera to it."""
+        b = self.state.block
+        self.scene.select_point(int(k))
+        seen = np.flatnonzero(b.observations.point == k)
+        if seen.size:  # its first image becomes the selected image
+            self.handles["image"].value = int(b.observations.image[seen[0]])
+        self.fly_to(self.scene.geo.frame.to_scene(b.points.xyz[k]))
+
+    def fly_to(self, target: np.ndarray, distance: float | None = None) -> None:
+        """Move every client's camera smoothly to look at ``target`` (scene frame, m)."""
+        d = 8.0 * self.scene.geo.spacing if distance is None else float(distance)
+        target = np.asarray(target, dtype=float)
         for client in self.server.get_clients().values():
             start_pos = np.asarray(client.camera.position, dtype=float)
             start_look = np.asarray(client.camera.look_at, dtype=float)

@@ -13,6 +13,9 @@ Scene tree (stable names; scene frame = object coordinates − origin, m, Z up):
     /block/strips                 polylines through the projection centres of each strip
     /block/models                 ground outlines of the models
     /block/ellipsoids             error ellipsoids of the points (after an adjustment)
+    /block/station_ellipsoids     error ellipsoids of projection centres (selected image, neighbours)
+    /block/selected_point         the point chosen in the panel, and /block/rays/point its rays
+    /block/control_drag           transform controls to drag a control point
     /block/labels/strip_<s>       strip labels
 
 Everything that is per observation is one batched node (a few line-segment and point
@@ -26,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from . import geometry as g
 from .block_geometry import COLORS, BlockGeometry
 
 #: Blocks with more images draw their frustums batched per strip, not one node per image.
@@ -81,6 +85,9 @@ class BlockScene:
         #: large blocks: strip → (line-segment node of its frustums, image indices)
         self.strip_frustums: dict[int, tuple[Any, np.ndarray]] = {}
         self.on_image_click = None
+        self.selected_point: int | None = None
+        #: frustum colours (m, 3) uint8 as last drawn by :meth:`colour_images`
+        self.image_colours: np.ndarray | None = None
         #: functions called after every redraw (e.g. parallax arrows, deformation)
         self.listeners: list = []
 
@@ -232,6 +239,8 @@ class BlockScene:
             if "strips" in self.nodes:
                 self.nodes["strips"].points = geo.strip_lines().astype(np.float32)
         self.last_scores, self.score_kind = scores, kind
+        if images is None and self.selected_point is not None:
+            self.select_point(self.selected_point)
         for fn in self.listeners:
             fn()
         return {"sigma0": geo.state.sigma0(e), "max_score": float(np.nanmax(scores, initial=0.0))}
@@ -285,6 +294,56 @@ class BlockScene:
         )  # fmt: skip
         self.ellipsoid_scale = k
         return k
+
+    # ------------------------------------------------------------------ colours by quality
+    def colour_images(self, rgb: np.ndarray | None) -> None:
+        """Colour each image's frustum (rgb (m, 3) uint8; None: the default colour)."""
+        m = self.geo.state.block.n_images
+        rgb = np.tile(COLORS["frustum"], (m, 1)) if rgb is None else np.asarray(rgb)
+        rgb = rgb.astype(np.uint8)
+        for k, h in enumerate(self.image_nodes):
+            h.color = tuple(int(c) for c in rgb[k])
+        for h, idx in self.strip_frustums.values():
+            h.colors = np.repeat(rgb[idx], 8, axis=0)[:, None, :].repeat(2, axis=1)
+        self.image_colours = rgb
+
+    def colour_points(self, rgb: np.ndarray | None) -> None:
+        """Colour the points (rgb (p, 3) uint8; None: by role)."""
+        role = self.geo.state.block.points.role
+        for r, name in ((0, "tie"), (1, "control"), (2, "check")):
+            h = self.nodes.get(f"points/{name}")
+            if h is None:
+                continue
+            n = int(np.count_nonzero(role == r))
+            if rgb is None:
+                h.colors = np.tile(np.asarray(COLORS[name], np.uint8), (n, 1))
+            else:
+                h.colors = np.asarray(rgb, np.uint8)[role == r]
+
+    def select_point(self, k: int | None) -> None:
+        """Mark point ``k`` (None: no point) and draw its rays."""
+        geo, b = self.geo, self.geo.state.block
+        for key in ("selected_point", "rays/point"):
+            old = self.nodes.pop(key, None)
+            if old is not None:
+                old.remove()
+        self.selected_point = k
+        if k is None:
+            return
+        P = geo.frame.to_scene(b.points.xyz[k : k + 1])
+        self.nodes["selected_point"] = self.scene.add_point_cloud(
+            f"{self.root}/selected_point", P.astype(np.float32), COLORS["selected"],
+            point_size=geo.point_size * 3.0, point_shape="circle", precision="float32",
+        )  # fmt: skip
+        o = b.observations
+        sel = np.flatnonzero(o.point == k)
+        rays = geo.frame.to_scene(
+            g.ray_segments(b.images.X0[o.image[sel]], b.points.xyz[o.point[sel]])
+        )
+        self.nodes["rays/point"] = self.scene.add_line_segments(
+            f"{self.root}/rays/point", rays.astype(np.float32), COLORS["ray_selected"],
+            thickness=WIDTH["ray"], thickness_units="screen",
+        )  # fmt: skip
 
     def set_visible(self, key: str, visible: bool) -> None:
         """Show or hide a group: ``"frustums"``, ``"points"``, ``"residuals"``, ``"strips"``, …"""

@@ -5,12 +5,20 @@ slider moves, adjustment steps or a replayed iteration), the adjustment history 
 the iteration scrubber replays, and computes the residuals the scene draws. Keeping it
 free of GUI code makes the viewer's logic testable without a browser.
 
+The user's actions on the adjustment — an observation, an image or a control point
+switched off or on, a control point moved, a weight changed
+(:mod:`orientviz.viewer.edits`) — re-solve warm-started from the current estimates and
+are recorded in :attr:`BlockState.changes`, one :class:`Change` each with its σ̂0.
+:meth:`BlockState.undo` and :meth:`BlockState.rewind` restore a recorded state exactly
+(the stored arrays and result, not a new adjustment).
+
 Units: object space m, image coordinates mm, angles rad inside (the block's rotation
 sequence, ω-φ-κ by default: R = R_ω R_φ R_κ).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,6 +28,7 @@ from ..adjust import Adjustment
 from ..block import Block
 from ..errors import InputError
 from .adjuster import Adjuster, apply_parameters, default_adjuster, image_normalized_residuals
+from .edits import Edits, Mapping, effective_block, expand_result
 
 F64 = NDArray[np.float64]
 
@@ -33,6 +42,39 @@ class Snapshot:
     angles: F64
     xyz: F64
     sigma0: float
+
+
+@dataclass
+class Change:
+    """One entry of the list of changes: what was done and the state it led to.
+
+    Attributes
+    ----------
+    label : str
+        What the user did, e.g. ``"observation img3/pt12 off"``.
+    sigma0 : float
+        σ̂0 of the adjustment after the change (NaN before any adjustment).
+    edits : Edits
+        The switches and values after the change.
+    X0, angles, xyz : ndarray
+        Estimates after the change (m, rad, m).
+    result : Adjustment or None
+        The adjustment after the change (laid out for the whole block).
+    history : list of Snapshot
+        The iteration history at that moment, and ``cursor`` its position.
+    """
+
+    label: str
+    sigma0: float
+    edits: Edits
+    X0: F64
+    angles: F64
+    xyz: F64
+    result: Adjustment | None
+    history: list[Snapshot]
+    cursor: int
+    at_result: bool
+    mapping: Mapping | None
 
 
 class BlockState:
@@ -63,8 +105,18 @@ class BlockState:
         self.history: list[Snapshot] = [self._snap("start", float("nan"))]
         #: index of the history record the state is at (steps truncate the history here)
         self.cursor = 0
+        #: the viewer's changes to the block (observations/images/control on-off, weights)
+        self.edits = Edits.of(block)
+        #: where the last adjusted sub-block sat in the block (None: the whole block)
+        self.mapping: Mapping | None = None
         if result is not None:
             self._take_result(result, self.block0)
+        #: the list of changes with their σ̂0; entry 0 is the state as loaded
+        self.changes: list[Change] = [
+            self._change("as loaded" if result is None else "as adjusted")
+        ]
+        #: index of the change the state is at (undo/rewind move it back)
+        self.change_cursor = 0
 
     # ------------------------------------------------------------------ snapshots
     def _snap(self, label: str, sigma0: float) -> Snapshot:
@@ -108,12 +160,24 @@ class BlockState:
             self.block.images.angles[i] = np.asarray(angles, dtype=float)
         self._at_result = False
 
-    def step(self, max_iter: int = 1) -> Adjustment:
-        """Adjust from the current state with at most ``max_iter`` steps; record the steps."""
+    def step(self, max_iter: int = 1, precision: bool = True) -> Adjustment:
+        """Adjust from the current state with at most ``max_iter`` steps; record the steps.
+
+        Only what :attr:`edits` leaves switched on is adjusted
+        (:func:`~orientviz.viewer.edits.effective_block`); the result is laid out for the
+        whole block. ``precision=False`` skips the cofactors (faster; no normalised
+        residuals, redundancy numbers or ellipsoids until the next adjustment with them).
+        """
         start = self.block.copy()
-        result = self.adjuster(start, max_iter)
+        sub, mp = effective_block(start, self.edits)
+        if precision:
+            raw = self.adjuster(sub, max_iter)
+        else:
+            raw = self.adjuster(sub, max_iter, precision=False)  # type: ignore[call-arg]
+        result = expand_result(raw, mp, start, self.effective_sigma())
         # a step from a replayed state discards the later history
         self._take_result(result, start)
+        self.mapping = mp
         return result
 
     def run(self, max_iter: int = 50) -> Adjustment:
@@ -121,12 +185,158 @@ class BlockState:
         return self.step(max_iter)
 
     def reset(self) -> None:
-        """Back to the start values; the history is cleared."""
+        """Back to the start values; the history and the list of changes are cleared."""
         self.block = self.block0.copy()
         self.result = None
         self.history = [self._snap("start", float("nan"))]
         self.cursor = 0
         self._at_result = False
+        self.edits = Edits.of(self.block0)
+        self.mapping = None
+        self.changes = [self._change("as loaded")]
+        self.change_cursor = 0
+
+    # ------------------------------------------------------------------ changes
+    def _change(self, label: str) -> Change:
+        b, res = self.block, self.result
+        return Change(
+            label,
+            float(res.sigma0) if res is not None and self.at_result else float("nan"),
+            self.edits.copy(),
+            b.images.X0.copy(),
+            b.images.angles.copy(),
+            b.points.xyz.copy(),
+            res,
+            list(self.history),
+            self.cursor,
+            self.at_result,
+            self.mapping,
+        )
+
+    def _restore(self, c: Change) -> None:
+        self.edits = c.edits.copy()
+        self.block.images.X0 = c.X0.copy()
+        self.block.images.angles = c.angles.copy()
+        self.block.points.xyz = c.xyz.copy()
+        self.result, self.mapping = c.result, c.mapping
+        self.history, self.cursor = list(c.history), c.cursor
+        self._at_result = c.at_result
+
+    def record(self, label: str) -> Change:
+        """Append the current state to :attr:`changes` (later entries are discarded)."""
+        del self.changes[self.change_cursor + 1 :]
+        self.changes.append(self._change(label))
+        self.change_cursor = len(self.changes) - 1
+        return self.changes[-1]
+
+    def update_current_change(self) -> None:
+        """Store the current state in the change the cursor is at (e.g. after the precision)."""
+        label = self.changes[self.change_cursor].label
+        self.changes[self.change_cursor] = self._change(label)
+
+    def act(
+        self, label: str, edit: Callable[[Edits], None], max_iter: int = 20, precision: bool = True
+    ) -> Change:
+        """Apply ``edit`` to :attr:`edits`, re-solve warm-started and record the change.
+
+        If the adjustment fails (e.g. a datum defect after a control point was switched
+        off) the state is restored exactly and the exception is raised.
+        """
+        before = self._change("")
+        edit(self.edits)
+        try:
+            self.step(max_iter, precision=precision)
+        except Exception:
+            self._restore(before)
+            raise
+        return self.record(label)
+
+    def undo(self) -> Change:
+        """Back to the change before the current one (exactly as it was)."""
+        if self.change_cursor == 0:
+            raise InputError("nothing to undo")
+        return self.rewind(self.change_cursor - 1)
+
+    def rewind(self, k: int) -> Change:
+        """Back (or forward again) to change ``k`` of :attr:`changes`, exactly as it was."""
+        if not 0 <= k < len(self.changes):
+            raise InputError(f"change {k} is not in the list (0..{len(self.changes) - 1})")
+        self._restore(self.changes[k])
+        self.change_cursor = k
+        return self.changes[k]
+
+    # ------------------------------------------------------------------ actions
+    def observation_on(self, j: int) -> bool:
+        """True if observation ``j`` is switched on (and its image too)."""
+        return bool(self.edits.obs_on[j] and self.edits.image_on[self.block.observations.image[j]])
+
+    def toggle_observation(self, j: int, **kw) -> Change:
+        """Switch observation ``j`` off (or on again) and re-solve."""
+        on = not self.edits.obs_on[j]
+
+        def edit(e: Edits) -> None:
+            e.obs_on[j] = on
+
+        return self.act(
+            f"observation {self.observation_label(j)} {'on' if on else 'off'}", edit, **kw
+        )
+
+    def toggle_image(self, i: int, **kw) -> Change:
+        """Switch image ``i`` (all its observations) off (or on again) and re-solve."""
+        on = not self.edits.image_on[i]
+
+        def edit(e: Edits) -> None:
+            e.image_on[i] = on
+
+        return self.act(f"image {self.block.images.ids[i]} {'on' if on else 'off'}", edit, **kw)
+
+    def toggle_control(self, k: int, **kw) -> Change:
+        """Use control point ``k`` as a check point (or as control again) and re-solve."""
+        if self.block.points.role[k] != 1:
+            raise InputError(f"point {self.block.points.ids[k]} is not a control point")
+        on = not self.edits.control_on[k]
+
+        def edit(e: Edits) -> None:
+            e.control_on[k] = on
+
+        word = "on" if on else "off (check point)"
+        return self.act(f"control {self.block.points.ids[k]} {word}", edit, **kw)
+
+    def move_control(self, k: int, xyz: F64, **kw) -> Change:
+        """Give control point ``k`` the coordinates ``xyz`` (m) and re-solve."""
+        if self.block.points.role[k] != 1:
+            raise InputError(f"point {self.block.points.ids[k]} is not a control point")
+        new = np.asarray(xyz, dtype=float).reshape(3)
+        d = new - self.edits.known[k]
+        d = np.where(np.isfinite(d), d, 0.0)
+
+        def edit(e: Edits) -> None:
+            given = np.isfinite(e.known[k])
+            e.known[k] = np.where(given, new, e.known[k])
+
+        label = (
+            f"control {self.block.points.ids[k]} moved by ({d[0]:.3f}, {d[1]:.3f}, {d[2]:.3f}) m"
+        )
+        return self.act(label, edit, **kw)
+
+    def set_weight(self, j: int, factor: float, **kw) -> Change:
+        """Multiply the weight of observation ``j`` by ``factor`` (σ / √factor) and re-solve."""
+        f = float(factor)
+        if not (np.isfinite(f) and f > 0):
+            raise InputError(f"a weight factor must be a positive number, got {factor!r}")
+
+        def edit(e: Edits) -> None:
+            e.weight[j] = f
+
+        return self.act(f"weight of {self.observation_label(j)} × {f:g}", edit, **kw)
+
+    def effective_sigma(self) -> F64:
+        """σ (n, 2) in mm of the image observations with the weight factors applied."""
+        return self.block.observations.sigma / np.sqrt(self.edits.weight)[:, None]
+
+    def active_observations(self) -> NDArray[np.bool_]:
+        """Observations that are switched on (with their image), shape (n,)."""
+        return self.edits.obs_on & self.edits.image_on[self.block.observations.image]
 
     # ------------------------------------------------------------------ residuals
     _at_result = False
@@ -158,7 +368,8 @@ class BlockState:
         if w is not None:
             return np.fmax(np.abs(w[:, 0]), np.abs(w[:, 1])), "|w|"  # NaN where r_i = 0
         e = self.misclosure() if misclosure is None else misclosure
-        return np.max(np.abs(e) / self.block.observations.sigma, axis=1), "|v|/σ"
+        s = np.max(np.abs(e) / self.effective_sigma(), axis=1)
+        return np.where(self.active_observations(), s, np.nan), "|v|/σ"
 
     def redundancy(self) -> int:
         """Redundancy of the bundle: 2n − 6m − 3·(free points), or the result's."""
@@ -175,7 +386,10 @@ class BlockState:
         r = self.redundancy()
         if r <= 0:
             return float("nan")
-        return float(np.sqrt(np.sum((e / self.block.observations.sigma) ** 2) / r))
+        on = self.active_observations()
+        if self.result is not None and getattr(self.result, "used_obs", None) is not None:
+            on = np.asarray(self.result.used_obs, bool)
+        return float(np.sqrt(np.sum((e[on] / self.effective_sigma()[on]) ** 2) / r))
 
     def largest(self, k: int = 10, scores: F64 | None = None) -> NDArray[np.int64]:
         """Indices of the ``k`` observations with the largest scores, largest first."""

@@ -1,0 +1,302 @@
+"""What the user changed in a block from the viewer, and the block that is then adjusted.
+
+No viser here. :class:`Edits` holds the switches and values the viewer's actions set —
+observations, images and control points on/off, moved control coordinates, weight
+factors of observations — on top of an unchanged :class:`~orientviz.block.Block`.
+:func:`effective_block` turns block + edits into the block the bundle adjusts (the
+*sub-block*: only what is switched on, with the current estimates as start values, so
+the adjustment is warm-started), and :func:`expand_result` maps the sub-block's result
+back onto the whole block, so that the viewer keeps indexing images, points and
+observations as loaded.
+
+Rules of the sub-block:
+
+* an observation enters if it is on and its image is on; its σ is σ / √(weight factor);
+* a control point switched off becomes a check point (its coordinates are not used;
+  the bundle intersects it and reports its check residual);
+* tie points left with fewer than two rays, and images left with fewer than three
+  observations, leave the sub-block (repeated until nothing changes); they keep their
+  current values and are reported as ``dropped``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields, replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..block import CHECK, CONTROL, Block
+
+F64 = NDArray[np.float64]
+I64 = NDArray[np.int64]
+
+
+@dataclass
+class Edits:
+    """The viewer's changes to a block (all arrays indexed as in the block).
+
+    Attributes
+    ----------
+    obs_on : ndarray of bool, shape (n,)
+    image_on : ndarray of bool, shape (m,)
+    control_on : ndarray of bool, shape (p,)
+        False for a control point switched off (used as a check point).
+    known : ndarray, shape (p, 3)
+        Given coordinates of the control points (m), as moved by the user.
+    weight : ndarray, shape (n,)
+        Weight factor of each observation (1 = as given; σ becomes σ / √factor).
+    """
+
+    obs_on: NDArray[np.bool_]
+    image_on: NDArray[np.bool_]
+    control_on: NDArray[np.bool_]
+    known: F64
+    weight: F64
+
+    @classmethod
+    def of(cls, block: Block) -> Edits:
+        """No changes: everything on, the given coordinates, unit weight factors."""
+        return cls(
+            np.ones(block.n_observations, bool),
+            np.ones(block.n_images, bool),
+            np.ones(block.n_points, bool),
+            block.points.xyz_known.copy(),
+            np.ones(block.n_observations),
+        )
+
+    def copy(self) -> Edits:
+        return Edits(*(getattr(self, f.name).copy() for f in fields(self)))
+
+    def equals(self, other: Edits) -> bool:
+        """True if both hold the same switches and values (NaN equal to NaN)."""
+        return all(
+            np.array_equal(getattr(self, f.name), getattr(other, f.name), equal_nan=True)
+            for f in fields(self)
+        )
+
+
+@dataclass
+class Mapping:
+    """Where the sub-block's images, points and observations sit in the whole block.
+
+    Attributes
+    ----------
+    images, points, obs : ndarray of int
+        Block indices of the sub-block's images, points and observations (in order).
+    dropped_images, dropped_points : ndarray of int
+        Images and points that had to leave (too few observations left).
+    """
+
+    images: I64
+    points: I64
+    obs: I64
+    dropped_images: I64 = field(default_factory=lambda: np.zeros(0, np.int64))
+    dropped_points: I64 = field(default_factory=lambda: np.zeros(0, np.int64))
+
+
+def _take(table: Any, idx: I64) -> Any:
+    """Rows ``idx`` of a structure-of-arrays table (lists by index, arrays by fancy index)."""
+    out = {}
+    for f in fields(table):
+        v = getattr(table, f.name)
+        if isinstance(v, list):
+            out[f.name] = [v[i] for i in idx] if len(v) == len(table) else list(v)
+        else:
+            out[f.name] = np.asarray(v)[idx].copy()
+    return replace(table, **out)
+
+
+def effective_block(block: Block, edits: Edits) -> tuple[Block, Mapping]:
+    """The block to adjust (see the module docstring) and where its parts come from.
+
+    Parameters
+    ----------
+    block : Block
+        The whole block at its current estimates (start values of the adjustment).
+    edits : Edits
+        The viewer's changes.
+    """
+    o, pts = block.observations, block.points
+    keep = edits.obs_on & edits.image_on[o.image]
+    role = pts.role.copy()
+    role[(role == CONTROL) & ~edits.control_on] = CHECK
+    img_keep = edits.image_on.copy()
+    while True:  # drop lonely tie points and weak images until stable
+        counted = keep & (role[o.point] != CHECK)
+        rays = np.bincount(o.point[counted], minlength=block.n_points)
+        lonely = (rays < 2) & (role != CONTROL)
+        keep &= ~(lonely[o.point] & (role[o.point] != CHECK))
+        per_img = np.bincount(o.image[keep & (role[o.point] != CHECK)], minlength=block.n_images)
+        weak = img_keep & (per_img < 3)
+        if not weak.any():
+            break
+        img_keep &= ~weak
+        keep &= img_keep[o.image]
+    # check points keep rays only if they have two or more (for their intersection)
+    rays_all = np.bincount(o.point[keep], minlength=block.n_points)
+    keep &= ~((role[o.point] == CHECK) & (rays_all[o.point] < 2))
+    rays_all = np.bincount(o.point[keep], minlength=block.n_points)
+    p_keep = rays_all > 0
+    images = np.flatnonzero(img_keep)
+    points = np.flatnonzero(p_keep)
+    obs = np.flatnonzero(keep)
+    new_img = np.full(block.n_images, -1, np.int64)
+    new_img[images] = np.arange(images.size)
+    new_pt = np.full(block.n_points, -1, np.int64)
+    new_pt[points] = np.arange(points.size)
+    P = _take(pts, points)
+    P.role = role[points].astype(pts.role.dtype)
+    P.xyz_known = edits.known[points].copy()
+    O = _take(o, obs)
+    O.image = new_img[o.image[obs]]
+    O.point = new_pt[o.point[obs]]
+    O.sigma = o.sigma[obs] / np.sqrt(edits.weight[obs])[:, None]
+    sub = block.with_(images=_take(block.images, images), points=P, observations=O)
+    was_used = np.bincount(o.point[edits.obs_on], minlength=block.n_points) > 0
+    mp = Mapping(
+        images,
+        points,
+        obs,
+        np.flatnonzero(edits.image_on & ~img_keep),
+        np.flatnonzero(was_used & ~p_keep),
+    )
+    return sub, mp
+
+
+def expand_result(sub_result: Any, mp: Mapping, block: Block, sigma: F64) -> Any:
+    """The sub-block's bundle result laid out for the whole ``block``.
+
+    Parameters
+    ----------
+    sub_result : BundleResult
+        Result of the adjustment of the sub-block (bundle residual order).
+    mp : Mapping
+        From :func:`effective_block`.
+    block : Block
+        The whole block at the start values of that adjustment (supplies the values of
+        what was left out).
+    sigma : ndarray, shape (n, 2)
+        The σ (mm) of every image observation as weighted (edits applied).
+
+    Returns
+    -------
+    BundleResult
+        ``x`` = [exterior (m·6), points (p·3)] of the whole block (left-out images and
+        points at their start values), ``exterior``/``points`` likewise; image residuals
+        v = f − l for *all* observations (left-out ones predicted from the adjusted
+        orientations), then the sub-block's pseudo-observations; redundancy numbers and
+        normalised residuals NaN for left-out observations; ``used_obs`` (n,);
+        ``cofactor_blocks`` ``"exterior"`` (m, 6, 6) and ``"points"`` (p, 3, 3) with NaN
+        for what was left out; ``exterior_pairs`` with keys in block indices; ``history``
+        with ``x`` in the whole layout (empty where the solver kept none).
+    """
+    m, p, n = block.n_images, block.n_points, block.n_observations
+    base = np.concatenate(
+        [np.hstack([block.images.X0, block.images.angles]).ravel(), block.points.xyz.ravel()]
+    )
+    ms, ps = mp.images.size, mp.points.size
+    col = np.concatenate(
+        [
+            (6 * mp.images[:, None] + np.arange(6)).ravel(),
+            6 * m + (3 * mp.points[:, None] + np.arange(3)).ravel(),
+        ]
+    )
+
+    def full_x(xs: F64 | None, fill: F64 = base) -> F64 | None:
+        if xs is None:
+            return None
+        if np.size(xs) < 6 * ms + 3 * ps:
+            return np.zeros(0)
+        out = fill.copy()
+        out[col] = np.asarray(xs)[: 6 * ms + 3 * ps]
+        return out
+
+    x = full_x(sub_result.x)
+    ext = x[: 6 * m].reshape(m, 6)
+    xyz = x[6 * m :].reshape(p, 3)
+    # image residuals of every observation at the adjusted state (v = f − l)
+    after = block.with_(
+        images=replace(block.images, X0=ext[:, :3], angles=ext[:, 3:]),
+        points=replace(block.points, xyz=xyz),
+    )
+    v_img = -after.residuals()
+    n_sub = mp.obs.size
+    v_sub = np.asarray(sub_result.residuals)
+    v_img[mp.obs] = v_sub[: 2 * n_sub].reshape(n_sub, 2)
+    tail = slice(2 * n_sub, None)
+
+    def per_obs(a: Any) -> Any:
+        if a is None:
+            return None
+        a = np.asarray(a, float)
+        out = np.full((n, 2), np.nan)
+        out[mp.obs] = a[: 2 * n_sub].reshape(n_sub, 2)
+        return np.concatenate([out.ravel(), a[tail]])
+
+    shift = 2 * (n - n_sub)
+    slices = {"image": slice(0, 2 * n)}
+    for k, s in sub_result.obs_slices.items():
+        if k != "image":
+            slices[k] = slice(s.start + shift, s.stop + shift)
+    cb = {}
+    for name, size, idx in (("exterior", m, mp.images), ("points", p, mp.points)):
+        Q = _diagonal_blocks(sub_result, name, 6 if name == "exterior" else 3)
+        if Q is not None and np.ndim(Q) == 3:
+            full = np.full((size,) + np.shape(Q)[1:], np.nan)
+            full[idx] = Q
+            cb[name] = full
+    pairs = getattr(sub_result, "exterior_pairs", None)
+    if pairs is not None:
+        i, k = np.divmod(np.asarray(pairs.keys), max(ms, 1))
+        keys = mp.images[i] * m + mp.images[k]
+        order = np.argsort(keys)
+        pairs = replace(pairs, keys=keys[order], blocks=np.asarray(pairs.blocks)[order])
+    used = np.zeros(n, bool)
+    sub_used = getattr(sub_result, "used_obs", None)
+    used[mp.obs] = True if sub_used is None else np.asarray(sub_used, bool)
+    zero = np.zeros_like(base)
+    history = [replace(it, x=full_x(it.x), dx=full_x(it.dx, zero)) for it in sub_result.history]
+    names = [
+        f"{i}.{q}" for i in block.images.ids for q in ("X0", "Y0", "Z0", "omega", "phi", "kappa")
+    ] + [f"{i}.{q}" for i in block.points.ids for q in "XYZ"]
+    return replace(
+        sub_result,
+        x=x,
+        names=names,
+        blocks={"exterior": slice(0, 6 * m), "points": slice(6 * m, 6 * m + 3 * p)},
+        residuals=np.concatenate([v_img.ravel(), v_sub[tail]]),
+        sigma_obs=np.concatenate(
+            [np.asarray(sigma, float).ravel(), np.asarray(sub_result.sigma_obs)[tail]]
+        ),
+        redundancy_numbers=per_obs(sub_result.redundancy_numbers),
+        normalized_residuals=per_obs(sub_result.normalized_residuals),
+        redundancy_xy=None,
+        cofactor=None,
+        cofactor_blocks=cb,
+        obs_slices=slices,
+        obs_labels=None,
+        history=history,
+        **_typed(sub_result, ext, xyz, used, pairs),
+    )
+
+
+def _typed(res: Any, ext: F64, xyz: F64, used: NDArray[np.bool_], pairs: Any) -> dict:
+    """The typed fields of a bundle result that this module lays out anew (those present)."""
+    want = {"exterior": ext, "points": xyz, "used_obs": used, "exterior_pairs": pairs,
+            "ray_gains": None, "subset": None}  # fmt: skip
+    have = {f.name for f in fields(res)}
+    return {k: v for k, v in want.items() if k in have}
+
+
+def _diagonal_blocks(res: Any, name: str, b: int) -> F64 | None:
+    """Stacked b × b diagonal cofactor blocks of block ``name``: stored, or from the dense Q."""
+    Q = res.cofactor_blocks.get(name)
+    if Q is not None and np.ndim(Q) == 3:
+        return np.asarray(Q)
+    if res.cofactor is None or name not in res.blocks:
+        return None
+    sl = res.blocks[name]
+    idx = np.arange(sl.start, sl.stop).reshape(-1, b)
+    return np.asarray(res.cofactor)[idx[:, :, None], idx[:, None, :]]
