@@ -131,6 +131,42 @@ def block():
     )  # fmt: skip
 
 
+def problem_document() -> dict:
+    """The calibration as an orientviz problem file (kind block, image units px).
+
+    DBAT's pixel measurements as they are (origin at the upper-left corner, y down,
+    σ 0.1 px), the camera with ``"model": "backward"`` and DBAT's free parameters, the
+    start orientations of :func:`block` (tie points without coordinates: the loader
+    intersects them).
+    """
+    blk = block()
+    d = _setup()[0]
+    p = d["pixel_mm"]
+    w, h = d["sensor_mm"]
+    im, pt, ob = blk.images, blk.points, blk.observations
+    ctrl = pt.role == 1
+    return {
+        "format": "orientviz/1", "kind": "block", "name": "dbat-camcal",
+        "description": "DBAT's camera calibration demo (Börlin & Grussenmeyer; BSD licence, see datasets/dbat)",
+        "units": {"length": "m", "angle": "rad", "image": "px", "pixel_size": p},
+        "sequence": "opk",
+        "cameras": [{"id": "C4040Z", "c": d["focal_mm"] / p, "x0": w / 2 / p, "y0": h / 2 / p,
+                     "format": [w / p, h / p], "model": "backward", "free": list(LENS_FREE)}],
+        "images": {"id": list(im.ids), "camera": ["C4040Z"] * len(im.ids),
+                   "X0": im.X0[:, 0].tolist(), "Y0": im.X0[:, 1].tolist(), "Z0": im.X0[:, 2].tolist(),
+                   "omega": im.angles[:, 0].tolist(), "phi": im.angles[:, 1].tolist(),
+                   "kappa": im.angles[:, 2].tolist()},
+        "points": {"id": list(pt.ids), "role": ["control" if c else "tie" for c in ctrl],
+                   "X": [float(v) if c else None for v, c in zip(pt.xyz_known[:, 0], ctrl)],
+                   "Y": [float(v) if c else None for v, c in zip(pt.xyz_known[:, 1], ctrl)],
+                   "Z": [float(v) if c else None for v, c in zip(pt.xyz_known[:, 2], ctrl)]},
+        "observations": {"image": [im.ids[i] for i in ob.image], "point": [pt.ids[j] for j in ob.point],
+                         "x": (ob.xy[:, 0] / p).tolist(), "y": (-ob.xy[:, 1] / p).tolist(),
+                         "sigma": (ob.sigma[:, 0] / p).tolist()},
+        "options": {"tol": TOL, "max_iter": 50},
+    }  # fmt: skip
+
+
 #: DBAT's demo estimates every parameter of its model 3 but the shear (no priors).
 LENS_FREE = ("c", "x0", "y0", "as", "K1", "K2", "K3", "P1", "P2")
 
