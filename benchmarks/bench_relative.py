@@ -122,11 +122,11 @@ def main():
     t_lin = best_of(lambda: essential_route(xy1, xy2, c, b=bb, refine=False), repeat=3)
     lin = essential_route(xy1, xy2, c, b=bb, refine=False)
     row("1000 points: our 8-point + cheirality (linear)", t_lin, peer,
-        f"max angle error {ang_err(lin.extra['R_linear']):.3f} c")  # fmt: skip
+        f"max angle error {ang_err(lin.R_linear):.3f} c")  # fmt: skip
     t_5 = best_of(lambda: essential_route(xy1, xy2, c, b=bb, refine=False, solver="five"), repeat=3)
     lin5 = essential_route(xy1, xy2, c, b=bb, refine=False, solver="five")
     row("1000 points: our 5-point (LS null space) + cheirality", t_5, peer,
-        f"max angle error {ang_err(lin5.extra['R_linear']):.3f} c")  # fmt: skip
+        f"max angle error {ang_err(lin5.R_linear):.3f} c")  # fmt: skip
     t_es = best_of(lambda: essential_route(xy1, xy2, c, b=bb, sigma=sig), repeat=3)
     es = essential_route(xy1, xy2, c, b=bb, sigma=sig)
     row("1000 points: 8-point + rigorous refinement", t_es, peer,

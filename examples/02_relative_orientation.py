@@ -43,7 +43,7 @@ def main() -> None:
     adj = ov.relative_orientation(xy_left, xy_right, c, kind="dependent", sigma=np.sqrt(2) * sigma)
     print(adj.summary())
 
-    b = adj.extra["b"]  # the model base, mm at image scale
+    b = adj.base  # the model base, mm at image scale
     by, bz, omega, phi, kappa = adj.x
     s_by, s_bz, *s_angles = adj.std()
     print(f"model base b = {b:.2f} mm (model at about image scale)")
@@ -56,7 +56,7 @@ def main() -> None:
         print(f"{name:5s} = {e:+.4f} ± {s:.4f} gon   (true {t:+.4f} gon)")
     z = np.abs(adj.x[2:] - angles) / np.asarray(s_angles)
     print(f"largest angle error / σ: {z.max():.2f}")
-    model = adj.extra["points"]  # model coordinates of the 15 points, model units (mm)
+    model = adj.points  # model coordinates of the 15 points, model units (mm)
     print(
         f"model points: {len(model)}, heights Z from {model[:, 2].min():.1f} to {model[:, 2].max():.1f} mm"
     )

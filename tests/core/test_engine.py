@@ -72,3 +72,22 @@ def test_lm_converges_where_gauss_newton_diverges():
     lm = gauss_newton(_model, [1.0, -0.5, 0.0], l, 0.01, damping="lm")
     assert lm.converged
     np.testing.assert_allclose(lm.x, [2.0, -1.0, 0.5], atol=1e-8)
+
+
+def test_extend_types_a_result_without_a_bag():
+    """A task's own results are typed fields of a subclass; the engine's fields are shared."""
+    import dataclasses
+
+    from orientviz.orientation.relative import RelativeResult
+
+    r = gauss_newton(_model, [1.5, -0.8, 0.3], _data(), 0.01)
+    assert "extra" not in {f.name for f in dataclasses.fields(r)}
+    t = r.extend(RelativeResult, kind="independent", base=92.0)
+    assert isinstance(t, ov.Adjustment) and (t.kind, t.base, t.points) == (
+        "independent",
+        92.0,
+        None,
+    )
+    assert t.x is r.x and t.history is r.history and t.sigma0 == r.sigma0
+    with pytest.raises(TypeError):
+        r.extend(RelativeResult, no_such_field=1)

@@ -138,8 +138,8 @@ def test_partial_control_height_and_planimetry():
     res = ov.similarity_transform(x, Xp)
     np.testing.assert_allclose(res.x, TRUE, atol=1e-8)
     assert res.redundancy == 6 + 2 + 4 - 7
-    assert np.isnan(res.extra["residuals_xyz"][2, 0])
-    assert res.extra["used"].sum() == 12
+    assert np.isnan(res.residuals_xyz[2, 0])
+    assert res.used.sum() == 12
 
 
 def test_minimal_classic_layout_two_full_one_height():
@@ -229,7 +229,7 @@ def test_property_recovers_any_transform(omega, phi, kappa, scale, seed):
     np.testing.assert_allclose(cf.scale, scale, rtol=1e-9)
     np.testing.assert_allclose(cf.apply(x), X, atol=1e-7 * (1 + scale * 100))
     res = ov.similarity_transform(x, X, sigma_target=0.01)
-    np.testing.assert_allclose(res.extra["transform"].R, R, atol=1e-9)
+    np.testing.assert_allclose(res.transform.R, R, atol=1e-9)
 
 
 @pytest.mark.parametrize("tilt_gon", [10.0, 40.0])
@@ -256,6 +256,4 @@ def test_gimbal_lock_is_reported_and_other_sequence_works():
         ov.similarity_transform(x, X, sequence="opk")
     assert set(exc.value.parameters) == {"omega", "kappa"}
     res = ov.similarity_transform(x, X, sequence="pok")
-    np.testing.assert_allclose(
-        res.extra["transform"].R, SimilarityTransform.from_params(p).R, atol=1e-12
-    )
+    np.testing.assert_allclose(res.transform.R, SimilarityTransform.from_params(p).R, atol=1e-12)

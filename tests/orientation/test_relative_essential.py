@@ -55,9 +55,21 @@ def test_noise_free_essential_and_decomposition():
 def test_route_linear_and_refined_noise_free():
     xy1, xy2, _ = _pair(np.random.default_rng(1))
     res = es.essential_route(xy1, xy2, C, b=B)
-    np.testing.assert_allclose(res.extra["linear"], TRUE, atol=1e-10)
+    np.testing.assert_allclose(res.linear, TRUE, atol=1e-10)
     np.testing.assert_allclose(res.x, TRUE, atol=1e-10)
     assert res.converged
+
+
+def test_route_result_is_typed_with_or_without_refinement():
+    """Both routes give a RelativeResult: the model points at the elements they return."""
+    xy1, xy2, st = _pair(np.random.default_rng(1))
+    for refine in (True, False):
+        res = es.essential_route(xy1, xy2, C, b=B, refine=refine)
+        assert isinstance(res, rel.RelativeResult) and res.n_front == len(xy1)
+        assert (res.kind, res.base, res.c) == ("dependent", B, C)
+        _, pts = rel.y_parallax(xy1, xy2, C, rel.PairState.from_elements(res.x, B))
+        np.testing.assert_allclose(res.points, pts, atol=1e-9)
+        np.testing.assert_allclose(res.state.base, st.base, atol=1e-8)
 
 
 def test_noisy_route_agrees_with_least_squares_from_zero():
@@ -80,7 +92,7 @@ def test_against_opencv():
     R2_cv = D @ R_cv.T @ D
     B_cv = -R2_cv @ (D @ t_cv.ravel())
     ours = es.essential_route(xy1, xy2, C, b=B, refine=False)
-    R_ours, t_ours = ours.extra["R_linear"], ours.extra["t_linear"]
+    R_ours, t_ours = ours.R_linear, ours.t_linear
     R_true = ov.matrix_from_opk(*TRUE[2:])
     # 3 µm noise on 100 points: rotations to ~1e-4 rad, base direction ~1e-3
     for R, t in ((R_ours, t_ours), (R2_cv, B_cv / np.linalg.norm(B_cv))):
@@ -134,7 +146,7 @@ def test_five_point_route_with_more_points_and_against_opencv():
 def test_route_with_the_five_point_solver():
     xy1, xy2, _ = _pair(np.random.default_rng(12), n=20)
     res = es.essential_route(xy1, xy2, C, b=B, solver="five")
-    np.testing.assert_allclose(res.extra["linear"], TRUE, atol=1e-8)
+    np.testing.assert_allclose(res.linear, TRUE, atol=1e-8)
     np.testing.assert_allclose(res.x, TRUE, atol=1e-10)
     with pytest.raises(ov.InputError, match="solver"):
         es.essential_route(xy1, xy2, C, b=B, solver="seven")

@@ -61,7 +61,7 @@ def test_least_squares_sequences(sequence):
     X0, _, R = vertical_image()
     X = ground_points(np.random.default_rng(4), 6)
     res = ov.resection(ov.project(X, X0, R, C_MM), X, C_MM, sequence=sequence)
-    np.testing.assert_allclose(res.extra["R"], R, atol=1e-10)
+    np.testing.assert_allclose(res.R, R, atol=1e-10)
 
 
 def test_noisy_precision_and_sigma0():
@@ -99,7 +99,7 @@ def test_interior_orientation_estimated_with_relief():
     xy = ov.project(X, X0, R, cam.c, cam.x0, cam.y0)
     res = ov.resection(xy, X, ov.FrameCamera(c=152.0), interior=True)
     np.testing.assert_allclose(res.x, np.r_[X0, ang, 0.01, -0.02, 150.0], atol=1e-7)
-    assert res.extra["camera"].c == pytest.approx(150.0)
+    assert res.camera.c == pytest.approx(150.0)
 
 
 def test_interior_with_flat_control_is_not_determinable():
@@ -166,7 +166,7 @@ def test_property_closed_form_then_ls_recovers_pose(kappa, omega, phi, seed):
     R = ov.matrix_from_opk(omega, phi, kappa)
     xy = ov.project(X, X0, R, C_MM)
     res = ov.resection(xy, X, C_MM)
-    np.testing.assert_allclose(res.extra["R"], R, atol=1e-8)
+    np.testing.assert_allclose(res.R, R, atol=1e-8)
     np.testing.assert_allclose(res.x[:3], X0, atol=1e-5)
 
 
@@ -179,7 +179,7 @@ def test_only_estimated_interior_parameters_are_reported():
     assert res.names == ["X0", "Y0", "Z0", "omega", "phi", "kappa", "c"]
     assert res.cofactor.shape == (7, 7) and res.history[-1].x.shape == (7,)
     assert res["c"] == pytest.approx(150.0, abs=1e-8)
-    assert res.extra["camera"].x0 == 0.0
+    assert res.camera.x0 == 0.0
 
 
 # --- degenerate input: a clear NotDeterminableError, never numpy's LinAlgError -------------

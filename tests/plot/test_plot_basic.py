@@ -51,7 +51,7 @@ def test_plot_transform_residuals_and_correlations():
     fig = plot_transform_residuals(res)
     ax = fig.axes[0]
     assert {t.get_text() for t in ax.texts} >= {"P1", "P5"}
-    assert control_kind(res.extra["used"])[:5] == ["XY"] * 4 + ["Z"]
+    assert control_kind(res.used)[:5] == ["XY"] * 4 + ["Z"]
     fig = plot_correlations(res, names=["omega", "phi", "kappa"])
     assert fig.axes[0].images[0].get_array().shape == (3, 3)
 

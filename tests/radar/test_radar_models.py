@@ -51,7 +51,7 @@ def test_relative_orientation_with_the_second_interior_orientation_exact():
     xy2 = G.project(P, im2)
     start = im2.with_(x0=440.0, y0=700.0, h=15050.0, m=1.1265, X0=(30030.0, 10.0, -1020.0))
     res = relative_orientation(xy1, T[1], xy2, start, free=PARAMS, damping="lm")
-    e = np.abs(res.extra["image"].vector() - im2.vector())
+    e = np.abs(res.image.vector() - im2.vector())
     assert res.redundancy == 25 - 10
     assert np.all(e[[0, 1, 2, 4, 5, 6]] < 1e-4) and e[3] < 1e-9 and np.all(e[7:] < 1e-9), e
 
@@ -70,4 +70,4 @@ def test_geier_rule_keeps_the_previous_estimate_when_m0_grows():
     f, J = model(u0)
     step = np.linalg.solve(J.T @ J, J.T @ (l - f))
     np.testing.assert_allclose(res.x, u0 + step, rtol=1e-12)
-    assert res.extra["m0_linearized"] > 0.32  # the grown value (0.3235)
+    assert res.m0_linearized > 0.32  # the grown value (0.3235)

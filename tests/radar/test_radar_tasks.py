@@ -25,7 +25,7 @@ EXACT_RAD = 1e-10
 
 
 def _err(res, truth, names):
-    est = res.extra["image"].vector()
+    est = res.image.vector()
     idx = [PARAMS.index(n) for n in names]
     return np.abs(est[idx] - truth.vector()[idx])
 
@@ -77,11 +77,11 @@ def test_trilateration_least_squares_exact():
     P, xy = G.points("fig7"), G.image_coordinates("fig7", 2, rounded=False)
     res = station_by_trilateration(P, xy, TRUE[2].with_(X0=(0.0, 0.0, 0.0)))
     _assert_exact(res, TRUE[2], ["X0", "Y0", "Z0"])
-    assert res.extra["candidates"].shape == (2, 3)
+    assert res.candidates.shape == (2, 3)
     tri = [0, 4, 22]  # a wide, nearly horizontal triangle: the mirror lies below it
     low = station_by_trilateration(P[tri], xy[tri], TRUE[2], upper=False)
-    assert low.extra["image"].X0[2] < -25000
-    np.testing.assert_allclose(low.extra["image"].X0, low.extra["candidates"][0], atol=1e-6)
+    assert low.image.X0[2] < -25000
+    np.testing.assert_allclose(low.image.X0, low.candidates[0], atol=1e-6)
 
 
 def test_intersection_and_relative_orientation_exact():
@@ -93,7 +93,7 @@ def test_intersection_and_relative_orientation_exact():
     res = relative_orientation(xy1, TRUE[1], xy2, start)
     e = _err(res, TRUE[2], list(PARAMS[4:]))
     assert np.all(e[:3] < 1e-5) and np.all(e[3:] < 1e-9), e
-    np.testing.assert_allclose(res.extra["points"], P, atol=1e-5)
+    np.testing.assert_allclose(res.points, P, atol=1e-5)
     assert res.redundancy == 25 - 6
 
 

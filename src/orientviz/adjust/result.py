@@ -7,13 +7,15 @@ of unit weight, ``σ̂0 = sqrt(vᵀPv / r)`` with redundancy ``r = n − u``.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
 F64 = NDArray[np.float64]
+A = TypeVar("A", bound="Adjustment")
 
 #: Default critical value of the normalised residual (Baarda's w-test, α0 = 0.1 %, two-sided).
 W_CRITICAL: float = 3.29
@@ -94,8 +96,9 @@ class Adjustment:
     redundancy_xy : ndarray, shape (n/2,) or None
         For observations that come in (x, y) pairs 2i, 2i+1: the off-diagonal of
         P½ Q_vv P½ per pair (the 2-D tests of :mod:`orientviz.adjust.snooping`).
-    extra : dict
-        Task-specific results (candidates, transformed points, …).
+
+    A task's own results are typed fields of a subclass (``RelativeResult``,
+    ``ResectionResult``, ``BlockAdjustment``, …), built with :meth:`extend`.
     """
 
     x: F64
@@ -115,7 +118,16 @@ class Adjustment:
     obs_labels: list[str] | None = None
     obs_slices: dict[str, slice] = field(default_factory=dict)
     redundancy_xy: F64 | None = None
-    extra: dict[str, Any] = field(default_factory=dict)
+
+    def extend(self, cls: type[A], **fields: Any) -> A:
+        """This result as ``cls`` (an :class:`Adjustment` with typed fields of its own).
+
+        The fields of ``cls`` that this result has are shared, not copied (``x``,
+        ``residuals``, …); ``fields`` set (or override) the others.
+        """
+        wanted = {f.name for f in dataclasses.fields(cls)}
+        own = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name in wanted}
+        return cls(**{**own, **fields})
 
     # ------------------------------------------------------------------ access
     @property

@@ -209,7 +209,7 @@ def approximate_values(block: Block, *, min_points: int = 6) -> Block:
                 f"approximate values: the resection of image {block.images.ids[nxt]} failed",
                 parameters=[f"{block.images.ids[nxt]}.X0"],
             )
-        Rm[nxt] = res.extra["R"]
+        Rm[nxt] = res.R
         Xm[nxt] = res.x[:3]
         done[nxt] = True
         intersect(nxt)

@@ -6,7 +6,9 @@ The face of the bundle's house. What a user calls:
   system, self-calibration, auxiliary data, exact precision);
 * self-calibration: :func:`ap_set` (:class:`Ebner12`, :class:`Brown`, :class:`Gruen44`,
   the :class:`AdditionalParameters` protocol), :func:`analyse` → :class:`APAnalysis`,
-  :func:`self_calibrate` → :class:`SelfCalibration`;
+  :func:`self_calibrate` → :class:`SelfCalibration`; the camera itself (c, principal
+  point, affinity, shear, radial and decentring distortion, backward or forward) inside
+  the projection: :class:`LensModel` → ``result.camera`` (:class:`LensEstimates`);
 * gross errors: :func:`clean_block`, :func:`bundle_solver`, :func:`cleaned_block`,
   :func:`ray_labels`; reliability per ray: :func:`ray_reliability` →
   :class:`RayReliability`;
@@ -20,7 +22,7 @@ additional parameters and its solves), ``_auxiliary`` / ``_auxiliary_border`` (G
 statoscope, APR rows and their offsets/drifts), ``_precision`` / ``_precision_ap``
 (cofactor blocks, redundancy numbers), ``_result`` (the result), ``_additional``
 (additional-parameter sets), ``_selfcal``, ``_cleaning``, ``_reliability``,
-``_alternation``. The numerical building blocks that tests and benchmarks use are
+``_alternation``, ``_lens`` (the camera model inside the projection). The numerical building blocks that tests and benchmarks use are
 exported too (second group of ``__all__``).
 """
 
@@ -37,7 +39,8 @@ from ._border import (
 )
 from ._checks import PointSetup, datum_defect, image_condition_deficit, point_setup
 from ._cleaning import bundle_solver, clean_block, cleaned_block, ray_labels
-from ._kernel import collinearity_block, project_block
+from ._kernel import collinearity_block, normalised_block, project_block
+from ._lens import BoundLens, LensEstimates, LensModel, lens_model
 from ._normal import APBorder, AuxBorder, NormalEquations
 from ._parts import (
     AdditionalBlock,
@@ -74,6 +77,9 @@ __all__ = [
     "BorderSolver",
     "AdditionalParameters",
     "APAnalysis",
+    "LensModel",
+    "LensEstimates",
+    "lens_model",
     "Brown",
     "Ebner12",
     "Gruen44",
@@ -103,7 +109,9 @@ __all__ = [
     "image_condition_deficit",
     "point_setup",
     "collinearity_block",
+    "normalised_block",
     "project_block",
+    "BoundLens",
     "banded_selected_inverse",
     "SOLVERS",
     "ReducedStructure",

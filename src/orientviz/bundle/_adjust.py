@@ -77,7 +77,7 @@ def bundle_adjust(
     ap_sigma=None,
     precision: bool = True,
     callback: Callable[[Iteration], object] | None = None,
-    solver: str = "banded",
+    solver: str = "auto",
     history_x: bool | None = None,
     auxiliary: list | None = None,
 ) -> BundleResult:
@@ -111,8 +111,12 @@ def bundle_adjust(
         normalised residuals (:mod:`orientviz.bundle._precision`).
     callback : callable, optional
         Called with each new :class:`Iteration`.
-    solver : {"banded", "splu", "dense"}
-        Solver of the reduced camera system (:mod:`orientviz.bundle._reduced`).
+    solver : {"auto", "banded", "dense", "sparse"}
+        Solver of the reduced camera system (:mod:`orientviz.bundle._reduced`):
+        ``"auto"`` chooses from the structure (banded for strips, dense for small or
+        densely connected networks, sparse otherwise:
+        :mod:`orientviz.bundle._solver_choice`). The result's ``solver`` is the one used,
+        ``reduced_info["solver_reason"]`` says why.
     history_x : bool, optional
         Keep the full parameter vector per iteration (default: blocks ≤ 500 images);
         otherwise ``Iteration.x`` is empty.
@@ -196,6 +200,7 @@ def bundle_adjust(
     cost = run.evaluation.cost
     damped_start, lin = run.damped_start, steps.lin
     prob.border.hold = prob.border.reuse = False
+    prob.design_at(st)  # a lens model: its design at the final iterate (precision)
     if not converged:
         lin = None
     if damped_start:  # a start that needed damping: prove the solution is determinable
@@ -229,6 +234,9 @@ def bundle_adjust(
         from ._auxiliary import finish_bundle
 
         finish_bundle(res, prob, st, rw, Je, Jp)
+    if prob.ap.lens is not None:
+        Q = res.cofactor_blocks.get("additional") if prob.q else None
+        res.camera = prob.ap.lens.estimates(st.ap, Q, res.sigma0)
     return res
 
 
@@ -304,6 +312,7 @@ class _BundleSteps:
             L = AP_REUSE * prob.ap.ray_length
             prob.border.reuse = (
                 not prob.border.hold
+                and prob.ap.lens is None  # a lens model's design moves with its parameters
                 and float(np.max(np.abs(dc[:, :3]), initial=0.0)) < L
                 and float(np.max(np.abs(dc[:, 3:]), initial=0.0)) < AP_REUSE
                 and float(np.max(np.abs(dp), initial=0.0)) < L

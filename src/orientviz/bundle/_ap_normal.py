@@ -84,14 +84,9 @@ class APStructure:
         go = grp[oi]
         # observations by group (direct F and ba terms)
         self.grp_present = np.unique(go)
-        # the direct F term Σ Aᵀ P A does not change over the iterations: one product
-        # per group over its rays
-        order = np.argsort(go, kind="stable")
-        bounds = np.searchsorted(go[order], self.grp_present.tolist() + [G])
-        Ao = Aw[order].reshape(-1, Aw.shape[2])
-        self.F_direct = np.stack(
-            [Ao[2 * a : 2 * b].T @ Ao[2 * a : 2 * b] for a, b in zip(bounds[:-1], bounds[1:])]
-        )
+        # the direct F term Σ Aᵀ P A: one product per group over its rays (:meth:`refresh`)
+        self._by_group = np.argsort(go, kind="stable")
+        self._group_bounds = np.searchsorted(go[self._by_group], self.grp_present.tolist() + [G])
 
         # (point, group) pairs: rays of one point in images of one group
         vo = pt_obs
@@ -132,11 +127,10 @@ class APStructure:
         cols = self.own_pg[var].astype(it)[:, None, None] * it(k) + np.arange(k, dtype=it)
         indptr = np.zeros(2 * n + 1, it)
         np.cumsum(np.repeat(np.where(var, k, 0).astype(it), 2), out=indptr[1:])
-        Mt = sp.csr_matrix(
-            (Aw[var].reshape(-1), np.broadcast_to(cols, (nvar, 2, k)).reshape(-1), indptr),
-            shape=(2 * n, npg * k),
-        )
-        self.H_design = Mt.T
+        self._var = var
+        self._h_index = (np.broadcast_to(cols, (nvar, 2, k)).reshape(-1), indptr)
+        self._h_shape = (2 * n, npg * k)
+        self.refresh(Aw)
         # E correction in the *other* groups of a ray's point (rays of points in the
         # overlap of two groups): every such pair, summed per (image, group)
         a = vo
@@ -167,6 +161,21 @@ class APStructure:
         self.f_bounds = np.r_[first_f, o.size]
         # (point, group) pairs by group (ba correction); observations by point
         self.sum_pgg, self.pgg_present = _summation(self.pg_grp)
+
+    def refresh(self, Aw: F64) -> None:
+        """Set the terms that depend on the design's values (Σ Aᵀ P A per group, the
+        scatter matrix of H) for a new weighted design ``Aw`` (n, 2, k) on the same rays.
+
+        Linear sets call it once; a model whose design changes with the iterate
+        (:class:`orientviz.bundle.LensModel`) at every linearisation.
+        """
+        order, bounds = self._by_group, self._group_bounds
+        Ao = Aw[order].reshape(-1, Aw.shape[2])
+        self.F_direct = np.stack(
+            [Ao[2 * a : 2 * b].T @ Ao[2 * a : 2 * b] for a, b in zip(bounds[:-1], bounds[1:])]
+        )
+        Mt = sp.csr_matrix((Aw[self._var].reshape(-1), *self._h_index), shape=self._h_shape)
+        self.H_design = Mt.T
 
 
 def ap_normal(
@@ -242,7 +251,7 @@ def ap_normal(
     else:
         other = np.zeros((0, 6, k))
     E = BorderE(own, other, prob.ap.group, A)
-    # F: direct term (constant: A is evaluated at the observed coordinates) − Σ H V⁻¹ Hᵀ
+    # F: direct term (constant for a linear set; refreshed for a lens model) − Σ H V⁻¹ Hᵀ
     F4 = np.zeros((G, G, k, k))
     F4[A.grp_present, A.grp_present] = A.F_direct
     # − Σ H_e V⁻¹ H_e'ᵀ over the pairs (e, e') of one point, one product per (g1, g2):

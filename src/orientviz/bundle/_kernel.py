@@ -85,3 +85,32 @@ def collinearity_block(
     Je[:, :, :3] = -Jp
     Je[:, :, 3:] = Ja
     return xy, Je, Jp
+
+
+def normalised_block(
+    X0: F64,
+    angles: F64,
+    obs_image: NDArray[np.int64],
+    xyz: F64,
+    sequence: str = "opk",
+    jac: bool = True,
+) -> tuple[F64, F64 | None, F64 | None]:
+    """Normalised image points n = −(u, v)/w of rays and their Jacobians.
+
+    The pinhole part of a camera model that applies c, the principal point and the lens
+    itself (:mod:`orientviz.bundle._lens`): ``project_block`` with c = 1, x0 = y0 = 0.
+
+    Returns
+    -------
+    n : ndarray, shape (n, 2)
+        Normalised image points (unitless).
+    J_exterior : ndarray, shape (n, 2, 6) or None
+        ∂n/∂(X0, Y0, Z0, ω, φ, κ) in 1/m and 1/rad (None without ``jac``).
+    J_point : ndarray, shape (n, 2, 3) or None
+        ∂n/∂(X, Y, Z) in 1/m.
+    """
+    one = np.ones(X0.shape[0])
+    zero = np.zeros(X0.shape[0])
+    if not jac:
+        return project_block(X0, angles, one, zero, zero, obs_image, xyz, sequence), None, None
+    return collinearity_block(X0, angles, one, zero, zero, obs_image, xyz, sequence)

@@ -19,7 +19,7 @@ All parts are constant over the iterations; the iterate is a
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -29,6 +29,7 @@ from ..block import Block
 from ..errors import InputError
 from ._ap_normal import APStructure
 from ._checks import PointSetup
+from ._lens import BoundLens, LensModel
 from ._reduced import ReducedStructure
 
 F64 = NDArray[np.float64]
@@ -176,6 +177,9 @@ class AdditionalBlock:
         Index orders of the border's terms.
     ray_length : float
         Median ray length, m (the scale of the reuse test of E, F).
+    lens : BoundLens or None
+        An exact camera model (:mod:`orientviz.bundle._lens`): then A, Aw, A_csr are the
+        design at the current iterate (:meth:`AdditionalBlock.with_design`).
     """
 
     k: int = 0
@@ -188,11 +192,22 @@ class AdditionalBlock:
     names: list[str] = field(default_factory=list)
     structure: APStructure | None = None
     ray_length: float = 1.0
+    lens: BoundLens | None = None
 
     @property
     def q(self) -> int:
         """Number of parameters, G·k."""
         return self.k * self.G
+
+    def with_design(self, A: F64, weight: F64) -> AdditionalBlock:
+        """This block with the design ``A`` (n, 2, k) mm per unit (rays weighted by
+        ``weight`` (n, 2), 1/mm); the structure's value terms are refreshed in place."""
+        Aw = A * weight[:, :, None]
+        A_csr = sp.csr_matrix(
+            (A.reshape(-1), self.A_csr.indices, self.A_csr.indptr), shape=self.A_csr.shape
+        )
+        self.structure.refresh(Aw)
+        return replace(self, A=A, Aw=Aw, A_csr=A_csr)
 
 
 def image_observations(block: Block, setup: PointSetup, pt_col: I64) -> ImageObservations:
@@ -269,24 +284,42 @@ def additional_block(
     if additional is None:
         return AdditionalBlock()
     m, n = block.n_images, obs.n
-    A = np.asarray(additional.design(obs.xy), dtype=float)
-    if A.ndim != 3 or A.shape[:2] != (n, 2):
-        raise InputError(f"additional.design: expected shape (n, 2, k), got {A.shape}")
-    k = A.shape[2]
-    grp = np.zeros(m, np.int64) if ap_group is None else np.asarray(ap_group, np.int64)
+    lens = None
+    if isinstance(additional, LensModel):  # the camera itself: one group per camera
+        default = block.images.camera
+    else:
+        default = np.zeros(m, np.int64)
+    grp = default if ap_group is None else np.asarray(ap_group, np.int64)
     if grp.shape != (m,) or grp.min() < 0:
         raise InputError(f"ap_group: expected {m} non-negative group indices")
     G = int(grp.max()) + 1
+    if isinstance(additional, LensModel):
+        lens = additional.bind(block, obs.xy, obs.image, grp)
+        if lens.k == 0:  # a known calibration applied, nothing estimated
+            return AdditionalBlock(G=G, group=grp, lens=lens)
+        A = np.zeros((n, 2, lens.k))  # the design at the iterate: set at each linearisation
+        if ap_sigma is None:
+            ap_sigma = lens.sigma.reshape(-1) if G else np.inf
+    else:
+        A = np.asarray(additional.design(obs.xy), dtype=float)
+    if A.ndim != 3 or A.shape[:2] != (n, 2):
+        raise InputError(f"additional.design: expected shape (n, 2, k), got {A.shape}")
+    k = A.shape[2]
     Aw = A * obs.weight[:, :, None]
     cols = (np.repeat(grp[obs.image], 2)[:, None] * k + np.arange(k)).ravel()
     A_csr = sp.csr_matrix(  # k entries per row, in column order: CSR directly
         (A.reshape(-1), cols, np.arange(0, 2 * n * k + 1, k)), shape=(2 * n, G * k)
     )
     s = np.inf if ap_sigma is None else ap_sigma
-    s = np.broadcast_to(np.asarray(s, dtype=float), (k,))
-    w = np.tile(np.where(np.isfinite(s) & (s > 0), 1.0 / s**2, 0.0), G)
+    s = np.asarray(s, dtype=float)
+    s = (
+        s.reshape(-1)
+        if s.size == G * k and lens is not None
+        else np.tile(np.broadcast_to(s, (k,)), G)
+    )
+    w = np.where(np.isfinite(s) & (s > 0), 1.0 / s**2, 0.0)
     names = [f"{nm}@g{g}" for g in range(G) for nm in additional.names]
     structure = APStructure(obs.image, obs.column, struct.pt_obs, points.n, grp, G, Aw)
     d = block.points.xyz[obs.point] - block.images.X0[obs.image]
     ray_length = float(np.nanmedian(np.linalg.norm(d, axis=1))) if d.size else 1.0
-    return AdditionalBlock(k, G, grp, A, Aw, A_csr, w, names, structure, ray_length)
+    return AdditionalBlock(k, G, grp, A, Aw, A_csr, w, names, structure, ray_length, lens)

@@ -20,7 +20,8 @@ from ..block import CHECK, BlockAdjustment, check_points_of
 from ..errors import NotDeterminableError
 from ..orientation.intersection import intersect_points
 from ..rotation import matrix_from_opk
-from ._kernel import project_block
+from ._kernel import normalised_block, project_block
+from ._lens import LensEstimates
 from ._state import wrap
 
 F64 = NDArray[np.float64]
@@ -99,7 +100,8 @@ class BundleResult(BlockAdjustment):
     used_obs : ndarray of bool, shape (n,)
         Image observations that entered the adjustment (rays of check points do not).
     solver : str
-        Solver of the reduced camera system (``"banded"``, ``"splu"``, ``"dense"``).
+        Solver of the reduced camera system that was used (``"banded"``, ``"dense"``,
+        ``"sparse"``; ``reduced_info["solver_reason"]`` says why it was chosen).
     reduced_info : dict
         Diagnostics of the reduced system (ordering, bandwidths) and, with additional
         parameters, ``"ap_border"``: how each solve of their border went.
@@ -114,6 +116,9 @@ class BundleResult(BlockAdjustment):
     subset : RaySubset or None
         For the rounds of :func:`orientviz.bundle.bundle_solver`: which rays were adjusted
         (``points`` then holds all block points, dropped ones from their rays).
+    camera : LensEstimates or None
+        With a :class:`~orientviz.bundle.LensModel`: the cameras' interior orientation
+        and lens parameters in physical units, their σ and correlations.
     """
 
     additional: F64 = field(default_factory=lambda: np.zeros(0))
@@ -125,6 +130,7 @@ class BundleResult(BlockAdjustment):
     redundancy_check: float | None = None
     precision_error: str | None = None
     subset: RaySubset | None = None
+    camera: LensEstimates | None = None
 
 
 def _intersect_check_points(block, X0: F64, angles: F64, chk: NDArray[np.int64]) -> F64:
@@ -247,6 +253,10 @@ def finish_result(
 def _project_all(block, st, xyz, prob) -> F64:
     cam = block.images.camera
     obs = block.observations
+    if prob.ap.lens is not None:  # the camera model predicts every ray
+        seq = block.sequence
+        nrm = normalised_block(st.X0, st.angles, obs.image, xyz[obs.point], seq, False)[0]
+        return prob.ap.lens.evaluate(st.ap, prob.ap.group[obs.image], nrm, obs.xy, False)[0]
     f = project_block(
         st.X0,
         st.angles,

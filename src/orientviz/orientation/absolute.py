@@ -95,6 +95,34 @@ class SimilarityTransform:
         return cls(float(p[6]), matrix_from_opk(p[3], p[4], p[5], sequence), p[:3].copy())
 
 
+@dataclass
+class SimilarityResult(Adjustment):
+    """The result of :func:`similarity_transform`: the engine's fields plus the transform.
+
+    Attributes
+    ----------
+    transform : SimilarityTransform
+        The estimated transformation.
+    start : SimilarityTransform
+        The approximate values it started from.
+    sequence : str
+        Rotation sequence of ω, φ, κ in ``x``.
+    used : ndarray of bool, shape (n, 3)
+        The control coordinates that entered.
+    residuals_xyz : ndarray, shape (n, 3)
+        Residuals v per control coordinate, m (NaN where not used).
+    transformed : ndarray, shape (n, 3)
+        The source points in the target frame, m (adjusted ones with ``sigma_source``).
+    """
+
+    transform: SimilarityTransform | None = None
+    start: SimilarityTransform | None = None
+    sequence: str = "opk"
+    used: NDArray[np.bool_] | None = None
+    residuals_xyz: F64 | None = None
+    transformed: F64 | None = None
+
+
 # --------------------------------------------------------------------------- validation
 def _check_pair(source: ArrayLike, target: ArrayLike) -> tuple[F64, F64]:
     try:
@@ -284,7 +312,7 @@ def similarity_transform(
     start: SimilarityTransform | None = None,
     point_ids: list[str] | None = None,
     max_iter: int = 30,
-) -> Adjustment:
+) -> SimilarityResult:
     """Least-squares 3D similarity (7 p.) or rigid (6 p.) transformation with precision.
 
     Model: ``X_i + v_X = t + m R(ω, φ, κ) x_i`` for every *given* control coordinate.
@@ -316,13 +344,13 @@ def similarity_transform(
 
     Returns
     -------
-    Adjustment
+    SimilarityResult
         ``names`` = ``("tx", "ty", "tz", "omega", "phi", "kappa", "scale")`` (+ model
         points), m and rad; residuals ``v = f(x̂) − l`` in m per control coordinate,
-        labelled ``"<id>/X"``; ``extra``: ``"transform"`` (SimilarityTransform),
-        ``"start"`` (the start transform), ``"sequence"``, ``"used"`` ((n, 3) bool mask of
-        the control coordinates used), ``"residuals_xyz"`` ((n, 3) m, NaN where unused),
-        ``"transformed"`` ((n, 3) transformed source points).
+        labelled ``"<id>/X"``; ``transform`` (SimilarityTransform), ``start`` (the start
+        transform), ``sequence``, ``used`` ((n, 3) bool mask of the control coordinates
+        used), ``residuals_xyz`` ((n, 3) m, NaN where unused), ``transformed`` ((n, 3)
+        transformed source points).
 
     Raises
     ------
@@ -417,7 +445,8 @@ def similarity_transform(
     tf = SimilarityTransform.from_params(res.x[:7], seq)
     vxyz = np.full((n, 3), np.nan)
     vxyz[rows, cols] = res.residuals[-n_obs:]
-    res.extra.update(
+    return res.extend(
+        SimilarityResult,
         transform=tf,
         start=start,
         sequence=seq,
@@ -425,4 +454,3 @@ def similarity_transform(
         residuals_xyz=vxyz,
         transformed=tf.apply(s if sigma_source is None else res.x[7:].reshape(n, 3)),
     )
-    return res

@@ -22,18 +22,45 @@ OpenCV's camera frame is x right, y down, z forwards: its normalised coordinates
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..adjust.result import Adjustment
 from ..errors import InputError, NotDeterminableError
 from ..rotation import check_sequence, opk_from_matrix, skew
-from .relative import check_points, relative_orientation
+from .relative import PairState, RelativeResult, check_points, relative_orientation, y_parallax
 
 F64 = NDArray[np.float64]
 
 #: OpenCV's camera frame in orientviz's: diag(1, −1, −1).
 D_OPENCV: F64 = np.diag([1.0, -1.0, -1.0])
+
+
+@dataclass
+class EssentialResult(RelativeResult):
+    """A relative orientation found through the essential matrix.
+
+    Attributes
+    ----------
+    E : ndarray, shape (3, 3)
+        The essential matrix (unit Frobenius norm up to sign).
+    R_linear : ndarray, shape (3, 3)
+        R2 of the linear solution (image → model).
+    t_linear : ndarray, shape (3,)
+        Unit base direction of the linear solution.
+    linear : ndarray, shape (5,)
+        The dependent pair's elements by, bz, ω, φ, κ before refinement (model units, rad).
+    n_front : int
+        Points in front of both images for the chosen factorisation.
+    """
+
+    E: F64 | None = None
+    R_linear: F64 | None = None
+    t_linear: F64 | None = None
+    linear: F64 | None = None
+    n_front: int = 0
 
 
 def essential_from_orientation(R2: ArrayLike, base: ArrayLike) -> F64:
@@ -293,7 +320,7 @@ def essential_route(
     sigma: float = 0.005,
     refine: bool = True,
     solver: str = "eight",
-) -> Adjustment:
+) -> EssentialResult:
     """Relative orientation via the essential matrix, refined by the rigorous model.
 
     Parameters
@@ -316,10 +343,11 @@ def essential_route(
 
     Returns
     -------
-    Adjustment
-        Elements by, bz, ω, φ, κ of a dependent pair; ``extra`` holds ``"E"``,
-        ``"R_linear"``, ``"t_linear"``, ``"linear"`` (the elements before refinement)
-        and ``"n_front"``.
+    EssentialResult
+        Elements by, bz, ω, φ, κ of a dependent pair (the fields of
+        :class:`~orientviz.orientation.relative.RelativeResult`; without refinement the
+        model points at the linear elements) and ``E``, ``R_linear``, ``t_linear``,
+        ``linear`` (the elements before refinement) and ``n_front``.
     """
     seq = check_sequence(sequence)
     xy1 = check_points(xy_left, "xy_left")
@@ -345,6 +373,7 @@ def essential_route(
     if refine:
         res = relative_orientation(xy1, xy2, c, b=b, approx=lin, sigma=sigma, sequence=seq)
     else:
+        st = PairState.from_elements(lin, b, "dependent", seq)
         res = Adjustment(
             lin,
             ["by", "bz", "omega", "phi", "kappa"],
@@ -354,6 +383,10 @@ def essential_route(
             np.full(len(xy1), sigma),
             True,
             "linear solution only",
-        )
-    res.extra.update(E=E, R_linear=R, t_linear=t, linear=lin, n_front=n_front)
-    return res
+        ).extend(
+            RelativeResult, kind="dependent", base=float(b), sequence=seq, c=float(c),
+            points=y_parallax(xy1, xy2, c, st)[1], state=st,
+        )  # fmt: skip
+    return res.extend(
+        EssentialResult, E=E, R_linear=R, t_linear=t, linear=lin, n_front=int(n_front)
+    )

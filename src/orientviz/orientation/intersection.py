@@ -83,6 +83,19 @@ class Intersection:
         return s
 
 
+@dataclass
+class ForwardIntersection(Adjustment):
+    """The result of :func:`forward_intersection` (one point on the engine).
+
+    Attributes
+    ----------
+    start : ndarray, shape (3,)
+        The linear solution it started from, m.
+    """
+
+    start: F64 | None = None
+
+
 def _as_per_image(value: ArrayLike, m: int, name: str) -> F64:
     v = np.asarray(value, dtype=float)
     try:
@@ -334,7 +347,7 @@ def forward_intersection(
     *,
     sigma: ArrayLike = 0.005,
     image_ids: list[str] | None = None,
-) -> Adjustment:
+) -> ForwardIntersection:
     """Intersect the rays of one point from k ≥ 2 images, on the engine, with precision.
 
     Parameters
@@ -354,9 +367,9 @@ def forward_intersection(
 
     Returns
     -------
-    Adjustment
+    ForwardIntersection
         ``names`` ``("X", "Y", "Z")`` in m; residuals ``v = f(X̂) − l`` in mm labelled
-        ``"<image>/x"``; ``extra["start"]`` the linear solution.
+        ``"<image>/x"``; ``start`` the linear solution.
 
     Raises
     ------
@@ -399,5 +412,4 @@ def forward_intersection(
         model, start.xyz[0], xy.reshape(-1), sg, names=["X", "Y", "Z"],
         obs_labels=[f"{i}/{a}" for i in ids for a in "xy"], context="forward intersection",
     )  # fmt: skip
-    res.extra["start"] = start.xyz[0]
-    return res
+    return res.extend(ForwardIntersection, start=start.xyz[0])

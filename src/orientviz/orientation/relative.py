@@ -209,6 +209,34 @@ class PairState:
         )
 
 
+@dataclass
+class RelativeResult(Adjustment):
+    """The result of a relative orientation: the engine's fields plus the pair.
+
+    Attributes
+    ----------
+    kind : {"dependent", "independent"}
+        Which five elements ``x`` holds (see the module docstring).
+    base : float
+        The model base bx, model units (mm at image scale by default).
+    sequence : str
+        Rotation sequence of the angles.
+    c : float
+        Principal distance, mm.
+    points : ndarray, shape (n, 3)
+        The model points at the estimated elements, model units (Z < 0).
+    state : PairState
+        The estimated orientation of the pair in the model frame.
+    """
+
+    kind: str = "dependent"
+    base: float = float("nan")
+    sequence: str = "opk"
+    c: float = float("nan")
+    points: F64 | None = None
+    state: PairState | None = None
+
+
 def _rays(xy: F64, angles: F64, c: float, sequence: str, derivatives: bool = True):
     d = np.empty((xy.shape[0], 3))
     d[:, :2] = xy
@@ -355,7 +383,7 @@ def relative_orientation(
     sequence: str = "opk",
     max_iter: int = 20,
     labels: list[str] | None = None,
-) -> Adjustment:
+) -> RelativeResult:
     """Relative orientation from image coordinates of n ≥ 5 points (least squares).
 
     The rigorous y-parallaxes (:func:`y_parallax`) are the observations, each observed
@@ -386,10 +414,10 @@ def relative_orientation(
 
     Returns
     -------
-    Adjustment
+    RelativeResult
         ``x`` = the five elements (model units, radians), with σ0, cofactors,
-        correlations and per-iteration history; ``extra`` holds ``kind``, ``b``,
-        ``sequence``, ``c`` and ``points`` (the model points, shape (n, 3)).
+        correlations and per-iteration history; ``kind``, ``base``, ``sequence``, ``c``,
+        ``points`` (the model points, shape (n, 3)) and ``state``.
 
     Raises
     ------
@@ -442,5 +470,6 @@ def relative_orientation(
     )
     st = PairState.from_elements(res.x, b, kind, seq)
     _, pts = y_parallax(xy1, xy2, c, st)
-    res.extra.update(kind=kind, b=float(b), sequence=seq, c=float(c), points=pts, state=st)
-    return res
+    return res.extend(
+        RelativeResult, kind=kind, base=float(b), sequence=seq, c=float(c), points=pts, state=st
+    )

@@ -20,7 +20,7 @@ Two steps, as in practice:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.polynomial import polynomial as P
@@ -65,6 +65,31 @@ class ResectionCandidate:
     def angles(self, sequence: str = "opk") -> F64:
         """ω, φ, κ in radians in the given sequence."""
         return np.array([float(a) for a in opk_from_matrix(self.R, sequence)])
+
+
+@dataclass
+class ResectionResult(Adjustment):
+    """The result of :func:`resection`: the engine's fields plus the oriented image.
+
+    Attributes
+    ----------
+    R : ndarray, shape (3, 3)
+        The estimated rotation image → object.
+    candidates : list of ResectionCandidate
+        The closed-form solutions it started from (empty with a given start).
+    camera : FrameCamera
+        The camera with the estimated (or given) interior orientation, mm.
+    sequence : str
+        Rotation sequence of ω, φ, κ in ``x``.
+    residuals_xy : ndarray, shape (n, 2)
+        Image residuals v per point, mm.
+    """
+
+    R: F64 | None = None
+    candidates: list[ResectionCandidate] = field(default_factory=list)
+    camera: FrameCamera | None = None
+    sequence: str = "opk"
+    residuals_xy: F64 | None = None
 
 
 def _camera(camera: FrameCamera | float) -> FrameCamera:
@@ -387,7 +412,7 @@ def resection(
     start: tuple[ArrayLike, ArrayLike] | None = None,
     point_ids: list[str] | None = None,
     max_iter: int = 30,
-) -> Adjustment:
+) -> ResectionResult:
     """Least-squares space resection (collinearity) with precision.
 
     Parameters
@@ -414,12 +439,11 @@ def resection(
 
     Returns
     -------
-    Adjustment
+    ResectionResult
         ``names`` ``("X0", "Y0", "Z0", "omega", "phi", "kappa")`` (+ ``"x0"``, ``"y0"``,
         ``"c"`` — only those estimated), in m, rad, mm; residuals ``v = f(x̂) − l`` in mm, labelled
-        ``"<id>/x"``; ``extra``: ``"R"``, ``"candidates"`` (closed-form solutions),
-        ``"camera"`` (FrameCamera with the estimated interior), ``"sequence"``,
-        ``"residuals_xy"`` ((n, 2) mm).
+        ``"<id>/x"``; ``R``, ``candidates`` (closed-form solutions), ``camera``
+        (FrameCamera with the estimated interior), ``sequence``, ``residuals_xy`` ((n, 2) mm).
 
     Raises
     ------
@@ -489,7 +513,8 @@ def resection(
         h.x = h.x[keep]
         h.dx = None if h.dx is None else h.dx[keep]
 
-    res.extra.update(
+    return res.extend(
+        ResectionResult,
         R=matrix_from_opk(*res.x[3:6], seq),
         candidates=cands,
         camera=FrameCamera(
@@ -502,4 +527,3 @@ def resection(
         sequence=seq,
         residuals_xy=res.residuals.reshape(n, 2),
     )
-    return res

@@ -30,8 +30,8 @@ def plot_transform_residuals(result, *, scale: float | None = None, ax=None, lab
     Parameters
     ----------
     result : Adjustment
-        Result of ``similarity_transform`` (uses ``extra["transformed"]``,
-        ``extra["used"]``, ``extra["residuals_xyz"]``).
+        Result of ``similarity_transform`` (uses ``transformed``, ``used``,
+        ``residuals_xyz``).
     scale : float, optional
         Exaggeration of the residuals; default so the largest spans ~12 % of the plot.
     ax : matplotlib.axes.Axes, optional
@@ -43,9 +43,9 @@ def plot_transform_residuals(result, *, scale: float | None = None, ax=None, lab
     matplotlib.figure.Figure
     """
 
-    P = np.asarray(result.extra["transformed"])
-    used = np.asarray(result.extra["used"])
-    v = np.asarray(result.extra["residuals_xyz"])
+    P = np.asarray(result.transformed)
+    used = np.asarray(result.used)
+    v = np.asarray(result.residuals_xyz)
     if ax is None:
         _, ax = subplots(figsize=(6, 5.5))
     fig = ax.figure

@@ -90,10 +90,11 @@ def rounded_coordinates(xy: ArrayLike, offset: ArrayLike | None = None) -> F64:
 
 
 def _errors(task: str, surface: str, res, truth: RadarImage, names) -> TaskOutcome:
-    est = res.extra["image"].vector()
+    est = res.image.vector()
     tv = truth.vector()
     out = TaskOutcome(task, surface, adjustment=res)
-    out.values["m0"] = float(res.extra.get("m0_linearized", res.sigma0))
+    # the stopping rule of Fig. 8 reports the linearised m0 (the value the paper prints)
+    out.values["m0"] = float(res.m0_linearized if res.stop_rule else res.sigma0)
     for q in names:
         if q in _PARAM_OF:
             k = PARAMS.index(_PARAM_OF[q])
@@ -165,11 +166,7 @@ def run_surface(
             elif task == "trilateration":
                 res = station_by_trilateration(P, xy[2], T[2].with_(X0=a2.X0))
             elif task == "rotations":
-                X0 = (
-                    out["trilateration"].adjustment.extra["image"].X0
-                    if "trilateration" in out
-                    else T[2].X0
-                )
+                X0 = out["trilateration"].adjustment.image.X0 if "trilateration" in out else T[2].X0
                 res = rotations(P, xy[2], ext2.with_(X0=X0), stopping=stopping, **kw)
             elif task == "exterior":
                 res = exterior(P, xy[2], ext2, stopping=stopping, **kw)
@@ -196,7 +193,7 @@ def run_surface(
                 {"r_x/z": abs(C[0, 2]), "r_x/phi": abs(C[0, 3]), "r_z/phi": abs(C[2, 3])}
             )
             cond, weak = weakest_direction(res, block="image2")
-            geo = pair_geometry(xy[1], T[1], xy[img], start, res.extra["points"])
+            geo = pair_geometry(xy[1], T[1], xy[img], start, res.points)
             o.diagnosis = (
                 f"condition number {cond:.3g}, weakest: "
                 + ", ".join(f"{n} {s:.2f}" for n, s in weak[:3])

@@ -1,9 +1,9 @@
 """Orientation tasks of a single radar panorama image (Geier 1973, tasks 1-3).
 
 Every task adjusts image observations with :func:`orientviz.adjust.gauss_newton` and
-returns its :class:`~orientviz.adjust.result.Adjustment` (estimates, σ̂0 — the paper's
-m0, the mean error of an image coordinate —, covariance, correlations, history). The
-estimated image is in ``result.extra["image"]`` (a :class:`~orientviz.radar.ppi.RadarImage`).
+returns a :class:`RadarResult`: the engine's fields (estimates, σ̂0 — the paper's m0,
+the mean error of an image coordinate —, covariance, correlations, history) and the
+estimated image ``result.image`` (a :class:`~orientviz.radar.ppi.RadarImage`).
 
 * :func:`calibrate` — task 1 (Fig. 5): interior orientation x0, y0, h, m and the
   reference direction α0 (= κ) with station and axis known.
@@ -21,6 +21,7 @@ Units: metres for coordinates, h and image coordinates; angles in radians; rotat
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -35,11 +36,57 @@ from .ppi import (
     project_with_jacobian,
     tolerant,
 )
-from .stopping import geier_iterate
+from .stopping import GeierRun, geier_iterate
 from .trilateration import sphere_ranges, trilaterate_three
 
 F64 = NDArray[np.float64]
 OBSERVES = ("xy", "radial", "tangential")
+
+
+@dataclass
+class RadarResult(Adjustment):
+    """The result of a radar image's orientation task.
+
+    Attributes
+    ----------
+    image : RadarImage
+        The estimated image (the free parameters at their estimates, the others known).
+    task : str
+        The task's name (``"calibration"``, ``"trilateration"``, …).
+    observe : {"xy", "radial", "tangential"}
+        Which image observations entered.
+    m0_linearized : float
+        With ``stopping="geier"``: the linearised m0 of the last system solved (the
+        value Geier prints), image m; NaN otherwise.
+    stop_rule : str
+        With ``stopping="geier"``: the branch of the reconstructed rule that ended the
+        iteration; empty otherwise.
+    """
+
+    image: RadarImage | None = None
+    task: str = ""
+    observe: str = "xy"
+    m0_linearized: float = float("nan")
+    stop_rule: str = ""
+
+
+@dataclass
+class TrilaterationResult(RadarResult):
+    """Task 2a's result: the station with the closed form's two candidates.
+
+    Attributes
+    ----------
+    candidates : ndarray, shape (2, 3)
+        The two stations of the closed form through three points (lower, upper Z), m.
+    discriminant : float
+        Its discriminant (≈ 0: the station near the plane of the three points), m².
+    triangle : list of int
+        The three points used for the closed form.
+    """
+
+    candidates: F64 | None = None
+    discriminant: float = float("nan")
+    triangle: list[int] = field(default_factory=list)
 
 
 def _indices(free: Sequence[str]) -> list[int]:
@@ -143,7 +190,7 @@ def adjust_image(
     labels: Sequence[str] | None = None,
     stopping: str = "converge",
     **engine,
-) -> Adjustment:
+) -> RadarResult:
     """Adjust any subset of the ten parameters of one image (the others held fixed).
 
     Parameters
@@ -162,7 +209,7 @@ def adjust_image(
         A-priori σ of an observation in image metres (weights 1/σ²): one value, one per
         point (both coordinates) or one per observation.
     task : str
-        Name used in messages and in ``result.extra["task"]``.
+        Name used in messages and in ``result.task``.
     labels : sequence of str, optional
         Point labels for the observation labels.
     stopping : {"converge", "geier"}
@@ -174,9 +221,9 @@ def adjust_image(
 
     Returns
     -------
-    Adjustment
-        With ``extra["image"]`` (the estimated :class:`RadarImage`), ``extra["task"]``
-        and ``extra["observe"]``.
+    RadarResult
+        With ``image`` (the estimated :class:`RadarImage`), ``task`` and ``observe``
+        (and ``m0_linearized``, ``stop_rule`` with ``stopping="geier"``).
 
     Raises
     ------
@@ -217,13 +264,18 @@ def adjust_image(
         raise InputError(f"expected stopping 'converge' or 'geier', got {stopping!r}")
     p = approx.vector()
     p[_indices(free)] = res.x
-    res.extra.update(
-        {"image": RadarImage.from_vector(p, approx.sequence), "task": task, "observe": observe}
+    geier = (
+        {"m0_linearized": res.m0_linearized, "stop_rule": res.rule}
+        if isinstance(res, GeierRun)
+        else {}
     )
-    return res
+    return res.extend(
+        RadarResult, image=RadarImage.from_vector(p, approx.sequence), task=task,
+        observe=observe, **geier,
+    )  # fmt: skip
 
 
-def calibrate(points: ArrayLike, xy: ArrayLike, approx: RadarImage, **kw) -> Adjustment:
+def calibrate(points: ArrayLike, xy: ArrayLike, approx: RadarImage, **kw) -> RadarResult:
     """Task 1 (Fig. 5): interior orientation x0, y0, h, m and α0 (κ), station and axis known.
 
     ``approx`` carries the known station and tilts (φ, ω) and approximate x0, y0, h, m, κ.
@@ -237,7 +289,7 @@ def calibrate(points: ArrayLike, xy: ArrayLike, approx: RadarImage, **kw) -> Adj
 
 def station_by_trilateration(
     points: ArrayLike, xy: ArrayLike, approx: RadarImage, *, upper: bool = True, **kw
-) -> Adjustment:
+) -> TrilaterationResult:
     """Task 2a: the station X0 from the ranges alone ("räumlicher Bogenschnitt").
 
     With three points the closed form (:func:`~orientviz.radar.trilateration.trilaterate_three`)
@@ -257,10 +309,10 @@ def station_by_trilateration(
 
     Returns
     -------
-    Adjustment
+    TrilaterationResult
         Unknowns X0, Y0, Z0 (observations: radial image distances, image m); with
-        ``extra["candidates"]`` (2, 3) — the candidates of the closed form — and
-        ``extra["discriminant"]``. For n = 3 the result is the closed form (redundancy 0).
+        ``candidates`` (2, 3) — the candidates of the closed form —, ``discriminant`` and
+        ``triangle``. For n = 3 the result is the closed form (redundancy 0).
     """
     P, L = _check(points, xy)
     n = len(P)
@@ -283,8 +335,9 @@ def station_by_trilateration(
         task="trilateration",
         **kw,
     )
-    res.extra.update({"candidates": np.vstack([lo, hi]), "discriminant": disc, "triangle": tri})
-    return res
+    return res.extend(
+        TrilaterationResult, candidates=np.vstack([lo, hi]), discriminant=float(disc), triangle=tri
+    )
 
 
 def _largest_triangle(P: F64) -> list[int]:
@@ -299,7 +352,7 @@ def _largest_triangle(P: F64) -> list[int]:
     return [i, j, k]
 
 
-def rotations(points: ArrayLike, xy: ArrayLike, approx: RadarImage, **kw) -> Adjustment:
+def rotations(points: ArrayLike, xy: ArrayLike, approx: RadarImage, **kw) -> RadarResult:
     """Task 2b: the rotation φ, ω, κ with station and interior orientation known.
 
     Uses the tangential image components only (the radial ones carry no information on
@@ -316,7 +369,7 @@ def rotations(points: ArrayLike, xy: ArrayLike, approx: RadarImage, **kw) -> Adj
     )
 
 
-def exterior(points: ArrayLike, xy: ArrayLike, approx: RadarImage, **kw) -> Adjustment:
+def exterior(points: ArrayLike, xy: ArrayLike, approx: RadarImage, **kw) -> RadarResult:
     """Task 2c: the six exterior parameters X0, Y0, Z0, φ, ω, κ jointly (interior known)."""
     return adjust_image(
         points,
@@ -328,6 +381,6 @@ def exterior(points: ArrayLike, xy: ArrayLike, approx: RadarImage, **kw) -> Adju
     )
 
 
-def resect_all(points: ArrayLike, xy: ArrayLike, approx: RadarImage, **kw) -> Adjustment:
+def resect_all(points: ArrayLike, xy: ArrayLike, approx: RadarImage, **kw) -> RadarResult:
     """Task 3: all ten parameters of the image jointly (interior and exterior)."""
     return adjust_image(points, xy, approx, PARAMS, task="all ten parameters", **kw)

@@ -21,6 +21,7 @@ Units: metres; angles in radians; rotations as in :mod:`orientviz.radar.ppi`.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -28,7 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..adjust import Adjustment, gauss_newton
 from ..errors import InputError, NotDeterminableError
 from ..rotation import matrix_derivatives, matrix_from_opk
-from .orientation import _indices
+from .orientation import RadarResult, _indices
 from .ppi import (
     EXTERIOR,
     PARAMS,
@@ -42,6 +43,35 @@ from .ppi import (
 )
 
 F64 = NDArray[np.float64]
+
+
+@dataclass
+class RadarPairResult(RadarResult):
+    """Task 4a's result: image 2 relative to image 1 and the model points.
+
+    Attributes
+    ----------
+    points : ndarray, shape (n, 3)
+        The model points (in image 1's object frame), m.
+    """
+
+    points: F64 | None = None
+
+
+@dataclass
+class RadarAbsoluteResult(Adjustment):
+    """Task 4b's result: the rigid transformation of a radar model onto control.
+
+    Attributes
+    ----------
+    transformed : ndarray, shape (n, 3)
+        The model points in the object frame, m.
+    task : str
+        ``"absolute orientation"``.
+    """
+
+    transformed: F64 | None = None
+    task: str = "absolute orientation"
 
 
 def circle_sphere_candidates(xy1: ArrayLike, image1: RadarImage, s2: ArrayLike, X02: ArrayLike):
@@ -138,7 +168,7 @@ def relative_orientation(
     sigma: float = 1.0,
     points0: ArrayLike | None = None,
     **engine,
-) -> Adjustment:
+) -> RadarPairResult:
     """Task 4a: orient image 2 to the fixed image 1 from homologous points alone.
 
     Parameters
@@ -161,9 +191,9 @@ def relative_orientation(
 
     Returns
     -------
-    Adjustment
+    RadarPairResult
         Parameters: image 2's unknowns, then the points (block ``"points"``);
-        ``extra["image"]`` is image 2, ``extra["points"]`` (n, 3) the model points.
+        ``image`` is image 2, ``points`` (n, 3) the model points.
         Redundancy 4n − 3n − len(free) = n − len(free).
     """
     L1, L2 = check_image_points(xy1), check_image_points(xy2)
@@ -209,14 +239,12 @@ def relative_orientation(
         raise _orientation_defect(model, u0, free, exc) from None
     p = full0.copy()
     p[idx] = res.x[:k]
-    res.extra.update(
-        {
-            "image": RadarImage.from_vector(p, seq),
-            "points": res.x[k:].reshape(n, 3),
-            "task": "relative orientation",
-        }
+    return res.extend(
+        RadarPairResult,
+        image=RadarImage.from_vector(p, seq),
+        points=res.x[k:].reshape(n, 3),
+        task="relative orientation",
     )
-    return res
 
 
 def _orientation_defect(model, u0: F64, free: list[str], exc: NotDeterminableError):
@@ -281,7 +309,7 @@ def absolute_orientation(
     sigma: float | ArrayLike = 1.0,
     sequence: str = "pok",
     **engine,
-) -> Adjustment:
+) -> RadarAbsoluteResult:
     """Task 4b: rigid transformation X = T + R(φ, ω, κ) · x of the model into control.
 
     No scale: the radar model already has true scale. Six coordinates (e.g. two full
@@ -300,8 +328,8 @@ def absolute_orientation(
 
     Returns
     -------
-    Adjustment
-        Parameters ``TX, TY, TZ, phi, omega, kappa``; ``extra["transformed"]`` (n, 3).
+    RadarAbsoluteResult
+        Parameters ``TX, TY, TZ, phi, omega, kappa``; ``transformed`` (n, 3) m.
     """
     x = check_points(model_points, "model points")
     C = np.asarray(control, dtype=float)
@@ -339,8 +367,7 @@ def absolute_orientation(
         model, u0, C[known], sigma, names=names, context="absolute orientation", **engine
     )
     R = matrix_from_opk(res.x[4], res.x[3], res.x[5], sequence)
-    res.extra.update({"transformed": res.x[:3] + x @ R.T, "task": "absolute orientation"})
-    return res
+    return res.extend(RadarAbsoluteResult, transformed=res.x[:3] + x @ R.T)
 
 
 def _rigid_start(x: F64, X: F64, sequence: str) -> F64:

@@ -18,13 +18,15 @@ Rule 2 is what leaves the calibration of the concave cylinders (Fig. 8, columns 
 (``stopping="geier"``) of the radar tasks; orientviz's default iterates to convergence.
 
 This module uses the engine only for the final precision (covariance, redundancy
-numbers) at the adopted estimate, so every result is an ordinary
-:class:`~orientviz.adjust.result.Adjustment`.
+numbers) at the adopted estimate; the result is an
+:class:`~orientviz.adjust.result.Adjustment` with the rule's own two fields
+(:class:`GeierRun`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -38,6 +40,23 @@ F64 = NDArray[np.float64]
 GEIER_RELATIVE_M0: float = 1e-3
 
 
+@dataclass
+class GeierRun(Adjustment):
+    """An adjustment stopped by the rule reconstructed from Fig. 8.
+
+    Attributes
+    ----------
+    m0_linearized : float
+        The linearised m0 of the last system solved (the value the paper prints), in the
+        observations' unit for σ = 1.
+    rule : str
+        Which branch of the rule ended the iteration, in words.
+    """
+
+    m0_linearized: float = float("nan")
+    rule: str = ""
+
+
 def geier_iterate(
     model: Callable[[F64], tuple[F64, F64]],
     u0: F64,
@@ -49,7 +68,7 @@ def geier_iterate(
     max_iter: int = 30,
     context: str = "",
     **engine,
-) -> Adjustment:
+) -> GeierRun:
     """Gauss-Newton with the stopping rule reconstructed from Fig. 8 (module docstring).
 
     Parameters
@@ -75,10 +94,10 @@ def geier_iterate(
 
     Returns
     -------
-    Adjustment
+    GeierRun
         At the adopted estimate. ``history`` holds one record per *applied* step;
-        ``extra["m0_linearized"]`` is the linearised m0 of the last system solved (the
-        value the paper prints), ``extra["rule"]`` says which branch ended the iteration.
+        ``m0_linearized`` is the linearised m0 of the last system solved (the value the
+        paper prints), ``rule`` says which branch ended the iteration.
     """
     u = np.asarray(u0, float).copy()
     l = np.asarray(l, float)
@@ -121,9 +140,7 @@ def geier_iterate(
     res.history = history
     res.converged = converged
     res.reason = f"stopping rule reconstructed from Geier's Fig. 8: {rule}"
-    res.extra["m0_linearized"] = m0_lin
-    res.extra["rule"] = rule
-    return res
+    return res.extend(GeierRun, m0_linearized=m0_lin, rule=rule)
 
 
 def _m0(v: F64, p: F64, dof: int) -> float:

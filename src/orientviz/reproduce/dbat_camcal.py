@@ -4,14 +4,15 @@
 ``datasets/dbat/camcal`` (21 images of a target sheet by an Olympus C4040Z, 2272 × 1704
 px, sensor height 5.43764 mm with square pixels, nominal focal length 7.5 mm; 2074
 marked points with σ = 0.1 px; 4 control points held fixed). Adjusted as DBAT's script
-does: the backward lens model (DBAT "model 3", :mod:`orientviz.lens`) with c, px, py,
-aspect, K1-K3, P1, P2 free and the skew fixed at 0; all 21 stations and the 96 other
-points free; no prior observations. Start: c = 7.5 mm, principal point at the sensor
-centre, no distortion; stations by space resection on the four control points
+does: the backward lens model (DBAT "model 3") with c, px, py, aspect, K1-K3, P1, P2
+free and the skew fixed at 0; all 21 stations and the 96 other points free; no prior
+observations. Start: c = 7.5 mm, principal point at the sensor centre, no distortion;
+stations by space resection on the four control points
 (:func:`orientviz.orientation.resection.resection_closed_form`), points by forward
-intersection — DBAT's script does the same two operations. The adjustment runs on
-:func:`orientviz.adjust.engine.gauss_newton` (Levenberg-Marquardt safeguard) with the
-lens model in the observation equation itself.
+intersection — DBAT's script does the same two operations. The adjustment is the
+ordinary bundle (:func:`orientviz.bundle.bundle_adjust`, points eliminated, the camera
+parameters bordering the reduced system) with the camera model inside the projection
+(:class:`orientviz.bundle.LensModel`, ``kind="backward"``).
 
 Published numbers: DBAT's report of the same data through its PhotoModeler-export route
 (``camcal-dbatreport.txt``, the reference the issue names), as printed; the report of
@@ -37,8 +38,6 @@ IO_KEYS = {"c [mm]": 0, "px [mm]": 1, "py [mm]": 2, "as": 3, "K1 [mm^-3]": 4, "K
            "K3 [mm^-7]": 6, "P1 [mm^-3]": 7, "P2 [mm^-3]": 8}  # fmt: skip
 #: The acceptance of the issue for the stations: within this fraction of DBAT's σ.
 STATION_SIGMA_FRACTION = 0.05
-#: Gauss-Newton steps (the start from the resections is close enough; DBAT: "gna", 9 steps)
-DAMPING = "none"
 
 
 def _folder():
@@ -107,85 +106,129 @@ def _start(d, img_ids, pts, im, pt, is_ctrl, ctrl_xyz, measured):
     return io, eo, res.xyz
 
 
-def _model(measured, im, pt, is_ctrl, ctrl_xyz, m, n_pts):
-    """v(x) = pinhole − corrected measurement, and its Jacobian (dense), x = IO, EO, points."""
-    from ..camera import collinearity_jacobian
-    from ..lens import BackwardLens, backward_ideal, backward_ideal_jacobian
+def block():
+    """DBAT's calibration data as an orientviz :class:`~orientviz.block.Block` (start values).
 
-    n = measured.shape[0]
-    free = pt >= 0
-    cols_eo = 9 + 6 * im[:, None] + np.arange(6)
-    cols_pt = 9 + 6 * m + 3 * np.where(free, pt, 0)[:, None] + np.arange(3)
+    One camera (c = 7.5 mm, principal point at the sensor centre, in the sensor frame:
+    x right, y up from the upper-left corner, mm), the 21 stations from the resections,
+    the 96 free points from the intersection and the 4 control points (fixed).
+    """
+    from ..block import Block
 
-    def f(x):
-        io = x[:9]
-        eo = x[9 : 9 + 6 * m].reshape(m, 6)
-        X = x[9 + 6 * m :].reshape(n_pts, 3)
-        obj = np.where(free[:, None], X[np.where(free, pt, 0)], ctrl_xyz)
-        xy, Je, Jp, Ji = collinearity_jacobian(obj, eo[im, :3], eo[im, 3:], io[0])
-        lens = BackwardLens(io[0], io[1], -io[2], tuple(io[4:7]), tuple(io[7:9]), io[3])
-        v = xy - backward_ideal(measured, lens)
-        Jl = backward_ideal_jacobian(measured, lens)
-        J = np.zeros((2 * n, x.size))
-        rows = np.arange(2 * n).reshape(n, 2)
-        J[rows.ravel(), 0] = Ji[:, :, 2].ravel()  # ∂pinhole/∂c
-        ioJ = -Jl[:, :, :8]  # px, py (DBAT's py points down: y0 = −py), as, K1-K3, P1, P2
-        ioJ[:, :, 1] *= -1
-        J[rows.ravel()[:, None], np.arange(1, 9)] = ioJ.reshape(2 * n, 8)
-        for k in range(2):
-            J[rows[:, k][:, None], cols_eo] = Je[:, k]
-            J[rows[free, k][:, None], cols_pt[free]] = Jp[free, k]
-        return v.ravel(), J
+    d, img_ids, pts, im, pt, is_ctrl, ctrl_xyz, measured, sigma = _setup()
+    io, eo, xyz = _start(d, img_ids, pts, im, pt, is_ctrl, ctrl_xyz, measured)
+    ctrl = sorted(d["control"], key=int)
+    ids = list(pts) + ctrl
+    where = {q: i for i, q in enumerate(ids)}
+    w, h = d["sensor_mm"]
+    return Block.from_arrays(
+        camera_c=[io[0]], camera_x0=[w / 2], camera_y0=[-h / 2], camera_format_mm=(w, h),
+        camera_ids=["C4040Z"], image_camera=np.zeros(len(img_ids), np.int64), X0=eo[:, :3],
+        angles=eo[:, 3:], xyz=np.vstack([xyz, [d["control"][q] for q in ctrl]]),
+        obs_image=im, obs_point=[where[m[1]] for m in d["marks"]], obs_xy=measured,
+        obs_sigma=sigma.reshape(-1, 2), role=[0] * len(pts) + [1] * len(ctrl),
+        image_ids=img_ids, point_ids=ids, meta={"name": "dbat-camcal"},
+    )  # fmt: skip
 
-    return f
+
+def problem_document() -> dict:
+    """The calibration as an orientviz problem file (kind block, image units px).
+
+    DBAT's pixel measurements as they are (origin at the upper-left corner, y down,
+    σ 0.1 px), the camera with ``"model": "backward"`` and DBAT's free parameters, the
+    start orientations of :func:`block` (tie points without coordinates: the loader
+    intersects them).
+    """
+    blk = block()
+    d = _setup()[0]
+    p = d["pixel_mm"]
+    w, h = d["sensor_mm"]
+    im, pt, ob = blk.images, blk.points, blk.observations
+    ctrl = pt.role == 1
+    return {
+        "format": "orientviz/1", "kind": "block", "name": "dbat-camcal",
+        "description": "DBAT's camera calibration demo (Börlin & Grussenmeyer; BSD licence, see datasets/dbat)",
+        "units": {"length": "m", "angle": "rad", "image": "px", "pixel_size": p},
+        "sequence": "opk",
+        "cameras": [{"id": "C4040Z", "c": d["focal_mm"] / p, "x0": w / 2 / p, "y0": h / 2 / p,
+                     "format": [w / p, h / p], "model": "backward", "free": list(LENS_FREE)}],
+        "images": {"id": list(im.ids), "camera": ["C4040Z"] * len(im.ids),
+                   "X0": im.X0[:, 0].tolist(), "Y0": im.X0[:, 1].tolist(), "Z0": im.X0[:, 2].tolist(),
+                   "omega": im.angles[:, 0].tolist(), "phi": im.angles[:, 1].tolist(),
+                   "kappa": im.angles[:, 2].tolist()},
+        "points": {"id": list(pt.ids), "role": ["control" if c else "tie" for c in ctrl],
+                   "X": [float(v) if c else None for v, c in zip(pt.xyz_known[:, 0], ctrl)],
+                   "Y": [float(v) if c else None for v, c in zip(pt.xyz_known[:, 1], ctrl)],
+                   "Z": [float(v) if c else None for v, c in zip(pt.xyz_known[:, 2], ctrl)]},
+        "observations": {"image": [im.ids[i] for i in ob.image], "point": [pt.ids[j] for j in ob.point],
+                         "x": (ob.xy[:, 0] / p).tolist(), "y": (-ob.xy[:, 1] / p).tolist(),
+                         "sigma": (ob.sigma[:, 0] / p).tolist()},
+        "options": {"tol": TOL, "max_iter": 50},
+    }  # fmt: skip
+
+
+#: DBAT's demo estimates every parameter of its model 3 but the shear (no priors).
+LENS_FREE = ("c", "x0", "y0", "as", "K1", "K2", "K3", "P1", "P2")
 
 
 @lru_cache(maxsize=1)
 def adjust():
-    """Run the calibration; returns (adjustment, image ids, point ids, pixel size mm)."""
-    from ..adjust.engine import gauss_newton
+    """Run the calibration through :func:`orientviz.bundle.bundle_adjust` with the
+    backward :class:`~orientviz.bundle.LensModel`.
 
-    d, img_ids, pts, im, pt, is_ctrl, ctrl_xyz, measured, sigma = _setup()
-    io, eo, xyz = _start(d, img_ids, pts, im, pt, is_ctrl, ctrl_xyz, measured)
-    m = len(img_ids)
-    x0 = np.concatenate([io, eo.ravel(), xyz.ravel()])
-    names = (list(IO_NAMES) + [f"{i}.{e}" for i in img_ids for e in ("X0", "Y0", "Z0", "omega", "phi", "kappa")]
-             + [f"{q}.{a}" for q in pts for a in "XYZ"])  # fmt: skip
-    f = _model(measured, im, pt, is_ctrl, ctrl_xyz, m, len(pts))
-    adj = gauss_newton(
-        f, x0, np.zeros(sigma.size), sigma, names=names, damping=DAMPING, max_iter=50, tol=1e-8,
-        blocks={"interior": slice(0, 9), "exterior": slice(9, 9 + 6 * m), "points": slice(9 + 6 * m, None)},
-        context="dbat-camcal",
-    )  # fmt: skip
-    return adj, img_ids, pts, d
+    Returns
+    -------
+    (BundleResult, image ids, point ids, DBAT data)
+        ``result.camera`` holds c, x0, y0 (y up: DBAT's py = −y0), as, K1-K3, P1, P2.
+    """
+    from ..bundle import LensModel, bundle_adjust
+
+    d, img_ids, pts = _setup()[:3]
+    res = bundle_adjust(block(), additional=LensModel("backward", free=LENS_FREE), tol=TOL,
+                        max_iter=50)  # fmt: skip
+    return res, img_ids, pts, d
+
+
+#: The bundle's stopping rule: corrections below this fraction of their conditional σ
+#: (DBAT iterates to its own tolerance; the printed digits need the optimum closely).
+TOL = 1e-8
+
+
+def camera_values(res) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(values (9,), σ (9,), correlations (9, 9)) in DBAT's order and signs (IO_NAMES)."""
+    cam = res.camera
+    j = [cam.names.index(k) for k in LENS_FREE]
+    sign = np.ones(9)
+    sign[2] = -1.0  # DBAT prints py downwards
+    rho = cam.correlation[0][np.ix_(j, j)] * np.outer(sign, sign)
+    return cam.value[0, j] * sign, cam.sigma[0, j], rho
 
 
 def ours() -> dict[str, float]:
     """orientviz's numbers under the report's keys (unrounded)."""
-    adj, img_ids, pts, d = adjust()
-    std = adj.std()
+    res, img_ids, pts, d = adjust()
     out: dict[str, float] = {
-        "summary||sigma0": adj.sigma0,
-        "summary||sigma0 [px]": adj.sigma0 * 0.1,
-        "summary||redundancy": float(adj.redundancy),
-        "summary||parameters": float(adj.n_unknowns),
-        "summary||observations": float(adj.n_observations),
-        "summary||sqrt(vTPv)": adj.sigma0 * np.sqrt(adj.redundancy),
+        "summary||sigma0": res.sigma0,
+        "summary||sigma0 [px]": res.sigma0 * 0.1,
+        "summary||redundancy": float(res.redundancy),
+        # unknowns: stations, free points, camera (``res.x`` also lists the fixed control)
+        "summary||parameters": float(6 * len(img_ids) + 3 * len(pts) + res.additional.size),
+        "summary||observations": float(res.n_observations),
+        "summary||sqrt(vTPv)": res.sigma0 * np.sqrt(res.redundancy),
     }
+    value, sigma, rho = camera_values(res)
     for key, k in IO_KEYS.items():
-        out[f"camera||{key}"] = float(adj.x[k])
-        out[f"camera||σ {key}"] = float(std[k])
-    rho = adj.correlations()[:9, :9]
+        out[f"camera||{key}"] = float(value[k])
+        out[f"camera||σ {key}"] = float(sigma[k])
     short = [k.split()[0] for k in IO_KEYS]
     for a in range(9):
         for b in range(a + 1, 9):
             out[f"camera||correlation {short[a]}-{short[b]} [%]"] = 100.0 * float(rho[a, b])
-    n = adj.residuals.size // 2
-    v = adj.residuals.reshape(n, 2) / d["pixel_mm"]
+    n = res.used_obs.size
+    v = res.residuals[: 2 * n].reshape(n, 2) / d["pixel_mm"]
     out["residuals||overall point RMS [px]"] = float(np.sqrt(np.mean(np.sum(v**2, axis=1))))
-    m = len(img_ids)
-    eo = adj.x[9 : 9 + 6 * m].reshape(m, 6)
-    seo = std[9 : 9 + 6 * m].reshape(m, 6)
+    eo = res.exterior
+    seo = res.sigma0 * np.sqrt(np.einsum("mii->mi", res.cofactor_blocks["exterior"]))
     for i, num in enumerate(img_ids):
         case = f"photo {int(num)} ({d['images'][num]})"
         vals = np.r_[np.degrees(eo[i, 3:]), eo[i, :3]]

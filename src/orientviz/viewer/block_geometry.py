@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 
 from ..block import CHECK, CONTROL, TIE
 from . import geometry as g
+from . import precision_view as pv
 from .state import BlockState
 
 F64 = NDArray[np.float64]
@@ -34,6 +35,7 @@ COLORS: dict[str, tuple[int, int, int]] = {
     "strip": (110, 60, 160),
     "model": (150, 150, 150),
     "ellipsoid": (230, 80, 200),
+    "station": (40, 150, 210),
     "deformation": (0, 140, 170),
 }
 
@@ -220,51 +222,54 @@ class BlockGeometry:
         return self.frame.to_scene(g.loop_segments(quad))
 
     # ------------------------------------------------------------------ precision
-    def point_covariances(self) -> tuple[NDArray[np.int64], F64] | None:
-        """Indices and covariances (k, 3, 3) m² of the points, from the adjustment.
+    def shown_points(self, mode: str, image: int) -> NDArray[np.int64]:
+        """Points whose ellipsoids are drawn: ``"all"``, ``"selected image"`` or ``"none"``."""
+        b = self.state.block
+        if mode == "all":
+            return np.arange(b.n_points)
+        if mode == "selected image":
+            return np.unique(b.observations.point[b.observations.image == image])
+        return np.zeros(0, np.int64)
 
-        Uses the dense cofactor matrix or ``cofactor_blocks["points"]`` (shape (p, 3, 3))
-        scaled by σ̂0². None if the adjustment has neither.
+    def ellipsoid_gain(self, k: float) -> float:
+        """Exaggeration of the ellipsoids for the whole adjustment (see :func:`pv.auto_gain`).
+
+        From up to 2 000 points spread over the block, so that it does not change when
+        another image is selected.
         """
-        res = self.state.result
-        if res is None or "points" not in res.blocks:
-            return None
         p = self.state.block.n_points
-        s0 = res.sigma0 if np.isfinite(res.sigma0) and res.redundancy > 0 else 1.0
-        if res.cofactor is not None:
-            sl = res.blocks["points"]
-            idx = np.arange(sl.start, sl.stop).reshape(p, 3)
-            Q = res.cofactor[idx[:, :, None], idx[:, None, :]]
-        elif res.cofactor_blocks.get("points") is not None and np.shape(
-            res.cofactor_blocks["points"]
-        ) == (p, 3, 3):
-            Q = np.asarray(res.cofactor_blocks["points"])
-        else:
-            return None
-        ok = np.einsum("nii->n", Q) > 0
-        return np.flatnonzero(ok), s0**2 * Q[ok]
+        sample = np.linspace(0, p - 1, min(p, 2000)).astype(np.int64) if p else np.zeros(0, int)
+        idx, cov = pv.point_covariances(self.state.result, sample)
+        if idx.size == 0:
+            idx, cov = pv.station_covariances(
+                self.state.result, np.arange(self.state.block.n_images)
+            )
+        return pv.auto_gain(cov, k, self.spacing)
 
     def ellipsoids(
-        self, limit: int = 3000, subdivisions: int = 1
-    ) -> tuple[F64, NDArray[np.int32], float] | None:
-        """One mesh of error ellipsoids (vertices, faces) and the exaggeration used.
+        self, points: NDArray[np.int64], k: float, gain: float, subdivisions: int = 1
+    ) -> tuple[F64, NDArray[np.int32]] | None:
+        """One mesh (vertices, faces) of the confidence ellipsoids of ``points``.
 
-        The exaggeration makes the median ellipsoid (largest semi-axis) 0.3 of a point
-        spacing; only the ``limit`` points with the largest ellipsoids are drawn.
+        Scale k (:func:`~orientviz.viewer.precision_view.confidence_factor`) × ``gain``;
+        at most :data:`~orientviz.viewer.precision_view.ELLIPSOID_LIMIT` (the largest).
+        None if none of them has a covariance.
         """
-        cov = self.point_covariances()
-        if cov is None or cov[0].size == 0:
+        idx, S = pv.largest_first(*pv.point_covariances(self.state.result, points))
+        if idx.size == 0:
             return None
-        idx, S = cov
-        big = np.sqrt(np.linalg.eigvalsh(S)[:, -1])
-        if idx.size > limit:
-            keep = np.argsort(-big)[:limit]
-            idx, S, big = idx[keep], S[keep], big[keep]
-        med = float(np.median(big))
-        k = 0.3 * self.spacing / med if med > 0 else 1.0
         centers = self.frame.to_scene(self.state.block.points.xyz[idx])
-        v, f = g.ellipsoid_mesh(centers, S, k, subdivisions)
-        return v, f, k
+        return g.ellipsoid_mesh(centers, S, k * gain, subdivisions)
+
+    def station_ellipsoids(
+        self, images: NDArray[np.int64], k: float, gain: float
+    ) -> tuple[F64, NDArray[np.int32]] | None:
+        """One mesh of the confidence ellipsoids of the projection centres of ``images``."""
+        idx, S = pv.station_covariances(self.state.result, images)
+        if idx.size == 0:
+            return None
+        centers = self.frame.to_scene(self.state.block.images.X0[idx])
+        return g.ellipsoid_mesh(centers, S, k * gain, 2)
 
     # ------------------------------------------------------------------ camera
     def default_camera(self) -> tuple[F64, F64]:

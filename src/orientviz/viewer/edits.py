@@ -242,7 +242,7 @@ def expand_result(sub_result: Any, mp: Mapping, block: Block, sigma: F64) -> Any
             slices[k] = slice(s.start + shift, s.stop + shift)
     cb = {}
     for name, size, idx in (("exterior", m, mp.images), ("points", p, mp.points)):
-        Q = _diagonal_blocks(sub_result, name, 6 if name == "exterior" else 3)
+        Q = diagonal_blocks(sub_result, name, 6 if name == "exterior" else 3)
         if Q is not None and np.ndim(Q) == 3:
             full = np.full((size,) + np.shape(Q)[1:], np.nan)
             full[idx] = Q
@@ -290,7 +290,7 @@ def _typed(res: Any, ext: F64, xyz: F64, used: NDArray[np.bool_], pairs: Any) ->
     return {k: v for k, v in want.items() if k in have}
 
 
-def _diagonal_blocks(res: Any, name: str, b: int) -> F64 | None:
+def diagonal_blocks(res: Any, name: str, b: int) -> F64 | None:
     """Stacked b × b diagonal cofactor blocks of block ``name``: stored, or from the dense Q."""
     Q = res.cofactor_blocks.get(name)
     if Q is not None and np.ndim(Q) == 3:

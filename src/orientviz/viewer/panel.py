@@ -101,9 +101,11 @@ class BlockPanel:
             ):  # fmt: skip
                 h[f"show_{key}"] = gui.add_checkbox(key, on)
         from .panel_act import ActControls
+        from .panel_precision import PrecisionControls
         from .panel_quality import QualityControls
 
         self.quality = QualityControls(self).build()
+        self.precision = PrecisionControls(self).build()
         self.act = ActControls(self).build()
         self._bind()
         self.scene.on_image_click = self.guard(self._select_from_click)
@@ -151,6 +153,7 @@ class BlockPanel:
         ang = from_rad(b.images.angles[k], "gon")
         if getattr(self, "act", None) is not None:
             self.act.refresh()
+            self.precision.refresh()
         self.handles["image_id"].content = (
             f"**{b.images.ids[k]}** (strip {b.images.strip[k]}) — sliders are changes of "
             f"X0 = ({b.images.X0[k, 0]:.1f}, {b.images.X0[k, 1]:.1f}, {b.images.X0[k, 2]:.1f}) m, "
@@ -233,8 +236,6 @@ class BlockPanel:
             lines.append(
                 f"last adjustment: σ̂0 = {res.sigma0:.3f}, {res.iterations} it., {res.reason}"
             )
-        if getattr(self.scene, "ellipsoid_scale", None) and "ellipsoids" in self.scene.nodes:
-            lines.append(f"error ellipsoids ×{self.scene.ellipsoid_scale:.3g}")
         h["stats"].content = "  \n".join(lines)
         # the list of largest residuals follows every change
         top = st.largest(10, scores)
@@ -251,6 +252,7 @@ class BlockPanel:
             self._syncing = False
         if full and quality and getattr(self, "quality", None) is not None:
             self.quality.recolour()
+            self.precision.refresh()
             self.act.refresh()
 
     def fly_to_selected(self) -> None:

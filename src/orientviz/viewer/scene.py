@@ -86,6 +86,14 @@ class BlockScene:
         self.strip_frustums: dict[int, tuple[Any, np.ndarray]] = {}
         self.on_image_click = None
         self.selected_point: int | None = None
+        #: what :meth:`update_ellipsoids` draws (the panel's "Precision" folder sets it)
+        self.ellipsoid_options: dict[str, Any] = {
+            "points": "all" if geometry.state.block.n_points <= 3000 else "selected image",
+            "level": 0.95,
+            "stations": True,
+            "factor": 1.0,
+        }
+        self.ellipsoids_visible = True
         #: frustum colours (m, 3) uint8 as last drawn by :meth:`colour_images`
         self.image_colours: np.ndarray | None = None
         #: functions called after every redraw (e.g. parallax arrows, deformation)
@@ -266,10 +274,14 @@ class BlockScene:
         self.nodes["residuals"].colors = col
 
     def select(self, image: int) -> None:
-        """Highlight image ``image`` and show its rays."""
+        """Highlight image ``image`` and show its rays (and its ellipsoids, if so chosen)."""
+        changed = int(image) != self.selected
         self.selected = int(image)
         self.nodes["selected"].points = self._selected_segments().astype(np.float32)
         self.nodes["rays/selected"].points = self.geo.rays(self.selected).astype(np.float32)
+        opt = self.ellipsoid_options
+        if changed and (opt["points"] == "selected image" or opt["stations"]):
+            self.update_ellipsoids(new_gain=False)
 
     def set_rays(self, mode: str) -> None:
         """``"none"``, ``"selected image"`` or ``"all"``."""
@@ -279,21 +291,49 @@ class BlockScene:
         if mode == "all":
             self.nodes["rays/all"].points = self.geo.rays().astype(np.float32)
 
-    def update_ellipsoids(self) -> float | None:
-        """(Re)draw the error ellipsoids from the current adjustment; returns their exaggeration."""
-        old = self.nodes.pop("ellipsoids", None)
-        if old is not None:
-            old.remove()
-        ell = self.geo.ellipsoids()
-        if ell is None:
+    def update_ellipsoids(self, new_gain: bool = True) -> float | None:
+        """(Re)draw the confidence ellipsoids from the current adjustment.
+
+        What is drawn follows :attr:`ellipsoid_options`: ``"points"`` (``"all"``,
+        ``"selected image"`` or ``"none"``), ``"level"`` (confidence, 0–1),
+        ``"stations"`` (the selected image's projection centre and its neighbours') and
+        ``"factor"`` (× the automatic exaggeration, which is recomputed when ``new_gain``).
+        Returns the exaggeration used (None if nothing has a covariance).
+        """
+        from .precision_view import confidence_factor, neighbour_correlations
+
+        opt = self.ellipsoid_options
+        for key in ("ellipsoids", "station_ellipsoids"):
+            old = self.nodes.pop(key, None)
+            if old is not None:
+                old.remove()
+        if self.geo.state.result is None:
             return None
-        v, f, k = ell
-        self.nodes["ellipsoids"] = self.scene.add_mesh_simple(
-            f"{self.root}/ellipsoids", v.astype(np.float32), f, color=COLORS["ellipsoid"],
-            opacity=0.55, flat_shading=False, cast_shadow=False, receive_shadow=False,
-        )  # fmt: skip
-        self.ellipsoid_scale = k
-        return k
+        k = confidence_factor(opt["level"])
+        if new_gain or not getattr(self, "auto_ellipsoid_gain", None):
+            self.auto_ellipsoid_gain = self.geo.ellipsoid_gain(k)
+        gain = self.ellipsoid_scale = self.auto_ellipsoid_gain * float(opt["factor"])
+        self.confidence_k = k
+        pts = self.geo.shown_points(opt["points"], self.selected)
+        ell = self.geo.ellipsoids(pts, k, gain) if pts.size else None
+        if ell is not None:
+            self.nodes["ellipsoids"] = self.scene.add_mesh_simple(
+                f"{self.root}/ellipsoids", ell[0].astype(np.float32), ell[1],
+                color=COLORS["ellipsoid"], opacity=0.55, flat_shading=False,
+                cast_shadow=False, receive_shadow=False, visible=self.ellipsoids_visible,
+            )  # fmt: skip
+        if opt["stations"]:
+            m = self.geo.state.block.n_images
+            nb, _ = neighbour_correlations(self.geo.state.result, self.selected, m)
+            imgs = np.concatenate([[self.selected], nb])
+            st = self.geo.station_ellipsoids(imgs, k, gain)
+            if st is not None:
+                self.nodes["station_ellipsoids"] = self.scene.add_mesh_simple(
+                    f"{self.root}/station_ellipsoids", st[0].astype(np.float32), st[1],
+                    color=COLORS["station"], opacity=0.6, flat_shading=False,
+                    cast_shadow=False, receive_shadow=False, visible=self.ellipsoids_visible,
+                )  # fmt: skip
+        return gain
 
     # ------------------------------------------------------------------ colours by quality
     def colour_images(self, rgb: np.ndarray | None) -> None:
@@ -347,6 +387,12 @@ class BlockScene:
 
     def set_visible(self, key: str, visible: bool) -> None:
         """Show or hide a group: ``"frustums"``, ``"points"``, ``"residuals"``, ``"strips"``, …"""
+        if key == "ellipsoids":
+            self.ellipsoids_visible = visible
+            for name in ("ellipsoids", "station_ellipsoids"):
+                if name in self.nodes:
+                    self.nodes[name].visible = visible
+            return
         if key == "frustums":
             for h in self.image_nodes + [h for h, _ in self.strip_frustums.values()]:
                 h.visible = visible

@@ -120,7 +120,7 @@ class RadarSliders:
         res = adjust_image(
             self.points, self.observed, self.current(), TASKS[task], task=task, **engine
         )
-        est = res.extra["image"].vector()
+        est = res.image.vector()
         for i, n in enumerate(PARAMS):
             self.values[n] = _to_slider(n, est[i])
         return res

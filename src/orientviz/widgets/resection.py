@@ -86,7 +86,7 @@ def _resection_figure(state: tuple[ResectionExample, Adjustment]):
 
     ex, res = state
     fig, (a1, a2) = subplots(1, 2, figsize=(7.0, 3.6))  # the book column: no down-scaling
-    plot_image(ex.image_points, residuals=res.extra["residuals_xy"], ax=a1,
+    plot_image(ex.image_points, residuals=res.residuals_xy, ax=a1,
                title="control points and residuals")  # fmt: skip
     plot_correlations(res, ax=a2)
     fig.tight_layout()

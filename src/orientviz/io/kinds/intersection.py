@@ -87,7 +87,6 @@ def _pooled(block: Block, res, ids: list[str]) -> Adjustment:
         history=[Iteration(0, x.copy(), None, s0, cost)],
         blocks={"points": slice(0, 3 * p)}, redundancy_numbers=rn, normalized_residuals=w,
         cofactor_blocks={"points": res.cofactor}, obs_labels=labels,
-        extra={"per_point_sigma0": res.sigma0, "n_rays": res.n_rays},
     )  # fmt: skip
 
 

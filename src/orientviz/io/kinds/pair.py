@@ -147,7 +147,7 @@ def solve(problem: Problem, method: str | None) -> Solution:
             "model frame: origin at the left projection centre, X along the base, Y left, Z up; "
             "observations: rigorous y-parallaxes p_y = Y_left − Y_right in units.length",
             "model points (the rays' meeting points in the XZ projection) are not reported: "
-            "orientviz.orientation.relative.relative_orientation returns them in extra['points']",
+            "orientviz.orientation.relative.relative_orientation returns them as .points",
         ],
     )
 

@@ -186,7 +186,7 @@ def solve(problem: Problem, method: str | None) -> Solution:
         res = relative_orientation(
             xy1[ka], data.images[0], xy2[kb], data.images[1], free=free, damping="lm", **engine
         )
-        img_k, pts = 1, res.extra["points"]
+        img_k, pts = 1, res.points
         point_ids = [data.point_ids[p] for p in common]
     else:
         xy, s, idx = _observed(data, 0)
@@ -202,7 +202,7 @@ def solve(problem: Problem, method: str | None) -> Solution:
                   "all": O.resect_all}[data.task]  # fmt: skip
             res = fn(P, xy, start, stopping=stopping, **kw)
         img_k, pts, point_ids = 0, np.zeros((0, 3)), []
-    est = res.extra["image"]
+    est = res.image
     std = dict(zip(res.names, res.std()))
     sd = {n: std.get(n, 0.0) for n in PARAMS}
     params = [
@@ -233,8 +233,7 @@ def solve(problem: Problem, method: str | None) -> Solution:
         observation_quantity="length",
         critical=float(opts.get("critical", W_CRITICAL)),
         notes=[
-            f"radar task {data.task!r} ({res.extra.get('task', '')}); unknowns: "
-            + ", ".join(res.names[:n_img_par]),
+            f"radar task {data.task!r} ({res.task}); unknowns: " + ", ".join(res.names[:n_img_par]),
             "image coordinates and residuals in units.length; kappa is the reference "
             "direction alpha0; sequence " + data.sequence,
         ],

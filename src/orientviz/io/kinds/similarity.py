@@ -140,7 +140,7 @@ def _propagate(adj, J: F64, n: int, with_points: bool) -> F64:
     if not with_points:
         Cp = C[:7, :7]
         return np.sqrt(np.clip(np.einsum("nik,kl,nil->ni", J, Cp, J), 0.0, None))
-    R_blk = adj.extra["transform"].scale * adj.extra["transform"].R
+    R_blk = adj.transform.scale * adj.transform.R
     Jf = np.concatenate([J, np.broadcast_to(R_blk, (n, 3, 3))], axis=2)  # (n, 3, 10)
     idx = np.concatenate(
         [np.broadcast_to(np.arange(7), (n, 7)), 7 + 3 * np.arange(n)[:, None] + np.arange(3)],
@@ -202,7 +202,7 @@ def solve(problem: Problem, method: str | None) -> Solution:
         units=problem.units,
         sequence=data.sequence,
         point_ids=list(src.ids),
-        xyz=adj.extra["transformed"],
+        xyz=adj.transformed,
         xyz_sigma=_propagate(adj, J, n, with_points),
         point_roles=["control" if u else "transformed" for u in used],
         parameters=params,
