@@ -183,6 +183,10 @@ COMMANDS: dict[str, Command] = {
             arg("--tol", type=positive_float, default=None, metavar="T",
                 help="stop when every correction is below T times its sigma (overrides "
                 "options.tol; default 5e-3 for blocks)"),
+            arg("--solver", choices=["auto", "banded", "dense", "sparse"], default=None,
+                help="solver of the bundle's reduced camera system (overrides options.solver; "
+                "default auto: banded for strips, dense for small or densely connected "
+                "networks, sparse otherwise; the report names the choice)"),
             arg(
                 "-o",
                 "--output",

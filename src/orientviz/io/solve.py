@@ -90,9 +90,11 @@ def run_from_cli(args: argparse.Namespace) -> int:
 
             report_format(report_path)  # a wrong suffix fails before the adjustment
         problem = load_problem(_resolve(args.file))
-        for name in ("max_iter", "tol"):  # solver options of the command line win
+        for name in ("max_iter", "tol", "solver"):  # solver options of the command line win
             if getattr(args, name, None) is not None:
                 problem.options = dict(problem.options, **{name: getattr(args, name)})
+        if getattr(args, "solver", None) is not None and problem.kind != "block":
+            raise InputError("--solver applies to block problems only", problem.source)
         solution = solve_problem(problem, getattr(args, "method", None))
         text = (
             json.dumps(solution.as_dict(), indent=1, ensure_ascii=False, allow_nan=False)

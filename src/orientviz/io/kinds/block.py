@@ -158,7 +158,7 @@ def solve(problem: Problem, method: str | None) -> Solution:
     """Adjust the block by ``method`` and collect the report."""
     method = method or "bundle"
     block: Block = approximate(problem.data)
-    keys = ("control", "max_iter", "tol", "degree_xy", "degree_z")
+    keys = ("control", "max_iter", "tol", "degree_xy", "degree_z", "solver")
     opts = {k: v for k, v in problem.options.items() if k in keys}
     if method == "bundle":
         from ...bundle import bundle_adjust
@@ -267,6 +267,8 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
     ties = int(np.sum(block.points.role == TIE))
     notes.append(f"block: {block.summary()} ({ties} tie points)")
     notes += camera_notes(block, adj, problem.units)
+    if getattr(adj, "reduced_info", {}).get("solver_reason"):
+        notes.append(f"reduced system solved {adj.reduced_info['solver_reason']}")
     return Solution(
         kind="block",
         method=method,
