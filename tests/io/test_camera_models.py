@@ -97,3 +97,26 @@ def test_an_additional_parameter_set_per_camera_from_the_file():
     ref = bundle_adjust(block, additional=Ebner12(b=b), ap_sigma=10.0)
     assert abs(sol.adjustment.sigma0 - ref.sigma0) < 1e-9 * ref.sigma0
     assert sol.adjustment.additional.size == 12
+
+
+def test_a_calibration_without_its_lens_terms_does_not_fit_and_says_so(camcal_doc, tmp_path, capsys):
+    from orientviz.cli import main
+
+    doc = copy.deepcopy(camcal_doc)
+    for k in ("model", "free"):
+        del doc["cameras"][0][k]
+    path = tmp_path / "nolens.json"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    code = main(["solve", str(path), "-o", str(tmp_path / "out.json")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 4  # not 0: the estimates of a model that does not fit are no result
+    assert len(err) == 1 and "the model does not fit the data" in err[0]
+    assert "lens distortion" in err[0] and "pixel size" in err[0] and str(path) in err[0]
+    assert not (tmp_path / "out.json").exists()
+    assert main(["solve", "dbat_camcal"]) == 0  # with its model the same data fit
+
+
+def test_the_shipped_calibration_file_is_what_the_converter_writes_now():
+    from orientviz.io.datasets import dataset_path
+
+    assert dataset_path("dbat_camcal").read_text(encoding="utf-8") == D.problem_text()

@@ -186,7 +186,7 @@ def solve(problem: Problem, method: str | None) -> Solution:
         block = apply_fix(block, fix)
         datum_notes.append("datum: " + ", ".join(i + (":" + ",".join(p) if p else "") for i, p in fix)
                            + " held at the given values" + (" (free network otherwise)" if free else ""))  # fmt: skip
-    keys = ("control", "max_iter", "tol", "degree_xy", "degree_z")
+    keys = ("control", "max_iter", "tol", "degree_xy", "degree_z", "solver")
     opts = {k: v for k, v in o.items() if k in keys}
     if method == "bundle":
         from ...bundle import bundle_adjust
@@ -333,6 +333,8 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
     ties = int(np.sum(block.points.role == TIE))
     notes.append(f"block: {block.summary()} ({ties} tie points)")
     notes += camera_notes(block, adj, problem.units)
+    if getattr(adj, "reduced_info", {}).get("solver_reason"):
+        notes.append(f"reduced system solved {adj.reduced_info['solver_reason']}")
     return Solution(
         kind="block",
         method=method,
