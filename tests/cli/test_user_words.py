@@ -69,7 +69,7 @@ def _weighted_block_with_oddities(tmp_path) -> str:
     ties = {p["id"] for p in doc["points"] if p.get("role", "tie") == "tie"}
     rays = Counter(o["point"] for o in doc["observations"] if o["point"] in ties)
     best = rays.most_common(1)[0][0]  # the best-determined tie point: a gross error shows
-    next(o for o in doc["observations"] if o["point"] == best)["x"] += 0.200
+    next(o for o in doc["observations"] if o["point"] == best)["x"] += 0.120
     path = tmp_path / "odd.json"
     path.write_text(json.dumps(doc))
     return str(path)
