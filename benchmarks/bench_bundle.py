@@ -214,8 +214,8 @@ def reduced_comparison(size: str, reps: int, dense: bool) -> str:
     variants = [
         ("banded, across-strip order", dict(solver="banded", orderings=list(base.orderings))),
         ("banded, RCM only", dict(solver="banded", orderings=[])),
-        ("SuperLU MMD_AT_PLUS_A", dict(solver="splu", permc_spec="MMD_AT_PLUS_A")),
-        ("SuperLU COLAMD", dict(solver="splu", permc_spec="COLAMD")),
+        ("SuperLU MMD_AT_PLUS_A", dict(solver="sparse", permc_spec="MMD_AT_PLUS_A")),
+        ("SuperLU COLAMD", dict(solver="sparse", permc_spec="COLAMD")),
     ]
     if dense:
         variants.append(("dense Cholesky", dict(solver="dense")))

@@ -159,7 +159,15 @@ COMMANDS: dict[str, Command] = {
         "redundancy, estimated values with standard deviations, the largest normalised "
         "residuals. FILE may also be the name of a shipped example (block_strip, "
         "block_compact, resection_example, intersection_example, similarity_example, "
-        "pair_example, ...). Exit 0 ok, 2 bad input, 3 adjustment impossible.",
+        "pair_example, dbat_sxb, dbat_camcal, ...). A camera of a block may be calibrated "
+        "with it: cameras[] may give \"model\": \"backward\" (DBAT, PhotoModeler) or "
+        "\"forward\" (OpenCV) with the lens terms as, sk, K1-K3, P1, P2 (k1-k3, p1, p2), "
+        "each parameter free (\"free\": [...]), weighted (\"sigma\": {name: σ}) or "
+        "fixed, or \"additional\": \"ebner12\" | \"gruen44\" | \"brown\"; image "
+        "units mm, um or px (with units.pixel_size in mm; pixels count y downwards). Exit "
+        "0 ok, 2 bad input, 3 adjustment impossible or not converged, 4 the model does not "
+        "fit the data (sigma0 far above 1 with many flagged observations: the report is "
+        "printed, the warning names the likely causes, -o writes nothing).",
         examples=(
             ("orientviz solve block_strip", "report on a shipped example block (bundle)"),
             ("orientviz solve resection_example --json", "the same report as JSON"),
@@ -168,6 +176,9 @@ COMMANDS: dict[str, Command] = {
             ("orientviz solve block_strip --report report.html", "full report (or .txt)"),
             ("orientviz solve dbat_sxb --max-iter 50 --tol 1e-6", "solver options (override "
              "options.max_iter / options.tol of the file)"),
+            ("orientviz solve dbat_camcal", "calibrate a real camera: its cameras[0] has "
+             "\"model\": \"backward\", \"free\": [\"c\", \"x0\", \"y0\", \"as\", "
+             "\"K1\", \"K2\", \"K3\", \"P1\", \"P2\"], units px"),
         ),
         arguments=(
             arg("file", help="problem file, or the name of a shipped example"),
@@ -183,6 +194,10 @@ COMMANDS: dict[str, Command] = {
             arg("--tol", type=positive_float, default=None, metavar="T",
                 help="stop when every correction is below T times its sigma (overrides "
                 "options.tol; default 5e-3 for blocks)"),
+            arg("--solver", choices=["auto", "banded", "dense", "sparse"], default=None,
+                help="solver of the bundle's reduced camera system (overrides options.solver; "
+                "default auto: banded for strips, dense for small or densely connected "
+                "networks, sparse otherwise; the report names the choice)"),
             arg(
                 "-o",
                 "--output",

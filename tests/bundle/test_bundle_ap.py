@@ -58,7 +58,7 @@ def _dense_step(prob, st, aps):
     return np.linalg.solve(N, b)
 
 
-@pytest.mark.parametrize("solver", ["banded", "splu", "dense"])
+@pytest.mark.parametrize("solver", ["banded", "sparse", "dense"])
 def test_step_with_group_parameters_equals_dense_solution(solver):
     sim = ov.simulate_block(3, 5, rng=21, extra=6, control_sigma=0.05)
     block = sim.block
@@ -135,7 +135,7 @@ def _problem(solver="banded"):
     return prob, aps
 
 
-@pytest.mark.parametrize("solver", ["banded", "splu"])
+@pytest.mark.parametrize("solver", ["banded", "sparse"])
 def test_conjugate_gradients_with_an_old_preconditioner_reach_the_dense_step(solver):
     prob, aps = _problem(solver)
     block = prob.block

@@ -820,11 +820,40 @@ def measurement_csv() -> list[Case]:
     return out
 
 
+def camera_models() -> list[Case]:
+    """cameras[] lens models and image units in pixels (issue #20): one line naming the field."""
+    cam = ("cameras", 0)
+    out = []
+    for what, mutate, says in (
+        ("K1-without-model", _set(cam + ("K1",), 1e-3), ('cameras[0].K1', 'needs "model"')),
+        ("K1-in-forward-model", lambda d: d["cameras"][0].update(model="forward", K1=1e-3),
+         ("cameras[0].K1", "not a term of the forward model")),
+        ("free-unknown-name", lambda d: d["cameras"][0].update(model="backward", free=["K4"]),
+         ("cameras[0].free",)),
+        ("model-and-additional", lambda d: d["cameras"][0].update(model="backward", additional="ebner12"),
+         ("cameras[0].additional", "not both")),
+        ("sigma-and-free", lambda d: d["cameras"][0].update(model="backward", free=["c"], sigma={"c": 0.1}),
+         ("cameras[0].sigma", "give one")),
+        ("negative-prior", lambda d: d["cameras"][0].update(model="backward", sigma={"c": -1}),
+         ("cameras[0].sigma.c",)),
+        ("model-fisheye", _set(cam + ("model",), "fisheye"), ("cameras[0].model",)),
+        ("px-without-pixel-size", _set(("units", "image"), "px"), ("units.pixel_size", "mm")),
+        ("pixel-size-with-mm", _set(("units", "pixel_size"), 0.005), ("units.pixel_size", '"px" only')),
+        ("pixel-size-zero", lambda d: d["units"].update(image="px", pixel_size=0), ("units.pixel_size",)),
+    ):  # fmt: skip
+        out.append(Case(f"solve/cameras/{what}", _problem(I.BLOCK, mutate), 2, says, I.BLOCK))
+    res = "resection_example.json"
+    out.append(Case("solve/cameras/model-in-resection",
+                    _problem(res, _set(("cameras", 0, "model"), "backward")), 2,
+                    ("cameras[0].model", "kind block only"), res))  # fmt: skip
+    return out
+
+
 def all_cases() -> list[Case]:
     return [
         *special_files(), *garbage_files(), *long_names(), *arguments(), *outputs(), *problem_files(),
         *csv_files(), *colmap_models(), *bal_files(), *geometry(), *accepted(),
-        *binary_models(), *measurement_csv(),
+        *binary_models(), *measurement_csv(), *camera_models(),
     ]  # fmt: skip
 
 

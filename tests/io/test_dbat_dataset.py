@@ -39,7 +39,13 @@ def _fake_checkout(tmp_path: Path) -> Path:
 def test_the_shipped_problem_is_what_the_script_makes_of_dbats_files(tmp_path):
     out = tmp_path / "out"
     assert make_dbat.main([str(_fake_checkout(tmp_path)), "-o", str(out)]) == 0
-    for name in ("dbat_sxb.json", "MANIFEST.json", "CITATION.md", "LICENSE.txt"):
+    for name in (
+        "dbat_sxb.json",
+        "dbat_camcal.json",
+        "MANIFEST.json",
+        "CITATION.md",
+        "LICENSE.txt",
+    ):
         assert (out / name).read_bytes() == (FOLDER / name).read_bytes(), name
     shipped = sorted(p.relative_to(FOLDER) for p in FOLDER.rglob("*") if p.is_file())
     made = sorted(p.relative_to(out) for p in out.rglob("*") if p.is_file())

@@ -96,6 +96,9 @@ class Cameras:
     format_mm: F64
     #: name of the additional-parameter set per camera ("" = none)
     ap_set: list[str] = field(default_factory=list)
+    #: per camera what a problem file says the bundle estimates of it ({} = nothing):
+    #: a lens model or an additional-parameter set (:mod:`orientviz.io.kinds._cameras`)
+    model: list[dict] = field(default_factory=list)
 
     def __len__(self) -> int:
         return len(self.ids)

@@ -77,7 +77,7 @@ def bundle_adjust(
     ap_sigma=None,
     precision: bool = True,
     callback: Callable[[Iteration], object] | None = None,
-    solver: str = "banded",
+    solver: str = "auto",
     history_x: bool | None = None,
     auxiliary: list | None = None,
 ) -> BundleResult:
@@ -111,8 +111,12 @@ def bundle_adjust(
         normalised residuals (:mod:`orientviz.bundle._precision`).
     callback : callable, optional
         Called with each new :class:`Iteration`.
-    solver : {"banded", "splu", "dense"}
-        Solver of the reduced camera system (:mod:`orientviz.bundle._reduced`).
+    solver : {"auto", "banded", "dense", "sparse"}
+        Solver of the reduced camera system (:mod:`orientviz.bundle._reduced`):
+        ``"auto"`` chooses from the structure (banded for strips, dense for small or
+        densely connected networks, sparse otherwise:
+        :mod:`orientviz.bundle._solver_choice`). The result's ``solver`` is the one used,
+        ``reduced_info["solver_reason"]`` says why.
     history_x : bool, optional
         Keep the full parameter vector per iteration (default: blocks ≤ 500 images);
         otherwise ``Iteration.x`` is empty.

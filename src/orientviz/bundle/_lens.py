@@ -86,9 +86,10 @@ class LensModel:
     prior : dict of str to float, optional
         Parameters estimated with a pseudo-observation "= its given value ± σ"
         (σ in the parameter's physical unit, see :data:`UNITS`).
-    values : dict of str to float, optional
+    values : dict of str to float or sequence, optional
         Given values of the distortion parameters (default 0) and of as, sk; c, x0, y0
-        come from the block's cameras unless given here. Fixed parameters keep them.
+        come from the block's cameras unless given here. Fixed parameters keep them. A
+        sequence gives one value per camera of the block (in its order).
     r0 : float, optional
         Reference radius in mm (default: from the camera's image points).
 
@@ -120,7 +121,7 @@ class LensModel:
             if not (np.isfinite(s) and s > 0):
                 raise InputError(f"lens model: prior σ of {k}: expected a positive number, got {s}")
         for k, v in self.values.items():
-            if not np.isfinite(v):
+            if not np.all(np.isfinite(np.asarray(v, dtype=float))):
                 raise InputError(f"lens model: value of {k}: expected a finite number, got {v}")
         self.free = tuple(k for k in all_names if k in free and k not in self.prior)
         if self.r0 is not None and not (np.isfinite(self.r0) and self.r0 > 0):
@@ -168,7 +169,8 @@ class LensModel:
                 )
             i = cam[0]
             base = {"c": cams.c[i], "x0": cams.x0[i], "y0": cams.y0[i]}
-            theta0[g] = [self.values.get(k, base.get(k, 0.0)) for k in names]
+            given = {k: (v[i] if np.ndim(v) else v) for k, v in self.values.items()}
+            theta0[g] = [given.get(k, base.get(k, 0.0)) for k in names]
             if not theta0[g, 0] > 0:
                 raise InputError(
                     f"lens model: camera {cams.ids[i]}: c expected > 0 mm, got {theta0[g, 0]}"

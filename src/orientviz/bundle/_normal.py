@@ -109,6 +109,9 @@ class NormalEquations:
         The auxiliary offsets' border.
     Fs, Fs_aux : ndarray or None
         The border's Schur complement F − Eᵀ S⁻¹ E when it was formed exactly.
+    S : ndarray, shape (6m, 6m), or None
+        S as a dense matrix (lower triangle) when it was formed densely
+        (:func:`orientviz.bundle._schur.dense_schur`); the factorisation consumes it.
     """
 
     blocks: F64
@@ -124,3 +127,4 @@ class NormalEquations:
     aux: AuxBorder | None = None
     Fs: F64 | None = None
     Fs_aux: F64 | None = None
+    S: F64 | None = field(default=None, repr=False)

@@ -32,7 +32,8 @@ from ._parts import (
     point_block,
     with_var_rays,
 )
-from ._reduced import ReducedStructure, assemble_blocks, factor_reduced, inv3
+from ._reduced import ReducedStructure, factor_reduced, inv3
+from ._schur import assemble_blocks, dense_schur, gram_by_segments
 from ._state import BundleState, wrap
 
 F64 = NDArray[np.float64]
@@ -80,7 +81,7 @@ class BundleProblem:
         additional=None,
         ap_group=None,
         ap_sigma=None,
-        solver: str = "banded",
+        solver: str = "auto",
         auxiliary: list | None = None,
     ) -> None:
         self.block = block
@@ -93,7 +94,7 @@ class BundleProblem:
             block.n_images,
             self.points.n,
             solver=solver,
-            positions=block.images.X0 if solver == "banded" else None,
+            positions=block.images.X0 if solver in ("auto", "banded") else None,
         )
         self.obs = with_var_rays(obs, self.reduced)
         self.interior = interior_orientation(block)
@@ -192,14 +193,12 @@ class BundleProblem:
         Jew, Jpw = Je * sw, Jp * sw
         # image blocks: gather the (n, 2, 6) Jacobian by image, then reduce
         Jc = Jew[S.cam_order]
-        JcT = Jc.transpose(0, 2, 1)
-        U = np.zeros((self.m, 6, 6))
-        U[S.cam_present] = np.add.reduceat(JcT @ Jc, S.cam_starts, axis=0)
+        U = gram_by_segments(Jc, S.cam_starts, S.cam_present, self.m)
         bc = np.zeros((self.m, 6))
         bc[S.cam_present] = np.add.reduceat(
             np.einsum("nki,nk->ni", Jc, rw[S.cam_order]), S.cam_starts, axis=0
         )
-        del Jc, JcT
+        del Jc
         U[:, [0, 1, 2], [0, 1, 2]] += self.exterior.X0_w
         bc[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
         U[:, [3, 4, 5], [3, 4, 5]] += self.exterior.angles_w
@@ -225,13 +224,25 @@ class BundleProblem:
         W[vo] = Jew[vo].transpose(0, 2, 1) @ Jpv
         T = np.zeros_like(W)
         T[vo] = W[vo] @ Vinv[self.obs.column[vo]]
-        blocks = assemble_blocks(S, U, T, W)
+        S_dense = None
+        if S.formation == "dense":
+            blocks, S_dense = dense_schur(S, U, W, V, self.obs.column, self.obs.image)
+        else:
+            blocks = assemble_blocks(S, U, T, W)
         Tb = np.zeros((Je.shape[0], 6))
         Tb[vo] = np.einsum("nij,nj->ni", T[vo], bp[self.obs.column[vo]])
         red = bc.copy()
         red[S.cam_present] -= np.add.reduceat(Tb[S.cam_order], S.cam_starts, axis=0)
         out = NormalEquations(
-            blocks=blocks, rhs=red.reshape(-1), Vinv=Vinv, W=W, T=T, bp=bp, diagU=diagU, diagV=diagV
+            blocks=blocks,
+            rhs=red.reshape(-1),
+            Vinv=Vinv,
+            W=W,
+            T=T,
+            bp=bp,
+            diagU=diagU,
+            diagV=diagV,
+            S=S_dense,
         )
         if self.q:
             if self.border.hold:
@@ -248,7 +259,8 @@ class BundleProblem:
 
     def solve(self, ne: NormalEquations, names: list[str]):
         """Corrections (dc (m, 6), dp (p_var, 3), da (q,)) and the factor of S."""
-        fac = factor_reduced(self.reduced, ne.blocks, names)
+        fac = factor_reduced(self.reduced, ne.blocks, names, dense=ne.S)
+        ne.S = None  # overwritten by the factor
         if self.aux:
             return self.aux.solve(self, fac, ne)
         if self.q:

@@ -20,10 +20,11 @@ common point. The group parameters border it (``E``, ``F``) and are eliminated w
 few extra solves. After solving, the points follow by back-substitution
 dp_j = V_j⁻¹ (bp_j − Σ W_ajᵀ dc_a − Σ G_ajᵀ da).
 
-Solvers of the reduced system (:data:`SOLVERS`), measured in
-``benchmarks/bench_bundle.py --reduced`` on the bench's 200- and 2 100-image blocks:
+Solvers of the reduced system (:data:`SOLVERS`; ``"auto"``, the default, chooses from
+the structure: :mod:`orientviz.bundle._solver_choice`), measured in
+``benchmarks/bench_bundle.py --reduced`` and ``benchmarks/bench_unordered.py``:
 
-* ``"banded"`` (**default**) — Ackermann's bandwidth minimisation: the images are
+* ``"banded"`` (chosen for strips) — Ackermann's bandwidth minimisation: the images are
   renumbered so that S becomes a narrow band, which is factored by LAPACK's banded
   Cholesky (``scipy.linalg.cholesky_banded``, cost ∝ n·b², b the half-bandwidth). The
   numbering is the better (smaller measured bandwidth) of reverse Cuthill-McKee and a
@@ -32,9 +33,12 @@ Solvers of the reduced system (:data:`SOLVERS`), measured in
   across the strips against 118 for RCM; factor + solve 0.08 s against 0.22 s (RCM),
   0.35 s (SuperLU) and 16.6 s (dense); on the 10 × 20 block 0.002 s against 0.003,
   0.010 and 0.021 s (``benchmarks/README.md``).
-* ``"splu"`` — SuperLU with a fill-reducing column ordering (``permc_spec``, default
-  MMD_AT_PLUS_A), symmetric mode.
-* ``"dense"`` — dense Cholesky, O(n³): fine for a few hundred images.
+* ``"dense"`` (chosen for small or densely connected systems: unordered close-range
+  networks) — dense Cholesky (LAPACK ``potrf``), n³/3 flops at LAPACK's best speed; S
+  may then be formed densely as well (:func:`orientviz.bundle._schur.dense_schur`).
+* ``"sparse"`` (chosen for large, sparse and wide systems) — SuperLU with a
+  fill-reducing ordering (``permc_spec``, default MMD_AT_PLUS_A) in symmetric mode
+  without pivoting (an LDLᵀ-like factorisation of the symmetric positive definite S).
 
 Singular systems never surface as ``LinAlgError``: :func:`raise_not_determinable`
 names the parameters (null-space analysis for small systems, the failing pivot for
@@ -53,12 +57,13 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ..adjust.rank import describe_defect, null_space_of_normal
 from ..errors import NotDeterminableError
+from ._solver_choice import SOLVER_CHOICES, choose_formation, choose_solver, image_blocks
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
 
-#: Names of the reduced-system solvers; the first is the default.
-SOLVERS: tuple[str, ...] = ("banded", "splu", "dense")
+#: Names of the reduced-system solvers (what ``"auto"`` chooses from).
+SOLVERS: tuple[str, ...] = ("banded", "dense", "sparse")
 #: Reduced systems up to this many unknowns are diagnosed with a dense null space.
 DENSE_DIAGNOSIS_LIMIT: int = 3000
 
@@ -148,31 +153,37 @@ class ReducedStructure:
         Index of the point unknown of each observation, −1 if the point is fixed.
     n_cam, n_pt : int
         Numbers of images and of point unknowns.
-    solver : {"banded", "splu", "dense"}
-        Solver of the reduced system.
+    solver : {"auto", "banded", "dense", "sparse"}
+        Solver of the reduced system; ``"auto"`` chooses from the structure
+        (:func:`orientviz.bundle._solver_choice.choose_solver`). After construction
+        ``solver`` is the one chosen, ``choice`` says why.
     permc_spec : str
-        SuperLU column ordering for ``"splu"``.
+        SuperLU column ordering for ``"sparse"``.
     orderings : list of ndarray
         Candidate image orders for ``"banded"`` (e.g. from :func:`geometric_orderings`);
         the one with the smallest bandwidth among these and reverse Cuthill-McKee wins.
     positions : ndarray, shape (m, 3), optional
         Projection centres (m): adds the two :func:`geometric_orderings` as candidates.
+    formation : {"auto", "pairs", "dense"}
+        How the Schur complement is formed (:func:`orientviz.bundle._schur.form_schur`);
+        ``"auto"``: :func:`orientviz.bundle._solver_choice.choose_formation`.
     """
 
     obs_cam: I64
     obs_pt: I64
     n_cam: int
     n_pt: int
-    solver: str = "banded"
+    solver: str = "auto"
     permc_spec: str = "MMD_AT_PLUS_A"
     orderings: list = field(default_factory=list)
     positions: F64 | None = None
+    formation: str = "auto"
     info: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        if self.solver not in SOLVERS:
+        if self.solver not in SOLVER_CHOICES:
             raise ValueError(
-                f"expected a reduced-system solver out of {SOLVERS}, got {self.solver!r}"
+                f"expected a reduced-system solver out of {SOLVER_CHOICES}, got {self.solver!r}"
             )
         oc, op = self.obs_cam, self.obs_pt
         self.cam_order, self.cam_starts, self.cam_present = _segments(oc, self.n_cam)
@@ -184,35 +195,59 @@ class ReducedStructure:
             raise ValueError(f"point unknowns without observations: {missing[:5].tolist()}")
         self.pt_obs = var[o]  # observation indices sorted by point
         self.pt_starts = s
+        # unique 6×6 blocks (i ≤ k), diagonal blocks always present
+        m = self.n_cam
+        self.block_i, self.block_k, self.n_pairs = image_blocks(oc, op, m, self.n_pt)
+        self.n_blocks = self.block_i.size
+        self.diag_block = np.searchsorted(self.block_i * m + self.block_k, np.arange(m) * (m + 1))
+        self._pairs = None
+        self._setup_solver()
+
+    # ------------------------------------------------------------ pairs of rays
+    def _form_pairs(self) -> None:
+        """All ordered pairs of rays of the same point, and those with image(a) ≤ image(b)
+        sorted by their block of S (formed on first use: Σ k_j² of them)."""
+        oc, op, m = self.obs_cam, self.obs_pt, self.n_cam
+        s = self.pt_starts
         k = np.diff(np.append(s, self.pt_obs.size))
-        # all ordered pairs (a, b) of observations of the same point
         g = np.repeat(np.arange(self.n_pt), k)  # point of each sorted obs
         rep = k[g]
         A = np.repeat(np.arange(self.pt_obs.size), rep)
         off = np.arange(A.size) - np.repeat(np.cumsum(rep) - rep, rep)
         B = s[g[A]] + off
+        del g, off
         a, b = self.pt_obs[A], self.pt_obs[B]
+        del A, B
         keep = oc[a] <= oc[b]
-        self.pair_a, self.pair_b = a[keep], b[keep]
-        self.pair_pt = op[self.pair_a]
-        self.all_pairs = (a, b)  # all ordered pairs, grouped by a (for precision, APs)
-        self.all_pairs_starts = np.cumsum(rep) - rep  # start of each a-group, pt_obs order
-        # unique 6×6 blocks (i ≤ k), diagonal blocks always present
-        m = self.n_cam
-        keys = np.concatenate([oc[self.pair_a] * m + oc[self.pair_b], np.arange(m) * (m + 1)])
-        ukeys, inv = np.unique(keys, return_inverse=True)
-        self.block_i, self.block_k = ukeys // m, ukeys % m
-        self.n_blocks = ukeys.size
-        pair_block = inv[: self.pair_a.size]
-        self.diag_block = inv[self.pair_a.size :]
-        order, self.pair_starts, self.pair_present = _segments(pair_block, self.n_blocks)
-        # store the pairs sorted by block so that their contributions are born sorted
-        self.pair_a, self.pair_b, self.pair_pt = (
-            self.pair_a[order],
-            self.pair_b[order],
-            self.pair_pt[order],
+        pa, pb = a[keep], b[keep]
+        pair_block = np.searchsorted(self.block_i * m + self.block_k, oc[pa] * m + oc[pb])
+        order, starts, present = _segments(pair_block, self.n_blocks)
+        # the pairs sorted by block so that their contributions are born sorted
+        pa, pb = pa[order], pb[order]
+        self._pairs = dict(
+            pair_a=pa,
+            pair_b=pb,
+            pair_pt=op[pa],
+            pair_starts=starts,
+            pair_present=present,
+            all_pairs=(a, b),  # all ordered pairs, grouped by a (for precision, APs)
+            all_pairs_starts=np.cumsum(rep) - rep,  # start of each a-group, pt_obs order
         )
-        self._setup_solver()
+
+    def _pair(self, name: str):
+        if self._pairs is None:
+            self._form_pairs()
+        return self._pairs[name]
+
+    pair_a = property(lambda self: self._pair("pair_a"), doc="First ray of each pair (by block).")
+    pair_b = property(lambda self: self._pair("pair_b"), doc="Second ray of each pair.")
+    pair_pt = property(lambda self: self._pair("pair_pt"), doc="Point unknown of each pair.")
+    pair_starts = property(lambda self: self._pair("pair_starts"), doc="Start of each block.")
+    pair_present = property(lambda self: self._pair("pair_present"), doc="Blocks with pairs.")
+    all_pairs = property(lambda self: self._pair("all_pairs"), doc="All ordered pairs (a, b).")
+    all_pairs_starts = property(
+        lambda self: self._pair("all_pairs_starts"), doc="Start of each a-group."
+    )
 
     # ------------------------------------------------------------ layout of S
     def image_graph(self) -> sp.csr_matrix:
@@ -229,32 +264,51 @@ class ReducedStructure:
         cols = (6 * bk)[:, None, None] + 0 * r6[None, :, None] + r6[None, None, :]
         return rows.reshape(-1), cols.reshape(-1), np.repeat(np.arange(self.n_blocks), 36)
 
+    def _band_ordering(self) -> None:
+        """The image numbering of the narrowest band (RCM or across the strips)."""
+        m = self.n_cam
+        if self.positions is not None:
+            self.orderings = list(self.orderings) + geometric_orderings(
+                self.positions, (self.block_i, self.block_k)
+            )
+        rcm = reverse_cuthill_mckee(self.image_graph(), symmetric_mode=True)
+        best = None
+        for name, perm in [("rcm", rcm)] + [
+            (f"geometric{i}", o) for i, o in enumerate(self.orderings)
+        ]:
+            perm = np.asarray(perm, np.int64)
+            if perm.shape != (m,) or np.unique(perm).size != m:
+                continue
+            pos = np.empty(m, np.int64)
+            pos[perm] = np.arange(m)
+            bw = int(np.max(np.abs(pos[self.block_i] - pos[self.block_k]), initial=0))
+            self.info[f"bandwidth_{name}"] = bw
+            if best is None or bw < best[0]:
+                best = (bw, name, perm, pos)
+        bw_img, name, perm, pos = best
+        self.perm_img, self.pos_img = perm, pos
+        self.info["ordering"] = name
+        self.kd = 6 * bw_img + 5
+        self.info.update(bandwidth_images=bw_img, kd=self.kd)
+
     def _setup_solver(self) -> None:
         m, n = self.n_cam, 6 * self.n_cam
+        requested = self.solver
+        if requested in ("auto", "banded"):
+            self._band_ordering()
+        self.choice = choose_solver(
+            requested, m, getattr(self, "kd", None), self.block_i, self.block_k
+        )
+        self.solver = self.choice.solver
+        if self.formation == "auto":
+            self.formation = choose_formation(self.solver, m, self.n_pt, self.n_pairs)
+        self.info.update(
+            solver=self.solver, solver_reason=self.choice.reason, formation=self.formation
+        )
         if self.solver == "banded":
-            if self.positions is not None:
-                self.orderings = list(self.orderings) + geometric_orderings(
-                    self.positions, (self.block_i, self.block_k)
-                )
-            rcm = reverse_cuthill_mckee(self.image_graph(), symmetric_mode=True)
-            best = None
-            for name, perm in [("rcm", rcm)] + [
-                (f"geometric{i}", o) for i, o in enumerate(self.orderings)
-            ]:
-                perm = np.asarray(perm, np.int64)
-                if perm.shape != (m,) or np.unique(perm).size != m:
-                    continue
-                pos = np.empty(m, np.int64)
-                pos[perm] = np.arange(m)
-                bw = int(np.max(np.abs(pos[self.block_i] - pos[self.block_k]), initial=0))
-                self.info[f"bandwidth_{name}"] = bw
-                if best is None or bw < best[0]:
-                    best = (bw, name, perm, pos)
-            bw_img, name, perm, pos = best
-            self.perm_img, self.pos_img = perm, pos
-            self.info["ordering"] = name
-            self.kd = 6 * bw_img + 5
-            rows, cols, _ = self._scalar_entries(pos)
+            if not hasattr(self, "kd"):
+                self._band_ordering()
+            rows, cols, _ = self._scalar_entries(self.pos_img)
             flat = np.arange(rows.size)
             lower = rows >= cols  # block entries that fall into the lower band
             self.band_src = flat[lower]
@@ -262,9 +316,8 @@ class ReducedStructure:
             upper = (rows < cols) & (self.block_i != self.block_k).repeat(36)
             self.band_src_t = flat[upper]  # mirrored into the lower band
             self.band_dst_t = (cols[upper] - rows[upper]) * n + rows[upper]
-            self.scalar_perm = (6 * perm[:, None] + np.arange(6)).reshape(-1)
-            self.info.update(bandwidth_images=bw_img, kd=self.kd)
-        elif self.solver == "splu":
+            self.scalar_perm = (6 * self.perm_img[:, None] + np.arange(6)).reshape(-1)
+        elif self.solver == "sparse":
             ident = np.arange(m)
             rows, cols, _ = self._scalar_entries(ident)
             off = np.repeat(self.block_i != self.block_k, 36)
@@ -275,9 +328,6 @@ class ReducedStructure:
             self.csc_indices, self.csc_indptr = A.indices, A.indptr
             self.csc_src = src[A.data.astype(np.int64) - 1]
             self.info.update(nnz=int(r.size))
-        else:
-            rows, cols, _ = self._scalar_entries(np.arange(m))
-            self.dense_rc = (rows, cols)
 
     @property
     def n_reduced(self) -> int:
@@ -300,42 +350,19 @@ class Factor:
             out = np.empty_like(z)
             out[p] = z
             return out
-        if self.kind == "splu":
+        if self.kind == "sparse":
             return self.data.solve(rhs)
         return scipy.linalg.cho_solve((self.data, True), rhs, check_finite=False)
 
 
-def assemble_blocks(st: ReducedStructure, U: F64, T: F64, W: F64, chunk: int = 65536) -> F64:
-    """Sum the 6×6 blocks of S = U − Σ W_a V_j⁻¹ W_bᵀ over pairs of rays of a point.
+def factor_reduced(
+    st: ReducedStructure, blocks: F64, names: list[str] | None = None, dense: F64 | None = None
+) -> Factor:
+    """Factor S given its 6×6 blocks; a singular S raises :class:`NotDeterminableError`.
 
-    Parameters
-    ----------
-    U : ndarray, shape (m, 6, 6)
-        Diagonal image blocks.
-    T, W : ndarray, shape (n, 6, 3)
-        T_a = W_a V_j⁻¹ and W_a = J_eᵀ P J_p per observation (zero for fixed points).
-    chunk : int
-        Pairs per batch (bounds the memory of the (pairs, 6, 6) products).
+    ``dense``: S as a dense (6m, 6m) array (lower triangle used) when the formation made
+    it (:func:`orientviz.bundle._schur.dense_schur`); it is overwritten by the factor.
     """
-    blocks = np.zeros((st.n_blocks, 6, 6))
-    blocks[st.diag_block] = U
-    n = st.pair_a.size
-    seg = np.append(st.pair_starts, n)
-    s0 = 0
-    while s0 < len(st.pair_starts):
-        # whole segments (blocks) per batch: each block is reduced in one piece
-        s1 = int(np.searchsorted(seg, seg[s0] + chunk, side="right")) - 1
-        s1 = max(s1, s0 + 1)
-        a0, a1 = seg[s0], seg[s1]
-        sl = slice(a0, a1)
-        c = T[st.pair_a[sl]] @ W[st.pair_b[sl]].transpose(0, 2, 1)
-        blocks[st.pair_present[s0:s1]] -= np.add.reduceat(c, st.pair_starts[s0:s1] - a0, axis=0)
-        s0 = s1
-    return blocks
-
-
-def factor_reduced(st: ReducedStructure, blocks: F64, names: list[str] | None = None) -> Factor:
-    """Factor S given its 6×6 blocks; a singular S raises :class:`NotDeterminableError`."""
     n = st.n_reduced
     flat = blocks.reshape(-1)
     try:
@@ -347,7 +374,7 @@ def factor_reduced(st: ReducedStructure, blocks: F64, names: list[str] | None = 
                 ab.reshape(st.kd + 1, n), lower=True, overwrite_ab=True, check_finite=False
             )
             return Factor(st, "banded", c)
-        if st.solver == "splu":
+        if st.solver == "sparse":
             A = sp.csc_matrix((flat[st.csc_src], st.csc_indices, st.csc_indptr), shape=(n, n))
             lu = sp.linalg.splu(
                 A,
@@ -357,9 +384,14 @@ def factor_reduced(st: ReducedStructure, blocks: F64, names: list[str] | None = 
             )
             if not np.all(np.abs(lu.U.diagonal()) > 1e-12 * np.abs(A.diagonal()).max()):
                 raise np.linalg.LinAlgError("zero pivot")
-            return Factor(st, "splu", lu)
-        S = dense_matrix(st, blocks)
-        return Factor(st, "dense", scipy.linalg.cholesky(S, lower=True, check_finite=False))
+            return Factor(st, "sparse", lu)
+        S = dense_matrix(st, blocks) if dense is None else dense
+        if not np.isfinite(S[:: n + 1]).all():
+            raise np.linalg.LinAlgError("non-finite diagonal")
+        c, _ = scipy.linalg.cho_factor(S, lower=True, overwrite_a=True, check_finite=False)
+        if not np.isfinite(c[:: n + 1]).all():
+            raise np.linalg.LinAlgError("non-finite pivot")
+        return Factor(st, "dense", c)
     except (np.linalg.LinAlgError, scipy.linalg.LinAlgError, RuntimeError, ValueError) as exc:
         raise_not_determinable(st, blocks, names, str(exc))
     raise AssertionError("unreachable")  # pragma: no cover

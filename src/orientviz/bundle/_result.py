@@ -100,7 +100,8 @@ class BundleResult(BlockAdjustment):
     used_obs : ndarray of bool, shape (n,)
         Image observations that entered the adjustment (rays of check points do not).
     solver : str
-        Solver of the reduced camera system (``"banded"``, ``"splu"``, ``"dense"``).
+        Solver of the reduced camera system that was used (``"banded"``, ``"dense"``,
+        ``"sparse"``; ``reduced_info["solver_reason"]`` says why it was chosen).
     reduced_info : dict
         Diagnostics of the reduced system (ordering, bandwidths) and, with additional
         parameters, ``"ap_border"``: how each solve of their border went.

@@ -270,6 +270,10 @@ def make(dbat: Path, out: Path = HERE) -> list[Path]:
         written.append(target)
     shutil.copyfile(dbat / CAMCAL_REPORT, out / "camcal" / "camcal-dbatreport.txt")
     written.append(out / "camcal" / "camcal-dbatreport.txt")
+    from ..reproduce.dbat_camcal import MANIFEST_ENTRY, problem_text
+
+    (out / "dbat_camcal.json").write_text(problem_text(out / "camcal"), encoding="utf-8")
+    written.append(out / "dbat_camcal.json")
     doc, facts = sxb_problem(dbat)
     # through orientviz's own reader and writer: validated, and in the canonical form
     text = dumps_problem(loads_problem(json.dumps(doc), "dbat_sxb.json"))
@@ -310,7 +314,8 @@ def make(dbat: Path, out: Path = HERE) -> list[Path]:
                     "points keep their rays but not their coordinates, interior "
                     "orientation fixed, no lens distortion"
                 ),
-            }
+            },
+            MANIFEST_ENTRY,
         ],
     }
     (out / "MANIFEST.json").write_text(

@@ -42,6 +42,8 @@ FORMAT = "orientviz/1"
 LENGTH_UNITS: dict[str, float] = {"m": 1.0, "mm": 1e-3}
 #: Image-coordinate units → millimetres per unit.
 IMAGE_UNITS: dict[str, float] = {"mm": 1.0, "um": 1e-3}
+#: Kinds that read image coordinates in pixels (``units.image = "px"``).
+PIXEL_KINDS = ("block", "resection", "intersection")
 #: Top-level keys handled by the envelope (all others belong to the kind).
 ENVELOPE_KEYS = ("format", "kind", "name", "description", "units", "sequence", "options")
 
@@ -56,13 +58,19 @@ class Units:
         Object-space coordinates and their σ.
     angle : {"rad", "deg", "gon", "c", "cc"}
         Orientation angles and their σ.
-    image : {"mm", "um"}
-        Image coordinates and their σ (kinds with images).
+    image : {"mm", "um", "px"}
+        Image coordinates and their σ (kinds with images), and the cameras' c, principal
+        point and format. ``"px"``: pixels of the pixel frame (origin at the upper-left
+        corner, x right, y *down*, as OpenCV and COLMAP), read as x·p, −y·p mm in the
+        photogrammetric image frame (y up); kinds block, resection and intersection.
+    pixel_size : float or None
+        p, mm per pixel (with ``image="px"``).
     """
 
     length: str = "m"
     angle: str = "gon"
     image: str = "mm"
+    pixel_size: float | None = None
 
     @property
     def m_per_length(self) -> float:
@@ -77,10 +85,24 @@ class Units:
     @property
     def mm_per_image(self) -> float:
         """Millimetres per file image unit."""
+        if self.image == "px":
+            return float(self.pixel_size)
         return IMAGE_UNITS[self.image]
 
-    def as_dict(self) -> dict[str, str]:
-        return {"length": self.length, "image": self.image, "angle": self.angle}
+    @property
+    def y_sign(self) -> float:
+        """−1 where the file's image y points down (pixels), else 1."""
+        return -1.0 if self.image == "px" else 1.0
+
+    def as_dict(self) -> dict[str, str | float]:
+        out: dict[str, str | float] = {
+            "length": self.length,
+            "image": self.image,
+            "angle": self.angle,
+        }
+        if self.image == "px":
+            out["pixel_size"] = float(self.pixel_size)
+        return out
 
 
 @dataclass
@@ -158,7 +180,17 @@ def problem_from_document(doc: Any, source: str = "<document>") -> Problem:
     kind = get_kind(doc["kind"], source)
     validate(doc, kind.schema, source)
     u = doc["units"]
-    units = Units(length=u["length"], angle=u["angle"], image=u.get("image", "mm"))
+    units = Units(length=u["length"], angle=u["angle"], image=u.get("image", "mm"),
+                  pixel_size=u.get("pixel_size"))  # fmt: skip
+    if units.image == "px" and units.pixel_size is None:
+        raise InputError('image "px" needs the pixel size in mm (e.g. "pixel_size": 0.0032)',
+                         source, "units.pixel_size")  # fmt: skip
+    if units.image != "px" and units.pixel_size is not None:
+        raise InputError(f'pixel_size applies to image "px" only (image is {units.image!r})',
+                         source, "units.pixel_size")  # fmt: skip
+    if units.image == "px" and doc["kind"] not in PIXEL_KINDS:
+        raise InputError(f'image "px" is read by the kinds {", ".join(PIXEL_KINDS)}; give mm or um',
+                         source, "units.image")  # fmt: skip
     sequence = check_sequence(doc.get("sequence", "opk"))
     data = kind.load(doc, units, source)
     columnar = any(_has_columns(v) for k, v in doc.items() if k not in ENVELOPE_KEYS)

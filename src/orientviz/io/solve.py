@@ -81,7 +81,9 @@ def check_geometry(problem: Problem) -> list:
 
 
 def run_from_cli(args: argparse.Namespace) -> int:
-    """Entry point of ``orientviz solve``; returns the exit code (0, 2 or 3)."""
+    """Entry point of ``orientviz solve``; returns the exit code: 0 ok, 2 bad input, 3
+    adjustment impossible or not converged, :data:`MISFIT_EXIT` (4) the model does not
+    fit the data."""
     prog = "orientviz solve"
     report_path = getattr(args, "report", None)
     try:
@@ -90,9 +92,11 @@ def run_from_cli(args: argparse.Namespace) -> int:
 
             report_format(report_path)  # a wrong suffix fails before the adjustment
         problem = load_problem(_resolve(args.file))
-        for name in ("max_iter", "tol"):  # solver options of the command line win
+        for name in ("max_iter", "tol", "solver"):  # solver options of the command line win
             if getattr(args, name, None) is not None:
                 problem.options = dict(problem.options, **{name: getattr(args, name)})
+        if getattr(args, "solver", None) is not None and problem.kind != "block":
+            raise InputError("--solver applies to block problems only", problem.source)
         solution = solve_problem(problem, getattr(args, "method", None))
         text = (
             json.dumps(solution.as_dict(), indent=1, ensure_ascii=False, allow_nan=False)
@@ -125,7 +129,7 @@ def run_from_cli(args: argparse.Namespace) -> int:
     except MemoryError:
         print(f"{prog}: {args.file}: the problem is too large for this machine", file=sys.stderr)
         return 2
-    if getattr(args, "output", None) and solution.adjustment.converged:
+    if getattr(args, "output", None) and solution.adjustment.converged and not misfit(solution):
         try:
             save_problem(adjusted_problem(problem, solution), args.output)
         except InputError as exc:
@@ -151,7 +155,24 @@ def run_from_cli(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 3
+    if misfit(solution):
+        return MISFIT_EXIT
     return 0
+
+
+#: Exit code of a solve whose model does not fit the data (σ0 far above 1 with a large
+#: share of the image coordinates flagged): the report is printed and the warning names
+#: the likely causes, but the estimates are not a result (``-o`` writes nothing).
+MISFIT_EXIT = 4
+
+
+def misfit(solution: Solution) -> bool:
+    """Whether the solution carries the "model does not fit the data" warning."""
+    return any(n.startswith(MISFIT_NOTE) for n in solution.notes)
+
+
+#: The start of the note of :func:`orientviz.io.kinds.block.misfit_warning`.
+MISFIT_NOTE = "warning: the model does not fit the data"
 
 
 def adjusted_problem(problem: Problem, solution: Solution) -> Problem:

@@ -62,11 +62,11 @@ def _decimals() -> dict[str, int]:
     return as_printed(report_values(read_report(_folder() / "camcal-dbatreport.txt")))[1]
 
 
-def _setup():
+def _setup(folder=None):
     """Observations (measured mm in the sensor frame), indices, control and start values."""
     from ..datasets.make_dbat import read_camcal
 
-    d = read_camcal(_folder())
+    d = read_camcal(_folder() if folder is None else folder)
     p = d["pixel_mm"]
     img_ids = list(d["images"])
     ctrl = d["control"]
@@ -106,7 +106,7 @@ def _start(d, img_ids, pts, im, pt, is_ctrl, ctrl_xyz, measured):
     return io, eo, res.xyz
 
 
-def block():
+def block(folder=None):
     """DBAT's calibration data as an orientviz :class:`~orientviz.block.Block` (start values).
 
     One camera (c = 7.5 mm, principal point at the sensor centre, in the sensor frame:
@@ -115,7 +115,7 @@ def block():
     """
     from ..block import Block
 
-    d, img_ids, pts, im, pt, is_ctrl, ctrl_xyz, measured, sigma = _setup()
+    d, img_ids, pts, im, pt, is_ctrl, ctrl_xyz, measured, sigma = _setup(folder)
     io, eo, xyz = _start(d, img_ids, pts, im, pt, is_ctrl, ctrl_xyz, measured)
     ctrl = sorted(d["control"], key=int)
     ids = list(pts) + ctrl
@@ -129,6 +129,68 @@ def block():
         obs_sigma=sigma.reshape(-1, 2), role=[0] * len(pts) + [1] * len(ctrl),
         image_ids=img_ids, point_ids=ids, meta={"name": "dbat-camcal"},
     )  # fmt: skip
+
+
+def problem_document(folder=None) -> dict:
+    """The calibration as an orientviz problem file (kind block, image units px).
+
+    DBAT's pixel measurements as they are (origin at the upper-left corner, y down,
+    σ 0.1 px), the camera with ``"model": "backward"`` and DBAT's free parameters, the
+    start orientations of :func:`block` (tie points without coordinates: the loader
+    intersects them).
+    """
+    blk = block(folder)
+    d = _setup(folder)[0]
+    p = d["pixel_mm"]
+    w, h = d["sensor_mm"]
+    im, pt, ob = blk.images, blk.points, blk.observations
+    ctrl = pt.role == 1
+    return {
+        "format": "orientviz/1", "kind": "block", "name": "dbat-camcal",
+        "description": "DBAT's camera calibration demo (Börlin & Grussenmeyer; BSD licence, see datasets/dbat)",
+        "units": {"length": "m", "angle": "rad", "image": "px", "pixel_size": p},
+        "sequence": "opk",
+        "cameras": [{"id": "C4040Z", "c": d["focal_mm"] / p, "x0": w / 2 / p, "y0": h / 2 / p,
+                     "format": [w / p, h / p], "model": "backward", "free": list(LENS_FREE)}],
+        "images": {"id": list(im.ids), "camera": ["C4040Z"] * len(im.ids),
+                   "X0": im.X0[:, 0].tolist(), "Y0": im.X0[:, 1].tolist(), "Z0": im.X0[:, 2].tolist(),
+                   "omega": im.angles[:, 0].tolist(), "phi": im.angles[:, 1].tolist(),
+                   "kappa": im.angles[:, 2].tolist()},
+        "points": {"id": list(pt.ids), "role": ["control" if c else "tie" for c in ctrl],
+                   "X": [float(v) if c else None for v, c in zip(pt.xyz_known[:, 0], ctrl)],
+                   "Y": [float(v) if c else None for v, c in zip(pt.xyz_known[:, 1], ctrl)],
+                   "Z": [float(v) if c else None for v, c in zip(pt.xyz_known[:, 2], ctrl)]},
+        "observations": {"image": [im.ids[i] for i in ob.image], "point": [pt.ids[j] for j in ob.point],
+                         "x": (ob.xy[:, 0] / p).tolist(), "y": (-ob.xy[:, 1] / p).tolist(),
+                         "sigma": (ob.sigma[:, 0] / p).tolist()},
+        "options": {"tol": TOL, "max_iter": 50},
+    }  # fmt: skip
+
+
+def problem_text(folder=None) -> str:
+    """:func:`problem_document` through orientviz's reader and writer (validated,
+    canonical form): the text of the shipped dataset ``dbat_camcal``."""
+    import json
+
+    from ..io.problem import dumps_problem, loads_problem
+
+    return dumps_problem(loads_problem(json.dumps(problem_document(folder)), "dbat_camcal.json"))
+
+
+#: The dataset's entry in datasets/dbat/MANIFEST.json (written by make_dbat).
+MANIFEST_ENTRY = {
+    "name": "dbat_camcal",
+    "file": "dbat_camcal.json",
+    "kind": "block",
+    "form": "columnar",
+    "description": "DBAT's camera calibration demo: 21 images of a target sheet by an Olympus C4040Z (2272 x 1704 px of 3.19 um), 2074 marked points (sigma 0.1 px), 4 fixed control points; the camera estimated with DBAT's backward lens model (c, principal point, aspect, K1-K3, P1, P2)",
+    "source": "DBAT 0.9.2.0 (https://github.com/niclasborlin/dbat), data/script/camcaldemo (copies in camcal/); made by orientviz.reproduce.dbat_camcal.write_problem from those copies (start orientations by resection on the control points)",
+    "citation": "CITATION.md",
+    "licence": "BSD-style licence of DBAT, (C) 2013-2020 N. Börlin and P. Grussenmeyer: LICENSE.txt",
+    "units": {"length": "m", "image": "px", "angle": "rad"},
+    "frame": "object: DBAT's target-sheet frame (m); image: pixels from the upper-left corner, y down (units.image px, pixel_size 0.0031911 mm)",
+    "adjustment": "as DBAT's camcal demo: all stations and points free, 4 control points fixed, camera model backward with c, x0, y0, as, K1-K3, P1, P2 free and sk fixed at 0; orientviz reproduce dbat-camcal compares every printed number",
+}
 
 
 #: DBAT's demo estimates every parameter of its model 3 but the shear (no priors).

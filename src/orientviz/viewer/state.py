@@ -19,7 +19,7 @@ sequence, ω-φ-κ by default: R = R_ω R_φ R_κ).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from ..adjust import Adjustment
 from ..block import Block
 from ..errors import InputError
-from .adjuster import Adjuster, apply_parameters, default_adjuster, image_normalized_residuals
+from .adjuster import Adjuster, default_adjuster, image_normalized_residuals
 from .edits import Edits, Mapping, effective_block, expand_result
 
 F64 = NDArray[np.float64]
@@ -131,13 +131,29 @@ class BlockState:
         del self.history[self.cursor + 1 :]
         kept = [it for it in result.history[1:] if np.size(it.x) == np.size(result.x)]
         for it in kept:
-            self.block = apply_parameters(start, result, it.x)
+            self._put(start, result, it.x)
             self.history.append(self._snap(f"iteration {len(self.history)}", it.sigma0))
-        self.block = apply_parameters(start, result)
+        self._put(start, result)
         if len(kept) < len(result.history) - 1:  # the solver kept no parameters per iteration
             self.history.append(self._snap("adjusted", result.sigma0))
         self.cursor = len(self.history) - 1
         self._at_result = True
+
+    def _put(self, start: Block, result: Adjustment, x: F64 | None = None) -> None:
+        """Set the estimates of the state from ``x`` (default ``result.x``; layout of
+        ``result.blocks``), those not in ``x`` from ``start`` (cf. ``apply_parameters``,
+        without copying the whole block)."""
+        x = result.x if x is None else np.asarray(x, dtype=float)
+        b = self.block
+        if "exterior" in result.blocks:
+            ext = x[result.blocks["exterior"]].reshape(b.n_images, 6)
+            b.images.X0, b.images.angles = ext[:, :3].copy(), ext[:, 3:].copy()
+        else:
+            b.images.X0, b.images.angles = start.images.X0.copy(), start.images.angles.copy()
+        if "points" in result.blocks:
+            b.points.xyz = x[result.blocks["points"]].reshape(b.n_points, 3).copy()
+        else:
+            b.points.xyz = start.points.xyz.copy()
 
     def replay(self, k: int) -> Snapshot:
         """Set the state to history record ``k`` (0 = start) and return it."""
@@ -168,7 +184,11 @@ class BlockState:
         whole block. ``precision=False`` skips the cofactors (faster; no normalised
         residuals, redundancy numbers or ellipsoids until the next adjustment with them).
         """
-        start = self.block.copy()
+        b = self.block  # the start values (a shallow copy: only the estimates are new arrays)
+        start = b.with_(
+            images=replace(b.images, X0=b.images.X0.copy(), angles=b.images.angles.copy()),
+            points=replace(b.points, xyz=b.points.xyz.copy()),
+        )
         sub, mp = effective_block(start, self.edits)
         if precision:
             raw = self.adjuster(sub, max_iter)

@@ -27,8 +27,16 @@ from ...block import CONTROL, ROLES, Block, Cameras, Images, Observations, Point
 from ...errors import InputError
 from ..problem import Units
 from ..tables import REQUIRED, Table, json_numbers, read_table, write_table
+from ._cameras import MODEL_FIELDS, camera_model_cells, read_camera_models
 
-CAMERA_FIELDS = {"id": REQUIRED, "c": REQUIRED, "x0": 0.0, "y0": 0.0, "format": None}
+CAMERA_FIELDS = {
+    "id": REQUIRED,
+    "c": REQUIRED,
+    "x0": 0.0,
+    "y0": 0.0,
+    "format": None,
+    **MODEL_FIELDS,
+}
 IMAGE_FIELDS = {
     "id": REQUIRED,
     "camera": REQUIRED,
@@ -76,6 +84,7 @@ def block_from_tables(
     sequence: str,
     default_role: str = "tie",
     image_sigma: float | None = None,
+    camera_models: bool = False,
 ) -> Block:
     """Build a :class:`Block` (internal units) from the tables; ids are checked here.
 
@@ -94,8 +103,12 @@ def block_from_tables(
         Role of points that do not state one.
     image_sigma : float, optional
         ``options.image_sigma`` in file image units, used where an observation gives none.
+    camera_models : bool
+        The kind estimates camera models (``model``/``additional`` in ``cameras[]``,
+        :mod:`orientviz.io.kinds._cameras`); otherwise such fields are refused.
     """
     L, A, I = units.m_per_length, units.rad_per_angle, units.mm_per_image
+    Y = I * units.y_sign  # image y: pixels count downwards
     cam_idx = t.cameras.index("id", "camera")
     img_idx = t.images.index("id", "image")
     pt_idx = t.points.index("id", "point")
@@ -107,10 +120,16 @@ def block_from_tables(
         ids=t.cameras.strings("id"),
         c=t.cameras.floats("c", I),
         x0=t.cameras.floats("x0", I),
-        y0=t.cameras.floats("y0", I),
+        y0=t.cameras.floats("y0", Y),
         format_mm=fmt,
         ap_set=[""] * t.cameras.n,
+        model=read_camera_models(t.cameras, units),
     )
+    if not camera_models:
+        for i, spec in enumerate(cameras.model):
+            if spec:
+                field = "model" if "model" in spec else "additional"
+                raise t.cameras.fail(i, field, "camera models are estimated by kind block only")
     im = t.images
     strip = im.ints("strip")
     images = Images(
@@ -178,7 +197,7 @@ def block_from_tables(
     observations = Observations(
         image=oi,
         point=op,
-        xy=np.column_stack([ob.floats("x", I), ob.floats("y", I)]).reshape(-1, 2),
+        xy=np.column_stack([ob.floats("x", I), ob.floats("y", Y)]).reshape(-1, 2),
         sigma=osig,
     )
     block = Block(cameras, images, points, observations, sequence=sequence)
@@ -213,14 +232,17 @@ def _vec_cells(obs: np.ndarray, sig: np.ndarray, scale: float) -> tuple[list, li
 def tables_from_block(block: Block, units: Units, columnar: bool) -> dict[str, Any]:
     """The four tables of ``block`` as JSON nodes in ``units`` (inverse of the reader)."""
     L, A, I = units.m_per_length, units.rad_per_angle, units.mm_per_image
+    Y = I * units.y_sign
     cam, im, pt, ob = block.cameras, block.images, block.points, block.observations
     cameras = {
         "id": list(cam.ids),
         "c": json_numbers(cam.c / I),
         "x0": json_numbers(cam.x0 / I),
-        "y0": json_numbers(cam.y0 / I),
+        "y0": json_numbers(cam.y0 / Y),
         "format": [json_numbers(f / I) for f in cam.format_mm],
     }
+    if any(cam.model):
+        cameras.update(camera_model_cells(cam.model, units))
     x0obs, x0sig = _vec_cells(im.X0_obs, im.X0_sigma, L)
     aobs, asig = _vec_cells(im.angles_obs, im.angles_sigma, A)
     images = {
@@ -259,7 +281,7 @@ def tables_from_block(block: Block, units: Units, columnar: bool) -> dict[str, A
         "image": [im.ids[i] for i in ob.image],
         "point": [pt.ids[p] for p in ob.point],
         "x": json_numbers(ob.xy[:, 0] / I),
-        "y": json_numbers(ob.xy[:, 1] / I),
+        "y": json_numbers(ob.xy[:, 1] / Y),
         "sigma": osig,
     }
     return {

@@ -28,6 +28,7 @@ from ...errors import InputError
 from ...report import Solution
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
+from ._cameras import bundle_camera_options, camera_notes
 from ._frame import block_from_tables, read_frame_tables, require_finite, tables_from_block
 
 METHODS = ("bundle", "models", "polynomial")
@@ -38,8 +39,9 @@ def load(doc: dict[str, Any], units: Units, source: str) -> Block:
     t = read_frame_tables(doc, source)
     opts = doc.get("options", {})
     block = block_from_tables(
-        t, units, source, sequence=doc["sequence"], image_sigma=opts.get("image_sigma")
-    )
+        t, units, source, sequence=doc["sequence"], image_sigma=opts.get("image_sigma"),
+        camera_models=True,
+    )  # fmt: skip
     im = block.images
     given = np.isfinite(np.column_stack([im.X0, im.angles]))
     if given.any() and not given.all():  # all approximations or none (then computed)
@@ -156,12 +158,13 @@ def solve(problem: Problem, method: str | None) -> Solution:
     """Adjust the block by ``method`` and collect the report."""
     method = method or "bundle"
     block: Block = approximate(problem.data)
-    keys = ("control", "max_iter", "tol", "degree_xy", "degree_z")
+    keys = ("control", "max_iter", "tol", "degree_xy", "degree_z", "solver")
     opts = {k: v for k, v in problem.options.items() if k in keys}
     if method == "bundle":
         from ...bundle import bundle_adjust
 
         rays = check_mode(problem) == "rays"
+        opts.update(bundle_camera_options(block))  # cameras[].model / additional
         adj = _call(bundle_adjust, with_check_rays(block) if rays else block, opts)
     elif method == "models":
         from ...stereo_models import independent_models
@@ -263,6 +266,9 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
         notes.insert(0, CHECK_MODES[mode] + f" (options.check_points = {mode!r})")
     ties = int(np.sum(block.points.role == TIE))
     notes.append(f"block: {block.summary()} ({ties} tie points)")
+    notes += camera_notes(block, adj, problem.units)
+    if getattr(adj, "reduced_info", {}).get("solver_reason"):
+        notes.append(f"reduced system solved {adj.reduced_info['solver_reason']}")
     return Solution(
         kind="block",
         method=method,

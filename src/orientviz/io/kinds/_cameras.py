@@ -1,0 +1,201 @@
+"""The camera models of a problem file's ``cameras[]`` (kind ``block``).
+
+A camera row may say what the bundle estimates of it::
+
+    {"id": "C4040Z", "c": 2337.6, "x0": 1136, "y0": 852, "format": [2272, 1704],
+     "model": "backward", "free": ["c", "x0", "y0", "as", "K1", "K2", "K3", "P1", "P2"],
+     "sigma": {"sk": 1e-4}, "K1": 0.0}
+
+* ``model``: ``"backward"`` (photogrammetry: DBAT, PhotoModeler — the distortion of the
+  measured point; terms as, sk, K1–K3, P1, P2) or ``"forward"`` (computer vision: OpenCV
+  — the distortion of the ideal point; terms as, sk, k1–k3, p1, p2), the camera model
+  inside the bundle's projection (:class:`orientviz.bundle.LensModel`).
+* each parameter (c, x0, y0 and the terms) is **free** (listed in ``free``; default all
+  but sk), **weighted** (a prior σ in ``sigma``: an observation of its given value) or
+  **fixed** (neither) at its given value (the row's c, x0, y0 and terms; terms default 0).
+* ``additional``: instead of a model, an additional-parameter set (``"ebner12"``,
+  ``"gruen44"``, ``"brown"``: corrections at the observed coordinates, one group per
+  camera) with ``additional_sigma`` (µm) for its pseudo-observations.
+
+Units: c, x0, y0, their σ and ``r0`` in the file's image unit; the lens terms in the
+photogrammetric image frame (y up) and mm (backward K1 mm⁻², K2 mm⁻⁴, K3 mm⁻⁶, P1, P2
+mm⁻¹ as DBAT and PhotoModeler print them; forward terms unitless, OpenCV's p1 with the
+opposite sign because OpenCV's y points down), whatever ``units.image`` is.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ...bundle._lens import BACKWARD_NAMES, FORWARD_NAMES
+from ...errors import InputError
+from ..problem import Units
+from ..tables import Table
+
+#: The lens terms a camera row may give (both models).
+TERMS = ("as", "sk", "K1", "K2", "K3", "P1", "P2", "k1", "k2", "k3", "p1", "p2")
+#: Fields of a camera row about its model (default None).
+MODEL_FIELDS = {k: None for k in ("model", "free", "sigma", "r0", "additional",
+                                  "additional_sigma") + TERMS}  # fmt: skip
+_NAMES = {"backward": BACKWARD_NAMES, "forward": FORWARD_NAMES}
+_IO = ("c", "x0", "y0")
+
+
+def _other(name: str, model: str) -> str:
+    mine = ", ".join(_NAMES[model][3:])
+    return f"{name!r} is not a term of the {model} model (its terms: {mine})"
+
+
+def read_camera_models(t: Table, units: Units) -> list[dict[str, Any]]:
+    """Per camera row its model spec in internal units ({} = none); fails at the cell.
+
+    A spec: ``{"model": kind, "free": [...], "sigma": {name: σ}, "values": {term: v},
+    "r0": mm or None}`` or ``{"additional": name, "additional_sigma": µm or None}``.
+    """
+    I = units.mm_per_image
+    col = t.columns
+    out: list[dict[str, Any]] = []
+    for i in range(t.n):
+        model, add = col["model"][i], col["additional"][i]
+        terms = {k: col[k][i] for k in TERMS if col[k][i] is not None}
+        if model is not None and add is not None:
+            raise t.fail(i, "additional", 'give "model" or "additional", not both')
+        if model is None:
+            for field in ("free", "sigma", "r0") + tuple(terms):
+                if col[field][i] is not None:
+                    raise t.fail(i, field, 'needs "model": "backward" or "forward"')
+            if col["additional_sigma"][i] is not None and add is None:
+                raise t.fail(i, "additional_sigma", 'needs "additional" (ebner12, gruen44, brown)')
+            out.append({} if add is None else {"additional": add,
+                                               "additional_sigma": col["additional_sigma"][i]})  # fmt: skip
+            continue
+        if col["additional_sigma"][i] is not None:
+            raise t.fail(i, "additional_sigma", 'needs "additional" (ebner12, gruen44, brown)')
+        names = _NAMES[model]
+        for k in terms:
+            if k not in names:
+                raise t.fail(i, k, _other(k, model))
+        free = col["free"][i]
+        for k in free or ():
+            if k not in names:
+                raise t.fail(i, "free", _other(k, model))
+        sigma = dict(col["sigma"][i] or {})
+        for k, s in sigma.items():
+            if k not in names:
+                raise t.fail(i, "sigma", _other(k, model))
+            if free and k in free:
+                raise t.fail(i, "sigma", f"{k!r} is listed in free and has a prior σ: give one")
+            if k in _IO:
+                sigma[k] = float(s) * I
+        r0 = col["r0"][i]
+        out.append({
+            "model": model,
+            "free": None if free is None else [str(k) for k in free],
+            "sigma": sigma,
+            "values": {k: float(v) for k, v in terms.items()},
+            "r0": None if r0 is None else float(r0) * I,
+        })  # fmt: skip
+    return out
+
+
+def camera_model_cells(models: list[dict[str, Any]], units: Units) -> dict[str, list[Any]]:
+    """The model columns of the cameras table in ``units`` (inverse of the reader)."""
+    I = units.mm_per_image
+    cols: dict[str, list[Any]] = {k: [] for k in MODEL_FIELDS}
+    for spec in models:
+        for k in MODEL_FIELDS:
+            v = spec.get(k)
+            if k in TERMS:
+                v = spec.get("values", {}).get(k)
+            elif k == "sigma" and v:
+                v = {n: (s / I if n in _IO else s) for n, s in v.items()}
+            elif k == "r0" and v is not None:
+                v = v / I
+            cols[k].append(v)
+    return {k: v for k, v in cols.items() if any(x is not None and x != {} for x in v)}
+
+
+def bundle_camera_options(block) -> dict[str, Any]:
+    """``bundle_adjust`` keywords for the block's camera models (empty without any).
+
+    Every camera must state the same model (kind, free and weighted parameters) or the
+    same additional-parameter set; each camera is its own parameter group.
+    """
+    from ...bundle import LensModel, ap_set
+
+    models = list(getattr(block.cameras, "model", None) or [])
+    if not any(models):
+        return {}
+    ids = block.cameras.ids
+    first = models[0]
+    key = _shape(first)
+    for cid, spec in zip(ids, models):
+        if _shape(spec) != key:
+            raise InputError(
+                f"camera {cid!r}: every camera of a block must state the same model "
+                f"({_describe(first)} for camera {ids[0]!r}, {_describe(spec)} here)"
+            )
+    group = np.asarray(block.images.camera, np.int64)
+    if "additional" in first:
+        cam = block.cameras
+        opts = {"b": float(np.min(cam.format_mm[0])) * 0.4} if first["additional"] != "brown" else {
+            "c": float(cam.c[0]), "r0": float(np.hypot(*cam.format_mm[0])) / 4}  # fmt: skip
+        sig = first.get("additional_sigma")
+        return {"additional": ap_set(first["additional"], **opts), "ap_group": group,
+                "ap_sigma": None if sig is None else float(sig)}  # fmt: skip
+    values = {}
+    for k in sorted({k for s in models for k in s["values"]}):
+        values[k] = [s["values"].get(k, 0.0) for s in models]
+    free = first["free"]
+    model = LensModel(first["model"], free=None if free is None else tuple(free),
+                      prior=dict(first["sigma"]), values=values,
+                      r0=first["r0"])  # fmt: skip
+    return {"additional": model, "ap_group": group}
+
+
+def _shape(spec: dict[str, Any]) -> tuple:
+    if "additional" in spec:
+        return ("additional", spec["additional"], spec.get("additional_sigma"))
+    if not spec:
+        return ("none",)
+    free = None if spec["free"] is None else tuple(spec["free"])
+    return ("model", spec["model"], free, tuple(sorted(spec["sigma"].items())))
+
+
+def _describe(spec: dict[str, Any]) -> str:
+    if not spec:
+        return "no model"
+    if "additional" in spec:
+        return f"additional {spec['additional']!r}"
+    return f"model {spec['model']!r} free {spec['free']} sigma {spec['sigma']}"
+
+
+def camera_notes(block, adj, units: Units) -> list[str]:
+    """Report lines of the estimated cameras: value ± σ per parameter (c, x0, y0 in the
+    file's image unit, the terms as in the file), and the high correlations."""
+    cam = getattr(adj, "camera", None)
+    if cam is None:
+        return []
+    I, Y = units.mm_per_image, units.mm_per_image * units.y_sign
+    scale = {"c": I, "x0": I, "y0": Y}
+    lines = []
+    for g in range(cam.value.shape[0]):
+        cid = block.cameras.ids[g] if g < len(block.cameras.ids) else f"group {g}"
+        parts = []
+        for j, name in enumerate(cam.names):
+            f = scale.get(name, 1.0)
+            unit = units.image if name in scale else cam.units[j]
+            if cam.estimated[j]:
+                parts.append(
+                    f"{name} {cam.value[g, j] / f:.7g} ± {cam.sigma[g, j] / abs(f):.2g} {unit}"
+                )
+            else:
+                parts.append(f"{name} {cam.value[g, j] / f:.7g} (fixed)")
+        lines.append(f"camera {cid} ({cam.kind} model): " + ", ".join(parts))
+    pairs = cam.high_correlations(0.9)
+    if pairs:
+        lines.append("camera parameters correlated above 0.9: " + ", ".join(
+            f"{a}~{b} ρ = {r:+.2f}" for _, a, b, r in pairs))  # fmt: skip
+    return lines
