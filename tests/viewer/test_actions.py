@@ -170,6 +170,8 @@ def test_panel_actions_undo_and_rewind(app):
     p.handles["image"].value = 1
     h["toggle_image"].value = None
     assert not st.edits.image_on[1]
+    assert tuple(app.scene.image_nodes[1].color) == (175, 175, 175)  # drawn grey
+    assert tuple(app.scene.image_nodes[0].color) == (40, 70, 160)
     h["weight"].value = 0.25
     p.handles["image"].value = 3
     h["set_weight"].value = None

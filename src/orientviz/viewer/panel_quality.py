@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from .block_geometry import COLORS
 from .quality import MEASURES, Quality, colour_bar, compute_quality, legend_text
 
 #: dropdown label → measure key (None: colours by role, as without this folder)
@@ -20,6 +21,8 @@ CHOICES: dict[str, str | None] = {"role (no quality)": None} | {
     v[0]: k for k, v in MEASURES.items()
 }
 NONE = "—"
+#: Frustum colour of an image switched off.
+OFF_GREY = (175, 175, 175)
 
 
 class QualityControls:
@@ -60,14 +63,21 @@ class QualityControls:
         visible = key is not None
         for name in ("legend_bar", "legend", "worst_images", "worst_points"):
             h[name].visible = visible
-        if key is None:
+        if key is None:  # colours by role; images switched off grey
             self.quality = None
-            sc.colour_images(None)
+            off = ~st.edits.image_on
+            rgb = None
+            if off.any():
+                rgb = np.tile(np.asarray(COLORS["frustum"], np.uint8), (off.size, 1))
+                rgb[off] = OFF_GREY
+            sc.colour_images(rgb)
             sc.colour_points(None)
             return
         q = compute_quality(st.block, st.result if st.at_result else None, key)
         self.quality = q
-        sc.colour_images(q.colours(q.image))
+        rgb = q.colours(q.image)
+        rgb[~st.edits.image_on] = OFF_GREY  # switched off (no measure: grey anyway)
+        sc.colour_images(rgb)
         sc.colour_points(q.colours(q.point))
         h["legend_bar"].image = colour_bar(q)
         text = legend_text(q)

@@ -315,25 +315,24 @@ class BlockScene:
         gain = self.ellipsoid_scale = self.auto_ellipsoid_gain * float(opt["factor"])
         self.confidence_k = k
         pts = self.geo.shown_points(opt["points"], self.selected)
-        ell = self.geo.ellipsoids(pts, k, gain) if pts.size else None
-        if ell is not None:
-            self.nodes["ellipsoids"] = self.scene.add_mesh_simple(
-                f"{self.root}/ellipsoids", ell[0].astype(np.float32), ell[1],
-                color=COLORS["ellipsoid"], opacity=0.55, flat_shading=False,
-                cast_shadow=False, receive_shadow=False, visible=self.ellipsoids_visible,
-            )  # fmt: skip
+        self._mesh("ellipsoids", self.geo.ellipsoids(pts, k, gain) if pts.size else None, 0.55)
         if opt["stations"]:
             m = self.geo.state.block.n_images
             nb, _ = neighbour_correlations(self.geo.state.result, self.selected, m)
             imgs = np.concatenate([[self.selected], nb])
-            st = self.geo.station_ellipsoids(imgs, k, gain)
-            if st is not None:
-                self.nodes["station_ellipsoids"] = self.scene.add_mesh_simple(
-                    f"{self.root}/station_ellipsoids", st[0].astype(np.float32), st[1],
-                    color=COLORS["station"], opacity=0.6, flat_shading=False,
-                    cast_shadow=False, receive_shadow=False, visible=self.ellipsoids_visible,
-                )  # fmt: skip
+            self._mesh("station_ellipsoids", self.geo.station_ellipsoids(imgs, k, gain), 0.6)
         return gain
+
+    def _mesh(self, key: str, mesh: tuple | None, opacity: float) -> None:
+        """Add the ellipsoid mesh ``(vertices, faces)`` as node ``key`` (nothing for None)."""
+        if mesh is None:
+            return
+        colour = COLORS["ellipsoid" if key == "ellipsoids" else "station"]
+        self.nodes[key] = self.scene.add_mesh_simple(
+            f"{self.root}/{key}", mesh[0].astype(np.float32), mesh[1], color=colour,
+            opacity=opacity, flat_shading=False, cast_shadow=False, receive_shadow=False,
+            visible=self.ellipsoids_visible,
+        )  # fmt: skip
 
     # ------------------------------------------------------------------ colours by quality
     def colour_images(self, rgb: np.ndarray | None) -> None:
