@@ -91,13 +91,13 @@ def test_pair_selected_point_rays_gap_plane_and_normalised_images_follow_the_dia
     app = ViewerApp(load_demo("pair"), port=0, verbose=False)
     try:
         pv = app.extra["pair"]
-        assert pv.selected() == 0 and pv.nodes["gap"].visible
+        assert pv.selected() == 4 and pv.nodes["gap"].visible
         gap0 = pv.point["gap_length"]
         seg = np.asarray(pv.nodes["gap"].points, dtype=float)[0] + pv.frame.origin
         assert np.linalg.norm(seg[1] - seg[0]) == pytest.approx(gap0, rel=1e-4)
         assert "shortest segment" in pv.h["point_info"].content
-        pv.h["point"].value = "5"
-        assert pv.selected() == 4 and pv.point["gap_length"] != gap0
+        pv.h["point"].value = "3"
+        assert pv.selected() == 2 and pv.point["gap_length"] != gap0
         plane = np.asarray(pv.nodes["epipolar_plane"].vertices, dtype=float) + pv.frame.origin
         np.testing.assert_allclose(plane, pv.point["plane"], atol=1e-3)
         pv.h["plane"].value = False

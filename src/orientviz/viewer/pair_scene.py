@@ -182,7 +182,7 @@ class PairView:
             h["stats"] = gui.add_markdown("")
         with gui.add_folder("Selected point"):
             names = tuple(str(i + 1) for i in range(len(geo["scheme"])))
-            h["point"] = gui.add_dropdown("scheme point", ("none", *names), initial_value="1")
+            h["point"] = gui.add_dropdown("scheme point", ("none", *names), initial_value="5")
             h["plane"] = gui.add_checkbox("epipolar plane of the left ray", True)
             h["point_info"] = gui.add_markdown("")
         with gui.add_folder("Display"):

@@ -1,0 +1,130 @@
+"""Photograph every ``orientviz view`` demo for the book's viewer chapter and the README.
+
+    python tools/make_viewer_screenshots.py              # all demos
+    python tools/make_viewer_screenshots.py --only radar
+
+Each demo is served on 127.0.0.1 and opened in headless Chromium (playwright with
+/usr/bin/chromium and the test suite's flags, software WebGL); a short scenario puts it in
+a telling state (block: run to convergence, colour by the largest normalised residual;
+pair: the rays, gap and epipolar plane of point 5 with the
+normalised images; radar: Geier's construction of target 15 in image 3 with the legend).
+Written to ``book/_static/viewer/<demo>.png`` as palette PNGs (helpers of
+``make_readme_figures.py``: at most 400 KB each, checked).
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import pathlib
+import shutil
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import make_readme_figures as mrf  # noqa: E402  (the Chromium settings and the PNG writer)
+
+OUT = mrf.ROOT / "book" / "_static" / "viewer"
+VIEWPORT = (1280, 960)
+
+
+def _wait(predicate: Callable[[], bool], timeout: float = 60.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            raise SystemExit("the viewer did not reach the state of the screenshot")
+        time.sleep(0.1)
+
+
+def _collapse(page: Any, *folders: str) -> None:
+    """Fold GUI folders (click their titles) so that the panel shows what matters."""
+    for name in folders:
+        page.get_by_text(name, exact=True).first.click()
+
+
+def block_scenario(app: Any, page: Any) -> None:
+    """Run to convergence, colour by the largest |w| (the worst images listed)."""
+    st, q = app.demo.state, app.panel.quality
+    for client in app.server.get_clients().values():
+        mrf._frame_camera(client.camera, 0.8, 0.1)  # closer, and left of the panel
+    page.get_by_role("button", name="run to convergence").click()
+    _wait(lambda: st.at_result and len(st.history) > 2)
+    with app.panel._lock:
+        q.handles["measure"].value = "largest normalised residual |w|"
+    _wait(lambda: q.quality is not None)
+    _collapse(page, "Image orientation", "Adjustment", "Largest residuals")
+
+
+def pair_scenario(app: Any, page: Any) -> None:
+    """Point 5 selected (rays, gap, epipolar plane) and the normalised images shown."""
+    pv = app.extra["pair"]
+    pv.h["normalised"].value = True
+    _wait(lambda: pv.h["picture"].visible)
+    _collapse(page, "Passes", "Display")
+
+
+def radar_scenario(app: Any, page: Any) -> None:
+    """The default state: image 3, target 15, construction and legend."""
+
+
+SCENARIOS: dict[str, Callable[[Any, Any], None]] = {
+    "block": block_scenario,
+    "pair": pair_scenario,
+    "radar": radar_scenario,
+}
+
+
+def screenshot(name: str, path: pathlib.Path, settle_s: float = 5.0) -> None:
+    """Serve demo ``name``, play its scenario in Chromium and save the screenshot."""
+    from PIL import Image
+    from playwright.sync_api import sync_playwright
+
+    from orientviz.viewer.app import ViewerApp
+    from orientviz.viewer.demos import load_demo
+
+    chromium, flags = mrf._chromium_settings()
+    app = ViewerApp(load_demo(name), host="127.0.0.1", port=0, verbose=False)
+    profile = tempfile.mkdtemp(prefix="orientviz-shot-chromium-")
+    try:
+        with sync_playwright() as p:
+            context = p.chromium.launch_persistent_context(
+                profile, executable_path=chromium, headless=True, args=flags,
+                viewport={"width": VIEWPORT[0], "height": VIEWPORT[1]},
+            )  # fmt: skip
+            try:
+                page = context.new_page()
+                page.goto(app.url)
+                page.wait_for_selector("canvas", timeout=60_000)
+                _wait(lambda: len(app.server.get_clients()) > 0)
+                page.add_style_tag(content=".mantine-Notifications-root {display: none}")
+                time.sleep(settle_s)  # the scene arrives and is drawn (software WebGL)
+                SCENARIOS[name](app, page)
+                time.sleep(settle_s)
+                png = page.screenshot()
+            finally:
+                context.close()
+    finally:
+        app.stop()
+        shutil.rmtree(profile, ignore_errors=True)
+    image = Image.open(io.BytesIO(png))
+    if np.asarray(image.convert("RGB"), dtype=float).std() < 10:
+        raise SystemExit(f"the screenshot of {name!r} is blank")
+    mrf._save_png(image, path)
+
+
+def main(argv: list[str] | None = None) -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--only", choices=sorted(SCENARIOS), default=None)
+    args = p.parse_args(argv)
+    OUT.mkdir(parents=True, exist_ok=True)
+    for name in SCENARIOS if args.only is None else [args.only]:
+        screenshot(name, OUT / f"{name}.png")
+
+
+if __name__ == "__main__":
+    main()
