@@ -296,6 +296,7 @@ def _result(block, ms, su, lam, R, T, w_c, method, converged, reason, sol, histo
         centre_image=su.centre_images, sigma0_m=s0 * math.sqrt(1.0 / w_c[0]),
         rms_xy_m=float(np.sqrt(np.mean(r[:, :2] ** 2))), rms_z_m=float(np.sqrt(np.mean(r[:, 2] ** 2))),
         sigma_model=(1 / math.sqrt(w_c[0]), 1 / math.sqrt(w_c[2])),
+        adjusted=(r.size + int(np.sum(su.prior_w > 0)), 7 * ms.n_models + su.n_scalar),
     )  # fmt: skip
     if precision and method == "rigorous" and sol is not None:
         res.cofactor_blocks["points"] = scalar_cofactors(sol, su.scalar)

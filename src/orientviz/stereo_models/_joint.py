@@ -331,6 +331,10 @@ def finish_joint(res: ModelsResult, block, ms, su, js, lam, R, T, p, g_aux, sol,
     cost = joint_cost(su, js, lam, R, T, p, g_aux, w_c)
     dof = joint_redundancy(su, js)
     res.redundancy = dof
+    if res.adjusted is not None:  # + the extra rows (pseudo-observations, auxiliary) and unknowns
+        n_pseudo = int(np.sum(np.isfinite(js.sigma))) * js.n_groups if js.q else 0
+        n_rows = n_pseudo + (js.aux.n if js.aux is not None else 0)
+        res.adjusted = (res.adjusted[0] + n_rows, res.adjusted[1] + js.n_def + js.n_aux)
     res.sigma0 = math.sqrt(cost / dof) if dof > 0 else float("nan")
     res.sigma0_m = res.sigma0 / math.sqrt(w_c[0])
     q_idx = np.arange(n7, n7 + js.n_def + js.n_aux)
