@@ -19,9 +19,9 @@ import sys
 import numpy as np
 
 from ..errors import AdjustmentError, InputError
-from ..report import Solution
 from .problem import Problem, load_problem, save_problem
 from .registry import get_kind
+from .solution import Solution
 
 
 def solve_problem(problem: Problem, method: str | None = None) -> Solution:

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..block import CHECK, CONTROL, TIE
 from ..io.problem import Problem
+from ..io.solution import Solution
 from ._document import (
     R_LOW,
     Report,
@@ -38,7 +39,6 @@ from ._document import (
 )
 from ._precision import PrecisionSections
 from ._quality import QualitySections
-from ._solution import Solution
 from ._stats import (
     F64,
     block_of,

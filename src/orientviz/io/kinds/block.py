@@ -25,9 +25,9 @@ import numpy as np
 from ...adjust.result import W_CRITICAL
 from ...block import CHECK, CONTROL, ROLES, TIE, Block
 from ...errors import InputError
-from ...report import Solution
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
+from ..solution import Solution
 from ._cameras import bundle_camera_options, camera_notes
 from ._diverge import divergence_note
 from ._frame import block_from_tables, read_frame_tables, require_finite, tables_from_block

@@ -1,4 +1,7 @@
-"""What ``orientviz solve`` reports: a :class:`Solution` as text or as JSON.
+"""The solution of a problem file: what ``orientviz solve`` prints, as text or as JSON.
+
+Every problem kind (:mod:`orientviz.io.kinds`) returns a :class:`Solution`;
+:mod:`orientviz.report` builds the full report from it (reports sit above ``io``).
 
 Every number is converted to the units of the problem file: lengths in ``units.length``,
 angles in ``units.angle``, image residuals in ``units.image``. Standard deviations are
@@ -14,8 +17,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..adjust.result import W_CRITICAL, Adjustment
-from ..io.problem import Units
-from ..io.tables import json_number
+from .problem import Units
+from .tables import json_number
 
 F64 = NDArray[np.float64]
 
