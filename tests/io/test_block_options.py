@@ -129,3 +129,26 @@ def test_too_little_control_names_the_datum_choices(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "--free" in err and "--fix" in err and "3" in err
     assert main(["solve", path, "--free"]) == 0
+
+
+def test_observed_centres_carry_the_datum_of_computed_approximations(tmp_path, capsys):
+    """No approximations, two control points, but GNSS-like observed centres (σ 0.5 m):
+    the approximations are carried onto the observed centres and the bundle converges."""
+    doc = _doc("dbat_sxb")
+    rays = Counter(o["point"] for o in doc["observations"])
+    ctrl = [p for p in doc["points"] if p.get("role") == "control" and rays[p["id"]] >= 2]
+    for p in ctrl[2:]:
+        p["role"] = "tie"
+        for k in ("X", "Y", "Z", "sigma"):
+            p.pop(k, None)
+    # the centres DBAT printed for the five photos (its report), rounded to 0.1 m
+    centres = {"8811": (999660.9, 112368.4, 1916.6), "8936": (1000062.2, 112625.5, 1916.4),
+               "8937": (1000077.4, 112417.5, 1910.4), "8938": (1000094.1, 112202.9, 1907.0),
+               "9111": (1000482.6, 112370.5, 1937.1)}  # fmt: skip
+    for im in doc["images"]:
+        im["X0_obs"], im["X0_obs_sigma"] = list(centres[im["id"]]), [0.5, 0.5, 0.5]
+    path = _write(tmp_path, doc)
+    assert main(["solve", path, "--json"]) == 0, capsys.readouterr().err
+    out = json.loads(capsys.readouterr().out)
+    for im in out["images"]:
+        assert np.allclose([im["X0"], im["Y0"], im["Z0"]], centres[im["id"]], atol=2.0)

@@ -15,7 +15,10 @@ alone — the stored orientations and tie-point coordinates of the block are ign
    rays is intersected (linear least-squares ray intersection). Images are thus
    connected across strips through the tie points, like an independent-model chain.
 3. **Datum** — a 3D similarity transformation (closed form) from the model frame to
-   the control points carries everything into object space.
+   the control points carries everything into object space; without 3 control points
+   not on a line, to the observed projection centres (``images.X0_obs`` with σ > 0,
+   e.g. GNSS; 3 or more not on a line); with ``frame="model"`` (a free network) the
+   result stays in the seed pair's model frame.
 
 Accumulated errors grow along long strips (the chain is not adjusted on the way), but
 they stay far inside the convergence range of :func:`~orientviz.bundle.
@@ -227,16 +230,24 @@ def approximate_values(block: Block, *, min_points: int = 6, frame: str = "contr
         & np.isfinite(block.points.xyz_known).all(axis=1)
         & np.isfinite(P).all(axis=1)
     )
+    # observed projection centres (GNSS) can carry the datum where control cannot
+    gnss = np.flatnonzero(np.isfinite(block.images.X0_obs).all(axis=1)
+                          & (block.images.X0_sigma > 0).all(axis=1) & done)  # fmt: skip
     if frame == "model":
         T = SimilarityTransform(1.0, np.eye(3), np.zeros(3))  # stay in the model frame
+    elif (ctrl.size < 3 or _collinear(block.points.xyz_known[ctrl])) and (
+        gnss.size >= 3 and not _collinear(block.images.X0_obs[gnss])
+    ):
+        T = similarity_closed_form(Xm[gnss], block.images.X0_obs[gnss])
     elif ctrl.size < 3 or _collinear(block.points.xyz_known[ctrl]):
         raise NotDeterminableError(
             f"approximate values: {ctrl.size} full XYZ control point(s) reached"
             + (" (on a line)" if ctrl.size >= 3 else "")
             + ", the similarity into the control's frame needs 3 not on a line. Datum "
-            "choices: give 3 or more control points (X, Y, Z) seen in the images; or give "
-            "the images' approximate orientations and hold some (options.fix / --fix ID); "
-            "or adjust as a free network (options.free / --free)"
+            "choices: give 3 or more control points (X, Y, Z) seen in the images; or observed "
+            "projection centres (3 or more not on a line); or give the images' approximate "
+            "orientations and hold some (options.fix / --fix ID); or adjust as a free "
+            "network (options.free / --free)"
         )
     else:
         T = similarity_closed_form(P[ctrl], block.points.xyz_known[ctrl])
