@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gzip
 import json
 import shutil
 from pathlib import Path
@@ -32,6 +33,16 @@ def _fake_checkout(tmp_path: Path) -> Path:
     report = root / make_dbat.CAMCAL_REPORT
     report.parent.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(FOLDER / "camcal" / "camcal-dbatreport.txt", report)
+    for name in make_dbat.ROMA_FILES:  # DBAT's measurements are shipped gzipped
+        target = root / make_dbat.ROMA / name
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shipped = FOLDER / "roma" / Path(name).name
+        if not shipped.exists():
+            target.write_bytes(
+                gzip.decompress((FOLDER / "roma" / (shipped.name + ".gz")).read_bytes())
+            )
+        else:
+            shutil.copyfile(shipped, target)
     shutil.copyfile(FOLDER / "LICENSE.txt", root / "LICENSE.txt")
     return root
 
@@ -45,6 +56,8 @@ def test_the_shipped_problem_is_what_the_script_makes_of_dbats_files(tmp_path):
         "MANIFEST.json",
         "CITATION.md",
         "LICENSE.txt",
+        "roma/markpts.txt.gz",
+        "roma/report.txt",
     ):
         assert (out / name).read_bytes() == (FOLDER / name).read_bytes(), name
     shipped = sorted(p.relative_to(FOLDER) for p in FOLDER.rglob("*") if p.is_file())

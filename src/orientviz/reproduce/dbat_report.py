@@ -11,8 +11,12 @@ each value as the printed string (its digits are the reproduction's tolerance).
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
+
+import numpy as np
 
 INDENT = 3
 
@@ -91,6 +95,8 @@ EO_FIELDS = (
     ("Zc", "Z0 [m]"),
 )
 EO_ORDER = [head for head, _ in EO_FIELDS]
+#: DBAT's order ω φ κ Xc Yc Zc → positions in orientviz's X0 Y0 Z0 ω φ κ
+_DBAT_ORDER = [3, 4, 5, 0, 1, 2]
 EO_NAMES = {head: name.split()[0] for head, name in EO_FIELDS}
 
 
@@ -203,3 +209,55 @@ def as_printed(values: dict[str, str]) -> tuple[dict[str, str | float], dict[str
         else:
             out[key] = text
     return out, decimals
+
+
+def station_numbers(out: dict[str, float], case: str, values, sigma, Q) -> None:
+    """Put one station's numbers under the report's keys into ``out``.
+
+    ``values``, ``sigma``: (6,) in DBAT's order ω, φ, κ (deg), Xc, Yc, Zc (m); ``Q``: the
+    station's 6 × 6 cofactor block in orientviz's order X0 Y0 Z0 ω φ κ (the correlations
+    DBAT lists over 95 % are computed for every pair).
+    """
+    q = np.asarray(Q)[np.ix_(_DBAT_ORDER, _DBAT_ORDER)]
+    rho = q / np.sqrt(np.outer(np.diag(q), np.diag(q)))
+    for j, (_, name) in enumerate(EO_FIELDS):
+        out[f"stations|{case}|{name}"] = float(values[j])
+        out[f"stations|{case}|σ {name}"] = float(sigma[j])
+        for jj in range(j + 1, 6):
+            other = EO_FIELDS[jj][1].split()[0]
+            out[f"stations|{case}|correlation {name.split()[0]}-{other} [%]"] = 100.0 * rho[j, jj]
+
+
+def predicted_rows(
+    paper: dict[str, Any],
+    mine: dict[str, float],
+    decimals: dict[str, int],
+    shown: Callable[[str, float], str] = lambda key, value: f"{value:.7g}",
+    note: Callable[[str, float | None], str] = lambda key, value: (
+        "" if value is not None else "not computed by orientviz"
+    ),
+) -> list:
+    """One predicted :class:`~orientviz.reproduce.Row` per published number: DBAT's as
+    printed beside orientviz's (``shown`` formats it, ``note`` explains it)."""
+    from . import Row
+
+    rows = []
+    for key, printed in paper.items():
+        section, case, quantity = key.split("|")
+        value = mine.get(key)
+        rows.append(
+            Row(
+                section,
+                case,
+                quantity,
+                printed,
+                None if value is None else shown(key, value),
+                note=note(key, value),
+                label="predicted",
+                value=value,
+                decimals=decimals.get(key) if isinstance(printed, float) else None,
+                key=key,
+                group=section,
+            )
+        )
+    return rows

@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from . import Row
-from .dbat_report import EO_FIELDS, as_printed, read_report, report_values
+from .dbat_report import as_printed, predicted_rows, read_report, report_values, station_numbers
 
 #: report key → name of the estimate in the camera result
 IO_KEYS = {"c [mm]": "c", "px [mm]": "x0", "py [mm]": "y0", "K1 [mm^-3]": "K1", "K2 [mm^-5]": "K2",
@@ -175,36 +175,15 @@ def ours() -> dict[str, float]:
     out["residuals||overall point RMS [px]"] = float(np.sqrt(np.mean(np.sum(v**2, axis=1))))
     eo = res.exterior
     Q = res.cofactor_blocks["exterior"]
-    order = [3, 4, 5, 0, 1, 2]  # DBAT's order ω φ κ X Y Z → orientviz's X0 Y0 Z0 ω φ κ
     for i, ident in enumerate(ids):
-        case = f"photo {i + 1} ({d['images'][ident]})"
-        q = Q[i][np.ix_(order, order)]
-        sig = res.sigma0 * np.sqrt(np.diag(q)) * np.r_[np.degrees(np.ones(3)), np.ones(3)]
-        rho = q / np.sqrt(np.outer(np.diag(q), np.diag(q)))
         vals = np.r_[np.degrees(eo[i, 3:]), eo[i, :3]]
-        for j, (_, name) in enumerate(EO_FIELDS):
-            out[f"stations|{case}|{name}"] = float(vals[j])
-            out[f"stations|{case}|σ {name}"] = float(sig[j])
-            for jj in range(j + 1, 6):
-                other = EO_FIELDS[jj][1].split()[0]
-                out[f"stations|{case}|correlation {name.split()[0]}-{other} [%]"] = (
-                    100.0 * rho[j, jj]
-                )
+        s = res.sigma0 * np.sqrt(np.diag(Q[i]))
+        sig = np.r_[np.degrees(s[3:]), s[:3]]
+        station_numbers(out, f"photo {i + 1} ({d['images'][ident]})", vals, sig, Q[i])
     return out
 
 
 def table(*, paper: dict[str, Any] | None = None) -> list[Row]:
     """One row per published number of DBAT's ROMA report, orientviz's beside it."""
     paper = paper_values() if paper is None else paper
-    decimals = _published()[1]
-    mine = ours()
-    rows = []
-    for key, printed in paper.items():
-        section, case, quantity = key.split("|")
-        value = mine.get(key)
-        rows.append(Row(section, case, quantity, printed,
-                        None if value is None else f"{value:.7g}",
-                        note="" if value is not None else "not computed by orientviz",
-                        label="predicted", value=value, key=key, group=section,
-                        decimals=decimals.get(key) if isinstance(printed, float) else None))  # fmt: skip
-    return rows
+    return predicted_rows(paper, ours(), _published()[1])

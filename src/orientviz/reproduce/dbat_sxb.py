@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from . import Row
-from .dbat_report import EO_FIELDS, as_printed, read_report, report_values
+from .dbat_report import as_printed, predicted_rows, read_report, report_values, station_numbers
 
 DATASET = "dbat_sxb"
 #: the a-priori σ of the marked image points (px), DBAT's unit of "Sigma0 (pixels)"
@@ -101,22 +101,11 @@ def ours(tol: float | None = None) -> dict[str, float]:
     out["residuals||overall point RMS [px]"] = float(np.sqrt(np.mean(np.sum(v**2, axis=1))))
     names = info["image_files"]  # DBAT's image number → file stem
     Q = adj.cofactor_blocks["exterior"]
-    order = [3, 4, 5, 0, 1, 2]  # DBAT's order ω φ κ X Y Z → orientviz's X0 Y0 Z0 ω φ κ
     for num, stem in names.items():
         i = list(sol.image_ids).index(stem)
-        case = f"photo {num} ({stem}.jpg)"
         vals = np.r_[np.degrees(sol.angles[i]), sol.X0[i]]  # the Solution holds rad, m
         sig = np.r_[np.degrees(sol.angles_sigma[i]), sol.X0_sigma[i]]
-        q = Q[i][np.ix_(order, order)]
-        rho = q / np.sqrt(np.outer(np.diag(q), np.diag(q)))
-        for j, (_, name) in enumerate(EO_FIELDS):
-            out[f"stations|{case}|{name}"] = float(vals[j])
-            out[f"stations|{case}|σ {name}"] = float(sig[j])
-            for jj in range(j + 1, 6):
-                other = EO_FIELDS[jj][1].split()[0]
-                out[f"stations|{case}|correlation {name.split()[0]}-{other} [%]"] = (
-                    100.0 * rho[j, jj]
-                )
+        station_numbers(out, f"photo {num} ({stem}.jpg)", vals, sig, Q[i])
     labels = info["point_labels"]
     dxyz = []
     for p, pid in enumerate(sol.point_ids):
@@ -160,26 +149,10 @@ def table(*, paper: dict[str, Any] | None = None) -> list[Row]:
     """One row per published number of DBAT's sxb report, orientviz's value beside it."""
     paper = paper_values() if paper is None else paper
     mine, converged = ours(), ours(CONVERGED_TOL)
-    rows = []
-    for key, printed in paper.items():
-        section, case, quantity = key.split("|")
-        value = mine.get(key)
-        rows.append(
-            Row(
-                section,
-                case,
-                quantity,
-                printed,
-                None if value is None else _shown(key, value),
-                note=_stopping_note(key, printed, value, converged.get(key)),
-                label="predicted",
-                value=value,
-                decimals=_decimals().get(key) if isinstance(printed, float) else None,
-                key=key,
-                group=section,
-            )
-        )
-    return rows
+    return predicted_rows(
+        paper, mine, _decimals(), _shown,
+        lambda key, value: _stopping_note(key, paper[key], value, converged.get(key)),
+    )  # fmt: skip
 
 
 def _stopping_note(key: str, printed, value: float | None, converged: float | None) -> str:
