@@ -179,6 +179,14 @@ COMMANDS: dict[str, Command] = {
             ("orientviz solve dbat_camcal", "calibrate a real camera: its cameras[0] has "
              "\"model\": \"backward\", \"free\": [\"c\", \"x0\", \"y0\", \"as\", "
              "\"K1\", \"K2\", \"K3\", \"P1\", \"P2\"], units px"),
+            ("orientviz solve dbat_sxb --robust huber", "robust bundle: Huber loss, scale "
+             "1.345 sigma (options.robust)"),
+            ("orientviz solve dbat_sxb --robust cauchy --robust-scale 3", "Cauchy loss with "
+             "scale 3 sigma (options.robust_scale)"),
+            ("orientviz solve dbat_sxb --free", "free network: control as tie points, datum by "
+             "minimum constraints (options.free)"),
+            ("orientviz solve dbat_sxb --free --fix 8811 --fix 8938:Y0", "datum by image 8811 "
+             "and Y0 of image 8938 held at their given values (options.fix)"),
         ),
         arguments=(
             arg("file", help="problem file, or the name of a shipped example"),
@@ -194,6 +202,18 @@ COMMANDS: dict[str, Command] = {
             arg("--tol", type=positive_float, default=None, metavar="T",
                 help="stop when every correction is below T times its sigma (overrides "
                 "options.tol; default 5e-3 for blocks)"),
+            arg("--robust", choices=["none", "huber", "cauchy"], default=None,
+                help="robust bundle by reweighting: huber bounds, cauchy redescends the "
+                "influence of large residuals (overrides options.robust; default none)"),
+            arg("--robust-scale", type=positive_float, default=None, metavar="K",
+                help="scale of the robust loss in units of the observations' sigma (default "
+                "1.345 huber, 2.385 cauchy)"),
+            arg("--fix", action="append", default=None, metavar="ID[:PARTS]",
+                help="datum: hold image ID (all six, or PARTS of X0,Y0,Z0,omega,phi,kappa) or "
+                "point ID (X,Y,Z) at its given values; repeatable (overrides options.fix)"),
+            arg("--free", action="store_true", default=None,
+                help="free network: control and check points become tie points; datum by "
+                "minimum constraints, or by --fix (options.free)"),
             arg("--solver", choices=["auto", "banded", "dense", "sparse"], default=None,
                 help="solver of the bundle's reduced camera system (overrides options.solver; "
                 "default auto: banded for strips, dense for small or densely connected "

@@ -84,3 +84,50 @@ class NotDeterminableError(AdjustmentError):
 
 class DatumDefectError(NotDeterminableError):
     """The datum is not defined: translation, rotation or scale are free."""
+
+
+#: Parameter suffixes of an image's exterior orientation and of a point.
+_IMAGE_PARTS = {"X0": "X0", "Y0": "Y0", "Z0": "Z0", "omega": "ω", "phi": "φ", "kappa": "κ"}
+_POINT_PARTS = ("X", "Y", "Z")
+
+
+def parameter_words(names: list[str], max_owners: int = 8) -> str:
+    """Internal parameter names in the user's words, grouped by image, point or strip.
+
+    ``["img24.Z0", "img24.omega", "p7.X", "strip0.height.p2"]`` →
+    ``"image img24 (Z0, ω), point p7 (X), strip 0 (height polynomial p2)"``: the ids are
+    the user's own; the suffixes name what of it is meant. Names of another form are
+    kept as they are.
+
+    Parameters
+    ----------
+    names : list of str
+        Parameter names ``"<image id>.<X0|…|kappa>"``, ``"<point id>.<X|Y|Z>"``,
+        ``"strip<k>.<part>.p<i>"`` or other.
+    max_owners : int
+        At most this many images/points/strips are listed, then "and N more".
+
+    Returns
+    -------
+    str
+    """
+    groups: dict[tuple[str, str], list[str]] = {}
+    for name in names:
+        owner, dot, part = str(name).rpartition(".")
+        if dot and part in _IMAGE_PARTS:
+            groups.setdefault(("image", owner), []).append(_IMAGE_PARTS[part])
+        elif dot and part in _POINT_PARTS:
+            groups.setdefault(("point", owner), []).append(part)
+        elif owner.startswith("strip") and "." in owner and part.startswith("p"):
+            strip, _, poly = owner.partition(".")
+            key = ("strip", strip[len("strip") :])
+            groups.setdefault(key, []).append(f"{poly} polynomial {part}")
+        else:
+            groups.setdefault(("", str(name)), [])
+    words = []
+    for (kind, owner), parts in list(groups.items())[:max_owners]:
+        head = f"{kind} {owner}" if kind else owner
+        words.append(f"{head} ({', '.join(dict.fromkeys(parts))})" if parts else head)
+    if len(groups) > max_owners:
+        words.append(f"and {len(groups) - max_owners} more")
+    return ", ".join(words)

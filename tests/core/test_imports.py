@@ -90,6 +90,9 @@ def test_every_face_name_resolves_and_has_a_docstring():
         if name == "__version__":
             assert isinstance(obj, str)
             continue
+        if name in ("TIE", "CONTROL", "CHECK"):  # the point roles: plain ints 0, 1, 2
+            assert obj == ("TIE", "CONTROL", "CHECK").index(name)
+            continue
         assert (obj.__doc__ or "").strip(), f"orientviz.{name} has no docstring"
         assert obj.__module__.startswith("orientviz"), f"orientviz.{name} is not orientviz's own"
     assert set(ov.__all__) <= set(dir(ov))
@@ -104,12 +107,21 @@ def test_unknown_face_name_is_an_attribute_error():
 
 #: What each layer may import from orientviz (dependencies point down): the engine knows
 #: nothing of blocks, bundles or model methods; the block's data model knows no solver.
+_SOLVERS = {"bundle", "stereo_models", "polynomial", "simulate", "orientation", "radar"}
+_BASE = {"errors", "units", "rotation", "camera", "lens", "adjust", "block", "plausibility"}
 LAYERS = {
     "adjust": {"errors", "units"},
     "block": {"errors", "units", "rotation", "camera", "adjust", "orientation", "bundle"},
+    # io reads and writes files, below the reports: the problem kinds build their
+    # Solution (io/solution.py) and know nothing of report/, plot/ or the GUIs
+    "io": _BASE | _SOLVERS | {"report"},
+    "report": _BASE | _SOLVERS | {"io", "plot", "__version__"},
 }
 #: Imports that are allowed only inside functions (run time, not import time).
-LAZY_ONLY = {"block": {"orientation", "bundle"}}
+LAZY_ONLY = {"block": {"orientation", "bundle"}, "io": {"report"}, "report": {"plot"}}
+#: The only io modules that may call report/ (at run time): the two commands that write
+#: a report or result tables on request (``orientviz solve --report``, ``orientviz export``).
+IO_CALLS_REPORT = {"solve.py", "export.py"}
 
 
 def _orientviz_imports(path: Path) -> list[tuple[str, bool]]:
@@ -148,6 +160,17 @@ def test_dependencies_point_down():
                 if target not in allowed or (at_top and target in lazy):
                     bad.append(f"{path.relative_to(SRC)} imports orientviz.{target}")
     assert not bad, "imports against the direction of the layers:\n" + "\n".join(bad)
+
+
+def test_io_does_not_import_the_reports():
+    """No io↔report cycle: report → io only; io's two commands call the writers at run time."""
+    bad = []
+    for path in sorted((SRC / "io").rglob("*.py")):
+        rel = path.relative_to(SRC / "io")
+        for target, _ in _orientviz_imports(path):
+            if target == "report" and str(rel) not in IO_CALLS_REPORT:
+                bad.append(f"io/{rel} imports orientviz.report")
+    assert not bad, "\n".join(bad)
 
 
 def test_dependency_check_sees_an_upward_import(tmp_path, monkeypatch):

@@ -159,3 +159,15 @@ def test_bundle_and_models_agree_within_their_precision():
     assert np.all(z < 3.0), z.max(axis=0)
     # and the bundle is the more precise method (Ackermann §21: in theory)
     assert np.mean(qb[free]) < np.mean(qm[free])
+
+
+@pytest.mark.parametrize("method", ["rigorous", "pat-m"])
+def test_history_runs_on_the_engines_loop(method):
+    """Index 0 is the start, then one record per step; the last record is the result."""
+    s = ov.simulate_block(2, 6, rng=np.random.default_rng(5))
+    res = ov.independent_models(s.block, method=method)
+    seen = [h.index for h in res.history]
+    assert seen == list(range(len(seen))) and res.iterations == len(seen) - 1 >= 1
+    assert res.history[0].sigma0 > res.history[-1].sigma0
+    assert res.history[-1].sigma0 == pytest.approx(res.sigma0, rel=1e-12)
+    np.testing.assert_array_equal(res.history[-1].x, res.x)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import NotDeterminableError
+from ..errors import NotDeterminableError, parameter_words
 
 #: Relative eigenvalue below which a direction counts as undetermined.
 RANK_TOLERANCE: float = 1e-10
@@ -65,7 +65,7 @@ def raise_if_singular(N: NDArray[np.float64], names: list[str], context: str = "
     prefix = f"{context}: " if context else ""
     raise NotDeterminableError(
         f"{prefix}{defect} parameter combination(s) not determinable from the observations; "
-        f"involved: {', '.join(involved)}",
+        f"involved: {parameter_words(involved)}",
         parameters=involved,
         defect=defect,
     )

@@ -82,7 +82,7 @@ def intersect_rays(X0: F64, d: F64, point: NDArray[np.int64], n_points: int) -> 
     return X, cond
 
 
-def approximate_values(block: Block, *, min_points: int = 6) -> Block:
+def approximate_values(block: Block, *, min_points: int = 6, frame: str = "control") -> Block:
     """A copy of ``block`` with approximate orientations and points computed from scratch.
 
     Parameters
@@ -92,6 +92,11 @@ def approximate_values(block: Block, *, min_points: int = 6) -> Block:
         ``xyz_known``); check points are not used.
     min_points : int
         Minimum number of known points for resecting an image.
+    frame : {"control", "model"}
+        ``"control"``: carry the result onto the control points (3 or more full XYZ
+        control points needed). ``"model"``: leave it in the model frame of the seed
+        pair (first image at the origin with R = I, base length 1 m) — the start of a
+        free network, whose datum is then chosen by the caller.
 
     Returns
     -------
@@ -106,7 +111,7 @@ def approximate_values(block: Block, *, min_points: int = 6) -> Block:
         oriented rays, or fewer than 3 full XYZ control points are intersected.
     """
     from ..bundle import bundle_adjust
-    from ..orientation.absolute import similarity_closed_form
+    from ..orientation.absolute import SimilarityTransform, similarity_closed_form
     from ..orientation.essential import eight_point, select_by_cheirality
     from ..orientation.resection import resection
 
@@ -222,12 +227,19 @@ def approximate_values(block: Block, *, min_points: int = 6) -> Block:
         & np.isfinite(block.points.xyz_known).all(axis=1)
         & np.isfinite(P).all(axis=1)
     )
-    if ctrl.size < 3:
+    if frame == "model":
+        T = SimilarityTransform(1.0, np.eye(3), np.zeros(3))  # stay in the model frame
+    elif ctrl.size < 3 or _collinear(block.points.xyz_known[ctrl]):
         raise NotDeterminableError(
-            f"approximate values: {ctrl.size} full XYZ control point(s) reached, need 3 "
-            "for the similarity transformation into object space"
+            f"approximate values: {ctrl.size} full XYZ control point(s) reached"
+            + (" (on a line)" if ctrl.size >= 3 else "")
+            + ", the similarity into the control's frame needs 3 not on a line. Datum "
+            "choices: give 3 or more control points (X, Y, Z) seen in the images; or give "
+            "the images' approximate orientations and hold some (options.fix / --fix ID); "
+            "or adjust as a free network (options.free / --free)"
         )
-    T = similarity_closed_form(P[ctrl], block.points.xyz_known[ctrl])
+    else:
+        T = similarity_closed_form(P[ctrl], block.points.xyz_known[ctrl])
     # a control point with given X, Y, Z needs no intersection (one ray suffices)
     given_xyz = (block.points.role == CONTROL) & np.isfinite(block.points.xyz_known).all(axis=1)
     missing = ~np.isfinite(P).all(axis=1) & (block.points.role != CHECK) & ~given_xyz
@@ -250,6 +262,14 @@ def approximate_values(block: Block, *, min_points: int = 6) -> Block:
         block.meta, approximate_values={"seed_pair": [int(i), int(k)], "similarity_scale": T.scale}
     )
     return out
+
+
+def _collinear(xyz: F64) -> bool:
+    """Points (k, 3) on one line (or fewer than 3)."""
+    if xyz.shape[0] < 3:
+        return True
+    s = np.linalg.svd(xyz - xyz.mean(axis=0), compute_uv=False)
+    return bool(s[1] <= 1e-6 * max(s[0], 1e-300))
 
 
 class _Sub:

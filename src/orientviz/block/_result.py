@@ -88,12 +88,18 @@ class BlockAdjustment(Adjustment):
         Differences at the check points (None without check points).
     auxiliary : AuxiliaryEstimates or None
         Offsets/drifts of GNSS / statoscope / APR data (None without them).
+    adjusted : tuple of int or None
+        (n, u) of the adjustment itself: its equations (observations that entered it and
+        pseudo-observations) and unknowns, so that n − u is the redundancy. The
+        ``n_observations``/``n_unknowns`` of :class:`Adjustment` count every reported
+        residual and parameter instead (rays of check points, fixed points, …).
     """
 
     exterior: F64 | None = None
     points: F64 | None = None
     check_points: CheckPoints | None = None
     auxiliary: AuxiliaryEstimates | None = None
+    adjusted: tuple[int, int] | None = None
 
     def __getitem__(self, key: str) -> Any:
         """``"points"`` (p, 3) and ``"exterior"`` (m, 6) as typed; else as :class:`Adjustment`."""

@@ -56,7 +56,7 @@ from numpy.typing import NDArray
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ..adjust.rank import describe_defect, null_space_of_normal
-from ..errors import NotDeterminableError
+from ..errors import NotDeterminableError, parameter_words
 from ._solver_choice import SOLVER_CHOICES, choose_formation, choose_solver, image_blocks
 
 F64 = NDArray[np.float64]
@@ -421,7 +421,7 @@ def raise_not_determinable(
             involved = describe_defect(names, null)
             raise NotDeterminableError(
                 f"{null.shape[1]} parameter combination(s) of the image orientations are not "
-                f"determinable from the observations; involved: {', '.join(involved)}",
+                f"determinable from the observations; involved: {parameter_words(involved)}",
                 parameters=involved,
                 defect=null.shape[1],
             )
@@ -430,7 +430,7 @@ def raise_not_determinable(
         digits = [int(t) for t in detail.replace("-", " ").split() if t.isdigit()]
         if digits:
             scalar = int(st.scalar_perm[min(digits[0] - 1, n - 1)])
-            where = f" (the elimination broke down at {names[scalar]})"
+            where = f" (the elimination broke down at {parameter_words([names[scalar]])})"
     raise NotDeterminableError(
         "the reduced normal equations of the image orientations are singular or "
         f"numerically not positive definite{where}; check the datum and weakly connected "

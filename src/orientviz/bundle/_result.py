@@ -221,6 +221,7 @@ def finish_result(
         check_points=check,
         additional=st.ap.copy(),
         used_obs=setup.used_obs,
+        adjusted=(int(prob.n_eq), int(prob.n_unknowns)),
         solver=prob.reduced.solver,
         reduced_info=dict(prob.reduced.info, **_border_info(prob)),
     )

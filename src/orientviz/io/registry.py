@@ -17,8 +17,8 @@ from typing import TYPE_CHECKING, Any
 from ..errors import InputError
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..report import Solution
     from .problem import Problem, Units
+    from .solution import Solution
 
 
 @dataclass(frozen=True)

@@ -19,9 +19,9 @@ import sys
 import numpy as np
 
 from ..errors import AdjustmentError, InputError
-from ..report import Solution
 from .problem import Problem, load_problem, save_problem
 from .registry import get_kind
+from .solution import Solution
 
 
 def solve_problem(problem: Problem, method: str | None = None) -> Solution:
@@ -92,8 +92,8 @@ def run_from_cli(args: argparse.Namespace) -> int:
 
             report_format(report_path)  # a wrong suffix fails before the adjustment
         problem = load_problem(_resolve(args.file))
-        for name in ("max_iter", "tol", "solver"):  # solver options of the command line win
-            if getattr(args, name, None) is not None:
+        for name in ("max_iter", "tol", "solver", "robust", "robust_scale", "fix", "free"):
+            if getattr(args, name, None) is not None:  # the command line wins over the file
                 problem.options = dict(problem.options, **{name: getattr(args, name)})
         if getattr(args, "solver", None) is not None and problem.kind != "block":
             raise InputError("--solver applies to block problems only", problem.source)

@@ -13,7 +13,10 @@ Each point is solved in two steps:
    their weights, again a 3 × 3 normal system per point.
 
 Both steps are vectorised over all points at once (:func:`intersect_points`), so that
-block code can intersect tens of thousands of points without a Python loop.
+block code can intersect tens of thousands of points without a Python loop; the rigorous
+step iterates on the engine's one loop (:func:`orientviz.adjust.iterate`), all points in
+one step (their normal matrix is block diagonal). This is the package's one
+``intersect_points``.
 :func:`forward_intersection` solves one point on the engine and returns a full
 :class:`~orientviz.adjust.Adjustment`.
 """
@@ -25,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..adjust import Adjustment, gauss_newton
+from ..adjust import Adjustment, Evaluation, Step, StopRule, gauss_newton, iterate
 from ..camera import rays
 from ..errors import InputError, NotDeterminableError
 
@@ -187,6 +190,57 @@ def _sym_eig_extremes(S: F64) -> tuple[F64, F64]:
     return lmin, lmax
 
 
+class _PointBatch:
+    """Forward intersection of many points as one problem of :func:`orientviz.adjust.iterate`.
+
+    The iterate is the (p, 3) array of all points; a step solves the 3 × 3 normal system
+    of every determinable point (the normal matrix is block diagonal: the points do not
+    share unknowns), so one Gauss-Newton step corrects all of them at once. Points that
+    are not determinable (``ok`` False) stay as they are (NaN).
+    """
+
+    def __init__(self, ok, pu, lu, wu, rays, scale) -> None:
+        self.ok, self.pu, self.lu, self.wu = ok, pu, lu, wu
+        self.rays = rays  # X0, R, c, x0, y0 per used ray
+        self.scale = scale  # per point, m
+        self.p = ok.size
+
+    def small(self, tol: float):
+        """The stopping test: every correction below ``tol`` × the mean distance to its cameras."""
+
+        def test(step: Step) -> bool:
+            return bool(np.all(np.abs(step.data) <= tol * self.scale[self.ok, None]))
+
+        return test
+
+    def evaluate(self, X: F64, jacobian: bool) -> Evaluation:
+        pu, p = self.pu, self.p
+        f_u, J = _point_jacobian(X[pu], *self.rays)
+        wu = self.wu
+        r = self.lu - f_u
+        J0, J1 = J[:, 0, :], J[:, 1, :]
+        N = _sum_per_point(wu[:, :1] * _sym_outer(J0, J0) + wu[:, 1:] * _sym_outer(J1, J1), pu, p)
+        b = _sum_per_point((wu[:, :1] * r[:, :1]) * J0 + (wu[:, 1:] * r[:, 1:]) * J1, pu, p)
+        # a point behind a camera is NaN for itself only: the batch goes on
+        cost = float(np.nansum(wu * r**2))
+        return Evaluation(cost, True, (f_u, J0, J1, N, b))
+
+    def solve(self, X: F64, ev: Evaluation, lam: float, iteration: int) -> Step:
+        N, b = ev.data[3], ev.data[4]
+        dx = _sym_apply(_sym_inverse(N[self.ok])[0], b[self.ok])
+        rel = np.abs(dx) / self.scale[self.ok, None]
+        return Step(float(np.max(rel, initial=0.0)), None, dx)
+
+    def apply(self, X: F64, step: Step) -> F64:
+        out = X.copy()
+        out[self.ok] += step.data
+        return out
+
+    def snapshot(self, X: F64) -> F64:
+        # no per-step copy of every point (blocks intersect 10⁵ points)
+        return np.empty(0)
+
+
 def intersect_points(
     xy: ArrayLike,
     image: ArrayLike,
@@ -295,37 +349,31 @@ def intersect_points(
         )
     X = np.full((p, 3), np.nan)
     X[ok] = _sym_apply(_sym_inverse(As[ok])[0], bs[ok])
-    # ---- rigorous collinearity adjustment per point (3 × 3 normal equations each)
+    # ---- rigorous collinearity adjustment per point (3 × 3 normal equations each), on the
+    # engine's loop: one step corrects every determinable point at once
     wgt = 1.0 / sg**2
     use = ok[pt]
     pu, iu = pt[use], img[use]
-    X0u, Ru, cu, x0u, y0u, wu, lu = X0[iu], R[iu], cc[iu], xx0[iu], yy0[iu], wgt[use], xy[use]
-    it, converged = 0, True
-    N = np.zeros((p, 6))
-    f = np.full((n, 2), np.nan)
-    scale = np.ones(p)
+    rays_u = (X0[iu], R[iu], cc[iu], xx0[iu], yy0[iu])
+    scale = np.ones(p)  # the stopping scale: each point's mean distance to its cameras, m
     if use.any():
-        dist = np.linalg.norm(X[pu] - X0u, axis=1)
+        dist = np.linalg.norm(X[pu] - rays_u[0], axis=1)
         scale = np.maximum(_sum_per_point(dist, pu, p) / np.maximum(nr, 1), 1.0)
-    for it in range(1, max_iter + 2):
-        f_u, J = _point_jacobian(X[pu], X0u, Ru, cu, x0u, y0u)
-        f[use] = f_u
-        r = lu - f_u
-        J0, J1 = J[:, 0, :], J[:, 1, :]
-        N = _sum_per_point(wu[:, :1] * _sym_outer(J0, J0) + wu[:, 1:] * _sym_outer(J1, J1), pu, p)
-        if not rigorous or it > max_iter:
-            converged = not rigorous or converged
-            it -= 1
-            break
-        b = _sum_per_point((wu[:, :1] * r[:, :1]) * J0 + (wu[:, 1:] * r[:, 1:]) * J1, pu, p)
-        dx = _sym_apply(_sym_inverse(N[ok])[0], b[ok])
-        X[ok] += dx
-        if np.all(np.abs(dx) <= tol * scale[ok, None]):
-            # one more pass evaluates f, J and N at the final X
-            rigorous = False
-            converged = True
-        elif it == max_iter:
-            converged = False
+    batch = _PointBatch(ok, pu, xy[use], wgt[use], rays_u, scale)
+    stop = StopRule(
+        step_test=batch.small(tol),
+        step_reason=f"corrections below {tol:g} × distance after {{it}} steps",
+    )
+    run = iterate(
+        batch, X, redundancy=int(np.sum(2 * nr[ok] - 3)), stop=stop,
+        max_iter=max_iter if rigorous else 0,
+    )  # fmt: skip
+    X = run.state
+    it = len(run.history) - 1
+    converged = run.converged or not rigorous
+    f_u, N = run.evaluation.data[0], run.evaluation.data[3]
+    f = np.full((n, 2), np.nan)
+    f[use] = f_u
     Q = np.full((p, 3, 3), np.nan)
     if ok.any():
         Q[ok] = _sym_full(_sym_inverse(N[ok])[0])

@@ -23,10 +23,10 @@ Examples
 
 from __future__ import annotations
 
+from ..io.solution import Parameter, Solution
 from ._document import Report, Section, Table
 from ._html import FORMATS, html_report, report_format, write_report
 from ._sections import build_report
-from ._solution import Parameter, Solution
 from ._stats import chi2_test, image_coverage, intersection_angles
 from ._tables import ResultTable, adjusted_block, image_table, point_table, read_csv_table
 from ._text import text_report

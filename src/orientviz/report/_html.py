@@ -22,9 +22,9 @@ import numpy as np
 
 from ..errors import InputError
 from ..io.problem import Problem
+from ..io.solution import Solution
 from ._document import Report, Section, Table
 from ._sections import build_report
-from ._solution import Solution
 from ._text import text_report
 
 #: Suffixes :func:`write_report` understands.

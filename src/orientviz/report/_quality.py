@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from ..block import CHECK, CONTROL
+from ..errors import parameter_words
 from ..units import RHO
 from ._document import (
     FEW_POINTS,
@@ -191,7 +192,10 @@ class QualitySections:
                     )
                     for k in active[np.flatnonzero(~(cond <= NEAR_SINGULAR))]:
                         near.append(
-                            (names[k * nb].split(".")[0], float(cond[np.searchsorted(active, k)]))
+                            (
+                                names[k * nb].rpartition(".")[0],
+                                float(cond[np.searchsorted(active, k)]),
+                            )
                         )
             pairs.sort(key=lambda t: -abs(t[2]))
         for what, cond in near[:10]:
@@ -200,7 +204,10 @@ class QualitySections:
                 f"number {cond:.3g} (> {NEAR_SINGULAR:.0e}); parameters nearly "
                 "undetermined"
             )
-        rows = [[a, b, f"{r:+.4f}"] for a, b, r in pairs[:MAX_ROWS]]
+        rows = [  # in the user's words: "image s00_003 (Y0)", not "s00_003.Y0"
+            [parameter_words([a]), parameter_words([b]), f"{r:+.4f}"]
+            for a, b, r in pairs[:MAX_ROWS]
+        ]
         t = Table(
             ["parameter", "parameter", "ρ"],
             rows,

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..block import CHECK, CONTROL, TIE
 from ..io.problem import Problem
+from ..io.solution import Solution
 from ._document import (
     R_LOW,
     Report,
@@ -38,7 +39,6 @@ from ._document import (
 )
 from ._precision import PrecisionSections
 from ._quality import QualitySections
-from ._solution import Solution
 from ._stats import (
     F64,
     block_of,
@@ -126,10 +126,10 @@ class _Builder(PrecisionSections, QualitySections):
     # .................................................................. summary
     def summary(self) -> Section:
         adj, s, p = self.adj, self.s, self.p
-        n_used = int(self.used.sum())
-        n_excl = adj.n_observations - n_used
-        r = int(adj.redundancy)
-        u = n_used - r
+        counts = s.counts()  # n − u = r, as in the text and JSON outputs
+        n_used, u, r = counts["observations"], counts["unknowns"], counts["redundancy"]
+        n_excl = counts["not_adjusted"]["observations"]
+        u_excl = counts["not_adjusted"]["parameters"]
         slices = adj.obs_slices
         pseudo = {k: sl.stop - sl.start for k, sl in slices.items() if k != "image"}
         n_constr = int(sum(pseudo.values()))
@@ -188,8 +188,15 @@ class _Builder(PrecisionSections, QualitySections):
                     ", ".join(f"{k} {n}" for k, n in pseudo.items() if n),
                 )
             )
+        u_txt = str(u) + (
+            f" (+{u_excl} reported, not adjusted: fixed or computed afterwards)"
+            if u_excl > 0
+            else ""
+        )
+        if counts["conditions"]:
+            u_txt += f"; {counts['conditions']} conditions"
         items += [
-            ("unknowns u (= n − r)", str(u)),
+            ("unknowns u", u_txt),
             ("redundancy r", str(r)),
             ("datum", self.datum()),
             ("iterations", str(s.n_iterations)),

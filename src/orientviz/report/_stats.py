@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 from ..adjust.result import Adjustment
 from ..block import Block
 from ..io.problem import Problem
-from ._solution import Solution
+from ..io.solution import Solution
 
 F64 = NDArray[np.float64]
 

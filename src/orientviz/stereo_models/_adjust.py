@@ -47,14 +47,14 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from ..adjust.result import Iteration
+from ..adjust import iterate
 from ..block import Block, check_points_of
 from ..errors import InputError, NotDeterminableError
-from ..rotation import matrix_from_opk, matrix_from_rotvec, opk_from_matrix, skew
 from ._formation import ModelSet, form_models
 from ._normal import scalar_cofactors, solve_rows
 from ._result import ModelsResult
 from ._setup import TieSetup, check_datum, tie_setup
+from ._steps import PatmSteps, RigorousSteps, model_params, rows3, stop_rule
 
 F64 = NDArray[np.float64]
 
@@ -168,23 +168,30 @@ def independent_models(
     T = ms.start_translation.copy()
     su.init_points(lam, R, T)
     w_c = np.array([1 / s_xy**2, 1 / s_xy**2, 1 / s_z**2])
-    history: list[Iteration] = []
     if joint:
         return _joint(
-            block, ms, su, lam, R, T, w_c, s_xy, tol, max_iter, history, precision,
+            block, ms, su, lam, R, T, w_c, s_xy, tol, max_iter, precision,
             deformation, deformation_group, deformation_sigma, auxiliary,
         )  # fmt: skip
     if method == "rigorous":
-        converged, reason, sol = _rigorous(su, lam, R, T, w_c, s_xy, tol, max_iter, history)
+        converged, reason, sol, history = _run(
+            RigorousSteps(su, w_c, s_xy), su, (lam, R, T), tol, s_xy, max_iter,
+            f"corrections below {tol:g} σ_xy after {{it}} iterations",
+            f"reached the maximum of {max_iter} iterations",
+        )  # fmt: skip
     else:
-        converged, reason, sol = _patm(su, lam, R, T, w_c, s_xy, tol, max_iter, history)
+        converged, reason, sol, history = _run(
+            PatmSteps(su, w_c, s_xy), su, (lam, R, T), tol, s_xy, max_iter,
+            "planimetry/height iteration converged after {it} iterations",
+            f"reached the maximum of {max_iter} planimetry/height iterations",
+        )  # fmt: skip
     return _result(
         block, ms, su, lam, R, T, w_c, method, converged, reason, sol, history, precision
     )
 
 
 def _joint(
-    block, ms, su, lam, R, T, w_c, s_xy, tol, max_iter, history, precision,
+    block, ms, su, lam, R, T, w_c, s_xy, tol, max_iter, precision,
     deformation, group, sigma, auxiliary,
 ):  # fmt: skip
     from . import _joint as mj
@@ -194,8 +201,8 @@ def _joint(
     js = mj.joint_setup(block, ms, su, w_c, spec, group, sigma, auxiliary)
     names = su.param_names(7) + js.names(ms)
     try:
-        converged, reason, sol, p, g = mj.rigorous_joint(
-            su, js, lam, R, T, w_c, s_xy, tol, max_iter, history, names
+        converged, reason, sol, p, g, history = mj.rigorous_joint(
+            su, js, lam, R, T, w_c, s_xy, tol, max_iter, names
         )
     except NotDeterminableError as exc:
         if spec is None or sigma is not None and np.all(np.isfinite(sigma)):
@@ -233,144 +240,16 @@ def su_control(su: TieSetup) -> str:
     return "weighted" if np.any(su.prior_w > 0) else "fixed"
 
 
-def _rows3(su: TieSetup, lam: F64, R: F64, T: F64):
-    """Misclosures (k, 3) and Jacobians (k, 3, 7) of all used model points."""
-    j, m = su.row_model, su.m
-    Rm = np.einsum("nij,nj->ni", R[j], m)
-    f = lam[j, None] * Rm + T[j]
-    r = f - su.X[su.row_point]
-    J = np.zeros((j.size, 3, 7))
-    J[:, :, :3] = -lam[j, None, None] * (R[j] @ skew(m))
-    J[:, :, 3] = Rm
-    J[:, :, 4:] = np.eye(3)
-    return r, J
-
-
-def _rigorous(su, lam, R, T, w_c, s_xy, tol, max_iter, history):
-    sol = None
-    for it in range(1, max_iter + 1):
-        r, J = _rows3(su, lam, R, T)
-        k = r.shape[0]
-        sol = solve_rows(
-            np.repeat(su.row_model, 3), J.reshape(3 * k, 7), su.scalar[su.row_point].ravel(), np.tile(w_c, k), r.ravel(), su.n_models, su.n_scalar, prior_w=su.prior_w,
-            prior_e=su.prior_e(), names=su.param_names(7), context="independent models",
-        )  # fmt: skip
-        dt = sol.dtheta
-        R[:] = R @ matrix_from_rotvec(dt[:, :3])
-        lam += dt[:, 3]
-        T += dt[:, 4:]
-        su.apply(sol.dX)
-        size = su.model_size
-        step = max(
-            float(np.max(np.abs(dt[:, :4]) * size[:, None], initial=0.0)),
-            float(np.max(np.abs(dt[:, 4:]), initial=0.0)),
-            float(np.max(np.abs(sol.dX), initial=0.0)),
-        )
-        history.append(_record(it, su, lam, R, T, w_c, step))
-        if step < tol * s_xy:
-            return True, f"corrections below {tol:g} σ_xy after {it} iterations", sol
-    return False, f"reached the maximum of {max_iter} iterations", sol
-
-
-def _patm(su, lam, R, T, w_c, s_xy, tol, max_iter, history):
-    sol = None
-    for it in range(1, max_iter + 1):
-        j = su.row_model
-        P = lam[j, None] * np.einsum("nij,nj->ni", R[j], su.m) + T[j]
-        k = P.shape[0]
-        # --- planimetry: X = a·Px − b·Py + tx, Y = b·Px + a·Py + ty (exactly linear)
-        J = np.zeros((k, 2, 4))
-        J[:, 0] = np.column_stack([P[:, 0], -P[:, 1], np.ones(k), np.zeros(k)])
-        J[:, 1] = np.column_stack([P[:, 1], P[:, 0], np.zeros(k), np.ones(k)])
-        r = P[:, :2] - su.X[su.row_point, :2]
-        g = su.row_point < su.tie_points.size  # the projection centres tie heights only
-        sub, n_sub, sel = su.sub((0, 1), rows=g)
-        solp = solve_rows(
-            np.repeat(j[g], 2), J[g].reshape(-1, 4), sub[su.row_point[g]].ravel(),
-            np.tile(w_c[:2], int(g.sum())), r[g].ravel(), su.n_models, n_sub,
-            prior_w=su.prior_w[sel], prior_e=su.prior_e()[sel],
-            names=su.param_names(4, ("a", "b", "tx", "ty")), context="independent models (planimetry)",
-        )  # fmt: skip
-        a = 1.0 + solp.dtheta[:, 0]
-        b, tx, ty = solp.dtheta[:, 1], solp.dtheta[:, 2], solp.dtheta[:, 3]
-        s = np.hypot(a, b)
-        Rz = matrix_from_opk(0.0 * s, 0.0 * s, np.arctan2(b, a))
-        zc = su.model_mean_z(lam, R, T)
-        t3 = np.column_stack([tx, ty, (1.0 - s) * zc])
-        lam *= s
-        R[:] = Rz @ R
-        T[:] = s[:, None] * np.einsum("nij,nj->ni", Rz, T) + t3
-        step_xy = np.abs(solp.dX).max(initial=0.0)
-        dX = np.zeros(su.n_scalar)
-        dX[sel] = solp.dX
-        su.apply(dX, coords=(0, 1))
-        # --- height: Z = Pz + dz + ω (Py − cy) − φ (Px − cx)
-        P = lam[j, None] * np.einsum("nij,nj->ni", R[j], su.m) + T[j]
-        cen = su.model_centre(P)
-        d = P - cen[j]
-        Jh = np.column_stack([np.ones(k), d[:, 1], -d[:, 0]])
-        rh = P[:, 2] - su.X[su.row_point, 2]
-        zsub, nz, zsel = su.sub((2,))
-        rs, wh, j_h = zsub[su.row_point][:, 0], np.full(k, w_c[2]), j
-        pc = ~g
-        sel = zsel
-        if np.any(pc):
-            # the tilts move the projection centres sideways: x' = x + φ·Δz, y' = y − ω·Δz;
-            # their X, Y are unknowns of the height step, shared by consecutive models
-            xysub, nxy, xysel = su.sub((0, 1), rows=pc)
-            q, dzq = np.flatnonzero(pc), d[pc, 2]
-            zero = np.zeros(q.size)
-            Jh = np.vstack(
-                [Jh, np.column_stack([zero, zero, dzq]), np.column_stack([zero, -dzq, zero])]
-            )
-            rh = np.concatenate(
-                [rh, P[q, 0] - su.X[su.row_point[q], 0], P[q, 1] - su.X[su.row_point[q], 1]]
-            )
-            rs = np.concatenate(
-                [rs, xysub[su.row_point[q], 0] + nz, xysub[su.row_point[q], 1] + nz]
-            )
-            wh = np.concatenate([wh, np.full(2 * q.size, w_c[0])])
-            j_h = np.concatenate([j, j[q], j[q]])
-            sel = np.concatenate([zsel, xysel])
-            nz += nxy
-        solh = solve_rows(
-            j_h, Jh, rs, wh, rh, su.n_models, nz,
-            prior_w=su.prior_w[sel], prior_e=su.prior_e()[sel],
-            names=su.param_names(3, ("dz", "omega", "phi")),
-            context="independent models (height)",
-        )  # fmt: skip
-        dz, om, ph = solh.dtheta.T
-        Rt = matrix_from_opk(om, ph, 0.0 * om)
-        T[:] = np.einsum("nij,nj->ni", Rt, T - cen) + cen + np.column_stack([0 * dz, 0 * dz, dz])
-        R[:] = Rt @ R
-        dX = np.zeros(su.n_scalar)
-        dX[sel] = solh.dX
-        su.apply(dX, coords=(0, 1, 2) if np.any(pc) else (2,))
-        step = max(
-            step_xy,
-            float(np.abs(solh.dX).max(initial=0.0)),
-            float(np.max(np.abs(s - 1.0) * su.model_size, initial=0.0)),
-            float(np.max(np.abs(solh.dtheta[:, 1:]) * su.model_size[:, None], initial=0.0)),
-            float(np.abs(solh.dtheta[:, 0]).max(initial=0.0)),
-        )
-        history.append(_record(it, su, lam, R, T, w_c, step))
-        sol = solh
-        if step < tol * s_xy:
-            return True, f"planimetry/height iteration converged after {it} iterations", sol
-    return False, f"reached the maximum of {max_iter} planimetry/height iterations", sol
-
-
-def _record(it, su, lam, R, T, w_c, step) -> Iteration:
-    r, _ = _rows3(su, lam, R, T)
-    cost = float(np.sum(r**2 * w_c) + np.sum(su.prior_w * su.prior_e() ** 2))
-    dof = max(su.redundancy, 1)
-    x = np.concatenate([_params(lam, R, T).ravel(), su.X.ravel()])
-    return Iteration(it, x, None, math.sqrt(cost / dof), cost, 0.0, step)
-
-
-def _params(lam, R, T) -> F64:
-    om, ph, ka = opk_from_matrix(R)
-    return np.column_stack([T, om, ph, ka, lam])
+def _run(
+    problem, su: TieSetup, state, tol: float, s_xy: float, max_iter: int, done: str, most: str
+):
+    """Iterate ``problem`` on the engine's loop; (converged, reason, last solution, history)."""
+    run = iterate(
+        problem, state, redundancy=su.redundancy, max_iter=max_iter,
+        stop=stop_rule(tol * s_xy, done),
+    )  # fmt: skip
+    reason = most if run.reason.startswith("reached the maximum") else run.reason
+    return run.converged, reason, problem.last, run.history
 
 
 def _separate_sigma0(su: TieSetup, r: F64, w_c: F64) -> tuple[float, float]:
@@ -396,11 +275,11 @@ def _separate_sigma0(su: TieSetup, r: F64, w_c: F64) -> tuple[float, float]:
 
 
 def _result(block, ms, su, lam, R, T, w_c, method, converged, reason, sol, history, precision):
-    r, _ = _rows3(su, lam, R, T)
+    r, _ = rows3(su, lam, R, T)
     cost = float(np.sum(r**2 * w_c) + np.sum(su.prior_w * su.prior_e() ** 2))
     dof = su.redundancy
     s0 = math.sqrt(cost / dof) if dof > 0 else float("nan")
-    x = np.concatenate([_params(lam, R, T).ravel(), su.X.ravel()])
+    x = np.concatenate([model_params(lam, R, T).ravel(), su.X.ravel()])
     n7 = 7 * ms.n_models
     names = [
         f"{mid}.{e}" for mid in ms.ids for e in ("X0", "Y0", "Z0", "omega", "phi", "kappa", "scale")
@@ -417,12 +296,13 @@ def _result(block, ms, su, lam, R, T, w_c, method, converged, reason, sol, histo
         centre_image=su.centre_images, sigma0_m=s0 * math.sqrt(1.0 / w_c[0]),
         rms_xy_m=float(np.sqrt(np.mean(r[:, :2] ** 2))), rms_z_m=float(np.sqrt(np.mean(r[:, 2] ** 2))),
         sigma_model=(1 / math.sqrt(w_c[0]), 1 / math.sqrt(w_c[2])),
+        adjusted=(r.size + int(np.sum(su.prior_w > 0)), 7 * ms.n_models + su.n_scalar),
     )  # fmt: skip
     if precision and method == "rigorous" and sol is not None:
         res.cofactor_blocks["points"] = scalar_cofactors(sol, su.scalar)
     elif precision:
         # one more rigorous linearisation at the PAT-M solution gives its precision
-        r3, J = _rows3(su, lam, R, T)
+        r3, J = rows3(su, lam, R, T)
         k = r3.shape[0]
         sol = solve_rows(
             np.repeat(su.row_model, 3), J.reshape(3 * k, 7),

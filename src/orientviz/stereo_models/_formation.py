@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..adjust import Evaluation, Step, StopRule, iterate
 from ..block import Block, BlockLayout, block_layout
 from ..camera import collinearity_jacobian
 from ..errors import NotDeterminableError
@@ -112,6 +113,58 @@ def _pairs(block: Block, models: I64) -> tuple[I64, I64, I64]:
     return j[hit], ol[hit], order[pos[hit]]
 
 
+class _ModelPairs:
+    """The relative orientations of all models as one problem of the engine's loop.
+
+    The iterate is (θ (n, 5): by, bz, ω, φ, κ per model; X (k, 3): the model points in
+    their left image's frame). A step solves every model's system at once: the points are
+    eliminated per point (3 × 3), the 5 × 5 reduced systems of the models are independent.
+    """
+
+    def __init__(self, j, starts, ids, obs, b, left, right) -> None:
+        self.j, self.starts, self.ids, self.obs, self.b = j, starts, ids, obs, b
+        self.left, self.right = left, right  # (c, x0, y0) per point row
+        self.zeros3 = np.zeros((j.size, 3))
+
+    def evaluate(self, state, jacobian: bool) -> Evaluation:
+        theta, Xp = state
+        j, z3 = self.j, self.zeros3
+        xl, xr, wl, wr = self.obs
+        X0r = np.column_stack([self.b, theta[:, 0], theta[:, 1]])
+        fl, _, Jlp, _ = collinearity_jacobian(Xp, z3, z3, *self.left)
+        fr, Jre, Jrp, _ = collinearity_jacobian(Xp, X0r[j], theta[j, 2:], *self.right)
+        rl, rr = xl - fl, xr - fr  # l − f(x)
+        cost = float(np.sum(wl * rl**2) + np.sum(wr * rr**2))
+        return Evaluation(cost, True, (fl, fr, Jlp, Jre[:, :, 1:], Jrp, rl, rr))  # by … κ
+
+    def solve(self, state, ev: Evaluation, lam: float, iteration: int) -> Step:
+        _, _, Jlp, Jt, Jrp, rl, rr = ev.data
+        _, _, wl, wr = self.obs
+        j = self.j
+        Npp = np.einsum("nai,na,naj->nij", Jlp, wl, Jlp) + np.einsum(
+            "nai,na,naj->nij", Jrp, wr, Jrp
+        )
+        Npt = np.einsum("nai,na,naj->nij", Jrp, wr, Jt)
+        Ntt = np.einsum("nai,na,naj->nij", Jt, wr, Jt)
+        bp = np.einsum("nai,na->ni", Jlp, wl * rl) + np.einsum("nai,na->ni", Jrp, wr * rr)
+        bt = np.einsum("nai,na->ni", Jt, wr * rr)
+        Ninv = np.linalg.inv(Npp)
+        NtpNi = np.einsum("nji,njk->nik", Npt, Ninv)  # Ntp · Npp⁻¹
+        S = np.add.reduceat(Ntt - NtpNi @ Npt, self.starts, axis=0)
+        rhs = np.add.reduceat(bt - np.einsum("nij,nj->ni", NtpNi, bp), self.starts, axis=0)
+        _check_models(S, self.ids)
+        dt = np.linalg.solve(S, rhs[:, :, None])[:, :, 0]
+        dX = np.einsum("nij,nj->ni", Ninv, bp - np.einsum("nij,nj->ni", Npt, dt[j]))
+        return Step(float(np.max(np.abs(dt), initial=0.0)), None, (dt, dX))
+
+    def apply(self, state, step: Step):
+        theta, Xp = state
+        return theta + step.data[0], Xp + step.data[1]
+
+    def snapshot(self, state) -> F64:
+        return np.empty(0)
+
+
 def form_models(
     block: Block,
     layout: BlockLayout | None = None,
@@ -190,36 +243,16 @@ def form_models(
     Xp = ul / cl[:, None] * lam[:, None]
     om, ph, ka = opk_from_matrix(Rrel0)
     theta = np.column_stack([np.zeros(n), np.zeros(n), om, ph, ka])
-    starts = np.cumsum(npts) - npts
-    zeros3 = np.zeros((j.size, 3))
-    iterations = 0
-    for iterations in range(1, max_iter + 1):  # noqa: B007
-        X0r = np.column_stack([b, theta[:, 0], theta[:, 1]])
-        fl, _, Jlp, _ = collinearity_jacobian(Xp, zeros3, zeros3, cl, x0l[j], y0l[j])
-        fr, Jre, Jrp, _ = collinearity_jacobian(Xp, X0r[j], theta[j, 2:], cr, x0r[j], y0r[j])
-        rl, rr = xl - fl, xr - fr  # l − f(x)
-        Jt = Jre[:, :, 1:]  # by, bz, ω, φ, κ
-        Npp = np.einsum("nai,na,naj->nij", Jlp, wl, Jlp) + np.einsum(
-            "nai,na,naj->nij", Jrp, wr, Jrp
-        )
-        Npt = np.einsum("nai,na,naj->nij", Jrp, wr, Jt)
-        Ntt = np.einsum("nai,na,naj->nij", Jt, wr, Jt)
-        bp = np.einsum("nai,na->ni", Jlp, wl * rl) + np.einsum("nai,na->ni", Jrp, wr * rr)
-        bt = np.einsum("nai,na->ni", Jt, wr * rr)
-        Ninv = np.linalg.inv(Npp)
-        NtpNi = np.einsum("nji,njk->nik", Npt, Ninv)  # Ntp · Npp⁻¹
-        S = np.add.reduceat(Ntt - NtpNi @ Npt, starts, axis=0)
-        rhs = np.add.reduceat(bt - np.einsum("nij,nj->ni", NtpNi, bp), starts, axis=0)
-        _check_models(S, ids)
-        dt = np.linalg.solve(S, rhs[:, :, None])[:, :, 0]
-        dX = np.einsum("nij,nj->ni", Ninv, bp - np.einsum("nij,nj->ni", Npt, dt[j]))
-        theta += dt
-        Xp = Xp + dX
-        if np.max(np.abs(dt)) < tol:
-            break
+    pairs = _ModelPairs(j, np.cumsum(npts) - npts, ids, (xl, xr, wl, wr), b,
+                        (cl, x0l[j], y0l[j]), (cr, x0r[j], y0r[j]))  # fmt: skip
+    run = iterate(
+        pairs, (theta, Xp), redundancy=int(np.sum(npts - 5)), max_iter=max_iter,
+        stop=StopRule(step_test=lambda step: np.max(np.abs(step.data[0])) < tol),
+    )  # fmt: skip
+    theta, Xp = run.state
+    iterations = len(run.history) - 1
+    fl, fr = run.evaluation.data[:2]
     X0r = np.column_stack([b, theta[:, 0], theta[:, 1]])
-    fl, _, _, _ = collinearity_jacobian(Xp, zeros3, zeros3, cl, x0l[j], y0l[j])
-    fr, _, _, _ = collinearity_jacobian(Xp, X0r[j], theta[j, 2:], cr, x0r[j], y0r[j])
     vtpv = np.bincount(
         j, np.sum(wl * (xl - fl) ** 2, axis=1) + np.sum(wr * (xr - fr) ** 2, axis=1), minlength=n
     )

@@ -22,7 +22,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ..adjust.result import Iteration
+from ..adjust import Evaluation, Step, iterate
 from ..block import AuxiliaryEstimates, check_points_of
 from ..bundle import AuxRows, analyse, auxiliary_rows
 from ..errors import InputError, NotDeterminableError
@@ -30,6 +30,7 @@ from ..rotation import matrix_from_rotvec, skew
 from ._deformation import DeformationField, ModelDeformation, group_index
 from ._normal import scalar_cofactors, solve_sparse
 from ._result import DeformationEstimates, ModelsResult
+from ._steps import stop_rule
 
 F64 = NDArray[np.float64]
 #: Above this many similarity parameters (7 per model) their correlations with the
@@ -207,17 +208,30 @@ def _system(su, js: JointSetup, lam, R, T, p, g_aux, w_c):
     return Ja, np.concatenate(sc), np.concatenate(sgn), np.concatenate(w), np.concatenate(res)
 
 
-def rigorous_joint(su, js, lam, R, T, w_c, s_xy, tol, max_iter, history, names):
-    """Gauss-Newton of the joint adjustment; returns (converged, reason, sol, p, g_aux)."""
-    n = su.n_models
-    p = np.zeros(js.n_def)
-    g_aux = np.zeros(js.n_aux)
-    sol = None
-    for it in range(1, max_iter + 1):
-        Ja, sc, sgn, w, r = _system(su, js, lam, R, T, p, g_aux, w_c)
+class JointSteps:
+    """The joint adjustment (models, deformation, auxiliary offsets) for the engine's loop.
+
+    The iterate is (λ, R, T, p, g_aux) with the points ``su.X``; each Gauss-Newton step is
+    applied in place (damping ``"none"``: every step is taken). See :mod:`._steps`.
+    """
+
+    def __init__(self, su, js: JointSetup, w_c: F64, s_xy: float, names: list[str]) -> None:
+        self.su, self.js, self.w_c, self.s_xy, self.names = su, js, w_c, s_xy, names
+        self.last = None
+
+    def evaluate(self, state, jacobian: bool) -> Evaluation:
+        lam, R, T, p, g_aux = state
+        cost = joint_cost(self.su, self.js, lam, R, T, p, g_aux, self.w_c)
+        return Evaluation(cost, True, None)
+
+    def solve(self, state, ev: Evaluation, lam_damp: float, iteration: int) -> Step:
+        su, js = self.su, self.js
+        lam, R, T, p, g_aux = state
+        n = su.n_models
+        Ja, sc, sgn, w, r = _system(su, js, lam, R, T, p, g_aux, self.w_c)
         sol = solve_sparse(
             Ja, sc, sgn, w, r, su.n_scalar, prior_w=su.prior_w, prior_e=su.prior_e(),
-            names=names, context="independent models",
+            names=self.names, context="independent models",
         )  # fmt: skip
         da = sol.dtheta
         dt = da[: 7 * n].reshape(n, 7)
@@ -229,19 +243,33 @@ def rigorous_joint(su, js, lam, R, T, w_c, s_xy, tol, max_iter, history, names):
         p += dp
         g_aux += dg
         su.apply(sol.dX)
-        step = max(
+        self.last = sol
+        size = max(
             float(np.max(np.abs(dt[:, :4]) * su.model_size[:, None], initial=0.0)),
             float(np.max(np.abs(dt[:, 4:]), initial=0.0)),
             float(np.max(np.abs(sol.dX), initial=0.0)),
             float(np.max(np.abs(dp), initial=0.0)) * 1e-3,
             float(np.max(np.abs(dg), initial=0.0)),
         )
-        cost = joint_cost(su, js, lam, R, T, p, g_aux, w_c)
-        dof = max(joint_redundancy(su, js), 1)
-        history.append(Iteration(it, np.empty(0), None, math.sqrt(cost / dof), cost, 0.0, step))
-        if step < tol * s_xy:
-            return True, f"corrections below {tol:g} σ_xy after {it} iterations", sol, p, g_aux
-    return False, f"reached the maximum of {max_iter} iterations", sol, p, g_aux
+        return Step(size / self.s_xy, None, (sol, size))
+
+    def apply(self, state, step: Step):
+        return state  # applied in place by solve
+
+    def snapshot(self, state) -> F64:
+        return np.empty(0)
+
+
+def rigorous_joint(su, js, lam, R, T, w_c, s_xy, tol, max_iter, names):
+    """Gauss-Newton of the joint adjustment; (converged, reason, sol, p, g_aux, history)."""
+    p = np.zeros(js.n_def)
+    g_aux = np.zeros(js.n_aux)
+    steps = JointSteps(su, js, w_c, s_xy, names)
+    run = iterate(
+        steps, (lam, R, T, p, g_aux), redundancy=joint_redundancy(su, js), max_iter=max_iter,
+        stop=stop_rule(tol * s_xy, f"corrections below {tol:g} σ_xy after {{it}} iterations"),
+    )  # fmt: skip
+    return run.converged, run.reason, steps.last, p, g_aux, run.history
 
 
 def joint_cost(su, js, lam, R, T, p, g_aux, w_c) -> float:
@@ -303,6 +331,10 @@ def finish_joint(res: ModelsResult, block, ms, su, js, lam, R, T, p, g_aux, sol,
     cost = joint_cost(su, js, lam, R, T, p, g_aux, w_c)
     dof = joint_redundancy(su, js)
     res.redundancy = dof
+    if res.adjusted is not None:  # + the extra rows (pseudo-observations, auxiliary) and unknowns
+        n_pseudo = int(np.sum(np.isfinite(js.sigma))) * js.n_groups if js.q else 0
+        n_rows = n_pseudo + (js.aux.n if js.aux is not None else 0)
+        res.adjusted = (res.adjusted[0] + n_rows, res.adjusted[1] + js.n_def + js.n_aux)
     res.sigma0 = math.sqrt(cost / dof) if dof > 0 else float("nan")
     res.sigma0_m = res.sigma0 / math.sqrt(w_c[0])
     q_idx = np.arange(n7, n7 + js.n_def + js.n_aux)

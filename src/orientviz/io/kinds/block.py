@@ -25,10 +25,11 @@ import numpy as np
 from ...adjust.result import W_CRITICAL
 from ...block import CHECK, CONTROL, ROLES, TIE, Block
 from ...errors import InputError
-from ...report import Solution
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
+from ..solution import Solution
 from ._cameras import bundle_camera_options, camera_notes
+from ._diverge import divergence_note
 from ._frame import block_from_tables, read_frame_tables, require_finite, tables_from_block
 
 METHODS = ("bundle", "models", "polynomial")
@@ -75,7 +76,7 @@ def dump(block: Block, units: Units, columnar: bool) -> dict[str, Any]:
     return tables_from_block(block, units, columnar)
 
 
-def approximate(block: Block) -> Block:
+def approximate(block: Block, frame: str = "control") -> Block:
     """Fill in missing approximate values before an adjustment.
 
     No image approximations at all: everything is computed from scratch by
@@ -83,12 +84,13 @@ def approximate(block: Block) -> Block:
     seed pair, resections, intersections, a similarity onto the control). Otherwise the
     given orientations are first carried into the control's frame when they are in
     another one (:func:`._align.align_to_control`, a 7-parameter similarity), and tie/check
-    points without coordinates are intersected from them.
+    points without coordinates are intersected from them. ``frame="model"`` (a free
+    network): computed approximations stay in the seed pair's model frame.
     """
     if not np.all(np.isfinite(block.images.X0)) or not np.all(np.isfinite(block.images.angles)):
         from ...block import approximate_values
 
-        return approximate_values(block)
+        return approximate_values(block, frame=frame)
     from ._align import align_to_control
 
     block, alignment = align_to_control(block)
@@ -155,17 +157,54 @@ def with_check_rays(block: Block) -> Block:
 
 
 def solve(problem: Problem, method: str | None) -> Solution:
-    """Adjust the block by ``method`` and collect the report."""
+    """Adjust the block by ``method`` and collect the report.
+
+    Datum options (:mod:`._datum`): ``free`` (a free network, minimum constraints) and
+    ``fix`` (images/points held at their given values); ``robust`` (``"huber"``,
+    ``"cauchy"``) with ``robust_scale`` reweights the bundle (:mod:`._robust`).
+    """
+    from ._datum import apply_fix, free_network, minimum_datum, parse_fix
+
     method = method or "bundle"
-    block: Block = approximate(problem.data)
+    o = problem.options
+    loss = str(o.get("robust", "none"))
+    if loss != "none" and method != "bundle":
+        raise InputError(f"robust = {loss!r} applies to the bundle only, not --method {method}",
+                         problem.source, "options.robust")  # fmt: skip
+    fix = parse_fix(o.get("fix"), problem.source)
+    free = bool(o.get("free", False))
+    block: Block = problem.data
+    datum_notes = []
+    if free:
+        block, note = free_network(block)
+        datum_notes += [note] if note else []
+    block = approximate(block, frame="model" if free else "control")
+    if free and not fix:
+        block, note = minimum_datum(block)
+        datum_notes.append(note)
+    elif fix:
+        block = apply_fix(block, fix)
+        datum_notes.append("datum: " + ", ".join(i + (":" + ",".join(p) if p else "") for i, p in fix)
+                           + " held at the given values" + (" (free network otherwise)" if free else ""))  # fmt: skip
     keys = ("control", "max_iter", "tol", "degree_xy", "degree_z", "solver")
-    opts = {k: v for k, v in problem.options.items() if k in keys}
+    opts = {k: v for k, v in o.items() if k in keys}
     if method == "bundle":
         from ...bundle import bundle_adjust
 
         rays = check_mode(problem) == "rays"
         opts.update(bundle_camera_options(block))  # cameras[].model / additional
-        adj = _call(bundle_adjust, with_check_rays(block) if rays else block, opts)
+        run_block = with_check_rays(block) if rays else block
+        if loss == "none":
+            adj = _call(bundle_adjust, run_block, opts)
+        else:
+            from ._robust import robust_bundle
+
+            adj, run = robust_bundle(run_block, loss, o.get("robust_scale"),
+                                     lambda b: _call(bundle_adjust, b, opts))  # fmt: skip
+            datum_notes.append(run.note(run_block))
+        sol = solution_from_block_adjustment(problem, block, adj, method)
+        sol.notes[:0] = datum_notes
+        return sol
     elif method == "models":
         from ...stereo_models import independent_models
 
@@ -181,22 +220,29 @@ def solve(problem: Problem, method: str | None) -> Solution:
     return solution_from_block_adjustment(problem, block, adj, method)
 
 
-def _labels(block: Block, n: int, slices: dict | None = None) -> list[str]:
+def _labels(
+    block: Block,
+    n: int,
+    slices: dict | None = None,
+    control: str = "weighted",
+    more: dict[str, list[str]] | None = None,
+) -> list[str]:
     """A label per residual in the user's ids: ``image/point/x``, ``point/X`` (control
-    coordinates), ``image/X0_obs``…, ``image/omega_obs``…, ``additional[k]``."""
+    coordinates), ``image/X0_obs``…, ``image/omega_obs``…, names of the additional
+    parameters or auxiliary rows given in ``more`` (never an internal index)."""
     obs = block.observations
     im, pt = block.images.ids, block.points.ids
     base = [f"{im[i]}/{pt[p]}" for i, p in zip(obs.image, obs.point)]
     labels = [f"{b}/{a}" for b in base for a in "xy"]
     slices = slices or {}
-    pts, imgs = block.points, block.images
+    imgs = block.images
     named = {
-        "control": [f"{pt[p]}/{'XYZ'[c]}" for p in range(len(pt)) for c in range(3)
-                    if pts.role[p] == CONTROL and pts.sigma[p, c] > 0],
+        "control": _control_labels(block, control),
         "X0_obs": [f"{im[i]}/{n_}_obs" for i in range(len(im)) for c, n_ in enumerate(("X0", "Y0", "Z0"))
                    if imgs.X0_sigma[i, c] > 0],
         "angles_obs": [f"{im[i]}/{n_}_obs" for i in range(len(im))
                        for c, n_ in enumerate(("omega", "phi", "kappa")) if imgs.angles_sigma[i, c] > 0],
+        **(more or {}),
     }  # fmt: skip
     out = labels[:n] + [""] * max(n - len(labels), 0)
     for name, sl in slices.items():
@@ -205,9 +251,21 @@ def _labels(block: Block, n: int, slices: dict | None = None) -> list[str]:
         k = sl.stop - sl.start
         mine = named.get(name)
         if mine is None or len(mine) != k:
-            mine = [f"{name}[{j}]" for j in range(k)]
+            words = {"control": "control coordinate", "additional": "additional parameter"}
+            mine = [f"{words.get(name, name)} no. {j + 1} of {k}" for j in range(k)]
         out[sl] = mine
-    return [lab or f"observation {j}" for j, lab in enumerate(out)]
+    return [lab or f"observation no. {j + 1}" for j, lab in enumerate(out)]
+
+
+def _control_labels(block: Block, control: str) -> list[str]:
+    """``point/X`` for each coordinate pseudo-observation of the bundle, in its order
+    (unknown points in block order, then X, Y, Z; see ``bundle._checks.point_setup``)."""
+    from ...bundle._checks import point_setup
+
+    setup = point_setup(block, control)
+    pt = block.points.ids
+    return [f"{pt[p]}/{'XYZ'[c]}" for p in np.flatnonzero(setup.unknown) for c in range(3)
+            if np.isfinite(setup.prior_sigma[p, c])]  # fmt: skip
 
 
 #: "The model does not fit the data" when σ0 exceeds this and …
@@ -243,8 +301,13 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
     """Turn a block adjustment (blocks ``exterior`` (m, 6) and ``points`` (p, 3)) into a report."""
     m, p = block.n_images, block.n_points
     if adj.obs_labels is None or len(adj.obs_labels) != adj.n_observations:
-        slices = adj.obs_slices
-        adj.obs_labels = _labels(block, adj.n_observations, slices)
+        more = {}
+        if "additional" in adj.blocks:
+            more["additional"] = [f"{nm}_obs" for nm in adj.names[adj.blocks["additional"]]]
+        if getattr(adj, "auxiliary", None) is not None and adj.auxiliary.labels:
+            more["auxiliary"] = list(adj.auxiliary.labels)
+        control = str(problem.options.get("control", "weighted"))
+        adj.obs_labels = _labels(block, adj.n_observations, adj.obs_slices, control, more)
     std = adj.std()
     ext = adj.x[adj.blocks["exterior"]].reshape(m, 6)
     sext = std[adj.blocks["exterior"]].reshape(m, 6)
@@ -261,6 +324,9 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
         adj.reason = f"{adj.reason}; BUT THE MODEL DOES NOT FIT THE DATA (see the warning)"
     if block.meta.get("alignment"):
         notes.insert(0, block.meta["alignment"])
+    moved = divergence_note(block, adj, problem.units.m_per_length, problem.units.length)
+    if moved:
+        notes.insert(0, moved)
     if np.any(block.points.role == CHECK):
         mode = check_mode(problem) if method == "bundle" else "independent"
         notes.insert(0, CHECK_MODES[mode] + f" (options.check_points = {mode!r})")

@@ -21,9 +21,9 @@ import numpy as np
 from ...adjust.result import W_CRITICAL, Adjustment, Iteration
 from ...block import CHECK, ROLES, Block
 from ...errors import NotDeterminableError
-from ...report import Solution
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
+from ..solution import Solution
 from ._checks import reject_first
 from ._frame import block_from_tables, read_frame_tables, require_finite, tables_from_block
 

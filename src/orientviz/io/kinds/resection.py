@@ -19,9 +19,9 @@ import numpy as np
 
 from ...block import CONTROL, TIE, Block
 from ...errors import InputError
-from ...report import Parameter, Solution
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
+from ..solution import Parameter, Solution
 from ._checks import reject_first
 from ._frame import block_from_tables, read_frame_tables, tables_from_block
 

@@ -25,9 +25,9 @@ from numpy.typing import NDArray
 
 from ...adjust.result import W_CRITICAL
 from ...errors import InputError
-from ...report import Parameter, Solution
 from ..problem import LENGTH_UNITS, Problem, Units
 from ..registry import Kind, register_kind
+from ..solution import Parameter, Solution
 from ..tables import REQUIRED, json_numbers, read_table, write_table
 
 F64 = NDArray[np.float64]

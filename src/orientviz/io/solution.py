@@ -1,4 +1,7 @@
-"""What ``orientviz solve`` reports: a :class:`Solution` as text or as JSON.
+"""The solution of a problem file: what ``orientviz solve`` prints, as text or as JSON.
+
+Every problem kind (:mod:`orientviz.io.kinds`) returns a :class:`Solution`;
+:mod:`orientviz.report` builds the full report from it (reports sit above ``io``).
 
 Every number is converted to the units of the problem file: lengths in ``units.length``,
 angles in ``units.angle``, image residuals in ``units.image``. Standard deviations are
@@ -14,8 +17,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..adjust.result import W_CRITICAL, Adjustment
-from ..io.problem import Units
-from ..io.tables import json_number
+from .problem import Units
+from .tables import json_number
 
 F64 = NDArray[np.float64]
 
@@ -93,6 +96,56 @@ class Solution:
         """Iterations taken (the solver's own count if it gave one, else the history's)."""
         return int(self.adjustment.iterations if self.iterations is None else self.iterations)
 
+    def counts(self) -> dict[str, int]:
+        """Observations n, unknowns u and redundancy r of the adjustment as it ran.
+
+        n − u = r always holds for them. Residuals and parameters that are reported but
+        took no part in the adjustment (rays of independent check points, check points
+        intersected afterwards, fixed points) are counted apart, under ``not_adjusted``.
+        Solvers with conditions among the unknowns besides the observations report
+        their number as ``conditions`` = r − (n − u) (0 for every solver of orientviz now).
+
+        Returns
+        -------
+        dict
+            ``observations``, ``unknowns``, ``redundancy``, ``conditions`` and
+            ``not_adjusted`` = {``observations``, ``parameters``} (counts).
+        """
+        adj = self.adjustment
+        r = int(adj.redundancy)
+        n_all, u_all = int(adj.n_observations), int(adj.n_unknowns)
+        ran = getattr(adj, "adjusted", None)
+        if ran is not None:
+            n, u = (int(k) for k in ran)
+        else:
+            rn = adj.redundancy_numbers
+            n = n_all - (int(np.sum(~np.isfinite(rn))) if rn is not None else 0)
+            u = u_all
+        return {
+            "observations": n,
+            "unknowns": u,
+            "redundancy": r,
+            "conditions": r - (n - u),
+            "not_adjusted": {"observations": n_all - n, "parameters": u_all - u},
+        }
+
+    def counts_text(self) -> str:
+        """``"n observations, u unknowns, redundancy r"`` and what was not adjusted."""
+        c = self.counts()
+        out = f"{c['observations']} observations, {c['unknowns']} unknowns"
+        if c["conditions"]:
+            out += f", {c['conditions']} conditions"
+        out += f", redundancy {c['redundancy']}"
+        na = c["not_adjusted"]
+        parts = []
+        if na["observations"]:
+            parts.append(f"{na['observations']} observations (rays of check points)")
+        if na["parameters"] > 0:
+            parts.append(f"{na['parameters']} parameters (fixed, or computed afterwards)")
+        if parts:
+            out += "; reported but not adjusted: " + ", ".join(parts)
+        return out
+
     # ------------------------------------------------------------------ units
     def factor(self, quantity: str) -> float:
         """Multiply an internal value of ``quantity`` by this to get file units."""
@@ -110,7 +163,7 @@ class Solution:
 
     def label(self, i: int) -> str:
         labels = self.adjustment.obs_labels
-        return labels[i] if labels is not None and i < len(labels) else f"obs[{i}]"
+        return labels[i] if labels is not None and i < len(labels) else f"observation no. {i + 1}"
 
     def flagged(self) -> list[dict[str, Any]]:
         """Observations with abs(w) above ``critical``, largest first (file units)."""
@@ -185,9 +238,7 @@ class Solution:
             "units": self.units.as_dict(),
             "sequence": self.sequence,
             "sigma0": num(adj.sigma0, 17),  # full precision (issue #14)
-            "redundancy": int(adj.redundancy),
-            "observations": int(adj.n_observations),
-            "unknowns": int(adj.n_unknowns),
+            **self.counts(),
             "iterations": self.n_iterations,
             "converged": bool(adj.converged),
             "reason": adj.reason,
@@ -206,8 +257,7 @@ class Solution:
         u = self.units
         L, A = self.factor("length"), self.factor("angle")
         lines = [
-            f"{self.kind} ({self.method}): {adj.n_observations} observations, "
-            f"{adj.n_unknowns} unknowns, redundancy {adj.redundancy}",
+            f"{self.kind} ({self.method}): {self.counts_text()}",
             f"sigma0 = {adj.sigma0:.4g} (a-posteriori, unit weight)",
             f"{self.n_iterations} iterations, "
             f"{'converged' if adj.converged else 'NOT CONVERGED'}: {adj.reason}",
