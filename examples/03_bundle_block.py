@@ -31,7 +31,7 @@ def main() -> None:
     Q = adj.cofactor_blocks["points"]  # (p, 3, 3), m² per unit weight
     sigma_xyz = adj.sigma0 * np.sqrt(np.diagonal(Q, axis1=1, axis2=2))
 
-    tie = block.points.role == 0  # 0 tie, 1 control, 2 check (orientviz.block.TIE, …)
+    tie = block.points.role == ov.TIE  # the point roles: ov.TIE, ov.CONTROL, ov.CHECK
     err = (xyz - sim.truth.points.xyz)[tie]
     rms_true = np.sqrt(np.mean(err**2, axis=0))
     rms_sigma = np.sqrt(np.mean(sigma_xyz[tie] ** 2, axis=0))

@@ -122,14 +122,14 @@ def main() -> None:
         int(np.argmin(np.hypot(*(xy - corner).T)))
         for corner in ([-20, -35], [-20, 35], [110, -35], [110, 35])
     ]
-    block.points.role[corners] = 1  # 0 tie, 1 control, 2 check
+    block.points.role[corners] = ov.CONTROL
     block.points.xyz_known[corners] = truth[corners]
     block.points.sigma[corners] = 0.0  # fixed
 
     adj = ov.bundle_adjust(block)
     print(adj.summary())
     xyz = adj.points
-    tie = block.points.role == 0
+    tie = block.points.role == ov.TIE
     rms = np.sqrt(np.mean((xyz - truth)[tie] ** 2, axis=0))
     print(f"tie points vs the truth, RMS: X {rms[0]:.3f}  Y {rms[1]:.3f}  Z {rms[2]:.3f} m")
     print(f"sigma0 = {adj.sigma0:.3f}  redundancy = {adj.redundancy}")

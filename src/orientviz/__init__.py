@@ -21,8 +21,9 @@ The face, by task (each name links to where it lives and is documented):
 * conventions: :func:`~orientviz.units.to_rad`, :func:`~orientviz.units.from_rad`,
   :func:`~orientviz.rotation.matrix_from_opk`, :func:`~orientviz.rotation.opk_from_matrix`,
   :class:`~orientviz.camera.FrameCamera`, :func:`~orientviz.camera.project`;
-* the block (the set of images and points): :class:`~orientviz.block.Block`,
-  :func:`~orientviz.simulate.simulate_block`, :class:`~orientviz.simulate.SimulatedBlock`;
+* the block (the set of images and points): :class:`~orientviz.block.Block`, the point
+  roles ``TIE``, ``CONTROL``, ``CHECK`` (``block.points.role``: 0, 1, 2),
+  :func:`~orientviz.simulate.simulate_block`;
 * single images and pairs: :func:`~orientviz.orientation.relative.relative_orientation`
   (the stereo model), :func:`~orientviz.orientation.absolute.similarity_transform`
   (absolute orientation), :func:`~orientviz.orientation.resection.resection`,
@@ -78,8 +79,10 @@ _FACE: dict[str, str] = {
     "project": ".camera",
     # the block
     "Block": ".block",
+    "TIE": ".block",
+    "CONTROL": ".block",
+    "CHECK": ".block",
     "simulate_block": ".simulate",
-    "SimulatedBlock": ".simulate",
     # single pairs and images
     "relative_orientation": ".orientation.relative",
     "similarity_transform": ".orientation.absolute",
@@ -104,6 +107,8 @@ __all__ = [
     "AdjustmentError",
     "Block",
     "BundleResult",
+    "CHECK",
+    "CONTROL",
     "FrameCamera",
     "InputError",
     "Intersection",
@@ -111,7 +116,7 @@ __all__ = [
     "NotDeterminableError",
     "OrientvizError",
     "Problem",
-    "SimulatedBlock",
+    "TIE",
     "__version__",
     "bundle_adjust",
     "clean_block",
@@ -184,7 +189,7 @@ def __dir__() -> list[str]:
 
 if TYPE_CHECKING:  # for type checkers and editors; nothing is imported at run time
     from .adjust.result import Adjustment, Iteration
-    from .block import Block
+    from .block import CHECK, CONTROL, TIE, Block
     from .bundle import BundleResult, bundle_adjust, clean_block, self_calibrate
     from .camera import FrameCamera, project
     from .io.colmap import read_colmap
@@ -197,6 +202,6 @@ if TYPE_CHECKING:  # for type checkers and editors; nothing is imported at run t
     from .orientation.resection import resection
     from .report import write_report
     from .rotation import matrix_from_opk, opk_from_matrix
-    from .simulate import SimulatedBlock, simulate_block
+    from .simulate import simulate_block
     from .stereo_models import independent_models
     from .units import from_rad, to_rad
