@@ -22,6 +22,17 @@ def _theta(kind):
     return np.array([cam[k] for k in names])
 
 
+def _central(kind, th, nrm, m, which, j, h):
+    """Central difference of f by column j of θ (which = 0) or of n (which = 1)."""
+    args = [th, nrm]
+    plus, minus = args[which].copy(), args[which].copy()
+    plus[:, j] += h
+    minus[:, j] -= h
+    f = [evaluate(kind, *((a if w == which else b) for w, b in enumerate(args)), m, False)[0]
+         for a in (plus, minus)]  # fmt: skip
+    return (f[0] - f[1]) / (2 * h)
+
+
 @pytest.mark.parametrize("kind", ["backward", "forward"])
 def test_derivatives_equal_central_differences(kind):
     rng = np.random.default_rng(3)
@@ -31,22 +42,10 @@ def test_derivatives_equal_central_differences(kind):
     m = rng.uniform(-3.0, 3.0, (n, 2))
     f, M, D = evaluate(kind, th, nrm, m)
     for j in range(10):
-        h = 1e-5 * max(abs(th[0, j]), 1e-2)
-        tp, tm = th.copy(), th.copy()
-        tp[:, j] += h
-        tm[:, j] -= h
-        num = (evaluate(kind, tp, nrm, m, False)[0] - evaluate(kind, tm, nrm, m, False)[0]) / (
-            2 * h
-        )
+        num = _central(kind, th, nrm, m, 0, j, 1e-5 * max(abs(th[0, j]), 1e-2))
         assert np.allclose(D[:, :, j], num, rtol=1e-6, atol=1e-9), (kind, j)
     for j in range(2):
-        h = 1e-7
-        npl, nmi = nrm.copy(), nrm.copy()
-        npl[:, j] += h
-        nmi[:, j] -= h
-        num = (evaluate(kind, th, npl, m, False)[0] - evaluate(kind, th, nmi, m, False)[0]) / (
-            2 * h
-        )
+        num = _central(kind, th, nrm, m, 1, j, 1e-7)
         assert np.allclose(M[:, :, j], num, rtol=1e-6, atol=1e-8), (kind, j)
 
 
