@@ -126,7 +126,7 @@ def bundle_adjust(
         ``additional`` (both border the reduced system:
         :mod:`orientviz.bundle._auxiliary_border`). Estimates in ``result.auxiliary``
         (:class:`~orientviz.block.AuxiliaryEstimates`: offsets, sigma (m), residuals),
-        ``cofactor_blocks["auxiliary"]``; the rows are appended to the observations
+        ``cofactor_groups["auxiliary"]``; the rows are appended to the observations
         (``obs_slices["auxiliary"]``, m) and with ``precision`` get redundancy numbers
         and normalised residuals; the cofactor blocks of orientations and points then
         include the uncertainty of the offsets/drifts. The datum check is left to the
@@ -235,7 +235,7 @@ def bundle_adjust(
 
         finish_bundle(res, prob, st, rw, Je, Jp)
     if prob.ap.lens is not None:
-        Q = res.cofactor_blocks.get("additional") if prob.q else None
+        Q = res.cofactor_groups.get("additional") if prob.q else None
         res.camera = prob.ap.lens.estimates(st.ap, Q, res.sigma0)
     return res
 
@@ -293,6 +293,11 @@ class _BundleSteps:
             dpa = np.zeros((prob.block.n_points, 3))
             dpa[prob.points.unknown] = dp
             dx = np.concatenate([dc.ravel(), dpa.ravel(), da[: prob.q]])
+        # the normal equations and their factor live on only where the precision may reuse
+        # them (an undamped step without border); else they are freed before the trial
+        # point's Jacobians are formed (the peak memory of a large block: ~30 MB of 280)
+        if not (self.precision and lam == 0 and not (prob.q or prob.aux)):
+            ne = fac = None
         return Step(rel, dx, (dc, dp, da, fac, ne))
 
     def apply(self, st: BundleState, step: Step) -> BundleState:

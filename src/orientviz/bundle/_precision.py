@@ -355,12 +355,12 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     Qp_all = np.zeros((p, 3, 3))
     Qp_all[prob.points.unknown] = Qpp
     Qp_all[prob.block.points.role == 2] = np.nan
-    res.cofactor_blocks["exterior"] = Qcc_diag
+    res.cofactor_groups["exterior"] = Qcc_diag
     # Q_cc of every image pair (i ≤ k) that shares a point: key i·m + k (sorted), blocks
     res.exterior_pairs = ExteriorPairs(S.block_i * m + S.block_k, Zblk)
-    res.cofactor_blocks["points"] = Qp_all
+    res.cofactor_groups["points"] = Qp_all
     if q:
-        res.cofactor_blocks["additional"] = Faa[:q, :q]
+        res.cofactor_groups["additional"] = Faa[:q, :q]
     if aux:  # redundancy numbers of the auxiliary rows, cofactors of the offsets
         if not nb:
             Qca, Qap, Faa = np.zeros((m, 6, 0)), np.zeros((S.n_pt, 0, 3)), np.zeros((0, 0))

@@ -100,7 +100,7 @@ def ours(tol: float | None = None) -> dict[str, float]:
     v = adj.residuals[: 2 * n].reshape(n, 2) / pixel
     out["residuals||overall point RMS [px]"] = float(np.sqrt(np.mean(np.sum(v**2, axis=1))))
     names = info["image_files"]  # DBAT's image number → file stem
-    Q = adj.cofactor_blocks["exterior"]
+    Q = adj.cofactor_groups["exterior"]
     order = [3, 4, 5, 0, 1, 2]  # DBAT's order ω φ κ X Y Z → orientviz's X0 Y0 Z0 ω φ κ
     for num, stem in names.items():
         i = list(sol.image_ids).index(stem)
