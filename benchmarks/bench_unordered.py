@@ -3,6 +3,7 @@
     python benchmarks/bench_unordered.py                    # 30 and 150 images, both track kinds
     python benchmarks/bench_unordered.py --large            # adds 600 images
     python benchmarks/bench_unordered.py --sizes 150 --poor-only
+    python benchmarks/bench_unordered.py --sizes 30 --peers pyceres --no-poor
 
 The networks come from ``pycolmap.synthesize_dataset`` (one PINHOLE camera, 1024 × 768 px,
 f = 1280 px; 0.7 px Gaussian noise on the image points, ``synthesize_noise``):
@@ -22,6 +23,12 @@ Best of ``--reps``; peak MB = the worker's VmHWM (interpreter and libraries incl
 The same optimum is checked on the results: σ0 of both (pycolmap's from its final
 cost, 2·cost / σ² / redundancy), and the largest difference of projection centres and
 of tie points between the two solutions, in units of the scene (about 5 units across).
+
+Extra peers (``--peers``, default ``pycolmap,gtsam``): GTSAM (Levenberg-Marquardt, METIS
+ordering, control held by priors of 1e-5 units) and pyceres (Ceres with SPARSE_SCHUR and
+the projection as Python cost functions: slow by construction, small networks only), both
+through the shared peer bench's solvers (``/work/shared/bench/run_peers.py``, given the
+network in its BAL camera convention); wall = their set-up + solve.
 
 ``--poor`` (on by default for 150 images): orientations perturbed by 20° (random axes)
 and 1 unit (random directions), points re-intersected from the perturbed orientations
@@ -219,6 +226,77 @@ def worker_pycolmap(directory: Path, control: list[int], reps: int, max_iters: i
     )
 
 
+BENCH = Path(os.environ.get("ORIENTVIZ_BENCH_DIR", "/work/shared/bench"))
+
+
+def _colmap_problem(directory: Path, control: list[int]):
+    """The COLMAP model as the shared peer bench's problem (its BAL camera convention), so
+    that its GTSAM and pyceres solvers run unchanged; also the model for the results."""
+    import types
+
+    import pycolmap
+
+    sys.path.insert(0, str(BENCH))
+    import make_block as mb
+
+    rec = pycolmap.Reconstruction(str(directory))
+    cam = next(iter(rec.cameras.values()))
+    f, cx, cy = cam.params[0], cam.params[2], cam.params[3]
+    image_ids = sorted(rec.images)
+    point_ids = sorted(rec.points3D)
+    col = {pid: k for k, pid in enumerate(point_ids)}
+    oc, op, uv = [], [], []
+    for i, iid in enumerate(image_ids):
+        for p2 in rec.images[iid].points2D:
+            if p2.has_point3D():
+                oc.append(i)
+                op.append(col[p2.point3D_id])
+                uv.append((p2.xy[0] - cx, -(p2.xy[1] - cy)))  # BAL: origin centre, y up
+    F = np.diag([1.0, -1.0, -1.0])
+    R = np.array([rec.images[i].cam_from_world().rotation.matrix() for i in image_ids])
+    t = np.array([rec.images[i].cam_from_world().translation for i in image_ids])
+    X = np.array([rec.points3D[p].xyz for p in point_ids])
+    ctrl = np.array([col[c] for c in control])
+    is_ctrl = np.zeros(len(point_ids), bool)
+    is_ctrl[ctrl] = True
+    P = types.SimpleNamespace(
+        f=float(f), sigma_px=SIGMA_PX, obs_cam=np.array(oc), obs_pt=np.array(op),
+        obs=np.array(uv), cam_aa0=mb.R_to_aa(F @ R), cam_t0=(F @ t[:, :, None])[:, :, 0],
+        pt0=X, is_ctrl=is_ctrl, ctrl_idx=ctrl, ctrl_xyz=X[ctrl], ctrl_sigma=1e-5,
+        control="fixed", n_cam=len(image_ids), n_pt=len(point_ids), n_obs=len(oc),
+        pt_is_var=~is_ctrl, pt_fixed=X.copy(),
+    )  # fmt: skip
+    names = [rec.images[i].name for i in image_ids]
+    return P, mb, names, [str(p) for p in point_ids]
+
+
+def worker_peer(solver: str, directory: Path, control: list[int], reps: int) -> dict:
+    """GTSAM or pyceres through the shared bench's solvers (1 thread; wall = set-up + solve)."""
+    sys.path.insert(0, str(BENCH))
+    import run_peers as rp
+
+    P, mb, names, pids = _colmap_problem(directory, control)
+    solve = {"gtsam": rp.solve_gtsam, "pyceres": rp.solve_pyceres}[solver]
+    walls = []
+    for _ in range(reps):
+        aa, t, X, iters, solve_s, info = solve(P, 1)
+        walls.append(solve_s + info.get("setup_s", 0.0))
+    Rb = mb.aa_to_R(aa)
+    C = -np.einsum("nji,nj->ni", Rb, t)
+    proj = mb.bal_project(aa[P.obs_cam], t[P.obs_cam], np.full(P.n_obs, P.f), X[P.obs_pt])
+    chi2 = float(np.sum(((proj - P.obs) / SIGMA_PX) ** 2))
+    redundancy = 2 * P.n_obs - 6 * P.n_cam - 3 * int(P.pt_is_var.sum())
+    return dict(
+        wall_s=min(walls),
+        iters=int(iters),
+        converged=True,
+        sigma0=float(np.sqrt(chi2 / redundancy)),
+        peak_mb=_peak_mb(),
+        centres={n: C[k].tolist() for k, n in enumerate(names)},
+        points={p: X[k].tolist() for k, p in enumerate(pids)},
+    )
+
+
 def run_worker(solver: str, directory: Path, control: list[int], reps: int, max_iters: int):
     env = dict(os.environ)
     for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
@@ -257,12 +335,20 @@ def main() -> None:
     ap.add_argument("--poor-only", action="store_true")
     ap.add_argument("--worker", nargs=3, metavar=("SOLVER", "DIR", "CONTROL"))
     ap.add_argument("--max-iters", type=int, default=100)
+    ap.add_argument(
+        "--peers",
+        default="pycolmap,gtsam",
+        help="peers besides orientviz (pycolmap always; gtsam, pyceres through the shared "
+        "bench's solvers; pyceres's costs are Python callbacks: small networks only)",
+    )
     a = ap.parse_args()
     if a.worker:
         solver, d, ctrl = a.worker
         control = [int(c) for c in ctrl.split(",")]
         if solver == "orientviz":
             out = worker_orientviz(Path(d), control, a.reps)
+        elif solver in ("gtsam", "pyceres"):
+            out = worker_peer(solver, Path(d), control, a.reps)
         else:
             out = worker_pycolmap(Path(d), control, a.reps, a.max_iters)
         print("@@RESULT " + json.dumps(out))
@@ -286,9 +372,9 @@ def main() -> None:
                 poor = n == 150 and not a.no_poor
                 if a.poor_only and not poor:
                     continue
+                peers = ["pycolmap"] + [p for p in a.peers.split(",") if p and p != "pycolmap"]
                 res = {
-                    s: run_worker(s, d, control, a.reps, a.max_iters)
-                    for s in ("pycolmap", "orientviz")
+                    s: run_worker(s, d, control, a.reps, a.max_iters) for s in peers + ["orientviz"]
                 }
                 n_obs = res["pycolmap"].get("n_obs")
                 for s, r in res.items():
@@ -303,7 +389,7 @@ def main() -> None:
                         f"| {tracks} | {n} | {n_obs or '-'} | {s} | {r['wall_s']:.3f} | {r['iters']} "
                         f"| {r['sigma0']:.6f} | {r['peak_mb']:.0f} | {ratio:.2f} | {dx:.1e} | {dp:.1e} |"
                     )
-                print("\n".join(rows[-2:]), flush=True)
+                print("\n".join(rows[-len(res) :]), flush=True)
                 if poor:
                     poor_run(d, control, rng, res, tmp, tracks, n)
     print()

@@ -49,6 +49,7 @@ from ..adjust.result import Iteration
 from ..block import Block
 from ..errors import NotDeterminableError
 from ._checks import check_connected, check_datum, check_determinable, point_setup
+from ._local_rotation import LOCAL_MIN_CORRECTION, LOCAL_SIGMA0
 from ._problem import BundleProblem
 from ._result import BundleResult
 from ._state import BundleState
@@ -184,7 +185,7 @@ def bundle_adjust(
         damping=Damping(
             "fallback", poor_start_sigma0=POOR_START_SIGMA0, first=2 if hold_first else 1
         ),
-        stop=StopRule(tol=tol, may_stop=lambda it: not prob.border.hold),
+        stop=StopRule(tol=tol, may_stop=lambda it: not (prob.border.hold or steps.local_step)),
         max_iter=max_iter,
         # derivatives at the new state: for the next iteration, the precision or the
         # check of a damped start (not after the last step of a screening run)
@@ -197,6 +198,8 @@ def bundle_adjust(
     )
     st, history, converged, reason = run.state, run.history, run.converged, run.reason
     rw, Je, Jp = run.evaluation.data
+    if steps.is_local(run.evaluation):  # the precision needs the derivatives by ω, φ, κ
+        rw, Je, Jp = prob.residuals(st, jac=True)
     cost = run.evaluation.cost
     damped_start, lin = run.damped_start, steps.lin
     prob.border.hold = prob.border.reuse = False
@@ -240,6 +243,15 @@ def bundle_adjust(
     return res
 
 
+class _Linearisation(tuple):
+    """(rw, Je, Jp) of an evaluation; ``local``: Je by rotations of the image frames."""
+
+    def __new__(cls, data: tuple, local: bool = False):
+        out = super().__new__(cls, data)
+        out.local = local
+        return out
+
+
 class _BundleSteps:
     """The bundle problem as the engine's loop sees it (:class:`orientviz.adjust.Step`s).
 
@@ -256,9 +268,17 @@ class _BundleSteps:
         self.hold_first = False
         self.lin = None  # (normal equations, factor, Jacobians) of the last plain step
         self._start: tuple | None = None
+        # rotation steps in the image frames while the start is poor (._local_rotation)
+        self.local_allowed = prob.local_rotations_allowed
+        self.local_step = False  # the last accepted step rotated the image frames
+        self.last_cost: float | None = None  # vᵀPv of the last accepted state
+        self.pending_cost: float | None = None  # … of the last evaluated one
+        self.last_correction = np.inf
 
     def start(self, st: BundleState) -> Evaluation:
         """Evaluate the start once (the loop asks for it again: no second evaluation)."""
+        if self.local_allowed:  # σ0 of the start decides how its Jacobian is formed
+            self.last_cost = self.prob.cost(st, self.prob.residuals(st, jac=False)[0])
         ev = self.evaluate(st, True)
         self._start = (st, ev)
         return ev
@@ -267,9 +287,25 @@ class _BundleSteps:
         if self._start is not None and self._start[0] is st:
             ev, self._start = self._start[1], None
             return ev
-        rw, Je, Jp = self.prob.residuals(st, jac=jacobian)
+        local = jacobian and self.local_allowed and self._poor()
+        rw, Je, Jp = self.prob.residuals(st, jac=jacobian, local=local)
         cost = self.prob.cost(st, rw)
-        return Evaluation(cost, bool(np.isfinite(cost)), (rw, Je, Jp))
+        self.pending_cost = cost
+        return Evaluation(cost, bool(np.isfinite(cost)), _Linearisation((rw, Je, Jp), local))
+
+    def _poor(self) -> bool:
+        """Still far from the solution: σ0 of the last accepted state (the start: unknown,
+        poor) at least LOCAL_SIGMA0 and the last step not small."""
+        dof = self.prob.redundancy
+        if self.last_cost is None or dof <= 0:
+            return self.last_cost is None
+        s0 = float(np.sqrt(self.last_cost / dof))
+        return s0 >= LOCAL_SIGMA0 and self.last_correction >= LOCAL_MIN_CORRECTION
+
+    @staticmethod
+    def is_local(ev: Evaluation) -> bool:
+        """Whether ``ev``'s Jacobian is by rotations of the image frames."""
+        return bool(getattr(ev.data, "local", False))
 
     def begin(self, it: int) -> None:
         self.prob.border.hold = self.hold_first and it == 1
@@ -293,25 +329,32 @@ class _BundleSteps:
             dpa = np.zeros((prob.block.n_points, 3))
             dpa[prob.points.unknown] = dp
             dx = np.concatenate([dc.ravel(), dpa.ravel(), da[: prob.q]])
+        local = self.is_local(ev)
         # the normal equations and their factor live on only where the precision may reuse
-        # them (an undamped step without border); else they are freed before the trial
-        # point's Jacobians are formed (the peak memory of a large block: ~30 MB of 280)
-        if not (self.precision and lam == 0 and not (prob.q or prob.aux)):
+        # them (an undamped plain step, see accepted); else they are freed before the trial
+        # point's Jacobians are formed (the peak memory of a large block)
+        if not (self.precision and lam == 0 and not (prob.q or prob.aux or local)):
             ne = fac = None
-        return Step(rel, dx, (dc, dp, da, fac, ne))
+        return Step(rel, dx, (dc, dp, da, fac, ne, local))
 
     def apply(self, st: BundleState, step: Step) -> BundleState:
         dc, dp, da = step.data[:3]
-        return self.prob.apply(st, dc, dp, da)
+        local = step.data[5]
+        new = self.prob.apply(st, dc, dp, da, local=local)
+        if local and step.dx is not None:  # the history records the change of the angles
+            step.dx.reshape(-1)[: 6 * self.prob.m].reshape(-1, 6)[:, 3:] = new.angles - st.angles
+        return new
 
     def snapshot(self, st: BundleState) -> F64:
         return self.prob.flat(st) if self.keep_x else np.empty(0)
 
     def accepted(self, it: int, step: Step, lam: float, previous: Evaluation) -> None:
         prob = self.prob
-        dc, dp, _, fac, ne = step.data
+        dc, dp, _, fac, ne, local = step.data
+        self.last_correction = step.max_correction
+        self.last_cost, self.local_step = self.pending_cost, local
         # the precision may reuse this linearisation when it is the converged one
-        if self.precision and lam == 0 and not (prob.q or prob.aux):
+        if self.precision and lam == 0 and not (prob.q or prob.aux or local):
             self.lin = (ne, fac, previous.data[1], previous.data[2])
         if prob.q:
             L = AP_REUSE * prob.ap.ray_length

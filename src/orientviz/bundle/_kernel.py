@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from ..camera import collinearity_partials, project
 from ..rotation import matrix_derivatives, matrix_from_opk
+from ._local_rotation import local_derivatives
 
 F64 = NDArray[np.float64]
 
@@ -60,10 +61,14 @@ def collinearity_block(
     obs_image: NDArray[np.int64],
     xyz: F64,
     sequence: str = "opk",
+    local: bool = False,
 ) -> tuple[F64, F64, F64]:
     """Image coordinates and Jacobians of all observations of a block.
 
-    Parameters are those of :func:`project_block`.
+    Parameters are those of :func:`project_block`; ``local``: the last three columns of
+    J_exterior are derivatives by a small rotation δ of the image frame,
+    R(δ) = R·exp([δ]×), instead of by ω, φ, κ (no gimbal lock; see
+    :mod:`orientviz.bundle._local_rotation`).
 
     Returns
     -------
@@ -75,7 +80,10 @@ def collinearity_block(
         ∂(x, y)/∂(X, Y, Z) in mm/m.
     """
     R = matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2], sequence)
-    dR = np.stack(matrix_derivatives(angles[:, 0], angles[:, 1], angles[:, 2], sequence), 1)
+    if local:
+        dR = local_derivatives(R)
+    else:
+        dR = np.stack(matrix_derivatives(angles[:, 0], angles[:, 1], angles[:, 2], sequence), 1)
     oi = obs_image
     dxy, Jp, Ja, _ = collinearity_partials(xyz - X0[oi], R[oi], dR[oi], c[oi])
     xy = np.empty_like(dxy)

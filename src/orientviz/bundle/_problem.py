@@ -22,6 +22,7 @@ from ._auxiliary import BundleAuxiliary, auxiliary_rows
 from ._border import solve_border
 from ._checks import PointSetup
 from ._kernel import collinearity_block, normalised_block, project_block
+from ._local_rotation import apply_local
 from ._normal import NormalEquations
 from ._parts import (
     BorderSolver,
@@ -135,14 +136,15 @@ class BundleProblem:
         return self.aux.n_global if self.aux is not None else 0
 
     # ----------------------------------------------------------------- model
-    def residuals(self, st: BundleState, jac: bool):
-        """Weighted misclosures l − f (n, 2)·(1/σ), with Jacobians if ``jac``."""
+    def residuals(self, st: BundleState, jac: bool, local: bool = False):
+        """Weighted misclosures l − f (n, 2)·(1/σ), with Jacobians if ``jac``; ``local``:
+        by rotations of the image frame (:mod:`orientviz.bundle._local_rotation`)."""
         if self.ap.lens is not None:
             return self._lens_residuals(st, jac)
         io = self.interior
         args = (st.X0, st.angles, io.c, io.x0, io.y0, self.obs.image, st.xyz[self.obs.point])
         if jac:
-            f, Je, Jp = collinearity_block(*args, self.block.sequence)
+            f, Je, Jp = collinearity_block(*args, self.block.sequence, local=local)
         else:
             f = project_block(*args, self.block.sequence)
             Je = Jp = None
@@ -282,9 +284,20 @@ class BundleProblem:
         dp = np.einsum("nij,nj->ni", ne.Vinv, red)
         return dc, dp, da, fac
 
-    def apply(self, st: BundleState, dc: F64, dp: F64, da: F64) -> BundleState:
+    @property
+    def local_rotations_allowed(self) -> bool:
+        """Whether steps may rotate the image frames (nothing else refers to the angles)."""
+        return not (self.q or self.aux or self.ap.lens is not None) and not np.any(
+            self.exterior.angles_w > 0
+        )
+
+    def apply(self, st: BundleState, dc: F64, dp: F64, da: F64, local: bool = False) -> BundleState:
+        """The next iterate; ``local``: dc[:, 3:] are rotations δ of the image frames."""
         xyz = st.xyz.copy()
         xyz[self.points.unknown] += dp
+        if local:
+            angles = apply_local(st.angles, dc[:, 3:], self.block.sequence)
+            return BundleState(st.X0 + dc[:, :3], angles, xyz, st.ap + da, st.g)
         if self.aux:  # da: the additional parameters, then the auxiliary offsets/drifts
             q = self.q
             return BundleState(

@@ -1,0 +1,52 @@
+"""Rotation steps in the image frame while the approximations are poor.
+
+The bundle's unknowns are ω, φ, κ. Near φ = ±90° (``"opk"``; ω = ±90° for ``"pok"``)
+these angles lose a degree of freedom (gimbal lock): ω and κ turn about the same axis,
+their derivatives become parallel and a Gauss-Newton step in them is long and poor.
+Close-range networks look in every direction, and from a start 20° off some images
+pass near that pole. A step in a small rotation δ of the image frame,
+R(δ) = R·exp([δ]×), has no such pole: ∂R/∂δ_k = R·[e_k]×.
+
+The bundle takes such steps while the start is poor (σ0 of the linearisation point at
+least :data:`LOCAL_SIGMA0` and the last step not yet small) and only if nothing else
+refers to the angles (no observed attitudes, additional parameters or auxiliary
+data); the last steps — those the stopping rule judges and the precision reuses — are
+always taken in ω, φ, κ. :func:`apply_local` turns R(δ) back into the angles.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..rotation import matrix_from_opk, matrix_from_rotvec, opk_from_matrix
+
+F64 = NDArray[np.float64]
+
+#: Rotation steps in the image frame while σ0 of the linearisation point is at least this …
+LOCAL_SIGMA0: float = 30.0
+#: … and the last step's largest correction (in a-priori σ) was at least this.
+LOCAL_MIN_CORRECTION: float = 10.0
+
+#: [e_k]× for k = 0, 1, 2.
+_GENERATORS = np.array(
+    [
+        [[0.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]],
+        [[0.0, 0.0, 1.0], [0.0, 0.0, 0.0], [-1.0, 0.0, 0.0]],
+        [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+    ]
+)
+
+
+def local_derivatives(R: F64) -> F64:
+    """∂R/∂δ_k = R·[e_k]× at δ = 0, shape (m, 3, 3, 3) as ``matrix_derivatives`` stacked."""
+    return np.einsum("mij,kjl->mkil", R, _GENERATORS)
+
+
+def apply_local(angles: F64, delta: F64, sequence: str = "opk") -> F64:
+    """Angles (m, 3) of R(angles)·exp([δ]×) for small rotations δ (m, 3) in rad."""
+    R = matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2], sequence)
+    Rn = R @ matrix_from_rotvec(delta)
+    out = np.column_stack(opk_from_matrix(Rn, sequence)).reshape(-1, 3)
+    # keep each angle on the branch nearest the old one (no 2π jumps in the history)
+    return angles + (out - angles + np.pi) % (2 * np.pi) - np.pi
