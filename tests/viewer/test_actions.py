@@ -196,6 +196,10 @@ def test_panel_drag_control_point(app):
     assert app.messages == []
     assert st.edits.known[k, 2] == pytest.approx(st.changes[1].edits.known[k, 2] + 0.3, abs=1e-3)
     assert "moved" in st.changes[-1].label
+    h["undo"].value = None  # the control point and its gizmo go back
+    back = np.asarray(act.drag.position, dtype=float) + app.scene.geo.frame.origin
+    np.testing.assert_allclose(back, pos, atol=1e-3)
+    np.testing.assert_array_equal(st.edits.known[k], st.changes[1].edits.known[k])
     h["auto_precision"].value = False  # large blocks: the quick answer only
     o = st.block.observations
     rays = np.bincount(o.point, minlength=st.block.n_points)

@@ -170,6 +170,8 @@ class ActControls:
 
     def _after_rewind(self) -> None:
         p = self.panel
+        if self.drag is not None:  # the gizmo goes back with the control point
+            self.show_drag(True)
         p.scene.update()
         p.set_exaggeration()
         p.scene.update_ellipsoids()
