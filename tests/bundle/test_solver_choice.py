@@ -29,17 +29,22 @@ def test_auto_chooses_banded_for_strips_and_dense_for_a_close_range_network():
     assert res.reduced_info["formation"] == "dense"
 
 
+def _network(name: str, strips: int):
+    """The close-range network 5 cm / 5 mrad off, or an aerial block of ``strips`` strips."""
+    if name == "aerial":
+        return ov.simulate_block(strips, 6, rng=4).block
+    return close_range_network(start_error=0.05)[0]
+
+
 @pytest.mark.parametrize("network", ["close-range", "aerial"])
 def test_every_solver_reaches_the_same_optimum(network):
-    if network == "aerial":
-        block = ov.simulate_block(3, 6, rng=4).block
-    else:
-        block, _ = close_range_network(start_error=0.05)
+    block = _network(network, 3)
     ref = ov.bundle_adjust(block, precision=False, solver="dense")
     assert ref.converged
+    auto = {"close-range": "dense", "aerial": "banded"}[network]
     for solver in ("banded", "sparse", "auto"):
         res = ov.bundle_adjust(block, precision=False, solver=solver)
-        assert res.solver == (solver if solver != "auto" else res.solver)
+        assert res.solver == (auto if solver == "auto" else solver)
         assert res.iterations == ref.iterations
         # the same linear systems factored differently: the same optimum to rounding
         np.testing.assert_allclose(res.x, ref.x, rtol=0, atol=1e-9 * np.abs(ref.x).max())
@@ -48,10 +53,7 @@ def test_every_solver_reaches_the_same_optimum(network):
 
 @pytest.mark.parametrize("network", ["close-range", "aerial"])
 def test_dense_and_pairwise_schur_complements_agree(network):
-    if network == "aerial":
-        block = ov.simulate_block(2, 6, rng=4).block
-    else:
-        block, _ = close_range_network(start_error=0.05)
+    block = _network(network, 2)
     prob = BundleProblem(block, point_setup(block, "fixed"), solver="dense")
     st = BundleState(block.images.X0, block.images.angles, block.points.xyz, np.zeros(0))
     rw, Je, Jp = prob.residuals(st, jac=True)
