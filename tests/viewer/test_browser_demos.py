@@ -9,56 +9,24 @@ deadline, until the Python side has followed and the picture has changed.
 
 from __future__ import annotations
 
-import io
 import time
 
 import numpy as np
 import pytest
 
-from orientviz.viewer.app import ViewerApp
 from orientviz.viewer.demos import DEMOS, load_demo
 
+from .browser import (
+    changed_share,
+    colour_count,
+    drawn_share,
+    gui_control,
+    scene_image,
+    served,
+    wait_for,
+)
+
 pytestmark = [pytest.mark.browser, pytest.mark.slow]  # ~10-20 s each with software WebGL
-
-#: share of the window width left of the GUI panel (1280 px window: panel from ~940 px)
-SCENE_WIDTH = 0.72
-#: colour distance (RGB, 0-255) within which a pixel counts as an element's colour (the
-#: renderer's colour management shifts flat colours by up to ~30)
-TOLERANCE = 45.0
-
-
-def wait_for(predicate, timeout=30.0, step=0.1):
-    """Poll ``predicate`` until it is true or ``timeout`` seconds have passed."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(step)
-    return False
-
-
-def scene_image(page) -> np.ndarray:
-    """The scene part (left of the panel) of a screenshot, float RGB (h, w, 3)."""
-    from PIL import Image
-
-    img = np.asarray(Image.open(io.BytesIO(page.screenshot())).convert("RGB"), dtype=float)
-    return img[:, : int(img.shape[1] * SCENE_WIDTH)]
-
-
-def drawn_share(img: np.ndarray) -> float:
-    """Share of pixels that differ clearly from the (median) background."""
-    background = np.median(img.reshape(-1, 3), axis=0)
-    return float(np.mean(np.abs(img - background).sum(axis=2) > 60))
-
-
-def colour_count(img: np.ndarray, rgb) -> int:
-    """Number of pixels within :data:`TOLERANCE` of colour ``rgb``."""
-    return int((np.linalg.norm(img - np.asarray(rgb, float), axis=2) < TOLERANCE).sum())
-
-
-def changed_share(a: np.ndarray, b: np.ndarray) -> float:
-    """Share of pixels whose colour changed by more than 40 in some channel."""
-    return float(np.mean(np.abs(a - b).max(axis=2) > 40))
 
 
 def open_demo(page, app, min_drawn: float = 0.01) -> np.ndarray:
@@ -95,14 +63,6 @@ def wait_for_picture(page, before: np.ndarray, test, timeout: float = 30.0) -> n
     return shot["img"]
 
 
-def gui_control(page, label, selector):
-    """The control (``selector``, e.g. ``[role=slider]``) of the GUI row labelled ``label``."""
-    row = page.locator("div", has=page.locator("label", has_text=label)).filter(
-        has=page.locator(selector)
-    )
-    return row.last.locator(selector).first
-
-
 def test_every_demo_has_a_browser_test():
     tested = {"block", "pair", "radar"}
     assert set(DEMOS) == tested, f"demos without a browser test: {set(DEMOS) - tested}"
@@ -111,8 +71,7 @@ def test_every_demo_has_a_browser_test():
 def test_radar_demo_draws_the_construction_and_its_checkbox_hides_it(browser_page):
     from orientviz.viewer.radar_scene import ELEMENTS
 
-    app = ViewerApp(load_demo("radar"), port=0, verbose=False)
-    try:
+    with served(load_demo("radar")) as app:
         page = browser_page
         img = open_demo(page, app)
         counts = {
@@ -130,16 +89,13 @@ def test_radar_demo_draws_the_construction_and_its_checkbox_hides_it(browser_pag
             page, img, lambda a: colour_count(a, blue) < 0.2 * counts["circle"]
         )
         assert changed_share(img, after) > 0.005
-    finally:
-        app.stop()
 
 
 def test_pair_demo_draws_rays_and_gap_and_a_dial_moves_them(browser_page):
     from orientviz.units import RHO_C
     from orientviz.viewer.pair_scene import GAP, LEFT_RAY, RIGHT_RAY
 
-    app = ViewerApp(load_demo("pair"), port=0, verbose=False)
-    try:
+    with served(load_demo("pair")) as app:
         page = browser_page
         img = open_demo(page, app)
         counts = {n: colour_count(img, c) for n, c in
@@ -160,13 +116,10 @@ def test_pair_demo_draws_rays_and_gap_and_a_dial_moves_them(browser_page):
         page.get_by_role("checkbox", name="normalised images").click()
         assert wait_for(lambda: pv.h["picture"].visible), "the checkbox did not arrive"
         assert wait_for(lambda: page.get_by_text("epipolar lines are rows").count() > 0)
-    finally:
-        app.stop()
 
 
 def test_block_demo_converges_and_colours_by_quality(browser_page):
-    app = ViewerApp(load_demo("block"), port=0, verbose=False)
-    try:
+    with served(load_demo("block")) as app:
         page = browser_page
         img = open_demo(page, app)
         st = app.demo.state
@@ -181,5 +134,3 @@ def test_block_demo_converges_and_colours_by_quality(browser_page):
         wait_for_picture(page, after_run, lambda a: changed_share(after_run, a) > 0.001)
         with app.panel._lock:  # let the callbacks finish before the server stops
             pass
-    finally:
-        app.stop()

@@ -17,6 +17,10 @@ used or shipped). It writes ``orientviz/datasets/dbat/``:
   points) and the report of its PhotoModeler-export route
   (``data/dbat/dbatexports/camcal-dbatreport.txt``), unchanged; :func:`read_camcal`
   reads it (``orientviz reproduce dbat-camcal``).
+* ``roma/`` — DBAT's ROMA bundle demo (``data/script/romabundledemo``: 60 images of a
+  Canon EOS 5D Mark II, 90 561 marked points of 26 321 object points, no control), its
+  measurements gzipped, and its report; ``orientviz reproduce dbat-roma`` reads them
+  (:mod:`orientviz.reproduce.dbat_roma`).
 * ``LICENSE.txt`` (DBAT's licence, verbatim), ``CITATION.md`` and ``MANIFEST.json``.
 
 Conversions (DBAT's conventions, read from its camera model): image coordinates are
@@ -30,6 +34,7 @@ orientviz's "opk" sequence, so the angles are comparable as printed.
 from __future__ import annotations
 
 import argparse
+import gzip
 import json
 import shutil
 import sys
@@ -64,6 +69,18 @@ CAMCAL_FILES = (
 )
 CAMCAL_REPORT = "data/dbat/dbatexports/camcal-dbatreport.txt"
 
+#: DBAT's ROMA bundle demo (script version, self-calibration without control); the
+#: measurements are gzipped (2.6 MB of text → 1.1 MB), the other files copied as they are.
+ROMA = "data/script/romabundledemo"
+ROMA_FILES = (
+    "romabundledemo.xml",
+    "cameras/EOS5DMarkII.xml",
+    "images/images.txt",
+    "prior/initial_eo.txt",
+    "measurements/markpts.txt",
+    "result/report.txt",
+)
+
 CITATION = """\
 # Citing the DBAT data
 
@@ -84,6 +101,11 @@ using the code or derivatives thereof refer to one or more of its papers; for th
 * the camera calibration `camcal`:
   N. Börlin, P. Grussenmeyer (2014). Camera Calibration using the Damped Bundle
   Adjustment Toolbox. ISPRS Annals II-5, 89-96. doi:10.5194/isprsannals-II-5-89-2014
+* the ROMA bundle `roma` (60 images, self-calibration without control points;
+  DBAT's script `romabundledemo.xml` says it was presented at LC3D 2019 in Strasbourg,
+  the conference of the paper cited for `sxb` above, which is therefore cited for it too):
+  N. Börlin, A. Murtiyoso, P. Grussenmeyer (2019), as for `sxb`; the images are not
+  shipped (DBAT: http://www.cs.umu.se/~niclas/dbat_images/roma)
 * the toolbox itself:
   N. Börlin, P. Grussenmeyer (2013). Bundle adjustment with and without damping.
   The Photogrammetric Record 28(144), 396-415. doi:10.1111/phor.12037
@@ -270,6 +292,16 @@ def make(dbat: Path, out: Path = HERE) -> list[Path]:
         written.append(target)
     shutil.copyfile(dbat / CAMCAL_REPORT, out / "camcal" / "camcal-dbatreport.txt")
     written.append(out / "camcal" / "camcal-dbatreport.txt")
+    (out / "roma").mkdir(exist_ok=True)
+    for name in ROMA_FILES:
+        target = out / "roma" / Path(name).name
+        if name.endswith("markpts.txt"):  # the bytes unchanged, gzipped (mtime 0: reproducible)
+            target = target.with_name(target.name + ".gz")
+            with gzip.GzipFile(target, "wb", compresslevel=9, mtime=0) as f:
+                f.write((dbat / ROMA / name).read_bytes())
+        else:
+            shutil.copyfile(dbat / ROMA / name, target)
+        written.append(target)
     from ..reproduce.dbat_camcal import MANIFEST_ENTRY, problem_text
 
     (out / "dbat_camcal.json").write_text(problem_text(out / "camcal"), encoding="utf-8")

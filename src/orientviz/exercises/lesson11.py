@@ -1,6 +1,7 @@
 """Checkers for lesson 11, systematic image errors and self-calibration.
 
-Oracles: error-free simulated distortion with known coefficients, the cofactor matrix
+Oracles: error-free simulated distortion with known coefficients (for the real camera's
+exercise a C4040Z-like sensor and the backward model), the cofactor matrix
 from numerical second derivatives of the sum of squares, scipy's normal quantile, and a
 QR projection for the share of a field that a parameter set describes — never the
 library's ``self_calibrate``, ``analyse`` or ``split_field``.
@@ -188,7 +189,75 @@ def check_described_share(fn: Callable) -> None:
     success(f"described: x {want[0]:.1%}, y {want[1]:.1%}")
 
 
+def check_fit_k1_real(fn: Callable) -> None:
+    """Check ``fn(m, ideal, pp) -> K1`` of the backward model ideal = z (1 + K1 r²),
+    z = m − pp, r² = |z|² (measured points m and their ideal points, mm, on a 7 × 5 mm
+    sensor; K1 in mm⁻²)."""
+    rng = rng_for("lesson11.check_fit_k1_real")
+    pp = np.array([3.61, -2.62])
+    m = np.column_stack([rng.uniform(0.2, 7.1, 11), rng.uniform(-5.3, -0.1, 11)])
+    k1 = 4.3e-3
+    z = m - pp
+    ideal = z * (1 + k1 * np.sum(z**2, axis=1))[:, None] + rng.normal(0, 3e-4, z.shape)
+    got = call(fn, m.copy(), ideal.copy(), pp.copy(), what="fit_k1_real")
+    try:
+        got = float(got)
+    except (TypeError, ValueError):
+        raise CheckFailed("return one number, K1 in mm⁻²") from None
+    # oracle: the sum of squares is a parabola in K1; three values give its vertex
+    a = (z * np.sum(z**2, axis=1)[:, None]).ravel()
+    ks = np.array([0.0, 2e-3, 4e-3])
+    cost = [np.sum((z.ravel() + k * a - ideal.ravel()) ** 2) for k in ks]
+    c2, c1, _ = np.polyfit(ks, cost, 2)
+    want = -c1 / (2 * c2)
+    zi = ideal  # the plausible wrong ideas, as numbers
+    ri = np.sum(zi**2, axis=1)
+    fwd = (zi * ri[:, None]).ravel()
+    u = 1e-3
+    compare(
+        "K1 [1e-3 mm⁻²]",
+        got / u,
+        want / u,
+        rtol=1e-6,
+        wrong=[
+            ("measured and ideal swapped (the forward model's direction)",
+             fwd @ (z - zi).ravel() / (fwd @ fwd) / u),
+            ("the radius of the ideal point, not of the measured one",
+             ((z * ri[:, None]).ravel() @ (zi - z).ravel())
+             / ((z * ri[:, None]).ravel() @ (z * ri[:, None]).ravel()) / u),
+            ("not reduced to the principal point (r from the sensor corner)",
+             _fit_k1_real(m, ideal + pp, np.zeros(2)) / u),
+        ],
+    )  # fmt: skip
+    success(f"K1 = {got:.5g} mm⁻² ({k1 * np.max(np.sum(z**2, axis=1)) ** 1.5 * 1000:.0f} µm "
+            "at the farthest point)")  # fmt: skip
+
+
 # ---------------------------------------------------------------------- solutions
+
+
+def _fit_k1_real(m, ideal, pp):
+    z = m - pp
+    a = (z * np.sum(z**2, axis=1)[:, None]).ravel()
+    return a @ (ideal - z).ravel() / (a @ a)
+
+
+def _k1_real_swapped(m, ideal, pp):
+    z = m - pp
+    a = (ideal * np.sum(ideal**2, axis=1)[:, None]).ravel()
+    return a @ (z - ideal).ravel() / (a @ a)
+
+
+def _k1_real_ideal_radius(m, ideal, pp):
+    z = m - pp
+    a = (z * np.sum(ideal**2, axis=1)[:, None]).ravel()
+    return a @ (ideal - z).ravel() / (a @ a)
+
+
+def _k1_real_x_only(m, ideal, pp):
+    z = m - pp
+    a = z[:, 0] * np.sum(z**2, axis=1)
+    return a @ (ideal - z)[:, 0] / (a @ a)
 
 
 def _fit_k1(xy, d):
@@ -247,12 +316,22 @@ def _share_separate(A, d):
 
 SOLUTIONS = {
     "check_fit_k1": _fit_k1,
+    "check_fit_k1_real": _fit_k1_real,
     "check_fit_k1k2": _fit_k1k2,
     "check_significant": _significant,
     "check_described_share": _described_share,
 }
 
 MUTANTS = {
+    "check_fit_k1_real": {
+        "measured and ideal swapped": _k1_real_swapped,
+        "radius of the ideal point": _k1_real_ideal_radius,
+        "x equations only": _k1_real_x_only,
+        "not reduced to the principal point": lambda m, ideal, pp: _fit_k1_real(
+            m, ideal + pp, np.zeros(2)
+        ),
+        "sign of the residual": lambda m, ideal, pp: -_fit_k1_real(m, ideal, pp),
+    },
     "check_fit_k1": {
         "x equations only": _k1_x_only,
         "divide by 2n": lambda xy, d: (

@@ -29,6 +29,11 @@ REGISTRY: dict[str, tuple[str, str, str]] = {
         "table",
         "Börlin & Grussenmeyer, DBAT: camera calibration (21 images, backward lens model)",
     ),
+    "dbat-roma": (
+        "orientviz.reproduce.dbat_roma",
+        "table",
+        "Börlin et al., DBAT: the ROMA bundle (60 images, no control, self-calibration)",
+    ),
     "ebner": (
         "orientviz.reproduce.ebner",
         "table",

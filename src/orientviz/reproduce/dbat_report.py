@@ -147,7 +147,10 @@ def report_values(root: Node) -> dict[str, str]:
         for head, name in EO_FIELDS:
             node = photo.child(head + ":")
             out[f"stations|{case}|{name}"] = node.field("Value")
-            out[f"stations|{case}|σ {name}"] = node.field("Deviation")
+            try:  # a parameter held for the datum has no deviation
+                out[f"stations|{case}|σ {name}"] = node.field("Deviation")
+            except KeyError:
+                pass
             for c in node.children:
                 if c.text.startswith("Correlations over 95%:"):
                     for item in c.value.rstrip(".").split(","):
