@@ -102,3 +102,19 @@ def test_image_blocks_are_the_pairs_of_images_sharing_a_point():
     got = set(zip(bi.tolist(), bk.tolist()))
     assert got == {(0, 0), (1, 1), (2, 2), (3, 3), (4, 4), (0, 1), (0, 2), (1, 2), (2, 3)}
     assert n_pairs == 6 + 3 + 1  # k(k + 1)/2 for tracks of 3, 2, 1 rays
+
+
+def test_precision_is_the_same_whatever_solved_and_formed_the_reduced_system():
+    block, _ = close_range_network(start_error=0.05)
+    dense = ov.bundle_adjust(block)  # S formed densely, Q_cp from the dense inverse
+    assert dense.solver == "dense" and dense.reduced_info["formation"] == "dense"
+    banded = ov.bundle_adjust(block, solver="banded")  # pairs of rays, selected inverse
+    assert banded.reduced_info["formation"] == "pairs"
+    np.testing.assert_allclose(dense.std(), banded.std(), rtol=1e-8)
+    np.testing.assert_allclose(
+        dense.redundancy_numbers, banded.redundancy_numbers, rtol=0, atol=1e-10
+    )
+    np.testing.assert_allclose(dense.ray_gains.points, banded.ray_gains.points, rtol=1e-7)
+    for name in ("exterior", "points"):
+        a, b = dense.cofactor_blocks[name], banded.cofactor_blocks[name]
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-9 * np.abs(b).max())
