@@ -40,6 +40,12 @@ def test_dbat_calibration_from_a_pixel_problem_file_equals_the_bundle_route(camc
     c_px = float(line.split("c ")[1].split(" ±")[0])
     assert abs(c_px * p - cam.get("c")[0]) < 1e-6
     assert any("K2~K3" in n for n in sol.notes)  # the high correlation is reported
+    params = {q["name"]: q for q in sol.as_dict()["parameters"]}  # --json: full precision
+    assert params["C4040Z.c"]["unit"] == "px"
+    assert abs(params["C4040Z.c"]["value"] * p - cam.get("c")[0]) < 1e-9
+    assert abs(-params["C4040Z.y0"]["value"] * p - cam.get("y0")[0]) < 1e-9  # y down
+    assert params["C4040Z.K1 [mm⁻²]"]["value"] == pytest.approx(cam.get("K1")[0], rel=1e-12)
+    assert "C4040Z.sk" not in params  # fixed: not an estimate
 
 
 def _to_pixels(doc: dict, p: float) -> dict:
@@ -99,7 +105,9 @@ def test_an_additional_parameter_set_per_camera_from_the_file():
     assert sol.adjustment.additional.size == 12
 
 
-def test_a_calibration_without_its_lens_terms_does_not_fit_and_says_so(camcal_doc, tmp_path, capsys):
+def test_a_calibration_without_its_lens_terms_does_not_fit_and_says_so(
+    camcal_doc, tmp_path, capsys
+):
     from orientviz.cli import main
 
     doc = copy.deepcopy(camcal_doc)

@@ -399,6 +399,30 @@ class BoundLens:
             return f, None, None
         return f, M, D[:, :, self.est] * self.scale[ray_group][:, None, :]
 
+    def pinhole(self, ap: F64, ray_group: NDArray[np.int64], m: F64) -> tuple[F64, F64]:
+        """Measured points (n, 2) as a pinhole camera would have seen them.
+
+        Returns ``(xy, io)``: xy = (x0, y0) + c·n with n the normalised point the model
+        maps onto m, and io (n, 3) = c, x0, y0 per ray — what a plain intersection of
+        rays (check points) needs. Backward: c·n = x̄(m); forward: n by Newton steps.
+        """
+        th = self.theta(ap)[ray_group]
+        pp, c = th[:, 1:3], th[:, 0]
+        if self.kind == "backward":
+            cn = m - evaluate(self.kind, th, np.zeros_like(m), m, False)[0]  # f(n=0) = m − x̄(m)
+        else:
+            a, s = th[:, 3], th[:, 4]
+            d = m - pp
+            nrm = np.column_stack([(d[:, 0] - s * d[:, 1]) / (1 + a), d[:, 1]]) / c[:, None]
+            for _ in range(20):
+                f, M, _ = evaluate(self.kind, th, nrm, m)
+                step = np.linalg.solve(M, (f - m)[:, :, None])[:, :, 0]
+                nrm = nrm - step
+                if np.max(np.abs(step), initial=0.0) < 1e-15:
+                    break
+            cn = c[:, None] * nrm
+        return pp + cn, np.column_stack([c, pp])
+
     def estimates(self, ap: F64, cofactor: F64 | None, sigma0: float) -> LensEstimates:
         """Physical values, σ and correlations from the scaled estimates and cofactor."""
         G, k = self.theta0.shape[0], self.k

@@ -199,3 +199,28 @@ def camera_notes(block, adj, units: Units) -> list[str]:
         lines.append("camera parameters correlated above 0.9: " + ", ".join(
             f"{a}~{b} ρ = {r:+.2f}" for _, a, b, r in pairs))  # fmt: skip
     return lines
+
+
+def camera_parameters(block, adj, units: Units) -> list:
+    """The estimated cameras as report parameters (``Solution.parameters``): c, x0, y0 as
+    image quantities (y0 in the file's frame: pixels count downwards), the terms as
+    pure numbers in their own units (named ``"<camera>.K1 [mm⁻²]"``); fixed ones left out."""
+    from ..solution import Parameter
+
+    cam = getattr(adj, "camera", None)
+    if cam is None:
+        return []
+    out = []
+    for g in range(cam.value.shape[0]):
+        cid = block.cameras.ids[g] if g < len(block.cameras.ids) else f"group{g}"
+        for j, name in enumerate(cam.names):
+            if not cam.estimated[j]:
+                continue
+            v, s = float(cam.value[g, j]), float(cam.sigma[g, j])
+            if name in _IO:
+                v = v * (units.y_sign if name == "y0" else 1.0)
+                out.append(Parameter(f"{cid}.{name}", v, s, "image"))
+            else:
+                unit = "" if cam.units[j] == "1" else f" [{cam.units[j]}]"
+                out.append(Parameter(f"{cid}.{name}{unit}", v, s, "1"))
+    return out
