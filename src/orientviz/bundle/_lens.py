@@ -11,7 +11,7 @@ two models are offered, in the two directions users meet:
 
 * ``kind="backward"`` — photogrammetry (DBAT's model 3, PhotoModeler, Australis): the
   distortion is a function of the *measured* point m; the corrected point must equal the
-  pinhole point c·n. With z = [[1 + as, sk], [0, 1]] (m − (x0, y0)), r² = |z|²::
+  pinhole point c·n. With z = [[1 + as, sk], [0, 1]] (m − (x0, y0)), r² = ‖z‖²::
 
       x̄(m) = z + z (K1 r² + K2 r⁴ + K3 r⁶)
                + (P1 (r² + 2 z_x²) + 2 P2 z_x z_y,  P2 (r² + 2 z_y²) + 2 P1 z_x z_y)
