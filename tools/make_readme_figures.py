@@ -16,6 +16,7 @@ Both are written as palette PNGs and must stay under 400 KB (checked here).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib.util
 import io
 import pathlib
@@ -23,6 +24,8 @@ import shutil
 import socket
 import tempfile
 import time
+from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 
@@ -77,6 +80,46 @@ def _frame_camera(camera, zoom: float, panel: float) -> None:
     camera.position, camera.look_at = pos + shift, look + shift
 
 
+@contextlib.contextmanager
+def viewer_page(
+    content: Any, viewport: tuple[int, int] = VIEWPORT, settle_s: float = 5.0
+) -> Iterator[tuple[Any, Any]]:
+    """The viewer on ``content`` (served on 127.0.0.1) in a headless Chromium page, drawn.
+
+    Yields ``(app, page)`` once the page is connected and the scene has had ``settle_s``
+    seconds to arrive (software WebGL); stops the server and the browser afterwards.
+    """
+    from playwright.sync_api import sync_playwright
+
+    from orientviz.viewer.app import ViewerApp
+
+    chromium, flags = _chromium_settings()
+    app = ViewerApp(content, host="127.0.0.1", port=_free_port(), verbose=False)
+    profile = tempfile.mkdtemp(prefix="orientviz-figure-chromium-")
+    try:
+        with sync_playwright() as p:
+            context = p.chromium.launch_persistent_context(
+                profile, executable_path=chromium, headless=True, args=flags,
+                viewport={"width": viewport[0], "height": viewport[1]},
+            )  # fmt: skip
+            try:
+                page = context.new_page()
+                page.goto(app.url)
+                page.wait_for_selector("canvas", timeout=60_000)
+                deadline = time.monotonic() + 60
+                while not app.server.get_clients() and time.monotonic() < deadline:
+                    time.sleep(0.1)
+                # the "software WebGL" notice is about this headless machine, not the viewer
+                page.add_style_tag(content=".mantine-Notifications-root {display: none}")
+                time.sleep(settle_s)  # the scene arrives and is drawn
+                yield app, page
+            finally:
+                context.close()
+    finally:
+        app.stop()
+        shutil.rmtree(profile, ignore_errors=True)
+
+
 def viewer_figure(
     path: pathlib.Path,
     *,
@@ -87,40 +130,16 @@ def viewer_figure(
 ) -> None:
     """Screenshot of the viewer on the default demo, optionally after "run to convergence"."""
     from PIL import Image
-    from playwright.sync_api import sync_playwright
 
-    from orientviz.viewer.app import DEFAULT_DEMO, ViewerApp
+    from orientviz.viewer.app import DEFAULT_DEMO
 
-    chromium, flags = _chromium_settings()
-    app = ViewerApp(DEFAULT_DEMO, host="127.0.0.1", port=_free_port(), verbose=False)
-    profile = tempfile.mkdtemp(prefix="orientviz-figure-chromium-")
-    try:
-        with sync_playwright() as p:
-            context = p.chromium.launch_persistent_context(
-                profile, executable_path=chromium, headless=True, args=flags,
-                viewport={"width": VIEWPORT[0], "height": VIEWPORT[1]},
-            )  # fmt: skip
-            try:
-                page = context.new_page()
-                page.goto(app.url)
-                page.wait_for_selector("canvas", timeout=60_000)
-                deadline = time.monotonic() + 60
-                while not app.server.get_clients() and time.monotonic() < deadline:
-                    time.sleep(0.1)
-                time.sleep(settle_s)  # the scene arrives and is drawn (software WebGL)
-                for client in app.server.get_clients().values():
-                    _frame_camera(client.camera, zoom, shift)
-                if converge:
-                    page.get_by_role("button", name="run to convergence").click()
-                # the "software WebGL" notice is about this headless machine, not the viewer
-                page.add_style_tag(content=".mantine-Notifications-root {display: none}")
-                time.sleep(settle_s)
-                png = page.screenshot()
-            finally:
-                context.close()
-    finally:
-        app.stop()
-        shutil.rmtree(profile, ignore_errors=True)
+    with viewer_page(DEFAULT_DEMO, settle_s=settle_s) as (app, page):
+        for client in app.server.get_clients().values():
+            _frame_camera(client.camera, zoom, shift)
+        if converge:
+            page.get_by_role("button", name="run to convergence").click()
+        time.sleep(settle_s)
+        png = page.screenshot()
     image = Image.open(io.BytesIO(png))
     rgb = np.asarray(image.convert("RGB"), dtype=float)
     if rgb.std() < 10:

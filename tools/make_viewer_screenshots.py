@@ -17,9 +17,7 @@ from __future__ import annotations
 import argparse
 import io
 import pathlib
-import shutil
 import sys
-import tempfile
 import time
 from collections.abc import Callable
 from typing import Any
@@ -82,35 +80,13 @@ SCENARIOS: dict[str, Callable[[Any, Any], None]] = {
 def screenshot(name: str, path: pathlib.Path, settle_s: float = 5.0) -> None:
     """Serve demo ``name``, play its scenario in Chromium and save the screenshot."""
     from PIL import Image
-    from playwright.sync_api import sync_playwright
 
-    from orientviz.viewer.app import ViewerApp
     from orientviz.viewer.demos import load_demo
 
-    chromium, flags = mrf._chromium_settings()
-    app = ViewerApp(load_demo(name), host="127.0.0.1", port=0, verbose=False)
-    profile = tempfile.mkdtemp(prefix="orientviz-shot-chromium-")
-    try:
-        with sync_playwright() as p:
-            context = p.chromium.launch_persistent_context(
-                profile, executable_path=chromium, headless=True, args=flags,
-                viewport={"width": VIEWPORT[0], "height": VIEWPORT[1]},
-            )  # fmt: skip
-            try:
-                page = context.new_page()
-                page.goto(app.url)
-                page.wait_for_selector("canvas", timeout=60_000)
-                _wait(lambda: len(app.server.get_clients()) > 0)
-                page.add_style_tag(content=".mantine-Notifications-root {display: none}")
-                time.sleep(settle_s)  # the scene arrives and is drawn (software WebGL)
-                SCENARIOS[name](app, page)
-                time.sleep(settle_s)
-                png = page.screenshot()
-            finally:
-                context.close()
-    finally:
-        app.stop()
-        shutil.rmtree(profile, ignore_errors=True)
+    with mrf.viewer_page(load_demo(name), VIEWPORT, settle_s) as (app, page):
+        SCENARIOS[name](app, page)
+        time.sleep(settle_s)
+        png = page.screenshot()
     image = Image.open(io.BytesIO(png))
     if np.asarray(image.convert("RGB"), dtype=float).std() < 10:
         raise SystemExit(f"the screenshot of {name!r} is blank")

@@ -128,6 +128,7 @@ def test_book_builds_offline(tmp_path):
         "chapters/command_line.html",
         "chapters/reproductions.html",
         "chapters/teaching.html",
+        "chapters/viewer.html",
         "api/index.html",
     ):
         assert chapter in pages, f"missing {chapter}"

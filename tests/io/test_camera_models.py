@@ -40,6 +40,12 @@ def test_dbat_calibration_from_a_pixel_problem_file_equals_the_bundle_route(camc
     c_px = float(line.split("c ")[1].split(" ±")[0])
     assert abs(c_px * p - cam.get("c")[0]) < 1e-6
     assert any("K2~K3" in n for n in sol.notes)  # the high correlation is reported
+    params = {q["name"]: q for q in sol.as_dict()["parameters"]}  # --json: full precision
+    assert params["C4040Z.c"]["unit"] == "px"
+    assert abs(params["C4040Z.c"]["value"] * p - cam.get("c")[0]) < 1e-9
+    assert abs(-params["C4040Z.y0"]["value"] * p - cam.get("y0")[0]) < 1e-9  # y down
+    assert params["C4040Z.K1 [mm⁻²]"]["value"] == pytest.approx(cam.get("K1")[0], rel=1e-12)
+    assert "C4040Z.sk" not in params  # fixed: not an estimate
 
 
 def _to_pixels(doc: dict, p: float) -> dict:
@@ -99,7 +105,9 @@ def test_an_additional_parameter_set_per_camera_from_the_file():
     assert sol.adjustment.additional.size == 12
 
 
-def test_a_calibration_without_its_lens_terms_does_not_fit_and_says_so(camcal_doc, tmp_path, capsys):
+def test_a_calibration_without_its_lens_terms_does_not_fit_and_says_so(
+    camcal_doc, tmp_path, capsys
+):
     from orientviz.cli import main
 
     doc = copy.deepcopy(camcal_doc)
@@ -120,3 +128,20 @@ def test_the_shipped_calibration_file_is_what_the_converter_writes_now():
     from orientviz.io.datasets import dataset_path
 
     assert dataset_path("dbat_camcal").read_text(encoding="utf-8") == D.problem_text()
+
+
+def test_parameters_of_an_additional_set_free_weighted_or_fixed():
+    block = simulate_block(2, 6, rng=5, control="full").block
+    doc = json.loads(dumps_problem(problem_from_block(block, columnar=False)))
+    doc["cameras"][0].update(additional="ebner12", free=["b1", "b2"], sigma={"b3": 5.0})
+    sol = solve_problem(problem_from_document(doc))
+    b = 0.4 * float(np.min(block.cameras.format_mm[0]))
+    sig = np.full(12, 1e-6)  # the others held at 0
+    sig[:2], sig[2] = np.inf, 5.0
+    ref = bundle_adjust(block, additional=Ebner12(b=b), ap_sigma=sig)
+    assert abs(sol.adjustment.sigma0 - ref.sigma0) < 1e-9 * ref.sigma0
+    a = sol.adjustment.additional
+    assert np.all(np.abs(a[3:]) < 1e-9) and np.any(np.abs(a[:3]) > 1e-3)
+    doc["cameras"][0]["free"] = ["k1"]
+    with pytest.raises(Exception, match=r"cameras\[0\]\.free: 'k1' is not a parameter of ebner12"):
+        problem_from_document(doc)

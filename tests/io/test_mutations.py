@@ -135,9 +135,9 @@ def test_solve_on_mutated_files_never_raises(text, tmp_path_factory, capsys):
     args = argparse.Namespace(file=str(path), method=None, json=True)
     code = run_from_cli(args)
     out, err = capsys.readouterr()
-    assert code in (0, 2, 3)
+    assert code in (0, 2, 3, 4)  # 4: the model does not fit the data (report printed)
     assert "Traceback" not in err
-    if code == 2:
+    if code in (2, 4):
         assert err.count("\n") == 1 and str(path) in err
-    if code == 0:
+    if code in (0, 4):
         assert json.loads(out)["converged"] is True

@@ -196,6 +196,21 @@ def test_panel_drag_control_point(app):
     assert app.messages == []
     assert st.edits.known[k, 2] == pytest.approx(st.changes[1].edits.known[k, 2] + 0.3, abs=1e-3)
     assert "moved" in st.changes[-1].label
+    h["undo"].value = None  # the control point and its gizmo go back
+    back = np.asarray(act.drag.position, dtype=float) + app.scene.geo.frame.origin
+    np.testing.assert_allclose(back, pos, atol=1e-3)
+    np.testing.assert_array_equal(st.edits.known[k], st.changes[1].edits.known[k])
+    h["auto_precision"].value = False  # large blocks: the quick answer only
+    o = st.block.observations
+    rays = np.bincount(o.point, minlength=st.block.n_points)
+    k = next(k for k, j in enumerate(act.rays) if rays[o.point[j]] >= 3)  # a well-seen point
+    h["ray"].value = h["ray"].options[k]
+    h["toggle_ray"].value = None
+    assert app.messages == []
+    assert st.result.normalized_residuals is None and "with precision" not in act.last_timing
+    h["auto_precision"].value = True  # switched on again: added to the current state
+    assert st.result.normalized_residuals is not None
+    assert st.changes[-1].result is st.result
 
 
 def test_quality_colouring_and_worst_lists(app):
@@ -216,3 +231,19 @@ def test_quality_colouring_and_worst_lists(app):
     np.testing.assert_allclose(target, p.state.block.points.xyz[q.worst_points[0]])
     h["measure"].value = "role (no quality)"
     assert tuple(app.scene.image_nodes[0].color) == (40, 70, 160)
+
+
+def test_a_change_the_precision_refuses_is_undone(app, monkeypatch):
+    p = app.panel
+    st, act, h = p.state, p.act, p.act.handles
+    n = len(st.changes)
+    before = st.changes[-1]
+
+    def refuse():
+        raise ov.NotDeterminableError("1 parameter combination is not determinable")
+
+    monkeypatch.setattr(act, "add_precision", refuse)
+    h["toggle_ray"].value = None
+    assert app.messages and "not determinable" in app.messages[-1]
+    assert len(st.changes) == n and st.edits.obs_on.all()
+    same_state(st, before)

@@ -11,27 +11,11 @@ from orientviz.viewer.adjuster import small_bundle
 from orientviz.viewer.app import ViewerApp
 from orientviz.viewer.demos import demo_from_block
 
+from .browser import gui_control, wait_for
+
 pytestmark = [pytest.mark.browser, pytest.mark.slow]  # about 10 s and 6 s with software WebGL
 
 SHOT = "/tmp/orientviz_viewer_browser.png"
-
-
-def wait_for(predicate, timeout=30.0, step=0.1):
-    """Poll ``predicate`` until it is true or ``timeout`` seconds have passed."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(step)
-    return False
-
-
-def slider_thumb(page, label):
-    """The draggable thumb (role=slider) of the GUI slider labelled ``label``."""
-    row = page.locator("div", has=page.locator("label", has_text=label)).filter(
-        has=page.locator("[role=slider]")
-    )
-    return row.last.locator("[role=slider]").first
 
 
 def test_viewer_renders_and_slider_updates_python(browser_page, block):
@@ -60,7 +44,7 @@ def test_viewer_renders_and_slider_updates_python(browser_page, block):
         st = app.demo.state
         before = np.asarray(app.scene.nodes["residuals"].points).copy()
         omega0 = st.block.images.angles[0, 0]
-        thumb = slider_thumb(page, "omega [gon]")
+        thumb = gui_control(page, "omega [gon]")
         thumb.focus()
         for _ in range(5):
             thumb.press("ArrowRight")  # 5 steps of 1 c

@@ -54,7 +54,8 @@ def test_heat_strip_draws_abs_rho():
     rho[1, 2, 3] = -1.0
     img = heat_strip(rho, cell=4, gap=2)
     assert img.shape == (24, 2 * 24 + 2, 3)
-    assert np.all(img[:, :24] == 255)  # ρ = 0: white
+    assert np.all(img[1:-1, 1:23] == 255)  # ρ = 0: white (inside the grey frame)
+    assert np.all(img[0, :24] == 150) and np.all(img[:, 24:26] == 255)  # frame, gap
     cell = img[2 * 4 + 1, 26 + 3 * 4 + 1]
     assert cell[0] < 150 and cell[1] < 40  # |ρ| = 1: dark red
 

@@ -133,11 +133,14 @@ class BundleResult(BlockAdjustment):
     camera: LensEstimates | None = None
 
 
-def _intersect_check_points(block, X0: F64, angles: F64, chk: NDArray[np.int64]) -> F64:
+def _intersect_check_points(
+    block, X0: F64, angles: F64, chk: NDArray[np.int64], prob=None, ap: F64 | None = None
+) -> F64:
     """Check points intersected from their own rays with the adjusted orientations (m).
 
     Least-squares forward intersection (:func:`orientviz.orientation.intersection.intersect_points`),
-    NaN for points with fewer than two rays or parallel rays.
+    NaN for points with fewer than two rays or parallel rays. With a camera model
+    (``prob.ap.lens``) the rays are first corrected by the estimated camera.
     """
     obs = block.observations
     col = -np.ones(block.n_points, np.int64)
@@ -147,11 +150,17 @@ def _intersect_check_points(block, X0: F64, angles: F64, chk: NDArray[np.int64])
     if sel.size == 0:
         return out
     cam = block.images.camera
+    xy, io = obs.xy[sel], (block.cameras.c[cam], block.cameras.x0[cam], block.cameras.y0[cam])
+    image = obs.image[sel]
+    if prob is not None and prob.ap.lens is not None:  # per ray: as a pinhole saw it
+        xy, io_ray = prob.ap.lens.pinhole(ap, prob.ap.group[image], xy)
+        image = np.arange(sel.size)  # one "image" per ray carries its ray's c, x0, y0
+        X0, angles = X0[obs.image[sel]], angles[obs.image[sel]]
+        io = (io_ray[:, 0], io_ray[:, 1], io_ray[:, 2])
     res = intersect_points(
-        obs.xy[sel], obs.image[sel], col[obs.point[sel]], X0,
+        xy, image, col[obs.point[sel]], X0,
         matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2], block.sequence),
-        block.cameras.c[cam], block.cameras.x0[cam], block.cameras.y0[cam],
-        sigma=obs.sigma[sel], n_points=chk.size, on_degenerate="nan",
+        *io, sigma=obs.sigma[sel], n_points=chk.size, on_degenerate="nan",
     )  # fmt: skip
     return res.xyz
 
@@ -166,7 +175,7 @@ def finish_result(
     # check points: intersect with the adjusted orientations from their own rays
     chk = np.flatnonzero(block.points.role == CHECK)
     if chk.size:
-        xyz[chk] = _intersect_check_points(block, st.X0, st.angles, chk)
+        xyz[chk] = _intersect_check_points(block, st.X0, st.angles, chk, prob, st.ap)
     check = check_points_of(block, xyz)
     # residuals of all image observations (v = f − l)
     obs = block.observations

@@ -4,7 +4,8 @@ Every action changes :attr:`BlockState.edits <orientviz.viewer.state.BlockState.
 and re-solves warm-started from the current estimates
 (:meth:`~orientviz.viewer.state.BlockState.act`). The answer is drawn in two passes: the
 adjustment without its precision first (geometry, residuals, σ̂0 — the quick answer),
-then the cofactors (normalised residuals, quality colours, ellipsoids). Each action is
+then the cofactors (normalised residuals, quality colours, ellipsoids; by default only
+for blocks up to :data:`AUTO_PRECISION_IMAGES` images). Each action is
 an entry of the "changes" list with its σ̂0; choosing an entry rewinds to it exactly,
 "undo" goes one entry back.
 
@@ -21,6 +22,9 @@ from typing import Any
 import numpy as np
 
 NONE = "—"
+#: Above this many images the precision pass after an action is off by default (large
+#: blocks: the quick answer stays quick; tick "precision after each action" to add it).
+AUTO_PRECISION_IMAGES: int = 500
 
 
 class ActControls:
@@ -50,6 +54,10 @@ class ActControls:
             h["control"] = gui.add_dropdown("control point", ids)
             h["toggle_control"] = gui.add_button("control off / on")
             h["drag"] = gui.add_checkbox("drag the control point", False)
+            h["auto_precision"] = gui.add_checkbox(
+                "precision after each action", b.n_images <= AUTO_PRECISION_IMAGES,
+                hint="cofactors, quality colours and ellipsoids after the quick answer",
+            )  # fmt: skip
             h["undo"] = gui.add_button("undo")
             h["changes"] = gui.add_dropdown("changes (σ̂0)", (NONE,), hint="choose one to rewind")
             h["act_info"] = gui.add_markdown("")
@@ -59,6 +67,7 @@ class ActControls:
         h["toggle_control"].on_click(p.guard(lambda _e: self.toggle_control()))
         h["drag"].on_update(p.guard(lambda _e: self.show_drag(bool(h["drag"].value))))
         h["control"].on_update(p.guard(lambda _e: self.show_drag(bool(h["drag"].value))))
+        h["auto_precision"].on_update(p.guard(lambda _e: self._precision_switched()))
         h["undo"].on_click(p.guard(lambda _e: self.undo()))
         h["changes"].on_update(p.guard(lambda _e: self.rewind_to_choice()))
         for name in ("toggle_control", "drag", "control"):
@@ -91,10 +100,26 @@ class ActControls:
         p.scene.update()
         p.refresh(quality=False)
         self.last_timing["answer"] = time.perf_counter() - t
-        self.add_precision()
-        self.last_timing["with precision"] = time.perf_counter() - t
-        st.update_current_change()
+        if self.handles["auto_precision"].value:
+            try:
+                self.add_precision()
+            except Exception:  # e.g. a defect only the precision finds: the change is undone
+                st.undo()
+                del st.changes[st.change_cursor + 1 :]
+                self._after_rewind()
+                raise
+            self.last_timing["with precision"] = time.perf_counter() - t
+            st.update_current_change()
+        else:
+            p.refresh()
         self.refresh()
+
+    def _precision_switched(self) -> None:
+        """The precision switched on again: add it to the current state now."""
+        if self.handles["auto_precision"].value and self.state.at_result:
+            self.add_precision()
+            self.state.update_current_change()
+            self.refresh()
 
     def add_precision(self) -> None:
         """Second pass: the cofactors at the new solution, then colours and ellipsoids."""
@@ -145,6 +170,8 @@ class ActControls:
 
     def _after_rewind(self) -> None:
         p = self.panel
+        if self.drag is not None:  # the gizmo goes back with the control point
+            self.show_drag(True)
         p.scene.update()
         p.set_exaggeration()
         p.scene.update_ellipsoids()
@@ -217,9 +244,7 @@ class ActControls:
                 f"{mp.dropped_points.size} points"
             )
         t = self.last_timing
-        if "with precision" in t:
-            lines.append(
-                f"last action: answer {1000 * t['answer']:.0f} ms, "
-                f"with precision {1000 * t['with precision']:.0f} ms"
-            )
+        if "answer" in t:
+            more = f", with precision {1000 * t['with precision']:.0f} ms" if len(t) > 1 else ""
+            lines.append(f"last action: answer {1000 * t['answer']:.0f} ms{more}")
         h["act_info"].content = "  \n".join(lines)

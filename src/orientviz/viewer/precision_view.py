@@ -106,7 +106,8 @@ def heat_strip(rho: F64, cell: int = 7, gap: int = 3) -> NDArray[np.uint8]:
     """The correlation blocks side by side as an RGB image: white (0) … dark red (1).
 
     One tile of 6 × 6 cells per neighbour (rows: the selected image's X0 … κ, columns:
-    the neighbour's), tiles separated by ``gap`` white pixels; abs(ρ) is drawn.
+    the neighbour's), framed in grey and separated by ``gap`` white pixels; abs(ρ) is
+    drawn.
     """
     k = rho.shape[0]
     stops = np.array([[255, 255, 255], [250, 200, 120], [220, 60, 40], [110, 0, 20]], float)
@@ -116,6 +117,8 @@ def heat_strip(rho: F64, cell: int = 7, gap: int = 3) -> NDArray[np.uint8]:
     for t in range(k):
         tile = ramp(np.abs(rho[t]).reshape(-1), 1.0, stops).reshape(6, 6, 3)
         tile = np.repeat(np.repeat(tile, cell, axis=0), cell, axis=1)
+        tile[[0, -1], :] = 150  # a thin grey frame: tiles stay apart where ρ ≈ 0
+        tile[:, [0, -1]] = 150
         x = t * (6 * cell + gap)
         img[:, x : x + 6 * cell] = tile
     return img

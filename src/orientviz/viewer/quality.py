@@ -42,7 +42,7 @@ MEASURES: dict[str, tuple[str, str, bool]] = {
 #: The quality ramp: good (blue-green) → fair (yellow) → bad (red), readable on white.
 STOPS = np.array([[40, 110, 190], [40, 170, 120], [235, 190, 30], [215, 40, 40]], float)
 
-#: Upper end of the colour scale of the measures of normalised residuals, ``|w|``, (W_CRITICAL ≈ 3.29 sits near red).
+#: Upper end of the colour scale of the abs(w) measures (W_CRITICAL ≈ 3.29 sits near red).
 W_SCALE: float = 4.0
 
 

@@ -28,7 +28,7 @@ from ...errors import InputError
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
 from ..solution import Solution
-from ._cameras import bundle_camera_options, camera_notes
+from ._cameras import bundle_camera_options, camera_notes, camera_parameters
 from ._diverge import divergence_note
 from ._frame import block_from_tables, read_frame_tables, require_finite, tables_from_block
 
@@ -353,6 +353,7 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
         observation_quantity="image",
         critical=float(problem.options.get("critical", W_CRITICAL)),
         notes=notes,
+        parameters=camera_parameters(block, adj, problem.units),
     )
 
 
