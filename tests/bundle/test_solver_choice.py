@@ -116,5 +116,5 @@ def test_precision_is_the_same_whatever_solved_and_formed_the_reduced_system():
     )
     np.testing.assert_allclose(dense.ray_gains.points, banded.ray_gains.points, rtol=1e-7)
     for name in ("exterior", "points"):
-        a, b = dense.cofactor_blocks[name], banded.cofactor_blocks[name]
+        a, b = dense.cofactor_groups[name], banded.cofactor_groups[name]
         np.testing.assert_allclose(a, b, rtol=0, atol=1e-9 * np.abs(b).max())
