@@ -253,7 +253,7 @@ def main(argv=None) -> int:
     ap.add_argument("--threads", type=int, default=2, help="threads for the peers")
     ap.add_argument("--ov-threads", type=int, default=1, help="BLAS threads for orientviz")
     ap.add_argument("--reps", type=int, default=5)
-    ap.add_argument("--solver", default="banded")
+    ap.add_argument("--solver", default="auto", help="orientviz's reduced-system solver")
     ap.add_argument("--control", default="fixed", choices=["fixed", "weighted"])
     ap.add_argument("--reduced", action="store_true", help="compare solvers of S instead")
     ap.add_argument("--dense", action="store_true", help="include dense Cholesky in --reduced")

@@ -80,7 +80,7 @@ def main(argv=None) -> int:
         tp, ts = wall["plain", False], wall["sc", False]
         cp, cs = cpu["plain", False], cpu["sc", False]
         rp, rs = res["plain", False], res["sc", False]
-        q = rs.blocks["additional"].stop - rs.blocks["additional"].start
+        q = rs.groups["additional"].stop - rs.groups["additional"].start
         print(
             f"{size:7s} {block.n_images:6d} {q:4d} {min(tp):8.3f} {min(ts):9.3f} "
             f"{min(ts) / min(tp):6.2f} {statistics.median(ts) / statistics.median(tp):9.2f} "

@@ -28,7 +28,7 @@ def main() -> None:
     # adjusted points (p, 3) m and their a-posteriori σ from the 3 × 3 cofactor blocks
     # (adj is a BundleResult: exterior (m, 6), points (p, 3), check_points, history, …)
     xyz = adj.points
-    Q = adj.cofactor_blocks["points"]  # (p, 3, 3), m² per unit weight
+    Q = adj.cofactor_groups["points"]  # (p, 3, 3), m² per unit weight
     sigma_xyz = adj.sigma0 * np.sqrt(np.diagonal(Q, axis1=1, axis2=2))
 
     tie = block.points.role == ov.TIE  # the point roles: ov.TIE, ov.CONTROL, ov.CHECK

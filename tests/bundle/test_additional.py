@@ -81,7 +81,7 @@ def _fit(columns, truth, rng, sigma=0.002):
         l,
         sigma,
         names=[f"a{i}" for i in range(k)],
-        blocks={"additional": slice(0, k)},
+        groups={"additional": slice(0, k)},
     )
     return adj
 

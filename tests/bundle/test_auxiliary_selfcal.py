@@ -233,7 +233,7 @@ def _bundle_x(res, dense):
     m = dense.block.n_images
     ext = res.exterior
     xyz = res.points
-    ap = res.x[res.blocks["additional"]]
+    ap = res.x[res.groups["additional"]]
     gd = {}
     for kind, arr in res.auxiliary.offsets.items():
         names = [n for n in res.auxiliary.names if n.startswith(kind + ".")]
@@ -273,12 +273,12 @@ def test_precision_with_auxiliary_data_equals_the_dense_inverse(joint):
     def close(got, ref):
         np.testing.assert_allclose(got, ref, rtol=1e-9, atol=1e-9 * np.abs(ref).max())
 
-    close(res.cofactor_blocks["exterior"], ext)
-    close(res.cofactor_blocks["points"][dense.var], pts)
-    close(res.cofactor_blocks["additional"], Q[dense.o_ap : dense.o_g, dense.o_ap : dense.o_g])
+    close(res.cofactor_groups["exterior"], ext)
+    close(res.cofactor_groups["points"][dense.var], pts)
+    close(res.cofactor_groups["additional"], Q[dense.o_ap : dense.o_g, dense.o_ap : dense.o_g])
     # offsets/drifts: the bundle's order mapped onto the dense one
     perm = [res.auxiliary.names.index(n) for n in dense.gnames]
-    Qg = res.cofactor_blocks["auxiliary"][np.ix_(perm, perm)]
+    Qg = res.cofactor_groups["auxiliary"][np.ix_(perm, perm)]
     close(Qg, Q[dense.o_g :, dense.o_g :])
     # redundancy numbers: image rays (used ones), parameter pseudo-observations, aux rows
     ref_r = 1.0 - np.einsum("ij,jk,ik->i", J, Q, J)
@@ -338,7 +338,7 @@ def test_precision_without_parameters_equals_the_dense_inverse(case, kind):
     m = block.n_images
     ext = np.stack([Q[6 * i : 6 * i + 6, 6 * i : 6 * i + 6] for i in range(m)])
     np.testing.assert_allclose(
-        res.cofactor_blocks["exterior"], ext, rtol=1e-9, atol=1e-9 * np.abs(ext).max()
+        res.cofactor_groups["exterior"], ext, rtol=1e-9, atol=1e-9 * np.abs(ext).max()
     )
     ref_r = 1.0 - np.einsum("ij,jk,ik->i", J, Q, J)
     sl = res.obs_slices
@@ -346,7 +346,7 @@ def test_precision_without_parameters_equals_the_dense_inverse(case, kind):
         res.redundancy_numbers[sl["auxiliary"]], ref_r[2 * dense.used.size :], atol=1e-9
     )
     assert np.nansum(res.redundancy_numbers) == pytest.approx(res.redundancy, abs=1e-6)
-    assert res.cofactor_blocks["auxiliary"].shape == (len(dense.gnames),) * 2
+    assert res.cofactor_groups["auxiliary"].shape == (len(dense.gnames),) * 2
 
 
 def _bundle_x_plain(res, dense):
@@ -372,7 +372,7 @@ def test_joint_with_parameters_equals_the_alternation(case):
         np.testing.assert_allclose(joint.auxiliary.offsets[kind], alt.offsets[kind], atol=0.03)
     d = joint.points - alt.adjustment.points
     assert np.nanmax(np.abs(d)) < 0.05
-    a = joint.blocks["additional"]
+    a = joint.groups["additional"]
     da = joint.x[a] - alt.adjustment.x[a]
-    sa = joint.sigma0 * np.sqrt(np.diag(joint.cofactor_blocks["additional"]))
+    sa = joint.sigma0 * np.sqrt(np.diag(joint.cofactor_groups["additional"]))
     assert np.abs(da / sa).max() < 0.05  # the parameters agree to a few per cent of their σ

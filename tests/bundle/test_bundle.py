@@ -95,7 +95,7 @@ def test_noisy_block_statistics_and_check_points():
     rms = res.check_rms
     tie = sim.block.points.role == 0
     sig = np.sqrt(
-        np.mean(res.std().reshape(-1)[res.blocks["points"]].reshape(-1, 3)[tie] ** 2, axis=0)
+        np.mean(res.std().reshape(-1)[res.groups["points"]].reshape(-1, 3)[tie] ** 2, axis=0)
     )
     ratio = rms / sig
     assert np.all((ratio > 0.5) & (ratio < 2.0)), ratio
@@ -192,7 +192,7 @@ def test_self_calibration_recovers_a_simulated_affinity():
     plain = ov.bundle_adjust(sim.block, precision=False)
     cal = ov.bundle_adjust(sim.block, additional=ap, ap_sigma=100.0)
     est = cal["additional"]
-    sd = cal.std()[cal.blocks["additional"]]
+    sd = cal.std()[cal.groups["additional"]]
     assert np.all(np.abs(est - true) < 4 * sd), (est, sd)
     assert cal.sigma0 < plain.sigma0
     assert abs(cal.sigma0 - 1.0) < 0.1

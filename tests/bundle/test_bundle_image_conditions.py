@@ -55,7 +55,7 @@ def test_the_count_names_a_real_null_space(monkeypatch, seed):
         assert {p.split(".")[0] for p in exc.parameters} == set(flagged)
         return
     assert adj.converged
-    sd = np.sqrt(np.einsum("mii->mi", adj.cofactor_blocks["exterior"])[:, :3]) * adj.sigma0
+    sd = np.sqrt(np.einsum("mii->mi", adj.cofactor_groups["exterior"])[:, :3]) * adj.sigma0
     i = list(block.images.ids).index(flagged[0])
     extent = np.ptp(adj.exterior[:, :3], axis=0).max()
     assert sd[i].max() > extent

@@ -102,7 +102,7 @@ def test_precision_equals_dense_inverse(case):
     ext_blocks = np.stack([Q[6 * i : 6 * i + 6, 6 * i : 6 * i + 6] for i in range(m)])
     # exact algebra on a well-conditioned system: agreement to rounding
     np.testing.assert_allclose(
-        res.cofactor_blocks["exterior"], ext_blocks, rtol=1e-7, atol=1e-9 * np.abs(ext_blocks).max()
+        res.cofactor_groups["exterior"], ext_blocks, rtol=1e-7, atol=1e-9 * np.abs(ext_blocks).max()
     )
     pt_blocks = np.stack(
         [
@@ -111,7 +111,7 @@ def test_precision_equals_dense_inverse(case):
         ]
     )
     np.testing.assert_allclose(
-        res.cofactor_blocks["points"][free],
+        res.cofactor_groups["points"][free],
         pt_blocks,
         rtol=1e-7,
         atol=1e-9 * np.abs(pt_blocks).max(),
@@ -122,7 +122,7 @@ def test_precision_equals_dense_inverse(case):
     assert np.isclose(np.nansum(res.redundancy_numbers), res.redundancy, atol=1e-6)
     if case == "ap":
         q0 = 6 * m + 3 * free.size
-        np.testing.assert_allclose(res.cofactor_blocks["additional"], Q[q0:, q0:], rtol=1e-7)
+        np.testing.assert_allclose(res.cofactor_groups["additional"], Q[q0:, q0:], rtol=1e-7)
 
 
 @pytest.mark.parametrize("nb", [16, 96])  # 96: block rows wider than the band (kd = 34)
@@ -156,7 +156,7 @@ def test_precision_at_last_linearisation_is_that_of_the_solution():
     Q_lin = dense_reference(res, sim.block, x=res.history[-2].x)[0]
     m = sim.block.n_images
     ext = np.stack([Q_final[6 * i : 6 * i + 6, 6 * i : 6 * i + 6] for i in range(m)])
-    got = res.cofactor_blocks["exterior"]
+    got = res.cofactor_groups["exterior"]
     lin = np.stack([Q_lin[6 * i : 6 * i + 6, 6 * i : 6 * i + 6] for i in range(m)])
     np.testing.assert_allclose(got, lin, rtol=1e-7, atol=1e-9 * np.abs(lin).max())
     # σ of the orientations at the solution and at the reused point: same to 1e-5
@@ -203,14 +203,14 @@ def test_precision_with_strip_parameters_equals_dense_inverse(path, monkeypatch)
     m = block.n_images
     ext = np.stack([Q[6 * i : 6 * i + 6, 6 * i : 6 * i + 6] for i in range(m)])
     tol = 1e-9
-    _assert_cofactors_close(res.cofactor_blocks["exterior"], ext, tol)
+    _assert_cofactors_close(res.cofactor_groups["exterior"], ext, tol)
     o = 6 * m
     pts = np.stack(
         [Q[o + 3 * j : o + 3 * j + 3, o + 3 * j : o + 3 * j + 3] for j in range(free.size)]
     )
-    _assert_cofactors_close(res.cofactor_blocks["points"][free], pts, tol)
+    _assert_cofactors_close(res.cofactor_groups["points"][free], pts, tol)
     q0 = 6 * m + 3 * free.size
-    _assert_cofactors_close(res.cofactor_blocks["additional"], Q[q0:, q0:], tol)
+    _assert_cofactors_close(res.cofactor_groups["additional"], Q[q0:, q0:], tol)
     # image-pair blocks of Q_cc (used by the 2-D tests of check rays)
     keys, blocks = res.exterior_pairs.keys, res.exterior_pairs.blocks
     r6 = np.arange(6)

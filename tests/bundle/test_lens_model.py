@@ -127,3 +127,24 @@ def test_check_points_are_intersected_through_the_estimated_camera(kind):
     # the same rays intersected as if the camera had no lens miss by far more
     plain = bundle_adjust(sim.block, additional=LensModel(kind, free=()), max_iter=50)
     assert np.max(np.abs(plain.check_points.difference)) > 100 * np.max(err)
+
+
+def test_a_forward_camera_in_opencvs_terms_projects_as_opencv_does():
+    from orientviz.bundle._lens import LensEstimates, opencv_camera
+    from orientviz.lens import forward_pixels
+
+    th = _theta("forward").copy()
+    th[4] = 0.0  # forward_pixels (OpenCV's formula, orientviz.lens) has no skew
+    est = LensEstimates("forward", FORWARD_NAMES, ("",) * 10, th[None], np.zeros((1, 10)),
+                        np.ones(10, bool), np.full((1, 10, 10), np.nan), np.ones(1))  # fmt: skip
+    p = 0.0032
+    cv = opencv_camera(est, p)
+    rng = np.random.default_rng(8)
+    nrm = rng.uniform(-0.4, 0.4, (9, 2))  # orientviz's normalised points (y up)
+    f = evaluate("forward", np.tile(th, (9, 1)), nrm, np.zeros((9, 2)), False)[0]
+    uv = forward_pixels(nrm * [1, -1], [cv[k] for k in ("fx", "fy", "cx", "cy", "k1", "k2",
+                                                         "k3", "p1", "p2")])  # fmt: skip
+    assert np.allclose(uv, f * [1 / p, -1 / p], atol=1e-9)  # pixels: x/p, −y/p
+    with pytest.raises(InputError, match="forward model is needed"):
+        opencv_camera(LensEstimates("backward", BACKWARD_NAMES, *[getattr(est, a) for a in (
+            "units", "value", "sigma", "estimated", "correlation", "r0")]), p)  # fmt: skip

@@ -29,17 +29,22 @@ def test_auto_chooses_banded_for_strips_and_dense_for_a_close_range_network():
     assert res.reduced_info["formation"] == "dense"
 
 
+def _network(name: str, strips: int):
+    """The close-range network 5 cm / 5 mrad off, or an aerial block of ``strips`` strips."""
+    if name == "aerial":
+        return ov.simulate_block(strips, 6, rng=4).block
+    return close_range_network(start_error=0.05)[0]
+
+
 @pytest.mark.parametrize("network", ["close-range", "aerial"])
 def test_every_solver_reaches_the_same_optimum(network):
-    if network == "aerial":
-        block = ov.simulate_block(3, 6, rng=4).block
-    else:
-        block, _ = close_range_network(start_error=0.05)
+    block = _network(network, 3)
     ref = ov.bundle_adjust(block, precision=False, solver="dense")
     assert ref.converged
+    auto = {"close-range": "dense", "aerial": "banded"}[network]
     for solver in ("banded", "sparse", "auto"):
         res = ov.bundle_adjust(block, precision=False, solver=solver)
-        assert res.solver == (solver if solver != "auto" else res.solver)
+        assert res.solver == (auto if solver == "auto" else solver)
         assert res.iterations == ref.iterations
         # the same linear systems factored differently: the same optimum to rounding
         np.testing.assert_allclose(res.x, ref.x, rtol=0, atol=1e-9 * np.abs(ref.x).max())
@@ -48,10 +53,7 @@ def test_every_solver_reaches_the_same_optimum(network):
 
 @pytest.mark.parametrize("network", ["close-range", "aerial"])
 def test_dense_and_pairwise_schur_complements_agree(network):
-    if network == "aerial":
-        block = ov.simulate_block(2, 6, rng=4).block
-    else:
-        block, _ = close_range_network(start_error=0.05)
+    block = _network(network, 2)
     prob = BundleProblem(block, point_setup(block, "fixed"), solver="dense")
     st = BundleState(block.images.X0, block.images.angles, block.points.xyz, np.zeros(0))
     rw, Je, Jp = prob.residuals(st, jac=True)
@@ -100,3 +102,19 @@ def test_image_blocks_are_the_pairs_of_images_sharing_a_point():
     got = set(zip(bi.tolist(), bk.tolist()))
     assert got == {(0, 0), (1, 1), (2, 2), (3, 3), (4, 4), (0, 1), (0, 2), (1, 2), (2, 3)}
     assert n_pairs == 6 + 3 + 1  # k(k + 1)/2 for tracks of 3, 2, 1 rays
+
+
+def test_precision_is_the_same_whatever_solved_and_formed_the_reduced_system():
+    block, _ = close_range_network(start_error=0.05)
+    dense = ov.bundle_adjust(block)  # S formed densely, Q_cp from the dense inverse
+    assert dense.solver == "dense" and dense.reduced_info["formation"] == "dense"
+    banded = ov.bundle_adjust(block, solver="banded")  # pairs of rays, selected inverse
+    assert banded.reduced_info["formation"] == "pairs"
+    np.testing.assert_allclose(dense.std(), banded.std(), rtol=1e-8)
+    np.testing.assert_allclose(
+        dense.redundancy_numbers, banded.redundancy_numbers, rtol=0, atol=1e-10
+    )
+    np.testing.assert_allclose(dense.ray_gains.points, banded.ray_gains.points, rtol=1e-7)
+    for name in ("exterior", "points"):
+        a, b = dense.cofactor_groups[name], banded.cofactor_groups[name]
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-9 * np.abs(b).max())

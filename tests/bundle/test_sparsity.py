@@ -27,7 +27,7 @@ def test_one_dense_step_equals_the_bundles_first_iteration(small):
     d = np.linalg.solve(N, b)
     m = nb.n_images
     res = ov.bundle_adjust(sim.block, max_iter=1, precision=False)
-    got = res.x[res.blocks["exterior"]].reshape(-1, 6)
+    got = res.x[res.groups["exterior"]].reshape(-1, 6)
     np.testing.assert_allclose(
         got[:, :3], sim.block.images.X0 + d[: 6 * m].reshape(-1, 6)[:, :3], atol=1e-6
     )

@@ -128,3 +128,20 @@ def test_the_shipped_calibration_file_is_what_the_converter_writes_now():
     from orientviz.io.datasets import dataset_path
 
     assert dataset_path("dbat_camcal").read_text(encoding="utf-8") == D.problem_text()
+
+
+def test_parameters_of_an_additional_set_free_weighted_or_fixed():
+    block = simulate_block(2, 6, rng=5, control="full").block
+    doc = json.loads(dumps_problem(problem_from_block(block, columnar=False)))
+    doc["cameras"][0].update(additional="ebner12", free=["b1", "b2"], sigma={"b3": 5.0})
+    sol = solve_problem(problem_from_document(doc))
+    b = 0.4 * float(np.min(block.cameras.format_mm[0]))
+    sig = np.full(12, 1e-6)  # the others held at 0
+    sig[:2], sig[2] = np.inf, 5.0
+    ref = bundle_adjust(block, additional=Ebner12(b=b), ap_sigma=sig)
+    assert abs(sol.adjustment.sigma0 - ref.sigma0) < 1e-9 * ref.sigma0
+    a = sol.adjustment.additional
+    assert np.all(np.abs(a[3:]) < 1e-9) and np.any(np.abs(a[:3]) > 1e-3)
+    doc["cameras"][0]["free"] = ["k1"]
+    with pytest.raises(Exception, match=r"cameras\[0\]\.free: 'k1' is not a parameter of ebner12"):
+        problem_from_document(doc)

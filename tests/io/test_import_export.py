@@ -32,7 +32,7 @@ def test_tables_agree_with_the_adjustment(adjusted):
         assert t["n_obs"][i] == sel.sum()
         assert t["rms_vx"][i] == pytest.approx(np.sqrt(np.mean(v[sel, 0] ** 2)))
         assert t["max_w"][i] == pytest.approx(np.nanmax(w[sel]))
-        ext = adj.blocks["exterior"]
+        ext = adj.groups["exterior"]
         assert t["kappa"][i] == pytest.approx(adj.x[ext][6 * i + 5])
         assert t["sZ0"][i] == pytest.approx(std[ext][6 * i + 2])
     p = point_table(block, adj)
@@ -40,7 +40,7 @@ def test_tables_agree_with_the_adjustment(adjusted):
     sel = block.observations.point == j
     assert p["n_rays"][j] == sel.sum()
     assert p["rms_vy"][j] == pytest.approx(np.sqrt(np.mean(v[sel, 1] ** 2)))
-    assert p["sZ"][j] == pytest.approx(std[adj.blocks["points"]][3 * j + 2])
+    assert p["sZ"][j] == pytest.approx(std[adj.groups["points"]][3 * j + 2])
     top = p.sorted_by("max_w", top=3)
     assert len(top) == 3 and top["max_w"][0] == pytest.approx(np.nanmax(p["max_w"]))
 
@@ -56,7 +56,7 @@ def test_table_without_adjustment_shows_misclosures(adjusted):
 def test_export_round_trip(adjusted, tmp_path):
     block, adj = adjusted
     out = export_results(block, adj, tmp_path)
-    ext = adj.x[adj.blocks["exterior"]].reshape(-1, 6)
+    ext = adj.x[adj.groups["exterior"]].reshape(-1, 6)
     again = ov.load_problem(out["json"]).data
     np.testing.assert_allclose(again.images.X0, ext[:, :3], atol=1e-6)
     col = ov.read_colmap(out["colmap"])
@@ -65,7 +65,7 @@ def test_export_round_trip(adjusted, tmp_path):
     assert list(col.points.ids) == [str(j + 1) for j in range(block.n_points)]
     csv = read_csv_table(out["points_csv"])
     assert csv["id"] == list(block.points.ids)
-    xyz = adj.x[adj.blocks["points"]].reshape(-1, 3)
+    xyz = adj.x[adj.groups["points"]].reshape(-1, 3)
     np.testing.assert_allclose(np.array(csv["Z[m]"], float), xyz[:, 2], rtol=1e-15)
     with pytest.raises(ov.InputError, match="unknown export format"):
         export_results(block, adj, tmp_path, formats=["xlsx"])

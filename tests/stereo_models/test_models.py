@@ -52,7 +52,7 @@ def test_planimetric_check_point_errors_match_the_predicted_precision():
         tp = res.point_index
         free = s.block.points.role[tp] == TIE
         e = (res.points[tp] - s.truth.points.xyz[tp])[free]
-        Q = res.cofactor_blocks["points"][: tp.size][free]
+        Q = res.cofactor_groups["points"][: tp.size][free]
         num += np.sum(e**2, axis=0)
         den += np.sum(np.einsum("nii->ni", Q), axis=0) * res.sigma0**2
     ratio = np.sqrt(num / den)
@@ -67,7 +67,7 @@ def test_rigorous_and_patm_agree_in_planimetry():
     a = ov.independent_models(s.block, method="rigorous", precision=True)
     b = ov.independent_models(s.block, method="pat-m")
     tp = a.point_index
-    sd = np.sqrt(np.einsum("nii->ni", a.cofactor_blocks["points"][: tp.size])) * a.sigma0
+    sd = np.sqrt(np.einsum("nii->ni", a.cofactor_groups["points"][: tp.size])) * a.sigma0
     d = a.points[tp] - b.points[tp]
     # the two estimators differ by less than 3 σ of the rigorous planimetry
     assert np.all(np.abs(d[:, :2]) < 3 * sd[:, :2] + 1e-9)
@@ -135,7 +135,7 @@ def test_noise_free_bundle_and_models_both_give_the_truth():
 
     s = noise_free(2, 6)
     b = bundle_adjust(s.block, precision=False)
-    xb = b.x[b.blocks["points"]].reshape(-1, 3)
+    xb = b.x[b.groups["points"]].reshape(-1, 3)
     np.testing.assert_allclose(xb, s.truth.points.xyz, atol=1e-5)
     m = ov.independent_models(s.block)
     np.testing.assert_allclose(m.points, xb, atol=1e-5)
@@ -148,9 +148,9 @@ def test_bundle_and_models_agree_within_their_precision():
     b = bundle_adjust(s.block)
     m = ov.independent_models(s.block, precision=True)
     tp = m.point_index
-    xb = b.x[b.blocks["points"]].reshape(-1, 3)[tp]
-    qb = np.einsum("nii->ni", b.cofactor_blocks["points"])[tp] * b.sigma0**2
-    qm = np.einsum("nii->ni", m.cofactor_blocks["points"][: tp.size]) * m.sigma0**2
+    xb = b.x[b.groups["points"]].reshape(-1, 3)[tp]
+    qb = np.einsum("nii->ni", b.cofactor_groups["points"])[tp] * b.sigma0**2
+    qm = np.einsum("nii->ni", m.cofactor_groups["points"][: tp.size]) * m.sigma0**2
     d = xb - m.points[tp]
     free = s.block.points.role[tp] == TIE
     # the two estimates use the same images, so their difference is smaller than the

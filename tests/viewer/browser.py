@@ -68,3 +68,40 @@ def colour_count(img: np.ndarray, rgb) -> int:
 def changed_share(a: np.ndarray, b: np.ndarray) -> float:
     """Share of pixels whose colour changed by more than 40 in some channel."""
     return float(np.mean(np.abs(a - b).max(axis=2) > 40))
+
+
+def open_demo(page, app, min_drawn: float = 0.01) -> np.ndarray:
+    """Load the viewer page, wait until the scene is drawn; return its screenshot."""
+    page.goto(app.url)
+    page.wait_for_selector("canvas", timeout=60_000)
+    assert wait_for(lambda: len(app.server.get_clients()) > 0, 60), "the page never connected"
+    # the "software WebGL" notice is about this headless machine, not the viewer
+    page.add_style_tag(content=".mantine-Notifications-root {display: none !important}")
+    shot = {}
+
+    def drawn():
+        shot["img"] = scene_image(page)
+        return drawn_share(shot["img"]) > min_drawn
+
+    assert wait_for(drawn, 60, 0.5), f"the scene stayed blank ({drawn_share(shot['img']):.4f})"
+    time.sleep(1.0)  # let the last nodes of the scene arrive
+    img = scene_image(page)
+    assert img.std() > 10, "the scene has no contrast"
+    return img
+
+
+def wait_for_picture(page, before: np.ndarray | None, test, timeout: float = 30.0) -> np.ndarray:
+    """Poll screenshots until ``test(after)`` holds; return the last one.
+
+    ``before`` (a screenshot, or None) only serves the message when the deadline passes.
+    """
+    shot = {}
+
+    def ok():
+        shot["img"] = scene_image(page)
+        return test(shot["img"])
+
+    if not wait_for(ok, timeout, 0.5):
+        changed = "" if before is None else f" ({changed_share(before, shot['img']):.4f} changed)"
+        raise AssertionError(f"the picture never became what the test expects{changed}")
+    return shot["img"]

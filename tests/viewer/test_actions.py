@@ -66,7 +66,7 @@ def test_toggle_image_leaves_it_out(state):
         and not used[np.isin(o.point, st.mapping.dropped_points)].any()
     )
     np.testing.assert_array_equal(st.block.images.X0[1], X0)  # not adjusted, kept
-    assert np.isnan(st.result.cofactor_blocks["exterior"][1]).all()
+    assert np.isnan(st.result.cofactor_groups["exterior"][1]).all()
     assert st.mapping.images.tolist() == [0] + list(range(2, st.block.n_images))
     st.toggle_image(1)
     assert st.mapping.images.size == st.block.n_images

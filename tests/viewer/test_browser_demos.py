@@ -9,8 +9,6 @@ deadline, until the Python side has followed and the picture has changed.
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import pytest
 
@@ -19,48 +17,30 @@ from orientviz.viewer.demos import DEMOS, load_demo
 from .browser import (
     changed_share,
     colour_count,
-    drawn_share,
     gui_control,
-    scene_image,
+    open_demo,
     served,
     wait_for,
+    wait_for_picture,
 )
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]  # ~10-20 s each with software WebGL
 
 
-def open_demo(page, app, min_drawn: float = 0.01) -> np.ndarray:
-    """Load the viewer page, wait until the scene is drawn; return its screenshot."""
-    page.goto(app.url)
-    page.wait_for_selector("canvas", timeout=60_000)
-    assert wait_for(lambda: len(app.server.get_clients()) > 0, 60), "the page never connected"
-    # the "software WebGL" notice is about this headless machine, not the viewer
-    page.add_style_tag(content=".mantine-Notifications-root {display: none !important}")
-    shot = {}
+def drawn_with(page, colours: dict, least: int = 20) -> tuple[np.ndarray, dict]:
+    """Poll screenshots until every colour of ``colours`` covers ``least`` pixels (60 s).
 
-    def drawn():
-        shot["img"] = scene_image(page)
-        return drawn_share(shot["img"]) > min_drawn
+    Returns the screenshot and the pixel count of each colour. Under load the nodes of a
+    scene arrive one by one, so a single screenshot may catch a scene half drawn.
+    """
+    found = {}
 
-    assert wait_for(drawn, 60, 0.5), f"the scene stayed blank ({drawn_share(shot['img']):.4f})"
-    time.sleep(1.0)  # let the last nodes of the scene arrive
-    img = scene_image(page)
-    assert img.std() > 10, "the scene has no contrast"
-    return img
+    def counts(a):
+        found.update({k: colour_count(a, c) for k, c in colours.items()})
+        return min(found.values()) >= least
 
-
-def wait_for_picture(page, before: np.ndarray, test, timeout: float = 30.0) -> np.ndarray:
-    """Poll screenshots until ``test(after)`` holds; return the last one."""
-    shot = {}
-
-    def ok():
-        shot["img"] = scene_image(page)
-        return test(shot["img"])
-
-    assert wait_for(ok, timeout, 0.5), (
-        f"the picture did not change as expected ({changed_share(before, shot['img']):.4f} changed)"
-    )
-    return shot["img"]
+    img = wait_for_picture(page, None, counts, 60)
+    return img, dict(found)
 
 
 def test_every_demo_has_a_browser_test():
@@ -73,20 +53,18 @@ def test_radar_demo_draws_the_construction_and_its_checkbox_hides_it(browser_pag
 
     with served(load_demo("radar")) as app:
         page = browser_page
-        img = open_demo(page, app)
-        counts = {
-            k: colour_count(img, ELEMENTS[k][0]) for k in ("slant_range", "circle", "s_e", "target")
-        }
+        open_demo(page, app)
         # each element of Geier's construction is on the screen (tens to hundreds of pixels)
-        assert min(counts.values()) >= 20, counts
+        keys = ("slant_range", "circle", "s_e", "target")
+        img, counts = drawn_with(page, {k: ELEMENTS[k][0] for k in keys})
         rv = app.extra["radar"]
         box = page.get_by_role("checkbox", name="construction of the target (Fig. 4)")
         box.click()
-        assert wait_for(lambda: rv.h["construction"].value is False), "the click did not arrive"
+        assert wait_for(lambda: rv.h["construction"].value is False, 60), "the click did not arrive"
         assert not rv.nodes["circle"].visible and not rv.nodes["ground_plane"].visible
         blue = ELEMENTS["circle"][0]
         after = wait_for_picture(
-            page, img, lambda a: colour_count(a, blue) < 0.2 * counts["circle"]
+            page, img, lambda a: colour_count(a, blue) < 0.2 * counts["circle"], 60
         )
         assert changed_share(img, after) > 0.005
 
@@ -97,25 +75,23 @@ def test_pair_demo_draws_rays_and_gap_and_a_dial_moves_them(browser_page):
 
     with served(load_demo("pair")) as app:
         page = browser_page
-        img = open_demo(page, app)
-        counts = {n: colour_count(img, c) for n, c in
-                  (("left", LEFT_RAY), ("right", RIGHT_RAY), ("gap", GAP))}  # fmt: skip
-        assert min(counts.values()) >= 20, counts
+        open_demo(page, app)
+        img, _ = drawn_with(page, {"left": LEFT_RAY, "right": RIGHT_RAY, "gap": GAP})
         pv = app.extra["pair"]
         gap0 = pv.point["gap_length"]
         thumb = gui_control(page, "kappa [c]", "[role=slider]")
         thumb.focus()
         for _ in range(20):
             thumb.press("ArrowRight")  # 20 steps of 1 c
-        assert wait_for(lambda: abs(pv.plotter.settings[4] * RHO_C - 20.0) < 1e-6), (
+        assert wait_for(lambda: abs(pv.plotter.settings[4] * RHO_C - 20.0) < 1e-6, 60), (
             f"κ on the Python side: {pv.plotter.settings[4] * RHO_C:.3f} c"
         )
         assert pv.point["gap_length"] != pytest.approx(gap0, rel=1e-6)
-        wait_for_picture(page, img, lambda a: changed_share(img, a) > 0.002)
+        wait_for_picture(page, img, lambda a: changed_share(img, a) > 0.002, 60)
         # the normalised images appear in the panel on request
         page.get_by_role("checkbox", name="normalised images").click()
-        assert wait_for(lambda: pv.h["picture"].visible), "the checkbox did not arrive"
-        assert wait_for(lambda: page.get_by_text("epipolar lines are rows").count() > 0)
+        assert wait_for(lambda: pv.h["picture"].visible, 60), "the checkbox did not arrive"
+        assert wait_for(lambda: page.get_by_text("epipolar lines are rows").count() > 0, 60)
 
 
 def test_block_demo_converges_and_colours_by_quality(browser_page):
@@ -130,7 +106,7 @@ def test_block_demo_converges_and_colours_by_quality(browser_page):
         q = app.panel.quality
         gui_control(page, "colour by", "input").click()
         page.get_by_role("option", name="largest normalised residual |w|").click()
-        assert wait_for(lambda: q.key == "max_w" and q.quality is not None, 30)
-        wait_for_picture(page, after_run, lambda a: changed_share(after_run, a) > 0.001)
+        assert wait_for(lambda: q.key == "max_w" and q.quality is not None, 60)
+        wait_for_picture(page, after_run, lambda a: changed_share(after_run, a) > 0.001, 60)
         with app.panel._lock:  # let the callbacks finish before the server stops
             pass

@@ -42,7 +42,7 @@ def test_redundancy_share_and_std(adjusted):
     worst = q.worst("point", 3)
     assert np.all(np.diff(q.point[worst]) >= 0)  # smallest redundancy first
     s = compute_quality(block, res, "std")
-    Q = res.cofactor_blocks["points"][k]
+    Q = res.cofactor_groups["points"][k]
     assert s.point[k] == pytest.approx(res.sigma0 * np.sqrt(np.trace(Q) / 3), rel=1e-12)
     fixed = block.points.role == 1
     assert np.all(s.point[fixed] == 0)  # fixed control: no uncertainty

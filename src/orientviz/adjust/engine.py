@@ -1,7 +1,7 @@
 """Gauss-Newton / Levenberg-Marquardt least squares: the engine every solver uses.
 
-The engine adjusts a *functional model* ``l + v = f(x)`` with weights ``P = diag(1/σ²)``.
-A problem supplies ``model(x) -> (f, J)`` with f of shape (n,) and J of shape (n, u)
+The engine adjusts the *observation equations* ``l + v = f(x)`` (the functional model)
+with weights ``P = diag(1/σ²)``. A problem supplies ``equations(x) -> (f, J)`` with f of shape (n,) and J of shape (n, u)
 (dense ndarray or ``scipy.sparse``). The engine iterates
 
     N Δx = Jᵀ P (l − f),   N = Jᵀ P J (+ λ diag N for Levenberg-Marquardt)
@@ -27,7 +27,7 @@ from .rank import raise_if_singular
 from .result import Adjustment, Iteration
 
 F64 = NDArray[np.float64]
-Model = Callable[[F64], tuple[F64, "F64 | sp.spmatrix"]]
+Equations = Callable[[F64], tuple[F64, "F64 | sp.spmatrix"]]
 
 #: Dense cofactor matrices are computed up to this many unknowns.
 DENSE_LIMIT: int = 3000
@@ -73,13 +73,13 @@ class _DenseProblem:
     formed once and kept with it (the damped retries of one iteration reuse it).
     """
 
-    def __init__(self, model, l, p, free_idx, u_all, upd, free_names, context):
-        self.model, self.l, self.p = model, l, p
+    def __init__(self, equations, l, p, free_idx, u_all, upd, free_names, context):
+        self.equations, self.l, self.p = equations, l, p
         self.free_idx, self.u_all, self.upd = free_idx, u_all, upd
         self.free_names, self.context = free_names, context
 
     def evaluate(self, x: F64, jacobian: bool) -> Evaluation:
-        f, J = self.model(x)
+        f, J = self.equations(x)
         r = self.l - f
         cost = float(r @ (self.p * r))
         return Evaluation(cost, bool(np.all(np.isfinite(f))), {"f": f, "J": J, "r": r})
@@ -112,13 +112,13 @@ class _DenseProblem:
 
 
 def gauss_newton(
-    model: Model,
+    equations: Equations,
     x0: ArrayLike,
     observations: ArrayLike,
     sigma: ArrayLike = 1.0,
     *,
     names: list[str] | None = None,
-    blocks: dict[str, slice] | None = None,
+    groups: dict[str, slice] | None = None,
     obs_labels: list[str] | None = None,
     fixed: ArrayLike | None = None,
     damping: str = "none",
@@ -136,8 +136,8 @@ def gauss_newton(
 
     Parameters
     ----------
-    model : callable
-        ``model(x) -> (f, J)``: computed observations (n,) and Jacobian (n, u), dense
+    equations : callable
+        ``equations(x) -> (f, J)``, the observation equations: computed observations (n,) and Jacobian (n, u), dense
         or sparse, in the observations' units per parameter unit.
     x0 : array_like, shape (u,)
         Approximate values.
@@ -147,8 +147,8 @@ def gauss_newton(
         A-priori standard deviations (weights 1/σ²), same units as l.
     names : list of str, optional
         Parameter names for reports and diagnostics (default ``p0, p1, …``).
-    blocks : dict of str to slice, optional
-        Named parameter groups, copied into the result.
+    groups : dict of str to slice, optional
+        Named parameter groups (slices of x), copied into the result.
     obs_labels : list of str, optional
         A label per observation.
     fixed : array_like of bool, shape (u,), optional
@@ -204,7 +204,7 @@ def gauss_newton(
     xt = None if xtol is None else np.broadcast_to(np.asarray(xtol, float), (u_all,))[free_idx]
 
     dof = n - free_idx.size
-    problem = _DenseProblem(model, l, p, free_idx, u_all, upd, free_names, context)
+    problem = _DenseProblem(equations, l, p, free_idx, u_all, upd, free_names, context)
     rule = StopRule(tol=tol, custom=stop)
     if stop is None and xt is not None:
         rule.step_test = lambda step: bool(np.all(np.abs(step.data) <= xt))
@@ -234,7 +234,7 @@ def gauss_newton(
         converged=converged,
         reason=reason,
         history=history,
-        blocks=dict(blocks or {}),
+        groups=dict(groups or {}),
         obs_labels=obs_labels,
     )
     if precision:

@@ -167,7 +167,7 @@ def reliability(
 
 # --------------------------------------------------------------------------- solvers
 def engine_solver(
-    model: Callable[[F64], tuple[F64, F64]],
+    equations: Callable[[F64], tuple[F64, F64]],
     x0: ArrayLike,
     observations: ArrayLike,
     sigma: ArrayLike = 1.0,
@@ -184,7 +184,7 @@ def engine_solver(
 
     Parameters
     ----------
-    model, x0, observations, sigma
+    equations, x0, observations, sigma
         As for :func:`orientviz.adjust.gauss_newton`.
     warm_start : bool
         Start each solve from the previous solution (faster, for well-behaved problems).
@@ -202,13 +202,13 @@ def engine_solver(
         idx = np.flatnonzero(keep)
 
         def sub(x):
-            f, J = model(x)
+            f, J = equations(x)
             return f[idx], J[idx]
 
         adj = gauss_newton(sub, start["x"], l[idx], s[idx] / np.sqrt(w[idx]), **options)
         if warm_start and adj.converged:
             start["x"] = adj.x.copy()
-        f, _ = model(adj.x)
+        f, _ = equations(adj.x)
         rn = np.zeros(n)
         wn = np.full(n, np.nan)
         if adj.redundancy_numbers is not None:

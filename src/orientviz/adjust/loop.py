@@ -51,7 +51,7 @@ class Evaluation:
     cost : float
         vᵀPv.
     finite : bool
-        Whether the model is defined there (no NaN/inf).
+        Whether the observation equations are defined there (no NaN/inf).
     data : object
         What the problem needs to form its normal equations (opaque to the loop).
     """
@@ -250,7 +250,7 @@ def iterate(
             break
         step, new, ev_new, lam_used, lam_next = outcome
         if not ev_new.finite:
-            run.reason = f"the model became undefined (NaN/inf) in iteration {it}"
+            run.reason = f"the observation equations became undefined (NaN/inf) in iteration {it}"
             break
         ev_old = run.evaluation
         run.state, run.evaluation = new, ev_new

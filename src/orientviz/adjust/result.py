@@ -62,7 +62,7 @@ class Adjustment:
         Estimated parameters (internal units: m, mm, rad).
     names : list of str
         Parameter names, e.g. ``"img3.omega"``.
-    blocks : dict of str to slice
+    groups : dict of str to slice
         Named groups of parameters (``"exterior"``, ``"points"``, …) as slices of ``x``.
     sigma0 : float
         σ̂0 (a-posteriori, unit weight; NaN if the redundancy is 0).
@@ -77,8 +77,8 @@ class Adjustment:
     normalized_residuals : ndarray, shape (n,) or None
         w_i = v_i / (σ_i √r_i) (Baarda, a-priori σ0 = 1).
     cofactor : ndarray, shape (u, u) or None
-        Q_xx = N⁻¹ for small problems; ``cofactor_blocks`` for large ones.
-    cofactor_blocks : dict
+        Q_xx = N⁻¹ for small problems; ``cofactor_groups`` for large ones.
+    cofactor_groups : dict
         Diagonal blocks of Q_xx by block name for large problems: a stack of shape
         (k, b, b), e.g. ``"exterior"`` (m, 6, 6) per image and ``"points"`` (p, 3, 3)
         per point, or a square matrix (u_block, u_block).
@@ -110,11 +110,11 @@ class Adjustment:
     converged: bool
     reason: str
     history: list[Iteration] = field(default_factory=list)
-    blocks: dict[str, slice] = field(default_factory=dict)
+    groups: dict[str, slice] = field(default_factory=dict)
     redundancy_numbers: F64 | None = None
     normalized_residuals: F64 | None = None
     cofactor: F64 | None = None
-    cofactor_blocks: dict[str, F64] = field(default_factory=dict)
+    cofactor_groups: dict[str, F64] = field(default_factory=dict)
     obs_labels: list[str] | None = None
     obs_slices: dict[str, slice] = field(default_factory=dict)
     redundancy_xy: F64 | None = None
@@ -152,16 +152,16 @@ class Adjustment:
 
     def __getitem__(self, key: str) -> Any:
         """A parameter by name, or a block of parameters by block name."""
-        if key in self.blocks:
-            return self.x[self.blocks[key]]
+        if key in self.groups:
+            return self.x[self.groups[key]]
         return self.x[self.index(key)]
 
     @property
     def params(self) -> dict[str, F64]:
         """Blocks of estimates by name (the whole ``x`` under ``"x"`` if no blocks)."""
-        if not self.blocks:
+        if not self.groups:
             return {"x": self.x}
-        return {k: self.x[s] for k, s in self.blocks.items()}
+        return {k: self.x[s] for k, s in self.groups.items()}
 
     def _sigma0_for_covariance(self, a_posteriori: bool) -> float:
         if a_posteriori and self.redundancy > 0 and np.isfinite(self.sigma0):
@@ -178,7 +178,7 @@ class Adjustment:
         """
         if self.cofactor is None:
             raise ValueError(
-                "no dense cofactor matrix was computed for this problem; use cofactor_blocks"
+                "no dense cofactor matrix was computed for this problem; use cofactor_groups"
             )
         return self._sigma0_for_covariance(a_posteriori) ** 2 * self.cofactor
 
@@ -188,11 +188,11 @@ class Adjustment:
         if self.cofactor is not None:
             return s0 * np.sqrt(np.clip(np.diag(self.cofactor), 0.0, None))
         out = np.full(self.n_unknowns, np.nan)
-        for name, Q in self.cofactor_blocks.items():
-            if name in self.blocks:
+        for name, Q in self.cofactor_groups.items():
+            if name in self.groups:
                 # a square matrix for the whole block, or a stack (k, b, b) of diagonal blocks
                 d = np.diag(Q) if Q.ndim == 2 else np.einsum("nii->ni", Q).reshape(-1)
-                out[self.blocks[name]] = s0 * np.sqrt(np.clip(d, 0.0, None))
+                out[self.groups[name]] = s0 * np.sqrt(np.clip(d, 0.0, None))
         return out
 
     def correlations(self) -> F64:

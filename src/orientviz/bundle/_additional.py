@@ -365,7 +365,7 @@ def analyse(
     ----------
     adj : Adjustment
         With a block ``"additional"``; correlations need the cofactor of the additional
-        parameters (``cofactor`` dense, or ``cofactor_blocks["additional"]``) — with the
+        parameters (``cofactor`` dense, or ``cofactor_groups["additional"]``) — with the
         dense cofactor also correlations with every other parameter are checked.
     alpha : float
         Significance level of the two-sided test of each parameter against 0.
@@ -375,17 +375,17 @@ def analyse(
         σ (µm) of the pseudo-observations used in the adjustment; with it, parameters
         determined only by their pseudo-observation are named (``undetermined``).
     """
-    if "additional" not in adj.blocks:
+    if "additional" not in adj.groups:
         raise InputError("the adjustment has no additional parameters (block 'additional')")
-    sl = adj.blocks["additional"]
+    sl = adj.groups["additional"]
     idx = np.arange(adj.n_unknowns)[sl]
     names = [adj.names[i] for i in idx]
     value = adj.x[sl]
     s0 = adj.sigma0 if np.isfinite(adj.sigma0) and adj.redundancy > 0 else 1.0
     if adj.cofactor is not None:
         Qa = adj.cofactor[np.ix_(idx, idx)]
-    elif "additional" in adj.cofactor_blocks:
-        Qa = np.asarray(adj.cofactor_blocks["additional"], float)
+    elif "additional" in adj.cofactor_groups:
+        Qa = np.asarray(adj.cofactor_groups["additional"], float)
     else:
         raise NotDeterminableError(
             "no cofactor of the additional parameters was computed (precision=False?)"

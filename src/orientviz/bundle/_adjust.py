@@ -127,7 +127,7 @@ def bundle_adjust(
         ``additional`` (both border the reduced system:
         :mod:`orientviz.bundle._auxiliary_border`). Estimates in ``result.auxiliary``
         (:class:`~orientviz.block.AuxiliaryEstimates`: offsets, sigma (m), residuals),
-        ``cofactor_blocks["auxiliary"]``; the rows are appended to the observations
+        ``cofactor_groups["auxiliary"]``; the rows are appended to the observations
         (``obs_slices["auxiliary"]``, m) and with ``precision`` get redundancy numbers
         and normalised residuals; the cofactor blocks of orientations and points then
         include the uncertainty of the offsets/drifts. The datum check is left to the
@@ -238,7 +238,7 @@ def bundle_adjust(
 
         finish_bundle(res, prob, st, rw, Je, Jp)
     if prob.ap.lens is not None:
-        Q = res.cofactor_blocks.get("additional") if prob.q else None
+        Q = res.cofactor_groups.get("additional") if prob.q else None
         res.camera = prob.ap.lens.estimates(st.ap, Q, res.sigma0)
     return res
 
@@ -329,7 +329,13 @@ class _BundleSteps:
             dpa = np.zeros((prob.block.n_points, 3))
             dpa[prob.points.unknown] = dp
             dx = np.concatenate([dc.ravel(), dpa.ravel(), da[: prob.q]])
-        return Step(rel, dx, (dc, dp, da, fac, ne, self.is_local(ev)))
+        local = self.is_local(ev)
+        # the normal equations and their factor live on only where the precision may reuse
+        # them (an undamped plain step, see accepted); else they are freed before the trial
+        # point's Jacobians are formed (the peak memory of a large block)
+        if not (self.precision and lam == 0 and not (prob.q or prob.aux or local)):
+            ne = fac = None
+        return Step(rel, dx, (dc, dp, da, fac, ne, local))
 
     def apply(self, st: BundleState, step: Step) -> BundleState:
         dc, dp, da = step.data[:3]

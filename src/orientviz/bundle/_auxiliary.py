@@ -323,14 +323,14 @@ class BundleAuxiliary:
 
     def precision(self, res, Qcc: F64, Qpp: F64, Qcb: F64, Qbp: F64, Qbb: F64) -> None:
         """Redundancy numbers of the rows (``res.auxiliary.redundancy``, appended to the
-        result's by :func:`finish_bundle`) and ``cofactor_blocks["auxiliary"]``.
+        result's by :func:`finish_bundle`) and ``cofactor_groups["auxiliary"]``.
 
         Cofactor blocks as in :func:`orientviz.bundle._auxiliary_border.auxiliary_redundancy`.
         """
         na = self.n_global
         r = _ab.auxiliary_redundancy(self, Qcc, Qpp, Qcb, Qbp, Qbb)
         res.auxiliary = AuxiliaryEstimates({}, {}, np.zeros(0), [], redundancy=r)
-        res.cofactor_blocks["auxiliary"] = Qbb[Qbb.shape[0] - na :, Qbb.shape[0] - na :]
+        res.cofactor_groups["auxiliary"] = Qbb[Qbb.shape[0] - na :, Qbb.shape[0] - na :]
 
 
 def finish_bundle(res, prob, st, rw, Je, Jp) -> None:
@@ -339,18 +339,18 @@ def finish_bundle(res, prob, st, rw, Je, Jp) -> None:
     The auxiliary rows are appended to the result's observations (after the
     pseudo-observations; ``obs_slices["auxiliary"]``, m): ``residuals``,
     ``sigma_obs`` and — when the precision was computed — ``redundancy_numbers`` and
-    ``normalized_residuals``. ``cofactor_blocks["auxiliary"]`` is the cofactor matrix of
+    ``normalized_residuals``. ``cofactor_groups["auxiliary"]`` is the cofactor matrix of
     the offsets/drifts (m², marginal: with the orientations, points and additional
     parameters adjusted together).
     """
     aux = prob.aux
-    Qg = res.cofactor_blocks.get("auxiliary")
+    Qg = res.cofactor_groups.get("auxiliary")
     if Qg is None:  # no precision run: the border of the solution alone
         ne = prob.normal(st, rw, Je, Jp)
         fac = factor_reduced(prob.reduced, ne.blocks, [str(i) for i in range(6 * prob.m)])
         aux.solve(prob, fac, ne)
         Qg = np.linalg.inv(ne.Fs_aux)[prob.q :, prob.q :]
-        res.cofactor_blocks["auxiliary"] = Qg
+        res.cofactor_groups["auxiliary"] = Qg
     s0 = res.sigma0 if np.isfinite(res.sigma0) else 1.0
     v = aux.residuals(st.X0, st.xyz, st.g)
     r = res.auxiliary.redundancy if res.auxiliary is not None else None

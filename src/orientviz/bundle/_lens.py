@@ -11,7 +11,7 @@ two models are offered, in the two directions users meet:
 
 * ``kind="backward"`` — photogrammetry (DBAT's model 3, PhotoModeler, Australis): the
   distortion is a function of the *measured* point m; the corrected point must equal the
-  pinhole point c·n. With z = [[1 + as, sk], [0, 1]] (m − (x0, y0)), r² = |z|²::
+  pinhole point c·n. With z = [[1 + as, sk], [0, 1]] (m − (x0, y0)), r² = ‖z‖²::
 
       x̄(m) = z + z (K1 r² + K2 r⁴ + K3 r⁶)
                + (P1 (r² + 2 z_x²) + 2 P2 z_x z_y,  P2 (r² + 2 z_y²) + 2 P1 z_x z_y)
@@ -65,7 +65,7 @@ UNITS = {
 }
 KINDS = ("backward", "forward")
 
-__all__ = ["LensModel", "BoundLens", "LensEstimates", "lens_model"]
+__all__ = ["LensModel", "BoundLens", "LensEstimates", "lens_model", "opencv_camera"]
 
 
 def _names(kind: str) -> tuple[str, ...]:
@@ -215,6 +215,8 @@ def evaluate(kind: str, th: F64, nrm: F64, m: F64, jac: bool = True):
     """
     c, x0, y0, a, s = th[:, 0], th[:, 1], th[:, 2], th[:, 3], th[:, 4]
     K1, K2, K3, P1, P2 = th[:, 5], th[:, 6], th[:, 7], th[:, 8], th[:, 9]
+    if kind == "forward":  # OpenCV's p1 is the 2xy term of x (Brown's P1 the r² + 2x² one)
+        P1, P2 = P2, P1
     n = nrm.shape[0]
     if kind == "backward":
         x, y = m[:, 0] - x0, m[:, 1] - y0
@@ -273,7 +275,7 @@ def evaluate(kind: str, th: F64, nrm: F64, m: F64, jac: bool = True):
         D[:, 1, 2] = 1.0
         D[:, 0, 3] = c * dx
         D[:, 0, 4] = c * dy
-        D[:, :, 5:] = cA @ Dd
+        D[:, :, 5:] = cA @ Dd[:, :, [0, 1, 2, 4, 3]]  # p1, p2 in OpenCV's roles
     return f, M, D
 
 
@@ -340,6 +342,25 @@ class LensEstimates:
                 + ", ".join(f"{a}~{b} ρ={r:+.2f}" + (f"@g{g}" if g else "") for g, a, b, r in pairs)
             )
         return "\n".join(lines)
+
+
+def opencv_camera(est: LensEstimates, pixel_mm: float, group: int = 0) -> dict[str, float]:
+    """A forward-model camera in OpenCV's terms (pixels, y down).
+
+    Valid where the image coordinates came from pixels as ``units.image = "px"`` reads
+    them (x = u·p, y = −v·p mm from the upper-left corner): then u = fx·x_d + s·y_d + cx,
+    v = fy·y_d + cy with OpenCV's distorted point (x_d, y_d) and
+    fx = c(1 + as)/p, fy = c/p, s = −c·sk/p, cx = x0/p, cy = −y0/p, k1–k3 as estimated,
+    p1 with the opposite sign, p2 as estimated.
+    """
+    if est.kind != "forward":
+        raise InputError("opencv_camera: a forward model is needed (the backward model has "
+                         "no closed OpenCV form: orientviz.lens.forward_from_backward fits one)")  # fmt: skip
+    v = dict(zip(est.names, est.value[group]))
+    p = float(pixel_mm)
+    return {"fx": v["c"] * (1 + v["as"]) / p, "fy": v["c"] / p, "skew": -v["c"] * v["sk"] / p,
+            "cx": v["x0"] / p, "cy": -v["y0"] / p, "k1": v["k1"], "k2": v["k2"], "k3": v["k3"],
+            "p1": -v["p1"], "p2": v["p2"]}  # fmt: skip
 
 
 class BoundLens:

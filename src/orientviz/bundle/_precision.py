@@ -42,6 +42,7 @@ from numpy.typing import NDArray
 
 from ._reduced import ReducedStructure, dense_matrix, factor_reduced
 from ._result import ExteriorPairs, RayGains
+from ._schur import DENSE_CHUNK_BYTES
 
 F64 = NDArray[np.float64]
 #: Up to this many reduced unknowns Z = S⁻¹ is computed densely.
@@ -139,11 +140,13 @@ class ReducedInverse:
         self._Z = self._fac = None
         self._m = st.n_cam
         if n <= DENSE_INVERSE_LIMIT or st.solver != "banded":
-            if n > DENSE_INVERSE_LIMIT:
+            if n > DENSE_INVERSE_LIMIT and st.solver != "dense":
                 st = ReducedStructure(st.obs_cam, st.obs_pt, st.n_cam, st.n_pt, solver="banded")
-            else:
-                S = dense_matrix(st, blocks)
-                c = scipy.linalg.cho_factor(S, lower=True)
+            else:  # dense: the factor of the last iteration when it is a dense one
+                if fac is not None and fac.kind == "dense":
+                    c = (fac.data, True)
+                else:
+                    c = scipy.linalg.cho_factor(dense_matrix(st, blocks), lower=True)
                 Z = self._Z = scipy.linalg.cho_solve(c, np.eye(n))
                 rows = 6 * st.block_i[:, None, None] + r6[None, :, None]
                 cols = 6 * st.block_k[:, None, None] + r6[None, None, :]
@@ -195,6 +198,47 @@ def _block_lookup(st: ReducedStructure, ca, cb_):
     return idx, ca > cb_
 
 
+def _cofactors_by_pairs(S, Zblk: F64, T: F64, oi, Qcp: F64) -> None:
+    """Q_cp for each observation a: −Σ_b Q(i_a, i_b) T_b over the rays b of its point, by
+    pairs of rays, in batches of whole a-groups (bounds the (pairs, 6, 6) gathers)."""
+    a, b = S.all_pairs
+    # blocks and their transposes side by side: one gather per pair, no masked transpose
+    Zboth = np.concatenate([Zblk, Zblk.transpose(0, 2, 1)])
+    seg = np.append(S.all_pairs_starts, a.size)
+    s0, chunk = 0, 65536
+    while s0 < S.all_pairs_starts.size:
+        s1 = max(int(np.searchsorted(seg, seg[s0] + chunk, side="right")) - 1, s0 + 1)
+        sl = slice(seg[s0], seg[s1])
+        idx, tr = _block_lookup(S, oi[a[sl]], oi[b[sl]])
+        Qab = Zboth[idx + tr * Zblk.shape[0]]
+        QT = Qab @ T[b[sl]]  # Q(i_a, i_b) T_b
+        Qcp[S.pt_obs[s0:s1]] = -np.add.reduceat(QT, S.all_pairs_starts[s0:s1] - seg[s0], axis=0)
+        s0 = s1
+
+
+def cofactors_image_point(S, Z: F64, T: F64, oi, ocol, Qcp: F64) -> bool:
+    """Q_cp of each ray by products with the dense inverse Z = S⁻¹: for a chunk of points,
+    Z (n × n) times their T_b placed at the rows of their images (n × 3p_chunk), read at
+    each ray's image rows. Σ k_j² pairs of rays become (6m)²·3p multiply-adds at BLAS
+    speed (what a network whose points are seen by most images needs). False (nothing
+    done) when a point has two rays in one image."""
+    rays = S.pt_obs
+    img, col = oi[rays], ocol[rays]
+    m, n = S.n_cam, S.n_reduced
+    if np.unique(col * m + img).size != rays.size:
+        return False
+    pc = max(1, DENSE_CHUNK_BYTES // (8 * 18 * m))
+    starts = np.append(S.pt_starts, rays.size)
+    for p0 in range(0, S.n_pt, pc):
+        p1 = min(p0 + pc, S.n_pt)
+        r = slice(starts[p0], starts[p1])
+        Tf = np.zeros((m, 6, p1 - p0, 3))
+        Tf[img[r], :, col[r] - p0, :] = T[rays[r]]
+        M = (Z @ Tf.reshape(n, -1)).reshape(m, 6, p1 - p0, 3)
+        Qcp[rays[r]] = -M[img[r], :, col[r] - p0, :]
+    return True
+
+
 def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     """Fill ``res`` with cofactor blocks, redundancy numbers and normalised residuals.
 
@@ -244,25 +288,17 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
         Qca = -(Y3 @ Faa)  # (m, 6, nb)
     Qcc_diag = Zblk[S.diag_block]
     # point cofactors: Vinv + Σ_ab T_aᵀ Q(i_a, i_b) T_b
-    a, b = S.all_pairs
     oi, ocol = prob.obs.image, prob.obs.column
     T = ne.T
     n_used = oi.size
     # Q_cp for each observation a: −Σ_b Q(i_a, i_b) T_b  (then add the AP part);
     # in batches of whole a-groups to bound the memory of the (pairs, 6, 6) gathers
     Qcp = np.zeros((n_used, 6, 3))
-    # blocks and their transposes side by side: one gather per pair, no masked transpose
-    Zboth = np.concatenate([Zblk, Zblk.transpose(0, 2, 1)])
-    seg = np.append(S.all_pairs_starts, a.size)
-    s0, chunk = 0, 65536
-    while s0 < S.all_pairs_starts.size:
-        s1 = max(int(np.searchsorted(seg, seg[s0] + chunk, side="right")) - 1, s0 + 1)
-        sl = slice(seg[s0], seg[s1])
-        idx, tr = _block_lookup(S, oi[a[sl]], oi[b[sl]])
-        Qab = Zboth[idx + tr * Zblk.shape[0]]
-        QT = Qab @ T[b[sl]]  # Q(i_a, i_b) T_b
-        Qcp[S.pt_obs[s0:s1]] = -np.add.reduceat(QT, S.all_pairs_starts[s0:s1] - seg[s0], axis=0)
-        s0 = s1
+    dense_qcp = inverse._Z is not None and not nb and S.formation == "dense"
+    if dense_qcp:  # dense S formed densely: Q_cp by products with the dense inverse
+        dense_qcp = cofactors_image_point(S, inverse._Z, T, oi, ocol, Qcp)
+    if not dense_qcp:
+        _cofactors_by_pairs(S, Zblk, T, oi, Qcp)
     Vinv = ne.Vinv
     vo = (
         prob.obs.var_rays
@@ -355,12 +391,12 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     Qp_all = np.zeros((p, 3, 3))
     Qp_all[prob.points.unknown] = Qpp
     Qp_all[prob.block.points.role == 2] = np.nan
-    res.cofactor_blocks["exterior"] = Qcc_diag
+    res.cofactor_groups["exterior"] = Qcc_diag
     # Q_cc of every image pair (i ≤ k) that shares a point: key i·m + k (sorted), blocks
     res.exterior_pairs = ExteriorPairs(S.block_i * m + S.block_k, Zblk)
-    res.cofactor_blocks["points"] = Qp_all
+    res.cofactor_groups["points"] = Qp_all
     if q:
-        res.cofactor_blocks["additional"] = Faa[:q, :q]
+        res.cofactor_groups["additional"] = Faa[:q, :q]
     if aux:  # redundancy numbers of the auxiliary rows, cofactors of the offsets
         if not nb:
             Qca, Qap, Faa = np.zeros((m, 6, 0)), np.zeros((S.n_pt, 0, 3)), np.zeros((0, 0))

@@ -267,6 +267,12 @@ class ReducedStructure:
     def _band_ordering(self) -> None:
         """The image numbering of the narrowest band (RCM or across the strips)."""
         m = self.n_cam
+        if self.n_blocks == m * (m + 1) // 2:  # every image with every other: no band
+            self.perm_img = self.pos_img = np.arange(m, dtype=np.int64)
+            self.kd = 6 * m - 1
+            self.info.update(ordering="any (complete image graph)", bandwidth_images=m - 1)
+            self.info["kd"] = self.kd
+            return
         if self.positions is not None:
             self.orderings = list(self.orderings) + geometric_orderings(
                 self.positions, (self.block_i, self.block_k)

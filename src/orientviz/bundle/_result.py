@@ -223,7 +223,7 @@ def finish_result(
         converged=converged,
         reason=reason,
         history=history,
-        blocks=blocks,
+        groups=blocks,
         obs_slices=slices,
         exterior=np.hstack([st.X0, st.angles]),
         points=xyz,

@@ -191,7 +191,7 @@ def check_described_share(fn: Callable) -> None:
 
 def check_fit_k1_real(fn: Callable) -> None:
     """Check ``fn(m, ideal, pp) -> K1`` of the backward model ideal = z (1 + K1 r²),
-    z = m − pp, r² = |z|² (measured points m and their ideal points, mm, on a 7 × 5 mm
+    z = m − pp, r² = ‖z‖² (measured points m and their ideal points, mm, on a 7 × 5 mm
     sensor; K1 in mm⁻²)."""
     rng = rng_for("lesson11.check_fit_k1_real")
     pp = np.array([3.61, -2.62])

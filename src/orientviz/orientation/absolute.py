@@ -398,7 +398,7 @@ def similarity_transform(
     fixed = np.zeros(7, bool)
     fixed[6] = rigid
     names = list(NAMES)
-    blocks = {"transform": slice(0, 7)}
+    groups = {"transform": slice(0, 7)}
 
     def transform_jac(p: F64, pts: F64):
         f, J = similarity_model(p, pts, seq)
@@ -411,7 +411,7 @@ def similarity_transform(
             return f[rows, cols], J[rows, cols, :]
 
         res = gauss_newton(
-            model, x0, l_ctrl, s_ctrl, names=names, blocks=blocks, obs_labels=labels,
+            model, x0, l_ctrl, s_ctrl, names=names, groups=groups, obs_labels=labels,
             fixed=fixed, max_iter=max_iter, context="similarity transformation",
         )  # fmt: skip
     else:
@@ -419,7 +419,7 @@ def similarity_transform(
         if not np.all(np.isfinite(ss)):
             raise InputError("sigma_source: expected finite σ > 0 for every model coordinate")
         names += [f"{i}.{a}" for i in ids for a in "xyz"]
-        blocks["model points"] = slice(7, 7 + 3 * n)
+        groups["model points"] = slice(7, 7 + 3 * n)
         x0 = np.concatenate([x0, s.reshape(-1)])
         fixed = np.concatenate([fixed, np.zeros(3 * n, bool)])
         l_all = np.concatenate([s.reshape(-1), l_ctrl])
@@ -439,7 +439,7 @@ def similarity_transform(
             return np.concatenate([p[7:], f[rows, cols]]), sp.vstack([top, bottom], format="csr")
 
         res = gauss_newton(
-            model, x0, l_all, s_all, names=names, blocks=blocks, obs_labels=labels,
+            model, x0, l_all, s_all, names=names, groups=groups, obs_labels=labels,
             fixed=fixed, max_iter=max_iter, context="similarity transformation",
         )  # fmt: skip
     tf = SimilarityTransform.from_params(res.x[:7], seq)

@@ -497,16 +497,16 @@ def resection(
 
     res = gauss_newton(
         model, x0, xy.reshape(-1), sg, names=list(EXTERIOR_NAMES + INTERIOR_NAMES),
-        blocks={"exterior": slice(0, 6), "interior": slice(6, 9)}, obs_labels=labels,
+        groups={"exterior": slice(0, 6), "interior": slice(6, 9)}, obs_labels=labels,
         fixed=fixed, max_iter=max_iter, context="space resection",
     )  # fmt: skip
     x_int = res.x[6:9].copy()
     # report only what was estimated: the exterior orientation and the free interior names
     keep = np.array([*range(6), *(6 + INTERIOR_NAMES.index(e) for e in INTERIOR_NAMES if e in est)])
     res.x, res.names = res.x[keep], [res.names[k] for k in keep]
-    res.blocks = {"exterior": slice(0, 6)}
+    res.groups = {"exterior": slice(0, 6)}
     if est:
-        res.blocks["interior"] = slice(6, keep.size)
+        res.groups["interior"] = slice(6, keep.size)
     if res.cofactor is not None:
         res.cofactor = res.cofactor[np.ix_(keep, keep)]
     for h in res.history:

@@ -175,7 +175,7 @@ def plot_correlations(result, *, names: list[str] | None = None, ax=None):
     C = result.correlations()
     all_names = list(result.names)
     if names is None:
-        names = all_names[result.blocks["image2"]] if "image2" in result.blocks else all_names
+        names = all_names[result.groups["image2"]] if "image2" in result.groups else all_names
     idx = [all_names.index(n) for n in names]
     C = C[np.ix_(idx, idx)]
     im = ax.imshow(C, vmin=-1, vmax=1, cmap="RdBu_r")

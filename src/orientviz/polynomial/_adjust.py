@@ -338,7 +338,7 @@ def _adjust_once(block, strips, target, degree_xy, degree_z, sigma_strip, base) 
     return PolynomialResult(
         x=xvec, names=names, sigma0=s0, redundancy=int(dof), residuals=resid,
         sigma_obs=1.0 / np.sqrt(wts), converged=True, reason="linear adjustments (one step each)",
-        history=[], blocks={"planimetry": slice(0, n1), "height": slice(n1, n1 + n2), "points": slice(n1 + n2, xvec.size)},
+        history=[], groups={"planimetry": slice(0, n1), "height": slice(n1, n1 + n2), "points": slice(n1 + n2, xvec.size)},
         points=xyz, check_points=check_points_of(block, xyz), strips=strips, degree_xy=degree_xy,
         degree_z=degree_z, sigma0_xy=s0_part["planimetry"], sigma0_z=s0_part["height"],
         sigma_strip=(s_xy, s_z), point_index=tie, adjusted=(int(resid.size), int(n_unknown)),

@@ -122,7 +122,7 @@ def weakest_direction(
     C = result.correlations()
     names = list(result.names)
     if block is not None:
-        sl = result.blocks[block]
+        sl = result.groups[block]
         C, names = C[sl, sl], names[sl]
     w, V = np.linalg.eigh(C)
     cond = float(w[-1] / max(w[0], 1e-300))

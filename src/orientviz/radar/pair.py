@@ -230,7 +230,7 @@ def relative_orientation(
             l,
             sigma,
             names=names,
-            blocks={"image2": slice(0, k), "points": slice(k, k + 3 * n)},
+            groups={"image2": slice(0, k), "points": slice(k, k + 3 * n)},
             obs_labels=labels,
             context="relative orientation",
             **engine,

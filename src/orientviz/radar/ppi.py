@@ -387,7 +387,7 @@ def tolerant(model, n_obs: int, n_par: int):
 
     The first evaluation (at the approximations) raises :class:`InputError` as usual;
     later ones (during the iteration) return NaN observations instead, which the engine
-    reports as "the model became undefined" — a diverging iteration, not bad input.
+    reports as "the observation equations became undefined" — a diverging iteration, not bad input.
     """
     state = {"first": True}
 

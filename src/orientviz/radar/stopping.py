@@ -58,7 +58,7 @@ class GeierRun(Adjustment):
 
 
 def geier_iterate(
-    model: Callable[[F64], tuple[F64, F64]],
+    equations: Callable[[F64], tuple[F64, F64]],
     u0: F64,
     l: F64,
     sigma: float | F64 = 1.0,
@@ -73,8 +73,8 @@ def geier_iterate(
 
     Parameters
     ----------
-    model : callable
-        ``model(u) -> (f, J)`` as for :func:`~orientviz.adjust.gauss_newton`.
+    equations : callable
+        ``equations(u) -> (f, J)`` as for :func:`~orientviz.adjust.gauss_newton`.
     u0 : ndarray
         Start values.
     l : ndarray
@@ -105,7 +105,7 @@ def geier_iterate(
     p = 1.0 / s**2
     dof = l.size - u.size
     m0_old = np.inf
-    f, J = model(u)
+    f, J = equations(u)
     r = l - f
     history = [Iteration(0, u.copy(), None, _m0(r, p, dof), float(r @ (p * r)))]
     rule, m0_lin = f"reached the maximum of {max_iter} iterations", float("nan")
@@ -127,16 +127,16 @@ def geier_iterate(
             u = u + dx
         if converged:
             if u is not history[-1].x:
-                f, J = model(u)
+                f, J = equations(u)
                 r = l - f
             if "not applied" not in rule:
                 history.append(Iteration(k, u.copy(), dx, _m0(r, p, dof), float(r @ (p * r))))
             break
-        f, J = model(u)
+        f, J = equations(u)
         r = l - f
         history.append(Iteration(k, u.copy(), dx, _m0(r, p, dof), float(r @ (p * r))))
         m0_old = m0_lin
-    res = gauss_newton(model, u, l, sigma, names=names, max_iter=0, context=context, **engine)
+    res = gauss_newton(equations, u, l, sigma, names=names, max_iter=0, context=context, **engine)
     res.history = history
     res.converged = converged
     res.reason = f"stopping rule reconstructed from Geier's Fig. 8: {rule}"

@@ -164,12 +164,12 @@ class QualitySections:
                 "pairs within one image's or one point's parameters (the full cofactor "
                 "matrix is not formed for blocks)"
             )
-            for bname, Q in adj.cofactor_blocks.items():
-                if bname not in adj.blocks or Q.ndim != 3:
+            for bname, Q in adj.cofactor_groups.items():
+                if bname not in adj.groups or Q.ndim != 3:
                     continue
-                names = adj.names[adj.blocks[bname]]
+                names = adj.names[adj.groups[bname]]
                 nb = Q.shape[1]
-                fb = free[adj.blocks[bname]].reshape(-1, nb)
+                fb = free[adj.groups[bname]].reshape(-1, nb)
                 # parameters without a σ (fixed points) get unit variance and no correlation
                 d = np.sqrt(np.clip(np.einsum("kii->ki", Q), 0.0, None))
                 d = np.where(fb & (d > 0), d, 1.0)
@@ -300,8 +300,8 @@ class QualitySections:
                 )
         std = self.adj.std()
         bad = ~np.isfinite(std)
-        if s.kind == "block" and "points" in self.adj.blocks:
-            pb = self.adj.blocks["points"]
+        if s.kind == "block" and "points" in self.adj.groups:
+            pb = self.adj.groups["points"]
             nb = bad[pb].reshape(-1, 3)
             if nb.shape[0] == roles.size:  # the bundle: all points (models: tie points only)
                 nb[roles == CHECK] = False  # check points are not unknowns

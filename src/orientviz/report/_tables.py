@@ -120,14 +120,14 @@ def adjusted_block(block: Block, adj: Adjustment) -> Block:
     adj : Adjustment
         Its bundle result (blocks ``"exterior"`` (m, 6) and ``"points"`` (p, 3)).
     """
-    if "exterior" not in adj.blocks:
+    if "exterior" not in adj.groups:
         raise InputError("expected a bundle adjustment (parameter block 'exterior')")
     out = block.copy()
-    ext = adj.x[adj.blocks["exterior"]].reshape(block.n_images, 6)
+    ext = adj.x[adj.groups["exterior"]].reshape(block.n_images, 6)
     out.images.X0 = ext[:, :3].copy()
     out.images.angles = ext[:, 3:].copy()
-    if "points" in adj.blocks:
-        xyz = adj.x[adj.blocks["points"]].reshape(block.n_points, 3)
+    if "points" in adj.groups:
+        xyz = adj.x[adj.groups["points"]].reshape(block.n_points, 3)
         ok = np.all(np.isfinite(xyz), axis=1)
         out.points.xyz = np.where(ok[:, None], xyz, block.points.xyz)
     return out
@@ -161,9 +161,9 @@ def _group(index: np.ndarray, count: int, v: F64, w: F64) -> tuple[np.ndarray, F
 
 
 def _std(adj: Adjustment | None, block_name: str, shape: tuple[int, int]) -> F64:
-    if adj is None or block_name not in adj.blocks:
+    if adj is None or block_name not in adj.groups:
         return np.full(shape, np.nan)
-    return np.asarray(adj.std()[adj.blocks[block_name]], dtype=float).reshape(shape)
+    return np.asarray(adj.std()[adj.groups[block_name]], dtype=float).reshape(shape)
 
 
 def image_table(

@@ -254,7 +254,7 @@ def ours() -> dict[str, float]:
     v = res.residuals[: 2 * n].reshape(n, 2) / d["pixel_mm"]
     out["residuals||overall point RMS [px]"] = float(np.sqrt(np.mean(np.sum(v**2, axis=1))))
     eo = res.exterior
-    seo = res.sigma0 * np.sqrt(np.einsum("mii->mi", res.cofactor_blocks["exterior"]))
+    seo = res.sigma0 * np.sqrt(np.einsum("mii->mi", res.cofactor_groups["exterior"]))
     for i, num in enumerate(img_ids):
         case = f"photo {int(num)} ({d['images'][num]})"
         vals = np.r_[np.degrees(eo[i, 3:]), eo[i, :3]]

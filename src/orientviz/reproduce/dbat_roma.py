@@ -174,7 +174,7 @@ def ours() -> dict[str, float]:
     v = res.residuals[: 2 * n].reshape(n, 2) / d["pixel_mm"]
     out["residuals||overall point RMS [px]"] = float(np.sqrt(np.mean(np.sum(v**2, axis=1))))
     eo = res.exterior
-    Q = res.cofactor_blocks["exterior"]
+    Q = res.cofactor_groups["exterior"]
     for i, ident in enumerate(ids):
         vals = np.r_[np.degrees(eo[i, 3:]), eo[i, :3]]
         s = res.sigma0 * np.sqrt(np.diag(Q[i]))

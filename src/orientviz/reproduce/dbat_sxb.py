@@ -100,7 +100,7 @@ def ours(tol: float | None = None) -> dict[str, float]:
     v = adj.residuals[: 2 * n].reshape(n, 2) / pixel
     out["residuals||overall point RMS [px]"] = float(np.sqrt(np.mean(np.sum(v**2, axis=1))))
     names = info["image_files"]  # DBAT's image number → file stem
-    Q = adj.cofactor_blocks["exterior"]
+    Q = adj.cofactor_groups["exterior"]
     for num, stem in names.items():
         i = list(sol.image_ids).index(stem)
         vals = np.r_[np.degrees(sol.angles[i]), sol.X0[i]]  # the Solution holds rad, m

@@ -70,7 +70,7 @@ def _pipeline_rows(rng: np.random.Generator) -> list[Row]:
             tp = res.point_index
             free = sim.block.points.role[tp] == TIE
             e = (res.points[tp] - sim.truth.points.xyz[tp])[free, :2]
-            q = np.einsum("nii->ni", res.cofactor_blocks["points"][: tp.size])[free, :2]
+            q = np.einsum("nii->ni", res.cofactor_groups["points"][: tp.size])[free, :2]
             num += float(np.sum(e**2))
             den += float(np.sum(q)) * res.sigma0**2
         rows.append(

@@ -110,7 +110,7 @@ def independent_models(
         Stop when all corrections are below ``tol · σ_xy`` (default 1e-4 for the
         quadratically converging rigorous solution, 1e-2 for PAT-M).
     precision : bool
-        Compute the 3 × 3 cofactor blocks of all tie points (``cofactor_blocks["points"]``).
+        Compute the 3 × 3 cofactor blocks of all tie points (``cofactor_groups["points"]``).
     deformation : str or list of str, optional
         Model deformation parameters (self-calibration; rigorous method only): a set
         name or terms of :mod:`orientviz.stereo_models._deformation`.
@@ -231,7 +231,7 @@ def _joint(
         su.m = m0
     res = mj.finish_joint(res, block, ms, su, js, lam, R, T, p, g, sol, names, w_c)
     if precision:
-        res.cofactor_blocks["points"] = mj.point_cofactors(sol, su)
+        res.cofactor_groups["points"] = mj.point_cofactors(sol, su)
     return res
 
 
@@ -289,7 +289,7 @@ def _result(block, ms, su, lam, R, T, w_c, method, converged, reason, sol, histo
     res = ModelsResult(
         x=x, names=names, sigma0=s0, redundancy=dof, residuals=r.ravel(),
         sigma_obs=np.tile(1.0 / np.sqrt(w_c), r.shape[0]), converged=converged, reason=reason,
-        history=history, blocks={"models": slice(0, n7), "points": slice(n7, x.size)},
+        history=history, groups={"models": slice(0, n7), "points": slice(n7, x.size)},
         points=xyz, check_points=check_points_of(block, xyz),
         sigma0_planimetry=s0_l, sigma0_height=s0_h,
         method=method, models=ms, centres=centres, point_index=su.tie_points,
@@ -299,7 +299,7 @@ def _result(block, ms, su, lam, R, T, w_c, method, converged, reason, sol, histo
         adjusted=(r.size + int(np.sum(su.prior_w > 0)), 7 * ms.n_models + su.n_scalar),
     )  # fmt: skip
     if precision and method == "rigorous" and sol is not None:
-        res.cofactor_blocks["points"] = scalar_cofactors(sol, su.scalar)
+        res.cofactor_groups["points"] = scalar_cofactors(sol, su.scalar)
     elif precision:
         # one more rigorous linearisation at the PAT-M solution gives its precision
         r3, J = rows3(su, lam, R, T)
@@ -309,5 +309,5 @@ def _result(block, ms, su, lam, R, T, w_c, method, converged, reason, sol, histo
             su.scalar[su.row_point].ravel(), np.tile(w_c, k), r3.ravel(), su.n_models,
             su.n_scalar, prior_w=su.prior_w, prior_e=su.prior_e(), names=su.param_names(7),
         )  # fmt: skip
-        res.cofactor_blocks["points"] = scalar_cofactors(sol, su.scalar)
+        res.cofactor_groups["points"] = scalar_cofactors(sol, su.scalar)
     return res

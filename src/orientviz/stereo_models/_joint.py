@@ -325,9 +325,9 @@ def finish_joint(res: ModelsResult, block, ms, su, js, lam, R, T, p, g_aux, sol,
     res.x = np.concatenate([res.x, extra_x])
     res.names = list(res.names) + names[n7:]
     if js.n_def:
-        res.blocks["additional"] = slice(nx, nx + js.n_def)
+        res.groups["additional"] = slice(nx, nx + js.n_def)
     if js.n_aux:
-        res.blocks["auxiliary"] = slice(nx + js.n_def, nx + js.n_def + js.n_aux)
+        res.groups["auxiliary"] = slice(nx + js.n_def, nx + js.n_def + js.n_aux)
     cost = joint_cost(su, js, lam, R, T, p, g_aux, w_c)
     dof = joint_redundancy(su, js)
     res.redundancy = dof
@@ -341,11 +341,11 @@ def finish_joint(res: ModelsResult, block, ms, su, js, lam, R, T, p, g_aux, sol,
     Q = sol.factor.solve(np.eye(sol.factor.scale.size)[:, q_idx]) if q_idx.size else None
     if js.n_def:
         qd = Q[:, : js.n_def]
-        res.cofactor_blocks["additional"] = qd[n7 : n7 + js.n_def]
+        res.cofactor_groups["additional"] = qd[n7 : n7 + js.n_def]
         s = np.tile(js.sigma, js.n_groups)
         an = analyse(res, ap_sigma=js.sigma if np.all(np.isfinite(s)) else None)
         # correlations with the similarity parameters of the models
-        dq = np.sqrt(np.clip(np.diag(res.cofactor_blocks["additional"]), 1e-300, None))
+        dq = np.sqrt(np.clip(np.diag(res.cofactor_groups["additional"]), 1e-300, None))
         # correlations with the similarity parameters need diag(S⁻¹) of all models:
         # n7 / 256 solves, left out for very large blocks
         big = n7 > SIMILARITY_CHECK_LIMIT
@@ -370,7 +370,7 @@ def finish_joint(res: ModelsResult, block, ms, su, js, lam, R, T, p, g_aux, sol,
         )
     if js.n_aux:
         qa = Q[n7 + js.n_def :, js.n_def :]
-        res.cofactor_blocks["auxiliary"] = qa
+        res.cofactor_groups["auxiliary"] = qa
         res.auxiliary = AuxiliaryEstimates(
             js.aux.split_globals(g_aux),
             js.aux.split_globals(res.sigma0 * np.sqrt(np.diag(qa))),

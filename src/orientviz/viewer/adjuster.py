@@ -46,12 +46,12 @@ def apply_parameters(block: Block, result: Adjustment, x: np.ndarray | None = No
     x = result.x if x is None else np.asarray(x, dtype=float)
     out = block.copy()
     m, p = block.n_images, block.n_points
-    if "exterior" in result.blocks:
-        ext = x[result.blocks["exterior"]].reshape(m, 6)
+    if "exterior" in result.groups:
+        ext = x[result.groups["exterior"]].reshape(m, 6)
         out.images.X0 = ext[:, :3].copy()
         out.images.angles = ext[:, 3:].copy()
-    if "points" in result.blocks:
-        out.points.xyz = x[result.blocks["points"]].reshape(p, 3).copy()
+    if "points" in result.groups:
+        out.points.xyz = x[result.groups["points"]].reshape(p, 3).copy()
     return out
 
 
@@ -138,7 +138,7 @@ def small_bundle(block: Block, max_iter: int = 20, precision: bool = True) -> Ad
         l,
         sig,
         names=names,
-        blocks={"exterior": slice(0, 6 * m), "points": slice(6 * m, u)},
+        groups={"exterior": slice(0, 6 * m), "points": slice(6 * m, u)},
         obs_labels=labels,
         fixed=fixed,
         max_iter=max_iter,

@@ -66,7 +66,7 @@ def self_calibration_fields(
     out = []
     for add in (None, ap_set(ap)):
         res = bundle_adjust(start, additional=add)
-        out.append((res.x[res.blocks["points"]].reshape(p, 3) - reference.points.xyz, res.sigma0))
+        out.append((res.x[res.groups["points"]].reshape(p, 3) - reference.points.xyz, res.sigma0))
     tie = start.points.role == 0
     a, b = rms(out[0][0][tie]), rms(out[1][0][tie])
     line = (

@@ -188,7 +188,7 @@ def expand_result(sub_result: Any, mp: Mapping, block: Block, sigma: F64) -> Any
         v = f − l for *all* observations (left-out ones predicted from the adjusted
         orientations), then the sub-block's pseudo-observations; redundancy numbers and
         normalised residuals NaN for left-out observations; ``used_obs`` (n,);
-        ``cofactor_blocks`` ``"exterior"`` (m, 6, 6) and ``"points"`` (p, 3, 3) with NaN
+        ``cofactor_groups`` ``"exterior"`` (m, 6, 6) and ``"points"`` (p, 3, 3) with NaN
         for what was left out; ``exterior_pairs`` with keys in block indices; ``history``
         with ``x`` in the whole layout (empty where the solver kept none).
     """
@@ -265,7 +265,7 @@ def expand_result(sub_result: Any, mp: Mapping, block: Block, sigma: F64) -> Any
         sub_result,
         x=x,
         names=names,
-        blocks={"exterior": slice(0, 6 * m), "points": slice(6 * m, 6 * m + 3 * p)},
+        groups={"exterior": slice(0, 6 * m), "points": slice(6 * m, 6 * m + 3 * p)},
         residuals=np.concatenate([v_img.ravel(), v_sub[tail]]),
         sigma_obs=np.concatenate(
             [np.asarray(sigma, float).ravel(), np.asarray(sub_result.sigma_obs)[tail]]
@@ -274,7 +274,7 @@ def expand_result(sub_result: Any, mp: Mapping, block: Block, sigma: F64) -> Any
         normalized_residuals=per_obs(sub_result.normalized_residuals),
         redundancy_xy=None,
         cofactor=None,
-        cofactor_blocks=cb,
+        cofactor_groups=cb,
         obs_slices=slices,
         obs_labels=None,
         history=history,
@@ -292,11 +292,11 @@ def _typed(res: Any, ext: F64, xyz: F64, used: NDArray[np.bool_], pairs: Any) ->
 
 def diagonal_blocks(res: Any, name: str, b: int) -> F64 | None:
     """Stacked b × b diagonal cofactor blocks of block ``name``: stored, or from the dense Q."""
-    Q = res.cofactor_blocks.get(name)
+    Q = res.cofactor_groups.get(name)
     if Q is not None and np.ndim(Q) == 3:
         return np.asarray(Q)
-    if res.cofactor is None or name not in res.blocks:
+    if res.cofactor is None or name not in res.groups:
         return None
-    sl = res.blocks[name]
+    sl = res.groups[name]
     idx = np.arange(sl.start, sl.stop).reshape(-1, b)
     return np.asarray(res.cofactor)[idx[:, :, None], idx[:, None, :]]

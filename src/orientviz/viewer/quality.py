@@ -172,7 +172,7 @@ def compute_quality(block, result, key: str) -> Quality:
         s0 = 1.0
         if result is not None and np.isfinite(result.sigma0) and result.redundancy > 0:
             s0 = float(result.sigma0)
-        cb = {} if result is None else result.cofactor_blocks
+        cb = {} if result is None else result.cofactor_groups
         per["image"] = position_std(cb.get("exterior"), s0, m)
         per["point"] = position_std(cb.get("points"), s0, p)
         both = np.concatenate([per["image"], per["point"]])

@@ -35,6 +35,11 @@ from .block_geometry import COLORS, BlockGeometry
 #: Blocks with more images draw their frustums batched per strip, not one node per image.
 FRUSTUM_NODE_LIMIT = 500
 
+#: A redraw after an adjustment moves a frustum node only if its apex moved by more than
+#: this fraction of the frustum depth or its quaternion by more than this (≈ 0.2 mrad):
+#: far below a pixel, and it spares viser hundreds of messages per re-solve.
+POSE_TOLERANCE: float = 1e-4
+
 #: Line widths in screen pixels.
 WIDTH = {"frustum": 1.5, "ray": 1.0, "residual": 2.0, "strip": 2.0, "model": 1.0, "selected": 3.0}
 
@@ -165,6 +170,8 @@ class BlockScene:
         """One clickable frustum node per image (small and medium blocks)."""
         geo, b = self.geo, self.geo.state.block
         pos, wxyz = geo.frustum_poses()
+        #: the poses last sent to viser (a redraw skips frustums that did not visibly move)
+        self.sent_pos, self.sent_wxyz = pos.copy(), wxyz.copy()
         for k, name in enumerate(names):
             fov, aspect, scale = geo.viser_frustum_args(int(b.images.camera[k]))
             h = self.scene.add_camera_frustum(
@@ -256,9 +263,17 @@ class BlockScene:
     def _move_frustums(self, images: list[int] | None) -> None:
         if self.image_nodes:
             pos, wxyz = self.geo.frustum_poses()
-            for k in range(len(self.image_nodes)) if images is None else images:
+            ks = np.arange(len(self.image_nodes)) if images is None else np.asarray(images)
+            if images is None:  # after an adjustment: send only poses that visibly moved
+                tol = POSE_TOLERANCE * self.geo.frustum_depth
+                moved = (np.linalg.norm(pos - self.sent_pos, axis=1) > tol) | (
+                    np.abs(wxyz - self.sent_wxyz).max(axis=1) > POSE_TOLERANCE
+                )
+                ks = ks[moved]
+            for k in ks:
                 self.image_nodes[k].position = pos[k]
                 self.image_nodes[k].wxyz = wxyz[k]
+            self.sent_pos[ks], self.sent_wxyz[ks] = pos[ks], wxyz[ks]
             return
         strips = self.geo.state.block.images.strip
         touched = None if images is None else {int(strips[k]) for k in images}
@@ -340,8 +355,10 @@ class BlockScene:
         m = self.geo.state.block.n_images
         rgb = np.tile(COLORS["frustum"], (m, 1)) if rgb is None else np.asarray(rgb)
         rgb = rgb.astype(np.uint8)
+        last = self.image_colours
         for k, h in enumerate(self.image_nodes):
-            h.color = tuple(int(c) for c in rgb[k])
+            if last is None or not np.array_equal(last[k], rgb[k]):
+                h.color = tuple(int(c) for c in rgb[k])
         for h, idx in self.strip_frustums.values():
             h.colors = np.repeat(rgb[idx], 8, axis=0)[:, None, :].repeat(2, axis=1)
         self.image_colours = rgb

@@ -141,17 +141,17 @@ class BlockState:
 
     def _put(self, start: Block, result: Adjustment, x: F64 | None = None) -> None:
         """Set the estimates of the state from ``x`` (default ``result.x``; layout of
-        ``result.blocks``), those not in ``x`` from ``start`` (cf. ``apply_parameters``,
+        ``result.groups``), those not in ``x`` from ``start`` (cf. ``apply_parameters``,
         without copying the whole block)."""
         x = result.x if x is None else np.asarray(x, dtype=float)
         b = self.block
-        if "exterior" in result.blocks:
-            ext = x[result.blocks["exterior"]].reshape(b.n_images, 6)
+        if "exterior" in result.groups:
+            ext = x[result.groups["exterior"]].reshape(b.n_images, 6)
             b.images.X0, b.images.angles = ext[:, :3].copy(), ext[:, 3:].copy()
         else:
             b.images.X0, b.images.angles = start.images.X0.copy(), start.images.angles.copy()
-        if "points" in result.blocks:
-            b.points.xyz = x[result.blocks["points"]].reshape(b.n_points, 3).copy()
+        if "points" in result.groups:
+            b.points.xyz = x[result.groups["points"]].reshape(b.n_points, 3).copy()
         else:
             b.points.xyz = start.points.xyz.copy()
 

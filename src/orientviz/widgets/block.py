@@ -94,7 +94,7 @@ def block_state(
         from ..bundle import bundle_adjust
 
         res = bundle_adjust(sim.block, precision=False)
-        xyz = res.x[res.blocks["points"]].reshape(-1, 3)
+        xyz = res.x[res.groups["points"]].reshape(-1, 3)
     else:
         raise ValueError(f"expected a method out of {sorted(METHODS.values())}, got {method!r}")
     dt = time.perf_counter() - t

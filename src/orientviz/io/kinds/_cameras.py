@@ -14,8 +14,9 @@ A camera row may say what the bundle estimates of it::
   but sk), **weighted** (a prior σ in ``sigma``: an observation of its given value) or
   **fixed** (neither) at its given value (the row's c, x0, y0 and terms; terms default 0).
 * ``additional``: instead of a model, an additional-parameter set (``"ebner12"``,
-  ``"gruen44"``, ``"brown"``: corrections at the observed coordinates, one group per
-  camera) with ``additional_sigma`` (µm) for its pseudo-observations.
+  ``"gruen44"``, ``"brown"``: corrections at the observed coordinates in µm, one group
+  per camera), its parameters free (``free``), weighted (``sigma`` in µm, or
+  ``additional_sigma`` for all) or fixed at 0 (not in ``free`` when ``free`` is given).
 
 Units: c, x0, y0, their σ and ``r0`` in the file's image unit; the lens terms in the
 photogrammetric image frame (y up) and mm (backward K1 mm⁻², K2 mm⁻⁴, K3 mm⁻⁶, P1, P2
@@ -63,13 +64,13 @@ def read_camera_models(t: Table, units: Units) -> list[dict[str, Any]]:
         if model is not None and add is not None:
             raise t.fail(i, "additional", 'give "model" or "additional", not both')
         if model is None:
-            for field in ("free", "sigma", "r0") + tuple(terms):
+            fields = ("r0",) + tuple(terms) + (("free", "sigma") if add is None else ())
+            for field in fields:
                 if col[field][i] is not None:
                     raise t.fail(i, field, 'needs "model": "backward" or "forward"')
             if col["additional_sigma"][i] is not None and add is None:
                 raise t.fail(i, "additional_sigma", 'needs "additional" (ebner12, gruen44, brown)')
-            out.append({} if add is None else {"additional": add,
-                                               "additional_sigma": col["additional_sigma"][i]})  # fmt: skip
+            out.append({} if add is None else _additional_spec(t, i, add))
             continue
         if col["additional_sigma"][i] is not None:
             raise t.fail(i, "additional_sigma", 'needs "additional" (ebner12, gruen44, brown)')
@@ -98,6 +99,45 @@ def read_camera_models(t: Table, units: Units) -> list[dict[str, Any]]:
             "r0": None if r0 is None else float(r0) * I,
         })  # fmt: skip
     return out
+
+
+def _additional_spec(t: Table, i: int, add: str) -> dict[str, Any]:
+    """An additional-parameter set of camera row ``i`` with its free/weighted/fixed parameters."""
+    from ...bundle import ap_set
+
+    col = t.columns
+    names = list(ap_set(add).names)
+    free, sigma = col["free"][i], dict(col["sigma"][i] or {})
+    for field, keys in (("free", free or ()), ("sigma", sigma)):
+        for k in keys:
+            if k not in names:
+                raise t.fail(i, field, f"{k!r} is not a parameter of {add} (its parameters: "
+                             f"{', '.join(names[:12])}{' …' if len(names) > 12 else ''})")  # fmt: skip
+            if field == "sigma" and free and k in free:
+                raise t.fail(i, "sigma", f"{k!r} is listed in free and has a prior σ: give one")
+    return {"additional": add, "additional_sigma": col["additional_sigma"][i],
+            "free": None if free is None else [str(k) for k in free], "sigma": sigma}  # fmt: skip
+
+
+#: σ (µm) that holds a fixed additional parameter at 0.
+FIXED_SIGMA_UM = 1e-6
+
+
+def additional_sigmas(spec: dict[str, Any], names: list[str]) -> np.ndarray:
+    """σ (µm) of the pseudo-observations p = 0 of each parameter of an additional set:
+    its ``sigma`` if given; with ``free``, inf (free) for the listed and
+    :data:`FIXED_SIGMA_UM` (held at 0) for the others; else ``additional_sigma`` or inf."""
+    sig, free = spec.get("sigma") or {}, spec.get("free")
+    default = spec.get("additional_sigma")
+    out = []
+    for k in names:
+        if k in sig:
+            out.append(float(sig[k]))
+        elif free is not None:
+            out.append(np.inf if k in free else FIXED_SIGMA_UM)
+        else:
+            out.append(np.inf if default is None else float(default))
+    return np.array(out)
 
 
 def camera_model_cells(models: list[dict[str, Any]], units: Units) -> dict[str, list[Any]]:
@@ -142,9 +182,9 @@ def bundle_camera_options(block) -> dict[str, Any]:
         cam = block.cameras
         opts = {"b": float(np.min(cam.format_mm[0])) * 0.4} if first["additional"] != "brown" else {
             "c": float(cam.c[0]), "r0": float(np.hypot(*cam.format_mm[0])) / 4}  # fmt: skip
-        sig = first.get("additional_sigma")
-        return {"additional": ap_set(first["additional"], **opts), "ap_group": group,
-                "ap_sigma": None if sig is None else float(sig)}  # fmt: skip
+        aps = ap_set(first["additional"], **opts)
+        return {"additional": aps, "ap_group": group,
+                "ap_sigma": additional_sigmas(first, list(aps.names))}  # fmt: skip
     values = {}
     for k in sorted({k for s in models for k in s["values"]}):
         values[k] = [s["values"].get(k, 0.0) for s in models]
@@ -157,7 +197,9 @@ def bundle_camera_options(block) -> dict[str, Any]:
 
 def _shape(spec: dict[str, Any]) -> tuple:
     if "additional" in spec:
-        return ("additional", spec["additional"], spec.get("additional_sigma"))
+        free = None if spec.get("free") is None else tuple(spec["free"])
+        return ("additional", spec["additional"], spec.get("additional_sigma"), free,
+                tuple(sorted((spec.get("sigma") or {}).items())))  # fmt: skip
     if not spec:
         return ("none",)
     free = None if spec["free"] is None else tuple(spec["free"])

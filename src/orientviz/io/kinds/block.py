@@ -215,7 +215,7 @@ def solve(problem: Problem, method: str | None) -> Solution:
         from ...polynomial import polynomial_adjust as func
 
         adj = _call(func, block, opts)
-        if "exterior" not in adj.blocks:
+        if "exterior" not in adj.groups:
             return solution_from_points(problem, block, adj, method, func)
     return solution_from_block_adjustment(problem, block, adj, method)
 
@@ -302,18 +302,18 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
     m, p = block.n_images, block.n_points
     if adj.obs_labels is None or len(adj.obs_labels) != adj.n_observations:
         more = {}
-        if "additional" in adj.blocks:
-            more["additional"] = [f"{nm}_obs" for nm in adj.names[adj.blocks["additional"]]]
+        if "additional" in adj.groups:
+            more["additional"] = [f"{nm}_obs" for nm in adj.names[adj.groups["additional"]]]
         if getattr(adj, "auxiliary", None) is not None and adj.auxiliary.labels:
             more["auxiliary"] = list(adj.auxiliary.labels)
         control = str(problem.options.get("control", "weighted"))
         adj.obs_labels = _labels(block, adj.n_observations, adj.obs_slices, control, more)
     std = adj.std()
-    ext = adj.x[adj.blocks["exterior"]].reshape(m, 6)
-    sext = std[adj.blocks["exterior"]].reshape(m, 6)
-    if "points" in adj.blocks:
-        xyz = adj.x[adj.blocks["points"]].reshape(p, 3)
-        sxyz = std[adj.blocks["points"]].reshape(p, 3)
+    ext = adj.x[adj.groups["exterior"]].reshape(m, 6)
+    sext = std[adj.groups["exterior"]].reshape(m, 6)
+    if "points" in adj.groups:
+        xyz = adj.x[adj.groups["points"]].reshape(p, 3)
+        sxyz = std[adj.groups["points"]].reshape(p, 3)
     else:
         xyz, sxyz = block.points.xyz, np.full((p, 3), np.nan)
     notes = check_note(problem, block, xyz)
@@ -381,9 +381,9 @@ def solution_from_points(problem: Problem, block: Block, adj, method: str, func)
     """
     p = block.n_points
     xyz_sigma = np.full((p, 3), np.nan)
-    if "points" in adj.blocks and getattr(adj, "point_index", None) is not None:
+    if "points" in adj.groups and getattr(adj, "point_index", None) is not None:
         idx = np.asarray(adj.point_index, dtype=np.int64)
-        xyz_sigma[idx] = adj.std()[adj.blocks["points"]].reshape(-1, 3)[: idx.size]
+        xyz_sigma[idx] = adj.std()[adj.groups["points"]].reshape(-1, 3)[: idx.size]
     passes = inspect.signature(func).parameters.get("iterations")
     return Solution(
         kind="block",
@@ -418,7 +418,7 @@ def solution_from_models(problem: Problem, block: Block, adj) -> Solution:
     """
     m, p = block.n_images, block.n_points
     std = adj.std()
-    tie_std = std[adj.blocks["points"]].reshape(-1, 3)
+    tie_std = std[adj.groups["points"]].reshape(-1, 3)
     pidx = np.asarray(adj.point_index, dtype=np.int64)
     cidx = np.asarray(adj.centre_image, dtype=np.int64)
     xyz_sigma = np.full((p, 3), np.nan)

@@ -85,8 +85,8 @@ def _pooled(block: Block, res, ids: list[str]) -> Adjustment:
         x=x, names=names, sigma0=s0, redundancy=dof, residuals=v, sigma_obs=s,
         converged=bool(res.converged), reason=reason,
         history=[Iteration(0, x.copy(), None, s0, cost)],
-        blocks={"points": slice(0, 3 * p)}, redundancy_numbers=rn, normalized_residuals=w,
-        cofactor_blocks={"points": res.cofactor}, obs_labels=labels,
+        groups={"points": slice(0, 3 * p)}, redundancy_numbers=rn, normalized_residuals=w,
+        cofactor_groups={"points": res.cofactor}, obs_labels=labels,
     )  # fmt: skip
 
 
