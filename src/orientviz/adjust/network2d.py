@@ -20,7 +20,7 @@ I64 = NDArray[np.int64]
 
 
 def distance_model(pairs: ArrayLike) -> Callable[[F64], tuple[F64, F64]]:
-    """``model(x) -> (s, J)`` of the distances between ``pairs`` (k, 2) of point indices.
+    """``equations(x) -> (s, J)`` of the distances between ``pairs`` (k, 2) of point indices.
 
     ``x`` holds the coordinates x1, y1, x2, … (m); ``J`` is (k, 2p) with the unit vector
     from point i to j (∂s/∂(xj, yj)) and its negative (∂s/∂(xi, yi)).
@@ -31,7 +31,7 @@ def distance_model(pairs: ArrayLike) -> Callable[[F64], tuple[F64, F64]]:
             f"expected pairs of two different point indices, shape (k, 2), got {P.shape}"
         )
 
-    def model(x: F64) -> tuple[F64, F64]:
+    def equations(x: F64) -> tuple[F64, F64]:
         xy = np.asarray(x, dtype=float).reshape(-1, 2)
         d = xy[P[:, 1]] - xy[P[:, 0]]
         s = np.linalg.norm(d, axis=1)
@@ -43,7 +43,7 @@ def distance_model(pairs: ArrayLike) -> Callable[[F64], tuple[F64, F64]]:
             J[rows, 2 * P[:, 0] + k] = -u[:, k]
         return s, J
 
-    return model
+    return equations
 
 
 def all_pairs_within(xy: ArrayLike, reach: float) -> I64:

@@ -49,7 +49,9 @@ REFINE_EVERY: int = 100
 POOR_RESECTION: float = 5.0
 
 
-def intersect_rays(X0: F64, d: F64, point: NDArray[np.int64], n_points: int) -> tuple[F64, F64]:
+def intersect_rays(
+    X0: F64, d: F64, point: NDArray[np.int64], n_points: int, *, tolerance: float = 1e-8
+) -> tuple[F64, F64]:
     """Linear least-squares intersection of rays (vectorised over points).
 
     Minimises Σ ‖(I − d dᵀ)(X − X0)‖² per point (d unit ray directions).
@@ -63,6 +65,9 @@ def intersect_rays(X0: F64, d: F64, point: NDArray[np.int64], n_points: int) -> 
     point : ndarray of int, shape (k,)
         Point index of each ray.
     n_points : int
+    tolerance : float
+        Smallest eigenvalue ratio (cond) of a point's 3×3 system that is still solved;
+        below it the rays count as parallel and the point stays NaN.
 
     Returns
     -------
@@ -80,7 +85,7 @@ def intersect_rays(X0: F64, d: F64, point: NDArray[np.int64], n_points: int) -> 
     ev = np.linalg.eigvalsh(A)
     cond = ev[:, 0] / np.maximum(ev[:, 2], 1e-300)
     X = np.full((n_points, 3), np.nan)
-    ok = cond > 1e-8
+    ok = cond > tolerance
     X[ok] = np.linalg.solve(A[ok], b[ok][:, :, None])[:, :, 0]
     return X, cond
 

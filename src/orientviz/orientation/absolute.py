@@ -406,12 +406,12 @@ def similarity_transform(
 
     if sigma_source is None:
 
-        def model(p: F64):
+        def equations(p: F64):
             f, J, _ = transform_jac(p, s)
             return f[rows, cols], J[rows, cols, :]
 
         res = gauss_newton(
-            model, x0, l_ctrl, s_ctrl, names=names, groups=groups, obs_labels=labels,
+            equations, x0, l_ctrl, s_ctrl, names=names, groups=groups, obs_labels=labels,
             fixed=fixed, max_iter=max_iter, context="similarity transformation",
         )  # fmt: skip
     else:
@@ -428,7 +428,7 @@ def similarity_transform(
         eye = sp.identity(3 * n, format="csr")
         ctrl_idx = rows * 3 + cols
 
-        def model(p: F64):
+        def equations(p: F64):
             pts = p[7:].reshape(n, 3)
             f, J, R = transform_jac(p, pts)
             Jt = sp.csr_matrix(J[rows, cols, :])
@@ -439,7 +439,7 @@ def similarity_transform(
             return np.concatenate([p[7:], f[rows, cols]]), sp.vstack([top, bottom], format="csr")
 
         res = gauss_newton(
-            model, x0, l_all, s_all, names=names, groups=groups, obs_labels=labels,
+            equations, x0, l_all, s_all, names=names, groups=groups, obs_labels=labels,
             fixed=fixed, max_iter=max_iter, context="similarity transformation",
         )  # fmt: skip
     tf = SimilarityTransform.from_params(res.x[:7], seq)

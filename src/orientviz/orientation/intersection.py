@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..adjust import Adjustment, Evaluation, Step, StopRule, gauss_newton, iterate
+from ..block import intersect_rays
 from ..camera import rays
 from ..errors import InputError, NotDeterminableError
 
@@ -173,23 +174,6 @@ def _sym_apply(S: F64, x: F64) -> F64:
     )
 
 
-def _sym_eig_extremes(S: F64) -> tuple[F64, F64]:
-    """Smallest and largest eigenvalue of symmetric 3 × 3 matrices (closed form)."""
-    q = (S[:, 0] + S[:, 1] + S[:, 2]) / 3.0
-    p1 = S[:, 3] ** 2 + S[:, 4] ** 2 + S[:, 5] ** 2
-    p2 = (S[:, 0] - q) ** 2 + (S[:, 1] - q) ** 2 + (S[:, 2] - q) ** 2 + 2.0 * p1
-    pp = np.sqrt(p2 / 6.0)
-    safe = np.where(pp > 0, pp, 1.0)
-    B = S.copy()
-    B[:, :3] -= q[:, None]
-    B /= safe[:, None]
-    _, det = _sym_inverse(B)
-    phi = np.arccos(np.clip(det / 2.0, -1.0, 1.0)) / 3.0
-    lmax = np.where(pp > 0, q + 2.0 * pp * np.cos(phi), q)
-    lmin = np.where(pp > 0, q + 2.0 * pp * np.cos(phi + 2.0 * np.pi / 3.0), q)
-    return lmin, lmax
-
-
 class _PointBatch:
     """Forward intersection of many points as one problem of :func:`orientviz.adjust.iterate`.
 
@@ -324,16 +308,11 @@ def intersect_points(
     if not np.all(np.isfinite(sg)) or np.any(sg <= 0):
         raise InputError("sigma: expected positive finite σ of the image coordinates in mm")
     # ---- linear start: Σ (I − d dᵀ) X = Σ (I − d dᵀ) X0
+    # (the one linear ray intersection of the package, shared with the block's approximations)
     d = rays(xy, R[img], cc[img], xx0[img], yy0[img])
-    d /= np.linalg.norm(d, axis=1, keepdims=True)
-    A = -_sym_outer(d, d)
-    A[:, :3] += 1.0
-    Xi = X0[img]
-    As = _sum_per_point(A, pt, p)
-    bs = _sum_per_point(Xi - d * np.sum(d * Xi, axis=1, keepdims=True), pt, p)
+    X_linear, _ = intersect_rays(X0[img], d, pt, p, tolerance=PARALLEL_TOLERANCE)
     nr = np.bincount(pt, minlength=p)
-    lmin, lmax = _sym_eig_extremes(As) if p else (np.zeros(0), np.zeros(0))
-    ok = (nr >= 2) & (lmin > PARALLEL_TOLERANCE * np.maximum(lmax, 1e-300))
+    ok = (nr >= 2) & np.isfinite(X_linear).all(axis=1)
     if not ok.all() and on_degenerate == "raise":
         bad = np.flatnonzero(~ok)
         few = bad[nr[bad] < 2]
@@ -347,8 +326,7 @@ def intersect_points(
             "forward intersection: " + "; ".join(parts),
             parameters=[f"{i}.{a}" for i in bad[:10] for a in "XYZ"],
         )
-    X = np.full((p, 3), np.nan)
-    X[ok] = _sym_apply(_sym_inverse(As[ok])[0], bs[ok])
+    X = np.where(ok[:, None], X_linear, np.nan)
     # ---- rigorous collinearity adjustment per point (3 × 3 normal equations each), on the
     # engine's loop: one step corrects every determinable point at once
     wgt = 1.0 / sg**2
@@ -451,13 +429,13 @@ def forward_intersection(
     sg = np.asarray(sigma, dtype=float)
     sg = np.broadcast_to(sg[:, None] if sg.ndim == 1 else sg, (k, 2)).reshape(-1)
 
-    def model(X: F64):
+    def equations(X: F64):
         f, J = _point_jacobian(np.tile(X, (k, 1)), X0, R, cc, xx0, yy0)
         return f.reshape(-1), J.reshape(2 * k, 3)
 
     ids = [str(i) for i in range(k)] if image_ids is None else [str(i) for i in image_ids]
     res = gauss_newton(
-        model, start.xyz[0], xy.reshape(-1), sg, names=["X", "Y", "Z"],
+        equations, start.xyz[0], xy.reshape(-1), sg, names=["X", "Y", "Z"],
         obs_labels=[f"{i}/{a}" for i in ids for a in "xy"], context="forward intersection",
     )  # fmt: skip
     return res.extend(ForwardIntersection, start=start.xyz[0])

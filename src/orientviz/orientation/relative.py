@@ -452,13 +452,13 @@ def relative_orientation(
         design(pts[:, 0], pts[:, 1], pts[:, 2], b, kind), names, "relative orientation"
     )
 
-    def model(x):
+    def equations(x):
         st = PairState.from_elements(x, b, kind, seq)
         p, _, J = _parallax_and_jacobian(xy1, xy2, c, st, kind)
         return p, J
 
     res = gauss_newton(
-        model,
+        equations,
         x0,
         np.zeros(xy1.shape[0]),
         sigma,

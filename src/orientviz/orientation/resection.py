@@ -492,11 +492,11 @@ def resection(
     ids = [str(i) for i in range(n)] if point_ids is None else [str(i) for i in point_ids]
     labels = [f"{i}/{a}" for i in ids for a in "xy"]
 
-    def model(p: F64):
+    def equations(p: F64):
         return resection_model(p, X, seq)
 
     res = gauss_newton(
-        model, x0, xy.reshape(-1), sg, names=list(EXTERIOR_NAMES + INTERIOR_NAMES),
+        equations, x0, xy.reshape(-1), sg, names=list(EXTERIOR_NAMES + INTERIOR_NAMES),
         groups={"exterior": slice(0, 6), "interior": slice(6, 9)}, obs_labels=labels,
         fixed=fixed, max_iter=max_iter, context="space resection",
     )  # fmt: skip

@@ -128,8 +128,8 @@ def image_model(
 
     Returns
     -------
-    model : callable
-        ``model(u) -> (f, J)`` for the reduced vector u of the free parameters.
+    equations : callable
+        ``equations(u) -> (f, J)`` for the reduced vector u of the free parameters.
     u0 : ndarray
         Start values of the free parameters.
     l : ndarray
@@ -150,7 +150,7 @@ def image_model(
         p[idx] = u
         return p
 
-    def model(u: F64) -> tuple[F64, F64]:
+    def equations(u: F64) -> tuple[F64, F64]:
         p = full(u)
         xy, J, _ = project_with_jacobian(points, RadarImage.from_vector(p, seq))
         J = J[:, :, idx]
@@ -175,7 +175,7 @@ def image_model(
         l = robs
     else:
         l = np.zeros(len(xy_obs))
-    return tolerant(model, l.size, len(idx)), full0[idx], l
+    return tolerant(equations, l.size, len(idx)), full0[idx], l
 
 
 def adjust_image(
@@ -233,7 +233,7 @@ def adjust_image(
     """
     P, L = _check(points, xy)
     free = list(free)
-    model, u0, l = image_model(P, L, approx, free, observe)
+    equations, u0, l = image_model(P, L, approx, free, observe)
     if l.size < len(free):
         raise NotDeterminableError(
             f"{task}: {l.size} observations for {len(free)} unknowns ({', '.join(free)}); "
@@ -253,12 +253,12 @@ def adjust_image(
     )
     if stopping == "geier":
         res = geier_iterate(
-            model, u0, l, sigma, names=free, obs_labels=obs_labels, context=task, **engine
+            equations, u0, l, sigma, names=free, obs_labels=obs_labels, context=task, **engine
         )
     elif stopping == "converge":
         engine.setdefault("tol", 1e-8)
         res = gauss_newton(
-            model, u0, l, sigma, names=free, obs_labels=obs_labels, context=task, **engine
+            equations, u0, l, sigma, names=free, obs_labels=obs_labels, context=task, **engine
         )
     else:
         raise InputError(f"expected stopping 'converge' or 'geier', got {stopping!r}")

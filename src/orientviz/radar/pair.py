@@ -215,7 +215,7 @@ def relative_orientation(
         if points0 is not None
         else intersect(L1, image1, L2, approx2, refine=True)
     )
-    model = relative_model(image1, approx2, free, n)
+    equations = relative_model(image1, approx2, free, n)
     full0 = approx2.vector()
     seq = approx2.sequence
     names = free + [f"P{i + 1}.{c}" for i in range(n) for c in "XYZ"]
@@ -225,7 +225,7 @@ def relative_orientation(
     u0 = np.concatenate([full0[idx], X0.reshape(-1)])
     try:
         res = gauss_newton(
-            tolerant(model, 4 * n, k + 3 * n),
+            tolerant(equations, 4 * n, k + 3 * n),
             u0,
             l,
             sigma,
@@ -236,7 +236,7 @@ def relative_orientation(
             **engine,
         )
     except NotDeterminableError as exc:
-        raise _orientation_defect(model, u0, free, exc) from None
+        raise _orientation_defect(equations, u0, free, exc) from None
     p = full0.copy()
     p[idx] = res.x[:k]
     return res.extend(
@@ -247,7 +247,7 @@ def relative_orientation(
     )
 
 
-def _orientation_defect(model, u0: F64, free: list[str], exc: NotDeterminableError):
+def _orientation_defect(equations, u0: F64, free: list[str], exc: NotDeterminableError):
     """Re-state a singular relative orientation in terms of image 2's parameters.
 
     The null space spans orientation parameters *and* points; the user needs to know
@@ -255,7 +255,7 @@ def _orientation_defect(model, u0: F64, free: list[str], exc: NotDeterminableErr
     """
     from ..adjust.rank import null_space_of_normal
 
-    _, J = model(u0)
+    _, J = equations(u0)
     null = null_space_of_normal(J.T @ J)
     k = len(free)
     if null.shape[1] == 0:
@@ -276,7 +276,7 @@ def _orientation_defect(model, u0: F64, free: list[str], exc: NotDeterminableErr
 def relative_model(image1: RadarImage, approx2: RadarImage, free: Sequence[str], n: int):
     """The functional model of a relative orientation with ``n`` homologous points.
 
-    Returns ``model(u) -> (f, J)`` with u = (image 2's free parameters, X1, Y1, Z1, …,
+    Returns ``equations(u) -> (f, J)`` with u = (image 2's free parameters, X1, Y1, Z1, …,
     Zn) and f = (image-1 coordinates x1, y1, …, then image-2 coordinates), m.
     """
     idx = _indices(free)
@@ -286,7 +286,7 @@ def relative_model(image1: RadarImage, approx2: RadarImage, free: Sequence[str],
     rows = np.arange(n)
     cols = k + 3 * rows[:, None] + np.arange(3)[None, :]
 
-    def model(u: F64):
+    def equations(u: F64):
         p = full0.copy()
         p[idx] = u[:k]
         X = u[k:].reshape(n, 3)
@@ -299,7 +299,7 @@ def relative_model(image1: RadarImage, approx2: RadarImage, free: Sequence[str],
             J[2 * n + 2 * rows[:, None] + c, cols] = Jb[:, c, :]
         return np.concatenate([xa.reshape(-1), xb.reshape(-1)]), J
 
-    return model
+    return equations
 
 
 def absolute_orientation(
@@ -351,7 +351,7 @@ def absolute_orientation(
     elif full.any():
         u0[:3] = (C[full] - x[full]).mean(axis=0)
 
-    def model(u: F64):
+    def equations(u: F64):
         R = matrix_from_opk(u[4], u[3], u[5], sequence)
         dRo, dRp, dRk = matrix_derivatives(u[4], u[3], u[5], sequence)
         X = u[:3] + x @ R.T
@@ -364,7 +364,7 @@ def absolute_orientation(
     engine.setdefault("tol", 1e-8)
     names = ["TX", "TY", "TZ", "phi", "omega", "kappa"]
     res = gauss_newton(
-        model, u0, C[known], sigma, names=names, context="absolute orientation", **engine
+        equations, u0, C[known], sigma, names=names, context="absolute orientation", **engine
     )
     R = matrix_from_opk(res.x[4], res.x[3], res.x[5], sequence)
     return res.extend(RadarAbsoluteResult, transformed=res.x[:3] + x @ R.T)

@@ -352,7 +352,7 @@ def model_field(
     l = np.concatenate([o.reshape(-1) for o in obs])
 
     # unknowns: right image (Y0, Z0, ω, φ, κ), then the N points
-    def model(x):
+    def equations(x):
         eo = np.array([B, x[0], x[1]]), x[2:5]
         pts = x[5:].reshape(N, 3)
         J = np.zeros((4 * N, 5 + 3 * N))
@@ -369,7 +369,7 @@ def model_field(
         return np.concatenate([fl.reshape(-1), fr.reshape(-1)]), J
 
     x0 = np.concatenate([[0.0, H, 0.0, 0.0, 0.0], truth.reshape(-1)])
-    adj = gauss_newton(model, x0, l, 0.005, precision=False, context="model_field")
+    adj = gauss_newton(equations, x0, l, 0.005, precision=False, context="model_field")
     if not adj.converged:
         raise InputError(f"model_field: relative orientation did not converge ({adj.reason})")
     pts = adj.x[5:].reshape(N, 3)

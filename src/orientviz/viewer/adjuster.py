@@ -95,7 +95,7 @@ def small_bundle(block: Block, max_iter: int = 20, precision: bool = True) -> Ad
     sig = np.concatenate([obs.sigma.ravel(), pts.sigma[weighted[:, 0], weighted[:, 1]]])
     rows = np.arange(2 * n).reshape(n, 2)
 
-    def model(x: np.ndarray):
+    def equations(x: np.ndarray):
         ext = x[: 6 * m].reshape(m, 6)
         xyz = x[6 * m :].reshape(p, 3)
         e = ext[obs.image]
@@ -133,7 +133,7 @@ def small_bundle(block: Block, max_iter: int = 20, precision: bool = True) -> Ad
     ]
     labels += [f"{pts.ids[i]}/{'XYZ'[j]}" for i, j in weighted]
     return gauss_newton(
-        model,
+        equations,
         x0,
         l,
         sig,
