@@ -151,3 +151,23 @@ def test_bad_input_gives_one_clear_line(kw):
     with pytest.raises(ov.InputError) as exc:
         ov.simulate_block(2, 4, **kw)
     assert "\n" not in str(exc.value)
+
+
+def test_block_take_keeps_rows_and_renumbers_the_observations():
+    b = small().block
+    images, points = np.array([1, 2, 5]), np.flatnonzero(np.arange(b.n_points) % 2 == 0)
+    o = b.observations
+    obs = np.flatnonzero(np.isin(o.image, images) & np.isin(o.point, points))
+    sub = b.take(images, points, obs)
+    assert sub.images.ids == [b.images.ids[i] for i in images]
+    assert sub.points.ids == [b.points.ids[i] for i in points]
+    # every kept observation still names the same image and point, by id
+    np.testing.assert_array_equal(
+        [sub.images.ids[i] for i in sub.observations.image], [b.images.ids[i] for i in o.image[obs]]
+    )
+    np.testing.assert_array_equal(
+        [sub.points.ids[p] for p in sub.observations.point], [b.points.ids[p] for p in o.point[obs]]
+    )
+    np.testing.assert_array_equal(sub.observations.xy, o.xy[obs])
+    sub.points.xyz[0] += 1.0  # a copy: the whole block is untouched
+    assert not np.array_equal(sub.points.xyz[0], b.points.xyz[points[0]])

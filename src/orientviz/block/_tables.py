@@ -10,7 +10,7 @@ Units: object coordinates in m, image coordinates and their σ in mm, angles in 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
@@ -406,6 +406,41 @@ class Block:
         """Shallow copy with some tables replaced (``dataclasses.replace``)."""
         return replace(self, **changes)
 
+    def take(
+        self,
+        images: ArrayLike | None = None,
+        points: ArrayLike | None = None,
+        observations: ArrayLike | None = None,
+    ) -> Block:
+        """The sub-block of some rows of the tables, renumbered (copies; cameras kept).
+
+        Parameters
+        ----------
+        images, points, observations : array_like of int, optional
+            Row indices into this block's tables (None = all rows). Every kept observation
+            must refer to a kept image and a kept point.
+        """
+        idx = {
+            name: np.arange(len(getattr(self, name)))
+            if rows is None
+            else np.asarray(rows, np.int64)
+            for name, rows in (
+                ("images", images),
+                ("points", points),
+                ("observations", observations),
+            )
+        }
+        O = _take_rows(self.observations, idx["observations"])
+        for name, col in (("images", "image"), ("points", "point")):
+            new = np.full(len(getattr(self, name)), -1, np.int64)
+            new[idx[name]] = np.arange(idx[name].size)
+            setattr(O, col, new[getattr(O, col)])
+        return self.with_(
+            images=_take_rows(self.images, idx["images"]),
+            points=_take_rows(self.points, idx["points"]),
+            observations=O,
+        )
+
     def summary(self) -> str:
         """One line: counts of cameras, images, points by role and observations."""
         r = np.bincount(self.points.role, minlength=3)
@@ -413,6 +448,18 @@ class Block:
             f"{len(self.cameras)} camera(s), {self.n_images} images, {self.n_points} points "
             f"({r[0]} tie, {r[1]} control, {r[2]} check), {self.n_observations} observations"
         )
+
+
+def _take_rows(table: Any, idx: NDArray[np.int64]) -> Any:
+    """Rows ``idx`` of a structure-of-arrays table (lists by index, arrays by fancy index)."""
+    out = {}
+    for f in fields(table):
+        v = getattr(table, f.name)
+        if isinstance(v, list):
+            out[f.name] = [v[i] for i in idx] if len(v) == len(table) else list(v)
+        else:
+            out[f.name] = np.asarray(v)[idx].copy()
+    return replace(table, **out)
 
 
 def _lookup(table: list[str], ids: str | list[str], what: str):

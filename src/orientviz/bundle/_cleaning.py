@@ -27,7 +27,7 @@ from scipy.sparse.csgraph import connected_components
 from ..adjust.gross import Cleaning, rerun_cleaning, robust_adjust
 from ..adjust.result import Adjustment
 from ..adjust.snooping import data_snooping
-from ..block import CHECK, CONTROL, Block, Observations, Points
+from ..block import CHECK, CONTROL, Block
 from ..camera import project
 from ..errors import InputError
 from ..rotation import matrix_from_opk
@@ -76,15 +76,9 @@ def _subset(
     keep &= ~lonely[o.point]
     rays = np.bincount(o.point[keep], minlength=block.n_points)
     pts = np.flatnonzero(rays > 0)
-    new = np.full(block.n_points, -1, np.int64)
-    new[pts] = np.arange(pts.size)
-    P = block.points
-    points = Points(
-        [P.ids[i] for i in pts], P.xyz[pts].copy(), P.role[pts].copy(),
-        P.xyz_known[pts].copy(), P.sigma[pts].copy(),
-    )  # fmt: skip
-    obs = Observations(o.image[keep], new[o.point[keep]], o.xy[keep], sigma[keep])
-    return block.with_(points=points, observations=obs), keep, pts
+    sub = block.take(points=pts, observations=np.flatnonzero(keep))
+    sub.observations.sigma = sigma[keep]
+    return sub, keep, pts
 
 
 def _local_redundancy(sub, adj, idx, v, sigma, rn, wn, rxy, rays) -> None:

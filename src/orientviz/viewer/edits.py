@@ -96,18 +96,6 @@ class Mapping:
     dropped_points: I64 = field(default_factory=lambda: np.zeros(0, np.int64))
 
 
-def _take(table: Any, idx: I64) -> Any:
-    """Rows ``idx`` of a structure-of-arrays table (lists by index, arrays by fancy index)."""
-    out = {}
-    for f in fields(table):
-        v = getattr(table, f.name)
-        if isinstance(v, list):
-            out[f.name] = [v[i] for i in idx] if len(v) == len(table) else list(v)
-        else:
-            out[f.name] = np.asarray(v)[idx].copy()
-    return replace(table, **out)
-
-
 def effective_block(block: Block, edits: Edits) -> tuple[Block, Mapping]:
     """The block to adjust (see the module docstring) and where its parts come from.
 
@@ -142,18 +130,10 @@ def effective_block(block: Block, edits: Edits) -> tuple[Block, Mapping]:
     images = np.flatnonzero(img_keep)
     points = np.flatnonzero(p_keep)
     obs = np.flatnonzero(keep)
-    new_img = np.full(block.n_images, -1, np.int64)
-    new_img[images] = np.arange(images.size)
-    new_pt = np.full(block.n_points, -1, np.int64)
-    new_pt[points] = np.arange(points.size)
-    P = _take(pts, points)
-    P.role = role[points].astype(pts.role.dtype)
-    P.xyz_known = edits.known[points].copy()
-    O = _take(o, obs)
-    O.image = new_img[o.image[obs]]
-    O.point = new_pt[o.point[obs]]
-    O.sigma = o.sigma[obs] / np.sqrt(edits.weight[obs])[:, None]
-    sub = block.with_(images=_take(block.images, images), points=P, observations=O)
+    sub = block.take(images, points, obs)
+    sub.points.role = role[points].astype(pts.role.dtype)
+    sub.points.xyz_known = edits.known[points].copy()
+    sub.observations.sigma = o.sigma[obs] / np.sqrt(edits.weight[obs])[:, None]
     was_used = np.bincount(o.point[edits.obs_on], minlength=block.n_points) > 0
     mp = Mapping(
         images,
