@@ -187,10 +187,14 @@ def bundle_adjust(
         ),
         stop=StopRule(tol=tol, may_stop=lambda it: not (prob.border.hold or steps.local_step)),
         max_iter=max_iter,
-        # derivatives at the new state: for the next iteration, the precision or the
-        # check of a damped start (not after the last step of a screening run)
-        jacobian_after=lambda it, run: (
-            it < max_iter or precision or run.damped_start or prob.aux is not None
+        # derivatives at the new state: for the next iteration, the precision, the check
+        # of a damped start or the auxiliary results — not after the last iteration or a
+        # step whose corrections alone stop the run when it is accepted
+        jacobian_after=lambda it, run, step: (
+            precision
+            or run.damped_start
+            or prob.aux is not None
+            or (it < max_iter and not steps.stops(step, tol))
         ),
         callback=callback,
         on_accept=steps.accepted,
@@ -277,9 +281,11 @@ class _BundleSteps:
 
     def start(self, st: BundleState) -> Evaluation:
         """Evaluate the start once (the loop asks for it again: no second evaluation)."""
+        ev = self._evaluate(st, True, False)
         if self.local_allowed:  # σ0 of the start decides how its Jacobian is formed
-            self.last_cost = self.prob.cost(st, self.prob.residuals(st, jac=False)[0])
-        ev = self.evaluate(st, True)
+            self.last_cost = ev.cost
+            if self._poor():  # a poor start: derivatives by rotations of the image frames
+                ev = self._evaluate(st, True, True)
         self._start = (st, ev)
         return ev
 
@@ -287,7 +293,9 @@ class _BundleSteps:
         if self._start is not None and self._start[0] is st:
             ev, self._start = self._start[1], None
             return ev
-        local = jacobian and self.local_allowed and self._poor()
+        return self._evaluate(st, jacobian, jacobian and self.local_allowed and self._poor())
+
+    def _evaluate(self, st: BundleState, jacobian: bool, local: bool) -> Evaluation:
         rw, Je, Jp = self.prob.residuals(st, jac=jacobian, local=local)
         cost = self.prob.cost(st, rw)
         self.pending_cost = cost
@@ -302,6 +310,11 @@ class _BundleSteps:
         s0 = float(np.sqrt(self.last_cost / dof))
         return s0 >= LOCAL_SIGMA0 and self.last_correction >= LOCAL_MIN_CORRECTION
 
+    def stops(self, step: Step, tol: float) -> bool:
+        """Whether the stopping rule ends the run after ``step`` once it is accepted
+        (its corrections are below ``tol`` and nothing forbids a stop there)."""
+        return step.max_correction < tol and not (self.prob.border.hold or step.data[5])
+
     @staticmethod
     def is_local(ev: Evaluation) -> bool:
         """Whether ``ev``'s Jacobian is by rotations of the image frames."""
@@ -313,6 +326,8 @@ class _BundleSteps:
 
     def solve(self, st: BundleState, ev: Evaluation, lam: float, iteration: int) -> Step:
         prob = self.prob
+        if ev.data[1] is None:  # evaluated without derivatives: form them now
+            ev.data = self.evaluate(st, True).data
         rw, Je, Jp = ev.data
         ne = prob.normal(st, rw, Je, Jp, lam)
         dc, dp, da, fac = prob.solve(ne, self.red_names)

@@ -110,8 +110,9 @@ class NormalEquations:
     Fs, Fs_aux : ndarray or None
         The border's Schur complement F − Eᵀ S⁻¹ E when it was formed exactly.
     S : ndarray, shape (6m, 6m), or None
-        S as a dense matrix (lower triangle) when it was formed densely
-        (:func:`orientviz.bundle._schur.dense_schur`); the factorisation consumes it.
+        S as a dense matrix (lower triangle) for the dense solver
+        (:func:`orientviz.bundle._schur.dense_schur` or
+        :func:`~orientviz.bundle._schur.dense_schur_by_pairs`); the factorisation consumes it.
     """
 
     blocks: F64

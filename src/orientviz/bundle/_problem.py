@@ -33,8 +33,9 @@ from ._parts import (
     point_block,
     with_var_rays,
 )
+from ._rays import RaySums, gram3, sym3
 from ._reduced import ReducedStructure, factor_reduced, inv3
-from ._schur import assemble_blocks, dense_schur, gram_by_segments
+from ._schur import assemble_blocks, dense_schur, dense_schur_by_pairs, gram_by_segments
 from ._state import BundleState, wrap
 
 F64 = NDArray[np.float64]
@@ -98,6 +99,11 @@ class BundleProblem:
             positions=block.images.X0 if solver in ("auto", "banded") else None,
         )
         self.obs = with_var_rays(obs, self.reduced)
+        #: sums over the rays of each image / point unknown (sparse 0/1 matrices)
+        self.sums = RaySums.of(
+            self.obs.image, block.n_images, self.reduced.pt_starts, self.reduced.pt_obs.size,
+            self.reduced.cam_order,
+        )  # fmt: skip
         self.interior = interior_orientation(block)
         self.exterior = exterior_block(block)
         self.ap = additional_block(
@@ -194,13 +200,8 @@ class BundleProblem:
         sw = self.obs.weight[:, :, None]
         Jew, Jpw = Je * sw, Jp * sw
         # image blocks: gather the (n, 2, 6) Jacobian by image, then reduce
-        Jc = Jew[S.cam_order]
-        U = gram_by_segments(Jc, S.cam_starts, S.cam_present, self.m)
-        bc = np.zeros((self.m, 6))
-        bc[S.cam_present] = np.add.reduceat(
-            np.einsum("nki,nk->ni", Jc, rw[S.cam_order]), S.cam_starts, axis=0
-        )
-        del Jc
+        U = gram_by_segments(Jew[S.cam_order], S.cam_starts, S.cam_present, self.m)
+        bc = self.sums.by_image @ np.einsum("nki,nk->ni", Jew, rw)
         U[:, [0, 1, 2], [0, 1, 2]] += self.exterior.X0_w
         bc[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
         U[:, [3, 4, 5], [3, 4, 5]] += self.exterior.angles_w
@@ -209,8 +210,8 @@ class BundleProblem:
             self.aux.add_images(U, bc, st.X0, st.xyz, st.g)
         vo = self.obs.var_rays
         Jpv = Jpw[vo]
-        V = np.add.reduceat(Jpv.transpose(0, 2, 1) @ Jpv, S.pt_starts, axis=0)
-        bp = np.add.reduceat(np.einsum("nki,nk->ni", Jpv, rw[vo]), S.pt_starts, axis=0)
+        V = sym3(self.sums.by_point @ gram3(Jpv))
+        bp = self.sums.by_point @ np.einsum("nki,nk->ni", Jpv, rw[vo])
         i3 = [0, 1, 2]
         V[:, i3, i3] += self.points.prior_w
         bp += self.points.prior_w * (self.points.prior_obs - st.xyz[self.points.unknown])
@@ -229,12 +230,13 @@ class BundleProblem:
         S_dense = None
         if S.formation == "dense":
             blocks, S_dense = dense_schur(S, U, W, V, self.obs.column, self.obs.image)
+        elif S.solver == "dense":
+            blocks, S_dense = dense_schur_by_pairs(S, U, T, W)
         else:
             blocks = assemble_blocks(S, U, T, W)
         Tb = np.zeros((Je.shape[0], 6))
         Tb[vo] = np.einsum("nij,nj->ni", T[vo], bp[self.obs.column[vo]])
-        red = bc.copy()
-        red[S.cam_present] -= np.add.reduceat(Tb[S.cam_order], S.cam_starts, axis=0)
+        red = bc - self.sums.by_image @ Tb
         out = NormalEquations(
             blocks=blocks,
             rhs=red.reshape(-1),
