@@ -194,7 +194,7 @@ def iterate(
     damping: Damping = Damping(),
     stop: StopRule | None = None,
     max_iter: int = 50,
-    jacobian_after: Callable[[int, Run, Step], bool] | None = None,
+    jacobian_after: Callable[[int, Run], bool] | None = None,
     callback: Callable[[Iteration], object] | None = None,
     on_accept: Callable[[int, Step, float, Evaluation], None] | None = None,
     on_iteration: Callable[[int], None] | None = None,
@@ -214,10 +214,9 @@ def iterate(
     max_iter : int
         Maximum number of steps.
     jacobian_after : callable, optional
-        ``jacobian_after(iteration, run, step) -> bool``: whether the trial point of
-        ``step`` is evaluated with derivatives (default always; False saves them where
-        nothing needs them: after the last iteration, or after a step whose corrections
-        alone end the run once it is accepted).
+        ``jacobian_after(iteration, run) -> bool``: whether a trial point of that
+        iteration is evaluated with derivatives (default always; False saves the last
+        one's).
     callback : callable, optional
         Called with each new :class:`Iteration` (the per-step hook).
     on_accept : callable, optional
@@ -306,7 +305,7 @@ def _one_step(problem, run: Run, it: int, lam: float, damping: Damping, jacobian
                 return None
             continue
         new = problem.apply(state, step)
-        jac = jacobian_after(it, run, step) if jacobian_after is not None else True
+        jac = jacobian_after(it, run) if jacobian_after is not None else True
         ev_new = problem.evaluate(new, jac)
         c_new = ev_new.cost
         if kind == "none":

@@ -3,10 +3,11 @@
 Two ways, same S up to rounding (:func:`orientviz.bundle._solver_choice.choose_formation`
 picks one per structure):
 
-* :func:`assemble_blocks` — by pairs of rays (a, b) of the same point: block
-  (image(a), image(b)) gains T_a W_bᵀ (T = W V⁻¹). Only the non-zero blocks are touched,
-  which is what banded and sparse systems need; the cost is one 6 × 3 · 3 × 6 product
-  per pair, Σ_j k_j(k_j + 1)/2 pairs for points seen k_j times.
+* by pairs of rays (a, b) of the same point: block (image(a), image(b)) gains
+  T_a W_bᵀ (T = W V⁻¹). Only the non-zero blocks are touched, which is what banded and
+  sparse systems need; the cost is Σ_j k_j(k_j + 1)/2 pairs for points seen k_j times,
+  formed per point by one batched BLAS product of the points of equal track length
+  (:func:`orientviz.bundle._tracks.schur_blocks`).
 * :func:`dense_schur` — for a dense S (small or densely connected networks): with the
   Cholesky factor V_j = L_j L_jᵀ of each point block, Y_a = W_a L_j⁻ᵀ gives
   W_j V_j⁻¹ W_jᵀ = Y_j Y_jᵀ, so Σ_j over a chunk of points is one product Y Yᵀ of a
@@ -17,11 +18,8 @@ picks one per structure):
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import scipy.linalg.blas as _blas
-import scipy.sparse as sp
 from numpy.typing import NDArray
 
 F64 = NDArray[np.float64]
@@ -29,126 +27,6 @@ I64 = NDArray[np.int64]
 
 #: Bytes of one chunk of the dense coupling matrix Y (6m × 3p_chunk) of :func:`dense_schur`.
 DENSE_CHUNK_BYTES: int = 32 * 2**20
-
-
-def assemble_blocks(st, U: F64, T: F64, W: F64, chunk: int = 65536) -> F64:
-    """Sum the 6×6 blocks of S = U − Σ W_a V_j⁻¹ W_bᵀ over pairs of rays of a point.
-
-    Parameters
-    ----------
-    st : orientviz.bundle._reduced.ReducedStructure
-        The structure (its pairs of rays, sorted by block).
-    U : ndarray, shape (m, 6, 6)
-        Diagonal image blocks.
-    T, W : ndarray, shape (n, 6, 3)
-        T_a = W_a V_j⁻¹ and W_a = J_eᵀ P J_p per observation (zero for fixed points).
-    chunk : int
-        Pairs per batch (bounds the memory of the (pairs, 6, 6) products).
-
-    Returns
-    -------
-    ndarray, shape (n_blocks, 6, 6)
-        The blocks (i ≤ k) of S in the order of ``st.block_i``, ``st.block_k``.
-    """
-    blocks = np.zeros((st.n_blocks, 6, 6))
-    blocks[st.diag_block] = U
-    pair_a, pair_b, starts, present = st.pair_a, st.pair_b, st.pair_starts, st.pair_present
-    n = pair_a.size
-    seg = np.append(starts, n)
-    s0 = 0
-    while s0 < len(starts):
-        # whole segments (blocks) per batch: each block is reduced in one piece
-        s1 = int(np.searchsorted(seg, seg[s0] + chunk, side="right")) - 1
-        s1 = max(s1, s0 + 1)
-        a0, a1 = seg[s0], seg[s1]
-        sl = slice(a0, a1)
-        c = T[pair_a[sl]] @ W[pair_b[sl]].transpose(0, 2, 1)
-        blocks[present[s0:s1]] -= np.add.reduceat(c, starts[s0:s1] - a0, axis=0)
-        s0 = s1
-    return blocks
-
-
-def dense_schur_by_pairs(st, U: F64, T: F64, W: F64) -> tuple[F64, F64]:
-    """S for the dense solver formed by pairs of rays: S = U − Σ T_a W_bᵀ.
-
-    For networks with few rays per point (random tracks: Σ k_j² ≪ m²·p) the pairs of
-    rays of a point are far fewer flops than :func:`dense_schur`'s BLAS products. The
-    products are :func:`assemble_blocks`' (T_a W_bᵀ for the pairs a, b of a point with
-    image(a) ≤ image(b)); around them, the pairs stay in the order of their points
-    (neighbouring rays: the gathers of T and W stay in cache) and are summed into
-    their blocks by one product with a sparse 0/1 (blocks × pairs) matrix per batch —
-    no sort of the pairs by block, and about 10 × faster than ``np.add.reduceat`` over
-    a (pairs, 6, 6) array. The blocks go straight into the dense matrix that the
-    Cholesky factorisation reads. The layout is formed once per structure
-    (:func:`_pair_layout`).
-
-    Parameters and ``blocks`` as for :func:`assemble_blocks`; also returns ``S``,
-    shape (6m, 6m), Fortran order, with a valid lower triangle (as :func:`dense_schur`).
-    """
-    lay = _pair_layout(st)
-    sums = np.zeros((st.n_blocks, 36))
-    for pa, pb, to_blocks in lay.batches:
-        c = T[pa] @ W[pb].transpose(0, 2, 1)
-        sums += to_blocks @ c.reshape(-1, 36)
-    blocks = -sums.reshape(-1, 6, 6)
-    blocks[st.diag_block] += U
-    n = 6 * st.n_cam
-    S = np.zeros((n, n), order="F")
-    S.T.reshape(-1)[lay.lower] = blocks.reshape(-1)
-    return blocks, S
-
-
-@dataclass(frozen=True)
-class _PairLayout:
-    """Batches of pairs of rays (first rays, second rays, the (blocks × pairs) 0/1 sum
-    matrix) and ``lower``: where entry (r, c) of block (i ≤ k) goes in S's lower
-    triangle — the flat index of S[6k + c, 6i + r] in Fortran order."""
-
-    batches: list
-    lower: I64
-
-
-def _pair_layout(st, chunk: int = 65536) -> _PairLayout:
-    """The layout of :func:`dense_schur_by_pairs` for structure ``st`` (cached on it).
-
-    Pairs: all ordered pairs (a, b) of rays of a point with image(a) ≤ image(b) (both
-    orders for two rays in one image), point by point.
-    """
-    lay = st.__dict__.get("_dense_pair_layout")
-    if lay is not None:
-        return lay
-    m, rays, oc = st.n_cam, st.pt_obs, st.obs_cam
-    k = np.diff(np.append(st.pt_starts, rays.size))
-    block_of = np.zeros((m, m), np.int64)  # block index of each image pair (i ≤ k)
-    block_of[st.block_i, st.block_k] = np.arange(st.n_blocks)
-    batches = []
-    p0 = 0
-    while p0 < k.size:  # whole points per batch, about `chunk` ordered pairs
-        ksq = np.cumsum(k[p0:] ** 2)
-        p1 = p0 + max(int(np.searchsorted(ksq, chunk, side="right")), 1)
-        kk = k[p0:p1]
-        first = st.pt_starts[p0:p1]
-        rep = np.repeat(kk, kk)  # per ray of the batch: its point's ray count
-        ray = np.arange(first[0], first[0] + kk.sum())
-        a = np.repeat(ray, rep)
-        start = np.repeat(np.repeat(first, kk), rep)  # first ray of a's point
-        b = start + (np.arange(a.size) - np.repeat(np.cumsum(rep) - rep, rep))
-        a, b = rays[a], rays[b]
-        keep = oc[a] <= oc[b]
-        a, b = a[keep], b[keep]
-        blk = block_of[oc[a], oc[b]]
-        to_blocks = sp.csr_matrix(
-            (np.ones(a.size), (blk, np.arange(a.size))), shape=(st.n_blocks, a.size)
-        )
-        batches.append((a, b, to_blocks))
-        p0 = p1
-    n = 6 * m
-    r6 = np.arange(6)
-    row = 6 * st.block_k[:, None, None] + r6[None, None, :]  # S row 6k + c
-    col = 6 * st.block_i[:, None, None] + r6[None, :, None]  # S column 6i + r
-    lay = _PairLayout(batches, (col * n + row).reshape(-1))
-    st.__dict__["_dense_pair_layout"] = lay
-    return lay
 
 
 def gram_by_segments(J: F64, starts: I64, present: I64, m: int) -> F64:
@@ -213,7 +91,8 @@ def dense_schur(st, U: F64, W: F64, V: F64, column: I64, image: I64) -> tuple[F6
     Returns
     -------
     blocks : ndarray, shape (n_blocks, 6, 6)
-        The blocks (i ≤ k) of S (as :func:`assemble_blocks` returns them).
+        The blocks (i ≤ k) of S (as :func:`orientviz.bundle._tracks.schur_blocks` returns
+        them).
     S : ndarray, shape (6m, 6m), Fortran order
         S with a valid lower triangle (what the dense Cholesky reads and overwrites).
     """
