@@ -3,10 +3,11 @@
 Two ways, same S up to rounding (:func:`orientviz.bundle._solver_choice.choose_formation`
 picks one per structure):
 
-* :func:`assemble_blocks` — by pairs of rays (a, b) of the same point: block
-  (image(a), image(b)) gains T_a W_bᵀ (T = W V⁻¹). Only the non-zero blocks are touched,
-  which is what banded and sparse systems need; the cost is one 6 × 3 · 3 × 6 product
-  per pair, Σ_j k_j(k_j + 1)/2 pairs for points seen k_j times.
+* by pairs of rays (a, b) of the same point: block (image(a), image(b)) gains
+  T_a W_bᵀ (T = W V⁻¹). Only the non-zero blocks are touched, which is what banded and
+  sparse systems need; the cost is Σ_j k_j(k_j + 1)/2 pairs for points seen k_j times,
+  formed per point by one batched BLAS product of the points of equal track length
+  (:func:`orientviz.bundle._tracks.schur_blocks`).
 * :func:`dense_schur` — for a dense S (small or densely connected networks): with the
   Cholesky factor V_j = L_j L_jᵀ of each point block, Y_a = W_a L_j⁻ᵀ gives
   W_j V_j⁻¹ W_jᵀ = Y_j Y_jᵀ, so Σ_j over a chunk of points is one product Y Yᵀ of a
@@ -26,43 +27,6 @@ I64 = NDArray[np.int64]
 
 #: Bytes of one chunk of the dense coupling matrix Y (6m × 3p_chunk) of :func:`dense_schur`.
 DENSE_CHUNK_BYTES: int = 32 * 2**20
-
-
-def assemble_blocks(st, U: F64, T: F64, W: F64, chunk: int = 65536) -> F64:
-    """Sum the 6×6 blocks of S = U − Σ W_a V_j⁻¹ W_bᵀ over pairs of rays of a point.
-
-    Parameters
-    ----------
-    st : orientviz.bundle._reduced.ReducedStructure
-        The structure (its pairs of rays, sorted by block).
-    U : ndarray, shape (m, 6, 6)
-        Diagonal image blocks.
-    T, W : ndarray, shape (n, 6, 3)
-        T_a = W_a V_j⁻¹ and W_a = J_eᵀ P J_p per observation (zero for fixed points).
-    chunk : int
-        Pairs per batch (bounds the memory of the (pairs, 6, 6) products).
-
-    Returns
-    -------
-    ndarray, shape (n_blocks, 6, 6)
-        The blocks (i ≤ k) of S in the order of ``st.block_i``, ``st.block_k``.
-    """
-    blocks = np.zeros((st.n_blocks, 6, 6))
-    blocks[st.diag_block] = U
-    pair_a, pair_b, starts, present = st.pair_a, st.pair_b, st.pair_starts, st.pair_present
-    n = pair_a.size
-    seg = np.append(starts, n)
-    s0 = 0
-    while s0 < len(starts):
-        # whole segments (blocks) per batch: each block is reduced in one piece
-        s1 = int(np.searchsorted(seg, seg[s0] + chunk, side="right")) - 1
-        s1 = max(s1, s0 + 1)
-        a0, a1 = seg[s0], seg[s1]
-        sl = slice(a0, a1)
-        c = T[pair_a[sl]] @ W[pair_b[sl]].transpose(0, 2, 1)
-        blocks[present[s0:s1]] -= np.add.reduceat(c, starts[s0:s1] - a0, axis=0)
-        s0 = s1
-    return blocks
 
 
 def gram_by_segments(J: F64, starts: I64, present: I64, m: int) -> F64:
@@ -127,7 +91,8 @@ def dense_schur(st, U: F64, W: F64, V: F64, column: I64, image: I64) -> tuple[F6
     Returns
     -------
     blocks : ndarray, shape (n_blocks, 6, 6)
-        The blocks (i ≤ k) of S (as :func:`assemble_blocks` returns them).
+        The blocks (i ≤ k) of S (as :func:`orientviz.bundle._tracks.schur_blocks` returns
+        them).
     S : ndarray, shape (6m, 6m), Fortran order
         S with a valid lower triangle (what the dense Cholesky reads and overwrites).
     """
