@@ -299,9 +299,11 @@ class _BundleSteps:
 
     def start(self, st: BundleState) -> Evaluation:
         """Evaluate the start once (the loop asks for it again: no second evaluation)."""
+        ev = self._evaluate(st, True, False)
         if self.local_allowed:  # σ0 of the start decides how its Jacobian is formed
-            self.last_cost = self.prob.cost(st, self.prob.residuals(st, jac=False)[0])
-        ev = self.evaluate(st, True)
+            self.last_cost = ev.cost
+            if self._poor():  # a poor start: derivatives by rotations of the image frames
+                ev = self._evaluate(st, True, True)
         self._start = (st, ev)
         return ev
 
@@ -309,7 +311,9 @@ class _BundleSteps:
         if self._start is not None and self._start[0] is st:
             ev, self._start = self._start[1], None
             return ev
-        local = jacobian and self.local_allowed and self._poor()
+        return self._evaluate(st, jacobian, jacobian and self.local_allowed and self._poor())
+
+    def _evaluate(self, st: BundleState, jacobian: bool, local: bool) -> Evaluation:
         rw, Je, Jp = self.prob.residuals(st, jac=jacobian, local=local)
         cost = self.prob.cost(st, rw)
         self.pending_cost = cost
