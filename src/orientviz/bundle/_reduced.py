@@ -312,20 +312,23 @@ class ReducedStructure:
         if self.solver == "banded":
             if not hasattr(self, "kd"):
                 self._band_ordering()
-            rows, cols, _ = self._scalar_entries(self.pos_img)
-            flat = np.arange(rows.size)
             # LAPACK's lower band storage ab[d, j] = S[j + d, j] in Fortran order, i.e.
-            # the C-ordered (n, kd + 1) array abT[j, d]: index j·(kd + 1) + d
+            # the C-ordered (n, kd + 1) array abT[j, d]: index j·(kd + 1) + d. Entry (r, c)
+            # of block (i, k) is S[6p_i + r, 6p_k + c] (p: position in the band order):
+            # for p_i ≥ p_k in the lower band at column 6p_k + c, else mirrored to column
+            # 6p_i + r; the upper half of a diagonal block goes to one spare slot at the end
             w = self.kd + 1
-            lower = rows >= cols  # block entries that fall into the lower band
-            upper = (rows < cols) & (self.block_i != self.block_k).repeat(36)
-            self.band_src = np.concatenate([flat[lower], flat[upper]])  # upper: mirrored
-            self.band_dst = np.concatenate(
-                [
-                    cols[lower] * w + rows[lower] - cols[lower],
-                    rows[upper] * w + cols[upper] - rows[upper],
-                ]
+            pi, pk = self.pos_img[self.block_i], self.pos_img[self.block_k]
+            r6 = np.arange(6)
+            lo = (r6[:, None] - r6[None, :]) + w * r6[None, :]  # (r, c) → c·w + r − c
+            lower = (pi >= pk)[:, None, None]
+            dst = np.where(
+                lower,
+                (6 * w * pk + 6 * (pi - pk))[:, None, None] + lo,
+                (6 * w * pi + 6 * (pk - pi))[:, None, None] + lo.T,
             )
+            dst[(pi == pk)[:, None, None] & (r6[:, None] < r6[None, :])] = n * w
+            self.band_dst = dst.reshape(-1)
             self.scalar_perm = (6 * self.perm_img[:, None] + np.arange(6)).reshape(-1)
         elif self.solver == "sparse":
             ident = np.arange(m)
@@ -379,11 +382,11 @@ def factor_reduced(
     flat = blocks.reshape(-1)
     try:
         if st.solver == "banded":
-            ab = np.zeros(n * (st.kd + 1))
-            ab[st.band_dst] = flat[st.band_src]
+            ab = np.zeros(n * (st.kd + 1) + 1)  # + the spare slot (see _setup_solver)
+            ab[st.band_dst] = flat
             # LAPACK directly on the Fortran-ordered band (no copy, no checks)
             c, info = scipy.linalg.lapack.dpbtrf(
-                ab.reshape(n, st.kd + 1).T, lower=1, overwrite_ab=1
+                ab[:-1].reshape(n, st.kd + 1).T, lower=1, overwrite_ab=1
             )
             if info != 0:
                 raise np.linalg.LinAlgError(f"{info}-th leading minor not positive definite")

@@ -26,7 +26,7 @@ F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
 
 #: Largest product array (doubles) of one batched call; bigger groups are split.
-CHUNK_DOUBLES: int = 2**22
+CHUNK_DOUBLES: int = 2**20
 
 
 @dataclass
@@ -72,17 +72,17 @@ class TrackGroups:
 def _group_map(img: I64, keys: I64, m: int) -> sp.csc_matrix:
     """The map of one group (n points × k images, ``img``) into the rows of S's blocks."""
     n, k = img.shape
-    # pairs (n, a, b) of rays of a point with image(a) ≤ image(b), their blocks
-    ia = np.broadcast_to(img[:, :, None], (n, k, k))
-    ib = np.broadcast_to(img[:, None, :], (n, k, k))
-    keep = ia <= ib
-    blk = np.zeros((n, k, k), np.int64)
+    # pairs (n, a, b) of rays of a point with image(a) ≤ image(b), and their blocks
+    keep = img[:, :, None] <= img[:, None, :]
+    blk = np.zeros((n, k, k), np.int32)
+    ia, ib = np.broadcast_arrays(img[:, :, None], img[:, None, :])
     blk[keep] = np.searchsorted(keys, ia[keep] * m + ib[keep])
     # the product's rows (n, a, r, b) of the (n, 6k, 6k) products viewed as (·, 6): one
     # CSC column each, holding the row r of block blk[n, a, b] where kept
     keep6 = np.broadcast_to(keep[:, :, None, :], (n, k, 6, k)).reshape(-1)
-    rows = (6 * blk[:, :, None, :] + np.arange(6)[None, None, :, None]).reshape(-1)[keep6]
-    indptr = np.zeros(keep6.size + 1, np.int64)
+    rows6 = 6 * blk[:, :, None, :] + np.arange(6, dtype=np.int32)[None, None, :, None]
+    rows = rows6.reshape(-1)[keep6]
+    indptr = np.zeros(keep6.size + 1, np.int32)
     np.cumsum(keep6, out=indptr[1:])
     return sp.csc_matrix(
         (np.full(rows.size, -1.0), rows, indptr), shape=(6 * keys.size, keep6.size)
@@ -132,11 +132,14 @@ def schur_blocks(st, U: F64, T: F64, W: F64) -> F64:
     tg = st.tracks
     maps = tg.maps(st.block_i * st.n_cam + st.block_k, st.n_cam)
     out = np.zeros((6 * st.n_blocks, 6))
+    # one buffer for the products of every chunk: reused memory (no fresh pages per call)
+    buf = np.empty(max((36 * k * k * n for k, _, n in tg.groups), default=0))
     for (k, r0, n), M in zip(tg.groups, maps):
         r1 = r0 + n * k
         Tk = T[r0:r1].reshape(n, 6 * k, 3)
         Wk = W[r0:r1].reshape(n, 6 * k, 3)
-        P = np.matmul(Tk, Wk.transpose(0, 2, 1))  # (n, 6k, 6k): all k² blocks of each point
+        P = buf[: 36 * k * k * n].reshape(n, 6 * k, 6 * k)
+        np.matmul(Tk, Wk.transpose(0, 2, 1), out=P)  # all k² blocks of each point
         out += M @ P.reshape(-1, 6)
     blocks = out.reshape(st.n_blocks, 6, 6)
     blocks[st.diag_block] += U
