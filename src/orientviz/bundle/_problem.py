@@ -251,7 +251,7 @@ class BundleProblem:
             diagV=diagV,
         )
         if schur and S.formation == "dense":
-            out.blocks, out.S = dense_schur(S, U, out.W, V, self.obs.column, self.obs.image)
+            out.blocks, out.S = dense_schur(S, U, Wr, V)
         elif schur:
             out.blocks = schur_blocks(S, U, Tr, Wr)
         if self.q:
