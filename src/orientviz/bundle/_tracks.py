@@ -40,6 +40,8 @@ class TrackGroups:
         point by point, the k rays of a point consecutive.
     ray_point, ray_image : ndarray of int, shape (n_var,)
         Point unknown and image of each ray in ``rays``.
+    points : ndarray of int, shape (p_var,)
+        Point unknown of each point in this order (its first ray: ``rays[first]``).
     groups : list of (k, first ray, number of points)
         The groups (chunks of at most :data:`CHUNK_DOUBLES` product entries).
     by_image, by_point : scipy.sparse.csr_matrix
@@ -50,6 +52,7 @@ class TrackGroups:
     rays: I64
     ray_point: I64
     ray_image: I64
+    points: I64
     groups: list
     by_image: sp.csr_matrix
     by_point: sp.csr_matrix
@@ -109,7 +112,62 @@ def track_groups(st) -> TrackGroups:
     ones, ray = np.ones(rays.size), np.arange(rays.size)
     by_image = sp.csr_matrix((ones, (ray_image, ray)), shape=(m, rays.size))
     by_point = sp.csr_matrix((ones, (ray_point, ray)), shape=(st.n_pt, rays.size))
-    return TrackGroups(rays, ray_point, ray_image, groups, by_image, by_point)
+    first = [r0 + k * np.arange(n) for k, r0, n in groups]  # first ray of each point
+    points = ray_point[np.concatenate(first)] if groups else rays
+    return TrackGroups(rays, ray_point, ray_image, points, groups, by_image, by_point)
+
+
+#: Rays per chunk of :func:`point_products` (its temporaries stay in the cache).
+RAY_CHUNK: int = 8192
+
+
+def point_products(tg: TrackGroups, Jew: F64, Jpw: F64, rw: F64, n_pt: int):
+    """W = J_eᵀ P J_p per ray and the point blocks V = Σ J_pᵀ P J_p, b_p = Σ J_pᵀ P (l − f).
+
+    Parameters
+    ----------
+    tg : TrackGroups
+    Jew, Jpw : ndarray, shapes (n, 2, 6), (n, 2, 3)
+        Weighted Jacobians (P½ J) of all observations.
+    rw : ndarray, shape (n, 2)
+        Weighted misclosures P½ (l − f).
+    n_pt : int
+        Number of point unknowns.
+
+    Returns
+    -------
+    Wr : ndarray, shape (n_var, 6, 3)
+        In ``tg.rays`` order.
+    V, bp : ndarray, shapes (p_var, 3, 3), (p_var, 3)
+        In point-unknown order.
+
+    Chunks of :data:`RAY_CHUNK` rays of whole points: the rays of a point are
+    consecutive, so their sums are reshapes, and the temporaries stay small (numpy's
+    stacked products need contiguous operands, the transposes are copied; large fresh
+    temporaries cost their page faults).
+    """
+    nv = tg.rays.size
+    Wr = np.empty((nv, 6, 3))
+    V = np.empty((n_pt, 3, 3))
+    bp = np.empty((n_pt, 3))
+    p0 = 0  # points done
+    for k, r0, n in tg.groups:
+        step = max(1, RAY_CHUNK // k)
+        for c0 in range(0, n, step):
+            c1 = min(c0 + step, n)
+            a, b = r0 + k * c0, r0 + k * c1
+            rr = tg.rays[a:b]
+            Jer = np.take(Jew, rr, axis=0)
+            Jpr = np.take(Jpw, rr, axis=0)
+            JprT = np.ascontiguousarray(Jpr.transpose(0, 2, 1))
+            np.matmul(np.ascontiguousarray(Jer.transpose(0, 2, 1)), Jpr, out=Wr[a:b])
+            pts = tg.points[p0 + c0 : p0 + c1]
+            V[pts] = (JprT @ Jpr).reshape(c1 - c0, k, 3, 3).sum(axis=1)
+            rwr = np.take(rw, rr, axis=0)
+            g = JprT[:, :, 0] * rwr[:, 0, None] + JprT[:, :, 1] * rwr[:, 1, None]
+            bp[pts] = g.reshape(c1 - c0, k, 3).sum(axis=1)
+        p0 += n
+    return Wr, V, bp
 
 
 def schur_blocks(st, U: F64, T: F64, W: F64) -> F64:
