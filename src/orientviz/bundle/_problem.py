@@ -239,7 +239,7 @@ class BundleProblem:
             diagV=diagV,
         )
         if S.formation == "dense":
-            out.blocks, out.S = dense_schur(S, U, out.W, V, self.obs.column, self.obs.image)
+            out.blocks, out.S = dense_schur(S, U, Wr, V)
         else:
             out.blocks = schur_blocks(S, U, Tr, Wr)
         if self.q:
