@@ -65,21 +65,36 @@ class TrackGroups:
         (sorted). Formed on first use (one 6-element row per pair of rays: Σ k(k+1)/2 · 6
         entries)."""
         if self._maps is None:
+            lookup = _block_lookup(keys, m)
             self._maps = [
-                _group_map(self.ray_image[r0 : r0 + n * k].reshape(n, k), keys, m)
+                _group_map(self.ray_image[r0 : r0 + n * k].reshape(n, k), lookup, keys.size)
                 for k, r0, n in self.groups
             ]
         return self._maps
 
 
-def _group_map(img: I64, keys: I64, m: int) -> sp.csc_matrix:
-    """The map of one group (n points × k images, ``img``) into the rows of S's blocks."""
+def _block_lookup(keys: I64, m: int):
+    """A function (i, k) → index of block (i, k), i ≤ k, in ``keys`` (= i·m + k, sorted):
+    a dense table (m × span) when the blocks lie within a span of image numbers (strips
+    numbered along the strips: a few hundred), else a binary search."""
+    i, k = keys // m, keys % m
+    span = int(np.max(k - i, initial=0)) + 1
+    if m * span > 2**24:
+        return lambda a, b: np.searchsorted(keys, a * m + b)
+    table = np.zeros((m, span), np.int32)
+    table[i, k - i] = np.arange(keys.size, dtype=np.int32)
+    return lambda a, b: table[a, b - a]
+
+
+def _group_map(img: I64, lookup, n_blocks: int) -> sp.csc_matrix:
+    """The map of one group (n points × k images, ``img``) into the rows of S's blocks
+    (``lookup``: :func:`_block_lookup`)."""
     n, k = img.shape
     # pairs (n, a, b) of rays of a point with image(a) ≤ image(b), and their blocks
     keep = img[:, :, None] <= img[:, None, :]
     blk = np.zeros((n, k, k), np.int32)
     ia, ib = np.broadcast_arrays(img[:, :, None], img[:, None, :])
-    blk[keep] = np.searchsorted(keys, ia[keep] * m + ib[keep])
+    blk[keep] = lookup(ia[keep], ib[keep])
     # the product's rows (n, a, r, b) of the (n, 6k, 6k) products viewed as (·, 6): one
     # CSC column each, holding the row r of block blk[n, a, b] where kept
     keep6 = np.broadcast_to(keep[:, :, None, :], (n, k, 6, k)).reshape(-1)
@@ -87,9 +102,7 @@ def _group_map(img: I64, keys: I64, m: int) -> sp.csc_matrix:
     rows = rows6.reshape(-1)[keep6]
     indptr = np.zeros(keep6.size + 1, np.int32)
     np.cumsum(keep6, out=indptr[1:])
-    return sp.csc_matrix(
-        (np.full(rows.size, -1.0), rows, indptr), shape=(6 * keys.size, keep6.size)
-    )
+    return sp.csc_matrix((np.full(rows.size, -1.0), rows, indptr), shape=(6 * n_blocks, keep6.size))
 
 
 def track_groups(st) -> TrackGroups:
