@@ -51,12 +51,12 @@ from scipy.optimize import least_squares  # noqa: E402
 
 from orientviz.adjust.gross import critical_value, noncentrality  # noqa: E402
 from orientviz.adjust.gross2d import noncentrality_2d  # noqa: E402
-from orientviz.block import CHECK, CONTROL
-from orientviz.bundle import bundle_adjust, bundle_solver, clean_block
+from orientviz.block import CHECK, CONTROL  # noqa: E402  (after the sys.path insert)
+from orientviz.bundle import bundle_adjust, bundle_solver, clean_block  # noqa: E402
 from orientviz.camera import project  # noqa: E402
 from orientviz.errors import AdjustmentError  # noqa: E402
 from orientviz.rotation import matrix_from_opk  # noqa: E402
-from orientviz.simulate import simulate_block
+from orientviz.simulate import simulate_block  # noqa: E402
 
 SIGMA_MM = 0.005
 METHODS = {

@@ -24,7 +24,7 @@ import numpy as np  # noqa: E402
 from scipy.stats import ncx2  # noqa: E402
 
 from orientviz.adjust.gross2d import critical_values_2d, statistic_2d  # noqa: E402
-from orientviz.bundle import bundle_solver
+from orientviz.bundle import bundle_solver  # noqa: E402  (after the sys.path insert)
 
 
 def main() -> None:

@@ -35,7 +35,7 @@ def main() -> int:
 
     from orientviz.radar import fig8
     from orientviz.radar import geier1973 as G
-    from orientviz.radar.orientation import calibrate, image_model
+    from orientviz.radar.orientation import calibrate, image_equations
 
     print(f"threads: {args.threads}   python {sys.version.split()[0]}   numpy {np.__version__}")
     fig8.run_surface("fig7")  # warm-up (imports, caches)
@@ -67,7 +67,7 @@ def main() -> int:
     def ov():
         return calibrate(P, xy, start, tol=1e-8)
 
-    model, u0, l = image_model(P, xy, start, free)
+    model, u0, l = image_equations(P, xy, start, free)
 
     def fun(u):
         return model(u)[0] - l

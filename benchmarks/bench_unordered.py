@@ -19,6 +19,8 @@ Every solve runs in its own fresh worker process (honest peak RSS, ``ru_maxrss``
 ``wall`` = orientviz ``bundle_adjust(precision=False)`` on the imported Block (the
 import itself is not timed), or pycolmap's adjuster set-up + ``solve()`` with
 SPARSE_SCHUR, function tolerance 1e-10 (as in the shared peer bench), 1 thread each.
+``cpu`` = the CPU time (``time.process_time``) of the same span (orientviz and pycolmap;
+on a loaded machine the CPU ratio is the steadier one, on an idle one both agree).
 Best of ``--reps``; peak MB = the worker's VmHWM (interpreter and libraries included).
 The same optimum is checked on the results: σ0 of both (pycolmap's from its final
 cost, 2·cost / σ² / redundancy), and the largest difference of projection centres and
@@ -163,15 +165,17 @@ def _peak_mb() -> float:
 def worker_orientviz(directory: Path, control: list[int], reps: int) -> dict:
     from orientviz.bundle import bundle_adjust
 
-    walls = []
+    walls, cpus = [], []
     for _ in range(reps):
         block = read_block(directory, control)
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         res = bundle_adjust(block, precision=False)
         walls.append(time.perf_counter() - t0)
+        cpus.append(time.process_time() - c0)
     centres = res["exterior"].reshape(-1, 6)[:, :3]
     return dict(
         wall_s=min(walls),
+        cpu_s=min(cpus),
         iters=res.iterations,
         converged=bool(res.converged),
         sigma0=float(res.sigma0),
@@ -184,10 +188,10 @@ def worker_orientviz(directory: Path, control: list[int], reps: int) -> dict:
 def worker_pycolmap(directory: Path, control: list[int], reps: int, max_iters: int) -> dict:
     import pycolmap
 
-    walls = []
+    walls, cpus = [], []
     for _ in range(reps):
         rec = pycolmap.Reconstruction(str(directory))
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         opts = pycolmap.BundleAdjustmentOptions()
         opts.refine_focal_length = False
         opts.refine_principal_point = False
@@ -211,11 +215,13 @@ def worker_pycolmap(directory: Path, control: list[int], reps: int, max_iters: i
         config.fix_gauge(pycolmap.BundleAdjustmentGauge.UNSPECIFIED)  # datum from control
         summary = pycolmap.create_default_bundle_adjuster(opts, config, rec).solve()
         walls.append(time.perf_counter() - t0)
+        cpus.append(time.process_time() - c0)
     cs = summary.ceres_summary
     n_obs = sum(len(p.track.elements) for p in rec.points3D.values())
     redundancy = 2 * n_obs - 6 * rec.num_images() - 3 * (rec.num_points3D() - len(control))
     return dict(
         wall_s=min(walls),
+        cpu_s=min(cpus),
         iters=cs.num_successful_steps + cs.num_unsuccessful_steps,
         converged=str(summary.termination_type).endswith("CONVERGENCE"),
         sigma0=float(np.sqrt(2.0 * cs.final_cost / SIGMA_PX**2 / redundancy)),
@@ -359,10 +365,10 @@ def main() -> None:
         f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}"
     )
     head = (
-        "| network | images | obs | solver | wall_s | iters | σ0 | peak MB "
-        "| wall / pycolmap | max ΔX0 | max Δpoint |"
+        "| network | images | obs | solver | wall_s | cpu_s | iters | σ0 | peak MB "
+        "| wall / pycolmap | cpu / pycolmap | max ΔX0 | max Δpoint |"
     )
-    rows = [head, "|" + " --- |" * 11]
+    rows = [head, "|" + " --- |" * 13]
     rng = np.random.default_rng(a.seed)
     with tempfile.TemporaryDirectory(prefix="ov-unordered-") as tmp:
         for tracks in a.tracks.split(","):
@@ -383,11 +389,14 @@ def main() -> None:
                         continue
                     ok = all("wall_s" in v for v in res.values())
                     ratio = r["wall_s"] / res["pycolmap"]["wall_s"] if ok else float("nan")
+                    cpu = r.get("cpu_s", float("nan"))
+                    cpu_ratio = cpu / res["pycolmap"]["cpu_s"] if ok else float("nan")
                     dx = difference(r, res["pycolmap"], "centres") if ok else float("nan")
                     dp = difference(r, res["pycolmap"], "points") if ok else float("nan")
                     rows.append(
-                        f"| {tracks} | {n} | {n_obs or '-'} | {s} | {r['wall_s']:.3f} | {r['iters']} "
-                        f"| {r['sigma0']:.6f} | {r['peak_mb']:.0f} | {ratio:.2f} | {dx:.1e} | {dp:.1e} |"
+                        f"| {tracks} | {n} | {n_obs or '-'} | {s} | {r['wall_s']:.3f} | {cpu:.3f} "
+                        f"| {r['iters']} | {r['sigma0']:.6f} | {r['peak_mb']:.0f} | {ratio:.2f} "
+                        f"| {cpu_ratio:.2f} | {dx:.1e} | {dp:.1e} |"
                     )
                 print("\n".join(rows[-len(res) :]), flush=True)
                 if poor:

@@ -178,8 +178,8 @@ def collinearity_jacobian(
 def collinearity_partials(d: F64, R: F64, dR: F64, c: F64) -> tuple[F64, F64, F64, F64]:
     """The derivative chain of the collinearity equations, vectorised over n rays.
 
-    Shared by :func:`collinearity_jacobian` and the bundle's kernel
-    (:mod:`orientviz.bundle._kernel`, which gathers R and dR per image).
+    Used by :func:`collinearity_jacobian`; the bundle's kernel
+    (:mod:`orientviz.bundle._kernel`) computes the same chain arranged per image.
 
     Parameters
     ----------

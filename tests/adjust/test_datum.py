@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from orientviz.adjust.datum import datum_solve, helmert_basis, s_transformation
-from orientviz.adjust.network2d import all_pairs_within, distance_model
+from orientviz.adjust.network2d import all_pairs_within, distance_equations
 from orientviz.errors import InputError
 
 
@@ -14,7 +14,7 @@ def _network(seed=9):
     rng = np.random.default_rng(seed)
     xy = np.array([[0, 0], [400, 30], [820, -20], [60, 420], [450, 380], [880, 430], [300, 760.0]])
     pairs = all_pairs_within(xy, 600)
-    model = distance_model(pairs)
+    model = distance_equations(pairs)
     l = model(xy.reshape(-1))[0] + rng.normal(0, 0.003, len(pairs))
     x0 = xy.reshape(-1) + rng.normal(0, 0.05, xy.size)
     f, J = model(x0)
@@ -66,4 +66,4 @@ def test_too_few_datum_points_are_rejected():
     with pytest.raises(InputError, match="datum"):
         s_transformation(G, datum_points=[3])
     with pytest.raises(InputError):
-        distance_model([[0, 0]])
+        distance_equations([[0, 0]])

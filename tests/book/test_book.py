@@ -84,7 +84,7 @@ def check_figure_audit(audit: pathlib.Path) -> list[dict]:
     lessons = {p.stem for p in (ROOT / "notebooks").glob("*.ipynb")}
     assert records and {r["notebook"] for r in records} <= lessons
     small = [r for r in records if r["min_px"] is not None and r["min_px"] < MIN_TEXT_PX]
-    assert not small, "figures with text below {} px in the column:\n".format(MIN_TEXT_PX) + "\n".join(
+    assert not small, f"figures with text below {MIN_TEXT_PX} px in the column:\n" + "\n".join(
         f"  {r['notebook']} figure {r['index']}: {r['min_px']:.1f} px ({r['text']!r}), "
         f"{r['figsize_in'][0]:.1f} in wide, PNG {r['width_px']} px"
         for r in small

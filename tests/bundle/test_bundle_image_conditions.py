@@ -41,11 +41,12 @@ def test_weak_image_is_named_before_the_iterations(seed):
 @pytest.mark.parametrize("seed", [13, 20])
 def test_the_count_names_a_real_null_space(monkeypatch, seed):
     # without the count the iterations converge on the singular system (rounding keeps
-    # the factorisation going); what follows depends on rounding (BLAS threads): either
-    # the precision step meets the singular reduced matrix — then it must raise
-    # NotDeterminableError naming the same image from the matrix's null space, never a
-    # LinAlgError — or it passes and gives that image a position standard deviation far
-    # beyond the size of the block
+    # the factorisation going); what follows depends on rounding (BLAS threads, the
+    # order of the kernel's products): either the precision step meets the singular
+    # reduced matrix — then it must raise NotDeterminableError naming the same image
+    # from the matrix's null space, never a LinAlgError — or the check of the damped
+    # start meets it (the result is not converged and says why), or it passes and gives
+    # that image a position standard deviation far beyond the size of the block
     block = _gruber_block(seed)
     flagged = _flagged(block)
     monkeypatch.setattr(bundle_mod, "check_datum", lambda b, s: None)
@@ -54,7 +55,10 @@ def test_the_count_names_a_real_null_space(monkeypatch, seed):
     except ov.NotDeterminableError as exc:
         assert {p.split(".")[0] for p in exc.parameters} == set(flagged)
         return
-    assert adj.converged
+    if not adj.converged:
+        assert "normal equations are not positive definite" in adj.reason
+        assert "exterior" not in adj.cofactor_groups  # no precision from a singular system
+        return
     sd = np.sqrt(np.einsum("mii->mi", adj.cofactor_groups["exterior"])[:, :3]) * adj.sigma0
     i = list(block.images.ids).index(flagged[0])
     extent = np.ptp(adj.exterior[:, :3], axis=0).max()

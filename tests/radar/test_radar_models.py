@@ -3,8 +3,8 @@
 import numpy as np
 
 from orientviz.radar import geier1973 as G
-from orientviz.radar.orientation import image_model
-from orientviz.radar.pair import intersect, relative_model, relative_orientation
+from orientviz.radar.orientation import image_equations
+from orientviz.radar.pair import intersect, relative_equations, relative_orientation
 from orientviz.radar.ppi import PARAMS
 from orientviz.radar.stopping import geier_iterate
 
@@ -27,7 +27,7 @@ def _steps(names):
 def test_radial_and_tangential_models_match_differences():
     P, xy = G.points("fig7"), G.image_coordinates("fig7", 3)
     for observe, free in (("radial", ("X0", "Y0", "Z0", "h", "m")), ("tangential", PARAMS)):
-        model, u0, _ = image_model(P, xy, T[3], free, observe)
+        model, u0, _ = image_equations(P, xy, T[3], free, observe)
         u = u0 + 0.001 * np.arange(len(u0))  # away from the truth: a generic point
         J = model(u)[1]
         # cancellation ε·1e5 m / step dominates: ≤ 2.2e-16·1e5/1e-7 ≈ 2e-4
@@ -37,7 +37,7 @@ def test_radial_and_tangential_models_match_differences():
 def test_relative_orientation_jacobian_matches_differences():
     xy1, xy2 = G.image_coordinates("plane", 1), G.image_coordinates("plane", 2)
     X = intersect(xy1, T[1], xy2, T[2])
-    model = relative_model(T[1], T[2].with_(phi=0.001), PARAMS, len(X))
+    model = relative_equations(T[1], T[2].with_(phi=0.001), PARAMS, len(X))
     u = np.concatenate([T[2].vector() + 1e-3, X.reshape(-1) + 1.0])
     names = list(PARAMS) + ["X"] * X.size
     np.testing.assert_allclose(model(u)[1], _fd(model, u, _steps(names)), rtol=1e-5, atol=5e-4)
@@ -63,7 +63,7 @@ def test_geier_rule_keeps_the_previous_estimate_when_m0_grows():
     a = G.approximations()[2]
     start = T[2].with_(x0=a.x0, y0=a.y0, h=a.h, m=a.m, kappa=G.alpha0_approx())
     free = ("x0", "y0", "h", "m", "kappa")
-    model, u0, l = image_model(P, xy, start, free)
+    model, u0, l = image_equations(P, xy, start, free)
     res = geier_iterate(model, u0, l, names=list(free))
     assert "not applied" in res.reason and res.iterations == 1
     # the kept estimate is exactly one Gauss-Newton step from the start

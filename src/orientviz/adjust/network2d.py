@@ -19,7 +19,7 @@ F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
 
 
-def distance_model(pairs: ArrayLike) -> Callable[[F64], tuple[F64, F64]]:
+def distance_equations(pairs: ArrayLike) -> Callable[[F64], tuple[F64, F64]]:
     """``equations(x) -> (s, J)`` of the distances between ``pairs`` (k, 2) of point indices.
 
     ``x`` holds the coordinates x1, y1, x2, … (m); ``J`` is (k, 2p) with the unit vector

@@ -89,14 +89,20 @@ class NormalEquations:
 
     Attributes
     ----------
-    blocks : ndarray
-        6 × 6 blocks of the reduced camera system S inside its band.
+    blocks : ndarray or None
+        6 × 6 blocks of the reduced camera system S inside its band (None when only the
+        rest was formed, for a chord step: :meth:`BundleProblem.normal` ``schur=False``).
     rhs : ndarray, shape (6m,)
         Reduced right-hand side r.
     Vinv : ndarray, shape (p_var, 3, 3)
         Inverse point blocks V⁻¹ (damped).
-    W, T : ndarray, shape (n, 6, 3)
-        W = J_eᵀ P J_p and T = W V⁻¹ per ray (zero for fixed points).
+    Wr, Tr : ndarray, shape (n_var, 6, 3)
+        W = J_eᵀ P J_p and T = W V⁻¹ of the rays of point unknowns in the order of
+        ``rays`` (the track-length order of :mod:`orientviz.bundle._tracks`).
+    rays : ndarray of int, shape (n_var,)
+        Observation index of each row of ``Wr``, ``Tr``.
+    n_obs : int
+        Number of observations (rows of :attr:`W`, :attr:`T`).
     bp : ndarray, shape (p_var, 3)
         Right-hand sides of the points.
     diagU, diagV : ndarray, shapes (m, 6), (p_var, 3)
@@ -114,11 +120,13 @@ class NormalEquations:
         (:func:`orientviz.bundle._schur.dense_schur`); the factorisation consumes it.
     """
 
-    blocks: F64
+    blocks: F64 | None
     rhs: F64
     Vinv: F64
-    W: F64
-    T: F64
+    Wr: F64
+    Tr: F64
+    rays: NDArray[np.int64]
+    n_obs: int
     bp: F64
     diagU: F64
     diagV: F64
@@ -128,3 +136,26 @@ class NormalEquations:
     Fs: F64 | None = None
     Fs_aux: F64 | None = None
     S: F64 | None = field(default=None, repr=False)
+    _W: F64 | None = field(default=None, repr=False)
+    _T: F64 | None = field(default=None, repr=False)
+
+    def _by_observation(self, A: F64) -> F64:
+        out = np.zeros((self.n_obs,) + A.shape[1:])
+        out[self.rays] = A
+        return out
+
+    @property
+    def W(self) -> F64:
+        """W = J_eᵀ P J_p per observation (n, 6, 3), zero for fixed points (formed on
+        first access)."""
+        if self._W is None:
+            self._W = self._by_observation(self.Wr)
+        return self._W
+
+    @property
+    def T(self) -> F64:
+        """T = W V⁻¹ per observation (n, 6, 3), zero for fixed points (formed on first
+        access)."""
+        if self._T is None:
+            self._T = self._by_observation(self.Tr)
+        return self._T

@@ -26,11 +26,15 @@ the structure: :mod:`orientviz.bundle._solver_choice`), measured in
 
 * ``"banded"`` (chosen for strips) — Ackermann's bandwidth minimisation: the images are
   renumbered so that S becomes a narrow band, which is factored by LAPACK's banded
-  Cholesky (``scipy.linalg.cholesky_banded``, cost ∝ n·b², b the half-bandwidth). The
-  numbering is the better (smaller measured bandwidth) of reverse Cuthill-McKee and a
-  numbering *across* the strips from the projection centres
-  (:func:`geometric_orderings`). On the bench's 30 × 70 block: bandwidth 61 images
-  across the strips against 118 for RCM; factor + solve 0.08 s against 0.22 s (RCM),
+  Cholesky (``dpbtrf`` called directly on S's blocks scattered into its Fortran-ordered
+  band storage; cost ∝ n·b², b the half-bandwidth). The numbering is the better
+  (smaller measured bandwidth) of reverse Cuthill-McKee and a numbering *across* the
+  strips from the projection centres (:func:`geometric_orderings`). On the bench's
+  30 × 70 block: bandwidth 61 images across the strips against 118 for RCM (an image
+  shares points with the images two along its strip, also in the neighbouring strips:
+  two columns of 30 images further on, so a numbering by columns cannot do better);
+  dpbtrf then runs at ~31 GFlop/s on one core, 56 ms for n = 12 600, kd = 371;
+  factor + solve 0.08 s against 0.22 s (RCM),
   0.35 s (SuperLU) and 16.6 s (dense); on the 10 × 20 block 0.002 s against 0.003,
   0.010 and 0.021 s (``benchmarks/README.md``).
 * ``"dense"`` (chosen for small or densely connected systems: unordered close-range
@@ -51,6 +55,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg
+import scipy.linalg.lapack
 import scipy.sparse as sp
 from numpy.typing import NDArray
 from scipy.sparse.csgraph import reverse_cuthill_mckee
@@ -201,13 +206,14 @@ class ReducedStructure:
         self.n_blocks = self.block_i.size
         self.diag_block = np.searchsorted(self.block_i * m + self.block_k, np.arange(m) * (m + 1))
         self._pairs = None
+        self._tracks = None
         self._setup_solver()
 
     # ------------------------------------------------------------ pairs of rays
     def _form_pairs(self) -> None:
-        """All ordered pairs of rays of the same point, and those with image(a) ≤ image(b)
-        sorted by their block of S (formed on first use: Σ k_j² of them)."""
-        oc, op, m = self.obs_cam, self.obs_pt, self.n_cam
+        """All ordered pairs of rays of the same point, grouped by the first ray (in
+        ``pt_obs`` order; formed on first use — the precision's image–point cofactors:
+        Σ k_j² of them)."""
         s = self.pt_starts
         k = np.diff(np.append(s, self.pt_obs.size))
         g = np.repeat(np.arange(self.n_pt), k)  # point of each sorted obs
@@ -216,21 +222,8 @@ class ReducedStructure:
         off = np.arange(A.size) - np.repeat(np.cumsum(rep) - rep, rep)
         B = s[g[A]] + off
         del g, off
-        a, b = self.pt_obs[A], self.pt_obs[B]
-        del A, B
-        keep = oc[a] <= oc[b]
-        pa, pb = a[keep], b[keep]
-        pair_block = np.searchsorted(self.block_i * m + self.block_k, oc[pa] * m + oc[pb])
-        order, starts, present = _segments(pair_block, self.n_blocks)
-        # the pairs sorted by block so that their contributions are born sorted
-        pa, pb = pa[order], pb[order]
         self._pairs = dict(
-            pair_a=pa,
-            pair_b=pb,
-            pair_pt=op[pa],
-            pair_starts=starts,
-            pair_present=present,
-            all_pairs=(a, b),  # all ordered pairs, grouped by a (for precision, APs)
+            all_pairs=(self.pt_obs[A], self.pt_obs[B]),
             all_pairs_starts=np.cumsum(rep) - rep,  # start of each a-group, pt_obs order
         )
 
@@ -239,15 +232,20 @@ class ReducedStructure:
             self._form_pairs()
         return self._pairs[name]
 
-    pair_a = property(lambda self: self._pair("pair_a"), doc="First ray of each pair (by block).")
-    pair_b = property(lambda self: self._pair("pair_b"), doc="Second ray of each pair.")
-    pair_pt = property(lambda self: self._pair("pair_pt"), doc="Point unknown of each pair.")
-    pair_starts = property(lambda self: self._pair("pair_starts"), doc="Start of each block.")
-    pair_present = property(lambda self: self._pair("pair_present"), doc="Blocks with pairs.")
     all_pairs = property(lambda self: self._pair("all_pairs"), doc="All ordered pairs (a, b).")
     all_pairs_starts = property(
         lambda self: self._pair("all_pairs_starts"), doc="Start of each a-group."
     )
+
+    @property
+    def tracks(self):
+        """The rays grouped by track length (:class:`orientviz.bundle._tracks.TrackGroups`),
+        formed on first use."""
+        if self._tracks is None:
+            from ._tracks import track_groups
+
+            self._tracks = track_groups(self)
+        return self._tracks
 
     # ------------------------------------------------------------ layout of S
     def image_graph(self) -> sp.csr_matrix:
@@ -314,14 +312,23 @@ class ReducedStructure:
         if self.solver == "banded":
             if not hasattr(self, "kd"):
                 self._band_ordering()
-            rows, cols, _ = self._scalar_entries(self.pos_img)
-            flat = np.arange(rows.size)
-            lower = rows >= cols  # block entries that fall into the lower band
-            self.band_src = flat[lower]
-            self.band_dst = (rows[lower] - cols[lower]) * n + cols[lower]
-            upper = (rows < cols) & (self.block_i != self.block_k).repeat(36)
-            self.band_src_t = flat[upper]  # mirrored into the lower band
-            self.band_dst_t = (cols[upper] - rows[upper]) * n + rows[upper]
+            # LAPACK's lower band storage ab[d, j] = S[j + d, j] in Fortran order, i.e.
+            # the C-ordered (n, kd + 1) array abT[j, d]: index j·(kd + 1) + d. Entry (r, c)
+            # of block (i, k) is S[6p_i + r, 6p_k + c] (p: position in the band order):
+            # for p_i ≥ p_k in the lower band at column 6p_k + c, else mirrored to column
+            # 6p_i + r; the upper half of a diagonal block goes to one spare slot at the end
+            w = self.kd + 1
+            pi, pk = self.pos_img[self.block_i], self.pos_img[self.block_k]
+            r6 = np.arange(6)
+            lo = (r6[:, None] - r6[None, :]) + w * r6[None, :]  # (r, c) → c·w + r − c
+            lower = (pi >= pk)[:, None, None]
+            dst = np.where(
+                lower,
+                (6 * w * pk + 6 * (pi - pk))[:, None, None] + lo,
+                (6 * w * pi + 6 * (pk - pi))[:, None, None] + lo.T,
+            )
+            dst[(pi == pk)[:, None, None] & (r6[:, None] < r6[None, :])] = n * w
+            self.band_dst = dst.reshape(-1)
             self.scalar_perm = (6 * self.perm_img[:, None] + np.arange(6)).reshape(-1)
         elif self.solver == "sparse":
             ident = np.arange(m)
@@ -352,7 +359,9 @@ class Factor:
         st = self.structure
         if self.kind == "banded":
             p = st.scalar_perm
-            z = scipy.linalg.cho_solve_banded((self.data, True), rhs[p], check_finite=False)
+            z, info = scipy.linalg.lapack.dpbtrs(self.data, rhs[p], lower=1, overwrite_b=1)
+            if info != 0:  # pragma: no cover - arguments are ours
+                raise ValueError(f"dpbtrs: illegal argument {-info}")
             out = np.empty_like(z)
             out[p] = z
             return out
@@ -373,12 +382,14 @@ def factor_reduced(
     flat = blocks.reshape(-1)
     try:
         if st.solver == "banded":
-            ab = np.zeros((st.kd + 1) * n)
-            ab[st.band_dst] = flat[st.band_src]
-            ab[st.band_dst_t] = flat[st.band_src_t]
-            c = scipy.linalg.cholesky_banded(
-                ab.reshape(st.kd + 1, n), lower=True, overwrite_ab=True, check_finite=False
+            ab = np.zeros(n * (st.kd + 1) + 1)  # + the spare slot (see _setup_solver)
+            ab[st.band_dst] = flat
+            # LAPACK directly on the Fortran-ordered band (no copy, no checks)
+            c, info = scipy.linalg.lapack.dpbtrf(
+                ab[:-1].reshape(n, st.kd + 1).T, lower=1, overwrite_ab=1
             )
+            if info != 0:
+                raise np.linalg.LinAlgError(f"{info}-th leading minor not positive definite")
             return Factor(st, "banded", c)
         if st.solver == "sparse":
             A = sp.csc_matrix((flat[st.csc_src], st.csc_indices, st.csc_indptr), shape=(n, n))

@@ -3,10 +3,11 @@
 Two ways, same S up to rounding (:func:`orientviz.bundle._solver_choice.choose_formation`
 picks one per structure):
 
-* :func:`assemble_blocks` — by pairs of rays (a, b) of the same point: block
-  (image(a), image(b)) gains T_a W_bᵀ (T = W V⁻¹). Only the non-zero blocks are touched,
-  which is what banded and sparse systems need; the cost is one 6 × 3 · 3 × 6 product
-  per pair, Σ_j k_j(k_j + 1)/2 pairs for points seen k_j times.
+* by pairs of rays (a, b) of the same point: block (image(a), image(b)) gains
+  T_a W_bᵀ (T = W V⁻¹). Only the non-zero blocks are touched, which is what banded and
+  sparse systems need; the cost is Σ_j k_j(k_j + 1)/2 pairs for points seen k_j times,
+  formed per point by one batched BLAS product of the points of equal track length
+  (:func:`orientviz.bundle._tracks.schur_blocks`).
 * :func:`dense_schur` — for a dense S (small or densely connected networks): with the
   Cholesky factor V_j = L_j L_jᵀ of each point block, Y_a = W_a L_j⁻ᵀ gives
   W_j V_j⁻¹ W_jᵀ = Y_j Y_jᵀ, so Σ_j over a chunk of points is one product Y Yᵀ of a
@@ -17,6 +18,8 @@ picks one per structure):
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
 import numpy as np
 import scipy.linalg.blas as _blas
 from numpy.typing import NDArray
@@ -26,43 +29,9 @@ I64 = NDArray[np.int64]
 
 #: Bytes of one chunk of the dense coupling matrix Y (6m × 3p_chunk) of :func:`dense_schur`.
 DENSE_CHUNK_BYTES: int = 32 * 2**20
-
-
-def assemble_blocks(st, U: F64, T: F64, W: F64, chunk: int = 65536) -> F64:
-    """Sum the 6×6 blocks of S = U − Σ W_a V_j⁻¹ W_bᵀ over pairs of rays of a point.
-
-    Parameters
-    ----------
-    st : orientviz.bundle._reduced.ReducedStructure
-        The structure (its pairs of rays, sorted by block).
-    U : ndarray, shape (m, 6, 6)
-        Diagonal image blocks.
-    T, W : ndarray, shape (n, 6, 3)
-        T_a = W_a V_j⁻¹ and W_a = J_eᵀ P J_p per observation (zero for fixed points).
-    chunk : int
-        Pairs per batch (bounds the memory of the (pairs, 6, 6) products).
-
-    Returns
-    -------
-    ndarray, shape (n_blocks, 6, 6)
-        The blocks (i ≤ k) of S in the order of ``st.block_i``, ``st.block_k``.
-    """
-    blocks = np.zeros((st.n_blocks, 6, 6))
-    blocks[st.diag_block] = U
-    pair_a, pair_b, starts, present = st.pair_a, st.pair_b, st.pair_starts, st.pair_present
-    n = pair_a.size
-    seg = np.append(starts, n)
-    s0 = 0
-    while s0 < len(starts):
-        # whole segments (blocks) per batch: each block is reduced in one piece
-        s1 = int(np.searchsorted(seg, seg[s0] + chunk, side="right")) - 1
-        s1 = max(s1, s0 + 1)
-        a0, a1 = seg[s0], seg[s1]
-        sl = slice(a0, a1)
-        c = T[pair_a[sl]] @ W[pair_b[sl]].transpose(0, 2, 1)
-        blocks[present[s0:s1]] -= np.add.reduceat(c, starts[s0:s1] - a0, axis=0)
-        s0 = s1
-    return blocks
+#: The scatter indices of :func:`dense_schur` are kept between iterations up to this many
+#: entries (8 bytes each; 18 per ray).
+DENSE_INDEX_KEEP: int = 2**21
 
 
 def gram_by_segments(J: F64, starts: I64, present: I64, m: int) -> F64:
@@ -82,80 +51,138 @@ def gram_by_segments(J: F64, starts: I64, present: I64, m: int) -> F64:
     return U
 
 
-def whitened_couplings(W: F64, V: F64, column: I64) -> F64:
-    """Y_a = W_a L_j⁻ᵀ per ray (n, 6, 3), V_j = L_j L_jᵀ (Cholesky of the 3 × 3 blocks).
-
-    Y_a Y_bᵀ = W_a V_j⁻¹ W_bᵀ for rays a, b of point j = ``column[a]``. A block V_j that
-    is not positive definite gives NaN (the factorisation of S then reports it).
-    """
+def whitening_factors(V: F64) -> F64:
+    """F_j = L_j⁻ᵀ per point block (p, 3, 3), V_j = L_j L_jᵀ (Cholesky), so that
+    (W F)(W F)ᵀ = W V⁻¹ Wᵀ. A block that is not positive definite gives NaN (the
+    factorisation of S then reports it)."""
     a, b, c = V[:, 0, 0], V[:, 0, 1], V[:, 0, 2]
     d, e, f = V[:, 1, 1], V[:, 1, 2], V[:, 2, 2]
+    F = np.zeros_like(V)
     with np.errstate(invalid="ignore", divide="ignore"):
         l00 = np.sqrt(a)
         l10, l20 = b / l00, c / l00
         l11 = np.sqrt(d - l10 * l10)
         l21 = (e - l20 * l10) / l11
         l22 = np.sqrt(f - l20 * l20 - l21 * l21)
-        # Y Lᵀ = W row by row: forward substitution with L (per ray's point)
-        L = np.stack([l00, l10, l20, l11, l21, l22], axis=1)[column]
-        Y = np.empty_like(W)
-        Y[:, :, 0] = W[:, :, 0] / L[:, None, 0]
-        Y[:, :, 1] = (W[:, :, 1] - L[:, None, 1] * Y[:, :, 0]) / L[:, None, 3]
-        Y[:, :, 2] = (W[:, :, 2] - L[:, None, 2] * Y[:, :, 0] - L[:, None, 4] * Y[:, :, 1]) / L[
-            :, None, 5
-        ]
-    return Y
+        # L⁻¹ is lower triangular; F = (L⁻¹)ᵀ upper
+        F[:, 0, 0] = 1.0 / l00
+        F[:, 1, 1] = 1.0 / l11
+        F[:, 2, 2] = 1.0 / l22
+        F[:, 0, 1] = -l10 * F[:, 0, 0] * F[:, 1, 1]
+        F[:, 1, 2] = -l21 * F[:, 1, 1] * F[:, 2, 2]
+        F[:, 0, 2] = -(l20 * F[:, 0, 0] + l21 * F[:, 0, 1]) * F[:, 2, 2]
+    return F
 
 
-def dense_schur(st, U: F64, W: F64, V: F64, column: I64, image: I64) -> tuple[F64, F64]:
+def dense_schur(st, U: F64, W: F64, V: F64) -> tuple[F64, F64]:
     """S formed densely by chunks of points: S = U − Σ_chunks Y Yᵀ (lower triangle).
+
+    Y_a = W_a F_j per ray (F_j = L_j⁻ᵀ, :func:`whitening_factors`: one stacked 6 × 3 · 3 × 3
+    product per ray) is scattered into the (6m × 3p_chunk) matrix of a chunk of points
+    by one flat index, and S gains −Y Yᵀ by BLAS ``dsyrk``.
 
     Parameters
     ----------
     st : orientviz.bundle._reduced.ReducedStructure
-        The structure (``pt_obs``, ``pt_starts``: the rays of each point unknown; the
-        blocks to return).
+        The structure (its rays grouped by track length, ``st.tracks``; the blocks to
+        return).
     U : ndarray, shape (m, 6, 6)
         Diagonal image blocks (damped).
-    W : ndarray, shape (n, 6, 3)
-        W_a = J_eᵀ P J_p per observation.
+    W : ndarray, shape (n_var, 6, 3)
+        W_a = J_eᵀ P J_p per ray of a point unknown, in ``st.tracks.rays`` order.
     V : ndarray, shape (p_var, 3, 3)
         Point blocks (damped).
-    column, image : ndarray of int, shape (n,)
-        Point unknown and image of each observation.
 
     Returns
     -------
     blocks : ndarray, shape (n_blocks, 6, 6)
-        The blocks (i ≤ k) of S (as :func:`assemble_blocks` returns them).
+        The blocks (i ≤ k) of S (as :func:`orientviz.bundle._tracks.schur_blocks` returns
+        them).
     S : ndarray, shape (6m, 6m), Fortran order
         S with a valid lower triangle (what the dense Cholesky reads and overwrites).
     """
-    m, n = st.n_cam, 6 * st.n_cam
-    rays = st.pt_obs  # sorted by point
-    Y = whitened_couplings(W[rays], V, column[rays])
+    n = 6 * st.n_cam
+    lay = _dense_layout(st)
+    tg = st.tracks
+    Y = W @ np.take(whitening_factors(V), tg.ray_point, axis=0)
     S = np.zeros((n, n), order="F")
-    r6 = np.arange(6)
-    z = np.zeros((m, 6, 6), np.int64)
-    d_rows = (z + 6 * np.arange(m)[:, None, None] + r6[None, :, None]).reshape(-1)
-    d_cols = (z + 6 * np.arange(m)[:, None, None] + r6[None, None, :]).reshape(-1)
-    S[d_rows, d_cols] = U.reshape(-1)
-    pc = max(1, DENSE_CHUNK_BYTES // (8 * 18 * m))
-    starts = np.append(st.pt_starts, rays.size)
-    img, pt = image[rays], column[rays]
-    for p0 in range(0, st.n_pt, pc):
-        p1 = min(p0 + pc, st.n_pt)
-        a0, a1 = starts[p0], starts[p1]
-        Yd = np.zeros((m, 6, p1 - p0, 3))
-        Yd[img[a0:a1], :, pt[a0:a1] - p0, :] = Y[a0:a1]
-        Y2 = Yd.reshape(n, 3 * (p1 - p0))
+    S.reshape(-1, order="F")[lay.diag] = U.reshape(-1)
+    for p0, p1, idx in lay.chunks():
+        a0, a1 = lay.point_first[p0], lay.point_first[p1]
+        Y2 = np.zeros((n, 3 * (p1 - p0)))
+        Y2.reshape(-1)[idx] = Y[a0:a1].reshape(-1)
         # S ← S − Y2 Y2ᵀ (lower): BLAS sees the C-ordered Y2 as its transpose
         S = _blas.dsyrk(-1.0, Y2.T, beta=1.0, c=S, trans=1, lower=1, overwrite_c=1)
-    bi, bk = st.block_i, st.block_k
-    rows = 6 * bk[:, None, None] + r6[None, None, :]  # block (i, k)[r, c] = S[6k + c, 6i + r]
-    cols = 6 * bi[:, None, None] + r6[None, :, None]
-    blocks = S[rows, cols]
-    D = S[d_rows, d_cols].reshape(m, 6, 6)  # diagonal blocks: only their lower half is S
-    D = np.tril(D) + np.tril(D, -1).transpose(0, 2, 1)
-    blocks[st.diag_block] = D
+    blocks = S.reshape(-1, order="F")[lay.lower].reshape(-1, 6, 6)
+    D = blocks[st.diag_block]  # diagonal blocks: S's lower half is their upper half here
+    blocks[st.diag_block] = np.triu(D) + np.triu(D, 1).transpose(0, 2, 1)
     return blocks, S
+
+
+@dataclass(frozen=True)
+class _DenseLayout:
+    """Constant index arrays of :func:`dense_schur` for one structure.
+
+    ``ray_image``, ``ray_slot``: image and rank of the point of each ray (track order);
+    ``point_first``: first ray of each point rank (and the end); ``diag``: flat (Fortran)
+    index of the entries of the diagonal blocks, image-major; ``lower``: flat index of
+    entry (r, c) of block (i ≤ k) in S's lower triangle, S[6k + c, 6i + r]
+    (block-major, the transposed block: S holds block (i, k)ᵀ there).
+    """
+
+    ray_image: I64
+    ray_slot: I64
+    point_first: I64
+    diag: I64
+    lower: I64
+    m: int
+    _index: list = field(default_factory=list, repr=False)
+
+    def chunks(self):
+        """(first point rank, end, flat index into the chunk's (6m × 3p_chunk) matrix of
+        every entry of the chunk's Y_a in ray order) per chunk of points; the indices are
+        kept while they fit in :data:`DENSE_INDEX_KEEP` doubles."""
+        if self._index:
+            yield from self._index
+            return
+        pc = max(1, DENSE_CHUNK_BYTES // (8 * 18 * self.m))
+        n_pt = self.point_first.size - 1
+        r6x3 = np.arange(6)[:, None] * 3 + np.arange(3)  # row r, column c of a ray's Y_a
+        keep = 18 * self.ray_image.size <= DENSE_INDEX_KEEP
+        for p0 in range(0, n_pt, pc):
+            p1 = min(p0 + pc, n_pt)
+            a0, a1 = self.point_first[p0], self.point_first[p1]
+            w = 3 * (p1 - p0)  # columns of the chunk
+            # Y2[6 img + r, 3 (slot − p0) + c] = Y_a[r, c]
+            base = self.ray_image[a0:a1] * (6 * w) + 3 * (self.ray_slot[a0:a1] - p0)
+            idx = (base[:, None] + (r6x3 // 3 * w + r6x3 % 3).reshape(-1)).reshape(-1)
+            if keep:
+                self._index.append((p0, p1, idx))
+            yield p0, p1, idx
+
+
+def _dense_layout(st) -> _DenseLayout:
+    """The :class:`_DenseLayout` of ``st`` (formed on first use, kept on ``st``)."""
+    lay = vars(st).get("_dense_layout")
+    if lay is not None:
+        return lay
+    tg = st.tracks
+    m, n = st.n_cam, 6 * st.n_cam
+    new_point = np.ones(tg.ray_point.size, bool)
+    new_point[1:] = tg.ray_point[1:] != tg.ray_point[:-1]
+    first = np.flatnonzero(new_point)
+    r6 = np.arange(6)
+    i6 = 6 * np.arange(m)[:, None, None]
+    diag = ((i6 + r6[None, None, :]) * n + (i6 + r6[None, :, None])).reshape(-1)
+    row = 6 * st.block_k[:, None, None] + r6[None, None, :]  # S row 6k + c
+    col = 6 * st.block_i[:, None, None] + r6[None, :, None]  # S column 6i + r
+    lay = _DenseLayout(
+        tg.ray_image,
+        np.cumsum(new_point) - 1,
+        np.append(first, tg.ray_point.size),
+        diag,
+        (col * n + row).reshape(-1),
+        m,
+    )
+    vars(st)["_dense_layout"] = lay
+    return lay

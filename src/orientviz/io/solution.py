@@ -267,10 +267,12 @@ class Solution:
         if self.parameters:
             lines.append("")
             lines.append("parameters:")
+            width = max(12, *(len(p.name) for p in self.parameters))
             for p in self.parameters:
                 f, un = self.factor(p.quantity), self.unit_name(p.quantity)
                 lines.append(
-                    f"  {p.name:12s} {p.value * f:16.6f} ± {p.sigma * f:.3g} {un}".rstrip()
+                    f"  {p.name:{width}s} {_value_to_sigma(p.value * f, p.sigma * f):>16s}"
+                    f" ± {p.sigma * f:.3g} {un}".rstrip()
                 )
         if self.image_ids:
             lines.append("")
@@ -325,6 +327,25 @@ class Solution:
         for note in self.notes:
             lines.append(note)
         return "\n".join(lines)
+
+
+def _value_to_sigma(value: float, sigma: float) -> str:
+    """A value printed to the digits its σ carries (σ to three significant digits).
+
+    Fixed point while that needs at most 8 decimals, else scientific notation with
+    as many mantissa digits as reach σ's third digit: a lens term of 2e-6 ± 1e-7
+    prints as ``-1.998e-06``, not as ``-0.000002``.
+    """
+    if not np.isfinite(value):
+        return "—"
+    if not (np.isfinite(sigma) and sigma > 0):
+        return f"{value:.6f}"
+    decimals = max(0, 2 - int(np.floor(np.log10(sigma))))
+    if decimals <= 8:
+        return f"{value:.{decimals}f}"
+    magnitude = int(np.floor(np.log10(abs(value)))) if value != 0 else 0
+    mantissa = max(1, min(16, magnitude + decimals))  # 17 digits: all a double has
+    return f"{value:.{mantissa}e}"
 
 
 def _pm(value: float, sigma: float, digits: int) -> str:

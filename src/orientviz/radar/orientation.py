@@ -106,7 +106,7 @@ def _check(points: ArrayLike, xy: ArrayLike) -> tuple[F64, F64]:
     return P, L
 
 
-def image_model(
+def image_equations(
     points: F64, xy_obs: F64, image: RadarImage, free: Sequence[str], observe: str = "xy"
 ) -> tuple[Callable[[F64], tuple[F64, F64]], F64, F64]:
     """The functional model of one image for :func:`~orientviz.adjust.gauss_newton`.
@@ -204,7 +204,7 @@ def adjust_image(
     free : sequence of str
         Unknowns, e.g. ``("x0", "y0", "h", "m", "kappa")``.
     observe : {"xy", "radial", "tangential"}
-        Which image observations enter (see :func:`image_model`).
+        Which image observations enter (see :func:`image_equations`).
     sigma : float or array_like
         A-priori σ of an observation in image metres (weights 1/σ²): one value, one per
         point (both coordinates) or one per observation.
@@ -233,7 +233,7 @@ def adjust_image(
     """
     P, L = _check(points, xy)
     free = list(free)
-    equations, u0, l = image_model(P, L, approx, free, observe)
+    equations, u0, l = image_equations(P, L, approx, free, observe)
     if l.size < len(free):
         raise NotDeterminableError(
             f"{task}: {l.size} observations for {len(free)} unknowns ({', '.join(free)}); "

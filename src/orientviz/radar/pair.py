@@ -215,7 +215,7 @@ def relative_orientation(
         if points0 is not None
         else intersect(L1, image1, L2, approx2, refine=True)
     )
-    equations = relative_model(image1, approx2, free, n)
+    equations = relative_equations(image1, approx2, free, n)
     full0 = approx2.vector()
     seq = approx2.sequence
     names = free + [f"P{i + 1}.{c}" for i in range(n) for c in "XYZ"]
@@ -273,7 +273,7 @@ def _orientation_defect(equations, u0: F64, free: list[str], exc: NotDeterminabl
     )
 
 
-def relative_model(image1: RadarImage, approx2: RadarImage, free: Sequence[str], n: int):
+def relative_equations(image1: RadarImage, approx2: RadarImage, free: Sequence[str], n: int):
     """The functional model of a relative orientation with ``n`` homologous points.
 
     Returns ``equations(u) -> (f, J)`` with u = (image 2's free parameters, X1, Y1, Z1, …,

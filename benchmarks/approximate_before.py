@@ -1,0 +1,269 @@
+"""orientviz's approximate values as they were before the batched growth (commit 95a8e82).
+
+Kept (module text of src/orientviz/block/_approximate.py at 95a8e82, relative imports
+made absolute; ``intersect_rays`` used from orientviz.block) as the baseline of
+``bench_approximations.py``: one least-squares resection per image in a Python loop and a
+model-frame bundle after every 25 % of growth and after every poor resection. It calls
+today's bundle, resection and essential-matrix code. Not used by orientviz.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from orientviz.block import intersect_rays
+from orientviz.block._tables import CHECK, CONTROL, Block
+from orientviz.errors import NotDeterminableError
+from orientviz.rotation import matrix_from_opk, opk_from_matrix
+
+F64 = NDArray[np.float64]
+#: The oriented part is re-adjusted (model-frame bundle) after every 25 % of growth, at
+#: the latest after this many new images.
+REFINE_EVERY: int = 100
+#: A resection whose σ̂0 exceeds this (image residuals ≫ their a-priori σ) triggers an
+#: immediate re-adjustment of the oriented part.
+POOR_RESECTION: float = 5.0
+
+
+def approximate_values(block: Block, *, min_points: int = 6, frame: str = "control") -> Block:
+    """A copy of ``block`` with approximate orientations and points computed from scratch.
+
+    Parameters
+    ----------
+    block : Block
+        Image observations, interior orientation and control (role 1 with
+        ``xyz_known``); check points are not used.
+    min_points : int
+        Minimum number of known points for resecting an image.
+    frame : {"control", "model"}
+        ``"control"``: carry the result onto the control points (3 or more full XYZ
+        control points needed). ``"model"``: leave it in the model frame of the seed
+        pair (first image at the origin with R = I, base length 1 m) — the start of a
+        free network, whose datum is then chosen by the caller.
+
+    Returns
+    -------
+    Block
+        ``images.X0`` (m), ``images.angles`` (rad, ``block.sequence``) and
+        ``points.xyz`` (m) replaced; control points keep their given coordinates.
+
+    Raises
+    ------
+    NotDeterminableError
+        If images cannot be reached from the seed pair, points stay without two
+        oriented rays, or fewer than 3 full XYZ control points are intersected.
+    """
+    from orientviz.bundle import bundle_adjust
+    from orientviz.orientation.absolute import SimilarityTransform, similarity_closed_form
+    from orientviz.orientation.essential import eight_point, select_by_cheirality
+    from orientviz.orientation.resection import resection
+
+    obs = block.observations
+    use = block.points.role[obs.point] != CHECK
+    oi, op, xy = obs.image[use], obs.point[use], obs.xy[use]
+    m, p = block.n_images, block.n_points
+    cam = block.images.camera
+    c = block.cameras.c[cam]
+    pp = np.column_stack([block.cameras.x0[cam], block.cameras.y0[cam]])
+    xyc = xy - pp[oi]  # image coordinates relative to the principal point
+    M = sp.csr_matrix((np.ones(oi.size), (oi, op)), shape=(m, p))
+    common = (M @ M.T).toarray() if m <= 3000 else (M @ M.T).tocsr().toarray()
+    np.fill_diagonal(common, 0)
+    i, k = np.unravel_index(np.argmax(common), common.shape)
+    if common[i, k] < 8:
+        raise NotDeterminableError("approximate values: no image pair shares 8 points")
+    # ---- seed pair: relative orientation in the model frame of image i
+    pts_i = {int(q): j for j, q in zip(np.flatnonzero(oi == i), op[oi == i])}
+    pairs = [
+        (pts_i[int(q)], j) for j, q in zip(np.flatnonzero(oi == k), op[oi == k]) if int(q) in pts_i
+    ]
+    a_idx, b_idx = np.array(pairs).T
+    if c[i] != c[k]:
+        raise NotDeterminableError("approximate values: the seed pair needs one principal distance")
+    E = eight_point(xyc[a_idx], xyc[b_idx], float(c[i]))
+    R2, t, _ = select_by_cheirality(E, xyc[a_idx], xyc[b_idx], float(c[i]))
+    Rm = np.full((m, 3, 3), np.nan)
+    Xm = np.full((m, 3), np.nan)
+    Rm[i], Xm[i] = np.eye(3), np.zeros(3)
+    Rm[k], Xm[k] = R2, t / np.linalg.norm(t)
+    done = np.zeros(m, bool)
+    done[[i, k]] = True
+    P = np.full((p, 3), np.nan)
+
+    def intersect(image=None):
+        # (re-)intersect the points of ``image`` (all points if None) from oriented rays
+        sel = done[oi]
+        if image is not None:
+            mark = np.zeros(p, bool)
+            mark[op[oi == image]] = True
+            sel &= mark[op]
+        pts, local = np.unique(op[sel], return_inverse=True)
+        d = np.einsum("nij,nj->ni", Rm[oi[sel]], np.column_stack([xyc[sel], -c[oi[sel]]]))
+        X, cond = intersect_rays(Xm[oi[sel]], d, local, pts.size)
+        good = np.isfinite(X).all(axis=1) & (cond > 1e-6)
+        P[pts[good]] = X[good]
+
+    intersect()
+    anchor = (i, k)
+    refined_at = 0
+
+    def refine():
+        # bundle adjustment of the oriented part in the model frame: the seed image's
+        # orientation and the seed base's x-component are held by strong observations
+        nonlocal refined_at
+        refined_at = int(done.sum())
+        sub = _sub_block(block, done, P, Xm, Rm, oi, op, use, anchor)
+        if sub is None:
+            return
+        res = bundle_adjust(sub.block, precision=False, max_iter=15, tol=1e-2)
+        ext = res["exterior"].reshape(-1, 6)
+        Xm[sub.images] = ext[:, :3]
+        Rm[sub.images] = matrix_from_opk(ext[:, 3], ext[:, 4], ext[:, 5], "opk")
+        P[sub.points] = res["points"].reshape(-1, 3)
+
+    refine()
+    while not done.all():
+        if (
+            done.sum() >= min(max(refined_at + 1, 1.25 * refined_at), refined_at + REFINE_EVERY)
+            or done.sum() <= 12
+        ):
+            refine()
+        known = np.isfinite(P[op]).all(axis=1)
+        score = np.bincount(oi[known], minlength=m).astype(float)
+        score[done] = -1
+        nxt = int(np.argmax(score))
+        if score[nxt] < min_points:
+            left = [block.images.ids[j] for j in np.flatnonzero(~done)[:8]]
+            raise NotDeterminableError(
+                f"approximate values: images {', '.join(left)} share fewer than {min_points} "
+                "points with the oriented part of the block",
+                parameters=[f"{j}.X0" for j in left],
+            )
+        sel = (oi == nxt) & known
+        # start from the best-connected oriented neighbour (its attitude, its centre);
+        # the three-point closed form is the fallback
+        nb = int(np.argmax(np.where(done, common[nxt], -1)))
+        start = (Xm[nb], np.array(opk_from_matrix(Rm[nb], "opk")))
+        res = None
+        for st in (start, None):
+            try:
+                res = resection(xyc[sel], P[op[sel]], float(c[nxt]), start=st, max_iter=15)
+            except (NotDeterminableError, np.linalg.LinAlgError, ValueError):
+                continue
+            if res.converged:
+                break
+        if res is None:
+            raise NotDeterminableError(
+                f"approximate values: the resection of image {block.images.ids[nxt]} failed",
+                parameters=[f"{block.images.ids[nxt]}.X0"],
+            )
+        Rm[nxt] = res.R
+        Xm[nxt] = res.x[:3]
+        done[nxt] = True
+        intersect(nxt)
+        if res.sigma0 > POOR_RESECTION:  # the chain starts to deteriorate: adjust now
+            refine()
+    refine()
+    # ---- datum: similarity from the model frame onto the full-XYZ control points
+    ctrl = np.flatnonzero(
+        (block.points.role == CONTROL)
+        & np.isfinite(block.points.xyz_known).all(axis=1)
+        & np.isfinite(P).all(axis=1)
+    )
+    # observed projection centres (GNSS) can carry the datum where control cannot
+    gnss = np.flatnonzero(np.isfinite(block.images.X0_obs).all(axis=1)
+                          & (block.images.X0_sigma > 0).all(axis=1) & done)  # fmt: skip
+    if frame == "model":
+        T = SimilarityTransform(1.0, np.eye(3), np.zeros(3))  # stay in the model frame
+    elif (ctrl.size < 3 or _collinear(block.points.xyz_known[ctrl])) and (
+        gnss.size >= 3 and not _collinear(block.images.X0_obs[gnss])
+    ):
+        T = similarity_closed_form(Xm[gnss], block.images.X0_obs[gnss])
+    elif ctrl.size < 3 or _collinear(block.points.xyz_known[ctrl]):
+        raise NotDeterminableError(
+            f"approximate values: {ctrl.size} full XYZ control point(s) reached"
+            + (" (on a line)" if ctrl.size >= 3 else "")
+            + ", the similarity into the control's frame needs 3 not on a line. Datum "
+            "choices: give 3 or more control points (X, Y, Z) seen in the images; or observed "
+            "projection centres (3 or more not on a line); or give the images' approximate "
+            "orientations and hold some (options.fix / --fix ID); or adjust as a free "
+            "network (options.free / --free)"
+        )
+    else:
+        T = similarity_closed_form(P[ctrl], block.points.xyz_known[ctrl])
+    # a control point with given X, Y, Z needs no intersection (one ray suffices)
+    given_xyz = (block.points.role == CONTROL) & np.isfinite(block.points.xyz_known).all(axis=1)
+    missing = ~np.isfinite(P).all(axis=1) & (block.points.role != CHECK) & ~given_xyz
+    if missing.any():
+        ids = [block.points.ids[j] for j in np.flatnonzero(missing)[:8]]
+        raise NotDeterminableError(
+            f"approximate values: {int(missing.sum())} point(s) without two oriented rays: "
+            f"{', '.join(ids)}",
+            parameters=[f"{j}.X" for j in ids],
+        )
+    out = block.copy()
+    R = T.R[None] @ Rm
+    om, ph, ka = opk_from_matrix(R, block.sequence)
+    out.images.X0 = T.apply(Xm)
+    out.images.angles = np.column_stack([om, ph, ka])
+    xyz = np.where(np.isfinite(P), T.apply(np.nan_to_num(P)), block.points.xyz)
+    given = np.isfinite(block.points.xyz_known) & (block.points.role == CONTROL)[:, None]
+    out.points.xyz = np.where(given, block.points.xyz_known, xyz)
+    out.meta = dict(
+        block.meta, approximate_values={"seed_pair": [int(i), int(k)], "similarity_scale": T.scale}
+    )
+    return out
+
+
+def _collinear(xyz: F64) -> bool:
+    """Points (k, 3) on one line (or fewer than 3)."""
+    if xyz.shape[0] < 3:
+        return True
+    s = np.linalg.svd(xyz - xyz.mean(axis=0), compute_uv=False)
+    return bool(s[1] <= 1e-6 * max(s[0], 1e-300))
+
+
+class _Sub:
+    def __init__(self, block, images, points):
+        self.block, self.images, self.points = block, images, points
+
+
+def _sub_block(block, done, P, Xm, Rm, oi, op, use, anchor):
+    """The oriented images and their points with ≥ 2 oriented rays, in the model frame."""
+    imgs = np.flatnonzero(done)
+    sel = done[oi] & np.isfinite(P[op]).all(axis=1)
+    rays = np.bincount(op[sel], minlength=block.n_points)
+    pts = np.flatnonzero(rays >= 2)
+    sel &= rays[op] >= 2
+    if imgs.size < 2 or pts.size < 6:
+        return None
+    img_new = -np.ones(block.n_images, np.int64)
+    img_new[imgs] = np.arange(imgs.size)
+    pt_new = -np.ones(block.n_points, np.int64)
+    pt_new[pts] = np.arange(pts.size)
+    full = np.flatnonzero(use)[sel]
+    obs = block.observations
+    om, ph, ka = opk_from_matrix(Rm[imgs], "opk")
+    sub = Block.from_arrays(
+        camera_c=block.cameras.c,
+        camera_x0=block.cameras.x0,
+        camera_y0=block.cameras.y0,
+        image_camera=block.images.camera[imgs],
+        X0=Xm[imgs],
+        angles=np.column_stack([om, ph, ka]),
+        xyz=P[pts],
+        obs_image=img_new[obs.image[full]],
+        obs_point=pt_new[obs.point[full]],
+        obs_xy=obs.xy[full],
+        obs_sigma=obs.sigma[full],
+    )
+    a, b = img_new[anchor[0]], img_new[anchor[1]]
+    sub.images.X0_obs[a] = Xm[anchor[0]]
+    sub.images.X0_sigma[a] = 1e-6
+    sub.images.angles_obs[a] = 0.0
+    sub.images.angles_sigma[a] = 1e-9
+    sub.images.X0_obs[b, 0] = Xm[anchor[1], 0]
+    sub.images.X0_sigma[b, 0] = 1e-6
+    return _Sub(sub, imgs, pts)

@@ -1,0 +1,34 @@
+"""The text report prints each parameter to the digits its σ carries."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from orientviz.io.solution import _value_to_sigma
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_printed_value_reaches_the_third_digit_of_sigma(seed):
+    rng = np.random.default_rng(seed)
+    for _ in range(400):
+        sigma = 10.0 ** rng.uniform(-12, 4)
+        value = rng.choice([-1.0, 1.0]) * 10.0 ** rng.uniform(-13, 5)
+        text = _value_to_sigma(value, sigma)
+        last_digit = 10.0 ** (np.floor(np.log10(sigma)) - 2)
+        bound = 0.5 * last_digit + abs(value) * 4.5e-16  # + two ulps of a double
+        assert abs(float(text) - value) <= bound, (value, sigma, text)
+        if abs(value) > last_digit:  # a value σ can see never prints as zero
+            assert float(text) != 0.0, (value, sigma, text)
+
+
+def test_small_lens_terms_are_not_rounded_away():
+    # DBAT's K3 of the camcal demo is about -2e-6 mm^-6 with σ 1e-7: six fixed
+    # decimals printed it as -0.000002, losing everything but the sign.
+    assert _value_to_sigma(-2.0534e-06, 1.01e-07) == "-2.053e-06"
+    assert _value_to_sigma(2336.807891, 0.328) == "2336.808"
+
+
+def test_values_without_sigma_keep_six_decimals_and_missing_values_a_dash():
+    assert _value_to_sigma(1.23456789, 0.0) == "1.234568"
+    assert _value_to_sigma(float("nan"), 0.1) == "—"
