@@ -213,6 +213,8 @@ def bundle_adjust(
         on_iteration=steps.begin,
     )
     st, history, converged, reason = run.state, run.history, run.converged, run.reason
+    prob.reduced.release_maps()  # the Schur formation's maps: not held through the precision
+    steps.chord_factor = steps.chord_pending = None
     rw, Je, Jp = run.evaluation.data
     if steps.is_local(run.evaluation):  # the precision needs the derivatives by ω, φ, κ
         rw, Je, Jp = prob.residuals(st, jac=True)

@@ -247,6 +247,11 @@ class ReducedStructure:
             self._tracks = track_groups(self)
         return self._tracks
 
+    def release_maps(self) -> None:
+        """Drop the Schur formation's sparse maps (formed again when needed)."""
+        if self._tracks is not None:
+            self._tracks._maps = None
+
     # ------------------------------------------------------------ layout of S
     def image_graph(self) -> sp.csr_matrix:
         """Adjacency (m, m) of images that share an unknown point (plus the diagonal)."""
