@@ -17,6 +17,7 @@ attitude is updated as R ← R·exp([δ]×) (δ in rad, small rotations about th
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 from numpy.typing import NDArray
 
 F64 = NDArray[np.float64]
@@ -156,18 +157,17 @@ def _cost(img, r, wgt, n):
 
 
 def _normal_solve(img, J, r, wgt, n, lam):
-    """Each image's step from its 6 × 6 normal equations; False where they are singular."""
-    Jw = J * wgt[:, :, None]
-    Nk = np.einsum("nai,naj->nij", Jw, J).reshape(-1, 36)
-    gk = np.einsum("nai,na->ni", Jw, r)
-    N = np.stack([np.bincount(img, Nk[:, e], n) for e in range(36)], 1).reshape(n, 6, 6)
-    g = np.stack([np.bincount(img, gk[:, e], n) for e in range(6)], 1)
+    """Each image's damped step from its 6 × 6 normal equations; False where they are singular."""
+    JwT = (J * wgt[:, :, None]).transpose(0, 2, 1)
+    to_image = sp.csr_matrix((np.ones(img.size), (img, np.arange(img.size))), shape=(n, img.size))
+    N = (to_image @ (JwT @ J).reshape(-1, 36)).reshape(n, 6, 6)
+    g = to_image @ (JwT @ r[:, :, None])[:, :, 0]
     # scale to unit diagonal: the condition then says whether the geometry determines x
     s = 1.0 / np.sqrt(np.maximum(np.einsum("nii->ni", N), 1e-300))
     Ns = N * s[:, :, None] * s[:, None, :]
-    Ns = Ns + lam[:, None, None] * np.eye(6)[None]
     ev = np.linalg.eigvalsh(Ns)
     reg = ev[:, 0] > 1e-12 * np.maximum(ev[:, -1], 1e-300)
+    Ns = Ns + lam[:, None, None] * np.eye(6)[None]
     dx = np.zeros((n, 6))
     if reg.any():
         dx[reg] = s[reg] * np.linalg.solve(Ns[reg], (s[reg] * g[reg])[:, :, None])[:, :, 0]

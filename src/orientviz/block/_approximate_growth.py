@@ -213,7 +213,8 @@ class Growth:
             self.intersect(new)
             self.waves += 1
             recent.append(new)
-            s0 = self.adjust_front(np.concatenate(recent[-FRONT_WAVES:]))
+            if self.done.sum() < REFINE_GROWTH * self.refined_at:  # else the whole follows
+                s0 = self.adjust_front(np.concatenate(recent[-FRONT_WAVES:]))
             poor = bool(np.any(s0 > POOR_RESECTION))
         if self.done.sum() > FINAL_REFINE * self.refined_at:
             self.refine()
