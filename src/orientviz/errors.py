@@ -94,16 +94,16 @@ _POINT_PARTS = ("X", "Y", "Z")
 def parameter_words(names: list[str], max_owners: int = 8) -> str:
     """Internal parameter names in the user's words, grouped by image, point or strip.
 
-    ``["img24.Z0", "img24.omega", "p7.X", "strip0.height.p2"]`` →
-    ``"image img24 (Z0, ω), point p7 (X), strip 0 (height polynomial p2)"``: the ids are
-    the user's own; the suffixes name what of it is meant. Names of another form are
-    kept as they are.
+    ``["img24.Z0", "img24.omega", "p7.X", "strip3.height.tilt across the strip"]`` →
+    ``"image img24 (Z0, ω), point p7 (X), strip 3 (tilt across the strip)"``: the ids
+    are the user's own; the suffixes name what of it is meant. Names of another form
+    are kept as they are.
 
     Parameters
     ----------
     names : list of str
         Parameter names ``"<image id>.<X0|…|kappa>"``, ``"<point id>.<X|Y|Z>"``,
-        ``"strip<k>.<part>.p<i>"`` or other.
+        ``"strip<strip number>.<part>.<term in words>"`` or other.
     max_owners : int
         At most this many images/points/strips are listed, then "and N more".
 
@@ -118,10 +118,9 @@ def parameter_words(names: list[str], max_owners: int = 8) -> str:
             groups.setdefault(("image", owner), []).append(_IMAGE_PARTS[part])
         elif dot and part in _POINT_PARTS:
             groups.setdefault(("point", owner), []).append(part)
-        elif owner.startswith("strip") and "." in owner and part.startswith("p"):
-            strip, _, poly = owner.partition(".")
-            key = ("strip", strip[len("strip") :])
-            groups.setdefault(key, []).append(f"{poly} polynomial {part}")
+        elif owner.startswith("strip") and "." in owner:
+            strip = owner.partition(".")[0]
+            groups.setdefault(("strip", strip[len("strip") :]), []).append(part)
         else:
             groups.setdefault(("", str(name)), [])
     words = []

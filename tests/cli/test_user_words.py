@@ -32,11 +32,56 @@ def leaks(text: str) -> list[str]:
 
 
 def test_parameter_words_group_by_the_users_ids():
-    text = parameter_words(["img24.Z0", "img24.omega", "p7.X", "strip0.height.p2", "a.b.kappa"])
+    names = ["img24.Z0", "img24.omega", "p7.X", "strip3.height.tilt across the strip", "a.b.kappa"]
+    text = parameter_words(names)
     assert (
-        text == "image img24 (Z0, ω), point p7 (X), strip 0 (height polynomial p2), image a.b (κ)"
+        text == "image img24 (Z0, ω), point p7 (X), strip 3 (tilt across the strip), image a.b (κ)"
     )
     assert not leaks(text)
+
+
+#: a polynomial's internal names: ``strip3.height.p2`` or its old rendering ``polynomial p2``
+POLYNOMIAL_INTERNAL = re.compile(r"\bstrip\d+\.\w|polynomial p\d+")
+
+
+def _polynomial_file(tmp_path, name: str, edit) -> str:
+    """block_strip with its strip numbered 7 (not the internal 0), edited by ``edit``."""
+    doc = json.loads(Path(_resolve("block_strip")).read_text())
+    for image in doc["images"]:
+        image["strip"] = 7
+    edit(doc)
+    path = tmp_path / f"{name}.json"
+    path.write_text(json.dumps(doc))
+    return str(path)
+
+
+def _no_control(doc):
+    for p in doc["points"]:
+        if p.get("role") == "control":
+            p["role"] = "tie"
+
+
+def _no_strips(doc):
+    for image in doc["images"]:
+        del image["strip"]
+
+
+@pytest.mark.parametrize(
+    "case, edit, code, words",
+    [
+        # 4 height control points cannot fix a degree-2 height polynomial (5 terms)
+        ("height", lambda doc: None, 3, ("strip 7 (", "tilt across the strip", "degree_z")),
+        ("no-control", _no_control, 3, ("strip 7 (", "shift X", "degree_xy")),
+        ("no-strips", _no_strips, 2, ("strip number", "images[].strip")),
+    ],
+)
+def test_polynomial_failures_name_the_users_strips(tmp_path, capsys, case, edit, code, words):
+    path = _polynomial_file(tmp_path, case, edit)
+    assert main(["solve", path, "--method", "polynomial"]) == code
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    assert all(w in err for w in words), err
+    assert not leaks(err) and not POLYNOMIAL_INTERNAL.search(err), err
 
 
 def test_singular_reduced_system_message_names_images_by_id():

@@ -74,13 +74,15 @@ def check_image_points(value: ArrayLike, name: str = "image points") -> F64:
 
 
 def index_ids(ids: list[str], what: str) -> dict[str, int]:
-    """Map string ids to indices, rejecting duplicates."""
-    out: dict[str, int] = {}
-    for i, ident in enumerate(ids):
-        key = str(ident)
-        if key in out:
-            raise InputError(f"duplicate {what} id {key!r}")
-        out[key] = i
+    """Map string ids to indices, rejecting duplicates (the first one repeated is named)."""
+    keys = list(map(str, ids))
+    out = dict(zip(keys, range(len(keys))))
+    if len(out) != len(keys):
+        seen: set[str] = set()
+        for key in keys:
+            if key in seen:
+                raise InputError(f"duplicate {what} id {key!r}")
+            seen.add(key)
     return out
 
 
@@ -295,7 +297,7 @@ class Block:
             np.full(m, -1, dtype=np.int64) if strip is None else np.asarray(strip, dtype=np.int64)
         )
         ids = lambda given, count, prefix: (
-            [str(s) for s in given] if given is not None else [f"{prefix}{i}" for i in range(count)]
+            list(map(str, given)) if given is not None else [f"{prefix}{i}" for i in range(count)]
         )
         block = cls(
             cameras=Cameras(ids(camera_ids, k, "cam"), c, x0, y0, fmt, [""] * k),
@@ -320,9 +322,10 @@ class Block:
 
     def validate(self) -> Block:
         """Check ids for duplicates and array shapes for consistency; return ``self``."""
-        index_ids(self.cameras.ids, "camera")
-        index_ids(self.images.ids, "image")
-        index_ids(self.points.ids, "point")
+        for ids, what in ((self.cameras.ids, "camera"), (self.images.ids, "image"),
+                          (self.points.ids, "point")):  # fmt: skip
+            if len(set(map(str, ids))) != len(ids):
+                index_ids(ids, what)  # names the first repeated id
         m, p, n = len(self.images), len(self.points), len(self.observations)
         for name, arr, shape in (
             ("images.X0", self.images.X0, (m, 3)),

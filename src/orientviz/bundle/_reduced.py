@@ -247,6 +247,11 @@ class ReducedStructure:
             self._tracks = track_groups(self)
         return self._tracks
 
+    def release_maps(self) -> None:
+        """Drop the Schur formation's sparse maps (formed again when needed)."""
+        if self._tracks is not None:
+            self._tracks._maps = None
+
     # ------------------------------------------------------------ layout of S
     def image_graph(self) -> sp.csr_matrix:
         """Adjacency (m, m) of images that share an unknown point (plus the diagonal)."""
@@ -402,7 +407,7 @@ def factor_reduced(
             if not np.all(np.abs(lu.U.diagonal()) > 1e-12 * np.abs(A.diagonal()).max()):
                 raise np.linalg.LinAlgError("zero pivot")
             return Factor(st, "sparse", lu)
-        S = dense_matrix(st, blocks) if dense is None else dense
+        S = dense_matrix(st, blocks, lower=True) if dense is None else dense
         if not np.isfinite(S[:: n + 1]).all():
             raise np.linalg.LinAlgError("non-finite diagonal")
         c, _ = scipy.linalg.cho_factor(S, lower=True, overwrite_a=True, check_finite=False)
@@ -414,15 +419,16 @@ def factor_reduced(
     raise AssertionError("unreachable")  # pragma: no cover
 
 
-def dense_matrix(st: ReducedStructure, blocks: F64) -> F64:
-    """The reduced matrix S as a dense (6m, 6m) array (original image order)."""
-    n = st.n_reduced
-    S = np.zeros((n, n))
-    m = np.arange(st.n_cam)
-    rows, cols, _ = st._scalar_entries(m)
-    vals = blocks.reshape(-1)
-    S[rows, cols] = vals
-    S[cols, rows] = vals
+def dense_matrix(st: ReducedStructure, blocks: F64, lower: bool = False) -> F64:
+    """The reduced matrix S as a dense (6m, 6m) array (original image order), in Fortran
+    order (what LAPACK reads without a copy); ``lower``: only the lower triangle (and
+    the diagonal blocks) is filled — what the dense Cholesky reads."""
+    n, m = st.n_reduced, st.n_cam
+    S = np.zeros((n, n), order="F")
+    S4 = S.T.reshape(m, 6, m, 6)  # S4[i, r, k, c] = S[6k + c, 6i + r]
+    if not lower:
+        S4[st.block_k, :, st.block_i, :] = blocks.transpose(0, 2, 1)
+    S4[st.block_i, :, st.block_k, :] = blocks  # diagonal blocks: Bᵀ
     return S
 
 

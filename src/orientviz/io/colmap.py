@@ -66,25 +66,27 @@ def _coefficients(cam: ColmapCamera) -> tuple[float, float, float, float]:
     return p.get("k", p.get("k1", 0.0)), p.get("k2", 0.0), p.get("p1", 0.0), p.get("p2", 0.0)
 
 
-def _distort(cam: ColmapCamera, xn: NDArray[np.float64], jacobian: bool = False):
-    """COLMAP's forward distortion of normalised coordinates (x right, y down), and its
-    2 × 2 Jacobian (∂x_d/∂x, ∂x_d/∂y, ∂y_d/∂x, ∂y_d/∂y) when asked."""
+def _distort(cam: ColmapCamera, x: NDArray[np.float64], y: NDArray[np.float64]):
+    """COLMAP's forward distortion of normalised coordinates ``x``, ``y`` (x right, y
+    down): ``xd, yd`` and the terms ``r2``, ``radial`` that :func:`_jacobian` needs."""
     k1, k2, p1, p2 = _coefficients(cam)
-    x, y = xn[:, 0], xn[:, 1]
     r2 = x * x + y * y
     radial = 1.0 + k1 * r2 + k2 * r2 * r2
     xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
     yd = y * radial + 2 * p2 * x * y + p1 * (r2 + 2 * y * y)
-    if not jacobian:
-        return np.column_stack([xd, yd])
+    return xd, yd, r2, radial
+
+
+def _jacobian(cam: ColmapCamera, x, y, r2, radial):
+    """∂x_d/∂x, ∂x_d/∂y, ∂y_d/∂x, ∂y_d/∂y of :func:`_distort` at ``x``, ``y``."""
+    k1, k2, p1, p2 = _coefficients(cam)
     g = 2.0 * (k1 + 2.0 * k2 * r2)
-    j = (radial + g * x * x + 2 * p1 * y + 6 * p2 * x, g * x * y + 2 * p1 * x + 2 * p2 * y,
-         g * x * y + 2 * p2 * y + 2 * p1 * x, radial + g * y * y + 2 * p2 * x + 6 * p1 * y)  # fmt: skip
-    return xd, yd, j
+    return (radial + g * x * x + 2 * p1 * y + 6 * p2 * x, g * x * y + 2 * p1 * x + 2 * p2 * y,
+            g * x * y + 2 * p2 * y + 2 * p1 * x, radial + g * y * y + 2 * p2 * x + 6 * p1 * y)  # fmt: skip
 
 
 #: Observations undistorted per batch (bounds the temporaries of the Newton iteration).
-UNDISTORT_BATCH: int = 1 << 18
+UNDISTORT_BATCH: int = 1 << 16
 
 
 def normalised(cam: ColmapCamera, uv: NDArray[np.float64], source: str = "") -> NDArray[np.float64]:
@@ -104,22 +106,11 @@ def normalised(cam: ColmapCamera, uv: NDArray[np.float64], source: str = "") -> 
         return out
     tol = UNDISTORT_TOL_PX / max(fx, fy)
     for a in range(0, len(out), UNDISTORT_BATCH):
-        d = out[a : a + UNDISTORT_BATCH].copy()
-        x = d.copy()
-        active = np.arange(len(d))
-        for _ in range(30):
-            xd, yd, (a11, a12, a21, a22) = _distort(cam, x[active], jacobian=True)
-            fx_, fy_ = xd - d[active, 0], yd - d[active, 1]
-            done = (np.abs(fx_) < tol) & (np.abs(fy_) < tol)
-            det = a11 * a22 - a12 * a21
-            det = np.where(np.abs(det) < 1e-12, 1e-12, det)
-            x[active, 0] -= np.where(done, 0.0, (a22 * fx_ - a12 * fy_) / det)
-            x[active, 1] -= np.where(done, 0.0, (-a21 * fx_ + a11 * fy_) / det)
-            active = active[~done]
-            if active.size == 0:
-                break
+        dx, dy = out[a : a + UNDISTORT_BATCH, 0].copy(), out[a : a + UNDISTORT_BATCH, 1].copy()
+        x, y = _undistort(cam, dx, dy, tol)
+        xd, yd, _, _ = _distort(cam, x, y)
         bad = np.flatnonzero(
-            np.any(np.abs(_distort(cam, x) - d) >= tol, axis=1) | ~np.isfinite(x).all(1)
+            (np.abs(xd - dx) >= tol) | (np.abs(yd - dy) >= tol) | ~np.isfinite(x) | ~np.isfinite(y)
         )
         if bad.size:
             u = uv[a + bad[0]]
@@ -128,8 +119,37 @@ def normalised(cam: ColmapCamera, uv: NDArray[np.float64], source: str = "") -> 
                 f"({u[0]:.1f}, {u[1]:.1f}) ({bad.size} observation(s))",
                 source=source,
             )
-        out[a : a + UNDISTORT_BATCH] = x
+        out[a : a + UNDISTORT_BATCH, 0] = x
+        out[a : a + UNDISTORT_BATCH, 1] = y
     return out
+
+
+def _undistort(cam: ColmapCamera, dx, dy, tol: float):
+    """Newton's method for the normalised coordinates whose distortion is ``dx``, ``dy``.
+
+    Starts at the distorted coordinates; an observation stops moving once its distortion
+    is within ``tol`` of the target (at most 30 steps); the others are stepped on alone.
+    """
+    x, y = dx.copy(), dy.copy()
+    at = np.arange(dx.size)  # the observations still moving, and their values
+    ax, ay, tx, ty = x, y, dx, dy
+    for _ in range(30):
+        xd, yd, r2, radial = _distort(cam, ax, ay)
+        fx_, fy_ = xd - tx, yd - ty
+        done = (np.abs(fx_) < tol) & (np.abs(fy_) < tol)
+        if done.all():
+            break
+        if done.any():
+            go = ~done
+            at, ax, ay, tx, ty = at[go], ax[go], ay[go], tx[go], ty[go]
+            fx_, fy_, r2, radial = fx_[go], fy_[go], r2[go], radial[go]
+        a11, a12, a21, a22 = _jacobian(cam, ax, ay, r2, radial)
+        det = a11 * a22 - a12 * a21
+        det = np.where(np.abs(det) < 1e-12, 1e-12, det)
+        ax = ax - (a22 * fx_ - a12 * fy_) / det
+        ay = ay - (-a21 * fx_ + a11 * fy_) / det
+        x[at], y[at] = ax, ay
+    return x, y
 
 
 def block_from_colmap(
@@ -172,7 +192,10 @@ def block_from_colmap(
         sel = slice(None) if len(cam_ids) == 1 else cam_arr[model.obs_image] == ci
         xn = normalised(cam, model.obs_uv[sel], model.source.get("images", ""))
         xn *= [c, -c]
-        xy[sel] = xn
+        if len(cam_ids) == 1:
+            xy = xn  # one camera: no copy
+        else:
+            xy[sel] = xn
         del xn
         sigma[sel] = sigma_px * pixel_size_mm * np.array([1.0, fx / fy])
     obs_point = model.obs_point  # indices into model.point_ids
@@ -189,7 +212,7 @@ def block_from_colmap(
         angles=np.column_stack(opk_from_matrix(R, sequence)).reshape(-1, 3),
         image_ids=ids,
         xyz=model.xyz.reshape(-1, 3),
-        point_ids=[str(p) for p in model.point_ids.tolist()],
+        point_ids=list(map(str, model.point_ids.tolist())),
         obs_image=model.obs_image,
         obs_point=obs_point,
         obs_xy=xy,

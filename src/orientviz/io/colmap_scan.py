@@ -17,45 +17,60 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import NDArray
 
 #: Bytes read per chunk (a chunk grows to the end of its last line).
-CHUNK_BYTES: int = 16 << 20
+CHUNK_BYTES: int = 8 << 20
 I64 = NDArray[np.int64]
 _POW10 = 10 ** np.arange(19, dtype=np.int64)
 _P10F = 10.0 ** np.arange(20)
 _ZERO, _DOT, _MINUS, _PLUS = 48, 46, 45, 43
+#: Longest token (sign, digits and point) converted without Python.
+_MAX_FAST = 19
 
 
 @dataclass
 class Chunk:
-    """Whole lines of a file: ``buf`` (uint8) and the 1-based number of its first line."""
+    """Whole lines of a file: ``buf`` (uint8), the 1-based number of its first line and
+    the offsets of its newlines (one per line; the last byte is one)."""
 
     buf: NDArray[np.uint8]
     first_line: int
+    newlines: I64
 
 
-def line_chunks(path: Path, chunk_bytes: int = CHUNK_BYTES) -> Iterator[Chunk]:
-    """Read ``path`` once, yielding chunks that end with a newline (one is added at the end)."""
+def line_chunks(path: Path, chunk_bytes: int | None = None) -> Iterator[Chunk]:
+    """Read ``path`` once, yielding chunks that end with a newline (one is added at the end).
+
+    The bytes (:data:`CHUNK_BYTES` at a time unless ``chunk_bytes`` is given) are read
+    into one buffer that is used again for the next chunk (no copy per chunk): a chunk
+    is valid until the next one is asked for.
+    """
+    store = bytearray(chunk_bytes or CHUNK_BYTES)
+    have = 0  # bytes of a line not yet complete, at the front of store
     line = 1
-    rest = b""
     with open(path, "rb") as f:
         while True:
-            data = f.read(chunk_bytes)
-            if not data:
+            if have == len(store):  # a line longer than the buffer: a bigger one
+                store = store + bytearray(len(store))
+            with memoryview(store) as view:
+                got = f.readinto(view[have:])
+            if not got:
                 break
-            data = rest + data
-            cut = data.rfind(b"\n") + 1
-            if cut == 0:  # a line longer than the chunk: keep reading
-                rest = data
+            end = have + got
+            cut = store.rfind(b"\n", 0, end) + 1
+            if cut == 0:
+                have = end
                 continue
-            rest = data[cut:]
-            buf = np.frombuffer(data, dtype=np.uint8, count=cut)
-            yield Chunk(buf, line)
-            line += int(np.count_nonzero(buf == 10))
-    if rest:
-        yield Chunk(np.frombuffer(rest + b"\n", dtype=np.uint8), line)
+            buf = np.frombuffer(store, dtype=np.uint8, count=cut)
+            newlines = np.flatnonzero(buf == 10)
+            yield Chunk(buf, line, newlines)
+            line += newlines.size
+            store[: end - cut] = store[cut:end]
+            have = end - cut
+    if have:
+        buf = np.frombuffer(bytes(store[:have]) + b"\n", dtype=np.uint8)
+        yield Chunk(buf, line, np.flatnonzero(buf == 10))
 
 
 @dataclass
@@ -97,6 +112,20 @@ def tokenize(buf: NDArray[np.uint8]) -> Tokens:
     return Tokens(start, end, line, line_start, n_lines)
 
 
+def token_starts(buf: NDArray[np.uint8]) -> tuple[I64, bool]:
+    """Start offsets of the tokens of ``buf`` (complete lines), and whether it is plain.
+
+    A token starts where a byte above 32 follows a separator (ASCII whitespace or a
+    control byte) or the start. Plain: every token is followed by exactly one
+    separator, so a token ends one byte before the next one starts.
+    """
+    word = np.empty(buf.size + 1, dtype=bool)
+    word[0] = False
+    np.greater(buf, 32, out=word[1:])
+    starts = np.flatnonzero(word[1:] > word[:-1])
+    return starts, bool(starts.size == buf.size - np.count_nonzero(word))
+
+
 def strided(first: I64, count: I64, offset: int, step: int) -> I64:
     """Token indices ``first + offset, first + offset + step, …`` below ``first + count``."""
     n = np.maximum(count - offset + step - 1, 0) // step
@@ -125,55 +154,83 @@ def _fallback(buf, start, end, idx, conv) -> tuple[NDArray, I64]:
     return np.array(vals), np.array(bad, dtype=np.int64)
 
 
+def records(buf: NDArray[np.uint8], width: int) -> NDArray:
+    """``buf`` seen as overlapping records of ``width`` bytes, one starting at every byte.
+
+    Indexing it with token starts gathers the tokens' bytes in one C loop (much faster
+    than indexing a 2-D sliding window).
+    """
+    return np.ndarray((buf.size - width + 1,), dtype=f"V{width}", buffer=buf, strides=(1,))
+
+
+def _plain_decimals(
+    buf: NDArray[np.uint8], start: I64, width: int, integer: bool
+) -> tuple[I64, I64, NDArray]:
+    """Tokens of ``width`` bytes, digits and at most one point: (mantissa, decimals, bad).
+
+    The tokens are cut into a (n, width) byte matrix (:func:`records`), the point counts
+    as a 0 digit, the digits are summed as int64 by one product with the powers of ten
+    and the point's 0 is taken out again. ``bad`` marks tokens with another byte, two
+    points or no digit (or a point at all if ``integer``).
+    """
+    n = start.size
+    M = records(buf, width)[start].view(np.uint8).reshape(n, width)  # a copy
+    M -= np.uint8(_ZERO)
+    isdot = M == np.uint8(_DOT - _ZERO + 256)
+    dot_col = isdot.argmax(axis=1)
+    has_dot = isdot.ravel()[np.arange(n) * width + dot_col]
+    bad = has_dot & (integer or width == 1)
+    if width == _MAX_FAST:
+        bad |= M[:, 0] == 9  # 19 digits from 9·10¹⁸ on overflow int64
+    other = M > 9
+    other &= ~isdot
+    if other.any():
+        bad |= other.any(axis=1)
+    if np.count_nonzero(isdot) != np.count_nonzero(has_dot):
+        bad |= isdot.sum(axis=1) > 1
+    np.putmask(M, isdot, 0)
+    total = M.astype(np.int64) @ _POW10[width - 1 :: -1]
+    frac = np.where(has_dot, width - 1 - dot_col, 0)
+    right = total % _POW10[frac]
+    mant = np.where(has_dot, right + (total - right) // 10, total)
+    return mant, frac, bad
+
+
 def parse_numbers(
     buf: NDArray[np.uint8], start: I64, end: I64, *, integer: bool = False
 ) -> tuple[NDArray, I64]:
     """Numbers of the tokens ``buf[start:end]``; returns (values, indices of bad tokens).
 
-    Plain decimals ``[+-]digits[.digits]`` of up to 18 digits are converted vectorised:
-    the tokens are viewed right-aligned in a (n, W) byte matrix (a sliding window ending
-    at each token's end), their digits summed by Horner's rule as int64 (the decimal
-    point counted as a 0 digit and removed afterwards) and divided once by a power of
-    ten. Other tokens (exponents, longer ones, ``nan``) are converted by Python; tokens
-    that are not numbers are returned in the second array (their value is 0).
-    Integers reject a decimal point.
+    Plain decimals ``[+-]digits[.digits]`` of up to 19 bytes are converted vectorised,
+    one group of equally long tokens at a time (:func:`_plain_decimals`): the mantissa
+    as int64 divided once by a power of ten, the correctly rounded result for up to 15
+    significant digits, within one unit in the last place beyond. Other tokens
+    (exponents, longer ones, ``nan``) are converted by Python; tokens that are not
+    numbers are returned in the second array (their value is 0). Integers reject a
+    decimal point.
     """
     n = start.size
     out = np.zeros(n, dtype=np.int64 if integer else np.float64)
     if n == 0:
         return out, np.zeros(0, dtype=np.int64)
-    lens = end - start
-    W = int(min(lens.max(), 19))
-    lead = max(0, W - int(end.min()))
-    src = np.concatenate([np.full(lead, 32, np.uint8), buf]) if lead else buf
-    M = sliding_window_view(src, W)[np.minimum(end, start + W) + lead - W]  # a copy
-    M[np.arange(W) < (W - np.minimum(lens, W))[:, None]] = _ZERO  # left padding: zeros
     first = buf[start]
     neg = first == _MINUS
     signed = neg | (first == _PLUS)
-    rows = np.flatnonzero(signed & (lens <= W))
-    M[rows, W - lens[rows]] = _ZERO
-    d = M - np.uint8(_ZERO)
-    isdot = d == np.uint8(_DOT - _ZERO + 256)
-    n_dots = isdot.sum(axis=1)
-    slow = (
-        ((d > 9) & ~isdot).any(axis=1) | (n_dots > 1) | (lens > W) | (lens - n_dots - signed == 0)
-    )
-    if integer:
-        slow |= n_dots > 0
-    d[isdot] = 0
-    total = np.zeros(n, dtype=np.int64)
-    for j in range(W):  # Horner's rule over the W columns
-        total *= 10
-        total += d[:, j]
-    frac = np.where(n_dots > 0, W - 1 - isdot.argmax(axis=1), 0)
-    right = total % _POW10[frac]
-    mant = np.where(n_dots > 0, right + (total - right) // 10, total)
-    if integer:
-        out[:] = np.where(neg, -mant, mant)
-    else:
-        val = mant / _P10F[frac]
-        out[:] = np.where(neg, -val, val)
+    digits_at = start + signed
+    width = end - digits_at
+    slow = (width <= 0) | (end - start > _MAX_FAST)
+    width[slow] = 0
+    counts = np.bincount(width)
+    counts[0] = 0
+    for w in np.flatnonzero(counts).tolist():
+        rows = np.flatnonzero(width == w)
+        mant, frac, bad = _plain_decimals(buf, digits_at[rows], w, integer)
+        if integer:
+            out[rows] = mant
+        else:
+            out[rows] = mant / _P10F[frac]
+        slow[rows[bad]] = True
+    np.negative(out, out=out, where=neg)
     idx = np.flatnonzero(slow)
     bad = np.zeros(0, dtype=np.int64)
     if idx.size:

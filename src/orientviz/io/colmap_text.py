@@ -1,11 +1,11 @@
 """COLMAP's text model (cameras.txt, images.txt, points3D.txt) read in one streaming pass.
 
-``images.txt`` holds two lines per image: ``IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID
-NAME`` and ``X Y POINT3D_ID`` triplets of *all* its keypoints, most of them unmatched
-(``POINT3D_ID = -1``). The file is read once in chunks (:mod:`orientviz.io.colmap_scan`);
-the triplets are cut by numpy and only the matched ones are converted to numbers, so
-the memory kept is that of the observations, not of the file. Broken input raises one
-:class:`~orientviz.errors.InputError` naming the file and line.
+cameras.txt and points3D.txt are read here, images.txt by
+:mod:`orientviz.io.colmap_images` (two lines per image, ``X Y POINT3D_ID`` triplets of
+*all* keypoints, most of them unmatched): each file once, in chunks
+(:mod:`orientviz.io.colmap_scan`), the fields cut by numpy and only the kept ones
+converted to numbers, so the memory kept is that of the observations, not of the file.
+Broken input raises one :class:`~orientviz.errors.InputError` naming the file and line.
 """
 
 from __future__ import annotations
@@ -42,6 +42,8 @@ MAX_VALUE: float = 1e15
 MAX_NAME: int = 256
 #: Keypoints farther than this many image sizes outside the image are refused.
 MAX_IMAGE_SIZES: float = 100.0
+#: TRACK image ids below this are remembered in a table (larger ones are sorted per chunk).
+_SEEN_TABLE: int = 1 << 22
 
 
 def checked_file(path: Path, what: str, *, capped: bool = False) -> Path:
@@ -205,6 +207,7 @@ def read_cameras_text(path: Path) -> dict[int, ColmapCamera]:
 def read_points_text(path: Path) -> tuple[I64, F64, dict[int, int]]:
     """points3D.txt: ids, XYZ and, per image id named in a TRACK, the first line naming it."""
     ids, xyz, where, track_first = [], [], [], {}
+    seen = np.zeros(0, dtype=bool)  # image ids named in a TRACK so far (small ids)
     seen_lines = 0
     checked_file(path, "a COLMAP text file points3D.txt")
     for chunk in line_chunks(path):
@@ -252,8 +255,14 @@ def read_points_text(path: Path) -> tuple[I64, F64, dict[int, int]]:
             raise _fail(
                 path, chunk.first_line + int(t.line[sel[bad[0]]]), "TRACK: expected integers"
             )
-        uniq, at = np.unique(img, return_index=True)
-        for u, a in zip(uniq.tolist(), at.tolist()):
+        new = np.arange(img.size)
+        if img.size and 0 <= img.min() and img.max() < _SEEN_TABLE:  # skip ids seen before
+            if img.max() >= seen.size:
+                seen = np.concatenate([seen, np.zeros(int(img.max()) + 1 - seen.size, bool)])
+            new = np.flatnonzero(~seen[img])
+            seen[img] = True
+        uniq, at = np.unique(img[new], return_index=True)
+        for u, a in zip(uniq.tolist(), new[at].tolist()):
             track_first.setdefault(u, chunk.first_line + int(t.line[sel[a]]))
     pid = np.concatenate(ids) if ids else np.zeros(0, np.int64)
     order = np.argsort(pid, kind="stable")
@@ -265,129 +274,13 @@ def read_points_text(path: Path) -> tuple[I64, F64, dict[int, int]]:
     return pid, (np.concatenate(xyz) if xyz else np.zeros((0, 3))), track_first
 
 
-def read_images_text(path: Path, point_ids: I64, cams: dict[int, ColmapCamera]) -> dict:
-    """images.txt: image records and the matched keypoints only (one pass, chunked)."""
-    checked_file(path, "a COLMAP text file images.txt")
-    lookup = IdIndex(point_ids)
-    limit: list[tuple[float, float]] = []  # per image: |u|, |v| limits (px)
-    recs: list[tuple] = []
-    obs_image, obs_uv, obs_pid = [], [], []
-    expect_header = True
-    last_header_line = 0
-    for chunk in line_chunks(path):
-        t = tokenize(chunk.buf)
-        first = t.first_of_line()
-        count = np.diff(first)
-        buf = chunk.buf
-        points_lines, points_image = [], []
-        for k in range(t.n_lines):  # two lines per image: a Python loop over images only
-            start = t.line_start[k]
-            is_comment = count[k] > 0 and buf[t.start[first[k]]] == 35
-            if is_comment:
-                continue
-            if expect_header:
-                if count[k] == 0:
-                    continue  # blank lines between images
-                no = chunk.first_line + k
-                end = t.end[first[k + 1] - 1]
-                f = _text(chunk, int(start), int(end)).split()
-                vals = _numbers(path, no, f, "ifffffffi", "an image")
-                name = " ".join(f[9:]) if len(f) > 9 else str(vals[0])
-                if len(name) > MAX_NAME:
-                    raise _fail(
-                        path,
-                        no,
-                        f"image NAME of {len(name)} characters, expected at most {MAX_NAME}",
-                    )
-                bad = pose_problem(np.array(vals[1:5]), np.array(vals[5:8]))
-                if bad:
-                    raise _fail(path, no, bad)
-                cam = cams.get(vals[8])
-                if cam is None:
-                    raise _fail(path, no, f"unknown camera id {vals[8]}")
-                limit.append((MAX_IMAGE_SIZES * cam.width, MAX_IMAGE_SIZES * cam.height))
-                recs.append((vals, name, no))
-                last_header_line = no
-                expect_header = False
-            else:
-                points_lines.append(k)
-                points_image.append(len(recs) - 1)
-                expect_header = True
-        if not points_lines:
-            continue
-        pl = np.array(points_lines, dtype=np.int64)
-        bad = pl[count[pl] % 3 != 0]
-        if bad.size:
-            raise _fail(path, chunk.first_line + int(bad[0]), "expected triplets X Y POINT3D_ID")
-        of_line = np.full(t.n_lines + 1, -1, dtype=np.int64)
-        of_line[pl] = np.array(points_image, dtype=np.int64)
-        pid_tok = strided(first[pl], count[pl], 2, 3)
-        minus = buf[t.start[pid_tok]] == 45
-        unmatched = pid_tok[minus]
-        odd = unmatched[
-            (t.end[unmatched] - t.start[unmatched] != 2) | (buf[t.start[unmatched] + 1] != 49)
-        ]
-        if odd.size:
-            raise _fail(path, chunk.first_line + int(t.line[odd[0]]),
-                        "POINT3D_ID must be -1 (unmatched) or a point id ≥ 0")  # fmt: skip
-        keep = pid_tok[~minus]
-        pid, badi = parse_numbers(buf, t.start[keep], t.end[keep], integer=True)
-        uv_tok = np.column_stack([keep - 2, keep - 1]).ravel()
-        uv, badf = parse_numbers(buf, t.start[uv_tok], t.end[uv_tok])
-        for bad_tok in (keep[badi], uv_tok[badf]):
-            if bad_tok.size:
-                raise _fail(path, chunk.first_line + int(t.line[bad_tok[0]]),
-                            "expected numbers X Y and an integer POINT3D_ID")  # fmt: skip
-        if not np.all(np.isfinite(uv)):
-            at = uv_tok[np.flatnonzero(~np.isfinite(uv))[0]]
-            raise _fail(path, chunk.first_line + int(t.line[at]), "X, Y must be finite")
-        uv = uv.reshape(-1, 2)
-        lim = np.asarray(limit)[of_line[t.line[keep]]]
-        far = np.flatnonzero(np.any(np.abs(uv) > lim, axis=1))
-        if far.size:
-            k = int(far[0])
-            raise _fail(path, chunk.first_line + int(t.line[keep[k]]),
-                        f"2D point ({uv[k, 0]:g}, {uv[k, 1]:g}) px lies far outside the image")  # fmt: skip
-        where_ = lookup.index(pid)
-        unknown = np.flatnonzero(where_ < 0)
-        if unknown.size:
-            at = keep[unknown[0]]
-            raise _fail(
-                path,
-                chunk.first_line + int(t.line[at]),
-                f"unknown POINT3D_ID {int(pid[unknown[0]])}",
-            )
-        obs_image.append(of_line[t.line[keep]])
-        obs_uv.append(uv)
-        obs_pid.append(where_)  # the index of the point (its POINT3D_ID is point_ids[i])
-    if not recs:
-        raise _fail(path, max(last_header_line, 1), "no images in the file")
-    vals = np.array([r[0][:8] for r in recs], dtype=float)
-    ids = np.array([r[0][0] for r in recs], dtype=np.int64)
-    order = np.sort(ids)
-    dup = np.flatnonzero(np.diff(order) == 0)
-    if dup.size:
-        again = [r for r in recs if r[0][0] == order[dup[0]]][1]
-        raise _fail(path, again[2], f"duplicate IMAGE_ID {int(order[dup[0]])}")
-    cat = lambda a, shape: np.concatenate(a) if a else np.zeros(shape)  # noqa: E731
-    return {
-        "image_ids": ids,
-        "qvec": vals[:, 1:5],
-        "tvec": vals[:, 5:8],
-        "camera": np.array([r[0][8] for r in recs], dtype=np.int64),
-        "names": [r[1] for r in recs],
-        "lines": [r[2] for r in recs],
-        "obs_image": cat(obs_image, (0,)).astype(np.int64),
-        "obs_uv": cat(obs_uv, (0, 2)),
-        "obs_point": cat(obs_pid, (0,)).astype(np.int64),
-    }
-
-
 def read_text_model(directory: Path) -> ColmapModel:
     """The three text files of ``directory`` as a :class:`ColmapModel` (checked)."""
     cams = read_cameras_text(directory / "cameras.txt")
     pts_path = directory / "points3D.txt"
     pid, xyz, track_first = read_points_text(pts_path)
+    from .colmap_images import read_images_text
+
     img_path = directory / "images.txt"
     im = read_images_text(img_path, pid, cams)
     known = set(im["image_ids"].tolist())

@@ -166,6 +166,23 @@ def form_strips(block: Block, models: ModelSet | None = None) -> list[Strip]:
     return strips
 
 
+def _term_words(part: str, degree: int) -> list[str]:
+    """What each coefficient of a strip's polynomial does, in words (for messages).
+
+    Planimetry: a0, b0, a1, b1, … of Σ (a_k + i b_k)(u + iv)^k; height: c0 … c_d,
+    e0 … e_{d−1} of Σ c_k u^k + v Σ e_k u^k (the module docstring's formulas).
+    """
+    if part == "planimetry":
+        words = ["shift X", "shift Y", "scale", "rotation"]
+        for k in range(2, degree + 1):
+            words += [f"planimetric term of degree {k} (a{k})", f"planimetric term of degree {k} (b{k})"]  # fmt: skip
+        return words[: 2 * (degree + 1)]
+    words = ["height shift", "tilt along the strip"][: degree + 1]
+    words += [f"height bending of degree {k} along the strip (c{k})" for k in range(2, degree + 1)]
+    words += ["tilt across the strip", *(f"twist of degree {k} (e{k})" for k in range(1, degree))][:degree]  # fmt: skip
+    return words
+
+
 def _planimetric_terms(u: F64, v: F64, d: int) -> tuple[F64, F64]:
     """Rows of X and Y for the coefficients (a0, b0, a1, b1, …) of Σ (a_k + i b_k) w^k."""
     w = u + 1j * v
@@ -224,7 +241,7 @@ def polynomial_adjust(
     Raises
     ------
     InputError
-        For degrees outside 0 … 4.
+        For degrees outside 0 … 4, or no strip of at least two images.
     NotDeterminableError
         For a strip that breaks apart or polynomials not determined by control and ties.
     """
@@ -232,6 +249,13 @@ def polynomial_adjust(
         if not 0 <= int(d) <= 4:
             raise InputError(f"{name}: expected a polynomial degree 0 … 4, got {d}")
     if strips is None:
+        strip = block.images.strip
+        if not np.any(np.bincount(strip[strip >= 0], minlength=1) >= 2):
+            raise InputError(
+                "the polynomial method needs strips: give the images a strip number "
+                "(images[].strip), at least two images in a strip (consecutive images form "
+                "its models)"
+            )
         ms = form_models(block)
         strips = form_strips(block, ms)
         base = float(np.median(ms.centres[:, 1, 0]))
@@ -292,10 +316,21 @@ def _adjust_once(block, strips, target, degree_xy, degree_z, sigma_strip, base) 
             r = xj[:, 2] - X[pj, 2]
             rows, rs, w = jj, sc[pj, 0], np.full(r.size, 1 / s_z**2)
         npar = J.shape[1]
-        names = [f"strip{strips[k].index}.{part}.p{i}" for k in range(ns) for i in range(npar)]
-        sol = solve_rows(
-            rows, J, rs, w, r, ns, int(free.sum()), names=names, context=f"polynomial {part}"
-        )
+        terms = _term_words(part, degree_xy if part == "planimetry" else degree_z)
+        names = [f"strip{strips[k].index}.{part}.{t}" for k in range(ns) for t in terms]
+        try:
+            sol = solve_rows(
+                rows, J, rs, w, r, ns, int(free.sum()), names=names, context=f"polynomial {part}"
+            )
+        except NotDeterminableError as exc:
+            degree = "degree_xy" if part == "planimetry" else "degree_z"
+            raise NotDeterminableError(
+                f"{exc} — the control points and the tie points shared with other strips do "
+                f"not determine the {part} polynomial of these strips: give more control there "
+                f"or a lower {degree}",
+                parameters=exc.parameters,
+                defect=exc.defect,
+            ) from None
         for i, c in enumerate(coords):
             has = sc[:, i] >= 0
             X[has, c] += sol.dX[sc[has, i]]

@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ..adjust.rank import raise_if_singular
-from ..errors import NotDeterminableError
+from ..errors import NotDeterminableError, parameter_words
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -96,7 +96,7 @@ def factor_spd(S: sp.spmatrix, names: list[str], context: str = "", solver: str 
     if np.any(d == 0):
         zero = [names[i] for i in np.flatnonzero(d == 0)[:8]]
         raise NotDeterminableError(
-            f"{context}: parameters without any observation: {', '.join(zero)}",
+            f"{context}: parameters without any observation: {parameter_words(zero)}",
             parameters=zero,
             defect=int(np.sum(d == 0)),
         )
