@@ -16,12 +16,15 @@ from orientviz.rotation import matrix_from_opk, opk_from_matrix
 GON = np.pi / 200
 
 
-def _rays(block: Block, X0, R, xyz):
-    """Error-free image coordinates (relative to the principal point) of every observation."""
-    o = block.observations
-    p = np.einsum("nji,nj->ni", R[o.image], xyz[o.point] - X0[o.image])
-    c = block.cameras.c[block.images.camera[o.image]]
-    return -c[:, None] * p[:, :2] / p[:, 2:], c
+def _true_rays(strips: int, per_strip: int, seed: int):
+    """A simulated block, its true rotations and error-free image coordinates (relative to
+    the principal point, mm) and principal distances of every observation."""
+    sim = ov.simulate_block(strips, per_strip, rng=seed)
+    t, o = sim.truth, sim.block.observations
+    R = matrix_from_opk(*t.images.angles.T, "opk")
+    p = np.einsum("nji,nj->ni", R[o.image], t.points.xyz[o.point] - t.images.X0[o.image])
+    c = sim.block.cameras.c[sim.block.images.camera[o.image]]
+    return sim, R, -c[:, None] * p[:, :2] / p[:, 2:], c
 
 
 def _angle_between(Ra, Rb):
@@ -31,11 +34,8 @@ def _angle_between(Ra, Rb):
 
 
 def test_a_batch_of_resections_finds_every_image_from_rough_starts():
-    sim = ov.simulate_block(3, 8, rng=2)
-    t = sim.truth
-    R = matrix_from_opk(*t.images.angles.T, "opk")
-    xy, c = _rays(sim.block, t.images.X0, R, t.points.xyz)
-    o = sim.block.observations
+    sim, R, xy, c = _true_rays(3, 8, 2)
+    t, o = sim.truth, sim.block.observations
     rng = np.random.default_rng(0)
     m = sim.block.n_images
     R0 = rotate_by(R, rng.normal(0, 3 * GON, (m, 3)))  # a few gon off
@@ -50,11 +50,8 @@ def test_a_batch_of_resections_finds_every_image_from_rough_starts():
 
 
 def test_a_batch_flags_what_it_cannot_orient():
-    sim = ov.simulate_block(1, 4, rng=3)
-    t = sim.truth
-    R = matrix_from_opk(*t.images.angles.T, "opk")
-    xy, c = _rays(sim.block, t.images.X0, R, t.points.xyz)
-    o = sim.block.observations
+    sim, R, xy, c = _true_rays(1, 4, 3)
+    t, o = sim.truth, sim.block.observations
     keep = (o.image != 1) | (np.cumsum(o.image == 1) <= 3)  # image 1: only 3 rays
     flip = rotate_by(R, np.tile([0.0, 0.0, np.pi], (4, 1)))  # image 2 starts turned 200 gon
     R0 = np.where(np.arange(4)[:, None, None] == 2, flip, R)
@@ -68,11 +65,8 @@ def test_a_batch_flags_what_it_cannot_orient():
 
 
 def test_the_local_bundle_of_the_front_returns_to_the_truth():
-    sim = ov.simulate_block(3, 8, rng=5)
-    t = sim.truth
-    R = matrix_from_opk(*t.images.angles.T, "opk")
-    xy, c = _rays(sim.block, t.images.X0, R, t.points.xyz)
-    o = sim.block.observations
+    sim, R, xy, c = _true_rays(3, 8, 5)
+    t, o = sim.truth, sim.block.observations
     free = np.array([9, 10, 11, 12])  # the middle strip's middle images
     rng = np.random.default_rng(1)
     Rs = R.copy()

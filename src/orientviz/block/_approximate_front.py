@@ -35,12 +35,8 @@ def adjust_front(
     ----------
     cam, pt : ndarray of int, shape (k,)
         Image (index into ``R``/``X0``) and point (index into ``P``) of each ray.
-    xy : ndarray, shape (k, 2)
-        Image coordinates relative to the principal point (mm).
-    c : ndarray, shape (k,)
-        Principal distance of the ray's image (mm).
-    sigma : ndarray, shape (k, 2)
-        A-priori σ of the image coordinates (mm).
+    xy, c, sigma : ndarray, shapes (k, 2), (k,), (k, 2)
+        The rays as for ``resect_batch`` (mm).
     R, X0 : ndarray, shapes (n, 3, 3) and (n, 3)
         Orientations of the images the rays refer to (image → object; m).
     free : ndarray of int, shape (b,)

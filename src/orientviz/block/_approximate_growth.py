@@ -33,8 +33,9 @@ REFINE_ITERATIONS: int = 2
 #: The last re-adjustment, of the whole block, is left out when the one before already
 #: held this share of the images (the few added since came with their local bundle).
 FINAL_REFINE: float = 1.1
-#: A local bundle whose σ̂0 exceeds this (image residuals ≫ their a-priori σ: the
-#: chain has bent) triggers a re-adjustment of the oriented part after the wave.
+#: A local bundle whose σ̂0 exceeds this many times that of the last re-adjustment (at
+#: least 1; image residuals ≫ their σ: the chain has bent) triggers a re-adjustment of
+#: the oriented part after the wave.
 POOR_RESECTION: float = 20.0
 #: A wave orients the images that see at least this share of the known points of the
 #: best-connected waiting image (the best-connected first; all of them in one batch).
@@ -86,6 +87,7 @@ class Growth:
         self.P = np.full((p, 3), np.nan)
         self.done = np.zeros(m, bool)
         self.refined_at = 0
+        self.sigma0 = 1.0  # σ̂0 of the last re-adjustment (at least 1)
         self.refines = 0
         self.waves = 0
 
@@ -177,6 +179,8 @@ class Growth:
         self.Rm[imgs] = matrix_from_opk(ext[:, 3], ext[:, 4], ext[:, 5], "opk")
         self.P[pts] = res["points"].reshape(-1, 3)
         self.refines += 1
+        if np.isfinite(res.sigma0):
+            self.sigma0 = max(float(res.sigma0), 1.0)
 
     # ---- growth ----------------------------------------------------------------------
     def grow(self) -> None:
@@ -215,7 +219,7 @@ class Growth:
             recent.append(new)
             if self.done.sum() < REFINE_GROWTH * self.refined_at:  # else the whole follows
                 s0 = self.adjust_front(np.concatenate(recent[-FRONT_WAVES:]))
-            poor = bool(np.any(s0 > POOR_RESECTION))
+            poor = bool(np.any(s0 > POOR_RESECTION * self.sigma0))
         if self.done.sum() > FINAL_REFINE * self.refined_at:
             self.refine()
 

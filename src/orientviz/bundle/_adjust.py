@@ -65,16 +65,17 @@ POOR_START_SIGMA0: float = 30.0
 #: median ray length and no angle by more than this (rad): the Jacobians then change by
 #: about as little (1e-4 relative), less than the tolerance of the border's solve.
 AP_REUSE: float = 1e-4
-#: A plain bundle without precision solves the step after a small one with the factor
-#: of S from that small step (a *chord* step: the points' blocks, the right-hand side
-#: and the corrections are those of the new iterate, only S is the one before) when
-#: that step moved no projection centre or point by more than this fraction of the
-#: median ray length and no angle by more than this (rad). S then differs from the new
-#: one by about as little relative, the chord step's correction from the Gauss-Newton
-#: step by that fraction of itself, so the stopping rule reads it as it reads a Newton
-#: step; a chord step that does not stop is followed by a full one. Saves the formation
-#: and the factorisation of S in the step that confirms convergence: on the bench's
-#: 2 100-image block the third step moves by 6e-5 of the ray length, the second by 1e-2.
+#: A plain bundle without precision solves the step after a small one with the normal
+#: matrix of that small step (a *chord* step dx = N(x_old)⁻¹ Jᵀ P (l − f) at the new
+#: iterate: only the gradient is formed anew, N and the factor of S are the last ones)
+#: when that step moved no projection centre or point by more than this fraction of
+#: the median ray length and no angle by more than this (rad). N then differs from the
+#: new one by about as little relative, the chord step's correction from the
+#: Gauss-Newton step by that fraction of itself, so the stopping rule reads it as it
+#: reads a Newton step (and the iterate it leads to is as close to the optimum); a
+#: chord step that does not stop is followed by a full one. Saves forming and factoring
+#: N in the step that confirms convergence: on the bench's 2 100-image block the third
+#: step moves by 6e-5 of the ray length, the second by 1e-2.
 CHORD_REUSE: float = 1e-3
 
 
@@ -212,6 +213,8 @@ def bundle_adjust(
         on_iteration=steps.begin,
     )
     st, history, converged, reason = run.state, run.history, run.converged, run.reason
+    prob.reduced.release_maps()  # the Schur formation's maps: not held through the precision
+    steps.chord_factor = steps.chord_pending = None
     rw, Je, Jp = run.evaluation.data
     if steps.is_local(run.evaluation):  # the precision needs the derivatives by ω, φ, κ
         rw, Je, Jp = prob.residuals(st, jac=True)
@@ -349,8 +352,12 @@ class _BundleSteps:
         rw, Je, Jp = ev.data
         chord = self.chord_factor if lam == 0 and not self.is_local(ev) else None
         self.chord_step = chord is not None
-        ne = prob.normal(st, rw, Je, Jp, lam, schur=chord is None)
-        dc, dp, da, fac = prob.solve(ne, self.red_names, fac=chord)
+        if chord is not None:  # N of the last step, the gradient of this state
+            ne = prob.chord_normal(st, rw, Je, Jp, chord[1])
+            dc, dp, da, fac = prob.solve(ne, self.red_names, fac=chord[0])
+        else:
+            ne = prob.normal(st, rw, Je, Jp, lam)
+            dc, dp, da, fac = prob.solve(ne, self.red_names)
         # parameter-based stopping: corrections in units of the conditional σ
         rel = max(
             float(np.max(np.abs(dc) * np.sqrt(ne.diagU), initial=0.0)),
@@ -369,7 +376,7 @@ class _BundleSteps:
         self.chord_pending = None
         if self.chord_allowed and lam == 0 and not (local or self.chord_step):
             if self._relative_move(st, dc, dp) < CHORD_REUSE:
-                self.chord_pending = fac
+                self.chord_pending = (fac, ne)
         # the normal equations and their factor live on only where the precision may reuse
         # them (an undamped plain step, see accepted); else they are freed before the trial
         # point's Jacobians are formed (the peak memory of a large block)

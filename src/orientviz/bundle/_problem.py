@@ -36,7 +36,7 @@ from ._parts import (
 from ._reduced import ReducedStructure, factor_reduced, inv3
 from ._schur import dense_schur, gram_by_segments
 from ._state import BundleState, wrap
-from ._tracks import schur_blocks
+from ._tracks import point_products, schur_blocks
 
 F64 = NDArray[np.float64]
 EXTERIOR_NAMES = ("X0", "Y0", "Z0", "omega", "phi", "kappa")
@@ -187,13 +187,9 @@ class BundleProblem:
 
     # ----------------------------------------------------------------- normal equations
     def normal(
-        self, st: BundleState, rw: F64, Je: F64, Jp: F64, lam: float = 0.0, schur: bool = True
+        self, st: BundleState, rw: F64, Je: F64, Jp: F64, lam: float = 0.0
     ) -> NormalEquations:
-        """Blocks of the normal equations and the Schur complement (see bundle._reduced).
-
-        ``schur=False``: everything but the blocks of S (``blocks`` is None), for a step
-        solved with the factor of an earlier iteration (:meth:`solve` with ``fac``).
-        """
+        """Blocks of the normal equations and the Schur complement (see bundle._reduced)."""
         S = self.reduced
         self.design_at(st)
         sw = self.obs.weight[:, :, None]
@@ -216,15 +212,7 @@ class BundleProblem:
         # per image by products with constant sparse incidences
         tg = S.tracks
         r = tg.rays
-        # (np.take gathers ~3 × faster than fancy indexing; numpy's stacked products are
-        # ~5 × faster on contiguous operands: the transposes are copied first)
-        Jpr = np.take(Jpw, r, axis=0)
-        JprT = np.ascontiguousarray(Jpr.transpose(0, 2, 1))
-        Wr = np.ascontiguousarray(np.take(Jew, r, axis=0).transpose(0, 2, 1)) @ Jpr
-        V = (tg.by_point @ (JprT @ Jpr).reshape(-1, 9)).reshape(-1, 3, 3)
-        rwr = np.take(rw, r, axis=0)
-        bp = tg.by_point @ (JprT[:, :, 0] * rwr[:, 0, None] + JprT[:, :, 1] * rwr[:, 1, None])
-        del Jpr, JprT, rwr
+        Wr, V, bp = point_products(tg, Jew, Jpw, rw, S.n_pt)
         i3 = [0, 1, 2]
         V[:, i3, i3] += self.points.prior_w
         bp += self.points.prior_w * (self.points.prior_obs - st.xyz[self.points.unknown])
@@ -250,9 +238,9 @@ class BundleProblem:
             diagU=diagU,
             diagV=diagV,
         )
-        if schur and S.formation == "dense":
+        if S.formation == "dense":
             out.blocks, out.S = dense_schur(S, U, Wr, V)
-        elif schur:
+        else:
             out.blocks = schur_blocks(S, U, Tr, Wr)
         if self.q:
             if self.border.hold:
@@ -267,11 +255,48 @@ class BundleProblem:
             self.aux.normal(self, st, out, lam)
         return out
 
+    def chord_normal(
+        self, st: BundleState, rw: F64, Je: F64, Jp: F64, ne: NormalEquations
+    ) -> NormalEquations:
+        """The right-hand sides at ``st`` with the matrix of an earlier linearisation.
+
+        For a *chord* step dx = N(x_old)⁻¹ g(x): the gradient g = Jᵀ P (l − f) at
+        ``st`` (its image and point parts, the points eliminated with ``ne``'s T), and
+        ``ne``'s point blocks, couplings and diagonals for the back-substitution and the
+        stopping rule. Plain bundles only (no border, no auxiliary rows); undamped.
+        """
+        S = self.reduced
+        tg = S.tracks
+        rp = rw * self.obs.weight  # P (l − f) = P½ · P½ (l − f)
+        gc = Je[:, 0, :] * rp[:, 0, None] + Je[:, 1, :] * rp[:, 1, None]
+        bc = np.zeros((self.m, 6))
+        bc[S.cam_present] = np.add.reduceat(np.take(gc, S.cam_order, axis=0), S.cam_starts)
+        bc[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
+        bc[:, 3:] += self.exterior.angles_w * wrap(self.exterior.angles_obs - st.angles)
+        gp = Jp[:, 0, :] * rp[:, 0, None] + Jp[:, 1, :] * rp[:, 1, None]
+        bp = tg.by_point @ np.take(gp, tg.rays, axis=0)
+        bp += self.points.prior_w * (self.points.prior_obs - st.xyz[self.points.unknown])
+        Tb = (ne.Tr @ np.take(bp, tg.ray_point, axis=0)[:, :, None])[:, :, 0]
+        red = bc - tg.by_image @ Tb
+        return NormalEquations(
+            blocks=None,
+            rhs=red.reshape(-1),
+            Vinv=ne.Vinv,
+            Wr=ne.Wr,
+            Tr=ne.Tr,
+            rays=ne.rays,
+            n_obs=ne.n_obs,
+            bp=bp,
+            diagU=ne.diagU,
+            diagV=ne.diagV,
+        )
+
     def solve(self, ne: NormalEquations, names: list[str], fac=None):
         """Corrections (dc (m, 6), dp (p_var, 3), da (q,)) and the factor of S.
 
         ``fac``: a factor of S from an earlier linearisation, used instead of factoring
-        ``ne``'s S (a *chord* step; plain bundles only: no border).
+        ``ne``'s S (a *chord* step, ``ne`` from :meth:`chord_normal`; plain bundles only:
+        no border).
         """
         if fac is not None:
             if self.aux or self.q:

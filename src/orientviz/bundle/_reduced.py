@@ -247,6 +247,11 @@ class ReducedStructure:
             self._tracks = track_groups(self)
         return self._tracks
 
+    def release_maps(self) -> None:
+        """Drop the Schur formation's sparse maps (formed again when needed)."""
+        if self._tracks is not None:
+            self._tracks._maps = None
+
     # ------------------------------------------------------------ layout of S
     def image_graph(self) -> sp.csr_matrix:
         """Adjacency (m, m) of images that share an unknown point (plus the diagonal)."""
@@ -321,13 +326,15 @@ class ReducedStructure:
             pi, pk = self.pos_img[self.block_i], self.pos_img[self.block_k]
             r6 = np.arange(6)
             lo = (r6[:, None] - r6[None, :]) + w * r6[None, :]  # (r, c) → c·w + r − c
-            lower = (pi >= pk)[:, None, None]
-            dst = np.where(
-                lower,
-                (6 * w * pk + 6 * (pi - pk))[:, None, None] + lo,
-                (6 * w * pi + 6 * (pk - pi))[:, None, None] + lo.T,
+            upper = pi < pk
+            p_lo = np.where(upper, pi, pk)
+            base = 6 * w * p_lo + 6 * np.abs(pi - pk)
+            dst = (
+                base[:, None] + np.stack([lo.reshape(-1), lo.T.reshape(-1)])[upper.astype(np.intp)]
             )
-            dst[(pi == pk)[:, None, None] & (r6[:, None] < r6[None, :])] = n * w
+            dst[np.flatnonzero(pi == pk)[:, None], np.flatnonzero(np.triu(np.ones((6, 6)), 1))] = (
+                n * w
+            )
             self.band_dst = dst.reshape(-1)
             self.scalar_perm = (6 * self.perm_img[:, None] + np.arange(6)).reshape(-1)
         elif self.solver == "sparse":
@@ -402,7 +409,7 @@ def factor_reduced(
             if not np.all(np.abs(lu.U.diagonal()) > 1e-12 * np.abs(A.diagonal()).max()):
                 raise np.linalg.LinAlgError("zero pivot")
             return Factor(st, "sparse", lu)
-        S = dense_matrix(st, blocks) if dense is None else dense
+        S = dense_matrix(st, blocks, lower=True) if dense is None else dense
         if not np.isfinite(S[:: n + 1]).all():
             raise np.linalg.LinAlgError("non-finite diagonal")
         c, _ = scipy.linalg.cho_factor(S, lower=True, overwrite_a=True, check_finite=False)
@@ -414,15 +421,16 @@ def factor_reduced(
     raise AssertionError("unreachable")  # pragma: no cover
 
 
-def dense_matrix(st: ReducedStructure, blocks: F64) -> F64:
-    """The reduced matrix S as a dense (6m, 6m) array (original image order)."""
-    n = st.n_reduced
-    S = np.zeros((n, n))
-    m = np.arange(st.n_cam)
-    rows, cols, _ = st._scalar_entries(m)
-    vals = blocks.reshape(-1)
-    S[rows, cols] = vals
-    S[cols, rows] = vals
+def dense_matrix(st: ReducedStructure, blocks: F64, lower: bool = False) -> F64:
+    """The reduced matrix S as a dense (6m, 6m) array (original image order), in Fortran
+    order (what LAPACK reads without a copy); ``lower``: only the lower triangle (and
+    the diagonal blocks) is filled — what the dense Cholesky reads."""
+    n, m = st.n_reduced, st.n_cam
+    S = np.zeros((n, n), order="F")
+    S4 = S.T.reshape(m, 6, m, 6)  # S4[i, r, k, c] = S[6k + c, 6i + r]
+    if not lower:
+        S4[st.block_k, :, st.block_i, :] = blocks.transpose(0, 2, 1)
+    S4[st.block_i, :, st.block_k, :] = blocks  # diagonal blocks: Bᵀ
     return S
 
 

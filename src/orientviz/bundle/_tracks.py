@@ -40,6 +40,8 @@ class TrackGroups:
         point by point, the k rays of a point consecutive.
     ray_point, ray_image : ndarray of int, shape (n_var,)
         Point unknown and image of each ray in ``rays``.
+    points : ndarray of int, shape (p_var,)
+        Point unknown of each point in this order (its first ray: ``rays[first]``).
     groups : list of (k, first ray, number of points)
         The groups (chunks of at most :data:`CHUNK_DOUBLES` product entries).
     by_image, by_point : scipy.sparse.csr_matrix
@@ -50,6 +52,7 @@ class TrackGroups:
     rays: I64
     ray_point: I64
     ray_image: I64
+    points: I64
     groups: list
     by_image: sp.csr_matrix
     by_point: sp.csr_matrix
@@ -62,21 +65,36 @@ class TrackGroups:
         (sorted). Formed on first use (one 6-element row per pair of rays: Σ k(k+1)/2 · 6
         entries)."""
         if self._maps is None:
+            lookup = _block_lookup(keys, m)
             self._maps = [
-                _group_map(self.ray_image[r0 : r0 + n * k].reshape(n, k), keys, m)
+                _group_map(self.ray_image[r0 : r0 + n * k].reshape(n, k), lookup, keys.size)
                 for k, r0, n in self.groups
             ]
         return self._maps
 
 
-def _group_map(img: I64, keys: I64, m: int) -> sp.csc_matrix:
-    """The map of one group (n points × k images, ``img``) into the rows of S's blocks."""
+def _block_lookup(keys: I64, m: int):
+    """A function (i, k) → index of block (i, k), i ≤ k, in ``keys`` (= i·m + k, sorted):
+    a dense table (m × span) when the blocks lie within a span of image numbers (strips
+    numbered along the strips: a few hundred), else a binary search."""
+    i, k = keys // m, keys % m
+    span = int(np.max(k - i, initial=0)) + 1
+    if m * span > 2**24:
+        return lambda a, b: np.searchsorted(keys, a * m + b)
+    table = np.zeros((m, span), np.int32)
+    table[i, k - i] = np.arange(keys.size, dtype=np.int32)
+    return lambda a, b: table[a, b - a]
+
+
+def _group_map(img: I64, lookup, n_blocks: int) -> sp.csc_matrix:
+    """The map of one group (n points × k images, ``img``) into the rows of S's blocks
+    (``lookup``: :func:`_block_lookup`)."""
     n, k = img.shape
     # pairs (n, a, b) of rays of a point with image(a) ≤ image(b), and their blocks
     keep = img[:, :, None] <= img[:, None, :]
     blk = np.zeros((n, k, k), np.int32)
     ia, ib = np.broadcast_arrays(img[:, :, None], img[:, None, :])
-    blk[keep] = np.searchsorted(keys, ia[keep] * m + ib[keep])
+    blk[keep] = lookup(ia[keep], ib[keep])
     # the product's rows (n, a, r, b) of the (n, 6k, 6k) products viewed as (·, 6): one
     # CSC column each, holding the row r of block blk[n, a, b] where kept
     keep6 = np.broadcast_to(keep[:, :, None, :], (n, k, 6, k)).reshape(-1)
@@ -84,9 +102,7 @@ def _group_map(img: I64, keys: I64, m: int) -> sp.csc_matrix:
     rows = rows6.reshape(-1)[keep6]
     indptr = np.zeros(keep6.size + 1, np.int32)
     np.cumsum(keep6, out=indptr[1:])
-    return sp.csc_matrix(
-        (np.full(rows.size, -1.0), rows, indptr), shape=(6 * keys.size, keep6.size)
-    )
+    return sp.csc_matrix((np.full(rows.size, -1.0), rows, indptr), shape=(6 * n_blocks, keep6.size))
 
 
 def track_groups(st) -> TrackGroups:
@@ -109,7 +125,62 @@ def track_groups(st) -> TrackGroups:
     ones, ray = np.ones(rays.size), np.arange(rays.size)
     by_image = sp.csr_matrix((ones, (ray_image, ray)), shape=(m, rays.size))
     by_point = sp.csr_matrix((ones, (ray_point, ray)), shape=(st.n_pt, rays.size))
-    return TrackGroups(rays, ray_point, ray_image, groups, by_image, by_point)
+    first = [r0 + k * np.arange(n) for k, r0, n in groups]  # first ray of each point
+    points = ray_point[np.concatenate(first)] if groups else rays
+    return TrackGroups(rays, ray_point, ray_image, points, groups, by_image, by_point)
+
+
+#: Rays per chunk of :func:`point_products` (its temporaries stay in the cache).
+RAY_CHUNK: int = 8192
+
+
+def point_products(tg: TrackGroups, Jew: F64, Jpw: F64, rw: F64, n_pt: int):
+    """W = J_eᵀ P J_p per ray and the point blocks V = Σ J_pᵀ P J_p, b_p = Σ J_pᵀ P (l − f).
+
+    Parameters
+    ----------
+    tg : TrackGroups
+    Jew, Jpw : ndarray, shapes (n, 2, 6), (n, 2, 3)
+        Weighted Jacobians (P½ J) of all observations.
+    rw : ndarray, shape (n, 2)
+        Weighted misclosures P½ (l − f).
+    n_pt : int
+        Number of point unknowns.
+
+    Returns
+    -------
+    Wr : ndarray, shape (n_var, 6, 3)
+        In ``tg.rays`` order.
+    V, bp : ndarray, shapes (p_var, 3, 3), (p_var, 3)
+        In point-unknown order.
+
+    Chunks of :data:`RAY_CHUNK` rays of whole points: the rays of a point are
+    consecutive, so their sums are reshapes, and the temporaries stay small (numpy's
+    stacked products need contiguous operands, the transposes are copied; large fresh
+    temporaries cost their page faults).
+    """
+    nv = tg.rays.size
+    Wr = np.empty((nv, 6, 3))
+    V = np.empty((n_pt, 3, 3))
+    bp = np.empty((n_pt, 3))
+    p0 = 0  # points done
+    for k, r0, n in tg.groups:
+        step = max(1, RAY_CHUNK // k)
+        for c0 in range(0, n, step):
+            c1 = min(c0 + step, n)
+            a, b = r0 + k * c0, r0 + k * c1
+            rr = tg.rays[a:b]
+            Jer = np.take(Jew, rr, axis=0)
+            Jpr = np.take(Jpw, rr, axis=0)
+            JprT = np.ascontiguousarray(Jpr.transpose(0, 2, 1))
+            np.matmul(np.ascontiguousarray(Jer.transpose(0, 2, 1)), Jpr, out=Wr[a:b])
+            pts = tg.points[p0 + c0 : p0 + c1]
+            V[pts] = (JprT @ Jpr).reshape(c1 - c0, k, 3, 3).sum(axis=1)
+            rwr = np.take(rw, rr, axis=0)
+            g = JprT[:, :, 0] * rwr[:, 0, None] + JprT[:, :, 1] * rwr[:, 1, None]
+            bp[pts] = g.reshape(c1 - c0, k, 3).sum(axis=1)
+        p0 += n
+    return Wr, V, bp
 
 
 def schur_blocks(st, U: F64, T: F64, W: F64) -> F64:
