@@ -326,13 +326,15 @@ class ReducedStructure:
             pi, pk = self.pos_img[self.block_i], self.pos_img[self.block_k]
             r6 = np.arange(6)
             lo = (r6[:, None] - r6[None, :]) + w * r6[None, :]  # (r, c) → c·w + r − c
-            lower = (pi >= pk)[:, None, None]
-            dst = np.where(
-                lower,
-                (6 * w * pk + 6 * (pi - pk))[:, None, None] + lo,
-                (6 * w * pi + 6 * (pk - pi))[:, None, None] + lo.T,
+            upper = pi < pk
+            p_lo = np.where(upper, pi, pk)
+            base = 6 * w * p_lo + 6 * np.abs(pi - pk)
+            dst = (
+                base[:, None] + np.stack([lo.reshape(-1), lo.T.reshape(-1)])[upper.astype(np.intp)]
             )
-            dst[(pi == pk)[:, None, None] & (r6[:, None] < r6[None, :])] = n * w
+            dst[np.flatnonzero(pi == pk)[:, None], np.flatnonzero(np.triu(np.ones((6, 6)), 1))] = (
+                n * w
+            )
             self.band_dst = dst.reshape(-1)
             self.scalar_perm = (6 * self.perm_img[:, None] + np.arange(6)).reshape(-1)
         elif self.solver == "sparse":
