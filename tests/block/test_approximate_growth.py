@@ -10,6 +10,7 @@ import orientviz as ov
 from orientviz.block import Block, approximate_values
 from orientviz.block._approximate_batch import resect_batch, rotate_by
 from orientviz.block._approximate_front import adjust_front
+from orientviz.block._approximate_growth import Growth, sub_block
 from orientviz.orientation.absolute import similarity_closed_form
 from orientviz.rotation import matrix_from_opk, opk_from_matrix
 
@@ -211,3 +212,32 @@ def test_unreachable_images_are_named():
     b = b.take(observations=np.setdiff1d(np.arange(o.image.size), drop))
     with pytest.raises(ov.NotDeterminableError, match=b.images.ids[last]):
         approximate_values(b)
+
+
+@pytest.mark.parametrize("solver", ["banded", "sparse", "dense"])
+def test_the_model_frame_re_adjustment_suits_every_solver(solver):
+    """The datum of the re-adjustments (seed image and one base component held) must
+    not be so strong that a solver of the reduced system takes the rays for zero."""
+    sim = ov.simulate_block(3, 8, rng=6)
+    g = Growth(sim.block, 6)
+    g.grow()
+    blk, imgs, pts = sub_block(sim.block, g.done, g.P, g.Xm, g.Rm, g.use, g.seed)
+    ref = ov.bundle_adjust(blk, precision=False, solver="dense")
+    res = ov.bundle_adjust(blk, precision=False, solver=solver)
+    assert res.converged
+    np.testing.assert_allclose(res["exterior"], ref["exterior"], atol=1e-9)
+
+
+def test_a_wrong_seed_relative_orientation_is_replaced_by_another_pair():
+    """In this strip the most central strong pair's eight-point solution is a wrong one
+    (its bundle fits with σ̂0 in the thousands): another pair seeds the growth."""
+    sim = ov.simulate_block(1, 40, rng=1)
+    g = Growth(sim.block, 6)
+    g._orient_pair(*g._seed_candidates(g.common.tocoo())[0])
+    g.refine()
+    assert g.sigma0 > 100  # the premise: the first candidate is wrong
+    approx = approximate_values(sim.block)
+    first = g._seed_candidates(g.common.tocoo())[0]
+    assert tuple(approx.meta["approximate_values"]["seed_pair"]) != first
+    _assert_close_to_truth(approx, sim.truth.images.X0, sim.truth.images.angles, 5.0, 0.3)
+    _same_optimum(approx, sim.block.with_(images=sim.truth.images))

@@ -188,3 +188,11 @@ def test_broken_triplets_name_their_line_after_good_chunks(tmp_path, monkeypatch
         _read(tmp_path, text, np.array([8]))
     msg = str(info.value)
     assert f"images.txt: line {line}:" in msg and words in msg, msg
+
+
+def test_newlines_are_found_past_the_first_few():
+    text = bytearray(b"".join(b"x" * (k % 7) + b"\n" for k in range(1000)))
+    buf = np.frombuffer(text, np.uint8)
+    for search in (0, 3, 256, 5000):
+        got = colmap_scan._newlines(text, buf, search)
+        assert np.array_equal(got, np.flatnonzero(buf == 10)), search

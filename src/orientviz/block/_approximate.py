@@ -33,10 +33,10 @@ alone — the stored orientations and tie-point coordinates of the block are ign
    only one ray (they keep their coordinates).
 
 Measured on the peer bench's blocks (perimeter control, start values ignored;
-``benchmarks/bench_approximations.py``): 2 100 images in about 4 s CPU time (the code
-before the waves: 55–78 s), centres within 3.4 m and attitudes within 0.08 gon of the
-truth, after which the bundle reaches the same optimum as from the bench's start in 3
-iterations. Units: m, mm, rad; rotation sequence of the block (``"opk"`` R = R_ω R_φ R_κ
+``benchmarks/bench_approximations.py``): 2 100 images in 3.3–3.7 s CPU time at load
+4–7 on 2 shared cores (the code before the waves: 37–49 s in the same runs), centres
+within 3.4 m and attitudes within 0.08 gon of the truth, after which the bundle reaches
+the same optimum as from the bench's start in 3 iterations. Units: m, mm, rad; rotation sequence of the block (``"opk"`` R = R_ω R_φ R_κ
 or ``"pok"`` R = R_φ R_ω R_κ).
 """
 

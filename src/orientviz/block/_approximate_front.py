@@ -49,7 +49,8 @@ def adjust_front(
     Returns
     -------
     R, X0, P : ndarray
-        Copies with the adjusted values.
+        Copies with the adjusted values (the start values if the steps made the weighted
+        square sum of all the rays worse).
     sigma0 : ndarray, shape (b,)
         σ̂0 of each free image's rays after the adjustment (a rough one: redundancy
         counted as 2k − 6 for its k rays).
@@ -67,11 +68,15 @@ def adjust_front(
     rows = (6 * s[:, None, None] + np.arange(6)[None, :, None]).repeat(3, 2).ravel()
     cols = (3 * pt[fr, None, None] + np.arange(3)[None, None, :]).repeat(6, 1).ravel()
     held = np.zeros(q, bool)
+    start = (R.copy(), X0.copy(), P.copy())
+    cost0 = None
     for _ in range(iterations):
         Rk = R[cam]
         p = (Rk.transpose(0, 2, 1) @ (P[pt] - X0[cam])[:, :, None])[:, :, 0]  # Rᵀ (X − X0)
         u, v, w = p[:, 0], p[:, 1], p[:, 2]
         r = xy + c[:, None] * p[:, :2] / w[:, None]  # l − f, f = −c (u, v)/w
+        if cost0 is None:
+            cost0 = float((r**2 * wgt).sum())
         g = np.zeros((cam.size, 2, 3))
         g[:, 0, 0] = g[:, 1, 1] = -c / w
         g[:, 0, 2] = c * u / w**2
@@ -106,8 +111,13 @@ def adjust_front(
         X0[free] += dc[:, :3]
         R[free] = rotate_by(R[free], dc[:, 3:])
         P += dp
-    p = (R[cam[fr]].transpose(0, 2, 1) @ (P[pt[fr]] - X0[cam[fr]])[:, :, None])[:, :, 0]
-    r = xy[fr] + c[fr, None] * p[:, :2] / p[:, 2:]
+    p = (R[cam].transpose(0, 2, 1) @ (P[pt] - X0[cam])[:, :, None])[:, :, 0]
+    r = xy + c[:, None] * p[:, :2] / p[:, 2:]
+    if cost0 is not None and not float((r**2 * wgt).sum()) <= cost0:  # worse: keep the start
+        R, X0, P = start
+        p = (R[cam].transpose(0, 2, 1) @ (P[pt] - X0[cam])[:, :, None])[:, :, 0]
+        r = xy + c[:, None] * p[:, :2] / p[:, 2:]
+    r = r[fr]
     k = np.bincount(s, minlength=b)
     with np.errstate(invalid="ignore", divide="ignore"):
         sigma0 = np.sqrt(np.bincount(s, (r**2 * wgt[fr]).sum(axis=1), b) / np.maximum(2 * k - 6, 1))

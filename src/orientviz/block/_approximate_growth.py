@@ -43,6 +43,8 @@ WAVE_SHARE: float = 0.5
 #: The seed pair shares at least this share of the largest number of common points of
 #: any pair (then the most central such pair is taken).
 SEED_SHARE: float = 0.8
+#: Seed pairs tried at most (see :meth:`Growth.seed_pair`).
+SEED_TRIES: int = 8
 #: The local bundle after a wave frees the images of this many latest waves.
 FRONT_WAVES: int = 2
 #: Gauss-Newton steps of the local bundle.
@@ -93,40 +95,66 @@ class Growth:
 
     # ---- seed pair -------------------------------------------------------------------
     def seed_pair(self) -> None:
-        """Relative orientation of the two images with the most common points."""
-        from ..orientation.essential import eight_point, select_by_cheirality
+        """Relative orientation of a strong pair near the middle, adjusted.
 
+        The candidates (:meth:`_seed_candidates`) are tried in turn until the bundle of
+        the pair fits (σ̂0 ≤ :data:`POOR_RESECTION`): the eight-point solution can be a
+        wrong one (e.g. over nearly flat ground); else the best fitting is kept.
+        """
         C = self.common.tocoo()
         if C.nnz == 0 or C.data.max() < 8:
             raise NotDeterminableError("approximate values: no image pair shares 8 points")
-        i, k = self._central_strong_pair(C)
+        tried = []
+        for i, k in self._seed_candidates(C)[:SEED_TRIES]:
+            if self.c_img[i] != self.c_img[k] or not self._orient_pair(i, k):
+                continue
+            self.refine()
+            tried.append((self.sigma0, i, k))
+            if self.sigma0 <= POOR_RESECTION:
+                return
+        if not tried:
+            raise NotDeterminableError(
+                "approximate values: no seed pair with one principal distance and a "
+                "relative orientation found"
+            )
+        _, i, k = min(tried)
+        self._orient_pair(i, k)
+        self.refine()
+
+    def _orient_pair(self, i: int, k: int) -> bool:
+        """Relative orientation of images i, k (essential matrix) as the only oriented ones."""
+        from ..orientation.essential import eight_point, select_by_cheirality
+
+        self.Rm[:], self.Xm[:], self.P[:], self.done[:] = np.nan, np.nan, np.nan, False
         oi, op = self.oi, self.op
         ri, rk = np.flatnonzero(oi == i), np.flatnonzero(oi == k)
         _, a_pos, b_pos = np.intersect1d(op[ri], op[rk], return_indices=True)
         a_idx, b_idx = ri[a_pos], rk[b_pos]
-        if self.c_img[i] != self.c_img[k]:
-            raise NotDeterminableError(
-                "approximate values: the seed pair needs one principal distance"
-            )
         c = float(self.c_img[i])
-        E = eight_point(self.xyc[a_idx], self.xyc[b_idx], c)
-        R2, t, _ = select_by_cheirality(E, self.xyc[a_idx], self.xyc[b_idx], c)
+        try:
+            E = eight_point(self.xyc[a_idx], self.xyc[b_idx], c)
+            R2, t, _ = select_by_cheirality(E, self.xyc[a_idx], self.xyc[b_idx], c)
+        except (NotDeterminableError, np.linalg.LinAlgError, ValueError):
+            return False
         self.Rm[i], self.Xm[i] = np.eye(3), np.zeros(3)
         self.Rm[k], self.Xm[k] = R2, t / np.linalg.norm(t)
         self.done[[i, k]] = True
         self.seed = (i, k)
+        self.refined_at, self.sigma0 = 0, 1.0
         self.intersect(np.array([i, k]))
+        return True
 
-    def _central_strong_pair(self, C: sp.coo_matrix) -> tuple[int, int]:
-        """A pair with ≥ :data:`SEED_SHARE` of the most common points, near the middle.
+    def _seed_candidates(self, C: sp.coo_matrix) -> list[tuple[int, int]]:
+        """Pairs sharing ≥ 8 points: first those with ≥ :data:`SEED_SHARE` of the most
+        common points, the most central first, then the others by their common points.
 
-        The middle: the smallest eccentricity max(d_a, d_b) in image-graph hops to the
-        two ends a, b of a long path (found by two breadth-first searches); seeding
-        there halves the way the growth (and its errors) must travel.
+        Central: the smallest eccentricity max(d_a, d_b) in image-graph hops to the two
+        ends a, b of a long path (found by two breadth-first searches); seeding there
+        halves the way the growth (and its errors) must travel.
         """
         from scipy.sparse.csgraph import shortest_path
 
-        upper = C.row < C.col
+        upper = (C.row < C.col) & (C.data >= 8)
         rows, cols, data = C.row[upper], C.col[upper], C.data[upper]
         start = int(rows[np.argmax(data)])
         d0 = shortest_path(self.common, unweighted=True, indices=start)
@@ -135,12 +163,11 @@ class Growth:
         b = int(np.argmax(np.where(np.isfinite(da), da, -1)))
         db = shortest_path(self.common, unweighted=True, indices=b)
         ecc = np.maximum(da, db)
-        strong = data >= SEED_SHARE * data.max()
         e = np.maximum(ecc[rows], ecc[cols])
-        e = np.where(strong & np.isfinite(e), e, np.inf)
-        best = np.flatnonzero(e == e.min())
-        best = best[np.lexsort((cols[best], rows[best], -data[best]))][0]
-        return int(rows[best]), int(cols[best])
+        e = np.where(np.isfinite(e), e, np.inf)
+        weak = data < SEED_SHARE * data.max()
+        order = np.lexsort((cols, rows, -data, np.where(weak, 0, e), weak))
+        return [(int(rows[j]), int(cols[j])) for j in order]
 
     # ---- intersection ----------------------------------------------------------------
     def intersect(self, images: NDArray[np.int64] | None = None) -> None:
@@ -186,7 +213,6 @@ class Growth:
     def grow(self) -> None:
         """Seed pair, then waves until every image is oriented, then a last refine."""
         self.seed_pair()
-        self.refine()
         m = self.block.n_images
         stuck = np.full(m, -1)  # known-point count at which an image's resection failed
         poor = False
@@ -239,10 +265,13 @@ class Growth:
         bad_start = ~np.isfinite(X00).all(axis=1)
         X00[bad_start] = self.Xm[nb[bad_start]]
         R, X0, s0, ok = resect_batch(img, self.xyc[sel], self.c[sel], self.sigma[sel], X, R0, X00)
-        if single:
-            ok[:] = False
-            for j in range(cand.size):
-                R[j], X0[j], s0[j], ok[j] = self._resect_one(cand[j], sel & (local[self.oi] == j))
+        # the closed form for images the batch found poorly (a wrong minimum?) and, when
+        # the batch could not orient any image that can be reached, for the failed ones
+        poor = ok & ~(s0 <= POOR_RESECTION * self.sigma0)
+        for j in np.flatnonzero(poor | (~ok if single else False)):
+            r1, x1, s1, ok1 = self._resect_one(cand[j], sel & (local[self.oi] == j))
+            if ok1 and (not ok[j] or s1 < s0[j]):
+                R[j], X0[j], s0[j], ok[j] = r1, x1, s1, True
         self.Rm[cand[ok]], self.Xm[cand[ok]] = R[ok], X0[ok]
         return cand[ok], s0[ok]
 
@@ -365,11 +394,14 @@ def sub_block(block, done, P, Xm, Rm, use, anchor):
         obs_xy=obs.xy[full],
         obs_sigma=obs.sigma[full],
     )
+    # the datum: the seed image and the base's largest component held by observations
+    # some 10³ times stronger than the rays (not more: every solver of the reduced system,
+    # also the sparse LU with its pivot test, must still see the rays beside them)
     a, b = img_new[anchor[0]], img_new[anchor[1]]
     sub.images.X0_obs[a] = Xm[anchor[0]]
     sub.images.X0_sigma[a] = 1e-6
     sub.images.angles_obs[a] = 0.0
-    sub.images.angles_sigma[a] = 1e-9
+    sub.images.angles_sigma[a] = 1e-7
     e = int(np.argmax(np.abs(Xm[anchor[1]] - Xm[anchor[0]])))  # the base's largest part
     sub.images.X0_obs[b, e] = Xm[anchor[1], e]
     sub.images.X0_sigma[b, e] = 1e-6

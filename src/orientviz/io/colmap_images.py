@@ -23,6 +23,7 @@ arrays.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +33,7 @@ from .colmap_scan import Chunk, line_chunks, parse_numbers, strided, token_start
 from .colmap_text import (
     MAX_IMAGE_SIZES,
     MAX_NAME,
+    MAX_VALUE,
     ColmapCamera,
     IdIndex,
     _fail,
@@ -66,9 +68,11 @@ class _Images:
         name = " ".join(f[9:]) if len(f) > 9 else str(vals[0])
         if len(name) > MAX_NAME:
             raise _fail(path, no, f"image NAME of {len(name)} characters, expected at most {MAX_NAME}")  # fmt: skip
-        bad = pose_problem(np.array(vals[1:5]), np.array(vals[5:8]))
-        if bad:
-            raise _fail(path, no, bad)
+        q, t = vals[1:5], vals[5:8]
+        if not (max(map(abs, t)) <= MAX_VALUE and 0.5 < math.sqrt(sum(x * x for x in q)) < 2.0):
+            bad = pose_problem(np.array(q), np.array(t))  # the message (vals are finite)
+            if bad:
+                raise _fail(path, no, bad)
         cam = self.cams.get(vals[8])
         if cam is None:
             raise _fail(path, no, f"unknown camera id {vals[8]}")
@@ -133,18 +137,18 @@ def _matched_fast(chunk, starts, plain, first, lines, image, limit, lookup):
     triplets = np.cumsum(count // 3)
     line = np.searchsorted(triplets, keep, side="right")
     tok = f0[line] + 3 * (keep - (triplets[line] - count[line] // 3)) + 2  # token of the id
-    tok = np.concatenate([tok - 2, tok - 1, tok])
+    n = keep.size
+    tok = np.concatenate([np.column_stack([tok - 2, tok - 1]).ravel(), tok])  # X Y X Y …, ids
     begin = starts[tok]
     nxt = tok + 1
     end = np.where(nxt < starts.size, starts[np.minimum(nxt, starts.size - 1)] - 1, buf.size - 1)
     if not plain:
         end = _token_ends(buf, end)
-    n = keep.size
     uv, bad_f = parse_numbers(buf, begin[: 2 * n], end[: 2 * n])
     pid, bad_i = parse_numbers(buf, begin[2 * n :], end[2 * n :], integer=True)
     if bad_f.size or bad_i.size or not np.all(np.isfinite(uv)):
         return None
-    uv = uv.reshape(2, n).T.copy()
+    uv = uv.reshape(n, 2)
     img = image[line]
     if np.any(np.abs(uv) > limit[img]):
         return None

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 #: Bytes read per chunk (a chunk grows to the end of its last line).
-CHUNK_BYTES: int = 8 << 20
+CHUNK_BYTES: int = 4 << 20
 I64 = NDArray[np.int64]
 _POW10 = 10 ** np.arange(19, dtype=np.int64)
 _P10F = 10.0 ** np.arange(20)
@@ -37,6 +37,19 @@ class Chunk:
     buf: NDArray[np.uint8]
     first_line: int
     newlines: I64
+
+
+def _newlines(raw: bytearray, buf: NDArray[np.uint8], search: int = 256) -> I64:
+    """Offsets of the newlines in ``buf`` (a view of ``raw``): the first ``search`` by
+    ``find`` (memchr: fast for few long lines), the rest by numpy (many short lines)."""
+    found, pos = [], -1
+    for _ in range(search):
+        pos = raw.find(b"\n", pos + 1, buf.size)
+        if pos < 0:
+            return np.array(found, dtype=np.int64)
+        found.append(pos)
+    rest = np.flatnonzero(buf[pos + 1 :] == 10) + (pos + 1)
+    return np.concatenate([np.array(found, dtype=np.int64), rest])
 
 
 def line_chunks(path: Path, chunk_bytes: int | None = None) -> Iterator[Chunk]:
@@ -63,7 +76,7 @@ def line_chunks(path: Path, chunk_bytes: int | None = None) -> Iterator[Chunk]:
                 have = end
                 continue
             buf = np.frombuffer(store, dtype=np.uint8, count=cut)
-            newlines = np.flatnonzero(buf == 10)
+            newlines = _newlines(store, buf)
             yield Chunk(buf, line, newlines)
             line += newlines.size
             store[: end - cut] = store[cut:end]
@@ -92,24 +105,22 @@ class Tokens:
 
 
 def tokenize(buf: NDArray[np.uint8]) -> Tokens:
-    """Split ``buf`` (complete lines) at ASCII whitespace and control characters."""
+    """Split ``buf`` (complete lines: it ends with a newline) at ASCII whitespace and
+    control characters; token k ends at the k-th separator."""
     sep = np.flatnonzero(buf <= 32)  # spaces, tabs, CR, LF and other control bytes
     nl = buf[sep] == 10
-    line = np.empty(sep.size + 1, dtype=np.int32)  # newlines before each token
-    line[0] = 0
-    np.cumsum(nl, dtype=np.int32, out=line[1:])
-    start = np.empty(sep.size + 1, dtype=np.int64)
-    start[0] = 0
-    np.add(sep, 1, out=start[1:])
-    end = np.empty(sep.size + 1, dtype=np.int64)
-    end[:-1] = sep
-    end[-1] = buf.size
-    n_lines = int(line[-1])
+    lines = np.empty(sep.size + 1, dtype=np.int32)  # newlines before each token
+    lines[0] = 0
+    np.cumsum(nl, dtype=np.int32, out=lines[1:])
+    start = np.empty(sep.size, dtype=np.int64)
+    start[:1] = 0
+    np.add(sep[:-1], 1, out=start[1:])
+    end, line = sep, lines[:-1]
     keep = end > start
     if not keep.all():  # runs of separators leave empty tokens
         start, end, line = start[keep], end[keep], line[keep]
     line_start = np.concatenate([[0], sep[nl] + 1])[:-1]
-    return Tokens(start, end, line, line_start, n_lines)
+    return Tokens(start, end, line, line_start, int(lines[-1]))
 
 
 def token_starts(buf: NDArray[np.uint8]) -> tuple[I64, bool]:
@@ -124,6 +135,23 @@ def token_starts(buf: NDArray[np.uint8]) -> tuple[I64, bool]:
     np.greater(buf, 32, out=word[1:])
     starts = np.flatnonzero(word[1:] > word[:-1])
     return starts, bool(starts.size == buf.size - np.count_nonzero(word))
+
+
+def tokens_of_lines(chunk: Chunk) -> tuple[I64, I64, I64]:
+    """(start, end) offsets of the tokens of a chunk and the first token of each line
+    (one more entry: the number of tokens) — :func:`token_starts` when every token is
+    followed by one separator (then a token ends before the next one starts), else
+    :func:`tokenize`."""
+    buf = chunk.buf
+    start, plain = token_starts(buf)
+    if not plain:
+        t = tokenize(buf)
+        return t.start, t.end, t.first_of_line()
+    end = np.empty_like(start)
+    np.subtract(start[1:], 1, out=end[:-1])
+    end[-1:] = buf.size - 1
+    line_start = np.concatenate([[0], chunk.newlines[:-1] + 1])
+    return start, end, np.append(np.searchsorted(start, line_start), start.size)
 
 
 def strided(first: I64, count: I64, offset: int, step: int) -> I64:
@@ -169,8 +197,8 @@ def _plain_decimals(
     """Tokens of ``width`` bytes, digits and at most one point: (mantissa, decimals, bad).
 
     The tokens are cut into a (n, width) byte matrix (:func:`records`), the point counts
-    as a 0 digit, the digits are summed as int64 by one product with the powers of ten
-    and the point's 0 is taken out again. ``bad`` marks tokens with another byte, two
+    as a 0 digit, the digits are summed as int64 by Horner's rule and the point's 0 is
+    taken out again. ``bad`` marks tokens with another byte, two
     points or no digit (or a point at all if ``integer``).
     """
     n = start.size
@@ -189,7 +217,10 @@ def _plain_decimals(
     if np.count_nonzero(isdot) != np.count_nonzero(has_dot):
         bad |= isdot.sum(axis=1) > 1
     np.putmask(M, isdot, 0)
-    total = M.astype(np.int64) @ _POW10[width - 1 :: -1]
+    total = M[:, 0].astype(np.int64)
+    for j in range(1, width):  # Horner's rule over the columns (faster than a product)
+        total *= 10
+        total += M[:, j]
     frac = np.where(has_dot, width - 1 - dot_col, 0)
     right = total % _POW10[frac]
     mant = np.where(has_dot, right + (total - right) // 10, total)

@@ -10,6 +10,7 @@ Broken input raises one :class:`~orientviz.errors.InputError` naming the file an
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -17,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InputError
-from .colmap_scan import Chunk, line_chunks, parse_numbers, strided, tokenize
+from .colmap_scan import Chunk, line_chunks, parse_numbers, strided, tokens_of_lines
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -158,7 +159,7 @@ def _numbers(path: Path, line: int, fields: list[str], kinds: str, what: str) ->
             ) from None
         if k == "i" and not -(2**63) <= v < 2**63:
             raise _fail(path, line, f"field {i + 1} of {what}: integer {f[:20]}… out of range")
-        if k == "f" and not np.isfinite(v):
+        if k == "f" and not math.isfinite(v):
             raise _fail(path, line, f"field {i + 1} of {what}: expected a finite number, got {f!r}")
         out.append(v)
     return out
@@ -211,13 +212,13 @@ def read_points_text(path: Path) -> tuple[I64, F64, dict[int, int]]:
     seen_lines = 0
     checked_file(path, "a COLMAP text file points3D.txt")
     for chunk in line_chunks(path):
-        t = tokenize(chunk.buf)
-        first = t.first_of_line()
+        start, end, first = tokens_of_lines(chunk)
+        line_of = lambda tok, first=first: np.searchsorted(first, tok, side="right") - 1  # noqa: E731
         count = np.diff(first)
         has = count > 0
         data = has.copy()
-        if len(t):
-            data &= chunk.buf[t.start[np.where(has, first[:-1], 0)]] != 35  # not a comment
+        if start.size:
+            data &= chunk.buf[start[np.where(has, first[:-1], 0)]] != 35  # not a comment
         lines = np.flatnonzero(data)
         seen_lines += lines.size
         short = lines[count[lines] < 8]
@@ -227,9 +228,9 @@ def read_points_text(path: Path) -> tuple[I64, F64, dict[int, int]]:
             if bad.size:
                 raise _fail(path, chunk.first_line + int(bad[0]), msg)
         f0 = first[lines]
-        pid, badi = parse_numbers(chunk.buf, t.start[f0], t.end[f0], integer=True)
+        pid, badi = parse_numbers(chunk.buf, start[f0], end[f0], integer=True)
         xyz_tok = (f0[:, None] + np.arange(1, 4)).ravel()
-        X, badf = parse_numbers(chunk.buf, t.start[xyz_tok], t.end[xyz_tok])
+        X, badf = parse_numbers(chunk.buf, start[xyz_tok], end[xyz_tok])
         for bad, what in ((badi, "POINT3D_ID: expected an integer"),
                           (badf // 3, "X, Y, Z: expected numbers")):  # fmt: skip
             if bad.size:
@@ -250,10 +251,10 @@ def read_points_text(path: Path) -> tuple[I64, F64, dict[int, int]]:
         xyz.append(X.reshape(-1, 3))
         where.append(chunk.first_line + lines)
         sel = strided(f0, count[lines], 8, 2)  # track image ids: tokens 8, 10, 12, …
-        img, bad = parse_numbers(chunk.buf, t.start[sel], t.end[sel], integer=True)
+        img, bad = parse_numbers(chunk.buf, start[sel], end[sel], integer=True)
         if bad.size:
             raise _fail(
-                path, chunk.first_line + int(t.line[sel[bad[0]]]), "TRACK: expected integers"
+                path, chunk.first_line + int(line_of(sel[bad[0]])), "TRACK: expected integers"
             )
         new = np.arange(img.size)
         if img.size and 0 <= img.min() and img.max() < _SEEN_TABLE:  # skip ids seen before
@@ -262,8 +263,8 @@ def read_points_text(path: Path) -> tuple[I64, F64, dict[int, int]]:
             new = np.flatnonzero(~seen[img])
             seen[img] = True
         uniq, at = np.unique(img[new], return_index=True)
-        for u, a in zip(uniq.tolist(), new[at].tolist()):
-            track_first.setdefault(u, chunk.first_line + int(t.line[sel[a]]))
+        for u, k in zip(uniq.tolist(), line_of(sel[new[at]]).tolist()):
+            track_first.setdefault(u, chunk.first_line + k)
     pid = np.concatenate(ids) if ids else np.zeros(0, np.int64)
     order = np.argsort(pid, kind="stable")
     dup = np.flatnonzero(np.diff(pid[order]) == 0)
