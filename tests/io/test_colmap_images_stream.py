@@ -196,3 +196,32 @@ def test_newlines_are_found_past_the_first_few():
     for search in (0, 3, 256, 5000):
         got = colmap_scan._newlines(text, buf, search)
         assert np.array_equal(got, np.flatnonzero(buf == 10)), search
+
+
+@pytest.mark.parametrize("chunk", [None, 50])
+def test_points3d_read_like_a_plain_parse(tmp_path, monkeypatch, chunk):
+    from orientviz.io.colmap_text import read_points_text
+
+    if chunk:
+        monkeypatch.setattr(colmap_scan, "CHUNK_BYTES", chunk)
+    rng = np.random.default_rng(3)
+    lines, want_ids, want_xyz, first = ["# 3D point list"], [], [], {}
+    for k in range(60):
+        pid = int(rng.integers(1, 10**6))
+        xyz = rng.normal(size=3) * 100
+        track = [(int(rng.integers(1, 9)), int(rng.integers(0, 99))) for _ in range(k % 4)]
+        sep = ["  ", "\t", " "][k % 3]
+        line = sep.join([str(pid), *(f"{v:.6f}" for v in xyz), "1", "2", "3", "0.5"])
+        line += "".join(f" {i} {j}" for i, j in track) + (" " if k % 5 == 0 else "")
+        lines.append(line + ("\r" if k % 7 == 0 else ""))
+        for i, _ in track:
+            first.setdefault(i, len(lines))  # the 1-based number of this line
+        if k % 11 == 3:
+            lines.append("")
+        want_ids.append(pid)
+        want_xyz.append([float(f"{v:.6f}") for v in xyz])
+    path = tmp_path / "points3D.txt"
+    path.write_bytes(("\n".join(lines) + "\n").encode())
+    ids, xyz, track_first = read_points_text(path)
+    assert ids.tolist() == want_ids and np.array_equal(xyz, np.array(want_xyz))
+    assert track_first == first

@@ -100,13 +100,15 @@ def normalised(cam: ColmapCamera, uv: NDArray[np.float64], source: str = "") -> 
     p = cam.named()
     fx, fy = p.get("fx", p.get("f")), p.get("fy", p.get("f"))
     out = np.empty_like(uv, dtype=float)
-    out[:, 0] = (uv[:, 0] - p["cx"]) / fx
-    out[:, 1] = (uv[:, 1] - p["cy"]) / fy
-    if not any(_coefficients(cam)):
-        return out
+    distorted = any(_coefficients(cam))
     tol = UNDISTORT_TOL_PX / max(fx, fy)
-    for a in range(0, len(out), UNDISTORT_BATCH):
-        dx, dy = out[a : a + UNDISTORT_BATCH, 0].copy(), out[a : a + UNDISTORT_BATCH, 1].copy()
+    for a in range(0, len(out), UNDISTORT_BATCH):  # batches: temporaries stay in the cache
+        dx = (uv[a : a + UNDISTORT_BATCH, 0] - p["cx"]) / fx
+        dy = (uv[a : a + UNDISTORT_BATCH, 1] - p["cy"]) / fy
+        if not distorted:
+            out[a : a + UNDISTORT_BATCH, 0] = dx
+            out[a : a + UNDISTORT_BATCH, 1] = dy
+            continue
         x, y = _undistort(cam, dx, dy, tol)
         xd, yd, _, _ = _distort(cam, x, y)
         bad = np.flatnonzero(
@@ -181,7 +183,7 @@ def block_from_colmap(
     cam_arr = np.array([cam_index[int(c)] for c in model.image_camera], dtype=np.int64)
     n = model.obs_image.size
     xy = np.empty((n, 2))
-    sigma = np.empty((n, 2))
+    sigma = np.empty((n, 2) if len(cam_ids) > 1 else (1, 2))  # one camera: broadcast
     c_mm = []
     for ci, cid in enumerate(cam_ids):
         cam = cams[cid]

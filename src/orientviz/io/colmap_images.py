@@ -29,7 +29,15 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from .colmap_scan import Chunk, line_chunks, parse_numbers, strided, token_starts, tokenize
+from .colmap_scan import (
+    Chunk,
+    line_chunks,
+    parse_numbers,
+    strided,
+    token_ends,
+    token_starts,
+    tokenize,
+)
 from .colmap_text import (
     MAX_IMAGE_SIZES,
     MAX_NAME,
@@ -143,7 +151,7 @@ def _matched_fast(chunk, starts, plain, first, lines, image, limit, lookup):
     nxt = tok + 1
     end = np.where(nxt < starts.size, starts[np.minimum(nxt, starts.size - 1)] - 1, buf.size - 1)
     if not plain:
-        end = _token_ends(buf, end)
+        end = token_ends(buf, end)
     uv, bad_f = parse_numbers(buf, begin[: 2 * n], end[: 2 * n])
     pid, bad_i = parse_numbers(buf, begin[2 * n :], end[2 * n :], integer=True)
     if bad_f.size or bad_i.size or not np.all(np.isfinite(uv)):
@@ -156,29 +164,6 @@ def _matched_fast(chunk, starts, plain, first, lines, image, limit, lookup):
     if np.any(point < 0):
         return None
     return img, uv, point
-
-
-#: Separators walked back at most per token before all separators are looked up.
-_WALK = 16
-
-
-def _token_ends(buf: NDArray[np.uint8], end: I64) -> I64:
-    """End offsets of tokens, given the separator before the next token (or the last byte).
-
-    Walks back over the rest of a run of separators (CR before LF, double spaces,
-    trailing blanks); a long run is looked up among all separators of ``buf`` instead.
-    """
-    end = end.copy()
-    walk = np.flatnonzero(buf[end - 1] <= 32)
-    for _ in range(_WALK):
-        if not walk.size:
-            return end
-        end[walk] -= 1
-        walk = walk[buf[end[walk] - 1] <= 32]
-    if walk.size:
-        inside = np.flatnonzero(buf > 32)  # token bytes: the last one before each run
-        end[walk] = inside[np.searchsorted(inside, end[walk]) - 1] + 1
-    return end
 
 
 def _matched_exact(path, chunk, lines, image, limit, lookup):

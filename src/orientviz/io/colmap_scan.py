@@ -139,19 +139,40 @@ def token_starts(buf: NDArray[np.uint8]) -> tuple[I64, bool]:
 
 def tokens_of_lines(chunk: Chunk) -> tuple[I64, I64, I64]:
     """(start, end) offsets of the tokens of a chunk and the first token of each line
-    (one more entry: the number of tokens) — :func:`token_starts` when every token is
-    followed by one separator (then a token ends before the next one starts), else
-    :func:`tokenize`."""
+    (one more entry: the number of tokens), from :func:`token_starts` (a token ends before
+    the next one starts, :func:`token_ends` where separators run on)."""
     buf = chunk.buf
     start, plain = token_starts(buf)
-    if not plain:
-        t = tokenize(buf)
-        return t.start, t.end, t.first_of_line()
     end = np.empty_like(start)
     np.subtract(start[1:], 1, out=end[:-1])
     end[-1:] = buf.size - 1
+    if not plain:
+        end = token_ends(buf, end)
     line_start = np.concatenate([[0], chunk.newlines[:-1] + 1])
     return start, end, np.append(np.searchsorted(start, line_start), start.size)
+
+
+#: Separators walked back at most per token before all separators are looked up.
+_WALK = 16
+
+
+def token_ends(buf: NDArray[np.uint8], end: I64) -> I64:
+    """End offsets of tokens, given the separator before the next token (or the last byte).
+
+    Walks back over the rest of a run of separators (CR before LF, double spaces,
+    trailing blanks); a long run is looked up among all separators of ``buf`` instead.
+    """
+    end = end.copy()
+    walk = np.flatnonzero(buf[end - 1] <= 32)
+    for _ in range(_WALK):
+        if not walk.size:
+            return end
+        end[walk] -= 1
+        walk = walk[buf[end[walk] - 1] <= 32]
+    if walk.size:
+        inside = np.flatnonzero(buf > 32)  # token bytes: the last one before each run
+        end[walk] = inside[np.searchsorted(inside, end[walk]) - 1] + 1
+    return end
 
 
 def strided(first: I64, count: I64, offset: int, step: int) -> I64:
