@@ -1,7 +1,8 @@
 """orientviz's approximate values as they were before the batched growth (commit 95a8e82).
 
 Kept (module text of src/orientviz/block/_approximate.py at 95a8e82, relative imports
-made absolute; ``intersect_rays`` used from orientviz.block) as the baseline of
+made absolute; ``intersect_rays`` and the datum step ``into_frame``, which the batched
+growth did not change, used from orientviz.block) as the baseline of
 ``bench_approximations.py``: one least-squares resection per image in a Python loop and a
 model-frame bundle after every 25 % of growth and after every poor resection. It calls
 today's bundle, resection and essential-matrix code. Not used by orientviz.
@@ -14,7 +15,8 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from orientviz.block import intersect_rays
-from orientviz.block._tables import CHECK, CONTROL, Block
+from orientviz.block._approximate import into_frame
+from orientviz.block._tables import CHECK, Block
 from orientviz.errors import NotDeterminableError
 from orientviz.rotation import matrix_from_opk, opk_from_matrix
 
@@ -56,7 +58,6 @@ def approximate_values(block: Block, *, min_points: int = 6, frame: str = "contr
         oriented rays, or fewer than 3 full XYZ control points are intersected.
     """
     from orientviz.bundle import bundle_adjust
-    from orientviz.orientation.absolute import SimilarityTransform, similarity_closed_form
     from orientviz.orientation.essential import eight_point, select_by_cheirality
     from orientviz.orientation.resection import resection
 
@@ -166,63 +167,11 @@ def approximate_values(block: Block, *, min_points: int = 6, frame: str = "contr
         if res.sigma0 > POOR_RESECTION:  # the chain starts to deteriorate: adjust now
             refine()
     refine()
-    # ---- datum: similarity from the model frame onto the full-XYZ control points
-    ctrl = np.flatnonzero(
-        (block.points.role == CONTROL)
-        & np.isfinite(block.points.xyz_known).all(axis=1)
-        & np.isfinite(P).all(axis=1)
-    )
-    # observed projection centres (GNSS) can carry the datum where control cannot
-    gnss = np.flatnonzero(np.isfinite(block.images.X0_obs).all(axis=1)
-                          & (block.images.X0_sigma > 0).all(axis=1) & done)  # fmt: skip
-    if frame == "model":
-        T = SimilarityTransform(1.0, np.eye(3), np.zeros(3))  # stay in the model frame
-    elif (ctrl.size < 3 or _collinear(block.points.xyz_known[ctrl])) and (
-        gnss.size >= 3 and not _collinear(block.images.X0_obs[gnss])
-    ):
-        T = similarity_closed_form(Xm[gnss], block.images.X0_obs[gnss])
-    elif ctrl.size < 3 or _collinear(block.points.xyz_known[ctrl]):
-        raise NotDeterminableError(
-            f"approximate values: {ctrl.size} full XYZ control point(s) reached"
-            + (" (on a line)" if ctrl.size >= 3 else "")
-            + ", the similarity into the control's frame needs 3 not on a line. Datum "
-            "choices: give 3 or more control points (X, Y, Z) seen in the images; or observed "
-            "projection centres (3 or more not on a line); or give the images' approximate "
-            "orientations and hold some (options.fix / --fix ID); or adjust as a free "
-            "network (options.free / --free)"
-        )
-    else:
-        T = similarity_closed_form(P[ctrl], block.points.xyz_known[ctrl])
-    # a control point with given X, Y, Z needs no intersection (one ray suffices)
-    given_xyz = (block.points.role == CONTROL) & np.isfinite(block.points.xyz_known).all(axis=1)
-    missing = ~np.isfinite(P).all(axis=1) & (block.points.role != CHECK) & ~given_xyz
-    if missing.any():
-        ids = [block.points.ids[j] for j in np.flatnonzero(missing)[:8]]
-        raise NotDeterminableError(
-            f"approximate values: {int(missing.sum())} point(s) without two oriented rays: "
-            f"{', '.join(ids)}",
-            parameters=[f"{j}.X" for j in ids],
-        )
-    out = block.copy()
-    R = T.R[None] @ Rm
-    om, ph, ka = opk_from_matrix(R, block.sequence)
-    out.images.X0 = T.apply(Xm)
-    out.images.angles = np.column_stack([om, ph, ka])
-    xyz = np.where(np.isfinite(P), T.apply(np.nan_to_num(P)), block.points.xyz)
-    given = np.isfinite(block.points.xyz_known) & (block.points.role == CONTROL)[:, None]
-    out.points.xyz = np.where(given, block.points.xyz_known, xyz)
+    out, T = into_frame(block, P, Xm, Rm, done, frame)  # the datum step (the same as then)
     out.meta = dict(
         block.meta, approximate_values={"seed_pair": [int(i), int(k)], "similarity_scale": T.scale}
     )
     return out
-
-
-def _collinear(xyz: F64) -> bool:
-    """Points (k, 3) on one line (or fewer than 3)."""
-    if xyz.shape[0] < 3:
-        return True
-    s = np.linalg.svd(xyz - xyz.mean(axis=0), compute_uv=False)
-    return bool(s[1] <= 1e-6 * max(s[0], 1e-300))
 
 
 class _Sub:

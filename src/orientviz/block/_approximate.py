@@ -121,13 +121,56 @@ def approximate_values(block: Block, *, min_points: int = 6, frame: str = "contr
         If images cannot be reached from the seed pair, points stay without two
         oriented rays, or fewer than 3 full XYZ control points are intersected.
     """
-    from ..orientation.absolute import SimilarityTransform, similarity_closed_form
     from ._approximate_growth import Growth
 
     g = Growth(block, min_points)
     g.grow()
-    i, k = g.seed
-    P, Xm, Rm, done = g.P, g.Xm, g.Rm, g.done
+    out, T = into_frame(block, g.P, g.Xm, g.Rm, g.done, frame)
+    out.meta = dict(
+        block.meta,
+        approximate_values={
+            "seed_pair": [int(g.seed[0]), int(g.seed[1])],
+            "similarity_scale": T.scale,
+            "waves": g.waves,
+            "refines": g.refines,
+        },
+    )
+    return out
+
+
+def into_frame(block: Block, P: F64, Xm: F64, Rm: F64, done: NDArray[np.bool_], frame: str):
+    """Carry a model-frame orientation of ``block`` into the frame of the datum.
+
+    Parameters
+    ----------
+    block : Block
+        The block whose approximations are computed.
+    P : ndarray, shape (p, 3)
+        Points in the model frame (NaN where not intersected).
+    Xm : ndarray, shape (m, 3)
+        Projection centres in the model frame.
+    Rm : ndarray, shape (m, 3, 3)
+        Rotations image → model frame.
+    done : ndarray of bool, shape (m,)
+        Images that were oriented.
+    frame : {"control", "model"}
+        See :func:`approximate_values`.
+
+    Returns
+    -------
+    out : Block
+        A copy of ``block`` with X0 (m), angles (rad) and points (m) replaced.
+    T : SimilarityTransform
+        Model frame → datum frame (the identity for ``"model"``).
+
+    Raises
+    ------
+    NotDeterminableError
+        Too few or collinear control points / observed centres, or points left
+        without two oriented rays.
+    """
+    from ..orientation.absolute import SimilarityTransform, similarity_closed_form
+
     # ---- datum: similarity from the model frame onto the full-XYZ control points
     ctrl = np.flatnonzero(
         (block.points.role == CONTROL)
@@ -173,16 +216,7 @@ def approximate_values(block: Block, *, min_points: int = 6, frame: str = "contr
     xyz = np.where(np.isfinite(P), T.apply(np.nan_to_num(P)), block.points.xyz)
     given = np.isfinite(block.points.xyz_known) & (block.points.role == CONTROL)[:, None]
     out.points.xyz = np.where(given, block.points.xyz_known, xyz)
-    out.meta = dict(
-        block.meta,
-        approximate_values={
-            "seed_pair": [int(i), int(k)],
-            "similarity_scale": T.scale,
-            "waves": g.waves,
-            "refines": g.refines,
-        },
-    )
-    return out
+    return out, T
 
 
 def _collinear(xyz: F64) -> bool:

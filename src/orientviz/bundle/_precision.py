@@ -184,11 +184,6 @@ class ReducedInverse:
         return Yp.reshape(m, 6, -1), EtY, st.pos_img
 
 
-def reduced_inverse_blocks(st: ReducedStructure, blocks: F64, fac=None) -> F64:
-    """The 6×6 blocks of Z = S⁻¹ at the structure's blocks (i ≤ k), shape (nb, 6, 6)."""
-    return ReducedInverse(st, blocks, fac).blocks
-
-
 def _block_lookup(st: ReducedStructure, ca, cb_):
     """Index of block (min, max) for image pairs and whether it must be transposed."""
     m = st.n_cam

@@ -150,10 +150,6 @@ def check_image_points(xy: ArrayLike, name: str = "image points") -> F64:
     return P
 
 
-def _local(points: F64, image: RadarImage) -> F64:
-    return (points - np.asarray(image.X0, float)) @ image.R
-
-
 def horizontal_range(points: ArrayLike, image: RadarImage) -> F64:
     """Approximate horizontal range s_e = sqrt(‖X − X0‖² − h²) in m, shape (n,).
 

@@ -286,10 +286,6 @@ class BlockState:
         return self.changes[k]
 
     # ------------------------------------------------------------------ actions
-    def observation_on(self, j: int) -> bool:
-        """True if observation ``j`` is switched on (and its image too)."""
-        return bool(self.edits.obs_on[j] and self.edits.image_on[self.block.observations.image[j]])
-
     def toggle_observation(self, j: int, **kw) -> Change:
         """Switch observation ``j`` off (or on again) and re-solve."""
         on = not self.edits.obs_on[j]
