@@ -297,7 +297,9 @@ class _BundleSteps:
         self.chord_factor = None
         self.chord_pending = None  # the factor of the last solved step, if it may serve
         self.chord_step = False  # the last solved step used chord_factor
-        self.ray_length: float | None = None
+        # the scale of the step's move (_relative_move): the border's median ray length
+        # with additional parameters, else the median ray of the first iterate that asks
+        self.ray_length: float | None = prob.ap.ray_length if prob.q else None
         self.last_rel, self.last_local = np.inf, False  # of the last solved step
 
     def start(self, st: BundleState) -> Evaluation:
@@ -384,15 +386,17 @@ class _BundleSteps:
             ne = fac = None
         return Step(rel, dx, (dc, dp, da, fac, ne, local))
 
-    def _relative_move(self, st: BundleState, dc: F64, dp: F64) -> float:
+    def _relative_move(self, st: BundleState | None, dc: F64, dp: F64) -> float:
         """The largest change of a step, centres and points in units of the median ray
-        length, angles in rad (:data:`CHORD_REUSE`)."""
+        length, angles in rad (the measure of :data:`CHORD_REUSE` and :data:`AP_REUSE`)."""
         prob = self.prob
         if self.ray_length is None:  # from the first iterate that gets here
             obs = prob.obs
             d = st.xyz[obs.point] - st.X0[obs.image]
             self.ray_length = float(np.median(np.sqrt(np.sum(d * d, axis=1))))
-        L = self.ray_length if self.ray_length > 0 else np.inf
+        L = self.ray_length
+        if not L > 0:  # no scale (a degenerate block): nothing may be reused
+            return np.inf
         return max(
             float(np.max(np.abs(dc[:, :3]), initial=0.0)) / L,
             float(np.max(np.abs(dc[:, 3:]), initial=0.0)),
@@ -420,13 +424,10 @@ class _BundleSteps:
         if self.precision and lam == 0 and not (prob.q or prob.aux or local):
             self.lin = (ne, fac, previous.data[1], previous.data[2])
         if prob.q:
-            L = AP_REUSE * prob.ap.ray_length
             prob.border.reuse = (
                 not prob.border.hold
                 and prob.ap.lens is None  # a lens model's design moves with its parameters
-                and float(np.max(np.abs(dc[:, :3]), initial=0.0)) < L
-                and float(np.max(np.abs(dc[:, 3:]), initial=0.0)) < AP_REUSE
-                and float(np.max(np.abs(dp), initial=0.0)) < L
+                and self._relative_move(None, dc, dp) < AP_REUSE  # (its scale is set)
             )
 
 
