@@ -42,6 +42,13 @@ def rotate_by(R: F64, delta: F64) -> F64:
     return R @ E
 
 
+def summing(index: I64, n: int) -> sp.csr_matrix:
+    """The (n, k) matrix that sums rows of a (k, …) array by ``index``."""
+    return sp.csr_matrix(
+        (np.ones(index.size), (index, np.arange(index.size))), shape=(n, index.size)
+    )
+
+
 def centres_for_attitudes(img: I64, xy: F64, c: F64, X: F64, R: F64, n: int) -> tuple[F64, F64]:
     """Projection centres (m) that best fit each image's rays for a given attitude.
 
@@ -99,15 +106,15 @@ def resect_batch(
     moving = np.ones(n, bool)
     regular = np.ones(n, bool)
     lam = np.full(n, 1e-4)  # Levenberg-Marquardt damping per image
-    _, r, _ = _linearise(img, xy, c, X, R, X0, jacobian=False)
+    _, r, _ = linearise(img, xy, c, X, R, X0, jacobian=False)
     cost = _cost(img, r, wgt, n)
     for _ in range(BATCH_ITERATIONS):
-        J, r, _ = _linearise(img, xy, c, X, R, X0)
+        J, r, _ = linearise(img, xy, c, X, R, X0)
         dx, reg = _normal_solve(img, J, r, wgt, n, lam)
         regular &= reg
         dx[~reg | ~moving] = 0.0
         X1, R1 = X0 + dx[:, :3], rotate_by(R, dx[:, 3:])
-        _, r1, _ = _linearise(img, xy, c, X, R1, X1, jacobian=False)
+        _, r1, _ = linearise(img, xy, c, X, R1, X1, jacobian=False)
         cost1 = _cost(img, r1, wgt, n)
         better = cost1 <= cost  # NaN (a point on the image plane) is not better
         X0[better], R[better], cost[better] = X1[better], R1[better], cost1[better]
@@ -120,7 +127,7 @@ def resect_batch(
         )  # a short step of a strongly damped image is no convergence
         if not moving.any():
             break
-    _, r, front = _linearise(img, xy, c, X, R, X0, jacobian=False)
+    _, r, front = linearise(img, xy, c, X, R, X0, jacobian=False)
     k = np.bincount(img, minlength=n)
     vtpv = np.bincount(img, (r**2 * wgt).sum(axis=1), n)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -130,7 +137,7 @@ def resect_batch(
     return R, X0, sigma0, ok
 
 
-def _linearise(img, xy, c, X, R, X0, jacobian=True):
+def linearise(img, xy, c, X, R, X0, jacobian=True):
     """Residuals ``l − f(x)`` (k, 2) mm, the Jacobian (k, 2, 6) and which points lie in front."""
     d = X - X0[img]
     p = np.einsum("nji,nj->ni", R[img], d)  # Rᵀ (X − X0): camera frame
@@ -159,7 +166,7 @@ def _cost(img, r, wgt, n):
 def _normal_solve(img, J, r, wgt, n, lam):
     """Each image's damped step from its 6 × 6 normal equations; False where they are singular."""
     JwT = (J * wgt[:, :, None]).transpose(0, 2, 1)
-    to_image = sp.csr_matrix((np.ones(img.size), (img, np.arange(img.size))), shape=(n, img.size))
+    to_image = summing(img, n)
     N = (to_image @ (JwT @ J).reshape(-1, 36)).reshape(n, 6, 6)
     g = to_image @ (JwT @ r[:, :, None])[:, :, 0]
     # scale to unit diagonal: the condition then says whether the geometry determines x

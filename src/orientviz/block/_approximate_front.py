@@ -19,7 +19,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ._approximate_batch import rotate_by
+from ._approximate_batch import linearise, rotate_by, summing
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -62,30 +62,23 @@ def adjust_front(
     wgt = 1.0 / sigma**2
     fr = np.flatnonzero(slot[cam] >= 0)  # rays of free images
     s = slot[cam[fr]]
-    to_point = _summing(pt, q)
-    to_image = _summing(s, b)
-    to_point_fr = _summing(pt[fr], q)
+    to_point = summing(pt, q)
+    to_image = summing(s, b)
+    to_point_fr = summing(pt[fr], q)
     rows = (6 * s[:, None, None] + np.arange(6)[None, :, None]).repeat(3, 2).ravel()
     cols = (3 * pt[fr, None, None] + np.arange(3)[None, None, :]).repeat(6, 1).ravel()
     held = np.zeros(q, bool)
     start = (R.copy(), X0.copy(), P.copy())
     cost0 = None
     for _ in range(iterations):
-        Rk = R[cam]
-        p = (Rk.transpose(0, 2, 1) @ (P[pt] - X0[cam])[:, :, None])[:, :, 0]  # Rᵀ (X − X0)
-        u, v, w = p[:, 0], p[:, 1], p[:, 2]
-        r = xy + c[:, None] * p[:, :2] / w[:, None]  # l − f, f = −c (u, v)/w
+        J, r, _ = linearise(cam, xy, c, P[pt], R, X0)  # l − f; ∂f/∂(X0, δ)
         if cost0 is None:
             cost0 = float((r**2 * wgt).sum())
-        g = np.zeros((cam.size, 2, 3))
-        g[:, 0, 0] = g[:, 1, 1] = -c / w
-        g[:, 0, 2] = c * u / w**2
-        g[:, 1, 2] = c * v / w**2
-        Jp = g @ Rk.transpose(0, 2, 1)  # ∂f/∂X = g Rᵀ (= −∂f/∂X0)
+        Jp = -J[:, :, :3]  # ∂f/∂X = −∂f/∂X0
         JpwT = (Jp * wgt[:, :, None]).transpose(0, 2, 1)
         Npp = (to_point @ (JpwT @ Jp).reshape(-1, 9)).reshape(q, 3, 3)
         bp = to_point @ (JpwT @ r[:, :, None])[:, :, 0]
-        Jc = np.concatenate([-Jp[fr], np.cross(g[fr], p[fr, None, :])], axis=2)
+        Jc = J[fr]
         JcwT = (Jc * wgt[fr, :, None]).transpose(0, 2, 1)
         Ncc = (to_image @ (JcwT @ Jc).reshape(-1, 36)).reshape(b, 6, 6)
         bc = to_image @ (JcwT @ r[fr, :, None])[:, :, 0]
@@ -111,24 +104,15 @@ def adjust_front(
         X0[free] += dc[:, :3]
         R[free] = rotate_by(R[free], dc[:, 3:])
         P += dp
-    p = (R[cam].transpose(0, 2, 1) @ (P[pt] - X0[cam])[:, :, None])[:, :, 0]
-    r = xy + c[:, None] * p[:, :2] / p[:, 2:]
+    _, r, _ = linearise(cam, xy, c, P[pt], R, X0, jacobian=False)
     if cost0 is not None and not float((r**2 * wgt).sum()) <= cost0:  # worse: keep the start
         R, X0, P = start
-        p = (R[cam].transpose(0, 2, 1) @ (P[pt] - X0[cam])[:, :, None])[:, :, 0]
-        r = xy + c[:, None] * p[:, :2] / p[:, 2:]
+        _, r, _ = linearise(cam, xy, c, P[pt], R, X0, jacobian=False)
     r = r[fr]
     k = np.bincount(s, minlength=b)
     with np.errstate(invalid="ignore", divide="ignore"):
         sigma0 = np.sqrt(np.bincount(s, (r**2 * wgt[fr]).sum(axis=1), b) / np.maximum(2 * k - 6, 1))
     return R, X0, P, sigma0
-
-
-def _summing(index: I64, n: int) -> sp.csr_matrix:
-    """The (n, k) matrix that sums rows of a (k, …) array by ``index``."""
-    return sp.csr_matrix(
-        (np.ones(index.size), (index, np.arange(index.size))), shape=(n, index.size)
-    )
 
 
 def _inverse3(A: F64) -> tuple[F64, F64]:
