@@ -30,33 +30,8 @@ POOR_RESECTION: float = 5.0
 
 
 def approximate_values(block: Block, *, min_points: int = 6, frame: str = "control") -> Block:
-    """A copy of ``block`` with approximate orientations and points computed from scratch.
-
-    Parameters
-    ----------
-    block : Block
-        Image observations, interior orientation and control (role 1 with
-        ``xyz_known``); check points are not used.
-    min_points : int
-        Minimum number of known points for resecting an image.
-    frame : {"control", "model"}
-        ``"control"``: carry the result onto the control points (3 or more full XYZ
-        control points needed). ``"model"``: leave it in the model frame of the seed
-        pair (first image at the origin with R = I, base length 1 m) — the start of a
-        free network, whose datum is then chosen by the caller.
-
-    Returns
-    -------
-    Block
-        ``images.X0`` (m), ``images.angles`` (rad, ``block.sequence``) and
-        ``points.xyz`` (m) replaced; control points keep their given coordinates.
-
-    Raises
-    ------
-    NotDeterminableError
-        If images cannot be reached from the seed pair, points stay without two
-        oriented rays, or fewer than 3 full XYZ control points are intersected.
-    """
+    """:func:`orientviz.block.approximate_values` as it was at 95a8e82 (same parameters,
+    result and errors; see its docstring): one resection per image, frequent re-adjustments."""
     from orientviz.bundle import bundle_adjust
     from orientviz.orientation.essential import eight_point, select_by_cheirality
     from orientviz.orientation.resection import resection
