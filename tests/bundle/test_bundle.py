@@ -204,6 +204,21 @@ def test_self_calibration_recovers_a_simulated_affinity():
     assert per_strip["additional"].shape == (6,)
 
 
+def test_a_sets_name_stands_for_the_set_and_anything_else_is_named_in_one_line():
+    from orientviz.bundle import ap_set
+    from orientviz.errors import InputError
+
+    sim = ov.simulate_block(2, 5, rng=4)
+    by_name = ov.bundle_adjust(sim.block, additional="ebner12", ap_sigma=100.0, precision=False)
+    by_set = ov.bundle_adjust(sim.block, additional=ap_set("ebner12"), ap_sigma=100.0, precision=False)
+    assert by_name["additional"].shape == (12,)
+    np.testing.assert_array_equal(by_name.x, by_set.x)
+    with pytest.raises(InputError, match="unknown additional-parameter set 'ebner13'"):
+        ov.bundle_adjust(sim.block, additional="ebner13")
+    with pytest.raises(InputError, match=r"additional: expected .* got int"):
+        ov.bundle_adjust(sim.block, additional=12)
+
+
 def test_approximate_values_from_scratch_reach_the_same_optimum():
     from orientviz.block import approximate_values
 

@@ -115,6 +115,8 @@ def bundle_adjust(
     additional : AdditionalParameters, optional
         Self-calibration set (``design(xy) -> (n, 2, k)`` in mm per unit, evaluated at the
         observed coordinates): ``x_obs + v = project(...) + A(x_obs)·a``.
+        A set's name (``"ebner12"``, ``"brown"``, ``"gruen44"``) stands for
+        ``ap_set(name)``; a :class:`LensModel` estimates the camera's own parameters.
     ap_group : array_like of int, shape (m,), optional
         Group of each image for the additional parameters (default: one group).
     ap_sigma : float or array_like (k,), optional
