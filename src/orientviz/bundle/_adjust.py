@@ -135,6 +135,8 @@ def bundle_adjust(
     additional : AdditionalParameters, optional
         Self-calibration set (``design(xy) -> (n, 2, k)`` in mm per unit, evaluated at the
         observed coordinates): ``x_obs + v = project(...) + A(x_obs)·a``.
+        A set's name (``"ebner12"``, ``"brown"``, ``"gruen44"``) stands for
+        ``ap_set(name)``; a :class:`LensModel` estimates the camera's own parameters.
     ap_group : array_like of int, shape (m,), optional
         Group of each image for the additional parameters (default: one group).
     ap_sigma : float or array_like (k,), optional
@@ -186,8 +188,8 @@ def bundle_adjust(
         block, setup, additional=additional, ap_group=ap_group, ap_sigma=ap_sigma, solver=solver,
         auxiliary=auxiliary,
     )  # fmt: skip
-    names = prob.names()
-    red_names = names[: 6 * prob.m]
+    names = prob.names()  # formed when read (a message, the result's names)
+    red_names = prob.names(exterior_only=True)
     xyz0 = block.points.xyz.copy()
     fixed = setup.fixed
     xyz0[fixed] = np.where(np.isfinite(setup.known[fixed]), setup.known[fixed], xyz0[fixed])
@@ -324,11 +326,13 @@ class _BundleSteps:
 
     def start(self, st: BundleState) -> Evaluation:
         """Evaluate the start once (the loop asks for it again: no second evaluation)."""
-        ev = self._evaluate(st, True, False)
         if self.local_allowed:  # σ0 of the start decides how its Jacobian is formed
-            self.last_cost = ev.cost
-            if self._poor():  # a poor start: derivatives by rotations of the image frames
-                ev = self._evaluate(st, True, True)
+            self.last_cost = self._evaluate(st, False, False, keep=True).cost
+            # a poor start: derivatives by rotations of the image frames (from the kept
+            # projection: the rays are projected once)
+            ev = self._evaluate(st, True, self._poor())
+        else:
+            ev = self._evaluate(st, True, False)
         self._start = (st, ev)
         return ev
 
@@ -338,8 +342,10 @@ class _BundleSteps:
             return ev
         return self._evaluate(st, jacobian, jacobian and self.local_allowed and self._poor())
 
-    def _evaluate(self, st: BundleState, jacobian: bool, local: bool) -> Evaluation:
-        rw, Je, Jp = self.prob.residuals(st, jac=jacobian, local=local)
+    def _evaluate(
+        self, st: BundleState, jacobian: bool, local: bool, keep: bool = False
+    ) -> Evaluation:
+        rw, Je, Jp = self.prob.residuals(st, jac=jacobian, local=local, keep=keep)
         cost = self.prob.cost(st, rw)
         self.pending_cost = cost
         return Evaluation(cost, bool(np.isfinite(cost)), _Linearisation((rw, Je, Jp), local))
