@@ -332,7 +332,13 @@ class BundleProblem:
         return out
 
     def chord_normal(
-        self, st: BundleState, rw: F64, Je: F64, Jp: F64, ne: NormalEquations
+        self,
+        st: BundleState,
+        rw: F64,
+        Je: F64,
+        Jp: F64,
+        ne: NormalEquations,
+        rot: F64 | None = None,
     ) -> NormalEquations:
         """The right-hand sides at ``st`` with the matrix of an earlier linearisation.
 
@@ -340,6 +346,12 @@ class BundleProblem:
         ``st`` (its image and point parts, the points eliminated with ``ne``'s T), and
         ``ne``'s point blocks, couplings and diagonals for the back-substitution and the
         stopping rule. Plain bundles only (no border, no auxiliary rows); undamped.
+
+        ``rot`` (m, 3, 3): ``ne`` is of rotations δ of the image frames, the Jacobian of
+        ω, φ, κ with J_θ = J_δ·rot (:func:`~orientviz.bundle._local_rotation.angle_map`):
+        the angle rows of the images' gradient become rot⁻ᵀ g_θ (the system is then in δ,
+        its solution δ = rot·dθ), the angle part of ``diagU`` the diagonal in ω, φ, κ at
+        ``st``.
         """
         S = self.reduced
         tg = S.tracks
@@ -349,6 +361,13 @@ class BundleProblem:
         bc[S.cam_present] = np.add.reduceat(np.take(gc, S.cam_order, axis=0), S.cam_starts)
         bc[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
         bc[:, 3:] += self.exterior.angles_w * wrap(self.exterior.angles_obs - st.angles)
+        diagU = ne.diagU
+        if rot is not None:
+            Ja = np.take(Je[:, :, 3:] * self.obs.weight[:, :, None], S.cam_order, axis=0)
+            diagU = diagU.copy()
+            diagU[:, 3:] = self.exterior.angles_w
+            diagU[S.cam_present, 3:] += np.add.reduceat(np.sum(Ja * Ja, axis=1), S.cam_starts)
+            bc[:, 3:] = np.linalg.solve(rot.transpose(0, 2, 1), bc[:, 3:, None])[:, :, 0]
         gp = Jp[:, 0, :] * rp[:, 0, None] + Jp[:, 1, :] * rp[:, 1, None]
         bp = tg.by_point @ tg.take(gp)
         bp += self.points.prior_w * (self.points.prior_obs - st.xyz[self.points.unknown])
@@ -363,7 +382,7 @@ class BundleProblem:
             rays=ne.rays,
             n_obs=ne.n_obs,
             bp=bp,
-            diagU=ne.diagU,
+            diagU=diagU,
             diagV=ne.diagV,
         )
 
