@@ -204,6 +204,21 @@ def test_self_calibration_recovers_a_simulated_affinity():
     assert per_strip["additional"].shape == (6,)
 
 
+def test_a_sets_name_stands_for_the_set_and_anything_else_is_named_in_one_line():
+    from orientviz.bundle import ap_set
+    from orientviz.errors import InputError
+
+    sim = ov.simulate_block(2, 5, rng=4)
+    by_name = ov.bundle_adjust(sim.block, additional="ebner12", ap_sigma=100.0, precision=False)
+    by_set = ov.bundle_adjust(sim.block, additional=ap_set("ebner12"), ap_sigma=100.0, precision=False)
+    assert by_name["additional"].shape == (12,)
+    np.testing.assert_array_equal(by_name.x, by_set.x)
+    with pytest.raises(InputError, match="unknown additional-parameter set 'ebner13'"):
+        ov.bundle_adjust(sim.block, additional="ebner13")
+    with pytest.raises(InputError, match=r"additional: expected .* got int"):
+        ov.bundle_adjust(sim.block, additional=12)
+
+
 def test_approximate_values_from_scratch_reach_the_same_optimum():
     from orientviz.block import approximate_values
 
@@ -321,3 +336,44 @@ def test_planimetric_control_and_z_only_centres_give_the_datum():
     res = ov.bundle_adjust(b, precision=False)
     assert res.converged
     assert abs(res.sigma0 - 1.0) < 0.1
+
+
+def test_result_names_read_like_the_list_of_parameter_names():
+    sim = ov.simulate_block(2, 5, rng=3)
+    res = ov.bundle_adjust(sim.block, precision=False)
+    b = sim.block
+    want = [f"{i}.{n}" for i in b.images.ids for n in ("X0", "Y0", "Z0", "omega", "phi", "kappa")]
+    want += [f"{i}.{c}" for i in b.points.ids for c in ("X", "Y", "Z")]
+    assert len(res.names) == len(want) == res.x.size
+    assert res.names == want and list(res.names) == want
+    assert res.names[: 6 * b.n_images] == want[: 6 * b.n_images]
+    name = f"{b.points.ids[2]}.Y"
+    assert name in res.names and res.index(name) == want.index(name)
+    assert res[name] == res.x[want.index(name)]
+
+
+def test_the_jacobians_of_a_kept_projection_are_those_of_its_state():
+    from orientviz.bundle._checks import point_setup
+    from orientviz.bundle._problem import BundleProblem
+    from orientviz.bundle._state import BundleState
+
+    sim = ov.simulate_block(2, 5, rng=8)
+    b = sim.block
+    prob = BundleProblem(b, point_setup(b, "fixed"))
+    z = np.zeros(0)
+    st = BundleState(b.images.X0.copy(), b.images.angles.copy(), b.points.xyz.copy(), z, z)
+    moved = BundleState(st.X0 + 0.5, st.angles + 1e-3, st.xyz, z, z)
+    for local in (False, True):
+        rw, Je, Jp = prob.residuals(st, jac=True, local=local)
+        rw1, none, _ = prob.residuals(st, jac=False, keep=True)
+        assert none is None
+        np.testing.assert_array_equal(rw1, rw)
+        for a, b_ in zip(prob.residuals(st, jac=True, local=local), (rw, Je, Jp)):
+            np.testing.assert_array_equal(a, b_)
+        # a projection kept at one state never serves another
+        prob.residuals(st, jac=False, keep=True)
+        want = prob.residuals(moved, jac=True, local=local)
+        assert not np.array_equal(want[0], rw)
+        prob.residuals(st, jac=False, keep=True)
+        for a, b_ in zip(prob.residuals(moved, jac=True, local=local), want):
+            np.testing.assert_array_equal(a, b_)

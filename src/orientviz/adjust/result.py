@@ -8,6 +8,7 @@ of unit weight, ``σ̂0 = sqrt(vᵀPv / r)`` with redundancy ``r = n − u``.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
@@ -60,8 +61,9 @@ class Adjustment:
     ----------
     x : ndarray, shape (u,)
         Estimated parameters (internal units: m, mm, rad).
-    names : list of str
-        Parameter names, e.g. ``"img3.omega"``.
+    names : sequence of str
+        Parameter names, e.g. ``"img3.omega"`` (a list; a bundle's is a
+        :class:`~orientviz.bundle._problem.ParameterNames`, formed when first read).
     groups : dict of str to slice
         Named groups of parameters (``"exterior"``, ``"points"``, …) as slices of ``x``.
     sigma0 : float
@@ -102,7 +104,7 @@ class Adjustment:
     """
 
     x: F64
-    names: list[str]
+    names: Sequence[str]
     sigma0: float
     redundancy: int
     residuals: F64

@@ -259,15 +259,17 @@ class Block:
         if role is None:
             role_arr = np.zeros(p, dtype=np.int8)
         else:
-            role_arr = np.array(
-                [
-                    ROLES.index(r) if isinstance(r, str) else int(r)
-                    for r in np.asarray(role).ravel()
-                ],
-                dtype=np.int8,
-            )
-            if role_arr.shape != (p,) or (p and (role_arr.min() < 0 or role_arr.max() > 2)):
+            codes = np.asarray(role)
+            if codes.dtype.kind in "iu":  # integer codes: no per-point Python loop
+                codes = codes.reshape(-1).astype(np.int64)
+            else:
+                codes = np.array(
+                    [ROLES.index(r) if isinstance(r, str) else int(r) for r in codes.ravel()],
+                    dtype=np.int64,
+                )
+            if codes.shape != (p,) or (p and (codes.min() < 0 or codes.max() > 2)):
                 raise ValueError(f"point role: expected {p} roles out of {ROLES}, got {role}")
+            role_arr = codes.astype(np.int8)
         if xyz_known is None:
             known = np.where((role_arr > 0)[:, None], xyz, np.nan)
         else:
@@ -317,14 +319,21 @@ class Block:
             sequence=sequence,
             meta=dict(meta or {}),
         )
-        block.validate()
-        return block
+        # ids numbered here are distinct: only given ones are checked for repeats
+        given = (camera_ids is not None, image_ids is not None, point_ids is not None)
+        return block._validate(given)
 
     def validate(self) -> Block:
         """Check ids for duplicates and array shapes for consistency; return ``self``."""
-        for ids, what in ((self.cameras.ids, "camera"), (self.images.ids, "image"),
-                          (self.points.ids, "point")):  # fmt: skip
-            if len(set(map(str, ids))) != len(ids):
+        return self._validate((True, True, True))
+
+    def _validate(self, check_ids: tuple[bool, bool, bool]) -> Block:
+        """:meth:`validate`, the ids of cameras, images, points checked where asked."""
+        for ids, what, check in zip(
+            (self.cameras.ids, self.images.ids, self.points.ids), ("camera", "image", "point"),
+            check_ids,
+        ):  # fmt: skip
+            if check and len(set(map(str, ids))) != len(ids):
                 index_ids(ids, what)  # names the first repeated id
         m, p, n = len(self.images), len(self.points), len(self.observations)
         for name, arr, shape in (

@@ -49,7 +49,7 @@ from ..adjust.result import Iteration
 from ..block import Block
 from ..errors import NotDeterminableError
 from ._checks import check_connected, check_datum, check_determinable, point_setup
-from ._local_rotation import LOCAL_MIN_CORRECTION, LOCAL_SIGMA0
+from ._local_rotation import LOCAL_MIN_CORRECTION, LOCAL_SIGMA0, angle_map
 from ._problem import BundleProblem
 from ._result import BundleResult
 from ._state import BundleState
@@ -65,18 +65,38 @@ POOR_START_SIGMA0: float = 30.0
 #: median ray length and no angle by more than this (rad): the Jacobians then change by
 #: about as little (1e-4 relative), less than the tolerance of the border's solve.
 AP_REUSE: float = 1e-4
-#: A plain bundle without precision solves the step after a small one with the normal
-#: matrix of that small step (a *chord* step dx = N(x_old)⁻¹ Jᵀ P (l − f) at the new
-#: iterate: only the gradient is formed anew, N and the factor of S are the last ones)
-#: when that step moved no projection centre or point by more than this fraction of
-#: the median ray length and no angle by more than this (rad). N then differs from the
-#: new one by about as little relative, the chord step's correction from the
-#: Gauss-Newton step by that fraction of itself, so the stopping rule reads it as it
-#: reads a Newton step (and the iterate it leads to is as close to the optimum); a
-#: chord step that does not stop is followed by a full one. Saves forming and factoring
-#: N in the step that confirms convergence: on the bench's 2 100-image block the third
-#: step moves by 6e-5 of the ray length, the second by 1e-2.
+#: A plain bundle without precision solves the steps after a small one with the normal
+#: matrix of that step (*chord* steps dx = N(x_old)⁻¹ Jᵀ P (l − f) at the new iterate:
+#: only the gradient is formed anew, N's point blocks and the factor of S are the old
+#: ones) when that full undamped step moved no projection centre or point by more than
+#: this fraction of the median ray length and no angle by more than this (rad). Chord
+#: steps follow each other while each corrects by less than :data:`CHORD_CONTRACTION`
+#: times the step before; one that does not is dropped and the step solved in full at
+#: the same iterate. The factor of a step in rotations of the image frames
+#: (:mod:`orientviz.bundle._local_rotation`) serves steps in ω, φ, κ through the map A
+#: of :func:`~orientviz.bundle._local_rotation.angle_map` (J_θ = J_δ·A per image).
+#:
+#: Why the stopping rule may judge a chord step: at one iterate the chord correction
+#: δ_c = N_old⁻¹ g and the Newton correction δ_N = N⁻¹ g satisfy δ_N = N⁻¹ N_old δ_c,
+#: so with ‖N⁻¹ N_old − I‖ ≤ ε (in the rule's norm, corrections in conditional σ) the
+#: rule reads δ_c within a factor 1 ± ε of δ_N. Near the optimum chord steps shrink the
+#: error by about ε each; the ratio θ of successive corrections observes that, and as
+#: long as it holds the iterate after a correction δ_k is within θ/(1 − θ)·‖δ_k‖ of the
+#: optimum — with θ < 1/2 within ‖δ_k‖ < tol, the distance a Newton stop leaves or less.
+#: ε grows faster than the move (the blocks' weak bending modes change most; measured,
+#: bench blocks of ``benchmarks/bench_bundle.py``): 3e-4 after the 2 100-image block's
+#: third step (move 6.5e-5: chord 0.0013043 σ, Newton 0.0013047), about 0.17 after the
+#: small block's second (1.7e-3), 0.6 after the medium block's (5e-3) and 5 after the
+#: large block's (1.4e-2: the chord corrects by 44 σ where Newton corrects by 10 σ;
+#: chord steps from there take ten iterations to the stop, with the fall-back six, and
+#: more time than the four of today). Hence the small threshold: the steps it
+#: lets through contract by about 0.1 or less, and the large block keeps its three
+#: factorisations (``benchmarks/README.md``, "Chord steps").
 CHORD_REUSE: float = 1e-3
+#: A chord step must correct by less than this times the step before (else it is
+#: replaced by a full step): the bound 1/2 keeps the distance to the optimum after a
+#: chord step that meets the stopping rule below the tolerance (see :data:`CHORD_REUSE`).
+CHORD_CONTRACTION: float = 0.5
 
 
 def bundle_adjust(
@@ -115,6 +135,8 @@ def bundle_adjust(
     additional : AdditionalParameters, optional
         Self-calibration set (``design(xy) -> (n, 2, k)`` in mm per unit, evaluated at the
         observed coordinates): ``x_obs + v = project(...) + A(x_obs)·a``.
+        A set's name (``"ebner12"``, ``"brown"``, ``"gruen44"``) stands for
+        ``ap_set(name)``; a :class:`LensModel` estimates the camera's own parameters.
     ap_group : array_like of int, shape (m,), optional
         Group of each image for the additional parameters (default: one group).
     ap_sigma : float or array_like (k,), optional
@@ -166,8 +188,8 @@ def bundle_adjust(
         block, setup, additional=additional, ap_group=ap_group, ap_sigma=ap_sigma, solver=solver,
         auxiliary=auxiliary,
     )  # fmt: skip
-    names = prob.names()
-    red_names = names[: 6 * prob.m]
+    names = prob.names()  # formed when read (a message, the result's names)
+    red_names = prob.names(exterior_only=True)
     xyz0 = block.points.xyz.copy()
     fixed = setup.fixed
     xyz0[fixed] = np.where(np.isfinite(setup.known[fixed]), setup.known[fixed], xyz0[fixed])
@@ -294,7 +316,7 @@ class _BundleSteps:
         self.last_correction = np.inf
         # chord steps (CHORD_REUSE): the factor of the last full step while it may serve
         self.chord_allowed = not precision and not (prob.q or prob.aux or prob.ap.lens is not None)
-        self.chord_factor = None
+        self.chord_factor = None  # (factor of S, its NormalEquations, local?)
         self.chord_pending = None  # the factor of the last solved step, if it may serve
         self.chord_step = False  # the last solved step used chord_factor
         # the scale of the step's move (_relative_move): the border's median ray length
@@ -304,11 +326,13 @@ class _BundleSteps:
 
     def start(self, st: BundleState) -> Evaluation:
         """Evaluate the start once (the loop asks for it again: no second evaluation)."""
-        ev = self._evaluate(st, True, False)
         if self.local_allowed:  # σ0 of the start decides how its Jacobian is formed
-            self.last_cost = ev.cost
-            if self._poor():  # a poor start: derivatives by rotations of the image frames
-                ev = self._evaluate(st, True, True)
+            self.last_cost = self._evaluate(st, False, False, keep=True).cost
+            # a poor start: derivatives by rotations of the image frames (from the kept
+            # projection: the rays are projected once)
+            ev = self._evaluate(st, True, self._poor())
+        else:
+            ev = self._evaluate(st, True, False)
         self._start = (st, ev)
         return ev
 
@@ -318,20 +342,23 @@ class _BundleSteps:
             return ev
         return self._evaluate(st, jacobian, jacobian and self.local_allowed and self._poor())
 
-    def _evaluate(self, st: BundleState, jacobian: bool, local: bool) -> Evaluation:
-        rw, Je, Jp = self.prob.residuals(st, jac=jacobian, local=local)
+    def _evaluate(
+        self, st: BundleState, jacobian: bool, local: bool, keep: bool = False
+    ) -> Evaluation:
+        rw, Je, Jp = self.prob.residuals(st, jac=jacobian, local=local, keep=keep)
         cost = self.prob.cost(st, rw)
         self.pending_cost = cost
         return Evaluation(cost, bool(np.isfinite(cost)), _Linearisation((rw, Je, Jp), local))
 
     def _poor(self) -> bool:
         """Still far from the solution: σ0 of the last accepted state (the start: unknown,
-        poor) at least LOCAL_SIGMA0 and the last step not small."""
+        poor) at least LOCAL_SIGMA0 and the step to the state evaluated not small (its
+        correction: the last one solved)."""
         dof = self.prob.redundancy
         if self.last_cost is None or dof <= 0:
             return self.last_cost is None
         s0 = float(np.sqrt(self.last_cost / dof))
-        return s0 >= LOCAL_SIGMA0 and self.last_correction >= LOCAL_MIN_CORRECTION
+        return s0 >= LOCAL_SIGMA0 and self.last_rel >= LOCAL_MIN_CORRECTION
 
     @staticmethod
     def is_local(ev: Evaluation) -> bool:
@@ -352,39 +379,69 @@ class _BundleSteps:
         if ev.data[1] is None:  # evaluated without derivatives (a stop was expected)
             ev = self.evaluate(st, True)
         rw, Je, Jp = ev.data
-        chord = self.chord_factor if lam == 0 and not self.is_local(ev) else None
+        local = self.is_local(ev)
+        chord = None  # a chord step in ω, φ, κ, or in frame rotations by such a factor
+        if self.chord_factor is not None and lam == 0 and (self.chord_factor[2] or not local):
+            chord = self._chord(st, rw, Je, Jp, local)  # None: it would not contract enough
         self.chord_step = chord is not None
-        if chord is not None:  # N of the last step, the gradient of this state
-            ne = prob.chord_normal(st, rw, Je, Jp, chord[1])
-            dc, dp, da, fac = prob.solve(ne, self.red_names, fac=chord[0])
-        else:
+        if chord is None:
             ne = prob.normal(st, rw, Je, Jp, lam)
             dc, dp, da, fac = prob.solve(ne, self.red_names)
-        # parameter-based stopping: corrections in units of the conditional σ
-        rel = max(
-            float(np.max(np.abs(dc) * np.sqrt(ne.diagU), initial=0.0)),
-            float(np.max(np.abs(dp) * np.sqrt(ne.diagV), initial=0.0)),
-            float(np.max(np.abs(da) * np.sqrt(ne.diagF), initial=0.0))
-            if prob.q or prob.na
-            else 0.0,
-        )
+            rel = self._correction(ne, dc, dp, da)
+        else:
+            rel, ne, dc, dp, da, fac = chord
         dx = None
         if self.keep_x:  # same layout as x: zeros for fixed points
             dpa = np.zeros((prob.block.n_points, 3))
             dpa[prob.points.unknown] = dp
             dx = np.concatenate([dc.ravel(), dpa.ravel(), da[: prob.q]])
-        local = self.is_local(ev)
         self.last_rel, self.last_local = rel, local
         self.chord_pending = None
-        if self.chord_allowed and lam == 0 and not (local or self.chord_step):
-            if self._relative_move(st, dc, dp) < CHORD_REUSE:
-                self.chord_pending = (fac, ne)
+        if self.chord_allowed and lam == 0:
+            if self.chord_step:  # the factor served: it may serve the next step too
+                self.chord_pending = self.chord_factor
+            elif self._relative_move(st, dc, dp) < CHORD_REUSE:
+                self.chord_pending = (fac, ne, local)
         # the normal equations and their factor live on only where the precision may reuse
         # them (an undamped plain step, see accepted); else they are freed before the trial
         # point's Jacobians are formed (the peak memory of a large block)
         if not (self.precision and lam == 0 and not (prob.q or prob.aux or local)):
             ne = fac = None
         return Step(rel, dx, (dc, dp, da, fac, ne, local))
+
+    def _correction(self, ne, dc: F64, dp: F64, da: F64) -> float:
+        """The largest correction in units of its conditional σ (the stopping measure)."""
+        return max(
+            float(np.max(np.abs(dc) * np.sqrt(ne.diagU), initial=0.0)),
+            float(np.max(np.abs(dp) * np.sqrt(ne.diagV), initial=0.0)),
+            float(np.max(np.abs(da) * np.sqrt(ne.diagF), initial=0.0))
+            if self.prob.q or self.prob.na
+            else 0.0,
+        )
+
+    def _chord(self, st: BundleState, rw: F64, Je: F64, Jp: F64, local: bool):
+        """A chord step by :attr:`chord_factor` (:data:`CHORD_REUSE`) at ``st``:
+        (correction, normal equations, dc, dp, da, factor), or None when its correction
+        is not below :data:`CHORD_CONTRACTION` times the last accepted one.
+
+        ``local``: the Jacobian at ``st`` is by rotations of the image frames. A factor
+        of such a step serves a step in ω, φ, κ through the map A of
+        :func:`~orientviz.bundle._local_rotation.angle_map` at ``st``: J_θ = J_δ·T with
+        T = diag(I, A) per image, so N_θ = Tᵀ N_δ T and the step is
+        dθ = T⁻¹ N_δ⁻¹ T⁻ᵀ g_θ — the gradient's angle rows A⁻ᵀ g_θ, the solution's
+        A⁻¹ δ (:meth:`BundleProblem.chord_normal` ``rot``).
+        """
+        prob = self.prob
+        fac, ne_old, old_local = self.chord_factor
+        A = angle_map(st.angles, prob.block.sequence) if old_local and not local else None
+        ne = prob.chord_normal(st, rw, Je, Jp, ne_old, rot=A)
+        dc, dp, da, fac = prob.solve(ne, self.red_names, fac=fac)
+        if A is not None:  # back to ω, φ, κ
+            dc[:, 3:] = np.linalg.solve(A, dc[:, 3:, None])[:, :, 0]
+        rel = self._correction(ne, dc, dp, da)
+        if not rel < CHORD_CONTRACTION * self.last_correction:
+            return None
+        return rel, ne, dc, dp, da, fac
 
     def _relative_move(self, st: BundleState | None, dc: F64, dp: F64) -> float:
         """The largest change of a step, centres and points in units of the median ray

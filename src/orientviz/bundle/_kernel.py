@@ -7,10 +7,12 @@ z = −c, R image → object, ``x = x0 − c·u/w``, ``y = y0 − c·v/w`` with
 few images: everything that depends only on the image — R, and for each angle θ the
 axial vector ω_θ of the skew-symmetric (∂R/∂θ)ᵀ R, so that ∂(u, v, w)/∂θ =
 (∂R/∂θ)ᵀ (X − X0) = ω_θ × (u, v, w) — is computed once per *image* and gathered per ray
-in one take; the per-ray work is then a few dozen products of (n,) arrays instead of
+by a take of a per-image table; the per-ray work is then a few dozen products of (n,) arrays instead of
 stacked 3 × 3 products (numpy pays ~100 ns per tiny matrix; a block of 10⁴ rays takes
 about 1 ms). Rotation sequence ``"opk"`` (R = R_ω R_φ R_κ) or ``"pok"``
-(R = R_φ R_ω R_κ), see :mod:`orientviz.rotation`.
+(R = R_φ R_ω R_κ), see :mod:`orientviz.rotation`. A :class:`RayProjection` keeps what
+the Jacobians reuse, so that they can follow a projection (:func:`ray_jacobians`: the
+bundle's start decides from the projection's misclosures which Jacobian it forms).
 """
 
 from __future__ import annotations
@@ -24,32 +26,35 @@ from ._local_rotation import local_derivatives
 F64 = NDArray[np.float64]
 
 
-def _image_table(
-    X0: F64, angles: F64, c: F64, x0: F64, y0: F64, sequence: str, jac: bool, local: bool
-) -> F64:
-    """Per-image rows to gather per ray, shape (k, m): R (9, row-major), X0, c, x0, y0
-    and with ``jac`` the axial vectors ω_θ (9: ω, φ, κ or the local δ's, 3 each)."""
+def _image_table(X0: F64, angles: F64, c: F64, x0: F64, y0: F64, sequence: str) -> F64:
+    """Per-image rows to gather per ray, shape (15, m): R (9, row-major), X0, c, x0, y0."""
     R = matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2], sequence)
     m = R.shape[0]
     cols = [R.reshape(m, 9), X0, c[:, None], x0[:, None], y0[:, None]]
-    if jac:
-        if local:
-            dR = local_derivatives(R)
-        else:
-            dR = np.stack(matrix_derivatives(angles[:, 0], angles[:, 1], angles[:, 2], sequence), 1)
-        # (∂R/∂θ)ᵀ R is skew-symmetric (R orthonormal): its axial vector, averaged over
-        # the two entries of each component
-        M = dR.transpose(0, 1, 3, 2) @ R[:, None]
-        omega = 0.5 * np.stack(
-            [
-                M[:, :, 2, 1] - M[:, :, 1, 2],
-                M[:, :, 0, 2] - M[:, :, 2, 0],
-                M[:, :, 1, 0] - M[:, :, 0, 1],
-            ],
-            axis=2,
-        )
-        cols.append(omega.reshape(m, 9))
     return np.ascontiguousarray(np.concatenate(cols, axis=1).T)
+
+
+def _axial_table(angles: F64, sequence: str, local: bool) -> F64:
+    """Per-image axial vectors ω_θ of (∂R/∂θ)ᵀ R, shape (9, m): ω, φ, κ (or with ``local``
+    the rotations δ of the image frame), 3 each."""
+    R = matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2], sequence)
+    m = R.shape[0]
+    if local:
+        dR = local_derivatives(R)
+    else:
+        dR = np.stack(matrix_derivatives(angles[:, 0], angles[:, 1], angles[:, 2], sequence), 1)
+    # (∂R/∂θ)ᵀ R is skew-symmetric (R orthonormal): its axial vector, averaged over the
+    # two entries of each component
+    M = dR.transpose(0, 1, 3, 2) @ R[:, None]
+    omega = 0.5 * np.stack(
+        [
+            M[:, :, 2, 1] - M[:, :, 1, 2],
+            M[:, :, 0, 2] - M[:, :, 2, 0],
+            M[:, :, 1, 0] - M[:, :, 0, 1],
+        ],
+        axis=2,
+    )
+    return np.ascontiguousarray(omega.reshape(m, 9).T)
 
 
 def _image_vectors(G: F64, xyz: F64) -> tuple[F64, F64, F64]:
@@ -67,6 +72,36 @@ def _image_vectors(G: F64, xyz: F64) -> tuple[F64, F64, F64]:
     w += G[5] * dy
     w += G[8] * dz
     return u, v, w
+
+
+class RayProjection:
+    """Image coordinates of rays and what their Jacobians reuse (:func:`ray_jacobians`).
+
+    Attributes
+    ----------
+    xy : ndarray, shape (n, 2)
+        Image coordinates in mm.
+    G : ndarray, shape (15, n)
+        The per-image rows of each ray (R row-major, X0, c, x0, y0).
+    u, v, w : ndarray, shape (n,)
+        Rᵀ (X − X0) per ray in m.
+    a : ndarray, shape (n,)
+        −c/w per ray in mm/m.
+    obs_image : ndarray of int, shape (n,)
+        Image of each ray.
+    """
+
+    def __init__(self, X0, angles, c, x0, y0, obs_image, xyz, sequence: str) -> None:
+        G = _image_table(X0, angles, c, x0, y0, sequence).take(obs_image, axis=1)
+        u, v, w = _image_vectors(G, xyz)
+        a = -G[12] / w
+        xy = np.empty((obs_image.shape[0], 2))
+        np.multiply(a, u, out=xy[:, 0])
+        xy[:, 0] += G[13]
+        np.multiply(a, v, out=xy[:, 1])
+        xy[:, 1] += G[14]
+        self.xy, self.G, self.u, self.v, self.w, self.a = xy, G, u, v, w, a
+        self.obs_image = obs_image
 
 
 def project_block(
@@ -95,13 +130,7 @@ def project_block(
         Object point of each observation in m.
     sequence : {"opk", "pok"}
     """
-    G = _image_table(X0, angles, c, x0, y0, sequence, False, False).take(obs_image, axis=1)
-    u, v, w = _image_vectors(G, xyz)
-    a = G[12] / w  # c / w
-    out = np.empty((obs_image.shape[0], 2))
-    np.subtract(G[13], a * u, out=out[:, 0])
-    np.subtract(G[14], a * v, out=out[:, 1])
-    return out
+    return RayProjection(X0, angles, c, x0, y0, obs_image, xyz, sequence).xy
 
 
 def collinearity_block(
@@ -130,21 +159,23 @@ def collinearity_block(
         ∂(x, y)/∂(X0, Y0, Z0, ω, φ, κ) in mm/m and mm/rad.
     J_point : ndarray, shape (n, 2, 3)
         ∂(x, y)/∂(X, Y, Z) in mm/m.
+    """
+    p = RayProjection(X0, angles, c, x0, y0, obs_image, xyz, sequence)
+    return (p.xy, *ray_jacobians(p, angles, sequence, local))
+
+
+def ray_jacobians(p: RayProjection, angles: F64, sequence: str, local: bool = False):
+    """J_exterior (n, 2, 6) and J_point (n, 2, 3) of the rays of a :class:`RayProjection`
+    (see :func:`collinearity_block`; ``angles`` those of the projection).
 
     Notes
     -----
     With a = −c/w, b = c·(u, v)/w²: ∂(x, y)/∂(u, v, w) = [[a, 0, b_u], [0, a, b_v]],
     ∂(u, v, w)/∂X = Rᵀ (rows of Rᵀ: columns of R) and ∂(u, v, w)/∂θ = ω_θ × (u, v, w).
     """
-    G = _image_table(X0, angles, c, x0, y0, sequence, True, local).take(obs_image, axis=1)
-    n = obs_image.shape[0]
-    u, v, w = _image_vectors(G, xyz)
-    a = -G[12] / w
-    xy = np.empty((n, 2))
-    np.multiply(a, u, out=xy[:, 0])
-    xy[:, 0] += G[13]
-    np.multiply(a, v, out=xy[:, 1])
-    xy[:, 1] += G[14]
+    G, u, v, w, a = p.G, p.u, p.v, p.w, p.a
+    Om = _axial_table(angles, sequence, local).take(p.obs_image, axis=1)
+    n = u.shape[0]
     bu = a * u
     bu /= w
     bu *= -1.0  # c u / w²
@@ -161,7 +192,7 @@ def collinearity_block(
         np.multiply(a, G[3 * j + 1], out=E[1, 6 + j])
         E[1, 6 + j] += bv * r2
     for k in range(3):  # ∂/∂θ_k: (du, dv, dw) = ω_k × (u, v, w)
-        ox, oy, oz = G[15 + 3 * k], G[16 + 3 * k], G[17 + 3 * k]
+        ox, oy, oz = Om[3 * k], Om[3 * k + 1], Om[3 * k + 2]
         dw = ox * v
         dw -= oy * u
         du = oy * w
@@ -174,7 +205,7 @@ def collinearity_block(
         E[1, 3 + k] += bv * dw
     np.negative(E[:, 6:], out=E[:, :3])
     J = E.transpose(2, 0, 1)
-    return xy, np.ascontiguousarray(J[:, :, :6]), np.ascontiguousarray(J[:, :, 6:])
+    return np.ascontiguousarray(J[:, :, :6]), np.ascontiguousarray(J[:, :, 6:])
 
 
 def normalised_block(

@@ -11,7 +11,10 @@ The bundle takes such steps while the start is poor (σ0 of the linearisation po
 least :data:`LOCAL_SIGMA0` and the last step not yet small) and only if nothing else
 refers to the angles (no observed attitudes, additional parameters or auxiliary
 data); the last steps — those the stopping rule judges and the precision reuses — are
-always taken in ω, φ, κ. :func:`apply_local` turns R(δ) back into the angles.
+always taken in ω, φ, κ. :func:`apply_local` turns R(δ) back into the angles;
+:func:`angle_map` relates the two parametrisations to first order, so that the factored
+normal matrix of a small step in δ can serve the next steps in ω, φ, κ (chord steps,
+:data:`orientviz.bundle._adjust.CHORD_REUSE`).
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..rotation import matrix_from_opk, matrix_from_rotvec, opk_from_matrix
+from ..rotation import matrix_derivatives, matrix_from_opk, matrix_from_rotvec, opk_from_matrix
 
 F64 = NDArray[np.float64]
 
@@ -50,3 +53,21 @@ def apply_local(angles: F64, delta: F64, sequence: str = "opk") -> F64:
     out = np.column_stack(opk_from_matrix(Rn, sequence)).reshape(-1, 3)
     # keep each angle on the branch nearest the old one (no 2π jumps in the history)
     return angles + (out - angles + np.pi) % (2 * np.pi) - np.pi
+
+
+def angle_map(angles: F64, sequence: str = "opk") -> F64:
+    """The map A (m, 3, 3) from changes of ω, φ, κ to rotations of the image frame.
+
+    ∂R/∂θ = R·[a_θ]× with a_θ the axial vector of Rᵀ ∂R/∂θ; A's columns are a_ω, a_φ,
+    a_κ, so a change dθ of the angles rotates the frame by δ = A·dθ (first order) and
+    the Jacobians relate as J_θ = J_δ·A (the chord step's change of parametrisation in
+    :class:`orientviz.bundle._adjust._BundleSteps`).
+    """
+    R = matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2], sequence)
+    dR = np.stack(matrix_derivatives(angles[:, 0], angles[:, 1], angles[:, 2], sequence), 1)
+    M = R.transpose(0, 2, 1)[:, None] @ dR  # (m, 3 angles, 3, 3): Rᵀ ∂R/∂θ
+    a = 0.5 * np.stack(
+        [M[:, :, 2, 1] - M[:, :, 1, 2], M[:, :, 0, 2] - M[:, :, 2, 0], M[:, :, 1, 0] - M[:, :, 0, 1]],
+        axis=2,
+    )  # (m, θ, k)
+    return a.transpose(0, 2, 1)

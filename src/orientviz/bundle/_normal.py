@@ -91,7 +91,7 @@ class NormalEquations:
     ----------
     blocks : ndarray or None
         6 × 6 blocks of the reduced camera system S inside its band (None when only the
-        rest was formed, for a chord step: :meth:`BundleProblem.normal` ``schur=False``).
+        rest was formed, for a chord step: :meth:`BundleProblem.chord_normal`).
     rhs : ndarray, shape (6m,)
         Reduced right-hand side r.
     Vinv : ndarray, shape (p_var, 3, 3)

@@ -274,8 +274,9 @@ def additional_block(
 
     Parameters
     ----------
-    additional : AdditionalParameters or None
-        ``design(xy (n, 2) mm) -> (n, 2, k)``, evaluated at the observed coordinates.
+    additional : AdditionalParameters, LensModel, str or None
+        ``design(xy (n, 2) mm) -> (n, 2, k)``, evaluated at the observed coordinates; a
+        string is a set's name for :func:`~orientviz.bundle.ap_set`.
     ap_group : array_like of int, shape (m,), optional
         Group of each image (default: one group).
     ap_sigma : float or array_like (k,), optional
@@ -283,6 +284,17 @@ def additional_block(
     """
     if additional is None:
         return AdditionalBlock()
+    if isinstance(additional, str):  # a set's name, as on the command line
+        from ._additional import ap_set
+
+        additional = ap_set(additional)
+    elif not isinstance(additional, LensModel) and not (
+        callable(getattr(additional, "design", None)) and hasattr(additional, "names")
+    ):
+        raise InputError(
+            "additional: expected a set's name (e.g. 'ebner12'), ap_set(name, ...) or a "
+            f"LensModel, got {type(additional).__name__}"
+        )
     m, n = block.n_images, obs.n
     lens = None
     if isinstance(additional, LensModel):  # the camera itself: one group per camera

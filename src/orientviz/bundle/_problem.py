@@ -13,6 +13,8 @@ the engine's (:func:`orientviz.adjust.engine.iterate`).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -21,7 +23,7 @@ from ._ap_normal import ap_normal, point_ap_term
 from ._auxiliary import BundleAuxiliary, auxiliary_rows
 from ._border import solve_border
 from ._checks import PointSetup
-from ._kernel import collinearity_block, normalised_block, project_block
+from ._kernel import RayProjection, normalised_block, ray_jacobians
 from ._local_rotation import apply_local
 from ._normal import NormalEquations
 from ._parts import (
@@ -40,6 +42,61 @@ from ._tracks import point_products, schur_blocks
 
 F64 = NDArray[np.float64]
 EXTERIOR_NAMES = ("X0", "Y0", "Z0", "omega", "phi", "kappa")
+
+
+class ParameterNames(Sequence):
+    """The names of a bundle's parameters, a sequence of str formed when first read.
+
+    ``"<image id>.<X0|Y0|Z0|omega|phi|kappa>"`` per image, ``"<point id>.<X|Y|Z>"`` per
+    point, then the additional parameters' names: the order of ``x``. A bundle needs
+    them only for a message or when a result's names are read; a block of 40 000
+    points has 130 000 of them (~10 ms to form). Compares equal to a list of the same
+    names; slices are lists.
+    """
+
+    def __init__(self, image_ids, point_ids, extra) -> None:
+        self._parts = (image_ids, point_ids, extra)
+        self._n = 6 * len(image_ids) + 3 * len(point_ids) + len(extra)
+        self._items: list[str] | None = None
+
+    def _list(self) -> list[str]:
+        if self._items is None:
+            image_ids, point_ids, extra = self._parts
+            out = [f"{i}.{n}" for i in image_ids for n in EXTERIOR_NAMES]
+            out += [f"{i}.{c}" for i in point_ids for c in ("X", "Y", "Z")]
+            self._items = out + list(extra)
+        return self._items
+
+    def __len__(self) -> int:
+        return self._n
+
+    def __getitem__(self, i):
+        return self._list()[i]
+
+    def __iter__(self):
+        return iter(self._list())
+
+    def __contains__(self, name) -> bool:
+        return name in self._list()
+
+    def index(self, name, *args) -> int:
+        return self._list().index(name, *args)
+
+    def __eq__(self, other) -> bool:
+        if isinstance(other, (ParameterNames, list, tuple)):
+            return self._list() == list(other)
+        return NotImplemented
+
+    __hash__ = None  # like a list
+
+    def __add__(self, other) -> list[str]:
+        return self._list() + list(other)
+
+    def __radd__(self, other) -> list[str]:
+        return list(other) + self._list()
+
+    def __repr__(self) -> str:
+        return repr(self._list())
 
 
 class BundleProblem:
@@ -106,6 +163,7 @@ class BundleProblem:
         )
         self.border = BorderSolver()
         self._design_at: BundleState | None = None  # iterate of a lens model's design
+        self._projection = None  # (iterate, RayProjection) kept by residuals(keep=True)
         #: per (point, group) pairs of rays for the precision with parameters (a cache)
         self.ray_groups = None
         self.aux: BundleAuxiliary | None = None
@@ -137,18 +195,30 @@ class BundleProblem:
         return self.aux.n_global if self.aux is not None else 0
 
     # ----------------------------------------------------------------- model
-    def residuals(self, st: BundleState, jac: bool, local: bool = False):
+    def residuals(self, st: BundleState, jac: bool, local: bool = False, keep: bool = False):
         """Weighted misclosures l − f (n, 2)·(1/σ), with Jacobians if ``jac``; ``local``:
-        by rotations of the image frame (:mod:`orientviz.bundle._local_rotation`)."""
+        by rotations of the image frame (:mod:`orientviz.bundle._local_rotation`).
+
+        ``keep`` (without ``jac``): the projection is kept until the next call, which
+        forms the Jacobians at the same ``st`` from it instead of projecting again.
+        """
         if self.ap.lens is not None:
             return self._lens_residuals(st, jac)
-        io = self.interior
-        args = (st.X0, st.angles, io.c, io.x0, io.y0, self.obs.image, st.xyz[self.obs.point])
-        if jac:
-            f, Je, Jp = collinearity_block(*args, self.block.sequence, local=local)
+        kept, self._projection = self._projection, None
+        seq = self.block.sequence
+        if kept is not None and kept[0] is st:
+            proj = kept[1]
         else:
-            f = project_block(*args, self.block.sequence)
+            io = self.interior
+            xyz = st.xyz[self.obs.point]
+            proj = RayProjection(st.X0, st.angles, io.c, io.x0, io.y0, self.obs.image, xyz, seq)
+        f = proj.xy
+        if jac:
+            Je, Jp = ray_jacobians(proj, st.angles, seq, local)
+        else:
             Je = Jp = None
+            if keep:
+                self._projection = (st, proj)
         if self.q:
             f = f + (self.ap.A_csr @ st.ap).reshape(-1, 2)
         return (self.obs.xy - f) * self.obs.weight, Je, Jp
@@ -256,7 +326,13 @@ class BundleProblem:
         return out
 
     def chord_normal(
-        self, st: BundleState, rw: F64, Je: F64, Jp: F64, ne: NormalEquations
+        self,
+        st: BundleState,
+        rw: F64,
+        Je: F64,
+        Jp: F64,
+        ne: NormalEquations,
+        rot: F64 | None = None,
     ) -> NormalEquations:
         """The right-hand sides at ``st`` with the matrix of an earlier linearisation.
 
@@ -264,6 +340,12 @@ class BundleProblem:
         ``st`` (its image and point parts, the points eliminated with ``ne``'s T), and
         ``ne``'s point blocks, couplings and diagonals for the back-substitution and the
         stopping rule. Plain bundles only (no border, no auxiliary rows); undamped.
+
+        ``rot`` (m, 3, 3): ``ne`` is of rotations δ of the image frames, the Jacobian of
+        ω, φ, κ with J_θ = J_δ·rot (:func:`~orientviz.bundle._local_rotation.angle_map`):
+        the angle rows of the images' gradient become rot⁻ᵀ g_θ (the system is then in δ,
+        its solution δ = rot·dθ), the angle part of ``diagU`` the diagonal in ω, φ, κ at
+        ``st``.
         """
         S = self.reduced
         tg = S.tracks
@@ -273,6 +355,13 @@ class BundleProblem:
         bc[S.cam_present] = np.add.reduceat(np.take(gc, S.cam_order, axis=0), S.cam_starts)
         bc[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
         bc[:, 3:] += self.exterior.angles_w * wrap(self.exterior.angles_obs - st.angles)
+        diagU = ne.diagU
+        if rot is not None:
+            Ja = np.take(Je[:, :, 3:] * self.obs.weight[:, :, None], S.cam_order, axis=0)
+            diagU = diagU.copy()
+            diagU[:, 3:] = self.exterior.angles_w
+            diagU[S.cam_present, 3:] += np.add.reduceat(np.sum(Ja * Ja, axis=1), S.cam_starts)
+            bc[:, 3:] = np.linalg.solve(rot.transpose(0, 2, 1), bc[:, 3:, None])[:, :, 0]
         gp = Jp[:, 0, :] * rp[:, 0, None] + Jp[:, 1, :] * rp[:, 1, None]
         bp = tg.by_point @ np.take(gp, tg.rays, axis=0)
         bp += self.points.prior_w * (self.points.prior_obs - st.xyz[self.points.unknown])
@@ -287,7 +376,7 @@ class BundleProblem:
             rays=ne.rays,
             n_obs=ne.n_obs,
             bp=bp,
-            diagU=ne.diagU,
+            diagU=diagU,
             diagV=ne.diagV,
         )
 
@@ -317,7 +406,8 @@ class BundleProblem:
         """Back-substitution of the points; returns (dc, dp, da, fac)."""
         dc = dc.reshape(self.m, 6)
         tg = self.reduced.tracks  # ne.Wr is in its ray order
-        t = (ne.Wr.transpose(0, 2, 1) @ dc[tg.ray_image][:, :, None])[:, :, 0]
+        # Wᵀ dc per ray as (1 × 6)(6 × 3) products: no transposed copy of W
+        t = (np.take(dc, tg.ray_image, axis=0)[:, None, :] @ ne.Wr)[:, 0, :]
         red = ne.bp - tg.by_point @ t
         if self.q and not self.border.hold:
             red -= point_ap_term(self, ne.ap.H, da)
@@ -345,11 +435,14 @@ class BundleProblem:
             )
         return BundleState(st.X0 + dc[:, :3], st.angles + dc[:, 3:], xyz, st.ap + da, st.g)
 
-    def names(self) -> list[str]:
+    def names(self, exterior_only: bool = False) -> ParameterNames:
+        """The parameters' names in the order of ``x`` (``"<image id>.omega"``,
+        ``"<point id>.X"``, the additional parameters'); ``exterior_only``: the first
+        6m (the reduced system's). Formed when first read (messages, results)."""
         b = self.block
-        out = [f"{i}.{n}" for i in b.images.ids for n in EXTERIOR_NAMES]
-        out += [f"{i}.{c}" for i in b.points.ids for c in ("X", "Y", "Z")]
-        return out + (list(self.ap.names) if self.q else [])
+        if exterior_only:
+            return ParameterNames(b.images.ids, (), ())
+        return ParameterNames(b.images.ids, b.points.ids, self.ap.names if self.q else ())
 
     def flat(self, st: BundleState) -> F64:
         """The parameter vector of ``st`` (exterior, points, additional parameters)."""
