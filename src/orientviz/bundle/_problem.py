@@ -164,6 +164,10 @@ class BundleProblem:
         self.border = BorderSolver()
         self._design_at: BundleState | None = None  # iterate of a lens model's design
         self._projection = None  # (iterate, RayProjection) kept by residuals(keep=True)
+        #: (iterate, image coordinates (n, 2) mm of the rays without additional
+        #: parameters) of the last evaluation by the collinearity kernel (the result's
+        #: residuals reuse them)
+        self.projected: tuple | None = None
         #: per (point, group) pairs of rays for the precision with parameters (a cache)
         self.ray_groups = None
         self.aux: BundleAuxiliary | None = None
@@ -213,6 +217,7 @@ class BundleProblem:
             xyz = st.xyz[self.obs.point]
             proj = RayProjection(st.X0, st.angles, io.c, io.x0, io.y0, self.obs.image, xyz, seq)
         f = proj.xy
+        self.projected = (st, f)
         if jac:
             Je, Jp = ray_jacobians(proj, st.angles, seq, local)
         else:
@@ -264,14 +269,15 @@ class BundleProblem:
         self.design_at(st)
         sw = self.obs.weight[:, :, None]
         Jew, Jpw = Je * sw, Jp * sw
-        # image blocks: gather the (n, 2, 6) Jacobian by image, then reduce
-        Jc = np.take(Jew, S.cam_order, axis=0)
-        U = gram_by_segments(Jc, S.cam_starts, S.cam_present, self.m)
-        bc = np.zeros((self.m, 6))
-        bc[S.cam_present] = np.add.reduceat(
-            np.einsum("nki,nk->ni", Jc, rw[S.cam_order]), S.cam_starts, axis=0
-        )
+        # image blocks: gather [P½ J_e | P½ (l − f)] (n, 2, 7) by image, then one Gram
+        # matrix per image: U and b_c (its last column)
+        Jc = np.empty((Je.shape[0], 2, 7))
+        Jc[:, :, :6] = np.take(Jew, S.cam_order, axis=0)
+        Jc[:, :, 6] = np.take(rw, S.cam_order, axis=0)
+        G = gram_by_segments(Jc, S.cam_starts, S.cam_present, self.m)
         del Jc
+        U = np.ascontiguousarray(G[:, :6, :6])
+        bc = G[:, :6, 6].copy()
         U[:, [0, 1, 2], [0, 1, 2]] += self.exterior.X0_w
         bc[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
         U[:, [3, 4, 5], [3, 4, 5]] += self.exterior.angles_w
@@ -363,7 +369,7 @@ class BundleProblem:
             diagU[S.cam_present, 3:] += np.add.reduceat(np.sum(Ja * Ja, axis=1), S.cam_starts)
             bc[:, 3:] = np.linalg.solve(rot.transpose(0, 2, 1), bc[:, 3:, None])[:, :, 0]
         gp = Jp[:, 0, :] * rp[:, 0, None] + Jp[:, 1, :] * rp[:, 1, None]
-        bp = tg.by_point @ np.take(gp, tg.rays, axis=0)
+        bp = tg.by_point @ tg.take(gp)
         bp += self.points.prior_w * (self.points.prior_obs - st.xyz[self.points.unknown])
         Tb = (ne.Tr @ np.take(bp, tg.ray_point, axis=0)[:, :, None])[:, :, 0]
         red = bc - tg.by_image @ Tb

@@ -47,6 +47,10 @@ class TrackGroups:
     by_image, by_point : scipy.sparse.csr_matrix
         (m, n_var) and (p_var, n_var) incidences of image and ray, point and ray (sums
         per image and per point by one sparse product).
+    in_order : bool
+        ``rays`` is 0, 1, …, n_var − 1: the observations are in this order (the bundle's
+        are, :func:`orientviz.bundle._parts.image_observations`), per-ray arrays are
+        slices of the observations' arrays.
     """
 
     rays: I64
@@ -56,7 +60,12 @@ class TrackGroups:
     groups: list
     by_image: sp.csr_matrix
     by_point: sp.csr_matrix
+    in_order: bool = False
     _maps: list | None = field(default=None, repr=False)
+
+    def take(self, a: F64) -> F64:
+        """The rows of ``a`` (per observation) of the rays in this order."""
+        return a[: self.rays.size] if self.in_order else np.take(a, self.rays, axis=0)
 
     def maps(self, keys: I64, m: int) -> list:
         """Per group a CSC matrix (6 · n_blocks, n_points · 6k · k): −1 where row r of the
@@ -127,7 +136,8 @@ def track_groups(st) -> TrackGroups:
     by_point = sp.csr_matrix((ones, (ray_point, ray)), shape=(st.n_pt, rays.size))
     first = [r0 + k * np.arange(n) for k, r0, n in groups]  # first ray of each point
     points = ray_point[np.concatenate(first)] if groups else rays
-    return TrackGroups(rays, ray_point, ray_image, points, groups, by_image, by_point)
+    in_order = bool(np.array_equal(rays, np.arange(rays.size)))
+    return TrackGroups(rays, ray_point, ray_image, points, groups, by_image, by_point, in_order)
 
 
 #: Rays per chunk of :func:`point_products` (its temporaries stay in the cache).
@@ -169,14 +179,15 @@ def point_products(tg: TrackGroups, Jew: F64, Jpw: F64, rw: F64, n_pt: int):
         for c0 in range(0, n, step):
             c1 = min(c0 + step, n)
             a, b = r0 + k * c0, r0 + k * c1
-            rr = tg.rays[a:b]
-            Jer = np.take(Jew, rr, axis=0)
-            Jpr = np.take(Jpw, rr, axis=0)
+            if tg.in_order:  # the rays are these observations: views
+                Jer, Jpr, rwr = Jew[a:b], Jpw[a:b], rw[a:b]
+            else:
+                rr = tg.rays[a:b]
+                Jer, Jpr, rwr = (np.take(x, rr, axis=0) for x in (Jew, Jpw, rw))
             JprT = np.ascontiguousarray(Jpr.transpose(0, 2, 1))
             np.matmul(np.ascontiguousarray(Jer.transpose(0, 2, 1)), Jpr, out=Wr[a:b])
             pts = tg.points[p0 + c0 : p0 + c1]
             V[pts] = (JprT @ Jpr).reshape(c1 - c0, k, 3, 3).sum(axis=1)
-            rwr = np.take(rw, rr, axis=0)
             g = JprT[:, :, 0] * rwr[:, 0, None] + JprT[:, :, 1] * rwr[:, 1, None]
             bp[pts] = g.reshape(c1 - c0, k, 3).sum(axis=1)
         p0 += n
