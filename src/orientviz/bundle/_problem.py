@@ -153,7 +153,7 @@ class BundleProblem:
             block.n_images,
             self.points.n,
             solver=solver,
-            positions=block.images.X0 if solver in ("auto", "banded") else None,
+            positions=block.images.X0,
         )
         self.obs = with_var_rays(obs, self.reduced)
         self.interior = interior_orientation(block)
