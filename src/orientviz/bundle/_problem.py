@@ -269,39 +269,43 @@ class BundleProblem:
         self.design_at(st)
         sw = self.obs.weight[:, :, None]
         Jew, Jpw = Je * sw, Jp * sw
-        # image blocks: gather [P½ J_e | P½ (l − f)] (n, 2, 7) by image, then one Gram
-        # matrix per image: U and b_c (its last column)
-        Jc = np.empty((Je.shape[0], 2, 7))
-        Jc[:, :, :6] = np.take(Jew, S.cam_order, axis=0)
-        Jc[:, :, 6] = np.take(rw, S.cam_order, axis=0)
-        G = gram_by_segments(Jc, S.cam_starts, S.cam_present, self.m)
-        del Jc
-        U = np.ascontiguousarray(G[:, :6, :6])
-        bc = G[:, :6, 6].copy()
-        U[:, [0, 1, 2], [0, 1, 2]] += self.exterior.X0_w
-        bc[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
-        U[:, [3, 4, 5], [3, 4, 5]] += self.exterior.angles_w
-        bc[:, 3:] += self.exterior.angles_w * wrap(self.exterior.angles_obs - st.angles)
-        if self.aux:
-            self.aux.add_images(U, bc, st.X0, st.xyz, st.g)
         # point rays in the order of their track lengths (._tracks); sums per point and
         # per image by products with constant sparse incidences
         tg = S.tracks
-        r = tg.rays
         Wr, V, bp = point_products(tg, Jew, Jpw, rw, S.n_pt)
         i3 = [0, 1, 2]
         V[:, i3, i3] += self.points.prior_w
         bp += self.points.prior_w * (self.points.prior_obs - st.xyz[self.points.unknown])
         if self.aux:
             self.aux.add_points(V, bp, st.X0, st.xyz, st.g)
-        diagU = U[:, range(6), range(6)].copy()
         diagV = V[:, i3, i3].copy()
         if lam > 0:
-            U[:, range(6), range(6)] *= 1.0 + lam
             V[:, i3, i3] *= 1.0 + lam
         Vinv = inv3(V)
         Tr = Wr @ np.take(Vinv, tg.ray_point, axis=0)
-        red = bc - tg.by_image @ (Tr @ np.take(bp, tg.ray_point, axis=0)[:, :, None])[:, :, 0]
+        # image blocks and the reduced right-hand side b_c − Σ T b_p = Σ P½J_eᵀ r' with
+        # r' = P½(l − f) − P½J_p V⁻¹ b_p per ray: one Gram matrix per image of
+        # [P½J_e | r'] (n, 2, 7) gathered by image — U and, in its last column, the rhs
+        y = np.take(np.einsum("nij,nj->ni", Vinv, bp), tg.ray_point, axis=0)
+        rr = rw.copy()
+        rr[tg.rows] -= (tg.take(Jpw) @ y[:, :, None])[:, :, 0]
+        Jc = np.empty((Je.shape[0], 2, 7))
+        Jc[:, :, :6] = np.take(Jew, S.cam_order, axis=0)
+        Jc[:, :, 6] = np.take(rr, S.cam_order, axis=0)
+        G = gram_by_segments(Jc, S.cam_starts, S.cam_present, self.m)
+        del Jc, rr, y
+        U = np.ascontiguousarray(G[:, :6, :6])
+        red = G[:, :6, 6].copy()
+        U[:, [0, 1, 2], [0, 1, 2]] += self.exterior.X0_w
+        red[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
+        U[:, [3, 4, 5], [3, 4, 5]] += self.exterior.angles_w
+        red[:, 3:] += self.exterior.angles_w * wrap(self.exterior.angles_obs - st.angles)
+        if self.aux:
+            self.aux.add_images(U, red, st.X0, st.xyz, st.g)
+        diagU = U[:, range(6), range(6)].copy()
+        if lam > 0:
+            U[:, range(6), range(6)] *= 1.0 + lam
+        r = tg.rays
         out = NormalEquations(
             blocks=None,
             rhs=red.reshape(-1),

@@ -63,6 +63,11 @@ class TrackGroups:
     in_order: bool = False
     _maps: list | None = field(default=None, repr=False)
 
+    @property
+    def rows(self) -> slice | I64:
+        """The observations of the rays in this order (a slice when ``in_order``)."""
+        return slice(0, self.rays.size) if self.in_order else self.rays
+
     def take(self, a: F64) -> F64:
         """The rows of ``a`` (per observation) of the rays in this order."""
         return a[: self.rays.size] if self.in_order else np.take(a, self.rays, axis=0)
@@ -191,9 +196,10 @@ def point_products(tg: TrackGroups, Jew: F64, Jpw: F64, rw: F64, n_pt: int):
         In point-unknown order.
 
     Chunks of :data:`RAY_CHUNK` rays of whole points: the rays of a point are
-    consecutive, so their sums are reshapes, and the temporaries stay small (numpy's
-    stacked products need contiguous operands, the transposes are copied; large fresh
-    temporaries cost their page faults).
+    consecutive, so their sums are reshapes, and the temporaries stay small (large
+    fresh temporaries cost their page faults; a stacked product runs faster on a
+    contiguous copy of a transpose than on the view). V is summed from W's upper 3 × 3 blocks
+    (−J_pᵀ P J_p: the derivatives by X0 are those by X negated), not formed again.
     """
     nv = tg.rays.size
     Wr = np.empty((nv, 6, 3))
@@ -210,11 +216,11 @@ def point_products(tg: TrackGroups, Jew: F64, Jpw: F64, rw: F64, n_pt: int):
             else:
                 rr = tg.rays[a:b]
                 Jer, Jpr, rwr = (np.take(x, rr, axis=0) for x in (Jew, Jpw, rw))
-            JprT = np.ascontiguousarray(Jpr.transpose(0, 2, 1))
             np.matmul(np.ascontiguousarray(Jer.transpose(0, 2, 1)), Jpr, out=Wr[a:b])
             pts = tg.points[p0 + c0 : p0 + c1]
-            V[pts] = (JprT @ Jpr).reshape(c1 - c0, k, 3, 3).sum(axis=1)
-            g = JprT[:, :, 0] * rwr[:, 0, None] + JprT[:, :, 1] * rwr[:, 1, None]
+            # ∂/∂X0 = −∂/∂X (f depends on X − X0): W's upper 3 × 3 block is −J_pᵀ P J_p
+            V[pts] = -Wr[a:b, :3].reshape(c1 - c0, k, 3, 3).sum(axis=1)
+            g = Jpr[:, 0, :] * rwr[:, 0, None] + Jpr[:, 1, :] * rwr[:, 1, None]
             bp[pts] = g.reshape(c1 - c0, k, 3).sum(axis=1)
         p0 += n
     return Wr, V, bp
