@@ -80,10 +80,12 @@ class TrackGroups:
         entries)."""
         if self._maps is None:
             lookup = _block_lookup(keys, m)
-            self._maps = [
-                _group_map(self.ray_image[r0 : r0 + n * k].reshape(n, k), lookup, keys.size)
-                for k, r0, n in self.groups
-            ]
+            self._maps = []
+            for k, r0, n in self.groups:
+                img = self.ray_image[r0 : r0 + n * k].reshape(n, k)
+                ascending = k > 1 and bool(np.all(img[:, 1:] > img[:, :-1]))
+                build = _ascending_group_map if ascending else _group_map
+                self._maps.append(build(img, lookup, keys.size))
         return self._maps
 
 
@@ -117,6 +119,30 @@ def _group_map(img: I64, lookup, n_blocks: int) -> sp.csc_matrix:
     indptr = np.zeros(keep6.size + 1, np.int32)
     np.cumsum(keep6, out=indptr[1:])
     return sp.csc_matrix((np.full(rows.size, -1.0), rows, indptr), shape=(6 * n_blocks, keep6.size))
+
+
+def _ascending_group_map(img: I64, lookup, n_blocks: int) -> sp.csc_matrix:
+    """:func:`_group_map` for points whose rays are in ascending image order (as the
+    bundle's set-up orders them): the kept pairs are a ≤ b for every point, so the map
+    is one point's pattern repeated (no masks over all n·6k² product rows; the same
+    matrix, ~3 × faster to form)."""
+    n, k = img.shape
+    iu, ju = np.triu_indices(k)
+    pair = np.zeros((k, k), np.int64)
+    pair[iu, ju] = np.arange(iu.size)
+    blk = lookup(img[:, iu], img[:, ju]).astype(np.int32)  # (n, pairs)
+    a, r, b = (
+        x.reshape(-1) for x in np.meshgrid(np.arange(k), np.arange(6), np.arange(k), indexing="ij")
+    )
+    kept = a <= b  # product rows (a, r, b) of one point, row-major in its (6k × 6k)
+    rows = 6 * blk[:, pair[a[kept], b[kept]]] + r[kept].astype(np.int32)
+    per_point = int(kept.sum())
+    before = (np.cumsum(kept) - kept).astype(np.int32)  # kept rows before each product row
+    indptr = np.empty(n * kept.size + 1, np.int32)
+    indptr[:-1] = (per_point * np.arange(n, dtype=np.int32)[:, None] + before).reshape(-1)
+    indptr[-1] = n * per_point
+    shape = (6 * n_blocks, n * kept.size)
+    return sp.csc_matrix((np.full(rows.size, -1.0), rows.reshape(-1), indptr), shape=shape)
 
 
 def track_groups(st) -> TrackGroups:
