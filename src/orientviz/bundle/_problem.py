@@ -350,7 +350,7 @@ class BundleProblem:
         S = self.reduced
         tg = S.tracks
         rp = rw * self.obs.weight  # P (l − f) = P½ · P½ (l − f)
-        gc = Je[:, 0, :] * rp[:, 0, None] + Je[:, 1, :] * rp[:, 1, None]
+        gc = np.einsum("nki,nk->ni", Je, rp)
         bc = np.zeros((self.m, 6))
         bc[S.cam_present] = np.add.reduceat(np.take(gc, S.cam_order, axis=0), S.cam_starts)
         bc[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
@@ -362,7 +362,7 @@ class BundleProblem:
             diagU[:, 3:] = self.exterior.angles_w
             diagU[S.cam_present, 3:] += np.add.reduceat(np.sum(Ja * Ja, axis=1), S.cam_starts)
             bc[:, 3:] = np.linalg.solve(rot.transpose(0, 2, 1), bc[:, 3:, None])[:, :, 0]
-        gp = Jp[:, 0, :] * rp[:, 0, None] + Jp[:, 1, :] * rp[:, 1, None]
+        gp = np.einsum("nki,nk->ni", Jp, rp)
         bp = tg.by_point @ np.take(gp, tg.rays, axis=0)
         bp += self.points.prior_w * (self.points.prior_obs - st.xyz[self.points.unknown])
         Tb = (ne.Tr @ np.take(bp, tg.ray_point, axis=0)[:, :, None])[:, :, 0]
