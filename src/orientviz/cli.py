@@ -217,7 +217,8 @@ COMMANDS: dict[str, Command] = {
             arg("--solver", choices=["auto", "banded", "dense", "sparse"], default=None,
                 help="solver of the bundle's reduced camera system (overrides options.solver; "
                 "default auto: banded for strips, dense for small or densely connected "
-                "networks, sparse otherwise; the report names the choice)"),
+                "networks, sparse (nested-dissection multifrontal Cholesky) otherwise; the "
+                "report names the choice)"),
             arg(
                 "-o",
                 "--output",

@@ -377,3 +377,20 @@ def test_the_jacobians_of_a_kept_projection_are_those_of_its_state():
         prob.residuals(st, jac=False, keep=True)
         for a, b_ in zip(prob.residuals(moved, jac=True, local=local), want):
             np.testing.assert_array_equal(a, b_)
+
+
+def test_image_residuals_are_those_of_the_adjusted_values():
+    from orientviz.bundle import project_block
+
+    sim = ov.simulate_block(3, 8, rng=7, n_check=24)
+    b = sim.block
+    res = ov.bundle_adjust(b, precision=False)
+    obs, cam = b.observations, b.images.camera
+    ext = res["exterior"].reshape(-1, 6)
+    f = project_block(
+        ext[:, :3], ext[:, 3:], b.cameras.c[cam], b.cameras.x0[cam], b.cameras.y0[cam],
+        obs.image, res.points[obs.point], b.sequence,
+    )  # fmt: skip
+    n = b.n_observations
+    np.testing.assert_allclose(res.residuals[: 2 * n], (f - obs.xy).reshape(-1), rtol=0, atol=1e-12)
+    assert not res.used_obs.all()  # the check points' rays are among them

@@ -90,7 +90,10 @@ def test_solver_choice_from_structure_alone():
     # a complete graph (every image with every other): dense
     i, k = np.triu_indices(60)
     assert choose_solver("auto", 60, 6 * 60 - 1, i, k).solver == "dense"
-    assert choose_solver("sparse", 60, None, i, k).reason == "sparse (requested)"
+    assert choose_solver("dense", 60, None, i, k).reason == "dense (requested)"
+    assert choose_solver("sparse", 60, None, i, k).reason == (
+        "sparse (requested, nested-dissection multifrontal Cholesky)"
+    )
     with pytest.raises(ValueError, match="solver"):
         choose_solver("splu", 60, None, i, k)
 

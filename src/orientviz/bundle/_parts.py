@@ -3,7 +3,8 @@
 A :class:`~orientviz.bundle.BundleProblem` is composed of
 
 * :class:`ImageObservations` — the rays that enter the adjustment (image, point, x, y,
-  1/σ), sorted by point so that the point reductions work on contiguous slices;
+  1/σ), sorted by the track length of their point, then by point (the order of the
+  point reductions, :mod:`orientviz.bundle._tracks`: they work on contiguous slices);
 * :class:`InteriorOrientation` — c, x0, y0 of each image's camera (mm, held fixed);
 * :class:`ExteriorBlock` — the exterior orientations' observed values and weights
   (GNSS/INS-like observations of X0 and ω, φ, κ);
@@ -38,7 +39,8 @@ I64 = NDArray[np.int64]
 
 @dataclass(frozen=True)
 class ImageObservations:
-    """The image observations that enter the adjustment, in point order.
+    """The image observations that enter the adjustment, in track order (by the number
+    of rays of their point unknown, then by point, then by image; fixed points last).
 
     Attributes
     ----------
@@ -53,7 +55,8 @@ class ImageObservations:
     column : ndarray of int, shape (n,)
         Point unknown of each ray (−1 for fixed points).
     var_rays : slice or ndarray of int
-        The rays of point unknowns in point order (a slice when they come first).
+        The rays of point unknowns in the order of the point unknowns (a slice when that
+        is the rays' order).
     """
 
     index: I64
@@ -211,16 +214,23 @@ class AdditionalBlock:
 
 
 def image_observations(block: Block, setup: PointSetup, pt_col: I64) -> ImageObservations:
-    """The used rays, sorted by point unknown (fixed points last), then by image."""
+    """The used rays, sorted by the track length of their point unknown, then by point
+    unknown, then by image; the rays of fixed points last, by image. The order of
+    :class:`orientviz.bundle._tracks.TrackGroups` (its per-ray arrays are then slices of
+    the evaluations' arrays, no gathers)."""
     obs = block.observations
     uobs = np.flatnonzero(setup.used_obs)
-    oi, opt = obs.image[uobs], obs.point[uobs]
-    col = pt_col[opt]
-    order = np.lexsort((oi, np.where(col >= 0, col, np.iinfo(np.int64).max)))
-    uobs = uobs[order]
-    return ImageObservations(
-        uobs, oi[order], opt[order], obs.xy[uobs], 1.0 / obs.sigma[uobs], col[order], slice(0)
-    )
+    oi, opt = np.take(obs.image, uobs), np.take(obs.point, uobs)
+    col = np.take(pt_col, opt)
+    var = col >= 0
+    n_var = int(pt_col.max(initial=-1)) + 1
+    k = np.bincount(col[var], minlength=n_var)  # track length of each point unknown
+    key = np.where(var, np.take(k, col, mode="clip") * n_var + col, np.iinfo(np.int64).max)
+    order = np.lexsort((oi, key))
+    uobs = np.take(uobs, order)
+    take = lambda a: np.take(a, order, axis=0)  # noqa: E731
+    xy, sigma = np.take(obs.xy, uobs, axis=0), np.take(obs.sigma, uobs, axis=0)
+    return ImageObservations(uobs, take(oi), take(opt), xy, 1.0 / sigma, take(col), slice(0))
 
 
 def with_var_rays(obs: ImageObservations, struct: ReducedStructure) -> ImageObservations:

@@ -141,7 +141,14 @@ class ReducedInverse:
         self._m = st.n_cam
         if n <= DENSE_INVERSE_LIMIT or st.solver != "banded":
             if n > DENSE_INVERSE_LIMIT and st.solver != "dense":
-                st = ReducedStructure(st.obs_cam, st.obs_pt, st.n_cam, st.n_pt, solver="banded")
+                st = ReducedStructure(
+                    st.obs_cam,
+                    st.obs_pt,
+                    st.n_cam,
+                    st.n_pt,
+                    solver="banded",
+                    positions=st.positions,
+                )
             else:  # dense: the factor of the last iteration when it is a dense one
                 if fac is not None and fac.kind == "dense":
                     c = (fac.data, True)

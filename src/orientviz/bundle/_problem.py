@@ -153,7 +153,7 @@ class BundleProblem:
             block.n_images,
             self.points.n,
             solver=solver,
-            positions=block.images.X0 if solver in ("auto", "banded") else None,
+            positions=block.images.X0,
         )
         self.obs = with_var_rays(obs, self.reduced)
         self.interior = interior_orientation(block)
@@ -164,6 +164,10 @@ class BundleProblem:
         self.border = BorderSolver()
         self._design_at: BundleState | None = None  # iterate of a lens model's design
         self._projection = None  # (iterate, RayProjection) kept by residuals(keep=True)
+        #: (iterate, image coordinates (n, 2) mm of the rays without additional
+        #: parameters) of the last evaluation by the collinearity kernel (the result's
+        #: residuals reuse them)
+        self.projected: tuple | None = None
         #: per (point, group) pairs of rays for the precision with parameters (a cache)
         self.ray_groups = None
         self.aux: BundleAuxiliary | None = None
@@ -213,6 +217,7 @@ class BundleProblem:
             xyz = st.xyz[self.obs.point]
             proj = RayProjection(st.X0, st.angles, io.c, io.x0, io.y0, self.obs.image, xyz, seq)
         f = proj.xy
+        self.projected = (st, f)
         if jac:
             Je, Jp = ray_jacobians(proj, st.angles, seq, local)
         else:
@@ -264,38 +269,43 @@ class BundleProblem:
         self.design_at(st)
         sw = self.obs.weight[:, :, None]
         Jew, Jpw = Je * sw, Jp * sw
-        # image blocks: gather the (n, 2, 6) Jacobian by image, then reduce
-        Jc = np.take(Jew, S.cam_order, axis=0)
-        U = gram_by_segments(Jc, S.cam_starts, S.cam_present, self.m)
-        bc = np.zeros((self.m, 6))
-        bc[S.cam_present] = np.add.reduceat(
-            np.einsum("nki,nk->ni", Jc, rw[S.cam_order]), S.cam_starts, axis=0
-        )
-        del Jc
-        U[:, [0, 1, 2], [0, 1, 2]] += self.exterior.X0_w
-        bc[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
-        U[:, [3, 4, 5], [3, 4, 5]] += self.exterior.angles_w
-        bc[:, 3:] += self.exterior.angles_w * wrap(self.exterior.angles_obs - st.angles)
-        if self.aux:
-            self.aux.add_images(U, bc, st.X0, st.xyz, st.g)
         # point rays in the order of their track lengths (._tracks); sums per point and
         # per image by products with constant sparse incidences
         tg = S.tracks
-        r = tg.rays
         Wr, V, bp = point_products(tg, Jew, Jpw, rw, S.n_pt)
         i3 = [0, 1, 2]
         V[:, i3, i3] += self.points.prior_w
         bp += self.points.prior_w * (self.points.prior_obs - st.xyz[self.points.unknown])
         if self.aux:
             self.aux.add_points(V, bp, st.X0, st.xyz, st.g)
-        diagU = U[:, range(6), range(6)].copy()
         diagV = V[:, i3, i3].copy()
         if lam > 0:
-            U[:, range(6), range(6)] *= 1.0 + lam
             V[:, i3, i3] *= 1.0 + lam
         Vinv = inv3(V)
         Tr = Wr @ np.take(Vinv, tg.ray_point, axis=0)
-        red = bc - tg.by_image @ (Tr @ np.take(bp, tg.ray_point, axis=0)[:, :, None])[:, :, 0]
+        # image blocks and the reduced right-hand side b_c − Σ T b_p = Σ P½J_eᵀ r' with
+        # r' = P½(l − f) − P½J_p V⁻¹ b_p per ray: one Gram matrix per image of
+        # [P½J_e | r'] (n, 2, 7) gathered by image — U and, in its last column, the rhs
+        y = np.take(np.einsum("nij,nj->ni", Vinv, bp), tg.ray_point, axis=0)
+        rr = rw.copy()
+        rr[tg.rows] -= (tg.take(Jpw) @ y[:, :, None])[:, :, 0]
+        Jc = np.empty((Je.shape[0], 2, 7))
+        Jc[:, :, :6] = np.take(Jew, S.cam_order, axis=0)
+        Jc[:, :, 6] = np.take(rr, S.cam_order, axis=0)
+        G = gram_by_segments(Jc, S.cam_starts, S.cam_present, self.m)
+        del Jc, rr, y
+        U = np.ascontiguousarray(G[:, :6, :6])
+        red = G[:, :6, 6].copy()
+        U[:, [0, 1, 2], [0, 1, 2]] += self.exterior.X0_w
+        red[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
+        U[:, [3, 4, 5], [3, 4, 5]] += self.exterior.angles_w
+        red[:, 3:] += self.exterior.angles_w * wrap(self.exterior.angles_obs - st.angles)
+        if self.aux:
+            self.aux.add_images(U, red, st.X0, st.xyz, st.g)
+        diagU = U[:, range(6), range(6)].copy()
+        if lam > 0:
+            U[:, range(6), range(6)] *= 1.0 + lam
+        r = tg.rays
         out = NormalEquations(
             blocks=None,
             rhs=red.reshape(-1),
@@ -363,7 +373,7 @@ class BundleProblem:
             diagU[S.cam_present, 3:] += np.add.reduceat(np.sum(Ja * Ja, axis=1), S.cam_starts)
             bc[:, 3:] = np.linalg.solve(rot.transpose(0, 2, 1), bc[:, 3:, None])[:, :, 0]
         gp = np.einsum("nki,nk->ni", Jp, rp)
-        bp = tg.by_point @ np.take(gp, tg.rays, axis=0)
+        bp = tg.by_point @ tg.take(gp)
         bp += self.points.prior_w * (self.points.prior_obs - st.xyz[self.points.unknown])
         Tb = (ne.Tr @ np.take(bp, tg.ray_point, axis=0)[:, :, None])[:, :, 0]
         red = bc - tg.by_image @ Tb

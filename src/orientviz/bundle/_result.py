@@ -261,21 +261,26 @@ def finish_result(
 
 
 def _project_all(block, st, xyz, prob) -> F64:
+    """Image coordinates (n, 2) mm of all of the block's rays at ``st`` (``xyz``: its
+    points with the check points intersected)."""
     cam = block.images.camera
     obs = block.observations
     if prob.ap.lens is not None:  # the camera model predicts every ray
         seq = block.sequence
         nrm = normalised_block(st.X0, st.angles, obs.image, xyz[obs.point], seq, False)[0]
         return prob.ap.lens.evaluate(st.ap, prob.ap.group[obs.image], nrm, obs.xy, False)[0]
-    f = project_block(
-        st.X0,
-        st.angles,
-        block.cameras.c[cam],
-        block.cameras.x0[cam],
-        block.cameras.y0[cam],
-        obs.image,
-        xyz[obs.point],
-        block.sequence,
+    io = (block.cameras.c[cam], block.cameras.x0[cam], block.cameras.y0[cam])
+    rays = slice(None)
+    f = np.empty((obs.image.size, 2))
+    if prob.projected is not None and prob.projected[0] is st:
+        # the adjusted rays were projected at st by the last evaluation (the same
+        # kernel on the same values: the same numbers); the others are projected here
+        f[prob.obs.index] = prob.projected[1]
+        rest = np.ones(obs.image.size, bool)
+        rest[prob.obs.index] = False
+        rays = np.flatnonzero(rest)
+    f[rays] = project_block(
+        st.X0, st.angles, *io, obs.image[rays], xyz[obs.point[rays]], block.sequence
     )
     if prob.q:
         f[prob.obs.index] += np.einsum(

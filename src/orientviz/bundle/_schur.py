@@ -35,7 +35,8 @@ DENSE_INDEX_KEEP: int = 2**21
 
 
 def gram_by_segments(J: F64, starts: I64, present: I64, m: int) -> F64:
-    """Σ JᵀJ over the rays of each segment (image): U (m, 6, 6) from J (n, 2, 6).
+    """Σ JᵀJ over the rays of each segment (image): (m, c, c) from J (n, 2, c) (the
+    bundle's c = 7: the image blocks U and, in the last column, b_c).
 
     J holds the rays sorted by segment, ``starts`` where each non-empty segment begins,
     ``present`` which segment that is. One BLAS product (6 × 2k)(2k × 6) per segment of k

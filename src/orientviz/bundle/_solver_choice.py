@@ -9,10 +9,10 @@ a common unknown point. Its shape tells which factorisation is cheapest:
 * small systems and densely connected ones (close-range networks where most images
   share points) are cheapest as one dense Cholesky, n³/3 flops, at LAPACK's best
   speed;
-* large, sparse and wide systems need a fill-reducing ordering: a sparse
-  factorisation costs ≈ Σ_j (6 c_j)²·6 flops, c_j the images in column j of the
-  image-level factor (its *column counts*, measured here by factoring the m × m image
-  graph once with SuperLU's minimum-degree ordering), at a lower speed per flop.
+* large, sparse and wide systems need a fill-reducing ordering: the multifrontal
+  factorisation along a nested dissection of the image graph costs the flops of its
+  dense fronts (:attr:`orientviz.bundle._dissection.Dissection.flops`, known once the
+  dissection is made) at a lower speed per flop, plus a fixed cost per front.
 
 :func:`choose_solver` compares these estimates (:data:`RATE`: relative speeds per flop,
 measured on this machine with ``benchmarks/bench_unordered.py`` and
@@ -25,6 +25,7 @@ couplings (cost ∝ m²·p flops but at BLAS speed, :func:`orientviz.bundle._sch
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,9 +38,13 @@ I64 = NDArray[np.int64]
 SOLVER_CHOICES: tuple[str, ...] = ("auto", "banded", "dense", "sparse")
 #: Relative time per flop of each factorisation (dense LAPACK = 1). Measured (1 thread):
 #: dense ``potrf`` 24-40 GFlop/s for n = 900-3600, the band Cholesky about 0.65-0.85 ×
-#: that for kd ≥ 200 and far less for narrow bands (3 GFlop/s at kd = 45); SciPy's
-#: SuperLU (no supernodes, one column at a time) about 8 × slower than dense.
-RATE: dict[str, float] = {"dense": 1.0, "banded": 1.5, "sparse": 8.0}
+#: that for kd ≥ 200 and far less for narrow bands (3 GFlop/s at kd = 45); the
+#: multifrontal one (fronts of 50-400 unknowns, most flops in low-rank ``syrk``
+#: updates) about half the dense speed, plus :data:`FRONT_COST` per front.
+RATE: dict[str, float] = {"dense": 1.0, "banded": 1.5, "sparse": 2.0}
+#: Fixed cost of one front of the multifrontal factorisation in dense-flop equivalents
+#: (its extend-adds and five LAPACK/BLAS calls from Python: ~40 µs).
+FRONT_COST: float = 1.5e6
 #: Nanoseconds per pair of rays of the pair-wise Schur formation (250-290 ns) and per
 #: multiply-add of the dense one (scatter included: 0.022 ns; 316 ms for 14.6 G on the
 #: 150-image random network), measured with 1 BLAS thread.
@@ -49,13 +54,19 @@ DENSE_FLOP_NS: float = 0.025
 #: block of strips: banded, whatever the estimates (the path aerial blocks always took).
 STRIP_BAND: float = 0.5
 #: With a narrow band the sparse factorisation is taken only when its estimate is below
-#: this fraction of the banded one.
+#: this fraction of the banded one (its solves cost more than the band's, and the
+#: precision's inverse needs the band).
 SPARSE_CLEAR_WIN: float = 0.25
 #: Dense systems only up to this many unknowns (6m; 8000² doubles = 512 MB).
 DENSE_MAX: int = 8000
-#: Below this many flops of the cheaper of dense/banded the sparse estimate (a symbolic
-#: factorisation of the image graph) is not worth its own cost.
+#: Below this many flops of the cheaper of dense/banded the sparse estimate (a nested
+#: dissection of the image graph) is not worth its own cost.
 SPARSE_CONSIDERED_ABOVE: float = 2e8
+#: A narrow band (strips) is compared with the sparse estimate only above this cost: the
+#: sparse factor must be estimated below :data:`SPARSE_CLEAR_WIN` of the band, and on
+#: strips its flops are not that much lower until the blocks are far larger (the bench's
+#: 30 × 70 images: 1.0 against 1.7 GFlop, same time; the estimate costs ~10 ms there).
+SPARSE_CONSIDERED_ABOVE_STRIPS: float = 5e10
 
 
 @dataclass(frozen=True)
@@ -112,28 +123,27 @@ def image_blocks(obs_cam: I64, obs_pt: I64, n_cam: int, n_pt: int) -> tuple[I64,
     return keys // m, keys % m, n_pairs
 
 
-def sparse_flops(block_i: I64, block_k: I64, m: int) -> tuple[float, int]:
-    """Flops of a sparse Cholesky of S with a minimum-degree ordering, and nnz of its L.
+def sparse_cost(block_i: I64, block_k: I64, m: int, positions=None) -> tuple[float, int]:
+    """Flops of the multifrontal Cholesky of S and its number of fronts, from a nested
+    dissection of the image graph (:func:`orientviz.bundle._dissection.nested_dissection`;
+    ``positions``: projection centres, for geometric separators)."""
+    from ._dissection import nested_dissection
 
-    The image graph (m × m, diagonally dominant values on the pattern of S) is factored
-    with SuperLU (symmetric mode, ``MMD_AT_PLUS_A``); its factor's column counts c_j
-    (images) give Σ_j 6·(6 c_j)² flops for the 6m × 6m system.
-    """
-    off = block_i != block_k
-    r = np.concatenate([block_i[off], block_k[off], np.arange(m)])
-    c = np.concatenate([block_k[off], block_i[off], np.arange(m)])
-    deg = np.bincount(block_i[off], minlength=m) + np.bincount(block_k[off], minlength=m)
-    v = np.concatenate([-np.ones(2 * off.sum()), deg + 1.0])
-    A = sp.csc_matrix((v, (r, c)), shape=(m, m))
-    lu = sp.linalg.splu(
-        A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True}
-    )
-    counts = np.diff(lu.L.indptr).astype(float)
-    return float(np.sum(6.0 * (6.0 * counts) ** 2)), int(lu.L.nnz)
+    diss = nested_dissection(block_i, block_k, m, positions)
+    return diss.flops, diss.n_nodes
+
+
+#: What each solver is, for the log.
+_HOW = {"banded": "", "dense": "", "sparse": ", nested-dissection multifrontal Cholesky"}
 
 
 def choose_solver(
-    requested: str, m: int, kd: int | None, block_i: I64, block_k: I64
+    requested: str,
+    m: int,
+    kd: int | None,
+    block_i: I64,
+    block_k: I64,
+    sparse_estimate: Callable[[], tuple[float, int]] | None = None,
 ) -> SolverChoice:
     """The solver of the reduced system for ``requested`` (``"auto"``: from the estimates).
 
@@ -146,14 +156,24 @@ def choose_solver(
         Half-bandwidth (scalars) of S in the best image numbering found, if computed.
     block_i, block_k : ndarray of int
         The blocks of S (:func:`image_blocks`).
+    sparse_estimate : callable, optional
+        ``() -> (flops, fronts)`` of the sparse factorisation (default:
+        :func:`sparse_cost` without positions); called only when it is considered.
     """
     if requested not in SOLVER_CHOICES:
         raise ValueError(
             f"expected a reduced-system solver out of {SOLVER_CHOICES}, got {requested!r}"
         )
     if requested != "auto":
-        return SolverChoice(requested, requested, f"{requested} (requested)", {})
+        return SolverChoice(requested, requested, f"{requested} (requested{_HOW[requested]})", {})
     n = 6 * m
+    if sparse_estimate is None:
+        sparse_estimate = lambda: sparse_cost(block_i, block_k, m)  # noqa: E731
+
+    def sparse() -> float:
+        flops, fronts = sparse_estimate()
+        return RATE["sparse"] * flops + FRONT_COST * fronts
+
     costs = {"dense": RATE["dense"] * n**3 / 3.0}
     if kd is not None:  # LAPACK's band Cholesky: Σ_j min(kd, n − j)² flops
         b = float(min(kd + 1, n))
@@ -162,21 +182,21 @@ def choose_solver(
     band = f", half-band {kd} of {n}" if kd is not None else ""
     if kd is not None and kd + 1 <= STRIP_BAND * n:
         # a narrow band (strips): banded, unless a sparse factor is clearly cheaper
-        if costs["banded"] > SPARSE_CONSIDERED_ABOVE:
-            costs["sparse"] = RATE["sparse"] * sparse_flops(block_i, block_k, m)[0]
+        if costs["banded"] > SPARSE_CONSIDERED_ABOVE_STRIPS:
+            costs["sparse"] = sparse()
         if costs.get("sparse", np.inf) >= SPARSE_CLEAR_WIN * costs["banded"]:
             est = ", ".join(f"{k} {v:.2g}" for k, v in sorted(costs.items(), key=lambda t: t[1]))
             reason = f"banded (auto: {m} images{band}: a narrow band, strips; est. {est})"
             return SolverChoice("banded", "auto", reason, costs)
     if n > DENSE_MAX or min(costs.values()) > SPARSE_CONSIDERED_ABOVE:
-        flops, _ = sparse_flops(block_i, block_k, m)
-        costs["sparse"] = RATE["sparse"] * flops
+        costs["sparse"] = sparse()
     if n > DENSE_MAX:
         del costs["dense"]
     best = min(costs, key=costs.get)
     est = ", ".join(f"{k} {v:.2g}" for k, v in sorted(costs.items(), key=lambda t: t[1]))
     reason = (
-        f"{best} (auto: {m} images, {100 * fill:.0f} % of S's blocks non-zero{band}; est. {est})"
+        f"{best} (auto{_HOW[best]}: {m} images, {100 * fill:.0f} % of S's blocks non-zero{band}; "
+        f"est. {est})"
     )
     return SolverChoice(best, "auto", reason, costs)
 
