@@ -434,6 +434,8 @@ class _BundleSteps:
         prob = self.prob
         fac, ne_old, old_local = self.chord_factor
         A = angle_map(st.angles, prob.block.sequence) if old_local and not local else None
+        if A is not None and not np.all(np.abs(np.linalg.det(A)) > 1e-9):
+            return None  # det A = cos φ ("opk"): an image at the gimbal lock of the angles
         ne = prob.chord_normal(st, rw, Je, Jp, ne_old, rot=A)
         dc, dp, da, fac = prob.solve(ne, self.red_names, fac=fac)
         if A is not None:  # back to ω, φ, κ

@@ -366,7 +366,7 @@ class BundleProblem:
         S = self.reduced
         tg = S.tracks
         rp = rw * self.obs.weight  # P (l − f) = P½ · P½ (l − f)
-        gc = Je[:, 0, :] * rp[:, 0, None] + Je[:, 1, :] * rp[:, 1, None]
+        gc = np.einsum("nki,nk->ni", Je, rp)
         bc = np.zeros((self.m, 6))
         bc[S.cam_present] = np.add.reduceat(np.take(gc, S.cam_order, axis=0), S.cam_starts)
         bc[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
@@ -378,7 +378,7 @@ class BundleProblem:
             diagU[:, 3:] = self.exterior.angles_w
             diagU[S.cam_present, 3:] += np.add.reduceat(np.sum(Ja * Ja, axis=1), S.cam_starts)
             bc[:, 3:] = np.linalg.solve(rot.transpose(0, 2, 1), bc[:, 3:, None])[:, :, 0]
-        gp = Jp[:, 0, :] * rp[:, 0, None] + Jp[:, 1, :] * rp[:, 1, None]
+        gp = np.einsum("nki,nk->ni", Jp, rp)
         bp = tg.by_point @ tg.take(gp)
         bp += self.points.prior_w * (
             self.points.prior_obs - np.take(st.xyz, self.points.unknown, 0)
