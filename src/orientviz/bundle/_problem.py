@@ -36,7 +36,7 @@ from ._parts import (
     with_var_rays,
 )
 from ._reduced import ReducedStructure, factor_reduced, inv3
-from ._schur import dense_schur, gram_by_segments
+from ._schur import ImageGram, dense_schur
 from ._state import BundleState, wrap
 from ._tracks import point_products, schur_blocks
 
@@ -156,6 +156,9 @@ class BundleProblem:
             positions=block.images.X0,
         )
         self.obs = with_var_rays(obs, self.reduced)
+        r = self.reduced
+        #: the images' Gram matrices (U and the reduced rhs in normal())
+        self.image_gram = ImageGram(r.cam_order, r.cam_starts, r.cam_present, r.n_cam, obs.n)
         self.interior = interior_orientation(block)
         self.exterior = exterior_block(block)
         self.ap = additional_block(
@@ -268,7 +271,12 @@ class BundleProblem:
         S = self.reduced
         self.design_at(st)
         sw = self.obs.weight[:, :, None]
-        Jew, Jpw = Je * sw, Jp * sw
+        # [P½J_e | r'] per ray (r' below) and a zero row: the images' Gram matrices
+        n = Je.shape[0]
+        Jz = np.empty((n + 1, 2, 7))
+        Jz[n] = 0.0
+        Jew = np.multiply(Je, sw, out=Jz[:n, :, :6])
+        Jpw = Jp * sw
         # point rays in the order of their track lengths (._tracks); sums per point and
         # per image by products with constant sparse incidences
         tg = S.tracks
@@ -292,13 +300,10 @@ class BundleProblem:
         Jy = Jpr[:, :, 0] * y[:, 0, None]  # P½J_p y per ray by columns (no tiny products)
         Jy += Jpr[:, :, 1] * y[:, 1, None]
         Jy += Jpr[:, :, 2] * y[:, 2, None]
-        rr = rw.copy()
-        rr[tg.rows] -= Jy
-        Jc = np.empty((Je.shape[0], 2, 7))
-        Jc[:, :, :6] = np.take(Jew, S.cam_order, axis=0)
-        Jc[:, :, 6] = np.take(rr, S.cam_order, axis=0)
-        G = gram_by_segments(Jc, S.cam_starts, S.cam_present, self.m)
-        del Jc, rr, y, Jy, Jpr
+        Jz[:n, :, 6] = rw
+        Jz[tg.rows, :, 6] -= Jy
+        G = self.image_gram.grams(Jz)
+        del Jz, y, Jy, Jpr
         U = np.ascontiguousarray(G[:, :6, :6])
         red = G[:, :6, 6].copy()
         U[:, [0, 1, 2], [0, 1, 2]] += self.exterior.X0_w

@@ -52,6 +52,59 @@ def gram_by_segments(J: F64, starts: I64, present: I64, m: int) -> F64:
     return U
 
 
+#: The images' Gram matrices are one stacked product over the rays padded to the largest
+#: count per image (zero rows) when that adds at most this fraction of rows; else one
+#: BLAS product per image (:func:`gram_by_segments`).
+GRAM_PAD_MAX: float = 0.5
+
+
+@dataclass
+class ImageGram:
+    """How the Gram matrices Σ JᵀJ per image are formed from rays in another order.
+
+    Attributes
+    ----------
+    order, starts, present : ndarray of int
+        The rays sorted by image, where each non-empty image begins, which image that is.
+    m, n : int
+        Numbers of images and rays.
+    slots : ndarray of int or None
+        With padding: (len(present) · kmax,) the ray of each padded row (``n``: the zero
+        row), image by image.
+    """
+
+    order: I64
+    starts: I64
+    present: I64
+    m: int
+    n: int
+    slots: I64 | None = None
+
+    def __post_init__(self) -> None:
+        counts = np.diff(np.append(self.starts, self.n))
+        kmax = int(counts.max(initial=0))
+        if self.present.size * kmax <= (1.0 + GRAM_PAD_MAX) * self.n and self.n:
+            rank = np.arange(self.n) - np.repeat(self.starts, counts)
+            seg = np.repeat(np.arange(self.present.size), counts)
+            self.slots = np.full(self.present.size * kmax, self.n)
+            self.slots[seg * kmax + rank] = self.order
+
+    def grams(self, Jz: F64) -> F64:
+        """Σ JᵀJ per image (m, c, c) from ``Jz`` (n + 1, 2, c): the rays in their own
+        order, then a zero row."""
+        c = Jz.shape[2]
+        if self.slots is None:
+            J = np.take(Jz[: self.n], self.order, axis=0)
+            return gram_by_segments(J, self.starts, self.present, self.m)
+        P = np.take(Jz, self.slots, axis=0).reshape(self.present.size, -1, c)
+        G = np.matmul(P.transpose(0, 2, 1), P)
+        if self.present.size == self.m:
+            return G
+        out = np.zeros((self.m, c, c))
+        out[self.present] = G
+        return out
+
+
 def whitening_factors(V: F64) -> F64:
     """F_j = L_j⁻ᵀ per point block (p, 3, 3), V_j = L_j L_jᵀ (Cholesky), so that
     (W F)(W F)ᵀ = W V⁻¹ Wᵀ. A block that is not positive definite gives NaN (the

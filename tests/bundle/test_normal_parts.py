@@ -1,0 +1,36 @@
+"""Pieces of the bundle's normal equations: the images' Gram matrices (padded stack or
+per image) and the sums over a point's rays."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from orientviz.bundle import _schur
+from orientviz.bundle._reduced import _segments
+from orientviz.bundle._schur import ImageGram
+from orientviz.bundle._tracks import SUM_BY_ADDS_MAX_K, _sum_rays
+
+
+@pytest.mark.parametrize("pad_max", [0.5, 0.0])
+def test_image_grams_are_the_sums_over_each_images_rays(monkeypatch, pad_max):
+    rng = np.random.default_rng(3)
+    m = 7
+    image = rng.permutation(np.repeat(np.arange(m), [10, 9, 11, 8, 0, 12, 10]))  # image 4: none
+    n = image.size
+    monkeypatch.setattr(_schur, "GRAM_PAD_MAX", pad_max)
+    layout = ImageGram(*_segments(image, m), m, n)
+    assert (layout.slots is None) == (pad_max == 0.0)
+    J = rng.standard_normal((n, 2, 7))
+    Jz = np.concatenate([J, np.zeros((1, 2, 7))])
+    want = np.zeros((m, 7, 7))
+    for i in range(m):
+        A = J[image == i].reshape(-1, 7)
+        want[i] = A.T @ A
+    np.testing.assert_allclose(layout.grams(Jz), want, rtol=1e-13, atol=1e-13)
+
+
+@pytest.mark.parametrize("k", [1, 2, 3, SUM_BY_ADDS_MAX_K, SUM_BY_ADDS_MAX_K + 1])
+def test_sums_over_a_points_rays_equal_numpys(k):
+    X = np.random.default_rng(k).standard_normal((11, k, 3, 3))
+    np.testing.assert_array_equal(_sum_rays(X), X.sum(axis=1))
