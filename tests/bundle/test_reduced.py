@@ -109,3 +109,25 @@ def test_singular_reduced_system_names_parameters():
     with pytest.raises(ov.NotDeterminableError) as info:
         prob.solve(ne, prob.names()[: 6 * prob.m])
     assert any(p.endswith(".kappa") for p in info.value.parameters)
+
+
+def test_schur_maps_of_ascending_tracks_equal_the_general_ones():
+    # the bundle's set-up orders a point's rays by image: the maps of S's formation are
+    # then built from one point's pattern; they must be the general construction's
+    from orientviz.bundle._tracks import _ascending_group_map, _block_lookup, _group_map
+
+    rng = np.random.default_rng(2)
+    m = 40
+    for k in (2, 3, 5):
+        img = np.sort(
+            np.stack([rng.choice(m, k, replace=False) for _ in range(25)]), axis=1
+        ).astype(np.int64)
+        i, j = np.triu_indices(k)
+        keys = np.union1d(img[:, i] * m + img[:, j], np.arange(m) * (m + 1))
+        lookup = _block_lookup(keys, m)
+        fast = _ascending_group_map(img, lookup, keys.size)
+        ref = _group_map(img, lookup, keys.size)
+        assert fast.shape == ref.shape
+        assert np.array_equal(fast.indptr, ref.indptr)
+        assert np.array_equal(fast.indices, ref.indices)
+        assert np.array_equal(fast.data, ref.data)

@@ -217,7 +217,7 @@ class BundleProblem:
             proj = kept[1]
         else:
             io = self.interior
-            xyz = st.xyz[self.obs.point]
+            xyz = np.take(st.xyz, self.obs.point, axis=0)
             proj = RayProjection(st.X0, st.angles, io.c, io.x0, io.y0, self.obs.image, xyz, seq)
         f = proj.xy
         self.projected = (st, f)
@@ -253,7 +253,7 @@ class BundleProblem:
 
     def cost(self, st: BundleState, rw: F64) -> float:
         c = float(np.sum(rw**2))
-        d = self.points.prior_obs - st.xyz[self.points.unknown]
+        d = self.points.prior_obs - np.take(st.xyz, self.points.unknown, axis=0)
         c += float(np.sum(self.points.prior_w * d**2))
         c += float(np.sum(self.exterior.X0_w * (self.exterior.X0_obs - st.X0) ** 2))
         c += float(np.sum(self.exterior.angles_w * wrap(self.exterior.angles_obs - st.angles) ** 2))
@@ -272,39 +272,49 @@ class BundleProblem:
         self.design_at(st)
         sw = self.obs.weight[:, :, None]
         Jew, Jpw = Je * sw, Jp * sw
-        # image blocks: gather [P½ J_e | P½ (l − f)] (n, 2, 7) by image, then one Gram
-        # matrix per image: U and b_c (its last column)
-        Jc = np.empty((Je.shape[0], 2, 7))
-        Jc[:, :, :6] = np.take(Jew, S.cam_order, axis=0)
-        Jc[:, :, 6] = np.take(rw, S.cam_order, axis=0)
-        G = gram_by_segments(Jc, S.cam_starts, S.cam_present, self.m)
-        del Jc
-        U = np.ascontiguousarray(G[:, :6, :6])
-        bc = G[:, :6, 6].copy()
-        U[:, [0, 1, 2], [0, 1, 2]] += self.exterior.X0_w
-        bc[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
-        U[:, [3, 4, 5], [3, 4, 5]] += self.exterior.angles_w
-        bc[:, 3:] += self.exterior.angles_w * wrap(self.exterior.angles_obs - st.angles)
-        if self.aux:
-            self.aux.add_images(U, bc, st.X0, st.xyz, st.g)
         # point rays in the order of their track lengths (._tracks); sums per point and
         # per image by products with constant sparse incidences
         tg = S.tracks
-        r = tg.rays
         Wr, V, bp = point_products(tg, Jew, Jpw, rw, S.n_pt)
-        i3 = [0, 1, 2]
-        V[:, i3, i3] += self.points.prior_w
-        bp += self.points.prior_w * (self.points.prior_obs - st.xyz[self.points.unknown])
+        Vd = V.reshape(-1, 9)[:, ::4]  # the diagonals (a view)
+        Vd += self.points.prior_w
+        xyz = np.take(st.xyz, self.points.unknown, axis=0)
+        bp += self.points.prior_w * (self.points.prior_obs - xyz)
         if self.aux:
             self.aux.add_points(V, bp, st.X0, st.xyz, st.g)
-        diagU = U[:, range(6), range(6)].copy()
-        diagV = V[:, i3, i3].copy()
+        diagV = Vd.copy()
         if lam > 0:
-            U[:, range(6), range(6)] *= 1.0 + lam
-            V[:, i3, i3] *= 1.0 + lam
+            Vd *= 1.0 + lam
         Vinv = inv3(V)
         Tr = Wr @ np.take(Vinv, tg.ray_point, axis=0)
-        red = bc - tg.by_image @ (Tr @ np.take(bp, tg.ray_point, axis=0)[:, :, None])[:, :, 0]
+        # image blocks and the reduced right-hand side b_c − Σ T b_p = Σ P½J_eᵀ r' with
+        # r' = P½(l − f) − P½J_p V⁻¹ b_p per ray: one Gram matrix per image of
+        # [P½J_e | r'] (n, 2, 7) gathered by image — U and, in its last column, the rhs
+        y = np.take(np.einsum("nij,nj->ni", Vinv, bp), tg.ray_point, axis=0)
+        Jpr = tg.take(Jpw)
+        Jy = Jpr[:, :, 0] * y[:, 0, None]  # P½J_p y per ray by columns (no tiny products)
+        Jy += Jpr[:, :, 1] * y[:, 1, None]
+        Jy += Jpr[:, :, 2] * y[:, 2, None]
+        rr = rw.copy()
+        rr[tg.rows] -= Jy
+        Jc = np.empty((Je.shape[0], 2, 7))
+        Jc[:, :, :6] = np.take(Jew, S.cam_order, axis=0)
+        Jc[:, :, 6] = np.take(rr, S.cam_order, axis=0)
+        G = gram_by_segments(Jc, S.cam_starts, S.cam_present, self.m)
+        del Jc, rr, y, Jy, Jpr
+        U = np.ascontiguousarray(G[:, :6, :6])
+        red = G[:, :6, 6].copy()
+        U[:, [0, 1, 2], [0, 1, 2]] += self.exterior.X0_w
+        red[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
+        U[:, [3, 4, 5], [3, 4, 5]] += self.exterior.angles_w
+        red[:, 3:] += self.exterior.angles_w * wrap(self.exterior.angles_obs - st.angles)
+        if self.aux:
+            self.aux.add_images(U, red, st.X0, st.xyz, st.g)
+        Ud = U.reshape(-1, 36)[:, ::7]  # the diagonals (a view)
+        diagU = Ud.copy()
+        if lam > 0:
+            Ud *= 1.0 + lam
+        r = tg.rays
         out = NormalEquations(
             blocks=None,
             rhs=red.reshape(-1),
@@ -359,7 +369,7 @@ class BundleProblem:
         S = self.reduced
         tg = S.tracks
         rp = rw * self.obs.weight  # P (l − f) = P½ · P½ (l − f)
-        gc = Je[:, 0, :] * rp[:, 0, None] + Je[:, 1, :] * rp[:, 1, None]
+        gc = np.einsum("nki,nk->ni", Je, rp)
         bc = np.zeros((self.m, 6))
         bc[S.cam_present] = np.add.reduceat(np.take(gc, S.cam_order, axis=0), S.cam_starts)
         bc[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
@@ -371,9 +381,11 @@ class BundleProblem:
             diagU[:, 3:] = self.exterior.angles_w
             diagU[S.cam_present, 3:] += np.add.reduceat(np.sum(Ja * Ja, axis=1), S.cam_starts)
             bc[:, 3:] = np.linalg.solve(rot.transpose(0, 2, 1), bc[:, 3:, None])[:, :, 0]
-        gp = Jp[:, 0, :] * rp[:, 0, None] + Jp[:, 1, :] * rp[:, 1, None]
+        gp = np.einsum("nki,nk->ni", Jp, rp)
         bp = tg.by_point @ tg.take(gp)
-        bp += self.points.prior_w * (self.points.prior_obs - st.xyz[self.points.unknown])
+        bp += self.points.prior_w * (
+            self.points.prior_obs - np.take(st.xyz, self.points.unknown, 0)
+        )
         Tb = (ne.Tr @ np.take(bp, tg.ray_point, axis=0)[:, :, None])[:, :, 0]
         red = bc - tg.by_image @ Tb
         return NormalEquations(
@@ -435,7 +447,7 @@ class BundleProblem:
     def apply(self, st: BundleState, dc: F64, dp: F64, da: F64, local: bool = False) -> BundleState:
         """The next iterate; ``local``: dc[:, 3:] are rotations δ of the image frames."""
         xyz = st.xyz.copy()
-        xyz[self.points.unknown] += dp
+        xyz[self.points.unknown] = np.take(xyz, self.points.unknown, axis=0) + dp
         if local:
             angles = apply_local(st.angles, dc[:, 3:], self.block.sequence)
             return BundleState(st.X0 + dc[:, :3], angles, xyz, st.ap + da, st.g)

@@ -62,6 +62,11 @@ DENSE_MAX: int = 8000
 #: Below this many flops of the cheaper of dense/banded the sparse estimate (a nested
 #: dissection of the image graph) is not worth its own cost.
 SPARSE_CONSIDERED_ABOVE: float = 2e8
+#: A narrow band (strips) is compared with the sparse estimate only above this cost: the
+#: sparse factor must be estimated below :data:`SPARSE_CLEAR_WIN` of the band, and on
+#: strips its flops are not that much lower until the blocks are far larger (the bench's
+#: 30 × 70 images: 1.0 against 1.7 GFlop, same time; the estimate costs ~10 ms there).
+SPARSE_CONSIDERED_ABOVE_STRIPS: float = 5e10
 
 
 @dataclass(frozen=True)
@@ -177,7 +182,7 @@ def choose_solver(
     band = f", half-band {kd} of {n}" if kd is not None else ""
     if kd is not None and kd + 1 <= STRIP_BAND * n:
         # a narrow band (strips): banded, unless a sparse factor is clearly cheaper
-        if costs["banded"] > SPARSE_CONSIDERED_ABOVE:
+        if costs["banded"] > SPARSE_CONSIDERED_ABOVE_STRIPS:
             costs["sparse"] = sparse()
         if costs.get("sparse", np.inf) >= SPARSE_CLEAR_WIN * costs["banded"]:
             est = ", ".join(f"{k} {v:.2g}" for k, v in sorted(costs.items(), key=lambda t: t[1]))

@@ -63,6 +63,11 @@ class TrackGroups:
     in_order: bool = False
     _maps: list | None = field(default=None, repr=False)
 
+    @property
+    def rows(self) -> slice | I64:
+        """The observations of the rays in this order (a slice when ``in_order``)."""
+        return slice(0, self.rays.size) if self.in_order else self.rays
+
     def take(self, a: F64) -> F64:
         """The rows of ``a`` (per observation) of the rays in this order."""
         return a[: self.rays.size] if self.in_order else np.take(a, self.rays, axis=0)
@@ -75,10 +80,12 @@ class TrackGroups:
         entries)."""
         if self._maps is None:
             lookup = _block_lookup(keys, m)
-            self._maps = [
-                _group_map(self.ray_image[r0 : r0 + n * k].reshape(n, k), lookup, keys.size)
-                for k, r0, n in self.groups
-            ]
+            self._maps = []
+            for k, r0, n in self.groups:
+                img = self.ray_image[r0 : r0 + n * k].reshape(n, k)
+                ascending = k > 1 and bool(np.all(img[:, 1:] > img[:, :-1]))
+                build = _ascending_group_map if ascending else _group_map
+                self._maps.append(build(img, lookup, keys.size))
         return self._maps
 
 
@@ -114,6 +121,30 @@ def _group_map(img: I64, lookup, n_blocks: int) -> sp.csc_matrix:
     return sp.csc_matrix((np.full(rows.size, -1.0), rows, indptr), shape=(6 * n_blocks, keep6.size))
 
 
+def _ascending_group_map(img: I64, lookup, n_blocks: int) -> sp.csc_matrix:
+    """:func:`_group_map` for points whose rays are in ascending image order (as the
+    bundle's set-up orders them): the kept pairs are a ≤ b for every point, so the map
+    is one point's pattern repeated (no masks over all n·6k² product rows; the same
+    matrix, ~3 × faster to form)."""
+    n, k = img.shape
+    iu, ju = np.triu_indices(k)
+    pair = np.zeros((k, k), np.int64)
+    pair[iu, ju] = np.arange(iu.size)
+    blk = lookup(img[:, iu], img[:, ju]).astype(np.int32)  # (n, pairs)
+    a, r, b = (
+        x.reshape(-1) for x in np.meshgrid(np.arange(k), np.arange(6), np.arange(k), indexing="ij")
+    )
+    kept = a <= b  # product rows (a, r, b) of one point, row-major in its (6k × 6k)
+    rows = 6 * blk[:, pair[a[kept], b[kept]]] + r[kept].astype(np.int32)
+    per_point = int(kept.sum())
+    before = (np.cumsum(kept) - kept).astype(np.int32)  # kept rows before each product row
+    indptr = np.empty(n * kept.size + 1, np.int32)
+    indptr[:-1] = (per_point * np.arange(n, dtype=np.int32)[:, None] + before).reshape(-1)
+    indptr[-1] = n * per_point
+    shape = (6 * n_blocks, n * kept.size)
+    return sp.csc_matrix((np.full(rows.size, -1.0), rows.reshape(-1), indptr), shape=shape)
+
+
 def track_groups(st) -> TrackGroups:
     """The :class:`TrackGroups` of a :class:`~orientviz.bundle._reduced.ReducedStructure`."""
     m = st.n_cam
@@ -144,6 +175,22 @@ def track_groups(st) -> TrackGroups:
 RAY_CHUNK: int = 8192
 
 
+#: Tracks up to this length are summed by k − 1 array additions (3–5 × faster than a
+#: reduction over the short middle axis; the same sums in the same order).
+SUM_BY_ADDS_MAX_K: int = 16
+
+
+def _sum_rays(X: F64) -> F64:
+    """Σ over axis 1 of (points, k, ...): the k rays of each point."""
+    k = X.shape[1]
+    if k > SUM_BY_ADDS_MAX_K or k < 2:
+        return X.sum(axis=1)
+    out = X[:, 0] + X[:, 1]
+    for j in range(2, k):
+        out += X[:, j]
+    return out
+
+
 def point_products(tg: TrackGroups, Jew: F64, Jpw: F64, rw: F64, n_pt: int):
     """W = J_eᵀ P J_p per ray and the point blocks V = Σ J_pᵀ P J_p, b_p = Σ J_pᵀ P (l − f).
 
@@ -165,9 +212,10 @@ def point_products(tg: TrackGroups, Jew: F64, Jpw: F64, rw: F64, n_pt: int):
         In point-unknown order.
 
     Chunks of :data:`RAY_CHUNK` rays of whole points: the rays of a point are
-    consecutive, so their sums are reshapes, and the temporaries stay small (numpy's
-    stacked products need contiguous operands, the transposes are copied; large fresh
-    temporaries cost their page faults).
+    consecutive, so their sums are reshapes, and the temporaries stay small (large
+    fresh temporaries cost their page faults; a stacked product runs faster on a
+    contiguous copy of a transpose than on the view). V is summed from W's upper 3 × 3 blocks
+    (−J_pᵀ P J_p: the derivatives by X0 are those by X negated), not formed again.
     """
     nv = tg.rays.size
     Wr = np.empty((nv, 6, 3))
@@ -184,12 +232,12 @@ def point_products(tg: TrackGroups, Jew: F64, Jpw: F64, rw: F64, n_pt: int):
             else:
                 rr = tg.rays[a:b]
                 Jer, Jpr, rwr = (np.take(x, rr, axis=0) for x in (Jew, Jpw, rw))
-            JprT = np.ascontiguousarray(Jpr.transpose(0, 2, 1))
             np.matmul(np.ascontiguousarray(Jer.transpose(0, 2, 1)), Jpr, out=Wr[a:b])
             pts = tg.points[p0 + c0 : p0 + c1]
-            V[pts] = (JprT @ Jpr).reshape(c1 - c0, k, 3, 3).sum(axis=1)
-            g = JprT[:, :, 0] * rwr[:, 0, None] + JprT[:, :, 1] * rwr[:, 1, None]
-            bp[pts] = g.reshape(c1 - c0, k, 3).sum(axis=1)
+            # ∂/∂X0 = −∂/∂X (f depends on X − X0): W's upper 3 × 3 block is −J_pᵀ P J_p
+            V[pts] = -_sum_rays(Wr[a:b, :3].reshape(c1 - c0, k, 3, 3))
+            g = Jpr[:, 0, :] * rwr[:, 0, None] + Jpr[:, 1, :] * rwr[:, 1, None]
+            bp[pts] = _sum_rays(g.reshape(c1 - c0, k, 3))
         p0 += n
     return Wr, V, bp
 
