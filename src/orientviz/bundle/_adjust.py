@@ -316,6 +316,8 @@ class _BundleSteps:
         self.last_correction = np.inf
         # chord steps (CHORD_REUSE): the factor of the last full step while it may serve
         self.chord_allowed = not precision and not (prob.q or prob.aux or prob.ap.lens is not None)
+        # the same condition lets S be factored in single precision (refined solves)
+        prob.single_factor = self.chord_allowed
         self.chord_factor = None  # (factor of S, its NormalEquations, local?)
         self.chord_pending = None  # the factor of the last solved step, if it may serve
         self.chord_step = False  # the last solved step used chord_factor

@@ -165,6 +165,9 @@ class BundleProblem:
             block, self.obs, self.points, self.reduced, additional, ap_group, ap_sigma
         )
         self.border = BorderSolver()
+        #: S may be factored in single precision with refined solves (set by the loop when
+        #: the factors serve the steps alone: no precision pass, no border unknowns)
+        self.single_factor = False
         self._design_at: BundleState | None = None  # iterate of a lens model's design
         self._projection = None  # (iterate, RayProjection) kept by residuals(keep=True)
         #: (iterate, image coordinates (n, 2) mm of the rays without additional
@@ -414,7 +417,9 @@ class BundleProblem:
             if self.aux or self.q:
                 raise ValueError("a chord step needs a bundle without border unknowns")
             return self.back_substitute(ne, fac.solve(ne.rhs), np.zeros(0), fac)
-        fac = factor_reduced(self.reduced, ne.blocks, names, dense=ne.S)
+        fac = factor_reduced(
+            self.reduced, ne.blocks, names, dense=ne.S, single=self.single_factor
+        )
         ne.S = None  # overwritten by the factor
         if self.aux:
             return self.aux.solve(self, fac, ne)
