@@ -113,9 +113,7 @@ def poor_start():
     return block, sd
 
 
-def test_chord_steps_after_a_frame_rotation_step_reach_the_newton_optimum(
-    monkeypatch, poor_start
-):
+def test_chord_steps_after_a_frame_rotation_step_reach_the_newton_optimum(monkeypatch, poor_start):
     block, sd = poor_start
     steps, _ = _record(monkeypatch)
     res = ov.bundle_adjust(block, precision=False)

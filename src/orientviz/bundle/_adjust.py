@@ -316,6 +316,8 @@ class _BundleSteps:
         self.last_correction = np.inf
         # chord steps (CHORD_REUSE): the factor of the last full step while it may serve
         self.chord_allowed = not precision and not (prob.q or prob.aux or prob.ap.lens is not None)
+        # the same condition lets S be factored in single precision (refined solves)
+        prob.single_factor = self.chord_allowed
         self.chord_factor = None  # (factor of S, its NormalEquations, local?)
         self.chord_pending = None  # the factor of the last solved step, if it may serve
         self.chord_step = False  # the last solved step used chord_factor
@@ -434,6 +436,8 @@ class _BundleSteps:
         prob = self.prob
         fac, ne_old, old_local = self.chord_factor
         A = angle_map(st.angles, prob.block.sequence) if old_local and not local else None
+        if A is not None and not np.all(np.abs(np.linalg.det(A)) > 1e-9):
+            return None  # det A = cos φ ("opk"): an image at the gimbal lock of the angles
         ne = prob.chord_normal(st, rw, Je, Jp, ne_old, rot=A)
         dc, dp, da, fac = prob.solve(ne, self.red_names, fac=fac)
         if A is not None:  # back to ω, φ, κ
@@ -445,12 +449,14 @@ class _BundleSteps:
 
     def _relative_move(self, st: BundleState | None, dc: F64, dp: F64) -> float:
         """The largest change of a step, centres and points in units of the median ray
-        length, angles in rad (the measure of :data:`CHORD_REUSE` and :data:`AP_REUSE`)."""
+        length (of a sample of the rays), angles in rad (the measure of
+        :data:`CHORD_REUSE` and :data:`AP_REUSE`)."""
         prob = self.prob
         if self.ray_length is None:  # from the first iterate that gets here
-            obs = prob.obs
-            d = st.xyz[obs.point] - st.X0[obs.image]
-            self.ray_length = float(np.median(np.sqrt(np.sum(d * d, axis=1))))
+            obs = prob.obs  # every k-th ray, at most ~8000: a scale, not a statistic
+            k = max(1, obs.point.size // 8192)
+            d = st.xyz[obs.point[::k]] - st.X0[obs.image[::k]]
+            self.ray_length = float(np.sqrt(np.median(np.sum(d * d, axis=1))))
         L = self.ray_length
         if not L > 0:  # no scale (a degenerate block): nothing may be reused
             return np.inf

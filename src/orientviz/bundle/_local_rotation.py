@@ -67,7 +67,11 @@ def angle_map(angles: F64, sequence: str = "opk") -> F64:
     dR = np.stack(matrix_derivatives(angles[:, 0], angles[:, 1], angles[:, 2], sequence), 1)
     M = R.transpose(0, 2, 1)[:, None] @ dR  # (m, 3 angles, 3, 3): Rᵀ ∂R/∂θ
     a = 0.5 * np.stack(
-        [M[:, :, 2, 1] - M[:, :, 1, 2], M[:, :, 0, 2] - M[:, :, 2, 0], M[:, :, 1, 0] - M[:, :, 0, 1]],
+        [
+            M[:, :, 2, 1] - M[:, :, 1, 2],
+            M[:, :, 0, 2] - M[:, :, 2, 0],
+            M[:, :, 1, 0] - M[:, :, 0, 1],
+        ],
         axis=2,
     )  # (m, θ, k)
     return a.transpose(0, 2, 1)

@@ -162,6 +162,9 @@ class BundleProblem:
             block, self.obs, self.points, self.reduced, additional, ap_group, ap_sigma
         )
         self.border = BorderSolver()
+        #: S may be factored in single precision with refined solves (set by the loop when
+        #: the factors serve the steps alone: no precision pass, no border unknowns)
+        self.single_factor = False
         self._design_at: BundleState | None = None  # iterate of a lens model's design
         self._projection = None  # (iterate, RayProjection) kept by residuals(keep=True)
         #: (iterate, image coordinates (n, 2) mm of the rays without additional
@@ -214,7 +217,7 @@ class BundleProblem:
             proj = kept[1]
         else:
             io = self.interior
-            xyz = st.xyz[self.obs.point]
+            xyz = np.take(st.xyz, self.obs.point, axis=0)
             proj = RayProjection(st.X0, st.angles, io.c, io.x0, io.y0, self.obs.image, xyz, seq)
         f = proj.xy
         self.projected = (st, f)
@@ -250,7 +253,7 @@ class BundleProblem:
 
     def cost(self, st: BundleState, rw: F64) -> float:
         c = float(np.sum(rw**2))
-        d = self.points.prior_obs - st.xyz[self.points.unknown]
+        d = self.points.prior_obs - np.take(st.xyz, self.points.unknown, axis=0)
         c += float(np.sum(self.points.prior_w * d**2))
         c += float(np.sum(self.exterior.X0_w * (self.exterior.X0_obs - st.X0) ** 2))
         c += float(np.sum(self.exterior.angles_w * wrap(self.exterior.angles_obs - st.angles) ** 2))
@@ -273,27 +276,32 @@ class BundleProblem:
         # per image by products with constant sparse incidences
         tg = S.tracks
         Wr, V, bp = point_products(tg, Jew, Jpw, rw, S.n_pt)
-        i3 = [0, 1, 2]
-        V[:, i3, i3] += self.points.prior_w
-        bp += self.points.prior_w * (self.points.prior_obs - st.xyz[self.points.unknown])
+        Vd = V.reshape(-1, 9)[:, ::4]  # the diagonals (a view)
+        Vd += self.points.prior_w
+        xyz = np.take(st.xyz, self.points.unknown, axis=0)
+        bp += self.points.prior_w * (self.points.prior_obs - xyz)
         if self.aux:
             self.aux.add_points(V, bp, st.X0, st.xyz, st.g)
-        diagV = V[:, i3, i3].copy()
+        diagV = Vd.copy()
         if lam > 0:
-            V[:, i3, i3] *= 1.0 + lam
+            Vd *= 1.0 + lam
         Vinv = inv3(V)
         Tr = Wr @ np.take(Vinv, tg.ray_point, axis=0)
         # image blocks and the reduced right-hand side b_c − Σ T b_p = Σ P½J_eᵀ r' with
         # r' = P½(l − f) − P½J_p V⁻¹ b_p per ray: one Gram matrix per image of
         # [P½J_e | r'] (n, 2, 7) gathered by image — U and, in its last column, the rhs
         y = np.take(np.einsum("nij,nj->ni", Vinv, bp), tg.ray_point, axis=0)
+        Jpr = tg.take(Jpw)
+        Jy = Jpr[:, :, 0] * y[:, 0, None]  # P½J_p y per ray by columns (no tiny products)
+        Jy += Jpr[:, :, 1] * y[:, 1, None]
+        Jy += Jpr[:, :, 2] * y[:, 2, None]
         rr = rw.copy()
-        rr[tg.rows] -= (tg.take(Jpw) @ y[:, :, None])[:, :, 0]
+        rr[tg.rows] -= Jy
         Jc = np.empty((Je.shape[0], 2, 7))
         Jc[:, :, :6] = np.take(Jew, S.cam_order, axis=0)
         Jc[:, :, 6] = np.take(rr, S.cam_order, axis=0)
         G = gram_by_segments(Jc, S.cam_starts, S.cam_present, self.m)
-        del Jc, rr, y
+        del Jc, rr, y, Jy, Jpr
         U = np.ascontiguousarray(G[:, :6, :6])
         red = G[:, :6, 6].copy()
         U[:, [0, 1, 2], [0, 1, 2]] += self.exterior.X0_w
@@ -302,9 +310,10 @@ class BundleProblem:
         red[:, 3:] += self.exterior.angles_w * wrap(self.exterior.angles_obs - st.angles)
         if self.aux:
             self.aux.add_images(U, red, st.X0, st.xyz, st.g)
-        diagU = U[:, range(6), range(6)].copy()
+        Ud = U.reshape(-1, 36)[:, ::7]  # the diagonals (a view)
+        diagU = Ud.copy()
         if lam > 0:
-            U[:, range(6), range(6)] *= 1.0 + lam
+            Ud *= 1.0 + lam
         r = tg.rays
         out = NormalEquations(
             blocks=None,
@@ -360,7 +369,7 @@ class BundleProblem:
         S = self.reduced
         tg = S.tracks
         rp = rw * self.obs.weight  # P (l − f) = P½ · P½ (l − f)
-        gc = Je[:, 0, :] * rp[:, 0, None] + Je[:, 1, :] * rp[:, 1, None]
+        gc = np.einsum("nki,nk->ni", Je, rp)
         bc = np.zeros((self.m, 6))
         bc[S.cam_present] = np.add.reduceat(np.take(gc, S.cam_order, axis=0), S.cam_starts)
         bc[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
@@ -372,9 +381,11 @@ class BundleProblem:
             diagU[:, 3:] = self.exterior.angles_w
             diagU[S.cam_present, 3:] += np.add.reduceat(np.sum(Ja * Ja, axis=1), S.cam_starts)
             bc[:, 3:] = np.linalg.solve(rot.transpose(0, 2, 1), bc[:, 3:, None])[:, :, 0]
-        gp = Jp[:, 0, :] * rp[:, 0, None] + Jp[:, 1, :] * rp[:, 1, None]
+        gp = np.einsum("nki,nk->ni", Jp, rp)
         bp = tg.by_point @ tg.take(gp)
-        bp += self.points.prior_w * (self.points.prior_obs - st.xyz[self.points.unknown])
+        bp += self.points.prior_w * (
+            self.points.prior_obs - np.take(st.xyz, self.points.unknown, 0)
+        )
         Tb = (ne.Tr @ np.take(bp, tg.ray_point, axis=0)[:, :, None])[:, :, 0]
         red = bc - tg.by_image @ Tb
         return NormalEquations(
@@ -401,7 +412,9 @@ class BundleProblem:
             if self.aux or self.q:
                 raise ValueError("a chord step needs a bundle without border unknowns")
             return self.back_substitute(ne, fac.solve(ne.rhs), np.zeros(0), fac)
-        fac = factor_reduced(self.reduced, ne.blocks, names, dense=ne.S)
+        fac = factor_reduced(
+            self.reduced, ne.blocks, names, dense=ne.S, single=self.single_factor
+        )
         ne.S = None  # overwritten by the factor
         if self.aux:
             return self.aux.solve(self, fac, ne)
@@ -434,7 +447,7 @@ class BundleProblem:
     def apply(self, st: BundleState, dc: F64, dp: F64, da: F64, local: bool = False) -> BundleState:
         """The next iterate; ``local``: dc[:, 3:] are rotations δ of the image frames."""
         xyz = st.xyz.copy()
-        xyz[self.points.unknown] += dp
+        xyz[self.points.unknown] = np.take(xyz, self.points.unknown, axis=0) + dp
         if local:
             angles = apply_local(st.angles, dc[:, 3:], self.block.sequence)
             return BundleState(st.X0 + dc[:, :3], angles, xyz, st.ap + da, st.g)

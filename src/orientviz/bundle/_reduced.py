@@ -33,7 +33,9 @@ the structure: :mod:`orientviz.bundle._solver_choice`), measured in
   30 × 70 block: bandwidth 61 images across the strips against 118 for RCM (an image
   shares points with the images two along its strip, also in the neighbouring strips:
   two columns of 30 images further on, so a numbering by columns cannot do better);
-  dpbtrf then runs at ~31 GFlop/s on one core, 56 ms for n = 12 600, kd = 371;
+  dpbtrf then runs at ~31 GFlop/s on one core, 56 ms for n = 12 600, kd = 371 (a
+  plain bundle factors such a band in single precision, ``spbtrf`` 38 ms, and refines
+  each solve: :mod:`orientviz.bundle._mixed_band`);
   factor + solve 0.08 s against 0.22 s (RCM),
   0.35 s (SuperLU) and 16.6 s (dense); on the 10 × 20 block 0.002 s against 0.003,
   0.010 and 0.021 s (``benchmarks/README.md``).
@@ -67,6 +69,7 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 from ..adjust.rank import describe_defect, null_space_of_normal
 from ..errors import NotDeterminableError, parameter_words
 from ._dissection import nested_dissection
+from ._mixed_band import MIN_BAND_FLOPS, SymmetricBlocks, mixed_band_factor
 from ._multifrontal import factor_fronts, front_layout, solve_fronts
 from ._solver_choice import SOLVER_CHOICES, choose_formation, choose_solver, image_blocks
 
@@ -210,6 +213,7 @@ class ReducedStructure:
         self.diag_block = np.searchsorted(self.block_i * m + self.block_k, np.arange(m) * (m + 1))
         self._pairs = None
         self._tracks = None
+        self._symmetric = None  # S's CSR pattern for mixed-precision refinement
         self._setup_solver()
 
     # ------------------------------------------------------------ pairs of rays
@@ -384,19 +388,37 @@ class Factor:
             return out
         if self.kind == "sparse":
             return solve_fronts(st.fronts, self.data, rhs)
+        if self.kind == "mixed":
+            return self.data.solve(rhs)
         return scipy.linalg.cho_solve((self.data, True), rhs, check_finite=False)
 
 
 def factor_reduced(
-    st: ReducedStructure, blocks: F64, names: list[str] | None = None, dense: F64 | None = None
+    st: ReducedStructure,
+    blocks: F64,
+    names: list[str] | None = None,
+    dense: F64 | None = None,
+    single: bool = False,
 ) -> Factor:
     """Factor S given its 6×6 blocks; a singular S raises :class:`NotDeterminableError`.
 
     ``dense``: S as a dense (6m, 6m) array (lower triangle used) when the formation made
     it (:func:`orientviz.bundle._schur.dense_schur`); it is overwritten by the factor.
+    ``single``: a wide band may be factored in single precision with double-precision
+    refinement of every solve (:mod:`orientviz.bundle._mixed_band`; kind ``"mixed"``) —
+    only for factors that serve solves alone (not the precision's inverse).
     """
     n = st.n_reduced
     flat = blocks.reshape(-1)
+    if single and st.solver == "banded" and n * float(st.kd) ** 2 >= MIN_BAND_FLOPS:
+        if st._symmetric is None:
+            st._symmetric = SymmetricBlocks(st.block_i, st.block_k, st.n_cam)
+        mixed = mixed_band_factor(
+            n * (st.kd + 1) + 1, st.band_dst, blocks, st.kd, n, st.scalar_perm,
+            st._symmetric, lambda: factor_reduced(st, blocks, names),
+        )
+        if mixed is not None:
+            return Factor(st, "mixed", mixed)
     try:
         if st.solver == "banded":
             ab = np.zeros(n * (st.kd + 1) + 1)  # + the spare slot (see _setup_solver)
