@@ -307,6 +307,8 @@ class BundleProblem:
         Jz[tg.rows, :, 6] -= Jy
         G = self.image_gram.grams(Jz)
         del Jz, y, Jy, Jpr
+        if not (self.q and not self.border.hold):  # the weighted Jacobians: border only
+            del Jew, Jpw  # (frees them before S is formed: the peak of a large block)
         U = np.ascontiguousarray(G[:, :6, :6])
         red = G[:, :6, 6].copy()
         U[:, [0, 1, 2], [0, 1, 2]] += self.exterior.X0_w
