@@ -28,6 +28,27 @@ def npz_path(size: str, seed: int = 1) -> Path:
     return data_dir() / f"aerial_{size}_seed{seed}.npz"
 
 
+def user_arrays(block: Block) -> dict:
+    """The in-memory arrays a user would hold for ``block``: the keyword arguments of
+    ``Block.from_arrays`` (the timed path of ``bench_bundle.py`` builds the block from
+    them)."""
+    return dict(
+        camera_c=block.cameras.c,
+        camera_format_mm=block.cameras.format_mm[0],
+        image_camera=block.images.camera,
+        X0=block.images.X0,
+        angles=block.images.angles,
+        xyz=block.points.xyz,
+        obs_image=block.observations.image,
+        obs_point=block.observations.point,
+        obs_xy=block.observations.xy,
+        obs_sigma=block.observations.sigma,
+        role=block.points.role,
+        xyz_known=block.points.xyz_known,
+        point_sigma=block.points.sigma,
+    )
+
+
 def load_bench_block(path, control: str = "fixed"):
     """Return ``(block, truth)`` from a make_block ``.npz``.
 

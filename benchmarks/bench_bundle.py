@@ -65,7 +65,7 @@ def ensure_data(size: str) -> Path:
 
 # --------------------------------------------------------------------------- orientviz worker
 def worker(npz: str, reps: int, precision: bool, solver: str, control: str = "fixed") -> dict:
-    from bench_blocks import load_bench_block
+    from bench_blocks import load_bench_block, user_arrays
 
     from orientviz.block import Block
     from orientviz.bundle import bundle_adjust
@@ -74,21 +74,7 @@ def worker(npz: str, reps: int, precision: bool, solver: str, control: str = "fi
     rp = _bench_module("run_peers")
     P = rp.Problem(npz, control=control)
     block, _ = load_bench_block(npz, control=control)
-    arrays = dict(  # the in-memory arrays a user would hold
-        camera_c=block.cameras.c,
-        camera_format_mm=block.cameras.format_mm[0],
-        image_camera=block.images.camera,
-        X0=block.images.X0,
-        angles=block.images.angles,
-        xyz=block.points.xyz,
-        obs_image=block.observations.image,
-        obs_point=block.observations.point,
-        obs_xy=block.observations.xy,
-        obs_sigma=block.observations.sigma,
-        role=block.points.role,
-        xyz_known=block.points.xyz_known,
-        point_sigma=block.points.sigma,
-    )
+    arrays = user_arrays(block)  # the in-memory arrays a user would hold
     walls, cpus = [], []
     for _ in range(reps):
         t0, c0 = time.perf_counter(), time.process_time()

@@ -34,27 +34,13 @@ def worker(src: str, size: str, reps: int) -> dict:
     """Time the path ``reps`` times with the code of ``src``; best totals and splits."""
     sys.path.insert(0, src)
     sys.path.insert(0, str(HERE))
-    from bench_blocks import load_bench_block, npz_path
+    from bench_blocks import load_bench_block, npz_path, user_arrays
 
     from orientviz.block import Block
     from orientviz.bundle import _problem, _reduced, bundle_adjust
 
     block, _ = load_bench_block(npz_path(size), control="fixed")
-    arrays = dict(
-        camera_c=block.cameras.c,
-        camera_format_mm=block.cameras.format_mm[0],
-        image_camera=block.images.camera,
-        X0=block.images.X0,
-        angles=block.images.angles,
-        xyz=block.points.xyz,
-        obs_image=block.observations.image,
-        obs_point=block.observations.point,
-        obs_xy=block.observations.xy,
-        obs_sigma=block.observations.sigma,
-        role=block.points.role,
-        xyz_known=block.points.xyz_known,
-        point_sigma=block.points.sigma,
-    )
+    arrays = user_arrays(block)
     spent = [0.0]
 
     def timed(owner, name: str) -> None:
