@@ -34,3 +34,22 @@ def test_image_grams_are_the_sums_over_each_images_rays(monkeypatch, pad_max):
 def test_sums_over_a_points_rays_equal_numpys(k):
     X = np.random.default_rng(k).standard_normal((11, k, 3, 3))
     np.testing.assert_array_equal(_sum_rays(X), X.sum(axis=1))
+
+
+def test_couplings_and_back_substitution_sums_per_point_equal_the_per_ray_ones():
+    import orientviz as ov
+    from orientviz.bundle._checks import point_setup
+    from orientviz.bundle._problem import BundleProblem
+    from orientviz.bundle._tracks import point_sums_wt, ray_couplings
+
+    sim = ov.simulate_block(3, 6, rng=2)
+    tg = BundleProblem(sim.block, point_setup(sim.block, "fixed")).reduced.tracks
+    rng = np.random.default_rng(5)
+    nv, p = tg.rays.size, tg.points.size
+    W, Vinv = rng.standard_normal((nv, 6, 3)), rng.standard_normal((p, 3, 3))
+    dc = rng.standard_normal((sim.block.n_images, 6))
+    assert len({k for k, _, _ in tg.groups}) > 1  # several track lengths
+    np.testing.assert_allclose(ray_couplings(tg, W, Vinv), W @ Vinv[tg.ray_point], rtol=1e-14)
+    want = np.zeros((p, 3))
+    np.add.at(want, tg.ray_point, np.einsum("nij,ni->nj", W, dc[tg.ray_image]))
+    np.testing.assert_allclose(point_sums_wt(tg, W, dc), want, rtol=1e-12, atol=1e-12)

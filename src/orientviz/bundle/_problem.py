@@ -38,7 +38,7 @@ from ._parts import (
 from ._reduced import ReducedStructure, factor_reduced, inv3
 from ._schur import ImageGram, dense_schur
 from ._state import BundleState, wrap
-from ._tracks import point_products, schur_blocks
+from ._tracks import point_products, point_sums_wt, ray_couplings, schur_blocks
 
 F64 = NDArray[np.float64]
 EXTERIOR_NAMES = ("X0", "Y0", "Z0", "omega", "phi", "kappa")
@@ -294,7 +294,7 @@ class BundleProblem:
         if lam > 0:
             Vd *= 1.0 + lam
         Vinv = inv3(V)
-        Tr = Wr @ np.take(Vinv, tg.ray_point, axis=0)
+        Tr = ray_couplings(tg, Wr, Vinv)
         # image blocks and the reduced right-hand side b_c − Σ T b_p = Σ P½J_eᵀ r' with
         # r' = P½(l − f) − P½J_p V⁻¹ b_p per ray: one Gram matrix per image of
         # [P½J_e | r'] (n, 2, 7) gathered by image — U and, in its last column, the rhs
@@ -436,9 +436,7 @@ class BundleProblem:
         """Back-substitution of the points; returns (dc, dp, da, fac)."""
         dc = dc.reshape(self.m, 6)
         tg = self.reduced.tracks  # ne.Wr is in its ray order
-        # Wᵀ dc per ray as (1 × 6)(6 × 3) products: no transposed copy of W
-        t = (np.take(dc, tg.ray_image, axis=0)[:, None, :] @ ne.Wr)[:, 0, :]
-        red = ne.bp - tg.by_point @ t
+        red = ne.bp - point_sums_wt(tg, ne.Wr, dc)
         if self.q and not self.border.hold:
             red -= point_ap_term(self, ne.ap.H, da)
         dp = np.einsum("nij,nj->ni", ne.Vinv, red)

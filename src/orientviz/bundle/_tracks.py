@@ -242,6 +242,33 @@ def point_products(tg: TrackGroups, Jew: F64, Jpw: F64, rw: F64, n_pt: int):
     return Wr, V, bp
 
 
+def ray_couplings(tg: TrackGroups, W: F64, Vinv: F64) -> F64:
+    """T = W V⁻¹ per ray (n_var, 6, 3) in ``tg.rays`` order, from W (same order) and the
+    point blocks' inverses V⁻¹ (p_var, 3, 3): per point one (6k × 3)(3 × 3) product of
+    its k rays stacked (no per-ray gather of V⁻¹; the same sums as per ray)."""
+    T = np.empty_like(W)
+    p0 = 0
+    for k, r0, n in tg.groups:
+        r1 = r0 + n * k
+        Vk = np.take(Vinv, tg.points[p0 : p0 + n], axis=0)
+        np.matmul(W[r0:r1].reshape(n, 6 * k, 3), Vk, out=T[r0:r1].reshape(n, 6 * k, 3))
+        p0 += n
+    return T
+
+
+def point_sums_wt(tg: TrackGroups, W: F64, dc: F64) -> F64:
+    """Σ over each point's rays of W_rayᵀ dc_image (p_var, 3), W (n_var, 6, 3) in
+    ``tg.rays`` order, dc (m, 6) per image: per point one (1 × 6k)(6k × 3) product."""
+    out = np.empty((tg.points.size, 3))
+    p0 = 0
+    for k, r0, n in tg.groups:
+        r1 = r0 + n * k
+        g = np.take(dc, tg.ray_image[r0:r1], axis=0).reshape(n, 1, 6 * k)
+        out[tg.points[p0 : p0 + n]] = (g @ W[r0:r1].reshape(n, 6 * k, 3))[:, 0, :]
+        p0 += n
+    return out
+
+
 def schur_blocks(st, U: F64, T: F64, W: F64) -> F64:
     """The blocks (i ≤ k) of S = U − Σ_j T_j W_jᵀ from per-ray T, W in track order.
 
