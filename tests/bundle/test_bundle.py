@@ -210,7 +210,9 @@ def test_a_sets_name_stands_for_the_set_and_anything_else_is_named_in_one_line()
 
     sim = ov.simulate_block(2, 5, rng=4)
     by_name = ov.bundle_adjust(sim.block, additional="ebner12", ap_sigma=100.0, precision=False)
-    by_set = ov.bundle_adjust(sim.block, additional=ap_set("ebner12"), ap_sigma=100.0, precision=False)
+    by_set = ov.bundle_adjust(
+        sim.block, additional=ap_set("ebner12"), ap_sigma=100.0, precision=False
+    )
     assert by_name["additional"].shape == (12,)
     np.testing.assert_array_equal(by_name.x, by_set.x)
     with pytest.raises(InputError, match="unknown additional-parameter set 'ebner13'"):

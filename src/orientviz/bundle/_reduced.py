@@ -213,7 +213,7 @@ class ReducedStructure:
         self.diag_block = np.searchsorted(self.block_i * m + self.block_k, np.arange(m) * (m + 1))
         self._pairs = None
         self._tracks = None
-        self._symmetric = None  # S's CSR pattern for mixed-precision refinement
+        self._symmetric = None  # S as block-sparse rows, for the mixed-precision refinement
         self._setup_solver()
 
     # ------------------------------------------------------------ pairs of rays
