@@ -20,8 +20,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..rotation import matrix_derivatives, matrix_from_opk
-from ._local_rotation import local_derivatives
+from ..rotation import matrix_from_opk
+from ._local_rotation import frame_axials
 
 F64 = NDArray[np.float64]
 
@@ -36,25 +36,9 @@ def _image_table(X0: F64, angles: F64, c: F64, x0: F64, y0: F64, sequence: str) 
 
 def _axial_table(angles: F64, sequence: str, local: bool) -> F64:
     """Per-image axial vectors ω_θ of (∂R/∂θ)ᵀ R, shape (9, m): ω, φ, κ (or with ``local``
-    the rotations δ of the image frame), 3 each."""
-    R = matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2], sequence)
-    m = R.shape[0]
-    if local:
-        dR = local_derivatives(R)
-    else:
-        dR = np.stack(matrix_derivatives(angles[:, 0], angles[:, 1], angles[:, 2], sequence), 1)
-    # (∂R/∂θ)ᵀ R is skew-symmetric (R orthonormal): its axial vector, averaged over the
-    # two entries of each component
-    M = dR.transpose(0, 1, 3, 2) @ R[:, None]
-    omega = 0.5 * np.stack(
-        [
-            M[:, :, 2, 1] - M[:, :, 1, 2],
-            M[:, :, 0, 2] - M[:, :, 2, 0],
-            M[:, :, 1, 0] - M[:, :, 0, 1],
-        ],
-        axis=2,
-    )
-    return np.ascontiguousarray(omega.reshape(m, 9).T)
+    the rotations δ of the image frame), 3 each (:func:`~._local_rotation.frame_axials`)."""
+    omega = frame_axials(angles, sequence, local)
+    return np.ascontiguousarray(omega.reshape(omega.shape[0], 9).T)
 
 
 def _image_vectors(G: F64, xyz: F64) -> tuple[F64, F64, F64]:

@@ -55,23 +55,37 @@ def apply_local(angles: F64, delta: F64, sequence: str = "opk") -> F64:
     return angles + (out - angles + np.pi) % (2 * np.pi) - np.pi
 
 
-def angle_map(angles: F64, sequence: str = "opk") -> F64:
-    """The map A (m, 3, 3) from changes of ω, φ, κ to rotations of the image frame.
+def frame_axials(angles: F64, sequence: str = "opk", local: bool = False) -> F64:
+    """Axial vectors ω_θ of (∂R/∂θ)ᵀ R per image and angle, shape (m, 3 θ, 3).
 
-    ∂R/∂θ = R·[a_θ]× with a_θ the axial vector of Rᵀ ∂R/∂θ; A's columns are a_ω, a_φ,
-    a_κ, so a change dθ of the angles rotates the frame by δ = A·dθ (first order) and
-    the Jacobians relate as J_θ = J_δ·A (the chord step's change of parametrisation in
-    :class:`orientviz.bundle._adjust._BundleSteps`).
+    (∂R/∂θ)ᵀ R is skew-symmetric (R orthonormal); its axial vector is taken averaged over
+    the two entries of each component. θ: ω, φ, κ, or with ``local`` the rotations δ of
+    the image frame. The collinearity kernel's derivatives by θ are ω_θ × (u, v, w)
+    (:mod:`orientviz.bundle._kernel`); −ω_θ are the columns of :func:`angle_map`.
     """
     R = matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2], sequence)
-    dR = np.stack(matrix_derivatives(angles[:, 0], angles[:, 1], angles[:, 2], sequence), 1)
-    M = R.transpose(0, 2, 1)[:, None] @ dR  # (m, 3 angles, 3, 3): Rᵀ ∂R/∂θ
-    a = 0.5 * np.stack(
+    if local:
+        dR = local_derivatives(R)
+    else:
+        dR = np.stack(matrix_derivatives(angles[:, 0], angles[:, 1], angles[:, 2], sequence), 1)
+    M = dR.transpose(0, 1, 3, 2) @ R[:, None]
+    return 0.5 * np.stack(
         [
             M[:, :, 2, 1] - M[:, :, 1, 2],
             M[:, :, 0, 2] - M[:, :, 2, 0],
             M[:, :, 1, 0] - M[:, :, 0, 1],
         ],
         axis=2,
-    )  # (m, θ, k)
-    return a.transpose(0, 2, 1)
+    )
+
+
+def angle_map(angles: F64, sequence: str = "opk") -> F64:
+    """The map A (m, 3, 3) from changes of ω, φ, κ to rotations of the image frame.
+
+    ∂R/∂θ = R·[a_θ]× with a_θ the axial vector of Rᵀ ∂R/∂θ = −(∂R/∂θ)ᵀ R, i.e. −ω_θ of
+    :func:`frame_axials`; A's columns are a_ω, a_φ, a_κ, so a change dθ of the angles
+    rotates the frame by δ = A·dθ (first order) and the Jacobians relate as J_θ = J_δ·A
+    (the chord step's change of parametrisation in
+    :class:`orientviz.bundle._adjust._BundleSteps`).
+    """
+    return -frame_axials(angles, sequence).transpose(0, 2, 1)
