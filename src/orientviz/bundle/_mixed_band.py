@@ -139,38 +139,26 @@ class MixedBandFactor:
         return self.fallback.solve(rhs)
 
 
-def mixed_band_factor(
-    ab_size: int,
-    band_dst: I64,
-    blocks: F64,
-    kd: int,
-    n: int,
-    perm: I64,
-    S: SymmetricBlocks,
-    refactor,
-) -> MixedBandFactor | None:
+def mixed_band_factor(st, blocks: F64, refactor) -> MixedBandFactor | None:
     """Factor S in single precision; None when ``spbtrf`` breaks down.
 
     Parameters
     ----------
-    ab_size : int
-        Length of the flat band storage including its spare slot.
-    band_dst : ndarray of int
-        Destination of each block entry in the flat band (``ReducedStructure.band_dst``).
+    st : ReducedStructure
+        A banded structure (:class:`~orientviz.bundle.ReducedStructure`: its band
+        numbering, half-bandwidth and the destinations of S's entries in the band); the
+        block pattern of S for the refinement's products is kept on it.
     blocks : ndarray, shape (nb, 6, 6)
         S's blocks (float64).
-    kd, n : int
-        Half-bandwidth and order of S.
-    perm : ndarray of int, shape (n,)
-        Band numbering (``ReducedStructure.scalar_perm``).
-    S : SymmetricBlocks
-        The pattern of S for the refinement's products.
     refactor : callable
         The double-precision factorisation, for :class:`MixedBandFactor`'s fallback.
     """
-    ab = np.zeros(ab_size, np.float32)
-    ab[band_dst] = blocks.reshape(-1)
+    n, kd = st.n_reduced, st.kd
+    if st._symmetric is None:
+        st._symmetric = SymmetricBlocks(st.block_i, st.block_k, st.n_cam)
+    ab = np.zeros(n * (kd + 1) + 1, np.float32)  # + the spare slot (see ReducedStructure._setup_solver)
+    ab[st.band_dst] = blocks.reshape(-1)
     c, info = scipy.linalg.lapack.spbtrf(ab[:-1].reshape(n, kd + 1).T, lower=1, overwrite_ab=1)
     if info != 0 or not np.isfinite(c[0]).all():
         return None
-    return MixedBandFactor(c, S.matrix(blocks), perm, refactor)
+    return MixedBandFactor(c, st._symmetric.matrix(blocks), st.scalar_perm, refactor)

@@ -68,8 +68,8 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ..adjust.rank import describe_defect, null_space_of_normal
 from ..errors import NotDeterminableError, parameter_words
-from ._dissection import nested_dissection
-from ._mixed_band import MIN_BAND_FLOPS, SymmetricBlocks, mixed_band_factor
+from ._dissection import image_adjacency, nested_dissection
+from ._mixed_band import MIN_BAND_FLOPS, mixed_band_factor
 from ._multifrontal import factor_fronts, front_layout, solve_fronts
 from ._solver_choice import SOLVER_CHOICES, choose_formation, choose_solver, image_blocks
 
@@ -199,7 +199,6 @@ class ReducedStructure:
         oc, op = self.obs_cam, self.obs_pt
         self.cam_order, self.cam_starts, self.cam_present = _segments(oc, self.n_cam)
         var = np.flatnonzero(op >= 0)
-        self.var_obs = var
         o, s, present = _segments(op[var], self.n_pt)
         if present.size != self.n_pt:
             missing = np.setdiff1d(np.arange(self.n_pt), present)
@@ -266,8 +265,8 @@ class ReducedStructure:
     def image_graph(self) -> sp.csr_matrix:
         """Adjacency (m, m) of images that share an unknown point (plus the diagonal)."""
         m = self.n_cam
-        g = sp.coo_matrix((np.ones(self.n_blocks), (self.block_i, self.block_k)), shape=(m, m))
-        return (g + g.T).tocsr()
+        g = image_adjacency(self.block_i, self.block_k, m)
+        return (g + sp.identity(m, dtype=g.dtype, format="csr")).tocsr()
 
     def _band_ordering(self) -> None:
         """The image numbering of the narrowest band (RCM or across the strips)."""
@@ -411,12 +410,7 @@ def factor_reduced(
     n = st.n_reduced
     flat = blocks.reshape(-1)
     if single and st.solver == "banded" and n * float(st.kd) ** 2 >= MIN_BAND_FLOPS:
-        if st._symmetric is None:
-            st._symmetric = SymmetricBlocks(st.block_i, st.block_k, st.n_cam)
-        mixed = mixed_band_factor(
-            n * (st.kd + 1) + 1, st.band_dst, blocks, st.kd, n, st.scalar_perm,
-            st._symmetric, lambda: factor_reduced(st, blocks, names),
-        )
+        mixed = mixed_band_factor(st, blocks, lambda: factor_reduced(st, blocks, names))
         if mixed is not None:
             return Factor(st, "mixed", mixed)
     try:
