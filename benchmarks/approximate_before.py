@@ -15,9 +15,9 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from orientviz.approximate._values import into_frame
-from orientviz.orientation.intersection import intersect_rays
 from orientviz.block._tables import CHECK, Block
 from orientviz.errors import NotDeterminableError
+from orientviz.orientation.intersection import intersect_rays
 from orientviz.rotation import matrix_from_opk, opk_from_matrix
 
 F64 = NDArray[np.float64]
