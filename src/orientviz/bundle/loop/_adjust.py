@@ -20,7 +20,7 @@ stopping rule: stop when every correction is below ``tol`` times the parameter's
 a-priori (conditional) σ = 1/√N_ii (the cost alone barely changes along the weak
 bending modes of large blocks). From start values whose normal matrix is not positive
 definite the result reports ``converged=False`` with a reason that points to
-:func:`orientviz.block.approximate_values`.
+:func:`orientviz.approximate.approximate_values`.
 
 Self-calibration (``additional=``): the parameters border the reduced system
 (:mod:`orientviz.bundle.problem._ap_normal` assembles E, F;
@@ -75,7 +75,7 @@ def bundle_adjust(
     ----------
     block : Block
         Approximate values in ``images.X0``/``angles`` (rad, ``block.sequence``) and
-        ``points.xyz`` (m); see :func:`orientviz.block.approximate_values`.
+        ``points.xyz`` (m); see :func:`orientviz.approximate.approximate_values`.
     control : {"fixed", "weighted"}
         ``"fixed"``: every given coordinate of a control point is held fixed.
         ``"weighted"``: given coordinates with ``points.sigma`` > 0 are observations
@@ -209,7 +209,7 @@ def bundle_adjust(
             reason = (
                 f"no convergence from poor approximate values (start σ0 = {history[0].sigma0:.3g}): "
                 "the normal equations are not positive definite there; compute better "
-                "approximations, e.g. with orientviz.block.approximate_values"
+                "approximations, e.g. with orientviz.approximate.approximate_values"
             )
     res = finish_result(
         block, prob, st, rw, Je, Jp, names, history, converged, reason, precision, dof, s0(cost),
