@@ -31,8 +31,8 @@ AP_REUSE: float = 1e-4
 #: steps follow each other while each corrects by less than :data:`CHORD_CONTRACTION`
 #: times the step before; one that does not is dropped and the step solved in full at
 #: the same iterate. The factor of a step in rotations of the image frames
-#: (:mod:`orientviz.bundle._local_rotation`) serves steps in ω, φ, κ through the map A
-#: of :func:`~orientviz.bundle._local_rotation.angle_map` (J_θ = J_δ·A per image).
+#: (:mod:`orientviz.bundle.model._local_rotation`) serves steps in ω, φ, κ through the map A
+#: of :func:`~orientviz.bundle.model._local_rotation.angle_map` (J_θ = J_δ·A per image).
 #:
 #: Why the stopping rule may judge a chord step: at one iterate the chord correction
 #: δ_c = N_old⁻¹ g and the Newton correction δ_N = N⁻¹ g satisfy δ_N = N⁻¹ N_old δ_c,
@@ -67,7 +67,7 @@ class _Linearisation(tuple):
 
 
 class BundleSteps:
-    """The bundle problem as the engine's loop sees it (:class:`orientviz.adjust.Step`s).
+    """The bundle problem as the engine's loop sees it (its :class:`orientviz.adjust.Step` objects).
 
     Evaluates the weighted misclosures and Jacobians at a :class:`BundleState`, forms the
     point-reduced normal equations and solves them (:meth:`BundleProblem.normal`,
@@ -200,7 +200,7 @@ class BundleSteps:
 
         ``local``: the Jacobian at ``st`` is by rotations of the image frames. A factor
         of such a step serves a step in ω, φ, κ through the map A of
-        :func:`~orientviz.bundle._local_rotation.angle_map` at ``st``: J_θ = J_δ·T with
+        :func:`~orientviz.bundle.model._local_rotation.angle_map` at ``st``: J_θ = J_δ·T with
         T = diag(I, A) per image, so N_θ = Tᵀ N_δ T and the step is
         dθ = T⁻¹ N_δ⁻¹ T⁻ᵀ g_θ — the gradient's angle rows A⁻ᵀ g_θ, the solution's
         A⁻¹ δ (:meth:`BundleProblem.chord_normal` ``rot``).
