@@ -14,10 +14,10 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from orientviz.block import intersect_rays
-from orientviz.block._approximate import into_frame
+from orientviz.approximate._values import into_frame
 from orientviz.block._tables import CHECK, Block
 from orientviz.errors import NotDeterminableError
+from orientviz.orientation.intersection import intersect_rays
 from orientviz.rotation import matrix_from_opk, opk_from_matrix
 
 F64 = NDArray[np.float64]
@@ -30,7 +30,7 @@ POOR_RESECTION: float = 5.0
 
 
 def approximate_values(block: Block, *, min_points: int = 6, frame: str = "control") -> Block:
-    """:func:`orientviz.block.approximate_values` as it was at 95a8e82 (same parameters,
+    """:func:`orientviz.approximate.approximate_values` as it was at 95a8e82 (same parameters,
     result and errors; see its docstring): one resection per image, frequent re-adjustments."""
     from orientviz.bundle import bundle_adjust
     from orientviz.orientation.essential import eight_point, select_by_cheirality

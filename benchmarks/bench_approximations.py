@@ -5,7 +5,7 @@
 
 For each block of the shared peer bench (``make_block.py`` data, made by
 ``bench_bundle.py``'s ``ensure_data`` if missing; 24, 200, 2 100 images, perimeter control
-held fixed) :func:`orientviz.block.approximate_values` runs on the image coordinates and
+held fixed) :func:`orientviz.approximate.approximate_values` runs on the image coordinates and
 the control alone (the block's own start values are ignored by it), in this process,
 alternating ``new`` (this checkout) and ``old`` (the code of commit 95a8e82, kept in
 ``approximate_before.py``; it calls today's bundle and resection). Reported per method:
@@ -35,7 +35,7 @@ sys.path.insert(0, str(HERE))
 from approximate_before import approximate_values as approximate_before  # noqa: E402
 from bench_blocks import load_bench_block, npz_path  # noqa: E402
 
-from orientviz.block import approximate_values  # noqa: E402
+from orientviz.approximate import approximate_values  # noqa: E402
 from orientviz.bundle import bundle_adjust  # noqa: E402
 from orientviz.units import from_rad  # noqa: E402
 

@@ -126,7 +126,8 @@ def read_block(directory: Path, control: list[int]):
 def perturb(block, rng: np.random.Generator, angle_deg: float = 20.0, shift: float = 1.0):
     """Rotate every image by ``angle_deg`` about a random axis, shift it by ``shift``, and
     re-intersect the tie points from the perturbed orientations (in place)."""
-    from orientviz.block import CONTROL, intersect_rays
+    from orientviz.block import CONTROL
+    from orientviz.orientation.intersection import intersect_rays
     from orientviz.rotation import matrix_from_opk, matrix_from_rotvec, opk_from_matrix
 
     im, seq = block.images, block.sequence

@@ -5,8 +5,9 @@ the command runs), a one-line description, its arguments and worked examples. Th
 parser and both levels of ``--help`` are built from that table, so a new command is one
 new row.
 
-Exit codes: 0 success, 2 bad input (one line names file, place and problem),
-3 the adjustment could not be done (datum defect, not determinable, no convergence).
+Exit codes: 0 success, 2 bad input (one line names file, place and problem) or a
+missing optional package (the line names the extra to install), 3 the adjustment
+could not be done (datum defect, not determinable, no convergence).
 Every command ends with one of them and one line on stderr, never a traceback (unless
 ``--debug``). Numbers on the command line are checked by the parser
 (:func:`finite_float`, :func:`positive_float`), input files by
@@ -436,6 +437,56 @@ def run_reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
+#: optional packages → the extra of pyproject.toml that installs them
+OPTIONAL_PACKAGES: dict[str, str] = {
+    "matplotlib": "plot",
+    "viser": "viewer",
+    "ipywidgets": "notebooks",
+    "jupyterlab": "notebooks",
+    "ipykernel": "notebooks",
+    "sphinx": "book",
+    "myst_nb": "book",
+    "pycolmap": "bench",
+    "cv2": "bench",
+}
+
+#: a command whose every optional package comes with one extra
+COMMAND_EXTRAS: dict[str, str] = {"view": "viewer"}
+
+
+def missing_package_message(command: str, exc: ModuleNotFoundError) -> str | None:
+    """The one line that names the extra to install for a missing package.
+
+    Parameters
+    ----------
+    command : str
+        The subcommand that needed the package.
+    exc : ModuleNotFoundError
+        What the import raised.
+
+    Returns
+    -------
+    str or None
+        ``None`` if the missing module is orientviz's own (a bug, not an install
+        problem).
+    """
+    top = (exc.name or "").split(".")[0]
+    if not top or top == "orientviz":
+        return None
+    extra = OPTIONAL_PACKAGES.get(top)
+    if extra is None:
+        return (
+            f"orientviz {command}: the package {top!r} is missing although orientviz "
+            "needs it; reinstall: pip install orientviz (in a clone: pip install -e .)"
+        )
+    extra = COMMAND_EXTRAS.get(command, extra)
+    return (
+        f"orientviz {command}: needs the optional package {top!r}, which is not installed; "
+        f'install the extra: pip install "orientviz[{extra}]" '
+        f'(in a clone: pip install -e ".[{extra}]")'
+    )
+
+
 def _dispatch(args: argparse.Namespace) -> int:
     cmd = COMMANDS[args.command]
     try:
@@ -444,12 +495,7 @@ def _dispatch(args: argparse.Namespace) -> int:
         if exc.name and exc.name.startswith("orientviz"):
             print(f"orientviz {args.command}: not yet available in this version", file=sys.stderr)
             return 2
-        print(
-            f"orientviz {args.command}: missing dependency {exc.name!r}; "
-            'install with: pip install -e ".[all]"',
-            file=sys.stderr,
-        )
-        return 2
+        raise
     return int(getattr(mod, cmd.function)(args))
 
 
@@ -475,6 +521,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     except OrientvizError as exc:
         print(f"{prog}: {_one_line(str(exc))}", file=sys.stderr)
         return exc.exit_code
+    except ModuleNotFoundError as exc:
+        message = missing_package_message(args.command, exc)
+        if debug:
+            raise
+        if message is not None:
+            print(message, file=sys.stderr)
+            return 2
+        print(
+            f"{prog}: internal error: {type(exc).__name__}: {_one_line(str(exc))} "
+            "(a bug in orientviz; rerun with --debug and report the traceback)",
+            file=sys.stderr,
+        )
+        return 3
     except KeyboardInterrupt:
         print(f"{prog}: interrupted", file=sys.stderr)
         return 3

@@ -222,7 +222,7 @@ def test_a_sets_name_stands_for_the_set_and_anything_else_is_named_in_one_line()
 
 
 def test_approximate_values_from_scratch_reach_the_same_optimum():
-    from orientviz.block import approximate_values
+    from orientviz.approximate import approximate_values
 
     sim = ov.simulate_block(3, 6, rng=13)
     ref = ov.bundle_adjust(sim.block, precision=False)

@@ -7,10 +7,11 @@ import pytest
 from unordered_networks import close_range_network
 
 import orientviz as ov
-from orientviz.block import CONTROL, intersect_rays
+from orientviz.block import CONTROL
 from orientviz.bundle import _adjust
 from orientviz.bundle._kernel import collinearity_block
 from orientviz.bundle._local_rotation import apply_local
+from orientviz.orientation.intersection import intersect_rays
 from orientviz.rotation import matrix_from_opk, matrix_from_rotvec, opk_from_matrix
 
 

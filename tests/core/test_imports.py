@@ -107,18 +107,26 @@ def test_unknown_face_name_is_an_attribute_error():
 
 #: What each layer may import from orientviz (dependencies point down): the engine knows
 #: nothing of blocks, bundles or model methods; the block's data model knows no solver.
-_SOLVERS = {"bundle", "stereo_models", "polynomial", "simulate", "orientation", "radar"}
+_SOLVERS = {
+    "approximate",
+    "bundle",
+    "stereo_models",
+    "polynomial",
+    "simulate",
+    "orientation",
+    "radar",
+}
 _BASE = {"errors", "units", "rotation", "camera", "lens", "adjust", "block", "plausibility"}
 LAYERS = {
     "adjust": {"errors", "units"},
-    "block": {"errors", "units", "rotation", "camera", "adjust", "orientation", "bundle"},
+    "block": {"errors", "units", "rotation", "camera", "adjust"},
     # io reads and writes files, below the reports: the problem kinds build their
     # Solution (io/solution.py) and know nothing of report/, plot/ or the GUIs
     "io": _BASE | _SOLVERS | {"report"},
     "report": _BASE | _SOLVERS | {"io", "plot", "__version__"},
 }
 #: Imports that are allowed only inside functions (run time, not import time).
-LAZY_ONLY = {"block": {"orientation", "bundle"}, "io": {"report"}, "report": {"plot"}}
+LAZY_ONLY = {"io": {"report"}, "report": {"plot"}}
 #: The only io modules that may call report/ (at run time): the two commands that write
 #: a report or result tables on request (``orientviz solve --report``, ``orientviz export``).
 IO_CALLS_REPORT = {"solve.py", "export.py"}

@@ -3,18 +3,20 @@ and named in the message."""
 
 from __future__ import annotations
 
+from answers import lesson01 as answers
 from mutants import assert_diagnoses, assert_module_checks
 
 from orientviz.exercises import lesson01
 
 
 def test_lesson01_checks():
-    assert_module_checks(lesson01)
+    assert_module_checks(lesson01, answers)
 
 
 def test_lesson01_diagnoses_name_the_mistake():
     assert_diagnoses(
         lesson01,
+        answers,
         {
             ("check_weighted_mean", "unweighted"): "weights are forgotten",
             ("check_weighted_mean", "one_over_sigma"): "1/σ instead of 1/σ²",

@@ -3,18 +3,20 @@ and named in the message."""
 
 from __future__ import annotations
 
+from answers import lesson03 as answers
 from mutants import assert_diagnoses, assert_module_checks
 
 from orientviz.exercises import lesson03
 
 
 def test_lesson03_checks():
-    assert_module_checks(lesson03)
+    assert_module_checks(lesson03, answers)
 
 
 def test_lesson03_diagnoses_name_the_mistake():
     assert_diagnoses(
         lesson03,
+        answers,
         {
             ("check_dlt_rows", "plus_sign"): "minus sign",
             ("check_dlt_rows", "swap_xy"): "swapped",

@@ -3,18 +3,20 @@ and named in the message."""
 
 from __future__ import annotations
 
+from answers import lesson09 as answers
 from mutants import assert_diagnoses, assert_module_checks
 
 from orientviz.exercises import lesson09
 
 
 def test_lesson09_checks():
-    assert_module_checks(lesson09)
+    assert_module_checks(lesson09, answers)
 
 
 def test_lesson09_diagnoses_name_the_mistake():
     assert_diagnoses(
         lesson09,
+        answers,
         {
             ("check_helmert_columns", "rotation_yx"): "(−y, x)",
             ("check_helmert_columns", "scale_for_rotation"): "change of scale",

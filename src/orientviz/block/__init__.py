@@ -8,16 +8,15 @@ together. This package holds its data model and what is computed from the data a
   :data:`TIE`, :data:`CONTROL`, :data:`CHECK`;
 * :func:`block_layout` → :class:`BlockLayout` (strips, stereo models = consecutive
   image pairs of a strip, footprints) and :func:`control_positions`;
-* :func:`approximate_values` (approximations from scratch);
 * :class:`Auxiliary` (GNSS / statoscope / APR observations with strip offsets);
 * what a block adjustment returns, whatever the method: :class:`BlockAdjustment`
   (exterior (m, 6), points (p, 3), :class:`CheckPoints`, :class:`AuxiliaryEstimates`).
 
 The adjustments live elsewhere: :mod:`orientviz.bundle`, :mod:`orientviz.stereo_models`,
-:mod:`orientviz.polynomial`; simulated blocks come from :mod:`orientviz.simulate`.
+:mod:`orientviz.polynomial`; approximations from scratch come from
+:mod:`orientviz.approximate`, simulated blocks from :mod:`orientviz.simulate`.
 """
 
-from ._approximate import approximate_values, intersect_rays
 from ._auxiliary import KINDS, Auxiliary, strip_time
 from ._layout import CONTROL_LAYOUTS, BlockLayout, block_layout, control_positions
 from ._result import AuxiliaryEstimates, BlockAdjustment, CheckPoints, check_points_of
@@ -54,7 +53,6 @@ __all__ = [
     "Images",
     "Observations",
     "Points",
-    "approximate_values",
     "block_layout",
     "check_array",
     "check_image_points",
@@ -62,6 +60,5 @@ __all__ = [
     "check_points_of",
     "control_positions",
     "index_ids",
-    "intersect_rays",
     "strip_time",
 ]

@@ -20,7 +20,7 @@ control): from start errors of 5 m / 1 gon / 5 m (positions / angles / points) 4
 iterations; from 100 m / 10 gon / 100 m 8 iterations, same optimum; from 200 m / 20 gon
 / 200 m the normal matrix at the start is not even positive definite — damped steps are
 tried, and the result reports ``converged=False`` with a reason that points to
-:func:`orientviz.block.approximate_values`, after which the bundle converges
+:func:`orientviz.approximate.approximate_values`, after which the bundle converges
 in 3 iterations. (The peers — pycolmap, GTSAM, Ceres, SciPy — diverge there too.)
 
 Self-calibration (``additional=``): the parameters border the reduced system
@@ -120,7 +120,7 @@ def bundle_adjust(
     ----------
     block : Block
         Approximate values in ``images.X0``/``angles`` (rad, ``block.sequence``) and
-        ``points.xyz`` (m); see :func:`orientviz.block.approximate_values`.
+        ``points.xyz`` (m); see :func:`orientviz.approximate.approximate_values`.
     control : {"fixed", "weighted"}
         ``"fixed"``: every given coordinate of a control point is held fixed.
         ``"weighted"``: given coordinates with ``points.sigma`` > 0 are observations
@@ -254,7 +254,7 @@ def bundle_adjust(
             reason = (
                 f"no convergence from poor approximate values (start σ0 = {history[0].sigma0:.3g}): "
                 "the normal equations are not positive definite there; compute better "
-                "approximations, e.g. with orientviz.block.approximate_values"
+                "approximations, e.g. with orientviz.approximate.approximate_values"
             )
     res = _finish(
         block,

@@ -22,8 +22,6 @@ from scipy.stats import norm
 from ._common import call, compare, rng_for, success
 
 __all__ = [
-    "MUTANTS",
-    "SOLUTIONS",
     "check_critical_value",
     "check_normalized",
     "check_redundancy",
@@ -124,61 +122,3 @@ def check_normalized(normalized: Callable[[F64, F64, F64], F64]) -> None:
     success(
         f"normalised residuals; the largest |w| = {np.abs(got).max():.2f} sits on the blunder (observation {int(np.argmax(np.abs(got)))})"
     )
-
-
-# ---------------------------------------------------------------- solutions and mutants
-
-
-def _sol_sigma0(v, sigma, r):
-    return np.sqrt(np.sum((v / sigma) ** 2) / r)
-
-
-def _sol_redundancy(n_images, n_tie, n_control, n_rays):
-    return 2 * n_rays - 6 * n_images - 3 * n_tie
-
-
-def _sol_critical(alpha):
-    return norm.isf(alpha / 2)
-
-
-def _redundancy_numbers(A, sigma, weighted=True):
-    P = 1 / sigma**2 if weighted else np.ones_like(sigma)
-    N = A.T @ (P[:, None] * A)
-    return 1 - np.einsum("ij,jk,ik->i", A, np.linalg.inv(N), A) * P
-
-
-def _sol_normalized(A, v, sigma):
-    return v / (sigma * np.sqrt(_redundancy_numbers(A, sigma)))
-
-
-SOLUTIONS = {
-    "check_sigma0": _sol_sigma0,
-    "check_redundancy": _sol_redundancy,
-    "check_critical_value": _sol_critical,
-    "check_normalized": _sol_normalized,
-}
-
-MUTANTS = {
-    "check_sigma0": {
-        "no weights": lambda v, s, r: np.sqrt(np.sum(v**2) / r),
-        "divides by n": lambda v, s, r: np.sqrt(np.sum((v / s) ** 2) / len(v)),
-        "no sqrt": lambda v, s, r: np.sum((v / s) ** 2) / r,
-        "1/sigma": lambda v, s, r: np.sqrt(np.sum(v**2 / s) / r),
-    },
-    "check_redundancy": {
-        "one observation per ray": lambda m, t, k, n: n - 6 * m - 3 * t,
-        "control as unknowns": lambda m, t, k, n: 2 * n - 6 * m - 3 * (t + k),
-        "7 per image": lambda m, t, k, n: 2 * n - 7 * m - 3 * t,
-    },
-    "check_critical_value": {
-        "one-sided": lambda a: norm.isf(a),
-        "percent": lambda a: norm.isf(a / 200),
-    },
-    "check_normalized": {
-        "v/sigma": lambda A, v, s: v / s,
-        "no sqrt": lambda A, v, s: v / (s * _redundancy_numbers(A, s)),
-        "unweighted r": lambda A, v, s: (
-            v / (s * np.sqrt(_redundancy_numbers(A, s, weighted=False)))
-        ),
-    },
-}

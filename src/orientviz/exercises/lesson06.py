@@ -36,10 +36,6 @@ def _pair(rng):
 # --------------------------------------------------------------------- E
 
 
-def _essential(R2, B):
-    return _skew(B) @ R2
-
-
 def check_essential(fn) -> None:
     """``fn(R2, B) -> E``: E = [B]ₓ R2 for a left bundle R1 = I (d1ᵀ E d2 = 0)."""
     for salt in range(2):
@@ -62,7 +58,8 @@ def check_essential(fn) -> None:
 # --------------------------------------------------------------------- epipolar line
 
 
-def _line(E, xy1, c, transpose=True, with_c=True, normalise=True):
+def _line(E, xy1, c, transpose, with_c, normalise):
+    """The epipolar line with one plausible mistake chosen by the flags (the wrong answers)."""
     d1 = np.array([xy1[0], xy1[1], -c])
     g = (E.T @ d1) if transpose else (E @ d1)
     line = np.array([g[0], g[1], (-c if with_c else 1.0) * g[2]])
@@ -83,7 +80,7 @@ def check_epipolar_line(fn) -> None:
             )
         compare("a² + b²", line[0] ** 2 + line[1] ** 2, 1.0, rtol=1e-9,
                 wrong=[("normalise the line: divide (a, b, d) by √(a² + b²)",
-                        float(np.sum(_line(E, xy1[k], c, normalise=False)[:2] ** 2)))])  # fmt: skip
+                        float(np.sum(_line(E, xy1[k], c, True, True, False)[:2] ** 2)))])  # fmt: skip
         # brute force: two points on the left ray, at 0.6 and 1.4 times the model depth
         ray = np.array([xy1[k, 0], xy1[k, 1], -c])
         on_ray = np.array([ray * s for s in (0.6 * P[k, 2] / -c, 1.4 * P[k, 2] / -c)])
@@ -91,10 +88,10 @@ def check_epipolar_line(fn) -> None:
         dist = q @ line[:2] + line[2]
         wrong = []
         for text, kw in (
-            ("E is used instead of Eᵀ: the line is g = Eᵀ d1", {"transpose": False}),
-            ("the third coefficient is −c g2 (the ray is (x, y, −c))", {"with_c": False}),
+            ("E is used instead of Eᵀ: the line is g = Eᵀ d1", (False, True, True)),
+            ("the third coefficient is −c g2 (the ray is (x, y, −c))", (True, False, True)),
         ):
-            m = _line(E, xy1[k], c, **kw)
+            m = _line(E, xy1[k], c, *kw)
             wrong.append((text, q @ m[:2] + m[2]))
         compare("distances of two projected points of the left ray from your line [mm]", dist,
                 np.zeros(2), rtol=1e-9, scale=1.0, wrong=wrong)  # fmt: skip
@@ -104,7 +101,8 @@ def check_epipolar_line(fn) -> None:
 # --------------------------------------------------------------------- normal case
 
 
-def _points(n1, n2, c, b, sign=1.0, zsign=-1.0, use_y=False):
+def _points(n1, n2, c, b, sign, zsign, use_y):
+    """Normal-case model points with the mistakes chosen by the flags (the wrong answers)."""
     px = sign * ((n1[:, 1] - n2[:, 1]) if use_y else (n1[:, 0] - n2[:, 0]))
     with np.errstate(divide="ignore", invalid="ignore"):
         lam = b / px
@@ -129,32 +127,7 @@ def check_normal_case_points(fn) -> None:
             "case: depth comes from the x-parallax x1' − x2'"
         )
     compare("model points", got, P, rtol=1e-9, wrong=[
-        ("the x-parallax is x1' − x2' (positive for points below the base)", _points(n1, n2, c, b, sign=-1.0)),
-        ("Z = −λ c: the points lie below the projection centres", _points(n1, n2, c, b, zsign=1.0)),
+        ("the x-parallax is x1' − x2' (positive for points below the base)", _points(n1, n2, c, b, -1.0, -1.0, False)),
+        ("Z = −λ c: the points lie below the projection centres", _points(n1, n2, c, b, 1.0, 1.0, False)),
     ])  # fmt: skip
     success(f"{n} model points from x-parallaxes agree with the simulated terrain")
-
-
-SOLUTIONS = {
-    "check_essential": _essential,
-    "check_epipolar_line": lambda E, xy1, c: _line(E, xy1, c),
-    "check_normal_case_points": lambda n1, n2, c, b: _points(n1, n2, c, b),
-}
-
-MUTANTS = {
-    "check_essential": {
-        "swapped": lambda R2, B: R2 @ _skew(B),
-        "transposed_R": lambda R2, B: _skew(B) @ R2.T,
-        "skew_transposed": lambda R2, B: _skew(B).T @ R2,
-    },
-    "check_epipolar_line": {
-        "E_not_transposed": lambda E, xy1, c: _line(E, xy1, c, transpose=False),
-        "no_c": lambda E, xy1, c: _line(E, xy1, c, with_c=False),
-        "not_normalised": lambda E, xy1, c: _line(E, xy1, c, normalise=False),
-    },
-    "check_normal_case_points": {
-        "parallax_sign": lambda n1, n2, c, b: _points(n1, n2, c, b, sign=-1.0),
-        "z_sign": lambda n1, n2, c, b: _points(n1, n2, c, b, zsign=1.0),
-        "y_parallax": lambda n1, n2, c, b: _points(n1, n2, c, b, use_y=True),
-    },
-}

@@ -29,7 +29,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..adjust import Adjustment, Evaluation, Step, StopRule, gauss_newton, iterate
-from ..block import intersect_rays
 from ..camera import rays
 from ..errors import InputError, NotDeterminableError
 
@@ -39,6 +38,47 @@ I64 = NDArray[np.int64]
 #: Smallest/largest eigenvalue ratio of Σ(I − ddᵀ) below which the rays of a point count
 #: as parallel (≈ sin² of the largest intersection angle; 1e-12 ↔ 0.2 cc … 0.0001 gon).
 PARALLEL_TOLERANCE: float = 1e-12
+
+
+def intersect_rays(
+    X0: F64, d: F64, point: NDArray[np.int64], n_points: int, *, tolerance: float = 1e-8
+) -> tuple[F64, F64]:
+    """Linear least-squares intersection of rays (vectorised over points).
+
+    Minimises Σ ‖(I − d dᵀ)(X − X0)‖² per point (d unit ray directions).
+
+    Parameters
+    ----------
+    X0 : ndarray, shape (k, 3)
+        Ray origins (projection centres).
+    d : ndarray, shape (k, 3)
+        Ray directions (object frame, any length).
+    point : ndarray of int, shape (k,)
+        Point index of each ray.
+    n_points : int
+    tolerance : float
+        Smallest eigenvalue ratio (cond) of a point's 3×3 system that is still solved;
+        below it the rays count as parallel and the point stays NaN.
+
+    Returns
+    -------
+    X : ndarray, shape (n_points, 3)
+        Intersections (NaN where fewer than two rays or a degenerate geometry).
+    cond : ndarray, shape (n_points,)
+        Smallest/largest eigenvalue of the 3×3 system (0 = parallel rays).
+    """
+    u = d / np.linalg.norm(d, axis=1, keepdims=True)
+    P = np.eye(3)[None] - u[:, :, None] * u[:, None, :]
+    PX = np.einsum("nij,nj->ni", P, X0)
+    A = np.stack([np.bincount(point, P[:, i, j], n_points) for i in range(3) for j in range(3)], 1)
+    A = A.reshape(n_points, 3, 3)
+    b = np.stack([np.bincount(point, PX[:, i], n_points) for i in range(3)], 1)
+    ev = np.linalg.eigvalsh(A)
+    cond = ev[:, 0] / np.maximum(ev[:, 2], 1e-300)
+    X = np.full((n_points, 3), np.nan)
+    ok = cond > tolerance
+    X[ok] = np.linalg.solve(A[ok], b[ok][:, :, None])[:, :, 0]
+    return X, cond
 
 
 @dataclass

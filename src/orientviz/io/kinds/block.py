@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from ...adjust.result import W_CRITICAL
+from ...approximate import approximate_values
 from ...block import CHECK, CONTROL, ROLES, TIE, Block
 from ...errors import InputError
 from ..problem import Problem, Units
@@ -80,7 +81,7 @@ def approximate(block: Block, frame: str = "control") -> Block:
     """Fill in missing approximate values before an adjustment.
 
     No image approximations at all: everything is computed from scratch by
-    :func:`orientviz.block.approximate_values` (relative orientation of a
+    :func:`orientviz.approximate.approximate_values` (relative orientation of a
     seed pair, resections, intersections, a similarity onto the control). Otherwise the
     given orientations are first carried into the control's frame when they are in
     another one (:func:`._align.align_to_control`, a 7-parameter similarity), and tie/check
@@ -88,8 +89,6 @@ def approximate(block: Block, frame: str = "control") -> Block:
     network): computed approximations stay in the seed pair's model frame.
     """
     if not np.all(np.isfinite(block.images.X0)) or not np.all(np.isfinite(block.images.angles)):
-        from ...block import approximate_values
-
         return approximate_values(block, frame=frame)
     from ._align import align_to_control
 

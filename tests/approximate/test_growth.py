@@ -7,10 +7,11 @@ import numpy as np
 import pytest
 
 import orientviz as ov
-from orientviz.block import Block, approximate_values
-from orientviz.block._approximate_batch import resect_batch, rotate_by
-from orientviz.block._approximate_front import adjust_front
-from orientviz.block._approximate_growth import Growth, sub_block
+from orientviz.approximate import approximate_values
+from orientviz.approximate._batch import resect_batch, rotate_by
+from orientviz.approximate._front import adjust_front
+from orientviz.approximate._growth import Growth, sub_block
+from orientviz.block import Block
 from orientviz.orientation.absolute import similarity_closed_form
 from orientviz.rotation import matrix_from_opk, opk_from_matrix
 

@@ -1,6 +1,6 @@
 """Many space resections at once: stacked Gauss-Newton for the growth of the approximations.
 
-:func:`orientviz.block.approximate_values` orients, in each step of its growth, every
+:func:`orientviz.approximate.approximate_values` orients, in each step of its growth, every
 image that sees enough already-intersected points. Instead of one least-squares
 resection per image (a Python loop of small solvers), :func:`resect_batch` runs the
 Gauss-Newton iteration of the collinearity equations for all of them together: the
@@ -19,6 +19,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
+
+from ..orientation.intersection import intersect_rays
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -54,11 +56,9 @@ def centres_for_attitudes(img: I64, xy: F64, c: F64, X: F64, R: F64, n: int) -> 
 
     With R fixed, the centre of image j lies on every line through an object point
     ``X`` in the direction ``R·(x, y, −c)``: the linear least-squares intersection of
-    those lines (:func:`orientviz.block.intersect_rays`). Returns the centres (n, 3),
-    NaN where the lines are parallel, and the eigenvalue ratio of each 3 × 3 system.
+    those lines (:func:`orientviz.orientation.intersection.intersect_rays`). Returns the
+    centres (n, 3), NaN where the lines are parallel, and the eigenvalue ratio of each 3 × 3 system.
     """
-    from ._approximate import intersect_rays
-
     d = np.einsum("nij,nj->ni", R[img], np.column_stack([xy, -c]))
     return intersect_rays(X, d, img, n)
 

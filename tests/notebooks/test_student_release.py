@@ -1,4 +1,5 @@
-"""The strip tool writes student copies in which no solution line survives."""
+"""The student release (tools/make_student_release.py): no solution line survives, hidden
+tests are gone, and the check after each blank may raise without stopping "Run All"."""
 
 from __future__ import annotations
 
@@ -6,16 +7,11 @@ import json
 import pathlib
 
 import pytest
+from release_tool import release
 
-from orientviz.exercises.strip import (
-    BEGIN,
-    END,
-    MD_BEGIN,
-    MD_END,
-    main,
-    strip_notebook,
-    strip_source,
-)
+BEGIN, END, MD_BEGIN, MD_END = release.BEGIN, release.END, release.MD_BEGIN, release.MD_END
+HIDDEN_BEGIN, HIDDEN_END = release.HIDDEN_BEGIN, release.HIDDEN_END
+main, strip_source, release_notebook = release.main, release.strip_source, release.release_notebook
 
 ROOT = pathlib.Path(__file__).parents[2]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
@@ -59,15 +55,42 @@ def test_strip_source_markdown_and_errors():
             strip_source(bad)
 
 
-def test_strip_notebook_unhides_and_clears():
+def test_hidden_tests_are_removed():
+    src = f"check(f)\n{HIDDEN_BEGIN}\nassert f(2) == 4\n{HIDDEN_END}\nprint('done')\n"
+    out, n = strip_source(src)
+    assert n == 0 and out == "check(f)\nprint('done')\n"
+    with pytest.raises(ValueError):
+        strip_source(f"{HIDDEN_BEGIN}\nx\n")
+
+
+def test_the_check_after_a_blank_may_raise():
+    def code(s, tags=()):
+        return {"cell_type": "code", "source": s, "metadata": {"tags": list(tags)} if tags else {},
+                "outputs": [], "execution_count": None}  # fmt: skip
+
+    nb = {"cells": [code("import x"), code(f"def f():\n    {BEGIN}\n    return 1\n    {END}\n",
+                    ["hide-cell"]), code(""), code("check(f)"), code("y = f()")],
+          "metadata": {}, "nbformat": 4, "nbformat_minor": 5}  # fmt: skip
+    student, n = release_notebook(nb)
+    tags = [c["metadata"].get("tags", []) for c in student["cells"]]
+    assert n == 1 and tags == [[], [], [], ["raises-exception"], []]
+
+
+def test_release_unhides_and_clears():
     cell = {
         "cell_type": "code",
         "source": [f"{BEGIN}\n", "x = 1\n", f"{END}\n"],
-        "metadata": {"tags": ["hide-cell"], "mystnb": {"code_prompt_show": "Show"}, "jupyter": {"source_hidden": True}},
+        "metadata": {
+            "tags": ["hide-cell"],
+            "mystnb": {"code_prompt_show": "Show"},
+            "jupyter": {"source_hidden": True},
+        },
         "outputs": [{"output_type": "stream", "name": "stdout", "text": "1"}],
         "execution_count": 3,
     }
-    student, n = strip_notebook({"cells": [cell], "metadata": {}, "nbformat": 4, "nbformat_minor": 5})
+    student, n = release_notebook(
+        {"cells": [cell], "metadata": {}, "nbformat": 4, "nbformat_minor": 5}
+    )
     out = student["cells"][0]
     assert n == 1 and out["source"] == "raise NotImplementedError\n"
     assert out["metadata"] == {} and out["outputs"] == [] and out["execution_count"] is None

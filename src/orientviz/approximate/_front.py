@@ -10,7 +10,7 @@ oriented rays), the images oriented before being held fixed: a few Gauss-Newton 
 of a small bundle, solved by the Schur complement onto the new images' 6 × 6 blocks
 (a dense system of 6 × the wave's images) with the points' 3 × 3 blocks eliminated.
 
-Units and conventions as in ``block/_approximate_batch.py``.
+Units and conventions as in ``approximate/_batch.py``.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ._approximate_batch import linearise, rotate_by, summing
+from ._batch import linearise, rotate_by, summing
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]

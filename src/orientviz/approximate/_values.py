@@ -10,16 +10,16 @@ alone — the stored orientations and tie-point coordinates of the block are ign
    from the essential matrix (normalised eight-point algorithm and the cheirality test,
    :mod:`orientviz.orientation.essential`), base length 1 in a local model frame (left
    image: X0 = 0, R = I).
-2. **Growth in waves** (``block/_approximate_growth.py``) — each wave orients
+2. **Growth in waves** (``approximate/_growth.py``) — each wave orients
    all images that see enough intersected points (≥ ``min_points`` and ≥ half as many
    as the best-connected waiting image) in one stacked Levenberg-Marquardt resection
-   (``block/_approximate_batch.py``; start: the attitude of the best-connected
+   (``approximate/_batch.py``; start: the attitude of the best-connected
    oriented neighbour turned by the in-image rotation between the two images, and the
    centre that fits the rays best with it; the three-point closed form of
    :mod:`orientviz.orientation.resection` only when the batch orients none), intersects
    every point of the new images from all its oriented rays in one call
-   (:func:`intersect_rays`), and adjusts the images of the last two waves with their
-   points by a local bundle, the rest held (``block/_approximate_front.py``).
+   (:func:`~orientviz.orientation.intersection.intersect_rays`), and adjusts the images
+   of the last two waves with their points by a local bundle, the rest held (``approximate/_front.py``).
    The whole oriented part is re-adjusted in the model frame (2 Gauss-Newton steps of
    :func:`~orientviz.bundle.bundle_adjust`) when it has doubled since the last time, and
    when the local bundle fits poorly (σ̂0 > 20: the chain has bent — in an aerial block
@@ -32,12 +32,9 @@ alone — the stored orientations and tie-point coordinates of the block are ign
    result stays in the seed pair's model frame. Control points with given X, Y, Z need
    only one ray (they keep their coordinates).
 
-Measured on the peer bench's blocks (perimeter control, start values ignored;
-``benchmarks/bench_approximations.py``): 2 100 images in 3.4–3.7 s CPU time at load
-2–7 on 2 shared cores (the code before the waves: 34–49 s in the same runs), centres
-within 3.4 m and attitudes within 0.08 gon of the truth, after which the bundle reaches
-the same optimum as from the bench's start in 3 iterations. Units: m, mm, rad; rotation sequence of the block (``"opk"`` R = R_ω R_φ R_κ
-or ``"pok"`` R = R_φ R_ω R_κ).
+Units: m, mm, rad; rotation sequence of the block (``"opk"`` R = R_ω R_φ R_κ or
+``"pok"`` R = R_φ R_ω R_κ). Timings on the peer bench's blocks:
+``benchmarks/bench_approximations.py`` and benchmarks/README.md.
 """
 
 from __future__ import annotations
@@ -45,52 +42,13 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ..block import CHECK, CONTROL, Block
 from ..errors import NotDeterminableError
+from ..orientation.absolute import SimilarityTransform, similarity_closed_form
 from ..rotation import opk_from_matrix
-from ._tables import CHECK, CONTROL, Block
+from ._growth import Growth
 
 F64 = NDArray[np.float64]
-
-
-def intersect_rays(
-    X0: F64, d: F64, point: NDArray[np.int64], n_points: int, *, tolerance: float = 1e-8
-) -> tuple[F64, F64]:
-    """Linear least-squares intersection of rays (vectorised over points).
-
-    Minimises Σ ‖(I − d dᵀ)(X − X0)‖² per point (d unit ray directions).
-
-    Parameters
-    ----------
-    X0 : ndarray, shape (k, 3)
-        Ray origins (projection centres).
-    d : ndarray, shape (k, 3)
-        Ray directions (object frame, any length).
-    point : ndarray of int, shape (k,)
-        Point index of each ray.
-    n_points : int
-    tolerance : float
-        Smallest eigenvalue ratio (cond) of a point's 3×3 system that is still solved;
-        below it the rays count as parallel and the point stays NaN.
-
-    Returns
-    -------
-    X : ndarray, shape (n_points, 3)
-        Intersections (NaN where fewer than two rays or a degenerate geometry).
-    cond : ndarray, shape (n_points,)
-        Smallest/largest eigenvalue of the 3×3 system (0 = parallel rays).
-    """
-    u = d / np.linalg.norm(d, axis=1, keepdims=True)
-    P = np.eye(3)[None] - u[:, :, None] * u[:, None, :]
-    PX = np.einsum("nij,nj->ni", P, X0)
-    A = np.stack([np.bincount(point, P[:, i, j], n_points) for i in range(3) for j in range(3)], 1)
-    A = A.reshape(n_points, 3, 3)
-    b = np.stack([np.bincount(point, PX[:, i], n_points) for i in range(3)], 1)
-    ev = np.linalg.eigvalsh(A)
-    cond = ev[:, 0] / np.maximum(ev[:, 2], 1e-300)
-    X = np.full((n_points, 3), np.nan)
-    ok = cond > tolerance
-    X[ok] = np.linalg.solve(A[ok], b[ok][:, :, None])[:, :, 0]
-    return X, cond
 
 
 def approximate_values(block: Block, *, min_points: int = 6, frame: str = "control") -> Block:
@@ -121,8 +79,6 @@ def approximate_values(block: Block, *, min_points: int = 6, frame: str = "contr
         If images cannot be reached from the seed pair, points stay without two
         oriented rays, or fewer than 3 full XYZ control points are intersected.
     """
-    from ._approximate_growth import Growth
-
     g = Growth(block, min_points)
     g.grow()
     out, T = into_frame(block, g.P, g.Xm, g.Rm, g.done, frame)
@@ -169,8 +125,6 @@ def into_frame(block: Block, P: F64, Xm: F64, Rm: F64, done: NDArray[np.bool_], 
         Too few or collinear control points / observed centres, or points left
         without two oriented rays.
     """
-    from ..orientation.absolute import SimilarityTransform, similarity_closed_form
-
     # ---- datum: similarity from the model frame onto the full-XYZ control points
     ctrl = np.flatnonzero(
         (block.points.role == CONTROL)

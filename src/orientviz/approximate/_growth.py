@@ -1,13 +1,13 @@
 """The growth of the approximations: seed pair, then waves of resections and intersections.
 
-Used by :func:`orientviz.block.approximate_values`, which adds the datum. Everything
+Used by :func:`orientviz.approximate.approximate_values`, which adds the datum. Everything
 here is in the model frame of the seed pair (left image at the origin with R = I, base
 length 1). One wave orients *all* images that see enough intersected points (at least
 ``min_points`` and at least :data:`WAVE_SHARE` of the best such image's count) in one
-stacked resection (``resect_batch`` of ``block/_approximate_batch.py``), then
+stacked resection (``resect_batch`` of ``approximate/_batch.py``), then
 intersects every point seen by the new images from all its oriented rays in one call
-(:func:`~orientviz.block.intersect_rays`). The oriented part is re-adjusted by a bundle
-in the model frame whenever it has grown by the factor :data:`REFINE_GROWTH` (so
+(:func:`~orientviz.orientation.intersection.intersect_rays`). The oriented part is
+re-adjusted by a bundle in the model frame whenever it has grown by the factor :data:`REFINE_GROWTH` (so
 O(log n) refines, the last of them on the whole block) and whenever a resection fits
 poorly (σ̂0 > :data:`POOR_RESECTION`): the chain's errors are removed before they grow.
 """
@@ -18,10 +18,15 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
+from ..block import CHECK, Block
+from ..bundle import bundle_adjust
 from ..errors import NotDeterminableError
+from ..orientation.essential import eight_point, select_by_cheirality
+from ..orientation.intersection import intersect_rays
+from ..orientation.resection import resection
 from ..rotation import matrix_from_opk, opk_from_matrix
-from ._approximate_batch import centres_for_attitudes, resect_batch
-from ._tables import CHECK, Block
+from ._batch import centres_for_attitudes, resect_batch
+from ._front import adjust_front
 
 F64 = NDArray[np.float64]
 #: The oriented part is re-adjusted (model-frame bundle) when it has grown by this
@@ -123,8 +128,6 @@ class Growth:
 
     def _orient_pair(self, i: int, k: int) -> bool:
         """Relative orientation of images i, k (essential matrix) as the only oriented ones."""
-        from ..orientation.essential import eight_point, select_by_cheirality
-
         self.Rm[:], self.Xm[:], self.P[:], self.done[:] = np.nan, np.nan, np.nan, False
         oi, op = self.oi, self.op
         ri, rk = np.flatnonzero(oi == i), np.flatnonzero(oi == k)
@@ -172,8 +175,6 @@ class Growth:
     # ---- intersection ----------------------------------------------------------------
     def intersect(self, images: NDArray[np.int64] | None = None) -> None:
         """(Re-)intersect the points of ``images`` (all if None) from all oriented rays."""
-        from ._approximate import intersect_rays
-
         oi, op = self.oi, self.op
         sel = self.done[oi]
         if images is not None:
@@ -193,8 +194,6 @@ class Growth:
     def refine(self) -> None:
         """Bundle adjustment of the oriented part in the model frame (the seed image's
         orientation and the seed base's x-component held by strong observations)."""
-        from ..bundle import bundle_adjust
-
         self.refined_at = int(self.done.sum())
         sub = sub_block(self.block, self.done, self.P, self.Xm, self.Rm, self.use, self.seed)
         if sub is None:
@@ -277,8 +276,6 @@ class Growth:
 
     def adjust_front(self, images):
         """Local bundle: ``images`` and all their points, the other oriented images held."""
-        from ._approximate_front import adjust_front
-
         oi, op = self.oi, self.op
         new = np.zeros(self.block.n_images, bool)
         new[images] = True
@@ -333,8 +330,6 @@ class Growth:
 
     def _resect_one(self, image: int, sel: NDArray[np.bool_]):
         """Single-image resection from the three-point closed form (the batch's fallback)."""
-        from ..orientation.resection import resection
-
         try:
             res = resection(
                 self.xyc[sel], self.P[self.op[sel]], float(self.c_img[image]),
