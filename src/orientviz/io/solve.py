@@ -214,11 +214,29 @@ def adjusted_problem(problem: Problem, solution: Solution) -> Problem:
         i = pt[ident]
         if block.points.role[i] == TIE and np.all(np.isfinite(solution.xyz[k])):
             block.points.xyz[i] = solution.xyz[k]
+    _adjusted_cameras(block, getattr(solution.adjustment, "camera", None))
     out = Problem(**{**problem.__dict__, "data": block})
     out.description = (problem.description + " " if problem.description else "") + (
         f"[start values adjusted by orientviz solve ({solution.method})]"
     )
     return out
+
+
+def _adjusted_cameras(block, cam) -> None:
+    """Put a lens model's estimates (``adj.camera``, one group per camera) into the
+    block's cameras: c, x0, y0 and the estimated terms of ``cameras.model``."""
+    models = list(getattr(block.cameras, "model", None) or [])
+    if cam is None or not models or cam.value.shape[0] != len(models):
+        return
+    for g, spec in enumerate(models):
+        for j, name in enumerate(cam.names):
+            if not cam.estimated[j] or not np.isfinite(cam.value[g, j]):
+                continue
+            v = float(cam.value[g, j])
+            if name in ("c", "x0", "y0"):
+                getattr(block.cameras, name)[g] = v
+            elif spec:
+                spec.setdefault("values", {})[name] = v
 
 
 def _resolve(name: str) -> str:
