@@ -3,19 +3,24 @@ and named in the message."""
 
 from __future__ import annotations
 
+from answers import lesson10 as answers
 from mutants import assert_diagnoses, assert_module_checks
 
 from orientviz.exercises import lesson10
 
 
 def test_lesson10_checks():
-    assert_module_checks(lesson10)
+    assert_module_checks(lesson10, answers)
 
 
 def test_lesson10_diagnoses_name_the_mistake():
     assert_diagnoses(
         lesson10,
+        answers,
         {
+            ("check_schur_step", "plus"): "sign is wrong",
+            ("check_schur_step", "no_coupling"): "coupling",
+            ("check_schur_step", "W_transposed"): "is a matrix transposed",
             ("check_reduce", "plus"): "sign is wrong",
             ("check_reduce", "rhs_not_reduced"): "right side is reduced too",
             ("check_reduce", "no_inverse"): "V must be inverted",

@@ -33,11 +33,12 @@ def _system(rng, m=4, q=7):
     return U, W, V, bc, bp
 
 
-def _reduce(U, W, V, bc, bp, mode="ok"):
-    Vi = np.linalg.inv(V) if mode != "no_inverse" else V
-    S = U - W @ Vi @ W.T if mode != "plus" else U + W @ Vi @ W.T
-    r = bc - W @ Vi @ bp if mode != "rhs" else bc
-    return S, r
+def _reduce_wrong(U, W, V, bc, bp, mode):
+    """The reduced system with one plausible mistake (mode "plus" or "no_inverse")."""
+    if mode == "plus":
+        Vi = np.linalg.inv(V)
+        return U + W @ Vi @ W.T, bc + W @ Vi @ bp
+    return U - W @ V @ W.T, bc - W @ V @ bp  # mode "no_inverse"
 
 
 def check_reduce(fn) -> None:
@@ -50,28 +51,30 @@ def check_reduce(fn) -> None:
     S, r = (np.asarray(g, dtype=float) for g in got)
     N = np.block([[U, W], [W.T, V]])
     want_dc = np.linalg.solve(N, np.concatenate([bc, bp]))[: len(bc)]
-    wS, wr = _reduce(U, W, V, bc, bp)
+    # oracle: the orientation block of N⁻¹ is S⁻¹ (block inversion), and S dc = r
+    k = len(bc)
+    wS = np.linalg.inv(np.linalg.inv(N)[:k, :k])
+    wr = wS @ want_dc
     compare("S", S, wS, rtol=1e-10, wrong=[
-        ("S = U − W V⁻¹ Wᵀ: the sign is wrong", _reduce(U, W, V, bc, bp, "plus")[0]),
-        ("V must be inverted: S = U − W V⁻¹ Wᵀ", _reduce(U, W, V, bc, bp, "no_inverse")[0]),
+        ("S = U − W V⁻¹ Wᵀ: the sign is wrong", _reduce_wrong(U, W, V, bc, bp, "plus")[0]),
+        ("V must be inverted: S = U − W V⁻¹ Wᵀ", _reduce_wrong(U, W, V, bc, bp, "no_inverse")[0]),
     ])  # fmt: skip
     compare("r", r, wr, rtol=1e-10, wrong=[
         ("the right side is reduced too: r = bc − W V⁻¹ bp", bc),
-        ("V must be inverted in r too: r = bc − W V⁻¹ bp", _reduce(U, W, V, bc, bp, "no_inverse")[1]),
+        ("V must be inverted in r too: r = bc − W V⁻¹ bp", _reduce_wrong(U, W, V, bc, bp, "no_inverse")[1]),
     ])  # fmt: skip
     dc = np.linalg.solve(S, r)
     compare("dc from your S, r against the whole system solved densely", dc, want_dc, rtol=1e-8)
     success("S dc = r gives the orientation unknowns of the whole system")
 
 
-def _back(V, W, bp, dc, mode="ok"):
+def _back(V, W, bp, dc, mode):
+    """The back-substitution with one plausible mistake ("no_coupling", "plus", "no_inverse")."""
     if mode == "no_coupling":
         return np.linalg.solve(V, bp)
     if mode == "plus":
         return np.linalg.solve(V, bp + W.T @ dc)
-    if mode == "no_inverse":
-        return V @ (bp - W.T @ dc)
-    return np.linalg.solve(V, bp - W.T @ dc)
+    return V @ (bp - W.T @ dc)  # mode "no_inverse"
 
 
 def check_back_substitute(fn) -> None:
@@ -91,17 +94,8 @@ def check_back_substitute(fn) -> None:
     success("dp equals the point part of the whole system solved densely")
 
 
-def _band_loops(P):
-    b = 0
-    n = len(P)
-    for i in range(n):
-        for k in range(n):
-            if P[i][k] and abs(i - k) > b:
-                b = abs(i - k)
-    return b
-
-
-def _bandwidth(P, mode="ok"):
+def _bandwidth(P, mode):
+    """A plausible wrong bandwidth (mode "full", "with_diagonal", "row_count")."""
     P = np.asarray(P, dtype=bool)
     i, k = np.nonzero(P)
     b = int(np.max(np.abs(i - k), initial=0))
@@ -109,9 +103,7 @@ def _bandwidth(P, mode="ok"):
         return 2 * b + 1
     if mode == "with_diagonal":
         return b + 1
-    if mode == "row_count":
-        return int(P.sum(axis=1).max()) - 1
-    return b
+    return int(P.sum(axis=1).max()) - 1  # mode "row_count"
 
 
 def check_bandwidth(fn) -> None:
@@ -122,7 +114,7 @@ def check_bandwidth(fn) -> None:
         A = rng.random((n, n)) < p
         P = A | A.T | np.eye(n, dtype=bool)
         got = call(fn, P.copy(), what="bandwidth")
-        want = _band_loops(P.tolist())
+        want = max(abs(i - k) for i in range(n) for k in range(n) if P[i, k])  # all entries
         compare(f"bandwidth of a {n}×{n} pattern", float(got), float(want), rtol=1e-12, wrong=[
             ("this is the full width 2b + 1; the half-bandwidth is b = max |i − k|", float(_bandwidth(P, "full"))),
             ("the diagonal is not counted: b = max |i − k|", float(_bandwidth(P, "with_diagonal"))),
@@ -132,26 +124,40 @@ def check_bandwidth(fn) -> None:
     success("bandwidths agree with a double loop over three patterns")
 
 
-SOLUTIONS = {
-    "check_reduce": lambda U, W, V, bc, bp: _reduce(U, W, V, bc, bp),
-    "check_back_substitute": lambda V, W, bp, dc: _back(V, W, bp, dc),
-    "check_bandwidth": lambda P: _bandwidth(P),
-}
+# --------------------------------------------------------------------- one reduced step
 
-MUTANTS = {
-    "check_reduce": {
-        "plus": lambda U, W, V, bc, bp: _reduce(U, W, V, bc, bp, "plus"),
-        "rhs_not_reduced": lambda U, W, V, bc, bp: _reduce(U, W, V, bc, bp, "rhs"),
-        "no_inverse": lambda U, W, V, bc, bp: _reduce(U, W, V, bc, bp, "no_inverse"),
-    },
-    "check_back_substitute": {
-        "no_coupling": lambda V, W, bp, dc: _back(V, W, bp, dc, "no_coupling"),
-        "plus": lambda V, W, bp, dc: _back(V, W, bp, dc, "plus"),
-        "no_inverse": lambda V, W, bp, dc: _back(V, W, bp, dc, "no_inverse"),
-    },
-    "check_bandwidth": {
-        "full": lambda P: _bandwidth(P, "full"),
-        "with_diagonal": lambda P: _bandwidth(P, "with_diagonal"),
-        "row_count": lambda P: _bandwidth(P, "row_count"),
-    },
-}
+
+def check_schur_step(fn) -> None:
+    """``fn(nb) -> (dc, dp)``: one Gauss-Newton step of a bundle by reduction to the
+    orientation unknowns (``nb`` from :func:`orientviz.bundle.sparsity.bundle_normal_blocks`)."""
+    from ..bundle.sparsity import bundle_normal_blocks
+    from ..simulate import simulate_block
+
+    # 3 strips of 4 images: W is 72 × 66, so a transposed W cannot pass unnoticed
+    seed = int(rng_for("lesson10.check_schur_step").integers(1000))
+    sim = simulate_block(3, 4, rng=seed, extra=None)
+    nb = bundle_normal_blocks(sim.block)
+    got = call(fn, nb, what="schur_step")
+    if not isinstance(got, tuple) or len(got) != 2:
+        raise CheckFailed("schur_step: return the pair (dc, dp)")
+    dc, dp = (np.asarray(g, dtype=float) for g in got)
+    N, b = nb.dense()
+    x = np.linalg.solve(N, b)  # oracle: the whole system, dense
+    k = 6 * nb.n_images
+    want_dc, want_dp = x[:k], x[k:]
+    U = np.zeros((k, k))
+    for i in range(nb.n_images):
+        U[6 * i : 6 * i + 6, 6 * i : 6 * i + 6] = nb.U[i]
+    Vfull = np.zeros((len(want_dp), len(want_dp)))
+    for j in range(nb.n_points):
+        Vfull[3 * j : 3 * j + 3, 3 * j : 3 * j + 3] = nb.V[j]
+    wrong_plus = _reduce_wrong(U, nb.W, Vfull, nb.bc, nb.bp, "plus")
+    compare("dc (orientation corrections)", dc, want_dc, rtol=1e-8, wrong=[
+        ("S = U − W V⁻¹ Wᵀ and r = bc − W V⁻¹ bp: the sign is wrong", np.linalg.solve(*wrong_plus)),
+        ("the right side is reduced too: r = bc − W V⁻¹ bp", np.linalg.solve(U - nb.W @ np.linalg.inv(Vfull) @ nb.W.T, nb.bc)),
+    ])  # fmt: skip
+    compare("dp (point corrections)", dp, want_dp, rtol=1e-8, wrong=[
+        ("the coupling Wᵀ dc is missing: dp = V⁻¹ (bp − Wᵀ dc)", np.linalg.solve(Vfull, nb.bp)),
+        ("the sign of Wᵀ dc is wrong: dp = V⁻¹ (bp − Wᵀ dc)", np.linalg.solve(Vfull, nb.bp + nb.W.T @ want_dc)),
+    ])  # fmt: skip
+    success(f"one reduced step equals the dense solution of all {len(x)} unknowns")

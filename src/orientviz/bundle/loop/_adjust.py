@@ -39,12 +39,13 @@ import numpy as np
 from ...adjust.loop import Damping, StopRule, iterate
 from ...adjust.result import Iteration
 from ...block import Block
-from ...errors import NotDeterminableError
+from ...errors import InputError, NotDeterminableError
 from .._result import BundleResult
 from ..problem import BundleProblem, BundleState, point_setup
 from ..problem._auxiliary import finish_bundle
 from ..problem._checks import check_connected, check_datum, check_determinable
 from ._finish import finish_result
+from ._reference_result import reference_result
 from ._steps import BundleSteps
 
 #: Blocks up to this many images keep the full parameter vector in every history record.
@@ -101,12 +102,14 @@ def bundle_adjust(
         normalised residuals (:mod:`orientviz.bundle.precision`).
     callback : callable, optional
         Called with each new :class:`Iteration`.
-    solver : {"auto", "banded", "dense", "sparse"}
+    solver : {"auto", "banded", "dense", "sparse", "reference"}
         Solver of the reduced camera system (:mod:`orientviz.bundle.reduced`):
         ``"auto"`` chooses from the structure (banded for strips, dense for small or
         densely connected networks, sparse otherwise:
         :mod:`orientviz.bundle.reduced._choice`). The result's ``solver`` is the one used,
-        ``reduced_info["solver_reason"]`` says why.
+        ``reduced_info["solver_reason"]`` says why. ``"reference"``: the textbook
+        Gauss-Newton iteration of :mod:`orientviz.bundle.reference` instead of the fast
+        one (small blocks; no auxiliary data).
     history_x : bool, optional
         Keep the full parameter vector per iteration (default: blocks ≤ 500 images);
         otherwise ``Iteration.x`` is empty.
@@ -139,6 +142,14 @@ def bundle_adjust(
     check_determinable(block, setup)
     if not auxiliary:
         check_datum(block, setup)
+    if solver == "reference":  # the textbook iteration (bundle/reference.py), no fast path
+        if auxiliary:
+            raise InputError("solver='reference' takes no auxiliary data (GNSS, statoscope, APR)")
+        return reference_result(
+            block, setup, control=control, max_iter=max_iter, tol=tol, additional=additional,
+            ap_group=ap_group, ap_sigma=ap_sigma, precision=precision, callback=callback,
+            history_x=history_x,
+        )  # fmt: skip
     prob = BundleProblem(
         block, setup, additional=additional, ap_group=ap_group, ap_sigma=ap_sigma, solver=solver,
         auxiliary=auxiliary,
