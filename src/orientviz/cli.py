@@ -215,11 +215,11 @@ COMMANDS: dict[str, Command] = {
             arg("--free", action="store_true", default=None,
                 help="free network: control and check points become tie points; datum by "
                 "minimum constraints, or by --fix (options.free)"),
-            arg("--solver", choices=["auto", "banded", "dense", "sparse"], default=None,
+            arg("--solver", choices=["auto", "banded", "dense", "sparse", "reference"], default=None,
                 help="solver of the bundle's reduced camera system (overrides options.solver; "
                 "default auto: banded for strips, dense for small or densely connected "
                 "networks, sparse (nested-dissection multifrontal Cholesky) otherwise; the "
-                "report names the choice)"),
+                "report names the choice); reference: the textbook iteration, small blocks"),
             arg(
                 "-o",
                 "--output",
