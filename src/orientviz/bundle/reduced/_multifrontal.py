@@ -1,7 +1,7 @@
 """Multifrontal Cholesky of the reduced camera system S along a nested dissection.
 
 S (n = 6m unknowns, 6 × 6 blocks) is factored node by node of its dissection tree
-(:mod:`orientviz.bundle._dissection`), children before parents. A node with ``p``
+(:mod:`orientviz.bundle.reduced._dissection`), children before parents. A node with ``p``
 pivot unknowns and ``b`` boundary unknowns owns a dense *front* ::
 
     F = [F11  F21ᵀ]   p     F11 = RᵀR (R upper triangular, LAPACK potrf),

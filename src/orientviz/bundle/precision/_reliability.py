@@ -16,7 +16,7 @@ overlap of a strip — controls that direction too.
 
 External reliability: an undetected bias moves the estimates by Δx̂ = Q Jᵀ P ∇. The
 bundle keeps, per ray, the gains K = Q_(·, ray) Jᵀ P½ on the ray's own image orientation
-(6×2) and point (3×2) (``BundleResult.ray_gains``, :mod:`orientviz.bundle._precision`), so
+(6×2) and point (3×2) (``BundleResult.ray_gains``, :mod:`orientviz.bundle.precision._precision`), so
 Δpoint = K_p e and Δorientation = K_e e. Reported here: the shifts caused by the MDB
 along the weakest direction, the largest shift caused by any bias on the MDB ellipse
 eᵀ R e = δ0², and Baarda's dimensionless δ̄0 = δ0 √((1 − r_min) / r_min), the largest
@@ -38,11 +38,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..adjust.gross import noncentrality
-from ..adjust.gross2d import RANK_TOL
-from ..adjust.result import Adjustment
-from ..block import Block
-from ..errors import InputError
+from ...adjust.gross import noncentrality
+from ...adjust.gross2d import RANK_TOL
+from ...adjust.result import Adjustment
+from ...block import Block
+from ...errors import InputError
 
 F64 = NDArray[np.float64]
 

@@ -1,7 +1,7 @@
 """Solving the bundle's normal equations with a border of group parameters.
 
 With self-calibration the reduced camera system S (points eliminated, see
-:mod:`orientviz.bundle._reduced`) gains a border of q = G·k additional parameters ::
+:mod:`orientviz.bundle.reduced`) gains a border of q = G·k additional parameters ::
 
     [ S   E ] [dc]   [r ]
     [ Eᵀ  F ] [da] = [ra]
@@ -41,9 +41,9 @@ import scipy.linalg.blas as _blas
 from numpy.lib.stride_tricks import as_strided
 from numpy.typing import NDArray
 
-from ..errors import NotDeterminableError
+from ...errors import NotDeterminableError
+from ..reduced import NormalEquations
 from ._ap_normal import BorderE, dense
-from ._normal import NormalEquations
 
 F64 = NDArray[np.float64]
 
@@ -188,7 +188,7 @@ def solve_bordered(fac, E: F64, F: F64, rhs: F64, ba: F64, names: list[str]):
 
     Parameters
     ----------
-    fac : orientviz.bundle._reduced.Factor
+    fac : orientviz.bundle.reduced.Factor
         Factor of S.
     E, F, rhs, ba : ndarray
         Border blocks and right-hand sides (see module docstring).
@@ -249,9 +249,9 @@ def solve_bordered_pcg(fac, E: F64, F: F64, rhs: F64, ba: F64, prec, tol: float 
 
     Parameters
     ----------
-    fac : orientviz.bundle._reduced.Factor
+    fac : orientviz.bundle.reduced.Factor
         Factor of S.
-    E : ndarray or orientviz.bundle._ap_normal.BorderE
+    E : ndarray or orientviz.bundle.problem._ap_normal.BorderE
         Border of this iteration (only ``E @ v`` and ``E.T @ y`` are used).
     F, rhs, ba : ndarray
         Parameter block and right-hand sides of this iteration.

@@ -1,7 +1,7 @@
 """Which solver factors the reduced camera system, and how it is formed: chosen from the structure.
 
 The reduced system S (6 unknowns per image, points eliminated; see
-:mod:`orientviz.bundle._reduced`) has a 6 × 6 block (i, k) wherever images i and k see
+:mod:`orientviz.bundle.reduced`) has a 6 × 6 block (i, k) wherever images i and k see
 a common unknown point. Its shape tells which factorisation is cheapest:
 
 * aerial strips, numbered across the strips, give a narrow band: LAPACK's banded
@@ -11,7 +11,7 @@ a common unknown point. Its shape tells which factorisation is cheapest:
   speed;
 * large, sparse and wide systems need a fill-reducing ordering: the multifrontal
   factorisation along a nested dissection of the image graph costs the flops of its
-  dense fronts (:attr:`orientviz.bundle._dissection.Dissection.flops`, known once the
+  dense fronts (:attr:`orientviz.bundle.reduced._dissection.Dissection.flops`, known once the
   dissection is made) at a lower speed per flop, plus a fixed cost per front.
 
 :func:`choose_solver` compares these estimates (:data:`RATE`: relative speeds per flop,
@@ -19,7 +19,7 @@ measured on this machine with ``benchmarks/bench_unordered.py`` and
 ``benchmarks/bench_bundle.py --reduced``) and says why. The Schur complement itself is
 formed either by pairs of rays of a point (cost ∝ the number of such pairs, the only
 way for banded and sparse S) or, for a dense S, by dense products of the per-point
-couplings (cost ∝ m²·p flops but at BLAS speed, :func:`orientviz.bundle._schur.dense_schur`);
+couplings (cost ∝ m²·p flops but at BLAS speed, :func:`orientviz.bundle.reduced._schur.dense_schur`);
 :func:`choose_formation` picks the cheaper one.
 """
 
@@ -34,6 +34,8 @@ from numpy.typing import NDArray
 
 I64 = NDArray[np.int64]
 
+#: Names of the reduced-system solvers (what ``"auto"`` chooses from).
+SOLVERS: tuple[str, ...] = ("banded", "dense", "sparse")
 #: Names accepted for the reduced-system solver; ``"auto"`` chooses from the structure.
 SOLVER_CHOICES: tuple[str, ...] = ("auto", "banded", "dense", "sparse")
 #: Relative time per flop of each factorisation (dense LAPACK = 1). Measured (1 thread):
@@ -125,7 +127,7 @@ def image_blocks(obs_cam: I64, obs_pt: I64, n_cam: int, n_pt: int) -> tuple[I64,
 
 def sparse_cost(block_i: I64, block_k: I64, m: int, positions=None) -> tuple[float, int]:
     """Flops of the multifrontal Cholesky of S and its number of fronts, from a nested
-    dissection of the image graph (:func:`orientviz.bundle._dissection.nested_dissection`;
+    dissection of the image graph (:func:`orientviz.bundle.reduced._dissection.nested_dissection`;
     ``positions``: projection centres, for geometric separators)."""
     from ._dissection import nested_dissection
 

@@ -13,13 +13,12 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..adjust.result import Iteration
-from ..block import Block
-from ._checks import PointSetup
-from ._problem import BundleProblem
-from ._result import BundleResult, finish_result
-from ._state import BundleState
-from .reference import reference_bundle
+from ...adjust.result import Iteration
+from ...block import Block
+from .._result import BundleResult
+from ..problem import BundleProblem, BundleState, PointSetup
+from ..reference import reference_bundle
+from ._finish import finish_result
 
 #: What ``reduced_info["solver_reason"]`` says for the reference.
 REASON = "by the textbook reference iteration (orientviz.bundle.reference): dense Schur complement"

@@ -15,8 +15,8 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 from scipy.sparse.csgraph import connected_components
 
-from ..block import CHECK, CONTROL, Block
-from ..errors import DatumDefectError, InputError, NotDeterminableError
+from ...block import CHECK, CONTROL, Block
+from ...errors import DatumDefectError, InputError, NotDeterminableError
 
 F64 = NDArray[np.float64]
 

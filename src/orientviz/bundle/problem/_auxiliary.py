@@ -30,11 +30,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from ..block import AuxiliaryEstimates
-from ..errors import InputError
+from ...block import AuxiliaryEstimates
+from ...errors import InputError
+from ..reduced import AuxBorder, NormalEquations, factor_reduced
 from . import _auxiliary_border as _ab
-from ._normal import AuxBorder, NormalEquations
-from ._reduced import factor_reduced
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -195,7 +194,7 @@ class BundleAuxiliary:
     Rows on projection centres add to the 6 × 6 image blocks of the normal matrix, rows
     on points to the 3 × 3 point blocks (before the points are eliminated), and the
     offsets/drifts border the reduced camera system together with the self-calibration
-    parameters, if any (after them; :mod:`orientviz.bundle._auxiliary_border`). All
+    parameters, if any (after them; :mod:`orientviz.bundle.problem._auxiliary_border`). All
     methods take the bundle's current state arrays.
     """
 
@@ -285,7 +284,7 @@ class BundleAuxiliary:
         """Put the globals' bordered block into the bundle's normal equations ``ne``.
 
         Stored as ``ne.aux`` (see :meth:`reduce`; with additional parameters also
-        their coupling ``"Fag"`` (q, na), :mod:`orientviz.bundle._auxiliary_border`);
+        their coupling ``"Fag"`` (q, na), :mod:`orientviz.bundle.problem._auxiliary_border`);
         ``ne.diagF`` is extended by the globals' diagonal (the stopping rule reads
         the corrections (da, dg) in one vector).
         """
@@ -325,7 +324,7 @@ class BundleAuxiliary:
         """Redundancy numbers of the rows (``res.auxiliary.redundancy``, appended to the
         result's by :func:`finish_bundle`) and ``cofactor_groups["auxiliary"]``.
 
-        Cofactor blocks as in :func:`orientviz.bundle._auxiliary_border.auxiliary_redundancy`.
+        Cofactor blocks as in :func:`orientviz.bundle.problem._auxiliary_border.auxiliary_redundancy`.
         """
         na = self.n_global
         r = _ab.auxiliary_redundancy(self, Qcc, Qpp, Qcb, Qbp, Qbb)

@@ -14,7 +14,7 @@ data); the last steps — those the stopping rule judges and the precision reuse
 always taken in ω, φ, κ. :func:`apply_local` turns R(δ) back into the angles;
 :func:`angle_map` relates the two parametrisations to first order, so that the factored
 normal matrix of a small step in δ can serve the next steps in ω, φ, κ (chord steps,
-:data:`orientviz.bundle._adjust.CHORD_REUSE`).
+:data:`orientviz.bundle.loop._steps.CHORD_REUSE`).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..rotation import matrix_derivatives, matrix_from_opk, matrix_from_rotvec, opk_from_matrix
+from ...rotation import matrix_derivatives, matrix_from_opk, matrix_from_rotvec, opk_from_matrix
 
 F64 = NDArray[np.float64]
 
@@ -61,7 +61,7 @@ def frame_axials(angles: F64, sequence: str = "opk", local: bool = False) -> F64
     (∂R/∂θ)ᵀ R is skew-symmetric (R orthonormal); its axial vector is taken averaged over
     the two entries of each component. θ: ω, φ, κ, or with ``local`` the rotations δ of
     the image frame. The collinearity kernel's derivatives by θ are ω_θ × (u, v, w)
-    (:mod:`orientviz.bundle._kernel`); −ω_θ are the columns of :func:`angle_map`.
+    (:mod:`orientviz.bundle.model._kernel`); −ω_θ are the columns of :func:`angle_map`.
     """
     R = matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2], sequence)
     if local:
@@ -86,6 +86,6 @@ def angle_map(angles: F64, sequence: str = "opk") -> F64:
     :func:`frame_axials`; A's columns are a_ω, a_φ, a_κ, so a change dθ of the angles
     rotates the frame by δ = A·dθ (first order) and the Jacobians relate as J_θ = J_δ·A
     (the chord step's change of parametrisation in
-    :class:`orientviz.bundle._adjust._BundleSteps`).
+    :class:`orientviz.bundle.loop._steps.BundleSteps`).
     """
     return -frame_axials(angles, sequence).transpose(0, 2, 1)

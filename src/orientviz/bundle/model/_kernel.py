@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..rotation import matrix_from_opk
+from ...rotation import matrix_from_opk
 from ._local_rotation import frame_axials
 
 F64 = NDArray[np.float64]
@@ -133,7 +133,7 @@ def collinearity_block(
     Parameters are those of :func:`project_block`; ``local``: the last three columns of
     J_exterior are derivatives by a small rotation δ of the image frame,
     R(δ) = R·exp([δ]×), instead of by ω, φ, κ (no gimbal lock; see
-    :mod:`orientviz.bundle._local_rotation`).
+    :mod:`orientviz.bundle.model._local_rotation`).
 
     Returns
     -------
@@ -203,7 +203,7 @@ def normalised_block(
     """Normalised image points n = −(u, v)/w of rays and their Jacobians.
 
     The pinhole part of a camera model that applies c, the principal point and the lens
-    itself (:mod:`orientviz.bundle._lens`): ``project_block`` with c = 1, x0 = y0 = 0.
+    itself (:mod:`orientviz.bundle.model._lens`): ``project_block`` with c = 1, x0 = y0 = 0.
 
     Returns
     -------

@@ -1,11 +1,11 @@
 """The bundle problem: its parts, its linearisation and its step.
 
 :class:`BundleProblem` holds what is constant during a bundle adjustment, composed of
-the parts in :mod:`orientviz.bundle._parts`. For an iterate
-(:class:`~orientviz.bundle._state.BundleState`) it computes the weighted misclosures and
+the parts in :mod:`orientviz.bundle.problem._parts`. For an iterate
+(:class:`~orientviz.bundle.problem._state.BundleState`) it computes the weighted misclosures and
 Jacobians (:meth:`BundleProblem.residuals`), vᵀPv (:meth:`~BundleProblem.cost`), the
 normal equations with the points eliminated by the Schur complement
-(:meth:`~BundleProblem.normal` → :class:`~orientviz.bundle._normal.NormalEquations`),
+(:meth:`~BundleProblem.normal` → :class:`~orientviz.bundle.reduced._normal.NormalEquations`),
 the step (:meth:`~BundleProblem.solve`, bordered by additional parameters and auxiliary
 offsets) and the next iterate (:meth:`~BundleProblem.apply`). The iteration itself is
 the engine's (:func:`orientviz.adjust.engine.iterate`).
@@ -18,14 +18,25 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from ..block import Block
+from ...block import Block
+from ..model._kernel import RayProjection, normalised_block, ray_jacobians
+from ..model._local_rotation import apply_local
+from ..reduced import (
+    ImageGram,
+    NormalEquations,
+    ReducedStructure,
+    back_substitute,
+    dense_schur,
+    factor_reduced,
+    inv3,
+    point_products,
+    ray_couplings,
+    schur_blocks,
+)
 from ._ap_normal import ap_normal, point_ap_term
 from ._auxiliary import BundleAuxiliary, auxiliary_rows
 from ._border import solve_border
 from ._checks import PointSetup
-from ._kernel import RayProjection, normalised_block, ray_jacobians
-from ._local_rotation import apply_local
-from ._normal import NormalEquations
 from ._parts import (
     BorderSolver,
     additional_block,
@@ -35,10 +46,7 @@ from ._parts import (
     point_block,
     with_var_rays,
 )
-from ._reduced import ReducedStructure, factor_reduced, inv3
-from ._schur import ImageGram, dense_schur
 from ._state import BundleState, wrap
-from ._tracks import point_products, point_sums_wt, ray_couplings, schur_blocks
 
 F64 = NDArray[np.float64]
 EXTERIOR_NAMES = ("X0", "Y0", "Z0", "omega", "phi", "kappa")
@@ -127,7 +135,7 @@ class BundleProblem:
     n_eq, n_unknowns, redundancy : int
         Counts of equations (observations and pseudo-observations) and unknowns.
 
-    The iterate is a :class:`~orientviz.bundle._state.BundleState`; the methods take it
+    The iterate is a :class:`~orientviz.bundle.problem._state.BundleState`; the methods take it
     as an argument: :meth:`residuals`, :meth:`cost`, :meth:`normal` (→
     :class:`NormalEquations`), :meth:`solve`, :meth:`apply`.
     """
@@ -165,9 +173,6 @@ class BundleProblem:
             block, self.obs, self.points, self.reduced, additional, ap_group, ap_sigma
         )
         self.border = BorderSolver()
-        #: S may be factored in single precision with refined solves (set by the loop when
-        #: the factors serve the steps alone: no precision pass, no border unknowns)
-        self.single_factor = False
         self._design_at: BundleState | None = None  # iterate of a lens model's design
         self._projection = None  # (iterate, RayProjection) kept by residuals(keep=True)
         #: (iterate, image coordinates (n, 2) mm of the rays without additional
@@ -207,7 +212,7 @@ class BundleProblem:
     # ----------------------------------------------------------------- model
     def residuals(self, st: BundleState, jac: bool, local: bool = False, keep: bool = False):
         """Weighted misclosures l − f (n, 2)·(1/σ), with Jacobians if ``jac``; ``local``:
-        by rotations of the image frame (:mod:`orientviz.bundle._local_rotation`).
+        by rotations of the image frame (:mod:`orientviz.bundle.model._local_rotation`).
 
         ``keep`` (without ``jac``): the projection is kept until the next call, which
         forms the Jacobians at the same ``st`` from it instead of projecting again.
@@ -270,7 +275,7 @@ class BundleProblem:
     def normal(
         self, st: BundleState, rw: F64, Je: F64, Jp: F64, lam: float = 0.0
     ) -> NormalEquations:
-        """Blocks of the normal equations and the Schur complement (see bundle._reduced)."""
+        """Blocks of the normal equations and the Schur complement (see bundle.reduced)."""
         S = self.reduced
         self.design_at(st)
         sw = self.obs.weight[:, :, None]
@@ -368,7 +373,7 @@ class BundleProblem:
         stopping rule. Plain bundles only (no border, no auxiliary rows); undamped.
 
         ``rot`` (m, 3, 3): ``ne`` is of rotations δ of the image frames, the Jacobian of
-        ω, φ, κ with J_θ = J_δ·rot (:func:`~orientviz.bundle._local_rotation.angle_map`):
+        ω, φ, κ with J_θ = J_δ·rot (:func:`~orientviz.bundle.model._local_rotation.angle_map`):
         the angle rows of the images' gradient become rot⁻ᵀ g_θ (the system is then in δ,
         its solution δ = rot·dθ), the angle part of ``diagU`` the diagonal in ω, φ, κ at
         ``st``.
@@ -419,9 +424,7 @@ class BundleProblem:
             if self.aux or self.q:
                 raise ValueError("a chord step needs a bundle without border unknowns")
             return self.back_substitute(ne, fac.solve(ne.rhs), np.zeros(0), fac)
-        fac = factor_reduced(
-            self.reduced, ne.blocks, names, dense=ne.S, single=self.single_factor
-        )
+        fac = factor_reduced(self.reduced, ne.blocks, names, dense=ne.S)
         ne.S = None  # overwritten by the factor
         if self.aux:
             return self.aux.solve(self, fac, ne)
@@ -436,10 +439,8 @@ class BundleProblem:
         """Back-substitution of the points; returns (dc, dp, da, fac)."""
         dc = dc.reshape(self.m, 6)
         tg = self.reduced.tracks  # ne.Wr is in its ray order
-        red = ne.bp - point_sums_wt(tg, ne.Wr, dc)
-        if self.q and not self.border.hold:
-            red -= point_ap_term(self, ne.ap.H, da)
-        dp = np.einsum("nij,nj->ni", ne.Vinv, red)
+        ap = point_ap_term(self, ne.ap.H, da) if self.q and not self.border.hold else None
+        dp = back_substitute(tg, ne.Vinv, ne.Wr, ne.bp, dc, ap)
         return dc, dp, da, fac
 
     @property

@@ -1,7 +1,7 @@
 """Additional parameters in the bundle's normal equations: assembly and bordered solve.
 
 With self-calibration the normal equations of the bundle (see
-:mod:`orientviz.bundle._reduced`) gain a border of ``q = G·k`` group parameters ::
+:mod:`orientviz.bundle.reduced`) gain a border of ``q = G·k`` group parameters ::
 
     [ S   E ] [dc]   [r ]      S  = reduced camera system (points eliminated)
     [ Eᵀ  F ] [da] = [ra]      E  = image × parameter coupling, F = parameter block
@@ -14,7 +14,7 @@ are summed first (``H``) — and with segment sums over index orders that are co
 once per problem (:class:`APStructure`) and applied as sparse 0/1 products; no
 ``np.add.at``.
 
-How the border is then eliminated: :mod:`orientviz.bundle._border`.
+How the border is then eliminated: :mod:`orientviz.bundle.problem._border`.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ._normal import APBorder
+from ..reduced import APBorder
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]

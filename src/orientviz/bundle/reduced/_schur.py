@@ -1,13 +1,13 @@
 """Forming the reduced camera system S = U − Σ_j W_j V_j⁻¹ W_jᵀ (the Schur complement).
 
-Two ways, same S up to rounding (:func:`orientviz.bundle._solver_choice.choose_formation`
+Two ways, same S up to rounding (:func:`._choice.choose_formation`
 picks one per structure):
 
 * by pairs of rays (a, b) of the same point: block (image(a), image(b)) gains
   T_a W_bᵀ (T = W V⁻¹). Only the non-zero blocks are touched, which is what banded and
   sparse systems need; the cost is Σ_j k_j(k_j + 1)/2 pairs for points seen k_j times,
   formed per point by one batched BLAS product of the points of equal track length
-  (:func:`orientviz.bundle._tracks.schur_blocks`).
+  (:func:`._tracks.schur_blocks`).
 * :func:`dense_schur` — for a dense S (small or densely connected networks): with the
   Cholesky factor V_j = L_j L_jᵀ of each point block, Y_a = W_a L_j⁻ᵀ gives
   W_j V_j⁻¹ W_jᵀ = Y_j Y_jᵀ, so Σ_j over a chunk of points is one product Y Yᵀ of a
@@ -32,6 +32,29 @@ DENSE_CHUNK_BYTES: int = 32 * 2**20
 #: The scatter indices of :func:`dense_schur` are kept between iterations up to this many
 #: entries (8 bytes each; 18 per ray).
 DENSE_INDEX_KEEP: int = 2**21
+
+
+def inv3(A: F64) -> F64:
+    """Vectorised inverse of symmetric 3×3 matrices (n, 3, 3) by the adjugate.
+
+    Raises ``ZeroDivisionError``-free: singular blocks give inf/NaN that callers check.
+    """
+    a, b, c = A[:, 0, 0], A[:, 0, 1], A[:, 0, 2]
+    d, e, f = A[:, 1, 1], A[:, 1, 2], A[:, 2, 2]
+    c00 = d * f - e * e
+    c01 = c * e - b * f
+    c02 = b * e - c * d
+    det = a * c00 + b * c01 + c * c02
+    out = np.empty_like(A)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = 1.0 / det
+        out[:, 0, 0] = c00 * r
+        out[:, 0, 1] = out[:, 1, 0] = c01 * r
+        out[:, 0, 2] = out[:, 2, 0] = c02 * r
+        out[:, 1, 1] = (a * f - c * c) * r
+        out[:, 1, 2] = out[:, 2, 1] = (b * c - a * e) * r
+        out[:, 2, 2] = (a * d - b * b) * r
+    return out
 
 
 def gram_by_segments(J: F64, starts: I64, present: I64, m: int) -> F64:
@@ -137,7 +160,7 @@ def dense_schur(st, U: F64, W: F64, V: F64) -> tuple[F64, F64]:
 
     Parameters
     ----------
-    st : orientviz.bundle._reduced.ReducedStructure
+    st : orientviz.bundle.reduced.ReducedStructure
         The structure (its rays grouped by track length, ``st.tracks``; the blocks to
         return).
     U : ndarray, shape (m, 6, 6)
@@ -150,7 +173,7 @@ def dense_schur(st, U: F64, W: F64, V: F64) -> tuple[F64, F64]:
     Returns
     -------
     blocks : ndarray, shape (n_blocks, 6, 6)
-        The blocks (i ≤ k) of S (as :func:`orientviz.bundle._tracks.schur_blocks` returns
+        The blocks (i ≤ k) of S (as :func:`orientviz.bundle.reduced._tracks.schur_blocks` returns
         them).
     S : ndarray, shape (6m, 6m), Fortran order
         S with a valid lower triangle (what the dense Cholesky reads and overwrites).

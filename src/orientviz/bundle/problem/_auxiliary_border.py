@@ -11,10 +11,10 @@ b = (a, g) — parameters first, offsets/drifts after them ::
 
 No observation holds both a and g, so F_ag comes only from the elimination of points
 that carry image rays and APR rows: ``F_ag = −Σ_j H_j V_j⁻¹ P_j`` (H_j the rays' Aᵀ P J_p
-per (point, group) pair, :mod:`orientviz.bundle._ap_normal`; P_j the APR rows' coupling of
+per (point, group) pair, :mod:`orientviz.bundle.problem._ap_normal`; P_j the APR rows' coupling of
 the point with g). The border is eliminated exactly, ``Fs = F − Eᵀ S⁻¹ E`` (forming Fs
 with :func:`orientviz.bundle.solve_bordered`); Fs⁻¹ is the cofactor matrix
-of the border, which the precision (:func:`orientviz.bundle._precision.bundle_precision`)
+of the border, which the precision (:func:`orientviz.bundle.precision._precision.bundle_precision`)
 needs anyway.
 
 For the precision the border also enters the point blocks: ``h_j = (coupling of point
@@ -28,10 +28,10 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
 
-from ..errors import NotDeterminableError
+from ...errors import NotDeterminableError
+from ..reduced import NormalEquations
 from ._ap_normal import dense
 from ._border import solve_bordered
-from ._normal import NormalEquations
 
 F64 = NDArray[np.float64]
 

@@ -6,7 +6,7 @@ W = J_eᵀ P J_p (6 × 3). Eliminating the points gives the reduced camera syste
     S dc = r,   S = U − Σ W V⁻¹ Wᵀ,   r = b_c − Σ W V⁻¹ b_p,
 
 stored by :class:`NormalEquations` as the blocks of S inside its band (the structure is
-:class:`orientviz.bundle._reduced.ReducedStructure`) with what the back-substitution of
+:class:`orientviz.bundle.reduced.ReducedStructure`) with what the back-substitution of
 the points and the precision need. Self-calibration parameters and auxiliary
 offsets/drifts border S (:class:`APBorder`, :class:`AuxBorder`).
 """
@@ -28,7 +28,7 @@ class APBorder:
     Attributes
     ----------
     E_border : BorderE
-        E (6m, q) by blocks (:class:`orientviz.bundle._ap_normal.BorderE`).
+        E (6m, q) by blocks (:class:`orientviz.bundle.problem._ap_normal.BorderE`).
     F0, F : ndarray, shape (q, q)
         The parameters' block, undamped and damped (diagonal × (1 + λ)).
     ba : ndarray, shape (q,)
@@ -98,7 +98,7 @@ class NormalEquations:
         Inverse point blocks V⁻¹ (damped).
     Wr, Tr : ndarray, shape (n_var, 6, 3)
         W = J_eᵀ P J_p and T = W V⁻¹ of the rays of point unknowns in the order of
-        ``rays`` (the track-length order of :mod:`orientviz.bundle._tracks`).
+        ``rays`` (the track-length order of :mod:`orientviz.bundle.reduced._tracks`).
     rays : ndarray of int, shape (n_var,)
         Observation index of each row of ``Wr``, ``Tr``.
     n_obs : int
@@ -117,7 +117,7 @@ class NormalEquations:
         The border's Schur complement F − Eᵀ S⁻¹ E when it was formed exactly.
     S : ndarray, shape (6m, 6m), or None
         S as a dense matrix (lower triangle) when it was formed densely
-        (:func:`orientviz.bundle._schur.dense_schur`); the factorisation consumes it.
+        (:func:`orientviz.bundle.reduced._schur.dense_schur`); the factorisation consumes it.
     """
 
     blocks: F64 | None

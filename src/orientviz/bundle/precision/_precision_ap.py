@@ -1,6 +1,6 @@
 """Cofactors of a self-calibrating bundle: the additional-parameter terms, sparse by group.
 
-:func:`orientviz.bundle._precision.bundle_precision` computes the cofactor blocks of a
+:func:`orientviz.bundle.precision._precision.bundle_precision` computes the cofactor blocks of a
 bundle from the reduced camera system S. With q = G·k additional parameters in G groups
 the reduced system is bordered ::
 
@@ -33,7 +33,7 @@ import scipy.linalg
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ._border import band_backward_solve, band_forward_solve
+from ..problem._border import band_backward_solve, band_forward_solve
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -44,9 +44,9 @@ def border_inverse(inverse, E: F64, F: F64, st) -> tuple[F64, F64, F64]:
 
     Parameters
     ----------
-    inverse : orientviz.bundle._precision.ReducedInverse
+    inverse : orientviz.bundle.precision._precision.ReducedInverse
         The inverse of S (dense or its banded Cholesky factor).
-    E : ndarray, shape (6m, q), or orientviz.bundle._ap_normal.BorderE
+    E : ndarray, shape (6m, q), or orientviz.bundle.problem._ap_normal.BorderE
         Border (points eliminated).
     F : ndarray, shape (q, q)
         Parameter block (points eliminated, pseudo-observations included).
@@ -86,7 +86,7 @@ def banded_border(L: F64, perm: I64, E, pos: I64) -> tuple[F64, F64]:
         Lower band factor of S[perm][:, perm].
     perm : ndarray of int, shape (n,)
         Scalar permutation of the factor (6 rows per image).
-    E : ndarray, shape (n, q), or orientviz.bundle._ap_normal.BorderE
+    E : ndarray, shape (n, q), or orientviz.bundle.problem._ap_normal.BorderE
     pos : ndarray of int, shape (m,)
         Position of each image in the factor's order (``perm`` by images).
 
@@ -97,7 +97,7 @@ def banded_border(L: F64, perm: I64, E, pos: I64) -> tuple[F64, F64]:
     EtY : ndarray, shape (q, q)
         Eᵀ S⁻¹ E = ZᵀZ with Z = L⁻¹ E (symmetric by construction).
     """
-    from ._ap_normal import BorderE
+    from ..problem._ap_normal import BorderE
 
     Ep = E.permuted(pos, np.float64) if isinstance(E, BorderE) else E[perm]
     Z = band_forward_solve(L, Ep)
@@ -112,7 +112,7 @@ class RayGroupPairs:
     """Index maps of the sparse parameter terms (constant for a problem).
 
     The rays of an image in their own group are handled in the per-image padded layout
-    of :class:`~orientviz.bundle._ap_normal.APStructure` (``pad``, (m, L)): ``slot`` is
+    of :class:`~orientviz.bundle.problem._ap_normal.APStructure` (``pad``, (m, L)): ``slot`` is
     each ray's place in it (i·L + column), ``sum_own`` sums the padded slots by the own
     (point, group) pair of their ray. The rays whose point also lies in *other* groups
     (``APStructure.e_obs``, ``e_pg``) are summed by ``sum_e_ray`` (into all n rays) and

@@ -1,7 +1,7 @@
 """Nested dissection of the image graph: the elimination tree of a sparse Cholesky of S.
 
 The reduced camera system S (6 × 6 blocks, one block row per image; see
-:mod:`orientviz.bundle._reduced`) has a block (i, k) wherever images i and k share a
+:mod:`orientviz.bundle.reduced`) has a block (i, k) wherever images i and k share a
 point: its *image graph*. A Cholesky factor of S fills in between images that are
 connected through images eliminated before them. *Nested dissection* bounds that fill:
 a small set of images (a *separator*) whose removal splits the graph into two parts is
@@ -10,7 +10,7 @@ of at most :data:`LEAF_IMAGES` images. The parts never couple each other, so the
 eliminations only update the separators above them.
 
 Every node of the resulting tree (a separator, or a leaf part) is eliminated as one
-dense *front* (:mod:`orientviz.bundle._multifrontal`): its own ``p`` unknowns and the
+dense *front* (:mod:`orientviz.bundle.reduced._multifrontal`): its own ``p`` unknowns and the
 ``b`` unknowns of the images of separators above it that it touches (its *boundary*),
 at ≈ p³/3 + p²b + pb² flops (:attr:`Dissection.flops`).
 
@@ -156,7 +156,7 @@ def nested_dissection(
     Parameters
     ----------
     block_i, block_k : ndarray of int
-        Images of the blocks (i ≤ k) of S (:func:`orientviz.bundle._solver_choice.image_blocks`).
+        Images of the blocks (i ≤ k) of S (:func:`orientviz.bundle.reduced._choice.image_blocks`).
     m : int
         Number of images.
     positions : ndarray, shape (m, 3), optional

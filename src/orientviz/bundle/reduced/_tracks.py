@@ -49,7 +49,7 @@ class TrackGroups:
         per image and per point by one sparse product).
     in_order : bool
         ``rays`` is 0, 1, …, n_var − 1: the observations are in this order (the bundle's
-        are, :func:`orientviz.bundle._parts.image_observations`), per-ray arrays are
+        are, :func:`orientviz.bundle.problem._parts.image_observations`), per-ray arrays are
         slices of the observations' arrays.
     """
 
@@ -146,7 +146,7 @@ def _ascending_group_map(img: I64, lookup, n_blocks: int) -> sp.csc_matrix:
 
 
 def track_groups(st) -> TrackGroups:
-    """The :class:`TrackGroups` of a :class:`~orientviz.bundle._reduced.ReducedStructure`."""
+    """The :class:`TrackGroups` of a :class:`~orientviz.bundle.reduced.ReducedStructure`."""
     m = st.n_cam
     k_pt = np.diff(np.append(st.pt_starts, st.pt_obs.size))
     order = np.argsort(k_pt, kind="stable")  # points by track length
@@ -274,7 +274,7 @@ def schur_blocks(st, U: F64, T: F64, W: F64) -> F64:
 
     Parameters
     ----------
-    st : orientviz.bundle._reduced.ReducedStructure
+    st : orientviz.bundle.reduced.ReducedStructure
         The structure (its blocks and :attr:`~ReducedStructure.tracks`).
     U : ndarray, shape (m, 6, 6)
         Image blocks.
@@ -301,3 +301,29 @@ def schur_blocks(st, U: F64, T: F64, W: F64) -> F64:
     blocks = out.reshape(st.n_blocks, 6, 6)
     blocks[st.diag_block] += U
     return blocks
+
+
+def back_substitute(
+    tg: TrackGroups, Vinv: F64, W: F64, bp: F64, dc: F64, border: F64 | None = None
+) -> F64:
+    """The point corrections dp_j = V_j⁻¹ (b_p,j − Σ_rays W_rayᵀ dc_image − t_j) (p_var, 3).
+
+    Parameters
+    ----------
+    tg : TrackGroups
+        The ray order of ``W``.
+    Vinv : ndarray, shape (p_var, 3, 3)
+        Inverse point blocks.
+    W : ndarray, shape (n_var, 6, 3)
+        Per ray J_cᵀ P J_p, in ``tg.rays`` order.
+    bp : ndarray, shape (p_var, 3)
+        The points' right-hand sides.
+    dc : ndarray, shape (m, 6)
+        The image corrections.
+    border : ndarray, shape (p_var, 3), optional
+        t_j, the term of a border's corrections (e.g. the additional parameters').
+    """
+    red = bp - point_sums_wt(tg, W, dc)
+    if border is not None:
+        red -= border
+    return np.einsum("nij,nj->ni", Vinv, red)

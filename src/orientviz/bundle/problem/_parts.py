@@ -4,7 +4,7 @@ A :class:`~orientviz.bundle.BundleProblem` is composed of
 
 * :class:`ImageObservations` — the rays that enter the adjustment (image, point, x, y,
   1/σ), sorted by the track length of their point, then by point (the order of the
-  point reductions, :mod:`orientviz.bundle._tracks`: they work on contiguous slices);
+  point reductions, :mod:`orientviz.bundle.reduced._tracks`: they work on contiguous slices);
 * :class:`InteriorOrientation` — c, x0, y0 of each image's camera (mm, held fixed);
 * :class:`ExteriorBlock` — the exterior orientations' observed values and weights
   (GNSS/INS-like observations of X0 and ω, φ, κ);
@@ -12,10 +12,10 @@ A :class:`~orientviz.bundle.BundleProblem` is composed of
   pseudo-observations of control coordinates;
 * :class:`AdditionalBlock` — self-calibration parameters (design, groups, weights of
   their pseudo-observations and the index orders of their border);
-* the auxiliary data (:class:`orientviz.bundle._auxiliary.BundleAuxiliary`).
+* the auxiliary data (:class:`orientviz.bundle.problem._auxiliary.BundleAuxiliary`).
 
 All parts are constant over the iterations; the iterate is a
-:class:`~orientviz.bundle._state.BundleState`.
+:class:`~orientviz.bundle.problem._state.BundleState`.
 """
 
 from __future__ import annotations
@@ -26,12 +26,12 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ..block import Block
-from ..errors import InputError
+from ...block import Block
+from ...errors import InputError
+from ..model._lens import BoundLens, LensModel
+from ..reduced import ReducedStructure
 from ._ap_normal import APStructure
 from ._checks import PointSetup
-from ._lens import BoundLens, LensModel
-from ._reduced import ReducedStructure
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -181,7 +181,7 @@ class AdditionalBlock:
     ray_length : float
         Median ray length, m (the scale of the reuse test of E, F).
     lens : BoundLens or None
-        An exact camera model (:mod:`orientviz.bundle._lens`): then A, Aw, A_csr are the
+        An exact camera model (:mod:`orientviz.bundle.model._lens`): then A, Aw, A_csr are the
         design at the current iterate (:meth:`AdditionalBlock.with_design`).
     """
 
@@ -216,7 +216,7 @@ class AdditionalBlock:
 def image_observations(block: Block, setup: PointSetup, pt_col: I64) -> ImageObservations:
     """The used rays, sorted by the track length of their point unknown, then by point
     unknown, then by image; the rays of fixed points last, by image. The order of
-    :class:`orientviz.bundle._tracks.TrackGroups` (its per-ray arrays are then slices of
+    :class:`orientviz.bundle.reduced._tracks.TrackGroups` (its per-ray arrays are then slices of
     the evaluations' arrays, no gathers)."""
     obs = block.observations
     uobs = np.flatnonzero(setup.used_obs)
@@ -295,7 +295,7 @@ def additional_block(
     if additional is None:
         return AdditionalBlock()
     if isinstance(additional, str):  # a set's name, as on the command line
-        from ._additional import ap_set
+        from ..model._additional import ap_set
 
         additional = ap_set(additional)
     elif not isinstance(additional, LensModel) and not (

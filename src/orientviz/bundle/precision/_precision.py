@@ -3,7 +3,7 @@
 For a bundle block the full cofactor matrix Q = N⁻¹ (u ≈ 130 000 unknowns for 2 100
 images) is never formed. What is needed — per-image 6×6 and per-point 3×3 blocks,
 redundancy numbers of the image observations — follows *exactly* from the blocks of
-Z = S⁻¹ (S the reduced camera system, :mod:`orientviz.bundle._reduced`) at the image
+Z = S⁻¹ (S the reduced camera system, :mod:`orientviz.bundle.reduced`) at the image
 pairs that share a point, i.e. inside the band of S:
 
 * Q_cc = Z (+ Y F̃⁻¹ Yᵀ with self-calibration parameters a, Y = S⁻¹E, F̃ = F − EᵀY),
@@ -22,7 +22,7 @@ factorisation (n·b²), so all numbers here are exact — no approximation. For 
 reduced systems (≤ 3 000 unknowns) the dense inverse is used instead.
 
 With self-calibration parameters the border's terms come from
-:mod:`orientviz.bundle._precision_ap`: Y = S⁻¹E by two banded triangular solves
+:mod:`orientviz.bundle.precision._precision_ap`: Y = S⁻¹E by two banded triangular solves
 with all q columns (BLAS level 3, the same factor as the selected inverse), the
 correction Y F̃⁻¹ Yᵀ only at the needed 6×6 blocks, and the point and ray terms per
 (point, group) pair with k columns instead of q (a point's rays lie in one or two
@@ -40,9 +40,8 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
 
-from ._reduced import ReducedStructure, dense_matrix, factor_reduced
-from ._result import ExteriorPairs, RayGains
-from ._schur import DENSE_CHUNK_BYTES
+from .._result import ExteriorPairs, RayGains
+from ..reduced import DENSE_CHUNK_BYTES, ReducedStructure, dense_matrix, factor_reduced
 
 F64 = NDArray[np.float64]
 #: Up to this many reduced unknowns Z = S⁻¹ is computed densely.
@@ -130,7 +129,7 @@ class ReducedInverse:
     ``blocks``: the 6×6 blocks of Z = S⁻¹ at the structure's blocks (i ≤ k), shape
     (nb, 6, 6); :meth:`border` gives S⁻¹E for a border E (self-calibration) from the same
     factorisation. ``fac``: an existing banded factor of S (from
-    :func:`orientviz.bundle.factor_reduced` on the same blocks), then not
+    :func:`orientviz.bundle.reduced.factor_reduced` on the same blocks), then not
     factored again.
     """
 
@@ -174,11 +173,11 @@ class ReducedInverse:
 
         ``Y3`` (m, 6, q) holds the 6 rows of image i at ``Y3[row[i]]`` (the banded
         factor's image order: no reordering pass over the (6m, q) array). ``E`` is an
-        array or a :class:`~orientviz.bundle._ap_normal.BorderE`.
+        array or a :class:`~orientviz.bundle.problem._ap_normal.BorderE`.
         """
         m = self._m
         if self._Z is not None:
-            from ._ap_normal import dense
+            from ..problem._ap_normal import dense
 
             E = dense(E)
             Y = self._Z @ E

@@ -41,7 +41,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import ndtri
 
-from ..errors import InputError, NotDeterminableError
+from ...errors import InputError, NotDeterminableError
 
 F64 = NDArray[np.float64]
 UM = 1e-3  # mm per µm
