@@ -185,8 +185,12 @@ def check_block(
                     "error" if fatal else "warning",
                     "behind",
                     f"{n_b} of {n_k} rays have their point behind the camera (images "
-                    f"{_names(im.ids, imgs)}): the camera looks along its −z axis with Z up; "
-                    "check the heights, the flying height and the angles",
+                    f"{_names(im.ids, imgs)}): the camera looks along its −z axis"
+                    + (
+                        "; check the heights, the flying height and the angles (Z up)"
+                        if _aerial(R)
+                        else "; check the angles of those images and the points' coordinates"
+                    ),
                     n_b,
                     place(int(np.flatnonzero(behind)[0])),
                     3,
@@ -247,6 +251,18 @@ def check_block(
                 )
             )
     return _sorted(out)
+
+
+#: A block is aerial when at least this share of its images looks down (within 45° of −Z).
+AERIAL_SHARE: float = 0.8
+
+
+def _aerial(R: np.ndarray) -> bool:
+    """Whether most images look down (viewing direction −z of the image within 45° of
+    −Z): the block is aerial, and messages may speak of heights and flying height."""
+    down = R[:, 2, 2]  # −(Z component of the viewing direction R·(0, 0, −1))
+    fin = np.isfinite(down)
+    return bool(fin.any() and np.mean(down[fin] > np.cos(np.pi / 4)) >= AERIAL_SHARE)
 
 
 def check_magnitudes(data: object, limit: float = ABSURD_M) -> list[Finding]:

@@ -76,3 +76,35 @@ def test_gauss_newton_runs_the_loop_with_its_hook():
                        np.exp(0.7 * t), callback=seen.append, tol=1e-10)  # fmt: skip
     assert adj.converged and adj.x[0] == pytest.approx(0.7, abs=1e-9)
     assert [r.index for r in seen] == [h.index for h in adj.history[1:]]
+
+
+def test_trust_damping_keeps_lambda_positive_shrinks_by_3_and_grows_by_doubling_factors():
+    p = Exp()
+    run = iterate(p, 0.0, redundancy=3, damping=Damping("trust", lambda0=1e-4),
+                  stop=StopRule(1e-10), max_iter=200)  # fmt: skip
+    assert run.converged and run.state == pytest.approx(0.7, abs=1e-9)
+    lams = [lam for _, lam in p.solves]
+    assert min(lams) > 0  # never a pure Gauss-Newton step
+    costs = [h.cost for h in run.history]
+    assert all(b <= a for a, b in zip(costs, costs[1:]))
+    for (it_a, a), (it_b, b) in zip(p.solves, p.solves[1:]):
+        ratio = b / a
+        if it_b == it_a:  # the same iteration again: the step was rejected, λ × 2, 4, 8 …
+            assert ratio in (2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 128.0, 256.0)
+        else:  # accepted: the next iteration starts from λ / 3
+            assert ratio == pytest.approx(1 / 3) or b == pytest.approx(1e-16)
+
+
+def test_relative_cost_decrease_stops_when_below_ftol():
+    p = Exp()
+    run = iterate(p, 0.0, redundancy=3, damping=Damping("trust", lambda0=1e3),
+                  stop=StopRule(1e-14, ftol=1e-2), max_iter=500)  # fmt: skip
+    assert run.converged and "decreased by less than 0.01" in run.reason
+    c = [h.cost for h in run.history]
+    assert c[-2] - c[-1] <= 1e-2 * c[-2]  # the stopping step
+    assert all(a - b > 1e-2 * a for a, b in zip(c[:-2], c[1:-1]))  # none before it
+    # the same run without ftol goes on to the corrections' rule
+    q = Exp()
+    longer = iterate(q, 0.0, redundancy=3, damping=Damping("trust", lambda0=1e3),
+                     stop=StopRule(1e-14), max_iter=500)  # fmt: skip
+    assert len(longer.history) > len(run.history)

@@ -125,3 +125,30 @@ def test_a_point_seen_twice_in_one_image_is_imported_and_solves(tmp_path, capsys
     assert "1 observation(s) of a point already seen in the same image left out" in said
     code, sol = _solve(out)
     assert code == 0 and sol["sigma0"] < 1e-6  # the kept one is the exact keypoint
+
+
+def test_an_imported_model_that_does_not_fit_exits_4(tmp_path, capsys):
+    """An imported model whose σ0 and residuals say the model does not fit (here: the
+    keypoints' σ declared 0.02 px against 0.3 px noise) ends with the misfit warning and
+    exit 4, as DBAT's files do; with a fitting σ the same model solves (exit 0)."""
+    d, X, truth = _scene(tmp_path, "SIMPLE_RADIAL", CAMERAS["SIMPLE_RADIAL"], rng=7)
+    rng = np.random.default_rng(7)
+    lines = (d / "images.txt").read_text().splitlines()
+    for i in (2, 4, 6):  # 0.3 px noise on the matched keypoints
+        t = np.array(lines[i].split(), dtype=object).reshape(-1, 3)
+        for row in t:
+            if row[2] != "-1":
+                row[0] = repr(float(row[0]) + rng.normal(0, 0.3))
+                row[1] = repr(float(row[1]) + rng.normal(0, 0.3))
+        lines[i] = " ".join(t.ravel())
+    (d / "images.txt").write_text("\n".join(lines) + "\n")
+    out = tmp_path / "ok.json"
+    assert main(["import-colmap", str(d), "--fix-lens", "-o", str(out)]) == 0
+    code, sol = _solve(out)
+    assert code == 0 and 0.1 < sol["sigma0"] < 0.6  # σ = 1 px against 0.3 px noise
+    bad = tmp_path / "bad.json"
+    args = ["import-colmap", str(d), "--fix-lens", "--sigma-px", "0.02", "-o", str(bad)]
+    assert main(args) == 0
+    capsys.readouterr()
+    assert main(["solve", str(bad), "--free"]) == 4
+    assert "the model does not fit the data" in capsys.readouterr().out

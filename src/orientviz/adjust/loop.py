@@ -19,6 +19,11 @@ viewer's scrubber, a notebook's live plot). Damping policies (:class:`Damping`):
 
 * ``"none"`` — pure Gauss-Newton: every step is taken;
 * ``"lm"`` — Levenberg-Marquardt from λ0: λ × 10 until vᵀPv decreases, then λ / 10;
+* ``"trust"`` — Levenberg-Marquardt as a trust region (Ceres's schedule): λ starts at
+  λ0 (1e-4), a step that decreases vᵀPv is taken and λ shrinks by 3 (never below
+  1e-16: the damping stays, so a weakly determined far point moves only as far as its
+  rays' misclosures pull it in one step); a step that does not is retried with λ × ν,
+  ν doubling (2, 4, 8, …) until it does (λ > 1e16: damping exhausted);
 * ``"fallback"`` — Gauss-Newton while vᵀPv does not increase; a step that would
   increase it is retried with λ = max(10 λ, 1e-4) until it does not (λ > 1e8: damping
   exhausted), and λ goes back by / 10 per accepted step (to 0 below 1e-6). A singular
@@ -39,7 +44,9 @@ from ..errors import InputError, NotDeterminableError
 from .result import Iteration
 
 F64 = NDArray[np.float64]
-DAMPING_KINDS = ("none", "lm", "fallback")
+#: ``"trust"`` damping: λ stays at or above this (Ceres's largest trust region, 1e16).
+TRUST_MIN_LAMBDA: float = 1e-16
+DAMPING_KINDS = ("none", "lm", "fallback", "trust")
 
 
 @dataclass
@@ -117,7 +124,9 @@ class Damping:
 
     def __post_init__(self) -> None:
         if self.kind not in DAMPING_KINDS:
-            raise InputError(f"expected damping 'none' or 'lm', got {self.kind!r}")
+            raise InputError(
+                f"expected damping one of {', '.join(DAMPING_KINDS)}, got {self.kind!r}"
+            )
 
 
 @dataclass
@@ -128,6 +137,11 @@ class StopRule:
     ----------
     tol : float
         Stop when ``Step.max_correction`` < tol (in σ).
+    ftol : float
+        Also stop when an accepted step decreased vᵀPv by less than ftol times its value
+        (relative decrease, Ceres's function tolerance; 0 = not used). Suits weakly
+        determined parameters (points far along nearly parallel rays) whose corrections
+        stay large in their σ while the fit no longer changes.
     custom : callable, optional
         ``custom(previous, current) -> bool`` on the :class:`Iteration` records.
     step_test : callable, optional
@@ -140,6 +154,7 @@ class StopRule:
     """
 
     tol: float = 1e-6
+    ftol: float = 0.0
     custom: Callable[[Iteration, Iteration], bool] | None = None
     step_test: Callable[[Step], bool] | None = None
     step_reason: str = "all corrections below xtol after {it} iterations"
@@ -157,6 +172,10 @@ class StopRule:
             return self.step_reason.format(it=it) if self.step_test(step) else None
         if step.max_correction < self.tol:
             return f"corrections below {self.tol:g} σ after {it} iterations"
+        if self.ftol > 0 and len(history) >= 2:
+            before, after = history[-2].cost, history[-1].cost
+            if before - after <= self.ftol * before:
+                return f"vᵀPv decreased by less than {self.ftol:g} of its value in iteration {it}"
         return None
 
 
@@ -241,7 +260,7 @@ def iterate(
     history = run.history
     history.append(Iteration(0, problem.snapshot(state), None, s0(cost0), cost0))
     kind = damping.kind
-    lam = damping.lambda0 if kind == "lm" else 0.0
+    lam = damping.lambda0 if kind in ("lm", "trust") else 0.0
     for it in range(1, max_iter + 1):
         if on_iteration is not None:
             on_iteration(it)
@@ -254,7 +273,7 @@ def iterate(
             break
         ev_old = run.evaluation
         run.state, run.evaluation = new, ev_new
-        rec_lam = lam_next if kind == "lm" else lam_used
+        rec_lam = lam_next if kind in ("lm", "trust") else lam_used
         rec = Iteration(
             it, problem.snapshot(new), step.dx, s0(ev_new.cost), ev_new.cost, rec_lam,
             float(step.max_correction),
@@ -278,6 +297,7 @@ def _one_step(problem, run: Run, it: int, lam: float, damping: Damping, jacobian
     """Solve, apply and accept one step; (step, state, evaluation, λ used, next λ) or None."""
     kind = damping.kind
     state, ev = run.state, run.evaluation
+    nu = None  # "trust": the growth factor of λ after a rejected step
     while True:
         try:
             step = problem.solve(state, ev, lam, it)
@@ -314,6 +334,15 @@ def _one_step(problem, run: Run, it: int, lam: float, damping: Damping, jacobian
             if (np.isfinite(c_new) and c_new <= ev.cost) or lam > 1e10:
                 return step, new, ev_new, lam, max(lam / 10.0, 1e-12)
             lam *= 10.0
+            continue
+        if kind == "trust":
+            if np.isfinite(c_new) and c_new <= ev.cost:
+                return step, new, ev_new, lam, max(lam / 3.0, TRUST_MIN_LAMBDA)
+            nu = 2.0 if nu is None else 2.0 * nu
+            lam *= nu
+            if lam > 1.0 / TRUST_MIN_LAMBDA:
+                run.reason = f"no step decreases vᵀPv in iteration {it} (damping exhausted)"
+                return None
             continue
         if np.isfinite(c_new) and c_new <= ev.cost * (1 + 1e-12) + 1e-12:
             return step, new, ev_new, lam, (lam / 10 if lam > 1e-6 else 0.0)
