@@ -203,6 +203,10 @@ COMMANDS: dict[str, Command] = {
             arg("--tol", type=positive_float, default=None, metavar="T",
                 help="stop when every correction is below T times its sigma (overrides "
                 "options.tol; default 5e-3 for blocks)"),
+            arg("--ftol", type=float_between(0.0, 0.1), default=None, metavar="F",
+                help="also stop when a step lowers vTPv by less than F of its value (Ceres's "
+                "function tolerance; overrides options.ftol; default 0 = off, 1e-6 in files "
+                "written by import-bal / import-colmap)"),
             arg("--robust", choices=["none", "huber", "cauchy"], default=None,
                 help="robust bundle by reweighting: huber bounds, cauchy redescends the "
                 "influence of large residuals (overrides options.robust; default none)"),

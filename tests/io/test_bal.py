@@ -251,3 +251,32 @@ def test_solve_output_and_export_bal_carry_the_refined_cameras(tmp_path):
     assert main(["export-bal", str(prob), "-o", str(tmp_path / "start.bal")]) == 0
     start = bal_cameras(read_bal(tmp_path / "start.bal"), 0.01)
     np.testing.assert_allclose(start[:, 6], 15352.0, rtol=1e-12)  # the file's own values
+
+
+def test_a_solve_stopped_by_the_iteration_limit_writes_its_last_iterate(tmp_path, capsys):
+    """-o at the iteration limit: the last iterate, marked in the description; the message
+    names the options that would help (--max-iter, and --ftol where it is off)."""
+    from orientviz.cli import main
+    from orientviz.io.problem import load_problem
+    from orientviz.io.solve import LAST_ITERATE_MARK
+
+    path = _four_cameras(tmp_path)
+    prob = tmp_path / "s.json"
+    assert main(["import-bal", str(path), "-o", str(prob)]) == 0
+    start = load_problem(prob)
+    assert start.options["damping"] == "trust" and start.options["ftol"] == 1e-6
+    out = tmp_path / "last.json"
+    capsys.readouterr()
+    code = main(["solve", str(prob), "--free", "--max-iter", "2", "--ftol", "0", "-o", str(out)])
+    assert code == 3
+    err = capsys.readouterr().err
+    assert "reached the maximum of 2 iterations" in err
+    assert "--max-iter 8" in err and "--ftol 1e-6" in err and "last iterate" in err
+    last = load_problem(out)
+    assert LAST_ITERATE_MARK in last.description
+    moved = np.abs(last.data.cameras.c - start.data.cameras.c).max()
+    assert moved > 0  # the steps were taken and written (the first holds the lens)
+    # without -o nothing is written, and the hint leaves out the file
+    code = main(["solve", str(prob), "--free", "--max-iter", "2"])
+    err = capsys.readouterr().err
+    assert code == 3 and "last iterate" not in err and "--ftol" not in err  # ftol is on

@@ -16,6 +16,13 @@ import numpy as np
 from ..block import CONTROL, Block
 from ..errors import InputError
 
+#: Solver options written into an imported SfM model (BAL, COLMAP): Levenberg-Marquardt
+#: with Ceres's trust-region schedule and Ceres's stopping rule on the relative decrease of
+#: vᵀPv. Weakly determined points far along nearly parallel rays keep corrections large in
+#: their a-priori σ long after the fit has settled; the σ-rule of aerial blocks alone would
+#: not stop there.
+SFM_OPTIONS: dict = {"damping": "trust", "ftol": 1e-6}
+
 
 def import_to_problem(
     args: argparse.Namespace,
@@ -32,8 +39,9 @@ def import_to_problem(
 
     Optional arguments (absent = default): ``args.control`` (CSV path),
     ``args.pixel_size`` (mm), ``args.sigma_px`` (px). ``options`` go into the file's
-    ``options``; ``pixel_units`` writes the image quantities in pixels (``units.image =
-    "px"``, angles in degrees: the units SfM users read) instead of mm and gon;
+    ``options``; ``pixel_units`` (an SfM model) writes the image quantities in pixels
+    (``units.image = "px"``, angles in degrees: the units SfM users read) instead of mm
+    and gon, and :data:`SFM_OPTIONS`;
     ``lens_note`` (or ``lens_note_of()`` after reading) is appended to the one-line
     summary. Returns the exit code.
     """
@@ -48,7 +56,7 @@ def import_to_problem(
         control = getattr(args, "control", None)
         if control:
             block = apply_control(block, read_control(control))
-        options = dict(options or {})
+        options = dict(SFM_OPTIONS if pixel_units else {}, **(options or {}))
         if np.any(np.nan_to_num(block.points.sigma) > 0):
             options["control"] = "weighted"
         units = Units(angle="deg", image="px", pixel_size=px) if pixel_units else None

@@ -92,7 +92,7 @@ def run_from_cli(args: argparse.Namespace) -> int:
 
             report_format(report_path)  # a wrong suffix fails before the adjustment
         problem = load_named(args.file)
-        for name in ("max_iter", "tol", "solver", "robust", "robust_scale", "fix", "free"):
+        for name in ("max_iter", "tol", "ftol", "solver", "robust", "robust_scale", "fix", "free"):
             if getattr(args, name, None) is not None:  # the command line wins over the file
                 problem.options = dict(problem.options, **{name: getattr(args, name)})
         if getattr(args, "solver", None) is not None and problem.kind != "block":
@@ -109,8 +109,10 @@ def run_from_cli(args: argparse.Namespace) -> int:
             raise
         print(failed[0], file=sys.stderr)
         return failed[1]
-    if getattr(args, "output", None) and solution.adjustment.converged and not misfit(solution):
-        try:
+    adj = solution.adjustment
+    at_limit = not adj.converged and str(adj.reason).startswith("reached the maximum")
+    if getattr(args, "output", None) and ((adj.converged and not misfit(solution)) or at_limit):
+        try:  # at the iteration limit: the last iterate, marked as such
             save_problem(adjusted_problem(problem, solution), args.output)
         except InputError as exc:
             print(f"{prog}: {exc.one_line()}", file=sys.stderr)
@@ -131,7 +133,8 @@ def run_from_cli(args: argparse.Namespace) -> int:
                 print(f"{prog}: warning: {args.file}: {note[9:]}", file=sys.stderr)
     if not solution.adjustment.converged:
         print(
-            f"{prog}: {args.file}: the adjustment did not converge: {solution.adjustment.reason}",
+            f"{prog}: {args.file}: the adjustment did not converge: {solution.adjustment.reason}"
+            + (limit_hint(problem, getattr(args, "output", None)) if at_limit else ""),
             file=sys.stderr,
         )
         return 3
@@ -187,6 +190,28 @@ def misfit(solution: Solution) -> bool:
 MISFIT_NOTE = "warning: the model does not fit the data"
 
 
+#: The description's marker of a file written at the iteration limit.
+LAST_ITERATE_MARK = "[NOT CONVERGED: the last iterate of orientviz solve"
+
+
+def limit_hint(problem: Problem, output: str | None) -> str:
+    """What follows the message of a solve stopped by the iteration limit: the options
+    that would help, and where the last iterate went (``-o``)."""
+    n = int(problem.options.get("max_iter", 30))
+    ftol = float(problem.options.get("ftol", 0.0) or 0.0)
+    tips = [f"--max-iter {min(1000, 4 * n)}"]
+    if not ftol > 0:
+        tips.append(
+            "--ftol 1e-6 (stop when a step lowers vTPv by less than 1e-6 of its value, as "
+            "Ceres does; weakly determined far points keep large corrections long after the "
+            "fit has settled)"
+        )
+    out = f"; try {' or '.join(tips)}"
+    if output:
+        out += f"; {output} holds the last iterate (marked NOT CONVERGED in its description)"
+    return out
+
+
 def adjusted_problem(problem: Problem, solution: Solution) -> Problem:
     """The problem with the adjusted orientations and points as its values (frame kinds).
 
@@ -216,9 +241,13 @@ def adjusted_problem(problem: Problem, solution: Solution) -> Problem:
             block.points.xyz[i] = solution.xyz[k]
     _adjusted_cameras(block, getattr(solution.adjustment, "camera", None))
     out = Problem(**{**problem.__dict__, "data": block})
-    out.description = (problem.description + " " if problem.description else "") + (
+    adj = solution.adjustment
+    mark = (
         f"[start values adjusted by orientviz solve ({solution.method})]"
+        if adj.converged
+        else f"{LAST_ITERATE_MARK} ({solution.method}): {adj.reason}]"
     )
+    out.description = (problem.description + " " if problem.description else "") + mark
     return out
 
 

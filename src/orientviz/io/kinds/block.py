@@ -219,7 +219,7 @@ def prepare(problem: Problem) -> tuple[Block, list[str]]:
 
 
 def _options(problem: Problem) -> dict[str, Any]:
-    keys = ("control", "max_iter", "tol", "degree_xy", "degree_z", "solver")
+    keys = ("control", "max_iter", "tol", "degree_xy", "degree_z", "solver", "damping", "ftol")
     return {k: v for k, v in problem.options.items() if k in keys}
 
 
