@@ -47,7 +47,7 @@ from numpy.typing import NDArray
 from ..adjust.loop import Damping, Evaluation, Step, StopRule, iterate
 from ..adjust.result import Iteration
 from ..block import Block
-from ..errors import NotDeterminableError
+from ..errors import InputError, NotDeterminableError
 from ._checks import check_connected, check_datum, check_determinable, point_setup
 from ._local_rotation import LOCAL_MIN_CORRECTION, LOCAL_SIGMA0, angle_map
 from ._problem import BundleProblem
@@ -146,12 +146,14 @@ def bundle_adjust(
         normalised residuals (:mod:`orientviz.bundle._precision`).
     callback : callable, optional
         Called with each new :class:`Iteration`.
-    solver : {"auto", "banded", "dense", "sparse"}
+    solver : {"auto", "banded", "dense", "sparse", "reference"}
         Solver of the reduced camera system (:mod:`orientviz.bundle._reduced`):
         ``"auto"`` chooses from the structure (banded for strips, dense for small or
         densely connected networks, sparse otherwise:
         :mod:`orientviz.bundle._solver_choice`). The result's ``solver`` is the one used,
-        ``reduced_info["solver_reason"]`` says why.
+        ``reduced_info["solver_reason"]`` says why. ``"reference"``: the textbook
+        Gauss-Newton iteration of :mod:`orientviz.bundle.reference` instead of the fast
+        one (small blocks; no auxiliary data).
     history_x : bool, optional
         Keep the full parameter vector per iteration (default: blocks ≤ 500 images);
         otherwise ``Iteration.x`` is empty.
@@ -184,6 +186,16 @@ def bundle_adjust(
     check_determinable(block, setup)
     if not auxiliary:
         check_datum(block, setup)
+    if solver == "reference":  # the textbook iteration (bundle/reference.py), no fast path
+        from ._reference_result import reference_result
+
+        if auxiliary:
+            raise InputError("solver='reference' takes no auxiliary data (GNSS, statoscope, APR)")
+        return reference_result(
+            block, setup, control=control, max_iter=max_iter, tol=tol, additional=additional,
+            ap_group=ap_group, ap_sigma=ap_sigma, precision=precision, callback=callback,
+            history_x=history_x,
+        )  # fmt: skip
     prob = BundleProblem(
         block, setup, additional=additional, ap_group=ap_group, ap_sigma=ap_sigma, solver=solver,
         auxiliary=auxiliary,
