@@ -18,7 +18,7 @@ import pytest
 from threadpoolctl import threadpool_limits
 
 import orientviz as ov
-from orientviz.bundle import _adjust
+from orientviz.bundle.loop import _steps
 from orientviz.bundle.reference import (
     collinearity,
     linearise,
@@ -131,14 +131,14 @@ def test_one_reduced_step_is_the_whole_system_solved_densely(strips):
 def _chord_steps(monkeypatch) -> list[int]:
     """Count the chord steps of the fast bundle (steps solved with an older factor)."""
     count = [0]
-    solve = _adjust._BundleSteps.solve
+    solve = _steps.BundleSteps.solve
 
     def spy(self, *args, **kwargs):
         out = solve(self, *args, **kwargs)
         count[0] += int(self.chord_step)
         return out
 
-    monkeypatch.setattr(_adjust._BundleSteps, "solve", spy)
+    monkeypatch.setattr(_steps.BundleSteps, "solve", spy)
     return count
 
 

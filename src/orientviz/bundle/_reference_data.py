@@ -1,7 +1,7 @@
 """What enters the textbook reference bundle (:mod:`orientviz.bundle.reference`).
 
 The rays that are adjusted, their weights, which points are unknowns (the datum rules of
-:func:`~orientviz.bundle._checks.point_setup`: control held fixed or weighted), the
+:func:`~orientviz.bundle.problem.point_setup`: control held fixed or weighted), the
 weights of observed exterior orientations, and the additional parameters: a linear set's
 design at the observed coordinates, or a :class:`~orientviz.bundle.LensModel` bound to
 the block. Constant over the iterations.
@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..block import Block
-from ._checks import point_setup
+from .problem import point_setup
 
 F64 = NDArray[np.float64]
 
@@ -60,7 +60,7 @@ def reference_data(
     block: Block, control: str = "fixed", additional=None, ap_group=None, ap_sigma=None
 ) -> ReferenceData:
     """What enters the adjustment (arguments as :func:`orientviz.bundle.bundle_adjust`)."""
-    from ._lens import LensModel  # the package's single camera model (only when asked)
+    from .model import LensModel  # the package's single camera model (only when asked)
 
     s = point_setup(block, control)  # the library's datum rules: fixed / weighted control
     obs, img, cams = block.observations, block.images, block.cameras
@@ -86,7 +86,7 @@ def reference_data(
     if additional is None:
         return out
     if isinstance(additional, str):
-        from ._additional import ap_set
+        from .model import ap_set
 
         additional = ap_set(additional)
     is_lens = isinstance(additional, LensModel)

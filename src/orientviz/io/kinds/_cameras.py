@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from ...bundle import LensModel, ap_set
-from ...bundle._lens import BACKWARD_NAMES, FORWARD_NAMES
+from ...bundle.model import BACKWARD_NAMES, FORWARD_NAMES
 from ...errors import InputError
 from ..problem import Units
 from ..solution import Parameter
