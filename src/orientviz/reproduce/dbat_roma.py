@@ -15,7 +15,7 @@
   which: photo 19's Yc — the largest single base component (ΔY = 39.11 m) to the first
   photo; :func:`datum` derives that rule from the prior EO. orientviz holds them by
   pseudo-observations of σ = 1e-6 m / 1e-9 rad (``options.fix``,
-  :mod:`orientviz.io.kinds._datum`) where DBAT removes them: the counts below are DBAT's
+  :mod:`orientviz.io.datum`) where DBAT removes them: the counts below are DBAT's
   (79 321 parameters), orientviz's n and u are each larger by those 7.
 
 Published numbers: DBAT's report of this script (``roma/report.txt``), as printed.
@@ -33,7 +33,7 @@ import numpy as np
 from ..block import Block
 from ..bundle import LensModel, bundle_adjust
 from ..io.datasets import dataset_path
-from ..io.kinds._datum import IMAGE_PARTS, apply_fix
+from ..io.datum import IMAGE_PARTS, apply_fix
 from ..lens import BackwardLens, backward_ideal
 from ..orientation.intersection import intersect_points
 from ..rotation import matrix_from_opk
