@@ -14,6 +14,9 @@ The face of the bundle's house. What a user calls:
   :class:`RayReliability`;
 * auxiliary data by alternation (teaching): :func:`adjust_with_auxiliary`.
 
+Start reading at :mod:`orientviz.bundle.reference`: the textbook Gauss-Newton iteration
+(``solver="reference"``); every fast path is tested against it.
+
 The rooms behind it (each a sub-package with its own door):
 
 * ``model`` — the photogrammetric model: collinearity and its derivatives, rotations of
@@ -26,7 +29,8 @@ The rooms behind it (each a sub-package with its own door):
   result;
 * ``precision`` — cofactor blocks, redundancy numbers, reliability per ray.
 
-Beside them: ``_result`` (the typed result), ``_selfcal``, ``_cleaning``,
+Beside them: ``reference`` with ``_reference_data`` (the textbook iteration), ``_result``
+(the typed result), ``_selfcal``, ``_cleaning``,
 ``_alternation`` (procedures built on :func:`bundle_adjust`) and ``sparsity`` (the
 sparsity of the normal equations drawn for the lessons). The numerical building blocks
 that tests and benchmarks use are exported too (second group of ``__all__``).

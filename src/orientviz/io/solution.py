@@ -69,6 +69,9 @@ class Solution:
         Remarks for the report (e.g. check-point errors).
     iterations : int, optional
         Number of iterations when the adjustment's history does not hold them.
+    start : Block, optional
+        Frame kinds solved by the bundle: the block the adjustment started from
+        (approximations computed, datum applied; the layout of ``adjustment.history``).
     """
 
     kind: str
@@ -90,6 +93,7 @@ class Solution:
     critical: float = W_CRITICAL
     notes: list[str] = field(default_factory=list)
     iterations: int | None = None
+    start: Any = None
 
     @property
     def n_iterations(self) -> int:

@@ -39,12 +39,13 @@ import numpy as np
 from ...adjust.loop import Damping, StopRule, iterate
 from ...adjust.result import Iteration
 from ...block import Block
-from ...errors import NotDeterminableError
+from ...errors import InputError, NotDeterminableError
 from .._options import BundleOptions
 from .._result import BundleResult
 from ..problem import BundleProblem, BundleState, point_setup
 from ..problem._checks import check_connected, check_datum, check_determinable
 from ._finish import RunEnd, finish_result
+from ._reference_result import reference_result
 from ._steps import BundleSteps
 
 
@@ -111,8 +112,9 @@ def bundle_adjust(
         (``max_iter`` Gauss-Newton steps at most; ``tol`` the stopping rule's bound on
         every correction in units of its a-priori conditional σ = 1/√N_ii; ``solver``
         ``"auto"``, ``"banded"``, ``"dense"`` or ``"sparse"`` — the result's ``solver``
-        is the one used, ``reduced_info["solver_reason"]`` says why; ``history_x`` keep
-        the full parameter vector per iteration).
+        is the one used, ``reduced_info["solver_reason"]`` says why — or ``"reference"``,
+        the textbook iteration of :mod:`orientviz.bundle.reference` (small blocks; no
+        auxiliary data); ``history_x`` keep the full parameter vector per iteration).
 
     Returns
     -------
@@ -137,6 +139,13 @@ def bundle_adjust(
     check_determinable(block, setup)
     if not auxiliary:
         check_datum(block, setup)
+    if opts.solver == "reference":  # the textbook iteration (bundle/reference.py), no fast path
+        if auxiliary:
+            raise InputError("solver='reference' takes no auxiliary data (GNSS, statoscope, APR)")
+        return reference_result(
+            block, setup, control=control, additional=additional, ap_group=ap_group,
+            ap_sigma=ap_sigma, precision=precision, callback=callback, options=opts,
+        )  # fmt: skip
     prob = BundleProblem(
         block, setup, additional=additional, ap_group=ap_group, ap_sigma=ap_sigma,
         auxiliary=auxiliary, options=opts,

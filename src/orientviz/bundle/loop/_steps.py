@@ -54,7 +54,7 @@ class _Linearisation(tuple):
 
 
 class BundleSteps:
-    """The bundle problem as the engine's loop sees it (:class:`orientviz.adjust.Step`s).
+    """The bundle problem as the engine's loop sees it (its :class:`orientviz.adjust.Step` objects).
 
     Evaluates the weighted misclosures and Jacobians at a :class:`BundleState`, forms the
     point-reduced normal equations and solves them (:meth:`BundleProblem.normal`,
