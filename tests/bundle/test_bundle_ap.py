@@ -8,6 +8,7 @@ import scipy.linalg
 
 import orientviz as ov
 from orientviz.bundle import (
+    BundleOptions,
     BundleProblem,
     BundleState,
     ap_set,
@@ -65,7 +66,7 @@ def test_step_with_group_parameters_equals_dense_solution(solver):
     aps = ap_set("ebner12")
     prob = BundleProblem(
         block, point_setup(block, "weighted"), additional=aps, ap_group=block.images.strip,
-        ap_sigma=10.0, solver=solver,
+        ap_sigma=10.0, options=BundleOptions(solver=solver),
     )  # fmt: skip
     assert prob.ap.G == 3 and prob.points.prior_w.any()
     rng = np.random.default_rng(3)
@@ -130,7 +131,7 @@ def _problem(solver="banded"):
     aps = ap_set("ebner12")
     prob = BundleProblem(
         block, point_setup(block, "weighted"), additional=aps, ap_group=block.images.strip,
-        ap_sigma=10.0, solver=solver,
+        ap_sigma=10.0, options=BundleOptions(solver=solver),
     )  # fmt: skip
     return prob, aps
 
