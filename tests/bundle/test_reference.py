@@ -27,7 +27,7 @@ from orientviz.bundle.reference import (
     reference_data,
     solve_step,
 )
-from orientviz.rotation import matrix_derivatives, matrix_from_opk
+from orientviz.rotation import convert_sequence, matrix_derivatives, matrix_from_opk
 
 TOL = 1e-9  # both iterate far below the default 5e-3 (conditional σ units)
 AGREE = 1e-10  # the relative agreement asked of every fast path
@@ -128,14 +128,17 @@ def test_one_reduced_step_is_the_whole_system_solved_densely(strips):
     assert np.abs(d * (N @ got - n)).max() < 1e-11 * np.abs(d * n).max()
 
 
-def _chord_steps(monkeypatch) -> list[int]:
-    """Count the chord steps of the fast bundle (steps solved with an older factor)."""
-    count = [0]
+def _step_kinds(monkeypatch) -> dict[str, int]:
+    """Count the fast bundle's steps by kind: chord steps (solved with an older factor of
+    S) and steps in rotations of the image frames (taken while the start is poor)."""
+    count = {"chord": 0, "frame": 0, "all": 0}
     solve = _adjust._BundleSteps.solve
 
-    def spy(self, *args, **kwargs):
-        out = solve(self, *args, **kwargs)
-        count[0] += int(self.chord_step)
+    def spy(self, st, ev, lam, it):
+        out = solve(self, st, ev, lam, it)
+        count["chord"] += int(self.chord_step)
+        count["frame"] += int(self.is_local(ev))
+        count["all"] += 1
         return out
 
     monkeypatch.setattr(_adjust._BundleSteps, "solve", spy)
@@ -147,13 +150,52 @@ def _chord_steps(monkeypatch) -> list[int]:
 def test_every_reduced_solver_reaches_the_reference_optimum(
     solver, precision, strips, strips_reference, monkeypatch
 ):
-    chords = _chord_steps(monkeypatch)
+    steps = _step_kinds(monkeypatch)
     res = ov.bundle_adjust(strips, solver=solver, tol=TOL, max_iter=50, precision=precision)
     assert res.solver == solver
     # without the precision the fast bundle takes chord steps (an older factor of S, in
-    # single precision with refinement); with it every step is a full Newton step
-    assert (chords[0] > 0) == (not precision), chords
+    # single precision with refinement); with it every step is a full Newton step; from
+    # this poor start (σ0 ≈ 1250) the first steps rotate the image frames
+    assert (steps["chord"] > 0) == (not precision), steps
+    assert steps["frame"] > 0, steps
     assert_same_optimum(res, strips_reference, strips)
+
+
+@pytest.mark.parametrize("solver", ["auto", "banded", "sparse"])
+def test_a_larger_block_and_real_nested_dissection(solver):
+    # 4 × 12 images: the sparse solver's nested dissection splits S into several fronts
+    block = ov.simulate_block(4, 12, rng=3, extra=None).block
+    ref = _cached_reference(block, "4x12")
+    res = ov.bundle_adjust(block, solver=solver, tol=TOL, max_iter=50, precision=False)
+    if solver == "sparse":
+        assert res.reduced_info["fronts"] > 2, res.reduced_info
+    assert_same_optimum(res, ref, block)
+
+
+_REFERENCES: dict[str, object] = {}
+
+
+def _cached_reference(block, key: str):
+    if key not in _REFERENCES:
+        _REFERENCES[key] = reference_bundle(block, tol=TOL, max_iter=50)
+    return _REFERENCES[key]
+
+
+def test_the_phi_omega_kappa_sequence():
+    sim = ov.simulate_block(2, 6, rng=4, extra=None)
+    block = copy.deepcopy(sim.block)
+    a = block.images.angles
+    block.images.angles = np.column_stack(convert_sequence(a[:, 0], a[:, 1], a[:, 2], "opk", "pok"))
+    block.sequence = "pok"
+    ref = reference_bundle(block, tol=TOL, max_iter=50)
+    res = ov.bundle_adjust(block, tol=TOL, max_iter=50)
+    assert_same_optimum(res, ref, block)
+    # the same block in ω-φ-κ: the same optimum, the angles of another sequence
+    opk = reference_bundle(sim.block, tol=TOL, max_iter=50)
+    assert np.max(np.abs(opk.xyz - ref.xyz)) < 1e-8
+    back = np.column_stack(convert_sequence(*ref.angles.T, "pok", "opk"))
+    d = (back - opk.angles + np.pi) % (2 * np.pi) - np.pi  # κ near ±π may wrap
+    assert np.max(np.abs(d)) < 1e-11
 
 
 def test_solver_reference_returns_the_same_typed_result(strips, strips_reference):
