@@ -18,6 +18,9 @@ def test_lesson10_diagnoses_name_the_mistake():
         lesson10,
         answers,
         {
+            ("check_schur_step", "plus"): "sign is wrong",
+            ("check_schur_step", "no_coupling"): "coupling",
+            ("check_schur_step", "W_transposed"): "is a matrix transposed",
             ("check_reduce", "plus"): "sign is wrong",
             ("check_reduce", "rhs_not_reduced"): "right side is reduced too",
             ("check_reduce", "no_inverse"): "V must be inverted",

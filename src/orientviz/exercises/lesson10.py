@@ -122,3 +122,42 @@ def check_bandwidth(fn) -> None:
              float(_bandwidth(P, "row_count"))),
         ])  # fmt: skip
     success("bandwidths agree with a double loop over three patterns")
+
+
+# --------------------------------------------------------------------- one reduced step
+
+
+def check_schur_step(fn) -> None:
+    """``fn(nb) -> (dc, dp)``: one Gauss-Newton step of a bundle by reduction to the
+    orientation unknowns (``nb`` from :func:`orientviz.bundle.sparsity.bundle_normal_blocks`)."""
+    from ..bundle.sparsity import bundle_normal_blocks
+    from ..simulate import simulate_block
+
+    # 3 strips of 4 images: W is 72 × 66, so a transposed W cannot pass unnoticed
+    seed = int(rng_for("lesson10.check_schur_step").integers(1000))
+    sim = simulate_block(3, 4, rng=seed, extra=None)
+    nb = bundle_normal_blocks(sim.block)
+    got = call(fn, nb, what="schur_step")
+    if not isinstance(got, tuple) or len(got) != 2:
+        raise CheckFailed("schur_step: return the pair (dc, dp)")
+    dc, dp = (np.asarray(g, dtype=float) for g in got)
+    N, b = nb.dense()
+    x = np.linalg.solve(N, b)  # oracle: the whole system, dense
+    k = 6 * nb.n_images
+    want_dc, want_dp = x[:k], x[k:]
+    U = np.zeros((k, k))
+    for i in range(nb.n_images):
+        U[6 * i : 6 * i + 6, 6 * i : 6 * i + 6] = nb.U[i]
+    Vfull = np.zeros((len(want_dp), len(want_dp)))
+    for j in range(nb.n_points):
+        Vfull[3 * j : 3 * j + 3, 3 * j : 3 * j + 3] = nb.V[j]
+    wrong_plus = _reduce_wrong(U, nb.W, Vfull, nb.bc, nb.bp, "plus")
+    compare("dc (orientation corrections)", dc, want_dc, rtol=1e-8, wrong=[
+        ("S = U − W V⁻¹ Wᵀ and r = bc − W V⁻¹ bp: the sign is wrong", np.linalg.solve(*wrong_plus)),
+        ("the right side is reduced too: r = bc − W V⁻¹ bp", np.linalg.solve(U - nb.W @ np.linalg.inv(Vfull) @ nb.W.T, nb.bc)),
+    ])  # fmt: skip
+    compare("dp (point corrections)", dp, want_dp, rtol=1e-8, wrong=[
+        ("the coupling Wᵀ dc is missing: dp = V⁻¹ (bp − Wᵀ dc)", np.linalg.solve(Vfull, nb.bp)),
+        ("the sign of Wᵀ dc is wrong: dp = V⁻¹ (bp − Wᵀ dc)", np.linalg.solve(Vfull, nb.bp + nb.W.T @ want_dc)),
+    ])  # fmt: skip
+    success(f"one reduced step equals the dense solution of all {len(x)} unknowns")

@@ -7,6 +7,7 @@ Kept out of the installed package (solutions stay with the teacher); used by
 from __future__ import annotations
 
 import numpy as np
+from scipy.linalg import block_diag
 
 
 def _reduce(U, W, V, bc, bp, mode="ok"):
@@ -39,13 +40,34 @@ def _bandwidth(P, mode="ok"):
     return b
 
 
+def _schur_step(nb, mode="ok"):
+    m, q = nb.n_images, nb.n_points
+    Vi = np.linalg.inv(nb.V)
+    WVi = np.einsum("aqj,qjk->aqk", nb.W.reshape(6 * m, q, 3), Vi).reshape(6 * m, 3 * q)
+    if mode == "W_transposed":
+        WVi = nb.W.T @ block_diag(*Vi)  # a shape error inside the student's function
+    sign = -1.0 if mode != "plus" else 1.0
+    S = block_diag(*nb.U) + sign * WVi @ nb.W.T
+    r = nb.bc + sign * WVi @ nb.bp
+    dc = np.linalg.solve(S, r)
+    coupling = nb.W.T @ dc if mode != "no_coupling" else 0.0
+    dp = np.einsum("qjk,qk->qj", Vi, (nb.bp - coupling).reshape(q, 3)).reshape(-1)
+    return dc, dp
+
+
 SOLUTIONS = {
+    "check_schur_step": _schur_step,
     "check_reduce": lambda U, W, V, bc, bp: _reduce(U, W, V, bc, bp, "ok"),
     "check_back_substitute": lambda V, W, bp, dc: _back(V, W, bp, dc, "ok"),
     "check_bandwidth": lambda P: _bandwidth(P, "ok"),
 }
 
 MUTANTS = {
+    "check_schur_step": {
+        "plus": lambda nb: _schur_step(nb, "plus"),
+        "no_coupling": lambda nb: _schur_step(nb, "no_coupling"),
+        "W_transposed": lambda nb: _schur_step(nb, "W_transposed"),
+    },
     "check_reduce": {
         "plus": lambda U, W, V, bc, bp: _reduce(U, W, V, bc, bp, "plus"),
         "rhs_not_reduced": lambda U, W, V, bc, bp: _reduce(U, W, V, bc, bp, "rhs"),
