@@ -51,6 +51,7 @@ from ..errors import InputError, NotDeterminableError
 from ._checks import check_connected, check_datum, check_determinable, point_setup
 from ._local_rotation import LOCAL_MIN_CORRECTION, LOCAL_SIGMA0, angle_map
 from ._problem import BundleProblem
+from ._reference_result import reference_result
 from ._result import BundleResult
 from ._state import BundleState
 
@@ -187,8 +188,6 @@ def bundle_adjust(
     if not auxiliary:
         check_datum(block, setup)
     if solver == "reference":  # the textbook iteration (bundle/reference.py), no fast path
-        from ._reference_result import reference_result
-
         if auxiliary:
             raise InputError("solver='reference' takes no auxiliary data (GNSS, statoscope, APR)")
         return reference_result(

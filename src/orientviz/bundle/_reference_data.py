@@ -15,7 +15,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..block import Block
+from ._additional import ap_set
 from ._checks import point_setup
+from ._lens import LensModel
 
 F64 = NDArray[np.float64]
 
@@ -60,8 +62,6 @@ def reference_data(
     block: Block, control: str = "fixed", additional=None, ap_group=None, ap_sigma=None
 ) -> ReferenceData:
     """What enters the adjustment (arguments as :func:`orientviz.bundle.bundle_adjust`)."""
-    from ._lens import LensModel  # the package's single camera model (only when asked)
-
     s = point_setup(block, control)  # the library's datum rules: fixed / weighted control
     obs, img, cams = block.observations, block.images, block.cameras
     use = s.used_obs
@@ -86,8 +86,6 @@ def reference_data(
     if additional is None:
         return out
     if isinstance(additional, str):
-        from ._additional import ap_set
-
         additional = ap_set(additional)
     is_lens = isinstance(additional, LensModel)
     default = img.camera if is_lens else np.zeros(block.n_images, np.int64)
