@@ -27,6 +27,7 @@ from orientviz.bundle.reference import (
     reference_data,
     solve_step,
 )
+from orientviz.bundle.sparsity import bundle_normal_blocks
 from orientviz.rotation import convert_sequence, matrix_derivatives, matrix_from_opk
 
 TOL = 1e-9  # both iterate far below the default 5e-3 (conditional σ units)
@@ -255,3 +256,24 @@ def test_weighted_and_partial_control_and_observed_centres():
         for solver in ("dense", "banded"):
             res = ov.bundle_adjust(block, control=control, solver=solver, tol=1e-7, max_iter=50)
             assert_same_optimum(res, ref, block)
+
+
+def test_lesson_10s_normal_blocks_are_the_reference_blocks(strips):
+    # bundle/sparsity.py (lesson 10's U, W, V, bc, bp) against the reference's N11, N12,
+    # N22, n1, n2 at the approximations: the lesson's building blocks are the textbook's
+    nb = bundle_normal_blocks(strips)
+    data = reference_data(strips)
+    X0, ang, xyz, ap = strips.images.X0, strips.images.angles, data.xyz0, data.ap0
+    f, A1, B = linearise(data, X0, ang, xyz, ap, strips.sequence)
+    N11, N12, N22, n1, n2, vtpv = normal_equations(data, f, A1, B, X0, ang, xyz, ap)
+    m, q = nb.n_images, nb.n_points
+    assert q == data.unknown.size and np.array_equal(
+        np.flatnonzero(nb.unknown_point >= 0), data.unknown
+    )
+    U = np.zeros((6 * m, 6 * m))
+    for i in range(m):
+        U[6 * i : 6 * i + 6, 6 * i : 6 * i + 6] = nb.U[i]
+    W = N12.transpose(1, 0, 2).reshape(6 * m, 3 * q)
+    for got, want in ((N11, U), (W, nb.W), (N22, nb.V), (n1, nb.bc), (n2.ravel(), nb.bp)):
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-10 * np.abs(want).max())
+    assert vtpv == pytest.approx(nb.vtpv, rel=1e-12)
