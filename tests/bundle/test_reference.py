@@ -18,7 +18,7 @@ import pytest
 from threadpoolctl import threadpool_limits
 
 import orientviz as ov
-from orientviz.bundle import _adjust
+from orientviz.bundle.loop import _steps
 from orientviz.bundle.reference import (
     collinearity,
     linearise,
@@ -133,7 +133,7 @@ def _step_kinds(monkeypatch) -> dict[str, int]:
     """Count the fast bundle's steps by kind: chord steps (solved with an older factor of
     S) and steps in rotations of the image frames (taken while the start is poor)."""
     count = {"chord": 0, "frame": 0, "all": 0}
-    solve = _adjust._BundleSteps.solve
+    solve = _steps.BundleSteps.solve
 
     def spy(self, st, ev, lam, it):
         out = solve(self, st, ev, lam, it)
@@ -142,7 +142,7 @@ def _step_kinds(monkeypatch) -> dict[str, int]:
         count["all"] += 1
         return out
 
-    monkeypatch.setattr(_adjust._BundleSteps, "solve", spy)
+    monkeypatch.setattr(_steps.BundleSteps, "solve", spy)
     return count
 
 

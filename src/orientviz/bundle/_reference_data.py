@@ -1,7 +1,7 @@
 """What enters the textbook reference bundle (:mod:`orientviz.bundle.reference`).
 
 The rays that are adjusted, their weights, which points are unknowns (the datum rules of
-:func:`~orientviz.bundle._checks.point_setup`: control held fixed or weighted), the
+:func:`~orientviz.bundle.problem.point_setup`: control held fixed or weighted), the
 weights of observed exterior orientations, and the additional parameters: a linear set's
 design at the observed coordinates, or a :class:`~orientviz.bundle.LensModel` bound to
 the block. Constant over the iterations.
@@ -15,9 +15,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..block import Block
-from ._additional import ap_set
-from ._checks import point_setup
-from ._lens import LensModel
+from .model import LensModel, ap_set
+from .problem import point_setup
 
 F64 = NDArray[np.float64]
 
