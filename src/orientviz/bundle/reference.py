@@ -167,6 +167,12 @@ def reference_bundle(
     ``"weighted"``, ``additional`` a set's name, an additional-parameter set or a
     :class:`~orientviz.bundle.LensModel`; ``ap_group``, ``ap_sigma``; ``tol`` in units
     of the conditional σ of each correction.
+
+    The datum is the library's: with ``"fixed"`` every given control coordinate is held
+    (a point given in X, Y and Z is no unknown, a partly given one is weighted with
+    σ = 1 µm); with ``"weighted"`` given coordinates with σ > 0 are observations of weight
+    1/σ², σ = 0 still holds. Check points and their rays stay out. Observed projection
+    centres and attitudes (``images.X0_obs``, ``angles_obs`` with σ) are observations too.
     """
     data = reference_data(block, control, additional, ap_group, ap_sigma)
     m = block.n_images
