@@ -163,3 +163,56 @@ def test_the_front_door_reads_them_too(tmp_path):
     path = tmp_path / "six.json"
     _six_point_block(path)
     assert ov.load_problem(path).data.n_images == 2
+
+
+def test_collinearity_method_is_the_two_image_bundle_and_parallax_is_close(tmp_path):
+    """Kovarik's y-parallax estimator and the textbook collinearity method on noisy data."""
+    from orientviz.orientation.relative import relative_orientation
+
+    rng = np.random.default_rng(29)
+    xy = {k: v + rng.normal(0.0, 0.004, v.shape) for k, v in _image_points().items()}
+    col = relative_orientation(xy["L"], xy["R"], C, method="collinearity", b="mean")
+    par = relative_orientation(xy["L"], xy["R"], C)
+    assert col.method == "collinearity" and col.converged and col.redundancy == 1
+    assert col.base == pytest.approx(float(np.mean(xy["L"][:, 0] - xy["R"][:, 0])))
+    # the same data as a two-image block (free network): the bundle's relative orientation
+    path = tmp_path / "noisy.json"
+    _six_point_block(path)
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    for o in doc["observations"]:
+        o["x"], o["y"] = (float(v) for v in xy[o["image"]][int(o["point"]) - 1])
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    sol = solve_problem(load_problem(path))
+    k = {ident: i for i, ident in enumerate(sol.image_ids)}
+    RL = matrix_from_opk(*sol.angles[k["L"]], "opk")
+    rel_block = RL.T @ matrix_from_opk(*sol.angles[k["R"]], "opk")
+    b_block = RL.T @ (sol.X0[k["R"]] - sol.X0[k["L"]])
+    R_col = matrix_from_opk(*col.x[2:5], "opk")
+    b_col = np.array([col.base, *col.x[:2]])
+    assert np.abs(R_col - rel_block).max() < 1e-9  # the same estimator
+    assert np.abs(b_col / np.linalg.norm(b_col) - b_block / np.linalg.norm(b_block)).max() < 1e-9
+    # Kovarik's estimator weighs the same information differently: close, not equal
+    R_par = matrix_from_opk(*par.x[2:5], "opk")
+    gap = np.abs(R_par - R_col).max()
+    assert 1e-9 < gap < 5 * np.sqrt(np.diag(par.cofactor)[2:5]).max() * par.sigma0 + 1e-6
+
+
+def test_the_pair_kind_prints_the_model_points(tmp_path, capsys):
+    xy = _image_points()
+    doc = {
+        "format": "orientviz/1", "kind": "pair", "units": {"length": "mm", "image": "mm",
+        "angle": "deg"}, "sequence": "opk", "camera": {"c": C},
+        "options": {"sigma": 0.005, "method": "collinearity", "base": "mean"},
+        "points": [{"id": f"P{j + 1}", "xl": float(a[0]), "yl": float(a[1]), "xr": float(b[0]),
+                    "yr": float(b[1])} for j, (a, b) in enumerate(zip(xy["L"], xy["R"]))],
+    }  # fmt: skip
+    path = tmp_path / "pair.json"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    assert main(["solve", str(path), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert [p["id"] for p in out["points"]] == [f"P{j + 1}" for j in range(6)]
+    assert all(p["role"] == "model" and p["Z"] < 0 and p["sigma"]["Z"] > 0 for p in out["points"])
+    assert "collinearity" in out["method"]
+    assert main(["solve", str(path)]) == 0
+    text = capsys.readouterr().out
+    assert "points (X Y Z ± σ [mm]):" in text and "base bx = the mean x-parallax" in text
