@@ -57,8 +57,7 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 from .errors import AdjustmentError, InputError, NotDeterminableError, OrientvizError
-
-__version__ = "0.1.0"
+from .version import __version__
 
 #: name on the face → the module (relative to this package) that defines it
 _FACE: dict[str, str] = {

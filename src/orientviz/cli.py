@@ -215,11 +215,11 @@ COMMANDS: dict[str, Command] = {
             arg("--free", action="store_true", default=None,
                 help="free network: control and check points become tie points; datum by "
                 "minimum constraints, or by --fix (options.free)"),
-            arg("--solver", choices=["auto", "banded", "dense", "sparse"], default=None,
+            arg("--solver", choices=["auto", "banded", "dense", "sparse", "reference"], default=None,
                 help="solver of the bundle's reduced camera system (overrides options.solver; "
                 "default auto: banded for strips, dense for small or densely connected "
                 "networks, sparse (nested-dissection multifrontal Cholesky) otherwise; the "
-                "report names the choice)"),
+                "report names the choice); reference: the textbook iteration, small blocks"),
             arg(
                 "-o",
                 "--output",
@@ -260,13 +260,42 @@ COMMANDS: dict[str, Command] = {
         "orientviz.io.bal",
         "run_from_cli",
         help="convert a BAL (Bundle Adjustment in the Large) file to a problem file",
-        description="Convert a BAL problem (text) to an orientviz/1 block problem file "
-        "(pixel size 0.010 mm, image coordinates undistorted with the file's k1, k2).",
-        examples=(("orientviz import-bal problem-49-7776-pre.txt -o block.json", "convert"),),
+        description="Convert a BAL problem (text) to an orientviz/1 block problem file in "
+        "pixels: each BAL camera is a camera with the forward lens model (c = f, k1, k2; "
+        "the observations stay the file's distorted pixels, y up), and f, k1, k2 are "
+        "refined per camera as the BAL problem defines them (--fix-lens holds them). BAL "
+        "has no control: solve with --free (or --fix, or add --control here).",
+        examples=(
+            ("orientviz import-bal problem-49-7776-pre.txt -o block.json", "convert"),
+            ("orientviz import-bal problem-49-7776-pre.txt --fix-lens -o block.json",
+             "only poses and points adjusted"),
+        ),  # fmt: skip
         arguments=(
             arg("file", help="BAL text file"),
+            arg("--fix-lens", action="store_true",
+                help="hold f, k1, k2 of every camera at the file's values (default: refined)"),
             *IMPORT_OPTIONS,
+        ),  # fmt: skip
+    ),
+    "export-bal": Command(
+        "orientviz.io.bal",
+        "run_export",
+        help="write a block problem file as a BAL file (cameras f, k1, k2)",
+        description="Write a block problem file as a BAL text file: angle-axis poses, f = "
+        "c / pixel size and k1, k2 of each camera's forward lens model (0 without one), "
+        "observations in pixels about the image centre, y up. With a file written by "
+        "`orientviz solve ... -o`, the adjusted values. Pixel size: the file's "
+        "units.pixel_size when its image unit is px, else --pixel-size (default 0.01 mm).",
+        examples=(
+            ("orientviz export-bal block.json -o block.bal", "write a BAL file (after "
+             "`orientviz solve block.json --free -o block.json`: the adjusted values)"),
         ),
+        arguments=(
+            arg("file", help="block problem file, or the name of a shipped example"),
+            arg("-o", "--output", required=True, metavar="OUT.bal", help="BAL file to write"),
+            arg("--pixel-size", type=float_between(1e-5, 10.0, "mm"), default=None,
+                metavar="MM", help="pixel size in mm (default: the file's, else 0.01)"),
+        ),  # fmt: skip
     ),
     "import-colmap": Command(
         "orientviz.io.colmap",

@@ -98,7 +98,7 @@ def test_introduction_lists_every_lesson_by_its_number():
     files = sorted(p.stem[:2] for p in (ROOT / "notebooks").glob("*.ipynb"))
     assert listed == files
     teaching = (ROOT / "book/chapters/teaching.md").read_text(encoding="utf-8")
-    assert "python -m orientviz.exercises.strip" in teaching
+    assert "python tools/make_student_release.py" in teaching
     for stem in files:
         assert re.search(rf"\b{stem}\b", teaching), f"lesson {stem} missing from the teachers' chapter"
 

@@ -1,6 +1,8 @@
 """The one test every lesson's checker module gets: solutions pass, mutants fail by far.
 
-``tests/exercises/test_lessonNN.py`` calls :func:`assert_module_checks` on its module.
+``tests/exercises/test_lessonNN.py`` calls :func:`assert_module_checks` on the checker module
+(``orientviz.exercises.lessonNN``, installed) and its answers (``answers/lessonNN.py`` here in
+the tests: ``SOLUTIONS`` and ``MUTANTS``, which the installed package does not ship).
 """
 
 from __future__ import annotations
@@ -16,14 +18,17 @@ from orientviz.exercises._common import CheckFailed, NotWrittenError
 MARGIN = 100.0
 
 
-def assert_module_checks(module: ModuleType) -> None:
+def assert_module_checks(module: ModuleType, answers: ModuleType) -> None:
     """Every ``SOLUTIONS`` entry passes its checker, every ``MUTANTS`` entry is rejected.
 
     A rejection must be a :class:`CheckFailed` (not a crash) whose relative error is at least
     ``MARGIN`` times the tolerance; a blank (``None`` / ``raise NotImplementedError``) must
     get "not written yet".
     """
-    solutions, mutants = module.SOLUTIONS, module.MUTANTS
+    assert not hasattr(module, "SOLUTIONS") and not hasattr(module, "MUTANTS"), (
+        f"{module.__name__} ships its solutions"
+    )
+    solutions, mutants = answers.SOLUTIONS, answers.MUTANTS
     assert solutions, f"{module.__name__}: no SOLUTIONS"
     assert set(mutants) <= set(solutions), "a mutant without a solution"
     for name, solution in solutions.items():
@@ -62,7 +67,9 @@ def assert_module_checks(module: ModuleType) -> None:
             raise AssertionError(f"{name}/{label}: the mutant passes the check")
 
 
-def assert_diagnoses(module: ModuleType, expected: dict[tuple[str, str], str]) -> None:
+def assert_diagnoses(
+    module: ModuleType, answers: ModuleType, expected: dict[tuple[str, str], str]
+) -> None:
     """Each named mutant is rejected with a message containing the expected diagnosis.
 
     ``expected`` maps (checker name, mutant label) to a piece of the message.
@@ -70,5 +77,5 @@ def assert_diagnoses(module: ModuleType, expected: dict[tuple[str, str], str]) -
     from orientviz.exercises._common import rejection
 
     for (name, label), text in expected.items():
-        exc = rejection(getattr(module, name), module.MUTANTS[name][label])
+        exc = rejection(getattr(module, name), answers.MUTANTS[name][label])
         assert exc is not None and text in str(exc), f"{name}/{label}: expected {text!r} in {exc}"

@@ -3,19 +3,26 @@ and named in the message."""
 
 from __future__ import annotations
 
+from answers import lesson01 as answers
 from mutants import assert_diagnoses, assert_module_checks
 
 from orientviz.exercises import lesson01
 
 
 def test_lesson01_checks():
-    assert_module_checks(lesson01)
+    assert_module_checks(lesson01, answers)
 
 
 def test_lesson01_diagnoses_name_the_mistake():
     assert_diagnoses(
         lesson01,
+        answers,
         {
+            ("check_line_fit", "no_weights"): "weights are forgotten",
+            ("check_line_fit", "one_over_sigma"): "1/σ instead of 1/σ²",
+            ("check_line_fit", "divide_by_n"): "redundancy r = n − 2",
+            ("check_line_fit", "Q_is_N"): "inverse of N",
+            ("check_line_fit", "v_sign"): "sign of v",
             ("check_weighted_mean", "unweighted"): "weights are forgotten",
             ("check_weighted_mean", "one_over_sigma"): "1/σ instead of 1/σ²",
             ("check_weighted_mean", "divide_by_n"): "divided by n",

@@ -1,12 +1,13 @@
 """Lesson 02 checkers: solutions pass, plausible mistakes are rejected with a diagnosis."""
 
+from answers import lesson02 as answers
 from mutants import assert_diagnoses, assert_module_checks
 
 from orientviz.exercises import lesson02
 
 
 def test_solutions_pass_and_mutants_fail():
-    assert_module_checks(lesson02)
+    assert_module_checks(lesson02, answers)
 
 
 def test_oracle_agrees_with_the_library():
@@ -30,8 +31,10 @@ def test_widget_names_the_locked_pair_of_its_sequence():
 def test_diagnoses_name_the_mistake():
     assert_diagnoses(
         lesson02,
+        answers,
         {
             ("check_rotation", "transpose"): "transpose",
+            ("check_opk_from_matrix", "transpose"): "angles of Rᵀ",
             ("check_rotation", "degrees"): "degrees",
             ("check_rotation", "phi-omega-kappa order"): "φ-ω-κ",
             ("check_collinearity", "R instead of R^T"): "Rᵀ",

@@ -3,19 +3,25 @@ and named in the message."""
 
 from __future__ import annotations
 
+from answers import lesson03 as answers
 from mutants import assert_diagnoses, assert_module_checks
 
 from orientviz.exercises import lesson03
 
 
 def test_lesson03_checks():
-    assert_module_checks(lesson03)
+    assert_module_checks(lesson03, answers)
 
 
 def test_lesson03_diagnoses_name_the_mistake():
     assert_diagnoses(
         lesson03,
+        answers,
         {
+            ("check_affine_fit", "interleaved"): "the order is",
+            ("check_affine_fit", "r_2n"): "not 2n.",
+            ("check_affine_fit", "r_2n_3"): "not 2n − 3",
+            ("check_affine_fit", "v_sign"): "sign of v",
             ("check_dlt_rows", "plus_sign"): "minus sign",
             ("check_dlt_rows", "swap_xy"): "swapped",
             ("check_dlt_rows", "stacked"): "interleave",

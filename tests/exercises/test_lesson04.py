@@ -1,17 +1,19 @@
 """Lesson 04 checkers: solutions pass, plausible mistakes are rejected with a diagnosis."""
 
+from answers import lesson04 as answers
 from mutants import assert_diagnoses, assert_module_checks
 
 from orientviz.exercises import lesson04
 
 
 def test_solutions_pass_and_mutants_fail():
-    assert_module_checks(lesson04)
+    assert_module_checks(lesson04, answers)
 
 
 def test_diagnoses_name_the_mistake():
     assert_diagnoses(
         lesson04,
+        answers,
         {
             ("check_resection", "weights forgotten"): "without weights",
             ("check_resection", "divides by n"): "redundancy",

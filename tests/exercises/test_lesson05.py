@@ -1,13 +1,14 @@
 """Lesson 05 checkers: solutions pass, plausible mistakes are rejected with a diagnosis."""
 
 import numpy as np
+from answers import lesson05 as answers
 from mutants import assert_diagnoses, assert_module_checks
 
 from orientviz.exercises import lesson05
 
 
 def test_solutions_pass_and_mutants_fail():
-    assert_module_checks(lesson05)
+    assert_module_checks(lesson05, answers)
 
 
 def test_oracle_agrees_with_the_library():
@@ -26,6 +27,7 @@ def test_oracle_agrees_with_the_library():
 def test_diagnoses_name_the_mistake():
     assert_diagnoses(
         lesson05,
+        answers,
         {
             ("check_design", "y'' - y'"): "opposite sign",
             ("check_design", "Kovarik signs"): "Kovarik",

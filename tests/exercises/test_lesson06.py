@@ -3,19 +3,24 @@ and named in the message."""
 
 from __future__ import annotations
 
+from answers import lesson06 as answers
 from mutants import assert_diagnoses, assert_module_checks
 
 from orientviz.exercises import lesson06
 
 
 def test_lesson06_checks():
-    assert_module_checks(lesson06)
+    assert_module_checks(lesson06, answers)
 
 
 def test_lesson06_diagnoses_name_the_mistake():
     assert_diagnoses(
         lesson06,
+        answers,
         {
+            ("check_eight_point", "no_rank2"): "rank 3",
+            ("check_eight_point", "not_scaled"): "not scaled",
+            ("check_eight_point", "transposed"): "E is transposed",
             ("check_essential", "swapped"): "factors are swapped",
             ("check_essential", "transposed_R"): "R2 is transposed",
             ("check_essential", "skew_transposed"): "cross-product matrix is transposed",

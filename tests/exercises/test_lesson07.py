@@ -1,13 +1,14 @@
 """Lesson 07 checkers: solutions pass, plausible mistakes are rejected with a diagnosis."""
 
 import numpy as np
+from answers import lesson07 as answers
 from mutants import assert_diagnoses, assert_module_checks
 
 from orientviz.exercises import lesson07
 
 
 def test_solutions_pass_and_mutants_fail():
-    assert_module_checks(lesson07)
+    assert_module_checks(lesson07, answers)
 
 
 def test_oracle_design_agrees_with_the_closed_form_solution():
@@ -15,13 +16,14 @@ def test_oracle_design_agrees_with_the_closed_form_solution():
     rng = np.random.default_rng(0)
     x, mm, R, _ = lesson07._model(rng, 3)
     assert np.allclose(
-        lesson07._numeric_design(x, mm, R), lesson07._sol_design(x, mm, R), rtol=1e-6, atol=1e-6
+        lesson07._numeric_design(x, mm, R), answers._sol_design(x, mm, R), rtol=1e-6, atol=1e-6
     )
 
 
 def test_diagnoses_name_the_mistake():
     assert_diagnoses(
         lesson07,
+        answers,
         {
             ("check_similarity", "transpose"): "Rᵀ",
             ("check_similarity", "no reflection fix"): "det",

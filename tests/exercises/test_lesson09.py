@@ -3,19 +3,24 @@ and named in the message."""
 
 from __future__ import annotations
 
+from answers import lesson09 as answers
 from mutants import assert_diagnoses, assert_module_checks
 
 from orientviz.exercises import lesson09
 
 
 def test_lesson09_checks():
-    assert_module_checks(lesson09)
+    assert_module_checks(lesson09, answers)
 
 
 def test_lesson09_diagnoses_name_the_mistake():
     assert_diagnoses(
         lesson09,
+        answers,
         {
+            ("check_inner_solve", "ridge"): "regularises",
+            ("check_inner_solve", "whole_inverse"): "whole bordered inverse",
+            ("check_inner_solve", "sign"): "sign of dx",
             ("check_helmert_columns", "rotation_yx"): "(−y, x)",
             ("check_helmert_columns", "scale_for_rotation"): "change of scale",
             ("check_helmert_columns", "no_translations"): "two shifts and one rotation",

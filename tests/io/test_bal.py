@@ -42,7 +42,7 @@ def _scene():
         [rng.uniform(-500, 500, 12), rng.uniform(-500, 500, 12), rng.uniform(0, 50, 12)]
     )
     X0 = np.array([[-300.0, 0.0, 1500.0], [300.0, 20.0, 1510.0]])
-    rot = np.array([[np.pi, 0.01, 0.02], [np.pi - 0.02, 0.0, 0.1]])  # R_bal: looking down
+    rot = np.array([[0.0, 0.01, 0.02], [-0.02, 0.0, 0.1]])  # R_bal ≈ I: the camera looks down (−z)
     ts = np.array([-matrix_from_rotvec(r) @ x for r, x in zip(rot, X0)])
     obs = [(c, p) for c in range(2) for p in range(12)]
     return pts, X0, rot, ts, obs
@@ -53,7 +53,7 @@ def test_bal_convention_matches_orientviz_camera(tmp_path):
     path = tmp_path / "scene.bal"
     path.write_text(_bal_text(rot, ts, 15200.0, pts, obs))
     b = read_bal(path, pixel_size_mm=0.01)
-    assert b.cameras.c.tolist() == [152.0]
+    assert b.cameras.c.tolist() == [152.0, 152.0]  # one camera per BAL camera
     np.testing.assert_allclose(b.images.X0, X0, atol=1e-9)
     np.testing.assert_allclose(b.points.xyz, pts)
     # orientviz's collinearity reproduces the BAL pixel coordinates (written to 1e-9 px)
@@ -62,13 +62,76 @@ def test_bal_convention_matches_orientviz_camera(tmp_path):
     np.testing.assert_allclose(b.rotations()[0], matrix_from_rotvec(rot[0]).T, atol=1e-12)
 
 
-def test_radial_distortion_is_removed(tmp_path):
+def _solve(tmp_path, bal, *flags):
+    """import-bal + solve --free --json of a BAL file: (exit code, solution dict)."""
+    import contextlib
+    import io
+    import json
+
+    from orientviz.cli import main
+
+    out = tmp_path / "p.json"
+    assert main(["import-bal", str(bal), "-o", str(out), *flags]) == 0
+    text = io.StringIO()
+    with contextlib.redirect_stdout(text):
+        code = main(["solve", str(out), "--free", "--json"])
+    return code, json.loads(text.getvalue())
+
+
+def test_distorted_observations_are_kept_and_the_forward_model_fits_them(tmp_path):
+    """The observations stay the file's distorted pixels; the bundle's forward lens model
+    with the file's f, k1, k2 reproduces them (exact data: zero residuals)."""
     pts, X0, rot, ts, obs = _scene()
     path = tmp_path / "dist.bal"
     path.write_text(_bal_text(rot, ts, 15200.0, pts, obs, k=(-0.05, 0.01)))
+    b = read_bal(path, lens="fixed")
+    raw = np.array([ln.split()[2:4] for ln in path.read_text().splitlines()[1:25]], float)
+    np.testing.assert_allclose(b.observations.xy, raw * 0.01, atol=0, rtol=0)
+    # the pinhole projection misses them by the distortion (≈ k1 r² of 0.1–1 px) …
+    assert np.abs(b.project() - b.observations.xy).max() > 1e-3
+    spec = b.cameras.model[0]
+    assert spec["model"] == "forward" and spec["free"] == []
+    assert spec["values"] == {"k1": -0.05, "k2": 0.01}
+    # … the forward model of orientviz solve fits them exactly
+    code, sol = _solve(tmp_path, path, "--fix-lens")
+    assert code == 0
+    assert sol["sigma0"] < 1e-6  # σ = 1 px: residuals below 1e-6 px
+
+
+def _four_cameras(tmp_path):
+    """A BAL file of 4 cameras and 80 points whose exact observations have f = 15200 px,
+    k1 = −0.05, k2 = 0.01, and whose start values say f 1 % long and k1 = k2 = 0."""
+    rng = np.random.default_rng(5)
+    pts = rng.uniform([-400, -400, 0], [400, 400, 300], (80, 3))
+    X0 = np.array([[-300, -50, 1500], [300, 0, 1450], [0, 300, 1550], [0, -300, 1500.0]])
+    rot = rng.normal(0, 0.05, (4, 3))
+    ts = np.array([-matrix_from_rotvec(r) @ x for r, x in zip(rot, X0)])
+    obs = [(c, p) for c in range(4) for p in range(80)]
+    text = _bal_text(rot, ts, 15200.0, pts, obs, k=(-0.05, 0.01)).splitlines()
+    for c in range(4):
+        at = 1 + len(obs) + 9 * c
+        text[at + 6 : at + 9] = [repr(15200.0 * 1.01), "0.0", "0.0"]
+    path = tmp_path / "d.bal"
+    path.write_text("\n".join(text) + "\n")
+    return path
+
+
+def test_lens_is_refined_per_camera_by_default(tmp_path):
+    """Default import: f, k1, k2 of every camera free; start values 1 % off in f and
+    without distortion are refined to the true ones (exact observations)."""
+    path = _four_cameras(tmp_path)
     b = read_bal(path)
-    # 20 fixed-point steps converge far below the 1e-9 px written precision for |k r²| ≈ 0.01
-    np.testing.assert_allclose(b.project(), b.observations.xy, atol=1e-9)
+    assert [m["free"] for m in b.cameras.model] == [["c", "k1", "k2"]] * 4
+    assert b.meta["lens"] == "refine"
+    code, sol = _solve(tmp_path, path)
+    assert code == 0 and sol["sigma0"] < 1e-5
+    par = {p["name"]: p["value"] for p in sol["parameters"]}
+    for c in range(4):
+        assert par[f"cam{c}.c"] == pytest.approx(15200.0, rel=1e-7)  # px
+        assert par[f"cam{c}.k1"] == pytest.approx(-0.05, abs=1e-6)
+        assert par[f"cam{c}.k2"] == pytest.approx(0.01, abs=1e-5)
+    with pytest.raises(ov.InputError, match="lens"):
+        read_bal(path, lens="undistort")
 
 
 def test_write_read_round_trip(tmp_path):
@@ -131,7 +194,7 @@ def test_reads_make_block_files(tmp_path):
     np.testing.assert_allclose(b.observations.xy, z["obs_xy_mm"], atol=1e-8)  # 6 decimals px
 
 
-def test_cli_import_bal_writes_problem_file(tmp_path):
+def test_cli_import_bal_writes_problem_file(tmp_path, capsys):
     from orientviz.cli import main
     from orientviz.io.problem import load_problem
 
@@ -140,6 +203,51 @@ def test_cli_import_bal_writes_problem_file(tmp_path):
     path.write_text(_bal_text(rot, ts, 15200.0, pts, obs))
     out = tmp_path / "scene.json"
     assert main(["import-bal", str(path), "-o", str(out)]) == 0
-    block = load_problem(out).data
+    said = capsys.readouterr().out
+    problem = load_problem(out)
+    block = problem.data
     assert isinstance(block, ov.Block)
     np.testing.assert_allclose(block.images.X0, X0, atol=1e-6)
+    # written in pixels: c is BAL's f; the datum hint names --free and --fix
+    assert problem.units.image == "px" and problem.units.pixel_size == 0.01
+    assert problem.units.angle == "deg"
+    np.testing.assert_allclose(block.cameras.c, 152.0)
+    assert "--free" in said and "--fix img0 --fix img1:X0" in said
+    assert "f, k1, k2 of each camera free" in said
+
+
+def test_the_datum_hint_solves(tmp_path, capsys):
+    """Both ways the hint names solve an imported BAL block (exit 0)."""
+    from orientviz.cli import main
+
+    path = _four_cameras(tmp_path)
+    out = tmp_path / "p.json"
+    assert main(["import-bal", str(path), "-o", str(out)]) == 0
+    assert main(["solve", str(out)]) == 3  # no datum: refused
+    assert main(["solve", str(out), "--free"]) == 0
+    assert main(["solve", str(out), "--fix", "img0", "--fix", "img1:X0"]) == 0
+
+
+def test_solve_output_and_export_bal_carry_the_refined_cameras(tmp_path):
+    """solve -o writes the refined f, k1, k2 into the problem file; export-bal writes them
+    back into a BAL file whose cameras read back the same."""
+    from orientviz.cli import main
+    from orientviz.io.bal import bal_cameras
+    from orientviz.io.problem import load_problem
+
+    path = _four_cameras(tmp_path)
+    prob = tmp_path / "s.json"
+    assert main(["import-bal", str(path), "-o", str(prob)]) == 0
+    adj = tmp_path / "adj.json"
+    assert main(["solve", str(prob), "--free", "--json", "-o", str(adj)]) == 0
+    cams = bal_cameras(load_problem(adj).data, 0.01)
+    np.testing.assert_allclose(cams[:, 6], 15200.0, rtol=1e-7)  # the refined f, not 15352
+    np.testing.assert_allclose(cams[:, 7], -0.05, atol=1e-6)
+    np.testing.assert_allclose(cams[:, 8], 0.01, atol=1e-5)
+    out = tmp_path / "adj.bal"
+    assert main(["export-bal", str(adj), "-o", str(out)]) == 0
+    back = bal_cameras(read_bal(out), 0.01)
+    np.testing.assert_allclose(back, cams, rtol=1e-12, atol=1e-12)
+    assert main(["export-bal", str(prob), "-o", str(tmp_path / "start.bal")]) == 0
+    start = bal_cameras(read_bal(tmp_path / "start.bal"), 0.01)
+    np.testing.assert_allclose(start[:, 6], 15352.0, rtol=1e-12)  # the file's own values

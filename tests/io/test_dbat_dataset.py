@@ -15,6 +15,7 @@ from orientviz.datasets import make_dbat
 from orientviz.io.datasets import dataset_info, dataset_path, load_dataset
 from orientviz.io.kinds.block import approximate, solve, with_check_rays
 from orientviz.io.problem import loads_problem
+from orientviz.reproduce.dbat_files import read_camcal
 
 FOLDER = dataset_path("dbat_sxb").parent
 
@@ -66,7 +67,7 @@ def test_the_shipped_problem_is_what_the_script_makes_of_dbats_files(tmp_path):
 
 
 def test_the_camera_calibration_demo_reads_as_dbat_describes_it():
-    d = make_dbat.read_camcal(FOLDER / "camcal")
+    d = read_camcal(FOLDER / "camcal")
     assert d["image_px"] == [2272, 1704] and len(d["images"]) == 21
     assert len(d["marks"]) == 2074 and len(d["control"]) == 4  # 4148 image coordinates
     assert d["pixel_mm"] == pytest.approx(5.43764 / 1704)

@@ -7,7 +7,8 @@ import pytest
 
 from orientviz.errors import InputError
 from orientviz.orientation import plotter as pl
-from orientviz.orientation.preorient import preorientation_error, round_formulas
+from orientviz.orientation.plotter import preorientation_error
+from orientviz.orientation.preorient import round_formulas
 from orientviz.units import RHO_C
 
 

@@ -10,7 +10,7 @@ mpl.use("Agg")
 
 from orientviz.orientation import relative as rel  # noqa: E402
 from orientviz.orientation import schemes as sch  # noqa: E402
-from orientviz.orientation.preorient import preorientation_error  # noqa: E402
+from orientviz.orientation.plotter import preorientation_error  # noqa: E402
 from orientviz.plot import relative as pr  # noqa: E402
 
 

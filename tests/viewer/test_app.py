@@ -159,17 +159,11 @@ def test_shipped_block_file_loads_and_adjusts():
         a.stop()
 
 
-def test_non_block_file_is_reported(tmp_path):
-    from pathlib import Path
-
-    import orientviz
-
-    path = Path(orientviz.__file__).parent / "datasets" / "examples" / "similarity_example.json"
-    if not path.exists():
-        pytest.skip("example problem files not shipped in this checkout")
-    a = ViewerApp(str(path), port=0, verbose=False)
+def test_non_block_file_opens_with_its_solution():
+    a = ViewerApp("similarity_example", port=0, verbose=False)
     try:
-        assert len(a.messages) == 1 and "'similarity' problem" in a.messages[0]
+        assert a.messages == [] and a.demo.solution is not None
+        assert a.demo.solution.kind == "similarity"
     finally:
         a.stop()
 

@@ -15,8 +15,8 @@ used or shipped). It writes ``orientviz/datasets/dbat/``:
 * ``camcal/`` — DBAT's camera calibration demo (``data/script/camcaldemo``: 21 images of
   a target sheet by an Olympus C4040Z, 7.3 mm, 2074 image points, 4 fixed control
   points) and the report of its PhotoModeler-export route
-  (``data/dbat/dbatexports/camcal-dbatreport.txt``), unchanged; :func:`read_camcal`
-  reads it (``orientviz reproduce dbat-camcal``).
+  (``data/dbat/dbatexports/camcal-dbatreport.txt``), unchanged;
+  :func:`orientviz.reproduce.dbat_files.read_camcal` reads it (``orientviz reproduce dbat-camcal``).
 * ``roma/`` — DBAT's ROMA bundle demo (``data/script/romabundledemo``: 60 images of a
   Canon EOS 5D Mark II, 90 561 marked points of 26 321 object points, no control), its
   measurements gzipped, and its report; ``orientviz reproduce dbat-roma`` reads them
@@ -43,6 +43,8 @@ from pathlib import Path
 from typing import Any
 
 from ..io.problem import dumps_problem, loads_problem
+from ..reproduce.dbat_camcal import MANIFEST_ENTRY, problem_text
+from ..reproduce.dbat_files import numbers, table_rows
 
 HERE = Path(__file__).resolve().parent / "dbat"
 
@@ -115,35 +117,21 @@ DBAT's original files are kept unchanged beside the converted problem files.
 """
 
 
-def _rows(path: Path) -> list[list[str]]:
-    """Comma-separated rows of a DBAT table, comments (#) and blank lines skipped."""
-    out = []
-    for line in path.read_text(encoding="utf-8").splitlines():
-        line = line.split("#", 1)[0].strip()
-        if line:
-            out.append([f.strip() for f in line.split(",")])
-    return out
-
-
-def _numbers(text: str) -> list[float]:
-    return [float(v) for v in text.replace(",", " ").split()]
-
-
 def sxb_camera(xml_path: Path) -> dict[str, Any]:
     """The camera and the options of DBAT's ``sxb.xml`` (sensor mm, image px, cc, pp)."""
     root = ET.parse(xml_path).getroot()
     cam = root.find("input/cameras/camera")
     if cam is None or cam.findtext("unit", "").strip() != "mm":
         raise ValueError(f"{xml_path}: expected one camera in mm")
-    sensor = _numbers(cam.findtext("sensor", ""))
-    image = _numbers(cam.findtext("image", ""))
+    sensor = numbers(cam.findtext("sensor", ""))
+    image = numbers(cam.findtext("image", ""))
     out = {
         "sensor_mm": sensor,
         "image_px": [int(v) for v in image],
         "c_mm": float(cam.findtext("cc", "")),
-        "pp_mm": _numbers(cam.findtext("pp", "")),
-        "K": _numbers(cam.findtext("K", "")),
-        "P": _numbers(cam.findtext("P", "")),
+        "pp_mm": numbers(cam.findtext("pp", "")),
+        "K": numbers(cam.findtext("K", "")),
+        "P": numbers(cam.findtext("P", "")),
         "aspect": float(cam.findtext("aspect", "1")),
         "skew": float(cam.findtext("skew", "0")),
     }
@@ -176,8 +164,8 @@ def sxb_problem(root: Path) -> tuple[dict[str, Any], dict[str, Any]]:
     base = root / SXB
     cam = sxb_camera(base / "sxb.xml")
     p = cam["pixel_mm"]
-    images = {row[0]: Path(row[1]).stem for row in _rows(base / "images/images.txt")}
-    control = _rows(base / "reference/sxb-control.txt")
+    images = {row[0]: Path(row[1]).stem for row in table_rows(base / "images/images.txt")}
+    control = table_rows(base / "reference/sxb-control.txt")
     check = set(cam["check_ids"])
     points: list[dict[str, Any]] = []
     labels: dict[str, str] = {}
@@ -193,7 +181,7 @@ def sxb_problem(root: Path) -> tuple[dict[str, Any], dict[str, Any]]:
     observations: list[dict[str, Any]] = []
     ties: list[str] = []
     for name, sigma_px in cam["image_sigma_px"].items():
-        for pid, im, col, row_px in _rows(base / name):
+        for pid, im, col, row_px in table_rows(base / name):
             if pid not in known and pid not in ties:
                 ties.append(pid)
             s = _r(sigma_px * p)
@@ -239,37 +227,6 @@ def sxb_problem(root: Path) -> tuple[dict[str, Any], dict[str, Any]]:
     return doc, facts
 
 
-def read_camcal(folder: Path) -> dict[str, Any]:
-    """DBAT's camera calibration demo from its script files in ``folder`` (copied flat).
-
-    Returns the camera (sensor height mm, image size px, nominal focal length mm; the
-    sensor width follows from square pixels, as DBAT's ``auto``), the image names, the
-    marked points (image number, point id, column, row px, σ px) and the control points
-    (id → X, Y, Z m, held fixed by DBAT's script).
-    """
-    root = ET.parse(folder / "camcaldemo.xml").getroot()
-    cam = root.find("input/cameras/camera")
-    if cam is None:
-        raise ValueError(f"{folder}: no camera in camcaldemo.xml")
-    sensor = cam.findtext("sensor", "").split(",")
-    image = [int(v) for v in _numbers(cam.findtext("image", ""))]
-    height = float(sensor[1])
-    pixel = height / image[1]
-    marks = _rows(folder / "markpts.txt")
-    return {
-        "image_px": image,
-        "pixel_mm": pixel,
-        "sensor_mm": [image[0] * pixel, height],
-        "focal_mm": float(cam.findtext("focal", "")),
-        "images": {row[0]: Path(row[1]).name for row in _rows(folder / "images.txt")},
-        "marks": [(m[0], m[1], float(m[2]), float(m[3]), float(m[4])) for m in marks],
-        "control": {
-            r[0]: (float(r[2]), float(r[3]), float(r[4]))
-            for r in _rows(folder / "camcal-fixed.txt")
-        },
-    }
-
-
 def make(dbat: Path, out: Path = HERE) -> list[Path]:
     """Convert from the DBAT checkout ``dbat`` into ``out``; return the written files."""
     dbat = Path(dbat)
@@ -302,8 +259,6 @@ def make(dbat: Path, out: Path = HERE) -> list[Path]:
         else:
             shutil.copyfile(dbat / ROMA / name, target)
         written.append(target)
-    from ..reproduce.dbat_camcal import MANIFEST_ENTRY, problem_text
-
     (out / "dbat_camcal.json").write_text(problem_text(out / "camcal"), encoding="utf-8")
     written.append(out / "dbat_camcal.json")
     doc, facts = sxb_problem(dbat)

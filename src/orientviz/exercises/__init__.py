@@ -12,17 +12,27 @@ enforces the notebook side):
   (an ``AssertionError``) whose message names the plausible mistake ("equals the
   transpose", "off by a factor 0.9: degrees instead of gon?"), answers an empty blank with
   "not written yet", and prints a short "✓ …" on success.
-* Each module exposes ``SOLUTIONS = {"check_x": fn}`` and
-  ``MUTANTS = {"check_x": {"transpose": fn, ...}}``; ``tests/exercises/test_lessonNN.py``
-  asserts that every solution passes and every mutant is rejected by ≥ 100× the tolerance.
+* The package ships the checks only, never the solutions: those are in the lesson
+  notebooks (between the markers below) and in the repository's
+  ``tests/exercises/answers/lessonNN.py`` (``SOLUTIONS`` and ``MUTANTS``), where
+  ``tests/exercises/test_lessonNN.py`` asserts that every solution passes and every mutant is
+  rejected by ≥ 100× the tolerance; ``tests/exercises/test_no_solutions.py`` that no function
+  of a checker module passes a check.
 * In the notebook an exercise is three cells: a markdown prompt (the signature in a code
   block), a solution cell whose body lies between ``### BEGIN SOLUTION`` and
   ``### END SOLUTION`` (tag ``hide-cell``, metadata ``mystnb.code_prompt_show = "Show the
   solution"`` and ``jupyter.source_hidden = true``), and a visible check cell. A wrong
   answer's message is shown with :func:`~orientviz.exercises._common.show_mistake`, never
   with an error cell.
-* Student copies: ``python -m orientviz.exercises.strip notebooks/ OUTDIR`` replaces every
-  solution body by ``raise NotImplementedError`` and unhides the cell.
+* Student copies: ``python tools/make_student_release.py notebooks/ OUTDIR`` (in the
+  repository) replaces every solution body by ``raise NotImplementedError``, drops hidden
+  tests, unhides the cell and tags the check after it ``raises-exception``.
+* A lesson decorates a "your version" function that later cells use with
+  :func:`stand_in` (the library's equivalent): while the blank is empty, those cells get
+  the library's result and say so; the checks unwrap it and answer "not written yet".
+* A numpy error raised inside the student's function (a transposed matrix, a wrong shape)
+  is turned by :func:`~orientviz.exercises._common.call` into a :class:`CheckFailed` that names
+  the shapes of the inputs.
 
 This package is core: it imports numpy only (no matplotlib, no widgets).
 """
@@ -30,5 +40,6 @@ This package is core: it imports numpy only (no matplotlib, no widgets).
 from __future__ import annotations
 
 from ._common import CheckFailed, NotWrittenError, show_mistake
+from ._standin import stand_in
 
-__all__ = ["CheckFailed", "NotWrittenError", "show_mistake"]
+__all__ = ["CheckFailed", "NotWrittenError", "show_mistake", "stand_in"]

@@ -20,6 +20,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._standin import student_function
+
 __all__ = [
     "ANGLE_FACTORS",
     "CheckFailed",
@@ -110,6 +112,7 @@ def call(func: Any, *args: Any, what: str = "your function", **kwargs: Any) -> A
     CheckFailed
         If ``func`` is not callable.
     """
+    func = student_function(func)  # a check never sees the library standing in
     if func is None or func is Ellipsis:
         raise NotWrittenError(f"{what}: not written yet (the blank is still empty).")
     if not callable(func):
@@ -120,9 +123,34 @@ def call(func: Any, *args: Any, what: str = "your function", **kwargs: Any) -> A
         raise NotWrittenError(
             f"{what}: not written yet (it still raises NotImplementedError)."
         ) from None
+    except (ValueError, IndexError, np.linalg.LinAlgError) as exc:
+        raise CheckFailed(_shape_message(what, exc, args, kwargs)) from None
     if out is None or out is Ellipsis:
         raise NotWrittenError(f"{what}: not written yet (it returns {out!r}; a `return` missing?).")
     return out
+
+
+def _shape_message(what: str, exc: Exception, args: tuple, kwargs: dict) -> str:
+    """Explain a numpy error raised inside the student's function, with the inputs' shapes."""
+    shapes = [
+        f"{name} {np.shape(value)}"
+        for name, value in [(f"argument {i + 1}", a) for i, a in enumerate(args)]
+        + list(kwargs.items())
+        if isinstance(value, np.ndarray) and value.ndim
+    ]
+    text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    if isinstance(exc, np.linalg.LinAlgError):
+        hint = "a matrix you invert or solve with is singular or not square — a transposed factor?"
+    elif "matmul" in text or "shapes" in text or "broadcast" in text or "dimension" in text:
+        hint = (
+            "the shapes do not fit — is a matrix transposed (Wᵀ for W, Rᵀ for R) or a vector a row?"
+        )
+    else:
+        hint = "an index or a value does not fit the inputs' shapes"
+    given = f" (inputs: {', '.join(shapes)})" if shapes else ""
+    return (
+        f"{what}: numpy stopped inside your function — {text}. {hint[0].upper()}{hint[1:]}{given}"
+    )
 
 
 def success(message: str) -> None:

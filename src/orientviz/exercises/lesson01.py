@@ -16,11 +16,13 @@ from ._common import CheckFailed, call, compare, rng_for, success
 # --------------------------------------------------------------------- weighted mean
 
 
-def _weighted_mean(h, sigma):
-    p = 1.0 / np.asarray(sigma, float) ** 2
-    m = float(np.sum(p * h) / np.sum(p))
-    v = m - np.asarray(h, float)
-    return m, math.sqrt(float(np.sum(p * v * v)) / (len(h) - 1))
+def _wm_lstsq(h, sigma):
+    """Oracle: the mean as the least-squares solution of √P·1·m = √P·h (numpy's lstsq)."""
+    h = np.asarray(h, float)
+    w = 1.0 / np.asarray(sigma, float)
+    m = float(np.linalg.lstsq(w[:, None], w * h, rcond=None)[0][0])
+    v = w * (m - h)
+    return m, math.sqrt(float(v @ v) / (len(h) - 1))
 
 
 def _wm_unweighted(h, sigma):
@@ -38,12 +40,12 @@ def _wm_one_over_sigma(h, sigma):
 
 
 def _wm_divide_by_n(h, sigma):
-    m, s0 = _weighted_mean(h, sigma)
+    m, s0 = _wm_lstsq(h, sigma)
     return m, s0 * math.sqrt((len(h) - 1) / len(h))
 
 
 def _wm_no_weights_in_sigma0(h, sigma):
-    m, _ = _weighted_mean(h, sigma)
+    m, _ = _wm_lstsq(h, sigma)
     v = m - np.asarray(h, float)
     return m, math.sqrt(float(np.sum(v * v)) / (len(h) - 1))
 
@@ -58,7 +60,7 @@ def check_weighted_mean(fn) -> None:
         got = call(fn, h.copy(), sigma.copy(), what="weighted_mean")
         if np.ndim(got) != 1 or len(got) != 2:
             raise CheckFailed("weighted_mean: return two numbers, (mean, sigma0)")
-        want = _weighted_mean(h, sigma)
+        want = _wm_lstsq(h, sigma)
         wrong = [
             ("the weights are forgotten (plain mean)", _wm_unweighted(h, sigma)),
             ("weights 1/σ instead of 1/σ²", _wm_one_over_sigma(h, sigma)),
@@ -89,30 +91,23 @@ def _ellipse_brute(C):
     return float(s[i]), float(s[j]), float(t[i])
 
 
-def _ellipse(C):
-    w, V = np.linalg.eigh(C)
-    a, b = math.sqrt(w[1]), math.sqrt(w[0])
-    th = math.atan2(V[1, 1], V[0, 1])
-    return a, b, th
-
-
 def _ellipse_variances(C):
-    a, b, th = _ellipse(C)
+    a, b, th = _ellipse_brute(C)
     return a * a, b * b, th
 
 
 def _ellipse_minor_direction(C):
-    a, b, th = _ellipse(C)
+    a, b, th = _ellipse_brute(C)
     return a, b, th + np.pi / 2
 
 
 def _ellipse_degrees(C):
-    a, b, th = _ellipse(C)
+    a, b, th = _ellipse_brute(C)
     return a, b, math.degrees(th)
 
 
 def _ellipse_no_half(C):
-    a, b, _ = _ellipse(C)
+    a, b, _ = _ellipse_brute(C)
     return a, b, math.atan2(2 * C[0, 1], C[0, 0] - C[1, 1])
 
 
@@ -162,15 +157,10 @@ def check_error_ellipse(fn) -> None:
 # --------------------------------------------------------------------- χ² test of σ0
 
 
-def _bounds(r, alpha):
+def _bounds_no_sqrt(r, alpha):
     from scipy.stats import chi2
 
-    return (math.sqrt(chi2.ppf(alpha / 2, r) / r), math.sqrt(chi2.ppf(1 - alpha / 2, r) / r))
-
-
-def _bounds_no_sqrt(r, alpha):
-    lo, hi = _bounds(r, alpha)
-    return lo * lo, hi * hi
+    return chi2.isf(1 - alpha / 2, r) / r, chi2.isf(alpha / 2, r) / r
 
 
 def _bounds_one_sided(r, alpha):
@@ -196,7 +186,8 @@ def check_sigma0_bounds(fn) -> None:
              _bounds_one_sided(r, alpha)),
             ("the χ² quantiles are not divided by r (T = r σ̂0²/σ0²)", _bounds_not_divided(r, alpha)),
         ]  # fmt: skip
-        compare(f"bounds for r = {r}, α = {alpha}", got, _bounds(r, alpha), rtol=1e-6, wrong=wrong)
+        want = np.sqrt(_bounds_no_sqrt(r, alpha))
+        compare(f"bounds for r = {r}, α = {alpha}", got, want, rtol=1e-6, wrong=wrong)
     success("bounds agree with scipy.stats.chi2 for r = 7, 40, 3")
 
 
@@ -220,7 +211,8 @@ def _gn_step_numeric(x, stations, s, sigma):
     return x + dx
 
 
-def _gn_step(x, stations, s, sigma, sign=1.0, weights=True, unit=True):
+def _gn_step(x, stations, s, sigma, sign, weights, unit):
+    """A Gauss-Newton step with one plausible mistake switched on (the wrong answers)."""
     x = np.asarray(x, float)
     f = _distances(x, stations)
     J = (x[None, :] - stations) / (f[:, None] if unit else 1.0)
@@ -244,10 +236,10 @@ def check_gauss_newton_step(fn) -> None:
     want = _gn_step_numeric(x, stations, s, sigma)
     wrong = [
         ("the correction is subtracted: N Δx = JᵀP(l − f(x)), then x + Δx",
-         _gn_step(x, stations, s, sigma, sign=-1)),
-        ("the weights are forgotten", _gn_step(x, stations, s, sigma, weights=False)),
+         _gn_step(x, stations, s, sigma, -1.0, True, True)),
+        ("the weights are forgotten", _gn_step(x, stations, s, sigma, 1.0, False, True)),
         ("the Jacobian rows are not unit vectors: ∂s_i/∂X = (X − X_i)/s_i",
-         _gn_step(x, stations, s, sigma, unit=False)),
+         _gn_step(x, stations, s, sigma, 1.0, True, False)),
     ]  # fmt: skip
     # 1e-9 of the coordinates ≈ 0.4 µm: the numerical Jacobian's own error is far smaller
     compare("the point after one step [m]", got, want, rtol=1e-9, wrong=wrong)
@@ -257,34 +249,51 @@ def check_gauss_newton_step(fn) -> None:
     )
 
 
-SOLUTIONS = {
-    "check_weighted_mean": _weighted_mean,
-    "check_error_ellipse": _ellipse,
-    "check_sigma0_bounds": _bounds,
-    "check_gauss_newton_step": lambda x, st, s, sig: _gn_step(x, st, s, sig),
-}
+# --------------------------------------------------------------------- the weighted line fit
 
-MUTANTS = {
-    "check_weighted_mean": {
-        "unweighted": _wm_unweighted,
-        "one_over_sigma": _wm_one_over_sigma,
-        "divide_by_n": _wm_divide_by_n,
-        "sigma0_unweighted": _wm_no_weights_in_sigma0,
-    },
-    "check_error_ellipse": {
-        "variances": _ellipse_variances,
-        "minor_direction": _ellipse_minor_direction,
-        "degrees": _ellipse_degrees,
-        "no_half": _ellipse_no_half,
-    },
-    "check_sigma0_bounds": {
-        "no_sqrt": _bounds_no_sqrt,
-        "one_sided": _bounds_one_sided,
-        "not_divided": _bounds_not_divided,
-    },
-    "check_gauss_newton_step": {
-        "minus": lambda x, st, s, sig: _gn_step(x, st, s, sig, sign=-1),
-        "no_weights": lambda x, st, s, sig: _gn_step(x, st, s, sig, weights=False),
-        "not_unit": lambda x, st, s, sig: _gn_step(x, st, s, sig, unit=False),
-    },
-}
+
+def _line_wrong(X, l, sigma, mistake):
+    """A line fit with one plausible mistake (the wrong answers the check names)."""
+    A = np.column_stack([np.ones_like(X), X])
+    p = {"no_weights": np.ones_like(sigma), "one_over_sigma": 1.0 / sigma}.get(
+        mistake, 1.0 / sigma**2
+    )
+    N = A.T @ (p[:, None] * A)
+    x = np.linalg.solve(N, A.T @ (p * l))
+    v = A @ x - l
+    r = len(l) if mistake == "divide_by_n" else len(l) - 2
+    s0 = math.sqrt(float(v @ (p * v)) / r)
+    Q = N if mistake == "Q_is_N" else np.linalg.inv(N)
+    return x, (-v if mistake == "v_sign" else v), s0, Q
+
+
+def check_line_fit(fn) -> None:
+    """``fn(X, l, sigma) -> (xhat, v, sigma0, Q)``: the weighted straight line l ≈ a + b X
+    (P = diag(1/σ²)), residuals v = A x̂ − l, σ̂0 = √(vᵀPv / (n − 2)) and Q = (AᵀPA)⁻¹."""
+    rng = rng_for("lesson01.check_line_fit")
+    X = np.sort(rng.uniform(-40.0, 60.0, 9))
+    sigma = np.where(np.arange(9) % 3 == 0, 0.002, 0.007)
+    l = 0.31 + 0.0042 * X + rng.normal(0.0, 1.0, 9) * sigma
+    got = call(fn, X.copy(), l.copy(), sigma.copy(), what="line_fit")
+    if not isinstance(got, tuple) or len(got) != 4:
+        raise CheckFailed("line_fit: return the four results (xhat, v, sigma0, Q)")
+    # oracle: a QR factorisation of √P A (no normal equations)
+    A = np.column_stack([np.ones_like(X), X])
+    Qr, Rr = np.linalg.qr(A / sigma[:, None])
+    x = np.linalg.solve(Rr, Qr.T @ (l / sigma))
+    v = A @ x - l
+    Ri = np.linalg.inv(Rr)
+    want = (x, v, math.sqrt(float(np.sum((v / sigma) ** 2)) / 7), Ri @ Ri.T)
+    names = ("x̂ = (a, b)", "v [mm]", "σ̂0", "Q = N⁻¹")
+    wrongs = {
+        "no_weights": "the weights are forgotten (P = I): P = diag(1/σ²)",
+        "one_over_sigma": "weights 1/σ instead of 1/σ²",
+        "divide_by_n": "vᵀPv divided by n instead of the redundancy r = n − 2",
+        "Q_is_N": "Q is the inverse of N = AᵀPA, not N itself",
+        "v_sign": "the sign of v is wrong: v = A x̂ − l (computed − observed)",
+    }
+    for k, name in enumerate(names):
+        compare(name, got[k], want[k], rtol=1e-8, wrong=[
+            (text, _line_wrong(X, l, sigma, key)[k]) for key, text in wrongs.items()
+        ])  # fmt: skip
+    success("x̂, v, σ̂0 and Q agree with a QR solution of √P A x = √P l")

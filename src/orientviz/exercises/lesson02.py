@@ -15,11 +15,9 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._common import call, compare, rng_for, success
+from ._common import CheckFailed, call, compare, rng_for, success
 
 __all__ = [
-    "MUTANTS",
-    "SOLUTIONS",
     "check_collinearity",
     "check_gimbal",
     "check_ground_point",
@@ -157,19 +155,24 @@ def check_opk_from_matrix(angles_from_R: Callable[[F64], ArrayLike]) -> None:
         truth = np.array([rng.uniform(-180, 180), rng.uniform(-90, 90), rng.uniform(-180, 180)])
         R = _rodrigues_opk(*truth)
         got = call(angles_from_R, R, what="angles_from_R")
+        g = np.asarray(got, dtype=float)
+        if g.shape == (3,) and np.all(np.isfinite(g)):
+            # the angles put back into R = R_ω R_φ R_κ (Rodrigues): do they give Rᵀ?
+            Rg = _rodrigues_opk(*g)
+            if np.abs(Rg - R.T).max() < 1e-9 and np.abs(R - R.T).max() > 1e-6:
+                err = float(np.abs(g - truth).max() / 200.0)
+                raise CheckFailed(
+                    f"(ω, φ, κ) [gon]: wrong (relative difference {err:.3g}, allowed 1e-09) — "
+                    "these are the angles of Rᵀ (R turns image vectors into the object frame).",
+                    err,
+                    1e-9,
+                )
         wrong = [
-            ("these are the angles of Rᵀ", _opk_of(R.T)),
             ("the sign of ω is wrong", truth * [-1, 1, 1]),
             ("the sign of κ is wrong", truth * [1, 1, -1]),
         ]
         compare("(ω, φ, κ) [gon]", got, truth, rtol=1e-9, unit="gon", wrong=wrong, scale=200.0)
     success("ω, φ, κ read back from R (in gon)")
-
-
-def _opk_of(R: F64) -> F64:
-    """ω, φ, κ (gon) of R = R_ω R_φ R_κ — used only to name the 'transposed' mistake."""
-    phi = np.arcsin(np.clip(R[0, 2], -1, 1))
-    return np.array([np.arctan2(-R[1, 2], R[2, 2]), phi, np.arctan2(-R[0, 1], R[0, 0])]) / GON
 
 
 def check_ground_point(ground_point: Callable[..., F64]) -> None:
@@ -193,75 +196,3 @@ def check_ground_point(ground_point: Callable[..., F64]) -> None:
     got = call(ground_point, xy, X0, R, c, Z, what="ground_point")
     compare("ground points [m]", got, truth, rtol=1e-9, scale=1000.0, wrong=wrong)
     success("ground points: the rays meet the plane where the points were")
-
-
-# ---------------------------------------------------------------- solutions and mutants
-
-
-def _sol_rotation(omega: float, phi: float, kappa: float) -> F64:
-    w, p, k = np.array([omega, phi, kappa]) * GON
-    Rw = np.array([[1, 0, 0], [0, np.cos(w), -np.sin(w)], [0, np.sin(w), np.cos(w)]])
-    Rp = np.array([[np.cos(p), 0, np.sin(p)], [0, 1, 0], [-np.sin(p), 0, np.cos(p)]])
-    Rk = np.array([[np.cos(k), -np.sin(k), 0], [np.sin(k), np.cos(k), 0], [0, 0, 1]])
-    return Rw @ Rp @ Rk
-
-
-def _sol_collinearity(X, X0, R, c, x0, y0):
-    u, v, w = ((np.asarray(X) - X0) @ R).T
-    return np.column_stack([x0 - c * u / w, y0 - c * v / w])
-
-
-def _sol_gimbal(omega, kappa, phi):
-    return omega + np.sign(phi) * kappa
-
-
-def _sol_opk(R):
-    return (
-        np.array([np.arctan2(-R[1, 2], R[2, 2]), np.arcsin(R[0, 2]), np.arctan2(-R[0, 1], R[0, 0])])
-        / GON
-    )
-
-
-def _sol_ground(xy, X0, R, c, Z):
-    d = np.column_stack([xy, np.full(len(xy), -c)]) @ R.T
-    return X0 + ((Z - X0[2]) / d[:, 2])[:, None] * d
-
-
-SOLUTIONS = {
-    "check_rotation": _sol_rotation,
-    "check_collinearity": _sol_collinearity,
-    "check_gimbal": _sol_gimbal,
-    "check_opk_from_matrix": _sol_opk,
-    "check_ground_point": _sol_ground,
-}
-
-MUTANTS = {
-    "check_rotation": {
-        "transpose": lambda w, p, k: _sol_rotation(w, p, k).T,
-        "degrees": lambda w, p, k: _sol_rotation(w * 200 / 180, p * 200 / 180, k * 200 / 180),
-        "phi-omega-kappa order": lambda w, p, k: (
-            _sol_rotation(0, p, 0) @ _sol_rotation(w, 0, 0) @ _sol_rotation(0, 0, k)
-        ),
-        "flipped sine in R_phi": lambda w, p, k: (
-            _sol_rotation(w, 0, 0) @ _sol_rotation(0, -p, 0) @ _sol_rotation(0, 0, k)
-        ),
-    },
-    "check_collinearity": {
-        "R instead of R^T": lambda X, X0, R, c, x0, y0: _sol_collinearity(X, X0, R.T, c, x0, y0),
-        "sign of c": lambda X, X0, R, c, x0, y0: _sol_collinearity(X, X0, R, -c, x0, y0),
-        "no principal point": lambda X, X0, R, c, x0, y0: _sol_collinearity(X, X0, R, c, 0.0, 0.0),
-    },
-    "check_gimbal": {
-        "omega minus kappa": lambda w, k, p: w - np.sign(p) * k,
-        "kappa forgotten": lambda w, k, p: w,
-    },
-    "check_opk_from_matrix": {
-        "radians": lambda R: _sol_opk(R) * GON,
-        "degrees": lambda R: _sol_opk(R) * 0.9,
-        "transpose": lambda R: _sol_opk(R.T),
-    },
-    "check_ground_point": {
-        "R^T instead of R": lambda xy, X0, R, c, Z: _sol_ground(xy, X0, R.T, c, Z),
-        "+c": lambda xy, X0, R, c, Z: _sol_ground(xy, X0, R, -c, Z),
-    },
-}

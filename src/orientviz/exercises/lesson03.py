@@ -34,7 +34,8 @@ def _scene(rng, affine=False):
 # --------------------------------------------------------------------- the DLT rows
 
 
-def _rows(X, xy, cross=-1.0, swap=False, stacked=False):
+def _rows(X, xy, cross, swap, stacked):
+    """The DLT rows with the sign of the cross terms, swapped x/y or stacked rows chosen."""
     n = len(X)
     one = np.ones((n, 1))
     ax = np.hstack([X, one, np.zeros((n, 4)), cross * (xy[:, 1:] if swap else xy[:, :1]) * X])
@@ -56,7 +57,7 @@ def check_dlt_rows(fn) -> None:
         raise CheckFailed("dlt_rows: return the pair (A, b)")
     A, b = (np.asarray(g, dtype=float) for g in got)
     L = P.reshape(-1)[:11]
-    want_A, want_b = _rows(X, xy)
+    want_A, want_b = _rows(X, xy, -1.0, False, False)
     compare("b (observed x1, y1, x2, …) [mm]", b, want_b, rtol=1e-12,
             wrong=[("b holds all x first, then all y: interleave x1, y1, x2, y2, …",
                     np.concatenate([xy[:, 0], xy[:, 1]]))])  # fmt: skip
@@ -67,11 +68,11 @@ def check_dlt_rows(fn) -> None:
         rtol=1e-12,
         wrong=[
             ("the last three columns need a minus sign: x (L9 X + L10 Y + L11 Z + 1) moved "
-             "to the left side", _rows(X, xy, cross=1.0)[0]),
+             "to the left side", _rows(X, xy, 1.0, False, False)[0]),
             ("x and y are swapped in the last three columns (the x row has −x·X, −x·Y, −x·Z)",
-             _rows(X, xy, swap=True)[0]),
+             _rows(X, xy, -1.0, True, False)[0]),
             ("rows all x first, then all y: interleave x1, y1, x2, y2, …",
-             _rows(X, xy, stacked=True)[0]),
+             _rows(X, xy, -1.0, False, True)[0]),
         ],
     )  # fmt: skip
     resid = float(np.max(np.abs(A @ L - b)))
@@ -81,13 +82,9 @@ def check_dlt_rows(fn) -> None:
 # --------------------------------------------------------------------- projection centre
 
 
-def _centre(L):
-    P = np.append(np.asarray(L, float), 1.0).reshape(3, 4)
-    return -np.linalg.solve(P[:, :3], P[:, 3])
-
-
 def _centre_plus(L):
-    return -_centre(L)
+    P = np.append(np.asarray(L, float), 1.0).reshape(3, 4)
+    return np.linalg.solve(P[:, :3], P[:, 3])
 
 
 def _centre_transpose(L):
@@ -118,15 +115,6 @@ def check_projection_centre(fn) -> None:
 # --------------------------------------------------------------------- interior orientation
 
 
-def _interior(L):
-    P = np.append(np.asarray(L, float), 1.0).reshape(3, 4)
-    m1, m2, m3 = P[0, :3], P[1, :3], P[2, :3]
-    q = m3 @ m3
-    x0, y0 = m1 @ m3 / q, m2 @ m3 / q
-    c = np.sqrt(m1 @ m1 / q - x0 * x0)
-    return np.array([c, x0, y0])
-
-
 def _interior_unnormalised(L):
     P = np.append(np.asarray(L, float), 1.0).reshape(3, 4)
     m1, m2, m3 = P[0, :3], P[1, :3], P[2, :3]
@@ -142,8 +130,11 @@ def _interior_no_x0(L):
 
 
 def _interior_swapped(L):
-    c, x0, y0 = _interior(L)
-    return np.array([c, y0, x0])
+    P = np.append(np.asarray(L, float), 1.0).reshape(3, 4)
+    m1, m2, m3 = P[0, :3], P[1, :3], P[2, :3]
+    q = m3 @ m3
+    x0, y0 = m2 @ m3 / q, m1 @ m3 / q
+    return np.array([np.sqrt(m1 @ m1 / q - y0 * y0), x0, y0])
 
 
 def check_interior_from_dlt(fn) -> None:
@@ -162,26 +153,48 @@ def check_interior_from_dlt(fn) -> None:
     success("c, x0, y0 agree with the simulated camera (two cameras)")
 
 
-SOLUTIONS = {
-    "check_dlt_rows": lambda X, xy: _rows(X, xy),
-    "check_projection_centre": _centre,
-    "check_interior_from_dlt": _interior,
-}
+# --------------------------------------------------------------------- the affine fiducial fit
 
-MUTANTS = {
-    "check_dlt_rows": {
-        "plus_sign": lambda X, xy: _rows(X, xy, cross=1.0),
-        "swap_xy": lambda X, xy: _rows(X, xy, swap=True),
-        "stacked": lambda X, xy: _rows(X, xy, stacked=True),
-    },
-    "check_projection_centre": {
-        "plus": _centre_plus,
-        "transpose": _centre_transpose,
-        "no_one": _centre_no_one,
-    },
-    "check_interior_from_dlt": {
-        "unnormalised": _interior_unnormalised,
-        "no_x0": _interior_no_x0,
-        "swapped": _interior_swapped,
-    },
-}
+
+def _fiducials(rng):
+    """Eight fiducials (calibrated, mm), an affine map and the machine coordinates."""
+    cal = np.array([[-106.0, 0.0], [106.0, 0.0], [0.0, -106.0], [0.0, 106.0],
+                    [-106.0, -106.0], [106.0, 106.0], [-106.0, 106.0], [106.0, -106.0]])  # fmt: skip
+    M = np.array([[1.0007, 0.0021], [-0.0018, 0.9989]])
+    t = np.array([12.3, -7.9])
+    machine = (cal - t) @ np.linalg.inv(M).T  # calibrated = t + M machine
+    return machine, cal, np.array([t[0], M[0, 0], M[0, 1], t[1], M[1, 0], M[1, 1]])
+
+
+def check_affine_fit(fn) -> None:
+    """``fn(machine, calibrated) -> (params, v, sigma0)``: x = a0 + a1 ξ + a2 η,
+    y = b0 + b1 ξ + b2 η; params (a0, a1, a2, b0, b1, b2), v (2n,) mm in the order x1, y1, …,
+    σ̂0 in mm with r = 2n − 6."""
+    rng = rng_for("lesson03.check_affine_fit")
+    machine, cal, truth = _fiducials(rng)
+    got = call(fn, machine.copy(), cal.copy(), what="affine_fit")
+    if not isinstance(got, tuple) or len(got) != 3:
+        raise CheckFailed("affine_fit: return the three results (params, v, sigma0)")
+    compare("params of error-free fiducials", got[0], truth, rtol=1e-9, wrong=[
+        ("the order is a0, a1, a2, b0, b1, b2 (x's three, then y's three)", truth[[0, 3, 1, 4, 2, 5]]),
+    ])  # fmt: skip
+    noisy = cal + rng.normal(0.0, 0.002, cal.shape)
+    got = call(fn, machine.copy(), noisy.copy(), what="affine_fit")
+    # oracle: x and y are two separate 3-parameter fits (numpy's lstsq)
+    D = np.column_stack([np.ones(len(machine)), machine])
+    px = np.linalg.lstsq(D, noisy[:, 0], rcond=None)[0]
+    py = np.linalg.lstsq(D, noisy[:, 1], rcond=None)[0]
+    v = np.column_stack([D @ px - noisy[:, 0], D @ py - noisy[:, 1]]).ravel()
+    s0 = float(np.sqrt(v @ v / (v.size - 6)))
+    compare("params of noisy fiducials", got[0], np.r_[px, py], rtol=1e-8)
+    compare("v [mm]", got[1], v, rtol=1e-6, wrong=[
+        ("the sign of v is wrong: v = A x̂ − l (computed − observed)", -v),
+        ("v in the order x1, y1, x2, y2, …", np.r_[v[0::2], v[1::2]]),
+    ])  # fmt: skip
+    compare("σ̂0 [mm]", got[2], s0, rtol=1e-8, wrong=[
+        ("the redundancy is 2n − 6 (six parameters), not 2n", np.sqrt(v @ v / v.size)),
+        ("the redundancy is 2n − 6 (six parameters), not 2n − 3", np.sqrt(v @ v / (v.size - 3))),
+    ])  # fmt: skip
+    success(
+        f"the affine map of error-free fiducials comes back; σ̂0 = {s0 * 1000:.2f} µm as two lstsq fits give"
+    )

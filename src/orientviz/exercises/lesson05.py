@@ -25,8 +25,6 @@ from ._common import call, compare, rng_for, success
 from .lesson02 import _rodrigues_opk
 
 __all__ = [
-    "MUTANTS",
-    "SOLUTIONS",
     "check_condition",
     "check_design",
     "check_parallax",
@@ -220,76 +218,3 @@ def check_scheme_sigma(scheme_sigma: Callable[[F64, F64, F64, float, float], F64
     ]
     compare("σ of (by, bz, ω, φ, κ)", got, truth, rtol=1e-5, wrong=wrong)
     success("scheme precision: σ √diag((AᵀA)⁻¹)")
-
-
-# ---------------------------------------------------------------- solutions and mutants
-
-
-def _sol_design(X, Y, Z, b):
-    q = Y / Z
-    return np.column_stack([np.ones_like(X), -q, -Z * (1 + q * q), -(b - X) * q, -(b - X)])
-
-
-def _sol_parallax(xy1, xy2, b):
-    lam = b / (xy1[:, 0] - xy2[:, 0])
-    return lam * (xy1[:, 1] - xy2[:, 1])
-
-
-def _sol_six_point(p, b, d, h):
-    P = _gruber(b, d, h)
-    A = _sol_design(P[:, 0], P[:, 1], P[:, 2], b)
-    e = np.linalg.lstsq(A, p, rcond=None)[0]
-    return e / [1, 1, GON, GON, GON]
-
-
-def _sol_condition(p, X, Y, Z, b):
-    w = np.linalg.svd(_sol_design(X, Y, Z, b).T)[2][-1]
-    return 2.0 * (w / w[0]) @ p
-
-
-def _sol_scheme_sigma(X, Y, Z, b, sigma):
-    A = _sol_design(X, Y, Z, b)
-    return sigma * np.sqrt(np.diag(np.linalg.inv(A.T @ A)))
-
-
-SOLUTIONS = {
-    "check_design": _sol_design,
-    "check_parallax": _sol_parallax,
-    "check_six_point": _sol_six_point,
-    "check_condition": _sol_condition,
-    "check_scheme_sigma": _sol_scheme_sigma,
-}
-
-MUTANTS = {
-    "check_design": {
-        "y'' - y'": lambda X, Y, Z, b: -_sol_design(X, Y, Z, b),
-        "phi and kappa swapped": lambda X, Y, Z, b: _sol_design(X, Y, Z, b)[:, [0, 1, 2, 4, 3]],
-        "Kovarik signs": lambda X, Y, Z, b: _sol_design(X, Y, Z, b) * [1, -1, 1, 1, -1],
-        "1 - Y^2/Z^2": lambda X, Y, Z, b: (
-            _sol_design(X, Y, Z, b)
-            - np.column_stack([0 * X, 0 * X, -2 * Z * (Y / Z) ** 2, 0 * X, 0 * X])
-        ),
-    },
-    "check_parallax": {
-        "Y_right - Y_left": lambda xy1, xy2, b: -_sol_parallax(xy1, xy2, b),
-        "image difference": lambda xy1, xy2, b: xy1[:, 1] - xy2[:, 1],
-    },
-    "check_six_point": {
-        "y'' - y'": lambda p, b, d, h: _sol_six_point(-p, b, d, h),
-        "degrees": lambda p, b, d, h: _sol_six_point(p, b, d, h) * [1, 1, 0.9, 0.9, 0.9],
-        "phi and kappa swapped": lambda p, b, d, h: _sol_six_point(p, b, d, h)[[0, 1, 2, 4, 3]],
-    },
-    "check_condition": {
-        "flat form with relief": lambda p, X, Y, Z, b: (
-            np.array([2.0, -2.0, -1.0, 1.0, -1.0, 1.0]) @ p
-        ),
-        "sign": lambda p, X, Y, Z, b: -_sol_condition(p, X, Y, Z, b),
-    },
-    "check_scheme_sigma": {
-        "inverse of the diagonal": lambda X, Y, Z, b, s: (
-            s / np.sqrt(np.diag(_sol_design(X, Y, Z, b).T @ _sol_design(X, Y, Z, b)))
-        ),
-        "variances": lambda X, Y, Z, b, s: _sol_scheme_sigma(X, Y, Z, b, s) ** 2,
-        "sigma squared": lambda X, Y, Z, b, s: s * _sol_scheme_sigma(X, Y, Z, b, s),
-    },
-}

@@ -36,10 +36,6 @@ def _pair(rng):
 # --------------------------------------------------------------------- E
 
 
-def _essential(R2, B):
-    return _skew(B) @ R2
-
-
 def check_essential(fn) -> None:
     """``fn(R2, B) -> E``: E = [B]ₓ R2 for a left bundle R1 = I (d1ᵀ E d2 = 0)."""
     for salt in range(2):
@@ -62,7 +58,8 @@ def check_essential(fn) -> None:
 # --------------------------------------------------------------------- epipolar line
 
 
-def _line(E, xy1, c, transpose=True, with_c=True, normalise=True):
+def _line(E, xy1, c, transpose, with_c, normalise):
+    """The epipolar line with one plausible mistake chosen by the flags (the wrong answers)."""
     d1 = np.array([xy1[0], xy1[1], -c])
     g = (E.T @ d1) if transpose else (E @ d1)
     line = np.array([g[0], g[1], (-c if with_c else 1.0) * g[2]])
@@ -83,7 +80,7 @@ def check_epipolar_line(fn) -> None:
             )
         compare("a² + b²", line[0] ** 2 + line[1] ** 2, 1.0, rtol=1e-9,
                 wrong=[("normalise the line: divide (a, b, d) by √(a² + b²)",
-                        float(np.sum(_line(E, xy1[k], c, normalise=False)[:2] ** 2)))])  # fmt: skip
+                        float(np.sum(_line(E, xy1[k], c, True, True, False)[:2] ** 2)))])  # fmt: skip
         # brute force: two points on the left ray, at 0.6 and 1.4 times the model depth
         ray = np.array([xy1[k, 0], xy1[k, 1], -c])
         on_ray = np.array([ray * s for s in (0.6 * P[k, 2] / -c, 1.4 * P[k, 2] / -c)])
@@ -91,10 +88,10 @@ def check_epipolar_line(fn) -> None:
         dist = q @ line[:2] + line[2]
         wrong = []
         for text, kw in (
-            ("E is used instead of Eᵀ: the line is g = Eᵀ d1", {"transpose": False}),
-            ("the third coefficient is −c g2 (the ray is (x, y, −c))", {"with_c": False}),
+            ("E is used instead of Eᵀ: the line is g = Eᵀ d1", (False, True, True)),
+            ("the third coefficient is −c g2 (the ray is (x, y, −c))", (True, False, True)),
         ):
-            m = _line(E, xy1[k], c, **kw)
+            m = _line(E, xy1[k], c, *kw)
             wrong.append((text, q @ m[:2] + m[2]))
         compare("distances of two projected points of the left ray from your line [mm]", dist,
                 np.zeros(2), rtol=1e-9, scale=1.0, wrong=wrong)  # fmt: skip
@@ -104,7 +101,8 @@ def check_epipolar_line(fn) -> None:
 # --------------------------------------------------------------------- normal case
 
 
-def _points(n1, n2, c, b, sign=1.0, zsign=-1.0, use_y=False):
+def _points(n1, n2, c, b, sign, zsign, use_y):
+    """Normal-case model points with the mistakes chosen by the flags (the wrong answers)."""
     px = sign * ((n1[:, 1] - n2[:, 1]) if use_y else (n1[:, 0] - n2[:, 0]))
     with np.errstate(divide="ignore", invalid="ignore"):
         lam = b / px
@@ -129,32 +127,51 @@ def check_normal_case_points(fn) -> None:
             "case: depth comes from the x-parallax x1' − x2'"
         )
     compare("model points", got, P, rtol=1e-9, wrong=[
-        ("the x-parallax is x1' − x2' (positive for points below the base)", _points(n1, n2, c, b, sign=-1.0)),
-        ("Z = −λ c: the points lie below the projection centres", _points(n1, n2, c, b, zsign=1.0)),
+        ("the x-parallax is x1' − x2' (positive for points below the base)", _points(n1, n2, c, b, -1.0, -1.0, False)),
+        ("Z = −λ c: the points lie below the projection centres", _points(n1, n2, c, b, 1.0, 1.0, False)),
     ])  # fmt: skip
     success(f"{n} model points from x-parallaxes agree with the simulated terrain")
 
 
-SOLUTIONS = {
-    "check_essential": _essential,
-    "check_epipolar_line": lambda E, xy1, c: _line(E, xy1, c),
-    "check_normal_case_points": lambda n1, n2, c, b: _points(n1, n2, c, b),
-}
+# --------------------------------------------------------------------- the eight-point algorithm
 
-MUTANTS = {
-    "check_essential": {
-        "swapped": lambda R2, B: R2 @ _skew(B),
-        "transposed_R": lambda R2, B: _skew(B) @ R2.T,
-        "skew_transposed": lambda R2, B: _skew(B).T @ R2,
-    },
-    "check_epipolar_line": {
-        "E_not_transposed": lambda E, xy1, c: _line(E, xy1, c, transpose=False),
-        "no_c": lambda E, xy1, c: _line(E, xy1, c, with_c=False),
-        "not_normalised": lambda E, xy1, c: _line(E, xy1, c, normalise=False),
-    },
-    "check_normal_case_points": {
-        "parallax_sign": lambda n1, n2, c, b: _points(n1, n2, c, b, sign=-1.0),
-        "z_sign": lambda n1, n2, c, b: _points(n1, n2, c, b, zsign=1.0),
-        "y_parallax": lambda n1, n2, c, b: _points(n1, n2, c, b, use_y=True),
-    },
-}
+
+def check_eight_point(fn) -> None:
+    """``fn(xy1, xy2, c) -> E``: the essential matrix from n ≥ 8 matches (rays (x, y, −c)),
+    rank 2 with singular values (1, 1, 0), ‖E‖ = √2; defined up to its sign."""
+    rng = rng_for("lesson06.check_eight_point")
+    c, B, R2, P, xy1, xy2 = _pair(rng)
+    E = np.asarray(call(fn, xy1.copy(), xy2.copy(), c, what="eight_point_mine"), dtype=float)
+    if E.shape != (3, 3):
+        raise CheckFailed(f"eight_point_mine: expected E of shape (3, 3), got {E.shape}")
+    truth = _skew(B) @ R2
+    truth = truth / np.linalg.norm(truth) * np.sqrt(2.0)
+    sign = 1.0 if np.sum(E * truth) >= 0 else -1.0
+    compare("E of an error-free pair (up to its sign)", sign * E, truth, rtol=1e-6, wrong=[
+        ("E is transposed: the rows of the system are vec(d1 d2ᵀ) for d1ᵀ E d2 = 0", truth.T),
+        ("E is transposed: the rows of the system are vec(d1 d2ᵀ) for d1ᵀ E d2 = 0", -truth.T),
+        ("E is not scaled to ‖E‖ = √2", truth / np.sqrt(2.0)),
+    ])  # fmt: skip
+    # noisy matches: only properties can be checked without the answer itself
+    n1 = xy1 + rng.normal(0, 0.004, xy1.shape)
+    n2 = xy2 + rng.normal(0, 0.004, xy2.shape)
+    E = np.asarray(call(fn, n1, n2, c, what="eight_point_mine"), dtype=float)
+    s = np.linalg.svd(E, compute_uv=False)
+    if s.shape == (3,) and s[2] > 1e-6 * s[0]:
+        raise CheckFailed(
+            f"E from noisy matches has rank 3 (singular values {np.round(s, 6).tolist()}): force "
+            "them to (1, 1, 0) — with noise the smallest one is not zero by itself",
+            float(s[2] / s[0]),
+            1e-8,
+        )
+    compare("singular values of E from noisy matches", s, [1.0, 1.0, 0.0], rtol=1e-8, scale=1.0,
+            wrong=[])  # fmt: skip
+    d1 = np.column_stack([n1, np.full(len(n1), -c)])
+    d2 = np.column_stack([n2, np.full(len(n2), -c)])
+    cop = np.abs(np.einsum("ni,ij,nj->n", d1, E, d2)).max() / (c * c)
+    if cop > 1e-3:
+        raise CheckFailed(f"E from noisy matches: the rays are far from coplanar (|d1ᵀ E d2|/c² = {cop:.2g})",
+                          cop, 1e-5)  # fmt: skip
+    success(
+        "the true E comes back from error-free matches; from noisy ones E has rank 2, (1, 1, 0)"
+    )

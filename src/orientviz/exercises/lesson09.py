@@ -38,19 +38,6 @@ def _jacobian(x, pairs, h=1e-5):
 # --------------------------------------------------------------------- null space
 
 
-def _helmert(xy, rot=(-1, 1), translations=True, scale_instead=False):
-    p = len(xy)
-    c = xy - xy.mean(axis=0)
-    cols = []
-    if translations:
-        cols += [np.tile([1.0, 0.0], p), np.tile([0.0, 1.0], p)]
-    if scale_instead:
-        cols.append(c.reshape(-1))
-    else:
-        cols.append(np.column_stack([rot[0] * c[:, 1], rot[1] * c[:, 0]]).reshape(-1))
-    return np.column_stack(cols)
-
-
 def check_helmert_columns(fn) -> None:
     """``fn(xy) -> G`` (2p, 3): columns that move a planar distance network (unknowns x1,
     y1, x2, …) without changing any distance; together they must span the whole defect."""
@@ -98,8 +85,8 @@ def _problem(rng):
     for k in range(2):
         J[r, 2 * pairs[:, 1] + k], J[r, 2 * pairs[:, 0] + k] = u[:, k], -u[:, k]
     N, b = J.T @ J / sig**2, J.T @ (l - _distances(x0, pairs)) / sig**2
-    G = _helmert(xy)
-    G = G / np.linalg.norm(G, axis=0)
+    # the datum defect's basis: the null space of the distances' Jacobian (SVD)
+    G = np.linalg.svd(J)[2][-3:].T
     return xy, N, b, G
 
 
@@ -122,14 +109,15 @@ def _s_matrix(G, e):
     return np.eye(len(e)) - G @ np.linalg.solve(GtE @ G, GtE)
 
 
-def _s_transform(x, Q, G, pts, mode="ok"):
+def _s_transform(x, Q, G, pts, mode):
+    """The S-transformation with one plausible mistake (mode "all", "no_St", "x_only")."""
     e = _sel(len(x) // 2, pts) if mode != "all" else np.ones(len(x))
     S = _s_matrix(G, e)
     if mode == "no_St":
         return S @ x, S @ Q
     if mode == "x_only":
         return S @ x, Q
-    return S @ x, S @ Q @ S.T
+    return S @ x, S @ Q @ S.T  # mode "all": the right formula with the wrong E
 
 
 def check_s_transform(fn) -> None:
@@ -159,7 +147,8 @@ def check_s_transform(fn) -> None:
 # --------------------------------------------------------------------- estimable σ
 
 
-def _dist_std(xy, Q, i, j, mode="ok"):
+def _dist_std(xy, Q, i, j, mode):
+    """σ of a distance with one plausible mistake (mode "diag", "blocks", "var")."""
     d = xy[j] - xy[i]
     u = d / np.linalg.norm(d)
     f = np.zeros(xy.size)
@@ -171,9 +160,7 @@ def _dist_std(xy, Q, i, j, mode="ok"):
         for k in (i, j):
             Qb[2 * k : 2 * k + 2, 2 * k : 2 * k + 2] = Q[2 * k : 2 * k + 2, 2 * k : 2 * k + 2]
         return float(np.sqrt(f @ Qb @ f))
-    if mode == "var":
-        return float(f @ Q @ f)
-    return float(np.sqrt(f @ Q @ f))
+    return float(f @ Q @ f)  # mode "var"
 
 
 def check_distance_std(fn) -> None:
@@ -201,26 +188,35 @@ def check_distance_std(fn) -> None:
     success(f"σ = {want * 1000:.2f} mm in two datums: a distance is estimable")
 
 
-SOLUTIONS = {
-    "check_helmert_columns": lambda xy: _helmert(xy),
-    "check_s_transform": lambda x, Q, G, pts: _s_transform(x, Q, G, pts),
-    "check_distance_std": lambda xy, Q, i, j: _dist_std(xy, Q, i, j),
-}
+# --------------------------------------------------------------------- inner constraints
 
-MUTANTS = {
-    "check_helmert_columns": {
-        "rotation_yx": lambda xy: _helmert(xy, rot=(1, 1)),
-        "scale_for_rotation": lambda xy: _helmert(xy, scale_instead=True),
-        "no_translations": lambda xy: _helmert(xy, translations=False),
-    },
-    "check_s_transform": {
-        "all_points": lambda x, Q, G, pts: _s_transform(x, Q, G, pts, "all"),
-        "no_St": lambda x, Q, G, pts: _s_transform(x, Q, G, pts, "no_St"),
-        "Q_unchanged": lambda x, Q, G, pts: _s_transform(x, Q, G, pts, "x_only"),
-    },
-    "check_distance_std": {
-        "diag": lambda xy, Q, i, j: _dist_std(xy, Q, i, j, "diag"),
-        "blocks": lambda xy, Q, i, j: _dist_std(xy, Q, i, j, "blocks"),
-        "variance": lambda xy, Q, i, j: _dist_std(xy, Q, i, j, "var"),
-    },
-}
+
+def check_inner_solve(fn) -> None:
+    """``fn(N, b, G) -> (dx, Q)``: the inner-constraint solution of N dx = b bordered with G
+    (all points), and Q the u × u block of the bordered inverse."""
+    rng = rng_for("lesson09.check_inner_solve")
+    xy, N, b, G = _problem(rng)
+    u = N.shape[0]
+    # G scaled, not unit: the student's function must not depend on the columns' length
+    Gs = G * rng.uniform(0.5, 40.0, 3)
+    got = call(fn, N.copy(), b.copy(), Gs.copy(), what="inner_solve")
+    if not isinstance(got, tuple) or len(got) != 2:
+        raise CheckFailed("inner_solve: return the pair (dx, Q)")
+    dx, Q = (np.asarray(g, dtype=float) for g in got)
+    if Q.shape == (u + 3, u + 3):
+        raise CheckFailed(
+            f"Q: this is the whole bordered inverse ({u + 3} × {u + 3}); return its u × u block "
+            f"({u} × {u})",
+            tolerance=1e-8,
+        )
+    # oracle: with E = I the inner-constraint solution is the pseudo-inverse's
+    Np = np.linalg.pinv(N, rcond=1e-10)
+    GGt = Gs @ Gs.T
+    compare("Q [m²]", Q, Np, rtol=1e-7, wrong=[
+        ("N + G Gᵀ regularises N, it is not the bordered system", np.linalg.inv(N + GGt)),
+    ])  # fmt: skip
+    compare("dx [m]", dx, Np @ b, rtol=1e-7, wrong=[
+        ("the sign of dx is wrong: N dx = b", -(Np @ b)),
+        ("N + G Gᵀ regularises N, it is not the bordered system", np.linalg.solve(N + GGt, b)),
+    ])  # fmt: skip
+    success("dx and Q equal the pseudo-inverse solution N⁺ b, N⁺ (E = I, any scaling of G)")

@@ -171,31 +171,50 @@ def _parse(lines: list[str], source: str) -> tuple[F64, F64, F64]:
     return obs, cams, pts
 
 
+#: What :func:`read_bal` does with each camera's f, k1, k2.
+LENS_MODES = ("refine", "fixed")
+#: The lens terms of a BAL camera in orientviz's forward model (f is the model's c).
+BAL_TERMS = ("c", "k1", "k2")
+
+
 def read_bal(
     path: str | os.PathLike[str],
     *,
     pixel_size_mm: float = DEFAULT_PIXEL_MM,
     sigma_px: float = 1.0,
     sequence: str = "opk",
+    lens: str = "refine",
 ) -> Block:
     """Read a BAL file into a :class:`~orientviz.block.Block` (all points tie points).
+
+    Each BAL camera becomes its own camera with the forward lens model of
+    :mod:`orientviz.bundle._lens` (the distortion of the ideal point, as BAL defines it):
+    c = f · pixel size (mm), x0 = y0 = 0, k1 and k2 as in the file. The observations are
+    the file's pixels (distorted) in mm, so the residuals are BAL's reprojection errors.
 
     Parameters
     ----------
     path : path-like
         The BAL text file.
     pixel_size_mm : float
-        Size of one pixel in mm (default 0.010 mm).
+        Size of one pixel in mm (default 0.010 mm); it only scales the image units.
     sigma_px : float
         A-priori σ of the image coordinates in pixels (default 1 px).
     sequence : {"opk", "pok"}
         Rotation sequence of the block's angles.
+    lens : {"refine", "fixed"}
+        ``"refine"`` (default, as a BAL problem is defined): f, k1, k2 of every camera
+        are free in the bundle (``cameras[].free = ["c", "k1", "k2"]``); ``"fixed"``:
+        they are held at the file's values (only the poses and points are adjusted).
 
     Returns
     -------
     Block
-        One camera per distinct f (c = f · pixel size, mm), image coordinates in mm,
-        X0 and points in the file's length unit (m for the bench), angles in rad.
+        One camera per BAL camera (ids ``cam0``, ``cam1``, …) with its lens spec in
+        ``cameras.model`` (what ``orientviz solve`` estimates; in the library pass
+        :func:`orientviz.io.kinds._cameras.bundle_camera_options` to ``bundle_adjust``),
+        image coordinates in mm (y up, origin at the image centre), X0 and points in the
+        file's length unit, angles in rad.
 
     Raises
     ------
@@ -207,75 +226,104 @@ def read_bal(
         raise InputError(f"expected a pixel size > 0 mm, got {pixel_size_mm}", source)
     if not (np.isfinite(sigma_px) and sigma_px > 0):
         raise InputError(f"expected an image σ > 0 px, got {sigma_px}", source)
+    if lens not in LENS_MODES:
+        raise InputError(f"lens: expected one of {', '.join(LENS_MODES)}, got {lens!r}", source)
     from .safeio import read_input_text
 
     lines = read_input_text(path, "a BAL text file").splitlines()
     obs, cams, pts = _parse(lines, source)
-    npt = pts.shape[0]
-    ci, pi = obs[:, 0], obs[:, 1]
-    f = cams[:, 6]
+    nc, npt = cams.shape[0], pts.shape[0]
+    ci, pi = obs[:, 0].astype(np.int64), obs[:, 1].astype(np.int64)
     Rb = matrix_from_rotvec(cams[:, :3])
     R = np.swapaxes(Rb, 1, 2)
     X0 = -np.einsum("nij,nj->ni", R, cams[:, 3:6])
     om, ph, ka = opk_from_matrix(R, sequence)
-    # one camera per distinct principal distance
-    fu, cam_of = np.unique(f, return_inverse=True)
-    ci = ci.astype(np.int64)
-    xy = obs[:, 2:4]
-    k1, k2 = cams[ci, 7], cams[ci, 8]
-    if np.any(k1 != 0) or np.any(k2 != 0):
-        xy = _undistort(xy / f[ci][:, None], k1, k2) * f[ci][:, None]
-    return Block.from_arrays(
-        camera_c=fu * pixel_size_mm,
-        image_camera=cam_of,
+    xy = obs[:, 2:4] * pixel_size_mm
+    # BAL has no image size: the format is the extent of all observations about the centre
+    half = 2.0 * float(np.max(np.abs(xy))) if xy.size else 1.0
+    free = list(BAL_TERMS) if lens == "refine" else []
+    models = [
+        {"model": "forward", "free": free, "sigma": {},
+         "values": {"k1": float(k1), "k2": float(k2)}, "r0": None}
+        for k1, k2 in cams[:, 7:9].tolist()
+    ]  # fmt: skip
+    block = Block.from_arrays(
+        camera_c=cams[:, 6] * pixel_size_mm,
+        camera_ids=[f"cam{i}" for i in range(nc)],
+        camera_format_mm=(half, half),
+        image_camera=np.arange(nc),
+        image_ids=[f"img{i}" for i in range(nc)],
         X0=X0,
         angles=np.column_stack([om, ph, ka]),
         xyz=pts.reshape(npt, 3),
         obs_image=ci,
-        obs_point=pi.astype(np.int64),
-        obs_xy=xy * pixel_size_mm,
+        obs_point=pi,
+        obs_xy=xy,
         obs_sigma=sigma_px * pixel_size_mm,
         sequence=sequence,
-        meta={"source": source, "format": "BAL", "pixel_size_mm": pixel_size_mm},
-    )
+        meta={"source": source, "format": "BAL", "pixel_size_mm": pixel_size_mm,
+              "lens": lens},
+    )  # fmt: skip
+    block.cameras.model = models
+    return block
 
 
-def _undistort(pd: F64, k1: F64, k2: F64, iterations: int = 20) -> F64:
-    """Invert p_d = (1 + k1 r² + k2 r⁴) p for normalised coordinates (fixed point)."""
-    p = pd.copy()
-    for _ in range(iterations):
-        r2 = np.sum(p**2, axis=1)
-        p = pd / (1.0 + k1 * r2 + k2 * r2**2)[:, None]
-    return p
+def bal_cameras(block: Block, pixel_size_mm: float) -> F64:
+    """The nine BAL parameters (r, t, f, k1, k2) per image of ``block``, shape (m, 9).
 
-
-def write_bal(
-    block: Block, path: str | os.PathLike[str], *, pixel_size_mm: float = DEFAULT_PIXEL_MM
-) -> Path:
-    """Write a block as a BAL file (k1 = k2 = 0; principal points must be 0).
-
-    Inverse of :func:`read_bal`: image coordinates mm → px, R_bal = Rᵀ as angle-axis,
-    t = −R_bal X0, f = c / pixel size.
+    R_bal = Rᵀ as angle-axis, t = −R_bal X0, f = c / pixel size; k1, k2 from the image's
+    camera's forward lens model (``cameras.model``; 0 without one). A camera BAL cannot
+    express (principal point ≠ 0, a backward model, other forward terms ≠ 0) is refused.
     """
+    cams = block.cameras
+    models = list(getattr(cams, "model", None) or [{}] * len(cams))
+    k = np.zeros((len(cams), 2))
+    for i, spec in enumerate(models):
+        if cams.x0[i] != 0 or cams.y0[i] != 0:
+            raise InputError(f"camera {cams.ids[i]!r}: BAL has no principal point: expected "
+                             f"x0 = y0 = 0, got {cams.x0[i]:g}, {cams.y0[i]:g} mm")  # fmt: skip
+        if not spec:
+            continue
+        if spec.get("model") != "forward":
+            what = spec.get("model") or f"additional {spec.get('additional')!r}"
+            raise InputError(f"camera {cams.ids[i]!r}: BAL cameras have the forward lens "
+                             f"model (f, k1, k2), this one has {what}")  # fmt: skip
+        values = spec.get("values", {})
+        other = {n: v for n, v in values.items() if n not in ("k1", "k2") and v != 0}
+        if other:
+            raise InputError(f"camera {cams.ids[i]!r}: BAL cameras have f, k1, k2 only, "
+                             f"this one also {', '.join(other)}")  # fmt: skip
+        k[i] = values.get("k1", 0.0), values.get("k2", 0.0)
     cam = block.images.camera
-    if np.any(block.cameras.x0 != 0) or np.any(block.cameras.y0 != 0):
-        raise InputError("BAL has no principal point: expected x0 = y0 = 0 for every camera")
     a = block.images.angles
     R = matrix_from_opk(a[:, 0], a[:, 1], a[:, 2], block.sequence)
     Rb = np.swapaxes(R, 1, 2)
     t = -np.einsum("nij,nj->ni", Rb, block.images.X0)
-    f = block.cameras.c[cam] / pixel_size_mm
-    params = np.column_stack([rotvec_from_matrix(Rb), t, f, np.zeros((len(f), 2))])
+    f = cams.c[cam] / pixel_size_mm
+    return np.column_stack([rotvec_from_matrix(Rb), t, f, k[cam]])
+
+
+def write_bal(
+    block: Block, path: str | os.PathLike[str], *, pixel_size_mm: float | None = None
+) -> Path:
+    """Write a block as a BAL file, the inverse of :func:`read_bal`.
+
+    Image coordinates mm → px (y up, origin at the centre), cameras by
+    :func:`bal_cameras` (k1, k2 from the cameras' forward lens models, else 0).
+    ``pixel_size_mm`` defaults to the block's ``meta["pixel_size_mm"]``, else 0.010 mm.
+    """
+    p = float(pixel_size_mm or block.meta.get("pixel_size_mm") or DEFAULT_PIXEL_MM)
+    params = bal_cameras(block, p)
     obs = block.observations
-    xy = obs.xy / pixel_size_mm
+    xy = obs.xy / p
     from .safeio import write_atomic
 
     text = "".join(
         [
             f"{block.n_images} {block.n_points} {block.n_observations}\n",
             *(
-                f"{c} {p} {x:.9f} {y:.9f}\n"
-                for c, p, x, y in zip(
+                f"{c} {p_} {x:.9f} {y:.9f}\n"
+                for c, p_, x, y in zip(
                     obs.image.tolist(), obs.point.tolist(), xy[:, 0].tolist(), xy[:, 1].tolist()
                 )
             ),
@@ -287,12 +335,55 @@ def write_bal(
 
 
 def run_from_cli(args: argparse.Namespace) -> int:
-    """``orientviz import-bal FILE -o OUT.json [--control CSV]``: BAL file → problem file."""
+    """``orientviz import-bal FILE -o OUT.json [--fix-lens] [--control CSV]``: BAL → problem file."""
     from .importing import import_to_problem
 
+    lens = "fixed" if getattr(args, "fix_lens", False) else "refine"
+    note = (
+        "; f, k1, k2 of each camera held at the file's values (--fix-lens)"
+        if lens == "fixed"
+        else "; f, k1, k2 of each camera free (forward lens model, as BAL defines the "
+        "problem; --fix-lens holds them)"
+    )
     return import_to_problem(
         args,
-        lambda px, sig: read_bal(args.file, pixel_size_mm=px, sigma_px=sig),
+        lambda px, sig: read_bal(args.file, pixel_size_mm=px, sigma_px=sig, lens=lens),
         Path(args.file).stem,
         default_pixel_mm=DEFAULT_PIXEL_MM,
+        pixel_units=True,
+        lens_note=note,
     )
+
+
+def run_export(args: argparse.Namespace) -> int:
+    """``orientviz export-bal FILE.json -o OUT.bal``: a block problem file → BAL file."""
+    import sys
+
+    from .problem import load_problem
+    from .solve import _resolve
+
+    prog = "orientviz export-bal"
+    try:
+        problem = load_problem(_resolve(args.file))
+        if problem.kind != "block":
+            raise InputError(f"expected a block problem, got kind {problem.kind!r}", args.file)
+        u = problem.units
+        px = getattr(args, "pixel_size", None) or (
+            u.pixel_size if u.image == "px" else DEFAULT_PIXEL_MM
+        )
+        block = problem.data
+        bad = [i for i, x in enumerate(block.points.xyz) if not np.all(np.isfinite(x))]
+        if bad:
+            raise InputError(
+                f"point {block.points.ids[bad[0]]!r} has no coordinates ({len(bad)} such "
+                "point(s)): BAL needs every point; solve the file with -o first",
+                args.file,
+            )
+        write_bal(block, args.output, pixel_size_mm=px)
+    except InputError as exc:
+        if not exc.source:
+            exc = InputError(exc.message, args.file, exc.where)
+        print(f"{prog}: {exc.one_line()}", file=sys.stderr)
+        return 2
+    print(f"wrote {args.output}: {block.summary()} (pixel size {px} mm)")
+    return 0

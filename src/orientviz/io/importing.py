@@ -23,14 +23,20 @@ def import_to_problem(
     name: str,
     *,
     default_pixel_mm: float,
+    options: dict | None = None,
+    pixel_units: bool = False,
+    lens_note: str = "",
 ) -> int:
     """Read (``read(pixel_size_mm, sigma_px)``), add control, write ``args.output``.
 
     Optional arguments (absent = default): ``args.control`` (CSV path),
-    ``args.pixel_size`` (mm), ``args.sigma_px`` (px). Returns the exit code.
+    ``args.pixel_size`` (mm), ``args.sigma_px`` (px). ``options`` go into the file's
+    ``options``; ``pixel_units`` writes the image quantities in pixels (``units.image =
+    "px"``, angles in degrees: the units SfM users read) instead of mm and gon;
+    ``lens_note`` is appended to the one-line summary. Returns the exit code.
     """
     from .control import apply_control, read_control
-    from .problem import write_problem
+    from .problem import Units, write_problem
 
     prog = f"orientviz {getattr(args, 'command', None) or 'import'}"
     px = getattr(args, "pixel_size", None) or default_pixel_mm
@@ -40,11 +46,13 @@ def import_to_problem(
         control = getattr(args, "control", None)
         if control:
             block = apply_control(block, read_control(control))
-        options = {}
+        options = dict(options or {})
         if np.any(np.nan_to_num(block.points.sigma) > 0):
             options["control"] = "weighted"
+        units = Units(angle="deg", image="px", pixel_size=px) if pixel_units else None
         write_problem(
-            {"kind": "block", "block": block, "name": name, "options": options}, args.output
+            {"kind": "block", "block": block, "name": name, "options": options, "units": units},
+            args.output,
         )
     except InputError as exc:
         if exc.source == "<written document>":  # a value the schema refuses after conversion
@@ -54,7 +62,26 @@ def import_to_problem(
             )
         print(f"{prog}: {exc.one_line()}", file=sys.stderr)
         return 2
-    n_control = int(np.sum(block.points.role == CONTROL))
-    note = "" if n_control else " — no control points: add them (--control) before adjusting"
-    print(f"wrote {args.output}: {block.summary()} (pixel size {px} mm){note}")
+    print(f"wrote {args.output}: {block.summary()} (pixel size {px} mm){lens_note}")
+    hint = datum_hint(block, args.output)
+    if hint:
+        print(hint)
     return 0
+
+
+def datum_hint(block: Block, output: str) -> str:
+    """What the user needs before ``orientviz solve`` on an imported block: the datum.
+
+    An SfM model without control floats in its own frame (7 datum parameters): it is
+    solved as a free network (``--free``: minimum constraints) or with chosen images or
+    points held (``--fix``), or control is added (``--control`` at import). Empty when
+    the block has control points.
+    """
+    if np.any(block.points.role == CONTROL):
+        return ""
+    ids = list(block.images.ids) + ["IMAGE", "IMAGE2"]
+    return (
+        f"datum: no control points — solve it as a free network (orientviz solve {output} "
+        f"--free), or hold images or points at their given values (e.g. --fix {ids[0]} "
+        f"--fix {ids[1]}:X0: one image and the scale), or add control at import (--control CSV)"
+    )

@@ -73,6 +73,9 @@ class Solution:
         Global test, number of flagged observations and the warnings, as the report
         states them (:func:`orientviz.report.verdict`; ``orientviz solve`` sets it);
         printed by :meth:`as_text` and :meth:`as_dict` when set.
+    start : Block, optional
+        Frame kinds solved by the bundle: the block the adjustment started from
+        (approximations computed, datum applied; the layout of ``adjustment.history``).
     """
 
     kind: str
@@ -95,6 +98,7 @@ class Solution:
     notes: list[str] = field(default_factory=list)
     iterations: int | None = None
     verdict: dict[str, Any] | None = None
+    start: Any = None
 
     @property
     def n_iterations(self) -> int:

@@ -91,7 +91,7 @@ def run_from_cli(args: argparse.Namespace) -> int:
             from ..report import report_format
 
             report_format(report_path)  # a wrong suffix fails before the adjustment
-        problem = load_problem(_resolve(args.file))
+        problem = load_named(args.file)
         for name in ("max_iter", "tol", "solver", "robust", "robust_scale", "fix", "free"):
             if getattr(args, name, None) is not None:  # the command line wins over the file
                 problem.options = dict(problem.options, **{name: getattr(args, name)})
@@ -107,32 +107,12 @@ def run_from_cli(args: argparse.Namespace) -> int:
             if getattr(args, "json", False)
             else solution.as_text()
         )
-    except InputError as exc:
-        if not exc.source:  # a solver's check: the file is the user's
-            exc = InputError(exc.message, args.file, exc.where)
-        print(f"{prog}: {exc.one_line()}", file=sys.stderr)
-        return 2
-    except ModuleNotFoundError as exc:  # a solver module of this kind is not there (yet)
-        print(
-            f"{prog}: {args.file}: not yet available in this version ({exc.name})", file=sys.stderr
-        )
-        return 2
-    except AdjustmentError as exc:
-        print(f"{prog}: {args.file}: adjustment impossible: {exc}", file=sys.stderr)
-        return 3
-    except (ValueError, TypeError, KeyError) as exc:  # a library check without InputError
-        msg = exc.args[0] if exc.args else type(exc).__name__
-        print(f"{prog}: {args.file}: {msg}", file=sys.stderr)
-        return 2
-    except (np.linalg.LinAlgError, ArithmeticError) as exc:
-        print(f"{prog}: {args.file}: adjustment impossible: {exc}", file=sys.stderr)
-        return 3
-    except RecursionError:
-        print(f"{prog}: {args.file}: the problem is nested too deeply", file=sys.stderr)
-        return 2
-    except MemoryError:
-        print(f"{prog}: {args.file}: the problem is too large for this machine", file=sys.stderr)
-        return 2
+    except Exception as exc:  # one line and an exit code, never a traceback
+        failed = failure(prog, args.file, exc)
+        if failed is None:
+            raise
+        print(failed[0], file=sys.stderr)
+        return failed[1]
     if getattr(args, "output", None) and solution.adjustment.converged and not misfit(solution):
         try:
             save_problem(adjusted_problem(problem, solution), args.output)
@@ -167,6 +147,38 @@ def run_from_cli(args: argparse.Namespace) -> int:
     if misfit(solution):
         return MISFIT_EXIT
     return 0
+
+
+def load_named(name: str) -> Problem:
+    """Load a problem file, or a shipped data set by its name (``dbat_sxb``, …)."""
+    return load_problem(_resolve(name))
+
+
+def failure(prog: str, file: str, exc: BaseException) -> tuple[str, int] | None:
+    """The one-line message and exit code of a problem that cannot be loaded or solved.
+
+    What ``orientviz solve`` prints (and ``orientviz view`` before any server starts):
+    2 bad input, 3 adjustment impossible. None for an exception that is not one of these
+    (a bug: the caller re-raises it).
+    """
+    if isinstance(exc, InputError):
+        if not exc.source:  # a solver's check: the file is the user's
+            exc = InputError(exc.message, file, exc.where)
+        return f"{prog}: {exc.one_line()}", 2
+    if isinstance(exc, ModuleNotFoundError):  # a solver module of this kind is not there (yet)
+        return f"{prog}: {file}: not yet available in this version ({exc.name})", 2
+    if isinstance(exc, AdjustmentError):
+        return f"{prog}: {file}: adjustment impossible: {exc}", 3
+    if isinstance(exc, ValueError | TypeError | KeyError):  # a library check without InputError
+        msg = exc.args[0] if exc.args else type(exc).__name__
+        return f"{prog}: {file}: {msg}", 2
+    if isinstance(exc, np.linalg.LinAlgError | ArithmeticError):
+        return f"{prog}: {file}: adjustment impossible: {exc}", 3
+    if isinstance(exc, RecursionError):
+        return f"{prog}: {file}: the problem is nested too deeply", 2
+    if isinstance(exc, MemoryError):
+        return f"{prog}: {file}: the problem is too large for this machine", 2
+    return None
 
 
 #: Exit code of a solve whose model does not fit the data (σ0 far above 1 with a large
@@ -211,11 +223,29 @@ def adjusted_problem(problem: Problem, solution: Solution) -> Problem:
         i = pt[ident]
         if block.points.role[i] == TIE and np.all(np.isfinite(solution.xyz[k])):
             block.points.xyz[i] = solution.xyz[k]
+    _adjusted_cameras(block, getattr(solution.adjustment, "camera", None))
     out = Problem(**{**problem.__dict__, "data": block})
     out.description = (problem.description + " " if problem.description else "") + (
         f"[start values adjusted by orientviz solve ({solution.method})]"
     )
     return out
+
+
+def _adjusted_cameras(block, cam) -> None:
+    """Put a lens model's estimates (``adj.camera``, one group per camera) into the
+    block's cameras: c, x0, y0 and the estimated terms of ``cameras.model``."""
+    models = list(getattr(block.cameras, "model", None) or [])
+    if cam is None or not models or cam.value.shape[0] != len(models):
+        return
+    for g, spec in enumerate(models):
+        for j, name in enumerate(cam.names):
+            if not cam.estimated[j] or not np.isfinite(cam.value[g, j]):
+                continue
+            v = float(cam.value[g, j])
+            if name in ("c", "x0", "y0"):
+                getattr(block.cameras, name)[g] = v
+            elif spec:
+                spec.setdefault("values", {})[name] = v
 
 
 def _resolve(name: str) -> str:

@@ -22,7 +22,8 @@ kept in :attr:`AnalogPlotter.history`. Formulas (:data:`FORMULAS`):
 
 The true pair (two images' orientation, terrain points, image coordinates) comes from
 :func:`true_pair` (module :mod:`orientviz.orientation.pairsim`, re-exported here);
-:meth:`TruePair.scene` gives everything a 3D viewer needs.
+:meth:`TruePair.scene` gives everything a 3D viewer needs. :func:`preorientation_error`
+measures the errors of the round pre-orientation formulas as the rotations grow.
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ from ..errors import InputError
 from ..rotation import matrix_from_opk, matrix_from_rotvec, opk_from_matrix
 from ..units import RHO_C
 from .pairsim import PlotterConfig, TruePair, config_with, true_pair
+from .preorient import preorientation_corrections
 from .relative import DEPENDENT, PairState, design_dependent, y_parallax
 from .schemes import Scheme, get_scheme, kovarik_nine_point, least_squares_elements
 
@@ -271,8 +273,6 @@ class AnalogPlotter:
                 )
             return kovarik_nine_point(p, readings.z, b, kk)
         if formula == "preorient":
-            from .preorient import preorientation_corrections
-
             return preorientation_corrections(p, readings.z, readings.scheme, b)
         raise InputError(f"unknown formula {formula!r}; known: {', '.join(FORMULAS)}")
 
@@ -371,3 +371,63 @@ __all__ = [
     "AnalogPlotter",
     "config_with",
 ]
+
+
+def preorientation_error(
+    magnitudes_c: ArrayLike,
+    *,
+    element: str = "all",
+    ordinate: float = 110.0,
+    relief: float = 0.0,
+    rng: np.random.Generator | None = None,
+) -> dict[str, F64]:
+    """Error of the round formulas (and of the exact linearisation) as rotations grow.
+
+    For each magnitude α the true pair is rotated by α (in ``element``, or in ω, φ and κ
+    together for ``"all"``), the plotter stands at zero, and one noise-free pass of
+    readings at Kovarik's nine points is evaluated by the round-constant formulas and by
+    the exact linearisation (least squares with the read heights).
+
+    Parameters
+    ----------
+    magnitudes_c : array_like, shape (m,)
+        True rotation sizes α, centesimal minutes.
+    element : {"omega", "phi", "all"}
+    ordinate : float
+        Image ordinate of the scheme's edge rows, mm (Kovarik: 110-117).
+    relief : float
+        Relative relief of the terrain.
+    rng : numpy.random.Generator, optional
+        Only needed for ``relief > 0`` (the terrain).
+
+    Returns
+    -------
+    dict
+        ``"alpha_c"``; ``"round"`` and ``"exact"``: arrays (m, 3) of the errors
+        (computed − true) of Δω, Δφ (c) and Δbz (mm) — the true corrections being the
+        true elements, since the plotter starts at zero.
+    """
+    alpha = np.atleast_1d(np.asarray(magnitudes_c, dtype=float))
+    which = {"omega": [1, 0, 0], "phi": [0, 1, 0], "all": [1, 1, 1]}
+    if element not in which:
+        raise InputError(f"expected element 'omega', 'phi' or 'all', got {element!r}")
+    cfg = config_with(ordinate=ordinate, relief=relief, sigma_by=0.0, sigma_z=0.0)
+    if relief > 0 and rng is None:
+        raise InputError("a terrain with relief needs rng=np.random.default_rng(seed)")
+    base = true_pair(cfg, rng=rng or np.random.default_rng(0), elements=np.zeros(5))
+    out_round = np.empty((alpha.size, 3))
+    out_exact = np.empty((alpha.size, 3))
+    for i, a in enumerate(alpha):
+        e = np.zeros(5)
+        e[2:] = np.array(which[element]) * np.array([1.0, -0.8, 0.6]) * a / RHO_C
+        base.elements = e
+        plotter = AnalogPlotter(base, "kovarik9")
+        r = plotter.read()
+        d = preorientation_corrections(r.by, r.z, r.scheme, cfg.model_base)
+        ex = plotter.corrections(r, "exact")
+        rnd = np.array([d[2] * RHO_C, d[3] * RHO_C, d[1]])
+        exa = np.array([ex[2] * RHO_C, ex[3] * RHO_C, ex[1]])
+        true = np.array([e[2] * RHO_C, e[3] * RHO_C, e[1]])
+        out_round[i] = rnd - true
+        out_exact[i] = exa - true
+    return {"alpha_c": alpha, "round": out_round, "exact": out_exact}

@@ -1,4 +1,7 @@
-"""Kovarik's pre-orientation formulas with round constants, and how wrong they get.
+"""Kovarik's pre-orientation formulas with round constants.
+
+How wrong they get as the rotations grow: :func:`orientviz.orientation.plotter.preorientation_error`
+(it drives the simulated plotter).
 
 For wide-angle photographs (c = 152.7 mm, 23 × 23 cm) and a constant model base of
 220.7 machine mm, Kovarik (1968) gives, with by and z in machine mm and the angles in
@@ -88,65 +91,3 @@ def preorientation_corrections(by: ArrayLike, z: ArrayLike, scheme: Scheme | str
     # at point 1 (x = 0, y = 0): p1 = dby − z1 dω + b dκ
     dk = (p[0] - dby + zz[0] * dw) / b
     return kovarik_to_orientviz([dby, dbz, dw, f_c / RHO_C, dk])
-
-
-def preorientation_error(
-    magnitudes_c: ArrayLike,
-    *,
-    element: str = "all",
-    ordinate: float = 110.0,
-    relief: float = 0.0,
-    rng: np.random.Generator | None = None,
-) -> dict[str, F64]:
-    """Error of the round formulas (and of the exact linearisation) as rotations grow.
-
-    For each magnitude α the true pair is rotated by α (in ``element``, or in ω, φ and κ
-    together for ``"all"``), the plotter stands at zero, and one noise-free pass of
-    readings at Kovarik's nine points is evaluated by the round-constant formulas and by
-    the exact linearisation (least squares with the read heights).
-
-    Parameters
-    ----------
-    magnitudes_c : array_like, shape (m,)
-        True rotation sizes α, centesimal minutes.
-    element : {"omega", "phi", "all"}
-    ordinate : float
-        Image ordinate of the scheme's edge rows, mm (Kovarik: 110-117).
-    relief : float
-        Relative relief of the terrain.
-    rng : numpy.random.Generator, optional
-        Only needed for ``relief > 0`` (the terrain).
-
-    Returns
-    -------
-    dict
-        ``"alpha_c"``; ``"round"`` and ``"exact"``: arrays (m, 3) of the errors
-        (computed − true) of Δω, Δφ (c) and Δbz (mm) — the true corrections being the
-        true elements, since the plotter starts at zero.
-    """
-    from .plotter import AnalogPlotter, config_with, true_pair
-
-    alpha = np.atleast_1d(np.asarray(magnitudes_c, dtype=float))
-    which = {"omega": [1, 0, 0], "phi": [0, 1, 0], "all": [1, 1, 1]}
-    if element not in which:
-        raise InputError(f"expected element 'omega', 'phi' or 'all', got {element!r}")
-    cfg = config_with(ordinate=ordinate, relief=relief, sigma_by=0.0, sigma_z=0.0)
-    if relief > 0 and rng is None:
-        raise InputError("a terrain with relief needs rng=np.random.default_rng(seed)")
-    base = true_pair(cfg, rng=rng or np.random.default_rng(0), elements=np.zeros(5))
-    out_round = np.empty((alpha.size, 3))
-    out_exact = np.empty((alpha.size, 3))
-    for i, a in enumerate(alpha):
-        e = np.zeros(5)
-        e[2:] = np.array(which[element]) * np.array([1.0, -0.8, 0.6]) * a / RHO_C
-        base.elements = e
-        plotter = AnalogPlotter(base, "kovarik9")
-        r = plotter.read()
-        d = preorientation_corrections(r.by, r.z, r.scheme, cfg.model_base)
-        ex = plotter.corrections(r, "exact")
-        rnd = np.array([d[2] * RHO_C, d[3] * RHO_C, d[1]])
-        exa = np.array([ex[2] * RHO_C, ex[3] * RHO_C, ex[1]])
-        true = np.array([e[2] * RHO_C, e[3] * RHO_C, e[1]])
-        out_round[i] = rnd - true
-        out_exact[i] = exa - true
-    return {"alpha_c": alpha, "round": out_round, "exact": out_exact}

@@ -278,7 +278,7 @@ def plot_preorientation_error(out: Mapping[str, np.ndarray], ax=None):
     Parameters
     ----------
     out : dict
-        From :func:`orientviz.orientation.preorient.preorientation_error`.
+        From :func:`orientviz.orientation.plotter.preorientation_error`.
     """
     fig, ax = _axes(ax)
     a = out["alpha_c"]

@@ -313,7 +313,7 @@ def write_report(
     >>> problem = load_problem("block.json")                     # doctest: +SKIP
     >>> write_report(problem, solve_problem(problem), "at.html")  # doctest: +SKIP
     """
-    from .. import __version__
+    from ..version import __version__
     from ..io.jsonio import write_atomic
 
     kind = report_format(path)

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from . import Row
+from .dbat_files import read_camcal
 from .dbat_report import EO_FIELDS, as_printed, read_report, report_values
 
 IO_NAMES = ("c", "px", "py", "as", "K1", "K2", "K3", "P1", "P2")
@@ -64,8 +65,6 @@ def _decimals() -> dict[str, int]:
 
 def _setup(folder=None):
     """Observations (measured mm in the sensor frame), indices, control and start values."""
-    from ..datasets.make_dbat import read_camcal
-
     d = read_camcal(_folder() if folder is None else folder)
     p = d["pixel_mm"]
     img_ids = list(d["images"])

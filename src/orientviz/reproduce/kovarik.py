@@ -45,8 +45,7 @@ import copy
 
 import numpy as np
 
-from ..orientation.plotter import AnalogPlotter, config_with, true_pair
-from ..orientation.preorient import preorientation_error
+from ..orientation.plotter import AnalogPlotter, config_with, preorientation_error, true_pair
 from ..units import RHO_C
 from .rows import Row
 

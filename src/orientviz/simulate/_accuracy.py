@@ -39,8 +39,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..block import CONTROL
-from ..stereo_models import scalar_cofactors, solve_rows
-from ..stereo_models._formation import _pairs
+from ..stereo_models import model_pairs, scalar_cofactors, solve_rows
 from ._block import simulate_block
 
 F64 = NDArray[np.float64]
@@ -95,7 +94,7 @@ def _geometry(n_strips: int, images: int, control: str, spacing: int, kind: str,
     )  # fmt: skip
     b = sim.truth
     models = sim.layout.models
-    j, ol, _ = _pairs(b, models)
+    j, ol, _ = model_pairs(b, models)
     pt = b.observations.point[ol]
     order = np.argsort(j, kind="stable")
     return sim, models, j[order], pt[order]

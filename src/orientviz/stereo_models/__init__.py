@@ -21,7 +21,7 @@ from ._deformation import (
     model_ap_set,
     similarity_columns,
 )
-from ._formation import ModelSet, form_models, model_to_object
+from ._formation import ModelSet, form_models, model_pairs, model_to_object
 from ._joint import deformed, joint_setup, model_rows
 from ._normal import LinearSolution, scalar_cofactors, solve_rows, solve_sparse
 from ._result import DeformationEstimates, ModelsResult
@@ -47,6 +47,7 @@ __all__ = [
     "joint_setup",
     "deformed",
     "model_rows",
+    "model_pairs",
     "LinearSolution",
     "scalar_cofactors",
     "solve_rows",

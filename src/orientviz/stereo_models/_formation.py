@@ -92,7 +92,7 @@ class ModelSet:
         return int(self.models.shape[0])
 
 
-def _pairs(block: Block, models: I64) -> tuple[I64, I64, I64]:
+def model_pairs(block: Block, models: I64) -> tuple[I64, I64, I64]:
     """(model, left obs, right obs) of every point seen in both images of a model."""
     obs = block.observations
     P = max(block.n_points, 1)
@@ -204,7 +204,7 @@ def form_models(
     n = models.shape[0]
     img_ids = block.images.ids
     ids = [f"{img_ids[a]}+{img_ids[b]}" for a, b in models]
-    j, ol, orr = _pairs(block, models)
+    j, ol, orr = model_pairs(block, models)
     if exclude_roles:
         keep = ~np.isin(block.points.role[block.observations.point[ol]], exclude_roles)
         j, ol, orr = j[keep], ol[keep], orr[keep]

@@ -16,7 +16,6 @@ the terminal; the server keeps running.
 from __future__ import annotations
 
 import argparse
-import os
 import socket
 import sys
 import time
@@ -27,6 +26,26 @@ from ..block import Block
 from ..errors import InputError, OrientvizError
 
 DEFAULT_DEMO = "block"
+PROG = "orientviz view"
+
+
+def check_host(host: str) -> None:
+    """Raise :class:`InputError` if ``host`` is no address of this machine to listen on."""
+    import errno
+
+    try:
+        infos = socket.getaddrinfo(host, None, type=socket.SOCK_STREAM)
+    except (socket.gaierror, UnicodeError) as exc:
+        raise InputError(f"--host {host}: not a valid host name or address ({exc})") from None
+    for family, kind, proto, _, addr in infos:
+        with socket.socket(family, kind, proto) as s:
+            try:
+                s.bind((addr[0], 0))
+                return
+            except OSError as exc:
+                if exc.errno != errno.EADDRNOTAVAIL:
+                    return
+    raise InputError(f"--host {host}: no interface of this machine has that address")
 
 
 def port_is_free(host: str, port: int) -> bool:
@@ -39,6 +58,21 @@ def port_is_free(host: str, port: int) -> bool:
         except OSError:
             return False
     return True
+
+
+def no_tunnel(server: Any) -> None:
+    """Switch viser's share button off, and refuse a share request that comes anyway.
+
+    viser's share button asks a public relay for a tunnel to the viewer, past the
+    binding to 127.0.0.1; orientviz never opens one (``--host`` exposes it on purpose).
+    """
+    server.gui.configure_theme(show_share_button=False)
+
+    def refused(verbose: bool = True) -> None:
+        print("orientviz view: sharing through a public relay is off", file=sys.stderr)
+        return None
+
+    server.request_share_url = refused
 
 
 class ViewerApp:
@@ -76,6 +110,7 @@ class ViewerApp:
     ) -> None:
         import viser
 
+        check_host(host)
         if not port_is_free(host, port):
             raise InputError(f"port {port} on {host} is already in use; choose another with --port")
         self.server = viser.ViserServer(host=host, port=port, label="orientviz", verbose=False)
@@ -83,6 +118,7 @@ class ViewerApp:
             self.server.stop()
             raise InputError(f"port {port} on {host} is already in use; choose another with --port")
         self.host, self.port = host, self.server.get_port()
+        no_tunnel(self.server)
         self.verbose = verbose
         self.scene = None
         self.panel = None
@@ -125,6 +161,8 @@ class ViewerApp:
 
         gui = self.server.gui
         gui.add_markdown(f"### {demo.title}\n{demo.description}")
+        if demo.message:
+            self.report(demo.message)
         if demo.state is not None:
             geo = BlockGeometry(demo.state)
             self.scene = BlockScene(self.server.scene, geo).build()
@@ -226,10 +264,13 @@ def resolve_content(content: Any) -> Any:
         Unknown demo, unreadable file or an object the viewer cannot show.
     """
     from .demos import DEMOS, Demo, demo_from_block, load_demo
+    from .solved import Solved, solution_demo
 
     if isinstance(content, str | Path):
         name = str(content)
         return load_demo(name) if name in DEMOS else demo_from_file(name)
+    if isinstance(content, Solved):
+        return solution_demo(content)
     if isinstance(content, Demo):
         return content
     if isinstance(content, Block):
@@ -241,26 +282,14 @@ def resolve_content(content: Any) -> Any:
     )
 
 
-def demo_from_file(path: str) -> Any:
-    """Load a problem file into a demo (a block file; other kinds are not shown yet)."""
-    from .demos import demo_from_block
+def demo_from_file(target: str) -> Any:
+    """Solve a problem file or shipped data set as ``orientviz solve`` does; its demo.
 
-    p = Path(path)
-    if not os.path.lexists(path):  # never raises (a name too long is simply not there)
-        raise InputError("no such file or demo (demos: block, pair, radar)", source=path)
-    try:
-        from ..io.problem import load_problem  # type: ignore[attr-defined]
-    except ImportError as exc:
-        raise InputError(f"cannot read problem files in this version ({exc})", source=path) from exc
-    problem = load_problem(p)
-    block = getattr(problem, "data", problem)
-    if not isinstance(block, Block):
-        raise InputError(
-            f"the viewer shows frame-camera problems (blocks); this file is a {problem.kind!r} problem",
-            source=path,
-        )
-    title = problem.name or p.name
-    return demo_from_block(block, title=title)
+    Raises what ``solve`` reports (:func:`orientviz.io.solve.failure`), before any server.
+    """
+    from .solved import solution_demo, solve_target
+
+    return solution_demo(solve_target(target))
 
 
 def open_viewer(
@@ -289,19 +318,32 @@ def export_html(content: Any, path: str | Path) -> Path:
 
 
 def run_from_cli(args: argparse.Namespace) -> int:
-    """``orientviz view [FILE | DEMO] [--host] [--port] [--export FILE.html]``; returns the exit code."""
+    """``orientviz view [FILE | NAME | DEMO] [--host] [--port] [--export FILE.html]``.
+
+    A file or data set that cannot be solved gets ``orientviz solve``'s one line and exit
+    code before any server starts. Returns the exit code.
+    """
+    from ..io.solve import failure
+
     target = args.target or DEFAULT_DEMO
+    try:
+        content = resolve_content(target)  # a bad file is refused before a server starts
+    except Exception as exc:
+        failed = failure(PROG, target, exc)
+        if failed is None:
+            raise
+        print(failed[0], file=sys.stderr)
+        return failed[1]
     if getattr(args, "export", None):
         try:
-            out = export_html(target, args.export)
+            out = export_html(content, args.export)
         except OrientvizError as exc:
-            print(f"orientviz view: {exc}", file=sys.stderr)
+            print(f"{PROG}: {exc}", file=sys.stderr)
             return exc.exit_code
-        print(f"orientviz view: wrote {out}")
+        print(f"{PROG}: wrote {out}")
         return 0
     app = None
     try:
-        content = resolve_content(target)  # a bad file is refused before a server starts
         app = ViewerApp(content, host=args.host, port=args.port)
         while True:
             time.sleep(0.5)

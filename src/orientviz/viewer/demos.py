@@ -45,6 +45,10 @@ class Demo:
         :class:`~orientviz.viewer.app.ViewerApp` (``app.server``, ``app.scene`` — the
         block scene or None —, ``app.guard``, ``app.report``). The dict may hold
         ``"camera"`` = (position, look_at, size) for scenes without a block.
+    message : str or None
+        Shown in the panel at the start (e.g. why the adjustment did not converge).
+    solution : Solution or None
+        A problem file's solution (:mod:`orientviz.viewer.solved`), for the panel.
     """
 
     name: str
@@ -52,6 +56,8 @@ class Demo:
     description: str
     state: BlockState | None = None
     extra: Callable[[Any], dict] | None = None
+    message: str | None = None
+    solution: Any = None
 
 
 def demo_from_block(block: Block, result: Adjustment | None = None, title: str = "Block") -> Demo:

@@ -184,18 +184,24 @@ def expand_result(sub_result: Any, mp: Mapping, block: Block, sigma: F64) -> Any
         ]
     )
 
+    ap_sl = sub_result.groups.get("additional")
+    q = 0 if ap_sl is None else ap_sl.stop - ap_sl.start
+
     def full_x(xs: F64 | None, fill: F64 = base) -> F64 | None:
         if xs is None:
             return None
-        if np.size(xs) < 6 * ms + 3 * ps:
+        if np.size(xs) < 6 * ms + 3 * ps + q:
             return np.zeros(0)
         out = fill.copy()
         out[col] = np.asarray(xs)[: 6 * ms + 3 * ps]
+        if q:  # the camera terms follow the points (the bundle's layout)
+            out = np.concatenate([out, np.asarray(xs)[ap_sl]])
         return out
 
     x = full_x(sub_result.x)
+    zero = np.zeros_like(base)
     ext = x[: 6 * m].reshape(m, 6)
-    xyz = x[6 * m :].reshape(p, 3)
+    xyz = x[6 * m : 6 * m + 3 * p].reshape(p, 3)
     # image residuals of every observation at the adjusted state (v = f − l)
     after = block.with_(
         images=replace(block.images, X0=ext[:, :3], angles=ext[:, 3:]),
@@ -227,6 +233,8 @@ def expand_result(sub_result: Any, mp: Mapping, block: Block, sigma: F64) -> Any
             full = np.full((size,) + np.shape(Q)[1:], np.nan)
             full[idx] = Q
             cb[name] = full
+    if sub_result.cofactor_groups.get("additional") is not None:
+        cb["additional"] = sub_result.cofactor_groups["additional"]
     pairs = getattr(sub_result, "exterior_pairs", None)
     if pairs is not None:
         i, k = np.divmod(np.asarray(pairs.keys), max(ms, 1))
@@ -236,16 +244,19 @@ def expand_result(sub_result: Any, mp: Mapping, block: Block, sigma: F64) -> Any
     used = np.zeros(n, bool)
     sub_used = getattr(sub_result, "used_obs", None)
     used[mp.obs] = True if sub_used is None else np.asarray(sub_used, bool)
-    zero = np.zeros_like(base)
     history = [replace(it, x=full_x(it.x), dx=full_x(it.dx, zero)) for it in sub_result.history]
     names = [
         f"{i}.{q}" for i in block.images.ids for q in ("X0", "Y0", "Z0", "omega", "phi", "kappa")
-    ] + [f"{i}.{q}" for i in block.points.ids for q in "XYZ"]
+    ] + [f"{i}.{c}" for i in block.points.ids for c in "XYZ"]
+    groups = {"exterior": slice(0, 6 * m), "points": slice(6 * m, 6 * m + 3 * p)}
+    if q:
+        names += list(sub_result.names[ap_sl])
+        groups["additional"] = slice(6 * m + 3 * p, 6 * m + 3 * p + q)
     return replace(
         sub_result,
         x=x,
         names=names,
-        groups={"exterior": slice(0, 6 * m), "points": slice(6 * m, 6 * m + 3 * p)},
+        groups=groups,
         residuals=np.concatenate([v_img.ravel(), v_sub[tail]]),
         sigma_obs=np.concatenate(
             [np.asarray(sigma, float).ravel(), np.asarray(sub_result.sigma_obs)[tail]]

@@ -155,7 +155,7 @@ class BlockPanel:
             self.act.refresh()
             self.precision.refresh()
         self.handles["image_id"].content = (
-            f"**{b.images.ids[k]}** (strip {b.images.strip[k]}) — sliders are changes of "
+            f"**{self.state.image_label(k)}** — sliders are changes of "
             f"X0 = ({b.images.X0[k, 0]:.1f}, {b.images.X0[k, 1]:.1f}, {b.images.X0[k, 2]:.1f}) m, "
             f"ω φ κ = ({ang[0]:.4f}, {ang[1]:.4f}, {ang[2]:.4f}) gon"
         )
@@ -227,14 +227,14 @@ class BlockPanel:
                 self._syncing = False
         res = st.result
         lines = [
-            f"σ0 of the current state: **{st.sigma0(e):.3f}** (redundancy {st.redundancy()})",
-            f"state: {st.history[st.cursor].label}"
-            + ("" if st.at_result or st.cursor == 0 else " (moved)"),
+            f"σ0 of the current state: **{st.sigma0(e):.10g}** (redundancy {st.redundancy()})",
+            f"state: {st.history[st.cursor].label} of {n_hist - 1}"
+            + (" (moved by hand)" if st.moved else ""),
             f"max {kind}: {np.nanmax(scores, initial=0.0):.2f} · residual exaggeration ×{self.scene.exaggeration:.3g}",
         ]
         if res is not None:
             lines.append(
-                f"last adjustment: σ̂0 = {res.sigma0:.3f}, {res.iterations} it., {res.reason}"
+                f"last adjustment: σ̂0 = {res.sigma0:.10g}, {res.iterations} it., {res.reason}"
             )
         h["stats"].content = "  \n".join(lines)
         # the list of largest residuals follows every change

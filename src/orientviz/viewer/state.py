@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -42,6 +43,8 @@ class Snapshot:
     angles: F64
     xyz: F64
     sigma0: float
+    #: the camera terms (the result's ``"additional"`` block) at this state, or None
+    ap: F64 | None = None
 
 
 @dataclass
@@ -75,6 +78,7 @@ class Change:
     cursor: int
     at_result: bool
     mapping: Mapping | None
+    ap: F64 | None = None
 
 
 class BlockState:
@@ -88,8 +92,13 @@ class BlockState:
         An adjustment of ``block`` (layout ``"exterior"``/``"points"``); the state then
         starts at the adjusted values and its history is the result's history.
     adjuster : callable, optional
-        ``adjuster(block, max_iter) -> Adjustment``; default
-        :func:`orientviz.viewer.adjuster.default_adjuster`.
+        ``adjuster(block, max_iter, precision=True) -> Adjustment``; default
+        :func:`orientviz.viewer.adjuster.default_adjuster`. A problem file's adjuster is
+        :class:`orientviz.viewer.solved.FileAdjuster` (the file's model and options).
+    camera : object, optional
+        ``camera.misclosure(block, ap) -> (n, 2)`` mm: the misclosures through the file's
+        camera model with the camera terms ``ap`` (:class:`orientviz.viewer.solved.
+        CameraTerms`); None: the block's pinhole projection.
     """
 
     def __init__(
@@ -97,10 +106,16 @@ class BlockState:
         block: Block,
         result: Adjustment | None = None,
         adjuster: Adjuster | None = None,
+        camera: Any = None,
     ) -> None:
         self.block0 = block.copy()
         self.block = block.copy()
         self.adjuster = adjuster or default_adjuster()
+        self.camera = camera
+        #: camera terms of the current state (None: no camera model, or not yet estimated)
+        self.ap: F64 | None = None
+        self.ap0: F64 | None = None
+        self._moved = False
         self.result: Adjustment | None = None
         self.history: list[Snapshot] = [self._snap("start", float("nan"))]
         #: index of the history record the state is at (steps truncate the history here)
@@ -110,6 +125,10 @@ class BlockState:
         #: where the last adjusted sub-block sat in the block (None: the whole block)
         self.mapping: Mapping | None = None
         if result is not None:
+            first = result.history[0] if result.history else None
+            if first is not None and np.size(first.x) == np.size(result.x):
+                self.ap0 = self.ap = _additional(result, first.x)
+                self.history[0] = self._snap("start", float(first.sigma0))
             self._take_result(result, self.block0)
         #: the list of changes with their σ̂0; entry 0 is the state as loaded
         self.changes: list[Change] = [
@@ -121,8 +140,9 @@ class BlockState:
     # ------------------------------------------------------------------ snapshots
     def _snap(self, label: str, sigma0: float) -> Snapshot:
         b = self.block
+        ap = None if self.ap is None else self.ap.copy()
         return Snapshot(
-            label, b.images.X0.copy(), b.images.angles.copy(), b.points.xyz.copy(), sigma0
+            label, b.images.X0.copy(), b.images.angles.copy(), b.points.xyz.copy(), sigma0, ap
         )
 
     def _take_result(self, result: Adjustment, start: Block) -> None:
@@ -136,8 +156,11 @@ class BlockState:
         self._put(start, result)
         if len(kept) < len(result.history) - 1:  # the solver kept no parameters per iteration
             self.history.append(self._snap("adjusted", result.sigma0))
+        else:  # the last record is the result: its σ̂0 as the result states it
+            self.history[-1] = self._snap(self.history[-1].label, float(result.sigma0))
         self.cursor = len(self.history) - 1
         self._at_result = True
+        self._moved = False
 
     def _put(self, start: Block, result: Adjustment, x: F64 | None = None) -> None:
         """Set the estimates of the state from ``x`` (default ``result.x``; layout of
@@ -154,6 +177,8 @@ class BlockState:
             b.points.xyz = x[result.groups["points"]].reshape(b.n_points, 3).copy()
         else:
             b.points.xyz = start.points.xyz.copy()
+        if self.camera is not None:
+            self.ap = _additional(result, x)
 
     def replay(self, k: int) -> Snapshot:
         """Set the state to history record ``k`` (0 = start) and return it."""
@@ -164,7 +189,9 @@ class BlockState:
         self.block.images.X0 = s.X0.copy()
         self.block.images.angles = s.angles.copy()
         self.block.points.xyz = s.xyz.copy()
+        self.ap = None if s.ap is None else s.ap.copy()
         self._at_result = self.result is not None and k == len(self.history) - 1
+        self._moved = False
         return s
 
     # ------------------------------------------------------------------ actions
@@ -175,6 +202,7 @@ class BlockState:
         if angles is not None:
             self.block.images.angles[i] = np.asarray(angles, dtype=float)
         self._at_result = False
+        self._moved = True
 
     def step(self, max_iter: int = 1, precision: bool = True) -> Adjustment:
         """Adjust from the current state with at most ``max_iter`` steps; record the steps.
@@ -208,9 +236,11 @@ class BlockState:
         """Back to the start values; the history and the list of changes are cleared."""
         self.block = self.block0.copy()
         self.result = None
+        self.ap = None if self.ap0 is None else self.ap0.copy()
         self.history = [self._snap("start", float("nan"))]
         self.cursor = 0
         self._at_result = False
+        self._moved = False
         self.edits = Edits.of(self.block0)
         self.mapping = None
         self.changes = [self._change("as loaded")]
@@ -231,6 +261,7 @@ class BlockState:
             self.cursor,
             self.at_result,
             self.mapping,
+            None if self.ap is None else self.ap.copy(),
         )
 
     def _restore(self, c: Change) -> None:
@@ -241,6 +272,8 @@ class BlockState:
         self.result, self.mapping = c.result, c.mapping
         self.history, self.cursor = list(c.history), c.cursor
         self._at_result = c.at_result
+        self.ap = None if c.ap is None else c.ap.copy()
+        self._moved = False
 
     def record(self, label: str) -> Change:
         """Append the current state to :attr:`changes` (later entries are discarded)."""
@@ -362,8 +395,16 @@ class BlockState:
         """True while the state equals the last adjustment's estimate."""
         return self._at_result
 
+    @property
+    def moved(self) -> bool:
+        """True when an orientation was changed by hand since the last recorded state."""
+        return self._moved
+
     def misclosure(self) -> F64:
-        """Observed minus computed image coordinates (n, 2) in mm for the current state."""
+        """Observed minus computed image coordinates (n, 2) in mm for the current state
+        (through the file's camera model and the current camera terms, if any)."""
+        if self.camera is not None and self.ap is not None:
+            return self.camera.misclosure(self.block, self.ap)
         return self.block.residuals()
 
     def scores(self, misclosure: F64 | None = None) -> tuple[F64, str]:
@@ -397,7 +438,14 @@ class BlockState:
         return 2 * self.block.n_observations - 6 * self.block.n_images - free
 
     def sigma0(self, misclosure: F64 | None = None) -> float:
-        """σ0 of the current state from the image misclosures, √(Σ(e/σ)² / r), unitless."""
+        """σ0 of the current state, unitless.
+
+        At a recorded state (the start, an iteration, the result) the adjustment's own
+        σ̂0 of that state (all its observations and pseudo-observations); after a change
+        by hand the image misclosures' √(Σ(e/σ)² / r).
+        """
+        if not self._moved and np.isfinite(self.history[self.cursor].sigma0):
+            return float(self.history[self.cursor].sigma0)
         e = self.misclosure() if misclosure is None else misclosure
         r = self.redundancy()
         if r <= 0:
@@ -415,7 +463,19 @@ class BlockState:
         idx = np.argpartition(-s, k - 1)[:k] if 0 < k < s.shape[0] else np.arange(s.shape[0])
         return idx[np.argsort(-s[idx])]
 
+    def image_label(self, i: int) -> str:
+        """``"img3"``, with its strip where the block has strips (``"img3 (strip 2)"``)."""
+        b = self.block
+        s = int(b.images.strip[i])
+        return f"{b.images.ids[i]}" + (f" (strip {s})" if s >= 0 else "")
+
     def observation_label(self, j: int) -> str:
         """``"image/point"`` ids of observation ``j``."""
         o = self.block.observations
         return f"{self.block.images.ids[o.image[j]]}/{self.block.points.ids[o.point[j]]}"
+
+
+def _additional(result: Any, x: F64) -> F64 | None:
+    """The camera terms (block ``"additional"``) of a parameter vector, or None."""
+    sl = result.groups.get("additional")
+    return None if sl is None else np.asarray(x, dtype=float)[sl].copy()

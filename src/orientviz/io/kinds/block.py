@@ -160,16 +160,46 @@ def solve(problem: Problem, method: str | None) -> Solution:
 
     Datum options (:mod:`._datum`): ``free`` (a free network, minimum constraints) and
     ``fix`` (images/points held at their given values); ``robust`` (``"huber"``,
-    ``"cauchy"``) with ``robust_scale`` reweights the bundle (:mod:`._robust`).
+    ``"cauchy"``) with ``robust_scale`` reweights the bundle (:mod:`._robust`). The
+    solution's ``start`` is the block the adjustment started from (approximations
+    computed, datum applied).
     """
-    from ._datum import apply_fix, free_network, minimum_datum, parse_fix
-
     method = method or "bundle"
-    o = problem.options
-    loss = str(o.get("robust", "none"))
+    loss = str(problem.options.get("robust", "none"))
     if loss != "none" and method != "bundle":
         raise InputError(f"robust = {loss!r} applies to the bundle only, not --method {method}",
                          problem.source, "options.robust")  # fmt: skip
+    block, datum_notes = prepare(problem)
+    if method == "bundle":
+        adj, robust_note = adjust_block(problem, block)
+        sol = solution_from_block_adjustment(problem, block, adj, method)
+        sol.notes[:0] = datum_notes + ([robust_note] if robust_note else [])
+        sol.start = block
+        return sol
+    opts = _options(problem)
+    if method == "models":
+        from ...stereo_models import independent_models
+
+        opts["method"] = problem.options.get("model_method", "rigorous")
+        adj = _call(independent_models, block, opts, precision=True)
+        return solution_from_models(problem, block, adj)
+    from ...polynomial import polynomial_adjust as func
+
+    adj = _call(func, block, opts)
+    if "exterior" not in adj.groups:
+        return solution_from_points(problem, block, adj, method, func)
+    return solution_from_block_adjustment(problem, block, adj, method)
+
+
+def prepare(problem: Problem) -> tuple[Block, list[str]]:
+    """The block the adjustment starts from, and the notes on its datum.
+
+    Approximate values where the file gives none (:func:`approximate`), then the datum
+    options ``free`` and ``fix`` (:mod:`._datum`).
+    """
+    from ._datum import apply_fix, free_network, minimum_datum, parse_fix
+
+    o = problem.options
     fix = parse_fix(o.get("fix"), problem.source)
     free = bool(o.get("free", False))
     block: Block = problem.data
@@ -185,38 +215,43 @@ def solve(problem: Problem, method: str | None) -> Solution:
         block = apply_fix(block, fix)
         datum_notes.append("datum: " + ", ".join(i + (":" + ",".join(p) if p else "") for i, p in fix)
                            + " held at the given values" + (" (free network otherwise)" if free else ""))  # fmt: skip
+    return block, datum_notes
+
+
+def _options(problem: Problem) -> dict[str, Any]:
     keys = ("control", "max_iter", "tol", "degree_xy", "degree_z", "solver")
-    opts = {k: v for k, v in o.items() if k in keys}
-    if method == "bundle":
-        from ...bundle import bundle_adjust
+    return {k: v for k, v in problem.options.items() if k in keys}
 
-        rays = check_mode(problem) == "rays"
-        opts.update(bundle_camera_options(block))  # cameras[].model / additional
-        run_block = with_check_rays(block) if rays else block
-        if loss == "none":
-            adj = _call(bundle_adjust, run_block, opts)
-        else:
-            from ._robust import robust_bundle
 
-            adj, run = robust_bundle(run_block, loss, o.get("robust_scale"),
-                                     lambda b: _call(bundle_adjust, b, opts))  # fmt: skip
-            datum_notes.append(run.note(run_block))
-        sol = solution_from_block_adjustment(problem, block, adj, method)
-        sol.notes[:0] = datum_notes
-        return sol
-    elif method == "models":
-        from ...stereo_models import independent_models
+def adjust_block(problem: Problem, block: Block, **overrides: Any) -> tuple[Any, str | None]:
+    """The bundle adjustment of ``block`` with the file's model and options.
 
-        opts["method"] = problem.options.get("model_method", "rigorous")
-        adj = _call(independent_models, block, opts, precision=True)
-        return solution_from_models(problem, block, adj)
-    else:
-        from ...polynomial import polynomial_adjust as func
+    What ``orientviz solve`` runs on the prepared block (:func:`prepare`): the options
+    ``control``, ``max_iter``, ``tol``, ``solver``, the cameras' lens models and
+    additional parameters, ``check_points`` and ``robust``. ``overrides`` are further
+    keywords of :func:`orientviz.bundle.bundle_adjust` (``max_iter``, ``precision``,
+    ``history_x``, …), e.g. for the viewer's steps and re-solves.
 
-        adj = _call(func, block, opts)
-        if "exterior" not in adj.groups:
-            return solution_from_points(problem, block, adj, method, func)
-    return solution_from_block_adjustment(problem, block, adj, method)
+    Returns
+    -------
+    (BundleResult, str or None)
+        The adjustment and the note of a robust run (None without ``robust``).
+    """
+    from ...bundle import bundle_adjust
+
+    o = problem.options
+    loss = str(o.get("robust", "none"))
+    opts = _options(problem)
+    opts.update(bundle_camera_options(block))  # cameras[].model / additional
+    opts.update(overrides)
+    run_block = with_check_rays(block) if check_mode(problem) == "rays" else block
+    if loss == "none":
+        return _call(bundle_adjust, run_block, opts), None
+    from ._robust import robust_bundle
+
+    adj, run = robust_bundle(run_block, loss, o.get("robust_scale"),
+                             lambda b: _call(bundle_adjust, b, opts))  # fmt: skip
+    return adj, run.note(run_block)
 
 
 def _labels(
@@ -258,8 +293,8 @@ def _labels(
 
 def _control_labels(block: Block, control: str) -> list[str]:
     """``point/X`` for each coordinate pseudo-observation of the bundle, in its order
-    (unknown points in block order, then X, Y, Z; see ``bundle._checks.point_setup``)."""
-    from ...bundle._checks import point_setup
+    (unknown points in block order, then X, Y, Z; see ``bundle.problem._checks.point_setup``)."""
+    from ...bundle.problem import point_setup
 
     setup = point_setup(block, control)
     pt = block.points.ids

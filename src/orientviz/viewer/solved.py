@@ -1,0 +1,224 @@
+"""The viewer on a problem file or shipped data set: solved as ``orientviz solve`` solves it.
+
+``orientviz view FILE|NAME`` (and ``open_viewer(path)``, the notebook's inline viewer)
+load the problem with :func:`orientviz.io.solve.load_named` and solve it with
+:func:`orientviz.io.solve.solve_problem` — the very call ``orientviz solve`` makes:
+approximations where the file gives none, the file's options, camera models and
+additional parameters, units. The viewer then shows the block the solve started from
+(``Solution.start``) and replays the solve's own iterations (``adjustment.history``);
+σ̂0 in the panel is the solution's.
+
+A problem that cannot be loaded or solved raises here, before any server starts; the
+command prints :func:`orientviz.io.solve.failure`'s one line and exit code. A solve that
+does not converge is shown with its message and its last state.
+
+The viewer's actions (a ray, an image or a control point off and on) re-solve with
+:class:`FileAdjuster`, the bundle run of :func:`orientviz.io.kinds.block.adjust_block`
+(the file's model and options), and the misclosures drawn follow the file's camera model
+(:class:`CameraTerms`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..block import Block
+
+F64 = NDArray[np.float64]
+
+
+@dataclass
+class Solved:
+    """A problem file and its solution (what ``orientviz solve`` computes)."""
+
+    problem: Any
+    solution: Any
+
+
+def solve_target(target: str) -> Solved:
+    """Load ``target`` (a path or a shipped data set's name) and solve it as ``solve`` does.
+
+    Raises
+    ------
+    InputError, AdjustmentError, …
+        What ``orientviz solve`` reports (:func:`orientviz.io.solve.failure`).
+    """
+    from ..io.solve import load_named, solve_problem
+
+    problem = load_named(target)
+    return Solved(problem, solve_problem(problem))
+
+
+class FileAdjuster:
+    """``adjuster(block, max_iter, precision=True)``: the bundle with the file's model.
+
+    Runs :func:`orientviz.io.kinds.block.adjust_block` (the adjustment of
+    ``orientviz solve``) on ``block`` with the iteration limit and precision the
+    viewer asks for; the parameters of every iteration are kept for the scrubber.
+    """
+
+    def __init__(self, problem: Any) -> None:
+        self.problem = problem
+
+    def __call__(self, block: Block, max_iter: int, precision: bool = True) -> Any:
+        from ..io.kinds.block import adjust_block
+
+        adj, _ = adjust_block(
+            self.problem, block, max_iter=max_iter, precision=precision, history_x=True
+        )
+        return adj
+
+
+class CameraTerms:
+    """Image misclosures (n, 2) mm through the file's camera model.
+
+    The camera model (lens model or additional parameters of ``cameras[]``) is part of
+    the bundle's projection; the misclosure of a state with camera terms ``ap`` (the
+    result's ``"additional"`` block) is the bundle's own, from its public problem
+    (:class:`orientviz.bundle.BundleProblem`). Observations the bundle does not use
+    (rays of independent check points) get the pinhole misclosure.
+    """
+
+    def __init__(self, options: dict[str, Any], control: str = "fixed") -> None:
+        self.options = options
+        self.control = control
+        self._cache: tuple[Any, Any] | None = None
+
+    @classmethod
+    def of(cls, problem: Any, block: Block) -> CameraTerms | None:
+        """The camera terms of ``problem`` (None if its cameras have no model)."""
+        from ..io.kinds.block import bundle_camera_options
+
+        opts = bundle_camera_options(block)
+        if not opts:
+            return None
+        return cls(opts, str(problem.options.get("control", "fixed")))
+
+    def _problem(self, block: Block) -> Any:
+        key = (id(block.observations), block.n_images, block.n_points)
+        if self._cache is None or self._cache[0] != key:
+            from ..bundle import BundleProblem, point_setup
+            from ..io.kinds.block import bundle_camera_options
+
+            opts = bundle_camera_options(block)  # ap groups of this (sub-)block
+            setup = point_setup(block, self.control)
+            self._cache = (key, BundleProblem(block, setup, **opts))
+        return self._cache[1]
+
+    def misclosure(self, block: Block, ap: F64) -> F64:
+        """l − f (n, 2) in mm at the block's orientations and points and terms ``ap``."""
+        from ..bundle import BundleState
+
+        prob = self._problem(block)
+        e = block.residuals()
+        if np.size(ap) != prob.q:
+            return e
+        st = BundleState(
+            block.images.X0, block.images.angles, block.points.xyz, np.asarray(ap, float),
+            np.zeros(prob.na),
+        )  # fmt: skip
+        rw = prob.residuals(st, jac=False)[0]
+        e[np.asarray(prob.obs.index)] = rw / prob.obs.weight
+        return e
+
+
+def solution_demo(solved: Solved, title: str | None = None) -> Any:
+    """The :class:`~orientviz.viewer.demos.Demo` of a solved problem file.
+
+    Block problems: the block the solve started from, its iterations on the scrubber,
+    the result at the end (σ̂0 the solution's), actions re-solving with the file's model.
+    Other frame kinds (resection, intersection): the solved block. Kinds without images
+    (pair, similarity, radar): the solution's report in the panel and its points.
+    """
+    from .demos import Demo
+    from .state import BlockState
+
+    problem, sol = solved.problem, solved.solution
+    adj = sol.adjustment
+    name = title or problem.name or problem.kind
+    head = f"{problem.kind} problem, solved by {sol.method} as `orientviz solve` solves it"
+    message = None
+    if not adj.converged:
+        message = f"the adjustment did not converge: {adj.reason}"
+    if problem.kind == "block" and sol.start is not None and "exterior" in adj.groups:
+        block = sol.start
+        state = BlockState(
+            block, adj, adjuster=FileAdjuster(problem), camera=CameraTerms.of(problem, block)
+        )
+        if not _finite(state):  # the last state has NaN: show the last finite record
+            state.replay(_last_finite(state))
+        desc = f"{head}. {block.summary()}."
+        return Demo("file", name, desc, state, None, message, sol)
+    if isinstance(problem.data, Block):
+        block = _solved_block(problem.data, sol)
+        state = BlockState(block, adjuster=_not_stepped(problem.kind))
+        state.history[0].sigma0 = float(adj.sigma0)  # the solution's, not recomputed
+        desc = f"{head}; σ̂0 = {adj.sigma0:.10g}. {block.summary()}."
+        return Demo("file", name, desc, state, None, message, sol)
+    return Demo("file", name, f"{head}.", None, _points_extra(sol), message, sol)
+
+
+def _finite(state: Any) -> bool:
+    b = state.block
+    return bool(np.all(np.isfinite(b.images.X0)) and np.all(np.isfinite(b.points.xyz)))
+
+
+def _last_finite(state: Any) -> int:
+    for k in range(len(state.history) - 1, -1, -1):
+        s = state.history[k]
+        if np.all(np.isfinite(s.X0)) and np.all(np.isfinite(s.xyz)):
+            return k
+    return 0
+
+
+def _solved_block(block: Block, sol: Any) -> Block:
+    """``block`` with the solution's orientations and points where they were estimated."""
+    out = block.copy()
+    im = {k: i for i, k in enumerate(out.images.ids)}
+    for k, ident in enumerate(sol.image_ids):
+        if np.all(np.isfinite(sol.X0[k])):
+            out.images.X0[im[ident]] = sol.X0[k]
+            out.images.angles[im[ident]] = sol.angles[k]
+    pt = {k: i for i, k in enumerate(out.points.ids)}
+    for k, ident in enumerate(sol.point_ids):
+        if ident in pt and np.all(np.isfinite(sol.xyz[k])):
+            out.points.xyz[pt[ident]] = sol.xyz[k]
+    return out
+
+
+def _not_stepped(kind: str) -> Any:
+    def adjuster(block: Block, max_iter: int, precision: bool = True) -> Any:
+        from ..errors import InputError
+
+        raise InputError(
+            f"a {kind!r} problem is shown as solved; stepping and actions apply to block problems"
+        )
+
+    return adjuster
+
+
+def _points_extra(sol: Any) -> Any:
+    """Extra content of kinds without a block: the solution's points, if any."""
+
+    def extra(app: Any) -> dict:
+        xyz = np.asarray(sol.xyz, dtype=float).reshape(-1, 3)
+        xyz = xyz[np.all(np.isfinite(xyz), axis=1)]
+        if xyz.shape[0] == 0:
+            return {}
+        centre = xyz.mean(axis=0)
+        size = float(np.ptp(xyz, axis=0).max()) or 1.0
+        P = (xyz - centre).astype(np.float32)
+        app.server.scene.add_point_cloud(
+            "/solution/points", P, (220, 40, 40), point_size=0.02 * size, point_shape="circle"
+        )
+        for k, ident in enumerate(sol.point_ids[: min(len(sol.point_ids), 40)]):
+            if k < P.shape[0]:
+                app.server.scene.add_label(f"/solution/labels/{k}", str(ident), position=P[k])
+        pos = np.array([-0.3, -1.0, 0.8]) * 1.6 * size
+        return {"camera": (pos, np.zeros(3), size)}
+
+    return extra

@@ -1,0 +1,57 @@
+"""Lesson 00: the solutions of its exercises and the plausible wrong answers (mutants).
+
+Kept out of the installed package (solutions stay with the teacher); used by
+``tests/exercises/test_lesson00.py``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.stats import norm
+
+
+def _sol_sigma0(v, sigma, r):
+    return np.sqrt(np.sum((v / sigma) ** 2) / r)
+
+
+def _sol_redundancy(n_images, n_tie, n_control, n_rays):
+    return 2 * n_rays - 6 * n_images - 3 * n_tie
+
+
+def _sol_critical(alpha):
+    return norm.isf(alpha / 2)
+
+
+def _sol_after_doubling(sigma0, r_i, w):
+    return sigma0 / 2, r_i, w / 2
+
+
+SOLUTIONS = {
+    "check_sigma0": _sol_sigma0,
+    "check_redundancy": _sol_redundancy,
+    "check_critical_value": _sol_critical,
+    "check_after_doubling": _sol_after_doubling,
+}
+
+MUTANTS = {
+    "check_sigma0": {
+        "no weights": lambda v, s, r: np.sqrt(np.sum(v**2) / r),
+        "divides by n": lambda v, s, r: np.sqrt(np.sum((v / s) ** 2) / len(v)),
+        "no sqrt": lambda v, s, r: np.sum((v / s) ** 2) / r,
+        "1/sigma": lambda v, s, r: np.sqrt(np.sum(v**2 / s) / r),
+    },
+    "check_redundancy": {
+        "one observation per ray": lambda m, t, k, n: n - 6 * m - 3 * t,
+        "control as unknowns": lambda m, t, k, n: 2 * n - 6 * m - 3 * (t + k),
+        "7 per image": lambda m, t, k, n: 2 * n - 7 * m - 3 * t,
+    },
+    "check_critical_value": {
+        "one-sided": lambda a: norm.isf(a),
+        "percent": lambda a: norm.isf(a / 200),
+    },
+    "check_after_doubling": {
+        "sigma0 doubled": lambda s, r, w: (2 * s, r, w / 2),
+        "r halved": lambda s, r, w: (s / 2, r / 2, w / 2),
+        "w unchanged": lambda s, r, w: (s / 2, r, w),
+    },
+}

@@ -1,0 +1,80 @@
+"""Lesson 02: the solutions of its exercises and the plausible wrong answers (mutants).
+
+Kept out of the installed package (solutions stay with the teacher); used by
+``tests/exercises/test_lesson02.py``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from orientviz.exercises.lesson02 import F64, GON
+
+
+def _sol_rotation(omega: float, phi: float, kappa: float) -> F64:
+    w, p, k = np.array([omega, phi, kappa]) * GON
+    Rw = np.array([[1, 0, 0], [0, np.cos(w), -np.sin(w)], [0, np.sin(w), np.cos(w)]])
+    Rp = np.array([[np.cos(p), 0, np.sin(p)], [0, 1, 0], [-np.sin(p), 0, np.cos(p)]])
+    Rk = np.array([[np.cos(k), -np.sin(k), 0], [np.sin(k), np.cos(k), 0], [0, 0, 1]])
+    return Rw @ Rp @ Rk
+
+
+def _sol_collinearity(X, X0, R, c, x0, y0):
+    u, v, w = ((np.asarray(X) - X0) @ R).T
+    return np.column_stack([x0 - c * u / w, y0 - c * v / w])
+
+
+def _sol_gimbal(omega, kappa, phi):
+    return omega + np.sign(phi) * kappa
+
+
+def _sol_opk(R):
+    return (
+        np.array([np.arctan2(-R[1, 2], R[2, 2]), np.arcsin(R[0, 2]), np.arctan2(-R[0, 1], R[0, 0])])
+        / GON
+    )
+
+
+def _sol_ground(xy, X0, R, c, Z):
+    d = np.column_stack([xy, np.full(len(xy), -c)]) @ R.T
+    return X0 + ((Z - X0[2]) / d[:, 2])[:, None] * d
+
+
+SOLUTIONS = {
+    "check_rotation": _sol_rotation,
+    "check_collinearity": _sol_collinearity,
+    "check_gimbal": _sol_gimbal,
+    "check_opk_from_matrix": _sol_opk,
+    "check_ground_point": _sol_ground,
+}
+
+MUTANTS = {
+    "check_rotation": {
+        "transpose": lambda w, p, k: _sol_rotation(w, p, k).T,
+        "degrees": lambda w, p, k: _sol_rotation(w * 200 / 180, p * 200 / 180, k * 200 / 180),
+        "phi-omega-kappa order": lambda w, p, k: (
+            _sol_rotation(0, p, 0) @ _sol_rotation(w, 0, 0) @ _sol_rotation(0, 0, k)
+        ),
+        "flipped sine in R_phi": lambda w, p, k: (
+            _sol_rotation(w, 0, 0) @ _sol_rotation(0, -p, 0) @ _sol_rotation(0, 0, k)
+        ),
+    },
+    "check_collinearity": {
+        "R instead of R^T": lambda X, X0, R, c, x0, y0: _sol_collinearity(X, X0, R.T, c, x0, y0),
+        "sign of c": lambda X, X0, R, c, x0, y0: _sol_collinearity(X, X0, R, -c, x0, y0),
+        "no principal point": lambda X, X0, R, c, x0, y0: _sol_collinearity(X, X0, R, c, 0.0, 0.0),
+    },
+    "check_gimbal": {
+        "omega minus kappa": lambda w, k, p: w - np.sign(p) * k,
+        "kappa forgotten": lambda w, k, p: w,
+    },
+    "check_opk_from_matrix": {
+        "radians": lambda R: _sol_opk(R) * GON,
+        "degrees": lambda R: _sol_opk(R) * 0.9,
+        "transpose": lambda R: _sol_opk(R.T),
+    },
+    "check_ground_point": {
+        "R^T instead of R": lambda xy, X0, R, c, Z: _sol_ground(xy, X0, R.T, c, Z),
+        "+c": lambda xy, X0, R, c, Z: _sol_ground(xy, X0, R, -c, Z),
+    },
+}

@@ -1,0 +1,83 @@
+"""Lesson 03: the solutions of its exercises and the plausible wrong answers (mutants).
+
+Kept out of the installed package (solutions stay with the teacher); used by
+``tests/exercises/test_lesson03.py``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from orientviz.exercises.lesson03 import (
+    _centre_no_one,
+    _centre_plus,
+    _centre_transpose,
+    _interior_no_x0,
+    _interior_unnormalised,
+    _rows,
+)
+
+
+def _centre(L):
+    P = np.append(np.asarray(L, float), 1.0).reshape(3, 4)
+    return -np.linalg.solve(P[:, :3], P[:, 3])
+
+
+def _interior(L):
+    P = np.append(np.asarray(L, float), 1.0).reshape(3, 4)
+    m1, m2, m3 = P[0, :3], P[1, :3], P[2, :3]
+    q = m3 @ m3
+    x0, y0 = m1 @ m3 / q, m2 @ m3 / q
+    c = np.sqrt(m1 @ m1 / q - x0 * x0)
+    return np.array([c, x0, y0])
+
+
+def _interior_swapped(L):
+    c, x0, y0 = _interior(L)
+    return np.array([c, y0, x0])
+
+
+def _affine_fit(machine, calibrated, order="ok", r_minus=6, vsign=1.0):
+    n = len(machine)
+    A = np.zeros((2 * n, 6))
+    A[0::2, 0], A[0::2, 1], A[0::2, 2] = 1.0, machine[:, 0], machine[:, 1]
+    A[1::2, 3], A[1::2, 4], A[1::2, 5] = 1.0, machine[:, 0], machine[:, 1]
+    l = calibrated.reshape(-1)
+    p = np.linalg.solve(A.T @ A, A.T @ l)
+    v = A @ p - l
+    s0 = np.sqrt(v @ v / (2 * n - r_minus))
+    if order == "interleaved":
+        p = p[[0, 3, 1, 4, 2, 5]]
+    return p, vsign * v, s0
+
+
+SOLUTIONS = {
+    "check_affine_fit": _affine_fit,
+    "check_dlt_rows": lambda X, xy: _rows(X, xy, -1.0, False, False),
+    "check_projection_centre": _centre,
+    "check_interior_from_dlt": _interior,
+}
+
+MUTANTS = {
+    "check_affine_fit": {
+        "interleaved": lambda m, c: _affine_fit(m, c, order="interleaved"),
+        "r_2n": lambda m, c: _affine_fit(m, c, r_minus=0),
+        "r_2n_3": lambda m, c: _affine_fit(m, c, r_minus=3),
+        "v_sign": lambda m, c: _affine_fit(m, c, vsign=-1.0),
+    },
+    "check_dlt_rows": {
+        "plus_sign": lambda X, xy: _rows(X, xy, 1.0, False, False),
+        "swap_xy": lambda X, xy: _rows(X, xy, -1.0, True, False),
+        "stacked": lambda X, xy: _rows(X, xy, -1.0, False, True),
+    },
+    "check_projection_centre": {
+        "plus": _centre_plus,
+        "transpose": _centre_transpose,
+        "no_one": _centre_no_one,
+    },
+    "check_interior_from_dlt": {
+        "unnormalised": _interior_unnormalised,
+        "no_x0": _interior_no_x0,
+        "swapped": _interior_swapped,
+    },
+}

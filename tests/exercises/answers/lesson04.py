@@ -1,0 +1,106 @@
+"""Lesson 04: the solutions of its exercises and the plausible wrong answers (mutants).
+
+Kept out of the installed package (solutions stay with the teacher); used by
+``tests/exercises/test_lesson04.py``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from orientviz.exercises.lesson04 import _R, _project
+
+
+def _sol_resection(xy, X, c, sigma, p0, n_iter=10, weighted=True, divide_by_n=False):
+    p = np.array(p0, dtype=float)
+    s = (
+        np.broadcast_to(np.asarray(sigma, dtype=float), xy.shape).ravel()
+        if weighted
+        else np.ones(xy.size)
+    )
+    for _ in range(n_iter):
+        f = lambda q: _project(X, q[:3], _R(q[3:]), c).ravel()  # noqa: E731
+        dl = xy.ravel() - f(p)
+        A = np.column_stack([(f(p + h) - f(p - h)) / (2e-6) for h in np.eye(6) * 1e-6])
+        dx = np.linalg.solve((A / s[:, None] ** 2).T @ A, (A / s[:, None] ** 2).T @ dl)
+        p = p + dx
+    v = f(p) - xy.ravel()
+    r = xy.size if divide_by_n else xy.size - 6
+    return p, float(np.sqrt(np.sum((v / s) ** 2) / r))
+
+
+def _sol_two_rays(X01, d1, X02, d2):
+    b = X02 - X01
+    N = np.array([[d1 @ d1, -d1 @ d2], [-d1 @ d2, d2 @ d2]])
+    lam1, lam2 = np.linalg.solve(N, [d1 @ b, -d2 @ b])
+    return (X01 + lam1 * d1 + X02 + lam2 * d2) / 2
+
+
+def _two_rays_plus(X01, d1, X02, d2):
+    """A mutant: +d1ᵀd2 off the diagonal of the 2×2 normal matrix."""
+    b = X02 - X01
+    N = np.array([[d1 @ d1, d1 @ d2], [d1 @ d2, d2 @ d2]])
+    lam1, lam2 = np.linalg.solve(N, [d1 @ b, -d2 @ b])
+    return (X01 + lam1 * d1 + X02 + lam2 * d2) / 2
+
+
+def _sol_design_X0(X, X0, R, c):
+    u, v, w = ((X - X0) @ R).T
+    A = np.empty((2 * len(X), 3))
+    A[0::2] = c * (R[:, 0][None, :] * w[:, None] - R[:, 2][None, :] * u[:, None]) / w[:, None] ** 2
+    A[1::2] = c * (R[:, 1][None, :] * w[:, None] - R[:, 2][None, :] * v[:, None]) / w[:, None] ** 2
+    return A
+
+
+def _sol_sigma_Z(B, H, c, sigma_x):
+    return (H / B) * (H / c) * np.sqrt(2) * sigma_x
+
+
+def _sol_normal_step(A, dl, P):
+    N = A.T @ (P[:, None] * A)
+    return np.linalg.solve(N, A.T @ (P * dl))
+
+
+SOLUTIONS = {
+    "check_resection": _sol_resection,
+    "check_two_rays": _sol_two_rays,
+    "check_design_X0": _sol_design_X0,
+    "check_sigma_Z": _sol_sigma_Z,
+    "check_normal_step": _sol_normal_step,
+}
+
+MUTANTS = {
+    "check_resection": {
+        "weights forgotten": lambda *a: _sol_resection(*a, weighted=False),
+        "divides by n": lambda *a: _sol_resection(*a, divide_by_n=True),
+        "one iteration": lambda *a: _sol_resection(*a, n_iter=1),
+    },
+    "check_two_rays": {
+        "point on ray 1": lambda X01, d1, X02, d2: (
+            X01
+            + np.linalg.solve(
+                np.array([[d1 @ d1, -d1 @ d2], [-d1 @ d2, d2 @ d2]]),
+                [d1 @ (X02 - X01), -d2 @ (X02 - X01)],
+            )[0]
+            * d1
+        ),
+        "sign of the cross term": lambda X01, d1, X02, d2: _two_rays_plus(X01, d1, X02, d2),
+    },
+    "check_design_X0": {
+        "by X, not X0": lambda X, X0, R, c: -_sol_design_X0(X, X0, R, c),
+        "R^T": lambda X, X0, R, c: _sol_design_X0(X, X0, R.T, c),
+        "rows x.. then y..": lambda X, X0, R, c: np.vstack(
+            [_sol_design_X0(X, X0, R, c)[0::2], _sol_design_X0(X, X0, R, c)[1::2]]
+        ),
+    },
+    "check_sigma_Z": {
+        "no sqrt 2": lambda B, H, c, s: (H / B) * (H / c) * s,
+        "H/B once": lambda B, H, c, s: (H / c) * np.sqrt(2) * s,
+        "micrometres": lambda B, H, c, s: _sol_sigma_Z(B, H, c, s * 1000),
+    },
+    "check_normal_step": {
+        "weights forgotten": lambda A, dl, P: _sol_normal_step(A, dl, np.ones_like(P)),
+        "sqrt of the weights": lambda A, dl, P: _sol_normal_step(A, dl, np.sqrt(P)),
+        "sign": lambda A, dl, P: -_sol_normal_step(A, dl, P),
+    },
+}

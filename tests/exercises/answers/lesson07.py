@@ -1,0 +1,83 @@
+"""Lesson 07: the solutions of its exercises and the plausible wrong answers (mutants).
+
+Kept out of the installed package (solutions stay with the teacher); used by
+``tests/exercises/test_lesson07.py``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def _sol_similarity(x, X, fix=True, symmetric=False, transpose=False):
+    xm, Xm = x.mean(0), X.mean(0)
+    xc, Xc = x - xm, X - Xm
+    U, S, Vt = np.linalg.svd(xc.T @ Xc)
+    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T)) if fix else 1.0])
+    R = Vt.T @ D @ U.T
+    m = (
+        np.sqrt((Xc**2).sum() / (xc**2).sum())
+        if symmetric
+        else np.trace(np.diag(S) @ D) / (xc**2).sum()
+    )
+    if transpose:
+        R = R.T
+    return m, R, Xm - m * R @ xm
+
+
+def _sol_model(X, m, R, T):
+    return (X - T) @ R / m
+
+
+def _sol_design(x, m, R):
+    Rx = x @ R.T
+    A = np.zeros((3 * len(x), 7))
+    for i, p in enumerate(Rx):
+        A[3 * i : 3 * i + 3, :3] = np.eye(3)
+        A[3 * i : 3 * i + 3, 3:6] = -m * np.array(
+            [[0, -p[2], p[1]], [p[2], 0, -p[0]], [-p[1], p[0], 0]]
+        )
+        A[3 * i : 3 * i + 3, 6] = p
+    return A
+
+
+def _sol_sigma_scale(x, sigma):
+    return sigma / np.sqrt(((x - x.mean(0)) ** 2).sum())
+
+
+SOLUTIONS = {
+    "check_similarity": _sol_similarity,
+    "check_model_coordinates": _sol_model,
+    "check_design": _sol_design,
+    "check_sigma_scale": _sol_sigma_scale,
+}
+
+MUTANTS = {
+    "check_similarity": {
+        "transpose": lambda x, X: _sol_similarity(x, X, transpose=True),
+        "no reflection fix": lambda x, X: _sol_similarity(x, X, fix=False),
+        "symmetric scale": lambda x, X: _sol_similarity(x, X, symmetric=True),
+        "T without scale": lambda x, X: (lambda m, R, T: (m, R, X.mean(0) - R @ x.mean(0)))(
+            *_sol_similarity(x, X)
+        ),
+    },
+    "check_model_coordinates": {
+        "R instead of R^T": lambda X, m, R, T: (X - T) @ R.T / m,
+        "times m": lambda X, m, R, T: m * (X - T) @ R,
+        "T forgotten": lambda X, m, R, T: X @ R / m,
+    },
+    "check_design": {
+        "sign of the rotation columns": lambda x, m, R: (
+            _sol_design(x, m, R) * np.r_[1, 1, 1, -1, -1, -1, 1]
+        ),
+        "m forgotten": lambda x, m, R: (
+            _sol_design(x, m, R) * np.r_[1, 1, 1, 1 / m, 1 / m, 1 / m, 1]
+        ),
+        "scale column times m": lambda x, m, R: _sol_design(x, m, R) * np.r_[1, 1, 1, 1, 1, 1, m],
+    },
+    "check_sigma_scale": {
+        "not centred": lambda x, s: s / np.sqrt((x**2).sum()),
+        "variance": lambda x, s: _sol_sigma_scale(x, s) ** 2,
+        "sigma squared": lambda x, s: s * _sol_sigma_scale(x, s),
+    },
+}

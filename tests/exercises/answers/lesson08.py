@@ -1,0 +1,114 @@
+"""Lesson 08: the solutions of its exercises and the plausible wrong answers (mutants).
+
+Kept out of the installed package (solutions stay with the teacher); used by
+``tests/exercises/test_lesson08.py``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def _similarity(x, X):
+    xm, Xm = x.mean(0), X.mean(0)
+    H = (x - xm).T @ (X - Xm)
+    U, S, Vt = np.linalg.svd(H)
+    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T))])
+    R = Vt.T @ D @ U.T
+    scale = np.trace(np.diag(S) @ D) / np.sum((x - xm) ** 2)
+    return scale, R, Xm - scale * R @ xm
+
+
+def _sigma0(x, X, scale, R, t, sigma):
+    v = t + scale * x @ R.T - X
+    return np.sqrt(np.sum((v / sigma) ** 2) / (3 * len(x) - 7))
+
+
+def _conformal(xy, XY, degree):
+    z = xy[:, 0] + 1j * xy[:, 1]
+    A = np.column_stack([z**k for k in range(degree + 1)])
+    return np.linalg.lstsq(A, XY[:, 0] + 1j * XY[:, 1], rcond=None)[0]
+
+
+def _log_law(n_s, mu):
+    A = np.column_stack([np.ones(len(n_s)), np.log10(n_s)])
+    return np.linalg.lstsq(A, mu, rcond=None)[0]
+
+
+def _no_det_fix(x, X):
+    xm, Xm = x.mean(0), X.mean(0)
+    U, S, Vt = np.linalg.svd((x - xm).T @ (X - Xm))
+    R = Vt.T @ U.T
+    scale = S.sum() / np.sum((x - xm) ** 2)
+    return scale, R, Xm - scale * R @ xm
+
+
+def _no_centroid(x, X):
+    U, S, Vt = np.linalg.svd(x.T @ X)
+    R = Vt.T @ np.diag([1, 1, np.sign(np.linalg.det(Vt.T @ U.T))]) @ U.T
+    scale = np.linalg.norm(X - X.mean(0)) / np.linalg.norm(x - x.mean(0))
+    return scale, R, X.mean(0) - scale * R @ x.mean(0)
+
+
+def _transpose(x, X):
+    s, R, t = _similarity(x, X)
+    return s, R.T, t
+
+
+def _inverse_scale(x, X):
+    s, R, t = _similarity(x, X)
+    return 1 / s, R, t
+
+
+def _t_from_origin(x, X):
+    s, R, t = _similarity(x, X)
+    return s, R, X.mean(0)
+
+
+def _compose(s1, s2):
+    m1, R1, t1 = s1
+    m2, R2, t2 = s2
+    return m1 * m2, R1 @ R2, m1 * R1 @ t2 + t1
+
+
+SOLUTIONS = {
+    "check_compose": _compose,
+    "check_sigma0": _sigma0,
+    "check_conformal": _conformal,
+    "check_log_law": _log_law,
+}
+
+MUTANTS = {
+    "check_compose": {
+        "order": lambda s1, s2: _compose(s2, s1),
+        "no scale in t": lambda s1, s2: (s1[0] * s2[0], s1[1] @ s2[1], s1[1] @ s2[2] + s1[2]),
+        "no rotation in t": lambda s1, s2: (s1[0] * s2[0], s1[1] @ s2[1], s1[0] * s2[2] + s1[2]),
+    },
+    "check_sigma0": {
+        "divide by 3n": lambda x, X, s, R, t, sg: (
+            _sigma0(x, X, s, R, t, sg) * np.sqrt((3 * len(x) - 7) / (3 * len(x)))
+        ),
+        "metres": lambda x, X, s, R, t, sg: _sigma0(x, X, s, R, t, sg) * sg,
+        "squared": lambda x, X, s, R, t, sg: _sigma0(x, X, s, R, t, sg) ** 2,
+        "transpose": lambda x, X, s, R, t, sg: _sigma0(x, X, s, R.T, t, sg),
+    },
+    "check_conformal": {
+        "reversed": lambda xy, XY, d: _conformal(xy, XY, d)[::-1],
+        "no constant": lambda xy, XY, d: np.r_[
+            0,
+            np.linalg.lstsq(
+                np.column_stack([(xy[:, 0] + 1j * xy[:, 1]) ** k for k in range(1, d + 1)]),
+                XY[:, 0] + 1j * XY[:, 1],
+                rcond=None,
+            )[0],
+        ],
+        "conjugate pairing": lambda xy, XY, d: _conformal(xy * [1, -1], XY, d),
+    },
+    "check_log_law": {
+        "natural log": lambda n, mu: np.linalg.lstsq(
+            np.column_stack([np.ones(len(n)), np.log(n)]), mu, rcond=None
+        )[0],
+        "linear": lambda n, mu: np.polyfit(n, mu, 1)[::-1],
+        "swapped": lambda n, mu: _log_law(n, mu)[::-1],
+    },
+}

@@ -1,0 +1,96 @@
+"""Lesson 09: the solutions of its exercises and the plausible wrong answers (mutants).
+
+Kept out of the installed package (solutions stay with the teacher); used by
+``tests/exercises/test_lesson09.py``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from orientviz.exercises.lesson09 import _s_matrix, _sel
+
+
+def _helmert(xy, rot=(-1, 1), translations=True, scale_instead=False):
+    p = len(xy)
+    c = xy - xy.mean(axis=0)
+    cols = []
+    if translations:
+        cols += [np.tile([1.0, 0.0], p), np.tile([0.0, 1.0], p)]
+    if scale_instead:
+        cols.append(c.reshape(-1))
+    else:
+        cols.append(np.column_stack([rot[0] * c[:, 1], rot[1] * c[:, 0]]).reshape(-1))
+    return np.column_stack(cols)
+
+
+def _s_transform(x, Q, G, pts, mode="ok"):
+    e = _sel(len(x) // 2, pts) if mode != "all" else np.ones(len(x))
+    S = _s_matrix(G, e)
+    if mode == "no_St":
+        return S @ x, S @ Q
+    if mode == "x_only":
+        return S @ x, Q
+    return S @ x, S @ Q @ S.T
+
+
+def _dist_std(xy, Q, i, j, mode="ok"):
+    d = xy[j] - xy[i]
+    u = d / np.linalg.norm(d)
+    f = np.zeros(xy.size)
+    f[2 * j : 2 * j + 2], f[2 * i : 2 * i + 2] = u, -u
+    if mode == "diag":
+        return float(np.sqrt(f**2 @ np.diag(Q)))
+    if mode == "blocks":
+        Qb = np.zeros_like(Q)
+        for k in (i, j):
+            Qb[2 * k : 2 * k + 2, 2 * k : 2 * k + 2] = Q[2 * k : 2 * k + 2, 2 * k : 2 * k + 2]
+        return float(np.sqrt(f @ Qb @ f))
+    if mode == "var":
+        return float(f @ Q @ f)
+    return float(np.sqrt(f @ Q @ f))
+
+
+def _inner_solve(N, b, G, mode="ok"):
+    u, d = G.shape
+    if mode == "ridge":
+        Q = np.linalg.inv(N + G @ G.T)
+        return Q @ b, Q
+    Gs = G * np.sqrt(np.trace(N) / u)
+    M = np.block([[N, Gs], [Gs.T, np.zeros((d, d))]])
+    Mi = np.linalg.inv(M)
+    if mode == "whole":
+        return Mi[:u, :u] @ b, Mi
+    Q = Mi[:u, :u]
+    return (-1.0 if mode == "sign" else 1.0) * Q @ b, Q
+
+
+SOLUTIONS = {
+    "check_inner_solve": _inner_solve,
+    "check_helmert_columns": lambda xy: _helmert(xy),
+    "check_s_transform": lambda x, Q, G, pts: _s_transform(x, Q, G, pts, "ok"),
+    "check_distance_std": lambda xy, Q, i, j: _dist_std(xy, Q, i, j, "ok"),
+}
+
+MUTANTS = {
+    "check_inner_solve": {
+        "ridge": lambda N, b, G: _inner_solve(N, b, G, "ridge"),
+        "whole_inverse": lambda N, b, G: _inner_solve(N, b, G, "whole"),
+        "sign": lambda N, b, G: _inner_solve(N, b, G, "sign"),
+    },
+    "check_helmert_columns": {
+        "rotation_yx": lambda xy: _helmert(xy, rot=(1, 1)),
+        "scale_for_rotation": lambda xy: _helmert(xy, scale_instead=True),
+        "no_translations": lambda xy: _helmert(xy, translations=False),
+    },
+    "check_s_transform": {
+        "all_points": lambda x, Q, G, pts: _s_transform(x, Q, G, pts, "all"),
+        "no_St": lambda x, Q, G, pts: _s_transform(x, Q, G, pts, "no_St"),
+        "Q_unchanged": lambda x, Q, G, pts: _s_transform(x, Q, G, pts, "x_only"),
+    },
+    "check_distance_std": {
+        "diag": lambda xy, Q, i, j: _dist_std(xy, Q, i, j, "diag"),
+        "blocks": lambda xy, Q, i, j: _dist_std(xy, Q, i, j, "blocks"),
+        "variance": lambda xy, Q, i, j: _dist_std(xy, Q, i, j, "var"),
+    },
+}

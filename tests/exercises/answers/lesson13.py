@@ -1,0 +1,93 @@
+"""Lesson 13: the solutions of its exercises and the plausible wrong answers (mutants).
+
+Kept out of the installed package (solutions stay with the teacher); used by
+``tests/exercises/test_lesson13.py``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+
+def _statoscope_row(N, n, k, o_col, s, sigma):
+    a = np.zeros(len(n))
+    a[k], a[o_col] = 1.0, 1.0
+    return N + np.outer(a, a) / sigma**2, n + a * s / sigma**2
+
+
+def _difference_covariance(sigma, m):
+    D = np.eye(m)[1:] - np.eye(m)[:-1]
+    return sigma**2 * D @ D.T
+
+
+def _gnss_rows(k, t, strip, m, n_strips):
+    A = np.zeros((3, 3 * m + 6 * n_strips))
+    A[:, 3 * k : 3 * k + 3] = np.eye(3)
+    A[:, 3 * m + 3 * strip : 3 * m + 3 * strip + 3] = np.eye(3)
+    A[:, 3 * m + 3 * n_strips + 3 * strip : 3 * m + 3 * n_strips + 3 * strip + 3] = t * np.eye(3)
+    return A
+
+
+def _offset_drift(t, s, Z, sigma):
+    A = np.column_stack([np.ones_like(t), t])
+    Q = np.linalg.inv(A.T @ A)
+    o, d = Q @ A.T @ (s - Z)
+    return o, d, sigma * np.sqrt(Q[0, 0]), sigma * np.sqrt(Q[1, 1])
+
+
+SOLUTIONS = {
+    "check_statoscope_row": _statoscope_row,
+    "check_difference_covariance": _difference_covariance,
+    "check_gnss_rows": _gnss_rows,
+    "check_offset_drift": _offset_drift,
+}
+
+
+def _row_with(a_o: float, w: Callable[[float], float], sign_n: float = 1.0):
+    def fn(N, n, k, o_col, s, sigma):
+        a = np.zeros(len(n))
+        a[k], a[o_col] = 1.0, a_o
+        return N + np.outer(a, a) * w(sigma), n + sign_n * a * s * w(sigma)
+
+    return fn
+
+
+MUTANTS = {
+    "check_statoscope_row": {
+        "no weight": _row_with(1.0, lambda s: 1.0),
+        "1/σ": _row_with(1.0, lambda s: 1 / s),
+        "minus offset": _row_with(-1.0, lambda s: 1 / s**2),
+        "n sign": _row_with(1.0, lambda s: 1 / s**2, -1.0),
+        "diagonal only": lambda N, n, k, o, s, sg: (
+            N + np.diag(np.eye(len(n))[k] + np.eye(len(n))[o]) / sg**2,
+            _statoscope_row(N, n, k, o, s, sg)[1],
+        ),
+    },
+    "check_difference_covariance": {
+        "independent": lambda sg, m: 2 * sg**2 * np.eye(m - 1),
+        "sigma squared": lambda sg, m: _difference_covariance(sg, m) / 2,
+        "positive": lambda sg, m: np.abs(_difference_covariance(sg, m)),
+    },
+    "check_gnss_rows": {
+        "no drift": lambda k, t, s, m, ns: _gnss_rows(k, 0.0, s, m, ns),
+        "drift 1": lambda k, t, s, m, ns: _gnss_rows(k, 1.0, s, m, ns),
+        "wrong strip": lambda k, t, s, m, ns: _gnss_rows(k, t, (s + 1) % ns, m, ns),
+        "minus offset": lambda k, t, s, m, ns: (
+            _gnss_rows(k, t, s, m, ns) * np.r_[np.ones(3 * m), -np.ones(3 * ns), np.ones(3 * ns)]
+        ),
+    },
+    "check_offset_drift": {
+        "no drift": lambda t, s, Z, sg: (np.mean(s - Z), 0.0, sg / np.sqrt(t.size), 0.0),
+        "sigma_o naive": lambda t, s, Z, sg: (
+            *_offset_drift(t, s, Z, sg)[:2],
+            sg / np.sqrt(t.size),
+            _offset_drift(t, s, Z, sg)[3],
+        ),
+        "uncentred": lambda t, s, Z, sg: (
+            *_offset_drift(t, s, Z, sg)[:3],
+            sg / np.sqrt(np.sum(t**2)),
+        ),
+    },
+}

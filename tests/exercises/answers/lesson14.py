@@ -1,0 +1,78 @@
+"""Lesson 14: the solutions of its exercises and the plausible wrong answers (mutants).
+
+Kept out of the installed package (solutions stay with the teacher); used by
+``tests/exercises/test_lesson14.py``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def _ppi_image(P, X0, R, h, m, x0, y0):
+    abc = (P - X0) @ R  # rows: Rᵀ (X − X0)
+    s_e = np.sqrt(np.sum((P - X0) ** 2, axis=1) - h**2)
+    hor = np.hypot(abc[:, 0], abc[:, 1])
+    return np.column_stack([x0 + m * s_e * abc[:, 0] / hor, y0 + m * s_e * abc[:, 1] / hor])
+
+
+def _sphere_radius(xy, x0, y0, m, h):
+    b = np.linalg.norm(xy - [x0, y0], axis=1)
+    return np.sqrt((b / m) ** 2 + h**2)
+
+
+def _trilaterate(C, r):
+    e1 = (C[1] - C[0]) / np.linalg.norm(C[1] - C[0])
+    w = C[2] - C[0]
+    i = e1 @ w
+    e2 = (w - i * e1) / np.linalg.norm(w - i * e1)
+    e3 = np.cross(e1, e2)
+    d, j = np.linalg.norm(C[1] - C[0]), e2 @ w
+    x = (r[0] ** 2 - r[1] ** 2 + d**2) / (2 * d)
+    y = (r[0] ** 2 - r[2] ** 2 + i**2 + j**2 - 2 * i * x) / (2 * j)
+    z = np.sqrt(max(r[0] ** 2 - x**2 - y**2, 0.0))
+    p1, p2 = C[0] + x * e1 + y * e2 + z * e3, C[0] + x * e1 + y * e2 - z * e3
+    return (p1, p2) if p1[2] < p2[2] else (p2, p1)
+
+
+def _station_ls(C, s, X, iterations=10, sign=1.0):
+    X = np.asarray(X, float).copy()
+    for _ in range(iterations):
+        d = X - C
+        rho = np.linalg.norm(d, axis=1)
+        J = sign * d / rho[:, None]
+        X = X + np.linalg.lstsq(J, s - rho, rcond=None)[0]
+    return X
+
+
+SOLUTIONS = {
+    "check_ppi_image": _ppi_image,
+    "check_sphere_radius": _sphere_radius,
+    "check_trilaterate": _trilaterate,
+    "check_station_ls": _station_ls,
+}
+
+MUTANTS = {
+    "check_ppi_image": {
+        "true horizontal range": lambda P, X0, R, h, m, x0, y0: (
+            np.array([x0, y0]) + m * ((P - X0) @ R)[:, :2]
+        ),
+        "R not transposed": lambda P, X0, R, h, m, x0, y0: _ppi_image(P, X0, R.T, h, m, x0, y0),
+        "no principal point": lambda P, X0, R, h, m, x0, y0: _ppi_image(P, X0, R, h, m, 0.0, 0.0),
+        "1/m": lambda P, X0, R, h, m, x0, y0: _ppi_image(P, X0, R, h, 1 / m, x0, y0),
+    },
+    "check_sphere_radius": {
+        "times m": lambda xy, x0, y0, m, h: _sphere_radius(xy, x0, y0, 1 / m, h),
+        "no h": lambda xy, x0, y0, m, h: _sphere_radius(xy, x0, y0, m, 0.0),
+        "no principal point": lambda xy, x0, y0, m, h: _sphere_radius(xy, 0.0, 0.0, m, h),
+    },
+    "check_trilaterate": {
+        "swapped": lambda C, r: _trilaterate(C, r)[::-1],
+        "one root": lambda C, r: (_trilaterate(C, r)[1], _trilaterate(C, r)[1]),
+    },
+    "check_station_ls": {
+        "no iteration": lambda C, s, X: np.asarray(X, float),
+        "one step": lambda C, s, X: _station_ls(C, s, X, iterations=1),
+        "Jacobian sign": lambda C, s, X: _station_ls(C, s, X, sign=-1.0),
+    },
+}

@@ -1,0 +1,75 @@
+"""Lesson 15: the solutions of its exercises and the plausible wrong answers (mutants).
+
+Kept out of the installed package (solutions stay with the teacher); used by
+``tests/exercises/test_lesson15.py``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.stats import chi2
+
+
+def _pattern(xy, v):
+    A = np.zeros((2 * len(xy), 4))
+    A[0::2, 0], A[1::2, 1] = 1.0, 1.0
+    A[0::2, 2], A[1::2, 2] = xy[:, 0], xy[:, 1]
+    A[0::2, 3], A[1::2, 3] = -xy[:, 1], xy[:, 0]
+    p = np.linalg.lstsq(A, v.ravel(), rcond=None)[0]
+    return p[:2], p[2], p[3]
+
+
+def _colmap_to_photo(uv, cx, cy, p):
+    return np.column_stack([(uv[:, 0] - cx) * p, -(uv[:, 1] - cy) * p])
+
+
+def _smallest_redundancy(ratio, alpha, tail=2, square=False, offset=0):
+    r = 1
+    while True:  # a plain search upwards
+        bound = chi2.ppf(1 - alpha / tail, r) / r
+        if (bound if square else np.sqrt(bound)) < ratio:
+            return r + offset
+        r += 1
+
+
+def _rms_per_image(image, v, m):
+    return np.array([np.sqrt(np.mean(v[image == i] ** 2, axis=0)) for i in range(m)])
+
+
+SOLUTIONS = {
+    "check_residual_pattern": _pattern,
+    "check_colmap_to_photo": _colmap_to_photo,
+    "check_smallest_redundancy": _smallest_redundancy,
+    "check_rms_per_image": _rms_per_image,
+}
+
+MUTANTS = {
+    "check_residual_pattern": {
+        "rotation sign": lambda xy, v: (lambda t, s, r: (t, s, -r))(*_pattern(xy, v)),
+        "swapped": lambda xy, v: (lambda t, s, r: (t, r, s))(*_pattern(xy, v)),
+        "x only": lambda xy, v: (
+            np.linalg.lstsq(
+                np.column_stack([np.ones(len(xy)), xy[:, 0], -xy[:, 1]]), v[:, 0], rcond=None
+            )[0][0]
+            * np.ones(2),
+            *np.linalg.lstsq(
+                np.column_stack([np.ones(len(xy)), xy[:, 0], -xy[:, 1]]), v[:, 0], rcond=None
+            )[0][1:],
+        ),
+    },
+    "check_colmap_to_photo": {
+        "no flip": lambda uv, cx, cy, p: _colmap_to_photo(uv, cx, cy, p) * [1, -1],
+        "swapped": lambda uv, cx, cy, p: _colmap_to_photo(uv, cy, cx, p),
+        "divided": lambda uv, cx, cy, p: _colmap_to_photo(uv, cx, cy, 1 / p),
+    },
+    "check_smallest_redundancy": {
+        "one-sided": lambda q, a: _smallest_redundancy(q, a, tail=1),
+        "squared": lambda q, a: _smallest_redundancy(q, a, square=True),
+        "off by one": lambda q, a: _smallest_redundancy(q, a, offset=-1),
+    },
+    "check_rms_per_image": {
+        "mean": lambda image, v, m: np.array([np.mean(v[image == i], axis=0) for i in range(m)]),
+        "std": lambda image, v, m: np.array([np.std(v[image == i], axis=0) for i in range(m)]),
+        "global": lambda image, v, m: np.tile(np.sqrt(np.mean(v**2, axis=0)), (m, 1)),
+    },
+}
