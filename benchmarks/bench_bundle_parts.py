@@ -37,7 +37,9 @@ def worker(src: str, size: str, reps: int) -> dict:
     from bench_blocks import load_bench_block, npz_path, user_arrays
 
     from orientviz.block import Block
-    from orientviz.bundle import _problem, _reduced, bundle_adjust
+    from orientviz.bundle import bundle_adjust
+    from orientviz.bundle.problem import _problem
+    from orientviz.bundle.reduced import Factor, ReducedStructure
 
     block, _ = load_bench_block(npz_path(size), control="fixed")
     arrays = user_arrays(block)
@@ -59,8 +61,8 @@ def worker(src: str, size: str, reps: int) -> dict:
 
     timed(_problem, "schur_blocks")
     timed(_problem, "factor_reduced")
-    timed(_reduced.Factor, "solve")
-    timed(_reduced.ReducedStructure, "_setup_solver")
+    timed(Factor, "solve")
+    timed(ReducedStructure, "_setup_solver")
     totals, reduced = [], []
     for _ in range(reps):
         spent[0] = 0.0

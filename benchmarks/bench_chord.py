@@ -53,7 +53,9 @@ def make_block(name: str):
 
 
 def run(block, reps: int, newton: bool) -> dict:
-    from orientviz.bundle import _adjust, _problem, bundle_adjust
+    from orientviz.bundle import bundle_adjust
+    from orientviz.bundle.loop import _steps
+    from orientviz.bundle.problem import _problem
 
     full = []
     solve = _problem.BundleProblem.solve
@@ -62,9 +64,9 @@ def run(block, reps: int, newton: bool) -> dict:
         full.append(fac is None)
         return solve(self, ne, names, fac=fac)
 
-    reuse = _adjust.CHORD_REUSE
+    reuse = _steps.CHORD_REUSE
     _problem.BundleProblem.solve = counting
-    _adjust.CHORD_REUSE = 0.0 if newton else reuse
+    _steps.CHORD_REUSE = 0.0 if newton else reuse
     try:
         cpus = []
         for _ in range(reps):
@@ -74,7 +76,7 @@ def run(block, reps: int, newton: bool) -> dict:
             cpus.append(time.process_time() - c0)
     finally:
         _problem.BundleProblem.solve = solve
-        _adjust.CHORD_REUSE = reuse
+        _steps.CHORD_REUSE = reuse
     return dict(res=res, cpu=min(cpus), factors=sum(full), iters=res.iterations)
 
 

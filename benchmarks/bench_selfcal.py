@@ -14,7 +14,7 @@ the shared bench (``make_block.py``, see ``bench_bundle.py``); its image errors 
 only, so the parameters stay near 0 — the cost of the algebra is what is measured.
 
 ``--precision`` adds a second table: the same two runs with ``precision=True`` (cofactor
-blocks, redundancy numbers; :mod:`orientviz.bundle._precision`), timed in the same
+blocks, redundancy numbers; :mod:`orientviz.bundle.precision._precision`), timed in the same
 repetitions. ``prec_ratio`` = self-cal with precision / plain with precision (best);
 ``prec_extra`` = what the precision adds to the self-calibrating bundle, in units of the
 plain bundle without precision: (best self-cal with − best self-cal without) / best plain

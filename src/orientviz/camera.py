@@ -179,7 +179,7 @@ def collinearity_partials(d: F64, R: F64, dR: F64, c: F64) -> tuple[F64, F64, F6
     """The derivative chain of the collinearity equations, vectorised over n rays.
 
     Used by :func:`collinearity_jacobian`; the bundle's kernel
-    (:mod:`orientviz.bundle._kernel`) computes the same chain arranged per image.
+    (:mod:`orientviz.bundle.model._kernel`) computes the same chain arranged per image.
 
     Parameters
     ----------

@@ -215,11 +215,11 @@ COMMANDS: dict[str, Command] = {
             arg("--free", action="store_true", default=None,
                 help="free network: control and check points become tie points; datum by "
                 "minimum constraints, or by --fix (options.free)"),
-            arg("--solver", choices=["auto", "banded", "dense", "sparse"], default=None,
+            arg("--solver", choices=["auto", "banded", "dense", "sparse", "reference"], default=None,
                 help="solver of the bundle's reduced camera system (overrides options.solver; "
                 "default auto: banded for strips, dense for small or densely connected "
                 "networks, sparse (nested-dissection multifrontal Cholesky) otherwise; the "
-                "report names the choice)"),
+                "report names the choice); reference: the textbook iteration, small blocks"),
             arg(
                 "-o",
                 "--output",
@@ -304,14 +304,26 @@ COMMANDS: dict[str, Command] = {
         description="Convert a COLMAP model (a folder with cameras.txt, images.txt and "
         "points3D.txt, or cameras.bin, images.bin and points3D.bin) to an orientviz/1 block "
         "problem file, keeping only keypoints matched to a 3D point; SIMPLE_PINHOLE, "
-        "PINHOLE, SIMPLE_RADIAL, RADIAL and OPENCV cameras are mapped exactly (distortion "
-        "removed with COLMAP's parameters, fx and fy kept apart); --control adds control "
-        "points from a CSV keyed by POINT3D_ID.",
-        examples=(("orientviz import-colmap sparse/0 -o block.json", "convert"),),
+        "PINHOLE, SIMPLE_RADIAL, RADIAL and OPENCV cameras are mapped exactly. By default "
+        "the file keeps COLMAP's objective: observations in COLMAP's distorted pixels, "
+        "each camera a forward lens model with focal length and distortion free as "
+        "COLMAP's bundle adjuster refines them (principal point held), sigma in pixels so "
+        "sigma0 reads as the pixel RMS; --fix-lens holds the cameras, --undistort writes "
+        "undistorted observations of distortion-free cameras instead. A point matched "
+        "twice in one image keeps its first keypoint (the count is printed). --control "
+        "adds control points from a CSV keyed by POINT3D_ID.",
+        examples=(
+            ("orientviz import-colmap sparse/0 -o block.json", "convert"),
+            ("orientviz import-colmap sparse/0 --fix-lens -o block.json", "cameras held"),
+        ),
         arguments=(
             arg("directory", help="folder of the COLMAP text model"),
+            arg("--fix-lens", action="store_true",
+                help="hold the cameras (focal length, distortion) at COLMAP's values"),
+            arg("--undistort", action="store_true",
+                help="undistorted observations, distortion-free cameras (held)"),
             *IMPORT_OPTIONS,
-        ),
+        ),  # fmt: skip
     ),
     "import-csv": Command(
         "orientviz.io.measurements",

@@ -6,7 +6,7 @@ import pytest
 import orientviz as ov
 from orientviz.adjust import gauss_newton
 from orientviz.bundle import Brown, Ebner12, Gruen44, analyse, ap_set
-from orientviz.bundle._additional import _eo_deformations
+from orientviz.bundle.model._additional import _eo_deformations
 
 
 def _grid(n, b=92.0):

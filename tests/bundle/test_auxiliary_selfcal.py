@@ -1,7 +1,7 @@
 """Auxiliary data together with self-calibration, and the precision with auxiliary data.
 
 The bundle's bordered solve (additional parameters + offsets/drifts,
-orientviz.bundle._auxiliary_border) and its precision are compared with a dense reference
+orientviz.bundle.problem._auxiliary_border) and its precision are compared with a dense reference
 built here from scratch: the full weighted Jacobian of all observations (image rays by
 orientviz.camera.collinearity_jacobian, the parameters' pseudo-observations, the
 auxiliary rows straight from the Auxiliary data) over all unknowns.

@@ -355,9 +355,9 @@ def test_result_names_read_like_the_list_of_parameter_names():
 
 
 def test_the_jacobians_of_a_kept_projection_are_those_of_its_state():
-    from orientviz.bundle._checks import point_setup
-    from orientviz.bundle._problem import BundleProblem
-    from orientviz.bundle._state import BundleState
+    from orientviz.bundle.problem._checks import point_setup
+    from orientviz.bundle.problem._problem import BundleProblem
+    from orientviz.bundle.problem._state import BundleState
 
     sim = ov.simulate_block(2, 5, rng=8)
     b = sim.block

@@ -1,4 +1,4 @@
-"""The bundle's additional-parameter border (orientviz.bundle._ap_normal) against dense algebra."""
+"""The bundle's additional-parameter border (orientviz.bundle.problem._ap_normal) against dense algebra."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Precision of the bundle (orientviz.bundle._precision) against the dense full inverse."""
+"""Precision of the bundle (orientviz.bundle.precision._precision) against the dense full inverse."""
 
 from __future__ import annotations
 
@@ -188,8 +188,8 @@ def _cross_scale(Q, i, j):
 def test_precision_with_strip_parameters_equals_dense_inverse(path, monkeypatch):
     """Ebner's 12 parameters per strip (3 strips): the sparse-by-group parameter terms and,
     with ``path="banded"``, the banded border solves against the full dense inverse."""
-    from orientviz.bundle import _precision as precision
     from orientviz.bundle import ap_set
+    from orientviz.bundle.precision import _precision as precision
 
     if path == "banded":  # the banded selected inverse and banded solves even when small
         monkeypatch.setattr(precision, "DENSE_INVERSE_LIMIT", 0)

@@ -15,12 +15,12 @@ import pytest
 from unordered_networks import close_range_network
 
 import orientviz as ov
-from orientviz.bundle import _adjust
-from orientviz.bundle._checks import point_setup
-from orientviz.bundle._kernel import collinearity_block
-from orientviz.bundle._local_rotation import LOCAL_MIN_CORRECTION, angle_map, apply_local
-from orientviz.bundle._problem import BundleProblem
-from orientviz.bundle._state import BundleState
+from orientviz.bundle.loop import _steps
+from orientviz.bundle.model._kernel import collinearity_block
+from orientviz.bundle.model._local_rotation import LOCAL_MIN_CORRECTION, angle_map, apply_local
+from orientviz.bundle.problem._checks import point_setup
+from orientviz.bundle.problem._problem import BundleProblem
+from orientviz.bundle.problem._state import BundleState
 
 
 @pytest.mark.parametrize("sequence", ["opk", "pok"])
@@ -72,7 +72,7 @@ def _record(monkeypatch):
     """Per solved step: (chord step?, correction, local?, chord by a frame-rotation
     factor in ω, φ, κ?, iteration) and per tried chord whether it was refused."""
     steps, refused = [], []
-    solve, chord = _adjust._BundleSteps.solve, _adjust._BundleSteps._chord
+    solve, chord = _steps.BundleSteps.solve, _steps.BundleSteps._chord
 
     def spy_solve(self, st, ev, lam, it):
         out = solve(self, st, ev, lam, it)
@@ -85,8 +85,8 @@ def _record(monkeypatch):
         refused.append(out is None)
         return out
 
-    monkeypatch.setattr(_adjust._BundleSteps, "solve", spy_solve)
-    monkeypatch.setattr(_adjust._BundleSteps, "_chord", spy_chord)
+    monkeypatch.setattr(_steps.BundleSteps, "solve", spy_solve)
+    monkeypatch.setattr(_steps.BundleSteps, "_chord", spy_chord)
     return steps, refused
 
 
@@ -119,7 +119,7 @@ def test_chord_steps_after_a_frame_rotation_step_reach_the_newton_optimum(monkey
     res = ov.bundle_adjust(block, precision=False)
     chords = list(steps)
     steps.clear()
-    monkeypatch.setattr(_adjust, "CHORD_REUSE", 0.0)  # every step a Newton step
+    monkeypatch.setattr(_steps, "CHORD_REUSE", 0.0)  # every step a Newton step
     newton = ov.bundle_adjust(block, precision=False)
     full_newton = len(steps)
     _assert_same_optimum(res, newton, sd)
@@ -132,17 +132,17 @@ def test_chord_steps_that_stop_contracting_fall_back_to_full_steps(monkeypatch, 
     block, sd = poor_start
     # every undamped step's factor is offered to the next: after the long first steps
     # the old matrix no longer contracts, and the step is solved in full instead
-    monkeypatch.setattr(_adjust, "CHORD_REUSE", np.inf)
+    monkeypatch.setattr(_steps, "CHORD_REUSE", np.inf)
     steps, refused = _record(monkeypatch)
     res = ov.bundle_adjust(block, precision=False)
     taken, refusals = list(steps), list(refused)
-    monkeypatch.setattr(_adjust, "CHORD_REUSE", 0.0)
+    monkeypatch.setattr(_steps, "CHORD_REUSE", 0.0)
     newton = ov.bundle_adjust(block, precision=False)
     _assert_same_optimum(res, newton, sd)
     assert any(refusals) and not all(refusals)
     for before, step in zip(taken, taken[1:]):
         if step[0]:  # each chord step shrank the correction by the contraction bound
-            assert step[1] < _adjust.CHORD_CONTRACTION * before[1]
+            assert step[1] < _steps.CHORD_CONTRACTION * before[1]
 
 
 def test_steps_after_a_small_correction_are_in_the_angles_even_if_sigma0_stays_large(

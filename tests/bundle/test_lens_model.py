@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from orientviz.bundle import LensModel, bundle_adjust
-from orientviz.bundle._lens import BACKWARD_NAMES, FORWARD_NAMES, evaluate
+from orientviz.bundle.model._lens import BACKWARD_NAMES, FORWARD_NAMES, evaluate
 from orientviz.errors import InputError
 from orientviz.lens import BackwardLens, backward_ideal
 from orientviz.simulate import simulate_calibration
@@ -130,7 +130,7 @@ def test_check_points_are_intersected_through_the_estimated_camera(kind):
 
 
 def test_a_forward_camera_in_opencvs_terms_projects_as_opencv_does():
-    from orientviz.bundle._lens import LensEstimates, opencv_camera
+    from orientviz.bundle.model._lens import LensEstimates, opencv_camera
     from orientviz.lens import forward_pixels
 
     th = _theta("forward").copy()

@@ -1,4 +1,4 @@
-"""Rotation steps in the image frames from poor starts (orientviz.bundle._local_rotation)."""
+"""Rotation steps in the image frames from poor starts (orientviz.bundle.model._local_rotation)."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ from unordered_networks import close_range_network
 
 import orientviz as ov
 from orientviz.block import CONTROL
-from orientviz.bundle import _adjust
-from orientviz.bundle._kernel import collinearity_block
-from orientviz.bundle._local_rotation import apply_local
+from orientviz.bundle.loop import _steps
+from orientviz.bundle.model._kernel import collinearity_block
+from orientviz.bundle.model._local_rotation import apply_local
 from orientviz.orientation.intersection import intersect_rays
 from orientviz.rotation import matrix_from_opk, matrix_from_rotvec, opk_from_matrix
 
@@ -67,7 +67,7 @@ def test_poor_start_converges_to_the_optimum_with_fewer_steps(monkeypatch):
     # the precision is the one of ω, φ, κ (the last steps are taken in the angles)
     ref = ov.bundle_adjust(block, precision=True)
     np.testing.assert_allclose(local.std(), ref.std(), rtol=1e-5)
-    monkeypatch.setattr(_adjust, "LOCAL_SIGMA0", np.inf)  # steps in ω, φ, κ only
+    monkeypatch.setattr(_steps, "LOCAL_SIGMA0", np.inf)  # steps in ω, φ, κ only
     angles = ov.bundle_adjust(poor, precision=False, max_iter=60)
     assert angles.converged
     assert local.iterations + 3 <= angles.iterations  # 6 against 10

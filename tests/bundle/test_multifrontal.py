@@ -13,11 +13,10 @@ import numpy as np
 import pytest
 
 import orientviz as ov
-from orientviz.bundle import _reduced
-from orientviz.bundle._dissection import check_dissection, nested_dissection
-from orientviz.bundle._multifrontal import NotPositiveDefinite, factor_fronts
-from orientviz.bundle._reduced import ReducedStructure, dense_matrix, factor_reduced
-from orientviz.bundle._solver_choice import DENSE_MAX, choose_solver
+from orientviz.bundle.reduced import ReducedStructure, _factor, dense_matrix, factor_reduced
+from orientviz.bundle.reduced._choice import DENSE_MAX, choose_solver
+from orientviz.bundle.reduced._dissection import check_dissection, nested_dissection
+from orientviz.bundle.reduced._multifrontal import NotPositiveDefinite, factor_fronts
 
 
 def _network(rng, rows: int, cols: int, reach: float = 0.9, n_pt: int = 900):
@@ -135,7 +134,7 @@ def test_singular_system_names_the_parameter(monkeypatch):
     elements = ("X0", "Y0", "Z0", "omega", "phi", "kappa")
     names = [f"image{i}.{e}" for i in range(m) for e in elements]
     # large systems are not diagnosed by a dense null space: the pivot names the parameter
-    monkeypatch.setattr(_reduced, "DENSE_DIAGNOSIS_LIMIT", 0)
+    monkeypatch.setattr(_factor, "DENSE_DIAGNOSIS_LIMIT", 0)
     with pytest.raises(ov.NotDeterminableError, match=r"broke down at image image17 \(φ\)"):
         factor_reduced(st, blocks, names)
     monkeypatch.undo()

@@ -1,4 +1,4 @@
-"""Schur complement and reduced-system solvers (orientviz.bundle._reduced)."""
+"""Schur complement and reduced-system solvers (orientviz.bundle.reduced)."""
 
 from __future__ import annotations
 
@@ -114,7 +114,7 @@ def test_singular_reduced_system_names_parameters():
 def test_schur_maps_of_ascending_tracks_equal_the_general_ones():
     # the bundle's set-up orders a point's rays by image: the maps of S's formation are
     # then built from one point's pattern; they must be the general construction's
-    from orientviz.bundle._tracks import _ascending_group_map, _block_lookup, _group_map
+    from orientviz.bundle.reduced._tracks import _ascending_group_map, _block_lookup, _group_map
 
     rng = np.random.default_rng(2)
     m = 40

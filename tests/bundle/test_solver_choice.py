@@ -13,7 +13,7 @@ from unordered_networks import close_range_network
 
 import orientviz as ov
 from orientviz.bundle import BundleProblem, BundleState, point_setup
-from orientviz.bundle._solver_choice import choose_solver, image_blocks
+from orientviz.bundle.reduced._choice import choose_solver, image_blocks
 
 
 def test_auto_chooses_banded_for_strips_and_dense_for_a_close_range_network():

@@ -99,3 +99,33 @@ def test_rejection_and_show_mistake(capsys):
     assert isinstance(rejection(check, [2.0, 1.0]), CheckFailed)
     show_mistake(check, [-1.0, -2.0])
     assert capsys.readouterr().out.startswith("✗ v: wrong")
+
+
+def test_stand_in_uses_the_library_only_while_the_blank_is_empty(capsys):
+    from orientviz.exercises import stand_in
+    from orientviz.exercises._common import NotWrittenError, call
+
+    @stand_in(lambda x: x + 100)
+    def blank(x):
+        raise NotImplementedError
+
+    @stand_in(lambda x: x + 100)
+    def written(x):
+        return x + 1
+
+    assert blank(1) == 101 and blank(2) == 102
+    assert capsys.readouterr().out.count("not written yet") == 1  # one note, not one per call
+    assert written(1) == 2
+    with pytest.raises(NotWrittenError, match="not written yet"):
+        call(blank, 1)  # a check sees the student's blank, not the stand-in
+    assert call(written, 1) == 2
+
+
+def test_a_numpy_shape_error_is_explained():
+    from orientviz.exercises._common import CheckFailed, call
+
+    def forgot_the_transpose(W, V):
+        return W @ V  # Wᵀ V was meant
+
+    with pytest.raises(CheckFailed, match=r"transposed.*inputs: argument 1 \(4, 6\)"):
+        call(forgot_the_transpose, np.ones((4, 6)), np.ones((4, 4)), what="reduce")

@@ -19,6 +19,8 @@ def test_diagnoses_name_the_mistake():
             ("check_sigma0", "divides by n"): "redundancy r",
             ("check_redundancy", "one observation per ray"): "two observations",
             ("check_critical_value", "one-sided"): "one-sided",
-            ("check_normalized", "unweighted r"): "need the weights",
+            ("check_after_doubling", "sigma0 doubled"): "halve it",
+            ("check_after_doubling", "r halved"): "relative weights only",
+            ("check_after_doubling", "w unchanged"): "so w halves",
         },
     )

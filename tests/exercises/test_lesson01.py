@@ -18,6 +18,11 @@ def test_lesson01_diagnoses_name_the_mistake():
         lesson01,
         answers,
         {
+            ("check_line_fit", "no_weights"): "weights are forgotten",
+            ("check_line_fit", "one_over_sigma"): "1/σ instead of 1/σ²",
+            ("check_line_fit", "divide_by_n"): "redundancy r = n − 2",
+            ("check_line_fit", "Q_is_N"): "inverse of N",
+            ("check_line_fit", "v_sign"): "sign of v",
             ("check_weighted_mean", "unweighted"): "weights are forgotten",
             ("check_weighted_mean", "one_over_sigma"): "1/σ instead of 1/σ²",
             ("check_weighted_mean", "divide_by_n"): "divided by n",

@@ -18,6 +18,10 @@ def test_lesson03_diagnoses_name_the_mistake():
         lesson03,
         answers,
         {
+            ("check_affine_fit", "interleaved"): "the order is",
+            ("check_affine_fit", "r_2n"): "not 2n.",
+            ("check_affine_fit", "r_2n_3"): "not 2n − 3",
+            ("check_affine_fit", "v_sign"): "sign of v",
             ("check_dlt_rows", "plus_sign"): "minus sign",
             ("check_dlt_rows", "swap_xy"): "swapped",
             ("check_dlt_rows", "stacked"): "interleave",

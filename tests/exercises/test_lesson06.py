@@ -18,6 +18,9 @@ def test_lesson06_diagnoses_name_the_mistake():
         lesson06,
         answers,
         {
+            ("check_eight_point", "no_rank2"): "rank 3",
+            ("check_eight_point", "not_scaled"): "not scaled",
+            ("check_eight_point", "transposed"): "E is transposed",
             ("check_essential", "swapped"): "factors are swapped",
             ("check_essential", "transposed_R"): "R2 is transposed",
             ("check_essential", "skew_transposed"): "cross-product matrix is transposed",

@@ -8,3 +8,17 @@ from orientviz.exercises import lesson08
 
 def test_checks():
     assert_module_checks(lesson08, answers)
+
+
+def test_diagnoses_name_the_mistake():
+    from mutants import assert_diagnoses
+
+    assert_diagnoses(
+        lesson08,
+        answers,
+        {
+            ("check_compose", "order"): "order is wrong",
+            ("check_compose", "no scale in t"): "scale m1 is missing",
+            ("check_compose", "no rotation in t"): "rotation R1 is missing",
+        },
+    )

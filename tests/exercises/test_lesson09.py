@@ -18,6 +18,9 @@ def test_lesson09_diagnoses_name_the_mistake():
         lesson09,
         answers,
         {
+            ("check_inner_solve", "ridge"): "regularises",
+            ("check_inner_solve", "whole_inverse"): "whole bordered inverse",
+            ("check_inner_solve", "sign"): "sign of dx",
             ("check_helmert_columns", "rotation_yx"): "(−y, x)",
             ("check_helmert_columns", "scale_for_rotation"): "change of scale",
             ("check_helmert_columns", "no_translations"): "two shifts and one rotation",

@@ -8,3 +8,17 @@ from orientviz.exercises import lesson15
 
 def test_checks():
     assert_module_checks(lesson15, answers)
+
+
+def test_diagnoses_name_the_mistake():
+    from mutants import assert_diagnoses
+
+    assert_diagnoses(
+        lesson15,
+        answers,
+        {
+            ("check_smallest_redundancy", "one-sided"): "one-sided",
+            ("check_smallest_redundancy", "squared"): "bound for σ̂0²",
+            ("check_smallest_redundancy", "off by one"): "off by one",
+        },
+    )

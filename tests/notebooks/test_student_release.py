@@ -120,3 +120,44 @@ def test_main_usage_errors(tmp_path, capsys):
     assert main([]) == 2
     assert main([str(tmp_path / "missing.ipynb"), str(tmp_path / "out")]) == 1
     assert main([str(ROOT / "notebooks"), str(ROOT / "notebooks")]) == 1
+
+
+def _run_release(path, tmp_path, monkeypatch):
+    """Release one lesson into tmp_path and execute it as "Run All" does; return the notebook."""
+    nbformat = pytest.importorskip("nbformat")
+    nbclient = pytest.importorskip("nbclient")
+    from test_notebooks import _patch_shell_polling
+
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    _patch_shell_polling()
+    assert main([str(path), str(tmp_path)]) == 0
+    nb = nbformat.read(tmp_path / path.name, as_version=4)
+    client = nbclient.NotebookClient(
+        nb, timeout=300, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}}
+    )
+    try:
+        client.execute()  # a cell not tagged raises-exception that raises stops here
+    except nbclient.exceptions.CellExecutionError as exc:
+        pytest.fail(f"{path.name}: the student release stops: {str(exc).splitlines()[-1]}")
+    return nb
+
+
+@pytest.mark.notebook
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
+def test_released_lesson_runs_to_the_end(path, tmp_path, monkeypatch):
+    """"Run All" on the student release reaches the last cell; the only errors are the checks
+    of the blanks, each saying "not written yet"."""
+    nb = _run_release(path, tmp_path, monkeypatch)
+    errors, blanks = [], 0
+    for i, cell in enumerate(nb.cells):
+        if cell.cell_type != "code":
+            continue
+        assert cell.source.strip() == "" or cell.execution_count is not None, f"cell {i} not run"
+        for out in cell.get("outputs", []):
+            if out.get("output_type") == "error":
+                if out.get("ename") == "NotWrittenError" and "not written yet" in out.get("evalue", ""):
+                    blanks += 1
+                else:
+                    errors.append(f"cell {i}: {out.get('ename')}: {out.get('evalue', '')[:200]}")
+    assert not errors, f"{path.name}: errors other than 'not written yet':\n" + "\n".join(errors)
+    assert blanks >= 4, f"{path.name}: only {blanks} checks answered 'not written yet'"

@@ -8,7 +8,7 @@ with weights ``P = diag(1/σ²)``. A problem supplies ``equations(x) -> (f, J)``
 
 until the corrections are negligible against the parameters' own precision, then
 computes σ̂0, the cofactor matrix, redundancy numbers and normalised residuals.
-Large block problems use the Schur-complement path in :mod:`orientviz.bundle._reduced`
+Large block problems use the Schur-complement path in :mod:`orientviz.bundle.reduced`
 and return the same :class:`~orientviz.adjust.result.Adjustment`.
 """
 

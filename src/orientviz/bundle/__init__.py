@@ -14,49 +14,82 @@ The face of the bundle's house. What a user calls:
   :class:`RayReliability`;
 * auxiliary data by alternation (teaching): :func:`adjust_with_auxiliary`.
 
-The parts behind it (private modules, one job each): ``_adjust`` (the loop and the
-problem), ``_checks`` (datum and determinability checks before solving), ``_kernel``
-(collinearity and its derivatives, vectorised), ``_reduced`` (the reduced camera system:
-structure, orderings, factorisation), ``_ap_normal`` / ``_border`` (the border of the
-additional parameters and its solves), ``_auxiliary`` / ``_auxiliary_border`` (GNSS,
-statoscope, APR rows and their offsets/drifts), ``_precision`` / ``_precision_ap``
-(cofactor blocks, redundancy numbers), ``_result`` (the result), ``_additional``
-(additional-parameter sets), ``_selfcal``, ``_cleaning``, ``_reliability``,
-``_alternation``, ``_lens`` (the camera model inside the projection). The numerical building blocks that tests and benchmarks use are
-exported too (second group of ``__all__``).
+Start reading at :mod:`orientviz.bundle.reference`: the textbook Gauss-Newton iteration
+(``solver="reference"``); every fast path is tested against it.
+
+The rooms behind it (each a sub-package with its own door):
+
+* ``model`` — the photogrammetric model: collinearity and its derivatives, rotations of
+  the image frames, the camera (lens) model, additional-parameter sets;
+* ``problem`` — the bundle problem: checks, typed parts, the iterate, one Gauss-Newton
+  step (normal equations, border of additional parameters and auxiliary data);
+* ``reduced`` — the reduced camera system: form → factor → solve → back-substitute,
+  the choice of solver inside (banded, dense, sparse);
+* ``loop`` — :func:`bundle_adjust`: the iterations over the problem's steps and the
+  result;
+* ``precision`` — cofactor blocks, redundancy numbers, reliability per ray.
+
+Beside them: ``reference`` with ``_reference_data`` (the textbook iteration), ``_result``
+(the typed result), ``_selfcal``, ``_cleaning``,
+``_alternation`` (procedures built on :func:`bundle_adjust`) and ``sparsity`` (the
+sparsity of the normal equations drawn for the lessons). The numerical building blocks
+that tests and benchmarks use are exported too (second group of ``__all__``).
 """
 
-from ._additional import AdditionalParameters, APAnalysis, Brown, Ebner12, Gruen44, analyse, ap_set
-from ._adjust import bundle_adjust
 from ._alternation import AuxiliaryResult, adjust_with_auxiliary
-from ._auxiliary import AuxRows, BundleAuxiliary, auxiliary_rows
-from ._border import (
-    band_backward_solve,
-    band_forward_solve,
-    form_preconditioner,
-    solve_bordered,
-    solve_bordered_pcg,
-)
-from ._checks import PointSetup, datum_defect, image_condition_deficit, point_setup
 from ._cleaning import bundle_solver, clean_block, cleaned_block, ray_labels
-from ._kernel import collinearity_block, normalised_block, project_block
-from ._lens import BoundLens, LensEstimates, LensModel, lens_model
-from ._normal import APBorder, AuxBorder, NormalEquations
-from ._parts import (
+from ._result import BundleResult, ExteriorPairs, RayGains
+from ._selfcal import SelfCalibration, self_calibrate
+from .loop import bundle_adjust
+from .model import (
+    AdditionalParameters,
+    APAnalysis,
+    BoundLens,
+    Brown,
+    Ebner12,
+    Gruen44,
+    LensEstimates,
+    LensModel,
+    analyse,
+    ap_set,
+    collinearity_block,
+    lens_model,
+    normalised_block,
+    project_block,
+)
+from .precision import RayReliability, banded_selected_inverse, ray_reliability
+from .problem import (
     AdditionalBlock,
+    AuxRows,
     BorderSolver,
+    BundleAuxiliary,
+    BundleProblem,
+    BundleState,
     ExteriorBlock,
     ImageObservations,
     InteriorOrientation,
     PointBlock,
+    PointSetup,
+    auxiliary_rows,
+    band_backward_solve,
+    band_forward_solve,
+    datum_defect,
+    form_preconditioner,
+    image_condition_deficit,
+    point_setup,
+    solve_bordered,
+    solve_bordered_pcg,
 )
-from ._precision import banded_selected_inverse
-from ._problem import BundleProblem
-from ._reduced import SOLVERS, ReducedStructure, factor_reduced, geometric_orderings, inv3
-from ._reliability import RayReliability, ray_reliability
-from ._result import BundleResult, ExteriorPairs, RayGains
-from ._selfcal import SelfCalibration, self_calibrate
-from ._state import BundleState
+from .reduced import (
+    SOLVERS,
+    APBorder,
+    AuxBorder,
+    NormalEquations,
+    ReducedStructure,
+    factor_reduced,
+    geometric_orderings,
+    inv3,
+)
 
 __all__ = [
     # the adjustment and its companions

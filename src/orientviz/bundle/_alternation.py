@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from ..adjust.result import Adjustment
 from ..block import CONTROL, KINDS, Auxiliary, Block
 from ..errors import InputError
-from ._adjust import bundle_adjust
+from .loop._adjust import bundle_adjust
 
 F64 = NDArray[np.float64]
 

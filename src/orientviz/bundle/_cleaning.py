@@ -31,10 +31,10 @@ from ..block import CHECK, CONTROL, Block
 from ..camera import project
 from ..errors import InputError
 from ..rotation import matrix_from_opk
-from ._adjust import bundle_adjust
-from ._kernel import collinearity_block
-from ._reduced import inv3
 from ._result import RaySubset
+from .loop._adjust import bundle_adjust
+from .model._kernel import collinearity_block
+from .reduced import inv3
 
 F64 = NDArray[np.float64]
 
@@ -252,7 +252,7 @@ def bundle_solver(
         the bundle computes check coordinates), so that cleaning tests them too.
     redundancy : {"exact", "local"}
         Default for ``solve(weights, redundancy=None)``: ``"exact"`` redundancy blocks
-        from the bundle's cofactors (:mod:`orientviz.bundle._precision`), or ``"local"``:
+        from the bundle's cofactors (:mod:`orientviz.bundle.precision._precision`), or ``"local"``:
         each point's intersection with the orientations held fixed (no precision
         computation; an upper bound of r, i.e. abs(w) is not overestimated).
     sharpen : bool

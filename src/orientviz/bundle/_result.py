@@ -1,10 +1,9 @@
-"""Assemble the :class:`Adjustment` of a bundle adjustment; check points.
+"""The typed result of a bundle adjustment and its parts.
 
-Residual order (v = f − l): the image coordinates of *all* observations of the block
-(x, y per observation, mm; rays to check points included but not adjusted — their
-redundancy numbers are NaN), then the pseudo-observations of weighted control
-coordinates (m), observed projection centres (m), attitudes (rad) and additional
-parameters; ``obs_slices`` names these ranges.
+:class:`BundleResult` (a :class:`~orientviz.block.BlockAdjustment`) with the precision's
+per-ray gains (:class:`RayGains`) and image–image cofactors (:class:`ExteriorPairs`);
+:class:`RaySubset` is a block's rays re-adjusted in the cleaning's checks. Filled by
+:func:`orientviz.bundle.loop._finish.finish_result`.
 """
 
 from __future__ import annotations
@@ -13,16 +12,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 from numpy.typing import NDArray
 
-from ..block import CHECK, BlockAdjustment, check_points_of
-from ..errors import NotDeterminableError
-from ..orientation.intersection import intersect_points
-from ..rotation import matrix_from_opk
-from ._kernel import normalised_block, project_block
-from ._lens import LensEstimates
-from ._state import wrap
+from ..block import BlockAdjustment
+from .model import LensEstimates
 
 F64 = NDArray[np.float64]
 
@@ -131,166 +124,3 @@ class BundleResult(BlockAdjustment):
     precision_error: str | None = None
     subset: RaySubset | None = None
     camera: LensEstimates | None = None
-
-
-def _intersect_check_points(
-    block, X0: F64, angles: F64, chk: NDArray[np.int64], prob=None, ap: F64 | None = None
-) -> F64:
-    """Check points intersected from their own rays with the adjusted orientations (m).
-
-    Least-squares forward intersection (:func:`orientviz.orientation.intersection.intersect_points`),
-    NaN for points with fewer than two rays or parallel rays. With a camera model
-    (``prob.ap.lens``) the rays are first corrected by the estimated camera.
-    """
-    obs = block.observations
-    col = -np.ones(block.n_points, np.int64)
-    col[chk] = np.arange(chk.size)
-    sel = np.flatnonzero(col[obs.point] >= 0)
-    out = np.full((chk.size, 3), np.nan)
-    if sel.size == 0:
-        return out
-    cam = block.images.camera
-    xy, io = obs.xy[sel], (block.cameras.c[cam], block.cameras.x0[cam], block.cameras.y0[cam])
-    image = obs.image[sel]
-    if prob is not None and prob.ap.lens is not None:  # per ray: as a pinhole saw it
-        xy, io_ray = prob.ap.lens.pinhole(ap, prob.ap.group[image], xy)
-        image = np.arange(sel.size)  # one "image" per ray carries its ray's c, x0, y0
-        X0, angles = X0[obs.image[sel]], angles[obs.image[sel]]
-        io = (io_ray[:, 0], io_ray[:, 1], io_ray[:, 2])
-    res = intersect_points(
-        xy, image, col[obs.point[sel]], X0,
-        matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2], block.sequence),
-        *io, sigma=obs.sigma[sel], n_points=chk.size, on_degenerate="nan",
-    )  # fmt: skip
-    return res.xyz
-
-
-def finish_result(
-    block, prob, st, rw, Je, Jp, names, history, converged, reason, precision, dof, sigma0,
-    lin=None,
-) -> BundleResult:  # fmt: skip
-    m, p, n = block.n_images, block.n_points, block.n_observations
-    setup = prob.setup
-    xyz = st.xyz.copy()
-    # check points: intersect with the adjusted orientations from their own rays
-    chk = np.flatnonzero(block.points.role == CHECK)
-    if chk.size:
-        xyz[chk] = _intersect_check_points(block, st.X0, st.angles, chk, prob, st.ap)
-    check = check_points_of(block, xyz)
-    # residuals of all image observations (v = f − l)
-    obs = block.observations
-    fa = _project_all(block, st, xyz, prob)
-    v_img = (fa - obs.xy).reshape(-1)
-    s_img = obs.sigma.reshape(-1)
-    parts_v, parts_s, slices = [v_img], [s_img], {"image": slice(0, 2 * n)}
-    pos = 2 * n
-
-    def add(name, v, s):
-        nonlocal pos
-        parts_v.append(v)
-        parts_s.append(s)
-        slices[name] = slice(pos, pos + v.size)
-        pos += v.size
-
-    w = prob.points.prior_w > 0
-    add(
-        "control",
-        (st.xyz[prob.points.unknown] - prob.points.prior_obs)[w],
-        1 / np.sqrt(prob.points.prior_w[w]),
-    )
-    w = prob.exterior.X0_w > 0
-    add("X0_obs", (st.X0 - prob.exterior.X0_obs)[w], 1 / np.sqrt(prob.exterior.X0_w[w]))
-    w = prob.exterior.angles_w > 0
-    add(
-        "angles_obs",
-        wrap(st.angles - prob.exterior.angles_obs)[w],
-        1 / np.sqrt(prob.exterior.angles_w[w]),
-    )
-    if prob.q:
-        w = prob.ap.w > 0
-        add("additional", st.ap[w], 1 / np.sqrt(prob.ap.w[w]))
-    blocks = {"exterior": slice(0, 6 * m), "points": slice(6 * m, 6 * m + 3 * p)}
-    if prob.q:
-        blocks["additional"] = slice(6 * m + 3 * p, 6 * m + 3 * p + prob.q)
-    x = np.concatenate([np.hstack([st.X0, st.angles]).ravel(), xyz.ravel(), st.ap])
-    res = BundleResult(
-        x=x,
-        names=names,
-        sigma0=sigma0,
-        redundancy=int(dof),
-        residuals=np.concatenate(parts_v),
-        sigma_obs=np.concatenate(parts_s),
-        converged=converged,
-        reason=reason,
-        history=history,
-        groups=blocks,
-        obs_slices=slices,
-        exterior=np.hstack([st.X0, st.angles]),
-        points=xyz,
-        check_points=check,
-        additional=st.ap.copy(),
-        used_obs=setup.used_obs,
-        adjusted=(int(prob.n_eq), int(prob.n_unknowns)),
-        solver=prob.reduced.solver,
-        reduced_info=dict(prob.reduced.info, **_border_info(prob)),
-    )
-    if precision:
-        from ._precision import bundle_precision
-
-        try:
-            bundle_precision(res, prob, st, rw, Je, Jp, lin)
-        except (np.linalg.LinAlgError, scipy.linalg.LinAlgError, ValueError) as exc:
-            # only reachable from a state the iterations did not settle (diverged start
-            # values leave singular or non-finite point blocks): keep the result, say why
-            # it carries no precision instead of letting a numerical error escape
-            if converged:
-                # a converged state with a singular reduced system: the count checks
-                # before the iterations (bundle_checks) missed a geometric defect; name
-                # the parameters instead of ending in a numerical error
-                from ._reduced import raise_not_determinable
-
-                blocks = prob.normal(st, rw, Je, Jp).blocks
-                try:
-                    raise_not_determinable(prob.reduced, blocks, names[: 6 * prob.m], str(exc))
-                except NotDeterminableError as err:
-                    raise err from exc
-            res.precision_error = (
-                f"no precision at the last (not converged) state: {type(exc).__name__}: {exc}"
-            )
-    return res
-
-
-def _project_all(block, st, xyz, prob) -> F64:
-    """Image coordinates (n, 2) mm of all of the block's rays at ``st`` (``xyz``: its
-    points with the check points intersected)."""
-    cam = block.images.camera
-    obs = block.observations
-    if prob.ap.lens is not None:  # the camera model predicts every ray
-        seq = block.sequence
-        nrm = normalised_block(st.X0, st.angles, obs.image, xyz[obs.point], seq, False)[0]
-        return prob.ap.lens.evaluate(st.ap, prob.ap.group[obs.image], nrm, obs.xy, False)[0]
-    io = (block.cameras.c[cam], block.cameras.x0[cam], block.cameras.y0[cam])
-    rays = slice(None)
-    f = np.empty((obs.image.size, 2))
-    if prob.projected is not None and prob.projected[0] is st:
-        # the adjusted rays were projected at st by the last evaluation (the same
-        # kernel on the same values: the same numbers); the others are projected here
-        f[prob.obs.index] = prob.projected[1]
-        rest = np.ones(obs.image.size, bool)
-        rest[prob.obs.index] = False
-        rays = np.flatnonzero(rest)
-    f[rays] = project_block(
-        st.X0, st.angles, *io, obs.image[rays], xyz[obs.point[rays]], block.sequence
-    )
-    if prob.q:
-        f[prob.obs.index] += np.einsum(
-            "nij,nj->ni",
-            prob.ap.A,
-            st.ap.reshape(prob.ap.G, prob.ap.k)[prob.ap.group[prob.obs.image]],
-        )
-    return f
-
-
-def _border_info(prob) -> dict:
-    """How the additional-parameter border was solved in each solve (formed / cg steps)."""
-    return {"ap_border": list(prob.border.log)} if prob.q else {}

@@ -30,8 +30,8 @@ from scipy.special import ndtri
 from ..adjust.result import Adjustment
 from ..block import Block
 from ..errors import InputError, NotDeterminableError
-from ._additional import APAnalysis, analyse, ap_set
-from ._adjust import bundle_adjust
+from .loop._adjust import bundle_adjust
+from .model._additional import APAnalysis, analyse, ap_set
 
 __all__ = ["SelfCalibration", "self_calibrate"]
 
@@ -116,7 +116,7 @@ def default_set(name: str, block: Block):
     """The set ``name`` sized for the block's camera: Ebner's and Grün's image base
     b = 0.4 × the shorter format side (92 mm for 23 cm), Brown's c and r0 from the
     camera, ``"backward"``/``"forward"``: a :class:`~orientviz.bundle.LensModel`."""
-    from ._lens import KINDS, LensModel
+    from .model._lens import KINDS, LensModel
 
     key = str(name).lower().replace("-", "").replace("_", "")
     if key in KINDS:
@@ -134,7 +134,7 @@ def default_ap_sigma(aps, block: Block) -> float:
     with the format side, for Ebner's and Grün's sets (film and comparator errors);
     :data:`LENS_SIGMA_OF_R0` of the reference radius for a lens (a lens model, Brown's
     set), whose distortion grows with the format."""
-    from ._lens import LensModel
+    from .model._lens import LensModel
 
     d = camera_defaults(block)
     if isinstance(aps, LensModel):
@@ -200,7 +200,7 @@ def self_calibrate(
     NotDeterminableError
         The set is not determinable by the block; the message names correlated pairs.
     """
-    from ._lens import LensModel
+    from .model._lens import LensModel
 
     aps = default_set(additional, block) if isinstance(additional, str) else additional
     if keep_t is None:

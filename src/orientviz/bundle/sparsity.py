@@ -9,7 +9,7 @@ normal equations are
 
 :func:`bundle_normal_blocks` assembles U, W, V and the right sides for a
 :class:`~orientviz.block.Block` (dense W: a few hundred images at most — the real solver
-is :mod:`orientviz.bundle._reduced`). :func:`block_pattern`, :func:`reduced_pattern`,
+is :mod:`orientviz.bundle.reduced`). :func:`block_pattern`, :func:`reduced_pattern`,
 :func:`bandwidth` and :func:`cholesky_fill` describe the sparsity (in blocks): the reduced
 system S = U − W V⁻¹ Wᵀ has a non-zero block (i, k) exactly when images i and k see a
 common point, and a Cholesky factor of S fills the band between its outermost non-zeros.

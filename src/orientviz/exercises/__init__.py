@@ -27,6 +27,9 @@ enforces the notebook side):
 * Student copies: ``python tools/make_student_release.py notebooks/ OUTDIR`` (in the
   repository) replaces every solution body by ``raise NotImplementedError``, drops hidden
   tests, unhides the cell and tags the check after it ``raises-exception``.
+* A lesson decorates a "your version" function that later cells use with
+  :func:`stand_in` (the library's equivalent): while the blank is empty, those cells get
+  the library's result and say so; the checks unwrap it and answer "not written yet".
 * A numpy error raised inside the student's function (a transposed matrix, a wrong shape)
   is turned by :func:`~orientviz.exercises._common.call` into a :class:`CheckFailed` that names
   the shapes of the inputs.
@@ -37,5 +40,6 @@ This package is core: it imports numpy only (no matplotlib, no widgets).
 from __future__ import annotations
 
 from ._common import CheckFailed, NotWrittenError, show_mistake
+from ._standin import stand_in
 
-__all__ = ["CheckFailed", "NotWrittenError", "show_mistake"]
+__all__ = ["CheckFailed", "NotWrittenError", "show_mistake", "stand_in"]

@@ -20,6 +20,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._standin import student_function
+
 __all__ = [
     "ANGLE_FACTORS",
     "CheckFailed",
@@ -110,6 +112,7 @@ def call(func: Any, *args: Any, what: str = "your function", **kwargs: Any) -> A
     CheckFailed
         If ``func`` is not callable.
     """
+    func = student_function(func)  # a check never sees the library standing in
     if func is None or func is Ellipsis:
         raise NotWrittenError(f"{what}: not written yet (the blank is still empty).")
     if not callable(func):

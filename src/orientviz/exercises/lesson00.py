@@ -1,11 +1,11 @@
-"""Checkers for lesson 00, the tour: σ̂0, redundancy, normalised residuals, the critical value.
+"""Checkers for lesson 00, the tour: σ̂0, redundancy, the critical value, a prediction.
 
 Oracles (never :mod:`orientviz.adjust` or :mod:`orientviz.block`):
 
 * σ̂0 and the redundancy from their definitions, evaluated on the checker's own numbers
   and on a block counted by hand;
-* redundancy numbers from a QR factorisation of √P·A (the diagonal of the hat matrix),
-  not from normal equations;
+* the prediction for doubled σ checked by the experiment: the fit adjusted again with σ
+  doubled (σ̂0, redundancy numbers from a QR factorisation of √P·A, normalised residuals);
 * the critical value from :func:`scipy.stats.norm.isf`.
 
 Units: residuals and σ in mm (any unit, the same for both).
@@ -19,11 +19,11 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.stats import norm
 
-from ._common import call, compare, rng_for, success
+from ._common import CheckFailed, call, compare, rng_for, success
 
 __all__ = [
     "check_critical_value",
-    "check_normalized",
+    "check_after_doubling",
     "check_redundancy",
     "check_sigma0",
 ]
@@ -88,37 +88,43 @@ def check_critical_value(critical_w: Callable[[float], float]) -> None:
     success("critical value: 3.29 for α = 0.1 %, 1.96 for 5 %")
 
 
-def _line_problem(rng: np.random.Generator) -> tuple[F64, F64, F64]:
-    """A weighted straight-line-plus-curvature fit: design A (n, 3), residuals v, σ."""
+def _adjusted(A: F64, l: F64, sigma: F64) -> tuple[float, F64, F64]:
+    """σ̂0, redundancy numbers and normalised residuals of a weighted fit, by QR (the oracle)."""
+    Q, R = np.linalg.qr(A / sigma[:, None])
+    x = np.linalg.solve(R, Q.T @ (l / sigma))
+    v = A @ x - l
+    r_i = 1.0 - np.sum(Q**2, axis=1)  # 1 − diagonal of the hat matrix of √P A
+    s0 = float(np.sqrt(np.sum((v / sigma) ** 2) / (len(l) - A.shape[1])))
+    return s0, r_i, v / (sigma * np.sqrt(r_i))
+
+
+def check_after_doubling(after_doubling: Callable[[float, F64, F64], tuple]) -> None:
+    """``after_doubling(sigma0, r_i, w)`` must predict (σ̂0, r_i, w) after every a-priori σ is
+    doubled (the measurements unchanged), from the values before."""
+    rng = rng_for("lesson00.check_after_doubling")
     t = np.sort(rng.uniform(-1, 1, 14))
     A = np.column_stack([np.ones_like(t), t, t**2])
     sigma = np.where(t > 0.3, 0.02, 0.005)
     l = A @ [1.0, -0.4, 0.2] + rng.normal(0, 1, t.size) * sigma
     l[5] += 0.05  # a blunder
-    w = 1 / sigma
-    x = np.linalg.lstsq(A * w[:, None], l * w, rcond=None)[0]
-    return A, A @ x - l, sigma
-
-
-def check_normalized(normalized: Callable[[F64, F64, F64], F64]) -> None:
-    """``normalized(A, v, sigma)`` must return w_i = v_i / (σ_i √r_i) with the redundancy numbers r_i."""
-    rng = rng_for("lesson00.check_normalized")
-    A, v, sigma = _line_problem(rng)
-    Q, _ = np.linalg.qr(A / sigma[:, None])
-    r = 1.0 - np.sum(Q**2, axis=1)  # 1 − diagonal of the hat matrix of √P A
-    truth = v / (sigma * np.sqrt(r))
-    Qu, _ = np.linalg.qr(A)
-    r_unweighted = 1.0 - np.sum(Qu**2, axis=1)
-    wrong = [
-        ("divide by σ·√r_i, not by σ alone (v/σ ignores the redundancy numbers)", v / sigma),
-        ("the square root of r_i is missing", v / (sigma * r)),
-        (
-            "the redundancy numbers need the weights: r_i = 1 − (A N⁻¹ Aᵀ P)_ii",
-            v / (sigma * np.sqrt(r_unweighted)),
-        ),
-    ]
-    got = call(normalized, A.copy(), v.copy(), sigma.copy(), what="normalized")
-    compare("normalised residuals w", got, truth, rtol=1e-8, wrong=wrong)
+    before = _adjusted(A, l, sigma)
+    after = _adjusted(A, l, 2.0 * sigma)  # the experiment: adjust again with σ doubled
+    got = call(after_doubling, before[0], before[1].copy(), before[2].copy(), what="after_doubling")
+    if not isinstance(got, tuple) or len(got) != 3:
+        raise CheckFailed("after_doubling: return the three predictions (sigma0, r_i, w)")
+    compare("σ̂0 after doubling σ", got[0], after[0], rtol=1e-9, wrong=[
+        ("σ̂0 = √(Σ(v/σ)²/r): the same residuals divided by a doubled σ halve it", 2 * before[0]),
+        ("σ̂0 changes: the residuals stay, σ doubles", before[0]),
+    ])  # fmt: skip
+    compare("redundancy numbers r_i after doubling σ", got[1], after[1], rtol=1e-9, wrong=[
+        ("r_i depend on the relative weights only; doubling every σ leaves them", before[1] / 2),
+        ("r_i depend on the relative weights only; doubling every σ leaves them", before[1] / 4),
+    ])  # fmt: skip
+    compare("normalised residuals w after doubling σ", got[2], after[2], rtol=1e-9, wrong=[
+        ("w = v/(σ√r_i): v and r_i stay, σ doubles, so w halves", before[2]),
+        ("w = v/(σ√r_i): v and r_i stay, σ doubles, so w halves", 2 * before[2]),
+    ])  # fmt: skip
     success(
-        f"normalised residuals; the largest |w| = {np.abs(got).max():.2f} sits on the blunder (observation {int(np.argmax(np.abs(got)))})"
+        f"σ̂0 {before[0]:.2f} → {after[0]:.2f}, r_i unchanged, the blunder's |w| "
+        f"{np.abs(before[2]).max():.1f} → {np.abs(after[2]).max():.1f}: an honest σ matters"
     )

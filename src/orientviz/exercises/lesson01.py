@@ -247,3 +247,53 @@ def check_gauss_newton_step(fn) -> None:
         f"one step from 8 m off lands {np.linalg.norm(got - truth) * 1000:.1f} mm from the truth, "
         "as a step with a numerical Jacobian does"
     )
+
+
+# --------------------------------------------------------------------- the weighted line fit
+
+
+def _line_wrong(X, l, sigma, mistake):
+    """A line fit with one plausible mistake (the wrong answers the check names)."""
+    A = np.column_stack([np.ones_like(X), X])
+    p = {"no_weights": np.ones_like(sigma), "one_over_sigma": 1.0 / sigma}.get(
+        mistake, 1.0 / sigma**2
+    )
+    N = A.T @ (p[:, None] * A)
+    x = np.linalg.solve(N, A.T @ (p * l))
+    v = A @ x - l
+    r = len(l) if mistake == "divide_by_n" else len(l) - 2
+    s0 = math.sqrt(float(v @ (p * v)) / r)
+    Q = N if mistake == "Q_is_N" else np.linalg.inv(N)
+    return x, (-v if mistake == "v_sign" else v), s0, Q
+
+
+def check_line_fit(fn) -> None:
+    """``fn(X, l, sigma) -> (xhat, v, sigma0, Q)``: the weighted straight line l ≈ a + b X
+    (P = diag(1/σ²)), residuals v = A x̂ − l, σ̂0 = √(vᵀPv / (n − 2)) and Q = (AᵀPA)⁻¹."""
+    rng = rng_for("lesson01.check_line_fit")
+    X = np.sort(rng.uniform(-40.0, 60.0, 9))
+    sigma = np.where(np.arange(9) % 3 == 0, 0.002, 0.007)
+    l = 0.31 + 0.0042 * X + rng.normal(0.0, 1.0, 9) * sigma
+    got = call(fn, X.copy(), l.copy(), sigma.copy(), what="line_fit")
+    if not isinstance(got, tuple) or len(got) != 4:
+        raise CheckFailed("line_fit: return the four results (xhat, v, sigma0, Q)")
+    # oracle: a QR factorisation of √P A (no normal equations)
+    A = np.column_stack([np.ones_like(X), X])
+    Qr, Rr = np.linalg.qr(A / sigma[:, None])
+    x = np.linalg.solve(Rr, Qr.T @ (l / sigma))
+    v = A @ x - l
+    Ri = np.linalg.inv(Rr)
+    want = (x, v, math.sqrt(float(np.sum((v / sigma) ** 2)) / 7), Ri @ Ri.T)
+    names = ("x̂ = (a, b)", "v [mm]", "σ̂0", "Q = N⁻¹")
+    wrongs = {
+        "no_weights": "the weights are forgotten (P = I): P = diag(1/σ²)",
+        "one_over_sigma": "weights 1/σ instead of 1/σ²",
+        "divide_by_n": "vᵀPv divided by n instead of the redundancy r = n − 2",
+        "Q_is_N": "Q is the inverse of N = AᵀPA, not N itself",
+        "v_sign": "the sign of v is wrong: v = A x̂ − l (computed − observed)",
+    }
+    for k, name in enumerate(names):
+        compare(name, got[k], want[k], rtol=1e-8, wrong=[
+            (text, _line_wrong(X, l, sigma, key)[k]) for key, text in wrongs.items()
+        ])  # fmt: skip
+    success("x̂, v, σ̂0 and Q agree with a QR solution of √P A x = √P l")

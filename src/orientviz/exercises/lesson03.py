@@ -151,3 +151,50 @@ def check_interior_from_dlt(fn) -> None:
             ("x0 and y0 are swapped: x0 comes from the first row m1", _interior_swapped(L)),
         ])  # fmt: skip
     success("c, x0, y0 agree with the simulated camera (two cameras)")
+
+
+# --------------------------------------------------------------------- the affine fiducial fit
+
+
+def _fiducials(rng):
+    """Eight fiducials (calibrated, mm), an affine map and the machine coordinates."""
+    cal = np.array([[-106.0, 0.0], [106.0, 0.0], [0.0, -106.0], [0.0, 106.0],
+                    [-106.0, -106.0], [106.0, 106.0], [-106.0, 106.0], [106.0, -106.0]])  # fmt: skip
+    M = np.array([[1.0007, 0.0021], [-0.0018, 0.9989]])
+    t = np.array([12.3, -7.9])
+    machine = (cal - t) @ np.linalg.inv(M).T  # calibrated = t + M machine
+    return machine, cal, np.array([t[0], M[0, 0], M[0, 1], t[1], M[1, 0], M[1, 1]])
+
+
+def check_affine_fit(fn) -> None:
+    """``fn(machine, calibrated) -> (params, v, sigma0)``: x = a0 + a1 ξ + a2 η,
+    y = b0 + b1 ξ + b2 η; params (a0, a1, a2, b0, b1, b2), v (2n,) mm in the order x1, y1, …,
+    σ̂0 in mm with r = 2n − 6."""
+    rng = rng_for("lesson03.check_affine_fit")
+    machine, cal, truth = _fiducials(rng)
+    got = call(fn, machine.copy(), cal.copy(), what="affine_fit")
+    if not isinstance(got, tuple) or len(got) != 3:
+        raise CheckFailed("affine_fit: return the three results (params, v, sigma0)")
+    compare("params of error-free fiducials", got[0], truth, rtol=1e-9, wrong=[
+        ("the order is a0, a1, a2, b0, b1, b2 (x's three, then y's three)", truth[[0, 3, 1, 4, 2, 5]]),
+    ])  # fmt: skip
+    noisy = cal + rng.normal(0.0, 0.002, cal.shape)
+    got = call(fn, machine.copy(), noisy.copy(), what="affine_fit")
+    # oracle: x and y are two separate 3-parameter fits (numpy's lstsq)
+    D = np.column_stack([np.ones(len(machine)), machine])
+    px = np.linalg.lstsq(D, noisy[:, 0], rcond=None)[0]
+    py = np.linalg.lstsq(D, noisy[:, 1], rcond=None)[0]
+    v = np.column_stack([D @ px - noisy[:, 0], D @ py - noisy[:, 1]]).ravel()
+    s0 = float(np.sqrt(v @ v / (v.size - 6)))
+    compare("params of noisy fiducials", got[0], np.r_[px, py], rtol=1e-8)
+    compare("v [mm]", got[1], v, rtol=1e-6, wrong=[
+        ("the sign of v is wrong: v = A x̂ − l (computed − observed)", -v),
+        ("v in the order x1, y1, x2, y2, …", np.r_[v[0::2], v[1::2]]),
+    ])  # fmt: skip
+    compare("σ̂0 [mm]", got[2], s0, rtol=1e-8, wrong=[
+        ("the redundancy is 2n − 6 (six parameters), not 2n", np.sqrt(v @ v / v.size)),
+        ("the redundancy is 2n − 6 (six parameters), not 2n − 3", np.sqrt(v @ v / (v.size - 3))),
+    ])  # fmt: skip
+    success(
+        f"the affine map of error-free fiducials comes back; σ̂0 = {s0 * 1000:.2f} µm as two lstsq fits give"
+    )

@@ -131,3 +131,47 @@ def check_normal_case_points(fn) -> None:
         ("Z = −λ c: the points lie below the projection centres", _points(n1, n2, c, b, 1.0, 1.0, False)),
     ])  # fmt: skip
     success(f"{n} model points from x-parallaxes agree with the simulated terrain")
+
+
+# --------------------------------------------------------------------- the eight-point algorithm
+
+
+def check_eight_point(fn) -> None:
+    """``fn(xy1, xy2, c) -> E``: the essential matrix from n ≥ 8 matches (rays (x, y, −c)),
+    rank 2 with singular values (1, 1, 0), ‖E‖ = √2; defined up to its sign."""
+    rng = rng_for("lesson06.check_eight_point")
+    c, B, R2, P, xy1, xy2 = _pair(rng)
+    E = np.asarray(call(fn, xy1.copy(), xy2.copy(), c, what="eight_point_mine"), dtype=float)
+    if E.shape != (3, 3):
+        raise CheckFailed(f"eight_point_mine: expected E of shape (3, 3), got {E.shape}")
+    truth = _skew(B) @ R2
+    truth = truth / np.linalg.norm(truth) * np.sqrt(2.0)
+    sign = 1.0 if np.sum(E * truth) >= 0 else -1.0
+    compare("E of an error-free pair (up to its sign)", sign * E, truth, rtol=1e-6, wrong=[
+        ("E is transposed: the rows of the system are vec(d1 d2ᵀ) for d1ᵀ E d2 = 0", truth.T),
+        ("E is transposed: the rows of the system are vec(d1 d2ᵀ) for d1ᵀ E d2 = 0", -truth.T),
+        ("E is not scaled to ‖E‖ = √2", truth / np.sqrt(2.0)),
+    ])  # fmt: skip
+    # noisy matches: only properties can be checked without the answer itself
+    n1 = xy1 + rng.normal(0, 0.004, xy1.shape)
+    n2 = xy2 + rng.normal(0, 0.004, xy2.shape)
+    E = np.asarray(call(fn, n1, n2, c, what="eight_point_mine"), dtype=float)
+    s = np.linalg.svd(E, compute_uv=False)
+    if s.shape == (3,) and s[2] > 1e-6 * s[0]:
+        raise CheckFailed(
+            f"E from noisy matches has rank 3 (singular values {np.round(s, 6).tolist()}): force "
+            "them to (1, 1, 0) — with noise the smallest one is not zero by itself",
+            float(s[2] / s[0]),
+            1e-8,
+        )
+    compare("singular values of E from noisy matches", s, [1.0, 1.0, 0.0], rtol=1e-8, scale=1.0,
+            wrong=[])  # fmt: skip
+    d1 = np.column_stack([n1, np.full(len(n1), -c)])
+    d2 = np.column_stack([n2, np.full(len(n2), -c)])
+    cop = np.abs(np.einsum("ni,ij,nj->n", d1, E, d2)).max() / (c * c)
+    if cop > 1e-3:
+        raise CheckFailed(f"E from noisy matches: the rays are far from coplanar (|d1ᵀ E d2|/c² = {cop:.2g})",
+                          cop, 1e-5)  # fmt: skip
+    success(
+        "the true E comes back from error-free matches; from noisy ones E has rank 2, (1, 1, 0)"
+    )

@@ -11,7 +11,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from orientviz.exercises._common import CheckFailed, call, compare, relative_error, success
+from orientviz.exercises._common import CheckFailed, call, compare, success
 
 
 def _rodrigues(axis, angle: float) -> np.ndarray:
@@ -43,32 +43,33 @@ def _triple(out) -> tuple[float, np.ndarray, np.ndarray]:
         raise CheckFailed("return the three values (scale, R, t)") from None
 
 
-def check_similarity(fn: Callable) -> None:
-    """Check ``fn(x, X) -> (scale, R, t)`` with ``X = t + scale · R · x`` (closed form)."""
-    rng = np.random.default_rng(807)  # the flat case makes numpy's SVD return a reflection
-    for n_case, (x, X, s, R, t) in enumerate(_similarity_cases(rng), start=1):
-        s_hat, R_hat, t_hat = _triple(call(fn, x.copy(), X.copy(), what="similarity_7"))
-        what = "the flat model (all z equal)" if n_case == 2 else "a hilly model"
-        if R_hat.shape == (3, 3) and np.linalg.det(R_hat) < 0:
-            raise CheckFailed(
-                f"R is a reflection (det R = {np.linalg.det(R_hat):+.3f}) for {what}: with "
-                "coplanar points the SVD leaves the sign of the third axis open; multiply the "
-                "last column of V by det(V Uᵀ)",
-                error=relative_error(R_hat, R),
-                tolerance=1e-8,
-            )
-        compare(f"scale ({what})", s_hat, s, rtol=1e-8, wrong=[("the inverse of the scale", 1 / s)])
-        compare(
-            f"R ({what})",
-            R_hat,
-            R,
-            rtol=1e-8,
-            wrong=[("R maps object → model: the transpose", R.T)],
-        )
-        compare(
-            f"t ({what})", t_hat, t, rtol=1e-9, wrong=[("t = X̄ without − scale · R · x̄", X.mean(0))]
-        )
-    success("scale, R and t of two error-free models (one of them flat) recovered exactly")
+def check_compose(fn: Callable) -> None:
+    """Check ``fn(s1, s2) -> (scale, R, t)``: the similarity that applies s2 first, then s1
+    (each ``(scale, R, t)`` maps x to scale · R · x + t) — chaining a model into its
+    predecessor's frame."""
+    rng = np.random.default_rng(808)
+    ang = rng.uniform(-0.3, 0.3, (2, 3))
+    s1 = (1.07, _rodrigues([1, 0, 0], ang[0, 0]) @ _rodrigues([0, 1, 0], ang[0, 1]) @ _rodrigues([0, 0, 1], ang[0, 2]),
+          np.array([120.0, -40.0, 15.0]))  # fmt: skip
+    s2 = (0.93, _rodrigues([0, 0, 1], ang[1, 2]) @ _rodrigues([1, 0, 0], ang[1, 0]) @ _rodrigues([0, 1, 0], ang[1, 1]),
+          np.array([-35.0, 60.0, 4.0]))  # fmt: skip
+    m, R, t = _triple(call(fn, s1, s2, what="compose"))
+    # oracle: the two transformations applied one after the other to four points
+    pts = rng.normal(0.0, 50.0, (4, 3))
+    want = s1[0] * (s2[0] * pts @ s2[1].T + s2[2]) @ s1[1].T + s1[2]
+    if R.shape != (3, 3) or t.shape != (3,):
+        raise CheckFailed(f"compose: R must be 3 × 3 and t of length 3 (got {R.shape}, {t.shape})")
+    got = m * pts @ R.T + t
+    other = s2[0] * (s1[0] * pts @ s1[1].T + s1[2]) @ s2[1].T + s2[2]
+    no_scale_t = want - s1[0] * s2[2] @ s1[1].T + s2[2] @ s1[1].T
+    no_rot_t = want - s1[0] * s2[2] @ s1[1].T + s1[0] * s2[2]
+    compare("four points through your composed similarity", got, want, rtol=1e-9, wrong=[
+        ("the order is wrong: s2 acts first, then s1 (s1 ∘ s2)", other),
+        ("t = m1 R1 t2 + t1: the scale m1 is missing from the shift", no_scale_t),
+        ("t = m1 R1 t2 + t1: the rotation R1 is missing from the shift", no_rot_t),
+    ])  # fmt: skip
+    compare("scale", m, s1[0] * s2[0], rtol=1e-12)
+    success("s1 ∘ s2 moves four points as s2 followed by s1 does")
 
 
 def check_sigma0(fn: Callable) -> None:

@@ -186,3 +186,37 @@ def check_distance_std(fn) -> None:
     got_b = float(call(fn, xy.copy(), QB.copy(), i, j, what="distance_std"))
     compare("the same σ in another datum", got_b, want, rtol=1e-6)
     success(f"σ = {want * 1000:.2f} mm in two datums: a distance is estimable")
+
+
+# --------------------------------------------------------------------- inner constraints
+
+
+def check_inner_solve(fn) -> None:
+    """``fn(N, b, G) -> (dx, Q)``: the inner-constraint solution of N dx = b bordered with G
+    (all points), and Q the u × u block of the bordered inverse."""
+    rng = rng_for("lesson09.check_inner_solve")
+    xy, N, b, G = _problem(rng)
+    u = N.shape[0]
+    # G scaled, not unit: the student's function must not depend on the columns' length
+    Gs = G * rng.uniform(0.5, 40.0, 3)
+    got = call(fn, N.copy(), b.copy(), Gs.copy(), what="inner_solve")
+    if not isinstance(got, tuple) or len(got) != 2:
+        raise CheckFailed("inner_solve: return the pair (dx, Q)")
+    dx, Q = (np.asarray(g, dtype=float) for g in got)
+    if Q.shape == (u + 3, u + 3):
+        raise CheckFailed(
+            f"Q: this is the whole bordered inverse ({u + 3} × {u + 3}); return its u × u block "
+            f"({u} × {u})",
+            tolerance=1e-8,
+        )
+    # oracle: with E = I the inner-constraint solution is the pseudo-inverse's
+    Np = np.linalg.pinv(N, rcond=1e-10)
+    GGt = Gs @ Gs.T
+    compare("Q [m²]", Q, Np, rtol=1e-7, wrong=[
+        ("N + G Gᵀ regularises N, it is not the bordered system", np.linalg.inv(N + GGt)),
+    ])  # fmt: skip
+    compare("dx [m]", dx, Np @ b, rtol=1e-7, wrong=[
+        ("the sign of dx is wrong: N dx = b", -(Np @ b)),
+        ("N + G Gᵀ regularises N, it is not the bordered system", np.linalg.solve(N + GGt, b)),
+    ])  # fmt: skip
+    success("dx and Q equal the pseudo-inverse solution N⁺ b, N⁺ (E = I, any scaling of G)")

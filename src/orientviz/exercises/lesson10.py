@@ -122,3 +122,160 @@ def check_bandwidth(fn) -> None:
              float(_bandwidth(P, "row_count"))),
         ])  # fmt: skip
     success("bandwidths agree with a double loop over three patterns")
+
+
+# --------------------------------------------------------------------- one reduced step
+
+
+def check_schur_step(fn) -> None:
+    """``fn(nb) -> (dc, dp)``: one Gauss-Newton step of a bundle by reduction to the
+    orientation unknowns (``nb`` from :func:`orientviz.bundle.sparsity.bundle_normal_blocks`)."""
+    from ..bundle.sparsity import bundle_normal_blocks
+    from ..simulate import simulate_block
+
+    # 3 strips of 4 images: W is 72 × 66, so a transposed W cannot pass unnoticed
+    seed = int(rng_for("lesson10.check_schur_step").integers(1000))
+    sim = simulate_block(3, 4, rng=seed, extra=None)
+    nb = bundle_normal_blocks(sim.block)
+    got = call(fn, nb, what="schur_step")
+    if not isinstance(got, tuple) or len(got) != 2:
+        raise CheckFailed("schur_step: return the pair (dc, dp)")
+    dc, dp = (np.asarray(g, dtype=float) for g in got)
+    N, b = nb.dense()
+    x = np.linalg.solve(N, b)  # oracle: the whole system, dense
+    k = 6 * nb.n_images
+    want_dc, want_dp = x[:k], x[k:]
+    U = np.zeros((k, k))
+    for i in range(nb.n_images):
+        U[6 * i : 6 * i + 6, 6 * i : 6 * i + 6] = nb.U[i]
+    Vfull = np.zeros((len(want_dp), len(want_dp)))
+    for j in range(nb.n_points):
+        Vfull[3 * j : 3 * j + 3, 3 * j : 3 * j + 3] = nb.V[j]
+    wrong_plus = _reduce_wrong(U, nb.W, Vfull, nb.bc, nb.bp, "plus")
+    compare("dc (orientation corrections)", dc, want_dc, rtol=1e-8, wrong=[
+        ("S = U − W V⁻¹ Wᵀ and r = bc − W V⁻¹ bp: the sign is wrong", np.linalg.solve(*wrong_plus)),
+        ("the right side is reduced too: r = bc − W V⁻¹ bp", np.linalg.solve(U - nb.W @ np.linalg.inv(Vfull) @ nb.W.T, nb.bc)),
+    ])  # fmt: skip
+    compare("dp (point corrections)", dp, want_dp, rtol=1e-8, wrong=[
+        ("the coupling Wᵀ dc is missing: dp = V⁻¹ (bp − Wᵀ dc)", np.linalg.solve(Vfull, nb.bp)),
+        ("the sign of Wᵀ dc is wrong: dp = V⁻¹ (bp − Wᵀ dc)", np.linalg.solve(Vfull, nb.bp + nb.W.T @ want_dc)),
+    ])  # fmt: skip
+    success(f"one reduced step equals the dense solution of all {len(x)} unknowns")
+
+
+# --------------------------------------------------------------------- your bundle
+
+
+def check_ray_partials(fn) -> None:
+    """``fn(X, X0, R, dR, c) -> (xy, dX0, dangles, dX)``: image coordinates (n, 2) mm of n rays
+    (x0 = y0 = 0) and their partial derivatives (n, 2, 3) by X0, (ω, φ, κ) and X; ``R`` (n, 3, 3)
+    image → object, ``dR`` (3, n, 3, 3) its derivatives by ω, φ, κ."""
+    from ..rotation import matrix_derivatives, matrix_from_opk
+
+    rng = rng_for("lesson10.check_ray_partials")
+    n = 5
+    ang = rng.uniform(-0.2, 0.2, (n, 3))
+    X0 = rng.normal(0.0, 50.0, (n, 3)) + [0.0, 0.0, 900.0]
+    X = rng.normal(0.0, 200.0, (n, 3)) * [1.0, 1.0, 0.1]
+    c = rng.uniform(100.0, 160.0, n)
+    R = matrix_from_opk(ang[:, 0], ang[:, 1], ang[:, 2])
+    dR = np.stack(matrix_derivatives(ang[:, 0], ang[:, 1], ang[:, 2]))
+    got = call(fn, X.copy(), X0.copy(), R.copy(), dR.copy(), c.copy(), what="ray_partials")
+    if not isinstance(got, tuple) or len(got) != 4:
+        raise CheckFailed("ray_partials: return the four results (xy, dX0, dangles, dX)")
+
+    def proj(X, X0, ang):  # oracle: the collinearity equations, written out
+        Rm = matrix_from_opk(ang[:, 0], ang[:, 1], ang[:, 2])
+        uvw = np.einsum("nki,nk->ni", Rm, X - X0)
+        return -c[:, None] * uvw[:, :2] / uvw[:, 2:]
+
+    def numeric(which):  # central differences, one coordinate at a time
+        out = np.zeros((n, 2, 3))
+        for k in range(3):
+            h = 1e-6 if which == "ang" else 1e-3
+            e = np.zeros((n, 3))
+            e[:, k] = h
+            args = {"X": (X, X0, ang), "X0": (X, X0, ang), "ang": (X, X0, ang)}[which]
+            plus, minus = [list(args), list(args)]
+            i = {"X": 0, "X0": 1, "ang": 2}[which]
+            plus[i], minus[i] = args[i] + e, args[i] - e
+            out[:, :, k] = (proj(*plus) - proj(*minus)) / (2 * h)
+        return out
+
+    xy, dX0, dang, dX = (np.asarray(g, dtype=float) for g in got)
+    compare("xy [mm]", xy, proj(X, X0, ang), rtol=1e-10, wrong=[
+        ("R is applied instead of Rᵀ: (u, v, w)ᵀ = Rᵀ (X − X0)",
+         -c[:, None] * np.einsum("nik,nk->ni", R, X - X0)[:, :2] / np.einsum("nik,nk->ni", R, X - X0)[:, 2:]),
+    ])  # fmt: skip
+    want_X = numeric("X")
+    no_w = (
+        -(c / np.einsum("nki,nk->ni", R, X - X0)[:, 2])[:, None, None]
+        * np.transpose(R, (0, 2, 1))[:, :2]
+    )
+    compare("∂(x, y)/∂X [mm/m]", dX, want_X, rtol=1e-6, wrong=[
+        ("the quotient rule lost its second term: ∂(u/w) = (∂u − (u/w) ∂w)/w", no_w),
+        ("the sign is wrong: ∂x/∂X = −c/w (∂u/∂X − (u/w) ∂w/∂X)", -want_X),
+    ])  # fmt: skip
+    compare("∂(x, y)/∂X0 [mm/m]", dX0, numeric("X0"), rtol=1e-6, wrong=[
+        ("∂/∂X0 = −∂/∂X: X0 enters as X − X0", -numeric("X0")),
+    ])  # fmt: skip
+    compare("∂(x, y)/∂(ω, φ, κ) [mm/rad]", dang, numeric("ang"), rtol=1e-6, wrong=[
+        ("the sign is wrong: ∂x/∂ω = −c/w (∂u/∂ω − (u/w) ∂w/∂ω)", -numeric("ang")),
+    ])  # fmt: skip
+    success("xy and all 9 partial derivatives of 5 rays agree with central differences")
+
+
+def check_my_bundle(fn) -> None:
+    """``fn(data, X0, angles, xyz) -> (X0, angles, xyz, sigma0, history)``: the whole bundle
+    iteration on the rays, weights and datum of ``data``
+    (:func:`orientviz.bundle.reference.reference_data`), from the start values given."""
+    from ..bundle import bundle_adjust
+    from ..bundle.reference import reference_data
+    from ..simulate import simulate_block
+
+    seed = int(rng_for("lesson10.check_my_bundle").integers(1000))
+    block = simulate_block(2, 4, rng=seed, extra=None).block
+    data = reference_data(block, "fixed")
+    got = call(fn, data, block.images.X0.copy(), block.images.angles.copy(), data.xyz0.copy(),
+               what="my_bundle")  # fmt: skip
+    if not isinstance(got, tuple) or len(got) < 4:
+        raise CheckFailed("my_bundle: return (X0, angles, xyz, sigma0, history)")
+    X0, angles, s0 = (np.asarray(got[k], dtype=float) for k in (0, 1, 3))
+    adj = bundle_adjust(block, control="fixed")  # the library's bundle on the same block
+    eo = adj.x[adj.groups["exterior"]].reshape(-1, 6)
+    sd = adj.std()[adj.groups["exterior"]].reshape(-1, 6)
+    m, n = block.n_images, data.image.size
+    p = data.unknown.size
+    r = 2 * n - 6 * m - 3 * p
+    compare("σ̂0", float(s0), adj.sigma0, rtol=1e-4, wrong=[
+        ("the points held fixed (control) are no unknowns: r = 2·rays − 6·images − 3·unknown points",
+         adj.sigma0 * np.sqrt(r / (r - 3 * (block.n_points - p)))),
+        ("vᵀPv divided by the number of observations, not the redundancy", adj.sigma0 * np.sqrt(r / (2 * n))),
+        ("the square root is missing (σ̂0² = vᵀPv / r)", adj.sigma0**2),
+    ])  # fmt: skip
+    if X0.shape != (m, 3) or angles.shape != (m, 3):
+        raise CheckFailed(
+            f"X0 and angles: expected shapes ({m}, 3), got {X0.shape}, {angles.shape}"
+        )
+    off = np.abs(np.hstack([X0, angles]) - eo) / sd
+    compare("stations in units of their σ", float(off.max()), 0.0, rtol=0.01, scale=1.0)
+    success(f"σ̂0 = {float(s0):.4f} as the library's; stations within {off.max():.1e} σ")
+
+
+def check_point_covariance(fn) -> None:
+    """``fn(U, W, V, j) -> Q (3, 3)``: the cofactor block of point j from the normal-equation
+    blocks (U (6m, 6m), W (6m, 3p), V (p, 3, 3) one block per point), without inverting the
+    whole matrix."""
+    rng = rng_for("lesson10.check_point_covariance")
+    U, W, Vf, _, _ = _system(rng, m=3, q=6)
+    m, q = U.shape[0] // 6, Vf.shape[0] // 3
+    V = np.stack([Vf[3 * k : 3 * k + 3, 3 * k : 3 * k + 3] for k in range(q)])
+    N = np.block([[U, W], [W.T, Vf]])
+    j = 4
+    want = np.linalg.inv(N)[6 * m + 3 * j : 6 * m + 3 * j + 3, 6 * m + 3 * j : 6 * m + 3 * j + 3]
+    got = call(fn, U.copy(), W.copy(), V.copy(), j, what="point_covariance")
+    compare("Q of point j", got, want, rtol=1e-9, wrong=[
+        ("V_j⁻¹ alone ignores the uncertainty of the orientations: add V_j⁻¹ W_jᵀ S⁻¹ W_j V_j⁻¹",
+         np.linalg.inv(V[j])),
+    ])  # fmt: skip
+    success("Q_jj equals the point's block of the whole inverse N⁻¹")

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from scipy.stats import chi2, norm
+from scipy.stats import chi2
 
 from orientviz.exercises._common import CheckFailed, call, compare, rng_for, success
 
@@ -73,31 +73,43 @@ def check_colmap_to_photo(fn: Callable) -> None:
     success("pixels → mm with the principal point, the pixel size and y upwards")
 
 
-def check_sigma0_interval(fn: Callable) -> None:
-    """Check ``fn(vPv, r, alpha) -> (sigma0, lo, hi)``: σ̂0 and the two-sided χ² interval for σ̂0."""
-    for vPv, r, alpha in ((19.3, 12, 0.05), (734.0, 718, 0.01)):
-        s0 = np.sqrt(vPv / r)
-        lo, hi = np.sqrt(chi2.ppf(alpha / 2, r) / r), np.sqrt(chi2.ppf(1 - alpha / 2, r) / r)
-        got = call(fn, vPv, r, alpha, what="sigma0_interval")
-        z = norm.ppf(1 - alpha / 2)
-        compare(
-            f"(σ̂0, lower, upper) for r = {r}",
-            got,
-            [s0, lo, hi],
-            rtol=1e-9,
-            wrong=[
-                (
-                    "one-sided bounds (α instead of α/2)",
-                    [s0, np.sqrt(chi2.ppf(alpha, r) / r), np.sqrt(chi2.ppf(1 - alpha, r) / r)],
-                ),
-                ("bounds for σ̂0² (the square root is missing)", [s0, lo**2, hi**2]),
-                (
-                    "the normal approximation 1 ± z/√(2r) (poor for small r)",
-                    [s0, 1 - z / np.sqrt(2 * r), 1 + z / np.sqrt(2 * r)],
-                ),
-            ],
-        )
-    success("σ̂0 and its χ² acceptance interval right (also for a small redundancy)")
+def _first_r(accept_hi, ratio: float, lo: int = 1, hi: int = 10**6) -> int:
+    """Smallest r in [lo, hi] with ``accept_hi(r) < ratio`` (the bound falls with r): bisection."""
+    if accept_hi(hi) >= ratio:
+        return hi
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if accept_hi(mid) < ratio:
+            hi = mid
+        else:
+            lo = mid + 1
+    return lo
+
+
+def check_smallest_redundancy(fn: Callable) -> None:
+    """Check ``fn(ratio, alpha) -> r``: the smallest redundancy at which the two-sided χ² test
+    at level α rejects σ̂0 = ratio (> 1), i.e. ratio lies above the upper bound
+    √(χ²_{1−α/2}(r)/r)."""
+    cases = ((1.15, 0.05), (1.5, 0.05), (1.05, 0.01))
+    for ratio, alpha in cases:
+        upper = lambda r, a=alpha: float(np.sqrt(chi2.isf(a / 2, r) / r))  # noqa: E731
+        want = _first_r(upper, ratio)
+        got = call(fn, ratio, alpha, what="smallest_redundancy")
+        try:
+            got = float(got)
+        except (TypeError, ValueError):
+            raise CheckFailed("smallest_redundancy: return one integer, the redundancy r") from None
+        one_sided = _first_r(lambda r, a=alpha: float(np.sqrt(chi2.isf(a, r) / r)), ratio)
+        squared = _first_r(lambda r, a=alpha: float(chi2.isf(a / 2, r) / r), ratio)
+        compare(f"r for σ̂0/σ0 = {ratio}, α = {alpha}", got, float(want), rtol=1e-12, scale=1.0, wrong=[
+            ("one-sided: the two-sided test puts α/2 in the upper tail", float(one_sided)),
+            ("this is the bound for σ̂0², compare σ̂0 = ratio with √(χ²/r)", float(squared)),
+            ("one less than the first redundancy that rejects (off by one)", float(want - 1)),
+        ])  # fmt: skip
+    success(
+        "a 15 % optimistic σ needs r ≥ "
+        f"{_first_r(lambda r: float(np.sqrt(chi2.isf(0.025, r) / r)), 1.15)} before the test sees it"
+    )
 
 
 def check_rms_per_image(fn: Callable) -> None:

@@ -2,7 +2,7 @@
 
 What a close-range self-calibration needs and an aerial block lacks: images from many
 directions, turned about their axes (κ in steps of 90°), of a target field with depth.
-The true camera is one of the exact models of :mod:`orientviz.bundle._lens` (backward or
+The true camera is one of the exact models of :mod:`orientviz.bundle.model._lens` (backward or
 forward), so :func:`orientviz.bundle.bundle_adjust` with a
 :class:`~orientviz.bundle.LensModel` can recover it, and studies of bias and precision
 have a truth to compare with. Scale: the field is ``field_m`` wide; the cameras stand
@@ -18,8 +18,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..block import Block
-from ..bundle._kernel import normalised_block
-from ..bundle._lens import BACKWARD_NAMES, FORWARD_NAMES, evaluate
+from ..bundle.model import normalised_block
+from ..bundle.model._lens import BACKWARD_NAMES, FORWARD_NAMES, evaluate
 from ..errors import InputError
 from ..rotation import opk_from_matrix
 
@@ -40,7 +40,7 @@ class SimulatedCalibration:
     kind : str
         Lens model of the truth (``"backward"`` or ``"forward"``).
     camera : dict of str to float
-        True parameters (names of :data:`orientviz.bundle._lens.BACKWARD_NAMES` or
+        True parameters (names of :data:`orientviz.bundle.model._lens.BACKWARD_NAMES` or
         ``FORWARD_NAMES``, physical units).
     exterior : ndarray, shape (m, 6)
         True X0, Y0, Z0 (m), ω, φ, κ (rad).

@@ -120,7 +120,7 @@ def independent_models(
         σ in mm of the pseudo-observations p = 0 (default 1000 mm: weak); None = free.
     auxiliary : list of Auxiliary, optional
         GNSS / statoscope (projection centres) and APR (tie point heights) data as joint
-        observations with offsets/drifts per strip (:mod:`orientviz.bundle._auxiliary`;
+        observations with offsets/drifts per strip (:mod:`orientviz.bundle.problem._auxiliary`;
         rigorous method, ``use_centres=True`` for gnss/statoscope). With auxiliary data
         the control check is left to the normal equations (GNSS may give the datum).
 

@@ -5,7 +5,7 @@ The rigorous 7-parameter adjustment of :mod:`orientviz.stereo_models`, extended 
 * model deformation parameters p (:mod:`orientviz.stereo_models._deformation`) per
   model, strip or block: the model coordinates carry the deformation A(m)·p, so
   ``X + v = λ R (m − A(m)·p) + T``, with pseudo-observations p = 0 ± σ (mm);
-* auxiliary observations (:mod:`orientviz.bundle._auxiliary`) of projection centres
+* auxiliary observations (:mod:`orientviz.bundle.problem._auxiliary`) of projection centres
   (GNSS, statoscope) and tie points (APR), with offset/drift unknowns per strip.
 
 The extra unknowns ("globals") join the 7 parameters of every model in the reduced

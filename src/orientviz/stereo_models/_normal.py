@@ -17,7 +17,7 @@ system of the transformation parameters ::
 that share a point are coupled. It is factored densely for small systems and otherwise
 by SuperLU with a minimum-degree ordering; the alternative of Ackermann's programs,
 bandwidth minimisation (reverse Cuthill-McKee) and a banded Cholesky, is kept for
-comparison — on a square 2193-model block its band is 600 wide and it is 17 × slower. ``orientviz.bundle._reduced``
+comparison — on a square 2193-model block its band is 600 wide and it is 17 × slower. ``orientviz.bundle.reduced``
 (the bundle's reduced camera system) is built for 6 × 6 image blocks, so model blocks
 (4, 3 or 7 parameters) use this small module instead.
 """

@@ -1,7 +1,7 @@
 """Precision as the viewer draws it: confidence ellipsoids and correlations, as plain arrays.
 
 No viser here. The covariances are the bundle's own selected cofactor blocks
-(:mod:`orientviz.bundle._precision`: per point 3 × 3, per image 6 × 6, and the 6 × 6
+(:mod:`orientviz.bundle.precision._precision`: per point 3 × 3, per image 6 × 6, and the 6 × 6
 blocks of the image pairs that share a point, ``exterior_pairs``), scaled by σ̂0². The
 bundle computes them once per adjustment at the cost of about one factorisation; what
 the viewer adds per redraw — eigen-decompositions and meshes — is done only for what is

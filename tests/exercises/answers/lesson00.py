@@ -22,21 +22,15 @@ def _sol_critical(alpha):
     return norm.isf(alpha / 2)
 
 
-def _redundancy_numbers(A, sigma, weighted=True):
-    P = 1 / sigma**2 if weighted else np.ones_like(sigma)
-    N = A.T @ (P[:, None] * A)
-    return 1 - np.einsum("ij,jk,ik->i", A, np.linalg.inv(N), A) * P
-
-
-def _sol_normalized(A, v, sigma):
-    return v / (sigma * np.sqrt(_redundancy_numbers(A, sigma)))
+def _sol_after_doubling(sigma0, r_i, w):
+    return sigma0 / 2, r_i, w / 2
 
 
 SOLUTIONS = {
     "check_sigma0": _sol_sigma0,
     "check_redundancy": _sol_redundancy,
     "check_critical_value": _sol_critical,
-    "check_normalized": _sol_normalized,
+    "check_after_doubling": _sol_after_doubling,
 }
 
 MUTANTS = {
@@ -55,11 +49,9 @@ MUTANTS = {
         "one-sided": lambda a: norm.isf(a),
         "percent": lambda a: norm.isf(a / 200),
     },
-    "check_normalized": {
-        "v/sigma": lambda A, v, s: v / s,
-        "no sqrt": lambda A, v, s: v / (s * _redundancy_numbers(A, s)),
-        "unweighted r": lambda A, v, s: (
-            v / (s * np.sqrt(_redundancy_numbers(A, s, weighted=False)))
-        ),
+    "check_after_doubling": {
+        "sigma0 doubled": lambda s, r, w: (2 * s, r, w / 2),
+        "r halved": lambda s, r, w: (s / 2, r / 2, w / 2),
+        "w unchanged": lambda s, r, w: (s / 2, r, w),
     },
 }

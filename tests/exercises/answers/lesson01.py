@@ -20,6 +20,7 @@ from orientviz.exercises.lesson01 import (
     _ellipse_minor_direction,
     _ellipse_no_half,
     _ellipse_variances,
+    _line_wrong,
     _wm_divide_by_n,
     _wm_no_weights_in_sigma0,
     _wm_one_over_sigma,
@@ -52,7 +53,17 @@ def _gn_step(x, stations, s, sigma, sign=1.0, weights=True, unit=True):
     return x + sign * dx
 
 
+def _line_fit(X, l, sigma):
+    A = np.column_stack([np.ones_like(X), X])
+    P = np.diag(1.0 / sigma**2)
+    Q = np.linalg.inv(A.T @ P @ A)
+    xhat = Q @ A.T @ P @ l
+    v = A @ xhat - l
+    return xhat, v, np.sqrt(v @ P @ v / (len(l) - 2)), Q
+
+
 SOLUTIONS = {
+    "check_line_fit": _line_fit,
     "check_weighted_mean": _weighted_mean,
     "check_error_ellipse": _ellipse,
     "check_sigma0_bounds": _bounds,
@@ -60,6 +71,10 @@ SOLUTIONS = {
 }
 
 MUTANTS = {
+    "check_line_fit": {
+        key: (lambda X, l, s, key=key: _line_wrong(X, l, s, key))
+        for key in ("no_weights", "one_over_sigma", "divide_by_n", "Q_is_N", "v_sign")
+    },
     "check_weighted_mean": {
         "unweighted": _wm_unweighted,
         "one_over_sigma": _wm_one_over_sigma,

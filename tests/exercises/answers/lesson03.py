@@ -37,13 +37,34 @@ def _interior_swapped(L):
     return np.array([c, y0, x0])
 
 
+def _affine_fit(machine, calibrated, order="ok", r_minus=6, vsign=1.0):
+    n = len(machine)
+    A = np.zeros((2 * n, 6))
+    A[0::2, 0], A[0::2, 1], A[0::2, 2] = 1.0, machine[:, 0], machine[:, 1]
+    A[1::2, 3], A[1::2, 4], A[1::2, 5] = 1.0, machine[:, 0], machine[:, 1]
+    l = calibrated.reshape(-1)
+    p = np.linalg.solve(A.T @ A, A.T @ l)
+    v = A @ p - l
+    s0 = np.sqrt(v @ v / (2 * n - r_minus))
+    if order == "interleaved":
+        p = p[[0, 3, 1, 4, 2, 5]]
+    return p, vsign * v, s0
+
+
 SOLUTIONS = {
+    "check_affine_fit": _affine_fit,
     "check_dlt_rows": lambda X, xy: _rows(X, xy, -1.0, False, False),
     "check_projection_centre": _centre,
     "check_interior_from_dlt": _interior,
 }
 
 MUTANTS = {
+    "check_affine_fit": {
+        "interleaved": lambda m, c: _affine_fit(m, c, order="interleaved"),
+        "r_2n": lambda m, c: _affine_fit(m, c, r_minus=0),
+        "r_2n_3": lambda m, c: _affine_fit(m, c, r_minus=3),
+        "v_sign": lambda m, c: _affine_fit(m, c, vsign=-1.0),
+    },
     "check_dlt_rows": {
         "plus_sign": lambda X, xy: _rows(X, xy, 1.0, False, False),
         "swap_xy": lambda X, xy: _rows(X, xy, -1.0, True, False),

@@ -6,15 +6,36 @@ Kept out of the installed package (solutions stay with the teacher); used by
 
 from __future__ import annotations
 
+import numpy as np
+
 from orientviz.exercises.lesson06 import _line, _points, _skew
 
+
+def _eight_point(xy1, xy2, c, rank2=True, scale=True, transpose=False):
+    d1 = np.column_stack([xy1, np.full(len(xy1), -c)])
+    d2 = np.column_stack([xy2, np.full(len(xy2), -c)])
+    M = (d1[:, :, None] * d2[:, None, :]).reshape(-1, 9)
+    E = np.linalg.svd(M)[2][-1].reshape(3, 3)
+    if rank2:
+        U, s, Vt = np.linalg.svd(E)
+        E = U @ np.diag([1.0, 1.0, 0.0]) @ Vt
+    E = E / np.linalg.norm(E) * (np.sqrt(2.0) if scale else 1.0)
+    return E.T if transpose else E
+
+
 SOLUTIONS = {
+    "check_eight_point": _eight_point,
     "check_essential": lambda R2, B: _skew(B) @ R2,
     "check_epipolar_line": lambda E, xy1, c: _line(E, xy1, c, True, True, True),
     "check_normal_case_points": lambda n1, n2, c, b: _points(n1, n2, c, b, 1.0, -1.0, False),
 }
 
 MUTANTS = {
+    "check_eight_point": {
+        "no_rank2": lambda a, b, c: _eight_point(a, b, c, rank2=False),
+        "not_scaled": lambda a, b, c: _eight_point(a, b, c, scale=False),
+        "transposed": lambda a, b, c: _eight_point(a, b, c, transpose=True),
+    },
     "check_essential": {
         "swapped": lambda R2, B: R2 @ _skew(B),
         "transposed_R": lambda R2, B: _skew(B) @ R2.T,

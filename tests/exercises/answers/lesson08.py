@@ -65,20 +65,24 @@ def _t_from_origin(x, X):
     return s, R, X.mean(0)
 
 
+def _compose(s1, s2):
+    m1, R1, t1 = s1
+    m2, R2, t2 = s2
+    return m1 * m2, R1 @ R2, m1 * R1 @ t2 + t1
+
+
 SOLUTIONS = {
-    "check_similarity": _similarity,
+    "check_compose": _compose,
     "check_sigma0": _sigma0,
     "check_conformal": _conformal,
     "check_log_law": _log_law,
 }
 
 MUTANTS = {
-    "check_similarity": {
-        "reflection": _no_det_fix,
-        "no centroids": _no_centroid,
-        "transpose": _transpose,
-        "inverse scale": _inverse_scale,
-        "t without the rotation": _t_from_origin,
+    "check_compose": {
+        "order": lambda s1, s2: _compose(s2, s1),
+        "no scale in t": lambda s1, s2: (s1[0] * s2[0], s1[1] @ s2[1], s1[1] @ s2[2] + s1[2]),
+        "no rotation in t": lambda s1, s2: (s1[0] * s2[0], s1[1] @ s2[1], s1[0] * s2[2] + s1[2]),
     },
     "check_sigma0": {
         "divide by 3n": lambda x, X, s, R, t, sg: (

@@ -51,13 +51,33 @@ def _dist_std(xy, Q, i, j, mode="ok"):
     return float(np.sqrt(f @ Q @ f))
 
 
+def _inner_solve(N, b, G, mode="ok"):
+    u, d = G.shape
+    if mode == "ridge":
+        Q = np.linalg.inv(N + G @ G.T)
+        return Q @ b, Q
+    Gs = G * np.sqrt(np.trace(N) / u)
+    M = np.block([[N, Gs], [Gs.T, np.zeros((d, d))]])
+    Mi = np.linalg.inv(M)
+    if mode == "whole":
+        return Mi[:u, :u] @ b, Mi
+    Q = Mi[:u, :u]
+    return (-1.0 if mode == "sign" else 1.0) * Q @ b, Q
+
+
 SOLUTIONS = {
+    "check_inner_solve": _inner_solve,
     "check_helmert_columns": lambda xy: _helmert(xy),
     "check_s_transform": lambda x, Q, G, pts: _s_transform(x, Q, G, pts, "ok"),
     "check_distance_std": lambda xy, Q, i, j: _dist_std(xy, Q, i, j, "ok"),
 }
 
 MUTANTS = {
+    "check_inner_solve": {
+        "ridge": lambda N, b, G: _inner_solve(N, b, G, "ridge"),
+        "whole_inverse": lambda N, b, G: _inner_solve(N, b, G, "whole"),
+        "sign": lambda N, b, G: _inner_solve(N, b, G, "sign"),
+    },
     "check_helmert_columns": {
         "rotation_yx": lambda xy: _helmert(xy, rot=(1, 1)),
         "scale_for_rotation": lambda xy: _helmert(xy, scale_instead=True),

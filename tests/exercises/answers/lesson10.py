@@ -7,6 +7,10 @@ Kept out of the installed package (solutions stay with the teacher); used by
 from __future__ import annotations
 
 import numpy as np
+from scipy.linalg import block_diag
+
+import orientviz as ov
+from orientviz.rotation import matrix_derivatives
 
 
 def _reduce(U, W, V, bc, bp, mode="ok"):
@@ -39,13 +43,136 @@ def _bandwidth(P, mode="ok"):
     return b
 
 
+def _schur_step(nb, mode="ok"):
+    m, q = nb.n_images, nb.n_points
+    Vi = np.linalg.inv(nb.V)
+    WVi = np.einsum("aqj,qjk->aqk", nb.W.reshape(6 * m, q, 3), Vi).reshape(6 * m, 3 * q)
+    if mode == "W_transposed":
+        WVi = nb.W.T @ block_diag(*Vi)  # a shape error inside the student's function
+    sign = -1.0 if mode != "plus" else 1.0
+    S = block_diag(*nb.U) + sign * WVi @ nb.W.T
+    r = nb.bc + sign * WVi @ nb.bp
+    dc = np.linalg.solve(S, r)
+    coupling = nb.W.T @ dc if mode != "no_coupling" else 0.0
+    dp = np.einsum("qjk,qk->qj", Vi, (nb.bp - coupling).reshape(q, 3)).reshape(-1)
+    return dc, dp
+
+
+# ---- your bundle (lesson 10's last section); the same code as the notebook's solution cells
+def _ray_partials(X, X0, R, dR, c, mistake=None):
+    d = X - X0
+    u, v, w = np.einsum("nki,nk->ni", R, d).T  # Rᵀ (X − X0), ray by ray
+    uv_w = (np.stack([u, v], 1) / w[:, None])[:, :, None]
+
+    def quotient(duvw):  # ∂(−c u/w, −c v/w) from ∂(u, v, w)
+        return -(c / w)[:, None, None] * (duvw[:, :2] - uv_w * duvw[:, 2:3])
+
+    dX = quotient(np.transpose(R, (0, 2, 1)))  # ∂(u, v, w)/∂X = Rᵀ
+    dang = quotient(np.stack([np.einsum("nki,nk->ni", dR[a], d) for a in range(3)], 2))
+    xy = -(c / w)[:, None] * np.stack([u, v], 1)
+    if mistake == "R_not_transposed":
+        uvw = np.einsum("nik,nk->ni", R, d)
+        xy = -c[:, None] * uvw[:, :2] / uvw[:, 2:]
+    if mistake == "no_quotient":
+        dX = -(c / w)[:, None, None] * np.transpose(R, (0, 2, 1))[:, :2]
+    if mistake == "X0_sign":
+        return xy, dX, dang, dX
+    return xy, -dX, dang, dX
+
+
+def _my_bundle(data, X0, angles, xyz, tol=5e-3, max_iter=20, mistake=None):
+    X0, angles, xyz = X0.copy(), angles.copy(), xyz.copy()
+    m, p, n = len(X0), data.unknown.size, data.image.size
+    j = data.col[data.point]  # point unknown of each ray (−1: fixed)
+    var = j >= 0
+    c, x0, y0 = data.cam
+    history = []
+    for it in range(max_iter + 1):
+        # 1. linearise: residuals and partial derivatives of every ray
+        R = ov.matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2])[data.image]
+        dR = np.stack(matrix_derivatives(angles[:, 0], angles[:, 1], angles[:, 2]))[:, data.image]
+        xy, dX0, dang, dX = _ray_partials(xyz[data.point], X0[data.image], R, dR, c)
+        lf = data.l - (xy + np.stack([x0, y0], 1))  # observed − computed, (n, 2) mm
+        A, P = np.concatenate([dX0, dang], 2), data.p  # (n, 2, 6), weights (n, 2)
+        if mistake == "no_weights":
+            P = np.ones_like(P)
+        # 2. normal equations: U per image, V per point, W between them; control as observations
+        U, V = np.zeros((6 * m, 6 * m)), np.zeros((p, 3, 3))
+        W, bc, bp = np.zeros((6 * m, 3 * p)), np.zeros(6 * m), np.zeros((p, 3))
+        for r in range(n):
+            ci = slice(6 * data.image[r], 6 * data.image[r] + 6)
+            U[ci, ci] += A[r].T @ (P[r, :, None] * A[r])
+            bc[ci] += A[r].T @ (P[r] * lf[r])
+            if var[r]:
+                V[j[r]] += dX[r].T @ (P[r, :, None] * dX[r])
+                W[ci, 3 * j[r] : 3 * j[r] + 3] += A[r].T @ (P[r, :, None] * dX[r])
+                bp[j[r]] += dX[r].T @ (P[r] * lf[r])
+        d = data.prior - xyz[data.unknown]  # weighted control coordinates
+        V[:, [0, 1, 2], [0, 1, 2]] += data.prior_w
+        bp += data.prior_w * d
+        vtpv = float(np.sum(P * lf**2) + np.sum(data.prior_w * d**2))
+        if it == max_iter or (history and history[-1][1] < tol):
+            break
+        # 3. reduce to the orientations (Schur), solve, back-substitute point by point
+        Vi = np.linalg.inv(V)
+        WVi = np.einsum("akj,kji->aki", W.reshape(6 * m, p, 3), Vi).reshape(6 * m, 3 * p)
+        dc = np.linalg.solve(U - WVi @ W.T, bc - WVi @ bp.ravel())
+        dp = np.einsum("kij,kj->ki", Vi, bp - (W.T @ dc).reshape(p, 3))
+        # 4. update; stop when every correction is below tol of its conditional σ
+        X0 += dc.reshape(m, 6)[:, :3]
+        angles += dc.reshape(m, 6)[:, 3:]
+        xyz[data.unknown] += dp
+        largest = max(
+            np.max(np.abs(dc) * np.sqrt(np.diag(U))),
+            np.max(np.abs(dp) * np.sqrt(np.diagonal(V, axis1=1, axis2=2)), initial=0.0),
+        )
+        history.append((vtpv, largest))
+    r = 2 * n + int(np.count_nonzero(data.prior_w)) - 6 * m - 3 * p  # the redundancy
+    if mistake == "fixed_as_unknowns":
+        r -= 3 * int(np.sum(data.col < 0))
+    s0 = vtpv / r if mistake == "no_sqrt" else np.sqrt(vtpv / r)
+    return X0, angles, xyz, s0, history, (U, W, V)
+
+
+def _point_covariance(U, W, V, j, mistake=None):
+    m, p = U.shape[0] // 6, len(V)
+    Vi = np.linalg.inv(V)
+    if mistake == "V_only":
+        return Vi[j]
+    WVi = np.einsum("akj,kji->aki", W.reshape(6 * m, p, 3), Vi).reshape(6 * m, 3 * p)
+    S = U - WVi @ W.T
+    T = W[:, 3 * j : 3 * j + 3] @ Vi[j]
+    return Vi[j] + T.T @ np.linalg.solve(S, T)
+
+
 SOLUTIONS = {
+    "check_ray_partials": _ray_partials,
+    "check_my_bundle": _my_bundle,
+    "check_point_covariance": _point_covariance,
+    "check_schur_step": _schur_step,
     "check_reduce": lambda U, W, V, bc, bp: _reduce(U, W, V, bc, bp, "ok"),
     "check_back_substitute": lambda V, W, bp, dc: _back(V, W, bp, dc, "ok"),
     "check_bandwidth": lambda P: _bandwidth(P, "ok"),
 }
 
 MUTANTS = {
+    "check_ray_partials": {
+        k: (lambda *a, k=k: _ray_partials(*a, mistake=k))
+        for k in ("R_not_transposed", "no_quotient", "X0_sign")
+    },
+    "check_my_bundle": {
+        k: (lambda *a, k=k: _my_bundle(*a, mistake=k))
+        for k in ("no_weights", "fixed_as_unknowns", "no_sqrt")
+    }
+    | {"one_step": lambda *a: _my_bundle(*a, max_iter=1)},
+    "check_point_covariance": {
+        "V_only": lambda U, W, V, j: _point_covariance(U, W, V, j, "V_only")
+    },
+    "check_schur_step": {
+        "plus": lambda nb: _schur_step(nb, "plus"),
+        "no_coupling": lambda nb: _schur_step(nb, "no_coupling"),
+        "W_transposed": lambda nb: _schur_step(nb, "W_transposed"),
+    },
     "check_reduce": {
         "plus": lambda U, W, V, bc, bp: _reduce(U, W, V, bc, bp, "plus"),
         "rhs_not_reduced": lambda U, W, V, bc, bp: _reduce(U, W, V, bc, bp, "rhs"),

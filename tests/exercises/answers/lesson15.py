@@ -7,7 +7,7 @@ Kept out of the installed package (solutions stay with the teacher); used by
 from __future__ import annotations
 
 import numpy as np
-from scipy.stats import chi2, norm
+from scipy.stats import chi2
 
 
 def _pattern(xy, v):
@@ -23,12 +23,13 @@ def _colmap_to_photo(uv, cx, cy, p):
     return np.column_stack([(uv[:, 0] - cx) * p, -(uv[:, 1] - cy) * p])
 
 
-def _sigma0_interval(vPv, r, alpha):
-    return (
-        np.sqrt(vPv / r),
-        np.sqrt(chi2.ppf(alpha / 2, r) / r),
-        np.sqrt(chi2.ppf(1 - alpha / 2, r) / r),
-    )
+def _smallest_redundancy(ratio, alpha, tail=2, square=False, offset=0):
+    r = 1
+    while True:  # a plain search upwards
+        bound = chi2.ppf(1 - alpha / tail, r) / r
+        if (bound if square else np.sqrt(bound)) < ratio:
+            return r + offset
+        r += 1
 
 
 def _rms_per_image(image, v, m):
@@ -38,7 +39,7 @@ def _rms_per_image(image, v, m):
 SOLUTIONS = {
     "check_residual_pattern": _pattern,
     "check_colmap_to_photo": _colmap_to_photo,
-    "check_sigma0_interval": _sigma0_interval,
+    "check_smallest_redundancy": _smallest_redundancy,
     "check_rms_per_image": _rms_per_image,
 }
 
@@ -61,17 +62,10 @@ MUTANTS = {
         "swapped": lambda uv, cx, cy, p: _colmap_to_photo(uv, cy, cx, p),
         "divided": lambda uv, cx, cy, p: _colmap_to_photo(uv, cx, cy, 1 / p),
     },
-    "check_sigma0_interval": {
-        "one-sided": lambda q, r, a: _sigma0_interval(q, r, 2 * a),
-        "squared": lambda q, r, a: (lambda s, lo, hi: (s, lo**2, hi**2))(
-            *_sigma0_interval(q, r, a)
-        ),
-        "normal": lambda q, r, a: (
-            np.sqrt(q / r),
-            1 - norm.ppf(1 - a / 2) / np.sqrt(2 * r),
-            1 + norm.ppf(1 - a / 2) / np.sqrt(2 * r),
-        ),
-        "dof n": lambda q, r, a: _sigma0_interval(q, r + 40, a),
+    "check_smallest_redundancy": {
+        "one-sided": lambda q, a: _smallest_redundancy(q, a, tail=1),
+        "squared": lambda q, a: _smallest_redundancy(q, a, square=True),
+        "off by one": lambda q, a: _smallest_redundancy(q, a, offset=-1),
     },
     "check_rms_per_image": {
         "mean": lambda image, v, m: np.array([np.mean(v[image == i], axis=0) for i in range(m)]),

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from ...bundle._lens import BACKWARD_NAMES, FORWARD_NAMES
+from ...bundle.model._lens import BACKWARD_NAMES, FORWARD_NAMES
 from ...errors import InputError
 from ..problem import Units
 from ..tables import Table

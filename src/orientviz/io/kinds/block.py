@@ -293,8 +293,8 @@ def _labels(
 
 def _control_labels(block: Block, control: str) -> list[str]:
     """``point/X`` for each coordinate pseudo-observation of the bundle, in its order
-    (unknown points in block order, then X, Y, Z; see ``bundle._checks.point_setup``)."""
-    from ...bundle._checks import point_setup
+    (unknown points in block order, then X, Y, Z; see ``bundle.problem._checks.point_setup``)."""
+    from ...bundle.problem import point_setup
 
     setup = point_setup(block, control)
     pt = block.points.ids

@@ -1,0 +1,234 @@
+"""Bundle block adjustment: all image bundles of a block at once (collinearity).
+
+Every image ray ``x_obs + v = project(X, X0, R(ω, φ, κ), c, x0, y0) + A(x_obs)·a`` (see
+:mod:`orientviz.camera`: image plane at z = −c, mm; R image → object with the block's
+rotation sequence, ``"opk"`` R = R_ω R_φ R_κ or ``"pok"`` R = R_φ R_ω R_κ) is one
+observation equation; the unknowns are the exterior orientations (X0, Y0, Z0 in m,
+ω, φ, κ in rad), the object points (m) and optional additional parameters ``a`` of
+self-calibration shared by groups of images. Control coordinates are fixed or
+weighted pseudo-observations, observed projection centres/attitudes
+(``images.X0_obs``/``X0_sigma``, ``angles_obs``/``angles_sigma``) weighted ones.
+
+:func:`bundle_adjust` checks the datum and determinability
+(:mod:`orientviz.bundle.problem._checks`), builds the
+:class:`~orientviz.bundle.problem.BundleProblem`, and runs the engine's loop
+(:func:`orientviz.adjust.loop.iterate`) over its steps
+(:class:`~orientviz.bundle.loop._steps.BundleSteps`): Gauss-Newton on the normal
+equations with the points eliminated (:mod:`orientviz.bundle.reduced`), a
+Levenberg-Marquardt fallback when a step would increase vᵀPv, and a parameter-based
+stopping rule: stop when every correction is below ``tol`` times the parameter's
+a-priori (conditional) σ = 1/√N_ii (the cost alone barely changes along the weak
+bending modes of large blocks). From start values whose normal matrix is not positive
+definite the result reports ``converged=False`` with a reason that points to
+:func:`orientviz.approximate.approximate_values`.
+
+Self-calibration (``additional=``): the parameters border the reduced system
+(:mod:`orientviz.bundle.problem._ap_normal` assembles E, F;
+:mod:`orientviz.bundle.problem._border` solves). From poor approximations (start σ0 ≥
+:data:`POOR_START_SIGMA0`) the first step holds the parameters at their values: they
+model image errors of a few µm and should not absorb the errors of the approximations.
+The result is finished by :func:`orientviz.bundle.loop._finish.finish_result`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from ...adjust.loop import Damping, StopRule, iterate
+from ...adjust.result import Iteration
+from ...block import Block
+from ...errors import InputError, NotDeterminableError
+from .._result import BundleResult
+from ..problem import BundleProblem, BundleState, point_setup
+from ..problem._auxiliary import finish_bundle
+from ..problem._checks import check_connected, check_datum, check_determinable
+from ._finish import finish_result
+from ._reference_result import reference_result
+from ._steps import BundleSteps
+
+#: Blocks up to this many images keep the full parameter vector in every history record.
+HISTORY_X_LIMIT: int = 500
+#: Above this start σ0 a singular first normal matrix is blamed on the approximations
+#: (damped steps are tried) rather than reported as a defect at once.
+POOR_START_SIGMA0: float = 30.0
+
+
+def bundle_adjust(
+    block: Block,
+    *,
+    control: str = "fixed",
+    max_iter: int = 30,
+    tol: float = 5e-3,
+    additional=None,
+    ap_group=None,
+    ap_sigma=None,
+    precision: bool = True,
+    callback: Callable[[Iteration], object] | None = None,
+    solver: str = "auto",
+    history_x: bool | None = None,
+    auxiliary: list | None = None,
+) -> BundleResult:
+    """Adjust a block by the bundle method (see module docstring for the model).
+
+    Parameters
+    ----------
+    block : Block
+        Approximate values in ``images.X0``/``angles`` (rad, ``block.sequence``) and
+        ``points.xyz`` (m); see :func:`orientviz.approximate.approximate_values`.
+    control : {"fixed", "weighted"}
+        ``"fixed"``: every given coordinate of a control point is held fixed.
+        ``"weighted"``: given coordinates with ``points.sigma`` > 0 are observations
+        with that σ (m), σ = 0 still fixes. Check points (role 2) are left out and
+        intersected afterwards with the adjusted orientations.
+    max_iter : int
+        Maximum number of Gauss-Newton steps.
+    tol : float
+        Stop when every ‖correction‖ < tol · (a-priori conditional σ = 1/√N_ii). The
+        conditional σ is much smaller than the real one in a block, so the rule is
+        strict: with 5e-3 the bench blocks stop within 0.001 mm of the optimum.
+    additional : AdditionalParameters, optional
+        Self-calibration set (``design(xy) -> (n, 2, k)`` in mm per unit, evaluated at the
+        observed coordinates): ``x_obs + v = project(...) + A(x_obs)·a``.
+        A set's name (``"ebner12"``, ``"brown"``, ``"gruen44"``) stands for
+        ``ap_set(name)``; a :class:`LensModel` estimates the camera's own parameters.
+    ap_group : array_like of int, shape (m,), optional
+        Group of each image for the additional parameters (default: one group).
+    ap_sigma : float or array_like (k,), optional
+        σ of the pseudo-observations a = 0 (units of the parameters); None = free.
+    precision : bool
+        Compute per-image 6×6 and per-point 3×3 cofactor blocks, redundancy numbers and
+        normalised residuals (:mod:`orientviz.bundle.precision`).
+    callback : callable, optional
+        Called with each new :class:`Iteration`.
+    solver : {"auto", "banded", "dense", "sparse", "reference"}
+        Solver of the reduced camera system (:mod:`orientviz.bundle.reduced`):
+        ``"auto"`` chooses from the structure (banded for strips, dense for small or
+        densely connected networks, sparse otherwise:
+        :mod:`orientviz.bundle.reduced._choice`). The result's ``solver`` is the one used,
+        ``reduced_info["solver_reason"]`` says why. ``"reference"``: the textbook
+        Gauss-Newton iteration of :mod:`orientviz.bundle.reference` instead of the fast
+        one (small blocks; no auxiliary data).
+    history_x : bool, optional
+        Keep the full parameter vector per iteration (default: blocks ≤ 500 images);
+        otherwise ``Iteration.x`` is empty.
+    auxiliary : list of Auxiliary, optional
+        GNSS / statoscope / APR data as joint observations with offset/drift unknowns
+        per strip (:mod:`orientviz.bundle.problem._auxiliary`), also together with
+        ``additional`` (both border the reduced system:
+        :mod:`orientviz.bundle.problem._auxiliary_border`). Estimates in ``result.auxiliary``
+        (:class:`~orientviz.block.AuxiliaryEstimates`: offsets, sigma (m), residuals),
+        ``cofactor_groups["auxiliary"]``; the rows are appended to the observations
+        (``obs_slices["auxiliary"]``, m) and with ``precision`` get redundancy numbers
+        and normalised residuals; the cofactor blocks of orientations and points then
+        include the uncertainty of the offsets/drifts. The datum check is left to the
+        normal equations.
+
+    Returns
+    -------
+    BundleResult
+        Typed fields ``exterior`` ((m, 6): X0, Y0, Z0 m, ω, φ, κ rad), ``points`` ((p, 3)
+        m; fixed control at its given value, check points intersected), ``additional``
+        (q,), ``check_points`` (:class:`~orientviz.block.CheckPoints`, ``check_rms`` m
+        X/Y/Z), ``auxiliary``, ``used_obs``, ``solver``, ``reduced_info``, and with the
+        precision ``ray_gains``, ``exterior_pairs``, ``redundancy_xy``; parameter
+        blocks ``"exterior"``, ``"points"``, ``"additional"`` of ``x``; residuals
+        v = f − l: the 2n image coordinates (x, y per observation, mm) first, then the
+        pseudo-observations (``obs_slices`` names the ranges).
+    """
+    setup = point_setup(block, control)
+    check_connected(block, setup)
+    check_determinable(block, setup)
+    if not auxiliary:
+        check_datum(block, setup)
+    if solver == "reference":  # the textbook iteration (bundle/reference.py), no fast path
+        if auxiliary:
+            raise InputError("solver='reference' takes no auxiliary data (GNSS, statoscope, APR)")
+        return reference_result(
+            block, setup, control=control, max_iter=max_iter, tol=tol, additional=additional,
+            ap_group=ap_group, ap_sigma=ap_sigma, precision=precision, callback=callback,
+            history_x=history_x,
+        )  # fmt: skip
+    prob = BundleProblem(
+        block, setup, additional=additional, ap_group=ap_group, ap_sigma=ap_sigma, solver=solver,
+        auxiliary=auxiliary,
+    )  # fmt: skip
+    names = prob.names()  # formed when read (a message, the result's names)
+    red_names = prob.names(exterior_only=True)
+    xyz0 = block.points.xyz.copy()
+    fixed = setup.fixed
+    xyz0[fixed] = np.where(np.isfinite(setup.known[fixed]), setup.known[fixed], xyz0[fixed])
+    st = BundleState(
+        block.images.X0.copy(), block.images.angles.copy(), xyz0, np.zeros(prob.q),
+        np.zeros(prob.na),
+    )  # fmt: skip
+    keep_x = (block.n_images <= HISTORY_X_LIMIT) if history_x is None else bool(history_x)
+    dof = prob.redundancy
+
+    def s0(c):
+        return float(np.sqrt(c / dof)) if dof > 0 else float("nan")
+
+    steps = BundleSteps(prob, red_names, keep_x, precision)
+    ev0 = steps.start(st)
+    # additional parameters model image errors of a few µm: from approximations whose
+    # misclosures are far larger (σ0 ≥ POOR_START_SIGMA0) the first step is taken with
+    # the parameters held at their values — it costs no border, and the parameters do
+    # not absorb errors of the approximations (the first joint step then starts close)
+    hold_first = bool(prob.q) and s0(ev0.cost) >= POOR_START_SIGMA0
+    del ev0  # the loop takes it over (and releases it after the first step)
+    steps.hold_first = hold_first
+    run = iterate(
+        steps,
+        st,
+        redundancy=dof,
+        damping=Damping(
+            "fallback", poor_start_sigma0=POOR_START_SIGMA0, first=2 if hold_first else 1
+        ),
+        stop=StopRule(tol=tol, may_stop=lambda it: not (prob.border.hold or steps.local_step)),
+        max_iter=max_iter,
+        # derivatives at the new state: for the next iteration, the precision or the
+        # check of a damped start (not after the last step of a screening run, nor after
+        # a step that meets the stopping rule: the loop stops there once it is accepted)
+        jacobian_after=lambda it, run: (
+            (it < max_iter and not steps.stops(tol))
+            or precision
+            or run.damped_start
+            or prob.aux is not None
+        ),
+        callback=callback,
+        on_accept=steps.accepted,
+        on_iteration=steps.begin,
+    )
+    st, history, converged, reason = run.state, run.history, run.converged, run.reason
+    prob.reduced.release_maps()  # the Schur formation's maps: not held through the precision
+    steps.chord_factor = steps.chord_pending = None
+    rw, Je, Jp = run.evaluation.data
+    if steps.is_local(run.evaluation):  # the precision needs the derivatives by ω, φ, κ
+        rw, Je, Jp = prob.residuals(st, jac=True)
+    cost = run.evaluation.cost
+    damped_start, lin = run.damped_start, steps.lin
+    prob.border.hold = prob.border.reuse = False
+    prob.design_at(st)  # a lens model: its design at the final iterate (precision)
+    if not converged:
+        lin = None
+    if damped_start:  # a start that needed damping: prove the solution is determinable
+        try:
+            prob.solve(prob.normal(st, rw, Je, Jp), red_names)
+        except NotDeterminableError:
+            converged, precision = False, False
+            reason = (
+                f"no convergence from poor approximate values (start σ0 = {history[0].sigma0:.3g}): "
+                "the normal equations are not positive definite there; compute better "
+                "approximations, e.g. with orientviz.approximate.approximate_values"
+            )
+    res = finish_result(
+        block, prob, st, rw, Je, Jp, names, history, converged, reason, precision, dof, s0(cost),
+        lin=lin,
+    )  # fmt: skip
+    if prob.aux:
+        finish_bundle(res, prob, st, rw, Je, Jp)
+    if prob.ap.lens is not None:
+        Q = res.cofactor_groups.get("additional") if prob.q else None
+        res.camera = prob.ap.lens.estimates(st.ap, Q, res.sigma0)
+    return res

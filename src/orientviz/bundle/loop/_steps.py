@@ -1,0 +1,266 @@
+"""The bundle problem as the engine's loop sees it: evaluate, solve, apply, accept.
+
+:class:`BundleSteps` implements the steps of :func:`orientviz.adjust.loop.iterate` for a
+:class:`~orientviz.bundle.problem.BundleProblem`: the weighted misclosures and Jacobians
+at an iterate, the step from the point-reduced normal equations, and what the iterations
+hand on — the hold of the additional parameters in the first step, the reuse of their
+border (:data:`AP_REUSE`), rotations of the image frames from a poor start
+(:mod:`orientviz.bundle.model._local_rotation`) and chord steps (:data:`CHORD_REUSE`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ...adjust.loop import Evaluation, Step
+from ..model import LOCAL_MIN_CORRECTION, LOCAL_SIGMA0, angle_map
+from ..problem import BundleProblem, BundleState
+
+F64 = NDArray[np.float64]
+#: The border E, F of the additional parameters is reused in the next iteration when the
+#: last step moved no projection centre or point by more than this fraction of the
+#: median ray length and no angle by more than this (rad): the Jacobians then change by
+#: about as little (1e-4 relative), less than the tolerance of the border's solve.
+AP_REUSE: float = 1e-4
+#: A plain bundle without precision solves the steps after a small one with the normal
+#: matrix of that step (*chord* steps dx = N(x_old)⁻¹ Jᵀ P (l − f) at the new iterate:
+#: only the gradient is formed anew, N's point blocks and the factor of S are the old
+#: ones) when that full undamped step moved no projection centre or point by more than
+#: this fraction of the median ray length and no angle by more than this (rad). Chord
+#: steps follow each other while each corrects by less than :data:`CHORD_CONTRACTION`
+#: times the step before; one that does not is dropped and the step solved in full at
+#: the same iterate. The factor of a step in rotations of the image frames
+#: (:mod:`orientviz.bundle.model._local_rotation`) serves steps in ω, φ, κ through the map A
+#: of :func:`~orientviz.bundle.model._local_rotation.angle_map` (J_θ = J_δ·A per image).
+#:
+#: Why the stopping rule may judge a chord step: at one iterate the chord correction
+#: δ_c = N_old⁻¹ g and the Newton correction δ_N = N⁻¹ g satisfy δ_N = N⁻¹ N_old δ_c,
+#: so with ‖N⁻¹ N_old − I‖ ≤ ε (in the rule's norm, corrections in conditional σ) the
+#: rule reads δ_c within a factor 1 ± ε of δ_N. Near the optimum chord steps shrink the
+#: error by about ε each; the ratio θ of successive corrections observes that, and as
+#: long as it holds the iterate after a correction δ_k is within θ/(1 − θ)·‖δ_k‖ of the
+#: optimum — with θ < 1/2 within ‖δ_k‖ < tol, the distance a Newton stop leaves or less.
+#: ε grows faster than the move (the blocks' weak bending modes change most; measured,
+#: bench blocks of ``benchmarks/bench_bundle.py``): 3e-4 after the 2 100-image block's
+#: third step (move 6.5e-5: chord 0.0013043 σ, Newton 0.0013047), about 0.17 after the
+#: small block's second (1.7e-3), 0.6 after the medium block's (5e-3) and 5 after the
+#: large block's (1.4e-2: the chord corrects by 44 σ where Newton corrects by 10 σ;
+#: chord steps from there take ten iterations to the stop, with the fall-back six, and
+#: more time than the four of today). Hence the small threshold: the steps it
+#: lets through contract by about 0.1 or less, and the large block keeps its three
+#: factorisations (``benchmarks/README.md``, "Chord steps").
+CHORD_REUSE: float = 1e-3
+#: A chord step must correct by less than this times the step before (else it is
+#: replaced by a full step): the bound 1/2 keeps the distance to the optimum after a
+#: chord step that meets the stopping rule below the tolerance (see :data:`CHORD_REUSE`).
+CHORD_CONTRACTION: float = 0.5
+
+
+class _Linearisation(tuple):
+    """(rw, Je, Jp) of an evaluation; ``local``: Je by rotations of the image frames."""
+
+    def __new__(cls, data: tuple, local: bool = False):
+        out = super().__new__(cls, data)
+        out.local = local
+        return out
+
+
+class BundleSteps:
+    """The bundle problem as the engine's loop sees it (its :class:`orientviz.adjust.Step` objects).
+
+    Evaluates the weighted misclosures and Jacobians at a :class:`BundleState`, forms the
+    point-reduced normal equations and solves them (:meth:`BundleProblem.normal`,
+    :meth:`BundleProblem.solve`), and keeps per run what the iterations hand on: the
+    hold of the additional parameters in the first step, the reuse of their border, and
+    the last undamped linearisation (the precision may reuse it).
+    """
+
+    def __init__(self, prob: BundleProblem, red_names: list[str], keep_x: bool, precision: bool):
+        self.prob, self.red_names = prob, red_names
+        self.keep_x, self.precision = keep_x, precision
+        self.hold_first = False
+        self.lin = None  # (normal equations, factor, Jacobians) of the last plain step
+        self._start: tuple | None = None
+        # rotation steps in the image frames while the start is poor (._local_rotation)
+        self.local_allowed = prob.local_rotations_allowed
+        self.local_step = False  # the last accepted step rotated the image frames
+        self.last_cost: float | None = None  # vᵀPv of the last accepted state
+        self.pending_cost: float | None = None  # … of the last evaluated one
+        self.last_correction = np.inf
+        # chord steps (CHORD_REUSE): the factor of the last full step while it may serve
+        self.chord_allowed = not precision and not (prob.q or prob.aux or prob.ap.lens is not None)
+        self.chord_factor = None  # (factor of S, its NormalEquations, local?)
+        self.chord_pending = None  # the factor of the last solved step, if it may serve
+        self.chord_step = False  # the last solved step used chord_factor
+        # the scale of the step's move (_relative_move): the border's median ray length
+        # with additional parameters, else the median ray of the first iterate that asks
+        self.ray_length: float | None = prob.ap.ray_length if prob.q else None
+        self.last_rel, self.last_local = np.inf, False  # of the last solved step
+
+    def start(self, st: BundleState) -> Evaluation:
+        """Evaluate the start once (the loop asks for it again: no second evaluation)."""
+        if self.local_allowed:  # σ0 of the start decides how its Jacobian is formed
+            self.last_cost = self._evaluate(st, False, False, keep=True).cost
+            # a poor start: derivatives by rotations of the image frames (from the kept
+            # projection: the rays are projected once)
+            ev = self._evaluate(st, True, self._poor())
+        else:
+            ev = self._evaluate(st, True, False)
+        self._start = (st, ev)
+        return ev
+
+    def evaluate(self, st: BundleState, jacobian: bool) -> Evaluation:
+        if self._start is not None and self._start[0] is st:
+            ev, self._start = self._start[1], None
+            return ev
+        return self._evaluate(st, jacobian, jacobian and self.local_allowed and self._poor())
+
+    def _evaluate(
+        self, st: BundleState, jacobian: bool, local: bool, keep: bool = False
+    ) -> Evaluation:
+        rw, Je, Jp = self.prob.residuals(st, jac=jacobian, local=local, keep=keep)
+        cost = self.prob.cost(st, rw)
+        self.pending_cost = cost
+        return Evaluation(cost, bool(np.isfinite(cost)), _Linearisation((rw, Je, Jp), local))
+
+    def _poor(self) -> bool:
+        """Still far from the solution: σ0 of the last accepted state (the start: unknown,
+        poor) at least LOCAL_SIGMA0 and the step to the state evaluated not small (its
+        correction: the last one solved)."""
+        dof = self.prob.redundancy
+        if self.last_cost is None or dof <= 0:
+            return self.last_cost is None
+        s0 = float(np.sqrt(self.last_cost / dof))
+        return s0 >= LOCAL_SIGMA0 and self.last_rel >= LOCAL_MIN_CORRECTION
+
+    @staticmethod
+    def is_local(ev: Evaluation) -> bool:
+        """Whether ``ev``'s Jacobian is by rotations of the image frames."""
+        return bool(getattr(ev.data, "local", False))
+
+    def begin(self, it: int) -> None:
+        self.prob.border.hold = self.hold_first and it == 1
+        self.lin = None  # released before the next normal equations are built
+
+    def stops(self, tol: float) -> bool:
+        """Whether the last solved step meets the stopping rule (``tol``) once accepted:
+        the state it leads to then needs no derivatives (without the precision)."""
+        return self.last_rel < tol and not (self.prob.border.hold or self.last_local)
+
+    def solve(self, st: BundleState, ev: Evaluation, lam: float, iteration: int) -> Step:
+        prob = self.prob
+        if ev.data[1] is None:  # evaluated without derivatives (a stop was expected)
+            ev = self.evaluate(st, True)
+        rw, Je, Jp = ev.data
+        local = self.is_local(ev)
+        chord = None  # a chord step in ω, φ, κ, or in frame rotations by such a factor
+        if self.chord_factor is not None and lam == 0 and (self.chord_factor[2] or not local):
+            chord = self._chord(st, rw, Je, Jp, local)  # None: it would not contract enough
+        self.chord_step = chord is not None
+        if chord is None:
+            ne = prob.normal(st, rw, Je, Jp, lam)
+            dc, dp, da, fac = prob.solve(ne, self.red_names)
+            rel = self._correction(ne, dc, dp, da)
+        else:
+            rel, ne, dc, dp, da, fac = chord
+        dx = None
+        if self.keep_x:  # same layout as x: zeros for fixed points
+            dpa = np.zeros((prob.block.n_points, 3))
+            dpa[prob.points.unknown] = dp
+            dx = np.concatenate([dc.ravel(), dpa.ravel(), da[: prob.q]])
+        self.last_rel, self.last_local = rel, local
+        self.chord_pending = None
+        if self.chord_allowed and lam == 0:
+            if self.chord_step:  # the factor served: it may serve the next step too
+                self.chord_pending = self.chord_factor
+            elif self._relative_move(st, dc, dp) < CHORD_REUSE:
+                self.chord_pending = (fac, ne, local)
+        # the normal equations and their factor live on only where the precision may reuse
+        # them (an undamped plain step, see accepted); else they are freed before the trial
+        # point's Jacobians are formed (the peak memory of a large block)
+        if not (self.precision and lam == 0 and not (prob.q or prob.aux or local)):
+            ne = fac = None
+        return Step(rel, dx, (dc, dp, da, fac, ne, local))
+
+    def _correction(self, ne, dc: F64, dp: F64, da: F64) -> float:
+        """The largest correction in units of its conditional σ (the stopping measure)."""
+        return max(
+            float(np.max(np.abs(dc) * np.sqrt(ne.diagU), initial=0.0)),
+            float(np.max(np.abs(dp) * np.sqrt(ne.diagV), initial=0.0)),
+            float(np.max(np.abs(da) * np.sqrt(ne.diagF), initial=0.0))
+            if self.prob.q or self.prob.na
+            else 0.0,
+        )
+
+    def _chord(self, st: BundleState, rw: F64, Je: F64, Jp: F64, local: bool):
+        """A chord step by :attr:`chord_factor` (:data:`CHORD_REUSE`) at ``st``:
+        (correction, normal equations, dc, dp, da, factor), or None when its correction
+        is not below :data:`CHORD_CONTRACTION` times the last accepted one.
+
+        ``local``: the Jacobian at ``st`` is by rotations of the image frames. A factor
+        of such a step serves a step in ω, φ, κ through the map A of
+        :func:`~orientviz.bundle.model._local_rotation.angle_map` at ``st``: J_θ = J_δ·T with
+        T = diag(I, A) per image, so N_θ = Tᵀ N_δ T and the step is
+        dθ = T⁻¹ N_δ⁻¹ T⁻ᵀ g_θ — the gradient's angle rows A⁻ᵀ g_θ, the solution's
+        A⁻¹ δ (:meth:`BundleProblem.chord_normal` ``rot``).
+        """
+        prob = self.prob
+        fac, ne_old, old_local = self.chord_factor
+        A = angle_map(st.angles, prob.block.sequence) if old_local and not local else None
+        if A is not None and not np.all(np.abs(np.linalg.det(A)) > 1e-9):
+            return None  # det A = cos φ ("opk"): an image at the gimbal lock of the angles
+        ne = prob.chord_normal(st, rw, Je, Jp, ne_old, rot=A)
+        dc, dp, da, fac = prob.solve(ne, self.red_names, fac=fac)
+        if A is not None:  # back to ω, φ, κ
+            dc[:, 3:] = np.linalg.solve(A, dc[:, 3:, None])[:, :, 0]
+        rel = self._correction(ne, dc, dp, da)
+        if not rel < CHORD_CONTRACTION * self.last_correction:
+            return None
+        return rel, ne, dc, dp, da, fac
+
+    def _relative_move(self, st: BundleState | None, dc: F64, dp: F64) -> float:
+        """The largest change of a step, centres and points in units of the median ray
+        length (of a sample of the rays), angles in rad (the measure of
+        :data:`CHORD_REUSE` and :data:`AP_REUSE`)."""
+        prob = self.prob
+        if self.ray_length is None:  # from the first iterate that gets here
+            obs = prob.obs  # every k-th ray, at most ~8000: a scale, not a statistic
+            k = max(1, obs.point.size // 8192)
+            d = st.xyz[obs.point[::k]] - st.X0[obs.image[::k]]
+            self.ray_length = float(np.sqrt(np.median(np.sum(d * d, axis=1))))
+        L = self.ray_length
+        if not L > 0:  # no scale (a degenerate block): nothing may be reused
+            return np.inf
+        return max(
+            float(np.max(np.abs(dc[:, :3]), initial=0.0)) / L,
+            float(np.max(np.abs(dc[:, 3:]), initial=0.0)),
+            float(np.max(np.abs(dp), initial=0.0)) / L,
+        )
+
+    def apply(self, st: BundleState, step: Step) -> BundleState:
+        dc, dp, da = step.data[:3]
+        local = step.data[5]
+        new = self.prob.apply(st, dc, dp, da, local=local)
+        if local and step.dx is not None:  # the history records the change of the angles
+            step.dx.reshape(-1)[: 6 * self.prob.m].reshape(-1, 6)[:, 3:] = new.angles - st.angles
+        return new
+
+    def snapshot(self, st: BundleState) -> F64:
+        return self.prob.flat(st) if self.keep_x else np.empty(0)
+
+    def accepted(self, it: int, step: Step, lam: float, previous: Evaluation) -> None:
+        prob = self.prob
+        dc, dp, _, fac, ne, local = step.data
+        self.last_correction = step.max_correction
+        self.last_cost, self.local_step = self.pending_cost, local
+        self.chord_factor, self.chord_pending = self.chord_pending, None
+        # the precision may reuse this linearisation when it is the converged one
+        if self.precision and lam == 0 and not (prob.q or prob.aux or local):
+            self.lin = (ne, fac, previous.data[1], previous.data[2])
+        if prob.q:
+            prob.border.reuse = (
+                not prob.border.hold
+                and prob.ap.lens is None  # a lens model's design moves with its parameters
+                and self._relative_move(None, dc, dp) < AP_REUSE  # (its scale is set)
+            )

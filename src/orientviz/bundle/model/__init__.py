@@ -1,0 +1,54 @@
+"""The photogrammetric model of the bundle: collinearity, rotations, the camera.
+
+* :mod:`._kernel` — collinearity for all rays at once: image coordinates
+  (:func:`project_block`), normalised coordinates (:func:`normalised_block`) and their
+  Jacobians by the exterior orientation and the points (:func:`collinearity_block`,
+  :class:`RayProjection` + :func:`ray_jacobians`);
+* :mod:`._local_rotation` — steps as rotations of the image frames and the map between
+  them and steps in ω, φ, κ (:func:`apply_local`, :func:`angle_map`);
+* :mod:`._lens` — the camera inside the projection (:class:`LensModel`: c, principal
+  point, affinity, shear, radial and decentring distortion, backward or forward);
+* :mod:`._additional` — additional-parameter sets of self-calibration
+  (:class:`Ebner12`, :class:`Brown`, :class:`Gruen44`, :func:`ap_set`, :func:`analyse`).
+"""
+
+from ._additional import AdditionalParameters, APAnalysis, Brown, Ebner12, Gruen44, analyse, ap_set
+from ._kernel import (
+    RayProjection,
+    collinearity_block,
+    normalised_block,
+    project_block,
+    ray_jacobians,
+)
+from ._lens import BoundLens, LensEstimates, LensModel, lens_model
+from ._local_rotation import (
+    LOCAL_MIN_CORRECTION,
+    LOCAL_SIGMA0,
+    angle_map,
+    apply_local,
+    frame_axials,
+)
+
+__all__ = [
+    "AdditionalParameters",
+    "APAnalysis",
+    "Brown",
+    "Ebner12",
+    "Gruen44",
+    "analyse",
+    "ap_set",
+    "RayProjection",
+    "collinearity_block",
+    "normalised_block",
+    "project_block",
+    "ray_jacobians",
+    "BoundLens",
+    "LensEstimates",
+    "LensModel",
+    "lens_model",
+    "LOCAL_MIN_CORRECTION",
+    "LOCAL_SIGMA0",
+    "angle_map",
+    "apply_local",
+    "frame_axials",
+]

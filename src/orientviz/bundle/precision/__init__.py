@@ -1,0 +1,15 @@
+"""The bundle's precision: cofactor blocks, redundancy numbers, reliability per ray.
+
+* :mod:`._precision` — :func:`bundle_precision`: per-image 6×6 and per-point 3×3
+  cofactor blocks from the selected inverse of the reduced system
+  (:func:`banded_selected_inverse` for a band), redundancy numbers and normalised
+  residuals;
+* :mod:`._precision_ap` — the same with a border of additional parameters;
+* :mod:`._reliability` — internal and external reliability per ray
+  (:func:`ray_reliability` → :class:`RayReliability`).
+"""
+
+from ._precision import banded_selected_inverse, bundle_precision
+from ._reliability import RayReliability, ray_reliability
+
+__all__ = ["banded_selected_inverse", "bundle_precision", "RayReliability", "ray_reliability"]

@@ -1,0 +1,415 @@
+"""Precision of block adjustments from the reduced system: selected cofactor blocks.
+
+For a bundle block the full cofactor matrix Q = N⁻¹ (u ≈ 130 000 unknowns for 2 100
+images) is never formed. What is needed — per-image 6×6 and per-point 3×3 blocks,
+redundancy numbers of the image observations — follows *exactly* from the blocks of
+Z = S⁻¹ (S the reduced camera system, :mod:`orientviz.bundle.reduced`) at the image
+pairs that share a point, i.e. inside the band of S:
+
+* Q_cc = Z (+ Y F̃⁻¹ Yᵀ with self-calibration parameters a, Y = S⁻¹E, F̃ = F − EᵀY),
+* Q_pp,j = V_j⁻¹ + Σ_a Σ_b T_aᵀ Q_cc(i_a, i_b) T_b   (T_a = W_a V_j⁻¹, rays a, b of j),
+* Q_cp(i, j) = −Σ_b Q_cc(i, i_b) T_b,
+* redundancy number of an image coordinate r = 1 − p · (J Q Jᵀ)_kk, and the
+  normalised residual w = v / (σ √r) (Baarda, a-priori σ0 = 1),
+* the gains of a ray on its own image and point, K = Q_(·, ray) Jᵀ P½ (6×2 and 3×2):
+  a bias ∇ (mm) of the ray moves them by K P½ ∇ (external reliability,
+  :mod:`orientviz.bundle`).
+
+Z inside the band is computed by the block form of Takahashi's recursion on the banded
+Cholesky factor L (S = L Lᵀ): for a block row I with the rows B below it in the band,
+Z_IB = −L_II⁻ᵀ L_BIᵀ Z_BB and Z_II = L_II⁻ᵀ (L_II⁻¹ − L_BIᵀ Z_BI). Its cost equals one
+factorisation (n·b²), so all numbers here are exact — no approximation. For small
+reduced systems (≤ 3 000 unknowns) the dense inverse is used instead.
+
+With self-calibration parameters the border's terms come from
+:mod:`orientviz.bundle.precision._precision_ap`: Y = S⁻¹E by two banded triangular solves
+with all q columns (BLAS level 3, the same factor as the selected inverse), the
+correction Y F̃⁻¹ Yᵀ only at the needed 6×6 blocks, and the point and ray terms per
+(point, group) pair with k columns instead of q (a point's rays lie in one or two
+groups). On the bench's 2 100-image block with 12 parameters per strip this took the
+precision from about 19-30 s (load dependent) to about 1.9 s, against 0.8 s without
+parameters (``python benchmarks/bench_selfcal.py --precision``).
+
+Units: cofactors in the parameters' units squared (m², rad², m·rad); multiply by σ̂0²
+for covariances.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import NDArray
+
+from .._result import ExteriorPairs, RayGains
+from ..reduced import DENSE_CHUNK_BYTES, ReducedStructure, dense_matrix, factor_reduced
+
+F64 = NDArray[np.float64]
+#: Up to this many reduced unknowns Z = S⁻¹ is computed densely.
+DENSE_INVERSE_LIMIT: int = 3000
+#: Block size of the banded selected inversion.
+TAKAHASHI_BLOCK: int = 96
+
+
+def banded_selected_inverse(cb: F64, nb: int = TAKAHASHI_BLOCK) -> F64:
+    """Entries of S⁻¹ inside the band, from the banded Cholesky factor of S.
+
+    Parameters
+    ----------
+    cb : ndarray, shape (kd + 1, n)
+        Lower banded Cholesky factor as returned by ``scipy.linalg.cholesky_banded(...,
+        lower=True)``: ``cb[d, j] = L[j + d, j]``.
+    nb : int
+        Block size of the recursion.
+
+    Returns
+    -------
+    ndarray, shape (n, kd + 1)
+        ``Zb[i, d] = (S⁻¹)[i, i + d]`` (upper band by rows; zero beyond n).
+    """
+    kd = cb.shape[0] - 1
+    n = cb.shape[1]
+    Zb = np.zeros((n, kd + 1))
+    # L as skewed views of the band storage padded with nb zero rows on both sides:
+    # element (r, c) of a block of L is cbp[pad + row − col, col], an affine address
+    pad = nb
+    cbp = np.zeros((kd + 1 + 2 * pad, n))
+    cbp[pad : pad + kd + 1] = cb
+    s0, s1 = cbp.strides
+
+    def L_block(r0: int, r1: int, c0: int, c1: int) -> F64:
+        start = (pad + r0 - c0) * s0 + c0 * s1
+        view = np.lib.stride_tricks.as_strided(
+            cbp[start // s0 :].reshape(-1)[(start % s0) // cbp.itemsize :],
+            shape=(r1 - r0, c1 - c0),
+            strides=(s0, s1 - s0),
+            writeable=False,
+        )
+        return view
+
+    # Z over the rows/columns [i0, b1) of the current block row and its band, kept dense
+    # (with kd + 1 zero columns on the right, so that the band rows are a strided view);
+    # the next block row (above) finds its Z_BB as the leading part of this window.
+    # Two buffers take turns (the extra columns stay zero: they are never written).
+    size = nb + kd
+    bufs = [np.zeros((size, size + kd + 1)), np.zeros((size, size + kd + 1))]
+    win = bufs[1][:0, :0]
+    for k, i0 in enumerate(reversed(range(0, n, nb))):
+        i1 = min(i0 + nb, n)
+        b1 = min(i1 - 1 + kd, n - 1) + 1
+        ni, nbb = i1 - i0, b1 - i1
+        # L_II (lower triangular; entries above the diagonal or beyond the band read
+        # the zero padding) and L_BI
+        LII = np.tril(L_block(i0, i1, i0, i1))
+        LBI = L_block(i1, b1, i0, i1)
+        LIIinv = scipy.linalg.solve_triangular(LII, np.eye(ni), lower=True)
+        w = ni + nbb
+        buf = bufs[k % 2]
+        new = buf[:w, : w + kd + 1]
+        if nbb:
+            ZBB = win[:nbb, :nbb]
+            ZIB = -LIIinv.T @ (LBI.T @ ZBB)
+            new[ni:w, ni:w] = ZBB
+            new[:ni, ni:w] = ZIB
+            new[ni:w, :ni] = ZIB.T
+            new[:ni, :ni] = LIIinv.T @ (LIIinv - LBI.T @ ZIB.T)
+        else:
+            new[:ni, :ni] = LIIinv.T @ LIIinv
+        win = new
+        buf[:ni, w : ni + kd + 1] = 0.0  # read by the band view below (stale otherwise)
+        st0, st1 = buf.strides
+        Zb[i0:i1] = np.lib.stride_tricks.as_strided(
+            buf, shape=(ni, kd + 1), strides=(st0 + st1, st1)
+        )
+    return Zb
+
+
+class ReducedInverse:
+    """The inverse of the reduced system S where the precision needs it.
+
+    ``blocks``: the 6×6 blocks of Z = S⁻¹ at the structure's blocks (i ≤ k), shape
+    (nb, 6, 6); :meth:`border` gives S⁻¹E for a border E (self-calibration) from the same
+    factorisation. ``fac``: an existing banded factor of S (from
+    :func:`orientviz.bundle.reduced.factor_reduced` on the same blocks), then not
+    factored again.
+    """
+
+    def __init__(self, st: ReducedStructure, blocks: F64, fac=None) -> None:
+        n = st.n_reduced
+        r6 = np.arange(6)
+        self._Z = self._fac = None
+        self._m = st.n_cam
+        if n <= DENSE_INVERSE_LIMIT or st.solver != "banded":
+            if n > DENSE_INVERSE_LIMIT and st.solver != "dense":
+                st = ReducedStructure(
+                    st.obs_cam,
+                    st.obs_pt,
+                    st.n_cam,
+                    st.n_pt,
+                    solver="banded",
+                    positions=st.positions,
+                )
+            else:  # dense: the factor of the last iteration when it is a dense one
+                if fac is not None and fac.kind == "dense":
+                    c = (fac.data, True)
+                else:
+                    c = scipy.linalg.cho_factor(dense_matrix(st, blocks), lower=True)
+                Z = self._Z = scipy.linalg.cho_solve(c, np.eye(n))
+                rows = 6 * st.block_i[:, None, None] + r6[None, :, None]
+                cols = 6 * st.block_k[:, None, None] + r6[None, None, :]
+                self.blocks = Z[rows, cols]
+                return
+        if fac is None or fac.kind != "banded":
+            fac = factor_reduced(st, blocks)
+        self._fac = fac
+        Zb = banded_selected_inverse(fac.data)
+        p = st.pos_img
+        rows = 6 * p[st.block_i][:, None, None] + r6[None, :, None]
+        cols = 6 * p[st.block_k][:, None, None] + r6[None, None, :]
+        lo, hi = np.minimum(rows, cols), np.maximum(rows, cols)
+        self.blocks = Zb[lo, hi - lo]
+
+    def border(self, E) -> tuple[F64, F64, NDArray[np.int64]]:
+        """S⁻¹E and Eᵀ S⁻¹ E for a border E (6m, q): ``(Y3, EtY, row)``.
+
+        ``Y3`` (m, 6, q) holds the 6 rows of image i at ``Y3[row[i]]`` (the banded
+        factor's image order: no reordering pass over the (6m, q) array). ``E`` is an
+        array or a :class:`~orientviz.bundle.problem._ap_normal.BorderE`.
+        """
+        m = self._m
+        if self._Z is not None:
+            from ..problem._ap_normal import dense
+
+            E = dense(E)
+            Y = self._Z @ E
+            EtY = E.T @ Y
+            return Y.reshape(m, 6, -1), 0.5 * (EtY + EtY.T), np.arange(m)
+        from ._precision_ap import banded_border
+
+        st = self._fac.structure
+        Yp, EtY = banded_border(self._fac.data, st.scalar_perm, E, st.pos_img)
+        return Yp.reshape(m, 6, -1), EtY, st.pos_img
+
+
+def _block_lookup(st: ReducedStructure, ca, cb_):
+    """Index of block (min, max) for image pairs and whether it must be transposed."""
+    m = st.n_cam
+    keys = st.block_i * m + st.block_k
+    lo, hi = np.minimum(ca, cb_), np.maximum(ca, cb_)
+    idx = np.searchsorted(keys, lo * m + hi)
+    return idx, ca > cb_
+
+
+def _cofactors_by_pairs(S, Zblk: F64, T: F64, oi, Qcp: F64) -> None:
+    """Q_cp for each observation a: −Σ_b Q(i_a, i_b) T_b over the rays b of its point, by
+    pairs of rays, in batches of whole a-groups (bounds the (pairs, 6, 6) gathers)."""
+    a, b = S.all_pairs
+    # blocks and their transposes side by side: one gather per pair, no masked transpose
+    Zboth = np.concatenate([Zblk, Zblk.transpose(0, 2, 1)])
+    seg = np.append(S.all_pairs_starts, a.size)
+    s0, chunk = 0, 65536
+    while s0 < S.all_pairs_starts.size:
+        s1 = max(int(np.searchsorted(seg, seg[s0] + chunk, side="right")) - 1, s0 + 1)
+        sl = slice(seg[s0], seg[s1])
+        idx, tr = _block_lookup(S, oi[a[sl]], oi[b[sl]])
+        Qab = Zboth[idx + tr * Zblk.shape[0]]
+        QT = Qab @ T[b[sl]]  # Q(i_a, i_b) T_b
+        Qcp[S.pt_obs[s0:s1]] = -np.add.reduceat(QT, S.all_pairs_starts[s0:s1] - seg[s0], axis=0)
+        s0 = s1
+
+
+def cofactors_image_point(S, Z: F64, T: F64, oi, ocol, Qcp: F64) -> bool:
+    """Q_cp of each ray by products with the dense inverse Z = S⁻¹: for a chunk of points,
+    Z (n × n) times their T_b placed at the rows of their images (n × 3p_chunk), read at
+    each ray's image rows. Σ k_j² pairs of rays become (6m)²·3p multiply-adds at BLAS
+    speed (what a network whose points are seen by most images needs). False (nothing
+    done) when a point has two rays in one image."""
+    rays = S.pt_obs
+    img, col = oi[rays], ocol[rays]
+    m, n = S.n_cam, S.n_reduced
+    if np.unique(col * m + img).size != rays.size:
+        return False
+    pc = max(1, DENSE_CHUNK_BYTES // (8 * 18 * m))
+    starts = np.append(S.pt_starts, rays.size)
+    for p0 in range(0, S.n_pt, pc):
+        p1 = min(p0 + pc, S.n_pt)
+        r = slice(starts[p0], starts[p1])
+        Tf = np.zeros((m, 6, p1 - p0, 3))
+        Tf[img[r], :, col[r] - p0, :] = T[rays[r]]
+        M = (Z @ Tf.reshape(n, -1)).reshape(m, 6, p1 - p0, 3)
+        Qcp[rays[r]] = -M[img[r], :, col[r] - p0, :]
+    return True
+
+
+def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
+    """Fill ``res`` with cofactor blocks, redundancy numbers and normalised residuals.
+
+    Also ``redundancy_xy`` (n,) and ``ray_gains`` = ``RayGains(exterior (n, 6, 2),
+    points (n, 3, 2))`` per image observation (NaN for unused rays; zero
+    point gains for fixed points): the change of the ray's image orientation (m, rad) and
+    point (m) per unit change of its x, y in units of their σ.
+
+    Parameters
+    ----------
+    res : Adjustment
+        The bundle result (residual order as in :mod:`orientviz.bundle._result`).
+    prob : BundleProblem
+    st : state at the solution; rw, Je, Jp : weighted misclosures and Jacobians there.
+    lin : tuple, optional
+        ``(ne, fac, Je, Jp)`` of the last Gauss-Newton iteration — its normal equations,
+        the factor of its reduced system and the Jacobians they were built from. The
+        cofactors are then those of that linearisation point, which the final
+        correction moved by less than the stopping tolerance (a few thousandths of a
+        conditional σ); the normal equations are not built and factored again.
+    """
+    S = prob.reduced
+    fac = None
+    if lin is not None:
+        ne, fac, Je, Jp = lin
+    else:
+        ne = prob.normal(st, rw, Je, Jp)
+    blocks = ne.blocks
+    inverse = ReducedInverse(S, blocks, fac)
+    Zblk = inverse.blocks
+    m, q = prob.m, prob.q
+    aux = getattr(prob, "aux", None)
+    nb = q + (prob.na if aux else 0)  # border: additional parameters, auxiliary offsets
+    fast_ap = bool(q) and not aux
+    if fast_ap:  # parameters only: the banded border path (bundle_precision_ap)
+        from ._precision_ap import border_inverse
+
+        E = ne.ap.E_border if ne.ap is not None else ne.ap.E
+        Faa, Qca3, dQ = border_inverse(inverse, E, ne.ap.F, S)
+        Zblk = Zblk + dQ
+    elif nb:  # auxiliary offsets/drifts (and parameters): the whole border densely
+        E, F = aux.border(prob, ne)
+        Y = factor_reduced(S, blocks).solve(E)
+        Faa = np.linalg.inv(F - E.T @ Y)  # Q_aa (of the whole border)
+        Y3 = Y.reshape(m, 6, nb)
+        Zblk = Zblk + Y3[S.block_i] @ Faa @ Y3[S.block_k].transpose(0, 2, 1)
+        Qca = -(Y3 @ Faa)  # (m, 6, nb)
+    Qcc_diag = Zblk[S.diag_block]
+    # point cofactors: Vinv + Σ_ab T_aᵀ Q(i_a, i_b) T_b
+    oi, ocol = prob.obs.image, prob.obs.column
+    T = ne.T
+    n_used = oi.size
+    # Q_cp for each observation a: −Σ_b Q(i_a, i_b) T_b  (then add the AP part);
+    # in batches of whole a-groups to bound the memory of the (pairs, 6, 6) gathers
+    Qcp = np.zeros((n_used, 6, 3))
+    dense_qcp = inverse._Z is not None and not nb and S.formation == "dense"
+    if dense_qcp:  # dense S formed densely: Q_cp by products with the dense inverse
+        dense_qcp = cofactors_image_point(S, inverse._Z, T, oi, ocol, Qcp)
+    if not dense_qcp:
+        _cofactors_by_pairs(S, Zblk, T, oi, Qcp)
+    Vinv = ne.Vinv
+    vo = (
+        prob.obs.var_rays
+    )  # the rays of point unknowns in point order (a slice when they come first)
+    sw = prob.obs.weight
+    Jew = Je * sw[:, :, None]
+    Jpw = Jp * sw[:, :, None]
+    if fast_ap:  # the parameters' terms, sparse by (ray, group) and (point, group) pairs
+        from ._precision_ap import point_terms
+
+        dQpp, Qap_pg, Hray = point_terms(prob, ne, Faa, Qca3, Qcp, Jew, Jpw)
+    elif nb:
+        hb = np.zeros((S.n_pt, nb, 3))  # Σ_b Tap_b placed in its group columns
+        if q:
+            Tap = (prob.ap.Aw[vo].transpose(0, 2, 1) @ Jpw[vo]) @ Vinv[ocol[vo]]
+            g = prob.ap.group[oi[vo]]
+            cols = g[:, None] * prob.ap.k + np.arange(prob.ap.k)
+            np.add.at(hb, (ocol[vo][:, None], cols), Tap)
+        aux.point_border(prob, ne, hb)
+        Qcp[vo] -= Qca[oi[vo]] @ hb[ocol[vo]]
+    # Q_pp,j = V_j⁻¹ − Σ_b T_bᵀ Q_cp(i_b, j) − h_jᵀ Q_ap,j
+    Qpp = Vinv + np.add.reduceat(T[vo].transpose(0, 2, 1) @ (-Qcp[vo]), S.pt_starts, axis=0)
+    if fast_ap:
+        Qpp -= dQpp
+    elif nb:
+        # Q_ap,j = −(Σ_b Q_ca(i_b)ᵀ T_b + Q_aa h_j)   (nb, 3) per point
+        Qap = -(
+            np.add.reduceat(Qca[oi[vo]].transpose(0, 2, 1) @ T[vo], S.pt_starts, axis=0) + Faa @ hb
+        )
+        Qpp -= hb.transpose(0, 2, 1) @ Qap
+    # gains of each ray on its own image and point, K = Q_(·, ray) Jwᵀ: the change of the
+    # estimates per σ-normalised change of the ray's x, y (external reliability); first
+    # without the parameters' terms
+    Jpv = Jpw[vo]
+    JewT, JpvT = Jew.transpose(0, 2, 1), Jpv.transpose(0, 2, 1)
+    Ke = Qcc_diag[oi] @ JewT
+    Ke[vo] += Qcp[vo] @ JpvT
+    Kp = np.zeros((n_used, 3, 2))
+    Kp[vo] = Qcp[vo].transpose(0, 2, 1) @ JewT[vo] + Qpp[ocol[vo]] @ JpvT
+    # 2×2 block of P½ J Q Jᵀ P½ per image observation = Jw K (batched products, no full
+    # Q): redundancy numbers r = 1 − diagonal, off-diagonal of P½ Q_vv P½ = −(J Q Jᵀ)_xy
+    H = Jew @ Ke
+    H[vo] += Jpv @ Kp[vo]
+    if fast_ap:
+        H += Hray
+    elif q:  # the parameters' terms of the rays, from the dense border cofactors
+        Aw = prob.ap.Aw
+        sl = np.arange(prob.ap.k)[None, :] + prob.ap.k * prob.ap.group[oi][:, None]  # (n, k)
+        Qaa_o = Faa[sl[:, :, None], sl[:, None, :]]
+        Qca_o = np.take_along_axis(Qca[oi], np.repeat(sl[:, None, :], 6, 1), axis=2)
+        AwT = Aw.transpose(0, 2, 1)
+        C = (Jew @ Qca_o) @ AwT
+        H += (Aw @ Qaa_o) @ AwT + C + C.transpose(0, 2, 1)
+        Qpa = Qap.transpose(0, 2, 1)[ocol[vo]]  # (nv, 3, nb)
+        Qpa_o = np.take_along_axis(Qpa, np.repeat(sl[vo][:, None, :], 3, 1), axis=2)
+        C = (Jpv @ Qpa_o) @ AwT[vo]
+        H[vo] += C + C.transpose(0, 2, 1)
+    r_img = np.clip(1.0 - np.stack([H[:, 0, 0], H[:, 1, 1]], 1), 0.0, 1.0)
+    if q:  # the gains' terms of Q_ca, Q_pa in the ray's own group's k columns
+        if fast_ap:
+            Qca_o = Qca3.reshape(m, 6, prob.ap.G, prob.ap.k)[np.arange(m), :, prob.ap.group, :][oi]
+            Qpa_o = Qap_pg[prob.ap.structure.own_pg[vo]].transpose(0, 2, 1)
+            AwT = prob.ap.Aw.transpose(0, 2, 1)
+        Ke += Qca_o @ AwT
+        Kp[vo] += Qpa_o @ AwT[vo]
+    r_xy = -0.5 * (H[:, 0, 1] + H[:, 1, 0])
+    n = prob.block.n_observations
+    rn = np.full((n, 2), np.nan)
+    rn[prob.obs.index] = r_img
+    out_r = [rn.reshape(-1)]
+    # pseudo-observations
+    w = prob.points.prior_w > 0
+    pdiag = np.einsum("nii->ni", Qpp)
+    out_r.append((1.0 - prob.points.prior_w * pdiag)[w])
+    cdiag = np.einsum("nii->ni", Qcc_diag)
+    w = prob.exterior.X0_w > 0
+    out_r.append((1.0 - prob.exterior.X0_w * cdiag[:, :3])[w])
+    w = prob.exterior.angles_w > 0
+    out_r.append((1.0 - prob.exterior.angles_w * cdiag[:, 3:])[w])
+    if q:
+        w = prob.ap.w > 0
+        out_r.append((1.0 - prob.ap.w * np.diag(Faa)[:q])[w])
+    rall = np.concatenate(out_r)
+    res.redundancy_numbers = rall
+    with np.errstate(divide="ignore", invalid="ignore"):
+        wres = res.residuals / (res.sigma_obs * np.sqrt(rall))
+    res.normalized_residuals = np.where(rall > 1e-10, wres, np.nan)
+    # cofactor blocks by result block
+    p = prob.block.n_points
+    Qp_all = np.zeros((p, 3, 3))
+    Qp_all[prob.points.unknown] = Qpp
+    Qp_all[prob.block.points.role == 2] = np.nan
+    res.cofactor_groups["exterior"] = Qcc_diag
+    # Q_cc of every image pair (i ≤ k) that shares a point: key i·m + k (sorted), blocks
+    res.exterior_pairs = ExteriorPairs(S.block_i * m + S.block_k, Zblk)
+    res.cofactor_groups["points"] = Qp_all
+    if q:
+        res.cofactor_groups["additional"] = Faa[:q, :q]
+    if aux:  # redundancy numbers of the auxiliary rows, cofactors of the offsets
+        if not nb:
+            Qca, Qap, Faa = np.zeros((m, 6, 0)), np.zeros((S.n_pt, 0, 3)), np.zeros((0, 0))
+        aux.precision(res, Qcc_diag, Qpp, Qca, Qap, Faa)
+    res.redundancy_check = float(np.nansum(rall))
+    # off-diagonal (x, y) element of P½ Q_vv P½ per image observation: with the diagonal
+    # (the redundancy numbers) the 2×2 block of a ray for 2-D outlier tests
+    rxy = np.full(n, np.nan)
+    rxy[prob.obs.index] = r_xy
+    res.redundancy_xy = rxy
+    gain_e = np.full((n, 6, 2), np.nan)
+    gain_e[prob.obs.index] = Ke
+    gain_p = np.full((n, 3, 2), np.nan)
+    gain_p[prob.obs.index] = Kp
+    res.ray_gains = RayGains(gain_e, gain_p)

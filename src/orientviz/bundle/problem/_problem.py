@@ -1,0 +1,478 @@
+"""The bundle problem: its parts, its linearisation and its step.
+
+:class:`BundleProblem` holds what is constant during a bundle adjustment, composed of
+the parts in :mod:`orientviz.bundle.problem._parts`. For an iterate
+(:class:`~orientviz.bundle.problem._state.BundleState`) it computes the weighted misclosures and
+Jacobians (:meth:`BundleProblem.residuals`), vᵀPv (:meth:`~BundleProblem.cost`), the
+normal equations with the points eliminated by the Schur complement
+(:meth:`~BundleProblem.normal` → :class:`~orientviz.bundle.reduced._normal.NormalEquations`),
+the step (:meth:`~BundleProblem.solve`, bordered by additional parameters and auxiliary
+offsets) and the next iterate (:meth:`~BundleProblem.apply`). The iteration itself is
+the engine's (:func:`orientviz.adjust.engine.iterate`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ...block import Block
+from ..model._kernel import RayProjection, normalised_block, ray_jacobians
+from ..model._local_rotation import apply_local
+from ..reduced import (
+    ImageGram,
+    NormalEquations,
+    ReducedStructure,
+    back_substitute,
+    dense_schur,
+    factor_reduced,
+    inv3,
+    point_products,
+    ray_couplings,
+    schur_blocks,
+)
+from ._ap_normal import ap_normal, point_ap_term
+from ._auxiliary import BundleAuxiliary, auxiliary_rows
+from ._border import solve_border
+from ._checks import PointSetup
+from ._parts import (
+    BorderSolver,
+    additional_block,
+    exterior_block,
+    image_observations,
+    interior_orientation,
+    point_block,
+    with_var_rays,
+)
+from ._state import BundleState, wrap
+
+F64 = NDArray[np.float64]
+EXTERIOR_NAMES = ("X0", "Y0", "Z0", "omega", "phi", "kappa")
+
+
+class ParameterNames(Sequence):
+    """The names of a bundle's parameters, a sequence of str formed when first read.
+
+    ``"<image id>.<X0|Y0|Z0|omega|phi|kappa>"`` per image, ``"<point id>.<X|Y|Z>"`` per
+    point, then the additional parameters' names: the order of ``x``. A bundle needs
+    them only for a message or when a result's names are read; a block of 40 000
+    points has 130 000 of them (~10 ms to form). Compares equal to a list of the same
+    names; slices are lists.
+    """
+
+    def __init__(self, image_ids, point_ids, extra) -> None:
+        self._parts = (image_ids, point_ids, extra)
+        self._n = 6 * len(image_ids) + 3 * len(point_ids) + len(extra)
+        self._items: list[str] | None = None
+
+    def _list(self) -> list[str]:
+        if self._items is None:
+            image_ids, point_ids, extra = self._parts
+            out = [f"{i}.{n}" for i in image_ids for n in EXTERIOR_NAMES]
+            out += [f"{i}.{c}" for i in point_ids for c in ("X", "Y", "Z")]
+            self._items = out + list(extra)
+        return self._items
+
+    def __len__(self) -> int:
+        return self._n
+
+    def __getitem__(self, i):
+        return self._list()[i]
+
+    def __iter__(self):
+        return iter(self._list())
+
+    def __contains__(self, name) -> bool:
+        return name in self._list()
+
+    def index(self, name, *args) -> int:
+        return self._list().index(name, *args)
+
+    def __eq__(self, other) -> bool:
+        if isinstance(other, (ParameterNames, list, tuple)):
+            return self._list() == list(other)
+        return NotImplemented
+
+    __hash__ = None  # like a list
+
+    def __add__(self, other) -> list[str]:
+        return self._list() + list(other)
+
+    def __radd__(self, other) -> list[str]:
+        return list(other) + self._list()
+
+    def __repr__(self) -> str:
+        return repr(self._list())
+
+
+class BundleProblem:
+    """One bundle adjustment, composed of small parts (constant over the iterations).
+
+    Attributes
+    ----------
+    block : Block
+        The block (approximate values, observations).
+    setup : PointSetup
+        How each point enters (fixed, unknown, weighted).
+    obs : ImageObservations
+        The rays that enter, in point order.
+    interior : InteriorOrientation
+        c, x0, y0 per image (mm).
+    exterior : ExteriorBlock
+        Observed projection centres/attitudes (weights, values).
+    points : PointBlock
+        Point unknowns and their coordinate pseudo-observations.
+    ap : AdditionalBlock
+        Self-calibration parameters (empty: ``q == 0``).
+    aux : BundleAuxiliary or None
+        GNSS / statoscope / APR rows and their offsets/drifts.
+    reduced : ReducedStructure
+        Structure, ordering and solver of the reduced camera system.
+    border : BorderSolver
+        What the border's solve remembers between iterations.
+    n_eq, n_unknowns, redundancy : int
+        Counts of equations (observations and pseudo-observations) and unknowns.
+
+    The iterate is a :class:`~orientviz.bundle.problem._state.BundleState`; the methods take it
+    as an argument: :meth:`residuals`, :meth:`cost`, :meth:`normal` (→
+    :class:`NormalEquations`), :meth:`solve`, :meth:`apply`.
+    """
+
+    def __init__(
+        self,
+        block: Block,
+        setup: PointSetup,
+        *,
+        additional=None,
+        ap_group=None,
+        ap_sigma=None,
+        solver: str = "auto",
+        auxiliary: list | None = None,
+    ) -> None:
+        self.block = block
+        self.setup = setup
+        self.points = point_block(block, setup)
+        obs = image_observations(block, setup, self.points.column)
+        self.reduced = ReducedStructure(
+            obs.image,
+            obs.column,
+            block.n_images,
+            self.points.n,
+            solver=solver,
+            positions=block.images.X0,
+        )
+        self.obs = with_var_rays(obs, self.reduced)
+        r = self.reduced
+        #: the images' Gram matrices (U and the reduced rhs in normal())
+        self.image_gram = ImageGram(r.cam_order, r.cam_starts, r.cam_present, r.n_cam, obs.n)
+        self.interior = interior_orientation(block)
+        self.exterior = exterior_block(block)
+        self.ap = additional_block(
+            block, self.obs, self.points, self.reduced, additional, ap_group, ap_sigma
+        )
+        self.border = BorderSolver()
+        self._design_at: BundleState | None = None  # iterate of a lens model's design
+        self._projection = None  # (iterate, RayProjection) kept by residuals(keep=True)
+        #: (iterate, image coordinates (n, 2) mm of the rays without additional
+        #: parameters) of the last evaluation by the collinearity kernel (the result's
+        #: residuals reuse them)
+        self.projected: tuple | None = None
+        #: per (point, group) pairs of rays for the precision with parameters (a cache)
+        self.ray_groups = None
+        self.aux: BundleAuxiliary | None = None
+        if auxiliary:
+            self.aux = BundleAuxiliary(auxiliary_rows(auxiliary, block), self.points.column)
+        n_pseudo = int(
+            (self.points.prior_w > 0).sum()
+            + (self.exterior.X0_w > 0).sum()
+            + (self.exterior.angles_w > 0).sum()
+        )
+        n_pseudo += int((self.ap.w > 0).sum()) if self.q else 0
+        self.n_eq = 2 * self.obs.n + n_pseudo + (self.aux.rows.n if self.aux else 0)
+        self.n_unknowns = 6 * self.m + 3 * self.points.n + self.q + self.na
+        self.redundancy = self.n_eq - self.n_unknowns
+
+    @property
+    def m(self) -> int:
+        """Number of images."""
+        return self.block.n_images
+
+    @property
+    def q(self) -> int:
+        """Number of additional parameters."""
+        return self.ap.q
+
+    @property
+    def na(self) -> int:
+        """Number of auxiliary offsets/drifts."""
+        return self.aux.n_global if self.aux is not None else 0
+
+    # ----------------------------------------------------------------- model
+    def residuals(self, st: BundleState, jac: bool, local: bool = False, keep: bool = False):
+        """Weighted misclosures l − f (n, 2)·(1/σ), with Jacobians if ``jac``; ``local``:
+        by rotations of the image frame (:mod:`orientviz.bundle.model._local_rotation`).
+
+        ``keep`` (without ``jac``): the projection is kept until the next call, which
+        forms the Jacobians at the same ``st`` from it instead of projecting again.
+        """
+        if self.ap.lens is not None:
+            return self._lens_residuals(st, jac)
+        kept, self._projection = self._projection, None
+        seq = self.block.sequence
+        if kept is not None and kept[0] is st:
+            proj = kept[1]
+        else:
+            io = self.interior
+            xyz = np.take(st.xyz, self.obs.point, axis=0)
+            proj = RayProjection(st.X0, st.angles, io.c, io.x0, io.y0, self.obs.image, xyz, seq)
+        f = proj.xy
+        self.projected = (st, f)
+        if jac:
+            Je, Jp = ray_jacobians(proj, st.angles, seq, local)
+        else:
+            Je = Jp = None
+            if keep:
+                self._projection = (st, proj)
+        if self.q:
+            f = f + (self.ap.A_csr @ st.ap).reshape(-1, 2)
+        return (self.obs.xy - f) * self.obs.weight, Je, Jp
+
+    def _lens_residuals(self, st: BundleState, jac: bool):
+        """Misclosures and Jacobians through the camera model (:mod:`._lens`); with
+        ``jac`` the design of its parameters at ``st`` becomes the problem's."""
+        obs, lens = self.obs, self.ap.lens
+        nrm, Je, Jp = normalised_block(
+            st.X0, st.angles, obs.image, st.xyz[obs.point], self.block.sequence, jac
+        )
+        f, M, A = lens.evaluate(st.ap, self.ap.group[obs.image], nrm, obs.xy, jac)
+        if jac:
+            Je, Jp = M @ Je, M @ Jp
+            if self.q:
+                self.ap = self.ap.with_design(A, obs.weight)
+                self._design_at = st
+        return (obs.xy - f) * obs.weight, Je, Jp
+
+    def design_at(self, st: BundleState) -> None:
+        """Make the camera model's design the one at ``st`` (no-op for linear sets)."""
+        if self.ap.lens is not None and self.q and self._design_at is not st:
+            self._lens_residuals(st, True)
+
+    def cost(self, st: BundleState, rw: F64) -> float:
+        c = float(np.sum(rw**2))
+        d = self.points.prior_obs - np.take(st.xyz, self.points.unknown, axis=0)
+        c += float(np.sum(self.points.prior_w * d**2))
+        c += float(np.sum(self.exterior.X0_w * (self.exterior.X0_obs - st.X0) ** 2))
+        c += float(np.sum(self.exterior.angles_w * wrap(self.exterior.angles_obs - st.angles) ** 2))
+        if self.q:
+            c += float(np.sum(self.ap.w * st.ap**2))
+        if self.aux:
+            c += self.aux.cost(st.X0, st.xyz, st.g)
+        return c
+
+    # ----------------------------------------------------------------- normal equations
+    def normal(
+        self, st: BundleState, rw: F64, Je: F64, Jp: F64, lam: float = 0.0
+    ) -> NormalEquations:
+        """Blocks of the normal equations and the Schur complement (see bundle.reduced)."""
+        S = self.reduced
+        self.design_at(st)
+        sw = self.obs.weight[:, :, None]
+        # [P½J_e | r'] per ray (r' below) and a zero row: the images' Gram matrices
+        n = Je.shape[0]
+        Jz = np.empty((n + 1, 2, 7))
+        Jz[n] = 0.0
+        Jew = np.multiply(Je, sw, out=Jz[:n, :, :6])
+        Jpw = Jp * sw
+        # point rays in the order of their track lengths (._tracks); sums per point and
+        # per image by products with constant sparse incidences
+        tg = S.tracks
+        Wr, V, bp = point_products(tg, Jew, Jpw, rw, S.n_pt)
+        Vd = V.reshape(-1, 9)[:, ::4]  # the diagonals (a view)
+        Vd += self.points.prior_w
+        xyz = np.take(st.xyz, self.points.unknown, axis=0)
+        bp += self.points.prior_w * (self.points.prior_obs - xyz)
+        if self.aux:
+            self.aux.add_points(V, bp, st.X0, st.xyz, st.g)
+        diagV = Vd.copy()
+        if lam > 0:
+            Vd *= 1.0 + lam
+        Vinv = inv3(V)
+        Tr = ray_couplings(tg, Wr, Vinv)
+        # image blocks and the reduced right-hand side b_c − Σ T b_p = Σ P½J_eᵀ r' with
+        # r' = P½(l − f) − P½J_p V⁻¹ b_p per ray: one Gram matrix per image of
+        # [P½J_e | r'] (n, 2, 7) gathered by image — U and, in its last column, the rhs
+        y = np.take(np.einsum("nij,nj->ni", Vinv, bp), tg.ray_point, axis=0)
+        Jpr = tg.take(Jpw)
+        Jy = Jpr[:, :, 0] * y[:, 0, None]  # P½J_p y per ray by columns (no tiny products)
+        Jy += Jpr[:, :, 1] * y[:, 1, None]
+        Jy += Jpr[:, :, 2] * y[:, 2, None]
+        Jz[:n, :, 6] = rw
+        Jz[tg.rows, :, 6] -= Jy
+        G = self.image_gram.grams(Jz)
+        del Jz, y, Jy, Jpr
+        if not (self.q and not self.border.hold):  # the weighted Jacobians: border only
+            del Jew, Jpw  # (frees them before S is formed: the peak of a large block)
+        U = np.ascontiguousarray(G[:, :6, :6])
+        red = G[:, :6, 6].copy()
+        U[:, [0, 1, 2], [0, 1, 2]] += self.exterior.X0_w
+        red[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
+        U[:, [3, 4, 5], [3, 4, 5]] += self.exterior.angles_w
+        red[:, 3:] += self.exterior.angles_w * wrap(self.exterior.angles_obs - st.angles)
+        if self.aux:
+            self.aux.add_images(U, red, st.X0, st.xyz, st.g)
+        Ud = U.reshape(-1, 36)[:, ::7]  # the diagonals (a view)
+        diagU = Ud.copy()
+        if lam > 0:
+            Ud *= 1.0 + lam
+        r = tg.rays
+        out = NormalEquations(
+            blocks=None,
+            rhs=red.reshape(-1),
+            Vinv=Vinv,
+            Wr=Wr,
+            Tr=Tr,
+            rays=r,
+            n_obs=Je.shape[0],
+            bp=bp,
+            diagU=diagU,
+            diagV=diagV,
+        )
+        if S.formation == "dense":
+            out.blocks, out.S = dense_schur(S, U, Wr, V)
+        else:
+            out.blocks = schur_blocks(S, U, Tr, Wr)
+        if self.q:
+            if self.border.hold:
+                out.diagF = np.ones(self.q)
+            else:
+                border = self.border.border if self.border.reuse else None
+                out.ap = ap_normal(self, st, rw, Jew, Jpw, out.T, Vinv, bp, lam, border)
+                out.ap.reused = border is not None
+                out.diagF = np.diag(out.ap.F0).copy()
+                self.border.border = (out.ap.E_border, out.ap.F0)
+        if self.aux:
+            self.aux.normal(self, st, out, lam)
+        return out
+
+    def chord_normal(
+        self,
+        st: BundleState,
+        rw: F64,
+        Je: F64,
+        Jp: F64,
+        ne: NormalEquations,
+        rot: F64 | None = None,
+    ) -> NormalEquations:
+        """The right-hand sides at ``st`` with the matrix of an earlier linearisation.
+
+        For a *chord* step dx = N(x_old)⁻¹ g(x): the gradient g = Jᵀ P (l − f) at
+        ``st`` (its image and point parts, the points eliminated with ``ne``'s T), and
+        ``ne``'s point blocks, couplings and diagonals for the back-substitution and the
+        stopping rule. Plain bundles only (no border, no auxiliary rows); undamped.
+
+        ``rot`` (m, 3, 3): ``ne`` is of rotations δ of the image frames, the Jacobian of
+        ω, φ, κ with J_θ = J_δ·rot (:func:`~orientviz.bundle.model._local_rotation.angle_map`):
+        the angle rows of the images' gradient become rot⁻ᵀ g_θ (the system is then in δ,
+        its solution δ = rot·dθ), the angle part of ``diagU`` the diagonal in ω, φ, κ at
+        ``st``.
+        """
+        S = self.reduced
+        tg = S.tracks
+        rp = rw * self.obs.weight  # P (l − f) = P½ · P½ (l − f)
+        gc = np.einsum("nki,nk->ni", Je, rp)
+        bc = np.zeros((self.m, 6))
+        bc[S.cam_present] = np.add.reduceat(np.take(gc, S.cam_order, axis=0), S.cam_starts)
+        bc[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
+        bc[:, 3:] += self.exterior.angles_w * wrap(self.exterior.angles_obs - st.angles)
+        diagU = ne.diagU
+        if rot is not None:
+            Ja = np.take(Je[:, :, 3:] * self.obs.weight[:, :, None], S.cam_order, axis=0)
+            diagU = diagU.copy()
+            diagU[:, 3:] = self.exterior.angles_w
+            diagU[S.cam_present, 3:] += np.add.reduceat(np.sum(Ja * Ja, axis=1), S.cam_starts)
+            bc[:, 3:] = np.linalg.solve(rot.transpose(0, 2, 1), bc[:, 3:, None])[:, :, 0]
+        gp = np.einsum("nki,nk->ni", Jp, rp)
+        bp = tg.by_point @ tg.take(gp)
+        bp += self.points.prior_w * (
+            self.points.prior_obs - np.take(st.xyz, self.points.unknown, 0)
+        )
+        Tb = (ne.Tr @ np.take(bp, tg.ray_point, axis=0)[:, :, None])[:, :, 0]
+        red = bc - tg.by_image @ Tb
+        return NormalEquations(
+            blocks=None,
+            rhs=red.reshape(-1),
+            Vinv=ne.Vinv,
+            Wr=ne.Wr,
+            Tr=ne.Tr,
+            rays=ne.rays,
+            n_obs=ne.n_obs,
+            bp=bp,
+            diagU=diagU,
+            diagV=ne.diagV,
+        )
+
+    def solve(self, ne: NormalEquations, names: list[str], fac=None):
+        """Corrections (dc (m, 6), dp (p_var, 3), da (q,)) and the factor of S.
+
+        ``fac``: a factor of S from an earlier linearisation, used instead of factoring
+        ``ne``'s S (a *chord* step, ``ne`` from :meth:`chord_normal`; plain bundles only:
+        no border).
+        """
+        if fac is not None:
+            if self.aux or self.q:
+                raise ValueError("a chord step needs a bundle without border unknowns")
+            return self.back_substitute(ne, fac.solve(ne.rhs), np.zeros(0), fac)
+        fac = factor_reduced(self.reduced, ne.blocks, names, dense=ne.S)
+        ne.S = None  # overwritten by the factor
+        if self.aux:
+            return self.aux.solve(self, fac, ne)
+        if self.q:
+            dc, da = solve_border(self, ne, fac)
+        else:
+            dc = fac.solve(ne.rhs)
+            da = np.zeros(0)
+        return self.back_substitute(ne, dc, da, fac)
+
+    def back_substitute(self, ne: NormalEquations, dc: F64, da: F64, fac):
+        """Back-substitution of the points; returns (dc, dp, da, fac)."""
+        dc = dc.reshape(self.m, 6)
+        tg = self.reduced.tracks  # ne.Wr is in its ray order
+        ap = point_ap_term(self, ne.ap.H, da) if self.q and not self.border.hold else None
+        dp = back_substitute(tg, ne.Vinv, ne.Wr, ne.bp, dc, ap)
+        return dc, dp, da, fac
+
+    @property
+    def local_rotations_allowed(self) -> bool:
+        """Whether steps may rotate the image frames (nothing else refers to the angles)."""
+        return not (self.q or self.aux or self.ap.lens is not None) and not np.any(
+            self.exterior.angles_w > 0
+        )
+
+    def apply(self, st: BundleState, dc: F64, dp: F64, da: F64, local: bool = False) -> BundleState:
+        """The next iterate; ``local``: dc[:, 3:] are rotations δ of the image frames."""
+        xyz = st.xyz.copy()
+        xyz[self.points.unknown] = np.take(xyz, self.points.unknown, axis=0) + dp
+        if local:
+            angles = apply_local(st.angles, dc[:, 3:], self.block.sequence)
+            return BundleState(st.X0 + dc[:, :3], angles, xyz, st.ap + da, st.g)
+        if self.aux:  # da: the additional parameters, then the auxiliary offsets/drifts
+            q = self.q
+            return BundleState(
+                st.X0 + dc[:, :3], st.angles + dc[:, 3:], xyz, st.ap + da[:q], st.g + da[q:]
+            )
+        return BundleState(st.X0 + dc[:, :3], st.angles + dc[:, 3:], xyz, st.ap + da, st.g)
+
+    def names(self, exterior_only: bool = False) -> ParameterNames:
+        """The parameters' names in the order of ``x`` (``"<image id>.omega"``,
+        ``"<point id>.X"``, the additional parameters'); ``exterior_only``: the first
+        6m (the reduced system's). Formed when first read (messages, results)."""
+        b = self.block
+        if exterior_only:
+            return ParameterNames(b.images.ids, (), ())
+        return ParameterNames(b.images.ids, b.points.ids, self.ap.names if self.q else ())
+
+    def flat(self, st: BundleState) -> F64:
+        """The parameter vector of ``st`` (exterior, points, additional parameters)."""
+        return st.flat()

@@ -1,0 +1,329 @@
+"""The Schur complement of a sparse block by points grouped by their track length.
+
+S = U − Σ_j W_j V_j⁻¹ W_jᵀ gains, for a point j seen in k images, the k × k blocks of
+T_j W_jᵀ (T_j = W_j V_j⁻¹ and W_j stacked: 6k × 3). Formed pair of rays by pair, this
+is one tiny product and one reduction per pair (the code before session 6: ~60 ms on
+the bench's 2 100-image block, 112 000 rays, 237 000 pairs). Here the points are grouped
+by k: the (6k × 6k) products of all points of a group are one batched product
+(``np.matmul`` on a stack), and their sum into the blocks of S is one product with a
+constant sparse matrix that maps each 6-element row of a product to its row of a block
+of S, with the sign of the subtraction (~15 ms). The per-ray arrays of
+:meth:`orientviz.bundle.BundleProblem.normal` are formed in this ray order; its sums per
+point and per image are products with constant sparse incidence matrices.
+
+:class:`TrackGroups` holds the constant layout (formed once per problem).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+F64 = NDArray[np.float64]
+I64 = NDArray[np.int64]
+
+#: Largest product array (doubles) of one batched call; bigger groups are split.
+CHUNK_DOUBLES: int = 2**20
+
+
+@dataclass
+class TrackGroups:
+    """Rays of the point unknowns grouped by track length (constant over the iterations).
+
+    Attributes
+    ----------
+    rays : ndarray of int, shape (n_var,)
+        Observation index of every ray of a point unknown: group by group (k ascending),
+        point by point, the k rays of a point consecutive.
+    ray_point, ray_image : ndarray of int, shape (n_var,)
+        Point unknown and image of each ray in ``rays``.
+    points : ndarray of int, shape (p_var,)
+        Point unknown of each point in this order (its first ray: ``rays[first]``).
+    groups : list of (k, first ray, number of points)
+        The groups (chunks of at most :data:`CHUNK_DOUBLES` product entries).
+    by_image, by_point : scipy.sparse.csr_matrix
+        (m, n_var) and (p_var, n_var) incidences of image and ray, point and ray (sums
+        per image and per point by one sparse product).
+    in_order : bool
+        ``rays`` is 0, 1, …, n_var − 1: the observations are in this order (the bundle's
+        are, :func:`orientviz.bundle.problem._parts.image_observations`), per-ray arrays are
+        slices of the observations' arrays.
+    """
+
+    rays: I64
+    ray_point: I64
+    ray_image: I64
+    points: I64
+    groups: list
+    by_image: sp.csr_matrix
+    by_point: sp.csr_matrix
+    in_order: bool = False
+    _maps: list | None = field(default=None, repr=False)
+
+    @property
+    def rows(self) -> slice | I64:
+        """The observations of the rays in this order (a slice when ``in_order``)."""
+        return slice(0, self.rays.size) if self.in_order else self.rays
+
+    def take(self, a: F64) -> F64:
+        """The rows of ``a`` (per observation) of the rays in this order."""
+        return a[: self.rays.size] if self.in_order else np.take(a, self.rays, axis=0)
+
+    def maps(self, keys: I64, m: int) -> list:
+        """Per group a CSC matrix (6 · n_blocks, n_points · 6k · k): −1 where row r of the
+        product block (a, b) of a point (image(a) ≤ image(b)) adds into row r of S's
+        block (image(a), image(b)); ``keys`` = block_i · m + block_k of S's blocks
+        (sorted). Formed on first use (one 6-element row per pair of rays: Σ k(k+1)/2 · 6
+        entries)."""
+        if self._maps is None:
+            lookup = _block_lookup(keys, m)
+            self._maps = []
+            for k, r0, n in self.groups:
+                img = self.ray_image[r0 : r0 + n * k].reshape(n, k)
+                ascending = k > 1 and bool(np.all(img[:, 1:] > img[:, :-1]))
+                build = _ascending_group_map if ascending else _group_map
+                self._maps.append(build(img, lookup, keys.size))
+        return self._maps
+
+
+def _block_lookup(keys: I64, m: int):
+    """A function (i, k) → index of block (i, k), i ≤ k, in ``keys`` (= i·m + k, sorted):
+    a dense table (m × span) when the blocks lie within a span of image numbers (strips
+    numbered along the strips: a few hundred), else a binary search."""
+    i, k = keys // m, keys % m
+    span = int(np.max(k - i, initial=0)) + 1
+    if m * span > 2**24:
+        return lambda a, b: np.searchsorted(keys, a * m + b)
+    table = np.zeros((m, span), np.int32)
+    table[i, k - i] = np.arange(keys.size, dtype=np.int32)
+    return lambda a, b: table[a, b - a]
+
+
+def _group_map(img: I64, lookup, n_blocks: int) -> sp.csc_matrix:
+    """The map of one group (n points × k images, ``img``) into the rows of S's blocks
+    (``lookup``: :func:`_block_lookup`)."""
+    n, k = img.shape
+    # pairs (n, a, b) of rays of a point with image(a) ≤ image(b), and their blocks
+    keep = img[:, :, None] <= img[:, None, :]
+    blk = np.zeros((n, k, k), np.int32)
+    ia, ib = np.broadcast_arrays(img[:, :, None], img[:, None, :])
+    blk[keep] = lookup(ia[keep], ib[keep])
+    # the product's rows (n, a, r, b) of the (n, 6k, 6k) products viewed as (·, 6): one
+    # CSC column each, holding the row r of block blk[n, a, b] where kept
+    keep6 = np.broadcast_to(keep[:, :, None, :], (n, k, 6, k)).reshape(-1)
+    rows6 = 6 * blk[:, :, None, :] + np.arange(6, dtype=np.int32)[None, None, :, None]
+    rows = rows6.reshape(-1)[keep6]
+    indptr = np.zeros(keep6.size + 1, np.int32)
+    np.cumsum(keep6, out=indptr[1:])
+    return sp.csc_matrix((np.full(rows.size, -1.0), rows, indptr), shape=(6 * n_blocks, keep6.size))
+
+
+def _ascending_group_map(img: I64, lookup, n_blocks: int) -> sp.csc_matrix:
+    """:func:`_group_map` for points whose rays are in ascending image order (as the
+    bundle's set-up orders them): the kept pairs are a ≤ b for every point, so the map
+    is one point's pattern repeated (no masks over all n·6k² product rows; the same
+    matrix, ~3 × faster to form)."""
+    n, k = img.shape
+    iu, ju = np.triu_indices(k)
+    pair = np.zeros((k, k), np.int64)
+    pair[iu, ju] = np.arange(iu.size)
+    blk = lookup(img[:, iu], img[:, ju]).astype(np.int32)  # (n, pairs)
+    a, r, b = (
+        x.reshape(-1) for x in np.meshgrid(np.arange(k), np.arange(6), np.arange(k), indexing="ij")
+    )
+    kept = a <= b  # product rows (a, r, b) of one point, row-major in its (6k × 6k)
+    rows = 6 * blk[:, pair[a[kept], b[kept]]] + r[kept].astype(np.int32)
+    per_point = int(kept.sum())
+    before = (np.cumsum(kept) - kept).astype(np.int32)  # kept rows before each product row
+    indptr = np.empty(n * kept.size + 1, np.int32)
+    indptr[:-1] = (per_point * np.arange(n, dtype=np.int32)[:, None] + before).reshape(-1)
+    indptr[-1] = n * per_point
+    shape = (6 * n_blocks, n * kept.size)
+    return sp.csc_matrix((np.full(rows.size, -1.0), rows.reshape(-1), indptr), shape=shape)
+
+
+def track_groups(st) -> TrackGroups:
+    """The :class:`TrackGroups` of a :class:`~orientviz.bundle.reduced.ReducedStructure`."""
+    m = st.n_cam
+    k_pt = np.diff(np.append(st.pt_starts, st.pt_obs.size))
+    order = np.argsort(k_pt, kind="stable")  # points by track length
+    rays_all, groups = [], []
+    n0 = 0
+    for k in np.unique(k_pt).tolist():
+        pts_k = order[k_pt[order] == k]
+        step = max(1, CHUNK_DOUBLES // (36 * k * k))
+        for c0 in range(0, pts_k.size, step):
+            pts = pts_k[c0 : c0 + step]
+            rays_all.append(st.pt_obs[(st.pt_starts[pts][:, None] + np.arange(k)).reshape(-1)])
+            groups.append((k, n0, pts.size))
+            n0 += rays_all[-1].size
+    rays = np.concatenate(rays_all) if rays_all else np.zeros(0, np.int64)
+    ray_point, ray_image = st.obs_pt[rays], st.obs_cam[rays]
+    ones, ray = np.ones(rays.size), np.arange(rays.size)
+    by_image = sp.csr_matrix((ones, (ray_image, ray)), shape=(m, rays.size))
+    by_point = sp.csr_matrix((ones, (ray_point, ray)), shape=(st.n_pt, rays.size))
+    first = [r0 + k * np.arange(n) for k, r0, n in groups]  # first ray of each point
+    points = ray_point[np.concatenate(first)] if groups else rays
+    in_order = bool(np.array_equal(rays, np.arange(rays.size)))
+    return TrackGroups(rays, ray_point, ray_image, points, groups, by_image, by_point, in_order)
+
+
+#: Rays per chunk of :func:`point_products` (its temporaries stay in the cache).
+RAY_CHUNK: int = 8192
+
+
+#: Tracks up to this length are summed by k − 1 array additions (3–5 × faster than a
+#: reduction over the short middle axis; the same sums in the same order).
+SUM_BY_ADDS_MAX_K: int = 16
+
+
+def _sum_rays(X: F64) -> F64:
+    """Σ over axis 1 of (points, k, ...): the k rays of each point."""
+    k = X.shape[1]
+    if k > SUM_BY_ADDS_MAX_K or k < 2:
+        return X.sum(axis=1)
+    out = X[:, 0] + X[:, 1]
+    for j in range(2, k):
+        out += X[:, j]
+    return out
+
+
+def point_products(tg: TrackGroups, Jew: F64, Jpw: F64, rw: F64, n_pt: int):
+    """W = J_eᵀ P J_p per ray and the point blocks V = Σ J_pᵀ P J_p, b_p = Σ J_pᵀ P (l − f).
+
+    Parameters
+    ----------
+    tg : TrackGroups
+    Jew, Jpw : ndarray, shapes (n, 2, 6), (n, 2, 3)
+        Weighted Jacobians (P½ J) of all observations.
+    rw : ndarray, shape (n, 2)
+        Weighted misclosures P½ (l − f).
+    n_pt : int
+        Number of point unknowns.
+
+    Returns
+    -------
+    Wr : ndarray, shape (n_var, 6, 3)
+        In ``tg.rays`` order.
+    V, bp : ndarray, shapes (p_var, 3, 3), (p_var, 3)
+        In point-unknown order.
+
+    Chunks of :data:`RAY_CHUNK` rays of whole points: the rays of a point are
+    consecutive, so their sums are reshapes, and the temporaries stay small (large
+    fresh temporaries cost their page faults; a stacked product runs faster on a
+    contiguous copy of a transpose than on the view). V is summed from W's upper 3 × 3 blocks
+    (−J_pᵀ P J_p: the derivatives by X0 are those by X negated), not formed again.
+    """
+    nv = tg.rays.size
+    Wr = np.empty((nv, 6, 3))
+    V = np.empty((n_pt, 3, 3))
+    bp = np.empty((n_pt, 3))
+    p0 = 0  # points done
+    for k, r0, n in tg.groups:
+        step = max(1, RAY_CHUNK // k)
+        for c0 in range(0, n, step):
+            c1 = min(c0 + step, n)
+            a, b = r0 + k * c0, r0 + k * c1
+            if tg.in_order:  # the rays are these observations: views
+                Jer, Jpr, rwr = Jew[a:b], Jpw[a:b], rw[a:b]
+            else:
+                rr = tg.rays[a:b]
+                Jer, Jpr, rwr = (np.take(x, rr, axis=0) for x in (Jew, Jpw, rw))
+            np.matmul(np.ascontiguousarray(Jer.transpose(0, 2, 1)), Jpr, out=Wr[a:b])
+            pts = tg.points[p0 + c0 : p0 + c1]
+            # ∂/∂X0 = −∂/∂X (f depends on X − X0): W's upper 3 × 3 block is −J_pᵀ P J_p
+            V[pts] = -_sum_rays(Wr[a:b, :3].reshape(c1 - c0, k, 3, 3))
+            g = Jpr[:, 0, :] * rwr[:, 0, None] + Jpr[:, 1, :] * rwr[:, 1, None]
+            bp[pts] = _sum_rays(g.reshape(c1 - c0, k, 3))
+        p0 += n
+    return Wr, V, bp
+
+
+def ray_couplings(tg: TrackGroups, W: F64, Vinv: F64) -> F64:
+    """T = W V⁻¹ per ray (n_var, 6, 3) in ``tg.rays`` order, from W (same order) and the
+    point blocks' inverses V⁻¹ (p_var, 3, 3): per point one (6k × 3)(3 × 3) product of
+    its k rays stacked (no per-ray gather of V⁻¹; the same sums as per ray)."""
+    T = np.empty_like(W)
+    p0 = 0
+    for k, r0, n in tg.groups:
+        r1 = r0 + n * k
+        Vk = np.take(Vinv, tg.points[p0 : p0 + n], axis=0)
+        np.matmul(W[r0:r1].reshape(n, 6 * k, 3), Vk, out=T[r0:r1].reshape(n, 6 * k, 3))
+        p0 += n
+    return T
+
+
+def point_sums_wt(tg: TrackGroups, W: F64, dc: F64) -> F64:
+    """Σ over each point's rays of W_rayᵀ dc_image (p_var, 3), W (n_var, 6, 3) in
+    ``tg.rays`` order, dc (m, 6) per image: per point one (1 × 6k)(6k × 3) product."""
+    out = np.empty((tg.points.size, 3))
+    p0 = 0
+    for k, r0, n in tg.groups:
+        r1 = r0 + n * k
+        g = np.take(dc, tg.ray_image[r0:r1], axis=0).reshape(n, 1, 6 * k)
+        out[tg.points[p0 : p0 + n]] = (g @ W[r0:r1].reshape(n, 6 * k, 3))[:, 0, :]
+        p0 += n
+    return out
+
+
+def schur_blocks(st, U: F64, T: F64, W: F64) -> F64:
+    """The blocks (i ≤ k) of S = U − Σ_j T_j W_jᵀ from per-ray T, W in track order.
+
+    Parameters
+    ----------
+    st : orientviz.bundle.reduced.ReducedStructure
+        The structure (its blocks and :attr:`~ReducedStructure.tracks`).
+    U : ndarray, shape (m, 6, 6)
+        Image blocks.
+    T, W : ndarray, shape (n_var, 6, 3)
+        W V⁻¹ and W per ray, in ``st.tracks.rays`` order.
+
+    Returns
+    -------
+    ndarray, shape (n_blocks, 6, 6)
+        In the order of ``st.block_i``, ``st.block_k``.
+    """
+    tg = st.tracks
+    maps = tg.maps(st.block_i * st.n_cam + st.block_k, st.n_cam)
+    out = np.zeros((6 * st.n_blocks, 6))
+    # one buffer for the products of every chunk: reused memory (no fresh pages per call)
+    buf = np.empty(max((36 * k * k * n for k, _, n in tg.groups), default=0))
+    for (k, r0, n), M in zip(tg.groups, maps):
+        r1 = r0 + n * k
+        Tk = T[r0:r1].reshape(n, 6 * k, 3)
+        Wk = W[r0:r1].reshape(n, 6 * k, 3)
+        P = buf[: 36 * k * k * n].reshape(n, 6 * k, 6 * k)
+        np.matmul(Tk, Wk.transpose(0, 2, 1), out=P)  # all k² blocks of each point
+        out += M @ P.reshape(-1, 6)
+    blocks = out.reshape(st.n_blocks, 6, 6)
+    blocks[st.diag_block] += U
+    return blocks
+
+
+def back_substitute(
+    tg: TrackGroups, Vinv: F64, W: F64, bp: F64, dc: F64, border: F64 | None = None
+) -> F64:
+    """The point corrections dp_j = V_j⁻¹ (b_p,j − Σ_rays W_rayᵀ dc_image − t_j) (p_var, 3).
+
+    Parameters
+    ----------
+    tg : TrackGroups
+        The ray order of ``W``.
+    Vinv : ndarray, shape (p_var, 3, 3)
+        Inverse point blocks.
+    W : ndarray, shape (n_var, 6, 3)
+        Per ray J_cᵀ P J_p, in ``tg.rays`` order.
+    bp : ndarray, shape (p_var, 3)
+        The points' right-hand sides.
+    dc : ndarray, shape (m, 6)
+        The image corrections.
+    border : ndarray, shape (p_var, 3), optional
+        t_j, the term of a border's corrections (e.g. the additional parameters').
+    """
+    red = bp - point_sums_wt(tg, W, dc)
+    if border is not None:
+        red -= border
+    return np.einsum("nij,nj->ni", Vinv, red)
