@@ -175,12 +175,15 @@ class ViewerApp:
                 self._set_camera(*cam)
 
     def _set_camera(self, position: Any, look_at: Any, size: float) -> None:
+        from .geometry import VIEW_FOV
+
         cam = self.server.initial_camera
         cam.position = tuple(float(v) for v in position)
         cam.look_at = tuple(float(v) for v in look_at)
         cam.up = (0.0, 0.0, 1.0)
+        cam.fov = VIEW_FOV
         cam.near = max(size * 1e-4, 1e-3)
-        cam.far = size * 20.0
+        cam.far = size * 50.0
 
     # ------------------------------------------------------------------ messages
     def guard(self, fn: Any) -> Any:
