@@ -82,7 +82,8 @@ def collinearity(X: F64, X0: F64, R: F64, dR: F64, c: F64) -> tuple[F64, F64, F6
 
     xy = -(c / w)[:, None] * np.stack([u, v], 1)
     d_point = quotient_rule(np.transpose(R, (0, 2, 1)))  # ∂(u, v, w)/∂X = Rᵀ
-    d_angles = quotient_rule(np.stack([np.einsum("nki,nk->ni", dR[a], d) for a in range(3)], 2))
+    duvw_dangles = np.stack([np.einsum("nki,nk->ni", dR[a], d) for a in range(3)], 2)
+    d_angles = quotient_rule(duvw_dangles)  # ∂(u, v, w)/∂θ = (∂R/∂θ)ᵀ (X − X0)
     return xy, -d_point, d_angles, d_point
 
 
