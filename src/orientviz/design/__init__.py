@@ -18,6 +18,7 @@ their machinery: the normal equations, the precision and reliability are the bun
 
 from ._design import DesignAssessment, accuracy_law, assess_block, assess_design
 from ._layout import FlightDesign, design_block, set_control
+from ._live import Change, LiveDesign
 from ._quality import DesignQuality, ellipsoids
 
 __all__ = [
@@ -30,4 +31,6 @@ __all__ = [
     "assess_block",
     "assess_design",
     "ellipsoids",
+    "Change",
+    "LiveDesign",
 ]
