@@ -304,14 +304,26 @@ COMMANDS: dict[str, Command] = {
         description="Convert a COLMAP model (a folder with cameras.txt, images.txt and "
         "points3D.txt, or cameras.bin, images.bin and points3D.bin) to an orientviz/1 block "
         "problem file, keeping only keypoints matched to a 3D point; SIMPLE_PINHOLE, "
-        "PINHOLE, SIMPLE_RADIAL, RADIAL and OPENCV cameras are mapped exactly (distortion "
-        "removed with COLMAP's parameters, fx and fy kept apart); --control adds control "
-        "points from a CSV keyed by POINT3D_ID.",
-        examples=(("orientviz import-colmap sparse/0 -o block.json", "convert"),),
+        "PINHOLE, SIMPLE_RADIAL, RADIAL and OPENCV cameras are mapped exactly. By default "
+        "the file keeps COLMAP's objective: observations in COLMAP's distorted pixels, "
+        "each camera a forward lens model with focal length and distortion free as "
+        "COLMAP's bundle adjuster refines them (principal point held), sigma in pixels so "
+        "sigma0 reads as the pixel RMS; --fix-lens holds the cameras, --undistort writes "
+        "undistorted observations of distortion-free cameras instead. A point matched "
+        "twice in one image keeps its first keypoint (the count is printed). --control "
+        "adds control points from a CSV keyed by POINT3D_ID.",
+        examples=(
+            ("orientviz import-colmap sparse/0 -o block.json", "convert"),
+            ("orientviz import-colmap sparse/0 --fix-lens -o block.json", "cameras held"),
+        ),
         arguments=(
             arg("directory", help="folder of the COLMAP text model"),
+            arg("--fix-lens", action="store_true",
+                help="hold the cameras (focal length, distortion) at COLMAP's values"),
+            arg("--undistort", action="store_true",
+                help="undistorted observations, distortion-free cameras (held)"),
             *IMPORT_OPTIONS,
-        ),
+        ),  # fmt: skip
     ),
     "import-csv": Command(
         "orientviz.io.measurements",
@@ -379,11 +391,15 @@ COMMANDS: dict[str, Command] = {
             ("orientviz reproduce geier", "Geier 1973, Fig. 8: radar orientation tasks"),
             ("orientviz reproduce", "list the reproductions"),
             ("orientviz reproduce kovarik --json", "as JSON"),
+            ("orientviz reproduce kovarik --wide", "one line per row (wider than 100 columns)"),
         ),
         arguments=(
             arg("name", nargs="?", default=None, help="reproduction (omit to list them)"),
             arg("--json", action="store_true", help="print the rows as JSON"),
-        ),
+            arg("--wide", action="store_true",
+                help="one line per row however long (default: blocks wrapped to 100 columns "
+                "when the table is wider)"),
+        ),  # fmt: skip
     ),
 }
 
@@ -462,7 +478,7 @@ def run_reproduce(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps([r.as_dict() for r in rows], indent=1, default=str))
     else:
-        print(reproduce.format_rows(rows))
+        print(reproduce.format_rows(rows, None if getattr(args, "wide", False) else 100))
     return 0
 
 

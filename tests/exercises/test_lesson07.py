@@ -25,6 +25,11 @@ def test_diagnoses_name_the_mistake():
         lesson07,
         answers,
         {
+            (
+                "check_similarity_gn",
+                "r_nobs",
+            ): "the redundancy is the number of control coordinates",
+            ("check_similarity_gn", "no_sqrt"): "square root is missing",
             ("check_similarity", "transpose"): "Rᵀ",
             ("check_similarity", "no reflection fix"): "det",
             ("check_similarity", "symmetric scale"): "symmetric scale",

@@ -90,7 +90,7 @@ CAMERAS = {
 def test_cameras_map_exactly_onto_orientvizs_projection(tmp_path, model):
     params = CAMERAS[model]
     d, X, truth = _scene(tmp_path, model, params, rng=3)
-    block = read_colmap(d)
+    block = read_colmap(d, lens="undistort")
     fx = params.get("fx", params.get("f"))
     assert block.cameras.c[0] == pytest.approx(fx * PX)  # never an average of fx and fy
     assert len(block.observations) == 3 * len(X)  # the unmatched keypoints are gone
@@ -118,11 +118,11 @@ def test_binary_and_text_give_the_same_block(tmp_path):
 def test_write_then_read_round_trips_a_simulated_block(tmp_path):
     sim = ov.simulate_block(2, 4, rng=2).block
     write_colmap(sim, tmp_path)
-    back = read_colmap(tmp_path)
+    back = read_colmap(tmp_path, lens="undistort")
     assert np.allclose(back.observations.xy, sim.observations.xy, atol=1e-6)
     b = tmp_path / "bin"
     write_binary_model(read_text_model(tmp_path), b)
-    assert np.array_equal(read_colmap(b).observations.xy, back.observations.xy)
+    assert np.array_equal(read_colmap(b, lens="undistort").observations.xy, back.observations.xy)
 
 
 def test_a_truncated_binary_file_names_the_byte(tmp_path):

@@ -207,3 +207,62 @@ def check_sigma_scale(sigma_scale: Callable[[F64, float], float]) -> None:
             ],
         )
     success("σ_m = σ / √Σ|x̃|²: at the centroid the scale is uncorrelated with T and R")
+
+
+def _partial_control(rng: np.random.Generator):
+    """A model with full, planimetric and height control points, unequal σ, and a poor start."""
+    x, m, R, T = _model(rng, 8)
+    sigma = np.tile([0.05, 0.05, 0.03], (8, 1)) * rng.uniform(0.5, 2.0, (8, 1))
+    X = T + m * x @ R.T + rng.normal(0.0, 1.0, x.shape) * sigma
+    observed = np.ones((8, 3), bool)
+    observed[[1, 5], 2] = False  # planimetric control
+    observed[[2, 6], :2] = False  # height control
+    start = (m * 1.02, _rotvec(np.array([0.02, -0.015, 0.03])) @ R, T + [3.0, -2.0, 1.5])
+    return x, X, sigma, observed, start, (m, R, T)
+
+
+def _gn_oracle(x, X, sigma, observed):
+    """The weighted least-squares similarity by scipy's minimiser (near the origin)."""
+    off = np.round(X[0])
+    w = observed / sigma
+
+    def resid(q: F64) -> F64:
+        return (w * (q[:3] + q[6] * x @ _rotvec(q[3:6]).T - (X - off))).ravel()
+
+    xc, Xc = x - x.mean(0), X - X.mean(0)
+    U, S, Vt = np.linalg.svd(xc.T @ Xc)
+    R0 = Vt.T @ np.diag([1, 1, np.linalg.det(Vt.T @ U.T)]) @ U.T
+    m0 = float(np.sqrt((Xc**2).sum() / (xc**2).sum()))
+    q = np.r_[X.mean(0) - m0 * R0 @ x.mean(0) - off, _rotvec_of(R0), m0]
+    for _ in range(3):
+        q = least_squares(resid, q, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15).x
+    v = resid(q)[observed.ravel()]
+    return q[6], _rotvec(q[3:6]), q[:3] + off, float(np.sqrt(v @ v / (observed.sum() - 7)))
+
+
+def check_similarity_gn(fn: Callable) -> None:
+    """``fn(x, X, sigma, observed, start) -> (m, R, T, sigma0)``: the weighted least-squares
+    similarity X ≈ T + m R x by Gauss-Newton from ``start = (m, R, T)``, using only the control
+    coordinates marked in ``observed`` (n, 3) with their σ (n, 3) m; σ̂0 with r = n_obs − 7."""
+    rng = rng_for("lesson07.check_similarity_gn")
+    x, X, sigma, observed, start, _ = _partial_control(rng)
+    got = call(fn, x.copy(), X.copy(), sigma.copy(), observed.copy(),
+               (start[0], start[1].copy(), start[2].copy()), what="similarity_gn")  # fmt: skip
+    if not isinstance(got, tuple) or len(got) != 4:
+        raise CheckFailed("similarity_gn: return (m, R, T, sigma0)")
+    m, R, T, s0 = got
+    wm, wR, wT, ws0 = _gn_oracle(x, X, sigma, observed)
+    compare("m", float(m), wm, rtol=1e-8)
+    compare("R", np.asarray(R, float), wR, rtol=1e-7, wrong=[
+        ("this is Rᵀ: R turns model into object vectors", wR.T),
+    ])  # fmt: skip
+    compare("T [m]", np.asarray(T, float), wT, rtol=1e-7, scale=1000.0)
+    n_obs = int(observed.sum())
+    compare("σ̂0", float(s0), ws0, rtol=1e-7, wrong=[
+        (f"the redundancy is the number of control coordinates ({n_obs}) − 7, not {n_obs}",
+         ws0 * np.sqrt((n_obs - 7) / n_obs)),
+        ("the square root is missing", ws0**2),
+    ])  # fmt: skip
+    success(
+        f"m, R, T and σ̂0 = {ws0:.3f} of partial control ({n_obs} coordinates) as scipy's minimiser finds them"
+    )

@@ -38,13 +38,12 @@ from numpy.typing import NDArray
 from ..block import CHECK, CONTROL, Block
 from ..errors import InputError
 from ..rotation import opk_from_matrix
-from .colmap_text import CAMERA_MODELS, ColmapCamera, ColmapModel, read_text_model
+from .colmap_text import CAMERA_MODELS, ColmapModel, read_text_model
+from .colmap_undistort import normalised
 
 __all__ = ["CAMERA_MODELS", "block_from_colmap", "read_colmap", "write_colmap"]
 
 FLIP = np.diag([1.0, -1.0, -1.0])
-#: The undistortion of an observation is iterated until it changes by less than this (px).
-UNDISTORT_TOL_PX: float = 1e-10
 
 
 def _rotation_cw(q: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -60,126 +59,47 @@ def _rotation_cw(q: NDArray[np.float64]) -> NDArray[np.float64]:
     )
 
 
-def _coefficients(cam: ColmapCamera) -> tuple[float, float, float, float]:
-    """k1, k2, p1, p2 of COLMAP's distortion (zeros where the model has none)."""
-    p = cam.named()
-    return p.get("k", p.get("k1", 0.0)), p.get("k2", 0.0), p.get("p1", 0.0), p.get("p2", 0.0)
-
-
-def _distort(cam: ColmapCamera, x: NDArray[np.float64], y: NDArray[np.float64]):
-    """COLMAP's forward distortion of normalised coordinates ``x``, ``y`` (x right, y
-    down): ``xd, yd`` and the terms ``r2``, ``radial`` that :func:`_jacobian` needs."""
-    k1, k2, p1, p2 = _coefficients(cam)
-    r2 = x * x + y * y
-    radial = 1.0 + k1 * r2 + k2 * r2 * r2
-    xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
-    yd = y * radial + 2 * p2 * x * y + p1 * (r2 + 2 * y * y)
-    return xd, yd, r2, radial
-
-
-def _jacobian(cam: ColmapCamera, x, y, r2, radial):
-    """∂x_d/∂x, ∂x_d/∂y, ∂y_d/∂x, ∂y_d/∂y of :func:`_distort` at ``x``, ``y``."""
-    k1, k2, p1, p2 = _coefficients(cam)
-    g = 2.0 * (k1 + 2.0 * k2 * r2)
-    return (radial + g * x * x + 2 * p1 * y + 6 * p2 * x, g * x * y + 2 * p1 * x + 2 * p2 * y,
-            g * x * y + 2 * p2 * y + 2 * p1 * x, radial + g * y * y + 2 * p2 * x + 6 * p1 * y)  # fmt: skip
-
-
-#: Observations undistorted per batch (bounds the temporaries of the Newton iteration).
-UNDISTORT_BATCH: int = 1 << 16
-
-
-def normalised(cam: ColmapCamera, uv: NDArray[np.float64], source: str = "") -> NDArray[np.float64]:
-    """Undistorted normalised coordinates (x right, y down) of pixel observations ``uv``.
-
-    ``(u − cx)/fx, (v − cy)/fy`` with COLMAP's distortion (SIMPLE_RADIAL, RADIAL,
-    OPENCV) inverted by Newton's method (analytic 2 × 2 Jacobian) to
-    :data:`UNDISTORT_TOL_PX` (px), in batches of :data:`UNDISTORT_BATCH`; an observation
-    that does not converge raises ``InputError`` (distortion too strong to invert there).
-    """
-    p = cam.named()
-    fx, fy = p.get("fx", p.get("f")), p.get("fy", p.get("f"))
-    out = np.empty_like(uv, dtype=float)
-    distorted = any(_coefficients(cam))
-    tol = UNDISTORT_TOL_PX / max(fx, fy)
-    for a in range(0, len(out), UNDISTORT_BATCH):  # batches: temporaries stay in the cache
-        dx = (uv[a : a + UNDISTORT_BATCH, 0] - p["cx"]) / fx
-        dy = (uv[a : a + UNDISTORT_BATCH, 1] - p["cy"]) / fy
-        if not distorted:
-            out[a : a + UNDISTORT_BATCH, 0] = dx
-            out[a : a + UNDISTORT_BATCH, 1] = dy
-            continue
-        x, y = _undistort(cam, dx, dy, tol)
-        xd, yd, _, _ = _distort(cam, x, y)
-        bad = np.flatnonzero(
-            (np.abs(xd - dx) >= tol) | (np.abs(yd - dy) >= tol) | ~np.isfinite(x) | ~np.isfinite(y)
-        )
-        if bad.size:
-            u = uv[a + bad[0]]
-            raise InputError(
-                f"{cam.model} camera: the lens distortion cannot be inverted at pixel "
-                f"({u[0]:.1f}, {u[1]:.1f}) ({bad.size} observation(s))",
-                source=source,
-            )
-        out[a : a + UNDISTORT_BATCH, 0] = x
-        out[a : a + UNDISTORT_BATCH, 1] = y
-    return out
-
-
-def _undistort(cam: ColmapCamera, dx, dy, tol: float):
-    """Newton's method for the normalised coordinates whose distortion is ``dx``, ``dy``.
-
-    Starts at the distorted coordinates; an observation stops moving once its distortion
-    is within ``tol`` of the target (at most 30 steps); the others are stepped on alone.
-    """
-    x, y = dx.copy(), dy.copy()
-    at = np.arange(dx.size)  # the observations still moving, and their values
-    ax, ay, tx, ty = x, y, dx, dy
-    for _ in range(30):
-        xd, yd, r2, radial = _distort(cam, ax, ay)
-        fx_, fy_ = xd - tx, yd - ty
-        done = (np.abs(fx_) < tol) & (np.abs(fy_) < tol)
-        if done.all():
-            break
-        if done.any():
-            go = ~done
-            at, ax, ay, tx, ty = at[go], ax[go], ay[go], tx[go], ty[go]
-            fx_, fy_, r2, radial = fx_[go], fy_[go], r2[go], radial[go]
-        a11, a12, a21, a22 = _jacobian(cam, ax, ay, r2, radial)
-        det = a11 * a22 - a12 * a21
-        det = np.where(np.abs(det) < 1e-12, 1e-12, det)
-        ax = ax - (a22 * fx_ - a12 * fy_) / det
-        ay = ay - (-a21 * fx_ + a11 * fy_) / det
-        x[at], y[at] = ax, ay
-    return x, y
-
-
 def block_from_colmap(
-    model: ColmapModel, *, pixel_size_mm: float = 0.01, sigma_px: float = 1.0, sequence: str = "opk"
+    model: ColmapModel,
+    *,
+    pixel_size_mm: float = 0.01,
+    sigma_px: float = 1.0,
+    sequence: str = "opk",
+    lens: str = "refine",
 ) -> Block:
     """Convert a :class:`ColmapModel` (text or binary) into a Block, exactly.
 
-    Each camera becomes a distortion-free camera with c = fx · p and the principal point
-    at the origin: observations are undistorted (COLMAP's own distortion model, fixed
-    parameters) and expressed as x = x_n · c, y = −y_n · c (mm). A camera with fx ≠ fy
-    (PINHOLE, OPENCV) keeps its affinity exactly: y_n = (v − cy)/fy carries it, so the
-    y-coordinates are in units of fx (σ_y = σ_px · p · fx/fy); nothing is averaged.
-    The COLMAP parameters are kept in ``block.meta["colmap_cameras"]``.
+    ``lens="refine"`` (default) or ``"fixed"``: COLMAP's objective
+    (:mod:`orientviz.io.colmap_lens`): the observations stay COLMAP's distorted pixels
+    (x = u·p, y = −v·p mm from the upper-left corner), each camera is a forward lens
+    model with COLMAP's parameters, free as COLMAP's bundle adjuster refines them
+    (``"refine"``) or held (``"fixed"``). ``lens="undistort"``: each camera becomes a
+    distortion-free camera with c = fx · p and the principal point at the origin:
+    observations are undistorted (COLMAP's own distortion model, fixed parameters) and
+    expressed as x = x_n · c, y = −y_n · c (mm); a camera with fx ≠ fy keeps its
+    affinity exactly: y_n = (v − cy)/fy carries it, so the y-coordinates are in units of
+    fx (σ_y = σ_px · p · fx/fy); nothing is averaged.
+
+    Only the cameras some image uses are kept. A 3D point matched to two keypoints of
+    one image keeps the first (:func:`~orientviz.io.colmap_lens.repeated_observations`;
+    ``meta["colmap_repeated"]`` = (count left out, largest distance px)). The COLMAP
+    parameters are kept in ``block.meta["colmap_cameras"]``.
     """
+    from .colmap_lens import LENS_MODES, repeated_observations
+
+    if lens not in LENS_MODES:
+        raise InputError(f"lens: expected one of {', '.join(LENS_MODES)}, got {lens!r}")
     cams = model.cameras
-    cam_ids = sorted(cams)
+    cam_ids = sorted(set(int(c) for c in model.image_camera))
     cam_index = {c: i for i, c in enumerate(cam_ids)}
-    q = model.qvec
-    norm = np.linalg.norm(q, axis=1)
-    if np.any(~((norm > 0.5) & (norm < 2.0))):
-        k = int(np.flatnonzero(~((norm > 0.5) & (norm < 2.0)))[0])
-        raise InputError(
-            f"image {model.names[k]!r}: quaternion is not normalised",
-            source=model.source.get("images", ""),
-        )
-    Rcw = _rotation_cw(q / norm[:, None])
-    X0 = -np.einsum("nji,nj->ni", Rcw, model.tvec)
-    R = np.transpose(Rcw, (0, 2, 1)) @ FLIP
+    keep, far = repeated_observations(model.obs_image, model.obs_point, model.obs_uv)
+    repeated = (model.obs_image.size - keep.size, far)
+    if repeated[0]:
+        model.obs_image, model.obs_point = model.obs_image[keep], model.obs_point[keep]
+        model.obs_uv = model.obs_uv[keep]
+    if lens != "undistort":
+        return _distorted_block(model, cam_ids, pixel_size_mm, sigma_px, sequence, lens, repeated)
+    X0, angles = _poses(model, sequence)
     cam_arr = np.array([cam_index[int(c)] for c in model.image_camera], dtype=np.int64)
     n = model.obs_image.size
     xy = np.empty((n, 2))
@@ -211,7 +131,7 @@ def block_from_colmap(
         camera_ids=[str(c) for c in cam_ids],
         image_camera=cam_arr,
         X0=X0,
-        angles=np.column_stack(opk_from_matrix(R, sequence)).reshape(-1, 3),
+        angles=angles,
         image_ids=ids,
         xyz=model.xyz.reshape(-1, 3),
         point_ids=list(map(str, model.point_ids.tolist())),
@@ -226,6 +146,8 @@ def block_from_colmap(
             "pixel_size_mm": pixel_size_mm,
             "image_names": names,
             "colmap_image_ids": model.image_ids.tolist(),
+            "colmap_repeated": list(repeated),
+            "lens": "undistort",
             "colmap_cameras": {
                 str(c): {
                     "model": cams[c].model,
@@ -239,12 +161,88 @@ def block_from_colmap(
     )
 
 
+def _poses(model: ColmapModel, sequence: str):
+    """X0 (m, 3) and ω, φ, κ (m, 3) of COLMAP's world → camera poses."""
+    q = model.qvec
+    norm = np.linalg.norm(q, axis=1)
+    if np.any(~((norm > 0.5) & (norm < 2.0))):
+        k = int(np.flatnonzero(~((norm > 0.5) & (norm < 2.0)))[0])
+        raise InputError(
+            f"image {model.names[k]!r}: quaternion is not normalised",
+            source=model.source.get("images", ""),
+        )
+    Rcw = _rotation_cw(q / norm[:, None])
+    X0 = -np.einsum("nji,nj->ni", Rcw, model.tvec)
+    R = np.transpose(Rcw, (0, 2, 1)) @ FLIP
+    return X0, np.column_stack(opk_from_matrix(R, sequence)).reshape(-1, 3)
+
+
+def _distorted_block(model, cam_ids, pixel_mm, sigma_px, sequence, lens, repeated) -> Block:
+    """The block of COLMAP's objective: distorted pixels, forward lens models."""
+    from .colmap_lens import forward_camera
+
+    cams = model.cameras
+    kinds = {cams[c].model for c in cam_ids}
+    if lens == "refine" and len(kinds) > 1:
+        raise InputError(
+            f"the cameras are of different COLMAP models ({', '.join(sorted(kinds))}): "
+            "one free parameter set per block; give --fix-lens (cameras held) or "
+            "--undistort",
+            source=model.source.get("cameras", ""),
+        )
+    io = [forward_camera(cams[c].model, cams[c].named(), pixel_mm, lens) for c in cam_ids]
+    cam_index = {c: i for i, c in enumerate(cam_ids)}
+    X0, angles = _poses(model, sequence)
+    names = list(model.names)
+    ids = names if len(set(names)) == len(names) else [str(i) for i in model.image_ids]
+    block = Block.from_arrays(
+        camera_c=[v[0] for v in io],
+        camera_x0=[v[1] for v in io],
+        camera_y0=[v[2] for v in io],
+        camera_format_mm=[(cams[c].width * pixel_mm, cams[c].height * pixel_mm) for c in cam_ids],
+        camera_ids=[str(c) for c in cam_ids],
+        image_camera=np.array([cam_index[int(c)] for c in model.image_camera], dtype=np.int64),
+        X0=X0,
+        angles=angles,
+        image_ids=ids,
+        xyz=model.xyz.reshape(-1, 3),
+        point_ids=list(map(str, model.point_ids.tolist())),
+        obs_image=model.obs_image,
+        obs_point=model.obs_point,
+        obs_xy=model.obs_uv * [pixel_mm, -pixel_mm],
+        obs_sigma=sigma_px * pixel_mm,
+        sequence=sequence,
+        meta={
+            "source": model.source.get("directory", ""),
+            "format": model.source.get("format", ""),
+            "pixel_size_mm": pixel_mm,
+            "image_origin": "corner",
+            "lens": lens,
+            "image_names": names,
+            "colmap_image_ids": model.image_ids.tolist(),
+            "colmap_repeated": list(repeated),
+            "colmap_cameras": {
+                str(c): {
+                    "model": cams[c].model,
+                    "width": cams[c].width,
+                    "height": cams[c].height,
+                    "params": cams[c].params.tolist(),
+                }
+                for c in cam_ids
+            },  # fmt: skip
+        },
+    )
+    block.cameras.model = [v[3] for v in io]
+    return block
+
+
 def read_colmap(
     directory: str | Path,
     *,
     pixel_size_mm: float = 0.01,
     sigma_px: float = 1.0,
     sequence: str = "opk",
+    lens: str = "refine",
 ) -> Block:
     """Read a COLMAP model (text or binary) into a Block.
 
@@ -260,6 +258,11 @@ def read_colmap(
         A-priori σ of the image coordinates in pixels.
     sequence : {"opk", "pok"}
         Rotation sequence for the returned angles.
+    lens : {"refine", "fixed", "undistort"}
+        COLMAP's objective (distorted pixels) with the cameras' focal length and
+        distortion free as COLMAP's bundle adjuster refines them (default) or held, or
+        undistorted observations of distortion-free cameras (see
+        :func:`block_from_colmap`).
 
     Returns
     -------
@@ -283,7 +286,7 @@ def read_colmap(
         model = read_binary_model(d)
     model.source["directory"] = str(d)
     return block_from_colmap(
-        model, pixel_size_mm=pixel_size_mm, sigma_px=sigma_px, sequence=sequence
+        model, pixel_size_mm=pixel_size_mm, sigma_px=sigma_px, sequence=sequence, lens=lens
     )
 
 
@@ -304,9 +307,14 @@ def write_colmap(
         "# Camera list with one line of data per camera:",
         "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]",
     ]
+    corner = _corner_origin(block)
     for i in range(len(cams)):
         w = int(round(cams.format_mm[i, 0] / p))
         h = int(round(cams.format_mm[i, 1] / p))
+        if corner:
+            kind, params = _forward_colmap(block, i, p)
+            lines.append(f"{i + 1} {kind} {w} {h} " + " ".join(f"{v:.17g}" for v in params))
+            continue
         f = cams.c[i] / p
         cx = w / 2 + cams.x0[i] / p
         cy = h / 2 - cams.y0[i] / p
@@ -334,8 +342,8 @@ def write_colmap(
         cam = block.images.camera[i]
         w = cams.format_mm[cam, 0] / p
         h = cams.format_mm[cam, 1] / p
-        cx = w / 2 + cams.x0[cam] / p
-        cy = h / 2 - cams.y0[cam] / p
+        cx = 0.0 if corner else w / 2 + cams.x0[cam] / p
+        cy = 0.0 if corner else h / 2 - cams.y0[cam] / p
         name = names[i]
         lines.append(
             f"{i + 1} {qw:.12g} {qx:.12g} {qy:.12g} {qz:.12g} {t[0]:.12g} {t[1]:.12g} {t[2]:.12g} {cam + 1} {name}"
@@ -343,8 +351,8 @@ def write_colmap(
         sel = order[starts[i] : starts[i + 1]]
         parts = []
         for k2, j in enumerate(sel):
-            u = obs.xy[j, 0] / p + cx - cams.x0[cam] / p
-            v = -obs.xy[j, 1] / p + cy + cams.y0[cam] / p
+            u = obs.xy[j, 0] / p + (0.0 if corner else cx - cams.x0[cam] / p)
+            v = -obs.xy[j, 1] / p + (0.0 if corner else cy + cams.y0[cam] / p)
             parts.append(f"{u:.6f} {v:.6f} {pids[obs.point[j]]}")
             track.setdefault(int(obs.point[j]), []).append((i + 1, k2))
         lines.append(" ".join(parts))
@@ -363,6 +371,34 @@ def write_colmap(
     tmp["points3D.txt"] = "\n".join(lines) + "\n"
     for name, text in tmp.items():  # write each file atomically
         write_atomic(d / name, text)
+
+
+def _forward_colmap(block: Block, i: int, p: float) -> tuple[str, list[float]]:
+    """COLMAP model name and parameters (px) of camera ``i`` of a block in COLMAP's pixel
+    frame: its forward lens model in the COLMAP model it was imported from (else OPENCV,
+    or PINHOLE without distortion)."""
+    from .colmap_lens import colmap_model_of, colmap_params
+
+    cams = block.cameras
+    models = list(getattr(cams, "model", None) or [])
+    spec = models[i] if i < len(models) else {}
+    if spec and spec.get("model") != "forward":
+        raise InputError(f"camera {cams.ids[i]!r}: COLMAP cameras have the forward model")
+    values = dict(spec.get("values", {})) if spec else {}
+    known = block.meta.get("colmap_cameras", {}).get(str(cams.ids[i]), {})
+    kind = known.get("model") or colmap_model_of(values)
+    return kind, colmap_params(kind, cams.c[i], cams.x0[i], cams.y0[i], values, p)
+
+
+def _corner_origin(block: Block) -> bool:
+    """Whether the block's image coordinates are COLMAP's pixel frame (origin at the
+    upper-left corner: x ≥ 0, y ≤ 0 mm, as ``units.image = "px"`` reads pixels): said by
+    ``meta["image_origin"]`` (import), else seen in the observations and principal points."""
+    if "image_origin" in block.meta:
+        return block.meta["image_origin"] == "corner"
+    xy, cams = block.observations.xy, block.cameras
+    return bool(xy.size and np.all(xy[:, 0] >= 0) and np.all(xy[:, 1] <= 0)
+                and np.all(cams.x0 > 0) and np.all(cams.y0 < 0))  # fmt: skip
 
 
 def _image_names(block: Block) -> list[str]:
@@ -387,12 +423,29 @@ def _point3d_ids(block: Block) -> list[int]:
 
 
 def run_from_cli(args: argparse.Namespace) -> int:
-    """``orientviz import-colmap DIR -o OUT.json [--control CSV]``: COLMAP text → problem file."""
+    """``orientviz import-colmap DIR -o OUT.json [--fix-lens | --undistort] [--control CSV]``."""
     from .importing import import_to_problem
 
+    lens = "undistort" if getattr(args, "undistort", False) else (
+        "fixed" if getattr(args, "fix_lens", False) else "refine")  # fmt: skip
+    notes = {
+        "refine": "; COLMAP's objective (distorted pixels), focal length and distortion free "
+        "as COLMAP refines them (--fix-lens holds them)",
+        "fixed": "; COLMAP's objective (distorted pixels), cameras held (--fix-lens)",
+        "undistort": "; observations undistorted with COLMAP's cameras, held (--undistort)",
+    }
+
+    def read(px: float, sig: float) -> Block:
+        block = read_colmap(args.directory, pixel_size_mm=px, sigma_px=sig, lens=lens)
+        n, far = block.meta["colmap_repeated"]
+        if n:
+            notes[lens] += (
+                f"; {n} observation(s) of a point already seen in the same image left out "
+                f"(the first keypoint kept; the others lay up to {far:.3g} px from it)"
+            )
+        return block
+
     return import_to_problem(
-        args,
-        lambda px, sig: read_colmap(args.directory, pixel_size_mm=px, sigma_px=sig),
-        Path(args.directory).resolve().name,
-        default_pixel_mm=0.01,
-    )
+        args, read, Path(args.directory).resolve().name, default_pixel_mm=0.01,
+        pixel_units=lens != "undistort", lens_note_of=lambda: notes[lens],
+    )  # fmt: skip

@@ -26,6 +26,7 @@ def import_to_problem(
     options: dict | None = None,
     pixel_units: bool = False,
     lens_note: str = "",
+    lens_note_of: Callable[[], str] | None = None,
 ) -> int:
     """Read (``read(pixel_size_mm, sigma_px)``), add control, write ``args.output``.
 
@@ -33,7 +34,8 @@ def import_to_problem(
     ``args.pixel_size`` (mm), ``args.sigma_px`` (px). ``options`` go into the file's
     ``options``; ``pixel_units`` writes the image quantities in pixels (``units.image =
     "px"``, angles in degrees: the units SfM users read) instead of mm and gon;
-    ``lens_note`` is appended to the one-line summary. Returns the exit code.
+    ``lens_note`` (or ``lens_note_of()`` after reading) is appended to the one-line
+    summary. Returns the exit code.
     """
     from .control import apply_control, read_control
     from .problem import Units, write_problem
@@ -62,7 +64,8 @@ def import_to_problem(
             )
         print(f"{prog}: {exc.one_line()}", file=sys.stderr)
         return 2
-    print(f"wrote {args.output}: {block.summary()} (pixel size {px} mm){lens_note}")
+    note = lens_note_of() if lens_note_of is not None else lens_note
+    print(f"wrote {args.output}: {block.summary()} (pixel size {px} mm){note}")
     hint = datum_hint(block, args.output)
     if hint:
         print(hint)

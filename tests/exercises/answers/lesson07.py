@@ -45,7 +45,35 @@ def _sol_sigma_scale(x, sigma):
     return sigma / np.sqrt(((x - x.mean(0)) ** 2).sum())
 
 
+def _similarity_gn(x, X, sigma, observed, start, tol=1e-10, max_iter=20, mistake=None):
+    m, R, T = start
+    rows = observed.ravel()
+    p = 1.0 / sigma.ravel()[rows] ** 2
+    if mistake == "no_weights":
+        p = np.ones_like(p)
+    if mistake == "one_step":
+        max_iter = 1
+    for _ in range(max_iter):
+        A = _sol_design(x, m, R)[rows]
+        dl = (X - (T + m * x @ R.T)).ravel()[rows]  # observed − computed
+        N = A.T @ (p[:, None] * A)
+        dx = np.linalg.solve(N, A.T @ (p * dl))
+        T = T + dx[:3]
+        a = dx[3:6]  # small rotation about the object axes
+        angle = np.linalg.norm(a)
+        K = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]]) / max(angle, 1e-300)
+        R = (np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K) @ R  # Rodrigues
+        m = m + dx[6]
+        if np.max(np.abs(dx) * np.sqrt(np.diag(N))) < tol:
+            break
+    v = (T + m * x @ R.T - X).ravel()[rows]
+    r = rows.sum() if mistake == "r_nobs" else rows.sum() - 7
+    s0 = v @ (p * v) / r if mistake == "no_sqrt" else np.sqrt(v @ (p * v) / r)
+    return m, R, T, s0
+
+
 SOLUTIONS = {
+    "check_similarity_gn": _similarity_gn,
     "check_similarity": _sol_similarity,
     "check_model_coordinates": _sol_model,
     "check_design": _sol_design,
@@ -53,6 +81,10 @@ SOLUTIONS = {
 }
 
 MUTANTS = {
+    "check_similarity_gn": {
+        k: (lambda *a, k=k: _similarity_gn(*a, mistake=k))
+        for k in ("no_weights", "one_step", "r_nobs", "no_sqrt")
+    },
     "check_similarity": {
         "transpose": lambda x, X: _sol_similarity(x, X, transpose=True),
         "no reflection fix": lambda x, X: _sol_similarity(x, X, fix=False),
