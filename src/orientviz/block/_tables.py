@@ -453,11 +453,11 @@ class Block:
         )
 
     def summary(self) -> str:
-        """One line: counts of cameras, images, points by role and observations."""
+        """One line: counts of cameras, images, points by role and image points (rays)."""
         r = np.bincount(self.points.role, minlength=3)
         return (
             f"{len(self.cameras)} camera(s), {self.n_images} images, {self.n_points} points "
-            f"({r[0]} tie, {r[1]} control, {r[2]} check), {self.n_observations} observations"
+            f"({r[0]} tie, {r[1]} control, {r[2]} check), {self.n_observations} image points"
         )
 
 

@@ -41,13 +41,7 @@ from ._lens import (
     evaluate_lens,
     lens_model,
 )
-from ._local_rotation import (
-    LOCAL_MIN_CORRECTION,
-    LOCAL_SIGMA0,
-    angle_map,
-    apply_local,
-    frame_axials,
-)
+from ._local_rotation import angle_map, apply_local, frame_axials
 
 __all__ = [
     "AdditionalParameters",
@@ -70,8 +64,6 @@ __all__ = [
     "evaluate_lens",
     "BACKWARD_NAMES",
     "FORWARD_NAMES",
-    "LOCAL_MIN_CORRECTION",
-    "LOCAL_SIGMA0",
     "angle_map",
     "apply_local",
     "frame_axials",
