@@ -29,6 +29,9 @@ def test_diagnoses_name_the_mistake():
         lesson05,
         answers,
         {
+            ("check_kovarik_iteration", "one_step"): "one linear solution is not the iteration",
+            ("check_kovarik_iteration", "sign"): "runs away",
+            ("check_kovarik_iteration", "R_transposed"): "runs away",
             ("check_design", "y'' - y'"): "opposite sign",
             ("check_design", "Kovarik signs"): "Kovarik",
             ("check_six_point", "degrees"): "degrees",

@@ -21,7 +21,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from ._common import call, compare, rng_for, success
+from ._common import CheckFailed, call, compare, rng_for, success
 from .lesson02 import _rodrigues_opk
 
 __all__ = [
@@ -218,3 +218,47 @@ def check_scheme_sigma(scheme_sigma: Callable[[F64, F64, F64, float, float], F64
     ]
     compare("σ of (by, bz, ω, φ, κ)", got, truth, rtol=1e-5, wrong=wrong)
     success("scheme precision: σ √diag((AᵀA)⁻¹)")
+
+
+def check_kovarik_iteration(fn: Callable) -> None:
+    """``fn(xy1, xy2, c, b) -> (elements, steps)``: the whole iteration of the dependent relative
+    orientation — rigorous y-parallaxes of the current pair, the five corrections by least
+    squares with the linearised parallax equation, applied, repeated — from the normal case;
+    elements (by, bz mm; ω, φ, κ rad) of the right projector."""
+    rng = rng_for("lesson05.check_kovarik_iteration")
+    c, b = 121.3, 81.0
+    n = 12
+    P = np.column_stack([rng.uniform(-5, b + 5, n), rng.uniform(-90, 90, n),
+                         -c * (1 + 0.2 * rng.uniform(-0.5, 0.5, n))])  # fmt: skip
+    truth = np.array([0.35, -0.22, 14 * GON / 100, -9 * GON / 100, 17 * GON / 100])  # 14, −9, 17 c
+    from ..camera import project
+    from ..rotation import matrix_from_opk
+
+    xy1 = project(P, np.zeros(3), np.eye(3), c)
+    xy2 = project(P, np.array([b, truth[0], truth[1]]), matrix_from_opk(*truth[2:]), c)
+    got = call(fn, xy1.copy(), xy2.copy(), c, b, what="kovarik_iteration")
+    if not isinstance(got, tuple) or len(got) != 2:
+        raise CheckFailed("kovarik_iteration: return (elements, steps)")
+    e = np.asarray(got[0], dtype=float)
+    if e.shape != (5,):
+        raise CheckFailed(f"elements: expected (by, bz, ω, φ, κ), shape (5,), got {e.shape}")
+    steps = list(got[1])
+    if len(steps) < 3:
+        raise CheckFailed(
+            f"only {len(steps)} step(s): one linear solution is not the iteration — repeat until "
+            "the corrections vanish",
+            float(np.abs(e - truth).max() / 0.01),
+            1e-8,
+        )
+    if not np.all(np.isfinite(e)) or np.abs(e[:2]).max() > 10.0 or np.abs(e[2:]).max() > 1.0:
+        raise CheckFailed(
+            "the iteration runs away (elements of "
+            f"{np.round(e, 3).tolist()}): a sign is wrong — the parallax is p_y = Y_left − Y_right, "
+            "the corrections are added, and the right ray is R (x'', y'', −c) (row-wise d2 @ Rᵀ)"
+        )
+    compare("by, bz [mm] of an error-free pair", e[:2], truth[:2], rtol=1e-8, scale=1.0)
+    compare(
+        "ω, φ, κ [rad] of an error-free pair", e[2:], truth[2:], rtol=1e-8, scale=0.01, unit="rad"
+    )
+    success(f"the error-free pair's elements come back after {len(steps)} steps "
+            f"(last correction {steps[-1]:.1e})")  # fmt: skip

@@ -91,9 +91,13 @@ class BlockPanel:
         with gui.add_folder("Display"):
             self.auto_k = self.scene.exaggeration
             h["exaggeration"] = gui.add_slider(
-                "residual × (log10, 0 = auto)", -3.0, 3.0, 0.05, 0.0,
-                hint="0 draws the median residual about a third of a point spacing",
+                "residual × (log10)", -3.0, 3.0, 0.05, 0.0,
+                hint="× 10^value of the fixed scale (see the scale bar in the scene)",
             )  # fmt: skip
+            h["rescale"] = gui.add_button(
+                "fit the residual scale to this state",
+                hint="the scale stays fixed while you iterate; this chooses it anew",
+            )
             h["rays"] = gui.add_dropdown("rays", RAY_MODES, initial_value="selected image")
             for key, on in (
                 ("frustums", True), ("points", True), ("residuals", True),
@@ -125,6 +129,7 @@ class BlockPanel:
         h["fly"].on_click(self.guard(lambda _e: self.fly_to_selected()))
         h["largest"].on_update(self.guard(lambda _e: self.fly_to_selected()))
         h["exaggeration"].on_update(self.guard(lambda _e: self.set_exaggeration()))
+        h["rescale"].on_click(self.guard(lambda _e: self.set_exaggeration(auto=True)))
         h["rays"].on_update(self.guard(lambda _e: self.scene.set_rays(str(h["rays"].value))))
         for key in ("frustums", "points", "residuals", "strips", "models", "ellipsoids"):
             h[f"show_{key}"].on_update(
@@ -179,7 +184,7 @@ class BlockPanel:
             "one iteration" if max_iter == 1 else f"adjusted ({res.iterations} iterations)"
         )
         self.scene.update()
-        self.set_exaggeration(auto=True)
+        self.set_exaggeration()  # the scale stays: the vectors shrink as the block converges
         self.scene.update_ellipsoids()
         self.select(self.scene.selected)
         self.refresh()
@@ -189,7 +194,7 @@ class BlockPanel:
     def reset(self) -> None:
         self.state.reset()
         self.scene.update()
-        self.set_exaggeration(auto=True)
+        self.set_exaggeration()
         self.scene.update_ellipsoids()
         self.select(self.scene.selected)
         self.refresh()
@@ -198,12 +203,19 @@ class BlockPanel:
         """Show history record ``k`` (the iteration scrubber)."""
         self.state.replay(k)
         self.scene.update()
-        self.set_exaggeration(auto=True)
+        self.set_exaggeration()
+        self.scene.update_ellipsoids(new_gain=False)
         self.select(self.scene.selected)
         self.refresh(full=False)
 
     def set_exaggeration(self, auto: bool = False) -> None:
-        """Exaggeration = automatic value × 10^slider; ``auto`` recomputes the automatic value."""
+        """Exaggeration = base value × 10^slider.
+
+        The base value is chosen once, from the state first shown (the median residual
+        a third of a point spacing), and kept while the student iterates, replays or acts,
+        so that convergence shows as vectors shrinking; ``auto`` (the button "fit the
+        residual scale to this state") chooses it anew from the current state.
+        """
         if auto:
             self.auto_k = self.scene.geo.auto_exaggeration()
         self.scene.set_exaggeration(self.auto_k * 10 ** float(self.handles["exaggeration"].value))

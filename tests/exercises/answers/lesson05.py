@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+import orientviz as ov
 from orientviz.exercises.lesson05 import GON, _gruber
 
 
@@ -38,7 +39,38 @@ def _sol_scheme_sigma(X, Y, Z, b, sigma):
     return sigma * np.sqrt(np.diag(np.linalg.inv(A.T @ A)))
 
 
+def _kovarik_iteration(xy1, xy2, c, b, tol=1e-9, max_iter=20, mistake=None):
+    e = np.zeros(5)
+    if mistake == "one_step":
+        max_iter = 1
+    steps = []
+    for _ in range(max_iter):
+        # 1. the rigorous y-parallaxes of the pair as it stands: rays meet in X and Z
+        B = np.array([b, e[0], e[1]])
+        d1 = np.column_stack([xy1, np.full(len(xy1), -c)])
+        d2 = np.column_stack([xy2, np.full(len(xy2), -c)]) @ (
+            ov.matrix_from_opk(*e[2:])
+            if mistake == "R_transposed"
+            else ov.matrix_from_opk(*e[2:]).T
+        )
+        det = -d1[:, 0] * d2[:, 2] + d2[:, 0] * d1[:, 2]
+        lam1 = (-B[0] * d2[:, 2] + d2[:, 0] * B[2]) / det
+        lam2 = (d1[:, 0] * B[2] - d1[:, 2] * B[0]) / det
+        X, Y, Z = (lam1[:, None] * d1).T  # model points on the left rays
+        p = Y - (B[1] + lam2 * d2[:, 1])  # Y_left − Y_right
+        if mistake == "sign":
+            p = -p
+        # 2. the corrections that clear them (your design matrix), 3. apply, repeat
+        d = np.linalg.lstsq(_sol_design(X, Y, Z, b), p, rcond=None)[0]
+        e = e + d
+        steps.append(np.abs(d).max())
+        if steps[-1] < tol:
+            break
+    return e, steps
+
+
 SOLUTIONS = {
+    "check_kovarik_iteration": _kovarik_iteration,
     "check_design": _sol_design,
     "check_parallax": _sol_parallax,
     "check_six_point": _sol_six_point,
@@ -47,6 +79,10 @@ SOLUTIONS = {
 }
 
 MUTANTS = {
+    "check_kovarik_iteration": {
+        k: (lambda *a, k=k: _kovarik_iteration(*a, mistake=k))
+        for k in ("one_step", "sign", "R_transposed")
+    },
     "check_design": {
         "y'' - y'": lambda X, Y, Z, b: -_sol_design(X, Y, Z, b),
         "phi and kappa swapped": lambda X, Y, Z, b: _sol_design(X, Y, Z, b)[:, [0, 1, 2, 4, 3]],
