@@ -268,11 +268,14 @@ COMMANDS: dict[str, Command] = {
         "pixels: each BAL camera is a camera with the forward lens model (c = f, k1, k2; "
         "the observations stay the file's distorted pixels, y up), and f, k1, k2 are "
         "refined per camera as the BAL problem defines them (--fix-lens holds them). BAL "
-        "has no control: solve with --free (or --fix, or add --control here).",
+        "has no control: solve with --free (or --fix, or add --control here). The file "
+        "gets options.damping = trust and options.ftol = 1e-6 (Ceres's stopping rule). FILE "
+        "may be bz2-compressed, or `ladybug`: the shipped BAL problem-49-7776.",
         examples=(
             ("orientviz import-bal problem-49-7776-pre.txt -o block.json", "convert"),
             ("orientviz import-bal problem-49-7776-pre.txt --fix-lens -o block.json",
              "only poses and points adjusted"),
+            ("orientviz import-bal ladybug -o ladybug.json", "the shipped real BAL problem"),
         ),  # fmt: skip
         arguments=(
             arg("file", help="BAL text file"),

@@ -77,6 +77,15 @@ class BundleOptions:
         Block size (unknowns) of the banded selected inverse.
     reduced : ReducedOptions
         How the reduced system's solver is chosen and diagnosed.
+    damping : {"fallback", "trust"}
+        The loop's damping (:class:`orientviz.adjust.Damping`): ``"fallback"``
+        Gauss-Newton, damped only where a step would raise vᵀPv; ``"trust"``
+        Levenberg-Marquardt with Ceres's trust-region schedule (λ0 = 1e-4, never 0),
+        which keeps weakly determined far points near their rays' meeting point in each
+        step (what imported SfM models use).
+    ftol : float
+        Also stop when a step lowers vᵀPv by less than ``ftol`` of its value (Ceres's
+        function tolerance, dimensionless; 0 = off).
     """
 
     max_iter: int = 30
@@ -96,10 +105,16 @@ class BundleOptions:
     dense_inverse_limit: int = 3000
     takahashi_block: int = 96
     reduced: ReducedOptions = field(default_factory=ReducedOptions)
+    damping: str = "fallback"
+    ftol: float = 0.0
 
     def __post_init__(self) -> None:
         if self.solver not in SOLVER_NAMES:
             raise ValueError(f"expected a solver out of {SOLVER_NAMES}, got {self.solver!r}")
+        if self.damping not in ("fallback", "trust"):
+            raise ValueError(f"expected damping 'fallback' or 'trust', got {self.damping!r}")
+        if not 0.0 <= self.ftol < 1.0:
+            raise ValueError(f"expected ftol in [0, 1), got {self.ftol!r}")
 
     def replace(self, **changes) -> BundleOptions:
         """A copy with ``changes`` (fields of this class)."""

@@ -228,9 +228,7 @@ def read_bal(
         raise InputError(f"expected an image σ > 0 px, got {sigma_px}", source)
     if lens not in LENS_MODES:
         raise InputError(f"lens: expected one of {', '.join(LENS_MODES)}, got {lens!r}", source)
-    from .safeio import read_input_text
-
-    lines = read_input_text(path, "a BAL text file").splitlines()
+    lines = _read_lines(path)
     obs, cams, pts = _parse(lines, source)
     nc, npt = cams.shape[0], pts.shape[0]
     ci, pi = obs[:, 0].astype(np.int64), obs[:, 1].astype(np.int64)
@@ -266,6 +264,44 @@ def read_bal(
     )  # fmt: skip
     block.cameras.model = models
     return block
+
+
+#: A compressed BAL file (``*.bz2``, as the BAL collection publishes them) may expand to
+#: at most this many bytes.
+MAX_BZ2_BYTES: int = 1 << 31
+#: The BAL problem shipped with orientviz (``orientviz import-bal ladybug``).
+SHIPPED = {"ladybug": "problem-49-7776-pre.txt.bz2"}
+
+
+def shipped_bal(name: str = "ladybug") -> Path:
+    """Path of a BAL problem shipped in ``orientviz/datasets/bal`` (see its MANIFEST.json:
+    Agarwal et al.'s Ladybug problem-49-7776, bz2-compressed)."""
+    from importlib import resources
+
+    if name not in SHIPPED:
+        raise InputError(f"no shipped BAL problem {name!r} (shipped: {', '.join(SHIPPED)})")
+    return Path(str(resources.files("orientviz.datasets").joinpath("bal", SHIPPED[name])))
+
+
+def _read_lines(path: str | os.PathLike[str]) -> list[str]:
+    """The lines of a BAL text file, plain or bz2-compressed (``*.bz2``)."""
+    from .safeio import decode_text, read_input_bytes, read_input_text
+
+    if not str(path).endswith(".bz2"):
+        return read_input_text(path, "a BAL text file").splitlines()
+    import bz2
+
+    raw = read_input_bytes(path, "a bz2-compressed BAL file")
+    unzip = bz2.BZ2Decompressor()
+    try:
+        data = unzip.decompress(raw, max_length=MAX_BZ2_BYTES)
+    except (OSError, ValueError) as exc:
+        raise InputError(f"not a bz2 file: {exc}", str(path)) from None
+    if not unzip.eof:
+        raise InputError(
+            f"the bz2 data expand beyond {MAX_BZ2_BYTES} bytes or are truncated", str(path)
+        )
+    return decode_text(data, str(path), "a BAL text file").splitlines()
 
 
 def bal_cameras(block: Block, pixel_size_mm: float) -> F64:
@@ -338,6 +374,8 @@ def run_from_cli(args: argparse.Namespace) -> int:
     """``orientviz import-bal FILE -o OUT.json [--fix-lens] [--control CSV]``: BAL → problem file."""
     from .importing import import_to_problem
 
+    if not os.path.exists(args.file) and args.file in SHIPPED:
+        args.file = str(shipped_bal(args.file))
     lens = "fixed" if getattr(args, "fix_lens", False) else "refine"
     note = (
         "; f, k1, k2 of each camera held at the file's values (--fix-lens)"
@@ -348,7 +386,7 @@ def run_from_cli(args: argparse.Namespace) -> int:
     return import_to_problem(
         args,
         lambda px, sig: read_bal(args.file, pixel_size_mm=px, sigma_px=sig, lens=lens),
-        Path(args.file).stem,
+        Path(args.file).name.split(".")[0],
         default_pixel_mm=DEFAULT_PIXEL_MM,
         pixel_units=True,
         lens_note=note,

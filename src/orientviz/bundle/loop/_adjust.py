@@ -180,9 +180,13 @@ def bundle_adjust(
         st,
         redundancy=dof,
         damping=Damping(
-            "fallback", poor_start_sigma0=opts.poor_start_sigma0, first=2 if hold_first else 1
-        ),
-        stop=StopRule(tol=tol, may_stop=lambda it: not (prob.run.border.hold or steps.local_step)),
+            opts.damping, lambda0=1e-4, poor_start_sigma0=opts.poor_start_sigma0,
+            first=2 if hold_first else 1,
+        ),  # fmt: skip
+        stop=StopRule(
+            tol=tol, ftol=opts.ftol,
+            may_stop=lambda it: not (prob.run.border.hold or steps.local_step),
+        ),  # fmt: skip
         max_iter=max_iter,
         # derivatives at the new state: for the next iteration, the precision or the
         # check of a damped start (not after the last step of a screening run, nor after

@@ -242,6 +242,12 @@ def adjust_block(problem: Problem, block: Block, **overrides: Any) -> tuple[Any,
     o = problem.options
     loss = str(o.get("robust", "none"))
     opts = _options(problem)
+    damping, ftol = opts.pop("damping", None), opts.pop("ftol", None)
+    if damping is not None or ftol is not None:  # the loop's knobs (SfM models)
+        from ...bundle import BundleOptions
+
+        opts["options"] = BundleOptions(damping=str(damping or "fallback"),
+                                        ftol=float(ftol or 0.0))  # fmt: skip
     opts.update(bundle_camera_options(block))  # cameras[].model / additional
     opts.update(overrides)
     run_block = with_check_rays(block) if check_mode(problem) == "rays" else block
