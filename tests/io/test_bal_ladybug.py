@@ -4,7 +4,10 @@ The independent solver is written here: BAL's projection in plain numpy (angle-a
 scipy's Rotation, p = −P_xy/P_z, x = f(1 + k1|p|² + k2|p|⁴)p), a central-difference
 sparse Jacobian and Levenberg-Marquardt with scipy's sparse direct solver — nothing of
 orientviz. Both start from
-the file's values; f, k1, k2 and the cost are datum-invariant, so they are compared.
+the file's values with f, k1, k2 held (``--fix-lens``; with them free the 5-camera part is
+too weak to determine them: its normal equations are singular at the optimum); the cost
+is datum-invariant and compared. The full file's refined optimum against Ceres is in
+benchmarks/README.md.
 """
 
 from __future__ import annotations
@@ -92,6 +95,8 @@ def _independent_optimum(obs, cams, pts, max_iter=100):
     x = np.r_[cams.ravel(), pts.ravel()]
     free = np.ones(x.size, bool)
     free[[0, 1, 2, 3, 4, 5, 9 + 3]] = False  # the datum: camera 0's pose, t_x of camera 1
+    for k in (6, 7, 8):  # f, k1, k2 held at the file's values (import-bal --fix-lens)
+        free[k : 9 * n_cam : 9] = False
     r = _residuals(x, n_cam, ci, pi, xy)
     cost, lam = 0.5 * r @ r, 1e-4
     for _ in range(max_iter):
@@ -136,7 +141,7 @@ def test_orientviz_reaches_the_independent_optimum(ladybug_part, tmp_path):
                                     obs[:, 0].astype(int), obs[:, 1].astype(int), obs[:, 2:]) ** 2)  # fmt: skip
     assert cost < 0.5 * start  # the independent solver did move
     prob = tmp_path / "p.json"
-    assert main(["import-bal", str(path), "-o", str(prob)]) == 0
+    assert main(["import-bal", str(path), "--fix-lens", "-o", str(prob)]) == 0
     text = io.StringIO()
     with contextlib.redirect_stdout(text):
         code = main(["solve", str(prob), "--free", "--json"])
@@ -144,8 +149,4 @@ def test_orientviz_reaches_the_independent_optimum(ladybug_part, tmp_path):
     assert code == 0 and sol["converged"]
     ours = 0.5 * sol["sigma0"] ** 2 * sol["redundancy"]  # ½ vᵀPv, σ = 1 px
     assert ours == pytest.approx(cost, rel=1e-6)
-    par = {p["name"]: p["value"] for p in sol["parameters"]}
-    f = np.array([par[f"cam{i}.c"] for i in range(len(cams))])
-    k1 = np.array([par[f"cam{i}.k1"] for i in range(len(cams))])
-    np.testing.assert_allclose(f, cams_opt[:, 6], rtol=1e-4)  # f to 0.04 px of ~400 px
-    np.testing.assert_allclose(k1, cams_opt[:, 7], atol=1e-4)
+    assert sol["parameters"] == []  # f, k1, k2 held
