@@ -391,11 +391,15 @@ COMMANDS: dict[str, Command] = {
             ("orientviz reproduce geier", "Geier 1973, Fig. 8: radar orientation tasks"),
             ("orientviz reproduce", "list the reproductions"),
             ("orientviz reproduce kovarik --json", "as JSON"),
+            ("orientviz reproduce kovarik --wide", "one line per row (wider than 100 columns)"),
         ),
         arguments=(
             arg("name", nargs="?", default=None, help="reproduction (omit to list them)"),
             arg("--json", action="store_true", help="print the rows as JSON"),
-        ),
+            arg("--wide", action="store_true",
+                help="one line per row however long (default: blocks wrapped to 100 columns "
+                "when the table is wider)"),
+        ),  # fmt: skip
     ),
 }
 
@@ -474,7 +478,7 @@ def run_reproduce(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps([r.as_dict() for r in rows], indent=1, default=str))
     else:
-        print(reproduce.format_rows(rows))
+        print(reproduce.format_rows(rows, None if getattr(args, "wide", False) else 100))
     return 0
 
 

@@ -17,10 +17,11 @@ from test_reference import assert_same_optimum, one_blas_thread  # noqa: F401
 
 import orientviz as ov
 from orientviz.bundle import LensModel, ap_set
-from orientviz.bundle.reference import reference_bundle
+from orientviz.bundle.reference import linearise, normal_equations, reference_bundle, reference_data
 from orientviz.simulate import simulate_calibration
 
 TOL = 1e-8
+RTOL_PREC = 1e-8  # the cofactors agree to ~1e-9 (measured); solves round differently
 
 EBNER = ap_set("ebner12")
 TRUE = np.array([6.0, -4.0, 3.0, 0.0, 5.0, -2.0, 0.0, 4.0, 0.0, -3.0, 2.0, 0.0])  # µm
@@ -112,3 +113,30 @@ def test_the_camera_model_reaches_the_reference_optimum(kind, model):
     # the camera in physical units and its σ from the same precision code
     np.testing.assert_allclose(ref_result.camera.value, res.camera.value, rtol=1e-10, atol=1e-14)
     np.testing.assert_allclose(ref_result.camera.sigma, res.camera.sigma, rtol=1e-7)
+
+
+def test_the_precision_with_additional_parameters_is_the_reference_inverse(distorted):
+    # Q11 = S⁻¹ over (exterior, additional parameters) and the point cofactors
+    # N22⁻¹ + Tᵀ Q11 T at the optimum, against the fast precision of a bordered system
+    case = "ebner12, one group, weighted"
+    ref = _reference(case, distorted)
+    kw = _case(case, distorted)
+    data = reference_data(distorted, "fixed", kw["additional"], None, kw["ap_sigma"])
+    f, A1, B = linearise(data, ref.X0, ref.angles, ref.xyz, ref.ap, distorted.sequence)
+    N11, N12, N22, *_ = normal_equations(data, f, A1, B, ref.X0, ref.angles, ref.xyz, ref.ap)
+    N22inv = np.linalg.inv(N22)
+    T = np.einsum("pia,pab->pib", N12, N22inv)
+    Q11 = np.linalg.inv(N11 - np.einsum("pia,pja->ij", T, N12))
+    Q22 = N22inv + np.einsum("pia,ij,pjb->pab", T, Q11, T)
+    fast = ov.bundle_adjust(distorted, solver="banded", tol=1e-10, max_iter=80, **kw)
+    s0 = np.sqrt(ref.cost[-1] / fast.redundancy)
+    std = fast.std()
+    m = distorted.n_images
+    np.testing.assert_allclose(
+        std[fast.groups["exterior"]], s0 * np.sqrt(np.diag(Q11)[: 6 * m]), rtol=1e-7
+    )
+    np.testing.assert_allclose(
+        std[fast.groups["additional"]], s0 * np.sqrt(np.diag(Q11)[6 * m :]), rtol=1e-7
+    )
+    got = std[fast.groups["points"]].reshape(-1, 3)[data.unknown]
+    np.testing.assert_allclose(got, s0 * np.sqrt(np.einsum("pii->pi", Q22)), rtol=RTOL_PREC)

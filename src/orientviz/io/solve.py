@@ -98,6 +98,10 @@ def run_from_cli(args: argparse.Namespace) -> int:
         if getattr(args, "solver", None) is not None and problem.kind != "block":
             raise InputError("--solver applies to block problems only", problem.source)
         solution = solve_problem(problem, getattr(args, "method", None))
+        from ..report import verdict  # the report's own test and warnings (one verdict)
+
+        with np.errstate(all="ignore"):
+            solution.verdict = verdict(problem, solution)
         text = (
             json.dumps(solution.as_dict(), indent=1, ensure_ascii=False, allow_nan=False)
             if getattr(args, "json", False)
@@ -124,6 +128,11 @@ def run_from_cli(args: argparse.Namespace) -> int:
         except InputError as exc:
             print(f"{prog}: {exc.one_line()}", file=sys.stderr)
             return 2
+        print(
+            f"{prog}: wrote {report_path} ({os.path.getsize(report_path) / 1024:.0f} KiB, "
+            f"{'HTML' if report_path.lower().endswith(('.html', '.htm')) else 'text'} report)",
+            file=sys.stderr,
+        )
     _print(text)
     if solution.adjustment.converged:  # on failure one line only (the report lists them)
         for note in solution.notes:

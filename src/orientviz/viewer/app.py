@@ -304,14 +304,20 @@ def open_viewer(
 
 def export_html(content: Any, path: str | Path) -> Path:
     """Build the scene of ``content`` on a private server and write a static HTML snapshot."""
+    import contextlib
+    import io
+
     demo = resolve_content(content)  # load errors are raised here, before any server starts
-    app = ViewerApp(demo, host="127.0.0.1", port=0, verbose=False)
-    try:
-        if app.messages:
-            raise InputError(app.messages[0])
-        return app.export_html(path)
-    finally:
-        app.stop()
+    # viser prints its server box and "Server stopped" whatever `verbose` says; this
+    # server is private and never announced, so its prints go nowhere
+    with contextlib.redirect_stdout(io.StringIO()):
+        app = ViewerApp(demo, host="127.0.0.1", port=0, verbose=False)
+        try:
+            if app.messages:
+                raise InputError(app.messages[0])
+            return app.export_html(path)
+        finally:
+            app.stop()
 
 
 def run_from_cli(args: argparse.Namespace) -> int:

@@ -158,7 +158,7 @@ def with_check_rays(block: Block) -> Block:
 def solve(problem: Problem, method: str | None) -> Solution:
     """Adjust the block by ``method`` and collect the report.
 
-    Datum options (:mod:`._datum`): ``free`` (a free network, minimum constraints) and
+    Datum options (:mod:`orientviz.io.datum`): ``free`` (a free network, minimum constraints) and
     ``fix`` (images/points held at their given values); ``robust`` (``"huber"``,
     ``"cauchy"``) with ``robust_scale`` reweights the bundle (:mod:`._robust`). The
     solution's ``start`` is the block the adjustment started from (approximations
@@ -195,9 +195,9 @@ def prepare(problem: Problem) -> tuple[Block, list[str]]:
     """The block the adjustment starts from, and the notes on its datum.
 
     Approximate values where the file gives none (:func:`approximate`), then the datum
-    options ``free`` and ``fix`` (:mod:`._datum`).
+    options ``free`` and ``fix`` (:mod:`orientviz.io.datum`).
     """
-    from ._datum import apply_fix, free_network, minimum_datum, parse_fix
+    from ..datum import apply_fix, free_network, minimum_datum, parse_fix
 
     o = problem.options
     fix = parse_fix(o.get("fix"), problem.source)
@@ -308,11 +308,13 @@ MISFIT_SIGMA0: float = 3.0
 MISFIT_FLAGGED: float = 0.2
 
 
-def misfit_warning(adj, n_image: int, critical: float) -> str | None:
+def misfit_warning(adj, n_image: int, critical: float, block: Block | None = None) -> str | None:
     """A warning when σ0 ≫ 1 and a large share of the image coordinates is flagged.
 
-    Such a solve "converges" to the best fit of a model that does not hold; the likely
-    causes are named instead of reporting it as a result.
+    Such a solve "converges" to the best fit of a model that does not hold. If one
+    observation explains the misfit (:func:`single_gross_error`), the warning names it
+    as a gross error and its remedy; otherwise it names the likely causes of a model
+    that does not fit (lens, units, principal distance, σ).
     """
     w = np.asarray(adj.normalized_residuals, dtype=float)[: 2 * n_image]
     w = w[np.isfinite(w)]
@@ -321,13 +323,73 @@ def misfit_warning(adj, n_image: int, critical: float) -> str | None:
     share = float(np.mean(np.abs(w) > critical))
     if share < MISFIT_FLAGGED:
         return None
-    return (
+    head = (
         f"warning: the model does not fit the data: sigma0 = {adj.sigma0:.4g} with "
-        f"{share:.0%} of the image coordinates flagged (|w| > {critical:g}). Likely causes: "
+        f"{share:.0%} of the image coordinates flagged (|w| > {critical:g})."
+    )
+    gross = single_gross_error(adj, n_image, block)
+    if gross is not None:
+        return f"{head} {gross}"
+    return (
+        f"{head} Likely causes: "
         "lens distortion or other interior-orientation terms missing from the model, image "
         "coordinates in the wrong unit or with a wrong pixel size, a wrong principal "
         "distance, or σ of the image coordinates far too small. The estimates are the best "
         "fit of a model that does not hold"
+    )
+
+
+#: One observation "explains" a misfit when leaving it out brings σ0 to this or below.
+GROSS_SIGMA0: float = 2.0
+
+
+def single_gross_error(adj, n_image: int, block: Block | None = None) -> str | None:
+    """Name the one observation whose removal would make the adjustment fit, if any.
+
+    Leaving out observation i lowers vᵀPv = r σ̂0² by w_i² (Baarda: w_i = v_i /
+    (σ_i √r_i), a-priori σ0 = 1), so σ̂0 without it is √((r σ̂0² − w_i²) / (r − 1)).
+    When that is at most :data:`GROSS_SIGMA0` for the largest |w|, one gross error
+    explains the misfit; observations whose |w| equals the largest (within 1 %) cannot
+    be told apart from it and are named too.
+
+    Returns
+    -------
+    str or None
+        One sentence (observation, point and image, σ̂0 without it, the remedy), or
+        None when no single observation explains the misfit.
+    """
+    w = np.asarray(adj.normalized_residuals, dtype=float)[: 2 * n_image]
+    r = int(adj.redundancy)
+    if r < 2 or not np.any(np.isfinite(w)):
+        return None
+    aw = np.where(np.isfinite(w), np.abs(w), 0.0)
+    i = int(np.argmax(aw))
+    omega = r * float(adj.sigma0) ** 2
+    rest = max(omega - aw[i] ** 2, 0.0)
+    s0 = float(np.sqrt(rest / (r - 1)))
+    if s0 > GROSS_SIGMA0:
+        return None
+    labels = adj.obs_labels or []
+    name = lambda k: labels[k] if k < len(labels) else f"observation no. {k + 1}"  # noqa: E731
+    alike = [int(k) for k in np.flatnonzero(aw >= 0.99 * aw[i]) if k != i]
+    where = ""
+    if block is not None and i < 2 * len(block.observations):
+        o = i // 2
+        pt = block.points.ids[block.observations.point[o]]
+        im = block.images.ids[block.observations.image[o]]
+        where = f" (point {pt!r}, {'xy'[i % 2]} in image {im!r})"
+    same = ""
+    if alike:
+        shown = ", ".join(name(k) for k in alike[:5]) + (", …" if len(alike) > 5 else "")
+        same = (
+            f"; {shown} have the same |w|: which of these rays is wrong cannot be told "
+            "from this block"
+        )
+    return (
+        f"One gross error explains it: {name(i)}{where} has the largest |w| = {aw[i]:.1f}, "
+        f"and without it sigma0 would be {s0:.2f}{same}. Check or remove that measurement, "
+        "or solve with --robust cauchy (options.robust), whose influence falls off for "
+        "large residuals"
     )
 
 
@@ -352,7 +414,7 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
         xyz, sxyz = block.points.xyz, np.full((p, 3), np.nan)
     notes = check_note(problem, block, xyz)
     critical = float(problem.options.get("critical", W_CRITICAL))
-    misfit = misfit_warning(adj, len(block.observations), critical)
+    misfit = misfit_warning(adj, len(block.observations), critical, block)
     if misfit:
         notes.insert(0, misfit)
         adj.reason = f"{adj.reason}; BUT THE MODEL DOES NOT FIT THE DATA (see the warning)"
@@ -364,8 +426,7 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
     if np.any(block.points.role == CHECK):
         mode = check_mode(problem) if method == "bundle" else "independent"
         notes.insert(0, CHECK_MODES[mode] + f" (options.check_points = {mode!r})")
-    ties = int(np.sum(block.points.role == TIE))
-    notes.append(f"block: {block.summary()} ({ties} tie points)")
+    notes.append(f"block: {block.summary()} (each 2 image coordinates)")
     notes += camera_notes(block, adj, problem.units)
     if getattr(adj, "reduced_info", {}).get("solver_reason"):
         notes.append(f"reduced system solved {adj.reduced_info['solver_reason']}")
