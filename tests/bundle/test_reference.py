@@ -277,3 +277,14 @@ def test_lesson_10s_normal_blocks_are_the_reference_blocks(strips):
     for got, want in ((N11, U), (W, nb.W), (N22, nb.V), (n1, nb.bc), (n2.ravel(), nb.bp)):
         np.testing.assert_allclose(got, want, rtol=0, atol=1e-10 * np.abs(want).max())
     assert vtpv == pytest.approx(nb.vtpv, rel=1e-12)
+
+
+def test_the_options_route_to_the_reference(strips, strips_reference):
+    res = ov.bundle_adjust(
+        strips, options=ov.bundle.BundleOptions(solver="reference", tol=TOL, max_iter=50),
+        precision=False,
+    )  # fmt: skip
+    assert res.solver == "reference" and res.reason == strips_reference.reason
+    assert np.array_equal(res.exterior[:, :3], strips_reference.X0)
+    with pytest.raises(ov.InputError, match="auxiliary"):
+        ov.bundle_adjust(strips, solver="reference", auxiliary=[object()])
