@@ -113,11 +113,19 @@ def radar_demo() -> Demo:
     return build()
 
 
+def design_demo() -> Demo:
+    """The design studio: plan a block, see its precision and reliability live."""
+    from .studio import design_demo as build  # the design studio: loaded only for its demo
+
+    return build()
+
+
 #: demo name → builder
 DEMOS: dict[str, Callable[[], Demo]] = {
     "block": block_demo,
     "pair": pair_demo,
     "radar": radar_demo,
+    "design": design_demo,
 }
 
 
