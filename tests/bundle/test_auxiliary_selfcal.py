@@ -190,7 +190,7 @@ def test_joint_step_equals_the_dense_step(case, kind, held):
     st.xyz[fixed] = np.where(
         np.isfinite(block.points.xyz_known[fixed]), block.points.xyz_known[fixed], st.xyz[fixed]
     )
-    prob.border.hold = held
+    prob.run.border.hold = held
     rw, Je, Jp = prob.residuals(st, jac=True)
     ne = prob.normal(st, rw, Je, Jp)
     dc, dp, d, _ = prob.solve(ne, prob.names()[: 6 * prob.m])

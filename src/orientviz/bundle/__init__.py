@@ -38,6 +38,7 @@ that tests and benchmarks use are exported too (second group of ``__all__``).
 
 from ._alternation import AuxiliaryResult, adjust_with_auxiliary
 from ._cleaning import bundle_solver, clean_block, cleaned_block, ray_labels
+from ._options import BundleOptions
 from ._result import BundleResult, ExteriorPairs, RayGains
 from ._selfcal import SelfCalibration, self_calibrate
 from .loop import bundle_adjust
@@ -85,6 +86,7 @@ from .reduced import (
     APBorder,
     AuxBorder,
     NormalEquations,
+    ReducedOptions,
     ReducedStructure,
     factor_reduced,
     geometric_orderings,
@@ -94,6 +96,8 @@ from .reduced import (
 __all__ = [
     # the adjustment and its companions
     "bundle_adjust",
+    "BundleOptions",
+    "ReducedOptions",
     "BundleResult",
     "RayGains",
     "ExteriorPairs",

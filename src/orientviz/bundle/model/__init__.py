@@ -21,13 +21,7 @@ from ._kernel import (
     ray_jacobians,
 )
 from ._lens import BoundLens, LensEstimates, LensModel, lens_model
-from ._local_rotation import (
-    LOCAL_MIN_CORRECTION,
-    LOCAL_SIGMA0,
-    angle_map,
-    apply_local,
-    frame_axials,
-)
+from ._local_rotation import angle_map, apply_local, frame_axials
 
 __all__ = [
     "AdditionalParameters",
@@ -46,8 +40,6 @@ __all__ = [
     "LensEstimates",
     "LensModel",
     "lens_model",
-    "LOCAL_MIN_CORRECTION",
-    "LOCAL_SIGMA0",
     "angle_map",
     "apply_local",
     "frame_axials",

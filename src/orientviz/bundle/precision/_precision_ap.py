@@ -20,8 +20,8 @@ This module supplies the border's part:
   columns; everything is therefore computed per (ray, group of its point) and
   (point, group) pair with k columns, not with all q.
 
-Cost on the bench's 2 100-image block with 12 parameters per strip (q = 360): the two
-banded solves dominate (about 2·n·kd·q flops each, n = 6m, kd the half-bandwidth).
+Cost: the two banded solves dominate (about 2·n·kd·q flops each, n = 6m, kd the
+half-bandwidth).
 """
 
 from __future__ import annotations
@@ -166,7 +166,6 @@ def ray_group_pairs(prob) -> RayGroupPairs:
         by_group,
         group_starts,
     )
-    prob.ray_groups = out
     return out
 
 

@@ -5,6 +5,7 @@
 * :mod:`._parts` — the problem's typed parts (observations, interior and exterior
   orientation, points, additional parameters, the border's memory);
 * :mod:`._state` — the iterate (:class:`BundleState`, a frozen value);
+* :mod:`._run` — what one run writes (:class:`BundleRun`; the problem stays constant);
 * :mod:`._problem` — :class:`BundleProblem`: misclosures and Jacobians at an iterate,
   vᵀPv, the point-reduced normal equations (through :mod:`orientviz.bundle.reduced`),
   the step and the next iterate;
@@ -31,6 +32,7 @@ from ._parts import (
     PointBlock,
 )
 from ._problem import BundleProblem, ParameterNames
+from ._run import BundleRun
 from ._state import BundleState, wrap
 
 __all__ = [
@@ -54,6 +56,7 @@ __all__ = [
     "PointBlock",
     "BundleProblem",
     "ParameterNames",
+    "BundleRun",
     "BundleState",
     "wrap",
 ]

@@ -67,7 +67,7 @@ def border(prob, ne: NormalEquations) -> tuple[F64, F64, F64]:
     Without additional parameters (or with them held) the border is g's alone.
     """
     a = ne.aux
-    if not prob.q or prob.border.hold:
+    if not prob.q or prob.run.border.hold:
         return a.E, a.F, a.b
     Ea = dense(ne.ap.E_border) if ne.ap is not None else ne.ap.E
     E = np.hstack([Ea, a.E])
@@ -77,7 +77,7 @@ def border(prob, ne: NormalEquations) -> tuple[F64, F64, F64]:
 
 def _not_determinable(prob) -> NotDeterminableError:
     names = list(prob.aux.rows.names)
-    if prob.q and not prob.border.hold:
+    if prob.q and not prob.run.border.hold:
         names = list(prob.ap.names) + names
     return NotDeterminableError(
         "the offsets/drifts of the auxiliary data (with the additional parameters, if any) "

@@ -21,14 +21,11 @@ A bisection's separator is
   one half that touch the other half (the smaller of the two such sets). On a block of
   strips this cuts across the strips (two columns of images: an image shares points
   with the images two along its strip) or between two strips. All parts of one level
-  of the tree are cut in one vectorised pass over the edges (~10 ms for 2 100 images).
+  of the tree are cut in one vectorised pass over the edges.
 * *level structure* (graph only, when there are no centres): breadth-first levels
   from a pseudo-peripheral image; any level separates the levels before it from those
   after it; the smallest level leaving at least :data:`BALANCE` of the images on each
   side, without its images that touch only one side (part by part: slower).
-
-On the bench's 30 × 70-image strip block (2 100 images): ≈ 1.0 GFlop against 1.7 for
-the band across the strips (``benchmarks/bench_bundle.py --reduced``).
 """
 
 from __future__ import annotations
