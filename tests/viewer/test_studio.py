@@ -9,7 +9,8 @@ import pytest
 
 from orientviz.design import FlightDesign
 from orientviz.viewer.app import ViewerApp
-from orientviz.viewer.studio import MEASURES, Studio, StudioView, point_values, scale_of
+from orientviz.viewer.studio import MEASURES, Studio, point_values, scale_of
+from orientviz.viewer.studio_panel import StudioView
 
 
 @pytest.fixture(scope="module")

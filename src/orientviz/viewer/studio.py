@@ -7,7 +7,7 @@ triangles, the projection centres and strips. Every change of the control (make 
 control or tie, change its σ, accept the suggested point) goes through
 :class:`orientviz.design.LiveDesign` (a low-rank update, no new factorisation); changes of
 the plan (strips, images per strip, overlaps, image σ, control σ, GNSS) build the design
-again. The panel (:mod:`orientviz.viewer.studio_panel`) shows the legend, the summary next
+again. The scene and the panel (:mod:`orientviz.viewer.studio_panel`) show the legend, the summary next
 to Ebner's accuracy laws, the weak spots in words, the list of changes and undo.
 
 Scene tree::
@@ -22,7 +22,6 @@ Scene tree::
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -36,7 +35,6 @@ from ..design import (
     design_block,
     suggest_control,
 )
-from . import geometry as g
 from .quality import STOPS
 from .shapes import ramp
 
@@ -128,8 +126,8 @@ def legend_html(scale: Scale) -> str:
 class Studio:
     """The studio's state: the plan, the live design, the measure, the suggestion.
 
-    No GUI here: :class:`StudioView` draws it, :mod:`.studio_panel` edits it; the tests
-    drive it directly.
+    No GUI here: :class:`~orientviz.viewer.studio_panel.StudioView` draws it and its panel
+    edits it; the tests drive it directly.
     """
 
     def __init__(self, design: FlightDesign = START) -> None:
@@ -227,87 +225,3 @@ class Studio:
         if not items:
             return "*no changes yet*"
         return "\n".join(f"{k + 1}. {t}" for k, t in enumerate(items[-12:]))
-
-
-class StudioView:
-    """The studio's scene (nodes under ``/design``) and its panel."""
-
-    def __init__(self, app: Any, studio: Studio | None = None) -> None:
-        self.app = app
-        self.studio = studio or Studio()
-        self.nodes: dict[str, Any] = {}
-        self.panel = None
-
-    def build(self) -> dict:
-        """Add the nodes and the panel; return the camera and the view (``"studio"``)."""
-        from .studio_panel import StudioPanel
-
-        self._frame()
-        self.panel = StudioPanel(self).build()
-        self.redraw()
-        pos, look = g.framing(self.frame.to_scene(self.studio.block.points.xyz))
-        return {"camera": (pos, look, self.frame.size), "studio": self}
-
-    def _frame(self) -> None:
-        b = self.studio.block
-        self.frame = g.SceneFrame.around(np.vstack([b.points.xyz, b.images.X0]))
-        self.scale = None
-
-    def redraw(self, reframe: bool = False) -> None:
-        """Draw points, control, stations and strips after the current design."""
-        if reframe:
-            self._frame()
-        st = self.studio
-        sc = self.app.server.scene
-        b, f = st.block, self.frame
-        P = f.to_scene(b.points.xyz).astype(np.float32)
-        vals = st.values()
-        self.scale = scale_of(vals, st.measure)
-        cols = self.scale.colours(vals)
-        size = f.size
-        ctrl = st.quality.control
-        self.colours = cols
-        self.nodes["points"] = sc.add_point_cloud(
-            "/design/points", P, cols, point_size=0.012 * size, point_shape="circle",
-            precision="float32",
-        )  # fmt: skip
-        cp = P[ctrl] if ctrl.any() else np.full((1, 3), np.nan, np.float32)
-        cp = cp + np.float32([0.0, 0.0, 0.004 * size])
-        self.nodes["control"] = sc.add_point_cloud(
-            "/design/control", cp, CONTROL_COLOUR, point_size=0.03 * size,
-            point_shape="diamond", precision="float32",
-        )  # fmt: skip
-        X0 = f.to_scene(b.images.X0).astype(np.float32)
-        self.nodes["stations"] = sc.add_point_cloud(
-            "/design/stations", X0, STATION_COLOUR, point_size=0.01 * size, precision="float32"
-        )
-        seg = g.polyline_segments(X0, b.images.strip)
-        if len(seg):
-            self.nodes["strips"] = sc.add_line_segments(
-                "/design/strips", np.asarray(seg, np.float32), STRIP_COLOUR, thickness=1.5,
-                thickness_units="screen",
-            )  # fmt: skip
-        sug = st.suggestion
-        if sug is not None:
-            sp = P[[sug.point]] + np.float32([0.0, 0.0, 0.008 * size])
-            self.nodes["suggested"] = sc.add_point_cloud(
-                "/design/suggested", sp, SUGGESTED_COLOUR, point_size=0.045 * size,
-                point_shape="sparkle", precision="float32",
-            )  # fmt: skip
-        elif "suggested" in self.nodes:
-            self.nodes.pop("suggested").remove()
-        if self.panel is not None:
-            self.panel.refresh()
-
-
-def design_demo() -> Any:
-    """The ``design`` demo: the studio on :data:`START` (see the module docstring)."""
-    from .demos import Demo
-
-    desc = (
-        "Plan a block before it is flown: the colours show the design's predicted quality "
-        "(no measurements, the bundle's own normal equations). Make points control or tie "
-        "under *Control* (or ask for the best next control point), change strips, overlaps "
-        "and σ under *Plan*; the summary compares with Ebner's accuracy laws."
-    )
-    return Demo("design", "Block design studio", desc, None, lambda app: StudioView(app).build())

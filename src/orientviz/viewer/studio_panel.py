@@ -1,4 +1,7 @@
-"""The design studio's panel: measure and legend, summary and law, control, plan, undo.
+"""The design studio's scene and panel: measure and legend, summary and law, control, plan, undo.
+
+:class:`StudioView` draws a :class:`~orientviz.viewer.studio.Studio` (nodes under
+``/design``) and builds the :class:`StudioPanel`.
 
 Folders:
 
@@ -17,7 +20,17 @@ from typing import Any
 
 import numpy as np
 
-from .studio import MEASURES
+from . import geometry as g
+from .studio import (
+    CONTROL_COLOUR,
+    MEASURES,
+    STATION_COLOUR,
+    STRIP_COLOUR,
+    SUGGESTED_COLOUR,
+    Studio,
+    legend_html,
+    scale_of,
+)
 
 LABELS = {key: v[0] for key, v in MEASURES.items()}
 
@@ -159,8 +172,6 @@ class StudioPanel:
     # ------------------------------------------------------------------ display
     def refresh(self) -> None:
         """Legend, summary, suggestion and changes after the current design."""
-        from .studio import legend_html
-
         st, h = self.studio, self.h
         h["legend"].content = legend_html(self.view.scale)
         h["summary"].content = st.summary_markdown()
@@ -168,3 +179,72 @@ class StudioPanel:
         h["suggestion"].content = sug.describe() if sug is not None else ""
         h["accept"].disabled = sug is None
         h["changes"].content = st.changes_markdown()
+
+
+class StudioView:
+    """The studio's scene (nodes under ``/design``) and its panel."""
+
+    def __init__(self, app: Any, studio: Studio | None = None) -> None:
+        self.app = app
+        self.studio = studio or Studio()
+        self.nodes: dict[str, Any] = {}
+        self.panel = None
+
+    def build(self) -> dict:
+        """Add the nodes and the panel; return the camera and the view (``"studio"``)."""
+        self._frame()
+        self.panel = StudioPanel(self).build()
+        self.redraw()
+        pos, look = g.framing(self.frame.to_scene(self.studio.block.points.xyz))
+        return {"camera": (pos, look, self.frame.size), "studio": self}
+
+    def _frame(self) -> None:
+        b = self.studio.block
+        self.frame = g.SceneFrame.around(np.vstack([b.points.xyz, b.images.X0]))
+        self.scale = None
+
+    def redraw(self, reframe: bool = False) -> None:
+        """Draw points, control, stations and strips after the current design."""
+        if reframe:
+            self._frame()
+        st = self.studio
+        sc = self.app.server.scene
+        b, f = st.block, self.frame
+        P = f.to_scene(b.points.xyz).astype(np.float32)
+        vals = st.values()
+        self.scale = scale_of(vals, st.measure)
+        cols = self.scale.colours(vals)
+        size = f.size
+        ctrl = st.quality.control
+        self.colours = cols
+        self.nodes["points"] = sc.add_point_cloud(
+            "/design/points", P, cols, point_size=0.012 * size, point_shape="circle",
+            precision="float32",
+        )  # fmt: skip
+        cp = P[ctrl] if ctrl.any() else np.full((1, 3), np.nan, np.float32)
+        cp = cp + np.float32([0.0, 0.0, 0.004 * size])
+        self.nodes["control"] = sc.add_point_cloud(
+            "/design/control", cp, CONTROL_COLOUR, point_size=0.03 * size,
+            point_shape="diamond", precision="float32",
+        )  # fmt: skip
+        X0 = f.to_scene(b.images.X0).astype(np.float32)
+        self.nodes["stations"] = sc.add_point_cloud(
+            "/design/stations", X0, STATION_COLOUR, point_size=0.01 * size, precision="float32"
+        )
+        seg = g.polyline_segments(X0, b.images.strip)
+        if len(seg):
+            self.nodes["strips"] = sc.add_line_segments(
+                "/design/strips", np.asarray(seg, np.float32), STRIP_COLOUR, thickness=1.5,
+                thickness_units="screen",
+            )  # fmt: skip
+        sug = st.suggestion
+        if sug is not None:
+            sp = P[[sug.point]] + np.float32([0.0, 0.0, 0.008 * size])
+            self.nodes["suggested"] = sc.add_point_cloud(
+                "/design/suggested", sp, SUGGESTED_COLOUR, point_size=0.045 * size,
+                point_shape="sparkle", precision="float32",
+            )  # fmt: skip
+        elif "suggested" in self.nodes:
+            self.nodes.pop("suggested").remove()
+        if self.panel is not None:
+            self.panel.refresh()
