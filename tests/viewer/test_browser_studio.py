@@ -33,8 +33,13 @@ def test_design_studio_adds_a_control_point_and_recolours(browser_page):
         q = st.quality
         assert q.summary["n_control"] == n0 + 1
         assert q.point_sigma[:, 2].max() == pytest.approx(sug.after, rel=1e-6)
-        # the points' colours changed on the Python side and on the screen
-        assert np.any(np.abs(sv.colours.astype(int) - cols0.astype(int)).max(axis=1) > 40)
+
+        # the points' colours change on the Python side (after the redraw that follows the
+        # update) and on the screen
+        def recoloured():
+            return np.any(np.abs(sv.colours.astype(int) - cols0.astype(int)).max(axis=1) > 40)
+
+        assert wait_for(recoloured, 60), "the points kept their colours"
         assert wait_for(lambda: page.get_by_text(f"{n0 + 1} control points").count() > 0, 60)
         wait_for_picture(page, img, lambda a: changed_share(img, a) > 0.002, 60)
         # undo returns to the start
