@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 import orientviz as ov
-from orientviz.bundle import BundleOptions, BundleProblem, BundleState, point_setup
+from orientviz.bundle import BundleOptions
+from orientviz.bundle.problem import BundleProblem, BundleState, point_setup
 from orientviz.cli import main
 from orientviz.errors import parameter_words
 from orientviz.io.solve import _resolve

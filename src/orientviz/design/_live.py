@@ -36,14 +36,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..block import CONTROL, TIE, Block
-from ..bundle import (
-    BundleProblem,
-    BundleState,
-    RayGains,
-    factor_reduced,
-    point_setup,
-    ray_reliability,
-)
+from ..bundle import RayGains, ray_reliability
+from ..bundle.problem import BundleProblem, BundleState, point_setup
+from ..bundle.reduced import factor_reduced
 from ..errors import InputError
 from ._design import assess_block
 from ._quality import DesignQuality, quality_from_arrays
