@@ -28,11 +28,6 @@ os.environ["PYTHONPATH"] = os.pathsep.join(
     [str(ROOT / "src")] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
 )
 os.environ["MPLBACKEND"] = "module://matplotlib_inline.backend_inline"
-# ... and talk to the build over Unix sockets (IPC), not TCP: ipykernel >= 7 prints a
-# warning for every kernel on unencrypted TCP (one line per lesson in the build's log).
-from jupyter_client.connect import ConnectionFileMixin  # noqa: E402
-
-ConnectionFileMixin.transport.default_value = "ipc"
 
 import orientviz  # noqa: E402
 
