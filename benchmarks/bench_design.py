@@ -6,7 +6,8 @@ points, perimeter control every 4 bases, σ 5 µm, control σ 2 cm) is assessed 
 factorised normal equations). Then ``--changes`` times a tie point is made control (or a
 change is undone), timed as the studio runs it: the update of σ of all points and
 stations, redundancy numbers, MDB, external reliability, ellipsoids, weak spots and summary
-(``LiveDesign.set_control`` / ``undo``). The peer in the same run: a new
+(``LiveDesign.set_control`` / ``undo``); then the suggestion of the next control point
+(``suggest_control``, 40 candidates). The peer in the same run: a new
 :func:`orientviz.design.assess_block` of the changed design (forming and factoring again).
 
     python benchmarks/bench_design.py                 # 1 000 images
@@ -21,7 +22,13 @@ import time
 
 import numpy as np
 
-from orientviz.design import FlightDesign, LiveDesign, assess_block, design_block
+from orientviz.design import (
+    FlightDesign,
+    LiveDesign,
+    assess_block,
+    design_block,
+    suggest_control,
+)
 
 
 def main() -> None:
@@ -59,6 +66,11 @@ def main() -> None:
             f"  change {k + 1} ({what}, {len(live.changes)} changed points): {dt * 1e3:.0f} ms;"
             f" σ_Z max {s['sigma_z_max'] * 1e3:.1f} mm"
         )
+    t = time.perf_counter()
+    sug = suggest_control(live, criterion="sigma_z")
+    print(
+        f"suggestion ({sug.candidates.size} candidates): {time.perf_counter() - t:.2f} s; {sug.describe()}"
+    )
     t = time.perf_counter()
     assess_block(live.block, spec)
     full = time.perf_counter() - t

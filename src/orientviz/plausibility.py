@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from .block import CONTROL, Block
 from .errors import AdjustmentError, InputError
+from .rotation import matrix_from_opk
 
 log = logging.getLogger("orientviz")
 log.addHandler(logging.NullHandler())  # a library logs; the application decides where to
@@ -80,8 +81,6 @@ def _names(ids: list[str], idx: NDArray[np.intp]) -> str:
 
 
 def _rotations(block: Block) -> NDArray[np.float64]:
-    from .rotation import matrix_from_opk
-
     a = block.images.angles
     return matrix_from_opk(a[:, 0], a[:, 1], a[:, 2], block.sequence)
 

@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 import orientviz as ov
-from orientviz.bundle import BundleProblem, BundleState, point_setup
+from orientviz.bundle import BundleOptions
+from orientviz.bundle.problem import BundleProblem, BundleState, point_setup
 from orientviz.cli import main
 from orientviz.errors import parameter_words
 from orientviz.io.solve import _resolve
@@ -87,7 +88,7 @@ def test_polynomial_failures_name_the_users_strips(tmp_path, capsys, case, edit,
 def test_singular_reduced_system_message_names_images_by_id():
     sim = ov.simulate_block(2, 4, rng=3, extra=8, control="perimeter")
     block = sim.block
-    prob = BundleProblem(block, point_setup(block, "fixed"), solver="banded")
+    prob = BundleProblem(block, point_setup(block, "fixed"), options=BundleOptions(solver="banded"))
     st = BundleState(block.images.X0.copy(), block.images.angles.copy(),
                      block.points.xyz.copy(), np.zeros(0))  # fmt: skip
     rw, Je, Jp = prob.residuals(st, jac=True)

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..camera import project
 from ..errors import InputError
 from ..rotation import check_sequence, matrix_from_opk
 
@@ -385,8 +386,6 @@ class Block:
 
     def project(self) -> F64:
         """Image coordinates (n, 2) mm computed from the current orientations and points."""
-        from ..camera import project
-
         obs = self.observations
         cam = self.images.camera[obs.image]
         R = self.rotations()[obs.image]

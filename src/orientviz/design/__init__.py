@@ -20,6 +20,7 @@ from ._design import DesignAssessment, accuracy_law, assess_block, assess_design
 from ._layout import FlightDesign, design_block, set_control
 from ._live import Change, LiveDesign
 from ._quality import DesignQuality, ellipsoids
+from ._suggest import Suggestion, suggest_control
 
 __all__ = [
     "FlightDesign",
@@ -33,4 +34,6 @@ __all__ = [
     "ellipsoids",
     "Change",
     "LiveDesign",
+    "Suggestion",
+    "suggest_control",
 ]

@@ -45,6 +45,8 @@ import copy
 
 import numpy as np
 
+from ..orientation import relative as rel
+from ..orientation import schemes as sch
 from ..orientation.plotter import AnalogPlotter, config_with, preorientation_error, true_pair
 from ..units import RHO_C
 from .rows import Row
@@ -181,9 +183,6 @@ def pass_contraction(
     ndarray, shape (n_trials,)
         Spectral radius of I − G A (dimensionless; 0 for the exact formula).
     """
-    from ..orientation import relative as rel
-    from ..orientation import schemes as sch
-
     out = []
     for t in range(n_trials):
         rng = np.random.default_rng(seed + t)

@@ -158,7 +158,7 @@ def with_check_rays(block: Block) -> Block:
 def solve(problem: Problem, method: str | None) -> Solution:
     """Adjust the block by ``method`` and collect the report.
 
-    Datum options (:mod:`._datum`): ``free`` (a free network, minimum constraints) and
+    Datum options (:mod:`orientviz.io.datum`): ``free`` (a free network, minimum constraints) and
     ``fix`` (images/points held at their given values); ``robust`` (``"huber"``,
     ``"cauchy"``) with ``robust_scale`` reweights the bundle (:mod:`._robust`). The
     solution's ``start`` is the block the adjustment started from (approximations
@@ -195,9 +195,9 @@ def prepare(problem: Problem) -> tuple[Block, list[str]]:
     """The block the adjustment starts from, and the notes on its datum.
 
     Approximate values where the file gives none (:func:`approximate`), then the datum
-    options ``free`` and ``fix`` (:mod:`._datum`).
+    options ``free`` and ``fix`` (:mod:`orientviz.io.datum`).
     """
-    from ._datum import apply_fix, free_network, minimum_datum, parse_fix
+    from ..datum import apply_fix, free_network, minimum_datum, parse_fix
 
     o = problem.options
     fix = parse_fix(o.get("fix"), problem.source)

@@ -23,6 +23,8 @@ from numpy.typing import NDArray
 
 from ...adjust.result import W_CRITICAL
 from ...errors import InputError
+from ...orientation.essential import essential_route
+from ...orientation.relative import DEPENDENT, INDEPENDENT, relative_orientation
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
 from ..solution import Parameter, Solution
@@ -60,7 +62,6 @@ def load(doc: dict[str, Any], units: Units, source: str) -> PairData:
     for name, v in doc.get("approx", {}).items():
         approx[name] = float(v) * (units.m_per_length if name in LENGTHS else units.rad_per_angle)
     elements = (doc.get("options") or {}).get("elements", "dependent")
-    from ...orientation.relative import DEPENDENT, INDEPENDENT
 
     allowed = DEPENDENT if elements == "dependent" else INDEPENDENT
     for name in approx:
@@ -99,9 +100,6 @@ def dump(data: PairData, units: Units, columnar: bool) -> dict[str, Any]:
 
 def solve(problem: Problem, method: str | None) -> Solution:
     """Relative orientation of the pair (rigorous, or via the essential matrix)."""
-    from ...orientation.essential import essential_route
-    from ...orientation.relative import DEPENDENT, INDEPENDENT, relative_orientation
-
     data: PairData = problem.data
     opt = problem.options
     elements = opt.get("elements", "dependent")
