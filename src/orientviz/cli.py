@@ -239,9 +239,9 @@ COMMANDS: dict[str, Command] = {
         "orientviz.viewer.app",
         "run_from_cli",
         help="open the 3D viewer (viser, in the browser) on a demo or a problem file",
-        description="Open the 3D viewer on a demo (block, pair, radar) or a problem file and "
-        "serve it on http://HOST:PORT until Ctrl-C; --export writes a static HTML page "
-        "instead.",
+        description="Open the 3D viewer on a demo (block, pair, radar, design: the block "
+        "design studio) or a problem file and serve it on http://HOST:PORT until Ctrl-C; "
+        "--export writes a static HTML page instead.",
         examples=(
             ("orientviz view", "the default demo on http://127.0.0.1:8080"),
             ("orientviz view pair --port 8081", "the relative-orientation demo, another port"),
