@@ -16,7 +16,8 @@ import pytest
 
 import orientviz as ov
 from orientviz.block import CHECK, CONTROL, TIE
-from orientviz.bundle import BundleProblem, BundleState, adjust_with_auxiliary, ap_set, point_setup
+from orientviz.bundle import adjust_with_auxiliary, ap_set
+from orientviz.bundle.problem import BundleProblem, BundleState, point_setup
 from orientviz.camera import collinearity_jacobian
 from orientviz.simulate import height_control_at_ends, simulate_auxiliary
 

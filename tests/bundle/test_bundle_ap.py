@@ -7,19 +7,18 @@ import pytest
 import scipy.linalg
 
 import orientviz as ov
-from orientviz.bundle import (
-    BundleOptions,
+from orientviz.bundle import BundleOptions, ap_set
+from orientviz.bundle.problem import (
     BundleProblem,
     BundleState,
-    ap_set,
     band_backward_solve,
     band_forward_solve,
-    factor_reduced,
     form_preconditioner,
     point_setup,
     solve_bordered,
     solve_bordered_pcg,
 )
+from orientviz.bundle.reduced import factor_reduced
 from orientviz.camera import collinearity_jacobian
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import orientviz as ov
-from orientviz.bundle import banded_selected_inverse
+from orientviz.bundle.precision import banded_selected_inverse
 from orientviz.camera import collinearity_jacobian
 
 

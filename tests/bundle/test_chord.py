@@ -17,11 +17,8 @@ from unordered_networks import close_range_network
 import orientviz as ov
 from orientviz.bundle import BundleOptions
 from orientviz.bundle.loop import _steps
-from orientviz.bundle.model._kernel import collinearity_block
-from orientviz.bundle.model._local_rotation import angle_map, apply_local
-from orientviz.bundle.problem._checks import point_setup
-from orientviz.bundle.problem._problem import BundleProblem
-from orientviz.bundle.problem._state import BundleState
+from orientviz.bundle.model import angle_map, apply_local, collinearity_block
+from orientviz.bundle.problem import BundleProblem, BundleState, point_setup
 
 
 @pytest.mark.parametrize("sequence", ["opk", "pok"])

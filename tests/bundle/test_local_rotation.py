@@ -9,8 +9,7 @@ from unordered_networks import close_range_network
 import orientviz as ov
 from orientviz.block import CONTROL
 from orientviz.bundle import BundleOptions
-from orientviz.bundle.model._kernel import collinearity_block
-from orientviz.bundle.model._local_rotation import apply_local
+from orientviz.bundle.model import apply_local, collinearity_block
 from orientviz.orientation.intersection import intersect_rays
 from orientviz.rotation import matrix_from_opk, matrix_from_rotvec, opk_from_matrix
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from orientviz.bundle.reduced._schur import ImageGram
+from orientviz.bundle.reduced import ImageGram
 from orientviz.bundle.reduced._structure import _segments
 from orientviz.bundle.reduced._tracks import SUM_BY_ADDS_MAX_K, _sum_rays
 
@@ -36,9 +36,8 @@ def test_sums_over_a_points_rays_equal_numpys(k):
 
 def test_couplings_and_back_substitution_sums_per_point_equal_the_per_ray_ones():
     import orientviz as ov
-    from orientviz.bundle.problem._checks import point_setup
-    from orientviz.bundle.problem._problem import BundleProblem
-    from orientviz.bundle.reduced._tracks import point_sums_wt, ray_couplings
+    from orientviz.bundle.problem import BundleProblem, point_setup
+    from orientviz.bundle.reduced import point_sums_wt, ray_couplings
 
     sim = ov.simulate_block(3, 6, rng=2)
     tg = BundleProblem(sim.block, point_setup(sim.block, "fixed")).reduced.tracks

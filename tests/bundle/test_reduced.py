@@ -6,15 +6,9 @@ import numpy as np
 import pytest
 
 import orientviz as ov
-from orientviz.bundle import (
-    SOLVERS,
-    BundleOptions,
-    BundleProblem,
-    BundleState,
-    geometric_orderings,
-    inv3,
-    point_setup,
-)
+from orientviz.bundle import BundleOptions
+from orientviz.bundle.problem import BundleProblem, BundleState, point_setup
+from orientviz.bundle.reduced import SOLVERS, geometric_orderings, inv3
 from orientviz.camera import collinearity_jacobian
 
 

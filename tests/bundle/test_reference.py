@@ -50,6 +50,17 @@ def relative_difference(res, ref, block) -> dict[str, float]:
     }
 
 
+def textbook_cofactors(data, ref, sequence: str):
+    """Q11 = S⁻¹ (x1) and the point blocks Q22_j = N22_j⁻¹ + T_jᵀ Q11 T_j,
+    T_j = N12_j N22_j⁻¹, from the reference's normal equations at its optimum."""
+    f, A1, B = linearise(data, ref.X0, ref.angles, ref.xyz, ref.ap, sequence)
+    N11, N12, N22, *_ = normal_equations(data, f, A1, B, ref.X0, ref.angles, ref.xyz, ref.ap)
+    N22inv = np.linalg.inv(N22)
+    T = np.einsum("pia,pab->pib", N12, N22inv)
+    Q11 = np.linalg.inv(N11 - np.einsum("pia,pja->ij", T, N12))
+    return Q11, N22inv + np.einsum("pia,ij,pjb->pab", T, Q11, T)
+
+
 def assert_same_optimum(res, ref, block, agree=AGREE):
     assert res.converged and ref.converged, (res.reason, ref.reason)
     d = relative_difference(res, ref, block)
@@ -224,12 +235,7 @@ def test_the_precision_equals_the_inverse_of_the_reference_normal_equations(
     # precision code (banded selected inverse)
     ref = strips_reference
     su = reference_data(strips)
-    f, A1, B = linearise(su, ref.X0, ref.angles, ref.xyz, ref.ap, strips.sequence)
-    N11, N12, N22, *_ = normal_equations(su, f, A1, B, ref.X0, ref.angles, ref.xyz, ref.ap)
-    N22inv = np.linalg.inv(N22)
-    T = np.einsum("pia,pab->pib", N12, N22inv)
-    Q11 = np.linalg.inv(N11 - np.einsum("pia,pja->ij", T, N12))
-    Q22 = N22inv + np.einsum("pia,ij,pjb->pab", T, Q11, T)
+    Q11, Q22 = textbook_cofactors(su, ref, strips.sequence)
     fast = ov.bundle_adjust(strips, solver="banded", tol=TOL, max_iter=50)
     s0 = np.sqrt(ref.cost[-1] / fast.redundancy)
     want_ext = s0 * np.sqrt(np.diag(Q11))
@@ -277,3 +283,14 @@ def test_lesson_10s_normal_blocks_are_the_reference_blocks(strips):
     for got, want in ((N11, U), (W, nb.W), (N22, nb.V), (n1, nb.bc), (n2.ravel(), nb.bp)):
         np.testing.assert_allclose(got, want, rtol=0, atol=1e-10 * np.abs(want).max())
     assert vtpv == pytest.approx(nb.vtpv, rel=1e-12)
+
+
+def test_the_options_route_to_the_reference(strips, strips_reference):
+    res = ov.bundle_adjust(
+        strips, options=ov.bundle.BundleOptions(solver="reference", tol=TOL, max_iter=50),
+        precision=False,
+    )  # fmt: skip
+    assert res.solver == "reference" and res.reason == strips_reference.reason
+    assert np.array_equal(res.exterior[:, :3], strips_reference.X0)
+    with pytest.raises(ov.InputError, match="auxiliary"):
+        ov.bundle_adjust(strips, solver="reference", auxiliary=[object()])

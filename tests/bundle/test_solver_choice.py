@@ -12,7 +12,8 @@ import pytest
 from unordered_networks import close_range_network
 
 import orientviz as ov
-from orientviz.bundle import BundleOptions, BundleProblem, BundleState, point_setup
+from orientviz.bundle import BundleOptions
+from orientviz.bundle.problem import BundleProblem, BundleState, point_setup
 from orientviz.bundle.reduced._choice import choose_solver, image_blocks
 
 

@@ -160,7 +160,6 @@ def linearise(data: ReferenceData, X0: F64, angles: F64, xyz: F64, ap: F64, sequ
     dR = np.stack(matrix_derivatives(angles[:, 0], angles[:, 1], angles[:, 2], sequence))
     c, x0, y0 = data.cam
     A1 = np.zeros((n, 2, 6 * m + ap.size))
-    rows = np.arange(n)[:, None]
     if data.lens is None:  # the pinhole: x = x0 − c·u/w, y = y0 − c·v/w
         xy, dX0, dang, B = collinearity(xyz[data.point], X0[data.image], R, dR[:, data.image], c)
         f = xy + np.stack([x0, y0], 1)
@@ -168,13 +167,17 @@ def linearise(data: ReferenceData, X0: F64, angles: F64, xyz: F64, ap: F64, sequ
         nrm, dX0, dang, B = collinearity(xyz[data.point], X0[data.image], R, dR[:, data.image], 1.0)
         f, M, D = data.lens.evaluate(ap, data.group, nrm, data.l, True)
         dX0, dang, B = M @ dX0, M @ dang, M @ B
-    for e, part in enumerate((dX0, dang)):  # columns 6i…6i+2, 6i+3…6i+5 of image i
-        A1[rows, :, 6 * data.image[:, None] + 3 * e + np.arange(3)] = part.transpose(0, 2, 1)
-    if data.k:
+    for i in range(m):  # a ray's row has non-zeros only in its own image's six columns
+        ray = data.image == i
+        A1[ray, :, 6 * i : 6 * i + 3] = dX0[ray]
+        A1[ray, :, 6 * i + 3 : 6 * i + 6] = dang[ray]
+    if data.k:  # and in the k columns of its image's group of additional parameters
         D = data.design if data.lens is None else D
         if data.lens is None:  # a linear set: f = collinearity + A(x_obs)·a
             f = f + np.einsum("nkj,nj->nk", D, ap.reshape(-1, data.k)[data.group])
-        A1[rows, :, 6 * m + data.k * data.group[:, None] + np.arange(data.k)] = D.transpose(0, 2, 1)
+        for g in range(ap.size // data.k):
+            ray, col = data.group == g, 6 * m + g * data.k
+            A1[ray, :, col : col + data.k] = D[ray]
     return f, A1, B
 
 

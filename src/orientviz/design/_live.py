@@ -2,17 +2,18 @@
 
 Making point j control with weights P_j = diag(1/σ²) (1/m²), or changing or removing its
 control, adds ΔP_j to the point's 3×3 block of the normal equations N — values change, the
-structure does not (a design's points are all unknowns: its control is weighted). For a
-set of such changes, A selecting the changed coordinates and ΔP their weight changes,
+structure does not (a design's points are all unknowns: its control is weighted). With A
+selecting the point's coordinates, each change is one step of the Sherman-Morrison-Woodbury
+formula from the current cofactors Q:
 
-    Q = (N + Aᵀ ΔP A)⁻¹ = Q0 − C M Cᵀ,   C = Q0 Aᵀ,   M = (I + ΔP A C)⁻¹ ΔP,
+    Q' = (N + Aᵀ ΔP A)⁻¹ = Q − C M Cᵀ,   C = Q Aᵀ,   M = (I + ΔP A C)⁻¹ ΔP.
 
-(Sherman-Morrison-Woodbury). The columns C of one changed point are three solves with the
-factorised reduced camera system of the base design (right-hand side −Σ T_a of the
-point's rays, T = W V⁻¹) and one back-substitution to all points
-(Q_kj = δ_kj V_j⁻¹ − Σ_b T_bᵀ Q_c(i_b, j)); they depend only on the base design and are
-kept per point. A change then costs those three solves (once per point) and the update of
-the shown quantities:
+The current columns C are those of the base design, C0 = Q0 Aᵀ — three solves with its
+factorised reduced camera system (right-hand side −Σ T_a of the point's rays,
+T = W V⁻¹) and one back-substitution to all points (Q_kj = δ_kj V_j⁻¹ − Σ_b T_bᵀ
+Q_c(i_b, j)), kept per point — less the earlier steps' C_s M_s C_sᵀ Aᵀ. A step costs
+those (the solves once per point) and the update of the shown quantities, whatever the
+number of earlier changes; undo restores the terms before the step:
 
 * point and station covariances: Q_kk − C_k M C_kᵀ;
 * per ray with h = P½ J C (2 × r): the block P½ J Q Jᵀ P½ loses h M hᵀ, so the
@@ -35,22 +36,17 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..block import CONTROL, TIE, Block
-from ..bundle import (
-    BundleProblem,
-    BundleState,
-    RayGains,
-    factor_reduced,
-    point_setup,
-    ray_reliability,
-)
+from ..bundle import RayGains, ray_reliability
+from ..bundle.problem import BundleProblem, BundleState, point_setup
+from ..bundle.reduced import factor_reduced
 from ..errors import InputError
 from ._design import assess_block
 from ._quality import DesignQuality, quality_from_arrays
 
 F64 = NDArray[np.float64]
 
-#: After this many changed points the base design is formed and factored again.
-MAX_CHANGED_POINTS: int = 40
+#: After this many update steps the design is formed and factored again.
+MAX_STEPS: int = 40
 
 
 @dataclass(frozen=True)
@@ -135,15 +131,20 @@ class LiveDesign:
         n = b.n_observations
         idx = prob.obs.index
         rn = np.asarray(res.redundancy_numbers[: 2 * n]).reshape(n, 2)
-        self._r0 = rn[idx]
-        self._rxy0 = np.asarray(res.redundancy_xy)[idx]
-        self._Ke0 = np.asarray(res.ray_gains.exterior)[idx]
-        self._Kp0 = np.asarray(res.ray_gains.points)[idx]
         unk = prob.points.unknown
-        self._Qp0 = np.asarray(res.cofactor_groups["points"])[unk]  # by column
-        self._Qe0 = np.asarray(res.cofactor_groups["exterior"])
-        self._w0 = self._weights_now()
+        #: the current cofactor terms (points by column, images, rays in the problem's order)
+        self._cur = _Current(
+            Qp=np.asarray(res.cofactor_groups["points"])[unk],
+            Qe=np.asarray(res.cofactor_groups["exterior"]),
+            r=rn[idx],
+            rxy=np.asarray(res.redundancy_xy)[idx],
+            Ke=np.asarray(res.ray_gains.exterior)[idx],
+            Kp=np.asarray(res.ray_gains.points)[idx],
+        )
+        self._w = self._weights_now()  # the weights the current terms belong to
         self._cols: dict[int, tuple[F64, F64]] = {}
+        #: per step: (weights, terms, quality) before it, and its (Cc, Cp, M)
+        self._stack: list[tuple[F64, _Current, DesignQuality, tuple]] = []
         self.changes: list[Change] = []
         self.base_quality = self._quality = q
         self.result = res
@@ -187,7 +188,8 @@ class LiveDesign:
         self._apply_roles(ch.point, s)
         self.changes.append(ch)
         self.history.append(ch.describe(self.block.points.ids))
-        if len({c.point for c in self.changes}) > MAX_CHANGED_POINTS:
+        if len(self._stack) >= MAX_STEPS:
+            self.history.append("(normal equations formed and factored again)")
             return self.rebuild()
         return self.quality()
 
@@ -206,6 +208,8 @@ class LiveDesign:
         ch = self.changes.pop()
         self._apply_roles(ch.point, np.asarray(ch.before))
         self.history.append(f"undo: {ch.describe(self.block.points.ids)}")
+        if self._stack:  # the terms before the change's step
+            self._w, self._cur, self._quality, _ = self._stack.pop()
         return self.quality()
 
     def _apply_roles(self, point: int, s: F64) -> None:
@@ -216,53 +220,85 @@ class LiveDesign:
         P.role[point] = CONTROL if given.any() else TIE
 
     # ------------------------------------------------------------------ the quality
-    def update_terms(self, points: list[int], dw: F64):
-        """C, M of the Woodbury update for weight changes ``dw`` (k, 3) at ``points``."""
-        cols = [self.columns(j) for j in points]
-        Cc = np.concatenate([c[0] for c in cols], axis=2)  # (m, 6, r)
-        Cp = np.concatenate([c[1] for c in cols], axis=2)  # (p, 3, r)
-        pc = self._prob.points.column[np.asarray(points)]
-        G = Cp[pc].reshape(-1, Cp.shape[2])  # A C (r, r)
-        d = np.asarray(dw, float).reshape(-1)
-        M = np.linalg.solve(np.eye(d.size) + d[:, None] * G, np.diag(d))
-        return Cc, Cp, 0.5 * (M + M.T)
+    def current_columns(self, point: int) -> tuple[F64, F64]:
+        """The current design's cofactors at the three columns of ``point``: orientations
+        (m, 6, 3) and points by column (p, 3, 3); Q0's columns less each step's C M Cᵀ."""
+        Cc, Cp = self.columns(point)
+        c = self._prob.points.column[point]
+        for _, _, _, (Cs, Ps, Ms) in self._stack:
+            B = Ms @ Ps[c].T  # (r, 3)
+            Cc = Cc - Cs @ B
+            Cp = Cp - Ps @ B
+        return Cc, Cp
 
     def quality(self) -> DesignQuality:
         """The quality of the current design (by the update formula)."""
         w = self._weights_now()
-        pts = np.flatnonzero(np.any(w != self._w0, axis=1))
-        if pts.size == 0:
-            self._quality = self.base_quality
-            return self._quality
-        Cc, Cp, M = self.update_terms(list(pts), (w - self._w0)[pts])
+        pts = np.flatnonzero(np.any(w != self._w, axis=1))
+        if pts.size:
+            self._step(pts, w)
+        return self._quality
+
+    def _step(self, pts: NDArray[np.int64], w: F64) -> None:
+        """One rank-3k update from the current terms to the weights ``w`` at ``pts``."""
+        cols = [self.current_columns(int(j)) for j in pts]
+        Cc = np.concatenate([c[0] for c in cols], axis=2)  # (m, 6, r)
+        Cp = np.concatenate([c[1] for c in cols], axis=2)  # (p, 3, r)
         prob = self._prob
-        unk = prob.points.unknown
-        Qp = self._Qp0 - np.einsum("kir,rs,kjs->kij", Cp, M, Cp, optimize=True)
-        Qe = self._Qe0 - np.einsum("kir,rs,kjs->kij", Cc, M, Cc, optimize=True)
+        pc = prob.points.column[pts]
+        G = Cp[pc].reshape(-1, Cp.shape[2])  # A C (r, r)
+        d = (w - self._w)[pts].reshape(-1)
+        M = np.linalg.solve(np.eye(d.size) + d[:, None] * G, np.diag(d))
+        M = 0.5 * (M + M.T)
+        c0 = self._cur
         oi, oc = prob.obs.image, prob.obs.column
+        CpM = Cp @ M
+        CcM = Cc @ M
         h = self._Jew @ Cc[oi] + self._Jpw @ Cp[oc]  # (n, 2, r)
         hM = h @ M
         dH = hM @ h.transpose(0, 2, 1)
-        r = np.clip(self._r0 + np.stack([dH[:, 0, 0], dH[:, 1, 1]], 1), 0.0, 1.0)
-        rxy = self._rxy0 + 0.5 * (dH[:, 0, 1] + dH[:, 1, 0])
-        Ke = self._Ke0 - Cc[oi] @ hM.transpose(0, 2, 1)
-        Kp = self._Kp0 - Cp[oc] @ hM.transpose(0, 2, 1)
-        b = self.block
+        ht = h.transpose(0, 2, 1)
+        cur = _Current(
+            Qp=c0.Qp - CpM @ Cp.transpose(0, 2, 1),
+            Qe=c0.Qe - CcM @ Cc.transpose(0, 2, 1),
+            r=np.clip(c0.r + np.stack([dH[:, 0, 0], dH[:, 1, 1]], 1), 0.0, 1.0),
+            rxy=c0.rxy + 0.5 * (dH[:, 0, 1] + dH[:, 1, 0]),
+            Ke=c0.Ke - CcM[oi] @ ht,
+            Kp=c0.Kp - CpM[oc] @ ht,
+        )
+        self._stack.append((self._w, c0, self._quality, (Cc, Cp, M)))
+        self._w, self._cur = w, cur
+        self._quality = self._assemble(cur)
+
+    def _assemble(self, cur: _Current) -> DesignQuality:
+        """Reliability, ellipsoids, weak spots and summary from the current terms."""
+        b, prob = self.block, self._prob
         n = b.n_observations
         idx = prob.obs.index
         rn = np.full((n, 2), np.nan)
-        rn[idx] = r
+        rn[idx] = cur.r
         rx = np.full(n, np.nan)
-        rx[idx] = rxy
+        rx[idx] = cur.rxy
         ge, gp = np.full((n, 6, 2), np.nan), np.full((n, 3, 2), np.nan)
-        ge[idx], gp[idx] = Ke, Kp
+        ge[idx], gp[idx] = cur.Ke, cur.Kp
         adj = SimpleNamespace(
             redundancy_numbers=rn.reshape(-1), redundancy_xy=rx, ray_gains=RayGains(ge, gp)
         )
         rel = ray_reliability(adj, b, alpha0=self.alpha0, beta0=self.beta0)
         Qp_all = np.empty((b.n_points, 3, 3))
-        Qp_all[unk] = Qp
-        self._quality = quality_from_arrays(
-            b, Qp_all, Qe, rn, rel, float(self.spec["base_m"]), self.level
+        Qp_all[prob.points.unknown] = cur.Qp
+        return quality_from_arrays(
+            b, Qp_all, cur.Qe, rn, rel, float(self.spec["base_m"]), self.level
         )
-        return self._quality
+
+
+@dataclass(frozen=True)
+class _Current:
+    """The cofactor terms of a design that the shown quantities come from."""
+
+    Qp: F64
+    Qe: F64
+    r: F64
+    rxy: F64
+    Ke: F64
+    Kp: F64

@@ -5,8 +5,8 @@ every point k of the current design :class:`~orientviz.design.LiveDesign` become
 
     Q_kk' = Q_kk − Q_kj (P⁻¹ + Q_jj)⁻¹ Q_jk,
 
-with the current columns Q_·j = C0_j − C M C_jᵀ (the base design's columns of j and the
-low-rank terms of the changes made so far). So each candidate costs its three columns and
+with the current columns Q_·j (:meth:`LiveDesign.current_columns`: the base design's
+columns of j less the low-rank terms of the changes made so far). So each candidate costs its three columns and
 a 3×3 update per point; the worst σ after the change is exact, not estimated. The
 criterion ``"external"`` (the largest δ̄0 of any ray) needs the rays' redundancy and is
 evaluated by making the change and taking it back (:meth:`LiveDesign.set_control`,
@@ -160,16 +160,11 @@ def _sigma_after(live, q, cand, sigma, criterion) -> F64:
     col = prob.points.column
     unk = prob.points.unknown
     w_now = live._weights_now()
-    changed = np.flatnonzero(np.any(w_now != live._w0, axis=1))
-    if changed.size:
-        Cc, Cp, M = live.update_terms(list(changed), (w_now - live._w0)[changed])
     Qp = q.point_cov[unk]  # current, by column
     ctrl = q.control[unk]
     out = np.empty(cand.size)
     for k, j in enumerate(cand):
-        Cj = live.columns(int(j))[1]  # (p, 3, 3) base columns of j
-        if changed.size:  # current columns: C0_j − C M Cᵀ at j
-            Cj = Cj - Cp @ M @ Cp[col[j]].T
+        Cj = live.current_columns(int(j))[1]  # (p, 3, 3)
         dw = 1.0 / sigma**2 - w_now[j]  # the weight added at j (3,)
         Gj = Cj[col[j]]
         Mj = np.linalg.solve(np.eye(3) + dw[:, None] * Gj, np.diag(dw))

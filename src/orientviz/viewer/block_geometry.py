@@ -29,9 +29,9 @@ COLORS: dict[str, tuple[int, int, int]] = {
     "control": (220, 40, 40),
     "check": (20, 150, 60),
     "frustum": (40, 70, 160),
-    "selected": (250, 130, 0),
+    "selected": (0, 200, 255),
     "ray": (120, 150, 200),
-    "ray_selected": (250, 150, 40),
+    "ray_selected": (90, 210, 255),
     "strip": (110, 60, 160),
     "model": (150, 150, 150),
     "ellipsoid": (230, 80, 200),
@@ -275,6 +275,12 @@ class BlockGeometry:
                 self.state.result, np.arange(self.state.block.n_images)
             )
         return pv.auto_gain(cov, k, self.spacing)
+
+    def station_gain(self, k: float) -> float:
+        """Exaggeration of the projection centres' ellipsoids: the median drawn a third of
+        the frustum depth (their own scale: stations and points differ by orders)."""
+        idx, cov = pv.station_covariances(self.state.result, np.arange(self.state.block.n_images))
+        return pv.auto_gain(cov, k, self.frustum_depth)
 
     def ellipsoids(
         self, points: NDArray[np.int64], k: float, gain: float, subdivisions: int = 1

@@ -76,6 +76,10 @@ def pair_geometry(plotter: Any, n_grid: int = 15) -> dict[str, F64]:
     }
 
 
+#: Colour of the right projector (the left one has the frustum colour).
+RIGHT_PROJECTOR = (250, 130, 0)
+
+
 def length_text(mm: float) -> str:
     """A length in machine mm as µm below 1 mm, else in mm (signed, e.g. ``+957 µm``)."""
     return f"{mm * 1000:+.0f} µm" if abs(mm) < 1.0 else f"{mm:+.2f} mm"
@@ -148,7 +152,7 @@ class PairView:
         self.base_k = self.k = self.auto_k(geo["parallax"])
         self.terrain_box = (geo["terrain"].min(axis=0), geo["terrain"].max(axis=0))
         self.nodes: dict[str, Any] = {}
-        for name, color in (("left", COLORS["frustum"]), ("right", COLORS["selected"])):
+        for name, color in (("left", COLORS["frustum"]), ("right", RIGHT_PROJECTOR)):
             self.nodes[name] = sc.add_camera_frustum(
                 f"/pair/{name}", fov=fov, aspect=aspect, scale=scale, color=color,
                 thickness=2.0, thickness_units="screen", cast_shadow=False, receive_shadow=False,

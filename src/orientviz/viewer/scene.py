@@ -353,7 +353,10 @@ class BlockScene:
             m = self.geo.state.block.n_images
             nb, _ = neighbour_correlations(self.geo.state.result, self.selected, m)
             imgs = np.concatenate([[self.selected], nb])
-            self._mesh("station_ellipsoids", self.geo.station_ellipsoids(imgs, k, gain), 0.6)
+            if new_gain or not getattr(self, "station_gain", None):
+                self.station_gain = self.geo.station_gain(k)
+            sg = self.station_gain * float(opt["factor"])
+            self._mesh("station_ellipsoids", self.geo.station_ellipsoids(imgs, k, sg), 0.6)
         return gain
 
     def _mesh(self, key: str, mesh: tuple | None, opacity: float) -> None:

@@ -79,7 +79,7 @@ class CameraTerms:
     The camera model (lens model or additional parameters of ``cameras[]``) is part of
     the bundle's projection; the misclosure of a state with camera terms ``ap`` (the
     result's ``"additional"`` block) is the bundle's own, from its public problem
-    (:class:`orientviz.bundle.BundleProblem`). Observations the bundle does not use
+    (:class:`orientviz.bundle.problem.BundleProblem`). Observations the bundle does not use
     (rays of independent check points) get the pinhole misclosure.
     """
 
@@ -101,7 +101,7 @@ class CameraTerms:
     def _problem(self, block: Block) -> Any:
         key = (id(block.observations), block.n_images, block.n_points)
         if self._cache is None or self._cache[0] != key:
-            from ..bundle import BundleProblem, point_setup
+            from ..bundle.problem import BundleProblem, point_setup
             from ..io.kinds.block import bundle_camera_options
 
             opts = bundle_camera_options(block)  # ap groups of this (sub-)block
@@ -111,7 +111,7 @@ class CameraTerms:
 
     def misclosure(self, block: Block, ap: F64) -> F64:
         """l − f (n, 2) in mm at the block's orientations and points and terms ``ap``."""
-        from ..bundle import BundleState
+        from ..bundle.problem import BundleState
 
         prob = self._problem(block)
         e = block.residuals()

@@ -23,6 +23,7 @@ from ._border import (
     solve_bordered_pcg,
 )
 from ._checks import PointSetup, datum_defect, image_condition_deficit, point_setup
+from ._names import ParameterNames
 from ._parts import (
     AdditionalBlock,
     BorderSolver,
@@ -31,7 +32,7 @@ from ._parts import (
     InteriorOrientation,
     PointBlock,
 )
-from ._problem import BundleProblem, ParameterNames
+from ._problem import BundleProblem
 from ._run import BundleRun
 from ._state import BundleState, wrap
 

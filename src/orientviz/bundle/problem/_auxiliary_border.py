@@ -13,7 +13,7 @@ No observation holds both a and g, so F_ag comes only from the elimination of po
 that carry image rays and APR rows: ``F_ag = −Σ_j H_j V_j⁻¹ P_j`` (H_j the rays' Aᵀ P J_p
 per (point, group) pair, :mod:`orientviz.bundle.problem._ap_normal`; P_j the APR rows' coupling of
 the point with g). The border is eliminated exactly, ``Fs = F − Eᵀ S⁻¹ E`` (forming Fs
-with :func:`orientviz.bundle.solve_bordered`); Fs⁻¹ is the cofactor matrix
+with :func:`orientviz.bundle.problem.solve_bordered`); Fs⁻¹ is the cofactor matrix
 of the border, which the precision (:func:`orientviz.bundle.precision._precision.bundle_precision`)
 needs anyway.
 

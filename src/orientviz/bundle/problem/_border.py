@@ -22,7 +22,7 @@ which is eliminated by block elimination: ``Fs = F − Eᵀ S⁻¹ E``, ``Fs da 
   geometry hardly changes between Gauss-Newton iterations, so that factor stays a good
   preconditioner (the eigenvalues of Fs_old⁻¹·Fs stay close to 1).
 
-The bundle (:meth:`orientviz.bundle.BundleProblem.solve`) forms the preconditioner
+The bundle (:meth:`orientviz.bundle.problem.BundleProblem.solve`) forms the preconditioner
 in the first iteration that solves for the parameters, uses the conjugate gradients from
 then on, forms Fs anew when they need more than ``BundleOptions.pcg_stale_steps`` steps, and falls
 back to the exact :func:`solve_bordered` (which also names a singular border) when they

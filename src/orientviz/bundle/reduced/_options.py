@@ -46,6 +46,13 @@ class ReducedOptions:
     gram_pad_max : float
         The images' Gram matrices are formed from one padded stack when padding adds at
         most this fraction of the rays, else image by image (same numbers).
+    leaf_images, merge_images : int
+        Nested dissection: parts of at most ``leaf_images`` images are not dissected
+        further (one dense front); separators of at most ``merge_images`` images join
+        their parent's (0: none).
+    balance : float
+        A level-structure separator (no projection centres) leaves at least this fraction
+        of a part on each side.
     """
 
     rate_dense: float = 1.0
@@ -61,3 +68,6 @@ class ReducedOptions:
     sparse_considered_above_strips: float = 5e10
     dense_diagnosis_limit: int = 3000
     gram_pad_max: float = 0.5
+    leaf_images: int = 12
+    merge_images: int = 0
+    balance: float = 0.3

@@ -241,7 +241,11 @@ class ReducedStructure:
         (:class:`._dissection.Dissection`; formed on first use, with
         geometric separators when ``positions`` are given)."""
         if getattr(self, "_diss", None) is None:
-            self._diss = nested_dissection(self.block_i, self.block_k, self.n_cam, self.positions)
+            o = self.options
+            self._diss = nested_dissection(
+                self.block_i, self.block_k, self.n_cam, self.positions,
+                leaf=o.leaf_images, merge=o.merge_images, balance=o.balance,
+            )  # fmt: skip
         return self._diss
 
     @property

@@ -6,7 +6,7 @@ T_j W_jᵀ (T_j = W_j V_j⁻¹ and W_j stacked: 6k × 3). The points are grouped
 stack), and their sum into the blocks of S is one product with a constant sparse matrix
 that maps each 6-element row of a product to its row of a block of S, with the sign of
 the subtraction. The per-ray arrays of
-:meth:`orientviz.bundle.BundleProblem.normal` are formed in this ray order; its sums per
+:meth:`orientviz.bundle.problem.BundleProblem.normal` are formed in this ray order; its sums per
 point and per image are products with constant sparse incidence matrices.
 
 :class:`TrackGroups` holds the constant layout (formed once per problem).
