@@ -25,7 +25,7 @@ import numpy as np
 from ...adjust.result import W_CRITICAL
 from ...approximate import approximate_values
 from ...block import CHECK, CONTROL, ROLES, TIE, Block
-from ...bundle import bundle_adjust
+from ...bundle import BundleOptions, bundle_adjust
 from ...bundle.problem import point_setup
 from ...errors import InputError
 from ...polynomial import polynomial_adjust
@@ -242,8 +242,6 @@ def adjust_block(problem: Problem, block: Block, **overrides: Any) -> tuple[Any,
     opts = _options(problem)
     damping, ftol = opts.pop("damping", None), opts.pop("ftol", None)
     if damping is not None or ftol is not None:  # the loop's knobs (SfM models)
-        from ...bundle import BundleOptions
-
         opts["options"] = BundleOptions(damping=str(damping or "fallback"),
                                         ftol=float(ftol or 0.0))  # fmt: skip
     opts.update(bundle_camera_options(block))  # cameras[].model / additional
