@@ -26,8 +26,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from . import __version__
-from .errors import OrientvizError
+from . import __version__, reproduce
+from .errors import OrientvizError, printable
+from .io.safeio import input_limit, parse_size
 
 
 @dataclass(frozen=True)
@@ -102,8 +103,6 @@ def port_number(text: str) -> int:
 
 def byte_size(text: str) -> int:
     """An argparse type: a size such as ``200M``, ``2G`` or ``4096`` (bytes)."""
-    from .io.safeio import parse_size
-
     try:
         return parse_size(text)
     except (ValueError, IndexError):
@@ -153,7 +152,7 @@ IMPORT_OPTIONS: tuple[Arg, ...] = (
 #: name → Command; the order is the order of ``orientviz --help``
 COMMANDS: dict[str, Command] = {
     "solve": Command(
-        "orientviz.io.solve",
+        "orientviz.report.solve",
         "run_from_cli",
         help="adjust a problem file (orientviz/1 JSON) and print a report",
         description="Adjust a problem file (orientviz/1 JSON) and print a report: sigma0, "
@@ -356,7 +355,7 @@ COMMANDS: dict[str, Command] = {
         ),  # fmt: skip
     ),
     "export": Command(
-        "orientviz.io.export",
+        "orientviz.report.export",
         "run_from_cli",
         help="adjust a block problem file and export the results (JSON, CSV, COLMAP text)",
         description="Adjust a block problem file by the bundle method and write into DIR: "
@@ -464,8 +463,6 @@ def _parser() -> argparse.ArgumentParser:
 
 def run_reproduce(args: argparse.Namespace) -> int:
     """``orientviz reproduce [NAME] [--json]``; returns the exit code."""
-    from . import reproduce
-
     if args.name is None:
         for k, d in reproduce.available().items():
             print(f"{k:12s} {d}")
@@ -551,8 +548,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     on stderr. An error nobody foresaw is reported in one line too (exit 3, "internal
     error"), with the traceback only under ``--debug``.
     """
-    from .io.safeio import input_limit
-
     parser = _parser()
     args = parser.parse_args(argv)
     if args.command not in COMMANDS:
@@ -608,8 +603,6 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _one_line(text: str, limit: int = 1000) -> str:
-    from .errors import printable
-
     return printable(text, limit)
 
 

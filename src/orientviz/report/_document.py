@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..io.problem import LENGTH_UNITS
 from ..units import RHO
 
 #: Redundancy numbers below this mark an observation as (nearly) uncontrolled.
@@ -158,8 +159,6 @@ def length_unit(sigmas_m: ArrayLike, file_unit: str = "m") -> tuple[str, float]:
     A file in feet (``file_unit`` ``"ft"`` or ``"us-ft"``) gets its own unit and factor
     (per m) instead: its lengths are labelled as the file gives them.
     """
-    from ..io.problem import LENGTH_UNITS
-
     if file_unit in ("ft", "us-ft"):
         return file_unit, 1.0 / LENGTH_UNITS[file_unit]
     a = np.asarray(sigmas_m, float)

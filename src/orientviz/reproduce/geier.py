@@ -28,13 +28,12 @@ import numpy as np
 
 from ..radar import fig8
 from ..radar.data import load_fig8_paper
+from ..radar.geier1973 import SURFACES
 from .rows import Row
 
 
 def _english(column: str) -> str:
     """The surface of a Fig. 8 column in English (the paper's headings are German)."""
-    from ..radar.geier1973 import SURFACES
-
     _, kind, radius, convex = SURFACES[column]
     if kind == "fig7":
         return "arbitrary heights of Fig. 7"

@@ -25,13 +25,20 @@ import numpy as np
 from ...adjust.result import W_CRITICAL
 from ...approximate import approximate_values
 from ...block import CHECK, CONTROL, ROLES, TIE, Block
+from ...bundle import bundle_adjust
+from ...bundle.problem import point_setup
 from ...errors import InputError
+from ...polynomial import polynomial_adjust
+from ...stereo_models import independent_models
+from ..datum import apply_fix, free_network, minimum_datum, parse_fix
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
 from ..solution import Solution
+from ._align import align_to_control, intersect_from_orientations
 from ._cameras import bundle_camera_options, camera_notes, camera_parameters
 from ._diverge import divergence_note
 from ._frame import block_from_tables, read_frame_tables, require_finite, tables_from_block
+from ._robust import robust_bundle
 
 METHODS = ("bundle", "models", "polynomial")
 
@@ -90,7 +97,6 @@ def approximate(block: Block, frame: str = "control") -> Block:
     """
     if not np.all(np.isfinite(block.images.X0)) or not np.all(np.isfinite(block.images.angles)):
         return approximate_values(block, frame=frame)
-    from ._align import align_to_control
 
     block, alignment = align_to_control(block)
     if alignment.applied:
@@ -103,7 +109,6 @@ def _approximate_tie_points(block: Block) -> Block:
     missing = np.flatnonzero(~np.all(np.isfinite(block.points.xyz), axis=1))
     if missing.size == 0:
         return block
-    from ._align import intersect_from_orientations
 
     mask = np.zeros(block.n_points, bool)
     mask[missing] = True
@@ -178,16 +183,13 @@ def solve(problem: Problem, method: str | None) -> Solution:
         return sol
     opts = _options(problem)
     if method == "models":
-        from ...stereo_models import independent_models
-
         opts["method"] = problem.options.get("model_method", "rigorous")
         adj = _call(independent_models, block, opts, precision=True)
         return solution_from_models(problem, block, adj)
-    from ...polynomial import polynomial_adjust as func
 
-    adj = _call(func, block, opts)
+    adj = _call(polynomial_adjust, block, opts)
     if "exterior" not in adj.groups:
-        return solution_from_points(problem, block, adj, method, func)
+        return solution_from_points(problem, block, adj, method, polynomial_adjust)
     return solution_from_block_adjustment(problem, block, adj, method)
 
 
@@ -197,8 +199,6 @@ def prepare(problem: Problem) -> tuple[Block, list[str]]:
     Approximate values where the file gives none (:func:`approximate`), then the datum
     options ``free`` and ``fix`` (:mod:`orientviz.io.datum`).
     """
-    from ..datum import apply_fix, free_network, minimum_datum, parse_fix
-
     o = problem.options
     fix = parse_fix(o.get("fix"), problem.source)
     free = bool(o.get("free", False))
@@ -237,8 +237,6 @@ def adjust_block(problem: Problem, block: Block, **overrides: Any) -> tuple[Any,
     (BundleResult, str or None)
         The adjustment and the note of a robust run (None without ``robust``).
     """
-    from ...bundle import bundle_adjust
-
     o = problem.options
     loss = str(o.get("robust", "none"))
     opts = _options(problem)
@@ -247,7 +245,6 @@ def adjust_block(problem: Problem, block: Block, **overrides: Any) -> tuple[Any,
     run_block = with_check_rays(block) if check_mode(problem) == "rays" else block
     if loss == "none":
         return _call(bundle_adjust, run_block, opts), None
-    from ._robust import robust_bundle
 
     adj, run = robust_bundle(run_block, loss, o.get("robust_scale"),
                              lambda b: _call(bundle_adjust, b, opts))  # fmt: skip
@@ -294,8 +291,6 @@ def _labels(
 def _control_labels(block: Block, control: str) -> list[str]:
     """``point/X`` for each coordinate pseudo-observation of the bundle, in its order
     (unknown points in block order, then X, Y, Z; see ``bundle.problem._checks.point_setup``)."""
-    from ...bundle.problem import point_setup
-
     setup = point_setup(block, control)
     pt = block.points.ids
     return [f"{pt[p]}/{'XYZ'[c]}" for p in np.flatnonzero(setup.unknown) for c in range(3)
