@@ -1,0 +1,33 @@
+"""Design a block before flying it: predicted precision and reliability from geometry.
+
+* :class:`FlightDesign` — the plan (camera, scale, overlaps, strips, control with σ,
+  GNSS σ, image σ); :func:`design_block` → the design block (planned geometry,
+  error-free observations); :func:`set_control` makes a point control or tie;
+* :func:`assess_design` / :func:`assess_block` → :class:`DesignAssessment`,
+  :class:`DesignQuality`: σ of every point and station, confidence ellipsoids,
+  redundancy numbers, MDB, external reliability, weak spots in words, and Ebner's
+  accuracy laws for the same layout (:func:`accuracy_law`);
+* :class:`LiveDesign` — one change (a control point added, removed, its σ changed)
+  updates the quality by a low-rank formula on the design's factorised normal
+  equations, without forming them again;
+* :func:`suggest_control` — the next control point that most reduces the worst σ.
+
+The package sits above :mod:`orientviz.bundle` and :mod:`orientviz.simulate` and uses
+their machinery: the normal equations, the precision and reliability are the bundle's.
+"""
+
+from ._design import DesignAssessment, accuracy_law, assess_block, assess_design
+from ._layout import FlightDesign, design_block, set_control
+from ._quality import DesignQuality, ellipsoids
+
+__all__ = [
+    "FlightDesign",
+    "design_block",
+    "set_control",
+    "DesignAssessment",
+    "DesignQuality",
+    "accuracy_law",
+    "assess_block",
+    "assess_design",
+    "ellipsoids",
+]

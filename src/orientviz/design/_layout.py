@@ -1,0 +1,155 @@
+"""A block design from geometry alone: the flight plan, the control and the σ.
+
+:class:`FlightDesign` holds what a planner decides before the flight (camera, image scale,
+overlaps, strips, control layout, the σ of image coordinates, control and GNSS projection
+centres). :func:`design_block` turns it into the *design block*: the planned images and
+points of :func:`orientviz.simulate.simulate_block` (exact flight plan, no jitter) with
+error-free image coordinates, i.e. the block's geometry itself. The bundle's normal
+equations formed at this block are the design's normal equations.
+
+Control in a design is always *weighted* (σ > 0): then every point is an unknown and
+adding or removing a control point changes the values of the normal equations, not
+their structure (:mod:`orientviz.design._live` uses that).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from ..block import CONTROL, TIE, Block
+from ..errors import InputError
+from ..simulate import simulate_block
+
+
+@dataclass(frozen=True)
+class FlightDesign:
+    """What a planner chooses before the flight (all lengths in m unless said).
+
+    Attributes
+    ----------
+    strips, images_per_strip : int
+        Parallel strips along +X and images per strip.
+    camera : str or float
+        ``"wide"`` (c = 152 mm), ``"superwide"`` (88 mm) or c in mm (format 230 mm).
+    scale : float
+        Image scale number m_B; flying height H = c · m_B.
+    forward_overlap, side_overlap : float
+        Overlaps as fractions.
+    relief : float
+        Peak-to-peak terrain relief as a fraction of H (0 = flat).
+    control : {"perimeter", "chains", "full", "corners", "none"}
+        Control layout of :func:`orientviz.simulate.simulate_block`.
+    control_spacing, chain_spacing : int
+        Perimeter spacing and height-chain spacing in bases.
+    control_kind : {"xyz", "xy+z"}
+        Full control everywhere, or XY on the perimeter and Z in the chains.
+    sigma_image_mm : float
+        σ of an image coordinate, mm.
+    sigma_control : float
+        σ of a given control coordinate, m (> 0: control is weighted).
+    sigma_gnss : float or None
+        σ of GNSS-observed projection centres (X0, Y0, Z0), m; None = no GNSS.
+    extra : {"grid"} or int or None
+        Tie points besides the standard (Gruber) ones (see ``simulate_block``).
+    terrain_seed : int
+        Seed of the terrain's hills (relief > 0); the design itself is deterministic.
+    """
+
+    strips: int = 3
+    images_per_strip: int = 8
+    camera: str | float = "wide"
+    scale: float = 10_000.0
+    forward_overlap: float = 0.6
+    side_overlap: float = 0.2
+    relief: float = 0.0
+    control: str = "perimeter"
+    control_spacing: int = 4
+    chain_spacing: int = 4
+    control_kind: str = "xyz"
+    sigma_image_mm: float = 0.005
+    sigma_control: float = 0.02
+    sigma_gnss: float | None = None
+    extra: str | int | None = None
+    terrain_seed: int = 0
+    options: dict[str, Any] = field(default_factory=dict, compare=False)
+
+    def with_(self, **changes: Any) -> FlightDesign:
+        """A copy with some choices changed."""
+        return replace(self, **changes)
+
+
+def design_block(design: FlightDesign) -> tuple[Block, dict[str, Any]]:
+    """The design block of a flight design: planned geometry, error-free observations.
+
+    Parameters
+    ----------
+    design : FlightDesign
+
+    Returns
+    -------
+    block : Block
+        True (planned) orientations and points; image coordinates without errors with
+        σ = ``sigma_image_mm`` (mm); control points with their true coordinates given with
+        σ = ``sigma_control`` (m); with ``sigma_gnss`` the projection centres observed
+        (``images.X0_obs``, ``X0_sigma``, m).
+    spec : dict
+        The simulator's geometry (``flying_height_m``, ``base_m``, ``strip_spacing_m``,
+        ``grid_rows``, ``grid_cols`` …).
+
+    Raises
+    ------
+    InputError
+        For σ ≤ 0 or impossible geometry.
+    """
+    if not design.sigma_image_mm > 0:
+        raise InputError(f"sigma_image_mm: expected σ > 0 mm, got {design.sigma_image_mm}")
+    if not design.sigma_control > 0:
+        raise InputError(
+            f"sigma_control: a design weights its control, expected σ > 0 m, got "
+            f"{design.sigma_control}"
+        )
+    if design.sigma_gnss is not None and not design.sigma_gnss > 0:
+        raise InputError(f"sigma_gnss: expected σ > 0 m or None, got {design.sigma_gnss}")
+    sim = simulate_block(
+        design.strips, design.images_per_strip, rng=np.random.default_rng(design.terrain_seed),
+        camera=design.camera, scale=design.scale, forward_overlap=design.forward_overlap,
+        side_overlap=design.side_overlap, relief=design.relief, extra=design.extra,
+        control=design.control, control_spacing=design.control_spacing,
+        chain_spacing=design.chain_spacing, control_kind=design.control_kind,
+        control_sigma=design.sigma_control, sigma_image_mm=design.sigma_image_mm,
+        start_error=None, flight_jitter=(0.0, 0.0, 0.0, 0.0), **design.options,
+    )  # fmt: skip
+    block = sim.truth.copy()
+    block.meta = {"source": "orientviz.design.design_block"}
+    if design.sigma_gnss is not None:
+        block.images.X0_obs[:] = block.images.X0
+        block.images.X0_sigma[:] = design.sigma_gnss
+    return block, dict(sim.spec)
+
+
+def set_control(block: Block, point: int, sigma_xyz) -> Block:
+    """A copy of ``block`` with point ``point`` made control (or tie) in place.
+
+    Parameters
+    ----------
+    block : Block
+        A design block (true coordinates in ``points.xyz``).
+    point : int
+        Point index.
+    sigma_xyz : array_like, shape (3,)
+        σ of the given X, Y, Z in m; NaN = that coordinate not given. All NaN makes the
+        point a tie point.
+    """
+    b = block.copy()
+    s = np.asarray(sigma_xyz, float).reshape(3)
+    given = np.isfinite(s)
+    if np.any(s[given] <= 0):
+        raise InputError(f"sigma_xyz: a design weights its control, expected σ > 0, got {s}")
+    P = b.points
+    P.sigma[point] = np.where(given, s, np.nan)
+    P.xyz_known[point] = np.where(given, P.xyz[point], np.nan)
+    P.role[point] = CONTROL if given.any() else TIE
+    return b
