@@ -183,13 +183,8 @@ def reduced_comparison(size: str, reps: int, dense: bool) -> str:
     """Time factor + solve of the same reduced system S with each solver/ordering."""
     from bench_blocks import load_bench_block
 
-    from orientviz.bundle import (
-        BundleProblem,
-        BundleState,
-        ReducedStructure,
-        factor_reduced,
-        point_setup,
-    )
+    from orientviz.bundle.problem import BundleProblem, BundleState, point_setup
+    from orientviz.bundle.reduced import ReducedStructure, factor_reduced
 
     block, _ = load_bench_block(ensure_data(size))
     prob = BundleProblem(block, point_setup(block, "fixed"))

@@ -1,10 +1,10 @@
-"""Chord steps of the bundle (``CHORD_REUSE``): iterations, factorisations and CPU time.
+"""Chord steps of the bundle (``BundleOptions.chord_reuse``): iterations, factorisations and CPU time.
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_chord.py               # all blocks
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_chord.py --blocks large --reps 5
 
 Each block is adjusted (``precision=False``, in this process) with the chord steps as
-they are and with every step a Newton step (``CHORD_REUSE = 0``), in the same run: the
+they are and with every step a Newton step (``BundleOptions(chord_reuse=0)``), in the same run: the
 number of iterations, of factorisations of the reduced system S (full steps), σ0, the
 largest difference of the two solutions' tie points (mm) and the CPU time
 (``time.process_time``, best of ``--reps``).
@@ -53,8 +53,7 @@ def make_block(name: str):
 
 
 def run(block, reps: int, newton: bool) -> dict:
-    from orientviz.bundle import bundle_adjust
-    from orientviz.bundle.loop import _steps
+    from orientviz.bundle import BundleOptions, bundle_adjust
     from orientviz.bundle.problem import _problem
 
     full = []
@@ -64,19 +63,17 @@ def run(block, reps: int, newton: bool) -> dict:
         full.append(fac is None)
         return solve(self, ne, names, fac=fac)
 
-    reuse = _steps.CHORD_REUSE
+    opts = BundleOptions(chord_reuse=0.0) if newton else BundleOptions()
     _problem.BundleProblem.solve = counting
-    _steps.CHORD_REUSE = 0.0 if newton else reuse
     try:
         cpus = []
         for _ in range(reps):
             full.clear()
             c0 = time.process_time()
-            res = bundle_adjust(block, precision=False)
+            res = bundle_adjust(block, precision=False, options=opts)
             cpus.append(time.process_time() - c0)
     finally:
         _problem.BundleProblem.solve = solve
-        _steps.CHORD_REUSE = reuse
     return dict(res=res, cpu=min(cpus), factors=sum(full), iters=res.iterations)
 
 

@@ -1,4 +1,5 @@
-"""Shared fixtures: a headless Chromium page for the real-browser tests; Hypothesis profiles."""
+"""Shared fixtures: a headless Chromium page for the real-browser tests; Hypothesis profiles;
+the lesson notebooks executed in this session."""
 
 from __future__ import annotations
 
@@ -63,3 +64,16 @@ def browser_page():
         finally:
             context.close()
             shutil.rmtree(profile, ignore_errors=True)
+
+
+@pytest.fixture(scope="session")
+def executed_lessons() -> dict[str, dict]:
+    """Lesson notebooks executed in this session: file name → ``{"source": the notebook's
+    text when it was executed, "notebook": the executed notebook (nbformat JSON)}``.
+
+    The book build (tests/book/test_book.py) executes every lesson (myst-nb, an error in a
+    cell fails the build) and records them here, so that tests/notebooks/test_notebooks.py
+    checks those executions instead of running each lesson a second time; run alone, the
+    notebook tests execute the lessons themselves.
+    """
+    return {}

@@ -168,7 +168,7 @@ def view(
         ``app.url`` to open in a browser, ``app.show()`` inline in Jupyter,
         ``app.export_html(path)`` a static snapshot, ``app.stop()`` to end it.
     """
-    from .viewer.app import open_viewer
+    from .viewer.app import open_viewer  # viser: loaded when ov.view is called, never before
 
     return open_viewer(content, host=host, port=port, **options)
 

@@ -26,8 +26,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from . import __version__
-from .errors import OrientvizError
+from . import __version__, reproduce
+from .errors import OrientvizError, printable
+from .io.safeio import input_limit, parse_size
 
 
 @dataclass(frozen=True)
@@ -102,8 +103,6 @@ def port_number(text: str) -> int:
 
 def byte_size(text: str) -> int:
     """An argparse type: a size such as ``200M``, ``2G`` or ``4096`` (bytes)."""
-    from .io.safeio import parse_size
-
     try:
         return parse_size(text)
     except (ValueError, IndexError):
@@ -153,7 +152,7 @@ IMPORT_OPTIONS: tuple[Arg, ...] = (
 #: name → Command; the order is the order of ``orientviz --help``
 COMMANDS: dict[str, Command] = {
     "solve": Command(
-        "orientviz.io.solve",
+        "orientviz.report.solve",
         "run_from_cli",
         help="adjust a problem file (orientviz/1 JSON) and print a report",
         description="Adjust a problem file (orientviz/1 JSON) and print a report: sigma0, "
@@ -240,9 +239,9 @@ COMMANDS: dict[str, Command] = {
         "orientviz.viewer.app",
         "run_from_cli",
         help="open the 3D viewer (viser, in the browser) on a demo or a problem file",
-        description="Open the 3D viewer on a demo (block, pair, radar) or a problem file and "
-        "serve it on http://HOST:PORT until Ctrl-C; --export writes a static HTML page "
-        "instead.",
+        description="Open the 3D viewer on a demo (block, pair, radar, design: the block "
+        "design studio) or a problem file and serve it on http://HOST:PORT until Ctrl-C; "
+        "--export writes a static HTML page instead.",
         examples=(
             ("orientviz view", "the default demo on http://127.0.0.1:8080"),
             ("orientviz view pair --port 8081", "the relative-orientation demo, another port"),
@@ -356,7 +355,7 @@ COMMANDS: dict[str, Command] = {
         ),  # fmt: skip
     ),
     "export": Command(
-        "orientviz.io.export",
+        "orientviz.report.export",
         "run_from_cli",
         help="adjust a block problem file and export the results (JSON, CSV, COLMAP text)",
         description="Adjust a block problem file by the bundle method and write into DIR: "
@@ -391,11 +390,15 @@ COMMANDS: dict[str, Command] = {
             ("orientviz reproduce geier", "Geier 1973, Fig. 8: radar orientation tasks"),
             ("orientviz reproduce", "list the reproductions"),
             ("orientviz reproduce kovarik --json", "as JSON"),
+            ("orientviz reproduce kovarik --wide", "one line per row (wider than 100 columns)"),
         ),
         arguments=(
             arg("name", nargs="?", default=None, help="reproduction (omit to list them)"),
             arg("--json", action="store_true", help="print the rows as JSON"),
-        ),
+            arg("--wide", action="store_true",
+                help="one line per row however long (default: blocks wrapped to 100 columns "
+                "when the table is wider)"),
+        ),  # fmt: skip
     ),
 }
 
@@ -460,8 +463,6 @@ def _parser() -> argparse.ArgumentParser:
 
 def run_reproduce(args: argparse.Namespace) -> int:
     """``orientviz reproduce [NAME] [--json]``; returns the exit code."""
-    from . import reproduce
-
     if args.name is None:
         for k, d in reproduce.available().items():
             print(f"{k:12s} {d}")
@@ -474,7 +475,7 @@ def run_reproduce(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps([r.as_dict() for r in rows], indent=1, default=str))
     else:
-        print(reproduce.format_rows(rows))
+        print(reproduce.format_rows(rows, None if getattr(args, "wide", False) else 100))
     return 0
 
 
@@ -547,8 +548,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     on stderr. An error nobody foresaw is reported in one line too (exit 3, "internal
     error"), with the traceback only under ``--debug``.
     """
-    from .io.safeio import input_limit
-
     parser = _parser()
     args = parser.parse_args(argv)
     if args.command not in COMMANDS:
@@ -604,8 +603,6 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _one_line(text: str, limit: int = 1000) -> str:
-    from .errors import printable
-
     return printable(text, limit)
 
 

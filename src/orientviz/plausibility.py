@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from .block import CONTROL, Block
 from .errors import AdjustmentError, InputError
+from .rotation import matrix_from_opk
 
 log = logging.getLogger("orientviz")
 log.addHandler(logging.NullHandler())  # a library logs; the application decides where to
@@ -53,8 +54,8 @@ class Finding:
     level : {"warning", "error"}
         ``"error"``: the adjustment cannot be meaningful (see :func:`raise_for`).
     check : str
-        ``"image-outside"``, ``"far-away"``, ``"behind"``, ``"weak-intersection"``,
-        ``"few-observations"``.
+        ``"empty"``, ``"image-outside"``, ``"far-away"``, ``"behind"``,
+        ``"weak-intersection"``, ``"few-observations"``.
     message : str
         One line in the user's ids, saying what to do.
     count : int
@@ -80,8 +81,6 @@ def _names(ids: list[str], idx: NDArray[np.intp]) -> str:
 
 
 def _rotations(block: Block) -> NDArray[np.float64]:
-    from .rotation import matrix_from_opk
-
     a = block.images.angles
     return matrix_from_opk(a[:, 0], a[:, 1], a[:, 2], block.sequence)
 
@@ -117,6 +116,12 @@ def check_block(
     out: list[Finding] = []
     obs, im, pts, cams = block.observations, block.images, block.points, block.cameras
     n_obs = obs.image.size
+    empty = [what for what, n in (("images", len(im.ids)), ("points", len(pts.ids)),
+                                  ("observations", n_obs)) if n == 0]  # fmt: skip
+    if empty:  # nothing to check or adjust (not a datum defect)
+        where = "images" if "images" in empty else empty[0]
+        return [Finding("error", "empty", f"nothing to adjust: the file has no "
+                        f"{' and no '.join(empty)} (0 rows)", 1, where, exit_code=2)]  # fmt: skip
     cam = im.camera[obs.image] if n_obs else np.zeros(0, dtype=np.intp)
     with np.errstate(all="ignore"):
         # --- image coordinates beyond the image ------------------------------------

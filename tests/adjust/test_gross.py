@@ -7,15 +7,13 @@ from orientviz.adjust import gauss_newton
 from orientviz.adjust.gross import (
     CleaningBreakdown,
     critical_value,
-    data_snooping,
     engine_solver,
     noncentrality,
     redundancy_numbers,
     reliability,
-    rerun_cleaning,
-    robust_adjust,
-    robust_weights,
 )
+from orientviz.adjust.robust import rerun_cleaning, robust_adjust, robust_weights
+from orientviz.adjust.snooping import data_snooping
 from orientviz.camera import collinearity_jacobian
 from orientviz.errors import InputError
 

@@ -104,7 +104,7 @@ def test_introduction_lists_every_lesson_by_its_number():
 
 
 @pytest.mark.slow
-def test_book_builds_offline(tmp_path):
+def test_book_builds_offline(tmp_path, executed_lessons):
     pytest.importorskip("myst_nb")
     out = tmp_path / "html"
     audit = tmp_path / "figure-audit.jsonl"
@@ -146,3 +146,8 @@ def test_book_builds_offline(tmp_path):
     check_widget_snapshots(out)
     check_no_error_output(out)
     check_figure_audit(audit)
+    for name in lessons:  # the lessons ran here: tests/notebooks need not run them again
+        executed = tmp_path / "jupyter_execute" / "lessons" / f"{name}.ipynb"
+        source = (ROOT / "notebooks" / f"{name}.ipynb").read_text(encoding="utf-8")
+        notebook = json.loads(executed.read_text(encoding="utf-8"))
+        executed_lessons[f"{name}.ipynb"] = {"source": source, "notebook": notebook}

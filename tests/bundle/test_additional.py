@@ -6,7 +6,7 @@ import pytest
 import orientviz as ov
 from orientviz.adjust import gauss_newton
 from orientviz.bundle import Brown, Ebner12, Gruen44, analyse, ap_set
-from orientviz.bundle.model._additional import _eo_deformations
+from orientviz.bundle.model import eo_deformations
 
 
 def _grid(n, b=92.0):
@@ -22,7 +22,7 @@ def test_orthogonal_on_their_grid_and_to_the_exterior_orientation(aps, n):
     G = A.T @ A
     d = np.sqrt(np.diag(G))
     np.testing.assert_allclose(G / np.outer(d, d), np.eye(aps.k), atol=1e-12)
-    E = _eo_deformations(xy[:, 0] / 92.0, xy[:, 1] / 92.0).reshape(-1, 6)
+    E = eo_deformations(xy[:, 0] / 92.0, xy[:, 1] / 92.0).reshape(-1, 6)
     assert np.abs(E.T @ A).max() < 1e-15  # mm² scale; values of A are ~1e-3
     assert len(aps.names) == aps.k == {3: 12, 5: 44}[n]
 

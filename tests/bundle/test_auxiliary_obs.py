@@ -5,7 +5,8 @@ import pytest
 
 import orientviz as ov
 from orientviz.block import CONTROL
-from orientviz.bundle import BundleAuxiliary, adjust_with_auxiliary, auxiliary_rows
+from orientviz.bundle import adjust_with_auxiliary
+from orientviz.bundle.problem import BundleAuxiliary, auxiliary_rows
 from orientviz.simulate import check_errors, height_control_at_ends, simulate_auxiliary
 
 

@@ -16,7 +16,8 @@ import pytest
 
 import orientviz as ov
 from orientviz.block import CHECK, CONTROL, TIE
-from orientviz.bundle import BundleProblem, BundleState, adjust_with_auxiliary, ap_set, point_setup
+from orientviz.bundle import adjust_with_auxiliary, ap_set
+from orientviz.bundle.problem import BundleProblem, BundleState, point_setup
 from orientviz.camera import collinearity_jacobian
 from orientviz.simulate import height_control_at_ends, simulate_auxiliary
 
@@ -190,7 +191,7 @@ def test_joint_step_equals_the_dense_step(case, kind, held):
     st.xyz[fixed] = np.where(
         np.isfinite(block.points.xyz_known[fixed]), block.points.xyz_known[fixed], st.xyz[fixed]
     )
-    prob.border.hold = held
+    prob.run.border.hold = held
     rw, Je, Jp = prob.residuals(st, jac=True)
     ne = prob.normal(st, rw, Je, Jp)
     dc, dp, d, _ = prob.solve(ne, prob.names()[: 6 * prob.m])

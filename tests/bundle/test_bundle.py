@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import orientviz as ov
-from orientviz.bundle import collinearity_block
+from orientviz.bundle.model import collinearity_block
 from orientviz.camera import collinearity_jacobian
 from orientviz.errors import DatumDefectError
 
@@ -310,7 +310,7 @@ def _z_only_centres(block, truth, sigma=0.1):
 
 
 def test_height_only_datum_is_diagnosed_not_a_linalg_error():
-    from orientviz.bundle import datum_defect, point_setup
+    from orientviz.bundle.problem import datum_defect, point_setup
 
     sim = ov.simulate_block(3, 6, rng=17, control="none")
     b = _z_only_centres(sim.block, sim.truth)
@@ -355,9 +355,7 @@ def test_result_names_read_like_the_list_of_parameter_names():
 
 
 def test_the_jacobians_of_a_kept_projection_are_those_of_its_state():
-    from orientviz.bundle.problem._checks import point_setup
-    from orientviz.bundle.problem._problem import BundleProblem
-    from orientviz.bundle.problem._state import BundleState
+    from orientviz.bundle.problem import BundleProblem, BundleState, point_setup
 
     sim = ov.simulate_block(2, 5, rng=8)
     b = sim.block
@@ -382,7 +380,7 @@ def test_the_jacobians_of_a_kept_projection_are_those_of_its_state():
 
 
 def test_image_residuals_are_those_of_the_adjusted_values():
-    from orientviz.bundle import project_block
+    from orientviz.bundle.model import project_block
 
     sim = ov.simulate_block(3, 8, rng=7, n_check=24)
     b = sim.block

@@ -7,18 +7,18 @@ import pytest
 import scipy.linalg
 
 import orientviz as ov
-from orientviz.bundle import (
+from orientviz.bundle import BundleOptions, ap_set
+from orientviz.bundle.problem import (
     BundleProblem,
     BundleState,
-    ap_set,
     band_backward_solve,
     band_forward_solve,
-    factor_reduced,
     form_preconditioner,
     point_setup,
     solve_bordered,
     solve_bordered_pcg,
 )
+from orientviz.bundle.reduced import factor_reduced
 from orientviz.camera import collinearity_jacobian
 
 
@@ -65,7 +65,7 @@ def test_step_with_group_parameters_equals_dense_solution(solver):
     aps = ap_set("ebner12")
     prob = BundleProblem(
         block, point_setup(block, "weighted"), additional=aps, ap_group=block.images.strip,
-        ap_sigma=10.0, solver=solver,
+        ap_sigma=10.0, options=BundleOptions(solver=solver),
     )  # fmt: skip
     assert prob.ap.G == 3 and prob.points.prior_w.any()
     rng = np.random.default_rng(3)
@@ -130,7 +130,7 @@ def _problem(solver="banded"):
     aps = ap_set("ebner12")
     prob = BundleProblem(
         block, point_setup(block, "weighted"), additional=aps, ap_group=block.images.strip,
-        ap_sigma=10.0, solver=solver,
+        ap_sigma=10.0, options=BundleOptions(solver=solver),
     )  # fmt: skip
     return prob, aps
 
@@ -149,7 +149,7 @@ def test_conjugate_gradients_with_an_old_preconditioner_reach_the_dense_step(sol
     )  # fmt: skip
     rw, Je, Jp = prob.residuals(old, jac=True)
     prob.solve(prob.normal(old, rw, Je, Jp), names)
-    assert prob.border.preconditioner is not None and "formed" in prob.border.log[0]
+    assert prob.run.border.preconditioner is not None and "formed" in prob.run.border.log[0]
     st = BundleState(
         block.images.X0, block.images.angles, block.points.xyz, rng.normal(0, 3, prob.q)
     )
@@ -157,7 +157,7 @@ def test_conjugate_gradients_with_an_old_preconditioner_reach_the_dense_step(sol
     ne = prob.normal(st, rw, Je, Jp)
     fac = factor_reduced(prob.reduced, ne.blocks, names)
     dc, da, steps = solve_bordered_pcg(
-        fac, ne.ap.E, ne.ap.F, ne.rhs, ne.ap.ba, prob.border.preconditioner, tol=1e-12
+        fac, ne.ap.E, ne.ap.F, ne.rhs, ne.ap.ba, prob.run.border.preconditioner, tol=1e-12
     )
     assert 1 < steps < 40
     ref = _dense_step(prob, st, aps)
@@ -166,7 +166,7 @@ def test_conjugate_gradients_with_an_old_preconditioner_reach_the_dense_step(sol
     np.testing.assert_allclose(da, ref[-prob.q :], rtol=1e-6, atol=1e-8 * np.abs(ref).max())
     # the bundle's own step (default tolerance) takes the iterative path
     prob.solve(ne, names)
-    assert prob.border.log[-1].startswith("cg")
+    assert prob.run.border.log[-1].startswith("cg")
     # the single-precision preconditioner of this very system: CG converges in very few
     # steps to the same step
     if solver == "banded":

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 import orientviz as ov
-from orientviz.bundle import image_condition_deficit, point_setup
 from orientviz.bundle.loop import _adjust as bundle_mod
+from orientviz.bundle.problem import image_condition_deficit, point_setup
 
 
 def _gruber_block(seed: int):

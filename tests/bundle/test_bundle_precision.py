@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import orientviz as ov
-from orientviz.bundle import banded_selected_inverse
+from orientviz.bundle.precision import banded_selected_inverse
 from orientviz.camera import collinearity_jacobian
 
 
@@ -185,19 +185,18 @@ def _cross_scale(Q, i, j):
 
 
 @pytest.mark.parametrize("path", ["dense", "banded"])
-def test_precision_with_strip_parameters_equals_dense_inverse(path, monkeypatch):
+def test_precision_with_strip_parameters_equals_dense_inverse(path):
     """Ebner's 12 parameters per strip (3 strips): the sparse-by-group parameter terms and,
     with ``path="banded"``, the banded border solves against the full dense inverse."""
-    from orientviz.bundle import ap_set
-    from orientviz.bundle.precision import _precision as precision
+    from orientviz.bundle import BundleOptions, ap_set
 
-    if path == "banded":  # the banded selected inverse and banded solves even when small
-        monkeypatch.setattr(precision, "DENSE_INVERSE_LIMIT", 0)
+    # "banded": the banded selected inverse and banded solves even when small
+    opts = BundleOptions(dense_inverse_limit=0 if path == "banded" else 3000)
     sim = ov.simulate_block(3, 5, rng=21, extra=6, n_check=2)
     block = sim.block
     aps = ap_set("ebner12")
     grp = block.images.strip
-    res = ov.bundle_adjust(block, additional=aps, ap_group=grp, ap_sigma=10.0)
+    res = ov.bundle_adjust(block, additional=aps, ap_group=grp, ap_sigma=10.0, options=opts)
     assert res.converged
     Q, free, used, r_ref = dense_reference(res, block, None, aps, grp, 10.0)
     m = block.n_images

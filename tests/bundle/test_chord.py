@@ -1,4 +1,4 @@
-"""Chord steps of the bundle (``CHORD_REUSE``): the factor of a small step serves the next.
+"""Chord steps of the bundle (``BundleOptions.chord_reuse``): the factor of a small step serves the next.
 
 A chord step solves with the normal matrix of an earlier iterate: it is right only as far
 as that matrix is close to the current one, and the stopping rule reads its correction as
@@ -15,12 +15,10 @@ import pytest
 from unordered_networks import close_range_network
 
 import orientviz as ov
+from orientviz.bundle import BundleOptions
 from orientviz.bundle.loop import _steps
-from orientviz.bundle.model._kernel import collinearity_block
-from orientviz.bundle.model._local_rotation import LOCAL_MIN_CORRECTION, angle_map, apply_local
-from orientviz.bundle.problem._checks import point_setup
-from orientviz.bundle.problem._problem import BundleProblem
-from orientviz.bundle.problem._state import BundleState
+from orientviz.bundle.model import angle_map, apply_local, collinearity_block
+from orientviz.bundle.problem import BundleProblem, BundleState, point_setup
 
 
 @pytest.mark.parametrize("sequence", ["opk", "pok"])
@@ -119,8 +117,8 @@ def test_chord_steps_after_a_frame_rotation_step_reach_the_newton_optimum(monkey
     res = ov.bundle_adjust(block, precision=False)
     chords = list(steps)
     steps.clear()
-    monkeypatch.setattr(_steps, "CHORD_REUSE", 0.0)  # every step a Newton step
-    newton = ov.bundle_adjust(block, precision=False)
+    newton_steps = BundleOptions(chord_reuse=0.0)  # every step a Newton step
+    newton = ov.bundle_adjust(block, precision=False, options=newton_steps)
     full_newton = len(steps)
     _assert_same_optimum(res, newton, sd)
     assert any(s[3] for s in chords)  # a local step's factor served a step in ω, φ, κ
@@ -132,17 +130,16 @@ def test_chord_steps_that_stop_contracting_fall_back_to_full_steps(monkeypatch, 
     block, sd = poor_start
     # every undamped step's factor is offered to the next: after the long first steps
     # the old matrix no longer contracts, and the step is solved in full instead
-    monkeypatch.setattr(_steps, "CHORD_REUSE", np.inf)
+    always = BundleOptions(chord_reuse=np.inf)
     steps, refused = _record(monkeypatch)
-    res = ov.bundle_adjust(block, precision=False)
+    res = ov.bundle_adjust(block, precision=False, options=always)
     taken, refusals = list(steps), list(refused)
-    monkeypatch.setattr(_steps, "CHORD_REUSE", 0.0)
-    newton = ov.bundle_adjust(block, precision=False)
+    newton = ov.bundle_adjust(block, precision=False, options=BundleOptions(chord_reuse=0.0))
     _assert_same_optimum(res, newton, sd)
     assert any(refusals) and not all(refusals)
     for before, step in zip(taken, taken[1:]):
         if step[0]:  # each chord step shrank the correction by the contraction bound
-            assert step[1] < _steps.CHORD_CONTRACTION * before[1]
+            assert step[1] < always.chord_contraction * before[1]
 
 
 def test_steps_after_a_small_correction_are_in_the_angles_even_if_sigma0_stays_large(
@@ -157,6 +154,6 @@ def test_steps_after_a_small_correction_are_in_the_angles_even_if_sigma0_stays_l
     assert res.converged and res.sigma0 > 30
     assert len({s[4] for s in steps}) == len(steps)  # no step was retried damped
     for (_, corr, _, _, _), (_, _, local_next, _, _) in zip(steps, steps[1:]):
-        if corr < LOCAL_MIN_CORRECTION:
+        if corr < BundleOptions().local_min_correction:
             assert not local_next
     assert steps[0][2] and not steps[-1][2]

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from orientviz.bundle import LensModel, bundle_adjust
-from orientviz.bundle.model._lens import BACKWARD_NAMES, FORWARD_NAMES, evaluate
+from orientviz.bundle.model import BACKWARD_NAMES, FORWARD_NAMES, evaluate_lens
 from orientviz.errors import InputError
 from orientviz.lens import BackwardLens, backward_ideal
 from orientviz.simulate import simulate_calibration
@@ -28,7 +28,7 @@ def _central(kind, th, nrm, m, which, j, h):
     plus, minus = args[which].copy(), args[which].copy()
     plus[:, j] += h
     minus[:, j] -= h
-    f = [evaluate(kind, *((a if w == which else b) for w, b in enumerate(args)), m, False)[0]
+    f = [evaluate_lens(kind, *((a if w == which else b) for w, b in enumerate(args)), m, False)[0]
          for a in (plus, minus)]  # fmt: skip
     return (f[0] - f[1]) / (2 * h)
 
@@ -40,7 +40,7 @@ def test_derivatives_equal_central_differences(kind):
     th = np.tile(_theta(kind), (n, 1))
     nrm = rng.uniform(-0.4, 0.4, (n, 2))
     m = rng.uniform(-3.0, 3.0, (n, 2))
-    f, M, D = evaluate(kind, th, nrm, m)
+    f, M, D = evaluate_lens(kind, th, nrm, m)
     for j in range(10):
         num = _central(kind, th, nrm, m, 0, j, 1e-5 * max(abs(th[0, j]), 1e-2))
         assert np.allclose(D[:, :, j], num, rtol=1e-6, atol=1e-9), (kind, j)
@@ -54,7 +54,7 @@ def test_backward_model_is_the_lens_modules_ideal_point():
     m = rng.uniform(-3.0, 3.0, (9, 2))
     nrm = rng.uniform(-0.4, 0.4, (9, 2))
     th = _theta("backward")
-    f = evaluate("backward", np.tile(th, (9, 1)), nrm, m, False)[0]
+    f = evaluate_lens("backward", np.tile(th, (9, 1)), nrm, m, False)[0]
     lens = BackwardLens(th[0], th[1], th[2], tuple(th[5:8]), tuple(th[8:10]), th[3], th[4])
     # f = m + c·n − x̄(m): the residual f − m is the pinhole minus the corrected point
     assert np.allclose(f - m, th[0] * nrm - backward_ideal(m, lens), atol=1e-14)
@@ -141,7 +141,7 @@ def test_a_forward_camera_in_opencvs_terms_projects_as_opencv_does():
     cv = opencv_camera(est, p)
     rng = np.random.default_rng(8)
     nrm = rng.uniform(-0.4, 0.4, (9, 2))  # orientviz's normalised points (y up)
-    f = evaluate("forward", np.tile(th, (9, 1)), nrm, np.zeros((9, 2)), False)[0]
+    f = evaluate_lens("forward", np.tile(th, (9, 1)), nrm, np.zeros((9, 2)), False)[0]
     uv = forward_pixels(nrm * [1, -1], [cv[k] for k in ("fx", "fy", "cx", "cy", "k1", "k2",
                                                          "k3", "p1", "p2")])  # fmt: skip
     assert np.allclose(uv, f * [1 / p, -1 / p], atol=1e-9)  # pixels: x/p, −y/p

@@ -8,9 +8,8 @@ from unordered_networks import close_range_network
 
 import orientviz as ov
 from orientviz.block import CONTROL
-from orientviz.bundle.loop import _steps
-from orientviz.bundle.model._kernel import collinearity_block
-from orientviz.bundle.model._local_rotation import apply_local
+from orientviz.bundle import BundleOptions
+from orientviz.bundle.model import apply_local, collinearity_block
 from orientviz.orientation.intersection import intersect_rays
 from orientviz.rotation import matrix_from_opk, matrix_from_rotvec, opk_from_matrix
 
@@ -52,7 +51,7 @@ def _poor_start(block, rng, angle_deg=20.0, shift=0.5):
     return b
 
 
-def test_poor_start_converges_to_the_optimum_with_fewer_steps(monkeypatch):
+def test_poor_start_converges_to_the_optimum_with_fewer_steps():
     block, _ = close_range_network(m=16, p=150, seed=8)
     # the ring's images have φ up to ±81°: turned by 30°, some pass the gimbal lock of
     # ω-φ-κ at φ = ±90°
@@ -67,7 +66,7 @@ def test_poor_start_converges_to_the_optimum_with_fewer_steps(monkeypatch):
     # the precision is the one of ω, φ, κ (the last steps are taken in the angles)
     ref = ov.bundle_adjust(block, precision=True)
     np.testing.assert_allclose(local.std(), ref.std(), rtol=1e-5)
-    monkeypatch.setattr(_steps, "LOCAL_SIGMA0", np.inf)  # steps in ω, φ, κ only
-    angles = ov.bundle_adjust(poor, precision=False, max_iter=60)
+    no_frames = BundleOptions(local_sigma0=np.inf)  # steps in ω, φ, κ only
+    angles = ov.bundle_adjust(poor, precision=False, max_iter=60, options=no_frames)
     assert angles.converged
     assert local.iterations + 3 <= angles.iterations  # 6 against 10

@@ -13,8 +13,13 @@ import numpy as np
 import pytest
 
 import orientviz as ov
-from orientviz.bundle.reduced import ReducedStructure, _factor, dense_matrix, factor_reduced
-from orientviz.bundle.reduced._choice import DENSE_MAX, choose_solver
+from orientviz.bundle.reduced import (
+    ReducedOptions,
+    ReducedStructure,
+    dense_matrix,
+    factor_reduced,
+)
+from orientviz.bundle.reduced._choice import choose_solver
 from orientviz.bundle.reduced._dissection import check_dissection, nested_dissection
 from orientviz.bundle.reduced._multifrontal import NotPositiveDefinite, factor_fronts
 
@@ -122,7 +127,7 @@ def test_non_positive_definite_pivot_is_located():
     assert info.value.unknown // 6 == bad_image
 
 
-def test_singular_system_names_the_parameter(monkeypatch):
+def test_singular_system_names_the_parameter():
     rng = np.random.default_rng(5)
     oc, op, m, n_pt, centres = _network(rng, 8, 10)
     st = ReducedStructure(oc, op, m, n_pt, solver="sparse", positions=centres)
@@ -134,21 +139,21 @@ def test_singular_system_names_the_parameter(monkeypatch):
     elements = ("X0", "Y0", "Z0", "omega", "phi", "kappa")
     names = [f"image{i}.{e}" for i in range(m) for e in elements]
     # large systems are not diagnosed by a dense null space: the pivot names the parameter
-    monkeypatch.setattr(_factor, "DENSE_DIAGNOSIS_LIMIT", 0)
+    no_dense = ReducedOptions(dense_diagnosis_limit=0)
+    large = ReducedStructure(oc, op, m, n_pt, solver="sparse", positions=centres, options=no_dense)
     with pytest.raises(ov.NotDeterminableError, match=r"broke down at image image17 \(φ\)"):
-        factor_reduced(st, blocks, names)
-    monkeypatch.undo()
+        factor_reduced(large, blocks, names)
     with pytest.raises(ov.NotDeterminableError) as info:  # small: the null space
         factor_reduced(st, blocks, names)
     assert "image17.phi" in info.value.parameters
 
 
 def test_auto_takes_the_sparse_factor_for_large_sparse_wide_systems():
-    # 40 × 40 images (9600 unknowns > DENSE_MAX), 8 neighbours each, and no good band:
+    # 40 × 40 images (9600 unknowns > ReducedOptions.dense_max), 8 neighbours each, and no good band:
     # the nested dissection's estimate wins
     side = 40
     m = side * side
-    assert 6 * m > DENSE_MAX
+    assert 6 * m > ReducedOptions().dense_max
     r, c = np.divmod(np.arange(m), side)
     near = (np.abs(r[:, None] - r[None]) <= 1) & (np.abs(c[:, None] - c[None]) <= 1)
     i, k = np.nonzero(np.triu(near))

@@ -6,20 +6,18 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from orientviz.bundle.reduced import _schur
-from orientviz.bundle.reduced._schur import ImageGram
+from orientviz.bundle.reduced import ImageGram
 from orientviz.bundle.reduced._structure import _segments
 from orientviz.bundle.reduced._tracks import SUM_BY_ADDS_MAX_K, _sum_rays
 
 
 @pytest.mark.parametrize("pad_max", [0.5, 0.0])
-def test_image_grams_are_the_sums_over_each_images_rays(monkeypatch, pad_max):
+def test_image_grams_are_the_sums_over_each_images_rays(pad_max):
     rng = np.random.default_rng(3)
     m = 7
     image = rng.permutation(np.repeat(np.arange(m), [10, 9, 11, 8, 0, 12, 10]))  # image 4: none
     n = image.size
-    monkeypatch.setattr(_schur, "GRAM_PAD_MAX", pad_max)
-    layout = ImageGram(*_segments(image, m), m, n)
+    layout = ImageGram(*_segments(image, m), m, n, pad_max=pad_max)
     assert (layout.slots is None) == (pad_max == 0.0)
     J = rng.standard_normal((n, 2, 7))
     Jz = np.concatenate([J, np.zeros((1, 2, 7))])
@@ -38,9 +36,8 @@ def test_sums_over_a_points_rays_equal_numpys(k):
 
 def test_couplings_and_back_substitution_sums_per_point_equal_the_per_ray_ones():
     import orientviz as ov
-    from orientviz.bundle.problem._checks import point_setup
-    from orientviz.bundle.problem._problem import BundleProblem
-    from orientviz.bundle.reduced._tracks import point_sums_wt, ray_couplings
+    from orientviz.bundle.problem import BundleProblem, point_setup
+    from orientviz.bundle.reduced import point_sums_wt, ray_couplings
 
     sim = ov.simulate_block(3, 6, rng=2)
     tg = BundleProblem(sim.block, point_setup(sim.block, "fixed")).reduced.tracks

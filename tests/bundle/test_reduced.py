@@ -6,14 +6,9 @@ import numpy as np
 import pytest
 
 import orientviz as ov
-from orientviz.bundle import (
-    SOLVERS,
-    BundleProblem,
-    BundleState,
-    geometric_orderings,
-    inv3,
-    point_setup,
-)
+from orientviz.bundle import BundleOptions
+from orientviz.bundle.problem import BundleProblem, BundleState, point_setup
+from orientviz.bundle.reduced import SOLVERS, geometric_orderings, inv3
 from orientviz.camera import collinearity_jacobian
 
 
@@ -21,7 +16,7 @@ def _problem(solver="banded", strips=2, n=4, control="fixed", seed=3):
     sim = ov.simulate_block(strips, n, rng=seed, extra=8, control="perimeter")
     block = sim.block
     setup = point_setup(block, control)
-    prob = BundleProblem(block, setup, solver=solver)
+    prob = BundleProblem(block, setup, options=BundleOptions(solver=solver))
     st = BundleState(
         block.images.X0.copy(), block.images.angles.copy(), block.points.xyz.copy(), np.zeros(0)
     )
@@ -68,7 +63,9 @@ def test_schur_equals_dense_full_normal_equations(solver, control):
     block, prob, st = _problem(solver, control=control)
     if control == "weighted":
         block.points.sigma[block.points.role == 1] = 0.05
-        prob = BundleProblem(block, point_setup(block, control), solver=solver)
+        prob = BundleProblem(
+            block, point_setup(block, control), options=BundleOptions(solver=solver)
+        )
     rw, Je, Jp = prob.residuals(st, jac=True)
     dc, dp, da, _ = prob.solve(prob.normal(st, rw, Je, Jp), prob.names()[: 6 * prob.m])
     ref = _dense_full_solution(block, prob, st)

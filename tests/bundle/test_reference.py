@@ -27,7 +27,8 @@ from orientviz.bundle.reference import (
     reference_data,
     solve_step,
 )
-from orientviz.rotation import matrix_derivatives, matrix_from_opk
+from orientviz.bundle.sparsity import bundle_normal_blocks
+from orientviz.rotation import convert_sequence, matrix_derivatives, matrix_from_opk
 
 TOL = 1e-9  # both iterate far below the default 5e-3 (conditional σ units)
 AGREE = 1e-10  # the relative agreement asked of every fast path
@@ -47,6 +48,17 @@ def relative_difference(res, ref, block) -> dict[str, float]:
         "additional": float(np.max(np.abs(res.additional - ref.ap), initial=0.0)) / scale_ap,
         "sigma0": abs(res.sigma0 / s0_ref - 1.0),
     }
+
+
+def textbook_cofactors(data, ref, sequence: str):
+    """Q11 = S⁻¹ (x1) and the point blocks Q22_j = N22_j⁻¹ + T_jᵀ Q11 T_j,
+    T_j = N12_j N22_j⁻¹, from the reference's normal equations at its optimum."""
+    f, A1, B = linearise(data, ref.X0, ref.angles, ref.xyz, ref.ap, sequence)
+    N11, N12, N22, *_ = normal_equations(data, f, A1, B, ref.X0, ref.angles, ref.xyz, ref.ap)
+    N22inv = np.linalg.inv(N22)
+    T = np.einsum("pia,pab->pib", N12, N22inv)
+    Q11 = np.linalg.inv(N11 - np.einsum("pia,pja->ij", T, N12))
+    return Q11, N22inv + np.einsum("pia,ij,pjb->pab", T, Q11, T)
 
 
 def assert_same_optimum(res, ref, block, agree=AGREE):
@@ -128,14 +140,17 @@ def test_one_reduced_step_is_the_whole_system_solved_densely(strips):
     assert np.abs(d * (N @ got - n)).max() < 1e-11 * np.abs(d * n).max()
 
 
-def _chord_steps(monkeypatch) -> list[int]:
-    """Count the chord steps of the fast bundle (steps solved with an older factor)."""
-    count = [0]
+def _step_kinds(monkeypatch) -> dict[str, int]:
+    """Count the fast bundle's steps by kind: chord steps (solved with an older factor of
+    S) and steps in rotations of the image frames (taken while the start is poor)."""
+    count = {"chord": 0, "frame": 0, "all": 0}
     solve = _steps.BundleSteps.solve
 
-    def spy(self, *args, **kwargs):
-        out = solve(self, *args, **kwargs)
-        count[0] += int(self.chord_step)
+    def spy(self, st, ev, lam, it):
+        out = solve(self, st, ev, lam, it)
+        count["chord"] += int(self.chord_step)
+        count["frame"] += int(self.is_local(ev))
+        count["all"] += 1
         return out
 
     monkeypatch.setattr(_steps.BundleSteps, "solve", spy)
@@ -147,13 +162,52 @@ def _chord_steps(monkeypatch) -> list[int]:
 def test_every_reduced_solver_reaches_the_reference_optimum(
     solver, precision, strips, strips_reference, monkeypatch
 ):
-    chords = _chord_steps(monkeypatch)
+    steps = _step_kinds(monkeypatch)
     res = ov.bundle_adjust(strips, solver=solver, tol=TOL, max_iter=50, precision=precision)
     assert res.solver == solver
     # without the precision the fast bundle takes chord steps (an older factor of S, in
-    # single precision with refinement); with it every step is a full Newton step
-    assert (chords[0] > 0) == (not precision), chords
+    # single precision with refinement); with it every step is a full Newton step; from
+    # this poor start (σ0 ≈ 1250) the first steps rotate the image frames
+    assert (steps["chord"] > 0) == (not precision), steps
+    assert steps["frame"] > 0, steps
     assert_same_optimum(res, strips_reference, strips)
+
+
+@pytest.mark.parametrize("solver", ["auto", "banded", "sparse"])
+def test_a_larger_block_and_real_nested_dissection(solver):
+    # 4 × 12 images: the sparse solver's nested dissection splits S into several fronts
+    block = ov.simulate_block(4, 12, rng=3, extra=None).block
+    ref = _cached_reference(block, "4x12")
+    res = ov.bundle_adjust(block, solver=solver, tol=TOL, max_iter=50, precision=False)
+    if solver == "sparse":
+        assert res.reduced_info["fronts"] > 2, res.reduced_info
+    assert_same_optimum(res, ref, block)
+
+
+_REFERENCES: dict[str, object] = {}
+
+
+def _cached_reference(block, key: str):
+    if key not in _REFERENCES:
+        _REFERENCES[key] = reference_bundle(block, tol=TOL, max_iter=50)
+    return _REFERENCES[key]
+
+
+def test_the_phi_omega_kappa_sequence():
+    sim = ov.simulate_block(2, 6, rng=4, extra=None)
+    block = copy.deepcopy(sim.block)
+    a = block.images.angles
+    block.images.angles = np.column_stack(convert_sequence(a[:, 0], a[:, 1], a[:, 2], "opk", "pok"))
+    block.sequence = "pok"
+    ref = reference_bundle(block, tol=TOL, max_iter=50)
+    res = ov.bundle_adjust(block, tol=TOL, max_iter=50)
+    assert_same_optimum(res, ref, block)
+    # the same block in ω-φ-κ: the same optimum, the angles of another sequence
+    opk = reference_bundle(sim.block, tol=TOL, max_iter=50)
+    assert np.max(np.abs(opk.xyz - ref.xyz)) < 1e-8
+    back = np.column_stack(convert_sequence(*ref.angles.T, "pok", "opk"))
+    d = (back - opk.angles + np.pi) % (2 * np.pi) - np.pi  # κ near ±π may wrap
+    assert np.max(np.abs(d)) < 1e-11
 
 
 def test_solver_reference_returns_the_same_typed_result(strips, strips_reference):
@@ -181,12 +235,7 @@ def test_the_precision_equals_the_inverse_of_the_reference_normal_equations(
     # precision code (banded selected inverse)
     ref = strips_reference
     su = reference_data(strips)
-    f, A1, B = linearise(su, ref.X0, ref.angles, ref.xyz, ref.ap, strips.sequence)
-    N11, N12, N22, *_ = normal_equations(su, f, A1, B, ref.X0, ref.angles, ref.xyz, ref.ap)
-    N22inv = np.linalg.inv(N22)
-    T = np.einsum("pia,pab->pib", N12, N22inv)
-    Q11 = np.linalg.inv(N11 - np.einsum("pia,pja->ij", T, N12))
-    Q22 = N22inv + np.einsum("pia,ij,pjb->pab", T, Q11, T)
+    Q11, Q22 = textbook_cofactors(su, ref, strips.sequence)
     fast = ov.bundle_adjust(strips, solver="banded", tol=TOL, max_iter=50)
     s0 = np.sqrt(ref.cost[-1] / fast.redundancy)
     want_ext = s0 * np.sqrt(np.diag(Q11))
@@ -213,3 +262,35 @@ def test_weighted_and_partial_control_and_observed_centres():
         for solver in ("dense", "banded"):
             res = ov.bundle_adjust(block, control=control, solver=solver, tol=1e-7, max_iter=50)
             assert_same_optimum(res, ref, block)
+
+
+def test_lesson_10s_normal_blocks_are_the_reference_blocks(strips):
+    # bundle/sparsity.py (lesson 10's U, W, V, bc, bp) against the reference's N11, N12,
+    # N22, n1, n2 at the approximations: the lesson's building blocks are the textbook's
+    nb = bundle_normal_blocks(strips)
+    data = reference_data(strips)
+    X0, ang, xyz, ap = strips.images.X0, strips.images.angles, data.xyz0, data.ap0
+    f, A1, B = linearise(data, X0, ang, xyz, ap, strips.sequence)
+    N11, N12, N22, n1, n2, vtpv = normal_equations(data, f, A1, B, X0, ang, xyz, ap)
+    m, q = nb.n_images, nb.n_points
+    assert q == data.unknown.size and np.array_equal(
+        np.flatnonzero(nb.unknown_point >= 0), data.unknown
+    )
+    U = np.zeros((6 * m, 6 * m))
+    for i in range(m):
+        U[6 * i : 6 * i + 6, 6 * i : 6 * i + 6] = nb.U[i]
+    W = N12.transpose(1, 0, 2).reshape(6 * m, 3 * q)
+    for got, want in ((N11, U), (W, nb.W), (N22, nb.V), (n1, nb.bc), (n2.ravel(), nb.bp)):
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-10 * np.abs(want).max())
+    assert vtpv == pytest.approx(nb.vtpv, rel=1e-12)
+
+
+def test_the_options_route_to_the_reference(strips, strips_reference):
+    res = ov.bundle_adjust(
+        strips, options=ov.bundle.BundleOptions(solver="reference", tol=TOL, max_iter=50),
+        precision=False,
+    )  # fmt: skip
+    assert res.solver == "reference" and res.reason == strips_reference.reason
+    assert np.array_equal(res.exterior[:, :3], strips_reference.X0)
+    with pytest.raises(ov.InputError, match="auxiliary"):
+        ov.bundle_adjust(strips, solver="reference", auxiliary=[object()])

@@ -10,8 +10,10 @@ import pytest
 from test_reference import one_blas_thread  # noqa: F401
 
 import orientviz as ov
+from orientviz.bundle.reference import reference_bundle
 from orientviz.cli import main
 from orientviz.io.datasets import load_dataset
+from orientviz.io.kinds.block import prepare, with_check_rays
 
 
 def _solve(capsys, *argv: str) -> dict:
@@ -49,3 +51,20 @@ def test_reference_and_fast_bundle_meet_far_below_the_default_tolerance():
     assert np.max(np.abs(ref.X0 - fast.X0)) / H < 1e-12
     assert np.max(np.abs(ref.angles - fast.angles)) < 1e-12
     assert np.max(np.abs(ref.xyz - fast.xyz)) / H < 1e-12
+
+
+def test_the_reference_functions_on_the_block_that_solve_adjusts():
+    # what a lesson does: the block `orientviz solve dbat_sxb` adjusts (approximations,
+    # check points kept as tie points: options.check_points = "rays"), then the reference
+    # module's own loop, without the result adapter
+    problem = load_dataset("dbat_sxb")
+    block = with_check_rays(prepare(problem)[0])
+    ref = reference_bundle(block, control="weighted", tol=2e-8, max_iter=20)
+    problem.options["tol"] = 2e-8
+    fast = ov.solve_problem(problem)
+    assert ref.converged and fast.adjustment.converged
+    s0 = np.sqrt(ref.cost[-1] / fast.adjustment.redundancy)
+    assert s0 == pytest.approx(fast.adjustment.sigma0, rel=1e-12)
+    H = float(np.mean(fast.X0[:, 2]) - np.mean(fast.xyz[:, 2]))
+    assert np.max(np.abs(ref.X0 - fast.X0)) / H < 1e-12
+    assert np.max(np.abs(ref.angles - fast.angles)) < 1e-12

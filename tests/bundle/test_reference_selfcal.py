@@ -13,14 +13,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_reference import assert_same_optimum, one_blas_thread  # noqa: F401
+from test_reference import assert_same_optimum, one_blas_thread, textbook_cofactors  # noqa: F401
 
 import orientviz as ov
-from orientviz.bundle import LensModel, ap_set
-from orientviz.bundle.reference import reference_bundle
+from orientviz.bundle import BundleOptions, LensModel, ap_set
+from orientviz.bundle.reference import reference_bundle, reference_data
 from orientviz.simulate import simulate_calibration
 
 TOL = 1e-8
+RTOL_PREC = 1e-8  # the cofactors agree to ~1e-9 (measured); solves round differently
 
 EBNER = ap_set("ebner12")
 TRUE = np.array([6.0, -4.0, 3.0, 0.0, 5.0, -2.0, 0.0, 4.0, 0.0, -3.0, 2.0, 0.0])  # µm
@@ -78,14 +79,25 @@ def test_additional_parameters_reach_the_reference_optimum(case, solver, distort
 
 @pytest.mark.xfail(
     strict=True,
-    reason="with E, F reused (AP_REUSE) a step below tol after inexact steps stops the fast "
-    "bundle 8e-8 relative (1.7e-7 σ) from the optimum of the free per-strip parameters",
+    reason="with E, F reused (options.ap_reuse) a step below tol after inexact steps stops the "
+    "fast bundle 8e-8 relative (1.7e-7 σ) from the optimum of the free per-strip parameters",
 )
 def test_a_tight_tolerance_brings_the_self_calibrating_bundle_to_the_optimum(distorted):
     case = "ebner12 per strip, free"
     ref = _reference(case, distorted)
     res = ov.bundle_adjust(distorted, solver="dense", tol=TOL, max_iter=60, precision=False,
                            **_case(case, distorted))  # fmt: skip
+    assert_same_optimum(res, ref, distorted)
+
+
+def test_without_the_reuse_of_the_border_a_tight_tolerance_reaches_the_optimum(distorted):
+    # the same run with E, F formed anew at every step: its steps are exact Newton steps
+    # of the bordered system, and a step below tol now means the optimum is met
+    case = "ebner12 per strip, free"
+    ref = _reference(case, distorted)
+    opts = BundleOptions(solver="dense", tol=TOL, max_iter=60, ap_reuse=0.0)
+    res = ov.bundle_adjust(distorted, options=opts, precision=False, **_case(case, distorted))
+    assert not any("reused" in entry for entry in res.reduced_info["ap_border"])
     assert_same_optimum(res, ref, distorted)
 
 
@@ -112,3 +124,25 @@ def test_the_camera_model_reaches_the_reference_optimum(kind, model):
     # the camera in physical units and its σ from the same precision code
     np.testing.assert_allclose(ref_result.camera.value, res.camera.value, rtol=1e-10, atol=1e-14)
     np.testing.assert_allclose(ref_result.camera.sigma, res.camera.sigma, rtol=1e-7)
+
+
+def test_the_precision_with_additional_parameters_is_the_reference_inverse(distorted):
+    # Q11 = S⁻¹ over (exterior, additional parameters) and the point cofactors
+    # N22⁻¹ + Tᵀ Q11 T at the optimum, against the fast precision of a bordered system
+    case = "ebner12, one group, weighted"
+    ref = _reference(case, distorted)
+    kw = _case(case, distorted)
+    data = reference_data(distorted, "fixed", kw["additional"], None, kw["ap_sigma"])
+    Q11, Q22 = textbook_cofactors(data, ref, distorted.sequence)
+    fast = ov.bundle_adjust(distorted, solver="banded", tol=1e-10, max_iter=80, **kw)
+    s0 = np.sqrt(ref.cost[-1] / fast.redundancy)
+    std = fast.std()
+    m = distorted.n_images
+    np.testing.assert_allclose(
+        std[fast.groups["exterior"]], s0 * np.sqrt(np.diag(Q11)[: 6 * m]), rtol=1e-7
+    )
+    np.testing.assert_allclose(
+        std[fast.groups["additional"]], s0 * np.sqrt(np.diag(Q11)[6 * m :]), rtol=1e-7
+    )
+    got = std[fast.groups["points"]].reshape(-1, 3)[data.unknown]
+    np.testing.assert_allclose(got, s0 * np.sqrt(np.einsum("pii->pi", Q22)), rtol=RTOL_PREC)

@@ -12,7 +12,8 @@ import pytest
 from unordered_networks import close_range_network
 
 import orientviz as ov
-from orientviz.bundle import BundleProblem, BundleState, point_setup
+from orientviz.bundle import BundleOptions
+from orientviz.bundle.problem import BundleProblem, BundleState, point_setup
 from orientviz.bundle.reduced._choice import choose_solver, image_blocks
 
 
@@ -54,7 +55,7 @@ def test_every_solver_reaches_the_same_optimum(network):
 @pytest.mark.parametrize("network", ["close-range", "aerial"])
 def test_dense_and_pairwise_schur_complements_agree(network):
     block = _network(network, 2)
-    prob = BundleProblem(block, point_setup(block, "fixed"), solver="dense")
+    prob = BundleProblem(block, point_setup(block, "fixed"), options=BundleOptions(solver="dense"))
     st = BundleState(block.images.X0, block.images.angles, block.points.xyz, np.zeros(0))
     rw, Je, Jp = prob.residuals(st, jac=True)
     out = {}

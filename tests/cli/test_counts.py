@@ -17,8 +17,8 @@ import pytest
 import orientviz as ov
 from orientviz.block import CHECK, CONTROL, TIE
 from orientviz.cli import main
+from orientviz.io.datasets import dataset_path
 from orientviz.io.kinds.block import check_mode
-from orientviz.io.solve import _resolve
 from orientviz.report import build_report
 
 
@@ -60,7 +60,7 @@ def outputs(
 
 @pytest.mark.parametrize("mode", ["independent", "rays"])
 def test_dbat_sxb_counts_add_up_both_check_modes(mode, capsys, tmp_path):
-    doc = json.loads(Path(_resolve("dbat_sxb")).read_text())
+    doc = json.loads(Path(dataset_path("dbat_sxb")).read_text())
     doc["options"]["check_points"] = mode
     path = tmp_path / "sxb.json"
     path.write_text(json.dumps(doc))
@@ -78,7 +78,7 @@ def test_dbat_sxb_counts_add_up_both_check_modes(mode, capsys, tmp_path):
 
 
 def test_block_strip_fixed_control_counts(capsys):
-    path = str(_resolve("block_strip"))
+    path = str(dataset_path("block_strip"))
     out, line, summary = outputs(capsys, path)
     assert (out["observations"], out["unknowns"]) == recount(ov.load_problem(path))
     assert line == (out["observations"], out["unknowns"], out["redundancy"])
@@ -91,7 +91,7 @@ def test_block_strip_fixed_control_counts(capsys):
 
 
 def test_models_counts_add_up(capsys):
-    path = str(_resolve("block_compact"))
+    path = str(dataset_path("block_compact"))
     out, line, summary = outputs(capsys, path, "--method", "models", method="models")
     assert out["observations"] - out["unknowns"] == out["redundancy"]
     assert line == (out["observations"], out["unknowns"], out["redundancy"])

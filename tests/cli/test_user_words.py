@@ -16,10 +16,11 @@ import numpy as np
 import pytest
 
 import orientviz as ov
-from orientviz.bundle import BundleProblem, BundleState, point_setup
+from orientviz.bundle import BundleOptions
+from orientviz.bundle.problem import BundleProblem, BundleState, point_setup
 from orientviz.cli import main
 from orientviz.errors import parameter_words
-from orientviz.io.solve import _resolve
+from orientviz.io.datasets import dataset_path
 
 #: ``<id>.X0`` … ``<id>.kappa``: an image's internal parameter name
 INTERNAL_IMAGE = re.compile(r"\S\.(X0|Y0|Z0|omega|phi|kappa)\b")
@@ -46,7 +47,7 @@ POLYNOMIAL_INTERNAL = re.compile(r"\bstrip\d+\.\w|polynomial p\d+")
 
 def _polynomial_file(tmp_path, name: str, edit) -> str:
     """block_strip with its strip numbered 7 (not the internal 0), edited by ``edit``."""
-    doc = json.loads(Path(_resolve("block_strip")).read_text())
+    doc = json.loads(Path(dataset_path("block_strip")).read_text())
     for image in doc["images"]:
         image["strip"] = 7
     edit(doc)
@@ -87,7 +88,7 @@ def test_polynomial_failures_name_the_users_strips(tmp_path, capsys, case, edit,
 def test_singular_reduced_system_message_names_images_by_id():
     sim = ov.simulate_block(2, 4, rng=3, extra=8, control="perimeter")
     block = sim.block
-    prob = BundleProblem(block, point_setup(block, "fixed"), solver="banded")
+    prob = BundleProblem(block, point_setup(block, "fixed"), options=BundleOptions(solver="banded"))
     st = BundleState(block.images.X0.copy(), block.images.angles.copy(),
                      block.points.xyz.copy(), np.zeros(0))  # fmt: skip
     rw, Je, Jp = prob.residuals(st, jac=True)
@@ -105,7 +106,7 @@ def _weighted_block_with_oddities(tmp_path) -> str:
     """block_strip with weighted control, one control point seen in no image and one with
     a σ = 0 coordinate (the cases in which the pseudo-observations once fell back to
     indices), and a gross error so that labels are printed as flagged."""
-    doc = json.loads(Path(_resolve("block_strip")).read_text())
+    doc = json.loads(Path(dataset_path("block_strip")).read_text())
     doc.setdefault("options", {})["control"] = "weighted"
     ctrl = [p for p in doc["points"] if p.get("role") == "control"]
     for p in ctrl:
@@ -146,7 +147,7 @@ def test_no_internal_names_in_any_output(tmp_path, capsys):
 def test_a_diverging_block_names_what_moved_most(tmp_path, capsys):
     """One image started 800 m and 30 gon off and only 2 iterations allowed: the report
     names images and points by their ids, largest move first, with the moves."""
-    doc = json.loads(Path(_resolve("block_strip")).read_text())
+    doc = json.loads(Path(dataset_path("block_strip")).read_text())
     doc["images"][1]["X0"] += 800.0
     doc["images"][1]["omega"] += 30.0
     path = tmp_path / "far.json"

@@ -849,11 +849,51 @@ def camera_models() -> list[Case]:
     return out
 
 
+def degenerate() -> list[Case]:
+    """Files that are valid JSON but leave nothing to adjust, or one blunder that spoils all."""
+    c = []
+
+    def emptied(*tables: str, cmd: tuple[str, ...] = ("solve",), extra: tuple[str, ...] = ()):
+        def make(f: Path) -> list[str]:
+            d = I.doc(I.COLUMNAR)
+            for t in tables:
+                d[t] = {k: [] for k in d[t]}
+            (f / I.COLUMNAR).write_text(json.dumps(d), encoding="utf-8")
+            return [*cmd, str(f / I.COLUMNAR), *extra]
+
+        return make
+
+    every = ("images", "points", "observations")
+    c.append(Case("solve/empty/columnar-no-rows", emptied(*every), 2,
+                  ("nothing to adjust", "no images"), I.COLUMNAR))  # fmt: skip
+    c.append(Case("solve/empty/columnar-no-rows-models", emptied(*every, extra=("--method", "models")),
+                  2, ("nothing to adjust", "no images"), I.COLUMNAR))  # fmt: skip
+    c.append(Case("solve/empty/no-points-no-observations", emptied("points", "observations"), 2,
+                  ("nothing to adjust", "no points and no observations"), I.COLUMNAR))  # fmt: skip
+    c.append(Case("export/empty/columnar-no-rows",
+                  emptied(*every, cmd=("export",), extra=("-d", "out")), 2,
+                  ("nothing to adjust",), I.COLUMNAR))  # fmt: skip
+
+    def one_blunder(f: Path) -> list[str]:
+        from orientviz.io.datasets import dataset_path
+
+        d = json.loads(dataset_path("block_strip").read_text(encoding="utf-8"))
+        o = d["observations"][5]  # image s00_000, tie point g02_001 (three rays)
+        o["x"] += 100 * o["sigma"]  # one 100 σ blunder in a block of redundancy 8
+        (f / "strip.json").write_text(json.dumps(d), encoding="utf-8")
+        return ["solve", str(f / "strip.json")]
+
+    c.append(Case("solve/gross/one-blunder-small-block", one_blunder, 4,
+                  ("One gross error explains it", "'g02_001'", "--robust cauchy"),
+                  "strip.json"))  # fmt: skip
+    return c
+
+
 def all_cases() -> list[Case]:
     return [
         *special_files(), *garbage_files(), *long_names(), *arguments(), *outputs(), *problem_files(),
         *csv_files(), *colmap_models(), *bal_files(), *geometry(), *accepted(),
-        *binary_models(), *measurement_csv(), *camera_models(),
+        *binary_models(), *measurement_csv(), *camera_models(), *degenerate(),
     ]  # fmt: skip
 
 

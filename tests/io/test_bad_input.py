@@ -189,8 +189,8 @@ def test_tie_point_with_one_ray():
 
 def test_unknown_unit():
     doc = _doc()
-    doc["units"]["length"] = "ft"
-    err = _fail(doc, 'expected one of "m", "mm", got "ft"')
+    doc["units"]["length"] = "furlong"  # ft and us-ft are lengths since issue 29
+    err = _fail(doc, 'expected one of "m", "mm", "ft", "us-ft", got "furlong"')
     assert err.where == "units.length"
 
 

@@ -10,8 +10,8 @@ from orientviz.block import CHECK, CONTROL
 from orientviz.cli import main
 from orientviz.datasets.debug_example import make_debug_example
 from orientviz.io.control import ControlPoints, apply_control, read_control, write_control
-from orientviz.io.export import export_results
 from orientviz.report import image_table, point_table, read_csv_table
+from orientviz.report.export import export_results
 
 
 @pytest.fixture(scope="module")

@@ -128,7 +128,7 @@ def test_mutated_files_raise_only_orientviz_errors(text):
 )
 @given(text=mutated())
 def test_solve_on_mutated_files_never_raises(text, tmp_path_factory, capsys):
-    from orientviz.io.solve import run_from_cli
+    from orientviz.report.solve import run_from_cli
 
     path = tmp_path_factory.mktemp("mut") / "mutated.json"
     path.write_text(text, encoding="utf-8")

@@ -8,7 +8,8 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 from orientviz.adjust import gauss_newton  # noqa: E402
-from orientviz.adjust.gross import data_snooping, engine_solver, reliability  # noqa: E402
+from orientviz.adjust.gross import engine_solver, reliability  # noqa: E402
+from orientviz.adjust.snooping import data_snooping  # noqa: E402
 from orientviz.errors import InputError  # noqa: E402
 from orientviz.plot.deformation import (  # noqa: E402
     plot_deformation_comparison,

@@ -16,7 +16,7 @@ from test_report_sections import (
 )
 
 import orientviz as ov
-from orientviz.io.solve import _resolve
+from orientviz.io.datasets import dataset_path
 from orientviz.report import build_report, html_report
 
 pytest.importorskip("matplotlib")
@@ -73,7 +73,7 @@ def kv(p: Collect, label: str) -> str:
 
 @pytest.fixture(scope="module")
 def strip_html(tmp_path_factory):
-    problem = ov.load_problem(_resolve("block_strip"))
+    problem = ov.load_problem(dataset_path("block_strip"))
     solution = ov.solve_problem(problem)
     path = ov.write_report(problem, solution, tmp_path_factory.mktemp("r") / "report.html")
     return problem, solution, path.read_text(encoding="utf-8"), path
@@ -114,14 +114,14 @@ def test_html_has_every_section_and_the_recomputed_numbers(strip_html):
 
 
 def test_block_compact_report_is_small(tmp_path):
-    problem = ov.load_problem(_resolve("block_compact"))
+    problem = ov.load_problem(dataset_path("block_compact"))
     path = ov.write_report(problem, ov.solve_problem(problem), tmp_path / "c.html")
     assert 0 < path.stat().st_size < 2_000_000
     parse(path.read_text(encoding="utf-8"))
 
 
 def test_all_text_is_escaped():
-    problem = ov.load_problem(_resolve("resection_example"))
+    problem = ov.load_problem(dataset_path("resection_example"))
     solution = ov.solve_problem(problem)
     problem.name = "<script>alert('x')</script> & <b>"
     problem.description = 'say "hi" <img src=http://example.com/x.png>'
@@ -133,7 +133,7 @@ def test_all_text_is_escaped():
 
 
 def test_without_matplotlib_the_report_says_figures_are_omitted(monkeypatch, tmp_path):
-    problem = ov.load_problem(_resolve("block_strip"))
+    problem = ov.load_problem(dataset_path("block_strip"))
     solution = ov.solve_problem(problem)
     monkeypatch.setitem(sys.modules, "orientviz.plot.report_figures", None)  # import fails
     path = ov.write_report(problem, solution, tmp_path / "nofig.html")

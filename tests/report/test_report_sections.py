@@ -12,9 +12,8 @@ import pytest
 
 import orientviz as ov
 from orientviz.block import CHECK, TIE
-from orientviz.io.datasets import list_datasets
+from orientviz.io.datasets import dataset_path, list_datasets
 from orientviz.io.problem import problem_from_block
-from orientviz.io.solve import _resolve
 from orientviz.report import build_report, chi2_test, intersection_angles, text_report
 
 BLOCK_SECTIONS = [
@@ -31,7 +30,7 @@ BLOCK_SECTIONS = [
 
 
 def solved(name: str):
-    problem = ov.load_problem(_resolve(name))
+    problem = ov.load_problem(dataset_path(name))
     return problem, ov.solve_problem(problem)
 
 
@@ -218,9 +217,10 @@ def test_core_report_does_not_import_matplotlib(tmp_path):
     code = (
         "import sys\n"
         "from orientviz.io.problem import load_problem\n"
-        "from orientviz.io.solve import solve_problem, _resolve\n"
+        "from orientviz.io.datasets import dataset_path\n"
+        "from orientviz.io.solve import solve_problem\n"
         "import orientviz.report as h\n"
-        "p = load_problem(_resolve('block_strip'))\n"
+        "p = load_problem(dataset_path('block_strip'))\n"
         f"h.write_report(p, solve_problem(p), r'{tmp_path / 'r.txt'}')\n"
         "assert 'matplotlib' not in sys.modules, 'matplotlib imported'\n"
     )

@@ -46,7 +46,7 @@ def test_rows_state_the_laws(small):
 
 def test_cli_json(small, capsys, monkeypatch):
     monkeypatch.setattr(ebner, "_pipeline_rows", lambda rng: [])
-    monkeypatch.setattr(ebner, "_sigma0_rows", lambda rng, paper: [])
+    monkeypatch.setattr(ebner, "_sigma0_numbers", lambda rng: ([1.2], [15.0]))
     assert cli.main(["reproduce", "ebner", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert {"task", "case", "quantity", "paper", "orientviz", "note", "label", "match"} <= set(

@@ -107,7 +107,9 @@ def test_fitted_rows_say_what_was_chosen(rows):
 
 def test_the_command_counts_per_label(capsys):
     assert main(["reproduce", "kovarik"]) == 0
-    out = capsys.readouterr().out.strip().splitlines()[-1]
+    text = capsys.readouterr().out
+    assert max(len(line) for line in text.splitlines()) <= 100  # wrapped (--wide: not)
+    out = " ".join(text[text.rindex("\ncounts: ") + 1 :].split())  # the wrapped last line
     assert out.startswith("counts: ")
     assert "relief 1/3 (predicted)" in out and "pass scheme 2/4 (predicted)" in out
 

@@ -44,7 +44,7 @@ def drawn_with(page, colours: dict, least: int = 20) -> tuple[np.ndarray, dict]:
 
 
 def test_every_demo_has_a_browser_test():
-    tested = {"block", "pair", "radar"}
+    tested = {"block", "pair", "radar", "design"}  # design: tests/viewer/test_browser_studio.py
     assert set(DEMOS) == tested, f"demos without a browser test: {set(DEMOS) - tested}"
 
 

@@ -1,7 +1,8 @@
 """Gross-error detection: data snooping, robust reweighting, reliability, automatic cleaning.
 
-Robust reweighting and the rerun model are in :mod:`orientviz.adjust.robust` and can
-be imported from here as well (``robust_adjust``, ``robust_weights``, ``rerun_cleaning``).
+Data snooping is in :mod:`orientviz.adjust.snooping`; robust reweighting and the rerun
+model in :mod:`orientviz.adjust.robust` (``robust_adjust``, ``robust_weights``,
+``rerun_cleaning``); both build on the statistics and the cleaning log here.
 
 Everything here works on *any* least-squares problem through one small interface, a
 **solver** ``solve(weights) -> Adjustment``: ``weights`` (n,) are factors on the a-priori
@@ -323,18 +324,3 @@ def _check_converged(adj, log, weights, it):
             log,
             weights,
         )
-
-
-# --------------------------------------------------------------------------- data snooping
-# data snooping lives in .snooping, robust reweighting and the rerun model in .robust
-# (all kept importable from here)
-def __getattr__(name: str):
-    if name in ("rerun_cleaning", "robust_adjust", "robust_weights"):
-        from . import robust
-
-        return getattr(robust, name)
-    if name == "data_snooping":
-        from . import snooping
-
-        return snooping.data_snooping
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

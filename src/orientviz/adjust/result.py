@@ -63,7 +63,7 @@ class Adjustment:
         Estimated parameters (internal units: m, mm, rad).
     names : sequence of str
         Parameter names, e.g. ``"img3.omega"`` (a list; a bundle's is a
-        :class:`~orientviz.bundle.problem._problem.ParameterNames`, formed when first read).
+        :class:`~orientviz.bundle.problem.ParameterNames`, formed when first read).
     groups : dict of str to slice
         Named groups of parameters (``"exterior"``, ``"points"``, …) as slices of ``x``.
     sigma0 : float

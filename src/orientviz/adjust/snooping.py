@@ -21,6 +21,7 @@ from .gross import (
     _labels,
     critical_value,
 )
+from .gross2d import critical_values_2d, statistic_2d
 from .result import Adjustment
 
 F64 = NDArray[np.float64]
@@ -46,7 +47,6 @@ def _statistics(adj: Adjustment, g, ng: int, test: str, crit: dict[int, float]):
     if test == "w":
         T, rank = _group_stat(adj, g, ng)
         return T, np.full(ng, crit[1]), rank, np.ones(ng, np.int64)
-    from .gross2d import statistic_2d
 
     rxy = adj.redundancy_xy
     if rxy is None or adj.normalized_residuals is None:
@@ -198,8 +198,6 @@ def data_snooping(
         raise InputError("the 2-D test needs (x, y) pairs 2i, 2i + 1 as the groups")
     names = _labels(labels, ng)
     if test == "2d":
-        from .gross2d import critical_values_2d
-
         crit = critical_values_2d(alpha0, beta0)
     else:
         crit = {0: np.inf, 1: critical_value(alpha0) ** 2, 2: np.inf}

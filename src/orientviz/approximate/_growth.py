@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from ..block import CHECK, Block
 from ..bundle import bundle_adjust
 from ..errors import NotDeterminableError
-from ..orientation.essential import eight_point, select_by_cheirality
+from ..orientation.essential import eight_point, five_point_route, select_by_cheirality
 from ..orientation.intersection import intersect_rays
 from ..orientation.resection import resection
 from ..rotation import matrix_from_opk, opk_from_matrix
@@ -45,6 +45,9 @@ POOR_RESECTION: float = 20.0
 #: A wave orients the images that see at least this share of the known points of the
 #: best-connected waiting image (the best-connected first; all of them in one batch).
 WAVE_SHARE: float = 0.5
+#: A seed pair shares at least this many points: the five-point relative orientation
+#: below 8 (a textbook pair of six von Gruber points), the eight-point one from 8 on.
+MIN_SEED_POINTS = 5
 #: The seed pair shares at least this share of the largest number of common points of
 #: any pair (then the most central such pair is taken).
 SEED_SHARE: float = 0.8
@@ -107,8 +110,10 @@ class Growth:
         wrong one (e.g. over nearly flat ground); else the best fitting is kept.
         """
         C = self.common.tocoo()
-        if C.nnz == 0 or C.data.max() < 8:
-            raise NotDeterminableError("approximate values: no image pair shares 8 points")
+        if C.nnz == 0 or C.data.max() < MIN_SEED_POINTS:
+            raise NotDeterminableError(
+                f"approximate values: no image pair shares {MIN_SEED_POINTS} points"
+            )
         tried = []
         for i, k in self._seed_candidates(C)[:SEED_TRIES]:
             if self.c_img[i] != self.c_img[k] or not self._orient_pair(i, k):
@@ -135,8 +140,11 @@ class Growth:
         a_idx, b_idx = ri[a_pos], rk[b_pos]
         c = float(self.c_img[i])
         try:
-            E = eight_point(self.xyc[a_idx], self.xyc[b_idx], c)
-            R2, t, _ = select_by_cheirality(E, self.xyc[a_idx], self.xyc[b_idx], c)
+            if a_idx.size >= 8:
+                E = eight_point(self.xyc[a_idx], self.xyc[b_idx], c)
+                R2, t, _ = select_by_cheirality(E, self.xyc[a_idx], self.xyc[b_idx], c)
+            else:  # a textbook pair of 5-7 points: the five-point solution fitting best
+                _, R2, t = five_point_route(self.xyc[a_idx], self.xyc[b_idx], c)
         except (NotDeterminableError, np.linalg.LinAlgError, ValueError):
             return False
         self.Rm[i], self.Xm[i] = np.eye(3), np.zeros(3)
@@ -148,7 +156,7 @@ class Growth:
         return True
 
     def _seed_candidates(self, C: sp.coo_matrix) -> list[tuple[int, int]]:
-        """Pairs sharing ≥ 8 points: first those with ≥ :data:`SEED_SHARE` of the most
+        """Pairs sharing ≥ :data:`MIN_SEED_POINTS` points: first those with ≥ :data:`SEED_SHARE` of the most
         common points, the most central first, then the others by their common points.
 
         Central: the smallest eccentricity max(d_a, d_b) in image-graph hops to the two
@@ -157,7 +165,7 @@ class Growth:
         """
         from scipy.sparse.csgraph import shortest_path
 
-        upper = (C.row < C.col) & (C.data >= 8)
+        upper = (C.row < C.col) & (C.data >= MIN_SEED_POINTS)
         rows, cols, data = C.row[upper], C.col[upper], C.data[upper]
         start = int(rows[np.argmax(data)])
         d0 = shortest_path(self.common, unweighted=True, indices=start)

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..camera import project
 from ..errors import InputError
 from ..rotation import check_sequence, matrix_from_opk
 
@@ -385,8 +386,6 @@ class Block:
 
     def project(self) -> F64:
         """Image coordinates (n, 2) mm computed from the current orientations and points."""
-        from ..camera import project
-
         obs = self.observations
         cam = self.images.camera[obs.image]
         R = self.rotations()[obs.image]
@@ -454,11 +453,11 @@ class Block:
         )
 
     def summary(self) -> str:
-        """One line: counts of cameras, images, points by role and observations."""
+        """One line: counts of cameras, images, points by role and image points (rays)."""
         r = np.bincount(self.points.role, minlength=3)
         return (
             f"{len(self.cameras)} camera(s), {self.n_images} images, {self.n_points} points "
-            f"({r[0]} tie, {r[1]} control, {r[2]} check), {self.n_observations} observations"
+            f"({r[0]} tie, {r[1]} control, {r[2]} check), {self.n_observations} image points"
         )
 
 

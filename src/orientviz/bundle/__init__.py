@@ -3,7 +3,8 @@
 The face of the bundle's house. What a user calls:
 
 * :func:`bundle_adjust` — the adjustment (Schur complement on the reduced camera
-  system, self-calibration, auxiliary data, exact precision);
+  system, self-calibration, auxiliary data, exact precision), its knobs one value:
+  :class:`BundleOptions` (with :class:`ReducedOptions`);
 * self-calibration: :func:`ap_set` (:class:`Ebner12`, :class:`Brown`, :class:`Gruen44`,
   the :class:`AdditionalParameters` protocol), :func:`analyse` → :class:`APAnalysis`,
   :func:`self_calibrate` → :class:`SelfCalibration`; the camera itself (c, principal
@@ -30,21 +31,23 @@ The rooms behind it (each a sub-package with its own door):
 * ``precision`` — cofactor blocks, redundancy numbers, reliability per ray.
 
 Beside them: ``reference`` with ``_reference_data`` (the textbook iteration), ``_result``
-(the typed result), ``_selfcal``, ``_cleaning``,
+(the typed result), ``_options`` (:class:`BundleOptions`), ``_selfcal``, ``_cleaning``,
 ``_alternation`` (procedures built on :func:`bundle_adjust`) and ``sparsity`` (the
-sparsity of the normal equations drawn for the lessons). The numerical building blocks
-that tests and benchmarks use are exported too (second group of ``__all__``).
+sparsity of the normal equations drawn for the lessons). ``__all__`` is the public face;
+the numerical building blocks are reached through the rooms' doors
+(``orientviz.bundle.problem``, ``orientviz.bundle.reduced``, ``orientviz.bundle.model``,
+``orientviz.bundle.precision``, ``orientviz.bundle.loop``).
 """
 
 from ._alternation import AuxiliaryResult, adjust_with_auxiliary
 from ._cleaning import bundle_solver, clean_block, cleaned_block, ray_labels
+from ._options import BundleOptions
 from ._result import BundleResult, ExteriorPairs, RayGains
 from ._selfcal import SelfCalibration, self_calibrate
 from .loop import bundle_adjust
 from .model import (
     AdditionalParameters,
     APAnalysis,
-    BoundLens,
     Brown,
     Ebner12,
     Gruen44,
@@ -52,62 +55,20 @@ from .model import (
     LensModel,
     analyse,
     ap_set,
-    collinearity_block,
     lens_model,
-    normalised_block,
-    project_block,
 )
-from .precision import RayReliability, banded_selected_inverse, ray_reliability
-from .problem import (
-    AdditionalBlock,
-    AuxRows,
-    BorderSolver,
-    BundleAuxiliary,
-    BundleProblem,
-    BundleState,
-    ExteriorBlock,
-    ImageObservations,
-    InteriorOrientation,
-    PointBlock,
-    PointSetup,
-    auxiliary_rows,
-    band_backward_solve,
-    band_forward_solve,
-    datum_defect,
-    form_preconditioner,
-    image_condition_deficit,
-    point_setup,
-    solve_bordered,
-    solve_bordered_pcg,
-)
-from .reduced import (
-    SOLVERS,
-    APBorder,
-    AuxBorder,
-    NormalEquations,
-    ReducedStructure,
-    factor_reduced,
-    geometric_orderings,
-    inv3,
-)
+from .precision import RayReliability, ray_reliability
+from .reduced import ReducedOptions
 
 __all__ = [
-    # the adjustment and its companions
+    # the adjustment, its options and its result
     "bundle_adjust",
+    "BundleOptions",
+    "ReducedOptions",
     "BundleResult",
     "RayGains",
     "ExteriorPairs",
-    "BundleProblem",
-    "BundleState",
-    "NormalEquations",
-    "APBorder",
-    "AuxBorder",
-    "ImageObservations",
-    "InteriorOrientation",
-    "ExteriorBlock",
-    "PointBlock",
-    "AdditionalBlock",
-    "BorderSolver",
+    # self-calibration and the camera
     "AdditionalParameters",
     "APAnalysis",
     "LensModel",
@@ -120,35 +81,14 @@ __all__ = [
     "ap_set",
     "SelfCalibration",
     "self_calibrate",
+    # gross errors and reliability
     "bundle_solver",
     "clean_block",
     "cleaned_block",
     "ray_labels",
     "RayReliability",
     "ray_reliability",
+    # auxiliary data by alternation
     "AuxiliaryResult",
     "adjust_with_auxiliary",
-    # numerical building blocks (tests, benchmarks, advanced use)
-    "AuxRows",
-    "BundleAuxiliary",
-    "auxiliary_rows",
-    "band_backward_solve",
-    "band_forward_solve",
-    "form_preconditioner",
-    "solve_bordered",
-    "solve_bordered_pcg",
-    "PointSetup",
-    "datum_defect",
-    "image_condition_deficit",
-    "point_setup",
-    "collinearity_block",
-    "normalised_block",
-    "project_block",
-    "BoundLens",
-    "banded_selected_inverse",
-    "SOLVERS",
-    "ReducedStructure",
-    "factor_reduced",
-    "geometric_orderings",
-    "inv3",
 ]

@@ -24,8 +24,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.sparse.csgraph import connected_components
 
-from ..adjust.gross import Cleaning, rerun_cleaning, robust_adjust
+from ..adjust.gross import Cleaning
 from ..adjust.result import Adjustment
+from ..adjust.robust import rerun_cleaning, robust_adjust
 from ..adjust.snooping import data_snooping
 from ..block import CHECK, CONTROL, Block
 from ..camera import project
@@ -373,7 +374,7 @@ def clean_block(
     method : {"snooping", "danish", "huber", "reruns"}
         Baarda's data snooping; robust reweighting (Danish method or Huber) followed by a
         final adjustment without the rejected rays; or the model of manual practice
-        (:func:`~orientviz.adjust.gross.rerun_cleaning`).
+        (:func:`~orientviz.adjust.robust.rerun_cleaning`).
     alpha0 : float
         Significance level of the w-test (0.1 %: k = 3.29).
     max_fraction : float

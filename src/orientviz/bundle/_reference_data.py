@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..block import Block
+from .model import LensModel, ap_set
 from .problem import point_setup
 
 F64 = NDArray[np.float64]
@@ -60,8 +61,6 @@ def reference_data(
     block: Block, control: str = "fixed", additional=None, ap_group=None, ap_sigma=None
 ) -> ReferenceData:
     """What enters the adjustment (arguments as :func:`orientviz.bundle.bundle_adjust`)."""
-    from .model import LensModel  # the package's single camera model (only when asked)
-
     s = point_setup(block, control)  # the library's datum rules: fixed / weighted control
     obs, img, cams = block.observations, block.images, block.cameras
     use = s.used_obs
@@ -86,8 +85,6 @@ def reference_data(
     if additional is None:
         return out
     if isinstance(additional, str):
-        from .model import ap_set
-
         additional = ap_set(additional)
     is_lens = isinstance(additional, LensModel)
     default = img.camera if is_lens else np.zeros(block.n_images, np.int64)

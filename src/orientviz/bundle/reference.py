@@ -28,7 +28,7 @@ plane at z = −c (mm), R = R(ω, φ, κ) turns image vectors into the object fr
    (the rule of :func:`orientviz.bundle.bundle_adjust`).
 
 There is no damping: the iteration needs approximations good enough for Gauss-Newton
-(:func:`orientviz.block.approximate_values`). ``bundle_adjust(block, solver="reference")``
+(:func:`orientviz.approximate.approximate_values`). ``bundle_adjust(block, solver="reference")``
 runs it and returns the usual :class:`~orientviz.bundle.BundleResult`; the fast solvers
 are tested against it (tests/bundle/test_reference*.py).
 """
@@ -46,13 +46,40 @@ from ._reference_data import ReferenceData, reference_data
 
 F64 = NDArray[np.float64]
 
+__all__ = [
+    "ReferenceData",
+    "ReferenceSolution",
+    "collinearity",
+    "linearise",
+    "normal_equations",
+    "reference_bundle",
+    "reference_data",
+    "solve_step",
+]
+
 
 @dataclass
 class ReferenceSolution:
-    """The estimates of :func:`reference_bundle` (m, rad; additional parameters in their
-    set's units), per iterate (index 0: the start) the parameters ``x`` (exterior, all
-    points, additional parameters) and vᵀPv, per step its largest correction in units of
-    the conditional σ, and how it ended."""
+    """What :func:`reference_bundle` returns.
+
+    Attributes
+    ----------
+    X0, angles : ndarray, shape (m, 3)
+        Projection centres (m) and ω, φ, κ (rad) at the end.
+    xyz : ndarray, shape (p, 3)
+        All block points (m); fixed control at its given value, check points untouched.
+    ap : ndarray, shape (q,)
+        Additional parameters (units of their set, e.g. µm).
+    x : list of ndarray
+        Per iterate (index 0: the start) the parameters: exterior (6m), points (3p), ap.
+    cost : list of float
+        vᵀPv per iterate; σ̂0 = √(cost[-1] / redundancy).
+    max_correction : list of float
+        Per step, its largest correction in units of the conditional σ (the stopping
+        measure).
+    converged : bool
+    reason : str
+    """
 
     X0: F64
     angles: F64
@@ -66,11 +93,26 @@ class ReferenceSolution:
 
 
 def collinearity(X: F64, X0: F64, R: F64, dR: F64, c: F64) -> tuple[F64, F64, F64, F64]:
-    """(x − x0, y − y0) of n rays and their partial derivatives.
+    """The collinearity equations of n rays and their partial derivatives.
 
-    ``X``, ``X0`` (n, 3) m; ``R`` (n, 3, 3); ``dR`` (3, n, 3, 3): ∂R/∂ω, ∂R/∂φ, ∂R/∂κ;
-    ``c`` (n,) mm. Returns xy (n, 2) mm and ∂(x, y)/∂(X0, Y0, Z0) (n, 2, 3) mm/m,
-    ∂(x, y)/∂(ω, φ, κ) (n, 2, 3) mm/rad, ∂(x, y)/∂(X, Y, Z) (n, 2, 3) mm/m.
+    Parameters
+    ----------
+    X, X0 : ndarray, shape (n, 3)
+        Object point and projection centre of each ray, m.
+    R : ndarray, shape (n, 3, 3)
+        Rotation (image → object) of each ray's image.
+    dR : ndarray, shape (3, n, 3, 3)
+        ∂R/∂ω, ∂R/∂φ, ∂R/∂κ of each ray's image (per rad).
+    c : ndarray, shape (n,), or float
+        Principal distance, mm.
+
+    Returns
+    -------
+    xy : ndarray, shape (n, 2)
+        x − x0, y − y0 in mm.
+    dX0, dangles, dX : ndarray, shape (n, 2, 3)
+        ∂(x, y)/∂(X0, Y0, Z0) in mm/m, ∂(x, y)/∂(ω, φ, κ) in mm/rad,
+        ∂(x, y)/∂(X, Y, Z) in mm/m.
     """
     d = X - X0
     uvw = np.einsum("nki,nk->ni", R, d)  # Rᵀ (X − X0)
@@ -82,19 +124,42 @@ def collinearity(X: F64, X0: F64, R: F64, dR: F64, c: F64) -> tuple[F64, F64, F6
 
     xy = -(c / w)[:, None] * np.stack([u, v], 1)
     d_point = quotient_rule(np.transpose(R, (0, 2, 1)))  # ∂(u, v, w)/∂X = Rᵀ
-    d_angles = quotient_rule(np.stack([np.einsum("nki,nk->ni", dR[a], d) for a in range(3)], 2))
+    duvw_dangles = np.stack([np.einsum("nki,nk->ni", dR[a], d) for a in range(3)], 2)
+    d_angles = quotient_rule(duvw_dangles)  # ∂(u, v, w)/∂θ = (∂R/∂θ)ᵀ (X − X0)
     return xy, -d_point, d_angles, d_point
 
 
 def linearise(data: ReferenceData, X0: F64, angles: F64, xyz: F64, ap: F64, sequence: str = "opk"):
-    """f (n, 2) mm at the current values and the Jacobians per ray: A1 (n, 2, 6m + q) by
-    x1 (exterior orientations, additional parameters), B (n, 2, 3) by the ray's point."""
+    """The observation equations at the current values, linearised.
+
+    Parameters
+    ----------
+    data : ReferenceData
+        What enters (:func:`reference_data`).
+    X0, angles : ndarray, shape (m, 3)
+        Projection centres (m), ω, φ, κ (rad).
+    xyz : ndarray, shape (p, 3)
+        All block points, m.
+    ap : ndarray, shape (q,)
+        Additional parameters.
+    sequence : {"opk", "pok"}
+        Rotation sequence of ``angles``.
+
+    Returns
+    -------
+    f : ndarray, shape (n, 2)
+        Predicted image coordinates of the rays, mm.
+    A1 : ndarray, shape (n, 2, 6m + q)
+        ∂f/∂x1: by the exterior orientations (6 columns per image) and the additional
+        parameters.
+    B : ndarray, shape (n, 2, 3)
+        ∂f/∂(X, Y, Z) of each ray's point, mm/m.
+    """
     m, n = X0.shape[0], data.image.size
     R = matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2], sequence)[data.image]
     dR = np.stack(matrix_derivatives(angles[:, 0], angles[:, 1], angles[:, 2], sequence))
     c, x0, y0 = data.cam
     A1 = np.zeros((n, 2, 6 * m + ap.size))
-    rows = np.arange(n)[:, None]
     if data.lens is None:  # the pinhole: x = x0 − c·u/w, y = y0 − c·v/w
         xy, dX0, dang, B = collinearity(xyz[data.point], X0[data.image], R, dR[:, data.image], c)
         f = xy + np.stack([x0, y0], 1)
@@ -102,19 +167,44 @@ def linearise(data: ReferenceData, X0: F64, angles: F64, xyz: F64, ap: F64, sequ
         nrm, dX0, dang, B = collinearity(xyz[data.point], X0[data.image], R, dR[:, data.image], 1.0)
         f, M, D = data.lens.evaluate(ap, data.group, nrm, data.l, True)
         dX0, dang, B = M @ dX0, M @ dang, M @ B
-    for e, part in enumerate((dX0, dang)):  # columns 6i…6i+2, 6i+3…6i+5 of image i
-        A1[rows, :, 6 * data.image[:, None] + 3 * e + np.arange(3)] = part.transpose(0, 2, 1)
-    if data.k:
+    for i in range(m):  # a ray's row has non-zeros only in its own image's six columns
+        ray = data.image == i
+        A1[ray, :, 6 * i : 6 * i + 3] = dX0[ray]
+        A1[ray, :, 6 * i + 3 : 6 * i + 6] = dang[ray]
+    if data.k:  # and in the k columns of its image's group of additional parameters
         D = data.design if data.lens is None else D
         if data.lens is None:  # a linear set: f = collinearity + A(x_obs)·a
             f = f + np.einsum("nkj,nj->nk", D, ap.reshape(-1, data.k)[data.group])
-        A1[rows, :, 6 * m + data.k * data.group[:, None] + np.arange(data.k)] = D.transpose(0, 2, 1)
+        for g in range(ap.size // data.k):
+            ray, col = data.group == g, 6 * m + g * data.k
+            A1[ray, :, col : col + data.k] = D[ray]
     return f, A1, B
 
 
 def normal_equations(data: ReferenceData, f: F64, A1: F64, B: F64, X0, angles, xyz, ap):
-    """N11 (u1, u1), N12 (p_var, u1, 3) per point, N22 (p_var, 3, 3), n1, n2 (p_var, 3)
-    and vᵀPv at the current values (see the module docstring)."""
+    """The normal-equation blocks (see the module docstring) and vᵀPv.
+
+    Parameters
+    ----------
+    data : ReferenceData
+    f, A1, B : ndarray
+        From :func:`linearise`.
+    X0, angles, xyz, ap : ndarray
+        The current values (as :func:`linearise`).
+
+    Returns
+    -------
+    N11 : ndarray, shape (u1, u1)
+        u1 = 6m + q.
+    N12 : ndarray, shape (p_var, u1, 3)
+        One u1 × 3 column block per point unknown.
+    N22 : ndarray, shape (p_var, 3, 3)
+        One 3 × 3 block per point unknown.
+    n1 : ndarray, shape (u1,)
+    n2 : ndarray, shape (p_var, 3)
+    cost : float
+        vᵀPv (image coordinates and pseudo-observations).
+    """
     m, q, P, l_f = X0.shape[0], ap.size, data.p, data.l - f
     A = A1.reshape(-1, A1.shape[2])  # the design matrix of x1, rows x, y of every ray
     N11 = A.T @ (P.reshape(-1, 1) * A)
@@ -145,7 +235,20 @@ def normal_equations(data: ReferenceData, f: F64, A1: F64, B: F64, X0, angles, x
 
 
 def solve_step(N11: F64, N12: F64, N22: F64, n1: F64, n2: F64) -> tuple[F64, F64]:
-    """dx1 (u1,) and dx2 (p_var, 3): reduce, solve densely, back-substitute."""
+    """One Gauss-Newton step: reduce to x1, solve densely, back-substitute the points.
+
+    Parameters
+    ----------
+    N11, N12, N22, n1, n2 : ndarray
+        From :func:`normal_equations`.
+
+    Returns
+    -------
+    dx1 : ndarray, shape (u1,)
+        Corrections of the exterior orientations (m, rad) and additional parameters.
+    dx2 : ndarray, shape (p_var, 3)
+        Corrections of the point unknowns, m.
+    """
     N22inv = np.linalg.inv(N22)  # one 3×3 inverse per point
     T = np.einsum("pia,pab->pib", N12, N22inv)  # N12 N22⁻¹, point by point
     S = N11 - np.einsum("pia,pja->ij", T, N12)
@@ -161,11 +264,30 @@ def reference_bundle(
 ) -> ReferenceSolution:  # fmt: skip
     """Adjust ``block`` by the textbook Gauss-Newton iteration (see the module docstring).
 
-    Arguments as :func:`orientviz.bundle.bundle_adjust`: approximations from the block
-    (``images.X0``/``angles`` m, rad; ``points.xyz`` m), ``control`` ``"fixed"`` or
-    ``"weighted"``, ``additional`` a set's name, an additional-parameter set or a
-    :class:`~orientviz.bundle.LensModel`; ``ap_group``, ``ap_sigma``; ``tol`` in units
-    of the conditional σ of each correction.
+    Parameters
+    ----------
+    block : Block
+        Approximate values in ``images.X0``/``angles`` (m, rad) and ``points.xyz`` (m).
+    control : {"fixed", "weighted"}
+        The datum, as in :func:`orientviz.bundle.bundle_adjust`: with ``"fixed"`` every
+        given control coordinate is held (a point given in X, Y and Z is no unknown, a
+        partly given one is weighted with σ = 1 µm); with ``"weighted"`` given
+        coordinates with σ > 0 are observations of weight 1/σ², σ = 0 still holds. Check
+        points and their rays stay out; observed projection centres and attitudes
+        (``images.X0_obs``, ``angles_obs`` with their σ) are observations too.
+    additional : str, AdditionalParameters or LensModel, optional
+        Self-calibration: a set's name, a set, or the camera model.
+    ap_group, ap_sigma : optional
+        Group of each image for the additional parameters; σ of their pseudo-
+        observations a = 0 (None: free).
+    max_iter : int
+        Maximum number of steps.
+    tol : float
+        Stop when every correction is below ``tol`` times its conditional σ 1/√N_kk.
+
+    Returns
+    -------
+    ReferenceSolution
     """
     data = reference_data(block, control, additional, ap_group, ap_sigma)
     m = block.n_images

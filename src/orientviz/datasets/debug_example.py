@@ -27,6 +27,10 @@ from pathlib import Path
 import numpy as np
 
 from ..block import CONTROL, Block
+from ..io.bal import write_bal
+from ..io.colmap import write_colmap
+from ..io.control import ControlPoints, write_control
+from ..simulate import simulate_block
 
 #: default seed: the same files every time
 SEED = 2024
@@ -87,11 +91,6 @@ def make_debug_example(
     -------
     DebugExample
     """
-    from ..io.bal import write_bal
-    from ..io.colmap import write_colmap
-    from ..io.control import ControlPoints, write_control
-    from ..simulate import simulate_block
-
     d = Path(directory)
     d.mkdir(parents=True, exist_ok=True)
     sim = simulate_block(

@@ -25,7 +25,10 @@ import numpy as np
 
 from ..block import Block, Cameras, Images, Observations, Points
 from ..camera import project
+from ..io.kinds.similarity import similarity_problem
+from ..io.problem import Problem, Units, save_problem
 from ..rotation import matrix_from_opk
+from ..simulate import simulate_block
 from ..units import to_rad
 
 HERE = Path(__file__).resolve().parent
@@ -69,8 +72,6 @@ def _observe(X0, ang_gon, pts, c, rng, sigma_mm, visible_mm=112.0):
 
 
 def similarity_example(rng: np.random.Generator):
-    from ..io.kinds.similarity import similarity_problem
-
     scale = 5000.0  # model 1 : 5000, model coordinates in mm
     R = matrix_from_opk(*to_rad([0.8, -1.2, 35.0], "gon"))
     T = np.array([5480.0, 3215.0, 1880.0])
@@ -139,8 +140,6 @@ def intersection_example(rng: np.random.Generator) -> tuple[Block, dict]:
 
 
 def _rounded_sim(strips: int, images: int, rng: np.random.Generator, **kw) -> Block:
-    from ..simulate import simulate_block
-
     sim = simulate_block(strips, images, rng=rng, **kw)
     b = sim.block
     b.images.X0 = _r(b.images.X0, 3)
@@ -153,8 +152,6 @@ def _rounded_sim(strips: int, images: int, rng: np.random.Generator, **kw) -> Bl
 
 def build_all(rng: np.random.Generator | None = None) -> dict[str, tuple]:
     """All examples: name → (kind, data, units, description, extra manifest fields)."""
-    from ..io.problem import Units
-
     rng = np.random.default_rng(SEED) if rng is None else rng
     streams = rng.spawn(5)
     gon = Units(length="m", angle="gon", image="mm")
@@ -179,8 +176,6 @@ def build_all(rng: np.random.Generator | None = None) -> dict[str, tuple]:
 
 def main(folder: Path = EXAMPLES) -> list[Path]:
     """Write every example and ``MANIFEST.json``; return the paths written."""
-    from ..io.problem import Problem, save_problem
-
     folder.mkdir(parents=True, exist_ok=True)
     written, manifest = [], []
     for name, (kind, data, units, desc, extra) in build_all().items():

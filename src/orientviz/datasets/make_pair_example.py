@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.kinds.pair import PairData
 from ..io.problem import Problem, Units, save_problem
 from ..orientation.plotter import PlotterConfig, true_pair
 from ..orientation.schemes import fifteen
@@ -25,8 +26,6 @@ SEED = 1968
 
 def make(path: Path | None = None) -> Path:
     """Write the example and return its path (the MANIFEST.json too when ``path`` is None)."""
-    from ..io.kinds.pair import PairData
-
     rng = np.random.default_rng(SEED)
     cfg = PlotterConfig(relief=0.10)
     pair = true_pair(cfg, rng=rng)

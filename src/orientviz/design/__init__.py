@@ -18,7 +18,9 @@ their machinery: the normal equations, the precision and reliability are the bun
 
 from ._design import DesignAssessment, accuracy_law, assess_block, assess_design
 from ._layout import FlightDesign, design_block, set_control
+from ._live import Change, LiveDesign
 from ._quality import DesignQuality, ellipsoids
+from ._suggest import Suggestion, suggest_control
 
 __all__ = [
     "FlightDesign",
@@ -30,4 +32,8 @@ __all__ = [
     "assess_block",
     "assess_design",
     "ellipsoids",
+    "Change",
+    "LiveDesign",
+    "Suggestion",
+    "suggest_control",
 ]

@@ -19,6 +19,7 @@ import numpy as np
 
 from ..block import Block
 from ..bundle import BundleResult, bundle_adjust, ray_reliability
+from ..simulate import height_precision, planimetric_precision
 from ._layout import FlightDesign, design_block
 from ._quality import DesignQuality, quality_from_arrays
 
@@ -103,8 +104,6 @@ def accuracy_law(design: FlightDesign, spec: dict[str, Any]) -> dict[str, Any]:
         ``sigma_xy`` and ``sigma_z`` (RMS σ of the non-control points, m, or NaN),
         ``note`` (what the numbers are).
     """
-    from ..simulate import height_precision, planimetric_precision
-
     s0 = design.sigma_image_mm * 1e-3 * design.scale
     s0z = s0 * spec["flying_height_m"] / spec["base_m"]
     out: dict[str, Any] = {"sigma_xy": float("nan"), "sigma_z": float("nan")}

@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 
 from ..block import CHECK, CONTROL, Block
 from ..errors import InputError
+from .safeio import open_input_text, write_atomic
 
 F64 = NDArray[np.float64]
 
@@ -109,8 +110,6 @@ def write_control(path: str | os.PathLike[str], control: ControlPoints) -> None:
     """Write ``control`` as a control CSV (inverse of :func:`read_control`), atomically."""
     import io
 
-    from .safeio import write_atomic
-
     fh = io.StringIO(newline="")
     w = csv.writer(fh)
     w.writerow([*REQUIRED, *OPTIONAL])
@@ -130,8 +129,6 @@ def csv_table(
 ) -> tuple[list[list[str]], list[str], dict[str, int]]:
     """Rows, header and column index of a CSV with the ``required`` columns (InputError at
     line 1 naming what is missing; ``optional`` is shown in the expected header)."""
-    from .safeio import open_input_text
-
     source = str(path)
     rows = csv_rows(open_input_text(path, what), source)
     if not rows:

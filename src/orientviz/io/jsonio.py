@@ -22,6 +22,9 @@ from importlib import resources
 from typing import Any
 
 from ..errors import InputError
+from .reduce import original_path, reduce_document
+from .safeio import decode_text, read_input_bytes
+from .safeio import write_atomic as _write
 
 #: Base URI of the schemas shipped in ``orientviz/io/schema`` (used for ``$ref`` only,
 #: nothing is fetched).
@@ -199,8 +202,6 @@ def read_json_file(path: str | os.PathLike[str]) -> Any:
     The file is checked first (:func:`orientviz.io.safeio.check_input_file`: a regular
     file within the size limit).
     """
-    from .safeio import decode_text, read_input_bytes
-
     source = str(path)
     raw = read_input_bytes(path, "a JSON problem file")
     _refuse_dense_structure(raw, source)
@@ -253,7 +254,7 @@ def _import_jsonschema():
     """Import :mod:`jsonschema` without its optional IRI format checker.
 
     jsonschema's format module imports ``rfc3987_syntax`` when it is installed, which
-    builds a parser grammar at import time (3–5 s here). orientviz's schemas use no
+    builds a parser grammar at import time (seconds). orientviz's schemas use no
     ``format`` keyword, so that import is skipped for the duration of jsonschema's own
     import (the module stays importable for anyone else afterwards).
     """
@@ -356,8 +357,6 @@ def validate(doc: Any, schema_name: str, source: str) -> None:
     (:func:`orientviz.io.reduce.reduce_document`, exact for the keywords our schemas use),
     so that a block of 10⁵ observations validates in about a second.
     """
-    from .reduce import original_path, reduce_document
-
     reduced, maps = reduce_document(doc)
     errors = list(validator_for(schema_name).iter_errors(reduced))
     if not errors:
@@ -415,6 +414,4 @@ def dumps_json(doc: Any, *, indent: int | None = 1) -> str:
 
 def write_atomic(path: str | os.PathLike[str], text: str) -> None:
     """Write ``text`` atomically (see :func:`orientviz.io.safeio.write_atomic`)."""
-    from .safeio import write_atomic as _write
-
     _write(path, text)

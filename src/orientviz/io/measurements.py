@@ -38,6 +38,8 @@ from numpy.typing import NDArray
 
 from ..block import Block
 from ..errors import InputError
+from .control import _num, csv_table
+from .importing import import_to_problem
 
 F64 = NDArray[np.float64]
 REQUIRED = ("image", "point", "x", "y")
@@ -59,8 +61,6 @@ class Measurements:
 
 def read_measurements(path: str | os.PathLike[str]) -> Measurements:
     """Read a measurement CSV (header ``image,point,x,y[,sigma]``), checked line by line."""
-    from .control import _num, csv_table
-
     source = str(path)
     rows, head, col = csv_table(path, "a measurement CSV file", REQUIRED, "empty file", "[,sigma]")
     img, pt, xy, sig, lines = [], [], [], [], []
@@ -161,7 +161,6 @@ def block_from_measurements(
 
 def run_from_cli(args: argparse.Namespace) -> int:
     """``orientviz import-csv MEASUREMENTS.csv --c MM ... -o OUT.json``."""
-    from .importing import import_to_problem
 
     def read(px: float, sig: float) -> Block:
         return block_from_measurements(

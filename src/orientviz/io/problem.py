@@ -26,6 +26,7 @@ whose one line names the file, the place and the problem.
 from __future__ import annotations
 
 import os
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -39,7 +40,7 @@ from .registry import get_kind
 #: The format string this version reads and writes.
 FORMAT = "orientviz/1"
 #: Object-space length units → metres per unit.
-LENGTH_UNITS: dict[str, float] = {"m": 1.0, "mm": 1e-3}
+LENGTH_UNITS: dict[str, float] = {"m": 1.0, "mm": 1e-3, "ft": 0.3048, "us-ft": 1200.0 / 3937.0}
 #: Image-coordinate units → millimetres per unit.
 IMAGE_UNITS: dict[str, float] = {"mm": 1.0, "um": 1e-3}
 #: Kinds that read image coordinates in pixels (``units.image = "px"``).
@@ -54,10 +55,13 @@ class Units:
 
     Attributes
     ----------
-    length : {"m", "mm"}
-        Object-space coordinates and their σ.
+    length : {"m", "mm", "ft", "us-ft"}
+        Object-space coordinates and their σ (``ft``: the international foot, 0.3048 m;
+        ``us-ft``: the US survey foot, 1200/3937 m).
     angle : {"rad", "deg", "gon", "c", "cc"}
-        Orientation angles and their σ.
+        Orientation angles and their σ. A file may say ``"dms"``: its angles are then
+        strings of degrees, minutes and seconds (``"-1°02'03.5\""``, ``"-1 02 03.5"``)
+        or numbers of decimal degrees, read as ``"deg"`` (:func:`dms_document`).
     image : {"mm", "um", "px"}
         Image coordinates and their σ (kinds with images), and the cameras' c, principal
         point and format. ``"px"``: pixels of the pixel frame (origin at the upper-left
@@ -176,6 +180,7 @@ def problem_from_document(doc: Any, source: str = "<document>") -> Problem:
             source,
             "format",
         )
+    doc = dms_document(doc, source)
     validate(doc, "envelope.json", source)
     kind = get_kind(doc["kind"], source)
     validate(doc, kind.schema, source)
@@ -207,6 +212,81 @@ def problem_from_document(doc: Any, source: str = "<document>") -> Problem:
         source=source,
         columnar=columnar,
     )
+
+
+#: Keys whose values are orientation angles (any kind, readable or columnar tables).
+ANGLE_KEYS = frozenset({"omega", "phi", "kappa", "phi1", "kappa1", "phi2", "omega2", "kappa2"})
+
+_DMS = re.compile(
+    r"""\s*([+-])?\s*(\d+(?:\.\d*)?)\s*(?:°|d|deg|\s)\s*"""
+    r"""(?:(\d+(?:\.\d*)?)\s*(?:'|′|m|min|\s)?\s*)?"""
+    r"""(?:(\d+(?:\.\d*)?)\s*(?:"|″|''|s|sec)?\s*)?"""
+)
+
+
+def parse_dms(text: str) -> float:
+    """Decimal degrees of an angle written in degrees, minutes and seconds.
+
+    Parameters
+    ----------
+    text : str
+        ``"12°34'56.7\""``, ``"-0°05'00\""``, ``"12 34 56.7"``, ``"12d34m56.7s"``: the
+        sign applies to the whole angle; minutes and seconds are below 60.
+
+    Raises
+    ------
+    ValueError
+        If ``text`` is not such an angle.
+    """
+    m = _DMS.fullmatch(text)
+    if m is None or m.group(2) is None:
+        raise ValueError(f"expected degrees-minutes-seconds such as \"12°34'56.7\\\"\" or "
+                         f"\"12 34 56.7\", got {text!r}")  # fmt: skip
+    d, mi, se = (float(g) if g else 0.0 for g in m.group(2, 3, 4))
+    if mi >= 60 or se >= 60:
+        raise ValueError(f"minutes and seconds must be below 60, got {text!r}")
+    value = d + mi / 60.0 + se / 3600.0
+    return -value if m.group(1) == "-" else value
+
+
+def dms_document(doc: Any, source: str) -> Any:
+    """A document with ``units.angle = "dms"`` turned into one in decimal degrees.
+
+    Every string under an angle key (:data:`ANGLE_KEYS`: rows, columns, approximations)
+    is read by :func:`parse_dms`; numbers are taken as decimal degrees. Other documents
+    are returned unchanged.
+    """
+    if not (isinstance(doc, dict) and isinstance(doc.get("units"), dict)):
+        return doc
+    if doc["units"].get("angle") != "dms":
+        return doc
+
+    def convert(node: Any, path: str) -> Any:
+        if isinstance(node, dict):
+            out = {}
+            for k, v in node.items():
+                here = f"{path}.{k}" if path else str(k)
+                if k in ANGLE_KEYS and isinstance(v, str):
+                    out[k] = _dms(v, here)
+                elif k in ANGLE_KEYS and isinstance(v, list):
+                    out[k] = [_dms(x, f"{here}[{i}]") if isinstance(x, str) else x
+                              for i, x in enumerate(v)]  # fmt: skip
+                else:
+                    out[k] = convert(v, here)
+            return out
+        if isinstance(node, list):
+            return [convert(v, f"{path}[{i}]") for i, v in enumerate(node)]
+        return node
+
+    def _dms(text: str, place: str) -> float:
+        try:
+            return parse_dms(text)
+        except ValueError as exc:
+            raise InputError(str(exc), source, place) from None
+
+    out = convert(doc, "")
+    out["units"] = {**doc["units"], "angle": "deg"}
+    return out
 
 
 def loads_problem(text: str, source: str = "<string>") -> Problem:

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from ..errors import InputError
+from . import kinds
 
 if TYPE_CHECKING:  # pragma: no cover
     from .problem import Problem, Units
@@ -67,8 +68,6 @@ def register_kind(kind: Kind) -> Kind:
 
 def available_kinds() -> list[str]:
     """Names of all kinds shipped in ``orientviz.io.kinds`` (imports nothing heavy)."""
-    from . import kinds
-
     names = {m.name for m in pkgutil.iter_modules(kinds.__path__) if not m.name.startswith("_")}
     return sorted(names | set(_KINDS))
 

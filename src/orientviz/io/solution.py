@@ -69,6 +69,10 @@ class Solution:
         Remarks for the report (e.g. check-point errors).
     iterations : int, optional
         Number of iterations when the adjustment's history does not hold them.
+    verdict : dict, optional
+        Global test, number of flagged observations and the warnings, as the report
+        states them (:func:`orientviz.report.verdict`; ``orientviz solve`` sets it);
+        printed by :meth:`as_text` and :meth:`as_dict` when set.
     start : Block, optional
         Frame kinds solved by the bundle: the block the adjustment started from
         (approximations computed, datum applied; the layout of ``adjustment.history``).
@@ -93,6 +97,7 @@ class Solution:
     critical: float = W_CRITICAL
     notes: list[str] = field(default_factory=list)
     iterations: int | None = None
+    verdict: dict[str, Any] | None = None
     start: Any = None
 
     @property
@@ -251,6 +256,11 @@ class Solution:
             "parameters": params,
             "flagged": self.flagged(),
             "critical": self.critical,
+            **(
+                {"global_test": self.verdict["global_test"], "warnings": self.verdict["warnings"]}
+                if self.verdict is not None
+                else {}
+            ),
             "notes": list(self.notes),
         }
 
@@ -328,9 +338,34 @@ class Solution:
                 lines.append(f"  {item['label']:24s} w = {item['w']}")
         else:
             lines.append(f"flagged (|w| > {self.critical:g}): none")
+        if self.verdict is not None:
+            lines += _verdict_lines(self.verdict, float(adj.sigma0))
         for note in self.notes:
-            lines.append(note)
+            if self.verdict is None or not note.startswith("warning: "):  # listed above
+                lines.append(note)
         return "\n".join(lines)
+
+
+def _verdict_lines(v: dict[str, Any], sigma0: float) -> list[str]:
+    """The global test and the warnings as ``orientviz solve`` prints them."""
+    t = v["global_test"]
+    if t["result"] == "not possible":
+        head = "global test: not possible (redundancy r = 0)"
+    else:
+        head = (
+            f"global test (χ²({t['r']}), α = {t['alpha']:g}): {t['result'].upper()}: "
+            f"σ0 = {sigma0:.3f} {'within' if t['result'] == 'accepted' else 'outside'} "
+            f"[{t['sigma0_lower']:.3f}, {t['sigma0_upper']:.3f}]"
+        )
+        if t["result"] == "rejected":
+            head += f" ({t['reason']})"
+    lines = [head]
+    if v["warnings"]:
+        lines.append(f"warnings: {len(v['warnings'])}")
+        lines += [f"  ! {k}. {m}" for k, m in enumerate(v["warnings"], 1)]
+    else:
+        lines.append("warnings: none")
+    return lines
 
 
 def _value_to_sigma(value: float, sigma: float) -> str:

@@ -1,25 +1,22 @@
-"""``orientviz solve FILE [--method bundle|models|polynomial] [--json] [--report PATH]``.
-
-Loads a problem file, solves it with the solver of its kind and prints a readable
-report or JSON. ``--report PATH`` also writes the full adjustment report
-(:func:`orientviz.report.write_report`): ``*.html`` one self-contained page with
-figures, ``*.txt`` fixed-width text. Exit codes: 0 solved and converged, 2 bad input
-(one line naming file, place and problem; also a report path that cannot be written or
-has another suffix), 3 the adjustment is impossible (datum defect, not determinable) or
-did not converge (the report is still printed and written). Never a traceback.
+"""Solve a problem file: :func:`solve_problem` by the solver of its kind, the geometry
+checks before it (:func:`check_geometry`), what a solve hands back to a file
+(:func:`adjusted_problem`) and whether its model fits (:func:`misfit`); loading by path
+or shipped name (:func:`load_named`) and the one-line messages of failures
+(:func:`failure`). The command ``orientviz solve``, which prints the solution and writes
+reports, is :mod:`orientviz.report.solve`.
 """
 
 from __future__ import annotations
 
-import argparse
-import json
 import os
-import sys
 
 import numpy as np
 
+from ..block import TIE, Block
 from ..errors import AdjustmentError, InputError
-from .problem import Problem, load_problem, save_problem
+from ..plausibility import check_block, check_magnitudes, raise_for
+from .datasets import dataset_path, list_datasets
+from .problem import Problem, load_problem
 from .registry import get_kind
 from .solution import Solution
 
@@ -63,12 +60,7 @@ def check_geometry(problem: Problem) -> list:
     Raises the first fatal finding (InputError naming the file and place, or
     AdjustmentError); returns the warnings (also logged). Other kinds: no checks.
     """
-    from ..block import Block
-    from ..plausibility import check_block, raise_for
-
     if not isinstance(problem.data, Block):
-        from ..plausibility import check_magnitudes
-
         return raise_for(check_magnitudes(problem.data), problem.source)
     if problem.columnar:
         place = lambda k: f"observations.x[{k}]"  # noqa: E731
@@ -78,66 +70,6 @@ def check_geometry(problem: Problem) -> list:
         problem.data, exterior_unknown=problem.kind != "intersection", place=place
     )
     return raise_for(findings, problem.source)
-
-
-def run_from_cli(args: argparse.Namespace) -> int:
-    """Entry point of ``orientviz solve``; returns the exit code: 0 ok, 2 bad input, 3
-    adjustment impossible or not converged, :data:`MISFIT_EXIT` (4) the model does not
-    fit the data."""
-    prog = "orientviz solve"
-    report_path = getattr(args, "report", None)
-    try:
-        if report_path:
-            from ..report import report_format
-
-            report_format(report_path)  # a wrong suffix fails before the adjustment
-        problem = load_named(args.file)
-        for name in ("max_iter", "tol", "solver", "robust", "robust_scale", "fix", "free"):
-            if getattr(args, name, None) is not None:  # the command line wins over the file
-                problem.options = dict(problem.options, **{name: getattr(args, name)})
-        if getattr(args, "solver", None) is not None and problem.kind != "block":
-            raise InputError("--solver applies to block problems only", problem.source)
-        solution = solve_problem(problem, getattr(args, "method", None))
-        text = (
-            json.dumps(solution.as_dict(), indent=1, ensure_ascii=False, allow_nan=False)
-            if getattr(args, "json", False)
-            else solution.as_text()
-        )
-    except Exception as exc:  # one line and an exit code, never a traceback
-        failed = failure(prog, args.file, exc)
-        if failed is None:
-            raise
-        print(failed[0], file=sys.stderr)
-        return failed[1]
-    if getattr(args, "output", None) and solution.adjustment.converged and not misfit(solution):
-        try:
-            save_problem(adjusted_problem(problem, solution), args.output)
-        except InputError as exc:
-            print(f"{prog}: {exc.one_line()}", file=sys.stderr)
-            return 2
-    if report_path:
-        try:
-            from ..report import write_report
-
-            with np.errstate(all="ignore"):
-                write_report(problem, solution, report_path)
-        except InputError as exc:
-            print(f"{prog}: {exc.one_line()}", file=sys.stderr)
-            return 2
-    _print(text)
-    if solution.adjustment.converged:  # on failure one line only (the report lists them)
-        for note in solution.notes:
-            if note.startswith("warning: "):
-                print(f"{prog}: warning: {args.file}: {note[9:]}", file=sys.stderr)
-    if not solution.adjustment.converged:
-        print(
-            f"{prog}: {args.file}: the adjustment did not converge: {solution.adjustment.reason}",
-            file=sys.stderr,
-        )
-        return 3
-    if misfit(solution):
-        return MISFIT_EXIT
-    return 0
 
 
 def load_named(name: str) -> Problem:
@@ -194,8 +126,6 @@ def adjusted_problem(problem: Problem, solution: Solution) -> Problem:
     adjusted coordinates; control and check coordinates and all observations stay as
     given. Raises :class:`InputError` for kinds without images and points (similarity).
     """
-    from ..block import TIE, Block
-
     if not isinstance(problem.data, Block):
         raise InputError(
             f"--output writes block, resection and intersection problems, not {problem.kind!r}",
@@ -243,7 +173,6 @@ def _resolve(name: str) -> str:
     """A path as given, or the file of a shipped dataset if no such path exists."""
     if os.path.exists(name):
         return name
-    from .datasets import dataset_path, list_datasets
 
     if name in list_datasets():
         return str(dataset_path(name))
@@ -253,13 +182,3 @@ def _resolve(name: str) -> str:
             name,
         )
     return name
-
-
-def _print(text: str) -> None:
-    """Print the report; a closed pipe (``| head``) is not an error."""
-    try:
-        sys.stdout.write(text + "\n")
-        sys.stdout.flush()
-    except BrokenPipeError:  # pragma: no cover - depends on the shell
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())

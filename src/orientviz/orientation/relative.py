@@ -227,6 +227,8 @@ class RelativeResult(Adjustment):
         The model points at the estimated elements, model units (Z < 0).
     state : PairState
         The estimated orientation of the pair in the model frame.
+    method : {"parallax", "collinearity"}
+        The estimator (see :func:`relative_orientation`).
     """
 
     kind: str = "dependent"
@@ -235,6 +237,7 @@ class RelativeResult(Adjustment):
     c: float = float("nan")
     points: F64 | None = None
     state: PairState | None = None
+    method: str = "parallax"
 
 
 def _rays(xy: F64, angles: F64, c: float, sequence: str, derivatives: bool = True):
@@ -377,18 +380,26 @@ def relative_orientation(
     c: float,
     *,
     kind: str = "dependent",
-    b: float | None = None,
+    b: float | str | None = None,
     sigma: float = 0.005,
     approx: ArrayLike | None = None,
     sequence: str = "opk",
     max_iter: int = 20,
     labels: list[str] | None = None,
+    method: str = "parallax",
 ) -> RelativeResult:
     """Relative orientation from image coordinates of n ≥ 5 points (least squares).
 
-    The rigorous y-parallaxes (:func:`y_parallax`) are the observations, each observed
-    as zero with standard deviation ``sigma``; the five elements are adjusted by
-    :func:`orientviz.adjust.gauss_newton`.
+    ``method="parallax"`` (Kovarik's estimator, the default): the rigorous y-parallaxes
+    (:func:`y_parallax`) are the observations, each observed as zero with standard
+    deviation ``sigma``; the five elements are adjusted by
+    :func:`orientviz.adjust.gauss_newton`. ``method="collinearity"`` (the textbook
+    method, e.g. Wolf/DeWitt): starting from that solution, all 4n image coordinates
+    are observations of the collinearity equations (σ = ``sigma`` brought to image
+    scale, sigma · c / mean |Z| of the model points, mm), and the five
+    elements are adjusted together with the 3n model points
+    (:func:`orientviz.orientation.relative_collinearity.collinearity_pair`); dependent
+    pairs only. Both agree for error-free data.
 
     Parameters
     ----------
@@ -398,9 +409,10 @@ def relative_orientation(
         Principal distance, mm (both images).
     kind : {"dependent", "independent"}
         Which five elements (see the module docstring).
-    b : float, optional
-        Model base in model units; by default the median x-parallax x' − x'' (mm), which
-        puts the model at about image scale (Z ≈ −c).
+    b : float or {"median", "mean"}, optional
+        Model base in model units; by default (or ``"median"``) the median x-parallax
+        x' − x'' (mm), which puts the model at about image scale (Z ≈ −c); ``"mean"``
+        the mean x-parallax, as many textbooks choose it.
     sigma : float
         A-priori σ of a y-parallax in model units (default 5 µm at image scale).
     approx : array_like, shape (5,), optional
@@ -411,6 +423,8 @@ def relative_orientation(
         Maximum number of Gauss-Newton steps.
     labels : list of str, optional
         Point labels for the residual report.
+    method : {"parallax", "collinearity"}
+        The estimator (see above).
 
     Returns
     -------
@@ -437,8 +451,15 @@ def relative_orientation(
         )
     if not np.isfinite(c) or c <= 0:
         raise InputError(f"expected a principal distance c > 0 mm, got {c}")
-    if b is None:
-        b = float(np.median(xy1[:, 0] - xy2[:, 0]))
+    if method not in ("parallax", "collinearity"):
+        raise InputError(f"expected method 'parallax' or 'collinearity', got {method!r}")
+    if method == "collinearity" and kind != "dependent":
+        raise InputError("method 'collinearity' estimates a dependent pair; use kind 'dependent'")
+    if b is None or isinstance(b, str):
+        if b not in (None, "median", "mean"):
+            raise InputError(f"expected a base length, 'median' or 'mean', got {b!r}")
+        px = xy1[:, 0] - xy2[:, 0]
+        b = float(np.mean(px) if b == "mean" else np.median(px))
     if not np.isfinite(b) or abs(b) < 1e-9 * c:
         raise InputError(
             "zero base: the images show no x-parallax (b = 0), so the rays cannot be intersected"
@@ -470,6 +491,16 @@ def relative_orientation(
     )
     st = PairState.from_elements(res.x, b, kind, seq)
     _, pts = y_parallax(xy1, xy2, c, st)
+    if method == "collinearity":
+        from .relative_collinearity import collinearity_pair
+
+        # σ of an image coordinate: the parallax σ (model units) brought to image scale
+        sigma_image = sigma * c / float(np.mean(np.abs(pts[:, 2])))
+        res, pts = collinearity_pair(
+            xy1, xy2, c, b, res.x, pts, sigma_image, seq, labels, max(max_iter, 10)
+        )
+        st = PairState.from_elements(res.x[:5], b, kind, seq)
     return res.extend(
-        RelativeResult, kind=kind, base=float(b), sequence=seq, c=float(c), points=pts, state=st
-    )
+        RelativeResult, kind=kind, base=float(b), sequence=seq, c=float(c), points=pts,
+        state=st, method=method,
+    )  # fmt: skip

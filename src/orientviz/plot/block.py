@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..block import CHECK, CONTROL
+from ..block import CHECK, CONTROL, block_layout
+from ..simulate import check_differences, fit_log_law
 from .style import subplots
 
 #: Colours of control kinds and roles.
@@ -25,8 +26,6 @@ def _axes(ax, figsize=(7, 5)):
 
 
 def _block_and_layout(obj):
-    from ..block import block_layout
-
     block = getattr(obj, "truth", obj)
     layout = getattr(obj, "layout", None) or block_layout(block)
     return block, layout
@@ -283,8 +282,6 @@ def plot_strip_law(precisions, *, ax=None, fit: bool = True, title: str | None =
     -------
     matplotlib.figure.Figure
     """
-    from ..simulate import fit_log_law
-
     fig, ax = _axes(ax, figsize=(6, 4))
     for k in sorted({p.spacing for p in precisions}):
         ps = sorted((p for p in precisions if p.spacing == k), key=lambda p: p.n_strips)
@@ -373,8 +370,6 @@ def plot_check_heights(sim, results, *, ax=None, title: str | None = None):
         ΔZ (adjusted − true) in m against X in km; the legend gives each result's
         μz (RMS ΔZ) in m.
     """
-    from ..simulate import check_differences
-
     fig, ax = _axes(ax, figsize=(8, 3.5))
     markers = "os^Dvx+"
     for k, (label, result) in enumerate(dict(results).items()):

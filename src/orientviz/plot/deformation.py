@@ -13,6 +13,8 @@ import textwrap
 
 import numpy as np
 
+from ..errors import InputError
+from ..simulate import ImageField, animate
 from .style import subplots
 
 
@@ -120,8 +122,6 @@ def plot_model_field(
         ax.plot(X, Y, ".", color="0.3", ms=2)
         sub = f"height, RMS Z {rms[2]:.1f} cm"
     else:
-        from ..errors import InputError
-
         raise InputError(f"component: expected 'planimetry' or 'height', got {component!r}")
     ax.set_aspect("equal")
     ax.set_xlabel("X [m] (along the base)")
@@ -209,8 +209,6 @@ def plot_deformation_frame(
     InputError
         If the fields lie on different grids or t is outside [0, 1] (from ``animate``).
     """
-    from ..simulate import ImageField, animate
-
     image = isinstance(without, ImageField)
     base = without.xy if image else without.xyz
     if exaggeration is None:
@@ -275,8 +273,6 @@ def plot_field_split(split, *, axes=None, exaggeration: float | None = None):
     -------
     matplotlib.figure.Figure
     """
-
-    from ..simulate import ImageField
 
     if axes is None:
         _, axes = subplots(1, 3, figsize=(9.6, 3.9))

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..radar.fig8 import UNITS
 from .style import figure, subplots
 
 _SHORT = {
@@ -48,8 +49,6 @@ def plot_rounding_distribution(dist, paper: dict, task: str, *, quantities=None,
     matplotlib.figure.Figure
         One panel per quantity, the ten surfaces along x, values in the paper's units.
     """
-
-    from ..radar.fig8 import UNITS
 
     qs = [q for q in (quantities or dist.draws[task]) if not q.startswith("r_")]
     n = len(qs)

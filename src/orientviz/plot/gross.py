@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..block import block_layout
+from ..errors import InputError
 from .style import subplots
 
 
@@ -65,9 +67,9 @@ def plot_cleaning(cleaning, *, truth=None, ax=None, title=None):
     Parameters
     ----------
     cleaning : Cleaning
-        Result of :func:`~orientviz.adjust.gross.data_snooping`,
-        :func:`~orientviz.adjust.gross.robust_adjust` or
-        :func:`~orientviz.adjust.gross.rerun_cleaning`.
+        Result of :func:`~orientviz.adjust.snooping.data_snooping`,
+        :func:`~orientviz.adjust.robust.robust_adjust` or
+        :func:`~orientviz.adjust.robust.rerun_cleaning`.
     truth : array_like of int, optional
         The truly corrupted observations (groups): eliminations are coloured as correct
         (in ``truth``) or false alarms; the missed ones are listed in the title.
@@ -185,8 +187,6 @@ def plot_reliability_map(
     -------
     matplotlib.figure.Figure
     """
-    from ..errors import InputError
-
     if quantity not in _QUANTITIES:
         raise InputError(f"unknown quantity {quantity!r}; expected one of {sorted(_QUANTITIES)}")
     field, factor, label = _QUANTITIES[quantity]
@@ -195,8 +195,6 @@ def plot_reliability_map(
     xy = np.asarray(block.points.xyz if xyz is None else xyz, float).reshape(-1, 3)[:, :2]
     if layout:
         from matplotlib.patches import Polygon
-
-        from ..block import block_layout
 
         lay = block_layout(block)
         for k, imgs in enumerate(lay.strips):

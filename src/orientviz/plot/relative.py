@@ -13,6 +13,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from ..units import RHO_C
 from .style import subplots
 
 ELEMENT_LABELS = ("by", "bz", "ω", "φ", "κ")
@@ -318,8 +319,6 @@ def plot_scheme_precision(table: Mapping[str, np.ndarray], ax=None):
     table : dict
         scheme name → σ of (by, bz, ω, φ, κ) in (mm, mm, rad, rad, rad).
     """
-    from ..units import RHO_C
-
     fig, ax = _axes(ax)
     names = list(table)
     w = 0.8 / max(len(names), 1)

@@ -6,6 +6,7 @@ every simulated plotter variant (:func:`orientviz.reproduce.kovarik_misses.varia
 
 from __future__ import annotations
 
+from ..reproduce.kovarik_misses import PAPER_RELIEFS, needed_leftover
 from .style import figure
 
 
@@ -27,8 +28,6 @@ def plot_kovarik_variants(results: dict, paper: dict, *, fig=None):
         ratio of the 2nd to the 1st pass's correction (log scale; paper: what its pass
         counts imply per relief, and the band its 2nd-pass scheme implies).
     """
-
-    from ..reproduce.kovarik_misses import PAPER_RELIEFS, needed_leftover
 
     if fig is None:
         fig = figure(figsize=(7.0, 4.6))

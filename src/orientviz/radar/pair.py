@@ -27,8 +27,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..adjust import Adjustment, gauss_newton
+from ..adjust.rank import null_space_of_normal
 from ..errors import InputError, NotDeterminableError
-from ..rotation import matrix_derivatives, matrix_from_opk
+from ..rotation import matrix_derivatives, matrix_from_opk, opk_from_matrix
 from .orientation import RadarResult, _indices
 from .ppi import (
     EXTERIOR,
@@ -253,8 +254,6 @@ def _orientation_defect(equations, u0: F64, free: list[str], exc: NotDeterminabl
     The null space spans orientation parameters *and* points; the user needs to know
     which orientation parameters move in it (the points just follow).
     """
-    from ..adjust.rank import null_space_of_normal
-
     _, J = equations(u0)
     null = null_space_of_normal(J.T @ J)
     k = len(free)
@@ -372,8 +371,6 @@ def absolute_orientation(
 
 def _rigid_start(x: F64, X: F64, sequence: str) -> F64:
     """Closed-form rigid fit (SVD) as start values: TX, TY, TZ, φ, ω, κ."""
-    from ..rotation import opk_from_matrix
-
     cx, cX = x.mean(0), X.mean(0)
     U, _, Vt = np.linalg.svd((X - cX).T @ (x - cx))
     D = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))])

@@ -96,7 +96,7 @@ def rounding_draws(
         Source of the shifts (uniform in [−0.5, 0.5) m per image and axis, per draw;
         the same shift for all surfaces of one draw).
     draws : int
-        Number of shifts (≈ 0.35 s each for all tasks and surfaces).
+        Number of shifts (each solves all tasks and surfaces once more).
     tasks : tuple of str
         Keys of :data:`~orientviz.radar.fig8.TASKS` (default: the five other tasks).
     surfaces : tuple of str

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .diagnostics import pair_geometry
 from .pair import intersect
 from .ppi import RadarImage, check_points, plane_normal, project, projection_circle, sphere_radius
 from .trilateration import trilaterate_three
@@ -95,8 +96,6 @@ def pair_scene(
     xy1: ArrayLike, image1: RadarImage, xy2: ArrayLike, image2: RadarImage, n_vertices: int = 73
 ) -> dict[str, Any]:
     """Both stations, the intersected points and both sets of projection circles."""
-    from .diagnostics import pair_geometry
-
     X = intersect(xy1, image1, xy2, image2)
     c1, c2 = circle_scene(xy1, image1, n_vertices), circle_scene(xy2, image2, n_vertices)
     geo = pair_geometry(xy1, image1, xy2, image2, X)

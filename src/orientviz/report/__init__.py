@@ -6,7 +6,8 @@ A solved problem file (:func:`orientviz.io.solve.solve_problem`) is a :class:`So
 :class:`Section` objects in the order of a classic aerotriangulation protocol (σ̂0
 with its χ² test, redundancy, exterior orientation, point precision, check points,
 largest normalised residuals, correlations, geometry warnings); :func:`text_report`
-and :func:`html_report` lay it out, :func:`write_report` writes either by the
+and :func:`html_report` lay it out, :func:`verdict` reads off the global test, flags and
+warnings that ``orientviz solve`` prints too, :func:`write_report` writes either by the
 file's suffix. :func:`image_table` and :func:`point_table` are the per-image and
 per-point tables of a block adjustment (and their CSV files).
 
@@ -30,6 +31,7 @@ from ._sections import build_report
 from ._stats import chi2_test, image_coverage, intersection_angles
 from ._tables import ResultTable, adjusted_block, image_table, point_table, read_csv_table
 from ._text import text_report
+from ._verdict import verdict
 
 __all__ = [
     "FORMATS",
@@ -50,5 +52,6 @@ __all__ = [
     "read_csv_table",
     "report_format",
     "text_report",
+    "verdict",
     "write_report",
 ]

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..io.problem import LENGTH_UNITS
 from ..units import RHO
 
 #: Redundancy numbers below this mark an observation as (nearly) uncontrolled.
@@ -152,8 +153,14 @@ def fmt_g(value: float, sig: int = 4) -> str:
     return f"{value:.{sig}g}"
 
 
-def length_unit(sigmas_m: ArrayLike) -> tuple[str, float]:
-    """``("mm", 1000)`` when every finite σ is below 1 m, else ``("m", 1)``."""
+def length_unit(sigmas_m: ArrayLike, file_unit: str = "m") -> tuple[str, float]:
+    """``("mm", 1000)`` when every finite σ is below 1 m, else ``("m", 1)``.
+
+    A file in feet (``file_unit`` ``"ft"`` or ``"us-ft"``) gets its own unit and factor
+    (per m) instead: its lengths are labelled as the file gives them.
+    """
+    if file_unit in ("ft", "us-ft"):
+        return file_unit, 1.0 / LENGTH_UNITS[file_unit]
     a = np.asarray(sigmas_m, float)
     a = a[np.isfinite(a)]
     return ("mm", 1000.0) if a.size == 0 or np.max(a) < 1.0 else ("m", 1.0)

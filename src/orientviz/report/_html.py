@@ -21,8 +21,10 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..io.jsonio import write_atomic
 from ..io.problem import Problem
 from ..io.solution import Solution
+from ..version import __version__
 from ._document import Report, Section, Table
 from ._sections import build_report
 from ._text import text_report
@@ -220,7 +222,7 @@ def html_report(report: Report, *, figures: bool = True, version: str = "", dpi:
     names = [n for s in report.sections for n in s.figures]
     if figures and names:
         try:
-            from ..plot.report_figures import report_figures
+            from ..plot.report_figures import report_figures  # matplotlib: optional, GUI-free core
         except ImportError:
             fig_note = "matplotlib is not installed (pip install 'orientviz[plot]')"
         else:
@@ -313,9 +315,6 @@ def write_report(
     >>> problem = load_problem("block.json")                     # doctest: +SKIP
     >>> write_report(problem, solve_problem(problem), "at.html")  # doctest: +SKIP
     """
-    from ..version import __version__
-    from ..io.jsonio import write_atomic
-
     kind = report_format(path)
     report = build_report(problem, solution, largest=largest, correlation=correlation, alpha=alpha)
     if kind == "html":

@@ -27,7 +27,7 @@ class PrecisionSections:
         m = len(s.image_ids)
         sX = np.asarray(s.X0_sigma, float)
         sA = np.asarray(s.angles_sigma, float)
-        lu, lf = length_unit(sX)
+        lu, lf = length_unit(sX, self.s.units.length)
         au, af = angle_unit(s.units.angle)
         L, A = s.factor("length"), s.factor("angle")
         blk = self.block
@@ -132,7 +132,7 @@ class PrecisionSections:
         est = np.all(np.isfinite(sxyz), axis=1) & np.any(sxyz > 0, axis=1)
         if not est.any():
             return None
-        lu, lf = length_unit(sxyz[est])
+        lu, lf = length_unit(sxyz[est], self.s.units.length)
         d = decimals(lu)
         v: dict[str, Any] = {
             "ids": list(s.point_ids),
@@ -245,7 +245,7 @@ class PrecisionSections:
         rms = np.where(n > 0, rms, np.nan)
         mean = np.where(n > 0, mean, np.nan)
         mx = np.where(n > 0, mx, np.nan)
-        lu, lf = length_unit(np.abs(dm))
+        lu, lf = length_unit(np.abs(dm), self.s.units.length)
         d = decimals(lu)
         v: dict[str, Any] = {
             "ids": ids,

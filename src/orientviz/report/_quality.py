@@ -240,7 +240,8 @@ class QualitySections:
 
     # .................................................................. warnings
     def warnings(self) -> Section:
-        msgs = list(dict.fromkeys(self.warn))
+        given = [n[len("warning: ") :] for n in self.s.notes if n.startswith("warning: ")]
+        msgs = list(dict.fromkeys(given + self.warn))
         sec = Section("warnings", "Warnings on geometry and quality", values={"messages": msgs})
         sec.items = [("warnings", str(len(msgs)) if msgs else "none")]
         sec.text = [

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from ..block import CHECK, CONTROL, TIE
+from ..block import CHECK, CONTROL, TIE, block_layout
 from ..io.problem import Problem
 from ..io.solution import Solution
 from ._document import (
@@ -385,7 +385,6 @@ class _Builder(PrecisionSections, QualitySections):
     # .................................................................. overview data
     def _overview_data(self) -> None:
         blk, s = self.block, self.s
-        from ..block import block_layout
 
         b2 = blk.copy()
         if s.image_ids and len(s.image_ids) == blk.n_images:

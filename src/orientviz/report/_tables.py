@@ -25,6 +25,8 @@ from numpy.typing import NDArray
 from ..adjust.result import Adjustment
 from ..block import ROLES, Block
 from ..errors import InputError
+from ..io.control import csv_rows
+from ..io.safeio import open_input_text, write_atomic
 from ..units import from_rad
 
 F64 = NDArray[np.float64]
@@ -81,8 +83,6 @@ class ResultTable:
     def to_csv(self, path: str | os.PathLike[str]) -> Path:
         """Write the table as CSV (header ``name[unit]``; NaN as an empty cell), atomically."""
         import io
-
-        from ..io.safeio import write_atomic
 
         fh = io.StringIO(newline="")
         w = csv.writer(fh)
@@ -242,9 +242,6 @@ def read_csv_table(path: str | os.PathLike[str]) -> dict[str, list[str]]:
     Header names keep their unit suffix (``"X0[m]"``). Raises :class:`InputError`
     naming the file and line for rows with the wrong number of cells.
     """
-    from ..io.control import csv_rows
-    from ..io.safeio import open_input_text
-
     source = str(path)
     rows = csv_rows(open_input_text(path, "a CSV table"), source)
     if not rows:

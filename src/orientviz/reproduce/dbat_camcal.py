@@ -15,7 +15,7 @@ parameters bordering the reduced system) with the camera model inside the projec
 (:class:`orientviz.bundle.LensModel`, ``kind="backward"``).
 
 Published numbers: DBAT's report of the same data through its PhotoModeler-export route
-(``camcal-dbatreport.txt``, the reference the issue names), as printed; the report of
+(``camcal-dbatreport.txt``), as printed; the report of
 the script route (``report.txt``) differs from it in a few last digits (two DBAT runs of
 the same adjustment stopped at slightly different iterates), which bounds what "the
 printed digit" can mean here.
@@ -29,6 +29,14 @@ from typing import Any
 
 import numpy as np
 
+from ..block import Block
+from ..bundle import LensModel, bundle_adjust
+from ..io.datasets import dataset_path
+from ..io.problem import dumps_problem, loads_problem
+from ..lens import BackwardLens, backward_ideal
+from ..orientation.intersection import intersect_points
+from ..orientation.resection import resection_closed_form
+from ..rotation import matrix_from_opk
 from . import Row
 from .dbat_files import read_camcal
 from .dbat_report import EO_FIELDS, as_printed, read_report, report_values
@@ -37,13 +45,11 @@ IO_NAMES = ("c", "px", "py", "as", "K1", "K2", "K3", "P1", "P2")
 #: report key → position in the interior-orientation vector
 IO_KEYS = {"c [mm]": 0, "px [mm]": 1, "py [mm]": 2, "as": 3, "K1 [mm^-3]": 4, "K2 [mm^-5]": 5,
            "K3 [mm^-7]": 6, "P1 [mm^-3]": 7, "P2 [mm^-3]": 8}  # fmt: skip
-#: The acceptance of the issue for the stations: within this fraction of DBAT's σ.
+#: The stations' acceptance: within this fraction of DBAT's σ of DBAT's values.
 STATION_SIGMA_FRACTION = 0.05
 
 
 def _folder():
-    from ..io.datasets import dataset_path
-
     return dataset_path("dbat_sxb").parent / "camcal"
 
 
@@ -83,11 +89,6 @@ def _setup(folder=None):
 
 def _start(d, img_ids, pts, im, pt, is_ctrl, ctrl_xyz, measured):
     """Start values: nominal interior orientation, resection on control, intersection."""
-    from ..lens import BackwardLens, backward_ideal
-    from ..orientation.intersection import intersect_points
-    from ..orientation.resection import resection_closed_form
-    from ..rotation import matrix_from_opk
-
     w, h = d["sensor_mm"]
     io = np.array([d["focal_mm"], w / 2, h / 2, 0, 0, 0, 0, 0, 0], dtype=float)
     ideal = backward_ideal(measured, BackwardLens(io[0], io[1], -io[2]))
@@ -112,8 +113,6 @@ def block(folder=None):
     x right, y up from the upper-left corner, mm), the 21 stations from the resections,
     the 96 free points from the intersection and the 4 control points (fixed).
     """
-    from ..block import Block
-
     d, img_ids, pts, im, pt, is_ctrl, ctrl_xyz, measured, sigma = _setup(folder)
     io, eo, xyz = _start(d, img_ids, pts, im, pt, is_ctrl, ctrl_xyz, measured)
     ctrl = sorted(d["control"], key=int)
@@ -171,8 +170,6 @@ def problem_text(folder=None) -> str:
     canonical form): the text of the shipped dataset ``dbat_camcal``."""
     import json
 
-    from ..io.problem import dumps_problem, loads_problem
-
     return dumps_problem(loads_problem(json.dumps(problem_document(folder)), "dbat_camcal.json"))
 
 
@@ -206,8 +203,6 @@ def adjust():
     (BundleResult, image ids, point ids, DBAT data)
         ``result.camera`` holds c, x0, y0 (y up: DBAT's py = −y0), as, K1-K3, P1, P2.
     """
-    from ..bundle import LensModel, bundle_adjust
-
     d, img_ids, pts = _setup()[:3]
     res = bundle_adjust(block(), additional=LensModel("backward", free=LENS_FREE), tol=TOL,
                         max_iter=50)  # fmt: skip

@@ -18,6 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from . import Row
+
 INDENT = 3
 
 
@@ -239,8 +241,6 @@ def predicted_rows(
 ) -> list:
     """One predicted :class:`~orientviz.reproduce.Row` per published number: DBAT's as
     printed beside orientviz's (``shown`` formats it, ``note`` explains it)."""
-    from . import Row
-
     rows = []
     for key, printed in paper.items():
         section, case, quantity = key.split("|")

@@ -15,7 +15,7 @@
   which: photo 19's Yc — the largest single base component (ΔY = 39.11 m) to the first
   photo; :func:`datum` derives that rule from the prior EO. orientviz holds them by
   pseudo-observations of σ = 1e-6 m / 1e-9 rad (``options.fix``,
-  :mod:`orientviz.io.kinds._datum`) where DBAT removes them: the counts below are DBAT's
+  :mod:`orientviz.io.datum`) where DBAT removes them: the counts below are DBAT's
   (79 321 parameters), orientviz's n and u are each larger by those 7.
 
 Published numbers: DBAT's report of this script (``roma/report.txt``), as printed.
@@ -30,6 +30,13 @@ from typing import Any
 
 import numpy as np
 
+from ..block import Block
+from ..bundle import LensModel, bundle_adjust
+from ..io.datasets import dataset_path
+from ..io.datum import IMAGE_PARTS, apply_fix
+from ..lens import BackwardLens, backward_ideal
+from ..orientation.intersection import intersect_points
+from ..rotation import matrix_from_opk
 from . import Row
 from .dbat_report import as_printed, predicted_rows, read_report, report_values, station_numbers
 
@@ -43,8 +50,6 @@ TOL = 1e-8
 
 
 def _folder():
-    from ..io.datasets import dataset_path
-
     return dataset_path("dbat_sxb").parent / "roma"
 
 
@@ -93,12 +98,6 @@ def block(folder=None):
     principal point at (px, −py), σ = 1 px; stations from the prior EO; points by
     forward intersection of the lens-corrected rays.
     """
-    from ..block import Block
-    from ..io.kinds._datum import IMAGE_PARTS, apply_fix
-    from ..lens import BackwardLens, backward_ideal
-    from ..orientation.intersection import intersect_points
-    from ..rotation import matrix_from_opk
-
     d = read_roma(folder)
     p = d["pixel_mm"]
     ids = list(d["images"])
@@ -133,8 +132,6 @@ def adjust():
     -------
     (BundleResult, image ids, DBAT data)
     """
-    from ..bundle import LensModel, bundle_adjust
-
     d = read_roma()
     lens = LensModel("backward", free=LENS_FREE, values={"K1": d["K"][0], "K2": d["K"][1]})
     res = bundle_adjust(block(), additional=lens, tol=TOL, max_iter=50)

@@ -29,6 +29,8 @@ from typing import Any
 
 import numpy as np
 
+from ..io.datasets import dataset_info, dataset_path, load_dataset
+from ..io.kinds.block import solve
 from . import Row
 from .dbat_report import as_printed, predicted_rows, read_report, report_values, station_numbers
 
@@ -42,8 +44,6 @@ CONVERGED_TOL = 1e-9
 
 
 def _report_path():
-    from ..io.datasets import dataset_path
-
     return dataset_path(DATASET).parent / "sxb" / "report.txt"
 
 
@@ -66,9 +66,6 @@ def _decimals() -> dict[str, int]:
 
 @lru_cache(maxsize=2)
 def _solution(tol: float | None = None):
-    from ..io.datasets import load_dataset
-    from ..io.kinds.block import solve
-
     problem = load_dataset(DATASET)
     if tol is not None:
         problem.options = dict(problem.options, tol=tol, max_iter=50)
@@ -81,8 +78,6 @@ def ours(tol: float | None = None) -> dict[str, float]:
     ``tol`` None: ``orientviz solve dbat_sxb`` as shipped (default stopping rule);
     else the stopping tolerance (fraction of each parameter's conditional σ).
     """
-    from ..io.datasets import dataset_info
-
     problem, sol = _solution(tol)
     adj = sol.adjustment
     block = problem.data

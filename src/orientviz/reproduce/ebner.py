@@ -29,10 +29,14 @@ reproduce (1.2-1.3): see the book's reproductions chapter.
 from __future__ import annotations
 
 import copy
+from typing import Any
 
 import numpy as np
 
-from ..simulate import fit_log_law, height_precision, planimetric_precision
+from ..block import TIE
+from ..bundle import bundle_adjust
+from ..simulate import fit_log_law, height_precision, planimetric_precision, simulate_block
+from ..stereo_models import independent_models
 from .rows import Row
 
 #: The paper's printed claims, by row key (Ackermann 1974 §17, §19-20).
@@ -55,10 +59,6 @@ SIGMA0_HEIGHT_PERMILLE = 0.015 / 152.0 * 1000.0
 
 
 def _pipeline_rows(rng: np.random.Generator) -> list[Row]:
-    from ..block import TIE
-    from ..simulate import simulate_block
-    from ..stereo_models import independent_models
-
     rows = []
     for ns in (2, 4):
         num, den = 0.0, 0.0
@@ -89,13 +89,10 @@ def paper_values() -> dict[str, str]:
     return copy.deepcopy(PAPER)
 
 
-def _sigma0_rows(rng: np.random.Generator, P: dict) -> list[Row]:
-    """§20: σ0 of independent models (planimetry, model coordinates at image scale) vs
-    σ0 of the bundle (image coordinates) on the same simulated blocks."""
-    from ..bundle import bundle_adjust
-    from ..simulate import simulate_block
-    from ..stereo_models import independent_models
-
+def _sigma0_numbers(rng: np.random.Generator) -> tuple[list[float], list[float]]:
+    """§20: σ0 of independent models (planimetry, model coordinates at image scale) over
+    σ0 of the bundle (image coordinates) on the same simulated blocks, and the models'
+    height σ0 at image scale (µm), for 3 blocks."""
     ratios, heights = [], []
     for _ in range(3):
         sim = simulate_block(4, 10, rng=rng, extra=3, control="chains")
@@ -105,6 +102,11 @@ def _sigma0_rows(rng: np.random.Generator, P: dict) -> list[Row]:
         sxy, sz = m.sigma_model
         ratios.append(m.sigma0_planimetry * sxy / (b.sigma0 * s_img_um * 1e-6 * sim.spec["scale"]))
         heights.append(m.sigma0_height * sz / sim.spec["scale"] * 1e6)
+    return ratios, heights
+
+
+def _sigma0_rows(ratios: list[float], heights: list[float], P: dict) -> list[Row]:
+    """§20's rows from :func:`_sigma0_numbers`."""
     return [
         Row(
             "§20", "same blocks, 5 µm image noise (3 × 4 × 10 images)",
@@ -122,6 +124,24 @@ def _sigma0_rows(rng: np.random.Generator, P: dict) -> list[Row]:
     ]  # fmt: skip
 
 
+def simulations(seed: int = 1974, pipeline: bool = True) -> dict[str, Any]:
+    """The simulations behind :func:`table` (all its computing; the rows add the paper),
+    in the order in which they draw from the one generator of ``seed``."""
+    rng = np.random.default_rng(seed)
+    out: dict[str, Any] = {
+        "plan": [
+            planimetric_precision(ns, control_spacing=2, replicates=20 if ns <= 6 else 0, rng=rng)
+            for ns in STRIPS
+        ],
+        "plan_4": [planimetric_precision(ns, control_spacing=4) for ns in STRIPS_4],
+        "height": [height_precision(i, replicates=20, rng=rng) for i in SPACINGS],
+    }
+    if pipeline:
+        out["chain"] = _pipeline_rows(rng)
+        out["sigma0"] = _sigma0_numbers(rng)
+    return out
+
+
 def table(seed: int = 1974, pipeline: bool = True, *, paper: dict | None = None) -> list[Row]:
     """Rows of the reproduction (see the module docstring).
 
@@ -135,11 +155,10 @@ def table(seed: int = 1974, pipeline: bool = True, *, paper: dict | None = None)
         The paper's values by row key (default :func:`paper_values`).
     """
     P = paper_values() if paper is None else paper
-    rng = np.random.default_rng(seed)
+    sims = simulations(seed, pipeline)
     rows: list[Row] = []
     mus = []
-    for ns in STRIPS:
-        p = planimetric_precision(ns, control_spacing=2, replicates=20 if ns <= 6 else 0, rng=rng)
+    for ns, p in zip(STRIPS, sims["plan"], strict=True):
         mus.append(p.mu)
         emp = "" if p.empirical is None else f"; empirical {p.empirical:.2f} ({p.replicates} runs)"
         rows.append(
@@ -161,8 +180,7 @@ def table(seed: int = 1974, pipeline: bool = True, *, paper: dict | None = None)
         )
     )  # fmt: skip
     for k in (4,):
-        for ns in STRIPS_4:
-            p = planimetric_precision(ns, control_spacing=k)
+        for ns, p in zip(STRIPS_4, sims["plan_4"], strict=True):
             rows.append(
                 Row(
                     "Bild 3", f"n_s = {ns}, perimeter every {k} b", "μ_xy / σ0",
@@ -170,8 +188,7 @@ def table(seed: int = 1974, pipeline: bool = True, *, paper: dict | None = None)
                     label="illustrative", value=p.mu, key="Bild 3|mu_xy/sigma0",
                 )
             )  # fmt: skip
-    for i in SPACINGS:
-        h = height_precision(i, replicates=20, rng=rng)
+    for i, h in zip(SPACINGS, sims["height"], strict=True):
         permille = h.mu * SIGMA0_HEIGHT_PERMILLE
         rows.append(
             Row(
@@ -192,6 +209,6 @@ def table(seed: int = 1974, pipeline: bool = True, *, paper: dict | None = None)
                 )
             )  # fmt: skip
     if pipeline:
-        rows += _pipeline_rows(rng)
-        rows += _sigma0_rows(rng, P)
+        rows += sims["chain"]
+        rows += _sigma0_rows(*sims["sigma0"], P)
     return rows

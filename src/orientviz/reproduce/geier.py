@@ -28,7 +28,20 @@ import numpy as np
 
 from ..radar import fig8
 from ..radar.data import load_fig8_paper
+from ..radar.geier1973 import SURFACES
 from .rows import Row
+
+
+def _english(column: str) -> str:
+    """The surface of a Fig. 8 column in English (the paper's headings are German)."""
+    _, kind, radius, convex = SURFACES[column]
+    if kind == "fig7":
+        return "arbitrary heights of Fig. 7"
+    if kind == "plane":
+        return "plane"
+    shape = "sphere" if kind == "sphere" else f"cylinder, axis {kind[-1]}"
+    return f"{shape}, radius {radius / 1000:.0f} km, {'convex' if convex else 'concave'}"
+
 
 #: Decimals the paper prints, by unit.
 DECIMALS = {"m": 2, "1e-6": 0, "cc": 0, "1": 3}
@@ -97,8 +110,8 @@ def paper_values() -> dict[str, object]:
         for j, col in enumerate(paper["columns"]):
             status = paper.get("status", {}).get(task, {}).get(col)
             if status:
-                short = status.split(" (")[0]
-                out[f"{task}|{col}|solution"] = f"no solution ({short})"
+                german, _, english = status.partition(" (")  # the paper's words, then English
+                out[f"{task}|{col}|solution"] = f'no solution ("{german}": {english.rstrip(")")})'
                 continue
             for q, values in qs.items():
                 if values[j] is not None:
@@ -170,7 +183,7 @@ def rows_from_results(
     spread = spread or {}
     fig = load_fig8_paper()
     cols = fig["columns"]
-    heads = [f"{i + 1} {h}" for i, h in enumerate(fig["headings"])]
+    heads = [f"{i + 1} {h} ({_english(c)})" for i, (h, c) in enumerate(zip(fig["headings"], cols))]
     rows: list[Row] = []
     for task, qs in fig["tasks"].items():
         label, fitted, group = _label(task)

@@ -15,7 +15,7 @@ much each choice matters:
 * sign of the true error: truth minus estimate instead of estimate minus truth.
 
 Run ``python -m orientviz.reproduce.geier_sensitivity`` for the table (about 15 runs of
-the whole Fig. 8 test, a few seconds each).
+the whole Fig. 8 test).
 """
 
 from __future__ import annotations

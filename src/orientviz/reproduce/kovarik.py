@@ -45,6 +45,8 @@ import copy
 
 import numpy as np
 
+from ..orientation import relative as rel
+from ..orientation import schemes as sch
 from ..orientation.plotter import AnalogPlotter, config_with, preorientation_error, true_pair
 from ..units import RHO_C
 from .rows import Row
@@ -181,9 +183,6 @@ def pass_contraction(
     ndarray, shape (n_trials,)
         Spectral radius of I − G A (dimensionless; 0 for the exact formula).
     """
-    from ..orientation import relative as rel
-    from ..orientation import schemes as sch
-
     out = []
     for t in range(n_trials):
         rng = np.random.default_rng(seed + t)
@@ -253,7 +252,7 @@ def table(n_trials: int = 12, seed: int = 1968, *, paper: dict | None = None) ->
             Row("pass scheme", f"pass {i + 1}, 6-15 % pooled", "median largest rotation [c]",
                 P[key], f"{med:.3g} ({len(vals)} of {len(pooled)} trials)" if vals else "no such pass",
                 "the start error is set to give the paper's first corrections" if fit else
-                "'im Durchschnitt' over the trials: median over all pairs that have this pass",
+                "'im Durchschnitt' (on average) over the trials: median over all pairs that have this pass",
                 label="fitted" if fit else "predicted", value=med,
                 fitted=("size of the start error",) if fit else (), key=key)
         )  # fmt: skip
@@ -262,7 +261,8 @@ def table(n_trials: int = 12, seed: int = 1968, *, paper: dict | None = None) ->
     rows.append(
         Row("pass scheme", "6-15 %, kovarik9", "median correction of a pass / previous pass",
             P["shrinkage|per pass"], f"{ratio:.3f}",
-            "'um eine Zehner-Potenz kleiner': the power of ten of the ratio",
+            "'um eine Zehner-Potenz kleiner' (smaller by a power of ten): the power of ten of the "
+            "ratio",
             label="predicted", value=ratio, key="shrinkage|per pass")
     )  # fmt: skip
     for relief, key in RELIEFS:
@@ -322,7 +322,7 @@ def table(n_trials: int = 12, seed: int = 1968, *, paper: dict | None = None) ->
     rows.append(
         Row("wrong ordinate", label_a, "passes / passes with 100 mm", P["wrong ordinate|ratio"],
             f"{ratio_a:.2f}" if np.isfinite(ratio_a) else "not converged",
-            f"'rund dreimal': the ratio rounded to whole units; correct: {_fmt_passes(right['passes'])}",
+            f"'rund dreimal' (about three times): the ratio rounded to whole units; correct: {_fmt_passes(right['passes'])}",
             label="fitted", value=ratio_a, fitted=("reading of 'Ordinatenwert'",),
             key="wrong ordinate|ratio")
     )  # fmt: skip

@@ -222,8 +222,18 @@ def counts_line(rows: list[Row]) -> str:
     return ", ".join(parts) if parts else "no flagged rows"
 
 
-def format_rows(rows: list[Row]) -> str:
-    """Plain-text table of rows for the terminal, with the counts line at the end."""
+def format_rows(rows: list[Row], width: int | None = None) -> str:
+    """Plain-text table of rows for the terminal, with the counts line at the end.
+
+    Parameters
+    ----------
+    rows : list of Row
+    width : int, optional
+        Widest line allowed (characters). A table wider than this is laid out as one
+        block per task and case instead: the quantity, then paper · orientviz · label ·
+        match, then the note, each wrapped to ``width``. None: always the one-line-per-row
+        table (``orientviz reproduce --wide``).
+    """
 
     def fmt(v: Any) -> str:
         if v is None:
@@ -256,6 +266,33 @@ def format_rows(rows: list[Row]) -> str:
         )
         if k == 0:
             lines.append("  ".join("-" * w for w in widths))
+    counts_text = "counts: " + counts_line(rows)
+    if width is not None and max(len(line) for line in [*lines, counts_text]) > width:
+        import textwrap
+
+        lines = _blocks(cells[1:], width)
+        counts_text = textwrap.fill(counts_text, width, subsequent_indent="  ")
     lines.append("")
-    lines.append("counts: " + counts_line(rows))
+    lines.append(counts_text)
     return "\n".join(lines)
+
+
+def _blocks(cells: list[tuple[str, ...]], width: int) -> list[str]:
+    """The rows of :func:`format_rows` as blocks per task and case, wrapped to ``width``."""
+    import textwrap
+
+    def wrap(text: str, indent: str) -> list[str]:
+        return textwrap.wrap(text, width, initial_indent=indent, subsequent_indent=indent + "  ",
+                             break_long_words=True, break_on_hyphens=False) or [indent]  # fmt: skip
+
+    lines: list[str] = []
+    group = None
+    for task, case, quantity, paper, ours, label, flag, note in cells:
+        if (task, case) != group:
+            group = (task, case)
+            lines += ([""] if lines else []) + wrap(f"{task} — {case}", "")
+        lines += wrap(quantity, "  ")
+        lines += wrap(f"paper {paper} · orientviz {ours} · {label} · match {flag}", "      ")
+        if note:
+            lines += wrap(note, "      ")
+    return lines

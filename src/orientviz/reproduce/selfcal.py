@@ -159,17 +159,27 @@ def visible_part(field, seed: int = 1, side: float = 0.2) -> tuple[float, float]
     return plain.sigma0 * 1e-3, sc.adjustment.sigma0 * 1e-3  # a-priori σ = 1e-3 µm
 
 
-def decomposition(seed: int = 1, paper: dict | None = None) -> list[Row]:
-    """Rows: the σ0-visible part of each error type (10 µm maximum, noise-free)."""
+def visible_parts(seed: int = 1) -> list[tuple[float, float]]:
+    """:func:`visible_part` of each of :data:`ERROR_TYPES`, scaled to 10 µm maximum (µm)."""
+    out = []
+    for _, make in ERROR_TYPES:
+        field = make()
+        out.append(visible_part(_Scaled(field, 10.0 / se.magnitude_um(field)), seed))
+    return out
+
+
+def decomposition(
+    seed: int = 1, paper: dict | None = None, visible: list[tuple[float, float]] | None = None
+) -> list[Row]:
+    """Rows: the σ0-visible part of each error type (10 µm maximum, noise-free);
+    ``visible``: :func:`visible_parts` of ``seed`` when already computed."""
     P = paper_values() if paper is None else paper
+    visible = visible_parts(seed) if visible is None else visible
     a, b = _pair(P, "Oberschwaben q=20%", "sigma0")
     ober = float(np.sqrt(a**2 - b**2))
     rows = []
     worst = 0.0
-    for name, make in ERROR_TYPES:
-        field = make()
-        scale = 10.0 / se.magnitude_um(field)
-        w, s = visible_part(_Scaled(field, scale), seed)
+    for (name, _), (w, s) in zip(ERROR_TYPES, visible, strict=True):
         worst = max(worst, w)
         rows.append(
             Row(
@@ -213,6 +223,14 @@ class _Scaled:
         return self.factor * np.asarray(self.model(xy, image_index), dtype=float)
 
 
+def simulations(seed: int = 1) -> dict[str, list]:
+    """The simulations behind :func:`table` (all its computing; the rows add the paper):
+    ``"cases"``: :func:`run_case` of each of :data:`CASES`; ``"visible"``:
+    :func:`visible_parts`."""
+    cases = [run_case(side, spacing, seed, factor=factor) for _, side, spacing, factor, _ in CASES]
+    return {"cases": cases, "visible": visible_parts(seed)}
+
+
 def table(seed: int = 1, *, paper: dict | None = None) -> list[Row]:
     """Rows: σ0, μ_xy, μ_z and μ/σ0 without and with self-calibration per case, and why
     σ0 falls less than in Oberschwaben (:func:`decomposition`).
@@ -225,11 +243,11 @@ def table(seed: int = 1, *, paper: dict | None = None) -> list[Row]:
         The paper's values by row key (default :func:`paper_values`).
     """
     P = paper_values() if paper is None else paper
+    sims = simulations(seed)
     rows: list[Row] = []
     ill = dict(label="illustrative")
-    for case, side, spacing, factor, proj in CASES:
+    for (case, _, _, factor, proj), r in zip(CASES, sims["cases"], strict=True):
         mag = se.magnitude_um(systematic_field(factor))
-        r = run_case(side, spacing, seed, factor=factor)
         scale = r["scale"]
         w, s, ref = r["without"], r["with"], r["reference"]
         note0 = f"paper: {proj}; orientviz: simulated, noise 3 µm + systematic ≤ {mag:.0f} µm"
@@ -281,4 +299,4 @@ def table(seed: int = 1, *, paper: dict | None = None) -> list[Row]:
                     "μxy at image scale over σ0; theory (random errors only): < 2",
                 )
             )
-    return rows + decomposition(seed, P)
+    return rows + decomposition(seed, P, sims["visible"])

@@ -18,8 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..block import Block
-from ..bundle.model import normalised_block
-from ..bundle.model._lens import BACKWARD_NAMES, FORWARD_NAMES, evaluate
+from ..bundle.model import BACKWARD_NAMES, FORWARD_NAMES, evaluate_lens, normalised_block
 from ..errors import InputError
 from ..rotation import opk_from_matrix
 
@@ -69,12 +68,12 @@ def _look_at(X0: F64, target: F64, roll: float) -> F64:
 
 def _measured(kind: str, th: F64, nrm: F64) -> F64:
     """Image points whose model prediction equals them (noise-free observations)."""
-    f = evaluate(kind, np.tile(th, (nrm.shape[0], 1)), nrm, np.zeros_like(nrm), False)[0]
+    f = evaluate_lens(kind, np.tile(th, (nrm.shape[0], 1)), nrm, np.zeros_like(nrm), False)[0]
     if kind == "forward":
         return f
     m = th[1:3] + th[0] * nrm  # backward: solve x̄(m) = c·n (∂x̄/∂m ≈ I)
     for _ in range(60):
-        g = evaluate(kind, np.tile(th, (m.shape[0], 1)), nrm, m, False)[0] - m
+        g = evaluate_lens(kind, np.tile(th, (m.shape[0], 1)), nrm, m, False)[0] - m
         m = m + g
         if np.max(np.abs(g), initial=0.0) < 1e-13:
             break

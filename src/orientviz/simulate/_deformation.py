@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..adjust import gauss_newton
-from ..bundle.model._additional import _eo_deformations
+from ..bundle.model import eo_deformations
 from ..camera import collinearity_jacobian, project
 from ..errors import InputError
 from ..orientation.absolute import similarity_closed_form
@@ -175,7 +175,7 @@ class FieldSplit:
         Least-squares values of the set's parameters in µm (the set's units).
     orientation : ndarray, shape (6,) or None
         Coefficients of the six exterior-orientation deformations (mm at u = x/b = 1,
-        order of :func:`orientviz.bundle.model._additional._eo_deformations`: shift x, shift y,
+        order of :func:`orientviz.bundle.model.eo_deformations`: shift x, shift y,
         scale, rotation, two projective tilts); None if they were not included.
     share : ndarray, shape (3,)
         Share of the field's sum of squares on the grid that the fit describes, for x,
@@ -258,7 +258,7 @@ def split_field(
     def columns(xy: F64) -> F64:
         A = np.asarray(aps.design(xy), float)  # (N, 2, k) mm per µm
         if orientation:
-            A = np.concatenate([A, _eo_deformations(xy[:, 0] / b, xy[:, 1] / b)], axis=2)
+            A = np.concatenate([A, eo_deformations(xy[:, 0] / b, xy[:, 1] / b)], axis=2)
         return A
 
     A = columns(grid.xy)

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..bundle import LensModel, bundle_adjust
 from ._calibration import simulate_calibration
 
 F64 = NDArray[np.float64]
@@ -112,8 +113,6 @@ def principal_distance_bias(
     grid : int
         Targets per side of the field.
     """
-    from ..bundle import LensModel, bundle_adjust
-
     rows = []
     for m in n_images:
         e_new, e_old, sig, red, npts = [], [], [], [], []

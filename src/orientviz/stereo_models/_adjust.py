@@ -50,6 +50,8 @@ from numpy.typing import NDArray
 from ..adjust import iterate
 from ..block import Block, check_points_of
 from ..errors import InputError, NotDeterminableError
+from . import _joint as mj
+from ._deformation import model_ap_set
 from ._formation import ModelSet, form_models
 from ._normal import scalar_cofactors, solve_rows
 from ._result import ModelsResult
@@ -194,8 +196,6 @@ def _joint(
     block, ms, su, lam, R, T, w_c, s_xy, tol, max_iter, precision,
     deformation, group, sigma, auxiliary,
 ):  # fmt: skip
-    from . import _joint as mj
-    from ._deformation import model_ap_set
 
     spec = model_ap_set(deformation) if deformation is not None else None
     js = mj.joint_setup(block, ms, su, w_c, spec, group, sigma, auxiliary)

@@ -24,7 +24,8 @@ from numpy.typing import NDArray
 
 from ..adjust import Evaluation, Step, iterate
 from ..block import AuxiliaryEstimates, check_points_of
-from ..bundle import AuxRows, analyse, auxiliary_rows
+from ..bundle import analyse
+from ..bundle.problem import AuxRows, auxiliary_rows
 from ..errors import InputError, NotDeterminableError
 from ..rotation import matrix_from_rotvec, skew
 from ._deformation import DeformationField, ModelDeformation, group_index

@@ -17,9 +17,9 @@ system of the transformation parameters ::
 that share a point are coupled. It is factored densely for small systems and otherwise
 by SuperLU with a minimum-degree ordering; the alternative of Ackermann's programs,
 bandwidth minimisation (reverse Cuthill-McKee) and a banded Cholesky, is kept for
-comparison — on a square 2193-model block its band is 600 wide and it is 17 × slower. ``orientviz.bundle.reduced``
-(the bundle's reduced camera system) is built for 6 × 6 image blocks, so model blocks
-(4, 3 or 7 parameters) use this small module instead.
+comparison (its band grows with the block's width; timings: ``benchmarks/bench_models.py``
+and benchmarks/README.md). The bundle's reduced camera system is built for 6 × 6 image
+blocks, so model blocks (4, 3 or 7 parameters) use this small module instead.
 """
 
 from __future__ import annotations
@@ -82,8 +82,7 @@ def factor_spd(S: sp.spmatrix, names: list[str], context: str = "", solver: str 
         Prefix of the error message.
     solver : {"splu", "banded"}
         For systems above :data:`DENSE_LIMIT`: SuperLU with a minimum-degree ordering
-        (symmetric mode; default — 17 × faster than the band on a 2193-model block,
-        ``benchmarks/bench_models.py``) or reverse Cuthill-McKee + banded Cholesky.
+        (symmetric mode; the default) or reverse Cuthill-McKee + banded Cholesky.
 
     Raises
     ------

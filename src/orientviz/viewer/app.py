@@ -175,12 +175,15 @@ class ViewerApp:
                 self._set_camera(*cam)
 
     def _set_camera(self, position: Any, look_at: Any, size: float) -> None:
+        from .geometry import VIEW_FOV
+
         cam = self.server.initial_camera
         cam.position = tuple(float(v) for v in position)
         cam.look_at = tuple(float(v) for v in look_at)
         cam.up = (0.0, 0.0, 1.0)
+        cam.fov = VIEW_FOV
         cam.near = max(size * 1e-4, 1e-3)
-        cam.far = size * 20.0
+        cam.far = size * 50.0
 
     # ------------------------------------------------------------------ messages
     def guard(self, fn: Any) -> Any:
@@ -301,14 +304,20 @@ def open_viewer(
 
 def export_html(content: Any, path: str | Path) -> Path:
     """Build the scene of ``content`` on a private server and write a static HTML snapshot."""
+    import contextlib
+    import io
+
     demo = resolve_content(content)  # load errors are raised here, before any server starts
-    app = ViewerApp(demo, host="127.0.0.1", port=0, verbose=False)
-    try:
-        if app.messages:
-            raise InputError(app.messages[0])
-        return app.export_html(path)
-    finally:
-        app.stop()
+    # viser prints its server box and "Server stopped" whatever `verbose` says; this
+    # server is private and never announced, so its prints go nowhere
+    with contextlib.redirect_stdout(io.StringIO()):
+        app = ViewerApp(demo, host="127.0.0.1", port=0, verbose=False)
+        try:
+            if app.messages:
+                raise InputError(app.messages[0])
+            return app.export_html(path)
+        finally:
+            app.stop()
 
 
 def run_from_cli(args: argparse.Namespace) -> int:

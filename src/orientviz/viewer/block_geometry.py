@@ -29,14 +29,15 @@ COLORS: dict[str, tuple[int, int, int]] = {
     "control": (220, 40, 40),
     "check": (20, 150, 60),
     "frustum": (40, 70, 160),
-    "selected": (250, 130, 0),
+    "selected": (0, 200, 255),
     "ray": (120, 150, 200),
-    "ray_selected": (250, 150, 40),
+    "ray_selected": (90, 210, 255),
     "strip": (110, 60, 160),
     "model": (150, 150, 150),
     "ellipsoid": (230, 80, 200),
     "station": (40, 150, 210),
     "deformation": (0, 140, 170),
+    "scale_bar": (30, 30, 30),
 }
 
 #: Point-cloud node name per role.
@@ -165,11 +166,15 @@ class BlockGeometry:
         b = self.state.block
         e = self.state.misclosure() if misclosure is None else misclosure
         s = self.state.scores(e)[0] if scores is None else scores
-        seg = g.vector_segments(
-            self.frame.to_scene(b.points.xyz[b.observations.point]),
-            self.residual_offsets(e),
-            exaggeration,
+        off = self.residual_offsets(e) * exaggeration
+        # a vector longer than the scene is drawn as long as the scene (far from the
+        # solution, e.g. the approximations replayed at the adjusted state's scale)
+        length = np.linalg.norm(off, axis=1)
+        cap = self.frame.size
+        off = np.where(
+            (length > cap)[:, None], off * (cap / np.maximum(length, 1e-300))[:, None], off
         )
+        seg = g.vector_segments(self.frame.to_scene(b.points.xyz[b.observations.point]), off)
         col = g.ramp(s, SCORE_RED)
         return seg, np.repeat(col[:, None, :], 2, axis=1)
 
@@ -181,6 +186,31 @@ class BlockGeometry:
             return 1.0
         k = float(np.clip(0.33 * self.spacing / med, 1.0, 1e6))  # exact data: at most 10⁶
         return float(10 ** (np.round(np.log10(k) * 4) / 4))
+
+    def scale_bar(self, exaggeration: float) -> tuple[F64, F64, str]:
+        """The residuals' scale bar: segments (k, 2, 3), label position (3,) and text.
+
+        The bar stands for a round object-space offset (1, 2 or 5 × 10ⁿ m) drawn at
+        ``exaggeration``, about two point spacings long, in front of the points (scene
+        frame); the label also gives the offset in the image at the median image scale.
+        """
+        b = self.state.block
+        target = 2.0 * self.spacing / max(float(exaggeration), 1e-300)
+        e = np.floor(np.log10(target))
+        m = target / 10**e
+        value = float((5 if m >= 5 else 2 if m >= 2 else 1) * 10**e)
+        length = value * exaggeration
+        P = self.frame.to_scene(b.points.xyz) if b.n_points else np.zeros((1, 3))
+        lo, hi = P.min(axis=0), P.max(axis=0)
+        start = np.array([lo[0], lo[1] - 0.08 * (hi[1] - lo[1] + self.spacing), lo[2]])
+        end = start + [length, 0.0, 0.0]
+        tick = np.array([0.0, 0.0, 0.25 * self.spacing])
+        seg = np.array([[start, end], [start - tick, start + tick], [end - tick, end + tick]])
+        depth = self.height if b.n_images else 1.0
+        c = float(np.median(b.cameras.c)) if b.cameras.c.size else 1.0
+        image_um = value * c / depth * 1e3  # m at the object → µm in the image
+        text = f"residuals ×{exaggeration:.3g}: bar = {_length(value)} at the object ≈ {image_um:.3g} µm in the image"
+        return seg, (start + end) / 2 - 2 * tick, text
 
     # ------------------------------------------------------------------ strips, models
     def strip_lines(self) -> F64:
@@ -246,6 +276,12 @@ class BlockGeometry:
             )
         return pv.auto_gain(cov, k, self.spacing)
 
+    def station_gain(self, k: float) -> float:
+        """Exaggeration of the projection centres' ellipsoids: the median drawn a third of
+        the frustum depth (their own scale: stations and points differ by orders)."""
+        idx, cov = pv.station_covariances(self.state.result, np.arange(self.state.block.n_images))
+        return pv.auto_gain(cov, k, self.frustum_depth)
+
     def ellipsoids(
         self, points: NDArray[np.int64], k: float, gain: float, subdivisions: int = 1
     ) -> tuple[F64, NDArray[np.int32]] | None:
@@ -273,14 +309,16 @@ class BlockGeometry:
 
     # ------------------------------------------------------------------ camera
     def default_camera(self) -> tuple[F64, F64]:
-        """(position, look_at) in the scene frame: an oblique view onto the whole block."""
+        """(position, look_at) in the scene frame: an oblique view that frames the points
+        and the cameras left of the GUI panel (:func:`~orientviz.viewer.geometry.framing`)."""
         b = self.state.block
         P = self.frame.to_scene(np.vstack([b.points.xyz, b.images.X0]))
-        lo, hi = P.min(axis=0), P.max(axis=0)
-        centre = (lo + hi) / 2
-        centre[2] = (
-            float(np.median(self.frame.to_scene(b.points.xyz)[:, 2])) if b.n_points else centre[2]
-        )
-        ext = max(hi[0] - lo[0], hi[1] - lo[1], 1e-3)
-        pos = centre + np.array([-0.3, -0.85, 0.65]) * ext
-        return pos, centre
+        return g.framing(P)
+
+
+def _length(metres: float) -> str:
+    """A length in m as it reads best (µm, mm, cm, m, km)."""
+    for unit, f in (("km", 1e3), ("m", 1.0), ("cm", 1e-2), ("mm", 1e-3), ("µm", 1e-6)):
+        if abs(metres) >= f:
+            return f"{metres / f:g} {unit}"
+    return f"{metres:.3g} m"

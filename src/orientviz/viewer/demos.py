@@ -113,11 +113,25 @@ def radar_demo() -> Demo:
     return build()
 
 
+def design_demo() -> Demo:
+    """The design studio: plan a block, see its precision and reliability live."""
+    from .studio_panel import StudioView  # the design studio: loaded only for its demo
+
+    desc = (
+        "Plan a block before it is flown: the colours show the design's predicted quality "
+        "(no measurements, the bundle's own normal equations). Make points control or tie "
+        "under *Control* (or ask for the best next control point), change strips, overlaps "
+        "and σ under *Plan*; the summary compares with Ebner's accuracy laws."
+    )
+    return Demo("design", "Block design studio", desc, None, lambda app: StudioView(app).build())
+
+
 #: demo name → builder
 DEMOS: dict[str, Callable[[], Demo]] = {
     "block": block_demo,
     "pair": pair_demo,
     "radar": radar_demo,
+    "design": design_demo,
 }
 
 

@@ -410,3 +410,42 @@ def typical_spacing(points: ArrayLike) -> float:
     if ext[0] < 1e-9 or ext[1] < 1e-9:
         return float(max(ext.max(), 1e-3) / P.shape[0])
     return float(np.sqrt(area / P.shape[0]))
+
+
+#: Vertical field of view of the viewer's camera (rad) and the share of the window
+#: width left of the GUI panel (1280 × 800 px: the panel takes the right ~28 %).
+VIEW_FOV: float = np.radians(50.0)
+VISIBLE_WIDTH: float = 0.72
+
+
+def framing(
+    points: ArrayLike,
+    direction: ArrayLike = (0.3, 0.85, -0.65),
+    fov: float = VIEW_FOV,
+    aspect: float = 1.6,
+    visible: float = VISIBLE_WIDTH,
+    margin: float = 1.1,
+) -> tuple[F64, F64]:
+    """Camera (position, look_at) that shows all ``points`` left of the GUI panel.
+
+    The bounding sphere of the points (about their bounding box's centre) fits the
+    vertical field of view ``fov`` (rad) and the visible width (share ``visible`` of a
+    window of ``aspect`` = width / height) with ``margin``; the camera looks along
+    ``direction`` (Z up) and is shifted sideways so that the object sits in the middle
+    of the part of the window the panel leaves free.
+    """
+    P = np.asarray(points, dtype=float).reshape(-1, 3)
+    P = P[np.all(np.isfinite(P), axis=1)]
+    if P.shape[0] == 0:
+        return np.array([0.0, -3.0, 2.0]), np.zeros(3)
+    centre = (P.min(axis=0) + P.max(axis=0)) / 2
+    r = max(float(np.max(np.linalg.norm(P - centre, axis=1))), 1e-6)
+    d = np.asarray(direction, dtype=float)
+    d = d / np.linalg.norm(d)
+    t = np.tan(fov / 2)
+    half = min(np.arctan(t), np.arctan(aspect * visible * t))  # the narrower half-angle
+    dist = margin * r / np.sin(half)
+    right = np.cross(d, [0.0, 0.0, 1.0])
+    right = right / (np.linalg.norm(right) or 1.0)
+    shift = (1.0 - visible) * dist * aspect * t * right
+    return centre - dist * d + shift, centre + shift

@@ -76,6 +76,10 @@ def pair_geometry(plotter: Any, n_grid: int = 15) -> dict[str, F64]:
     }
 
 
+#: Colour of the right projector (the left one has the frustum colour).
+RIGHT_PROJECTOR = (250, 130, 0)
+
+
 def length_text(mm: float) -> str:
     """A length in machine mm as µm below 1 mm, else in mm (signed, e.g. ``+957 µm``)."""
     return f"{mm * 1000:+.0f} µm" if abs(mm) < 1.0 else f"{mm:+.2f} mm"
@@ -144,9 +148,11 @@ class PairView:
         self.depth = 0.22 * H
         fov, aspect, scale = g.viser_frustum(cfg.c, (cfg.format_mm, cfg.format_mm), self.depth)
         self.spacing = g.typical_spacing(geo["terrain"])
-        self.k = self.auto_k(geo["parallax"])
+        #: the arrows' scale, fixed while the dials turn (re-fitted only on request)
+        self.base_k = self.k = self.auto_k(geo["parallax"])
+        self.terrain_box = (geo["terrain"].min(axis=0), geo["terrain"].max(axis=0))
         self.nodes: dict[str, Any] = {}
-        for name, color in (("left", COLORS["frustum"]), ("right", COLORS["selected"])):
+        for name, color in (("left", COLORS["frustum"]), ("right", RIGHT_PROJECTOR)):
             self.nodes[name] = sc.add_camera_frustum(
                 f"/pair/{name}", fov=fov, aspect=aspect, scale=scale, color=color,
                 thickness=2.0, thickness_units="screen", cast_shadow=False, receive_shadow=False,
@@ -187,9 +193,13 @@ class PairView:
             h["point_info"] = gui.add_markdown("")
         with gui.add_folder("Display"):
             h["exaggeration"] = gui.add_slider(
-                "parallax × (log10, 0 = auto)", -2.0, 2.0, 0.05, 0.0,
-                hint="0 draws the 90th percentile of |p_y| as 0.8 of a grid spacing",
+                "parallax × (log10)", -2.0, 2.0, 0.05, 0.0,
+                hint="× 10^value of the fixed arrow scale (see the scale bar in the scene)",
             )  # fmt: skip
+            h["rescale"] = gui.add_button(
+                "fit the arrow scale to this state",
+                hint="the scale stays fixed while the dials turn; this chooses it anew",
+            )
             h["normalised"] = gui.add_checkbox(
                 "normalised images", False,
                 hint="the pair re-projected to the normal case: epipolar lines are rows",
@@ -208,6 +218,7 @@ class PairView:
             guard(lambda _e: self._set(self.snapshots[int(h["scrub"].value)], keep=True))
         )
         h["exaggeration"].on_update(guard(lambda _e: self._exaggerate()))
+        h["rescale"].on_click(guard(lambda _e: self.rescale()))
         for key in ("point", "plane", "normalised"):
             h[key].on_update(guard(lambda _e: self.redraw()))
         self.redraw()
@@ -303,6 +314,39 @@ class PairView:
     def _exaggerate(self) -> None:
         self.redraw()
 
+    def rescale(self) -> None:
+        """Fit the arrow scale to the current parallaxes (it stays fixed otherwise)."""
+        self.base_k = self.auto_k(pair_geometry(self.plotter)["parallax"])
+        self.redraw()
+
+    def _scale_bar(self) -> None:
+        """A bar for a round y-parallax (1, 2 or 5 × 10ⁿ mm) at the arrows' scale."""
+        target = 1.5 * self.spacing / self.k
+        e = np.floor(np.log10(target))
+        m = target / 10**e
+        value = float((5 if m >= 5 else 2 if m >= 2 else 1) * 10**e)  # machine mm
+        lo, hi = self.terrain_box
+        start = np.array([lo[0] - 0.6 * self.spacing, lo[1], lo[2]])
+        end = start + [0.0, value * self.k, 0.0]
+        tick = np.array([0.25 * self.spacing, 0.0, 0.0])
+        seg = np.array([[start, end], [start - tick, start + tick], [end - tick, end + tick]])
+        sc, f = self.app.server.scene, self.frame
+        key = (round(value, 15), round(self.k, 6))
+        if getattr(self, "_bar_key", None) == key:
+            return
+        self._bar_key = key
+        size = f"{value * 1000:g} µm" if value < 1 else f"{value:g} mm"
+        text = f"y-parallax ×{self.k:.3g}: bar = {size} (machine)"
+        self.scale_bar_text = text
+        self.nodes["scale_bar"] = sc.add_line_segments(
+            "/pair/scale_bar", f.to_scene(seg).astype(np.float32), (30, 30, 30),
+            thickness=3.0, thickness_units="screen",
+        )  # fmt: skip
+        self.nodes["scale_label"] = sc.add_label(
+            "/pair/labels/scale_bar", text,
+            position=f.to_scene((start + end) / 2 - 3 * tick).astype(np.float32),
+        )  # fmt: skip
+
     # ------------------------------------------------------------------ drawing
     def redraw(self) -> None:
         """Re-project under the current dials and update every node."""
@@ -321,7 +365,8 @@ class PairView:
         self.nodes["rays"].points = f.to_scene(rays).astype(np.float32)
         slider = self.h.get("exaggeration") if hasattr(self, "h") else None
         extra = 10 ** float(slider.value) if slider is not None else 1.0
-        self.k = self.auto_k(geo["parallax"]) * extra
+        self.k = self.base_k * extra
+        self._scale_bar()
         arrows = parallax_arrows(geo["terrain"], geo["parallax"], self.k)
         col = g.ramp(
             np.repeat(np.abs(geo["parallax"]), 3), max(np.abs(geo["parallax"]).max(), 1e-9)

@@ -66,6 +66,8 @@ class BlockPanel:
     def build(self) -> BlockPanel:
         gui, b, h = self.server.gui, self.state.block, self.handles
         geo = self.scene.geo
+        with gui.add_folder("Legend"):
+            h["legend"] = gui.add_markdown("")
         with gui.add_folder("Image orientation"):
             m = b.n_images
             h["image"] = gui.add_slider("image #", 0, max(m - 1, 1), 1, 0, disabled=m < 2)
@@ -91,9 +93,13 @@ class BlockPanel:
         with gui.add_folder("Display"):
             self.auto_k = self.scene.exaggeration
             h["exaggeration"] = gui.add_slider(
-                "residual × (log10, 0 = auto)", -3.0, 3.0, 0.05, 0.0,
-                hint="0 draws the median residual about a third of a point spacing",
+                "residual × (log10)", -3.0, 3.0, 0.05, 0.0,
+                hint="× 10^value of the fixed scale (see the scale bar in the scene)",
             )  # fmt: skip
+            h["rescale"] = gui.add_button(
+                "fit the residual scale to this state",
+                hint="the scale stays fixed while you iterate; this chooses it anew",
+            )
             h["rays"] = gui.add_dropdown("rays", RAY_MODES, initial_value="selected image")
             for key, on in (
                 ("frustums", True), ("points", True), ("residuals", True),
@@ -101,12 +107,14 @@ class BlockPanel:
             ):  # fmt: skip
                 h[f"show_{key}"] = gui.add_checkbox(key, on)
         from .panel_act import ActControls
+        from .panel_camera import CameraControls
         from .panel_precision import PrecisionControls
         from .panel_quality import QualityControls
 
         self.quality = QualityControls(self).build()
         self.precision = PrecisionControls(self).build()
         self.act = ActControls(self).build()
+        self.camera = CameraControls(self).build()
         self._bind()
         self.scene.on_image_click = self.guard(self._select_from_click)
         self.select(0)
@@ -125,14 +133,11 @@ class BlockPanel:
         h["fly"].on_click(self.guard(lambda _e: self.fly_to_selected()))
         h["largest"].on_update(self.guard(lambda _e: self.fly_to_selected()))
         h["exaggeration"].on_update(self.guard(lambda _e: self.set_exaggeration()))
+        h["rescale"].on_click(self.guard(lambda _e: self.set_exaggeration(auto=True)))
         h["rays"].on_update(self.guard(lambda _e: self.scene.set_rays(str(h["rays"].value))))
         for key in ("frustums", "points", "residuals", "strips", "models", "ellipsoids"):
             h[f"show_{key}"].on_update(
-                self.guard(
-                    lambda _e, k=key: self.scene.set_visible(
-                        k, bool(self.handles[f"show_{k}"].value)
-                    )
-                )
+                self.guard(lambda _e, k=key: self._show(k, bool(self.handles[f"show_{k}"].value)))
             )
 
     # ------------------------------------------------------------------ actions
@@ -154,6 +159,8 @@ class BlockPanel:
         if getattr(self, "act", None) is not None:
             self.act.refresh()
             self.precision.refresh()
+        if getattr(self, "camera", None) is not None:
+            self.camera.refresh()
         self.handles["image_id"].content = (
             f"**{self.state.image_label(k)}** — sliders are changes of "
             f"X0 = ({b.images.X0[k, 0]:.1f}, {b.images.X0[k, 1]:.1f}, {b.images.X0[k, 2]:.1f}) m, "
@@ -179,7 +186,7 @@ class BlockPanel:
             "one iteration" if max_iter == 1 else f"adjusted ({res.iterations} iterations)"
         )
         self.scene.update()
-        self.set_exaggeration(auto=True)
+        self.set_exaggeration()  # the scale stays: the vectors shrink as the block converges
         self.scene.update_ellipsoids()
         self.select(self.scene.selected)
         self.refresh()
@@ -189,7 +196,7 @@ class BlockPanel:
     def reset(self) -> None:
         self.state.reset()
         self.scene.update()
-        self.set_exaggeration(auto=True)
+        self.set_exaggeration()
         self.scene.update_ellipsoids()
         self.select(self.scene.selected)
         self.refresh()
@@ -198,16 +205,24 @@ class BlockPanel:
         """Show history record ``k`` (the iteration scrubber)."""
         self.state.replay(k)
         self.scene.update()
-        self.set_exaggeration(auto=True)
+        self.set_exaggeration()
+        self.scene.update_ellipsoids(new_gain=False)
         self.select(self.scene.selected)
         self.refresh(full=False)
 
     def set_exaggeration(self, auto: bool = False) -> None:
-        """Exaggeration = automatic value × 10^slider; ``auto`` recomputes the automatic value."""
+        """Exaggeration = base value × 10^slider.
+
+        The base value is chosen once, from the state first shown (the median residual
+        a third of a point spacing), and kept while the student iterates, replays or acts,
+        so that convergence shows as vectors shrinking; ``auto`` (the button "fit the
+        residual scale to this state") chooses it anew from the current state.
+        """
         if auto:
             self.auto_k = self.scene.geo.auto_exaggeration()
         self.scene.set_exaggeration(self.auto_k * 10 ** float(self.handles["exaggeration"].value))
         self.refresh(full=False)
+        self.update_legend()
 
     # ------------------------------------------------------------------ read-outs
     def refresh(self, full: bool = True, quality: bool = True) -> None:
@@ -254,6 +269,19 @@ class BlockPanel:
             self.quality.recolour()
             self.precision.refresh()
             self.act.refresh()
+            if getattr(self, "camera", None) is not None:
+                self.camera.refresh()
+            self.update_legend()
+
+    def _show(self, key: str, visible: bool) -> None:
+        self.scene.set_visible(key, visible)
+        self.update_legend()
+
+    def update_legend(self) -> None:
+        """Name the colours of what the scene draws now (:func:`~orientviz.viewer.legend.block_legend`)."""
+        from .legend import block_legend
+
+        self.handles["legend"].content = block_legend(self.scene)
 
     def fly_to_selected(self) -> None:
         """Move every client's camera to the observation chosen in the residual list."""
@@ -268,6 +296,7 @@ class BlockPanel:
         b = self.state.block
         img = int(b.observations.image[j])
         self.handles["image"].value = img
+        self.scene.select_point(int(b.observations.point[j]))  # a marker on its point
         self.fly_to(self.scene.geo.frame.to_scene(b.points.xyz[b.observations.point[j]]))
 
     def fly_to_image(self, i: int) -> None:

@@ -143,6 +143,7 @@ class BlockScene:
         self.nodes["residuals"] = sc.add_line_segments(
             f"{r}/residuals", seg, col, thickness=WIDTH["residual"], thickness_units="screen"
         )
+        self._scale_bar()
         strips = geo.strip_lines()
         if strips.shape[0]:
             self.nodes["strips"] = sc.add_line_segments(
@@ -282,11 +283,28 @@ class BlockScene:
                 h.points = self._frustum_segments(idx)
 
     def set_exaggeration(self, k: float) -> None:
-        """Redraw the residual vectors with exaggeration ``k``."""
+        """Redraw the residual vectors and the scale bar with exaggeration ``k``."""
+        changed = float(k) != self.exaggeration
         self.exaggeration = float(k)
         seg, col = self.geo.residuals(self.exaggeration)
         self.nodes["residuals"].points = seg.astype(np.float32)
         self.nodes["residuals"].colors = col
+        if changed:
+            self._scale_bar()
+
+    def _scale_bar(self) -> None:
+        """(Re)draw the residuals' scale bar and its label (:meth:`BlockGeometry.scale_bar`)."""
+        seg, at, text = self.geo.scale_bar(self.exaggeration)
+        self.scale_bar_text = text
+        self.nodes["scale_bar"] = self.scene.add_line_segments(
+            f"{self.root}/scale_bar", seg.astype(np.float32), COLORS["scale_bar"],
+            thickness=WIDTH["residual"] + 1.0, thickness_units="screen",
+            visible=self.nodes["residuals"].visible,
+        )  # fmt: skip
+        self.nodes["labels/scale_bar"] = self.scene.add_label(
+            f"{self.root}/labels/scale_bar", text, position=at.astype(np.float32),
+            visible=self.nodes["residuals"].visible,
+        )  # fmt: skip
 
     def select(self, image: int) -> None:
         """Highlight image ``image`` and show its rays (and its ellipsoids, if so chosen)."""
@@ -322,8 +340,8 @@ class BlockScene:
             old = self.nodes.pop(key, None)
             if old is not None:
                 old.remove()
-        if self.geo.state.result is None:
-            return None
+        if self.geo.state.result is None or not self.geo.state.at_result:
+            return None  # ellipsoids belong to the adjusted state (not to a replayed one)
         k = confidence_factor(opt["level"])
         if new_gain or not getattr(self, "auto_ellipsoid_gain", None):
             self.auto_ellipsoid_gain = self.geo.ellipsoid_gain(k)
@@ -335,7 +353,10 @@ class BlockScene:
             m = self.geo.state.block.n_images
             nb, _ = neighbour_correlations(self.geo.state.result, self.selected, m)
             imgs = np.concatenate([[self.selected], nb])
-            self._mesh("station_ellipsoids", self.geo.station_ellipsoids(imgs, k, gain), 0.6)
+            if new_gain or not getattr(self, "station_gain", None):
+                self.station_gain = self.geo.station_gain(k)
+            sg = self.station_gain * float(opt["factor"])
+            self._mesh("station_ellipsoids", self.geo.station_ellipsoids(imgs, k, sg), 0.6)
         return gain
 
     def _mesh(self, key: str, mesh: tuple | None, opacity: float) -> None:
@@ -413,6 +434,7 @@ class BlockScene:
             for h in self.image_nodes + [h for h, _ in self.strip_frustums.values()]:
                 h.visible = visible
             return
+        names = (key, "scale_bar", "labels/scale_bar") if key == "residuals" else (key,)
         for name, h in self.nodes.items():
-            if name == key or name.startswith(key + "/"):
+            if name in names or name.startswith(key + "/"):
                 h.visible = visible

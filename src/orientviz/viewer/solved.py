@@ -79,7 +79,7 @@ class CameraTerms:
     The camera model (lens model or additional parameters of ``cameras[]``) is part of
     the bundle's projection; the misclosure of a state with camera terms ``ap`` (the
     result's ``"additional"`` block) is the bundle's own, from its public problem
-    (:class:`orientviz.bundle.BundleProblem`). Observations the bundle does not use
+    (:class:`orientviz.bundle.problem.BundleProblem`). Observations the bundle does not use
     (rays of independent check points) get the pinhole misclosure.
     """
 
@@ -101,7 +101,7 @@ class CameraTerms:
     def _problem(self, block: Block) -> Any:
         key = (id(block.observations), block.n_images, block.n_points)
         if self._cache is None or self._cache[0] != key:
-            from ..bundle import BundleProblem, point_setup
+            from ..bundle.problem import BundleProblem, point_setup
             from ..io.kinds.block import bundle_camera_options
 
             opts = bundle_camera_options(block)  # ap groups of this (sub-)block
@@ -111,7 +111,7 @@ class CameraTerms:
 
     def misclosure(self, block: Block, ap: F64) -> F64:
         """l − f (n, 2) in mm at the block's orientations and points and terms ``ap``."""
-        from ..bundle import BundleState
+        from ..bundle.problem import BundleState
 
         prob = self._problem(block)
         e = block.residuals()
@@ -159,7 +159,11 @@ def solution_demo(solved: Solved, title: str | None = None) -> Any:
         state.history[0].sigma0 = float(adj.sigma0)  # the solution's, not recomputed
         desc = f"{head}; σ̂0 = {adj.sigma0:.10g}. {block.summary()}."
         return Demo("file", name, desc, state, None, message, sol)
-    return Demo("file", name, f"{head}.", None, _points_extra(sol), message, sol)
+    desc = (
+        f"{head}: σ̂0 = {adj.sigma0:.10g}, redundancy {adj.redundancy}, "
+        f"{sol.n_iterations} iterations; {adj.reason}. The scene shows the solution's points."
+    )
+    return Demo("file", name, desc, None, _points_extra(sol), message, sol)
 
 
 def _finite(state: Any) -> bool:
@@ -209,16 +213,18 @@ def _points_extra(sol: Any) -> Any:
         xyz = xyz[np.all(np.isfinite(xyz), axis=1)]
         if xyz.shape[0] == 0:
             return {}
+        from .geometry import framing
+
         centre = xyz.mean(axis=0)
         size = float(np.ptp(xyz, axis=0).max()) or 1.0
         P = (xyz - centre).astype(np.float32)
         app.server.scene.add_point_cloud(
-            "/solution/points", P, (220, 40, 40), point_size=0.02 * size, point_shape="circle"
+            "/solution/points", P, (220, 40, 40), point_size=0.04 * size, point_shape="circle"
         )
         for k, ident in enumerate(sol.point_ids[: min(len(sol.point_ids), 40)]):
             if k < P.shape[0]:
                 app.server.scene.add_label(f"/solution/labels/{k}", str(ident), position=P[k])
-        pos = np.array([-0.3, -1.0, 0.8]) * 1.6 * size
-        return {"camera": (pos, np.zeros(3), size)}
+        pos, look = framing(P)
+        return {"camera": (pos, look, size)}
 
     return extra

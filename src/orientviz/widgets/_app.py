@@ -13,6 +13,8 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from ..errors import NotDeterminableError
+
 
 def control_app(
     controls: Sequence[Any],
@@ -41,8 +43,6 @@ def control_app(
     import ipywidgets as W
     import matplotlib.pyplot as plt
     from IPython.display import display
-
-    from ..errors import NotDeterminableError
 
     out, text = W.Output(), W.Output()
 

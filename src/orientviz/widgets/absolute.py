@@ -12,7 +12,9 @@ from ..adjust import Adjustment
 from ..orientation.absolute import similarity_transform
 from ..orientation.examples import LAYOUTS, SimilarityExample, similarity_example
 from ..plot.style import subplots
+from ..plot.transform import plot_transform_residuals
 from ..units import RHO_CC
+from ._app import control_app
 
 
 def absolute_state(
@@ -62,8 +64,6 @@ def precision_table(res: Adjustment) -> str:
 
 def _residual_figure(state: tuple[SimilarityExample, Adjustment]):
 
-    from ..plot.transform import plot_transform_residuals
-
     fig, ax = subplots(figsize=(6, 5.5))
     plot_transform_residuals(state[1], ax=ax)
     return fig
@@ -72,8 +72,6 @@ def _residual_figure(state: tuple[SimilarityExample, Adjustment]):
 def absolute_app():
     """ipywidgets app around :func:`absolute_state`; returns the widget box."""
     import ipywidgets as W
-
-    from ._app import control_app
 
     layout = W.Dropdown(options=[(v, k) for k, v in LAYOUTS.items()], description="control")
     sigma = W.FloatSlider(value=5.0, min=0.5, max=30.0, step=0.5, description="σ [cm]",

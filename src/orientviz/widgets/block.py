@@ -12,8 +12,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..block import TIE
+from ..bundle import bundle_adjust
+from ..errors import OrientvizError
+from ..plot.block import plot_block_layout, plot_error_vectors
 from ..plot.style import subplots
+from ..polynomial import polynomial_adjust
 from ..simulate import SimulatedBlock, simulate_block
+from ..stereo_models import independent_models
 
 METHODS = {
     "independent models (7 p.)": "rigorous",
@@ -81,18 +86,12 @@ def block_state(
     )  # fmt: skip
     t = time.perf_counter()
     if method in ("rigorous", "pat-m"):
-        from ..stereo_models import independent_models
-
         res = independent_models(sim.block, method=method)
         xyz = res.points
     elif method == "polynomial":
-        from ..polynomial import polynomial_adjust
-
         res = polynomial_adjust(sim.block, degree_xy=3, degree_z=3)
         xyz = res.points
     elif method == "bundle":
-        from ..bundle import bundle_adjust
-
         res = bundle_adjust(sim.block, precision=False)
         xyz = res.x[res.groups["points"]].reshape(-1, 3)
     else:
@@ -109,9 +108,6 @@ def block_app():
     import ipywidgets as W
     import matplotlib.pyplot as plt
     from IPython.display import display
-
-    from ..errors import OrientvizError
-    from ..plot.block import plot_block_layout, plot_error_vectors
 
     cu = {"continuous_update": False}
     strips = W.IntSlider(value=3, min=1, max=6, description="strips", **cu)

@@ -15,8 +15,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import InputError
 from ..orientation.plotter import FORMULAS, AnalogPlotter, Readings, config_with, true_pair
 from ..orientation.schemes import get_scheme
+from ..plot.relative import blit_parallax_field, parallax_field_png, plot_parallax_field
 from ..plot.style import subplots
 from ..units import RHO_C
 
@@ -142,8 +144,6 @@ class VirtualPlotter:
     def set_formula(self, formula: str) -> PlotterView:
         """Choose the formula of the desk computer (a key of :data:`FORMULA_CHOICES`)."""
         if formula not in FORMULAS:
-            from ..errors import InputError
-
             raise InputError(f"unknown formula {formula!r}; known: {', '.join(FORMULAS)}")
         self.formula = formula
         return self.view()
@@ -200,8 +200,6 @@ def _field_figure(figsize: tuple[float, float] = (7.0, 5.0)):
 def plotter_app(relief: float = 0.10, seed: int = 0):
     """The ipywidgets app around :class:`VirtualPlotter`; returns the widget box."""
     import ipywidgets as W
-
-    from ..plot.relative import blit_parallax_field, parallax_field_png, plot_parallax_field
 
     vp = VirtualPlotter(relief=relief, seed=seed)
     v0 = vp.view()

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..plot.radar import plot_image
 from ..plot.style import subplots
 from ..radar import geier1973 as G
 from ..radar.orientation import adjust_image
@@ -166,8 +167,6 @@ def radar_app(state: RadarSliders | None = None):  # pragma: no cover - needs a 
     """An ipywidgets app: ten sliders, the image with discrepancy arrows, a solve button."""
     import ipywidgets as w
     import matplotlib.pyplot as plt
-
-    from ..plot.radar import plot_image
 
     state = state or RadarSliders()
     out = w.Output()

@@ -9,11 +9,14 @@ from __future__ import annotations
 import numpy as np
 
 from ..adjust import Adjustment
+from ..camera import project
 from ..orientation.examples import ResectionExample, resection_example
 from ..orientation.intersection import Intersection, intersect_points
 from ..orientation.resection import resection
+from ..plot.image import plot_correlations, plot_image
 from ..plot.style import subplots
 from ..rotation import matrix_from_opk
+from ._app import control_app
 
 
 def resection_state(
@@ -65,7 +68,6 @@ def intersection_state(
     R = matrix_from_opk(np.zeros(2), np.zeros(2), np.zeros(2))
     X = np.array([[-B / 2, 0.0, 0.0], [0.0, 0.0, 0.0], [B / 2, 0.0, 0.0]])
     img, pt = np.repeat([0, 1], 3), np.tile([0, 1, 2], 2)
-    from ..camera import project
 
     xy = project(X[pt], X0[img], R[img], c)
     return intersect_points(xy, img, pt, X0, R, c, sigma=sigma_um / 1000)
@@ -82,8 +84,6 @@ def _describe_resection(state: tuple[ResectionExample, Adjustment]) -> str:
 
 def _resection_figure(state: tuple[ResectionExample, Adjustment]):
 
-    from ..plot.image import plot_correlations, plot_image
-
     ex, res = state
     fig, (a1, a2) = subplots(1, 2, figsize=(7.0, 3.6))  # the book column: no down-scaling
     plot_image(ex.image_points, residuals=res.residuals_xy, ax=a1,
@@ -96,8 +96,6 @@ def _resection_figure(state: tuple[ResectionExample, Adjustment]):
 def resection_app():
     """ipywidgets app around :func:`resection_state`; returns the widget box."""
     import ipywidgets as W
-
-    from ._app import control_app
 
     n = W.IntSlider(value=8, min=3, max=40, description="points", continuous_update=False)
     relief = W.FloatSlider(value=80.0, min=0.0, max=600.0, step=10.0, description="relief [m]",

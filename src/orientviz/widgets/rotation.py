@@ -14,6 +14,7 @@ from numpy.typing import NDArray
 
 from ..camera import project
 from ..orientation.examples import ground_grid, house
+from ..plot.image import plot_image
 from ..plot.style import subplots
 from ..rotation import GIMBAL_TOLERANCE, check_sequence, matrix_from_opk, opk_from_matrix
 from ..units import from_rad, to_rad
@@ -108,7 +109,9 @@ def describe(state: RotationState) -> str:
     lines.append(f"same R in {other}: ω = {a[0]:.4f}, φ = {a[1]:.4f}, κ = {a[2]:.4f} {state.unit}")
     if state.gimbal_lock:
         primary = "ω" if state.sequence == "opk" else "φ"
-        lines.append(f"gimbal lock: the secondary angle is ±100 gon — {primary} and κ turn about one axis, only {primary} ± κ is defined")
+        lines.append(
+            f"gimbal lock: the secondary angle is ±100 gon — {primary} and κ turn about one axis, only {primary} ± κ is defined"
+        )
     return "\n".join(lines)
 
 
@@ -117,8 +120,6 @@ def rotation_app(sequence: str = "opk"):
     import ipywidgets as W
     import matplotlib.pyplot as plt
     from IPython.display import display
-
-    from ..plot.image import plot_image
 
     style = dict(min=-200.0, max=200.0, step=0.5, continuous_update=False)
     sliders = {

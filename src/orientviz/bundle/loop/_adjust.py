@@ -25,7 +25,7 @@ definite the result reports ``converged=False`` with a reason that points to
 Self-calibration (``additional=``): the parameters border the reduced system
 (:mod:`orientviz.bundle.problem._ap_normal` assembles E, F;
 :mod:`orientviz.bundle.problem._border` solves). From poor approximations (start σ0 ≥
-:data:`POOR_START_SIGMA0`) the first step holds the parameters at their values: they
+``BundleOptions.poor_start_sigma0``) the first step holds the parameters at their values: they
 model image errors of a few µm and should not absorb the errors of the approximations.
 The result is finished by :func:`orientviz.bundle.loop._finish.finish_result`.
 """
@@ -40,35 +40,30 @@ from ...adjust.loop import Damping, StopRule, iterate
 from ...adjust.result import Iteration
 from ...block import Block
 from ...errors import InputError, NotDeterminableError
+from .._options import BundleOptions
 from .._result import BundleResult
 from ..problem import BundleProblem, BundleState, point_setup
-from ..problem._auxiliary import finish_bundle
 from ..problem._checks import check_connected, check_datum, check_determinable
-from ._finish import finish_result
+from ._finish import RunEnd, finish_result
 from ._reference_result import reference_result
 from ._steps import BundleSteps
-
-#: Blocks up to this many images keep the full parameter vector in every history record.
-HISTORY_X_LIMIT: int = 500
-#: Above this start σ0 a singular first normal matrix is blamed on the approximations
-#: (damped steps are tried) rather than reported as a defect at once.
-POOR_START_SIGMA0: float = 30.0
 
 
 def bundle_adjust(
     block: Block,
     *,
     control: str = "fixed",
-    max_iter: int = 30,
-    tol: float = 5e-3,
     additional=None,
     ap_group=None,
     ap_sigma=None,
+    auxiliary: list | None = None,
     precision: bool = True,
     callback: Callable[[Iteration], object] | None = None,
-    solver: str = "auto",
+    options: BundleOptions | None = None,
+    max_iter: int | None = None,
+    tol: float | None = None,
+    solver: str | None = None,
     history_x: bool | None = None,
-    auxiliary: list | None = None,
 ) -> BundleResult:
     """Adjust a block by the bundle method (see module docstring for the model).
 
@@ -82,12 +77,6 @@ def bundle_adjust(
         ``"weighted"``: given coordinates with ``points.sigma`` > 0 are observations
         with that σ (m), σ = 0 still fixes. Check points (role 2) are left out and
         intersected afterwards with the adjusted orientations.
-    max_iter : int
-        Maximum number of Gauss-Newton steps.
-    tol : float
-        Stop when every ‖correction‖ < tol · (a-priori conditional σ = 1/√N_ii). The
-        conditional σ is much smaller than the real one in a block, so the rule is
-        strict: with 5e-3 the bench blocks stop within 0.001 mm of the optimum.
     additional : AdditionalParameters, optional
         Self-calibration set (``design(xy) -> (n, 2, k)`` in mm per unit, evaluated at the
         observed coordinates): ``x_obs + v = project(...) + A(x_obs)·a``.
@@ -102,17 +91,6 @@ def bundle_adjust(
         normalised residuals (:mod:`orientviz.bundle.precision`).
     callback : callable, optional
         Called with each new :class:`Iteration`.
-    solver : {"auto", "banded", "dense", "sparse", "reference"}
-        Solver of the reduced camera system (:mod:`orientviz.bundle.reduced`):
-        ``"auto"`` chooses from the structure (banded for strips, dense for small or
-        densely connected networks, sparse otherwise:
-        :mod:`orientviz.bundle.reduced._choice`). The result's ``solver`` is the one used,
-        ``reduced_info["solver_reason"]`` says why. ``"reference"``: the textbook
-        Gauss-Newton iteration of :mod:`orientviz.bundle.reference` instead of the fast
-        one (small blocks; no auxiliary data).
-    history_x : bool, optional
-        Keep the full parameter vector per iteration (default: blocks ≤ 500 images);
-        otherwise ``Iteration.x`` is empty.
     auxiliary : list of Auxiliary, optional
         GNSS / statoscope / APR data as joint observations with offset/drift unknowns
         per strip (:mod:`orientviz.bundle.problem._auxiliary`), also together with
@@ -124,6 +102,19 @@ def bundle_adjust(
         and normalised residuals; the cofactor blocks of orientations and points then
         include the uncertainty of the offsets/drifts. The datum check is left to the
         normal equations.
+
+    options : BundleOptions, optional
+        The solver's knobs (:class:`~orientviz.bundle.BundleOptions`: iterations,
+        tolerance, the reduced system's solver, chord steps, the border's and the
+        precision's limits); default ``BundleOptions()``.
+    max_iter, tol, solver, history_x : optional
+        Shorthands: each one given replaces that field of ``options``
+        (``max_iter`` Gauss-Newton steps at most; ``tol`` the stopping rule's bound on
+        every correction in units of its a-priori conditional σ = 1/√N_ii; ``solver``
+        ``"auto"``, ``"banded"``, ``"dense"`` or ``"sparse"`` — the result's ``solver``
+        is the one used, ``reduced_info["solver_reason"]`` says why — or ``"reference"``,
+        the textbook iteration of :mod:`orientviz.bundle.reference` (small blocks; no
+        auxiliary data); ``history_x`` keep the full parameter vector per iteration).
 
     Returns
     -------
@@ -137,24 +128,28 @@ def bundle_adjust(
         v = f − l: the 2n image coordinates (x, y per observation, mm) first, then the
         pseudo-observations (``obs_slices`` names the ranges).
     """
+    opts = BundleOptions() if options is None else options
+    given = dict(max_iter=max_iter, tol=tol, solver=solver, history_x=history_x)
+    given = {k: v for k, v in given.items() if v is not None}
+    if given:
+        opts = opts.replace(**given)
+    max_iter, tol = opts.max_iter, opts.tol
     setup = point_setup(block, control)
     check_connected(block, setup)
     check_determinable(block, setup)
     if not auxiliary:
         check_datum(block, setup)
-    if solver == "reference":  # the textbook iteration (bundle/reference.py), no fast path
+    if opts.solver == "reference":  # the textbook iteration (bundle/reference.py), no fast path
         if auxiliary:
             raise InputError("solver='reference' takes no auxiliary data (GNSS, statoscope, APR)")
         return reference_result(
-            block, setup, control=control, max_iter=max_iter, tol=tol, additional=additional,
-            ap_group=ap_group, ap_sigma=ap_sigma, precision=precision, callback=callback,
-            history_x=history_x,
+            block, setup, control=control, additional=additional, ap_group=ap_group,
+            ap_sigma=ap_sigma, precision=precision, callback=callback, options=opts,
         )  # fmt: skip
     prob = BundleProblem(
-        block, setup, additional=additional, ap_group=ap_group, ap_sigma=ap_sigma, solver=solver,
-        auxiliary=auxiliary,
+        block, setup, additional=additional, ap_group=ap_group, ap_sigma=ap_sigma,
+        auxiliary=auxiliary, options=opts,
     )  # fmt: skip
-    names = prob.names()  # formed when read (a message, the result's names)
     red_names = prob.names(exterior_only=True)
     xyz0 = block.points.xyz.copy()
     fixed = setup.fixed
@@ -163,7 +158,9 @@ def bundle_adjust(
         block.images.X0.copy(), block.images.angles.copy(), xyz0, np.zeros(prob.q),
         np.zeros(prob.na),
     )  # fmt: skip
-    keep_x = (block.n_images <= HISTORY_X_LIMIT) if history_x is None else bool(history_x)
+    keep_x = (
+        (block.n_images <= opts.history_x_limit) if opts.history_x is None else bool(opts.history_x)
+    )
     dof = prob.redundancy
 
     def s0(c):
@@ -172,10 +169,10 @@ def bundle_adjust(
     steps = BundleSteps(prob, red_names, keep_x, precision)
     ev0 = steps.start(st)
     # additional parameters model image errors of a few µm: from approximations whose
-    # misclosures are far larger (σ0 ≥ POOR_START_SIGMA0) the first step is taken with
+    # misclosures are far larger (σ0 ≥ opts.poor_start_sigma0) the first step is taken with
     # the parameters held at their values — it costs no border, and the parameters do
     # not absorb errors of the approximations (the first joint step then starts close)
-    hold_first = bool(prob.q) and s0(ev0.cost) >= POOR_START_SIGMA0
+    hold_first = bool(prob.q) and s0(ev0.cost) >= opts.poor_start_sigma0
     del ev0  # the loop takes it over (and releases it after the first step)
     steps.hold_first = hold_first
     run = iterate(
@@ -183,9 +180,9 @@ def bundle_adjust(
         st,
         redundancy=dof,
         damping=Damping(
-            "fallback", poor_start_sigma0=POOR_START_SIGMA0, first=2 if hold_first else 1
+            "fallback", poor_start_sigma0=opts.poor_start_sigma0, first=2 if hold_first else 1
         ),
-        stop=StopRule(tol=tol, may_stop=lambda it: not (prob.border.hold or steps.local_step)),
+        stop=StopRule(tol=tol, may_stop=lambda it: not (prob.run.border.hold or steps.local_step)),
         max_iter=max_iter,
         # derivatives at the new state: for the next iteration, the precision or the
         # check of a damped start (not after the last step of a screening run, nor after
@@ -208,7 +205,7 @@ def bundle_adjust(
         rw, Je, Jp = prob.residuals(st, jac=True)
     cost = run.evaluation.cost
     damped_start, lin = run.damped_start, steps.lin
-    prob.border.hold = prob.border.reuse = False
+    prob.run.border.hold = prob.run.border.reuse = False
     prob.design_at(st)  # a lens model: its design at the final iterate (precision)
     if not converged:
         lin = None
@@ -222,13 +219,5 @@ def bundle_adjust(
                 "the normal equations are not positive definite there; compute better "
                 "approximations, e.g. with orientviz.approximate.approximate_values"
             )
-    res = finish_result(
-        block, prob, st, rw, Je, Jp, names, history, converged, reason, precision, dof, s0(cost),
-        lin=lin,
-    )  # fmt: skip
-    if prob.aux:
-        finish_bundle(res, prob, st, rw, Je, Jp)
-    if prob.ap.lens is not None:
-        Q = res.cofactor_groups.get("additional") if prob.q else None
-        res.camera = prob.ap.lens.estimates(st.ap, Q, res.sigma0)
-    return res
+    end = RunEnd(st, rw, Je, Jp, cost, history, converged, reason, precision, lin)
+    return finish_result(prob, end)

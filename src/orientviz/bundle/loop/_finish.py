@@ -11,6 +11,8 @@ adjusted orientations from their own rays; the precision is
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
@@ -22,7 +24,8 @@ from ...rotation import matrix_from_opk
 from .._result import BundleResult
 from ..model import normalised_block, project_block
 from ..precision import bundle_precision
-from ..problem import wrap
+from ..problem import BundleProblem, BundleState, wrap
+from ..problem._auxiliary import finish_bundle
 from ..reduced import raise_not_determinable
 
 F64 = NDArray[np.float64]
@@ -60,10 +63,56 @@ def _intersect_check_points(
     return res.xyz
 
 
-def finish_result(
-    block, prob, st, rw, Je, Jp, names, history, converged, reason, precision, dof, sigma0,
-    lin=None,
-) -> BundleResult:  # fmt: skip
+@dataclass(frozen=True)
+class RunEnd:
+    """What the iterations of a bundle adjustment leave for its result.
+
+    Attributes
+    ----------
+    state : BundleState
+        The last accepted iterate.
+    rw : ndarray, shape (n, 2)
+        Weighted misclosures P½(l − f) of the adjusted rays at ``state``.
+    Je, Jp : ndarray, shapes (n, 2, 6), (n, 2, 3)
+        Their Jacobians by the exterior orientation (ω, φ, κ) and the points.
+    cost : float
+        vᵀPv at ``state``.
+    history : list of Iteration
+        One record per iteration.
+    converged : bool
+    reason : str
+        Why the iterations stopped.
+    precision : bool
+        Whether the result gets cofactors, redundancy numbers, normalised residuals.
+    lin : tuple or None
+        ``(ne, fac, Je, Jp)`` of the last Gauss-Newton step when the precision may reuse
+        its factor (:func:`orientviz.bundle.precision.bundle_precision`).
+    """
+
+    state: BundleState
+    rw: F64
+    Je: F64
+    Jp: F64
+    cost: float
+    history: list
+    converged: bool
+    reason: str
+    precision: bool
+    lin: tuple | None = None
+
+
+def finish_result(prob: BundleProblem, end: RunEnd) -> BundleResult:
+    """The :class:`~orientviz.bundle.BundleResult` of ``prob`` at the end of a run.
+
+    Residuals of every observation of the block (check-point rays included), the
+    pseudo-observations, check points intersected with the adjusted orientations, the
+    precision when asked (``end.precision``), the auxiliary data's estimates and a
+    lens model's camera.
+    """
+    block, st, rw, Je, Jp = prob.block, end.state, end.rw, end.Je, end.Jp
+    history, converged, reason, precision = end.history, end.converged, end.reason, end.precision
+    names, dof, lin = prob.names(), prob.redundancy, end.lin
+    sigma0 = float(np.sqrt(end.cost / dof)) if dof > 0 else float("nan")
     m, p, n = block.n_images, block.n_points, block.n_observations
     setup = prob.setup
     xyz = st.xyz.copy()
@@ -148,6 +197,11 @@ def finish_result(
             res.precision_error = (
                 f"no precision at the last (not converged) state: {type(exc).__name__}: {exc}"
             )
+    if prob.aux:
+        finish_bundle(res, prob, st, rw, Je, Jp)
+    if prob.ap.lens is not None:
+        Q = res.cofactor_groups.get("additional") if prob.q else None
+        res.camera = prob.ap.lens.estimates(st.ap, Q, res.sigma0)
     return res
 
 
@@ -163,10 +217,10 @@ def _project_all(block, st, xyz, prob) -> F64:
     io = (block.cameras.c[cam], block.cameras.x0[cam], block.cameras.y0[cam])
     rays = slice(None)
     f = np.empty((obs.image.size, 2))
-    if prob.projected is not None and prob.projected[0] is st:
+    if prob.run.projected is not None and prob.run.projected[0] is st:
         # the adjusted rays were projected at st by the last evaluation (the same
         # kernel on the same values: the same numbers); the others are projected here
-        f[prob.obs.index] = prob.projected[1]
+        f[prob.obs.index] = prob.run.projected[1]
         rest = np.ones(obs.image.size, bool)
         rest[prob.obs.index] = False
         rays = np.flatnonzero(rest)
@@ -184,4 +238,4 @@ def _project_all(block, st, xyz, prob) -> F64:
 
 def _border_info(prob) -> dict:
     """How the additional-parameter border was solved in each solve (formed / cg steps)."""
-    return {"ap_border": list(prob.border.log)} if prob.q else {}
+    return {"ap_border": list(prob.run.border.log)} if prob.q else {}

@@ -15,10 +15,11 @@ import numpy as np
 
 from ...adjust.result import Iteration
 from ...block import Block
+from .._options import BundleOptions
 from .._result import BundleResult
 from ..problem import BundleProblem, BundleState, PointSetup
 from ..reference import reference_bundle
-from ._finish import finish_result
+from ._finish import RunEnd, finish_result
 
 #: What ``reduced_info["solver_reason"]`` says for the reference.
 REASON = "by the textbook reference iteration (orientviz.bundle.reference): dense Schur complement"
@@ -29,30 +30,32 @@ def reference_result(
     setup: PointSetup,
     *,
     control: str,
-    max_iter: int,
-    tol: float,
     additional,
     ap_group,
     ap_sigma,
     precision: bool,
     callback: Callable[[Iteration], object] | None,
-    history_x: bool | None,
+    options: BundleOptions,
 ) -> BundleResult:
     """Run :func:`~orientviz.bundle.reference.reference_bundle` and build the result
-    (arguments as :func:`orientviz.bundle.bundle_adjust`, after its checks)."""
+    (arguments as :func:`orientviz.bundle.bundle_adjust`, after its checks; of
+    ``options`` the reference reads ``max_iter``, ``tol``, ``history_x``,
+    ``history_x_limit``)."""
     sol = reference_bundle(
         block, control=control, additional=additional, ap_group=ap_group, ap_sigma=ap_sigma,
-        max_iter=max_iter, tol=tol,
+        max_iter=options.max_iter, tol=options.tol,
     )  # fmt: skip
     prob = BundleProblem(
-        block, setup, additional=additional, ap_group=ap_group, ap_sigma=ap_sigma, solver="dense"
-    )
+        block, setup, additional=additional, ap_group=ap_group, ap_sigma=ap_sigma,
+        options=options.replace(solver="dense"),
+    )  # fmt: skip
     dof = prob.redundancy
 
     def s0(cost: float) -> float:
         return float(np.sqrt(cost / dof)) if dof > 0 else float("nan")
 
-    keep_x = block.n_images <= 500 if history_x is None else bool(history_x)
+    hx = options.history_x
+    keep_x = block.n_images <= options.history_x_limit if hx is None else bool(hx)
     history = []
     for k, (x, cost) in enumerate(zip(sol.x, sol.cost)):
         dx = None if k == 0 else x - sol.x[k - 1]
@@ -64,13 +67,8 @@ def reference_result(
             callback(rec)
     st = BundleState(sol.X0, sol.angles, sol.xyz, sol.ap)
     rw, Je, Jp = prob.residuals(st, jac=True)
-    res = finish_result(
-        block, prob, st, rw, Je, Jp, prob.names(), history, sol.converged, sol.reason,
-        precision, dof, s0(sol.cost[-1]),
-    )  # fmt: skip
+    end = RunEnd(st, rw, Je, Jp, sol.cost[-1], history, sol.converged, sol.reason, precision)
+    res = finish_result(prob, end)
     res.solver = "reference"
     res.reduced_info = {"solver_reason": REASON}
-    if prob.ap.lens is not None:
-        Q = res.cofactor_groups.get("additional") if prob.q else None
-        res.camera = prob.ap.lens.estimates(st.ap, Q, res.sigma0)
     return res

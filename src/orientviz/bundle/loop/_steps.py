@@ -3,9 +3,33 @@
 :class:`BundleSteps` implements the steps of :func:`orientviz.adjust.loop.iterate` for a
 :class:`~orientviz.bundle.problem.BundleProblem`: the weighted misclosures and Jacobians
 at an iterate, the step from the point-reduced normal equations, and what the iterations
-hand on — the hold of the additional parameters in the first step, the reuse of their
-border (:data:`AP_REUSE`), rotations of the image frames from a poor start
-(:mod:`orientviz.bundle.model._local_rotation`) and chord steps (:data:`CHORD_REUSE`).
+hand on. Its knobs are fields of the problem's
+:class:`~orientviz.bundle.BundleOptions`:
+
+* the additional parameters are held at their values in the first step from a poor
+  start; their border E, F is reused in the next iteration when the last step moved
+  nothing by more than ``ap_reuse`` (the Jacobians then change by about as little, less
+  than the tolerance of the border's solve);
+* from a poor start (σ0 ≥ ``local_sigma0``, last correction ≥ ``local_min_correction``)
+  steps rotate the image frames (:mod:`orientviz.bundle.model._local_rotation`);
+* *chord* steps: a plain bundle without precision solves the step after a small one
+  (move < ``chord_reuse``) with the normal matrix of that step, dx = N(x_old)⁻¹ Jᵀ P (l − f)
+  at the new iterate — only the gradient is formed anew, N's point blocks and the factor
+  of S are the old ones. Chord steps follow each other while each corrects by less than
+  ``chord_contraction`` times the step before; one that does not is dropped and the step
+  solved in full at the same iterate. A factor of a step in frame rotations serves steps
+  in ω, φ, κ through the map A of :func:`~orientviz.bundle.model.angle_map`
+  (J_θ = J_δ·A per image).
+
+Why the stopping rule may judge a chord step: at one iterate the chord correction
+δ_c = N_old⁻¹ g and the Newton correction δ_N = N⁻¹ g satisfy δ_N = N⁻¹ N_old δ_c, so with
+‖N⁻¹ N_old − I‖ ≤ ε (in the rule's norm, corrections in conditional σ) the rule reads δ_c
+within a factor 1 ± ε of δ_N. Near the optimum chord steps shrink the error by about ε
+each; the ratio θ of successive corrections observes that, and as long as it holds the
+iterate after a correction δ_k is within θ/(1 − θ)·‖δ_k‖ of the optimum — with θ < 1/2
+within ‖δ_k‖ < tol, the distance a Newton stop leaves or less. ε grows faster than the
+move (the blocks' weak bending modes change most), hence the small ``chord_reuse``
+(measurements: ``benchmarks/README.md``, "Chord steps").
 """
 
 from __future__ import annotations
@@ -14,47 +38,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...adjust.loop import Evaluation, Step
-from ..model import LOCAL_MIN_CORRECTION, LOCAL_SIGMA0, angle_map
+from ..model import angle_map
 from ..problem import BundleProblem, BundleState
 
 F64 = NDArray[np.float64]
-#: The border E, F of the additional parameters is reused in the next iteration when the
-#: last step moved no projection centre or point by more than this fraction of the
-#: median ray length and no angle by more than this (rad): the Jacobians then change by
-#: about as little (1e-4 relative), less than the tolerance of the border's solve.
-AP_REUSE: float = 1e-4
-#: A plain bundle without precision solves the steps after a small one with the normal
-#: matrix of that step (*chord* steps dx = N(x_old)⁻¹ Jᵀ P (l − f) at the new iterate:
-#: only the gradient is formed anew, N's point blocks and the factor of S are the old
-#: ones) when that full undamped step moved no projection centre or point by more than
-#: this fraction of the median ray length and no angle by more than this (rad). Chord
-#: steps follow each other while each corrects by less than :data:`CHORD_CONTRACTION`
-#: times the step before; one that does not is dropped and the step solved in full at
-#: the same iterate. The factor of a step in rotations of the image frames
-#: (:mod:`orientviz.bundle.model._local_rotation`) serves steps in ω, φ, κ through the map A
-#: of :func:`~orientviz.bundle.model._local_rotation.angle_map` (J_θ = J_δ·A per image).
-#:
-#: Why the stopping rule may judge a chord step: at one iterate the chord correction
-#: δ_c = N_old⁻¹ g and the Newton correction δ_N = N⁻¹ g satisfy δ_N = N⁻¹ N_old δ_c,
-#: so with ‖N⁻¹ N_old − I‖ ≤ ε (in the rule's norm, corrections in conditional σ) the
-#: rule reads δ_c within a factor 1 ± ε of δ_N. Near the optimum chord steps shrink the
-#: error by about ε each; the ratio θ of successive corrections observes that, and as
-#: long as it holds the iterate after a correction δ_k is within θ/(1 − θ)·‖δ_k‖ of the
-#: optimum — with θ < 1/2 within ‖δ_k‖ < tol, the distance a Newton stop leaves or less.
-#: ε grows faster than the move (the blocks' weak bending modes change most; measured,
-#: bench blocks of ``benchmarks/bench_bundle.py``): 3e-4 after the 2 100-image block's
-#: third step (move 6.5e-5: chord 0.0013043 σ, Newton 0.0013047), about 0.17 after the
-#: small block's second (1.7e-3), 0.6 after the medium block's (5e-3) and 5 after the
-#: large block's (1.4e-2: the chord corrects by 44 σ where Newton corrects by 10 σ;
-#: chord steps from there take ten iterations to the stop, with the fall-back six, and
-#: more time than the four of today). Hence the small threshold: the steps it
-#: lets through contract by about 0.1 or less, and the large block keeps its three
-#: factorisations (``benchmarks/README.md``, "Chord steps").
-CHORD_REUSE: float = 1e-3
-#: A chord step must correct by less than this times the step before (else it is
-#: replaced by a full step): the bound 1/2 keeps the distance to the optimum after a
-#: chord step that meets the stopping rule below the tolerance (see :data:`CHORD_REUSE`).
-CHORD_CONTRACTION: float = 0.5
 
 
 class _Linearisation(tuple):
@@ -88,7 +75,7 @@ class BundleSteps:
         self.last_cost: float | None = None  # vᵀPv of the last accepted state
         self.pending_cost: float | None = None  # … of the last evaluated one
         self.last_correction = np.inf
-        # chord steps (CHORD_REUSE): the factor of the last full step while it may serve
+        # chord steps (options.chord_reuse): the factor of the last full step while it may serve
         self.chord_allowed = not precision and not (prob.q or prob.aux or prob.ap.lens is not None)
         self.chord_factor = None  # (factor of S, its NormalEquations, local?)
         self.chord_pending = None  # the factor of the last solved step, if it may serve
@@ -126,13 +113,14 @@ class BundleSteps:
 
     def _poor(self) -> bool:
         """Still far from the solution: σ0 of the last accepted state (the start: unknown,
-        poor) at least LOCAL_SIGMA0 and the step to the state evaluated not small (its
+        poor) at least ``options.local_sigma0`` and the step to the state evaluated not small (its
         correction: the last one solved)."""
         dof = self.prob.redundancy
         if self.last_cost is None or dof <= 0:
             return self.last_cost is None
         s0 = float(np.sqrt(self.last_cost / dof))
-        return s0 >= LOCAL_SIGMA0 and self.last_rel >= LOCAL_MIN_CORRECTION
+        opts = self.prob.options
+        return s0 >= opts.local_sigma0 and self.last_rel >= opts.local_min_correction
 
     @staticmethod
     def is_local(ev: Evaluation) -> bool:
@@ -140,13 +128,13 @@ class BundleSteps:
         return bool(getattr(ev.data, "local", False))
 
     def begin(self, it: int) -> None:
-        self.prob.border.hold = self.hold_first and it == 1
+        self.prob.run.border.hold = self.hold_first and it == 1
         self.lin = None  # released before the next normal equations are built
 
     def stops(self, tol: float) -> bool:
         """Whether the last solved step meets the stopping rule (``tol``) once accepted:
         the state it leads to then needs no derivatives (without the precision)."""
-        return self.last_rel < tol and not (self.prob.border.hold or self.last_local)
+        return self.last_rel < tol and not (self.prob.run.border.hold or self.last_local)
 
     def solve(self, st: BundleState, ev: Evaluation, lam: float, iteration: int) -> Step:
         prob = self.prob
@@ -174,7 +162,7 @@ class BundleSteps:
         if self.chord_allowed and lam == 0:
             if self.chord_step:  # the factor served: it may serve the next step too
                 self.chord_pending = self.chord_factor
-            elif self._relative_move(st, dc, dp) < CHORD_REUSE:
+            elif self._relative_move(st, dc, dp) < prob.options.chord_reuse:
                 self.chord_pending = (fac, ne, local)
         # the normal equations and their factor live on only where the precision may reuse
         # them (an undamped plain step, see accepted); else they are freed before the trial
@@ -194,13 +182,13 @@ class BundleSteps:
         )
 
     def _chord(self, st: BundleState, rw: F64, Je: F64, Jp: F64, local: bool):
-        """A chord step by :attr:`chord_factor` (:data:`CHORD_REUSE`) at ``st``:
+        """A chord step by :attr:`chord_factor` (``options.chord_reuse``) at ``st``:
         (correction, normal equations, dc, dp, da, factor), or None when its correction
-        is not below :data:`CHORD_CONTRACTION` times the last accepted one.
+        is not below ``options.chord_contraction`` times the last accepted one.
 
         ``local``: the Jacobian at ``st`` is by rotations of the image frames. A factor
         of such a step serves a step in ω, φ, κ through the map A of
-        :func:`~orientviz.bundle.model._local_rotation.angle_map` at ``st``: J_θ = J_δ·T with
+        :func:`~orientviz.bundle._local_rotation.angle_map` at ``st``: J_θ = J_δ·T with
         T = diag(I, A) per image, so N_θ = Tᵀ N_δ T and the step is
         dθ = T⁻¹ N_δ⁻¹ T⁻ᵀ g_θ — the gradient's angle rows A⁻ᵀ g_θ, the solution's
         A⁻¹ δ (:meth:`BundleProblem.chord_normal` ``rot``).
@@ -215,14 +203,14 @@ class BundleSteps:
         if A is not None:  # back to ω, φ, κ
             dc[:, 3:] = np.linalg.solve(A, dc[:, 3:, None])[:, :, 0]
         rel = self._correction(ne, dc, dp, da)
-        if not rel < CHORD_CONTRACTION * self.last_correction:
+        if not rel < prob.options.chord_contraction * self.last_correction:
             return None
         return rel, ne, dc, dp, da, fac
 
     def _relative_move(self, st: BundleState | None, dc: F64, dp: F64) -> float:
         """The largest change of a step, centres and points in units of the median ray
         length (of a sample of the rays), angles in rad (the measure of
-        :data:`CHORD_REUSE` and :data:`AP_REUSE`)."""
+        ``options.chord_reuse`` and ``options.ap_reuse``)."""
         prob = self.prob
         if self.ray_length is None:  # from the first iterate that gets here
             obs = prob.obs  # every k-th ray, at most ~8000: a scale, not a statistic
@@ -259,8 +247,8 @@ class BundleSteps:
         if self.precision and lam == 0 and not (prob.q or prob.aux or local):
             self.lin = (ne, fac, previous.data[1], previous.data[2])
         if prob.q:
-            prob.border.reuse = (
-                not prob.border.hold
+            prob.run.border.reuse = (
+                not prob.run.border.hold
                 and prob.ap.lens is None  # a lens model's design moves with its parameters
-                and self._relative_move(None, dc, dp) < AP_REUSE  # (its scale is set)
+                and self._relative_move(None, dc, dp) < prob.options.ap_reuse  # (scale set)
             )

@@ -7,12 +7,24 @@
 * :mod:`._local_rotation` — steps as rotations of the image frames and the map between
   them and steps in ω, φ, κ (:func:`apply_local`, :func:`angle_map`);
 * :mod:`._lens` — the camera inside the projection (:class:`LensModel`: c, principal
-  point, affinity, shear, radial and decentring distortion, backward or forward);
+  point, affinity, shear, radial and decentring distortion, backward or forward; the
+  parameter names :data:`BACKWARD_NAMES`, :data:`FORWARD_NAMES` and the rays' lens terms
+  :func:`evaluate_lens`);
 * :mod:`._additional` — additional-parameter sets of self-calibration
-  (:class:`Ebner12`, :class:`Brown`, :class:`Gruen44`, :func:`ap_set`, :func:`analyse`).
+  (:class:`Ebner12`, :class:`Brown`, :class:`Gruen44`, :func:`ap_set`, :func:`analyse`)
+  and the six image deformations of the exterior orientation (:func:`eo_deformations`).
 """
 
-from ._additional import AdditionalParameters, APAnalysis, Brown, Ebner12, Gruen44, analyse, ap_set
+from ._additional import (
+    AdditionalParameters,
+    APAnalysis,
+    Brown,
+    Ebner12,
+    Gruen44,
+    analyse,
+    ap_set,
+    eo_deformations,
+)
 from ._kernel import (
     RayProjection,
     collinearity_block,
@@ -20,14 +32,16 @@ from ._kernel import (
     project_block,
     ray_jacobians,
 )
-from ._lens import BoundLens, LensEstimates, LensModel, lens_model
-from ._local_rotation import (
-    LOCAL_MIN_CORRECTION,
-    LOCAL_SIGMA0,
-    angle_map,
-    apply_local,
-    frame_axials,
+from ._lens import (
+    BACKWARD_NAMES,
+    FORWARD_NAMES,
+    BoundLens,
+    LensEstimates,
+    LensModel,
+    evaluate_lens,
+    lens_model,
 )
+from ._local_rotation import angle_map, apply_local, frame_axials
 
 __all__ = [
     "AdditionalParameters",
@@ -37,6 +51,7 @@ __all__ = [
     "Gruen44",
     "analyse",
     "ap_set",
+    "eo_deformations",
     "RayProjection",
     "collinearity_block",
     "normalised_block",
@@ -46,8 +61,9 @@ __all__ = [
     "LensEstimates",
     "LensModel",
     "lens_model",
-    "LOCAL_MIN_CORRECTION",
-    "LOCAL_SIGMA0",
+    "evaluate_lens",
+    "BACKWARD_NAMES",
+    "FORWARD_NAMES",
     "angle_map",
     "apply_local",
     "frame_axials",

@@ -206,7 +206,7 @@ def _discrete_legendre(t: F64, nodes: F64, degree: int) -> F64:
     return np.vander(t, degree + 1, increasing=True) @ np.linalg.inv(R) * np.sqrt(nodes.size)
 
 
-def _eo_deformations(u: F64, v: F64) -> F64:
+def eo_deformations(u: F64, v: F64) -> F64:
     """The six image deformations of the exterior orientation, (n, 2, 6)."""
     z, o = np.zeros_like(u), np.ones_like(u)
     return np.stack(
@@ -229,7 +229,7 @@ class Gruen44(_Set):
     Build: on the grid u, v ∈ {−1, −½, 0, ½, 1} (u = x/b) take the 25 products
     P_i(u) P_j(v), i, j ≤ 4, of discrete orthonormal polynomials for Δx and the same for
     Δy (50 functions); remove the 6-dimensional span of the exterior-orientation
-    deformations (:func:`_eo_deformations`); an SVD gives 44 functions orthonormal on the
+    deformations (:func:`eo_deformations`); an SVD gives 44 functions orthonormal on the
     grid, each scaled so that its largest value on the grid is 1 µm. Parameters g1…g44.
 
     Parameters
@@ -250,7 +250,7 @@ class Gruen44(_Set):
         u, v = gu.ravel(), gv.ravel()
         B = self._basis(u, v)  # (25, 2, 50)
         M = B.reshape(50, 50)  # rows: grid point × coordinate
-        E = _eo_deformations(u, v).reshape(50, 6)
+        E = eo_deformations(u, v).reshape(50, 6)
         Qe, _ = np.linalg.qr(E)
         Mp = M - Qe @ (Qe.T @ M)
         U, s, Vt = np.linalg.svd(Mp, full_matrices=False)

@@ -8,8 +8,7 @@ few images: everything that depends only on the image — R, and for each angle 
 axial vector ω_θ of the skew-symmetric (∂R/∂θ)ᵀ R, so that ∂(u, v, w)/∂θ =
 (∂R/∂θ)ᵀ (X − X0) = ω_θ × (u, v, w) — is computed once per *image* and gathered per ray
 by a take of a per-image table; the per-ray work is then a few dozen products of (n,) arrays instead of
-stacked 3 × 3 products (numpy pays ~100 ns per tiny matrix; a block of 10⁴ rays takes
-about 1 ms). Rotation sequence ``"opk"`` (R = R_ω R_φ R_κ) or ``"pok"``
+stacked 3 × 3 products. Rotation sequence ``"opk"`` (R = R_ω R_φ R_κ) or ``"pok"``
 (R = R_φ R_ω R_κ), see :mod:`orientviz.rotation`. A :class:`RayProjection` keeps what
 the Jacobians reuse, so that they can follow a projection (:func:`ray_jacobians`: the
 bundle's start decides from the projection's misclosures which Jacobian it forms).

@@ -189,7 +189,7 @@ def _affinity_apply(a: F64, s: F64, v: F64) -> tuple[F64, F64]:
     return (1.0 + a) * v[:, 0] + s * v[:, 1], v[:, 1]
 
 
-def evaluate(kind: str, th: F64, nrm: F64, m: F64, jac: bool = True):
+def evaluate_lens(kind: str, th: F64, nrm: F64, m: F64, jac: bool = True):
     """Predicted observations, ∂f/∂n and ∂f/∂θ of rays with per-ray parameters.
 
     Parameters
@@ -397,7 +397,7 @@ class BoundLens:
         u = np.column_stack([np.cos(t), np.sin(t)])
         nrm = r0 * u / th[0]
         m = th[1:3] + r0 * u
-        _, _, D = evaluate(self.kind, np.tile(th, (t.size, 1)), nrm, m)
+        _, _, D = evaluate_lens(self.kind, np.tile(th, (t.size, 1)), nrm, m)
         big = np.max(np.linalg.norm(D, axis=1), axis=0)[self.est]
         return np.where(big > 0, UM / np.where(big > 0, big, 1.0), UM)
 
@@ -413,9 +413,9 @@ class BoundLens:
         return th
 
     def evaluate(self, ap: F64, ray_group: NDArray[np.int64], nrm: F64, m: F64, jac: bool):
-        """(f, ∂f/∂n, design (n, 2, k) in mm per scaled unit) of rays; see :func:`evaluate`."""
+        """(f, ∂f/∂n, design (n, 2, k) in mm per scaled unit) of rays; see :func:`evaluate_lens`."""
         th = self.theta(ap)
-        f, M, D = evaluate(self.kind, th[ray_group], nrm, m, jac)
+        f, M, D = evaluate_lens(self.kind, th[ray_group], nrm, m, jac)
         if not jac:
             return f, None, None
         return f, M, D[:, :, self.est] * self.scale[ray_group][:, None, :]
@@ -430,13 +430,13 @@ class BoundLens:
         th = self.theta(ap)[ray_group]
         pp, c = th[:, 1:3], th[:, 0]
         if self.kind == "backward":
-            cn = m - evaluate(self.kind, th, np.zeros_like(m), m, False)[0]  # f(n=0) = m − x̄(m)
+            cn = m - evaluate_lens(self.kind, th, np.zeros_like(m), m, False)[0]  # f(n=0) = m − x̄(m)
         else:
             a, s = th[:, 3], th[:, 4]
             d = m - pp
             nrm = np.column_stack([(d[:, 0] - s * d[:, 1]) / (1 + a), d[:, 1]]) / c[:, None]
             for _ in range(20):
-                f, M, _ = evaluate(self.kind, th, nrm, m)
+                f, M, _ = evaluate_lens(self.kind, th, nrm, m)
                 step = np.linalg.solve(M, (f - m)[:, :, None])[:, :, 0]
                 nrm = nrm - step
                 if np.max(np.abs(step), initial=0.0) < 1e-15:

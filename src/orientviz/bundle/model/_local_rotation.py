@@ -8,13 +8,13 @@ pass near that pole. A step in a small rotation δ of the image frame,
 R(δ) = R·exp([δ]×), has no such pole: ∂R/∂δ_k = R·[e_k]×.
 
 The bundle takes such steps while the start is poor (σ0 of the linearisation point at
-least :data:`LOCAL_SIGMA0` and the last step not yet small) and only if nothing else
+least ``BundleOptions.local_sigma0`` and the last step not yet small) and only if nothing else
 refers to the angles (no observed attitudes, additional parameters or auxiliary
 data); the last steps — those the stopping rule judges and the precision reuses — are
 always taken in ω, φ, κ. :func:`apply_local` turns R(δ) back into the angles;
 :func:`angle_map` relates the two parametrisations to first order, so that the factored
 normal matrix of a small step in δ can serve the next steps in ω, φ, κ (chord steps,
-:data:`orientviz.bundle.loop._steps.CHORD_REUSE`).
+``BundleOptions.chord_reuse``, :mod:`orientviz.bundle.loop._steps`).
 """
 
 from __future__ import annotations
@@ -25,11 +25,6 @@ from numpy.typing import NDArray
 from ...rotation import matrix_derivatives, matrix_from_opk, matrix_from_rotvec, opk_from_matrix
 
 F64 = NDArray[np.float64]
-
-#: Rotation steps in the image frame while σ0 of the linearisation point is at least this …
-LOCAL_SIGMA0: float = 30.0
-#: … and the last step's largest correction (in a-priori σ) was at least this.
-LOCAL_MIN_CORRECTION: float = 10.0
 
 #: [e_k]× for k = 0, 1, 2.
 _GENERATORS = np.array(

@@ -26,9 +26,7 @@ With self-calibration parameters the border's terms come from
 with all q columns (BLAS level 3, the same factor as the selected inverse), the
 correction Y F̃⁻¹ Yᵀ only at the needed 6×6 blocks, and the point and ray terms per
 (point, group) pair with k columns instead of q (a point's rays lie in one or two
-groups). On the bench's 2 100-image block with 12 parameters per strip this took the
-precision from about 19-30 s (load dependent) to about 1.9 s, against 0.8 s without
-parameters (``python benchmarks/bench_selfcal.py --precision``).
+groups).
 
 Units: cofactors in the parameters' units squared (m², rad², m·rad); multiply by σ̂0²
 for covariances.
@@ -44,13 +42,9 @@ from .._result import ExteriorPairs, RayGains
 from ..reduced import DENSE_CHUNK_BYTES, ReducedStructure, dense_matrix, factor_reduced
 
 F64 = NDArray[np.float64]
-#: Up to this many reduced unknowns Z = S⁻¹ is computed densely.
-DENSE_INVERSE_LIMIT: int = 3000
-#: Block size of the banded selected inversion.
-TAKAHASHI_BLOCK: int = 96
 
 
-def banded_selected_inverse(cb: F64, nb: int = TAKAHASHI_BLOCK) -> F64:
+def banded_selected_inverse(cb: F64, nb: int = 96) -> F64:
     """Entries of S⁻¹ inside the band, from the banded Cholesky factor of S.
 
     Parameters
@@ -130,16 +124,19 @@ class ReducedInverse:
     (nb, 6, 6); :meth:`border` gives S⁻¹E for a border E (self-calibration) from the same
     factorisation. ``fac``: an existing banded factor of S (from
     :func:`orientviz.bundle.reduced.factor_reduced` on the same blocks), then not
-    factored again.
+    factored again. ``dense_limit``: up to this many unknowns Z is computed densely;
+    ``nb``: block size of the banded selected inverse.
     """
 
-    def __init__(self, st: ReducedStructure, blocks: F64, fac=None) -> None:
+    def __init__(
+        self, st: ReducedStructure, blocks: F64, fac=None, dense_limit: int = 3000, nb: int = 96
+    ) -> None:
         n = st.n_reduced
         r6 = np.arange(6)
         self._Z = self._fac = None
         self._m = st.n_cam
-        if n <= DENSE_INVERSE_LIMIT or st.solver != "banded":
-            if n > DENSE_INVERSE_LIMIT and st.solver != "dense":
+        if n <= dense_limit or st.solver != "banded":
+            if n > dense_limit and st.solver != "dense":
                 st = ReducedStructure(
                     st.obs_cam,
                     st.obs_pt,
@@ -147,6 +144,7 @@ class ReducedInverse:
                     st.n_pt,
                     solver="banded",
                     positions=st.positions,
+                    options=st.options,
                 )
             else:  # dense: the factor of the last iteration when it is a dense one
                 if fac is not None and fac.kind == "dense":
@@ -161,7 +159,7 @@ class ReducedInverse:
         if fac is None or fac.kind != "banded":
             fac = factor_reduced(st, blocks)
         self._fac = fac
-        Zb = banded_selected_inverse(fac.data)
+        Zb = banded_selected_inverse(fac.data, nb)
         p = st.pos_img
         rows = 6 * p[st.block_i][:, None, None] + r6[None, :, None]
         cols = 6 * p[st.block_k][:, None, None] + r6[None, None, :]
@@ -268,7 +266,8 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     else:
         ne = prob.normal(st, rw, Je, Jp)
     blocks = ne.blocks
-    inverse = ReducedInverse(S, blocks, fac)
+    opts = prob.options
+    inverse = ReducedInverse(S, blocks, fac, opts.dense_inverse_limit, opts.takahashi_block)
     Zblk = inverse.blocks
     m, q = prob.m, prob.q
     aux = getattr(prob, "aux", None)

@@ -10,8 +10,8 @@ the reduced system is bordered ::
 This module supplies the border's part:
 
 * :func:`border_inverse` — Y, Q_aa, Q_ca from two banded triangular solves with all q
-  columns at once (BLAS level 3, :func:`~orientviz.bundle.band_forward_solve`
-  and :func:`~orientviz.bundle.band_backward_solve`), and the correction
+  columns at once (BLAS level 3, :func:`~orientviz.bundle.problem.band_forward_solve`
+  and :func:`~orientviz.bundle.problem.band_backward_solve`), and the correction
   Y Q_aa Yᵀ of the 6 × 6 blocks of Q_cc that the precision needs (one product per image
   row of blocks, never the dense 6m × 6m matrix);
 * :func:`point_terms` — the terms of the points and of the image rays. A point's
@@ -20,8 +20,8 @@ This module supplies the border's part:
   columns; everything is therefore computed per (ray, group of its point) and
   (point, group) pair with k columns, not with all q.
 
-Cost on the bench's 2 100-image block with 12 parameters per strip (q = 360): the two
-banded solves dominate (about 2·n·kd·q flops each, n = 6m, kd the half-bandwidth).
+Cost: the two banded solves dominate (about 2·n·kd·q flops each, n = 6m, kd the
+half-bandwidth).
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ def border_inverse(inverse, E: F64, F: F64, st) -> tuple[F64, F64, F64]:
         Border (points eliminated).
     F : ndarray, shape (q, q)
         Parameter block (points eliminated, pseudo-observations included).
-    st : orientviz.bundle.ReducedStructure
+    st : orientviz.bundle.reduced.ReducedStructure
         Blocks (i ≤ k) where the correction is wanted (``block_i`` sorted).
 
     Returns
@@ -166,7 +166,6 @@ def ray_group_pairs(prob) -> RayGroupPairs:
         by_group,
         group_starts,
     )
-    prob.ray_groups = out
     return out
 
 

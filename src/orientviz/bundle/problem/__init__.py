@@ -5,6 +5,7 @@
 * :mod:`._parts` — the problem's typed parts (observations, interior and exterior
   orientation, points, additional parameters, the border's memory);
 * :mod:`._state` — the iterate (:class:`BundleState`, a frozen value);
+* :mod:`._run` — what one run writes (:class:`BundleRun`; the problem stays constant);
 * :mod:`._problem` — :class:`BundleProblem`: misclosures and Jacobians at an iterate,
   vᵀPv, the point-reduced normal equations (through :mod:`orientviz.bundle.reduced`),
   the step and the next iterate;
@@ -22,6 +23,7 @@ from ._border import (
     solve_bordered_pcg,
 )
 from ._checks import PointSetup, datum_defect, image_condition_deficit, point_setup
+from ._names import ParameterNames
 from ._parts import (
     AdditionalBlock,
     BorderSolver,
@@ -30,7 +32,8 @@ from ._parts import (
     InteriorOrientation,
     PointBlock,
 )
-from ._problem import BundleProblem, ParameterNames
+from ._problem import BundleProblem
+from ._run import BundleRun
 from ._state import BundleState, wrap
 
 __all__ = [
@@ -54,6 +57,7 @@ __all__ = [
     "PointBlock",
     "BundleProblem",
     "ParameterNames",
+    "BundleRun",
     "BundleState",
     "wrap",
 ]

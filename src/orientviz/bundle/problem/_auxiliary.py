@@ -289,7 +289,7 @@ class BundleAuxiliary:
         the corrections (da, dg) in one vector).
         """
         a = self.reduce(prob, st.X0, st.xyz, st.g, ne, lam)
-        if prob.q and not prob.border.hold:
+        if prob.q and not prob.run.border.hold:
             a.Fag = _ab.ap_aux_coupling(prob, ne, a.Pg)
         ne.aux = a
         ne.diagF = np.concatenate([ne.diagF, a.diag])

@@ -13,7 +13,7 @@ No observation holds both a and g, so F_ag comes only from the elimination of po
 that carry image rays and APR rows: ``F_ag = −Σ_j H_j V_j⁻¹ P_j`` (H_j the rays' Aᵀ P J_p
 per (point, group) pair, :mod:`orientviz.bundle.problem._ap_normal`; P_j the APR rows' coupling of
 the point with g). The border is eliminated exactly, ``Fs = F − Eᵀ S⁻¹ E`` (forming Fs
-with :func:`orientviz.bundle.solve_bordered`); Fs⁻¹ is the cofactor matrix
+with :func:`orientviz.bundle.problem.solve_bordered`); Fs⁻¹ is the cofactor matrix
 of the border, which the precision (:func:`orientviz.bundle.precision._precision.bundle_precision`)
 needs anyway.
 
@@ -67,7 +67,7 @@ def border(prob, ne: NormalEquations) -> tuple[F64, F64, F64]:
     Without additional parameters (or with them held) the border is g's alone.
     """
     a = ne.aux
-    if not prob.q or prob.border.hold:
+    if not prob.q or prob.run.border.hold:
         return a.E, a.F, a.b
     Ea = dense(ne.ap.E_border) if ne.ap is not None else ne.ap.E
     E = np.hstack([Ea, a.E])
@@ -77,7 +77,7 @@ def border(prob, ne: NormalEquations) -> tuple[F64, F64, F64]:
 
 def _not_determinable(prob) -> NotDeterminableError:
     names = list(prob.aux.rows.names)
-    if prob.q and not prob.border.hold:
+    if prob.q and not prob.run.border.hold:
         names = list(prob.ap.names) + names
     return NotDeterminableError(
         "the offsets/drifts of the auxiliary data (with the additional parameters, if any) "

@@ -19,18 +19,14 @@ which is eliminated by block elimination: ``Fs = F − Eᵀ S⁻¹ E``, ``Fs da 
 * :func:`solve_bordered_pcg` solves ``Fs da = …`` by conjugate gradients, applying
   Fs = F − Eᵀ S⁻¹ E to a vector (one banded solve with S and two products with the
   dense E per step), preconditioned with the Cholesky factor of an Fs formed once. The
-  geometry hardly changes between Gauss-Newton iterations, so that factor stays an
-  excellent preconditioner: on the bench's 2 100-image block with 12 parameters per
-  strip the eigenvalues of Fs_old⁻¹·Fs stay within [0.74, 1.05] even between the start
-  values and the solution, and 1-2 steps reach the tolerance.
+  geometry hardly changes between Gauss-Newton iterations, so that factor stays a good
+  preconditioner (the eigenvalues of Fs_old⁻¹·Fs stay close to 1).
 
-The bundle (:meth:`orientviz.bundle.BundleProblem.solve`) forms the preconditioner
+The bundle (:meth:`orientviz.bundle.problem.BundleProblem.solve`) forms the preconditioner
 in the first iteration that solves for the parameters, uses the conjugate gradients from
-then on, forms Fs anew when they need more than :data:`PCG_STALE_STEPS` steps, and falls
+then on, forms Fs anew when they need more than ``BundleOptions.pcg_stale_steps`` steps, and falls
 back to the exact :func:`solve_bordered` (which also names a singular border) when they
 fail. ``BundleResult.reduced_info["ap_border"]`` of the result logs what each solve did.
-
-Measured with ``python benchmarks/bench_selfcal.py`` (see ``benchmarks/README.md``).
 """
 
 from __future__ import annotations
@@ -46,15 +42,6 @@ from ..reduced import NormalEquations
 from ._ap_normal import BorderE, dense
 
 F64 = NDArray[np.float64]
-
-#: Relative tolerance of the conjugate gradients (preconditioned residual norm). The
-#: step is one of Gauss-Newton's: an error of 1e-4 of the correction costs no iteration
-#: (the next linearisation sees it as a misclosure), while every step costs a banded solve.
-PCG_TOL: float = 1e-4
-#: More steps than this: the preconditioner is considered stale (Fs is formed anew).
-PCG_STALE_STEPS: int = 12
-#: Give up (and form Fs) after this many steps.
-PCG_MAX_STEPS: int = 40
 
 
 def _skewed_block(L: F64, r0: int, r1: int, c0: int) -> F64:
@@ -244,7 +231,9 @@ def form_preconditioner(fac, E: F64, F: F64):
         return None
 
 
-def solve_bordered_pcg(fac, E: F64, F: F64, rhs: F64, ba: F64, prec, tol: float = PCG_TOL):
+def solve_bordered_pcg(
+    fac, E: F64, F: F64, rhs: F64, ba: F64, prec, tol: float = 1e-4, max_steps: int = 40
+):
     """Solve the bordered system by preconditioned conjugate gradients on Fs.
 
     Parameters
@@ -259,6 +248,8 @@ def solve_bordered_pcg(fac, E: F64, F: F64, rhs: F64, ba: F64, prec, tol: float 
         ``scipy.linalg.cho_factor`` of an earlier Fs (the preconditioner).
     tol : float
         Stop when the preconditioned residual norm fell below ``tol`` times its start.
+    max_steps : int
+        Give up after this many steps.
 
     Returns
     -------
@@ -287,7 +278,7 @@ def solve_bordered_pcg(fac, E: F64, F: F64, rhs: F64, ba: F64, prec, tol: float 
     d = y.copy()
     steps = 0
     while rho > stop and rho > 0:
-        if steps == PCG_MAX_STEPS:
+        if steps == max_steps:
             return None, None, steps
         steps += 1
         w, u = Fs(d)
@@ -309,30 +300,32 @@ def solve_bordered_pcg(fac, E: F64, F: F64, rhs: F64, ba: F64, prec, tol: float 
 def solve_border(prob, ne: NormalEquations, fac) -> tuple[F64, F64]:
     """The bundle's solve with additional parameters: (dc (6m,), da (q,)).
 
-    Held parameters (``prob.border.hold``): the plain step, da = 0. Otherwise conjugate
+    Held parameters (``prob.run.border.hold``): the plain step, da = 0. Otherwise conjugate
     gradients with the preconditioner (formed in single precision on first use, formed
-    anew after :data:`PCG_STALE_STEPS` steps) and, if they fail, the exact
-    :func:`solve_bordered`. Appends what it did to ``prob.border.log``.
+    anew after ``prob.options.pcg_stale_steps`` steps) and, if they fail, the exact
+    :func:`solve_bordered`. Appends what it did to ``prob.run.border.log``.
     """
-    if prob.border.hold:
-        prob.border.log.append("held")
+    if prob.run.border.hold:
+        prob.run.border.log.append("held")
         return fac.solve(ne.rhs), np.zeros(prob.q)
     dc = None
     tag = "E,F reused, " if ne.ap.reused else ""
-    if prob.border.preconditioner is None:
-        prob.border.preconditioner = form_preconditioner(fac, ne.ap.E_border, ne.ap.F)
-        tag += "Fs formed (float32), " if prob.border.preconditioner is not None else ""
-    if prob.border.preconditioner is not None:
+    if prob.run.border.preconditioner is None:
+        prob.run.border.preconditioner = form_preconditioner(fac, ne.ap.E_border, ne.ap.F)
+        tag += "Fs formed (float32), " if prob.run.border.preconditioner is not None else ""
+    if prob.run.border.preconditioner is not None:
+        opts = prob.options
         dc, da, steps = solve_bordered_pcg(
-            fac, ne.ap.E_border, ne.ap.F, ne.rhs, ne.ap.ba, prob.border.preconditioner
-        )
-        prob.border.log.append(tag + f"cg{steps}")
-        if dc is None or steps > PCG_STALE_STEPS:
-            prob.border.preconditioner = None  # stale preconditioner: form Fs next time
+            fac, ne.ap.E_border, ne.ap.F, ne.rhs, ne.ap.ba, prob.run.border.preconditioner,
+            tol=opts.pcg_tol, max_steps=opts.pcg_max_steps,
+        )  # fmt: skip
+        prob.run.border.log.append(tag + f"cg{steps}")
+        if dc is None or steps > opts.pcg_stale_steps:
+            prob.run.border.preconditioner = None  # stale preconditioner: form Fs next time
     if dc is None:
-        dc, da, Fs, prob.border.preconditioner = solve_bordered(
+        dc, da, Fs, prob.run.border.preconditioner = solve_bordered(
             fac, ne.ap.E, ne.ap.F, ne.rhs, ne.ap.ba, prob.ap.names
         )
         ne.Fs = Fs
-        prob.border.log.append("Fs formed")
+        prob.run.border.log.append("Fs formed")
     return dc, da

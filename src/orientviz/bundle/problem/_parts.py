@@ -1,6 +1,6 @@
 """The parts of a bundle problem, one job each: observations and the parameter blocks.
 
-A :class:`~orientviz.bundle.BundleProblem` is composed of
+A :class:`~orientviz.bundle.problem.BundleProblem` is composed of
 
 * :class:`ImageObservations` — the rays that enter the adjustment (image, point, x, y,
   1/σ), sorted by the track length of their point, then by point (the order of the

@@ -13,12 +13,11 @@ the engine's (:func:`orientviz.adjust.engine.iterate`).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import numpy as np
 from numpy.typing import NDArray
 
 from ...block import Block
+from .._options import BundleOptions
 from ..model._kernel import RayProjection, normalised_block, ray_jacobians
 from ..model._local_rotation import apply_local
 from ..reduced import (
@@ -37,8 +36,9 @@ from ._ap_normal import ap_normal, point_ap_term
 from ._auxiliary import BundleAuxiliary, auxiliary_rows
 from ._border import solve_border
 from ._checks import PointSetup
+from ._names import ParameterNames
 from ._parts import (
-    BorderSolver,
+    AdditionalBlock,
     additional_block,
     exterior_block,
     image_observations,
@@ -46,69 +46,17 @@ from ._parts import (
     point_block,
     with_var_rays,
 )
+from ._run import BundleRun
 from ._state import BundleState, wrap
 
 F64 = NDArray[np.float64]
-EXTERIOR_NAMES = ("X0", "Y0", "Z0", "omega", "phi", "kappa")
-
-
-class ParameterNames(Sequence):
-    """The names of a bundle's parameters, a sequence of str formed when first read.
-
-    ``"<image id>.<X0|Y0|Z0|omega|phi|kappa>"`` per image, ``"<point id>.<X|Y|Z>"`` per
-    point, then the additional parameters' names: the order of ``x``. A bundle needs
-    them only for a message or when a result's names are read; a block of 40 000
-    points has 130 000 of them (~10 ms to form). Compares equal to a list of the same
-    names; slices are lists.
-    """
-
-    def __init__(self, image_ids, point_ids, extra) -> None:
-        self._parts = (image_ids, point_ids, extra)
-        self._n = 6 * len(image_ids) + 3 * len(point_ids) + len(extra)
-        self._items: list[str] | None = None
-
-    def _list(self) -> list[str]:
-        if self._items is None:
-            image_ids, point_ids, extra = self._parts
-            out = [f"{i}.{n}" for i in image_ids for n in EXTERIOR_NAMES]
-            out += [f"{i}.{c}" for i in point_ids for c in ("X", "Y", "Z")]
-            self._items = out + list(extra)
-        return self._items
-
-    def __len__(self) -> int:
-        return self._n
-
-    def __getitem__(self, i):
-        return self._list()[i]
-
-    def __iter__(self):
-        return iter(self._list())
-
-    def __contains__(self, name) -> bool:
-        return name in self._list()
-
-    def index(self, name, *args) -> int:
-        return self._list().index(name, *args)
-
-    def __eq__(self, other) -> bool:
-        if isinstance(other, (ParameterNames, list, tuple)):
-            return self._list() == list(other)
-        return NotImplemented
-
-    __hash__ = None  # like a list
-
-    def __add__(self, other) -> list[str]:
-        return self._list() + list(other)
-
-    def __radd__(self, other) -> list[str]:
-        return list(other) + self._list()
-
-    def __repr__(self) -> str:
-        return repr(self._list())
 
 
 class BundleProblem:
     """One bundle adjustment, composed of small parts (constant over the iterations).
+
+    What a run writes lives in :attr:`run` (a :class:`~orientviz.bundle.problem._run.BundleRun`),
+    never in the problem's other attributes.
 
     Attributes
     ----------
@@ -124,14 +72,19 @@ class BundleProblem:
         Observed projection centres/attitudes (weights, values).
     points : PointBlock
         Point unknowns and their coordinate pseudo-observations.
-    ap : AdditionalBlock
-        Self-calibration parameters (empty: ``q == 0``).
+    ap0 : AdditionalBlock
+        Self-calibration parameters (empty: ``q == 0``), design at the approximations;
+        :attr:`ap` is the run's (a lens model's design moves with the iterate).
     aux : BundleAuxiliary or None
         GNSS / statoscope / APR rows and their offsets/drifts.
     reduced : ReducedStructure
         Structure, ordering and solver of the reduced camera system.
-    border : BorderSolver
-        What the border's solve remembers between iterations.
+    run : BundleRun
+        The state of the current run (the border's memory, the kept projection, the
+        additional parameters' current design).
+    options : BundleOptions
+        The solver's knobs (the reduced system's solver, tolerances of the border's
+        solve, the precision's limits).
     n_eq, n_unknowns, redundancy : int
         Counts of equations (observations and pseudo-observations) and unknowns.
 
@@ -148,11 +101,12 @@ class BundleProblem:
         additional=None,
         ap_group=None,
         ap_sigma=None,
-        solver: str = "auto",
         auxiliary: list | None = None,
+        options: BundleOptions | None = None,
     ) -> None:
         self.block = block
         self.setup = setup
+        self.options = BundleOptions() if options is None else options
         self.points = point_block(block, setup)
         obs = image_observations(block, setup, self.points.column)
         self.reduced = ReducedStructure(
@@ -160,27 +114,28 @@ class BundleProblem:
             obs.column,
             block.n_images,
             self.points.n,
-            solver=solver,
+            solver=self.options.solver,
             positions=block.images.X0,
+            options=self.options.reduced,
         )
         self.obs = with_var_rays(obs, self.reduced)
         r = self.reduced
         #: the images' Gram matrices (U and the reduced rhs in normal())
-        self.image_gram = ImageGram(r.cam_order, r.cam_starts, r.cam_present, r.n_cam, obs.n)
+        self.image_gram = ImageGram(
+            r.cam_order,
+            r.cam_starts,
+            r.cam_present,
+            r.n_cam,
+            obs.n,
+            self.options.reduced.gram_pad_max,
+        )
         self.interior = interior_orientation(block)
         self.exterior = exterior_block(block)
-        self.ap = additional_block(
+        #: the additional parameters with their design at the approximations
+        self.ap0 = additional_block(
             block, self.obs, self.points, self.reduced, additional, ap_group, ap_sigma
         )
-        self.border = BorderSolver()
-        self._design_at: BundleState | None = None  # iterate of a lens model's design
-        self._projection = None  # (iterate, RayProjection) kept by residuals(keep=True)
-        #: (iterate, image coordinates (n, 2) mm of the rays without additional
-        #: parameters) of the last evaluation by the collinearity kernel (the result's
-        #: residuals reuse them)
-        self.projected: tuple | None = None
-        #: per (point, group) pairs of rays for the precision with parameters (a cache)
-        self.ray_groups = None
+        self.run = BundleRun(self.ap0)
         self.aux: BundleAuxiliary | None = None
         if auxiliary:
             self.aux = BundleAuxiliary(auxiliary_rows(auxiliary, block), self.points.column)
@@ -193,6 +148,16 @@ class BundleProblem:
         self.n_eq = 2 * self.obs.n + n_pseudo + (self.aux.rows.n if self.aux else 0)
         self.n_unknowns = 6 * self.m + 3 * self.points.n + self.q + self.na
         self.redundancy = self.n_eq - self.n_unknowns
+
+    def new_run(self) -> BundleRun:
+        """Start a fresh :class:`BundleRun` (the problem may be adjusted again)."""
+        self.run = BundleRun(self.ap0)
+        return self.run
+
+    @property
+    def ap(self) -> AdditionalBlock:
+        """The additional parameters, their design at the last evaluation (``run.ap``)."""
+        return self.run.ap
 
     @property
     def m(self) -> int:
@@ -219,7 +184,8 @@ class BundleProblem:
         """
         if self.ap.lens is not None:
             return self._lens_residuals(st, jac)
-        kept, self._projection = self._projection, None
+        run = self.run
+        kept, run.projection = run.projection, None
         seq = self.block.sequence
         if kept is not None and kept[0] is st:
             proj = kept[1]
@@ -228,13 +194,13 @@ class BundleProblem:
             xyz = np.take(st.xyz, self.obs.point, axis=0)
             proj = RayProjection(st.X0, st.angles, io.c, io.x0, io.y0, self.obs.image, xyz, seq)
         f = proj.xy
-        self.projected = (st, f)
+        run.projected = (st, f)
         if jac:
             Je, Jp = ray_jacobians(proj, st.angles, seq, local)
         else:
             Je = Jp = None
             if keep:
-                self._projection = (st, proj)
+                run.projection = (st, proj)
         if self.q:
             f = f + (self.ap.A_csr @ st.ap).reshape(-1, 2)
         return (self.obs.xy - f) * self.obs.weight, Je, Jp
@@ -250,13 +216,13 @@ class BundleProblem:
         if jac:
             Je, Jp = M @ Je, M @ Jp
             if self.q:
-                self.ap = self.ap.with_design(A, obs.weight)
-                self._design_at = st
+                self.run.ap = self.ap.with_design(A, obs.weight)
+                self.run.design_at = st
         return (obs.xy - f) * obs.weight, Je, Jp
 
     def design_at(self, st: BundleState) -> None:
         """Make the camera model's design the one at ``st`` (no-op for linear sets)."""
-        if self.ap.lens is not None and self.q and self._design_at is not st:
+        if self.ap.lens is not None and self.q and self.run.design_at is not st:
             self._lens_residuals(st, True)
 
     def cost(self, st: BundleState, rw: F64) -> float:
@@ -312,7 +278,7 @@ class BundleProblem:
         Jz[tg.rows, :, 6] -= Jy
         G = self.image_gram.grams(Jz)
         del Jz, y, Jy, Jpr
-        if not (self.q and not self.border.hold):  # the weighted Jacobians: border only
+        if not (self.q and not self.run.border.hold):  # the weighted Jacobians: border only
             del Jew, Jpw  # (frees them before S is formed: the peak of a large block)
         U = np.ascontiguousarray(G[:, :6, :6])
         red = G[:, :6, 6].copy()
@@ -344,14 +310,14 @@ class BundleProblem:
         else:
             out.blocks = schur_blocks(S, U, Tr, Wr)
         if self.q:
-            if self.border.hold:
+            if self.run.border.hold:
                 out.diagF = np.ones(self.q)
             else:
-                border = self.border.border if self.border.reuse else None
+                border = self.run.border.border if self.run.border.reuse else None
                 out.ap = ap_normal(self, st, rw, Jew, Jpw, out.T, Vinv, bp, lam, border)
                 out.ap.reused = border is not None
                 out.diagF = np.diag(out.ap.F0).copy()
-                self.border.border = (out.ap.E_border, out.ap.F0)
+                self.run.border.border = (out.ap.E_border, out.ap.F0)
         if self.aux:
             self.aux.normal(self, st, out, lam)
         return out
@@ -439,7 +405,7 @@ class BundleProblem:
         """Back-substitution of the points; returns (dc, dp, da, fac)."""
         dc = dc.reshape(self.m, 6)
         tg = self.reduced.tracks  # ne.Wr is in its ray order
-        ap = point_ap_term(self, ne.ap.H, da) if self.q and not self.border.hold else None
+        ap = point_ap_term(self, ne.ap.H, da) if self.q and not self.run.border.hold else None
         dp = back_substitute(tg, ne.Vinv, ne.Wr, ne.bp, dc, ap)
         return dc, dp, da, fac
 

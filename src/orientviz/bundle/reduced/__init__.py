@@ -38,6 +38,7 @@ Nothing here knows photogrammetry: the blocks come in, corrections go out.
 from ._choice import SOLVERS, SolverChoice
 from ._factor import Factor, dense_matrix, factor_reduced, raise_not_determinable
 from ._normal import APBorder, AuxBorder, NormalEquations
+from ._options import ReducedOptions
 from ._orderings import geometric_orderings
 from ._schur import DENSE_CHUNK_BYTES, ImageGram, dense_schur, inv3
 from ._structure import ReducedStructure
@@ -52,6 +53,7 @@ from ._tracks import (
 
 __all__ = [
     "SOLVERS",
+    "ReducedOptions",
     "SolverChoice",
     "ReducedStructure",
     "TrackGroups",

@@ -14,9 +14,9 @@ a common unknown point. Its shape tells which factorisation is cheapest:
   dense fronts (:attr:`orientviz.bundle.reduced._dissection.Dissection.flops`, known once the
   dissection is made) at a lower speed per flop, plus a fixed cost per front.
 
-:func:`choose_solver` compares these estimates (:data:`RATE`: relative speeds per flop,
-measured on this machine with ``benchmarks/bench_unordered.py`` and
-``benchmarks/bench_bundle.py --reduced``) and says why. The Schur complement itself is
+:func:`choose_solver` compares these estimates (relative speeds per flop and thresholds:
+:class:`~orientviz.bundle.reduced.ReducedOptions`, measured with
+``benchmarks/bench_unordered.py`` and ``benchmarks/bench_bundle.py --reduced``) and says why. The Schur complement itself is
 formed either by pairs of rays of a point (cost ∝ the number of such pairs, the only
 way for banded and sparse S) or, for a dense S, by dense products of the per-point
 couplings (cost ∝ m²·p flops but at BLAS speed, :func:`orientviz.bundle.reduced._schur.dense_schur`);
@@ -32,43 +32,12 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
+from ._options import SOLVER_CHOICES, ReducedOptions
+
 I64 = NDArray[np.int64]
 
 #: Names of the reduced-system solvers (what ``"auto"`` chooses from).
 SOLVERS: tuple[str, ...] = ("banded", "dense", "sparse")
-#: Names accepted for the reduced-system solver; ``"auto"`` chooses from the structure.
-SOLVER_CHOICES: tuple[str, ...] = ("auto", "banded", "dense", "sparse")
-#: Relative time per flop of each factorisation (dense LAPACK = 1). Measured (1 thread):
-#: dense ``potrf`` 24-40 GFlop/s for n = 900-3600, the band Cholesky about 0.65-0.85 ×
-#: that for kd ≥ 200 and far less for narrow bands (3 GFlop/s at kd = 45); the
-#: multifrontal one (fronts of 50-400 unknowns, most flops in low-rank ``syrk``
-#: updates) about half the dense speed, plus :data:`FRONT_COST` per front.
-RATE: dict[str, float] = {"dense": 1.0, "banded": 1.5, "sparse": 2.0}
-#: Fixed cost of one front of the multifrontal factorisation in dense-flop equivalents
-#: (its extend-adds and five LAPACK/BLAS calls from Python: ~40 µs).
-FRONT_COST: float = 1.5e6
-#: Nanoseconds per pair of rays of the pair-wise Schur formation (250-290 ns) and per
-#: multiply-add of the dense one (scatter included: 0.022 ns; 316 ms for 14.6 G on the
-#: 150-image random network), measured with 1 BLAS thread.
-PAIR_NS: float = 250.0
-DENSE_FLOP_NS: float = 0.025
-#: A band narrower than this fraction of S (half-bandwidth + 1 ≤ STRIP_BAND · 6m) is a
-#: block of strips: banded, whatever the estimates (the path aerial blocks always took).
-STRIP_BAND: float = 0.5
-#: With a narrow band the sparse factorisation is taken only when its estimate is below
-#: this fraction of the banded one (its solves cost more than the band's, and the
-#: precision's inverse needs the band).
-SPARSE_CLEAR_WIN: float = 0.25
-#: Dense systems only up to this many unknowns (6m; 8000² doubles = 512 MB).
-DENSE_MAX: int = 8000
-#: Below this many flops of the cheaper of dense/banded the sparse estimate (a nested
-#: dissection of the image graph) is not worth its own cost.
-SPARSE_CONSIDERED_ABOVE: float = 2e8
-#: A narrow band (strips) is compared with the sparse estimate only above this cost: the
-#: sparse factor must be estimated below :data:`SPARSE_CLEAR_WIN` of the band, and on
-#: strips its flops are not that much lower until the blocks are far larger (the bench's
-#: 30 × 70 images: 1.0 against 1.7 GFlop, same time; the estimate costs ~10 ms there).
-SPARSE_CONSIDERED_ABOVE_STRIPS: float = 5e10
 
 
 @dataclass(frozen=True)
@@ -146,6 +115,7 @@ def choose_solver(
     block_i: I64,
     block_k: I64,
     sparse_estimate: Callable[[], tuple[float, int]] | None = None,
+    options: ReducedOptions | None = None,
 ) -> SolverChoice:
     """The solver of the reduced system for ``requested`` (``"auto"``: from the estimates).
 
@@ -161,7 +131,10 @@ def choose_solver(
     sparse_estimate : callable, optional
         ``() -> (flops, fronts)`` of the sparse factorisation (default:
         :func:`sparse_cost` without positions); called only when it is considered.
+    options : ReducedOptions, optional
+        The rates and thresholds of the comparison (default: ``ReducedOptions()``).
     """
+    o = ReducedOptions() if options is None else options
     if requested not in SOLVER_CHOICES:
         raise ValueError(
             f"expected a reduced-system solver out of {SOLVER_CHOICES}, got {requested!r}"
@@ -174,25 +147,25 @@ def choose_solver(
 
     def sparse() -> float:
         flops, fronts = sparse_estimate()
-        return RATE["sparse"] * flops + FRONT_COST * fronts
+        return o.rate_sparse * flops + o.front_cost * fronts
 
-    costs = {"dense": RATE["dense"] * n**3 / 3.0}
+    costs = {"dense": o.rate_dense * n**3 / 3.0}
     if kd is not None:  # LAPACK's band Cholesky: Σ_j min(kd, n − j)² flops
         b = float(min(kd + 1, n))
-        costs["banded"] = RATE["banded"] * (n * b**2 - 2.0 * b**3 / 3.0)
+        costs["banded"] = o.rate_banded * (n * b**2 - 2.0 * b**3 / 3.0)
     fill = (2 * block_i.size - m) / float(m * m)
     band = f", half-band {kd} of {n}" if kd is not None else ""
-    if kd is not None and kd + 1 <= STRIP_BAND * n:
+    if kd is not None and kd + 1 <= o.strip_band * n:
         # a narrow band (strips): banded, unless a sparse factor is clearly cheaper
-        if costs["banded"] > SPARSE_CONSIDERED_ABOVE_STRIPS:
+        if costs["banded"] > o.sparse_considered_above_strips:
             costs["sparse"] = sparse()
-        if costs.get("sparse", np.inf) >= SPARSE_CLEAR_WIN * costs["banded"]:
+        if costs.get("sparse", np.inf) >= o.sparse_clear_win * costs["banded"]:
             est = ", ".join(f"{k} {v:.2g}" for k, v in sorted(costs.items(), key=lambda t: t[1]))
             reason = f"banded (auto: {m} images{band}: a narrow band, strips; est. {est})"
             return SolverChoice("banded", "auto", reason, costs)
-    if n > DENSE_MAX or min(costs.values()) > SPARSE_CONSIDERED_ABOVE:
+    if n > o.dense_max or min(costs.values()) > o.sparse_considered_above:
         costs["sparse"] = sparse()
-    if n > DENSE_MAX:
+    if n > o.dense_max:
         del costs["dense"]
     best = min(costs, key=costs.get)
     est = ", ".join(f"{k} {v:.2g}" for k, v in sorted(costs.items(), key=lambda t: t[1]))
@@ -203,14 +176,17 @@ def choose_solver(
     return SolverChoice(best, "auto", reason, costs)
 
 
-def choose_formation(solver: str, m: int, n_pt: int, n_pairs: int) -> str:
+def choose_formation(
+    solver: str, m: int, n_pt: int, n_pairs: int, options: ReducedOptions | None = None
+) -> str:
     """``"dense"`` (BLAS products of the per-point couplings) or ``"pairs"`` (pairs of rays).
 
     Only a dense S can be formed densely; it is when (6m)²·3p/2 multiply-adds at BLAS
-    speed cost less than the pairs of rays one by one (:data:`DENSE_FLOP_NS`,
-    :data:`PAIR_NS`).
+    speed cost less than the pairs of rays one by one (``options.dense_flop_ns``,
+    ``options.pair_ns``).
     """
+    o = ReducedOptions() if options is None else options
     if solver != "dense":
         return "pairs"
-    dense_ns = DENSE_FLOP_NS * 2.0 * 54.0 * float(m) ** 2 * n_pt
-    return "dense" if dense_ns < PAIR_NS * n_pairs else "pairs"
+    dense_ns = o.dense_flop_ns * 2.0 * 54.0 * float(m) ** 2 * n_pt
+    return "dense" if dense_ns < o.pair_ns * n_pairs else "pairs"

@@ -6,7 +6,8 @@ point: its *image graph*. A Cholesky factor of S fills in between images that ar
 connected through images eliminated before them. *Nested dissection* bounds that fill:
 a small set of images (a *separator*) whose removal splits the graph into two parts is
 numbered last, the two parts first, each dissected again the same way, down to parts
-of at most :data:`LEAF_IMAGES` images. The parts never couple each other, so their
+of at most ``leaf`` images (:attr:`ReducedOptions.leaf_images
+<orientviz.bundle.reduced.ReducedOptions>`). The parts never couple each other, so their
 eliminations only update the separators above them.
 
 Every node of the resulting tree (a separator, or a leaf part) is eliminated as one
@@ -21,14 +22,11 @@ A bisection's separator is
   one half that touch the other half (the smaller of the two such sets). On a block of
   strips this cuts across the strips (two columns of images: an image shares points
   with the images two along its strip) or between two strips. All parts of one level
-  of the tree are cut in one vectorised pass over the edges (~10 ms for 2 100 images).
+  of the tree are cut in one vectorised pass over the edges.
 * *level structure* (graph only, when there are no centres): breadth-first levels
   from a pseudo-peripheral image; any level separates the levels before it from those
-  after it; the smallest level leaving at least :data:`BALANCE` of the images on each
+  after it; the smallest level leaving at least ``balance`` of the images on each
   side, without its images that touch only one side (part by part: slower).
-
-On the bench's 30 × 70-image strip block (2 100 images): ≈ 1.0 GFlop against 1.7 for
-the band across the strips (``benchmarks/bench_bundle.py --reduced``).
 """
 
 from __future__ import annotations
@@ -42,13 +40,6 @@ from scipy.sparse import csgraph
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
-
-#: Parts of at most this many images are not dissected further (one dense front).
-LEAF_IMAGES: int = 12
-#: Separators of at most this many images join their parent's (:func:`_merge_small`).
-MERGE_IMAGES: int = 0
-#: A level-structure separator leaves at least this fraction of a part on each side.
-BALANCE: float = 0.3
 
 
 @dataclass
@@ -115,7 +106,7 @@ def _geometric_cut(sub: sp.csr_matrix, xy: F64):
     return left & ~s_left, ~left, s_left
 
 
-def _level_cut(sub: sp.csr_matrix):
+def _level_cut(sub: sp.csr_matrix, balance: float = 0.3):
     """(A, B, separator) masks from a breadth-first level structure, or None."""
     n = sub.shape[0]
     start, ecc, d = 0, -1.0, None
@@ -132,7 +123,7 @@ def _level_cut(sub: sp.csr_matrix):
     cnt = np.bincount(levels)
     before = np.cumsum(cnt) - cnt
     after = n - before - cnt
-    ok = (np.minimum(before, after) >= BALANCE * n) & (np.arange(cnt.size) > 0)
+    ok = (np.minimum(before, after) >= balance * n) & (np.arange(cnt.size) > 0)
     if not ok.any():
         return None
     lv = int(np.flatnonzero(ok)[np.argmin(cnt[ok])])
@@ -148,8 +139,9 @@ def nested_dissection(
     block_k: I64,
     m: int,
     positions: F64 | None = None,
-    leaf: int = LEAF_IMAGES,
-    merge: int = MERGE_IMAGES,
+    leaf: int = 12,
+    merge: int = 0,
+    balance: float = 0.3,
 ) -> Dissection:
     """The :class:`Dissection` of the image graph given by the blocks of S.
 
@@ -164,6 +156,10 @@ def nested_dissection(
         vectorised); without them, level-structure separators (part by part).
     leaf : int
         Parts of at most this many images are leaves.
+    merge : int
+        Separators of at most this many images join their parent's (0: none).
+    balance : float
+        A level-structure separator leaves at least this fraction of a part on each side.
     """
     off = block_i != block_k
     eu = np.concatenate([block_i[off], block_k[off]])
@@ -173,7 +169,7 @@ def nested_dissection(
         pivots, parent = _build_geometric(eu, ev, xy, m, leaf)
     else:
         adj = image_adjacency(block_i, block_k, m)
-        pivots, parent = _build(adj, leaf)
+        pivots, parent = _build(adj, leaf, balance)
     pivots, parent = _postorder(pivots, parent)
     if merge:
         pivots, parent = _postorder(*_merge_small(pivots, parent, merge))
@@ -294,7 +290,7 @@ def _build_geometric(eu: I64, ev: I64, xy: F64, m: int, leaf: int) -> tuple[list
     return pivots, np.asarray(parent, np.int64)
 
 
-def _build(adj: sp.csr_matrix, leaf: int) -> tuple[list, I64]:
+def _build(adj: sp.csr_matrix, leaf: int, balance: float = 0.3) -> tuple[list, I64]:
     """Nodes (pivot images, postorder) and parents by level-structure bisection."""
     pivots: list = []
     parent: list = []
@@ -302,7 +298,7 @@ def _build(adj: sp.csr_matrix, leaf: int) -> tuple[list, I64]:
     def rec(verts: I64) -> list:
         """Emit the subtree of ``verts``; returns the indices of its roots."""
         sub = adj[verts][:, verts] if verts.size > leaf else None
-        cut = _level_cut(sub) if sub is not None else None
+        cut = _level_cut(sub, balance) if sub is not None else None
         if cut is None:  # a leaf, or no balanced separator (e.g. a clique): one front
             pivots.append(verts)
             parent.append(-1)

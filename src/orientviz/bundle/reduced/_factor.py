@@ -31,9 +31,6 @@ from ._structure import ReducedStructure
 
 F64 = NDArray[np.float64]
 
-#: Reduced systems up to this many unknowns are diagnosed with a dense null space.
-DENSE_DIAGNOSIS_LIMIT: int = 3000
-
 
 @dataclass
 class Factor:
@@ -122,7 +119,7 @@ def raise_not_determinable(
     """Raise :class:`NotDeterminableError` naming the parameters of a singular S."""
     n = st.n_reduced
     names = names or [f"c{i}" for i in range(n)]
-    if n <= DENSE_DIAGNOSIS_LIMIT:
+    if n <= st.options.dense_diagnosis_limit:
         null = null_space_of_normal(dense_matrix(st, blocks))
         if null.shape[1]:
             involved = describe_defect(names, null)

@@ -13,21 +13,16 @@ LAPACK/BLAS through SciPy (``dpotrf``, ``dtrtri``, ``dtrmm``, ``dsyrk``), in pla
 Fortran-ordered views:
 
 * the factor of a node is stored as one (p × (p + b)) array ``[R⁻¹ | L21ᵀ]`` in one
-  buffer for all nodes (R⁻¹ instead of R: ``dtrmm`` runs at ~2× the speed of ``dtrsm``
-  at these sizes, and the solves multiply instead of substitute);
+  buffer for all nodes (R⁻¹ instead of R: the updates use ``dtrmm`` instead of
+  ``dtrsm``, and the solves multiply instead of substitute);
 * the updates F22 (upper triangles) live in a work arena kept by the layout and reused
   by every factorisation, at offsets fixed once (first fit among the updates alive);
-* a child's boundary is a few runs of consecutive rows of its parent (≈ 3 on the
-  bench's strip block), so an extend-add is a few 2-D slice additions, not an index
-  scatter (6–10 × fewer nanoseconds per entry).
+* a child's boundary is a few runs of consecutive rows of its parent, so an extend-add
+  is a few 2-D slice additions, not an index scatter.
 
 The layout (:class:`FrontLayout`) is built once per structure; :func:`factor_fronts`
 fills a new buffer per factorisation (its arena is the layout's: one factorisation of a
 structure at a time), :func:`solve_fronts` solves with it.
-
-Measured on the bench's 2 100-image strip block (``benchmarks/README.md``): 1.03 GFlop
-against the band's 1.71, but ~55 ms like the band's 57: the low-rank updates of small
-fronts run at ~27 GFlop/s, the extend-adds (7 M entries) and the scatter of S add ~16 ms.
 """
 
 from __future__ import annotations
@@ -67,7 +62,7 @@ class FrontLayout:
     entry_at, entry_of : ndarray of int
         Positions in the factor buffer of the entries of S's blocks taken in the order
         ``entry_of`` (blocks sorted by where they go: near-sequential writes; in S's
-        order the scatter over the whole buffer misses the caches, ~5 × slower).
+        order the scatter over the whole buffer misses the caches).
     scalar_perm : ndarray of int, shape (n,)
         Unknown of S at each position of the elimination order.
     size, arena_size : int

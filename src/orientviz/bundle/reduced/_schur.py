@@ -11,8 +11,8 @@ picks one per structure):
 * :func:`dense_schur` — for a dense S (small or densely connected networks): with the
   Cholesky factor V_j = L_j L_jᵀ of each point block, Y_a = W_a L_j⁻ᵀ gives
   W_j V_j⁻¹ W_jᵀ = Y_j Y_jᵀ, so Σ_j over a chunk of points is one product Y Yᵀ of a
-  (6m × 3p_chunk) matrix — BLAS ``dsyrk``, about 20 × the speed per flop of the
-  pair-wise products. A network whose points are each seen by every image (pycolmap's
+  (6m × 3p_chunk) matrix — BLAS ``dsyrk``, far faster per flop than the pair-wise
+  products. A network whose points are each seen by every image (pycolmap's
   ``visibility`` tracks) has Σ k_j² = m²·p: then the dense form does the same work.
 """
 
@@ -75,12 +75,6 @@ def gram_by_segments(J: F64, starts: I64, present: I64, m: int) -> F64:
     return U
 
 
-#: The images' Gram matrices are one stacked product over the rays padded to the largest
-#: count per image (zero rows) when that adds at most this fraction of rows; else one
-#: BLAS product per image (:func:`gram_by_segments`).
-GRAM_PAD_MAX: float = 0.5
-
-
 @dataclass
 class ImageGram:
     """How the Gram matrices Σ JᵀJ per image are formed from rays in another order.
@@ -91,6 +85,10 @@ class ImageGram:
         The rays sorted by image, where each non-empty image begins, which image that is.
     m, n : int
         Numbers of images and rays.
+    pad_max : float
+        The Gram matrices are one stacked product over the rays padded to the largest
+        count per image (zero rows) when that adds at most this fraction of rows; else
+        one BLAS product per image (:func:`gram_by_segments`).
     slots : ndarray of int or None
         With padding: (len(present) · kmax,) the ray of each padded row (``n``: the zero
         row), image by image.
@@ -101,12 +99,13 @@ class ImageGram:
     present: I64
     m: int
     n: int
+    pad_max: float = 0.5
     slots: I64 | None = None
 
     def __post_init__(self) -> None:
         counts = np.diff(np.append(self.starts, self.n))
         kmax = int(counts.max(initial=0))
-        if self.present.size * kmax <= (1.0 + GRAM_PAD_MAX) * self.n and self.n:
+        if self.present.size * kmax <= (1.0 + self.pad_max) * self.n and self.n:
             rank = np.arange(self.n) - np.repeat(self.starts, counts)
             seg = np.repeat(np.arange(self.present.size), counts)
             self.slots = np.full(self.present.size * kmax, self.n)

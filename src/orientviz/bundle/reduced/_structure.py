@@ -16,9 +16,10 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-from ._choice import SOLVER_CHOICES, choose_formation, choose_solver, image_blocks
+from ._choice import choose_formation, choose_solver, image_blocks
 from ._dissection import image_adjacency, nested_dissection
 from ._multifrontal import front_layout
+from ._options import SOLVER_CHOICES, ReducedOptions
 from ._orderings import geometric_orderings
 from ._tracks import track_groups
 
@@ -56,6 +57,8 @@ class ReducedStructure:
         the one with the smallest bandwidth among these and reverse Cuthill-McKee wins.
     positions : ndarray, shape (m, 3), optional
         Projection centres (m): adds the two :func:`geometric_orderings` as candidates.
+    options : ReducedOptions
+        Rates and thresholds of the solver's choice, the dense diagnosis limit.
     formation : {"auto", "pairs", "dense"}
         How the Schur complement is formed (:mod:`._schur`);
         ``"auto"``: :func:`._choice.choose_formation`.
@@ -70,6 +73,7 @@ class ReducedStructure:
     positions: F64 | None = None
     formation: str = "auto"
     info: dict = field(default_factory=dict)
+    options: ReducedOptions = field(default_factory=ReducedOptions)
 
     def __post_init__(self) -> None:
         if self.solver not in SOLVER_CHOICES:
@@ -190,10 +194,11 @@ class ReducedStructure:
             self.block_i,
             self.block_k,
             sparse_estimate=lambda: (self.dissection.flops, self.dissection.n_nodes),
+            options=self.options,
         )
         self.solver = self.choice.solver
         if self.formation == "auto":
-            self.formation = choose_formation(self.solver, m, self.n_pt, self.n_pairs)
+            self.formation = choose_formation(self.solver, m, self.n_pt, self.n_pairs, self.options)
         self.info.update(
             solver=self.solver, solver_reason=self.choice.reason, formation=self.formation
         )
@@ -236,7 +241,11 @@ class ReducedStructure:
         (:class:`._dissection.Dissection`; formed on first use, with
         geometric separators when ``positions`` are given)."""
         if getattr(self, "_diss", None) is None:
-            self._diss = nested_dissection(self.block_i, self.block_k, self.n_cam, self.positions)
+            o = self.options
+            self._diss = nested_dissection(
+                self.block_i, self.block_k, self.n_cam, self.positions,
+                leaf=o.leaf_images, merge=o.merge_images, balance=o.balance,
+            )  # fmt: skip
         return self._diss
 
     @property

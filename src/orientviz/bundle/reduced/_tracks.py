@@ -1,14 +1,12 @@
 """The Schur complement of a sparse block by points grouped by their track length.
 
 S = U − Σ_j W_j V_j⁻¹ W_jᵀ gains, for a point j seen in k images, the k × k blocks of
-T_j W_jᵀ (T_j = W_j V_j⁻¹ and W_j stacked: 6k × 3). Formed pair of rays by pair, this
-is one tiny product and one reduction per pair (the code before session 6: ~60 ms on
-the bench's 2 100-image block, 112 000 rays, 237 000 pairs). Here the points are grouped
-by k: the (6k × 6k) products of all points of a group are one batched product
-(``np.matmul`` on a stack), and their sum into the blocks of S is one product with a
-constant sparse matrix that maps each 6-element row of a product to its row of a block
-of S, with the sign of the subtraction (~15 ms). The per-ray arrays of
-:meth:`orientviz.bundle.BundleProblem.normal` are formed in this ray order; its sums per
+T_j W_jᵀ (T_j = W_j V_j⁻¹ and W_j stacked: 6k × 3). The points are grouped by k: the
+(6k × 6k) products of all points of a group are one batched product (``np.matmul`` on a
+stack), and their sum into the blocks of S is one product with a constant sparse matrix
+that maps each 6-element row of a product to its row of a block of S, with the sign of
+the subtraction. The per-ray arrays of
+:meth:`orientviz.bundle.problem.BundleProblem.normal` are formed in this ray order; its sums per
 point and per image are products with constant sparse incidence matrices.
 
 :class:`TrackGroups` holds the constant layout (formed once per problem).
@@ -125,7 +123,7 @@ def _ascending_group_map(img: I64, lookup, n_blocks: int) -> sp.csc_matrix:
     """:func:`_group_map` for points whose rays are in ascending image order (as the
     bundle's set-up orders them): the kept pairs are a ≤ b for every point, so the map
     is one point's pattern repeated (no masks over all n·6k² product rows; the same
-    matrix, ~3 × faster to form)."""
+    matrix)."""
     n, k = img.shape
     iu, ju = np.triu_indices(k)
     pair = np.zeros((k, k), np.int64)
@@ -175,8 +173,8 @@ def track_groups(st) -> TrackGroups:
 RAY_CHUNK: int = 8192
 
 
-#: Tracks up to this length are summed by k − 1 array additions (3–5 × faster than a
-#: reduction over the short middle axis; the same sums in the same order).
+#: Tracks up to this length are summed by k − 1 array additions (the same sums in the
+#: same order as a reduction over the short middle axis, without its overhead).
 SUM_BY_ADDS_MAX_K: int = 16
 
 

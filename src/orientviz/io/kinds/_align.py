@@ -19,6 +19,8 @@ import numpy as np
 
 from ...block import CONTROL, Block
 from ...errors import InputError
+from ...orientation.absolute import similarity_closed_form
+from ...orientation.intersection import intersect_points
 from ...rotation import opk_from_matrix
 
 #: The frames differ when the control misfits the approximations by more than this share
@@ -50,8 +52,6 @@ class Alignment:
 def intersect_from_orientations(block: Block, points: np.ndarray) -> np.ndarray:
     """XYZ (p, 3) m of the points ``points`` (bool mask) intersected from the block's given
     orientations (NaN where fewer than two rays or parallel ones)."""
-    from ...orientation.intersection import intersect_points
-
     obs = block.observations
     sel = points[obs.point]
     cam = block.images.camera
@@ -64,8 +64,6 @@ def intersect_from_orientations(block: Block, points: np.ndarray) -> np.ndarray:
 
 def align_to_control(block: Block) -> tuple[Block, Alignment]:
     """``block`` in the control's frame if its approximations are in another one."""
-    from ...orientation.absolute import similarity_closed_form
-
     pts = block.points
     full = (pts.role == CONTROL) & np.isfinite(pts.xyz_known).all(axis=1)
     if not full.any():

@@ -30,9 +30,11 @@ from typing import Any
 
 import numpy as np
 
-from ...bundle.model._lens import BACKWARD_NAMES, FORWARD_NAMES
+from ...bundle import LensModel, ap_set
+from ...bundle.model import BACKWARD_NAMES, FORWARD_NAMES
 from ...errors import InputError
 from ..problem import Units
+from ..solution import Parameter
 from ..tables import Table
 
 #: The lens terms a camera row may give (both models).
@@ -103,8 +105,6 @@ def read_camera_models(t: Table, units: Units) -> list[dict[str, Any]]:
 
 def _additional_spec(t: Table, i: int, add: str) -> dict[str, Any]:
     """An additional-parameter set of camera row ``i`` with its free/weighted/fixed parameters."""
-    from ...bundle import ap_set
-
     col = t.columns
     names = list(ap_set(add).names)
     free, sigma = col["free"][i], dict(col["sigma"][i] or {})
@@ -163,8 +163,6 @@ def bundle_camera_options(block) -> dict[str, Any]:
     Every camera must state the same model (kind, free and weighted parameters) or the
     same additional-parameter set; each camera is its own parameter group.
     """
-    from ...bundle import LensModel, ap_set
-
     models = list(getattr(block.cameras, "model", None) or [])
     if not any(models):
         return {}
@@ -247,8 +245,6 @@ def camera_parameters(block, adj, units: Units) -> list:
     """The estimated cameras as report parameters (``Solution.parameters``): c, x0, y0 as
     image quantities (y0 in the file's frame: pixels count downwards), the terms as
     pure numbers in their own units (named ``"<camera>.K1 [mm⁻²]"``); fixed ones left out."""
-    from ..solution import Parameter
-
     cam = getattr(adj, "camera", None)
     if cam is None:
         return []

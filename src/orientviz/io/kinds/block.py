@@ -25,13 +25,20 @@ import numpy as np
 from ...adjust.result import W_CRITICAL
 from ...approximate import approximate_values
 from ...block import CHECK, CONTROL, ROLES, TIE, Block
+from ...bundle import bundle_adjust
+from ...bundle.problem import point_setup
 from ...errors import InputError
+from ...polynomial import polynomial_adjust
+from ...stereo_models import independent_models
+from ..datum import apply_fix, free_network, minimum_datum, parse_fix
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
 from ..solution import Solution
+from ._align import align_to_control, intersect_from_orientations
 from ._cameras import bundle_camera_options, camera_notes, camera_parameters
 from ._diverge import divergence_note
 from ._frame import block_from_tables, read_frame_tables, require_finite, tables_from_block
+from ._robust import robust_bundle
 
 METHODS = ("bundle", "models", "polynomial")
 
@@ -90,7 +97,6 @@ def approximate(block: Block, frame: str = "control") -> Block:
     """
     if not np.all(np.isfinite(block.images.X0)) or not np.all(np.isfinite(block.images.angles)):
         return approximate_values(block, frame=frame)
-    from ._align import align_to_control
 
     block, alignment = align_to_control(block)
     if alignment.applied:
@@ -103,7 +109,6 @@ def _approximate_tie_points(block: Block) -> Block:
     missing = np.flatnonzero(~np.all(np.isfinite(block.points.xyz), axis=1))
     if missing.size == 0:
         return block
-    from ._align import intersect_from_orientations
 
     mask = np.zeros(block.n_points, bool)
     mask[missing] = True
@@ -158,7 +163,7 @@ def with_check_rays(block: Block) -> Block:
 def solve(problem: Problem, method: str | None) -> Solution:
     """Adjust the block by ``method`` and collect the report.
 
-    Datum options (:mod:`._datum`): ``free`` (a free network, minimum constraints) and
+    Datum options (:mod:`orientviz.io.datum`): ``free`` (a free network, minimum constraints) and
     ``fix`` (images/points held at their given values); ``robust`` (``"huber"``,
     ``"cauchy"``) with ``robust_scale`` reweights the bundle (:mod:`._robust`). The
     solution's ``start`` is the block the adjustment started from (approximations
@@ -178,16 +183,13 @@ def solve(problem: Problem, method: str | None) -> Solution:
         return sol
     opts = _options(problem)
     if method == "models":
-        from ...stereo_models import independent_models
-
         opts["method"] = problem.options.get("model_method", "rigorous")
         adj = _call(independent_models, block, opts, precision=True)
         return solution_from_models(problem, block, adj)
-    from ...polynomial import polynomial_adjust as func
 
-    adj = _call(func, block, opts)
+    adj = _call(polynomial_adjust, block, opts)
     if "exterior" not in adj.groups:
-        return solution_from_points(problem, block, adj, method, func)
+        return solution_from_points(problem, block, adj, method, polynomial_adjust)
     return solution_from_block_adjustment(problem, block, adj, method)
 
 
@@ -195,10 +197,8 @@ def prepare(problem: Problem) -> tuple[Block, list[str]]:
     """The block the adjustment starts from, and the notes on its datum.
 
     Approximate values where the file gives none (:func:`approximate`), then the datum
-    options ``free`` and ``fix`` (:mod:`._datum`).
+    options ``free`` and ``fix`` (:mod:`orientviz.io.datum`).
     """
-    from ._datum import apply_fix, free_network, minimum_datum, parse_fix
-
     o = problem.options
     fix = parse_fix(o.get("fix"), problem.source)
     free = bool(o.get("free", False))
@@ -237,8 +237,6 @@ def adjust_block(problem: Problem, block: Block, **overrides: Any) -> tuple[Any,
     (BundleResult, str or None)
         The adjustment and the note of a robust run (None without ``robust``).
     """
-    from ...bundle import bundle_adjust
-
     o = problem.options
     loss = str(o.get("robust", "none"))
     opts = _options(problem)
@@ -247,7 +245,6 @@ def adjust_block(problem: Problem, block: Block, **overrides: Any) -> tuple[Any,
     run_block = with_check_rays(block) if check_mode(problem) == "rays" else block
     if loss == "none":
         return _call(bundle_adjust, run_block, opts), None
-    from ._robust import robust_bundle
 
     adj, run = robust_bundle(run_block, loss, o.get("robust_scale"),
                              lambda b: _call(bundle_adjust, b, opts))  # fmt: skip
@@ -294,8 +291,6 @@ def _labels(
 def _control_labels(block: Block, control: str) -> list[str]:
     """``point/X`` for each coordinate pseudo-observation of the bundle, in its order
     (unknown points in block order, then X, Y, Z; see ``bundle.problem._checks.point_setup``)."""
-    from ...bundle.problem import point_setup
-
     setup = point_setup(block, control)
     pt = block.points.ids
     return [f"{pt[p]}/{'XYZ'[c]}" for p in np.flatnonzero(setup.unknown) for c in range(3)
@@ -308,11 +303,13 @@ MISFIT_SIGMA0: float = 3.0
 MISFIT_FLAGGED: float = 0.2
 
 
-def misfit_warning(adj, n_image: int, critical: float) -> str | None:
+def misfit_warning(adj, n_image: int, critical: float, block: Block | None = None) -> str | None:
     """A warning when σ0 ≫ 1 and a large share of the image coordinates is flagged.
 
-    Such a solve "converges" to the best fit of a model that does not hold; the likely
-    causes are named instead of reporting it as a result.
+    Such a solve "converges" to the best fit of a model that does not hold. If one
+    observation explains the misfit (:func:`single_gross_error`), the warning names it
+    as a gross error and its remedy; otherwise it names the likely causes of a model
+    that does not fit (lens, units, principal distance, σ).
     """
     w = np.asarray(adj.normalized_residuals, dtype=float)[: 2 * n_image]
     w = w[np.isfinite(w)]
@@ -321,13 +318,73 @@ def misfit_warning(adj, n_image: int, critical: float) -> str | None:
     share = float(np.mean(np.abs(w) > critical))
     if share < MISFIT_FLAGGED:
         return None
-    return (
+    head = (
         f"warning: the model does not fit the data: sigma0 = {adj.sigma0:.4g} with "
-        f"{share:.0%} of the image coordinates flagged (|w| > {critical:g}). Likely causes: "
+        f"{share:.0%} of the image coordinates flagged (|w| > {critical:g})."
+    )
+    gross = single_gross_error(adj, n_image, block)
+    if gross is not None:
+        return f"{head} {gross}"
+    return (
+        f"{head} Likely causes: "
         "lens distortion or other interior-orientation terms missing from the model, image "
         "coordinates in the wrong unit or with a wrong pixel size, a wrong principal "
         "distance, or σ of the image coordinates far too small. The estimates are the best "
         "fit of a model that does not hold"
+    )
+
+
+#: One observation "explains" a misfit when leaving it out brings σ0 to this or below.
+GROSS_SIGMA0: float = 2.0
+
+
+def single_gross_error(adj, n_image: int, block: Block | None = None) -> str | None:
+    """Name the one observation whose removal would make the adjustment fit, if any.
+
+    Leaving out observation i lowers vᵀPv = r σ̂0² by w_i² (Baarda: w_i = v_i /
+    (σ_i √r_i), a-priori σ0 = 1), so σ̂0 without it is √((r σ̂0² − w_i²) / (r − 1)).
+    When that is at most :data:`GROSS_SIGMA0` for the largest |w|, one gross error
+    explains the misfit; observations whose |w| equals the largest (within 1 %) cannot
+    be told apart from it and are named too.
+
+    Returns
+    -------
+    str or None
+        One sentence (observation, point and image, σ̂0 without it, the remedy), or
+        None when no single observation explains the misfit.
+    """
+    w = np.asarray(adj.normalized_residuals, dtype=float)[: 2 * n_image]
+    r = int(adj.redundancy)
+    if r < 2 or not np.any(np.isfinite(w)):
+        return None
+    aw = np.where(np.isfinite(w), np.abs(w), 0.0)
+    i = int(np.argmax(aw))
+    omega = r * float(adj.sigma0) ** 2
+    rest = max(omega - aw[i] ** 2, 0.0)
+    s0 = float(np.sqrt(rest / (r - 1)))
+    if s0 > GROSS_SIGMA0:
+        return None
+    labels = adj.obs_labels or []
+    name = lambda k: labels[k] if k < len(labels) else f"observation no. {k + 1}"  # noqa: E731
+    alike = [int(k) for k in np.flatnonzero(aw >= 0.99 * aw[i]) if k != i]
+    where = ""
+    if block is not None and i < 2 * len(block.observations):
+        o = i // 2
+        pt = block.points.ids[block.observations.point[o]]
+        im = block.images.ids[block.observations.image[o]]
+        where = f" (point {pt!r}, {'xy'[i % 2]} in image {im!r})"
+    same = ""
+    if alike:
+        shown = ", ".join(name(k) for k in alike[:5]) + (", …" if len(alike) > 5 else "")
+        same = (
+            f"; {shown} have the same |w|: which of these rays is wrong cannot be told "
+            "from this block"
+        )
+    return (
+        f"One gross error explains it: {name(i)}{where} has the largest |w| = {aw[i]:.1f}, "
+        f"and without it sigma0 would be {s0:.2f}{same}. Check or remove that measurement, "
+        "or solve with --robust cauchy (options.robust), whose influence falls off for "
+        "large residuals"
     )
 
 
@@ -352,7 +409,7 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
         xyz, sxyz = block.points.xyz, np.full((p, 3), np.nan)
     notes = check_note(problem, block, xyz)
     critical = float(problem.options.get("critical", W_CRITICAL))
-    misfit = misfit_warning(adj, len(block.observations), critical)
+    misfit = misfit_warning(adj, len(block.observations), critical, block)
     if misfit:
         notes.insert(0, misfit)
         adj.reason = f"{adj.reason}; BUT THE MODEL DOES NOT FIT THE DATA (see the warning)"
@@ -364,8 +421,7 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
     if np.any(block.points.role == CHECK):
         mode = check_mode(problem) if method == "bundle" else "independent"
         notes.insert(0, CHECK_MODES[mode] + f" (options.check_points = {mode!r})")
-    ties = int(np.sum(block.points.role == TIE))
-    notes.append(f"block: {block.summary()} ({ties} tie points)")
+    notes.append(f"block: {block.summary()} (each 2 image coordinates)")
     notes += camera_notes(block, adj, problem.units)
     if getattr(adj, "reduced_info", {}).get("solver_reason"):
         notes.append(f"reduced system solved {adj.reduced_info['solver_reason']}")

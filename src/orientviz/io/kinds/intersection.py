@@ -20,7 +20,9 @@ import numpy as np
 
 from ...adjust.result import W_CRITICAL, Adjustment, Iteration
 from ...block import CHECK, ROLES, Block
+from ...camera import collinearity_jacobian
 from ...errors import NotDeterminableError
+from ...orientation.intersection import intersect_points
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
 from ..solution import Solution
@@ -50,8 +52,6 @@ def load(doc: dict[str, Any], units: Units, source: str) -> Block:
 
 def _pooled(block: Block, res, ids: list[str]) -> Adjustment:
     """One Adjustment for all points from the per-point intersection results."""
-    from ...camera import collinearity_jacobian
-
     obs = block.observations
     cam = block.images.camera[obs.image]
     cams = block.cameras
@@ -92,8 +92,6 @@ def _pooled(block: Block, res, ids: list[str]) -> Adjustment:
 
 def solve(problem: Problem, method: str | None) -> Solution:
     """Forward intersection of every observed point."""
-    from ...orientation.intersection import intersect_points
-
     block: Block = problem.data
     obs = block.observations
     cam = block.images.camera

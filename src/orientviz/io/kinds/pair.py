@@ -23,6 +23,8 @@ from numpy.typing import NDArray
 
 from ...adjust.result import W_CRITICAL
 from ...errors import InputError
+from ...orientation.essential import essential_route
+from ...orientation.relative import DEPENDENT, INDEPENDENT, relative_orientation
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
 from ..solution import Parameter, Solution
@@ -60,7 +62,6 @@ def load(doc: dict[str, Any], units: Units, source: str) -> PairData:
     for name, v in doc.get("approx", {}).items():
         approx[name] = float(v) * (units.m_per_length if name in LENGTHS else units.rad_per_angle)
     elements = (doc.get("options") or {}).get("elements", "dependent")
-    from ...orientation.relative import DEPENDENT, INDEPENDENT
 
     allowed = DEPENDENT if elements == "dependent" else INDEPENDENT
     for name in approx:
@@ -99,18 +100,25 @@ def dump(data: PairData, units: Units, columnar: bool) -> dict[str, Any]:
 
 def solve(problem: Problem, method: str | None) -> Solution:
     """Relative orientation of the pair (rigorous, or via the essential matrix)."""
-    from ...orientation.essential import essential_route
-    from ...orientation.relative import DEPENDENT, INDEPENDENT, relative_orientation
-
     data: PairData = problem.data
     opt = problem.options
     elements = opt.get("elements", "dependent")
     names = DEPENDENT if elements == "dependent" else INDEPENDENT
     L = problem.units.m_per_length
-    b = float(opt["base"]) * L if "base" in opt else None
-    if b is None:  # the model at image scale: the x-parallax in mm read as model length units
-        b = float(np.median(data.xy_left[:, 0] - data.xy_right[:, 0])) * L
+    base = opt.get("base", "median")
+    if isinstance(base, str):  # the model at image scale: the x-parallax in mm read as length
+        px = data.xy_left[:, 0] - data.xy_right[:, 0]
+        b = float(np.mean(px) if base == "mean" else np.median(px)) * L
+    else:
+        b = float(base) * L
     sigma = float(opt.get("sigma", 0.005)) * L
+    method = opt.get("method", "parallax")
+    if method == "collinearity" and elements != "dependent":
+        raise InputError(
+            "method 'collinearity' gives a dependent pair; use elements 'dependent'",
+            problem.source,
+            "options.method",
+        )
     approx = np.array([data.approx.get(n, 0.0) for n in names])
     route = opt.get("route", "rigorous")
     common = dict(b=b, sigma=sigma, sequence=data.sequence)
@@ -125,29 +133,49 @@ def solve(problem: Problem, method: str | None) -> Solution:
     else:
         adj = relative_orientation(
             data.xy_left, data.xy_right, data.c, kind=elements, approx=approx,
-            max_iter=int(opt.get("max_iter", 20)), labels=list(data.ids), **common,
+            max_iter=int(opt.get("max_iter", 20)), labels=list(data.ids), method=method,
+            **common,
         )  # fmt: skip
-    adj.obs_labels = [f"{i}/py" for i in data.ids]
+    if getattr(adj, "method", "parallax") == "parallax":
+        adj.obs_labels = [f"{i}/py" for i in data.ids]
     std = adj.std()
     params = [
         Parameter(n, float(adj.x[i]), float(std[i]), "length" if n in LENGTHS else "angle")
         for i, n in enumerate(names)
     ]
     params.insert(0, Parameter("bx", b, 0.0, "length"))
+    collinear = getattr(adj, "method", "parallax") == "collinearity"
+    points = getattr(adj, "points", None)
+    n = len(data.ids)
+    if points is None or np.shape(points) != (n, 3):
+        points = np.full((n, 3), np.nan)
+    if collinear:  # the model points are unknowns: their σ (model units)
+        point_sigma = std[5 : 5 + 3 * n].reshape(n, 3)
+        observed = ("observations: the image coordinates of both images (collinearity "
+                    "equations, model points unknown; residuals in units.image)")  # fmt: skip
+        what = "model points (adjusted with the elements, ± σ)"
+    else:
+        point_sigma = np.full((n, 3), np.nan)
+        observed = ("observations: rigorous y-parallaxes p_y = Y_left − Y_right in "
+                    "units.length")  # fmt: skip
+        what = "model points: the rays' meeting points in the XZ projection (no σ)"
     return Solution(
         kind="pair",
-        method=f"{route} ({elements} pair)",
+        method=f"{route} ({elements} pair, {'collinearity' if collinear else 'parallax'})",
         adjustment=adj,
         units=problem.units,
         sequence=data.sequence,
         parameters=params,
-        observation_quantity="length",
+        point_ids=list(data.ids),
+        xyz=np.asarray(points, float),
+        xyz_sigma=point_sigma,
+        point_roles=["model"] * n,
+        observation_quantity="image" if collinear else "length",
         critical=float(opt.get("critical", W_CRITICAL)),
         notes=[
-            "model frame: origin at the left projection centre, X along the base, Y left, Z up; "
-            "observations: rigorous y-parallaxes p_y = Y_left − Y_right in units.length",
-            "model points (the rays' meeting points in the XZ projection) are not reported: "
-            "orientviz.orientation.relative.relative_orientation returns them as .points",
+            "model frame: origin at the left projection centre, X along the base, Y left, "
+            f"Z up, in units.length; {observed}",
+            f"{what}; base bx = {'the ' + base + ' x-parallax' if isinstance(base, str) else 'given'}",
         ],
     )
 

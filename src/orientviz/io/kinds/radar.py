@@ -29,6 +29,11 @@ from numpy.typing import NDArray
 
 from ...adjust.result import W_CRITICAL
 from ...errors import InputError
+from ...radar import geier1973 as G
+from ...radar import orientation as O
+from ...radar.pair import relative_orientation
+from ...radar.ppi import EXTERIOR, PARAMS, RadarImage
+from ...units import from_rad
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
 from ..solution import Parameter, Solution
@@ -61,8 +66,6 @@ class RadarData:
 
 def load(doc: dict[str, Any], units: Units, source: str) -> RadarData:
     """Read a ``radar`` document into :class:`RadarData` (m, rad)."""
-    from ...radar.ppi import RadarImage
-
     L, A = units.m_per_length, units.rad_per_angle
     seq = doc.get("sequence", "pok")
     task = doc["task"]
@@ -163,10 +166,6 @@ def _observed(data: RadarData, image: int) -> tuple[F64, F64, NDArray[np.int64]]
 
 def solve(problem: Problem, method: str | None) -> Solution:
     """Run the file's task and report the image(s) and the interior parameters."""
-    from ...radar import orientation as O
-    from ...radar.pair import relative_orientation
-    from ...radar.ppi import EXTERIOR, PARAMS
-
     data: RadarData = problem.data
     opts = dict(problem.options or {})
     stopping = opts.get("stopping", "converge")
@@ -246,9 +245,6 @@ def radar_problem_from_geier(surface: str = "fig7", task: str = "calibration") -
     ``task`` ``"calibration"``/``"exterior"``/``"trilateration"``/``"rotations"`` use image
     2 with the Fig. 7 approximations, ``"all"`` image 3, ``"relative"`` images 1 and 2.
     """
-    from ...radar import geier1973 as G
-    from ...units import from_rad
-
     if task not in TASKS:
         raise InputError(f"unknown radar task {task!r}; expected one of {', '.join(TASKS)}")
     T, A = G.images(), G.approximations()

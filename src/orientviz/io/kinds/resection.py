@@ -18,7 +18,9 @@ from typing import Any
 import numpy as np
 
 from ...block import CONTROL, TIE, Block
+from ...camera import FrameCamera
 from ...errors import InputError
+from ...orientation import resection as module
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
 from ..solution import Parameter, Solution
@@ -60,9 +62,6 @@ def load(doc: dict[str, Any], units: Units, source: str) -> Block:
 
 def solve(problem: Problem, method: str | None) -> Solution:
     """Space resection of the single image (collinearity least squares)."""
-    from ...camera import FrameCamera
-    from ...orientation import resection as module
-
     func = getattr(module, "space_resection", None) or module.resection
     block: Block = problem.data
     obs, pts = block.observations, block.points

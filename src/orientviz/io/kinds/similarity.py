@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 
 from ...adjust.result import W_CRITICAL
 from ...errors import InputError
+from ...orientation.absolute import similarity_model, similarity_transform
 from ..problem import LENGTH_UNITS, Problem, Units
 from ..registry import Kind, register_kind
 from ..solution import Parameter, Solution
@@ -152,8 +153,6 @@ def _propagate(adj, J: F64, n: int, with_points: bool) -> F64:
 
 def solve(problem: Problem, method: str | None) -> Solution:
     """Estimate the transformation and transform every source point."""
-    from ...orientation.absolute import similarity_model, similarity_transform
-
     data: SimilarityData = problem.data
     src, tgt = data.source, data.target
     n = len(src.ids)

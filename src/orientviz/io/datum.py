@@ -22,8 +22,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ...block import CONTROL, TIE, Block
-from ...errors import InputError
+from ..block import CONTROL, TIE, Block
+from ..errors import InputError
 
 #: σ of the pseudo-observations that hold a fixed image's centre (m) and attitude (rad).
 FIX_SIGMA_M: float = 1e-6

@@ -5,7 +5,7 @@
 * ``adjusted.json`` — the problem file (``orientviz/1``, kind ``block``) with the
   adjusted orientations and tie points as its values: load it with
   :func:`~orientviz.io.problem.load_problem` or adjust it again with ``orientviz solve``;
-* ``images.csv`` and ``points.csv`` — the tables of :mod:`orientviz.report`
+* ``images.csv`` and ``points.csv`` — the result tables of this package
   (values, a-posteriori σ, residuals per image and per point);
 * ``colmap/`` — the adjusted block as a COLMAP text model
   (:func:`~orientviz.io.colmap.write_colmap`).
@@ -25,7 +25,14 @@ import numpy as np
 
 from ..adjust.result import Adjustment
 from ..block import Block
+from ..bundle import bundle_adjust
 from ..errors import AdjustmentError, InputError
+from ..io.colmap import write_colmap
+from ..io.kinds.block import approximate
+from ..io.problem import write_problem
+from ..io.safeio import prepare_output_dir
+from ..io.solve import check_geometry, load_named
+from ._tables import adjusted_block, image_table, point_table
 
 FORMATS = ("json", "csv", "colmap")
 
@@ -62,15 +69,10 @@ def export_results(
         ``{"json": path, "images_csv": path, "points_csv": path, "colmap": folder}``
         for what was written.
     """
-    from ..report import adjusted_block, image_table, point_table
-    from .colmap import write_colmap
-    from .problem import write_problem
 
     unknown = [f for f in formats if f not in FORMATS]
     if unknown:
         raise InputError(f"unknown export format {unknown[0]!r}; expected {', '.join(FORMATS)}")
-    from .safeio import prepare_output_dir
-
     d = prepare_output_dir(directory)
     out = block if adj is None else adjusted_block(block, adj)
     written: dict[str, Path] = {}
@@ -91,22 +93,14 @@ def export_results(
 
 def run_from_cli(args: argparse.Namespace) -> int:
     """``orientviz export FILE -d DIR [--format json,csv,colmap] [--no-adjust]``."""
-    from ..bundle import bundle_adjust
-    from .kinds.block import approximate
-    from .problem import load_problem
-
     prog = "orientviz export"
     try:
-        from .solve import _resolve  # a path, or the name of a shipped example
-
-        problem = load_problem(_resolve(args.file))
+        problem = load_named(args.file)  # a path, or the name of a shipped example
         if not isinstance(problem.data, Block):
             raise InputError(f"expected a block problem, got kind {problem.kind!r}", args.file)
         block = problem.data
         adj = None
         if not args.no_adjust:
-            from .solve import check_geometry
-
             for f in check_geometry(problem):  # errors raise; warnings are printed
                 print(f"{prog}: warning: {args.file}: {f.message}", file=sys.stderr)
             block = approximate(block)
