@@ -24,6 +24,8 @@ CORE = [
     "orientviz.rotation",
     "orientviz.camera",
     "orientviz.block",
+    "orientviz.approximate",
+    "orientviz.design",
     "orientviz.adjust",
     "orientviz.orientation",
     "orientviz.bundle",

@@ -315,6 +315,8 @@ def misfit_warning(adj, n_image: int, critical: float, block: Block | None = Non
     as a gross error and its remedy; otherwise it names the likely causes of a model
     that does not fit (lens, units, principal distance, σ).
     """
+    if adj.normalized_residuals is None:  # no redundancy numbers (e.g. not converged)
+        return None
     w = np.asarray(adj.normalized_residuals, dtype=float)[: 2 * n_image]
     w = w[np.isfinite(w)]
     if w.size == 0 or not adj.sigma0 > MISFIT_SIGMA0:
@@ -357,6 +359,8 @@ def single_gross_error(adj, n_image: int, block: Block | None = None) -> str | N
         One sentence (observation, point and image, σ̂0 without it, the remedy), or
         None when no single observation explains the misfit.
     """
+    if adj.normalized_residuals is None:
+        return None
     w = np.asarray(adj.normalized_residuals, dtype=float)[: 2 * n_image]
     r = int(adj.redundancy)
     if r < 2 or not np.any(np.isfinite(w)):
