@@ -396,7 +396,7 @@ def relative_orientation(
     :func:`orientviz.adjust.gauss_newton`. ``method="collinearity"`` (the textbook
     method, e.g. Wolf/DeWitt): starting from that solution, all 4n image coordinates
     are observations of the collinearity equations (σ = ``sigma`` brought to image
-    scale, sigma · c / mean |Z| of the model points, mm), and the five
+    scale, sigma · c / mean ``|Z|`` of the model points, mm), and the five
     elements are adjusted together with the 3n model points
     (:func:`orientviz.orientation.relative_collinearity.collinearity_pair`); dependent
     pairs only. Both agree for error-free data.

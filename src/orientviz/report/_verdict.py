@@ -36,7 +36,7 @@ def verdict(problem: Problem, solution: Solution, alpha: float = 0.05) -> dict[s
         ``"not possible"``), ``T`` = r σ̂0², its χ²(r) bounds ``lower``/``upper``,
         the bounds ``sigma0_lower``/``sigma0_upper`` of σ̂0 (unit weight), ``alpha``,
         ``r`` and ``reason`` (one phrase); ``flagged``: the number of observations
-        with |w| above the critical value; ``warnings``: the report's list of warnings.
+        with ``|w|`` above the critical value; ``warnings``: the report's list of warnings.
     """
     report = build_report(problem, solution, alpha=alpha)
     t = dict(report.section("sigma0").values["test"])

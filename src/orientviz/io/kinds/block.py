@@ -349,8 +349,8 @@ def single_gross_error(adj, n_image: int, block: Block | None = None) -> str | N
 
     Leaving out observation i lowers vᵀPv = r σ̂0² by w_i² (Baarda: w_i = v_i /
     (σ_i √r_i), a-priori σ0 = 1), so σ̂0 without it is √((r σ̂0² − w_i²) / (r − 1)).
-    When that is at most :data:`GROSS_SIGMA0` for the largest |w|, one gross error
-    explains the misfit; observations whose |w| equals the largest (within 1 %) cannot
+    When that is at most :data:`GROSS_SIGMA0` for the largest ``|w|``, one gross error
+    explains the misfit; observations whose ``|w|`` equals the largest (within 1 %) cannot
     be told apart from it and are named too.
 
     Returns
