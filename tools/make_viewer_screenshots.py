@@ -5,9 +5,11 @@
 
 Each demo is served on 127.0.0.1 and opened in headless Chromium (playwright with
 /usr/bin/chromium and the test suite's flags, software WebGL); a short scenario puts it in
-a telling state (block: run to convergence, colour by the largest normalised residual;
-pair: the rays, gap and epipolar plane of point 5 with the
-normalised images; radar: Geier's construction of target 15 in image 3 with the legend).
+a telling state (block: run to convergence, the residual scale fitted anew, colour by the
+largest normalised residual; pair: the rays, gap and epipolar plane of point 5 with the
+normalised images; radar: Geier's construction of target 15 in image 3 with the legend;
+dbat_camcal: the shipped DBAT camera calibration as ``orientviz solve`` solves it, with
+the estimated camera, its distortion field and the legend).
 Written to ``book/_static/viewer/<demo>.png`` as palette PNGs (helpers of
 ``make_readme_figures.py``: at most 400 KB each, checked).
 """
@@ -42,20 +44,28 @@ def _wait(predicate: Callable[[], bool], timeout: float = 60.0) -> None:
 def _collapse(page: Any, *folders: str) -> None:
     """Fold GUI folders (click their titles) so that the panel shows what matters."""
     for name in folders:
-        page.get_by_text(name, exact=True).first.click()
+        page.get_by_text(name, exact=True).first.click(timeout=120_000, force=True)
 
 
 def block_scenario(app: Any, page: Any) -> None:
     """Run to convergence, colour by the largest |w| (the worst images listed)."""
     st, q = app.demo.state, app.panel.quality
-    for client in app.server.get_clients().values():
-        mrf._frame_camera(client.camera, 0.8, 0.1)  # closer, and left of the panel
     page.get_by_role("button", name="run to convergence").click()
     _wait(lambda: st.at_result and len(st.history) > 2)
+    with app.panel._lock:  # the scale stays fixed while iterating; fitted anew here
+        app.panel.set_exaggeration(auto=True)
     with app.panel._lock:
         q.handles["measure"].value = "largest normalised residual |w|"
     _wait(lambda: q.quality is not None)
-    _collapse(page, "Image orientation", "Adjustment", "Largest residuals")
+    _collapse(page, "Image orientation", "Adjustment", "Largest residuals", "Display")
+
+
+def camcal_scenario(app: Any, page: Any) -> None:
+    """The solved calibration: legend, camera terms and the distortion of image 1."""
+    _collapse(page, "Image orientation", "Adjustment", "Largest residuals", "Display",
+              "Colour by quality", "Precision", "Act on the adjustment")  # fmt: skip
+    app.panel.scene.set_visible("ellipsoids", False)
+    app.panel.update_legend()
 
 
 def pair_scenario(app: Any, page: Any) -> None:
@@ -74,6 +84,7 @@ SCENARIOS: dict[str, Callable[[Any, Any], None]] = {
     "block": block_scenario,
     "pair": pair_scenario,
     "radar": radar_scenario,
+    "dbat_camcal": camcal_scenario,
 }
 
 
@@ -81,9 +92,9 @@ def screenshot(name: str, path: pathlib.Path, settle_s: float = 5.0) -> None:
     """Serve demo ``name``, play its scenario in Chromium and save the screenshot."""
     from PIL import Image
 
-    from orientviz.viewer.demos import load_demo
+    from orientviz.viewer.app import resolve_content
 
-    with mrf.viewer_page(load_demo(name), VIEWPORT, settle_s) as (app, page):
+    with mrf.viewer_page(resolve_content(name), VIEWPORT, settle_s) as (app, page):
         SCENARIOS[name](app, page)
         time.sleep(settle_s)
         png = page.screenshot()

@@ -57,7 +57,11 @@ def test_legend_names_what_is_drawn_and_only_that(camcal):
 
 
 def test_selection_colour_is_outside_the_quality_scale():
-    stops = ramp(np.linspace(0.0, 1.0, 41), 1.0).astype(float)
+    from orientviz.viewer.quality import STOPS
+
+    stops = np.vstack(  # the residuals' ramp and the quality colours' ramp
+        [ramp(np.linspace(0.0, 1.0, 41), 1.0), ramp(np.linspace(0.0, 1.0, 41), 1.0, STOPS)]
+    ).astype(float)
     for key in ("selected", "ray_selected"):
         d = np.linalg.norm(stops - np.asarray(COLORS[key], float), axis=1)
         assert d.min() > 120, key

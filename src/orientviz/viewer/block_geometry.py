@@ -29,9 +29,9 @@ COLORS: dict[str, tuple[int, int, int]] = {
     "control": (220, 40, 40),
     "check": (20, 150, 60),
     "frustum": (40, 70, 160),
-    "selected": (0, 200, 255),
+    "selected": (0, 230, 230),
     "ray": (120, 150, 200),
-    "ray_selected": (90, 210, 255),
+    "ray_selected": (0, 230, 230),
     "strip": (110, 60, 160),
     "model": (150, 150, 150),
     "ellipsoid": (230, 80, 200),
@@ -202,7 +202,8 @@ class BlockGeometry:
         length = value * exaggeration
         P = self.frame.to_scene(b.points.xyz) if b.n_points else np.zeros((1, 3))
         lo, hi = P.min(axis=0), P.max(axis=0)
-        start = np.array([lo[0], lo[1] - 0.08 * (hi[1] - lo[1] + self.spacing), lo[2]])
+        mid = 0.5 * (lo[0] + hi[0]) - 0.5 * length  # centred in front of the points
+        start = np.array([mid, lo[1] - 0.08 * (hi[1] - lo[1] + self.spacing), lo[2]])
         end = start + [length, 0.0, 0.0]
         tick = np.array([0.0, 0.0, 0.25 * self.spacing])
         seg = np.array([[start, end], [start - tick, start + tick], [end - tick, end + tick]])
