@@ -148,17 +148,22 @@ def block_from_colmap(
             "colmap_image_ids": model.image_ids.tolist(),
             "colmap_repeated": list(repeated),
             "lens": "undistort",
-            "colmap_cameras": {
-                str(c): {
-                    "model": cams[c].model,
-                    "width": cams[c].width,
-                    "height": cams[c].height,
-                    "params": cams[c].params.tolist(),
-                }
-                for c in cam_ids
-            },  # fmt: skip
+            "colmap_cameras": _camera_records(cams, cam_ids),
         },
     )
+
+
+def _camera_records(cams, cam_ids) -> dict[str, dict]:
+    """COLMAP's camera entries (model, width and height in px, parameters) by camera id, for ``block.meta``."""
+    return {
+        str(c): {
+            "model": cams[c].model,
+            "width": cams[c].width,
+            "height": cams[c].height,
+            "params": cams[c].params.tolist(),
+        }
+        for c in cam_ids
+    }
 
 
 def _poses(model: ColmapModel, sequence: str):
@@ -221,15 +226,7 @@ def _distorted_block(model, cam_ids, pixel_mm, sigma_px, sequence, lens, repeate
             "image_names": names,
             "colmap_image_ids": model.image_ids.tolist(),
             "colmap_repeated": list(repeated),
-            "colmap_cameras": {
-                str(c): {
-                    "model": cams[c].model,
-                    "width": cams[c].width,
-                    "height": cams[c].height,
-                    "params": cams[c].params.tolist(),
-                }
-                for c in cam_ids
-            },  # fmt: skip
+            "colmap_cameras": _camera_records(cams, cam_ids),
         },
     )
     block.cameras.model = [v[3] for v in io]
