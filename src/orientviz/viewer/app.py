@@ -258,8 +258,10 @@ class ViewerApp:
             self.stop()
 
 
-def resolve_content(content: Any) -> Any:
+def resolve_content(content: Any, options: dict[str, Any] | None = None) -> Any:
     """Turn what :class:`ViewerApp` accepts into a :class:`~orientviz.viewer.demos.Demo`.
+
+    ``options`` override a problem file's (``--free``, ``--fix``, ``--max-iter``).
 
     Raises
     ------
@@ -271,7 +273,11 @@ def resolve_content(content: Any) -> Any:
 
     if isinstance(content, str | Path):
         name = str(content)
-        return load_demo(name) if name in DEMOS else demo_from_file(name)
+        if name in DEMOS and options:
+            raise InputError(
+                f"--free, --fix and --max-iter apply to problem files, not the demo {name!r}"
+            )
+        return load_demo(name) if name in DEMOS else demo_from_file(name, options)
     if isinstance(content, Solved):
         return solution_demo(content)
     if isinstance(content, Demo):
@@ -285,14 +291,15 @@ def resolve_content(content: Any) -> Any:
     )
 
 
-def demo_from_file(target: str) -> Any:
+def demo_from_file(target: str, options: dict[str, Any] | None = None) -> Any:
     """Solve a problem file or shipped data set as ``orientviz solve`` does; its demo.
 
-    Raises what ``solve`` reports (:func:`orientviz.io.solve.failure`), before any server.
+    ``options`` override the file's (``--free``, ``--fix``, ``--max-iter``). Raises what
+    ``solve`` reports (:func:`orientviz.io.solve.failure`), before any server.
     """
     from .solved import solution_demo, solve_target
 
-    return solution_demo(solve_target(target))
+    return solution_demo(solve_target(target, options))
 
 
 def open_viewer(
@@ -329,8 +336,10 @@ def run_from_cli(args: argparse.Namespace) -> int:
     from ..io.solve import failure
 
     target = args.target or DEFAULT_DEMO
+    options = {k: getattr(args, k) for k in ("fix", "free", "max_iter")
+               if getattr(args, k, None) is not None}  # fmt: skip
     try:
-        content = resolve_content(target)  # a bad file is refused before a server starts
+        content = resolve_content(target, options)  # a bad file: refused before a server
     except Exception as exc:
         failed = failure(PROG, target, exc)
         if failed is None:
