@@ -158,7 +158,6 @@ LAZY_UNRESOLVED: dict[str, int] = {
     "io/colmap_lens.py": 1,
     "io/colmap_text.py": 2,
     "io/importing.py": 2,
-    "orientation/relative.py": 1,
 }
 #: Packages whose modules may import other packages' private modules (none).
 PRIVATE_OK: set[str] = set()
