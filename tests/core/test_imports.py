@@ -149,8 +149,6 @@ LAZY_UNRESOLVED: dict[str, int] = {
     "bundle/precision/_precision_ap.py": 1,
     "bundle/problem/_parts.py": 1,
     "bundle/reduced/_choice.py": 1,
-    "exercises/lesson05.py": 2,
-    "exercises/lesson10.py": 6,
 }
 #: Packages whose modules may import other packages' private modules (none).
 PRIVATE_OK: set[str] = set()
