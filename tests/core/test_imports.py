@@ -139,8 +139,6 @@ LAYERS: list[tuple[str, ...]] = [
 #: Circles between the modules of one package still to be broken; the test fails on any
 #: other circle, and on an entry that is gone (remove it then).
 KNOWN_CYCLES: list[set[str]] = [
-    # colmap_text reads images.txt through colmap_images, which builds on colmap_text
-    {"orientviz.io.colmap_images", "orientviz.io.colmap_text"},
 ]
 #: Function-level imports without a reason still to be resolved, per file (made top-level
 #: or given their reason); a file may not gain one, and a count must fall with its file.
@@ -151,13 +149,6 @@ LAZY_UNRESOLVED: dict[str, int] = {
     "bundle/precision/_precision_ap.py": 1,
     "bundle/problem/_parts.py": 1,
     "bundle/reduced/_choice.py": 1,
-    "exercises/lesson05.py": 2,
-    "exercises/lesson10.py": 6,
-    "io/bal.py": 5,
-    "io/colmap.py": 6,
-    "io/colmap_lens.py": 1,
-    "io/colmap_text.py": 2,
-    "io/importing.py": 2,
 }
 #: Packages whose modules may import other packages' private modules (none).
 PRIVATE_OK: set[str] = set()
