@@ -160,7 +160,6 @@ LAZY_UNRESOLVED: dict[str, int] = {
     "io/colmap_lens.py": 1,
     "io/colmap_text.py": 2,
     "io/importing.py": 2,
-    "orientation/relative.py": 1,
     "viewer/adjuster.py": 1,
     "viewer/app.py": 9,
     "viewer/deformation.py": 1,
