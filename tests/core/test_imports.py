@@ -139,8 +139,6 @@ LAYERS: list[tuple[str, ...]] = [
 #: Circles between the modules of one package still to be broken; the test fails on any
 #: other circle, and on an entry that is gone (remove it then).
 KNOWN_CYCLES: list[set[str]] = [
-    # the demos import the scene builders lazily, the scenes import Demo back
-    {"orientviz.viewer.demos", "orientviz.viewer.pair_scene", "orientviz.viewer.radar_scene"},
     # colmap_text reads images.txt through colmap_images, which builds on colmap_text
     {"orientviz.io.colmap_images", "orientviz.io.colmap_text"},
 ]
@@ -160,20 +158,6 @@ LAZY_UNRESOLVED: dict[str, int] = {
     "io/colmap_lens.py": 1,
     "io/colmap_text.py": 2,
     "io/importing.py": 2,
-    "orientation/relative.py": 1,
-    "viewer/adjuster.py": 1,
-    "viewer/app.py": 9,
-    "viewer/deformation.py": 1,
-    "viewer/demos.py": 5,
-    "viewer/inline.py": 1,
-    "viewer/pair_rays.py": 3,
-    "viewer/pair_scene.py": 2,
-    "viewer/panel.py": 5,
-    "viewer/panel_camera.py": 2,
-    "viewer/radar_geometry.py": 1,
-    "viewer/radar_scene.py": 5,
-    "viewer/scene.py": 3,
-    "viewer/solved.py": 10,
 }
 #: Packages whose modules may import other packages' private modules (none).
 PRIVATE_OK: set[str] = set()
