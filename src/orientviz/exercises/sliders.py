@@ -14,6 +14,9 @@ from collections.abc import Callable, Iterable
 
 import numpy as np
 
+from ..orientation.plotter import AnalogPlotter
+from ..radar.scene import trilateration_scene
+from ..units import RHO_C
 from ._common import CheckFailed, NotWrittenError, call, success
 
 __all__ = [
@@ -130,8 +133,6 @@ def pair_parallax_rms(
     kappa_offset_c : float
         Added to κ, centesimal minutes.
     """
-    from ..orientation.plotter import AnalogPlotter
-    from ..units import RHO_C
 
     s = np.asarray(settings, dtype=float).copy()
     s[4] += kappa_offset_c / RHO_C
@@ -146,7 +147,6 @@ def check_pair_kappa(
 ) -> None:
     """The κ offset (c) from ``settings`` at which the RMS y-parallax at the nine points
     reaches ``target_mm`` (lesson 05's live pair)."""
-    from ..units import RHO_C
 
     def rms(t: float) -> float:
         return pair_parallax_rms(pair, settings, t)[0]
@@ -174,7 +174,6 @@ def trilateration_shift(centres: np.ndarray, ranges: np.ndarray, station: np.nda
                         delta_m: float) -> float:  # fmt: skip
     """Distance (m) of the upper trilateration candidate from ``station`` when every one of
     the three ``ranges`` (m) about ``centres`` (3, 3) m is too long by ``delta_m``."""
-    from ..radar.scene import trilateration_scene
 
     sc = trilateration_scene(centres, np.asarray(ranges, dtype=float) + delta_m)
     return float(np.linalg.norm(sc["candidates"][1] - np.asarray(station, dtype=float)))

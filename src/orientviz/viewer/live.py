@@ -31,8 +31,11 @@ import numpy as np
 
 from ..adjust import Adjustment
 from ..block import Block
+from ..orientation.plotter import AnalogPlotter
 from .app import ViewerApp
+from .deformation import deformation_extra
 from .demos import Demo
+from .pair_scene import PairView
 from .state import BlockState, Snapshot
 
 #: output metadata key holding the name of the book's static picture of the scene
@@ -174,8 +177,6 @@ def pair_passes_demo(
         The pair view (``app.extra["pair"]`` once started): dials at the last pass, the
         scrubber under *Passes* replays every pass; the dials stay free to turn.
     """
-    from ..orientation.plotter import AnalogPlotter
-    from .pair_scene import PairView
 
     settings = [np.asarray(p, dtype=float).reshape(5).copy() for p in passes]
     if not settings:
@@ -222,7 +223,6 @@ def deformation_demo(
         The block panel plus the folder *Deformation* (adjusted − true points, morph,
         and the comparison without / with self-calibration).
     """
-    from .deformation import deformation_extra
 
     state = BlockState(block, result)
     return Demo("block", title, description or block.summary(), state,
