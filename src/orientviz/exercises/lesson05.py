@@ -23,6 +23,8 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from ..camera import project
+from ..rotation import matrix_from_opk
 from ._common import CheckFailed, call, compare, rng_for, success
 from .lesson02 import _rodrigues_opk
 
@@ -234,9 +236,6 @@ def check_kovarik_iteration(fn: Callable) -> None:
     P = np.column_stack([rng.uniform(-5, b + 5, n), rng.uniform(-90, 90, n),
                          -c * (1 + 0.2 * rng.uniform(-0.5, 0.5, n))])  # fmt: skip
     truth = np.array([0.35, -0.22, 14 * GON / 100, -9 * GON / 100, 17 * GON / 100])  # 14, −9, 17 c
-    from ..camera import project
-    from ..rotation import matrix_from_opk
-
     xy1 = project(P, np.zeros(3), np.eye(3), c)
     xy2 = project(P, np.array([b, truth[0], truth[1]]), matrix_from_opk(*truth[2:]), c)
     got = call(fn, xy1.copy(), xy2.copy(), c, b, what="kovarik_iteration")
