@@ -324,7 +324,8 @@ def export_html(content: Any, path: str | Path) -> Path:
 
 
 def run_from_cli(args: argparse.Namespace) -> int:
-    """``orientviz view [FILE | NAME | DEMO] [--host] [--port] [--export FILE.html]``.
+    """``orientviz view [FILE | NAME | DEMO] [--host] [--port] [--export FILE.html]``;
+    ``orientviz view design FILE``: the design studio on a problem file's geometry.
 
     A file or data set that cannot be solved gets ``orientviz solve``'s one line and exit
     code before any server starts. Returns the exit code.
@@ -332,8 +333,17 @@ def run_from_cli(args: argparse.Namespace) -> int:
     target = args.target or DEFAULT_DEMO
     options = {k: getattr(args, k) for k in ("fix", "free", "max_iter")
                if getattr(args, k, None) is not None}  # fmt: skip
+    plan_from = getattr(args, "file", None)
+    if plan_from and target != "design":
+        print(f"{PROG}: a second argument (FILE) goes with `design` only", file=sys.stderr)
+        return 2
     try:
-        content = resolve_content(target, options)  # a bad file: refused before a server
+        if plan_from:  # the design studio on a problem file's geometry
+            from .demos import design_from_file  # the design studio: for its demo only
+
+            content, target = design_from_file(plan_from), plan_from
+        else:
+            content = resolve_content(target, options)  # a bad file: refused before a server
     except Exception as exc:
         failed = failure(PROG, target, exc)
         if failed is None:
