@@ -317,14 +317,24 @@ def export_html(content: Any, path: str | Path) -> Path:
 
 
 def run_from_cli(args: argparse.Namespace) -> int:
-    """``orientviz view [FILE | NAME | DEMO] [--host] [--port] [--export FILE.html]``.
+    """``orientviz view [FILE | NAME | DEMO] [--host] [--port] [--export FILE.html]``;
+    ``orientviz view design FILE``: the design studio on a problem file's geometry.
 
     A file or data set that cannot be solved gets ``orientviz solve``'s one line and exit
     code before any server starts. Returns the exit code.
     """
     target = args.target or DEFAULT_DEMO
+    plan_from = getattr(args, "file", None)
+    if plan_from and target != "design":
+        print(f"{PROG}: a second argument (FILE) goes with `design` only", file=sys.stderr)
+        return 2
     try:
-        content = resolve_content(target)  # a bad file is refused before a server starts
+        if plan_from:  # the design studio on a problem file's geometry
+            from .demos import design_from_file  # the design studio: for its demo only
+
+            content, target = design_from_file(plan_from), plan_from
+        else:
+            content = resolve_content(target)  # a bad file is refused before a server starts
     except Exception as exc:
         failed = failure(PROG, target, exc)
         if failed is None:
