@@ -23,6 +23,7 @@ from ..bundle import bundle_adjust
 #: also take ``precision=False`` (the viewer's quick re-solve after an action).
 Adjuster = Callable[..., Adjustment]
 
+
 def apply_parameters(block: Block, result: Adjustment, x: np.ndarray | None = None) -> Block:
     """Copy of ``block`` with exterior orientations and points taken from ``x``.
 
