@@ -206,12 +206,13 @@ COMMANDS: dict[str, Command] = {
                 help="also stop when a step lowers vTPv by less than F of its value (Ceres's "
                 "function tolerance; overrides options.ftol; default 0 = off, 1e-6 in files "
                 "written by import-bal / import-colmap)"),
-            arg("--robust", choices=["none", "huber", "cauchy"], default=None,
-                help="robust bundle by reweighting: huber bounds, cauchy redescends the "
-                "influence of large residuals (overrides options.robust; default none)"),
+            arg("--robust", choices=["none", "huber", "cauchy", "soft_l1"], default=None,
+                help="robust loss of each ray inside the bundle's iterations (as Ceres's): "
+                "huber and soft_l1 bound, cauchy redescends the influence of large "
+                "residuals (overrides options.robust; default none)"),
             arg("--robust-scale", type=positive_float, default=None, metavar="K",
                 help="scale of the robust loss in units of the observations' sigma (default "
-                "1.345 huber, 2.385 cauchy)"),
+                "1.345 huber and soft_l1, 2.385 cauchy)"),
             arg("--fix", action="append", default=None, metavar="ID[:PARTS]",
                 help="datum: hold image ID (all six, or PARTS of X0,Y0,Z0,omega,phi,kappa) or "
                 "point ID (X,Y,Z) at its given values; repeatable (overrides options.fix)"),
