@@ -127,7 +127,7 @@ def generate(
             )
     sys.path.insert(0, str(HERE.parent / "src"))
     from orientviz.io.colmap_bin import write_binary_model
-    from orientviz.io.colmap_text import read_text_model
+    from orientviz.io.colmap_text_model import read_text_model
 
     write_binary_model(read_text_model(txt), directory / "binary")
     meta = {"size_mb": size_mb, "keypoints": keypoints, "matched": matched, "images": n_images,

@@ -57,6 +57,17 @@ nb_execution_timeout = 300
 nb_execution_raise_on_error = True
 nb_execution_show_tb = True
 nb_merge_streams = True
+# ipykernel ≥ 7.4 warns once per kernel ("[IPKernelApp] WARNING | Kernel is running over
+# TCP without encryption ...") unless the kernel manager provisions CurveZMQ keys. The
+# lessons' kernels get keys when their kernelspec declares support ("auto"; the standard
+# python3 spec of ipykernel does), so the build log stays free of that line. The kernels
+# still listen on 127.0.0.1 only. (The IPC transport, the other remedy, made myst-nb's
+# kernel start time out on this machine.)
+import zmq  # noqa: E402
+from jupyter_client.manager import KernelManager  # noqa: E402
+
+if zmq.has("curve"):  # libzmq built with libsodium (pyzmq's wheels are)
+    KernelManager.transport_encryption.default_value = "auto"
 # Widgets need a kernel; the static book shows a snapshot of each widget instead (the
 # figures and text its Output widgets held after execution, _ext/orientviz_book.py).
 # Leaving out the widget manager keeps every page free of CDN scripts (it works offline).

@@ -117,6 +117,8 @@ def test_book_builds_offline(tmp_path, executed_lessons):
         env=env,
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
+    # the lessons' kernels get CurveZMQ keys (book/conf.py): no unencrypted-TCP warning
+    assert "without encryption" not in proc.stdout + proc.stderr
     bad_docstrings = docstring_warnings(proc.stderr)
     assert not bad_docstrings, "warnings from docstrings:\n" + "\n".join(bad_docstrings[:10])
     pages = {p.relative_to(out).as_posix() for p in out.rglob("*.html")}

@@ -136,45 +136,6 @@ LAYERS: list[tuple[str, ...]] = [
     ("rotation", "lens"),
     ("units", "errors", "version"),
 ]
-#: Circles between the modules of one package still to be broken; the test fails on any
-#: other circle, and on an entry that is gone (remove it then).
-KNOWN_CYCLES: list[set[str]] = [
-    # the demos import the scene builders lazily, the scenes import Demo back
-    {"orientviz.viewer.demos", "orientviz.viewer.pair_scene", "orientviz.viewer.radar_scene"},
-    # colmap_text reads images.txt through colmap_images, which builds on colmap_text
-    {"orientviz.io.colmap_images", "orientviz.io.colmap_text"},
-]
-#: Function-level imports without a reason still to be resolved, per file (made top-level
-#: or given their reason); a file may not gain one, and a count must fall with its file.
-LAZY_UNRESOLVED: dict[str, int] = {
-    "bundle/_cleaning.py": 1,
-    "bundle/_selfcal.py": 3,
-    "bundle/precision/_precision.py": 4,
-    "bundle/precision/_precision_ap.py": 1,
-    "bundle/problem/_parts.py": 1,
-    "bundle/reduced/_choice.py": 1,
-    "exercises/lesson05.py": 2,
-    "exercises/lesson10.py": 6,
-    "io/bal.py": 5,
-    "io/colmap.py": 6,
-    "io/colmap_lens.py": 1,
-    "io/colmap_text.py": 2,
-    "io/importing.py": 2,
-    "orientation/relative.py": 1,
-    "viewer/adjuster.py": 1,
-    "viewer/app.py": 9,
-    "viewer/deformation.py": 1,
-    "viewer/demos.py": 5,
-    "viewer/inline.py": 1,
-    "viewer/pair_rays.py": 3,
-    "viewer/pair_scene.py": 2,
-    "viewer/panel.py": 5,
-    "viewer/panel_camera.py": 2,
-    "viewer/radar_geometry.py": 1,
-    "viewer/radar_scene.py": 5,
-    "viewer/scene.py": 3,
-    "viewer/solved.py": 10,
-}
 #: Packages whose modules may import other packages' private modules (none).
 PRIVATE_OK: set[str] = set()
 
@@ -308,28 +269,23 @@ def cycles(edges) -> list[set[str]]:
 
 
 def test_no_circle_between_modules():
-    found = cycles(import_graph(SRC))
-    new = [sorted(c) for c in found if c not in KNOWN_CYCLES]
-    gone = [sorted(c) for c in KNOWN_CYCLES if c not in found]
-    assert not new, "modules that import each other (directly or round a circle):\n" + "\n".join(
-        map(str, new)
+    found = [sorted(c) for c in cycles(import_graph(SRC))]
+    assert not found, "modules that import each other (directly or round a circle):\n" + "\n".join(
+        map(str, found)
     )
-    assert not gone, f"circles broken: remove them from KNOWN_CYCLES: {gone}"
 
 
 def test_lazy_imports_say_why():
     """An import inside a function only where it keeps a first import fast or a GUI library
     out of the core, and then with a one-line reason as a comment on its line."""
-    bare: dict[str, list[str]] = defaultdict(list)
-    for a, _, line, lazy, text in import_graph(SRC):
-        if lazy and "#" not in text:
-            bare[f"{_path(a, SRC)}.py"].append(f"{_path(a, SRC)}.py:{line} {text.strip()}")
-    new = [s for f, found in bare.items() if len(found) > LAZY_UNRESOLVED.get(f, 0) for s in found]
-    assert not new, "lazy imports without a reason (import at the top instead):\n" + "\n".join(new)
-    fewer = {
-        f: len(bare.get(f, [])) for f, n in LAZY_UNRESOLVED.items() if len(bare.get(f, [])) < n
-    }
-    assert not fewer, f"resolved: lower these counts in LAZY_UNRESOLVED: {fewer}"
+    bare = [
+        f"{_path(a, SRC)}.py:{line} {text.strip()}"
+        for a, _, line, lazy, text in import_graph(SRC)
+        if lazy and "#" not in text
+    ]
+    assert not bare, "lazy imports without a reason (import at the top instead):\n" + "\n".join(
+        bare
+    )
 
 
 def test_no_module_imports_another_packages_private_modules():
@@ -376,8 +332,6 @@ def test_the_checks_see_an_upward_import_a_circle_and_a_bare_lazy_import(tmp_pat
     (src / "bundle" / "_one.py").write_text("def f():\n    from ._two import g\n")
     (src / "bundle" / "_two.py").write_text("from ._one import f\nfrom ..adjust._x import y\n")
     monkeypatch.setattr(sys.modules[__name__], "SRC", src)
-    monkeypatch.setattr(sys.modules[__name__], "KNOWN_CYCLES", [])
-    monkeypatch.setattr(sys.modules[__name__], "LAZY_UNRESOLVED", {})
     with pytest.raises(AssertionError, match=r"adjust/bad.py:1 imports orientviz.bundle "):
         test_dependencies_point_down()
     with pytest.raises(AssertionError, match=r"orientviz.bundle._one', 'orientviz.bundle._two"):

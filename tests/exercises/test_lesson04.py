@@ -21,5 +21,9 @@ def test_diagnoses_name_the_mistake():
             ("check_design_X0", "rows x.. then y.."): "alternate",
             ("check_sigma_Z", "no sqrt 2"): "√2",
             ("check_normal_step", "weights forgotten"): "weights P are missing",
+            ("check_best_extra_point", "farthest from the centre"): "farthest",
+            ("check_best_extra_point", "weights forgotten"): "forgotten weight",
+            ("check_best_extra_point", "always Y0"): "not for X0",
+            ("check_best_extra_point", "argmax"): "worst",
         },
     )

@@ -33,6 +33,11 @@ def test_diagnoses_name_the_mistake():
             ("check_kovarik_iteration", "sign"): "runs away",
             ("check_kovarik_iteration", "R_transposed"): "runs away",
             ("check_design", "y'' - y'"): "opposite sign",
+            ("check_relative_from_exterior", "R_transposed"): "R transposed",
+            ("check_relative_from_exterior", "object_frame"): "object frame",
+            ("check_relative_from_exterior", "base_not_rotated"): "rotate it into the left image",
+            ("check_relative_from_exterior", "not_scaled"): "not scaled",
+            ("check_relative_from_exterior", "degrees"): "degrees",
             ("check_design", "Kovarik signs"): "Kovarik",
             ("check_six_point", "degrees"): "degrees",
             ("check_six_point", "phi and kappa swapped"): "swapped",
@@ -41,3 +46,11 @@ def test_diagnoses_name_the_mistake():
             ("check_scheme_sigma", "inverse of the diagonal"): "diagonal of (AᵀA)⁻¹",
         },
     )
+
+
+def test_angle_reader_inverts_the_rotation():
+    """The checker's own ω-φ-κ reader (an oracle of check_relative_from_exterior) inverts R."""
+    from orientviz.exercises.lesson02 import _rodrigues_opk
+
+    a = np.array([0.03, -0.02, 1.6])
+    assert np.allclose(lesson05._opk(_rodrigues_opk(*a, unit=1.0)), a, atol=1e-12)

@@ -20,5 +20,8 @@ def test_diagnoses_name_the_mistake():
             ("check_compose", "order"): "order is wrong",
             ("check_compose", "no scale in t"): "scale m1 is missing",
             ("check_compose", "no rotation in t"): "rotation R1 is missing",
+            ("check_intersect_many", "R transposed"): "R transposed",
+            ("check_intersect_many", "not normalised"): "not normalised",
+            ("check_intersect_many", "pairwise midpoints"): "pairwise midpoints",
         },
     )

@@ -30,5 +30,10 @@ def test_lesson09_diagnoses_name_the_mistake():
             ("check_distance_std", "diag"): "only the diagonal",
             ("check_distance_std", "blocks"): "only their 2×2 blocks",
             ("check_distance_std", "variance"): "square root",
+            ("check_null_space", "relative tolerance"): "too large",
+            ("check_null_space", "largest jump"): "largest jump",
+            ("check_null_space", "absolute tolerance"): "round-off",
+            ("check_null_space", "rows"): "columns are the basis vectors",
+            ("check_null_space", "largest"): "LARGEST",
         },
     )

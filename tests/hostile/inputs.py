@@ -78,7 +78,7 @@ def base_binary() -> dict[str, bytes]:
     import tempfile
 
     from orientviz.io.colmap_bin import write_binary_model
-    from orientviz.io.colmap_text import read_text_model
+    from orientviz.io.colmap_text_model import read_text_model
 
     texts = base()
     with tempfile.TemporaryDirectory() as tmp:

@@ -13,7 +13,7 @@ from orientviz.errors import InputError
 from orientviz.io.colmap import FLIP, read_colmap, write_colmap
 from orientviz.io.colmap_bin import write_binary_model
 from orientviz.io.colmap_scan import parse_numbers, tokenize
-from orientviz.io.colmap_text import read_text_model
+from orientviz.io.colmap_text_model import read_text_model
 
 PX = 0.01  # mm, the reader's default pixel size
 

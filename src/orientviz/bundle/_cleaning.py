@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 from scipy.sparse.csgraph import connected_components
 
 from ..adjust.gross import Cleaning
+from ..adjust.gross2d import statistic_2d
 from ..adjust.result import Adjustment
 from ..adjust.robust import rerun_cleaning, robust_adjust
 from ..adjust.snooping import data_snooping
@@ -135,8 +136,6 @@ def _use_earlier_exact(exact, w, rows, v, sigma, rn, wn, rxy) -> None:
     """
     if exact is None or rows.size == 0:
         return
-    from ..adjust.gross2d import statistic_2d
-
     ex_rows, ex_rn, ex_rxy, ex_w = exact
     if np.any(w > ex_w):
         return

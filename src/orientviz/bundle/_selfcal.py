@@ -32,6 +32,7 @@ from ..block import Block
 from ..errors import InputError, NotDeterminableError
 from .loop._adjust import bundle_adjust
 from .model._additional import APAnalysis, analyse, ap_set
+from .model._lens import KINDS, LensModel
 
 __all__ = ["SelfCalibration", "self_calibrate"]
 
@@ -116,8 +117,6 @@ def default_set(name: str, block: Block):
     """The set ``name`` sized for the block's camera: Ebner's and Grün's image base
     b = 0.4 × the shorter format side (92 mm for 23 cm), Brown's c and r0 from the
     camera, ``"backward"``/``"forward"``: a :class:`~orientviz.bundle.LensModel`."""
-    from .model._lens import KINDS, LensModel
-
     key = str(name).lower().replace("-", "").replace("_", "")
     if key in KINDS:
         return LensModel(key)
@@ -134,8 +133,6 @@ def default_ap_sigma(aps, block: Block) -> float:
     with the format side, for Ebner's and Grün's sets (film and comparator errors);
     :data:`LENS_SIGMA_OF_R0` of the reference radius for a lens (a lens model, Brown's
     set), whose distortion grows with the format."""
-    from .model._lens import LensModel
-
     d = camera_defaults(block)
     if isinstance(aps, LensModel):
         r0 = aps.r0 if aps.r0 is not None else d["r0"]
@@ -200,8 +197,6 @@ def self_calibrate(
     NotDeterminableError
         The set is not determinable by the block; the message names correlated pairs.
     """
-    from .model._lens import LensModel
-
     aps = default_set(additional, block) if isinstance(additional, str) else additional
     if keep_t is None:
         keep_t = float(ndtri(1 - alpha / 2)) if isinstance(aps, LensModel) else 10.0

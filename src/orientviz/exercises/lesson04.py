@@ -10,7 +10,9 @@ Oracles (never :func:`orientviz.orientation.resection.resection` or
 * the normal-case precision: the covariance of a two-ray intersection from numerical
   derivatives;
 * one weighted Gauss-Newton step: the weighted least-squares problem solved by QR
-  (``numpy.linalg.lstsq`` on √P A), not by normal equations.
+  (``numpy.linalg.lstsq`` on √P A), not by normal equations;
+* the best extra control point: a search over every candidate, each σ from the inverse of
+  normal equations built with numerical derivatives.
 
 Units: object space m, image mm, angles rad, σ of image coordinates mm.
 """
@@ -27,6 +29,7 @@ from ._common import CheckFailed, call, compare, rng_for, success
 from .lesson02 import _rodrigues_opk
 
 __all__ = [
+    "check_best_extra_point",
     "check_design_X0",
     "check_normal_step",
     "check_resection",
@@ -215,3 +218,85 @@ def check_normal_step(normal_step: Callable[[F64, F64, F64], F64]) -> None:
     if got.shape != (4,):  # pragma: no cover - compare already checked the shape
         raise CheckFailed("dx: expected shape (4,)")
     success("dx: the weighted least-squares step, as a QR solution of √P A dx = √P dl gives it")
+
+
+def _cofactor_std(X: F64, p: F64, c: float, sigma: F64) -> F64:
+    """A-priori σ of (X0, Y0, Z0, ω, φ, κ) from the points X with image σ (n,), by numerical derivatives."""
+
+    def f(q: F64) -> F64:
+        return _project(X, q[:3], _R(q[3:]), c).ravel()
+
+    steps = np.array([1e-3, 1e-3, 1e-3, 1e-7, 1e-7, 1e-7])
+    A = np.column_stack([(f(p + h) - f(p - h)) / (2 * h[k]) for k, h in enumerate(np.diag(steps))])
+    P = np.repeat(1.0 / np.asarray(sigma, dtype=float) ** 2, 2)
+    return np.sqrt(np.diag(np.linalg.inv(A.T @ (P[:, None] * A))))
+
+
+def _extra_point_scene(rng: np.random.Generator) -> tuple:
+    """Six control points, 40 candidates with unequal σ (3 or 12 µm), an orientation near vertical."""
+    X, p, xy, c = _scene(rng, 6)
+    X[:, :2] *= 0.5  # the control clustered in the middle of the image: a weak resection
+    xy = _project(X, p[:3], _R(p[3:]), float(c))
+    Xn = np.column_stack(
+        [rng.uniform(-1100, 1100, 40), rng.uniform(-1100, 1100, 40), rng.uniform(0, 150, 40)]
+    )
+    xyn = _project(Xn, p[:3], _R(p[3:]), float(c))
+    sn = np.where(rng.uniform(size=40) < 0.5, 0.003, 0.012)
+    return xy, X, np.full(len(X), 0.005), float(c), p, xyn, Xn, sn
+
+
+def check_best_extra_point(best_extra_point: Callable[..., int]) -> None:
+    """``best_extra_point(xy, X, sigma, c, p, xy_new, X_new, sigma_new, k)`` must return the index of
+    the candidate point whose addition makes the a-priori σ of parameter ``k`` of the resection
+    smallest (p = X0, Y0, Z0 in m, ω, φ, κ in rad; σ of the image coordinates in mm, one per point)."""
+    rng = rng_for("lesson04.check_best_extra_point")
+    for k, name in ((1, "Y0"), (0, "X0")):
+        xy, X, s, c, p, xyn, Xn, sn = _extra_point_scene(rng)
+        sig = np.array(
+            [_cofactor_std(np.vstack([X, Xn[j]]), p, c, np.r_[s, sn[j]])[k] for j in range(len(Xn))]
+        )
+        plain = np.array(
+            [_cofactor_std(np.vstack([X, Xn[j]]), p, c, np.r_[s, 0.005])[k] for j in range(len(Xn))]
+        )
+        other = np.array(
+            [
+                _cofactor_std(np.vstack([X, Xn[j]]), p, c, np.r_[s, sn[j]])[1 - k]
+                for j in range(len(Xn))
+            ]
+        )
+        out = call(
+            best_extra_point, xy.copy(), X.copy(), s.copy(), c, p.copy(), xyn.copy(), Xn.copy(),
+            sn.copy(), k, what="best_extra_point",
+        )  # fmt: skip
+        try:
+            j = int(np.asarray(out).item())
+        except (TypeError, ValueError):
+            raise CheckFailed(
+                f"best_extra_point: expected one index (an int), got {out!r}."
+            ) from None
+        if not 0 <= j < len(Xn):
+            raise CheckFailed(
+                f"best_extra_point: index {j} is not one of the {len(Xn)} candidates."
+            )
+        best = int(np.argmin(sig))
+        if j == best:
+            continue
+        notes = {
+            int(np.argmax(np.hypot(*xyn.T))): "this is the candidate farthest from the image "
+            "centre — far out helps, but its σ and its direction matter too",
+            int(np.argmin(plain)): "this is the best candidate if every point had the same σ: "
+            "a forgotten weight (the candidates are measured with 3 µm or 12 µm)",
+            int(np.argmin(other)): f"this is the best candidate for {'X0' if k == 1 else 'Y0'}, "
+            f"not for {name} (parameter k = {k})",
+            int(np.argmax(sig)): "this is the worst candidate, not the best (argmax for argmin?)",
+        }
+        why = notes.get(j, "")
+        raise CheckFailed(
+            f"best_extra_point (k = {k}, {name}): your candidate {j} gives σ {sig[j]:.4f} m, "
+            f"candidate {best} gives {sig[best]:.4f} m" + (f" — {why}." if why else "."),
+            error=float(sig[j] / sig[best] - 1.0),
+            tolerance=1e-9,
+        )
+    success(
+        "best_extra_point: the candidate that shrinks the chosen σ most, as a search over all of them finds"
+    )

@@ -8,7 +8,9 @@ Oracles (never :mod:`orientviz.orientation.relative` or :mod:`~orientviz.orienta
 * the design matrix: central differences of that rigorous parallax at the normal case;
 * rays built with a known Y gap (the parallax is then known exactly);
 * six parallaxes made with the oracle's linear equation from known elements, which a
-  six-point solution must return exactly.
+  six-point solution must return exactly;
+* a pair of exterior orientations built from known elements of the dependent pair (the right
+  projection centre and rotation put where the elements say), which must come back.
 
 Model units (mm at machine or image scale), model Z < 0 below the base, angles rad inside,
 gon where the exercise says so.
@@ -21,6 +23,8 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from ..camera import project
+from ..rotation import matrix_from_opk
 from ._common import CheckFailed, call, compare, rng_for, success
 from .lesson02 import _rodrigues_opk
 
@@ -28,6 +32,7 @@ __all__ = [
     "check_condition",
     "check_design",
     "check_parallax",
+    "check_relative_from_exterior",
     "check_scheme_sigma",
     "check_six_point",
 ]
@@ -231,9 +236,6 @@ def check_kovarik_iteration(fn: Callable) -> None:
     P = np.column_stack([rng.uniform(-5, b + 5, n), rng.uniform(-90, 90, n),
                          -c * (1 + 0.2 * rng.uniform(-0.5, 0.5, n))])  # fmt: skip
     truth = np.array([0.35, -0.22, 14 * GON / 100, -9 * GON / 100, 17 * GON / 100])  # 14, −9, 17 c
-    from ..camera import project
-    from ..rotation import matrix_from_opk
-
     xy1 = project(P, np.zeros(3), np.eye(3), c)
     xy2 = project(P, np.array([b, truth[0], truth[1]]), matrix_from_opk(*truth[2:]), c)
     got = call(fn, xy1.copy(), xy2.copy(), c, b, what="kovarik_iteration")
@@ -262,3 +264,59 @@ def check_kovarik_iteration(fn: Callable) -> None:
     )
     success(f"the error-free pair's elements come back after {len(steps)} steps "
             f"(last correction {steps[-1]:.1e})")  # fmt: skip
+
+
+def _opk(R: F64) -> F64:
+    """ω, φ, κ (rad) of R = R_ω R_φ R_κ, read from its entries (|φ| < 100 gon)."""
+    return np.array(
+        [np.arctan2(-R[1, 2], R[2, 2]), np.arcsin(R[0, 2]), np.arctan2(-R[0, 1], R[0, 0])]
+    )
+
+
+def check_relative_from_exterior(relative_from_exterior: Callable[..., F64]) -> None:
+    """``relative_from_exterior(X01, R1, X02, R2, b)`` must return the dependent pair's elements
+    (by, bz [model mm], ω, φ, κ [rad]) of two exterior orientations (m; R image → object),
+    the left image fixed and the model base b along the left image's x axis."""
+    rng = rng_for("lesson05.check_relative_from_exterior")
+    for _ in range(3):
+        e = np.r_[rng.uniform(-0.8, 0.8, 2), rng.uniform(-0.03, 0.03, 3)]  # mm, rad
+        b = rng.uniform(12.0, 90.0)
+        R1 = _rodrigues_opk(*rng.uniform(-0.04, 0.04, 2), rng.uniform(1.3, 1.8), unit=1.0)
+        X01 = np.array([rng.uniform(-1e3, 1e3), rng.uniform(-1e3, 1e3), rng.uniform(1500, 2000)])
+        scale = rng.uniform(5.0, 20.0)  # m of object space per model mm
+        X02 = X01 + scale * R1 @ np.array([b, e[0], e[1]])
+        R2 = R1 @ _rodrigues_opk(*e[2:], unit=1.0)
+        got = np.asarray(
+            call(
+                relative_from_exterior,
+                X01.copy(),
+                R1.copy(),
+                X02.copy(),
+                R2.copy(),
+                b,
+                what="relative_from_exterior",
+            ),  # fmt: skip
+            dtype=float,
+        )
+        if got.shape != (5,):
+            raise CheckFailed(
+                f"relative_from_exterior: expected 5 elements (by, bz, ω, φ, κ), got shape {got.shape}."
+            )
+        B_obj = (X02 - X01) * b / (X02 - X01)[0]
+        B_unscaled = R1.T @ (X02 - X01)
+        wrong_base = [
+            ("the base is taken in the object frame: rotate it into the left image first, "
+             "Bᵀ = R1ᵀ(X02 − X01)", B_obj[1:]),
+            ("the base is not scaled so that its x component is b (model mm)", B_unscaled[1:]),
+        ]  # fmt: skip
+        compare("by, bz [model mm]", got[:2], e[:2], rtol=1e-8, scale=b, wrong=wrong_base)
+        wrong_rot = [
+            ("these are the angles of R2ᵀR1: R transposed (the relative rotation is R1ᵀR2)",
+             _opk(R2.T @ R1)),
+            ("these are the angles of R2R1ᵀ, a rotation in the object frame (the relative "
+             "rotation is R1ᵀR2, in the left image's frame)", _opk(R2 @ R1.T)),
+            ("these are the angles of the right image alone, not relative to the left one",
+             _opk(R2)),
+        ]  # fmt: skip
+        compare("ω, φ, κ [rad]", got[2:], e[2:], rtol=1e-8, unit="rad", wrong=wrong_rot, scale=0.03)
+    success("relative_from_exterior: the elements the pair was built with come back")

@@ -2,7 +2,9 @@
 
 Oracles: error-free simulated truth (a similarity, a conformal polynomial and a
 logarithmic law with known parameters) and σ0 written out by hand; never the library's
-``similarity_transform``, ``polynomial_adjust`` or ``fit_log_law``.
+``similarity_transform``, ``polynomial_adjust`` or ``fit_log_law``. The n-ray intersection:
+error-free rays (they meet in the truth), two rays built around a known common perpendicular
+(the midpoint), and scipy's minimiser of the perpendicular distances for noisy rays.
 """
 
 from __future__ import annotations
@@ -10,8 +12,9 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+from scipy.optimize import least_squares
 
-from orientviz.exercises._common import CheckFailed, call, compare, success
+from orientviz.exercises._common import CheckFailed, call, compare, rng_for, success
 
 
 def _rodrigues(axis, angle: float) -> np.ndarray:
@@ -154,3 +157,103 @@ def check_log_law(fn: Callable) -> None:
         ],
     )
     success(f"a = {a:.3f}, b = {b:.3f}: a straight line over log10 n_s")
+
+
+def _project(X: np.ndarray, X0: np.ndarray, R: np.ndarray, c: float) -> np.ndarray:
+    """Image coordinates (mm) of X seen from X0 with R (image → object), principal distance c."""
+    uvw = R.T @ (X - X0)
+    return -c * uvw[:2] / uvw[2]
+
+
+def _rays_scene(rng: np.random.Generator, n: int):
+    """n tilted images (about 1800 m up, κ anywhere) around a ground point P."""
+    P = np.array([rng.uniform(-300, 300), rng.uniform(-300, 300), rng.uniform(100, 160)])
+    X0 = P + np.column_stack(
+        [rng.uniform(-600, 600, n), rng.uniform(-600, 600, n), rng.uniform(1600, 1900, n)]
+    )
+    R = np.stack(
+        [
+            _rodrigues([1, 0, 0], rng.uniform(-0.05, 0.05))
+            @ _rodrigues([0, 1, 0], rng.uniform(-0.05, 0.05))
+            @ _rodrigues([0, 0, 1], rng.uniform(-3, 3))
+            for _ in range(n)
+        ]
+    )
+    return P, X0, R
+
+
+def _distances(
+    X: np.ndarray, X0: np.ndarray, R: np.ndarray, xy: np.ndarray, c: float
+) -> np.ndarray:
+    """Perpendicular distance vectors (m) from X to each ray (flattened)."""
+    d = np.einsum("nij,nj->ni", R, np.column_stack([xy, np.full(len(xy), -c)]))
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    r = X - X0
+    return (r - np.sum(r * d, axis=1)[:, None] * d).ravel()
+
+
+def check_intersect_many(intersect_many: Callable) -> None:
+    """``intersect_many(X0, R, xy, c)`` must return the point (3,) nearest to all n rays in the
+    least-squares sense (the sum of squared perpendicular distances); X0 (n, 3) m, R (n, 3, 3)
+    image → object, xy (n, 2) mm reduced to the principal point, c mm."""
+
+    def _least_squares_point(X0, R, xy, c, normalise=True):
+        """The point nearest to the rays, for naming wrong answers (R transposed, d not unit)."""
+        d = np.einsum("nij,nj->ni", R, np.column_stack([xy, np.full(len(xy), -c)]))
+        if normalise:
+            d = d / np.linalg.norm(d, axis=1)[:, None]
+        M = np.eye(3)[None] * np.sum(d * d, axis=1)[:, None, None] - d[:, :, None] * d[:, None, :]
+        return np.linalg.solve(M.sum(0), np.einsum("nij,nj->i", M, X0))
+
+    rng = rng_for("lesson08.check_intersect_many")
+    c = 123.9
+    # 1. error-free rays from four images meet in the point
+    P, X0, R = _rays_scene(rng, 4)
+    xy = np.array([_project(P, X0[i], R[i], c) for i in range(4)])
+    got = call(intersect_many, X0.copy(), R.copy(), xy.copy(), c, what="intersect_many")
+    wrong = []
+    if np.shape(got) == (3,):
+        Rt = np.transpose(R, (0, 2, 1))
+        wrong = [("R transposed: the ray direction is R (x, y, −c), not Rᵀ (x, y, −c)",
+                  _least_squares_point(X0, Rt, xy, c))]  # fmt: skip
+    compare("the point of four error-free rays [m]", got, P, rtol=1e-9, scale=1000.0, wrong=wrong)
+    # 2. two rays with a known common perpendicular: the midpoint
+    Pm, X0m, Rm = _rays_scene(rng, 2)
+    xy_true = np.array([_project(Pm, X0m[i], Rm[i], c) for i in range(2)])
+    d = np.einsum("nij,nj->ni", Rm, np.column_stack([xy_true, [-c, -c]]))
+    nrm = np.cross(d[0], d[1])
+    nrm /= np.linalg.norm(nrm)
+    Q = np.array([Pm + 0.4 * nrm, Pm - 0.4 * nrm])  # 0.8 m gap, perpendicular to both rays
+    X0m = X0m + np.array([0.4, -0.4])[:, None] * nrm  # the rays keep their directions, through Q
+    xy2 = np.array([_project(Q[i], X0m[i], Rm[i], c) for i in range(2)])
+    got = call(intersect_many, X0m.copy(), Rm.copy(), xy2.copy(), c, what="intersect_many")
+    compare(
+        "two rays 0.8 m apart: the midpoint of their common perpendicular [m]",
+        got, Pm, rtol=1e-9, scale=1000.0,
+        wrong=[
+            ("this is the point on the first ray, not the midpoint", Q[0]),
+            ("the directions are not normalised: longer direction vectors weigh more "
+             "(divide d by its length)", _least_squares_point(X0m, Rm, xy2, c, normalise=False)),
+        ],
+    )  # fmt: skip
+    # 3. five noisy rays of unequal length: scipy's minimiser of the perpendicular distances
+    P5, X05, R5 = _rays_scene(rng, 5)
+    X05[:, 2] += np.array([0.0, 900.0, -700.0, 300.0, 1500.0])  # very different ray lengths
+    xy5 = np.array([_project(P5, X05[i], R5[i], c) for i in range(5)])
+    xy5 += rng.normal(0, 0.02, xy5.shape)
+    ref = least_squares(
+        lambda X: _distances(X, X05, R5, xy5, c), P5 + 5.0, xtol=1e-15, ftol=1e-15, gtol=1e-15
+    ).x
+    got = call(intersect_many, X05.copy(), R5.copy(), xy5.copy(), c, what="intersect_many")
+    wrong = [
+        ("the directions are not normalised: longer direction vectors weigh more "
+         "(divide d by its length)", _least_squares_point(X05, R5, xy5, c, normalise=False)),
+        ("this is the mean of the pairwise midpoints, not the least-squares point of all rays",
+         np.mean([_least_squares_point(X05[[i, k]], R5[[i, k]], xy5[[i, k]], c)
+                  for i in range(5) for k in range(i + 1, 5)], axis=0)),
+    ]  # fmt: skip
+    compare("five noisy rays [m]", got, ref, rtol=1e-9, scale=1000.0, wrong=wrong)
+    success(
+        "intersect_many: error-free rays meet, two rays give the midpoint, n rays the point a "
+        "minimiser of the perpendicular distances finds"
+    )

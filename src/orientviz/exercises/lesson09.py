@@ -3,7 +3,9 @@
 Oracles: a numerical Jacobian of the distances (central differences) for the null space;
 the bordered normal equations solved directly with the new datum's constraints for the
 S-transformation; the σ of a distance from the numerical Jacobian row and the full
-cofactor matrix, in a datum the student's function never saw.
+cofactor matrix, in a datum the student's function never saw; for the datum defect of a
+normal matrix, one built with a known null space (and eigenvalues spread over 13 orders of
+magnitude, as when m and rad are mixed).
 """
 
 from __future__ import annotations
@@ -220,3 +222,72 @@ def check_inner_solve(fn) -> None:
         ("N + G Gᵀ regularises N, it is not the bordered system", np.linalg.solve(N + GGt, b)),
     ])  # fmt: skip
     success("dx and Q equal the pseudo-inverse solution N⁺ b, N⁺ (E = I, any scaling of G)")
+
+
+def _defect_case(
+    rng: np.random.Generator, d: int, clusters: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
+    """A normal matrix with a known null space of dimension d, round-off of 1e-6 in it, and
+    eigenvalues from 5e-2 to 2e9 (m and rad mixed); with ``clusters`` the real eigenvalues
+    form two groups 8 orders of magnitude apart (a larger jump than the one at the defect)."""
+    u = 40
+    G0 = np.linalg.qr(rng.normal(size=(u, d)))[0]
+    rest = rng.normal(size=(u, u))
+    rest = rest - G0 @ (G0.T @ rest)
+    W = np.linalg.svd(rest, full_matrices=False)[0][:, : u - d]  # orthonormal, orthogonal to G0
+    if clusters:
+        half = (u - d) // 2
+        lam = np.r_[
+            10.0 ** rng.uniform(-0.5, 0.5, half), 10.0 ** rng.uniform(8.5, 9.3, u - d - half)
+        ]
+    else:
+        lam = 10.0 ** rng.uniform(-1, 9, u - d)
+        lam[:4] = [0.05, 0.08, 0.5, 2e9]  # small but real eigenvalues (weak, not a defect)
+    N = (W * lam) @ W.T + (G0 * rng.uniform(-1e-6, 1e-6, d)) @ G0.T
+    return (N + N.T) / 2, G0
+
+
+def check_null_space(null_space) -> None:
+    """``null_space(N)`` must return G (u, d): a basis of the null space of the symmetric normal
+    matrix N, d its datum defect: the eigenvalues that are zero to round-off (about u·ε·λ_max),
+    not those below a fixed tolerance nor those below the largest jump of the spectrum."""
+    rng = rng_for("lesson09.check_null_space")
+    for d, clusters in ((7, False), (4, False), (7, True)):
+        N, G0 = _defect_case(rng, d, clusters)
+        G = np.asarray(call(null_space, N.copy(), what="null_space"), dtype=float)
+        if G.ndim != 2 or G.shape[0] != len(N):
+            hint = " (columns are the basis vectors: eigh returns them as columns, V[:, :d])"
+            raise CheckFailed(
+                f"null_space: expected an array of shape ({len(N)}, d), got {G.shape}{hint}."
+            )
+        if G.shape[1] != d:
+            w = np.linalg.eigvalsh(N)
+            why = (
+                "more than the defect: small but real eigenvalues "
+                f"({w[d]:.1e} …, the largest is {w[-1]:.1e}) were taken for zero — a tolerance "
+                "too large, or the largest jump of the spectrum, which here lies between two "
+                "groups of real eigenvalues; round-off is about u·ε·λ_max"
+                if G.shape[1] > d
+                else "fewer than the defect: the zero eigenvalues are zero only to round-off "
+                f"(up to {np.abs(w[:d]).max():.0e} here): a tolerance that small misses them"
+            )
+            raise CheckFailed(
+                f"null_space: {G.shape[1]} columns, but the defect of this N is {d} — {why}.",
+                error=abs(G.shape[1] - d),
+                tolerance=0.0,
+            )
+        try:
+            proj = G @ np.linalg.pinv(G)
+        except np.linalg.LinAlgError:  # pragma: no cover - pinv of finite input converges
+            raise CheckFailed("null_space: the columns of G are not independent.") from None
+        compare(
+            f"the projector onto span(G), defect {d}",
+            proj,
+            G0 @ G0.T,
+            rtol=1e-4,
+            wrong=[("these columns are eigenvectors of the LARGEST eigenvalues, not the smallest",
+                    (lambda V: V @ V.T)(np.linalg.eigh(N)[1][:, -d:]))],
+        )  # fmt: skip
+    success(
+        "null_space: the defect and its directions — the eigenvalues that are zero to round-off"
+    )

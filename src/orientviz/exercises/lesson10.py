@@ -8,6 +8,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..bundle import bundle_adjust
+from ..bundle.reference import reference_data
+from ..bundle.sparsity import bundle_normal_blocks
+from ..rotation import matrix_derivatives, matrix_from_opk
+from ..simulate import simulate_block
 from ._common import CheckFailed, call, compare, rng_for, success
 
 
@@ -130,9 +135,6 @@ def check_bandwidth(fn) -> None:
 def check_schur_step(fn) -> None:
     """``fn(nb) -> (dc, dp)``: one Gauss-Newton step of a bundle by reduction to the
     orientation unknowns (``nb`` from :func:`orientviz.bundle.sparsity.bundle_normal_blocks`)."""
-    from ..bundle.sparsity import bundle_normal_blocks
-    from ..simulate import simulate_block
-
     # 3 strips of 4 images: W is 72 × 66, so a transposed W cannot pass unnoticed
     seed = int(rng_for("lesson10.check_schur_step").integers(1000))
     sim = simulate_block(3, 4, rng=seed, extra=None)
@@ -170,8 +172,6 @@ def check_ray_partials(fn) -> None:
     """``fn(X, X0, R, dR, c) -> (xy, dX0, dangles, dX)``: image coordinates (n, 2) mm of n rays
     (x0 = y0 = 0) and their partial derivatives (n, 2, 3) by X0, (ω, φ, κ) and X; ``R`` (n, 3, 3)
     image → object, ``dR`` (3, n, 3, 3) its derivatives by ω, φ, κ."""
-    from ..rotation import matrix_derivatives, matrix_from_opk
-
     rng = rng_for("lesson10.check_ray_partials")
     n = 5
     ang = rng.uniform(-0.2, 0.2, (n, 3))
@@ -229,10 +229,6 @@ def check_my_bundle(fn) -> None:
     """``fn(data, X0, angles, xyz) -> (X0, angles, xyz, sigma0, history)``: the whole bundle
     iteration on the rays, weights and datum of ``data``
     (:func:`orientviz.bundle.reference.reference_data`), from the start values given."""
-    from ..bundle import bundle_adjust
-    from ..bundle.reference import reference_data
-    from ..simulate import simulate_block
-
     seed = int(rng_for("lesson10.check_my_bundle").integers(1000))
     block = simulate_block(2, 4, rng=seed, extra=None).block
     data = reference_data(block, "fixed")

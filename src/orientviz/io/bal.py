@@ -37,6 +37,10 @@ from numpy.typing import NDArray
 from ..block import Block
 from ..errors import InputError
 from ..rotation import matrix_from_opk, matrix_from_rotvec, opk_from_matrix, rotvec_from_matrix
+from .importing import import_to_problem
+from .problem import load_problem
+from .safeio import decode_text, read_input_bytes, read_input_text, write_atomic
+from .solve import _resolve
 
 F64 = NDArray[np.float64]
 #: Pixel size (mm) assumed when none is given: 10 µm, as in the peer bench.
@@ -285,8 +289,6 @@ def shipped_bal(name: str = "ladybug") -> Path:
 
 def _read_lines(path: str | os.PathLike[str]) -> list[str]:
     """The lines of a BAL text file, plain or bz2-compressed (``*.bz2``)."""
-    from .safeio import decode_text, read_input_bytes, read_input_text
-
     if not str(path).endswith(".bz2"):
         return read_input_text(path, "a BAL text file").splitlines()
     import bz2
@@ -352,8 +354,6 @@ def write_bal(
     params = bal_cameras(block, p)
     obs = block.observations
     xy = obs.xy / p
-    from .safeio import write_atomic
-
     text = "".join(
         [
             f"{block.n_images} {block.n_points} {block.n_observations}\n",
@@ -372,8 +372,6 @@ def write_bal(
 
 def run_from_cli(args: argparse.Namespace) -> int:
     """``orientviz import-bal FILE -o OUT.json [--fix-lens] [--control CSV]``: BAL → problem file."""
-    from .importing import import_to_problem
-
     if not os.path.exists(args.file) and args.file in SHIPPED:
         args.file = str(shipped_bal(args.file))
     lens = "fixed" if getattr(args, "fix_lens", False) else "refine"
@@ -396,9 +394,6 @@ def run_from_cli(args: argparse.Namespace) -> int:
 def run_export(args: argparse.Namespace) -> int:
     """``orientviz export-bal FILE.json -o OUT.bal``: a block problem file → BAL file."""
     import sys
-
-    from .problem import load_problem
-    from .solve import _resolve
 
     prog = "orientviz export-bal"
     try:

@@ -38,8 +38,19 @@ from numpy.typing import NDArray
 from ..block import CHECK, CONTROL, Block
 from ..errors import InputError
 from ..rotation import opk_from_matrix
-from .colmap_text import CAMERA_MODELS, ColmapModel, read_text_model
+from .colmap_bin import read_binary_model
+from .colmap_lens import (
+    LENS_MODES,
+    colmap_model_of,
+    colmap_params,
+    forward_camera,
+    repeated_observations,
+)
+from .colmap_text import CAMERA_MODELS, ColmapModel
+from .colmap_text_model import read_text_model
 from .colmap_undistort import normalised
+from .importing import import_to_problem
+from .safeio import prepare_output_dir, write_atomic
 
 __all__ = ["CAMERA_MODELS", "block_from_colmap", "read_colmap", "write_colmap"]
 
@@ -85,8 +96,6 @@ def block_from_colmap(
     ``meta["colmap_repeated"]`` = (count left out, largest distance px)). The COLMAP
     parameters are kept in ``block.meta["colmap_cameras"]``.
     """
-    from .colmap_lens import LENS_MODES, repeated_observations
-
     if lens not in LENS_MODES:
         raise InputError(f"lens: expected one of {', '.join(LENS_MODES)}, got {lens!r}")
     cams = model.cameras
@@ -184,8 +193,6 @@ def _poses(model: ColmapModel, sequence: str):
 
 def _distorted_block(model, cam_ids, pixel_mm, sigma_px, sequence, lens, repeated) -> Block:
     """The block of COLMAP's objective: distorted pixels, forward lens models."""
-    from .colmap_lens import forward_camera
-
     cams = model.cameras
     kinds = {cams[c].model for c in cam_ids}
     if lens == "refine" and len(kinds) > 1:
@@ -278,8 +285,6 @@ def read_colmap(
     if (d / "images.txt").exists() or not (d / "images.bin").exists():
         model = read_text_model(d)
     else:
-        from .colmap_bin import read_binary_model
-
         model = read_binary_model(d)
     model.source["directory"] = str(d)
     return block_from_colmap(
@@ -295,8 +300,6 @@ def write_colmap(
     Image coordinates are written distortion-free (the COLMAP camera is written as
     PINHOLE/SIMPLE_PINHOLE); object coordinates are written as they are.
     """
-    from .safeio import prepare_output_dir, write_atomic
-
     d = prepare_output_dir(directory)
     p = float(pixel_size_mm or block.meta.get("pixel_size_mm", 0.01))
     cams = block.cameras
@@ -374,8 +377,6 @@ def _forward_colmap(block: Block, i: int, p: float) -> tuple[str, list[float]]:
     """COLMAP model name and parameters (px) of camera ``i`` of a block in COLMAP's pixel
     frame: its forward lens model in the COLMAP model it was imported from (else OPENCV,
     or PINHOLE without distortion)."""
-    from .colmap_lens import colmap_model_of, colmap_params
-
     cams = block.cameras
     models = list(getattr(cams, "model", None) or [])
     spec = models[i] if i < len(models) else {}
@@ -421,8 +422,6 @@ def _point3d_ids(block: Block) -> list[int]:
 
 def run_from_cli(args: argparse.Namespace) -> int:
     """``orientviz import-colmap DIR -o OUT.json [--fix-lens | --undistort] [--control CSV]``."""
-    from .importing import import_to_problem
-
     lens = "undistort" if getattr(args, "undistort", False) else (
         "fixed" if getattr(args, "fix_lens", False) else "refine")  # fmt: skip
     notes = {

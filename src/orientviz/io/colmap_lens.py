@@ -31,6 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InputError
+from .colmap_text import CAMERA_MODELS
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -79,8 +80,6 @@ def colmap_model_of(values: dict) -> str:
 def colmap_params(model: str, c: float, x0: float, y0: float, values: dict, pixel_mm: float):
     """COLMAP's parameters (px, in COLMAP's order) of a forward camera: the inverse of
     :func:`forward_camera`. Terms the COLMAP model cannot hold must be 0."""
-    from .colmap_text import CAMERA_MODELS
-
     fy = c / pixel_mm
     fx = fy * (1.0 + values.get("as", 0.0))
     named = {"f": fy, "fx": fx, "fy": fy, "cx": x0 / pixel_mm, "cy": -y0 / pixel_mm,

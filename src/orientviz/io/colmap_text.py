@@ -1,8 +1,9 @@
 """COLMAP's text model (cameras.txt, images.txt, points3D.txt) read in one streaming pass.
 
-cameras.txt and points3D.txt are read here, images.txt by
-:mod:`orientviz.io.colmap_images` (two lines per image, ``X Y POINT3D_ID`` triplets of
-*all* keypoints, most of them unmatched): each file once, in chunks
+cameras.txt and points3D.txt are read here (with the model's types and checks that
+the other readers share), images.txt by :mod:`orientviz.io.colmap_images` (two lines per
+image, ``X Y POINT3D_ID`` triplets of *all* keypoints, most of them unmatched), the three
+put together by :func:`orientviz.io.colmap_text_model.read_text_model`: each file once, in chunks
 (:mod:`orientviz.io.colmap_scan`), the fields cut by numpy and only the kept ones
 converted to numbers, so the memory kept is that of the observations, not of the file.
 Broken input raises one :class:`~orientviz.errors.InputError` naming the file and line.
@@ -19,6 +20,7 @@ from numpy.typing import NDArray
 
 from ..errors import InputError
 from .colmap_scan import Chunk, line_chunks, parse_numbers, strided, tokens_of_lines
+from .safeio import check_input_file
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -49,8 +51,6 @@ _SEEN_TABLE: int = 1 << 22
 
 def checked_file(path: Path, what: str, *, capped: bool = False) -> Path:
     """:func:`orientviz.io.safeio.check_input_file` (streaming readers are not capped)."""
-    from .safeio import check_input_file
-
     return check_input_file(path, what, capped=capped)
 
 
@@ -273,23 +273,3 @@ def read_points_text(path: Path) -> tuple[I64, F64, dict[int, int]]:
         k = int(np.argmin(lines_of))
         raise _fail(path, int(lines_of[k]), f"duplicate POINT3D_ID {int(pid[order[dup[k]]])}")
     return pid, (np.concatenate(xyz) if xyz else np.zeros((0, 3))), track_first
-
-
-def read_text_model(directory: Path) -> ColmapModel:
-    """The three text files of ``directory`` as a :class:`ColmapModel` (checked)."""
-    cams = read_cameras_text(directory / "cameras.txt")
-    pts_path = directory / "points3D.txt"
-    pid, xyz, track_first = read_points_text(pts_path)
-    from .colmap_images import read_images_text
-
-    img_path = directory / "images.txt"
-    im = read_images_text(img_path, pid, cams)
-    known = set(im["image_ids"].tolist())
-    for iid, line in sorted(track_first.items(), key=lambda kv: kv[1]):
-        if iid not in known:
-            raise _fail(pts_path, line, f"TRACK names IMAGE_ID {iid}, which is not in images.txt")
-    return ColmapModel(
-        cams, im["image_ids"], im["names"], im["qvec"], im["tvec"], im["camera"],
-        im["obs_image"], im["obs_uv"], im["obs_point"], pid, xyz,
-        source={"format": "colmap-text", "images": str(img_path)},
-    )  # fmt: skip

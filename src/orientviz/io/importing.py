@@ -15,6 +15,8 @@ import numpy as np
 
 from ..block import CONTROL, Block
 from ..errors import InputError
+from .control import apply_control, read_control
+from .problem import Units, write_problem
 
 #: Solver options written into an imported SfM model (BAL, COLMAP): Levenberg-Marquardt
 #: with Ceres's trust-region schedule and Ceres's stopping rule on the relative decrease of
@@ -45,9 +47,6 @@ def import_to_problem(
     ``lens_note`` (or ``lens_note_of()`` after reading) is appended to the one-line
     summary. Returns the exit code.
     """
-    from .control import apply_control, read_control
-    from .problem import Units, write_problem
-
     prog = f"orientviz {getattr(args, 'command', None) or 'import'}"
     px = getattr(args, "pixel_size", None) or default_pixel_mm
     sig = getattr(args, "sigma_px", None) or 1.0

@@ -47,6 +47,8 @@ from ..adjust.rank import describe_defect, null_space_of_normal
 from ..adjust.result import Adjustment
 from ..errors import InputError, NotDeterminableError
 from ..rotation import check_sequence, matrix_derivatives, matrix_from_opk
+from .relative_collinearity import collinearity_pair
+from .relative_coplanarity import coplanarity_pair
 
 F64 = NDArray[np.float64]
 
@@ -56,6 +58,8 @@ DEPENDENT: tuple[str, ...] = ("by", "bz", "omega", "phi", "kappa")
 INDEPENDENT: tuple[str, ...] = ("phi1", "kappa1", "phi2", "omega2", "kappa2")
 #: orientviz element = KOVARIK_SIGNS × Kovarik's element (dependent pair order).
 KOVARIK_SIGNS: F64 = np.array([1.0, -1.0, 1.0, 1.0, -1.0])
+#: The estimators of :func:`relative_orientation`.
+METHODS: tuple[str, ...] = ("parallax", "collinearity", "coplanarity")
 #: Below this smallest/largest eigenvalue ratio of the Jacobi-scaled normal matrix of
 #: the linearised equations a geometry counts as critical (not determinable).
 CRITICAL_TOLERANCE: float = 1e-7
@@ -227,7 +231,7 @@ class RelativeResult(Adjustment):
         The model points at the estimated elements, model units (Z < 0).
     state : PairState
         The estimated orientation of the pair in the model frame.
-    method : {"parallax", "collinearity"}
+    method : {"parallax", "collinearity", "coplanarity"}
         The estimator (see :func:`relative_orientation`).
     """
 
@@ -399,7 +403,13 @@ def relative_orientation(
     scale, sigma · c / mean ``|Z|`` of the model points, mm), and the five
     elements are adjusted together with the 3n model points
     (:func:`orientviz.orientation.relative_collinearity.collinearity_pair`); dependent
-    pairs only. Both agree for error-free data.
+    pairs only. ``method="coplanarity"`` (the textbook's other method): one condition
+    per point, the triple product F = B·(r1 × r2) of the base and the two rays = 0, its
+    σ propagated from image coordinates of σ = sigma · c / mean ``|Z|`` (mm); the
+    residuals are the triple products at the estimate, model units
+    (:mod:`orientviz.orientation.relative_coplanarity`); both kinds. All three agree
+    for error-free data; coplanarity and collinearity also with measuring errors, up
+    to terms of the second order in them.
 
     Parameters
     ----------
@@ -423,7 +433,7 @@ def relative_orientation(
         Maximum number of Gauss-Newton steps.
     labels : list of str, optional
         Point labels for the residual report.
-    method : {"parallax", "collinearity"}
+    method : {"parallax", "collinearity", "coplanarity"}
         The estimator (see above).
 
     Returns
@@ -451,8 +461,8 @@ def relative_orientation(
         )
     if not np.isfinite(c) or c <= 0:
         raise InputError(f"expected a principal distance c > 0 mm, got {c}")
-    if method not in ("parallax", "collinearity"):
-        raise InputError(f"expected method 'parallax' or 'collinearity', got {method!r}")
+    if method not in METHODS:
+        raise InputError(f"expected method {' or '.join(map(repr, METHODS))}, got {method!r}")
     if method == "collinearity" and kind != "dependent":
         raise InputError("method 'collinearity' estimates a dependent pair; use kind 'dependent'")
     if b is None or isinstance(b, str):
@@ -473,27 +483,27 @@ def relative_orientation(
         design(pts[:, 0], pts[:, 1], pts[:, 2], b, kind), names, "relative orientation"
     )
 
-    def equations(x):
-        st = PairState.from_elements(x, b, kind, seq)
-        p, _, J = _parallax_and_jacobian(xy1, xy2, c, st, kind)
-        return p, J
+    if method == "coplanarity":
 
-    res = gauss_newton(
-        equations,
-        x0,
-        np.zeros(xy1.shape[0]),
-        sigma,
-        names=list(names),
-        obs_labels=labels,
-        max_iter=max_iter,
-        tol=1e-8,
-        context="relative orientation",
-    )
+        def sigma_image(x):  # as for collinearity, at the model points of the elements x
+            _, p = y_parallax(xy1, xy2, c, PairState.from_elements(x, b, kind, seq))
+            return sigma * c / float(np.mean(np.abs(p[:, 2])))
+
+        res = coplanarity_pair(xy1, xy2, c, b, kind, x0, sigma_image, seq, labels, max_iter)
+    else:  # parallax, and the start of collinearity
+
+        def equations(x):
+            st = PairState.from_elements(x, b, kind, seq)
+            p, _, J = _parallax_and_jacobian(xy1, xy2, c, st, kind)
+            return p, J
+
+        res = gauss_newton(
+            equations, x0, np.zeros(xy1.shape[0]), sigma, names=list(names), obs_labels=labels,
+            max_iter=max_iter, tol=1e-8, context="relative orientation",
+        )  # fmt: skip
     st = PairState.from_elements(res.x, b, kind, seq)
     _, pts = y_parallax(xy1, xy2, c, st)
     if method == "collinearity":
-        from .relative_collinearity import collinearity_pair
-
         # σ of an image coordinate: the parallax σ (model units) brought to image scale
         sigma_image = sigma * c / float(np.mean(np.abs(pts[:, 2])))
         res, pts = collinearity_pair(

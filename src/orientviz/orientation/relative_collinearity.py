@@ -12,8 +12,10 @@ six and bx).
 Kovarik's estimator (``method="parallax"``) adjusts one rigorous y-parallax per point
 instead; both give the same elements for error-free data and differ in the second
 order of the measuring errors (different weighting of the same information). The
-coplanarity formulation (one triple product b·(r1×r2) = 0 per point, adjusted with its
-image coordinates as a Gauss-Helmert model) is equivalent to this one.
+coplanarity formulation (one triple product B·(r1×r2) = 0 per point, its σ propagated
+from the image coordinates; ``method="coplanarity"``,
+:mod:`orientviz.orientation.relative_coplanarity`) gives this estimate up to terms of
+the second order in the errors.
 """
 
 from __future__ import annotations

@@ -20,6 +20,7 @@ import scipy.sparse as sp
 
 from ..adjust import Adjustment, gauss_newton
 from ..block import Block
+from ..bundle import bundle_adjust
 from ..camera import collinearity_jacobian
 from ..errors import InputError
 
@@ -147,11 +148,7 @@ def small_bundle(block: Block, max_iter: int = 20, precision: bool = True) -> Ad
 
 
 def default_adjuster() -> Adjuster:
-    """The bundle to use: ``orientviz.bundle.bundle_adjust`` if present, else the fallback."""
-    try:
-        from ..bundle import bundle_adjust
-    except ImportError:
-        return small_bundle
+    """The bundle to use: :func:`orientviz.bundle.bundle_adjust`."""
 
     def adjust(block: Block, max_iter: int, precision: bool = True) -> Adjustment:
         return bundle_adjust(block, max_iter=max_iter, history_x=True, precision=precision)

@@ -24,6 +24,15 @@ from typing import Any
 
 from ..block import Block
 from ..errors import InputError, OrientvizError
+from ..io.safeio import write_atomic
+from ..io.solve import failure
+from .block_geometry import BlockGeometry
+from .demo import Demo
+from .demos import DEMOS, demo_from_block, load_demo
+from .geometry import VIEW_FOV
+from .panel import BlockPanel
+from .scene import BlockScene
+from .solved import Solved, solution_demo, solve_target
 
 DEFAULT_DEMO = "block"
 PROG = "orientviz view"
@@ -82,7 +91,7 @@ class ViewerApp:
     ----------
     content : Block, tuple (Block, Adjustment), Demo, str or None
         What to show: a block (start values), a block with its adjustment, a
-        :class:`~orientviz.viewer.demos.Demo`, a demo name or a problem file path.
+        :class:`~orientviz.viewer.demo.Demo`, a demo name or a problem file path.
         None shows an empty scene (e.g. after a load error, see ``error``).
     host : str
         Interface to bind (default 127.0.0.1, local only).
@@ -155,10 +164,6 @@ class ViewerApp:
         self._build(demo)
 
     def _build(self, demo: Any) -> None:
-        from .block_geometry import BlockGeometry
-        from .panel import BlockPanel
-        from .scene import BlockScene
-
         gui = self.server.gui
         gui.add_markdown(f"### {demo.title}\n{demo.description}")
         if demo.message:
@@ -175,8 +180,6 @@ class ViewerApp:
                 self._set_camera(*cam)
 
     def _set_camera(self, position: Any, look_at: Any, size: float) -> None:
-        from .geometry import VIEW_FOV
-
         cam = self.server.initial_camera
         cam.position = tuple(float(v) for v in position)
         cam.look_at = tuple(float(v) for v in look_at)
@@ -218,8 +221,6 @@ class ViewerApp:
         Uses viser's own serializer (``scene.as_html``): the viser client with the
         recorded scene embedded (GUI controls are not part of a static snapshot).
         """
-        from ..io.safeio import write_atomic
-
         return write_atomic(path, self.server.scene.as_html())
 
     def show(self, height: int = 600, static: bool = False) -> Any:
@@ -259,16 +260,13 @@ class ViewerApp:
 
 
 def resolve_content(content: Any) -> Any:
-    """Turn what :class:`ViewerApp` accepts into a :class:`~orientviz.viewer.demos.Demo`.
+    """Turn what :class:`ViewerApp` accepts into a :class:`~orientviz.viewer.demo.Demo`.
 
     Raises
     ------
     InputError
         Unknown demo, unreadable file or an object the viewer cannot show.
     """
-    from .demos import DEMOS, Demo, demo_from_block, load_demo
-    from .solved import Solved, solution_demo
-
     if isinstance(content, str | Path):
         name = str(content)
         return load_demo(name) if name in DEMOS else demo_from_file(name)
@@ -290,8 +288,6 @@ def demo_from_file(target: str) -> Any:
 
     Raises what ``solve`` reports (:func:`orientviz.io.solve.failure`), before any server.
     """
-    from .solved import solution_demo, solve_target
-
     return solution_demo(solve_target(target))
 
 
@@ -326,8 +322,6 @@ def run_from_cli(args: argparse.Namespace) -> int:
     A file or data set that cannot be solved gets ``orientviz solve``'s one line and exit
     code before any server starts. Returns the exit code.
     """
-    from ..io.solve import failure
-
     target = args.target or DEFAULT_DEMO
     try:
         content = resolve_content(target)  # a bad file is refused before a server starts

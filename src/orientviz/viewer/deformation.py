@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..block import Block
+from ..bundle import ap_set, bundle_adjust
 from .block_geometry import COLORS
 from .state import BlockState
 
@@ -60,8 +61,6 @@ def self_calibration_fields(
     start: Block, reference: Block, ap: str = "ebner12"
 ) -> tuple[F64, F64, str]:
     """Point errors (p, 3) m of bundles without and with self-calibration, and a summary line."""
-    from ..bundle import ap_set, bundle_adjust
-
     p = start.n_points
     out = []
     for add in (None, ap_set(ap)):
@@ -77,7 +76,7 @@ def self_calibration_fields(
 
 
 def deformation_extra(state: BlockState, reference: Block):
-    """An ``extra`` builder (see :class:`~orientviz.viewer.demos.Demo`) for the deformation view."""
+    """An ``extra`` builder (see :class:`~orientviz.viewer.demo.Demo`) for the deformation view."""
     ref = reference.points.xyz.copy()
 
     def build(app: Any) -> dict:

@@ -8,56 +8,29 @@
 * ``radar`` — Geier's radar panorama geometry: stations, range spheres, projection
   circles and the two trilateration candidates.
 
-A :class:`Demo` bundles the state for the block panel with an optional ``extra``
+A :class:`~orientviz.viewer.demo.Demo` bundles the state for the block panel with an optional ``extra``
 builder for content beyond a block (parallax arrows, radar spheres).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from ..adjust import Adjustment
 from ..block import Block
 from ..errors import InputError
+from ..simulate import simulate_block
+from ..simulate.systematic import typical
+from .deformation import deformation_extra
+from .demo import Demo
+from .pair_scene import pair_demo as build_pair
+from .radar_scene import radar_demo as build_radar
 from .state import BlockState
 
 #: default seed of the demos (deterministic scenes)
 SEED = 7
-
-
-@dataclass
-class Demo:
-    """What the viewer shows.
-
-    Attributes
-    ----------
-    name, title : str
-    description : str
-        Markdown shown at the top of the panel.
-    state : BlockState or None
-        A block for the scene and the orientation/adjustment panel.
-    extra : callable or None
-        ``extra(app) -> dict``: adds further nodes and controls to the
-        :class:`~orientviz.viewer.app.ViewerApp` (``app.server``, ``app.scene`` — the
-        block scene or None —, ``app.guard``, ``app.report``). The dict may hold
-        ``"camera"`` = (position, look_at, size) for scenes without a block.
-    message : str or None
-        Shown in the panel at the start (e.g. why the adjustment did not converge).
-    solution : Solution or None
-        A problem file's solution (:mod:`orientviz.viewer.solved`), for the panel.
-    """
-
-    name: str
-    title: str
-    description: str
-    state: BlockState | None = None
-    extra: Callable[[Any], dict] | None = None
-    message: str | None = None
-    solution: Any = None
 
 
 def demo_from_block(block: Block, result: Adjustment | None = None, title: str = "Block") -> Demo:
@@ -74,9 +47,6 @@ def block_demo(
     rng: np.random.Generator | int = SEED, strips: int = 3, images_per_strip: int = 8
 ) -> Demo:
     """A simulated block with blunders and systematic image errors."""
-    from ..simulate import simulate_block
-    from ..simulate.systematic import typical
-
     sim = simulate_block(
         strips,
         images_per_strip,
@@ -94,23 +64,17 @@ def block_demo(
         "under *act on the adjustment* (undo / rewind in the list of changes); *reset* "
         "starts again from the approximate values."
     )
-    from .deformation import deformation_extra
-
     return Demo("block", "Simulated block", desc, state, deformation_extra(state, sim.truth))
 
 
 def pair_demo(rng: np.random.Generator | int = SEED) -> Demo:
     """A stereo pair with y-parallaxes (Kovarik's camera, right image misoriented)."""
-    from .pair_scene import pair_demo as build
-
-    return build(rng)
+    return build_pair(rng)
 
 
 def radar_demo() -> Demo:
     """Geier's radar panorama test geometry."""
-    from .radar_scene import radar_demo as build
-
-    return build()
+    return build_radar()
 
 
 def design_demo() -> Demo:

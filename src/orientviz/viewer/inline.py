@@ -24,6 +24,7 @@ import numpy as np
 
 from .app import ViewerApp, resolve_content
 from .block_geometry import COLORS, BlockGeometry
+from .geometry import frustum_segments
 
 
 def scene_figure(
@@ -100,8 +101,6 @@ def scene_figure(
 
 def g_segments(geo: BlockGeometry) -> np.ndarray:
     """Frustum edges (m·8, 2, 3) of all images in the scene frame."""
-    from .geometry import frustum_segments
-
     return frustum_segments(geo.frustum_corners())
 
 

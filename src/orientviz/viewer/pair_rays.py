@@ -24,6 +24,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..orientation.epipolar import normal_case_rotation, normalise_points
+from ..orientation.relative import y_parallax
+from ..rotation import matrix_from_opk
 from .geometry import closest_points_of_rays
 
 F64 = NDArray[np.float64]
@@ -39,8 +42,6 @@ def pair_frames(plotter: Any) -> tuple[F64, F64, F64, F64]:
     R1, R2 : ndarray, shape (3, 3)
         Image → model rotations (R1 = I, R2 from the dials).
     """
-    from ..rotation import matrix_from_opk
-
     st = plotter.state
     R1 = matrix_from_opk(*st.angles_left, sequence=st.sequence)
     R2 = matrix_from_opk(*st.angles_right, sequence=st.sequence)
@@ -72,8 +73,6 @@ def point_rays(plotter: Any, point: ArrayLike, reach: float = 1.15) -> dict[str,
         ``right_off_plane`` distance of the right ray's closest point from that plane
         (mm, signed along the normal).
     """
-    from ..orientation.relative import y_parallax
-
     P = np.asarray(point, dtype=float).reshape(1, 3)
     xy1, xy2 = plotter.pair.images(P)
     c = float(plotter.config.c)
@@ -126,8 +125,6 @@ def normalised_pair(plotter: Any, points: ArrayLike) -> dict[str, Any]:
         right: the epipolar lines are the rows); ``R_n`` (3, 3) the common rotation;
         ``c`` (mm); ``half_format`` (mm) half the side of the photographs.
     """
-    from ..orientation.epipolar import normal_case_rotation, normalise_points
-
     P = np.asarray(points, dtype=float).reshape(-1, 3)
     xy1, xy2 = plotter.pair.images(P)
     c = float(plotter.config.c)

@@ -34,10 +34,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..orientation.plotter import AnalogPlotter, PlotterConfig, true_pair
 from ..rotation import matrix_from_opk
 from ..units import RHO_C
 from . import geometry as g
 from .block_geometry import COLORS
+from .demo import Demo
 from .epipolar_picture import normalised_picture
 from .pair_rays import normalised_pair, plane_mesh, point_rays
 
@@ -106,11 +108,8 @@ def parallax_arrows(points: F64, parallax: F64, exaggeration: float) -> F64:
     return g.arrow_segments(points + half, -2.0 * half, head=0.3)
 
 
-def pair_demo(rng: np.random.Generator | int = 7) -> Any:
+def pair_demo(rng: np.random.Generator | int = 7) -> Demo:
     """The ``pair`` demo (see the module docstring)."""
-    from ..orientation.plotter import AnalogPlotter, PlotterConfig, true_pair
-    from .demos import Demo
-
     gen = np.random.default_rng(rng) if isinstance(rng, int) else rng
     cfg = PlotterConfig(sigma_by=0.0, sigma_z=0.0)
     pair = true_pair(cfg, rng=gen)

@@ -16,6 +16,11 @@ from typing import Any
 import numpy as np
 
 from ..units import from_rad, to_rad
+from .legend import block_legend
+from .panel_act import ActControls
+from .panel_camera import CameraControls
+from .panel_precision import PrecisionControls
+from .panel_quality import QualityControls
 from .scene import BlockScene
 
 ANGLES = ("omega", "phi", "kappa")
@@ -106,10 +111,6 @@ class BlockPanel:
                 ("strips", True), ("models", False), ("ellipsoids", True),
             ):  # fmt: skip
                 h[f"show_{key}"] = gui.add_checkbox(key, on)
-        from .panel_act import ActControls
-        from .panel_camera import CameraControls
-        from .panel_precision import PrecisionControls
-        from .panel_quality import QualityControls
 
         self.quality = QualityControls(self).build()
         self.precision = PrecisionControls(self).build()
@@ -279,8 +280,6 @@ class BlockPanel:
 
     def update_legend(self) -> None:
         """Name the colours of what the scene draws now (:func:`~orientviz.viewer.legend.block_legend`)."""
-        from .legend import block_legend
-
         self.handles["legend"].content = block_legend(self.scene)
 
     def fly_to_selected(self) -> None:

@@ -18,6 +18,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..lens import BackwardLens, backward_ideal
+from .legend import swatch
+
 F64 = NDArray[np.float64]
 
 #: Colour of the distortion arrows (RGB), outside the residuals' quality ramp.
@@ -78,8 +81,6 @@ def distortion_vectors(cam: Any, lo: F64, hi: F64, group: int = 0, n: int = 9) -
     """Grid points m (k, 2) mm over the rectangle ``lo``–``hi`` (the measured points'
     extent) and the lens's correction x̄(m) − (m − p) (k, 2) mm there: the backward
     model (:func:`orientviz.lens.backward_ideal`)."""
-    from ..lens import BackwardLens, backward_ideal
-
     v = dict(zip(cam.names, cam.value[group]))
     lens = BackwardLens(
         v["c"], v["x0"], v["y0"], K=(v["K1"], v["K2"], v["K3"]), P=(v["P1"], v["P2"]),
@@ -177,8 +178,6 @@ class CameraControls:
         self.handles["table"].content = (
             self.text + f"  \ndistortion arrows ×{factor:.3g} (largest {big * 1e3:.1f} µm)"
         )
-        from .legend import swatch
-
         scene.legend_extra = [
             f"{swatch(DISTORTION_COLOUR, '→')} lens distortion of the selected image "
             f"(×{factor:.3g}, largest {big * 1e3:.0f} µm)"

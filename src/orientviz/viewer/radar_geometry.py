@@ -26,6 +26,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..radar.ppi import azimuth_direction, plane_normal, sphere_radius
+
 F64 = NDArray[np.float64]
 I32 = NDArray[np.int32]
 
@@ -156,8 +158,6 @@ def geier_construction(point: ArrayLike, xy: ArrayLike, image: Any, n: int = 181
         ⟂ k (rad); ``gap`` distance of the target from the circle (m, 0 for exact
         image coordinates).
     """
-    from ..radar.ppi import azimuth_direction, plane_normal, sphere_radius
-
     P = np.asarray(point, dtype=float).reshape(3)
     b = np.asarray(xy, dtype=float).reshape(1, 2)
     X0 = np.asarray(image.X0, dtype=float)

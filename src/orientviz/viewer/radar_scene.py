@@ -36,8 +36,12 @@ from typing import Any
 
 import numpy as np
 
+from ..radar import geier1973 as G
+from ..radar import scene as RS
+from ..radar.trilateration import sphere_ranges
 from . import geometry as g
 from . import radar_geometry as rg
+from .demo import Demo
 
 STATION_COLORS = {1: (40, 70, 160), 2: (250, 130, 0), 3: (20, 150, 60)}
 FADED = (175, 175, 175)
@@ -75,10 +79,6 @@ def radar_geometry(surface: str = "fig7", image: int = 1, rounded: bool = True) 
         ``candidates`` (2, 3) lower/upper; ``discriminant`` (m²); ``image`` the
         :class:`~orientviz.radar.ppi.RadarImage`.
     """
-    from ..radar import geier1973 as G
-    from ..radar import scene as RS
-    from ..radar.trilateration import sphere_ranges
-
     P = G.points(surface)
     imgs = G.images()
     xy = G.image_coordinates(surface, image, rounded=rounded)
@@ -113,10 +113,8 @@ def legend_html() -> str:
     return f'<div style="font-size:0.8em;line-height:1.3">{rows}</div>'
 
 
-def radar_demo() -> Any:
+def radar_demo() -> Demo:
     """The ``radar`` demo (see the module docstring)."""
-    from .demos import Demo
-
     desc = (
         "Geier's test: 25 grid points 15 km below three airborne radar stations. Choose an "
         "image and a target: the image keeps only the azimuth and s_e = √(s² − h²), the "
@@ -141,8 +139,6 @@ class RadarView:
 
     # ------------------------------------------------------------------ building
     def build(self) -> dict:
-        from ..radar import geier1973 as G
-
         app = self.app
         sc, gui = app.server.scene, app.server.gui
         geo = radar_geometry()

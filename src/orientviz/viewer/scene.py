@@ -31,6 +31,8 @@ import numpy as np
 
 from . import geometry as g
 from .block_geometry import COLORS, BlockGeometry
+from .geometry import frustum_segments
+from .precision_view import confidence_factor, neighbour_correlations
 
 #: Blocks with more images draw their frustums batched per strip, not one node per image.
 FRUSTUM_NODE_LIMIT = 500
@@ -196,8 +198,6 @@ class BlockScene:
             self.strip_frustums[int(s)] = (h, idx)
 
     def _frustum_segments(self, images: np.ndarray) -> np.ndarray:
-        from .geometry import frustum_segments
-
         return frustum_segments(self.geo.frustum_corners(images)).astype(np.float32)
 
     def _bind_click(self, handle: Any, k: int) -> None:
@@ -224,8 +224,6 @@ class BlockScene:
             )
 
     def _selected_segments(self) -> np.ndarray:
-        from .geometry import frustum_segments
-
         return frustum_segments(self.geo.frustum_corners(np.array([self.selected])))
 
     # ------------------------------------------------------------------ updates
@@ -333,8 +331,6 @@ class BlockScene:
         ``"factor"`` (× the automatic exaggeration, which is recomputed when ``new_gain``).
         Returns the exaggeration used (None if nothing has a covariance).
         """
-        from .precision_view import confidence_factor, neighbour_correlations
-
         opt = self.ellipsoid_options
         for key in ("ellipsoids", "station_ellipsoids"):
             old = self.nodes.pop(key, None)

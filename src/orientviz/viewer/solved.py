@@ -27,6 +27,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..block import Block
+from ..bundle.problem import BundleProblem, BundleState, point_setup
+from ..errors import InputError
+from ..io.kinds.block import adjust_block, bundle_camera_options
+from ..io.solve import load_named, solve_problem
+from .demo import Demo
+from .geometry import framing
+from .state import BlockState
 
 F64 = NDArray[np.float64]
 
@@ -47,8 +54,6 @@ def solve_target(target: str) -> Solved:
     InputError, AdjustmentError, …
         What ``orientviz solve`` reports (:func:`orientviz.io.solve.failure`).
     """
-    from ..io.solve import load_named, solve_problem
-
     problem = load_named(target)
     return Solved(problem, solve_problem(problem))
 
@@ -65,8 +70,6 @@ class FileAdjuster:
         self.problem = problem
 
     def __call__(self, block: Block, max_iter: int, precision: bool = True) -> Any:
-        from ..io.kinds.block import adjust_block
-
         adj, _ = adjust_block(
             self.problem, block, max_iter=max_iter, precision=precision, history_x=True
         )
@@ -91,8 +94,6 @@ class CameraTerms:
     @classmethod
     def of(cls, problem: Any, block: Block) -> CameraTerms | None:
         """The camera terms of ``problem`` (None if its cameras have no model)."""
-        from ..io.kinds.block import bundle_camera_options
-
         opts = bundle_camera_options(block)
         if not opts:
             return None
@@ -101,9 +102,6 @@ class CameraTerms:
     def _problem(self, block: Block) -> Any:
         key = (id(block.observations), block.n_images, block.n_points)
         if self._cache is None or self._cache[0] != key:
-            from ..bundle.problem import BundleProblem, point_setup
-            from ..io.kinds.block import bundle_camera_options
-
             opts = bundle_camera_options(block)  # ap groups of this (sub-)block
             setup = point_setup(block, self.control)
             self._cache = (key, BundleProblem(block, setup, **opts))
@@ -111,8 +109,6 @@ class CameraTerms:
 
     def misclosure(self, block: Block, ap: F64) -> F64:
         """l − f (n, 2) in mm at the block's orientations and points and terms ``ap``."""
-        from ..bundle.problem import BundleState
-
         prob = self._problem(block)
         e = block.residuals()
         if np.size(ap) != prob.q:
@@ -126,17 +122,14 @@ class CameraTerms:
         return e
 
 
-def solution_demo(solved: Solved, title: str | None = None) -> Any:
-    """The :class:`~orientviz.viewer.demos.Demo` of a solved problem file.
+def solution_demo(solved: Solved, title: str | None = None) -> Demo:
+    """The :class:`~orientviz.viewer.demo.Demo` of a solved problem file.
 
     Block problems: the block the solve started from, its iterations on the scrubber,
     the result at the end (σ̂0 the solution's), actions re-solving with the file's model.
     Other frame kinds (resection, intersection): the solved block. Kinds without images
     (pair, similarity, radar): the solution's report in the panel and its points.
     """
-    from .demos import Demo
-    from .state import BlockState
-
     problem, sol = solved.problem, solved.solution
     adj = sol.adjustment
     name = title or problem.name or problem.kind
@@ -196,8 +189,6 @@ def _solved_block(block: Block, sol: Any) -> Block:
 
 def _not_stepped(kind: str) -> Any:
     def adjuster(block: Block, max_iter: int, precision: bool = True) -> Any:
-        from ..errors import InputError
-
         raise InputError(
             f"a {kind!r} problem is shown as solved; stepping and actions apply to block problems"
         )
@@ -213,8 +204,6 @@ def _points_extra(sol: Any) -> Any:
         xyz = xyz[np.all(np.isfinite(xyz), axis=1)]
         if xyz.shape[0] == 0:
             return {}
-        from .geometry import framing
-
         centre = xyz.mean(axis=0)
         size = float(np.ptp(xyz, axis=0).max()) or 1.0
         P = (xyz - centre).astype(np.float32)

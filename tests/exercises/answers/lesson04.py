@@ -61,7 +61,33 @@ def _sol_normal_step(A, dl, P):
     return np.linalg.solve(N, A.T @ (P * dl))
 
 
+def _sigmas(xy, X, sigma, c, p, k_all=True):
+    """A-priori σ of the six parameters from the points X (image σ one per point)."""
+    f = lambda q: _project(X, q[:3], _R(q[3:]), c).ravel()  # noqa: E731
+    h = np.array([1e-3, 1e-3, 1e-3, 1e-7, 1e-7, 1e-7])
+    A = np.column_stack([(f(p + e) - f(p - e)) / (2 * e[i]) for i, e in enumerate(np.diag(h))])
+    P = np.repeat(1.0 / np.asarray(sigma) ** 2, 2)
+    return np.sqrt(np.diag(np.linalg.inv(A.T @ (P[:, None] * A))))
+
+
+def _sol_best_extra_point(
+    xy, X, sigma, c, p, xy_new, X_new, sigma_new, k, weighted=True, pick=np.argmin
+):
+    s = [
+        _sigmas(
+            None,
+            np.vstack([X, X_new[j]]),
+            np.r_[sigma, sigma_new[j] if weighted else sigma[0]],
+            c,
+            p,
+        )[k]
+        for j in range(len(X_new))
+    ]
+    return int(pick(s))
+
+
 SOLUTIONS = {
+    "check_best_extra_point": _sol_best_extra_point,
     "check_resection": _sol_resection,
     "check_two_rays": _sol_two_rays,
     "check_design_X0": _sol_design_X0,
@@ -70,6 +96,14 @@ SOLUTIONS = {
 }
 
 MUTANTS = {
+    "check_best_extra_point": {
+        "farthest from the centre": lambda xy, X, s, c, p, xyn, Xn, sn, k: int(
+            np.argmax(np.hypot(*xyn.T))
+        ),
+        "weights forgotten": lambda *a: _sol_best_extra_point(*a, weighted=False),
+        "always Y0": lambda *a: _sol_best_extra_point(*a[:-1], 1),
+        "argmax": lambda *a: _sol_best_extra_point(*a, pick=np.argmax),
+    },
     "check_resection": {
         "weights forgotten": lambda *a: _sol_resection(*a, weighted=False),
         "divides by n": lambda *a: _sol_resection(*a, divide_by_n=True),

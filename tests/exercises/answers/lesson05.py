@@ -69,7 +69,23 @@ def _kovarik_iteration(xy1, xy2, c, b, tol=1e-9, max_iter=20, mistake=None):
     return e, steps
 
 
+def _sol_relative_from_exterior(X01, R1, X02, R2, b, mistake=None):
+    R = R1.T @ R2
+    if mistake == "R_transposed":
+        R = R.T
+    elif mistake == "object_frame":
+        R = R2 @ R1.T
+    B = R1.T @ (X02 - X01) if mistake != "base_not_rotated" else X02 - X01
+    if mistake != "not_scaled":
+        B = B * b / B[0]
+    ang = np.array(ov.opk_from_matrix(R))
+    if mistake == "degrees":
+        ang = np.degrees(ang)
+    return np.r_[B[1], B[2], ang]
+
+
 SOLUTIONS = {
+    "check_relative_from_exterior": _sol_relative_from_exterior,
     "check_kovarik_iteration": _kovarik_iteration,
     "check_design": _sol_design,
     "check_parallax": _sol_parallax,
@@ -79,6 +95,10 @@ SOLUTIONS = {
 }
 
 MUTANTS = {
+    "check_relative_from_exterior": {
+        k: (lambda *a, k=k: _sol_relative_from_exterior(*a, mistake=k))
+        for k in ("R_transposed", "object_frame", "base_not_rotated", "not_scaled", "degrees")
+    },
     "check_kovarik_iteration": {
         k: (lambda *a, k=k: _kovarik_iteration(*a, mistake=k))
         for k in ("one_step", "sign", "R_transposed")

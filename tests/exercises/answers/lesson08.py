@@ -71,7 +71,37 @@ def _compose(s1, s2):
     return m1 * m2, R1 @ R2, m1 * R1 @ t2 + t1
 
 
+def _sol_intersect_many(X0, R, xy, c, mistake=None):
+    if mistake == "R_transposed":
+        R = np.transpose(R, (0, 2, 1))
+    d = np.einsum("nij,nj->ni", R, np.column_stack([xy, np.full(len(xy), -c)]))
+    if mistake != "not_normalised":
+        d = d / np.linalg.norm(d, axis=1)[:, None]
+    M = np.eye(3)[None] * np.sum(d * d, axis=1)[:, None, None] - d[:, :, None] * d[:, None, :]
+    return np.linalg.solve(M.sum(0), np.einsum("nij,nj->i", M, X0))
+
+
+def _pairwise_midpoints(X0, R, xy, c):
+    n = len(X0)
+    return np.mean(
+        [
+            _sol_intersect_many(X0[[i, k]], R[[i, k]], xy[[i, k]], c)
+            for i in range(n)
+            for k in range(i + 1, n)
+        ],
+        axis=0,
+    )
+
+
+def _plus_c(X0, R, xy, c):
+    d = np.einsum("nij,nj->ni", R, np.column_stack([xy, np.full(len(xy), c)]))
+    d = d / np.linalg.norm(d, axis=1)[:, None]
+    M = np.eye(3)[None] - d[:, :, None] * d[:, None, :]
+    return np.linalg.solve(M.sum(0), np.einsum("nij,nj->i", M, X0))
+
+
 SOLUTIONS = {
+    "check_intersect_many": _sol_intersect_many,
     "check_compose": _compose,
     "check_sigma0": _sigma0,
     "check_conformal": _conformal,
@@ -79,6 +109,12 @@ SOLUTIONS = {
 }
 
 MUTANTS = {
+    "check_intersect_many": {
+        "R transposed": lambda *a: _sol_intersect_many(*a, mistake="R_transposed"),
+        "not normalised": lambda *a: _sol_intersect_many(*a, mistake="not_normalised"),
+        "pairwise midpoints": _pairwise_midpoints,
+        "+c": _plus_c,
+    },
     "check_compose": {
         "order": lambda s1, s2: _compose(s2, s1),
         "no scale in t": lambda s1, s2: (s1[0] * s2[0], s1[1] @ s2[1], s1[1] @ s2[2] + s1[2]),

@@ -58,7 +58,22 @@ def _inner_solve(N, b, G, mode="ok"):
     return (-1.0 if mode == "sign" else 1.0) * Q @ b, Q
 
 
+def _sol_null_space(N, rule="roundoff"):
+    w, V = np.linalg.eigh(N)
+    a = np.abs(w)
+    if rule == "roundoff":
+        d = int(np.sum(a < len(N) * np.finfo(float).eps * a.max()))
+    elif rule == "gap":
+        d = int(np.argmax(np.log10(a[1:] + 1e-300) - np.log10(a[:-1] + 1e-300))) + 1
+    elif rule == "relative":
+        d = int(np.sum(a < 1e-10 * a.max()))
+    else:  # absolute
+        d = int(np.sum(a < 1e-8))
+    return V[:, :d]
+
+
 SOLUTIONS = {
+    "check_null_space": _sol_null_space,
     "check_inner_solve": _inner_solve,
     "check_helmert_columns": lambda xy: _helmert(xy),
     "check_s_transform": lambda x, Q, G, pts: _s_transform(x, Q, G, pts, "ok"),
@@ -66,6 +81,13 @@ SOLUTIONS = {
 }
 
 MUTANTS = {
+    "check_null_space": {
+        "relative tolerance": lambda N: _sol_null_space(N, "relative"),
+        "largest jump": lambda N: _sol_null_space(N, "gap"),
+        "absolute tolerance": lambda N: _sol_null_space(N, "absolute"),
+        "rows": lambda N: _sol_null_space(N).T,
+        "largest": lambda N: np.linalg.eigh(N)[1][:, -_sol_null_space(N).shape[1] :],
+    },
     "check_inner_solve": {
         "ridge": lambda N, b, G: _inner_solve(N, b, G, "ridge"),
         "whole_inverse": lambda N, b, G: _inner_solve(N, b, G, "whole"),

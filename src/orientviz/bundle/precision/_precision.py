@@ -39,7 +39,9 @@ import scipy.linalg
 from numpy.typing import NDArray
 
 from .._result import ExteriorPairs, RayGains
+from ..problem._ap_normal import dense
 from ..reduced import DENSE_CHUNK_BYTES, ReducedStructure, dense_matrix, factor_reduced
+from ._precision_ap import banded_border, border_inverse, point_terms
 
 F64 = NDArray[np.float64]
 
@@ -175,14 +177,10 @@ class ReducedInverse:
         """
         m = self._m
         if self._Z is not None:
-            from ..problem._ap_normal import dense
-
             E = dense(E)
             Y = self._Z @ E
             EtY = E.T @ Y
             return Y.reshape(m, 6, -1), 0.5 * (EtY + EtY.T), np.arange(m)
-        from ._precision_ap import banded_border
-
         st = self._fac.structure
         Yp, EtY = banded_border(self._fac.data, st.scalar_perm, E, st.pos_img)
         return Yp.reshape(m, 6, -1), EtY, st.pos_img
@@ -274,8 +272,6 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     nb = q + (prob.na if aux else 0)  # border: additional parameters, auxiliary offsets
     fast_ap = bool(q) and not aux
     if fast_ap:  # parameters only: the banded border path (bundle_precision_ap)
-        from ._precision_ap import border_inverse
-
         E = ne.ap.E_border if ne.ap is not None else ne.ap.E
         Faa, Qca3, dQ = border_inverse(inverse, E, ne.ap.F, S)
         Zblk = Zblk + dQ
@@ -307,8 +303,6 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     Jew = Je * sw[:, :, None]
     Jpw = Jp * sw[:, :, None]
     if fast_ap:  # the parameters' terms, sparse by (ray, group) and (point, group) pairs
-        from ._precision_ap import point_terms
-
         dQpp, Qap_pg, Hray = point_terms(prob, ne, Faa, Qca3, Qcp, Jew, Jpw)
     elif nb:
         hb = np.zeros((S.n_pt, nb, 3))  # Σ_b Tap_b placed in its group columns

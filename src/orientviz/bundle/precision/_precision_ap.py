@@ -33,6 +33,7 @@ import scipy.linalg
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
+from ..problem._ap_normal import BorderE
 from ..problem._border import band_backward_solve, band_forward_solve
 
 F64 = NDArray[np.float64]
@@ -97,8 +98,6 @@ def banded_border(L: F64, perm: I64, E, pos: I64) -> tuple[F64, F64]:
     EtY : ndarray, shape (q, q)
         Eᵀ S⁻¹ E = ZᵀZ with Z = L⁻¹ E (symmetric by construction).
     """
-    from ..problem._ap_normal import BorderE
-
     Ep = E.permuted(pos, np.float64) if isinstance(E, BorderE) else E[perm]
     Z = band_forward_solve(L, Ep)
     del Ep

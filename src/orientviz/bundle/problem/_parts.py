@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 
 from ...block import Block
 from ...errors import InputError
+from ..model._additional import ap_set
 from ..model._lens import BoundLens, LensModel
 from ..reduced import ReducedStructure
 from ._ap_normal import APStructure
@@ -295,8 +296,6 @@ def additional_block(
     if additional is None:
         return AdditionalBlock()
     if isinstance(additional, str):  # a set's name, as on the command line
-        from ..model._additional import ap_set
-
         additional = ap_set(additional)
     elif not isinstance(additional, LensModel) and not (
         callable(getattr(additional, "design", None)) and hasattr(additional, "names")

@@ -32,6 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
+from ._dissection import nested_dissection
 from ._options import SOLVER_CHOICES, ReducedOptions
 
 I64 = NDArray[np.int64]
@@ -98,8 +99,6 @@ def sparse_cost(block_i: I64, block_k: I64, m: int, positions=None) -> tuple[flo
     """Flops of the multifrontal Cholesky of S and its number of fronts, from a nested
     dissection of the image graph (:func:`orientviz.bundle.reduced._dissection.nested_dissection`;
     ``positions``: projection centres, for geometric separators)."""
-    from ._dissection import nested_dissection
-
     diss = nested_dissection(block_i, block_k, m, positions)
     return diss.flops, diss.n_nodes
 

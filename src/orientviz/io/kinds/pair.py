@@ -5,9 +5,12 @@ The file gives, per point, the image coordinates in the left (``xl``, ``yl``) an
 principal distance ``camera.c``. The five elements of a dependent pair (``by``, ``bz``,
 ``omega``, ``phi``, ``kappa`` of the right image, the left one fixed) or an independent
 pair (``phi1``, ``kappa1``, ``phi2``, ``omega2``, ``kappa2``) are estimated from the
-rigorous y-parallaxes; angles in the file's ``sequence``. Model lengths (the base, by,
-bz, the model points, the parallaxes and their σ) are in ``units.length``; the model
-base defaults to the median x-parallax, i.e. the model at image scale.
+rigorous y-parallaxes (``options.method``: ``"parallax"``, Kovarik's estimator, the
+default), from all image coordinates with the model points unknown (``"collinearity"``)
+or from one coplanarity condition per point (``"coplanarity"``); angles in the file's
+``sequence``. Model lengths (the base, by, bz, the model points, the parallaxes, the
+triple products and their σ) are in ``units.length``; the model base defaults to the
+median x-parallax (``options.base = "mean"``: the mean), i.e. the model at image scale.
 
 Solvers: :func:`orientviz.orientation.relative.relative_orientation` and, with
 ``options.route = "essential"``, :func:`orientviz.orientation.essential.essential_route`.
@@ -144,7 +147,8 @@ def solve(problem: Problem, method: str | None) -> Solution:
         for i, n in enumerate(names)
     ]
     params.insert(0, Parameter("bx", b, 0.0, "length"))
-    collinear = getattr(adj, "method", "parallax") == "collinearity"
+    used = getattr(adj, "method", "parallax")  # the essential route: parallax-like
+    collinear = used == "collinearity"
     points = getattr(adj, "points", None)
     n = len(data.ids)
     if points is None or np.shape(points) != (n, 3):
@@ -158,10 +162,14 @@ def solve(problem: Problem, method: str | None) -> Solution:
         point_sigma = np.full((n, 3), np.nan)
         observed = ("observations: rigorous y-parallaxes p_y = Y_left − Y_right in "
                     "units.length")  # fmt: skip
+        if used == "coplanarity":
+            observed = ("observations: one coplanarity condition per point, residual = the "
+                        "triple product F = B·(r1 × r2) with r = R (x, y, −c)/c, in "
+                        "units.length; its σ propagated from the image coordinates")  # fmt: skip
         what = "model points: the rays' meeting points in the XZ projection (no σ)"
     return Solution(
         kind="pair",
-        method=f"{route} ({elements} pair, {'collinearity' if collinear else 'parallax'})",
+        method=f"{route} ({elements} pair, {used})",
         adjustment=adj,
         units=problem.units,
         sequence=data.sequence,
