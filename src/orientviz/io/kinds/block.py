@@ -160,14 +160,15 @@ def with_check_rays(block: Block) -> Block:
     return out
 
 
-def solve(problem: Problem, method: str | None) -> Solution:
+def solve(problem: Problem, method: str | None, **bundle: Any) -> Solution:
     """Adjust the block by ``method`` and collect the report.
 
     Datum options (:mod:`orientviz.io.datum`): ``free`` (a free network, minimum constraints) and
     ``fix`` (images/points held at their given values); ``robust`` (``"huber"``,
     ``"cauchy"``) with ``robust_scale`` reweights the bundle (:mod:`._robust`). The
     solution's ``start`` is the block the adjustment started from (approximations
-    computed, datum applied).
+    computed, datum applied). ``bundle``: further keywords of the bundle run
+    (:func:`adjust_block`, e.g. ``precision=False``).
     """
     method = method or "bundle"
     loss = str(problem.options.get("robust", "none"))
@@ -176,7 +177,7 @@ def solve(problem: Problem, method: str | None) -> Solution:
                          problem.source, "options.robust")  # fmt: skip
     block, datum_notes = prepare(problem)
     if method == "bundle":
-        adj, robust_note = adjust_block(problem, block)
+        adj, robust_note = adjust_block(problem, block, **bundle)
         sol = solution_from_block_adjustment(problem, block, adj, method)
         sol.notes[:0] = datum_notes + ([robust_note] if robust_note else [])
         sol.start = block
