@@ -9,7 +9,9 @@ planted "mistake" is in fact right and no checker lets it through.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
+import io
 import json
 import pathlib
 import re
@@ -18,10 +20,22 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from orientviz.exercises._common import rejection
+from orientviz.exercises import CheckFailed
 from orientviz.orientation.relative import design_dependent
 
 ROOT = pathlib.Path(__file__).parents[2]
+
+
+def rejection(check, answer):
+    """The CheckFailed that ``check(answer)`` raises (None if it passes), its ✓ line silenced."""
+    with contextlib.redirect_stdout(io.StringIO()):
+        try:
+            check(answer)
+        except CheckFailed as exc:
+            return exc
+    return None
+
+
 MARK = "# A colleague's version: one line is wrong."
 
 #: (lesson, function) → (checker, a piece of its diagnosis)
