@@ -15,6 +15,7 @@ builder for content beyond a block (parallax arrows, radar spheres).
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 

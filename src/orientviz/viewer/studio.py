@@ -33,6 +33,7 @@ from ..design import (
     LiveDesign,
     Suggestion,
     accuracy_law,
+    add_images,
     assess_models,
     cross_strip,
     design_block,
@@ -205,7 +206,11 @@ class Studio:
     def _set_block(self, block, spec) -> None:
         self.spec = spec
         self.live = LiveDesign(block, spec)
-        self.law = {"sigma_xy": float("nan"), "sigma_z": float("nan"), "note": LAW_NONE}
+        if self.design is None:
+            self.law = {"sigma_xy": float("nan"), "sigma_z": float("nan"), "note": LAW_NONE}
+        else:  # images added or removed: the law still describes the regular plan
+            self.law = dict(accuracy_law(self.design, spec))
+            self.law["note"] += "; for the plan without the images added or removed since"
         self._models = None
 
     def _structural(self, label: str, change) -> DesignQuality:
@@ -241,6 +246,20 @@ class Studio:
         label = what or ("image " + ", ".join(names) + " removed")
         return self._structural(label, lambda: self._set_block(b, self.spec))
 
+    def add_image(self, xy) -> DesignQuality:
+        """Add an image above the ground position ``xy`` (m) at the height, attitude and in
+        the strip of the nearest projection centre."""
+        I = self.block.images
+        xy = np.asarray(xy, float)[:2]
+        i = int(np.argmin(np.linalg.norm(I.X0[:, :2] - xy[None, :], axis=1)))
+        X0 = np.r_[xy, I.X0[i, 2]]
+        b = add_images(self.block, X0[None], I.angles[i][None], strip=int(I.strip[i]))
+        name = b.images.ids[-1]
+        return self._structural(
+            f"image {name} added at X {xy[0]:,.0f} m, Y {xy[1]:,.0f} m (strip {I.strip[i]})",
+            lambda: self._set_block(b, self.spec),
+        )
+
     def remove_strip(self, strip: int) -> DesignQuality:
         """Remove every image of strip ``strip``."""
         idx = np.flatnonzero(self.block.images.strip == strip)
@@ -253,7 +272,12 @@ class Studio:
         if method not in METHODS:
             raise ValueError(f"method: expected one of {', '.join(METHODS)}, got {method!r}")
         if method != self.method:
-            self.method = method
+            old, self.method = self.method, method
+            try:
+                self.quality  # noqa: B018  (computed now: a failure keeps the old method)
+            except Exception:
+                self.method = old
+                raise
             self.log.append(f"method: {METHODS[method][0]}")
         return self.quality
 
