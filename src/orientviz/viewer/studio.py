@@ -36,6 +36,7 @@ from ..design import (
     add_images,
     assess_models,
     cross_strip,
+    design_auxiliary,
     design_block,
     design_from_block,
     remove_images,
@@ -199,13 +200,15 @@ class Studio:
     def _set_plan(self, design: FlightDesign) -> None:
         self.design = design
         block, self.spec = design_block(design)
-        self.live = LiveDesign(block, self.spec)
+        aux = design_auxiliary(block, design)
+        self.live = LiveDesign(block, self.spec, auxiliary=aux)
         self.law = accuracy_law(design, self.spec)
         self._models = None
 
     def _set_block(self, block, spec) -> None:
         self.spec = spec
-        self.live = LiveDesign(block, spec)
+        aux = design_auxiliary(block, self.design) if self.design is not None else []
+        self.live = LiveDesign(block, spec, auxiliary=aux)
         if self.design is None:
             self.law = {"sigma_xy": float("nan"), "sigma_z": float("nan"), "note": LAW_NONE}
         else:  # images added or removed: the law still describes the regular plan
@@ -325,7 +328,8 @@ class Studio:
             return self.live.quality()
         key = len(self.live.history)
         if self._models is None or self._models[0] != key or self._models[2] is not self.live:
-            self._models = (key, assess_models(self.block, self.spec), self.live)
+            q = assess_models(self.block, self.spec, auxiliary=self.live.auxiliary)
+            self._models = (key, q, self.live)
         return self._models[1]
 
     def point_index(self, name: str) -> int:
@@ -374,6 +378,8 @@ class Studio:
                 f"p = {d.forward_overlap:.0%}, q = {d.side_overlap:.0%}, σ image "
                 f"{d.sigma_image_mm * 1e3:.1f} µm, control σ {d.sigma_control * 100:.0f} cm"
                 + (f", GNSS σ {d.sigma_gnss:.2f} m" if d.sigma_gnss else "")
+                + (f", statoscope σ {d.sigma_statoscope:.2f} m" if d.sigma_statoscope else "")
+                + (f", APR σ {d.sigma_apr:.2f} m" if d.sigma_apr else "")
             )
         else:
             head = f"**{self.title or 'a block'}**"

@@ -15,7 +15,8 @@ Folders:
   by id and its σ, *make control* / *make tie*; *suggest control point* and *accept
   suggestion*; *undo* (every kind of change); the list of changes;
 * **Plan** — strips, images per strip, overlaps, image scale (flying height), image σ,
-  control layout and σ, GNSS σ and *apply plan*
+  control layout and σ, GNSS σ (absolute), statoscope and APR σ (offsets per strip) and
+  *apply plan*
   (builds the design again).
 """
 
@@ -114,6 +115,10 @@ class StudioPanel:
             )  # fmt: skip
             h["spacing"] = gui.add_slider("control spacing [bases]", 1, 20, 1, d.control_spacing)
             h["gnss"] = gui.add_number("GNSS σ [m] (0 = none)", d.sigma_gnss or 0.0, min=0.0)
+            h["statoscope"] = gui.add_number(
+                "statoscope σ [m] (0 = none)", d.sigma_statoscope or 0.0, min=0.0
+            )
+            h["apr"] = gui.add_number("APR σ [m] (0 = none)", d.sigma_apr or 0.0, min=0.0)
             h["apply"] = gui.add_button("apply plan")
         guard = self.view.app.guard
         h["method"].on_update(guard(lambda _e: self.set_method()))
@@ -182,6 +187,8 @@ class StudioPanel:
             sigma_image_mm=float(h["sigma_image"].value) / 1e3, control=str(h["layout"].value),
             control_spacing=int(h["spacing"].value), chain_spacing=int(h["spacing"].value),
             sigma_control=self._sigma(), sigma_gnss=gnss if gnss > 0 else None,
+            sigma_statoscope=float(h["statoscope"].value) or None,
+            sigma_apr=float(h["apr"].value) or None,
         )  # fmt: skip
         st.set_plan(new)
         self.view.redraw(reframe=True)
