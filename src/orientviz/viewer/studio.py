@@ -33,8 +33,10 @@ from ..design import (
     LiveDesign,
     Suggestion,
     accuracy_law,
+    add_images,
     assess_models,
     cross_strip,
+    design_auxiliary,
     design_block,
     design_from_block,
     remove_images,
@@ -198,14 +200,20 @@ class Studio:
     def _set_plan(self, design: FlightDesign) -> None:
         self.design = design
         block, self.spec = design_block(design)
-        self.live = LiveDesign(block, self.spec)
+        aux = design_auxiliary(block, design)
+        self.live = LiveDesign(block, self.spec, auxiliary=aux)
         self.law = accuracy_law(design, self.spec)
         self._models = None
 
     def _set_block(self, block, spec) -> None:
         self.spec = spec
-        self.live = LiveDesign(block, spec)
-        self.law = {"sigma_xy": float("nan"), "sigma_z": float("nan"), "note": LAW_NONE}
+        aux = design_auxiliary(block, self.design) if self.design is not None else []
+        self.live = LiveDesign(block, spec, auxiliary=aux)
+        if self.design is None:
+            self.law = {"sigma_xy": float("nan"), "sigma_z": float("nan"), "note": LAW_NONE}
+        else:  # images added or removed: the law still describes the regular plan
+            self.law = dict(accuracy_law(self.design, spec))
+            self.law["note"] += "; for the plan without the images added or removed since"
         self._models = None
 
     def _structural(self, label: str, change) -> DesignQuality:
@@ -241,6 +249,20 @@ class Studio:
         label = what or ("image " + ", ".join(names) + " removed")
         return self._structural(label, lambda: self._set_block(b, self.spec))
 
+    def add_image(self, xy) -> DesignQuality:
+        """Add an image above the ground position ``xy`` (m) at the height, attitude and in
+        the strip of the nearest projection centre."""
+        I = self.block.images
+        xy = np.asarray(xy, float)[:2]
+        i = int(np.argmin(np.linalg.norm(I.X0[:, :2] - xy[None, :], axis=1)))
+        X0 = np.r_[xy, I.X0[i, 2]]
+        b = add_images(self.block, X0[None], I.angles[i][None], strip=int(I.strip[i]))
+        name = b.images.ids[-1]
+        return self._structural(
+            f"image {name} added at X {xy[0]:,.0f} m, Y {xy[1]:,.0f} m (strip {I.strip[i]})",
+            lambda: self._set_block(b, self.spec),
+        )
+
     def remove_strip(self, strip: int) -> DesignQuality:
         """Remove every image of strip ``strip``."""
         idx = np.flatnonzero(self.block.images.strip == strip)
@@ -253,7 +275,12 @@ class Studio:
         if method not in METHODS:
             raise ValueError(f"method: expected one of {', '.join(METHODS)}, got {method!r}")
         if method != self.method:
-            self.method = method
+            old, self.method = self.method, method
+            try:
+                self.quality  # noqa: B018  (computed now: a failure keeps the old method)
+            except Exception:
+                self.method = old
+                raise
             self.log.append(f"method: {METHODS[method][0]}")
         return self.quality
 
@@ -301,7 +328,8 @@ class Studio:
             return self.live.quality()
         key = len(self.live.history)
         if self._models is None or self._models[0] != key or self._models[2] is not self.live:
-            self._models = (key, assess_models(self.block, self.spec), self.live)
+            q = assess_models(self.block, self.spec, auxiliary=self.live.auxiliary)
+            self._models = (key, q, self.live)
         return self._models[1]
 
     def point_index(self, name: str) -> int:
@@ -350,6 +378,8 @@ class Studio:
                 f"p = {d.forward_overlap:.0%}, q = {d.side_overlap:.0%}, σ image "
                 f"{d.sigma_image_mm * 1e3:.1f} µm, control σ {d.sigma_control * 100:.0f} cm"
                 + (f", GNSS σ {d.sigma_gnss:.2f} m" if d.sigma_gnss else "")
+                + (f", statoscope σ {d.sigma_statoscope:.2f} m" if d.sigma_statoscope else "")
+                + (f", APR σ {d.sigma_apr:.2f} m" if d.sigma_apr else "")
             )
         else:
             head = f"**{self.title or 'a block'}**"
