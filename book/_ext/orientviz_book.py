@@ -1,4 +1,4 @@
-"""Sphinx extension of the orientviz book: static widget snapshots and clear build errors.
+"""Sphinx extension of the orientviz book: static widget and viewer snapshots, clear build errors.
 
 Two things myst-nb does not do on its own:
 
@@ -9,6 +9,10 @@ Two things myst-nb does not do on its own:
   *static snapshot*: the figures and text its Output widgets held when the cell ran,
   with the control settings as a caption. This works for every widget, the lesson
   apps of :mod:`orientviz.widgets` as well as ``ipywidgets.interact`` cells.
+* **The live viewer.** A lesson cell that runs :func:`orientviz.viewer.live.show_live`
+  shows the viser viewer as an IFrame of a server in the kernel; the book has no server,
+  so :func:`_render_mime_type` shows the static picture named in the output's metadata
+  (``book/_static/lesson_viewer/<name>.png``, written by ``tools/make_lesson_snapshots.py``).
 * **A stalled execution.** :func:`patch_shell_polling` works around a lost wake-up in
   nbclient's handling of Output widgets that could stall a lesson for minutes.
 * **Failing notebooks.** With ``nb_execution_raise_on_error = True`` myst-nb stops
@@ -244,6 +248,48 @@ def _render_widget_view(self, data) -> list[nodes.Element]:
     return [box]
 
 
+# --------------------------------------------------------------------------- live viewer
+#: output metadata key of a live viewer (orientviz.viewer.live.SNAPSHOT_KEY; not imported
+#: here so that the extension loads without the viewer's dependencies)
+VIEWER_SNAPSHOT_KEY = "orientviz_viewer_snapshot"
+#: folder (below the book's source) of the lessons' viewer pictures
+LESSON_SNAPSHOTS = Path("_static") / "lesson_viewer"
+#: CSS class of the container holding a viewer picture in the HTML.
+VIEWER_CLASS = "orientviz-viewer-snapshot"
+
+
+def viewer_snapshot_path(srcdir: str | Path, name: str) -> Path:
+    """The picture that stands for the live viewer output ``name`` in the book."""
+    return Path(srcdir) / LESSON_SNAPSHOTS / f"{name}.png"
+
+
+def _render_mime_type(self, data) -> list[nodes.Element]:
+    """myst-nb hook: a live viewer's output becomes its static picture; others unchanged."""
+    name = (data.output_metadata or {}).get(VIEWER_SNAPSHOT_KEY)
+    if not name:
+        return _ORIGINAL["render_mime_type"](self, data)
+    document = getattr(self.renderer, "document", None)
+    source = document.get("source", "?") if document is not None else "?"
+    env = getattr(getattr(document, "settings", None), "env", None)
+    srcdir = getattr(env, "srcdir", None) or Path(__file__).resolve().parents[1]
+    path = viewer_snapshot_path(srcdir, str(name))
+    if not path.is_file():
+        raise NotebookExecutionFailed(
+            f"{source}\n  cell {data.cell_index}: no picture of the live viewer {name!r} at "
+            f"{path} (python tools/make_lesson_snapshots.py writes it)"
+        )
+    box = nodes.container(classes=[VIEWER_CLASS])
+    para = nodes.paragraph(classes=["orientviz-widget-caption"])
+    para += nodes.emphasis(
+        text="Static picture of the live 3D viewer (in JupyterLab this cell shows the viewer "
+        "itself, on the state computed above: turn the scene, use the panel)."
+    )
+    box += para
+    uri = "/" + (LESSON_SNAPSHOTS / f"{name}.png").as_posix()
+    box += nodes.image(uri=uri, alt=f"orientviz viewer: {name}", classes=["orientviz-viewer"])
+    return [box]
+
+
 # --------------------------------------------------------------------------- failures
 class NotebookExecutionFailed(SphinxError):
     """A lesson notebook raised while the book was being built."""
@@ -376,8 +422,10 @@ def _patch() -> None:
 
     if "render_widget_view" not in _ORIGINAL:
         _ORIGINAL["render_widget_view"] = NbElementRenderer.render_widget_view
+        _ORIGINAL["render_mime_type"] = NbElementRenderer.render_mime_type
         _ORIGINAL["start_client"] = NotebookClientDirect.start_client
         NbElementRenderer.render_widget_view = _render_widget_view
+        NbElementRenderer.render_mime_type = _render_mime_type
         NotebookClientDirect.start_client = _start_client
     patch_shell_polling()
 

@@ -160,10 +160,10 @@ COMMANDS: dict[str, Command] = {
         "residuals. FILE may also be the name of a shipped example (block_strip, "
         "block_compact, resection_example, intersection_example, similarity_example, "
         "pair_example, dbat_sxb, dbat_camcal, ...). A camera of a block may be calibrated "
-        "with it: cameras[] may give \"model\": \"backward\" (DBAT, PhotoModeler) or "
-        "\"forward\" (OpenCV) with the lens terms as, sk, K1-K3, P1, P2 (k1-k3, p1, p2), "
-        "each parameter free (\"free\": [...]), weighted (\"sigma\": {name: σ}) or "
-        "fixed, or \"additional\": \"ebner12\" | \"gruen44\" | \"brown\"; image "
+        'with it: cameras[] may give "model": "backward" (DBAT, PhotoModeler) or '
+        '"forward" (OpenCV) with the lens terms as, sk, K1-K3, P1, P2 (k1-k3, p1, p2), '
+        'each parameter free ("free": [...]), weighted ("sigma": {name: σ}) or '
+        'fixed, or "additional": "ebner12" | "gruen44" | "brown"; image '
         "units mm, um or px (with units.pixel_size in mm; pixels count y downwards). Exit "
         "0 ok, 2 bad input, 3 adjustment impossible or not converged, 4 the model does not "
         "fit the data (sigma0 far above 1 with many flagged observations: the report is "
@@ -174,19 +174,32 @@ COMMANDS: dict[str, Command] = {
             ("orientviz solve block_compact --method models", "independent models instead"),
             ("orientviz solve block.json -o adjusted.json", "also save the adjusted values"),
             ("orientviz solve block_strip --report report.html", "full report (or .txt)"),
-            ("orientviz solve dbat_sxb --max-iter 50 --tol 1e-6", "solver options (override "
-             "options.max_iter / options.tol of the file)"),
-            ("orientviz solve dbat_camcal", "calibrate a real camera: its cameras[0] has "
-             "\"model\": \"backward\", \"free\": [\"c\", \"x0\", \"y0\", \"as\", "
-             "\"K1\", \"K2\", \"K3\", \"P1\", \"P2\"], units px"),
-            ("orientviz solve dbat_sxb --robust huber", "robust bundle: Huber loss, scale "
-             "1.345 sigma (options.robust)"),
-            ("orientviz solve dbat_sxb --robust cauchy --robust-scale 3", "Cauchy loss with "
-             "scale 3 sigma (options.robust_scale)"),
-            ("orientviz solve dbat_sxb --free", "free network: control as tie points, datum by "
-             "minimum constraints (options.free)"),
-            ("orientviz solve dbat_sxb --free --fix 8811 --fix 8938:Y0", "datum by image 8811 "
-             "and Y0 of image 8938 held at their given values (options.fix)"),
+            (
+                "orientviz solve dbat_sxb --max-iter 50 --tol 1e-6",
+                "solver options (override options.max_iter / options.tol of the file)",
+            ),
+            (
+                "orientviz solve dbat_camcal",
+                "calibrate a real camera: its cameras[0] has "
+                '"model": "backward", "free": ["c", "x0", "y0", "as", '
+                '"K1", "K2", "K3", "P1", "P2"], units px',
+            ),
+            (
+                "orientviz solve dbat_sxb --robust huber",
+                "robust bundle: Huber loss, scale 1.345 sigma (options.robust)",
+            ),
+            (
+                "orientviz solve dbat_sxb --robust cauchy --robust-scale 3",
+                "Cauchy loss with scale 3 sigma (options.robust_scale)",
+            ),
+            (
+                "orientviz solve dbat_sxb --free",
+                "free network: control as tie points, datum by minimum constraints (options.free)",
+            ),
+            (
+                "orientviz solve dbat_sxb --free --fix 8811 --fix 8938:Y0",
+                "datum by image 8811 and Y0 of image 8938 held at their given values (options.fix)",
+            ),
         ),
         arguments=(
             arg("file", help="problem file, or the name of a shipped example"),
@@ -197,32 +210,70 @@ COMMANDS: dict[str, Command] = {
                 help="block adjustment method (blocks only; default bundle)",
             ),
             arg("--json", action="store_true", help="print the result as JSON"),
-            arg("--max-iter", type=iteration_count, default=None, metavar="N",
-                help="maximum number of iterations (overrides options.max_iter of the file)"),
-            arg("--tol", type=positive_float, default=None, metavar="T",
+            arg(
+                "--max-iter",
+                type=iteration_count,
+                default=None,
+                metavar="N",
+                help="maximum number of iterations (overrides options.max_iter of the file)",
+            ),
+            arg(
+                "--tol",
+                type=positive_float,
+                default=None,
+                metavar="T",
                 help="stop when every correction is below T times its sigma (overrides "
-                "options.tol; default 5e-3 for blocks)"),
-            arg("--ftol", type=float_between(0.0, 0.1), default=None, metavar="F",
+                "options.tol; default 5e-3 for blocks)",
+            ),
+            arg(
+                "--ftol",
+                type=float_between(0.0, 0.1),
+                default=None,
+                metavar="F",
                 help="also stop when a step lowers vTPv by less than F of its value (Ceres's "
                 "function tolerance; overrides options.ftol; default 0 = off, 1e-6 in files "
-                "written by import-bal / import-colmap)"),
-            arg("--robust", choices=["none", "huber", "cauchy"], default=None,
-                help="robust bundle by reweighting: huber bounds, cauchy redescends the "
-                "influence of large residuals (overrides options.robust; default none)"),
-            arg("--robust-scale", type=positive_float, default=None, metavar="K",
+                "written by import-bal / import-colmap)",
+            ),
+            arg(
+                "--robust",
+                choices=["none", "huber", "cauchy", "soft_l1"],
+                default=None,
+                help="robust loss of each ray inside the bundle's iterations (as Ceres's): "
+                "huber and soft_l1 bound, cauchy redescends the influence of large "
+                "residuals (overrides options.robust; default none)",
+            ),
+            arg(
+                "--robust-scale",
+                type=positive_float,
+                default=None,
+                metavar="K",
                 help="scale of the robust loss in units of the observations' sigma (default "
-                "1.345 huber, 2.385 cauchy)"),
-            arg("--fix", action="append", default=None, metavar="ID[:PARTS]",
+                "1.345 huber and soft_l1, 2.385 cauchy)",
+            ),
+            arg(
+                "--fix",
+                action="append",
+                default=None,
+                metavar="ID[:PARTS]",
                 help="datum: hold image ID (all six, or PARTS of X0,Y0,Z0,omega,phi,kappa) or "
-                "point ID (X,Y,Z) at its given values; repeatable (overrides options.fix)"),
-            arg("--free", action="store_true", default=None,
+                "point ID (X,Y,Z) at its given values; repeatable (overrides options.fix)",
+            ),
+            arg(
+                "--free",
+                action="store_true",
+                default=None,
                 help="free network: control and check points become tie points; datum by "
-                "minimum constraints, or by --fix (options.free)"),
-            arg("--solver", choices=["auto", "banded", "dense", "sparse", "reference"], default=None,
+                "minimum constraints, or by --fix (options.free)",
+            ),
+            arg(
+                "--solver",
+                choices=["auto", "banded", "dense", "sparse", "reference"],
+                default=None,
                 help="solver of the bundle's reduced camera system (overrides options.solver; "
                 "default auto: banded for strips, dense for small or densely connected "
                 "networks, sparse (nested-dissection multifrontal Cholesky) otherwise; the "
-                "report names the choice); reference: the textbook iteration, small blocks"),
+                "report names the choice); reference: the textbook iteration, small blocks",
+            ),
             arg(
                 "-o",
                 "--output",
@@ -245,18 +296,39 @@ COMMANDS: dict[str, Command] = {
         help="open the 3D viewer (viser, in the browser) on a demo or a problem file",
         description="Open the 3D viewer on a demo (block, pair, radar, design: the block "
         "design studio) or a problem file and serve it on http://HOST:PORT until Ctrl-C; "
-        "--export writes a static HTML page instead.",
+        "--export writes a static HTML page instead. FILE may be a shipped data set's name, "
+        "or dbat_roma (DBAT's ROMA bundle: 60 images, 90 561 image points). Large blocks "
+        "open without the precision (the panel offers it).",
         examples=(
             ("orientviz view", "the default demo on http://127.0.0.1:8080"),
             ("orientviz view pair --port 8081", "the relative-orientation demo, another port"),
             ("orientviz view block.json", "a block problem file"),
+            ("orientviz view block.json --free --export free.html",
+             "a model without control (an imported COLMAP/BAL model) as a free network"),
             ("orientviz view radar --export radar.html", "write a static page, no server"),
+            (
+                "orientviz view design block_strip --export design.html",
+                "the design studio on a problem file (a static page)",
+            ),
         ),
         arguments=(
             arg("target", nargs="?", default=None, help="problem file or demo name"),
+            arg(
+                "file",
+                nargs="?",
+                default=None,
+                help="after `design`: a block problem file (or data set) to plan from",
+            ),  # fmt: skip
             arg("--host", default="127.0.0.1", help="interface to serve on (default 127.0.0.1)"),
             arg("--port", type=port_number, default=8080, help="port (default 8080)"),
             arg("--export", metavar="FILE.html", default=None, help="write a static HTML page"),
+            arg("--fix", action="append", default=None, metavar="ID[:PARTS]",
+                help="datum of a problem file, as in solve (overrides options.fix)"),
+            arg("--free", action="store_true", default=None,
+                help="free network, as in solve (options.free): e.g. an imported COLMAP or BAL "
+                "model"),
+            arg("--max-iter", type=iteration_count, default=None, metavar="N",
+                help="maximum number of iterations, as in solve (overrides options.max_iter)"),
         ),
     ),
     "import-bal": Command(
@@ -272,14 +344,19 @@ COMMANDS: dict[str, Command] = {
         "may be bz2-compressed, or `ladybug`: the shipped BAL problem-49-7776.",
         examples=(
             ("orientviz import-bal problem-49-7776-pre.txt -o block.json", "convert"),
-            ("orientviz import-bal problem-49-7776-pre.txt --fix-lens -o block.json",
-             "only poses and points adjusted"),
+            (
+                "orientviz import-bal problem-49-7776-pre.txt --fix-lens -o block.json",
+                "only poses and points adjusted",
+            ),
             ("orientviz import-bal ladybug -o ladybug.json", "the shipped real BAL problem"),
         ),  # fmt: skip
         arguments=(
             arg("file", help="BAL text file"),
-            arg("--fix-lens", action="store_true",
-                help="hold f, k1, k2 of every camera at the file's values (default: refined)"),
+            arg(
+                "--fix-lens",
+                action="store_true",
+                help="hold f, k1, k2 of every camera at the file's values (default: refined)",
+            ),
             *IMPORT_OPTIONS,
         ),  # fmt: skip
     ),
@@ -293,14 +370,22 @@ COMMANDS: dict[str, Command] = {
         "`orientviz solve ... -o`, the adjusted values. Pixel size: the file's "
         "units.pixel_size when its image unit is px, else --pixel-size (default 0.01 mm).",
         examples=(
-            ("orientviz export-bal block.json -o block.bal", "write a BAL file (after "
-             "`orientviz solve block.json --free -o block.json`: the adjusted values)"),
+            (
+                "orientviz export-bal block.json -o block.bal",
+                "write a BAL file (after "
+                "`orientviz solve block.json --free -o block.json`: the adjusted values)",
+            ),
         ),
         arguments=(
             arg("file", help="block problem file, or the name of a shipped example"),
             arg("-o", "--output", required=True, metavar="OUT.bal", help="BAL file to write"),
-            arg("--pixel-size", type=float_between(1e-5, 10.0, "mm"), default=None,
-                metavar="MM", help="pixel size in mm (default: the file's, else 0.01)"),
+            arg(
+                "--pixel-size",
+                type=float_between(1e-5, 10.0, "mm"),
+                default=None,
+                metavar="MM",
+                help="pixel size in mm (default: the file's, else 0.01)",
+            ),
         ),  # fmt: skip
     ),
     "import-colmap": Command(
@@ -324,10 +409,16 @@ COMMANDS: dict[str, Command] = {
         ),
         arguments=(
             arg("directory", help="folder of the COLMAP text model"),
-            arg("--fix-lens", action="store_true",
-                help="hold the cameras (focal length, distortion) at COLMAP's values"),
-            arg("--undistort", action="store_true",
-                help="undistorted observations, distortion-free cameras (held)"),
+            arg(
+                "--fix-lens",
+                action="store_true",
+                help="hold the cameras (focal length, distortion) at COLMAP's values",
+            ),
+            arg(
+                "--undistort",
+                action="store_true",
+                help="undistorted observations, distortion-free cameras (held)",
+            ),
             *IMPORT_OPTIONS,
         ),  # fmt: skip
     ),
@@ -344,20 +435,43 @@ COMMANDS: dict[str, Command] = {
         "orientations are computed by `orientviz solve`. --sigma-px is the sigma in the "
         "file's unit where a row gives none.",
         examples=(
-            ("orientviz import-csv marks.csv --c 123.9392 --pixel-size 0.006 "
-             "--principal-point 26.577 38.811 --control control.csv -o block.json",
-             "pixel measurements of an aerial camera with control"),
+            (
+                "orientviz import-csv marks.csv --c 123.9392 --pixel-size 0.006 "
+                "--principal-point 26.577 38.811 --control control.csv -o block.json",
+                "pixel measurements of an aerial camera with control",
+            ),
         ),  # fmt: skip
         arguments=(
             arg("file", help="measurement CSV: image,point,x,y[,sigma]"),
-            arg("--c", type=positive_float, required=True, metavar="MM",
-                help="principal distance in mm"),
-            arg("--units", choices=["px", "mm"], default="px",
-                help="unit and frame of x, y (default px: upper-left origin, y down)"),
-            arg("--principal-point", type=finite_float, nargs=2, default=None, metavar=("PX", "PY"),
-                help="principal point in mm (px units: from the upper-left corner, PY down)"),
-            arg("--format", type=positive_float, nargs=2, default=None, metavar=("W", "H"),
-                help="image format in mm (default: the extent of the measurements)"),
+            arg(
+                "--c",
+                type=positive_float,
+                required=True,
+                metavar="MM",
+                help="principal distance in mm",
+            ),
+            arg(
+                "--units",
+                choices=["px", "mm"],
+                default="px",
+                help="unit and frame of x, y (default px: upper-left origin, y down)",
+            ),
+            arg(
+                "--principal-point",
+                type=finite_float,
+                nargs=2,
+                default=None,
+                metavar=("PX", "PY"),
+                help="principal point in mm (px units: from the upper-left corner, PY down)",
+            ),
+            arg(
+                "--format",
+                type=positive_float,
+                nargs=2,
+                default=None,
+                metavar=("W", "H"),
+                help="image format in mm (default: the extent of the measurements)",
+            ),
             *IMPORT_OPTIONS,
         ),  # fmt: skip
     ),
@@ -402,9 +516,12 @@ COMMANDS: dict[str, Command] = {
         arguments=(
             arg("name", nargs="?", default=None, help="reproduction (omit to list them)"),
             arg("--json", action="store_true", help="print the rows as JSON"),
-            arg("--wide", action="store_true",
+            arg(
+                "--wide",
+                action="store_true",
                 help="one line per row however long (default: blocks wrapped to 100 columns "
-                "when the table is wider)"),
+                "when the table is wider)",
+            ),
         ),  # fmt: skip
     ),
 }

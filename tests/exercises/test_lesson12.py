@@ -8,3 +8,17 @@ from orientviz.exercises import lesson12
 
 def test_checks():
     assert_module_checks(lesson12, answers)
+
+
+def test_diagnoses_name_the_mistake():
+    from mutants import assert_diagnoses
+
+    assert_diagnoses(
+        lesson12,
+        answers,
+        {
+            ("check_snoop", "all at once"): "one at a time",
+            ("check_snoop", "no abs"): "not w",
+            ("check_snoop", "one round"): "go on until",
+        },
+    )

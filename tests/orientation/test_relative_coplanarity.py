@@ -89,6 +89,21 @@ def test_with_measuring_errors_coplanarity_is_collinearity_and_parallax_is_close
     assert res["coplanarity"].redundancy == res["collinearity"].redundancy
 
 
+def test_the_gaps_are_of_the_second_and_the_first_order_in_the_errors(exact):
+    """Doubling one pattern of errors: coplanarity − collinearity × 4, parallax − collinearity × 2."""
+    rng = np.random.default_rng(29)
+    pattern = [rng.normal(0.0, 1.0, xy.shape) for xy in exact]
+    gaps = []
+    for size in (0.002, 0.004):  # mm
+        xl, xr = (xy + size * e for xy, e in zip(exact, pattern))
+        res = {m: relative_orientation(xl, xr, C, method=m) for m in METHODS}
+        col = res["collinearity"].x[:5]
+        gaps.append([np.abs(res[m].x - col).max() for m in ("coplanarity", "parallax")])
+    (cop1, par1), (cop2, par2) = gaps
+    assert 3.5 < cop2 / cop1 < 4.5
+    assert 1.8 < par2 / par1 < 2.2
+
+
 def test_coplanarity_residuals_are_the_triple_products(noisy):
     xl, xr = noisy
     res = relative_orientation(xl, xr, C, method="coplanarity")

@@ -43,3 +43,36 @@ def server():
     s = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     yield s
     s.stop()
+
+
+@pytest.fixture(scope="module")
+def module_browser(request):
+    """One headless Chromium for a whole test module (playwright's browser context);
+    each test opens its pages with ``module_browser.new_page()``. Same executable and
+    flags as the ``browser_page`` fixture of tests/conftest.py."""
+    import os
+    import shutil
+    import tempfile
+
+    chromium = os.environ.get("ORIENTVIZ_CHROMIUM", "/usr/bin/chromium")
+    if not os.path.exists(chromium):
+        pytest.skip(f"no Chromium at {chromium} (apt-get install -y chromium chromium-driver)")
+    sync_api = pytest.importorskip("playwright.sync_api")
+    flags = request.config.pluginmanager.get_plugin(
+        os.path.join(str(request.config.rootpath), "tests", "conftest.py")
+    )
+    args = getattr(flags, "CHROMIUM_FLAGS", None) or [
+        "--headless", "--no-sandbox", "--disable-gpu", "--use-angle=swiftshader",
+        "--enable-unsafe-swiftshader",
+    ]  # fmt: skip
+    profile = tempfile.mkdtemp(prefix="orientviz-chromium-")
+    with sync_api.sync_playwright() as p:
+        context = p.chromium.launch_persistent_context(
+            profile, executable_path=chromium, headless=True, args=args,
+            viewport={"width": 1280, "height": 800},
+        )  # fmt: skip
+        try:
+            yield context
+        finally:
+            context.close()
+            shutil.rmtree(profile, ignore_errors=True)

@@ -4,6 +4,8 @@ State level (no viser) and through the panel's handlers on a local viser server
 (127.0.0.1, ephemeral port), the way a click would call them.
 """
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -247,3 +249,23 @@ def test_a_change_the_precision_refuses_is_undone(app, monkeypatch):
     assert app.messages and "not determinable" in app.messages[-1]
     assert len(st.changes) == n and st.edits.obs_on.all()
     same_state(st, before)
+
+
+def test_a_camera_left_without_images_leaves_the_sub_block(block):
+    """Per-camera lens models: a camera whose images are all off is no group of the
+    adjustment (it would not be determinable: "parameter group has no image")."""
+    b = block.copy()
+    b.cameras = replace(
+        b.cameras, ids=["a", "b"], c=np.repeat(b.cameras.c, 2), x0=np.repeat(b.cameras.x0, 2),
+        y0=np.repeat(b.cameras.y0, 2), format_mm=np.repeat(b.cameras.format_mm, 2, axis=0),
+        model=[{"model": "backward", "free": ["c"], "sigma": {}, "values": {}, "r0": None}] * 2,
+    )  # fmt: skip
+    b.images.camera = np.array([0, 0, 0, 1, 1, 1])
+    e = Edits.of(b)
+    sub, mp = effective_block(b, e)
+    assert mp.cameras is None and len(sub.cameras.ids) == 2
+    e.image_on[:3] = False  # every image of camera "a"
+    sub, mp = effective_block(b, e)
+    assert list(mp.cameras) == [1] and sub.cameras.ids == ["b"]
+    assert np.all(sub.images.camera == 0) and len(sub.cameras.model) == 1
+    np.testing.assert_array_equal(sub.cameras.c, b.cameras.c[[1]])

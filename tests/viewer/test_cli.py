@@ -63,3 +63,22 @@ def test_view_default_demo_prints_url_and_stops_on_ctrl_c():
     assert code == 0
     assert "Traceback" not in err
     assert "stopped" in err
+
+
+def test_view_takes_solves_datum_options_free_and_fix(tmp_path, capsys):
+    """`view FILE --free` solves as `solve FILE --free` (an imported SfM model has no control)."""
+    from orientviz.io.solve import load_named, solve_problem
+    from orientviz.viewer.app import demo_from_file
+
+    problem = load_named("block_compact")
+    problem.options = dict(problem.options, free=True)
+    want = solve_problem(problem).adjustment
+    demo = demo_from_file("block_compact", {"free": True})
+    assert demo.solution.adjustment.sigma0 == pytest.approx(want.sigma0, rel=1e-9)
+    assert demo.solution.adjustment.redundancy == want.redundancy
+    plain = demo_from_file("block_compact").solution.adjustment
+    assert plain.redundancy != want.redundancy  # the option changed the datum
+    assert main(["view", "block_compact", "--free", "--export", str(tmp_path / "f.html")]) == 0
+    assert main(["view", "block", "--free", "--export", str(tmp_path / "d.html")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--free" in err and "demo" in err

@@ -10,7 +10,7 @@ import pytest
 from orientviz.design import FlightDesign
 from orientviz.viewer.app import ViewerApp
 from orientviz.viewer.studio import MEASURES, Studio, point_values, scale_of
-from orientviz.viewer.studio_panel import StudioView
+from orientviz.viewer.studio_panel import CLICKS, StudioView, ellipsoid_mesh
 
 
 @pytest.fixture(scope="module")
@@ -50,19 +50,114 @@ def test_a_click_on_the_ground_makes_the_nearest_point_control_and_undo(view):
         ray_direction=tuple((target - origin) / np.linalg.norm(target - origin)),
     )
     before = st.quality.point_sigma[j, 2]
+    panel.h["click"].value = CLICKS["control"]
     panel._clicked(event)
     assert st.block.points.role[j] == 1 and st.quality.point_sigma[j, 2] < before
     assert st.block.points.ids[j] in panel.h["changes"].content
     panel.undo()
     assert st.block.points.role[j] == 0
+    panel.h["click"].value = CLICKS["nothing"]
 
 
 def test_apply_plan_builds_the_new_design(view):
     panel, st = view.panel, view.studio
     panel.h["strips"].value = 3
     panel.h["gnss"].value = 0.1
+    panel.h["statoscope"].value = 0.3
     panel.apply_plan()
     assert st.design.strips == 3 and st.design.sigma_gnss == pytest.approx(0.1)
+    assert st.design.sigma_statoscope == pytest.approx(0.3) and st.design.sigma_apr is None
+    assert [a.kind for a in st.live.auxiliary] == ["statoscope"]
+    assert "statoscope σ 0.30 m" in panel.h["summary"].content
     assert st.block.n_images == 18
     assert "3 strips × 6 images" in panel.h["summary"].content
     assert "plan: 3 × 6" in panel.h["changes"].content
+    panel.undo()  # the plan before
+    assert st.design.strips == 2 and st.block.n_images == 12 and not st.live.auxiliary
+    panel.h["statoscope"].value = 0.0
+
+
+def test_cross_strip_and_removals_by_click_and_their_undo(view):
+    panel, st = view.panel, view.studio
+    n0, z0 = st.block.n_images, st.quality.summary["sigma_z_rms"]
+    x_end = float(st.block.images.X0[:, 0].max())
+    panel.act_at((x_end, 0.0), "cross")
+    assert st.block.n_images > n0 and st.block.images.strip.max() == 2
+    # new images with their own unknowns can only make the others' σ smaller
+    assert st.quality.summary["sigma_z_rms"] < z0
+    assert "cross strip at X" in panel.h["changes"].content
+    panel.undo()
+    assert st.block.n_images == n0
+    assert st.quality.summary["sigma_z_rms"] == pytest.approx(z0, rel=1e-12)
+    X0 = st.block.images.X0
+    between = 0.5 * (X0[2, :2] + X0[3, :2])
+    z_between = st.quality.point_sigma[:, 2].copy()
+    panel.act_at(between, "add")
+    assert st.block.n_images == n0 + 1
+    np.testing.assert_allclose(st.block.images.X0[-1], [*between, X0[2, 2]])
+    assert st.block.images.strip[-1] == st.block.images.strip[2]
+    assert np.all(st.quality.point_sigma[:, 2] <= z_between * (1 + 1e-9))
+    assert "added at X" in panel.h["changes"].content
+    panel.undo()
+    panel.act_at(X0[3, :2] + 10.0, "image")
+    assert st.block.n_images == n0 - 1 and st.block.images.ids[3] != "000_003"
+    panel.undo()
+    panel.act_at(X0[0, :2], "strip")
+    assert st.block.n_images == n0 // 2
+    panel.undo()
+    assert st.block.n_images == n0
+
+
+def test_method_switch_and_the_polynomial_says_it_has_no_precision(view):
+    panel, st = view.panel, view.studio
+    zb = st.quality.point_sigma[:, 2].copy()
+    panel.h["method"].value = "independent models (7 parameters per model)"
+    panel.set_method()
+    zm = st.quality.point_sigma[:, 2]
+    assert st.method == "models" and not np.allclose(zm, zb, rtol=1e-3, equal_nan=True)
+    assert "not defined for independent models" in panel.h["summary"].content
+    st.measure = "redundancy"
+    view.redraw()  # no redundancy for models: grey, no error
+    st.measure = "sigma_z"
+    panel.h["method"].value = "polynomial strip adjustment"
+    panel.set_method()
+    assert "no design precision" in panel.h["summary"].content
+    assert np.allclose(st.quality.point_sigma[:, 2], zb, equal_nan=True)
+    panel.h["method"].value = "bundle adjustment"
+    panel.set_method()
+
+
+def test_ellipsoids_and_the_gizmo(view):
+    panel, st = view.panel, view.studio
+    panel.h["ellipsoids"].value = True
+    view.redraw()
+    assert "ellipsoids" in view.nodes
+    panel.h["ellipsoids"].value = False
+    view.redraw()
+    assert "ellipsoids" not in view.nodes
+    view.gizmo(True)
+    tie = np.flatnonzero(st.block.points.role == 0)
+    j = int(tie[0])
+    view.gizmo_released(view.frame.to_scene(st.block.points.xyz[j]) + 5.0)
+    assert st.block.points.role[j] == 1
+    panel.undo()
+    view.gizmo(False)
+    assert "gizmo" not in view.nodes
+
+
+def test_ellipsoid_mesh_has_the_semi_axes():
+    dirs = np.eye(3)[None]
+    V, F = ellipsoid_mesh(np.zeros((1, 3)), np.array([[1.0, 2.0, 5.0]]), dirs)
+    assert F.shape[1] == 3 and V.shape[0] == 42
+    assert np.abs(V).max(axis=0) == pytest.approx([1.0, 2.0, 5.0], rel=0.1)
+
+
+def test_a_method_that_cannot_take_the_design_keeps_the_old_one():
+    from orientviz.errors import NotDeterminableError
+
+    st = Studio(FlightDesign(strips=3, images_per_strip=9, control="corners"))
+    st.add_cross_strip(float(st.block.images.X0[:, 0].mean()))
+    assert "plan without the images added" in st.law["note"]
+    with pytest.raises(NotDeterminableError, match="fewer than 5 common points"):
+        st.set_method("models")  # the cross strip's end models cannot be formed
+    assert st.method == "bundle" and np.isfinite(st.quality.point_sigma).all()

@@ -10,21 +10,28 @@
 * :class:`LiveDesign` — one change (a control point added, removed, its σ changed)
   updates the quality by a low-rank formula on the design's factorised normal
   equations, without forming them again;
-* :func:`suggest_control` — the next control point that most reduces the worst σ.
+* :func:`suggest_control` — the next control point that most reduces the worst σ;
+* :func:`cross_strip`, :func:`add_images`, :func:`remove_images` — structural edits of a
+  design block; :func:`design_from_block` — a design with the geometry of any block;
+* :func:`assess_models` — the design's precision for independent models
+  (:data:`METHODS`: the polynomial adjustment has none).
 
 The package sits above :mod:`orientviz.bundle` and :mod:`orientviz.simulate` and uses
 their machinery: the normal equations, the precision and reliability are the bundle's.
 """
 
 from ._design import DesignAssessment, accuracy_law, assess_block, assess_design
-from ._layout import FlightDesign, design_block, set_control
+from ._extend import add_images, cross_strip, design_from_block, remove_images
+from ._layout import FlightDesign, design_auxiliary, design_block, set_control
 from ._live import Change, LiveDesign
+from ._methods import METHODS, assess_models
 from ._quality import DesignQuality, ellipsoids
 from ._suggest import Suggestion, suggest_control
 
 __all__ = [
     "FlightDesign",
     "design_block",
+    "design_auxiliary",
     "set_control",
     "DesignAssessment",
     "DesignQuality",
@@ -32,6 +39,12 @@ __all__ = [
     "assess_block",
     "assess_design",
     "ellipsoids",
+    "add_images",
+    "cross_strip",
+    "design_from_block",
+    "remove_images",
+    "METHODS",
+    "assess_models",
     "Change",
     "LiveDesign",
     "Suggestion",

@@ -154,3 +154,64 @@ def check_external(fn: Callable) -> None:
             ],
         )
     success("the shift of the unknowns by an undetected error is right")
+
+
+def check_snoop(fn: Callable) -> None:
+    """Check ``fn(adjust, n, k) -> list``: data snooping to the end. ``adjust(keep)`` adjusts with
+    the observations where the boolean mask ``keep`` (n,) is True and returns their normalised
+    residuals (n,) (NaN where not kept); the answer lists the rejected indices in order."""
+    rng = rng_for("lesson12.check_snoop")
+    k = norm.ppf(1 - 0.001 / 2)
+    n = 24
+    t = np.linspace(0.0, 10.0, n)
+    A = np.column_stack([np.ones(n), t, t**2 / 10])
+    sigma = np.full(n, 1.0)
+    l = A @ [1.0, 0.5, -0.3] + np.clip(rng.normal(0, 1.0, n), -2, 2)
+    planted = {0: 14.0, 2: 11.0, 17: -7.5}  # 0 and 2 smear into their neighbours' w
+    for i, size in planted.items():
+        l[i] += size
+    calls = []
+
+    def adjust(keep):
+        keep = np.asarray(keep, dtype=bool)
+        if keep.shape != (n,):
+            raise CheckFailed(
+                f"snoop: adjust(keep) needs a boolean mask of shape ({n},), got {keep.shape}."
+            )
+        calls.append(keep.copy())
+        w = np.full(n, np.nan)
+        w[keep] = _oracle_w(A[keep], l[keep], sigma[keep])[2]
+        return w
+
+    got = call(fn, adjust, n, k, what="snoop")
+    try:
+        got = [int(i) for i in got]
+    except (TypeError, ValueError):
+        raise CheckFailed(f"snoop: expected a list of indices, got {got!r}.") from None
+    want = set(planted)
+    if set(got) == want and len(got) == len(want):
+        if len(calls) != len(want) + 1:
+            raise CheckFailed(
+                f"snoop: the right observations, but adjust was called {len(calls)} times: "
+                f"one rejection per adjustment and a last one that finds nothing ({len(want) + 1})",
+                error=1.0, tolerance=0.0,
+            )  # fmt: skip
+        success(
+            f"data snooping: the {len(want)} planted blunders and nothing else, one per adjustment"
+        )
+        return
+    first = adjust(np.ones(n, bool))
+    calls.pop()
+    why = ""
+    if set(got) == set(np.flatnonzero(np.abs(first) > k).tolist()) and len(calls) <= 1:
+        why = "these are all |w| > k of the first adjustment: reject one at a time and adjust again (a blunder's w spreads to its neighbours)"  # noqa: E501
+    elif want - set(got) and all(first[i] < 0 for i in want - set(got)):
+        why = "the blunders with a negative w were kept: compare |w| with k, not w"
+    elif len(got) > len(want):
+        why = "innocent observations were rejected too — stop when the largest |w| of the current adjustment is ≤ k"
+    elif len(got) < len(want):
+        why = "a blunder was kept — go on until no |w| exceeds k"
+    raise CheckFailed(
+        f"snoop: rejected {got}, the planted blunders are {sorted(want)}" + (f" — {why}." if why else "."),
+        error=1.0, tolerance=0.0,
+    )  # fmt: skip

@@ -9,6 +9,7 @@ reports, is :mod:`orientviz.report.solve`.
 from __future__ import annotations
 
 import os
+from typing import Any
 
 import numpy as np
 
@@ -21,7 +22,7 @@ from .registry import get_kind
 from .solution import Solution
 
 
-def solve_problem(problem: Problem, method: str | None = None) -> Solution:
+def solve_problem(problem: Problem, method: str | None = None, **bundle: Any) -> Solution:
     """Solve a loaded problem by its kind's solver.
 
     Parameters
@@ -30,6 +31,9 @@ def solve_problem(problem: Problem, method: str | None = None) -> Solution:
         From :func:`~orientviz.io.problem.load_problem`.
     method : str, optional
         ``"bundle"``, ``"models"`` or ``"polynomial"`` for blocks; None = the default.
+    **bundle
+        Further keywords of the block bundle (:func:`orientviz.io.kinds.block.adjust_block`),
+        e.g. ``precision=False`` (the viewer on a large block); block problems only.
 
     Raises
     ------
@@ -49,7 +53,7 @@ def solve_problem(problem: Problem, method: str | None = None) -> Solution:
         raise InputError(f"kind {kind.name!r} cannot be solved by this version", problem.source)
     warnings = check_geometry(problem)
     with np.errstate(all="ignore"):
-        solution = kind.solve(problem, method)
+        solution = kind.solve(problem, method, **bundle) if bundle else kind.solve(problem, method)
     solution.notes.extend(f"warning: {f.message}" for f in warnings)
     return solution
 

@@ -259,8 +259,10 @@ class ViewerApp:
             self.stop()
 
 
-def resolve_content(content: Any) -> Any:
+def resolve_content(content: Any, options: dict[str, Any] | None = None) -> Any:
     """Turn what :class:`ViewerApp` accepts into a :class:`~orientviz.viewer.demo.Demo`.
+
+    ``options`` override a problem file's (``--free``, ``--fix``, ``--max-iter``).
 
     Raises
     ------
@@ -269,7 +271,11 @@ def resolve_content(content: Any) -> Any:
     """
     if isinstance(content, str | Path):
         name = str(content)
-        return load_demo(name) if name in DEMOS else demo_from_file(name)
+        if name in DEMOS and options:
+            raise InputError(
+                f"--free, --fix and --max-iter apply to problem files, not the demo {name!r}"
+            )
+        return load_demo(name) if name in DEMOS else demo_from_file(name, options)
     if isinstance(content, Solved):
         return solution_demo(content)
     if isinstance(content, Demo):
@@ -283,12 +289,13 @@ def resolve_content(content: Any) -> Any:
     )
 
 
-def demo_from_file(target: str) -> Any:
+def demo_from_file(target: str, options: dict[str, Any] | None = None) -> Any:
     """Solve a problem file or shipped data set as ``orientviz solve`` does; its demo.
 
-    Raises what ``solve`` reports (:func:`orientviz.io.solve.failure`), before any server.
+    ``options`` override the file's (``--free``, ``--fix``, ``--max-iter``). Raises what
+    ``solve`` reports (:func:`orientviz.io.solve.failure`), before any server.
     """
-    return solution_demo(solve_target(target))
+    return solution_demo(solve_target(target, options))
 
 
 def open_viewer(
@@ -317,14 +324,26 @@ def export_html(content: Any, path: str | Path) -> Path:
 
 
 def run_from_cli(args: argparse.Namespace) -> int:
-    """``orientviz view [FILE | NAME | DEMO] [--host] [--port] [--export FILE.html]``.
+    """``orientviz view [FILE | NAME | DEMO] [--host] [--port] [--export FILE.html]``;
+    ``orientviz view design FILE``: the design studio on a problem file's geometry.
 
     A file or data set that cannot be solved gets ``orientviz solve``'s one line and exit
     code before any server starts. Returns the exit code.
     """
     target = args.target or DEFAULT_DEMO
+    options = {k: getattr(args, k) for k in ("fix", "free", "max_iter")
+               if getattr(args, k, None) is not None}  # fmt: skip
+    plan_from = getattr(args, "file", None)
+    if plan_from and target != "design":
+        print(f"{PROG}: a second argument (FILE) goes with `design` only", file=sys.stderr)
+        return 2
     try:
-        content = resolve_content(target)  # a bad file is refused before a server starts
+        if plan_from:  # the design studio on a problem file's geometry
+            from .demos import design_from_file  # the design studio: for its demo only
+
+            content, target = design_from_file(plan_from), plan_from
+        else:
+            content = resolve_content(target, options)  # a bad file: refused before a server
     except Exception as exc:
         failed = failure(PROG, target, exc)
         if failed is None:

@@ -46,6 +46,12 @@ ROLE_NODES = {TIE: "tie", CONTROL: "control", CHECK: "check"}
 #: ``|w|`` (or ``|v|/σ``) at which the residual colour ramp saturates (red).
 SCORE_RED: float = 4.0
 
+#: Level of detail of large blocks: at most this many residual vectors are drawn (those
+#: with the largest scores) ...
+RESIDUAL_LIMIT: int = 20_000
+#: ... and at most this many rays when all rays are shown (every k-th ray).
+RAY_LIMIT: int = 20_000
+
 
 class BlockGeometry:
     """Arrays for the scene of a block, in the scene frame.
@@ -85,6 +91,10 @@ class BlockGeometry:
         cam_sp = g.typical_spacing(b.images.X0) if b.n_images > 1 else self.height
         self.frustum_depth = float(min(0.25 * self.height, 0.6 * cam_sp))
         self.point_size = float(np.clip(0.12 * self.spacing, 1e-6, None))
+        n = b.n_observations
+        #: (drawn, all) residual vectors and rays of "all rays" (level of detail)
+        self.residuals_drawn = (min(n, RESIDUAL_LIMIT), n)
+        self.ray_step = max(1, int(np.ceil(n / RAY_LIMIT)))
 
     # ------------------------------------------------------------------ cameras
     def strip_of_images(self) -> NDArray[np.int64]:
@@ -130,29 +140,35 @@ class BlockGeometry:
 
     # ------------------------------------------------------------------ rays
     def rays(self, image: int | None = None) -> F64:
-        """Ray segments projection centre → point (k, 2, 3), of one image or all."""
+        """Ray segments projection centre → point (k, 2, 3), of one image or all (every
+        :attr:`ray_step`-th ray of a block with more than :data:`RAY_LIMIT` rays)."""
         b = self.state.block
         o = b.observations
-        sel = slice(None) if image is None else (o.image == image)
+        sel = slice(None, None, self.ray_step) if image is None else (o.image == image)
         return self.frame.to_scene(
             g.ray_segments(b.images.X0[o.image[sel]], b.points.xyz[o.point[sel]])
         )
 
     # ------------------------------------------------------------------ residuals
-    def residual_offsets(self, misclosure: F64 | None = None) -> F64:
-        """Object-space offsets (n, 3) in m of the observed rays from their points."""
+    def residual_offsets(self, misclosure: F64 | None = None, keep: object = slice(None)) -> F64:
+        """Object-space offsets (k, 3) in m of the observed rays from their points (the
+        observations ``keep``, default all; ``misclosure`` (k, 2) mm of those)."""
         b = self.state.block
         o = b.observations
-        e = self.state.misclosure() if misclosure is None else misclosure
-        cam = b.images.camera[o.image]
+        e = self.state.misclosure()[keep] if misclosure is None else misclosure
+        im = o.image[keep]
         return g.residual_offsets(
-            b.points.xyz[o.point], b.images.X0[o.image], b.rotations()[o.image], b.cameras.c[cam], e
-        )
+            b.points.xyz[o.point[keep]], b.images.X0[im], b.rotations()[im],
+            b.cameras.c[b.images.camera[im]], e,
+        )  # fmt: skip
 
     def residuals(
         self, exaggeration: float, misclosure: F64 | None = None, scores: F64 | None = None
     ) -> tuple[F64, NDArray[np.uint8]]:
-        """Residual vectors (n, 2, 3) in the scene frame, and their colours (n, 2, 3) uint8.
+        """Residual vectors (k, 2, 3) in the scene frame, and their colours (k, 2, 3) uint8.
+
+        All n observations' vectors, or above :data:`RESIDUAL_LIMIT` the ``RESIDUAL_LIMIT``
+        with the largest scores (:attr:`residuals_drawn`).
 
         Parameters
         ----------
@@ -166,7 +182,12 @@ class BlockGeometry:
         b = self.state.block
         e = self.state.misclosure() if misclosure is None else misclosure
         s = self.state.scores(e)[0] if scores is None else scores
-        off = self.residual_offsets(e) * exaggeration
+        keep = slice(None)
+        if s.shape[0] > RESIDUAL_LIMIT:  # level of detail: the largest scores
+            keep = np.argpartition(-np.nan_to_num(s, nan=-1.0), RESIDUAL_LIMIT - 1)[:RESIDUAL_LIMIT]
+            keep.sort()
+            e, s = e[keep], s[keep]
+        off = self.residual_offsets(e, keep) * exaggeration
         # a vector longer than the scene is drawn as long as the scene (far from the
         # solution, e.g. the approximations replayed at the adjusted state's scale)
         length = np.linalg.norm(off, axis=1)
@@ -174,7 +195,7 @@ class BlockGeometry:
         off = np.where(
             (length > cap)[:, None], off * (cap / np.maximum(length, 1e-300))[:, None], off
         )
-        seg = g.vector_segments(self.frame.to_scene(b.points.xyz[b.observations.point]), off)
+        seg = g.vector_segments(self.frame.to_scene(b.points.xyz[b.observations.point[keep]]), off)
         col = g.ramp(s, SCORE_RED)
         return seg, np.repeat(col[:, None, :], 2, axis=1)
 

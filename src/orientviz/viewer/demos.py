@@ -15,6 +15,7 @@ builder for content beyond a block (parallax arrows, radar spheres).
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -77,17 +78,24 @@ def radar_demo() -> Demo:
     return build_radar()
 
 
-def design_demo() -> Demo:
-    """The design studio: plan a block, see its precision and reliability live."""
-    from .studio_panel import StudioView  # the design studio: loaded only for its demo
+def design_demo(studio: Any = None) -> Demo:
+    """The design studio on ``studio`` (a :class:`~orientviz.viewer.studio.Studio`;
+    default: its first design): plan a block, see its precision and reliability live."""
+    from .studio_panel import DESCRIPTION, StudioView  # the studio: loaded for its demo only
 
-    desc = (
-        "Plan a block before it is flown: the colours show the design's predicted quality "
-        "(no measurements, the bundle's own normal equations). Make points control or tie "
-        "under *Control* (or ask for the best next control point), change strips, overlaps "
-        "and σ under *Plan*; the summary compares with Ebner's accuracy laws."
-    )
-    return Demo("design", "Block design studio", desc, None, lambda app: StudioView(app).build())
+    if studio is None:
+        from .studio import Studio  # the design studio: loaded for its demo only
+
+        studio = Studio()
+    title = "Block design studio" + (f": {studio.title}" if studio.title else "")
+    return Demo("design", title, DESCRIPTION, None, lambda app: StudioView(app, studio).build())
+
+
+def design_from_file(target: str) -> Demo:
+    """The design studio on the geometry of a block problem file or data set."""
+    from .studio import Studio  # the design studio: loaded for its demo only
+
+    return design_demo(Studio.from_file(target))
 
 
 #: demo name → builder

@@ -87,6 +87,9 @@ class Mapping:
         Block indices of the sub-block's images, points and observations (in order).
     dropped_images, dropped_points : ndarray of int
         Images and points that had to leave (too few observations left).
+    cameras : ndarray of int or None
+        Block indices of the sub-block's cameras where cameras with a model (one group of
+        camera terms each) were left without images; None: all cameras kept.
     """
 
     images: I64
@@ -94,6 +97,7 @@ class Mapping:
     obs: I64
     dropped_images: I64 = field(default_factory=lambda: np.zeros(0, np.int64))
     dropped_points: I64 = field(default_factory=lambda: np.zeros(0, np.int64))
+    cameras: I64 | None = None
 
 
 def effective_block(block: Block, edits: Edits) -> tuple[Block, Mapping]:
@@ -134,6 +138,7 @@ def effective_block(block: Block, edits: Edits) -> tuple[Block, Mapping]:
     sub.points.role = role[points].astype(pts.role.dtype)
     sub.points.xyz_known = edits.known[points].copy()
     sub.observations.sigma = o.sigma[obs] / np.sqrt(edits.weight[obs])[:, None]
+    cameras = _drop_idle_cameras(sub, block)
     was_used = np.bincount(o.point[edits.obs_on], minlength=block.n_points) > 0
     mp = Mapping(
         images,
@@ -141,11 +146,40 @@ def effective_block(block: Block, edits: Edits) -> tuple[Block, Mapping]:
         obs,
         np.flatnonzero(edits.image_on & ~img_keep),
         np.flatnonzero(was_used & ~p_keep),
+        cameras,
     )
     return sub, mp
 
 
-def expand_result(sub_result: Any, mp: Mapping, block: Block, sigma: F64) -> Any:
+def _drop_idle_cameras(sub: Block, block: Block) -> I64 | None:
+    """Remove the cameras of ``sub`` left without images, if the cameras carry a model
+    (each camera is a group of camera terms, and a group without images is not
+    determinable); renumbers ``sub.images.camera``. Returns the kept cameras' indices in
+    ``block`` (None: all kept)."""
+    cams = block.cameras
+    if not any(getattr(cams, "model", None) or []):
+        return None
+    kept = np.unique(sub.images.camera)
+    n = len(cams.ids)
+    if kept.size == n:
+        return None
+    new = np.full(n, -1, np.int64)
+    new[kept] = np.arange(kept.size)
+    rows = {}
+    for f in fields(cams):
+        v = getattr(cams, f.name)
+        if isinstance(v, np.ndarray) and v.shape[:1] == (n,):
+            rows[f.name] = v[kept].copy()
+        elif isinstance(v, list) and len(v) == n:
+            rows[f.name] = [v[i] for i in kept]
+    sub.cameras = replace(cams, **rows)
+    sub.images.camera = new[sub.images.camera]
+    return kept
+
+
+def expand_result(
+    sub_result: Any, mp: Mapping, block: Block, sigma: F64, ap: F64 | None = None
+) -> Any:
     """The sub-block's bundle result laid out for the whole ``block``.
 
     Parameters
@@ -159,6 +193,9 @@ def expand_result(sub_result: Any, mp: Mapping, block: Block, sigma: F64) -> Any
         what was left out).
     sigma : ndarray, shape (n, 2)
         The σ (mm) of every image observation as weighted (edits applied).
+    ap : ndarray, optional
+        The camera terms of the whole block before the adjustment: those of cameras the
+        sub-block left out (``mp.cameras``) keep these values (zero without them).
 
     Returns
     -------
@@ -186,8 +223,16 @@ def expand_result(sub_result: Any, mp: Mapping, block: Block, sigma: F64) -> Any
 
     ap_sl = sub_result.groups.get("additional")
     q = 0 if ap_sl is None else ap_sl.stop - ap_sl.start
+    ap_names = [] if ap_sl is None else list(sub_result.names[ap_sl])
+    ap_idx, ap_fill = None, None
+    if q and mp.cameras is not None:  # per-camera terms of the kept cameras → all cameras
+        G, k = len(block.cameras.ids), q // mp.cameras.size
+        ok = ap is not None and np.size(ap) == G * k
+        ap_fill = np.asarray(ap, float).copy() if ok else np.zeros(G * k)
+        ap_idx = (k * mp.cameras[:, None] + np.arange(k)).ravel()
+        ap_names = [nm.rsplit("@g", 1)[0] + f"@g{g}" for g in range(G) for nm in ap_names[:k]]
 
-    def full_x(xs: F64 | None, fill: F64 = base) -> F64 | None:
+    def full_x(xs: F64 | None, fill: F64 = base, increments: bool = False) -> F64 | None:
         if xs is None:
             return None
         if np.size(xs) < 6 * ms + 3 * ps + q:
@@ -195,7 +240,12 @@ def expand_result(sub_result: Any, mp: Mapping, block: Block, sigma: F64) -> Any
         out = fill.copy()
         out[col] = np.asarray(xs)[: 6 * ms + 3 * ps]
         if q:  # the camera terms follow the points (the bundle's layout)
-            out = np.concatenate([out, np.asarray(xs)[ap_sl]])
+            terms = np.asarray(xs)[ap_sl]
+            if ap_idx is not None:  # cameras left out keep their terms (no increment)
+                full = np.zeros_like(ap_fill) if increments else ap_fill.copy()
+                full[ap_idx] = terms
+                terms = full
+            out = np.concatenate([out, terms])
         return out
 
     x = full_x(sub_result.x)
@@ -233,7 +283,7 @@ def expand_result(sub_result: Any, mp: Mapping, block: Block, sigma: F64) -> Any
             full = np.full((size,) + np.shape(Q)[1:], np.nan)
             full[idx] = Q
             cb[name] = full
-    if sub_result.cofactor_groups.get("additional") is not None:
+    if sub_result.cofactor_groups.get("additional") is not None and ap_idx is None:
         cb["additional"] = sub_result.cofactor_groups["additional"]
     pairs = getattr(sub_result, "exterior_pairs", None)
     if pairs is not None:
@@ -244,14 +294,17 @@ def expand_result(sub_result: Any, mp: Mapping, block: Block, sigma: F64) -> Any
     used = np.zeros(n, bool)
     sub_used = getattr(sub_result, "used_obs", None)
     used[mp.obs] = True if sub_used is None else np.asarray(sub_used, bool)
-    history = [replace(it, x=full_x(it.x), dx=full_x(it.dx, zero)) for it in sub_result.history]
+    history = [
+        replace(it, x=full_x(it.x), dx=full_x(it.dx, zero, increments=True))
+        for it in sub_result.history
+    ]
     names = [
         f"{i}.{q}" for i in block.images.ids for q in ("X0", "Y0", "Z0", "omega", "phi", "kappa")
     ] + [f"{i}.{c}" for i in block.points.ids for c in "XYZ"]
     groups = {"exterior": slice(0, 6 * m), "points": slice(6 * m, 6 * m + 3 * p)}
     if q:
-        names += list(sub_result.names[ap_sl])
-        groups["additional"] = slice(6 * m + 3 * p, 6 * m + 3 * p + q)
+        names += ap_names
+        groups["additional"] = slice(6 * m + 3 * p, 6 * m + 3 * p + len(ap_names))
     return replace(
         sub_result,
         x=x,

@@ -38,6 +38,23 @@ F64 = NDArray[np.float64]
 FLIP: F64 = np.diag([1.0, -1.0, -1.0])
 
 
+def core_points(points: ArrayLike) -> F64:
+    """The finite points (k, 3) without far strays, which frames and scales must ignore.
+
+    A real reconstruction may hold a few points thrown far away (weakly determined, rays
+    meeting at a small angle: 10⁴–10⁷ times the object's size). Kept: the points within
+    half the extent of the central 98 % (per axis, 1st–99th percentile) around it; a
+    compact object or a block keeps every point. Fewer than 20 points: all finite ones.
+    """
+    P = np.asarray(points, dtype=float).reshape(-1, 3)
+    P = P[np.all(np.isfinite(P), axis=1)]
+    if P.shape[0] < 20:
+        return P
+    lo, hi = np.percentile(P, [1.0, 99.0], axis=0)
+    ext = np.maximum(hi - lo, 0.1 * np.max(hi - lo))  # a flat block keeps its heights
+    return P[np.all((P >= lo - 0.5 * ext) & (P <= hi + 0.5 * ext), axis=1)]
+
+
 @dataclass(frozen=True)
 class SceneFrame:
     """The local frame the viewer draws in: ``scene = object − origin`` (m).
@@ -56,9 +73,9 @@ class SceneFrame:
 
     @classmethod
     def around(cls, points: ArrayLike) -> SceneFrame:
-        """Frame centred on the bounding box of ``points`` (n, 3) m."""
-        P = np.asarray(points, dtype=float).reshape(-1, 3)
-        P = P[np.all(np.isfinite(P), axis=1)]
+        """Frame centred on the bounding box of ``points`` (n, 3) m (far strays left out,
+        :func:`core_points`)."""
+        P = core_points(points)
         if P.shape[0] == 0:
             return cls(np.zeros(3), 1.0)
         lo, hi = P.min(axis=0), P.max(axis=0)
@@ -400,9 +417,9 @@ def loop_segments(polygons: ArrayLike) -> F64:
 
 
 def typical_spacing(points: ArrayLike) -> float:
-    """A typical distance between neighbouring points (m): √(horizontal area / count)."""
-    P = np.asarray(points, dtype=float).reshape(-1, 3)
-    P = P[np.all(np.isfinite(P), axis=1)]
+    """A typical distance between neighbouring points (m): √(horizontal area / count)
+    (far strays left out, :func:`core_points`)."""
+    P = core_points(points)
     if P.shape[0] < 2:
         return 1.0
     ext = P.max(axis=0) - P.min(axis=0)
@@ -426,7 +443,8 @@ def framing(
     visible: float = VISIBLE_WIDTH,
     margin: float = 1.1,
 ) -> tuple[F64, F64]:
-    """Camera (position, look_at) that shows all ``points`` left of the GUI panel.
+    """Camera (position, look_at) that shows all ``points`` (but far strays,
+    :func:`core_points`) left of the GUI panel.
 
     The bounding sphere of the points (about their bounding box's centre) fits the
     vertical field of view ``fov`` (rad) and the visible width (share ``visible`` of a
@@ -434,8 +452,7 @@ def framing(
     ``direction`` (Z up) and is shifted sideways so that the object sits in the middle
     of the part of the window the panel leaves free.
     """
-    P = np.asarray(points, dtype=float).reshape(-1, 3)
-    P = P[np.all(np.isfinite(P), axis=1)]
+    P = core_points(points)
     if P.shape[0] == 0:
         return np.array([0.0, -3.0, 2.0]), np.zeros(3)
     centre = (P.min(axis=0) + P.max(axis=0)) / 2

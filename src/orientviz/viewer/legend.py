@@ -45,6 +45,13 @@ def block_legend(scene: Any) -> str:
             f"{SCORE_RED / 2:g} {swatch((210, 30, 30))} {kind} ≥ {SCORE_RED:g}; {swatch(COLORS['scale_bar'], '▬')} "
             + getattr(scene, "scale_bar_text", "scale bar")
         )
+    drawn, n = scene.geo.residuals_drawn
+    if shown("residuals") and drawn < n:
+        lines.append(f"(level of detail: the {drawn:,} largest of {n:,} residual vectors drawn)")
+    if shown("rays/all"):
+        step = scene.geo.ray_step
+        every = f" (one in {step} of {n:,}: level of detail)" if step > 1 else ""
+        lines.append(f"{swatch(COLORS['ray'], '▬')} all rays{every}")
     if shown("strips"):
         lines.append(f"{swatch(COLORS['strip'], '▬')} strips (projection centres in order)")
     if "ellipsoids" in scene.nodes and scene.ellipsoids_visible:

@@ -135,7 +135,7 @@ class BlockPanel:
         h["largest"].on_update(self.guard(lambda _e: self.fly_to_selected()))
         h["exaggeration"].on_update(self.guard(lambda _e: self.set_exaggeration()))
         h["rescale"].on_click(self.guard(lambda _e: self.set_exaggeration(auto=True)))
-        h["rays"].on_update(self.guard(lambda _e: self.scene.set_rays(str(h["rays"].value))))
+        h["rays"].on_update(self.guard(lambda _e: self._show_rays(str(h["rays"].value))))
         for key in ("frustums", "points", "residuals", "strips", "models", "ellipsoids"):
             h[f"show_{key}"].on_update(
                 self.guard(lambda _e, k=key: self._show(k, bool(self.handles[f"show_{k}"].value)))
@@ -182,7 +182,8 @@ class BlockPanel:
 
     def adjust(self, max_iter: int) -> None:
         """One iteration (``max_iter=1``) or a run to convergence from the current state."""
-        res = self.state.step(max_iter)
+        # large blocks: the precision only on request (the "Precision" folder)
+        res = self.state.step(max_iter, precision=bool(self.act.handles["auto_precision"].value))
         self.state.record(
             "one iteration" if max_iter == 1 else f"adjusted ({res.iterations} iterations)"
         )
@@ -252,6 +253,8 @@ class BlockPanel:
             lines.append(
                 f"last adjustment: σ̂0 = {res.sigma0:.10g}, {res.iterations} it., {res.reason}"
             )
+            if res.normalized_residuals is None:
+                lines.append("precision not computed: see the *Precision* folder")
         h["stats"].content = "  \n".join(lines)
         # the list of largest residuals follows every change
         top = st.largest(10, scores)
@@ -273,6 +276,10 @@ class BlockPanel:
             if getattr(self, "camera", None) is not None:
                 self.camera.refresh()
             self.update_legend()
+
+    def _show_rays(self, mode: str) -> None:
+        self.scene.set_rays(mode)
+        self.update_legend()
 
     def _show(self, key: str, visible: bool) -> None:
         self.scene.set_visible(key, visible)

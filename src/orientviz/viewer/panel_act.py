@@ -21,9 +21,13 @@ from typing import Any
 
 import numpy as np
 
+from . import solved
+
 NONE = "—"
-#: Above this many images the precision pass after an action is off by default (large
-#: blocks: the quick answer stays quick; tick "precision after each action" to add it).
+#: Above this many images (or :data:`~orientviz.viewer.solved.PRECISION_LIMIT` image
+#: observations) the precision pass after an action or an adjustment is off by default
+#: (large blocks: the quick answer stays quick; tick "precision after each action" to add
+#: it, or ask for it once in the "Precision" folder).
 AUTO_PRECISION_IMAGES: int = 500
 
 
@@ -55,7 +59,8 @@ class ActControls:
             h["toggle_control"] = gui.add_button("control off / on")
             h["drag"] = gui.add_checkbox("drag the control point", False)
             h["auto_precision"] = gui.add_checkbox(
-                "precision after each action", b.n_images <= AUTO_PRECISION_IMAGES,
+                "precision after each action",
+                b.n_images <= AUTO_PRECISION_IMAGES and b.n_observations <= solved.PRECISION_LIMIT,
                 hint="cofactors, quality colours and ellipsoids after the quick answer",
             )  # fmt: skip
             h["undo"] = gui.add_button("undo")

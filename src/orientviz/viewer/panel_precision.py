@@ -14,6 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from . import solved
+from .panel_act import AUTO_PRECISION_IMAGES
 from .precision_view import (
     STRIP_NEIGHBOURS,
     confidence_factor,
@@ -49,10 +51,15 @@ class PrecisionControls:
                 hint="0 draws the median ellipsoid about a third of a point spacing",
             )  # fmt: skip
             h["info"] = gui.add_markdown("")
+            h["compute"] = gui.add_button(
+                "compute the precision",
+                hint="cofactors at the solution: normalised residuals, quality, ellipsoids",
+            )
             h["strip"] = gui.add_image(np.full((42, 42, 3), 255, np.uint8), label="correlations")
             h["strip_text"] = gui.add_markdown("")
         for name in ("level", "points", "stations", "gain"):
             h[name].on_update(p.guard(lambda _e: self.apply()))
+        h["compute"].on_click(p.guard(lambda _e: self.compute()))
         self.refresh()
         return self
 
@@ -67,6 +74,14 @@ class PrecisionControls:
         sc.update_ellipsoids(new_gain=True)
         self.refresh()
 
+    def compute(self) -> None:
+        """The precision pass on request (large blocks open without it)."""
+        act = self.panel.act
+        act.add_precision()
+        self.panel.state.update_current_change()
+        act.refresh()
+        self.refresh()
+
     def refresh(self) -> None:
         """The read-out of the ellipsoids and the correlation strip of the selected image."""
         p, h = self.panel, self.handles
@@ -75,8 +90,24 @@ class PrecisionControls:
         k = confidence_factor(opt["level"])
         res = st.result if st.at_result else None
         b = st.block
+        missing = res is not None and res.normalized_residuals is None
+        h["compute"].visible = missing
         if res is None:
             h["info"].content = "*no adjustment at this state: no ellipsoids*"
+        elif missing:
+            n = b.n_observations
+            big = n > solved.PRECISION_LIMIT or b.n_images > AUTO_PRECISION_IMAGES
+            why = (
+                f"{n:,} image points, above the viewer's limit of {solved.PRECISION_LIMIT:,} for "
+                "the precision at every solve"
+                if big
+                else "switched off after each action"
+            )
+            h["info"].content = (
+                f"**precision not computed** ({why}): no normalised residuals (the "
+                "residuals are scored |v|/σ), quality measures or ellipsoids until you press "
+                "*compute the precision*"
+            )
         else:
             n_pts = (
                 int(np.asarray(sc.nodes["ellipsoids"].vertices).shape[0] // 42)

@@ -6,6 +6,9 @@ order: x, y of each image observation first) and the block it belongs to.
 
 Measures (key → what it is, per image over its rays and per point over its rays):
 
+* ``"rms_v"`` — RMS of the residuals in units of their a-priori σ, v/σ, of the image
+  coordinates used; unitless, larger is worse. Needs no precision (large blocks open
+  without it).
 * ``"rms_w"`` — RMS of the normalised residuals w = v / (σ √r) of the image
   coordinates (Baarda, a-priori σ0 = 1); unitless, larger is worse.
 * ``"max_w"`` — the largest abs(w); unitless, larger is worse.
@@ -33,6 +36,7 @@ F64 = NDArray[np.float64]
 
 #: key → (label, unit, larger is worse)
 MEASURES: dict[str, tuple[str, str, bool]] = {
+    "rms_v": ("RMS of residuals |v|/σ (no precision needed)", "", True),
     "rms_w": ("RMS of normalised residuals |w|", "", True),
     "max_w": ("largest normalised residual |w|", "", True),
     "redundancy": ("redundancy share (mean r_i)", "", False),
@@ -111,6 +115,20 @@ def image_observation_arrays(result, n: int) -> tuple[F64, F64]:
     return out[0], out[1]
 
 
+def image_v_sigma(block, result) -> F64:
+    """v/σ (n, 2) of the image coordinates the result used (NaN for the others, or all
+    NaN without a result)."""
+    n = block.n_observations
+    v = None if result is None else np.asarray(result.residuals, float)
+    if v is None or v.size < 2 * n:
+        return np.full((n, 2), np.nan)
+    out = v[: 2 * n].reshape(n, 2) / block.observations.sigma
+    used = getattr(result, "used_obs", None)
+    if used is not None and np.size(used) == n:
+        out[~np.asarray(used, bool)] = np.nan
+    return out
+
+
 def _group(index: NDArray[np.int64], values: F64, size: int) -> tuple[F64, F64, F64, F64]:
     """Per group: count of finite values, their sum of squares, their sum, max of abs."""
     ok = np.isfinite(values)
@@ -143,7 +161,7 @@ def compute_quality(block, result, key: str) -> Quality:
     result : Adjustment or None
         The adjustment (residual order of the bundle). None gives NaN everywhere.
     key : str
-        ``"rms_w"``, ``"max_w"``, ``"redundancy"`` or ``"std"``.
+        ``"rms_v"``, ``"rms_w"``, ``"max_w"``, ``"redundancy"`` or ``"std"``.
 
     Raises
     ------
@@ -155,12 +173,12 @@ def compute_quality(block, result, key: str) -> Quality:
     o = block.observations
     w, r = image_observation_arrays(result, n)
     per = {}
-    if key in ("rms_w", "max_w", "redundancy"):
-        vals = r if key == "redundancy" else w
+    if key in ("rms_v", "rms_w", "max_w", "redundancy"):
+        vals = {"redundancy": r, "rms_v": image_v_sigma(block, result)}.get(key, w)
         for name, index, size in (("image", o.image, m), ("point", o.point, p)):
             cnt, sq, s, mx = _group(index, vals, size)
             with np.errstate(invalid="ignore", divide="ignore"):
-                if key == "rms_w":
+                if key in ("rms_w", "rms_v"):
                     v = np.sqrt(sq / cnt)
                 elif key == "max_w":
                     v = np.where(cnt > 0, mx, np.nan)

@@ -245,7 +245,7 @@ class BlockScene:
         self.nodes["selected"].points = self._selected_segments().astype(np.float32)
         if self.rays_mode == "selected image":
             self.nodes["rays/selected"].points = geo.rays(self.selected).astype(np.float32)
-        if images is None or self.nodes["rays/all"].visible:
+        if self.nodes["rays/all"].visible:  # hidden: drawn anew when shown (set_rays)
             self.nodes["rays/all"].points = geo.rays().astype(np.float32)
         if images is None:
             for role, P in geo.points_by_role().items():

@@ -16,10 +16,17 @@ The viewer's actions (a ray, an image or a control point off and on) re-solve wi
 :class:`FileAdjuster`, the bundle run of :func:`orientviz.io.kinds.block.adjust_block`
 (the file's model and options), and the misclosures drawn follow the file's camera model
 (:class:`CameraTerms`).
+
+Large blocks (more than :data:`PRECISION_LIMIT` image observations) are solved without
+the precision pass at the start — the estimates and σ̂0 are the same, the cofactors
+(normalised residuals, ellipsoids) follow on request in the panel. ``dbat_roma`` (DBAT's
+ROMA bundle, :mod:`orientviz.reproduce.dbat_roma`; not a problem file) opens as the
+problem its reproduction solves (:func:`roma_problem`).
 """
 
 from __future__ import annotations
 
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from typing import Any
 
@@ -29,13 +36,21 @@ from numpy.typing import NDArray
 from ..block import Block
 from ..bundle.problem import BundleProblem, BundleState, point_setup
 from ..errors import InputError
+from ..io.datasets import dataset_path
 from ..io.kinds.block import adjust_block, bundle_camera_options
+from ..io.problem import Units, problem_from_block
 from ..io.solve import load_named, solve_problem
+from ..reproduce import dbat_roma as roma
 from .demo import Demo
 from .geometry import framing
 from .state import BlockState
 
 F64 = NDArray[np.float64]
+
+
+#: Above this many image observations the viewer opens without the precision pass (the
+#: cofactors of 10⁵ observations cost more than the solve); the panel says so and offers it.
+PRECISION_LIMIT: int = 20_000
 
 
 @dataclass
@@ -46,16 +61,53 @@ class Solved:
     solution: Any
 
 
-def solve_target(target: str) -> Solved:
+def solve_target(target: str, options: dict[str, Any] | None = None) -> Solved:
     """Load ``target`` (a path or a shipped data set's name) and solve it as ``solve`` does.
+
+    ``options`` override the file's (as ``solve``'s ``--free``, ``--fix``, ``--max-iter``
+    do). A block of more than :data:`PRECISION_LIMIT` image observations is solved
+    without the precision pass (same estimates and σ̂0).
 
     Raises
     ------
     InputError, AdjustmentError, …
         What ``orientviz solve`` reports (:func:`orientviz.io.solve.failure`).
     """
-    problem = load_named(target)
+    problem = VIEWER_NAMES[target]() if target in VIEWER_NAMES else load_named(target)
+    if options:
+        problem.options = dict(problem.options, **options)
+    large = isinstance(problem.data, Block) and problem.data.n_observations > PRECISION_LIMIT
+    if problem.kind == "block" and large:
+        return Solved(problem, solve_problem(problem, precision=False, history_x=True))
     return Solved(problem, solve_problem(problem))
+
+
+def roma_problem() -> Any:
+    """DBAT's ROMA bundle as a block problem: what ``orientviz reproduce dbat-roma`` solves.
+
+    60 images, 26 321 points, 90 561 image points (σ 1 px); the backward lens model with
+    c, x0, y0, K1, K2 free from the camera file's values; the datum of DBAT's script (the
+    first photo and one base component held, :func:`orientviz.reproduce.dbat_roma.block`).
+    """
+    block = roma.block()  # reads the measurements (read_roma) once
+    cam = (
+        ET.parse(dataset_path("dbat_sxb").parent / "roma" / "EOS5DMarkII.xml")
+        .getroot()
+        .find("cameras/camera")
+    )
+    K = [float(v) for v in cam.findtext("K").split(",")]
+    spec = {"model": "backward", "free": list(roma.LENS_FREE), "sigma": {},
+            "values": {"K1": K[0], "K2": K[1]}, "r0": None}  # fmt: skip
+    block.cameras.model = [spec]
+    pixel = float(block.observations.sigma[0, 0])  # σ = 1 px
+    units = Units(length="m", angle="deg", image="px", pixel_size=pixel)
+    desc = "DBAT's ROMA bundle (data/script/romabundledemo), self-calibrating, no control"
+    opts = {"tol": roma.TOL, "max_iter": 50}
+    return problem_from_block(block, units=units, name="dbat_roma", description=desc, options=opts)
+
+
+#: names the viewer opens besides the shipped data sets (problems built in memory)
+VIEWER_NAMES: dict[str, Any] = {"dbat_roma": roma_problem}
 
 
 class FileAdjuster:

@@ -223,7 +223,7 @@ class BlockState:
         else:  # the quick answer: small BLAS calls, fastest on one thread
             with one_blas_thread():
                 raw = self.adjuster(sub, max_iter, precision=False)  # type: ignore[call-arg]
-        result = expand_result(raw, mp, start, self.effective_sigma())
+        result = expand_result(raw, mp, start, self.effective_sigma(), self.ap)
         # a step from a replayed state discards the later history
         self._take_result(result, start)
         self.mapping = mp

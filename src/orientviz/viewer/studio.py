@@ -27,12 +27,19 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..design import (
+    METHODS,
     DesignQuality,
     FlightDesign,
     LiveDesign,
     Suggestion,
     accuracy_law,
+    add_images,
+    assess_models,
+    cross_strip,
+    design_auxiliary,
     design_block,
+    design_from_block,
+    remove_images,
     suggest_control,
 )
 from .quality import STOPS
@@ -56,6 +63,8 @@ SUGGESTED_COLOUR = (200, 0, 200)
 
 #: the studio's first design: 4 strips of 10 images, XYZ control on the perimeter every 4 bases
 START = FlightDesign(strips=4, images_per_strip=10, control="perimeter", control_spacing=4)
+#: the law's note for a design without a plan (a block from a file)
+LAW_NONE = "no accuracy law: the block comes from a file, not from a regular flight plan"
 
 
 def point_values(q: DesignQuality, block, key: str) -> F64:
@@ -66,6 +75,8 @@ def point_values(q: DesignQuality, block, key: str) -> F64:
     if key == "sigma_z":
         return q.point_sigma[:, 2] * f
     if key == "redundancy":
+        if not np.isfinite(q.redundancy).any():  # a method without image rays
+            return np.full(block.n_points, np.nan)
         return -q.per_point(-np.nanmin(q.redundancy, axis=1), block)
     if key == "mdb":
         return q.per_point(q.mdb, block) * f
@@ -106,9 +117,15 @@ def _fmt(v: float) -> str:
     return f"{v:,.0f}" if abs(v) >= 100 else f"{v:.3g}"
 
 
-def legend_html(scale: Scale) -> str:
-    """A colour bar with the measure's name and the values at its ends (HTML)."""
+def legend_html(scale: Scale, defined: bool = True) -> str:
+    """A colour bar with the measure's name and the values at its ends (HTML); with
+    ``defined`` False, the note that the method has no such measure (points grey)."""
     label, unit, _, worse_high = MEASURES[scale.key]
+    if not defined:
+        return (
+            f'<div style="font-size:0.8em"><b>{label}</b>: not defined for the chosen method '
+            "(points grey)</div>"
+        )
     stops = STOPS if worse_high else STOPS[::-1]
     grad = ", ".join(f"rgb({int(r)},{int(gg)},{int(b)})" for r, gg, b in stops)
     u = f" {unit}" if unit else ""
@@ -124,26 +141,180 @@ def legend_html(scale: Scale) -> str:
 
 
 class Studio:
-    """The studio's state: the plan, the live design, the measure, the suggestion.
+    """The studio's state: the plan, the live design, the method, the measure, the
+    suggestion, the changes and their undo.
 
     No GUI here: :class:`~orientviz.viewer.studio_panel.StudioView` draws it and its panel
-    edits it; the tests drive it directly.
+    edits it; the tests and the lessons drive it directly.
+
+    Parameters
+    ----------
+    design : FlightDesign
+        The plan (ignored when ``block`` is given).
+    block, spec : Block and dict, optional
+        A design block and its geometry (``base_m``) instead of a plan, e.g. from
+        :func:`orientviz.design.design_from_block`; then there is no plan to change and no
+        accuracy law.
+    title : str, optional
+        What the block is (a file name), for the summary.
     """
 
-    def __init__(self, design: FlightDesign = START) -> None:
+    def __init__(
+        self, design: FlightDesign = START, *, block=None, spec=None, title: str | None = None
+    ) -> None:  # fmt: skip
         self.measure = "sigma_z"
+        self.method = "bundle"
         self.suggestion: Suggestion | None = None
-        self.plan_history: list[str] = []
-        self.set_plan(design)
+        self.title = title
+        #: every change in words, in order (control, plan, images, strips, method)
+        self.log: list[str] = []
+        #: per change that can be undone: ("control",) or ("structure", the state before)
+        self._undo: list[tuple] = []
+        self._models: tuple | None = None  # (changes, quality, live) of independent models
+        if block is not None:
+            self.design = None
+            self._set_block(block.copy(), dict(spec))
+        else:
+            self._set_plan(design)
 
-    def set_plan(self, design: FlightDesign) -> DesignQuality:
-        """Build the design of a (new) plan: strips, overlaps, σ …"""
+    @classmethod
+    def from_file(cls, target: str, *, sigma_control: float = 0.02) -> Studio:
+        """The studio on the geometry of a block problem file (or a shipped data set):
+        solved as ``orientviz solve`` does, then made a design
+        (:func:`orientviz.design.design_from_block`: projections as error-free image
+        coordinates, fixed control weighted with ``sigma_control`` m)."""
+        from ..io.solve import adjusted_problem, load_named, solve_problem  # files: on demand
+
+        problem = load_named(target)
+        block = adjusted_problem(problem, solve_problem(problem)).data
+        b, spec = design_from_block(block, sigma_control=sigma_control)
+        return cls(block=b, spec=spec, title=str(target))
+
+    # ------------------------------------------------------------------ state
+    def _state(self) -> tuple:
+        return (self.design, self.live, self.spec, self.law, self._models)
+
+    def _restore(self, state: tuple) -> None:
+        self.design, self.live, self.spec, self.law, self._models = state
+
+    def _set_plan(self, design: FlightDesign) -> None:
         self.design = design
         block, self.spec = design_block(design)
-        self.live = LiveDesign(block, self.spec)
+        aux = design_auxiliary(block, design)
+        self.live = LiveDesign(block, self.spec, auxiliary=aux)
         self.law = accuracy_law(design, self.spec)
+        self._models = None
+
+    def _set_block(self, block, spec) -> None:
+        self.spec = spec
+        aux = design_auxiliary(block, self.design) if self.design is not None else []
+        self.live = LiveDesign(block, spec, auxiliary=aux)
+        if self.design is None:
+            self.law = {"sigma_xy": float("nan"), "sigma_z": float("nan"), "note": LAW_NONE}
+        else:  # images added or removed: the law still describes the regular plan
+            self.law = dict(accuracy_law(self.design, spec))
+            self.law["note"] += "; for the plan without the images added or removed since"
+        self._models = None
+
+    def _structural(self, label: str, change) -> DesignQuality:
+        """Apply a change of the structure (a new design), keeping the old one for undo."""
+        before = self._state()
+        change()
+        self._undo.append(("structure", before))
+        self.log.append(label)
         self.suggestion = None
-        return self.live.quality()
+        return self.quality
+
+    def set_plan(self, design: FlightDesign) -> DesignQuality:
+        """Build the design of a (new) plan: strips, overlaps, σ … (undo restores the old)."""
+        return self._structural(
+            f"plan: {design.strips} × {design.images_per_strip}, p {design.forward_overlap:.0%}"
+            f", q {design.side_overlap:.0%}, control {design.control}",
+            lambda: self._set_plan(design),
+        )
+
+    def add_cross_strip(self, x: float) -> DesignQuality:
+        """Fly a cross strip along +Y at X = ``x`` (m) over the block."""
+        b = cross_strip(self.block, self.spec, x)
+        n = b.n_images - self.block.n_images
+        return self._structural(
+            f"cross strip at X = {x:,.0f} m ({n} images)", lambda: self._set_block(b, self.spec)
+        )
+
+    def remove_images(self, images, what: str | None = None) -> DesignQuality:
+        """Remove images (indices) and their rays from the design."""
+        idx = np.atleast_1d(np.asarray(images, np.int64))
+        names = [self.block.images.ids[i] for i in idx]
+        b = remove_images(self.block, idx)
+        label = what or ("image " + ", ".join(names) + " removed")
+        return self._structural(label, lambda: self._set_block(b, self.spec))
+
+    def add_image(self, xy) -> DesignQuality:
+        """Add an image above the ground position ``xy`` (m) at the height, attitude and in
+        the strip of the nearest projection centre."""
+        I = self.block.images
+        xy = np.asarray(xy, float)[:2]
+        i = int(np.argmin(np.linalg.norm(I.X0[:, :2] - xy[None, :], axis=1)))
+        X0 = np.r_[xy, I.X0[i, 2]]
+        b = add_images(self.block, X0[None], I.angles[i][None], strip=int(I.strip[i]))
+        name = b.images.ids[-1]
+        return self._structural(
+            f"image {name} added at X {xy[0]:,.0f} m, Y {xy[1]:,.0f} m (strip {I.strip[i]})",
+            lambda: self._set_block(b, self.spec),
+        )
+
+    def remove_strip(self, strip: int) -> DesignQuality:
+        """Remove every image of strip ``strip``."""
+        idx = np.flatnonzero(self.block.images.strip == strip)
+        return self.remove_images(idx, f"strip {strip} removed ({idx.size} images)")
+
+    def set_method(self, method: str) -> DesignQuality:
+        """Assess the design for ``"bundle"``, ``"models"`` or ``"polynomial"``
+        (:data:`orientviz.design.METHODS`; the polynomial method has no design precision:
+        the bundle's quality stays shown and :meth:`method_note` says so)."""
+        if method not in METHODS:
+            raise ValueError(f"method: expected one of {', '.join(METHODS)}, got {method!r}")
+        if method != self.method:
+            old, self.method = self.method, method
+            try:
+                self.quality  # noqa: B018  (computed now: a failure keeps the old method)
+            except Exception:
+                self.method = old
+                raise
+            self.log.append(f"method: {METHODS[method][0]}")
+        return self.quality
+
+    def method_note(self) -> str | None:
+        """Why the chosen method shows no precision of its own (None if it does)."""
+        return METHODS[self.method][1]
+
+    # ------------------------------------------------------------------ control
+    def set_control(self, point: int, sigma: float | None) -> DesignQuality:
+        """Make ``point`` XYZ control with σ ``sigma`` m (None: make it a tie point)."""
+        if sigma is None:
+            self.live.remove_control(point)
+        else:
+            self.live.add_control(point, sigma)
+        self._undo.append(("control",))
+        self.log.append(self.live.history[-1])
+        self.suggestion = None
+        return self.quality
+
+    def undo(self) -> DesignQuality:
+        """Take the last change back (control, plan, images, strips)."""
+        if not self._undo:
+            raise ValueError("nothing to undo")
+        kind = self._undo.pop()
+        if kind[0] == "control":
+            self.live.undo()
+            self.log.append(self.live.history[-1])
+        else:
+            self._restore(kind[1])
+            self.log.append(
+                "undo: " + next(t for t in reversed(self.log) if not t.startswith("undo"))
+            )
+        self.suggestion = None
+        return self.quality
 
     @property
     def block(self):
@@ -152,8 +323,14 @@ class Studio:
 
     @property
     def quality(self) -> DesignQuality:
-        """The current quality."""
-        return self.live.quality()
+        """The current quality for the chosen method (the bundle's for the polynomial)."""
+        if self.method != "models":
+            return self.live.quality()
+        key = len(self.live.history)
+        if self._models is None or self._models[0] != key or self._models[2] is not self.live:
+            q = assess_models(self.block, self.spec, auxiliary=self.live.auxiliary)
+            self._models = (key, q, self.live)
+        return self._models[1]
 
     def point_index(self, name: str) -> int:
         """Index of the point with id ``name`` (or an index as text)."""
@@ -195,12 +372,29 @@ class Studio:
             return "–" if not np.isfinite(v) else f"{v * mm:.1f}"
 
         d = self.design
+        if d is not None:
+            head = (
+                f"**{d.strips} strips × {d.images_per_strip} images**, 1:{d.scale:,.0f}, "
+                f"p = {d.forward_overlap:.0%}, q = {d.side_overlap:.0%}, σ image "
+                f"{d.sigma_image_mm * 1e3:.1f} µm, control σ {d.sigma_control * 100:.0f} cm"
+                + (f", GNSS σ {d.sigma_gnss:.2f} m" if d.sigma_gnss else "")
+                + (f", statoscope σ {d.sigma_statoscope:.2f} m" if d.sigma_statoscope else "")
+                + (f", APR σ {d.sigma_apr:.2f} m" if d.sigma_apr else "")
+            )
+        else:
+            head = f"**{self.title or 'a block'}**"
+        b = self.block
+        extra = b.n_images - (d.strips * d.images_per_strip if d is not None else b.n_images)
+        head += (
+            f"; {b.n_images} images"
+            + (f" ({extra:+d} by cross strips / removals)" if extra else "")
+            + f", {b.n_points} points, {s['n_control']} control points"
+        )
+        note = self.method_note()
         lines = [
-            f"**{d.strips} strips × {d.images_per_strip} images**, 1:{d.scale:,.0f}, "
-            f"p = {d.forward_overlap:.0%}, q = {d.side_overlap:.0%}, σ image "
-            f"{d.sigma_image_mm * 1e3:.1f} µm, control σ {d.sigma_control * 100:.0f} cm, "
-            f"{s['n_control']} control points"
-            + (f", GNSS σ {d.sigma_gnss:.2f} m" if d.sigma_gnss else ""),
+            head,
+            "",
+            f"Method: **{METHODS[self.method][0]}**" + (f" — {note}" if note else ""),
             "",
             "| | median | RMS | max | law (RMS) |",
             "| --- | --- | --- | --- | --- |",
@@ -209,19 +403,27 @@ class Studio:
             f"| σ_Z mm | {s['sigma_z_median'] * mm:.1f} | {s['sigma_z_rms'] * mm:.1f} | "
             f"{s['sigma_z_max'] * mm:.1f} | {lawv('sigma_z')} |",
             "",
-            f"mean redundancy number {s['redundancy_mean']:.2f}; largest MDB "
-            f"{s['mdb_max_mm'] * 1e3:.0f} µm; largest δ̄0 {s['external_max']:.1f}; "
-            f"{s['untestable_rays']} rays not testable.  ",
-            f"Law: {law.get('note', '')}",
         ]
+        if np.isfinite(s["redundancy_mean"]):
+            lines.append(
+                f"mean redundancy number {s['redundancy_mean']:.2f}; largest MDB "
+                f"{s['mdb_max_mm'] * 1e3:.0f} µm; largest δ̄0 {s['external_max']:.1f}; "
+                f"{s['untestable_rays']} rays not testable.  "
+            )
+        else:
+            lines.append(
+                "Reliability (redundancy, MDB, δ̄0 of the image rays) is not defined for "
+                "independent models: the models have no image rays.  "
+            )
+        lines.append(f"Law: {law.get('note', '')}")
         spots = self.quality.weak_spots
         if spots:
             lines += ["", "**Weak spots**"] + [f"- {w}" for w in spots]
         return "\n".join(lines)
 
     def changes_markdown(self) -> str:
-        """The list of changes (plan and control) in order."""
-        items = self.plan_history + self.live.history
+        """The list of changes (control, plan, images, strips, method) in order."""
+        items = self.log
         if not items:
             return "*no changes yet*"
         return "\n".join(f"{k + 1}. {t}" for k, t in enumerate(items[-12:]))

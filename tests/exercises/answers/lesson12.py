@@ -42,7 +42,26 @@ def _snoop_v(A, l, sigma, k):
     return i if abs(w[i]) > k else -1
 
 
+def _snoop(adjust, n, k, mistake=None):
+    keep = np.ones(n, bool)
+    out = []
+    if mistake == "all at once":
+        w = adjust(keep)
+        return [int(i) for i in np.flatnonzero(np.abs(np.nan_to_num(w)) > k)]
+    while True:
+        w = adjust(keep)
+        a = np.nan_to_num(w, nan=-np.inf) if mistake == "no abs" else np.abs(np.nan_to_num(w))
+        i = int(np.argmax(a))
+        if a[i] <= k:
+            return out
+        keep[i] = False
+        out.append(i)
+        if mistake == "one round":
+            return out
+
+
 SOLUTIONS = {
+    "check_snoop": _snoop,
     "check_normalized": _normalized,
     "check_snoop_round": _snoop_round,
     "check_mdb": _mdb,
@@ -50,6 +69,10 @@ SOLUTIONS = {
 }
 
 MUTANTS = {
+    "check_snoop": {
+        m: (lambda adjust, n, k, m=m: _snoop(adjust, n, k, m))
+        for m in ("all at once", "no abs", "one round")
+    },
     "check_normalized": {
         "no sqrt r": lambda A, l, s: (lambda v, r, w: (v, r, v / s))(*_normalized(A, l, s)),
         "r not sqrt": lambda A, l, s: (lambda v, r, w: (v, r, v / (s * r)))(*_normalized(A, l, s)),

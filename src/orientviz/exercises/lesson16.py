@@ -1,0 +1,234 @@
+"""Checkers for lesson 16, network design: the block's precision before it is flown.
+
+Oracles: the inverse of the enlarged normal matrix formed from scratch (for the update of
+the cofactors), a forward intersection by least squares with numerical derivatives (for
+the height precision of the normal case), the flight geometry written out (for the
+accuracy law's σ0), and the bundle adjustment of the design block with the student's
+control points made control (for the control placed by hand) — never the studio's
+update formula (:class:`orientviz.design.LiveDesign`) or its suggestion.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from ..block import CONTROL
+from ..bundle import bundle_adjust
+from ..simulate import simulate_block
+from ._common import CheckFailed, call, compare, rng_for, success
+
+#: The design of the by-hand exercise: 3 strips × 9 images at 1 : 10 000, wide angle,
+#: 60 % / 20 % overlap, flat terrain, XYZ control at the 4 corners (σ 2 cm), image σ 5 µm.
+TASK: dict[str, Any] = {
+    "strips": 3,
+    "images_per_strip": 9,
+    "control": "corners",
+    "sigma_control": 0.02,
+    "sigma_image_mm": 0.005,
+}
+#: The required largest σ_Z of the non-control points, m.
+TARGET_SIGMA_Z: float = 0.35
+#: The fewest added control points that reach the target: one is not enough (the check
+#: tries every point), two are (tests/exercises/test_lesson16.py computes a pair that does).
+FEWEST: int = 2
+
+
+def _design_block():
+    """The task's design block: planned geometry, weighted control (no random errors)."""
+    sim = simulate_block(
+        TASK["strips"], TASK["images_per_strip"], rng=np.random.default_rng(0), relief=0.0,
+        extra=None, control=TASK["control"], control_sigma=TASK["sigma_control"],
+        sigma_image_mm=TASK["sigma_image_mm"], start_error=None,
+        flight_jitter=(0.0, 0.0, 0.0, 0.0),
+    )  # fmt: skip
+    return sim.truth.copy()
+
+
+def worst_sigma_z(block, control_ids: Sequence[str], sigma: float = 0.02) -> float:
+    """Largest σ_Z (m) of the non-control points with ``control_ids`` made XYZ control.
+
+    The bundle adjustment of the design block (error-free observations, a-priori σ0 = 1,
+    weighted control) with its precision: the design's σ.
+    """
+    b = block.copy()
+    ids = b.points.ids
+    for name in control_ids:
+        j = ids.index(name)
+        b.points.sigma[j] = sigma
+        b.points.xyz_known[j] = b.points.xyz[j]
+        b.points.role[j] = CONTROL
+    res = bundle_adjust(b, control="weighted", precision=True, max_iter=2)
+    Qp = np.asarray(res.cofactor_groups["points"])
+    sz = np.sqrt(np.clip(Qp[:, 2, 2], 0.0, None))
+    return float(sz[b.points.role != CONTROL].max())
+
+
+def check_control_update(fn: Callable) -> None:
+    """Check ``fn(Q, idx, sigma) -> Q_new``: the cofactors after making a point control.
+
+    ``Q`` (u, u) is the cofactor matrix of the design, ``idx`` the three indices of the
+    point's X, Y, Z among the unknowns, ``sigma`` (3,) the σ of the given coordinates (m).
+    """
+    rng = rng_for("lesson16.check_control_update")
+    for u, idx, sigma in ((11, [7, 2, 9], [0.03, 0.05, 0.02]), (8, [0, 1, 2], [0.4, 0.1, 0.25])):
+        A = rng.normal(size=(3 * u, u))
+        N = A.T @ np.diag(rng.uniform(0.5, 3.0, 3 * u)) @ A
+        Q = np.linalg.inv(N)
+        s = np.asarray(sigma)
+        E = np.zeros((3, u))
+        E[np.arange(3), idx] = 1.0
+        ref = np.linalg.inv(N + E.T @ np.diag(1 / s**2) @ E)  # oracle: the enlarged N inverted
+        got = call(fn, Q.copy(), list(idx), s.copy(), what="control_update")
+        Qj = Q[:, idx]
+        Qjj = Q[np.ix_(idx, idx)]
+        compare(
+            f"Q' (u = {u})",
+            got,
+            ref,
+            rtol=1e-8,
+            wrong=[
+                (
+                    "(P + Q_jj)⁻¹ with P = 1/σ²: the inner matrix needs P⁻¹ = σ²",
+                    Q - Qj @ np.linalg.inv(np.diag(1 / s**2) + Qjj) @ Qj.T,
+                ),
+                (
+                    "σ instead of σ² in P⁻¹",
+                    Q - Qj @ np.linalg.inv(np.diag(s) + Qjj) @ Qj.T,
+                ),
+                (
+                    "the sign: new control makes the cofactors smaller (Q − …)",
+                    Q + Qj @ np.linalg.inv(np.diag(s**2) + Qjj) @ Qj.T,
+                ),
+            ],
+        )
+    success("Q' equals the inverse of N + AᵀPA: one 3×3 inverse instead of a new u×u one")
+
+
+def _normal_case_oracle(H: float, B: float, c_mm: float, sigma_x_mm: float) -> float:
+    """σ_Z (m) of a ground point midway between two vertical images at height H, base B:
+    least squares on its four image coordinates, numerical derivatives."""
+    c = c_mm * 1e-3
+    centres = np.array([[0.0, 0.0, H], [B, 0.0, H]])
+    P0 = np.array([B / 2, 0.0, 0.0])
+
+    def f(P):
+        d = P[None, :] - centres
+        return np.concatenate([-c * d[:, 0] / d[:, 2], -c * d[:, 1] / d[:, 2]])
+
+    J = np.empty((4, 3))
+    for k in range(3):
+        e = np.zeros(3)
+        e[k] = 1e-3
+        J[:, k] = (f(P0 + e) - f(P0 - e)) / 2e-3
+    Q = np.linalg.inv(J.T @ J) * (sigma_x_mm * 1e-3) ** 2
+    return float(np.sqrt(Q[2, 2]))
+
+
+def check_sigma_z_normal_case(fn: Callable) -> None:
+    """Check ``fn(H, B, c_mm, sigma_x_mm) -> σ_Z`` (m) of the normal case's midpoint."""
+    for H, B, c_mm, sx in ((1520.0, 920.0, 152.0, 0.005), (790.0, 300.0, 88.0, 0.012)):
+        ref = _normal_case_oracle(H, B, c_mm, sx)
+        got = call(fn, H, B, c_mm, sx, what="sigma_z_normal_case")
+        mb = H / (c_mm * 1e-3)
+        compare(
+            f"σ_Z (H = {H:g} m, B = {B:g} m)",
+            got,
+            ref,
+            rtol=1e-4,
+            wrong=[
+                ("the parallax has σ√2: two image coordinates", (H / B) * mb * sx * 1e-3),
+                ("B/H upside down", (B / H) * mb * sx * 1e-3 * np.sqrt(2)),
+            ],
+        )
+    success("σ_Z = √2 · (H/B) · m_B · σ_x, as the least-squares intersection gives")
+
+
+def check_law_spacing(fn: Callable) -> None:
+    """Check ``fn(sigma_img_mm, scale, c_mm, format_mm, p, target_m, mu) -> (sigma0z, i)``.
+
+    ``mu`` maps the chain spacing i (bases) to Ebner's μ_z/σ0 (increasing with i);
+    the answer is σ0z = σ_img · m_B · H/B (m) and the largest i with μ_z(i) · σ0z ≤ target.
+    """
+    rng = rng_for("lesson16.check_law_spacing")
+    for sigma_img, scale, c_mm, fmt, p, target in (
+        (0.005, 10_000.0, 152.0, 230.0, 0.6, 0.105),
+        (0.008, 25_000.0, 88.0, 230.0, 0.65, 0.5),
+    ):
+        spac = np.arange(2, 12)
+        mu = dict(zip(spac.tolist(), (0.8 + np.cumsum(rng.uniform(0.05, 0.4, spac.size))).tolist()))
+        base = fmt * 1e-3 * scale * (1 - p)  # B, m
+        H = c_mm * 1e-3 * scale
+        s0z = sigma_img * 1e-3 * scale * H / base  # the geometry written out
+        ok = [i for i in spac if mu[int(i)] * s0z <= target]
+        i_ref = int(max(ok)) if ok else 0
+        out = call(fn, sigma_img, scale, c_mm, fmt, p, target, dict(mu), what="law_spacing")
+        try:
+            s0, i = out
+        except (TypeError, ValueError):
+            raise CheckFailed("return the two values (sigma0z, i)") from None
+        compare(
+            "σ0z",
+            s0,
+            s0z,
+            rtol=1e-6,
+            wrong=[
+                ("the base uses p, not 1 − p", s0z * (1 - p) / p),
+                ("H/B upside down", sigma_img * 1e-3 * scale * base / H),
+            ],
+        )
+        if int(i) != i_ref:
+            hint = (
+                "the smallest spacing that misses the target, not the largest that meets it"
+                if int(i) == i_ref + 1
+                else "compare μ_z(i) · σ0z (m) with the target"
+            )
+            raise CheckFailed(f"chain spacing: expected {i_ref} bases, got {i} — {hint}.")
+    success("σ0z from the flight and the widest chain spacing that meets the target")
+
+
+def check_by_hand(fn: Callable) -> None:
+    """Check ``fn() -> list of point ids``: the fewest extra control points with which the
+    task's design (:data:`TASK`) reaches σ_Z ≤ :data:`TARGET_SIGMA_Z` everywhere."""
+    ids = call(fn, what="my_control_points")
+    if isinstance(ids, str) or not all(isinstance(x, str) for x in ids):
+        raise CheckFailed("return a list of point ids such as ['g02_004', …]")
+    block = _design_block()
+    unknown = [x for x in ids if x not in block.points.ids]
+    if unknown:
+        raise CheckFailed(f"no point {unknown[0]!r} in the design (ids look like 'g02_004')")
+    got = worst_sigma_z(block, list(ids))
+    if got > TARGET_SIGMA_Z * (1 + 1e-6):
+        raise CheckFailed(
+            f"with {len(ids)} added control points the largest σ_Z is {got:.3f} m, above the "
+            f"required {TARGET_SIGMA_Z} m — put control where σ_Z is largest (colour by σ_Z)",
+            error=(got - TARGET_SIGMA_Z) / TARGET_SIGMA_Z,
+            tolerance=1e-6,
+        )
+    # the fewest: one point is not enough (every one tried here), FEWEST are
+    tie = [x for j, x in enumerate(block.points.ids) if block.points.role[j] != CONTROL]
+    best_one = min(worst_sigma_z(block, [x]) for x in tie)
+    fewest = 1 if best_one <= TARGET_SIGMA_Z else FEWEST
+    if len(set(ids)) > fewest:
+        raise CheckFailed(
+            f"{len(set(ids))} points reach σ_Z {got:.3f} m, but {fewest} are enough (one alone "
+            f"leaves at best {best_one:.2f} m): look for a better placement"
+        )
+    success(
+        f"{len(set(ids))} added control points: largest σ_Z {got:.3f} m ≤ {TARGET_SIGMA_Z} m "
+        f"(the best single point leaves {best_one:.2f} m)"
+    )
+
+
+__all__ = [
+    "FEWEST",
+    "TARGET_SIGMA_Z",
+    "TASK",
+    "check_by_hand",
+    "check_control_update",
+    "check_law_spacing",
+    "check_sigma_z_normal_case",
+    "worst_sigma_z",
+]

@@ -1,0 +1,103 @@
+"""Lesson 16: the solutions of its exercises and the plausible wrong answers (mutants).
+
+Kept out of the installed package (solutions stay with the teacher); used by
+``tests/exercises/test_lesson16.py``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def _control_update(Q, idx, sigma):
+    Qj = Q[:, idx]
+    M = np.linalg.inv(np.diag(np.asarray(sigma) ** 2) + Q[np.ix_(idx, idx)])
+    return Q - Qj @ M @ Qj.T
+
+
+def _sigma_z_normal_case(H, B, c_mm, sigma_x_mm):
+    return np.sqrt(2.0) * (H / B) * (H / (c_mm * 1e-3)) * sigma_x_mm * 1e-3
+
+
+def _law_spacing(sigma_img_mm, scale, c_mm, format_mm, p, target_m, mu):
+    base = format_mm * 1e-3 * scale * (1 - p)
+    s0z = sigma_img_mm * 1e-3 * scale * (c_mm * 1e-3 * scale) / base
+    ok = [i for i, m in mu.items() if m * s0z <= target_m]
+    return s0z, max(ok) if ok else 0
+
+
+def _by_hand():
+    return ["g02_004", "g04_006"]
+
+
+SOLUTIONS = {
+    "check_control_update": _control_update,
+    "check_sigma_z_normal_case": _sigma_z_normal_case,
+    "check_law_spacing": _law_spacing,
+    "check_by_hand": _by_hand,
+}
+
+
+def _update_with(inner, sign=-1.0):
+    def fn(Q, idx, sigma):
+        Qj = Q[:, idx]
+        return Q + sign * Qj @ np.linalg.inv(inner(np.asarray(sigma)) + Q[np.ix_(idx, idx)]) @ Qj.T
+
+    return fn
+
+
+def _spacing_with(s0z_of, pick):
+    def fn(sigma_img_mm, scale, c_mm, format_mm, p, target_m, mu):
+        s0z = s0z_of(sigma_img_mm, scale, c_mm, format_mm, p)
+        return s0z, pick(mu, s0z, target_m)
+
+    return fn
+
+
+def _s0z(si, m, c, f, p):
+    return si * 1e-3 * m * (c * 1e-3 * m) / (f * 1e-3 * m * (1 - p))
+
+
+def _largest(mu, s0z, t):
+    ok = [i for i, v in mu.items() if v * s0z <= t]
+    return max(ok) if ok else 0
+
+
+MUTANTS = {
+    "check_control_update": {
+        "P instead of P⁻¹": _update_with(lambda s: np.diag(1 / s**2)),
+        "σ instead of σ²": _update_with(lambda s: np.diag(s)),
+        "plus sign": _update_with(lambda s: np.diag(s**2), sign=1.0),
+        "only the point's own block": lambda Q, idx, s: np.where(
+            np.isin(np.arange(len(Q))[:, None], idx) & np.isin(np.arange(len(Q))[None, :], idx),
+            _control_update(Q, idx, s),
+            Q,
+        ),
+    },
+    "check_sigma_z_normal_case": {
+        "no √2": lambda H, B, c, s: (H / B) * (H / (c * 1e-3)) * s * 1e-3,
+        "B/H": lambda H, B, c, s: np.sqrt(2.0) * (B / H) * (H / (c * 1e-3)) * s * 1e-3,
+        "c in mm as m": lambda H, B, c, s: np.sqrt(2.0) * (H / B) * (H / c) * s * 1e-3,
+    },
+    "check_law_spacing": {
+        "p for 1 − p": _spacing_with(
+            lambda si, m, c, f, p: si * 1e-3 * m * (c * 1e-3 * m) / (f * 1e-3 * m * p), _largest
+        ),
+        "B/H": _spacing_with(
+            lambda si, m, c, f, p: si * 1e-3 * m * (f * 1e-3 * m * (1 - p)) / (c * 1e-3 * m),
+            _largest,
+        ),
+        "first spacing that fails": _spacing_with(
+            _s0z, lambda mu, s0z, t: min(i for i, v in mu.items() if v * s0z > t)
+        ),
+        "μ compared without σ0z": _spacing_with(
+            _s0z, lambda mu, s0z, t: max([i for i, v in mu.items() if v <= t], default=0)
+        ),
+    },
+    "check_by_hand": {
+        "corners only (nothing added)": lambda: [],
+        "one point in the middle": lambda: ["g03_004"],
+        "three points where two do": lambda: ["g02_004", "g04_006", "g03_000"],
+        "a point that does not exist": lambda: ["g09_009"],
+    },
+}

@@ -1,0 +1,100 @@
+"""Every planted mistake of the lessons ("a colleague's version: one line is wrong") is wrong.
+
+An exercise of the kind "find the mistake" shows a colleague's function with one wrong line
+and asks the student for the corrected one. This test executes each such cell of the lesson
+notebooks and demands that the exercise's checker rejects the colleague's function with a
+diagnosis (a :class:`~orientviz.exercises.CheckFailed` that names a mistake), so that no
+planted "mistake" is in fact right and no checker lets it through.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib
+import io
+import json
+import pathlib
+import re
+
+import numpy as np
+import pytest
+from scipy.stats import norm
+
+from orientviz.exercises import CheckFailed
+from orientviz.orientation.relative import design_dependent
+
+ROOT = pathlib.Path(__file__).parents[2]
+
+
+def rejection(check, answer):
+    """The CheckFailed that ``check(answer)`` raises (None if it passes), its ✓ line silenced."""
+    with contextlib.redirect_stdout(io.StringIO()):
+        try:
+            check(answer)
+        except CheckFailed as exc:
+            return exc
+    return None
+
+
+MARK = "# A colleague's version: one line is wrong."
+
+#: (lesson, function) → (checker, a piece of its diagnosis)
+CHECKERS = {
+    ("00", "redundancy"): ("check_redundancy", "not unknowns"),
+    ("00", "critical_w"): ("check_critical_value", "one-sided"),
+    ("01", "weighted_mean"): ("check_weighted_mean", "1/σ instead of 1/σ²"),
+    ("01", "ellipse"): ("check_error_ellipse", "halve the angle"),
+    ("03", "projection_centre"): ("check_projection_centre", "transposed"),
+    ("04", "sigma_Z"): ("check_sigma_Z", "√2 is missing"),
+    ("04", "normal_step"): ("check_normal_step", "√P"),
+    ("05", "scheme_sigma"): ("check_scheme_sigma", "not the inverse of the diagonal"),
+    ("06", "essential"): ("check_essential", "swapped"),
+    ("07", "to_model"): ("check_model_coordinates", "not R"),
+    ("09", "distance_std"): ("check_distance_std", "only the diagonal"),
+    ("12", "mdb"): ("check_mdb", "one-sided"),
+    ("13", "difference_covariance"): ("check_difference_covariance", "not independent"),
+    ("01", "sigma0_bounds"): ("check_sigma0_bounds", "α/2 in each tail"),
+    ("01", "gn_step"): ("check_gauss_newton_step", "not unit vectors"),
+    ("03", "dlt_rows"): ("check_dlt_rows", "minus sign"),
+    ("03", "interior_from_dlt"): ("check_interior_from_dlt", "subtract x0²"),
+    ("05", "six_point"): ("check_six_point", "degrees"),
+    ("06", "epipolar_line"): ("check_epipolar_line", "instead of Eᵀ"),
+    ("07", "sigma_scale"): ("check_sigma_scale", "centre"),
+    ("09", "helmert_columns"): ("check_helmert_columns", "change of scale"),
+    ("09", "s_transform"): ("check_s_transform", "datum points are only"),
+    ("12", "external"): ("check_external", "opposite sign"),
+    ("13", "gnss_rows"): ("check_gnss_rows", "not the time t"),
+    ("02", "ground_point"): ("check_ground_point", "Rᵀ instead of R"),
+    ("12", "snoop_round"): ("check_snoop_round", "|v|/σ"),
+}
+
+
+def _planted() -> list[tuple[str, str, str]]:
+    out = []
+    for path in sorted((ROOT / "notebooks").glob("*.ipynb")):
+        for cell in json.loads(path.read_text(encoding="utf-8"))["cells"]:
+            src = "".join(cell["source"])
+            if cell["cell_type"] == "code" and src.startswith(MARK):
+                name = re.search(r"^def (\w+)_colleague\(", src, re.M).group(1)
+                out.append((path.name[:2], name, src))
+    return out
+
+
+PLANTED = _planted()
+
+
+def test_every_planted_mistake_is_listed():
+    assert {(les, name) for les, name, _ in PLANTED} == set(CHECKERS)
+
+
+@pytest.mark.parametrize("lesson,name,src", PLANTED, ids=[f"{a}-{b}" for a, b, _ in PLANTED])
+def test_the_planted_mistake_is_rejected_and_named(lesson, name, src):
+    namespace = {"np": np, "norm": norm, "design_dependent": design_dependent}
+    exec(
+        compile(src, f"lesson {lesson}: {name}_colleague", "exec"), namespace
+    )  # the lesson's own cell
+    checker, diagnosis = CHECKERS[(lesson, name)]
+    module = importlib.import_module(f"orientviz.exercises.lesson{lesson}")
+    exc = rejection(getattr(module, checker), namespace[f"{name}_colleague"])
+    assert exc is not None, f"lesson {lesson}: the colleague's {name} passes its check"
+    assert diagnosis in str(exc), f"lesson {lesson}: {name}: expected {diagnosis!r} in {exc}"

@@ -1,0 +1,65 @@
+"""Debugging a real reconstruction by eye, in a real headless Chromium (issue 28 point 7).
+
+The shipped BAL problem (Ladybug, 49 images, 7 776 points, 31 843 image points: a real
+SfM reconstruction) imported as a user does (``orientviz import-bal ladybug``) and viewed
+as a free network (``orientviz view FILE --free``): the scene draws, the panel shows
+σ̂0 of the solve and says that the precision waits for a request (above the viewer's
+limit), the worst images by |v|/σ are listed and one is flown to from the page, and
+switching that image off re-solves and undo restores it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from orientviz.cli import main
+from orientviz.viewer.app import ViewerApp, demo_from_file
+
+from .browser import changed_share, gui_control, open_demo, wait_for, wait_for_picture
+
+pytestmark = [pytest.mark.browser, pytest.mark.slow]
+
+
+@pytest.fixture(scope="module")
+def ladybug_app(tmp_path_factory):
+    path = tmp_path_factory.mktemp("bal") / "ladybug.json"
+    assert main(["import-bal", "ladybug", "-o", str(path)]) == 0
+    app = ViewerApp(demo_from_file(str(path), {"free": True}), port=0, verbose=False)
+    yield app
+    with app.panel._lock:  # let the callbacks finish before the server stops
+        pass
+    app.stop()
+
+
+def test_a_real_bal_model_debugged_in_the_page(module_browser, ladybug_app):
+    app, page = ladybug_app, module_browser.new_page()
+    st, q = app.panel.state, app.panel.quality
+    b = st.block
+    assert (b.n_images, b.n_points) == (49, 7776) and not app.messages
+    img = open_demo(page, app, min_drawn=0.004)
+    sigma0 = f"{app.demo.solution.adjustment.sigma0:.10g}"
+    body = page.inner_text("body")
+    assert sigma0 in body and "precision not computed" in body
+    # the worst images by |v|/σ: choose the measure, then the worst image in the page
+    gui_control(page, "colour by", "input").click()
+    page.get_by_role("option", name="RMS of residuals |v|/σ (no precision needed)").click()
+    assert wait_for(lambda: q.key == "rms_v" and len(q.worst_images) == 10, 60)
+    worst = q.worst_images[0]
+    assert q.quality.image[worst] == np.nanmax(q.quality.image)
+    # the points and frustums take the colours (small on the screen: ~0.05 % of the pixels)
+    coloured = wait_for_picture(page, img, lambda a: changed_share(img, a) > 0.0003, 60)
+    gui_control(page, "worst images", "input").click()
+    page.get_by_role("option", name=f"1. {b.images.ids[worst]} ").click()
+    assert wait_for(lambda: app.scene.selected == worst, 60), "the choice did not fly there"
+    # act: the worst image off re-solves (σ̂0 changes), undo restores the solve's state
+    page.get_by_role("button", name="selected image off / on").click()
+    assert wait_for(lambda: len(st.changes) == 2, 120), "the click did not re-solve"
+    assert not st.edits.image_on[worst] and st.result.sigma0 != pytest.approx(float(sigma0))
+    wait_for_picture(page, coloured, lambda a: changed_share(coloured, a) > 0.0005, 60)
+    page.get_by_role("button", name="undo").click()
+    assert wait_for(lambda: st.change_cursor == 0, 60), "undo did not arrive"
+    with app.panel._lock:
+        pass
+    assert st.edits.image_on[worst] and f"{st.result.sigma0:.10g}" == sigma0
+    page.close()
