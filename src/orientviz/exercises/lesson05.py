@@ -267,7 +267,7 @@ def check_kovarik_iteration(fn: Callable) -> None:
 
 
 def _opk(R: F64) -> F64:
-    """ω, φ, κ (rad) of R = R_ω R_φ R_κ, read from its entries (|φ| < 100 gon)."""
+    """ω, φ, κ (rad) of R = R_ω R_φ R_κ, read from its entries (abs(φ) < 100 gon)."""
     return np.array(
         [np.arctan2(-R[1, 2], R[2, 2]), np.arcsin(R[0, 2]), np.arctan2(-R[0, 1], R[0, 0])]
     )

@@ -139,11 +139,14 @@ class BundleSteps:
     def _evaluate_robust(self, st: BundleState, jacobian: bool, local: bool, keep: bool):
         """Σ ρ(s) + the pseudo-observations' vᵀPv at ``st``; with ``jacobian`` the rays
         weighted by 1/σ·√ρ′(s) (the Gauss-Newton model of ρ, see :mod:`._loss`): the
-        misclosures first with 1/σ (their projection kept), then the Jacobians with the
-        scaled weights (a camera model's design is weighted as it is formed)."""
+        misclosures first with 1/σ, then the weights scaled (the normal equations weight
+        the Jacobians by them; a camera model's design is re-weighted)."""
         prob, weight = self.prob, self.prob.obs.weight
         weight[...] = self.base_weight
-        rw, Je, Jp = prob.residuals(st, jac=False, keep=jacobian or keep)
+        # a camera model is evaluated once, with its derivatives (its design is then
+        # re-weighted); a pinhole's projection is kept for the Jacobians' pass
+        lens = jacobian and prob.ap.lens is not None
+        rw, Je, Jp = prob.residuals(st, jac=lens, keep=(jacobian or keep) and not lens)
         s = np.einsum("ij,ij->i", rw, rw)
         rho, rho1 = self.loss(s)
         cost = float(np.sum(rho)) + prob.cost(st, rw[:0])  # the rays by ρ, the rest by vᵀPv
@@ -152,7 +155,12 @@ class BundleSteps:
         if jacobian and np.isfinite(cost):
             scale = np.sqrt(rho1)
             weight *= scale[:, None]
-            rw, Je, Jp = prob.residuals(st, jac=True, local=local)
+            if lens:
+                rw = rw * scale[:, None]
+                if prob.q:
+                    prob.run.ap = prob.ap.with_design(prob.ap.A, weight)
+            else:
+                rw, Je, Jp = prob.residuals(st, jac=True, local=local)
         return Evaluation(cost, bool(np.isfinite(cost)), _Linearisation((rw, Je, Jp), local, scale))
 
     def weigh(self, ev: Evaluation) -> None:
