@@ -83,26 +83,26 @@ def estimate(c: dict, run_s: float = 0.0) -> tuple[float, float]:
 def table(times: dict | None = None) -> str:
     """The Markdown table of every lesson."""
     rows = [
-        "| lesson | words | $$ | blanks (lines) | prose answers | widgets | 3D viewer | "
-        "released run [s] | estimate [h] | needs beyond `orientviz[notebooks]` |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| lesson | words | display equations | blanks (solution lines) | prose answers | "
+        "widgets | live 3D viewer | released run, wall (CPU) [s] | student time, estimated [h] |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     total = [0.0, 0.0]
-    for nb in sorted((ROOT / "notebooks").glob("*.ipynb")):
+    lessons = sorted((ROOT / "notebooks").glob("*.ipynb"))
+    for nb in lessons:
         c = count(nb)
         t = (times or {}).get(nb.name, {})
         wall = float(t.get("wall", 0.0))
         lo, hi = estimate(c, wall)
         total[0] += lo
         total[1] += hi
-        extra = "viser (`orientviz[viewer]`)" if "viser" in c["needs"] else "–"
         run = f"{wall:.0f} (CPU {t['cpu']:.0f})" if t else "–"
         rows.append(
             f"| {nb.stem} | {c['words']} | {c['equations']} | {c['blanks']} ({c['lines']}) | "
             f"{c['answers']} | {c['widgets']} | {'yes' if c['viewers'] else '–'} | {run} | "
-            f"{lo / 60:.1f}–{hi / 60:.1f} | {extra} |"
+            f"{lo / 60:.1f}–{hi / 60:.1f} |"
         )
-    rows.append(f"| all 16 | | | | | | | | {total[0] / 60:.0f}–{total[1] / 60:.0f} | |")
+    rows.append(f"| all {len(lessons)} | | | | | | | | {total[0] / 60:.0f}–{total[1] / 60:.0f} |")
     return "\n".join(rows)
 
 

@@ -94,6 +94,10 @@ def snapshot_lesson(path: pathlib.Path) -> list[pathlib.Path]:
     import nbformat
     from nbclient import NotebookClient
 
+    sys.path.insert(0, str(ROOT / "book" / "_ext"))
+    from orientviz_book import patch_shell_polling
+
+    patch_shell_polling()  # nbclient can lose the wake-up of a widget cell (see the book's ext)
     nb = nbformat.read(path, as_version=4)
     client = NotebookClient(nb, timeout=600, kernel_name="python3",
                             resources={"metadata": {"path": str(path.parent)}})  # fmt: skip

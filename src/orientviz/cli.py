@@ -236,10 +236,11 @@ COMMANDS: dict[str, Command] = {
             ),
             arg(
                 "--robust",
-                choices=["none", "huber", "cauchy"],
+                choices=["none", "huber", "cauchy", "soft_l1"],
                 default=None,
-                help="robust bundle by reweighting: huber bounds, cauchy redescends the "
-                "influence of large residuals (overrides options.robust; default none)",
+                help="robust loss of each ray inside the bundle's iterations (as Ceres's): "
+                "huber and soft_l1 bound, cauchy redescends the influence of large "
+                "residuals (overrides options.robust; default none)",
             ),
             arg(
                 "--robust-scale",
@@ -247,7 +248,7 @@ COMMANDS: dict[str, Command] = {
                 default=None,
                 metavar="K",
                 help="scale of the robust loss in units of the observations' sigma (default "
-                "1.345 huber, 2.385 cauchy)",
+                "1.345 huber and soft_l1, 2.385 cauchy)",
             ),
             arg(
                 "--fix",

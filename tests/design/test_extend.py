@@ -141,3 +141,65 @@ def test_the_models_design_equals_the_adjusted_simulated_block(base):
     k = np.asarray(res.point_index)
     sig = np.sqrt(np.einsum("nii->ni", Q[: k.size]))
     np.testing.assert_allclose(sig, qm.point_sigma[k], rtol=5e-3)
+
+
+AUX_PLAN = FlightDesign(strips=2, images_per_strip=6, control="corners", sigma_statoscope=0.3,
+                        sigma_apr=0.5)  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def aux_design():
+    from orientviz.design import assess_design
+
+    return assess_design(AUX_PLAN, law=False)
+
+
+def test_statoscope_and_apr_never_make_the_heights_worse(aux_design):
+    from orientviz.design import assess_design
+
+    plain = assess_design(AUX_PLAN.with_(sigma_statoscope=None, sigma_apr=None), law=False)
+    z0, z1 = plain.quality.point_sigma[:, 2], aux_design.quality.point_sigma[:, 2]
+    assert np.all(z1 <= z0 * (1 + 1e-9))
+    # offsets per strip: the readings stiffen each strip along its length (≥ 5 % here) but
+    # cannot hold its roll, so the row between the strips stays weak (~1.4 m)
+    assert np.max(1 - z1 / z0) > 0.05
+
+
+def test_the_auxiliary_design_equals_the_adjusted_simulated_block(aux_design):
+    from types import SimpleNamespace
+
+    from orientviz.design import design_auxiliary
+    from orientviz.simulate import simulate_auxiliary
+
+    b = aux_design.block
+    assert [a.kind for a in design_auxiliary(b, AUX_PLAN)] == ["statoscope", "apr"]
+    rng = np.random.default_rng(21)
+    sim = _noisy_start(b, rng)
+    holder = SimpleNamespace(truth=b)  # readings with noise and a 20 m offset per strip
+    aux = [
+        simulate_auxiliary(holder, "statoscope", rng=rng, sigma=0.3, offset_sigma=20.0),
+        simulate_auxiliary(holder, "apr", rng=rng, sigma=0.5, offset_sigma=20.0),
+    ]
+    res = bundle_adjust(sim, control="weighted", precision=True, auxiliary=aux)
+    assert res.converged
+    sig = np.sqrt(np.einsum("nii->ni", res.cofactor_groups["points"]))
+    np.testing.assert_allclose(sig, aux_design.quality.point_sigma, rtol=2e-3)
+
+
+def test_a_live_design_with_auxiliary_data_assesses_each_change_anew(aux_design):
+    from orientviz.design import LiveDesign, design_auxiliary, set_control, suggest_control
+
+    b, spec = aux_design.block, aux_design.spec
+    aux = design_auxiliary(b, AUX_PLAN)
+    live = LiveDesign(b, spec, auxiliary=aux)
+    j = int(np.flatnonzero(b.points.role == 0)[3])
+    got = live.add_control(j, 0.05).point_sigma
+    ref = assess_block(set_control(b, j, (0.05, 0.05, 0.05)), spec, auxiliary=aux)[1]
+    np.testing.assert_allclose(got, ref.point_sigma, rtol=1e-9)
+    live.undo()
+    np.testing.assert_allclose(live.quality().point_sigma, aux_design.quality.point_sigma)
+    s = suggest_control(live, criterion="sigma_z", sigma=0.05)  # brute force with the border
+    best = assess_block(set_control(b, s.point, (0.05,) * 3), spec, auxiliary=aux)[1]
+    tie = ~best.control
+    assert s.after == pytest.approx(best.point_sigma[tie, 2].max(), rel=1e-9)
+    assert s.after == pytest.approx(s.values.min()) and len(live.changes) == 0

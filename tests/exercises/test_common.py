@@ -129,3 +129,10 @@ def test_a_numpy_shape_error_is_explained():
 
     with pytest.raises(CheckFailed, match=r"transposed.*inputs: argument 1 \(4, 6\)"):
         call(forgot_the_transpose, np.ones((4, 6)), np.ones((4, 4)), what="reduce")
+
+
+def test_a_failed_check_reads_with_a_cross_once():
+    """Every CheckFailed (in a traceback as in show_mistake) begins with one "✗"."""
+    assert str(CheckFailed("v: wrong")) == "✗ v: wrong"
+    assert str(CheckFailed("✗ v: wrong")) == "✗ v: wrong"
+    assert str(NotWrittenError("f: not written yet")).startswith("✗ f: not written yet")

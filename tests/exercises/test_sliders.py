@@ -68,3 +68,61 @@ def test_trilateration_check(capsys):
         sliders.check_trilateration_delta(100.0, P, r, X0, 100.0, 0.5)
     with pytest.raises(CheckFailed, match="too small"):
         sliders.check_trilateration_delta(fine - 5.0, P, r, X0, 100.0, 0.5)
+
+
+def test_tilt_check_against_the_projection(capsys):
+    from orientviz.camera import project
+    from orientviz.rotation import matrix_from_opk
+
+    # the closed form agrees with the library's projection of a tilted camera
+    P = np.array([[100.0, 0.0, -150.0]]) * 10
+    for phi_c in (0.5, 3.0, 9.0):
+        xy = project(P, np.zeros(3), matrix_from_opk(0.0, phi_c * np.pi / 20000, 0.0), 150.0)
+        assert sliders.tilt_shift_um(100.0, 150.0, phi_c) == pytest.approx(
+            abs(xy[0, 0] - 100.0) * 1000, rel=2e-3
+        )
+    sliders.check_tilt(lambda: 3.0, 100.0, 150.0, 100.0, 0.1)
+    assert "✓" in capsys.readouterr().out
+    with pytest.raises(CheckFailed, match="CENTRE"):
+        sliders.check_tilt(lambda: 4.2, 100.0, 150.0, 100.0, 0.1)
+    with pytest.raises(CheckFailed, match="in cc"):
+        sliders.check_tilt(lambda: 294.0, 100.0, 150.0, 100.0, 0.1)
+    with pytest.raises(NotWrittenError):
+        sliders.check_tilt(lambda: None, 100.0, 150.0, 100.0, 0.1)
+
+
+def test_base_height_check_against_the_library_intersection():
+    from orientviz.orientation.intersection import intersect_points  # noqa: F401 (present)
+    from orientviz.widgets.resection import intersection_state
+
+    for bh in (0.3, 0.7, 1.2):  # the closed form is the library's σ_Z of the middle point
+        assert sliders.normal_case_sigma_z(bh, 1500.0, 152.7, 5.0) == pytest.approx(
+            intersection_state(bh).std()[1][2], rel=1e-6
+        )
+    sliders.check_base_height(0.70, 1500.0, 152.7, 5.0, 0.10, 0.01)
+    with pytest.raises(CheckFailed, match="σ_Z equals σ_X"):
+        sliders.check_base_height(1.41, 1500.0, 152.7, 5.0, 0.10, 0.01)
+
+
+def test_similarity_and_model_checks():
+    # σ of the scale is linear in the control σ (up to the noise's effect on the estimated
+    # scale it is divided by, ~2e-5 here): the crossing is where that line meets the target
+    q = sliders.similarity_scale_ppm("clustered", 1.0)
+    assert sliders.similarity_scale_ppm("clustered", 3.0) == pytest.approx(3 * q, rel=1e-4)
+    sliders.check_similarity_scale(round(50.0 / q, 1), "clustered", 50.0, 0.1)
+    with pytest.raises(CheckFailed, match="in m"):
+        sliders.check_similarity_scale(50.0 / q / 100, "clustered", 50.0, 0.1)
+    z1 = sliders.model_radial_z_cm(1.0)
+    sliders.check_model_radial(round(2 * 5.0 / z1) / 2, 5.0, 0.5)
+    with pytest.raises(CheckFailed, match="PLANIMETRIC"):
+        sliders.check_model_radial(287.0, 5.0, 0.5)
+
+
+def test_event_check():
+    sliders.check_event_at("e", 2.0, lambda v: v >= 1.95, 0.1, "m", 0.1, 3.0)
+    with pytest.raises(CheckFailed, match="does not happen yet"):
+        sliders.check_event_at("e", 1.9, lambda v: v >= 1.95, 0.1, "m", 0.1, 3.0)
+    with pytest.raises(CheckFailed, match="smallest value"):
+        sliders.check_event_at("e", 2.5, lambda v: v >= 1.95, 0.1, "m", 0.1, 3.0)
+    with pytest.raises(CheckFailed, match="outside"):
+        sliders.check_event_at("e", 9.0, lambda v: v >= 1.95, 0.1, "m", 0.1, 3.0)

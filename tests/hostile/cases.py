@@ -640,8 +640,22 @@ def geometry() -> list[Case]:
     def four_points(d):
         d["points"] = d["points"][:4]
 
+    def by(method, edit=None):  # the same file solved by another estimator
+        def change(d):
+            d.setdefault("options", {})["method"] = method
+            if edit:
+                edit(d)
+
+        return change
+
     for what, edit, code, says in (("all-points-equal", same_point, 3, "not determinable"),
-                                   ("four-points", four_points, 2, "at least 5")):  # fmt: skip
+                                   ("four-points", four_points, 2, "at least 5"),
+                                   ("coplanarity-all-points-equal", by("coplanarity", same_point),
+                                    3, "not determinable"),
+                                   ("coplanarity-four-points", by("coplanarity", four_points), 2,
+                                    "at least 5"),
+                                   ("unknown-method", by("epipolar"), 2,
+                                    '"coplanarity", got "epipolar"')):  # fmt: skip
         c.append(Case(f"solve/pair/{what}", pair_points(edit), code, (says,), "pair.json"))
 
     def lost_tie(d):  # the last image's rays removed: tie points left with one ray

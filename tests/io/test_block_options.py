@@ -12,8 +12,8 @@ import pytest
 
 import orientviz as ov
 from orientviz.block import TIE
+from orientviz.bundle.loop import RobustLoss
 from orientviz.cli import main
-from orientviz.io.kinds._robust import weight_factors
 from orientviz.io.problem import Units, problem_from_block
 from orientviz.io.solve import _resolve
 
@@ -49,9 +49,14 @@ def _simulated(gross_mm: float = 0.0):
 
 
 def test_weight_factors():
-    e = np.array([0.0, 1.0, 2.0, 10.0])
-    assert weight_factors(e, "huber", 2.0) == pytest.approx([1, 1, 1, 0.2])
-    assert weight_factors(e, "cauchy", 2.0) == pytest.approx([1, 0.8, 0.5, 1 / 26])
+    """w = ρ′(e²) of standardised misclosures e (scale 2): Huber 2/e beyond 2, Cauchy
+    1/(1 + e²/4), soft-L1 1/√(1 + e²/4); ρ itself by its closed form at e = 10."""
+    s = np.array([0.0, 1.0, 2.0, 10.0]) ** 2
+    assert RobustLoss("huber", 2.0).weights(s) == pytest.approx([1, 1, 1, 0.2])
+    assert RobustLoss("cauchy", 2.0).weights(s) == pytest.approx([1, 0.8, 0.5, 1 / 26])
+    assert RobustLoss("soft_l1", 2.0).weights(s) == pytest.approx(1 / np.sqrt(1 + s / 4))
+    rho = [RobustLoss(k, 2.0)(np.array([100.0]))[0][0] for k in ("huber", "cauchy", "soft_l1")]
+    assert rho == pytest.approx([2 * 2 * 10 - 4, 4 * np.log(26), 8 * (np.sqrt(26) - 1)])
 
 
 @pytest.mark.parametrize("loss", ["huber", "cauchy"])

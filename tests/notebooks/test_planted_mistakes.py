@@ -9,7 +9,9 @@ planted "mistake" is in fact right and no checker lets it through.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
+import io
 import json
 import pathlib
 import re
@@ -18,10 +20,22 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from orientviz.exercises._common import rejection
+from orientviz.exercises import CheckFailed
 from orientviz.orientation.relative import design_dependent
 
 ROOT = pathlib.Path(__file__).parents[2]
+
+
+def rejection(check, answer):
+    """The CheckFailed that ``check(answer)`` raises (None if it passes), its ✓ line silenced."""
+    with contextlib.redirect_stdout(io.StringIO()):
+        try:
+            check(answer)
+        except CheckFailed as exc:
+            return exc
+    return None
+
+
 MARK = "# A colleague's version: one line is wrong."
 
 #: (lesson, function) → (checker, a piece of its diagnosis)
@@ -39,6 +53,19 @@ CHECKERS = {
     ("09", "distance_std"): ("check_distance_std", "only the diagonal"),
     ("12", "mdb"): ("check_mdb", "one-sided"),
     ("13", "difference_covariance"): ("check_difference_covariance", "not independent"),
+    ("01", "sigma0_bounds"): ("check_sigma0_bounds", "α/2 in each tail"),
+    ("01", "gn_step"): ("check_gauss_newton_step", "not unit vectors"),
+    ("03", "dlt_rows"): ("check_dlt_rows", "minus sign"),
+    ("03", "interior_from_dlt"): ("check_interior_from_dlt", "subtract x0²"),
+    ("05", "six_point"): ("check_six_point", "degrees"),
+    ("06", "epipolar_line"): ("check_epipolar_line", "instead of Eᵀ"),
+    ("07", "sigma_scale"): ("check_sigma_scale", "centre"),
+    ("09", "helmert_columns"): ("check_helmert_columns", "change of scale"),
+    ("09", "s_transform"): ("check_s_transform", "datum points are only"),
+    ("12", "external"): ("check_external", "opposite sign"),
+    ("13", "gnss_rows"): ("check_gnss_rows", "not the time t"),
+    ("02", "ground_point"): ("check_ground_point", "Rᵀ instead of R"),
+    ("12", "snoop_round"): ("check_snoop_round", "|v|/σ"),
 }
 
 

@@ -63,13 +63,18 @@ def test_apply_plan_builds_the_new_design(view):
     panel, st = view.panel, view.studio
     panel.h["strips"].value = 3
     panel.h["gnss"].value = 0.1
+    panel.h["statoscope"].value = 0.3
     panel.apply_plan()
     assert st.design.strips == 3 and st.design.sigma_gnss == pytest.approx(0.1)
+    assert st.design.sigma_statoscope == pytest.approx(0.3) and st.design.sigma_apr is None
+    assert [a.kind for a in st.live.auxiliary] == ["statoscope"]
+    assert "statoscope σ 0.30 m" in panel.h["summary"].content
     assert st.block.n_images == 18
     assert "3 strips × 6 images" in panel.h["summary"].content
     assert "plan: 3 × 6" in panel.h["changes"].content
     panel.undo()  # the plan before
-    assert st.design.strips == 2 and st.block.n_images == 12
+    assert st.design.strips == 2 and st.block.n_images == 12 and not st.live.auxiliary
+    panel.h["statoscope"].value = 0.0
 
 
 def test_cross_strip_and_removals_by_click_and_their_undo(view):
@@ -85,6 +90,15 @@ def test_cross_strip_and_removals_by_click_and_their_undo(view):
     assert st.block.n_images == n0
     assert st.quality.summary["sigma_z_rms"] == pytest.approx(z0, rel=1e-12)
     X0 = st.block.images.X0
+    between = 0.5 * (X0[2, :2] + X0[3, :2])
+    z_between = st.quality.point_sigma[:, 2].copy()
+    panel.act_at(between, "add")
+    assert st.block.n_images == n0 + 1
+    np.testing.assert_allclose(st.block.images.X0[-1], [*between, X0[2, 2]])
+    assert st.block.images.strip[-1] == st.block.images.strip[2]
+    assert np.all(st.quality.point_sigma[:, 2] <= z_between * (1 + 1e-9))
+    assert "added at X" in panel.h["changes"].content
+    panel.undo()
     panel.act_at(X0[3, :2] + 10.0, "image")
     assert st.block.n_images == n0 - 1 and st.block.images.ids[3] != "000_003"
     panel.undo()
@@ -136,3 +150,14 @@ def test_ellipsoid_mesh_has_the_semi_axes():
     V, F = ellipsoid_mesh(np.zeros((1, 3)), np.array([[1.0, 2.0, 5.0]]), dirs)
     assert F.shape[1] == 3 and V.shape[0] == 42
     assert np.abs(V).max(axis=0) == pytest.approx([1.0, 2.0, 5.0], rel=0.1)
+
+
+def test_a_method_that_cannot_take_the_design_keeps_the_old_one():
+    from orientviz.errors import NotDeterminableError
+
+    st = Studio(FlightDesign(strips=3, images_per_strip=9, control="corners"))
+    st.add_cross_strip(float(st.block.images.X0[:, 0].mean()))
+    assert "plan without the images added" in st.law["note"]
+    with pytest.raises(NotDeterminableError, match="fewer than 5 common points"):
+        st.set_method("models")  # the cross strip's end models cannot be formed
+    assert st.method == "bundle" and np.isfinite(st.quality.point_sigma).all()

@@ -23,7 +23,9 @@ viewer's scrubber, a notebook's live plot). Damping policies (:class:`Damping`):
   λ0 (1e-4), a step that decreases vᵀPv is taken and λ shrinks by 3 (never below
   1e-16: the damping stays, so a weakly determined far point moves only as far as its
   rays' misclosures pull it in one step); a step that does not is retried with λ × ν,
-  ν doubling (2, 4, 8, …) until it does (λ > 1e16: damping exhausted);
+  ν doubling (2, 4, 8, …) until it does (λ > 1e16: damping exhausted). A system that
+  is singular after the first iteration (numerically: weak parameters, down-weighted
+  rays) is a rejected step too, retried with λ at least λ0;
 * ``"fallback"`` — Gauss-Newton while vᵀPv does not increase; a step that would
   increase it is retried with λ = max(10 λ, 1e-4) until it does not (λ > 1e8: damping
   exhausted), and λ goes back by / 10 per accepted step (to 0 below 1e-6). A singular
@@ -302,6 +304,13 @@ def _one_step(problem, run: Run, it: int, lam: float, damping: Damping, jacobian
         try:
             step = problem.solve(state, ev, lam, it)
         except NotDeterminableError as exc:
+            if kind == "trust" and it > 1 and lam * 2.0 * (nu or 1.0) <= 1.0 / TRUST_MIN_LAMBDA:
+                # solvable in iteration 1, singular now: a numerical loss of definiteness
+                # (weak parameters, down-weighted rays) — as Ceres, a failed solve is a
+                # rejected step: retried with more damping
+                nu = 2.0 if nu is None else 2.0 * nu
+                lam = max(lam * nu, damping.lambda0)
+                continue
             if kind != "fallback":
                 if it == 1:
                     raise

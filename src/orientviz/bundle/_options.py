@@ -19,6 +19,8 @@ from .reduced import ReducedOptions
 #: What ``solver`` may name: the reduced system's solvers, ``"auto"`` (chosen from the
 #: structure) and ``"reference"`` (the textbook iteration, :mod:`orientviz.bundle.reference`).
 SOLVER_NAMES: tuple[str, ...] = ("auto", "banded", "dense", "sparse", "reference")
+#: What ``loss`` may name (:mod:`orientviz.bundle.loop._loss`; ``"none"``: least squares).
+LOSSES: tuple[str, ...] = ("none", "huber", "cauchy", "soft_l1")
 
 
 @dataclass(frozen=True)
@@ -86,6 +88,15 @@ class BundleOptions:
     ftol : float
         Also stop when a step lowers vᵀPv by less than ``ftol`` of its value (Ceres's
         function tolerance, dimensionless; 0 = off).
+    loss : {"none", "huber", "cauchy", "soft_l1"}
+        Robust loss ρ of each ray's squared standardised misclosure, minimised inside
+        the loop (each step's rays weighted by √ρ′; :mod:`orientviz.bundle.loop._loss`);
+        such steps converge linearly: a robust run may take 4 × ``max_iter`` steps and
+        stops also when Σ ρ falls by less than ``ftol`` of its value (1e-6 if ``ftol``
+        is 0, as Ceres).
+    loss_scale : float or None
+        Its scale a in units of the observations' σ (None: 1.345 Huber and soft-L1,
+        2.385 Cauchy).
     """
 
     max_iter: int = 30
@@ -107,6 +118,8 @@ class BundleOptions:
     reduced: ReducedOptions = field(default_factory=ReducedOptions)
     damping: str = "fallback"
     ftol: float = 0.0
+    loss: str = "none"
+    loss_scale: float | None = None
 
     def __post_init__(self) -> None:
         if self.solver not in SOLVER_NAMES:
@@ -115,6 +128,10 @@ class BundleOptions:
             raise ValueError(f"expected damping 'fallback' or 'trust', got {self.damping!r}")
         if not 0.0 <= self.ftol < 1.0:
             raise ValueError(f"expected ftol in [0, 1), got {self.ftol!r}")
+        if self.loss not in LOSSES:
+            raise ValueError(f"expected a loss out of {LOSSES}, got {self.loss!r}")
+        if self.loss_scale is not None and not self.loss_scale > 0:
+            raise ValueError(f"expected a positive loss_scale, got {self.loss_scale!r}")
 
     def replace(self, **changes) -> BundleOptions:
         """A copy with ``changes`` (fields of this class)."""

@@ -22,7 +22,7 @@ their machinery: the normal equations, the precision and reliability are the bun
 
 from ._design import DesignAssessment, accuracy_law, assess_block, assess_design
 from ._extend import add_images, cross_strip, design_from_block, remove_images
-from ._layout import FlightDesign, design_block, set_control
+from ._layout import FlightDesign, design_auxiliary, design_block, set_control
 from ._live import Change, LiveDesign
 from ._methods import METHODS, assess_models
 from ._quality import DesignQuality, ellipsoids
@@ -31,6 +31,7 @@ from ._suggest import Suggestion, suggest_control
 __all__ = [
     "FlightDesign",
     "design_block",
+    "design_auxiliary",
     "set_control",
     "DesignAssessment",
     "DesignQuality",

@@ -20,7 +20,7 @@ import numpy as np
 from ..block import Block
 from ..bundle import BundleResult, bundle_adjust, ray_reliability
 from ..simulate import height_precision, planimetric_precision
-from ._layout import FlightDesign, design_block
+from ._layout import FlightDesign, design_auxiliary, design_block
 from ._quality import DesignQuality, quality_from_arrays
 
 
@@ -54,7 +54,7 @@ class DesignAssessment:
 
 def assess_block(
     block: Block, spec: dict[str, Any], *, level: float = 0.95, alpha0: float = 0.001,
-    beta0: float = 0.80, solver: str = "auto",
+    beta0: float = 0.80, solver: str = "auto", auxiliary: list | None = None,
 ) -> tuple[BundleResult, DesignQuality]:  # fmt: skip
     """Precision and reliability of a design block (error-free observations).
 
@@ -71,13 +71,19 @@ def assess_block(
         Test level and power of the reliability (δ0 = 4.13 for 0.1 %, 80 %).
     solver : str
         The bundle's solver of the reduced system.
+    auxiliary : list of Auxiliary, optional
+        Statoscope / APR / GNSS data of the design (:func:`orientviz.design.design_auxiliary`),
+        adjusted jointly with their strip offsets.
 
     Returns
     -------
     result : BundleResult
     quality : DesignQuality
     """
-    res = bundle_adjust(block, control="weighted", precision=True, max_iter=3, solver=solver)
+    res = bundle_adjust(
+        block, control="weighted", precision=True, max_iter=3, solver=solver,
+        auxiliary=auxiliary or None,
+    )  # fmt: skip
     rel = ray_reliability(res, block, alpha0=alpha0, beta0=beta0)
     n = block.n_observations
     red = np.asarray(res.redundancy_numbers[: 2 * n]).reshape(n, 2)
@@ -139,8 +145,8 @@ def assess_design(
     Parameters
     ----------
     design : FlightDesign
-        Camera, image scale, overlaps, strips, control layout with σ (m), GNSS σ (m),
-        image σ (mm).
+        Camera, image scale, overlaps, strips, control layout with σ (m), GNSS,
+        statoscope and APR σ (m), image σ (mm).
     level : float
         Probability of the confidence ellipsoids.
     law : bool
@@ -162,6 +168,7 @@ def assess_design(
     3
     """
     block, spec = design_block(design)
-    res, q = assess_block(block, spec, level=level, solver=solver)
+    aux = design_auxiliary(block, design)
+    res, q = assess_block(block, spec, level=level, solver=solver, auxiliary=aux)
     lw = accuracy_law(design, spec) if law else {}
     return DesignAssessment(design, block, spec, res, q, lw)

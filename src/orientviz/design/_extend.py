@@ -121,7 +121,9 @@ def cross_strip(block: Block, spec: dict[str, Any], x: float, *, ids_prefix: str
 
     The cross strip has the block's flying height and air base (``spec["base_m"]``, so
     its forward overlap is the block's), κ = 90° (image x along +Y), and spans the
-    block's points in Y with one base to spare at both ends.
+    block's points in Y (images that would see fewer than 3 points are left out). Its
+    consecutive images may share too few points to form stereo models: the bundle takes
+    such a strip, independent models (:func:`assess_models`) refuse it and name the models.
     """
     P = block.points.xyz
     B = float(spec["base_m"])
@@ -133,6 +135,8 @@ def cross_strip(block: Block, spec: dict[str, Any], x: float, *, ids_prefix: str
     ang = np.tile([0.0, 0.0, 0.5 * np.pi], (n, 1))
     seen = _visible(block, X0, ang, 0)[0]
     keep = np.bincount(seen, minlength=n) >= 3  # drop the images beyond the block's ends
+    if keep.sum() < 2:
+        raise InputError(f"a cross strip at X = {x:.0f} m would not overlap the block")
     X0, ang = X0[keep], ang[keep]
     strip = int(block.images.strip.max()) + 1
     ids = [f"{ids_prefix}{strip:02d}_{i:03d}" for i in range(X0.shape[0])]

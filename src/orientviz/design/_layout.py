@@ -15,13 +15,14 @@ their structure (:mod:`orientviz.design._live` uses that).
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 
-from ..block import CONTROL, TIE, Block
+from ..block import CONTROL, TIE, Auxiliary, Block
 from ..errors import InputError
-from ..simulate import simulate_block
+from ..simulate import simulate_auxiliary, simulate_block
 
 
 @dataclass(frozen=True)
@@ -51,7 +52,12 @@ class FlightDesign:
     sigma_control : float
         σ of a given control coordinate, m (> 0: control is weighted).
     sigma_gnss : float or None
-        σ of GNSS-observed projection centres (X0, Y0, Z0), m; None = no GNSS.
+        σ of GNSS-observed projection centres (X0, Y0, Z0), m, absolute (no offsets);
+        None = no GNSS.
+    sigma_statoscope, sigma_apr : float or None
+        σ (m) of statoscope readings of every projection centre's height and of APR
+        terrain heights (the tie point nearest each image's nadir), each with an unknown
+        offset per strip (:func:`design_auxiliary`); None = none.
     extra : {"grid"} or int or None
         Tie points besides the standard (Gruber) ones (see ``simulate_block``).
     terrain_seed : int
@@ -72,6 +78,8 @@ class FlightDesign:
     sigma_image_mm: float = 0.005
     sigma_control: float = 0.02
     sigma_gnss: float | None = None
+    sigma_statoscope: float | None = None
+    sigma_apr: float | None = None
     extra: str | int | None = None
     terrain_seed: int = 0
     options: dict[str, Any] = field(default_factory=dict, compare=False)
@@ -153,3 +161,37 @@ def set_control(block: Block, point: int, sigma_xyz) -> Block:
     P.xyz_known[point] = np.where(given, P.xyz[point], np.nan)
     P.role[point] = CONTROL if given.any() else TIE
     return b
+
+
+def design_auxiliary(block: Block, design: FlightDesign) -> list[Auxiliary]:
+    """The plan's auxiliary data of a design block: error-free values (the planned
+    heights), σ from the plan, an unknown offset per strip (statoscope and APR).
+
+    Parameters
+    ----------
+    block : Block
+        The design block (planned geometry).
+    design : FlightDesign
+        ``sigma_statoscope``, ``sigma_apr`` (m; None = none).
+
+    Returns
+    -------
+    list of Auxiliary
+        For :func:`orientviz.bundle.bundle_adjust`'s ``auxiliary`` (empty: none).
+    """
+    out = []
+    holder = SimpleNamespace(truth=block)
+    for kind, sig in (("statoscope", design.sigma_statoscope), ("apr", design.sigma_apr)):
+        if sig is None:
+            continue
+        if not sig > 0:
+            raise InputError(f"sigma_{kind}: expected σ > 0 m or None, got {sig}")
+        a = simulate_auxiliary(
+            holder, kind, rng=np.random.default_rng(0), sigma=sig, offset_sigma=0.0
+        )
+        a.values = (
+            block.images.X0[a.index, 2] if kind == "statoscope" else block.points.xyz[a.index, 2]
+        ).copy()  # the planned heights: no errors
+        a.truth = {}
+        out.append(a)
+    return out

@@ -103,9 +103,12 @@ class LiveDesign:
 
     def __init__(
         self, block: Block, spec: dict[str, Any], *, level: float = 0.95,
-        alpha0: float = 0.001, beta0: float = 0.80,
+        alpha0: float = 0.001, beta0: float = 0.80, auxiliary: list | None = None,
     ) -> None:  # fmt: skip
         self.spec = spec
+        #: auxiliary data with strip offsets (a border of the normal equations): then each
+        #: change is assessed anew (exact, slower), not by the update formula
+        self.auxiliary = list(auxiliary or [])
         self.level, self.alpha0, self.beta0 = level, alpha0, beta0
         self.history: list[str] = []
         self._undo_base: list[Change] = []
@@ -117,7 +120,17 @@ class LiveDesign:
         if block is not None:
             self.block = block
         b = self.block
-        res, q = assess_block(b, self.spec, level=self.level, alpha0=self.alpha0, beta0=self.beta0)
+        res, q = assess_block(
+            b, self.spec, level=self.level, alpha0=self.alpha0, beta0=self.beta0,
+            auxiliary=self.auxiliary,
+        )  # fmt: skip
+        self.changes = []
+        self._stack = []
+        self.base_quality = self._quality = q
+        self.result = res
+        if self.auxiliary:
+            self._w = self._weights_now()
+            return q
         prob = BundleProblem(b, point_setup(b, "weighted"))
         if prob.points.n != b.n_points:
             raise InputError("a live design needs weighted control (σ > 0) at every point")
@@ -223,6 +236,8 @@ class LiveDesign:
     def current_columns(self, point: int) -> tuple[F64, F64]:
         """The current design's cofactors at the three columns of ``point``: orientations
         (m, 6, 3) and points by column (p, 3, 3); Q0's columns less each step's C M Cᵀ."""
+        if self.auxiliary:
+            raise InputError("no cofactor columns for a design with auxiliary data")
         Cc, Cp = self.columns(point)
         c = self._prob.points.column[point]
         for _, _, _, (Cs, Ps, Ms) in self._stack:
@@ -235,7 +250,14 @@ class LiveDesign:
         """The quality of the current design (by the update formula)."""
         w = self._weights_now()
         pts = np.flatnonzero(np.any(w != self._w, axis=1))
-        if pts.size:
+        if pts.size and self.auxiliary:  # a new assessment (the border has no update here)
+            self._stack.append((self._w, None, self._quality, None))
+            self._w = w
+            self._quality = assess_block(
+                self.block, self.spec, level=self.level, alpha0=self.alpha0, beta0=self.beta0,
+                auxiliary=self.auxiliary,
+            )[1]  # fmt: skip
+        elif pts.size:
             self._step(pts, w)
         return self._quality
 

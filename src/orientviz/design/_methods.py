@@ -36,7 +36,9 @@ METHODS: dict[str, tuple[str, str | None]] = {
 }
 
 
-def assess_models(block: Block, spec: dict[str, Any], *, level: float = 0.95) -> DesignQuality:
+def assess_models(
+    block: Block, spec: dict[str, Any], *, level: float = 0.95, auxiliary: list | None = None
+) -> DesignQuality:
     """The design's precision if the block is adjusted by independent models.
 
     Parameters
@@ -48,6 +50,8 @@ def assess_models(block: Block, spec: dict[str, Any], *, level: float = 0.95) ->
         Needs ``base_m`` (air base, m; for the weak spots' distances).
     level : float
         Probability of the confidence ellipsoids.
+    auxiliary : list of Auxiliary, optional
+        Statoscope / APR data of the design, adjusted jointly (rigorous method).
 
     Returns
     -------
@@ -57,7 +61,9 @@ def assess_models(block: Block, spec: dict[str, Any], *, level: float = 0.95) ->
         0-2 (NaN for the angles); redundancy numbers, MDB, δ̄0 and point shifts NaN (the
         models have no image rays); weak spots and summary.
     """
-    res = independent_models(block, control="weighted", precision=True, max_iter=3)
+    res = independent_models(
+        block, control="weighted", precision=True, max_iter=3, auxiliary=auxiliary or None
+    )
     Q = np.asarray(res.cofactor_groups["points"])
     p, m, n = block.n_points, block.n_images, block.n_observations
     cov = np.full((p, 3, 3), np.nan)

@@ -10,7 +10,8 @@ columns of j less the low-rank terms of the changes made so far). So each candid
 a 3×3 update per point; the worst σ after the change is exact, not estimated. The
 criterion ``"external"`` (the largest δ̄0 of any ray) needs the rays' redundancy and is
 evaluated by making the change and taking it back (:meth:`LiveDesign.set_control`,
-:meth:`LiveDesign.undo`).
+:meth:`LiveDesign.undo`); so is every criterion of a design with auxiliary data (whose
+strip offsets border the normal equations: no columns by the update formula).
 """
 
 from __future__ import annotations
@@ -139,11 +140,20 @@ def suggest_control(
         cand = np.asarray(candidates, np.int64)
     if cand.size == 0:
         raise InputError("no candidate points (every point is control)")
-    if criterion == "external":
-        before = q.summary["external_max"]
+    if criterion == "external" or live.auxiliary:  # make each change and take it back
+        before = (
+            q.summary["external_max"]
+            if criterion == "external"
+            else worst(q.point_sigma, ctrl, criterion)
+        )
         vals = np.empty(cand.size)
         for k, j in enumerate(cand):
-            vals[k] = live.add_control(int(j), sigma).summary["external_max"]
+            qj = live.add_control(int(j), sigma)
+            vals[k] = (
+                qj.summary["external_max"]
+                if criterion == "external"
+                else worst(qj.point_sigma, qj.control, criterion)
+            )
             live.undo()
             live.history = live.history[:-2]
     else:

@@ -49,7 +49,7 @@ ANGLE_FACTORS: dict[str, float] = {
 
 
 class CheckFailed(AssertionError):
-    """A check found a wrong answer.
+    """A check found a wrong answer; its message begins with "✗".
 
     Attributes
     ----------
@@ -61,7 +61,8 @@ class CheckFailed(AssertionError):
     """
 
     def __init__(self, message: str, error: float = math.inf, tolerance: float = 0.0) -> None:
-        super().__init__(message)
+        # every failed check reads "✗ …" (a passed one prints "✓ …"), in a traceback too
+        super().__init__(message if message.startswith("✗") else f"✗ {message}")
         self.error = float(error)
         self.tolerance = float(tolerance)
 
@@ -383,4 +384,4 @@ def show_mistake(check: Callable[[Any], Any], answer: Any) -> None:
     if exc is None:
         print("(this answer passes the check)")
     else:
-        print(f"✗ {exc}")
+        print(str(exc))  # the message begins with "✗"

@@ -14,13 +14,25 @@ from collections.abc import Callable, Iterable
 
 import numpy as np
 
+from ..orientation.absolute import similarity_transform
+from ..orientation.examples import similarity_example
 from ..orientation.plotter import AnalogPlotter
 from ..radar.scene import trilateration_scene
+from ..simulate import model_field
+from ..simulate import systematic as se
 from ..units import RHO_C
 from ._common import CheckFailed, NotWrittenError, call, success
 
 __all__ = [
     "answer_value",
+    "check_base_height",
+    "check_model_radial",
+    "check_similarity_scale",
+    "check_tilt",
+    "model_radial_z_cm",
+    "normal_case_sigma_z",
+    "similarity_scale_ppm",
+    "tilt_shift_um",
     "check_event_at",
     "check_slider_answer",
     "crossing",
@@ -31,13 +43,15 @@ __all__ = [
 ]
 
 
-def crossing(f: Callable[[float], float], target: float, lo: float, hi: float) -> float:
+def crossing(
+    f: Callable[[float], float], target: float, lo: float, hi: float, steps: int = 200
+) -> float:
     """The smallest ``t`` in [lo, hi] with ``f(t) = target``, for ``f(lo) < target``.
 
-    Scans 200 steps for the first sign change of ``f − target``, then bisects it to
+    Scans ``steps`` steps for the first sign change of ``f − target``, then bisects it to
     1e-9 of the interval. Raises ValueError if ``f`` never reaches ``target``.
     """
-    ts = np.linspace(lo, hi, 201)
+    ts = np.linspace(lo, hi, steps + 1)
     vals = np.array([f(float(t)) for t in ts]) - target
     if vals[0] >= 0:
         raise ValueError(f"f({lo}) already ≥ {target}")
@@ -122,7 +136,7 @@ def check_slider_answer(
 def pair_parallax_rms(
     pair: object, settings: np.ndarray, kappa_offset_c: float
 ) -> tuple[float, float]:
-    """RMS and largest |y-parallax| (mm) at Kovarik's nine points, κ turned by an offset.
+    """RMS and largest absolute y-parallax (mm) at Kovarik's nine points, κ turned by an offset.
 
     Parameters
     ----------
@@ -249,3 +263,85 @@ def check_event_at(
         f"✗ {what}: it happens already at {got - step:g} {unit} — the question asks for the "
         "smallest value"
     )
+
+
+# ---------------------------------------------------------------- lessons 02, 04, 07, 11
+def tilt_shift_um(x_mm: float, c_mm: float, phi_c: float) -> float:
+    """Absolute shift (µm) of the image of a ray at image abscissa ``x_mm`` when the camera is
+    tilted by φ (centesimal minutes) about its y axis: the ray's angle to the axis,
+    atan(x/c), changes by φ, so x' = c·tan(atan(x/c) − φ) (closed form)."""
+    phi = phi_c / RHO_C
+    return abs(c_mm * math.tan(math.atan2(x_mm, c_mm) - phi) - x_mm) * 1000.0
+
+
+def check_tilt(answer: object, x_mm: float, c_mm: float, target_um: float, step_c: float) -> None:
+    """The tilt φ (c) that moves the image at ``x_mm`` by ``target_um`` (lesson 02)."""
+    expected = crossing(lambda t: tilt_shift_um(x_mm, c_mm, t), target_um, 0.0, 100.0)
+    centre = crossing(lambda t: tilt_shift_um(0.0, c_mm, t), target_um, 0.0, 100.0)
+    wrong = [
+        ("the tilt that moves the image CENTRE so far, not the edge", centre),
+        ("the tilt in cc, not in c", expected * 100.0),
+        ("the tilt in gon, not in c", expected / 100.0),
+    ]
+    what = f"φ that moves the image at x = {x_mm:g} mm by {target_um:g} µm"
+    value = answer_value(answer, what)
+    check_slider_answer(what, None if value is None else abs(value), expected, step_c, "c", wrong)
+
+
+def normal_case_sigma_z(base_height: float, height_m: float, c_mm: float, sigma_um: float) -> float:
+    """σ_Z (m) of a point intersected in the normal case: √2 (H/B)(H/c) σ (closed form)."""
+    return math.sqrt(2.0) / base_height * (height_m / (c_mm / 1000.0)) * sigma_um * 1e-6
+
+
+def check_base_height(
+    answer: object, height_m: float, c_mm: float, sigma_um: float, target_m: float, step: float
+) -> None:
+    """The B/H at which σ_Z of the normal case falls to ``target_m`` (lesson 04)."""
+
+    def excess(bh: float) -> float:  # decreasing in B/H: find where it drops to the target
+        return -normal_case_sigma_z(bh, height_m, c_mm, sigma_um)
+
+    expected = crossing(excess, -target_m, 0.05, 3.0)
+    sxy = height_m / (c_mm / 1000.0) * sigma_um * 1e-6
+    wrong = [(f"where σ_Z equals σ_X ({sxy * 100:.1f} cm), not {target_m * 100:g} cm",
+              crossing(excess, -sxy, 0.05, 3.0))]  # fmt: skip
+    what = f"B/H for σ_Z = {target_m * 100:g} cm"
+    check_slider_answer(what, answer, expected, step, "", wrong)
+
+
+def similarity_scale_ppm(layout: str, sigma_cm: float, seed: int = 1) -> float:
+    """A-priori σ of the scale (ppm) of the 7-parameter similarity of lesson 07's model
+    with control in ``layout`` of σ ``sigma_cm`` (the library's similarity_transform)."""
+    ex = similarity_example(layout, sigma_cm / 100.0, rng=np.random.default_rng(seed))
+    res = similarity_transform(
+        ex.source, ex.target, sigma_target=sigma_cm / 100.0, point_ids=ex.ids
+    )
+    i = list(res.names).index("scale")
+    return float(res.std(a_posteriori=False)[i] * 1e6 / res.x[i])
+
+
+def check_similarity_scale(
+    answer: object, layout: str, target_ppm: float, step_cm: float, seed: int = 1
+) -> None:
+    """The control σ (cm) at which the scale's a-priori σ reaches ``target_ppm`` (lesson 07)."""
+    expected = crossing(lambda s: similarity_scale_ppm(layout, s, seed), target_ppm, 0.01, 50.0)
+    wrong = [("the σ in m, not in cm", expected / 100.0), ("the σ in mm, not in cm", expected * 10)]
+    what = f"control σ for a scale σ of {target_ppm:g} ppm ({layout})"
+    check_slider_answer(what, answer, expected, step_cm, "cm", wrong)
+
+
+def model_radial_z_cm(strength_um: float) -> float:
+    """RMS height deformation (cm) of lesson 11's stereo model (``model_field``, n = 5)
+    oriented from images with radial distortion of ``strength_um`` µm (``se.radial``)."""
+    return float(model_field(se.radial(strength_um), n=5).rms()[2] * 100.0)
+
+
+def check_model_radial(answer: object, target_cm: float, step_um: float) -> None:
+    """The radial distortion (µm) that bends lesson 11's model by ``target_cm`` RMS in Z."""
+    # the deformation grows smoothly with the distortion: a coarse scan finds the crossing
+    expected = crossing(model_radial_z_cm, target_cm, 0.0, 200.0, steps=20)
+    xy = crossing(lambda s: float(np.hypot(*model_field(se.radial(s), n=5).rms()[:2]) * 100),
+                  target_cm, 0.0, 2000.0, steps=20)  # fmt: skip
+    wrong = [("where the PLANIMETRIC deformation reaches it, not the height", xy)]
+    what = f"radial distortion for an RMS height deformation of {target_cm:g} cm"
+    check_slider_answer(what, answer, expected, step_um, "µm", wrong)

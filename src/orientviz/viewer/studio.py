@@ -21,6 +21,8 @@ Scene tree::
 
 from __future__ import annotations
 
+import functools
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,8 +35,10 @@ from ..design import (
     LiveDesign,
     Suggestion,
     accuracy_law,
+    add_images,
     assess_models,
     cross_strip,
+    design_auxiliary,
     design_block,
     design_from_block,
     remove_images,
@@ -138,6 +142,18 @@ def legend_html(scale: Scale, defined: bool = True) -> str:
     )
 
 
+def _locked(method):
+    """Run a :class:`Studio` method under the studio's lock (GUI callbacks may run in
+    several threads; the live design's lazy update must not run twice at once)."""
+
+    @functools.wraps(method)
+    def run(self, *args, **kwargs):
+        with self.lock:
+            return method(self, *args, **kwargs)
+
+    return run
+
+
 class Studio:
     """The studio's state: the plan, the live design, the method, the measure, the
     suggestion, the changes and their undo.
@@ -160,6 +176,7 @@ class Studio:
     def __init__(
         self, design: FlightDesign = START, *, block=None, spec=None, title: str | None = None
     ) -> None:  # fmt: skip
+        self.lock = threading.RLock()
         self.measure = "sigma_z"
         self.method = "bundle"
         self.suggestion: Suggestion | None = None
@@ -198,14 +215,20 @@ class Studio:
     def _set_plan(self, design: FlightDesign) -> None:
         self.design = design
         block, self.spec = design_block(design)
-        self.live = LiveDesign(block, self.spec)
+        aux = design_auxiliary(block, design)
+        self.live = LiveDesign(block, self.spec, auxiliary=aux)
         self.law = accuracy_law(design, self.spec)
         self._models = None
 
     def _set_block(self, block, spec) -> None:
         self.spec = spec
-        self.live = LiveDesign(block, spec)
-        self.law = {"sigma_xy": float("nan"), "sigma_z": float("nan"), "note": LAW_NONE}
+        aux = design_auxiliary(block, self.design) if self.design is not None else []
+        self.live = LiveDesign(block, spec, auxiliary=aux)
+        if self.design is None:
+            self.law = {"sigma_xy": float("nan"), "sigma_z": float("nan"), "note": LAW_NONE}
+        else:  # images added or removed: the law still describes the regular plan
+            self.law = dict(accuracy_law(self.design, spec))
+            self.law["note"] += "; for the plan without the images added or removed since"
         self._models = None
 
     def _structural(self, label: str, change) -> DesignQuality:
@@ -217,6 +240,7 @@ class Studio:
         self.suggestion = None
         return self.quality
 
+    @_locked
     def set_plan(self, design: FlightDesign) -> DesignQuality:
         """Build the design of a (new) plan: strips, overlaps, σ … (undo restores the old)."""
         return self._structural(
@@ -225,6 +249,7 @@ class Studio:
             lambda: self._set_plan(design),
         )
 
+    @_locked
     def add_cross_strip(self, x: float) -> DesignQuality:
         """Fly a cross strip along +Y at X = ``x`` (m) over the block."""
         b = cross_strip(self.block, self.spec, x)
@@ -233,6 +258,7 @@ class Studio:
             f"cross strip at X = {x:,.0f} m ({n} images)", lambda: self._set_block(b, self.spec)
         )
 
+    @_locked
     def remove_images(self, images, what: str | None = None) -> DesignQuality:
         """Remove images (indices) and their rays from the design."""
         idx = np.atleast_1d(np.asarray(images, np.int64))
@@ -241,11 +267,28 @@ class Studio:
         label = what or ("image " + ", ".join(names) + " removed")
         return self._structural(label, lambda: self._set_block(b, self.spec))
 
+    @_locked
+    def add_image(self, xy) -> DesignQuality:
+        """Add an image above the ground position ``xy`` (m) at the height, attitude and in
+        the strip of the nearest projection centre."""
+        I = self.block.images
+        xy = np.asarray(xy, float)[:2]
+        i = int(np.argmin(np.linalg.norm(I.X0[:, :2] - xy[None, :], axis=1)))
+        X0 = np.r_[xy, I.X0[i, 2]]
+        b = add_images(self.block, X0[None], I.angles[i][None], strip=int(I.strip[i]))
+        name = b.images.ids[-1]
+        return self._structural(
+            f"image {name} added at X {xy[0]:,.0f} m, Y {xy[1]:,.0f} m (strip {I.strip[i]})",
+            lambda: self._set_block(b, self.spec),
+        )
+
+    @_locked
     def remove_strip(self, strip: int) -> DesignQuality:
         """Remove every image of strip ``strip``."""
         idx = np.flatnonzero(self.block.images.strip == strip)
         return self.remove_images(idx, f"strip {strip} removed ({idx.size} images)")
 
+    @_locked
     def set_method(self, method: str) -> DesignQuality:
         """Assess the design for ``"bundle"``, ``"models"`` or ``"polynomial"``
         (:data:`orientviz.design.METHODS`; the polynomial method has no design precision:
@@ -253,7 +296,12 @@ class Studio:
         if method not in METHODS:
             raise ValueError(f"method: expected one of {', '.join(METHODS)}, got {method!r}")
         if method != self.method:
-            self.method = method
+            old, self.method = self.method, method
+            try:
+                self.quality  # noqa: B018  (computed now: a failure keeps the old method)
+            except Exception:
+                self.method = old
+                raise
             self.log.append(f"method: {METHODS[method][0]}")
         return self.quality
 
@@ -262,6 +310,7 @@ class Studio:
         return METHODS[self.method][1]
 
     # ------------------------------------------------------------------ control
+    @_locked
     def set_control(self, point: int, sigma: float | None) -> DesignQuality:
         """Make ``point`` XYZ control with σ ``sigma`` m (None: make it a tie point)."""
         if sigma is None:
@@ -273,6 +322,7 @@ class Studio:
         self.suggestion = None
         return self.quality
 
+    @_locked
     def undo(self) -> DesignQuality:
         """Take the last change back (control, plan, images, strips)."""
         if not self._undo:
@@ -295,13 +345,15 @@ class Studio:
         return self.live.block
 
     @property
+    @_locked
     def quality(self) -> DesignQuality:
         """The current quality for the chosen method (the bundle's for the polynomial)."""
         if self.method != "models":
             return self.live.quality()
         key = len(self.live.history)
         if self._models is None or self._models[0] != key or self._models[2] is not self.live:
-            self._models = (key, assess_models(self.block, self.spec), self.live)
+            q = assess_models(self.block, self.spec, auxiliary=self.live.auxiliary)
+            self._models = (key, q, self.live)
         return self._models[1]
 
     def point_index(self, name: str) -> int:
@@ -322,6 +374,7 @@ class Studio:
         d = np.linalg.norm(self.block.points.xyz[:, :2] - np.asarray(xy)[None, :2], axis=1)
         return int(np.argmin(d))
 
+    @_locked
     def suggest(self, sigma: float) -> Suggestion:
         """Suggest the next control point (σ ``sigma`` m) for the shown measure: worst
         σ_XY, worst σ_Z (also for redundancy and MDB) or largest δ̄0."""
@@ -329,10 +382,12 @@ class Studio:
         self.suggestion = suggest_control(self.live, criterion=crit, sigma=sigma)
         return self.suggestion
 
+    @_locked
     def values(self) -> F64:
         """The chosen measure per point."""
         return point_values(self.quality, self.block, self.measure)
 
+    @_locked
     def summary_markdown(self) -> str:
         """The block's figures next to the accuracy law's values, the weak spots."""
         s = self.quality.summary
@@ -350,6 +405,8 @@ class Studio:
                 f"p = {d.forward_overlap:.0%}, q = {d.side_overlap:.0%}, σ image "
                 f"{d.sigma_image_mm * 1e3:.1f} µm, control σ {d.sigma_control * 100:.0f} cm"
                 + (f", GNSS σ {d.sigma_gnss:.2f} m" if d.sigma_gnss else "")
+                + (f", statoscope σ {d.sigma_statoscope:.2f} m" if d.sigma_statoscope else "")
+                + (f", APR σ {d.sigma_apr:.2f} m" if d.sigma_apr else "")
             )
         else:
             head = f"**{self.title or 'a block'}**"

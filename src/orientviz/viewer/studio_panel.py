@@ -10,11 +10,13 @@ Folders:
   δ̄0), the 95 % ellipsoids (exaggerated), the legend, the block's summary next to Ebner's
   accuracy laws, the weak spots;
 * **Control and images** — what *a click on the ground* does (make the nearest point
-  control or tie, fly a cross strip through the place, remove the nearest image or
-  strip), a *control gizmo* to drag (its release makes the nearest point control), a point
+  control or tie, add an image there, fly a cross strip through the place, remove the
+  nearest image or strip), a *control gizmo* to drag (its release makes the nearest point control), a point
   by id and its σ, *make control* / *make tie*; *suggest control point* and *accept
   suggestion*; *undo* (every kind of change); the list of changes;
-* **Plan** — strips, images per strip, overlaps, image σ, control σ, GNSS and *apply plan*
+* **Plan** — strips, images per strip, overlaps, image scale (flying height), image σ,
+  control layout and σ, GNSS σ (absolute), statoscope and APR σ (offsets per strip) and
+  *apply plan*
   (builds the design again).
 """
 
@@ -45,6 +47,7 @@ CLICKS = {
     "nothing": "does nothing",
     "control": "makes the nearest point control",
     "tie": "makes the nearest point a tie point",
+    "add": "adds an image there (the nearest strip's height and heading)",
     "cross": "flies a cross strip through it",
     "image": "removes the nearest image",
     "strip": "removes the nearest strip",
@@ -102,6 +105,9 @@ class StudioPanel:
                 "forward overlap [%]", 55, 85, 1, round(100 * d.forward_overlap)
             )
             h["q"] = gui.add_slider("side overlap [%]", 5, 60, 1, round(100 * d.side_overlap))
+            h["scale"] = gui.add_number(
+                "image scale 1 : m_B (H = c·m_B)", d.scale, min=1_000.0, max=200_000.0, step=500.0
+            )
             h["sigma_image"] = gui.add_number("image σ [µm]", d.sigma_image_mm * 1e3, min=0.5)
             h["layout"] = gui.add_dropdown(
                 "control layout", ("corners", "perimeter", "chains", "full", "none"),
@@ -109,6 +115,10 @@ class StudioPanel:
             )  # fmt: skip
             h["spacing"] = gui.add_slider("control spacing [bases]", 1, 20, 1, d.control_spacing)
             h["gnss"] = gui.add_number("GNSS σ [m] (0 = none)", d.sigma_gnss or 0.0, min=0.0)
+            h["statoscope"] = gui.add_number(
+                "statoscope σ [m] (0 = none)", d.sigma_statoscope or 0.0, min=0.0
+            )
+            h["apr"] = gui.add_number("APR σ [m] (0 = none)", d.sigma_apr or 0.0, min=0.0)
             h["apply"] = gui.add_button("apply plan")
         guard = self.view.app.guard
         h["method"].on_update(guard(lambda _e: self.set_method()))
@@ -173,9 +183,12 @@ class StudioPanel:
         new = (st.design or START).with_(
             strips=int(h["strips"].value), images_per_strip=int(h["images"].value),
             forward_overlap=float(h["p"].value) / 100.0, side_overlap=float(h["q"].value) / 100.0,
+            scale=float(h["scale"].value),
             sigma_image_mm=float(h["sigma_image"].value) / 1e3, control=str(h["layout"].value),
             control_spacing=int(h["spacing"].value), chain_spacing=int(h["spacing"].value),
             sigma_control=self._sigma(), sigma_gnss=gnss if gnss > 0 else None,
+            sigma_statoscope=float(h["statoscope"].value) or None,
+            sigma_apr=float(h["apr"].value) or None,
         )  # fmt: skip
         st.set_plan(new)
         self.view.redraw(reframe=True)
@@ -210,14 +223,14 @@ class StudioPanel:
     def act_at(self, xy: Any, what: str) -> None:
         """Do ``what`` (a key of :data:`CLICKS`) at the ground position ``xy`` (m)."""
         st = self.studio
-        reframe = False
         if what in ("control", "tie"):
             j = st.nearest_point(xy)
             self.h["point"].value = st.block.points.ids[j]
             st.set_control(j, self._sigma() if what == "control" else None)
         elif what == "cross":
             st.add_cross_strip(float(xy[0]))
-            reframe = True
+        elif what == "add":
+            st.add_image(xy)
         elif what in ("image", "strip"):
             X0 = st.block.images.X0[:, :2]
             i = int(np.argmin(np.linalg.norm(X0 - np.asarray(xy)[None, :2], axis=1)))
@@ -227,7 +240,7 @@ class StudioPanel:
                 st.remove_strip(int(st.block.images.strip[i]))
         else:
             return
-        self.view.redraw(reframe=reframe)
+        self.view.redraw()
 
     # ------------------------------------------------------------------ display
     def refresh(self) -> None:

@@ -45,8 +45,18 @@ from .._result import BundleResult
 from ..problem import BundleProblem, BundleState, point_setup
 from ..problem._checks import check_connected, check_datum, check_determinable
 from ._finish import RunEnd, finish_result
+from ._loss import RobustLoss
 from ._reference_result import reference_result
 from ._steps import BundleSteps
+
+
+#: A robust loss (``BundleOptions.loss``) allows this many times ``max_iter`` steps: its
+#: reweighted steps converge linearly, not quadratically as Gauss-Newton steps do.
+ROBUST_ITER_FACTOR: int = 4
+#: … and stops also when a step lowers Σ ρ by less than this fraction (Ceres's function
+#: tolerance) unless ``BundleOptions.ftol`` is set: a point seen only by down-weighted rays
+#: may drift away slowly for ever (its rays' cost falls towards a limit).
+ROBUST_FTOL: float = 1e-6
 
 
 def bundle_adjust(
@@ -133,7 +143,10 @@ def bundle_adjust(
     given = {k: v for k, v in given.items() if v is not None}
     if given:
         opts = opts.replace(**given)
-    max_iter, tol = opts.max_iter, opts.tol
+    max_iter, tol, ftol = opts.max_iter, opts.tol, opts.ftol
+    if opts.loss != "none":  # reweighted steps converge linearly (._loss)
+        max_iter *= ROBUST_ITER_FACTOR
+        ftol = ftol or ROBUST_FTOL
     setup = point_setup(block, control)
     check_connected(block, setup)
     check_determinable(block, setup)
@@ -142,6 +155,8 @@ def bundle_adjust(
     if opts.solver == "reference":  # the textbook iteration (bundle/reference.py), no fast path
         if auxiliary:
             raise InputError("solver='reference' takes no auxiliary data (GNSS, statoscope, APR)")
+        if opts.loss != "none":
+            raise InputError("solver='reference' is least squares only (no robust loss)")
         return reference_result(
             block, setup, control=control, additional=additional, ap_group=ap_group,
             ap_sigma=ap_sigma, precision=precision, callback=callback, options=opts,
@@ -166,7 +181,8 @@ def bundle_adjust(
     def s0(c):
         return float(np.sqrt(c / dof)) if dof > 0 else float("nan")
 
-    steps = BundleSteps(prob, red_names, keep_x, precision)
+    loss = RobustLoss.named(opts.loss, opts.loss_scale)
+    steps = BundleSteps(prob, red_names, keep_x, precision, loss)
     ev0 = steps.start(st)
     # additional parameters model image errors of a few µm: from approximations whose
     # misclosures are far larger (σ0 ≥ opts.poor_start_sigma0) the first step is taken with
@@ -180,12 +196,15 @@ def bundle_adjust(
         st,
         redundancy=dof,
         damping=Damping(
-            opts.damping, lambda0=1e-4, poor_start_sigma0=opts.poor_start_sigma0,
+            opts.damping,
+            lambda0=1e-4,
+            poor_start_sigma0=opts.poor_start_sigma0,
             first=2 if hold_first else 1,
         ),  # fmt: skip
         stop=StopRule(
-            tol=tol, ftol=opts.ftol,
-            may_stop=lambda it: not (prob.run.border.hold or steps.local_step),
+            tol=tol,
+            ftol=ftol,
+            may_stop=lambda it: not (prob.run.border.hold or steps.local_step) and steps.may_stop(),
         ),  # fmt: skip
         max_iter=max_iter,
         # derivatives at the new state: for the next iteration, the precision or the
@@ -205,9 +224,12 @@ def bundle_adjust(
     prob.reduced.release_maps()  # the Schur formation's maps: not held through the precision
     steps.chord_factor = steps.chord_pending = None
     rw, Je, Jp = run.evaluation.data
-    if steps.is_local(run.evaluation):  # the precision needs the derivatives by ω, φ, κ
+    cost, obs_sigma = run.evaluation.cost, None
+    if loss is not None:  # the result refers to the rays' σ/√ρ′ at the last iterate
+        rw, Je, Jp, cost, obs_sigma = robust_end(prob, steps, st)
+        steps.lin = None
+    elif steps.is_local(run.evaluation):  # the precision needs the derivatives by ω, φ, κ
         rw, Je, Jp = prob.residuals(st, jac=True)
-    cost = run.evaluation.cost
     damped_start, lin = run.damped_start, steps.lin
     prob.run.border.hold = prob.run.border.reuse = False
     prob.design_at(st)  # a lens model: its design at the final iterate (precision)
@@ -223,5 +245,31 @@ def bundle_adjust(
                 "the normal equations are not positive definite there; compute better "
                 "approximations, e.g. with orientviz.approximate.approximate_values"
             )
-    end = RunEnd(st, rw, Je, Jp, cost, history, converged, reason, precision, lin)
+    end = RunEnd(st, rw, Je, Jp, cost, history, converged, reason, precision, lin, obs_sigma)
     return finish_result(prob, end)
+
+
+def robust_end(prob: BundleProblem, steps: BundleSteps, st: BundleState):
+    """The last iterate of a robust run as a weighted least-squares solution: each ray's
+    weight factor w = ρ′(s) there, its σ/√w, vᵀPv with those weights (the pseudo-
+    observations' unchanged), and the weighted misclosures and Jacobians the precision
+    reads (the problem's ray weights are set to 1/σ·√w).
+
+    Returns
+    -------
+    (rw, Je, Jp, cost, obs_sigma)
+        ``obs_sigma`` (n_obs, 2): σ of every observation of the block (mm), σ/√w for the
+        adjusted rays.
+    """
+    weight = prob.obs.weight
+    weight[...] = steps.base_weight
+    rw = prob.residuals(st, jac=False, keep=True)[0]
+    s = np.einsum("ij,ij->i", rw, rw)
+    w = steps.loss.weights(s)
+    weight *= np.sqrt(w)[:, None]
+    steps.reweigh_design()
+    rw, Je, Jp = prob.residuals(st, jac=True)
+    cost = float(np.dot(w, s)) + prob.cost(st, rw[:0])
+    obs_sigma = prob.block.observations.sigma.copy()
+    obs_sigma[prob.obs.index] /= np.sqrt(w)[:, None]
+    return rw, Je, Jp, cost, obs_sigma

@@ -63,6 +63,32 @@ def _intersect_check_points(
     return res.xyz
 
 
+#: A point whose rays meet at less than this angle (rad) lies near infinity: its depth
+#: along the rays is not determined (:func:`ray_parallax`).
+FAR_PARALLAX: float = 1e-5
+
+
+def ray_parallax(block, X0: F64, xyz: F64) -> F64:
+    """The largest angle (rad) between a point's rays and their mean direction, per
+    point of ``block`` (NaN with fewer than two rays): projection centres ``X0`` (m,
+    (m, 3)), points ``xyz`` (m, (p, 3)). Below :data:`FAR_PARALLAX` the point lies near
+    infinity."""
+    obs = block.observations
+    d = xyz[obs.point] - X0[obs.image]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        d /= np.linalg.norm(d, axis=1)[:, None]
+        mean = np.zeros((block.n_points, 3))
+        np.add.at(mean, obs.point, d)
+        mean /= np.linalg.norm(mean, axis=1)[:, None]
+        cos = np.clip(np.einsum("ij,ij->i", d, mean[obs.point]), -1.0, 1.0)
+        # the angle by its sine from the cross product: exact for tiny angles
+        ang = np.arctan2(np.linalg.norm(np.cross(d, mean[obs.point]), axis=1), cos)
+    out = np.full(block.n_points, -np.inf)
+    np.maximum.at(out, obs.point, np.nan_to_num(ang, nan=np.inf))
+    out[np.bincount(obs.point, minlength=block.n_points) < 2] = np.nan
+    return out
+
+
 @dataclass(frozen=True)
 class RunEnd:
     """What the iterations of a bundle adjustment leave for its result.
@@ -87,6 +113,9 @@ class RunEnd:
     lin : tuple or None
         ``(ne, fac, Je, Jp)`` of the last Gauss-Newton step when the precision may reuse
         its factor (:func:`orientviz.bundle.precision.bundle_precision`).
+    obs_sigma : ndarray, shape (n_obs, 2), optional
+        σ of the block's image observations as adjusted (mm; a robust loss: σ/√ρ′);
+        None: ``block.observations.sigma``.
     """
 
     state: BundleState
@@ -99,6 +128,7 @@ class RunEnd:
     reason: str
     precision: bool
     lin: tuple | None = None
+    obs_sigma: F64 | None = None
 
 
 def finish_result(prob: BundleProblem, end: RunEnd) -> BundleResult:
@@ -125,7 +155,7 @@ def finish_result(prob: BundleProblem, end: RunEnd) -> BundleResult:
     obs = block.observations
     fa = _project_all(block, st, xyz, prob)
     v_img = (fa - obs.xy).reshape(-1)
-    s_img = obs.sigma.reshape(-1)
+    s_img = (obs.sigma if end.obs_sigma is None else end.obs_sigma).reshape(-1)
     parts_v, parts_s, slices = [v_img], [s_img], {"image": slice(0, 2 * n)}
     pos = 2 * n
 
@@ -185,7 +215,16 @@ def finish_result(prob: BundleProblem, end: RunEnd) -> BundleResult:
             # only reachable from a state the iterations did not settle (diverged start
             # values leave singular or non-finite point blocks): keep the result, say why
             # it carries no precision instead of letting a numerical error escape
-            if converged:
+            far = _far_points(prob, st)
+            if far.size:  # points that went to infinity (a robust loss lets them): kept
+                converged_note = "" if converged else " (not converged)"
+                ids = ", ".join(str(block.points.ids[j]) for j in far[:5])
+                res.precision_error = (
+                    f"no precision at the last{converged_note} state: {far.size} point(s) "
+                    f"near infinity (rays meet at < {FAR_PARALLAX:g} rad: {ids}"
+                    f"{' …' if far.size > 5 else ''}), their depth is not determined"
+                )
+            elif converged:
                 # a converged state with a singular reduced system: the count checks
                 # before the iterations (bundle_checks) missed a geometric defect; name
                 # the parameters instead of ending in a numerical error
@@ -194,15 +233,24 @@ def finish_result(prob: BundleProblem, end: RunEnd) -> BundleResult:
                     raise_not_determinable(prob.reduced, blocks, names[: 6 * prob.m], str(exc))
                 except NotDeterminableError as err:
                     raise err from exc
-            res.precision_error = (
-                f"no precision at the last (not converged) state: {type(exc).__name__}: {exc}"
-            )
+            else:
+                res.precision_error = (
+                    f"no precision at the last (not converged) state: {type(exc).__name__}: {exc}"
+                )
     if prob.aux:
         finish_bundle(res, prob, st, rw, Je, Jp)
     if prob.ap.lens is not None:
         Q = res.cofactor_groups.get("additional") if prob.q else None
         res.camera = prob.ap.lens.estimates(st.ap, Q, res.sigma0)
     return res
+
+
+def _far_points(prob: BundleProblem, st: BundleState) -> NDArray[np.int64]:
+    """Indices of the adjusted points near infinity at ``st`` (:func:`ray_parallax`)."""
+    par = ray_parallax(prob.block, st.X0, st.xyz)
+    far = np.zeros(prob.block.n_points, bool)
+    far[prob.points.unknown] = par[prob.points.unknown] < FAR_PARALLAX
+    return np.flatnonzero(far)
 
 
 def _project_all(block, st, xyz, prob) -> F64:

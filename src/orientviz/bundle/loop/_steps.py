@@ -40,16 +40,23 @@ from numpy.typing import NDArray
 from ...adjust.loop import Evaluation, Step
 from ..model import angle_map
 from ..problem import BundleProblem, BundleState
+from ._loss import RobustLoss
 
 F64 = NDArray[np.float64]
+#: A robust loss is switched on after the first least-squares step that lowers vᵀPv by
+#: at most this fraction of its value (or corrects by less than 1 σ).
+LOSS_SWITCH: float = 1e-2
 
 
 class _Linearisation(tuple):
-    """(rw, Je, Jp) of an evaluation; ``local``: Je by rotations of the image frames."""
+    """(rw, Je, Jp) of an evaluation; ``local``: Je by rotations of the image frames;
+    ``scale``: √ρ′ per ray of a robust loss (None: least squares) — rw and the weights
+    of Je, Jp are scaled by it."""
 
-    def __new__(cls, data: tuple, local: bool = False):
+    def __new__(cls, data: tuple, local: bool = False, scale: F64 | None = None):
         out = super().__new__(cls, data)
         out.local = local
+        out.scale = scale
         return out
 
 
@@ -63,8 +70,24 @@ class BundleSteps:
     the last undamped linearisation (the precision may reuse it).
     """
 
-    def __init__(self, prob: BundleProblem, red_names: list[str], keep_x: bool, precision: bool):
+    def __init__(
+        self,
+        prob: BundleProblem,
+        red_names: list[str],
+        keep_x: bool,
+        precision: bool,
+        loss: RobustLoss | None = None,
+    ):
         self.prob, self.red_names = prob, red_names
+        # a robust loss (._loss): the rays' weights are the problem's 1/σ times √ρ′ of the
+        # evaluation whose normal equations are formed (set in place before each)
+        self.loss = loss
+        self.base_weight = prob.obs.weight.copy() if loss is not None else None
+        # the loss is switched on once least-squares steps have settled (see accepted):
+        # from poor approximations every ray is an outlier and a redescending loss would
+        # down-weight the wrong ones; the loop's current evaluation is then made robust
+        self.loss_on = False
+        self.switch_pending = False
         self.keep_x, self.precision = keep_x, precision
         self.hold_first = False
         self.lin = None  # (normal equations, factor, Jacobians) of the last plain step
@@ -106,10 +129,55 @@ class BundleSteps:
     def _evaluate(
         self, st: BundleState, jacobian: bool, local: bool, keep: bool = False
     ) -> Evaluation:
+        if self.loss_on:
+            return self._evaluate_robust(st, jacobian, local, keep)
         rw, Je, Jp = self.prob.residuals(st, jac=jacobian, local=local, keep=keep)
         cost = self.prob.cost(st, rw)
         self.pending_cost = cost
         return Evaluation(cost, bool(np.isfinite(cost)), _Linearisation((rw, Je, Jp), local))
+
+    def _evaluate_robust(self, st: BundleState, jacobian: bool, local: bool, keep: bool):
+        """Σ ρ(s) + the pseudo-observations' vᵀPv at ``st``; with ``jacobian`` the rays
+        weighted by 1/σ·√ρ′(s) (the Gauss-Newton model of ρ, see :mod:`._loss`): the
+        misclosures first with 1/σ, then the weights scaled (the normal equations weight
+        the Jacobians by them; a camera model's design is re-weighted)."""
+        prob, weight = self.prob, self.prob.obs.weight
+        weight[...] = self.base_weight
+        # a camera model is evaluated once, with its derivatives (its design is then
+        # re-weighted); a pinhole's projection is kept for the Jacobians' pass
+        lens = jacobian and prob.ap.lens is not None
+        rw, Je, Jp = prob.residuals(st, jac=lens, keep=(jacobian or keep) and not lens)
+        s = np.einsum("ij,ij->i", rw, rw)
+        rho, rho1 = self.loss(s)
+        cost = float(np.sum(rho)) + prob.cost(st, rw[:0])  # the rays by ρ, the rest by vᵀPv
+        self.pending_cost = cost
+        scale = None
+        if jacobian and np.isfinite(cost):
+            scale = np.sqrt(rho1)
+            weight *= scale[:, None]
+            if lens:
+                rw = rw * scale[:, None]
+                if prob.q:
+                    prob.run.ap = prob.ap.with_design(prob.ap.A, weight)
+            else:
+                rw, Je, Jp = prob.residuals(st, jac=True, local=local)
+        return Evaluation(cost, bool(np.isfinite(cost)), _Linearisation((rw, Je, Jp), local, scale))
+
+    def weigh(self, ev: Evaluation) -> None:
+        """Set the rays' weights to those of ``ev``'s linearisation (a robust loss; the
+        normal equations, the precision and a camera model's design read them)."""
+        scale = getattr(ev.data, "scale", None)
+        if self.loss is None or scale is None:
+            return
+        np.multiply(self.base_weight, scale[:, None], out=self.prob.obs.weight)
+        self.reweigh_design()
+
+    def reweigh_design(self) -> None:
+        """A linear additional-parameter set: its weighted design with the rays' current
+        weights (a camera model's design is weighted as it is formed)."""
+        prob = self.prob
+        if prob.q and prob.ap.lens is None:
+            prob.run.ap = prob.ap.with_design(prob.ap.A, prob.obs.weight)
 
     def _poor(self) -> bool:
         """Still far from the solution: σ0 of the last accepted state (the start: unknown,
@@ -131,6 +199,10 @@ class BundleSteps:
         self.prob.run.border.hold = self.hold_first and it == 1
         self.lin = None  # released before the next normal equations are built
 
+    def may_stop(self) -> bool:
+        """Whether the run may stop: not before a robust loss is switched on."""
+        return self.loss is None or (self.loss_on and not self.switch_pending)
+
     def stops(self, tol: float) -> bool:
         """Whether the last solved step meets the stopping rule (``tol``) once accepted:
         the state it leads to then needs no derivatives (without the precision)."""
@@ -138,10 +210,16 @@ class BundleSteps:
 
     def solve(self, st: BundleState, ev: Evaluation, lam: float, iteration: int) -> Step:
         prob = self.prob
+        if self.switch_pending:  # the loss is switched on: the loop's evaluation at st too
+            self.switch_pending = False
+            robust = self._evaluate(st, True, self.is_local(ev))
+            ev.cost, ev.finite, ev.data = robust.cost, robust.finite, robust.data
+            self.last_cost = robust.cost
         if ev.data[1] is None:  # evaluated without derivatives (a stop was expected)
             ev = self.evaluate(st, True)
         rw, Je, Jp = ev.data
         local = self.is_local(ev)
+        self.weigh(ev)
         chord = None  # a chord step in ω, φ, κ, or in frame rotations by such a factor
         if self.chord_factor is not None and lam == 0 and (self.chord_factor[2] or not local):
             chord = self._chord(st, rw, Je, Jp, local)  # None: it would not contract enough
@@ -240,6 +318,10 @@ class BundleSteps:
     def accepted(self, it: int, step: Step, lam: float, previous: Evaluation) -> None:
         prob = self.prob
         dc, dp, _, fac, ne, local = step.data
+        if self.loss is not None and not self.loss_on:  # least squares has settled?
+            drop = (previous.cost - self.pending_cost) / previous.cost if previous.cost > 0 else 0.0
+            if drop <= LOSS_SWITCH or step.max_correction < 1.0:
+                self.loss_on = self.switch_pending = True
         self.last_correction = step.max_correction
         self.last_cost, self.local_step = self.pending_cost, local
         self.chord_factor, self.chord_pending = self.chord_pending, None

@@ -26,6 +26,7 @@ from ...adjust.result import W_CRITICAL
 from ...approximate import approximate_values
 from ...block import CHECK, CONTROL, ROLES, TIE, Block
 from ...bundle import BundleOptions, bundle_adjust
+from ...bundle.loop import FAR_PARALLAX, RobustLoss, ray_parallax
 from ...bundle.problem import point_setup
 from ...errors import InputError
 from ...polynomial import polynomial_adjust
@@ -38,7 +39,7 @@ from ._align import align_to_control, intersect_from_orientations
 from ._cameras import bundle_camera_options, camera_notes, camera_parameters
 from ._diverge import divergence_note
 from ._frame import block_from_tables, read_frame_tables, require_finite, tables_from_block
-from ._robust import robust_bundle
+from ._robust import robust_note
 
 METHODS = ("bundle", "models", "polynomial")
 
@@ -165,7 +166,8 @@ def solve(problem: Problem, method: str | None, **bundle: Any) -> Solution:
 
     Datum options (:mod:`orientviz.io.datum`): ``free`` (a free network, minimum constraints) and
     ``fix`` (images/points held at their given values); ``robust`` (``"huber"``,
-    ``"cauchy"``) with ``robust_scale`` reweights the bundle (:mod:`._robust`). The
+    ``"cauchy"``, ``"soft_l1"``) with ``robust_scale``: the bundle minimises that loss
+    (:mod:`._robust`). The
     solution's ``start`` is the block the adjustment started from (approximations
     computed, datum applied). ``bundle``: further keywords of the bundle run
     (:func:`adjust_block`, e.g. ``precision=False``).
@@ -179,7 +181,7 @@ def solve(problem: Problem, method: str | None, **bundle: Any) -> Solution:
     if method == "bundle":
         adj, robust_note = adjust_block(problem, block, **bundle)
         sol = solution_from_block_adjustment(problem, block, adj, method)
-        sol.notes[:0] = datum_notes + ([robust_note] if robust_note else [])
+        sol.notes[:0] = datum_notes + ([robust_note] if robust_note else []) + far_notes(block, adj)
         sol.start = block
         return sol
     opts = _options(problem)
@@ -192,6 +194,25 @@ def solve(problem: Problem, method: str | None, **bundle: Any) -> Solution:
     if "exterior" not in adj.groups:
         return solution_from_points(problem, block, adj, method, polynomial_adjust)
     return solution_from_block_adjustment(problem, block, adj, method)
+
+
+def far_notes(block: Block, adj) -> list[str]:
+    """Notes on points near infinity (their rays meet at < ``FAR_PARALLAX`` rad: kept in
+    the adjustment, depth not determined) and on a result without precision."""
+    notes = []
+    if adj.exterior is not None and adj.points is not None:
+        par = ray_parallax(block, adj.exterior[:, :3], adj.points)
+        far = np.flatnonzero((par < FAR_PARALLAX) & (block.points.role == TIE))
+        if far.size:
+            ids = ", ".join(str(block.points.ids[j]) for j in far[:5])
+            notes.append(
+                f"{far.size} point(s) near infinity (their rays meet at < {FAR_PARALLAX:g} rad: "
+                f"{ids}{' …' if far.size > 5 else ''}): kept in the adjustment, their depth is "
+                "not determined (a robust loss lets points seen only by down-weighted rays drift away)"
+            )
+    if getattr(adj, "precision_error", None):
+        notes.append(adj.precision_error)
+    return notes
 
 
 def prepare(problem: Problem) -> tuple[Block, list[str]]:
@@ -239,21 +260,24 @@ def adjust_block(problem: Problem, block: Block, **overrides: Any) -> tuple[Any,
         The adjustment and the note of a robust run (None without ``robust``).
     """
     o = problem.options
-    loss = str(o.get("robust", "none"))
+    try:  # the robust loss, minimised inside the loop (._robust)
+        loss = RobustLoss.named(str(o.get("robust", "none")), o.get("robust_scale"))
+    except InputError as exc:
+        raise InputError(exc.message, problem.source, "options.robust") from None
     opts = _options(problem)
     damping, ftol = opts.pop("damping", None), opts.pop("ftol", None)
+    loop = {}
     if damping is not None or ftol is not None:  # the loop's knobs (SfM models)
-        opts["options"] = BundleOptions(damping=str(damping or "fallback"),
-                                        ftol=float(ftol or 0.0))  # fmt: skip
+        loop.update(damping=str(damping or "fallback"), ftol=float(ftol or 0.0))
+    if loss is not None:
+        loop.update(loss=loss.kind, loss_scale=loss.scale)
+    if loop:
+        opts["options"] = BundleOptions(**loop)
     opts.update(bundle_camera_options(block))  # cameras[].model / additional
     opts.update(overrides)
     run_block = with_check_rays(block) if check_mode(problem) == "rays" else block
-    if loss == "none":
-        return _call(bundle_adjust, run_block, opts), None
-
-    adj, run = robust_bundle(run_block, loss, o.get("robust_scale"),
-                             lambda b: _call(bundle_adjust, b, opts))  # fmt: skip
-    return adj, run.note(run_block)
+    adj = _call(bundle_adjust, run_block, opts)
+    return adj, (robust_note(run_block, adj, loss) if loss is not None else None)
 
 
 def _labels(
