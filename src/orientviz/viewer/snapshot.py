@@ -20,9 +20,7 @@ import re
 from typing import Any
 
 import numpy as np
-from matplotlib import font_manager
 from numpy.typing import NDArray
-from PIL import Image, ImageDraw, ImageFont
 
 _SPAN = re.compile(r'<span style="color: rgb\((\d+),(\d+),(\d+)\)">(.*?)</span>')
 
@@ -50,6 +48,9 @@ def runs(markdown: str) -> list[list[tuple[tuple[int, int, int] | None, str]]]:
 
 
 def _font(size: int) -> Any:
+    from matplotlib import font_manager  # GUI library: loaded when a PNG is made
+    from PIL import ImageFont  # GUI library: loaded when a PNG is made
+
     return ImageFont.truetype(font_manager.findfont("DejaVu Sans"), size)
 
 
@@ -77,6 +78,8 @@ def view_png(render: NDArray[np.uint8], panel: str, title: str = "") -> bytes:
 
     Returns the PNG file's bytes.
     """
+    from PIL import Image, ImageDraw  # GUI library: loaded when a PNG is made
+
     rgba = np.asarray(render, np.uint8)
     img = Image.fromarray(rgba[..., :3])
     if rgba.shape[-1] == 4:  # the canvas is transparent where nothing is drawn: white there
