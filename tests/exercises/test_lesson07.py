@@ -30,6 +30,8 @@ def test_diagnoses_name_the_mistake():
                 "r_nobs",
             ): "the redundancy is the number of control coordinates",
             ("check_similarity_gn", "no_sqrt"): "square root is missing",
+            ("check_similarity_gn", "no_weights"): "weights are missing",
+            ("check_similarity_gn", "one_step"): "iterate until",
             ("check_similarity", "transpose"): "Rᵀ",
             ("check_similarity", "no reflection fix"): "det",
             ("check_similarity", "symmetric scale"): "symmetric scale",

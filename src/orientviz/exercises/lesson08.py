@@ -99,6 +99,10 @@ def check_sigma0(fn: Callable) -> None:
             ("divided by n − 7 (points, not coordinates)", want * np.sqrt((3 * n - 7) / (n - 7))),
             ("forgot to divide the residuals by σ (metres, not unit weight)", want * sigma),
             ("σ̂0² instead of σ̂0", want**2),
+            (
+                "R applied transposed: the model point turns with R (x @ R.T row by row), not Rᵀ",
+                float(np.sqrt(np.sum((t + s * x @ R - X) ** 2) / sigma**2 / (3 * n - 7))),
+            ),
         ],
     )
     success(f"σ̂0 = {float(got):.4f} with r = 3n − 7 = {3 * n - 7}")
@@ -215,7 +219,9 @@ def check_intersect_many(intersect_many: Callable) -> None:
     if np.shape(got) == (3,):
         Rt = np.transpose(R, (0, 2, 1))
         wrong = [("R transposed: the ray direction is R (x, y, −c), not Rᵀ (x, y, −c)",
-                  _least_squares_point(X0, Rt, xy, c))]  # fmt: skip
+                  _least_squares_point(X0, Rt, xy, c)),
+                 ("the image vector is (x, y, +c): the image plane lies at z = −c",
+                  _least_squares_point(X0, R, xy, -c))]  # fmt: skip
     compare("the point of four error-free rays [m]", got, P, rtol=1e-9, scale=1000.0, wrong=wrong)
     # 2. two rays with a known common perpendicular: the midpoint
     Pm, X0m, Rm = _rays_scene(rng, 2)
