@@ -87,6 +87,11 @@ def check_design(design_dependent: Callable[[F64, F64, F64, float], F64]) -> Non
             truth * [1, -1, 1, 1, -1],
         ),
     ]
+    q = P[:, 1] / P[:, 2]
+    omega_minus = truth.copy()
+    omega_minus[:, 2] = -P[:, 2] * (1 - q * q)
+    wrong.append(("the ω column is −Z(1 − Y²/Z²): the sign inside the bracket is +, −Z(1 + Y²/Z²)",
+                  omega_minus))  # fmt: skip
     compare("∂p_y/∂(by, bz, ω, φ, κ)", got, truth, rtol=1e-5, wrong=wrong)
     success("design matrix: each column is the derivative of the rigorous y-parallax")
 
