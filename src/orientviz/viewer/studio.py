@@ -405,6 +405,7 @@ class Studio:
                 f"p = {d.forward_overlap:.0%}, q = {d.side_overlap:.0%}, σ image "
                 f"{d.sigma_image_mm * 1e3:.1f} µm, control σ {d.sigma_control * 100:.0f} cm"
                 + (f", GNSS σ {d.sigma_gnss:.2f} m" if d.sigma_gnss else "")
+                + (" (shift per strip)" if d.sigma_gnss and d.gnss_offsets else "")
                 + (f", statoscope σ {d.sigma_statoscope:.2f} m" if d.sigma_statoscope else "")
                 + (f", APR σ {d.sigma_apr:.2f} m" if d.sigma_apr else "")
             )
