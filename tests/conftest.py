@@ -4,11 +4,16 @@ the lesson notebooks executed in this session."""
 from __future__ import annotations
 
 import os
-import shutil
 import socket
-import tempfile
 
-import pytest
+# BLAS on one thread in the tests and in every process they start (lesson kernels, the book
+# build, the command line): the tests' matrices are small, and on a shared machine a second
+# BLAS thread mostly spins waiting for a core (several times the CPU for the same result).
+# Set before numpy loads; a value given in the environment is kept.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import pytest  # noqa: E402
 
 try:  # property-based tests explore new inputs locally; CI replays a fixed sequence, so
     # that a landing run cannot turn red on an input nobody has seen (run the suite
@@ -43,27 +48,30 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
-@pytest.fixture
-def browser_page():
-    """A fresh headless Chromium page (playwright), skipped with a reason if unavailable."""
+@pytest.fixture(scope="module")
+def _chromium():
+    """One headless Chromium (playwright) per test module, skipped with a reason if unavailable;
+    each test gets a fresh context of its own (:func:`browser_page`)."""
     if not os.path.exists(CHROMIUM):
         pytest.skip(f"no Chromium at {CHROMIUM} (apt-get install -y chromium chromium-driver)")
     sync_api = pytest.importorskip("playwright.sync_api")
-    profile = tempfile.mkdtemp(prefix="orientviz-chromium-")
     with sync_api.sync_playwright() as p:
-        context = p.chromium.launch_persistent_context(
-            profile,
-            executable_path=CHROMIUM,
-            headless=True,
-            args=CHROMIUM_FLAGS,
-            viewport={"width": 1280, "height": 800},
-        )
+        browser = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_FLAGS)
         try:
-            page = context.new_page()
-            yield page
+            yield browser
         finally:
-            context.close()
-            shutil.rmtree(profile, ignore_errors=True)
+            browser.close()
+
+
+@pytest.fixture
+def browser_page(_chromium):
+    """A fresh headless Chromium page in a context of its own (no cookies, storage or cache
+    shared with another test), closed afterwards."""
+    context = _chromium.new_context(viewport={"width": 1280, "height": 800})
+    try:
+        yield context.new_page()
+    finally:
+        context.close()
 
 
 @pytest.fixture(scope="session")

@@ -203,3 +203,27 @@ def test_a_live_design_with_auxiliary_data_assesses_each_change_anew(aux_design)
     tie = ~best.control
     assert s.after == pytest.approx(best.point_sigma[tie, 2].max(), rel=1e-9)
     assert s.after == pytest.approx(s.values.min()) and len(live.changes) == 0
+
+
+def test_gnss_with_a_shift_per_strip_equals_the_adjusted_block_and_is_weaker():
+    from types import SimpleNamespace
+
+    from orientviz.design import assess_design
+    from orientviz.simulate import simulate_auxiliary
+
+    plan = FlightDesign(strips=2, images_per_strip=6, control="corners", sigma_gnss=0.1)
+    absolute = assess_design(plan, law=False)
+    shifted = assess_design(plan.with_(gnss_offsets=True), law=False)
+    assert np.isnan(shifted.block.images.X0_obs).all()  # as joint auxiliary data instead
+    za, zs = absolute.quality.point_sigma[:, 2], shifted.quality.point_sigma[:, 2]
+    assert np.all(zs >= za * (1 - 1e-9)) and zs.max() > 1.05 * za.max()
+    b = shifted.block
+    rng = np.random.default_rng(8)
+    sim = _noisy_start(b, rng)
+    gnss = simulate_auxiliary(
+        SimpleNamespace(truth=b), "gnss", rng=rng, sigma=0.1, offset_sigma=2.0
+    )
+    res = bundle_adjust(sim, control="weighted", precision=True, auxiliary=[gnss])
+    assert res.converged
+    sig = np.sqrt(np.einsum("nii->ni", res.cofactor_groups["points"]))
+    np.testing.assert_allclose(sig, shifted.quality.point_sigma, rtol=2e-3)

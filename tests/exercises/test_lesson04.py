@@ -20,6 +20,8 @@ def test_diagnoses_name_the_mistake():
             ("check_two_rays", "point on ray 1"): "ray 1",
             ("check_design_X0", "rows x.. then y.."): "alternate",
             ("check_sigma_Z", "no sqrt 2"): "√2",
+            ("check_sigma_Z", "H/B once"): "H/B is missing",
+            ("check_two_rays", "sign of the cross term"): "cross term",
             ("check_normal_step", "weights forgotten"): "weights P are missing",
             ("check_best_extra_point", "farthest from the centre"): "farthest",
             ("check_best_extra_point", "weights forgotten"): "forgotten weight",

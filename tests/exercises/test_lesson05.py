@@ -39,6 +39,7 @@ def test_diagnoses_name_the_mistake():
             ("check_relative_from_exterior", "not_scaled"): "not scaled",
             ("check_relative_from_exterior", "degrees"): "degrees",
             ("check_design", "Kovarik signs"): "Kovarik",
+            ("check_design", "1 - Y^2/Z^2"): "sign inside the bracket",
             ("check_six_point", "degrees"): "degrees",
             ("check_six_point", "phi and kappa swapped"): "swapped",
             ("check_parallax", "image difference"): "scale it to the model",

@@ -20,5 +20,6 @@ def test_diagnoses_name_the_mistake():
             ("check_snoop", "all at once"): "one at a time",
             ("check_snoop", "no abs"): "not w",
             ("check_snoop", "one round"): "go on until",
+            ("check_snoop_round", "signed"): "test |w|",
         },
     )

@@ -8,3 +8,18 @@ from orientviz.exercises import lesson13
 
 def test_checks():
     assert_module_checks(lesson13, answers)
+
+
+def test_diagnoses_name_the_mistake():
+    from mutants import assert_diagnoses
+
+    assert_diagnoses(
+        lesson13,
+        answers,
+        {
+            ("check_gnss_rows", "minus offset"): "wrong sign",
+            ("check_gnss_rows", "wrong strip"): "another strip",
+            ("check_gnss_rows", "drift 1"): "holds 1",
+            ("check_difference_covariance", "independent"): "not independent",
+        },
+    )

@@ -130,6 +130,10 @@ def test_the_notebooks_and_book_extras_hold_what_they_need():
             if cell["cell_type"] == "code":
                 code = "".join(cell["source"])
                 imported |= set(re.findall(r"^\s*(?:import|from) (\w+)", code, re.M))
+    # lessons that show the 3D viewer live need viser from both extras
+    lessons = [p.read_text(encoding="utf-8") for p in (ROOT / "notebooks").glob("*.ipynb")]
+    if any("orientviz.viewer" in text for text in lessons):
+        assert "viser" in names["notebooks"] and "viser" in names["book"]
     # besides the standard library: the core and what the notebooks extra brings
     allowed = {"orientviz", "numpy", "scipy", "jsonschema", "matplotlib", "ipywidgets", "IPython"}
     imported -= set(sys.stdlib_module_names)

@@ -239,3 +239,20 @@ def test_ceres_reaches_the_same_robust_optimum(block):
     )
     assert adj.converged
     assert adj.history[-1].cost == pytest.approx(2 * summary.final_cost, rel=1e-7)
+
+
+def test_points_near_infinity_are_found_by_their_rays_parallax():
+    """Centres 1 m apart: a point 10 m in front is seen under atan(0.05) from its rays'
+    mean direction, one 10⁷ m away under ~5e-8 rad (< FAR_PARALLAX); one ray: NaN."""
+    from types import SimpleNamespace
+
+    from orientviz.bundle.loop import FAR_PARALLAX, ray_parallax
+
+    obs = SimpleNamespace(image=np.array([0, 1, 0, 1, 0]), point=np.array([0, 0, 1, 1, 2]))
+    block = SimpleNamespace(observations=obs, n_points=3)
+    X0 = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    xyz = np.array([[0.5, 0.0, 10.0], [0.5, 0.0, 1e7], [0.0, 0.0, 5.0]])
+    par = ray_parallax(block, X0, xyz)
+    assert par[0] == pytest.approx(np.arctan(0.5 / 10.0), rel=1e-9)
+    assert par[1] == pytest.approx(np.arctan(0.5 / 1e7), rel=1e-6) and par[1] < FAR_PARALLAX
+    assert np.isnan(par[2])

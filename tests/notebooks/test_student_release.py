@@ -4,6 +4,7 @@ tests are gone, and the check after each blank may raise without stopping "Run A
 from __future__ import annotations
 
 import json
+import os
 import pathlib
 
 import pytest
@@ -122,21 +123,61 @@ def test_main_usage_errors(tmp_path, capsys):
     assert main([str(ROOT / "notebooks"), str(ROOT / "notebooks")]) == 1
 
 
-def _run_release(path, tmp_path, monkeypatch):
+#: Run in the shared kernel before each released lesson: an empty namespace, no figures,
+#: matplotlib's settings as they were before the first lesson, the lesson's own folder.
+RESET = """\
+%reset -f
+import os as _os, sys as _sys
+import matplotlib as _mpl, matplotlib.pyplot as _plt
+_plt.close("all")
+_sys.__dict__.setdefault("_orientviz_rc", dict(_mpl.rcParams))
+_mpl.rcParams.update(_sys._orientviz_rc)
+_os.chdir({path!r})
+del _os, _sys, _mpl, _plt
+"""
+
+
+@pytest.fixture(scope="module")
+def lesson_kernel():
+    """One kernel for the 16 released lessons (a kernel start with its imports costs about
+    as much CPU as a short lesson). Before each lesson :data:`RESET` empties it; each
+    lesson as written also runs in a fresh kernel of its own in the book build
+    (tests/book/test_book.py) or tests/notebooks/test_notebooks.py."""
+    jupyter_client = pytest.importorskip("jupyter_client")
+    km = jupyter_client.KernelManager(kernel_name="python3")
+    km.start_kernel(env=dict(os.environ, MPLBACKEND="Agg"))
+    try:
+        yield km
+    finally:
+        km.shutdown_kernel(now=False)
+
+
+def _execute(nb, km, path):
+    nbclient = pytest.importorskip("nbclient")
+    client = nbclient.NotebookClient(nb, km=km, timeout=300, kernel_name="python3",
+                                     resources={"metadata": {"path": str(path)}})  # fmt: skip
+    try:
+        return client.execute()
+    finally:
+        if client.kc is not None:
+            client.kc.stop_channels()
+
+
+def _run_release(path, tmp_path, km):
     """Release one lesson into tmp_path and execute it as "Run All" does; return the notebook."""
     nbformat = pytest.importorskip("nbformat")
     nbclient = pytest.importorskip("nbclient")
     from test_notebooks import _patch_shell_polling
 
-    monkeypatch.setenv("MPLBACKEND", "Agg")
     _patch_shell_polling()
     assert main([str(path), str(tmp_path)]) == 0
     nb = nbformat.read(tmp_path / path.name, as_version=4)
-    client = nbclient.NotebookClient(
-        nb, timeout=300, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}}
+    reset = nbformat.v4.new_notebook(
+        cells=[nbformat.v4.new_code_cell(RESET.format(path=str(tmp_path)))]
     )
+    _execute(reset, km, tmp_path)
     try:
-        client.execute()  # a cell not tagged raises-exception that raises stops here
+        _execute(nb, km, tmp_path)  # a cell not tagged raises-exception that raises stops here
     except nbclient.exceptions.CellExecutionError as exc:
         pytest.fail(f"{path.name}: the student release stops: {str(exc).splitlines()[-1]}")
     return nb
@@ -144,10 +185,10 @@ def _run_release(path, tmp_path, monkeypatch):
 
 @pytest.mark.notebook
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
-def test_released_lesson_runs_to_the_end(path, tmp_path, monkeypatch):
+def test_released_lesson_runs_to_the_end(path, tmp_path, lesson_kernel):
     """"Run All" on the student release reaches the last cell; the only errors are the checks
     of the blanks, each saying "not written yet"."""
-    nb = _run_release(path, tmp_path, monkeypatch)
+    nb = _run_release(path, tmp_path, lesson_kernel)
     errors, blanks = [], 0
     for i, cell in enumerate(nb.cells):
         if cell.cell_type != "code":

@@ -41,7 +41,7 @@ def test_design_studio_adds_a_control_point_and_a_cross_strip(browser_page, tmp_
             lambda: page.get_by_text(f"make point {sug.point_id} control").count() > 0, 60
         )
         page.get_by_role("button", name="accept suggestion").click()
-        assert wait_for(lambda: len(st.live.changes) == 1, 60), "accept did not arrive"
+        assert wait_for(lambda: len(st.log) == 1, 60), "accept did not arrive"
         q = st.quality
         assert q.summary["n_control"] == n0 + 1
         assert q.point_sigma[:, 2].max() == pytest.approx(sug.after, rel=1e-6)
@@ -56,7 +56,7 @@ def test_design_studio_adds_a_control_point_and_a_cross_strip(browser_page, tmp_
         wait_for_picture(page, img, lambda a: changed_share(img, a) > 0.002, 60)
         # undo returns to the start
         page.get_by_role("button", name="undo").click()
-        assert wait_for(lambda: len(st.live.changes) == 0, 60)
+        assert wait_for(lambda: len(st.log) == 2, 60)
         assert wait_for(lambda: page.get_by_text(f"{n0} control points").count() > 0, 60)
         time.sleep(1.5)  # the redraw after the undo
         after_undo = scene_image(page)

@@ -63,18 +63,21 @@ def test_apply_plan_builds_the_new_design(view):
     panel, st = view.panel, view.studio
     panel.h["strips"].value = 3
     panel.h["gnss"].value = 0.1
-    panel.h["statoscope"].value = 0.3
+    panel.h["apr"].value = 0.3
+    panel.h["gnss_offsets"].value = True
     panel.apply_plan()
     assert st.design.strips == 3 and st.design.sigma_gnss == pytest.approx(0.1)
-    assert st.design.sigma_statoscope == pytest.approx(0.3) and st.design.sigma_apr is None
-    assert [a.kind for a in st.live.auxiliary] == ["statoscope"]
-    assert "statoscope σ 0.30 m" in panel.h["summary"].content
+    assert st.design.sigma_apr == pytest.approx(0.3) and st.design.sigma_statoscope is None
+    assert [a.kind for a in st.live.auxiliary] == ["gnss", "apr"]
+    assert "(shift per strip)" in panel.h["summary"].content
+    assert "APR σ 0.30 m" in panel.h["summary"].content
     assert st.block.n_images == 18
     assert "3 strips × 6 images" in panel.h["summary"].content
     assert "plan: 3 × 6" in panel.h["changes"].content
     panel.undo()  # the plan before
     assert st.design.strips == 2 and st.block.n_images == 12 and not st.live.auxiliary
-    panel.h["statoscope"].value = 0.0
+    panel.h["apr"].value = 0.0
+    panel.h["gnss_offsets"].value = False
 
 
 def test_cross_strip_and_removals_by_click_and_their_undo(view):

@@ -54,6 +54,9 @@ class FlightDesign:
     sigma_gnss : float or None
         σ of GNSS-observed projection centres (X0, Y0, Z0), m, absolute (no offsets);
         None = no GNSS.
+    gnss_offsets : bool
+        GNSS positions with an unknown shift per strip (X, Y, Z; as the bundle's joint
+        auxiliary data, :func:`design_auxiliary`) instead of absolute ones.
     sigma_statoscope, sigma_apr : float or None
         σ (m) of statoscope readings of every projection centre's height and of APR
         terrain heights (the tie point nearest each image's nadir), each with an unknown
@@ -78,6 +81,7 @@ class FlightDesign:
     sigma_image_mm: float = 0.005
     sigma_control: float = 0.02
     sigma_gnss: float | None = None
+    gnss_offsets: bool = False
     sigma_statoscope: float | None = None
     sigma_apr: float | None = None
     extra: str | int | None = None
@@ -132,7 +136,7 @@ def design_block(design: FlightDesign) -> tuple[Block, dict[str, Any]]:
     )  # fmt: skip
     block = sim.truth.copy()
     block.meta = {"source": "orientviz.design.design_block"}
-    if design.sigma_gnss is not None:
+    if design.sigma_gnss is not None and not design.gnss_offsets:
         block.images.X0_obs[:] = block.images.X0
         block.images.X0_sigma[:] = design.sigma_gnss
     return block, dict(sim.spec)
@@ -165,14 +169,16 @@ def set_control(block: Block, point: int, sigma_xyz) -> Block:
 
 def design_auxiliary(block: Block, design: FlightDesign) -> list[Auxiliary]:
     """The plan's auxiliary data of a design block: error-free values (the planned
-    heights), σ from the plan, an unknown offset per strip (statoscope and APR).
+    positions and heights), σ from the plan, an unknown offset per strip (GNSS with
+    ``gnss_offsets``, statoscope and APR).
 
     Parameters
     ----------
     block : Block
         The design block (planned geometry).
     design : FlightDesign
-        ``sigma_statoscope``, ``sigma_apr`` (m; None = none).
+        ``sigma_gnss`` with ``gnss_offsets``, ``sigma_statoscope``, ``sigma_apr`` (m; None =
+        none).
 
     Returns
     -------
@@ -181,7 +187,10 @@ def design_auxiliary(block: Block, design: FlightDesign) -> list[Auxiliary]:
     """
     out = []
     holder = SimpleNamespace(truth=block)
-    for kind, sig in (("statoscope", design.sigma_statoscope), ("apr", design.sigma_apr)):
+    gnss = design.sigma_gnss if design.gnss_offsets else None
+    for kind, sig in (
+        ("gnss", gnss), ("statoscope", design.sigma_statoscope), ("apr", design.sigma_apr),
+    ):  # fmt: skip
         if sig is None:
             continue
         if not sig > 0:
@@ -189,9 +198,12 @@ def design_auxiliary(block: Block, design: FlightDesign) -> list[Auxiliary]:
         a = simulate_auxiliary(
             holder, kind, rng=np.random.default_rng(0), sigma=sig, offset_sigma=0.0
         )
-        a.values = (
-            block.images.X0[a.index, 2] if kind == "statoscope" else block.points.xyz[a.index, 2]
-        ).copy()  # the planned heights: no errors
+        if kind == "gnss":
+            a.values = block.images.X0[a.index].copy()  # the planned positions: no errors
+        elif kind == "statoscope":
+            a.values = block.images.X0[a.index, 2].copy()
+        else:
+            a.values = block.points.xyz[a.index, 2].copy()
         a.truth = {}
         out.append(a)
     return out

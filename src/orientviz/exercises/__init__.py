@@ -30,6 +30,11 @@ enforces the notebook side):
 * A lesson decorates a "your version" function that later cells use with
   :func:`stand_in` (the library's equivalent): while the blank is empty, those cells get
   the library's result and say so; the checks unwrap it and answer "not written yet".
+* A "find the mistake" exercise shows a colleague's function in a visible cell that begins
+  with ``# A colleague's version: one line is wrong.``; the student writes the corrected
+  function, which the usual check judges. ``tests/notebooks/test_planted_mistakes.py`` runs
+  every such cell and demands that its checker rejects it with the named diagnosis.
+* A failed check raises a message that begins with "✗" (a passed one prints "✓ …").
 * A numpy error raised inside the student's function (a transposed matrix, a wrong shape)
   is turned by :func:`~orientviz.exercises._common.call` into a :class:`CheckFailed` that names
   the shapes of the inputs.

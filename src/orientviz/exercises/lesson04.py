@@ -125,10 +125,17 @@ def check_two_rays(intersect_two_rays: Callable[[F64, F64, F64, F64], F64]) -> N
             d2 * 0.5,
             what="intersect_two_rays",
         )
+        a1, a2 = d1 * 3.0, d2 * 0.5  # the directions as handed in
+        bb = X02 - X01
+        l1, l2 = np.linalg.solve(
+            np.array([[a1 @ a1, a1 @ a2], [a1 @ a2, a2 @ a2]]), [a1 @ bb, -a2 @ bb]
+        )
         wrong = [
             ("this is the point on ray 1, not the midpoint", Q1),
             ("this is the point on ray 2, not the midpoint", Q2),
-        ]
+            ("the sign of the cross term d1ᵀd2 in the 2 × 2 system is wrong (it is −d1ᵀd2)",
+             (X01 + l1 * a1 + X02 + l2 * a2) / 2),
+        ]  # fmt: skip
         compare("midpoint [m]", got, P, rtol=1e-9, scale=1.0, wrong=wrong)
     success(
         "two rays: the midpoint of their common perpendicular (direction lengths do not matter)"
@@ -194,6 +201,7 @@ def check_sigma_Z(sigma_Z: Callable[[float, float, float, float], float]) -> Non
         wrong = [
             ("√2 is missing: the x-parallax has two measured coordinates", truth / np.sqrt(2)),
             ("σ_x must be in mm here (5 µm = 0.005 mm), not µm", truth * 1000.0),
+            ("the base/height ratio H/B is missing (H/c alone is the image scale)", truth * B / H),
         ]
         compare(f"σ_Z for B = {B:.0f} m, H = {H:.0f} m [m]", got, truth, rtol=1e-6, wrong=wrong)
     success("σ_Z = (H/B)(H/c)·√2·σ_x, as the covariance of the two-ray intersection says")

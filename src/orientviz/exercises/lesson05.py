@@ -87,6 +87,11 @@ def check_design(design_dependent: Callable[[F64, F64, F64, float], F64]) -> Non
             truth * [1, -1, 1, 1, -1],
         ),
     ]
+    q = P[:, 1] / P[:, 2]
+    omega_minus = truth.copy()
+    omega_minus[:, 2] = -P[:, 2] * (1 - q * q)
+    wrong.append(("the ω column is −Z(1 − Y²/Z²): the sign inside the bracket is +, −Z(1 + Y²/Z²)",
+                  omega_minus))  # fmt: skip
     compare("∂p_y/∂(by, bz, ω, φ, κ)", got, truth, rtol=1e-5, wrong=wrong)
     success("design matrix: each column is the derivative of the rigorous y-parallax")
 
@@ -267,7 +272,7 @@ def check_kovarik_iteration(fn: Callable) -> None:
 
 
 def _opk(R: F64) -> F64:
-    """ω, φ, κ (rad) of R = R_ω R_φ R_κ, read from its entries (|φ| < 100 gon)."""
+    """ω, φ, κ (rad) of R = R_ω R_φ R_κ, read from its entries (abs(φ) < 100 gon)."""
     return np.array(
         [np.arctan2(-R[1, 2], R[2, 2]), np.arcsin(R[0, 2]), np.arctan2(-R[0, 1], R[0, 0])]
     )

@@ -177,6 +177,7 @@ def check_design(design: Callable[[F64, float, F64], F64]) -> None:
     wrong = [
         ("the rotation columns have the wrong sign: d(Rx) = α × Rx = −[Rx]ₓ α", flip),
         ("the rotation columns need the scale m", nom),
+        ("the scale column is ∂X/∂m = R x, without m", truth * np.r_[1, 1, 1, 1, 1, 1, m]),
     ]
     compare("design matrix", got, truth, rtol=1e-6, wrong=wrong)
     success("design matrix of the similarity agrees with numerical derivatives")
@@ -252,7 +253,20 @@ def check_similarity_gn(fn: Callable) -> None:
         raise CheckFailed("similarity_gn: return (m, R, T, sigma0)")
     m, R, T, s0 = got
     wm, wR, wT, ws0 = _gn_oracle(x, X, sigma, observed)
-    compare("m", float(m), wm, rtol=1e-8)
+    wrong_m = [
+        ("the weights are missing: each control coordinate counts with 1/σ² (σ differ here)",
+         _gn_oracle(x, X, np.ones_like(sigma), observed)[0]),
+    ]  # fmt: skip
+    try:
+        compare("m", float(m), wm, rtol=1e-8, wrong=wrong_m)
+    except CheckFailed as exc:
+        if "weights" not in str(exc) and abs(float(m) - wm) < 0.1 * abs(start[0] - wm):
+            raise CheckFailed(
+                f"{exc}\n  (much closer than the start, but not there: iterate until every "
+                "correction is tiny — one Gauss-Newton step is not the adjustment)",
+                exc.error, exc.tolerance,
+            ) from None  # fmt: skip
+        raise
     compare("R", np.asarray(R, float), wR, rtol=1e-7, wrong=[
         ("this is Rᵀ: R turns model into object vectors", wR.T),
     ])  # fmt: skip

@@ -99,6 +99,10 @@ def check_sigma0(fn: Callable) -> None:
             ("divided by n − 7 (points, not coordinates)", want * np.sqrt((3 * n - 7) / (n - 7))),
             ("forgot to divide the residuals by σ (metres, not unit weight)", want * sigma),
             ("σ̂0² instead of σ̂0", want**2),
+            (
+                "R applied transposed: the model point turns with R (x @ R.T row by row), not Rᵀ",
+                float(np.sqrt(np.sum((t + s * x @ R - X) ** 2) / sigma**2 / (3 * n - 7))),
+            ),
         ],
     )
     success(f"σ̂0 = {float(got):.4f} with r = 3n − 7 = {3 * n - 7}")
@@ -129,7 +133,28 @@ def check_conformal(fn: Callable) -> None:
             wrong=[
                 ("the wrong order: give c0 (the shift) first", pair(c[::-1])),
                 ("complex conjugates: the coordinates were paired as x − iy", pair(np.conj(c))),
-            ],
+                (
+                    "the strip coordinates were paired as x − iy: use z = x + iy",
+                    pair(
+                        np.linalg.lstsq(
+                            np.column_stack([np.conj(z) ** k for k in range(degree + 1)]),
+                            Z,
+                            rcond=None,
+                        )[0]
+                    ),
+                ),
+                (
+                    "the constant c0 (the shift) is missing from the fit",
+                    pair(
+                        np.r_[
+                            0,
+                            np.linalg.lstsq(
+                                np.column_stack([z**k for k in range(1, degree + 1)]), Z, rcond=None
+                            )[0],
+                        ]
+                    ),
+                ),
+            ],  # fmt: skip
         )
     success("the conformal polynomials of degree 2 and 3 recovered exactly")
 
@@ -146,6 +171,10 @@ def check_log_law(fn: Callable) -> None:
         rtol=1e-9,
         wrong=[
             ("(a, b) swapped: return the constant a first", [b, a]),
+            (
+                "a straight line over n_s itself: the law is linear in log10 n_s",
+                np.polyfit(n_s, a + b * np.log10(n_s), 1)[::-1],
+            ),  # fmt: skip
             (
                 "b/ln 10: the natural logarithm instead of log10",
                 np.linalg.lstsq(
@@ -215,7 +244,9 @@ def check_intersect_many(intersect_many: Callable) -> None:
     if np.shape(got) == (3,):
         Rt = np.transpose(R, (0, 2, 1))
         wrong = [("R transposed: the ray direction is R (x, y, −c), not Rᵀ (x, y, −c)",
-                  _least_squares_point(X0, Rt, xy, c))]  # fmt: skip
+                  _least_squares_point(X0, Rt, xy, c)),
+                 ("the image vector is (x, y, +c): the image plane lies at z = −c",
+                  _least_squares_point(X0, R, xy, -c))]  # fmt: skip
     compare("the point of four error-free rays [m]", got, P, rtol=1e-9, scale=1000.0, wrong=wrong)
     # 2. two rays with a known common perpendicular: the midpoint
     Pm, X0m, Rm = _rays_scene(rng, 2)

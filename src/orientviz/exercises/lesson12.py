@@ -104,6 +104,8 @@ def check_snoop_round(fn: Callable) -> None:
         }.get(got, "")
         if want == -1:
             why = f"max |w| = {abs(w[i]):.2f} is below k = {k:.2f}: nothing is rejected (return −1)"
+        elif got == -1 and w[i] < 0:
+            why = f"the largest |w| = {abs(w[i]):.2f} > k belongs to a negative w: test |w|, not w"
         raise CheckFailed(
             f"case {n_case}: got {got}, expected {want}" + (f" — {why}" if why else "")
         )

@@ -124,6 +124,25 @@ def check_gnss_rows(fn: Callable) -> None:
             wrong=[
                 ("the drift columns are missing (offset only)", no_drift),
                 ("the drift column holds 1, not the time t", np.where(np.isclose(J, t), 1.0, J)),
+                (
+                    "the offset enters with the wrong sign (the GNSS reads X0 + offset + t · drift)",
+                    J * np.r_[np.ones(3 * m), -np.ones(3 * n_strips), np.ones(3 * n_strips)],
+                ),
+                (
+                    "the offset and drift columns of another strip: strip s owns the columns "
+                    "3m + 3s … and 3m + 3·n_strips + 3s …",
+                    np.column_stack(
+                        [J[:, : 3 * m]]
+                        + [
+                            np.roll(
+                                J[:, 3 * m + 3 * n_strips * h : 3 * m + 3 * n_strips * (h + 1)],
+                                3,
+                                axis=1,
+                            )
+                            for h in (0, 1)
+                        ]
+                    ),
+                ),
             ],
         )
     success("the three GNSS rows have 1 at X0, Y0, Z0 and the strip's offsets, t at its drifts")

@@ -175,6 +175,18 @@ def _parse(lines: list[str], source: str) -> tuple[F64, F64, F64]:
     return obs, cams, pts
 
 
+def read_bal_arrays(path: str | os.PathLike[str]) -> tuple[F64, F64, F64]:
+    """The three tables of a BAL file (plain or ``*.bz2``) as they stand, BAL's units.
+
+    Returns
+    -------
+    (obs, cams, pts)
+        ``obs`` (n, 4): camera index, point index, x, y (px, BAL's signs); ``cams``
+        (m, 9): angle-axis rotation (rad), translation, f (px), k1, k2; ``pts`` (p, 3).
+    """
+    return _parse(_read_lines(path), str(path))
+
+
 #: What :func:`read_bal` does with each camera's f, k1, k2.
 LENS_MODES = ("refine", "fixed")
 #: The lens terms of a BAL camera in orientviz's forward model (f is the model's c).

@@ -21,6 +21,8 @@ Scene tree::
 
 from __future__ import annotations
 
+import functools
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -140,6 +142,18 @@ def legend_html(scale: Scale, defined: bool = True) -> str:
     )
 
 
+def _locked(method):
+    """Run a :class:`Studio` method under the studio's lock (GUI callbacks may run in
+    several threads; the live design's lazy update must not run twice at once)."""
+
+    @functools.wraps(method)
+    def run(self, *args, **kwargs):
+        with self.lock:
+            return method(self, *args, **kwargs)
+
+    return run
+
+
 class Studio:
     """The studio's state: the plan, the live design, the method, the measure, the
     suggestion, the changes and their undo.
@@ -162,6 +176,7 @@ class Studio:
     def __init__(
         self, design: FlightDesign = START, *, block=None, spec=None, title: str | None = None
     ) -> None:  # fmt: skip
+        self.lock = threading.RLock()
         self.measure = "sigma_z"
         self.method = "bundle"
         self.suggestion: Suggestion | None = None
@@ -225,6 +240,7 @@ class Studio:
         self.suggestion = None
         return self.quality
 
+    @_locked
     def set_plan(self, design: FlightDesign) -> DesignQuality:
         """Build the design of a (new) plan: strips, overlaps, σ … (undo restores the old)."""
         return self._structural(
@@ -233,6 +249,7 @@ class Studio:
             lambda: self._set_plan(design),
         )
 
+    @_locked
     def add_cross_strip(self, x: float) -> DesignQuality:
         """Fly a cross strip along +Y at X = ``x`` (m) over the block."""
         b = cross_strip(self.block, self.spec, x)
@@ -241,6 +258,7 @@ class Studio:
             f"cross strip at X = {x:,.0f} m ({n} images)", lambda: self._set_block(b, self.spec)
         )
 
+    @_locked
     def remove_images(self, images, what: str | None = None) -> DesignQuality:
         """Remove images (indices) and their rays from the design."""
         idx = np.atleast_1d(np.asarray(images, np.int64))
@@ -249,6 +267,7 @@ class Studio:
         label = what or ("image " + ", ".join(names) + " removed")
         return self._structural(label, lambda: self._set_block(b, self.spec))
 
+    @_locked
     def add_image(self, xy) -> DesignQuality:
         """Add an image above the ground position ``xy`` (m) at the height, attitude and in
         the strip of the nearest projection centre."""
@@ -263,11 +282,13 @@ class Studio:
             lambda: self._set_block(b, self.spec),
         )
 
+    @_locked
     def remove_strip(self, strip: int) -> DesignQuality:
         """Remove every image of strip ``strip``."""
         idx = np.flatnonzero(self.block.images.strip == strip)
         return self.remove_images(idx, f"strip {strip} removed ({idx.size} images)")
 
+    @_locked
     def set_method(self, method: str) -> DesignQuality:
         """Assess the design for ``"bundle"``, ``"models"`` or ``"polynomial"``
         (:data:`orientviz.design.METHODS`; the polynomial method has no design precision:
@@ -289,6 +310,7 @@ class Studio:
         return METHODS[self.method][1]
 
     # ------------------------------------------------------------------ control
+    @_locked
     def set_control(self, point: int, sigma: float | None) -> DesignQuality:
         """Make ``point`` XYZ control with σ ``sigma`` m (None: make it a tie point)."""
         if sigma is None:
@@ -300,6 +322,7 @@ class Studio:
         self.suggestion = None
         return self.quality
 
+    @_locked
     def undo(self) -> DesignQuality:
         """Take the last change back (control, plan, images, strips)."""
         if not self._undo:
@@ -322,6 +345,7 @@ class Studio:
         return self.live.block
 
     @property
+    @_locked
     def quality(self) -> DesignQuality:
         """The current quality for the chosen method (the bundle's for the polynomial)."""
         if self.method != "models":
@@ -350,6 +374,7 @@ class Studio:
         d = np.linalg.norm(self.block.points.xyz[:, :2] - np.asarray(xy)[None, :2], axis=1)
         return int(np.argmin(d))
 
+    @_locked
     def suggest(self, sigma: float) -> Suggestion:
         """Suggest the next control point (σ ``sigma`` m) for the shown measure: worst
         σ_XY, worst σ_Z (also for redundancy and MDB) or largest δ̄0."""
@@ -357,10 +382,12 @@ class Studio:
         self.suggestion = suggest_control(self.live, criterion=crit, sigma=sigma)
         return self.suggestion
 
+    @_locked
     def values(self) -> F64:
         """The chosen measure per point."""
         return point_values(self.quality, self.block, self.measure)
 
+    @_locked
     def summary_markdown(self) -> str:
         """The block's figures next to the accuracy law's values, the weak spots."""
         s = self.quality.summary
@@ -378,6 +405,7 @@ class Studio:
                 f"p = {d.forward_overlap:.0%}, q = {d.side_overlap:.0%}, σ image "
                 f"{d.sigma_image_mm * 1e3:.1f} µm, control σ {d.sigma_control * 100:.0f} cm"
                 + (f", GNSS σ {d.sigma_gnss:.2f} m" if d.sigma_gnss else "")
+                + (" (shift per strip)" if d.sigma_gnss and d.gnss_offsets else "")
                 + (f", statoscope σ {d.sigma_statoscope:.2f} m" if d.sigma_statoscope else "")
                 + (f", APR σ {d.sigma_apr:.2f} m" if d.sigma_apr else "")
             )

@@ -115,6 +115,7 @@ class StudioPanel:
             )  # fmt: skip
             h["spacing"] = gui.add_slider("control spacing [bases]", 1, 20, 1, d.control_spacing)
             h["gnss"] = gui.add_number("GNSS σ [m] (0 = none)", d.sigma_gnss or 0.0, min=0.0)
+            h["gnss_offsets"] = gui.add_checkbox("GNSS shift per strip", d.gnss_offsets)
             h["statoscope"] = gui.add_number(
                 "statoscope σ [m] (0 = none)", d.sigma_statoscope or 0.0, min=0.0
             )
@@ -187,6 +188,7 @@ class StudioPanel:
             sigma_image_mm=float(h["sigma_image"].value) / 1e3, control=str(h["layout"].value),
             control_spacing=int(h["spacing"].value), chain_spacing=int(h["spacing"].value),
             sigma_control=self._sigma(), sigma_gnss=gnss if gnss > 0 else None,
+            gnss_offsets=bool(h["gnss_offsets"].value),
             sigma_statoscope=float(h["statoscope"].value) or None,
             sigma_apr=float(h["apr"].value) or None,
         )  # fmt: skip

@@ -49,7 +49,6 @@ from ._loss import RobustLoss
 from ._reference_result import reference_result
 from ._steps import BundleSteps
 
-
 #: A robust loss (``BundleOptions.loss``) allows this many times ``max_iter`` steps: its
 #: reweighted steps converge linearly, not quadratically as Gauss-Newton steps do.
 ROBUST_ITER_FACTOR: int = 4

@@ -43,8 +43,14 @@ from ..problem import BundleProblem, BundleState
 from ._loss import RobustLoss
 
 F64 = NDArray[np.float64]
-#: A robust loss is switched on after the first least-squares step that lowers vᵀPv by
-#: at most this fraction of its value (or corrects by less than 1 σ).
+#: A robust loss is on from the start when the start's σ0 (of least squares) is below
+#: this: the misclosures of most rays are then a few σ (Ladybug with 2 % gross errors
+#: starts at 8). From a poorer start (a strip from approximations: 1 500, then 28 after
+#: one step) least-squares steps come first: a redescending loss there down-weighted the
+#: wrong rays …
+LOSS_SIGMA0: float = 10.0
+#: … until a step reaches σ0 below LOSS_SIGMA0, lowers vᵀPv by at most this fraction of
+#: its value, or corrects by less than 1 σ.
 LOSS_SWITCH: float = 1e-2
 
 
@@ -83,9 +89,10 @@ class BundleSteps:
         # evaluation whose normal equations are formed (set in place before each)
         self.loss = loss
         self.base_weight = prob.obs.weight.copy() if loss is not None else None
-        # the loss is switched on once least-squares steps have settled (see accepted):
-        # from poor approximations every ray is an outlier and a redescending loss would
-        # down-weight the wrong ones; the loop's current evaluation is then made robust
+        # the loss is on from a start with σ0 below LOSS_SIGMA0; from poorer
+        # approximations (every ray an outlier: a redescending loss would down-weight the
+        # wrong ones) least-squares steps come first, until σ0 falls below it or the steps
+        # settle (see accepted); the loop's current evaluation is then made robust
         self.loss_on = False
         self.switch_pending = False
         self.keep_x, self.precision = keep_x, precision
@@ -117,8 +124,16 @@ class BundleSteps:
             ev = self._evaluate(st, True, self._poor())
         else:
             ev = self._evaluate(st, True, False)
+        if self.loss is not None and not self._poor_sigma0(ev.cost):  # a good start: ρ at once
+            self.loss_on = True
+            ev = self._evaluate(st, True, self.is_local(ev))
         self._start = (st, ev)
         return ev
+
+    def _poor_sigma0(self, cost: float) -> bool:
+        """σ0 of vᵀPv ``cost`` at least :data:`LOSS_SIGMA0` (too poor for a robust loss)."""
+        dof = self.prob.redundancy
+        return dof > 0 and float(np.sqrt(cost / dof)) >= LOSS_SIGMA0
 
     def evaluate(self, st: BundleState, jacobian: bool) -> Evaluation:
         if self._start is not None and self._start[0] is st:
@@ -139,11 +154,14 @@ class BundleSteps:
     def _evaluate_robust(self, st: BundleState, jacobian: bool, local: bool, keep: bool):
         """Σ ρ(s) + the pseudo-observations' vᵀPv at ``st``; with ``jacobian`` the rays
         weighted by 1/σ·√ρ′(s) (the Gauss-Newton model of ρ, see :mod:`._loss`): the
-        misclosures first with 1/σ (their projection kept), then the Jacobians with the
-        scaled weights (a camera model's design is weighted as it is formed)."""
+        misclosures first with 1/σ, then the weights scaled (the normal equations weight
+        the Jacobians by them; a camera model's design is re-weighted)."""
         prob, weight = self.prob, self.prob.obs.weight
         weight[...] = self.base_weight
-        rw, Je, Jp = prob.residuals(st, jac=False, keep=jacobian or keep)
+        # a camera model is evaluated once, with its derivatives (its design is then
+        # re-weighted); a pinhole's projection is kept for the Jacobians' pass
+        lens = jacobian and prob.ap.lens is not None
+        rw, Je, Jp = prob.residuals(st, jac=lens, keep=(jacobian or keep) and not lens)
         s = np.einsum("ij,ij->i", rw, rw)
         rho, rho1 = self.loss(s)
         cost = float(np.sum(rho)) + prob.cost(st, rw[:0])  # the rays by ρ, the rest by vᵀPv
@@ -152,7 +170,12 @@ class BundleSteps:
         if jacobian and np.isfinite(cost):
             scale = np.sqrt(rho1)
             weight *= scale[:, None]
-            rw, Je, Jp = prob.residuals(st, jac=True, local=local)
+            if lens:
+                rw = rw * scale[:, None]
+                if prob.q:
+                    prob.run.ap = prob.ap.with_design(prob.ap.A, weight)
+            else:
+                rw, Je, Jp = prob.residuals(st, jac=True, local=local)
         return Evaluation(cost, bool(np.isfinite(cost)), _Linearisation((rw, Je, Jp), local, scale))
 
     def weigh(self, ev: Evaluation) -> None:
@@ -310,9 +333,13 @@ class BundleSteps:
     def accepted(self, it: int, step: Step, lam: float, previous: Evaluation) -> None:
         prob = self.prob
         dc, dp, _, fac, ne, local = step.data
-        if self.loss is not None and not self.loss_on:  # least squares has settled?
+        if self.loss is not None and not self.loss_on:  # no longer poor, or settled?
             drop = (previous.cost - self.pending_cost) / previous.cost if previous.cost > 0 else 0.0
-            if drop <= LOSS_SWITCH or step.max_correction < 1.0:
+            if (
+                not self._poor_sigma0(self.pending_cost)
+                or drop <= LOSS_SWITCH
+                or step.max_correction < 1.0
+            ):
                 self.loss_on = self.switch_pending = True
         self.last_correction = step.max_correction
         self.last_cost, self.local_step = self.pending_cost, local

@@ -1,0 +1,217 @@
+"""Real SfM data: orientviz's bundle against pycolmap's (Ceres) on the same model.
+
+``python benchmarks/bench_sfm.py [--bal FILE] [--colmap DIR] [--threads 1,default]
+[--skip-cli] [--dir DIR]``
+
+Models (each measurement runs in its own fresh process: honest peak RSS):
+
+* ``--bal`` (default: the shipped Ladybug 49-7776): the observations whose point lies
+  behind its camera at the start and the points then left with fewer than two rays are
+  removed first (pycolmap's reprojection cost leaves such observations out, BAL's does
+  not), so both solvers minimise the same ½Σr² (px). orientviz: ``import-bal`` (f, k1,
+  k2 free per camera) and the free network (minimum datum); pycolmap: one RADIAL camera
+  per BAL camera (principal point held at 0), world Z reflected (BAL cameras look down
+  −z), gauge TWO_CAMS_FROM_WORLD.
+* ``--colmap DIR`` (a COLMAP sparse model, e.g. a SIMPLE_RADIAL one): orientviz
+  ``import-colmap`` (COLMAP's objective: distorted pixels, focal length and distortion
+  free, principal point held) and the free network; pycolmap's bundle adjuster on the
+  model as read, the same parameters refined. orientviz leaves repeated observations of
+  a point in one image out (its import message counts them), pycolmap keeps them.
+
+Per solver and thread setting: the solve's CPU and wall time (s; on a shared machine
+the CPU time is the steadier number), iterations, final ½Σr² (px²), the process's peak
+RSS (MB). ``1``: OPENBLAS/OMP_NUM_THREADS=1 and Ceres num_threads 1; ``default``: the
+environment as a user has it and Ceres num_threads −1 (all cores). Unless
+``--skip-cli``: ``orientviz import-* … && orientviz solve … --free`` end to end (CPU of
+both commands, children's rusage) against orientviz's library solve measured in the
+same run. Both solvers stop with Ceres's default function tolerance (1e-6 relative).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+WORKER = r"""
+import json, resource, sys, time
+import numpy as np
+kind, model, threads = sys.argv[1], sys.argv[2], sys.argv[3]
+out = {}
+if kind == "orientviz":
+    from orientviz.io.kinds.block import adjust_block, prepare
+    from orientviz.io.problem import load_problem
+    prob = load_problem(model)
+    prob.options["free"] = True
+    block, _ = prepare(prob)
+    t, w = time.process_time(), time.perf_counter()
+    adj, _ = adjust_block(prob, block, precision=False)
+    out.update(cpu=time.process_time() - t, wall=time.perf_counter() - w,
+               iterations=len(adj.history) - 1, cost=adj.history[-1].cost / 2,
+               converged=bool(adj.converged))
+else:
+    import pycolmap
+    if kind == "pycolmap-bal":
+        from orientviz.io.bal import read_bal_arrays
+        obs, cams, pts = read_bal_arrays(model)
+        from orientviz.rotation import matrix_from_rotvec
+        F = np.diag([1.0, 1.0, -1.0])
+        rec = pycolmap.Reconstruction()
+        ci, pi = obs[:, 0].astype(int), obs[:, 1].astype(int)
+        order = np.argsort(ci, kind="stable")
+        oc, op, uv = ci[order], pi[order], obs[order, 2:4]
+        starts = np.searchsorted(oc, np.arange(len(cams) + 1))
+        Rb = matrix_from_rotvec(cams[:, :3])
+        for i in range(len(cams)):
+            cam = pycolmap.Camera(model="RADIAL", width=2000, height=2000, camera_id=i + 1,
+                                  params=[cams[i, 6], 0.0, 0.0, cams[i, 7], cams[i, 8]])
+            rec.add_camera_with_trivial_rig(cam)
+            pose = pycolmap.Rigid3d(pycolmap.Rotation3d(F @ Rb[i] @ F), F @ cams[i, 3:6])
+            img = pycolmap.Image(name=f"img{i}", keypoints=uv[starts[i]:starts[i + 1]],
+                                 camera_id=i + 1, image_id=i + 1)
+            rec.add_image_with_trivial_frame(img, pose)
+        pidx = np.arange(len(oc)) - starts[oc]
+        by_pt = np.argsort(op, kind="stable")
+        ps = np.searchsorted(op[by_pt], np.arange(len(pts) + 1))
+        for j in range(len(pts)):
+            tr = pycolmap.Track()
+            for k in by_pt[ps[j]:ps[j + 1]]:
+                tr.add_element(int(oc[k]) + 1, int(pidx[k]))
+            rec.add_point3D(F @ pts[j], tr)
+        image_ids = range(1, len(cams) + 1)
+    else:
+        rec = pycolmap.Reconstruction(model)
+        image_ids = sorted(rec.reg_image_ids())
+    opts = pycolmap.BundleAdjustmentOptions()
+    opts.refine_focal_length = True
+    opts.refine_principal_point = False
+    opts.refine_extra_params = True
+    opts.print_summary = False
+    so = opts.ceres.solver_options
+    so.num_threads = 1 if threads == "1" else -1
+    so.function_tolerance = 1e-6
+    config = pycolmap.BundleAdjustmentConfig()
+    for i in image_ids:
+        config.add_image(i)
+    config.fix_gauge(pycolmap.BundleAdjustmentGauge.TWO_CAMS_FROM_WORLD)
+    adjuster = pycolmap.create_default_bundle_adjuster(opts, config, rec)
+    t, w = time.process_time(), time.perf_counter()
+    s = adjuster.solve()
+    cs = getattr(s, "ceres_summary", s)
+    out.update(cpu=time.process_time() - t, wall=time.perf_counter() - w,
+               iterations=cs.num_successful_steps + cs.num_unsuccessful_steps,
+               cost=cs.final_cost, converged=True)
+out["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+print(json.dumps(out))
+"""
+
+
+def _env(threads: str) -> dict:
+    env = dict(os.environ)
+    if threads == "1":
+        env.update(OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    return env
+
+
+def run_worker(kind: str, model: str, threads: str) -> dict:
+    res = subprocess.run(
+        [sys.executable, "-c", WORKER, kind, model, threads],
+        capture_output=True, text=True, env=_env(threads), check=True,
+    )  # fmt: skip
+    return json.loads(res.stdout.strip().splitlines()[-1])
+
+
+def front_bal(src: str, dst: Path) -> str:
+    """``src`` without the observations behind their camera at the start and without the
+    points left with fewer than two rays (see the module docstring); the counts."""
+    import numpy as np
+
+    from orientviz.io.bal import read_bal_arrays
+    from orientviz.rotation import matrix_from_rotvec
+
+    obs, cams, pts = read_bal_arrays(src)
+    ci, pi = obs[:, 0].astype(int), obs[:, 1].astype(int)
+    P = np.einsum("nij,nj->ni", matrix_from_rotvec(cams[:, :3])[ci], pts[pi]) + cams[ci, 3:6]
+    behind = P[:, 2] >= 0
+    obs = obs[~behind]
+    keep = np.flatnonzero(np.bincount(obs[:, 1].astype(int), minlength=len(pts)) >= 2)
+    obs = obs[np.isin(obs[:, 1].astype(int), keep)]
+    new = np.full(len(pts), -1)
+    new[keep] = np.arange(keep.size)
+    obs[:, 1] = new[obs[:, 1].astype(int)]
+    pts = pts[keep]
+    with open(dst, "w") as f:
+        f.write(f"{len(cams)} {len(pts)} {len(obs)}\n")
+        f.writelines(f"{int(a)} {int(b)} {x!r} {y!r}\n" for a, b, x, y in obs.tolist())
+        f.writelines(f"{v!r}\n" for v in np.r_[cams.ravel(), pts.ravel()].tolist())
+    return f"{int(behind.sum())} observations behind their camera and {len(new) - keep.size} points removed"
+
+
+def cli_end_to_end(import_cmd: list[str], json_path: Path, threads: str) -> float:
+    """CPU (s) of ``orientviz import-* … && orientviz solve … --free`` (both processes)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    env = _env(threads)
+    subprocess.run(["orientviz", *import_cmd], check=True, capture_output=True, env=env)
+    subprocess.run(["orientviz", "solve", str(json_path), "--free"], capture_output=True, env=env)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--bal", default=None, help="BAL problem (default: the shipped Ladybug)")
+    ap.add_argument("--colmap", default=None, help="COLMAP sparse model directory")
+    ap.add_argument("--threads", default="1,default")
+    ap.add_argument("--skip-cli", action="store_true")
+    ap.add_argument("--dir", default=None, help="working folder (default: a temporary one)")
+    a = ap.parse_args(argv)
+    from orientviz.io.bal import shipped_bal
+
+    work = Path(a.dir or tempfile.mkdtemp(prefix="bench_sfm_"))
+    work.mkdir(parents=True, exist_ok=True)
+    models = []
+    bal = a.bal or str(shipped_bal())
+    front = work / "front.bal"
+    print(f"BAL {bal}: {front_bal(bal, front)}")
+    lb_json = work / "bal.json"
+    subprocess.run(["orientviz", "import-bal", str(front), "-o", str(lb_json)], check=True,
+                   capture_output=True)  # fmt: skip
+    models.append(("BAL " + Path(bal).name, str(lb_json), "pycolmap-bal", str(front),
+                   ["import-bal", str(front), "-o", str(lb_json)]))  # fmt: skip
+    if a.colmap:
+        cm_json = work / "colmap.json"
+        cmd = ["import-colmap", a.colmap, "-o", str(cm_json)]
+        subprocess.run(["orientviz", *cmd], check=True, capture_output=True)
+        models.append(("COLMAP " + a.colmap, str(cm_json), "pycolmap", a.colmap, cmd))
+    rows = []
+    for name, ov_model, peer, peer_model, import_cmd in models:
+        for threads in a.threads.split(","):
+            o = run_worker("orientviz", ov_model, threads)
+            p = run_worker(peer, peer_model, threads)
+            row = dict(model=name, threads=threads, orientviz=o, pycolmap=p,
+                       cpu_ratio=o["cpu"] / p["cpu"], rss_ratio=o["peak_rss_mb"] / p["peak_rss_mb"])  # fmt: skip
+            if not a.skip_cli:
+                row["cli_cpu"] = cli_end_to_end(import_cmd, Path(ov_model), threads)
+                row["cli_ratio"] = row["cli_cpu"] / o["cpu"]
+            rows.append(row)
+            print(json.dumps(row))
+    print()
+    print("| model | threads | orientviz it / CPU s / ½Σr² / peak MB | pycolmap it / CPU s / ½Σr² / peak MB "
+          "| CPU ratio | memory ratio | CLI end to end CPU s (÷ library solve) |")  # fmt: skip
+    print("| --- | --- | --- | --- | --- | --- | --- |")
+    for r in rows:
+        o, p = r["orientviz"], r["pycolmap"]
+        cli = f"{r['cli_cpu']:.2f} ({r['cli_ratio']:.2f}×)" if "cli_cpu" in r else "—"
+        print(f"| {r['model']} | {r['threads']} | {o['iterations']} / {o['cpu']:.2f} / {o['cost']:.3f} / "
+              f"{o['peak_rss_mb']:.0f} | {p['iterations']} / {p['cpu']:.2f} / {p['cost']:.3f} / "
+              f"{p['peak_rss_mb']:.0f} | {r['cpu_ratio']:.2f} | {r['rss_ratio']:.2f} | {cli} |")  # fmt: skip
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
