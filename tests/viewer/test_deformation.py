@@ -73,3 +73,29 @@ def test_self_calibration_comparison_shows_its_gain():
     assert with_ < 0.5 * without  # the deformation is mostly removed
     assert "systematic image errors alone" in text and "% removed" in text
     assert "the gain does not show there" in text
+
+
+def test_lens_model_deformation_of_a_problem_file():
+    """Issue 31 pt 4: dbat_camcal adjusted without its lens terms against with them."""
+    pytest.importorskip("viser")
+    from orientviz.viewer.app import ViewerApp
+
+    app = ViewerApp("dbat_camcal", port=0, verbose=False)
+    try:
+        ctl, vec = app.extra["lens_deformation"], app.extra["lens_deformation_node"]
+        field = app.extra["lens_field"]
+        st = app.panel.state
+        ctl["show"].value = True
+        assert vec.visible and not app.scene.nodes["residuals"].visible
+        A = field["A"]
+        assert A.shape == (st.block.n_points, 3) and np.all(np.isfinite(A))
+        # without the lens terms the model does not fit: σ̂0 far above the solution's
+        assert field["sigma0"] > 5 * st.result.sigma0
+        assert np.linalg.norm(rms(A)) > 0
+        seg = np.asarray(vec.points, float) + app.scene.geo.frame.origin
+        np.testing.assert_allclose(seg[:, 0], st.block.points.xyz, atol=1e-4)  # from the solution
+        assert "without" in ctl["info"].content and app.messages == []
+        ctl["show"].value = False
+        assert not vec.visible and app.scene.nodes["residuals"].visible
+    finally:
+        app.stop()

@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from ..block import Block
 from ..bundle import ap_set, bundle_adjust
+from ..io.kinds.block import adjust_block
 from .block_geometry import COLORS
 from .state import BlockState
 
@@ -180,5 +181,75 @@ def deformation_extra(state: BlockState, reference: Block, systematic_only: Bloc
         scene.listeners.append(redraw)
         redraw()
         return {"deformation": ctl, "deformation_nodes": (vec, pts), "deformation_reference": ref}
+
+    return build
+
+
+def without_lens_terms(problem: Any, block: Block) -> tuple[F64, float]:
+    """Points (p, 3) m and σ̂0 of the file's bundle of ``block`` with the cameras' lens
+    models or additional parameters left out (pinhole cameras at the file's c, x0, y0)."""
+    pinhole = block.copy()
+    pinhole.cameras.model = [{} for _ in pinhole.cameras.ids]
+    adj, _ = adjust_block(problem, pinhole, precision=False)
+    p = block.n_points
+    return adj.x[adj.groups["points"]].reshape(p, 3), float(adj.sigma0)
+
+
+def lens_deformation_extra(problem: Any, state: BlockState):
+    """An ``extra`` builder for a problem file whose cameras have a lens model: the model
+    deformation the lens terms remove — the block adjusted without them against with them.
+
+    Vectors from each point as adjusted with the lens terms (the file's solution) to the
+    same point adjusted without them, × k (the median drawn half a point spacing), morphed
+    by t; the panel gives k, the RMS displacement and both σ̂0. The second bundle runs
+    when the view is first shown.
+    """
+    start, with_lens = state.block0.copy(), state.block.points.xyz.copy()
+    sigma_with = float(state.result.sigma0) if state.result is not None else float("nan")
+
+    def build(app: Any) -> dict:
+        scene = app.scene
+        frame, spacing = scene.geo.frame, scene.geo.spacing
+        gui, sc = app.server.gui, app.server.scene
+        ctl: dict[str, Any] = {}
+        field: dict[str, Any] = {}
+        vec = sc.add_line_segments(
+            "/block/lens_deformation/vectors", np.zeros((1, 2, 3), np.float32),
+            COLORS["deformation"], thickness=2.0, thickness_units="screen", visible=False,
+        )  # fmt: skip
+        with gui.add_folder("Model deformation (lens terms)", expand_by_default=False):
+            ctl["show"] = gui.add_checkbox("without → with the lens terms", False)
+            ctl["t"] = gui.add_slider("morph t", 0.0, 1.0, 0.01, 0.0)
+            ctl["info"] = gui.add_markdown("*tick the box: the block is adjusted once more "
+                                           "without the cameras' lens terms*")  # fmt: skip
+
+        def redraw() -> None:
+            if "A" not in field:
+                xyz, s0 = without_lens_terms(problem, start)
+                field["A"], field["sigma0"] = xyz - with_lens, s0
+            A = field["A"]
+            k = auto_scale(A, spacing=spacing)
+            t = float(ctl["t"].value)
+            M = morph(with_lens, A, np.zeros_like(A), t, k)
+            vec.points = frame.to_scene(np.stack([with_lens, M], axis=1)).astype(np.float32)
+            d = np.linalg.norm(rms(A))
+            ctl["info"].content = (
+                f"each point adjusted **without** the lens terms (t = 0) against **with** them "
+                f"(t = 1, the solution): RMS {d:.3g} m, drawn ×{k:.3g}, t = {t:.2f}  \n"
+                f"σ̂0 without {field['sigma0']:.4g}, with {sigma_with:.4g}"
+            )
+
+        def show(_e: Any = None) -> None:
+            on = bool(ctl["show"].value)
+            if on:
+                redraw()
+            vec.visible = on
+            for key in ("residuals", "ellipsoids"):
+                box = app.panel.handles.get(f"show_{key}") if app.panel else None
+                scene.set_visible(key, (not on) and (box is None or bool(box.value)))
+
+        ctl["show"].on_update(app.guard(show))
+        ctl["t"].on_update(app.guard(lambda _e: redraw() if ctl["show"].value else None))
+        return {"lens_deformation": ctl, "lens_deformation_node": vec, "lens_field": field}
 
     return build

@@ -41,6 +41,7 @@ from ..io.kinds.block import adjust_block, bundle_camera_options
 from ..io.problem import Units, problem_from_block
 from ..io.solve import load_named, solve_problem
 from ..reproduce import dbat_roma as roma
+from .deformation import lens_deformation_extra
 from .demo import Demo
 from .geometry import framing
 from .state import BlockState
@@ -197,7 +198,8 @@ def solution_demo(solved: Solved, title: str | None = None) -> Demo:
         if not _finite(state):  # the last state has NaN: show the last finite record
             state.replay(_last_finite(state))
         desc = f"{head}. {block.summary()}."
-        return Demo("file", name, desc, state, None, message, sol)
+        extra = lens_deformation_extra(problem, state) if state.camera is not None else None
+        return Demo("file", name, desc, state, extra, message, sol)
     if isinstance(problem.data, Block):
         block = _solved_block(problem.data, sol)
         state = BlockState(block, adjuster=_not_stepped(problem.kind))
