@@ -6,6 +6,10 @@ at an iterate, the step from the point-reduced normal equations, and what the it
 hand on. Its knobs are fields of the problem's
 :class:`~orientviz.bundle.BundleOptions`:
 
+* a robust loss (``options.loss``, :mod:`._loss`): Σρ is the cost, each step's rays are
+  weighted by √ρ′ of the iterate (set in the problem's ray weights before its normal
+  equations are formed); from a start with σ0 ≥ :data:`LOSS_SIGMA0` least-squares steps
+  come first;
 * the additional parameters are held at their values in the first step from a poor
   start; their border E, F is reused in the next iteration when the last step moved
   nothing by more than ``ap_reuse`` (the Jacobians then change by about as little, less
