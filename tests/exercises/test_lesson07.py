@@ -38,5 +38,6 @@ def test_diagnoses_name_the_mistake():
             ("check_similarity", "T without scale"): "scale m is missing",
             ("check_sigma_scale", "not centred"): "centre",
             ("check_design", "sign of the rotation columns"): "wrong sign",
+            ("check_design", "scale column times m"): "without m",
         },
     )

@@ -37,9 +37,7 @@ INDEPENDENT_ORACLES = {
     "lesson04": {"_numeric_design": "central differences of the collinearity equations"},
     "lesson07": {"_numeric_design": "central differences of the similarity"},
     "lesson12": {"_oracle_w": "redundancy numbers by leave-one-out, not from Q_vv P"},
-    "lesson16": {
-        "_normal_case_oracle": "least squares with numerical derivatives, not the closed form"
-    },
+    "lesson16": {"_worst_after": "the inverse of the enlarged N, not the update formula"},
 }
 
 

@@ -177,6 +177,7 @@ def check_design(design: Callable[[F64, float, F64], F64]) -> None:
     wrong = [
         ("the rotation columns have the wrong sign: d(Rx) = α × Rx = −[Rx]ₓ α", flip),
         ("the rotation columns need the scale m", nom),
+        ("the scale column is ∂X/∂m = R x, without m", truth * np.r_[1, 1, 1, 1, 1, 1, m]),
     ]
     compare("design matrix", got, truth, rtol=1e-6, wrong=wrong)
     success("design matrix of the similarity agrees with numerical derivatives")

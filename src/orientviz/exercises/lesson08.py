@@ -133,7 +133,28 @@ def check_conformal(fn: Callable) -> None:
             wrong=[
                 ("the wrong order: give c0 (the shift) first", pair(c[::-1])),
                 ("complex conjugates: the coordinates were paired as x − iy", pair(np.conj(c))),
-            ],
+                (
+                    "the strip coordinates were paired as x − iy: use z = x + iy",
+                    pair(
+                        np.linalg.lstsq(
+                            np.column_stack([np.conj(z) ** k for k in range(degree + 1)]),
+                            Z,
+                            rcond=None,
+                        )[0]
+                    ),
+                ),
+                (
+                    "the constant c0 (the shift) is missing from the fit",
+                    pair(
+                        np.r_[
+                            0,
+                            np.linalg.lstsq(
+                                np.column_stack([z**k for k in range(1, degree + 1)]), Z, rcond=None
+                            )[0],
+                        ]
+                    ),
+                ),
+            ],  # fmt: skip
         )
     success("the conformal polynomials of degree 2 and 3 recovered exactly")
 
@@ -150,6 +171,10 @@ def check_log_law(fn: Callable) -> None:
         rtol=1e-9,
         wrong=[
             ("(a, b) swapped: return the constant a first", [b, a]),
+            (
+                "a straight line over n_s itself: the law is linear in log10 n_s",
+                np.polyfit(n_s, a + b * np.log10(n_s), 1)[::-1],
+            ),  # fmt: skip
             (
                 "b/ln 10: the natural logarithm instead of log10",
                 np.linalg.lstsq(

@@ -1,8 +1,7 @@
 """Checkers for lesson 16, network design: the block's precision before it is flown.
 
 Oracles: the inverse of the enlarged normal matrix formed from scratch (for the update of
-the cofactors), a forward intersection by least squares with numerical derivatives (for
-the height precision of the normal case), the flight geometry written out (for the
+the cofactors and for the best candidate), the flight geometry written out (for the
 accuracy law's σ0), and the bundle adjustment of the design block with the student's
 control points made control (for the control placed by hand) — never the studio's
 update formula (:class:`orientviz.design.LiveDesign`) or its suggestion.
@@ -107,45 +106,6 @@ def check_control_update(fn: Callable) -> None:
     success("Q' equals the inverse of N + AᵀPA: one 3×3 inverse instead of a new u×u one")
 
 
-def _normal_case_oracle(H: float, B: float, c_mm: float, sigma_x_mm: float) -> float:
-    """σ_Z (m) of a ground point midway between two vertical images at height H, base B:
-    least squares on its four image coordinates, numerical derivatives."""
-    c = c_mm * 1e-3
-    centres = np.array([[0.0, 0.0, H], [B, 0.0, H]])
-    P0 = np.array([B / 2, 0.0, 0.0])
-
-    def f(P):
-        d = P[None, :] - centres
-        return np.concatenate([-c * d[:, 0] / d[:, 2], -c * d[:, 1] / d[:, 2]])
-
-    J = np.empty((4, 3))
-    for k in range(3):
-        e = np.zeros(3)
-        e[k] = 1e-3
-        J[:, k] = (f(P0 + e) - f(P0 - e)) / 2e-3
-    Q = np.linalg.inv(J.T @ J) * (sigma_x_mm * 1e-3) ** 2
-    return float(np.sqrt(Q[2, 2]))
-
-
-def check_sigma_z_normal_case(fn: Callable) -> None:
-    """Check ``fn(H, B, c_mm, sigma_x_mm) -> σ_Z`` (m) of the normal case's midpoint."""
-    for H, B, c_mm, sx in ((1520.0, 920.0, 152.0, 0.005), (790.0, 300.0, 88.0, 0.012)):
-        ref = _normal_case_oracle(H, B, c_mm, sx)
-        got = call(fn, H, B, c_mm, sx, what="sigma_z_normal_case")
-        mb = H / (c_mm * 1e-3)
-        compare(
-            f"σ_Z (H = {H:g} m, B = {B:g} m)",
-            got,
-            ref,
-            rtol=1e-4,
-            wrong=[
-                ("the parallax has σ√2: two image coordinates", (H / B) * mb * sx * 1e-3),
-                ("B/H upside down", (B / H) * mb * sx * 1e-3 * np.sqrt(2)),
-            ],
-        )
-    success("σ_Z = √2 · (H/B) · m_B · σ_x, as the least-squares intersection gives")
-
-
 def check_law_spacing(fn: Callable) -> None:
     """Check ``fn(sigma_img_mm, scale, c_mm, format_mm, p, target_m, mu) -> (sigma0z, i)``.
 
@@ -222,13 +182,78 @@ def check_by_hand(fn: Callable) -> None:
     )
 
 
+def _worst_after(Q: np.ndarray, j: int, sigma: float) -> float:
+    """Largest σ_Z (m) of the points other than ``j`` after making ``j`` control — by the
+    inverse of the enlarged normal matrix (the oracle)."""
+    u = Q.shape[0]
+    E = np.zeros((3, u))
+    E[np.arange(3), [3 * j, 3 * j + 1, 3 * j + 2]] = 1.0
+    Qn = np.linalg.inv(np.linalg.inv(Q) + E.T @ E / sigma**2)
+    sz = np.sqrt(np.diag(Qn)[2::3])
+    return float(np.delete(sz, j).max())
+
+
+def _candidate_case(rng: np.random.Generator, p: int) -> tuple[np.ndarray, list[int]]:
+    """Point cofactors (3p × 3p) of a chain of points tied to their neighbours, and the
+    candidates, drawn until the point with the largest σ_Z is *not* the best candidate."""
+    while True:
+        A = np.zeros((0, 3 * p))
+        for k in range(p - 1):  # coordinate differences of neighbours, random weights
+            D = np.zeros((3, 3 * p))
+            D[:, 3 * k : 3 * k + 3] = -np.eye(3)
+            D[:, 3 * k + 3 : 3 * k + 6] = np.eye(3) + 0.3 * rng.normal(size=(3, 3))
+            A = np.vstack([A, D * rng.uniform(0.5, 3.0)])
+        E0 = np.zeros((3, 3 * p))
+        E0[:, :3] = np.eye(3)  # the first point is control
+        N = A.T @ A + E0.T @ E0 * 1e4 + 1e-3 * np.eye(3 * p)
+        Q = np.linalg.inv(N)
+        cand = sorted(rng.choice(np.arange(1, p), size=min(6, p - 1), replace=False).tolist())
+        worst = [_worst_after(Q, j, 0.05) for j in cand]
+        sz = np.sqrt(np.diag(Q)[2::3])
+        if cand[int(np.argmax(sz[cand]))] != cand[int(np.argmin(worst))]:
+            return Q, cand
+
+
+def check_best_candidate(fn: Callable) -> None:
+    """Check ``fn(Q, candidates, sigma) -> j``: the candidate point that, made XYZ control
+    with σ ``sigma`` (m), leaves the smallest largest σ_Z of the other points.
+
+    ``Q`` (3p, 3p) are the cofactors of the points' coordinates (X, Y, Z of point 0, …).
+    """
+    rng = rng_for("lesson16.check_best_candidate")
+    for p in (9, 12):
+        Q, cand = _candidate_case(rng, p)
+        worst = [_worst_after(Q, j, 0.05) for j in cand]
+        best = cand[int(np.argmin(worst))]
+        got = call(fn, Q.copy(), list(cand), 0.05, what="best_candidate")
+        try:
+            j = int(got)
+        except (TypeError, ValueError):
+            raise CheckFailed("return one point index (an int from candidates)") from None
+        if j not in cand:
+            raise CheckFailed(f"point {j} is not among the candidates {cand}")
+        if j != best:
+            sz = np.sqrt(np.diag(Q)[2::3])
+            why = (
+                " — the point with the largest σ_Z itself: control there helps it, but "
+                "not necessarily the worst of the others"
+                if j == cand[int(np.argmax(sz[cand]))]
+                else ""
+            )
+            raise CheckFailed(
+                f"candidate {j} leaves a largest σ_Z of {worst[cand.index(j)]:.4f} m, "
+                f"candidate {best} {worst[cand.index(best)]:.4f} m{why}"
+            )
+    success("the best candidate by trying each one — what suggest_control does")
+
+
 __all__ = [
     "FEWEST",
     "TARGET_SIGMA_Z",
     "TASK",
+    "check_best_candidate",
     "check_by_hand",
     "check_control_update",
     "check_law_spacing",
-    "check_sigma_z_normal_case",
     "worst_sigma_z",
 ]

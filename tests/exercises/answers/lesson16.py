@@ -15,10 +15,6 @@ def _control_update(Q, idx, sigma):
     return Q - Qj @ M @ Qj.T
 
 
-def _sigma_z_normal_case(H, B, c_mm, sigma_x_mm):
-    return np.sqrt(2.0) * (H / B) * (H / (c_mm * 1e-3)) * sigma_x_mm * 1e-3
-
-
 def _law_spacing(sigma_img_mm, scale, c_mm, format_mm, p, target_m, mu):
     base = format_mm * 1e-3 * scale * (1 - p)
     s0z = sigma_img_mm * 1e-3 * scale * (c_mm * 1e-3 * scale) / base
@@ -30,9 +26,31 @@ def _by_hand():
     return ["g02_004", "g04_006"]
 
 
+def _best_candidate(Q, candidates, sigma):
+    worst = []
+    for j in candidates:
+        idx = [3 * j, 3 * j + 1, 3 * j + 2]
+        Qn = _control_update(Q, idx, [sigma] * 3)
+        sz = np.sqrt(np.diag(Qn)[2::3])
+        worst.append(np.delete(sz, j).max())
+    return candidates[int(np.argmin(worst))]
+
+
+def _best_by(score):
+    def fn(Q, candidates, sigma):
+        vals = []
+        for j in candidates:
+            idx = [3 * j, 3 * j + 1, 3 * j + 2]
+            sz = np.sqrt(np.diag(_control_update(Q, idx, [sigma] * 3))[2::3])
+            vals.append(score(np.delete(sz, j)))
+        return candidates[int(np.argmin(vals))]
+
+    return fn
+
+
 SOLUTIONS = {
+    "check_best_candidate": _best_candidate,
     "check_control_update": _control_update,
-    "check_sigma_z_normal_case": _sigma_z_normal_case,
     "check_law_spacing": _law_spacing,
     "check_by_hand": _by_hand,
 }
@@ -64,6 +82,11 @@ def _largest(mu, s0z, t):
 
 
 MUTANTS = {
+    "check_best_candidate": {
+        "where σ_Z is largest": lambda Q, c, s: c[int(np.argmax(np.sqrt(np.diag(Q)[2::3])[c]))],
+        "the first candidate": lambda Q, c, s: c[0],
+        "the mean σ_Z instead of the largest": _best_by(np.mean),
+    },
     "check_control_update": {
         "P instead of P⁻¹": _update_with(lambda s: np.diag(1 / s**2)),
         "σ instead of σ²": _update_with(lambda s: np.diag(s)),
@@ -73,11 +96,6 @@ MUTANTS = {
             _control_update(Q, idx, s),
             Q,
         ),
-    },
-    "check_sigma_z_normal_case": {
-        "no √2": lambda H, B, c, s: (H / B) * (H / (c * 1e-3)) * s * 1e-3,
-        "B/H": lambda H, B, c, s: np.sqrt(2.0) * (B / H) * (H / (c * 1e-3)) * s * 1e-3,
-        "c in mm as m": lambda H, B, c, s: np.sqrt(2.0) * (H / B) * (H / c) * s * 1e-3,
     },
     "check_law_spacing": {
         "p for 1 − p": _spacing_with(
