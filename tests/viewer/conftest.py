@@ -69,7 +69,7 @@ def module_browser(request):
     with sync_api.sync_playwright() as p:
         context = p.chromium.launch_persistent_context(
             profile, executable_path=chromium, headless=True, args=args,
-            viewport={"width": 1280, "height": 800},
+            viewport={"width": 1280, "height": 800}, accept_downloads=True,
         )  # fmt: skip
         try:
             yield context

@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 
 import orientviz as ov
-from orientviz.viewer.adjuster import small_bundle
 from orientviz.viewer.app import ViewerApp, port_is_free, run_from_cli
 from orientviz.viewer.demos import demo_from_block
 
@@ -26,7 +25,6 @@ def app(block):
     block.observations.xy += rng.normal(0, 0.005, block.observations.xy.shape)  # 5 µm noise
     block.images.X0 += rng.normal(0, 3.0, block.images.X0.shape)  # start errors, 3 m
     demo = demo_from_block(block)
-    demo.state.adjuster = small_bundle
     a = ViewerApp(demo, port=0, verbose=False)
     yield a
     a.stop()
@@ -175,9 +173,11 @@ def test_result_without_per_iteration_parameters_still_replays(block):
 
     noisy = block.copy()
     noisy.images.X0 += 2.0
-    res = small_bundle(noisy)
+    from orientviz.bundle import bundle_adjust
+
+    res = bundle_adjust(noisy, history_x=True)
     res.history = [replace(it, x=np.zeros(0)) for it in res.history]  # as large bundles do
-    st = BlockState(noisy, res, adjuster=small_bundle)
+    st = BlockState(noisy, res)
     assert [s.label for s in st.history] == ["start", "adjusted"]
     np.testing.assert_allclose(st.block.images.X0, res["exterior"].reshape(-1, 6)[:, :3])
     st.replay(0)

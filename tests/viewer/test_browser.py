@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 
 import orientviz as ov
-from orientviz.viewer.adjuster import small_bundle
 from orientviz.viewer.app import ViewerApp
 from orientviz.viewer.demos import demo_from_block
 
@@ -24,7 +23,6 @@ def test_viewer_renders_and_slider_updates_python(browser_page, block):
     rng = np.random.default_rng(2)
     block.observations.xy += rng.normal(0, 0.005, block.observations.xy.shape)
     demo = demo_from_block(block)
-    demo.state.adjuster = small_bundle
     app = ViewerApp(demo, port=0, verbose=False)
     try:
         page = browser_page

@@ -115,3 +115,24 @@ def test_pair_arrows_keep_their_scale_while_orienting():
         assert pv.k > 10 * k0
     finally:
         app.stop()
+
+
+def test_export_carries_the_panels_numbers_and_legend(tmp_path):
+    """`view FILE --export` writes the adjusted state with σ̂0 and the legend in a box."""
+    from orientviz.io.solve import load_named, solve_problem
+    from orientviz.viewer.app import export_html
+
+    out = export_html("block_compact", tmp_path / "b.html")
+    page = out.read_text()
+    sigma0 = f"{solve_problem(load_named('block_compact')).adjustment.sigma0:.10g}"
+    box = page[page.index('<div id="orientviz-panel"') :]
+    assert sigma0 in box and "residual vectors" in box and "<b>" in box
+    assert "__VISER_EMBED_DATA__" in page
+
+
+def test_legend_runs_keep_the_colours():
+    from orientviz.viewer.legend import swatch
+    from orientviz.viewer.snapshot import runs
+
+    md = f"**σ0** 1.5  \n{swatch((1, 2, 3), '●')} tie points"
+    assert runs(md) == [[(None, "σ0 1.5")], [((1, 2, 3), "●"), (None, " tie points")]]

@@ -99,6 +99,11 @@ def test_pair_passes_demo_sets_the_dials_to_the_passes():
         assert len(view.snapshots) == 3 and int(view.h["scrub"].max) == 2
         view.h["scrub"].value = 1  # the scrubber replays the second pass
         np.testing.assert_allclose(view.plotter.settings, 0.5 * pair.elements)
+        live.set_pair_dials(app, 0.25 * pair.elements)  # the notebook turns the dials
+        np.testing.assert_allclose(view.plotter.settings, 0.25 * pair.elements)
+        assert float(view.h["kappa [c]"].value) == pytest.approx(
+            0.25 * pair.elements[4] * 200 / np.pi * 100, abs=0.01
+        )
         pts = live.mark_points(app, "/pair/mine", np.zeros((2, 3)))
         np.testing.assert_allclose(pts.points, view.frame.to_scene(np.zeros((2, 3))), atol=1e-3)
     finally:

@@ -4,7 +4,6 @@ import numpy as np
 import pytest
 
 import orientviz as ov
-from orientviz.viewer.adjuster import small_bundle
 from orientviz.viewer.precision_view import (
     confidence_factor,
     heat_strip,
@@ -12,6 +11,8 @@ from orientviz.viewer.precision_view import (
     point_covariances,
     station_covariances,
 )
+
+from .dense_bundle import small_bundle
 
 
 def test_confidence_factor_holds_the_chosen_share():
@@ -27,7 +28,7 @@ def test_confidence_factor_holds_the_chosen_share():
 
 def test_neighbour_correlations_agree_with_the_dense_inverse(block):
     block.observations.xy += np.random.default_rng(4).normal(0, 0.004, block.observations.xy.shape)
-    block.points.role[block.points.role == 2] = 0  # the dense fallback adjusts check points
+    block.points.role[block.points.role == 2] = 0
     res = ov.bundle_adjust(block)  # selected blocks (exterior_pairs)
     dense = small_bundle(block)  # the same problem, dense Q = N⁻¹
     C = dense.correlations()

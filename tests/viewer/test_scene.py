@@ -95,17 +95,16 @@ def test_rays_of_selected_image(server, block):
 
 
 def test_ellipsoids_after_adjustment(server, block):
-    from orientviz.viewer.adjuster import small_bundle
-
     noisy = block.copy()
     noisy.observations.xy += np.random.default_rng(3).normal(0, 0.005, noisy.observations.xy.shape)
-    st = BlockState(noisy, adjuster=small_bundle)
+    st = BlockState(noisy)
     st.run()
     sc = BlockScene(server.scene, BlockGeometry(st)).build()
     assert "ellipsoids" in sc.nodes
     v = np.asarray(sc.nodes["ellipsoids"].vertices)
-    # one ellipsoid (42 vertices) per point that is not fixed control
-    free = block.n_points - np.count_nonzero(block.points.role == 1)
+    # one ellipsoid (42 vertices) per tie point: control is fixed, the check point is
+    # intersected after the bundle (no covariance)
+    free = np.count_nonzero(block.points.role == 0)
     assert v.shape[0] == 42 * free
 
 

@@ -32,6 +32,7 @@ from .demos import DEMOS, demo_from_block, load_demo
 from .geometry import VIEW_FOV
 from .panel import BlockPanel
 from .scene import BlockScene
+from .snapshot import panel_markdown, with_panel
 from .solved import Solved, solution_demo, solve_target
 
 DEFAULT_DEMO = "block"
@@ -172,6 +173,7 @@ class ViewerApp:
             geo = BlockGeometry(demo.state)
             self.scene = BlockScene(self.server.scene, geo).build()
             self.panel = BlockPanel(self.server, self.scene, self.report).build()
+            self.panel.title = demo.title
             self._set_camera(*geo.default_camera(), geo.frame.size)
         if demo.extra is not None:
             self.extra = demo.extra(self) or {}
@@ -219,9 +221,12 @@ class ViewerApp:
         """Write a self-contained static HTML snapshot of the scene (no server needed).
 
         Uses viser's own serializer (``scene.as_html``): the viser client with the
-        recorded scene embedded (GUI controls are not part of a static snapshot).
+        recorded scene embedded (GUI controls are not part of a static snapshot), with
+        the panel's read-out (σ̂0, state, largest residual) and legend in a box.
         """
-        return write_atomic(path, self.server.scene.as_html())
+        title = self.demo.title if self.demo is not None else ""
+        page = with_panel(self.server.scene.as_html(), title, panel_markdown(self))
+        return write_atomic(path, page)
 
     def show(self, height: int = 600, static: bool = False) -> Any:
         """Display the viewer inline in Jupyter.

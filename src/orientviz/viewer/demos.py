@@ -65,7 +65,27 @@ def block_demo(
         "under *act on the adjustment* (undo / rewind in the list of changes); *reset* "
         "starts again from the approximate values."
     )
-    return Demo("block", "Simulated block", desc, state, deformation_extra(state, sim.truth))
+    return Demo(
+        "block", "Simulated block", desc, state,
+        deformation_extra(state, sim.truth, _systematic_twin(sim, rng, strips, images_per_strip)),
+    )  # fmt: skip
+
+
+def _systematic_twin(sim: Any, rng: Any, strips: int, images_per_strip: int) -> Block | None:
+    """The demo block's observations with only their systematic errors (the same seed
+    without random errors and blunders; σ as in the demo), or None for a Generator seed."""
+    if not isinstance(rng, int | np.integer):
+        return None
+    twin = simulate_block(
+        strips, images_per_strip, rng=rng, sigma_image_mm=0.0, systematic=typical(10.0)
+    )
+    b = twin.block
+    if b.n_observations != sim.block.n_observations or not np.allclose(
+        twin.truth.points.xyz, sim.truth.points.xyz
+    ):
+        return None
+    b.observations.sigma = sim.block.observations.sigma.copy()
+    return b
 
 
 def pair_demo(rng: np.random.Generator | int = SEED) -> Demo:

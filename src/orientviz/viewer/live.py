@@ -15,7 +15,8 @@ The builders make the scenes of the lessons from what the student computed:
 * :func:`iterations_demo` — a block at the states of the student's own iterations (the
   panel's iteration scrubber replays them);
 * :func:`pair_passes_demo` — a stereo pair on the analog plotter, its five dials set to
-  the student's passes (the scrubber under *Passes* replays them);
+  the student's passes (the scrubber under *Passes* replays them; :func:`set_pair_dials`
+  turns the dials from the notebook);
 * :func:`deformation_demo` — an adjusted block with the deformation view against the
   truth (and the comparison without / with self-calibration).
 """
@@ -255,3 +256,22 @@ def mark_points(
         name, pts, color, point_size=size or 0.03 * frame.size, point_shape="sparkle",
         precision="float32",
     )  # fmt: skip
+
+
+def set_pair_dials(app: ViewerApp, settings: Any, refit: bool = False) -> None:
+    """Turn the five dials of a pair view (:func:`pair_passes_demo`) to ``settings``.
+
+    Parameters
+    ----------
+    app : ViewerApp
+        A viewer showing a pair (``app.extra["pair"]``).
+    settings : array_like, shape (5,)
+        by, bz (machine mm), ω, φ, κ (rad).
+    refit : bool
+        Also choose the parallax arrows' scale anew for this state (it stays fixed otherwise,
+        so that arrows of different states compare).
+    """
+    view = app.extra["pair"]
+    view._set(np.asarray(settings, dtype=float).reshape(5))
+    if refit:
+        view.rescale()

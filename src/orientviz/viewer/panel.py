@@ -22,6 +22,7 @@ from .panel_camera import CameraControls
 from .panel_precision import PrecisionControls
 from .panel_quality import QualityControls
 from .scene import BlockScene
+from .snapshot import panel_text, view_png
 
 ANGLES = ("omega", "phi", "kappa")
 POSITIONS = ("X0", "Y0", "Z0")
@@ -105,6 +106,10 @@ class BlockPanel:
                 "fit the residual scale to this state",
                 hint="the scale stays fixed while you iterate; this chooses it anew",
             )
+            h["save_png"] = gui.add_button(
+                "save the view as PNG (with legend)",
+                hint="the picture as you see it, the legend and σ̂0 beside it (a download)",
+            )
             h["rays"] = gui.add_dropdown("rays", RAY_MODES, initial_value="selected image")
             for key, on in (
                 ("frustums", True), ("points", True), ("residuals", True),
@@ -135,6 +140,7 @@ class BlockPanel:
         h["largest"].on_update(self.guard(lambda _e: self.fly_to_selected()))
         h["exaggeration"].on_update(self.guard(lambda _e: self.set_exaggeration()))
         h["rescale"].on_click(self.guard(lambda _e: self.set_exaggeration(auto=True)))
+        h["save_png"].on_click(self.guard(lambda e: self.save_png(e.client)))
         h["rays"].on_update(self.guard(lambda _e: self._show_rays(str(h["rays"].value))))
         for key in ("frustums", "points", "residuals", "strips", "models", "ellipsoids"):
             h[f"show_{key}"].on_update(
@@ -288,6 +294,15 @@ class BlockPanel:
     def update_legend(self) -> None:
         """Name the colours of what the scene draws now (:func:`~orientviz.viewer.legend.block_legend`)."""
         self.handles["legend"].content = block_legend(self.scene)
+
+    def save_png(self, client: Any, size: tuple[int, int] = (800, 1000)) -> bytes:
+        """Send ``client`` a PNG of its view (height, width px) with the legend and σ̂0 beside it."""
+        render = client.get_render(height=size[0], width=size[1], transport_format="png")
+        title = getattr(self, "title", "") or "orientviz"
+        png = view_png(render, panel_text(self), title)
+        client.send_file_download("orientviz-view.png", png, save_immediately=True)
+        self.last_png = png
+        return png
 
     def fly_to_selected(self) -> None:
         """Move every client's camera to the observation chosen in the residual list."""
