@@ -28,6 +28,10 @@ Self-calibration (``additional=``): the parameters border the reduced system
 ``BundleOptions.poor_start_sigma0``) the first step holds the parameters at their values: they
 model image errors of a few µm and should not absorb the errors of the approximations.
 The result is finished by :func:`orientviz.bundle.loop._finish.finish_result`.
+
+A robust loss (``BundleOptions.loss``: Huber, Cauchy, soft-L1 of each ray, as Ceres's)
+is minimised inside the same loop (:mod:`orientviz.bundle.loop._loss`); the result then
+refers to the rays' σ/√w with w = ρ′ at the solution (:func:`robust_end`).
 """
 
 from __future__ import annotations

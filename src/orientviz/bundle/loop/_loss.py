@@ -72,6 +72,12 @@ class RobustLoss:
             raise InputError(f"loss must be one of {', '.join(LOSSES)}, got {kind!r}")
         return cls(kind, DEFAULT_SCALE[kind] if scale is None else float(scale))
 
+    @property
+    def redescending(self) -> bool:
+        """Whether the influence of a large misclosure falls off again (Cauchy): ρ is then
+        not convex in the misclosure, and the start decides the minimum found."""
+        return self.kind == "cauchy"
+
     def __call__(self, s: F64) -> tuple[F64, F64]:
         """ρ(s) and ρ′(s) for squared norms ``s`` ≥ 0 (dimensionless)."""
         s = np.asarray(s, float)

@@ -6,6 +6,10 @@ at an iterate, the step from the point-reduced normal equations, and what the it
 hand on. Its knobs are fields of the problem's
 :class:`~orientviz.bundle.BundleOptions`:
 
+* a robust loss (``options.loss``, :mod:`._loss`): Σρ is the cost, each step's rays are
+  weighted by √ρ′ of the iterate (set in the problem's ray weights before its normal
+  equations are formed); least-squares steps come first for Huber and soft-L1, and for
+  Cauchy from a start with σ0 ≥ :data:`LOSS_SIGMA0`;
 * the additional parameters are held at their values in the first step from a poor
   start; their border E, F is reused in the next iteration when the last step moved
   nothing by more than ``ap_reuse`` (the Jacobians then change by about as little, less
@@ -43,14 +47,17 @@ from ..problem import BundleProblem, BundleState
 from ._loss import RobustLoss
 
 F64 = NDArray[np.float64]
-#: A robust loss is on from the start when the start's σ0 (of least squares) is below
-#: this: the misclosures of most rays are then a few σ (Ladybug with 2 % gross errors
-#: starts at 8). From a poorer start (a strip from approximations: 1 500, then 28 after
-#: one step) least-squares steps come first: a redescending loss there down-weighted the
-#: wrong rays …
+#: A redescending loss (Cauchy) is on from the start when the start's σ0 (of least
+#: squares) is below this: the misclosures of most rays are then a few σ (Ladybug with
+#: 2 % gross errors starts at 8; there the least-squares optimum, pulled by the gross
+#: errors, lies in a worse basin: ½Σρ 6 089 against 6 076 from the start). From a poorer
+#: start (a strip from approximations: σ0 1 500, then 28 after one step) least-squares
+#: steps come first — Cauchy there down-weighted the wrong rays — until σ0 falls below
+#: this. The convex losses (Huber, soft-L1) always start from least-squares steps: on
+#: Ladybug they reach a lower Σρ in fewer steps so (Huber 89 steps against > 120) …
 LOSS_SIGMA0: float = 10.0
-#: … until a step reaches σ0 below LOSS_SIGMA0, lowers vᵀPv by at most this fraction of
-#: its value, or corrects by less than 1 σ.
+#: … and every loss is switched on at the latest after a least-squares step that lowers
+#: vᵀPv by at most this fraction of its value, or corrects by less than 1 σ.
 LOSS_SWITCH: float = 1e-2
 
 
@@ -124,7 +131,8 @@ class BundleSteps:
             ev = self._evaluate(st, True, self._poor())
         else:
             ev = self._evaluate(st, True, False)
-        if self.loss is not None and not self._poor_sigma0(ev.cost):  # a good start: ρ at once
+        if self.loss is not None and self.loss.redescending and not self._poor_sigma0(ev.cost):
+            # a redescending loss from a good start: ρ at once (see LOSS_SIGMA0)
             self.loss_on = True
             ev = self._evaluate(st, True, self.is_local(ev))
         self._start = (st, ev)
@@ -336,7 +344,7 @@ class BundleSteps:
         if self.loss is not None and not self.loss_on:  # no longer poor, or settled?
             drop = (previous.cost - self.pending_cost) / previous.cost if previous.cost > 0 else 0.0
             if (
-                not self._poor_sigma0(self.pending_cost)
+                (self.loss.redescending and not self._poor_sigma0(self.pending_cost))
                 or drop <= LOSS_SWITCH
                 or step.max_correction < 1.0
             ):
