@@ -153,3 +153,43 @@ def test_radar_panel_follows_image_target_and_surface():
         assert app.messages == []
     finally:
         app.stop()
+
+
+def test_radar_legend_names_every_line_it_draws():
+    """Issue 31: the radar legend missed the green range ring and the thin red line."""
+    pytest.importorskip("viser")
+    from orientviz.viewer.app import ViewerApp
+    from orientviz.viewer.radar_scene import ELEMENTS, legend_html
+
+    app = ViewerApp("radar", port=0, verbose=False)
+    try:
+        nodes = app.extra["radar"].nodes
+        drawn = {k.split("/")[-1] for k in nodes if hasattr(nodes[k], "points")}
+        lines = {"slant_range", "circle", "arc", "h", "s_e", "reduced", "range_ring"}
+        assert lines <= drawn
+        html = legend_html()
+        for key in lines:
+            assert key in ELEMENTS and ELEMENTS[key][1].split(":")[0] in html
+        assert "range ring" in html and "thin red" in html
+    finally:
+        app.stop()
+
+
+def test_pair_scene_has_a_legend_with_the_scale_bar():
+    """Issue 31 pt 8: the pair scene had the scale bar's text only."""
+    pytest.importorskip("viser")
+    from orientviz.viewer.app import ViewerApp
+    from orientviz.viewer.legend import swatch
+    from orientviz.viewer.pair_scene import GAP, RIGHT_PROJECTOR
+
+    app = ViewerApp("pair", port=0, verbose=False)
+    try:
+        pv = app.extra["pair"]
+        text = pv.h["legend"].content
+        assert pv.scale_bar_text in text and "y-parallax arrows" in text
+        assert swatch(RIGHT_PROJECTOR, "△") in text and swatch(GAP, "▬") in text
+        pv.k *= 10.0
+        pv._scale_bar()
+        assert pv.scale_bar_text in pv.h["legend"].content
+    finally:
+        app.stop()

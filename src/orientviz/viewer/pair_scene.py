@@ -41,6 +41,7 @@ from . import geometry as g
 from .block_geometry import COLORS
 from .demo import Demo
 from .epipolar_picture import normalised_picture
+from .legend import swatch
 from .pair_rays import normalised_pair, plane_mesh, point_rays
 
 F64 = NDArray[np.float64]
@@ -129,6 +130,22 @@ def pair_demo(rng: np.random.Generator | int = 7) -> Demo:
     )
 
 
+def pair_legend(scale_bar_text: str) -> str:
+    """The pair scene's legend (Markdown): every colour drawn, and the arrows' scale."""
+    return "  \n".join([
+        f"{swatch(COLORS['frustum'], '△')} left projector, {swatch(RIGHT_PROJECTOR, '△')} right "
+        "projector (its dials turn it)",
+        f"{swatch(COLORS['tie'], '●')} model points, {swatch(COLORS['control'], '◆')} the "
+        "scheme's points (the passes clear their y-parallax)",
+        f"{swatch(COLORS['ray'], '▬')} rays of the scheme points",
+        f"y-parallax arrows by size: {swatch((40, 160, 80))} small {swatch((240, 170, 20))} "
+        f"{swatch((210, 30, 30))} the largest now; {swatch((30, 30, 30), '▬')} " + scale_bar_text,
+        f"selected point: {swatch(LEFT_RAY, '▬')} left ray, {swatch(RIGHT_RAY, '▬')} right ray, "
+        f"{swatch(GAP, '▬')} their gap (closest points {swatch(LEFT_RAY, '●')}"
+        f"{swatch(RIGHT_RAY, '●')}), {swatch(LEFT_RAY, '■')} epipolar plane of the left ray",
+    ])  # fmt: skip
+
+
 class PairView:
     """Nodes and controls of the pair demo."""
 
@@ -174,6 +191,8 @@ class PairView:
         )
         self._build_selection_nodes(sc, ps)
         h: dict[str, Any] = {}
+        with gui.add_folder("Legend"):
+            h["legend"] = gui.add_markdown("")
         with gui.add_folder("Dials of the right projector"):
             for i, label in enumerate(DIALS):
                 lim, step = (5.0, 0.01) if i < 2 else (250.0, 1.0)
@@ -207,6 +226,7 @@ class PairView:
             h["picture"] = gui.add_image(np.full((8, 8, 3), 255, np.uint8), visible=False)
             h["picture_info"] = gui.add_markdown("", visible=False)
         self.h = h
+        h["legend"].content = pair_legend(getattr(self, "scale_bar_text", "scale bar"))
         guard = app.guard
         for label in DIALS:
             h[label].on_update(guard(lambda _e: self._from_sliders()))
@@ -337,6 +357,8 @@ class PairView:
         size = f"{value * 1000:g} µm" if value < 1 else f"{value:g} mm"
         text = f"y-parallax ×{self.k:.3g}: bar = {size} (machine)"
         self.scale_bar_text = text
+        if getattr(self, "h", None) is not None:
+            self.h["legend"].content = pair_legend(text)
         self.nodes["scale_bar"] = sc.add_line_segments(
             "/pair/scale_bar", f.to_scene(seg).astype(np.float32), (30, 30, 30),
             thickness=3.0, thickness_units="screen",

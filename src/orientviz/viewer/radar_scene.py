@@ -58,6 +58,11 @@ ELEMENTS: dict[str, tuple[tuple[int, int, int], str]] = {
     "ground_plane": ((205, 180, 120), "ground plane ⟂ axis k, distance h below the station"),
     "h": ((90, 90, 90), "h: station → foot of the axis"),
     "s_e": ((20, 140, 60), "s_e = √(s² − h²): the image point in the ground plane"),
+    "reduced": (
+        (200, 30, 30),
+        "thin red: station → image point, the slant range s turned into the ground plane",
+    ),
+    "range_ring": ((20, 140, 60), "thin green: the range ring, radius s_e about the foot"),
     "azimuth_plane": ((30, 90, 200), "azimuth plane (4c) of the target (option)"),
 }
 
@@ -167,9 +172,8 @@ class RadarView:
         )  # fmt: skip
         lines = {"slant_range": 4.0, "circle": 2.5, "arc": 3.0, "h": 2.5, "s_e": 4.0,
                  "reduced": 1.5, "range_ring": 1.5}  # fmt: skip
-        same = {"reduced": "slant_range", "range_ring": "s_e"}
-        for key, width in lines.items():
-            color = col[same.get(key, key)]
+        for key, width in lines.items():  # every line has its own legend entry
+            color = col[key]
             self.nodes[key] = sc.add_line_segments(
                 f"/radar/geier/{key}", z2, color, thickness=width, thickness_units="screen"
             )
