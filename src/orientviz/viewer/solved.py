@@ -44,7 +44,7 @@ from ..reproduce import dbat_roma as roma
 from .deformation import lens_deformation_extra
 from .demo import Demo
 from .geometry import framing
-from .state import BlockState
+from .state import BlockState, one_blas_thread
 
 F64 = NDArray[np.float64]
 
@@ -78,8 +78,9 @@ def solve_target(target: str, options: dict[str, Any] | None = None) -> Solved:
     if options:
         problem.options = dict(problem.options, **options)
     large = isinstance(problem.data, Block) and problem.data.n_observations > PRECISION_LIMIT
-    if problem.kind == "block" and large:
-        return Solved(problem, solve_problem(problem, precision=False, history_x=True))
+    if problem.kind == "block" and large:  # many small BLAS calls: one thread is faster
+        with one_blas_thread():  # (Ladybug: 1.5× less CPU, 1.3× less wall at load 4)
+            return Solved(problem, solve_problem(problem, precision=False, history_x=True))
     return Solved(problem, solve_problem(problem))
 
 
