@@ -139,7 +139,7 @@ del _os, _sys, _mpl, _plt
 
 @pytest.fixture(scope="module")
 def lesson_kernel():
-    """One kernel for the 16 released lessons (a kernel start with its imports costs about
+    """One kernel for all released lessons (a kernel start with its imports costs about
     as much CPU as a short lesson). Before each lesson :data:`RESET` empties it; each
     lesson as written also runs in a fresh kernel of its own in the book build
     (tests/book/test_book.py) or tests/notebooks/test_notebooks.py."""
