@@ -95,7 +95,11 @@ def test_lens_model_deformation_of_a_problem_file():
         seg = np.asarray(vec.points, float) + app.scene.geo.frame.origin
         np.testing.assert_allclose(seg[:, 0], st.block.points.xyz, atol=1e-4)  # from the solution
         assert "without" in ctl["info"].content and app.messages == []
+        legend = app.panel.handles["legend"].content
+        assert "model deformation" in legend and "residual vectors" not in legend
         ctl["show"].value = False
+        legend = app.panel.handles["legend"].content
+        assert "model deformation" not in legend and "residual vectors" in legend
         assert not vec.visible and app.scene.nodes["residuals"].visible
     finally:
         app.stop()

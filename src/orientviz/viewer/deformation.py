@@ -28,6 +28,7 @@ from ..block import Block
 from ..bundle import ap_set, bundle_adjust
 from ..io.kinds.block import adjust_block
 from .block_geometry import COLORS
+from .legend import swatch
 from .state import BlockState
 
 F64 = NDArray[np.float64]
@@ -247,6 +248,14 @@ def lens_deformation_extra(problem: Any, state: BlockState):
             for key in ("residuals", "ellipsoids"):
                 box = app.panel.handles.get(f"show_{key}") if app.panel else None
                 scene.set_visible(key, (not on) and (box is None or bool(box.value)))
+            scene.legend_deformation = (
+                f"{swatch(COLORS['deformation'], '▬')} model deformation: each point adjusted "
+                "without the lens terms → with them (see its folder)"
+                if on
+                else None
+            )
+            if app.panel is not None:
+                app.panel.update_legend()
 
         ctl["show"].on_update(app.guard(show))
         ctl["t"].on_update(app.guard(lambda _e: redraw() if ctl["show"].value else None))

@@ -69,4 +69,7 @@ def block_legend(scene: Any) -> str:
     extra = getattr(scene, "legend_extra", None)
     if extra:
         lines += list(extra)
+    shown_extra = getattr(scene, "legend_deformation", None)  # a deformation view, while shown
+    if shown_extra:
+        lines.append(shown_extra)
     return "  \n".join(lines)
