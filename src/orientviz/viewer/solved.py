@@ -79,7 +79,7 @@ def solve_target(target: str, options: dict[str, Any] | None = None) -> Solved:
         problem.options = dict(problem.options, **options)
     large = isinstance(problem.data, Block) and problem.data.n_observations > PRECISION_LIMIT
     if problem.kind == "block" and large:  # many small BLAS calls: one thread is faster
-        with one_blas_thread():  # (Ladybug: 1.5× less CPU, 1.3× less wall at load 4)
+        with one_blas_thread():
             return Solved(problem, solve_problem(problem, precision=False, history_x=True))
     return Solved(problem, solve_problem(problem))
 

@@ -28,6 +28,7 @@ import numpy as np
 
 from ..design import METHODS
 from . import geometry as g
+from .shapes import icosphere
 from .studio import (
     CONTROL_COLOUR,
     MEASURES,
@@ -373,33 +374,7 @@ class StudioView:
         self.panel.act_at(xy, "control")
 
 
-def _unit_sphere() -> tuple[Any, Any]:
-    """An icosphere (42 vertices, 80 triangles) of radius 1."""
-    t = (1.0 + 5.0**0.5) / 2.0
-    v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t),
-         (0, -1, -t), (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]  # fmt: skip
-    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4),
-         (11, 10, 2), (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8),
-         (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]  # fmt: skip
-    verts = [np.asarray(x, float) / np.linalg.norm(x) for x in v]
-    mid: dict[tuple[int, int], int] = {}
-
-    def middle(a: int, b: int) -> int:
-        key = (min(a, b), max(a, b))
-        if key not in mid:
-            m = verts[a] + verts[b]
-            verts.append(m / np.linalg.norm(m))
-            mid[key] = len(verts) - 1
-        return mid[key]
-
-    faces = []
-    for a, b, c in f:
-        ab, bc, ca = middle(a, b), middle(b, c), middle(c, a)
-        faces += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
-    return np.array(verts), np.array(faces, np.int64)
-
-
-SPHERE = _unit_sphere()
+SPHERE = icosphere(1)  # 42 vertices, 80 triangles, radius 1
 
 
 def ellipsoid_mesh(centres: Any, axes: Any, dirs: Any) -> tuple[Any, Any]:
