@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from threadpoolctl import threadpool_limits
 
 import orientviz as ov
 from orientviz.bundle import bundle_adjust
@@ -16,6 +17,12 @@ SMALL = FlightDesign(
     strips=2, images_per_strip=6, control="perimeter", control_spacing=2, sigma_control=0.03,
     sigma_gnss=0.10,
 )  # fmt: skip
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _one_thread():
+    with threadpool_limits(1, "blas"):
+        yield
 
 
 @pytest.fixture(scope="module")

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from threadpoolctl import threadpool_limits
 
 from orientviz.bundle import bundle_adjust
 from orientviz.camera import project
@@ -22,6 +23,12 @@ from orientviz.errors import InputError
 from orientviz.stereo_models import independent_models
 
 PLAN = FlightDesign(strips=2, images_per_strip=5, control="perimeter", control_spacing=2)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _one_thread():
+    with threadpool_limits(1, "blas"):
+        yield
 
 
 @pytest.fixture(scope="module")

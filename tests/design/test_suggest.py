@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from threadpoolctl import threadpool_limits
 
 import orientviz as ov
 from orientviz.design import (
@@ -15,6 +16,12 @@ from orientviz.design import (
     suggest_control,
 )
 from orientviz.design._suggest import worst
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _one_thread():
+    with threadpool_limits(1, "blas"):
+        yield
 
 
 @pytest.fixture(scope="module")
