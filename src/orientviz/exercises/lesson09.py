@@ -16,6 +16,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ._common import CheckFailed, call, compare, rng_for, success
+from .sliders import check_slider_answer
 
 
 def _network(rng):
@@ -316,8 +317,6 @@ def check_largest_ellipse(
     m², unknowns x1, y1, x2, …) written out here and the largest eigenvalue of the point's
     2 × 2 block — not the library's ``s_transformation`` or ``error_ellipse``.
     """
-    from .sliders import check_slider_answer
-
     p, k = G.shape[0] // 2, point - 1
     a = {
         (i, j): sigma0 * _a_of_point(G, Q, (i, j), k) * 1000.0

@@ -13,7 +13,15 @@ from collections.abc import Callable
 import numpy as np
 from scipy.stats import chi2
 
-from orientviz.exercises._common import CheckFailed, call, compare, rng_for, success
+from orientviz.exercises._common import (
+    CheckFailed,
+    NotWrittenError,
+    call,
+    compare,
+    rng_for,
+    success,
+)
+from orientviz.exercises.sliders import answer_value
 
 
 def check_residual_pattern(fn: Callable) -> None:
@@ -157,9 +165,6 @@ def check_false_alarms(
     every level itself (the library's data snooping is the oracle of what is eliminated; the
     counting is done here).
     """
-    from ._common import NotWrittenError
-    from .sliders import answer_value
-
     what = "false alarms where one more blunder is found"
     got = answer_value(answer, what)
     if got is None:

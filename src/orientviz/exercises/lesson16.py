@@ -18,6 +18,7 @@ from ..block import CONTROL
 from ..bundle import bundle_adjust
 from ..simulate import simulate_block
 from ._common import CheckFailed, call, compare, rng_for, success
+from .sliders import check_slider_answer, crossing
 
 #: The design of the by-hand exercise: 3 strips × 9 images at 1 : 10 000, wide angle,
 #: 60 % / 20 % overlap, flat terrain, XYZ control at the 4 corners (σ 2 cm), image σ 5 µm.
@@ -278,8 +279,6 @@ def check_control_sigma(
     Oracle: the normal matrix N = Q⁻¹ enlarged by the point's three weighted rows and
     inverted whole, bisected in σ — not the Woodbury update of the lesson or the studio.
     """
-    from .sliders import check_slider_answer, crossing
-
     perfect = _largest_other_sz(Q, j, 1e-6)
     want = crossing(lambda s: _largest_other_sz(Q, j, s), (1 + worse) * perfect, 1e-4, 20.0, 60)
     own = float(np.sqrt(Q[3 * j + 2, 3 * j + 2]))
