@@ -33,8 +33,33 @@ def test_lesson10_diagnoses_name_the_mistake():
             ("check_back_substitute", "no_coupling"): "coupling Wᵀ dc is missing",
             ("check_back_substitute", "plus"): "sign of Wᵀ dc",
             ("check_back_substitute", "no_inverse"): "multiplies instead",
-            ("check_bandwidth", "full"): "full width",
-            ("check_bandwidth", "with_diagonal"): "diagonal is not counted",
-            ("check_bandwidth", "row_count"): "zeros inside the band",
+            ("check_point_covariance", "minus"): "ADDS to the point's",
+            ("check_predicted_bandwidth", "same_direction"): "back and forth",
+            ("check_predicted_bandwidth", "across_2s"): "2s + 1",
+            ("check_predicted_bandwidth", "swapped"): "swapped",
         },
     )
+
+
+def test_fill_in_start_is_found_and_the_bandwidth_misreading_named(capsys):
+    import pytest
+
+    from orientviz.exercises._common import CheckFailed, NotWrittenError
+
+    # an independent look at the lesson's numbers: 4 strips, 3..25 images per strip
+    fills = {}
+    for n in range(3, 12):
+        along, across, S, best = lesson10._block_patterns(4, n)
+        fills[n] = (along, across, int(lesson10.cholesky_fill(S, None).sum()),
+                    int(lesson10.cholesky_fill(S, best).sum()))  # fmt: skip
+    first = min(n for n, f in fills.items() if f[3] < f[2])
+    band = min(n for n, f in fills.items() if f[1] < f[0])
+    assert band < first  # the lesson's point: a narrower band before any saving of fill-in
+    lesson10.check_fill_in_start(lambda: first)
+    assert capsys.readouterr().out.startswith("✓")
+    with pytest.raises(CheckFailed, match="BANDWIDTH"):
+        lesson10.check_fill_in_start(lambda: band)
+    with pytest.raises(CheckFailed, match="same number of blocks"):
+        lesson10.check_fill_in_start(first - 1)
+    with pytest.raises(NotWrittenError):
+        lesson10.check_fill_in_start(None)

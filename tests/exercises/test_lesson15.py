@@ -22,3 +22,34 @@ def test_diagnoses_name_the_mistake():
             ("check_smallest_redundancy", "off by one"): "off by one",
         },
     )
+
+
+def test_false_alarms_check_counts_at_the_first_level_that_finds_more(capsys):
+    import pytest
+
+    from orientviz.exercises._common import CheckFailed, NotWrittenError
+
+    blunders = {"a/1", "b/2", "c/3"}
+    runs = {  # what a data snooping would eliminate at each level (%)
+        0.01: {"a/1", "x/9"},
+        0.1: {"a/1", "x/9", "y/8"},
+        1.0: {"a/1", "b/2", "x/9", "y/8", "z/7", "w/6"},
+        5.0: {"a/1", "b/2", "x/9", "y/8", "z/7", "w/6", "v/5", "u/4", "t/3"},
+    }
+    calls = []
+
+    def clean(alpha):
+        calls.append(alpha)
+        return runs[alpha]
+
+    lesson15.check_false_alarms(lambda: 4, clean, blunders)  # at 1 %: 6 eliminated, 2 blunders
+    assert capsys.readouterr().out.startswith("✓")
+    assert sorted(set(calls)) == [0.01, 0.1, 1.0, 5.0]
+    with pytest.raises(CheckFailed, match="all rays eliminated"):
+        lesson15.check_false_alarms(6, clean, blunders)
+    with pytest.raises(CheckFailed, match="α0 = 5 %"):
+        lesson15.check_false_alarms(7, clean, blunders)
+    with pytest.raises(CheckFailed, match="blunders found"):
+        lesson15.check_false_alarms(2, clean, blunders)
+    with pytest.raises(NotWrittenError):
+        lesson15.check_false_alarms(None, clean, blunders)

@@ -66,6 +66,15 @@ CHECKERS = {
     ("13", "gnss_rows"): ("check_gnss_rows", "not the time t"),
     ("02", "ground_point"): ("check_ground_point", "Rᵀ instead of R"),
     ("12", "snoop_round"): ("check_snoop_round", "|v|/σ"),
+    ("10", "reduce"): ("check_reduce", "the sign is wrong"),
+    ("10", "back_substitute"): ("check_back_substitute", "multiplies instead of being inverted"),
+    ("10", "point_covariance"): ("check_point_covariance", "ADDS to the point's"),
+    ("11", "significant"): ("check_significant", "the sign was kept"),
+    ("11", "described_share"): ("check_described_share", "remainder's share"),
+    ("14", "ppi_image"): ("check_ppi_image", "true horizontal distance"),
+    ("15", "residual_pattern"): ("check_residual_pattern", "the rotation has the wrong sign"),
+    ("16", "control_update"): ("check_control_update", "needs P⁻¹ = σ²"),
+    ("16", "law_spacing"): ("check_law_spacing", "the base uses p, not 1 − p"),
 }
 
 

@@ -5,14 +5,18 @@ the bordered normal equations solved directly with the new datum's constraints f
 S-transformation; the σ of a distance from the numerical Jacobian row and the full
 cofactor matrix, in a datum the student's function never saw; for the datum defect of a
 normal matrix, one built with a known null space (and eigenvalues spread over 13 orders of
-magnitude, as when m and rad are mixed).
+magnitude, as when m and rad are mixed); for the datum dropdowns, every pair of datum points
+S-transformed here.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from ._common import CheckFailed, call, compare, rng_for, success
+from .sliders import check_slider_answer
 
 
 def _network(rng):
@@ -291,3 +295,45 @@ def check_null_space(null_space) -> None:
     success(
         "null_space: the defect and its directions — the eigenvalues that are zero to round-off"
     )
+
+
+# ---------------------------------------------------------------- the datum dropdowns
+
+
+def _a_of_point(G: np.ndarray, Q: np.ndarray, pts: Sequence[int], k: int) -> float:
+    """Semi-major axis (cofactor units) of point k's ellipse in the datum of the points pts."""
+    S = _s_matrix(G, _sel(G.shape[0] // 2, pts))
+    Qk = (S @ Q @ S.T)[2 * k : 2 * k + 2, 2 * k : 2 * k + 2]
+    return float(np.sqrt(np.linalg.eigvalsh(Qk)[-1]))
+
+
+def check_largest_ellipse(
+    answer: object, G: np.ndarray, Q: np.ndarray, sigma0: float, point: int = 5
+) -> None:
+    """The largest semi-major axis (mm) that the ellipse of ``point`` (1-based) takes among
+    all datums of two points (the lesson's dropdowns), σ̂0 applied.
+
+    Oracle: every pair of datum points, the S-transformation of ``Q`` (any datum's cofactors,
+    m², unknowns x1, y1, x2, …) written out here and the largest eigenvalue of the point's
+    2 × 2 block — not the library's ``s_transformation`` or ``error_ellipse``.
+    """
+    p, k = G.shape[0] // 2, point - 1
+    a = {
+        (i, j): sigma0 * _a_of_point(G, Q, (i, j), k) * 1000.0
+        for i in range(p)
+        for j in range(i + 1, p)
+    }
+    worst = max(a, key=a.get)
+    S = _s_matrix(G, np.ones(2 * p))
+    inner = sigma0 * float(np.sqrt(np.linalg.eigvalsh((S @ Q @ S.T)[2 * k : 2 * k + 2,
+                                                                   2 * k : 2 * k + 2])[-1])) * 1000.0  # fmt: skip
+    wrong = [
+        ("the SMALLEST ellipse of the point (a datum next to it), not the largest",
+         min(a.values())),
+        ("without σ̂0: that is √(largest eigenvalue) of the cofactor block; a = σ̂0 √λ",
+         a[worst] / sigma0),
+        ("the inner datum's value, which the dropdowns do not give", inner),
+        ("in m, not mm", a[worst] / 1000.0),
+    ]  # fmt: skip
+    check_slider_answer(f"largest a of point {point}", answer, a[worst], 0.01, "mm", wrong)
+    print(f"  (datum points {worst[0] + 1} and {worst[1] + 1})")

@@ -1,7 +1,8 @@
 """Checkers for lesson 10 (sparse normal equations: Schur complement, back-substitution, bandwidth).
 
-Oracles: the whole normal system solved densely (numpy) for the reduction and the
-back-substitution; a double loop over all matrix entries for the bandwidth.
+Oracles: the whole normal system solved densely (numpy) for the reduction, the
+back-substitution and the covariance of a point; the library's pattern of simulated blocks for
+the predicted bandwidth and the fill-in.
 """
 
 from __future__ import annotations
@@ -9,11 +10,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..bundle import bundle_adjust
+from ..bundle.reduced import geometric_orderings
 from ..bundle.reference import reference_data
-from ..bundle.sparsity import bundle_normal_blocks
+from ..bundle.sparsity import bandwidth, bundle_normal_blocks, cholesky_fill, reduced_pattern
 from ..rotation import matrix_derivatives, matrix_from_opk
 from ..simulate import simulate_block
-from ._common import CheckFailed, call, compare, rng_for, success
+from ._common import CheckFailed, NotWrittenError, call, compare, rng_for, success
+from .sliders import answer_value
 
 
 def _system(rng, m=4, q=7):
@@ -99,34 +102,88 @@ def check_back_substitute(fn) -> None:
     success("dp equals the point part of the whole system solved densely")
 
 
-def _bandwidth(P, mode):
-    """A plausible wrong bandwidth (mode "full", "with_diagonal", "row_count")."""
-    P = np.asarray(P, dtype=bool)
-    i, k = np.nonzero(P)
-    b = int(np.max(np.abs(i - k), initial=0))
-    if mode == "full":
-        return 2 * b + 1
-    if mode == "with_diagonal":
-        return b + 1
-    return int(P.sum(axis=1).max()) - 1  # mode "row_count"
+def _block_patterns(strips: int, per_strip: int) -> tuple[int, int, np.ndarray, np.ndarray]:
+    """Half-bandwidths (images) of a simulated block's reduced pattern S in flight order and
+    numbered across the strips (the better of the library's two geometric orderings), S and
+    that ordering."""
+    blk = simulate_block(strips, per_strip, rng=12, extra=None).block
+    fixed = np.all(np.nan_to_num(blk.points.sigma, nan=1.0) == 0.0, axis=1)
+    col = np.full(blk.n_points, -1)
+    col[~fixed] = np.arange(int(np.sum(~fixed)))
+    S = reduced_pattern(blk.observations.image, col[blk.observations.point], blk.n_images)
+    best = min(geometric_orderings(blk.images.X0), key=lambda o: bandwidth(S, o))
+    return bandwidth(S), bandwidth(S, best), S, best
 
 
-def check_bandwidth(fn) -> None:
-    """``fn(P) -> b``: the half-bandwidth of a symmetric pattern: the largest abs(i − k) of a
-    non-zero entry (0 for a diagonal matrix)."""
-    rng = rng_for("lesson10.check_bandwidth")
-    for n, p in ((12, 0.15), (20, 0.08), (9, 0.3)):
-        A = rng.random((n, n)) < p
-        P = A | A.T | np.eye(n, dtype=bool)
-        got = call(fn, P.copy(), what="bandwidth")
-        want = max(abs(i - k) for i in range(n) for k in range(n) if P[i, k])  # all entries
-        compare(f"bandwidth of a {n}×{n} pattern", float(got), float(want), rtol=1e-12, wrong=[
-            ("this is the full width 2b + 1; the half-bandwidth is b = max |i − k|", float(_bandwidth(P, "full"))),
-            ("the diagonal is not counted: b = max |i − k|", float(_bandwidth(P, "with_diagonal"))),
-            ("the number of non-zeros in a row is not the bandwidth: zeros inside the band count too",
-             float(_bandwidth(P, "row_count"))),
+def check_predicted_bandwidth(fn) -> None:
+    """``fn(strips, per_strip) -> (along, across)``: the half-bandwidth of the reduced normal
+    matrix S (in images) of a block flown strip by strip, back and forth, numbered in flight
+    order (along) and column by column across the strips (across), predicted from the shape.
+
+    Oracle: the library's pattern of S of simulated blocks of five shapes (two or more strips,
+    more images per strip than twice the strips), bandwidth counted over all entries.
+    """
+    cases = ((2, 6), (3, 9), (4, 11), (2, 15), (5, 13))
+    for s, n in cases:
+        along, across, _, _ = _block_patterns(s, n)
+        got = call(fn, s, n, what="predicted_bandwidth")
+        try:
+            g_along, g_across = (float(v) for v in got)
+        except (TypeError, ValueError):
+            raise CheckFailed("predicted_bandwidth: return two numbers (along, across)") from None
+        compare(f"bandwidth along the strips, {s} × {n}", g_along, float(along), rtol=0.0,
+                scale=1.0, wrong=[
+            ("n + 2: that is a strip flown in the same direction as the one before; here the "
+             "strips are flown back and forth, so the first image of a strip meets the last of "
+             "the next", float(n + 2)),
+            ("2n + 1: in the neighbouring strip the image that starts a strip is coupled with "
+             "the one at the same place, not two bases further", float(2 * n + 1)),
+            ("(along, across) swapped?", float(across)),
         ])  # fmt: skip
-    success("bandwidths agree with a double loop over three patterns")
+        compare(f"bandwidth across the strips, {s} × {n}", g_across, float(across), rtol=0.0,
+                scale=1.0, wrong=[
+            ("2s: the neighbouring strip is reached too — two bases ahead and one strip over "
+             "is 2s + 1 numbers away", float(2 * s)),
+            ("s + 1: an image shares points with images two bases ahead, in its own strip and in "
+             "the next", float(s + 1)),
+            ("(along, across) swapped?", float(along)),
+        ])  # fmt: skip
+    success(f"your law gives the bandwidths of all {len(cases)} block shapes, both numberings")
+
+
+def check_fill_in_start(answer: object, strips: int = 4, lo: int = 3, hi: int = 25) -> None:
+    """The smallest number of images per strip (``lo``..``hi``) at which numbering across the
+    strips gives a Cholesky factor of S with fewer non-zero blocks than numbering along them
+    (``strips`` strips; the lesson's slider). Oracle: the library's fill-in, computed here."""
+    got = answer_value(answer, "images per strip")
+    if got is None:
+        raise NotWrittenError(
+            "images per strip: not written yet (type the value you read off the sliders)"
+        )
+    first_fill = first_band = None
+    for n in range(lo, hi + 1):
+        along, across, S, best = _block_patterns(strips, n)
+        if first_band is None and across < along:
+            first_band = n
+        if int(cholesky_fill(S, best).sum()) < int(cholesky_fill(S, None).sum()):
+            first_fill = n
+            break
+    if first_fill is None:  # pragma: no cover - the lesson's range always has one
+        raise CheckFailed(f"no block of {strips} strips with {lo}..{hi} images saves fill-in")
+    if got == first_fill:
+        success(f"from {first_fill} images per strip on, numbering across saves fill-in "
+                f"(the bandwidth drops from {first_band} on)")  # fmt: skip
+        return
+    if first_band is not None and got == first_band:
+        why = (
+            f"{first_band} is where the BANDWIDTH across becomes smaller; the fill-in "
+            f"(non-zero blocks of L) is still the same there: L fills its envelope, not its band"
+        )
+    elif got == first_fill - 1:
+        why = f"at {first_fill - 1} both numberings still fill the same number of blocks"
+    else:
+        why = "move the sliders again and compare the two lines' non-zero blocks of L"
+    raise CheckFailed(f"images per strip: {got:g} — {why}", error=np.inf, tolerance=0.0)
 
 
 # --------------------------------------------------------------------- one reduced step
@@ -273,5 +330,7 @@ def check_point_covariance(fn) -> None:
     compare("Q of point j", got, want, rtol=1e-9, wrong=[
         ("V_j⁻¹ alone ignores the uncertainty of the orientations: add V_j⁻¹ W_jᵀ S⁻¹ W_j V_j⁻¹",
          np.linalg.inv(V[j])),
+        ("the orientations' term is subtracted: their uncertainty ADDS to the point's, "
+         "Q_jj = V_j⁻¹ + V_j⁻¹ W_jᵀ S⁻¹ W_j V_j⁻¹", 2 * np.linalg.inv(V[j]) - want),
     ])  # fmt: skip
     success("Q_jj equals the point's block of the whole inverse N⁻¹")
