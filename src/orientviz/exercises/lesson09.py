@@ -15,7 +15,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..adjust.datum import datum_solve
 from ._common import CheckFailed, call, compare, rng_for, success
+from ._forbid import without_library
 from .sliders import check_slider_answer
 
 
@@ -205,7 +207,8 @@ def check_inner_solve(fn) -> None:
     u = N.shape[0]
     # G scaled, not unit: the student's function must not depend on the columns' length
     Gs = G * rng.uniform(0.5, 40.0, 3)
-    got = call(fn, N.copy(), b.copy(), Gs.copy(), what="inner_solve")
+    with without_library("inner_solve", datum_solve):
+        got = call(fn, N.copy(), b.copy(), Gs.copy(), what="inner_solve")
     if not isinstance(got, tuple) or len(got) != 2:
         raise CheckFailed("inner_solve: return the pair (dx, Q)")
     dx, Q = (np.asarray(g, dtype=float) for g in got)
