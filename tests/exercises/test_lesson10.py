@@ -87,4 +87,4 @@ def test_schur_step_check_refuses_the_dense_solution():
         return x[: 6 * nb.n_images], x[6 * nb.n_images :]
 
     exc = rejection(lesson10.check_schur_step, dense_step)
-    assert exc is not None and "BundleNormal.dense" in str(exc)
+    assert exc is not None and "nb.dense" in str(exc)

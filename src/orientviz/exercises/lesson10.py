@@ -27,8 +27,7 @@ from ..bundle.sparsity import (
 )
 from ..rotation import matrix_derivatives, matrix_from_opk
 from ..simulate import simulate_block
-from ._common import CheckFailed, NotWrittenError, call, compare, rng_for, success
-from ._forbid import without_library
+from ._common import CheckFailed, NotWrittenError, call, compare, own_work, rng_for, success
 from .sliders import answer_value
 
 
@@ -209,7 +208,7 @@ def check_schur_step(fn) -> None:
     seed = int(rng_for("lesson10.check_schur_step").integers(1000))
     sim = simulate_block(3, 4, rng=seed, extra=None)
     nb = bundle_normal_blocks(sim.block)
-    with without_library("schur_step", BundleNormal.dense):
+    with own_work(**{"nb.dense (the whole system solved densely)": BundleNormal.dense}):
         got = call(fn, nb, what="schur_step")
     if not isinstance(got, tuple) or len(got) != 2:
         raise CheckFailed("schur_step: return the pair (dc, dp)")
@@ -251,7 +250,7 @@ def check_ray_partials(fn) -> None:
     c = rng.uniform(100.0, 160.0, n)
     R = matrix_from_opk(ang[:, 0], ang[:, 1], ang[:, 2])
     dR = np.stack(matrix_derivatives(ang[:, 0], ang[:, 1], ang[:, 2]))
-    with without_library("ray_partials", collinearity):
+    with own_work(collinearity=collinearity):
         got = call(fn, X.copy(), X0.copy(), R.copy(), dR.copy(), c.copy(), what="ray_partials")
     if not isinstance(got, tuple) or len(got) != 4:
         raise CheckFailed("ray_partials: return the four results (xy, dX0, dangles, dX)")
@@ -297,14 +296,19 @@ def check_ray_partials(fn) -> None:
     success("xy and all 9 partial derivatives of 5 rays agree with central differences")
 
 
-_LIBRARY_BUNDLE = (reference_bundle, linearise, normal_equations, bundle_adjust)
+_LIBRARY_BUNDLE = {
+    "reference_bundle": reference_bundle,
+    "linearise": linearise,
+    "normal_equations": normal_equations,
+    "bundle_adjust": bundle_adjust,
+}
 
 
 def _bundle_case(fn, block, control: str):
     """Run the student's bundle on ``block`` with the control ``"fixed"`` or ``"weighted"``;
     return its result and the library's adjustment of the same block."""
     data = reference_data(block, control)
-    with without_library("my_bundle", *_LIBRARY_BUNDLE):
+    with own_work(**_LIBRARY_BUNDLE):
         got = call(fn, data, block.images.X0.copy(), block.images.angles.copy(),
                    data.xyz0.copy(), what="my_bundle")  # fmt: skip
     if not isinstance(got, tuple) or len(got) < 5:
