@@ -164,3 +164,23 @@ def test_a_method_that_cannot_take_the_design_keeps_the_old_one():
     with pytest.raises(NotDeterminableError, match="fewer than 5 common points"):
         st.set_method("models")  # the cross strip's end models cannot be formed
     assert st.method == "bundle" and np.isfinite(st.quality.point_sigma).all()
+
+
+def test_moving_an_image_updates_the_design_like_a_new_assessment(view):
+    from orientviz.design import assess_block
+
+    st = view.studio
+    n0, ids0 = st.block.n_images, list(st.block.images.ids)
+    X0 = st.block.images.X0
+    to = X0[3, :2] + [150.0, -80.0]
+    st.move_image(3, to)
+    b = st.block
+    assert b.n_images == n0 and sorted(b.images.ids) == sorted(ids0)
+    k = b.images.ids.index(ids0[3])
+    np.testing.assert_allclose(b.images.X0[k], [*to, X0[3, 2]])
+    ref = assess_block(b, st.spec)[1]  # the two update steps equal a new assessment
+    np.testing.assert_allclose(st.quality.point_sigma, ref.point_sigma, rtol=1e-7)
+    np.testing.assert_allclose(st.quality.redundancy, ref.redundancy, atol=1e-9)
+    assert "moved to X" in st.changes_markdown()
+    st.undo()
+    assert list(st.block.images.ids) == ids0
