@@ -75,3 +75,11 @@ def test_largest_ellipse_check_finds_the_pair_and_names_misreadings(capsys):
         lesson09.check_largest_ellipse(largest / 1000, G, Q, sigma0, point=5)
     with pytest.raises(NotWrittenError):
         lesson09.check_largest_ellipse(None, G, Q, sigma0, point=5)
+
+
+def test_inner_solve_check_refuses_the_library():
+    from orientviz.adjust.datum import datum_solve
+    from orientviz.exercises._common import rejection
+
+    exc = rejection(lesson09.check_inner_solve, datum_solve)
+    assert exc is not None and "calls the library's datum_solve" in str(exc)

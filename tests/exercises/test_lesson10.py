@@ -63,3 +63,28 @@ def test_fill_in_start_is_found_and_the_bandwidth_misreading_named(capsys):
         lesson10.check_fill_in_start(first - 1)
     with pytest.raises(NotWrittenError):
         lesson10.check_fill_in_start(None)
+
+
+def test_lesson10_checks_refuse_the_library_and_name_the_lost_control_weight():
+    assert_diagnoses(
+        lesson10,
+        answers,
+        {
+            ("check_my_bundle", "library"): "calls the library's linearise",
+            ("check_my_bundle", "no_control"): "add P_control to V",
+            ("check_my_bundle", "control_not_counted"): "observations too",
+        },
+    )
+
+
+def test_schur_step_check_refuses_the_dense_solution():
+    import numpy as np
+
+    from orientviz.exercises._common import rejection
+
+    def dense_step(nb):  # the lesson's stand-in
+        x = np.linalg.solve(*nb.dense())
+        return x[: 6 * nb.n_images], x[6 * nb.n_images :]
+
+    exc = rejection(lesson10.check_schur_step, dense_step)
+    assert exc is not None and "nb.dense" in str(exc)

@@ -53,3 +53,20 @@ def test_false_alarms_check_counts_at_the_first_level_that_finds_more(capsys):
         lesson15.check_false_alarms(2, clean, blunders)
     with pytest.raises(NotWrittenError):
         lesson15.check_false_alarms(None, clean, blunders)
+
+
+def test_residual_pattern_check_refuses_the_engine():
+    import numpy as np
+
+    from orientviz.adjust import gauss_newton
+    from orientviz.exercises._common import rejection
+
+    def engine(xy, w):  # the lesson's stand-in
+        A4 = np.zeros((2 * len(xy), 4))
+        A4[0::2, 0], A4[1::2, 1] = 1, 1
+        A4[0::2, 2], A4[1::2, 2], A4[0::2, 3], A4[1::2, 3] = xy[:, 0], xy[:, 1], -xy[:, 1], xy[:, 0]
+        p = gauss_newton(lambda q: (A4 @ q, A4), np.zeros(4), w.ravel(), 0.005).x
+        return p[:2], p[2], p[3]
+
+    exc = rejection(lesson15.check_residual_pattern, engine)
+    assert exc is not None and "calls the library's gauss_newton" in str(exc)

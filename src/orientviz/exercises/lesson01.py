@@ -11,7 +11,8 @@ import math
 
 import numpy as np
 
-from ._common import CheckFailed, call, compare, rng_for, success
+from ..adjust.engine import gauss_newton  # forbidden inside the student's line_fit
+from ._common import CheckFailed, call, compare, own_work, rng_for, success
 
 # --------------------------------------------------------------------- weighted mean
 
@@ -267,6 +268,7 @@ def _line_wrong(X, l, sigma, mistake):
     return x, (-v if mistake == "v_sign" else v), s0, Q
 
 
+@own_work(gauss_newton=gauss_newton)
 def check_line_fit(fn) -> None:
     """``fn(X, l, sigma) -> (xhat, v, sigma0, Q)``: the weighted straight line l ≈ a + b X
     (P = diag(1/σ²)), residuals v = A x̂ − l, σ̂0 = √(vᵀPv / (n − 2)) and Q = (AᵀPA)⁻¹."""

@@ -15,7 +15,9 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._common import CheckFailed, call, compare, rng_for, success
+from ..camera import project  # forbidden inside the student's functions (own_work)
+from ..rotation import matrix_from_opk
+from ._common import CheckFailed, call, compare, own_work, rng_for, success
 
 __all__ = [
     "check_collinearity",
@@ -49,6 +51,7 @@ def _rodrigues_opk(
     return rot[order[0]] @ rot[order[1]] @ rot[order[2]]
 
 
+@own_work(matrix_from_opk=matrix_from_opk)
 def check_rotation(R_opk: Callable[[float, float, float], F64]) -> None:
     """``R_opk(omega, phi, kappa)`` (gon) must return R = R_ω R_φ R_κ, shape (3, 3)."""
     # a case by hand: κ = 100 gon alone turns image x into object Y
@@ -87,6 +90,7 @@ def _rays_to_points(xy: F64, X0: F64, R: F64, c: float, x0: float, y0: float, de
     return X0 + depth[:, None] * (d @ R.T)
 
 
+@own_work(project=project)
 def check_collinearity(collinearity: Callable[..., F64]) -> None:
     """``collinearity(X, X0, R, c, x0, y0)`` must return the image coordinates (n, 2) in mm."""
     rng = rng_for("lesson02.check_collinearity")

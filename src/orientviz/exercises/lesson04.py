@@ -25,7 +25,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import least_squares
 
-from ._common import CheckFailed, call, compare, rng_for, success
+from ..orientation.intersection import intersect_rays  # forbidden inside the student's
+from ..orientation.resection import resection  # functions (own_work), never an oracle
+from ._common import CheckFailed, call, compare, own_work, rng_for, success
 from .lesson02 import _rodrigues_opk
 
 __all__ = [
@@ -93,6 +95,7 @@ def _stopped_early(p: F64, start: F64, truth: F64, X: F64, xy: F64, c: float) ->
     return None
 
 
+@own_work(resection=resection)
 def check_resection(resection_gn: Callable[..., tuple[F64, float]]) -> None:
     """``resection_gn(xy, X, c, sigma, p0)`` must return (p̂, σ̂0), p = (X0, Y0, Z0, ω, φ, κ) in m, rad."""
     rng = rng_for("lesson04.check_resection")
@@ -139,6 +142,7 @@ def check_resection(resection_gn: Callable[..., tuple[F64, float]]) -> None:
     )
 
 
+@own_work(intersect_rays=intersect_rays)
 def check_two_rays(intersect_two_rays: Callable[[F64, F64, F64, F64], F64]) -> None:
     """``intersect_two_rays(X01, d1, X02, d2)`` must return the midpoint of the shortest segment (3,)."""
     rng = rng_for("lesson04.check_two_rays")
@@ -287,6 +291,7 @@ def _extra_point_scene(rng: np.random.Generator) -> tuple:
     return xy, X, np.full(len(X), 0.005), float(c), p, xyn, Xn, sn
 
 
+@own_work(resection=resection)
 def check_best_extra_point(best_extra_point: Callable[..., int]) -> None:
     """``best_extra_point(xy, X, sigma, c, p, xy_new, X_new, sigma_new, k)`` must return the index of
     the candidate point whose addition makes the a-priori σ of parameter ``k`` of the resection

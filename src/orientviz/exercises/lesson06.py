@@ -11,8 +11,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..camera import project
+from ..orientation.essential import eight_point  # forbidden in eight_point_mine, no oracle
 from ..rotation import matrix_from_opk
-from ._common import CheckFailed, call, compare, rng_for, success
+from ._common import CheckFailed, call, compare, own_work, rng_for, success
 
 
 def _skew(v):
@@ -136,6 +137,7 @@ def check_normal_case_points(fn) -> None:
 # --------------------------------------------------------------------- the eight-point algorithm
 
 
+@own_work(eight_point=eight_point)
 def check_eight_point(fn) -> None:
     """``fn(xy1, xy2, c) -> E``: the essential matrix from n ≥ 8 matches (rays (x, y, −c)),
     rank 2 with singular values (1, 1, 0), ‖E‖ = √2; defined up to its sign."""

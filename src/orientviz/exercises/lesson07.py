@@ -19,7 +19,11 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import least_squares
 
-from ._common import CheckFailed, call, compare, rng_for, success
+from ..orientation.absolute import (  # forbidden inside the student's functions, no oracle
+    similarity_closed_form,
+    similarity_transform,
+)
+from ._common import CheckFailed, call, compare, own_work, rng_for, success
 from .lesson02 import _axis_rotation
 
 __all__ = [
@@ -56,6 +60,7 @@ def _unpack(out: object, what: str) -> tuple[float, F64, F64]:
         raise CheckFailed(f"{what}: expected (m, R, T), got {type(out).__name__}") from None
 
 
+@own_work(similarity_closed_form=similarity_closed_form, similarity_transform=similarity_transform)
 def check_similarity(similarity_svd: Callable[[F64, F64], tuple[float, F64, F64]]) -> None:
     """``similarity_svd(x, X)`` must return (m, R, T) with X ≈ T + m R x (least squares, equal weights)."""
     rng = rng_for("lesson07.check_similarity")
@@ -241,6 +246,7 @@ def _gn_oracle(x, X, sigma, observed):
     return q[6], _rotvec(q[3:6]), q[:3] + off, float(np.sqrt(v @ v / (observed.sum() - 7)))
 
 
+@own_work(similarity_transform=similarity_transform)
 def check_similarity_gn(fn: Callable) -> None:
     """``fn(x, X, sigma, observed, start) -> (m, R, T, sigma0)``: the weighted least-squares
     similarity X ≈ T + m R x by Gauss-Newton from ``start = (m, R, T)``, using only the control

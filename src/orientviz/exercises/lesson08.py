@@ -14,7 +14,9 @@ from collections.abc import Callable
 import numpy as np
 from scipy.optimize import least_squares
 
-from orientviz.exercises._common import CheckFailed, call, compare, rng_for, success
+from ..orientation.absolute import similarity_closed_form  # forbidden inside the student's
+from ..orientation.intersection import intersect_points, intersect_rays  # functions, no oracle
+from ._common import CheckFailed, call, compare, own_work, rng_for, success
 
 
 def _rodrigues(axis, angle: float) -> np.ndarray:
@@ -46,6 +48,7 @@ def _triple(out) -> tuple[float, np.ndarray, np.ndarray]:
         raise CheckFailed("return the three values (scale, R, t)") from None
 
 
+@own_work(similarity_closed_form=similarity_closed_form)
 def check_compose(fn: Callable) -> None:
     """Check ``fn(s1, s2) -> (scale, R, t)``: the similarity that applies s2 first, then s1
     (each ``(scale, R, t)`` maps x to scale · R · x + t) — chaining a model into its
@@ -221,6 +224,7 @@ def _distances(
     return (r - np.sum(r * d, axis=1)[:, None] * d).ravel()
 
 
+@own_work(intersect_points=intersect_points, intersect_rays=intersect_rays)
 def check_intersect_many(intersect_many: Callable) -> None:
     """``intersect_many(X0, R, xy, c)`` must return the point (3,) nearest to all n rays in the
     least-squares sense (the sum of squared perpendicular distances); X0 (n, 3) m, R (n, 3, 3)

@@ -15,7 +15,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ._common import CheckFailed, call, compare, rng_for, success
+from ..adjust.datum import datum_solve
+from ._common import CheckFailed, call, compare, own_work, rng_for, success
 from .sliders import check_slider_answer
 
 
@@ -205,7 +206,8 @@ def check_inner_solve(fn) -> None:
     u = N.shape[0]
     # G scaled, not unit: the student's function must not depend on the columns' length
     Gs = G * rng.uniform(0.5, 40.0, 3)
-    got = call(fn, N.copy(), b.copy(), Gs.copy(), what="inner_solve")
+    with own_work(datum_solve=datum_solve):
+        got = call(fn, N.copy(), b.copy(), Gs.copy(), what="inner_solve")
     if not isinstance(got, tuple) or len(got) != 2:
         raise CheckFailed("inner_solve: return the pair (dx, Q)")
     dx, Q = (np.asarray(g, dtype=float) for g in got)

@@ -11,11 +11,23 @@ import numpy as np
 
 from ..bundle import bundle_adjust
 from ..bundle.reduced import geometric_orderings
-from ..bundle.reference import reference_data
-from ..bundle.sparsity import bandwidth, bundle_normal_blocks, cholesky_fill, reduced_pattern
+from ..bundle.reference import (
+    collinearity,
+    linearise,
+    normal_equations,
+    reference_bundle,
+    reference_data,
+)
+from ..bundle.sparsity import (
+    BundleNormal,
+    bandwidth,
+    bundle_normal_blocks,
+    cholesky_fill,
+    reduced_pattern,
+)
 from ..rotation import matrix_derivatives, matrix_from_opk
 from ..simulate import simulate_block
-from ._common import CheckFailed, NotWrittenError, call, compare, rng_for, success
+from ._common import CheckFailed, NotWrittenError, call, compare, own_work, rng_for, success
 from .sliders import answer_value
 
 
@@ -196,7 +208,8 @@ def check_schur_step(fn) -> None:
     seed = int(rng_for("lesson10.check_schur_step").integers(1000))
     sim = simulate_block(3, 4, rng=seed, extra=None)
     nb = bundle_normal_blocks(sim.block)
-    got = call(fn, nb, what="schur_step")
+    with own_work(**{"nb.dense (the whole system solved densely)": BundleNormal.dense}):
+        got = call(fn, nb, what="schur_step")
     if not isinstance(got, tuple) or len(got) != 2:
         raise CheckFailed("schur_step: return the pair (dc, dp)")
     dc, dp = (np.asarray(g, dtype=float) for g in got)
@@ -237,7 +250,8 @@ def check_ray_partials(fn) -> None:
     c = rng.uniform(100.0, 160.0, n)
     R = matrix_from_opk(ang[:, 0], ang[:, 1], ang[:, 2])
     dR = np.stack(matrix_derivatives(ang[:, 0], ang[:, 1], ang[:, 2]))
-    got = call(fn, X.copy(), X0.copy(), R.copy(), dR.copy(), c.copy(), what="ray_partials")
+    with own_work(collinearity=collinearity):
+        got = call(fn, X.copy(), X0.copy(), R.copy(), dR.copy(), c.copy(), what="ray_partials")
     if not isinstance(got, tuple) or len(got) != 4:
         raise CheckFailed("ray_partials: return the four results (xy, dX0, dangles, dX)")
 
@@ -282,37 +296,96 @@ def check_ray_partials(fn) -> None:
     success("xy and all 9 partial derivatives of 5 rays agree with central differences")
 
 
-def check_my_bundle(fn) -> None:
-    """``fn(data, X0, angles, xyz) -> (X0, angles, xyz, sigma0, history)``: the whole bundle
-    iteration on the rays, weights and datum of ``data``
-    (:func:`orientviz.bundle.reference.reference_data`), from the start values given."""
-    seed = int(rng_for("lesson10.check_my_bundle").integers(1000))
-    block = simulate_block(2, 4, rng=seed, extra=None).block
-    data = reference_data(block, "fixed")
-    got = call(fn, data, block.images.X0.copy(), block.images.angles.copy(), data.xyz0.copy(),
-               what="my_bundle")  # fmt: skip
-    if not isinstance(got, tuple) or len(got) < 4:
-        raise CheckFailed("my_bundle: return (X0, angles, xyz, sigma0, history)")
+_LIBRARY_BUNDLE = {
+    "reference_bundle": reference_bundle,
+    "linearise": linearise,
+    "normal_equations": normal_equations,
+    "bundle_adjust": bundle_adjust,
+}
+
+
+def _bundle_case(fn, block, control: str):
+    """Run the student's bundle on ``block`` with the control ``"fixed"`` or ``"weighted"``;
+    return its result and the library's adjustment of the same block."""
+    data = reference_data(block, control)
+    with own_work(**_LIBRARY_BUNDLE):
+        got = call(fn, data, block.images.X0.copy(), block.images.angles.copy(),
+                   data.xyz0.copy(), what="my_bundle")  # fmt: skip
+    if not isinstance(got, tuple) or len(got) < 5:
+        raise CheckFailed("my_bundle: return (X0, angles, xyz, sigma0, history, ...)")
+    return data, got, bundle_adjust(block, control=control)
+
+
+def _compare_bundle(block, data, got, adj, label: str) -> float:
     X0, angles, s0 = (np.asarray(got[k], dtype=float) for k in (0, 1, 3))
-    adj = bundle_adjust(block, control="fixed")  # the library's bundle on the same block
     eo = adj.x[adj.groups["exterior"]].reshape(-1, 6)
     sd = adj.std()[adj.groups["exterior"]].reshape(-1, 6)
     m, n = block.n_images, data.image.size
     p = data.unknown.size
-    r = 2 * n - 6 * m - 3 * p
-    compare("σ̂0", float(s0), adj.sigma0, rtol=1e-4, wrong=[
+    r = adj.redundancy
+    n_prior = int(np.count_nonzero(data.prior_w))
+    wrong = [
         ("the points held fixed (control) are no unknowns: r = 2·rays − 6·images − 3·unknown points",
          adj.sigma0 * np.sqrt(r / (r - 3 * (block.n_points - p)))),
         ("vᵀPv divided by the number of observations, not the redundancy", adj.sigma0 * np.sqrt(r / (2 * n))),
         ("the square root is missing (σ̂0² = vᵀPv / r)", adj.sigma0**2),
-    ])  # fmt: skip
+    ]  # fmt: skip
+    if n_prior:
+        wrong.append(("the observed control coordinates are observations too: r = 2·rays + "
+                      "control coordinates − 6·images − 3·points",
+                      adj.sigma0 * np.sqrt(r / (r - n_prior))))  # fmt: skip
+    compare(f"σ̂0 ({label})", float(s0), adj.sigma0, rtol=1e-4, wrong=wrong)
     if X0.shape != (m, 3) or angles.shape != (m, 3):
         raise CheckFailed(
             f"X0 and angles: expected shapes ({m}, 3), got {X0.shape}, {angles.shape}"
         )
     off = np.abs(np.hstack([X0, angles]) - eo) / sd
-    compare("stations in units of their σ", float(off.max()), 0.0, rtol=0.01, scale=1.0)
-    success(f"σ̂0 = {float(s0):.4f} as the library's; stations within {off.max():.1e} σ")
+    compare(f"stations in units of their σ ({label})", float(off.max()), 0.0, rtol=0.01, scale=1.0)
+    return float(off.max())
+
+
+def check_my_bundle(fn) -> None:
+    """``fn(data, X0, angles, xyz) -> (X0, angles, xyz, sigma0, history, ...)``: the whole
+    bundle iteration on the rays, weights and datum of ``data``
+    (:func:`orientviz.bundle.reference.reference_data`), from the start values given.
+
+    Two blocks: control held fixed (the control points are no unknowns) and control observed
+    with σ (their coordinates are weighted observations: the datum). Oracle: the library's
+    ``bundle_adjust`` of the same block, which the student's function must not call (nor the
+    reference path of the lesson). The history must end with a step below the default
+    ``tol`` = 0.005.
+    """
+    seed = int(rng_for("lesson10.check_my_bundle").integers(1000))
+    block = simulate_block(2, 4, rng=seed, extra=None).block
+    data, got, adj = _bundle_case(fn, block, "fixed")
+    off = _compare_bundle(block, data, got, adj, "control held fixed")
+    history = list(got[4])
+    tol = 5e-3
+    if not history or float(history[-1][1]) >= tol:
+        raise CheckFailed(
+            "my_bundle: the history must end with a step whose largest correction is below tol "
+            f"(in units of its σ); got {history[-1][1] if history else 'no steps'}",
+            error=np.inf, tolerance=0.0,
+        )  # fmt: skip
+    weighted = block.copy()
+    control = np.all(np.nan_to_num(weighted.points.sigma, nan=1.0) == 0.0, axis=1)
+    weighted.points.sigma[control] = [0.02, 0.03, 0.05]  # m: unequal, so a lost weight shows
+    try:
+        data_w, got_w, adj_w = _bundle_case(fn, weighted, "weighted")
+        off_w = _compare_bundle(weighted, data_w, got_w, adj_w, "control observed with σ")
+    except CheckFailed as exc:
+        if "control coordinates − 6·images" in str(exc):
+            raise
+        raise CheckFailed(
+            f"my_bundle is right with the control held fixed, but not with the control observed "
+            f"with σ — the control coordinates are observations: add P_control to V and "
+            f"P_control·(X_given − X) to b_p (and their vᵀPv to σ̂0). Without them the block "
+            f"has no datum. ({str(exc).lstrip('✗ ')})",
+            error=np.inf, tolerance=0.0,
+        ) from None  # fmt: skip
+    success(f"σ̂0 = {float(got[3]):.4f} and {float(got_w[3]):.4f} (control fixed / observed) as "
+            f"the library's; stations within {max(off, off_w):.1e} σ; "
+            f"{len(history)} steps")  # fmt: skip
 
 
 def check_point_covariance(fn) -> None:

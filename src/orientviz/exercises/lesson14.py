@@ -64,6 +64,8 @@ def check_ppi_image(fn: Callable) -> None:
     )
     wrong_pp = sc["xy"] - pp
     wrong_hor = pp + sc["m"] * np.sqrt(hor**2 - sc["h"] ** 2)[:, None] * loc[:, :2] / hor[:, None]
+    s = np.sqrt(np.sum(d**2, axis=1))
+    wrong_no_h = pp + sc["m"] * s[:, None] * loc[:, :2] / hor[:, None]  # slant range, h left out
     compare(
         "image coordinates [image m]",
         got,
@@ -78,6 +80,7 @@ def check_ppi_image(fn: Callable) -> None:
             ("R (X − X0) instead of Rᵀ (X − X0): the rotation goes image → object", wrong_R),
             ("the principal point (x0, y0) was not added", wrong_pp),
             ("h was subtracted from the horizontal distance, not from the slant range", wrong_hor),
+            ("the slant range s was plotted: h is missing, s_e = √(s² − h²)", wrong_no_h),
         ],
     )
     success("the image of points built backwards from their image coordinates comes out exactly")

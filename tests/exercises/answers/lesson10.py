@@ -108,8 +108,9 @@ def _my_bundle(data, X0, angles, xyz, tol=5e-3, max_iter=20, mistake=None):
                 W[ci, 3 * j[r] : 3 * j[r] + 3] += A[r].T @ (P[r, :, None] * dX[r])
                 bp[j[r]] += dX[r].T @ (P[r] * lf[r])
         d = data.prior - xyz[data.unknown]  # weighted control coordinates
-        V[:, [0, 1, 2], [0, 1, 2]] += data.prior_w
-        bp += data.prior_w * d
+        if mistake != "no_control":
+            V[:, [0, 1, 2], [0, 1, 2]] += data.prior_w
+            bp += data.prior_w * d
         vtpv = float(np.sum(P * lf**2) + np.sum(data.prior_w * d**2))
         if it == max_iter or (history and history[-1][1] < tol):
             break
@@ -128,10 +129,20 @@ def _my_bundle(data, X0, angles, xyz, tol=5e-3, max_iter=20, mistake=None):
         )
         history.append((vtpv, largest))
     r = 2 * n + int(np.count_nonzero(data.prior_w)) - 6 * m - 3 * p  # the redundancy
+    if mistake == "control_not_counted":
+        r -= int(np.count_nonzero(data.prior_w))
     if mistake == "fixed_as_unknowns":
         r -= 3 * int(np.sum(data.col < 0))
     s0 = vtpv / r if mistake == "no_sqrt" else np.sqrt(vtpv / r)
     return X0, angles, xyz, s0, history, (U, W, V)
+
+
+def _library_bundle(data, X0, angles, xyz):
+    """A student who lets the reference path linearise (the lesson's stand-in's pieces)."""
+    from orientviz.bundle.reference import linearise
+
+    linearise(data, X0, angles, xyz, data.ap0)  # the call the check must see
+    return _my_bundle(data, X0, angles, xyz)
 
 
 def _point_covariance(U, W, V, j, mistake=None):
@@ -164,9 +175,12 @@ MUTANTS = {
     },
     "check_my_bundle": {
         k: (lambda *a, k=k: _my_bundle(*a, mistake=k))
-        for k in ("no_weights", "fixed_as_unknowns", "no_sqrt")
+        for k in ("no_weights", "fixed_as_unknowns", "no_sqrt", "no_control", "control_not_counted")
     }
-    | {"one_step": lambda *a: _my_bundle(*a, max_iter=1)},
+    | {
+        "one_step": lambda *a: _my_bundle(*a, max_iter=1),
+        "library": _library_bundle,
+    },
     "check_point_covariance": {
         k: (lambda U, W, V, j, k=k: _point_covariance(U, W, V, j, k)) for k in ("V_only", "minus")
     },
