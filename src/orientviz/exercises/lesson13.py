@@ -148,19 +148,6 @@ def check_gnss_rows(fn: Callable) -> None:
     success("the three GNSS rows have 1 at X0, Y0, Z0 and the strip's offsets, t at its drifts")
 
 
-def _offset_solution(A0: np.ndarray, l0: np.ndarray, sig0: np.ndarray, s: np.ndarray,
-                     sigma: float) -> np.ndarray:  # fmt: skip
-    """Heights Z from the strip rows (A0, l0, sig0) plus readings s + v = Z_k + o with one
-    unknown offset o: the stacked least-squares system, solved from scratch."""
-    m = A0.shape[1]
-    A = np.vstack(
-        [np.column_stack([A0, np.zeros(len(A0))]), np.column_stack([np.eye(m), np.ones(m)])]
-    )
-    w = np.r_[1 / sig0**2, np.full(m, 1 / sigma**2)]
-    x = np.linalg.solve(A.T @ (w[:, None] * A), A.T @ (w * np.r_[l0, s]))
-    return x[:m]
-
-
 def check_from_differences(fn: Callable) -> None:
     """Check ``fn(A0, l0, sig0, s, sigma) -> Z``: the heights adjusted from the strip's rows
     (A0 (r, m), l0, sig0) together with the m − 1 consecutive differences of the statoscope
@@ -179,7 +166,12 @@ def check_from_differences(fn: Callable) -> None:
     l0 = A0 @ Z + rng.normal(0.0, 1.0, m + 1) * sig0
     sigma = 0.3
     s = Z - 6.2 + rng.normal(0.0, sigma, m)
-    want = _offset_solution(A0, l0, sig0, s, sigma)
+    # oracle: the readings s + v = Z_k + o with the offset as an unknown, stacked and solved
+    A = np.vstack(
+        [np.column_stack([A0, np.zeros(m + 1)]), np.column_stack([np.eye(m), np.ones(m)])]
+    )
+    w = np.r_[1 / sig0**2, np.full(m, 1 / sigma**2)]
+    want = np.linalg.solve(A.T @ (w[:, None] * A), A.T @ (w * np.r_[l0, s]))[:m]
     got = call(fn, A0.copy(), l0.copy(), sig0.copy(), s.copy(), sigma, what="from_differences")
     D = np.eye(m)[1:] - np.eye(m)[:-1]
     N0, n0 = A0.T @ (A0 / sig0[:, None] ** 2), A0.T @ (l0 / sig0**2)
