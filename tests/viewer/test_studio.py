@@ -184,3 +184,19 @@ def test_moving_an_image_updates_the_design_like_a_new_assessment(view):
     assert "moved to X" in st.changes_markdown()
     st.undo()
     assert list(st.block.images.ids) == ids0
+
+
+def test_the_image_gizmo_drags_an_image(view):
+    panel, st = view.panel, view.studio
+    X0 = st.block.images.X0.copy()
+    panel.act_at(X0[4, :2] + 5.0, "pick")  # the gizmo on the nearest image
+    assert "image_gizmo" in view.nodes and view.dragged == st.block.images.ids[4]
+    to = X0[4] + [120.0, 60.0, 0.0]
+    view.image_released(view.frame.to_scene(to))
+    k = st.block.images.ids.index(view.dragged)
+    np.testing.assert_allclose(st.block.images.X0[k], to)
+    assert "moved to X" in panel.h["changes"].content
+    panel.undo()
+    np.testing.assert_allclose(st.block.images.X0, X0)
+    view.image_gizmo(False)
+    assert "image_gizmo" not in view.nodes

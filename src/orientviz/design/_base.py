@@ -20,11 +20,14 @@ Points are indexed by the base block's point index, rays by its observation inde
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
 
 from ..block import Block
+from ..bundle.precision import bundle_precision
 from ..bundle.problem import BundleProblem, BundleState, point_setup
 from ..bundle.reduced import factor_reduced
 from ..errors import InputError
@@ -64,6 +67,7 @@ class DesignBase:
         rw, Je, Jp = prob.residuals(st, jac=True)
         ne = prob.normal(st, rw, Je, Jp)
         self.fac = factor_reduced(prob.reduced, ne.blocks)
+        self._lin = (st, rw, Je, Jp, ne)
         self.prob, self.T, self.Vinv = prob, ne.T, ne.Vinv
         self.m, self.p = block.n_images, block.n_points
         idx = prob.obs.index
@@ -72,10 +76,10 @@ class DesignBase:
         Jw[idx, :, :6], Jw[idx, :, 6:] = Je * sw, Jp * sw
         self.Jw = Jw
         self.pcol = np.asarray(prob.points.column)  # base point → column of the problem
-        self._order = np.argsort(self.pcol)  # column → base point
         self.na = prob.na
         self._cache: dict[tuple[str, int], tuple[F64, F64]] = {}
-        self._blocks: list | None = None  # the banded factor as dense blocks
+        #: the banded factor as dense blocks (multi-column solves by BLAS level 3)
+        self._blocks = _dense_blocks(self.fac.data) if self.fac.kind == "banded" else None
         if self.na:  # the border of the auxiliary offsets: G = A⁻¹B and F̃⁻¹
             E, F = prob.aux.border(prob, ne)
             Y = self.solve(E).reshape(self.m, 6, -1)
@@ -84,14 +88,22 @@ class DesignBase:
             Gp = ne.Vinv @ Pg + self._back(Y)
             self.Gc, self.Gp = Y, Gp[self.pcol]
 
+    def precision(self) -> SimpleNamespace:
+        """The bundle's precision of the base design from this factor
+        (:func:`orientviz.bundle.precision.bundle_precision`: cofactor blocks of points and
+        stations, redundancy numbers, ``redundancy_xy``, ``ray_gains``; a-priori σ0 = 1)."""
+        st, rw, Je, Jp, ne = self._lin
+        res = SimpleNamespace(residuals=0.0, sigma_obs=1.0, cofactor_groups={})
+        bundle_precision(res, self.prob, st, rw, Je, Jp, (ne, self.fac, Je, Jp))
+        self._lin = None  # the normal equations are not needed any more
+        return res
+
     def solve(self, rhs: F64) -> F64:
         """S⁻¹ rhs (6m, k): with a banded factor and many columns by block triangular
         solves (BLAS level 3) on the factor's dense blocks, else by the factor's solve."""
         fac = self.fac
-        if fac.kind != "banded" or rhs.shape[1] < 4:
+        if self._blocks is None or rhs.shape[1] < 4:
             return fac.solve(rhs)
-        if self._blocks is None:
-            self._blocks = _dense_blocks(fac.data)
         p = fac.structure.scalar_perm
         X = rhs[p]
         parts = self._blocks

@@ -37,7 +37,9 @@ forms and factors it again, as does a structural change of a design with auxilia
 
 from __future__ import annotations
 
+import contextlib
 import copy
+import functools
 from dataclasses import dataclass
 from types import SimpleNamespace
 from typing import Any
@@ -52,7 +54,6 @@ from ..bundle import RayGains, ray_reliability
 from ..bundle.model import collinearity_block
 from ..errors import InputError, NotDeterminableError
 from ._base import DesignBase
-from ._design import assess_block
 from ._extend import add_images, kept_after_removal
 from ._extend import remove_images as _remove_images
 from ._quality import DesignQuality, quality_from_arrays
@@ -91,6 +92,33 @@ class Change:
         return f"point {ids[self.point]}: {txt(self.before)} → {txt(self.sigma)}"
 
 
+def blas_threads(n: int | None) -> Any:
+    """A context running BLAS on ``n`` threads (threadpoolctl), or doing nothing (``n`` None
+    or without threadpoolctl).
+
+    A live design's step is many BLAS calls on matrices of a few hundred rows; on a machine
+    whose cores are busy, OpenBLAS's worker threads wait for each other in every call
+    (benchmarks/README.md, "design studio")."""
+    if n is None:
+        return contextlib.nullcontext()
+    try:
+        from threadpoolctl import threadpool_limits  # optional: the viewer's extra
+    except ImportError:
+        return contextlib.nullcontext()
+    return threadpool_limits(limits=n, user_api="blas")
+
+
+def _capped(method):
+    """Run a :class:`LiveDesign` method with its BLAS thread limit."""
+
+    @functools.wraps(method)
+    def run(self, *args, **kwargs):
+        with blas_threads(self.blas_threads):
+            return method(self, *args, **kwargs)
+
+    return run
+
+
 def _check_connected(block: Block) -> None:
     """Raise :class:`NotDeterminableError` if the images fall apart into groups that
     share no point (as the bundle does)."""
@@ -107,6 +135,23 @@ def _check_connected(block: Block) -> None:
             f"{groups.size} groups that share no point",
             parameters=[],
             defect=7 * (groups.size - 1),
+        )
+
+
+def _check_rays(block: Block) -> None:
+    """Raise :class:`NotDeterminableError` for tie points seen in fewer than two images
+    and images that see fewer than three points (the bundle's rule)."""
+    O = block.observations
+    rays = np.bincount(O.point, minlength=block.n_points)
+    weak = np.flatnonzero((rays < 2) & ~np.isfinite(block.points.sigma).all(axis=1))
+    few = np.flatnonzero(np.bincount(O.image, minlength=block.n_images) < 3)
+    if weak.size or few.size:
+        what = [f"point {block.points.ids[j]}" for j in weak[:4]]
+        what += [f"image {block.images.ids[i]}" for i in few[:4]]
+        raise NotDeterminableError(
+            f"the design is not determinable: {weak.size} tie point(s) in fewer than two "
+            f"images, {few.size} image(s) with fewer than three points ({', '.join(what)})",
+            parameters=[],
         )
 
 
@@ -142,6 +187,9 @@ class LiveDesign:
         Ellipsoid probability; test level and power of the reliability.
     auxiliary : list of Auxiliary, optional
         Statoscope / APR / GNSS rows with strip offsets (:func:`orientviz.design.design_auxiliary`).
+    blas_threads : int or None
+        BLAS threads while the design forms, factors and updates (:func:`blas_threads`;
+        None: as the process runs them).
 
     Attributes
     ----------
@@ -157,8 +205,10 @@ class LiveDesign:
     def __init__(
         self, block: Block, spec: dict[str, Any], *, level: float = 0.95,
         alpha0: float = 0.001, beta0: float = 0.80, auxiliary: list | None = None,
+        blas_threads: int | None = 1,
     ) -> None:  # fmt: skip
         self.spec = spec
+        self.blas_threads = blas_threads
         self.auxiliary = list(auxiliary or [])
         self.level, self.alpha0, self.beta0 = level, alpha0, beta0
         #: a structural step needing more columns of Q than this is assessed anew
@@ -167,17 +217,16 @@ class LiveDesign:
         self.rebuild(block.copy())
 
     # ------------------------------------------------------------------ the base design
+    @_capped
     def rebuild(self, block: Block | None = None) -> DesignQuality:
         """Form and factor the normal equations of the current (or given) design again."""
         if block is not None:
             self.block = block
         b = self.block
-        res, q = assess_block(
-            b, self.spec, level=self.level, alpha0=self.alpha0, beta0=self.beta0,
-            auxiliary=self.auxiliary,
-        )  # fmt: skip
-        self.result = res
+        _check_connected(b)
+        _check_rays(b)
         self._base = DesignBase(b, self.auxiliary)
+        self.result = res = self._base.precision()
         m, p, n = b.n_images, b.n_points, b.n_observations
         self._img = np.arange(m)  # slot of each current image, point, ray
         self._pt = np.arange(p)
@@ -200,6 +249,7 @@ class LiveDesign:
         #: per control change: (weights, terms, quality, number of steps) before it
         self._saved: list[tuple[F64, _Current, DesignQuality, int]] = []
         self.changes: list[Change] = []
+        q = self._assemble()
         self.base_quality = self._quality = q
         return q
 
@@ -240,6 +290,7 @@ class LiveDesign:
             Cpk -= Up @ B
         return Cc, Cpk
 
+    @_capped
     def current_columns(self, point: int) -> tuple[F64, F64]:
         """The current design's cofactors at the three columns of ``point`` (current
         index): orientations (m, 6, 3) and points (p, 3, 3) in the current order."""
@@ -310,6 +361,7 @@ class LiveDesign:
         self._steps.append((Uc, Up, Mx))
 
     # ------------------------------------------------------------------ control changes
+    @_capped
     def set_control(self, point: int, sigma_xyz: ArrayLike) -> DesignQuality:
         """Make ``point`` control with σ (m; NaN = coordinate not given, all NaN = tie).
 
@@ -375,7 +427,7 @@ class LiveDesign:
         """A new live design of ``block`` (formed and factored anew)."""
         new = LiveDesign(
             block, self.spec, level=self.level, alpha0=self.alpha0, beta0=self.beta0,
-            auxiliary=self.auxiliary,
+            auxiliary=self.auxiliary, blas_threads=self.blas_threads,
         )  # fmt: skip
         new.max_columns = self.max_columns
         new.history = self.history + [label, "(normal equations formed and factored again)"]
@@ -393,6 +445,7 @@ class LiveDesign:
         new.history = self.history + [label]
         return new
 
+    @_capped
     def add_images(
         self, X0: ArrayLike, angles: ArrayLike, *, strip: ArrayLike | int | None = None,
         ids: list[str] | None = None,
@@ -474,6 +527,7 @@ class LiveDesign:
         new._quality = new.base_quality = new._assemble()
         return new
 
+    @_capped
     def remove_images(self, images: ArrayLike, label: str | None = None) -> LiveDesign:
         """A new live design without some images (:func:`orientviz.design.remove_images`:
         points left with fewer than 2 rays go too). The current design stays as it is.

@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from ..block import TIE
 from ..errors import InputError
+from ._live import blas_threads
 
 F64 = NDArray[np.float64]
 
@@ -118,6 +119,11 @@ def suggest_control(
     -------
     Suggestion
     """
+    with blas_threads(getattr(live, "blas_threads", None)):
+        return _suggest(live, criterion, sigma, candidates, top)
+
+
+def _suggest(live, criterion, sigma, candidates, top) -> Suggestion:
     if criterion not in CRITERIA:
         raise InputError(f"criterion: expected one of {', '.join(CRITERIA)}, got {criterion!r}")
     if not sigma > 0:

@@ -5,9 +5,9 @@ image) a point's rays lie in as many groups as it has rays, and the terms that t
 elimination of the points leaves in E and F (:mod:`._ap_normal`) couple thousands of
 group pairs. They are formed here per point: the points with k rays and c (point, group)
 pairs are stacked, one product gives all their (ray, pair) blocks ``T_a H_eᵀ`` (6 × k)
-and (pair, pair) blocks ``H_e V⁻¹ H_e'ᵀ`` (k × k), and a sparse 0/1 matrix per batch
-adds each block's rows into the block of E or F they belong to (computed once per
-problem).
+and (pair, pair) blocks ``H_e V⁻¹ H_e'ᵀ`` (k × k), and each block's rows are added
+into the block of E or F they belong to by ``np.bincount`` over row indices computed
+once per problem.
 """
 
 from __future__ import annotations
@@ -15,7 +15,6 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import NDArray
 
 F64 = NDArray[np.float64]
@@ -29,17 +28,17 @@ BATCH_DOUBLES: int = 2**16
 class PointBatch(NamedTuple):
     """Points with k rays and c (point, group) pairs, for the per-point products.
 
-    ``rays`` (n, k) their rays (observations), ``pairs`` (n, c) their pairs. ``e_map``
-    (6K, n·k·6·c) adds row r of the product block (ray a, pair e) of a ray in a group
-    other than its own into row r of E's block (image of a, group of e), the K blocks
-    ``APStructure.e_key``; ``f_map`` (G²·k, n·c·k·c) adds row r of the block (pair e,
-    pair e') into row r of F's block (g_e, g_e').
+    ``rays`` (n, k) their rays (observations), ``pairs`` (n, c) their pairs. ``e_rows``
+    (n·k·6·c,): for row r of the product block (ray a, pair e), the row of E's
+    other-group blocks (``APStructure.e_key``, 6 rows each) it adds into — 6K (a row
+    beyond them, dropped) when e is a's own group; ``f_rows`` (n·c·k·c,): for row r of
+    the block (pair e, pair e'), the row of F's group blocks (g_e · G + g_e', k rows each).
     """
 
     rays: I64
     pairs: I64
-    e_map: sp.csr_matrix
-    f_map: sp.csr_matrix
+    e_rows: NDArray[np.int32]
+    f_rows: NDArray[np.int32]
 
 
 def point_batches(
@@ -83,24 +82,20 @@ def point_batches(
             rays = vo[rfirst[pts][:, None] + np.arange(kr)]
             pairs = first[pts][:, None] + np.arange(c)
             # E: row r of block (point, ray a, pair e) → row r of E's block (image of a,
-            # group of e) if that is not a's own group
+            # group of e), or the dropped row 6K when e is a's own group
             shape = (n, kr, 6, c)
             g_e = np.broadcast_to(A.pg_grp[pairs][:, None, None, :], shape).reshape(-1)
             g_a = np.broadcast_to(go[rays][:, :, None, None], shape).reshape(-1)
             i_a = np.broadcast_to(oi[rays][:, :, None, None], shape).reshape(-1)
             r = np.broadcast_to(np.arange(6)[:, None], shape).reshape(-1)
-            other = np.flatnonzero(g_e != g_a)
-            row = 6 * np.searchsorted(A.e_key, i_a[other] * G + g_e[other]) + r[other]
-            e_map = sp.csr_matrix((np.ones(other.size), (row, other)), shape=(6 * K, r.size))
+            other = g_e != g_a
+            e_rows = np.full(r.size, 6 * K, np.int32)
+            e_rows[other] = 6 * np.searchsorted(A.e_key, i_a[other] * G + g_e[other]) + r[other]
             # F: row r of block (point, pair e, pair e') → row r of block (g_e, g_e')
             gp = A.pg_grp[pairs]
-            shape = (n, c, k, c)
-            fk = np.broadcast_to(gp[:, :, None, None] * G + gp[:, None, None, :], shape)
-            fr = k * fk + np.arange(k)[:, None]
-            f_map = sp.csr_matrix(
-                (np.ones(fr.size), (fr.reshape(-1), np.arange(fr.size))), shape=(G * G * k, fr.size)
-            )
-            out.append(PointBatch(rays, pairs, e_map, f_map))
+            fk = gp[:, :, None, None] * G + gp[:, None, None, :]
+            f_rows = (k * fk + np.arange(k)[:, None]).astype(np.int32).reshape(-1)
+            out.append(PointBatch(rays, pairs, e_rows, f_rows))
     return out
 
 
@@ -108,17 +103,21 @@ def batched_terms(A, T: F64, H: F64, HV: F64, k: int) -> tuple[F64, F64]:
     """Σ T_a H_eᵀ into E's other-group blocks (K, 6, k) and Σ H_e V⁻¹ H_e'ᵀ into F's
     group blocks (G², k, k), over all rays a and pairs e, e' of each point: one stacked
     product per batch of points (:class:`PointBatch`)."""
-    other = np.zeros((6 * A.e_key.size, k))
-    F = np.zeros((A.G * A.G * k, k))
+    nE, nF = 6 * A.e_key.size, A.G * A.G * k
+    other = np.zeros((k, nE + 1))
+    F = np.zeros((k, nF))
     for b in A.batches:
         n, kr = b.rays.shape
         c = b.pairs.shape[1]
         Hb = H[b.pairs.reshape(-1)].reshape(n, c * k, 3)
-        if other.shape[0]:
+        if nE:
             Tb = T[b.rays.reshape(-1)].reshape(n, 6 * kr, 3)
-            P = np.matmul(Tb, Hb.transpose(0, 2, 1))  # (n, kr·6, c·k): rows (a, r), (e, s)
-            other += b.e_map @ P.reshape(-1, k)
+            # (n, kr·6, c·k) → column s of rows (a, r, e)
+            P = np.matmul(Tb, Hb.transpose(0, 2, 1)).reshape(-1, k)
+            for s in range(k):
+                other[s] += np.bincount(b.e_rows, P[:, s], nE + 1)
         HVb = HV[b.pairs.reshape(-1)].reshape(n, c * k, 3)
-        P = np.matmul(HVb, Hb.transpose(0, 2, 1))  # (n, c·k, c·k)
-        F += b.f_map @ P.reshape(-1, k)
-    return other.reshape(-1, 6, k), F.reshape(-1, k, k)
+        P = np.matmul(HVb, Hb.transpose(0, 2, 1)).reshape(-1, k)  # (n, c·k, c·k)
+        for s in range(k):
+            F[s] += np.bincount(b.f_rows, P[:, s], nF)
+    return other[:, :nE].T.reshape(-1, 6, k), F.T.reshape(-1, k, k)
