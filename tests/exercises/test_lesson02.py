@@ -46,5 +46,7 @@ def test_diagnoses_name_the_mistake():
             ("check_vertical_partials", "kappa sign"): "κ column has the wrong sign",
             ("check_vertical_partials", "per gon"): "per gon, not per radian",
             ("check_vertical_partials", "rows swapped"): "rows) are swapped",
+            ("check_relief_displacement", "foot's factor"): "h/(H − h) goes with the foot",
+            ("check_relief_displacement", "sign"): "sign is reversed",
         },
     )

@@ -23,3 +23,17 @@ def test_ppi_image_without_h_is_named():
 
     exc = rejection(lesson14.check_ppi_image, slant)
     assert exc is not None and "h is missing" in str(exc)
+
+
+def test_best_pair_misreadings_are_named():
+    from mutants import assert_diagnoses
+
+    assert_diagnoses(
+        lesson14,
+        answers,
+        {
+            ("check_best_pair", "largest"): "LARGEST",
+            ("check_best_pair", "plan"): "plan position",
+            ("check_best_pair", "spread"): "farthest apart",
+        },
+    )

@@ -24,6 +24,7 @@ __all__ = [
     "check_gimbal",
     "check_ground_point",
     "check_opk_from_matrix",
+    "check_relief_displacement",
     "check_rotation",
     "check_vertical_partials",
 ]
@@ -269,3 +270,35 @@ def check_vertical_partials(vertical_partials: Callable[[F64, float], ArrayLike]
         wrong=wrong,
     )
     success("∂(x, y)/∂(ω, φ, κ) of a vertical image: your closed forms = central differences")
+
+
+def check_relief_displacement(relief_displacement: Callable[[F64, F64, float], F64]) -> None:
+    """``relief_displacement(r_top, h, H)`` must return the radial displacement Δr (mm) of the
+    top of a vertical object of height ``h`` (m) in a vertical photograph taken ``H`` (m) above
+    the object's foot, from the radial distance ``r_top`` (mm) of the top's image.
+
+    Oracle: the checker's own projection of the foot and the top of vertical objects.
+    """
+    rng = rng_for("lesson02.check_relief_displacement")
+    c, H = 152.7, float(rng.uniform(1200.0, 1800.0))
+    foot = np.column_stack([rng.uniform(-600, 600, 6), rng.uniform(-600, 600, 6), np.zeros(6)])
+    h = rng.uniform(20.0, 300.0, 6)
+    top = foot + np.column_stack([np.zeros((6, 2)), h])
+    X0 = np.array([0.0, 0.0, H])
+
+    def image(P: F64) -> F64:
+        uvw = P - X0  # R = I
+        return -c * uvw[:, :2] / uvw[:, 2:]
+
+    r_foot = np.hypot(*image(foot).T)
+    r_top = np.hypot(*image(top).T)
+    truth = r_top - r_foot
+    wrong = [
+        ("this is r·h/(H − h): with r of the TOP the factor is h/H (h/(H − h) goes with the foot's r)",
+         r_top * h / (H - h)),
+        ("the sign is reversed: the top lies farther from the centre (away from the nadir)", -truth),
+        ("h/H in different units: h and H are both in m, r in mm", r_top * h / (H * 1000.0)),
+    ]  # fmt: skip
+    got = call(relief_displacement, r_top.copy(), h.copy(), H, what="relief_displacement")
+    compare("Δr [mm]", got, truth, rtol=1e-9, scale=float(np.abs(truth).max()), wrong=wrong)
+    success("Δr = r·h/H with r of the top: the projected foot and top agree")

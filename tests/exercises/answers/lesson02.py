@@ -61,6 +61,10 @@ def _kappa_sign(xy, c):
     return J
 
 
+def _sol_relief(r_top, h, H):
+    return np.asarray(r_top) * np.asarray(h) / H
+
+
 SOLUTIONS = {
     "check_rotation": _sol_rotation,
     "check_collinearity": _sol_collinearity,
@@ -68,6 +72,7 @@ SOLUTIONS = {
     "check_opk_from_matrix": _sol_opk,
     "check_ground_point": _sol_ground,
     "check_vertical_partials": _sol_vertical,
+    "check_relief_displacement": _sol_relief,
 }
 
 MUTANTS = {
@@ -107,5 +112,11 @@ MUTANTS = {
         "per gon": lambda xy, c: _sol_vertical(xy, c) * np.pi / 200,
         "rows swapped": lambda xy, c: _sol_vertical(xy, c)[:, ::-1],
         "only omega phi kappa of x": lambda xy, c: _sol_vertical(xy, c) * [[1], [0]],
+    },
+    "check_relief_displacement": {
+        "foot's factor": lambda r, h, H: r * h / (H - h),
+        "sign": lambda r, h, H: -r * h / H,
+        "h in mm": lambda r, h, H: r * h / (H * 1000.0),
+        "h/r": lambda r, h, H: h / H,
     },
 }
