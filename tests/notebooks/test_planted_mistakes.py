@@ -53,7 +53,6 @@ CHECKERS = {
     ("09", "distance_std"): ("check_distance_std", "only the diagonal"),
     ("12", "mdb"): ("check_mdb", "one-sided"),
     ("13", "difference_covariance"): ("check_difference_covariance", "not independent"),
-    ("01", "sigma0_bounds"): ("check_sigma0_bounds", "α/2 in each tail"),
     ("01", "gn_step"): ("check_gauss_newton_step", "not unit vectors"),
     ("03", "dlt_rows"): ("check_dlt_rows", "minus sign"),
     ("03", "interior_from_dlt"): ("check_interior_from_dlt", "subtract x0²"),
