@@ -55,7 +55,6 @@ CHECKERS = {
     ("13", "difference_covariance"): ("check_difference_covariance", "not independent"),
     ("01", "gn_step"): ("check_gauss_newton_step", "not unit vectors"),
     ("03", "dlt_rows"): ("check_dlt_rows", "minus sign"),
-    ("03", "interior_from_dlt"): ("check_interior_from_dlt", "subtract x0²"),
     ("05", "six_point"): ("check_six_point", "degrees"),
     ("06", "epipolar_line"): ("check_epipolar_line", "instead of Eᵀ"),
     ("07", "sigma_scale"): ("check_sigma_scale", "centre"),
