@@ -221,7 +221,7 @@ def _left_of_the_panel(xy):
 def test_first_view_shows_every_point_left_of_the_panel(name):
     """Issue 31 pt 8: radar target 25 lay behind the panel, the pair ran under it and the
     pair's scale-bar label sat half under it (1280 × 800)."""
-    from orientviz.viewer.geometry import VIEW_FOV
+    from orientviz.viewer.geometry import VIEW_FOV, VISIBLE_WIDTH
 
     app = ViewerApp(load_demo(name), port=0, verbose=False)
     try:
@@ -234,8 +234,13 @@ def test_first_view_shows_every_point_left_of_the_panel(name):
         else:
             pts += [np.asarray(view.nodes[k].position, float)[None] for k in ("left", "right")]
             label = view.nodes["scale_label"]
-            pts.append(np.asarray(label.position, float)[None])
-            assert label.anchor.endswith("right"), "the label's text must run away from the panel"
+            assert label.anchor == "top-center"
+            # its text (~220 px wide at 1280 px: ±0.17 of the half-width) fits on the screen
+            # left of the panel in the viewer's window and in the book's 1280 × 960 pictures
+            for aspect in (1280 / 800, 1280 / 960):
+                x = _screen(np.asarray(label.position, float)[None], cam.position,
+                            cam.look_at, VIEW_FOV, aspect)[0, 0]  # fmt: skip
+                assert -1 + 0.2 < x < -1 + 2 * VISIBLE_WIDTH - 0.2, (aspect, x)
         xy = _screen(np.vstack(pts), cam.position, cam.look_at, VIEW_FOV)
         assert _left_of_the_panel(xy).all(), xy[~_left_of_the_panel(xy)]
         if name == "radar":  # all 25 targets, 25 among them

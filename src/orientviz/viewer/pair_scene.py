@@ -369,7 +369,7 @@ class PairView:
             thickness=3.0, thickness_units="screen",
         )  # fmt: skip
         self.nodes["scale_label"] = sc.add_label(
-            "/pair/labels/scale_bar", text, anchor="top-right",
+            "/pair/labels/scale_bar", text, anchor="top-center",
             position=f.to_scene((start + end) / 2 - 3 * tick).astype(np.float32),
         )  # fmt: skip
 
