@@ -1,87 +1,177 @@
-"""One change of a block design: the low-rank update against a new assessment.
+"""Every change the design studio offers, on a 1 000-image block: update against a new assessment.
 
 A design block of ``--strips`` × ``--images`` images (default 20 × 50 = 1 000, standard
-points, perimeter control every 4 bases, σ 5 µm, control σ 2 cm) is assessed once
-(:class:`orientviz.design.LiveDesign`: the bundle's precision and reliability, its
-factorised normal equations). Then ``--changes`` times a tie point is made control (or a
-change is undone), timed as the studio runs it: the update of σ of all points and
-stations, redundancy numbers, MDB, external reliability, ellipsoids, weak spots and summary
-(``LiveDesign.set_control`` / ``undo``); then the suggestion of the next control point
-(``suggest_control``, 40 candidates). The peer in the same run: a new
-:func:`orientviz.design.assess_block` of the changed design (forming and factoring again).
+points, perimeter control every 4 bases, σ 5 µm, control σ 2 cm) is made live once
+(:class:`orientviz.design.LiveDesign`: the bundle's precision and reliability and the
+factorised normal equations). Then each kind of change the studio makes is timed as the
+studio runs it — the update of σ of all points and stations, redundancy numbers, MDB,
+external reliability, ellipsoids, weak spots and summary:
 
-    python benchmarks/bench_design.py                 # 1 000 images
-    python benchmarks/bench_design.py --strips 4 --images 10
+* control added / its σ changed / undone (``set_control``, ``undo``);
+* an image added, removed, moved (``add_images``, ``remove_images``, both);
+* a cross strip added and a strip removed (a new assessment: the step would need more
+  than ``max_columns`` columns; ``--forced`` also times the update forced through);
+* the same design with statoscope and APR readings (offsets per strip): control added;
+* a change of the plan (image σ): a new design, formed and factored;
+* the suggestion of the next control point (40 candidates).
+
+The peer in the same run: a new :func:`orientviz.design.assess_block` of the changed
+design. Each kind is run ``--repeat`` times (median, max). With ``--threads both`` the
+whole sequence runs with the default BLAS threads and then with one
+(``threadpoolctl``), in the same process. Wall time and the process's CPU time (all its
+threads) are printed: on the shared machine a change waits for a core, its CPU time is
+its cost. ``LiveDesign`` itself runs its BLAS on one
+thread (``blas_threads=1``, its default); ``--uncapped`` leaves it on the process's
+threads (the peer ``assess_block`` always is).
+
+    python benchmarks/bench_design.py                       # 1 000 images, both thread settings
+    python benchmarks/bench_design.py --strips 4 --images 10 --threads 1
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import time
+from contextlib import nullcontext
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from orientviz.design import (
     FlightDesign,
     LiveDesign,
     assess_block,
+    cross_strip_images,
+    design_auxiliary,
     design_block,
     suggest_control,
 )
+
+CPU: list[float] = []  # the process's CPU time of the last _t (all threads), s
+
+
+def _t(f):
+    t, c = time.perf_counter(), time.process_time()
+    out = f()
+    CPU.append(time.process_time() - c)
+    return time.perf_counter() - t, out
+
+
+def run(args, label: str) -> list[tuple[str, list[float], list[float]]]:
+    plan = FlightDesign(strips=args.strips, images_per_strip=args.images)
+    block, spec = design_block(plan)
+    print(f"\n== {label}: {block.n_images} images, {block.n_points} points, "
+          f"{block.n_observations} rays; load {os.getloadavg()[0]:.1f}")  # fmt: skip
+    cap = None if args.uncapped else 1
+    dt, live = _t(lambda: LiveDesign(block, spec, blas_threads=cap))
+    print(f"base assessment + factorisation: {dt:.2f} s")
+    rows: list[tuple[str, list[float], list[float]]] = []
+    rng = np.random.default_rng(1)
+    tie = np.flatnonzero(block.points.role == 0)
+    I = block.images
+    R = args.repeat
+
+    def kind(name, f):
+        ts, cs = [], []
+        for k in range(R):
+            dt, out = _t(functools.partial(f, k))
+            ts.append(dt)
+            cs.append(CPU[-1])
+        if isinstance(out, LiveDesign) and "{how}" in name:  # update or new assessment
+            fresh = any("formed and factored" in t for t in out.history[-2:])
+            name = name.format(how="new assessment" if fresh else "update")
+        rows.append((name, ts, cs))
+        print(
+            f"  {name:<44} median {1e3 * np.median(ts):7.0f} ms  max {1e3 * max(ts):7.0f} ms"
+            f"  CPU median {1e3 * np.median(cs):7.0f} ms"
+        )
+
+    picks = rng.choice(tie, size=R, replace=False)
+    kind("control added", lambda k: live.add_control(int(picks[k]), 0.02))
+    kind("control σ changed (height only, 5 cm)",
+         lambda k: live.set_control(int(picks[k]), (np.nan, np.nan, 0.05)))  # fmt: skip
+    kind("undo (control)", lambda k: live.undo())
+    inner = np.flatnonzero((I.strip > 0) & (I.strip < plan.strips - 1))
+    imgs = rng.choice(inner, size=R, replace=False)
+    # an image moved a third of a base towards the block's middle (it keeps seeing points)
+    B = float(spec["base_m"])
+    towards = np.sign(I.X0[:, :2].mean(axis=0) - I.X0[:, :2])
+    shift = np.column_stack([B / 3 * towards, np.zeros(block.n_images)])  # (m, 3)
+    kind("image removed ({how})", lambda k: live.remove_images([int(imgs[k])]))
+    kind("image added ({how})",
+         lambda k: live.add_images(I.X0[imgs[k]] + shift[imgs[k]], I.angles[imgs[k]],
+                                   strip=int(I.strip[imgs[k]])))  # fmt: skip
+
+    def move(k):
+        i = int(imgs[k])
+        return live.remove_images([i]).add_images(
+            I.X0[i] + shift[i], I.angles[i], strip=int(I.strip[i])
+        )
+
+    kind("image moved (removed + added)", move)
+    xs = rng.uniform(I.X0[:, 0].min(), I.X0[:, 0].max(), size=R)
+    cs = [cross_strip_images(live.block, spec, float(x)) for x in xs]
+    kind(f"cross strip ({len(cs[0][3])} images, {{how}})",
+         lambda k: live.add_images(cs[k][0], cs[k][1], strip=cs[k][2], ids=cs[k][3]))  # fmt: skip
+    edge = np.flatnonzero(I.strip == plan.strips - 1)
+    kind(f"strip removed ({edge.size} images, {{how}})", lambda k: live.remove_images(edge))
+    if args.forced:
+        live.max_columns = 10**9
+        kind("cross strip ({how}, forced)",
+             lambda k: live.add_images(cs[k][0], cs[k][1], strip=cs[k][2], ids=cs[k][3]))  # fmt: skip
+        kind("strip removed ({how}, forced)", lambda k: live.remove_images(edge))
+        live.max_columns = 400
+    kind("plan changed (image σ 4 µm: new design)",
+         lambda k: LiveDesign(*design_block(plan.with_(sigma_image_mm=0.004)),
+                              blas_threads=cap))  # fmt: skip
+    dt, sug = _t(lambda: suggest_control(live, criterion="sigma_z"))
+    rows.append(("suggestion (40 candidates)", [dt], [CPU[-1]]))
+    print(f"  suggestion ({sug.candidates.size} candidates): {dt:.2f} s")
+    aplan = plan.with_(sigma_statoscope=0.3, sigma_apr=0.5)
+    ablock, aspec = design_block(aplan)
+    aux = design_auxiliary(ablock, aplan)
+    dt, alive = _t(lambda: LiveDesign(ablock, aspec, auxiliary=aux, blas_threads=cap))
+    print(f"with statoscope + APR: base {dt:.2f} s")
+    kind("control added (statoscope + APR)", lambda k: alive.add_control(int(picks[k]), 0.02))
+    kind("image removed (statoscope + APR: new design)",
+         lambda k: LiveDesign(ablock, aspec, auxiliary=aux, blas_threads=cap))  # fmt: skip
+    kind("peer: new assessment (assess_block)", lambda k: assess_block(live.block, spec))
+    kind("peer: new assessment with statoscope + APR",
+         lambda k: assess_block(alive.block, aspec, auxiliary=aux))  # fmt: skip
+    return rows
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--strips", type=int, default=20)
     ap.add_argument("--images", type=int, default=50)
-    ap.add_argument("--changes", type=int, default=8)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--threads", choices=("both", "default", "1"), default="both")
+    ap.add_argument("--forced", action="store_true", help="also force strips through the update")
+    ap.add_argument(
+        "--uncapped", action="store_true",
+        help="LiveDesign(blas_threads=None): the design's BLAS on the process's threads",
+    )  # fmt: skip
     args = ap.parse_args()
-    print(f"load average {os.getloadavg()}, threads: default BLAS")
-    t = time.perf_counter()
-    block, spec = design_block(FlightDesign(strips=args.strips, images_per_strip=args.images))
-    print(
-        f"design block {block.n_images} images, {block.n_points} points, "
-        f"{block.n_observations} rays: {time.perf_counter() - t:.2f} s"
-    )
-    t = time.perf_counter()
-    live = LiveDesign(block, spec)
-    print(f"base assessment + factorisation: {time.perf_counter() - t:.2f} s")
-    tie = np.flatnonzero(block.points.role == 0)
-    rng = np.random.default_rng(1)
-    picks = rng.choice(tie, size=args.changes, replace=False)
-    times, adds = [], []
-    for k, j in enumerate(picks):
-        t = time.perf_counter()
-        if k % 4 == 3:
-            q = live.undo()
-            what = "undo"
-        else:
-            q = live.add_control(int(j), 0.02)
-            what = f"add control at {block.points.ids[j]}"
-        dt = time.perf_counter() - t
-        times.append(dt)
-        if what != "undo":
-            adds.append(dt)
-        s = q.summary
-        print(
-            f"  change {k + 1} ({what}, {len(live.changes)} changed points): {dt * 1e3:.0f} ms;"
-            f" σ_Z max {s['sigma_z_max'] * 1e3:.1f} mm"
-        )
-    t = time.perf_counter()
-    sug = suggest_control(live, criterion="sigma_z")
-    print(
-        f"suggestion ({sug.candidates.size} candidates): {time.perf_counter() - t:.2f} s; {sug.describe()}"
-    )
-    t = time.perf_counter()
-    assess_block(live.block, spec)
-    full = time.perf_counter() - t
-    med = float(np.median(adds))
-    print(
-        f"added control: median {med * 1e3:.0f} ms, max {max(adds) * 1e3:.0f} ms "
-        f"(all changes with undo: median {np.median(times) * 1e3:.0f} ms); "
-        f"new assessment of the same design {full:.2f} s ({full / med:.0f} × the added median)"
-    )
+    settings = {"both": ("default", "1"), "default": ("default",), "1": ("1",)}[args.threads]
+    tables = {}
+    for s in settings:
+        ctx = threadpool_limits(1, "blas") if s == "1" else nullcontext()
+        with ctx:
+            tables[s] = run(args, f"BLAS threads: {s}")
+    head = " | ".join(f"{s} thread(s): wall median / max, CPU median ms" for s in settings)
+    print(f"\n| change | {head} |")
+    print("| --- |" + " --- |" * len(settings))
+    for i, (name, *_) in enumerate(tables[settings[0]]):
+        cells = []
+        for s in settings:
+            _, ts, cs = tables[s][i]
+            cells.append(
+                f"{1e3 * np.median(ts):.0f} / {1e3 * max(ts):.0f}, {1e3 * np.median(cs):.0f}"
+            )
+        print(f"| {name} | " + " | ".join(cells) + " |")
 
 
 if __name__ == "__main__":

@@ -186,16 +186,23 @@ def test_the_auxiliary_design_equals_the_adjusted_simulated_block(aux_design):
     np.testing.assert_allclose(sig, aux_design.quality.point_sigma, rtol=2e-3)
 
 
-def test_a_live_design_with_auxiliary_data_assesses_each_change_anew(aux_design):
+def test_a_live_design_with_auxiliary_data_is_updated_exactly(aux_design):
     from orientviz.design import LiveDesign, design_auxiliary, set_control, suggest_control
 
     b, spec = aux_design.block, aux_design.spec
     aux = design_auxiliary(b, AUX_PLAN)
     live = LiveDesign(b, spec, auxiliary=aux)
     j = int(np.flatnonzero(b.points.role == 0)[3])
-    got = live.add_control(j, 0.05).point_sigma
+    q = live.add_control(j, 0.05)  # by the update formula with the offsets' border
+    assert not any("formed and factored again" in t for t in live.history)
     ref = assess_block(set_control(b, j, (0.05, 0.05, 0.05)), spec, auxiliary=aux)[1]
-    np.testing.assert_allclose(got, ref.point_sigma, rtol=1e-9)
+    np.testing.assert_allclose(q.point_sigma, ref.point_sigma, rtol=1e-9)
+    np.testing.assert_allclose(q.station_sigma, ref.station_sigma, rtol=1e-9)
+    np.testing.assert_allclose(q.redundancy, ref.redundancy, atol=1e-10)
+    fin = np.isfinite(ref.external)
+    np.testing.assert_allclose(q.external[fin], ref.external[fin], rtol=1e-8)
+    np.testing.assert_allclose(q.point_shift[fin], ref.point_shift[fin], rtol=1e-8)
+    assert q.weak_spots == ref.weak_spots
     live.undo()
     np.testing.assert_allclose(live.quality().point_sigma, aux_design.quality.point_sigma)
     s = suggest_control(live, criterion="sigma_z", sigma=0.05)  # brute force with the border

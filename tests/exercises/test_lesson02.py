@@ -40,5 +40,13 @@ def test_diagnoses_name_the_mistake():
             ("check_collinearity", "R instead of R^T"): "Rᵀ",
             ("check_gimbal", "kappa forgotten"): "same axis",
             ("check_opk_from_matrix", "degrees"): "degrees instead of gon",
+            ("check_vertical_partials", "all signs"): "every sign is reversed",
+            ("check_vertical_partials", "1 forgotten"): "the 1 in c(1 + x²/c²)",
+            ("check_vertical_partials", "omega phi swapped"): "ω and φ columns are swapped",
+            ("check_vertical_partials", "kappa sign"): "κ column has the wrong sign",
+            ("check_vertical_partials", "per gon"): "per gon, not per radian",
+            ("check_vertical_partials", "rows swapped"): "rows) are swapped",
+            ("check_relief_displacement", "foot's factor"): "h/(H − h) goes with the foot",
+            ("check_relief_displacement", "sign"): "sign is reversed",
         },
     )

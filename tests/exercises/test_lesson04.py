@@ -17,6 +17,9 @@ def test_diagnoses_name_the_mistake():
         {
             ("check_resection", "weights forgotten"): "without weights",
             ("check_resection", "divides by n"): "redundancy",
+            ("check_resection", "one iteration"): "after 1 Gauss-Newton step",
+            ("check_resection", "two iterations"): "after 2 Gauss-Newton steps",
+            ("check_resection", "no iteration"): "the start itself",
             ("check_two_rays", "point on ray 1"): "ray 1",
             ("check_design_X0", "rows x.. then y.."): "alternate",
             ("check_sigma_Z", "no sqrt 2"): "√2",

@@ -41,3 +41,21 @@ def test_diagnoses_name_the_mistake():
             ("check_design", "scale column times m"): "without m",
         },
     )
+
+
+def test_similarity_gn_names_the_rotation_update_on_the_wrong_side():
+    """R ← R R(α) instead of R(α) R converges slowly to nearly the same point (R off by ~1e-6,
+    so it is not among the MUTANTS, which must miss by 100× the tolerance); the check still
+    rejects it and names it from a one-step probe."""
+    from orientviz.exercises import rejection
+
+    exc = rejection(
+        lesson07.check_similarity_gn,
+        lambda *a: answers._similarity_gn(*a, mistake="right_side"),
+    )
+    assert exc is not None and "wrong side" in str(exc), exc
+    exc = rejection(
+        lesson07.check_similarity_gn,
+        lambda *a: answers._similarity_gn(*a, mistake="one_step"),
+    )
+    assert "wrong side" not in str(exc)

@@ -21,5 +21,8 @@ def test_diagnoses_name_the_mistake():
             ("check_snoop", "no abs"): "not w",
             ("check_snoop", "one round"): "go on until",
             ("check_snoop_round", "signed"): "test |w|",
+            ("check_external", "N not inverted"): "multiplied by AᵀA",
+            ("check_external", "unweighted"): "weights were forgotten",
+            ("check_external", "sign"): "opposite sign",
         },
     )

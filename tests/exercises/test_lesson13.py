@@ -21,5 +21,8 @@ def test_diagnoses_name_the_mistake():
             ("check_gnss_rows", "wrong strip"): "another strip",
             ("check_gnss_rows", "drift 1"): "holds 1",
             ("check_difference_covariance", "independent"): "not independent",
+            ("check_from_differences", "independent"): "taken as independent",
+            ("check_from_differences", "C as weight"): "covariance itself used as the weight",
+            ("check_from_differences", "no offset"): "without the offset",
         },
     )

@@ -8,3 +8,32 @@ from orientviz.exercises import lesson14
 
 def test_checks():
     assert_module_checks(lesson14, answers)
+
+
+def test_ppi_image_without_h_is_named():
+    import numpy as np
+
+    from orientviz.exercises._common import rejection
+
+    def slant(P, X0, R, h, m, x0, y0):  # the slant range plotted: h forgotten
+        abc = (P - X0) @ R
+        s = np.linalg.norm(P - X0, axis=1)
+        horiz = np.hypot(abc[:, 0], abc[:, 1])
+        return np.column_stack([x0 + m * s * abc[:, 0] / horiz, y0 + m * s * abc[:, 1] / horiz])
+
+    exc = rejection(lesson14.check_ppi_image, slant)
+    assert exc is not None and "h is missing" in str(exc)
+
+
+def test_best_pair_misreadings_are_named():
+    from mutants import assert_diagnoses
+
+    assert_diagnoses(
+        lesson14,
+        answers,
+        {
+            ("check_best_pair", "largest"): "LARGEST",
+            ("check_best_pair", "plan"): "plan position",
+            ("check_best_pair", "spread"): "farthest apart",
+        },
+    )

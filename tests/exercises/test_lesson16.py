@@ -19,3 +19,33 @@ def test_the_task_needs_two_points_and_the_witness_reaches_the_target():
     pair = answers.SOLUTIONS["check_by_hand"]()
     assert len(pair) == 2
     assert lesson16.worst_sigma_z(block, pair) <= lesson16.TARGET_SIGMA_Z
+
+
+def test_control_sigma_check_agrees_with_the_woodbury_update_and_names_misreadings(capsys):
+    import numpy as np
+    import pytest
+
+    from orientviz.exercises._common import CheckFailed, NotWrittenError
+
+    rng = np.random.default_rng(16)
+    L = rng.normal(size=(12, 12)) * np.repeat([1.0, 0.3, 2.0, 0.5], 3)[:, None]
+    Q = L @ L.T + 0.01 * np.eye(12)  # cofactors of 4 points (XYZ each), strongly correlated
+    j = 2
+
+    def others(sigma):  # an independent look: the Woodbury update of the lesson
+        idx = [3 * j, 3 * j + 1, 3 * j + 2]
+        M = np.linalg.inv(np.eye(3) * sigma**2 + Q[np.ix_(idx, idx)])
+        Qn = Q - Q[:, idx] @ M @ Q[:, idx].T
+        return np.delete(np.sqrt(np.diag(Qn)[2::3]), j).max()
+
+    target = 1.1 * others(1e-6)
+    grid = np.arange(0.001, 20.0, 0.002)
+    want = next(s for s in grid if others(s) >= target)
+    lesson16.check_control_sigma(round(want, 2), Q, j, step=0.02)
+    assert capsys.readouterr().out.startswith("✓")
+    with pytest.raises(CheckFailed, match="largest σ_Z itself"):
+        lesson16.check_control_sigma(target, Q, j, step=0.02)
+    with pytest.raises(CheckFailed, match="in cm"):
+        lesson16.check_control_sigma(want * 100, Q, j, step=0.02)
+    with pytest.raises(NotWrittenError):
+        lesson16.check_control_sigma(None, Q, j, step=0.02)

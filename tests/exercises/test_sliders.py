@@ -126,3 +126,17 @@ def test_event_check():
         sliders.check_event_at("e", 2.5, lambda v: v >= 1.95, 0.1, "m", 0.1, 3.0)
     with pytest.raises(CheckFailed, match="outside"):
         sliders.check_event_at("e", 9.0, lambda v: v >= 1.95, 0.1, "m", 0.1, 3.0)
+
+
+def test_first_event_bisects_over_the_slider_positions():
+    calls = []
+
+    def happens(v):
+        calls.append(v)
+        return v >= 2.26
+
+    assert sliders.first_event(happens, 0.0, 5.0, 0.25) == pytest.approx(2.5)
+    assert len(calls) <= 8  # bisection, not a scan of the 21 positions
+    assert sliders.first_event(lambda v: v >= -1.0, 0.0, 5.0, 0.25) == 0.0
+    with pytest.raises(ValueError):
+        sliders.first_event(lambda v: v > 9.0, 0.0, 5.0, 0.25)

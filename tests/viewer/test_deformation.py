@@ -103,3 +103,85 @@ def test_lens_model_deformation_of_a_problem_file():
         assert not vec.visible and app.scene.nodes["residuals"].visible
     finally:
         app.stop()
+
+
+@pytest.fixture(scope="module")
+def ap_file(tmp_path_factory):
+    """A problem file whose camera has Ebner's 12 additional parameters (``cameras[]
+    .additional``), on a simulated block with a barrel distortion (15 µm at r = 80 mm)."""
+    import json
+
+    from orientviz.io.problem import dumps_problem, problem_from_block
+    from orientviz.simulate import simulate_block
+
+    def barrel(xy, image):
+        return -3e-8 * (xy**2).sum(axis=1, keepdims=True) * xy  # mm
+
+    sim = simulate_block(3, 6, rng=5, control="full", systematic=barrel)
+    doc = json.loads(dumps_problem(problem_from_block(sim.block, columnar=False)))
+    doc["cameras"][0].update(additional="ebner12")
+    path = tmp_path_factory.mktemp("ap") / "ebner.json"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    return path
+
+
+def test_additional_parameter_set_of_a_file_in_the_panel_and_its_deformation(ap_file):
+    """Issue 31 pt 4: an additional-parameter set given in a problem file — its estimates
+    with σ and strongest correlations, its correction field and the model deformation
+    (the block adjusted without the set against with it)."""
+    pytest.importorskip("viser")
+    from orientviz.io.solve import load_named, solve_problem
+    from orientviz.viewer.app import ViewerApp
+    from orientviz.viewer.panel_camera import DISTORTION_COLOUR
+
+    ref = solve_problem(load_named(str(ap_file))).adjustment
+    app = ViewerApp(str(ap_file), port=0, verbose=False)
+    try:
+        st, cam = app.panel.state, app.panel.camera
+        assert st.result.sigma0 == pytest.approx(ref.sigma0, rel=1e-9)
+        # the camera folder: 12 parameters, each value ± σ in µm, the σ the solve's
+        sl = ref.groups["additional"]
+        sig = ref.sigma0 * np.sqrt(np.diag(ref.cofactor_groups["additional"]))
+        lines = cam.text.split("\n")
+        assert cam.handles["folder"].visible and len(lines) == 13
+        for name, s, line in zip(ref.names[sl], sig, lines, strict=False):
+            assert line.startswith(f"{name} = ") and f"± {s:.2g} µm" in line
+        assert lines[-1].startswith("strongest correlations: ")
+        # the correction field of the estimated set on the selected image
+        assert cam.node is not None and "additional parameters (ebner12)" in (
+            app.panel.handles["legend"].content
+        )
+        assert np.asarray(cam.node.colors).reshape(-1, 3)[0].tolist() == list(DISTORTION_COLOUR)
+        # the model deformation: once more without the set
+        ctl, field = app.extra["lens_deformation"], app.extra["lens_field"]
+        ctl["show"].value = True
+        assert "**without** the additional parameters (ebner12) (t = 0)" in ctl["info"].content
+        pinhole = load_named(str(ap_file))
+        pinhole.data.cameras.model = [{}]
+        plain = solve_problem(pinhole).adjustment
+        assert field["sigma0"] == pytest.approx(plain.sigma0, rel=1e-9)
+        assert field["sigma0"] > 1.2 * st.result.sigma0  # the barrel shows without the set
+        p = st.block.n_points
+        A = plain.x[plain.groups["points"]].reshape(p, 3) - st.block.points.xyz
+        np.testing.assert_allclose(field["A"], A, atol=1e-9)
+        assert app.messages == []
+    finally:
+        app.stop()
+
+
+def test_misclosure_at_the_estimate_is_the_adjustments_own(ap_file):
+    """Opening a self-calibrated block builds no second bundle problem: at the estimate the
+    misclosure is −v of the adjustment, equal to the one through the camera model."""
+    pytest.importorskip("viser")
+    from orientviz.viewer import solved
+
+    for target in (str(ap_file), "dbat_camcal"):
+        st = solved.solution_demo(solved.solve_target(target)).state
+        assert st.at_result and st.camera is not None
+        fast = st.misclosure()
+        assert st.camera._cache is None  # no bundle problem built for it
+        full = st.camera.misclosure(st.block, st.ap)
+        np.testing.assert_allclose(fast, full, rtol=0, atol=1e-12 * np.abs(full).max())
+        st.replay(0)  # another state: through the camera model
+        assert not st.at_result
+        np.testing.assert_array_equal(st.misclosure(), st.camera.misclosure(st.block, st.ap))

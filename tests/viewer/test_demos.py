@@ -193,3 +193,86 @@ def test_pair_scene_has_a_legend_with_the_scale_bar():
         assert pv.scale_bar_text in pv.h["legend"].content
     finally:
         app.stop()
+
+
+def _screen(points, position, look_at, fov, aspect=1280 / 800):
+    """Normalised window coordinates (x, y in [-1, 1], x right, y up) of scene points seen
+    by a pinhole camera at ``position`` looking at ``look_at`` with Z up."""
+    f = np.asarray(look_at, float) - np.asarray(position, float)
+    f /= np.linalg.norm(f)
+    right = np.cross(f, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, f)
+    d = np.asarray(points, float) - np.asarray(position, float)
+    depth = d @ f
+    assert np.all(depth > 0), "a point behind the camera"
+    t = np.tan(fov / 2)
+    return np.column_stack([d @ right / (depth * t * aspect), d @ up / (depth * t)])
+
+
+def _left_of_the_panel(xy):
+    """Inside the window and left of the GUI panel (the right 28 % at 1280 × 800)."""
+    from orientviz.viewer.geometry import VISIBLE_WIDTH
+
+    return (xy[:, 0] > -1) & (xy[:, 0] < -1 + 2 * VISIBLE_WIDTH) & (np.abs(xy[:, 1]) < 1)
+
+
+@pytest.mark.parametrize("name", ["pair", "radar"])
+def test_first_view_shows_every_point_left_of_the_panel(name):
+    """Issue 31 pt 8: radar target 25 lay behind the panel, the pair ran under it and the
+    pair's scale-bar label sat half under it (1280 × 800)."""
+    from orientviz.viewer.geometry import VIEW_FOV, VISIBLE_WIDTH
+
+    app = ViewerApp(load_demo(name), port=0, verbose=False)
+    try:
+        cam = app.server.initial_camera
+        view = app.extra[name]
+        nodes = ["points", "target"] if name == "radar" else ["terrain", "scheme", "scale_bar"]
+        pts = [np.asarray(view.nodes[k].points, float).reshape(-1, 3) for k in nodes]
+        if name == "radar":
+            pts += [np.asarray(view.nodes[f"station_{i}"].position, float)[None] for i in (1, 2, 3)]
+        else:
+            pts += [np.asarray(view.nodes[k].position, float)[None] for k in ("left", "right")]
+            label = view.nodes["scale_label"]
+            assert label.anchor == "top-center"
+            # its text (~220 px wide at 1280 px: ±0.17 of the half-width) fits on the screen
+            # left of the panel in the viewer's window and in the book's 1280 × 960 pictures
+            for aspect in (1280 / 800, 1280 / 960):
+                x = _screen(np.asarray(label.position, float)[None], cam.position,
+                            cam.look_at, VIEW_FOV, aspect)[0, 0]  # fmt: skip
+                assert -1 + 0.2 < x < -1 + 2 * VISIBLE_WIDTH - 0.2, (aspect, x)
+        xy = _screen(np.vstack(pts), cam.position, cam.look_at, VIEW_FOV)
+        assert _left_of_the_panel(xy).all(), xy[~_left_of_the_panel(xy)]
+        if name == "radar":  # all 25 targets, 25 among them
+            assert np.asarray(view.nodes["points"].points).shape == (25, 3)
+    finally:
+        app.stop()
+
+
+def test_radar_sphere_cap_slider_redraws_the_caps_alone(monkeypatch):
+    """The cap slider took ~12 s in software rendering: it re-sent every node. It now moves
+    the three caps' vertices only (their triangles stay)."""
+    app = ViewerApp(load_demo("radar"), port=0, verbose=False)
+    try:
+        rv = app.extra["radar"]
+        calls = []
+        monkeypatch.setattr(rv, "redraw", lambda: calls.append(1))
+        faces = np.asarray(rv.nodes["sphere_1"].faces).copy()
+        before = np.asarray(rv.nodes["sphere_1"].vertices, float).copy()
+        circle = np.asarray(rv.nodes["circle"].points).copy()
+        rv.h["extent"].value = 30.0
+        after = np.asarray(rv.nodes["sphere_1"].vertices, float)
+        assert calls == [] and not np.allclose(after, before)
+        np.testing.assert_array_equal(rv.nodes["sphere_1"].faces, faces)
+        np.testing.assert_array_equal(rv.nodes["circle"].points, circle)
+        # the cap still lies on its range sphere, now 30° wide about the station
+        geo = rv.geo
+        c = geo["points"][geo["triangle"][1]]
+        r = np.linalg.norm(after + rv.frame.origin - c, axis=1)
+        np.testing.assert_allclose(r, geo["radii"][1], rtol=1e-5)
+        w = geo["stations"][3] - c
+        cos = (after + rv.frame.origin - c) @ w / (r * np.linalg.norm(w))
+        assert np.degrees(np.arccos(cos.min())) == pytest.approx(30.0, abs=0.01)
+        assert app.messages == []
+    finally:
+        app.stop()

@@ -126,3 +126,33 @@ def test_deformation_demo_shows_the_errors_against_the_truth(small_block):
         assert shown == pytest.approx(np.linalg.norm(np.sqrt(np.mean(d**2, axis=0))), rel=5e-3)
     finally:
         app.stop()
+
+
+def test_pair_read_out_says_where_the_dials_stand_against_the_scrubber():
+    """Lesson 05's snapshot read "passes: 0" (the plotter's own counter) beside the
+    scrubber at pass 5, with the dials turned 2 c away from that pass by the notebook."""
+    from orientviz.orientation.plotter import config_with, true_pair
+    from orientviz.units import RHO_C
+
+    pair = true_pair(
+        config_with(sequence="opk", sigma_by=0.0, sigma_z=0.0), rng=np.random.default_rng(1)
+    )
+    passes = [np.zeros(5), 0.5 * pair.elements, 0.9 * pair.elements, pair.elements]
+    app = live.start(live.pair_passes_demo(pair, passes))
+    try:
+        view = app.extra["pair"]
+        assert int(view.h["scrub"].value) == 3
+        assert "dials at pass 3 of 3" in view.h["stats"].content
+        assert "turned" not in view.h["stats"].content
+        live.set_pair_dials(app, pair.elements + np.r_[0, 0, 0, 0, 2.0 / RHO_C])
+        stats = view.h["stats"].content
+        assert "dials at pass 3 of 3, turned by κ +2.0 c" in stats and "passes: 0" not in stats
+        view.h["scrub"].value = 1
+        assert "dials at pass 1 of 3" in view.h["stats"].content
+        assert "turned" not in view.h["stats"].content
+        view.h["by [mm]"].value = round(float(view.h["by [mm]"].value) + 0.5, 2)  # by hand
+        # the other dials snap to the sliders' steps: less than half a step is no turn
+        assert "dials at pass 1 of 3, turned by by +0.50" in view.h["stats"].content
+        assert "bz" not in view.h["stats"].content.split("\n")[1]
+    finally:
+        app.stop()

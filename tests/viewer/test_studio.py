@@ -164,3 +164,56 @@ def test_a_method_that_cannot_take_the_design_keeps_the_old_one():
     with pytest.raises(NotDeterminableError, match="fewer than 5 common points"):
         st.set_method("models")  # the cross strip's end models cannot be formed
     assert st.method == "bundle" and np.isfinite(st.quality.point_sigma).all()
+
+
+def test_moving_an_image_updates_the_design_like_a_new_assessment(view):
+    from orientviz.design import assess_block
+
+    st = view.studio
+    n0, ids0 = st.block.n_images, list(st.block.images.ids)
+    X0 = st.block.images.X0
+    to = X0[3, :2] + [150.0, -80.0]
+    st.move_image(3, to)
+    b = st.block
+    assert b.n_images == n0 and sorted(b.images.ids) == sorted(ids0)
+    k = b.images.ids.index(ids0[3])
+    np.testing.assert_allclose(b.images.X0[k], [*to, X0[3, 2]])
+    ref = assess_block(b, st.spec)[1]  # the two update steps equal a new assessment
+    np.testing.assert_allclose(st.quality.point_sigma, ref.point_sigma, rtol=1e-7)
+    np.testing.assert_allclose(st.quality.redundancy, ref.redundancy, atol=1e-9)
+    assert "moved to X" in st.changes_markdown()
+    st.undo()
+    assert list(st.block.images.ids) == ids0
+
+
+def test_the_image_gizmo_drags_an_image(view):
+    panel, st = view.panel, view.studio
+    X0 = st.block.images.X0.copy()
+    panel.act_at(X0[4, :2] + 5.0, "pick")  # the gizmo on the nearest image
+    assert "image_gizmo" in view.nodes and view.dragged == st.block.images.ids[4]
+    to = X0[4] + [120.0, 60.0, 0.0]
+    view.image_released(view.frame.to_scene(to))
+    k = st.block.images.ids.index(view.dragged)
+    np.testing.assert_allclose(st.block.images.X0[k], to)
+    assert "moved to X" in panel.h["changes"].content
+    panel.undo()
+    np.testing.assert_allclose(st.block.images.X0, X0)
+    view.image_gizmo(False)
+    assert "image_gizmo" not in view.nodes
+
+
+def test_structural_changes_with_auxiliary_data_follow_the_readings():
+    from orientviz.design import assess_block, design_auxiliary
+
+    st = Studio(FlightDesign(strips=2, images_per_strip=6, control="corners", sigma_statoscope=0.3))
+    st.add_cross_strip(float(st.block.images.X0[:, 0].mean()))
+    aux = design_auxiliary(st.block, st.design)  # the readings of the new block's images
+    assert aux[0].index.size == st.block.n_images
+    ref = assess_block(st.block, st.spec, auxiliary=aux)[1]
+    np.testing.assert_allclose(st.quality.point_sigma, ref.point_sigma, rtol=1e-7)
+    q = st.set_control(int(np.flatnonzero(st.block.points.role == 0)[4]), 0.05)  # an update
+    ref = assess_block(st.block, st.spec, auxiliary=aux)[1]
+    np.testing.assert_allclose(q.point_sigma, ref.point_sigma, rtol=1e-7)
+    st.move_image(2, st.block.images.X0[2, :2] + 100.0)
+    ref = assess_block(st.block, st.spec, auxiliary=design_auxiliary(st.block, st.design))[1]
+    np.testing.assert_allclose(st.quality.point_sigma, ref.point_sigma, rtol=1e-7)

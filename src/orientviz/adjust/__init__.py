@@ -6,7 +6,8 @@ No plotting, no I/O and nothing of blocks or bundles here (dependencies point do
 returns an :class:`~orientviz.adjust.result.Adjustment`.
 """
 
-from .engine import gauss_newton
+from typing import Any
+
 from .loop import Damping, Evaluation, IterativeProblem, Run, Step, StopRule, iterate
 from .result import Adjustment, Iteration
 
@@ -22,3 +23,13 @@ __all__ = [
     "gauss_newton",
     "iterate",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """``gauss_newton`` on first use: :mod:`.engine` loads SciPy, which the tables of a
+    block (``orientviz.block`` imports :mod:`.result`) and the file importers never need."""
+    if name == "gauss_newton":
+        from .engine import gauss_newton  # SciPy only when the dense engine is used
+
+        return gauss_newton
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

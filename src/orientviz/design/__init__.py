@@ -7,12 +7,12 @@
   :class:`DesignQuality`: σ of every point and station, confidence ellipsoids,
   redundancy numbers, MDB, external reliability, weak spots in words, and Ebner's
   accuracy laws for the same layout (:func:`accuracy_law`);
-* :class:`LiveDesign` — one change (a control point added, removed, its σ changed)
-  updates the quality by a low-rank formula on the design's factorised normal
-  equations, without forming them again;
+* :class:`LiveDesign` — one change (a control point added, removed, its σ changed;
+  images added or removed) updates the quality by a low-rank formula on the design's
+  factorised normal equations, without forming them again;
 * :func:`suggest_control` — the next control point that most reduces the worst σ;
-* :func:`cross_strip`, :func:`add_images`, :func:`remove_images` — structural edits of a
-  design block; :func:`design_from_block` — a design with the geometry of any block;
+* :func:`cross_strip` (:func:`cross_strip_images`), :func:`add_images`,
+  :func:`remove_images` — structural edits of a design block; :func:`design_from_block` — a design with the geometry of any block;
 * :func:`assess_models` — the design's precision for independent models
   (:data:`METHODS`: the polynomial adjustment has none).
 
@@ -21,7 +21,13 @@ their machinery: the normal equations, the precision and reliability are the bun
 """
 
 from ._design import DesignAssessment, accuracy_law, assess_block, assess_design
-from ._extend import add_images, cross_strip, design_from_block, remove_images
+from ._extend import (
+    add_images,
+    cross_strip,
+    cross_strip_images,
+    design_from_block,
+    remove_images,
+)
 from ._layout import FlightDesign, design_auxiliary, design_block, set_control
 from ._live import Change, LiveDesign
 from ._methods import METHODS, assess_models
@@ -41,6 +47,7 @@ __all__ = [
     "ellipsoids",
     "add_images",
     "cross_strip",
+    "cross_strip_images",
     "design_from_block",
     "remove_images",
     "METHODS",

@@ -97,12 +97,22 @@ def assess_block(
 def accuracy_law(design: FlightDesign, spec: dict[str, Any]) -> dict[str, Any]:
     """Ebner's accuracy laws (independent models) for the design's layout, in m.
 
-    The laws give μ/σ0 for σ0 the σ of a model coordinate; here σ0 = σ_image · m_B in
-    planimetry and σ_image · m_B · H/B in height (the image σ at ground scale, the
-    height by the parallax's base-to-height ratio). Planimetry: perimeter control every
-    ``control_spacing`` bases (:func:`orientviz.simulate.planimetric_precision`); height:
-    chains every ``chain_spacing`` bases (:func:`orientviz.simulate.height_precision`).
-    Other layouts have no law: NaN with a reason.
+    The laws give μ = σ/σ0 for σ0 the σ of a model coordinate, the unit weight of the
+    independent-model adjustment they model: in planimetry σ0 = σ_image · m_B (the image σ
+    at ground scale), in height σ0z = √2 · σ_image · m_B · H/B, the σ of a model height
+    from the x-parallax of two image coordinates (the normal case: σ_Z = √2 · H/B · m_B ·
+    σ_x). Both are the σ of the model coordinates that
+    :func:`orientviz.stereo_models.independent_models` weights by default. Planimetry:
+    perimeter control every ``control_spacing`` bases
+    (:func:`orientviz.simulate.planimetric_precision`); height: chains every
+    ``chain_spacing`` bases (:func:`orientviz.simulate.height_precision`). Other layouts
+    have no law: NaN with a reason.
+
+    The height law weights every coordinate of its height block alike, also the
+    projection centres' X, Y (which hold the tilts between models); the designs weight the
+    centres' planimetry with σ0 (√2 · H/B times better than a model height), so the law is
+    pessimistic against them, the more so the wider the chains (benchmarks/README.md, "the
+    σ0 of Ebner's laws").
 
     Returns
     -------
@@ -111,7 +121,7 @@ def accuracy_law(design: FlightDesign, spec: dict[str, Any]) -> dict[str, Any]:
         ``note`` (what the numbers are).
     """
     s0 = design.sigma_image_mm * 1e-3 * design.scale
-    s0z = s0 * spec["flying_height_m"] / spec["base_m"]
+    s0z = np.sqrt(2.0) * s0 * spec["flying_height_m"] / spec["base_m"]
     out: dict[str, Any] = {"sigma_xy": float("nan"), "sigma_z": float("nan")}
     notes = []
     if design.control in ("perimeter", "chains"):
@@ -120,7 +130,10 @@ def accuracy_law(design: FlightDesign, spec: dict[str, Any]) -> dict[str, Any]:
             control_spacing=design.control_spacing,
         )  # fmt: skip
         out["sigma_xy"] = pl.mu * s0
-        notes.append(f"μ_xy = {pl.mu:.2f} σ0 (perimeter every {design.control_spacing} bases)")
+        notes.append(
+            f"μ_xy = {pl.mu:.2f} σ0, σ0 = σ·m_B = {s0 * 1e3:.0f} mm (perimeter every "
+            f"{design.control_spacing} bases)"
+        )
     else:
         notes.append(f"no planimetric law for control {design.control!r}")
     if design.control == "chains":
@@ -129,7 +142,11 @@ def accuracy_law(design: FlightDesign, spec: dict[str, Any]) -> dict[str, Any]:
             models_per_strip=design.images_per_strip - 1,
         )  # fmt: skip
         out["sigma_z"] = hz.mu * s0z
-        notes.append(f"μ_z = {hz.mu:.2f} σ0z (chains every {design.chain_spacing} bases)")
+        notes.append(
+            f"μ_z = {hz.mu:.2f} σ0z, σ0z = √2·σ·m_B·H/B = {s0z * 1e3:.0f} mm (chains every "
+            f"{design.chain_spacing} bases; the law weights the projection centres like model "
+            "heights, the designs better: the law is the more pessimistic the wider the chains)"
+        )
     else:
         notes.append("height law needs control='chains'")
     out["sigma0_xy"], out["sigma0_z"] = s0, s0z

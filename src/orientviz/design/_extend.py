@@ -116,15 +116,11 @@ def add_images(
     return b
 
 
-def cross_strip(block: Block, spec: dict[str, Any], x: float, *, ids_prefix: str = "c") -> Block:
-    """A copy of a design block with a cross strip flown along +Y at X = ``x`` (m).
-
-    The cross strip has the block's flying height and air base (``spec["base_m"]``, so
-    its forward overlap is the block's), κ = 90° (image x along +Y), and spans the
-    block's points in Y (images that would see fewer than 3 points are left out). Its
-    consecutive images may share too few points to form stereo models: the bundle takes
-    such a strip, independent models (:func:`assess_models`) refuse it and name the models.
-    """
+def cross_strip_images(
+    block: Block, spec: dict[str, Any], x: float, *, ids_prefix: str = "c"
+) -> tuple[F64, F64, int, list[str]]:
+    """The images of a cross strip at X = ``x`` (m): projection centres (k, 3) m, ω φ κ
+    (k, 3) rad, strip index and ids, as :func:`cross_strip` adds them."""
     P = block.points.xyz
     B = float(spec["base_m"])
     y0, y1 = float(P[:, 1].min()) - B, float(P[:, 1].max()) + B
@@ -140,7 +136,31 @@ def cross_strip(block: Block, spec: dict[str, Any], x: float, *, ids_prefix: str
     X0, ang = X0[keep], ang[keep]
     strip = int(block.images.strip.max()) + 1
     ids = [f"{ids_prefix}{strip:02d}_{i:03d}" for i in range(X0.shape[0])]
+    return X0, ang, strip, ids
+
+
+def cross_strip(block: Block, spec: dict[str, Any], x: float, *, ids_prefix: str = "c") -> Block:
+    """A copy of a design block with a cross strip flown along +Y at X = ``x`` (m).
+
+    The cross strip has the block's flying height and air base (``spec["base_m"]``, so
+    its forward overlap is the block's), κ = 90° (image x along +Y), and spans the
+    block's points in Y (images that would see fewer than 3 points are left out). Its
+    consecutive images may share too few points to form stereo models: the bundle takes
+    such a strip, independent models (:func:`assess_models`) refuse it and name the models.
+    """
+    X0, ang, strip, ids = cross_strip_images(block, spec, x, ids_prefix=ids_prefix)
     return add_images(block, X0, ang, strip=strip, ids=ids)
+
+
+def kept_after_removal(block: Block, images: ArrayLike) -> tuple[NDArray, NDArray]:
+    """The rays (n,) and points (p,) of a block that stay when ``images`` are removed:
+    the rays of the other images, less those of points left with fewer than 2 rays."""
+    drop = np.zeros(block.n_images, bool)
+    drop[np.asarray(images, np.int64)] = True
+    O = block.observations
+    keep_o = ~drop[O.image]
+    keep_p = np.bincount(O.point[keep_o], minlength=block.n_points) >= 2
+    return keep_o & keep_p[O.point], keep_p
 
 
 def remove_images(block: Block, images: ArrayLike) -> Block:
@@ -158,10 +178,7 @@ def remove_images(block: Block, images: ArrayLike) -> Block:
     if (~drop).sum() < 2:
         raise InputError("a design needs at least 2 images")
     I, O, P = block.images, block.observations, block.points
-    keep_o = ~drop[O.image]
-    rays = np.bincount(O.point[keep_o], minlength=block.n_points)
-    keep_p = rays >= 2
-    keep_o &= keep_p[O.point]
+    keep_o, keep_p = kept_after_removal(block, images)
     new_i = np.cumsum(~drop) - 1
     new_p = np.cumsum(keep_p) - 1
     b = Block.from_arrays(

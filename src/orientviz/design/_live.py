@@ -1,34 +1,43 @@
 """A design that answers each change at once: low-rank updates of the design's cofactors.
 
-Making point j control with weights P_j = diag(1/σ²) (1/m²), or changing or removing its
-control, adds ΔP_j to the point's 3×3 block of the normal equations N — values change, the
-structure does not (a design's points are all unknowns: its control is weighted). With A
-selecting the point's coordinates, each change is one step of the Sherman-Morrison-Woodbury
-formula from the current cofactors Q:
+Every change the studio makes to a design block is a change of the normal equations
+N = Σ gᵀ d g by a few rows g with signed weights d:
 
-    Q' = (N + Aᵀ ΔP A)⁻¹ = Q − C M Cᵀ,   C = Q Aᵀ,   M = (I + ΔP A C)⁻¹ ΔP.
+* control of point j (weights P_j = diag(1/σ²), 1/m²) added, changed or removed: the
+  three unit rows of the point with d = ΔP_j;
+* images added: their rays (two rows P½J each, d = +1) and their GNSS prior; the new
+  unknowns enter the base as separate slots with a provisional prior ω I (their cofactor
+  block ω⁻¹ I, no coupling), which the same step takes away (d = −ω);
+* images removed: their rays (d = −1) and a provisional prior ω I on their unknowns
+  (d = +ω), which leaves them decoupled (cofactor ω⁻¹ I, masked from then on); the same
+  for the points left with fewer than two rays (:func:`orientviz.design.remove_images`).
 
-The current columns C are those of the base design, C0 = Q0 Aᵀ — three solves with its
-factorised reduced camera system (right-hand side −Σ T_a of the point's rays,
-T = W V⁻¹) and one back-substitution to all points (Q_kj = δ_kj V_j⁻¹ − Σ_b T_bᵀ
-Q_c(i_b, j)), kept per point — less the earlier steps' C_s M_s C_sᵀ Aᵀ. A step costs
-those (the solves once per point) and the update of the shown quantities, whatever the
-number of earlier changes; undo restores the terms before the step:
+With G the rows, D = diag(d) and Q the current cofactors, each step is one
+Sherman-Morrison-Woodbury update
 
-* point and station covariances: Q_kk − C_k M C_kᵀ;
-* per ray with h = P½ J C (2 × r): the block P½ J Q Jᵀ P½ loses h M hᵀ, so the
-  redundancy numbers gain diag(h M hᵀ) and the ray's gains K = Q Jᵀ P½ lose C M hᵀ;
-* from these the reliability (:func:`orientviz.bundle.ray_reliability`), ellipsoids,
-  weak spots and summary (:func:`orientviz.design._quality.quality_from_arrays`).
+    Q' = Q − U M Uᵀ,   U = Q Gᵀ,   M = (I + D G U)⁻¹ D.
+
+The current columns Q[:, Ω] at the step's coordinates Ω are the base design's
+(:class:`orientviz.design._base.DesignBase`: one multi-column solve with its factor) less
+the earlier steps' U_s M_s U_s[Ω]ᵀ. A step costs those columns and the update of the
+shown quantities: the diagonal blocks of the point and station cofactors (Q_kk − U_k M
+U_kᵀ) and per ray with h = P½ J U (2 × r) the 2 × 2 block P½ J Q Jᵀ P½ (loses h M hᵀ: the
+redundancy numbers gain its diagonal) and the ray's gains K = Q Jᵀ P½ (lose U M hᵀ); a ray
+added in the step starts from its own rows of G U and U. From these the reliability
+(:func:`orientviz.bundle.ray_reliability`), ellipsoids, weak spots and summary follow
+(:func:`orientviz.design._quality.quality_from_arrays`).
 
 Every number equals a new :func:`orientviz.design.assess_block` of the changed design up
-to rounding (``tests/design/test_live.py``). Changes of the image σ, the flight or the
-strips change N itself: :meth:`LiveDesign.rebuild` forms and factors it again.
+to rounding (``tests/design/test_live.py``, ``tests/design/test_live_structure.py``).
+Changes of the plan (image σ, flight, overlaps) change all of N: :meth:`LiveDesign.rebuild`
+forms and factors it again, as does a structural change of a design with auxiliary data
+(their rows follow the images) or one whose step would need more than
+:data:`MAX_COLUMNS` columns.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import copy
 from types import SimpleNamespace
 from typing import Any
 
@@ -37,48 +46,34 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..block import CONTROL, TIE, Block
 from ..bundle import RayGains, ray_reliability
-from ..bundle.problem import BundleProblem, BundleState, point_setup
-from ..bundle.reduced import factor_reduced
-from ..errors import InputError
-from ._design import assess_block
+from ..bundle.model import collinearity_block
+from ..errors import InputError, NotDeterminableError
+from ._base import DesignBase
+from ._extend import add_images, kept_after_removal
+from ._extend import remove_images as _remove_images
+from ._live_parts import (
+    Change,
+    _capped,
+    _check_connected,
+    _check_rays,
+    _Current,
+    _weights,
+)
 from ._quality import DesignQuality, quality_from_arrays
 
 F64 = NDArray[np.float64]
+I64 = NDArray[np.int64]
 
 #: After this many update steps the design is formed and factored again.
 MAX_STEPS: int = 40
-
-
-@dataclass(frozen=True)
-class Change:
-    """One change of a design: point ``point`` gets control σ ``sigma`` (m, NaN = that
-    coordinate not given; all NaN = tie point); ``before`` is what it had."""
-
-    point: int
-    sigma: tuple[float, float, float]
-    before: tuple[float, float, float]
-
-    def describe(self, ids: list[str]) -> str:
-        """The change in words."""
-
-        def txt(s):
-            s = np.asarray(s)
-            if not np.isfinite(s).any():
-                return "tie"
-            return (
-                "control σ " + "/".join("–" if not np.isfinite(v) else f"{v:g}" for v in s) + " m"
-            )
-
-        return f"point {ids[self.point]}: {txt(self.before)} → {txt(self.sigma)}"
-
-
-def _weights(sig) -> F64:
-    s = np.asarray(sig, float)
-    return np.where(np.isfinite(s), 1.0 / np.where(np.isfinite(s), s, 1.0) ** 2, 0.0)
+#: The scaled Woodbury matrix of a step is taken as singular beyond this condition.
+COND_LIMIT: float = 1e14
+#: A structural change whose step needs more columns of Q than this is assessed anew.
+MAX_COLUMNS: int = 400
 
 
 class LiveDesign:
-    """A design block whose quality follows each change of its control at once.
+    """A design block whose quality follows each change at once.
 
     Parameters
     ----------
@@ -89,14 +84,19 @@ class LiveDesign:
         Its geometry (needs ``base_m``).
     level, alpha0, beta0 : float
         Ellipsoid probability; test level and power of the reliability.
+    auxiliary : list of Auxiliary, optional
+        Statoscope / APR / GNSS rows with strip offsets (:func:`orientviz.design.design_auxiliary`).
+    blas_threads : int or None
+        BLAS threads while the design forms, factors and updates (:func:`blas_threads`;
+        None: as the process runs them).
 
     Attributes
     ----------
     block : Block
         The current design (control as changed).
     changes : list of Change
-        The changes since the last :meth:`rebuild`, in order (:meth:`undo` takes the
-        last back).
+        The control changes since the last :meth:`rebuild` or structural change, in
+        order (:meth:`undo` takes the last back).
     history : list of str
         Every change in words, including those before a rebuild.
     """
@@ -104,90 +104,163 @@ class LiveDesign:
     def __init__(
         self, block: Block, spec: dict[str, Any], *, level: float = 0.95,
         alpha0: float = 0.001, beta0: float = 0.80, auxiliary: list | None = None,
+        blas_threads: int | None = 1,
     ) -> None:  # fmt: skip
         self.spec = spec
-        #: auxiliary data with strip offsets (a border of the normal equations): then each
-        #: change is assessed anew (exact, slower), not by the update formula
+        self.blas_threads = blas_threads
         self.auxiliary = list(auxiliary or [])
         self.level, self.alpha0, self.beta0 = level, alpha0, beta0
+        #: a structural step needing more columns of Q than this is assessed anew
+        self.max_columns = MAX_COLUMNS
         self.history: list[str] = []
-        self._undo_base: list[Change] = []
         self.rebuild(block.copy())
 
     # ------------------------------------------------------------------ the base design
+    @_capped
     def rebuild(self, block: Block | None = None) -> DesignQuality:
         """Form and factor the normal equations of the current (or given) design again."""
         if block is not None:
             self.block = block
         b = self.block
-        res, q = assess_block(
-            b, self.spec, level=self.level, alpha0=self.alpha0, beta0=self.beta0,
-            auxiliary=self.auxiliary,
-        )  # fmt: skip
-        self.changes = []
-        self._stack = []
-        self.base_quality = self._quality = q
-        self.result = res
-        if self.auxiliary:
-            self._w = self._weights_now()
-            return q
-        prob = BundleProblem(b, point_setup(b, "weighted"))
-        if prob.points.n != b.n_points:
-            raise InputError("a live design needs weighted control (σ > 0) at every point")
-        st = BundleState(b.images.X0, b.images.angles, b.points.xyz, np.zeros(0), np.zeros(0))
-        rw, Je, Jp = prob.residuals(st, jac=True)
-        ne = prob.normal(st, rw, Je, Jp)
-        self._fac = factor_reduced(prob.reduced, ne.blocks)
-        self._prob, self._T, self._Vinv = prob, ne.T, ne.Vinv
-        sw = prob.obs.weight[:, :, None]
-        self._Jew, self._Jpw = Je * sw, Jp * sw
-        n = b.n_observations
-        idx = prob.obs.index
-        rn = np.asarray(res.redundancy_numbers[: 2 * n]).reshape(n, 2)
-        unk = prob.points.unknown
-        #: the current cofactor terms (points by column, images, rays in the problem's order)
+        _check_connected(b)
+        _check_rays(b)
+        self._base = DesignBase(b, self.auxiliary)
+        self.result = res = self._base.precision()
+        m, p, n = b.n_images, b.n_points, b.n_observations
+        self._img = np.arange(m)  # slot of each current image, point, ray
+        self._pt = np.arange(p)
+        self._obs = np.arange(n)
+        self._omega = np.zeros((m, 6))  # provisional prior of the image slots
+        self._ray_img = np.asarray(b.observations.image, np.int64).copy()
+        self._ray_pt = np.asarray(b.observations.point, np.int64).copy()
+        self._Jw = self._base.Jw
         self._cur = _Current(
-            Qp=np.asarray(res.cofactor_groups["points"])[unk],
-            Qe=np.asarray(res.cofactor_groups["exterior"]),
-            r=rn[idx],
-            rxy=np.asarray(res.redundancy_xy)[idx],
-            Ke=np.asarray(res.ray_gains.exterior)[idx],
-            Kp=np.asarray(res.ray_gains.points)[idx],
+            Qp=np.asarray(res.cofactor_groups["points"], float).copy(),
+            Qe=np.asarray(res.cofactor_groups["exterior"], float).copy(),
+            r=np.asarray(res.redundancy_numbers[: 2 * n]).reshape(n, 2).copy(),
+            rxy=np.asarray(res.redundancy_xy, float).copy(),
+            Ke=np.asarray(res.ray_gains.exterior, float).copy(),
+            Kp=np.asarray(res.ray_gains.points, float).copy(),
         )
-        self._w = self._weights_now()  # the weights the current terms belong to
-        self._cols: dict[int, tuple[F64, F64]] = {}
-        #: per step: (weights, terms, quality) before it, and its (Cc, Cp, M)
-        self._stack: list[tuple[F64, _Current, DesignQuality, tuple]] = []
+        self._w = _weights(b.points.sigma)  # by base point: the weights of the terms
+        #: the steps (U images by slot, U points by base point, M)
+        self._steps: list[tuple[F64, F64, F64]] = []
+        #: per control change: (weights, terms, quality, number of steps) before it
+        self._saved: list[tuple[F64, _Current, DesignQuality, int]] = []
         self.changes: list[Change] = []
+        q = self._assemble()
         self.base_quality = self._quality = q
-        self.result = res
         return q
 
-    def _weights_now(self) -> F64:
-        """Weights 1/σ² (1/m²) of the given coordinates of every point (p, 3)."""
-        return _weights(self.block.points.sigma)
-
     def columns(self, point: int) -> tuple[F64, F64]:
-        """Q0 at the three columns of a point: orientations (m, 6, 3), points (p, 3, 3)."""
-        got = self._cols.get(point)
-        if got is not None:
-            return got
-        prob, T = self._prob, self._T
-        col = prob.points.column[point]
-        rays = np.flatnonzero(prob.obs.column == col)
-        m = self.block.n_images
-        rhs = np.zeros((m, 6, 3))
-        np.add.at(rhs, prob.obs.image[rays], -T[rays])
-        Cc = self._fac.solve(rhs.reshape(6 * m, 3)).reshape(m, 6, 3)
-        S = prob.reduced
-        vo = prob.obs.var_rays
-        oi = prob.obs.image
-        Cp = -np.add.reduceat(T[vo].transpose(0, 2, 1) @ Cc[oi[vo]], S.pt_starts, axis=0)
-        Cp[col] += self._Vinv[col]
-        self._cols[point] = (Cc, Cp)
-        return Cc, Cp
+        """Q0 (the base design's cofactors) at the three columns of a base point:
+        orientations (m, 6, 3), points (p, 3, 3) in the base block's order."""
+        return self._base.columns(np.zeros(0, np.int64), np.array([point]))
 
-    # ------------------------------------------------------------------ changes
+    # ------------------------------------------------------------------ columns
+    def _columns(self, imgs: I64, pts: I64) -> tuple[F64, F64]:
+        """The current cofactors at the coordinates of image slots ``imgs`` (6 each) and
+        base points ``pts`` (3 each): images by slot (M, 6, k), points (p0, 3, k)."""
+        base = self._base
+        M = self._omega.shape[0]
+        old = imgs[imgs < base.m]
+        Cc0, Cp = base.columns(old, pts)
+        k = 6 * imgs.size + 3 * pts.size
+        Cc = np.zeros((M, 6, k))
+        pos = np.flatnonzero(imgs < base.m)  # where the base images' columns go
+        cols = np.r_[
+            (6 * pos[:, None] + np.arange(6)).reshape(-1), 6 * imgs.size + np.arange(3 * pts.size)
+        ]
+        Cc[: base.m, :, cols] = Cc0
+        Cpk = np.zeros((Cp.shape[0], 3, k))
+        Cpk[:, :, cols] = Cp
+        for s, i in enumerate(imgs):  # added slots: ω⁻¹ I in the base
+            if i >= base.m:
+                Cc[i, :, 6 * s : 6 * s + 6] = np.diag(1.0 / self._omega[i])
+        for Uc, Up, Ms in self._steps:  # less the earlier steps' U M U[Ω]ᵀ
+            r = Uc.shape[2]
+            X = np.concatenate(
+                [Uc[i] if i < Uc.shape[0] else np.zeros((6, r)) for i in imgs]
+                + [Up[j] for j in pts],
+                axis=0,
+            )  # (k, r)
+            B = Ms @ X.T
+            Cc[: Uc.shape[0]] -= Uc @ B
+            Cpk -= Up @ B
+        return Cc, Cpk
+
+    @_capped
+    def current_columns(self, point: int) -> tuple[F64, F64]:
+        """The current design's cofactors at the three columns of ``point`` (current
+        index): orientations (m, 6, 3) and points (p, 3, 3) in the current order."""
+        Cc, Cp = self._columns(np.zeros(0, np.int64), self._pt[[point]])
+        return Cc[self._img], Cp[self._pt]
+
+    # ------------------------------------------------------------------ the step
+    def _step(
+        self, imgs: I64, pts: I64, G: F64, d: F64, new_rays: I64 | None = None,
+        alive: NDArray[np.bool_] | None = None,
+    ) -> None:  # fmt: skip
+        """One update by rows ``G`` (r, k) over the coordinates of ``imgs``, ``pts`` with
+        signed weights ``d`` (r,); ``new_rays``: ray slots added in this step, their rows
+        at 2i, 2i + 1 of G in order; ``alive``: the ray slots present after the step."""
+        Cc, Cp = self._columns(imgs, pts)
+        k = G.shape[1]
+        QO = np.concatenate(
+            [Cc[imgs].reshape(-1, k) if imgs.size else np.zeros((0, k)),
+             Cp[pts].reshape(-1, k)], axis=0,
+        )  # fmt: skip
+        GU = G @ QO @ G.T
+        GU = 0.5 * (GU + GU.T)
+        # M = (I + D G U)⁻¹ D = S B⁻¹ Σ S with D = S Σ S (S = √|d|, Σ = sign d) and
+        # B = I + Σ S G U S: B is scaled (unit rows for rays and priors alike), so its
+        # condition tells whether the changed design is still determinable
+        sq, sg = np.sqrt(np.abs(d)), np.sign(d)
+        B = np.eye(d.size) + sg[:, None] * (sq[:, None] * GU * sq[None, :])
+        if not np.isfinite(B).all() or np.linalg.cond(B) > COND_LIMIT:
+            raise NotDeterminableError(
+                "the changed design is not determinable (the change leaves unknowns "
+                "without enough observations)",
+                parameters=[],
+            )
+        Mx = sq[:, None] * np.linalg.solve(B, np.diag(sg)) * sq[None, :]
+        Mx = 0.5 * (Mx + Mx.T)
+        Uc, Up = Cc @ G.T, Cp @ G.T  # (M, 6, r), (p0, 3, r)
+        c0 = self._cur
+        r, rxy, Ke, Kp = c0.r.copy(), c0.rxy.copy(), c0.Ke.copy(), c0.Kp.copy()
+        if new_rays is not None and new_rays.size:  # their terms before: rows of G U, U
+            nn = new_rays.size
+            a = np.arange(nn)
+            H = GU[: 2 * nn, : 2 * nn].reshape(nn, 2, nn, 2)[a, :, a, :]  # (nn, 2, 2)
+            r[new_rays] = 1.0 - np.stack([H[:, 0, 0], H[:, 1, 1]], 1)
+            rxy[new_rays] = -0.5 * (H[:, 0, 1] + H[:, 1, 0])
+            Ue = Uc[self._ray_img[new_rays]][:, :, : 2 * nn].reshape(nn, 6, nn, 2)
+            Upn = Up[self._ray_pt[new_rays]][:, :, : 2 * nn].reshape(nn, 3, nn, 2)
+            Ke[new_rays], Kp[new_rays] = Ue[a, :, a, :], Upn[a, :, a, :]
+        live = np.flatnonzero(alive) if alive is not None else self._obs
+        oi, op = self._ray_img[live], self._ray_pt[live]
+        Jw = self._Jw[live]
+        rr = Mx.shape[0]
+        UcM = (Uc.reshape(-1, rr) @ Mx).reshape(Uc.shape)
+        UpM = (Up.reshape(-1, rr) @ Mx).reshape(Up.shape)
+        h = Jw[:, :, :6] @ Uc[oi] + Jw[:, :, 6:] @ Up[op]  # (n, 2, r)
+        ht = h.transpose(0, 2, 1)
+        UcMo, UpMo = UcM[oi], UpM[op]
+        hM = Jw[:, :, :6] @ UcMo + Jw[:, :, 6:] @ UpMo
+        dH = hM @ ht
+        r[live] = np.clip(r[live] + np.stack([dH[:, 0, 0], dH[:, 1, 1]], 1), 0.0, 1.0)
+        rxy[live] += 0.5 * (dH[:, 0, 1] + dH[:, 1, 0])
+        Ke[live] -= UcMo @ ht
+        Kp[live] -= UpMo @ ht
+        self._cur = _Current(
+            Qp=c0.Qp - UpM @ Up.transpose(0, 2, 1),
+            Qe=c0.Qe - UcM @ Uc.transpose(0, 2, 1),
+            r=r, rxy=rxy, Ke=Ke, Kp=Kp,
+        )  # fmt: skip
+        self._steps.append((Uc, Up, Mx))
+
+    # ------------------------------------------------------------------ control changes
+    @_capped
     def set_control(self, point: int, sigma_xyz: ArrayLike) -> DesignQuality:
         """Make ``point`` control with σ (m; NaN = coordinate not given, all NaN = tie).
 
@@ -198,13 +271,22 @@ class LiveDesign:
             raise InputError(f"sigma_xyz: a design weights its control, expected σ > 0, got {s}")
         before = tuple(float(v) for v in self.block.points.sigma[point])
         ch = Change(int(point), tuple(float(v) for v in s), before)
+        self._saved.append((self._w, self._cur, self._quality, len(self._steps)))
         self._apply_roles(ch.point, s)
         self.changes.append(ch)
         self.history.append(ch.describe(self.block.points.ids))
-        if len(self._stack) >= MAX_STEPS:
+        if len(self._steps) >= MAX_STEPS:
             self.history.append("(normal equations formed and factored again)")
             return self.rebuild()
-        return self.quality()
+        w = self._w.copy()
+        j = int(self._pt[point])
+        w[j] = _weights(s)
+        if np.any(w[j] != self._w[j]):
+            d = (w[j] - self._w[j]).astype(float)
+            self._step(np.zeros(0, np.int64), np.array([j]), np.eye(3), d)
+            self._w = w
+            self._quality = self._assemble()
+        return self._quality
 
     def add_control(self, point: int, sigma: float = 0.02) -> DesignQuality:
         """Make ``point`` XYZ control with σ ``sigma`` (m) in each coordinate."""
@@ -215,15 +297,15 @@ class LiveDesign:
         return self.set_control(point, (np.nan, np.nan, np.nan))
 
     def undo(self) -> DesignQuality:
-        """Take the last change since the last :meth:`rebuild` back."""
+        """Take the last control change since the last :meth:`rebuild` back."""
         if not self.changes:
             raise InputError("nothing to undo since the last rebuild")
         ch = self.changes.pop()
         self._apply_roles(ch.point, np.asarray(ch.before))
         self.history.append(f"undo: {ch.describe(self.block.points.ids)}")
-        if self._stack:  # the terms before the change's step
-            self._w, self._cur, self._quality, _ = self._stack.pop()
-        return self.quality()
+        self._w, self._cur, self._quality, n = self._saved.pop()
+        del self._steps[n:]
+        return self._quality
 
     def _apply_roles(self, point: int, s: F64) -> None:
         P = self.block.points
@@ -232,95 +314,195 @@ class LiveDesign:
         P.xyz_known[point] = np.where(given, P.xyz[point], np.nan)
         P.role[point] = CONTROL if given.any() else TIE
 
-    # ------------------------------------------------------------------ the quality
-    def current_columns(self, point: int) -> tuple[F64, F64]:
-        """The current design's cofactors at the three columns of ``point``: orientations
-        (m, 6, 3) and points by column (p, 3, 3); Q0's columns less each step's C M Cᵀ."""
+    # ------------------------------------------------------------------ structural changes
+    def _no_auxiliary(self) -> None:
         if self.auxiliary:
-            raise InputError("no cofactor columns for a design with auxiliary data")
-        Cc, Cp = self.columns(point)
-        c = self._prob.points.column[point]
-        for _, _, _, (Cs, Ps, Ms) in self._stack:
-            B = Ms @ Ps[c].T  # (r, 3)
-            Cc = Cc - Cs @ B
-            Cp = Cp - Ps @ B
-        return Cc, Cp
+            raise InputError(
+                "images of a design with auxiliary data: their rows follow the images — "
+                "make a new LiveDesign with design_auxiliary of the new block"
+            )
 
+    def _fresh(self, block: Block, label: str) -> LiveDesign:
+        """A new live design of ``block`` (formed and factored anew)."""
+        new = LiveDesign(
+            block, self.spec, level=self.level, alpha0=self.alpha0, beta0=self.beta0,
+            auxiliary=self.auxiliary, blas_threads=self.blas_threads,
+        )  # fmt: skip
+        new.max_columns = self.max_columns
+        new.history = self.history + [label, "(normal equations formed and factored again)"]
+        return new
+
+    def _derived(self, block: Block, label: str) -> LiveDesign:
+        """A copy for ``block`` sharing the base and the steps so far (the bundle's rule
+        for a block in pieces applies first: the update would give each piece its own
+        numbers, the bundle refuses it)."""
+        _check_connected(block)
+        new = copy.copy(self)
+        new.block = block.copy()
+        new._steps = list(self._steps)
+        new._saved, new.changes = [], []
+        new.history = self.history + [label]
+        return new
+
+    @_capped
+    def add_images(
+        self, X0: ArrayLike, angles: ArrayLike, *, strip: ArrayLike | int | None = None,
+        ids: list[str] | None = None,
+    ) -> LiveDesign:  # fmt: skip
+        """A new live design with images added (:func:`orientviz.design.add_images`).
+
+        The current design stays as it is (undo: keep using it). Updated by one step
+        (rank 2·rays + 6·images) when the step needs at most :data:`MAX_COLUMNS` columns
+        of Q; otherwise assessed anew.
+
+        Raises
+        ------
+        InputError
+            For a design with auxiliary data (their rows follow the images).
+        NotDeterminableError
+            If the changed design is not determinable.
+        """
+        self._no_auxiliary()
+        b = add_images(self.block, X0, angles, strip=strip, ids=ids)
+        m, n = self.block.n_images, self.block.n_observations
+        k = b.n_images - m
+        label = f"{k} image(s) added"
+        O = b.observations
+        new_obs = np.arange(n, b.n_observations)
+        pts_new = np.unique(O.point[new_obs])
+        if 6 * k + 3 * pts_new.size > self.max_columns or len(self._steps) >= MAX_STEPS:
+            return self._fresh(b, label)
+        new = self._derived(b, label)
+        M0, R0 = self._omega.shape[0], self._Jw.shape[0]
+        slots = M0 + np.arange(k)
+        rays = R0 + np.arange(new_obs.size)
+        # the new rays' weighted Jacobians
+        cam = b.cameras
+        I = b.images
+        _, Je, Jp = collinearity_block(
+            I.X0, I.angles, cam.c[I.camera], cam.x0[I.camera], cam.y0[I.camera],
+            O.image[new_obs], b.points.xyz[O.point[new_obs]], b.sequence,
+        )  # fmt: skip
+        sw = 1.0 / np.asarray(O.sigma[new_obs], float)[:, :, None]
+        Jn = np.concatenate([Je * sw, Jp * sw], axis=2)  # (nn, 2, 9)
+        ray_img = slots[O.image[new_obs] - m]
+        ray_pt = self._pt[O.point[new_obs]]
+        # provisional prior ω (the new rays' diagonal + GNSS) and the GNSS weights
+        gw = np.zeros((k, 6))
+        xs = np.asarray(I.X0_sigma[m:], float)
+        gw[:, :3] = np.where(np.isfinite(xs) & (xs > 0), 1.0 / np.where(xs > 0, xs, 1.0) ** 2, 0.0)
+        omega = gw.copy()
+        np.add.at(omega, O.image[new_obs] - m, np.einsum("nki,nki->ni", Jn[:, :, :6], Jn[:, :, :6]))
+        new._omega = np.vstack([self._omega, omega])
+        new._Jw = np.concatenate([self._Jw, Jn])
+        new._ray_img = np.r_[self._ray_img, ray_img]
+        new._ray_pt = np.r_[self._ray_pt, ray_pt]
+        c = self._cur
+        nn = rays.size
+        new._cur = _Current(
+            Qp=c.Qp, Qe=np.concatenate([c.Qe, np.stack([np.diag(1.0 / o) for o in omega])]),
+            r=np.vstack([c.r, np.zeros((nn, 2))]), rxy=np.r_[c.rxy, np.zeros(nn)],
+            Ke=np.concatenate([c.Ke, np.zeros((nn, 6, 2))]),
+            Kp=np.concatenate([c.Kp, np.zeros((nn, 3, 2))]),
+        )  # fmt: skip
+        new._img = np.r_[self._img, slots]
+        new._obs = np.r_[self._obs, rays]
+        # the rows: new rays (d = +1), then the priors of the new images (d = GNSS − ω)
+        pos_i = {int(s): t for t, s in enumerate(slots)}
+        pts_s = self._pt[pts_new]
+        pos_p = {int(j): t for t, j in enumerate(pts_s)}
+        kc = 6 * k + 3 * pts_new.size
+        G = np.zeros((2 * nn + 6 * k, kc))
+        for a in range(nn):
+            ci0 = 6 * pos_i[int(ray_img[a])]
+            cp0 = 6 * k + 3 * pos_p[int(ray_pt[a])]
+            G[2 * a : 2 * a + 2, ci0 : ci0 + 6] = Jn[a, :, :6]
+            G[2 * a : 2 * a + 2, cp0 : cp0 + 3] = Jn[a, :, 6:]
+        G[2 * nn :, : 6 * k] = np.eye(6 * k)
+        d = np.r_[np.ones(2 * nn), (gw - omega).reshape(-1)]
+        alive = np.zeros(new._Jw.shape[0], bool)
+        alive[new._obs] = True
+        new._step(slots, pts_s, G, d, new_rays=rays, alive=alive)
+        new._quality = new.base_quality = new._assemble()
+        return new
+
+    @_capped
+    def remove_images(self, images: ArrayLike, label: str | None = None) -> LiveDesign:
+        """A new live design without some images (:func:`orientviz.design.remove_images`:
+        points left with fewer than 2 rays go too). The current design stays as it is.
+        Updated by one step when possible (see :meth:`add_images`), else assessed anew.
+        """
+        self._no_auxiliary()
+        drop_i = np.asarray(images, np.int64).reshape(-1)
+        b = _remove_images(self.block, drop_i)
+        label = label or f"{drop_i.size} image(s) removed"
+        keep_o, keep_p = kept_after_removal(self.block, drop_i)
+        O = self.block.observations
+        gone = np.flatnonzero(~keep_o)
+        gone_p = np.flatnonzero(~keep_p)
+        touched = np.unique(O.point[gone])
+        other_imgs = np.setdiff1d(np.unique(O.image[gone]), drop_i)
+        imgs_cur = np.r_[drop_i, other_imgs]
+        kc = 6 * imgs_cur.size + 3 * touched.size
+        if kc > self.max_columns or len(self._steps) >= MAX_STEPS:
+            return self._fresh(b, label)
+        new = self._derived(b, label)
+        imgs = self._img[imgs_cur]
+        pts = self._pt[touched]
+        rays = self._obs[gone]
+        pos_i = {int(s): t for t, s in enumerate(imgs)}
+        pos_p = {int(j): t for t, j in enumerate(pts)}
+        Jg = self._Jw[rays]
+        # provisional priors ω: the diagonal of the normal block of the removed images
+        # (their rays) and of the dropped points (their rays and control weight)
+        om_i = np.zeros((drop_i.size, 6))
+        for t, i in enumerate(drop_i):
+            Jr = self._Jw[self._obs[O.image == i]][:, :, :6]
+            om_i[t] = np.einsum("nki,nki->i", Jr, Jr)
+        om_p = np.zeros((gone_p.size, 3))
+        for t, j in enumerate(gone_p):
+            Jr = self._Jw[self._obs[O.point == j]][:, :, 6:]
+            om_p[t] = np.einsum("nki,nki->i", Jr, Jr) + self._w[self._pt[j]]
+        nr = rays.size
+        G = np.zeros((6 * drop_i.size + 3 * gone_p.size + 2 * nr, kc))
+        G[: 6 * drop_i.size, : 6 * drop_i.size] = np.eye(6 * drop_i.size)
+        r0 = 6 * drop_i.size
+        for t, j in enumerate(gone_p):
+            c0 = 6 * imgs.size + 3 * pos_p[int(self._pt[j])]
+            G[r0 + 3 * t : r0 + 3 * t + 3, c0 : c0 + 3] = np.eye(3)
+        r0 += 3 * gone_p.size
+        for a in range(nr):
+            ci0 = 6 * pos_i[int(self._ray_img[rays[a]])]
+            cp0 = 6 * imgs.size + 3 * pos_p[int(self._ray_pt[rays[a]])]
+            G[r0 + 2 * a : r0 + 2 * a + 2, ci0 : ci0 + 6] = Jg[a, :, :6]
+            G[r0 + 2 * a : r0 + 2 * a + 2, cp0 : cp0 + 3] = Jg[a, :, 6:]
+        d = np.r_[om_i.reshape(-1), om_p.reshape(-1), -np.ones(2 * nr)]
+        keep_i = np.ones(self.block.n_images, bool)
+        keep_i[drop_i] = False
+        new._img = self._img[keep_i]
+        new._pt = self._pt[keep_p]
+        new._obs = self._obs[keep_o]
+        alive = np.zeros(self._Jw.shape[0], bool)
+        alive[new._obs] = True
+        new._step(imgs, pts, G, d, alive=alive)
+        new._quality = new.base_quality = new._assemble()
+        return new
+
+    # ------------------------------------------------------------------ the quality
     def quality(self) -> DesignQuality:
-        """The quality of the current design (by the update formula)."""
-        w = self._weights_now()
-        pts = np.flatnonzero(np.any(w != self._w, axis=1))
-        if pts.size and self.auxiliary:  # a new assessment (the border has no update here)
-            self._stack.append((self._w, None, self._quality, None))
-            self._w = w
-            self._quality = assess_block(
-                self.block, self.spec, level=self.level, alpha0=self.alpha0, beta0=self.beta0,
-                auxiliary=self.auxiliary,
-            )[1]  # fmt: skip
-        elif pts.size:
-            self._step(pts, w)
+        """The quality of the current design."""
         return self._quality
 
-    def _step(self, pts: NDArray[np.int64], w: F64) -> None:
-        """One rank-3k update from the current terms to the weights ``w`` at ``pts``."""
-        cols = [self.current_columns(int(j)) for j in pts]
-        Cc = np.concatenate([c[0] for c in cols], axis=2)  # (m, 6, r)
-        Cp = np.concatenate([c[1] for c in cols], axis=2)  # (p, 3, r)
-        prob = self._prob
-        pc = prob.points.column[pts]
-        G = Cp[pc].reshape(-1, Cp.shape[2])  # A C (r, r)
-        d = (w - self._w)[pts].reshape(-1)
-        M = np.linalg.solve(np.eye(d.size) + d[:, None] * G, np.diag(d))
-        M = 0.5 * (M + M.T)
-        c0 = self._cur
-        oi, oc = prob.obs.image, prob.obs.column
-        CpM = Cp @ M
-        CcM = Cc @ M
-        h = self._Jew @ Cc[oi] + self._Jpw @ Cp[oc]  # (n, 2, r)
-        hM = h @ M
-        dH = hM @ h.transpose(0, 2, 1)
-        ht = h.transpose(0, 2, 1)
-        cur = _Current(
-            Qp=c0.Qp - CpM @ Cp.transpose(0, 2, 1),
-            Qe=c0.Qe - CcM @ Cc.transpose(0, 2, 1),
-            r=np.clip(c0.r + np.stack([dH[:, 0, 0], dH[:, 1, 1]], 1), 0.0, 1.0),
-            rxy=c0.rxy + 0.5 * (dH[:, 0, 1] + dH[:, 1, 0]),
-            Ke=c0.Ke - CcM[oi] @ ht,
-            Kp=c0.Kp - CpM[oc] @ ht,
-        )
-        self._stack.append((self._w, c0, self._quality, (Cc, Cp, M)))
-        self._w, self._cur = w, cur
-        self._quality = self._assemble(cur)
-
-    def _assemble(self, cur: _Current) -> DesignQuality:
+    def _assemble(self) -> DesignQuality:
         """Reliability, ellipsoids, weak spots and summary from the current terms."""
-        b, prob = self.block, self._prob
-        n = b.n_observations
-        idx = prob.obs.index
-        rn = np.full((n, 2), np.nan)
-        rn[idx] = cur.r
-        rx = np.full(n, np.nan)
-        rx[idx] = cur.rxy
-        ge, gp = np.full((n, 6, 2), np.nan), np.full((n, 3, 2), np.nan)
-        ge[idx], gp[idx] = cur.Ke, cur.Kp
+        b, cur = self.block, self._cur
+        o = self._obs
         adj = SimpleNamespace(
-            redundancy_numbers=rn.reshape(-1), redundancy_xy=rx, ray_gains=RayGains(ge, gp)
-        )
+            redundancy_numbers=cur.r[o].reshape(-1), redundancy_xy=cur.rxy[o],
+            ray_gains=RayGains(cur.Ke[o], cur.Kp[o]),
+        )  # fmt: skip
         rel = ray_reliability(adj, b, alpha0=self.alpha0, beta0=self.beta0)
-        Qp_all = np.empty((b.n_points, 3, 3))
-        Qp_all[prob.points.unknown] = cur.Qp
         return quality_from_arrays(
-            b, Qp_all, cur.Qe, rn, rel, float(self.spec["base_m"]), self.level
-        )
-
-
-@dataclass(frozen=True)
-class _Current:
-    """The cofactor terms of a design that the shown quantities come from."""
-
-    Qp: F64
-    Qe: F64
-    r: F64
-    rxy: F64
-    Ke: F64
-    Kp: F64
+            b, cur.Qp[self._pt], cur.Qe[self._img], cur.r[o], rel, float(self.spec["base_m"]),
+            self.level,
+        )  # fmt: skip

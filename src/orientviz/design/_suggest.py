@@ -10,8 +10,7 @@ columns of j less the low-rank terms of the changes made so far). So each candid
 a 3×3 update per point; the worst σ after the change is exact, not estimated. The
 criterion ``"external"`` (the largest δ̄0 of any ray) needs the rays' redundancy and is
 evaluated by making the change and taking it back (:meth:`LiveDesign.set_control`,
-:meth:`LiveDesign.undo`); so is every criterion of a design with auxiliary data (whose
-strip offsets border the normal equations: no columns by the update formula).
+:meth:`LiveDesign.undo`).
 """
 
 from __future__ import annotations
@@ -23,6 +22,7 @@ from numpy.typing import NDArray
 
 from ..block import TIE
 from ..errors import InputError
+from ._live_parts import _weights, blas_threads
 
 F64 = NDArray[np.float64]
 
@@ -119,6 +119,11 @@ def suggest_control(
     -------
     Suggestion
     """
+    with blas_threads(getattr(live, "blas_threads", None)):
+        return _suggest(live, criterion, sigma, candidates, top)
+
+
+def _suggest(live, criterion, sigma, candidates, top) -> Suggestion:
     if criterion not in CRITERIA:
         raise InputError(f"criterion: expected one of {', '.join(CRITERIA)}, got {criterion!r}")
     if not sigma > 0:
@@ -140,7 +145,7 @@ def suggest_control(
         cand = np.asarray(candidates, np.int64)
     if cand.size == 0:
         raise InputError("no candidate points (every point is control)")
-    if criterion == "external" or live.auxiliary:  # make each change and take it back
+    if criterion == "external":  # make each change and take it back
         before = (
             q.summary["external_max"]
             if criterion == "external"
@@ -166,22 +171,18 @@ def suggest_control(
 
 def _sigma_after(live, q, cand, sigma, criterion) -> F64:
     """The worst σ criterion after making each candidate control (exact, rank 3)."""
-    prob = live._prob
-    col = prob.points.column
-    unk = prob.points.unknown
-    w_now = live._weights_now()
-    Qp = q.point_cov[unk]  # current, by column
-    ctrl = q.control[unk]
+    w_now = _weights(live.block.points.sigma)
+    Qp = q.point_cov  # current
     out = np.empty(cand.size)
     for k, j in enumerate(cand):
         Cj = live.current_columns(int(j))[1]  # (p, 3, 3)
         dw = 1.0 / sigma**2 - w_now[j]  # the weight added at j (3,)
-        Gj = Cj[col[j]]
+        Gj = Cj[j]
         Mj = np.linalg.solve(np.eye(3) + dw[:, None] * Gj, np.diag(dw))
         Mj = 0.5 * (Mj + Mj.T)
         Qn = Qp - Cj @ Mj @ Cj.transpose(0, 2, 1)
         s = np.sqrt(np.clip(np.einsum("kii->ki", Qn), 0.0, None))
-        c = ctrl.copy()
-        c[col[j]] = True
+        c = q.control.copy()
+        c[j] = True
         out[k] = worst(s, c, criterion)
     return out

@@ -35,6 +35,11 @@ enforces the notebook side):
   function, which the usual check judges. ``tests/notebooks/test_planted_mistakes.py`` runs
   every such cell and demands that its checker rejects it with the named diagnosis.
 * A failed check raises a message that begins with "✗" (a passed one prints "✓ …").
+* A slider question ("move the slider until …") is checked by
+  :mod:`orientviz.exercises.sliders`; its check cell may end with hidden tests (between
+  ``### BEGIN HIDDEN TESTS`` and ``### END HIDDEN TESTS``, run in the teacher's copy, dropped
+  from the student's) that demand :func:`~orientviz.exercises._common.rejection` names each
+  plausible misreading.
 * A numpy error raised inside the student's function (a transposed matrix, a wrong shape)
   is turned by :func:`~orientviz.exercises._common.call` into a :class:`CheckFailed` that names
   the shapes of the inputs.
@@ -44,7 +49,7 @@ This package is core: it imports numpy only (no matplotlib, no widgets).
 
 from __future__ import annotations
 
-from ._common import CheckFailed, NotWrittenError, show_mistake
+from ._common import CheckFailed, NotWrittenError, rejection, show_mistake
 from ._standin import stand_in
 
-__all__ = ["CheckFailed", "NotWrittenError", "show_mistake", "stand_in"]
+__all__ = ["CheckFailed", "NotWrittenError", "rejection", "show_mistake", "stand_in"]

@@ -12,9 +12,13 @@ the relative error found and the tolerance used, so that the tests in
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
+import inspect
 import math
+import sys
 import zlib
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 import numpy as np
@@ -32,6 +36,7 @@ __all__ = [
     "diagnose",
     "is_sign_flip",
     "is_transpose",
+    "own_work",
     "relative_error",
     "rejection",
     "rng_for",
@@ -88,6 +93,70 @@ def rng_for(name: str, salt: int = 0) -> np.random.Generator:
     return np.random.default_rng([zlib.crc32(name.encode("utf-8")), int(salt)])
 
 
+#: The library functions the running check forbids, by code object (see :func:`own_work`).
+_FORBIDDEN: contextvars.ContextVar[dict[Any, str] | None] = contextvars.ContextVar(
+    "orientviz_exercises_forbidden", default=None
+)
+
+
+@contextlib.contextmanager
+def own_work(**library: Callable[..., Any]) -> Iterator[None]:
+    """Within the block, :func:`call` rejects a student's function that runs ``library``.
+
+    A "your version" exercise asks for the student's own numpy; the lesson shows the
+    library's equivalent right above the blank (it stands in while the blank is empty).
+    Inside ``with own_work(resection=resection): …`` every :func:`call` watches the
+    student's function with a profile hook and raises :class:`CheckFailed` naming the library
+    function if its code runs — whatever name or wrapper (a stand-in, a lambda, an alias)
+    it was called through.
+
+    Parameters
+    ----------
+    **library : callable
+        The forbidden library functions, keyed by the name the message uses.
+    """
+    codes = {inspect.unwrap(f).__code__: name for name, f in library.items()}
+    token = _FORBIDDEN.set({**(_FORBIDDEN.get() or {}), **codes})
+    try:
+        yield
+    finally:
+        _FORBIDDEN.reset(token)
+
+
+def _library_message(what: str, name: str) -> str:
+    return (
+        f"{what} calls the library's {name}: this exercise asks for your own numpy "
+        "(the library stands in above only while your blank is empty)"
+    )
+
+
+def _run_watched(func: Callable[..., Any], args: tuple, kwargs: dict, what: str) -> Any:
+    """Run ``func``; raise :class:`CheckFailed` if it ran a library function :func:`own_work`
+    forbids (also when it then failed)."""
+    forbidden = _FORBIDDEN.get() or {}
+    if not forbidden:
+        return func(*args, **kwargs)
+    hits: list[str] = []
+
+    def hook(frame: Any, event: str, arg: Any) -> None:
+        if event == "call" and frame.f_code in forbidden and not hits:
+            hits.append(forbidden[frame.f_code])
+
+    previous = sys.getprofile()
+    sys.setprofile(hook)
+    try:
+        out = func(*args, **kwargs)
+    except Exception:
+        sys.setprofile(previous)
+        if hits:
+            raise CheckFailed(_library_message(what, hits[0])) from None
+        raise
+    sys.setprofile(previous)
+    if hits:
+        raise CheckFailed(_library_message(what, hits[0]))
+    return out
+
+
 def call(func: Any, *args: Any, what: str = "your function", **kwargs: Any) -> Any:
     """Call the student's function and turn an unwritten blank into a clear message.
 
@@ -119,7 +188,7 @@ def call(func: Any, *args: Any, what: str = "your function", **kwargs: Any) -> A
     if not callable(func):
         raise CheckFailed(f"{what}: expected a function, got {type(func).__name__}.")
     try:
-        out = func(*args, **kwargs)
+        out = _run_watched(func, args, kwargs, what)
     except NotImplementedError:
         raise NotWrittenError(
             f"{what}: not written yet (it still raises NotImplementedError)."

@@ -11,7 +11,8 @@ import math
 
 import numpy as np
 
-from ._common import CheckFailed, call, compare, rng_for, success
+from ..adjust.engine import gauss_newton  # forbidden inside the student's line_fit
+from ._common import CheckFailed, call, compare, own_work, rng_for, success
 
 # --------------------------------------------------------------------- weighted mean
 
@@ -154,41 +155,67 @@ def check_error_ellipse(fn) -> None:
     success("semi-axes and direction agree with a brute-force search over 200 001 directions")
 
 
-# --------------------------------------------------------------------- χ² test of σ0
+# --------------------------------------------------------------------- σ̂0 of a group
 
 
-def _bounds_no_sqrt(r, alpha):
-    from scipy.stats import chi2
+def _redundancy_by_perturbation(A: np.ndarray, l: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Redundancy numbers r_i = −∂v_i/∂l_i, each by moving l_i and solving again (lstsq of
+    √P A): not the formula diag(I − A N⁻¹ Aᵀ P)."""
+    sq = np.sqrt(p)
 
-    return chi2.isf(1 - alpha / 2, r) / r, chi2.isf(alpha / 2, r) / r
+    def residuals(obs: np.ndarray) -> np.ndarray:
+        x = np.linalg.lstsq(A * sq[:, None], obs * sq, rcond=None)[0]
+        return A @ x - obs
+
+    v0, eps = residuals(l), 1e-3
+    r = np.empty(len(l))
+    for i in range(len(l)):
+        moved = l.copy()
+        moved[i] += eps
+        r[i] = -(residuals(moved)[i] - v0[i]) / eps
+    return r
 
 
-def _bounds_one_sided(r, alpha):
-    from scipy.stats import chi2
+def _group_case(rng: np.random.Generator):
+    """A quadratic fit to 30 observations in three groups whose true σ are 1, 2 and 4 times the
+    claimed one, so the groups' σ̂0 differ."""
+    t = np.sort(rng.uniform(-1.0, 1.0, 30))
+    A = np.column_stack([np.ones_like(t), t, t**2])
+    group = np.repeat([0, 1, 2], 10)[rng.permutation(30)]
+    claimed = rng.uniform(0.5, 1.5, 30)
+    l = A @ [2.0, -1.0, 0.5] + rng.normal(0.0, 1.0, 30) * claimed * np.array([1.0, 2.0, 4.0])[group]
+    return A, l, claimed, group
 
-    return (math.sqrt(chi2.ppf(alpha, r) / r), math.sqrt(chi2.ppf(1 - alpha, r) / r))
 
-
-def _bounds_not_divided(r, alpha):
-    from scipy.stats import chi2
-
-    return (math.sqrt(chi2.ppf(alpha / 2, r)), math.sqrt(chi2.ppf(1 - alpha / 2, r)))
-
-
-def check_sigma0_bounds(fn) -> None:
-    """``fn(r, alpha) -> (lower, upper)``: the range of σ̂0/σ0 accepted by the two-sided
-    χ² test at level alpha with r degrees of freedom (r σ̂0²/σ0² ~ χ²(r))."""
-    for r, alpha in ((7, 0.05), (40, 0.01), (3, 0.10)):
-        got = tuple(float(g) for g in call(fn, r, alpha, what="sigma0_bounds"))
-        wrong = [
-            ("these are bounds for σ̂0², not σ̂0 (take the square roots)", _bounds_no_sqrt(r, alpha)),
-            ("one-sided quantiles α and 1 − α: a two-sided test puts α/2 in each tail",
-             _bounds_one_sided(r, alpha)),
-            ("the χ² quantiles are not divided by r (T = r σ̂0²/σ0²)", _bounds_not_divided(r, alpha)),
-        ]  # fmt: skip
-        want = np.sqrt(_bounds_no_sqrt(r, alpha))
-        compare(f"bounds for r = {r}, α = {alpha}", got, want, rtol=1e-6, wrong=wrong)
-    success("bounds agree with scipy.stats.chi2 for r = 7, 40, 3")
+def check_group_sigma0(fn) -> None:
+    """``fn(A, l, sigma, group) -> s`` (k,): σ̂0 of each group g = 0 … k−1 of observations,
+    sqrt(Σ_g p_i v_i² / Σ_g r_i) with the redundancy numbers r_i of the whole adjustment."""
+    A, l, sigma, group = _group_case(rng_for("lesson01.check_group_sigma0"))
+    p = 1.0 / sigma**2
+    x = np.linalg.lstsq(A * np.sqrt(p)[:, None], l * np.sqrt(p), rcond=None)[0]
+    v = A @ x - l
+    r_i = _redundancy_by_perturbation(A, l, p)
+    k = int(group.max()) + 1
+    pvv = np.array([np.sum((p * v * v)[group == g]) for g in range(k)])
+    n_g = np.array([np.sum(group == g) for g in range(k)], float)
+    r_g = np.array([r_i[group == g].sum() for g in range(k)])
+    want = np.sqrt(pvv / r_g)
+    u = A.shape[1]
+    wrong = [
+        ("divided by the group's number of observations, not its share of the redundancy "
+         "(Σ r_i over the group)", np.sqrt(pvv / n_g)),
+        ("the redundancy split in proportion to the group's size, not by its redundancy numbers",
+         np.sqrt(pvv / (n_g * (len(l) - u) / len(l)))),
+        ("the weights are missing: v_i²/σ_i², not v_i²",
+         np.sqrt(np.array([np.sum((v * v)[group == g]) for g in range(k)]) / r_g)),
+        ("this is σ̂0², not σ̂0", want**2),
+    ]  # fmt: skip
+    got = call(fn, A.copy(), l.copy(), sigma.copy(), group.copy(), what="group_sigma0")
+    compare("σ̂0 of the three groups", got, want, rtol=1e-6, wrong=wrong)
+    success(
+        f"σ̂0 per group {np.round(want, 3).tolist()} (true σ 1, 2, 4 × the claimed; "
+        "redundancy numbers by re-solving with each observation moved)"
+    )
 
 
 # --------------------------------------------------------------------- Gauss-Newton step
@@ -267,6 +294,7 @@ def _line_wrong(X, l, sigma, mistake):
     return x, (-v if mistake == "v_sign" else v), s0, Q
 
 
+@own_work(gauss_newton=gauss_newton)
 def check_line_fit(fn) -> None:
     """``fn(X, l, sigma) -> (xhat, v, sigma0, Q)``: the weighted straight line l ≈ a + b X
     (P = diag(1/σ²)), residuals v = A x̂ − l, σ̂0 = √(vᵀPv / (n − 2)) and Q = (AᵀPA)⁻¹."""

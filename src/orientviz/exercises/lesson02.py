@@ -15,14 +15,18 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._common import CheckFailed, call, compare, rng_for, success
+from ..camera import project  # forbidden inside the student's functions (own_work)
+from ..rotation import matrix_from_opk
+from ._common import CheckFailed, call, compare, own_work, rng_for, success
 
 __all__ = [
     "check_collinearity",
     "check_gimbal",
     "check_ground_point",
     "check_opk_from_matrix",
+    "check_relief_displacement",
     "check_rotation",
+    "check_vertical_partials",
 ]
 
 F64 = NDArray[np.float64]
@@ -48,6 +52,7 @@ def _rodrigues_opk(
     return rot[order[0]] @ rot[order[1]] @ rot[order[2]]
 
 
+@own_work(matrix_from_opk=matrix_from_opk)
 def check_rotation(R_opk: Callable[[float, float, float], F64]) -> None:
     """``R_opk(omega, phi, kappa)`` (gon) must return R = R_ω R_φ R_κ, shape (3, 3)."""
     # a case by hand: κ = 100 gon alone turns image x into object Y
@@ -86,6 +91,7 @@ def _rays_to_points(xy: F64, X0: F64, R: F64, c: float, x0: float, y0: float, de
     return X0 + depth[:, None] * (d @ R.T)
 
 
+@own_work(project=project)
 def check_collinearity(collinearity: Callable[..., F64]) -> None:
     """``collinearity(X, X0, R, c, x0, y0)`` must return the image coordinates (n, 2) in mm."""
     rng = rng_for("lesson02.check_collinearity")
@@ -196,3 +202,103 @@ def check_ground_point(ground_point: Callable[..., F64]) -> None:
     got = call(ground_point, xy, X0, R, c, Z, what="ground_point")
     compare("ground points [m]", got, truth, rtol=1e-9, scale=1000.0, wrong=wrong)
     success("ground points: the rays meet the plane where the points were")
+
+
+def _vertical_closed_forms(x: F64, y: F64, c: float, one: float = 1.0) -> F64:
+    """∂(x, y)/∂(ω, φ, κ) of a vertical image (n, 2, 3), mm/rad; ``one = 0`` drops the 1 in
+    c(1 + x²/c²) — a plausible slip the check names."""
+    J = np.zeros((len(x), 2, 3))
+    J[:, 0, 0], J[:, 1, 0] = -x * y / c, -c * (one + y**2 / c**2)
+    J[:, 0, 1], J[:, 1, 1] = c * (one + x**2 / c**2), x * y / c
+    J[:, 0, 2], J[:, 1, 2] = y, -x
+    return J
+
+
+def check_vertical_partials(vertical_partials: Callable[[F64, float], ArrayLike]) -> None:
+    """``vertical_partials(xy, c)`` must return ∂(x, y)/∂(ω, φ, κ), shape (n, 2, 3), in mm/rad,
+    of a vertical image (R = I, principal point at 0) at its image points ``xy`` (n, 2) mm.
+
+    Oracle: central differences (h = 1e-6 rad) of the image points of object points drawn on
+    the rays, projected through Rodrigues rotations by ±h about X, Y, Z.
+    """
+    rng = rng_for("lesson02.check_vertical_partials")
+    c = float(rng.uniform(100.0, 160.0))
+    xy = rng.uniform(-110.0, 110.0, (7, 2))
+    X0 = np.array([350.0, -120.0, 1500.0])
+    X = _rays_to_points(xy, X0, np.eye(3), c, 0.0, 0.0, rng.uniform(1300.0, 1700.0, 7))
+
+    def image(R: F64) -> F64:
+        uvw = (X - X0) @ R
+        return -c * uvw[:, :2] / uvw[:, 2:]
+
+    h = 1e-6
+    truth = np.zeros((len(xy), 2, 3))
+    for a in range(3):
+        e = np.zeros(3)
+        e[a] = h
+        plus, minus = _rodrigues_opk(*e, unit=1.0), _rodrigues_opk(*-e, unit=1.0)
+        truth[:, :, a] = (image(plus) - image(minus)) / (2.0 * h)
+    x, y = xy.T
+    closed = _vertical_closed_forms(x, y, c)
+    if np.abs(closed - truth).max() > 1e-6 * np.abs(truth).max():  # pragma: no cover - oracle
+        raise RuntimeError("lesson 02: the central differences disagree with the closed forms")
+    kappa_swapped = closed.copy()
+    kappa_swapped[:, 0, 2], kappa_swapped[:, 1, 2] = -y, x
+    wrong = [
+        (
+            "every sign is reversed: (∂R/∂ω)ᵀ d = −Rᵀ(e_X × d), not +Rᵀ(e_X × d) ([a]×ᵀ = −[a]×)",
+            -closed,
+        ),
+        (
+            "the 1 in c(1 + x²/c²) and c(1 + y²/c²) is missing — ∂u/∂φ = −w (step 3) "
+            "gives c·w/w = c",
+            _vertical_closed_forms(x, y, c, one=0.0),
+        ),
+        ("the ω and φ columns are swapped", closed[:, :, [1, 0, 2]]),
+        ("the κ column has the wrong sign (∂x/∂κ = +y, ∂y/∂κ = −x)", kappa_swapped),
+        ("these are derivatives per gon, not per radian", closed * GON),
+        ("these are derivatives per degree, not per radian", closed * np.pi / 180.0),
+        ("x and y (the rows) are swapped", closed[:, ::-1, :]),
+    ]
+    got = call(vertical_partials, xy, c, what="vertical_partials")
+    compare(
+        "∂(x, y)/∂(ω, φ, κ) [mm/rad]",
+        got,
+        truth,
+        rtol=1e-6,
+        scale=float(np.abs(truth).max()),
+        wrong=wrong,
+    )
+    success("∂(x, y)/∂(ω, φ, κ) of a vertical image: your closed forms = central differences")
+
+
+def check_relief_displacement(relief_displacement: Callable[[F64, F64, float], F64]) -> None:
+    """``relief_displacement(r_top, h, H)`` must return the radial displacement Δr (mm) of the
+    top of a vertical object of height ``h`` (m) in a vertical photograph taken ``H`` (m) above
+    the object's foot, from the radial distance ``r_top`` (mm) of the top's image.
+
+    Oracle: the checker's own projection of the foot and the top of vertical objects.
+    """
+    rng = rng_for("lesson02.check_relief_displacement")
+    c, H = 152.7, float(rng.uniform(1200.0, 1800.0))
+    foot = np.column_stack([rng.uniform(-600, 600, 6), rng.uniform(-600, 600, 6), np.zeros(6)])
+    h = rng.uniform(20.0, 300.0, 6)
+    top = foot + np.column_stack([np.zeros((6, 2)), h])
+    X0 = np.array([0.0, 0.0, H])
+
+    def image(P: F64) -> F64:
+        uvw = P - X0  # R = I
+        return -c * uvw[:, :2] / uvw[:, 2:]
+
+    r_foot = np.hypot(*image(foot).T)
+    r_top = np.hypot(*image(top).T)
+    truth = r_top - r_foot
+    wrong = [
+        ("this is r·h/(H − h): with r of the TOP the factor is h/H (h/(H − h) goes with the foot's r)",
+         r_top * h / (H - h)),
+        ("the sign is reversed: the top lies farther from the centre (away from the nadir)", -truth),
+        ("h/H in different units: h and H are both in m, r in mm", r_top * h / (H * 1000.0)),
+    ]  # fmt: skip
+    got = call(relief_displacement, r_top.copy(), h.copy(), H, what="relief_displacement")
+    compare("Δr [mm]", got, truth, rtol=1e-9, scale=float(np.abs(truth).max()), wrong=wrong)
+    success("Δr = r·h/H with r of the top: the projected foot and top agree")

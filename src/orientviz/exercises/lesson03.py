@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..orientation.interior import fiducial_transformation  # forbidden in affine_fit
 from ..rotation import matrix_from_opk
-from ._common import CheckFailed, call, compare, rng_for, success
+from ._common import CheckFailed, call, compare, own_work, rng_for, success
 
 
 def _scene(rng, affine=False):
@@ -166,6 +167,7 @@ def _fiducials(rng):
     return machine, cal, np.array([t[0], M[0, 0], M[0, 1], t[1], M[1, 0], M[1, 1]])
 
 
+@own_work(fiducial_transformation=fiducial_transformation)
 def check_affine_fit(fn) -> None:
     """``fn(machine, calibrated) -> (params, v, sigma0)``: x = a0 + a1 ξ + a2 η,
     y = b0 + b1 ξ + b2 η; params (a0, a1, a2, b0, b1, b2), v (2n,) mm in the order x1, y1, …,

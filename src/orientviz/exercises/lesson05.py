@@ -24,8 +24,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..camera import project
+from ..orientation.relative import relative_orientation  # forbidden (own_work), no oracle
 from ..rotation import matrix_from_opk
-from ._common import CheckFailed, call, compare, rng_for, success
+from ._common import CheckFailed, call, compare, own_work, rng_for, success
 from .lesson02 import _rodrigues_opk
 
 __all__ = [
@@ -230,6 +231,7 @@ def check_scheme_sigma(scheme_sigma: Callable[[F64, F64, F64, float, float], F64
     success("scheme precision: σ √diag((AᵀA)⁻¹)")
 
 
+@own_work(relative_orientation=relative_orientation)
 def check_kovarik_iteration(fn: Callable) -> None:
     """``fn(xy1, xy2, c, b) -> (elements, steps)``: the whole iteration of the dependent relative
     orientation — rigorous y-parallaxes of the current pair, the five corrections by least
@@ -263,6 +265,13 @@ def check_kovarik_iteration(fn: Callable) -> None:
             f"{np.round(e, 3).tolist()}): a sign is wrong — the parallax is p_y = Y_left − Y_right, "
             "the corrections are added, and the right ray is R (x'', y'', −c) (row-wise d2 @ Rᵀ)"
         )
+    size = np.abs(np.asarray([float(np.max(np.abs(s))) for s in steps]))
+    if not np.all(np.isfinite(size)) or size[-1] > 1e-6 or size[-1] > 1e-3 * size[0]:
+        raise CheckFailed(
+            f"the steps do not shrink to zero (first {size[0]:.1e}, last {size[-1]:.1e}): return "
+            "the size of each correction (e.g. its largest element) and iterate until the last one "
+            "is tiny (< 1e-6)"
+        )
     compare("by, bz [mm] of an error-free pair", e[:2], truth[:2], rtol=1e-8, scale=1.0)
     compare(
         "ω, φ, κ [rad] of an error-free pair", e[2:], truth[2:], rtol=1e-8, scale=0.01, unit="rad"
@@ -278,6 +287,7 @@ def _opk(R: F64) -> F64:
     )
 
 
+@own_work(relative_orientation=relative_orientation)
 def check_relative_from_exterior(relative_from_exterior: Callable[..., F64]) -> None:
     """``relative_from_exterior(X01, R1, X02, R2, b)`` must return the dependent pair's elements
     (by, bz [model mm], ω, φ, κ [rad]) of two exterior orientations (m; R image → object),

@@ -19,7 +19,12 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import least_squares
 
-from ._common import CheckFailed, call, compare, rng_for, success
+from ..orientation.absolute import (  # forbidden inside the student's functions, no oracle
+    similarity_closed_form,
+    similarity_transform,
+)
+from ._common import CheckFailed, call, compare, own_work, rng_for, success
+from ._standin import student_function
 from .lesson02 import _axis_rotation
 
 __all__ = [
@@ -56,6 +61,7 @@ def _unpack(out: object, what: str) -> tuple[float, F64, F64]:
         raise CheckFailed(f"{what}: expected (m, R, T), got {type(out).__name__}") from None
 
 
+@own_work(similarity_closed_form=similarity_closed_form, similarity_transform=similarity_transform)
 def check_similarity(similarity_svd: Callable[[F64, F64], tuple[float, F64, F64]]) -> None:
     """``similarity_svd(x, X)`` must return (m, R, T) with X ≈ T + m R x (least squares, equal weights)."""
     rng = rng_for("lesson07.check_similarity")
@@ -241,6 +247,27 @@ def _gn_oracle(x, X, sigma, observed):
     return q[6], _rotvec(q[3:6]), q[:3] + off, float(np.sqrt(v @ v / (observed.sum() - 7)))
 
 
+def _rotation_on_wrong_side(fn: Callable, rng: np.random.Generator) -> bool:
+    """Does one step of ``fn`` apply the rotation correction on the wrong side (R ← R R(α))?
+
+    Error-free control, the start off in R only, by 0.01 rad about an oblique axis: one
+    Gauss-Newton step with R ← R(α) R leaves an error of second order (~1e-4 rad); with
+    R ← R R(α) the correction turns about the wrong axes and the error stays of first order.
+    """
+    x, m, R, T = _model(rng, 6)
+    X = T + m * x @ R.T
+    start = (m, _rotvec(np.array([0.006, -0.005, 0.006])) @ R, T.copy())
+    try:
+        out = fn(x.copy(), X, np.ones_like(X), np.ones(X.shape, bool),
+                 (start[0], start[1].copy(), start[2].copy()), 1e-10, 1)  # tol, max_iter = 1  # fmt: skip
+        R1 = np.asarray(out[1], float)
+        err = np.arccos(np.clip((np.trace(R1 @ R.T) - 1.0) / 2.0, -1.0, 1.0))
+    except Exception:  # noqa: BLE001 - a probe only: any failure means "cannot tell"
+        return False
+    return bool(err > 3e-3)
+
+
+@own_work(similarity_transform=similarity_transform)
 def check_similarity_gn(fn: Callable) -> None:
     """``fn(x, X, sigma, observed, start) -> (m, R, T, sigma0)``: the weighted least-squares
     similarity X ≈ T + m R x by Gauss-Newton from ``start = (m, R, T)``, using only the control
@@ -267,9 +294,19 @@ def check_similarity_gn(fn: Callable) -> None:
                 exc.error, exc.tolerance,
             ) from None  # fmt: skip
         raise
-    compare("R", np.asarray(R, float), wR, rtol=1e-7, wrong=[
-        ("this is Rᵀ: R turns model into object vectors", wR.T),
-    ])  # fmt: skip
+    try:
+        compare("R", np.asarray(R, float), wR, rtol=1e-7, wrong=[
+            ("this is Rᵀ: R turns model into object vectors", wR.T),
+        ])  # fmt: skip
+    except CheckFailed as exc:
+        if "Rᵀ" not in str(exc) and _rotation_on_wrong_side(student_function(fn), rng):
+            raise CheckFailed(
+                f"{str(exc).splitlines()[0]} — the rotation correction is applied on the wrong "
+                "side: α is a small rotation about the OBJECT axes (the design's columns), so "
+                "R ← R(α) R, not R R(α) (one step from a start off in R only leaves a first-order "
+                "error)", exc.error, exc.tolerance,
+            ) from None  # fmt: skip
+        raise
     compare("T [m]", np.asarray(T, float), wT, rtol=1e-7, scale=1000.0)
     n_obs = int(observed.sum())
     compare("σ̂0", float(s0), ws0, rtol=1e-7, wrong=[

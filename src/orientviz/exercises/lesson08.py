@@ -14,7 +14,9 @@ from collections.abc import Callable
 import numpy as np
 from scipy.optimize import least_squares
 
-from orientviz.exercises._common import CheckFailed, call, compare, rng_for, success
+from ..orientation.absolute import similarity_closed_form  # forbidden inside the student's
+from ..orientation.intersection import intersect_points, intersect_rays  # functions, no oracle
+from ._common import CheckFailed, call, compare, own_work, rng_for, success
 
 
 def _rodrigues(axis, angle: float) -> np.ndarray:
@@ -46,6 +48,7 @@ def _triple(out) -> tuple[float, np.ndarray, np.ndarray]:
         raise CheckFailed("return the three values (scale, R, t)") from None
 
 
+@own_work(similarity_closed_form=similarity_closed_form)
 def check_compose(fn: Callable) -> None:
     """Check ``fn(s1, s2) -> (scale, R, t)``: the similarity that applies s2 first, then s1
     (each ``(scale, R, t)`` maps x to scale · R · x + t) — chaining a model into its
@@ -75,37 +78,65 @@ def check_compose(fn: Callable) -> None:
     success("s1 ∘ s2 moves four points as s2 followed by s1 does")
 
 
-def check_sigma0(fn: Callable) -> None:
-    """Check ``fn(x, X, scale, R, t, sigma) -> σ̂0`` (unit weight) of a 7-parameter fit."""
-    rng = np.random.default_rng(809)
-    x, X, s, R, t = _similarity_cases(rng)[0]
-    x = np.vstack([x, x[:3] * 0.7])
-    sigma = 0.04
-    X = t + s * x @ R.T + rng.normal(0, sigma, x.shape)
-    n = len(x)
-    v = t + s * x @ R.T - X
-    want = float(np.sqrt(np.sum(v**2) / sigma**2 / (3 * n - 7)))
-    got = call(fn, x, X, s, R, t, sigma, what="sigma0_similarity")
-    compare(
-        "σ̂0",
-        got,
-        want,
-        rtol=1e-9,
-        wrong=[
-            (
-                "divided by 3n instead of the redundancy 3n − 7",
-                want * np.sqrt((3 * n - 7) / (3 * n)),
-            ),
-            ("divided by n − 7 (points, not coordinates)", want * np.sqrt((3 * n - 7) / (n - 7))),
-            ("forgot to divide the residuals by σ (metres, not unit weight)", want * sigma),
-            ("σ̂0² instead of σ̂0", want**2),
-            (
-                "R applied transposed: the model point turns with R (x @ R.T row by row), not Rᵀ",
-                float(np.sqrt(np.sum((t + s * x @ R - X) ** 2) / sigma**2 / (3 * n - 7))),
-            ),
-        ],
-    )
-    success(f"σ̂0 = {float(got):.4f} with r = 3n − 7 = {3 * n - 7}")
+def _control_rank(x: np.ndarray, kinds: str) -> int:
+    """Rank of the linearised 7-parameter similarity (tx, ty, tz, s, ω, φ, κ) of a level model
+    (ω = φ = 0) with model points ``x`` (n, 3) and control ``kinds`` ("f" XYZ, "p" XY, "h" Z):
+    central differences of the checker's own similarity, rank by singular values."""
+    p0 = np.array([500.0, 300.0, 100.0, 8.0, 0.0, 0.0, 0.7])
+
+    def f(p: np.ndarray) -> np.ndarray:
+        R = _rodrigues([1, 0, 0], p[4]) @ _rodrigues([0, 1, 0], p[5]) @ _rodrigues([0, 0, 1], p[6])
+        X = p[:3] + p[3] * x @ R.T
+        rows = [
+            X[i, :2] if k == "p" else X[i, 2:] if k == "h" else X[i] for i, k in enumerate(kinds)
+        ]
+        return np.concatenate(rows) if rows else np.zeros(0)
+
+    if not kinds:
+        return 0
+    h = 1e-6
+    A = np.column_stack([(f(p0 + e) - f(p0 - e)) / (2 * h) for e in np.eye(7) * h])
+    sv = np.linalg.svd(A, compute_uv=False)
+    return int(np.sum(sv > 1e-9 * sv[0]))
+
+
+def check_determined(fn: Callable) -> None:
+    """Check ``fn(n_full, n_plan, n_height) -> bool``: does that control (points in general
+    position) determine the 7-parameter similarity of a level model of flat terrain?"""
+    rng = np.random.default_rng(808)
+    cases = [(f, p, h) for f in range(4) for p in range(5) for h in range(6)]
+    truth, got = [], []
+    for nf, npl, nh in cases:
+        n = nf + npl + nh
+        x = np.column_stack([rng.uniform(-90, 90, n), rng.uniform(-80, 80, n), np.full(n, -152.0)])
+        truth.append(_control_rank(x, "f" * nf + "p" * npl + "h" * nh) == 7)
+        answer = call(fn, nf, npl, nh, what="determined")
+        if not isinstance(answer, (bool, np.bool_)):
+            raise CheckFailed(f"determined{(nf, npl, nh)}: expected True or False, got {answer!r}")
+        got.append(bool(answer))
+    wrong_rules = [
+        ("seven known coordinates are not enough: the X, Y equations and the Z equations "
+         "fix different parameters (count plan and height separately)",
+         lambda f, p, h: 3 * f + 2 * p + h >= 7),
+        ("two height points leave the tilt about the line through them free: a plane needs "
+         "three points with Z, not on one line", lambda f, p, h: f + p >= 2 and f + h >= 2),
+        ("planimetric points fix the plan part as well as full points do",
+         lambda f, p, h: f >= 2 and f + h >= 3),
+        ("height points fix the height part as well as full points do",
+         lambda f, p, h: f + p >= 2 and f >= 3),
+        ("the scale and κ need two points with X, Y: one point fixes only the shift",
+         lambda f, p, h: f + p >= 1 and f + h >= 3),
+    ]  # fmt: skip
+    if got != truth:
+        for text, rule in wrong_rules:
+            if got == [bool(rule(*c)) for c in cases]:
+                raise CheckFailed(f"determined: wrong for some control — {text}")
+        k = next(i for i in range(len(cases)) if got[i] != truth[i])
+        raise CheckFailed(
+            f"determined{cases[k]} (full, plan, height) = {got[k]}: the linearised similarity has "
+            f"rank {'7 (determined)' if truth[k] else 'below 7 (not determined)'} there"
+        )
+    success(f"all {len(cases)} combinations of 0–3 full, 0–4 plan and 0–5 height points right")
 
 
 def check_conformal(fn: Callable) -> None:
@@ -159,33 +190,46 @@ def check_conformal(fn: Callable) -> None:
     success("the conformal polynomials of degree 2 and 3 recovered exactly")
 
 
-def check_log_law(fn: Callable) -> None:
-    """Check ``fn(n_s, mu) -> (a, b)`` for the law μ = a + b · log10(n_s)."""
-    n_s = np.array([2, 3, 4, 6, 8, 12, 20])
-    a, b = 0.62, 0.71
-    out = call(fn, n_s.copy(), a + b * np.log10(n_s), what="log_law")
-    compare(
-        "(a, b)",
-        out,
-        [a, b],
-        rtol=1e-9,
-        wrong=[
-            ("(a, b) swapped: return the constant a first", [b, a]),
-            (
-                "a straight line over n_s itself: the law is linear in log10 n_s",
-                np.polyfit(n_s, a + b * np.log10(n_s), 1)[::-1],
-            ),  # fmt: skip
-            (
-                "b/ln 10: the natural logarithm instead of log10",
-                np.linalg.lstsq(
-                    np.column_stack([np.ones(n_s.size), np.log(n_s)]),
-                    a + b * np.log10(n_s),
-                    rcond=None,
-                )[0],
-            ),
-        ],
-    )
-    success(f"a = {a:.3f}, b = {b:.3f}: a straight line over log10 n_s")
+def check_strips_for(fn: Callable) -> None:
+    """Check ``fn(a, b, mu_max) -> n_s``: the number of strips at which Ebner's line
+    μ = a + b · log10(n_s) reaches ``mu_max`` (``inf`` if it never does, b ≤ 0)."""
+    cases = [(0.62, 0.71, 2.0), (1.0, 0.2, 1.5), (0.93, 0.073, 2.0), (1.19, -0.10, 2.0)]
+    for a, b, m in cases:
+        got = call(fn, a, b, m, what="strips_for")
+        try:
+            n = float(got)
+        except (TypeError, ValueError):
+            raise CheckFailed(
+                f"strips_for({a}, {b}, {m}): expected one number, got {got!r}"
+            ) from None
+        if b <= 0:
+            if n != np.inf:
+                raise CheckFailed(
+                    f"strips_for({a}, {b}, {m}) = {n:.4g}: with b ≤ 0 the line never rises to "
+                    f"{m} (μ does not grow with n_s) — return np.inf"
+                )
+            continue
+        if not (np.isfinite(n) and n > 0):
+            raise CheckFailed(
+                f"strips_for({a}, {b}, {m}) = {n}: a number of strips is positive and finite here"
+            )
+        e = (m - a) / b  # log10 of the answer
+        wrong = [
+            ("the natural logarithm: the law is in log10 n_s, so n_s = 10^((μ − a)/b)",
+             e * np.log10(np.e)),
+            ("a is missing: solve a + b log10 n_s = μ_max, not b log10 n_s = μ_max", m / b),
+        ]  # fmt: skip
+        if e > 0:
+            wrong.append(("this is log10 n_s, not n_s itself", np.log10(e)))
+        compare(
+            f"log10 of strips_for({a}, {b}, {m})",
+            np.log10(n),
+            e,
+            rtol=1e-9,
+            scale=max(1.0, abs(e)),
+            wrong=wrong,
+        )
+    success("n_s = 10^((μ_max − a)/b), and never (∞) when the line does not rise")
 
 
 def _project(X: np.ndarray, X0: np.ndarray, R: np.ndarray, c: float) -> np.ndarray:
@@ -221,6 +265,7 @@ def _distances(
     return (r - np.sum(r * d, axis=1)[:, None] * d).ravel()
 
 
+@own_work(intersect_points=intersect_points, intersect_rays=intersect_rays)
 def check_intersect_many(intersect_many: Callable) -> None:
     """``intersect_many(X0, R, xy, c)`` must return the point (3,) nearest to all n rays in the
     least-squares sense (the sum of squared perpendicular distances); X0 (n, 3) m, R (n, 3, 3)

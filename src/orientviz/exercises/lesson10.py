@@ -1,7 +1,8 @@
 """Checkers for lesson 10 (sparse normal equations: Schur complement, back-substitution, bandwidth).
 
-Oracles: the whole normal system solved densely (numpy) for the reduction and the
-back-substitution; a double loop over all matrix entries for the bandwidth.
+Oracles: the whole normal system solved densely (numpy) for the reduction, the
+back-substitution and the covariance of a point; the library's pattern of simulated blocks for
+the predicted bandwidth and the fill-in.
 """
 
 from __future__ import annotations
@@ -9,11 +10,25 @@ from __future__ import annotations
 import numpy as np
 
 from ..bundle import bundle_adjust
-from ..bundle.reference import reference_data
-from ..bundle.sparsity import bundle_normal_blocks
+from ..bundle.reduced import geometric_orderings
+from ..bundle.reference import (
+    collinearity,
+    linearise,
+    normal_equations,
+    reference_bundle,
+    reference_data,
+)
+from ..bundle.sparsity import (
+    BundleNormal,
+    bandwidth,
+    bundle_normal_blocks,
+    cholesky_fill,
+    reduced_pattern,
+)
 from ..rotation import matrix_derivatives, matrix_from_opk
 from ..simulate import simulate_block
-from ._common import CheckFailed, call, compare, rng_for, success
+from ._common import CheckFailed, NotWrittenError, call, compare, own_work, rng_for, success
+from .sliders import answer_value
 
 
 def _system(rng, m=4, q=7):
@@ -99,34 +114,88 @@ def check_back_substitute(fn) -> None:
     success("dp equals the point part of the whole system solved densely")
 
 
-def _bandwidth(P, mode):
-    """A plausible wrong bandwidth (mode "full", "with_diagonal", "row_count")."""
-    P = np.asarray(P, dtype=bool)
-    i, k = np.nonzero(P)
-    b = int(np.max(np.abs(i - k), initial=0))
-    if mode == "full":
-        return 2 * b + 1
-    if mode == "with_diagonal":
-        return b + 1
-    return int(P.sum(axis=1).max()) - 1  # mode "row_count"
+def _block_patterns(strips: int, per_strip: int) -> tuple[int, int, np.ndarray, np.ndarray]:
+    """Half-bandwidths (images) of a simulated block's reduced pattern S in flight order and
+    numbered across the strips (the better of the library's two geometric orderings), S and
+    that ordering."""
+    blk = simulate_block(strips, per_strip, rng=12, extra=None).block
+    fixed = np.all(np.nan_to_num(blk.points.sigma, nan=1.0) == 0.0, axis=1)
+    col = np.full(blk.n_points, -1)
+    col[~fixed] = np.arange(int(np.sum(~fixed)))
+    S = reduced_pattern(blk.observations.image, col[blk.observations.point], blk.n_images)
+    best = min(geometric_orderings(blk.images.X0), key=lambda o: bandwidth(S, o))
+    return bandwidth(S), bandwidth(S, best), S, best
 
 
-def check_bandwidth(fn) -> None:
-    """``fn(P) -> b``: the half-bandwidth of a symmetric pattern: the largest abs(i − k) of a
-    non-zero entry (0 for a diagonal matrix)."""
-    rng = rng_for("lesson10.check_bandwidth")
-    for n, p in ((12, 0.15), (20, 0.08), (9, 0.3)):
-        A = rng.random((n, n)) < p
-        P = A | A.T | np.eye(n, dtype=bool)
-        got = call(fn, P.copy(), what="bandwidth")
-        want = max(abs(i - k) for i in range(n) for k in range(n) if P[i, k])  # all entries
-        compare(f"bandwidth of a {n}×{n} pattern", float(got), float(want), rtol=1e-12, wrong=[
-            ("this is the full width 2b + 1; the half-bandwidth is b = max |i − k|", float(_bandwidth(P, "full"))),
-            ("the diagonal is not counted: b = max |i − k|", float(_bandwidth(P, "with_diagonal"))),
-            ("the number of non-zeros in a row is not the bandwidth: zeros inside the band count too",
-             float(_bandwidth(P, "row_count"))),
+def check_predicted_bandwidth(fn) -> None:
+    """``fn(strips, per_strip) -> (along, across)``: the half-bandwidth of the reduced normal
+    matrix S (in images) of a block flown strip by strip, back and forth, numbered in flight
+    order (along) and column by column across the strips (across), predicted from the shape.
+
+    Oracle: the library's pattern of S of simulated blocks of five shapes (two or more strips,
+    more images per strip than twice the strips), bandwidth counted over all entries.
+    """
+    cases = ((2, 6), (3, 9), (4, 11), (2, 15), (5, 13))
+    for s, n in cases:
+        along, across, _, _ = _block_patterns(s, n)
+        got = call(fn, s, n, what="predicted_bandwidth")
+        try:
+            g_along, g_across = (float(v) for v in got)
+        except (TypeError, ValueError):
+            raise CheckFailed("predicted_bandwidth: return two numbers (along, across)") from None
+        compare(f"bandwidth along the strips, {s} × {n}", g_along, float(along), rtol=0.0,
+                scale=1.0, wrong=[
+            ("n + 2: that is a strip flown in the same direction as the one before; here the "
+             "strips are flown back and forth, so the first image of a strip meets the last of "
+             "the next", float(n + 2)),
+            ("2n + 1: in the neighbouring strip the image that starts a strip is coupled with "
+             "the one at the same place, not two bases further", float(2 * n + 1)),
+            ("(along, across) swapped?", float(across)),
         ])  # fmt: skip
-    success("bandwidths agree with a double loop over three patterns")
+        compare(f"bandwidth across the strips, {s} × {n}", g_across, float(across), rtol=0.0,
+                scale=1.0, wrong=[
+            ("2s: the neighbouring strip is reached too — two bases ahead and one strip over "
+             "is 2s + 1 numbers away", float(2 * s)),
+            ("s + 1: an image shares points with images two bases ahead, in its own strip and in "
+             "the next", float(s + 1)),
+            ("(along, across) swapped?", float(along)),
+        ])  # fmt: skip
+    success(f"your law gives the bandwidths of all {len(cases)} block shapes, both numberings")
+
+
+def check_fill_in_start(answer: object, strips: int = 4, lo: int = 3, hi: int = 25) -> None:
+    """The smallest number of images per strip (``lo``..``hi``) at which numbering across the
+    strips gives a Cholesky factor of S with fewer non-zero blocks than numbering along them
+    (``strips`` strips; the lesson's slider). Oracle: the library's fill-in, computed here."""
+    got = answer_value(answer, "images per strip")
+    if got is None:
+        raise NotWrittenError(
+            "images per strip: not written yet (type the value you read off the sliders)"
+        )
+    first_fill = first_band = None
+    for n in range(lo, hi + 1):
+        along, across, S, best = _block_patterns(strips, n)
+        if first_band is None and across < along:
+            first_band = n
+        if int(cholesky_fill(S, best).sum()) < int(cholesky_fill(S, None).sum()):
+            first_fill = n
+            break
+    if first_fill is None:  # pragma: no cover - the lesson's range always has one
+        raise CheckFailed(f"no block of {strips} strips with {lo}..{hi} images saves fill-in")
+    if got == first_fill:
+        success(f"from {first_fill} images per strip on, numbering across saves fill-in "
+                f"(the bandwidth drops from {first_band} on)")  # fmt: skip
+        return
+    if first_band is not None and got == first_band:
+        why = (
+            f"{first_band} is where the BANDWIDTH across becomes smaller; the fill-in "
+            f"(non-zero blocks of L) is still the same there: L fills its envelope, not its band"
+        )
+    elif got == first_fill - 1:
+        why = f"at {first_fill - 1} both numberings still fill the same number of blocks"
+    else:
+        why = "move the sliders again and compare the two lines' non-zero blocks of L"
+    raise CheckFailed(f"images per strip: {got:g} — {why}", error=np.inf, tolerance=0.0)
 
 
 # --------------------------------------------------------------------- one reduced step
@@ -139,7 +208,8 @@ def check_schur_step(fn) -> None:
     seed = int(rng_for("lesson10.check_schur_step").integers(1000))
     sim = simulate_block(3, 4, rng=seed, extra=None)
     nb = bundle_normal_blocks(sim.block)
-    got = call(fn, nb, what="schur_step")
+    with own_work(**{"nb.dense (the whole system solved densely)": BundleNormal.dense}):
+        got = call(fn, nb, what="schur_step")
     if not isinstance(got, tuple) or len(got) != 2:
         raise CheckFailed("schur_step: return the pair (dc, dp)")
     dc, dp = (np.asarray(g, dtype=float) for g in got)
@@ -180,7 +250,8 @@ def check_ray_partials(fn) -> None:
     c = rng.uniform(100.0, 160.0, n)
     R = matrix_from_opk(ang[:, 0], ang[:, 1], ang[:, 2])
     dR = np.stack(matrix_derivatives(ang[:, 0], ang[:, 1], ang[:, 2]))
-    got = call(fn, X.copy(), X0.copy(), R.copy(), dR.copy(), c.copy(), what="ray_partials")
+    with own_work(collinearity=collinearity):
+        got = call(fn, X.copy(), X0.copy(), R.copy(), dR.copy(), c.copy(), what="ray_partials")
     if not isinstance(got, tuple) or len(got) != 4:
         raise CheckFailed("ray_partials: return the four results (xy, dX0, dangles, dX)")
 
@@ -225,37 +296,96 @@ def check_ray_partials(fn) -> None:
     success("xy and all 9 partial derivatives of 5 rays agree with central differences")
 
 
-def check_my_bundle(fn) -> None:
-    """``fn(data, X0, angles, xyz) -> (X0, angles, xyz, sigma0, history)``: the whole bundle
-    iteration on the rays, weights and datum of ``data``
-    (:func:`orientviz.bundle.reference.reference_data`), from the start values given."""
-    seed = int(rng_for("lesson10.check_my_bundle").integers(1000))
-    block = simulate_block(2, 4, rng=seed, extra=None).block
-    data = reference_data(block, "fixed")
-    got = call(fn, data, block.images.X0.copy(), block.images.angles.copy(), data.xyz0.copy(),
-               what="my_bundle")  # fmt: skip
-    if not isinstance(got, tuple) or len(got) < 4:
-        raise CheckFailed("my_bundle: return (X0, angles, xyz, sigma0, history)")
+_LIBRARY_BUNDLE = {
+    "reference_bundle": reference_bundle,
+    "linearise": linearise,
+    "normal_equations": normal_equations,
+    "bundle_adjust": bundle_adjust,
+}
+
+
+def _bundle_case(fn, block, control: str):
+    """Run the student's bundle on ``block`` with the control ``"fixed"`` or ``"weighted"``;
+    return its result and the library's adjustment of the same block."""
+    data = reference_data(block, control)
+    with own_work(**_LIBRARY_BUNDLE):
+        got = call(fn, data, block.images.X0.copy(), block.images.angles.copy(),
+                   data.xyz0.copy(), what="my_bundle")  # fmt: skip
+    if not isinstance(got, tuple) or len(got) < 5:
+        raise CheckFailed("my_bundle: return (X0, angles, xyz, sigma0, history, ...)")
+    return data, got, bundle_adjust(block, control=control)
+
+
+def _compare_bundle(block, data, got, adj, label: str) -> float:
     X0, angles, s0 = (np.asarray(got[k], dtype=float) for k in (0, 1, 3))
-    adj = bundle_adjust(block, control="fixed")  # the library's bundle on the same block
     eo = adj.x[adj.groups["exterior"]].reshape(-1, 6)
     sd = adj.std()[adj.groups["exterior"]].reshape(-1, 6)
     m, n = block.n_images, data.image.size
     p = data.unknown.size
-    r = 2 * n - 6 * m - 3 * p
-    compare("σ̂0", float(s0), adj.sigma0, rtol=1e-4, wrong=[
+    r = adj.redundancy
+    n_prior = int(np.count_nonzero(data.prior_w))
+    wrong = [
         ("the points held fixed (control) are no unknowns: r = 2·rays − 6·images − 3·unknown points",
          adj.sigma0 * np.sqrt(r / (r - 3 * (block.n_points - p)))),
         ("vᵀPv divided by the number of observations, not the redundancy", adj.sigma0 * np.sqrt(r / (2 * n))),
         ("the square root is missing (σ̂0² = vᵀPv / r)", adj.sigma0**2),
-    ])  # fmt: skip
+    ]  # fmt: skip
+    if n_prior:
+        wrong.append(("the observed control coordinates are observations too: r = 2·rays + "
+                      "control coordinates − 6·images − 3·points",
+                      adj.sigma0 * np.sqrt(r / (r - n_prior))))  # fmt: skip
+    compare(f"σ̂0 ({label})", float(s0), adj.sigma0, rtol=1e-4, wrong=wrong)
     if X0.shape != (m, 3) or angles.shape != (m, 3):
         raise CheckFailed(
             f"X0 and angles: expected shapes ({m}, 3), got {X0.shape}, {angles.shape}"
         )
     off = np.abs(np.hstack([X0, angles]) - eo) / sd
-    compare("stations in units of their σ", float(off.max()), 0.0, rtol=0.01, scale=1.0)
-    success(f"σ̂0 = {float(s0):.4f} as the library's; stations within {off.max():.1e} σ")
+    compare(f"stations in units of their σ ({label})", float(off.max()), 0.0, rtol=0.01, scale=1.0)
+    return float(off.max())
+
+
+def check_my_bundle(fn) -> None:
+    """``fn(data, X0, angles, xyz) -> (X0, angles, xyz, sigma0, history, ...)``: the whole
+    bundle iteration on the rays, weights and datum of ``data``
+    (:func:`orientviz.bundle.reference.reference_data`), from the start values given.
+
+    Two blocks: control held fixed (the control points are no unknowns) and control observed
+    with σ (their coordinates are weighted observations: the datum). Oracle: the library's
+    ``bundle_adjust`` of the same block, which the student's function must not call (nor the
+    reference path of the lesson). The history must end with a step below the default
+    ``tol`` = 0.005.
+    """
+    seed = int(rng_for("lesson10.check_my_bundle").integers(1000))
+    block = simulate_block(2, 4, rng=seed, extra=None).block
+    data, got, adj = _bundle_case(fn, block, "fixed")
+    off = _compare_bundle(block, data, got, adj, "control held fixed")
+    history = list(got[4])
+    tol = 5e-3
+    if not history or float(history[-1][1]) >= tol:
+        raise CheckFailed(
+            "my_bundle: the history must end with a step whose largest correction is below tol "
+            f"(in units of its σ); got {history[-1][1] if history else 'no steps'}",
+            error=np.inf, tolerance=0.0,
+        )  # fmt: skip
+    weighted = block.copy()
+    control = np.all(np.nan_to_num(weighted.points.sigma, nan=1.0) == 0.0, axis=1)
+    weighted.points.sigma[control] = [0.02, 0.03, 0.05]  # m: unequal, so a lost weight shows
+    try:
+        data_w, got_w, adj_w = _bundle_case(fn, weighted, "weighted")
+        off_w = _compare_bundle(weighted, data_w, got_w, adj_w, "control observed with σ")
+    except CheckFailed as exc:
+        if "control coordinates − 6·images" in str(exc):
+            raise
+        raise CheckFailed(
+            f"my_bundle is right with the control held fixed, but not with the control observed "
+            f"with σ — the control coordinates are observations: add P_control to V and "
+            f"P_control·(X_given − X) to b_p (and their vᵀPv to σ̂0). Without them the block "
+            f"has no datum. ({str(exc).lstrip('✗ ')})",
+            error=np.inf, tolerance=0.0,
+        ) from None  # fmt: skip
+    success(f"σ̂0 = {float(got[3]):.4f} and {float(got_w[3]):.4f} (control fixed / observed) as "
+            f"the library's; stations within {max(off, off_w):.1e} σ; "
+            f"{len(history)} steps")  # fmt: skip
 
 
 def check_point_covariance(fn) -> None:
@@ -273,5 +403,52 @@ def check_point_covariance(fn) -> None:
     compare("Q of point j", got, want, rtol=1e-9, wrong=[
         ("V_j⁻¹ alone ignores the uncertainty of the orientations: add V_j⁻¹ W_jᵀ S⁻¹ W_j V_j⁻¹",
          np.linalg.inv(V[j])),
+        ("the orientations' term is subtracted: their uncertainty ADDS to the point's, "
+         "Q_jj = V_j⁻¹ + V_j⁻¹ W_jᵀ S⁻¹ W_j V_j⁻¹", 2 * np.linalg.inv(V[j]) - want),
     ])  # fmt: skip
     success("Q_jj equals the point's block of the whole inverse N⁻¹")
+
+
+def _rms_image_residual_um(data, X0, angles, xyz) -> float:
+    """RMS of l − f(x) over all rays' x and y (µm), the collinearity equations image by image."""
+    c, x0, y0 = (np.asarray(a, dtype=float) for a in data.cam)
+    e = np.zeros((data.image.size, 2))
+    for i in range(len(X0)):
+        m = data.image == i
+        R = matrix_from_opk(*np.asarray(angles, dtype=float)[i])
+        uvw = (np.asarray(xyz, dtype=float)[data.point[m]] - X0[i]) @ R  # Rᵀ (X − X0) per row
+        xy = np.column_stack(
+            [x0[m] - c[m] * uvw[:, 0] / uvw[:, 2], y0[m] - c[m] * uvw[:, 1] / uvw[:, 2]]
+        )
+        e[m] = data.l[m] - xy
+    return float(np.sqrt(np.mean(e**2)) * 1000.0)
+
+
+def check_first_state_below(answer: object, data, states, limit_um: float = 10.0) -> None:
+    """The first state k (0 = the start) of the student's iteration whose RMS image residual
+    is below ``limit_um``; ``states`` lists (X0, angles, xyz, ...) per state (the slider's).
+
+    Oracle: the collinearity equations evaluated here for every ray of ``data``
+    (:func:`orientviz.bundle.reference.reference_data`), not the viewer's misclosure.
+    """
+    got = answer_value(answer, f"first state below {limit_um:g} µm")
+    if got is None:
+        raise NotWrittenError(
+            f"first state below {limit_um:g} µm: not written yet (type the state you read off the slider)"
+        )
+    rms = [_rms_image_residual_um(data, *st[:3]) for st in states]
+    want = next((k for k, r in enumerate(rms) if r < limit_um), None)
+    if want is None:  # pragma: no cover - the lesson's iteration gets there
+        raise CheckFailed(f"no state is below {limit_um:g} µm (smallest {min(rms):.1f} µm)")
+    if got == want:
+        success(f"state {want}: RMS {rms[want]:.2f} µm (state {want - 1}: {rms[want - 1]:.1f} µm)")
+        return
+    k = int(got)
+    if 0 <= k < len(rms) and got == k:
+        why = (f"state {k} has {rms[k]:.2f} µm — " + ("not yet below" if rms[k] >= limit_um
+               else f"below, but state {want} already is"))  # fmt: skip
+    else:
+        why = f"the states are numbered 0 … {len(rms) - 1} (0: the start, before any step)"
+    raise CheckFailed(
+        f"first state below {limit_um:g} µm: {got:g} — {why}", error=np.inf, tolerance=0.0
+    )

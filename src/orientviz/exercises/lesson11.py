@@ -1,8 +1,8 @@
 """Checkers for lesson 11, systematic image errors and self-calibration.
 
 Oracles: error-free simulated distortion with known coefficients (for the real camera's
-exercise a C4040Z-like sensor and the backward model), the cofactor matrix
-from numerical second derivatives of the sum of squares, scipy's normal quantile, and a
+exercise a C4040Z-like sensor and the backward model), the one-parameter adjustment from the
+normal matrix recovered by inverting Q, scipy's normal quantile, and a
 QR projection for the share of a field that a parameter set describes — never the
 library's ``self_calibrate``, ``analyse`` or ``split_field``.
 """
@@ -14,7 +14,8 @@ from collections.abc import Callable
 import numpy as np
 from scipy.stats import norm
 
-from orientviz.exercises._common import CheckFailed, call, compare, rng_for, success
+from orientviz.adjust import gauss_newton
+from orientviz.exercises._common import CheckFailed, call, compare, own_work, rng_for, success
 
 
 def _points(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -33,7 +34,8 @@ def check_fit_k1(fn: Callable) -> None:
     xy = _points(rng, 14)
     k1 = 2.5e-9  # mm⁻²: 8.4 µm at r = 150 mm
     d = _radial(xy, np.array([k1])) + rng.normal(0.0, 0.0015, xy.shape)
-    out = call(fn, xy.copy(), d.copy(), what="fit_k1")
+    with own_work(gauss_newton=gauss_newton):
+        out = call(fn, xy.copy(), d.copy(), what="fit_k1")
     try:
         k_hat, s0 = (float(v) for v in out)
     except (TypeError, ValueError):
@@ -74,54 +76,39 @@ def check_fit_k1(fn: Callable) -> None:
     success(f"k1 = {k_hat:.4g} mm⁻², σ0 = {s0 * 1000:.2f} µm (redundancy 2n − 1 = {d.size - 1})")
 
 
-def check_fit_k1k2(fn: Callable) -> None:
-    """Check ``fn(xy, d) -> (k, Q)``: k = (k1, k2) of d = (k1 r² + k2 r⁴)(x, y), Q = N⁻¹."""
-    rng = rng_for("lesson11.check_fit_k1k2")
-    xy = _points(rng, 16)
-    k = np.array([6.0e-10, -1.1e-14])
-    d = _radial(xy, k)  # error-free: the solution must be exact
-    out = call(fn, xy.copy(), d.copy(), what="fit_k1k2")
-    try:
-        k_hat, Q = out
-    except (TypeError, ValueError):
-        raise CheckFailed("return two things: k (2,) and Q (2, 2)") from None
-    scale = np.array([1e-10, 1e-14])  # compare k1 in 1e-10 mm⁻², k2 in 1e-14 mm⁻⁴
-    k_hat = np.asarray(k_hat, float)
-    compare(
-        "(k1 / 1e-10, k2 / 1e-14)",
-        k_hat / scale if k_hat.shape == (2,) else k_hat,
-        k / scale,
-        rtol=1e-6,
-        wrong=[("(k2, k1): the order is k1 first", k[::-1] / scale)],
-    )
-    # oracle for Q: N is the Hessian of ½ vᵀv (numerical second differences), Q = N⁻¹
+def _sigma_alone(Q: np.ndarray) -> float:
+    """σ of parameter 0 (unit weight) if it were the only unknown: 1/√N₀₀ with N = Q⁻¹."""
+    return 1.0 / np.sqrt(np.linalg.inv(Q)[0, 0])
 
-    def half_ss(p):
-        return 0.5 * np.sum((_radial(xy, p) - d) ** 2)
 
-    H = np.empty((2, 2))
-    for i in range(2):
-        for j in range(2):
-            ei, ej = np.eye(2)[i] * scale[i], np.eye(2)[j] * scale[j]
-            H[i, j] = (
-                half_ss(k + ei + ej)
-                - half_ss(k + ei - ej)
-                - half_ss(k - ei + ej)
-                + half_ss(k - ei - ej)
-            ) / (4 * scale[i] * scale[j])
-    Q_ref = np.linalg.inv(H)
-    Qs = np.asarray(Q, float)
-    if Qs.shape == (2, 2) and np.allclose(
-        Qs / np.abs(H).max(), H / np.abs(H).max(), rtol=1e-4, atol=1e-6
-    ):
-        raise CheckFailed(
-            "Q equals N itself: the cofactor matrix is N⁻¹", error=np.inf, tolerance=1e-4
-        )
-    # compare scaled so that both entries count (k1 and k2 differ by 10⁴ in size)
-    Dq = np.diag(1 / np.sqrt(np.diag(Q_ref)))
-    compare("Q scaled to unit diagonal", Dq @ Qs @ Dq, Dq @ Q_ref @ Dq, rtol=1e-4)
-    rho = Q_ref[0, 1] / np.sqrt(Q_ref[0, 0] * Q_ref[1, 1])
-    success(f"k1, k2 exact; Q = N⁻¹ right; correlation of k1 and k2: {rho:+.3f}")
+def check_inflation(fn: Callable) -> None:
+    """Check ``fn(Q) -> f``: by how much the σ of the first parameter grows because the second
+    is estimated with it, from the 2 × 2 cofactor matrix Q of the joint adjustment:
+    f = σ(joint) / σ(alone) = √Q₀₀ / (1/√N₀₀), N = Q⁻¹ (= 1/√(1 − ρ²)).
+
+    Oracle: the normal matrix N recovered by inverting Q, and the one-parameter adjustment's
+    σ = 1/√N₀₀ — no correlation formula.
+    """
+    rng = rng_for("lesson11.check_inflation")
+    for rho in (0.97, -0.6, 0.2):
+        s = rng.uniform(0.5, 3.0, 2) * np.array([1.0, 1e-4])  # unequal sizes, as K1 and K2
+        Q = np.array([[s[0] ** 2, rho * s[0] * s[1]], [rho * s[0] * s[1], s[1] ** 2]])
+        want = np.sqrt(Q[0, 0]) / _sigma_alone(Q)
+        got = call(fn, Q.copy(), what="inflation")
+        try:
+            got = float(got)
+        except (TypeError, ValueError):
+            raise CheckFailed(f"inflation: expected one number, got {got!r}") from None
+        compare(f"σ(joint)/σ(alone) at ρ = {rho:+.2f}", got, want, rtol=1e-9, wrong=[
+            ("1/(1 − ρ²) is the ratio of the VARIANCES; the σ grow by its square root", want**2),
+            ("inverted: estimating the second parameter too cannot make the first more precise",
+             1.0 / want),
+            ("ρ itself is not the factor: f = 1/√(1 − ρ²)", abs(rho)),
+            ("1/√(1 − |ρ|): ρ enters squared", 1.0 / np.sqrt(1.0 - abs(rho))),
+            ("√(Q₀₀/Q₁₁) compares the two parameters, not one parameter with and without "
+             "the other", np.sqrt(Q[0, 0] / Q[1, 1])),
+        ])  # fmt: skip
+    success("σ(joint)/σ(alone) right for ρ = +0.97, −0.6, +0.2")
 
 
 def check_significant(fn: Callable) -> None:

@@ -153,6 +153,11 @@ def check_external(fn: Callable) -> None:
             wrong=[
                 ("the weights were forgotten", np.linalg.solve(A.T @ A, A.T @ e)),
                 ("N instead of N⁻¹", N @ (A.T @ (e / sigma**2))),
+                (
+                    "multiplied by AᵀA: the normal matrix is solved with, not multiplied: "
+                    "Δx̂ = N⁻¹AᵀPe",
+                    (A.T @ A) @ want,
+                ),
             ],
         )
     success("the shift of the unknowns by an undetected error is right")

@@ -1,8 +1,8 @@
 """Checkers for lesson 13, auxiliary data (statoscope, APR, GNSS) in the adjustment.
 
 Oracles: the normal equations of the stacked system formed from scratch, numerical
-derivatives of the observation function, the straight-line regression formulas written
-out, and the covariance of differences written by hand — never the library's
+derivatives of the observation function, the offset model solved from scratch (for the
+heights from differences), and the covariance of differences written by hand — never the library's
 ``auxiliary_rows`` or ``bundle_adjust(..., auxiliary=...)``.
 """
 
@@ -148,32 +148,43 @@ def check_gnss_rows(fn: Callable) -> None:
     success("the three GNSS rows have 1 at X0, Y0, Z0 and the strip's offsets, t at its drifts")
 
 
-def check_offset_drift(fn: Callable) -> None:
-    """Check ``fn(t, s, Z, sigma) -> (o, d, sigma_o, sigma_d)`` for s − Z = o + d t (one strip)."""
-    t = np.array([0.0, 8.0, 16.0, 24.0, 32.0, 40.0, 48.0])
-    Z = 1520.0 + np.array([0.4, -1.2, 0.3, 2.0, -0.7, 0.1, 0.9])
-    o, d, sigma = -4.3, 0.021, 0.35
-    s = Z + o + d * t  # error-free: o and d must come out exactly
-    out = call(fn, t.copy(), s.copy(), Z.copy(), sigma, what="offset_drift")
-    got = np.asarray(out, float)
-    tc = t - t.mean()
-    s_d = sigma / np.sqrt(np.sum(tc**2))  # regression formulas by hand
-    s_o = sigma * np.sqrt(1 / t.size + t.mean() ** 2 / np.sum(tc**2))
-    compare(
-        "(o, d, σ_o, σ_d)",
-        got,
-        [o, d, s_o, s_d],
-        rtol=1e-8,
-        wrong=[
-            ("the drift was ignored", [np.mean(s - Z), 0.0, sigma / np.sqrt(t.size), 0.0]),
-            (
-                "σ_o = σ/√m ignores the correlation with the drift",
-                [o, d, sigma / np.sqrt(t.size), s_d],
-            ),
-            ("σ_d from Σt², t not reduced to its mean", [o, d, s_o, sigma / np.sqrt(np.sum(t**2))]),
-        ],
-        scale=1.0,
+def check_from_differences(fn: Callable) -> None:
+    """Check ``fn(A0, l0, sig0, s, sigma) -> Z``: the heights adjusted from the strip's rows
+    (A0 (r, m), l0, sig0) together with the m − 1 consecutive differences of the statoscope
+    readings s (σ each), with their covariance — no offset unknown.
+
+    Oracle: the same data with the readings as observations s + v = Z_k + o and the offset
+    as an unknown (the model of the lesson), solved from scratch; the two must agree exactly.
+    """
+    rng = rng_for("lesson13.check_from_differences")
+    m = 9
+    A0 = np.zeros((m + 1, m))
+    A0[np.arange(m - 1), np.arange(1, m)], A0[np.arange(m - 1), np.arange(m - 1)] = 1.0, -1.0
+    A0[m - 1, 0] = A0[m, m - 1] = 1.0
+    Z = 1500.0 + np.cumsum(rng.normal(0.0, 4.0, m))
+    sig0 = np.r_[rng.uniform(0.3, 0.8, m - 1), 0.1, 0.15]
+    l0 = A0 @ Z + rng.normal(0.0, 1.0, m + 1) * sig0
+    sigma = 0.3
+    s = Z - 6.2 + rng.normal(0.0, sigma, m)
+    # oracle: the readings s + v = Z_k + o with the offset as an unknown, stacked and solved
+    A = np.vstack(
+        [np.column_stack([A0, np.zeros(m + 1)]), np.column_stack([np.eye(m), np.ones(m)])]
     )
-    success(
-        f"o = {got[0]:.3f} m, d = {got[1]:.4f} m/s, σ_o = {got[2]:.3f} m, σ_d = {got[3]:.4f} m/s"
-    )
+    w = np.r_[1 / sig0**2, np.full(m, 1 / sigma**2)]
+    want = np.linalg.solve(A.T @ (w[:, None] * A), A.T @ (w * np.r_[l0, s]))[:m]
+    got = call(fn, A0.copy(), l0.copy(), sig0.copy(), s.copy(), sigma, what="from_differences")
+    D = np.eye(m)[1:] - np.eye(m)[:-1]
+    N0, n0 = A0.T @ (A0 / sig0[:, None] ** 2), A0.T @ (l0 / sig0**2)
+
+    def with_weight(W):  # the differences with the weight matrix W
+        return np.linalg.solve(N0 + D.T @ W @ D, n0 + D.T @ W @ (D @ s))
+
+    wrong = [
+        ("the differences taken as independent (2σ² each): neighbours share a reading, "
+         "Cov = −σ²", with_weight(np.eye(m - 1) / (2 * sigma**2))),
+        ("the covariance itself used as the weight: P = C⁻¹", with_weight(sigma**2 * D @ D.T)),
+        ("the readings as heights without the offset", np.linalg.solve(
+            N0 + np.eye(m) / sigma**2, n0 + s / sigma**2)),
+    ]  # fmt: skip
+    compare("Z from the differences [m]", got, want, rtol=1e-9, scale=1.0, wrong=wrong)
+    success("the differences with their covariance give exactly the heights of the offset model")

@@ -64,6 +64,8 @@ def check_ppi_image(fn: Callable) -> None:
     )
     wrong_pp = sc["xy"] - pp
     wrong_hor = pp + sc["m"] * np.sqrt(hor**2 - sc["h"] ** 2)[:, None] * loc[:, :2] / hor[:, None]
+    s = np.sqrt(np.sum(d**2, axis=1))
+    wrong_no_h = pp + sc["m"] * s[:, None] * loc[:, :2] / hor[:, None]  # slant range, h left out
     compare(
         "image coordinates [image m]",
         got,
@@ -78,6 +80,7 @@ def check_ppi_image(fn: Callable) -> None:
             ("R (X − X0) instead of Rᵀ (X − X0): the rotation goes image → object", wrong_R),
             ("the principal point (x0, y0) was not added", wrong_pp),
             ("h was subtracted from the horizontal distance, not from the slant range", wrong_hor),
+            ("the slant range s was plotted: h is missing, s_e = √(s² − h²)", wrong_no_h),
         ],
     )
     success("the image of points built backwards from their image coordinates comes out exactly")
@@ -152,27 +155,51 @@ def check_trilaterate(fn: Callable) -> None:
     success("both candidates of three spheres found, ordered by Z")
 
 
-def check_station_ls(fn: Callable) -> None:
-    """Check ``fn(C, s, X_start) -> X``: the station from n ≥ 4 ranges by Gauss-Newton."""
-    rng = rng_for("lesson14.check_station_ls")
-    C = np.column_stack(
-        [rng.uniform(-6000, 6000, 7), rng.uniform(-6000, 6000, 7), rng.uniform(-100, 300, 7)]
-    )
-    X = np.array([30054.5, 28.2, 1039.9])
-    s = np.linalg.norm(C - X, axis=1)  # error-free ranges: the station must come out exactly
-    start = X + [420.0, -310.0, 260.0]
-    got = call(fn, C.copy(), s.copy(), start.copy(), what="station_ls")
-    mirror = _mirror(C[:3], X)  # near the mirror if the iteration slid below the points
-    compare(
-        "station [m]",
-        got,
-        X,
-        rtol=1e-9,
-        scale=1000.0,
-        wrong=[
-            ("the start value itself: no iteration took place", start),
-        ],
-    )
-    if np.linalg.norm(np.asarray(got) - mirror) < 1.0:  # pragma: no cover - compare raised already
-        raise CheckFailed("the mirror image below the points: start above the terrain")
-    success("the station from 7 error-free ranges recovered exactly")
+def _station_sigma(C: np.ndarray, X0: np.ndarray, idx) -> np.ndarray:
+    """σ of the station's X, Y, Z (units of the range σ) from ranges to the points ``idx``."""
+    d = X0 - C[list(idx)]
+    J = d / np.linalg.norm(d, axis=1)[:, None]
+    return np.sqrt(np.diag(np.linalg.inv(J.T @ J)))
+
+
+def check_best_pair(fn: Callable) -> None:
+    """Check ``fn(C, X0, tri) -> (i, j)``: the two points (not in ``tri``) whose ranges, added to
+    those of the three points ``tri``, give the station the smallest σ_Z.
+
+    Oracle: every pair tried, σ from (JᵀJ)⁻¹ with J the unit vectors station − point, on a
+    scene the student has not seen (a station 12 km above 20 points spread over ±40 km).
+    """
+    rng = rng_for("lesson14.check_best_pair")
+    C = np.column_stack([rng.uniform(-40e3, 40e3, 20), rng.uniform(-40e3, 40e3, 20),
+                         rng.uniform(-600.0, 600.0, 20)])  # fmt: skip
+    X0 = np.array([3000.0, -2000.0, 12000.0])
+    far = np.argsort(-np.hypot(*(C[:, :2] - X0[:2]).T))
+    tri = sorted(int(k) for k in far[[0, 2, 5]])
+    pairs = [(a, b) for a in range(20) for b in range(a + 1, 20) if a not in tri and b not in tri]
+    sig = {pr: _station_sigma(C, X0, tri + list(pr)) for pr in pairs}
+    best = min(pairs, key=lambda pr: sig[pr][2])
+    got = call(fn, C.copy(), X0.copy(), list(tri), what="best_pair")
+    try:
+        g = tuple(sorted(int(k) for k in got))
+    except (TypeError, ValueError):
+        raise CheckFailed(f"best_pair: expected two point indices, got {got!r}") from None
+    if len(g) != 2 or g[0] == g[1]:
+        raise CheckFailed(f"best_pair: expected two different point indices, got {got!r}")
+    if g == best:
+        success(f"σ_Z of the station {sig[best][2]:.2f} σ_s with points {best} "
+                f"(three alone: {_station_sigma(C, X0, tri)[2]:.2f} σ_s)")  # fmt: skip
+        return
+    names = {
+        max(pairs, key=lambda pr: sig[pr][2]): "the pair with the LARGEST σ_Z",
+        min(pairs, key=lambda pr: np.hypot(*sig[pr][:2])): (
+            "the pair best for the plan position (σ_X, σ_Y); the question is the height"),
+        max(pairs, key=lambda pr: np.linalg.norm(C[pr[0], :2] - C[pr[1], :2])): (
+            "the two points farthest apart: spread helps the plan, the height needs steep rays"),
+    }  # fmt: skip
+    if g not in sig:
+        why = "one of them is already among the three, or an index is out of range"
+    else:
+        why = names.get(
+            g, f"σ_Z {sig[g][2]:.2f} σ_s, but another pair gives {sig[best][2]:.2f} σ_s"
+        )
+    raise CheckFailed(f"best_pair: {g} — {why}", error=np.inf, tolerance=0.0)

@@ -13,7 +13,17 @@ from collections.abc import Callable
 import numpy as np
 from scipy.stats import chi2
 
-from orientviz.exercises._common import CheckFailed, call, compare, rng_for, success
+from orientviz.adjust import gauss_newton
+from orientviz.exercises._common import (
+    CheckFailed,
+    NotWrittenError,
+    call,
+    compare,
+    own_work,
+    rng_for,
+    success,
+)
+from orientviz.exercises.sliders import answer_value
 
 
 def check_residual_pattern(fn: Callable) -> None:
@@ -22,7 +32,8 @@ def check_residual_pattern(fn: Callable) -> None:
     for t, lam, rho in (([0.012, -0.031], 0.004, 0.0021), ([-0.2, 0.05], -1.99, -0.0007)):
         xy = rng.uniform(-110, 110, (15, 2))
         v = np.asarray(t) + lam * xy + rho * np.column_stack([-xy[:, 1], xy[:, 0]])
-        out = call(fn, xy.copy(), v.copy(), what="residual_pattern")
+        with own_work(gauss_newton=gauss_newton):
+            out = call(fn, xy.copy(), v.copy(), what="residual_pattern")
         try:
             shift, scale, rot = out
             got = np.r_[np.asarray(shift, float).ravel(), float(scale), float(rot)]
@@ -141,3 +152,40 @@ def check_rms_per_image(fn: Callable) -> None:
         ],
     )
     success("RMS of x and y residuals per image right")
+
+
+def check_false_alarms(
+    answer: object,
+    clean: Callable[[float], set],
+    blunders: set,
+    levels: tuple[float, ...] = (0.01, 0.1, 1.0, 5.0),
+) -> None:
+    """The number of good rays thrown out at the first level α0 (%, the lesson's slider
+    positions, in increasing order) at which data snooping finds more of the planted
+    ``blunders`` than at the smallest level.
+
+    ``clean(alpha0_percent)`` returns the set of eliminated ray labels; the check runs it at
+    every level itself (the library's data snooping is the oracle of what is eliminated; the
+    counting is done here).
+    """
+    what = "false alarms where one more blunder is found"
+    got = answer_value(answer, what)
+    if got is None:
+        raise NotWrittenError(f"{what}: not written yet (type the number you read off the slider)")
+    runs = {a: clean(a) for a in levels}
+    found = {a: len(runs[a] & blunders) for a in levels}
+    level = next((a for a in levels if found[a] > found[levels[0]]), None)
+    if level is None:  # pragma: no cover - the lesson's block has one
+        raise CheckFailed(f"{what}: no level finds more blunders than α0 = {levels[0]} %")
+    want = len(runs[level] - blunders)
+    if got == want:
+        success(f"at α0 = {level:g} % {found[level]} of the {len(blunders)} blunders are found, "
+                f"and {want} good rays are thrown out with them")  # fmt: skip
+        return
+    wrong = {len(runs[level]): "all rays eliminated there; a false alarm is one that is no blunder"}
+    wrong.setdefault(found[level], "the blunders found, not the false alarms")
+    for a in levels:
+        if a != level:
+            wrong.setdefault(len(runs[a] - blunders), f"the false alarms at α0 = {a:g} %")
+    why = wrong.get(int(got), f"read the line at α0 = {level:g} % again")
+    raise CheckFailed(f"{what}: {got:g} — {why}", error=np.inf, tolerance=0.0)

@@ -18,6 +18,7 @@ from ..block import CONTROL
 from ..bundle import bundle_adjust
 from ..simulate import simulate_block
 from ._common import CheckFailed, call, compare, rng_for, success
+from .sliders import check_slider_answer, crossing
 
 #: The design of the by-hand exercise: 3 strips × 9 images at 1 : 10 000, wide angle,
 #: 60 % / 20 % overlap, flat terrain, XYZ control at the 4 corners (σ 2 cm), image σ 5 µm.
@@ -257,3 +258,33 @@ __all__ = [
     "check_law_spacing",
     "worst_sigma_z",
 ]
+
+
+def _largest_other_sz(Q: np.ndarray, j: int, sigma: float) -> float:
+    """Largest σ_Z (m) of the points other than j after point j becomes XYZ control with σ
+    (m): the enlarged normal matrix inverted from scratch (Q: cofactors of all points, m²)."""
+    E = np.zeros((3, len(Q)))
+    E[[0, 1, 2], [3 * j, 3 * j + 1, 3 * j + 2]] = 1.0
+    Qn = np.linalg.inv(np.linalg.inv(Q) + E.T @ E / sigma**2)
+    return float(np.delete(np.sqrt(np.diag(Qn)[2::3]), j).max())
+
+
+def check_control_sigma(
+    answer: object, Q: np.ndarray, j: int, worse: float = 0.10, step: float = 0.02
+) -> None:
+    """The σ (m) of the given coordinates of control point ``j`` at which the largest σ_Z of
+    the other points is ``worse`` (10 %) above what an error-free control point there gives
+    (the lesson's slider, ``step`` m).
+
+    Oracle: the normal matrix N = Q⁻¹ enlarged by the point's three weighted rows and
+    inverted whole, bisected in σ — not the Woodbury update of the lesson or the studio.
+    """
+    perfect = _largest_other_sz(Q, j, 1e-6)
+    want = crossing(lambda s: _largest_other_sz(Q, j, s), (1 + worse) * perfect, 1e-4, 20.0, 60)
+    own = float(np.sqrt(Q[3 * j + 2, 3 * j + 2]))
+    wrong = [
+        ("the largest σ_Z itself, not the control's σ that causes it", (1 + worse) * perfect),
+        ("the point's own σ_Z before it became control", own),
+        ("in cm, not m", want * 100.0),
+    ]  # fmt: skip
+    check_slider_answer("σ of the control point", answer, want, step, "m", wrong)

@@ -34,6 +34,7 @@ __all__ = [
     "similarity_scale_ppm",
     "tilt_shift_um",
     "check_event_at",
+    "first_event",
     "check_slider_answer",
     "crossing",
     "check_pair_kappa",
@@ -212,6 +213,36 @@ def check_trilateration_delta(
 
 
 # ---------------------------------------------------------------- the event at the answer
+def first_event(happens: Callable[[float], bool], lo: float, hi: float, step: float) -> float:
+    """The smallest slider position ``lo + k·step`` (k = 0, 1, …) at which ``happens`` is true.
+
+    Assumes the event, once it happens, goes on happening further along the slider (the
+    quantity behind it grows with the slider), and bisects over the slider's positions:
+    about log2((hi − lo)/step) calls of ``happens``. Raises ValueError if it does not happen
+    at ``hi``.
+
+    Parameters
+    ----------
+    happens : callable
+        ``happens(value) -> bool`` for a slider value (same unit as ``lo``, ``hi``, ``step``).
+    lo, hi, step : float
+        The slider's range and step.
+    """
+    n = int(round((hi - lo) / step))
+    if not happens(lo + n * step):
+        raise ValueError(f"it does not happen on the slider ({lo:g} … {hi:g})")
+    if happens(lo):
+        return float(lo)
+    a, b = 0, n  # not at a, at b
+    while b - a > 1:
+        m = (a + b) // 2
+        if happens(lo + m * step):
+            b = m
+        else:
+            a = m
+    return float(lo + b * step)
+
+
 def check_event_at(
     what: str,
     answer: object,

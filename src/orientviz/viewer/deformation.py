@@ -196,9 +196,19 @@ def without_lens_terms(problem: Any, block: Block) -> tuple[F64, float]:
     return adj.x[adj.groups["points"]].reshape(p, 3), float(adj.sigma0)
 
 
+def camera_terms_name(block: Block) -> str:
+    """What the cameras of a problem file estimate, as the panel names it: ``"lens
+    terms"`` (a lens model) or ``"additional parameters (ebner12)"`` (a set)."""
+    models = [m for m in (getattr(block.cameras, "model", None) or []) if m]
+    if models and "additional" in models[0]:
+        return f"additional parameters ({models[0]['additional']})"
+    return "lens terms"
+
+
 def lens_deformation_extra(problem: Any, state: BlockState):
-    """An ``extra`` builder for a problem file whose cameras have a lens model: the model
-    deformation the lens terms remove — the block adjusted without them against with them.
+    """An ``extra`` builder for a problem file whose cameras have a lens model or an
+    additional-parameter set: the model deformation those terms remove — the block
+    adjusted without them against with them (:func:`camera_terms_name` names them).
 
     Vectors from each point as adjusted with the lens terms (the file's solution) to the
     same point adjusted without them, × k (the median drawn half a point spacing), morphed
@@ -207,6 +217,7 @@ def lens_deformation_extra(problem: Any, state: BlockState):
     """
     start, with_lens = state.block0.copy(), state.block.points.xyz.copy()
     sigma_with = float(state.result.sigma0) if state.result is not None else float("nan")
+    terms = camera_terms_name(start)
 
     def build(app: Any) -> dict:
         scene = app.scene
@@ -218,11 +229,11 @@ def lens_deformation_extra(problem: Any, state: BlockState):
             "/block/lens_deformation/vectors", np.zeros((1, 2, 3), np.float32),
             COLORS["deformation"], thickness=2.0, thickness_units="screen", visible=False,
         )  # fmt: skip
-        with gui.add_folder("Model deformation (lens terms)", expand_by_default=False):
-            ctl["show"] = gui.add_checkbox("without → with the lens terms", False)
+        with gui.add_folder(f"Model deformation ({terms})", expand_by_default=False):
+            ctl["show"] = gui.add_checkbox(f"without → with the {terms}", False)
             ctl["t"] = gui.add_slider("morph t", 0.0, 1.0, 0.01, 0.0)
             ctl["info"] = gui.add_markdown("*tick the box: the block is adjusted once more "
-                                           "without the cameras' lens terms*")  # fmt: skip
+                                           f"without the cameras' {terms}*")  # fmt: skip
 
         def redraw() -> None:
             if "A" not in field:
@@ -235,7 +246,7 @@ def lens_deformation_extra(problem: Any, state: BlockState):
             vec.points = frame.to_scene(np.stack([with_lens, M], axis=1)).astype(np.float32)
             d = np.linalg.norm(rms(A))
             ctl["info"].content = (
-                f"each point adjusted **without** the lens terms (t = 0) against **with** them "
+                f"each point adjusted **without** the {terms} (t = 0) against **with** them "
                 f"(t = 1, the solution): RMS {d:.3g} m, drawn ×{k:.3g}, t = {t:.2f}  \n"
                 f"σ̂0 without {field['sigma0']:.4g}, with {sigma_with:.4g}"
             )
@@ -250,7 +261,7 @@ def lens_deformation_extra(problem: Any, state: BlockState):
                 scene.set_visible(key, (not on) and (box is None or bool(box.value)))
             scene.legend_deformation = (
                 f"{swatch(COLORS['deformation'], '▬')} model deformation: each point adjusted "
-                "without the lens terms → with them (see its folder)"
+                f"without the {terms} → with them (see its folder)"
                 if on
                 else None
             )

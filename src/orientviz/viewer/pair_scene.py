@@ -191,8 +191,6 @@ class PairView:
         )
         self._build_selection_nodes(sc, ps)
         h: dict[str, Any] = {}
-        with gui.add_folder("Legend"):
-            h["legend"] = gui.add_markdown("")
         with gui.add_folder("Dials of the right projector"):
             for i, label in enumerate(DIALS):
                 lim, step = (5.0, 0.01) if i < 2 else (250.0, 1.0)
@@ -209,6 +207,8 @@ class PairView:
             h["point"] = gui.add_dropdown("scheme point", ("none", *names), initial_value="5")
             h["plane"] = gui.add_checkbox("epipolar plane of the left ray", True)
             h["point_info"] = gui.add_markdown("")
+        with gui.add_folder("Legend"):
+            h["legend"] = gui.add_markdown("")
         with gui.add_folder("Display"):
             h["exaggeration"] = gui.add_slider(
                 "parallax × (log10)", -2.0, 2.0, 0.05, 0.0,
@@ -241,8 +241,11 @@ class PairView:
         for key in ("point", "plane", "normalised"):
             h[key].on_update(guard(lambda _e: self.redraw()))
         self.redraw()
-        pos = self.frame.to_scene(np.array([-0.9 * cfg.model_base, -1.1 * cfg.model_base, 0.5 * H]))
-        look = self.frame.to_scene(np.array([0.5 * cfg.model_base, 0.0, -H]))
+        # the whole pair (terrain, both projectors and their frustums) left of the panel
+        top = geo["centres"] + [0.0, 0.0, self.depth]
+        seen = self.frame.to_scene(np.vstack([geo["terrain"], geo["centres"], top]))
+        b = cfg.model_base
+        pos, look = g.framing(seen, direction=(1.4 * b, 1.1 * b, -1.5 * H), margin=0.9)
         return {"camera": (pos, look, self.frame.size), "pair": self}
 
     def _build_selection_nodes(self, sc: Any, ps: float) -> None:
@@ -345,8 +348,10 @@ class PairView:
         m = target / 10**e
         value = float((5 if m >= 5 else 2 if m >= 2 else 1) * 10**e)  # machine mm
         lo, hi = self.terrain_box
-        start = np.array([lo[0] - 0.6 * self.spacing, lo[1], lo[2]])
-        end = start + [0.0, value * self.k, 0.0]
+        # along Y (the parallax's direction) at the terrain's edge X = 0 ending at its far
+        # side +Y: the corner farthest from the GUI panel in the first view
+        end = np.array([lo[0] - 0.6 * self.spacing, hi[1], lo[2]])
+        start = end - [0.0, value * self.k, 0.0]
         tick = np.array([0.25 * self.spacing, 0.0, 0.0])
         seg = np.array([[start, end], [start - tick, start + tick], [end - tick, end + tick]])
         sc, f = self.app.server.scene, self.frame
@@ -364,7 +369,7 @@ class PairView:
             thickness=3.0, thickness_units="screen",
         )  # fmt: skip
         self.nodes["scale_label"] = sc.add_label(
-            "/pair/labels/scale_bar", text,
+            "/pair/labels/scale_bar", text, anchor="top-center",
             position=f.to_scene((start + end) / 2 - 3 * tick).astype(np.float32),
         )  # fmt: skip
 
@@ -398,7 +403,8 @@ class PairView:
         rms = float(np.sqrt(np.mean(geo["parallax"] ** 2)))
         self.h["stats"].content = (
             f"RMS y-parallax over the model: **{rms * 1000:.1f} µm** (machine)  \n"
-            f"passes: {len(self.plotter.history)} · dials − truth: by {err[0]:+.3f}, bz {err[1]:+.3f} mm; "
+            f"{self.dials_text()}  \n"
+            f"dials − truth: by {err[0]:+.3f}, bz {err[1]:+.3f} mm; "
             f"ω {err[2] * RHO_C:+.1f}, φ {err[3] * RHO_C:+.1f}, κ {err[4] * RHO_C:+.1f} c  \n"
             f"arrows ×{self.k:.3g} (left ray → right ray)"
         )
@@ -406,6 +412,26 @@ class PairView:
         if hasattr(self, "h"):
             self._draw_selection(geo)
             self._draw_picture(geo)
+
+    def dials_text(self) -> str:
+        """Where the dials stand against the pass the scrubber shows.
+
+        ``"dials at pass 5 of 5"`` when they equal that pass; ``"dials at pass 5 of 5,
+        turned by κ +2.0 c"`` once a dial (by hand or from a notebook) moved them away
+        from it, so that the scrubber and the read-out never contradict each other.
+        Differences below half a dial's step (0.005 mm, 0.5 c: the sliders' rounding) are
+        not counted as turns.
+        """
+        n = len(self.snapshots) - 1
+        k = min(int(self.h["scrub"].value), n) if hasattr(self, "h") else n
+        where = f"dials at pass {k} of {n}" if n else "dials at the start"
+        d = self.plotter.settings - self.snapshots[k]
+        moved = [
+            f"{name} {d[i]:+.3f} mm" if i < 2 else f"{name} {d[i] * RHO_C:+.1f} c"
+            for i, name in enumerate(("by", "bz", "ω", "φ", "κ"))
+            if abs(d[i]) >= (0.005 if i < 2 else 0.5 / RHO_C)  # half a dial's step
+        ]
+        return f"{where}, turned by {', '.join(moved)}" if moved else where
 
     def selected(self) -> int | None:
         """Index of the selected scheme point, or None."""

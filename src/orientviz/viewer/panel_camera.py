@@ -3,9 +3,11 @@
 Shown when the adjustment estimates camera terms (a lens model or additional parameters
 of the problem file's ``cameras[]``): each parameter with its value and σ (σ̂0 applied;
 "fixed" when held), the strongest correlations among the estimated ones, and — for the
-backward (photogrammetric) lens model — the distortion field of the estimated lens drawn
-on the image plane of the selected image's frustum, as arrows from the measured to the
-corrected image point, exaggerated (:func:`distortion_segments`).
+backward (photogrammetric) lens model and for additional-parameter sets — the distortion
+field of the estimated camera drawn on the image plane of the selected image's frustum,
+as arrows from the measured to the corrected image point, exaggerated
+(:func:`distortion_segments`; an additional-parameter set's field is −A(m)·a,
+:func:`ap_distortion_vectors`).
 
 Units: c, x0, y0 in mm; the lens terms in the units :class:`orientviz.bundle.LensEstimates`
 states (mm⁻², mm⁻⁴, …); the arrows in mm of the image, drawn × the factor in the panel.
@@ -18,6 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..io.kinds.block import bundle_camera_options
 from ..lens import BackwardLens, backward_ideal
 from .legend import swatch
 
@@ -64,7 +67,7 @@ def additional_table(result: Any, strongest: int = 3) -> str:
     Q = result.cofactor_groups.get("additional")
     s0 = float(result.sigma0) if np.isfinite(result.sigma0) else 1.0
     sig = s0 * np.sqrt(np.diag(Q)) if Q is not None and np.ndim(Q) == 2 else np.full(x.size, np.nan)
-    lines = [f"{n} = {v:.4g} ± {s:.2g}" for n, v, s in zip(names, x, sig)]
+    lines = [f"{n} = {v:.4g} ± {s:.2g} µm" for n, v, s in zip(names, x, sig)]
     if Q is not None and np.ndim(Q) == 2 and x.size > 1:
         d = np.sqrt(np.clip(np.diag(Q), 1e-300, None))
         R = Q / np.outer(d, d)
@@ -92,6 +95,29 @@ def distortion_vectors(cam: Any, lo: F64, hi: F64, group: int = 0, n: int = 9) -
     m = np.column_stack([gx.ravel(), gy.ravel()])
     rel = m - [lens.px, lens.py]
     return m, backward_ideal(m, lens) - rel
+
+
+def ap_group_values(result: Any, group: int) -> F64 | None:
+    """The estimated additional parameters (k,) µm of parameter group ``group`` (a camera),
+    from the result's ``"additional"`` block (names ``b1@g0``, …), or None if it has none."""
+    sl = result.groups["additional"]
+    names = [str(n) for n in result.names[sl]]
+    x = np.asarray(result.x)[sl]
+    mine = [j for j, n in enumerate(names) if n.rsplit("@g", 1)[-1] == str(group)]
+    if "@g" not in "".join(names):  # one group: the names carry no group
+        mine = list(range(len(names)))
+    return x[mine] if mine else None
+
+
+def ap_distortion_vectors(aps: Any, a: F64, lo: F64, hi: F64, n: int = 9) -> tuple[F64, F64]:
+    """Grid points m (k, 2) mm over ``lo``–``hi`` and the correction of the estimated
+    additional parameters there, from the measured to the corrected point: −A(m)·a (mm)
+    (the set's model is x_obs + v = projection + A(x_obs)·a, ``a`` in µm)."""
+    gx, gy = np.meshgrid(
+        np.linspace(lo[0], hi[0], n), np.linspace(lo[1], hi[1], max(3, n * 2 // 3))
+    )
+    m = np.column_stack([gx.ravel(), gy.ravel()])
+    return m, -aps.correction(m, a)
 
 
 def distortion_segments(
@@ -143,15 +169,16 @@ class CameraControls:
         else:
             self.text = ""
         h["table"].content = self.text
-        self._draw_field(cam if bool(h["field"].value) else None)
+        on = bool(h["field"].value)
+        self._draw_field(cam if on else None, on and cam is None and has_ap)
 
-    def _draw_field(self, cam: Any) -> None:
+    def _draw_field(self, cam: Any, ap: bool = False) -> None:
         scene = self.panel.scene
         scene.legend_extra = []
         if self.node is not None:
             self.node.remove()
             self.node = None
-        if cam is None or cam.kind != "backward":
+        if not ap and (cam is None or cam.kind != "backward"):
             return
         b, k = self.state.block, scene.selected
         ci = int(b.images.camera[k])
@@ -159,13 +186,22 @@ class CameraControls:
         if xy.shape[0] < 2:
             return
         lo, hi = xy.min(axis=0), xy.max(axis=0)
-        m, d = distortion_vectors(cam, lo, hi, ci if cam.value.shape[0] > 1 else 0)
+        if ap:  # an additional-parameter set of the file: its correction field
+            opts = bundle_camera_options(b)
+            a = ap_group_values(self.state.result, int(opts["ap_group"][k]))
+            if a is None:
+                return
+            m, d = ap_distortion_vectors(opts["additional"], a, lo, hi)
+            pp = np.array([b.cameras.x0[ci], b.cameras.y0[ci]])
+            what = f"correction of the additional parameters ({opts['additional'].name})"
+        else:
+            m, d = distortion_vectors(cam, lo, hi, ci if cam.value.shape[0] > 1 else 0)
+            g = ci if cam.value.shape[0] > 1 else 0
+            pp, what = np.array([cam.get("x0", g)[0], cam.get("y0", g)[0]]), "lens distortion"
         big = float(np.max(np.linalg.norm(d, axis=1))) if d.size else 0.0
         if not big > 0:
             return
         factor = 0.12 * float(np.max(hi - lo)) / big  # the largest arrow an eighth of the format
-        g = ci if cam.value.shape[0] > 1 else 0
-        pp = np.array([cam.get("x0", g)[0], cam.get("y0", g)[0]])
         seg = distortion_segments(  # the image plane: rays through m − principal point
             m - pp, d, b.images.X0[k], b.rotations()[k], float(b.cameras.c[b.images.camera[k]]),
             scene.geo.frustum_depth, factor,
@@ -179,6 +215,6 @@ class CameraControls:
             self.text + f"  \ndistortion arrows ×{factor:.3g} (largest {big * 1e3:.1f} µm)"
         )
         scene.legend_extra = [
-            f"{swatch(DISTORTION_COLOUR, '→')} lens distortion of the selected image "
+            f"{swatch(DISTORTION_COLOUR, '→')} {what} of the selected image "
             f"(×{factor:.3g}, largest {big * 1e3:.0f} µm)"
         ]

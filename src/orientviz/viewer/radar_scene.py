@@ -45,12 +45,21 @@ from .demo import Demo
 
 STATION_COLORS = {1: (40, 70, 160), 2: (250, 130, 0), 3: (20, 150, 60)}
 FADED = (175, 175, 175)
+#: Shades of the three range spheres' caps (about Fig. 7's points 1, 5 and 21).
+SPHERE_COLORS = ((110, 150, 225), (235, 150, 90), (120, 195, 130))
 
 #: Colours of the construction and their legend text (one place for both).
 ELEMENTS: dict[str, tuple[tuple[int, int, int], str]] = {
+    "stations": (
+        STATION_COLORS[3],
+        "the selected image's station with its antenna axis k (the other two faded grey)",
+    ),
     "points": ((70, 80, 100), "object points (Fig. 7 grid on the chosen surface)"),
     "target": ((200, 0, 130), "the chosen target"),
-    "spheres": ((110, 150, 225), "range spheres (4b) about three points, radius = slant range"),
+    "spheres": (
+        SPHERE_COLORS[0],
+        "shaded caps of the range spheres (4b) about points 1, 5, 21, radius = slant range",
+    ),
     "candidates": ((0, 0, 0), "their two common points: the station and its mirror image"),
     "slant_range": ((200, 30, 30), "slant range s, station → target"),
     "circle": ((30, 90, 200), "slant-range circle: range sphere ∩ azimuth plane (4c)"),
@@ -64,11 +73,20 @@ ELEMENTS: dict[str, tuple[tuple[int, int, int], str]] = {
     ),
     "range_ring": ((20, 140, 60), "thin green: the range ring, radius s_e about the foot"),
     "azimuth_plane": ((30, 90, 200), "azimuth plane (4c) of the target (option)"),
+    "target_sphere": ((30, 90, 200), "range sphere (4b) of the target (option)"),
+    "circles": ((150, 175, 215), "projection circles of all points (option)"),
 }
 
 #: The grid corners (points 1, 5 and 21 of Fig. 7) whose range spheres are drawn.
 TRIANGLE: tuple[int, int, int] = (0, 4, 20)
-SPHERE_COLORS = ((110, 150, 225), (235, 150, 90), (120, 195, 130))
+#: (rings, vertices per ring) of a shaded cap: its triangles never change.
+CAP_MESH: tuple[int, int] = (10, 48)
+#: Material of the shaded surfaces: toon shading costs a software renderer (a projector
+#: laptop without GPU, headless Chromium) a fraction of the standard PBR material.
+MESH_MATERIAL = "toon3"
+#: Direction the first view looks along (object frame, Z up): steep from the south, so
+#: that the stations (15 km above the grid) do not stand in front of the grid's far rows.
+VIEW_DIRECTION = (0.2, 1.0, -1.2)
 
 
 def radar_geometry(surface: str = "fig7", image: int = 1, rounded: bool = True) -> dict[str, Any]:
@@ -107,13 +125,28 @@ def radar_geometry(surface: str = "fig7", image: int = 1, rounded: bool = True) 
     }
 
 
+def _swatch_html(col: tuple[int, int, int]) -> str:
+    return (
+        '<span style="display:inline-block;width:0.9em;height:0.9em;'
+        f'background:rgb{col};border-radius:2px;margin-right:0.25em;vertical-align:-0.1em"></span>'
+    )
+
+
 def legend_html() -> str:
-    """The legend: a colour swatch and a name for every element of the scene."""
+    """The legend: colour swatches and a name for every element of the scene.
+
+    Elements drawn in several colours (the stations, the three spheres' caps) get a
+    swatch per colour.
+    """
+    several = {
+        "stations": (*STATION_COLORS.values(), FADED),
+        "spheres": SPHERE_COLORS,
+    }
     rows = "".join(
-        f'<div style="margin:1px 0"><span style="display:inline-block;width:0.9em;height:0.9em;'
-        f'background:rgb{col};border-radius:2px;margin-right:0.4em;vertical-align:-0.1em"></span>'
-        f"{text}</div>"
-        for col, text in ELEMENTS.values()
+        '<div style="margin:1px 0">'
+        + "".join(_swatch_html(c) for c in several.get(key, (col,)))
+        + f"{text}</div>"
+        for key, (col, text) in ELEMENTS.items()
     )
     return f'<div style="font-size:0.8em;line-height:1.3">{rows}</div>'
 
@@ -160,11 +193,13 @@ class RadarView:
         self.nodes["target"] = sc.add_point_cloud(
             "/radar/target", z1, col["target"], point_size=0.035 * f.size, **pts
         )
-        mesh = dict(opacity=0.3, side="double", cast_shadow=False, receive_shadow=False)
+        mesh = dict(opacity=0.3, side="double", cast_shadow=False, receive_shadow=False,
+                    material=MESH_MATERIAL)  # fmt: skip
         v0, f0 = rg.disc_mesh(np.zeros(3), (0.0, 0.0, 1.0), 1.0, 8)
         for j, c in enumerate(SPHERE_COLORS):
+            vc, fc = rg.cap_mesh(np.zeros(3), 1.0, (0.0, 0.0, 1.0), 0.1, *CAP_MESH)
             self.nodes[f"sphere_{j}"] = sc.add_mesh_simple(
-                f"/radar/sphere_{j}", v0, f0, color=c, **mesh
+                f"/radar/sphere_{j}", vc.astype(np.float32), fc, color=c, **mesh
             )
         self.nodes["candidates"] = sc.add_point_cloud(
             "/radar/candidates", np.zeros((2, 3), np.float32), col["candidates"],
@@ -204,13 +239,12 @@ class RadarView:
         )  # fmt: skip
         self._build_panel(gui, G)
         self.redraw()
-        centre = f.to_scene(np.array([20000.0, 2000.0, -9000.0]))
-        pos = centre + np.array([-0.45, -1.0, 0.4]) * 1.05 * f.size
-        return {"camera": (pos, centre, f.size), "radar": self}
+        pos, look = g.framing(f.to_scene(allp), direction=VIEW_DIRECTION, margin=0.95)
+        return {"camera": (pos, look, f.size), "radar": self}
 
     def _build_stations(self, sc: Any, geo: dict) -> None:
         f = self.frame
-        r_station = 0.012 * f.size
+        self.r_station = r_station = 0.012 * f.size
         for i, X in geo["stations"].items():
             self.nodes[f"station_{i}"] = sc.add_icosphere(
                 f"/radar/station_{i}", radius=r_station, color=STATION_COLORS[i],
@@ -222,8 +256,9 @@ class RadarView:
                 thickness=3.0, thickness_units="screen",
             )  # fmt: skip
             self.nodes[f"label_{i}"] = sc.add_label(
-                f"/radar/station_{i}/label", f"image {i}", position=(0.0, 0.0, 2.0 * r_station)
-            )
+                f"/radar/station_{i}/label", f"image {i}", anchor="bottom-center",
+                position=(0.0, 0.0, 3.0 * r_station),
+            )  # fmt: skip
 
     def _build_panel(self, gui: Any, G: Any) -> None:
         h: dict[str, Any] = {}
@@ -244,14 +279,15 @@ class RadarView:
             h["target_sphere"] = gui.add_checkbox("range sphere of the target (4b)", False)
             h["spheres"] = gui.add_checkbox("trilateration spheres", True)
             h["extent"] = gui.add_slider(
-                "sphere cap [°]", 5.0, 180.0, 5.0, 15.0,
+                "sphere cap [°]", 2.0, 180.0, 1.0, 8.0,
                 hint="angular radius of the shaded caps about the station; 180 = whole sphere",
             )  # fmt: skip
             h["circles"] = gui.add_checkbox("projection circles of all points", False)
         self.h = h
         guard = self.app.guard
-        for key in ("image", "target", "surface", "rounded", "extent"):
+        for key in ("image", "target", "surface", "rounded"):
             h[key].on_update(guard(lambda _e: self.redraw()))
+        h["extent"].on_update(guard(lambda _e: self.draw_caps()))
         for key in ("construction", "ground_plane", "azimuth_plane", "target_sphere",
                     "spheres", "circles"):  # fmt: skip
             h[key].on_update(guard(lambda _e: self.apply_visibility()))
@@ -276,7 +312,21 @@ class RadarView:
     def _mesh(self, key: str, verts: np.ndarray, faces: np.ndarray) -> None:
         node = self.nodes[key]
         node.vertices = self.frame.to_scene(verts).astype(np.float32)
-        node.faces = faces.astype(np.uint32)
+        if not np.array_equal(node.faces, faces):  # the triangles rarely change: sent once
+            node.faces = faces.astype(np.uint32)
+
+    def draw_caps(self) -> None:
+        """The shaded caps of the three range spheres about the selected station.
+
+        Only their vertices change (the triangles stay: :data:`CAP_MESH`), so that a move
+        of the *sphere cap* slider sends three arrays and nothing else.
+        """
+        geo, half = self.geo, np.radians(float(self.h["extent"].value))
+        station = geo["stations"][int(self.h["image"].value)]
+        P = geo["points"][geo["triangle"]]
+        for j, (centre, radius) in enumerate(zip(P, geo["radii"], strict=True)):
+            verts, _ = rg.cap_mesh(centre, radius, station - centre, half, *CAP_MESH)
+            self.nodes[f"sphere_{j}"].vertices = self.frame.to_scene(verts).astype(np.float32)
 
     def redraw(self) -> None:
         """Recompute everything for the chosen image, target and surface."""
@@ -290,6 +340,11 @@ class RadarView:
             self.nodes[f"station_{i}"].color = STATION_COLORS[i] if sel else FADED
             self.nodes[f"station_{i}"].opacity = None if sel else 0.35
             self.nodes[f"axis_{i}"].visible = sel
+            # the selected station's name above it, the faded ones' below (off the construction)
+            label, up = self.nodes[f"label_{i}"], 3.0 * self.r_station
+            label.anchor = "bottom-center" if sel else "top-center"
+            label.position = (0.0, 0.0, up if sel else -up)
+            label.font_screen_scale = 1.0 if sel else 0.85
         P = geo["points"]
         self.nodes["points"].points = f.to_scene(P).astype(np.float32)
         self.nodes["target"].points = f.to_scene(P[target : target + 1]).astype(np.float32)
@@ -297,9 +352,7 @@ class RadarView:
         seg = np.stack([C[:, :-1], C[:, 1:]], axis=2).reshape(-1, 2, 3)
         self.nodes["circles"].points = f.to_scene(seg).astype(np.float32)
         station = geo["stations"][image]
-        half = np.radians(float(self.h["extent"].value))
-        for j, (centre, radius) in enumerate(zip(P[geo["triangle"]], geo["radii"], strict=True)):
-            self._mesh(f"sphere_{j}", *rg.cap_mesh(centre, radius, station - centre, half))
+        self.draw_caps()
         self.nodes["candidates"].points = f.to_scene(geo["candidates"]).astype(np.float32)
         self.construction = con = rg.geier_construction(P[target], geo["xy"][target], geo["image"])
         self._draw_construction(con, P[target], geo)
@@ -336,7 +389,7 @@ class RadarView:
         self._mesh("ground_plane", *rg.disc_mesh(foot, con["axis"], 1.1 * reach.max(), 96))
         self._mesh("azimuth_plane", *rg.disc_mesh(X0, con["normal"], 1.05 * con["s"], 96))
         self._mesh("target_sphere", *rg.cap_mesh(X0, con["s"], -con["axis"], np.pi, 24, 64))
-        labels = {"s": 0.5 * (X0 + target), "h": 0.5 * (X0 + foot), "s_e": 0.5 * (foot + ip),
+        labels = {"s": 0.35 * X0 + 0.65 * target, "h": 0.5 * (X0 + foot), "s_e": 0.5 * (foot + ip),
                   "target": target, "image point": ip}  # fmt: skip
         for key, X in labels.items():
             self.nodes[f"label_{key}"].position = f.to_scene(X)

@@ -405,8 +405,23 @@ class BlockState:
         """Observed minus computed image coordinates (n, 2) in mm for the current state
         (through the file's camera model and the current camera terms, if any)."""
         if self.camera is not None and self.ap is not None:
-            return self.camera.misclosure(self.block, self.ap)
+            e = self._result_misclosure()
+            return self.camera.misclosure(self.block, self.ap) if e is None else e
         return self.block.residuals()
+
+    def _result_misclosure(self) -> F64 | None:
+        """−v (n, 2) mm of the last adjustment while the state is its estimate, else None.
+
+        At the estimate the misclosure through the camera model is the adjustment's own
+        residual vector (the contract's order: x, y of each image observation first), so
+        opening a self-calibrated block needs no second bundle problem for it.
+        """
+        n = self.block.n_observations
+        v = None if not self.at_result or self.result is None else self.result.residuals
+        if v is None or np.shape(v)[0] < 2 * n:
+            return None
+        e = -np.asarray(v[: 2 * n], dtype=float).reshape(n, 2)
+        return e if np.all(np.isfinite(e)) else None
 
     def scores(self, misclosure: F64 | None = None) -> tuple[F64, str]:
         """Per-observation size of the residual and what it is.

@@ -37,7 +37,7 @@ from ..design import (
     accuracy_law,
     add_images,
     assess_models,
-    cross_strip,
+    cross_strip_images,
     design_auxiliary,
     design_block,
     design_from_block,
@@ -249,23 +249,41 @@ class Studio:
             lambda: self._set_plan(design),
         )
 
+    def _set_live(self, live: LiveDesign) -> None:
+        """The design after a structural change updated by the live design."""
+        self.live = live
+        if self.design is not None:  # the law still describes the regular plan
+            self.law = dict(accuracy_law(self.design, self.spec))
+            self.law["note"] += "; for the plan without the images added or removed since"
+        self._models = None
+
+    def _images_added(self, label: str, X0, angles, strip, ids=None) -> DesignQuality:
+        """Add images: by the live design's update (a new assessment with auxiliary data,
+        whose rows follow the images)."""
+        if self.live.auxiliary:
+            b = add_images(self.block, X0, angles, strip=strip, ids=ids)
+            return self._structural(label, lambda: self._set_block(b, self.spec))
+        new = self.live.add_images(X0, angles, strip=strip, ids=ids)
+        return self._structural(label, lambda: self._set_live(new))
+
     @_locked
     def add_cross_strip(self, x: float) -> DesignQuality:
         """Fly a cross strip along +Y at X = ``x`` (m) over the block."""
-        b = cross_strip(self.block, self.spec, x)
-        n = b.n_images - self.block.n_images
-        return self._structural(
-            f"cross strip at X = {x:,.0f} m ({n} images)", lambda: self._set_block(b, self.spec)
-        )
+        X0, ang, strip, ids = cross_strip_images(self.block, self.spec, x)
+        label = f"cross strip at X = {x:,.0f} m ({len(ids)} images)"
+        return self._images_added(label, X0, ang, strip, ids)
 
     @_locked
     def remove_images(self, images, what: str | None = None) -> DesignQuality:
         """Remove images (indices) and their rays from the design."""
         idx = np.atleast_1d(np.asarray(images, np.int64))
         names = [self.block.images.ids[i] for i in idx]
-        b = remove_images(self.block, idx)
         label = what or ("image " + ", ".join(names) + " removed")
-        return self._structural(label, lambda: self._set_block(b, self.spec))
+        if self.live.auxiliary:
+            b = remove_images(self.block, idx)
+            return self._structural(label, lambda: self._set_block(b, self.spec))
+        new = self.live.remove_images(idx, label)
+        return self._structural(label, lambda: self._set_live(new))
 
     @_locked
     def add_image(self, xy) -> DesignQuality:
@@ -275,12 +293,30 @@ class Studio:
         xy = np.asarray(xy, float)[:2]
         i = int(np.argmin(np.linalg.norm(I.X0[:, :2] - xy[None, :], axis=1)))
         X0 = np.r_[xy, I.X0[i, 2]]
-        b = add_images(self.block, X0[None], I.angles[i][None], strip=int(I.strip[i]))
-        name = b.images.ids[-1]
-        return self._structural(
+        name = f"x{self.block.n_images:03d}"
+        return self._images_added(
             f"image {name} added at X {xy[0]:,.0f} m, Y {xy[1]:,.0f} m (strip {I.strip[i]})",
-            lambda: self._set_block(b, self.spec),
+            X0[None],
+            I.angles[i][None],
+            int(I.strip[i]),
         )
+
+    @_locked
+    def move_image(self, image: int, xy) -> DesignQuality:
+        """Move image ``image`` to above the ground position ``xy`` (m), keeping its
+        height, attitude, strip and id (the image removed, then added at the new place:
+        two updates, one change to undo)."""
+        I = self.block.images
+        xy = np.asarray(xy, float)[:2]
+        name, strip = I.ids[image], int(I.strip[image])
+        X0 = np.r_[xy, I.X0[image, 2]][None]
+        ang = I.angles[image][None].copy()
+        label = f"image {name} moved to X {xy[0]:,.0f} m, Y {xy[1]:,.0f} m"
+        if self.live.auxiliary:
+            b = add_images(remove_images(self.block, [image]), X0, ang, strip=strip, ids=[name])
+            return self._structural(label, lambda: self._set_block(b, self.spec))
+        new = self.live.remove_images([image], label).add_images(X0, ang, strip=strip, ids=[name])
+        return self._structural(label, lambda: self._set_live(new))
 
     @_locked
     def remove_strip(self, strip: int) -> DesignQuality:

@@ -11,8 +11,9 @@ Folders:
   accuracy laws, the weak spots;
 * **Control and images** — what *a click on the ground* does (make the nearest point
   control or tie, add an image there, fly a cross strip through the place, remove the
-  nearest image or strip), a *control gizmo* to drag (its release makes the nearest point control), a point
-  by id and its σ, *make control* / *make tie*; *suggest control point* and *accept
+  nearest image or strip, put the image gizmo on the nearest image), a *control gizmo* to
+  drag (its release makes the nearest point control), an *image gizmo* to drag (its
+  release moves the image there), a point by id and its σ, *make control* / *make tie*; *suggest control point* and *accept
   suggestion*; *undo* (every kind of change); the list of changes;
 * **Plan** — strips, images per strip, overlaps, image scale (flying height), image σ,
   control layout and σ, GNSS σ (absolute), statoscope and APR σ (offsets per strip) and
@@ -52,6 +53,7 @@ CLICKS = {
     "cross": "flies a cross strip through it",
     "image": "removes the nearest image",
     "strip": "removes the nearest strip",
+    "pick": "puts the image gizmo on the nearest image",
 }
 ELLIPSOID_COLOUR = (60, 140, 220)
 
@@ -88,6 +90,7 @@ class StudioPanel:
                 "a click on the ground", tuple(CLICKS.values()), initial_value=CLICKS["nothing"]
             )
             h["gizmo"] = gui.add_checkbox("control gizmo (drag, release)", False)
+            h["image_gizmo"] = gui.add_checkbox("image gizmo (drag an image, release)", False)
             h["point"] = gui.add_text("point", initial_value="")
             h["sigma"] = gui.add_number("control σ [cm]", 2.0, min=0.1, max=100.0, step=0.1)
             h["make_control"] = gui.add_button("make control")
@@ -128,6 +131,9 @@ class StudioPanel:
         h["ellipsoids"].on_update(guard(lambda _e: self.view.redraw()))
         h["exaggeration"].on_update(guard(lambda _e: self.view.redraw()))
         h["gizmo"].on_update(guard(lambda _e: self.view.gizmo(self.h["gizmo"].value)))
+        h["image_gizmo"].on_update(
+            guard(lambda _e: self.view.image_gizmo(self.h["image_gizmo"].value))
+        )
         h["make_control"].on_click(guard(lambda _e: self.make_control()))
         h["make_tie"].on_click(guard(lambda _e: self.make_tie()))
         h["suggest"].on_click(guard(lambda _e: self.suggest()))
@@ -234,13 +240,17 @@ class StudioPanel:
             st.add_cross_strip(float(xy[0]))
         elif what == "add":
             st.add_image(xy)
-        elif what in ("image", "strip"):
+        elif what in ("image", "strip", "pick"):
             X0 = st.block.images.X0[:, :2]
             i = int(np.argmin(np.linalg.norm(X0 - np.asarray(xy)[None, :2], axis=1)))
             if what == "image":
                 st.remove_images([i])
-            else:
+            elif what == "strip":
                 st.remove_strip(int(st.block.images.strip[i]))
+            else:
+                self.h["image_gizmo"].value = True
+                self.view.image_gizmo(True, i)
+                return
         else:
             return
         self.view.redraw()
@@ -265,6 +275,7 @@ class StudioView:
         self.studio = studio or Studio()
         self.nodes: dict[str, Any] = {}
         self.panel = None
+        self.dragged: str | None = None  # id of the image under the image gizmo
 
     def build(self) -> dict:
         """Add the nodes and the panel; return the camera and the view (``"studio"``)."""
@@ -368,6 +379,46 @@ class StudioView:
         gz.on_update(self.app.guard(moved))
         self.nodes["gizmo"] = gz
 
+    def image_gizmo(self, on: bool, image: int | None = None) -> None:
+        """Show (or hide) the image gizmo on the projection centre of ``image`` (default:
+        the image nearest to the block's centre): drag it and release, and the image moves
+        there (:meth:`Studio.move_image <orientviz.viewer.studio.Studio.move_image>`)."""
+        old = self.nodes.pop("image_gizmo", None)
+        if old is not None:
+            old.remove()
+        if not on:
+            return
+        I = self.studio.block.images
+        if image is None:
+            c = I.X0[:, :2].mean(axis=0)
+            image = int(np.argmin(np.linalg.norm(I.X0[:, :2] - c, axis=1)))
+        self.dragged = I.ids[image]
+        lim = 2.0 * self.frame.size
+        gz = self.app.server.scene.add_transform_controls(
+            "/design/image_gizmo", scale=0.06 * self.frame.size, disable_rotations=True,
+            active_axes=(True, True, False),
+            position=tuple(float(v) for v in self.frame.to_scene(I.X0[image])),
+            translation_limits=((-lim, lim), (-lim, lim), (-lim, lim)),
+        )  # fmt: skip
+
+        def moved(event: Any) -> None:
+            if getattr(event, "phase", "end") == "end":
+                self.image_released(np.asarray(gz.position, float))
+
+        gz.on_update(self.app.guard(moved))
+        self.nodes["image_gizmo"] = gz
+
+    def image_released(self, position: Any) -> None:
+        """Move the image under the image gizmo to its position (scene frame, m): same
+        height, attitude, strip and id."""
+        ids = self.studio.block.images.ids
+        if self.dragged not in ids:  # removed meanwhile: the gizmo picks the nearest one
+            self.image_gizmo(True)
+            return
+        xy = (np.asarray(position, float) + self.frame.origin)[:2]
+        self.studio.move_image(ids.index(self.dragged), xy)
+        self.redraw()
+
     def gizmo_released(self, position: Any) -> None:
         """Make the point nearest to the gizmo's position (scene frame, m) control."""
         xy = (np.asarray(position, float) + self.frame.origin)[:2]
@@ -393,7 +444,7 @@ DESCRIPTION = (
     "Plan a block before it is flown: the colours show the design's predicted quality (no "
     "measurements, the bundle's own normal equations). Make points control or tie, fly "
     "cross strips or remove images and strips by clicking the ground (*Control and "
-    "images*), drag the control gizmo, ask for the best next control point, switch the "
+    "images*), drag the control gizmo or an image (image gizmo), ask for the best next control point, switch the "
     "method, change strips, overlaps and σ under *Plan*; the summary compares with Ebner's "
     "accuracy laws."
 )

@@ -9,13 +9,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.stats import chi2
 
 from orientviz.exercises import lesson01 as checker
 from orientviz.exercises.lesson01 import (
-    _bounds_no_sqrt,
-    _bounds_not_divided,
-    _bounds_one_sided,
     _ellipse_degrees,
     _ellipse_minor_direction,
     _ellipse_no_half,
@@ -40,8 +36,20 @@ def _ellipse(C):
     return math.sqrt(w[1]), math.sqrt(w[0]), math.atan2(V[1, 1], V[0, 1])
 
 
-def _bounds(r, alpha):
-    return (math.sqrt(chi2.ppf(alpha / 2, r) / r), math.sqrt(chi2.ppf(1 - alpha / 2, r) / r))
+def _group_sigma0(A, l, sigma, group, how="r_i"):
+    p = 1.0 / sigma**2
+    N = A.T @ (p[:, None] * A)
+    v = A @ np.linalg.solve(N, A.T @ (p * l)) - l
+    r_i = 1.0 - p * np.einsum("ij,jk,ik->i", A, np.linalg.inv(N), A)  # diag(I − A N⁻¹ Aᵀ P)
+    out = []
+    for g in range(int(group.max()) + 1):
+        m = group == g
+        pvv = np.sum((p * v * v)[m]) if how != "no_weights" else np.sum((v * v)[m])
+        r_g = {"n_g": m.sum(), "share": m.sum() * (len(l) - A.shape[1]) / len(l)}.get(
+            how, r_i[m].sum()
+        )
+        out.append(pvv / r_g if how == "squared" else np.sqrt(pvv / r_g))
+    return np.array(out)
 
 
 def _gn_step(x, stations, s, sigma, sign=1.0, weights=True, unit=True):
@@ -61,7 +69,7 @@ SOLUTIONS = {
     "check_line_fit": _line_fit,
     "check_weighted_mean": _weighted_mean,
     "check_error_ellipse": _ellipse,
-    "check_sigma0_bounds": _bounds,
+    "check_group_sigma0": _group_sigma0,
     "check_gauss_newton_step": lambda x, st, s, sig: _gn_step(x, st, s, sig),
 }
 
@@ -82,10 +90,9 @@ MUTANTS = {
         "degrees": _ellipse_degrees,
         "no_half": _ellipse_no_half,
     },
-    "check_sigma0_bounds": {
-        "no_sqrt": _bounds_no_sqrt,
-        "one_sided": _bounds_one_sided,
-        "not_divided": _bounds_not_divided,
+    "check_group_sigma0": {
+        how: (lambda A, l, s, g, how=how: _group_sigma0(A, l, s, g, how))
+        for how in ("n_g", "share", "no_weights", "squared")
     },
     "check_gauss_newton_step": {
         "minus": lambda x, st, s, sig: _gn_step(x, st, s, sig, sign=-1),

@@ -40,12 +40,39 @@ def _sol_ground(xy, X0, R, c, Z):
     return X0 + ((Z - X0[2]) / d[:, 2])[:, None] * d
 
 
+def _sol_vertical(xy, c):
+    x, y = np.asarray(xy, dtype=float).T
+    J = np.zeros((len(x), 2, 3))
+    J[:, 0] = np.column_stack([-x * y / c, c * (1 + x**2 / c**2), y])
+    J[:, 1] = np.column_stack([-c * (1 + y**2 / c**2), x * y / c, -x])
+    return J
+
+
+def _without_one(xy, c):
+    J = _sol_vertical(xy, c)
+    J[:, 0, 1] -= c
+    J[:, 1, 0] += c
+    return J
+
+
+def _kappa_sign(xy, c):
+    J = _sol_vertical(xy, c)
+    J[:, :, 2] *= -1
+    return J
+
+
+def _sol_relief(r_top, h, H):
+    return np.asarray(r_top) * np.asarray(h) / H
+
+
 SOLUTIONS = {
     "check_rotation": _sol_rotation,
     "check_collinearity": _sol_collinearity,
     "check_gimbal": _sol_gimbal,
     "check_opk_from_matrix": _sol_opk,
     "check_ground_point": _sol_ground,
+    "check_vertical_partials": _sol_vertical,
+    "check_relief_displacement": _sol_relief,
 }
 
 MUTANTS = {
@@ -76,5 +103,20 @@ MUTANTS = {
     "check_ground_point": {
         "R^T instead of R": lambda xy, X0, R, c, Z: _sol_ground(xy, X0, R.T, c, Z),
         "+c": lambda xy, X0, R, c, Z: _sol_ground(xy, X0, R, -c, Z),
+    },
+    "check_vertical_partials": {
+        "all signs": lambda xy, c: -_sol_vertical(xy, c),
+        "1 forgotten": _without_one,
+        "omega phi swapped": lambda xy, c: _sol_vertical(xy, c)[:, :, [1, 0, 2]],
+        "kappa sign": _kappa_sign,
+        "per gon": lambda xy, c: _sol_vertical(xy, c) * np.pi / 200,
+        "rows swapped": lambda xy, c: _sol_vertical(xy, c)[:, ::-1],
+        "only omega phi kappa of x": lambda xy, c: _sol_vertical(xy, c) * [[1], [0]],
+    },
+    "check_relief_displacement": {
+        "foot's factor": lambda r, h, H: r * h / (H - h),
+        "sign": lambda r, h, H: -r * h / H,
+        "h in mm": lambda r, h, H: r * h / (H * 1000.0),
+        "h/r": lambda r, h, H: h / H,
     },
 }

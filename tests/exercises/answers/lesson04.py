@@ -18,8 +18,8 @@ def _sol_resection(xy, X, c, sigma, p0, n_iter=10, weighted=True, divide_by_n=Fa
         if weighted
         else np.ones(xy.size)
     )
+    f = lambda q: _project(X, q[:3], _R(q[3:]), c).ravel()  # noqa: E731
     for _ in range(n_iter):
-        f = lambda q: _project(X, q[:3], _R(q[3:]), c).ravel()  # noqa: E731
         dl = xy.ravel() - f(p)
         A = np.column_stack([(f(p + h) - f(p - h)) / (2e-6) for h in np.eye(6) * 1e-6])
         dx = np.linalg.solve((A / s[:, None] ** 2).T @ A, (A / s[:, None] ** 2).T @ dl)
@@ -108,6 +108,8 @@ MUTANTS = {
         "weights forgotten": lambda *a: _sol_resection(*a, weighted=False),
         "divides by n": lambda *a: _sol_resection(*a, divide_by_n=True),
         "one iteration": lambda *a: _sol_resection(*a, n_iter=1),
+        "two iterations": lambda *a: _sol_resection(*a, n_iter=2),
+        "no iteration": lambda *a: _sol_resection(*a, n_iter=0),
     },
     "check_two_rays": {
         "point on ray 1": lambda X01, d1, X02, d2: (

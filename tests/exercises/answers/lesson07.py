@@ -62,7 +62,8 @@ def _similarity_gn(x, X, sigma, observed, start, tol=1e-10, max_iter=20, mistake
         a = dx[3:6]  # small rotation about the object axes
         angle = np.linalg.norm(a)
         K = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]]) / max(angle, 1e-300)
-        R = (np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K) @ R  # Rodrigues
+        Ra = np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K  # Rodrigues
+        R = R @ Ra if mistake == "right_side" else Ra @ R
         m = m + dx[6]
         if np.max(np.abs(dx) * np.sqrt(np.diag(N))) < tol:
             break

@@ -19,9 +19,8 @@ def _similarity(x, X):
     return scale, R, Xm - scale * R @ xm
 
 
-def _sigma0(x, X, scale, R, t, sigma):
-    v = t + scale * x @ R.T - X
-    return np.sqrt(np.sum((v / sigma) ** 2) / (3 * len(x) - 7))
+def _determined(n_full, n_plan, n_height):
+    return n_full + n_plan >= 2 and n_full + n_height >= 3
 
 
 def _conformal(xy, XY, degree):
@@ -30,9 +29,8 @@ def _conformal(xy, XY, degree):
     return np.linalg.lstsq(A, XY[:, 0] + 1j * XY[:, 1], rcond=None)[0]
 
 
-def _log_law(n_s, mu):
-    A = np.column_stack([np.ones(len(n_s)), np.log10(n_s)])
-    return np.linalg.lstsq(A, mu, rcond=None)[0]
+def _strips_for(a, b, mu_max):
+    return np.inf if b <= 0 else 10.0 ** ((mu_max - a) / b)
 
 
 def _no_det_fix(x, X):
@@ -103,9 +101,9 @@ def _plus_c(X0, R, xy, c):
 SOLUTIONS = {
     "check_intersect_many": _sol_intersect_many,
     "check_compose": _compose,
-    "check_sigma0": _sigma0,
+    "check_determined": _determined,
     "check_conformal": _conformal,
-    "check_log_law": _log_law,
+    "check_strips_for": _strips_for,
 }
 
 MUTANTS = {
@@ -120,13 +118,12 @@ MUTANTS = {
         "no scale in t": lambda s1, s2: (s1[0] * s2[0], s1[1] @ s2[1], s1[1] @ s2[2] + s1[2]),
         "no rotation in t": lambda s1, s2: (s1[0] * s2[0], s1[1] @ s2[1], s1[0] * s2[2] + s1[2]),
     },
-    "check_sigma0": {
-        "divide by 3n": lambda x, X, s, R, t, sg: (
-            _sigma0(x, X, s, R, t, sg) * np.sqrt((3 * len(x) - 7) / (3 * len(x)))
-        ),
-        "metres": lambda x, X, s, R, t, sg: _sigma0(x, X, s, R, t, sg) * sg,
-        "squared": lambda x, X, s, R, t, sg: _sigma0(x, X, s, R, t, sg) ** 2,
-        "transpose": lambda x, X, s, R, t, sg: _sigma0(x, X, s, R.T, t, sg),
+    "check_determined": {
+        "counting": lambda f, p, h: 3 * f + 2 * p + h >= 7,
+        "two heights": lambda f, p, h: f + p >= 2 and f + h >= 2,
+        "plan points ignored": lambda f, p, h: f >= 2 and f + h >= 3,
+        "one plan point": lambda f, p, h: f + p >= 1 and f + h >= 3,
+        "yes instead of True": lambda f, p, h: "yes" if f + p >= 2 and f + h >= 3 else False,
     },
     "check_conformal": {
         "reversed": lambda xy, XY, d: _conformal(xy, XY, d)[::-1],
@@ -140,11 +137,10 @@ MUTANTS = {
         ],
         "conjugate pairing": lambda xy, XY, d: _conformal(xy * [1, -1], XY, d),
     },
-    "check_log_law": {
-        "natural log": lambda n, mu: np.linalg.lstsq(
-            np.column_stack([np.ones(len(n)), np.log(n)]), mu, rcond=None
-        )[0],
-        "linear": lambda n, mu: np.polyfit(n, mu, 1)[::-1],
-        "swapped": lambda n, mu: _log_law(n, mu)[::-1],
+    "check_strips_for": {
+        "natural log": lambda a, b, m: np.inf if b <= 0 else np.exp((m - a) / b),
+        "a forgotten": lambda a, b, m: np.inf if b <= 0 else 10.0 ** (m / b),
+        "exponent only": lambda a, b, m: np.inf if b <= 0 else (m - a) / b,
+        "b <= 0 not handled": lambda a, b, m: 10.0 ** ((m - a) / b),
     },
 }

@@ -10,7 +10,6 @@ import numpy as np
 from scipy.linalg import block_diag
 
 import orientviz as ov
-from orientviz.exercises import lesson10 as checker
 from orientviz.rotation import matrix_derivatives
 
 
@@ -31,11 +30,17 @@ def _back(V, W, bp, dc, mode="ok"):
     return np.linalg.solve(V, bp - W.T @ dc)
 
 
-def _bandwidth(P, mode="ok"):
-    if mode != "ok":  # the plausible mistakes, as the checker knows them
-        return checker._bandwidth(P, mode)
-    i, k = np.nonzero(np.asarray(P, dtype=bool))
-    return int(np.max(np.abs(i - k), initial=0))
+def _predicted_bandwidth(strips, per_strip, mistake=None):
+    # along: image 0 of a strip meets the last image of the next strip (flown back); across:
+    # two bases ahead in the neighbouring strip
+    along, across = 2 * per_strip - 1, 2 * strips + 1
+    if mistake == "same_direction":
+        along = per_strip + 2
+    if mistake == "across_2s":
+        across = 2 * strips
+    if mistake == "swapped":
+        along, across = across, along
+    return along, across
 
 
 def _schur_step(nb, mode="ok"):
@@ -103,8 +108,9 @@ def _my_bundle(data, X0, angles, xyz, tol=5e-3, max_iter=20, mistake=None):
                 W[ci, 3 * j[r] : 3 * j[r] + 3] += A[r].T @ (P[r, :, None] * dX[r])
                 bp[j[r]] += dX[r].T @ (P[r] * lf[r])
         d = data.prior - xyz[data.unknown]  # weighted control coordinates
-        V[:, [0, 1, 2], [0, 1, 2]] += data.prior_w
-        bp += data.prior_w * d
+        if mistake != "no_control":
+            V[:, [0, 1, 2], [0, 1, 2]] += data.prior_w
+            bp += data.prior_w * d
         vtpv = float(np.sum(P * lf**2) + np.sum(data.prior_w * d**2))
         if it == max_iter or (history and history[-1][1] < tol):
             break
@@ -123,10 +129,20 @@ def _my_bundle(data, X0, angles, xyz, tol=5e-3, max_iter=20, mistake=None):
         )
         history.append((vtpv, largest))
     r = 2 * n + int(np.count_nonzero(data.prior_w)) - 6 * m - 3 * p  # the redundancy
+    if mistake == "control_not_counted":
+        r -= int(np.count_nonzero(data.prior_w))
     if mistake == "fixed_as_unknowns":
         r -= 3 * int(np.sum(data.col < 0))
     s0 = vtpv / r if mistake == "no_sqrt" else np.sqrt(vtpv / r)
     return X0, angles, xyz, s0, history, (U, W, V)
+
+
+def _library_bundle(data, X0, angles, xyz):
+    """A student who lets the reference path linearise (the lesson's stand-in's pieces)."""
+    from orientviz.bundle.reference import linearise
+
+    linearise(data, X0, angles, xyz, data.ap0)  # the call the check must see
+    return _my_bundle(data, X0, angles, xyz)
 
 
 def _point_covariance(U, W, V, j, mistake=None):
@@ -137,6 +153,8 @@ def _point_covariance(U, W, V, j, mistake=None):
     WVi = np.einsum("akj,kji->aki", W.reshape(6 * m, p, 3), Vi).reshape(6 * m, 3 * p)
     S = U - WVi @ W.T
     T = W[:, 3 * j : 3 * j + 3] @ Vi[j]
+    if mistake == "minus":
+        return Vi[j] - T.T @ np.linalg.solve(S, T)
     return Vi[j] + T.T @ np.linalg.solve(S, T)
 
 
@@ -147,7 +165,7 @@ SOLUTIONS = {
     "check_schur_step": _schur_step,
     "check_reduce": lambda U, W, V, bc, bp: _reduce(U, W, V, bc, bp, "ok"),
     "check_back_substitute": lambda V, W, bp, dc: _back(V, W, bp, dc, "ok"),
-    "check_bandwidth": lambda P: _bandwidth(P, "ok"),
+    "check_predicted_bandwidth": _predicted_bandwidth,
 }
 
 MUTANTS = {
@@ -157,11 +175,14 @@ MUTANTS = {
     },
     "check_my_bundle": {
         k: (lambda *a, k=k: _my_bundle(*a, mistake=k))
-        for k in ("no_weights", "fixed_as_unknowns", "no_sqrt")
+        for k in ("no_weights", "fixed_as_unknowns", "no_sqrt", "no_control", "control_not_counted")
     }
-    | {"one_step": lambda *a: _my_bundle(*a, max_iter=1)},
+    | {
+        "one_step": lambda *a: _my_bundle(*a, max_iter=1),
+        "library": _library_bundle,
+    },
     "check_point_covariance": {
-        "V_only": lambda U, W, V, j: _point_covariance(U, W, V, j, "V_only")
+        k: (lambda U, W, V, j, k=k: _point_covariance(U, W, V, j, k)) for k in ("V_only", "minus")
     },
     "check_schur_step": {
         "plus": lambda nb: _schur_step(nb, "plus"),
@@ -178,9 +199,8 @@ MUTANTS = {
         "plus": lambda V, W, bp, dc: _back(V, W, bp, dc, "plus"),
         "no_inverse": lambda V, W, bp, dc: _back(V, W, bp, dc, "no_inverse"),
     },
-    "check_bandwidth": {
-        "full": lambda P: _bandwidth(P, "full"),
-        "with_diagonal": lambda P: _bandwidth(P, "with_diagonal"),
-        "row_count": lambda P: _bandwidth(P, "row_count"),
+    "check_predicted_bandwidth": {
+        k: (lambda s, n, k=k: _predicted_bandwidth(s, n, k))
+        for k in ("same_direction", "across_2s", "swapped")
     },
 }

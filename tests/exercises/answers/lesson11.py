@@ -41,11 +41,11 @@ def _fit_k1(xy, d):
     return k1, np.sqrt(v @ v / (a.size - 1))
 
 
-def _fit_k1k2(xy, d):
-    r2 = np.sum(xy**2, axis=1)
-    A = np.stack([(xy * r2[:, None]).ravel(), (xy * (r2**2)[:, None]).ravel()], axis=1)
-    N = A.T @ A
-    return np.linalg.solve(N, A.T @ d.ravel()), np.linalg.inv(N)
+def _inflation(Q, mistake=None):
+    rho = Q[0, 1] / np.sqrt(Q[0, 0] * Q[1, 1])
+    f = 1.0 / np.sqrt(1.0 - rho**2)
+    return {"variance": f**2, "inverted": 1.0 / f, "rho": abs(rho),
+            "abs rho": 1.0 / np.sqrt(1.0 - abs(rho))}.get(mistake, f)  # fmt: skip
 
 
 def _significant(values, sigmas, alpha):
@@ -66,20 +66,6 @@ def _k1_x_only(xy, d):
     return k1, np.sqrt(v @ v / (d.size - 1))
 
 
-def _k1k2_x_only(xy, d):
-    r2 = np.sum(xy**2, axis=1)
-    A = np.stack([xy[:, 0] * r2, xy[:, 0] * r2**2], axis=1)
-    N = A.T @ A
-    return np.linalg.solve(N, A.T @ d[:, 0]), np.linalg.inv(N)
-
-
-def _k1k2_r(xy, d):
-    r = np.sqrt(np.sum(xy**2, axis=1))
-    A = np.stack([(xy * r[:, None]).ravel(), (xy * (r**3)[:, None]).ravel()], axis=1)
-    N = A.T @ A
-    return np.linalg.solve(N, A.T @ d.ravel()), np.linalg.inv(N)
-
-
 def _share_separate(A, d):
     out = []
     for i in range(2):
@@ -91,7 +77,7 @@ def _share_separate(A, d):
 SOLUTIONS = {
     "check_fit_k1": _fit_k1,
     "check_fit_k1_real": _fit_k1_real,
-    "check_fit_k1k2": _fit_k1k2,
+    "check_inflation": _inflation,
     "check_significant": _significant,
     "check_described_share": _described_share,
 }
@@ -117,11 +103,8 @@ MUTANTS = {
         ),
         "σ0 squared": lambda xy, d: (_fit_k1(xy, d)[0], _fit_k1(xy, d)[1] ** 2),
     },
-    "check_fit_k1k2": {
-        "Q = N": lambda xy, d: (_fit_k1k2(xy, d)[0], np.linalg.inv(_fit_k1k2(xy, d)[1])),
-        "x equations only": _k1k2_x_only,
-        "r and r³ columns": _k1k2_r,
-        "swapped": lambda xy, d: (_fit_k1k2(xy, d)[0][::-1], _fit_k1k2(xy, d)[1]),
+    "check_inflation": {
+        k: (lambda Q, k=k: _inflation(Q, k)) for k in ("variance", "inverted", "rho", "abs rho")
     },
     "check_significant": {
         "one-sided": lambda v, s, a: np.abs(v) / s > norm.ppf(1 - a),

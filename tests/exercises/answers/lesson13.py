@@ -30,18 +30,23 @@ def _gnss_rows(k, t, strip, m, n_strips):
     return A
 
 
-def _offset_drift(t, s, Z, sigma):
-    A = np.column_stack([np.ones_like(t), t])
-    Q = np.linalg.inv(A.T @ A)
-    o, d = Q @ A.T @ (s - Z)
-    return o, d, sigma * np.sqrt(Q[0, 0]), sigma * np.sqrt(Q[1, 1])
+def _from_differences(A0, l0, sig0, s, sigma, mistake=None):
+    m = A0.shape[1]
+    D = np.eye(m)[1:] - np.eye(m)[:-1]  # (m − 1, m): row k gives s[k+1] − s[k]
+    C = sigma**2 * D @ D.T
+    if mistake == "independent":
+        C = np.diag(np.diag(C))
+    W = np.linalg.inv(C) if mistake != "C as weight" else C
+    N = A0.T @ (A0 / sig0[:, None] ** 2) + D.T @ W @ D
+    n = A0.T @ (l0 / sig0**2) + D.T @ W @ (D @ s)
+    return np.linalg.solve(N, n)
 
 
 SOLUTIONS = {
     "check_statoscope_row": _statoscope_row,
     "check_difference_covariance": _difference_covariance,
     "check_gnss_rows": _gnss_rows,
-    "check_offset_drift": _offset_drift,
+    "check_from_differences": _from_differences,
 }
 
 
@@ -78,16 +83,14 @@ MUTANTS = {
             _gnss_rows(k, t, s, m, ns) * np.r_[np.ones(3 * m), -np.ones(3 * ns), np.ones(3 * ns)]
         ),
     },
-    "check_offset_drift": {
-        "no drift": lambda t, s, Z, sg: (np.mean(s - Z), 0.0, sg / np.sqrt(t.size), 0.0),
-        "sigma_o naive": lambda t, s, Z, sg: (
-            *_offset_drift(t, s, Z, sg)[:2],
-            sg / np.sqrt(t.size),
-            _offset_drift(t, s, Z, sg)[3],
-        ),
-        "uncentred": lambda t, s, Z, sg: (
-            *_offset_drift(t, s, Z, sg)[:3],
-            sg / np.sqrt(np.sum(t**2)),
-        ),
+    "check_from_differences": {
+        k: (lambda A0, l0, sig0, s, sigma, k=k: _from_differences(A0, l0, sig0, s, sigma, k))
+        for k in ("independent", "C as weight")
+    }
+    | {
+        "no offset": lambda A0, l0, sig0, s, sigma: np.linalg.solve(
+            A0.T @ (A0 / sig0[:, None] ** 2) + np.eye(A0.shape[1]) / sigma**2,
+            A0.T @ (l0 / sig0**2) + s / sigma**2,
+        )
     },
 }

@@ -35,21 +35,30 @@ def _trilaterate(C, r):
     return (p1, p2) if p1[2] < p2[2] else (p2, p1)
 
 
-def _station_ls(C, s, X, iterations=10, sign=1.0):
-    X = np.asarray(X, float).copy()
-    for _ in range(iterations):
-        d = X - C
-        rho = np.linalg.norm(d, axis=1)
-        J = sign * d / rho[:, None]
-        X = X + np.linalg.lstsq(J, s - rho, rcond=None)[0]
-    return X
+def _station_sigma(C, X0, idx):
+    d = X0 - C[list(idx)]
+    J = d / np.linalg.norm(d, axis=1)[:, None]
+    return np.sqrt(np.diag(np.linalg.inv(J.T @ J)))
+
+
+def _best_pair(C, X0, tri, mistake=None):
+    pairs = [
+        (a, b) for a in range(len(C)) for b in range(a + 1, len(C)) if a not in tri and b not in tri
+    ]
+    if mistake == "largest":
+        return max(pairs, key=lambda pr: _station_sigma(C, X0, list(tri) + list(pr))[2])
+    if mistake == "plan":
+        return min(pairs, key=lambda pr: np.hypot(*_station_sigma(C, X0, list(tri) + list(pr))[:2]))
+    if mistake == "spread":
+        return max(pairs, key=lambda pr: np.linalg.norm(C[pr[0], :2] - C[pr[1], :2]))
+    return min(pairs, key=lambda pr: _station_sigma(C, X0, list(tri) + list(pr))[2])
 
 
 SOLUTIONS = {
     "check_ppi_image": _ppi_image,
     "check_sphere_radius": _sphere_radius,
     "check_trilaterate": _trilaterate,
-    "check_station_ls": _station_ls,
+    "check_best_pair": _best_pair,
 }
 
 MUTANTS = {
@@ -70,9 +79,8 @@ MUTANTS = {
         "swapped": lambda C, r: _trilaterate(C, r)[::-1],
         "one root": lambda C, r: (_trilaterate(C, r)[1], _trilaterate(C, r)[1]),
     },
-    "check_station_ls": {
-        "no iteration": lambda C, s, X: np.asarray(X, float),
-        "one step": lambda C, s, X: _station_ls(C, s, X, iterations=1),
-        "Jacobian sign": lambda C, s, X: _station_ls(C, s, X, sign=-1.0),
+    "check_best_pair": {
+        k: (lambda C, X0, tri, k=k: _best_pair(C, X0, tri, k))
+        for k in ("largest", "plan", "spread")
     },
 }

@@ -36,6 +36,9 @@ refers to the rays' σ/√w with w = ρ′ at the solution (:func:`robust_end`).
 
 from __future__ import annotations
 
+import contextlib
+import functools
+import os
 from collections.abc import Callable
 
 import numpy as np
@@ -60,6 +63,38 @@ ROBUST_ITER_FACTOR: int = 4
 #: tolerance) unless ``BundleOptions.ftol`` is set: a point seen only by down-weighted rays
 #: may drift away slowly for ever (its rays' cost falls towards a limit).
 ROBUST_FTOL: float = 1e-6
+
+#: Up to this many images the bundle's BLAS calls are small (reduced systems of a few
+#: thousand rows at most, stacked products of tiny blocks): OpenBLAS's threads then only
+#: wait for each other, and the adjustment runs BLAS on one thread (threadpoolctl).
+ONE_BLAS_THREAD_MAX_IMAGES: int = 500
+
+
+def blas_threads(n_images: int) -> contextlib.AbstractContextManager:
+    """A context running BLAS on one thread for a block of at most
+    :data:`ONE_BLAS_THREAD_MAX_IMAGES` images; nothing for larger blocks, when the
+    environment already holds BLAS to one thread (``OPENBLAS_NUM_THREADS`` or
+    ``OMP_NUM_THREADS`` = 1) or when threadpoolctl is not installed."""
+    if n_images > ONE_BLAS_THREAD_MAX_IMAGES or "1" in (
+        os.environ.get("OPENBLAS_NUM_THREADS"),
+        os.environ.get("OMP_NUM_THREADS"),
+    ):
+        return contextlib.nullcontext()
+    controller = _blas_controller()
+    if controller is None:
+        return contextlib.nullcontext()
+    return controller.limit(limits=1, user_api="blas")
+
+
+@functools.cache
+def _blas_controller():
+    """threadpoolctl's controller of the loaded libraries (found once per process: some
+    30 ms), or None without threadpoolctl."""
+    try:
+        from threadpoolctl import ThreadpoolController  # optional: only to cap BLAS's threads
+    except ImportError:
+        return None
+    return ThreadpoolController()
 
 
 def bundle_adjust(
@@ -164,92 +199,97 @@ def bundle_adjust(
             block, setup, control=control, additional=additional, ap_group=ap_group,
             ap_sigma=ap_sigma, precision=precision, callback=callback, options=opts,
         )  # fmt: skip
-    prob = BundleProblem(
-        block, setup, additional=additional, ap_group=ap_group, ap_sigma=ap_sigma,
-        auxiliary=auxiliary, options=opts,
-    )  # fmt: skip
-    red_names = prob.names(exterior_only=True)
-    xyz0 = block.points.xyz.copy()
-    fixed = setup.fixed
-    xyz0[fixed] = np.where(np.isfinite(setup.known[fixed]), setup.known[fixed], xyz0[fixed])
-    st = BundleState(
-        block.images.X0.copy(), block.images.angles.copy(), xyz0, np.zeros(prob.q),
-        np.zeros(prob.na),
-    )  # fmt: skip
-    keep_x = (
-        (block.n_images <= opts.history_x_limit) if opts.history_x is None else bool(opts.history_x)
-    )
-    dof = prob.redundancy
+    with blas_threads(block.n_images):  # many small products: one BLAS thread
+        prob = BundleProblem(
+            block, setup, additional=additional, ap_group=ap_group, ap_sigma=ap_sigma,
+            auxiliary=auxiliary, options=opts,
+        )  # fmt: skip
+        red_names = prob.names(exterior_only=True)
+        xyz0 = block.points.xyz.copy()
+        fixed = setup.fixed
+        xyz0[fixed] = np.where(np.isfinite(setup.known[fixed]), setup.known[fixed], xyz0[fixed])
+        st = BundleState(
+            block.images.X0.copy(), block.images.angles.copy(), xyz0, np.zeros(prob.q),
+            np.zeros(prob.na),
+        )  # fmt: skip
+        keep_x = (
+            (block.n_images <= opts.history_x_limit)
+            if opts.history_x is None
+            else bool(opts.history_x)
+        )
+        dof = prob.redundancy
 
-    def s0(c):
-        return float(np.sqrt(c / dof)) if dof > 0 else float("nan")
+        def s0(c):
+            return float(np.sqrt(c / dof)) if dof > 0 else float("nan")
 
-    loss = RobustLoss.named(opts.loss, opts.loss_scale)
-    steps = BundleSteps(prob, red_names, keep_x, precision, loss)
-    ev0 = steps.start(st)
-    # additional parameters model image errors of a few µm: from approximations whose
-    # misclosures are far larger (σ0 ≥ opts.poor_start_sigma0) the first step is taken with
-    # the parameters held at their values — it costs no border, and the parameters do
-    # not absorb errors of the approximations (the first joint step then starts close)
-    hold_first = bool(prob.q) and s0(ev0.cost) >= opts.poor_start_sigma0
-    del ev0  # the loop takes it over (and releases it after the first step)
-    steps.hold_first = hold_first
-    run = iterate(
-        steps,
-        st,
-        redundancy=dof,
-        damping=Damping(
-            opts.damping,
-            lambda0=1e-4,
-            poor_start_sigma0=opts.poor_start_sigma0,
-            first=2 if hold_first else 1,
-        ),  # fmt: skip
-        stop=StopRule(
-            tol=tol,
-            ftol=ftol,
-            may_stop=lambda it: not (prob.run.border.hold or steps.local_step) and steps.may_stop(),
-        ),  # fmt: skip
-        max_iter=max_iter,
-        # derivatives at the new state: for the next iteration, the precision or the
-        # check of a damped start (not after the last step of a screening run, nor after
-        # a step that meets the stopping rule: the loop stops there once it is accepted)
-        jacobian_after=lambda it, run: (
-            (it < max_iter and not steps.stops(tol))
-            or precision
-            or run.damped_start
-            or prob.aux is not None
-        ),
-        callback=callback,
-        on_accept=steps.accepted,
-        on_iteration=steps.begin,
-    )
-    st, history, converged, reason = run.state, run.history, run.converged, run.reason
-    prob.reduced.release_maps()  # the Schur formation's maps: not held through the precision
-    steps.chord_factor = steps.chord_pending = None
-    rw, Je, Jp = run.evaluation.data
-    cost, obs_sigma = run.evaluation.cost, None
-    if loss is not None:  # the result refers to the rays' σ/√ρ′ at the last iterate
-        rw, Je, Jp, cost, obs_sigma = robust_end(prob, steps, st)
-        steps.lin = None
-    elif steps.is_local(run.evaluation):  # the precision needs the derivatives by ω, φ, κ
-        rw, Je, Jp = prob.residuals(st, jac=True)
-    damped_start, lin = run.damped_start, steps.lin
-    prob.run.border.hold = prob.run.border.reuse = False
-    prob.design_at(st)  # a lens model: its design at the final iterate (precision)
-    if not converged:
-        lin = None
-    if damped_start:  # a start that needed damping: prove the solution is determinable
-        try:
-            prob.solve(prob.normal(st, rw, Je, Jp), red_names)
-        except NotDeterminableError:
-            converged, precision = False, False
-            reason = (
-                f"no convergence from poor approximate values (start σ0 = {history[0].sigma0:.3g}): "
-                "the normal equations are not positive definite there; compute better "
-                "approximations, e.g. with orientviz.approximate.approximate_values"
-            )
-    end = RunEnd(st, rw, Je, Jp, cost, history, converged, reason, precision, lin, obs_sigma)
-    return finish_result(prob, end)
+        loss = RobustLoss.named(opts.loss, opts.loss_scale)
+        steps = BundleSteps(prob, red_names, keep_x, precision, loss)
+        ev0 = steps.start(st)
+        # additional parameters model image errors of a few µm: from approximations whose
+        # misclosures are far larger (σ0 ≥ opts.poor_start_sigma0) the first step is taken with
+        # the parameters held at their values — it costs no border, and the parameters do
+        # not absorb errors of the approximations (the first joint step then starts close)
+        hold_first = bool(prob.q) and s0(ev0.cost) >= opts.poor_start_sigma0
+        del ev0  # the loop takes it over (and releases it after the first step)
+        steps.hold_first = hold_first
+        run = iterate(
+            steps,
+            st,
+            redundancy=dof,
+            damping=Damping(
+                opts.damping,
+                lambda0=1e-4,
+                poor_start_sigma0=opts.poor_start_sigma0,
+                first=2 if hold_first else 1,
+            ),  # fmt: skip
+            stop=StopRule(
+                tol=tol,
+                ftol=ftol,
+                may_stop=lambda it: (
+                    not (prob.run.border.hold or steps.local_step) and steps.may_stop()
+                ),
+            ),  # fmt: skip
+            max_iter=max_iter,
+            # derivatives at the new state: for the next iteration, the precision or the
+            # check of a damped start (not after the last step of a screening run, nor after
+            # a step that meets the stopping rule: the loop stops there once it is accepted)
+            jacobian_after=lambda it, run: (
+                (it < max_iter and not steps.stops(tol))
+                or precision
+                or run.damped_start
+                or prob.aux is not None
+            ),
+            callback=callback,
+            on_accept=steps.accepted,
+            on_iteration=steps.begin,
+        )
+        st, history, converged, reason = run.state, run.history, run.converged, run.reason
+        prob.reduced.release_maps()  # the Schur formation's maps: not held through the precision
+        steps.chord_factor = steps.chord_pending = None
+        rw, Je, Jp = run.evaluation.data
+        cost, obs_sigma = run.evaluation.cost, None
+        if loss is not None:  # the result refers to the rays' σ/√ρ′ at the last iterate
+            rw, Je, Jp, cost, obs_sigma = robust_end(prob, steps, st)
+            steps.lin = None
+        elif steps.is_local(run.evaluation):  # the precision needs the derivatives by ω, φ, κ
+            rw, Je, Jp = prob.residuals(st, jac=True)
+        damped_start, lin = run.damped_start, steps.lin
+        prob.run.border.hold = prob.run.border.reuse = False
+        prob.design_at(st)  # a lens model: its design at the final iterate (precision)
+        if not converged:
+            lin = None
+        if damped_start:  # a start that needed damping: prove the solution is determinable
+            try:
+                prob.solve(prob.normal(st, rw, Je, Jp), red_names)
+            except NotDeterminableError:
+                converged, precision = False, False
+                reason = (
+                    f"no convergence from poor approximate values (start σ0 = {history[0].sigma0:.3g}): "
+                    "the normal equations are not positive definite there; compute better "
+                    "approximations, e.g. with orientviz.approximate.approximate_values"
+                )
+        end = RunEnd(st, rw, Je, Jp, cost, history, converged, reason, precision, lin, obs_sigma)
+        return finish_result(prob, end)
 
 
 def robust_end(prob: BundleProblem, steps: BundleSteps, st: BundleState):

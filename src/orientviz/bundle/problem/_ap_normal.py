@@ -24,6 +24,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..reduced import APBorder
+from ._ap_batches import PointBatch, batched_terms, point_batches
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -140,7 +141,7 @@ class APStructure:
         e_pg = np.repeat(first[ocol[a]], ca) + off
         other = self.pg_grp[e_pg] != go[e_obs]
         self.e_obs, self.e_pg = e_obs[other], e_pg[other]
-        self.sum_e, self.e_key = _summation(oi[self.e_obs] * G + self.pg_grp[self.e_pg])
+        self.e_key = np.unique(oi[self.e_obs] * G + self.pg_grp[self.e_pg])
         # block sums of E @ v and Eᵀ @ y: other blocks → their image, images and other
         # blocks → their group
         K, ki, gi = self.e_key.size, self.e_key // G, self.e_key % G
@@ -161,6 +162,22 @@ class APStructure:
         self.f_bounds = np.r_[first_f, o.size]
         # (point, group) pairs by group (ba correction); observations by point
         self.sum_pgg, self.pgg_present = _summation(self.pg_grp)
+        # many coupled group pairs (a group per image: BAL, per-image COLMAP cameras): the
+        # E and F terms by stacked per-point products (:mod:`._ap_batches`); a few
+        # (aerial groups): one product per group pair and per-ray products
+        self.batches: list[PointBatch] | None = None
+        self._sum_e: sp.csr_matrix | None = None
+        if self.f_key.size > GROUP_PAIR_LOOP_MAX:
+            self.batches = point_batches(oi, go, vo, ocol, first, count, self, k)
+        self._e_rows = oi[self.e_obs] * G + self.pg_grp[self.e_pg]
+
+    @property
+    def sum_e(self) -> sp.csr_matrix:
+        """Sums the (ray, other pair) products into E's other-group blocks (``e_key``);
+        formed on first use."""
+        if self._sum_e is None:
+            self._sum_e, _ = _summation(self._e_rows)
+        return self._sum_e
 
     def refresh(self, Aw: F64) -> None:
         """Set the terms that depend on the design's values (Σ Aᵀ P A per group, the
@@ -176,6 +193,26 @@ class APStructure:
         )
         Mt = sp.csr_matrix((Aw[self._var].reshape(-1), *self._h_index), shape=self._h_shape)
         self.H_design = Mt.T
+
+
+#: Up to this many coupled group pairs (g1, g2) the F term is one product per pair
+#: (fast for a few aerial groups); beyond, stacked per-point products.
+GROUP_PAIR_LOOP_MAX: int = 64
+
+
+def _other_per_ray(A: APStructure, T: F64, H: F64, k: int) -> F64:
+    """− Σ T_a H_eᵀ into E's other-group blocks (K, 6, k): one product per (ray, pair)."""
+    if not A.e_key.size:
+        return np.zeros((0, 6, k))
+    return -_ssum(A.sum_e, T[A.e_obs] @ H[A.e_pg].transpose(0, 2, 1))
+
+
+def _subtract_per_group_pair(A: APStructure, F4g: F64, VHt: F64, H: F64, k: int) -> None:
+    """F4g (G², k, k) −= Σ H_e V⁻¹ H_e'ᵀ over the pairs (e, e') of one point: one product
+    per (g1, g2), (V⁻¹ Hᵀ)ᵀ of e (3 × k) with Hᵀ of e' (3 × k) over all its pairs."""
+    Htz = np.ascontiguousarray(H.transpose(0, 2, 1))
+    for key, a, b in zip(A.f_key, A.f_bounds[:-1], A.f_bounds[1:]):
+        F4g[key] -= VHt[A.f_1[a:b]].reshape(-1, k).T @ Htz[A.f_2[a:b]].reshape(-1, k)
 
 
 def ap_normal(
@@ -245,21 +282,19 @@ def ap_normal(
     At[-1] = 0.0
     Jpad = Jew[A.pad0].reshape(m, 2 * L, 6)  # padded slots: any ray, times a zero ray
     own = np.matmul(Jpad.transpose(0, 2, 1), At[A.pad].reshape(m, 2 * L, k))
-    # ... and the blocks of the other groups that its points reach
-    if A.e_key.size:
-        other = -_ssum(A.sum_e, T[A.e_obs] @ H[A.e_pg].transpose(0, 2, 1))
+    # ... and the blocks of the other groups that its points reach (− Σ T_a H_eᵀ); F:
+    # direct term (constant for a linear set; refreshed for a lens model) − Σ H V⁻¹ Hᵀ
+    # over the pairs (e, e') of one point
+    if A.batches is not None:
+        other, Fcorr = batched_terms(A, T, H, HV, k)
+        E = BorderE(own, -other, prob.ap.group, A)
+        F4 = -Fcorr.reshape(G, G, k, k)
+        F4[A.grp_present, A.grp_present] += A.F_direct
     else:
-        other = np.zeros((0, 6, k))
-    E = BorderE(own, other, prob.ap.group, A)
-    # F: direct term (constant for a linear set; refreshed for a lens model) − Σ H V⁻¹ Hᵀ
-    F4 = np.zeros((G, G, k, k))
-    F4[A.grp_present, A.grp_present] = A.F_direct
-    # − Σ H_e V⁻¹ H_e'ᵀ over the pairs (e, e') of one point, one product per (g1, g2):
-    # (V⁻¹ Hᵀ)ᵀ of e (3 × k) with Hᵀ of e' (3 × k)
-    Htz = np.ascontiguousarray(H.transpose(0, 2, 1))
-    F4g = F4.reshape(G * G, k, k)
-    for key, a, b in zip(A.f_key, A.f_bounds[:-1], A.f_bounds[1:]):
-        F4g[key] -= VHt[A.f_1[a:b]].reshape(-1, k).T @ Htz[A.f_2[a:b]].reshape(-1, k)
+        E = BorderE(own, _other_per_ray(A, T, H, k), prob.ap.group, A)
+        F4 = np.zeros((G, G, k, k))
+        F4[A.grp_present, A.grp_present] = A.F_direct
+        _subtract_per_group_pair(A, F4.reshape(G * G, k, k), VHt, H, k)
     F0 = F4.transpose(0, 2, 1, 3).reshape(prob.q, prob.q)
     F0[np.diag_indices(prob.q)] += prob.ap.w
     return _damped(E, F0, ba, H, lam)

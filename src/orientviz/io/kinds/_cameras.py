@@ -30,8 +30,6 @@ from typing import Any
 
 import numpy as np
 
-from ...bundle import LensModel, ap_set
-from ...bundle.model import BACKWARD_NAMES, FORWARD_NAMES
 from ...errors import InputError
 from ..problem import Units
 from ..solution import Parameter
@@ -42,12 +40,18 @@ TERMS = ("as", "sk", "K1", "K2", "K3", "P1", "P2", "k1", "k2", "k3", "p1", "p2")
 #: Fields of a camera row about its model (default None).
 MODEL_FIELDS = {k: None for k in ("model", "free", "sigma", "r0", "additional",
                                   "additional_sigma") + TERMS}  # fmt: skip
-_NAMES = {"backward": BACKWARD_NAMES, "forward": FORWARD_NAMES}
 _IO = ("c", "x0", "y0")
 
 
+def _names(model: str) -> tuple[str, ...]:
+    """The parameter names of the ``"backward"`` or ``"forward"`` lens model."""
+    from ...bundle.model import BACKWARD_NAMES, FORWARD_NAMES  # SciPy only for lens models
+
+    return {"backward": BACKWARD_NAMES, "forward": FORWARD_NAMES}[model]
+
+
 def _other(name: str, model: str) -> str:
-    mine = ", ".join(_NAMES[model][3:])
+    mine = ", ".join(_names(model)[3:])
     return f"{name!r} is not a term of the {model} model (its terms: {mine})"
 
 
@@ -76,7 +80,7 @@ def read_camera_models(t: Table, units: Units) -> list[dict[str, Any]]:
             continue
         if col["additional_sigma"][i] is not None:
             raise t.fail(i, "additional_sigma", 'needs "additional" (ebner12, gruen44, brown)')
-        names = _NAMES[model]
+        names = _names(model)
         for k in terms:
             if k not in names:
                 raise t.fail(i, k, _other(k, model))
@@ -105,6 +109,8 @@ def read_camera_models(t: Table, units: Units) -> list[dict[str, Any]]:
 
 def _additional_spec(t: Table, i: int, add: str) -> dict[str, Any]:
     """An additional-parameter set of camera row ``i`` with its free/weighted/fixed parameters."""
+    from ...bundle import ap_set  # the bundle (SciPy) only when a file names a set
+
     col = t.columns
     names = list(ap_set(add).names)
     free, sigma = col["free"][i], dict(col["sigma"][i] or {})
@@ -166,6 +172,8 @@ def bundle_camera_options(block) -> dict[str, Any]:
     models = list(getattr(block.cameras, "model", None) or [])
     if not any(models):
         return {}
+    from ...bundle import LensModel, ap_set  # the solver stack: only when adjusting
+
     ids = block.cameras.ids
     first = models[0]
     key = _shape(first)

@@ -276,7 +276,8 @@ def tables_from_block(block: Block, units: Units, columnar: bool) -> dict[str, A
         "Z": json_numbers(xyz[:, 2] / L),
         "sigma": sig_cells,
     }
-    osig = [v[0] if v[0] == v[1] else v for v in (json_numbers(s / I) for s in ob.sigma)]
+    sv = json_numbers(np.asarray(ob.sigma, float).reshape(-1, 2) / I)  # (σx, σy) per row
+    osig = [a if a == b else [a, b] for a, b in zip(sv[0::2], sv[1::2])]
     observations = {
         "image": [im.ids[i] for i in ob.image],
         "point": [pt.ids[p] for p in ob.point],

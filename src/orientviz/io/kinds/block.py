@@ -23,23 +23,17 @@ from typing import Any
 import numpy as np
 
 from ...adjust.result import W_CRITICAL
-from ...approximate import approximate_values
 from ...block import CHECK, CONTROL, ROLES, TIE, Block
-from ...bundle import BundleOptions, bundle_adjust
-from ...bundle.loop import FAR_PARALLAX, RobustLoss, ray_parallax
-from ...bundle.problem import point_setup
 from ...errors import InputError
-from ...polynomial import polynomial_adjust
-from ...stereo_models import independent_models
-from ..datum import apply_fix, free_network, minimum_datum, parse_fix
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
 from ..solution import Solution
-from ._align import align_to_control, intersect_from_orientations
 from ._cameras import bundle_camera_options, camera_notes, camera_parameters
 from ._diverge import divergence_note
 from ._frame import block_from_tables, read_frame_tables, require_finite, tables_from_block
-from ._robust import robust_note
+
+# The solvers (SciPy, the bundle, approximate values) are imported inside the functions
+# that adjust: reading and writing a block file (import-bal, import-colmap) never loads them.
 
 METHODS = ("bundle", "models", "polynomial")
 
@@ -96,7 +90,11 @@ def approximate(block: Block, frame: str = "control") -> Block:
     points without coordinates are intersected from them. ``frame="model"`` (a free
     network): computed approximations stay in the seed pair's model frame.
     """
+    from ._align import align_to_control  # the solver stack: only when adjusting
+
     if not np.all(np.isfinite(block.images.X0)) or not np.all(np.isfinite(block.images.angles)):
+        from ...approximate import approximate_values  # only for a block without approximations
+
         return approximate_values(block, frame=frame)
 
     block, alignment = align_to_control(block)
@@ -110,6 +108,8 @@ def _approximate_tie_points(block: Block) -> Block:
     missing = np.flatnonzero(~np.all(np.isfinite(block.points.xyz), axis=1))
     if missing.size == 0:
         return block
+
+    from ._align import intersect_from_orientations  # the solver stack: only when adjusting
 
     mask = np.zeros(block.n_points, bool)
     mask[missing] = True
@@ -184,6 +184,9 @@ def solve(problem: Problem, method: str | None, **bundle: Any) -> Solution:
         sol.notes[:0] = datum_notes + ([robust_note] if robust_note else []) + far_notes(block, adj)
         sol.start = block
         return sol
+    from ...polynomial import polynomial_adjust  # the solver stack: only when adjusting
+    from ...stereo_models import independent_models  # the solver stack: only when adjusting
+
     opts = _options(problem)
     if method == "models":
         opts["method"] = problem.options.get("model_method", "rigorous")
@@ -199,6 +202,8 @@ def solve(problem: Problem, method: str | None, **bundle: Any) -> Solution:
 def far_notes(block: Block, adj) -> list[str]:
     """Notes on points near infinity (their rays meet at < ``FAR_PARALLAX`` rad: kept in
     the adjustment, depth not determined) and on a result without precision."""
+    from ...bundle.loop import FAR_PARALLAX, ray_parallax  # the solver stack: only when adjusting
+
     notes = []
     if adj.exterior is not None and adj.points is not None:
         par = ray_parallax(block, adj.exterior[:, :3], adj.points)
@@ -221,6 +226,8 @@ def prepare(problem: Problem) -> tuple[Block, list[str]]:
     Approximate values where the file gives none (:func:`approximate`), then the datum
     options ``free`` and ``fix`` (:mod:`orientviz.io.datum`).
     """
+    from ..datum import apply_fix, free_network, minimum_datum, parse_fix  # the solver stack
+
     o = problem.options
     fix = parse_fix(o.get("fix"), problem.source)
     free = bool(o.get("free", False))
@@ -259,6 +266,10 @@ def adjust_block(problem: Problem, block: Block, **overrides: Any) -> tuple[Any,
     (BundleResult, str or None)
         The adjustment and the note of a robust run (None without ``robust``).
     """
+    from ...bundle import BundleOptions, bundle_adjust  # the solver stack: only when adjusting
+    from ...bundle.loop import RobustLoss  # the solver stack: only when adjusting
+    from ._robust import robust_note  # the solver stack: only when adjusting
+
     o = problem.options
     try:  # the robust loss, minimised inside the loop (._robust)
         loss = RobustLoss.named(str(o.get("robust", "none")), o.get("robust_scale"))
@@ -320,6 +331,8 @@ def _labels(
 def _control_labels(block: Block, control: str) -> list[str]:
     """``point/X`` for each coordinate pseudo-observation of the bundle, in its order
     (unknown points in block order, then X, Y, Z; see ``bundle.problem._checks.point_setup``)."""
+    from ...bundle.problem import point_setup  # the solver stack: only when adjusting
+
     setup = point_setup(block, control)
     pt = block.points.ids
     return [f"{pt[p]}/{'XYZ'[c]}" for p in np.flatnonzero(setup.unknown) for c in range(3)

@@ -1,0 +1,123 @@
+"""The point-elimination terms of the additional parameters' border by point batches.
+
+With a group of additional parameters per image (a BAL problem, COLMAP cameras per
+image) a point's rays lie in as many groups as it has rays, and the terms that the
+elimination of the points leaves in E and F (:mod:`._ap_normal`) couple thousands of
+group pairs. They are formed here per point: the points with k rays and c (point, group)
+pairs are stacked, one product gives all their (ray, pair) blocks ``T_a H_eᵀ`` (6 × k)
+and (pair, pair) blocks ``H_e V⁻¹ H_e'ᵀ`` (k × k), and each block's rows are added
+into the block of E or F they belong to by ``np.bincount`` over row indices computed
+once per problem.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+F64 = NDArray[np.float64]
+I64 = NDArray[np.int64]
+
+#: Entries of the largest per-point product of one batch (:func:`point_batches`): its
+#: temporaries stay in the cache.
+BATCH_DOUBLES: int = 2**16
+
+
+class PointBatch(NamedTuple):
+    """Points with k rays and c (point, group) pairs, for the per-point products.
+
+    ``rays`` (n, k) their rays (observations), ``pairs`` (n, c) their pairs. ``e_rows``
+    (n·k·6·c,): for row r of the product block (ray a, pair e), the row of E's
+    other-group blocks (``APStructure.e_key``, 6 rows each) it adds into — 6K (a row
+    beyond them, dropped) when e is a's own group; ``f_rows`` (n·c·k·c,): for row r of
+    the block (pair e, pair e'), the row of F's group blocks (g_e · G + g_e', k rows each).
+    """
+
+    rays: I64
+    pairs: I64
+    e_rows: NDArray[np.int32]
+    f_rows: NDArray[np.int32]
+
+
+def point_batches(
+    oi: I64, go: I64, vo: I64, ocol: I64, first: I64, count: I64, A, k: int
+) -> list[PointBatch]:
+    """The :class:`PointBatch` es of a problem: points grouped by (rays, pairs), in
+    chunks of at most :data:`BATCH_DOUBLES` entries of E's product.
+
+    Parameters
+    ----------
+    oi, go : ndarray of int, shape (n,)
+        Image and group of each observation.
+    vo : ndarray of int
+        Observations of point unknowns, sorted by point.
+    ocol : ndarray of int, shape (n,)
+        Point unknown of each observation.
+    first, count : ndarray of int, shape (p,)
+        Each point's first (point, group) pair and its number of pairs.
+    A : APStructure
+        With ``G``, ``pg_grp`` and ``e_key`` set.
+    k : int
+        Parameters per group.
+    """
+    G, n_pt = A.G, first.size
+    pts_of = ocol[vo]
+    rcount = np.bincount(pts_of, minlength=n_pt)
+    rfirst = np.cumsum(rcount) - rcount
+    key = rcount * (int(count.max(initial=0)) + 1) + count
+    order = np.argsort(key, kind="stable")
+    bounds = np.flatnonzero(np.diff(key[order])) + 1
+    K = A.e_key.size
+    out = []
+    for grp_pts in np.split(order, bounds):
+        if grp_pts.size == 0:
+            continue
+        kr, c = int(rcount[grp_pts[0]]), int(count[grp_pts[0]])
+        step = max(1, BATCH_DOUBLES // (6 * kr * k * c))
+        for c0 in range(0, grp_pts.size, step):
+            pts = grp_pts[c0 : c0 + step]
+            n = pts.size
+            rays = vo[rfirst[pts][:, None] + np.arange(kr)]
+            pairs = first[pts][:, None] + np.arange(c)
+            # E: row r of block (point, ray a, pair e) → row r of E's block (image of a,
+            # group of e), or the dropped row 6K when e is a's own group
+            shape = (n, kr, 6, c)
+            g_e = np.broadcast_to(A.pg_grp[pairs][:, None, None, :], shape).reshape(-1)
+            g_a = np.broadcast_to(go[rays][:, :, None, None], shape).reshape(-1)
+            i_a = np.broadcast_to(oi[rays][:, :, None, None], shape).reshape(-1)
+            r = np.broadcast_to(np.arange(6)[:, None], shape).reshape(-1)
+            other = g_e != g_a
+            e_rows = np.full(r.size, 6 * K, np.int32)
+            e_rows[other] = 6 * np.searchsorted(A.e_key, i_a[other] * G + g_e[other]) + r[other]
+            # F: row r of block (point, pair e, pair e') → row r of block (g_e, g_e')
+            gp = A.pg_grp[pairs]
+            fk = gp[:, :, None, None] * G + gp[:, None, None, :]
+            f_rows = (k * fk + np.arange(k)[:, None]).astype(np.int32).reshape(-1)
+            out.append(PointBatch(rays, pairs, e_rows, f_rows))
+    return out
+
+
+def batched_terms(A, T: F64, H: F64, HV: F64, k: int) -> tuple[F64, F64]:
+    """Σ T_a H_eᵀ into E's other-group blocks (K, 6, k) and Σ H_e V⁻¹ H_e'ᵀ into F's
+    group blocks (G², k, k), over all rays a and pairs e, e' of each point: one stacked
+    product per batch of points (:class:`PointBatch`)."""
+    nE, nF = 6 * A.e_key.size, A.G * A.G * k
+    other = np.zeros((k, nE + 1))
+    F = np.zeros((k, nF))
+    for b in A.batches:
+        n, kr = b.rays.shape
+        c = b.pairs.shape[1]
+        Hb = H[b.pairs.reshape(-1)].reshape(n, c * k, 3)
+        if nE:
+            Tb = T[b.rays.reshape(-1)].reshape(n, 6 * kr, 3)
+            # (n, kr·6, c·k) → column s of rows (a, r, e)
+            P = np.matmul(Tb, Hb.transpose(0, 2, 1)).reshape(-1, k)
+            for s in range(k):
+                other[s] += np.bincount(b.e_rows, P[:, s], nE + 1)
+        HVb = HV[b.pairs.reshape(-1)].reshape(n, c * k, 3)
+        P = np.matmul(HVb, Hb.transpose(0, 2, 1)).reshape(-1, k)  # (n, c·k, c·k)
+        for s in range(k):
+            F[s] += np.bincount(b.f_rows, P[:, s], nF)
+    return other[:, :nE].T.reshape(-1, 6, k), F.T.reshape(-1, k, k)
