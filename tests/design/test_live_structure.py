@@ -107,3 +107,13 @@ def test_images_of_a_design_with_auxiliary_data_need_a_new_live_design():
     live = LiveDesign(block, spec, auxiliary=design_auxiliary(block, plan))
     with pytest.raises(InputError, match="auxiliary"):
         live.remove_images([3])
+
+
+def test_the_block_solve_equals_the_factors_solve():
+    from orientviz.design._base import DesignBase  # a unit test of the package's module
+
+    block, _ = design_block(FlightDesign(strips=4, images_per_strip=12, control="perimeter"))
+    base = DesignBase(block)
+    assert base.fac.kind == "banded"  # the blocks are what is tested
+    rhs = np.random.default_rng(3).normal(size=(6 * block.n_images, 9))
+    np.testing.assert_allclose(base.solve(rhs), base.fac.solve(rhs), rtol=1e-10, atol=1e-12)

@@ -27,8 +27,7 @@ def test_lesson06_diagnoses_name_the_mistake():
             ("check_epipolar_line", "E_not_transposed"): "instead of Eᵀ",
             ("check_epipolar_line", "no_c"): "−c g2",
             ("check_epipolar_line", "not_normalised"): "normalise the line",
-            ("check_normal_case_points", "parallax_sign"): "x1' − x2'",
-            ("check_normal_case_points", "z_sign"): "below the projection centres",
-            ("check_normal_case_points", "y_parallax"): "x-parallax",
+            ("check_swapped_pair", "two largest"): "two largest distances",
+            ("check_swapped_pair", "one-based"): "1-based",
         },
     )

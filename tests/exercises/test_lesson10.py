@@ -88,3 +88,40 @@ def test_schur_step_check_refuses_the_dense_solution():
 
     exc = rejection(lesson10.check_schur_step, dense_step)
     assert exc is not None and "nb.dense" in str(exc)
+
+
+def test_first_state_below_reads_the_iteration_and_names_the_neighbours(capsys):
+    import numpy as np
+    import pytest
+
+    import orientviz as ov
+    from orientviz.bundle.reference import reference_data
+    from orientviz.exercises._common import CheckFailed, NotWrittenError
+
+    sim = ov.simulate_block(2, 4, rng=3, extra=None)
+    data = reference_data(sim.block, "fixed")
+    adj = ov.bundle_adjust(sim.block, control="fixed")
+    eo = adj.x[adj.groups["exterior"]].reshape(-1, 6)
+    xyz = adj.x[adj.groups["points"]].reshape(-1, 3)  # all points of the block
+    start = (eo[:, :3], eo[:, 3:], xyz)  # the adjusted state: residuals at the noise level
+    moved = (start[0] + 5.0, start[1] + 0.01, start[2])  # metres and 0.6 gon off: far above 10 µm
+    states = [moved, moved, start, start]
+    # an independent look: the library's projection of every ray
+    c, x0, y0 = data.cam
+    e = []
+    for i in range(sim.block.n_images):
+        m = data.image == i
+        R = ov.matrix_from_opk(*start[1][i])
+        e.append(
+            ov.project(start[2][data.point[m]], start[0][i], R, c[m][0], x0[m][0], y0[m][0])
+            - data.l[m]
+        )
+    assert np.sqrt(np.mean(np.concatenate(e) ** 2)) * 1000 < 10.0
+    lesson10.check_first_state_below(lambda: 2, data, states)
+    assert capsys.readouterr().out.startswith("✓")
+    with pytest.raises(CheckFailed, match="not yet below"):
+        lesson10.check_first_state_below(1, data, states)
+    with pytest.raises(CheckFailed, match="already is"):
+        lesson10.check_first_state_below(3, data, states)
+    with pytest.raises(NotWrittenError):
+        lesson10.check_first_state_below(None, data, states)

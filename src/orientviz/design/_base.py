@@ -78,8 +78,7 @@ class DesignBase:
         self.pcol = np.asarray(prob.points.column)  # base point → column of the problem
         self.na = prob.na
         self._cache: dict[tuple[str, int], tuple[F64, F64]] = {}
-        #: the banded factor as dense blocks (multi-column solves by BLAS level 3)
-        self._blocks = _dense_blocks(self.fac.data) if self.fac.kind == "banded" else None
+        self._blocks: list | None = None  # the banded factor as dense blocks (on demand)
         if self.na:  # the border of the auxiliary offsets: G = A⁻¹B and F̃⁻¹
             E, F = prob.aux.border(prob, ne)
             Y = self.solve(E).reshape(self.m, 6, -1)
@@ -102,8 +101,10 @@ class DesignBase:
         """S⁻¹ rhs (6m, k): with a banded factor and many columns by block triangular
         solves (BLAS level 3) on the factor's dense blocks, else by the factor's solve."""
         fac = self.fac
-        if self._blocks is None or rhs.shape[1] < 4:
+        if fac.kind != "banded" or rhs.shape[1] < 4:
             return fac.solve(rhs)
+        if self._blocks is None:
+            self._blocks = _dense_blocks(fac.data)
         p = fac.structure.scalar_perm
         X = rhs[p]
         parts = self._blocks
@@ -188,22 +189,27 @@ class DesignBase:
 def _dense_blocks(cb: F64) -> list[tuple[int, int, F64, F64 | None]]:
     """A lower banded factor (LAPACK storage ``cb[d, j] = L[j + d, j]``) as dense blocks
     of kd + 1 rows: per block row (r0, r1, L_II, L_I,I−1); block I touches block I − 1
-    only (the band is kd wide)."""
+    only (the band is kd wide).
+
+    Element (r, c) of L is ``cb[r − c, c]``: with nb zero rows above and below the band,
+    a block of L is a strided view of the padded storage (rows step by one band row,
+    columns by one column less one band row), copied out."""
     kd, n = cb.shape[0] - 1, cb.shape[1]
     nb = kd + 1
+    pad = np.zeros((kd + 1 + 2 * nb, n))
+    pad[nb : nb + kd + 1] = cb
+    flat = pad.reshape(-1)
+    e = flat.itemsize
+
+    def block(r0: int, r1: int, c0: int, c1: int) -> F64:
+        start = (nb + r0 - c0) * n + c0
+        view = np.lib.stride_tricks.as_strided(
+            flat[start:], shape=(r1 - r0, c1 - c0), strides=(n * e, e - n * e), writeable=False
+        )
+        return np.array(view)
+
     out = []
     for r0 in range(0, n, nb):
         r1 = min(r0 + nb, n)
-        Lsub = _band_block(cb, r0, r1, r0 - nb, r0) if r0 else None
-        out.append((r0, r1, _band_block(cb, r0, r1, r0, r1), Lsub))
+        out.append((r0, r1, block(r0, r1, r0, r1), block(r0, r1, r0 - nb, r0) if r0 else None))
     return out
-
-
-def _band_block(cb: F64, r0: int, r1: int, c0: int, c1: int) -> F64:
-    """Rows r0:r1, columns c0:c1 of L from its lower band storage (zero outside the band)."""
-    kd = cb.shape[0] - 1
-    rows = np.arange(r0, r1)[:, None]
-    cols = np.broadcast_to(np.arange(c0, c1)[None, :], (r1 - r0, c1 - c0))
-    d = rows - cols
-    ok = (d >= 0) & (d <= kd)
-    return np.where(ok, cb[np.clip(d, 0, kd), cols], 0.0)

@@ -37,16 +37,11 @@ forms and factors it again, as does a structural change of a design with auxilia
 
 from __future__ import annotations
 
-import contextlib
 import copy
-import functools
-from dataclasses import dataclass
 from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
-import scipy.sparse
-import scipy.sparse.csgraph
 from numpy.typing import ArrayLike, NDArray
 
 from ..block import CONTROL, TIE, Block
@@ -56,6 +51,14 @@ from ..errors import InputError, NotDeterminableError
 from ._base import DesignBase
 from ._extend import add_images, kept_after_removal
 from ._extend import remove_images as _remove_images
+from ._live_parts import (
+    Change,
+    _capped,
+    _check_connected,
+    _check_rays,
+    _Current,
+    _weights,
+)
 from ._quality import DesignQuality, quality_from_arrays
 
 F64 = NDArray[np.float64]
@@ -67,110 +70,6 @@ MAX_STEPS: int = 40
 COND_LIMIT: float = 1e14
 #: A structural change whose step needs more columns of Q than this is assessed anew.
 MAX_COLUMNS: int = 400
-
-
-@dataclass(frozen=True)
-class Change:
-    """One change of a design: point ``point`` gets control σ ``sigma`` (m, NaN = that
-    coordinate not given; all NaN = tie point); ``before`` is what it had."""
-
-    point: int
-    sigma: tuple[float, float, float]
-    before: tuple[float, float, float]
-
-    def describe(self, ids: list[str]) -> str:
-        """The change in words."""
-
-        def txt(s):
-            s = np.asarray(s)
-            if not np.isfinite(s).any():
-                return "tie"
-            return (
-                "control σ " + "/".join("–" if not np.isfinite(v) else f"{v:g}" for v in s) + " m"
-            )
-
-        return f"point {ids[self.point]}: {txt(self.before)} → {txt(self.sigma)}"
-
-
-def blas_threads(n: int | None) -> Any:
-    """A context running BLAS on ``n`` threads (threadpoolctl), or doing nothing (``n`` None
-    or without threadpoolctl).
-
-    A live design's step is many BLAS calls on matrices of a few hundred rows; on a machine
-    whose cores are busy, OpenBLAS's worker threads wait for each other in every call
-    (benchmarks/README.md, "design studio")."""
-    if n is None:
-        return contextlib.nullcontext()
-    try:
-        from threadpoolctl import threadpool_limits  # optional: the viewer's extra
-    except ImportError:
-        return contextlib.nullcontext()
-    return threadpool_limits(limits=n, user_api="blas")
-
-
-def _capped(method):
-    """Run a :class:`LiveDesign` method with its BLAS thread limit."""
-
-    @functools.wraps(method)
-    def run(self, *args, **kwargs):
-        with blas_threads(self.blas_threads):
-            return method(self, *args, **kwargs)
-
-    return run
-
-
-def _check_connected(block: Block) -> None:
-    """Raise :class:`NotDeterminableError` if the images fall apart into groups that
-    share no point (as the bundle does)."""
-    O = block.observations
-    m, p = block.n_images, block.n_points
-    g = scipy.sparse.coo_matrix(
-        (np.ones(O.image.size), (O.image, m + O.point)), shape=(m + p, m + p)
-    )
-    n, labels = scipy.sparse.csgraph.connected_components(g, directed=False)
-    groups = np.unique(labels[:m])
-    if groups.size > 1:
-        raise NotDeterminableError(
-            f"the changed design is not determinable: its images fall apart into "
-            f"{groups.size} groups that share no point",
-            parameters=[],
-            defect=7 * (groups.size - 1),
-        )
-
-
-def _check_rays(block: Block) -> None:
-    """Raise :class:`NotDeterminableError` for tie points seen in fewer than two images
-    and images that see fewer than three points (the bundle's rule)."""
-    O = block.observations
-    rays = np.bincount(O.point, minlength=block.n_points)
-    weak = np.flatnonzero((rays < 2) & ~np.isfinite(block.points.sigma).all(axis=1))
-    few = np.flatnonzero(np.bincount(O.image, minlength=block.n_images) < 3)
-    if weak.size or few.size:
-        what = [f"point {block.points.ids[j]}" for j in weak[:4]]
-        what += [f"image {block.images.ids[i]}" for i in few[:4]]
-        raise NotDeterminableError(
-            f"the design is not determinable: {weak.size} tie point(s) in fewer than two "
-            f"images, {few.size} image(s) with fewer than three points ({', '.join(what)})",
-            parameters=[],
-        )
-
-
-def _weights(sig) -> F64:
-    s = np.asarray(sig, float)
-    return np.where(np.isfinite(s), 1.0 / np.where(np.isfinite(s), s, 1.0) ** 2, 0.0)
-
-
-@dataclass(frozen=True)
-class _Current:
-    """The cofactor terms the shown quantities come from: point blocks by base point,
-    station blocks by image slot, ray terms by ray slot."""
-
-    Qp: F64
-    Qe: F64
-    r: F64
-    rxy: F64
-    Ke: F64
-    Kp: F64
 
 
 class LiveDesign:

@@ -99,42 +99,61 @@ def check_epipolar_line(fn) -> None:
     success("your lines pass through the right-image projections of points on the left rays")
 
 
-# --------------------------------------------------------------------- normal case
+# --------------------------------------------------------------------- a swapped match
 
 
-def _points(n1, n2, c, b, sign, zsign, use_y):
-    """Normal-case model points with the mistakes chosen by the flags (the wrong answers)."""
-    px = sign * ((n1[:, 1] - n2[:, 1]) if use_y else (n1[:, 0] - n2[:, 0]))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        lam = b / px
-    return np.column_stack([lam * n1[:, 0], lam * 0.5 * (n1[:, 1] + n2[:, 1]), zsign * lam * c])
-
-
-def check_normal_case_points(fn) -> None:
-    """``fn(n1, n2, c, b) -> points``: model points (n, 3) of a pair in the normal case
-    (left centre at 0, right at (b, 0, 0), both images level), Z < 0 below the base."""
-    rng = rng_for("lesson06.check_normal_case_points")
-    c, b = rng.uniform(100, 160), rng.uniform(70, 100)
-    n = 7
+def check_swapped_pair(fn) -> None:
+    """``fn(E, xy1, xy2, c) -> (i, j)``: the two matches whose right points were exchanged,
+    in a pair that also holds one single wrong match (larger distance than the swap's)."""
+    rng = rng_for("lesson06.check_swapped_pair")
+    c, b, n = 152.0, 90.0, 30
     P = np.column_stack(
-        [rng.uniform(-10, b + 10, n), rng.uniform(-80, 80, n), -c + rng.uniform(-25, 25, n)]
+        [rng.uniform(0, b, n), rng.uniform(-90, 90, n), -c + rng.uniform(-15, 15, n)]
     )
-    n1 = project(P, np.zeros(3), np.eye(3), c)
-    n2 = project(P, np.array([b, 0.0, 0.0]), np.eye(3), c)
-    got = np.asarray(call(fn, n1.copy(), n2.copy(), c, b, what="normal_case_points"), dtype=float)
-    if got.shape == P.shape and not np.all(np.isfinite(got)):
-        raise CheckFailed(
-            "model points: not finite — a division by y1' − y2', which is zero in the normal "
-            "case: depth comes from the x-parallax x1' − x2'"
+    R2 = matrix_from_opk(*rng.uniform(-0.03, 0.03, 3))
+    B = np.array([b, rng.uniform(-2, 2), rng.uniform(-2, 2)])
+    xy1 = project(P, np.zeros(3), np.eye(3), c) + rng.normal(0, 0.002, (n, 2))
+    xy2 = project(P, B, R2, c) + rng.normal(0, 0.002, (n, 2))
+    Bx = np.array([[0.0, -B[2], B[1]], [B[2], 0.0, -B[0]], [-B[1], B[0], 0.0]])
+    E = Bx @ R2
+
+    def dist(a: np.ndarray, q: np.ndarray) -> np.ndarray:  # the checker's own epipolar distances
+        g = np.column_stack([a, np.full(len(a), -c)]) @ E
+        return (g[:, 0] * q[:, 0] + g[:, 1] * q[:, 1] - c * g[:, 2]) / np.hypot(g[:, 0], g[:, 1])
+
+    i, j = (int(k) for k in rng.choice(n, 2, replace=False))
+    while abs(xy2[i, 1] - xy2[j, 1]) < 40.0:
+        i, j = (int(k) for k in rng.choice(n, 2, replace=False))
+    xy2[[i, j]] = xy2[[j, i]]
+    d = np.abs(dist(xy1, xy2))
+    k = int(next(m for m in rng.permutation(n) if m not in (i, j)))
+    xy2[k, 1] += 1.5 * max(d[i], d[j])  # a single wrong match, farther from its line
+    d = np.abs(dist(xy1, xy2))
+    got = call(fn, E.copy(), xy1.copy(), xy2.copy(), c, what="swapped_pair")
+    try:
+        pair = {int(g) for g in got}
+    except (TypeError, ValueError):
+        raise CheckFailed(f"swapped_pair: return two indices (i, j), got {got!r}") from None
+    if pair == {i, j}:
+        success(
+            f"matches {min(i, j)} and {max(i, j)} were swapped; match {k} is a single wrong match"
         )
-    compare("model points", got, P, rtol=1e-9, wrong=[
-        ("the x-parallax is x1' − x2' (positive for points below the base)", _points(n1, n2, c, b, -1.0, -1.0, False)),
-        ("Z = −λ c: the points lie below the projection centres", _points(n1, n2, c, b, 1.0, 1.0, False)),
-    ])  # fmt: skip
-    success(f"{n} model points from x-parallaxes agree with the simulated terrain")
-
-
-# --------------------------------------------------------------------- the eight-point algorithm
+        return
+    largest = {int(m) for m in np.argsort(d)[-2:]}
+    if pair == largest:
+        raise CheckFailed(
+            f"swapped_pair: {sorted(pair)} are the two largest distances, but match {k} is a single "
+            "wrong match, not half of the swap — exchange the right points of a candidate pair "
+            "and keep the pair whose distances both vanish"
+        )
+    if k in pair:
+        raise CheckFailed(
+            f"swapped_pair: {sorted(pair)} contains match {k}, a single wrong match: exchanging its "
+            "right point with another one does not clear both distances"
+        )
+    if pair == {i + 1, j + 1}:
+        raise CheckFailed("swapped_pair: these are 1-based indices; numpy counts from 0")
+    raise CheckFailed(f"swapped_pair: {sorted(pair)} is not the swapped pair")
 
 
 @own_work(eight_point=eight_point)

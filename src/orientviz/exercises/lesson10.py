@@ -407,3 +407,48 @@ def check_point_covariance(fn) -> None:
          "Q_jj = V_j⁻¹ + V_j⁻¹ W_jᵀ S⁻¹ W_j V_j⁻¹", 2 * np.linalg.inv(V[j]) - want),
     ])  # fmt: skip
     success("Q_jj equals the point's block of the whole inverse N⁻¹")
+
+
+def _rms_image_residual_um(data, X0, angles, xyz) -> float:
+    """RMS of l − f(x) over all rays' x and y (µm), the collinearity equations image by image."""
+    c, x0, y0 = (np.asarray(a, dtype=float) for a in data.cam)
+    e = np.zeros((data.image.size, 2))
+    for i in range(len(X0)):
+        m = data.image == i
+        R = matrix_from_opk(*np.asarray(angles, dtype=float)[i])
+        uvw = (np.asarray(xyz, dtype=float)[data.point[m]] - X0[i]) @ R  # Rᵀ (X − X0) per row
+        xy = np.column_stack(
+            [x0[m] - c[m] * uvw[:, 0] / uvw[:, 2], y0[m] - c[m] * uvw[:, 1] / uvw[:, 2]]
+        )
+        e[m] = data.l[m] - xy
+    return float(np.sqrt(np.mean(e**2)) * 1000.0)
+
+
+def check_first_state_below(answer: object, data, states, limit_um: float = 10.0) -> None:
+    """The first state k (0 = the start) of the student's iteration whose RMS image residual
+    is below ``limit_um``; ``states`` lists (X0, angles, xyz, ...) per state (the slider's).
+
+    Oracle: the collinearity equations evaluated here for every ray of ``data``
+    (:func:`orientviz.bundle.reference.reference_data`), not the viewer's misclosure.
+    """
+    got = answer_value(answer, f"first state below {limit_um:g} µm")
+    if got is None:
+        raise NotWrittenError(
+            f"first state below {limit_um:g} µm: not written yet (type the state you read off the slider)"
+        )
+    rms = [_rms_image_residual_um(data, *st[:3]) for st in states]
+    want = next((k for k, r in enumerate(rms) if r < limit_um), None)
+    if want is None:  # pragma: no cover - the lesson's iteration gets there
+        raise CheckFailed(f"no state is below {limit_um:g} µm (smallest {min(rms):.1f} µm)")
+    if got == want:
+        success(f"state {want}: RMS {rms[want]:.2f} µm (state {want - 1}: {rms[want - 1]:.1f} µm)")
+        return
+    k = int(got)
+    if 0 <= k < len(rms) and got == k:
+        why = (f"state {k} has {rms[k]:.2f} µm — " + ("not yet below" if rms[k] >= limit_um
+               else f"below, but state {want} already is"))  # fmt: skip
+    else:
+        why = f"the states are numbered 0 … {len(rms) - 1} (0: the start, before any step)"
+    raise CheckFailed(
+        f"first state below {limit_um:g} µm: {got:g} — {why}", error=np.inf, tolerance=0.0
+    )

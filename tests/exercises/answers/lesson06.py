@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from orientviz.exercises.lesson06 import _line, _points, _skew
+from orientviz.exercises.lesson06 import _line, _skew
 
 
 def _eight_point(xy1, xy2, c, rank2=True, scale=True, transpose=False):
@@ -23,11 +23,37 @@ def _eight_point(xy1, xy2, c, rank2=True, scale=True, transpose=False):
     return E.T if transpose else E
 
 
+def _dist(E, xy1, xy2, c):
+    g = np.column_stack([xy1, np.full(len(xy1), -c)]) @ E
+    return np.abs(g[:, 0] * xy2[:, 0] + g[:, 1] * xy2[:, 1] - c * g[:, 2]) / np.hypot(
+        g[:, 0], g[:, 1]
+    )
+
+
+def _swapped_pair(E, xy1, xy2, c, how="swap test"):
+    d = _dist(E, xy1, xy2, c)
+    order = np.argsort(d)[::-1]
+    if how == "two largest":
+        return tuple(order[:2])
+    if how == "one-based":
+        return tuple(np.asarray(_swapped_pair(E, xy1, xy2, c)) + 1)
+    best, pair = np.inf, None
+    for a in order[:5]:  # the candidates: the largest distances
+        for b in order[:5]:
+            if a < b:
+                q = xy2.copy()
+                q[[a, b]] = q[[b, a]]
+                worst = _dist(E, xy1, q, c)[[a, b]].max()
+                if worst < best:
+                    best, pair = worst, (int(a), int(b))
+    return pair
+
+
 SOLUTIONS = {
     "check_eight_point": _eight_point,
     "check_essential": lambda R2, B: _skew(B) @ R2,
     "check_epipolar_line": lambda E, xy1, c: _line(E, xy1, c, True, True, True),
-    "check_normal_case_points": lambda n1, n2, c, b: _points(n1, n2, c, b, 1.0, -1.0, False),
+    "check_swapped_pair": _swapped_pair,
 }
 
 MUTANTS = {
@@ -46,9 +72,8 @@ MUTANTS = {
         "no_c": lambda E, xy1, c: _line(E, xy1, c, True, False, True),
         "not_normalised": lambda E, xy1, c: _line(E, xy1, c, True, True, False),
     },
-    "check_normal_case_points": {
-        "parallax_sign": lambda n1, n2, c, b: _points(n1, n2, c, b, -1.0, -1.0, False),
-        "z_sign": lambda n1, n2, c, b: _points(n1, n2, c, b, 1.0, 1.0, False),
-        "y_parallax": lambda n1, n2, c, b: _points(n1, n2, c, b, 1.0, -1.0, True),
+    "check_swapped_pair": {
+        "two largest": lambda E, a, b, c: _swapped_pair(E, a, b, c, "two largest"),
+        "one-based": lambda E, a, b, c: _swapped_pair(E, a, b, c, "one-based"),
     },
 }
