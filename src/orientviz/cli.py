@@ -26,7 +26,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from . import __version__, reproduce
+from . import __version__
 from .errors import OrientvizError, printable
 from .io.safeio import input_limit, parse_size
 
@@ -587,6 +587,8 @@ def _parser() -> argparse.ArgumentParser:
 
 def run_reproduce(args: argparse.Namespace) -> int:
     """``orientviz reproduce [NAME] [--json]``; returns the exit code."""
+    from . import reproduce  # the papers' tables: only for this command (keeps others' start fast)
+
     if args.name is None:
         for k, d in reproduce.available().items():
             print(f"{k:12s} {d}")

@@ -50,7 +50,6 @@ CHECKERS = {
     ("05", "scheme_sigma"): ("check_scheme_sigma", "not the inverse of the diagonal"),
     ("06", "essential"): ("check_essential", "swapped"),
     ("07", "to_model"): ("check_model_coordinates", "not R"),
-    ("09", "distance_std"): ("check_distance_std", "only the diagonal"),
     ("12", "mdb"): ("check_mdb", "one-sided"),
     ("13", "difference_covariance"): ("check_difference_covariance", "not independent"),
     ("01", "gn_step"): ("check_gauss_newton_step", "not unit vectors"),

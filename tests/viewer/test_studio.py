@@ -200,3 +200,20 @@ def test_the_image_gizmo_drags_an_image(view):
     np.testing.assert_allclose(st.block.images.X0, X0)
     view.image_gizmo(False)
     assert "image_gizmo" not in view.nodes
+
+
+def test_structural_changes_with_auxiliary_data_follow_the_readings():
+    from orientviz.design import assess_block, design_auxiliary
+
+    st = Studio(FlightDesign(strips=2, images_per_strip=6, control="corners", sigma_statoscope=0.3))
+    st.add_cross_strip(float(st.block.images.X0[:, 0].mean()))
+    aux = design_auxiliary(st.block, st.design)  # the readings of the new block's images
+    assert aux[0].index.size == st.block.n_images
+    ref = assess_block(st.block, st.spec, auxiliary=aux)[1]
+    np.testing.assert_allclose(st.quality.point_sigma, ref.point_sigma, rtol=1e-7)
+    q = st.set_control(int(np.flatnonzero(st.block.points.role == 0)[4]), 0.05)  # an update
+    ref = assess_block(st.block, st.spec, auxiliary=aux)[1]
+    np.testing.assert_allclose(q.point_sigma, ref.point_sigma, rtol=1e-7)
+    st.move_image(2, st.block.images.X0[2, :2] + 100.0)
+    ref = assess_block(st.block, st.spec, auxiliary=design_auxiliary(st.block, st.design))[1]
+    np.testing.assert_allclose(st.quality.point_sigma, ref.point_sigma, rtol=1e-7)

@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from ..block import TIE
 from ..errors import InputError
-from ._live import blas_threads
+from ._live_parts import _weights, blas_threads
 
 F64 = NDArray[np.float64]
 
@@ -186,9 +186,3 @@ def _sigma_after(live, q, cand, sigma, criterion) -> F64:
         c[j] = True
         out[k] = worst(s, c, criterion)
     return out
-
-
-def _weights(sig) -> F64:
-    """Weights 1/σ² (1/m²) of the given coordinates (0 where not given)."""
-    s = np.asarray(sig, float)
-    return np.where(np.isfinite(s), 1.0 / np.where(np.isfinite(s), s, 1.0) ** 2, 0.0)

@@ -2,8 +2,8 @@
 
 Oracles: a numerical Jacobian of the distances (central differences) for the null space;
 the bordered normal equations solved directly with the new datum's constraints for the
-S-transformation; the σ of a distance from the numerical Jacobian row and the full
-cofactor matrix, in a datum the student's function never saw; for the datum defect of a
+S-transformation; for what is estimable, numerical gradients of five quantities against the
+null space of a distance and of a direction network; for the datum defect of a
 normal matrix, one built with a known null space (and eigenvalues spread over 13 orders of
 magnitude, as when m and rad are mixed); for the datum dropdowns, every pair of datum points
 S-transformed here.
@@ -151,48 +151,100 @@ def check_s_transform(fn) -> None:
     success("S-transformed x and Q equal a new adjustment with the datum on points 2 and 5")
 
 
-# --------------------------------------------------------------------- estimable σ
+# --------------------------------------------------------------------- estimable or not
+
+#: The quantities of the exercise "estimable or not?" (points numbered from 1).
+ESTIMABLE_QUANTITIES = (
+    "coordinate x of point 1",
+    "distance 1–4",
+    "angle at point 5 between points 1 and 6",
+    "azimuth of the line 1–2",
+    "ratio of the distances 1–4 and 2–3",
+)
 
 
-def _dist_std(xy, Q, i, j, mode):
-    """σ of a distance with one plausible mistake (mode "diag", "blocks", "var")."""
-    d = xy[j] - xy[i]
-    u = d / np.linalg.norm(d)
-    f = np.zeros(xy.size)
-    f[2 * j : 2 * j + 2], f[2 * i : 2 * i + 2] = u, -u
-    if mode == "diag":
-        return float(np.sqrt(f**2 @ np.diag(Q)))
-    if mode == "blocks":
-        Qb = np.zeros_like(Q)
-        for k in (i, j):
-            Qb[2 * k : 2 * k + 2, 2 * k : 2 * k + 2] = Q[2 * k : 2 * k + 2, 2 * k : 2 * k + 2]
-        return float(np.sqrt(f @ Qb @ f))
-    return float(f @ Q @ f)  # mode "var"
+def _quantity(name: str, x: np.ndarray) -> float:
+    """The value of one quantity of ESTIMABLE_QUANTITIES for coordinates x = (x1, y1, x2, …)."""
+    P = x.reshape(-1, 2)
+
+    def dist(i: int, j: int) -> float:
+        return float(np.linalg.norm(P[j - 1] - P[i - 1]))
+
+    if name.startswith("coordinate"):
+        return float(P[0, 0])
+    if name.startswith("distance"):
+        return dist(1, 4)
+    if name.startswith("angle"):
+        a, b = P[0] - P[4], P[5] - P[4]
+        return float(np.arctan2(a[0] * b[1] - a[1] * b[0], a @ b))
+    if name.startswith("azimuth"):
+        d = P[1] - P[0]
+        return float(np.arctan2(d[0], d[1]))
+    return dist(1, 4) / dist(2, 3)
 
 
-def check_distance_std(fn) -> None:
-    """``fn(xy, Q, i, j) -> sigma``: σ (m) of the adjusted distance between points i and j
-    from the coordinates xy (p, 2) and their covariance Q (2p, 2p)."""
-    rng = rng_for("lesson09.check_distance_std")
-    xy, N, b, G = _problem(rng)
-    p = len(xy)
-    _, QA = _bordered(N, b, G, np.ones(2 * p))
-    _, QB = _bordered(N, b, G, _sel(p, [0, 3]))
-    i, j = 2, 5
-    # oracle: numerical Jacobian row of this distance, full Q of a datum not given to fn
-    pair = np.array([[i, j]])
-    Jr = _jacobian(xy.reshape(-1), pair)[0]
-    want = float(np.sqrt(Jr @ QB @ Jr))
-    got = float(call(fn, xy.copy(), QA.copy(), i, j, what="distance_std"))
-    compare(f"σ of the distance {i + 1}–{j + 1} [m]", got, want, rtol=1e-6, wrong=[
-        ("the covariances are left out (only the diagonal of Q)", _dist_std(xy, QA, i, j, "diag")),
-        ("the covariance between the two points is left out (only their 2×2 blocks)",
-         _dist_std(xy, QA, i, j, "blocks")),
-        ("this is the variance: take the square root", _dist_std(xy, QA, i, j, "var")),
-    ])  # fmt: skip
-    got_b = float(call(fn, xy.copy(), QB.copy(), i, j, what="distance_std"))
-    compare("the same σ in another datum", got_b, want, rtol=1e-6)
-    success(f"σ = {want * 1000:.2f} mm in two datums: a distance is estimable")
+def _estimable(name: str, x: np.ndarray, G: np.ndarray) -> bool:
+    """fᵀG = 0 with f the numerical gradient of the quantity (central differences)."""
+    f = np.zeros(x.size)
+    for k in range(x.size):
+        e = np.zeros(x.size)
+        e[k] = 1e-4
+        f[k] = (_quantity(name, x + e) - _quantity(name, x - e)) / 2e-4
+    Gn = G / np.linalg.norm(G, axis=0)
+    return bool(np.max(np.abs(f @ Gn)) < 1e-6 * np.linalg.norm(f))
+
+
+def check_estimable(fn) -> None:
+    """``fn() -> {quantity: (in a distance network, in a network of directions only)}``: for
+    each of :data:`ESTIMABLE_QUANTITIES`, True if it is estimable (the same in every datum).
+
+    Oracle: on a network of six points the checker differentiates each quantity numerically
+    and tests fᵀG = 0 with G the shifts and the rotation (distances measured: defect 3) and
+    with the scale added (directions only: defect 4).
+    """
+    rng = rng_for("lesson09.check_estimable")
+    xy = np.column_stack([rng.uniform(0, 900, 6), rng.uniform(0, 800, 6)])
+    x = xy.reshape(-1)
+    c = xy - xy.mean(axis=0)
+    G3 = np.zeros((x.size, 3))
+    G3[0::2, 0], G3[1::2, 1] = 1.0, 1.0
+    G3[0::2, 2], G3[1::2, 2] = -c[:, 1], c[:, 0]
+    G4 = np.column_stack([G3, c.reshape(-1)])  # + the change of scale
+    got = call(fn, what="estimable")
+    if not isinstance(got, dict) or set(got) != set(ESTIMABLE_QUANTITIES):
+        raise CheckFailed(
+            "estimable: return a dict with exactly these keys: " + "; ".join(ESTIMABLE_QUANTITIES)
+        )
+    why = {
+        ("coordinate", 0): "a shift of the whole network moves every coordinate",
+        ("azimuth", 0): "a rotation of the whole network turns every azimuth",
+        ("distance", 0): "in a network of distances the scale is measured: a distance is estimable",
+        ("distance", 1): "without a measured length the scale is free: a distance is not estimable",
+        ("angle", 0): "an angle does not change under shift, rotation or scale: estimable in both",
+        ("angle", 1): "an angle does not change under shift, rotation or scale: estimable in both",
+        ("ratio", 0): "a ratio of two distances survives even a change of scale: estimable in both",
+        ("ratio", 1): "a ratio of two distances survives even a change of scale: estimable in both",
+        ("coordinate", 1): "a shift of the whole network moves every coordinate",
+        ("azimuth", 1): "a rotation of the whole network turns every azimuth",
+    }
+    wrong = []
+    for name in ESTIMABLE_QUANTITIES:
+        want = (_estimable(name, x, G3), _estimable(name, x, G4))
+        try:
+            ans = tuple(bool(v) for v in got[name])
+        except TypeError:
+            raise CheckFailed(
+                f"estimable: {name!r} needs two booleans (distances, directions)"
+            ) from None
+        if len(ans) != 2:
+            raise CheckFailed(f"estimable: {name!r} needs two booleans (distances, directions)")
+        for k in (0, 1):
+            if ans[k] != want[k]:
+                net = ("the distance network", "the network of directions")[k]
+                wrong.append(f"{name} in {net}: {why[(name.split()[0], k)]}")
+    if wrong:
+        raise CheckFailed("estimable: " + "; ".join(wrong), error=np.inf, tolerance=0.0)
+    success("all five right: fᵀG = 0 decides, not whether the quantity was measured")
 
 
 # --------------------------------------------------------------------- inner constraints

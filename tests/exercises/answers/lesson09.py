@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from orientviz.exercises import lesson09 as checker
 from orientviz.exercises.lesson09 import _s_matrix, _sel
 
 
@@ -35,13 +34,21 @@ def _s_transform(x, Q, G, pts, mode="ok"):
     return S @ x, S @ Q @ S.T
 
 
-def _dist_std(xy, Q, i, j, mode="ok"):
-    if mode != "ok":  # the plausible mistakes, as the checker knows them
-        return checker._dist_std(xy, Q, i, j, mode)
-    d = xy[j] - xy[i]
-    f = np.zeros(xy.size)
-    f[2 * j : 2 * j + 2], f[2 * i : 2 * i + 2] = d / np.linalg.norm(d), -d / np.linalg.norm(d)
-    return float(np.sqrt(f @ Q @ f))
+def _estimable(mistake=None):
+    out = {
+        "coordinate x of point 1": (False, False),
+        "distance 1–4": (True, False),
+        "angle at point 5 between points 1 and 6": (True, True),
+        "azimuth of the line 1–2": (False, False),
+        "ratio of the distances 1–4 and 2–3": (True, True),
+    }
+    if mistake == "measured":  # estimable = measured: only the distance
+        out = {k: (k.startswith("distance"), False) for k in out}
+    if mistake == "distance everywhere":
+        out["distance 1–4"] = (True, True)
+    if mistake == "azimuth":
+        out["azimuth of the line 1–2"] = (True, True)
+    return out
 
 
 def _inner_solve(N, b, G, mode="ok"):
@@ -77,7 +84,7 @@ SOLUTIONS = {
     "check_inner_solve": _inner_solve,
     "check_helmert_columns": lambda xy: _helmert(xy),
     "check_s_transform": lambda x, Q, G, pts: _s_transform(x, Q, G, pts, "ok"),
-    "check_distance_std": lambda xy, Q, i, j: _dist_std(xy, Q, i, j, "ok"),
+    "check_estimable": _estimable,
 }
 
 MUTANTS = {
@@ -103,9 +110,7 @@ MUTANTS = {
         "no_St": lambda x, Q, G, pts: _s_transform(x, Q, G, pts, "no_St"),
         "Q_unchanged": lambda x, Q, G, pts: _s_transform(x, Q, G, pts, "x_only"),
     },
-    "check_distance_std": {
-        "diag": lambda xy, Q, i, j: _dist_std(xy, Q, i, j, "diag"),
-        "blocks": lambda xy, Q, i, j: _dist_std(xy, Q, i, j, "blocks"),
-        "variance": lambda xy, Q, i, j: _dist_std(xy, Q, i, j, "var"),
+    "check_estimable": {
+        k: (lambda k=k: _estimable(k)) for k in ("measured", "distance everywhere", "azimuth")
     },
 }

@@ -37,6 +37,8 @@ refers to the rays' σ/√w with w = ρ′ at the solution (:func:`robust_end`).
 from __future__ import annotations
 
 import contextlib
+import functools
+import os
 from collections.abc import Callable
 
 import numpy as np
@@ -70,15 +72,29 @@ ONE_BLAS_THREAD_MAX_IMAGES: int = 500
 
 def blas_threads(n_images: int) -> contextlib.AbstractContextManager:
     """A context running BLAS on one thread for a block of at most
-    :data:`ONE_BLAS_THREAD_MAX_IMAGES` images (nothing for larger blocks, or when
-    threadpoolctl is not installed)."""
-    if n_images > ONE_BLAS_THREAD_MAX_IMAGES:
+    :data:`ONE_BLAS_THREAD_MAX_IMAGES` images; nothing for larger blocks, when the
+    environment already holds BLAS to one thread (``OPENBLAS_NUM_THREADS`` or
+    ``OMP_NUM_THREADS`` = 1) or when threadpoolctl is not installed."""
+    if n_images > ONE_BLAS_THREAD_MAX_IMAGES or "1" in (
+        os.environ.get("OPENBLAS_NUM_THREADS"),
+        os.environ.get("OMP_NUM_THREADS"),
+    ):
         return contextlib.nullcontext()
+    controller = _blas_controller()
+    if controller is None:
+        return contextlib.nullcontext()
+    return controller.limit(limits=1, user_api="blas")
+
+
+@functools.cache
+def _blas_controller():
+    """threadpoolctl's controller of the loaded libraries (found once per process: some
+    30 ms), or None without threadpoolctl."""
     try:
-        from threadpoolctl import threadpool_limits  # optional: only to cap BLAS's threads
+        from threadpoolctl import ThreadpoolController  # optional: only to cap BLAS's threads
     except ImportError:
-        return contextlib.nullcontext()
-    return threadpool_limits(limits=1, user_api="blas")
+        return None
+    return ThreadpoolController()
 
 
 def bundle_adjust(

@@ -90,10 +90,11 @@ def approximate(block: Block, frame: str = "control") -> Block:
     points without coordinates are intersected from them. ``frame="model"`` (a free
     network): computed approximations stay in the seed pair's model frame.
     """
-    from ...approximate import approximate_values  # the solver stack: only when adjusting
     from ._align import align_to_control  # the solver stack: only when adjusting
 
     if not np.all(np.isfinite(block.images.X0)) or not np.all(np.isfinite(block.images.angles)):
+        from ...approximate import approximate_values  # only for a block without approximations
+
         return approximate_values(block, frame=frame)
 
     block, alignment = align_to_control(block)
