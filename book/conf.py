@@ -41,6 +41,7 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
     "numpydoc",
+    "numpydoc_once",  # _ext/: numpydoc's template compiled once per build
     "sphinx.ext.viewcode",
     "sphinx.ext.mathjax",
     "sphinx-mathjax-offline",
@@ -84,8 +85,11 @@ templates_path = ["_templates"]  # module pages document every member in full (n
 html_theme = "pydata_sphinx_theme"
 html_title = "orientviz"
 html_static_path = ["_static"]
+# navigation_depth reaches the API's module pages (api → orientviz → package → module), so
+# every page is in its own sidebar, and the theme can reuse one rendered sidebar for the
+# pages of a section (at depth 2 it rendered the toctree anew for each of ~170 module pages)
 html_theme_options = {
-    "navigation_depth": 2,
+    "navigation_depth": 4,
     "show_toc_level": 2,
     "header_links_before_dropdown": 5,
     "navbar_align": "left",
