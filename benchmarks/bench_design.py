@@ -11,7 +11,9 @@ external reliability, ellipsoids, weak spots and summary:
 * an image added, removed, moved (``add_images``, ``remove_images``, both);
 * a cross strip added and a strip removed (a new assessment: the step would need more
   than ``max_columns`` columns; ``--forced`` also times the update forced through);
-* the same design with statoscope and APR readings (offsets per strip): control added;
+* the same design with statoscope and APR readings (offsets per strip): control added, an
+  image removed and added (their readings with them), a cross strip (new offsets: a new
+  design);
 * a change of the plan (image σ): a new design, formed and factored;
 * the suggestion of the next control point (40 candidates).
 
@@ -135,8 +137,18 @@ def run(args, label: str) -> list[tuple[str, list[float], list[float]]]:
     dt, alive = _t(lambda: LiveDesign(ablock, aspec, auxiliary=aux, blas_threads=cap))
     print(f"with statoscope + APR: base {dt:.2f} s")
     kind("control added (statoscope + APR)", lambda k: alive.add_control(int(picks[k]), 0.02))
-    kind("image removed (statoscope + APR: new design)",
-         lambda k: LiveDesign(ablock, aspec, auxiliary=aux, blas_threads=cap))  # fmt: skip
+
+    def of(b):
+        return design_auxiliary(b, aplan)
+
+    kind("image removed (statoscope + APR, {how})",
+         lambda k: alive.remove_images([int(imgs[k])], auxiliary=of))  # fmt: skip
+    kind("image added (statoscope + APR, {how})",
+         lambda k: alive.add_images(I.X0[imgs[k]] + shift[imgs[k]], I.angles[imgs[k]],
+                                    strip=int(I.strip[imgs[k]]), auxiliary=of))  # fmt: skip
+    kind("cross strip (statoscope + APR, {how})",
+         lambda k: alive.add_images(cs[k][0], cs[k][1], strip=cs[k][2], ids=cs[k][3],
+                                    auxiliary=of))  # fmt: skip
     kind("peer: new assessment (assess_block)", lambda k: assess_block(live.block, spec))
     kind("peer: new assessment with statoscope + APR",
          lambda k: assess_block(alive.block, aspec, auxiliary=aux))  # fmt: skip

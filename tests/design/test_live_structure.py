@@ -101,12 +101,48 @@ def test_a_removal_that_disconnects_the_block_is_not_determinable(base):
         assess_block(remove_images(block, np.flatnonzero(block.images.strip == 1)), spec)
 
 
-def test_images_of_a_design_with_auxiliary_data_need_a_new_live_design():
-    plan = FlightDesign(strips=2, images_per_strip=6, control="corners", sigma_statoscope=0.3)
+@pytest.mark.parametrize(
+    "aux",
+    [
+        dict(sigma_statoscope=0.3, sigma_apr=0.5),
+        dict(sigma_gnss=0.1, gnss_offsets=True),
+    ],
+    ids=["statoscope+apr", "gnss-shift"],
+)
+def test_images_of_a_design_with_auxiliary_data_update_their_rows(aux):
+    plan = FlightDesign(strips=3, images_per_strip=7, control="perimeter", **aux)
     block, spec = design_block(plan)
     live = LiveDesign(block, spec, auxiliary=design_auxiliary(block, plan))
     with pytest.raises(InputError, match="auxiliary"):
-        live.remove_images([3])
+        live.remove_images([3])  # the rows follow the images: the new data are needed
+
+    def of(b):
+        return design_auxiliary(b, plan)
+
+    def same(lv):
+        ref = assess_block(lv.block, spec, auxiliary=of(lv.block))[1]
+        np.testing.assert_allclose(lv.quality().point_sigma, ref.point_sigma, rtol=1e-7)
+        np.testing.assert_allclose(lv.quality().station_sigma, ref.station_sigma, rtol=1e-7)
+        np.testing.assert_allclose(lv.quality().redundancy, ref.redundancy, atol=1e-9)
+        fin = np.isfinite(ref.external)
+        np.testing.assert_allclose(lv.quality().external[fin], ref.external[fin], rtol=1e-7)
+
+    rm = live.remove_images([9], auxiliary=of)  # inside strip 1: its readings go too
+    _updated(rm)
+    same(rm)
+    I = rm.block.images
+    add = rm.add_images(I.X0[4] + [200.0, 0.0, 0.0], I.angles[4], strip=int(I.strip[4]),
+                        auxiliary=of)  # fmt: skip
+    _updated(add)
+    same(add)
+    tie = np.flatnonzero(add.block.points.role == ov.TIE)
+    add.add_control(int(tie[len(tie) // 3]), 0.05)  # control after, with the border
+    same(add)
+    # a cross strip is a new strip: new offsets, a new design
+    X0, ang, strip, ids = cross_strip_images(block, spec, float(np.median(block.points.xyz[:, 0])))
+    cs = live.add_images(X0, ang, strip=strip, ids=ids, auxiliary=of)
+    assert "formed and factored again" in cs.history[-1]
+    same(cs)
 
 
 def test_the_block_solve_equals_the_factors_solve():

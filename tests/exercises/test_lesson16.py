@@ -49,3 +49,9 @@ def test_control_sigma_check_agrees_with_the_woodbury_update_and_names_misreadin
         lesson16.check_control_sigma(want * 100, Q, j, step=0.02)
     with pytest.raises(NotWrittenError):
         lesson16.check_control_sigma(None, Q, j, step=0.02)
+
+
+def test_law_spacing_without_sqrt2_is_named():
+    from mutants import assert_diagnoses
+
+    assert_diagnoses(lesson16, answers, {("check_law_spacing", "no √2"): "√2 is missing"})

@@ -182,3 +182,25 @@ def test_result_without_per_iteration_parameters_still_replays(block):
     np.testing.assert_allclose(st.block.images.X0, res["exterior"].reshape(-1, 6)[:, :3])
     st.replay(0)
     np.testing.assert_allclose(st.block.images.X0, noisy.images.X0)
+
+
+def test_the_scene_is_lit_without_an_environment_map(monkeypatch):
+    """viser's default HDR environment map blocked a software-WebGL page ~15 s before its
+    first picture (benchmarks/README.md, "The viewer in the browser"): the viewer turns it
+    off and lights the scene by the default lights, without shadows."""
+    import viser
+
+    calls = []
+    monkeypatch.setattr(
+        viser.SceneApi, "configure_environment_map",
+        lambda self, hdri="warehouse", **kw: calls.append(("env", hdri)),
+    )  # fmt: skip
+    monkeypatch.setattr(
+        viser.SceneApi, "configure_default_lights",
+        lambda self, enabled=True, cast_shadow=True: calls.append(("lights", enabled, cast_shadow)),
+    )  # fmt: skip
+    app = ViewerApp("radar", port=0, verbose=False)
+    try:
+        assert ("env", None) in calls and ("lights", True, False) in calls
+    finally:
+        app.stop()

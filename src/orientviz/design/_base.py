@@ -135,34 +135,43 @@ class DesignBase:
         oi = prob.obs.image
         return -np.add.reduceat(T[vo].transpose(0, 2, 1) @ Cc[oi[vo]], S.pt_starts, axis=0)
 
-    def columns(self, images: I64, points: I64) -> tuple[F64, F64]:
-        """Q0 at the coordinates of ``images`` (6 each) then ``points`` (3 each).
+    def columns(self, images: I64, points: I64, border: I64 | None = None) -> tuple[F64, F64, F64]:
+        """Q0 at the coordinates of ``images`` (6 each), ``points`` (3 each) and the
+        border's offsets ``border`` (1 each), in that order.
 
         Returns
         -------
         Cc : ndarray, shape (m, 6, k)
-            Rows of the images (base order), k = 6·len(images) + 3·len(points).
+            Rows of the images (base order), k = 6·len(images) + 3·len(points) + len(border).
         Cp : ndarray, shape (p, 3, k)
             Rows of the points (base point index).
+        Cg : ndarray, shape (na, k)
+            Rows of the border's offsets (na = 0 without auxiliary data).
         """
+        border = np.zeros(0, np.int64) if border is None else np.asarray(border, np.int64)
         keys = [("i", int(i)) for i in images] + [("p", int(j)) for j in points]
+        keys += [("g", int(g)) for g in border]
         todo = [k for k in keys if k not in self._cache]
         if todo:
             self._compute(todo)
-        Cc = np.concatenate([self._cache[k][0] for k in keys], axis=2)
-        Cp = np.concatenate([self._cache[k][1] for k in keys], axis=2)
+        parts = [self._cache[k] for k in keys]
+        if not parts:
+            return np.zeros((self.m, 6, 0)), np.zeros((self.p, 3, 0)), np.zeros((self.na, 0))
+        out = tuple(np.concatenate([c[i] for c in parts], axis=-1) for i in range(3))
         if len(self._cache) > 400:  # bound the memory (each entry ~ (6m + 3p)·6 floats)
             self._cache.clear()
-        return Cc, Cp
+        return out
 
     def _compute(self, keys: list[tuple[str, int]]) -> None:
         prob, T, m = self.prob, self.T, self.m
-        widths = [6 if kind == "i" else 3 for kind, _ in keys]
-        starts = np.concatenate([[0], np.cumsum(widths)])
+        border = [j for kind, j in keys if kind == "g"]
+        keys_x = [key for key in keys if key[0] != "g"]
+        widths = [6 if kind == "i" else 3 for kind, _ in keys_x]
+        starts = np.concatenate([[0], np.cumsum(widths)]).astype(int)
         k = int(starts[-1])
         rhs = np.zeros((m, 6, k))
         own = []  # (column of the problem, start) of the point columns
-        for (kind, j), s in zip(keys, starts[:-1]):
+        for (kind, j), s in zip(keys_x, starts[:-1]):
             if kind == "i":
                 rhs[j, :, s : s + 6] = np.eye(6)
             else:
@@ -175,15 +184,20 @@ class DesignBase:
         for col, s in own:
             Cp[col, :, s : s + 3] += self.Vinv[col]
         Cp = Cp[self.pcol]
-        if self.na:  # the border: + G F̃⁻¹ G_Ωᵀ
+        Cg = np.zeros((self.na, k))
+        if self.na:  # the border: + G F̃⁻¹ G_Ωᵀ, and its own rows −F̃⁻¹ G_Ωᵀ
             GO = np.concatenate(
-                [self.Gc[j] if kind == "i" else self.Gp[j] for kind, j in keys], axis=0
-            )  # (k, na)
+                [self.Gc[j] if kind == "i" else self.Gp[j] for kind, j in keys_x], axis=0
+            ).reshape(k, self.na)
             B = self.Faa @ GO.T
             Cc += self.Gc @ B
             Cp += self.Gp @ B
-        for key, s, w in zip(keys, starts[:-1], widths):
-            self._cache[key] = (Cc[:, :, s : s + w], Cp[:, :, s : s + w])
+            Cg = -B
+        for key, s, w in zip(keys_x, starts[:-1], widths):
+            self._cache[key] = (Cc[:, :, s : s + w], Cp[:, :, s : s + w], Cg[:, s : s + w])
+        for g in border:  # an offset's column: −G F̃⁻¹ e_g, F̃⁻¹ e_g
+            f = self.Faa[:, [g]]
+            self._cache[("g", g)] = (-(self.Gc @ f), -(self.Gp @ f), f.copy())
 
 
 def _dense_blocks(cb: F64) -> list[tuple[int, int, F64, F64 | None]]:

@@ -47,23 +47,27 @@ from numpy.typing import ArrayLike, NDArray
 from ..block import CONTROL, TIE, Block
 from ..bundle import RayGains, ray_reliability
 from ..bundle.model import collinearity_block
+from ..bundle.problem import auxiliary_rows
 from ..errors import InputError, NotDeterminableError
 from ._base import DesignBase
 from ._extend import add_images, kept_after_removal
 from ._extend import remove_images as _remove_images
 from ._live_parts import (
     Change,
+    _aux_rows,
     _capped,
     _check_connected,
     _check_rays,
     _Current,
     _weights,
+    _with_aux_rows,
 )
 from ._quality import DesignQuality, quality_from_arrays
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
 
+_NONE = np.zeros(0, np.int64)
 #: After this many update steps the design is formed and factored again.
 MAX_STEPS: int = 40
 #: The scaled Woodbury matrix of a step is taken as singular beyond this condition.
@@ -143,8 +147,11 @@ class LiveDesign:
             Kp=np.asarray(res.ray_gains.points, float).copy(),
         )
         self._w = _weights(b.points.sigma)  # by base point: the weights of the terms
-        #: the steps (U images by slot, U points by base point, M)
-        self._steps: list[tuple[F64, F64, F64]] = []
+        rows = self._base.prob.aux.rows if self.auxiliary else None
+        self._aux_names = list(rows.names) if rows is not None else []
+        self._aux = _aux_rows(rows, lambda i: i, lambda j: j)  # by label, slots
+        #: the steps (U images by slot, U points by base point, U offsets, M)
+        self._steps: list[tuple[F64, F64, F64, F64]] = []
         #: per control change: (weights, terms, quality, number of steps) before it
         self._saved: list[tuple[F64, _Current, DesignQuality, int]] = []
         self.changes: list[Change] = []
@@ -155,61 +162,67 @@ class LiveDesign:
     def columns(self, point: int) -> tuple[F64, F64]:
         """Q0 (the base design's cofactors) at the three columns of a base point:
         orientations (m, 6, 3), points (p, 3, 3) in the base block's order."""
-        return self._base.columns(np.zeros(0, np.int64), np.array([point]))
+        return self._base.columns(np.zeros(0, np.int64), np.array([point]))[:2]
 
     # ------------------------------------------------------------------ columns
-    def _columns(self, imgs: I64, pts: I64) -> tuple[F64, F64]:
-        """The current cofactors at the coordinates of image slots ``imgs`` (6 each) and
-        base points ``pts`` (3 each): images by slot (M, 6, k), points (p0, 3, k)."""
+    def _columns(self, imgs: I64, pts: I64, gs: I64 = _NONE) -> tuple[F64, F64, F64]:
+        """The current cofactors at the coordinates of image slots ``imgs`` (6 each), base
+        points ``pts`` (3 each) and offsets ``gs`` (1 each): rows of the images by slot
+        (M, 6, k), of the points (p0, 3, k) and of the offsets (na, k)."""
         base = self._base
         M = self._omega.shape[0]
         old = imgs[imgs < base.m]
-        Cc0, Cp = base.columns(old, pts)
-        k = 6 * imgs.size + 3 * pts.size
+        Cc0, Cp, Cg = base.columns(old, pts, gs)
+        k = 6 * imgs.size + 3 * pts.size + gs.size
         Cc = np.zeros((M, 6, k))
         pos = np.flatnonzero(imgs < base.m)  # where the base images' columns go
         cols = np.r_[
-            (6 * pos[:, None] + np.arange(6)).reshape(-1), 6 * imgs.size + np.arange(3 * pts.size)
+            (6 * pos[:, None] + np.arange(6)).reshape(-1),
+            6 * imgs.size + np.arange(3 * pts.size + gs.size),
         ]
         Cc[: base.m, :, cols] = Cc0
         Cpk = np.zeros((Cp.shape[0], 3, k))
         Cpk[:, :, cols] = Cp
+        Cgk = np.zeros((Cg.shape[0], k))
+        Cgk[:, cols] = Cg
         for s, i in enumerate(imgs):  # added slots: ω⁻¹ I in the base
             if i >= base.m:
                 Cc[i, :, 6 * s : 6 * s + 6] = np.diag(1.0 / self._omega[i])
-        for Uc, Up, Ms in self._steps:  # less the earlier steps' U M U[Ω]ᵀ
+        for Uc, Up, Ug, Ms in self._steps:  # less the earlier steps' U M U[Ω]ᵀ
             r = Uc.shape[2]
             X = np.concatenate(
                 [Uc[i] if i < Uc.shape[0] else np.zeros((6, r)) for i in imgs]
-                + [Up[j] for j in pts],
+                + [Up[j] for j in pts]
+                + [Ug[gs]],
                 axis=0,
             )  # (k, r)
             B = Ms @ X.T
             Cc[: Uc.shape[0]] -= Uc @ B
             Cpk -= Up @ B
-        return Cc, Cpk
+            Cgk -= Ug @ B
+        return Cc, Cpk, Cgk
 
     @_capped
     def current_columns(self, point: int) -> tuple[F64, F64]:
         """The current design's cofactors at the three columns of ``point`` (current
         index): orientations (m, 6, 3) and points (p, 3, 3) in the current order."""
-        Cc, Cp = self._columns(np.zeros(0, np.int64), self._pt[[point]])
+        Cc, Cp, _ = self._columns(_NONE, self._pt[[point]])
         return Cc[self._img], Cp[self._pt]
 
     # ------------------------------------------------------------------ the step
     def _step(
         self, imgs: I64, pts: I64, G: F64, d: F64, new_rays: I64 | None = None,
-        alive: NDArray[np.bool_] | None = None,
+        alive: NDArray[np.bool_] | None = None, gs: I64 = _NONE,
     ) -> None:  # fmt: skip
-        """One update by rows ``G`` (r, k) over the coordinates of ``imgs``, ``pts`` with
-        signed weights ``d`` (r,); ``new_rays``: ray slots added in this step, their rows
-        at 2i, 2i + 1 of G in order; ``alive``: the ray slots present after the step."""
-        Cc, Cp = self._columns(imgs, pts)
+        """One update by rows ``G`` (r, k) over the coordinates of ``imgs``, ``pts`` and
+        offsets ``gs`` with signed weights ``d`` (r,); ``new_rays``: ray slots added in
+        this step, their rows at 2i, 2i + 1 of G in order; ``alive``: the ray slots
+        present after the step."""
+        Cc, Cp, Cg = self._columns(imgs, pts, gs)
         k = G.shape[1]
         QO = np.concatenate(
-            [Cc[imgs].reshape(-1, k) if imgs.size else np.zeros((0, k)),
-             Cp[pts].reshape(-1, k)], axis=0,
-        )  # fmt: skip
+            [Cc[imgs].reshape(-1, k), Cp[pts].reshape(-1, k), Cg[gs].reshape(-1, k)], axis=0
+        )
         GU = G @ QO @ G.T
         GU = 0.5 * (GU + GU.T)
         # M = (I + D G U)⁻¹ D = S B⁻¹ Σ S with D = S Σ S (S = √|d|, Σ = sign d) and
@@ -225,7 +238,7 @@ class LiveDesign:
             )
         Mx = sq[:, None] * np.linalg.solve(B, np.diag(sg)) * sq[None, :]
         Mx = 0.5 * (Mx + Mx.T)
-        Uc, Up = Cc @ G.T, Cp @ G.T  # (M, 6, r), (p0, 3, r)
+        Uc, Up, Ug = Cc @ G.T, Cp @ G.T, Cg @ G.T  # (M, 6, r), (p0, 3, r), (na, r)
         c0 = self._cur
         r, rxy, Ke, Kp = c0.r.copy(), c0.rxy.copy(), c0.Ke.copy(), c0.Kp.copy()
         if new_rays is not None and new_rays.size:  # their terms before: rows of G U, U
@@ -257,7 +270,7 @@ class LiveDesign:
             Qe=c0.Qe - UcM @ Uc.transpose(0, 2, 1),
             r=r, rxy=rxy, Ke=Ke, Kp=Kp,
         )  # fmt: skip
-        self._steps.append((Uc, Up, Mx))
+        self._steps.append((Uc, Up, Ug, Mx))
 
     # ------------------------------------------------------------------ control changes
     @_capped
@@ -283,7 +296,7 @@ class LiveDesign:
         w[j] = _weights(s)
         if np.any(w[j] != self._w[j]):
             d = (w[j] - self._w[j]).astype(float)
-            self._step(np.zeros(0, np.int64), np.array([j]), np.eye(3), d)
+            self._step(_NONE, np.array([j]), np.eye(3), d)
             self._w = w
             self._quality = self._assemble()
         return self._quality
@@ -315,24 +328,39 @@ class LiveDesign:
         P.role[point] = CONTROL if given.any() else TIE
 
     # ------------------------------------------------------------------ structural changes
-    def _no_auxiliary(self) -> None:
-        if self.auxiliary:
+    def _aux_change(self, b: Block, auxiliary, img_slot, pt_slot):
+        """The auxiliary rows of the changed design ``b``: (its data, its rows by label,
+        rows removed, rows added), or its data and None when its offsets differ (then the
+        design is assessed anew). ``auxiliary``: the new design's data or a function of
+        the new block giving them (:func:`orientviz.design.design_auxiliary`)."""
+        if not self.auxiliary:
+            return [], {}, [], []
+        if auxiliary is None:
             raise InputError(
                 "images of a design with auxiliary data: their rows follow the images — "
-                "make a new LiveDesign with design_auxiliary of the new block"
+                "pass auxiliary= (the new design's data, or a function of the new block)"
             )
+        new_aux = list(auxiliary(b) if callable(auxiliary) else auxiliary)
+        rows = auxiliary_rows(new_aux, b)
+        if list(rows.names) != self._aux_names:
+            return new_aux, None, [], []
+        now = _aux_rows(rows, img_slot, pt_slot)
+        removed = [v for key, v in self._aux.items() if now.get(key) != v]
+        added = [v for key, v in now.items() if self._aux.get(key) != v]
+        return new_aux, now, removed, added
 
-    def _fresh(self, block: Block, label: str) -> LiveDesign:
+    def _fresh(self, block: Block, label: str, auxiliary=None) -> LiveDesign:
         """A new live design of ``block`` (formed and factored anew)."""
         new = LiveDesign(
             block, self.spec, level=self.level, alpha0=self.alpha0, beta0=self.beta0,
-            auxiliary=self.auxiliary, blas_threads=self.blas_threads,
+            auxiliary=self.auxiliary if auxiliary is None else auxiliary,
+            blas_threads=self.blas_threads,
         )  # fmt: skip
         new.max_columns = self.max_columns
         new.history = self.history + [label, "(normal equations formed and factored again)"]
         return new
 
-    def _derived(self, block: Block, label: str) -> LiveDesign:
+    def _derived(self, block: Block, label: str, aux: list, rows: dict) -> LiveDesign:
         """A copy for ``block`` sharing the base and the steps so far (the bundle's rule
         for a block in pieces applies first: the update would give each piece its own
         numbers, the bundle refuses it)."""
@@ -342,27 +370,31 @@ class LiveDesign:
         new._steps = list(self._steps)
         new._saved, new.changes = [], []
         new.history = self.history + [label]
+        new.auxiliary, new._aux = aux, rows
         return new
 
     @_capped
     def add_images(
         self, X0: ArrayLike, angles: ArrayLike, *, strip: ArrayLike | int | None = None,
-        ids: list[str] | None = None,
+        ids: list[str] | None = None, auxiliary=None,
     ) -> LiveDesign:  # fmt: skip
         """A new live design with images added (:func:`orientviz.design.add_images`).
 
         The current design stays as it is (undo: keep using it). Updated by one step
         (rank 2·rays + 6·images) when the step needs at most :data:`MAX_COLUMNS` columns
-        of Q; otherwise assessed anew.
+        of Q and the auxiliary data keep their offsets; otherwise assessed anew.
+        ``auxiliary``: for a design with auxiliary data, the new design's data or a
+        function of the new block giving them (their rows follow the images:
+        :func:`orientviz.design.design_auxiliary`); the rows that change are rows of the
+        step.
 
         Raises
         ------
         InputError
-            For a design with auxiliary data (their rows follow the images).
+            For a design with auxiliary data without ``auxiliary``.
         NotDeterminableError
             If the changed design is not determinable.
         """
-        self._no_auxiliary()
         b = add_images(self.block, X0, angles, strip=strip, ids=ids)
         m, n = self.block.n_images, self.block.n_observations
         k = b.n_images - m
@@ -370,11 +402,15 @@ class LiveDesign:
         O = b.observations
         new_obs = np.arange(n, b.n_observations)
         pts_new = np.unique(O.point[new_obs])
-        if 6 * k + 3 * pts_new.size > self.max_columns or len(self._steps) >= MAX_STEPS:
-            return self._fresh(b, label)
-        new = self._derived(b, label)
         M0, R0 = self._omega.shape[0], self._Jw.shape[0]
         slots = M0 + np.arange(k)
+        img_slot = np.r_[self._img, slots]
+        aux, now, gone_a, new_a = self._aux_change(b, auxiliary, img_slot.__getitem__,
+                                                   self._pt.__getitem__)  # fmt: skip
+        wide = 6 * k + 3 * pts_new.size + 3 * (len(gone_a) + len(new_a))
+        if now is None or wide > self.max_columns or len(self._steps) >= MAX_STEPS:
+            return self._fresh(b, label, aux)
+        new = self._derived(b, label, aux, now)
         rays = R0 + np.arange(new_obs.size)
         # the new rays' weighted Jacobians
         cam = b.cameras
@@ -422,17 +458,20 @@ class LiveDesign:
         d = np.r_[np.ones(2 * nn), (gw - omega).reshape(-1)]
         alive = np.zeros(new._Jw.shape[0], bool)
         alive[new._obs] = True
-        new._step(slots, pts_s, G, d, new_rays=rays, alive=alive)
+        imgs, pts, gs, G, d = _with_aux_rows(slots, pts_s, G, d, gone_a, new_a)
+        new._step(imgs, pts, G, d, new_rays=rays, alive=alive, gs=gs)
         new._quality = new.base_quality = new._assemble()
         return new
 
     @_capped
-    def remove_images(self, images: ArrayLike, label: str | None = None) -> LiveDesign:
+    def remove_images(
+        self, images: ArrayLike, label: str | None = None, *, auxiliary=None
+    ) -> LiveDesign:
         """A new live design without some images (:func:`orientviz.design.remove_images`:
         points left with fewer than 2 rays go too). The current design stays as it is.
-        Updated by one step when possible (see :meth:`add_images`), else assessed anew.
+        Updated by one step when possible (see :meth:`add_images`, also for
+        ``auxiliary``), else assessed anew.
         """
-        self._no_auxiliary()
         drop_i = np.asarray(images, np.int64).reshape(-1)
         b = _remove_images(self.block, drop_i)
         label = label or f"{drop_i.size} image(s) removed"
@@ -444,9 +483,15 @@ class LiveDesign:
         other_imgs = np.setdiff1d(np.unique(O.image[gone]), drop_i)
         imgs_cur = np.r_[drop_i, other_imgs]
         kc = 6 * imgs_cur.size + 3 * touched.size
-        if kc > self.max_columns or len(self._steps) >= MAX_STEPS:
-            return self._fresh(b, label)
-        new = self._derived(b, label)
+        keep_i = np.ones(self.block.n_images, bool)
+        keep_i[drop_i] = False
+        aux, now, gone_a, new_a = self._aux_change(
+            b, auxiliary, self._img[keep_i].__getitem__, self._pt[keep_p].__getitem__
+        )
+        wide = kc + 3 * (len(gone_a) + len(new_a))
+        if now is None or wide > self.max_columns or len(self._steps) >= MAX_STEPS:
+            return self._fresh(b, label, aux)
+        new = self._derived(b, label, aux, now)
         imgs = self._img[imgs_cur]
         pts = self._pt[touched]
         rays = self._obs[gone]
@@ -477,14 +522,13 @@ class LiveDesign:
             G[r0 + 2 * a : r0 + 2 * a + 2, ci0 : ci0 + 6] = Jg[a, :, :6]
             G[r0 + 2 * a : r0 + 2 * a + 2, cp0 : cp0 + 3] = Jg[a, :, 6:]
         d = np.r_[om_i.reshape(-1), om_p.reshape(-1), -np.ones(2 * nr)]
-        keep_i = np.ones(self.block.n_images, bool)
-        keep_i[drop_i] = False
         new._img = self._img[keep_i]
         new._pt = self._pt[keep_p]
         new._obs = self._obs[keep_o]
         alive = np.zeros(self._Jw.shape[0], bool)
         alive[new._obs] = True
-        new._step(imgs, pts, G, d, alive=alive)
+        imgs, pts, gs, G, d = _with_aux_rows(imgs, pts, G, d, gone_a, new_a)
+        new._step(imgs, pts, G, d, alive=alive, gs=gs)
         new._quality = new.base_quality = new._assemble()
         return new
 

@@ -124,3 +124,50 @@ class _Current:
     rxy: F64
     Ke: F64
     Kp: F64
+
+
+def _aux_rows(rows, img_slot, pt_slot) -> dict:
+    """Auxiliary rows by label: (on an image, target slot, coordinate, offset columns,
+    their coefficients, weight 1/σ² in 1/m²); ``img_slot``/``pt_slot`` map the block's
+    image/point index to the live design's slot."""
+    if rows is None:
+        return {}
+    out = {}
+    for i, label in enumerate(rows.labels):
+        on = bool(rows.on_image[i])
+        t = int(rows.target[i])
+        out[label] = (
+            on, int(img_slot(t) if on else pt_slot(t)), int(rows.coord[i]),
+            tuple(int(v) for v in rows.gcol[i]), tuple(float(v) for v in rows.gcoef[i]),
+            float(rows.w[i]),
+        )  # fmt: skip
+    return out
+
+
+def _with_aux_rows(imgs, pts, G, d, removed: list, added: list):
+    """Rows G (r, k) over image slots ``imgs``, points ``pts`` extended by auxiliary rows
+    taken away (d = −1) and added (d = +1), each √w·(unit on its coordinate + the
+    coefficients of its offsets): (image slots, points, offsets, G, d) with the columns
+    [images · 6 | points · 3 | offsets]."""
+    if not removed and not added:
+        return imgs, pts, np.zeros(0, np.int64), G, d
+    rows = [(v, -1.0) for v in removed] + [(v, 1.0) for v in added]
+    extra_i = [v[1] for v, _ in rows if v[0] and v[1] not in set(imgs.tolist())]
+    extra_p = [v[1] for v, _ in rows if not v[0] and v[1] not in set(pts.tolist())]
+    imgs2 = np.r_[imgs, np.unique(np.asarray(extra_i, np.int64))].astype(np.int64)
+    pts2 = np.r_[pts, np.unique(np.asarray(extra_p, np.int64))].astype(np.int64)
+    gs = np.unique([c for v, _ in rows for c in v[3] if c >= 0]).astype(np.int64)
+    ki, kp = 6 * imgs2.size, 3 * pts2.size
+    G2 = np.zeros((G.shape[0] + len(rows), ki + kp + gs.size))
+    G2[: G.shape[0], : 6 * imgs.size] = G[:, : 6 * imgs.size]
+    G2[: G.shape[0], ki : ki + 3 * pts.size] = G[:, 6 * imgs.size :]
+    pi = {int(s): t for t, s in enumerate(imgs2)}
+    pp = {int(s): t for t, s in enumerate(pts2)}
+    pg = {int(s): t for t, s in enumerate(gs)}
+    for r, ((on, slot, c, gcol, gcoef, w), _) in enumerate(rows):
+        row = G2[G.shape[0] + r]
+        row[6 * pi[slot] + c if on else ki + 3 * pp[slot] + c] = np.sqrt(w)
+        for gc, gf in zip(gcol, gcoef):
+            if gc >= 0:
+                row[ki + kp + pg[gc]] += np.sqrt(w) * gf
+    return imgs2, pts2, gs, G2, np.r_[d, [sign for _, sign in rows]]

@@ -111,7 +111,8 @@ def check_law_spacing(fn: Callable) -> None:
     """Check ``fn(sigma_img_mm, scale, c_mm, format_mm, p, target_m, mu) -> (sigma0z, i)``.
 
     ``mu`` maps the chain spacing i (bases) to Ebner's μ_z/σ0 (increasing with i);
-    the answer is σ0z = σ_img · m_B · H/B (m) and the largest i with μ_z(i) · σ0z ≤ target.
+    the answer is σ0z = √2 · σ_img · m_B · H/B (m), the σ of a model height from an x-parallax,
+    and the largest i with μ_z(i) · σ0z ≤ target.
     """
     rng = rng_for("lesson16.check_law_spacing")
     for sigma_img, scale, c_mm, fmt, p, target in (
@@ -122,7 +123,7 @@ def check_law_spacing(fn: Callable) -> None:
         mu = dict(zip(spac.tolist(), (0.8 + np.cumsum(rng.uniform(0.05, 0.4, spac.size))).tolist()))
         base = fmt * 1e-3 * scale * (1 - p)  # B, m
         H = c_mm * 1e-3 * scale
-        s0z = sigma_img * 1e-3 * scale * H / base  # the geometry written out
+        s0z = np.sqrt(2.0) * sigma_img * 1e-3 * scale * H / base  # the geometry written out
         ok = [i for i in spac if mu[int(i)] * s0z <= target]
         i_ref = int(max(ok)) if ok else 0
         out = call(fn, sigma_img, scale, c_mm, fmt, p, target, dict(mu), what="law_spacing")
@@ -137,7 +138,12 @@ def check_law_spacing(fn: Callable) -> None:
             rtol=1e-6,
             wrong=[
                 ("the base uses p, not 1 − p", s0z * (1 - p) / p),
-                ("H/B upside down", sigma_img * 1e-3 * scale * base / H),
+                ("H/B upside down", np.sqrt(2.0) * sigma_img * 1e-3 * scale * base / H),
+                (
+                    "√2 is missing: σ0z is the σ of a model height from the x-parallax of TWO "
+                    "image coordinates",
+                    s0z / np.sqrt(2.0),
+                ),
             ],
         )
         if int(i) != i_ref:

@@ -85,6 +85,19 @@ def no_tunnel(server: Any) -> None:
     server.request_share_url = refused
 
 
+def light_scene(server: Any) -> None:
+    """Light the scene by viser's default lights only, without its environment map.
+
+    viser lights a scene by an HDR environment map by default; the browser filters it
+    (PMREM) on the first frame. Without a GPU (a projector laptop's software WebGL,
+    headless Chromium) that blocks the page for ~15 s before the first picture. The
+    viewer's lines and points are unlit, its meshes (ellipsoids, spheres, planes) read as
+    well under the default lights; shadows are off (nothing here casts one).
+    """
+    server.scene.configure_environment_map(None)
+    server.scene.configure_default_lights(True, cast_shadow=False)
+
+
 class ViewerApp:
     """A running viewer: viser server, scene and GUI for one block (or demo).
 
@@ -129,6 +142,7 @@ class ViewerApp:
             raise InputError(f"port {port} on {host} is already in use; choose another with --port")
         self.host, self.port = host, self.server.get_port()
         no_tunnel(self.server)
+        light_scene(self.server)
         self.verbose = verbose
         self.scene = None
         self.panel = None

@@ -35,13 +35,11 @@ from ..design import (
     LiveDesign,
     Suggestion,
     accuracy_law,
-    add_images,
     assess_models,
     cross_strip_images,
     design_auxiliary,
     design_block,
     design_from_block,
-    remove_images,
     suggest_control,
 )
 from .quality import STOPS
@@ -257,13 +255,14 @@ class Studio:
             self.law["note"] += "; for the plan without the images added or removed since"
         self._models = None
 
+    def _aux_of(self):
+        """The plan's auxiliary data of a changed block (their rows follow the images)."""
+        design = self.design
+        return None if design is None else (lambda block: design_auxiliary(block, design))
+
     def _images_added(self, label: str, X0, angles, strip, ids=None) -> DesignQuality:
-        """Add images: by the live design's update (a new assessment with auxiliary data,
-        whose rows follow the images)."""
-        if self.live.auxiliary:
-            b = add_images(self.block, X0, angles, strip=strip, ids=ids)
-            return self._structural(label, lambda: self._set_block(b, self.spec))
-        new = self.live.add_images(X0, angles, strip=strip, ids=ids)
+        """Add images by the live design's update (auxiliary rows of the new images too)."""
+        new = self.live.add_images(X0, angles, strip=strip, ids=ids, auxiliary=self._aux_of())
         return self._structural(label, lambda: self._set_live(new))
 
     @_locked
@@ -279,10 +278,7 @@ class Studio:
         idx = np.atleast_1d(np.asarray(images, np.int64))
         names = [self.block.images.ids[i] for i in idx]
         label = what or ("image " + ", ".join(names) + " removed")
-        if self.live.auxiliary:
-            b = remove_images(self.block, idx)
-            return self._structural(label, lambda: self._set_block(b, self.spec))
-        new = self.live.remove_images(idx, label)
+        new = self.live.remove_images(idx, label, auxiliary=self._aux_of())
         return self._structural(label, lambda: self._set_live(new))
 
     @_locked
@@ -312,10 +308,9 @@ class Studio:
         X0 = np.r_[xy, I.X0[image, 2]][None]
         ang = I.angles[image][None].copy()
         label = f"image {name} moved to X {xy[0]:,.0f} m, Y {xy[1]:,.0f} m"
-        if self.live.auxiliary:
-            b = add_images(remove_images(self.block, [image]), X0, ang, strip=strip, ids=[name])
-            return self._structural(label, lambda: self._set_block(b, self.spec))
-        new = self.live.remove_images([image], label).add_images(X0, ang, strip=strip, ids=[name])
+        aux = self._aux_of()
+        new = self.live.remove_images([image], label, auxiliary=aux)
+        new = new.add_images(X0, ang, strip=strip, ids=[name], auxiliary=aux)
         return self._structural(label, lambda: self._set_live(new))
 
     @_locked

@@ -17,7 +17,7 @@ def _control_update(Q, idx, sigma):
 
 def _law_spacing(sigma_img_mm, scale, c_mm, format_mm, p, target_m, mu):
     base = format_mm * 1e-3 * scale * (1 - p)
-    s0z = sigma_img_mm * 1e-3 * scale * (c_mm * 1e-3 * scale) / base
+    s0z = np.sqrt(2.0) * sigma_img_mm * 1e-3 * scale * (c_mm * 1e-3 * scale) / base
     ok = [i for i, m in mu.items() if m * s0z <= target_m]
     return s0z, max(ok) if ok else 0
 
@@ -73,7 +73,7 @@ def _spacing_with(s0z_of, pick):
 
 
 def _s0z(si, m, c, f, p):
-    return si * 1e-3 * m * (c * 1e-3 * m) / (f * 1e-3 * m * (1 - p))
+    return np.sqrt(2.0) * si * 1e-3 * m * (c * 1e-3 * m) / (f * 1e-3 * m * (1 - p))
 
 
 def _largest(mu, s0z, t):
@@ -99,11 +99,19 @@ MUTANTS = {
     },
     "check_law_spacing": {
         "p for 1 − p": _spacing_with(
-            lambda si, m, c, f, p: si * 1e-3 * m * (c * 1e-3 * m) / (f * 1e-3 * m * p), _largest
+            lambda si, m, c, f, p: (
+                np.sqrt(2.0) * si * 1e-3 * m * (c * 1e-3 * m) / (f * 1e-3 * m * p)
+            ),
+            _largest,
         ),
         "B/H": _spacing_with(
-            lambda si, m, c, f, p: si * 1e-3 * m * (f * 1e-3 * m * (1 - p)) / (c * 1e-3 * m),
+            lambda si, m, c, f, p: (
+                np.sqrt(2.0) * si * 1e-3 * m * (f * 1e-3 * m * (1 - p)) / (c * 1e-3 * m)
+            ),
             _largest,
+        ),
+        "no √2": _spacing_with(
+            lambda si, m, c, f, p: _s0z(si, m, c, f, p) / np.sqrt(2.0), _largest
         ),
         "first spacing that fails": _spacing_with(
             _s0z, lambda mu, s0z, t: min(i for i, v in mu.items() if v * s0z > t)
