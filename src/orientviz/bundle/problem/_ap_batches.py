@@ -6,8 +6,8 @@ elimination of the points leaves in E and F (:mod:`._ap_normal`) couple thousand
 group pairs. They are formed here per point: the points with k rays and c (point, group)
 pairs are stacked, one product gives all their (ray, pair) blocks ``T_a H_eᵀ`` (6 × k)
 and (pair, pair) blocks ``H_e V⁻¹ H_e'ᵀ`` (k × k), and each block's rows are added
-into the block of E or F they belong to by ``np.bincount`` over row indices computed
-once per problem.
+into the block of E or F they belong to by ``np.bincount`` over the blocks' indices
+(computed once per problem).
 """
 
 from __future__ import annotations
@@ -28,17 +28,16 @@ BATCH_DOUBLES: int = 2**16
 class PointBatch(NamedTuple):
     """Points with k rays and c (point, group) pairs, for the per-point products.
 
-    ``rays`` (n, k) their rays (observations), ``pairs`` (n, c) their pairs. ``e_rows``
-    (n·k·6·c,): for row r of the product block (ray a, pair e), the row of E's
-    other-group blocks (``APStructure.e_key``, 6 rows each) it adds into — 6K (a row
-    beyond them, dropped) when e is a's own group; ``f_rows`` (n·c·k·c,): for row r of
-    the block (pair e, pair e'), the row of F's group blocks (g_e · G + g_e', k rows each).
+    ``rays`` (n, k) their rays (observations), ``pairs`` (n, c) their pairs. ``e_block``
+    (n, k, c): for the product block (ray a, pair e), the index of E's other-group block
+    (``APStructure.e_key``) it adds into, K (dropped) when e is a's own group;
+    ``f_block`` (n, c, c): for the block (pair e, pair e'), F's group block g_e · G + g_e'.
     """
 
     rays: I64
     pairs: I64
-    e_rows: NDArray[np.int32]
-    f_rows: NDArray[np.int32]
+    e_block: NDArray[np.int32]
+    f_block: NDArray[np.int32]
 
 
 def point_batches(
@@ -81,21 +80,19 @@ def point_batches(
             n = pts.size
             rays = vo[rfirst[pts][:, None] + np.arange(kr)]
             pairs = first[pts][:, None] + np.arange(c)
-            # E: row r of block (point, ray a, pair e) → row r of E's block (image of a,
-            # group of e), or the dropped row 6K when e is a's own group
-            shape = (n, kr, 6, c)
-            g_e = np.broadcast_to(A.pg_grp[pairs][:, None, None, :], shape).reshape(-1)
-            g_a = np.broadcast_to(go[rays][:, :, None, None], shape).reshape(-1)
-            i_a = np.broadcast_to(oi[rays][:, :, None, None], shape).reshape(-1)
-            r = np.broadcast_to(np.arange(6)[:, None], shape).reshape(-1)
+            # E: block (point, ray a, pair e) → E's block (image of a, group of e), or K
+            # when e is a's own group
+            shape = (n, kr, c)
+            g_e = np.broadcast_to(A.pg_grp[pairs][:, None, :], shape)
+            g_a = np.broadcast_to(go[rays][:, :, None], shape)
+            i_a = np.broadcast_to(oi[rays][:, :, None], shape)
             other = g_e != g_a
-            e_rows = np.full(r.size, 6 * K, np.int32)
-            e_rows[other] = 6 * np.searchsorted(A.e_key, i_a[other] * G + g_e[other]) + r[other]
-            # F: row r of block (point, pair e, pair e') → row r of block (g_e, g_e')
+            e_block = np.full(shape, K, np.int32)
+            e_block[other] = np.searchsorted(A.e_key, i_a[other] * G + g_e[other])
+            # F: block (point, pair e, pair e') → (g_e, g_e')
             gp = A.pg_grp[pairs]
-            fk = gp[:, :, None, None] * G + gp[:, None, None, :]
-            f_rows = (k * fk + np.arange(k)[:, None]).astype(np.int32).reshape(-1)
-            out.append(PointBatch(rays, pairs, e_rows, f_rows))
+            f_block = (gp[:, :, None] * G + gp[:, None, :]).astype(np.int32)
+            out.append(PointBatch(rays, pairs, e_block, f_block))
     return out
 
 
@@ -104,20 +101,23 @@ def batched_terms(A, T: F64, H: F64, HV: F64, k: int) -> tuple[F64, F64]:
     group blocks (G², k, k), over all rays a and pairs e, e' of each point: one stacked
     product per batch of points (:class:`PointBatch`)."""
     nE, nF = 6 * A.e_key.size, A.G * A.G * k
-    other = np.zeros((k, nE + 1))
+    other = np.zeros((k, nE + 6))
     F = np.zeros((k, nF))
+    r6, rk = np.arange(6, dtype=np.int32)[:, None], np.arange(k, dtype=np.int32)[:, None]
     for b in A.batches:
         n, kr = b.rays.shape
         c = b.pairs.shape[1]
         Hb = H[b.pairs.reshape(-1)].reshape(n, c * k, 3)
         if nE:
             Tb = T[b.rays.reshape(-1)].reshape(n, 6 * kr, 3)
-            # (n, kr·6, c·k) → column s of rows (a, r, e)
+            # (n, kr·6, c·k): column s of the rows (a, r, e), each into row 6·block + r
             P = np.matmul(Tb, Hb.transpose(0, 2, 1)).reshape(-1, k)
+            rows = (6 * b.e_block[:, :, None, :] + r6).reshape(-1)
             for s in range(k):
-                other[s] += np.bincount(b.e_rows, P[:, s], nE + 1)
+                other[s] += np.bincount(rows, P[:, s], nE + 6)
         HVb = HV[b.pairs.reshape(-1)].reshape(n, c * k, 3)
         P = np.matmul(HVb, Hb.transpose(0, 2, 1)).reshape(-1, k)  # (n, c·k, c·k)
+        rows = (k * b.f_block[:, :, None, :] + rk).reshape(-1)
         for s in range(k):
-            F[s] += np.bincount(b.f_rows, P[:, s], nF)
+            F[s] += np.bincount(rows, P[:, s], nF)
     return other[:, :nE].T.reshape(-1, 6, k), F.T.reshape(-1, k, k)
