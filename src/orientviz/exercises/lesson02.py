@@ -21,7 +21,7 @@ from ._common import CheckFailed, call, compare, own_work, rng_for, success
 
 __all__ = [
     "check_collinearity",
-    "check_gimbal",
+    "check_gimbal_pok",
     "check_ground_point",
     "check_opk_from_matrix",
     "check_relief_displacement",
@@ -121,37 +121,29 @@ def check_collinearity(collinearity: Callable[..., F64]) -> None:
     success("collinearity: the image points lie where their rays were drawn from")
 
 
-def _R_pair(omega: float, kappa: float, phi: float) -> F64:
-    return _rodrigues_opk(omega, phi, kappa)
+def _R_pok(phi: float, omega: float, kappa: float) -> F64:
+    """R = R_φ R_ω R_κ (φ-ω-κ, analogue plotters), gon, by Rodrigues' rotations."""
+    return _rodrigues_opk(omega, phi, kappa, order="pok")
 
 
-def check_gimbal(locked_omega: Callable[[float, float, float], float]) -> None:
-    """``locked_omega(omega, kappa, phi)`` (gon, φ = ±100) must return ω' with R(ω', φ, 0) = R(ω, φ, κ)."""
-    rng = rng_for("lesson02.check_gimbal")
-    for phi in (100.0, -100.0):
-        w, k = (float(a) for a in rng.uniform(-60, 60, 2))
-        got = float(call(locked_omega, w, k, phi, what="locked_omega"))
-        truth = _R_pair(w, k, phi)
+def check_gimbal_pok(locked_phi: Callable[[float, float, float], float]) -> None:
+    """``locked_phi(phi, kappa, omega)`` (gon, ω = ±100) must return φ' with
+    R_φ(φ') R_ω(ω) = R_φ(φ) R_ω(ω) R_κ(κ) in the φ-ω-κ sequence."""
+    rng = rng_for("lesson02.check_gimbal_pok")
+    for omega in (100.0, -100.0):
+        p, k = (float(a) for a in rng.uniform(-60, 60, 2))
+        got = float(call(locked_phi, p, k, omega, what="locked_phi"))
+        truth = _R_pok(p, omega, k)
         wrong = [
-            (
-                "at this φ the matrix depends on ω − κ, not ω + κ"
-                if phi < 0
-                else "at φ = +100 gon it is ω + κ, not ω − κ",
-                _R_pair(w + k if phi < 0 else w - k, 0.0, phi),
-            ),
-            (
-                "κ is missing: at φ = ±100 gon κ turns about the same axis as ω",
-                _R_pair(w, 0.0, phi),
-            ),
-        ]
-        compare(
-            f"R(ω', {phi:+.0f}, 0) for ω = {w:.3f}, κ = {k:.3f} gon",
-            _R_pair(got, 0.0, phi),
-            truth,
-            rtol=1e-9,
-            wrong=wrong,
-        )
-    success("at φ = ±100 gon only ω ± κ counts: ω and κ turn about the same axis")
+            ("that is the ω-φ-κ rule (ω + κ at +100 gon): in φ-ω-κ, R_ω(+100 gon) turns the κ "
+             "axis into −Y, so the sign is reversed — work it out with R_ω e_Z",
+             _R_pok(p + np.sign(omega) * k, omega, 0.0)),
+            ("κ is missing: at ω = ±100 gon κ turns about the same axis as φ",
+             _R_pok(p, omega, 0.0)),
+        ]  # fmt: skip
+        compare(f"R(φ', {omega:+.0f}, 0) for φ = {p:.3f}, κ = {k:.3f} gon",
+                _R_pok(got, omega, 0.0), truth, rtol=1e-9, wrong=wrong)  # fmt: skip
+    success("at ω = ±100 gon in φ-ω-κ only φ ∓ κ counts: φ and κ turn about one axis")
 
 
 def check_opk_from_matrix(angles_from_R: Callable[[F64], ArrayLike]) -> None:

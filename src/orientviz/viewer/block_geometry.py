@@ -47,8 +47,8 @@ ROLE_NODES = {TIE: "tie", CONTROL: "control", CHECK: "check"}
 SCORE_RED: float = 4.0
 
 #: Level of detail of large blocks: at most this many residual vectors are drawn (those
-#: with the largest scores) ...
-RESIDUAL_LIMIT: int = 20_000
+#: with the largest scores; thick lines cost a renderer without GPU most of a frame) ...
+RESIDUAL_LIMIT: int = 5_000
 #: ... and at most this many rays when all rays are shown (every k-th ray).
 RAY_LIMIT: int = 20_000
 

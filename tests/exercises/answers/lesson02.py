@@ -24,8 +24,8 @@ def _sol_collinearity(X, X0, R, c, x0, y0):
     return np.column_stack([x0 - c * u / w, y0 - c * v / w])
 
 
-def _sol_gimbal(omega, kappa, phi):
-    return omega + np.sign(phi) * kappa
+def _sol_gimbal_pok(phi, kappa, omega):
+    return phi - np.sign(omega) * kappa
 
 
 def _sol_opk(R):
@@ -68,7 +68,7 @@ def _sol_relief(r_top, h, H):
 SOLUTIONS = {
     "check_rotation": _sol_rotation,
     "check_collinearity": _sol_collinearity,
-    "check_gimbal": _sol_gimbal,
+    "check_gimbal_pok": _sol_gimbal_pok,
     "check_opk_from_matrix": _sol_opk,
     "check_ground_point": _sol_ground,
     "check_vertical_partials": _sol_vertical,
@@ -91,9 +91,9 @@ MUTANTS = {
         "sign of c": lambda X, X0, R, c, x0, y0: _sol_collinearity(X, X0, R, -c, x0, y0),
         "no principal point": lambda X, X0, R, c, x0, y0: _sol_collinearity(X, X0, R, c, 0.0, 0.0),
     },
-    "check_gimbal": {
-        "omega minus kappa": lambda w, k, p: w - np.sign(p) * k,
-        "kappa forgotten": lambda w, k, p: w,
+    "check_gimbal_pok": {
+        "the opk rule": lambda p, k, w: p + np.sign(w) * k,
+        "kappa forgotten": lambda p, k, w: p,
     },
     "check_opk_from_matrix": {
         "radians": lambda R: _sol_opk(R) * GON,

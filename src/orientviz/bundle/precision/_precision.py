@@ -37,6 +37,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
+from threadpoolctl import threadpool_limits
 
 from .._result import ExteriorPairs, RayGains
 from ..problem._ap_normal import dense
@@ -256,7 +257,19 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
         cofactors are then those of that linearisation point, which the final
         correction moved by less than the stopping tolerance (a few thousandths of a
         conditional σ); the normal equations are not built and factored again.
+
+    Notes
+    -----
+    BLAS runs on one thread here (threadpoolctl): the pass is made of many small
+    products, and a second BLAS thread costs several times the CPU without
+    shortening the wall time (benchmarks/README.md, bench_bundle with precision).
     """
+    with threadpool_limits(limits=1, user_api="blas"):
+        _fill_precision(res, prob, st, rw, Je, Jp, lin)
+
+
+def _fill_precision(res, prob, st, rw, Je, Jp, lin) -> None:
+    """The work of :func:`bundle_precision` (same arguments)."""
     S = prob.reduced
     fac = None
     if lin is not None:
