@@ -350,14 +350,13 @@ class LiveDesign:
         return new_aux, now, removed, added
 
     def _fresh(self, block: Block, label: str, auxiliary=None) -> LiveDesign:
-        """A new live design of ``block`` (formed and factored anew)."""
-        new = LiveDesign(
-            block, self.spec, level=self.level, alpha0=self.alpha0, beta0=self.beta0,
-            auxiliary=self.auxiliary if auxiliary is None else auxiliary,
-            blas_threads=self.blas_threads,
-        )  # fmt: skip
-        new.max_columns = self.max_columns
+        """A new live design of ``block`` (a new block of the structural edit, not shared
+        with this design's: formed and factored anew, no copy)."""
+        new = copy.copy(self)
+        if auxiliary is not None:
+            new.auxiliary = auxiliary
         new.history = self.history + [label, "(normal equations formed and factored again)"]
+        new.rebuild(block)
         return new
 
     def _derived(self, block: Block, label: str, aux: list, rows: dict) -> LiveDesign:
@@ -366,7 +365,7 @@ class LiveDesign:
         numbers, the bundle refuses it)."""
         _check_connected(block)
         new = copy.copy(self)
-        new.block = block.copy()
+        new.block = block  # new arrays from the structural edit: not shared
         new._steps = list(self._steps)
         new._saved, new.changes = [], []
         new.history = self.history + [label]
