@@ -46,7 +46,6 @@ CHECKERS = {
     ("01", "ellipse"): ("check_error_ellipse", "halve the angle"),
     ("03", "projection_centre"): ("check_projection_centre", "transposed"),
     ("04", "sigma_Z"): ("check_sigma_Z", "√2 is missing"),
-    ("04", "normal_step"): ("check_normal_step", "√P"),
     ("05", "scheme_sigma"): ("check_scheme_sigma", "not the inverse of the diagonal"),
     ("06", "essential"): ("check_essential", "swapped"),
     ("07", "to_model"): ("check_model_coordinates", "not R"),
