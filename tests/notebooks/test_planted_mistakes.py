@@ -62,8 +62,6 @@ CHECKERS = {
     ("13", "gnss_rows"): ("check_gnss_rows", "not the time t"),
     ("02", "ground_point"): ("check_ground_point", "Rᵀ instead of R"),
     ("12", "snoop_round"): ("check_snoop_round", "|v|/σ"),
-    ("10", "reduce"): ("check_reduce", "the sign is wrong"),
-    ("10", "back_substitute"): ("check_back_substitute", "multiplies instead of being inverted"),
     ("10", "point_covariance"): ("check_point_covariance", "ADDS to the point's"),
     ("11", "significant"): ("check_significant", "the sign was kept"),
     ("11", "described_share"): ("check_described_share", "remainder's share"),
