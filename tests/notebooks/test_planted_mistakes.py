@@ -47,7 +47,6 @@ CHECKERS = {
     ("03", "projection_centre"): ("check_projection_centre", "transposed"),
     ("04", "sigma_Z"): ("check_sigma_Z", "√2 is missing"),
     ("05", "scheme_sigma"): ("check_scheme_sigma", "not the inverse of the diagonal"),
-    ("06", "essential"): ("check_essential", "swapped"),
     ("07", "to_model"): ("check_model_coordinates", "not R"),
     ("12", "mdb"): ("check_mdb", "one-sided"),
     ("13", "difference_covariance"): ("check_difference_covariance", "not independent"),
