@@ -3,8 +3,9 @@ design made from any block with orientations.
 
 All keep a design block a design block: planned geometry, image coordinates without
 errors (projections of the points by the collinearity equations), weighted control.
-They change the structure of the normal equations, so the quality is assessed again
-(:class:`orientviz.design.LiveDesign` built anew), not updated.
+They change the structure of the normal equations; :class:`orientviz.design.LiveDesign`
+(``add_images``, ``remove_images``) updates the quality of such a change by one low-rank
+step, or assesses the new design anew when the step would be too wide.
 """
 
 from __future__ import annotations

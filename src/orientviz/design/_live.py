@@ -10,7 +10,10 @@ N = Σ gᵀ d g by a few rows g with signed weights d:
   block ω⁻¹ I, no coupling), which the same step takes away (d = −ω);
 * images removed: their rays (d = −1) and a provisional prior ω I on their unknowns
   (d = +ω), which leaves them decoupled (cofactor ω⁻¹ I, masked from then on); the same
-  for the points left with fewer than two rays (:func:`orientviz.design.remove_images`).
+  for the points left with fewer than two rays (:func:`orientviz.design.remove_images`);
+* with auxiliary data (statoscope, APR, GNSS with strip offsets g): the readings that
+  come or go with the images, each a row √w·(unit on its coordinate + its offsets'
+  coefficients); the offsets' border is part of the base columns and of every step.
 
 With G the rows, D = diag(d) and Q the current cofactors, each step is one
 Sherman-Morrison-Woodbury update
@@ -30,9 +33,10 @@ added in the step starts from its own rows of G U and U. From these the reliabil
 Every number equals a new :func:`orientviz.design.assess_block` of the changed design up
 to rounding (``tests/design/test_live.py``, ``tests/design/test_live_structure.py``).
 Changes of the plan (image σ, flight, overlaps) change all of N: :meth:`LiveDesign.rebuild`
-forms and factors it again, as does a structural change of a design with auxiliary data
-(their rows follow the images) or one whose step would need more than
-:data:`MAX_COLUMNS` columns.
+forms and factors it again, as does a structural change whose step would need more than
+``max_columns`` (:data:`MAX_COLUMNS`) columns, or that adds offsets (a new strip of a
+design with auxiliary data). The algebra of the columns and the step is
+:class:`orientviz.design._steps.WoodburySteps`.
 """
 
 from __future__ import annotations
