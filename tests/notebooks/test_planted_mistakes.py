@@ -44,7 +44,6 @@ CHECKERS = {
     ("00", "critical_w"): ("check_critical_value", "one-sided"),
     ("01", "weighted_mean"): ("check_weighted_mean", "1/σ instead of 1/σ²"),
     ("01", "ellipse"): ("check_error_ellipse", "halve the angle"),
-    ("03", "projection_centre"): ("check_projection_centre", "transposed"),
     ("04", "sigma_Z"): ("check_sigma_Z", "√2 is missing"),
     ("05", "scheme_sigma"): ("check_scheme_sigma", "not the inverse of the diagonal"),
     ("07", "to_model"): ("check_model_coordinates", "not R"),
