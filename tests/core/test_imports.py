@@ -134,7 +134,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("block",),  # the block's data model
     ("adjust", "camera"),  # the engine; the frame camera
     ("rotation", "lens"),
-    ("units", "errors", "version"),
+    ("units", "errors", "version", "blas"),
 ]
 #: Packages whose modules may import other packages' private modules (none).
 PRIVATE_OK: set[str] = set()

@@ -93,7 +93,7 @@ class LiveDesign(WoodburySteps):
     auxiliary : list of Auxiliary, optional
         Statoscope / APR / GNSS rows with strip offsets (:func:`orientviz.design.design_auxiliary`).
     blas_threads : int or None
-        BLAS threads while the design forms, factors and updates (:func:`blas_threads`;
+        BLAS threads while the design forms, factors and updates (:func:`orientviz.blas.blas_threads`;
         None: as the process runs them).
 
     Attributes

@@ -6,16 +6,15 @@ BLAS thread limit of its work.
 
 from __future__ import annotations
 
-import contextlib
 import functools
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import scipy.sparse
 import scipy.sparse.csgraph
 from numpy.typing import NDArray
 
+from ..blas import blas_threads
 from ..block import Block
 from ..errors import NotDeterminableError
 
@@ -43,22 +42,6 @@ class Change:
             )
 
         return f"point {ids[self.point]}: {txt(self.before)} → {txt(self.sigma)}"
-
-
-def blas_threads(n: int | None) -> Any:
-    """A context running BLAS on ``n`` threads (threadpoolctl), or doing nothing (``n`` None
-    or without threadpoolctl).
-
-    A live design's step is many BLAS calls on matrices of a few hundred rows; on a machine
-    whose cores are busy, OpenBLAS's worker threads wait for each other in every call
-    (benchmarks/README.md, "design studio")."""
-    if n is None:
-        return contextlib.nullcontext()
-    try:
-        from threadpoolctl import threadpool_limits  # optional: the viewer's extra
-    except ImportError:
-        return contextlib.nullcontext()
-    return threadpool_limits(limits=n, user_api="blas")
 
 
 def _capped(method):

@@ -20,9 +20,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..blas import blas_threads
 from ..block import TIE
 from ..errors import InputError
-from ._live_parts import _weights, blas_threads
+from ._live_parts import _weights
 
 F64 = NDArray[np.float64]
 

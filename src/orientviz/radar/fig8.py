@@ -20,13 +20,13 @@ number is the luck of one particular rounding.
 
 from __future__ import annotations
 
-from contextlib import nullcontext
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..blas import blas_threads
 from ..errors import NotDeterminableError
 from ..units import RHO_CC
 from . import geier1973 as G
@@ -205,23 +205,9 @@ def run_surface(
     return out
 
 
-def single_thread_blas():
-    """A context that runs BLAS on one thread, if threadpoolctl is installed.
-
-    The Fig. 8 test is hundreds of tiny adjustments (normal matrices of 3 × 3 … 81 × 81);
-    OpenBLAS threads only add synchronisation to them, and on a busy machine make the
-    whole test several times slower. Without threadpoolctl this does nothing.
-    """
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # pragma: no cover - optional
-        return nullcontext()
-    return threadpool_limits(limits=1, user_api="blas")
-
-
 def run_all(**kw) -> dict[str, dict[str, TaskOutcome]]:
     """:func:`run_surface` for all ten columns of Fig. 8 (same keyword arguments)."""
-    with single_thread_blas():
+    with blas_threads(1):  # hundreds of tiny adjustments
         return {s: run_surface(s, **kw) for s in G.COLUMNS}
 
 
@@ -244,7 +230,7 @@ def rounding_spread(
         task → quantity → (mean, standard deviation) over the draws, paper units.
     """
     acc: dict[str, dict[str, list[float]]] = {t: {} for t in tasks}
-    with single_thread_blas():
+    with blas_threads(1):  # hundreds of tiny adjustments
         for _ in range(draws):
             off = rng.uniform(-0.5, 0.5, (3, 2))
             res = run_surface(surface, offsets=off, stopping=stopping, tasks=tasks)

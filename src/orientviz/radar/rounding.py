@@ -21,8 +21,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from ..blas import blas_threads
 from . import geier1973 as G
-from .fig8 import TASKS, run_surface, single_thread_blas
+from .fig8 import TASKS, run_surface
 
 F64 = NDArray[np.float64]
 
@@ -113,7 +114,7 @@ def rounding_draws(
     out = RoundingDraws(tasks, surfaces)
     out.draws = {t: {q: np.full((draws, n), np.nan) for q in TASKS[t]} for t in tasks}
     out.own = {t: {q: np.full(n, np.nan) for q in TASKS[t]} for t in tasks}
-    with single_thread_blas():
+    with blas_threads(1):
         for j, s in enumerate(surfaces):
             _collect(run_surface(s, stopping=stopping, tasks=tasks), tasks, surfaces, j,
                      out.own, None)  # fmt: skip

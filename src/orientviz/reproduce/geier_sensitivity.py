@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from ..blas import blas_threads
 from ..radar import fig8
 from ..radar import geier1973 as G
 from .geier import rows_from_results
@@ -59,7 +60,7 @@ def run_choice(kw: dict) -> dict:
     sign = kw.pop("_sign", 1.0)
     if kw.pop("_radians", False):
         kw["truth"] = _truth_in_radians()
-    with fig8.single_thread_blas():
+    with blas_threads(1):
         res = {c: fig8.run_surface(c, **kw) for c in G.COLUMNS}
     if sign != 1.0:
         for per_task in res.values():

@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..blas import blas_threads
 from ..block import Block
 from ..bundle.problem import BundleProblem, BundleState, point_setup
 from ..errors import InputError
@@ -44,7 +45,7 @@ from ..reproduce import dbat_roma as roma
 from .deformation import lens_deformation_extra
 from .demo import Demo
 from .geometry import framing
-from .state import BlockState, one_blas_thread
+from .state import BlockState
 
 F64 = NDArray[np.float64]
 
@@ -79,7 +80,7 @@ def solve_target(target: str, options: dict[str, Any] | None = None) -> Solved:
         problem.options = dict(problem.options, **options)
     large = isinstance(problem.data, Block) and problem.data.n_observations > PRECISION_LIMIT
     if problem.kind == "block" and large:  # many small BLAS calls: one thread is faster
-        with one_blas_thread():
+        with blas_threads(1):
             return Solved(problem, solve_problem(problem, precision=False, history_x=True))
     return Solved(problem, solve_problem(problem))
 

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..adjust import Adjustment
+from ..blas import blas_threads
 from ..block import Block
 from ..errors import InputError
 from .adjuster import Adjuster, default_adjuster, image_normalized_residuals
@@ -221,7 +222,7 @@ class BlockState:
         if precision:
             raw = self.adjuster(sub, max_iter)
         else:  # the quick answer: small BLAS calls, fastest on one thread
-            with one_blas_thread():
+            with blas_threads(1):
                 raw = self.adjuster(sub, max_iter, precision=False)  # type: ignore[call-arg]
         result = expand_result(raw, mp, start, self.effective_sigma(), self.ap)
         # a step from a replayed state discards the later history
@@ -495,20 +496,3 @@ def _additional(result: Any, x: F64) -> F64 | None:
     """The camera terms (block ``"additional"``) of a parameter vector, or None."""
     sl = result.groups.get("additional")
     return None if sl is None else np.asarray(x, dtype=float)[sl].copy()
-
-
-def one_blas_thread() -> Any:
-    """A context running BLAS on one thread (threadpoolctl), or doing nothing without it.
-
-    The viewer's quick answer to an action is a warm re-solve of one or two iterations
-    made of many small BLAS calls; on a machine whose cores are busy, OpenBLAS's worker
-    threads wait for each other in every call (the answer on the 200-image block took
-    about ten times longer with the default threads, benchmarks/README.md).
-    """
-    from contextlib import nullcontext
-
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:
-        return nullcontext()
-    return threadpool_limits(limits=1, user_api="blas")

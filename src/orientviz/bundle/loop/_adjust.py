@@ -36,15 +36,13 @@ refers to the rays' σ/√w with w = ρ′ at the solution (:func:`robust_end`).
 
 from __future__ import annotations
 
-import contextlib
-import functools
-import os
 from collections.abc import Callable
 
 import numpy as np
 
 from ...adjust.loop import Damping, StopRule, iterate
 from ...adjust.result import Iteration
+from ...blas import blas_threads
 from ...block import Block
 from ...errors import InputError, NotDeterminableError
 from .._options import BundleOptions
@@ -68,33 +66,6 @@ ROBUST_FTOL: float = 1e-6
 #: thousand rows at most, stacked products of tiny blocks): OpenBLAS's threads then only
 #: wait for each other, and the adjustment runs BLAS on one thread (threadpoolctl).
 ONE_BLAS_THREAD_MAX_IMAGES: int = 500
-
-
-def blas_threads(n_images: int) -> contextlib.AbstractContextManager:
-    """A context running BLAS on one thread for a block of at most
-    :data:`ONE_BLAS_THREAD_MAX_IMAGES` images; nothing for larger blocks, when the
-    environment already holds BLAS to one thread (``OPENBLAS_NUM_THREADS`` or
-    ``OMP_NUM_THREADS`` = 1) or when threadpoolctl is not installed."""
-    if n_images > ONE_BLAS_THREAD_MAX_IMAGES or "1" in (
-        os.environ.get("OPENBLAS_NUM_THREADS"),
-        os.environ.get("OMP_NUM_THREADS"),
-    ):
-        return contextlib.nullcontext()
-    controller = _blas_controller()
-    if controller is None:
-        return contextlib.nullcontext()
-    return controller.limit(limits=1, user_api="blas")
-
-
-@functools.cache
-def _blas_controller():
-    """threadpoolctl's controller of the loaded libraries (found once per process: some
-    30 ms), or None without threadpoolctl."""
-    try:
-        from threadpoolctl import ThreadpoolController  # optional: only to cap BLAS's threads
-    except ImportError:
-        return None
-    return ThreadpoolController()
 
 
 def bundle_adjust(
@@ -199,7 +170,8 @@ def bundle_adjust(
             block, setup, control=control, additional=additional, ap_group=ap_group,
             ap_sigma=ap_sigma, precision=precision, callback=callback, options=opts,
         )  # fmt: skip
-    with blas_threads(block.n_images):  # many small products: one BLAS thread
+    one_thread = block.n_images <= ONE_BLAS_THREAD_MAX_IMAGES
+    with blas_threads(1 if one_thread else None):  # many small products: one BLAS thread
         prob = BundleProblem(
             block, setup, additional=additional, ap_group=ap_group, ap_sigma=ap_sigma,
             auxiliary=auxiliary, options=opts,

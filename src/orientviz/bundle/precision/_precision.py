@@ -37,8 +37,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
-from threadpoolctl import threadpool_limits
 
+from ...blas import blas_threads
 from .._result import ExteriorPairs, RayGains
 from ..problem._ap_normal import dense
 from ..reduced import DENSE_CHUNK_BYTES, ReducedStructure, dense_matrix, factor_reduced
@@ -264,7 +264,7 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     products, and a second BLAS thread costs several times the CPU without
     shortening the wall time (benchmarks/README.md, bench_bundle with precision).
     """
-    with threadpool_limits(limits=1, user_api="blas"):
+    with blas_threads(1):
         _fill_precision(res, prob, st, rw, Je, Jp, lin)
 
 
