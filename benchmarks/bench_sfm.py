@@ -1,7 +1,7 @@
 """Real SfM data: orientviz's bundle against pycolmap's (Ceres) on the same model.
 
 ``python benchmarks/bench_sfm.py [--bal FILE] [--colmap DIR] [--threads 1,default]
-[--skip-cli] [--dir DIR]``
+[--skip-cli] [--robust LOSSES] [--dir DIR]``
 
 Models (each measurement runs in its own fresh process: honest peak RSS):
 
@@ -25,6 +25,14 @@ environment as a user has it and Ceres num_threads −1 (all cores). Unless
 ``--skip-cli``: ``orientviz import-* … && orientviz solve … --free`` end to end (CPU of
 both commands, children's rusage) against orientviz's library solve measured in the
 same run. Both solvers stop with Ceres's default function tolerance (1e-6 relative).
+
+``--robust huber,soft_l1,cauchy`` (instead of the table above, first thread setting
+only): the stripped BAL problem with 2 % of its observations moved by 20–50 px (rng 28),
+loss scale 1 px. Stage 1 solves it (``orientviz solve --free --robust L --robust-scale 1
+-o``) and removes the rays that end behind their camera (pycolmap's cost leaves those
+out); stage 2 is the measured problem: orientviz's robust and least-squares library
+solves, pycolmap with the same loss from the start, and pycolmap started at orientviz's
+robust optimum (``export-bal``): no decrease there means Ceres takes it as its optimum.
 """
 
 from __future__ import annotations
@@ -42,12 +50,15 @@ WORKER = r"""
 import json, resource, sys, time
 import numpy as np
 kind, model, threads = sys.argv[1], sys.argv[2], sys.argv[3]
+loss = sys.argv[4] if len(sys.argv) > 4 else "none"
 out = {}
 if kind == "orientviz":
     from orientviz.io.kinds.block import adjust_block, prepare
     from orientviz.io.problem import load_problem
     prob = load_problem(model)
     prob.options["free"] = True
+    if loss != "none":
+        prob.options.update(robust=loss, robust_scale=1.0)
     block, _ = prepare(prob)
     t, w = time.process_time(), time.perf_counter()
     adj, _ = adjust_block(prob, block, precision=False)
@@ -95,6 +106,10 @@ else:
     so = opts.ceres.solver_options
     so.num_threads = 1 if threads == "1" else -1
     so.function_tolerance = 1e-6
+    if loss != "none":
+        opts.ceres.loss_function_type = getattr(pycolmap.LossFunctionType, loss.upper())
+        opts.ceres.loss_function_scale = 1.0
+        so.max_num_iterations = 500  # robust runs take hundreds of steps (pycolmap: 100)
     config = pycolmap.BundleAdjustmentConfig()
     for i in image_ids:
         config.add_image(i)
@@ -105,7 +120,8 @@ else:
     cs = getattr(s, "ceres_summary", s)
     out.update(cpu=time.process_time() - t, wall=time.perf_counter() - w,
                iterations=cs.num_successful_steps + cs.num_unsuccessful_steps,
-               cost=cs.final_cost, converged=True)
+               cost=cs.final_cost, initial_cost=cs.initial_cost,
+               converged="Termination: CONVERGENCE" in cs.BriefReport())
 out["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 print(json.dumps(out))
 """
@@ -118,9 +134,9 @@ def _env(threads: str) -> dict:
     return env
 
 
-def run_worker(kind: str, model: str, threads: str) -> dict:
+def run_worker(kind: str, model: str, threads: str, loss: str = "none") -> dict:
     res = subprocess.run(
-        [sys.executable, "-c", WORKER, kind, model, threads],
+        [sys.executable, "-c", WORKER, kind, model, threads, loss],
         capture_output=True, text=True, env=_env(threads), check=True,
     )  # fmt: skip
     return json.loads(res.stdout.strip().splitlines()[-1])
@@ -152,6 +168,85 @@ def front_bal(src: str, dst: Path) -> str:
     return f"{int(behind.sum())} observations behind their camera and {len(new) - keep.size} points removed"
 
 
+def write_bal(dst: Path, obs, cams, pts) -> None:
+    """A BAL text file of the arrays (observations: camera, point, x, y)."""
+    import numpy as np
+
+    with open(dst, "w") as f:
+        f.write(f"{len(cams)} {len(pts)} {len(obs)}\n")
+        f.writelines(f"{int(a)} {int(b)} {x!r} {y!r}\n" for a, b, x, y in obs.tolist())
+        f.writelines(f"{v!r}\n" for v in np.r_[cams.ravel(), pts.ravel()].tolist())
+
+
+def _without(obs, pts, drop):
+    """Observations without ``drop`` (bool) and points left with fewer than two rays."""
+    import numpy as np
+
+    obs = obs[~drop]
+    keep = np.flatnonzero(np.bincount(obs[:, 1].astype(int), minlength=len(pts)) >= 2)
+    obs = obs[np.isin(obs[:, 1].astype(int), keep)]
+    new = np.full(len(pts), -1)
+    new[keep] = np.arange(keep.size)
+    obs[:, 1] = new[obs[:, 1].astype(int)]
+    return obs, pts[keep]
+
+
+def behind(path: Path):
+    """Which observations of a BAL file lie behind their camera, and the file's arrays."""
+    import numpy as np
+
+    from orientviz.io.bal import read_bal_arrays
+    from orientviz.rotation import matrix_from_rotvec
+
+    obs, cams, pts = read_bal_arrays(str(path))
+    ci, pi = obs[:, 0].astype(int), obs[:, 1].astype(int)
+    P = np.einsum("nij,nj->ni", matrix_from_rotvec(cams[:, :3])[ci], pts[pi]) + cams[ci, 3:6]
+    return P[:, 2] > 0, (obs, cams, pts)
+
+
+def robust_rows(front: Path, work: Path, losses: list[str], threads: str) -> list[dict]:
+    """Robust losses on the stripped BAL problem with 2 % planted outliers (see ``--robust``)."""
+    import numpy as np
+
+    _, (obs, cams, pts) = behind(front)
+    rng = np.random.default_rng(28)
+    k = rng.choice(len(obs), int(round(0.02 * len(obs))), replace=False)
+    ang, mag = rng.uniform(0, 2 * np.pi, k.size), rng.uniform(20, 50, k.size)
+    obs[k, 2] += mag * np.cos(ang)
+    obs[k, 3] += mag * np.sin(ang)
+    rows = []
+    for loss in losses:
+        src = work / f"outliers_{loss}.bal"
+        write_bal(src, obs, cams, pts)
+        for stage in (1, 2):  # 2: without the rays that stage 1 left behind their camera
+            js, sol, sol_bal = (
+                work / f"{loss}{stage}{x}" for x in (".json", "_sol.json", "_sol.bal")
+            )
+            ov(["import-bal", str(src), "-o", str(js)])
+            ov(["solve", str(js), "--free", "--robust", loss, "--robust-scale", "1", "-o", str(sol)],
+               check=False)  # fmt: skip
+            ov(["export-bal", str(sol), "-o", str(sol_bal)])
+            back, (o2, c2, p2) = behind(sol_bal)
+            if stage == 1:
+                o_all, _, p_all = behind(src)[1]
+                o_new, p_new = _without(o_all, p_all, back)
+                write_bal(src, o_new, cams, p_new)
+        o = run_worker("orientviz", str(js), threads, loss)
+        p = run_worker("pycolmap-bal", str(src), threads, loss)
+        q = run_worker("orientviz", str(js), threads)  # least squares on the same rays
+        at = run_worker(
+            "pycolmap-bal", str(sol_bal), threads, loss
+        )  # Ceres from orientviz's optimum
+        rows.append(dict(loss=loss, behind_at_optimum=int(back.sum()), orientviz=o, plain=q,
+                         pycolmap=p, pycolmap_from_orientviz=at))  # fmt: skip
+        print(json.dumps(rows[-1]))
+    return rows
+
+
+def ov(args: list[str], check: bool = True) -> None:
+    subprocess.run(["orientviz", *args], check=check, capture_output=True)
+
+
 def cli_end_to_end(import_cmd: list[str], json_path: Path, threads: str) -> float:
     """CPU (s) of ``orientviz import-* … && orientviz solve … --free`` (both processes)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -168,6 +263,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--colmap", default=None, help="COLMAP sparse model directory")
     ap.add_argument("--threads", default="1,default")
     ap.add_argument("--skip-cli", action="store_true")
+    ap.add_argument("--robust", default="", help="losses (huber,soft_l1,cauchy): see below")
     ap.add_argument("--dir", default=None, help="working folder (default: a temporary one)")
     a = ap.parse_args(argv)
     from orientviz.io.bal import shipped_bal
@@ -188,6 +284,21 @@ def main(argv: list[str] | None = None) -> int:
         cmd = ["import-colmap", a.colmap, "-o", str(cm_json)]
         subprocess.run(["orientviz", *cmd], check=True, capture_output=True)
         models.append(("COLMAP " + a.colmap, str(cm_json), "pycolmap", a.colmap, cmd))
+    if a.robust:
+        rob = robust_rows(front, work, a.robust.split(","), a.threads.split(",")[0])
+        print()
+        print("| loss | orientviz it / CPU s / ½Σρ | least squares it / CPU s | pycolmap from the start "
+              "it / CPU s / ½Σρ | pycolmap from orientviz's optimum it / ½Σρ start → end |")  # fmt: skip
+        print("| --- | --- | --- | --- | --- |")
+        for r in rob:
+            o, q, p, at = r["orientviz"], r["plain"], r["pycolmap"], r["pycolmap_from_orientviz"]
+            for x in (o, q, p, at):  # a run that stopped on its iteration limit: marked *
+                x["iterations"] = f"{x['iterations']}{'' if x['converged'] else '*'}"
+            print(f"| {r['loss']} | {o['iterations']} / {o['cpu']:.2f} / {o['cost']:.4f} | "
+                  f"{q['iterations']} / {q['cpu']:.2f} | {p['iterations']} / {p['cpu']:.2f} / "
+                  f"{p['cost']:.4f} | {at['iterations']} / {at['initial_cost']:.4f} → "
+                  f"{at['cost']:.4f} |")  # fmt: skip
+        return 0
     rows = []
     for name, ov_model, peer, peer_model, import_cmd in models:
         for threads in a.threads.split(","):

@@ -11,6 +11,9 @@ Headless Chromium (/usr/bin/chromium, the test suite's flags: software WebGL, no
   0.5 s apart that differ in < 0.01 % of the pixels). Printed: process (s) to the
   server ready, browser (s) from the page load to the first and the settled picture, and
   the total. CPU of the Python process is printed too (the browser's is not included).
+* ``slide NAME`` — as ``open``, then the ω slider of the selected image moved by 1 gon and
+  back on the Python side (as the GUI does) until the picture has changed and settled
+  (seconds, median of the two): the redraw of a block as the browser shows it.
 * ``cap`` — the radar demo: the *sphere cap* slider set to 30° then 10° on the Python side
   (as the GUI does) until the picture has changed and settled (seconds, median of the two).
 
@@ -101,6 +104,15 @@ def worker(task: str, name: str | None, free: bool) -> dict:
             page.add_style_tag(content=".mantine-Notifications-root {display: none !important}")
             first, settled = _settle(page, t1)
             out.update(first_s=first, settled_s=settled, total_s=ready + settled)
+            if task == "slide":
+                h = app.panel.handles["omega"]
+                times = []
+                for value in (1.0, 0.0):
+                    before = _grab(page)
+                    t2 = time.perf_counter()
+                    h.value = value
+                    times.append(_settle(page, t2, before)[1])
+                out["slide_s"] = statistics.median(times)
             if task == "cap":
                 rv = app.extra["radar"]
                 times = []
@@ -118,7 +130,7 @@ def worker(task: str, name: str | None, free: bool) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("task", choices=("open", "cap"))
+    ap.add_argument("task", choices=("open", "slide", "cap"))
     ap.add_argument("name", nargs="?", default=None)
     ap.add_argument("--free", action="store_true")
     ap.add_argument("--tree", action="append", default=[])
@@ -145,7 +157,7 @@ def main() -> None:
             r = json.loads(line[-1])
             results[tree].append(r)
             print(tree, {k: round(v, 2) for k, v in r.items()}, flush=True)
-    keys = ("process_s", "process_cpu_s", "first_s", "settled_s", "total_s", "cap_s")
+    keys = ("process_s", "process_cpu_s", "first_s", "settled_s", "total_s", "slide_s", "cap_s")
     med = {t: {k: statistics.median(r[k] for r in rs) for k in keys if k in rs[0]}
            for t, rs in results.items()}  # fmt: skip
     for t, m in med.items():

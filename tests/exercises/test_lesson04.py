@@ -16,6 +16,9 @@ def test_diagnoses_name_the_mistake():
         answers,
         {
             ("check_resection", "weights forgotten"): "without weights",
+            ("check_rho_x0_phi", "N"): "normal matrix N",
+            ("check_rho_x0_phi", "cofactor"): "not divided by",
+            ("check_rho_x0_phi", "x only"): "only the x equations",
             ("check_resection", "divides by n"): "redundancy",
             ("check_resection", "one iteration"): "after 1 Gauss-Newton step",
             ("check_resection", "two iterations"): "after 2 Gauss-Newton steps",
@@ -25,7 +28,6 @@ def test_diagnoses_name_the_mistake():
             ("check_sigma_Z", "no sqrt 2"): "√2",
             ("check_sigma_Z", "H/B once"): "H/B is missing",
             ("check_two_rays", "sign of the cross term"): "cross term",
-            ("check_normal_step", "weights forgotten"): "weights P are missing",
             ("check_best_extra_point", "farthest from the centre"): "farthest",
             ("check_best_extra_point", "weights forgotten"): "forgotten weight",
             ("check_best_extra_point", "always Y0"): "not for X0",

@@ -20,6 +20,9 @@ def test_diagnoses_name_the_mistake():
             ("check_smallest_redundancy", "one-sided"): "one-sided",
             ("check_smallest_redundancy", "squared"): "bound for σ̂0²",
             ("check_smallest_redundancy", "off by one"): "off by one",
+            ("check_expected_rms", "no r"): "σ_v = σ √r",
+            ("check_expected_rms", "no sqrt"): "square root is missing",
+            ("check_expected_rms", "r squared"): "r enters squared",
         },
     )
 

@@ -3,8 +3,9 @@ design made from any block with orientations.
 
 All keep a design block a design block: planned geometry, image coordinates without
 errors (projections of the points by the collinearity equations), weighted control.
-They change the structure of the normal equations, so the quality is assessed again
-(:class:`orientviz.design.LiveDesign` built anew), not updated.
+They change the structure of the normal equations; :class:`orientviz.design.LiveDesign`
+(``add_images``, ``remove_images``) updates the quality of such a change by one low-rank
+step, or assesses the new design anew when the step would be too wide.
 """
 
 from __future__ import annotations
@@ -97,11 +98,11 @@ def add_images(
         camera_c=block.cameras.c, camera_x0=block.cameras.x0, camera_y0=block.cameras.y0,
         camera_format_mm=block.cameras.format_mm, camera_ids=list(block.cameras.ids),
         image_camera=np.r_[I.camera, np.full(k, camera)], X0=np.vstack([I.X0, X0]),
-        angles=np.vstack([I.angles, ang]), xyz=P.xyz, obs_image=np.r_[O.image, oi + m],
+        angles=np.vstack([I.angles, ang]), xyz=P.xyz.copy(), obs_image=np.r_[O.image, oi + m],
         obs_point=np.r_[O.point, op], obs_xy=np.vstack([O.xy, xy]),
         obs_sigma=np.vstack([O.sigma, np.full((oi.size, 2), s)]),
         image_ids=list(I.ids) + list(ids), point_ids=list(P.ids), role=P.role,
-        xyz_known=P.xyz_known, point_sigma=P.sigma, strip=np.r_[I.strip, st],
+        xyz_known=P.xyz_known.copy(), point_sigma=P.sigma, strip=np.r_[I.strip, st],
         sequence=block.sequence, meta=dict(block.meta),
     )  # fmt: skip
     for name in ("X0_obs", "X0_sigma", "angles_obs", "angles_sigma"):

@@ -10,7 +10,10 @@ N = Σ gᵀ d g by a few rows g with signed weights d:
   block ω⁻¹ I, no coupling), which the same step takes away (d = −ω);
 * images removed: their rays (d = −1) and a provisional prior ω I on their unknowns
   (d = +ω), which leaves them decoupled (cofactor ω⁻¹ I, masked from then on); the same
-  for the points left with fewer than two rays (:func:`orientviz.design.remove_images`).
+  for the points left with fewer than two rays (:func:`orientviz.design.remove_images`);
+* with auxiliary data (statoscope, APR, GNSS with strip offsets g): the readings that
+  come or go with the images, each a row √w·(unit on its coordinate + its offsets'
+  coefficients); the offsets' border is part of the base columns and of every step.
 
 With G the rows, D = diag(d) and Q the current cofactors, each step is one
 Sherman-Morrison-Woodbury update
@@ -30,9 +33,10 @@ added in the step starts from its own rows of G U and U. From these the reliabil
 Every number equals a new :func:`orientviz.design.assess_block` of the changed design up
 to rounding (``tests/design/test_live.py``, ``tests/design/test_live_structure.py``).
 Changes of the plan (image σ, flight, overlaps) change all of N: :meth:`LiveDesign.rebuild`
-forms and factors it again, as does a structural change of a design with auxiliary data
-(their rows follow the images) or one whose step would need more than
-:data:`MAX_COLUMNS` columns.
+forms and factors it again, as does a structural change whose step would need more than
+``max_columns`` (:data:`MAX_COLUMNS`) columns, or that adds offsets (a new strip of a
+design with auxiliary data). The algebra of the columns and the step is
+:class:`orientviz.design._steps.WoodburySteps`.
 """
 
 from __future__ import annotations
@@ -48,7 +52,7 @@ from ..block import CONTROL, TIE, Block
 from ..bundle import RayGains, ray_reliability
 from ..bundle.model import collinearity_block
 from ..bundle.problem import auxiliary_rows
-from ..errors import InputError, NotDeterminableError
+from ..errors import InputError
 from ._base import DesignBase
 from ._extend import add_images, kept_after_removal
 from ._extend import remove_images as _remove_images
@@ -63,20 +67,18 @@ from ._live_parts import (
     _with_aux_rows,
 )
 from ._quality import DesignQuality, quality_from_arrays
+from ._steps import _NONE, WoodburySteps
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
 
-_NONE = np.zeros(0, np.int64)
 #: After this many update steps the design is formed and factored again.
 MAX_STEPS: int = 40
-#: The scaled Woodbury matrix of a step is taken as singular beyond this condition.
-COND_LIMIT: float = 1e14
 #: A structural change whose step needs more columns of Q than this is assessed anew.
 MAX_COLUMNS: int = 400
 
 
-class LiveDesign:
+class LiveDesign(WoodburySteps):
     """A design block whose quality follows each change at once.
 
     Parameters
@@ -164,113 +166,12 @@ class LiveDesign:
         orientations (m, 6, 3), points (p, 3, 3) in the base block's order."""
         return self._base.columns(np.zeros(0, np.int64), np.array([point]))[:2]
 
-    # ------------------------------------------------------------------ columns
-    def _columns(self, imgs: I64, pts: I64, gs: I64 = _NONE) -> tuple[F64, F64, F64]:
-        """The current cofactors at the coordinates of image slots ``imgs`` (6 each), base
-        points ``pts`` (3 each) and offsets ``gs`` (1 each): rows of the images by slot
-        (M, 6, k), of the points (p0, 3, k) and of the offsets (na, k)."""
-        base = self._base
-        M = self._omega.shape[0]
-        old = imgs[imgs < base.m]
-        Cc0, Cp, Cg = base.columns(old, pts, gs)
-        k = 6 * imgs.size + 3 * pts.size + gs.size
-        Cc = np.zeros((M, 6, k))
-        pos = np.flatnonzero(imgs < base.m)  # where the base images' columns go
-        cols = np.r_[
-            (6 * pos[:, None] + np.arange(6)).reshape(-1),
-            6 * imgs.size + np.arange(3 * pts.size + gs.size),
-        ]
-        Cc[: base.m, :, cols] = Cc0
-        Cpk = np.zeros((Cp.shape[0], 3, k))
-        Cpk[:, :, cols] = Cp
-        Cgk = np.zeros((Cg.shape[0], k))
-        Cgk[:, cols] = Cg
-        for s, i in enumerate(imgs):  # added slots: ω⁻¹ I in the base
-            if i >= base.m:
-                Cc[i, :, 6 * s : 6 * s + 6] = np.diag(1.0 / self._omega[i])
-        for Uc, Up, Ug, Ms in self._steps:  # less the earlier steps' U M U[Ω]ᵀ
-            r = Uc.shape[2]
-            X = np.concatenate(
-                [Uc[i] if i < Uc.shape[0] else np.zeros((6, r)) for i in imgs]
-                + [Up[j] for j in pts]
-                + [Ug[gs]],
-                axis=0,
-            )  # (k, r)
-            B = Ms @ X.T
-            Cc[: Uc.shape[0]] -= Uc @ B
-            Cpk -= Up @ B
-            Cgk -= Ug @ B
-        return Cc, Cpk, Cgk
-
     @_capped
     def current_columns(self, point: int) -> tuple[F64, F64]:
         """The current design's cofactors at the three columns of ``point`` (current
         index): orientations (m, 6, 3) and points (p, 3, 3) in the current order."""
         Cc, Cp, _ = self._columns(_NONE, self._pt[[point]])
         return Cc[self._img], Cp[self._pt]
-
-    # ------------------------------------------------------------------ the step
-    def _step(
-        self, imgs: I64, pts: I64, G: F64, d: F64, new_rays: I64 | None = None,
-        alive: NDArray[np.bool_] | None = None, gs: I64 = _NONE,
-    ) -> None:  # fmt: skip
-        """One update by rows ``G`` (r, k) over the coordinates of ``imgs``, ``pts`` and
-        offsets ``gs`` with signed weights ``d`` (r,); ``new_rays``: ray slots added in
-        this step, their rows at 2i, 2i + 1 of G in order; ``alive``: the ray slots
-        present after the step."""
-        Cc, Cp, Cg = self._columns(imgs, pts, gs)
-        k = G.shape[1]
-        QO = np.concatenate(
-            [Cc[imgs].reshape(-1, k), Cp[pts].reshape(-1, k), Cg[gs].reshape(-1, k)], axis=0
-        )
-        GU = G @ QO @ G.T
-        GU = 0.5 * (GU + GU.T)
-        # M = (I + D G U)⁻¹ D = S B⁻¹ Σ S with D = S Σ S (S = √|d|, Σ = sign d) and
-        # B = I + Σ S G U S: B is scaled (unit rows for rays and priors alike), so its
-        # condition tells whether the changed design is still determinable
-        sq, sg = np.sqrt(np.abs(d)), np.sign(d)
-        B = np.eye(d.size) + sg[:, None] * (sq[:, None] * GU * sq[None, :])
-        if not np.isfinite(B).all() or np.linalg.cond(B) > COND_LIMIT:
-            raise NotDeterminableError(
-                "the changed design is not determinable (the change leaves unknowns "
-                "without enough observations)",
-                parameters=[],
-            )
-        Mx = sq[:, None] * np.linalg.solve(B, np.diag(sg)) * sq[None, :]
-        Mx = 0.5 * (Mx + Mx.T)
-        Uc, Up, Ug = Cc @ G.T, Cp @ G.T, Cg @ G.T  # (M, 6, r), (p0, 3, r), (na, r)
-        c0 = self._cur
-        r, rxy, Ke, Kp = c0.r.copy(), c0.rxy.copy(), c0.Ke.copy(), c0.Kp.copy()
-        if new_rays is not None and new_rays.size:  # their terms before: rows of G U, U
-            nn = new_rays.size
-            a = np.arange(nn)
-            H = GU[: 2 * nn, : 2 * nn].reshape(nn, 2, nn, 2)[a, :, a, :]  # (nn, 2, 2)
-            r[new_rays] = 1.0 - np.stack([H[:, 0, 0], H[:, 1, 1]], 1)
-            rxy[new_rays] = -0.5 * (H[:, 0, 1] + H[:, 1, 0])
-            Ue = Uc[self._ray_img[new_rays]][:, :, : 2 * nn].reshape(nn, 6, nn, 2)
-            Upn = Up[self._ray_pt[new_rays]][:, :, : 2 * nn].reshape(nn, 3, nn, 2)
-            Ke[new_rays], Kp[new_rays] = Ue[a, :, a, :], Upn[a, :, a, :]
-        live = np.flatnonzero(alive) if alive is not None else self._obs
-        oi, op = self._ray_img[live], self._ray_pt[live]
-        Jw = self._Jw[live]
-        rr = Mx.shape[0]
-        UcM = (Uc.reshape(-1, rr) @ Mx).reshape(Uc.shape)
-        UpM = (Up.reshape(-1, rr) @ Mx).reshape(Up.shape)
-        h = Jw[:, :, :6] @ Uc[oi] + Jw[:, :, 6:] @ Up[op]  # (n, 2, r)
-        ht = h.transpose(0, 2, 1)
-        UcMo, UpMo = UcM[oi], UpM[op]
-        hM = Jw[:, :, :6] @ UcMo + Jw[:, :, 6:] @ UpMo
-        dH = hM @ ht
-        r[live] = np.clip(r[live] + np.stack([dH[:, 0, 0], dH[:, 1, 1]], 1), 0.0, 1.0)
-        rxy[live] += 0.5 * (dH[:, 0, 1] + dH[:, 1, 0])
-        Ke[live] -= UcMo @ ht
-        Kp[live] -= UpMo @ ht
-        self._cur = _Current(
-            Qp=c0.Qp - UpM @ Up.transpose(0, 2, 1),
-            Qe=c0.Qe - UcM @ Uc.transpose(0, 2, 1),
-            r=r, rxy=rxy, Ke=Ke, Kp=Kp,
-        )  # fmt: skip
-        self._steps.append((Uc, Up, Ug, Mx))
 
     # ------------------------------------------------------------------ control changes
     @_capped
@@ -350,14 +251,13 @@ class LiveDesign:
         return new_aux, now, removed, added
 
     def _fresh(self, block: Block, label: str, auxiliary=None) -> LiveDesign:
-        """A new live design of ``block`` (formed and factored anew)."""
-        new = LiveDesign(
-            block, self.spec, level=self.level, alpha0=self.alpha0, beta0=self.beta0,
-            auxiliary=self.auxiliary if auxiliary is None else auxiliary,
-            blas_threads=self.blas_threads,
-        )  # fmt: skip
-        new.max_columns = self.max_columns
+        """A new live design of ``block`` (a new block of the structural edit, not shared
+        with this design's: formed and factored anew, no copy)."""
+        new = copy.copy(self)
+        if auxiliary is not None:
+            new.auxiliary = auxiliary
         new.history = self.history + [label, "(normal equations formed and factored again)"]
+        new.rebuild(block)
         return new
 
     def _derived(self, block: Block, label: str, aux: list, rows: dict) -> LiveDesign:
@@ -366,7 +266,7 @@ class LiveDesign:
         numbers, the bundle refuses it)."""
         _check_connected(block)
         new = copy.copy(self)
-        new.block = block.copy()
+        new.block = block  # new arrays from the structural edit: not shared
         new._steps = list(self._steps)
         new._saved, new.changes = [], []
         new.history = self.history + [label]

@@ -83,34 +83,51 @@ def check_dlt_rows(fn) -> None:
 # --------------------------------------------------------------------- projection centre
 
 
-def _centre_plus(L):
-    P = np.append(np.asarray(L, float), 1.0).reshape(3, 4)
-    return np.linalg.solve(P[:, :3], P[:, 3])
+def _viewing_cases(rng):
+    """Two cameras looking along +Y at a test field: the object origin in front of the first
+    (λ < 0 once P is scaled to L12 = 1), behind the second (λ > 0); their true axes −R e_Z."""
+    out = []
+    for Y0 in (-7.0, 8.0):
+        ang = np.array(
+            [1.45 + rng.uniform(-0.1, 0.1), rng.uniform(-0.2, 0.2), rng.uniform(-0.3, 0.3)]
+        )
+        R = matrix_from_opk(*ang)
+        X0 = np.array([rng.uniform(-1, 1), Y0, rng.uniform(1.0, 2.0)])
+        c = rng.uniform(20.0, 35.0)
+        K = np.array(
+            [[-c, 0.0, rng.uniform(-0.3, 0.3)], [0.0, -c, rng.uniform(-0.3, 0.3)], [0, 0, 1.0]]
+        )
+        P = K @ R.T @ np.hstack([np.eye(3), -X0[:, None]])
+        P = P / P[2, 3]
+        out.append((P.reshape(-1)[:11], -R[:, 2], P))
+    return out
 
 
-def _centre_transpose(L):
-    P = np.append(np.asarray(L, float), 1.0).reshape(3, 4)
-    return -np.linalg.solve(P[:, :3].T, P[:, 3])
+def check_viewing_direction(fn) -> None:
+    """``fn(L) -> v``: the unit vector (object frame) along which the camera of the eleven DLT
+    parameters looks, from its projection centre towards the scene."""
+    cases = _viewing_cases(rng_for("lesson03.check_viewing_direction"))
+    got = [
+        np.asarray(call(fn, L.copy(), what="viewing_direction"), dtype=float) for L, _, _ in cases
+    ]
+    views = [view for _, view, _ in cases]
+    m3 = [P[2, :3] / np.linalg.norm(P[2, :3]) for _, _, P in cases]
 
+    def same(a: np.ndarray, b: np.ndarray) -> bool:
+        return a.shape == b.shape and float(np.abs(a - b).max()) < 1e-6
 
-def _centre_no_one(L):
-    P = np.append(np.asarray(L, float), 0.0).reshape(3, 4)
-    return -np.linalg.solve(P[:, :3], P[:, 3])
-
-
-def check_projection_centre(fn) -> None:
-    """``fn(L) -> X0``: the projection centre (m) contained in eleven DLT parameters."""
-    for salt in range(2):
-        X, xy, P, X0, _ = _scene(rng_for("lesson03.check_projection_centre", salt))
-        L = P.reshape(-1)[:11]
-        got = call(fn, L.copy(), what="projection_centre")
-        compare("X0 [m]", got, X0, rtol=1e-9, wrong=[
-            ("the sign is wrong: P (X0, 1)ᵀ = 0 gives M X0 = −p4", _centre_plus(L)),
-            ("M is transposed: solve M X0 = −p4 with M the left 3×3 of P (rows L1…L3, L5…L7, L9…L11)",
-             _centre_transpose(L)),
-            ("the last element of P (the 1 after L11) is missing from p4", _centre_no_one(L)),
-        ])  # fmt: skip
-    success("X0 agrees with the camera that took the simulated images (two cameras)")
+    if all(same(g, -v) for g, v in zip(got, views)):
+        text = ("this points from the scene to the camera: the image plane is at z = −c, so the "
+                "camera looks along −r3")  # fmt: skip
+    elif all(same(g, m) for g, m in zip(got, m3)) or all(same(g, -m) for g, m in zip(got, m3)):
+        text = ("the sign of λ is missing: L is scaled so that L12 = 1, which can turn P round — "
+                "M = λKRᵀ, and det M has the sign of λ (det K = c² > 0)")  # fmt: skip
+    else:
+        text = ""
+    for k, (g, v) in enumerate(zip(got, views)):
+        compare(f"viewing direction of camera {k + 1}", g, v, rtol=1e-9, scale=1.0,
+                wrong=[(text, g)] if text else [])  # fmt: skip
+    success("viewing directions of two cameras, one with the object origin in front, one behind")
 
 
 # --------------------------------------------------------------------- interior orientation

@@ -9,8 +9,8 @@ Oracles (never :func:`orientviz.orientation.resection.resection` or
 * partial derivatives: central differences of the checker's own collinearity;
 * the normal-case precision: the covariance of a two-ray intersection from numerical
   derivatives;
-* one weighted Gauss-Newton step: the weighted least-squares problem solved by QR
-  (``numpy.linalg.lstsq`` on √P A), not by normal equations;
+* ρ(X0, φ) of a vertical image: the design by central differences, the cofactors from its QR
+  decomposition, not from the normal equations;
 * the best extra control point: a search over every candidate, each σ from the inverse of
   normal equations built with numerical derivatives.
 
@@ -33,8 +33,8 @@ from .lesson02 import _rodrigues_opk
 __all__ = [
     "check_best_extra_point",
     "check_design_X0",
-    "check_normal_step",
     "check_resection",
+    "check_rho_x0_phi",
     "check_sigma_Z",
     "check_two_rays",
 ]
@@ -245,27 +245,6 @@ def check_sigma_Z(sigma_Z: Callable[[float, float, float, float], float]) -> Non
     success("σ_Z = (H/B)(H/c)·√2·σ_x, as the covariance of the two-ray intersection says")
 
 
-def check_normal_step(normal_step: Callable[[F64, F64, F64], F64]) -> None:
-    """``normal_step(A, dl, P)`` must return dx solving (AᵀPA) dx = AᵀP dl (P diagonal, given as a vector)."""
-    rng = rng_for("lesson04.check_normal_step")
-    A = rng.normal(size=(12, 4))
-    dl = rng.normal(size=12)
-    P = np.exp(rng.uniform(-3, 3, 12))  # weights differing up to a factor 400
-    w = np.sqrt(P)
-    truth = np.linalg.lstsq(A * w[:, None], dl * w, rcond=None)[0]
-    unweighted = np.linalg.lstsq(A, dl, rcond=None)[0]
-    sqrt_w = np.linalg.lstsq(A * P[:, None] ** 0.25, dl * P**0.25, rcond=None)[0]
-    got = call(normal_step, A, dl, P, what="normal_step")
-    wrong = [
-        ("the weights P are missing", unweighted),
-        ("this weights with √P (1/σ instead of 1/σ²)", sqrt_w),
-    ]
-    compare("dx", got, truth, rtol=1e-8, wrong=wrong)
-    if got.shape != (4,):  # pragma: no cover - compare already checked the shape
-        raise CheckFailed("dx: expected shape (4,)")
-    success("dx: the weighted least-squares step, as a QR solution of √P A dx = √P dl gives it")
-
-
 def _cofactor_std(X: F64, p: F64, c: float, sigma: F64) -> F64:
     """A-priori σ of (X0, Y0, Z0, ω, φ, κ) from the points X with image σ (n,), by numerical derivatives."""
 
@@ -347,3 +326,42 @@ def check_best_extra_point(best_extra_point: Callable[..., int]) -> None:
     success(
         "best_extra_point: the candidate that shrinks the chosen σ most, as a search over all of them finds"
     )
+
+
+def check_rho_x0_phi(fn: Callable[[F64, float, float], float]) -> None:
+    """``fn(xy, c, H) -> ρ``: the correlation of X0 and φ when only these two are estimated
+    from the x and y image coordinates ``xy`` (n, 2) mm of flat control (Z = 0) seen by a
+    vertical image (R = I) from the height H (m), all coordinates with one σ.
+
+    Oracle: the design matrix by central differences of the checker's own collinearity,
+    the cofactors from the QR decomposition of it (not the normal equations).
+    """
+    rng = rng_for("lesson04.check_rho_x0_phi")
+    for spread in (110.0, 40.0):
+        c, H = 152.7, float(rng.uniform(1200.0, 1800.0))
+        xy = rng.uniform(-spread, spread, (8, 2))
+        X = np.column_stack([xy * H / c, np.zeros(8)])  # the control on the ground, Z = 0
+        X0 = np.array([0.0, 0.0, H])
+
+        def f(q: F64, X: F64 = X, X0: F64 = X0, c: float = c) -> F64:  # q = (X0, φ)
+            return _project(X, X0 + [q[0], 0.0, 0.0], _R(np.array([0.0, q[1], 0.0])), c).ravel()
+
+        h = np.array([1e-3, 1e-7])
+        A = np.column_stack([(f(e) - f(-e)) / (2 * e[k]) for k, e in enumerate(np.diag(h))])
+        Rq = np.linalg.qr(A, mode="r")
+        Q = np.linalg.inv(Rq.T @ Rq)
+        rho = Q[0, 1] / np.sqrt(Q[0, 0] * Q[1, 1])
+        Ax = A[0::2]
+        Qx = np.linalg.inv(Ax.T @ Ax)
+        N = A.T @ A
+        wrong = [
+            ("this is the correlation of the normal matrix N, not of its inverse Q = N⁻¹: the "
+             "sign is reversed", N[0, 1] / np.sqrt(N[0, 0] * N[1, 1])),
+            ("this is the cofactor Q(X0, φ), not divided by √(Q(X0, X0) Q(φ, φ))", Q[0, 1]),
+            ("only the x equations: a tilt φ also moves y by x·y/c·dφ",
+             Qx[0, 1] / np.sqrt(Qx[0, 0] * Qx[1, 1])),
+        ]  # fmt: skip
+        got = float(call(fn, xy.copy(), c, H, what="rho_x0_phi"))
+        compare(f"ρ(X0, φ) for control within ±{spread:.0f} mm", got, rho, rtol=1e-6, scale=1.0,
+                wrong=wrong)  # fmt: skip
+    success("ρ(X0, φ) of a vertical image, for control spread wide and narrow")

@@ -37,23 +37,55 @@ def _pair(rng):
 # --------------------------------------------------------------------- E
 
 
-def check_essential(fn) -> None:
-    """``fn(R2, B) -> E``: E = [B]ₓ R2 for a left bundle R1 = I (d1ᵀ E d2 = 0)."""
-    for salt in range(2):
-        c, B, R2, P, xy1, xy2 = _pair(rng_for("lesson06.check_essential", salt))
-        E = np.asarray(call(fn, R2.copy(), B.copy(), what="essential"), dtype=float)
-        want = _skew(B) @ R2
-        compare("E", E, want, rtol=1e-12, wrong=[
-            ("the factors are swapped: E = [B]ₓ R2, not R2 [B]ₓ", R2 @ _skew(B)),
-            ("R2 is transposed: the rays of the right image enter as R2 d2", _skew(B) @ R2.T),
-            ("the cross-product matrix is transposed: [B]ₓ v must equal B × v", _skew(B).T @ R2),
-        ])  # fmt: skip
-        d1 = np.column_stack([xy1, np.full(len(xy1), -c)])
-        d2 = np.column_stack([xy2, np.full(len(xy2), -c)])
-        cop = np.einsum("ni,ij,nj->n", d1, E, d2)
-    success(
-        f"E = [B]ₓ R2; the true rays are coplanar: max |d1ᵀ E d2| = {np.max(np.abs(cop)):.1e} mm³"
-    )
+def check_plane_points(fn) -> None:
+    """``fn(n_plane, n_off) -> bool``: do ``n_plane`` matches of points on one plane and
+    ``n_off`` matches of points in general position determine E by the (linear) eight-point
+    algorithm? Oracle: the rank of the checker's own n × 9 system for every combination of
+    0–12 and 0–9 points (rank 8: E fixed up to its scale)."""
+    rng = rng_for("lesson06.check_plane_points")
+    c, b = 152.0, 90.0
+    R2, B = matrix_from_opk(0.02, -0.03, 0.05), np.array([b, 2.0, -1.0])
+    cases = [(p, q) for p in range(13) for q in range(10)]
+    truth, got = [], []
+    for n_plane, n_off in cases:
+        P1 = np.column_stack([rng.uniform(-5, b + 5, n_plane), rng.uniform(-90, 90, n_plane),
+                              np.zeros(n_plane)])  # fmt: skip
+        P1[:, 2] = -c + 0.1 * P1[:, 0] - 0.05 * P1[:, 1]  # one (tilted) plane
+        P2 = np.column_stack([rng.uniform(-5, b + 5, n_off), rng.uniform(-90, 90, n_off),
+                              -c + rng.uniform(-15, 15, n_off)])  # fmt: skip
+        P = np.vstack([P1, P2])
+        rank = 0
+        if len(P):
+            d1 = np.column_stack([project(P, np.zeros(3), np.eye(3), c), np.full(len(P), -c)])
+            d2 = np.column_stack([project(P, B, R2, c), np.full(len(P), -c)])
+            sv = np.linalg.svd((d1[:, :, None] * d2[:, None, :]).reshape(-1, 9), compute_uv=False)
+            rank = int(np.sum(sv > 1e-9 * sv[0]))
+        truth.append(rank == 8)
+        answer = call(fn, n_plane, n_off, what="determined")
+        if not isinstance(answer, (bool, np.bool_)):
+            raise CheckFailed(
+                f"determined{(n_plane, n_off)}: expected True or False, got {answer!r}"
+            )
+        got.append(bool(answer))
+    rules = [
+        ("counting points is not enough: matches of points on one plane give at most six "
+         "independent equations (their images are related by a homography)",
+         lambda p, q: p + q >= 8),
+        ("points on a plane do help — up to six equations; two points off the plane complete them",
+         lambda p, q: q >= 8),
+        ("E has nine entries fixed up to a scale: the linear algorithm needs eight independent "
+         "equations, not seven", lambda p, q: min(p, 6) + q >= 7),
+    ]  # fmt: skip
+    if got != truth:
+        for text, rule in rules:
+            if got == [bool(rule(*cc)) for cc in cases]:
+                raise CheckFailed(f"determined: wrong for some configurations — {text}")
+        k = next(i for i in range(len(cases)) if got[i] != truth[i])
+        raise CheckFailed(
+            f"determined{cases[k]} (on the plane, off it) = {got[k]}: the system has rank "
+            f"{'8 (determined)' if truth[k] else 'below 8 (not determined)'} there"
+        )
+    success(f"all {len(cases)} combinations of 0–12 points on a plane and 0–9 off it right")
 
 
 # --------------------------------------------------------------------- epipolar line

@@ -61,59 +61,6 @@ def _reduce_wrong(U, W, V, bc, bp, mode):
     return U - W @ V @ W.T, bc - W @ V @ bp  # mode "no_inverse"
 
 
-def check_reduce(fn) -> None:
-    """``fn(U, W, V, bc, bp) -> (S, r)``: the reduced system S dc = r of the orientation
-    unknowns (Schur complement of the point block V)."""
-    U, W, V, bc, bp = _system(rng_for("lesson10.check_reduce"))
-    got = call(fn, U.copy(), W.copy(), V.copy(), bc.copy(), bp.copy(), what="reduce")
-    if not isinstance(got, tuple) or len(got) != 2:
-        raise CheckFailed("reduce: return the pair (S, r)")
-    S, r = (np.asarray(g, dtype=float) for g in got)
-    N = np.block([[U, W], [W.T, V]])
-    want_dc = np.linalg.solve(N, np.concatenate([bc, bp]))[: len(bc)]
-    # oracle: the orientation block of N⁻¹ is S⁻¹ (block inversion), and S dc = r
-    k = len(bc)
-    wS = np.linalg.inv(np.linalg.inv(N)[:k, :k])
-    wr = wS @ want_dc
-    compare("S", S, wS, rtol=1e-10, wrong=[
-        ("S = U − W V⁻¹ Wᵀ: the sign is wrong", _reduce_wrong(U, W, V, bc, bp, "plus")[0]),
-        ("V must be inverted: S = U − W V⁻¹ Wᵀ", _reduce_wrong(U, W, V, bc, bp, "no_inverse")[0]),
-    ])  # fmt: skip
-    compare("r", r, wr, rtol=1e-10, wrong=[
-        ("the right side is reduced too: r = bc − W V⁻¹ bp", bc),
-        ("V must be inverted in r too: r = bc − W V⁻¹ bp", _reduce_wrong(U, W, V, bc, bp, "no_inverse")[1]),
-    ])  # fmt: skip
-    dc = np.linalg.solve(S, r)
-    compare("dc from your S, r against the whole system solved densely", dc, want_dc, rtol=1e-8)
-    success("S dc = r gives the orientation unknowns of the whole system")
-
-
-def _back(V, W, bp, dc, mode):
-    """The back-substitution with one plausible mistake ("no_coupling", "plus", "no_inverse")."""
-    if mode == "no_coupling":
-        return np.linalg.solve(V, bp)
-    if mode == "plus":
-        return np.linalg.solve(V, bp + W.T @ dc)
-    return V @ (bp - W.T @ dc)  # mode "no_inverse"
-
-
-def check_back_substitute(fn) -> None:
-    """``fn(V, W, bp, dc) -> dp``: the point unknowns once the orientation unknowns dc are known."""
-    U, W, V, bc, bp = _system(rng_for("lesson10.check_back_substitute"), m=3, q=6)
-    N = np.block([[U, W], [W.T, V]])
-    x = np.linalg.solve(N, np.concatenate([bc, bp]))
-    dc, want = x[: len(bc)], x[len(bc) :]
-    got = np.asarray(
-        call(fn, V.copy(), W.copy(), bp.copy(), dc.copy(), what="back_substitute"), dtype=float
-    )
-    compare("dp", got, want, rtol=1e-9, wrong=[
-        ("the coupling Wᵀ dc is missing: dp = V⁻¹ (bp − Wᵀ dc)", _back(V, W, bp, dc, "no_coupling")),
-        ("the sign of Wᵀ dc is wrong: dp = V⁻¹ (bp − Wᵀ dc)", _back(V, W, bp, dc, "plus")),
-        ("V multiplies instead of being inverted: dp = V⁻¹ (bp − Wᵀ dc)", _back(V, W, bp, dc, "no_inverse")),
-    ])  # fmt: skip
-    success("dp equals the point part of the whole system solved densely")
-
-
 def _block_patterns(strips: int, per_strip: int) -> tuple[int, int, np.ndarray, np.ndarray]:
     """Half-bandwidths (images) of a simulated block's reduced pattern S in flight order and
     numbered across the strips (the better of the library's two geometric orderings), S and
@@ -452,3 +399,98 @@ def check_first_state_below(answer: object, data, states, limit_um: float = 10.0
     raise CheckFailed(
         f"first state below {limit_um:g} µm: {got:g} — {why}", error=np.inf, tolerance=0.0
     )
+
+
+# --------------------------------------------------------------------- patterns of S and L
+
+
+def check_coupled(fn) -> None:
+    """``fn(image, point, m) -> P (m, m) bool``: the non-zero 6 × 6 blocks of the reduced
+    matrix S of a block whose rays are ``(image[k], point[k])`` (point −1: a fixed point).
+
+    Oracle: S = U − W V⁻¹ Wᵀ formed numerically from random blocks with that structure and
+    its non-zero blocks read off — not the library's ``reduced_pattern``.
+    """
+    rng = rng_for("lesson10.check_coupled")
+    m, q, n = 7, 12, 30
+    image = rng.integers(0, m, n)
+    point = rng.integers(-1, q, n)  # some rays to fixed points (−1)
+    h = q // 2  # image 0 sees only points < h, image m − 1 only points ≥ h: not coupled …
+    first, last = (image == 0) & (point >= h), (image == m - 1) & (point >= 0) & (point < h)
+    point[first], point[last] = point[first] % h, h + point[last] % (q - h)
+    image, point = np.r_[image, 0, m - 1], np.r_[point, -1, -1]  # … but both see a fixed point
+    U = np.zeros((6 * m, 6 * m))
+    W = np.zeros((6 * m, 3 * q))
+    V = np.zeros((3 * q, 3 * q))
+    for i, j in zip(image, point):
+        J = rng.normal(size=(2, 9))
+        U[6 * i : 6 * i + 6, 6 * i : 6 * i + 6] += J[:, :6].T @ J[:, :6]
+        if j >= 0:
+            W[6 * i : 6 * i + 6, 3 * j : 3 * j + 3] += J[:, :6].T @ J[:, 6:]
+            V[3 * j : 3 * j + 3, 3 * j : 3 * j + 3] += J[:, 6:].T @ J[:, 6:]
+    U += np.eye(6 * m)
+    V += np.eye(3 * q)
+    S = U - W @ np.linalg.solve(V, W.T)
+    want = np.abs(S).reshape(m, 6, m, 6).max(axis=(1, 3)) > 1e-12
+    with own_work(reduced_pattern=reduced_pattern):
+        got = call(fn, image.copy(), point.copy(), m, what="coupled")
+    got = np.asarray(got)
+    if got.shape != (m, m):
+        raise CheckFailed(f"coupled: expected an (m, m) = ({m}, {m}) pattern, got {got.shape}")
+    got = got.astype(bool)
+    if np.array_equal(got, want):
+        success(f"the pattern of S: {int(want.sum())} of {m * m} blocks, from the rays alone")
+        return
+    no_diag = want & ~np.eye(m, dtype=bool)
+    seen = np.zeros((m, q), bool)
+    ok = point >= 0
+    seen[image[ok], point[ok]] = True
+    with_fixed = np.zeros((m, q + 1), bool)
+    with_fixed[image, point] = True  # −1 lands in the last column
+    wrong = {
+        "the diagonal blocks U_i are never zero (every image that has a ray)": no_diag,
+        "a fixed point (−1) is no unknown: it couples nothing": (with_fixed.astype(int) @ with_fixed.T.astype(int)) > 0,
+        "only one triangle: S is symmetric": np.triu(want),
+    }  # fmt: skip
+    why = next((w for w, v in wrong.items() if np.array_equal(got, v)),
+               "images i and k are coupled if they see a common unknown point")  # fmt: skip
+    raise CheckFailed(f"coupled: {int((got != want).sum())} blocks wrong — {why}",
+                      error=np.inf, tolerance=0.0)  # fmt: skip
+
+
+def check_fill_pattern(fn) -> None:
+    """``fn(P) -> L (n, n) bool``: the non-zeros of the lower Cholesky factor of a symmetric
+    positive definite matrix with the non-zero pattern P (diagonal included).
+
+    Oracle: numpy's Cholesky factor of random matrices with that pattern (three patterns, the
+    non-zeros read off) — not the library's ``cholesky_fill``.
+    """
+    rng = rng_for("lesson10.check_fill_pattern")
+    for n, dens in ((9, 0.25), (12, 0.15), (10, 0.3)):
+        A = rng.random((n, n)) < dens
+        P = A | A.T | np.eye(n, dtype=bool)
+        M = np.where(P, rng.normal(size=(n, n)), 0.0)
+        M = (M + M.T) / 2 + np.diag(np.full(n, 3.0 * n))  # symmetric, diagonally dominant
+        L = np.linalg.cholesky(M)
+        want = np.abs(L) > 1e-12 * np.abs(L).max()
+        with own_work(cholesky_fill=cholesky_fill):
+            got = np.asarray(call(fn, P.copy(), what="fill_pattern"))
+        if got.shape != (n, n):
+            raise CheckFailed(f"fill_pattern: expected an ({n}, {n}) pattern, got {got.shape}")
+        got = got.astype(bool)
+        if np.array_equal(got, want):
+            continue
+        first = np.array([np.flatnonzero(P[i])[0] for i in range(n)])
+        envelope = np.tril(np.arange(n)[None, :] >= first[:, None])
+        wrong = {
+            "no fill-in at all: eliminating column k makes every pair of its rows below k "
+            "non-zero in L": np.tril(P),
+            "the whole envelope: it is only an upper bound — a zero inside it stays zero when "
+            "no earlier column has non-zeros in both rows": envelope,
+            "L is lower triangular: the upper half is zero": want | want.T,
+        }  # fmt: skip
+        why = next((w for w, v in wrong.items() if np.array_equal(got, v)),
+                   "eliminating column k links every pair of rows below k that are non-zero in it")  # fmt: skip
+        raise CheckFailed(f"fill_pattern ({n} × {n}): {int((got != want).sum())} entries wrong — {why}",
+                          error=np.inf, tolerance=0.0)  # fmt: skip
+    success("the fill-in of three patterns equals numpy's Cholesky factors")

@@ -123,35 +123,38 @@ def check_smallest_redundancy(fn: Callable) -> None:
     )
 
 
-def check_rms_per_image(fn: Callable) -> None:
-    """Check ``fn(image, v, m) -> (m, 2)``: RMS of the x and y residuals of each image."""
-    rng = rng_for("lesson15.check_rms_per_image")
-    m = 5
-    image = rng.integers(0, m, 60)
-    v = rng.normal(0.0, 1.0, (60, 2)) * [2.0, 0.5] + [0.8, -0.3]
-    want = np.empty((m, 2))
-    for i in range(m):  # by hand
-        for k in range(2):
-            vals = [v[j, k] for j in range(len(image)) if image[j] == i]
-            want[i, k] = np.sqrt(sum(x * x for x in vals) / len(vals))
-    got = call(fn, image.copy(), v.copy(), m, what="rms_per_image")
-    mean = np.array([[v[image == i, k].mean() for k in range(2)] for i in range(m)])
-    std = np.array([[v[image == i, k].std() for k in range(2)] for i in range(m)])
-    compare(
-        "RMS per image",
-        got,
-        want,
-        rtol=1e-10,
-        wrong=[
-            ("the mean residual, not the root mean square", mean),
-            (
-                "the standard deviation: the mean was removed, but a shift is part of the pattern",
-                std,
-            ),
-            ("one RMS for all images", np.tile(np.sqrt(np.mean(v**2, axis=0)), (m, 1))),
-        ],
+def check_expected_rms(fn: Callable) -> None:
+    """Check ``fn(image, sigma, r, m) -> (m, 2)``: the RMS of the x and the y residuals each
+    image should have if the a-priori σ are right, from the σ (n, 2) and the redundancy numbers
+    r (n, 2) of its n rays: √(mean σ² r) per image and axis.
+
+    Oracle: a small linear adjustment (random design, unequal σ) whose residual variances
+    σ_v² = diag(Q_ll − A N⁻¹ Aᵀ) are computed here from the design — the student's function
+    only gets σ and r.
+    """
+    rng = rng_for("lesson15.check_expected_rms")
+    n, u, m = 40, 7, 4
+    image = np.repeat(np.arange(m), n // m)
+    sigma = rng.uniform(0.003, 0.009, (n, 2))
+    A = rng.normal(size=(2 * n, u))
+    s = sigma.reshape(-1)
+    N = A.T @ (A / s[:, None] ** 2)
+    var_v = s**2 - np.einsum("ij,jk,ik->i", A, np.linalg.inv(N), A)  # diag(Q_ll − A N⁻¹ Aᵀ)
+    r = (var_v / s**2).reshape(n, 2)
+    want = np.array([[np.sqrt(np.mean(var_v.reshape(n, 2)[image == i, k])) for k in range(2)]
+                     for i in range(m)])  # fmt: skip
+    got = call(fn, image.copy(), sigma.copy(), r.copy(), m, what="expected_rms")
+    sig_rms = np.array(
+        [[np.sqrt(np.mean(sigma[image == i, k] ** 2)) for k in range(2)] for i in range(m)]
     )
-    success("RMS of x and y residuals per image right")
+    compare("expected RMS per image [mm]", got, want, rtol=1e-9, wrong=[
+        ("the σ of the observations: a residual is smaller than its observation's error, "
+         "σ_v = σ √r", sig_rms),
+        ("the square root is missing: E(v²) = σ² r, the RMS is its root", want**2),
+        ("r enters squared: σ_v² = σ² r, so σ_v = σ √r", np.array(
+            [[np.sqrt(np.mean((sigma * r)[image == i, k] ** 2)) for k in range(2)] for i in range(m)])),
+    ])  # fmt: skip
+    success("the expected RMS per image and axis is √(mean σ² r)")
 
 
 def check_false_alarms(

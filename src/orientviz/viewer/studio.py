@@ -4,10 +4,11 @@ The studio shows a planned block (:mod:`orientviz.design`): its points coloured 
 chosen quality measure of the design (σ_XY, σ_Z, the smallest redundancy number of the
 point's rays, the largest MDB or δ̄0 of its rays), the control points as larger
 triangles, the projection centres and strips. Every change of the control (make a point
-control or tie, change its σ, accept the suggested point) goes through
-:class:`orientviz.design.LiveDesign` (a low-rank update, no new factorisation); changes of
-the plan (strips, images per strip, overlaps, image σ, control σ, GNSS) build the design
-again. The scene and the panel (:mod:`orientviz.viewer.studio_panel`) show the legend, the summary next
+control or tie, change its σ, accept the suggested point) and of the images (add, remove,
+move an image; cross strips and removed strips, which are new designs when the step would
+be too wide) goes through :class:`orientviz.design.LiveDesign` (a low-rank update, no new
+factorisation); changes of the plan (strips, images per strip, overlaps, image σ, control
+σ, GNSS) build the design again. The scene and the panel (:mod:`orientviz.viewer.studio_panel`) show the legend, the summary next
 to Ebner's accuracy laws, the weak spots in words, the list of changes and undo.
 
 Scene tree::

@@ -319,7 +319,8 @@ class StudioView:
         self.nodes["stations"] = sc.add_point_cloud(
             "/design/stations", X0, STATION_COLOUR, point_size=0.01 * size, precision="float32"
         )
-        seg = g.polyline_segments(X0, b.images.strip)
+        along = _along_strip(b.images.X0, b.images.strip)  # an added/moved image in place
+        seg = g.polyline_segments(X0[along], b.images.strip[along])
         if len(seg):
             self.nodes["strips"] = sc.add_line_segments(
                 "/design/strips", np.asarray(seg, np.float32), STRIP_COLOUR, thickness=1.5,
@@ -423,6 +424,18 @@ class StudioView:
         """Make the point nearest to the gizmo's position (scene frame, m) control."""
         xy = (np.asarray(position, float) + self.frame.origin)[:2]
         self.panel.act_at(xy, "control")
+
+
+def _along_strip(X0: Any, strip: Any) -> Any:
+    """Image order for the flight lines: by strip, and within a strip along its longer
+    horizontal extent (an image added or moved later sits in its place on the line)."""
+    X0, strip = np.asarray(X0, float), np.asarray(strip)
+    key = np.zeros(strip.size)
+    for s in np.unique(strip):
+        k = np.flatnonzero(strip == s)
+        ax = int(np.argmax(np.ptp(X0[k, :2], axis=0)))
+        key[k] = X0[k, ax]
+    return np.lexsort((key, strip))
 
 
 SPHERE = icosphere(1)  # 42 vertices, 80 triangles, radius 1

@@ -9,18 +9,17 @@ from __future__ import annotations
 import numpy as np
 
 from orientviz.exercises.lesson03 import (
-    _centre_no_one,
-    _centre_plus,
-    _centre_transpose,
     _interior_no_x0,
     _interior_unnormalised,
     _rows,
 )
 
 
-def _centre(L):
+def _viewing(L, how="det"):
     P = np.append(np.asarray(L, float), 1.0).reshape(3, 4)
-    return -np.linalg.solve(P[:, :3], P[:, 3])
+    m3 = P[2, :3] / np.linalg.norm(P[2, :3])
+    sign = {"det": -np.sign(np.linalg.det(P[:, :3])), "plus": 1.0, "minus": -1.0}[how]
+    return sign * m3 if how != "reversed" else np.sign(np.linalg.det(P[:, :3])) * m3
 
 
 def _interior(L):
@@ -54,7 +53,7 @@ def _affine_fit(machine, calibrated, order="ok", r_minus=6, vsign=1.0):
 SOLUTIONS = {
     "check_affine_fit": _affine_fit,
     "check_dlt_rows": lambda X, xy: _rows(X, xy, -1.0, False, False),
-    "check_projection_centre": _centre,
+    "check_viewing_direction": _viewing,
     "check_interior_from_dlt": _interior,
 }
 
@@ -70,10 +69,10 @@ MUTANTS = {
         "swap_xy": lambda X, xy: _rows(X, xy, -1.0, True, False),
         "stacked": lambda X, xy: _rows(X, xy, -1.0, False, True),
     },
-    "check_projection_centre": {
-        "plus": _centre_plus,
-        "transpose": _centre_transpose,
-        "no_one": _centre_no_one,
+    "check_viewing_direction": {
+        "m3 as it is": lambda L: _viewing(L, "plus"),
+        "minus m3": lambda L: _viewing(L, "minus"),
+        "reversed": lambda L: -_viewing(L),
     },
     "check_interior_from_dlt": {
         "unnormalised": _interior_unnormalised,

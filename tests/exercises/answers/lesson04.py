@@ -56,11 +56,6 @@ def _sol_sigma_Z(B, H, c, sigma_x):
     return (H / B) * (H / c) * np.sqrt(2) * sigma_x
 
 
-def _sol_normal_step(A, dl, P):
-    N = A.T @ (P[:, None] * A)
-    return np.linalg.solve(N, A.T @ (P * dl))
-
-
 def _sigmas(xy, X, sigma, c, p, k_all=True):
     """A-priori σ of the six parameters from the points X (image σ one per point)."""
     f = lambda q: _project(X, q[:3], _R(q[3:]), c).ravel()  # noqa: E731
@@ -86,16 +81,32 @@ def _sol_best_extra_point(
     return int(pick(s))
 
 
+def _rho_x0_phi(xy, c, H, how="Q"):
+    x, y = np.asarray(xy, dtype=float).T
+    A = np.zeros((2 * len(x), 2))
+    A[0::2, 0], A[0::2, 1] = -c / H / 1.0, c * (1 + x**2 / c**2)  # ∂x/∂X0 [mm/m], ∂x/∂φ [mm/rad]
+    A[1::2, 1] = x * y / c  # ∂y/∂φ
+    if how == "x only":
+        A = A[0::2]
+    N = A.T @ A
+    Q = N if how == "N" else np.linalg.inv(N)
+    return Q[0, 1] if how == "cofactor" else Q[0, 1] / np.sqrt(Q[0, 0] * Q[1, 1])
+
+
 SOLUTIONS = {
+    "check_rho_x0_phi": _rho_x0_phi,
     "check_best_extra_point": _sol_best_extra_point,
     "check_resection": _sol_resection,
     "check_two_rays": _sol_two_rays,
     "check_design_X0": _sol_design_X0,
     "check_sigma_Z": _sol_sigma_Z,
-    "check_normal_step": _sol_normal_step,
 }
 
 MUTANTS = {
+    "check_rho_x0_phi": {
+        how: (lambda xy, c, H, how=how: _rho_x0_phi(xy, c, H, how))
+        for how in ("N", "cofactor", "x only")
+    },
     "check_best_extra_point": {
         "farthest from the centre": lambda xy, X, s, c, p, xyn, Xn, sn, k: int(
             np.argmax(np.hypot(*xyn.T))
@@ -133,10 +144,5 @@ MUTANTS = {
         "no sqrt 2": lambda B, H, c, s: (H / B) * (H / c) * s,
         "H/B once": lambda B, H, c, s: (H / c) * np.sqrt(2) * s,
         "micrometres": lambda B, H, c, s: _sol_sigma_Z(B, H, c, s * 1000),
-    },
-    "check_normal_step": {
-        "weights forgotten": lambda A, dl, P: _sol_normal_step(A, dl, np.ones_like(P)),
-        "sqrt of the weights": lambda A, dl, P: _sol_normal_step(A, dl, np.sqrt(P)),
-        "sign": lambda A, dl, P: -_sol_normal_step(A, dl, P),
     },
 }

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from orientviz.exercises.lesson06 import _line, _skew
+from orientviz.exercises.lesson06 import _line
 
 
 def _eight_point(xy1, xy2, c, rank2=True, scale=True, transpose=False):
@@ -51,7 +51,7 @@ def _swapped_pair(E, xy1, xy2, c, how="swap test"):
 
 SOLUTIONS = {
     "check_eight_point": _eight_point,
-    "check_essential": lambda R2, B: _skew(B) @ R2,
+    "check_plane_points": lambda p, q: min(p, 6) + q >= 8,
     "check_epipolar_line": lambda E, xy1, c: _line(E, xy1, c, True, True, True),
     "check_swapped_pair": _swapped_pair,
 }
@@ -62,10 +62,11 @@ MUTANTS = {
         "not_scaled": lambda a, b, c: _eight_point(a, b, c, scale=False),
         "transposed": lambda a, b, c: _eight_point(a, b, c, transpose=True),
     },
-    "check_essential": {
-        "swapped": lambda R2, B: R2 @ _skew(B),
-        "transposed_R": lambda R2, B: _skew(B) @ R2.T,
-        "skew_transposed": lambda R2, B: _skew(B).T @ R2,
+    "check_plane_points": {
+        "counting": lambda p, q: p + q >= 8,
+        "plane useless": lambda p, q: q >= 8,
+        "seven": lambda p, q: min(p, 6) + q >= 7,
+        "a string": lambda p, q: "yes" if min(p, 6) + q >= 8 else False,
     },
     "check_epipolar_line": {
         "E_not_transposed": lambda E, xy1, c: _line(E, xy1, c, False, True, True),

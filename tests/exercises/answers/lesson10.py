@@ -13,21 +13,28 @@ import orientviz as ov
 from orientviz.rotation import matrix_derivatives
 
 
-def _reduce(U, W, V, bc, bp, mode="ok"):
-    Vi = np.linalg.inv(V) if mode != "no_inverse" else V
-    S = U - W @ Vi @ W.T if mode != "plus" else U + W @ Vi @ W.T
-    r = bc - W @ Vi @ bp if mode != "rhs" else bc
-    return S, r
+def _coupled(image, point, m, mistake=None):
+    P = np.eye(m, dtype=bool)
+    for j in np.unique(point[point >= 0] if mistake != "fixed" else point):
+        ims = np.unique(image[point == j])
+        P[np.ix_(ims, ims)] = True
+    if mistake == "no diagonal":
+        P &= ~np.eye(m, dtype=bool)
+    return np.triu(P) if mistake == "one triangle" else P
 
 
-def _back(V, W, bp, dc, mode="ok"):
-    if mode == "no_coupling":
-        return np.linalg.solve(V, bp)
-    if mode == "plus":
-        return np.linalg.solve(V, bp + W.T @ dc)
-    if mode == "no_inverse":
-        return V @ (bp - W.T @ dc)
-    return np.linalg.solve(V, bp - W.T @ dc)
+def _fill_pattern(P, mistake=None):
+    n = len(P)
+    L = np.tril(P).copy()
+    if mistake == "no fill":
+        return L
+    if mistake == "envelope":
+        first = np.array([np.flatnonzero(P[i])[0] for i in range(n)])
+        return np.tril(np.arange(n)[None, :] >= first[:, None])
+    for k in range(n):
+        rows = np.flatnonzero(L[k + 1 :, k]) + k + 1
+        L[np.ix_(rows, rows)] |= np.tril(np.ones((rows.size, rows.size), bool))
+    return L
 
 
 def _predicted_bandwidth(strips, per_strip, mistake=None):
@@ -163,8 +170,8 @@ SOLUTIONS = {
     "check_my_bundle": _my_bundle,
     "check_point_covariance": _point_covariance,
     "check_schur_step": _schur_step,
-    "check_reduce": lambda U, W, V, bc, bp: _reduce(U, W, V, bc, bp, "ok"),
-    "check_back_substitute": lambda V, W, bp, dc: _back(V, W, bp, dc, "ok"),
+    "check_coupled": _coupled,
+    "check_fill_pattern": _fill_pattern,
     "check_predicted_bandwidth": _predicted_bandwidth,
 }
 
@@ -189,15 +196,12 @@ MUTANTS = {
         "no_coupling": lambda nb: _schur_step(nb, "no_coupling"),
         "W_transposed": lambda nb: _schur_step(nb, "W_transposed"),
     },
-    "check_reduce": {
-        "plus": lambda U, W, V, bc, bp: _reduce(U, W, V, bc, bp, "plus"),
-        "rhs_not_reduced": lambda U, W, V, bc, bp: _reduce(U, W, V, bc, bp, "rhs"),
-        "no_inverse": lambda U, W, V, bc, bp: _reduce(U, W, V, bc, bp, "no_inverse"),
+    "check_coupled": {
+        k: (lambda i, p, m, k=k: _coupled(i, p, m, k))
+        for k in ("no diagonal", "fixed", "one triangle")
     },
-    "check_back_substitute": {
-        "no_coupling": lambda V, W, bp, dc: _back(V, W, bp, dc, "no_coupling"),
-        "plus": lambda V, W, bp, dc: _back(V, W, bp, dc, "plus"),
-        "no_inverse": lambda V, W, bp, dc: _back(V, W, bp, dc, "no_inverse"),
+    "check_fill_pattern": {
+        k: (lambda P, k=k: _fill_pattern(P, k)) for k in ("no fill", "envelope")
     },
     "check_predicted_bandwidth": {
         k: (lambda s, n, k=k: _predicted_bandwidth(s, n, k))

@@ -32,15 +32,19 @@ def _smallest_redundancy(ratio, alpha, tail=2, square=False, offset=0):
         r += 1
 
 
-def _rms_per_image(image, v, m):
-    return np.array([np.sqrt(np.mean(v[image == i] ** 2, axis=0)) for i in range(m)])
+def _expected_rms(image, sigma, r, m, mistake=None):
+    var = sigma**2 * (r**2 if mistake == "r squared" else r)
+    if mistake == "no r":
+        var = sigma**2
+    out = np.array([np.sqrt(np.mean(var[image == i], axis=0)) for i in range(m)])
+    return out**2 if mistake == "no sqrt" else out
 
 
 SOLUTIONS = {
     "check_residual_pattern": _pattern,
     "check_colmap_to_photo": _colmap_to_photo,
     "check_smallest_redundancy": _smallest_redundancy,
-    "check_rms_per_image": _rms_per_image,
+    "check_expected_rms": _expected_rms,
 }
 
 MUTANTS = {
@@ -67,9 +71,8 @@ MUTANTS = {
         "squared": lambda q, a: _smallest_redundancy(q, a, square=True),
         "off by one": lambda q, a: _smallest_redundancy(q, a, offset=-1),
     },
-    "check_rms_per_image": {
-        "mean": lambda image, v, m: np.array([np.mean(v[image == i], axis=0) for i in range(m)]),
-        "std": lambda image, v, m: np.array([np.std(v[image == i], axis=0) for i in range(m)]),
-        "global": lambda image, v, m: np.tile(np.sqrt(np.mean(v**2, axis=0)), (m, 1)),
+    "check_expected_rms": {
+        k: (lambda image, sigma, r, m, k=k: _expected_rms(image, sigma, r, m, k))
+        for k in ("no r", "no sqrt", "r squared")
     },
 }

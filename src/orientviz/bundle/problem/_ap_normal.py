@@ -133,43 +133,97 @@ class APStructure:
         self._h_shape = (2 * n, npg * k)
         self.refresh(Aw)
         # E correction in the *other* groups of a ray's point (rays of points in the
-        # overlap of two groups): every such pair, summed per (image, group)
-        a = vo
-        ca = count[ocol[a]]
-        e_obs = np.repeat(a, ca)
-        off = np.arange(e_obs.size) - np.repeat(np.cumsum(ca) - ca, ca)
-        e_pg = np.repeat(first[ocol[a]], ca) + off
-        other = self.pg_grp[e_pg] != go[e_obs]
-        self.e_obs, self.e_pg = e_obs[other], e_pg[other]
-        self.e_key = np.unique(oi[self.e_obs] * G + self.pg_grp[self.e_pg])
+        # overlap of two groups): its blocks (image, group) = the pattern of (image ×
+        # point) · (point × group) without each image's own group
+        inc_img = sp.csr_matrix((np.ones(vo.size), (oi[vo], ocol[vo])), shape=(m, n_pt))
+        inc_grp = sp.csr_matrix((np.ones(npg), (self.pg_pt, self.pg_grp)), shape=(n_pt, G))
+        reach = (inc_img @ inc_grp).tocoo()
+        key = reach.row.astype(np.int64) * G + reach.col
+        self.e_key = np.unique(key[reach.col != grp[reach.row]])
         # block sums of E @ v and Eᵀ @ y: other blocks → their image, images and other
         # blocks → their group
         K, ki, gi = self.e_key.size, self.e_key // G, self.e_key % G
         self.sum_other_img = sp.csr_matrix((np.ones(K), (ki, np.arange(K))), shape=(m, K))
         self.sum_other_grp = sp.csr_matrix((np.ones(K), (gi, np.arange(K))), shape=(G, K))
         self.sum_img_grp = sp.csr_matrix((np.ones(m), (grp, np.arange(m))), shape=(G, m))
-        c1 = count[self.pg_pt]
-        f1 = np.repeat(np.arange(npg), c1)
-        off = np.arange(f1.size) - np.repeat(np.cumsum(c1) - c1, c1)
-        f2 = np.repeat(first[self.pg_pt], c1) + off
-        # all ordered pairs of (point, group) pairs of one point (a pair with itself
-        # included), sorted by their groups (g1, g2): F's correction is one product per
-        # (g1, g2) over its pairs (g1 = g2: the pairs of one group with themselves)
-        fkey = self.pg_grp[f1] * G + self.pg_grp[f2]
-        o = np.argsort(fkey, kind="stable")
-        self.f_1, self.f_2 = f1[o], f2[o]
-        self.f_key, first_f = np.unique(fkey[o], return_index=True)
-        self.f_bounds = np.r_[first_f, o.size]
         # (point, group) pairs by group (ba correction); observations by point
         self.sum_pgg, self.pgg_present = _summation(self.pg_grp)
+        # the coupled group pairs (g1, g2): two groups that share a point
+        n_coupled = (inc_grp.T @ inc_grp).nnz
+        self._lists = (oi, go, vo, ocol, first, count)
+        self._pairs: dict[str, NDArray] | None = None
+        self._sum_e: sp.csr_matrix | None = None
         # many coupled group pairs (a group per image: BAL, per-image COLMAP cameras): the
         # E and F terms by stacked per-point products (:mod:`._ap_batches`); a few
-        # (aerial groups): one product per group pair and per-ray products
+        # (aerial groups): one product per group pair and per-ray products, over the
+        # lists of :meth:`_pair_lists` (formed on first use, as for the precision)
         self.batches: list[PointBatch] | None = None
-        self._sum_e: sp.csr_matrix | None = None
-        if self.f_key.size > GROUP_PAIR_LOOP_MAX:
+        if n_coupled > GROUP_PAIR_LOOP_MAX:
             self.batches = point_batches(oi, go, vo, ocol, first, count, self, k)
-        self._e_rows = oi[self.e_obs] * G + self.pg_grp[self.e_pg]
+
+    def _pair_lists(self) -> dict[str, NDArray]:
+        """Every (ray, pair of another group of its point) and every ordered pair of
+        (point, group) pairs of one point, sorted by their groups (formed on first use:
+        millions of entries for a model of long tracks and a group per image)."""
+        if self._pairs is not None:
+            return self._pairs
+        oi, go, vo, ocol, first, count = self._lists
+        G = self.G
+        a = vo
+        ca = count[ocol[a]]
+        e_obs = np.repeat(a, ca)
+        off = np.arange(e_obs.size) - np.repeat(np.cumsum(ca) - ca, ca)
+        e_pg = np.repeat(first[ocol[a]], ca) + off
+        other = self.pg_grp[e_pg] != go[e_obs]
+        e_obs, e_pg = e_obs[other], e_pg[other]
+        c1 = count[self.pg_pt]
+        f1 = np.repeat(np.arange(self.pg_pt.size), c1)
+        off = np.arange(f1.size) - np.repeat(np.cumsum(c1) - c1, c1)
+        f2 = np.repeat(first[self.pg_pt], c1) + off
+        # F's correction is one product per (g1, g2) over its pairs (g1 = g2: the pairs of
+        # one group with themselves)
+        fkey = self.pg_grp[f1] * G + self.pg_grp[f2]
+        o = np.argsort(fkey, kind="stable")
+        f_key, first_f = np.unique(fkey[o], return_index=True)
+        self._pairs = dict(
+            e_obs=e_obs, e_pg=e_pg, e_rows=oi[e_obs] * G + self.pg_grp[e_pg],
+            f_1=f1[o], f_2=f2[o], f_key=f_key, f_bounds=np.r_[first_f, o.size],
+        )  # fmt: skip
+        return self._pairs
+
+    @property
+    def e_obs(self) -> I64:
+        """The rays of the (ray, other-group pair) products (:meth:`_pair_lists`)."""
+        return self._pair_lists()["e_obs"]
+
+    @property
+    def e_pg(self) -> I64:
+        """The pairs of the (ray, other-group pair) products (:meth:`_pair_lists`)."""
+        return self._pair_lists()["e_pg"]
+
+    @property
+    def _e_rows(self) -> I64:
+        return self._pair_lists()["e_rows"]
+
+    @property
+    def f_1(self) -> I64:
+        """First pairs of the ordered pairs of one point's pairs (:meth:`_pair_lists`)."""
+        return self._pair_lists()["f_1"]
+
+    @property
+    def f_2(self) -> I64:
+        """Second pairs of the ordered pairs of one point's pairs (:meth:`_pair_lists`)."""
+        return self._pair_lists()["f_2"]
+
+    @property
+    def f_key(self) -> I64:
+        """The group pairs g1 · G + g2 of ``f_1``, ``f_2`` (sorted, distinct)."""
+        return self._pair_lists()["f_key"]
+
+    @property
+    def f_bounds(self) -> I64:
+        """Where each group pair's entries of ``f_1``, ``f_2`` begin (and the end)."""
+        return self._pair_lists()["f_bounds"]
 
     @property
     def sum_e(self) -> sp.csr_matrix:
