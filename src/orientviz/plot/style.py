@@ -126,11 +126,15 @@ def text_sizes_px(
     The figure is rendered as the book renders it (``dpi``, tight bounding box); the
     PNG is scaled to ``column_px`` if wider. Returns ``(px, text)`` pairs, smallest first.
     """
+    return _sizes_and_width(fig, column_px, dpi)[0]
+
+
+def _sizes_and_width(fig, column_px: float, dpi: float) -> tuple[list[tuple[float, str]], int]:
+    """:func:`text_sizes_px` and the width (px) of the PNG it rendered."""
     import io
 
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
-    buf.seek(0)
     width_px = _png_width(buf.getvalue())
     scale = min(1.0, column_px / width_px)
     out = []
@@ -140,7 +144,7 @@ def text_sizes_px(
         if not _on_figure(t, fig):
             continue
         out.append((float(t.get_fontsize()) / 72.0 * dpi * scale, str(t.get_text())))
-    return sorted(out)
+    return sorted(out), width_px
 
 
 def _png_width(data: bytes) -> int:
@@ -213,17 +217,13 @@ def audit_figures(path: str, label: str) -> bool:
     count = {"n": 0}
 
     def measured(fig, *args, **kwargs):
-        sizes = text_sizes_px(fig)
-        import io
-
-        buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=BOOK_DPI, bbox_inches="tight")
+        sizes, width_px = _sizes_and_width(fig, COLUMN_PX, BOOK_DPI)
         rec = {
             "notebook": label,
             "index": count["n"],
             "min_px": sizes[0][0] if sizes else None,
             "text": sizes[0][1][:60] if sizes else "",
-            "width_px": _png_width(buf.getvalue()),
+            "width_px": width_px,
             "figsize_in": [float(v) for v in fig.get_size_inches()],
         }
         count["n"] += 1

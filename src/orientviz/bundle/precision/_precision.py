@@ -261,8 +261,9 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
     Notes
     -----
     BLAS runs on one thread here (threadpoolctl): the pass is made of many small
-    products, and a second BLAS thread costs several times the CPU without
-    shortening the wall time (benchmarks/README.md, bench_bundle with precision).
+    products, for which a second BLAS thread mostly waits; it cost several times the
+    CPU and no wall time was gained (benchmarks/README.md, "the precision pass on one
+    BLAS thread").
     """
     with blas_threads(1):
         _fill_precision(res, prob, st, rw, Je, Jp, lin)
