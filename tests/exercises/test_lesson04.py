@@ -17,6 +17,8 @@ def test_diagnoses_name_the_mistake():
         {
             ("check_resection", "weights forgotten"): "without weights",
             ("check_rho_x0_phi", "N"): "normal matrix N",
+            ("check_rho_x0_phi", "sign of ∂x/∂X0"): "one column of the design has the wrong sign",
+            ("check_design_X0", "the stand-in (numeric_X0)"): "calls the library's project",
             ("check_rho_x0_phi", "cofactor"): "not divided by",
             ("check_rho_x0_phi", "x only"): "only the x equations",
             ("check_resection", "divides by n"): "redundancy",

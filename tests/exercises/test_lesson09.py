@@ -83,3 +83,12 @@ def test_inner_solve_check_refuses_the_library():
 
     exc = rejection(lesson09.check_inner_solve, datum_solve)
     assert exc is not None and "calls the library's datum_solve" in str(exc)
+
+
+def test_the_lessons_stand_in_is_refused_and_named():
+    from mutants import assert_diagnoses
+
+    for text in ["calls scipy.linalg.null_space", "stand-in"]:
+        assert_diagnoses(
+            lesson09, answers, {("check_null_space", "the stand-in (scipy's null_space)"): text}
+        )

@@ -124,3 +124,12 @@ def test_first_state_below_reads_the_iteration_and_names_the_neighbours(capsys):
         lesson10.check_first_state_below(3, data, states)
     with pytest.raises(NotWrittenError):
         lesson10.check_first_state_below(None, data, states)
+
+
+def test_the_lessons_stand_in_is_refused_and_named():
+    from mutants import assert_diagnoses
+
+    for text in ["calls the library's simulate_block", "measured_bandwidths"]:
+        assert_diagnoses(
+            lesson10, answers, {("check_predicted_bandwidth", "the stand-in (measured)"): text}
+        )

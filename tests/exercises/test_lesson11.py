@@ -40,3 +40,20 @@ def test_fit_k1_check_refuses_the_engine():
 
     exc = rejection(lesson11.check_fit_k1, fit_k1_engine)
     assert exc is not None and "calls the library's gauss_newton" in str(exc)
+
+
+def test_the_lessons_stand_in_is_refused_and_named():
+    from mutants import assert_diagnoses
+
+    for text in ["calls np.linalg.inv", "stand-in"]:
+        assert_diagnoses(
+            lesson11, answers, {("check_inflation", "the stand-in (Q inverted)"): text}
+        )
+
+
+def test_inflation_check_refuses_solving_with_q_too():
+    from mutants import assert_diagnoses
+
+    assert_diagnoses(
+        lesson11, answers, {("check_inflation", "solve instead of inv"): "calls np.linalg.solve"}
+    )

@@ -24,5 +24,13 @@ def test_diagnoses_name_the_mistake():
             ("check_from_differences", "independent"): "taken as independent",
             ("check_from_differences", "C as weight"): "covariance itself used as the weight",
             ("check_from_differences", "no offset"): "without the offset",
+            ("check_from_differences", "the offset model again"): "is the offset model again",
         },
     )
+
+
+def test_the_lessons_stand_in_is_refused_and_named():
+    from mutants import assert_diagnoses
+
+    for text in ["calls the library's statoscope_row_library", "stand-in"]:
+        assert_diagnoses(lesson13, answers, {("check_statoscope_row", "the stand-in"): text})

@@ -35,5 +35,6 @@ def test_best_pair_misreadings_are_named():
             ("check_best_pair", "largest"): "LARGEST",
             ("check_best_pair", "plan"): "plan position",
             ("check_best_pair", "spread"): "farthest apart",
+            ("check_best_pair", "the stand-in"): "calls the library's best_pair_library",
         },
     )

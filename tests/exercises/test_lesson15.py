@@ -73,3 +73,10 @@ def test_residual_pattern_check_refuses_the_engine():
 
     exc = rejection(lesson15.check_residual_pattern, engine)
     assert exc is not None and "calls the library's gauss_newton" in str(exc)
+
+
+def test_the_lessons_stand_in_is_refused_and_named():
+    from mutants import assert_diagnoses
+
+    for text in ["calls the library's expected_rms_library", "stand-in"]:
+        assert_diagnoses(lesson15, answers, {("check_expected_rms", "the stand-in"): text})

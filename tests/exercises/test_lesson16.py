@@ -55,3 +55,22 @@ def test_law_spacing_without_sqrt2_is_named():
     from mutants import assert_diagnoses
 
     assert_diagnoses(lesson16, answers, {("check_law_spacing", "no √2"): "√2 is missing"})
+
+
+def test_the_lessons_stand_in_is_refused_and_named():
+    from mutants import assert_diagnoses
+
+    for text in ["hands a 11 × 11 matrix to np.linalg.inv", "control_update_library"]:
+        assert_diagnoses(
+            lesson16,
+            answers,
+            {("check_control_update", "the stand-in (a new u × u inverse)"): text},
+        )
+
+
+def test_control_update_check_refuses_solving_with_the_enlarged_n():
+    from mutants import assert_diagnoses
+
+    assert_diagnoses(
+        lesson16, answers, {("check_control_update", "solve on the enlarged N"): "to np.linalg."}
+    )

@@ -111,3 +111,22 @@ def test_kovarik_check_demands_shrinking_steps():
 
     exc = rejection(lesson05.check_kovarik_iteration, constant_steps)
     assert exc is not None and "do not shrink" in str(exc)
+
+
+def test_small_matrices_lets_a_small_inverse_through_and_names_a_large_one():
+    from orientviz.exercises._common import small_matrices
+
+    with small_matrices(3, "too large here", inv=np.linalg.inv):
+        assert call(lambda a: np.linalg.inv(a)[0, 0], 2.0 * np.eye(3), what="f") == 0.5
+        with pytest.raises(AssertionError, match="f hands a 4 × 4 matrix to inv: too large here"):
+            call(lambda a: np.linalg.inv(a)[0, 0], np.eye(4), what="f")
+    assert call(lambda a: np.linalg.inv(a)[0, 0], np.eye(4), what="f") == 1.0  # outside
+
+
+def test_own_work_says_the_reason_it_is_given():
+    def library(x):
+        return 2 * x
+
+    with own_work("why not", library=library):
+        with pytest.raises(AssertionError, match="f calls the library's library: why not"):
+            call(library, 1.0, what="f")

@@ -19,15 +19,17 @@ import math
 import sys
 import zlib
 from collections.abc import Callable, Iterable, Iterator
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
+import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
 from ._standin import student_function
 
 __all__ = [
     "ANGLE_FACTORS",
+    "INVERTERS",
     "CheckFailed",
     "NotWrittenError",
     "angle_unit_diagnosis",
@@ -42,6 +44,7 @@ __all__ = [
     "rng_for",
     "scale_diagnosis",
     "show_mistake",
+    "small_matrices",
     "success",
 ]
 
@@ -50,6 +53,20 @@ ANGLE_FACTORS: dict[str, float] = {
     "rad": 1.0,
     "deg": math.pi / 180.0,
     "gon": math.pi / 200.0,
+}
+
+
+#: numpy's and scipy's functions that invert a matrix or solve with it, by the name a message
+#: uses (for :func:`own_work` / :func:`small_matrices` in exercises that avoid an inverse).
+INVERTERS: dict[str, Callable[..., Any]] = {
+    "np.linalg.inv": np.linalg.inv,
+    "np.linalg.solve": np.linalg.solve,
+    "np.linalg.pinv": np.linalg.pinv,
+    "np.linalg.lstsq": np.linalg.lstsq,
+    "scipy.linalg.inv": scipy.linalg.inv,
+    "scipy.linalg.solve": scipy.linalg.solve,
+    "scipy.linalg.pinv": scipy.linalg.pinv,
+    "scipy.linalg.lstsq": scipy.linalg.lstsq,
 }
 
 
@@ -93,14 +110,31 @@ def rng_for(name: str, salt: int = 0) -> np.random.Generator:
     return np.random.default_rng([zlib.crc32(name.encode("utf-8")), int(salt)])
 
 
+class _Guard(NamedTuple):
+    """One forbidden library function: its name in messages, why it is forbidden and the
+    most columns of a matrix it may still be given (None: not called at all)."""
+
+    name: str
+    reason: str | None
+    limit: int | None
+
+
 #: The library functions the running check forbids, by code object (see :func:`own_work`).
-_FORBIDDEN: contextvars.ContextVar[dict[Any, str] | None] = contextvars.ContextVar(
+_FORBIDDEN: contextvars.ContextVar[dict[Any, _Guard] | None] = contextvars.ContextVar(
     "orientviz_exercises_forbidden", default=None
 )
 
 
 @contextlib.contextmanager
-def own_work(**library: Callable[..., Any]) -> Iterator[None]:
+def _forbid(guards: dict[Any, _Guard]) -> Iterator[None]:
+    token = _FORBIDDEN.set({**(_FORBIDDEN.get() or {}), **guards})
+    try:
+        yield
+    finally:
+        _FORBIDDEN.reset(token)
+
+
+def own_work(reason: str | None = None, /, **library: Callable[..., Any]) -> Any:
     """Within the block, :func:`call` rejects a student's function that runs ``library``.
 
     A "your version" exercise asks for the student's own numpy; the lesson shows the
@@ -112,35 +146,99 @@ def own_work(**library: Callable[..., Any]) -> Iterator[None]:
 
     Parameters
     ----------
+    reason : str, optional
+        What the message says after naming the function (default: the exercise asks for
+        your own numpy; the library stands in only while the blank is empty).
     **library : callable
         The forbidden library functions, keyed by the name the message uses.
+
+    Returns
+    -------
+    context manager
+        Usable as ``with own_work(...):`` and as a decorator of a check.
     """
-    codes = {inspect.unwrap(f).__code__: name for name, f in library.items()}
-    token = _FORBIDDEN.set({**(_FORBIDDEN.get() or {}), **codes})
-    try:
-        yield
-    finally:
-        _FORBIDDEN.reset(token)
-
-
-def _library_message(what: str, name: str) -> str:
-    return (
-        f"{what} calls the library's {name}: this exercise asks for your own numpy "
-        "(the library stands in above only while your blank is empty)"
+    return _forbid(
+        {inspect.unwrap(f).__code__: _Guard(name, reason, None) for name, f in library.items()}
     )
+
+
+def small_matrices(limit: int, reason: str, /, **library: Callable[..., Any]) -> Any:
+    """Within the block, :func:`call` rejects a student's function that hands ``library``
+    (e.g. ``np.linalg.inv``) a matrix with more than ``limit`` columns.
+
+    For exercises whose point is to avoid a large inverse (an update formula that needs only
+    a small one): the first argument of each watched call is measured.
+
+    Parameters
+    ----------
+    limit : int
+        The most columns still allowed (e.g. 3 for a 3 × 3 inverse; for a least-squares
+        fit the columns are its unknowns).
+    reason : str
+        What the message says after naming the call and the size.
+    **library : callable
+        The watched functions, keyed by the name the message uses.
+
+    Returns
+    -------
+    context manager
+        Usable as ``with small_matrices(...):`` and as a decorator of a check.
+    """
+    return _forbid(
+        {
+            inspect.unwrap(f).__code__: _Guard(name, reason, int(limit))
+            for name, f in library.items()
+        }
+    )
+
+
+def _library_message(what: str, hit: tuple[_Guard, tuple[int, ...] | None]) -> str:
+    guard, shape = hit
+    if shape is not None:
+        size = " × ".join(str(k) for k in shape)
+        return f"{what} hands a {size} matrix to {guard.name}: {guard.reason}"
+    reason = guard.reason or (
+        "this exercise asks for your own numpy (the library stands in above only while your "
+        "blank is empty)"
+    )
+    whose = "" if "." in guard.name else "the library's "  # np.linalg.inv: numpy, not ours
+    return f"{what} calls {whose}{guard.name}: {reason}"
+
+
+def _too_large(frame: Any, limit: int) -> tuple[int, ...] | None:
+    """The shape of the watched call's first argument if its columns (the unknowns of an
+    inverse, a solve or a least-squares fit) exceed ``limit``."""
+    code = frame.f_code
+    if not code.co_argcount:
+        return None
+    try:
+        shape = tuple(int(k) for k in np.shape(frame.f_locals.get(code.co_varnames[0])))
+    except (TypeError, ValueError):  # pragma: no cover - not an array-like
+        return None
+    return shape if shape and shape[-1] > limit else None
 
 
 def _run_watched(func: Callable[..., Any], args: tuple, kwargs: dict, what: str) -> Any:
     """Run ``func``; raise :class:`CheckFailed` if it ran a library function :func:`own_work`
-    forbids (also when it then failed)."""
+    forbids or handed one of :func:`small_matrices` too large a matrix (also when it then
+    failed)."""
     forbidden = _FORBIDDEN.get() or {}
     if not forbidden:
         return func(*args, **kwargs)
-    hits: list[str] = []
+    hits: list[tuple[_Guard, tuple[int, ...] | None]] = []
 
     def hook(frame: Any, event: str, arg: Any) -> None:
-        if event == "call" and frame.f_code in forbidden and not hits:
-            hits.append(forbidden[frame.f_code])
+        if event != "call" or hits:
+            return
+        guard = forbidden.get(frame.f_code)
+        if guard is None:
+            return
+        if guard.limit is None:
+            hits.append((guard, None))
+        else:
+            shape = _too_large(frame, guard.limit)
+            if shape is not None:
+                hits.append((guard, shape))
 
     previous = sys.getprofile()
     sys.setprofile(hook)

@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import least_squares
 
+from ..camera import project  # forbidden in design_X0 (own_work): the stand-in differentiates it
 from ..orientation.intersection import intersect_rays  # forbidden inside the student's
 from ..orientation.resection import resection  # functions (own_work), never an oracle
 from ._common import CheckFailed, call, compare, own_work, rng_for, success
@@ -189,8 +190,15 @@ def _numeric_design(X: F64, X0: F64, R: F64, c: float, h: float = 1e-3) -> F64:
     return np.column_stack(cols)
 
 
+@own_work(
+    "the exercise is the analytic derivatives; central differences of the library's projection "
+    "(the stand-in numeric_X0 above) are what the cell after the check compares them with",
+    project=project,
+)
 def check_design_X0(design_X0: Callable[[F64, F64, F64, float], F64]) -> None:
-    """``design_X0(X, X0, R, c)`` must return ∂(x1, y1, x2, y2, …)/∂(X0, Y0, Z0), shape (2n, 3), mm/m."""
+    """``design_X0(X, X0, R, c)`` must return ∂(x1, y1, x2, y2, …)/∂(X0, Y0, Z0), shape (2n, 3), mm/m.
+
+    The answer may not call the library's ``project`` (the lesson's numerical stand-in does)."""
     rng = rng_for("lesson04.check_design_X0")
     X, p, _, c = _scene(rng, 5)
     R = _R(p[3:] * 20)  # a strongly tilted image, so that R and Rᵀ differ clearly
@@ -355,8 +363,10 @@ def check_rho_x0_phi(fn: Callable[[F64, float, float], float]) -> None:
         Qx = np.linalg.inv(Ax.T @ Ax)
         N = A.T @ A
         wrong = [
-            ("this is the correlation of the normal matrix N, not of its inverse Q = N⁻¹: the "
-             "sign is reversed", N[0, 1] / np.sqrt(N[0, 0] * N[1, 1])),
+            ("the sign is reversed: one column of the design has the wrong sign (a derivative "
+             "by X0 or by φ), or this is the correlation of the normal matrix N instead of its "
+             "inverse Q = N⁻¹ (for two unknowns the two differ only in sign)",
+             N[0, 1] / np.sqrt(N[0, 0] * N[1, 1])),
             ("this is the cofactor Q(X0, φ), not divided by √(Q(X0, X0) Q(φ, φ))", Q[0, 1]),
             ("only the x equations: a tilt φ also moves y by x·y/c·dφ",
              Qx[0, 1] / np.sqrt(Qx[0, 0] * Qx[1, 1])),

@@ -14,8 +14,10 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+from scipy.linalg import null_space as scipy_null_space  # forbidden (own_work), no oracle
 
 from ..adjust.datum import datum_solve
+from ..adjust.rank import null_space_of_normal  # forbidden (own_work), no oracle
 from ._common import CheckFailed, call, compare, own_work, rng_for, success
 from .sliders import check_slider_answer
 
@@ -305,10 +307,17 @@ def _defect_case(
     return (N + N.T) / 2, G0
 
 
+@own_work(
+    "the exercise is your own rule for which eigenvalues of eigh are zero; scipy's "
+    "null_space (the stand-in above) applies its own",
+    **{"scipy.linalg.null_space": scipy_null_space},
+    null_space_of_normal=null_space_of_normal,
+)
 def check_null_space(null_space) -> None:
     """``null_space(N)`` must return G (u, d): a basis of the null space of the symmetric normal
     matrix N, d its datum defect: the eigenvalues that are zero to round-off (about u·ε·λ_max),
-    not those below a fixed tolerance nor those below the largest jump of the spectrum."""
+    not those below a fixed tolerance nor those below the largest jump of the spectrum.
+    The answer may not call scipy's ``null_space`` or the library's ``null_space_of_normal``."""
     rng = rng_for("lesson09.check_null_space")
     for d, clusters in ((7, False), (4, False), (7, True)):
         N, G0 = _defect_case(rng, d, clusters)

@@ -74,13 +74,24 @@ def _block_patterns(strips: int, per_strip: int) -> tuple[int, int, np.ndarray, 
     return bandwidth(S), bandwidth(S, best), S, best
 
 
+@own_work(
+    "a prediction is a law in s and n; building the block and counting its bandwidth (the "
+    "stand-in measured_bandwidths above) is the measurement it is compared with",
+    simulate_block=simulate_block,
+    reduced_pattern=reduced_pattern,
+    bandwidth=bandwidth,
+    geometric_orderings=geometric_orderings,
+)
 def check_predicted_bandwidth(fn) -> None:
     """``fn(strips, per_strip) -> (along, across)``: the half-bandwidth of the reduced normal
     matrix S (in images) of a block flown strip by strip, back and forth, numbered in flight
     order (along) and column by column across the strips (across), predicted from the shape.
 
     Oracle: the library's pattern of S of simulated blocks of five shapes (two or more strips,
-    more images per strip than twice the strips), bandwidth counted over all entries.
+    more images per strip than twice the strips), bandwidth counted over all entries. The
+    answer may not build a block or count a pattern's bandwidth (the library's
+    ``simulate_block``, ``reduced_pattern``, ``bandwidth`` and ``geometric_orderings`` are
+    watched).
     """
     cases = ((2, 6), (3, 9), (4, 11), (2, 15), (5, 13))
     for s, n in cases:

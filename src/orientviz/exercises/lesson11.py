@@ -15,7 +15,15 @@ import numpy as np
 from scipy.stats import norm
 
 from orientviz.adjust import gauss_newton
-from orientviz.exercises._common import CheckFailed, call, compare, own_work, rng_for, success
+from orientviz.exercises._common import (
+    INVERTERS,
+    CheckFailed,
+    call,
+    compare,
+    own_work,
+    rng_for,
+    success,
+)
 
 
 def _points(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -81,13 +89,19 @@ def _sigma_alone(Q: np.ndarray) -> float:
     return 1.0 / np.sqrt(np.linalg.inv(Q)[0, 0])
 
 
+@own_work(
+    "the exercise is f from the entries of Q, worked out on paper — inverting Q (as the "
+    "stand-in above does) skips the derivation",
+    **INVERTERS,
+)
 def check_inflation(fn: Callable) -> None:
     """Check ``fn(Q) -> f``: by how much the σ of the first parameter grows because the second
     is estimated with it, from the 2 × 2 cofactor matrix Q of the joint adjustment:
     f = σ(joint) / σ(alone) = √Q₀₀ / (1/√N₀₀), N = Q⁻¹ (= 1/√(1 − ρ²)).
 
     Oracle: the normal matrix N recovered by inverting Q, and the one-parameter adjustment's
-    σ = 1/√N₀₀ — no correlation formula.
+    σ = 1/√N₀₀ — no correlation formula. The answer may not invert Q or solve with it (numpy's
+    and scipy's inverses and solvers are watched).
     """
     rng = rng_for("lesson11.check_inflation")
     for rho in (0.97, -0.6, 0.2):

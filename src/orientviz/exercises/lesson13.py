@@ -12,11 +12,39 @@ from collections.abc import Callable
 
 import numpy as np
 
-from orientviz.exercises._common import CheckFailed, call, compare, rng_for, success
+from orientviz.exercises._common import (
+    INVERTERS,
+    CheckFailed,
+    call,
+    compare,
+    own_work,
+    rng_for,
+    small_matrices,
+    success,
+)
 
 
+def statoscope_row_library(
+    N: np.ndarray, n: np.ndarray, k: int, o_col: int, s: float, sigma: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The lesson's stand-in for ``add_statoscope_row`` while the student's blank is empty:
+    the normal equations ``(N, n)`` after the reading ``s`` (m, σ ``sigma`` m) of height
+    ``k`` plus the offset in column ``o_col`` (never shown in the lesson;
+    :func:`check_statoscope_row` refuses it)."""
+    row = np.zeros(len(n))
+    row[[k, o_col]] = 1.0
+    weight = 1.0 / sigma**2
+    return N + weight * np.outer(row, row), n + weight * s * row
+
+
+@own_work(
+    "that is the stand-in; the exercise is the one row of the reading, written into N and n by you",
+    statoscope_row_library=statoscope_row_library,
+)
 def check_statoscope_row(fn: Callable) -> None:
-    """Check ``fn(N, n, k, o_col, s, sigma) -> (N, n)``: add the row s + v = Z_k + o."""
+    """Check ``fn(N, n, k, o_col, s, sigma) -> (N, n)``: add the row s + v = Z_k + o.
+
+    The lesson's stand-in :func:`statoscope_row_library` is refused."""
     rng = rng_for("lesson13.check_statoscope_row")
     u, rows = 7, 12
     A0 = rng.normal(size=(rows, u))
@@ -148,6 +176,12 @@ def check_gnss_rows(fn: Callable) -> None:
     success("the three GNSS rows have 1 at X0, Y0, Z0 and the strip's offsets, t at its drifts")
 
 
+@small_matrices(
+    9,
+    "an inverse or a solve with more unknowns than the 9 heights is the offset model again (its "
+    "offset the 10th unknown); the exercise is the heights from the differences, no offset",
+    **INVERTERS,
+)
 def check_from_differences(fn: Callable) -> None:
     """Check ``fn(A0, l0, sig0, s, sigma) -> Z``: the heights adjusted from the strip's rows
     (A0 (r, m), l0, sig0) together with the m − 1 consecutive differences of the statoscope
@@ -155,6 +189,9 @@ def check_from_differences(fn: Callable) -> None:
 
     Oracle: the same data with the readings as observations s + v = Z_k + o and the offset
     as an unknown (the model of the lesson), solved from scratch; the two must agree exactly.
+    Because they agree, the answer may not invert or solve with more than m = 9 unknowns
+    (numpy's and scipy's inverses, solvers and least-squares fits are watched): solving the
+    offset model again is refused.
     """
     rng = rng_for("lesson13.check_from_differences")
     m = 9

@@ -12,7 +12,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from orientviz.exercises._common import CheckFailed, call, compare, rng_for, success
+from orientviz.exercises._common import CheckFailed, call, compare, own_work, rng_for, success
 
 
 def _rodrigues(axis, angle: float) -> np.ndarray:
@@ -162,6 +162,20 @@ def _station_sigma(C: np.ndarray, X0: np.ndarray, idx) -> np.ndarray:
     return np.sqrt(np.diag(np.linalg.inv(J.T @ J)))
 
 
+def best_pair_library(C: np.ndarray, X0: np.ndarray, tri: list[int]) -> tuple[int, int]:
+    """The lesson's stand-in for ``best_pair`` while the student's blank is empty: the two
+    points of ``C`` (n, 3) m not in ``tri`` whose ranges, added to those of ``tri``, give the
+    station ``X0`` (3,) m the smallest σ_Z (never shown in the lesson, so that the pair is
+    not printed before the student finds it; :func:`check_best_pair` refuses it)."""
+    free = [k for k in range(len(C)) if k not in tri]
+    pairs = [(a, b) for n, a in enumerate(free) for b in free[n + 1 :]]
+    return min(pairs, key=lambda pr: float(_station_sigma(C, X0, list(tri) + list(pr))[2]))
+
+
+@own_work(
+    "that is the stand-in; the exercise is the search over the pairs, written by you",
+    best_pair_library=best_pair_library,
+)
 def check_best_pair(fn: Callable) -> None:
     """Check ``fn(C, X0, tri) -> (i, j)``: the two points (not in ``tri``) whose ranges, added to
     those of the three points ``tri``, give the station the smallest σ_Z.

@@ -123,6 +123,22 @@ def check_smallest_redundancy(fn: Callable) -> None:
     )
 
 
+def expected_rms_library(image: np.ndarray, sigma: np.ndarray, r: np.ndarray, m: int) -> np.ndarray:
+    """The lesson's stand-in for ``expected_rms`` while the student's blank is empty: per
+    image (``m`` of them) and axis, the RMS (mm) the residuals of the rays ``image`` (n,)
+    with σ ``sigma`` (n, 2, mm) and redundancy numbers ``r`` (n, 2) should show (never shown
+    in the lesson; :func:`check_expected_rms` refuses it)."""
+    image = np.asarray(image)
+    var = np.asarray(sigma, float) ** 2 * np.asarray(r, float)
+    total = np.zeros((m, 2))
+    np.add.at(total, image, var)
+    return np.sqrt(total / np.bincount(image, minlength=m)[:, None])
+
+
+@own_work(
+    "that is the stand-in; the exercise is the residual's variance worked out from Q_vv",
+    expected_rms_library=expected_rms_library,
+)
 def check_expected_rms(fn: Callable) -> None:
     """Check ``fn(image, sigma, r, m) -> (m, 2)``: the RMS of the x and the y residuals each
     image should have if the a-priori σ are right, from the σ (n, 2) and the redundancy numbers
@@ -130,7 +146,7 @@ def check_expected_rms(fn: Callable) -> None:
 
     Oracle: a small linear adjustment (random design, unequal σ) whose residual variances
     σ_v² = diag(Q_ll − A N⁻¹ Aᵀ) are computed here from the design — the student's function
-    only gets σ and r.
+    only gets σ and r. The lesson's stand-in :func:`expected_rms_library` is refused.
     """
     rng = rng_for("lesson15.check_expected_rms")
     n, u, m = 40, 7, 4

@@ -17,7 +17,7 @@ import numpy as np
 from ..block import CONTROL
 from ..bundle import bundle_adjust
 from ..simulate import simulate_block
-from ._common import CheckFailed, call, compare, rng_for, success
+from ._common import INVERTERS, CheckFailed, call, compare, rng_for, small_matrices, success
 from .sliders import check_slider_answer, crossing
 
 #: The design of the by-hand exercise: 3 strips × 9 images at 1 : 10 000, wide angle,
@@ -66,11 +66,19 @@ def worst_sigma_z(block, control_ids: Sequence[str], sigma: float = 0.02) -> flo
     return float(sz[b.points.role != CONTROL].max())
 
 
+@small_matrices(
+    3,
+    "a new u × u inverse, as the stand-in control_update_library computes it; the Woodbury "
+    "update inverts only the 3 × 3 matrix P⁻¹ + Q_jj of the new control point",
+    **INVERTERS,
+)
 def check_control_update(fn: Callable) -> None:
     """Check ``fn(Q, idx, sigma) -> Q_new``: the cofactors after making a point control.
 
     ``Q`` (u, u) is the cofactor matrix of the design, ``idx`` the three indices of the
     point's X, Y, Z among the unknowns, ``sigma`` (3,) the σ of the given coordinates (m).
+    The answer may invert or solve with matrices of at most 3 × 3 (numpy's and scipy's
+    inverses and solvers are watched): the exercise is the update without a new inverse.
     """
     rng = rng_for("lesson16.check_control_update")
     for u, idx, sigma in ((11, [7, 2, 9], [0.03, 0.05, 0.02]), (8, [0, 1, 2], [0.4, 0.1, 0.25])):

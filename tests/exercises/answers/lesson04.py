@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+import orientviz as ov
 from orientviz.exercises.lesson04 import _R, _project
 
 
@@ -81,6 +82,13 @@ def _sol_best_extra_point(
     return int(pick(s))
 
 
+def _numeric_X0(X, X0, R, c):  # the lesson's stand-in: central differences of ov.project
+    def f(q):
+        return ov.project(X, q, R, c).ravel()
+
+    return np.column_stack([(f(X0 + h) - f(X0 - h)) / 2e-3 for h in np.eye(3) * 1e-3])
+
+
 def _rho_x0_phi(xy, c, H, how="Q"):
     x, y = np.asarray(xy, dtype=float).T
     A = np.zeros((2 * len(x), 2))
@@ -104,8 +112,11 @@ SOLUTIONS = {
 
 MUTANTS = {
     "check_rho_x0_phi": {
-        how: (lambda xy, c, H, how=how: _rho_x0_phi(xy, c, H, how))
-        for how in ("N", "cofactor", "x only")
+        **{
+            how: (lambda xy, c, H, how=how: _rho_x0_phi(xy, c, H, how))
+            for how in ("N", "cofactor", "x only")
+        },
+        "sign of ∂x/∂X0": lambda xy, c, H: _rho_x0_phi(xy, c, -H),
     },
     "check_best_extra_point": {
         "farthest from the centre": lambda xy, X, s, c, p, xyn, Xn, sn, k: int(
@@ -134,6 +145,7 @@ MUTANTS = {
         "sign of the cross term": lambda X01, d1, X02, d2: _two_rays_plus(X01, d1, X02, d2),
     },
     "check_design_X0": {
+        "the stand-in (numeric_X0)": _numeric_X0,
         "by X, not X0": lambda X, X0, R, c: -_sol_design_X0(X, X0, R, c),
         "R^T": lambda X, X0, R, c: _sol_design_X0(X, X0, R.T, c),
         "rows x.. then y..": lambda X, X0, R, c: np.vstack(

@@ -7,6 +7,7 @@ Kept out of the installed package (solutions stay with the teacher); used by
 from __future__ import annotations
 
 import numpy as np
+from scipy.linalg import null_space as scipy_null_space
 
 from orientviz.exercises.lesson09 import _s_matrix, _sel
 
@@ -94,6 +95,7 @@ MUTANTS = {
         "absolute tolerance": lambda N: _sol_null_space(N, "absolute"),
         "rows": lambda N: _sol_null_space(N).T,
         "largest": lambda N: np.linalg.eigh(N)[1][:, -_sol_null_space(N).shape[1] :],
+        "the stand-in (scipy's null_space)": scipy_null_space,
     },
     "check_inner_solve": {
         "ridge": lambda N, b, G: _inner_solve(N, b, G, "ridge"),

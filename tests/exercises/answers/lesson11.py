@@ -104,7 +104,12 @@ MUTANTS = {
         "σ0 squared": lambda xy, d: (_fit_k1(xy, d)[0], _fit_k1(xy, d)[1] ** 2),
     },
     "check_inflation": {
-        k: (lambda Q, k=k: _inflation(Q, k)) for k in ("variance", "inverted", "rho", "abs rho")
+        **{
+            k: (lambda Q, k=k: _inflation(Q, k)) for k in ("variance", "inverted", "rho", "abs rho")
+        },
+        # the lesson's stand-in: the right number, with Q inverted instead of derived
+        "the stand-in (Q inverted)": lambda Q: np.sqrt(Q[0, 0] * np.linalg.inv(Q)[0, 0]),
+        "solve instead of inv": lambda Q: np.sqrt(Q[0, 0] * np.linalg.solve(Q, [1.0, 0.0])[0]),
     },
     "check_significant": {
         "one-sided": lambda v, s, a: np.abs(v) / s > norm.ppf(1 - a),

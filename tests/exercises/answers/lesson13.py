@@ -10,6 +10,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from orientviz.exercises.lesson13 import statoscope_row_library
+
 
 def _statoscope_row(N, n, k, o_col, s, sigma):
     a = np.zeros(len(n))
@@ -42,6 +44,13 @@ def _from_differences(A0, l0, sig0, s, sigma, mistake=None):
     return np.linalg.solve(N, n)
 
 
+def _offset_model(A0, l0, sig0, s, sigma):  # the right heights, but not from the differences
+    r, m = A0.shape
+    A = np.vstack([np.column_stack([A0, np.zeros(r)]), np.column_stack([np.eye(m), np.ones(m)])])
+    w = np.r_[1 / sig0**2, np.full(m, 1 / sigma**2)]
+    return np.linalg.solve(A.T @ (w[:, None] * A), A.T @ (w * np.r_[l0, s]))[:m]
+
+
 SOLUTIONS = {
     "check_statoscope_row": _statoscope_row,
     "check_difference_covariance": _difference_covariance,
@@ -69,6 +78,7 @@ MUTANTS = {
             N + np.diag(np.eye(len(n))[k] + np.eye(len(n))[o]) / sg**2,
             _statoscope_row(N, n, k, o, s, sg)[1],
         ),
+        "the stand-in": statoscope_row_library,
     },
     "check_difference_covariance": {
         "independent": lambda sg, m: 2 * sg**2 * np.eye(m - 1),
@@ -91,6 +101,7 @@ MUTANTS = {
         "no offset": lambda A0, l0, sig0, s, sigma: np.linalg.solve(
             A0.T @ (A0 / sig0[:, None] ** 2) + np.eye(A0.shape[1]) / sigma**2,
             A0.T @ (l0 / sig0**2) + s / sigma**2,
-        )
+        ),
+        "the offset model again": _offset_model,
     },
 }

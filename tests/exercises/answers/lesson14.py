@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from orientviz.exercises.lesson14 import best_pair_library
+
 
 def _ppi_image(P, X0, R, h, m, x0, y0):
     abc = (P - X0) @ R  # rows: Rᵀ (X − X0)
@@ -80,7 +82,10 @@ MUTANTS = {
         "one root": lambda C, r: (_trilaterate(C, r)[1], _trilaterate(C, r)[1]),
     },
     "check_best_pair": {
-        k: (lambda C, X0, tri, k=k: _best_pair(C, X0, tri, k))
-        for k in ("largest", "plan", "spread")
+        **{
+            k: (lambda C, X0, tri, k=k: _best_pair(C, X0, tri, k))
+            for k in ("largest", "plan", "spread")
+        },
+        "the stand-in": best_pair_library,
     },
 }

@@ -15,6 +15,11 @@ def _control_update(Q, idx, sigma):
     return Q - Qj @ M @ Qj.T
 
 
+def _control_update_library(Q, idx, sigma):  # the lesson's stand-in: the full inverse
+    E = np.eye(len(Q))[idx]
+    return np.linalg.inv(np.linalg.inv(Q) + E.T @ np.diag(1 / np.asarray(sigma) ** 2) @ E)
+
+
 def _law_spacing(sigma_img_mm, scale, c_mm, format_mm, p, target_m, mu):
     base = format_mm * 1e-3 * scale * (1 - p)
     s0z = np.sqrt(2.0) * sigma_img_mm * 1e-3 * scale * (c_mm * 1e-3 * scale) / base
@@ -95,6 +100,12 @@ MUTANTS = {
             np.isin(np.arange(len(Q))[:, None], idx) & np.isin(np.arange(len(Q))[None, :], idx),
             _control_update(Q, idx, s),
             Q,
+        ),
+        "the stand-in (a new u × u inverse)": _control_update_library,
+        "solve on the enlarged N": lambda Q, idx, s: np.linalg.solve(
+            np.linalg.inv(Q)
+            + np.eye(len(Q))[idx].T @ np.diag(1 / np.asarray(s) ** 2) @ np.eye(len(Q))[idx],
+            np.eye(len(Q)),
         ),
     },
     "check_law_spacing": {
