@@ -44,7 +44,7 @@ enforces the notebook side):
   is turned by :func:`~orientviz.exercises._common.call` into a :class:`CheckFailed` that names
   the shapes of the inputs.
 
-This package is core: it imports numpy only (no matplotlib, no widgets).
+This package is core: it imports numpy and scipy only (no matplotlib, no widgets).
 """
 
 from __future__ import annotations
