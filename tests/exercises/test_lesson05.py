@@ -40,6 +40,11 @@ def test_diagnoses_name_the_mistake():
             ("check_relative_from_exterior", "degrees"): "degrees",
             ("check_design", "Kovarik signs"): "Kovarik",
             ("check_design", "1 - Y^2/Z^2"): "sign inside the bracket",
+            (
+                "check_design",
+                "the stand-in (the library's)",
+            ): "calls the library's design_dependent",
+            ("check_parallax", "the stand-in (the library's)"): "calls the library's y_parallax",
             ("check_six_point", "degrees"): "degrees",
             ("check_six_point", "phi and kappa swapped"): "swapped",
             ("check_parallax", "image difference"): "scale it to the model",

@@ -24,7 +24,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..camera import project
-from ..orientation.relative import relative_orientation  # forbidden (own_work), no oracle
+
+# the library's relative orientation: forbidden in the checks (own_work), never an oracle
+from ..orientation.relative import design_dependent as library_design_dependent
+from ..orientation.relative import relative_orientation, y_parallax_jacobian
+from ..orientation.relative import y_parallax as library_y_parallax
 from ..rotation import matrix_from_opk
 from ._common import CheckFailed, call, compare, own_work, rng_for, success
 from .lesson02 import _rodrigues_opk
@@ -71,8 +75,12 @@ def _points(rng: np.random.Generator, n: int, b: float, relief: float = 0.15) ->
     )
 
 
+@own_work(design_dependent=library_design_dependent, y_parallax_jacobian=y_parallax_jacobian)
 def check_design(design_dependent: Callable[[F64, F64, F64, float], F64]) -> None:
-    """``design_dependent(X, Y, Z, b)`` must return ∂p_y/∂(by, bz, ω, φ, κ), shape (n, 5)."""
+    """``design_dependent(X, Y, Z, b)`` must return ∂p_y/∂(by, bz, ω, φ, κ), shape (n, 5).
+
+    The answer may not call the library's ``design_dependent`` (the lesson's stand-in) or
+    ``y_parallax_jacobian``."""
     rng = rng_for("lesson05.check_design")
     b = 92.0
     P = _points(rng, 7, b)
@@ -97,8 +105,11 @@ def check_design(design_dependent: Callable[[F64, F64, F64, float], F64]) -> Non
     success("design matrix: each column is the derivative of the rigorous y-parallax")
 
 
+@own_work(y_parallax=library_y_parallax)
 def check_parallax(y_parallax: Callable[[F64, F64, float], F64]) -> None:
-    """``y_parallax(xy1, xy2, b)`` must return p_y = Y_left − Y_right (n,) of a normal-case pair, model mm."""
+    """``y_parallax(xy1, xy2, b)`` must return p_y = Y_left − Y_right (n,) of a normal-case pair, model mm.
+
+    The answer may not call the library's ``y_parallax`` (the lesson's stand-in)."""
     rng = rng_for("lesson05.check_parallax")
     b, c = 92.0, 152.7
     P = _points(rng, 6, b)

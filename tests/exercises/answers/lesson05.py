@@ -10,6 +10,7 @@ import numpy as np
 
 import orientviz as ov
 from orientviz.exercises.lesson05 import GON, _gruber
+from orientviz.orientation import relative as rel
 
 
 def _sol_design(X, Y, Z, b):
@@ -107,6 +108,7 @@ MUTANTS = {
         "y'' - y'": lambda X, Y, Z, b: -_sol_design(X, Y, Z, b),
         "phi and kappa swapped": lambda X, Y, Z, b: _sol_design(X, Y, Z, b)[:, [0, 1, 2, 4, 3]],
         "Kovarik signs": lambda X, Y, Z, b: _sol_design(X, Y, Z, b) * [1, -1, 1, 1, -1],
+        "the stand-in (the library's)": rel.design_dependent,
         "1 - Y^2/Z^2": lambda X, Y, Z, b: (
             _sol_design(X, Y, Z, b)
             - np.column_stack([0 * X, 0 * X, -2 * Z * (Y / Z) ** 2, 0 * X, 0 * X])
@@ -115,6 +117,10 @@ MUTANTS = {
     "check_parallax": {
         "Y_right - Y_left": lambda xy1, xy2, b: -_sol_parallax(xy1, xy2, b),
         "image difference": lambda xy1, xy2, b: xy1[:, 1] - xy2[:, 1],
+        # the lesson's stand-in (its c is 152.7 mm, as the check's)
+        "the stand-in (the library's)": lambda xy1, xy2, b: rel.y_parallax(
+            xy1, xy2, 152.7, rel.PairState.from_elements(np.zeros(5), b)
+        )[0],
     },
     "check_six_point": {
         "y'' - y'": lambda p, b, d, h: _sol_six_point(-p, b, d, h),
