@@ -13,7 +13,9 @@ import json
 import os
 import subprocess
 import sys
+import tarfile
 import venv
+import zipfile
 from pathlib import Path
 
 import pytest
@@ -48,6 +50,14 @@ def test_pyproject_metadata_is_what_the_ecosystem_expects():
 
 def test_build_gives_wheel_and_sdist_without_warnings_and_the_wheel_solves(tmp_path):
     dist = tmp_path / "dist"
+    # a tree people build from has run Python: its data folders hold __pycache__
+    subprocess.run(
+        [sys.executable, "-c", "import orientviz.datasets"],
+        check=True,
+        env={**_clean_env(), "PYTHONPATH": str(ROOT / "src")},
+        timeout=120,
+    )
+    assert (ROOT / "src" / "orientviz" / "datasets" / "__pycache__").is_dir()
     build = subprocess.run(
         [sys.executable, "-m", "build", "--outdir", str(dist), str(ROOT)],
         capture_output=True,
@@ -62,6 +72,9 @@ def test_build_gives_wheel_and_sdist_without_warnings_and_the_wheel_solves(tmp_p
     wheels = sorted(dist.glob("orientviz-*.whl"))
     sdists = sorted(dist.glob("orientviz-*.tar.gz"))
     assert len(wheels) == 1 and len(sdists) == 1
+    with zipfile.ZipFile(wheels[0]) as whl, tarfile.open(sdists[0]) as sdist:
+        names = whl.namelist() + sdist.getnames()
+    assert not [n for n in names if "__pycache__" in n or n.endswith(".pyc")], "bytecode shipped"
 
     env_dir = tmp_path / "venv"
     venv.EnvBuilder(system_site_packages=True, with_pip=True).create(env_dir)
