@@ -48,8 +48,8 @@ def blas_threads(n: int | None = 1) -> contextlib.AbstractContextManager:
 
 @functools.cache
 def _controller() -> ThreadpoolController:
-    """The thread pools of the loaded BLAS libraries, found once per process (a scan of
-    some 30 ms)."""
+    """The thread pools of the loaded BLAS libraries, found once per process (the scan
+    walks every loaded shared library)."""
     import scipy.linalg  # noqa: F401  loads SciPy's own BLAS before the scan, so it is held too
 
     return ThreadpoolController()
