@@ -46,6 +46,7 @@ __all__ = [
     "show_mistake",
     "small_matrices",
     "success",
+    "check_determined_table",
 ]
 
 #: Size of one unit in radians (rad, deg, gon, c, cc), for the angle-unit diagnosis.
@@ -324,6 +325,52 @@ def _shape_message(what: str, exc: Exception, args: tuple, kwargs: dict) -> str:
 def success(message: str) -> None:
     """Print the short success line of a check (``✓ message``)."""
     print(f"✓ {message}")
+
+
+def check_determined_table(
+    got: list[bool],
+    truth: list[bool],
+    cases: list[tuple[int, ...]],
+    rules: list[tuple[str, Callable[..., Any]]],
+    *,
+    labels: str,
+    what: str,
+    rank: str,
+) -> None:
+    """Compare a student's "is it determined?" answers with the rank oracle's, case by case.
+
+    Parameters
+    ----------
+    got, truth : list of bool
+        The student's answer and the oracle's (rank test) for each case.
+    cases : list of tuple of int
+        The counts each answer was asked for (the arguments of the student's function).
+    rules : list of (str, callable)
+        Plausible wrong rules: when ``got`` equals a rule's answer for every case, the
+        message names that rule's mistake (its text).
+    labels : str
+        What the counts of a case are, e.g. ``"full, plan, height"``.
+    what : str
+        What the cases vary, for the message "wrong for some {what}".
+    rank : str
+        The system and its full rank, e.g. ``"the system has rank 8"``; for the first wrong
+        case the message says "... has rank 8 (determined)" or "... has rank below 8 (not
+        determined)".
+
+    Raises
+    ------
+    CheckFailed
+        When ``got`` differs from ``truth``.
+    """
+    if got == truth:
+        return
+    for text, rule in rules:
+        if got == [bool(rule(*c)) for c in cases]:
+            raise CheckFailed(f"determined: wrong for some {what} — {text}")
+    k = next(i for i in range(len(cases)) if got[i] != truth[i])
+    system, full = rank.rsplit(" ", 1)
+    state = f"{full} (determined)" if truth[k] else f"below {full} (not determined)"
+    raise CheckFailed(f"determined{cases[k]} ({labels}) = {got[k]}: {system} {state} there")
 
 
 def relative_error(got: ArrayLike, expected: ArrayLike, scale: float | None = None) -> float:

@@ -13,7 +13,15 @@ import numpy as np
 from ..camera import project
 from ..orientation.essential import eight_point  # forbidden in eight_point_mine, no oracle
 from ..rotation import matrix_from_opk
-from ._common import CheckFailed, call, compare, own_work, rng_for, success
+from ._common import (
+    CheckFailed,
+    call,
+    check_determined_table,
+    compare,
+    own_work,
+    rng_for,
+    success,
+)
 
 
 def _skew(v):
@@ -76,15 +84,8 @@ def check_plane_points(fn) -> None:
         ("E has nine entries fixed up to a scale: the linear algorithm needs eight independent "
          "equations, not seven", lambda p, q: min(p, 6) + q >= 7),
     ]  # fmt: skip
-    if got != truth:
-        for text, rule in rules:
-            if got == [bool(rule(*cc)) for cc in cases]:
-                raise CheckFailed(f"determined: wrong for some configurations — {text}")
-        k = next(i for i in range(len(cases)) if got[i] != truth[i])
-        raise CheckFailed(
-            f"determined{cases[k]} (on the plane, off it) = {got[k]}: the system has rank "
-            f"{'8 (determined)' if truth[k] else 'below 8 (not determined)'} there"
-        )
+    check_determined_table(got, truth, cases, rules, labels="on the plane, off it",
+                           what="configurations", rank="the system has rank 8")  # fmt: skip
     success(f"all {len(cases)} combinations of 0–12 points on a plane and 0–9 off it right")
 
 

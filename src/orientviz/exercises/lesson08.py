@@ -16,7 +16,15 @@ from scipy.optimize import least_squares
 
 from ..orientation.absolute import similarity_closed_form  # forbidden inside the student's
 from ..orientation.intersection import intersect_points, intersect_rays  # functions, no oracle
-from ._common import CheckFailed, call, compare, own_work, rng_for, success
+from ._common import (
+    CheckFailed,
+    call,
+    check_determined_table,
+    compare,
+    own_work,
+    rng_for,
+    success,
+)
 
 
 def _rodrigues(axis, angle: float) -> np.ndarray:
@@ -127,15 +135,8 @@ def check_determined(fn: Callable) -> None:
         ("the scale and κ need two points with X, Y: one point fixes only the shift",
          lambda f, p, h: f + p >= 1 and f + h >= 3),
     ]  # fmt: skip
-    if got != truth:
-        for text, rule in wrong_rules:
-            if got == [bool(rule(*c)) for c in cases]:
-                raise CheckFailed(f"determined: wrong for some control — {text}")
-        k = next(i for i in range(len(cases)) if got[i] != truth[i])
-        raise CheckFailed(
-            f"determined{cases[k]} (full, plan, height) = {got[k]}: the linearised similarity has "
-            f"rank {'7 (determined)' if truth[k] else 'below 7 (not determined)'} there"
-        )
+    check_determined_table(got, truth, cases, wrong_rules, labels="full, plan, height",
+                           what="control", rank="the linearised similarity has rank 7")  # fmt: skip
     success(f"all {len(cases)} combinations of 0–3 full, 0–4 plan and 0–5 height points right")
 
 

@@ -23,6 +23,7 @@ Folders:
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -365,20 +366,7 @@ class StudioView:
         if not on:
             return
         P = self.frame.to_scene(self.studio.block.points.xyz)
-        c = P.mean(axis=0)
-        lim = 2.0 * self.frame.size
-        gz = self.app.server.scene.add_transform_controls(
-            "/design/gizmo", scale=0.08 * self.frame.size, disable_rotations=True,
-            active_axes=(True, True, False), position=tuple(float(v) for v in c),
-            translation_limits=((-lim, lim), (-lim, lim), (-lim, lim)),
-        )  # fmt: skip
-
-        def moved(event: Any) -> None:
-            if getattr(event, "phase", "end") == "end":
-                self.gizmo_released(np.asarray(gz.position, float))
-
-        gz.on_update(self.app.guard(moved))
-        self.nodes["gizmo"] = gz
+        self._planar_gizmo("gizmo", 0.08, P.mean(axis=0), self.gizmo_released)
 
     def image_gizmo(self, on: bool, image: int | None = None) -> None:
         """Show (or hide) the image gizmo on the projection centre of ``image`` (default:
@@ -394,20 +382,28 @@ class StudioView:
             c = I.X0[:, :2].mean(axis=0)
             image = int(np.argmin(np.linalg.norm(I.X0[:, :2] - c, axis=1)))
         self.dragged = I.ids[image]
+        self._planar_gizmo("image_gizmo", 0.06, self.frame.to_scene(I.X0[image]),
+                           self.image_released)  # fmt: skip
+
+    def _planar_gizmo(
+        self, name: str, size: float, position: Any, released: Callable[[Any], None]
+    ) -> None:
+        """Add a gizmo that moves in the scene's X, Y plane (no rotations) at ``position``,
+        ``size`` × the scene's extent, calling ``released(position)`` when it is let go; kept
+        in ``self.nodes[name]``."""
         lim = 2.0 * self.frame.size
         gz = self.app.server.scene.add_transform_controls(
-            "/design/image_gizmo", scale=0.06 * self.frame.size, disable_rotations=True,
-            active_axes=(True, True, False),
-            position=tuple(float(v) for v in self.frame.to_scene(I.X0[image])),
+            f"/design/{name}", scale=size * self.frame.size, disable_rotations=True,
+            active_axes=(True, True, False), position=tuple(float(v) for v in position),
             translation_limits=((-lim, lim), (-lim, lim), (-lim, lim)),
         )  # fmt: skip
 
         def moved(event: Any) -> None:
             if getattr(event, "phase", "end") == "end":
-                self.image_released(np.asarray(gz.position, float))
+                released(np.asarray(gz.position, float))
 
         gz.on_update(self.app.guard(moved))
-        self.nodes["image_gizmo"] = gz
+        self.nodes[name] = gz
 
     def image_released(self, position: Any) -> None:
         """Move the image under the image gizmo to its position (scene frame, m): same
