@@ -61,8 +61,6 @@ CHECKERS = {
     ("02", "ground_point"): ("check_ground_point", "Rᵀ instead of R"),
     ("12", "snoop_round"): ("check_snoop_round", "|v|/σ"),
     ("10", "point_covariance"): ("check_point_covariance", "ADDS to the point's"),
-    ("11", "significant"): ("check_significant", "the sign was kept"),
-    ("11", "described_share"): ("check_described_share", "remainder's share"),
     ("14", "ppi_image"): ("check_ppi_image", "true horizontal distance"),
     ("15", "residual_pattern"): ("check_residual_pattern", "the rotation has the wrong sign"),
     ("16", "control_update"): ("check_control_update", "needs P⁻¹ = σ²"),
