@@ -53,7 +53,6 @@ CHECKERS = {
     ("03", "dlt_rows"): ("check_dlt_rows", "minus sign"),
     ("05", "six_point"): ("check_six_point", "degrees"),
     ("06", "epipolar_line"): ("check_epipolar_line", "instead of Eᵀ"),
-    ("07", "sigma_scale"): ("check_sigma_scale", "centre"),
     ("09", "helmert_columns"): ("check_helmert_columns", "change of scale"),
     ("09", "s_transform"): ("check_s_transform", "datum points are only"),
     ("12", "external"): ("check_external", "opposite sign"),
