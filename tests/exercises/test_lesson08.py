@@ -34,5 +34,30 @@ def test_diagnoses_name_the_mistake():
             ("check_determined", "one plan point"): "two points with X, Y",
             ("check_intersect_many", "not normalised"): "not normalised",
             ("check_intersect_many", "pairwise midpoints"): "pairwise midpoints",
+            ("check_model_jacobian", "sign"): "wrong sign",
+            ("check_model_jacobian", "left increment"): "increment on the left",
+            ("check_model_jacobian", "lambda column"): "λ column",
+            ("check_adjust_models", "no weights"): "equal weights",
+            ("check_adjust_models", "one step"): "not converged",
+            ("check_adjust_models", "left update"): "not converged",
+            ("check_adjust_models", "whole points"): "decide per coordinate",
+            ("check_adjust_models", "r without points"): "lacks the",
         },
     )
+
+
+def test_the_lessons_stand_ins_are_refused_and_named():
+    """The numeric stand-in of model_jacobian, and a version that calls the library's
+    independent_models, are refused by name."""
+    from orientviz.exercises._common import rejection
+
+    exc = rejection(lesson08.check_model_jacobian, lesson08.model_jacobian_numeric)
+    assert exc is not None and "calls the library's model_jacobian_numeric" in str(exc)
+
+    def by_library(m, model, point, X, free, sigma, R, T):
+        import orientviz as ov
+
+        ov.independent_models(None)
+
+    exc = rejection(lesson08.check_adjust_models, by_library)
+    assert exc is not None and "calls the library's independent_models" in str(exc)

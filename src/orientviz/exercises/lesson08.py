@@ -1,6 +1,7 @@
 """Checkers for lesson 08, block triangulation.
 
-Oracles: error-free simulated truth (a similarity, a conformal polynomial and a
+The own independent-model adjustment (its partial derivatives and the whole iteration) is
+checked in :mod:`._independent_models`, re-exported here. Oracles of the other checks: error-free simulated truth (a similarity, a conformal polynomial and a
 logarithmic law with known parameters) and σ0 written out by hand; never the library's
 ``similarity_transform``, ``polynomial_adjust`` or ``fit_log_law``. The n-ray intersection:
 error-free rays (they meet in the truth), two rays built around a known common perpendicular
@@ -25,6 +26,22 @@ from ._common import (
     rng_for,
     success,
 )
+from ._independent_models import (  # the student's own block method
+    check_adjust_models,
+    check_model_jacobian,
+    model_jacobian_numeric,
+)
+
+__all__ = [
+    "check_adjust_models",
+    "check_compose",
+    "check_conformal",
+    "check_determined",
+    "check_intersect_many",
+    "check_model_jacobian",
+    "check_strips_for",
+    "model_jacobian_numeric",
+]
 
 
 def _rodrigues(axis, angle: float) -> np.ndarray:

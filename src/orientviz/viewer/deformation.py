@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from ..block import Block
 from ..bundle import ap_set, bundle_adjust
+from ..errors import InputError
 from ..io.kinds.block import adjust_block
 from .block_geometry import COLORS
 from .legend import swatch
@@ -213,10 +214,16 @@ def lens_deformation_extra(problem: Any, state: BlockState):
     Vectors from each point as adjusted with the lens terms (the file's solution) to the
     same point adjusted without them, × k (the median drawn half a point spacing), morphed
     by t; the panel gives k, the RMS displacement and both σ̂0. The second bundle runs
-    when the view is first shown.
+    when the view is first shown. While a solve started at opening still runs
+    (``state.pending``) there is no solution to compare with yet: the view waits for it.
     """
-    start, with_lens = state.block0.copy(), state.block.points.xyz.copy()
-    sigma_with = float(state.result.sigma0) if state.result is not None else float("nan")
+    start = state.block0.copy()
+    solution: dict[str, Any] = {}
+    if not state.pending:
+        solution["xyz"] = state.block.points.xyz.copy()
+        solution["sigma0"] = (
+            float(state.result.sigma0) if state.result is not None else float("nan")
+        )
     terms = camera_terms_name(start)
 
     def build(app: Any) -> dict:
@@ -236,6 +243,11 @@ def lens_deformation_extra(problem: Any, state: BlockState):
                                            f"without the cameras' {terms}*")  # fmt: skip
 
         def redraw() -> None:
+            if state.pending:
+                raise InputError(f"{state.pending}: the model deformation follows its solution")
+            if not solution:  # the solve ran in the background: its solution ("as adjusted")
+                solution.update(xyz=state.changes[0].xyz.copy(), sigma0=state.changes[0].sigma0)
+            with_lens, sigma_with = solution["xyz"], solution["sigma0"]
             if "A" not in field:
                 xyz, s0 = without_lens_terms(problem, start)
                 field["A"], field["sigma0"] = xyz - with_lens, s0

@@ -98,7 +98,62 @@ def _plus_c(X0, R, xy, c):
     return np.linalg.solve(M.sum(0), np.einsum("nij,nj->i", M, X0))
 
 
+def _model_jacobian(lam, R, m, mistake=None):
+    from orientviz.rotation import skew
+
+    J = np.zeros((len(m), 3, 7))
+    J[:, :, :3] = -lam[:, None, None] * (R @ skew(m))
+    if mistake == "sign":
+        J[:, :, :3] *= -1
+    elif mistake == "left":
+        J[:, :, :3] = -lam[:, None, None] * skew(np.einsum("kij,kj->ki", R, m))
+    J[:, :, 3] = m if mistake == "lambda column" else np.einsum("kij,kj->ki", R, m)
+    J[:, :, 4:] = np.eye(3)
+    return J
+
+
+def _adjust_models(m, model, point, X, free, sigma, R, T, mistake=None):
+    """The independent-model adjustment (Gauss-Newton, dense normal equations)."""
+    from orientviz.rotation import matrix_from_rotvec
+
+    n, k = len(R), len(m)
+    lam, R, T, X = np.ones(n), R.copy(), T.copy(), X.copy()
+    if mistake == "whole points":  # a point is fixed only if all of X, Y, Z are given
+        free = np.repeat(free.any(axis=1, keepdims=True), 3, axis=1)
+    col = np.full(free.shape, -1)
+    col[free] = 7 * n + np.arange(free.sum())
+    w = np.tile(1.0 / sigma**2, k) if mistake != "no weights" else np.ones(3 * k)
+    rows = np.arange(3 * k).reshape(k, 3)
+    for _ in range(1 if mistake == "one step" else 20):
+        v = lam[model, None] * np.einsum("kij,kj->ki", R[model], m) + T[model] - X[point]
+        A = np.zeros((3 * k, 7 * n + int(free.sum())))
+        J = _model_jacobian(lam[model], R[model], m)
+        if mistake == "left update":
+            J[:, :, :3] = -lam[model, None, None] * _skew(np.einsum("kij,kj->ki", R[model], m))
+        A[rows[:, :, None], 7 * model[:, None, None] + np.arange(7)] = J
+        has = col[point] >= 0
+        A[rows[has], col[point][has]] = -1.0
+        d = np.linalg.solve(A.T @ (w[:, None] * A), -A.T @ (w * v.ravel()))
+        dm = d[: 7 * n].reshape(n, 7)
+        R = R @ matrix_from_rotvec(dm[:, :3])
+        lam, T = lam + dm[:, 3], T + dm[:, 4:]
+        X[free] += d[7 * n :]
+        if np.max(np.abs(d)) < 1e-6 * sigma[0]:
+            break
+    v = (lam[model, None] * np.einsum("kij,kj->ki", R[model], m) + T[model] - X[point]).ravel()
+    r = 3 * k - A.shape[1] if mistake != "r without points" else 3 * k - 7 * n
+    return lam, R, T, X, np.sqrt(v @ (w * v) / r)
+
+
+def _skew(v):
+    from orientviz.rotation import skew
+
+    return skew(v)
+
+
 SOLUTIONS = {
+    "check_model_jacobian": _model_jacobian,
+    "check_adjust_models": _adjust_models,
     "check_intersect_many": _sol_intersect_many,
     "check_compose": _compose,
     "check_determined": _determined,
@@ -107,6 +162,18 @@ SOLUTIONS = {
 }
 
 MUTANTS = {
+    "check_model_jacobian": {
+        "sign": lambda *a: _model_jacobian(*a, mistake="sign"),
+        "left increment": lambda *a: _model_jacobian(*a, mistake="left"),
+        "lambda column": lambda *a: _model_jacobian(*a, mistake="lambda column"),
+    },
+    "check_adjust_models": {
+        "no weights": lambda *a: _adjust_models(*a, mistake="no weights"),
+        "one step": lambda *a: _adjust_models(*a, mistake="one step"),
+        "left update": lambda *a: _adjust_models(*a, mistake="left update"),
+        "whole points": lambda *a: _adjust_models(*a, mistake="whole points"),
+        "r without points": lambda *a: _adjust_models(*a, mistake="r without points"),
+    },
     "check_intersect_many": {
         "R transposed": lambda *a: _sol_intersect_many(*a, mistake="R_transposed"),
         "not normalised": lambda *a: _sol_intersect_many(*a, mistake="not_normalised"),
