@@ -53,7 +53,6 @@ CHECKERS = {
     ("09", "helmert_columns"): ("check_helmert_columns", "change of scale"),
     ("09", "s_transform"): ("check_s_transform", "datum points are only"),
     ("12", "external"): ("check_external", "opposite sign"),
-    ("13", "gnss_rows"): ("check_gnss_rows", "not the time t"),
     ("02", "ground_point"): ("check_ground_point", "Rᵀ instead of R"),
     ("12", "snoop_round"): ("check_snoop_round", "|v|/σ"),
     ("10", "point_covariance"): ("check_point_covariance", "ADDS to the point's"),
