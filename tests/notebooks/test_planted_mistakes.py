@@ -42,13 +42,10 @@ MARK = "# A colleague's version: one line is wrong."
 CHECKERS = {
     ("00", "redundancy"): ("check_redundancy", "not unknowns"),
     ("00", "critical_w"): ("check_critical_value", "one-sided"),
-    ("01", "weighted_mean"): ("check_weighted_mean", "1/σ instead of 1/σ²"),
-    ("01", "ellipse"): ("check_error_ellipse", "halve the angle"),
     ("04", "sigma_Z"): ("check_sigma_Z", "√2 is missing"),
     ("05", "scheme_sigma"): ("check_scheme_sigma", "not the inverse of the diagonal"),
     ("07", "to_model"): ("check_model_coordinates", "not R"),
     ("13", "difference_covariance"): ("check_difference_covariance", "not independent"),
-    ("01", "gn_step"): ("check_gauss_newton_step", "not unit vectors"),
     ("03", "dlt_rows"): ("check_dlt_rows", "minus sign"),
     ("05", "six_point"): ("check_six_point", "degrees"),
     ("06", "epipolar_line"): ("check_epipolar_line", "instead of Eᵀ"),

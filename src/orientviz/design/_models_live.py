@@ -41,6 +41,7 @@ from ..bundle.precision import banded_selected_inverse
 from ..errors import NotDeterminableError
 from ..rotation import skew
 from ..stereo_models import check_datum, default_model_sigma, form_models, tie_setup
+from ._base import TAKAHASHI_BLOCK
 from ._live_parts import _weights
 from ._methods import models_quality
 from ._quality import DesignQuality
@@ -189,7 +190,7 @@ class LiveModels:
         """Q_XX at every tie's 3 × 3 block: D⁻¹ + Σ_ab g_aᵀ Z(j_a, j_b) g_b over the pairs
         of rows (a, b) of each tie, g the rows' columns of G = C D⁻¹ and Z = S⁻¹ inside
         the band."""
-        Zb = banded_selected_inverse(self._cb)
+        Zb = banded_selected_inverse(self._cb, TAKAHASHI_BLOCK)
         j, sc = self._rows
         su, D = self.su, self._D
         g = self._C / D[sc][:, :, None]  # (k, 3, 7)
