@@ -11,24 +11,9 @@ iterations and can stop it between two iterations.
 
 from __future__ import annotations
 
-import os
 import threading
 from collections.abc import Callable
 from typing import Any
-
-
-#: The solve thread's niceness above the viewer's (Linux: per thread): the browser's first
-#: picture and the server's messages come first, the solve takes the CPU left over.
-NICER: int = 10
-
-
-def _lower_priority() -> None:
-    """Lower the calling thread's CPU priority by :data:`NICER` where the OS allows it."""
-    try:
-        tid = threading.get_native_id()
-        os.setpriority(os.PRIO_PROCESS, tid, os.getpriority(os.PRIO_PROCESS, tid) + NICER)
-    except (AttributeError, OSError):  # no per-thread priorities here: run as is
-        pass
 
 
 class Cancelled(Exception):
@@ -90,7 +75,6 @@ class BackgroundSolve:
         ``on_iteration(self)`` after each iteration."""
 
         def work() -> None:
-            _lower_priority()
             try:
                 self.result = self.solve(lambda it: self._progress(it, on_iteration))
             except Cancelled:
