@@ -33,8 +33,13 @@ def test_block_demo_deformation_nodes():
         vec, pts = app.extra["deformation_nodes"]
         origin = app.scene.geo.frame.origin
         demo = app.demo
+        legend = app.panel.handles["legend"]
+        assert "model deformation" not in legend.content and "residual vectors" in legend.content
         ctl["show"].value = True
         assert vec.visible and not app.scene.nodes["residuals"].visible
+        # the legend names the deformation's arrows and points, not what it hid
+        assert "model deformation: each point from its true position" in legend.content
+        assert "residual vectors" not in legend.content and "tie" not in legend.content
         ctl["t"].value = 0.0  # reference → estimate at t = 0: the reference itself
         ref = app.extra["deformation_reference"]
         # float32 scene coordinates of a few km: a few 0.1 mm
@@ -47,6 +52,9 @@ def test_block_demo_deformation_nodes():
         np.testing.assert_allclose(moved, ref + k * d, atol=2e-3)
         ctl["mode"].value = MODES[1]  # two bundles: without and with Ebner's 12 parameters
         assert "with ebner12" in ctl["info"].content
+        assert "adjusted without (t = 0) and with (t = 1) self-calibration" in legend.content
+        ctl["show"].value = False
+        assert "model deformation" not in legend.content and "residual vectors" in legend.content
         assert app.messages == []
     finally:
         app.stop()
