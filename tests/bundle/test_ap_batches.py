@@ -80,6 +80,14 @@ def test_a_batch_map_adds_every_block_once(per_image, monkeypatch):
     K, G = A.e_key.size, A.G
     e_block = np.concatenate([b.e_block.reshape(-1) for b in A.batches])
     f_block = np.concatenate([b.f_block.reshape(-1) for b in A.batches])
+    k = A.F_direct.shape[1]  # parameters per group
+    for b in A.batches:  # a block's rows are 6·block + 0…5 (E), k·block + 0…k−1 (F)
+        n, kr = b.rays.shape
+        c = b.pairs.shape[1]
+        e = b.e_rows.reshape(n, kr, 6, c)
+        assert np.array_equal(e, e[:, :, :1, :] + np.arange(6)[:, None])  # 6·block + r
+        f = b.f_rows.reshape(n, c, k, c)
+        assert np.array_equal(f, f[:, :, :1, :] + np.arange(k)[:, None])  # k·block + s
     # E: one (ray, other pair) block at a time into the block of its (image, group) key
     kept = e_block[e_block < K]
     per_key = np.bincount(np.searchsorted(A.e_key, A._e_rows), minlength=K)

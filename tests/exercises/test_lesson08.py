@@ -61,3 +61,32 @@ def test_the_lessons_stand_ins_are_refused_and_named():
 
     exc = rejection(lesson08.check_adjust_models, by_library)
     assert exc is not None and "calls the library's independent_models" in str(exc)
+
+
+def test_the_independent_models_module_ships_no_solution():
+    """exercises/_independent_models.py (re-exported by lesson08) holds checks and a refused
+    stand-in only: none of its functions passes one of its checks."""
+    import contextlib
+    import inspect
+    import io
+
+    from orientviz.exercises import _independent_models as module
+
+    checks = [module.check_model_jacobian, module.check_adjust_models]
+    own = [
+        f
+        for name, f in vars(module).items()
+        if inspect.isfunction(f)
+        and f.__module__ == module.__name__
+        and not name.startswith("check_")
+    ]
+    assert own
+    for check in checks:
+        for f in own:
+            out = io.StringIO()
+            with contextlib.redirect_stdout(out):
+                try:
+                    check(f)
+                except Exception:  # noqa: BLE001 - refused or wrong signature: not a solution
+                    continue
+            assert not out.getvalue().startswith("✓"), f"{check.__name__} accepts {f.__name__}"

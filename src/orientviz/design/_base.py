@@ -27,6 +27,7 @@ import scipy.linalg
 from numpy.typing import NDArray
 
 from ..block import Block
+from ..bundle import BundleOptions
 from ..bundle.precision import bundle_precision
 from ..bundle.problem import BundleProblem, BundleState, point_setup
 from ..bundle.reduced import factor_reduced
@@ -34,6 +35,10 @@ from ..errors import InputError
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
+
+#: Block size (unknowns) of the banded selected inverse of a design (the bundle's
+#: default is 96; benchmarks/README.md, "Block design", for the choice).
+TAKAHASHI_BLOCK: int = 48
 
 
 class DesignBase:
@@ -57,7 +62,10 @@ class DesignBase:
     """
 
     def __init__(self, block: Block, auxiliary: list | None = None) -> None:
-        prob = BundleProblem(block, point_setup(block, "weighted"), auxiliary=auxiliary or None)
+        prob = BundleProblem(
+            block, point_setup(block, "weighted"), auxiliary=auxiliary or None,
+            options=BundleOptions(takahashi_block=TAKAHASHI_BLOCK),
+        )  # fmt: skip
         if prob.points.n != block.n_points:
             raise InputError("a live design needs weighted control (σ > 0) at every point")
         st = BundleState(

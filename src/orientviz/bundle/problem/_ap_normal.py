@@ -158,8 +158,10 @@ class APStructure:
         # (aerial groups): one product per group pair and per-ray products, over the
         # lists of :meth:`_pair_lists` (formed on first use, as for the precision)
         self.batches: list[PointBatch] | None = None
+        self.sum_img: sp.csr_matrix | None = None  # sums per-ray terms by image (E's own blocks)
         if n_coupled > GROUP_PAIR_LOOP_MAX:
             self.batches = point_batches(oi, go, vo, ocol, first, count, self, k)
+            self.sum_img = sp.csr_matrix((np.ones(n), (oi, np.arange(n))), shape=(m, n))
 
     def _pair_lists(self) -> dict[str, NDArray]:
         """Every (ray, pair of another group of its point) and every ordered pair of
@@ -325,7 +327,7 @@ def ap_normal(
         return _damped(E, F0, ba, H, lam)
     # E: per image, its own group's block Σ_a (J_eᵀ P A − T Hᵀ) = Σ_a J_eᵀ P½ Ã with the
     # reduced design Ã = P½ (A − J_p V⁻¹ Hᵀ) of each ray (T = J_eᵀ P J_p V⁻¹, H of the
-    # ray's own (point, group) pair): one (6 × 2L)(2L × k) product per image
+    # ray's own (point, group) pair)
     n, L = Jew.shape[0], A.L
     VHt = np.empty((H.shape[0] + 1, 3, k))  # V⁻¹ Hᵀ = (H V⁻¹)ᵀ (V⁻¹ symmetric), and a zero
     VHt[:-1] = HV.transpose(0, 2, 1)
@@ -334,8 +336,13 @@ def ap_normal(
     np.matmul(Jpw, VHt[A.own_pg], out=At[:-1])
     np.subtract(prob.ap.Aw, At[:-1], out=At[:-1])
     At[-1] = 0.0
-    Jpad = Jew[A.pad0].reshape(m, 2 * L, 6)  # padded slots: any ray, times a zero ray
-    own = np.matmul(Jpad.transpose(0, 2, 1), At[A.pad].reshape(m, 2 * L, k))
+    if A.batches is not None:  # a group per image: one (6 × 2)(2 × k) product per ray,
+        # summed by image (the images' ray counts differ: padding them costs more)
+        JA = np.matmul(Jew.transpose(0, 2, 1), At[:-1]).reshape(n, 6 * k)
+        own = (A.sum_img @ JA).reshape(m, 6, k)
+    else:  # one (6 × 2L)(2L × k) product per image over its rays padded to L
+        Jpad = Jew[A.pad0].reshape(m, 2 * L, 6)  # padded slots: any ray, times a zero ray
+        own = np.matmul(Jpad.transpose(0, 2, 1), At[A.pad].reshape(m, 2 * L, k))
     # ... and the blocks of the other groups that its points reach (− Σ T_a H_eᵀ); F:
     # direct term (constant for a linear set; refreshed for a lens model) − Σ H V⁻¹ Hᵀ
     # over the pairs (e, e') of one point
