@@ -64,6 +64,8 @@ I64 = NDArray[np.int64]
 MAX_STEPS: int = 40
 #: Scaled pivots of the band factor below this count as singular.
 PIVOT_TOLERANCE: float = 1e-12
+#: What a factorisation sets (restored when a change fails).
+_FACTOR_STATE = ("_D", "_G", "_scale", "_perm", "_pos", "_cb", "kd", "_H", "_Fi", "_quality")
 
 
 class LiveModels:
@@ -205,7 +207,7 @@ class LiveModels:
         pos[perm] = np.arange(perm.size)
         self._D, self._G, self._scale = D, G, s
         self._perm, self._pos, self._cb, self.kd = perm, pos, cb, kd
-        self._H = None
+        self._H = self._Fi = None
         if self._aux is not None:  # the offsets' border: E = −Gθ Cgᵀ, F = Σ w aᵀa − Cg D⁻¹ Cgᵀ
             Cg, Faux = self._aux
             Gg = Cg / D[None, :]
@@ -322,6 +324,7 @@ class LiveModels:
             return self._quality
         su = self.su
         saved = (su.prior_w.copy(), su.known.copy(), su.given.copy(), self._Q, list(self._steps))
+        kept = {k: self.__dict__[k] for k in _FACTOR_STATE}
         try:
             with _blas(self.blas_threads):
                 for p in changed:
@@ -345,6 +348,7 @@ class LiveModels:
         except Exception:
             su.prior_w[:], su.known[:], su.given[:] = saved[0], saved[1], saved[2]
             self._Q, self._steps = saved[3], saved[4]
+            self.__dict__.update(kept)  # the factor, if a new one was begun
             raise
         self._sigma = P.sigma.copy()
         return self._quality
