@@ -19,7 +19,8 @@ external reliability, ellipsoids, weak spots and summary:
 * the method switched to independent models (:class:`orientviz.design.LiveModels`): its
   design (models formed, normal equations factored, selected inverse), control added /
   changed / undone (updates), a new structure (an image removed: a new factorisation);
-  peer: :func:`orientviz.design.assess_models` (one run, ``--models-peer``).
+  the same with statoscope and APR (the offsets' border); peer:
+  :func:`orientviz.design.assess_models` (one run each, ``--models-peer``).
 
 The peer in the same run: a new :func:`orientviz.design.assess_block` of the changed
 design. Each kind is run ``--repeat`` times (median, max). With ``--threads both`` the
@@ -184,6 +185,24 @@ def run(args, label: str) -> list[tuple[str, list[float], list[float]]]:
         dt, _ = _t(lambda: assess_models(mb, spec))
         rows.append(("peer: models assessment (assess_models)", [dt], [CPU[-1]]))
         print(f"  peer assess_models: {dt:.2f} s (CPU {CPU[-1]:.2f} s)")
+    # independent models with statoscope + APR (the offsets' border of the factor)
+    amb = ablock.copy()
+    dt, alm = _t(lambda: LiveModels(amb, aspec, auxiliary=aux, blas_threads=cap))
+    rows.append(("models, statoscope + APR: design", [dt], [CPU[-1]]))
+    print(f"  models, statoscope + APR: design {1e3 * dt:.0f} ms (CPU {1e3 * CPU[-1]:.0f} ms)")
+
+    def aux_models_control(k):
+        P, j = amb.points, int(picks[k])
+        P.sigma[j] = 0.02
+        P.xyz_known[j] = P.xyz[j]
+        P.role[j] = CONTROL
+        return alm.sync()
+
+    kind("models, statoscope + APR: control added (update)", aux_models_control)
+    if args.models_peer:
+        dt, _ = _t(lambda: assess_models(amb, aspec, auxiliary=aux))
+        rows.append(("peer: models assessment with statoscope + APR", [dt], [CPU[-1]]))
+        print(f"  peer assess_models with statoscope + APR: {dt:.2f} s (CPU {CPU[-1]:.2f} s)")
     kind("peer: new assessment (assess_block)", lambda k: assess_block(live.block, spec))
     kind("peer: new assessment with statoscope + APR",
          lambda k: assess_block(alive.block, aspec, auxiliary=aux))  # fmt: skip

@@ -13,7 +13,14 @@ import numpy as np
 import pytest
 
 from orientviz.block import CONTROL, TIE
-from orientviz.design import FlightDesign, LiveModels, _models_live, assess_models, design_block
+from orientviz.design import (
+    FlightDesign,
+    LiveModels,
+    _models_live,
+    assess_models,
+    design_auxiliary,
+    design_block,
+)
 from orientviz.errors import DatumDefectError, NotDeterminableError
 
 RTOL = 1e-8
@@ -34,8 +41,8 @@ def set_control(block, j: int, sigma) -> None:
     P.role[j] = CONTROL if np.isfinite(s).any() else TIE
 
 
-def _same(q, block, spec):
-    ref = assess_models(block, spec)
+def _same(q, block, spec, auxiliary=None):
+    ref = assess_models(block, spec, auxiliary=auxiliary)
     np.testing.assert_allclose(q.point_sigma, ref.point_sigma, rtol=RTOL)
     np.testing.assert_allclose(q.station_sigma, ref.station_sigma, rtol=RTOL)
     np.testing.assert_allclose(q.point_cov, ref.point_cov, rtol=RTOL, atol=1e-14)
@@ -100,3 +107,50 @@ def test_taking_the_datum_away_raises_and_keeps_the_design(design):
     for j in ctrl:  # the control back: nothing to change
         set_control(b, int(j), tuple(block.points.sigma[j]))
     assert live.sync() is q0
+
+
+@pytest.mark.parametrize(
+    "aux",
+    [dict(sigma_statoscope=0.3, sigma_apr=0.5), dict(sigma_gnss=0.1, gnss_offsets=True)],
+    ids=["statoscope+apr", "gnss-shift"],
+)
+def test_with_auxiliary_data_the_offsets_border_follows_every_change(aux):
+    """The joint models adjustment (offsets per strip) by the border of the factor."""
+    plan = FlightDesign(strips=3, images_per_strip=8, control="perimeter", **aux)
+    b, spec = design_block(plan)
+    a = design_auxiliary(b, plan)
+    live = LiveModels(b, spec, auxiliary=a)
+    _same(live.quality(), b, spec, a)
+    tie = np.flatnonzero(b.points.role == 0)
+    set_control(b, int(tie[len(tie) // 2]), (0.02, 0.02, 0.02))
+    set_control(b, int(np.flatnonzero(b.points.role == 1)[0]), (np.nan, np.nan, np.nan))
+    q = live.sync()
+    assert len(live._steps) == 2
+    _same(q, b, spec, a)
+
+
+def test_a_failed_new_factorisation_keeps_the_design(monkeypatch):
+    """With auxiliary data the datum is left to the factorisation; when the steps run out
+    a change factors anew, and a change that leaves no datum must not leave a half-new
+    factor behind for the updates after it."""
+    plan = FlightDesign(strips=3, images_per_strip=8, control="perimeter",
+                        sigma_statoscope=0.3, sigma_apr=0.5)  # fmt: skip
+    b, spec = design_block(plan)
+    a = design_auxiliary(b, plan)
+    live = LiveModels(b, spec, auxiliary=a)
+    monkeypatch.setattr(_models_live, "MAX_STEPS", 0)  # every change: a new factorisation
+    q0 = live.quality()
+    ctrl = np.flatnonzero(b.points.role == 1)
+    sig = b.points.sigma[ctrl].copy()
+    for j in ctrl:  # planimetric control only: the strips' height offsets are free
+        set_control(b, int(j), (0.02, 0.02, np.nan))
+    with pytest.raises(NotDeterminableError, match="offsets"):
+        live.sync()
+    assert live.quality() is q0
+    monkeypatch.setattr(_models_live, "MAX_STEPS", 40)  # updates again, on the old factor
+    for j, s in zip(ctrl, sig):
+        set_control(b, int(j), s)
+    assert live.sync() is q0
+    tie = np.flatnonzero(b.points.role == 0)
+    set_control(b, int(tie[len(tie) // 2]), (0.02, 0.02, 0.02))
+    _same(live.sync(), b, spec, a)

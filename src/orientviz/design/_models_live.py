@@ -15,6 +15,10 @@ from the models' normal equations linearised once at the design's geometry:
   models that share a point, which lie inside the band: the banded selected inverse
   (:func:`orientviz.bundle.precision.banded_selected_inverse`) gives them, so the base costs
   about two band factorisations instead of one solve per point coordinate;
+* with auxiliary data (statoscope, APR, GNSS; offsets per strip, adjusted jointly as
+  ``independent_models`` does) the offsets g are a border: with E = S_θg, Y = S⁻¹E and
+  F̃ = F − EᵀY, Q_XX gains Hᵀ F̃⁻¹ H, H = Yᵀ G_θ − G_g (a band solve with one column per
+  offset);
 * a control change of a point (weights of its three coordinates) is a Woodbury step of
   rank ≤ 3 on Q_XX: Q' = Q − U M Uᵀ, U = Q[:, s], M = (I + Δw U[s])⁻¹ Δw, with Q[:, s]
   from the factor (one solve with three right-hand sides) less the earlier steps' terms.
@@ -40,7 +44,13 @@ from ..block import Block
 from ..bundle.precision import banded_selected_inverse
 from ..errors import NotDeterminableError
 from ..rotation import skew
-from ..stereo_models import check_datum, default_model_sigma, form_models, tie_setup
+from ..stereo_models import (
+    check_datum,
+    default_model_sigma,
+    form_models,
+    joint_setup,
+    tie_setup,
+)
 from ._base import TAKAHASHI_BLOCK
 from ._live_parts import _weights
 from ._methods import models_quality
@@ -54,6 +64,8 @@ I64 = NDArray[np.int64]
 MAX_STEPS: int = 40
 #: Scaled pivots of the band factor below this count as singular.
 PIVOT_TOLERANCE: float = 1e-12
+#: What a factorisation sets (restored when a change fails).
+_FACTOR_STATE = ("_D", "_G", "_scale", "_perm", "_pos", "_cb", "kd", "_H", "_Fi", "_quality")
 
 
 class LiveModels:
@@ -68,6 +80,9 @@ class LiveModels:
         Needs ``base_m`` (air base, m).
     level : float
         Probability of the confidence ellipsoids.
+    auxiliary : list of Auxiliary, optional
+        Statoscope / APR / GNSS data with offsets per strip, adjusted jointly (as
+        ``assess_models`` does): a border of the reduced system.
     blas_threads : int or None
         BLAS threads of the work (None: the process's).
 
@@ -80,9 +95,10 @@ class LiveModels:
 
     def __init__(
         self, block: Block, spec: dict[str, Any], *, level: float = 0.95,
-        blas_threads: int | None = 1,
+        auxiliary: list | None = None, blas_threads: int | None = 1,
     ) -> None:  # fmt: skip
         self.block, self.spec, self.level = block, spec, level
+        self.auxiliary = list(auxiliary or [])
         self.blas_threads = blas_threads
         with _blas(blas_threads):
             self._build()
@@ -92,7 +108,8 @@ class LiveModels:
         b = self.block
         ms = form_models(b)
         su = tie_setup(b, ms, control="weighted", use_centres=True)
-        check_datum(su, ms, need_xy=True, need_z=True)
+        if not self.auxiliary:  # with auxiliary data the normal equations tell (as there)
+            check_datum(su, ms, need_xy=True, need_z=True)
         s_xy, s_z = default_model_sigma(b, ms)
         wc = np.array([1 / s_xy**2, 1 / s_xy**2, 1 / s_z**2])
         j, m = su.row_model, su.m
@@ -117,6 +134,19 @@ class LiveModels:
         self._C = -JW  # (k, 3, 7): the entries of C = Jᵀ W · (−1) of each row coordinate
         self._rows = (j, sc)
         self._D0 = np.bincount(sc.ravel(), np.tile(wc, j.size), minlength=ns)
+        self._aux = None
+        if self.auxiliary:  # rows v = dX_s + Σ_g a_g dg (readings of one coordinate each)
+            js = joint_setup(b, ms, su, wc, None, "model", None, self.auxiliary)
+            a, asc = js.aux, js.aux_scalar
+            if np.any(asc < 0):
+                raise NotDeterminableError(
+                    "a live models design needs weighted control (σ > 0)", parameters=[]
+                )
+            Jg = a.jacobian_global()  # (rows, na)
+            self._D0 += np.bincount(asc, a.w, minlength=ns)
+            Cg = np.zeros((ns, Jg.shape[1]))  # Cgᵀ: C_g[g, s] = Σ w a_g over the rows of s
+            np.add.at(Cg, asc, Jg * a.w[:, None])
+            self._aux = (Cg.T.copy(), Jg.T @ (Jg * a.w[:, None]))
         self._Ublk = Ublk
         self.su, self.ms, self.n = su, ms, n
         self._tie_of = np.full(b.n_points, -1, np.int64)
@@ -177,6 +207,22 @@ class LiveModels:
         pos[perm] = np.arange(perm.size)
         self._D, self._G, self._scale = D, G, s
         self._perm, self._pos, self._cb, self.kd = perm, pos, cb, kd
+        self._H = self._Fi = None
+        if self._aux is not None:  # the offsets' border: E = −Gθ Cgᵀ, F = Σ w aᵀa − Cg D⁻¹ Cgᵀ
+            Cg, Faux = self._aux
+            Gg = Cg / D[None, :]
+            E = -(G @ Cg.T)
+            Y = self._solve(E)
+            Ft = Faux - Gg @ Cg.T - E.T @ Y  # F̃ = F − Eᵀ A⁻¹ E
+            Ft = 0.5 * (Ft + Ft.T)
+            if not np.isfinite(Ft).all() or np.linalg.cond(Ft) > COND_LIMIT:
+                raise NotDeterminableError(
+                    "the offsets of the auxiliary data are not determinable by this models design",
+                    parameters=[],
+                )
+            # Q_XX = D⁻¹ + Gθᵀ A⁻¹ Gθ + Hᵀ F̃⁻¹ H, H = Yᵀ Gθ − Gg
+            self._H = (G.T @ Y).T - Gg
+            self._Fi = np.linalg.inv(Ft)
 
     def _solve(self, rhs: F64) -> F64:
         """S⁻¹ rhs for rhs (7n, r), with the band factor."""
@@ -215,6 +261,9 @@ class LiveModels:
         Q = np.zeros((su.scalar.shape[0], 3, 3))
         np.add.at(Q, su.row_point[a], blk)
         Q += np.einsum("ta,ab->tab", 1.0 / D[su.scalar], np.eye(3))
+        if self._H is not None:
+            Ht = self._H.T[su.scalar]  # (nt, 3, na)
+            Q += Ht @ self._Fi @ Ht.transpose(0, 2, 1)
         return Q
 
     # ------------------------------------------------------------------ updates
@@ -224,6 +273,8 @@ class LiveModels:
         Gs = G[:, s3].toarray()
         col = G.T @ self._solve(Gs)
         col[s3, np.arange(s3.size)] += 1.0 / self._D[s3]
+        if self._H is not None:
+            col += self._H.T @ (self._Fi @ self._H[:, s3])
         for U, M in self._steps:
             col -= U @ (M @ U[s3].T)
         return col
@@ -273,6 +324,7 @@ class LiveModels:
             return self._quality
         su = self.su
         saved = (su.prior_w.copy(), su.known.copy(), su.given.copy(), self._Q, list(self._steps))
+        kept = {k: self.__dict__[k] for k in _FACTOR_STATE}
         try:
             with _blas(self.blas_threads):
                 for p in changed:
@@ -280,7 +332,8 @@ class LiveModels:
                     given = np.isfinite(P.sigma[p])
                     su.given[t] = given
                     su.known[t] = np.where(given, P.xyz[p], np.nan)
-                check_datum(su, self.ms, need_xy=True, need_z=True)
+                if not self.auxiliary:
+                    check_datum(su, self.ms, need_xy=True, need_z=True)
                 for p in changed:
                     t = int(self._tie_of[p])
                     w = _weights(P.sigma[p])
@@ -295,6 +348,7 @@ class LiveModels:
         except Exception:
             su.prior_w[:], su.known[:], su.given[:] = saved[0], saved[1], saved[2]
             self._Q, self._steps = saved[3], saved[4]
+            self.__dict__.update(kept)  # the factor, if a new one was begun
             raise
         self._sigma = P.sigma.copy()
         return self._quality

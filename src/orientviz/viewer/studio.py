@@ -37,7 +37,6 @@ from ..design import (
     LiveModels,
     Suggestion,
     accuracy_law,
-    assess_models,
     cross_strip_images,
     design_auxiliary,
     design_block,
@@ -185,9 +184,8 @@ class Studio:
         self.log: list[str] = []
         #: per change that can be undone: ("control",) or ("structure", the state before)
         self._undo: list[tuple] = []
-        #: independent models: the live models design of the block, or (changes, live,
-        #: quality) of a design with auxiliary data (assessed anew per change)
-        self._models: LiveModels | tuple | None = None
+        #: independent models: the live models design of the block
+        self._models: LiveModels | None = None
         if block is not None:
             self.design = None
             self._set_block(block.copy(), dict(spec))
@@ -385,15 +383,9 @@ class Studio:
         """The current quality for the chosen method (the bundle's for the polynomial)."""
         if self.method != "models":
             return self.live.quality()
-        if self.live.auxiliary:  # the joint models adjustment with its offsets, anew
-            key = len(self.live.history)
-            if not isinstance(self._models, tuple) or self._models[:2] != (key, self.live):
-                q = assess_models(self.block, self.spec, auxiliary=self.live.auxiliary)
-                self._models = (key, self.live, q)
-            return self._models[2]
         # one factorisation per structure (block), control changes by updates
-        if not isinstance(self._models, LiveModels) or self._models.block is not self.block:
-            self._models = LiveModels(self.block, self.spec)
+        if self._models is None or self._models.block is not self.block:
+            self._models = LiveModels(self.block, self.spec, auxiliary=self.live.auxiliary)
         return self._models.sync()
 
     def point_index(self, name: str) -> int:
