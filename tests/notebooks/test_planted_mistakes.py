@@ -48,8 +48,6 @@ CHECKERS = {
     ("13", "difference_covariance"): ("check_difference_covariance", "not independent"),
     ("03", "dlt_rows"): ("check_dlt_rows", "minus sign"),
     ("05", "six_point"): ("check_six_point", "degrees"),
-    ("09", "helmert_columns"): ("check_helmert_columns", "change of scale"),
-    ("09", "s_transform"): ("check_s_transform", "datum points are only"),
     ("02", "ground_point"): ("check_ground_point", "Rᵀ instead of R"),
     ("10", "point_covariance"): ("check_point_covariance", "ADDS to the point's"),
     ("14", "ppi_image"): ("check_ppi_image", "true horizontal distance"),
