@@ -48,7 +48,6 @@ CHECKERS = {
     ("13", "difference_covariance"): ("check_difference_covariance", "not independent"),
     ("03", "dlt_rows"): ("check_dlt_rows", "minus sign"),
     ("05", "six_point"): ("check_six_point", "degrees"),
-    ("06", "epipolar_line"): ("check_epipolar_line", "instead of Eᵀ"),
     ("02", "ground_point"): ("check_ground_point", "Rᵀ instead of R"),
     ("10", "point_covariance"): ("check_point_covariance", "ADDS to the point's"),
     ("14", "ppi_image"): ("check_ppi_image", "true horizontal distance"),
