@@ -127,3 +127,30 @@ def test_with_auxiliary_data_the_offsets_border_follows_every_change(aux):
     q = live.sync()
     assert len(live._steps) == 2
     _same(q, b, spec, a)
+
+
+def test_a_failed_new_factorisation_keeps_the_design(monkeypatch):
+    """With auxiliary data the datum is left to the factorisation; when the steps run out
+    a change factors anew, and a change that leaves no datum must not leave a half-new
+    factor behind for the updates after it."""
+    plan = FlightDesign(strips=3, images_per_strip=8, control="perimeter",
+                        sigma_statoscope=0.3, sigma_apr=0.5)  # fmt: skip
+    b, spec = design_block(plan)
+    a = design_auxiliary(b, plan)
+    live = LiveModels(b, spec, auxiliary=a)
+    monkeypatch.setattr(_models_live, "MAX_STEPS", 0)  # every change: a new factorisation
+    q0 = live.quality()
+    ctrl = np.flatnonzero(b.points.role == 1)
+    sig = b.points.sigma[ctrl].copy()
+    for j in ctrl:  # planimetric control only: the strips' height offsets are free
+        set_control(b, int(j), (0.02, 0.02, np.nan))
+    with pytest.raises(NotDeterminableError, match="offsets"):
+        live.sync()
+    assert live.quality() is q0
+    monkeypatch.setattr(_models_live, "MAX_STEPS", 40)  # updates again, on the old factor
+    for j, s in zip(ctrl, sig):
+        set_control(b, int(j), s)
+    assert live.sync() is q0
+    tie = np.flatnonzero(b.points.role == 0)
+    set_control(b, int(tie[len(tie) // 2]), (0.02, 0.02, 0.02))
+    _same(live.sync(), b, spec, a)

@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 from ..block import Block
 from ..stereo_models import independent_models
-from ._quality import DesignQuality, ellipsoids, summarise, weak_spots
+from ._quality import DesignQuality, summarise, weak_spots
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -99,11 +99,9 @@ def models_quality(
     if centres.size:
         st[centres, :3] = np.sqrt(np.clip(np.einsum("nii->ni", centre_q), 0.0, None))
     sig = np.sqrt(np.clip(np.einsum("nii->ni", cov), 0.0, None))
-    axes, dirs = ellipsoids(cov, level)
     nan_n = np.full(n, np.nan)
     q = DesignQuality(
-        point_sigma=sig, point_cov=cov, station_sigma=st, ellipsoid_axes=axes,
-        ellipsoid_dirs=dirs, level=level, redundancy=np.full((n, 2), np.nan), mdb=nan_n,
+        point_sigma=sig, point_cov=cov, station_sigma=st, level=level, redundancy=np.full((n, 2), np.nan), mdb=nan_n,
         external=nan_n.copy(), point_shift=nan_n.copy(),
         control=np.isfinite(block.points.xyz_known).any(axis=1),
     )  # fmt: skip

@@ -64,6 +64,8 @@ I64 = NDArray[np.int64]
 MAX_STEPS: int = 40
 #: Scaled pivots of the band factor below this count as singular.
 PIVOT_TOLERANCE: float = 1e-12
+#: What a factorisation sets (restored when a change fails).
+_FACTOR_STATE = ("_D", "_G", "_scale", "_perm", "_pos", "_cb", "kd", "_H", "_Fi", "_quality")
 
 
 class LiveModels:
@@ -174,23 +176,23 @@ class LiveModels:
         ui = (7 * np.arange(n)[:, None, None] + r7[:, None] + 0 * r7[None, :]).ravel()
         uj = (7 * np.arange(n)[:, None, None] + 0 * r7[:, None] + r7[None, :]).ravel()
         U = sp.csr_matrix((self._Ublk.ravel(), (ui, uj)), shape=(7 * n, 7 * n))
-        S = (U - G @ C.T).tocsr()
+        S = (U - G @ C.T).tocoo()  # canonical: no duplicate entries
         s = 1.0 / np.sqrt(S.diagonal())
-        Ss = sp.csr_matrix(S.multiply(s[:, None]).multiply(s[None, :]))
         # ordered by models (each model's 7 parameters together, so that the band holds
         # whole 7 × 7 blocks of every pair of coupled models)
-        agg = sp.csr_matrix((np.ones(7 * n), (np.repeat(np.arange(n), 7), np.arange(7 * n))))
-        Sm = sp.csr_matrix(agg @ abs(Ss) @ agg.T)
+        mr, mc = S.row // 7, S.col // 7
+        Sm = sp.csr_matrix((np.ones(mr.size), (mr, mc)), shape=(n, n))
         pm = reverse_cuthill_mckee(Sm, symmetric_mode=True).astype(np.int64)
         at = np.empty_like(pm)
         at[pm] = np.arange(n)
-        Sm = Sm.tocoo()
-        kd = 7 * int(np.max(np.abs(at[Sm.row] - at[Sm.col]), initial=0)) + 6
+        kd = 7 * int(np.max(np.abs(at[mr] - at[mc]), initial=0)) + 6
         perm = (7 * pm[:, None] + np.arange(7)).ravel()
-        P = Ss[perm][:, perm].tocoo()
-        low = P.row >= P.col
-        ab = np.zeros((kd + 1, 7 * n))
-        ab[P.row[low] - P.col[low], P.col[low]] = P.data[low]
+        pos = np.empty_like(perm)
+        pos[perm] = np.arange(perm.size)
+        pr, pc = pos[S.row], pos[S.col]
+        low = pr >= pc
+        ab = np.zeros((kd + 1, 7 * n))  # the Jacobi-scaled S[perm][:, perm], lower band
+        ab[pr[low] - pc[low], pc[low]] = (S.data * s[S.row] * s[S.col])[low]
         try:
             cb = scipy.linalg.cholesky_banded(ab, lower=True, check_finite=False)
         except np.linalg.LinAlgError:
@@ -201,11 +203,9 @@ class LiveModels:
                 "connected models)",
                 parameters=[],
             )
-        pos = np.empty_like(perm)
-        pos[perm] = np.arange(perm.size)
         self._D, self._G, self._scale = D, G, s
         self._perm, self._pos, self._cb, self.kd = perm, pos, cb, kd
-        self._H = None
+        self._H = self._Fi = None
         if self._aux is not None:  # the offsets' border: E = −Gθ Cgᵀ, F = Σ w aᵀa − Cg D⁻¹ Cgᵀ
             Cg, Faux = self._aux
             Gg = Cg / D[None, :]
@@ -322,6 +322,7 @@ class LiveModels:
             return self._quality
         su = self.su
         saved = (su.prior_w.copy(), su.known.copy(), su.given.copy(), self._Q, list(self._steps))
+        kept = {k: self.__dict__[k] for k in _FACTOR_STATE}
         try:
             with _blas(self.blas_threads):
                 for p in changed:
@@ -345,6 +346,7 @@ class LiveModels:
         except Exception:
             su.prior_w[:], su.known[:], su.given[:] = saved[0], saved[1], saved[2]
             self._Q, self._steps = saved[3], saved[4]
+            self.__dict__.update(kept)  # the factor, if a new one was begun
             raise
         self._sigma = P.sigma.copy()
         return self._quality

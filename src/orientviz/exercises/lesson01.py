@@ -241,6 +241,9 @@ def check_second_order(fn) -> None:
                  along**2 / (2 * dist)),
                 ("the sign: s(x + dx) is never shorter than its linearisation (s is convex)",
                  -perp2 / (2 * dist)),
+                ("this is the whole linearisation error s(x + dx) − s − uᵀdx, third and higher "
+                 "orders included; the exercise is its second-order term",
+                 s(x + dx) - dist - along),
             ],
         )  # fmt: skip
     success(

@@ -232,13 +232,20 @@ class Studio:
         self._models = None
 
     def _structural(self, label: str, change) -> DesignQuality:
-        """Apply a change of the structure (a new design), keeping the old one for undo."""
+        """Apply a change of the structure (a new design), keeping the old one for undo; a
+        change the chosen method cannot take (e.g. independent models whose models cannot
+        be formed any more) raises and leaves the old design."""
         before = self._state()
-        change()
+        try:
+            change()
+            q = self.quality
+        except Exception:
+            self._restore(before)
+            raise
         self._undo.append(("structure", before))
         self.log.append(label)
         self.suggestion = None
-        return self.quality
+        return q
 
     @_locked
     def set_plan(self, design: FlightDesign) -> DesignQuality:

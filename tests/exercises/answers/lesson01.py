@@ -53,6 +53,7 @@ def _second_order(x, station, dx, mistake=None):
         "no half": perp @ perp / s,
         "along": along**2 / (2 * s),
         "sign": -(perp @ perp) / (2 * s),
+        "exact": np.linalg.norm(x + dx - station) - s - along,
     }.get(mistake, perp @ perp / (2 * s))
 
 
@@ -108,6 +109,6 @@ MUTANTS = {
     },
     "check_second_order": {
         k: (lambda x, st, dx, k=k: _second_order(x, st, dx, k))
-        for k in ("whole dx", "no half", "along", "sign")
+        for k in ("whole dx", "no half", "along", "sign", "exact")
     },
 }

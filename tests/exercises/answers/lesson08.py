@@ -23,10 +23,30 @@ def _determined(n_full, n_plan, n_height):
     return n_full + n_plan >= 2 and n_full + n_height >= 3
 
 
-def _conformal(xy, XY, degree):
+def _strip_degree(xy, XY, sigma, max_degree, mistake=None):
+    from scipy.stats import chi2
+
     z = xy[:, 0] + 1j * xy[:, 1]
-    A = np.column_stack([z**k for k in range(degree + 1)])
-    return np.linalg.lstsq(A, XY[:, 0] + 1j * XY[:, 1], rcond=None)[0]
+    Z = XY[:, 0] + 1j * XY[:, 1]
+    n, s0s = len(z), []
+    for d in range(1, max_degree + 1):
+        A = np.column_stack([z**k for k in range(d + 1)])
+        v = A @ np.linalg.lstsq(A, Z, rcond=None)[0] - Z
+        r = n - (d + 1) if mistake == "complex r" else 2 * n - 2 * (d + 1)
+        vv = np.sum(np.abs(v) ** 2) / (1.0 if mistake == "no sigma" else sigma**2)
+        s0 = np.sqrt(vv / r)
+        s0s.append(s0)
+        if mistake == "min":
+            continue
+        if mistake == "two-sided":
+            ok = chi2.ppf(0.025, r) / r <= s0**2 <= chi2.ppf(0.975, r) / r
+        elif mistake == "le1":
+            ok = s0 <= 1.0
+        else:
+            ok = s0**2 <= chi2.ppf(0.95, r) / r
+        if ok:
+            return d
+    return int(np.argmin(s0s)) + 1 if mistake == "min" else max_degree
 
 
 def _strips_for(a, b, mu_max):
@@ -157,7 +177,7 @@ SOLUTIONS = {
     "check_intersect_many": _sol_intersect_many,
     "check_compose": _compose,
     "check_determined": _determined,
-    "check_conformal": _conformal,
+    "check_strip_degree": _strip_degree,
     "check_strips_for": _strips_for,
 }
 
@@ -192,17 +212,9 @@ MUTANTS = {
         "one plan point": lambda f, p, h: f + p >= 1 and f + h >= 3,
         "yes instead of True": lambda f, p, h: "yes" if f + p >= 2 and f + h >= 3 else False,
     },
-    "check_conformal": {
-        "reversed": lambda xy, XY, d: _conformal(xy, XY, d)[::-1],
-        "no constant": lambda xy, XY, d: np.r_[
-            0,
-            np.linalg.lstsq(
-                np.column_stack([(xy[:, 0] + 1j * xy[:, 1]) ** k for k in range(1, d + 1)]),
-                XY[:, 0] + 1j * XY[:, 1],
-                rcond=None,
-            )[0],
-        ],
-        "conjugate pairing": lambda xy, XY, d: _conformal(xy * [1, -1], XY, d),
+    "check_strip_degree": {
+        k: (lambda xy, XY, s, m, k=k: _strip_degree(xy, XY, s, m, k))
+        for k in ("complex r", "two-sided", "le1", "min", "no sigma")
     },
     "check_strips_for": {
         "natural log": lambda a, b, m: np.inf if b <= 0 else np.exp((m - a) / b),
