@@ -51,8 +51,6 @@ CHECKERS = {
     ("02", "ground_point"): ("check_ground_point", "Rᵀ instead of R"),
     ("10", "point_covariance"): ("check_point_covariance", "ADDS to the point's"),
     ("14", "ppi_image"): ("check_ppi_image", "true horizontal distance"),
-    ("16", "control_update"): ("check_control_update", "needs P⁻¹ = σ²"),
-    ("16", "law_spacing"): ("check_law_spacing", "the base uses p, not 1 − p"),
 }
 
 
