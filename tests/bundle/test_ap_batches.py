@@ -49,14 +49,20 @@ def test_the_point_batches_reach_the_reference_optimum(per_image, monkeypatch):
     assert_same_optimum(res, ref, block)
 
 
-def test_the_point_batches_equal_the_products_per_group_pair(per_image, monkeypatch):
-    # one formation of the border, the same inputs: by point batches and per group pair
+def _formation(per_image, monkeypatch):
+    """The arguments of one formation of the border (E, F formed, not reused) in a short
+    run, and the formation function itself."""
     block, group, _ = per_image
     calls = []
     real = problem_module.ap_normal
     monkeypatch.setattr(problem_module, "ap_normal", lambda *a: calls.append(a) or real(*a))
     ov.bundle_adjust(block, max_iter=2, precision=False, ap_group=group, **CASE)
-    args = next(a for a in calls if a[-1] is None)  # E, F formed (not reused)
+    return next(a for a in calls if a[-1] is None), real
+
+
+def test_the_point_batches_equal_the_products_per_group_pair(per_image, monkeypatch):
+    # one formation of the border, the same inputs: by point batches and per group pair
+    args, real = _formation(per_image, monkeypatch)
     A = args[0].ap.structure
     batched = real(*args)
     A.batches = None
@@ -68,12 +74,7 @@ def test_the_point_batches_equal_the_products_per_group_pair(per_image, monkeypa
 
 def test_row_indices_formed_per_call_give_the_kept_ones_sums(per_image, monkeypatch):
     # a model whose row indices are too large to keep forms them in each formation
-    block, group, _ = per_image
-    calls = []
-    real = problem_module.ap_normal
-    monkeypatch.setattr(problem_module, "ap_normal", lambda *a: calls.append(a) or real(*a))
-    ov.bundle_adjust(block, max_iter=2, precision=False, ap_group=group, **CASE)
-    args = next(a for a in calls if a[-1] is None)
+    args, real = _formation(per_image, monkeypatch)
     A = args[0].ap.structure
     kept = real(*args)
     A.batches = [b._replace(e_rows=None, f_rows=None) for b in A.batches]
