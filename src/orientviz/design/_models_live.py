@@ -65,7 +65,7 @@ MAX_STEPS: int = 40
 #: Scaled pivots of the band factor below this count as singular.
 PIVOT_TOLERANCE: float = 1e-12
 #: What a factorisation sets (restored when a change fails).
-_FACTOR_STATE = ("_D", "_G", "_scale", "_perm", "_pos", "_cb", "kd", "_H", "_Fi", "_quality")
+_FACTOR_STATE = ("_D", "_G", "_scale", "_perm", "_at", "_cb", "kd", "_H", "_Fi", "_quality")
 
 
 class LiveModels:
@@ -204,7 +204,8 @@ class LiveModels:
                 parameters=[],
             )
         self._D, self._G, self._scale = D, G, s
-        self._perm, self._pos, self._cb, self.kd = perm, pos, cb, kd
+        # band position of each model (its 7 parameters from 7·at on)
+        self._perm, self._at, self._cb, self.kd = perm, at, cb, kd
         self._H = self._Fi = None
         if self._aux is not None:  # the offsets' border: E = −Gθ Cgᵀ, F = Σ w aᵀa − Cg D⁻¹ Cgᵀ
             Cg, Faux = self._aux
@@ -246,16 +247,21 @@ class LiveModels:
         A = np.repeat(np.arange(tp.size), c)
         off = np.arange(c.sum()) - np.repeat(np.cumsum(c) - c, c)
         a, bb = order[A], order[np.repeat(st, c) + off]
+        # the 7 × 7 blocks of Z, once per pair of models (positions P, Q in the band, each
+        # model's parameters together): Z[7P + a, 7Q + b] = Zb[min, |difference|]
+        n = self.n
+        pair, inv = np.unique(j[a] * n + j[bb], return_inverse=True)
+        P, Qp = self._at[pair // n], self._at[pair % n]
         r7 = np.arange(7)
-        u = 7 * j[a][:, None, None] + r7[None, :, None]
-        v = 7 * j[bb][:, None, None] + r7[None, None, :]
-        pu, pv = self._pos[u], self._pos[v]
-        dist = np.abs(pu - pv)
+        u = 7 * P[:, None, None] + r7[None, :, None]
+        v = 7 * Qp[:, None, None] + r7[None, None, :]
+        dist = np.abs(u - v)
         if dist.max(initial=0) > self.kd:  # cannot be: models sharing a point are coupled
             raise NotDeterminableError("models sharing a point lie outside the band", parameters=[])
-        s = self._scale
-        Z = Zb[np.minimum(pu, pv), dist] * s[u] * s[v]  # (pairs, 7, 7)
-        blk = g[a] @ Z @ g[bb].transpose(0, 2, 1)  # (pairs, 3, 3)
+        sm = self._scale.reshape(n, 7)  # the Jacobi scale of each model's parameters
+        Z = Zb[np.minimum(u, v), dist]
+        Z *= sm[pair // n][:, :, None] * sm[pair % n][:, None, :]  # (pairs of models, 7, 7)
+        blk = g[a] @ Z[inv.reshape(-1)] @ g[bb].transpose(0, 2, 1)  # (pairs of rows, 3, 3)
         Q = np.zeros((su.scalar.shape[0], 3, 3))
         np.add.at(Q, su.row_point[a], blk)
         Q += np.einsum("ta,ab->tab", 1.0 / D[su.scalar], np.eye(3))
