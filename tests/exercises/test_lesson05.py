@@ -52,6 +52,8 @@ def test_diagnoses_name_the_mistake():
             ("check_parallax", "image difference"): "scale it to the model",
             ("check_condition", "flat form with relief"): "flat-terrain form",
             ("check_scheme_sigma", "inverse of the diagonal"): "diagonal of (AᵀA)⁻¹",
+            ("check_scheme_sigma", "variances"): "square root is missing",
+            ("check_scheme_sigma", "spread"): "not the distance between",
         },
     )
 
