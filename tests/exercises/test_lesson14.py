@@ -58,3 +58,16 @@ def test_radius_change_mistakes_are_named_and_the_exact_change_passes():
     # a student who differences (4b) for the given dm (exact, not first order) is right too
     exact = lambda *a: answers._radius_change(*a, mistake="exact")  # noqa: E731
     assert rejection(lesson14.check_radius_change, exact) is None
+
+
+def test_radius_change_refuses_the_library_sphere_radius():
+    from orientviz.exercises._common import rejection
+    from orientviz.radar import geier1973 as G
+    from orientviz.radar.ppi import sphere_radius
+
+    def numeric(xy, x0, y0, m, h, dm):  # the library's sphere radius differenced
+        image = G.images()[2].with_(x0=x0, y0=y0, m=m, h=h)
+        return sphere_radius(xy, image.with_(m=m + dm)) - sphere_radius(xy, image)
+
+    exc = rejection(lesson14.check_radius_change, numeric)
+    assert exc is not None and "calls the library's sphere_radius" in str(exc)

@@ -13,6 +13,7 @@ from collections.abc import Callable
 import numpy as np
 
 from orientviz.exercises._common import CheckFailed, call, compare, own_work, rng_for, success
+from orientviz.radar.ppi import sphere_radius
 
 
 def _rodrigues(axis, angle: float) -> np.ndarray:
@@ -86,6 +87,11 @@ def check_ppi_image(fn: Callable) -> None:
     success("the image of points built backwards from their image coordinates comes out exactly")
 
 
+@own_work(
+    "the library's sphere radius differenced numerically skips the derivation the exercise "
+    "asks for",
+    sphere_radius=sphere_radius,
+)
 def check_radius_change(fn: Callable) -> None:
     """Check ``fn(xy, x0, y0, m, h, dm) -> ds``: the first-order change of the range-sphere
     radius (4b) of each image point when the image scale m is wrong by ``dm`` (image m, m).
