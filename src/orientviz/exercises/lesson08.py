@@ -33,6 +33,7 @@ from ._independent_models import (  # the student's own block method
     check_model_jacobian,
     model_jacobian_numeric,
 )
+from ._polynomial_strip import check_strip_polynomial  # the student's polynomial method
 
 __all__ = [
     "check_adjust_models",
@@ -41,6 +42,7 @@ __all__ = [
     "check_determined",
     "check_intersect_many",
     "check_model_jacobian",
+    "check_strip_polynomial",
     "check_strips_for",
     "model_jacobian_numeric",
 ]

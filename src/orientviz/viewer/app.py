@@ -33,7 +33,14 @@ from .geometry import VIEW_FOV
 from .panel import BlockPanel
 from .scene import BlockScene
 from .snapshot import panel_markdown, with_panel
-from .solved import Solved, block_description, solution_demo, solve_target
+from .solved import (
+    Solved,
+    block_description,
+    finite_state,
+    last_finite_record,
+    solution_demo,
+    solve_target,
+)
 
 DEFAULT_DEMO = "block"
 PROG = "orientviz view"
@@ -221,6 +228,8 @@ class ViewerApp:
         self._head.content = f"### {demo.title}\n{demo.description}"
         adj = solved.solution.adjustment
         panel.take_result(adj)
+        if not finite_state(panel.state):  # NaN at the end: the last finite record, no blank
+            panel.replay(last_finite_record(panel.state))
         if not adj.converged:
             self.report(f"the adjustment did not converge: {adj.reason}")
 

@@ -171,7 +171,27 @@ def _skew(v):
     return skew(v)
 
 
+def _strip_polynomial(x, X, dxy, dz, mistake=None):
+    """Conformal planimetry (one complex lstsq) and height with cross tilt, fitted to control."""
+    w = (x[:, 0] + 1j * x[:, 1] - (x[:, 0].mean() + 1j * x[:, 1].mean())) / 1000.0
+    u, v = w.real, w.imag
+    plan = ~np.isnan(X[:, 0]) & ~np.isnan(X[:, 1])
+    height = ~np.isnan(X[:, 2])
+    if mistake == "full control only":
+        plan = height = plan & height
+    A = np.column_stack([w**k for k in range(dxy + (0 if mistake == "degree" else 1))])
+    z, Z = x[:, 0] + 1j * x[:, 1], X[:, 0] + 1j * X[:, 1]
+    sign = -1.0 if mistake == "sign" else 1.0
+    c = np.linalg.lstsq(A[plan], sign * (Z[plan] - z[plan]), rcond=None)[0]
+    n_tilt = {"no tilt": 0, "tilt to d": dz + 1}.get(mistake, dz)
+    B = np.column_stack([u**k for k in range(dz + 1)] + [v * u**k for k in range(n_tilt)])
+    e = np.linalg.lstsq(B[height], sign * (X[height, 2] - x[height, 2]), rcond=None)[0]
+    zc = z + A @ c
+    return np.column_stack([zc.real, zc.imag, x[:, 2] + B @ e])
+
+
 SOLUTIONS = {
+    "check_strip_polynomial": _strip_polynomial,
     "check_model_jacobian": _model_jacobian,
     "check_adjust_models": _adjust_models,
     "check_intersect_many": _sol_intersect_many,
@@ -182,6 +202,10 @@ SOLUTIONS = {
 }
 
 MUTANTS = {
+    "check_strip_polynomial": {
+        m: (lambda x, X, a, b, m=m: _strip_polynomial(x, X, a, b, mistake=m))
+        for m in ("degree", "no tilt", "tilt to d", "sign", "full control only")
+    },
     "check_model_jacobian": {
         "sign": lambda *a: _model_jacobian(*a, mistake="sign"),
         "left increment": lambda *a: _model_jacobian(*a, mistake="left"),
