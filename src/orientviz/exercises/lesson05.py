@@ -76,7 +76,14 @@ def _points(rng: np.random.Generator, n: int, b: float, relief: float = 0.15) ->
     )
 
 
-@own_work(design_dependent=library_design_dependent, y_parallax_jacobian=y_parallax_jacobian)
+@own_work(
+    "the exercise is the derivation of the linearised equation; differences of the library's "
+    "parallax or projection skip it",
+    design_dependent=library_design_dependent,
+    y_parallax_jacobian=y_parallax_jacobian,
+    y_parallax=library_y_parallax,
+    project=project,
+)
 def check_design(design_dependent: Callable[[F64, F64, F64, float], F64]) -> None:
     """``design_dependent(X, Y, Z, b)`` must return ∂p_y/∂(by, bz, ω, φ, κ), shape (n, 5).
 

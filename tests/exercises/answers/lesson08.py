@@ -42,6 +42,10 @@ def _strip_degree(xy, XY, sigma, max_degree, mistake=None):
             ok = chi2.ppf(0.025, r) / r <= s0**2 <= chi2.ppf(0.975, r) / r
         elif mistake == "le1":
             ok = s0 <= 1.0
+        elif isinstance(mistake, float) and mistake > 1.0:  # a fixed bound on σ̂0
+            ok = s0 <= mistake
+        elif isinstance(mistake, float):  # another level: chi2.ppf(mistake, r)
+            ok = s0**2 <= chi2.ppf(mistake, r) / r
         else:
             ok = s0**2 <= chi2.ppf(0.95, r) / r
         if ok:
@@ -138,6 +142,7 @@ def _adjust_models(m, model, point, X, free, sigma, R, T, mistake=None):
 
     n, k = len(R), len(m)
     lam, R, T, X = np.ones(n), R.copy(), T.copy(), X.copy()
+    R0, T0 = R.copy(), T.copy()
     if mistake == "whole points":  # a point is fixed only if all of X, Y, Z are given
         free = np.repeat(free.any(axis=1, keepdims=True), 3, axis=1)
     col = np.full(free.shape, -1)
@@ -162,6 +167,12 @@ def _adjust_models(m, model, point, X, free, sigma, R, T, mistake=None):
             break
     v = (lam[model, None] * np.einsum("kij,kj->ki", R[model], m) + T[model] - X[point]).ravel()
     r = 3 * k - A.shape[1] if mistake != "r without points" else 3 * k - 7 * n
+    if mistake == "R transposed":
+        R = np.transpose(R, (0, 2, 1))
+    if mistake == "start R, T":
+        R, T = R0, T0
+    if mistake == "T zero":
+        T = np.zeros_like(T)
     return lam, R, T, X, np.sqrt(v @ (w * v) / r)
 
 
@@ -217,6 +228,9 @@ MUTANTS = {
         "left update": lambda *a: _adjust_models(*a, mistake="left update"),
         "whole points": lambda *a: _adjust_models(*a, mistake="whole points"),
         "r without points": lambda *a: _adjust_models(*a, mistake="r without points"),
+        "R transposed": lambda *a: _adjust_models(*a, mistake="R transposed"),
+        "start R, T": lambda *a: _adjust_models(*a, mistake="start R, T"),
+        "T zero": lambda *a: _adjust_models(*a, mistake="T zero"),
     },
     "check_intersect_many": {
         "R transposed": lambda *a: _sol_intersect_many(*a, mistake="R_transposed"),
@@ -239,6 +253,14 @@ MUTANTS = {
     "check_strip_degree": {
         k: (lambda xy, XY, s, m, k=k: _strip_degree(xy, XY, s, m, k))
         for k in ("complex r", "two-sided", "le1", "min", "no sigma")
+    }
+    | {
+        f"fixed bound {t}": (lambda xy, XY, s, m, t=t: _strip_degree(xy, XY, s, m, t))
+        for t in (1.1, 1.2, 1.3, 1.4)
+    }
+    | {
+        f"level {q}": (lambda xy, XY, s, m, q=q: _strip_degree(xy, XY, s, m, q))
+        for q in (0.9, 0.975)
     },
     "check_strips_for": {
         "natural log": lambda a, b, m: np.inf if b <= 0 else np.exp((m - a) / b),
