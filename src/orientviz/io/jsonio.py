@@ -250,13 +250,20 @@ def _registry():
     return Registry().with_resources(entries)
 
 
-def _import_jsonschema():
+def import_jsonschema():
     """Import :mod:`jsonschema` without its optional IRI format checker.
 
     jsonschema's format module imports ``rfc3987_syntax`` when it is installed, which
-    builds a parser grammar at import time (seconds). orientviz's schemas use no
-    ``format`` keyword, so that import is skipped for the duration of jsonschema's own
-    import (the module stays importable for anyone else afterwards).
+    builds a parser grammar at import time. orientviz's schemas use no ``format``
+    keyword, so that import is skipped for the duration of jsonschema's own import (the
+    module stays importable for anyone else afterwards). The test suite and the book's
+    build import jsonschema this way before nbformat does (nbformat's notebook schemas
+    use no ``format`` keyword either).
+
+    Returns
+    -------
+    module
+        :mod:`jsonschema` (the one already imported, if any).
     """
     import sys
 
@@ -276,7 +283,7 @@ def _import_jsonschema():
 @cache
 def validator_for(name: str):
     """A Draft 2020-12 validator for schema file ``name`` (with ``$ref`` resolution)."""
-    Draft202012Validator = _import_jsonschema().Draft202012Validator
+    Draft202012Validator = import_jsonschema().Draft202012Validator
 
     schema = load_schema(name)
     Draft202012Validator.check_schema(schema)
