@@ -15,7 +15,12 @@ external reliability, ellipsoids, weak spots and summary:
   image removed and added (their readings with them), a cross strip (new offsets: a new
   design);
 * a change of the plan (image σ): a new design, formed and factored;
-* the suggestion of the next control point (40 candidates).
+* the suggestion of the next control point (40 candidates);
+* the method switched to independent models (:class:`orientviz.design.LiveModels`): its
+  design (models formed, normal equations factored, selected inverse), control added /
+  changed / undone (updates), a new structure (an image removed: a new factorisation);
+  the same with statoscope and APR (the offsets' border); peer:
+  :func:`orientviz.design.assess_models` (one run each, ``--models-peer``).
 
 The peer in the same run: a new :func:`orientviz.design.assess_block` of the changed
 design. Each kind is run ``--repeat`` times (median, max). With ``--threads both`` the
@@ -41,10 +46,13 @@ from contextlib import nullcontext
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from orientviz.block import CONTROL, TIE
 from orientviz.design import (
     FlightDesign,
     LiveDesign,
+    LiveModels,
     assess_block,
+    assess_models,
     cross_strip_images,
     design_auxiliary,
     design_block,
@@ -149,6 +157,52 @@ def run(args, label: str) -> list[tuple[str, list[float], list[float]]]:
     kind("cross strip (statoscope + APR, {how})",
          lambda k: alive.add_images(cs[k][0], cs[k][1], strip=cs[k][2], ids=cs[k][3],
                                     auxiliary=of))  # fmt: skip
+    # the method switched to independent models: one factorisation, control by updates
+    mb = block.copy()
+    dt, lm = _t(lambda: LiveModels(mb, spec, blas_threads=cap))
+    rows.append(("models: design (formed, factored, inverted)", [dt], [CPU[-1]]))
+    print(f"  models: design {1e3 * dt:.0f} ms (CPU {1e3 * CPU[-1]:.0f} ms)")
+
+    def models_control(k, sigma):
+        P, j = mb.points, int(picks[k])
+        P.sigma[j] = sigma
+        P.xyz_known[j] = np.where(np.isfinite(sigma), P.xyz[j], np.nan)
+        P.role[j] = CONTROL if np.isfinite(sigma).any() else TIE
+        return lm.sync()
+
+    kind("models: control added (update)", lambda k: models_control(k, np.full(3, 0.02)))
+    kind("models: control σ changed (height only, 5 cm)",
+         lambda k: models_control(k, np.array([np.nan, np.nan, 0.05])))  # fmt: skip
+    kind("models: undo (control back to tie, update)",
+         lambda k: models_control(k, np.full(3, np.nan)))  # fmt: skip
+    # an image at a strip's end (inside a strip its neighbours would form no model)
+    ends = np.array([np.flatnonzero(I.strip == s)[-1] for s in range(plan.strips)])
+    ends = rng.choice(ends, size=min(R, ends.size), replace=False)
+    kind("models: strip's end image removed (bundle update + models factored)",
+         lambda k: LiveModels(live.remove_images([int(ends[k % ends.size])]).block, spec,
+                              blas_threads=cap))  # fmt: skip
+    if args.models_peer:
+        dt, _ = _t(lambda: assess_models(mb, spec))
+        rows.append(("peer: models assessment (assess_models)", [dt], [CPU[-1]]))
+        print(f"  peer assess_models: {dt:.2f} s (CPU {CPU[-1]:.2f} s)")
+    # independent models with statoscope + APR (the offsets' border of the factor)
+    amb = ablock.copy()
+    dt, alm = _t(lambda: LiveModels(amb, aspec, auxiliary=aux, blas_threads=cap))
+    rows.append(("models, statoscope + APR: design", [dt], [CPU[-1]]))
+    print(f"  models, statoscope + APR: design {1e3 * dt:.0f} ms (CPU {1e3 * CPU[-1]:.0f} ms)")
+
+    def aux_models_control(k):
+        P, j = amb.points, int(picks[k])
+        P.sigma[j] = 0.02
+        P.xyz_known[j] = P.xyz[j]
+        P.role[j] = CONTROL
+        return alm.sync()
+
+    kind("models, statoscope + APR: control added (update)", aux_models_control)
+    if args.models_peer:
+        dt, _ = _t(lambda: assess_models(amb, aspec, auxiliary=aux))
+        rows.append(("peer: models assessment with statoscope + APR", [dt], [CPU[-1]]))
+        print(f"  peer assess_models with statoscope + APR: {dt:.2f} s (CPU {CPU[-1]:.2f} s)")
     kind("peer: new assessment (assess_block)", lambda k: assess_block(live.block, spec))
     kind("peer: new assessment with statoscope + APR",
          lambda k: assess_block(alive.block, aspec, auxiliary=aux))  # fmt: skip
@@ -162,6 +216,10 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--threads", choices=("both", "default", "1"), default="both")
     ap.add_argument("--forced", action="store_true", help="also force strips through the update")
+    ap.add_argument(
+        "--models-peer", action="store_true",
+        help="also time assess_models once (≈ 14 s CPU on the 1 000-image block)",
+    )  # fmt: skip
     ap.add_argument(
         "--uncapped", action="store_true",
         help="LiveDesign(blas_threads=None): the design's BLAS on the process's threads",

@@ -11,11 +11,18 @@ Headless Chromium (/usr/bin/chromium, the test suite's flags: software WebGL, no
   0.5 s apart that differ in < 0.01 % of the pixels). Printed: process (s) to the
   server ready, browser (s) from the page load to the first and the settled picture, and
   the total. CPU of the Python process is printed too (the browser's is not included).
+  A large imported model opens at its start values while it is solved in the background
+  (as ``orientviz view`` does): then also ``solved_s``, from the start of the process to
+  the solution's settled picture, and ``solved_cpu_s``, the process's CPU until then.
 * ``slide NAME`` — as ``open``, then the ω slider of the selected image moved by 1 gon and
   back on the Python side (as the GUI does) until the picture has changed and settled
   (seconds, median of the two): the redraw of a block as the browser shows it.
 * ``cap`` — the radar demo: the *sphere cap* slider set to 30° then 10° on the Python side
-  (as the GUI does) until the picture has changed and settled (seconds, median of the two).
+  (as the GUI does) until the picture has changed and settled (seconds, median of the two;
+  the settled picture needs two grabs 0.5 s apart, so this is ~1 s above the change
+  itself); ``cap_first_s``: until the first changed picture (grabbing without pause), and
+  ``toggle_first_s`` the same for a one-node change (the projection circles shown or
+  hidden): the page's floor.
 
 Run:  python benchmarks/bench_viewer_browser.py open dbat_roma --tree .
       python benchmarks/bench_viewer_browser.py cap --tree /path/to/old --tree . --repeat 2
@@ -81,13 +88,38 @@ def _settle(page, t0: float, before=None, timeout: float = 120.0) -> tuple[float
     return first or float("nan"), float("nan")
 
 
+def _first_change(page, before, t0: float, timeout: float = 30.0) -> float:
+    """Seconds after t0 until a grab differs from ``before`` (grabbing without pause:
+    the resolution is one screenshot, ~0.1–0.3 s in software WebGL)."""
+    while time.perf_counter() - t0 < timeout:
+        if _changed(before, _grab(page)) > 0.001:
+            return time.perf_counter() - t0
+    return float("nan")
+
+
+def _latency(page, setter, values) -> float:
+    """Median seconds from ``setter(value)`` to the first changed picture."""
+    out = []
+    for value in values:
+        time.sleep(1.0)  # the last change has settled
+        before = _grab(page)
+        t0 = time.perf_counter()
+        setter(value)
+        out.append(_first_change(page, before, t0))
+    return statistics.median(out)
+
+
 def worker(task: str, name: str | None, free: bool) -> dict:
     t0 = time.perf_counter()
     from playwright.sync_api import sync_playwright
 
     from orientviz.viewer.app import ViewerApp, resolve_content
 
-    content = resolve_content(name or "radar", {"free": True} if free else None)
+    opts = {"free": True} if free else None
+    try:  # as `orientviz view` opens it: a large imported model while it is being solved
+        content = resolve_content(name or "radar", opts, background=True)
+    except TypeError:  # a tree from before the background solve
+        content = resolve_content(name or "radar", opts)
     app = ViewerApp(content, host="127.0.0.1", port=0, verbose=False)
     ready, cpu = time.perf_counter() - t0, time.process_time()
     out = {"process_s": ready, "process_cpu_s": cpu}
@@ -104,6 +136,11 @@ def worker(task: str, name: str | None, free: bool) -> dict:
             page.add_style_tag(content=".mantine-Notifications-root {display: none !important}")
             first, settled = _settle(page, t1)
             out.update(first_s=first, settled_s=settled, total_s=ready + settled)
+            job = getattr(app, "background", None)
+            if job is not None:  # the solution replaces the start values: settled again
+                job.wait(600)
+                out["solved_s"] = ready + _settle(page, t1)[1]
+                out["solved_cpu_s"] = time.process_time()
             if task == "slide":
                 h = app.panel.handles["omega"]
                 times = []
@@ -122,6 +159,13 @@ def worker(task: str, name: str | None, free: bool) -> dict:
                     rv.h["extent"].value = value
                     times.append(_settle(page, t2, before)[1])
                 out["cap_s"] = statistics.median(times)
+                # the first changed picture, and the page's floor: one node shown/hidden
+                out["cap_first_s"] = _latency(
+                    page, lambda v: setattr(rv.h["extent"], "value", v), (30.0, 10.0) * 2
+                )
+                out["toggle_first_s"] = _latency(
+                    page, lambda v: setattr(rv.h["circles"], "value", v), (True, False) * 2
+                )
             ctx.close()
     finally:
         app.stop()
@@ -157,14 +201,15 @@ def main() -> None:
             r = json.loads(line[-1])
             results[tree].append(r)
             print(tree, {k: round(v, 2) for k, v in r.items()}, flush=True)
-    keys = ("process_s", "process_cpu_s", "first_s", "settled_s", "total_s", "slide_s", "cap_s")
+    keys = ("process_s", "process_cpu_s", "first_s", "settled_s", "total_s", "solved_s",
+            "solved_cpu_s", "slide_s", "cap_s", "cap_first_s", "toggle_first_s")  # fmt: skip
     med = {t: {k: statistics.median(r[k] for r in rs) for k in keys if k in rs[0]}
            for t, rs in results.items()}  # fmt: skip
     for t, m in med.items():
         print("median", t, {k: round(v, 2) for k, v in m.items()})
     if len(trees) == 2:
         A, B = med[trees[0]], med[trees[1]]
-        print("ratio B/A", {k: round(B[k] / A[k], 3) for k in A if A[k]})
+        print("ratio B/A", {k: round(B[k] / A[k], 3) for k in A if k in B and A[k]})
 
 
 if __name__ == "__main__":

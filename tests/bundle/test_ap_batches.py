@@ -49,14 +49,20 @@ def test_the_point_batches_reach_the_reference_optimum(per_image, monkeypatch):
     assert_same_optimum(res, ref, block)
 
 
-def test_the_point_batches_equal_the_products_per_group_pair(per_image, monkeypatch):
-    # one formation of the border, the same inputs: by point batches and per group pair
+def _formation(per_image, monkeypatch):
+    """The arguments of one formation of the border (E, F formed, not reused) in a short
+    run, and the formation function itself."""
     block, group, _ = per_image
     calls = []
     real = problem_module.ap_normal
     monkeypatch.setattr(problem_module, "ap_normal", lambda *a: calls.append(a) or real(*a))
     ov.bundle_adjust(block, max_iter=2, precision=False, ap_group=group, **CASE)
-    args = next(a for a in calls if a[-1] is None)  # E, F formed (not reused)
+    return next(a for a in calls if a[-1] is None), real
+
+
+def test_the_point_batches_equal_the_products_per_group_pair(per_image, monkeypatch):
+    # one formation of the border, the same inputs: by point batches and per group pair
+    args, real = _formation(per_image, monkeypatch)
     A = args[0].ap.structure
     batched = real(*args)
     A.batches = None
@@ -64,6 +70,17 @@ def test_the_point_batches_equal_the_products_per_group_pair(per_image, monkeypa
     for x, y in ((batched.E_border.dense(), per_pair.E_border.dense()), (batched.F0, per_pair.F0)):
         assert np.max(np.abs(x - y)) < 1e-12 * np.max(np.abs(y))
     assert np.array_equal(batched.ba, per_pair.ba)
+
+
+def test_row_indices_formed_per_call_give_the_kept_ones_sums(per_image, monkeypatch):
+    # a model whose row indices are too large to keep forms them in each formation
+    args, real = _formation(per_image, monkeypatch)
+    A = args[0].ap.structure
+    kept = real(*args)
+    A.batches = [b._replace(e_rows=None, f_rows=None) for b in A.batches]
+    formed = real(*args)
+    assert np.array_equal(kept.E_border.dense(), formed.E_border.dense())
+    assert np.array_equal(kept.F0, formed.F0)
 
 
 def test_a_batch_map_adds_every_block_once(per_image, monkeypatch):
@@ -80,6 +97,15 @@ def test_a_batch_map_adds_every_block_once(per_image, monkeypatch):
     K, G = A.e_key.size, A.G
     e_block = np.concatenate([b.e_block.reshape(-1) for b in A.batches])
     f_block = np.concatenate([b.f_block.reshape(-1) for b in A.batches])
+    k = A.F_direct.shape[1]  # parameters per group
+    assert all(b.e_rows is not None for b in A.batches)  # a small problem keeps its rows
+    for b in A.batches:  # a block's rows are 6·block + 0…5 (E), k·block + 0…k−1 (F)
+        n, kr = b.rays.shape
+        c = b.pairs.shape[1]
+        e = b.e_rows.reshape(n, kr, 6, c)
+        assert np.array_equal(e, 6 * b.e_block[:, :, None, :] + np.arange(6)[:, None])
+        f = b.f_rows.reshape(n, c, k, c)
+        assert np.array_equal(f, k * b.f_block[:, :, None, :] + np.arange(k)[:, None])
     # E: one (ray, other pair) block at a time into the block of its (image, group) key
     kept = e_block[e_block < K]
     per_key = np.bincount(np.searchsorted(A.e_key, A._e_rows), minlength=K)

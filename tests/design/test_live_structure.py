@@ -153,3 +153,26 @@ def test_the_block_solve_equals_the_factors_solve():
     assert base.fac.kind == "banded"  # the blocks are what is tested
     rhs = np.random.default_rng(3).normal(size=(6 * block.n_images, 9))
     np.testing.assert_allclose(base.solve(rhs), base.fac.solve(rhs), rtol=1e-10, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "aux",
+    [dict(sigma_statoscope=0.3, sigma_apr=0.5), dict(sigma_gnss=0.1, gnss_offsets=True)],
+    ids=["statoscope+apr", "gnss-shift"],
+)
+def test_the_banded_precision_of_a_design_with_auxiliary_data_equals_the_dense(aux):
+    """Large designs take the banded selected inverse and the offsets' border S⁻¹E by the
+    same band factor; small ones (all other tests here) the dense inverse."""
+    from orientviz.bundle import BundleOptions, bundle_adjust
+
+    plan = FlightDesign(strips=3, images_per_strip=7, control="perimeter", **aux)
+    block, _ = design_block(plan)
+    kw = dict(control="weighted", precision=True, max_iter=3,
+              auxiliary=design_auxiliary(block, plan))  # fmt: skip
+    dense = bundle_adjust(block, **kw)
+    band = bundle_adjust(block, options=BundleOptions(dense_inverse_limit=0), **kw)
+    for key in ("points", "exterior", "auxiliary"):
+        a, b = band.cofactor_groups[key], dense.cofactor_groups[key]
+        np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12 * np.abs(b).max())
+    np.testing.assert_allclose(band.redundancy_numbers, dense.redundancy_numbers, atol=1e-10)
+    np.testing.assert_allclose(band.ray_gains.exterior, dense.ray_gains.exterior, atol=1e-10)

@@ -21,8 +21,11 @@ def test_diagnoses_name_the_mistake():
             ("check_compose", "no scale in t"): "scale m1 is missing",
             ("check_compose", "no rotation in t"): "rotation R1 is missing",
             ("check_intersect_many", "R transposed"): "R transposed",
-            ("check_conformal", "conjugate pairing"): "x − iy",
-            ("check_conformal", "no constant"): "c0 (the shift) is missing",
+            ("check_strip_degree", "complex r"): "real numbers",
+            ("check_strip_degree", "two-sided"): "one-sided",
+            ("check_strip_degree", "le1"): "not a rejection",
+            ("check_strip_degree", "min"): "SMALLEST accepted",
+            ("check_strip_degree", "no sigma"): "divide the residuals by σ",
             ("check_strips_for", "natural log"): "natural logarithm",
             ("check_strips_for", "a forgotten"): "a is missing",
             ("check_strips_for", "exponent only"): "log10 n_s, not n_s",
@@ -34,5 +37,59 @@ def test_diagnoses_name_the_mistake():
             ("check_determined", "one plan point"): "two points with X, Y",
             ("check_intersect_many", "not normalised"): "not normalised",
             ("check_intersect_many", "pairwise midpoints"): "pairwise midpoints",
+            ("check_model_jacobian", "sign"): "wrong sign",
+            ("check_model_jacobian", "left increment"): "increment on the left",
+            ("check_model_jacobian", "lambda column"): "λ column",
+            ("check_adjust_models", "no weights"): "equal weights",
+            ("check_adjust_models", "one step"): "not converged",
+            ("check_adjust_models", "left update"): "not converged",
+            ("check_adjust_models", "whole points"): "decide per coordinate",
+            ("check_adjust_models", "r without points"): "lacks the",
         },
     )
+
+
+def test_the_lessons_stand_ins_are_refused_and_named():
+    """The numeric stand-in of model_jacobian, and a version that calls the library's
+    independent_models, are refused by name."""
+    from orientviz.exercises._common import rejection
+
+    exc = rejection(lesson08.check_model_jacobian, lesson08.model_jacobian_numeric)
+    assert exc is not None and "calls the library's model_jacobian_numeric" in str(exc)
+
+    def by_library(m, model, point, X, free, sigma, R, T):
+        import orientviz as ov
+
+        ov.independent_models(None)
+
+    exc = rejection(lesson08.check_adjust_models, by_library)
+    assert exc is not None and "calls the library's independent_models" in str(exc)
+
+
+def test_the_independent_models_module_ships_no_solution():
+    """exercises/_independent_models.py (re-exported by lesson08) holds checks and a refused
+    stand-in only: none of its functions passes one of its checks."""
+    import contextlib
+    import inspect
+    import io
+
+    from orientviz.exercises import _independent_models as module
+
+    checks = [module.check_model_jacobian, module.check_adjust_models]
+    own = [
+        f
+        for name, f in vars(module).items()
+        if inspect.isfunction(f)
+        and f.__module__ == module.__name__
+        and not name.startswith("check_")
+    ]
+    assert own
+    for check in checks:
+        for f in own:
+            out = io.StringIO()
+            with contextlib.redirect_stdout(out):
+                try:
+                    check(f)
+                except Exception:  # noqa: BLE001 - refused or wrong signature: not a solution
+                    continue
+            assert not out.getvalue().startswith("✓"), f"{check.__name__} accepts {f.__name__}"

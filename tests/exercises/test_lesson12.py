@@ -20,9 +20,33 @@ def test_diagnoses_name_the_mistake():
             ("check_snoop", "all at once"): "one at a time",
             ("check_snoop", "no abs"): "not w",
             ("check_snoop", "one round"): "go on until",
-            ("check_snoop_round", "signed"): "test |w|",
-            ("check_external", "N not inverted"): "multiplied by AᵀA",
-            ("check_external", "unweighted"): "weights were forgotten",
-            ("check_external", "sign"): "opposite sign",
+            ("check_new_position", "in the cluster"): "stays alone",
+            ("check_new_position", "half way"): "closer to the far point",
+            ("check_new_position", "far beyond"): "the NEW observation is the lonely one",
+            ("check_detection_probability", "one tail"): "one tail only",
+            ("check_detection_probability", "no sqrt r"): "√r is missing",
+            ("check_detection_probability", "r not sqrt"): "r instead of √r",
+            ("check_detection_probability", "not flagging"): "NOT flagging",
+            ("check_detection_probability", "divided by sqrt r"): "w's mean is",
+            ("check_bias_to_noise", "the MDB"): "the MDB in units of the observation's σ",
+            ("check_bias_to_noise", "sqrt(1 - r)"): "not δ0 σ",
+            ("check_bias_to_noise", "no root"): "needs its square root",
+            ("check_bias_to_noise", "inverted"): "inverted",
         },
     )
+
+
+def test_bias_to_noise_check_refuses_the_library():
+    from orientviz.adjust.gross import reliability
+    from orientviz.exercises._common import rejection
+
+    def via_library(r, delta0):  # the library's δ̄0 through a stand-in adjustment
+        from types import SimpleNamespace
+
+        import numpy as np
+
+        adj = SimpleNamespace(redundancy_numbers=r, sigma_obs=np.ones_like(r), cofactor=None)
+        return reliability(adj).external
+
+    exc = rejection(lesson12.check_bias_to_noise, via_library)
+    assert exc is not None and "calls the library's reliability" in str(exc)

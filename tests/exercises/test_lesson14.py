@@ -38,3 +38,23 @@ def test_best_pair_misreadings_are_named():
             ("check_best_pair", "the stand-in"): "calls the library's best_pair_library",
         },
     )
+
+
+def test_radius_change_mistakes_are_named_and_the_exact_change_passes():
+    from mutants import assert_diagnoses
+
+    from orientviz.exercises._common import rejection
+
+    assert_diagnoses(
+        lesson14,
+        answers,
+        {
+            ("check_radius_change", "s_e"): "the change of s_e",
+            ("check_radius_change", "sign"): "the sign",
+            ("check_radius_change", "relative"): "relative change",
+            ("check_radius_change", "s/s_e"): "chain rule",
+        },
+    )
+    # a student who differences (4b) for the given dm (exact, not first order) is right too
+    exact = lambda *a: answers._radius_change(*a, mistake="exact")  # noqa: E731
+    assert rejection(lesson14.check_radius_change, exact) is None

@@ -80,3 +80,17 @@ def test_the_lessons_stand_in_is_refused_and_named():
 
     for text in ["calls the library's expected_rms_library", "stand-in"]:
         assert_diagnoses(lesson15, answers, {("check_expected_rms", "the stand-in"): text})
+
+
+def test_import_mistakes_are_explained():
+    from mutants import assert_diagnoses
+
+    assert_diagnoses(
+        lesson15,
+        answers,
+        {
+            ("check_import_mistakes", "mirror as a rotation"): "mirrors the image",
+            ("check_import_mistakes", "principal point as none"): "a shift",
+            ("check_import_mistakes", "pixel size as a scale"): "invisible in the images",
+        },
+    )

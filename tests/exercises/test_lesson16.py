@@ -51,10 +51,19 @@ def test_control_sigma_check_agrees_with_the_woodbury_update_and_names_misreadin
         lesson16.check_control_sigma(None, Q, j, step=0.02)
 
 
-def test_law_spacing_without_sqrt2_is_named():
+def test_largest_scale_mistakes_are_named():
     from mutants import assert_diagnoses
 
-    assert_diagnoses(lesson16, answers, {("check_law_spacing", "no √2"): "√2 is missing"})
+    assert_diagnoses(
+        lesson16,
+        answers,
+        {
+            ("check_largest_scale", "no √2"): "√2 is missing",
+            ("check_largest_scale", "p"): "not 1 − p",
+            ("check_largest_scale", "no μ"): "μ_z(i) left out",
+            ("check_largest_scale", "B/H"): "upside down",
+        },
+    )
 
 
 def test_the_lessons_stand_in_is_refused_and_named():

@@ -33,8 +33,13 @@ def test_block_demo_deformation_nodes():
         vec, pts = app.extra["deformation_nodes"]
         origin = app.scene.geo.frame.origin
         demo = app.demo
+        legend = app.panel.handles["legend"]
+        assert "model deformation" not in legend.content and "residual vectors" in legend.content
         ctl["show"].value = True
         assert vec.visible and not app.scene.nodes["residuals"].visible
+        # the legend names the deformation's arrows and points, not what it hid
+        assert "model deformation: each point from its true position" in legend.content
+        assert "residual vectors" not in legend.content and "tie" not in legend.content
         ctl["t"].value = 0.0  # reference → estimate at t = 0: the reference itself
         ref = app.extra["deformation_reference"]
         # float32 scene coordinates of a few km: a few 0.1 mm
@@ -47,6 +52,9 @@ def test_block_demo_deformation_nodes():
         np.testing.assert_allclose(moved, ref + k * d, atol=2e-3)
         ctl["mode"].value = MODES[1]  # two bundles: without and with Ebner's 12 parameters
         assert "with ebner12" in ctl["info"].content
+        assert "adjusted without (t = 0) and with (t = 1) self-calibration" in legend.content
+        ctl["show"].value = False
+        assert "model deformation" not in legend.content and "residual vectors" in legend.content
         assert app.messages == []
     finally:
         app.stop()
@@ -105,9 +113,8 @@ def test_lens_model_deformation_of_a_problem_file():
         app.stop()
 
 
-@pytest.fixture(scope="module")
-def ap_file(tmp_path_factory):
-    """A problem file whose camera has Ebner's 12 additional parameters (``cameras[]
+def write_ap_file(folder, name: str):
+    """A problem file whose camera has the additional-parameter set ``name`` (``cameras[]
     .additional``), on a simulated block with a barrel distortion (15 µm at r = 80 mm)."""
     import json
 
@@ -119,10 +126,54 @@ def ap_file(tmp_path_factory):
 
     sim = simulate_block(3, 6, rng=5, control="full", systematic=barrel)
     doc = json.loads(dumps_problem(problem_from_block(sim.block, columnar=False)))
-    doc["cameras"][0].update(additional="ebner12")
-    path = tmp_path_factory.mktemp("ap") / "ebner.json"
+    doc["cameras"][0].update(additional=name)
+    path = folder / f"{name}.json"
     path.write_text(json.dumps(doc), encoding="utf-8")
     return path
+
+
+@pytest.fixture(scope="module")
+def ap_file(tmp_path_factory):
+    """:func:`write_ap_file` with Ebner's 12 parameters."""
+    return write_ap_file(tmp_path_factory.mktemp("ap"), "ebner12")
+
+
+@pytest.mark.parametrize("name", ["brown", "gruen44"])
+def test_brown_and_gruen44_sets_reach_the_view_as_solve_estimates_them(name, tmp_path):
+    """The set named in the file (not another, not none) is what the viewer solves with,
+    lists and draws: σ̂0, the parameter names and values of ``solve``, and the correction
+    field of that set's own model at the estimates."""
+    pytest.importorskip("viser")
+    from orientviz.bundle import ap_set
+    from orientviz.io.kinds.block import bundle_camera_options
+    from orientviz.io.solve import load_named, solve_problem
+    from orientviz.viewer.app import ViewerApp
+    from orientviz.viewer.panel_camera import ap_distortion_vectors
+
+    path = write_ap_file(tmp_path, name)
+    problem = load_named(str(path))
+    ref = solve_problem(problem).adjustment
+    sl = ref.groups["additional"]
+    aps = bundle_camera_options(problem.data)["additional"]  # the set as solve builds it
+    assert aps.name == name and list(aps.names) == list(ap_set(name).names)
+    app = ViewerApp(str(path), port=0, verbose=False)
+    try:
+        st, cam = app.panel.state, app.panel.camera
+        assert st.result.sigma0 == pytest.approx(ref.sigma0, rel=1e-9)
+        lines = cam.text.split("\n")
+        assert len(lines) == len(aps.names) + 1
+        for label, value, line in zip(ref.names[sl], ref.x[sl], lines, strict=False):
+            assert line.startswith(f"{label} = {value:.4g} ± ")
+        assert [str(n).split("@")[0] for n in ref.names[sl]] == list(aps.names)
+        # the field drawn on the selected image is the set's correction at the estimates
+        b = st.block
+        xy = b.observations.xy
+        m, d = ap_distortion_vectors(aps, ref.x[sl], xy.min(axis=0), xy.max(axis=0))
+        assert cam.field_max_um == pytest.approx(1e3 * np.linalg.norm(d, axis=1).max(), rel=1e-9)
+        assert f"additional parameters ({name})" in app.panel.handles["legend"].content
+        assert app.messages == []
+    finally:
+        app.stop()
 
 
 def test_additional_parameter_set_of_a_file_in_the_panel_and_its_deformation(ap_file):

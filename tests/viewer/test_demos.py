@@ -276,3 +276,41 @@ def test_radar_sphere_cap_slider_redraws_the_caps_alone(monkeypatch):
         assert app.messages == []
     finally:
         app.stop()
+
+
+def _label_box(xy, anchor: str, scale: float, size=(1280, 800)):
+    """Pixel box (x0, y0, x1, y1; y down) of a station label ("image N", ~46 × 18 px at
+    scale 1 as viser draws it) whose ``anchor`` point lies at window coordinates ``xy``."""
+    w, h = 46.0 * scale, 18.0 * scale
+    px, py = (xy[0] + 1) / 2 * size[0], (1 - xy[1]) / 2 * size[1]
+    vert, horiz = anchor.split("-")
+    x0 = {"left": px, "center": px - w / 2, "right": px - w}[horiz]
+    y0 = {"top": py, "center": py - h / 2, "bottom": py - h}[vert]
+    return x0, y0, x0 + w, y0 + h
+
+
+@pytest.mark.parametrize("image", ["1", "2", "3"])
+def test_radar_station_names_do_not_meet_in_the_first_view(image):
+    """Lesson 14's snapshot (image 2 selected): "image 3" touched "image 2". The faded
+    stations' names now sit beside their stations, away from the selected one."""
+    from orientviz.viewer.geometry import VIEW_FOV
+
+    app = ViewerApp(load_demo("radar"), port=0, verbose=False)
+    try:
+        cam, rv = app.server.initial_camera, app.extra["radar"]
+        rv.h["image"].value = image
+        for size in ((1280, 800), (1280, 860)):  # the viewer, the lesson's snapshot
+            boxes = []
+            for i in (1, 2, 3):
+                label = rv.nodes[f"label_{i}"]
+                at = np.asarray(rv.nodes[f"station_{i}"].position, float)
+                at = at + np.asarray(label.position, float)
+                xy = _screen(at[None], cam.position, cam.look_at, VIEW_FOV, size[0] / size[1])
+                boxes.append(_label_box(xy[0], label.anchor, label.font_screen_scale, size))
+            for a in range(3):
+                for b in range(a + 1, 3):
+                    A, B = boxes[a], boxes[b]
+                    apart = A[2] < B[0] or B[2] < A[0] or A[3] < B[1] or B[3] < A[1]
+                    assert apart, (image, size, a + 1, b + 1, A, B)
+    finally:
+        app.stop()

@@ -6,7 +6,8 @@
 * a block above :data:`~orientviz.viewer.solved.PRECISION_LIMIT` image observations is
   solved without the precision (same σ̂0 as ``solve``), the panel says so, and the
   precision follows on request;
-* DBAT's ROMA bundle (60 images, 90 561 image points) opens as ``dbat_roma`` with DBAT's σ0.
+* DBAT's ROMA bundle (60 images, 90 561 image points) opens as ``dbat_roma`` (at its start
+  values while it is solved) and shows DBAT's σ0 once solved.
 """
 
 from __future__ import annotations
@@ -95,7 +96,8 @@ def test_dbat_roma_opens_with_dbats_sigma0_and_level_of_detail():
     from orientviz.reproduce.dbat_roma import paper_values
 
     app = ViewerApp("dbat_roma", port=0, verbose=False)
-    try:
+    try:  # every start value given: it opens at them while it is solved (test_background.py)
+        assert app.background is not None and app.background.wait(300)
         st, sc = app.panel.state, app.scene
         b = st.block
         assert (b.n_images, b.n_points, b.n_observations) == (60, 26321, 90561)

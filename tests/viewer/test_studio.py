@@ -130,6 +130,34 @@ def test_method_switch_and_the_polynomial_says_it_has_no_precision(view):
     panel.set_method()
 
 
+def test_control_changes_with_the_models_method_are_updates_of_one_factorisation():
+    from orientviz.design import LiveModels, assess_models
+    from orientviz.errors import NotDeterminableError
+
+    st = Studio(FlightDesign(strips=3, images_per_strip=8, control_spacing=4))
+    st.set_method("models")
+    live = st._models
+    assert isinstance(live, LiveModels)
+    tie = np.flatnonzero(st.block.points.role == 0)
+    for j in tie[[3, len(tie) // 2]]:
+        st.set_control(int(j), 0.02)
+    st.set_control(int(tie[3]), None)
+    st.undo()
+    assert st._models is live and len(live._steps) == 4  # updates, no new factorisation
+    ref = assess_models(st.block, st.spec)  # rtol: tests/design/test_models_live.py
+    np.testing.assert_allclose(st.quality.point_sigma, ref.point_sigma, rtol=1e-8)
+    n0, log0 = st.block.n_images, list(st.log)
+    with pytest.raises(NotDeterminableError, match="common points"):
+        st.remove_images([9])  # inside a strip: its neighbours form no model
+    assert st.block.n_images == n0 and st.log == log0 and st._models is live
+    st.remove_images([0])  # a new structure: a new factorisation
+    assert st._models is not live
+    ref = assess_models(st.block, st.spec)
+    np.testing.assert_allclose(st.quality.point_sigma, ref.point_sigma, rtol=1e-8)
+    st.undo()
+    assert st._models is live
+
+
 def test_ellipsoids_and_the_gizmo(view):
     panel, st = view.panel, view.studio
     panel.h["ellipsoids"].value = True

@@ -14,7 +14,8 @@
 * :func:`cross_strip` (:func:`cross_strip_images`), :func:`add_images`,
   :func:`remove_images` — structural edits of a design block; :func:`design_from_block` — a design with the geometry of any block;
 * :func:`assess_models` — the design's precision for independent models
-  (:data:`METHODS`: the polynomial adjustment has none).
+  (:data:`METHODS`: the polynomial adjustment has none); :class:`LiveModels` — the same,
+  factorised once per structure and updated per control change.
 
 The package sits above :mod:`orientviz.bundle` and :mod:`orientviz.simulate` and uses
 their machinery: the normal equations, the precision and reliability are the bundle's.
@@ -31,6 +32,7 @@ from ._extend import (
 from ._layout import FlightDesign, design_auxiliary, design_block, set_control
 from ._live import Change, LiveDesign
 from ._methods import METHODS, assess_models
+from ._models_live import LiveModels
 from ._quality import DesignQuality, ellipsoids
 from ._suggest import Suggestion, suggest_control
 
@@ -52,6 +54,7 @@ __all__ = [
     "remove_images",
     "METHODS",
     "assess_models",
+    "LiveModels",
     "Change",
     "LiveDesign",
     "Suggestion",

@@ -27,6 +27,7 @@ import scipy.linalg
 from numpy.typing import NDArray
 
 from ..block import Block
+from ..bundle import BundleOptions
 from ..bundle.precision import bundle_precision
 from ..bundle.problem import BundleProblem, BundleState, point_setup
 from ..bundle.reduced import factor_reduced
@@ -34,6 +35,10 @@ from ..errors import InputError
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
+
+#: Block size (unknowns) of the banded selected inverse of a design (the bundle's
+#: default is 96; benchmarks/README.md, "Block design", for the choice).
+TAKAHASHI_BLOCK: int = 48
 
 
 class DesignBase:
@@ -57,7 +62,10 @@ class DesignBase:
     """
 
     def __init__(self, block: Block, auxiliary: list | None = None) -> None:
-        prob = BundleProblem(block, point_setup(block, "weighted"), auxiliary=auxiliary or None)
+        prob = BundleProblem(
+            block, point_setup(block, "weighted"), auxiliary=auxiliary or None,
+            options=BundleOptions(takahashi_block=TAKAHASHI_BLOCK),
+        )  # fmt: skip
         if prob.points.n != block.n_points:
             raise InputError("a live design needs weighted control (σ > 0) at every point")
         st = BundleState(
@@ -79,13 +87,22 @@ class DesignBase:
         self.na = prob.na
         self._cache: dict[tuple[str, int], tuple[F64, F64]] = {}
         self._blocks: list | None = None  # the banded factor as dense blocks (on demand)
-        if self.na:  # the border of the auxiliary offsets: G = A⁻¹B and F̃⁻¹
-            E, F = prob.aux.border(prob, ne)
-            Y = self.solve(E).reshape(self.m, 6, -1)
-            self.Faa = np.linalg.inv(F - E.reshape(-1, self.na).T @ Y.reshape(-1, self.na))
-            Pg = ne.aux.Pg  # (p, 3, na) by column
-            Gp = ne.Vinv @ Pg + self._back(Y)
-            self.Gc, self.Gp = Y, Gp[self.pcol]
+        #: the border of the auxiliary offsets (E, F, P_g), made G = A⁻¹B and F̃⁻¹ by
+        #: :meth:`_border` when columns are first asked for (a design that is only looked
+        #: at does not pay for it)
+        self._border_parts = (*prob.aux.border(prob, ne), ne.aux.Pg) if self.na else None
+        self.Gc = self.Gp = self.Faa = None
+
+    def _border(self) -> None:
+        """G = A⁻¹B (images ``Gc`` (m, 6, na), points ``Gp`` (p, 3, na)) and F̃⁻¹ ``Faa``."""
+        if self.Faa is not None or self._border_parts is None:
+            return
+        E, F, Pg = self._border_parts  # Pg (p, 3, na) by column
+        Y = self.solve(E).reshape(self.m, 6, -1)
+        self.Faa = np.linalg.inv(F - E.reshape(-1, self.na).T @ Y.reshape(-1, self.na))
+        Gp = self.Vinv @ Pg + self._back(Y)
+        self.Gc, self.Gp = Y, Gp[self.pcol]
+        self._border_parts = None
 
     def precision(self) -> SimpleNamespace:
         """The bundle's precision of the base design from this factor
@@ -164,6 +181,7 @@ class DesignBase:
 
     def _compute(self, keys: list[tuple[str, int]]) -> None:
         prob, T, m = self.prob, self.T, self.m
+        self._border()
         border = [j for kind, j in keys if kind == "g"]
         keys_x = [key for key in keys if key[0] != "g"]
         widths = [6 if kind == "i" else 3 for kind, _ in keys_x]

@@ -151,7 +151,8 @@ class LiveDesign(WoodburySteps):
         self._w = _weights(b.points.sigma)  # by base point: the weights of the terms
         rows = self._base.prob.aux.rows if self.auxiliary else None
         self._aux_names = list(rows.names) if rows is not None else []
-        self._aux = _aux_rows(rows, lambda i: i, lambda j: j)  # by label, slots
+        #: the auxiliary rows by label (slots), or the base's rows until first asked for
+        self._aux: dict | object = rows if rows is not None else {}
         #: the steps (U images by slot, U points by base point, U offsets, M)
         self._steps: list[tuple[F64, F64, F64, F64]] = []
         #: per control change: (weights, terms, quality, number of steps) before it
@@ -246,6 +247,8 @@ class LiveDesign(WoodburySteps):
         if list(rows.names) != self._aux_names:
             return new_aux, None, [], []
         now = _aux_rows(rows, img_slot, pt_slot)
+        if not isinstance(self._aux, dict):  # the base's rows: slots are indices
+            self._aux = _aux_rows(self._aux, lambda i: i, lambda j: j)
         removed = [v for key, v in self._aux.items() if now.get(key) != v]
         added = [v for key, v in now.items() if self._aux.get(key) != v]
         return new_aux, now, removed, added

@@ -19,10 +19,14 @@ import warnings
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..block import Block
 from ..stereo_models import independent_models
-from ._quality import DesignQuality, ellipsoids, summarise, weak_spots
+from ._quality import DesignQuality, summarise, weak_spots
+
+F64 = NDArray[np.float64]
+I64 = NDArray[np.int64]
 
 #: method → (name in words, None or why there is no design precision)
 METHODS: dict[str, tuple[str, str | None]] = {
@@ -65,21 +69,39 @@ def assess_models(
         block, control="weighted", precision=True, max_iter=3, auxiliary=auxiliary or None
     )
     Q = np.asarray(res.cofactor_groups["points"])
+    k = np.asarray(res.point_index)
+    ci = np.asarray(res.centre_image)
+    return models_quality(block, spec, Q[: k.size], k, Q[k.size : k.size + ci.size], ci, level)
+
+
+def models_quality(
+    block: Block, spec: dict[str, Any], point_q: F64, points: I64, centre_q: F64,
+    centres: I64, level: float = 0.95,
+) -> DesignQuality:  # fmt: skip
+    """A :class:`DesignQuality` of a models design from its cofactor blocks.
+
+    Parameters
+    ----------
+    block : Block
+    spec : dict
+        Needs ``base_m`` (m).
+    point_q : ndarray, shape (k, 3, 3)
+        Cofactor blocks (m², σ0 = 1) of the block points ``points`` (k,).
+    centre_q : ndarray, shape (c, 3, 3)
+        Those of the projection centres of the images ``centres`` (c,).
+    level : float
+        Probability of the confidence ellipsoids.
+    """
     p, m, n = block.n_points, block.n_images, block.n_observations
     cov = np.full((p, 3, 3), np.nan)
-    k = np.asarray(res.point_index)
-    cov[k] = Q[: k.size]
+    cov[points] = point_q
     st = np.full((m, 6), np.nan)
-    ci = np.asarray(res.centre_image)
-    if ci.size:
-        Qc = Q[k.size : k.size + ci.size]
-        st[ci, :3] = np.sqrt(np.clip(np.einsum("nii->ni", Qc), 0.0, None))
+    if centres.size:
+        st[centres, :3] = np.sqrt(np.clip(np.einsum("nii->ni", centre_q), 0.0, None))
     sig = np.sqrt(np.clip(np.einsum("nii->ni", cov), 0.0, None))
-    axes, dirs = ellipsoids(cov, level)
     nan_n = np.full(n, np.nan)
     q = DesignQuality(
-        point_sigma=sig, point_cov=cov, station_sigma=st, ellipsoid_axes=axes,
-        ellipsoid_dirs=dirs, level=level, redundancy=np.full((n, 2), np.nan), mdb=nan_n,
+        point_sigma=sig, point_cov=cov, station_sigma=st, level=level, redundancy=np.full((n, 2), np.nan), mdb=nan_n,
         external=nan_n.copy(), point_shift=nan_n.copy(),
         control=np.isfinite(block.points.xyz_known).any(axis=1),
     )  # fmt: skip

@@ -10,6 +10,7 @@ design, in m² and rad².
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -37,7 +38,8 @@ class DesignQuality:
     station_sigma : ndarray, shape (m, 6)
         σ of X0, Y0, Z0 (m) and ω, φ, κ (rad) of every image.
     ellipsoid_axes : ndarray, shape (p, 3)
-        Semi-axes (m, ascending) of every point's confidence ellipsoid at ``level``.
+        Semi-axes (m, ascending) of every point's confidence ellipsoid at ``level``
+        (computed from ``point_cov`` when first asked for).
     ellipsoid_dirs : ndarray, shape (p, 3, 3)
         Their directions (columns, unit vectors in the object frame).
     level : float
@@ -65,8 +67,6 @@ class DesignQuality:
     point_sigma: F64
     point_cov: F64
     station_sigma: F64
-    ellipsoid_axes: F64
-    ellipsoid_dirs: F64
     level: float
     redundancy: F64
     mdb: F64
@@ -75,6 +75,20 @@ class DesignQuality:
     control: NDArray[np.bool_]
     weak_spots: list[str] = field(default_factory=list)
     summary: dict = field(default_factory=dict)
+
+    @functools.cached_property
+    def _ellipsoids(self) -> tuple[F64, F64]:
+        return ellipsoids(self.point_cov, self.level)
+
+    @property
+    def ellipsoid_axes(self) -> F64:
+        """Semi-axes (m, ascending) of the confidence ellipsoids, (p, 3)."""
+        return self._ellipsoids[0]
+
+    @property
+    def ellipsoid_dirs(self) -> F64:
+        """Directions of the semi-axes (columns, unit vectors), (p, 3, 3)."""
+        return self._ellipsoids[1]
 
     @property
     def sigma_xy(self) -> F64:
@@ -239,11 +253,9 @@ def quality_from_arrays(
     """
     sig = np.sqrt(np.clip(np.einsum("nii->ni", point_cov), 0.0, None))
     ssig = np.sqrt(np.clip(np.einsum("nii->ni", exterior_cov), 0.0, None))
-    axes, dirs = ellipsoids(point_cov, level)
     ctrl = block.points.role == CONTROL
     q = DesignQuality(
-        point_sigma=sig, point_cov=point_cov, station_sigma=ssig, ellipsoid_axes=axes,
-        ellipsoid_dirs=dirs, level=level, redundancy=redundancy, mdb=rel.mdb_weak,
+        point_sigma=sig, point_cov=point_cov, station_sigma=ssig, level=level, redundancy=redundancy, mdb=rel.mdb_weak,
         external=rel.external, point_shift=rel.point_shift_max, control=ctrl,
     )  # fmt: skip
     q.weak_spots = weak_spots(q, block, base_m)

@@ -1,8 +1,9 @@
-"""Checkers for lesson 01 (least squares: weights, σ0, error ellipses, the χ² test, Gauss-Newton).
+"""Checkers for lesson 01 (least squares: weights, σ0, propagation, error ellipses, Gauss-Newton).
 
-Oracles: the weighted mean written out by hand; the error ellipse found by brute force
-(the standard deviation sqrt(uᵀCu) in 200 001 directions u); the χ² quantiles of
-``scipy.stats.chi2``; a Gauss-Newton step built from a central-difference Jacobian.
+Oracles: the propagation F C Fᵀ of a mean written out by hand; the weakest direction of a
+point found by brute force (the standard deviation √(uᵀCu) in 200 001 directions u, C from a
+central-difference Jacobian); redundancy numbers by re-solving; the second-order term of a
+distance by central second differences; the line fit from the normal equations written out.
 """
 
 from __future__ import annotations
@@ -14,145 +15,124 @@ import numpy as np
 from ..adjust.engine import gauss_newton  # forbidden inside the student's line_fit
 from ._common import CheckFailed, call, compare, own_work, rng_for, success
 
-# --------------------------------------------------------------------- weighted mean
+# --------------------------------------------------------------------- precision of a mean
 
 
-def _wm_lstsq(h, sigma):
-    """Oracle: the mean as the least-squares solution of √P·1·m = √P·h (numpy's lstsq)."""
-    h = np.asarray(h, float)
-    w = 1.0 / np.asarray(sigma, float)
-    m = float(np.linalg.lstsq(w[:, None], w * h, rcond=None)[0][0])
-    v = w * (m - h)
-    return m, math.sqrt(float(v @ v) / (len(h) - 1))
+def check_mean_sigma(fn) -> None:
+    """``fn(sigma) -> (sigma_weighted, sigma_plain)``: σ (m) of the weighted mean (weights
+    1/σ²) and of the plain mean of heights with a-priori σ (m), by propagation of variances.
 
-
-def _wm_unweighted(h, sigma):
-    m = float(np.mean(h))
-    v = m - np.asarray(h, float)
-    p = 1.0 / np.asarray(sigma, float) ** 2
-    return m, math.sqrt(float(np.sum(p * v * v)) / (len(h) - 1))
-
-
-def _wm_one_over_sigma(h, sigma):
-    p = 1.0 / np.asarray(sigma, float)
-    m = float(np.sum(p * h) / np.sum(p))
-    v = m - np.asarray(h, float)
-    return m, math.sqrt(float(np.sum(p * v * v)) / (len(h) - 1))
-
-
-def _wm_divide_by_n(h, sigma):
-    m, s0 = _wm_lstsq(h, sigma)
-    return m, s0 * math.sqrt((len(h) - 1) / len(h))
-
-
-def _wm_no_weights_in_sigma0(h, sigma):
-    m, _ = _wm_lstsq(h, sigma)
-    v = m - np.asarray(h, float)
-    return m, math.sqrt(float(np.sum(v * v)) / (len(h) - 1))
-
-
-def check_weighted_mean(fn) -> None:
-    """``fn(h, sigma) -> (mean, sigma0)``: weighted mean of heights h (m) with a-priori
-    σ (m), and σ̂0 = √(vᵀPv / r) with P = diag(1/σ²) (σ0 = 1 a priori, so σ̂0 has no unit)."""
-    rng = rng_for("lesson01.check_weighted_mean")
+    Oracle: σ_F = √(F C Fᵀ) with the row F of each mean and C = diag(σ²), written out here;
+    the named mistakes are the plausible shortcuts (no root, weights 1/σ, σ̄/√n, RMS σ).
+    """
+    rng = rng_for("lesson01.check_mean_sigma")
     for n in (3, 5):
-        sigma = rng.uniform(0.02, 0.12, n)
-        h = 412.40 + rng.normal(0.0, 1.0, n) * sigma * 1.7
-        got = call(fn, h.copy(), sigma.copy(), what="weighted_mean")
+        sigma = np.sort(rng.uniform(0.005, 0.06, n))
+        C = np.diag(sigma**2)
+        F_w = (1 / sigma**2) / np.sum(1 / sigma**2)
+        F_p = np.full(n, 1.0 / n)
+        want = np.array([math.sqrt(F_w @ C @ F_w), math.sqrt(F_p @ C @ F_p)])
+        got = call(fn, sigma.copy(), what="mean_sigma")
         if np.ndim(got) != 1 or len(got) != 2:
-            raise CheckFailed("weighted_mean: return two numbers, (mean, sigma0)")
-        want = _wm_lstsq(h, sigma)
-        wrong = [
-            ("the weights are forgotten (plain mean)", _wm_unweighted(h, sigma)),
-            ("weights 1/σ instead of 1/σ²", _wm_one_over_sigma(h, sigma)),
-            ("vᵀPv divided by n instead of the redundancy r = n − 1", _wm_divide_by_n(h, sigma)),
-            ("σ0 from vᵀv without the weights", _wm_no_weights_in_sigma0(h, sigma)),
-        ]
-        compare(
-            f"the mean of {n} heights [m]",
-            got[0],
-            want[0],
-            rtol=1e-10,
-            wrong=[(t, w[0]) for t, w in wrong],
-        )
-        compare(
-            f"σ̂0 of {n} heights", got[1], want[1], rtol=1e-8, wrong=[(t, w[1]) for t, w in wrong]
-        )
-    success("weighted mean and σ̂0 agree with the hand formulas for 3 and 5 heights")
+            raise CheckFailed("mean_sigma: return two numbers, (sigma_weighted, sigma_plain)")
+        F_1 = (1 / sigma) / np.sum(1 / sigma)
+        wrong_w = [
+            ("this is the variance 1/Σ(1/σ²): take the square root", 1 / np.sum(1 / sigma**2)),
+            ("the weights 1/σ: the weighted mean uses 1/σ², so F = (1/σ²)/Σ(1/σ²)",
+             math.sqrt(F_1 @ C @ F_1)),
+            ("σ/√n with the mean σ: that holds only for equal σ", np.mean(sigma) / math.sqrt(n)),
+        ]  # fmt: skip
+        wrong_p = [
+            ("σ̄/√n with the mean σ: with unequal σ propagate F C Fᵀ, F = (1/n, …, 1/n)",
+             np.mean(sigma) / math.sqrt(n)),
+            ("this is the RMS of the σ, √(Σσ²/n): the mean divides by n, so √(Σσ²)/n",
+             math.sqrt(np.mean(sigma**2))),
+            ("this is the variance Σσ²/n²: take the square root", np.sum(sigma**2) / n**2),
+        ]  # fmt: skip
+        compare(f"σ of the weighted mean of {n} heights [m]", got[0], want[0], rtol=1e-9,
+                wrong=wrong_w)  # fmt: skip
+        compare(f"σ of the plain mean of {n} heights [m]", got[1], want[1], rtol=1e-9,
+                wrong=wrong_p)  # fmt: skip
+    success("σ of both means as F C Fᵀ gives them, for 3 and 5 heights")
 
 
-# --------------------------------------------------------------------- error ellipse
+# --------------------------------------------------------------------- the weakest direction
 
 
-def _ellipse_brute(C):
+def _numeric_normal(stations, x, sigma):
+    """N = JᵀPJ of distances from ``stations`` with a central-difference Jacobian."""
+    h = 1e-5
+    J = np.column_stack([
+        (_distances(x + e, stations) - _distances(x - e, stations)) / (2 * h)
+        for e in np.eye(2) * h
+    ])  # fmt: skip
+    return J.T @ (J / np.asarray(sigma, float)[:, None] ** 2)
+
+
+def _worst_by_search(C):
+    """The direction (unit vector) of largest √(uᵀCu) among 200 001 directions."""
     t = np.linspace(-np.pi / 2, np.pi / 2, 200_001)
-    u = np.stack([np.cos(t), np.sin(t)])
-    s = np.sqrt(np.einsum("in,ij,jn->n", u, C, u))
-    i, j = int(np.argmax(s)), int(np.argmin(s))
-    return float(s[i]), float(s[j]), float(t[i])
+    s = np.einsum(
+        "in,ij,jn->n", np.stack([np.cos(t), np.sin(t)]), C, np.stack([np.cos(t), np.sin(t)])
+    )
+    k = int(np.argmax(s))
+    return np.array([np.cos(t[k]), np.sin(t[k])])
 
 
-def _ellipse_variances(C):
-    a, b, th = _ellipse_brute(C)
-    return a * a, b * b, th
+def check_weakest_direction(fn) -> None:
+    """``fn(stations, x, sigma) -> u``: the unit vector (either sign) along which a point x
+    (m) fixed by distances from ``stations`` (k, 2) with σ (k,) m is worst determined.
 
-
-def _ellipse_minor_direction(C):
-    a, b, th = _ellipse_brute(C)
-    return a, b, th + np.pi / 2
-
-
-def _ellipse_degrees(C):
-    a, b, th = _ellipse_brute(C)
-    return a, b, math.degrees(th)
-
-
-def _ellipse_no_half(C):
-    a, b, _ = _ellipse_brute(C)
-    return a, b, math.atan2(2 * C[0, 1], C[0, 0] - C[1, 1])
-
-
-def _angle_diff(t1, t2):
-    """Difference of two axis directions (mod π), rad."""
-    d = (t1 - t2 + np.pi / 2) % np.pi - np.pi / 2
-    return abs(d)
-
-
-def check_error_ellipse(fn) -> None:
-    """``fn(C) -> (a, b, theta)``: semi-axes (a ≥ b, units of √C) and the angle of the
-    major axis from the x axis (rad, counter-clockwise) of the standard ellipse of C."""
-    rng = rng_for("lesson01.check_error_ellipse")
-    for _ in range(3):
-        sx, sy = rng.uniform(0.004, 0.02, 2)
-        rho = rng.uniform(-0.8, 0.8)
-        C = np.array([[sx * sx, rho * sx * sy], [rho * sx * sy, sy * sy]])
-        got = tuple(float(g) for g in call(fn, C.copy(), what="ellipse"))
-        a, b, th = _ellipse_brute(C)
-        err_ab = float(np.max(np.abs(np.subtract(got[:2], (a, b))))) / a
-        err_th = _angle_diff(got[2], th)
-        if err_ab <= 1e-6 and err_th <= 1e-4:
-            continue
-        error = max(err_ab / 1e-6, err_th / 1e-4) * 1e-6
-        for label, m in (
-            (
-                "variances instead of standard deviations (take the square roots)",
-                _ellipse_variances,
-            ),
-            ("the angle of the minor axis, not the major one", _ellipse_minor_direction),
-            ("the angle in degrees: give it in radians", _ellipse_degrees),
-            ("2θ, not θ: tan 2θ = 2σxy/(σx² − σy²), halve the angle", _ellipse_no_half),
-        ):
-            w = m(C)
-            if np.allclose(got[:2], w[:2], rtol=1e-6) and _angle_diff(got[2], w[2]) < 1e-4:
-                raise CheckFailed(f"error ellipse of C = {np.round(C * 1e6, 2).tolist()} · 1e-6: {label}",
-                                  error, 1e-6)  # fmt: skip
-        raise CheckFailed(
-            f"error ellipse of C = {np.round(C * 1e6, 2).tolist()} · 1e-6: expected a = {a:.6g}, "
-            f"b = {b:.6g}, θ = {th:.5f} rad, got {got}",
-            error,
-            1e-6,
+    Oracle: σ in 200 001 directions from the inverse of a normal matrix built with a
+    central-difference Jacobian."""
+    rng = rng_for("lesson01.check_weakest_direction")
+    for case in range(3):
+        k = 4 + case % 2
+        x = rng.uniform(-200, 200, 2)
+        ang = rng.uniform(0, 2 * np.pi, k)
+        stations = x + rng.uniform(300, 1500, k)[:, None] * np.column_stack(
+            [np.cos(ang), np.sin(ang)]
         )
-    success("semi-axes and direction agree with a brute-force search over 200 001 directions")
+        sigma = rng.uniform(0.003, 0.03, k)
+        N = _numeric_normal(stations, x, sigma)
+        want = _worst_by_search(np.linalg.inv(N))
+        got = np.asarray(
+            call(fn, stations.copy(), x.copy(), sigma.copy(), what="weakest_direction"), float
+        )
+        if got.shape != (2,):
+            raise CheckFailed(
+                f"weakest_direction: return a unit vector of shape (2,), got shape {got.shape}"
+            )
+        norm = float(np.linalg.norm(got))
+        if not np.isfinite(norm) or abs(norm - 1.0) > 1e-6:
+            raise CheckFailed(
+                f"weakest_direction: the vector has length {norm:.4g}; return a unit vector"
+            )
+        off = math.degrees(math.acos(min(1.0, abs(float(got @ want)))))
+        if off <= 0.01:
+            continue
+        strong = np.array([-want[1], want[0]])
+        unweighted = _worst_by_search(np.linalg.inv(_numeric_normal(stations, x, np.ones(k))))
+        d = x - stations[int(np.argmax(sigma))]
+        weak_ray = d / np.linalg.norm(d)
+        why = "build N = Σ u_i u_iᵀ/σ_i² from the unit vectors u_i, and take the direction of C = N⁻¹'s largest σ"
+        for text, w in (
+            ("that is the BEST-determined direction: N's largest eigenvalue belongs to C = N⁻¹'s "
+             "smallest; the weakest is the other eigenvector", strong),
+            ("the σ are missing: weight each distance's row by 1/σ_i²", unweighted),
+            ("that is the ray of the least precise distance: a direction is weak only if no "
+             "precise ray covers it — ask N, not one station", weak_ray),
+        ):  # fmt: skip
+            if abs(float(got @ w)) > math.cos(math.radians(0.01)):
+                why = text
+                break
+        raise CheckFailed(
+            f"weakest_direction (case {case + 1}): off by {off:.2f}° from the direction of the largest σ: {why}",
+            error=off / 0.01 * 1e-6, tolerance=1e-6,
+        )  # fmt: skip
+    success(
+        "the direction of the largest σ (the ellipse's major axis), from N as a search over directions finds it"
+    )
 
 
 # --------------------------------------------------------------------- σ̂0 of a group
@@ -218,61 +198,56 @@ def check_group_sigma0(fn) -> None:
     )
 
 
-# --------------------------------------------------------------------- Gauss-Newton step
+# --------------------------------------------------------------------- the linearisation error
 
 
 def _distances(x, stations):
     return np.linalg.norm(np.asarray(x, float)[None, :] - stations, axis=1)
 
 
-def _gn_step_numeric(x, stations, s, sigma):
-    x = np.asarray(x, float)
-    h = 1e-6
-    J = np.empty((len(s), 2))
-    for k in range(2):
-        e = np.zeros(2)
-        e[k] = h
-        J[:, k] = (_distances(x + e, stations) - _distances(x - e, stations)) / (2 * h)
-    P = np.diag(1.0 / np.asarray(sigma, float) ** 2)
-    dx = np.linalg.solve(J.T @ P @ J, J.T @ P @ (s - _distances(x, stations)))
-    return x + dx
+def check_second_order(fn) -> None:
+    """``fn(x, station, dx) -> e``: the second-order term (m) of the distance from ``station``
+    to the point x + dx (m), s(x + dx) ≈ s(x) + uᵀdx + e.
 
-
-def _gn_step(x, stations, s, sigma, sign, weights, unit):
-    """A Gauss-Newton step with one plausible mistake switched on (the wrong answers)."""
-    x = np.asarray(x, float)
-    f = _distances(x, stations)
-    J = (x[None, :] - stations) / (f[:, None] if unit else 1.0)
-    p = 1.0 / np.asarray(sigma, float) ** 2 if weights else np.ones(len(s))
-    dx = np.linalg.solve(J.T @ (p[:, None] * J), J.T @ (p * (s - f)))
-    return x + sign * dx
-
-
-def check_gauss_newton_step(fn) -> None:
-    """``fn(x, stations, s, sigma) -> x_new``: one Gauss-Newton step of a 2-D point
-    (m) from measured distances s (m, σ in m) to known stations (k, 2)."""
-    rng = rng_for("lesson01.check_gauss_newton_step")
-    stations = np.array([[0.0, 0.0], [820.0, 40.0], [300.0, 910.0], [-250.0, 500.0]])
-    truth = np.array([310.0, 360.0])
-    sigma = np.array([0.004, 0.012, 0.006, 0.02])
-    s = _distances(truth, stations) + rng.normal(0, 1, 4) * sigma
-    x = truth + np.array([7.0, -4.0])
-    got = np.asarray(
-        call(fn, x.copy(), stations.copy(), s.copy(), sigma.copy(), what="gn_step"), float
-    )
-    want = _gn_step_numeric(x, stations, s, sigma)
-    wrong = [
-        ("the correction is subtracted: N Δx = JᵀP(l − f(x)), then x + Δx",
-         _gn_step(x, stations, s, sigma, -1.0, True, True)),
-        ("the weights are forgotten", _gn_step(x, stations, s, sigma, 1.0, False, True)),
-        ("the Jacobian rows are not unit vectors: ∂s_i/∂X = (X − X_i)/s_i",
-         _gn_step(x, stations, s, sigma, 1.0, True, False)),
-    ]  # fmt: skip
-    # 1e-9 of the coordinates ≈ 0.4 µm: the numerical Jacobian's own error is far smaller
-    compare("the point after one step [m]", got, want, rtol=1e-9, wrong=wrong)
+    Oracle: half the second directional derivative of the distance along dx by central
+    second differences of the checker's own distance."""
+    rng = rng_for("lesson01.check_second_order")
+    for _ in range(4):
+        station = rng.uniform(-500, 500, 2)
+        x = station + rng.uniform(200, 900) * np.array(
+            [np.cos(a := rng.uniform(0, 6.3)), np.sin(a)]
+        )
+        dx = rng.normal(0.0, 30.0, 2)
+        t = 1e-3
+        s = lambda q, st=station: float(np.linalg.norm(q - st))  # noqa: E731
+        want = 0.5 * (s(x + t * dx) - 2 * s(x) + s(x - t * dx)) / t**2
+        got = call(fn, x.copy(), station.copy(), dx.copy(), what="second_order")
+        try:
+            got = float(got)
+        except (TypeError, ValueError):
+            raise CheckFailed(f"second_order: expected one number (m), got {got!r}") from None
+        dist = s(x)
+        u = (x - station) / dist
+        along = float(u @ dx)
+        perp2 = float(dx @ dx) - along**2
+        compare(
+            f"second-order term for |dx| = {np.linalg.norm(dx):.1f} m at s = {dist:.0f} m [m]",
+            got, want, rtol=1e-5,
+            wrong=[
+                ("|dx|²/(2s): only the part of dx ACROSS the ray bends the distance; along the "
+                 "ray s changes linearly", float(dx @ dx) / (2 * dist)),
+                ("the factor 1/2 of the Taylor series is missing", perp2 / dist),
+                ("the part ALONG the ray was used; the curvature comes from the part across it",
+                 along**2 / (2 * dist)),
+                ("the sign: s(x + dx) is never shorter than its linearisation (s is convex)",
+                 -perp2 / (2 * dist)),
+                ("this is the whole linearisation error s(x + dx) − s − uᵀdx, third and higher "
+                 "orders included; the exercise is its second-order term",
+                 s(x + dx) - dist - along),
+            ],
+        )  # fmt: skip
     success(
-        f"one step from 8 m off lands {np.linalg.norm(got - truth) * 1000:.1f} mm from the truth, "
-        "as a step with a numerical Jacobian does"
+        "e = |dx_⊥|²/(2s): the linearisation error grows with the square of the offset across the ray"
     )
 
 

@@ -32,52 +32,46 @@ def _scene(rng, affine=False):
     return X, xy, P, X0, (c, x0, y0)
 
 
-# --------------------------------------------------------------------- the DLT rows
+# --------------------------------------------------------------------- moving the origin
 
 
-def _rows(X, xy, cross, swap, stacked):
-    """The DLT rows with the sign of the cross terms, swapped x/y or stacked rows chosen."""
-    n = len(X)
-    one = np.ones((n, 1))
-    ax = np.hstack([X, one, np.zeros((n, 4)), cross * (xy[:, 1:] if swap else xy[:, :1]) * X])
-    ay = np.hstack([np.zeros((n, 4)), X, one, cross * (xy[:, :1] if swap else xy[:, 1:]) * X])
-    if stacked:
-        return np.vstack([ax, ay]), np.concatenate([xy[:, 0], xy[:, 1]])
-    A = np.empty((2 * n, 11))
-    A[0::2], A[1::2] = ax, ay
-    return A, xy.reshape(-1)
+def _shifted_wrongly(L, t, how):
+    """Wrong answers of shift_origin: no rescaling, the last column only, the shift reversed."""
+    P = np.append(np.asarray(L, float), 1.0).reshape(3, 4)
+    Q = np.hstack([P[:, :3], P[:, :3] @ (-t if how == "sign" else t)[:, None] + P[:, 3:]])
+    if how == "last column":
+        Q[:, 3] /= Q[2, 3]
+    elif how == "sign":
+        Q = Q / Q[2, 3]
+    return Q.reshape(-1)[:11]
 
 
-def check_dlt_rows(fn) -> None:
-    """``fn(X, xy) -> (A, b)``: the linear DLT system, rows x1, y1, x2, y2, …, unknowns
-    L1…L11; the true L of an error-free image must satisfy A L = b."""
-    rng = rng_for("lesson03.check_dlt_rows")
-    X, xy, P, _, _ = _scene(rng)
-    got = call(fn, X.copy(), xy.copy(), what="dlt_rows")
-    if not isinstance(got, tuple) or len(got) != 2:
-        raise CheckFailed("dlt_rows: return the pair (A, b)")
-    A, b = (np.asarray(g, dtype=float) for g in got)
-    L = P.reshape(-1)[:11]
-    want_A, want_b = _rows(X, xy, -1.0, False, False)
-    compare("b (observed x1, y1, x2, …) [mm]", b, want_b, rtol=1e-12,
-            wrong=[("b holds all x first, then all y: interleave x1, y1, x2, y2, …",
-                    np.concatenate([xy[:, 0], xy[:, 1]]))])  # fmt: skip
-    compare(
-        "A",
-        A,
-        want_A,
-        rtol=1e-12,
-        wrong=[
-            ("the last three columns need a minus sign: x (L9 X + L10 Y + L11 Z + 1) moved "
-             "to the left side", _rows(X, xy, 1.0, False, False)[0]),
-            ("x and y are swapped in the last three columns (the x row has −x·X, −x·Y, −x·Z)",
-             _rows(X, xy, -1.0, True, False)[0]),
-            ("rows all x first, then all y: interleave x1, y1, x2, y2, …",
-             _rows(X, xy, -1.0, False, True)[0]),
-        ],
-    )  # fmt: skip
-    resid = float(np.max(np.abs(A @ L - b)))
-    success(f"A L − b = {resid:.1e} mm for the true L of an error-free image of 10 points")
+def check_shift_origin(fn) -> None:
+    """``fn(L, t) -> L_new``: the eleven DLT parameters of the same image after the object
+    origin is moved to the point ``t`` (old coordinates, m): X_new = X − t, again scaled to
+    L12 = 1."""
+    for salt in range(3):
+        rng = rng_for("lesson03.check_shift_origin", salt)
+        X, xy, P, X0, (c, x0, y0) = _scene(rng)
+        t = rng.uniform([-2.0, -1.0, 0.0], [2.0, 3.0, 2.0])
+        L = P.reshape(-1)[:11]
+        # oracle: the camera itself in the new coordinates (projection centre X0 − t), built from
+        # (c, x0, y0, R) as in _scene; R from the true P: M = λ K Rᵀ
+        K = np.array([[-c, 0.0, x0], [0.0, -c, y0], [0.0, 0.0, 1.0]])
+        Rt = np.linalg.solve(K, P[:, :3])
+        Q = K @ Rt @ np.hstack([np.eye(3), -(X0 - t)[:, None]])
+        want = (Q / Q[2, 3]).reshape(-1)[:11]
+        got = call(fn, L.copy(), t.copy(), what="shift_origin")
+        compare(f"L after moving the origin (image {salt + 1})", got, want, rtol=1e-9, wrong=[
+            ("the new P is not scaled back to L12 = 1: divide all twelve entries by the new "
+             "L12 = m3·t + 1", _shifted_wrongly(L, t, "none")),
+            ("only the last column is divided by the new L12: the common factor λ scales "
+             "all of P, M too", _shifted_wrongly(L, t, "last column")),
+            ("the shift goes the wrong way: X = X_new + t, so p4 becomes M t + p4",
+             _shifted_wrongly(L, t, "sign")),
+        ])  # fmt: skip
+    success("the moved DLT parameters agree with the cameras built in the new coordinates "
+            "(three images)")  # fmt: skip
 
 
 # --------------------------------------------------------------------- projection centre

@@ -36,7 +36,7 @@ __all__ = [
     "check_design_X0",
     "check_resection",
     "check_rho_x0_phi",
-    "check_sigma_Z",
+    "check_sigma_X",
     "check_two_rays",
 ]
 
@@ -215,42 +215,63 @@ def check_design_X0(design_X0: Callable[[F64, F64, F64, float], F64]) -> None:
     success("design matrix for X0, Y0, Z0 agrees with numerical derivatives")
 
 
-def check_sigma_Z(sigma_Z: Callable[[float, float, float, float], float]) -> None:
-    """``sigma_Z(B, H, c, sigma_x)`` (m, m, mm, mm) must return σ of the height of a normal-case point, m."""
-    rng = rng_for("lesson04.check_sigma_Z")
-    for _ in range(2):
+def _normal_case_cov(t: float, B: float, H: float, c: float, sx: float) -> F64:
+    """Covariance (m²) of a ground point at X = t·B, Y = 0, Z = 0 intersected from two vertical
+    images at (0, 0, H) and (B, 0, H), all four image coordinates with σ = sx (mm); by
+    numerical derivatives of the checker's own projection."""
+    P = np.array([[t * B, 0.0, 0.0]])
+    A = []
+    for X0 in (np.array([0.0, 0, H]), np.array([B, 0, H])):
+        cols = []
+        for k in range(3):
+            e = np.zeros(3)
+            e[k] = 1e-3
+            cols.append(
+                (
+                    (_project(P + e, X0, np.eye(3), c) - _project(P - e, X0, np.eye(3), c)) / 2e-3
+                ).ravel()
+            )
+        A.append(np.column_stack(cols))
+    A = np.vstack(A) / sx
+    return np.linalg.inv(A.T @ A)
+
+
+def check_sigma_X(sigma_X: Callable[[float, float, float, float, float], float]) -> None:
+    """``sigma_X(x1, B, H, c, sigma_x)`` (mm, m, m, mm, mm): σ [m] of the ground coordinate X
+    along the base of a point on the base's ground track (Y = 0, flat ground) that the left
+    image of a normal-case pair sees at x1."""
+    rng = rng_for("lesson04.check_sigma_X")
+    ts = (0.5, 0.0, 0.83, -0.35, 1.0, 1.4)
+    for t in ts:
         B, H, c, sx = (
             rng.uniform(300, 900),
             rng.uniform(800, 3000),
             152.7,
             rng.uniform(0.003, 0.008),
         )
-        # a ground point midway, seen in two vertical images; covariance of its intersection
-        P = np.array([[B / 2, 0.0, 0.0]])
-        X01, X02 = np.array([0.0, 0, H]), np.array([B, 0, H])
-        A = []
-        for X0 in (X01, X02):
-            cols = []
-            for k in range(3):
-                e = np.zeros(3)
-                e[k] = 1e-3
-                cols.append(
-                    (
-                        (_project(P + e, X0, np.eye(3), c) - _project(P - e, X0, np.eye(3), c))
-                        / 2e-3
-                    ).ravel()
-                )
-            A.append(np.column_stack(cols))
-        A = np.vstack(A) / sx
-        truth = float(np.sqrt(np.linalg.inv(A.T @ A)[2, 2]))
-        got = float(call(sigma_Z, B, H, c, sx, what="sigma_Z"))
+        x1 = c * t * B / H
+        truth = float(np.sqrt(_normal_case_cov(t, B, H, c, sx)[0, 0]))
+        got = call(sigma_X, x1, B, H, c, sx, what="sigma_X")
+        g = H / c * sx  # the ground size of σ_x
+        sz = np.sqrt(2.0) * H / B * H / c * sx
         wrong = [
-            ("√2 is missing: the x-parallax has two measured coordinates", truth / np.sqrt(2)),
+            ("this is σ_X of a point midway between the images (the ground size of σ_x over √2) "
+             "for every point: X depends on the position along the base", g / np.sqrt(2.0)),
+            ("X = x' (H − Z)/c with x' and Z taken as independent: they are not — Z comes from "
+             "the parallax p = x' − x'', which contains x' itself (the errors partly cancel)",
+             float(np.hypot(g, x1 / c * sz))),
+            ("(H/c)·σ_x: this is the left image alone (X is intersected from both rays, x'' "
+             "enters through the parallax), or the parts of dx' and dx'' added instead of their "
+             "squares (they are independent)", g),
+            ("the square root is missing", truth**2),
             ("σ_x must be in mm here (5 µm = 0.005 mm), not µm", truth * 1000.0),
-            ("the base/height ratio H/B is missing (H/c alone is the image scale)", truth * B / H),
-        ]
-        compare(f"σ_Z for B = {B:.0f} m, H = {H:.0f} m [m]", got, truth, rtol=1e-6, wrong=wrong)
-    success("σ_Z = (H/B)(H/c)·√2·σ_x, as the covariance of the two-ray intersection says")
+        ]  # fmt: skip
+        compare(f"σ_X at {t:.2f} of the base (B = {B:.0f} m, H = {H:.0f} m) [m]", got, truth,
+                rtol=1e-6, wrong=wrong)  # fmt: skip
+    success(
+        "σ_X along the base agrees with the covariance of the two-ray intersection (six points, "
+        "inside and outside the base)"
+    )
 
 
 def _cofactor_std(X: F64, p: F64, c: float, sigma: F64) -> F64:

@@ -36,6 +36,7 @@ from .lesson02 import _rodrigues_opk
 __all__ = [
     "check_condition",
     "check_design",
+    "check_middle_users",
     "check_parallax",
     "check_relative_from_exterior",
     "check_scheme_sigma",
@@ -103,6 +104,77 @@ def check_design(design_dependent: Callable[[F64, F64, F64, float], F64]) -> Non
                   omega_minus))  # fmt: skip
     compare("∂p_y/∂(by, bz, ω, φ, κ)", got, truth, rtol=1e-5, wrong=wrong)
     success("design matrix: each column is the derivative of the rigorous y-parallax")
+
+
+NAMES = ("by", "bz", "omega", "phi", "kappa")
+
+
+def _kovarik_nine(b: float, d: float, Z: F64) -> F64:
+    """Kovarik's nine points (profiles X = 0, b, then the middle b/2; rows Y = 0, +d, −d)."""
+    X = np.array([0, b, 0, b, 0, b, b / 2, b / 2, b / 2])
+    Y = np.array([0, 0, d, d, -d, -d, d, 0, -d])
+    return np.column_stack([X, Y, Z])
+
+
+def check_middle_users(fn: Callable) -> None:
+    """Check ``fn(X, Y, Z, b) -> names``: the elements (of "by", "bz", "omega", "phi", "kappa")
+    on which Kovarik's middle profile (the last three of nine points) has an influence, i.e. a
+    non-zero entry of G = (AᵀA)⁻¹Aᵀ relative to the element's largest.
+
+    Oracle: G from the pseudo-inverse of a central-difference design of the rigorous
+    y-parallax (the checker's own), threshold 1e-6 of each row's largest entry; five height
+    patterns (flat, a hill under the middle profile, single outer points raised, random)."""
+    rng = rng_for("lesson05.check_middle_users")
+    b, d, H = 92.0, 100.0, -152.7
+    patterns = {
+        "flat terrain": np.full(9, H),
+        "the middle profile on a hill (its Z 20 % shorter)": np.r_[
+            np.full(6, H), np.full(3, 0.8 * H)
+        ],
+        "point 1 (left profile, base line) raised": np.r_[0.8 * H, np.full(8, H)],
+        "point 3 (left profile, upper row) raised": np.r_[H, H, 0.8 * H, np.full(6, H)],
+        "random relief": H * (1 + 0.3 * rng.uniform(-0.5, 0.5, 9)),
+    }
+    for what, Z in patterns.items():
+        P = _kovarik_nine(b, d, Z)
+        A = _numeric_design(P, b)
+        G = np.linalg.pinv(A)
+        want = {
+            n for j, n in enumerate(NAMES) if np.abs(G[j, 6:]).max() > 1e-6 * np.abs(G[j]).max()
+        }
+        got = call(fn, P[:, 0].copy(), P[:, 1].copy(), P[:, 2].copy(), b, what="middle_users")
+        try:
+            got = {str(g) for g in got}
+        except TypeError:
+            raise CheckFailed(f"middle_users: expected names of elements, got {got!r}") from None
+        if not got <= set(NAMES):
+            raise CheckFailed(
+                f"middle_users: unknown names {sorted(got - set(NAMES))}; use {NAMES}"
+            )
+        if got == want:
+            continue
+        from_A = {
+            n for j, n in enumerate(NAMES) if np.abs(A[6:, j]).max() > 1e-6 * np.abs(A[:, j]).max()
+        }
+        first = {
+            n for j, n in enumerate(NAMES) if np.abs(G[j, :3]).max() > 1e-6 * np.abs(G[j]).max()
+        }
+        reasons = []
+        if got == from_A:
+            reasons.append("these are the elements that act ON the middle points (the design A); "
+                           "which points an element listens TO is its row of the influence matrix "
+                           "G = (AᵀA)⁻¹Aᵀ")  # fmt: skip
+        if got == first:
+            reasons.append("these are the first three points' influences; the middle profile is "
+                           "points 7, 8, 9 (the last three)")  # fmt: skip
+        why = (
+            " — or: ".join(reasons)
+            or f"missing {sorted(want - got)}, not influenced {sorted(got - want)}"
+        )
+        raise CheckFailed(f"middle_users ({what}): {sorted(got)}, expected {sorted(want)} — {why}")
+    success(
+        "the middle profile's influence for flat ground, a hill under it, raised outer points and random relief"
+    )
 
 
 @own_work(y_parallax=library_y_parallax)

@@ -89,47 +89,48 @@ def check_plane_points(fn) -> None:
     success(f"all {len(cases)} combinations of 0–12 points on a plane and 0–9 off it right")
 
 
-# --------------------------------------------------------------------- epipolar line
+# --------------------------------------------------------------------- the epipole
 
 
-def _line(E, xy1, c, transpose, with_c, normalise):
-    """The epipolar line with one plausible mistake chosen by the flags (the wrong answers)."""
-    d1 = np.array([xy1[0], xy1[1], -c])
-    g = (E.T @ d1) if transpose else (E @ d1)
-    line = np.array([g[0], g[1], (-c if with_c else 1.0) * g[2]])
-    return line / np.hypot(line[0], line[1]) if normalise else line
+def _epipole_pairs(rng):
+    """Three error-free pairs whose right epipole lies at a finite, measurable place: a base
+    with a clear b_z (a convergent or stepped pair), κ and φ of a few gon; (E, c, B, R2)."""
+    out = []
+    for bz in (35.0, -60.0, 18.0):
+        c = rng.uniform(100.0, 160.0)
+        B = np.array([rng.uniform(60.0, 100.0), rng.uniform(-15.0, 15.0), bz])
+        R2 = matrix_from_opk(*rng.uniform(-0.08, 0.08, 3))
+        out.append((_skew(B) @ R2, c, B, R2))
+    return out
 
 
-def check_epipolar_line(fn) -> None:
-    """``fn(E, xy1, c) -> (a, b, d)``: the epipolar line a x + b y + d = 0 in the right
-    image (mm) of the left point xy1, with a² + b² = 1."""
-    for salt in range(3):
-        c, B, R2, P, xy1, xy2 = _pair(rng_for("lesson06.check_epipolar_line", salt))
-        E = _skew(B) @ R2
-        k = salt % len(xy1)
-        line = np.asarray(call(fn, E.copy(), xy1[k].copy(), c, what="epipolar_line"), dtype=float)
-        if line.shape != (3,):
-            raise CheckFailed(
-                f"epipolar_line: expected three numbers (a, b, d), got shape {line.shape}"
-            )
-        compare("a² + b²", line[0] ** 2 + line[1] ** 2, 1.0, rtol=1e-9,
-                wrong=[("normalise the line: divide (a, b, d) by √(a² + b²)",
-                        float(np.sum(_line(E, xy1[k], c, True, True, False)[:2] ** 2)))])  # fmt: skip
-        # brute force: two points on the left ray, at 0.6 and 1.4 times the model depth
-        ray = np.array([xy1[k, 0], xy1[k, 1], -c])
-        on_ray = np.array([ray * s for s in (0.6 * P[k, 2] / -c, 1.4 * P[k, 2] / -c)])
-        q = project(on_ray, B, R2, c)
-        dist = q @ line[:2] + line[2]
-        wrong = []
-        for text, kw in (
-            ("E is used instead of Eᵀ: the line is g = Eᵀ d1", (False, True, True)),
-            ("the third coefficient is −c g2 (the ray is (x, y, −c))", (True, False, True)),
-        ):
-            m = _line(E, xy1[k], c, *kw)
-            wrong.append((text, q @ m[:2] + m[2]))
-        compare("distances of two projected points of the left ray from your line [mm]", dist,
-                np.zeros(2), rtol=1e-9, scale=1.0, wrong=wrong)  # fmt: skip
-    success("your lines pass through the right-image projections of points on the left rays")
+def _image_of(direction, c):
+    """Image point (mm) of a ray direction in a camera frame whose image plane is z = −c."""
+    return -c * direction[:2] / direction[2]
+
+
+def check_epipole(fn) -> None:
+    """``fn(E, c) -> (x, y)``: the epipole of the right image (mm), the image there of the
+    left projection centre, from E alone (E = [B]× R2, any scale and sign)."""
+    for k, (E, c, B, R2) in enumerate(_epipole_pairs(rng_for("lesson06.check_epipole"))):
+        # oracle: the left projection centre (the model origin) projected into the right image
+        truth = project(np.zeros((1, 3)), B, R2, c)[0]
+        scale = float(np.abs(E).max())
+        got = call(fn, E.copy() * (-1.7 if k == 1 else 1.0) / scale, c, what="epipole")
+        wrong = [
+            ("this is the LEFT epipole (the image of the right centre in the left image): "
+             "Eᵀ d1 = 0, i.e. the null vector of Eᵀ; the right one solves E d2 = 0",
+             _image_of(B, c)),
+            ("the sign is reversed: x = −c d_x/d_z, the image plane is at z = −c",
+             -_image_of(R2.T @ B, c)),
+            ("the factor −c is missing: (d_x/d_z, d_y/d_z) is a direction, not mm in the image",
+             (R2.T @ B)[:2] / (R2.T @ B)[2]),
+            ("R2 instead of R2ᵀ: d2 = R2ᵀ B turns the base into the right image's frame",
+             _image_of(R2 @ B, c)),
+        ]  # fmt: skip
+        compare(f"right epipole of pair {k + 1} [mm]", got, truth, rtol=1e-7, wrong=wrong)
+    success("the right epipoles of three pairs (one with E scaled by −1.7) are the images of "
+            "the left projection centres")  # fmt: skip
 
 
 # --------------------------------------------------------------------- a swapped match

@@ -29,8 +29,8 @@ from .lesson02 import _axis_rotation
 
 __all__ = [
     "check_design",
+    "check_extra_point",
     "check_model_coordinates",
-    "check_sigma_scale",
     "check_similarity",
 ]
 
@@ -180,40 +180,79 @@ def check_design(design: Callable[[F64, float, F64], F64]) -> None:
     flip[:, 3:6] *= -1
     nom = truth.copy()
     nom[:, 3:6] /= m
+    model_axes = truth.copy()
+    for i, xi in enumerate(x):
+        K = np.array([[0, -xi[2], xi[1]], [xi[2], 0, -xi[0]], [-xi[1], xi[0], 0]])
+        model_axes[3 * i : 3 * i + 3, 3:6] = -m * R @ K
     wrong = [
         ("the rotation columns have the wrong sign: d(Rx) = α × Rx = −[Rx]ₓ α", flip),
         ("the rotation columns need the scale m", nom),
         ("the scale column is ∂X/∂m = R x, without m", truth * np.r_[1, 1, 1, 1, 1, 1, m]),
+        (
+            "these are the partials of a rotation about the MODEL axes, X = T + m R R(α) x "
+            "(−m R [x]ₓ); α turns about the object axes, X = T + m R(α) R x: −m [R x]ₓ",
+            model_axes,
+        ),
     ]
     compare("design matrix", got, truth, rtol=1e-6, wrong=wrong)
     success("design matrix of the similarity agrees with numerical derivatives")
 
 
-def check_sigma_scale(sigma_scale: Callable[[F64, float], float]) -> None:
-    """``sigma_scale(x, sigma)`` must return σ of m for full XYZ control with equal σ (m)."""
-    rng = rng_for("lesson07.check_sigma_scale")
-    for _ in range(2):
-        x, m, R, _ = _model(rng, 5)
-        sigma = rng.uniform(0.02, 0.2)
-        A = _numeric_design(x, m, R) / sigma
-        truth = float(np.sqrt(np.linalg.inv(A.T @ A)[6, 6]))
-        uncentred = sigma / np.sqrt((x**2).sum())
-        got = float(call(sigma_scale, x.copy(), sigma, what="sigma_scale"))
-        compare(
-            "σ_m",
-            got,
-            truth,
-            rtol=1e-6,
-            wrong=[
-                (
-                    "centre the model coordinates first (x̃ = x − x̄): only then is m uncorrelated",
-                    uncentred,
-                ),
-                ("σ² instead of σ", truth * sigma),
-                ("the square root is missing", truth**2),
-            ],
+def check_extra_point(best_extra_point: Callable[[F64, F64], int]) -> None:
+    """``best_extra_point(x_control, x_candidates)`` must return the index of the candidate
+    whose addition as a full XYZ control point (equal σ) lowers σ of the scale m the most.
+
+    Oracle: for every candidate, σ_m from the inverse of the normal matrix of the numerically
+    differentiated similarity with that point added (brute force, not the centroid rule).
+    """
+    rng = rng_for("lesson07.check_extra_point")
+    for case in range(3):
+        x, m, R, _ = _model(rng, 4)
+        corner = rng.choice([-1.0, 1.0], 2)
+        x_ctl = x.copy()
+        x_ctl[:, :2] = corner * rng.uniform(50, 95, (4, 2))  # control crowded in one corner
+        xm = x_ctl.mean(0)
+        # candidates: one far from the model origin but beside the control, one across the
+        # model from the control, one in the middle, two at the sides
+        cand = np.array([
+            [*(corner * 150.0), 5.0],
+            [*(-corner * [60.0, 20.0]), -4.0],
+            [0.0, 0.0, 1.0],
+            [corner[0] * 120.0, -corner[1] * 40.0, 2.0],
+            [-corner[0] * 30.0, corner[1] * 130.0, -2.0],
+        ]) + rng.normal(0.0, 3.0, (5, 3))  # fmt: skip
+        cand = cand[rng.permutation(5)]
+        sig_m = []
+        for p in cand:
+            A = _numeric_design(np.vstack([x_ctl, p]), m, R)
+            sig_m.append(float(np.sqrt(np.linalg.inv(A.T @ A)[6, 6])))
+        want = int(np.argmin(sig_m))
+        got = call(best_extra_point, x_ctl.copy(), cand.copy(), what="best_extra_point")
+        try:
+            k = int(got)
+        except (TypeError, ValueError):
+            raise CheckFailed(f"best_extra_point: expected an index, got {got!r}") from None
+        if k == want:
+            continue
+        origin = int(np.argmax(np.sum(cand**2, axis=1)))
+        nearest = int(np.argmin(np.sum((cand - xm) ** 2, axis=1)))
+        if not 0 <= k < len(cand):
+            why = f"there are {len(cand)} candidates (index 0–{len(cand) - 1})"
+        elif k == origin:
+            why = ("that candidate lies farthest from the model's ORIGIN; σ_m depends on the "
+                   "spread about the centroid of the control, Σ|x − x̄|², and the origin is "
+                   "anywhere (here beside the control)")  # fmt: skip
+        elif k == nearest:
+            why = "that candidate lies nearest to the control's centroid: it adds the least spread"
+        else:
+            why = "compare σ_m after adding each candidate"
+        raise CheckFailed(
+            f"best_extra_point (case {case + 1}): candidate {k} gives σ_m = {sig_m[k]:.3g}, "
+            f"candidate {want} gives {sig_m[want]:.3g}: {why}",
+            error=abs(sig_m[k] / sig_m[want] - 1.0),
+            tolerance=1e-9,
         )
-    success("σ_m = σ / √Σ|x̃|²: at the centroid the scale is uncorrelated with T and R")
+    success("the candidate farthest from the control's centroid: it adds the most Σ|x − x̄|²")
 
 
 def _partial_control(rng: np.random.Generator):

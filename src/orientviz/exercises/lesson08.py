@@ -1,10 +1,13 @@
 """Checkers for lesson 08, block triangulation.
 
-Oracles: error-free simulated truth (a similarity, a conformal polynomial and a
-logarithmic law with known parameters) and σ0 written out by hand; never the library's
-``similarity_transform``, ``polynomial_adjust`` or ``fit_log_law``. The n-ray intersection:
-error-free rays (they meet in the truth), two rays built around a known common perpendicular
-(the midpoint), and scipy's minimiser of the perpendicular distances for noisy rays.
+The own independent-model adjustment (its partial derivatives and the whole iteration) is
+checked in :mod:`._independent_models`, re-exported here. Oracles of the other checks:
+error-free simulated truth (a similarity, a logarithmic law with known parameters) and σ0
+written out by hand; never the library's ``similarity_transform``, ``polynomial_adjust`` or
+``fit_log_law``. The degree of the strip polynomial: the checker's own real-valued fit and
+``scipy.stats.chi2``. The n-ray intersection: error-free rays (they meet in the truth), two
+rays built around a known common perpendicular (the midpoint), and scipy's minimiser of the
+perpendicular distances for noisy rays.
 """
 
 from __future__ import annotations
@@ -25,6 +28,22 @@ from ._common import (
     rng_for,
     success,
 )
+from ._independent_models import (  # the student's own block method
+    check_adjust_models,
+    check_model_jacobian,
+    model_jacobian_numeric,
+)
+
+__all__ = [
+    "check_adjust_models",
+    "check_compose",
+    "check_strip_degree",
+    "check_determined",
+    "check_intersect_many",
+    "check_model_jacobian",
+    "check_strips_for",
+    "model_jacobian_numeric",
+]
 
 
 def _rodrigues(axis, angle: float) -> np.ndarray:
@@ -140,55 +159,107 @@ def check_determined(fn: Callable) -> None:
     success(f"all {len(cases)} combinations of 0–3 full, 0–4 plan and 0–5 height points right")
 
 
-def check_conformal(fn: Callable) -> None:
-    """Check ``fn(xy, XY, degree) -> c`` (complex, c[0] first) with X + iY = Σ c_k (x + iy)^k."""
-    rng = np.random.default_rng(810)
-    for degree in (2, 3):
-        xy = rng.uniform(-1, 1, (12, 2)) * [5.0, 1.0]  # a strip: long in x, km
-        c = rng.normal(size=degree + 1) + 1j * rng.normal(size=degree + 1)
-        c[1] += 1.0  # mostly a scale and a rotation
-        z = xy[:, 0] + 1j * xy[:, 1]
-        Z = np.polyval(c[::-1], z)
-        got = np.asarray(
-            call(fn, xy.copy(), np.column_stack([Z.real, Z.imag]), degree, what="conformal_fit")
-        )
-        pair = lambda c_: np.column_stack([np.real(c_), np.imag(c_)])  # noqa: E731
-        if got.shape != c.shape:
+def _conformal_residuals(xy: np.ndarray, XY: np.ndarray, degree: int) -> np.ndarray:
+    """Residuals (2n,) m of X + iY = Σ c_k (x + iy)^k, fitted as a REAL least-squares problem
+    (2 unknowns a_k, b_k per coefficient): the checker's own route, not the complex one."""
+    z = xy[:, 0] + 1j * xy[:, 1]
+    cols = []
+    for k in range(degree + 1):
+        p = z**k
+        cols += [np.r_[p.real, p.imag], np.r_[-p.imag, p.real]]
+    A = np.column_stack(cols)
+    l = np.r_[XY[:, 0], XY[:, 1]]
+    return A @ np.linalg.lstsq(A, l, rcond=None)[0] - l
+
+
+def _strip_scene(seed: int, n: int, degree: int, noise: float, sigma: float = 0.05):
+    """n control points on a strip 6 km × 1 km (strip coordinates in km), object XY in m from a
+    conformal polynomial of ``degree`` bent by about 3 m, noise ``noise`` · σ."""
+    rng = np.random.default_rng(seed)
+    xy = np.column_stack([rng.uniform(0, 6, n), rng.uniform(-0.5, 0.5, n)])
+    c = np.zeros(degree + 1, complex)
+    c[0], c[1] = 3.0 + 2.0j, 1000.0 * np.exp(1j * rng.uniform(0, 6.3))  # m, m per km
+    for k in range(2, degree + 1):
+        c[k] = 3.0 * np.exp(1j * rng.uniform(0, 6.3)) / 6.0**k
+    Z = np.polyval(c[::-1], xy[:, 0] + 1j * xy[:, 1])
+    XY = np.column_stack([Z.real, Z.imag]) + rng.normal(0, noise * sigma, (n, 2))
+    return xy, XY, sigma
+
+
+def _degree_rules(s0: dict, r: dict, n: int, sigma: float) -> tuple[int, dict]:
+    """The smallest degree the one-sided χ² test accepts, and the degrees the plausible wrong
+    rules pick (diagnosis → degree), from σ̂0 and r of degrees 1 … 4."""
+    from scipy.stats import chi2
+
+    def bound(q: float, dof: int) -> float:
+        return float(np.sqrt(chi2.ppf(q, dof) / dof))
+
+    def first(ok) -> int:
+        return next((d for d in s0 if ok(d)), 4)
+
+    want = first(lambda d: s0[d] <= bound(0.95, r[d]))
+    rules = {
+        "count the redundancy in real numbers: n points give 2n equations (X and Y), a "
+        "complex coefficient is 2 unknowns: r = 2n − 2(d + 1)":
+            first(lambda d: s0[d] * np.sqrt(r[d] / (n - d - 1)) <= bound(0.95, n - d - 1)),
+        "a σ̂0 below 1, even significantly, says the σ are pessimistic, not that the model is "
+        "too weak: the test for a sufficient degree is one-sided (reject only a σ̂0 "
+        "significantly too LARGE)":
+            first(lambda d: bound(0.025, r[d]) <= s0[d] <= bound(0.975, r[d])),
+        "σ̂0 > 1 is not a rejection: accept a degree unless σ̂0 exceeds the χ² bound "
+        "√(χ²_{r,0.95}/r)": first(lambda d: s0[d] <= 1.0),
+        "the SMALLEST accepted degree: a higher one always fits the control better, not "
+        "necessarily the strip": min(s0, key=s0.get),
+        "divide the residuals by σ (σ̂0 has no unit) before comparing with the χ² bound":
+            first(lambda d: s0[d] * sigma <= bound(0.95, r[d])),
+    }  # fmt: skip
+    return want, rules
+
+
+#: (seed, control points, degree of the bend, noise in σ) of the check's strips, in the order
+#: that lets each plausible wrong rule fail first where no other remaining rule picks its degree
+_STRIPS = ((7, 8, 3, 1.0), (0, 6, 2, 1.0), (3, 10, 2, 1.0), (3, 12, 3, 0.45))
+
+
+def check_strip_degree(fn: Callable) -> None:
+    """Check ``fn(xy, XY, sigma, max_degree) -> d``: the smallest degree 1 … max_degree of the
+    conformal strip polynomial whose σ̂0 (control XY with σ in m, strip xy in km) is not
+    significantly too large (one-sided χ² test, α = 5 %); max_degree if none is accepted.
+
+    Oracle: the checker's real-valued fit (2 unknowns per complex coefficient) and
+    ``scipy.stats.chi2`` on four simulated strips. A wrong degree is named by the wrong rule
+    that picks it and was consistent with the answers on the strips before."""
+    alive: set[str] | None = None
+    for seed, n, true_degree, noise in _STRIPS:
+        xy, XY, sigma = _strip_scene(seed, n, true_degree, noise)
+        s0, r = {}, {}
+        for d in range(1, 5):
+            v = _conformal_residuals(xy, XY, d)
+            r[d] = 2 * n - 2 * (d + 1)
+            s0[d] = float(np.sqrt(v @ v / sigma**2 / r[d]))
+        want, rules = _degree_rules(s0, r, n, sigma)
+        alive = set(rules) if alive is None else alive
+        got = call(fn, xy.copy(), XY.copy(), sigma, 4, what="strip_degree")
+        try:
+            k = int(got)
+        except (TypeError, ValueError):
             raise CheckFailed(
-                f"expected {degree + 1} complex coefficients for degree {degree}, got shape {got.shape}"
-            )
-        compare(
-            f"coefficients (degree {degree}) as (real, imaginary)",
-            pair(got),
-            pair(c),
-            rtol=1e-8,
-            wrong=[
-                ("the wrong order: give c0 (the shift) first", pair(c[::-1])),
-                ("complex conjugates: the coordinates were paired as x − iy", pair(np.conj(c))),
-                (
-                    "the strip coordinates were paired as x − iy: use z = x + iy",
-                    pair(
-                        np.linalg.lstsq(
-                            np.column_stack([np.conj(z) ** k for k in range(degree + 1)]),
-                            Z,
-                            rcond=None,
-                        )[0]
-                    ),
-                ),
-                (
-                    "the constant c0 (the shift) is missing from the fit",
-                    pair(
-                        np.r_[
-                            0,
-                            np.linalg.lstsq(
-                                np.column_stack([z**k for k in range(1, degree + 1)]), Z, rcond=None
-                            )[0],
-                        ]
-                    ),
-                ),
-            ],  # fmt: skip
+                f"strip_degree: expected a degree (an integer), got {got!r}"
+            ) from None
+        if k == want:
+            alive = {text for text in alive if rules[text] == k}
+            continue
+        named = [text for text in rules if text in alive and rules[text] == k]
+        why = (
+            " — or: ".join(named)
+            if named
+            else "fit each degree, then test σ̂0 against √(χ²_{r,0.95}/r)"
         )
-    success("the conformal polynomials of degree 2 and 3 recovered exactly")
+        table = ", ".join(f"d = {d}: σ̂0 {s0[d]:.3f}" for d in s0)
+        raise CheckFailed(
+            f"strip_degree ({n} control points): {k}, expected {want} — {why}. The fits: {table}"
+        )
+    success("the smallest degree the one-sided χ² test accepts, on all four strips")
 
 
 def check_strips_for(fn: Callable) -> None:

@@ -35,48 +35,82 @@ def _distances(x, pairs):
     return np.linalg.norm(xy[pairs[:, 1]] - xy[pairs[:, 0]], axis=1)
 
 
-def _jacobian(x, pairs, h=1e-5):
-    J = np.empty((len(pairs), x.size))
-    for k in range(x.size):
-        e = np.zeros(x.size)
-        e[k] = h
-        J[:, k] = (_distances(x + e, pairs) - _distances(x - e, pairs)) / (2 * h)
-    return J
-
-
 # --------------------------------------------------------------------- null space
 
 
-def check_helmert_columns(fn) -> None:
-    """``fn(xy) -> G`` (2p, 3): columns that move a planar distance network (unknowns x1,
-    y1, x2, …) without changing any distance; together they must span the whole defect."""
+def _angles(x, triples):
+    """The angles (rad) at point j between the points i and k, for rows (i, j, k)."""
+    xy = x.reshape(-1, 2)
+    a, b = xy[triples[:, 0]] - xy[triples[:, 1]], xy[triples[:, 2]] - xy[triples[:, 1]]
+    return np.arctan2(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], np.sum(a * b, axis=1))
+
+
+def _angle_jacobian(x, triples, h=1e-4):
+    J = np.empty((len(triples), x.size))
+    for k in range(x.size):
+        e = np.zeros(x.size)
+        e[k] = h
+        J[:, k] = (_angles(x + e, triples) - _angles(x - e, triples)) / (2 * h)
+    return J
+
+
+def check_similarity_columns(fn) -> None:
+    """``fn(xy) -> G`` (2p, 4): columns that move a planar network of measured ANGLES (unknowns
+    x1, y1, x2, …) without changing any angle; together they must span the whole defect
+    (two shifts, a rotation and a change of scale).
+
+    Oracle: a numerical Jacobian of all angles between the points of a network the lesson does
+    not use; any basis of the null space passes (centred or not, scaled or not).
+    """
     for salt in range(2):
-        xy, pairs = _network(rng_for("lesson09.check_helmert_columns", salt))
-        G = np.asarray(call(fn, xy.copy(), what="helmert_columns"), dtype=float)
-        if G.shape != (xy.size, 3):
+        xy, _ = _network(rng_for("lesson09.check_similarity_columns", salt))
+        p = len(xy)
+        triples = np.array([(i, j, k) for j in range(p) for i in range(p) for k in range(i + 1, p)
+                            if len({i, j, k}) == 3])  # fmt: skip
+        G = np.asarray(call(fn, xy.copy(), what="similarity_columns"), dtype=float)
+        if G.ndim != 2 or G.shape[0] != xy.size:
+            raise CheckFailed(f"G: expected {xy.size} rows (x1, y1, x2, …), got shape {G.shape}")
+        if G.shape[1] == 3:
             raise CheckFailed(
-                f"G: expected shape ({xy.size}, 3) — two shifts and one rotation — got {G.shape}"
+                "G: 3 columns are the defect of a DISTANCE network; angles keep no length "
+                "either, so a change of scale is free too: 4 columns",
+                error=np.inf,
             )
-        J = _jacobian(xy.reshape(-1), pairs)
+        if G.shape[1] != 4:
+            raise CheckFailed(
+                f"G: expected 4 columns — two shifts, a rotation, a scale — got {G.shape[1]}"
+            )
+        J = _angle_jacobian(xy.reshape(-1), triples)
         Gn = G / np.maximum(np.linalg.norm(G, axis=0), 1e-300)
-        change = np.abs(J @ Gn).max(axis=0)  # distance change per unit move, each column
+        change = np.abs(J @ Gn).max(axis=0) * np.linalg.norm(xy - xy.mean(axis=0), axis=1).max()
         bad = int(np.argmax(change))
-        if change[bad] > 1e-8:
-            err = float(change[bad])
-            hint = ""
-            if bad == 2 or np.linalg.matrix_rank(G) == 3:
+        if change[bad] > 1e-6:
+            c = xy - xy.mean(axis=0)
+            swapped = np.column_stack([c[:, 1], c[:, 0]]).reshape(-1)
+            if abs(Gn[:, bad] @ swapped) > 0.999 * np.linalg.norm(swapped):
                 hint = (
-                    " — a rotation moves point (x, y) by (−y, x) (about the centroid or the origin);"
-                    " (x, y) itself is a change of scale, which the distances see"
+                    " — (y, x) is a shear: a change of scale moves point (x, y) by ε(x, y), "
+                    "a rotation by ε(−y, x)"
+                )
+            else:
+                hint = (
+                    " — a scale moves (x, y) by ε(x, y), a rotation by ε(−y, x) (about the "
+                    "centroid or the origin), a shift by the same vector for all points"
                 )
             raise CheckFailed(
-                f"G: column {bad + 1} changes the distances by {err:.3g} per unit{hint}", err, 1e-8
+                f"G: column {bad + 1} changes the angles by {change[bad]:.3g} rad per unit{hint}",
+                float(change[bad]),
+                1e-6,
             )
         sv = np.linalg.svd(Gn, compute_uv=False)
         if sv[-1] < 1e-6 * sv[0]:
-            raise CheckFailed("G: the three columns are not independent (rank < 3): the defect is not covered",
-                              1.0 / max(sv[-1] / sv[0], 1e-300) * 1e-6, 1e-6)  # fmt: skip
-    success("J G = 0 with a numerical Jacobian of all distances, rank 3")
+            raise CheckFailed(
+                "G: the four columns are not independent (rank < 4): one motion is missing or "
+                "repeated",
+                1.0 / max(sv[-1] / sv[0], 1e-300) * 1e-6,
+                1e-6,
+            )
+    success("J G = 0 with a numerical Jacobian of all angles, rank 4 (shifts, rotation, scale)")
 
 
 # --------------------------------------------------------------------- S-transformation
@@ -118,39 +152,59 @@ def _s_matrix(G, e):
     return np.eye(len(e)) - G @ np.linalg.solve(GtE @ G, GtE)
 
 
-def _s_transform(x, Q, G, pts, mode):
-    """The S-transformation with one plausible mistake (mode "all", "no_St", "x_only")."""
-    e = _sel(len(x) // 2, pts) if mode != "all" else np.ones(len(x))
-    S = _s_matrix(G, e)
-    if mode == "no_St":
-        return S @ x, S @ Q
-    if mode == "x_only":
-        return S @ x, Q
-    return S @ x, S @ Q @ S.T  # mode "all": the right formula with the wrong E
+def _largest_point_sigma(Q: np.ndarray) -> float:
+    """The largest point error √(σx² + σy²) of a cofactor matrix (σ0 = 1), m."""
+    return float(np.sqrt(np.diag(Q).reshape(-1, 2).sum(axis=1)).max())
 
 
-def check_s_transform(fn) -> None:
-    """``fn(x, Q, G, datum_points) -> (x_new, Q_new)``: corrections and cofactors of a free
-    network moved from the inner-constraint datum into the datum of ``datum_points``."""
-    rng = rng_for("lesson09.check_s_transform")
-    xy, N, b, G = _problem(rng)
-    p = len(xy)
-    xA, QA = _bordered(N, b, G, np.ones(2 * p))
-    pts = [1, 4]
-    xB, QB = _bordered(N, b, G, _sel(p, pts))
-    got = call(fn, xA.copy(), QA.copy(), G.copy(), list(pts), what="s_transform")
-    if not isinstance(got, tuple) or len(got) != 2:
-        raise CheckFailed("s_transform: return the pair (x_new, Q_new)")
-    x_new, Q_new = (np.asarray(g, dtype=float) for g in got)
-    compare("x_new [m]", x_new, xB, rtol=1e-8, wrong=[
-        ("E selects all points: the datum points are only " + str(pts), _s_transform(xA, QA, G, pts, "all")[0]),
-    ])  # fmt: skip
-    compare("Q_new", Q_new, QB, rtol=1e-8, wrong=[
-        ("Q_new = S Q Sᵀ, not S Q", _s_transform(xA, QA, G, pts, "no_St")[1]),
-        ("Q must be transformed too: Q_new = S Q Sᵀ", QA),
-        ("E selects all points: the datum points are only " + str(pts), _s_transform(xA, QA, G, pts, "all")[1]),
-    ])  # fmt: skip
-    success("S-transformed x and Q equal a new adjustment with the datum on points 2 and 5")
+def check_best_datum(fn) -> None:
+    """``fn(Q, G) -> (i, j)``: the two datum points (0-based) that make the largest point error
+    √(σx² + σy²) of the network smallest, from the cofactors Q of any datum.
+
+    Oracle: a new bordered adjustment in every pair's datum (no S-transformation), brute force
+    over all pairs; ties within 1e-9 are accepted.
+    """
+    for salt in range(2):
+        rng = rng_for("lesson09.check_best_datum", salt)
+        xy, N, b, G = _problem(rng)
+        p = len(xy)
+        _, Q_inner = _bordered(N, b, G, np.ones(2 * p))
+        pairs = [(i, j) for i in range(p) for j in range(i + 1, p)]
+        worst = {pr: _largest_point_sigma(_bordered(N, b, G, _sel(p, pr))[1]) for pr in pairs}
+        best = min(worst.values())
+        got = call(fn, Q_inner.copy(), G.copy(), what="best_datum")
+        try:
+            pr = tuple(sorted(int(k) for k in got))
+        except (TypeError, ValueError):
+            raise CheckFailed(f"best_datum: expected two point indices, got {got!r}") from None
+        if pr not in worst:
+            raise CheckFailed(
+                f"best_datum: {got!r} is not a pair of two of the {p} points (0-based)"
+            )
+        if worst[pr] <= best * (1 + 1e-9):
+            continue
+        far = max(pairs, key=lambda q: np.linalg.norm(xy[q[0]] - xy[q[1]]))
+        sig_inner = np.sqrt(np.diag(Q_inner).reshape(-1, 2).sum(axis=1))
+        centre = tuple(sorted(np.argsort(sig_inner)[:2].tolist()))
+        if pr == far:
+            why = (
+                "the pair farthest apart — close, but the network's shape matters too: compare "
+                "the largest point error of every pair"
+            )
+        elif pr == centre:
+            why = (
+                "the two best points of the inner datum lie in the middle: as datum points they "
+                "let the network swing about them, and the outer points get worse"
+            )
+        else:
+            why = "move Q into each pair's datum (S Q Sᵀ) and compare the largest point error"
+        raise CheckFailed(
+            f"best_datum: points {pr} give a largest point error of {worst[pr] * 1000:.2f} mm, "
+            f"the best pair {min(worst, key=worst.get)} {best * 1000:.2f} mm — {why}",
+            error=np.inf,
+            tolerance=0.0,
+        )
+    success("the datum pair with the smallest largest point error, in two networks")
 
 
 # --------------------------------------------------------------------- estimable or not

@@ -1,10 +1,11 @@
 """Checkers for lesson 11, systematic image errors and self-calibration.
 
 Oracles: error-free simulated distortion with known coefficients (for the real camera's
-exercise a C4040Z-like sensor and the backward model), the one-parameter adjustment from the
-normal matrix recovered by inverting Q, scipy's normal quantile, and a
-QR projection for the share of a field that a parameter set describes — never the
-library's ``self_calibrate``, ``analyse`` or ``split_field``.
+exercise a three-term radial lens fitted by one term, brute force), the one-parameter
+adjustment from the normal matrix recovered by inverting Q, scipy's binomial distribution for
+the level of several tests together, and a projection for the share of a field that a
+parameter set and the orientation describe (an SVD) — never the library's ``self_calibrate``,
+``analyse`` or ``split_field``.
 """
 
 from __future__ import annotations
@@ -12,9 +13,10 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from scipy.stats import norm
+from scipy.stats import binom
 
 from orientviz.adjust import gauss_newton
+from orientviz.bundle import Ebner12
 from orientviz.exercises._common import (
     INVERTERS,
     CheckFailed,
@@ -24,6 +26,7 @@ from orientviz.exercises._common import (
     rng_for,
     success,
 )
+from orientviz.simulate import systematic as se
 
 
 def _points(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -84,6 +87,23 @@ def check_fit_k1(fn: Callable) -> None:
     success(f"k1 = {k_hat:.4g} mm⁻², σ0 = {s0 * 1000:.2f} µm (redundancy 2n − 1 = {d.size - 1})")
 
 
+def inflation_library(Q: np.ndarray) -> float:
+    """σ(joint)/σ(alone) of parameter 0 by inverting Q (the lesson's stand-in while
+    ``inflation`` is a blank; its check refuses it: the exercise is the derivation).
+
+    Parameters
+    ----------
+    Q : numpy.ndarray, shape (2, 2)
+        Cofactor matrix of two parameters estimated together.
+
+    Returns
+    -------
+    float
+        The factor by which the σ of parameter 0 grows because parameter 1 is estimated too.
+    """
+    return float(np.sqrt(Q[0, 0] * np.linalg.inv(Q)[0, 0]))
+
+
 def _sigma_alone(Q: np.ndarray) -> float:
     """σ of parameter 0 (unit weight) if it were the only unknown: 1/√N₀₀ with N = Q⁻¹."""
     return 1.0 / np.sqrt(np.linalg.inv(Q)[0, 0])
@@ -125,111 +145,188 @@ def check_inflation(fn: Callable) -> None:
     success("σ(joint)/σ(alone) right for ρ = +0.97, −0.6, +0.2")
 
 
-def check_significant(fn: Callable) -> None:
-    """Check ``fn(values, sigmas, alpha) -> bool array``: two-sided test abs(p)/σ_p > z(1 − α/2)."""
-    values = np.array([2.1, -3.4, 0.52, 1.7, -0.9, 7.0, 1.5])  # µm
-    sigmas = np.array([1.0, 1.2, 0.24, 0.95, 0.41, 6.0, 1.0])  # µm
-    alpha = 0.05
-    t = np.abs(values) / sigmas
-    want = t > norm.ppf(1 - alpha / 2)
-    got = np.asarray(call(fn, values.copy(), sigmas.copy(), alpha, what="significant"))
-    if got.shape != want.shape:
+def check_per_test_alpha(fn: Callable) -> None:
+    """Check ``fn(family, m) -> alpha``: the level of each of m independent tests such that
+    at least one of them rejects with probability ``family`` when every tested value is 0
+    (α = 1 − (1 − family)^(1/m)).
+
+    Oracle: the binomial distribution of the number of rejections (scipy), evaluated at the
+    student's α — not the closed form.
+    """
+    cases = ((0.05, 12), (0.01, 44), (0.10, 3))
+    for family, m in cases:
+        got = call(fn, family, m, what="per_test_alpha")
+        try:
+            got = float(got)
+        except (TypeError, ValueError):
+            raise CheckFailed(f"per_test_alpha: expected one number, got {got!r}") from None
+        if not 0.0 < got < 1.0:
+            raise CheckFailed(
+                f"per_test_alpha({family}, {m}) = {got:.4g}: a level is a probability in (0, 1)"
+            )
+        level = float(binom.sf(0, m, got))  # P(at least one of m tests rejects)
+        want = 1.0 - (1.0 - family) ** (1.0 / m)
+        if abs(level - family) <= 1e-9 * family:
+            continue
+        pct = f"{level:.4%}"
+        wrong = [
+            (
+                f"α/m is Bonferroni's bound: the {m} tests together then reject with "
+                f"probability {pct}, below {family:.0%} — safe but not the level asked for; "
+                f"no test rejects with probability (1 − α)^m",
+                family / m,
+            ),
+            (
+                f"each test at the family's level: {m} tests together reject with probability "
+                f"{pct}",
+                family,
+            ),
+            (f"multiplied by m instead of divided: together {pct}", family * m),
+            (
+                "this is the probability that ONE test does not reject; the level is 1 minus it",
+                (1.0 - family) ** (1.0 / m),
+            ),
+            (
+                f"1 − (1 − α)^m is the level of {m} tests at α = {family}, the question "
+                "turned round",
+                1.0 - (1.0 - family) ** m,
+            ),
+        ]
+        compare(f"α per test for {m} tests at {family:.0%} together", got, want, rtol=1e-9,
+                wrong=wrong)  # fmt: skip
+    success(
+        "the tests together keep their level: e.g. 12 tests at "
+        f"{1.0 - 0.95 ** (1 / 12):.4%} each reject together with probability 5 %"
+    )
+
+
+def _eo_columns(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The six image deformations an exterior orientation makes (shifts, scale, rotation,
+    two projective tilts), (n, 2, 6)."""
+    o, one = np.zeros_like(x), np.ones_like(x)
+    cols = [(one, o), (o, one), (x, y), (-y, x), (x * x, x * y), (x * y, y * y)]
+    return np.stack([np.column_stack(c) for c in cols], axis=2)
+
+
+def _shares(A: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """Share of Σd² per axis that the columns of A (n, 2, k) describe (projection onto their
+    span by an SVD, so a column that repeats others changes nothing)."""
+    n = d.shape[0]
+    M = A.reshape(2 * n, -1)
+    M = M / np.maximum(np.linalg.norm(M, axis=0), 1e-300)  # columns of any unit alike
+    U, s, _ = np.linalg.svd(M, full_matrices=False)
+    U = U[:, s > 1e-10 * s[0]]
+    rest = (d.ravel() - U @ (U.T @ d.ravel())).reshape(n, 2)
+    return 1.0 - np.sum(rest**2, axis=0) / np.sum(d**2, axis=0)
+
+
+def check_trough_term(fn: Callable) -> None:
+    """Check ``fn(xy) -> (n, 2)``: the image field (per unit) of one additional parameter
+    that, added to Ebner's 12 terms and the orientation's six deformations, describes a film
+    trough in x and in y (≥ 99.9 % of its squares each).
+
+    Oracle: a trough of another size and principal distance on a grid the lesson does not use,
+    projected onto the span of the columns (Ebner's design and the six deformations built here).
+    """
+    g = np.linspace(-110.0, 110.0, 9)
+    xy = np.array([(a, b) for a in g for b in g])
+    trough = se.unflatness(6.0, c=153.0)
+    d = np.asarray(trough(xy, np.zeros(len(xy), int)), float)
+    with own_work(
+        "the trough's own field describes the trough trivially (a physical model of the film, "
+        "the other way the lesson names); the exercise is the one polynomial term that is "
+        "missing",
+        unflatness=trough.field,  # the code every se.unflatness(...) field runs
+    ):
+        col = call(fn, xy.copy(), what="trough_term")
+    col = np.asarray(col, dtype=float)
+    if col.shape != xy.shape:
         raise CheckFailed(
-            f"expected one decision per parameter, shape {want.shape}, got {got.shape}"
+            f"trough_term: expected the field at each point, shape {xy.shape}, got {col.shape}"
         )
-    got = got.astype(bool)
-    if np.array_equal(got, want):
+    if not np.all(np.isfinite(col)) or not np.any(col):
+        raise CheckFailed("trough_term: the field is zero or not finite")
+    k = float(col.ravel() @ d.ravel() / (d.ravel() @ d.ravel()))
+    if np.max(np.abs(col - k * d)) <= 1e-6 * np.max(np.abs(col)):
+        raise CheckFailed(
+            "trough_term: that is the trough itself (a physical model of the film) — the "
+            "exercise asks which one polynomial term Ebner's 12 lack"
+        )
+    base = np.concatenate([Ebner12().design(xy), _eo_columns(xy[:, 0], xy[:, 1])], axis=2)
+    before = _shares(base, d)
+    after = _shares(np.concatenate([base, col[:, :, None]], axis=2), d)
+    if np.all(after >= 0.999):
         success(
-            f"t = {np.round(t, 2).tolist()}, k = {norm.ppf(1 - alpha / 2):.3f}: {got.astype(int).tolist()}"
+            f"with your term the set describes x {after[0]:.2%} (was {before[0]:.1%}), "
+            f"y {after[1]:.2%} (was {before[1]:.1%})"
         )
         return
-    wrong = {
-        "a one-sided critical value (1.645): the test is two-sided": t > norm.ppf(1 - alpha),
-        "the sign was kept: test |value| / σ": values / sigmas > norm.ppf(1 - alpha / 2),
-        "the value was not divided by its σ": np.abs(values) > norm.ppf(1 - alpha / 2),
-        "t² was compared with k": t**2 > norm.ppf(1 - alpha / 2),
-    }
-    why = next(
-        (w for w, v in wrong.items() if np.array_equal(got, v)),
-        "compare t = |value|/σ with z(1 − α/2)",
-    )
-    raise CheckFailed(
-        f"decisions {got.astype(int).tolist()}, expected {want.astype(int).tolist()}: {why}",
-        error=np.inf,
-        tolerance=0.0,
-    )
+    text = f"x {after[0]:.1%} (was {before[0]:.1%}), y {after[1]:.1%} (was {before[1]:.1%})"
+    if np.max(np.abs(col[:, 0])) < 1e-12 * np.max(np.abs(col)):
+        why = (
+            "a term in y only: the y part was described already; the missing part is in x "
+            "(x·h(x)/c with h quadratic in x)"
+        )
+    elif np.all(np.abs(after - before) < 1e-6):
+        why = (
+            "your term adds nothing: it is a combination of Ebner's terms and the orientation's "
+            "deformations already"
+        )
+    else:
+        radial = xy * np.sum(xy**2, axis=1)[:, None]
+        kr = float(col.ravel() @ radial.ravel() / (radial.ravel() @ radial.ravel()))
+        if np.max(np.abs(col - kr * radial)) <= 1e-6 * np.max(np.abs(col)):
+            why = (
+                "a radial r² term (K1): the trough moves points along the radius by h/c, but h "
+                "depends on x alone, not on r"
+            )
+        else:
+            why = (
+                "the part left is in x: x·h(x)/c with h quadratic in x — which power of x in "
+                "the x coordinate has neither a term nor the orientation?"
+            )
+    raise CheckFailed(f"trough_term: described {text}: {why}", error=np.inf, tolerance=0.0)
 
 
-def check_described_share(fn: Callable) -> None:
-    """Check ``fn(A, d) -> (share_x, share_y)``: one joint fit d ≈ A p, shares of Σd² per axis."""
-    rng = rng_for("lesson11.check_described_share")
-    n, k = 40, 4
-    A = rng.normal(size=(n, 2, k))
-    d = np.einsum("nik,k->ni", A, rng.normal(size=k)) + rng.normal(0, 0.7, (n, 2)) * [1.0, 0.3]
-    Qm, _ = np.linalg.qr(A.reshape(2 * n, k))  # oracle: orthogonal projection by QR
-    rest = (d.ravel() - Qm @ (Qm.T @ d.ravel())).reshape(n, 2)
-    want = 1 - np.sum(rest**2, axis=0) / np.sum(d**2, axis=0)
-    got = call(fn, A.copy(), d.copy(), what="described_share")
-    sep = []
-    for i in range(2):  # x and y fitted separately
-        Ai = A[:, i, :]
-        r_i = d[:, i] - Ai @ np.linalg.lstsq(Ai, d[:, i], rcond=None)[0]
-        sep.append(1 - np.sum(r_i**2) / np.sum(d[:, i] ** 2))
-    both = 1 - np.sum(rest**2) / np.sum(d**2)
-    compare(
-        "(share x, share y)",
-        got,
-        want,
-        rtol=1e-9,
-        wrong=[
-            ("the remainder's share (1 − described)", 1 - want),
-            ("x and y fitted separately: the parameters are shared by both coordinates", sep),
-            ("one share for x and y together", [both, both]),
-        ],
-    )
-    success(f"described: x {want[0]:.1%}, y {want[1]:.1%}")
+def check_k1_alone(fn: Callable) -> None:
+    """Check ``fn(K, r) -> K1``: the K1 a one-term fit Δ = K1 r² z returns when the lens is
+    exactly Δ = (K1 r² + K2 r⁴ + K3 r⁶) z, from points at the radii r (mm; K in mm⁻², mm⁻⁴,
+    mm⁻⁶).
 
-
-def check_fit_k1_real(fn: Callable) -> None:
-    """Check ``fn(m, ideal, pp) -> K1`` of the backward model ideal = z (1 + K1 r²),
-    z = m − pp, r² = ‖z‖² (measured points m and their ideal points, mm, on a 7 × 5 mm
-    sensor; K1 in mm⁻²)."""
-    rng = rng_for("lesson11.check_fit_k1_real")
-    pp = np.array([3.61, -2.62])
-    m = np.column_stack([rng.uniform(0.2, 7.1, 11), rng.uniform(-5.3, -0.1, 11)])
-    k1 = 4.3e-3
-    z = m - pp
-    ideal = z * (1 + k1 * np.sum(z**2, axis=1))[:, None] + rng.normal(0, 3e-4, z.shape)
-    got = call(fn, m.copy(), ideal.copy(), pp.copy(), what="fit_k1_real")
-    try:
-        got = float(got)
-    except (TypeError, ValueError):
-        raise CheckFailed("return one number, K1 in mm⁻²") from None
-    # oracle: the sum of squares is a parabola in K1; three values give its vertex
-    a = (z * np.sum(z**2, axis=1)[:, None]).ravel()
-    ks = np.array([0.0, 2e-3, 4e-3])
-    cost = [np.sum((z.ravel() + k * a - ideal.ravel()) ** 2) for k in ks]
-    c2, c1, _ = np.polyfit(ks, cost, 2)
-    want = -c1 / (2 * c2)
-    zi = ideal  # the plausible wrong ideas, as numbers
-    ri = np.sum(zi**2, axis=1)
-    fwd = (zi * ri[:, None]).ravel()
-    u = 1e-3
-    compare(
-        "K1 [1e-3 mm⁻²]",
-        got / u,
-        want / u,
-        rtol=1e-6,
-        wrong=[
-            ("measured and ideal swapped (the forward model's direction)",
-             fwd @ (z - zi).ravel() / (fwd @ fwd) / u),
-            ("the radius of the ideal point, not of the measured one",
-             ((z * ri[:, None]).ravel() @ (zi - z).ravel())
-             / ((z * ri[:, None]).ravel() @ (z * ri[:, None]).ravel()) / u),
-            ("not reduced to the principal point (r from the sensor corner)",
-             (m * np.sum(m**2, axis=1)[:, None]).ravel() @ (ideal + pp - m).ravel()
-             / np.sum((m * np.sum(m**2, axis=1)[:, None]) ** 2) / u),
-        ],
-    )  # fmt: skip
-    success(f"K1 = {got:.5g} mm⁻² ({k1 * np.max(np.sum(z**2, axis=1)) ** 1.5 * 1000:.0f} µm "
-            "at the farthest point)")  # fmt: skip
+    Oracle: error-free points of the three-term lens at those radii in random directions, the
+    one-term least-squares sum of squares sampled at three values of K1 (a parabola's vertex)
+    — not the closed form.
+    """
+    rng = rng_for("lesson11.check_k1_alone")
+    for K, n in (((4.6e-3, -4.5e-5, -2.1e-6), 12), ((-2.3e-3, 3.1e-4, 0.0), 20)):
+        K = np.array(K)
+        r = rng.uniform(0.3, 3.6, n)
+        ang = rng.uniform(0.0, 2 * np.pi, n)
+        z = r[:, None] * np.column_stack([np.cos(ang), np.sin(ang)])
+        lens = z * (K[0] * r**2 + K[1] * r**4 + K[2] * r**6)[:, None]
+        a = (z * (r**2)[:, None]).ravel()
+        ks = np.array([-1e-2, 0.0, 1e-2])
+        cost = [np.sum((k * a - lens.ravel()) ** 2) for k in ks]
+        c2, c1, _ = np.polyfit(ks, cost, 2)
+        want = -c1 / (2 * c2)
+        got = call(fn, K.copy(), r.copy(), what="k1_alone")
+        try:
+            got = float(got)
+        except (TypeError, ValueError):
+            raise CheckFailed(f"k1_alone: expected one number, got {got!r}") from None
+        s6 = np.sum(r**6)
+        u = 1e-3
+        compare(f"K1 of one term [1e-3 mm⁻²] for K = {K.tolist()}", got / u, want / u, rtol=1e-6,
+                wrong=[
+                    ("the lens's own K1: alone, K1 also takes over what K2 and K3 describe — "
+                     "write the one-term normal equation with the three-term field as the data",
+                     K[0] / u),
+                    ("K3 forgotten", (K[0] + K[1] * np.sum(r**8) / s6) / u),
+                    ("plain means of r² and r⁴: the points weigh with r⁶ (the square of the "
+                     "K1 column r² z)",
+                     (K[0] + K[1] * np.mean(r**2) + K[2] * np.mean(r**4)) / u),
+                    ("weights r⁴: the column of K1 is r²·z, whose square is r⁶, not r⁴",
+                     (K[0] + K[1] * np.sum(r**6) / np.sum(r**4)
+                      + K[2] * np.sum(r**8) / np.sum(r**4)) / u),
+                ])  # fmt: skip
+    success("K1 of a one-term fit = K1 + K2·Σr⁸/Σr⁶ + K3·Σr¹⁰/Σr⁶, for both lenses")

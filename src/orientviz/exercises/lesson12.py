@@ -1,9 +1,9 @@
 """Checkers for lesson 12, gross errors: normalised residuals, data snooping, reliability.
 
 Oracles: redundancy numbers from leave-one-out adjustments (the residual of an observation
-is r_i times its residual when it is left out), scipy's normal quantiles, and the shift of
-the unknowns by brute force (adjust with and without the error) — never the library's
-``gauss_newton``, ``data_snooping`` or ``reliability``.
+is r_i times its residual when it is left out), scipy's normal quantiles and non-central χ²,
+and the shift of the unknowns by an error of MDB size computed per observation — never the
+library's ``gauss_newton``, ``data_snooping`` or ``reliability``.
 """
 
 from __future__ import annotations
@@ -11,9 +11,10 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from scipy.stats import norm
+from scipy.stats import chi2, ncx2, norm
 
-from orientviz.exercises._common import CheckFailed, call, compare, rng_for, success
+from orientviz.adjust.gross import reliability
+from orientviz.exercises._common import CheckFailed, call, compare, own_work, rng_for, success
 
 
 def _wls(A: np.ndarray, l: np.ndarray, sigma: np.ndarray) -> np.ndarray:
@@ -81,86 +82,138 @@ def check_normalized(fn: Callable) -> None:
     success(f"v, r and w right; Σr = {r.sum():.3f} = n − u = {len(l) - A.shape[1]}")
 
 
-def check_snoop_round(fn: Callable) -> None:
-    """Check ``fn(A, l, sigma, k) -> index``: the observation with the largest abs(w) if > k, else −1."""
-    rng = rng_for("lesson12.check_snoop_round")
-    k = norm.ppf(1 - 0.001 / 2)
-    cases = [_line(rng, blunder=(11, -6.0)), _line(rng), _line(rng, blunder=(2, 9.0))]
-    for n_case, (A, l, sigma) in enumerate(cases, start=1):
-        _, r, w = _oracle_w(A, l, sigma)
-        i = int(np.argmax(np.abs(w)))
-        want = i if abs(w[i]) > k else -1
-        got = call(fn, A.copy(), l.copy(), sigma.copy(), k, what="snoop_round")
-        got = int(got)
-        if got == want:
-            continue
-        v = A @ _wls(A, l, sigma) - l
-        why = {
-            int(np.argmax(w)): "the largest w with its sign: test |w|",
-            int(np.argmax(np.abs(v))): "the largest |v|, not the largest normalised residual |w|",
-            int(
-                np.argmax(np.abs(v) / sigma)
-            ): "the largest |v|/σ, not the largest normalised residual |w|",
-        }.get(got, "")
-        if want == -1:
-            why = f"max |w| = {abs(w[i]):.2f} is below k = {k:.2f}: nothing is rejected (return −1)"
-        elif got == -1 and w[i] < 0:
-            why = f"the largest |w| = {abs(w[i]):.2f} > k belongs to a negative w: test |w|, not w"
-        raise CheckFailed(
-            f"case {n_case}: got {got}, expected {want}" + (f" — {why}" if why else "")
+#: The lesson's design case: eight observations of a line bunched at T = 0 … 3.5 and one far
+#: out at T = 12, all with σ = 1 (exercise 1 adds a tenth).
+DESIGN_T = np.r_[np.arange(0.0, 4.0, 0.5), 12.0]
+
+
+def _redundancy_by_leaving_out(T: np.ndarray) -> np.ndarray:
+    """r_i of a straight line through equal-σ observations at T, by leave-one-out (the
+    residual of l_i is r_i times its prediction error when left out), not from Q_vv P."""
+    A = np.column_stack([np.ones_like(T), T])
+    r = np.empty(len(T))
+    for i in range(len(T)):
+        l = np.zeros(len(T))
+        l[i] = 1.0  # a unit error in l_i alone
+        v_i = A[i] @ np.linalg.lstsq(A, l, rcond=None)[0] - 1.0
+        keep = np.arange(len(T)) != i
+        pred = A[i] @ np.linalg.lstsq(A[keep], l[keep], rcond=None)[0]  # = 0
+        r[i] = -v_i / (1.0 - pred)
+    return r
+
+
+def check_new_position(fn: Callable) -> None:
+    """Check ``fn() -> T``: where a tenth observation of the line (σ = 1) must go so that no
+    observation's minimal detectable bias exceeds 6 σ (α0 = 0.1 %, β0 = 80 %).
+
+    Oracle: the redundancy numbers of all ten observations by leave-one-out, δ0 from scipy's
+    normal quantiles.
+    """
+    got = call(fn, what="new_position")
+    try:
+        t_new = float(got)
+    except (TypeError, ValueError):
+        raise CheckFailed(f"new_position: expected one number T, got {got!r}") from None
+    if not 0.0 <= t_new <= 30.0:
+        raise CheckFailed(f"new_position: T = {t_new:g} lies outside the line's 0 … 30")
+    d0 = norm.isf(0.001 / 2) + norm.ppf(0.80)
+    mdb = d0 / np.sqrt(_redundancy_by_leaving_out(np.r_[DESIGN_T, t_new]))  # in σ
+    worst = int(np.argmax(mdb))
+    if mdb[worst] <= 6.0:
+        success(
+            f"T = {t_new:g}: largest MDB {mdb[worst]:.2f} σ (the far point {mdb[8]:.2f} σ, "
+            f"the new one {mdb[9]:.2f} σ)"
         )
-    success(f"one round of data snooping right in {len(cases)} cases (k = {k:.2f})")
-
-
-def check_mdb(fn: Callable) -> None:
-    """Check ``fn(sigma, r, alpha0, beta0) -> MDB``: δ0 σ / √r, δ0 = z(1 − α0/2) + z(β0)."""
-    sigma = np.array([0.005, 0.005, 0.008, 0.003])
-    r = np.array([0.25, 0.81, 0.5, 0.12])
-    for alpha0, beta0 in ((0.001, 0.80), (0.05, 0.90)):
-        d0 = norm.ppf(1 - alpha0 / 2) + norm.ppf(beta0)
-        want = d0 * sigma / np.sqrt(r)
-        got = call(fn, sigma.copy(), r.copy(), alpha0, beta0, what="mdb")
-        compare(
-            f"MDB (α0 = {alpha0}, β0 = {beta0})",
-            got,
-            want,
-            rtol=1e-6,
-            wrong=[
-                ("σ/r: r instead of √r", d0 * sigma / r),
-                ("one-sided α0", (norm.ppf(1 - alpha0) + norm.ppf(beta0)) * sigma / np.sqrt(r)),
-                ("δ0 without the power term z(β0)", norm.ppf(1 - alpha0 / 2) * sigma / np.sqrt(r)),
-                ("σ √r instead of σ / √r", d0 * sigma * np.sqrt(r)),
-            ],
+        return
+    if worst == 9:
+        why = (
+            "now the NEW observation is the lonely one: nothing checks it, so its own MDB is "
+            "the largest — it must stay close enough to the far point that each checks the other"
         )
-    success(f"MDB right; δ0(0.1 %, 80 %) = {norm.ppf(1 - 0.0005) + norm.ppf(0.8):.3f}")
+    elif t_new <= 4.0:
+        why = (
+            "among the others it checks only what is checked already; the far point stays alone "
+            "and unchecked"
+        )
+    else:
+        why = "closer to the far point: it must share the far point's leverage to check it"
+    raise CheckFailed(
+        f"new_position: T = {t_new:g} leaves observation {worst} (T = "
+        f"{np.r_[DESIGN_T, t_new][worst]:g}) with an MDB of {mdb[worst]:.2f} σ > 6 σ — {why}",
+        error=np.inf,
+        tolerance=0.0,
+    )
 
 
-def check_external(fn: Callable) -> None:
-    """Check ``fn(A, sigma, i, nabla) -> Δx̂``: what an undetected error ∇ in l_i does to x̂."""
-    rng = rng_for("lesson12.check_external")
+def check_detection_probability(fn: Callable) -> None:
+    """Check ``fn(nabla, sigma, r, k) -> P``: the probability that the w-test |w| > k flags an
+    observation with the error ``nabla`` (σ ``sigma``, redundancy number ``r``), arrays.
+
+    Oracle: w² is non-central χ² with one degree of freedom and non-centrality r ∇²/σ²
+    (scipy's ncx2), not the normal tails.
+    """
+    k = norm.isf(0.001 / 2)
+    nabla = np.array([0.0, 0.004, 0.010, 0.018, 0.030, -0.012])
+    sigma = np.array([0.005, 0.005, 0.003, 0.008, 0.004, 0.005])
+    r = np.array([0.6, 0.3, 0.85, 0.5, 0.12, 0.7])
+    lam = r * nabla**2 / sigma**2
+    want = _chi2_sf(k**2, lam)
+    got = call(fn, nabla.copy(), sigma.copy(), r.copy(), k, what="detection_probability")
+    d = np.sqrt(r) * np.abs(nabla) / sigma
+    compare("P(|w| > k)", got, want, rtol=1e-6, scale=1.0, wrong=[
+        ("one tail only: with no error (∇ = 0) the test still flags with probability α0 = "
+         "0.1 %, half of it in each tail", norm.sf(k - d)),
+        ("√r is missing: E(w) = √r ∇/σ", norm.sf(k - np.abs(nabla) / sigma)
+         + norm.cdf(-k - np.abs(nabla) / sigma)),
+        ("r instead of √r in E(w)", norm.sf(k - r * np.abs(nabla) / sigma)
+         + norm.cdf(-k - r * np.abs(nabla) / sigma)),
+        ("the probability of NOT flagging it (1 − P)", 1 - want),
+        ("E(w) = ∇/(σ√r) is the error in units of the residual's σ times r: w's mean is "
+         "√r ∇/σ", norm.sf(k - d / r) + norm.cdf(-k - d / r)),
+    ])  # fmt: skip
+    success(
+        f"P(|w| > k) right, from α0 = 0.1 % at ∇ = 0 up to {np.max(want):.0%} for the largest error"
+    )
+
+
+def _chi2_sf(x: float, lam: np.ndarray) -> np.ndarray:
+    """P(χ'²₁(λ) > x) for each λ (scipy's non-central χ²; the central one at λ = 0)."""
+    return np.where(lam > 0, ncx2.sf(x, 1, np.maximum(lam, 1e-300)), chi2.sf(x, 1))
+
+
+def check_bias_to_noise(fn: Callable) -> None:
+    """Check ``fn(r, delta0) -> ratio``: the largest effect of an undetected error of MDB size in
+    observation i on any function f = cᵀx̂ of the unknowns, in units of σ_f (arrays r).
+
+    Oracle: on a random weighted line fit, Δx̂ = N⁻¹AᵀPe_i∇₀ computed for every observation and
+    √(Δx̂ᵀNΔx̂) — the largest |cᵀΔx̂|/σ_f over all c (Cauchy–Schwarz) — with r from the leave-one-
+    out adjustments; not a formula in r.
+    """
+    rng = rng_for("lesson12.check_bias_to_noise")
     A, l, sigma = _line(rng)
-    for i, nabla in ((11, 3.0), (4, -2.5)):
+    _, r, _ = _oracle_w(A, l, sigma)
+    d0 = norm.isf(0.001 / 2) + norm.ppf(0.80)
+    N = A.T @ (A / sigma[:, None] ** 2)
+    want = np.empty(len(l))
+    for i in range(len(l)):
         e = np.zeros(len(l))
-        e[i] = nabla
-        want = _wls(A, l + e, sigma) - _wls(A, l, sigma)  # brute force: adjust twice
-        got = call(fn, A.copy(), sigma.copy(), i, nabla, what="external")
-        N = A.T @ (A / sigma[:, None] ** 2)
-        compare(
-            f"Δx̂ for an error in l[{i}]",
-            got,
-            want,
-            rtol=1e-8,
-            wrong=[
-                ("the weights were forgotten", np.linalg.solve(A.T @ A, A.T @ e)),
-                ("N instead of N⁻¹", N @ (A.T @ (e / sigma**2))),
-                (
-                    "multiplied by AᵀA: the normal matrix is solved with, not multiplied: "
-                    "Δx̂ = N⁻¹AᵀPe",
-                    (A.T @ A) @ want,
-                ),
-            ],
-        )
-    success("the shift of the unknowns by an undetected error is right")
+        e[i] = d0 * sigma[i] / np.sqrt(r[i])  # an error of MDB size
+        dx = np.linalg.solve(N, A.T @ (e / sigma**2))
+        want[i] = np.sqrt(dx @ N @ dx)
+    with own_work(reliability=reliability):
+        got = call(fn, r.copy(), d0, what="bias_to_noise")
+    compare("largest |Δf|/σ_f per observation", got, want, rtol=1e-6, wrong=[
+        ("δ0/√r is the MDB in units of the observation's σ, not its effect on the unknowns",
+         d0 / np.sqrt(r)),
+        ("δ0 √(1 − r): the MDB is δ0 σ/√r, not δ0 σ", d0 * np.sqrt(1 - r)),
+        ("(1 − r)/r needs its square root: the ratio is √(ΔxᵀNΔx)", d0 * (1 - r) / r),
+        ("inverted: a small r (little control) must give a LARGE effect",
+         d0 * np.sqrt(r / (1 - r))),
+    ])  # fmt: skip
+    success(
+        f"δ̄0 = δ0 √((1 − r)/r): from {want.min():.2f} to {want.max():.2f} on this line "
+        f"(r from {r.max():.2f} to {r.min():.2f})"
+    )
 
 
 def check_snoop(fn: Callable) -> None:

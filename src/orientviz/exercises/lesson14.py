@@ -86,30 +86,46 @@ def check_ppi_image(fn: Callable) -> None:
     success("the image of points built backwards from their image coordinates comes out exactly")
 
 
-def check_sphere_radius(fn: Callable) -> None:
-    """Check ``fn(xy, x0, y0, m, h) -> s``: the radius of the range sphere (4b)."""
-    sc = _scene(rng_for("lesson14.check_sphere_radius"))
-    got = call(fn, sc["xy"].copy(), sc["x0"], sc["y0"], sc["m"], sc["h"], what="sphere_radius")
-    b = np.linalg.norm(sc["xy"] - [sc["x0"], sc["y0"]], axis=1)
-    want = np.linalg.norm(sc["P"] - sc["X0"], axis=1)  # the true slant ranges
-    compare(
-        "slant range s [m]",
-        got,
-        want,
-        rtol=1e-9,
-        wrong=[
-            (
-                "|b|·m instead of |b|/m: the image scale multiplies",
-                np.sqrt((b * sc["m"]) ** 2 + sc["h"] ** 2),
-            ),
-            ("h was forgotten (that is s_e)", b / sc["m"]),
-            (
-                "the principal point was not subtracted",
-                np.sqrt((np.linalg.norm(sc["xy"], axis=1) / sc["m"]) ** 2 + sc["h"] ** 2),
-            ),
-        ],
+def check_radius_change(fn: Callable) -> None:
+    """Check ``fn(xy, x0, y0, m, h, dm) -> ds``: the first-order change of the range-sphere
+    radius (4b) of each image point when the image scale m is wrong by ``dm`` (image m, m).
+
+    Oracle: central differences of the sphere radius √((|b|/m)² + h²), evaluated here, for
+    points from near the nadir (|b|/m ≪ h) to far out; compared per point relative to
+    s_e·dm/m, so that near and far points count alike.
+    """
+    rng = rng_for("lesson14.check_radius_change")
+    h, m, x0, y0 = 15020.0, 1.1264, 434.2, 716.8
+    rho = np.r_[rng.uniform(1500.0, 6000.0, 4), rng.uniform(20000.0, 76000.0, 5)]  # image m
+    theta = rng.uniform(-np.pi, np.pi, rho.size)
+    xy = np.column_stack([x0 + rho * np.cos(theta), y0 + rho * np.sin(theta)])
+    dm = 2e-4 * m
+
+    def radius(mm: float) -> np.ndarray:
+        return np.sqrt((rho / mm) ** 2 + h**2)
+
+    eps = 1e-7 * m
+    want = (radius(m + eps) - radius(m - eps)) / (2 * eps) * dm
+    got = call(fn, xy.copy(), x0, y0, m, h, dm, what="radius_change")
+    s_e, s = rho / m, radius(m)
+    unit = s_e * dm / m  # the change of s_e itself, per point
+    try:
+        g = np.asarray(got, dtype=float) / unit
+    except (TypeError, ValueError):
+        raise CheckFailed(f"radius_change: expected one number per point, got {got!r}") from None
+    compare("ds per point, in units of s_e·dm/m", g, want / unit, rtol=2e-3, scale=1.0, wrong=[
+        ("that is the change of s_e = |b|/m, not of s: the square root with h damps it by "
+         "s_e/s (most near the nadir)", -np.ones_like(s)),
+        ("the sign: a larger scale m makes every sphere smaller", -want / unit),
+        ("the relative change ds/s, not ds", want / unit / s),
+        ("s/s_e for s_e/s: the chain rule through √(s_e² + h²) gives s_e/s",
+         -s / s_e),
+    ])  # fmt: skip
+    success(
+        "ds = −(s_e²/s)·dm/m: from "
+        f"{np.min(np.abs(want / unit)):.2f} to {np.max(np.abs(want / unit)):.2f} times the change "
+        "of s_e (near the nadir to far out)"
     )
-    success("the range spheres pass exactly through the object points")
 
 
 def _mirror(C: np.ndarray, X: np.ndarray) -> np.ndarray:

@@ -57,31 +57,109 @@ def check_residual_pattern(fn: Callable) -> None:
     success("shift, scale and rotation of two residual fields recovered exactly")
 
 
-def check_colmap_to_photo(fn: Callable) -> None:
-    """Check ``fn(uv, cx, cy, pixel_mm) -> xy``: COLMAP pixels to photo coordinates in mm."""
-    rng = rng_for("lesson15.check_colmap_to_photo")
-    cx, cy, p = 2011.4, 1498.7, 0.0052
-    xy = rng.uniform(-10.0, 10.0, (8, 2))  # mm, y up
-    uv = np.column_stack(
-        [cx + xy[:, 0] / p, cy - xy[:, 1] / p]
-    )  # built backwards: v grows downwards
-    got = call(fn, uv.copy(), cx, cy, p, what="colmap_to_photo")
-    compare(
-        "photo coordinates [mm]",
-        got,
-        xy,
-        rtol=1e-10,
-        scale=10.0,
-        wrong=[
-            ("y is not flipped: COLMAP's v grows downwards, photo y upwards", xy * [1, -1]),
-            ("cx and cy swapped", np.column_stack([(uv[:, 0] - cy) * p, -(uv[:, 1] - cx) * p])),
-            (
-                "divided by the pixel size instead of multiplied",
-                np.column_stack([(uv[:, 0] - cx) / p, -(uv[:, 1] - cy) / p]),
-            ),
-        ],
-    )
-    success("pixels → mm with the principal point, the pixel size and y upwards")
+#: The three import mistakes of exercise 1 and the pattern labels a student chooses from.
+IMPORT_CASES = (
+    "v not flipped",
+    "principal point at the image centre",
+    "pixel size 0.012 mm instead of 0.010 mm",
+)
+PATTERNS = ("none", "shift", "scale", "rotation", "no pattern")
+
+
+def _import_patterns() -> dict[str, tuple[str, str]]:
+    """For each import mistake: the pattern label its misclosures show and why, from a
+    vertical image imported wrongly (start values = the truth, so a correct import leaves
+    no misclosure at all)."""
+    rng = rng_for("lesson15.check_import_mistakes")
+    f_px, p, W = 15200.0, 0.010, 23000.0  # principal distance in px, pixel size mm, format px
+    cx, cy = W / 2 + 12.3, W / 2 - 11.1  # the principal point off the centre, px
+    X = np.column_stack([rng.uniform(-700, 700, 30), rng.uniform(-700, 700, 30),
+                         rng.uniform(-20, 20, 30)])  # fmt: skip
+    X0 = np.array([15.0, -8.0, 1520.0])
+    d = X - X0
+    xy = -f_px * p * d[:, :2] / d[:, 2:3]  # true photo coordinates, mm from the pp (R = I)
+    u, v = cx + xy[:, 0] / p, cy - xy[:, 1] / p  # COLMAP pixels, v downwards
+
+    def misclosure(obs: np.ndarray, c: float) -> np.ndarray:
+        return -c * d[:, :2] / d[:, 2:3] - obs  # computed (true start values) − observed
+
+    wrong = {
+        IMPORT_CASES[0]: misclosure(np.column_stack([(u - cx) * p, (v - cy) * p]), f_px * p),
+        IMPORT_CASES[1]: misclosure(np.column_stack([(u - W / 2) * p, -(v - W / 2) * p]), f_px * p),
+        IMPORT_CASES[2]: misclosure(
+            np.column_stack([(u - cx) * 0.012, -(v - cy) * 0.012]), f_px * 0.012
+        ),
+    }
+    out = {}
+    for case, w in wrong.items():
+        size = float(np.sqrt(np.mean(w**2)))
+        if size < 1e-9:
+            out[case] = ("none", "the misclosures are zero")
+            continue
+        A = np.zeros((2 * len(xy), 4))
+        A[0::2, 0], A[1::2, 1] = 1.0, 1.0
+        A[0::2, 2], A[1::2, 2] = xy[:, 0], xy[:, 1]
+        A[0::2, 3], A[1::2, 3] = -xy[:, 1], xy[:, 0]
+        q, *_ = np.linalg.lstsq(A, w.ravel(), rcond=None)
+        rest = float(np.sqrt(np.mean((A @ q - w.ravel()) ** 2)))
+        if rest > 0.1 * size:
+            out[case] = ("no pattern", f"a pattern fit leaves {rest / size:.0%} of the misclosures")
+            continue
+        effect = {"shift": float(np.hypot(*q[:2])), "scale": abs(q[2]) * 100.0,
+                  "rotation": abs(q[3]) * 100.0}  # fmt: skip
+        label = max(effect, key=effect.get)
+        out[case] = (label, f"shift {q[0] * 1000:+.0f}, {q[1] * 1000:+.0f} µm, scale {q[2]:+.2e}, "
+                            f"rotation {q[3]:+.2e}")  # fmt: skip
+    return out
+
+
+_WHY = {
+    IMPORT_CASES[0]: (
+        "a y that is not flipped mirrors the image: no shift, scale or rotation turns a mirror "
+        "image into the original, so the misclosures (0 in x, 2y in y) fit no pattern"
+    ),
+    IMPORT_CASES[1]: (
+        "every reduced coordinate is off by the same (cx − W/2, cy − H/2)·p: a shift, the same "
+        "in every image"
+    ),
+    IMPORT_CASES[2]: (
+        "the pixel size scales the measured coordinates AND the principal distance c = f·p "
+        "alike, so the computed image scales with the observed one: the misclosures stay as "
+        "they were (none) — a wrong pixel size is invisible in the images"
+    ),
+}
+
+
+def check_import_mistakes(fn: Callable) -> None:
+    """Check ``fn() -> dict``: for each of :data:`IMPORT_CASES` the pattern (one of
+    :data:`PATTERNS`) that the misclosures of a wrongly imported image show.
+
+    Oracle: a vertical image with known orientation imported with each mistake here, its
+    misclosures at the true start values and a 4-parameter pattern fit (least squares; "no
+    pattern" when the fit leaves more than 10 % of them).
+    """
+    got = call(fn, what="import_mistakes")
+    if not isinstance(got, dict):
+        raise CheckFailed(f"import_mistakes: expected a dict, got {type(got).__name__}")
+    missing = [c for c in IMPORT_CASES if c not in got]
+    if missing:
+        raise CheckFailed(f"import_mistakes: no answer for {missing} (copy the keys exactly)")
+    for case in IMPORT_CASES:
+        if got[case] not in PATTERNS:
+            raise CheckFailed(
+                f"import_mistakes[{case!r}] = {got[case]!r}: choose one of {', '.join(PATTERNS)}"
+            )
+    truth = _import_patterns()
+    wrong = [c for c in IMPORT_CASES if got[c] != truth[c][0]]
+    if wrong:
+        c = wrong[0]
+        raise CheckFailed(
+            f"import_mistakes[{c!r}] = {got[c]!r}, the misclosures show {truth[c][0]!r} "
+            f"({truth[c][1]}): {_WHY[c]}",
+            error=np.inf,
+            tolerance=0.0,
+        )
+    success("; ".join(f"{c}: {truth[c][0]}" for c in IMPORT_CASES))
 
 
 def _first_r(accept_hi, ratio: float, lo: int = 1, hi: int = 10**6) -> int:

@@ -115,53 +115,52 @@ def check_control_update(fn: Callable) -> None:
     success("Q' equals the inverse of N + AᵀPA: one 3×3 inverse instead of a new u×u one")
 
 
-def check_law_spacing(fn: Callable) -> None:
-    """Check ``fn(sigma_img_mm, scale, c_mm, format_mm, p, target_m, mu) -> (sigma0z, i)``.
+def _law_sigma_z(sigma_img_mm: float, scale: float, c_mm: float, fmt: float, p: float,
+                 mu_i: float) -> float:  # fmt: skip
+    """μ_z(i)·σ0z (m) of a flight at the image scale number ``scale``, H and B written out."""
+    H = c_mm * 1e-3 * scale
+    base = fmt * 1e-3 * scale * (1 - p)
+    return mu_i * np.sqrt(2.0) * sigma_img_mm * 1e-3 * scale * H / base
 
-    ``mu`` maps the chain spacing i (bases) to Ebner's μ_z/σ0 (increasing with i);
-    the answer is σ0z = √2 · σ_img · m_B · H/B (m), the σ of a model height from an x-parallax,
-    and the largest i with μ_z(i) · σ0z ≤ target.
+
+def check_largest_scale(fn: Callable) -> None:
+    """Check ``fn(sigma_img_mm, c_mm, format_mm, p, target_m, mu_i) -> scale``: the largest image
+    scale number m_B at which Ebner's height law μ_z(i)·σ0z, σ0z = √2 σ_x m_B H/B, still meets
+    the target (m), for one chain spacing (μ_z(i) given).
+
+    Oracle: the law evaluated with H = c m_B and B = (1 − p)·format·m_B written out, and a
+    bisection over m_B — not the closed form.
     """
-    rng = rng_for("lesson16.check_law_spacing")
-    for sigma_img, scale, c_mm, fmt, p, target in (
-        (0.005, 10_000.0, 152.0, 230.0, 0.6, 0.105),
-        (0.008, 25_000.0, 88.0, 230.0, 0.65, 0.5),
+    for sigma_img, c_mm, fmt, p, target, mu_i in (
+        (0.005, 152.0, 230.0, 0.6, 0.15, 1.42),
+        (0.008, 88.0, 230.0, 0.65, 0.5, 2.07),
     ):
-        spac = np.arange(2, 12)
-        mu = dict(zip(spac.tolist(), (0.8 + np.cumsum(rng.uniform(0.05, 0.4, spac.size))).tolist()))
-        base = fmt * 1e-3 * scale * (1 - p)  # B, m
-        H = c_mm * 1e-3 * scale
-        s0z = np.sqrt(2.0) * sigma_img * 1e-3 * scale * H / base  # the geometry written out
-        ok = [i for i in spac if mu[int(i)] * s0z <= target]
-        i_ref = int(max(ok)) if ok else 0
-        out = call(fn, sigma_img, scale, c_mm, fmt, p, target, dict(mu), what="law_spacing")
+        lo, hi = 1.0, 1e7
+        for _ in range(200):  # the law grows with the scale number: bisection
+            mid = np.sqrt(lo * hi)
+            if _law_sigma_z(sigma_img, mid, c_mm, fmt, p, mu_i) <= target:
+                lo = mid
+            else:
+                hi = mid
+        want = lo
+        got = call(fn, sigma_img, c_mm, fmt, p, target, mu_i, what="largest_scale")
         try:
-            s0, i = out
+            got = float(got)
         except (TypeError, ValueError):
-            raise CheckFailed("return the two values (sigma0z, i)") from None
-        compare(
-            "σ0z",
-            s0,
-            s0z,
-            rtol=1e-6,
-            wrong=[
-                ("the base uses p, not 1 − p", s0z * (1 - p) / p),
-                ("H/B upside down", np.sqrt(2.0) * sigma_img * 1e-3 * scale * base / H),
-                (
-                    "√2 is missing: σ0z is the σ of a model height from the x-parallax of TWO "
-                    "image coordinates",
-                    s0z / np.sqrt(2.0),
-                ),
-            ],
-        )
-        if int(i) != i_ref:
-            hint = (
-                "the smallest spacing that misses the target, not the largest that meets it"
-                if int(i) == i_ref + 1
-                else "compare μ_z(i) · σ0z (m) with the target"
-            )
-            raise CheckFailed(f"chain spacing: expected {i_ref} bases, got {i} — {hint}.")
-    success("σ0z from the flight and the widest chain spacing that meets the target")
+            raise CheckFailed(f"largest_scale: expected one number m_B, got {got!r}") from None
+        hb = c_mm / ((1 - p) * fmt)  # H/B, the same at every scale
+        compare(f"m_B for σ_Z ≤ {target} m (σ_x {sigma_img * 1000:g} µm, c {c_mm:g} mm)", got, want,
+                rtol=1e-6, wrong=[
+                    ("the base uses p, not 1 − p: B = (1 − p)·format·m_B", want * p / (1 - p)),
+                    ("√2 is missing: σ0z is the σ of a model height from the x-parallax of TWO "
+                     "image coordinates", want * np.sqrt(2.0)),
+                    ("H/B does not grow with the scale: H = c m_B and B = (1 − p) s m_B, so H/B = "
+                     "c/((1 − p) s) and σ0z is LINEAR in m_B",
+                     np.sqrt(target / (mu_i * np.sqrt(2.0) * sigma_img * 1e-3 * hb) * 1.0)),
+                    ("μ_z(i) left out: the law is μ_z(i)·σ0z, not σ0z", want * mu_i),
+                    ("H/B upside down", target / (mu_i * np.sqrt(2.0) * sigma_img * 1e-3 / hb)),
+                ])  # fmt: skip
+    success("the largest image scale number that keeps the law's σ_Z at the target, two flights")
 
 
 def check_by_hand(fn: Callable) -> None:
@@ -269,7 +268,7 @@ __all__ = [
     "check_best_candidate",
     "check_by_hand",
     "check_control_update",
-    "check_law_spacing",
+    "check_largest_scale",
     "worst_sigma_z",
 ]
 

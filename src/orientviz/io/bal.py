@@ -59,16 +59,19 @@ class _Tokens:
     """
 
     def __init__(self, lines: list[str], source: str) -> None:
-        fields = [ln.split() for ln in lines]
         self.source = source
+        self.lines = lines
         self.n_lines = len(lines)
-        self.words = [w for f in fields for w in f]
-        self.line = np.repeat(np.arange(1, len(lines) + 1), [len(f) for f in fields])
+        self.words = "\n".join(lines).split()  # the fields of every line, in order
         self.pos = 0
 
     def fail(self, message: str, k: int | None = None) -> InputError:
         """An InputError at the line of field ``k`` (default: the last line of the file)."""
-        no = int(self.line[k]) if k is not None and k < self.line.size else self.n_lines
+        if k is not None and k < len(self.words):  # the line of each field (only to fail)
+            line = np.repeat(np.arange(1, self.n_lines + 1), [len(ln.split()) for ln in self.lines])
+            no = int(line[k])
+        else:
+            no = self.n_lines
         return InputError(message, self.source, f"line {max(no, 1)}")
 
     def first_bad(self, bad: NDArray[np.bool_], start: int, stride: int, message) -> None:

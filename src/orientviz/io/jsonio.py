@@ -250,15 +250,22 @@ def _registry():
     return Registry().with_resources(entries)
 
 
-def import_jsonschema():
-    """Import :mod:`jsonschema` without its optional IRI format checker.
+#: The optional format checkers' packages that jsonschema's format module imports when
+#: they are installed (rfc3987_syntax builds a parser grammar: seconds; isoduration
+#: brings arrow: ~40 ms).
+FORMAT_PACKAGES = ("rfc3987_syntax", "rfc3987", "isoduration", "rfc3339_validator",
+                   "rfc3986_validator", "webcolors", "uri_template", "jsonpointer", "fqdn",
+                   "idna")  # fmt: skip
 
-    jsonschema's format module imports ``rfc3987_syntax`` when it is installed, which
-    builds a parser grammar at import time. orientviz's schemas use no ``format``
-    keyword, so that import is skipped for the duration of jsonschema's own import (the
-    module stays importable for anyone else afterwards). The test suite and the book's
-    build import jsonschema this way before nbformat does (nbformat's notebook schemas
-    use no ``format`` keyword either).
+
+def import_jsonschema():
+    """Import :mod:`jsonschema` without its optional format checkers.
+
+    orientviz's schemas use no ``format`` keyword (and validate without a format
+    checker), so the packages of :data:`FORMAT_PACKAGES` are kept out for the duration
+    of jsonschema's own import (they stay importable for anyone else afterwards). The
+    test suite and the book's build import jsonschema this way before nbformat does
+    (nbformat's notebook schemas use no ``format`` keyword either).
 
     Returns
     -------
@@ -269,14 +276,15 @@ def import_jsonschema():
 
     if "jsonschema" in sys.modules:
         return sys.modules["jsonschema"]
-    blocked = "rfc3987_syntax" not in sys.modules
-    if blocked:
-        sys.modules["rfc3987_syntax"] = None  # type: ignore[assignment]
+    blocked = [name for name in FORMAT_PACKAGES if name not in sys.modules]
+    for name in blocked:
+        sys.modules[name] = None  # type: ignore[assignment]
     try:
         import jsonschema
     finally:
-        if blocked and sys.modules.get("rfc3987_syntax", 0) is None:
-            del sys.modules["rfc3987_syntax"]
+        for name in blocked:
+            if sys.modules.get(name, 0) is None:
+                del sys.modules[name]
     return jsonschema
 
 

@@ -284,18 +284,15 @@ def plot_field_split(split, *, axes=None, exaggeration: float | None = None):
         exaggeration = width / 8.0 / big
     part = np.asarray(split.described(g.xy, np.zeros(g.xy.shape[0], np.int64)), float)
     sx, sy, _ = np.asarray(split.share) * 100.0
-    panels = (
-        (g.d, f"field: RMS {split.rms_um[0]:.2f} µm"),
-        (
-            part,
-            f"described: RMS {split.rms_um[1]:.2f} µm\n(share of squares x {sx:.0f} %, y {sy:.0f} %)",
-        ),
-        (g.d - part, f"remainder: RMS {split.rms_um[2]:.2f} µm"),
+    panels = (  # two short lines each: three panels share the 6.2 in of a book column
+        (g.d, "field", split.rms_um[0]),
+        (part, f"described (x {sx:.0f} %, y {sy:.0f} %)", split.rms_um[1]),
+        (g.d - part, "remainder", split.rms_um[2]),
     )
-    for ax, (d, title) in zip(axes, panels):
+    for ax, (d, label, rms) in zip(axes, panels):
         plot_image_field(
             ImageField(g.xy, d, g.shape, g.name), ax=ax, exaggeration=exaggeration,
-            title=f"{title}, ×{exaggeration:.0f}",
+            title=f"{label}\nRMS {rms:.2f} µm, ×{exaggeration:.0f}",
         )  # fmt: skip
     lo = np.min([[ax.get_xlim()[0], ax.get_ylim()[0]] for ax in axes[:3]], axis=0)
     hi = np.max([[ax.get_xlim()[1], ax.get_ylim()[1]] for ax in axes[:3]], axis=0)

@@ -11,7 +11,7 @@ Private parts: ``_formation`` (model formation), ``_setup`` (tie points and datu
 unknowns), ``_normal`` (sparse reduced systems), ``_deformation`` (deformation sets).
 """
 
-from ._adjust import independent_models
+from ._adjust import default_model_sigma, independent_models
 from ._deformation import (
     MODEL_SETS,
     TERMS,
@@ -25,7 +25,7 @@ from ._formation import ModelSet, form_models, model_pairs, model_to_object
 from ._joint import deformed, joint_setup, model_rows
 from ._normal import LinearSolution, scalar_cofactors, solve_rows, solve_sparse
 from ._result import DeformationEstimates, ModelsResult
-from ._setup import TieSetup, tie_setup
+from ._setup import TieSetup, check_datum, tie_setup
 
 __all__ = [
     "independent_models",
@@ -44,6 +44,8 @@ __all__ = [
     # building blocks (tests, benchmarks, the precision laws)
     "TieSetup",
     "tie_setup",
+    "check_datum",
+    "default_model_sigma",
     "joint_setup",
     "deformed",
     "model_rows",

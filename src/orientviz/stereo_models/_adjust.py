@@ -61,7 +61,10 @@ from ._steps import PatmSteps, RigorousSteps, model_params, rows3, stop_rule
 F64 = NDArray[np.float64]
 
 
-def _default_sigma(block: Block, ms: ModelSet) -> tuple[float, float]:
+def default_model_sigma(block: Block, ms: ModelSet) -> tuple[float, float]:
+    """σ of model coordinates (planimetry, height) in m that :func:`independent_models`
+    uses by default: σ_xy = σ_image · m_B, σ_z = √2 · (H/B) · σ_xy (medians of the image σ,
+    the principal distance, the flying height above the points and the models' bases)."""
     s_img = float(np.median(block.observations.sigma))  # mm
     c = float(np.median(block.cameras.c))  # mm
     H = float(np.median(block.images.X0[:, 2]) - np.median(block.points.xyz[:, 2]))
@@ -163,7 +166,7 @@ def independent_models(
         raise InputError("deformation parameters and auxiliary data need method='rigorous'")
     if not auxiliary:
         check_datum(su, ms, need_xy=True, need_z=True)
-    s_xy, s_z = sigma_model if sigma_model is not None else _default_sigma(block, ms)
+    s_xy, s_z = sigma_model if sigma_model is not None else default_model_sigma(block, ms)
     n = ms.n_models
     lam = np.ones(n)
     R = ms.start_rotation.copy()

@@ -33,7 +33,7 @@ from .geometry import VIEW_FOV
 from .panel import BlockPanel
 from .scene import BlockScene
 from .snapshot import panel_markdown, with_panel
-from .solved import Solved, solution_demo, solve_target
+from .solved import Solved, block_description, solution_demo, solve_target
 
 DEFAULT_DEMO = "block"
 PROG = "orientviz view"
@@ -148,6 +148,8 @@ class ViewerApp:
         self.panel = None
         self.demo = None
         self.extra: dict[str, Any] = {}
+        #: the solve started at opening (:mod:`orientviz.viewer.background`), or None
+        self.background: Any = None
         self.messages: list[str] = []
         self._message_md = self.server.gui.add_markdown("")
         self._message_md.visible = False
@@ -174,13 +176,13 @@ class ViewerApp:
 
     def load(self, content: Any) -> None:
         """Build the scene and GUI for ``content`` (see the class docstring)."""
-        demo = resolve_content(content)
+        demo = resolve_content(content, background=True)  # a live viewer: see resolve_content
         self.demo = demo
         self._build(demo)
 
     def _build(self, demo: Any) -> None:
         gui = self.server.gui
-        gui.add_markdown(f"### {demo.title}\n{demo.description}")
+        self._head = gui.add_markdown(f"### {demo.title}\n{demo.description}")
         if demo.message:
             self.report(demo.message)
         if demo.state is not None:
@@ -194,6 +196,33 @@ class ViewerApp:
             cam = self.extra.get("camera")
             if cam is not None and demo.state is None:
                 self._set_camera(*cam)
+        self.background = demo.background if self.panel is not None else None
+        if self.background is not None:  # the solve runs while the start values are shown
+            self.panel.show_pending(self.background)
+            self.background.start(self.take_background, self.panel.show_pending)
+
+    def take_background(self, job: Any) -> None:
+        """The solve started at opening has ended: show its solution (or its error).
+
+        The block state takes the solution (:meth:`~orientviz.viewer.state.BlockState.
+        adopt`), scene and panel are redrawn with the residual scale kept (the vectors
+        shrink from the file's start values to the solution).
+        """
+        demo, panel = self.demo, self.panel
+        if job.error is not None:
+            panel.state.pending = None
+            failed = failure(PROG, demo.name, job.error)
+            self.report(failed[0] if failed else f"{type(job.error).__name__}: {job.error}")
+            panel.show_pending(None)
+            return
+        solved = job.result
+        demo.solution = solved.solution
+        demo.description = block_description(solved)
+        self._head.content = f"### {demo.title}\n{demo.description}"
+        adj = solved.solution.adjustment
+        panel.take_result(adj)
+        if not adj.converged:
+            self.report(f"the adjustment did not converge: {adj.reason}")
 
     def _set_camera(self, position: Any, look_at: Any, size: float) -> None:
         cam = self.server.initial_camera
@@ -264,7 +293,9 @@ class ViewerApp:
         return frame
 
     def stop(self) -> None:
-        """Stop the server."""
+        """Stop the server (and a solve still running in the background)."""
+        if self.background is not None:
+            self.background.cancel()
         self.server.stop()
 
     def wait(self) -> None:
@@ -278,10 +309,14 @@ class ViewerApp:
             self.stop()
 
 
-def resolve_content(content: Any, options: dict[str, Any] | None = None) -> Any:
+def resolve_content(
+    content: Any, options: dict[str, Any] | None = None, background: bool = False
+) -> Any:
     """Turn what :class:`ViewerApp` accepts into a :class:`~orientviz.viewer.demo.Demo`.
 
-    ``options`` override a problem file's (``--free``, ``--fix``, ``--max-iter``).
+    ``options`` override a problem file's (``--free``, ``--fix``, ``--max-iter``);
+    ``background``: a large imported model opens at its start values and is solved in
+    the background (:func:`~orientviz.viewer.solved.solve_target`).
 
     Raises
     ------
@@ -294,7 +329,7 @@ def resolve_content(content: Any, options: dict[str, Any] | None = None) -> Any:
             raise InputError(
                 f"--free, --fix and --max-iter apply to problem files, not the demo {name!r}"
             )
-        return load_demo(name) if name in DEMOS else demo_from_file(name, options)
+        return load_demo(name) if name in DEMOS else demo_from_file(name, options, background)
     if isinstance(content, Solved):
         return solution_demo(content)
     if isinstance(content, Demo):
@@ -308,13 +343,17 @@ def resolve_content(content: Any, options: dict[str, Any] | None = None) -> Any:
     )
 
 
-def demo_from_file(target: str, options: dict[str, Any] | None = None) -> Any:
+def demo_from_file(
+    target: str, options: dict[str, Any] | None = None, background: bool = False
+) -> Any:
     """Solve a problem file or shipped data set as ``orientviz solve`` does; its demo.
 
     ``options`` override the file's (``--free``, ``--fix``, ``--max-iter``). Raises what
     ``solve`` reports (:func:`orientviz.io.solve.failure`), before any server.
+    ``background``: see :func:`~orientviz.viewer.solved.solve_target` (the demo then
+    carries the solve still to run, ``Demo.background``).
     """
-    return solution_demo(solve_target(target, options))
+    return solution_demo(solve_target(target, options, background))
 
 
 def open_viewer(
@@ -330,6 +369,8 @@ def export_html(content: Any, path: str | Path) -> Path:
     import io
 
     demo = resolve_content(content)  # load errors are raised here, before any server starts
+    if demo.background is not None:  # a snapshot shows the solution: solve it now
+        demo = solution_demo(demo.background.run())
     # viser prints its server box and "Server stopped" whatever `verbose` says; this
     # server is private and never announced, so its prints go nowhere
     with contextlib.redirect_stdout(io.StringIO()):
@@ -362,7 +403,10 @@ def run_from_cli(args: argparse.Namespace) -> int:
 
             content, target = design_from_file(plan_from), plan_from
         else:
-            content = resolve_content(target, options)  # a bad file: refused before a server
+            # a bad file: refused before a server; a large imported model opens at its
+            # start values while it is solved (not for a snapshot, which shows the solution)
+            live = not getattr(args, "export", None)
+            content = resolve_content(target, options, background=live)
     except Exception as exc:
         failed = failure(PROG, target, exc)
         if failed is None:

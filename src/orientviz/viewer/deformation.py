@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from ..block import Block
 from ..bundle import ap_set, bundle_adjust
+from ..errors import InputError
 from ..io.kinds.block import adjust_block
 from .block_geometry import COLORS
 from .legend import swatch
@@ -144,6 +145,14 @@ def deformation_extra(state: BlockState, reference: Block, systematic_only: Bloc
                 return fields["selfcal"]
             return np.zeros_like(ref), state.block.points.xyz - ref
 
+        def name_in_legend(k: float | None) -> None:
+            """The legend names the deformation's arrows and points while they are shown."""
+            text = None if k is None else deformation_legend(str(ctl["mode"].value), k)
+            if text != getattr(scene, "legend_deformation", None):
+                scene.legend_deformation = text
+                if app.panel is not None:
+                    app.panel.update_legend()
+
         def redraw() -> None:
             A, B = current()
             k = auto_scale(A, B, spacing=spacing)
@@ -151,6 +160,9 @@ def deformation_extra(state: BlockState, reference: Block, systematic_only: Bloc
             M = morph(ref, A, B, t, k)
             vec.points = frame.to_scene(np.stack([ref, M], axis=1)).astype(np.float32)
             pts.points = frame.to_scene(M).astype(np.float32)
+            fields["k"] = k
+            if ctl["show"].value:
+                name_in_legend(k)
             a, b = rms(A), rms(B)
             ctl["info"].content = (
                 f"drawn ×{k:.3g}, t = {t:.2f}  \n"
@@ -164,6 +176,8 @@ def deformation_extra(state: BlockState, reference: Block, systematic_only: Bloc
             for key in ("points", "residuals", "ellipsoids"):
                 box = app.panel.handles.get(f"show_{key}") if app.panel else None
                 scene.set_visible(key, (not on) and (box is None or bool(box.value)))
+            scene.legend_deformation = ""  # the legend is written anew (what is drawn now)
+            name_in_legend(fields.get("k", 1.0) if on else None)
 
         def play(_e: Any = None) -> None:
             def run() -> None:
@@ -184,6 +198,19 @@ def deformation_extra(state: BlockState, reference: Block, systematic_only: Bloc
         return {"deformation": ctl, "deformation_nodes": (vec, pts), "deformation_reference": ref}
 
     return build
+
+
+def deformation_legend(mode: str, k: float) -> str:
+    """The legend line of the deformation view in ``mode`` (one of :data:`MODES`), drawn ×k."""
+    arrows, dots = swatch(COLORS["deformation"], "▬"), swatch(COLORS["deformation"], "●")
+    if mode == MODES[1]:
+        what = (
+            "each point's error as adjusted without (t = 0) and with (t = 1) "
+            "self-calibration, from its true position"
+        )
+    else:
+        what = "each point from its true position (t = 0) to its estimate (t = 1)"
+    return f"{arrows} {dots} model deformation: {what}, ×{k:.3g} (see *Deformation*)"
 
 
 def without_lens_terms(problem: Any, block: Block) -> tuple[F64, float]:
@@ -213,10 +240,16 @@ def lens_deformation_extra(problem: Any, state: BlockState):
     Vectors from each point as adjusted with the lens terms (the file's solution) to the
     same point adjusted without them, × k (the median drawn half a point spacing), morphed
     by t; the panel gives k, the RMS displacement and both σ̂0. The second bundle runs
-    when the view is first shown.
+    when the view is first shown. While a solve started at opening still runs
+    (``state.pending``) there is no solution to compare with yet: the view waits for it.
     """
-    start, with_lens = state.block0.copy(), state.block.points.xyz.copy()
-    sigma_with = float(state.result.sigma0) if state.result is not None else float("nan")
+    start = state.block0.copy()
+    solution: dict[str, Any] = {}
+    if not state.pending:
+        solution["xyz"] = state.block.points.xyz.copy()
+        solution["sigma0"] = (
+            float(state.result.sigma0) if state.result is not None else float("nan")
+        )
     terms = camera_terms_name(start)
 
     def build(app: Any) -> dict:
@@ -236,6 +269,11 @@ def lens_deformation_extra(problem: Any, state: BlockState):
                                            f"without the cameras' {terms}*")  # fmt: skip
 
         def redraw() -> None:
+            if state.pending:
+                raise InputError(f"{state.pending}: the model deformation follows its solution")
+            if not solution:  # the solve ran in the background: its solution ("as adjusted")
+                solution.update(xyz=state.changes[0].xyz.copy(), sigma0=state.changes[0].sigma0)
+            with_lens, sigma_with = solution["xyz"], solution["sigma0"]
             if "A" not in field:
                 xyz, s0 = without_lens_terms(problem, start)
                 field["A"], field["sigma0"] = xyz - with_lens, s0

@@ -34,6 +34,9 @@ class Demo:
         Shown in the panel at the start (e.g. why the adjustment did not converge).
     solution : Solution or None
         A problem file's solution (:mod:`orientviz.viewer.solved`), for the panel.
+    background : BackgroundSolve or None
+        The solve still to run (:mod:`orientviz.viewer.background`): the viewer shows
+        ``state`` at the file's start values meanwhile and takes its solution at the end.
     """
 
     name: str
@@ -43,3 +46,4 @@ class Demo:
     extra: Callable[[Any], dict] | None = None
     message: str | None = None
     solution: Any = None
+    background: Any = None

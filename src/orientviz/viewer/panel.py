@@ -201,6 +201,24 @@ class BlockPanel:
         if not res.converged and max_iter > 1:
             self.report(f"the adjustment did not converge: {res.reason}")
 
+    def show_pending(self, job: Any) -> None:
+        """The line on the solve running in the background (``job``; None: remove it)."""
+        with self._lock:
+            self._pending_line = None if job is None else job.status()
+            self.refresh(full=False)
+
+    def take_result(self, result: Any) -> None:
+        """Show the solve that ran in the background (the state adopts it); the residual
+        scale stays, so the vectors shrink from the start values to the solution."""
+        with self._lock:
+            self.state.adopt(result)
+            self._pending_line = None
+            self.scene.update()
+            self.set_exaggeration()
+            self.scene.update_ellipsoids()
+            self.select(self.scene.selected)
+            self.refresh()
+
     def reset(self) -> None:
         self.state.reset()
         self.scene.update()
@@ -255,7 +273,10 @@ class BlockPanel:
             + (" (moved by hand)" if st.moved else ""),
             f"max {kind}: {np.nanmax(scores, initial=0.0):.2f} · residual exaggeration ×{self.scene.exaggeration:.3g}",
         ]
-        if res is not None:
+        pending = getattr(self, "_pending_line", None)
+        if pending:
+            lines.append(pending)
+        elif res is not None:
             lines.append(
                 f"last adjustment: σ̂0 = {res.sigma0:.10g}, {res.iterations} it., {res.reason}"
             )

@@ -125,6 +125,22 @@ def radar_geometry(surface: str = "fig7", image: int = 1, rounded: bool = True) 
     }
 
 
+def faded_label_place(away: np.ndarray, offset: float) -> tuple[str, tuple[float, float, float]]:
+    """Anchor and position (m, from the station) of a faded station's name.
+
+    The name goes beside its station on the side away from the selected one (``away`` =
+    this station − the selected, m), as seen along the first view (:data:`VIEW_DIRECTION`),
+    ``offset`` m off, so that it does not meet the selected station's name above it even
+    where the two stations lie close together on the screen.
+    """
+    d = np.asarray(VIEW_DIRECTION, float)
+    right = np.cross(d, (0.0, 0.0, 1.0))
+    right /= np.linalg.norm(right)
+    side = 1.0 if float(np.dot(away, right)) >= 0.0 else -1.0
+    pos = side * offset * right
+    return ("center-left" if side > 0 else "center-right"), (pos[0], pos[1], pos[2])
+
+
 def _swatch_html(col: tuple[int, int, int]) -> str:
     return (
         '<span style="display:inline-block;width:0.9em;height:0.9em;'
@@ -340,10 +356,10 @@ class RadarView:
             self.nodes[f"station_{i}"].color = STATION_COLORS[i] if sel else FADED
             self.nodes[f"station_{i}"].opacity = None if sel else 0.35
             self.nodes[f"axis_{i}"].visible = sel
-            # the selected station's name above it, the faded ones' below (off the construction)
             label, up = self.nodes[f"label_{i}"], 3.0 * self.r_station
-            label.anchor = "bottom-center" if sel else "top-center"
-            label.position = (0.0, 0.0, up if sel else -up)
+            label.anchor, label.position = ("bottom-center", (0.0, 0.0, up)) if sel else (
+                faded_label_place(geo["stations"][i] - geo["stations"][image], up)
+            )  # fmt: skip
             label.font_screen_scale = 1.0 if sel else 0.85
         P = geo["points"]
         self.nodes["points"].points = f.to_scene(P).astype(np.float32)

@@ -19,7 +19,11 @@ The viewer's actions (a ray, an image or a control point off and on) re-solve wi
 
 Large blocks (more than :data:`PRECISION_LIMIT` image observations) are solved without
 the precision pass at the start — the estimates and σ̂0 are the same, the cofactors
-(normalised residuals, ellipsoids) follow on request in the panel. ``dbat_roma`` (DBAT's
+(normalised residuals, ellipsoids) follow on request in the panel. A large block whose
+file gives every start value (an imported reconstruction, :func:`opens_before_solve`)
+opens at those values — evaluated by the solve's own model, datum and checks, no step —
+while the solve runs in a thread (``solve_target(..., background=True)``); the viewer
+then takes the solution (:meth:`orientviz.viewer.app.ViewerApp.take_background`). ``dbat_roma`` (DBAT's
 ROMA bundle, :mod:`orientviz.reproduce.dbat_roma`; not a problem file) opens as the
 problem its reproduction solves (:func:`roma_problem`).
 """
@@ -42,6 +46,7 @@ from ..io.kinds.block import adjust_block, bundle_camera_options
 from ..io.problem import Units, problem_from_block
 from ..io.solve import load_named, solve_problem
 from ..reproduce import dbat_roma as roma
+from .background import BackgroundSolve
 from .deformation import lens_deformation_extra
 from .demo import Demo
 from .geometry import framing
@@ -57,18 +62,59 @@ PRECISION_LIMIT: int = 20_000
 
 @dataclass
 class Solved:
-    """A problem file and its solution (what ``orientviz solve`` computes)."""
+    """A problem file and its solution (what ``orientviz solve`` computes).
+
+    ``pending``: the solution is the evaluation at the file's start values (no step
+    taken) and the solve itself is still to run (:func:`solve_target`, ``background``).
+    """
 
     problem: Any
     solution: Any
+    pending: bool = False
 
 
-def solve_target(target: str, options: dict[str, Any] | None = None) -> Solved:
+def _large_block(problem: Any) -> bool:
+    return (
+        problem.kind == "block"
+        and isinstance(problem.data, Block)
+        and problem.data.n_observations > PRECISION_LIMIT
+    )
+
+
+def opens_before_solve(problem: Any) -> bool:
+    """True for a block problem above :data:`PRECISION_LIMIT` image observations whose
+    file gives start values for every image and point (an imported reconstruction)."""
+    if not _large_block(problem):
+        return False
+    b = problem.data
+    finite = np.isfinite
+    return bool(
+        finite(b.images.X0).all() and finite(b.images.angles).all() and finite(b.points.xyz).all()
+    )
+
+
+def solve_problem_as_viewer(problem: Any, callback: Any = None) -> Any:
+    """``solve_problem`` as the viewer runs it: large blocks on one BLAS thread, without
+    the precision pass (same estimates and σ̂0), every iteration's parameters kept."""
+    if _large_block(problem):  # many small BLAS calls: one thread is faster
+        kw = {"callback": callback} if callback is not None else {}
+        with blas_threads(1):
+            return solve_problem(problem, precision=False, history_x=True, **kw)
+    return solve_problem(problem)
+
+
+def solve_target(
+    target: str, options: dict[str, Any] | None = None, background: bool = False
+) -> Solved:
     """Load ``target`` (a path or a shipped data set's name) and solve it as ``solve`` does.
 
     ``options`` override the file's (as ``solve``'s ``--free``, ``--fix``, ``--max-iter``
     do). A block of more than :data:`PRECISION_LIMIT` image observations is solved
-    without the precision pass (same estimates and σ̂0).
+    without the precision pass (same estimates and σ̂0). With ``background`` such a
+    block whose file gives every start value (:func:`opens_before_solve`) is only
+    evaluated at those values here — the checks, the datum and the model of the solve,
+    no step — and comes back ``pending``: the viewer shows it at once and solves it in a
+    thread (:mod:`orientviz.viewer.background`).
 
     Raises
     ------
@@ -78,11 +124,11 @@ def solve_target(target: str, options: dict[str, Any] | None = None) -> Solved:
     problem = VIEWER_NAMES[target]() if target in VIEWER_NAMES else load_named(target)
     if options:
         problem.options = dict(problem.options, **options)
-    large = isinstance(problem.data, Block) and problem.data.n_observations > PRECISION_LIMIT
-    if problem.kind == "block" and large:  # many small BLAS calls: one thread is faster
+    if background and opens_before_solve(problem):
         with blas_threads(1):
-            return Solved(problem, solve_problem(problem, precision=False, history_x=True))
-    return Solved(problem, solve_problem(problem))
+            start = solve_problem(problem, precision=False, history_x=True, max_iter=0)
+        return Solved(problem, start, pending=True)
+    return Solved(problem, solve_problem_as_viewer(problem))
 
 
 def roma_problem() -> Any:
@@ -188,9 +234,9 @@ def solution_demo(solved: Solved, title: str | None = None) -> Demo:
     problem, sol = solved.problem, solved.solution
     adj = sol.adjustment
     name = title or problem.name or problem.kind
-    head = f"{problem.kind} problem, solved by {sol.method} as `orientviz solve` solves it"
+    head = _head(solved)
     message = None
-    if not adj.converged:
+    if not adj.converged and not solved.pending:
         message = f"the adjustment did not converge: {adj.reason}"
     if problem.kind == "block" and sol.start is not None and "exterior" in adj.groups:
         block = sol.start
@@ -199,9 +245,16 @@ def solution_demo(solved: Solved, title: str | None = None) -> Demo:
         )
         if not _finite(state):  # the last state has NaN: show the last finite record
             state.replay(_last_finite(state))
-        desc = f"{head}. {block.summary()}."
+        desc = block_description(solved)
         extra = lens_deformation_extra(problem, state) if state.camera is not None else None
-        return Demo("file", name, desc, state, extra, message, sol)
+        demo = Demo("file", name, desc, state, extra, message, sol)
+        if solved.pending:
+            demo.background = BackgroundSolve(
+                lambda cb: Solved(problem, solve_problem_as_viewer(problem, cb)),
+                float(adj.sigma0),
+            )
+            state.pending = "the solve started at opening is still running"
+        return demo
     if isinstance(problem.data, Block):
         block = _solved_block(problem.data, sol)
         state = BlockState(block, adjuster=_not_stepped(problem.kind))
@@ -213,6 +266,21 @@ def solution_demo(solved: Solved, title: str | None = None) -> Demo:
         f"{sol.n_iterations} iterations; {adj.reason}. The scene shows the solution's points."
     )
     return Demo("file", name, desc, None, _points_extra(sol), message, sol)
+
+
+def _head(solved: Solved) -> str:
+    p, method = solved.problem, solved.solution.method
+    if solved.pending:
+        return (
+            f"{p.kind} problem, being solved by {method} in the background as `orientviz "
+            "solve` solves it; shown until the solve ends: the file's own start values"
+        )
+    return f"{p.kind} problem, solved by {method} as `orientviz solve` solves it"
+
+
+def block_description(solved: Solved) -> str:
+    """The panel's description of a solved block problem (what was solved, the block)."""
+    return f"{_head(solved)}. {solved.solution.start.summary()}."
 
 
 def _finite(state: Any) -> bool:

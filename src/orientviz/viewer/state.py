@@ -125,18 +125,43 @@ class BlockState:
         self.edits = Edits.of(block)
         #: where the last adjusted sub-block sat in the block (None: the whole block)
         self.mapping: Mapping | None = None
+        #: what runs while the state shows the file's start values (a solve started at
+        #: opening, :mod:`orientviz.viewer.background`); steps and actions wait for it
+        self.pending: str | None = None
         if result is not None:
-            first = result.history[0] if result.history else None
-            if first is not None and np.size(first.x) == np.size(result.x):
-                self.ap0 = self.ap = _additional(result, first.x)
-                self.history[0] = self._snap("start", float(first.sigma0))
-            self._take_result(result, self.block0)
+            self._start_from(result)
         #: the list of changes with their σ̂0; entry 0 is the state as loaded
         self.changes: list[Change] = [
             self._change("as loaded" if result is None else "as adjusted")
         ]
         #: index of the change the state is at (undo/rewind move it back)
         self.change_cursor = 0
+
+    def _start_from(self, result: Adjustment) -> None:
+        """Take ``result`` (an adjustment of :attr:`block0`) with its start record."""
+        first = result.history[0] if result.history else None
+        if first is not None and np.size(first.x) == np.size(result.x):
+            self.ap0 = self.ap = _additional(result, first.x)
+            self.history[0] = self._snap("start", float(first.sigma0))
+        self._take_result(result, self.block0)
+
+    def adopt(self, result: Adjustment) -> None:
+        """Take the solve of :attr:`block0` that ran while the state showed its start values.
+
+        The state becomes what it would be had it been built with ``result``: the start,
+        the solve's iterations on the scrubber, the estimate; a hand move made meanwhile
+        is dropped and the list of changes starts again ("as adjusted").
+        """
+        self.block = self.block0.copy()
+        self.ap = self.ap0
+        self.history = [self._snap("start", float("nan"))]
+        self.cursor = 0
+        self.edits = Edits.of(self.block0)
+        self.mapping = None
+        self._start_from(result)
+        self.changes = [self._change("as adjusted")]
+        self.change_cursor = 0
+        self.pending = None
 
     # ------------------------------------------------------------------ snapshots
     def _snap(self, label: str, sigma0: float) -> Snapshot:
@@ -212,7 +237,10 @@ class BlockState:
         (:func:`~orientviz.viewer.edits.effective_block`); the result is laid out for the
         whole block. ``precision=False`` skips the cofactors (faster; no normalised
         residuals, redundancy numbers or ellipsoids until the next adjustment with them).
+        Refused (InputError) while a solve started at opening runs (:attr:`pending`).
         """
+        if self.pending:
+            raise InputError(f"{self.pending}; this waits for its solution")
         b = self.block  # the start values (a shallow copy: only the estimates are new arrays)
         start = b.with_(
             images=replace(b.images, X0=b.images.X0.copy(), angles=b.images.angles.copy()),

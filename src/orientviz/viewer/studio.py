@@ -34,9 +34,9 @@ from ..design import (
     DesignQuality,
     FlightDesign,
     LiveDesign,
+    LiveModels,
     Suggestion,
     accuracy_law,
-    assess_models,
     cross_strip_images,
     design_auxiliary,
     design_block,
@@ -184,7 +184,8 @@ class Studio:
         self.log: list[str] = []
         #: per change that can be undone: ("control",) or ("structure", the state before)
         self._undo: list[tuple] = []
-        self._models: tuple | None = None  # (changes, quality, live) of independent models
+        #: independent models: the live models design of the block
+        self._models: LiveModels | None = None
         if block is not None:
             self.design = None
             self._set_block(block.copy(), dict(spec))
@@ -231,13 +232,20 @@ class Studio:
         self._models = None
 
     def _structural(self, label: str, change) -> DesignQuality:
-        """Apply a change of the structure (a new design), keeping the old one for undo."""
+        """Apply a change of the structure (a new design), keeping the old one for undo; a
+        change the chosen method cannot take (e.g. independent models whose models cannot
+        be formed any more) raises and leaves the old design."""
         before = self._state()
-        change()
+        try:
+            change()
+            q = self.quality
+        except Exception:
+            self._restore(before)
+            raise
         self._undo.append(("structure", before))
         self.log.append(label)
         self.suggestion = None
-        return self.quality
+        return q
 
     @_locked
     def set_plan(self, design: FlightDesign) -> DesignQuality:
@@ -382,11 +390,10 @@ class Studio:
         """The current quality for the chosen method (the bundle's for the polynomial)."""
         if self.method != "models":
             return self.live.quality()
-        key = len(self.live.history)
-        if self._models is None or self._models[0] != key or self._models[2] is not self.live:
-            q = assess_models(self.block, self.spec, auxiliary=self.live.auxiliary)
-            self._models = (key, q, self.live)
-        return self._models[1]
+        # one factorisation per structure (block), control changes by updates
+        if self._models is None or self._models.block is not self.block:
+            self._models = LiveModels(self.block, self.spec, auxiliary=self.live.auxiliary)
+        return self._models.sync()
 
     def point_index(self, name: str) -> int:
         """Index of the point with id ``name`` (or an index as text)."""

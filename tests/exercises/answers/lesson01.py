@@ -10,30 +10,51 @@ import math
 
 import numpy as np
 
-from orientviz.exercises import lesson01 as checker
-from orientviz.exercises.lesson01 import (
-    _ellipse_degrees,
-    _ellipse_minor_direction,
-    _ellipse_no_half,
-    _ellipse_variances,
-    _line_wrong,
-    _wm_divide_by_n,
-    _wm_no_weights_in_sigma0,
-    _wm_one_over_sigma,
-    _wm_unweighted,
-)
+from orientviz.exercises.lesson01 import _line_wrong
 
 
-def _weighted_mean(h, sigma):
-    p = 1.0 / np.asarray(sigma, float) ** 2
-    m = float(np.sum(p * h) / np.sum(p))
-    v = m - np.asarray(h, float)
-    return m, math.sqrt(float(np.sum(p * v * v)) / (len(h) - 1))
+def _mean_sigma(sigma, mistake=None):
+    sigma = np.asarray(sigma, float)
+    n = len(sigma)
+    if mistake == "variance":
+        return 1 / np.sum(1 / sigma**2), np.sum(sigma**2) / n**2
+    if mistake == "mean sigma":
+        return np.mean(sigma) / math.sqrt(n), np.mean(sigma) / math.sqrt(n)
+    if mistake == "rms":
+        return 1 / math.sqrt(np.sum(1 / sigma**2)), math.sqrt(np.mean(sigma**2))
+    if mistake == "one over sigma":
+        return math.sqrt(n) / np.sum(1 / sigma), math.sqrt(np.sum(sigma**2)) / n
+    return 1 / math.sqrt(np.sum(1 / sigma**2)), math.sqrt(np.sum(sigma**2)) / n
 
 
-def _ellipse(C):
-    w, V = np.linalg.eigh(C)
-    return math.sqrt(w[1]), math.sqrt(w[0]), math.atan2(V[1, 1], V[0, 1])
+def _weakest(stations, x, sigma, mistake=None):
+    d = x - stations
+    u = d / np.linalg.norm(d, axis=1)[:, None]
+    p = np.ones(len(sigma)) if mistake == "unweighted" else 1.0 / sigma**2
+    N = u.T @ (p[:, None] * u)
+    w, V = np.linalg.eigh(N)  # ascending: N's smallest eigenvalue is C's largest
+    if mistake == "strong":
+        return V[:, 1]
+    if mistake == "weak ray":
+        return u[int(np.argmax(sigma))]
+    if mistake == "degrees":
+        return np.degrees(np.arctan2(V[1, 0], V[0, 0]))
+    return V[:, 0]
+
+
+def _second_order(x, station, dx, mistake=None):
+    d = x - station
+    s = np.linalg.norm(d)
+    u = d / s
+    along = u @ dx
+    perp = dx - along * u
+    return {
+        "whole dx": dx @ dx / (2 * s),
+        "no half": perp @ perp / s,
+        "along": along**2 / (2 * s),
+        "sign": -(perp @ perp) / (2 * s),
+        "exact": np.linalg.norm(x + dx - station) - s - along,
+    }.get(mistake, perp @ perp / (2 * s))
 
 
 def _group_sigma0(A, l, sigma, group, how="r_i"):
@@ -52,10 +73,6 @@ def _group_sigma0(A, l, sigma, group, how="r_i"):
     return np.array(out)
 
 
-def _gn_step(x, stations, s, sigma, sign=1.0, weights=True, unit=True):
-    return checker._gn_step(x, stations, s, sigma, sign, weights, unit)  # all flags off: right
-
-
 def _line_fit(X, l, sigma):
     A = np.column_stack([np.ones_like(X), X])
     P = np.diag(1.0 / sigma**2)
@@ -67,10 +84,10 @@ def _line_fit(X, l, sigma):
 
 SOLUTIONS = {
     "check_line_fit": _line_fit,
-    "check_weighted_mean": _weighted_mean,
-    "check_error_ellipse": _ellipse,
+    "check_mean_sigma": _mean_sigma,
+    "check_weakest_direction": _weakest,
     "check_group_sigma0": _group_sigma0,
-    "check_gauss_newton_step": lambda x, st, s, sig: _gn_step(x, st, s, sig),
+    "check_second_order": _second_order,
 }
 
 MUTANTS = {
@@ -78,25 +95,20 @@ MUTANTS = {
         key: (lambda X, l, s, key=key: _line_wrong(X, l, s, key))
         for key in ("no_weights", "one_over_sigma", "divide_by_n", "Q_is_N", "v_sign")
     },
-    "check_weighted_mean": {
-        "unweighted": _wm_unweighted,
-        "one_over_sigma": _wm_one_over_sigma,
-        "divide_by_n": _wm_divide_by_n,
-        "sigma0_unweighted": _wm_no_weights_in_sigma0,
+    "check_mean_sigma": {
+        k: (lambda sg, k=k: _mean_sigma(sg, k))
+        for k in ("variance", "mean sigma", "rms", "one over sigma")
     },
-    "check_error_ellipse": {
-        "variances": _ellipse_variances,
-        "minor_direction": _ellipse_minor_direction,
-        "degrees": _ellipse_degrees,
-        "no_half": _ellipse_no_half,
+    "check_weakest_direction": {
+        k: (lambda st, x, sg, k=k: _weakest(st, x, sg, k))
+        for k in ("unweighted", "strong", "weak ray", "degrees")
     },
     "check_group_sigma0": {
         how: (lambda A, l, s, g, how=how: _group_sigma0(A, l, s, g, how))
         for how in ("n_g", "share", "no_weights", "squared")
     },
-    "check_gauss_newton_step": {
-        "minus": lambda x, st, s, sig: _gn_step(x, st, s, sig, sign=-1),
-        "no_weights": lambda x, st, s, sig: _gn_step(x, st, s, sig, weights=False),
-        "not_unit": lambda x, st, s, sig: _gn_step(x, st, s, sig, unit=False),
+    "check_second_order": {
+        k: (lambda x, st, dx, k=k: _second_order(x, st, dx, k))
+        for k in ("whole dx", "no half", "along", "sign", "exact")
     },
 }

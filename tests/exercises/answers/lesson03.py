@@ -11,8 +11,21 @@ import numpy as np
 from orientviz.exercises.lesson03 import (
     _interior_no_x0,
     _interior_unnormalised,
-    _rows,
 )
+
+
+def _shift_origin(L, t, how="right"):
+    """P (X + t; 1) = [M | M t + p4] (X; 1), scaled back to L12 = 1 (or a wrong variant)."""
+    P = np.append(np.asarray(L, float), 1.0).reshape(3, 4)
+    M, p4 = P[:, :3], P[:, 3]
+    p4 = M @ (-t if how == "sign" else t) + p4
+    if how == "no rescale":
+        return np.hstack([M, p4[:, None]]).reshape(-1)[:11]
+    if how == "last column":
+        return np.hstack([M, (p4 / p4[2])[:, None]]).reshape(-1)[:11]
+    if how == "twelve":
+        return np.hstack([M, p4[:, None]]).reshape(-1) / p4[2]
+    return (np.hstack([M, p4[:, None]]) / p4[2]).reshape(-1)[:11]
 
 
 def _viewing(L, how="det"):
@@ -52,7 +65,7 @@ def _affine_fit(machine, calibrated, order="ok", r_minus=6, vsign=1.0):
 
 SOLUTIONS = {
     "check_affine_fit": _affine_fit,
-    "check_dlt_rows": lambda X, xy: _rows(X, xy, -1.0, False, False),
+    "check_shift_origin": _shift_origin,
     "check_viewing_direction": _viewing,
     "check_interior_from_dlt": _interior,
 }
@@ -64,10 +77,9 @@ MUTANTS = {
         "r_2n_3": lambda m, c: _affine_fit(m, c, r_minus=3),
         "v_sign": lambda m, c: _affine_fit(m, c, vsign=-1.0),
     },
-    "check_dlt_rows": {
-        "plus_sign": lambda X, xy: _rows(X, xy, 1.0, False, False),
-        "swap_xy": lambda X, xy: _rows(X, xy, -1.0, True, False),
-        "stacked": lambda X, xy: _rows(X, xy, -1.0, False, True),
+    "check_shift_origin": {
+        how: (lambda L, t, how=how: _shift_origin(L, t, how))
+        for how in ("no rescale", "last column", "sign", "twelve")
     },
     "check_viewing_direction": {
         "m3 as it is": lambda L: _viewing(L, "plus"),

@@ -53,8 +53,19 @@ def _sol_design_X0(X, X0, R, c):
     return A
 
 
-def _sol_sigma_Z(B, H, c, sigma_x):
-    return (H / B) * (H / c) * np.sqrt(2) * sigma_x
+def _sol_sigma_X(x1, B, H, c, sigma_x, how="right"):
+    """σ_X of a normal-case ground point seen at x1 in the left image (or a wrong answer)."""
+    t = x1 * H / (B * c)  # x1 / p with p = B c / H: the fraction of the base
+    g = H / c * sigma_x  # dX = (H/c)((1 − t) dx' + t dx'')
+    if how == "midway":
+        return g / np.sqrt(2)
+    if how == "independent":
+        return np.hypot(g, x1 / c * np.sqrt(2) * H / B * H / c * sigma_x)
+    if how == "one image":
+        return g
+    if how == "sum":  # the two parts added, not as squares
+        return g * (abs(1 - t) + abs(t))
+    return g * np.hypot(1 - t, t)
 
 
 def _sigmas(xy, X, sigma, c, p, k_all=True):
@@ -107,7 +118,7 @@ SOLUTIONS = {
     "check_resection": _sol_resection,
     "check_two_rays": _sol_two_rays,
     "check_design_X0": _sol_design_X0,
-    "check_sigma_Z": _sol_sigma_Z,
+    "check_sigma_X": _sol_sigma_X,
 }
 
 MUTANTS = {
@@ -152,9 +163,9 @@ MUTANTS = {
             [_sol_design_X0(X, X0, R, c)[0::2], _sol_design_X0(X, X0, R, c)[1::2]]
         ),
     },
-    "check_sigma_Z": {
-        "no sqrt 2": lambda B, H, c, s: (H / B) * (H / c) * s,
-        "H/B once": lambda B, H, c, s: (H / c) * np.sqrt(2) * s,
-        "micrometres": lambda B, H, c, s: _sol_sigma_Z(B, H, c, s * 1000),
-    },
+    "check_sigma_X": {
+        how: (lambda x1, B, H, c, s, how=how: _sol_sigma_X(x1, B, H, c, s, how))
+        for how in ("midway", "independent", "one image", "sum")
+    }
+    | {"micrometres": lambda x1, B, H, c, s: _sol_sigma_X(x1, B, H, c, s * 1000)},
 }

@@ -85,7 +85,20 @@ def _sol_relative_from_exterior(X01, R1, X02, R2, b, mistake=None):
     return np.r_[B[1], B[2], ang]
 
 
+def _middle_users(X, Y, Z, b, mistake=None):
+    A = _sol_design(X, Y, Z, b)
+    G = np.linalg.pinv(A)
+    names = ("by", "bz", "omega", "phi", "kappa")
+    if mistake == "design":
+        return {
+            n for j, n in enumerate(names) if np.abs(A[6:, j]).max() > 1e-9 * np.abs(A[:, j]).max()
+        }
+    rows = slice(0, 3) if mistake == "first three" else slice(6, 9)
+    return {n for j, n in enumerate(names) if np.abs(G[j, rows]).max() > 1e-9 * np.abs(G[j]).max()}
+
+
 SOLUTIONS = {
+    "check_middle_users": _middle_users,
     "check_relative_from_exterior": _sol_relative_from_exterior,
     "check_kovarik_iteration": _kovarik_iteration,
     "check_design": _sol_design,
@@ -96,6 +109,11 @@ SOLUTIONS = {
 }
 
 MUTANTS = {
+    "check_middle_users": {
+        "design": lambda *a: _middle_users(*a, mistake="design"),
+        "first three": lambda *a: _middle_users(*a, mistake="first three"),
+        "flat answer": lambda *a: {"by", "bz", "omega"},
+    },
     "check_relative_from_exterior": {
         k: (lambda *a, k=k: _sol_relative_from_exterior(*a, mistake=k))
         for k in ("R_transposed", "object_frame", "base_not_rotated", "not_scaled", "degrees")

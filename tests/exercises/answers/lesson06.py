@@ -8,8 +8,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from orientviz.exercises.lesson06 import _line
-
 
 def _eight_point(xy1, xy2, c, rank2=True, scale=True, transpose=False):
     d1 = np.column_stack([xy1, np.full(len(xy1), -c)])
@@ -28,6 +26,15 @@ def _dist(E, xy1, xy2, c):
     return np.abs(g[:, 0] * xy2[:, 0] + g[:, 1] * xy2[:, 1] - c * g[:, 2]) / np.hypot(
         g[:, 0], g[:, 1]
     )
+
+
+def _epipole(E, c, how="right"):
+    """The image of the null vector of E (or of Eᵀ, …: the wrong answers)."""
+    M = E.T if how == "left" else E
+    d = np.linalg.svd(M)[2][-1]
+    if how == "no c":
+        return d[:2] / d[2]
+    return (c if how == "sign" else -c) * d[:2] / d[2]
 
 
 def _swapped_pair(E, xy1, xy2, c, how="swap test"):
@@ -52,7 +59,7 @@ def _swapped_pair(E, xy1, xy2, c, how="swap test"):
 SOLUTIONS = {
     "check_eight_point": _eight_point,
     "check_plane_points": lambda p, q: min(p, 6) + q >= 8,
-    "check_epipolar_line": lambda E, xy1, c: _line(E, xy1, c, True, True, True),
+    "check_epipole": _epipole,
     "check_swapped_pair": _swapped_pair,
 }
 
@@ -68,10 +75,13 @@ MUTANTS = {
         "seven": lambda p, q: min(p, 6) + q >= 7,
         "a string": lambda p, q: "yes" if min(p, 6) + q >= 8 else False,
     },
-    "check_epipolar_line": {
-        "E_not_transposed": lambda E, xy1, c: _line(E, xy1, c, False, True, True),
-        "no_c": lambda E, xy1, c: _line(E, xy1, c, True, False, True),
-        "not_normalised": lambda E, xy1, c: _line(E, xy1, c, True, True, False),
+    "check_epipole": {
+        "left": lambda E, c: _epipole(E, c, "left"),
+        "sign": lambda E, c: _epipole(E, c, "sign"),
+        "no c": lambda E, c: _epipole(E, c, "no c"),
+        "largest singular vector": lambda E, c: (
+            -c * np.linalg.svd(E)[2][0][:2] / np.linalg.svd(E)[2][0][2]
+        ),
     },
     "check_swapped_pair": {
         "two largest": lambda E, a, b, c: _swapped_pair(E, a, b, c, "two largest"),

@@ -41,8 +41,16 @@ def _sol_design(x, m, R):
     return A
 
 
-def _sol_sigma_scale(x, sigma):
-    return sigma / np.sqrt(((x - x.mean(0)) ** 2).sum())
+def _sol_extra_point(x_control, x_candidates):
+    return int(np.argmax(np.sum((x_candidates - x_control.mean(0)) ** 2, axis=1)))
+
+
+def _model_axes_design(x, m, R):
+    A = _sol_design(x, m, R)
+    for i, p in enumerate(x):
+        K = np.array([[0, -p[2], p[1]], [p[2], 0, -p[0]], [-p[1], p[0], 0]])
+        A[3 * i : 3 * i + 3, 3:6] = -m * R @ K
+    return A
 
 
 def _similarity_gn(x, X, sigma, observed, start, tol=1e-10, max_iter=20, mistake=None):
@@ -78,7 +86,7 @@ SOLUTIONS = {
     "check_similarity": _sol_similarity,
     "check_model_coordinates": _sol_model,
     "check_design": _sol_design,
-    "check_sigma_scale": _sol_sigma_scale,
+    "check_extra_point": _sol_extra_point,
 }
 
 MUTANTS = {
@@ -107,10 +115,13 @@ MUTANTS = {
             _sol_design(x, m, R) * np.r_[1, 1, 1, 1 / m, 1 / m, 1 / m, 1]
         ),
         "scale column times m": lambda x, m, R: _sol_design(x, m, R) * np.r_[1, 1, 1, 1, 1, 1, m],
+        "model axes": _model_axes_design,
     },
-    "check_sigma_scale": {
-        "not centred": lambda x, s: s / np.sqrt((x**2).sum()),
-        "variance": lambda x, s: _sol_sigma_scale(x, s) ** 2,
-        "sigma squared": lambda x, s: s * _sol_sigma_scale(x, s),
+    "check_extra_point": {
+        "farthest from the origin": lambda xc, c: int(np.argmax(np.sum(c**2, axis=1))),
+        "nearest to the centroid": lambda xc, c: int(
+            np.argmin(np.sum((c - xc.mean(0)) ** 2, axis=1))
+        ),
+        "first candidate": lambda xc, c: 0,
     },
 }

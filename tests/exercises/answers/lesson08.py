@@ -23,10 +23,30 @@ def _determined(n_full, n_plan, n_height):
     return n_full + n_plan >= 2 and n_full + n_height >= 3
 
 
-def _conformal(xy, XY, degree):
+def _strip_degree(xy, XY, sigma, max_degree, mistake=None):
+    from scipy.stats import chi2
+
     z = xy[:, 0] + 1j * xy[:, 1]
-    A = np.column_stack([z**k for k in range(degree + 1)])
-    return np.linalg.lstsq(A, XY[:, 0] + 1j * XY[:, 1], rcond=None)[0]
+    Z = XY[:, 0] + 1j * XY[:, 1]
+    n, s0s = len(z), []
+    for d in range(1, max_degree + 1):
+        A = np.column_stack([z**k for k in range(d + 1)])
+        v = A @ np.linalg.lstsq(A, Z, rcond=None)[0] - Z
+        r = n - (d + 1) if mistake == "complex r" else 2 * n - 2 * (d + 1)
+        vv = np.sum(np.abs(v) ** 2) / (1.0 if mistake == "no sigma" else sigma**2)
+        s0 = np.sqrt(vv / r)
+        s0s.append(s0)
+        if mistake == "min":
+            continue
+        if mistake == "two-sided":
+            ok = chi2.ppf(0.025, r) / r <= s0**2 <= chi2.ppf(0.975, r) / r
+        elif mistake == "le1":
+            ok = s0 <= 1.0
+        else:
+            ok = s0**2 <= chi2.ppf(0.95, r) / r
+        if ok:
+            return d
+    return int(np.argmin(s0s)) + 1 if mistake == "min" else max_degree
 
 
 def _strips_for(a, b, mu_max):
@@ -98,15 +118,82 @@ def _plus_c(X0, R, xy, c):
     return np.linalg.solve(M.sum(0), np.einsum("nij,nj->i", M, X0))
 
 
+def _model_jacobian(lam, R, m, mistake=None):
+    from orientviz.rotation import skew
+
+    J = np.zeros((len(m), 3, 7))
+    J[:, :, :3] = -lam[:, None, None] * (R @ skew(m))
+    if mistake == "sign":
+        J[:, :, :3] *= -1
+    elif mistake == "left":
+        J[:, :, :3] = -lam[:, None, None] * skew(np.einsum("kij,kj->ki", R, m))
+    J[:, :, 3] = m if mistake == "lambda column" else np.einsum("kij,kj->ki", R, m)
+    J[:, :, 4:] = np.eye(3)
+    return J
+
+
+def _adjust_models(m, model, point, X, free, sigma, R, T, mistake=None):
+    """The independent-model adjustment (Gauss-Newton, dense normal equations)."""
+    from orientviz.rotation import matrix_from_rotvec
+
+    n, k = len(R), len(m)
+    lam, R, T, X = np.ones(n), R.copy(), T.copy(), X.copy()
+    if mistake == "whole points":  # a point is fixed only if all of X, Y, Z are given
+        free = np.repeat(free.any(axis=1, keepdims=True), 3, axis=1)
+    col = np.full(free.shape, -1)
+    col[free] = 7 * n + np.arange(free.sum())
+    w = np.tile(1.0 / sigma**2, k) if mistake != "no weights" else np.ones(3 * k)
+    rows = np.arange(3 * k).reshape(k, 3)
+    for _ in range(1 if mistake == "one step" else 20):
+        v = lam[model, None] * np.einsum("kij,kj->ki", R[model], m) + T[model] - X[point]
+        A = np.zeros((3 * k, 7 * n + int(free.sum())))
+        J = _model_jacobian(lam[model], R[model], m)
+        if mistake == "left update":
+            J[:, :, :3] = -lam[model, None, None] * _skew(np.einsum("kij,kj->ki", R[model], m))
+        A[rows[:, :, None], 7 * model[:, None, None] + np.arange(7)] = J
+        has = col[point] >= 0
+        A[rows[has], col[point][has]] = -1.0
+        d = np.linalg.solve(A.T @ (w[:, None] * A), -A.T @ (w * v.ravel()))
+        dm = d[: 7 * n].reshape(n, 7)
+        R = R @ matrix_from_rotvec(dm[:, :3])
+        lam, T = lam + dm[:, 3], T + dm[:, 4:]
+        X[free] += d[7 * n :]
+        if np.max(np.abs(d)) < 1e-6 * sigma[0]:
+            break
+    v = (lam[model, None] * np.einsum("kij,kj->ki", R[model], m) + T[model] - X[point]).ravel()
+    r = 3 * k - A.shape[1] if mistake != "r without points" else 3 * k - 7 * n
+    return lam, R, T, X, np.sqrt(v @ (w * v) / r)
+
+
+def _skew(v):
+    from orientviz.rotation import skew
+
+    return skew(v)
+
+
 SOLUTIONS = {
+    "check_model_jacobian": _model_jacobian,
+    "check_adjust_models": _adjust_models,
     "check_intersect_many": _sol_intersect_many,
     "check_compose": _compose,
     "check_determined": _determined,
-    "check_conformal": _conformal,
+    "check_strip_degree": _strip_degree,
     "check_strips_for": _strips_for,
 }
 
 MUTANTS = {
+    "check_model_jacobian": {
+        "sign": lambda *a: _model_jacobian(*a, mistake="sign"),
+        "left increment": lambda *a: _model_jacobian(*a, mistake="left"),
+        "lambda column": lambda *a: _model_jacobian(*a, mistake="lambda column"),
+    },
+    "check_adjust_models": {
+        "no weights": lambda *a: _adjust_models(*a, mistake="no weights"),
+        "one step": lambda *a: _adjust_models(*a, mistake="one step"),
+        "left update": lambda *a: _adjust_models(*a, mistake="left update"),
+        "whole points": lambda *a: _adjust_models(*a, mistake="whole points"),
+        "r without points": lambda *a: _adjust_models(*a, mistake="r without points"),
+    },
     "check_intersect_many": {
         "R transposed": lambda *a: _sol_intersect_many(*a, mistake="R_transposed"),
         "not normalised": lambda *a: _sol_intersect_many(*a, mistake="not_normalised"),
@@ -125,17 +212,9 @@ MUTANTS = {
         "one plan point": lambda f, p, h: f + p >= 1 and f + h >= 3,
         "yes instead of True": lambda f, p, h: "yes" if f + p >= 2 and f + h >= 3 else False,
     },
-    "check_conformal": {
-        "reversed": lambda xy, XY, d: _conformal(xy, XY, d)[::-1],
-        "no constant": lambda xy, XY, d: np.r_[
-            0,
-            np.linalg.lstsq(
-                np.column_stack([(xy[:, 0] + 1j * xy[:, 1]) ** k for k in range(1, d + 1)]),
-                XY[:, 0] + 1j * XY[:, 1],
-                rcond=None,
-            )[0],
-        ],
-        "conjugate pairing": lambda xy, XY, d: _conformal(xy * [1, -1], XY, d),
+    "check_strip_degree": {
+        k: (lambda xy, XY, s, m, k=k: _strip_degree(xy, XY, s, m, k))
+        for k in ("complex r", "two-sided", "le1", "min", "no sigma")
     },
     "check_strips_for": {
         "natural log": lambda a, b, m: np.inf if b <= 0 else np.exp((m - a) / b),

@@ -12,6 +12,58 @@ from scipy.linalg import null_space as scipy_null_space
 from orientviz.exercises.lesson09 import _s_matrix, _sel
 
 
+def _similarity(xy, rot=(-1, 1), shear=False, scale_twice=False):
+    p = len(xy)
+    c = xy - xy.mean(axis=0)
+    scale = np.column_stack([c[:, 1], c[:, 0]]) if shear else c
+    rotation = np.column_stack([rot[0] * c[:, 1], rot[1] * c[:, 0]])
+    if scale_twice:
+        rotation = 2.0 * c
+    return np.column_stack(
+        [np.tile([1.0, 0.0], p), np.tile([0.0, 1.0], p), rotation.reshape(-1), scale.reshape(-1)]
+    )
+
+
+def _point_sigma(Q):
+    return np.sqrt(np.diag(Q).reshape(-1, 2).sum(axis=1))
+
+
+def _best_datum(Q, G):
+    p = Q.shape[0] // 2
+    best, pair = np.inf, None
+    for i in range(p):
+        for j in range(i + 1, p):
+            S = _s_matrix(G, _sel(p, (i, j)))
+            worst = _point_sigma(S @ Q @ S.T).max()
+            if worst < best:
+                best, pair = worst, (i, j)
+    return pair
+
+
+def _central_pair(Q, G):
+    return tuple(sorted(np.argsort(_point_sigma(Q))[:2].tolist()))
+
+
+def _farthest_pair(Q, G):  # the network's coordinates are not given: from Q's largest spread
+    p = Q.shape[0] // 2
+    # the farthest pair in the checker's network, found from the inner datum's G (its rotation
+    # column holds (−ȳ, x̄) up to scale and a rotation of the frame): use distances in that frame
+    c = _centred_from_G(G)
+    pairs = [(i, j) for i in range(p) for j in range(i + 1, p)]
+    return max(pairs, key=lambda q: np.linalg.norm(c[q[0]] - c[q[1]]))
+
+
+def _centred_from_G(G):
+    """Centred point coordinates (up to rotation and scale) from a null-space basis of a distance
+    network: the rotation direction orthogonal to both shifts, turned back by 90°."""
+    p = G.shape[0] // 2
+    tx, ty = np.tile([1.0, 0.0], p), np.tile([0.0, 1.0], p)
+    T = np.column_stack([tx, ty])
+    R = G - T @ np.linalg.lstsq(T, G, rcond=None)[0]  # remove the shift parts
+    r = np.linalg.svd(R, full_matrices=False)[0][:, 0].reshape(-1, 2)  # (−ȳ, x̄) up to a factor
+    return np.column_stack([r[:, 1], -r[:, 0]])
+
+
 def _helmert(xy, rot=(-1, 1), translations=True, scale_instead=False):
     p = len(xy)
     c = xy - xy.mean(axis=0)
@@ -83,8 +135,8 @@ def _sol_null_space(N, rule="roundoff"):
 SOLUTIONS = {
     "check_null_space": _sol_null_space,
     "check_inner_solve": _inner_solve,
-    "check_helmert_columns": lambda xy: _helmert(xy),
-    "check_s_transform": lambda x, Q, G, pts: _s_transform(x, Q, G, pts, "ok"),
+    "check_similarity_columns": _similarity,
+    "check_best_datum": _best_datum,
     "check_estimable": _estimable,
 }
 
@@ -102,15 +154,15 @@ MUTANTS = {
         "whole_inverse": lambda N, b, G: _inner_solve(N, b, G, "whole"),
         "sign": lambda N, b, G: _inner_solve(N, b, G, "sign"),
     },
-    "check_helmert_columns": {
-        "rotation_yx": lambda xy: _helmert(xy, rot=(1, 1)),
-        "scale_for_rotation": lambda xy: _helmert(xy, scale_instead=True),
-        "no_translations": lambda xy: _helmert(xy, translations=False),
+    "check_similarity_columns": {
+        "distance defect (3 columns)": lambda xy: _helmert(xy),
+        "shear for scale": lambda xy: _similarity(xy, shear=True),
+        "rotation sign": lambda xy: _similarity(xy, rot=(1, 1)),
+        "scale twice": lambda xy: _similarity(xy, scale_twice=True),
     },
-    "check_s_transform": {
-        "all_points": lambda x, Q, G, pts: _s_transform(x, Q, G, pts, "all"),
-        "no_St": lambda x, Q, G, pts: _s_transform(x, Q, G, pts, "no_St"),
-        "Q_unchanged": lambda x, Q, G, pts: _s_transform(x, Q, G, pts, "x_only"),
+    "check_best_datum": {
+        "farthest apart": _farthest_pair,
+        "central": _central_pair,
     },
     "check_estimable": {
         k: (lambda k=k: _estimable(k)) for k in ("measured", "distance everywhere", "azimuth")

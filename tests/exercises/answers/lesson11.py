@@ -7,31 +7,19 @@ Kept out of the installed package (solutions stay with the teacher); used by
 from __future__ import annotations
 
 import numpy as np
-from scipy.stats import norm
 
 
-def _fit_k1_real(m, ideal, pp):
-    z = m - pp
-    a = (z * np.sum(z**2, axis=1)[:, None]).ravel()
-    return a @ (ideal - z).ravel() / (a @ a)
+def _k1_alone(K, r):
+    s6 = np.sum(r**6)
+    return K[0] + K[1] * np.sum(r**8) / s6 + K[2] * np.sum(r**10) / s6
 
 
-def _k1_real_swapped(m, ideal, pp):
-    z = m - pp
-    a = (ideal * np.sum(ideal**2, axis=1)[:, None]).ravel()
-    return a @ (z - ideal).ravel() / (a @ a)
+def _per_test_alpha(family, m):
+    return 1.0 - (1.0 - family) ** (1.0 / m)
 
 
-def _k1_real_ideal_radius(m, ideal, pp):
-    z = m - pp
-    a = (z * np.sum(ideal**2, axis=1)[:, None]).ravel()
-    return a @ (ideal - z).ravel() / (a @ a)
-
-
-def _k1_real_x_only(m, ideal, pp):
-    z = m - pp
-    a = z[:, 0] * np.sum(z**2, axis=1)
-    return a @ (ideal - z)[:, 0] / (a @ a)
+def _trough_term(xy):
+    return np.column_stack([xy[:, 0] ** 3, np.zeros(len(xy))])
 
 
 def _fit_k1(xy, d):
@@ -48,17 +36,6 @@ def _inflation(Q, mistake=None):
             "abs rho": 1.0 / np.sqrt(1.0 - abs(rho))}.get(mistake, f)  # fmt: skip
 
 
-def _significant(values, sigmas, alpha):
-    return np.abs(values) / sigmas > norm.ppf(1 - alpha / 2)
-
-
-def _described_share(A, d):
-    n, _, k = A.shape
-    p = np.linalg.lstsq(A.reshape(2 * n, k), d.ravel(), rcond=None)[0]
-    rest = d - A @ p
-    return 1 - np.sum(rest**2, axis=0) / np.sum(d**2, axis=0)
-
-
 def _k1_x_only(xy, d):
     a = xy[:, 0] * np.sum(xy**2, axis=1)
     k1 = a @ d[:, 0] / (a @ a)
@@ -66,31 +43,23 @@ def _k1_x_only(xy, d):
     return k1, np.sqrt(v @ v / (d.size - 1))
 
 
-def _share_separate(A, d):
-    out = []
-    for i in range(2):
-        r_i = d[:, i] - A[:, i, :] @ np.linalg.lstsq(A[:, i, :], d[:, i], rcond=None)[0]
-        out.append(1 - np.sum(r_i**2) / np.sum(d[:, i] ** 2))
-    return np.array(out)
-
-
 SOLUTIONS = {
     "check_fit_k1": _fit_k1,
-    "check_fit_k1_real": _fit_k1_real,
+    "check_k1_alone": _k1_alone,
     "check_inflation": _inflation,
-    "check_significant": _significant,
-    "check_described_share": _described_share,
+    "check_per_test_alpha": _per_test_alpha,
+    "check_trough_term": _trough_term,
 }
 
 MUTANTS = {
-    "check_fit_k1_real": {
-        "measured and ideal swapped": _k1_real_swapped,
-        "radius of the ideal point": _k1_real_ideal_radius,
-        "x equations only": _k1_real_x_only,
-        "not reduced to the principal point": lambda m, ideal, pp: _fit_k1_real(
-            m, ideal + pp, np.zeros(2)
+    "check_k1_alone": {
+        "the lens's K1": lambda K, r: K[0],
+        "K3 forgotten": lambda K, r: K[0] + K[1] * np.sum(r**8) / np.sum(r**6),
+        "plain means": lambda K, r: K[0] + K[1] * np.mean(r**2) + K[2] * np.mean(r**4),
+        "weights r⁴": lambda K, r: (
+            K[0] + K[1] * np.sum(r**6) / np.sum(r**4) + K[2] * np.sum(r**8) / np.sum(r**4)
         ),
-        "sign of the residual": lambda m, ideal, pp: -_fit_k1_real(m, ideal, pp),
+        "sign of K2": lambda K, r: _k1_alone(np.array([K[0], -K[1], -K[2]]), r),
     },
     "check_fit_k1": {
         "x equations only": _k1_x_only,
@@ -111,22 +80,22 @@ MUTANTS = {
         "the stand-in (Q inverted)": lambda Q: np.sqrt(Q[0, 0] * np.linalg.inv(Q)[0, 0]),
         "solve instead of inv": lambda Q: np.sqrt(Q[0, 0] * np.linalg.solve(Q, [1.0, 0.0])[0]),
     },
-    "check_significant": {
-        "one-sided": lambda v, s, a: np.abs(v) / s > norm.ppf(1 - a),
-        "signed": lambda v, s, a: v / s > norm.ppf(1 - a / 2),
-        "not divided by σ": lambda v, s, a: np.abs(v) > norm.ppf(1 - a / 2),
-        "t squared": lambda v, s, a: (v / s) ** 2 > norm.ppf(1 - a / 2),
+    "check_per_test_alpha": {
+        "Bonferroni": lambda f, m: f / m,
+        "the family's level": lambda f, m: f,
+        "times m": lambda f, m: min(f * m, 0.99),
+        "not rejecting": lambda f, m: (1.0 - f) ** (1.0 / m),
+        "turned round": lambda f, m: 1.0 - (1.0 - f) ** m,
     },
-    "check_described_share": {
-        "remainder": lambda A, d: 1 - _described_share(A, d),
-        "separate fits": _share_separate,
-        "pooled": lambda A, d: np.full(
-            2,
-            1
-            - np.sum(
-                (d - A @ np.linalg.lstsq(A.reshape(-1, A.shape[2]), d.ravel(), rcond=None)[0]) ** 2
-            )
-            / np.sum(d**2),
-        ),
+    "check_trough_term": {
+        "a scale (in the span)": lambda xy: 2.0 * xy,
+        "x² in x (in the span too)": lambda xy: np.column_stack([xy[:, 0] ** 2, np.zeros(len(xy))]),
+        "x⁵ in x": lambda xy: np.column_stack([xy[:, 0] ** 5, np.zeros(len(xy))]),
+        "x³ in y": lambda xy: np.column_stack([np.zeros(len(xy)), xy[:, 0] ** 3]),
+        "radial r²": lambda xy: xy * np.sum(xy**2, axis=1)[:, None],
+        "the trough itself": lambda xy: xy * (1.0 - 2.0 * (xy[:, 0] / 115.0) ** 2)[:, None],
+        "the library's trough": lambda xy: __import__(
+            "orientviz.simulate.systematic", fromlist=["unflatness"]
+        ).unflatness(5.0)(xy),
     },
 }

@@ -19,27 +19,13 @@ def _normalized(A, l, sigma):
     return v, r, v / (sigma * np.sqrt(r))
 
 
-def _snoop_round(A, l, sigma, k):
-    _, _, w = _normalized(A, l, sigma)
-    i = int(np.argmax(np.abs(w)))
-    return i if abs(w[i]) > k else -1
+def _detection_probability(nabla, sigma, r, k):
+    d = np.sqrt(r) * np.abs(nabla) / sigma  # |E(w)|
+    return norm.sf(k - d) + norm.cdf(-k - d)
 
 
-def _mdb(sigma, r, alpha0, beta0):
-    return (norm.ppf(1 - alpha0 / 2) + norm.ppf(beta0)) * sigma / np.sqrt(r)
-
-
-def _external(A, sigma, i, nabla):
-    P = np.diag(1 / sigma**2)
-    e = np.zeros(len(sigma))
-    e[i] = nabla
-    return np.linalg.solve(A.T @ P @ A, A.T @ P @ e)
-
-
-def _snoop_v(A, l, sigma, k):
-    v, _, w = _normalized(A, l, sigma)
-    i = int(np.argmax(np.abs(v) / sigma))
-    return i if abs(w[i]) > k else -1
+def _bias_to_noise(r, delta0):
+    return delta0 * np.sqrt((1 - r) / r)
 
 
 def _snoop(adjust, n, k, mistake=None):
@@ -63,9 +49,9 @@ def _snoop(adjust, n, k, mistake=None):
 SOLUTIONS = {
     "check_snoop": _snoop,
     "check_normalized": _normalized,
-    "check_snoop_round": _snoop_round,
-    "check_mdb": _mdb,
-    "check_external": _external,
+    "check_new_position": lambda: 12.0,
+    "check_detection_probability": _detection_probability,
+    "check_bias_to_noise": _bias_to_noise,
 }
 
 MUTANTS = {
@@ -79,21 +65,23 @@ MUTANTS = {
         "1 - r": lambda A, l, s: (lambda v, r, w: (v, 1 - r, w))(*_normalized(A, l, s)),
         "unweighted": lambda A, l, s: _normalized(A, l, np.ones_like(s)),
     },
-    "check_snoop_round": {
-        "largest v/σ": _snoop_v,
-        "no threshold": lambda A, l, s, k: _snoop_round(A, l, s, 0.0),
-        "signed": lambda A, l, s, k: (lambda w: int(np.argmax(w)) if w.max() > k else -1)(
-            _normalized(A, l, s)[2]
-        ),
+    "check_new_position": {
+        "in the cluster": lambda: 1.75,
+        "half way": lambda: 8.0,
+        "far beyond": lambda: 20.0,
+        "just short": lambda: 10.5,
     },
-    "check_mdb": {
-        "r not sqrt": lambda s, r, a, b: (norm.ppf(1 - a / 2) + norm.ppf(b)) * s / r,
-        "one-sided": lambda s, r, a, b: (norm.ppf(1 - a) + norm.ppf(b)) * s / np.sqrt(r),
-        "no power": lambda s, r, a, b: norm.ppf(1 - a / 2) * s / np.sqrt(r),
+    "check_detection_probability": {
+        "one tail": lambda nb, s, r, k: norm.sf(k - np.sqrt(r) * np.abs(nb) / s),
+        "no sqrt r": lambda nb, s, r, k: _detection_probability(nb, s, np.ones_like(r), k),
+        "r not sqrt": lambda nb, s, r, k: _detection_probability(nb, s, r**2, k),
+        "not flagging": lambda nb, s, r, k: 1 - _detection_probability(nb, s, r, k),
+        "divided by sqrt r": lambda nb, s, r, k: _detection_probability(nb, s, 1 / r, k),
     },
-    "check_external": {
-        "sign": lambda A, s, i, nb: -_external(A, s, i, nb),
-        "unweighted": lambda A, s, i, nb: _external(A, np.ones_like(s), i, nb),
-        "N not inverted": lambda A, s, i, nb: (A.T @ A / 1.0) @ _external(A, s, i, nb),
+    "check_bias_to_noise": {
+        "the MDB": lambda r, d0: d0 / np.sqrt(r),
+        "sqrt(1 - r)": lambda r, d0: d0 * np.sqrt(1 - r),
+        "no root": lambda r, d0: d0 * (1 - r) / r,
+        "inverted": lambda r, d0: d0 * np.sqrt(r / (1 - r)),
     },
 }

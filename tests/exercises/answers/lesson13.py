@@ -9,8 +9,10 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+import scipy.linalg
 
-from orientviz.exercises.lesson13 import statoscope_row_library
+from orientviz.exercises.lesson13 import statoscope_normals_library, statoscope_row_library
+from orientviz.rotation import matrix_derivatives, matrix_from_opk
 
 
 def _statoscope_row(N, n, k, o_col, s, sigma):
@@ -24,11 +26,42 @@ def _difference_covariance(sigma, m):
     return sigma**2 * D @ D.T
 
 
-def _gnss_rows(k, t, strip, m, n_strips):
-    A = np.zeros((3, 3 * m + 6 * n_strips))
-    A[:, 3 * k : 3 * k + 3] = np.eye(3)
-    A[:, 3 * m + 3 * strip : 3 * m + 3 * strip + 3] = np.eye(3)
-    A[:, 3 * m + 3 * n_strips + 3 * strip : 3 * m + 3 * n_strips + 3 * strip + 3] = t * np.eye(3)
+def _statoscope_normals(N11, n1, Z0, o, s, image, strip, sigma, mistake=None):
+    u1, ns = len(n1), len(o)
+    N = np.zeros((u1 + ns, u1 + ns))
+    N[:u1, :u1] = N11
+    n = np.r_[n1, np.zeros(ns)]
+    w = 1.0 if mistake == "no weight" else 1.0 / sigma**2
+    for s_k, i, j in zip(s, image, strip):
+        a = np.zeros(u1 + ns)
+        a[6 * i + (0 if mistake == "X0 column" else 2)] = 1.0
+        a[u1 + (0 if mistake == "one offset" else j)] = 1.0
+        d = {"reading": s_k, "sign": Z0[i] + o[j] - s_k, "no offset": s_k - Z0[i]}.get(
+            mistake, s_k - Z0[i] - o[j]
+        )
+        N += w * np.outer(a, a)
+        n += w * a * d
+    return N, n
+
+
+def _skew(v):
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+def _gnss_lever_rows(angles, e, mistake=None):
+    om, ph, ka = angles
+    Ro, Rp, Rk = (matrix_from_opk(om, 0, 0), matrix_from_opk(0, ph, 0), matrix_from_opk(0, 0, ka))
+    R = Ro @ Rp @ Rk
+    ex, ey, ez = np.eye(3)
+    dRk = _skew(ez) @ R if mistake == "kappa left" else R @ _skew(ez)
+    dR = [_skew(ex) @ R, Ro @ _skew(ey) @ Rp @ Rk, dRk]
+    if mistake == "transposed":
+        dR = [d.T for d in dR]
+    A = np.zeros((3, 6))
+    A[:, :3] = np.eye(3)
+    A[:, 3:] = np.column_stack([d @ e for d in dR]) * (-1.0 if mistake == "sign" else 1.0)
+    if mistake == "no arm":
+        A[:, 3:] = 0.0
     return A
 
 
@@ -51,10 +84,19 @@ def _offset_model(A0, l0, sig0, s, sigma):  # the right heights, but not from th
     return np.linalg.solve(A.T @ (w[:, None] * A), A.T @ (w * np.r_[l0, s]))[:m]
 
 
+def _offset_by_qr(A0, l0, sig0, s, sigma):  # the re-review's bypass: QR + a triangular solve
+    r, m = A0.shape
+    A = np.vstack([np.column_stack([A0, np.zeros(r)]), np.column_stack([np.eye(m), np.ones(m)])])
+    w = np.sqrt(np.r_[1 / sig0**2, np.full(m, 1 / sigma**2)])
+    Q, R = np.linalg.qr(A * w[:, None])
+    return scipy.linalg.solve_triangular(R, Q.T @ (w * np.r_[l0, s]))[:m]
+
+
 SOLUTIONS = {
     "check_statoscope_row": _statoscope_row,
     "check_difference_covariance": _difference_covariance,
-    "check_gnss_rows": _gnss_rows,
+    "check_statoscope_normals": _statoscope_normals,
+    "check_gnss_lever_rows": _gnss_lever_rows,
     "check_from_differences": _from_differences,
 }
 
@@ -85,12 +127,20 @@ MUTANTS = {
         "sigma squared": lambda sg, m: _difference_covariance(sg, m) / 2,
         "positive": lambda sg, m: np.abs(_difference_covariance(sg, m)),
     },
-    "check_gnss_rows": {
-        "no drift": lambda k, t, s, m, ns: _gnss_rows(k, 0.0, s, m, ns),
-        "drift 1": lambda k, t, s, m, ns: _gnss_rows(k, 1.0, s, m, ns),
-        "wrong strip": lambda k, t, s, m, ns: _gnss_rows(k, t, (s + 1) % ns, m, ns),
-        "minus offset": lambda k, t, s, m, ns: (
-            _gnss_rows(k, t, s, m, ns) * np.r_[np.ones(3 * m), -np.ones(3 * ns), np.ones(3 * ns)]
+    "check_statoscope_normals": {
+        **{
+            k: (lambda *args, k=k: _statoscope_normals(*args, mistake=k))
+            for k in ("no weight", "X0 column", "one offset", "reading", "sign", "no offset")
+        },
+        "the stand-in": statoscope_normals_library,
+    },
+    "check_gnss_lever_rows": {
+        **{
+            k: (lambda a, e, k=k: _gnss_lever_rows(a, e, k))
+            for k in ("no arm", "transposed", "sign", "kappa left")
+        },
+        "the library's derivatives": lambda a, e: np.column_stack(
+            [np.eye(3), np.column_stack([d @ e for d in matrix_derivatives(*a)])]
         ),
     },
     "check_from_differences": {
@@ -103,5 +153,8 @@ MUTANTS = {
             A0.T @ (l0 / sig0**2) + s / sigma**2,
         ),
         "the offset model again": _offset_model,
+        "the offset model by QR": lambda A0, l0, sig0, s, sigma: _offset_by_qr(
+            A0, l0, sig0, s, sigma
+        ),
     },
 }

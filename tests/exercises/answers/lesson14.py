@@ -18,9 +18,17 @@ def _ppi_image(P, X0, R, h, m, x0, y0):
     return np.column_stack([x0 + m * s_e * abc[:, 0] / hor, y0 + m * s_e * abc[:, 1] / hor])
 
 
-def _sphere_radius(xy, x0, y0, m, h):
-    b = np.linalg.norm(xy - [x0, y0], axis=1)
-    return np.sqrt((b / m) ** 2 + h**2)
+def _radius_change(xy, x0, y0, m, h, dm, mistake=None):
+    s_e = np.linalg.norm(xy - [x0, y0], axis=1) / m
+    s = np.sqrt(s_e**2 + h**2)
+    ds = -(s_e**2 / s) * dm / m
+    return {
+        "s_e": -s_e * dm / m,
+        "sign": -ds,
+        "relative": ds / s,
+        "s/s_e": -s * dm / m,
+        "exact": np.sqrt((s_e * m / (m + dm)) ** 2 + h**2) - s,
+    }.get(mistake, ds)
 
 
 def _trilaterate(C, r):
@@ -58,7 +66,7 @@ def _best_pair(C, X0, tri, mistake=None):
 
 SOLUTIONS = {
     "check_ppi_image": _ppi_image,
-    "check_sphere_radius": _sphere_radius,
+    "check_radius_change": _radius_change,
     "check_trilaterate": _trilaterate,
     "check_best_pair": _best_pair,
 }
@@ -72,10 +80,9 @@ MUTANTS = {
         "no principal point": lambda P, X0, R, h, m, x0, y0: _ppi_image(P, X0, R, h, m, 0.0, 0.0),
         "1/m": lambda P, X0, R, h, m, x0, y0: _ppi_image(P, X0, R, h, 1 / m, x0, y0),
     },
-    "check_sphere_radius": {
-        "times m": lambda xy, x0, y0, m, h: _sphere_radius(xy, x0, y0, 1 / m, h),
-        "no h": lambda xy, x0, y0, m, h: _sphere_radius(xy, x0, y0, m, 0.0),
-        "no principal point": lambda xy, x0, y0, m, h: _sphere_radius(xy, 0.0, 0.0, m, h),
+    "check_radius_change": {
+        k: (lambda *a, k=k: _radius_change(*a, mistake=k))
+        for k in ("s_e", "sign", "relative", "s/s_e")
     },
     "check_trilaterate": {
         "swapped": lambda C, r: _trilaterate(C, r)[::-1],

@@ -21,8 +21,15 @@ def _pattern(xy, v):
     return p[:2], p[2], p[3]
 
 
-def _colmap_to_photo(uv, cx, cy, p):
-    return np.column_stack([(uv[:, 0] - cx) * p, -(uv[:, 1] - cy) * p])
+_RIGHT = {
+    "v not flipped": "no pattern",
+    "principal point at the image centre": "shift",
+    "pixel size 0.012 mm instead of 0.010 mm": "none",
+}
+
+
+def _with(**change):
+    return lambda: {**_RIGHT, **change}
 
 
 def _smallest_redundancy(ratio, alpha, tail=2, square=False, offset=0):
@@ -44,7 +51,7 @@ def _expected_rms(image, sigma, r, m, mistake=None):
 
 SOLUTIONS = {
     "check_residual_pattern": _pattern,
-    "check_colmap_to_photo": _colmap_to_photo,
+    "check_import_mistakes": lambda: dict(_RIGHT),
     "check_smallest_redundancy": _smallest_redundancy,
     "check_expected_rms": _expected_rms,
 }
@@ -63,10 +70,11 @@ MUTANTS = {
             )[0][1:],
         ),
     },
-    "check_colmap_to_photo": {
-        "no flip": lambda uv, cx, cy, p: _colmap_to_photo(uv, cx, cy, p) * [1, -1],
-        "swapped": lambda uv, cx, cy, p: _colmap_to_photo(uv, cy, cx, p),
-        "divided": lambda uv, cx, cy, p: _colmap_to_photo(uv, cx, cy, 1 / p),
+    "check_import_mistakes": {
+        "mirror as a rotation": _with(**{"v not flipped": "rotation"}),
+        "mirror as a scale": _with(**{"v not flipped": "scale"}),
+        "principal point as none": _with(**{"principal point at the image centre": "none"}),
+        "pixel size as a scale": _with(**{"pixel size 0.012 mm instead of 0.010 mm": "scale"}),
     },
     "check_smallest_redundancy": {
         "one-sided": lambda q, a: _smallest_redundancy(q, a, tail=1),

@@ -20,11 +20,15 @@ def _control_update_library(Q, idx, sigma):  # the lesson's stand-in: the full i
     return np.linalg.inv(np.linalg.inv(Q) + E.T @ np.diag(1 / np.asarray(sigma) ** 2) @ E)
 
 
-def _law_spacing(sigma_img_mm, scale, c_mm, format_mm, p, target_m, mu):
-    base = format_mm * 1e-3 * scale * (1 - p)
-    s0z = np.sqrt(2.0) * sigma_img_mm * 1e-3 * scale * (c_mm * 1e-3 * scale) / base
-    ok = [i for i, m in mu.items() if m * s0z <= target_m]
-    return s0z, max(ok) if ok else 0
+def _largest_scale(sigma_img_mm, c_mm, format_mm, p, target_m, mu_i, mistake=None):
+    hb = c_mm / ((1 - p) * format_mm)  # H/B, the same at every scale
+    if mistake == "p":
+        hb = c_mm / (p * format_mm)
+    if mistake == "B/H":
+        hb = 1 / hb
+    root2 = 1.0 if mistake == "no √2" else np.sqrt(2.0)
+    mu = 1.0 if mistake == "no μ" else mu_i
+    return target_m / (mu * root2 * sigma_img_mm * 1e-3 * hb)
 
 
 def _by_hand():
@@ -56,7 +60,7 @@ def _best_by(score):
 SOLUTIONS = {
     "check_best_candidate": _best_candidate,
     "check_control_update": _control_update,
-    "check_law_spacing": _law_spacing,
+    "check_largest_scale": _largest_scale,
     "check_by_hand": _by_hand,
 }
 
@@ -67,23 +71,6 @@ def _update_with(inner, sign=-1.0):
         return Q + sign * Qj @ np.linalg.inv(inner(np.asarray(sigma)) + Q[np.ix_(idx, idx)]) @ Qj.T
 
     return fn
-
-
-def _spacing_with(s0z_of, pick):
-    def fn(sigma_img_mm, scale, c_mm, format_mm, p, target_m, mu):
-        s0z = s0z_of(sigma_img_mm, scale, c_mm, format_mm, p)
-        return s0z, pick(mu, s0z, target_m)
-
-    return fn
-
-
-def _s0z(si, m, c, f, p):
-    return np.sqrt(2.0) * si * 1e-3 * m * (c * 1e-3 * m) / (f * 1e-3 * m * (1 - p))
-
-
-def _largest(mu, s0z, t):
-    ok = [i for i, v in mu.items() if v * s0z <= t]
-    return max(ok) if ok else 0
 
 
 MUTANTS = {
@@ -108,28 +95,9 @@ MUTANTS = {
             np.eye(len(Q)),
         ),
     },
-    "check_law_spacing": {
-        "p for 1 − p": _spacing_with(
-            lambda si, m, c, f, p: (
-                np.sqrt(2.0) * si * 1e-3 * m * (c * 1e-3 * m) / (f * 1e-3 * m * p)
-            ),
-            _largest,
-        ),
-        "B/H": _spacing_with(
-            lambda si, m, c, f, p: (
-                np.sqrt(2.0) * si * 1e-3 * m * (f * 1e-3 * m * (1 - p)) / (c * 1e-3 * m)
-            ),
-            _largest,
-        ),
-        "no √2": _spacing_with(
-            lambda si, m, c, f, p: _s0z(si, m, c, f, p) / np.sqrt(2.0), _largest
-        ),
-        "first spacing that fails": _spacing_with(
-            _s0z, lambda mu, s0z, t: min(i for i, v in mu.items() if v * s0z > t)
-        ),
-        "μ compared without σ0z": _spacing_with(
-            _s0z, lambda mu, s0z, t: max([i for i, v in mu.items() if v <= t], default=0)
-        ),
+    "check_largest_scale": {
+        k: (lambda *args, k=k: _largest_scale(*args, mistake=k))
+        for k in ("p", "B/H", "no √2", "no μ")
     },
     "check_by_hand": {
         "corners only (nothing added)": lambda: [],

@@ -236,6 +236,8 @@ def bundle_adjust(
             on_iteration=steps.begin,
         )
         st, history, converged, reason = run.state, run.history, run.converged, run.reason
+        if getattr(run.evaluation.data, "deferred", False):  # the loop asked for derivatives
+            steps.resolve(st, run.evaluation)
         prob.reduced.release_maps()  # the Schur formation's maps: not held through the precision
         steps.chord_factor = steps.chord_pending = None
         rw, Je, Jp = run.evaluation.data

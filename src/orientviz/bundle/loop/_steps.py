@@ -64,12 +64,16 @@ LOSS_SWITCH: float = 1e-2
 class _Linearisation(tuple):
     """(rw, Je, Jp) of an evaluation; ``local``: Je by rotations of the image frames;
     ``scale``: √ρ′ per ray of a robust loss (None: least squares) — rw and the weights
-    of Je, Jp are scaled by it."""
+    of Je, Jp are scaled by it; ``deferred``: the derivatives were asked for but not yet
+    formed (Je = Jp = None; :meth:`BundleSteps.resolve` forms them, by ``local``)."""
 
-    def __new__(cls, data: tuple, local: bool = False, scale: F64 | None = None):
+    def __new__(
+        cls, data: tuple, local: bool = False, scale: F64 | None = None, deferred: bool = False
+    ):
         out = super().__new__(cls, data)
         out.local = local
         out.scale = scale
+        out.deferred = deferred
         return out
 
 
@@ -103,6 +107,9 @@ class BundleSteps:
         self.loss_on = False
         self.switch_pending = False
         self.keep_x, self.precision = keep_x, precision
+        # a camera model's trial points are evaluated without derivatives (:meth:`evaluate`):
+        # its Jacobians and design cost ~5× its projection, and a rejected step needs none
+        self.defer = prob.ap.lens is not None
         self.hold_first = False
         self.lin = None  # (normal equations, factor, Jacobians) of the last plain step
         self._start: tuple | None = None
@@ -144,10 +151,29 @@ class BundleSteps:
         return dof > 0 and float(np.sqrt(cost / dof)) >= LOSS_SIGMA0
 
     def evaluate(self, st: BundleState, jacobian: bool) -> Evaluation:
+        """The cost at ``st`` and, with ``jacobian``, its linearisation — for a camera
+        model (:attr:`defer`) only the cost: the derivatives are formed when a step is
+        solved from ``st`` (:meth:`resolve`), never for a trial point that is rejected."""
         if self._start is not None and self._start[0] is st:
             ev, self._start = self._start[1], None
             return ev
-        return self._evaluate(st, jacobian, jacobian and self.local_allowed and self._poor())
+        local = jacobian and self.local_allowed and self._poor()
+        if jacobian and self.defer:
+            ev = self._evaluate(st, False, local)
+            ev.data = _Linearisation(ev.data, local, deferred=True)
+            return ev
+        return self._evaluate(st, jacobian, local)
+
+    def resolve(self, st: BundleState, ev: Evaluation) -> None:
+        """Give ``ev`` (at ``st``, evaluated without derivatives) its linearisation, in
+        place: by the frame rotations decided when it was evaluated (a deferred one) or
+        as a new evaluation would (one evaluated where a stop was expected)."""
+        data = ev.data
+        local = data.local if getattr(data, "deferred", False) else (
+            self.local_allowed and self._poor()
+        )  # fmt: skip
+        full = self._evaluate(st, True, local)
+        ev.cost, ev.finite, ev.data = full.cost, full.finite, full.data
 
     def _evaluate(
         self, st: BundleState, jacobian: bool, local: bool, keep: bool = False
@@ -238,8 +264,8 @@ class BundleSteps:
             robust = self._evaluate(st, True, self.is_local(ev))
             ev.cost, ev.finite, ev.data = robust.cost, robust.finite, robust.data
             self.last_cost = robust.cost
-        if ev.data[1] is None:  # evaluated without derivatives (a stop was expected)
-            ev = self.evaluate(st, True)
+        if ev.data[1] is None:  # evaluated without derivatives (deferred, or a stop was expected)
+            self.resolve(st, ev)
         rw, Je, Jp = ev.data
         local = self.is_local(ev)
         self.weigh(ev)

@@ -51,6 +51,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import InputError
+from ._lens_rays import lens_rays
 
 F64 = NDArray[np.float64]
 UM = 1e-3  # mm per µm
@@ -413,12 +414,9 @@ class BoundLens:
         return th
 
     def evaluate(self, ap: F64, ray_group: NDArray[np.int64], nrm: F64, m: F64, jac: bool):
-        """(f, ∂f/∂n, design (n, 2, k) in mm per scaled unit) of rays; see :func:`evaluate_lens`."""
-        th = self.theta(ap)
-        f, M, D = evaluate_lens(self.kind, th[ray_group], nrm, m, jac)
-        if not jac:
-            return f, None, None
-        return f, M, D[:, :, self.est] * self.scale[ray_group][:, None, :]
+        """(f, ∂f/∂n, design (n, 2, k) in mm per scaled unit) of rays; see :func:`evaluate_lens`
+        (evaluated by :func:`~orientviz.bundle.model._lens_rays.lens_rays`: the terms that act)."""
+        return lens_rays(self.kind, self.theta(ap), ray_group, nrm, m, self.est, self.scale, jac)
 
     def pinhole(self, ap: F64, ray_group: NDArray[np.int64], m: F64) -> tuple[F64, F64]:
         """Measured points (n, 2) as a pinhole camera would have seen them.
@@ -430,7 +428,9 @@ class BoundLens:
         th = self.theta(ap)[ray_group]
         pp, c = th[:, 1:3], th[:, 0]
         if self.kind == "backward":
-            cn = m - evaluate_lens(self.kind, th, np.zeros_like(m), m, False)[0]  # f(n=0) = m − x̄(m)
+            cn = (
+                m - evaluate_lens(self.kind, th, np.zeros_like(m), m, False)[0]
+            )  # f(n=0) = m − x̄(m)
         else:
             a, s = th[:, 3], th[:, 4]
             d = m - pp

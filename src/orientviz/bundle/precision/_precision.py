@@ -291,9 +291,9 @@ def _fill_precision(res, prob, st, rw, Je, Jp, lin) -> None:
         Zblk = Zblk + dQ
     elif nb:  # auxiliary offsets/drifts (and parameters): the whole border densely
         E, F = aux.border(prob, ne)
-        Y = factor_reduced(S, blocks).solve(E)
-        Faa = np.linalg.inv(F - E.T @ Y)  # Q_aa (of the whole border)
-        Y3 = Y.reshape(m, 6, nb)
+        Y3, EtY, row = inverse.border(E)  # S⁻¹E by the same factor (BLAS 3)
+        Y3 = Y3[row]  # image order
+        Faa = np.linalg.inv(F - EtY)  # Q_aa (of the whole border)
         Zblk = Zblk + Y3[S.block_i] @ Faa @ Y3[S.block_k].transpose(0, 2, 1)
         Qca = -(Y3 @ Faa)  # (m, 6, nb)
     Qcc_diag = Zblk[S.diag_block]

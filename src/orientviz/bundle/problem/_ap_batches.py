@@ -23,6 +23,10 @@ I64 = NDArray[np.int64]
 #: Entries of the largest per-point product of one batch (:func:`point_batches`): its
 #: temporaries stay in the cache.
 BATCH_DOUBLES: int = 2**16
+#: The batches' row indices (:class:`PointBatch`) are kept when they take at most this
+#: many bytes (Ladybug, 31 812 rays: 7.7 MB); beyond (long tracks: the 177-image COLMAP
+#: model would need ~150 MB) they are formed anew in each formation from the block indices.
+ROWS_KEPT_BYTES: int = 2**24
 
 
 class PointBatch(NamedTuple):
@@ -32,12 +36,28 @@ class PointBatch(NamedTuple):
     (n, k, c): for the product block (ray a, pair e), the index of E's other-group block
     (``APStructure.e_key``) it adds into, K (dropped) when e is a's own group;
     ``f_block`` (n, c, c): for the block (pair e, pair e'), F's group block g_e · G + g_e'.
+    ``e_rows`` (n·k·6·c,), ``f_rows`` (n·c·k·c,): the rows 6·e_block + r and
+    k·f_block + s that the products' rows add into, in their order (None where
+    :data:`ROWS_KEPT_BYTES` does not hold them: then :func:`batch_rows` forms them).
     """
 
     rays: I64
     pairs: I64
     e_block: NDArray[np.int32]
     f_block: NDArray[np.int32]
+    e_rows: NDArray[np.int32] | None = None
+    f_rows: NDArray[np.int32] | None = None
+
+
+def batch_rows(b: PointBatch, k: int) -> tuple[NDArray[np.int32], NDArray[np.int32]]:
+    """The rows of E's and F's blocks that the products of batch ``b`` add into."""
+    if b.e_rows is not None:
+        return b.e_rows, b.f_rows
+    r6 = np.arange(6, dtype=np.int32)[:, None]
+    rk = np.arange(k, dtype=np.int32)[:, None]
+    e_rows = (6 * b.e_block[:, :, None, :] + r6).reshape(-1)
+    f_rows = (k * b.f_block[:, :, None, :] + rk).reshape(-1)
+    return e_rows, f_rows
 
 
 def point_batches(
@@ -93,6 +113,9 @@ def point_batches(
             gp = A.pg_grp[pairs]
             f_block = (gp[:, :, None] * G + gp[:, None, :]).astype(np.int32)
             out.append(PointBatch(rays, pairs, e_block, f_block))
+    size = sum(4 * (6 + k) * b.e_block.size for b in out)  # e_rows 6×, f_rows ≤ k× e_block
+    if size <= ROWS_KEPT_BYTES:
+        out = [b._replace(**dict(zip(("e_rows", "f_rows"), batch_rows(b, k)))) for b in out]
     return out
 
 
@@ -103,21 +126,22 @@ def batched_terms(A, T: F64, H: F64, HV: F64, k: int) -> tuple[F64, F64]:
     nE, nF = 6 * A.e_key.size, A.G * A.G * k
     other = np.zeros((k, nE + 6))
     F = np.zeros((k, nF))
-    r6, rk = np.arange(6, dtype=np.int32)[:, None], np.arange(k, dtype=np.int32)[:, None]
     for b in A.batches:
         n, kr = b.rays.shape
         c = b.pairs.shape[1]
-        Hb = H[b.pairs.reshape(-1)].reshape(n, c * k, 3)
+        pairs = b.pairs.reshape(-1)
+        Hb = H[pairs].reshape(n, c * k, 3)
+        e_rows, f_rows = batch_rows(b, k)
         if nE:
             Tb = T[b.rays.reshape(-1)].reshape(n, 6 * kr, 3)
             # (n, kr·6, c·k): column s of the rows (a, r, e), each into row 6·block + r
             P = np.matmul(Tb, Hb.transpose(0, 2, 1)).reshape(-1, k)
-            rows = (6 * b.e_block[:, :, None, :] + r6).reshape(-1)
+            rows = e_rows.astype(np.intp)  # (bincount's index type: converted once)
             for s in range(k):
                 other[s] += np.bincount(rows, P[:, s], nE + 6)
-        HVb = HV[b.pairs.reshape(-1)].reshape(n, c * k, 3)
+        HVb = HV[pairs].reshape(n, c * k, 3)
         P = np.matmul(HVb, Hb.transpose(0, 2, 1)).reshape(-1, k)  # (n, c·k, c·k)
-        rows = (k * b.f_block[:, :, None, :] + rk).reshape(-1)
+        rows = f_rows.astype(np.intp)
         for s in range(k):
             F[s] += np.bincount(rows, P[:, s], nF)
     return other[:, :nE].T.reshape(-1, 6, k), F.T.reshape(-1, k, k)

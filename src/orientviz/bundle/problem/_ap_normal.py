@@ -157,9 +157,27 @@ class APStructure:
         # E and F terms by stacked per-point products (:mod:`._ap_batches`); a few
         # (aerial groups): one product per group pair and per-ray products, over the
         # lists of :meth:`_pair_lists` (formed on first use, as for the precision)
-        self.batches: list[PointBatch] | None = None
-        if n_coupled > GROUP_PAIR_LOOP_MAX:
-            self.batches = point_batches(oi, go, vo, ocol, first, count, self, k)
+        # (the batches are formed on first use: a problem evaluated without its normal
+        # equations, e.g. the viewer opening a model at its start values, needs none)
+        self._k = k
+        self._batches: list[PointBatch] | None = None
+        self.batched = n_coupled > GROUP_PAIR_LOOP_MAX
+        self.sum_img: sp.csr_matrix | None = None  # sums per-ray terms by image (E's own blocks)
+        if self.batched:
+            self.sum_img = sp.csr_matrix((np.ones(n), (oi, np.arange(n))), shape=(m, n))
+
+    @property
+    def batches(self) -> list[PointBatch] | None:
+        """The point batches of the E and F terms (:mod:`._ap_batches`), formed on first
+        use; None when there are few coupled group pairs (per group pair instead)."""
+        if self.batched and self._batches is None:
+            oi, go, vo, ocol, first, count = self._lists
+            self._batches = point_batches(oi, go, vo, ocol, first, count, self, self._k)
+        return self._batches if self.batched else None
+
+    @batches.setter
+    def batches(self, value: list[PointBatch] | None) -> None:
+        self._batches, self.batched = value, value is not None
 
     def _pair_lists(self) -> dict[str, NDArray]:
         """Every (ray, pair of another group of its point) and every ordered pair of
@@ -325,7 +343,7 @@ def ap_normal(
         return _damped(E, F0, ba, H, lam)
     # E: per image, its own group's block Σ_a (J_eᵀ P A − T Hᵀ) = Σ_a J_eᵀ P½ Ã with the
     # reduced design Ã = P½ (A − J_p V⁻¹ Hᵀ) of each ray (T = J_eᵀ P J_p V⁻¹, H of the
-    # ray's own (point, group) pair): one (6 × 2L)(2L × k) product per image
+    # ray's own (point, group) pair)
     n, L = Jew.shape[0], A.L
     VHt = np.empty((H.shape[0] + 1, 3, k))  # V⁻¹ Hᵀ = (H V⁻¹)ᵀ (V⁻¹ symmetric), and a zero
     VHt[:-1] = HV.transpose(0, 2, 1)
@@ -334,12 +352,17 @@ def ap_normal(
     np.matmul(Jpw, VHt[A.own_pg], out=At[:-1])
     np.subtract(prob.ap.Aw, At[:-1], out=At[:-1])
     At[-1] = 0.0
-    Jpad = Jew[A.pad0].reshape(m, 2 * L, 6)  # padded slots: any ray, times a zero ray
-    own = np.matmul(Jpad.transpose(0, 2, 1), At[A.pad].reshape(m, 2 * L, k))
+    if A.batched:  # a group per image: one (6 × 2)(2 × k) product per ray,
+        # summed by image (the images' ray counts differ: padding them costs more)
+        JA = np.matmul(Jew.transpose(0, 2, 1), At[:-1]).reshape(n, 6 * k)
+        own = (A.sum_img @ JA).reshape(m, 6, k)
+    else:  # one (6 × 2L)(2L × k) product per image over its rays padded to L
+        Jpad = Jew[A.pad0].reshape(m, 2 * L, 6)  # padded slots: any ray, times a zero ray
+        own = np.matmul(Jpad.transpose(0, 2, 1), At[A.pad].reshape(m, 2 * L, k))
     # ... and the blocks of the other groups that its points reach (− Σ T_a H_eᵀ); F:
     # direct term (constant for a linear set; refreshed for a lens model) − Σ H V⁻¹ Hᵀ
     # over the pairs (e, e') of one point
-    if A.batches is not None:
+    if A.batched:
         other, Fcorr = batched_terms(A, T, H, HV, k)
         E = BorderE(own, -other, prob.ap.group, A)
         F4 = -Fcorr.reshape(G, G, k, k)

@@ -1,0 +1,113 @@
+"""A solve that runs while the viewer already shows the block: one thread, its progress, its end.
+
+The viewer opens a large problem file whose start values are complete (an imported
+reconstruction: COLMAP's or a BAL file's own estimate) at those values at once and runs
+the solve here (:func:`orientviz.viewer.solved.solve_target` with ``background=True``);
+the application takes the solution when the solve ends
+(:meth:`orientviz.viewer.app.ViewerApp.take_background`). The solve itself is
+``orientviz solve``'s, unchanged: this module only runs it in a thread, counts its
+iterations and can stop it between two iterations.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from typing import Any
+
+
+class Cancelled(Exception):
+    """Raised inside the solve's iteration callback to stop a background solve."""
+
+
+class BackgroundSolve:
+    """``solve(callback) -> Solved`` run once, in a daemon thread or at once.
+
+    Parameters
+    ----------
+    solve : callable
+        ``solve(callback)``: the solve; ``callback(iteration)`` is called with each new
+        :class:`~orientviz.adjust.result.Iteration` (None: no progress wanted).
+    shown : float
+        σ̂0 (unitless) of the state shown while the solve runs (the file's start values).
+
+    Attributes
+    ----------
+    iteration : Iteration or None
+        The last iteration the solve reported.
+    result : object or None
+        What ``solve`` returned, once it has ended.
+    error : BaseException or None
+        What it raised instead.
+    done : threading.Event
+        Set when the solve has ended and ``on_done`` (of :meth:`start`) has returned.
+    """
+
+    def __init__(self, solve: Callable[[Any], Any], shown: float) -> None:
+        self.solve = solve
+        self.shown = float(shown)
+        self.iteration: Any = None
+        self.result: Any = None
+        self.error: BaseException | None = None
+        self.done = threading.Event()
+        self._cancel = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def _progress(self, iteration: Any, on_iteration: Callable[[Any], None] | None) -> None:
+        if self._cancel.is_set():
+            raise Cancelled("the viewer was stopped")
+        self.iteration = iteration
+        if on_iteration is not None:
+            on_iteration(self)
+
+    def run(self) -> Any:
+        """Solve now, in this thread, and return the result."""
+        self.result = self.solve(lambda it: self._progress(it, None))
+        self.done.set()
+        return self.result
+
+    def start(
+        self,
+        on_done: Callable[[BackgroundSolve], None],
+        on_iteration: Callable[[BackgroundSolve], None] | None = None,
+    ) -> None:
+        """Solve in a daemon thread; ``on_done(self)`` when it ends (result or error set),
+        ``on_iteration(self)`` after each iteration."""
+
+        def work() -> None:
+            try:
+                self.result = self.solve(lambda it: self._progress(it, on_iteration))
+            except Cancelled:
+                return
+            except Exception as exc:  # handed to on_done: the viewer shows it
+                self.error = exc
+            try:
+                on_done(self)
+            finally:
+                self.done.set()
+
+        self._thread = threading.Thread(target=work, name="orientviz-solve", daemon=True)
+        self._thread.start()
+
+    def cancel(self) -> None:
+        """Stop the solve at its next iteration (its result is then never taken)."""
+        self._cancel.set()
+
+    def wait(self, timeout: float | None = None) -> bool:
+        """Wait until the solve has ended and its result was taken; False on timeout."""
+        return self.done.wait(timeout)
+
+    @property
+    def running(self) -> bool:
+        """True while the solve has not ended."""
+        return not self.done.is_set()
+
+    def status(self) -> str:
+        """One line for the panel: what runs and what is shown meanwhile."""
+        it = self.iteration
+        now = "starting" if it is None else f"iteration {int(it.index)}, σ0 {float(it.sigma0):.6g}"
+        return (
+            f"**solving in the background** as `orientviz solve` does ({now}); shown until it "
+            f"ends: the file's own start values (σ̂0 {self.shown:.6g} there); actions wait for "
+            "the solution"
+        )
