@@ -30,8 +30,8 @@ if _package is not None and _package.submodule_search_locations:
 from orientviz.io.jsonio import import_jsonschema  # noqa: E402
 
 # jsonschema (nbformat, the notebook and problem-file tests use it) imported once without its
-# optional IRI format checker, whose grammar is built at import (~1.3 s CPU); no schema
-# validated here has a "format" keyword (orientviz's, nbformat's), so nothing checked changes
+# optional format checkers' packages (rfc3987_syntax builds a grammar at import: ~1.3 s CPU);
+# no schema validated here has a "format" keyword (orientviz's, nbformat's): nothing changes
 import_jsonschema()
 
 try:  # property-based tests explore new inputs locally; CI replays a fixed sequence, so
