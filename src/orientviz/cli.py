@@ -298,7 +298,8 @@ COMMANDS: dict[str, Command] = {
         "design studio) or a problem file and serve it on http://HOST:PORT until Ctrl-C; "
         "--export writes a static HTML page instead. FILE may be a shipped data set's name, "
         "or dbat_roma (DBAT's ROMA bundle: 60 images, 90 561 image points). Large blocks "
-        "open without the precision (the panel offers it).",
+        "open without the precision (the panel offers it); a large imported model with "
+        "every start value given opens at those values while it is solved in the background.",
         examples=(
             ("orientviz view", "the default demo on http://127.0.0.1:8080"),
             ("orientviz view pair --port 8081", "the relative-orientation demo, another port"),

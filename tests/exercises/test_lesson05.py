@@ -52,6 +52,8 @@ def test_diagnoses_name_the_mistake():
             ("check_parallax", "image difference"): "scale it to the model",
             ("check_condition", "flat form with relief"): "flat-terrain form",
             ("check_scheme_sigma", "inverse of the diagonal"): "diagonal of (AᵀA)⁻¹",
+            ("check_scheme_sigma", "variances"): "square root is missing",
+            ("check_scheme_sigma", "spread"): "not the distance between",
         },
     )
 
@@ -62,3 +64,27 @@ def test_angle_reader_inverts_the_rotation():
 
     a = np.array([0.03, -0.02, 1.6])
     assert np.allclose(lesson05._opk(_rodrigues_opk(*a, unit=1.0)), a, atol=1e-12)
+
+
+def test_design_from_differences_of_the_library_is_refused():
+    """Central differences of the library's rigorous y-parallax skip the derivation: refused."""
+    import numpy as np
+
+    from orientviz.exercises._common import rejection
+    from orientviz.orientation import relative as rel
+
+    def design_by_differences(X, Y, Z, b):
+        state = rel.PairState.from_elements(np.zeros(5), b)
+        xy1 = np.column_stack([X, Y]) * (-152.7 / Z)[:, None]
+        out = np.zeros((len(X), 5))
+        for k in range(5):
+            e = np.zeros(5)
+            e[k] = 1e-6
+            out[:, k] = (
+                rel.y_parallax(xy1, xy1, 152.7, rel.PairState.from_elements(e, b))[0]
+                - rel.y_parallax(xy1, xy1, 152.7, state)[0]
+            ) / 1e-6
+        return out
+
+    exc = rejection(lesson05.check_design, design_by_differences)
+    assert exc is not None and "calls the library's y_parallax" in str(exc)

@@ -17,6 +17,13 @@ def test_diagnoses_name_the_mistake():
         lesson08,
         answers,
         {
+            ("check_adjust_models", "R transposed"): "R is returned transposed",
+            ("check_adjust_models", "start R, T"): "start rotations",
+            ("check_adjust_models", "T zero"): "not zeros",
+            ("check_strip_polynomial", "degree"): "one degree too low",
+            ("check_strip_polynomial", "no tilt"): "cross tilt",
+            ("check_strip_polynomial", "sign"): "wrong sign",
+            ("check_strip_polynomial", "full control only"): "plan control only",
             ("check_compose", "order"): "order is wrong",
             ("check_compose", "no scale in t"): "scale m1 is missing",
             ("check_compose", "no rotation in t"): "rotation R1 is missing",
@@ -26,6 +33,10 @@ def test_diagnoses_name_the_mistake():
             ("check_strip_degree", "le1"): "not a rejection",
             ("check_strip_degree", "min"): "SMALLEST accepted",
             ("check_strip_degree", "no sigma"): "divide the residuals by σ",
+            ("check_strip_degree", "level 0.9"): "not at 10 %",
+            ("check_strip_degree", "level 0.975"): "not at 2.5 %",
+            ("check_strip_degree", "fixed bound 1.2"): "fixed bound on σ̂0",
+            ("check_strip_degree", "fixed bound 1.4"): "fixed bound on σ̂0",
             ("check_strips_for", "natural log"): "natural logarithm",
             ("check_strips_for", "a forgotten"): "a is missing",
             ("check_strips_for", "exponent only"): "log10 n_s, not n_s",
@@ -93,3 +104,39 @@ def test_the_independent_models_module_ships_no_solution():
                 except Exception:  # noqa: BLE001 - refused or wrong signature: not a solution
                     continue
             assert not out.getvalue().startswith("✓"), f"{check.__name__} accepts {f.__name__}"
+
+
+def test_the_polynomial_strip_module_ships_no_solution():
+    """exercises/_polynomial_strip.py (re-exported by lesson08): none of its functions passes
+    its check, and the library's polynomial_adjust is refused by name."""
+    import contextlib
+    import inspect
+    import io
+
+    from orientviz.exercises import _polynomial_strip as module
+    from orientviz.exercises._common import rejection
+
+    own = [
+        f
+        for name, f in vars(module).items()
+        if inspect.isfunction(f)
+        and f.__module__ == module.__name__
+        and not name.startswith("check_")
+    ]
+    assert own
+    for f in own:
+        out = io.StringIO()
+        with contextlib.redirect_stdout(out):
+            try:
+                module.check_strip_polynomial(f)
+            except Exception:  # noqa: BLE001 - wrong signature or refused: not a solution
+                continue
+        assert not out.getvalue().startswith("✓"), f"check_strip_polynomial accepts {f.__name__}"
+
+    def by_library(x, X, dxy, dz):
+        from orientviz.polynomial import polynomial_adjust
+
+        polynomial_adjust(None)
+
+    exc = rejection(lesson08.check_strip_polynomial, by_library)
+    assert exc is not None and "calls the library's polynomial_adjust" in str(exc)

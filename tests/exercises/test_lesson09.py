@@ -95,3 +95,12 @@ def test_the_lessons_stand_in_is_refused_and_named():
         assert_diagnoses(
             lesson09, answers, {("check_null_space", "the stand-in (scipy's null_space)"): text}
         )
+
+
+def test_the_new_stand_ins_are_refused():
+    from orientviz.exercises._common import rejection
+
+    exc = rejection(lesson09.check_similarity_columns, lesson09.similarity_basis_library)
+    assert exc is not None and "calls the library's" in str(exc)
+    exc = rejection(lesson09.check_best_datum, lesson09.best_datum_library)
+    assert exc is not None and "calls the library's best_datum_library" in str(exc)

@@ -42,7 +42,6 @@ MARK = "# A colleague's version: one line is wrong."
 CHECKERS = {
     ("00", "redundancy"): ("check_redundancy", "not unknowns"),
     ("00", "critical_w"): ("check_critical_value", "one-sided"),
-    ("05", "scheme_sigma"): ("check_scheme_sigma", "not the inverse of the diagonal"),
     ("07", "to_model"): ("check_model_coordinates", "not R"),
     ("13", "difference_covariance"): ("check_difference_covariance", "not independent"),
     ("05", "six_point"): ("check_six_point", "degrees"),

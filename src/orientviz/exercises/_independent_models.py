@@ -175,7 +175,8 @@ def check_adjust_models(fn: Callable) -> None:
 
     The independent-model adjustment of a block the check simulates (2 strips × 5 images,
     one control point with Z only) against the library's rigorous solution: tie points and
-    projection centres within 1 % of σ_xy, λ within 1e-6, σ̂0 within 0.1 %.
+    projection centres within 1 % of σ_xy, λ within 1e-6, R within 1e-6 rad, T within 1 % of
+    σ_xy, σ̂0 within 0.1 %.
     """
     rng = np.random.default_rng(8082)
     block, ms = _check_block(rng)
@@ -217,6 +218,37 @@ def check_adjust_models(fn: Callable) -> None:
             tolerance=0.01,
         )
     compare("the models' scales λ", lam, lam_l, rtol=1e-6)
+
+    # the rotations: angle of R_libᵀ R per model; a transposed R is named
+    def angles(R_: F64) -> F64:
+        c = (np.einsum("kji,kji->k", R_l, R_) - 1.0) / 2.0  # (trace(R_libᵀ R) − 1) / 2
+        return np.arccos(np.clip(c, -1.0, 1.0))
+
+    da = float(np.max(angles(R)))
+    if not np.isfinite(da) or da > 1e-6:
+        if np.max(angles(np.transpose(R, (0, 2, 1)))) < 1e-6:
+            why = "R is returned transposed: the model rotation takes model to object coordinates"
+        elif np.max(np.abs(R - args[6])) < 1e-12:
+            why = "these are the start rotations: return the adjusted R, not the given one"
+        else:
+            why = "the rotations do not fit the adjusted points: update R ← R exp([θ]×) each step"
+        raise CheckFailed(
+            f"adjust_models: the models' rotations differ from the library's by up to {da:.3g} rad "
+            f"(allowed 1e-6): {why}",
+            error=da if np.isfinite(da) else np.inf,
+            tolerance=1e-6,
+        )
+    compare(
+        "the models' translations T [m]",
+        T,
+        T_l,
+        rtol=0.01 * sigma[0],
+        scale=1.0,
+        wrong=[
+            ("these are the start translations: return the adjusted T", args[7]),
+            ("T must be returned, not zeros", np.zeros_like(T_l)),
+        ],
+    )
     n_obs, n_unknown = 3 * su.row_model.size, 7 * ms.n_models + int(free.sum())
     r = n_obs - n_unknown
     s = s0_l * np.sqrt(r)  # √(vᵀPv)

@@ -76,7 +76,14 @@ def _points(rng: np.random.Generator, n: int, b: float, relief: float = 0.15) ->
     )
 
 
-@own_work(design_dependent=library_design_dependent, y_parallax_jacobian=y_parallax_jacobian)
+@own_work(
+    "the exercise is the derivation of the linearised equation; differences of the library's "
+    "parallax or projection skip it",
+    design_dependent=library_design_dependent,
+    y_parallax_jacobian=y_parallax_jacobian,
+    y_parallax=library_y_parallax,
+    project=project,
+)
 def check_design(design_dependent: Callable[[F64, F64, F64, float], F64]) -> None:
     """``design_dependent(X, Y, Z, b)`` must return ∂p_y/∂(by, bz, ω, φ, κ), shape (n, 5).
 
@@ -288,30 +295,51 @@ def check_condition(misclosure: Callable[[F64, F64, F64, F64, float], float]) ->
     success("condition: zero for a consistent model, and it shows a misread parallax")
 
 
-def check_scheme_sigma(scheme_sigma: Callable[[F64, F64, F64, float, float], F64]) -> None:
-    """``scheme_sigma(X, Y, Z, b, sigma)`` must return σ of (by, bz, ω, φ, κ) [model mm, rad]."""
+def _gruber_sigmas(b: float, d: float, h: float, sigma: float, how: str = "right") -> F64:
+    """σ of (by, bz, ω, φ, κ) of Gruber's six flat points from the checker's numerical design
+    (``how`` names a wrong variant)."""
+    A = _numeric_design(_gruber(b, d / 2 if how == "spread" else d, h), b)
+    N = A.T @ A
+    if how == "diagonal":
+        return sigma / np.sqrt(np.diag(N))
+    q = np.diag(np.linalg.inv(N))
+    if how == "variance":
+        return sigma**2 * q
+    if how == "sigma squared":
+        return sigma**2 * np.sqrt(q)
+    return sigma * np.sqrt(q)
+
+
+@own_work(
+    "the checker's oracle is not an answer",
+    _gruber_sigmas=_gruber_sigmas,
+    _numeric_design=_numeric_design,
+)
+def check_scheme_sigma(scheme_sigmas: Callable[[float, float, float, float], F64]) -> None:
+    """``scheme_sigmas(d, sigma, b, h)``: σ of (by, bz, ω, φ, κ) [model mm, rad] of Gruber's six
+    points on flat ground (profiles X = 0 and X = b, rows Y = 0 and ±d, Z = −h), σ per
+    parallax reading (model mm)."""
     rng = rng_for("lesson05.check_scheme_sigma")
-    b, d, h = 220.7, 110.0, 366.0
-    P = np.vstack(
-        [_gruber_relief(rng, b, d, h, 0.1), [[b / 2, 0, -h], [b / 2, d, -h], [b / 2, -d, -h]]]
-    )
-    A = _numeric_design(P, b)
-    sigma = 0.005
-    Q = np.linalg.inv(A.T @ A)
-    truth = sigma * np.sqrt(np.diag(Q))
-    got = call(
-        scheme_sigma, P[:, 0].copy(), P[:, 1].copy(), P[:, 2].copy(), b, sigma, what="scheme_sigma"
-    )
-    wrong = [
-        (
-            "take the diagonal of (AᵀA)⁻¹, not the inverse of the diagonal of AᵀA",
-            sigma / np.sqrt(np.diag(A.T @ A)),
-        ),
-        ("the square root is missing (these are variances)", sigma**2 * np.diag(Q)),
-        ("multiply by σ, not σ²", sigma**2 * np.sqrt(np.diag(Q))),
-    ]
-    compare("σ of (by, bz, ω, φ, κ)", got, truth, rtol=1e-5, wrong=wrong)
-    success("scheme precision: σ √diag((AᵀA)⁻¹)")
+    for _ in range(3):
+        b, h = rng.uniform(180.0, 240.0), rng.uniform(300.0, 420.0)
+        d, sigma = rng.uniform(80.0, 260.0), rng.uniform(0.003, 0.008)
+        truth = _gruber_sigmas(b, d, h, sigma)
+        got = call(scheme_sigmas, d, sigma, b, h, what="scheme_sigmas")
+        wrong = [
+            (
+                "take the diagonal of (AᵀA)⁻¹, not the inverse of the diagonal of AᵀA: the "
+                "elements are correlated",
+                _gruber_sigmas(b, d, h, sigma, "diagonal"),
+            ),
+            ("the square root is missing (these are variances)",
+             _gruber_sigmas(b, d, h, sigma, "variance")),
+            ("multiply by σ, not σ²", _gruber_sigmas(b, d, h, sigma, "sigma squared")),
+            ("d is each outer row's distance from the middle row (Y = ±d), not the distance "
+             "between the two outer rows", _gruber_sigmas(b, d, h, sigma, "spread")),
+        ]  # fmt: skip
+        compare(f"σ of (by, bz, ω, φ, κ) for d = {d:.0f}, h = {h:.0f} mm", got, truth, rtol=1e-5,
+                wrong=wrong)  # fmt: skip
+    success("σ of the five elements of Gruber's six points, three schemes (numerical design)")
 
 
 @own_work(relative_orientation=relative_orientation)

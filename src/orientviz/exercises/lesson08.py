@@ -33,6 +33,7 @@ from ._independent_models import (  # the student's own block method
     check_model_jacobian,
     model_jacobian_numeric,
 )
+from ._polynomial_strip import check_strip_polynomial  # the student's polynomial method
 
 __all__ = [
     "check_adjust_models",
@@ -41,6 +42,7 @@ __all__ = [
     "check_determined",
     "check_intersect_many",
     "check_model_jacobian",
+    "check_strip_polynomial",
     "check_strips_for",
     "model_jacobian_numeric",
 ]
@@ -212,13 +214,24 @@ def _degree_rules(s0: dict, r: dict, n: int, sigma: float) -> tuple[int, dict]:
         "necessarily the strip": min(s0, key=s0.get),
         "divide the residuals by σ (σ̂0 has no unit) before comparing with the χ² bound":
             first(lambda d: s0[d] * sigma <= bound(0.95, r[d])),
+        "the test is at α = 5 %: σ̂0 against √(χ²_{r,0.95}/r), not at 10 %":
+            first(lambda d: s0[d] <= bound(0.90, r[d])),
+        "the test is at α = 5 %: σ̂0 against √(χ²_{r,0.95}/r), not at 2.5 %":
+            first(lambda d: s0[d] <= bound(0.975, r[d])),
     }  # fmt: skip
+    for t in (1.1, 1.2, 1.3, 1.4):
+        rules[
+            f"a fixed bound on σ̂0 (here {t}?) ignores the redundancy: the bound "
+            "√(χ²_{r,0.95}/r) is 1.73 for r = 2 and 1.25 for r = 20"
+        ] = first(lambda d, t=t: s0[d] <= t)
     return want, rules
 
 
 #: (seed, control points, degree of the bend, noise in σ) of the check's strips, in the order
 #: that lets each plausible wrong rule fail first where no other remaining rule picks its degree
-_STRIPS = ((7, 8, 3, 1.0), (0, 6, 2, 1.0), (3, 10, 2, 1.0), (3, 12, 3, 0.45))
+#: (the fifth: σ̂0 1.37/1.44/1.375/1.31 for d = 1 … 4 at r = 12/10/8/6 — a fixed bound anywhere in
+#: 1.1 … 1.4 and the levels 10 % and 2.5 % pick another degree than the 5 % test)
+_STRIPS = ((7, 8, 3, 1.0), (0, 6, 2, 1.0), (3, 10, 2, 1.0), (3, 12, 3, 0.45), (26, 8, 1, 1.0))
 
 
 def check_strip_degree(fn: Callable) -> None:
@@ -227,7 +240,7 @@ def check_strip_degree(fn: Callable) -> None:
     significantly too large (one-sided χ² test, α = 5 %); max_degree if none is accepted.
 
     Oracle: the checker's real-valued fit (2 unknowns per complex coefficient) and
-    ``scipy.stats.chi2`` on four simulated strips. A wrong degree is named by the wrong rule
+    ``scipy.stats.chi2`` on five simulated strips. A wrong degree is named by the wrong rule
     that picks it and was consistent with the answers on the strips before."""
     alive: set[str] | None = None
     for seed, n, true_degree, noise in _STRIPS:
@@ -259,7 +272,7 @@ def check_strip_degree(fn: Callable) -> None:
         raise CheckFailed(
             f"strip_degree ({n} control points): {k}, expected {want} — {why}. The fits: {table}"
         )
-    success("the smallest degree the one-sided χ² test accepts, on all four strips")
+    success("the smallest degree the one-sided χ² test accepts, on all five strips")
 
 
 def check_strips_for(fn: Callable) -> None:

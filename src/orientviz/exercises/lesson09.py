@@ -16,7 +16,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.linalg import null_space as scipy_null_space  # forbidden (own_work), no oracle
 
-from ..adjust.datum import datum_solve
+from ..adjust.datum import datum_solve, helmert_basis, s_transformation
 from ..adjust.rank import null_space_of_normal  # forbidden (own_work), no oracle
 from ._common import CheckFailed, call, compare, own_work, rng_for, success
 from .sliders import check_slider_answer
@@ -54,6 +54,32 @@ def _angle_jacobian(x, triples, h=1e-4):
     return J
 
 
+def similarity_basis_library(xy: np.ndarray) -> np.ndarray:
+    """The lesson's stand-in for ``similarity_columns`` while its blank is empty: the library's
+    null-space basis with the scale column, (2p, 4). :func:`check_similarity_columns` refuses it.
+    """
+    return helmert_basis(np.asarray(xy, float), scale=True)
+
+
+def best_datum_library(Q: np.ndarray, G: np.ndarray) -> tuple[int, int]:
+    """The lesson's stand-in for ``best_datum`` while its blank is empty: every pair tried with
+    the library's S-transformation (0-based indices). :func:`check_best_datum` refuses it."""
+    p = Q.shape[0] // 2
+    pairs = [(i, j) for i in range(p) for j in range(i + 1, p)]
+
+    def worst(pair: tuple[int, int]) -> float:
+        S = s_transformation(G, datum_points=list(pair))
+        return _largest_point_sigma(S @ Q @ S.T)
+
+    return min(pairs, key=worst)
+
+
+@own_work(
+    "helmert_basis (with scale=True) and the stand-in give the answer; write the four columns "
+    "yourself",
+    helmert_basis=helmert_basis,
+    similarity_basis_library=similarity_basis_library,
+)
 def check_similarity_columns(fn) -> None:
     """``fn(xy) -> G`` (2p, 4): columns that move a planar network of measured ANGLES (unknowns
     x1, y1, x2, …) without changing any angle; together they must span the whole defect
@@ -157,6 +183,10 @@ def _largest_point_sigma(Q: np.ndarray) -> float:
     return float(np.sqrt(np.diag(Q).reshape(-1, 2).sum(axis=1)).max())
 
 
+@own_work(
+    "that is the stand-in; the exercise is your own search over the pairs",
+    best_datum_library=best_datum_library,
+)
 def check_best_datum(fn) -> None:
     """``fn(Q, G) -> (i, j)``: the two datum points (0-based) that make the largest point error
     √(σx² + σy²) of the network smallest, from the cofactors Q of any datum.

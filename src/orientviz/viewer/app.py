@@ -33,7 +33,14 @@ from .geometry import VIEW_FOV
 from .panel import BlockPanel
 from .scene import BlockScene
 from .snapshot import panel_markdown, with_panel
-from .solved import Solved, block_description, solution_demo, solve_target
+from .solved import (
+    Solved,
+    block_description,
+    finite_state,
+    last_finite_record,
+    solution_demo,
+    solve_target,
+)
 
 DEFAULT_DEMO = "block"
 PROG = "orientviz view"
@@ -200,6 +207,8 @@ class ViewerApp:
         if self.background is not None:  # the solve runs while the start values are shown
             self.panel.show_pending(self.background)
             self.background.start(self.take_background, self.panel.show_pending)
+            job = self.background  # a browser's first picture first, then the solve again
+            self.server.on_client_connect(lambda _c: job.hold() if job.running else None)
 
     def take_background(self, job: Any) -> None:
         """The solve started at opening has ended: show its solution (or its error).
@@ -221,6 +230,8 @@ class ViewerApp:
         self._head.content = f"### {demo.title}\n{demo.description}"
         adj = solved.solution.adjustment
         panel.take_result(adj)
+        if not finite_state(panel.state):  # NaN at the end: the last finite record, no blank
+            panel.replay(last_finite_record(panel.state))
         if not adj.converged:
             self.report(f"the adjustment did not converge: {adj.reason}")
 

@@ -243,8 +243,8 @@ def solution_demo(solved: Solved, title: str | None = None) -> Demo:
         state = BlockState(
             block, adj, adjuster=FileAdjuster(problem), camera=CameraTerms.of(problem, block)
         )
-        if not _finite(state):  # the last state has NaN: show the last finite record
-            state.replay(_last_finite(state))
+        if not finite_state(state):  # the last state has NaN: show the last finite record
+            state.replay(last_finite_record(state))
         desc = block_description(solved)
         extra = lens_deformation_extra(problem, state) if state.camera is not None else None
         demo = Demo("file", name, desc, state, extra, message, sol)
@@ -283,12 +283,14 @@ def block_description(solved: Solved) -> str:
     return f"{_head(solved)}. {solved.solution.start.summary()}."
 
 
-def _finite(state: Any) -> bool:
+def finite_state(state: Any) -> bool:
+    """True if every orientation and point of the state is finite."""
     b = state.block
     return bool(np.all(np.isfinite(b.images.X0)) and np.all(np.isfinite(b.points.xyz)))
 
 
-def _last_finite(state: Any) -> int:
+def last_finite_record(state: Any) -> int:
+    """Index of the last history record without NaN (0 if none)."""
     for k in range(len(state.history) - 1, -1, -1):
         s = state.history[k]
         if np.all(np.isfinite(s.X0)) and np.all(np.isfinite(s.xyz)):

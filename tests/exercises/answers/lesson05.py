@@ -35,9 +35,17 @@ def _sol_condition(p, X, Y, Z, b):
     return 2.0 * (w / w[0]) @ p
 
 
-def _sol_scheme_sigma(X, Y, Z, b, sigma):
-    A = _sol_design(X, Y, Z, b)
-    return sigma * np.sqrt(np.diag(np.linalg.inv(A.T @ A)))
+def _sol_scheme_sigma(d, sigma, b, h, how="right"):
+    """Gruber's six flat points with rows at Y = 0, ±d (``how``: a wrong variant)."""
+    if how == "spread":
+        d = d / 2
+    X = np.array([0.0, b, 0.0, b, 0.0, b])
+    Y = np.array([0.0, 0.0, d, d, -d, -d])
+    A = _sol_design(X, Y, np.full(6, -h), b)
+    if how == "inverse of the diagonal":
+        return sigma / np.sqrt(np.diag(A.T @ A))
+    s = sigma * np.sqrt(np.diag(np.linalg.inv(A.T @ A)))
+    return s**2 if how == "variances" else s
 
 
 def _kovarik_iteration(xy1, xy2, c, b, tol=1e-9, max_iter=20, mistake=None):
@@ -152,10 +160,8 @@ MUTANTS = {
         "sign": lambda p, X, Y, Z, b: -_sol_condition(p, X, Y, Z, b),
     },
     "check_scheme_sigma": {
-        "inverse of the diagonal": lambda X, Y, Z, b, s: (
-            s / np.sqrt(np.diag(_sol_design(X, Y, Z, b).T @ _sol_design(X, Y, Z, b)))
-        ),
-        "variances": lambda X, Y, Z, b, s: _sol_scheme_sigma(X, Y, Z, b, s) ** 2,
-        "sigma squared": lambda X, Y, Z, b, s: s * _sol_scheme_sigma(X, Y, Z, b, s),
-    },
+        how: (lambda d, s, b, h, how=how: _sol_scheme_sigma(d, s, b, h, how))
+        for how in ("inverse of the diagonal", "variances", "spread")
+    }
+    | {"sigma squared": lambda d, s, b, h: s * _sol_scheme_sigma(d, s, b, h)},
 }

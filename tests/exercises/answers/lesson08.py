@@ -42,6 +42,10 @@ def _strip_degree(xy, XY, sigma, max_degree, mistake=None):
             ok = chi2.ppf(0.025, r) / r <= s0**2 <= chi2.ppf(0.975, r) / r
         elif mistake == "le1":
             ok = s0 <= 1.0
+        elif isinstance(mistake, float) and mistake > 1.0:  # a fixed bound on σ̂0
+            ok = s0 <= mistake
+        elif isinstance(mistake, float):  # another level: chi2.ppf(mistake, r)
+            ok = s0**2 <= chi2.ppf(mistake, r) / r
         else:
             ok = s0**2 <= chi2.ppf(0.95, r) / r
         if ok:
@@ -138,6 +142,7 @@ def _adjust_models(m, model, point, X, free, sigma, R, T, mistake=None):
 
     n, k = len(R), len(m)
     lam, R, T, X = np.ones(n), R.copy(), T.copy(), X.copy()
+    R0, T0 = R.copy(), T.copy()
     if mistake == "whole points":  # a point is fixed only if all of X, Y, Z are given
         free = np.repeat(free.any(axis=1, keepdims=True), 3, axis=1)
     col = np.full(free.shape, -1)
@@ -162,6 +167,12 @@ def _adjust_models(m, model, point, X, free, sigma, R, T, mistake=None):
             break
     v = (lam[model, None] * np.einsum("kij,kj->ki", R[model], m) + T[model] - X[point]).ravel()
     r = 3 * k - A.shape[1] if mistake != "r without points" else 3 * k - 7 * n
+    if mistake == "R transposed":
+        R = np.transpose(R, (0, 2, 1))
+    if mistake == "start R, T":
+        R, T = R0, T0
+    if mistake == "T zero":
+        T = np.zeros_like(T)
     return lam, R, T, X, np.sqrt(v @ (w * v) / r)
 
 
@@ -171,7 +182,27 @@ def _skew(v):
     return skew(v)
 
 
+def _strip_polynomial(x, X, dxy, dz, mistake=None):
+    """Conformal planimetry (one complex lstsq) and height with cross tilt, fitted to control."""
+    w = (x[:, 0] + 1j * x[:, 1] - (x[:, 0].mean() + 1j * x[:, 1].mean())) / 1000.0
+    u, v = w.real, w.imag
+    plan = ~np.isnan(X[:, 0]) & ~np.isnan(X[:, 1])
+    height = ~np.isnan(X[:, 2])
+    if mistake == "full control only":
+        plan = height = plan & height
+    A = np.column_stack([w**k for k in range(dxy + (0 if mistake == "degree" else 1))])
+    z, Z = x[:, 0] + 1j * x[:, 1], X[:, 0] + 1j * X[:, 1]
+    sign = -1.0 if mistake == "sign" else 1.0
+    c = np.linalg.lstsq(A[plan], sign * (Z[plan] - z[plan]), rcond=None)[0]
+    n_tilt = {"no tilt": 0, "tilt to d": dz + 1}.get(mistake, dz)
+    B = np.column_stack([u**k for k in range(dz + 1)] + [v * u**k for k in range(n_tilt)])
+    e = np.linalg.lstsq(B[height], sign * (X[height, 2] - x[height, 2]), rcond=None)[0]
+    zc = z + A @ c
+    return np.column_stack([zc.real, zc.imag, x[:, 2] + B @ e])
+
+
 SOLUTIONS = {
+    "check_strip_polynomial": _strip_polynomial,
     "check_model_jacobian": _model_jacobian,
     "check_adjust_models": _adjust_models,
     "check_intersect_many": _sol_intersect_many,
@@ -182,6 +213,10 @@ SOLUTIONS = {
 }
 
 MUTANTS = {
+    "check_strip_polynomial": {
+        m: (lambda x, X, a, b, m=m: _strip_polynomial(x, X, a, b, mistake=m))
+        for m in ("degree", "no tilt", "tilt to d", "sign", "full control only")
+    },
     "check_model_jacobian": {
         "sign": lambda *a: _model_jacobian(*a, mistake="sign"),
         "left increment": lambda *a: _model_jacobian(*a, mistake="left"),
@@ -193,6 +228,9 @@ MUTANTS = {
         "left update": lambda *a: _adjust_models(*a, mistake="left update"),
         "whole points": lambda *a: _adjust_models(*a, mistake="whole points"),
         "r without points": lambda *a: _adjust_models(*a, mistake="r without points"),
+        "R transposed": lambda *a: _adjust_models(*a, mistake="R transposed"),
+        "start R, T": lambda *a: _adjust_models(*a, mistake="start R, T"),
+        "T zero": lambda *a: _adjust_models(*a, mistake="T zero"),
     },
     "check_intersect_many": {
         "R transposed": lambda *a: _sol_intersect_many(*a, mistake="R_transposed"),
@@ -215,6 +253,14 @@ MUTANTS = {
     "check_strip_degree": {
         k: (lambda xy, XY, s, m, k=k: _strip_degree(xy, XY, s, m, k))
         for k in ("complex r", "two-sided", "le1", "min", "no sigma")
+    }
+    | {
+        f"fixed bound {t}": (lambda xy, XY, s, m, t=t: _strip_degree(xy, XY, s, m, t))
+        for t in (1.1, 1.2, 1.3, 1.4)
+    }
+    | {
+        f"level {q}": (lambda xy, XY, s, m, q=q: _strip_degree(xy, XY, s, m, q))
+        for q in (0.9, 0.975)
     },
     "check_strips_for": {
         "natural log": lambda a, b, m: np.inf if b <= 0 else np.exp((m - a) / b),

@@ -161,6 +161,7 @@ class BundleSteps:
         if jacobian and self.defer:
             ev = self._evaluate(st, False, local)
             ev.data = _Linearisation(ev.data, local, deferred=True)
+            ev.data.robust = self.loss_on  # its misclosures: weighted by 1/σ only
             return ev
         return self._evaluate(st, jacobian, local)
 
@@ -169,32 +170,59 @@ class BundleSteps:
         place: by the frame rotations decided when it was evaluated (a deferred one) or
         as a new evaluation would (one evaluated where a stop was expected)."""
         data = ev.data
-        local = data.local if getattr(data, "deferred", False) else (
-            self.local_allowed and self._poor()
-        )  # fmt: skip
-        full = self._evaluate(st, True, local)
+        deferred = getattr(data, "deferred", False)
+        local = data.local if deferred else self.local_allowed and self._poor()
+        known = data[0] if deferred and getattr(data, "robust", False) and self.loss_on else None
+        full = self._evaluate(st, True, local, rw_base=known)
         ev.cost, ev.finite, ev.data = full.cost, full.finite, full.data
 
     def _evaluate(
-        self, st: BundleState, jacobian: bool, local: bool, keep: bool = False
+        self,
+        st: BundleState,
+        jacobian: bool,
+        local: bool,
+        keep: bool = False,
+        rw_base: F64 | None = None,
     ) -> Evaluation:
+        """The evaluation at ``st``; ``rw_base``: its misclosures weighted by 1/σ, known
+        from an evaluation without derivatives at ``st`` (a robust loss's weights are then
+        set before a camera model's design is formed)."""
         if self.loss_on:
-            return self._evaluate_robust(st, jacobian, local, keep)
+            return self._evaluate_robust(st, jacobian, local, keep, rw_base)
         rw, Je, Jp = self.prob.residuals(st, jac=jacobian, local=local, keep=keep)
         cost = self.prob.cost(st, rw)
         self.pending_cost = cost
         return Evaluation(cost, bool(np.isfinite(cost)), _Linearisation((rw, Je, Jp), local))
 
-    def _evaluate_robust(self, st: BundleState, jacobian: bool, local: bool, keep: bool):
+    def _evaluate_robust(
+        self,
+        st: BundleState,
+        jacobian: bool,
+        local: bool,
+        keep: bool,
+        rw_base: F64 | None = None,
+    ):
         """Σ ρ(s) + the pseudo-observations' vᵀPv at ``st``; with ``jacobian`` the rays
         weighted by 1/σ·√ρ′(s) (the Gauss-Newton model of ρ, see :mod:`._loss`): the
         misclosures first with 1/σ, then the weights scaled (the normal equations weight
-        the Jacobians by them; a camera model's design is re-weighted)."""
+        the Jacobians by them; a camera model's design is re-weighted). ``rw_base``: the
+        misclosures with 1/σ at ``st``, known (see :meth:`_evaluate`)."""
         prob, weight = self.prob, self.prob.obs.weight
         weight[...] = self.base_weight
+        lens = jacobian and prob.ap.lens is not None
+        if lens and rw_base is not None:  # the weights first: the design is formed once
+            rho, rho1 = self.loss(np.einsum("ij,ij->i", rw_base, rw_base))
+            cost = float(np.sum(rho)) + prob.cost(st, rw_base[:0])
+            if np.isfinite(cost):
+                self.pending_cost = cost
+                scale = np.sqrt(rho1)
+                weight *= scale[:, None]
+                _, Je, Jp = prob.residuals(st, jac=True)  # (Je, Jp: unweighted)
+                rw = rw_base * scale[:, None]  # as the path below forms it
+                return Evaluation(cost, True, _Linearisation((rw, Je, Jp), local, scale))
+            weight[...] = self.base_weight
         # a camera model is evaluated once, with its derivatives (its design is then
         # re-weighted); a pinhole's projection is kept for the Jacobians' pass
-        lens = jacobian and prob.ap.lens is not None
         rw, Je, Jp = prob.residuals(st, jac=lens, keep=(jacobian or keep) and not lens)
         s = np.einsum("ij,ij->i", rw, rw)
         rho, rho1 = self.loss(s)

@@ -9,7 +9,8 @@
 * :mod:`._lens` — the camera inside the projection (:class:`LensModel`: c, principal
   point, affinity, shear, radial and decentring distortion, backward or forward; the
   parameter names :data:`BACKWARD_NAMES`, :data:`FORWARD_NAMES` and the rays' lens terms
-  :func:`evaluate_lens`);
+  :func:`evaluate_lens`); :mod:`._lens_rays` evaluates it on a block's rays with only the
+  terms that act and the estimated parameters' derivatives (what the bundle calls);
 * :mod:`._additional` — additional-parameter sets of self-calibration
   (:class:`Ebner12`, :class:`Brown`, :class:`Gruen44`, :func:`ap_set`, :func:`analyse`)
   and the six image deformations of the exterior orientation (:func:`eo_deformations`).
