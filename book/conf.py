@@ -30,6 +30,11 @@ os.environ["PYTHONPATH"] = os.pathsep.join(
 os.environ["MPLBACKEND"] = "module://matplotlib_inline.backend_inline"
 
 import orientviz  # noqa: E402
+from orientviz.io.jsonio import import_jsonschema  # noqa: E402
+
+# myst-nb imports nbformat, which imports jsonschema: imported here first, without its optional
+# format checkers' packages (one builds a grammar at import; no notebook schema has "format")
+import_jsonschema()
 
 project = "orientviz"
 author = "the orientviz developers"
