@@ -96,8 +96,8 @@ def check_radius_change(fn: Callable) -> None:
     """Check ``fn(xy, x0, y0, m, h, dm) -> ds``: the first-order change of the range-sphere
     radius (4b) of each image point when the image scale m is wrong by ``dm`` (image m, m).
 
-    Oracle: central differences of the sphere radius √((|b|/m)² + h²), evaluated here, for
-    points from near the nadir (|b|/m ≪ h) to far out; compared per point relative to
+    Oracle: central differences of the sphere radius √((‖b‖/m)² + h²), evaluated here, for
+    points from near the nadir (‖b‖/m ≪ h) to far out; compared per point relative to
     s_e·dm/m, so that near and far points count alike. The answer must be linear in dm
     (−3·dm gives −3 times the change): the finite change of (4b) evaluated twice is refused.
     """
