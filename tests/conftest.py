@@ -13,7 +13,26 @@ import socket
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
+import compileall  # noqa: E402
+import importlib.util  # noqa: E402
+
 import pytest  # noqa: E402
+
+# Bytecode of the package once, before the suite starts its ~50 Python processes (lesson
+# kernels, the book's Sphinx, command-line and example runs): an editable install has none,
+# and where PYTHONDONTWRITEBYTECODE is set every one of those processes would compile the
+# ~280 modules it imports anew (~0.3 s CPU for a lesson kernel's imports). pip does the same
+# when it installs a wheel; files already compiled are skipped by their time stamp.
+_package = importlib.util.find_spec("orientviz")
+if _package is not None and _package.submodule_search_locations:
+    compileall.compile_dir(_package.submodule_search_locations[0], quiet=2)
+
+from orientviz.io.jsonio import import_jsonschema  # noqa: E402
+
+# jsonschema (nbformat, the notebook and problem-file tests use it) imported once without its
+# optional format checkers' packages (rfc3987_syntax builds a grammar at import: ~1.3 s CPU);
+# no schema validated here has a "format" keyword (orientviz's, nbformat's): nothing changes
+import_jsonschema()
 
 try:  # property-based tests explore new inputs locally; CI replays a fixed sequence, so
     # that a landing run cannot turn red on an input nobody has seen (run the suite

@@ -18,6 +18,8 @@ def test_diagnoses_name_the_mistake():
             ("check_sigma0", "no weights"): "weights are missing",
             ("check_sigma0", "divides by n"): "redundancy r",
             ("check_redundancy", "one observation per ray"): "two observations",
+            ("check_redundancy", "weighted: unknowns only"): "the unknowns alone",
+            ("check_redundancy", "weighted: observations only"): "but also 3 unknowns",
             ("check_critical_value", "one-sided"): "one-sided",
             ("check_after_doubling", "sigma0 doubled"): "halve it",
             ("check_after_doubling", "r halved"): "relative weights only",

@@ -81,8 +81,8 @@ def test_design_from_differences_of_the_library_is_refused():
             e = np.zeros(5)
             e[k] = 1e-6
             out[:, k] = (
-                rel.y_parallax(xy1, xy1, 152.7, rel.PairState.from_elements(e, b))[0]
-                - rel.y_parallax(xy1, xy1, 152.7, state)[0]
+                rel.y_parallax(xy1, xy1 - [90.0, 0.0], 152.7, rel.PairState.from_elements(e, b))[0]
+                - rel.y_parallax(xy1, xy1 - [90.0, 0.0], 152.7, state)[0]
             ) / 1e-6
         return out
 

@@ -22,6 +22,8 @@ def test_diagnoses_name_the_mistake():
             ("check_adjust_models", "T zero"): "not zeros",
             ("check_strip_polynomial", "degree"): "one degree too low",
             ("check_strip_polynomial", "no tilt"): "cross tilt",
+            ("check_strip_polynomial", "tilt to d"): "takes up noise",
+            ("check_strip_polynomial", "tilt too low"): "not to d_z − 2",
             ("check_strip_polynomial", "sign"): "wrong sign",
             ("check_strip_polynomial", "full control only"): "plan control only",
             ("check_compose", "order"): "order is wrong",

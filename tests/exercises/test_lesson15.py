@@ -89,8 +89,18 @@ def test_import_mistakes_are_explained():
         lesson15,
         answers,
         {
-            ("check_import_mistakes", "mirror as a rotation"): "mirrors the image",
-            ("check_import_mistakes", "principal point as none"): "a shift",
-            ("check_import_mistakes", "pixel size as a scale"): "invisible in the images",
+            ("check_import_mistakes", "mirror as a rotation"): "'v not flipped'. (v) What does",
+            ("check_import_mistakes", "principal point as none"): "(principal point) By how much",
+            ("check_import_mistakes", "pixel size as a scale"): "(pixel size) Which quantities",
         },
     )
+
+
+def test_import_mistakes_do_not_give_the_answer_away():
+    from orientviz.exercises._common import rejection
+
+    exc = rejection(
+        lesson15.check_import_mistakes,
+        answers.MUTANTS["check_import_mistakes"]["mirror as a scale"],
+    )
+    assert exc is not None and "no pattern" not in str(exc) and "mirror" not in str(exc)

@@ -83,3 +83,11 @@ def test_control_update_check_refuses_solving_with_the_enlarged_n():
     assert_diagnoses(
         lesson16, answers, {("check_control_update", "solve on the enlarged N"): "to np.linalg."}
     )
+
+
+def test_best_candidate_by_the_rms_is_named():
+    from mutants import assert_diagnoses
+
+    assert_diagnoses(
+        lesson16, answers, {("check_best_candidate", "RMS σ_Z of all points"): "smallest RMS σ_Z"}
+    )

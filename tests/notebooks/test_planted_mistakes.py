@@ -40,10 +40,8 @@ MARK = "# A colleague's version: one line is wrong."
 
 #: (lesson, function) → (checker, a piece of its diagnosis)
 CHECKERS = {
-    ("00", "redundancy"): ("check_redundancy", "not unknowns"),
     ("00", "critical_w"): ("check_critical_value", "one-sided"),
     ("07", "to_model"): ("check_model_coordinates", "not R"),
-    ("13", "difference_covariance"): ("check_difference_covariance", "not independent"),
     ("05", "six_point"): ("check_six_point", "degrees"),
     ("02", "ground_point"): ("check_ground_point", "Rᵀ instead of R"),
     ("10", "point_covariance"): ("check_point_covariance", "ADDS to the point's"),

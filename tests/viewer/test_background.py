@@ -21,7 +21,7 @@ from orientviz.io.solve import load_named
 from orientviz.viewer import app as app_module
 from orientviz.viewer import solved
 from orientviz.viewer.app import ViewerApp, resolve_content
-from orientviz.viewer.background import BackgroundSolve
+from orientviz.viewer.background import BackgroundSolve, Cancelled
 
 
 @pytest.fixture(scope="module")
@@ -184,3 +184,19 @@ def test_a_solution_ending_in_nan_shows_its_last_finite_state(model, small_limit
         assert st.cursor == len(st.history) - 2
     finally:
         app.stop()
+
+
+def test_a_hold_pauses_the_solve_at_its_next_iteration():
+    """A browser connecting holds the solve (its first picture gets the CPU)."""
+    job = BackgroundSolve(lambda callback: None, shown=1.0)
+    job.hold(60.0)
+    waiting = threading.Thread(target=lambda: pytest.raises(Cancelled, job._progress, "it", None))
+    waiting.start()
+    waiting.join(0.3)
+    assert waiting.is_alive() and job.iteration is None  # held at the iteration's end
+    job.cancel()  # stopping the viewer ends a hold too
+    waiting.join(10)
+    assert not waiting.is_alive()
+    free = BackgroundSolve(lambda callback: None, shown=1.0)
+    free._progress("it", None)  # no hold: goes on at once
+    assert free.iteration == "it"

@@ -85,6 +85,7 @@ def debugged_in_the_page(browser, app, size: tuple[int, int]) -> None:
         start = f"{st.history[0].sigma0:.10g}"
         body = page.inner_text("body")
         assert "solving in the background" in body and start in body
+        assert app.background._hold_until > 0  # the page's connection held the solve
         app.gate.set()
         assert app.background.wait(300)
         solution = f"{app.demo.solution.adjustment.sigma0:.10g}"

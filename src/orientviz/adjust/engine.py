@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InputError
 from .loop import Damping, Evaluation, Step, StopRule, iterate
-from .rank import raise_if_singular
+from .rank import raise_if_singular, scaled_condition_bound
 from .result import Adjustment, Iteration
 
 F64 = NDArray[np.float64]
@@ -42,6 +42,24 @@ def _normal(J, p: F64, r: F64):
     return JP @ J, JP @ r
 
 
+#: A factored normal matrix whose Jacobi-scaled condition number reaches this is treated
+#: as singular (diagnosed by :func:`~orientviz.adjust.rank.raise_if_singular`).
+COND_LIMIT: float = 1e12
+
+
+def _well_conditioned(N: F64, factor: tuple[F64, bool]) -> bool:
+    """Whether the Jacobi-scaled ``N`` has a 2-norm condition number below :data:`COND_LIMIT`
+    (``factor``: N's Cholesky factor). The singular values are computed only when the cheap
+    upper bound (:func:`~orientviz.adjust.rank.scaled_condition_bound`) is not below half
+    the limit (a margin far above the rounding error of either number at that size), so
+    the answer is the one ``np.linalg.cond`` of the scaled matrix gives."""
+    if scaled_condition_bound(N, factor) < 0.5 * COND_LIMIT:
+        return True
+    d = np.sqrt(np.abs(np.diag(N)))
+    d[d == 0] = 1.0
+    return bool(np.linalg.cond(N / np.outer(d, d)) < COND_LIMIT)
+
+
 def _solve(N, b: F64, names: list[str], context: str) -> F64:
     if sp.issparse(N):
         from scipy.sparse.linalg import splu
@@ -54,12 +72,9 @@ def _solve(N, b: F64, names: list[str], context: str) -> F64:
     try:
         c, low = scipy.linalg.cho_factor(N, check_finite=False)
         x = scipy.linalg.cho_solve((c, low), b, check_finite=False)
-        if np.all(np.isfinite(x)):
-            # guard against near-singular matrices Cholesky happens to factor
-            d = np.sqrt(np.abs(np.diag(N)))
-            d[d == 0] = 1.0
-            if np.linalg.cond(N / np.outer(d, d)) < 1e12:
-                return x
+        # guard against near-singular matrices Cholesky happens to factor
+        if np.all(np.isfinite(x)) and _well_conditioned(N, (c, low)):
+            return x
     except (np.linalg.LinAlgError, scipy.linalg.LinAlgError):
         pass
     raise_if_singular(N, names, context)

@@ -67,6 +67,11 @@ def _real_fit(x: F64, X: F64, dxy: int, dz: int, centre: F64, how: str) -> F64:
         AX, AY, _ = _real_rows(x, centre, dxy - 1, dz)
     if how == "no cross tilt":
         AZ = AZ[:, : dz + 1]
+    u, v = (x[:, 0] - centre[0]) / 1000.0, (x[:, 1] - centre[1]) / 1000.0
+    if how == "cross tilt to d":
+        AZ = np.column_stack([AZ, v * u**dz])
+    if how == "cross tilt too low" and dz >= 2:
+        AZ = np.delete(AZ, -1, axis=1)
     A = np.vstack([AX[plan], AY[plan]])
     sign = -1.0 if how == "sign" else 1.0
     l = sign * np.concatenate([X[plan, 0] - x[plan, 0], X[plan, 1] - x[plan, 1]])
@@ -119,6 +124,11 @@ def check_strip_polynomial(fn: Callable[[F64, F64, int, int], F64]) -> None:
                 "it to the strip coordinates",
                 _real_fit(x, X, dxy, dz, centre, "sign"),
             ),
+            (
+                "the cross tilt v·u^k runs to k = d_z − 1 (one degree below the bend), not to "
+                "d_z − 2",
+                _real_fit(x, X, dxy, dz, centre, "cross tilt too low"),
+            ),
         ]
         compare(
             f"strip {salt + 1} (degrees {dxy}/{dz}), error-free control: all {n} points [m]",
@@ -137,6 +147,11 @@ def check_strip_polynomial(fn: Callable[[F64, F64, int, int], F64]) -> None:
                 "a point with plan control only (or height control only) still counts for "
                 "planimetry (for height)",
                 _real_fit(x, noisy, dxy, dz, centre, "full control only"),
+            ),
+            (
+                "the cross tilt v·u^k runs to k = d_z − 1, one degree below the bend: with "
+                "k = d_z it takes up noise of the control",
+                _real_fit(x, noisy, dxy, dz, centre, "cross tilt to d"),
             ),
         ]
         compare(

@@ -49,30 +49,44 @@ def check_sigma0(sigma0: Callable[[F64, F64, int], float]) -> None:
     success(f"σ̂0 = √(vᵀPv / r) = {got:.3f}")
 
 
-def check_redundancy(redundancy: Callable[[int, int, int, int], int]) -> None:
-    """``redundancy(n_images, n_tie, n_control, n_rays)`` of a bundle with fixed control points."""
+def check_redundancy(redundancy: Callable[..., int]) -> None:
+    """``redundancy(n_images, n_tie, n_control, n_rays, weighted_control)`` of a bundle whose
+    full control points are fixed (``weighted_control=False``) or enter as unknowns with their
+    given coordinates as weighted observations (``True``)."""
     cases = [
         (2, 6, 4, 20),
         (18, 380, 8, 1021),
         (7, 45, 6, 190),
     ]  # the first by hand: 40 − 12 − 18 = 10
-    for m, t, k, n in cases:
-        truth = 2 * n - 6 * m - 3 * t
-        wrong = [
-            ("each ray gives two observations, x and y", n - 6 * m - 3 * t),
-            ("fixed control points are not unknowns", 2 * n - 6 * m - 3 * (t + k)),
-            ("an image has 6 orientation unknowns (X0, Y0, Z0, ω, φ, κ)", 2 * n - 7 * m - 3 * t),
-        ]
-        got = call(redundancy, m, t, k, n, what="redundancy")
-        compare(
-            f"redundancy of {m} images, {t} tie points, {n} rays",
-            got,
-            truth,
-            rtol=1e-12,
-            scale=1.0,
-            wrong=wrong,
-        )
-    success("redundancy r = 2·rays − 6·images − 3·tie points")
+    for weighted in (False, True):
+        for m, t, k, n in cases:
+            truth = 2 * n - 6 * m - 3 * t  # weighted: + 3k observations, + 3k unknowns
+            wrong = [
+                ("each ray gives two observations, x and y", n - 6 * m - 3 * t),
+                ("an image has 6 orientation unknowns (X0, Y0, Z0, ω, φ, κ)",
+                 2 * n - 7 * m - 3 * t),
+            ]  # fmt: skip
+            if weighted:
+                wrong += [
+                    ("weighted control points are unknowns (3 each) AND observations (their 3 "
+                     "given coordinates): the unknowns alone are counted here",
+                     2 * n - 6 * m - 3 * (t + k)),
+                    ("weighted control points add 3 observations each but also 3 unknowns",
+                     2 * n + 3 * k - 6 * m - 3 * t),
+                ]  # fmt: skip
+            else:
+                wrong.append(("fixed control points are not unknowns", 2 * n - 6 * m - 3 * (t + k)))
+            got = call(redundancy, m, t, k, n, weighted, what="redundancy")
+            compare(
+                f"redundancy of {m} images, {t} tie points, {k} control points "
+                f"({'weighted' if weighted else 'fixed'}), {n} rays",
+                got,
+                truth,
+                rtol=1e-12,
+                scale=1.0,
+                wrong=wrong,
+            )
+    success("redundancy r = 2·rays − 6·images − 3·tie points, fixed or weighted control alike")
 
 
 def check_critical_value(critical_w: Callable[[float], float]) -> None:

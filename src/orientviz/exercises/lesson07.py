@@ -29,7 +29,7 @@ from .lesson02 import _axis_rotation
 
 __all__ = [
     "check_design",
-    "check_extra_point",
+    "check_free_axis",
     "check_model_coordinates",
     "check_similarity",
 ]
@@ -198,61 +198,43 @@ def check_design(design: Callable[[F64, float, F64], F64]) -> None:
     success("design matrix of the similarity agrees with numerical derivatives")
 
 
-def check_extra_point(best_extra_point: Callable[[F64, F64], int]) -> None:
-    """``best_extra_point(x_control, x_candidates)`` must return the index of the candidate
-    whose addition as a full XYZ control point (equal σ) lowers σ of the scale m the most.
+def check_free_axis(free_axis: Callable[[F64], F64]) -> None:
+    """``free_axis(x_control)`` must return the unit vector (model frame, either sign) about
+    which a model can still turn when all its full control points lie on one straight line.
 
-    Oracle: for every candidate, σ_m from the inverse of the normal matrix of the numerically
-    differentiated similarity with that point added (brute force, not the centroid rule).
+    Oracle: the null vector of the numerically differentiated similarity at those points
+    (rank 6 of 7); its rotation part, turned into the model frame.
     """
-    rng = rng_for("lesson07.check_extra_point")
-    for case in range(3):
-        x, m, R, _ = _model(rng, 4)
-        corner = rng.choice([-1.0, 1.0], 2)
-        x_ctl = x.copy()
-        x_ctl[:, :2] = corner * rng.uniform(50, 95, (4, 2))  # control crowded in one corner
-        xm = x_ctl.mean(0)
-        # candidates: one far from the model origin but beside the control, one across the
-        # model from the control, one in the middle, two at the sides
-        cand = np.array([
-            [*(corner * 150.0), 5.0],
-            [*(-corner * [60.0, 20.0]), -4.0],
-            [0.0, 0.0, 1.0],
-            [corner[0] * 120.0, -corner[1] * 40.0, 2.0],
-            [-corner[0] * 30.0, corner[1] * 130.0, -2.0],
-        ]) + rng.normal(0.0, 3.0, (5, 3))  # fmt: skip
-        cand = cand[rng.permutation(5)]
-        sig_m = []
-        for p in cand:
-            A = _numeric_design(np.vstack([x_ctl, p]), m, R)
-            sig_m.append(float(np.sqrt(np.linalg.inv(A.T @ A)[6, 6])))
-        want = int(np.argmin(sig_m))
-        got = call(best_extra_point, x_ctl.copy(), cand.copy(), what="best_extra_point")
-        try:
-            k = int(got)
-        except (TypeError, ValueError):
-            raise CheckFailed(f"best_extra_point: expected an index, got {got!r}") from None
-        if k == want:
-            continue
-        origin = int(np.argmax(np.sum(cand**2, axis=1)))
-        nearest = int(np.argmin(np.sum((cand - xm) ** 2, axis=1)))
-        if not 0 <= k < len(cand):
-            why = f"there are {len(cand)} candidates (index 0–{len(cand) - 1})"
-        elif k == origin:
-            why = ("that candidate lies farthest from the model's ORIGIN; σ_m depends on the "
-                   "spread about the centroid of the control, Σ|x − x̄|², and the origin is "
-                   "anywhere (here beside the control)")  # fmt: skip
-        elif k == nearest:
-            why = "that candidate lies nearest to the control's centroid: it adds the least spread"
-        else:
-            why = "compare σ_m after adding each candidate"
-        raise CheckFailed(
-            f"best_extra_point (case {case + 1}): candidate {k} gives σ_m = {sig_m[k]:.3g}, "
-            f"candidate {want} gives {sig_m[want]:.3g}: {why}",
-            error=abs(sig_m[k] / sig_m[want] - 1.0),
-            tolerance=1e-9,
-        )
-    success("the candidate farthest from the control's centroid: it adds the most Σ|x − x̄|²")
+    rng = rng_for("lesson07.check_free_axis")
+    for case, n in enumerate((3, 5, 4)):
+        x, m, R, _ = _model(rng, n)
+        u = rng.normal(0.0, 1.0, 3)
+        u /= np.linalg.norm(u)
+        base = x[0] + rng.uniform(-30.0, 30.0, 3)
+        x_ctl = base + np.outer(rng.uniform(-120.0, 120.0, n), u)  # a road: one straight line
+        null = np.linalg.svd(_numeric_design(x_ctl, m, R))[2][-1]
+        axis = R.T @ null[3:6]
+        axis /= np.linalg.norm(axis)
+        got = np.asarray(call(free_axis, x_ctl.copy(), what="free_axis"), dtype=float)
+        if got.shape != (3,):
+            raise CheckFailed(f"free_axis: expected a vector of 3 numbers, got shape {got.shape}")
+        if float(got @ axis) < 0.0:
+            got = -got  # the sign of the axis is free
+        centroid = x_ctl.mean(axis=0) / np.linalg.norm(x_ctl.mean(axis=0))
+        size = float(np.linalg.norm(got))
+        wrong = [
+            ("return a UNIT vector: divide by its length", axis * size),
+            ("this is the direction from the model origin to the control's centroid; the "
+             "origin plays no part — the free rotation turns about the line of the points",
+             centroid * np.sign(float(centroid @ axis) or 1.0)),
+        ]  # fmt: skip
+        if size > 0 and abs(float(got @ axis)) < 0.1 * size:
+            wrong.append(("this is perpendicular to the line of the control points (a smallest "
+                          "singular vector of the centred points?): the rotation they cannot "
+                          "fix turns about the line itself", got))  # fmt: skip
+        compare(f"free axis of control on one line (case {case + 1}, {n} points)", got, axis,
+                rtol=1e-6, scale=1.0, wrong=wrong)  # fmt: skip
+    success("the rotation that control on one line cannot fix turns about that line (3 cases)")
 
 
 def _partial_control(rng: np.random.Generator):

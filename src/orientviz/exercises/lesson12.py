@@ -146,7 +146,7 @@ def check_new_position(fn: Callable) -> None:
 
 
 def check_detection_probability(fn: Callable) -> None:
-    """Check ``fn(nabla, sigma, r, k) -> P``: the probability that the w-test |w| > k flags an
+    """Check ``fn(nabla, sigma, r, k) -> P``: the probability that the w-test abs(w) > k flags an
     observation with the error ``nabla`` (σ ``sigma``, redundancy number ``r``), arrays.
 
     Oracle: w² is non-central χ² with one degree of freedom and non-centrality r ∇²/σ²
@@ -186,7 +186,7 @@ def check_bias_to_noise(fn: Callable) -> None:
     observation i on any function f = cᵀx̂ of the unknowns, in units of σ_f (arrays r).
 
     Oracle: on a random weighted line fit, Δx̂ = N⁻¹AᵀPe_i∇₀ computed for every observation and
-    √(Δx̂ᵀNΔx̂) — the largest |cᵀΔx̂|/σ_f over all c (Cauchy–Schwarz) — with r from the leave-one-
+    √(Δx̂ᵀNΔx̂) — the largest abs(cᵀΔx̂)/σ_f over all c (Cauchy–Schwarz) — with r from the leave-one-
     out adjustments; not a formula in r.
     """
     rng = rng_for("lesson12.check_bias_to_noise")

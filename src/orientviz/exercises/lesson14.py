@@ -96,9 +96,10 @@ def check_radius_change(fn: Callable) -> None:
     """Check ``fn(xy, x0, y0, m, h, dm) -> ds``: the first-order change of the range-sphere
     radius (4b) of each image point when the image scale m is wrong by ``dm`` (image m, m).
 
-    Oracle: central differences of the sphere radius √((|b|/m)² + h²), evaluated here, for
-    points from near the nadir (|b|/m ≪ h) to far out; compared per point relative to
-    s_e·dm/m, so that near and far points count alike.
+    Oracle: central differences of the sphere radius √((‖b‖/m)² + h²), evaluated here, for
+    points from near the nadir (‖b‖/m ≪ h) to far out; compared per point relative to
+    s_e·dm/m, so that near and far points count alike. The answer must be linear in dm
+    (−3·dm gives −3 times the change): the finite change of (4b) evaluated twice is refused.
     """
     rng = rng_for("lesson14.check_radius_change")
     h, m, x0, y0 = 15020.0, 1.1264, 434.2, 716.8
@@ -113,13 +114,26 @@ def check_radius_change(fn: Callable) -> None:
     eps = 1e-7 * m
     want = (radius(m + eps) - radius(m - eps)) / (2 * eps) * dm
     got = call(fn, xy.copy(), x0, y0, m, h, dm, what="radius_change")
+    back = call(fn, xy.copy(), x0, y0, m, h, -3.0 * dm, what="radius_change")
+    try:
+        ratio = np.asarray(back, dtype=float) / np.asarray(got, dtype=float)
+    except (TypeError, ValueError):
+        raise CheckFailed(f"radius_change: expected one number per point, got {got!r}") from None
+    if ratio.shape == rho.shape and np.max(np.abs(ratio + 3.0)) > 1e-9 * 3.0:
+        raise CheckFailed(
+            "radius_change: not linear in dm (−3·dm does not give −3 times the change): that is "
+            "the finite change s(m + dm) − s(m); the first-order change ds = (ds/dm)·dm is asked "
+            "— differentiate (4b)",
+            error=float(np.max(np.abs(ratio + 3.0)) / 3.0),
+            tolerance=1e-9,
+        )
     s_e, s = rho / m, radius(m)
     unit = s_e * dm / m  # the change of s_e itself, per point
     try:
         g = np.asarray(got, dtype=float) / unit
     except (TypeError, ValueError):
         raise CheckFailed(f"radius_change: expected one number per point, got {got!r}") from None
-    compare("ds per point, in units of s_e·dm/m", g, want / unit, rtol=2e-3, scale=1.0, wrong=[
+    compare("ds per point, in units of s_e·dm/m", g, want / unit, rtol=1e-6, scale=1.0, wrong=[
         ("that is the change of s_e = |b|/m, not of s: the square root with h damps it by "
          "s_e/s (most near the nadir)", -np.ones_like(s)),
         ("the sign: a larger scale m makes every sphere smaller", -want / unit),
@@ -205,37 +219,43 @@ def check_best_pair(fn: Callable) -> None:
     Oracle: every pair tried, σ from (JᵀJ)⁻¹ with J the unit vectors station − point, on a
     scene the student has not seen (a station 12 km above 20 points spread over ±40 km).
     """
-    rng = rng_for("lesson14.check_best_pair")
-    C = np.column_stack([rng.uniform(-40e3, 40e3, 20), rng.uniform(-40e3, 40e3, 20),
-                         rng.uniform(-600.0, 600.0, 20)])  # fmt: skip
-    X0 = np.array([3000.0, -2000.0, 12000.0])
-    far = np.argsort(-np.hypot(*(C[:, :2] - X0[:2]).T))
-    tri = sorted(int(k) for k in far[[0, 2, 5]])
-    pairs = [(a, b) for a in range(20) for b in range(a + 1, 20) if a not in tri and b not in tri]
-    sig = {pr: _station_sigma(C, X0, tri + list(pr)) for pr in pairs}
-    best = min(pairs, key=lambda pr: sig[pr][2])
-    got = call(fn, C.copy(), X0.copy(), list(tri), what="best_pair")
-    try:
-        g = tuple(sorted(int(k) for k in got))
-    except (TypeError, ValueError):
-        raise CheckFailed(f"best_pair: expected two point indices, got {got!r}") from None
-    if len(g) != 2 or g[0] == g[1]:
-        raise CheckFailed(f"best_pair: expected two different point indices, got {got!r}")
-    if g == best:
-        success(f"σ_Z of the station {sig[best][2]:.2f} σ_s with points {best} "
-                f"(three alone: {_station_sigma(C, X0, tri)[2]:.2f} σ_s)")  # fmt: skip
-        return
-    names = {
-        max(pairs, key=lambda pr: sig[pr][2]): "the pair with the LARGEST σ_Z",
-        min(pairs, key=lambda pr: np.hypot(*sig[pr][:2])): (
-            "the pair best for the plan position (σ_X, σ_Y); the question is the height"),
-        max(pairs, key=lambda pr: np.linalg.norm(C[pr[0], :2] - C[pr[1], :2])): (
-            "the two points farthest apart: spread helps the plan, the height needs steep rays"),
-    }  # fmt: skip
-    if g not in sig:
-        why = "one of them is already among the three, or an index is out of range"
-    else:
-        why = names.get(
-            g, f"σ_Z {sig[g][2]:.2f} σ_s, but another pair gives {sig[best][2]:.2f} σ_s"
-        )
-    raise CheckFailed(f"best_pair: {g} — {why}", error=np.inf, tolerance=0.0)
+    for salt in (0, 2):  # scene 2: the 3-D criterion (trace of (JᵀJ)⁻¹) picks another pair
+        rng = rng_for("lesson14.check_best_pair", salt)
+        C = np.column_stack([rng.uniform(-40e3, 40e3, 20), rng.uniform(-40e3, 40e3, 20),
+                             rng.uniform(-600.0, 600.0, 20)])  # fmt: skip
+        X0 = np.array([3000.0, -2000.0, 12000.0])
+        far = np.argsort(-np.hypot(*(C[:, :2] - X0[:2]).T))
+        tri = sorted(int(k) for k in far[[0, 2, 5]])
+        pairs = [
+            (a, b) for a in range(20) for b in range(a + 1, 20) if a not in tri and b not in tri
+        ]
+        sig = {pr: _station_sigma(C, X0, tri + list(pr)) for pr in pairs}
+        best = min(pairs, key=lambda pr: sig[pr][2])
+        got = call(fn, C.copy(), X0.copy(), list(tri), what="best_pair")
+        try:
+            g = tuple(sorted(int(k) for k in got))
+        except (TypeError, ValueError):
+            raise CheckFailed(f"best_pair: expected two point indices, got {got!r}") from None
+        if len(g) != 2 or g[0] == g[1]:
+            raise CheckFailed(f"best_pair: expected two different point indices, got {got!r}")
+        if g == best:
+            continue
+        names = {
+            max(pairs, key=lambda pr: sig[pr][2]): "the pair with the LARGEST σ_Z",
+            min(pairs, key=lambda pr: np.hypot(*sig[pr][:2])): (
+                "the pair best for the plan position (σ_X, σ_Y); the question is the height"),
+            min(pairs, key=lambda pr: np.sum(sig[pr] ** 2)): (
+                "the pair best for the 3-D position (the trace of (JᵀJ)⁻¹); the question is the "
+                "height alone, σ_Z"),
+            max(pairs, key=lambda pr: np.linalg.norm(C[pr[0], :2] - C[pr[1], :2])): (
+                "the two points farthest apart: spread helps the plan, the height needs steep "
+                "rays"),
+        }  # fmt: skip
+        if g not in sig:
+            why = "one of them is already among the three, or an index is out of range"
+        else:
+            why = names.get(
+                g, f"σ_Z {sig[g][2]:.2f} σ_s, but another pair gives {sig[best][2]:.2f} σ_s"
+            )
+        raise CheckFailed(f"best_pair: {g} — {why}", error=np.inf, tolerance=0.0)
+    success("σ_Z of the station smallest with your pair in two scenes (not the pair best in 3-D)")

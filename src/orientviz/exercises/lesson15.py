@@ -113,19 +113,18 @@ def _import_patterns() -> dict[str, tuple[str, str]]:
     return out
 
 
-_WHY = {
+_HINT = {
     IMPORT_CASES[0]: (
-        "a y that is not flipped mirrors the image: no shift, scale or rotation turns a mirror "
-        "image into the original, so the misclosures (0 in x, 2y in y) fit no pattern"
+        "(v) What does a y axis that points the wrong way do to the picture — can a shift, a "
+        "scale or a turn undo it?"
     ),
     IMPORT_CASES[1]: (
-        "every reduced coordinate is off by the same (cx − W/2, cy − H/2)·p: a shift, the same "
-        "in every image"
+        "(principal point) By how much does each reduced coordinate change, and does that "
+        "depend on the point?"
     ),
     IMPORT_CASES[2]: (
-        "the pixel size scales the measured coordinates AND the principal distance c = f·p "
-        "alike, so the computed image scales with the observed one: the misclosures stay as "
-        "they were (none) — a wrong pixel size is invisible in the images"
+        "(pixel size) Which quantities does the pixel size convert — only the measured "
+        "coordinates? And what does x = −c·u/w see of a factor on both?"
     ),
 }
 
@@ -152,10 +151,9 @@ def check_import_mistakes(fn: Callable) -> None:
     truth = _import_patterns()
     wrong = [c for c in IMPORT_CASES if got[c] != truth[c][0]]
     if wrong:
-        c = wrong[0]
         raise CheckFailed(
-            f"import_mistakes[{c!r}] = {got[c]!r}, the misclosures show {truth[c][0]!r} "
-            f"({truth[c][1]}): {_WHY[c]}",
+            f"import_mistakes: {len(wrong)} of 3 mispredicted — {', '.join(map(repr, wrong))}. "
+            + " ".join(_HINT[c] for c in wrong),
             error=np.inf,
             tolerance=0.0,
         )

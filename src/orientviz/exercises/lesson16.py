@@ -207,6 +207,15 @@ def _worst_after(Q: np.ndarray, j: int, sigma: float) -> float:
     return float(np.delete(sz, j).max())
 
 
+def _rms_after(Q: np.ndarray, j: int, sigma: float, others: bool) -> float:
+    """RMS σ_Z (m) after making ``j`` control, of the other points or of all points."""
+    u = Q.shape[0]
+    E = np.zeros((3, u))
+    E[np.arange(3), [3 * j, 3 * j + 1, 3 * j + 2]] = 1.0
+    var = np.diag(np.linalg.inv(np.linalg.inv(Q) + E.T @ E / sigma**2))[2::3]
+    return float(np.sqrt(np.mean(np.delete(var, j) if others else var)))
+
+
 def _candidate_case(rng: np.random.Generator, p: int) -> tuple[np.ndarray, list[int]]:
     """Point cofactors (3p × 3p) of a chain of points tied to their neighbours, and the
     candidates, drawn until the point with the largest σ_Z is *not* the best candidate."""
@@ -235,8 +244,10 @@ def check_best_candidate(fn: Callable) -> None:
     ``Q`` (3p, 3p) are the cofactors of the points' coordinates (X, Y, Z of point 0, …).
     """
     rng = rng_for("lesson16.check_best_candidate")
-    for p in (9, 12):
-        Q, cand = _candidate_case(rng, p)
+    cases = [_candidate_case(rng, 9), _candidate_case(rng, 12)]
+    # a third chain in which the candidate best for the RMS σ_Z is another one
+    cases.append(_candidate_case(rng_for("lesson16.check_best_candidate", 7), 15))
+    for Q, cand in cases:
         worst = [_worst_after(Q, j, 0.05) for j in cand]
         best = cand[int(np.argmin(worst))]
         got = call(fn, Q.copy(), list(cand), 0.05, what="best_candidate")
@@ -248,12 +259,22 @@ def check_best_candidate(fn: Callable) -> None:
             raise CheckFailed(f"point {j} is not among the candidates {cand}")
         if j != best:
             sz = np.sqrt(np.diag(Q)[2::3])
-            why = (
-                " — the point with the largest σ_Z itself: control there helps it, but "
-                "not necessarily the worst of the others"
-                if j == cand[int(np.argmax(sz[cand]))]
-                else ""
-            )
+            rms = {
+                k: min(cand, key=lambda c, k=k: _rms_after(Q, c, 0.05, others=k))
+                for k in (True, False)
+            }
+            if j == cand[int(np.argmax(sz[cand]))]:
+                why = (
+                    " — the point with the largest σ_Z itself: control there helps it, but "
+                    "not necessarily the worst of the others"
+                )
+            elif j in rms.values():
+                why = (
+                    " — the candidate with the smallest RMS σ_Z: the question is the LARGEST "
+                    "σ_Z of the other points (the worst spot of the block)"
+                )
+            else:
+                why = ""
             raise CheckFailed(
                 f"candidate {j} leaves a largest σ_Z of {worst[cand.index(j)]:.4f} m, "
                 f"candidate {best} {worst[cand.index(best)]:.4f} m{why}"

@@ -304,12 +304,19 @@ FORMAT_PACKAGES = ("rfc3987_syntax", "rfc3987", "isoduration", "rfc3339_validato
                    "idna")  # fmt: skip
 
 
-def _import_jsonschema():
+def import_jsonschema():
     """Import :mod:`jsonschema` without its optional format checkers.
 
     orientviz's schemas use no ``format`` keyword (and validate without a format
     checker), so the packages of :data:`FORMAT_PACKAGES` are kept out for the duration
-    of jsonschema's own import (they stay importable for anyone else afterwards).
+    of jsonschema's own import (they stay importable for anyone else afterwards). The
+    test suite and the book's build import jsonschema this way before nbformat does
+    (nbformat's notebook schemas use no ``format`` keyword either).
+
+    Returns
+    -------
+    module
+        :mod:`jsonschema` (the one already imported, if any).
     """
     import sys
 
@@ -330,7 +337,7 @@ def _import_jsonschema():
 @cache
 def validator_for(name: str):
     """A Draft 2020-12 validator for schema file ``name`` (with ``$ref`` resolution)."""
-    Draft202012Validator = _import_jsonschema().Draft202012Validator
+    Draft202012Validator = import_jsonschema().Draft202012Validator
 
     schema = load_schema(name)
     Draft202012Validator.check_schema(schema)

@@ -207,6 +207,8 @@ class ViewerApp:
         if self.background is not None:  # the solve runs while the start values are shown
             self.panel.show_pending(self.background)
             self.background.start(self.take_background, self.panel.show_pending)
+            job = self.background  # a browser's first picture first, then the solve again
+            self.server.on_client_connect(lambda _c: job.hold() if job.running else None)
 
     def take_background(self, job: Any) -> None:
         """The solve started at opening has ended: show its solution (or its error).

@@ -12,8 +12,13 @@ iterations and can stop it between two iterations.
 from __future__ import annotations
 
 import threading
+import time
 from collections.abc import Callable
 from typing import Any
+
+#: Seconds a background solve waits (at its next iteration) when a browser connects: the
+#: page's first picture gets the CPU (software WebGL shares the two cores with the solve).
+FIRST_PICTURE_HOLD: float = 3.0
 
 
 class Cancelled(Exception):
@@ -52,8 +57,15 @@ class BackgroundSolve:
         self.done = threading.Event()
         self._cancel = threading.Event()
         self._thread: threading.Thread | None = None
+        self._hold_until = 0.0
+
+    def hold(self, seconds: float = FIRST_PICTURE_HOLD) -> None:
+        """Let the solve wait at its next iteration until ``seconds`` from now."""
+        self._hold_until = max(self._hold_until, time.monotonic() + seconds)
 
     def _progress(self, iteration: Any, on_iteration: Callable[[Any], None] | None) -> None:
+        while not self._cancel.is_set() and time.monotonic() < self._hold_until:
+            self._cancel.wait(0.05)  # held (:meth:`hold`)
         if self._cancel.is_set():
             raise Cancelled("the viewer was stopped")
         self.iteration = iteration

@@ -36,8 +36,9 @@ from ..orientation.plotter import AnalogPlotter
 from .app import ViewerApp
 from .deformation import deformation_extra
 from .demos import Demo
+from .history import Snapshot
 from .pair_scene import PairView
-from .state import BlockState, Snapshot
+from .state import BlockState
 
 #: output metadata key holding the name of the book's static picture of the scene
 SNAPSHOT_KEY = "orientviz_viewer_snapshot"

@@ -19,7 +19,7 @@ sequence, ω-φ-κ by default: R = R_ω R_φ R_κ).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -31,55 +31,9 @@ from ..block import Block
 from ..errors import InputError
 from .adjuster import Adjuster, default_adjuster, image_normalized_residuals
 from .edits import Edits, Mapping, effective_block, expand_result
+from .history import Change, Snapshot
 
 F64 = NDArray[np.float64]
-
-
-@dataclass
-class Snapshot:
-    """One replayable state: orientations, points and the σ0 reported for it."""
-
-    label: str
-    X0: F64
-    angles: F64
-    xyz: F64
-    sigma0: float
-    #: the camera terms (the result's ``"additional"`` block) at this state, or None
-    ap: F64 | None = None
-
-
-@dataclass
-class Change:
-    """One entry of the list of changes: what was done and the state it led to.
-
-    Attributes
-    ----------
-    label : str
-        What the user did, e.g. ``"observation img3/pt12 off"``.
-    sigma0 : float
-        σ̂0 of the adjustment after the change (NaN before any adjustment).
-    edits : Edits
-        The switches and values after the change.
-    X0, angles, xyz : ndarray
-        Estimates after the change (m, rad, m).
-    result : Adjustment or None
-        The adjustment after the change (laid out for the whole block).
-    history : list of Snapshot
-        The iteration history at that moment, and ``cursor`` its position.
-    """
-
-    label: str
-    sigma0: float
-    edits: Edits
-    X0: F64
-    angles: F64
-    xyz: F64
-    result: Adjustment | None
-    history: list[Snapshot]
-    cursor: int
-    at_result: bool
-    mapping: Mapping | None
-    ap: F64 | None = None
 
 
 class BlockState:

@@ -14,8 +14,9 @@ def _sol_sigma0(v, sigma, r):
     return np.sqrt(np.sum((v / sigma) ** 2) / r)
 
 
-def _sol_redundancy(n_images, n_tie, n_control, n_rays):
-    return 2 * n_rays - 6 * n_images - 3 * n_tie
+def _sol_redundancy(n_images, n_tie, n_control, n_rays, weighted_control=False):
+    extra = 3 * n_control if weighted_control else 0  # observations and unknowns alike
+    return 2 * n_rays + extra - 6 * n_images - 3 * n_tie - extra
 
 
 def _sol_critical(alpha):
@@ -41,9 +42,11 @@ MUTANTS = {
         "1/sigma": lambda v, s, r: np.sqrt(np.sum(v**2 / s) / r),
     },
     "check_redundancy": {
-        "one observation per ray": lambda m, t, k, n: n - 6 * m - 3 * t,
-        "control as unknowns": lambda m, t, k, n: 2 * n - 6 * m - 3 * (t + k),
-        "7 per image": lambda m, t, k, n: 2 * n - 7 * m - 3 * t,
+        "one observation per ray": lambda m, t, k, n, w: n - 6 * m - 3 * t,
+        "control as unknowns": lambda m, t, k, n, w: 2 * n - 6 * m - 3 * (t + k),
+        "7 per image": lambda m, t, k, n, w: 2 * n - 7 * m - 3 * t,
+        "weighted: unknowns only": lambda m, t, k, n, w: 2 * n - 6 * m - 3 * (t + (k if w else 0)),
+        "weighted: observations only": lambda m, t, k, n, w: 2 * n + 3 * k * w - 6 * m - 3 * t,
     },
     "check_critical_value": {
         "one-sided": lambda a: norm.isf(a),

@@ -41,8 +41,17 @@ def _sol_design(x, m, R):
     return A
 
 
-def _sol_extra_point(x_control, x_candidates):
-    return int(np.argmax(np.sum((x_candidates - x_control.mean(0)) ** 2, axis=1)))
+def _sol_free_axis(x_control, how="line"):
+    """The direction of the line through the control points (or a wrong answer)."""
+    xc = x_control - x_control.mean(axis=0)
+    V = np.linalg.svd(xc)[2]
+    if how == "normal":
+        return V[-1]
+    if how == "centroid":
+        return x_control.mean(axis=0) / np.linalg.norm(x_control.mean(axis=0))
+    if how == "not unit":
+        return x_control[-1] - x_control[0]
+    return V[0]
 
 
 def _model_axes_design(x, m, R):
@@ -86,7 +95,7 @@ SOLUTIONS = {
     "check_similarity": _sol_similarity,
     "check_model_coordinates": _sol_model,
     "check_design": _sol_design,
-    "check_extra_point": _sol_extra_point,
+    "check_free_axis": _sol_free_axis,
 }
 
 MUTANTS = {
@@ -117,11 +126,8 @@ MUTANTS = {
         "scale column times m": lambda x, m, R: _sol_design(x, m, R) * np.r_[1, 1, 1, 1, 1, 1, m],
         "model axes": _model_axes_design,
     },
-    "check_extra_point": {
-        "farthest from the origin": lambda xc, c: int(np.argmax(np.sum(c**2, axis=1))),
-        "nearest to the centroid": lambda xc, c: int(
-            np.argmin(np.sum((c - xc.mean(0)) ** 2, axis=1))
-        ),
-        "first candidate": lambda xc, c: 0,
+    "check_free_axis": {
+        how: (lambda x, how=how: _sol_free_axis(x, how))
+        for how in ("normal", "centroid", "not unit")
     },
 }

@@ -194,7 +194,7 @@ def _strip_polynomial(x, X, dxy, dz, mistake=None):
     z, Z = x[:, 0] + 1j * x[:, 1], X[:, 0] + 1j * X[:, 1]
     sign = -1.0 if mistake == "sign" else 1.0
     c = np.linalg.lstsq(A[plan], sign * (Z[plan] - z[plan]), rcond=None)[0]
-    n_tilt = {"no tilt": 0, "tilt to d": dz + 1}.get(mistake, dz)
+    n_tilt = {"no tilt": 0, "tilt to d": dz + 1, "tilt too low": dz - 1}.get(mistake, dz)
     B = np.column_stack([u**k for k in range(dz + 1)] + [v * u**k for k in range(n_tilt)])
     e = np.linalg.lstsq(B[height], sign * (X[height, 2] - x[height, 2]), rcond=None)[0]
     zc = z + A @ c
@@ -215,7 +215,7 @@ SOLUTIONS = {
 MUTANTS = {
     "check_strip_polynomial": {
         m: (lambda x, X, a, b, m=m: _strip_polynomial(x, X, a, b, mistake=m))
-        for m in ("degree", "no tilt", "tilt to d", "sign", "full control only")
+        for m in ("degree", "no tilt", "tilt to d", "tilt too low", "sign", "full control only")
     },
     "check_model_jacobian": {
         "sign": lambda *a: _model_jacobian(*a, mistake="sign"),

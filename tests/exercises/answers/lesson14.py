@@ -61,6 +61,8 @@ def _best_pair(C, X0, tri, mistake=None):
         return min(pairs, key=lambda pr: np.hypot(*_station_sigma(C, X0, list(tri) + list(pr))[:2]))
     if mistake == "spread":
         return max(pairs, key=lambda pr: np.linalg.norm(C[pr[0], :2] - C[pr[1], :2]))
+    if mistake == "3-D trace":
+        return min(pairs, key=lambda pr: np.sum(_station_sigma(C, X0, list(tri) + list(pr)) ** 2))
     return min(pairs, key=lambda pr: _station_sigma(C, X0, list(tri) + list(pr))[2])
 
 
@@ -82,7 +84,7 @@ MUTANTS = {
     },
     "check_radius_change": {
         k: (lambda *a, k=k: _radius_change(*a, mistake=k))
-        for k in ("s_e", "sign", "relative", "s/s_e")
+        for k in ("s_e", "sign", "relative", "s/s_e", "exact")
     },
     "check_trilaterate": {
         "swapped": lambda C, r: _trilaterate(C, r)[::-1],
@@ -91,7 +93,7 @@ MUTANTS = {
     "check_best_pair": {
         **{
             k: (lambda C, X0, tri, k=k: _best_pair(C, X0, tri, k))
-            for k in ("largest", "plan", "spread")
+            for k in ("largest", "plan", "spread", "3-D trace")
         },
         "the stand-in": best_pair_library,
     },

@@ -78,6 +78,12 @@ MUTANTS = {
         "where σ_Z is largest": lambda Q, c, s: c[int(np.argmax(np.sqrt(np.diag(Q)[2::3])[c]))],
         "the first candidate": lambda Q, c, s: c[0],
         "the mean σ_Z instead of the largest": _best_by(np.mean),
+        "RMS σ_Z of all points": lambda Q, c, s: min(
+            c,
+            key=lambda j: np.sqrt(
+                np.mean(np.diag(_control_update(Q, [3 * j, 3 * j + 1, 3 * j + 2], [s] * 3))[2::3])
+            ),
+        ),
     },
     "check_control_update": {
         "P instead of P⁻¹": _update_with(lambda s: np.diag(1 / s**2)),
