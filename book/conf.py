@@ -84,6 +84,9 @@ numpydoc_class_members_toctree = False
 autodoc_member_order = "bysource"
 # the numpydoc Parameters give the types; expanded ArrayLike unions are unreadable
 autodoc_typehints = "none"
+# the package writes no PEP 484 type comments: autodoc need not parse each function's source
+# for them (the pages are the same: 469 of 469 compared)
+autodoc_use_type_comments = False
 autosummary_generate = True
 templates_path = ["_templates"]  # module pages document every member in full (numpydoc)
 

@@ -155,6 +155,42 @@ def _bad(node: Any) -> tuple[list[str | int], str] | None:
     return None
 
 
+def _suspect(node: Any) -> bool:
+    """True if a document parsed without the number hooks may hold anything
+    :func:`_find_bad` or the hooks object to: a non-finite float or an integer beyond the
+    float range, a NaN/Infinity placeholder, a duplicated key, a non-ASCII or very long
+    text. False means the strict parse gives the same document and finds nothing."""
+    t = type(node)
+    if t is list:
+        values: Iterable[Any] = node
+    elif t is dict:
+        for k in node:
+            if not k.isascii() or len(k) > 1000:
+                return True
+        values = node.values()
+    else:
+        values = (node,)
+    for v in values:
+        tv = type(v)
+        if tv is float:
+            if v - v != 0.0:  # inf or NaN
+                return True
+        elif tv is str:
+            if not v.isascii() or len(v) > MAX_TEXT_LENGTH:
+                return True
+        elif tv is int:
+            if not -1e308 < v < 1e308:
+                return True
+        elif tv is bool or v is None:
+            continue
+        elif tv is list or tv is dict:
+            if _suspect(v):
+                return True
+        else:  # a placeholder, an object with duplicated keys
+            return True
+    return False
+
+
 def parse_json(text: str, source: str) -> Any:
     """Parse JSON text strictly.
 
@@ -177,20 +213,30 @@ def parse_json(text: str, source: str) -> Any:
         path of a NaN/Infinity/overflowing number or of a duplicated key.
     """
     try:
-        doc = json.loads(
-            text,
-            parse_constant=_NonFinite,
-            parse_float=_parse_float,
-            parse_int=_parse_int,
-            object_pairs_hook=_pairs_hook,
-        )
+        # numbers parsed in C first; the strict hooks only when something is suspect
+        # (the same document then, and the same first problem)
+        try:
+            doc = json.loads(text, parse_constant=_NonFinite, object_pairs_hook=_pairs_hook)
+            strict = _suspect(doc)
+        except json.JSONDecodeError:
+            raise
+        except ValueError:  # an integer too long for int()
+            strict = True
+        if strict:
+            doc = json.loads(
+                text,
+                parse_constant=_NonFinite,
+                parse_float=_parse_float,
+                parse_int=_parse_int,
+                object_pairs_hook=_pairs_hook,
+            )
     except json.JSONDecodeError as exc:
         raise InputError(
             f"malformed JSON: {exc.msg}", source, f"line {exc.lineno}, column {exc.colno}"
         ) from None
     except RecursionError:
         raise InputError("malformed JSON: nested too deeply", source) from None
-    bad = _find_bad(doc, [])
+    bad = _find_bad(doc, []) if strict else None
     if bad is not None:
         raise InputError(bad[1], source, format_path(bad[0]) or "document")
     return doc

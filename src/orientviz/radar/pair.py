@@ -146,8 +146,8 @@ def intersect(
     if not refine:
         return X
     for _ in range(10):
-        xy_a, _, Ja = project_with_jacobian(X, image1)
-        xy_b, _, Jb = project_with_jacobian(X, image2)
+        xy_a, _, Ja = project_with_jacobian(X, image1, image_terms=False)
+        xy_b, _, Jb = project_with_jacobian(X, image2, image_terms=False)
         J = np.concatenate([Ja, Jb], axis=1)  # (n, 4, 3)
         r = np.concatenate([L1 - xy_a, L2 - xy_b], axis=1)
         N = np.einsum("nki,nkj->nij", J, J)
@@ -289,7 +289,7 @@ def relative_equations(image1: RadarImage, approx2: RadarImage, free: Sequence[s
         p = full0.copy()
         p[idx] = u[:k]
         X = u[k:].reshape(n, 3)
-        xa, _, Ja = project_with_jacobian(X, image1)
+        xa, _, Ja = project_with_jacobian(X, image1, image_terms=False)
         xb, Jib, Jb = project_with_jacobian(X, RadarImage.from_vector(p, seq))
         J = np.zeros((4 * n, k + 3 * n))
         for c in range(2):

@@ -192,7 +192,7 @@ def project(points: ArrayLike, image: RadarImage) -> F64:
 
 
 def project_with_jacobian(
-    points: ArrayLike, image: RadarImage, jacobian: bool = True
+    points: ArrayLike, image: RadarImage, jacobian: bool = True, *, image_terms: bool = True
 ) -> tuple[F64, F64 | None, F64 | None]:
     """Image coordinates and their derivatives.
 
@@ -204,6 +204,9 @@ def project_with_jacobian(
         The ten parameters (rotation sequence included).
     jacobian : bool
         Compute the derivatives too.
+    image_terms : bool
+        With ``jacobian``, the derivatives by the image's parameters too (False: only
+        those by the points; ``J_image`` is None).
 
     Returns
     -------
@@ -211,7 +214,7 @@ def project_with_jacobian(
         Image coordinates in m.
     J_image : ndarray, shape (n, 2, 10) or None
         ∂(x_B, y_B)/∂(x0, y0, h, m, X0, Y0, Z0, φ, ω, κ): image m per m, per unit of m,
-        per radian.
+        per radian (None unless ``jacobian`` and ``image_terms``).
     J_points : ndarray, shape (n, 2, 3) or None
         ∂(x_B, y_B)/∂(X, Y, Z), image m per object m.
     """
@@ -255,6 +258,8 @@ def project_with_jacobian(
     Ju[:, 1, 1] = g + b * g_b
     Ju[:, 1, 2] = b * g_c
     J_points = Ju @ R.T  # ∂u/∂X = Rᵀ
+    if not image_terms:
+        return xy, None, J_points
     Ji = np.zeros((n, 2, 10))
     Ji[:, 0, 0] = 1.0
     Ji[:, 1, 1] = 1.0
