@@ -43,7 +43,6 @@ CHECKERS = {
     ("00", "critical_w"): ("check_critical_value", "one-sided"),
     ("07", "to_model"): ("check_model_coordinates", "not R"),
     ("05", "six_point"): ("check_six_point", "degrees"),
-    ("02", "ground_point"): ("check_ground_point", "Rᵀ instead of R"),
     ("10", "point_covariance"): ("check_point_covariance", "ADDS to the point's"),
     ("14", "ppi_image"): ("check_ppi_image", "true horizontal distance"),
 }
