@@ -247,7 +247,12 @@ def test_sliced_shell_polling_finds_a_late_message_and_keeps_the_deadline(monkey
 def test_an_error_inside_a_widget_is_found():
     outputs = [
         {"output_type": "stream", "name": "stdout", "text": "fine\n"},
-        {"output_type": "error", "ename": "NameError", "evalue": "name 's' is not defined", "traceback": []},
+        {
+            "output_type": "error",
+            "ename": "NameError",
+            "evalue": "name 's' is not defined",
+            "traceback": [],
+        },
     ]
     assert ob.snapshot_errors(outputs) == ["NameError: name 's' is not defined"]
     assert ob.snapshot_errors(outputs[:1]) == []
