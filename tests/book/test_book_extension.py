@@ -175,6 +175,8 @@ def test_failing_book_build_names_notebook_and_cell(tmp_path):
     src.mkdir()
     (src / "conf.py").write_text(
         f"import sys\nsys.path.insert(0, {str(ROOT / 'book/_ext')!r})\n"
+        # as book/conf.py: jsonschema without its format checkers' packages before myst-nb
+        "from orientviz.io.jsonio import import_jsonschema\nimport_jsonschema()\n"
         "extensions = ['myst_nb', 'orientviz_book']\n"
         "nb_execution_mode = 'force'\nnb_execution_raise_on_error = True\n"
         "exclude_patterns = ['_build']\n",
@@ -245,7 +247,12 @@ def test_sliced_shell_polling_finds_a_late_message_and_keeps_the_deadline(monkey
 def test_an_error_inside_a_widget_is_found():
     outputs = [
         {"output_type": "stream", "name": "stdout", "text": "fine\n"},
-        {"output_type": "error", "ename": "NameError", "evalue": "name 's' is not defined", "traceback": []},
+        {
+            "output_type": "error",
+            "ename": "NameError",
+            "evalue": "name 's' is not defined",
+            "traceback": [],
+        },
     ]
     assert ob.snapshot_errors(outputs) == ["NameError: name 's' is not defined"]
     assert ob.snapshot_errors(outputs[:1]) == []

@@ -11,7 +11,7 @@ import ast
 import functools
 import subprocess
 import sys
-from collections import defaultdict
+from collections import defaultdict, deque
 from pathlib import Path
 
 import pytest
@@ -145,13 +145,21 @@ def _module_name(path: Path, src: Path) -> str:
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def _type_checking_nodes(tree: ast.Module) -> set[int]:
-    """ids of the nodes under ``if TYPE_CHECKING:`` (annotations only, never run)."""
-    out: set[int] = set()
-    for node in ast.walk(tree):
+def _walk_marked(tree: ast.AST):
+    """The nodes of ``tree`` in :func:`ast.walk`'s order, each with two marks: inside a
+    function or class body; under ``if TYPE_CHECKING:`` (annotations only, never run).
+    One pass instead of a walk per mark and per scope."""
+    scope = (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)
+    todo = deque([(tree, False, False)])
+    while todo:
+        node, inside, checking = todo.popleft()
+        below = inside or isinstance(node, scope)
         if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
-            out |= {id(n) for stmt in node.body for n in ast.walk(stmt)}
-    return out
+            body = {id(stmt) for stmt in node.body}
+            todo.extend((c, below, checking or id(c) in body) for c in ast.iter_child_nodes(node))
+        else:
+            todo.extend((c, below, checking) for c in ast.iter_child_nodes(node))
+        yield node, inside, checking
 
 
 @functools.lru_cache(maxsize=4)
@@ -164,16 +172,9 @@ def import_graph(src: Path = SRC) -> list[tuple[str, str, int, bool, str]]:
         text = path.read_text(encoding="utf-8")
         lines = text.splitlines()
         tree = ast.parse(text)
-        skip = _type_checking_nodes(tree)
         package = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
-        scopes = [
-            n
-            for n in ast.walk(tree)
-            if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))
-        ]
-        inner = {id(n) for s in scopes for n in ast.walk(s) if n is not s}
-        for node in ast.walk(tree):
-            if id(node) in skip:
+        for node, inner, checking in _walk_marked(tree):
+            if checking:
                 continue
             targets = []
             if isinstance(node, ast.ImportFrom):
@@ -190,7 +191,7 @@ def import_graph(src: Path = SRC) -> list[tuple[str, str, int, bool, str]]:
                 targets = [a.name for a in node.names if a.name.split(".")[0] == src.name]
             for target in dict.fromkeys(targets):
                 line = lines[node.lineno - 1]
-                edges.append((name, target, node.lineno, id(node) in inner, line))
+                edges.append((name, target, node.lineno, inner, line))
     return edges
 
 

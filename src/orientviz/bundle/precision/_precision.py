@@ -198,12 +198,13 @@ def _block_lookup(st: ReducedStructure, ca, cb_):
 
 def _cofactors_by_pairs(S, Zblk: F64, T: F64, oi, Qcp: F64) -> None:
     """Q_cp for each observation a: −Σ_b Q(i_a, i_b) T_b over the rays b of its point, by
-    pairs of rays, in batches of whole a-groups (bounds the (pairs, 6, 6) gathers)."""
+    pairs of rays, in batches of whole a-groups of about 4096 pairs: the (pairs, 6, 6)
+    gather of a batch (~1.2 MB) and its products stay in the processor's cache."""
     a, b = S.all_pairs
     # blocks and their transposes side by side: one gather per pair, no masked transpose
     Zboth = np.concatenate([Zblk, Zblk.transpose(0, 2, 1)])
     seg = np.append(S.all_pairs_starts, a.size)
-    s0, chunk = 0, 65536
+    s0, chunk = 0, 4096
     while s0 < S.all_pairs_starts.size:
         s1 = max(int(np.searchsorted(seg, seg[s0] + chunk, side="right")) - 1, s0 + 1)
         sl = slice(seg[s0], seg[s1])

@@ -137,10 +137,8 @@ def _summation(rows: I64, n_rows: int) -> sp.csr_matrix:
 
 
 def ray_group_pairs(prob) -> RayGroupPairs:
-    """The :class:`RayGroupPairs` of a bundle problem (computed once, kept on it)."""
-    cached = getattr(prob, "_ap_precision_pairs", None)
-    if cached is not None:
-        return cached
+    """The :class:`RayGroupPairs` of a bundle problem, from its additional parameters'
+    structure (computed at each call)."""
     A = prob.ap.structure
     n, npg = prob.obs.image.size, A.pg_pt.size
     pad = A.pad.reshape(-1)
