@@ -12,7 +12,7 @@ import numpy as np
 
 from ..camera import project
 from ..orientation.essential import eight_point  # forbidden in eight_point_mine, no oracle
-from ..rotation import matrix_from_opk
+from ..rotation import matrix_from_opk, skew
 from ._common import (
     CheckFailed,
     call,
@@ -22,10 +22,6 @@ from ._common import (
     rng_for,
     success,
 )
-
-
-def _skew(v):
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
 def _pair(rng):
@@ -100,7 +96,7 @@ def _epipole_pairs(rng):
         c = rng.uniform(100.0, 160.0)
         B = np.array([rng.uniform(60.0, 100.0), rng.uniform(-15.0, 15.0), bz])
         R2 = matrix_from_opk(*rng.uniform(-0.08, 0.08, 3))
-        out.append((_skew(B) @ R2, c, B, R2))
+        out.append((skew(B) @ R2, c, B, R2))
     return out
 
 
@@ -199,7 +195,7 @@ def check_eight_point(fn) -> None:
     E = np.asarray(call(fn, xy1.copy(), xy2.copy(), c, what="eight_point_mine"), dtype=float)
     if E.shape != (3, 3):
         raise CheckFailed(f"eight_point_mine: expected E of shape (3, 3), got {E.shape}")
-    truth = _skew(B) @ R2
+    truth = skew(B) @ R2
     truth = truth / np.linalg.norm(truth) * np.sqrt(2.0)
     sign = 1.0 if np.sum(E * truth) >= 0 else -1.0
     compare("E of an error-free pair (up to its sign)", sign * E, truth, rtol=1e-6, wrong=[
