@@ -41,6 +41,7 @@ def test_diagnoses_name_the_mistake():
             ("check_relative_from_exterior", "not_scaled"): "not scaled",
             ("check_relative_from_exterior", "degrees"): "degrees",
             ("check_design", "Kovarik signs"): "Kovarik",
+            ("check_design", "own central differences"): "finite difference",
             ("check_design", "1 - Y^2/Z^2"): "sign inside the bracket",
             (
                 "check_design",

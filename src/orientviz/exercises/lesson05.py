@@ -31,7 +31,16 @@ from ..orientation.relative import design_dependent as library_design_dependent
 from ..orientation.relative import relative_orientation, y_parallax_jacobian
 from ..orientation.relative import y_parallax as library_y_parallax
 from ..rotation import matrix_from_opk
-from ._common import CheckFailed, call, compare, own_work, rng_for, success
+from ._common import (
+    CheckFailed,
+    call,
+    compare,
+    complex_step,
+    exact_derivatives,
+    own_work,
+    rng_for,
+    success,
+)
 from .lesson02 import _rodrigues_opk
 
 __all__ = [
@@ -111,6 +120,8 @@ def check_design(design_dependent: Callable[[F64, F64, F64, float], F64]) -> Non
     wrong.append(("the ω column is −Z(1 − Y²/Z²): the sign inside the bracket is +, −Z(1 + Y²/Z²)",
                   omega_minus))  # fmt: skip
     compare("∂p_y/∂(by, bz, ω, φ, κ)", got, truth, rtol=1e-5, wrong=wrong)
+    exact = complex_step(lambda e: _rigorous_parallax(P, e, b), np.zeros(5))
+    exact_derivatives("∂p_y/∂(by, bz, ω, φ, κ)", got, exact)
     success("design matrix: each column is the derivative of the rigorous y-parallax")
 
 

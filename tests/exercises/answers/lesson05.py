@@ -18,6 +18,19 @@ def _sol_design(X, Y, Z, b):
     return np.column_stack([np.ones_like(X), -q, -Z * (1 + q * q), -(b - X) * q, -(b - X)])
 
 
+def _design_fd(X, Y, Z, b, h=1e-7):
+    """The numeric shortcut: central differences of one's own rigorous parallax."""
+    P = np.column_stack([X, Y, Z])
+
+    def parallax(e):
+        xy1 = -152.7 * P[:, :2] / P[:, 2:]
+        uvw = (P - np.array([b, e[0], e[1]])) @ ov.matrix_from_opk(*e[2:])
+        xy2 = -152.7 * uvw[:, :2] / uvw[:, 2:]
+        return b / (xy1[:, 0] - xy2[:, 0]) * (xy1[:, 1] - xy2[:, 1])
+
+    return np.column_stack([(parallax(e) - parallax(-e)) / (2 * h) for e in np.eye(5) * h])
+
+
 def _sol_parallax(xy1, xy2, b):
     lam = b / (xy1[:, 0] - xy2[:, 0])
     return lam * (xy1[:, 1] - xy2[:, 1])
@@ -144,6 +157,7 @@ MUTANTS = {
         "phi and kappa swapped": lambda X, Y, Z, b: _sol_design(X, Y, Z, b)[:, [0, 1, 2, 4, 3]],
         "Kovarik signs": lambda X, Y, Z, b: _sol_design(X, Y, Z, b) * [1, -1, 1, 1, -1],
         "the stand-in (the library's)": rel.design_dependent,
+        "own central differences": _design_fd,
         "1 - Y^2/Z^2": lambda X, Y, Z, b: (
             _sol_design(X, Y, Z, b)
             - np.column_stack([0 * X, 0 * X, -2 * Z * (Y / Z) ** 2, 0 * X, 0 * X])
