@@ -11,7 +11,8 @@ otter-grader read them:
 * in code cells, the lines between ``### BEGIN SOLUTION`` and ``### END SOLUTION``
   (markers included) become one ``raise NotImplementedError`` at the marker's indentation;
 * the lines between ``### BEGIN HIDDEN TESTS`` and ``### END HIDDEN TESTS`` are removed
-  (they run in the teacher's copy and when grading, the student never sees them);
+  (they run in the teacher's copy and when grading, the student never sees them); a code cell
+  left empty by that is dropped;
 * in markdown cells, the text between ``<!-- BEGIN SOLUTION -->`` and
   ``<!-- END SOLUTION -->`` becomes ``*(your answer)*``.
 
@@ -134,6 +135,8 @@ def release_notebook(nb: dict[str, Any]) -> tuple[dict[str, Any], int]:
         cell = json.loads(json.dumps(cell))  # a deep copy
         code = cell.get("cell_type") == "code"
         text, n = strip_source(_source(cell), markdown=not code)
+        if code and _source(cell).strip() and not text.strip():
+            continue  # a cell of hidden tests only: nothing of it is the student's
         meta = cell.setdefault("metadata", {})
         if text != _source(cell):
             cell["source"] = text

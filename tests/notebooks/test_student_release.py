@@ -64,6 +64,18 @@ def test_hidden_tests_are_removed():
         strip_source(f"{HIDDEN_BEGIN}\nx\n")
 
 
+def test_a_cell_of_hidden_tests_only_is_dropped():
+    def code(s):
+        return {"cell_type": "code", "source": s, "metadata": {}, "outputs": [],
+                "execution_count": None}  # fmt: skip
+
+    hidden = f"{HIDDEN_BEGIN}\nassert f(2) == 4\n{HIDDEN_END}\n"
+    nb = {"cells": [code("a = 1"), code(hidden), code(""), code("b = 2")], "metadata": {},
+          "nbformat": 4, "nbformat_minor": 5}  # fmt: skip
+    student, _ = release_notebook(nb)
+    assert [c["source"] for c in student["cells"]] == ["a = 1", "", "b = 2"]
+
+
 def test_the_check_after_a_blank_may_raise():
     def code(s, tags=()):
         return {"cell_type": "code", "source": s, "metadata": {"tags": list(tags)} if tags else {},
@@ -186,7 +198,7 @@ def _run_release(path, tmp_path, km):
 @pytest.mark.notebook
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
 def test_released_lesson_runs_to_the_end(path, tmp_path, lesson_kernel):
-    """"Run All" on the student release reaches the last cell; the only errors are the checks
+    """ "Run All" on the student release reaches the last cell; the only errors are the checks
     of the blanks, each saying "not written yet"."""
     nb = _run_release(path, tmp_path, lesson_kernel)
     errors, blanks = [], 0
@@ -196,7 +208,9 @@ def test_released_lesson_runs_to_the_end(path, tmp_path, lesson_kernel):
         assert cell.source.strip() == "" or cell.execution_count is not None, f"cell {i} not run"
         for out in cell.get("outputs", []):
             if out.get("output_type") == "error":
-                if out.get("ename") == "NotWrittenError" and "not written yet" in out.get("evalue", ""):
+                if out.get("ename") == "NotWrittenError" and "not written yet" in out.get(
+                    "evalue", ""
+                ):
                     blanks += 1
                 else:
                     errors.append(f"cell {i}: {out.get('ename')}: {out.get('evalue', '')[:200]}")
