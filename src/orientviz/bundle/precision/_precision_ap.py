@@ -242,7 +242,7 @@ def point_terms(prob, ne, Qaa: F64, Qca3: F64, Qcp: F64, Jew: F64, Jpw: F64):
     A = prob.ap.structure
     R = ray_group_pairs(prob)
     G, k, m = prob.ap.G, prob.ap.k, prob.m
-    n, L = prob.obs.image.size, A.pad.shape[1]
+    L = A.pad.shape[1]
     Vinv, T = ne.Vinv, ne.T
     HV = ne.ap.H @ Vinv[A.pg_pt]  # (npg, k, 3): H V⁻¹, the point's coupling with group g
     Qca4 = Qca3.reshape(m, 6, G, k)
