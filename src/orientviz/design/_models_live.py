@@ -42,6 +42,7 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ..blas import blas_threads as _blas
 from ..block import Block
+from ..bundle.precision import banded_selected_inverse
 from ..bundle.reduced import geometric_orderings
 from ..errors import NotDeterminableError
 from ..rotation import skew
@@ -52,7 +53,6 @@ from ..stereo_models import (
     joint_setup,
     tie_setup,
 )
-from ._band import selected_inverse
 from ._base import TAKAHASHI_BLOCK
 from ._live_parts import _weights
 from ._methods import models_quality
@@ -254,7 +254,7 @@ class LiveModels:
         """Q_XX at every tie's 3 × 3 block: D⁻¹ + Σ_ab g_aᵀ Z(j_a, j_b) g_b over the pairs
         of rows (a, b) of each tie, g the rows' columns of G = C D⁻¹ and Z = S⁻¹ inside
         the band."""
-        Zb = selected_inverse(self._cb, TAKAHASHI_BLOCK)
+        Zb = banded_selected_inverse(self._cb, TAKAHASHI_BLOCK)
         j, sc = self._rows
         su, D, pr = self.su, self._D, self._pairs
         g = self._C / D[sc][:, :, None]  # (k, 3, 7)

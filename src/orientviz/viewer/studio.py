@@ -249,8 +249,7 @@ class Studio:
         if self.design is None:
             self.law = {"sigma_xy": float("nan"), "sigma_z": float("nan"), "note": LAW_NONE}
         else:  # images added or removed: the law still describes the regular plan
-            self.law = dict(accuracy_law(self.design, spec))
-            self.law["note"] += "; for the plan without the images added or removed since"
+            self.law = self._law_of_plan(accuracy_law(self.design, spec))
         self._models = None
 
     def _structural(self, label: str, change) -> DesignQuality:
@@ -283,9 +282,18 @@ class Studio:
         the models method, to be updated when the bundle's quality is asked for)."""
         self.live = live
         if self.design is not None:  # the law still describes the regular plan
-            self.law = dict(accuracy_law(self.design, self.spec))
-            self.law["note"] += "; for the plan without the images added or removed since"
+            self.law = self._law_of_plan(self.law)
         self._models = None
+
+    @staticmethod
+    def _law_of_plan(law: dict) -> dict:
+        """The plan's accuracy law after images were added or removed: the same values
+        (the law describes the regular plan; computed once per plan), said so."""
+        note = "; for the plan without the images added or removed since"
+        out = dict(law)
+        if not out["note"].endswith(note):
+            out["note"] += note
+        return out
 
     def _aux_of(self):
         """The plan's auxiliary data of a changed block (their rows follow the images)."""
