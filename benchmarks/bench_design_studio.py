@@ -12,7 +12,8 @@ its panel makes it, followed by the studio's undo (not timed), ``--repeat`` time
   :mod:`orientviz.viewer.studio_live`), a control point added (an update), a control
   point added right after an image was removed (the bundle's update of the removal is
   made then), the method switched back to the bundle after an image was removed (the same);
-* under the bundle: a cross strip.
+* under the bundle: a cross strip; the plan changed: the image σ (a new design, the
+  accuracy law of the same layout kept), the control spacing (a new design and law).
 
 Peer in the same run: a new bundle assessment of the block (:func:`orientviz.design.assess_block`).
 With ``--threads both`` everything runs with the default BLAS threads, then with one
@@ -34,7 +35,7 @@ from contextlib import nullcontext
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from orientviz.design import FlightDesign, assess_block, design_auxiliary
+from orientviz.design import FlightDesign, _design, assess_block, design_auxiliary
 from orientviz.viewer.studio import Studio
 
 
@@ -84,6 +85,17 @@ def _kinds(st: Studio, plan: FlightDesign, tag: str, R: int, kind) -> None:
          to_bundle, undo)  # fmt: skip
     xs = rng.uniform(I.X0[:, 0].min(), I.X0[:, 0].max(), size=R)
     kind(f"bundle: cross strip{tag}", nothing, lambda k: st.add_cross_strip(float(xs[k])), undo)
+    kind(f"plan: image σ 4 µm (a new design){tag}", nothing,
+         lambda k: st.set_plan(plan.with_(sigma_image_mm=0.004 + 1e-4 * k)), undo)  # fmt: skip
+
+    def new_layout(k):  # the law of a layout not seen before: computed, not kept from before
+        for f in (getattr(_design, "_mu_xy", None), getattr(_design, "_mu_z", None)):
+            if f is not None:  # (a checkout without the kept laws computes them anyway)
+                f.cache_clear()
+
+    kind(f"plan: control every 3 bases (a new design and law){tag}", new_layout,
+         lambda k: st.set_plan(plan.with_(control_spacing=3, sigma_image_mm=0.005 + 1e-4 * k)),
+         undo)  # fmt: skip
     aux = design_auxiliary(b, plan) if st.live.auxiliary else None
     kind(f"peer: new bundle assessment (assess_block){tag}", nothing,
          lambda k: assess_block(st.block, st.spec, auxiliary=aux))  # fmt: skip
