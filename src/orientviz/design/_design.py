@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from ..blas import blas_threads
 from ..block import Block
 from ..bundle import BundleResult, bundle_adjust, ray_reliability
 from ..simulate import height_precision, planimetric_precision
@@ -98,16 +99,20 @@ def assess_block(
 @functools.lru_cache(maxsize=64)
 def _mu_xy(strips: int, models_per_strip: int, control_spacing: int) -> float:
     """μ_xy/σ0 of Ebner's planimetric law for a layout (kept per layout: it depends on
-    nothing else)."""
-    return planimetric_precision(
-        strips, models_per_strip=models_per_strip, control_spacing=control_spacing
-    ).mu
+    nothing else; BLAS on one thread, as the designs' other work)."""
+    with blas_threads(1):
+        return planimetric_precision(
+            strips, models_per_strip=models_per_strip, control_spacing=control_spacing
+        ).mu
 
 
 @functools.lru_cache(maxsize=64)
 def _mu_z(chain_spacing: int, strips: int, models_per_strip: int) -> float:
-    """μ_z/σ0z of Ebner's height law for a layout (kept per layout)."""
-    return height_precision(chain_spacing, n_strips=strips, models_per_strip=models_per_strip).mu
+    """μ_z/σ0z of Ebner's height law for a layout (kept per layout; BLAS on one thread)."""
+    with blas_threads(1):
+        return height_precision(
+            chain_spacing, n_strips=strips, models_per_strip=models_per_strip
+        ).mu
 
 
 def accuracy_law(design: FlightDesign, spec: dict[str, Any]) -> dict[str, Any]:

@@ -42,7 +42,7 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ..blas import blas_threads as _blas
 from ..block import Block
-from ..bundle.precision import banded_selected_inverse
+from ..bundle.precision import BandSolver, banded_selected_inverse
 from ..bundle.reduced import geometric_orderings
 from ..errors import NotDeterminableError
 from ..rotation import skew
@@ -245,7 +245,11 @@ class LiveModels:
     def _solve(self, rhs: F64) -> F64:
         """S⁻¹ rhs for rhs (7n, r), with the band factor."""
         s, p = self._scale[:, None], self._perm
-        z = scipy.linalg.cho_solve_banded((self._cb, True), (rhs * s)[p], check_finite=False)
+        b = (rhs * s)[p]
+        if b.shape[1] >= 4:  # many columns: block products on views of the factor
+            z = BandSolver(self._cb).solve(b)
+        else:
+            z = scipy.linalg.cho_solve_banded((self._cb, True), b, check_finite=False)
         out = np.empty_like(z)
         out[p] = z
         return out * s
