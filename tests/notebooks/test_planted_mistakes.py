@@ -40,8 +40,6 @@ MARK = "# A colleague's version: one line is wrong."
 
 #: (lesson, function) → (checker, a piece of its diagnosis)
 CHECKERS = {
-    ("00", "critical_w"): ("check_critical_value", "one-sided"),
-    ("05", "six_point"): ("check_six_point", "degrees"),
     ("10", "point_covariance"): ("check_point_covariance", "ADDS to the point's"),
     ("14", "ppi_image"): ("check_ppi_image", "true horizontal distance"),
 }

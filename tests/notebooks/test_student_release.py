@@ -12,6 +12,7 @@ from release_tool import release
 
 BEGIN, END, MD_BEGIN, MD_END = release.BEGIN, release.END, release.MD_BEGIN, release.MD_END
 HIDDEN_BEGIN, HIDDEN_END = release.HIDDEN_BEGIN, release.HIDDEN_END
+HIDDEN_NOTE = release.HIDDEN_NOTE
 main, strip_source, release_notebook = release.main, release.strip_source, release.release_notebook
 
 ROOT = pathlib.Path(__file__).parents[2]
@@ -62,6 +63,38 @@ def test_hidden_tests_are_removed():
     assert n == 0 and out == "check(f)\nprint('done')\n"
     with pytest.raises(ValueError):
         strip_source(f"{HIDDEN_BEGIN}\nx\n")
+
+
+def test_a_release_names_the_checks_it_needs_and_stops_on_another_orientviz():
+    from orientviz.exercises import CheckFailed, release_check
+
+    def code(s):
+        return {"cell_type": "code", "source": s, "metadata": {}, "outputs": [],
+                "execution_count": None}  # fmt: skip
+
+    nb = {"cells": [code("import numpy as np"), code("def check_mine(f):\n    pass"),
+                    code("from orientviz.simulate import check_errors\ncheck_errors(s, a)"),
+                    code("ex.check_condition(misclosure)\ncheck_mine(g)")],
+          "metadata": {}, "nbformat": 4, "nbformat_minor": 5}  # fmt: skip
+    student, _ = release_notebook(nb, "05", "abc1234")
+    first = student["cells"][0]["source"]
+    assert first.startswith("import numpy as np") and len(student["cells"]) == 4
+    assert "release_check('05', ['check_condition'], made_with='abc1234')" in first
+    release_check("05", ["check_condition"], "abc1234")  # present: no error
+    with pytest.raises(CheckFailed, match="check_six_point.*abc1234|abc1234.*check_six_point"):
+        release_check("05", ["check_condition", "check_six_point"], "abc1234")
+
+
+def test_a_cell_of_hidden_tests_only_says_so():
+    def code(s):
+        return {"cell_type": "code", "source": s, "metadata": {}, "outputs": [],
+                "execution_count": None}  # fmt: skip
+
+    hidden = f"{HIDDEN_BEGIN}\nassert f(2) == 4\n{HIDDEN_END}\n"
+    nb = {"cells": [code("a = 1"), code(hidden), code(""), code("b = 2")], "metadata": {},
+          "nbformat": 4, "nbformat_minor": 5}  # fmt: skip
+    student, _ = release_notebook(nb)
+    assert [c["source"] for c in student["cells"]] == ["a = 1", HIDDEN_NOTE, "", "b = 2"]
 
 
 def test_the_check_after_a_blank_may_raise():
@@ -186,7 +219,7 @@ def _run_release(path, tmp_path, km):
 @pytest.mark.notebook
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
 def test_released_lesson_runs_to_the_end(path, tmp_path, lesson_kernel):
-    """"Run All" on the student release reaches the last cell; the only errors are the checks
+    """ "Run All" on the student release reaches the last cell; the only errors are the checks
     of the blanks, each saying "not written yet"."""
     nb = _run_release(path, tmp_path, lesson_kernel)
     errors, blanks = [], 0
@@ -196,7 +229,9 @@ def test_released_lesson_runs_to_the_end(path, tmp_path, lesson_kernel):
         assert cell.source.strip() == "" or cell.execution_count is not None, f"cell {i} not run"
         for out in cell.get("outputs", []):
             if out.get("output_type") == "error":
-                if out.get("ename") == "NotWrittenError" and "not written yet" in out.get("evalue", ""):
+                if out.get("ename") == "NotWrittenError" and "not written yet" in out.get(
+                    "evalue", ""
+                ):
                     blanks += 1
                 else:
                     errors.append(f"cell {i}: {out.get('ename')}: {out.get('evalue', '')[:200]}")

@@ -34,6 +34,11 @@ def gui_control(page, label, selector="[role=slider]"):
     return row.last.locator(selector).first
 
 
+def number_box(page, label):
+    """The number box beside the slider labelled ``label``."""
+    return gui_control(page, label, "input:not([type=hidden])")
+
+
 @contextmanager
 def served(content) -> Iterator:
     """A viewer on ``content`` at 127.0.0.1 (a free port), stopped afterwards."""

@@ -10,7 +10,7 @@ import orientviz as ov
 from orientviz.viewer.app import ViewerApp
 from orientviz.viewer.demos import demo_from_block
 
-from .browser import gui_control, wait_for
+from .browser import gui_control, number_box, wait_for
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]  # about 10 s and 6 s with software WebGL
 
@@ -42,12 +42,18 @@ def test_viewer_renders_and_slider_updates_python(browser_page, block):
         st = app.demo.state
         before = np.asarray(app.scene.nodes["residuals"].points).copy()
         omega0 = st.block.images.angles[0, 0]
+        client = next(iter(app.server.get_clients().values()))
+        eye = np.array(client.camera.position)
+        distance = np.linalg.norm(eye - np.array(client.camera.look_at))
         thumb = gui_control(page, "omega [gon]")
         thumb.focus()
         for _ in range(5):
             thumb.press("ArrowRight")  # 5 steps of 1 c
         ok = wait_for(lambda: abs(app.panel.handles["omega"].value - 0.05) < 1e-9, timeout=20)
         assert ok, f"slider value on the Python side: {app.panel.handles['omega'].value}"
+        time.sleep(0.5)  # the page reports its camera every 50 ms
+        moved = np.linalg.norm(np.array(client.camera.position) - eye)
+        assert moved < 1e-6 * distance, f"the arrow keys on the slider moved the camera {moved:.3g}"
         assert wait_for(
             lambda: abs(st.block.images.angles[0, 0] - (omega0 + ov.to_rad(0.05, "gon"))) < 1e-12
         )
@@ -57,10 +63,25 @@ def test_viewer_renders_and_slider_updates_python(browser_page, block):
         np.testing.assert_array_equal(changed, st.block.observations.image == 0)
         page.screenshot(path=SHOT.replace(".png", "_after.png"))
 
+        # a value typed into a dial's number box (ended with Enter) reaches Python
+        box = number_box(page, "X0 [m]")
+        box.fill("0.3")
+        box.press("Enter")
+        assert wait_for(lambda: app.panel.handles["X0"].value == 0.3, timeout=20)
+
         # a button pressed in the page runs one adjustment iteration on the Python side
         page.get_by_role("button", name="one iteration").click()
         assert wait_for(lambda: len(st.history) == 2, timeout=30), "no iteration after the click"
         assert wait_for(lambda: app.panel.handles["iteration"].max == 1)
+        # the iteration set the dials back to 0; the next value pasted into the box (one
+        # input event, no key pressed: a paste from the context menu) reaches Python too
+        assert wait_for(lambda: number_box(page, "X0 [m]").input_value() == "0", timeout=20)
+        number_box(page, "X0 [m]").fill("0.5")
+        arrived = wait_for(lambda: app.panel.handles["X0"].value == 0.5, timeout=10)
+        shown = number_box(page, "X0 [m]").input_value()
+        assert arrived, (
+            f"the pasted 0.5 was dropped (Python: {app.panel.handles['X0'].value}, box: {shown!r})"
+        )
         with app.panel._lock:  # let the button's callback finish before the server stops
             pass
     finally:

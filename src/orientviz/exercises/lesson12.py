@@ -145,34 +145,40 @@ def check_new_position(fn: Callable) -> None:
     )
 
 
-def check_detection_probability(fn: Callable) -> None:
-    """Check ``fn(nabla, sigma, r, k) -> P``: the probability that the w-test abs(w) > k flags an
-    observation with the error ``nabla`` (σ ``sigma``, redundancy number ``r``), arrays.
+def check_flag_probability(fn: Callable) -> None:
+    """Check ``fn(nabla, sigma, sigma_true, r, k) -> P``: the probability that the w-test
+    abs(w) > k flags an observation with the error ``nabla`` whose σ is ``sigma_true`` while the
+    test divides by the stated ``sigma`` (redundancy number ``r``), arrays.
 
-    Oracle: w² is non-central χ² with one degree of freedom and non-centrality r ∇²/σ²
-    (scipy's ncx2), not the normal tails.
+    Oracle: (w σ/σ_true)² is non-central χ² with one degree of freedom and non-centrality
+    r ∇²/σ_true² (scipy's ncx2), and P = P(that > k² σ²/σ_true²) — not the normal tails.
     """
     k = norm.isf(0.001 / 2)
-    nabla = np.array([0.0, 0.004, 0.010, 0.018, 0.030, -0.012])
-    sigma = np.array([0.005, 0.005, 0.003, 0.008, 0.004, 0.005])
-    r = np.array([0.6, 0.3, 0.85, 0.5, 0.12, 0.7])
-    lam = r * nabla**2 / sigma**2
-    want = _chi2_sf(k**2, lam)
-    got = call(fn, nabla.copy(), sigma.copy(), r.copy(), k, what="detection_probability")
-    d = np.sqrt(r) * np.abs(nabla) / sigma
+    nabla = np.array([0.0, 0.0, 0.004, 0.010, 0.018, 0.030, -0.012])
+    sigma = np.array([0.005, 0.005, 0.005, 0.003, 0.008, 0.004, 0.005])
+    true = sigma * np.array([1.0, 1.5, 1.0, 1.3, 0.8, 1.0, 2.0])
+    r = np.array([0.6, 0.4, 0.3, 0.85, 0.5, 0.12, 0.7])
+    s = true / sigma  # the standard deviation of w
+    want = _chi2_sf(k**2 / s**2, r * nabla**2 / true**2)
+    got = call(fn, nabla.copy(), sigma.copy(), true.copy(), r.copy(), k, what="flag_probability")
+    m = np.sqrt(r) * np.abs(nabla) / sigma  # |E(w)|
+
+    def tails(mean: np.ndarray, sd: np.ndarray | float = 1.0) -> np.ndarray:
+        return norm.sf((k - mean) / sd) + norm.cdf((-k - mean) / sd)
+
     compare("P(|w| > k)", got, want, rtol=1e-6, scale=1.0, wrong=[
-        ("one tail only: with no error (∇ = 0) the test still flags with probability α0 = "
-         "0.1 %, half of it in each tail", norm.sf(k - d)),
-        ("√r is missing: E(w) = √r ∇/σ", norm.sf(k - np.abs(nabla) / sigma)
-         + norm.cdf(-k - np.abs(nabla) / sigma)),
-        ("r instead of √r in E(w)", norm.sf(k - r * np.abs(nabla) / sigma)
-         + norm.cdf(-k - r * np.abs(nabla) / sigma)),
+        ("σ_true is left out: w = v/(σ√r) is divided by the STATED σ, so its standard deviation "
+         "is σ_true/σ, not 1", tails(m)),
+        ("E(w) = √r ∇/σ_true with standard deviation 1: w is divided by the stated σ, so its mean "
+         "is √r ∇/σ and its standard deviation σ_true/σ", tails(m * sigma / true)),
+        ("one tail only: a clean observation (∇ = 0) is flagged on both sides", norm.sf((k - m) / s)),
+        ("√r is missing: E(w) = √r ∇/σ", tails(np.abs(nabla) / sigma, s)),
         ("the probability of NOT flagging it (1 − P)", 1 - want),
-        ("E(w) = ∇/(σ√r) is the error in units of the residual's σ times r: w's mean is "
-         "√r ∇/σ", norm.sf(k - d / r) + norm.cdf(-k - d / r)),
+        ("the variance (σ_true/σ)² used as the standard deviation", tails(m, s**2)),
     ])  # fmt: skip
     success(
-        f"P(|w| > k) right, from α0 = 0.1 % at ∇ = 0 up to {np.max(want):.0%} for the largest error"
+        f"P(|w| > k) right: a clean observation whose σ is 1.5 times the stated one is flagged "
+        f"with probability {want[1]:.1%} (α0 = 0.1 % when σ is right)"
     )
 
 

@@ -76,7 +76,7 @@ def plot_frames(
         e[k] = 3.0
         ax.quiver(0, 0, 0, *e, color=AXIS_COLOURS[k], arrow_length_ratio=0.08, lw=2)
         ax.text(*(e * 1.07), name, color=AXIS_COLOURS[k], fontsize=13, fontweight="bold")
-        label_at = ((0.0, 0.0, 0.62), (0.0, 0.0, 0.62), (-0.55, 0.3, 0.2))[k]
+        label_at = ((0.42, 0.0, 0.42), (0.0, 0.0, 0.62), (-0.55, 0.3, 0.2))[k]
         _arc(ax, e * 0.6, k, 0.3, AXIS_COLOURS[k], ("ω", "φ", "κ")[k], label_at)
     ax.text2D(
         0.02,
@@ -184,7 +184,8 @@ def plot_conventions(omega: float = 0.12, phi: float = -0.10, kappa: float = 0.3
     omega, phi, kappa : float
         Attitude of the drawn camera, rad, sequence ω-φ-κ.
     fig : matplotlib.figure.Figure, optional
-        Figure to draw into (a new 11 × 5.5 in figure if None).
+        Figure to draw into (a new 6.2 × 10 in figure if None: the 3D schematic above the
+        image frame, so that both stay readable at the book's column width).
 
     Returns
     -------
@@ -192,8 +193,8 @@ def plot_conventions(omega: float = 0.12, phi: float = -0.10, kappa: float = 0.3
     """
 
     if fig is None:
-        fig = figure(figsize=(11, 5.5))
-    grid = fig.add_gridspec(1, 2, width_ratios=(1.25, 1.0))
+        fig = figure(figsize=(6.2, 10.0))
+    grid = fig.add_gridspec(2, 1, height_ratios=(1.25, 1.0))
     ax3 = fig.add_subplot(grid[0], projection="3d")
     ax2 = fig.add_subplot(grid[1])
     plot_frames(omega, phi, kappa, ax=ax3)

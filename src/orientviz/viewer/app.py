@@ -30,6 +30,7 @@ from .block_geometry import BlockGeometry
 from .demo import Demo
 from .demos import DEMOS, demo_from_block, load_demo
 from .geometry import VIEW_FOV
+from .keys import keep_arrow_keys_on_sliders
 from .panel import BlockPanel
 from .scene import BlockScene
 from .snapshot import panel_markdown, with_panel
@@ -150,6 +151,7 @@ class ViewerApp:
         self.host, self.port = host, self.server.get_port()
         no_tunnel(self.server)
         light_scene(self.server)
+        keep_arrow_keys_on_sliders(self.server)
         self.verbose = verbose
         self.scene = None
         self.panel = None

@@ -30,6 +30,7 @@ from ..errors import InputError
 from ..io.kinds.block import adjust_block
 from .block_geometry import COLORS
 from .legend import swatch
+from .sliders import Sliders
 from .state import BlockState
 
 F64 = NDArray[np.float64]
@@ -128,10 +129,11 @@ def deformation_extra(state: BlockState, reference: Block, systematic_only: Bloc
             "/block/deformation/points", R.astype(np.float32), COLORS["deformation"],
             point_size=scene.geo.point_size, point_shape="circle", precision="float32", visible=False,
         )  # fmt: skip
-        with gui.add_folder("Deformation", expand_by_default=False):
+        sliders = Sliders(gui, ctl)  # "play" moves the morph slider from the server
+        with gui.add_folder("Deformation", expand_by_default=False) as folder:
             ctl["show"] = gui.add_checkbox("show deformation", False)
             ctl["mode"] = gui.add_dropdown("compare", MODES, initial_value=MODES[0])
-            ctl["t"] = gui.add_slider("morph t", 0.0, 1.0, 0.01, 1.0)
+            sliders.add("t", folder, "morph t", 0.0, 1.0, 0.01, 1.0)
             ctl["play"] = gui.add_button("play")
             ctl["info"] = gui.add_markdown("")
 
@@ -182,7 +184,7 @@ def deformation_extra(state: BlockState, reference: Block, systematic_only: Bloc
         def play(_e: Any = None) -> None:
             def run() -> None:
                 for t in np.concatenate([np.linspace(0, 1, 40), np.linspace(1, 0, 40), [1.0]]):
-                    ctl["t"].value = round(float(t), 2)
+                    sliders.set("t", round(float(t), 2))
                     time.sleep(0.04)
 
             if not ctl["show"].value:
@@ -191,7 +193,7 @@ def deformation_extra(state: BlockState, reference: Block, systematic_only: Bloc
 
         ctl["show"].on_update(app.guard(show))
         ctl["mode"].on_update(app.guard(lambda _e: redraw()))
-        ctl["t"].on_update(app.guard(lambda _e: redraw()))
+        sliders.on_update("t", app.guard(lambda _e: redraw()))
         ctl["play"].on_click(app.guard(play))
         scene.listeners.append(redraw)
         redraw()

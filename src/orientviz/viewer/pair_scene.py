@@ -43,6 +43,7 @@ from .demo import Demo
 from .epipolar_picture import normalised_picture
 from .legend import swatch
 from .pair_rays import normalised_pair, plane_mesh, point_rays
+from .sliders import Sliders
 
 F64 = NDArray[np.float64]
 
@@ -191,16 +192,17 @@ class PairView:
         )
         self._build_selection_nodes(sc, ps)
         h: dict[str, Any] = {}
-        with gui.add_folder("Dials of the right projector"):
+        sliders = self.sliders = Sliders(gui, h)  # the server sets these too
+        with gui.add_folder("Dials of the right projector") as folder:
             for i, label in enumerate(DIALS):
                 lim, step = (5.0, 0.01) if i < 2 else (250.0, 1.0)
-                h[label] = gui.add_slider(label, -lim, lim, step, self._dial(i))
-        with gui.add_folder("Passes"):
+                sliders.add(label, folder, label, -lim, lim, step, self._dial(i))
+        with gui.add_folder("Passes") as folder:
             h["formula"] = gui.add_dropdown("formula", ("exact", "kovarik9", "flat", "preorient"))
             h["pass"] = gui.add_button("one pass")
             h["orient"] = gui.add_button("orient to convergence")
             h["reset"] = gui.add_button("reset")
-            h["scrub"] = gui.add_slider("pass", 0, 1, 1, 0, disabled=True)
+            sliders.add("scrub", folder, "pass", 0, 1, 1, 0, disabled=True)
             h["stats"] = gui.add_markdown("")
         with gui.add_folder("Selected point"):
             names = tuple(str(i + 1) for i in range(len(geo["scheme"])))
@@ -229,12 +231,12 @@ class PairView:
         h["legend"].content = pair_legend(getattr(self, "scale_bar_text", "scale bar"))
         guard = app.guard
         for label in DIALS:
-            h[label].on_update(guard(lambda _e: self._from_sliders()))
+            sliders.on_update(label, guard(lambda _e: self._from_sliders()))
         h["pass"].on_click(guard(lambda _e: self._passes(1)))
         h["orient"].on_click(guard(lambda _e: self._passes(30)))
         h["reset"].on_click(guard(lambda _e: self._set(self.start, reset=True)))
-        h["scrub"].on_update(
-            guard(lambda _e: self._set(self.snapshots[int(h["scrub"].value)], keep=True))
+        sliders.on_update(
+            "scrub", guard(lambda _e: self._set(self.snapshots[int(h["scrub"].value)], keep=True))
         )
         h["exaggeration"].on_update(guard(lambda _e: self._exaggerate()))
         h["rescale"].on_click(guard(lambda _e: self.rescale()))
@@ -285,7 +287,7 @@ class PairView:
         self._syncing = True
         try:
             for i, lab in enumerate(DIALS):
-                self.h[lab].value = self._dial(i)
+                self.sliders.set(lab, self._dial(i))
         finally:
             self._syncing = False
 
@@ -320,7 +322,7 @@ class PairView:
         try:
             n = len(self.snapshots)
             self.h["scrub"].max = max(n - 1, 1)
-            self.h["scrub"].value = n - 1
+            self.sliders.set("scrub", n - 1)
             self.h["scrub"].disabled = n < 2
         finally:
             self._syncing = False

@@ -22,6 +22,7 @@ from .panel_camera import CameraControls
 from .panel_precision import PrecisionControls
 from .panel_quality import QualityControls
 from .scene import BlockScene
+from .sliders import Sliders
 from .snapshot import panel_text, view_png
 
 ANGLES = ("omega", "phi", "kappa")
@@ -74,24 +75,27 @@ class BlockPanel:
         geo = self.scene.geo
         with gui.add_folder("Legend"):
             h["legend"] = gui.add_markdown("")
-        with gui.add_folder("Image orientation"):
+        sliders = self.sliders = Sliders(gui, h)  # the server sets these too
+        with gui.add_folder("Image orientation") as folder:
             m = b.n_images
-            h["image"] = gui.add_slider("image #", 0, max(m - 1, 1), 1, 0, disabled=m < 2)
+            sliders.add("image", folder, "image #", 0, max(m - 1, 1), 1, 0, disabled=m < 2)
             h["image_id"] = gui.add_markdown("")
             span = float(10 ** np.round(np.log10(max(0.03 * geo.height, 1.0))))  # 1, 10, 100 m
             for name in POSITIONS:
-                h[name] = gui.add_slider(
-                    f"{name} [m]", -span, span, 0.1, 0.0, hint="position of the projection centre"
-                )
+                sliders.add(
+                    name, folder, f"{name} [m]", -span, span, 0.1, 0.0,
+                    hint="position of the projection centre",
+                )  # fmt: skip
             for name in ANGLES:
-                h[name] = gui.add_slider(
-                    f"{name} [gon]", -2.0, 2.0, 0.01, 0.0, hint="slider step 1 c = 0.01 gon"
-                )
-        with gui.add_folder("Adjustment"):
+                sliders.add(
+                    name, folder, f"{name} [gon]", -2.0, 2.0, 0.01, 0.0,
+                    hint="slider step 1 c = 0.01 gon",
+                )  # fmt: skip
+        with gui.add_folder("Adjustment") as folder:
             h["step"] = gui.add_button("one iteration")
             h["run"] = gui.add_button("run to convergence")
             h["reset"] = gui.add_button("reset")
-            h["iteration"] = gui.add_slider("iteration", 0, 1, 1, 0, disabled=True)
+            sliders.add("iteration", folder, "iteration", 0, 1, 1, 0, disabled=True)
             h["stats"] = gui.add_markdown("")
         with gui.add_folder("Largest residuals"):
             h["largest"] = gui.add_dropdown("observation", ("—",))
@@ -129,13 +133,16 @@ class BlockPanel:
 
     def _bind(self) -> None:
         h = self.handles
-        h["image"].on_update(self.guard(lambda _e: self.select(int(h["image"].value))))
+        sliders = self.sliders
+        sliders.on_update("image", self.guard(lambda _e: self.select(int(h["image"].value))))
         for name in POSITIONS + ANGLES:
-            h[name].on_update(self.guard(lambda _e: self.apply_sliders()))
+            sliders.on_update(name, self.guard(lambda _e: self.apply_sliders()))
         h["step"].on_click(self.guard(lambda _e: self.adjust(1)))
         h["run"].on_click(self.guard(lambda _e: self.adjust(50)))
         h["reset"].on_click(self.guard(lambda _e: self.reset()))
-        h["iteration"].on_update(self.guard(lambda _e: self.replay(int(h["iteration"].value))))
+        sliders.on_update(
+            "iteration", self.guard(lambda _e: self.replay(int(h["iteration"].value)))
+        )
         h["fly"].on_click(self.guard(lambda _e: self.fly_to_selected()))
         h["largest"].on_update(self.guard(lambda _e: self.fly_to_selected()))
         h["exaggeration"].on_update(self.guard(lambda _e: self.set_exaggeration()))
@@ -149,7 +156,7 @@ class BlockPanel:
 
     # ------------------------------------------------------------------ actions
     def _select_from_click(self, k: int) -> None:
-        self.handles["image"].value = k  # triggers select()
+        self.sliders.set("image", k)  # triggers select()
 
     def select(self, k: int) -> None:
         """Select image ``k``: centre the sliders on its orientation, show its rays."""
@@ -159,7 +166,7 @@ class BlockPanel:
         self._syncing = True
         try:
             for name in POSITIONS + ANGLES:
-                self.handles[name].value = 0.0
+                self.sliders.set(name, 0.0)
         finally:
             self._syncing = False
         ang = from_rad(b.images.angles[k], "gon")
@@ -262,7 +269,7 @@ class BlockPanel:
             self._syncing = True
             try:
                 h["iteration"].max = max(n_hist - 1, 1)
-                h["iteration"].value = st.cursor
+                self.sliders.set("iteration", st.cursor)
                 h["iteration"].disabled = n_hist < 2
             finally:
                 self._syncing = False
@@ -337,14 +344,14 @@ class BlockPanel:
         """Select the observation's image and fly the camera to its point."""
         b = self.state.block
         img = int(b.observations.image[j])
-        self.handles["image"].value = img
+        self.sliders.set("image", img)
         self.scene.select_point(int(b.observations.point[j]))  # a marker on its point
         self.fly_to(self.scene.geo.frame.to_scene(b.points.xyz[b.observations.point[j]]))
 
     def fly_to_image(self, i: int) -> None:
         """Select image ``i`` and fly the camera to its projection centre's footprint."""
         b = self.state.block
-        self.handles["image"].value = int(i)
+        self.sliders.set("image", int(i))
         target = self.scene.geo.frame.to_scene(b.images.X0[i]) - [
             0.0,
             0.0,
@@ -358,7 +365,7 @@ class BlockPanel:
         self.scene.select_point(int(k))
         seen = np.flatnonzero(b.observations.point == k)
         if seen.size:  # its first image becomes the selected image
-            self.handles["image"].value = int(b.observations.image[seen[0]])
+            self.sliders.set("image", int(b.observations.image[seen[0]]))
         self.fly_to(self.scene.geo.frame.to_scene(b.points.xyz[k]))
 
     def fly_to(self, target: np.ndarray, distance: float | None = None) -> None:

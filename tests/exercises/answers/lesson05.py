@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 import orientviz as ov
-from orientviz.exercises.lesson05 import GON, _gruber
+from orientviz.adjust.gross import redundancy_numbers
 from orientviz.orientation import relative as rel
 
 
@@ -18,16 +18,38 @@ def _sol_design(X, Y, Z, b):
     return np.column_stack([np.ones_like(X), -q, -Z * (1 + q * q), -(b - X) * q, -(b - X)])
 
 
+def _design_fd(X, Y, Z, b, h=1e-7):
+    """The numeric shortcut: central differences of one's own rigorous parallax."""
+    P = np.column_stack([X, Y, Z])
+
+    def parallax(e):
+        xy1 = -152.7 * P[:, :2] / P[:, 2:]
+        uvw = (P - np.array([b, e[0], e[1]])) @ ov.matrix_from_opk(*e[2:])
+        xy2 = -152.7 * uvw[:, :2] / uvw[:, 2:]
+        return b / (xy1[:, 0] - xy2[:, 0]) * (xy1[:, 1] - xy2[:, 1])
+
+    return np.column_stack([(parallax(e) - parallax(-e)) / (2 * h) for e in np.eye(5) * h])
+
+
 def _sol_parallax(xy1, xy2, b):
     lam = b / (xy1[:, 0] - xy2[:, 0])
     return lam * (xy1[:, 1] - xy2[:, 1])
 
 
-def _sol_six_point(p, b, d, h):
-    P = _gruber(b, d, h)
-    A = _sol_design(P[:, 0], P[:, 1], P[:, 2], b)
-    e = np.linalg.lstsq(A, p, rcond=None)[0]
-    return e / [1, 1, GON, GON, GON]
+def _sol_six_point_residuals(p, X, Y, Z, b, mistake=None):
+    A = _sol_design(X, Y, Z, b)
+    H = A @ np.linalg.solve(A.T @ A, A.T)  # the part of p that goes into the elements
+    v = H @ p - p
+    r = 1.0 - np.diag(H)
+    if mistake == "p - Ad":
+        v = -v
+    elif mistake == "hat diagonal":
+        r = np.diag(H)
+    elif mistake == "mean share":
+        r = np.full(6, (6 - 5) / 6)
+    elif mistake == "library":
+        r = redundancy_numbers(A, 1.0)
+    return v, r
 
 
 def _sol_condition(p, X, Y, Z, b):
@@ -111,7 +133,7 @@ SOLUTIONS = {
     "check_kovarik_iteration": _kovarik_iteration,
     "check_design": _sol_design,
     "check_parallax": _sol_parallax,
-    "check_six_point": _sol_six_point,
+    "check_six_point_residuals": _sol_six_point_residuals,
     "check_condition": _sol_condition,
     "check_scheme_sigma": _sol_scheme_sigma,
 }
@@ -135,6 +157,7 @@ MUTANTS = {
         "phi and kappa swapped": lambda X, Y, Z, b: _sol_design(X, Y, Z, b)[:, [0, 1, 2, 4, 3]],
         "Kovarik signs": lambda X, Y, Z, b: _sol_design(X, Y, Z, b) * [1, -1, 1, 1, -1],
         "the stand-in (the library's)": rel.design_dependent,
+        "own central differences": _design_fd,
         "1 - Y^2/Z^2": lambda X, Y, Z, b: (
             _sol_design(X, Y, Z, b)
             - np.column_stack([0 * X, 0 * X, -2 * Z * (Y / Z) ** 2, 0 * X, 0 * X])
@@ -148,11 +171,11 @@ MUTANTS = {
             xy1, xy2, 152.7, rel.PairState.from_elements(np.zeros(5), b)
         )[0],
     },
-    "check_six_point": {
-        "y'' - y'": lambda p, b, d, h: _sol_six_point(-p, b, d, h),
-        "degrees": lambda p, b, d, h: _sol_six_point(p, b, d, h) * [1, 1, 0.9, 0.9, 0.9],
-        "phi and kappa swapped": lambda p, b, d, h: _sol_six_point(p, b, d, h)[[0, 1, 2, 4, 3]],
-    },
+    "check_six_point_residuals": {
+        k: (lambda *a, k=k: _sol_six_point_residuals(*a, mistake=k))
+        for k in ("p - Ad", "hat diagonal", "mean share", "library")
+    }
+    | {"one array": lambda *a: _sol_six_point_residuals(*a)[0]},
     "check_condition": {
         "flat form with relief": lambda p, X, Y, Z, b: (
             np.array([2.0, -2.0, -1.0, 1.0, -1.0, 1.0]) @ p

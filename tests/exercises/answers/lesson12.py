@@ -19,9 +19,18 @@ def _normalized(A, l, sigma):
     return v, r, v / (sigma * np.sqrt(r))
 
 
-def _detection_probability(nabla, sigma, r, k):
-    d = np.sqrt(r) * np.abs(nabla) / sigma  # |E(w)|
-    return norm.sf(k - d) + norm.cdf(-k - d)
+def _flag_probability(nabla, sigma, sigma_true, r, k, mistake=None):
+    m = np.sqrt(r) * np.abs(nabla) / sigma  # |E(w)|
+    s = sigma_true / sigma  # σ of w
+    if mistake == "no sigma_true":
+        s = 1.0
+    elif mistake == "mean by sigma_true":
+        m, s = m / s, 1.0
+    elif mistake == "variance":
+        s = s**2
+    if mistake == "one tail":
+        return norm.sf((k - m) / s)
+    return norm.sf((k - m) / s) + norm.cdf((-k - m) / s)
 
 
 def _bias_to_noise(r, delta0):
@@ -50,7 +59,7 @@ SOLUTIONS = {
     "check_snoop": _snoop,
     "check_normalized": _normalized,
     "check_new_position": lambda: 12.0,
-    "check_detection_probability": _detection_probability,
+    "check_flag_probability": _flag_probability,
     "check_bias_to_noise": _bias_to_noise,
 }
 
@@ -71,12 +80,13 @@ MUTANTS = {
         "far beyond": lambda: 20.0,
         "just short": lambda: 10.5,
     },
-    "check_detection_probability": {
-        "one tail": lambda nb, s, r, k: norm.sf(k - np.sqrt(r) * np.abs(nb) / s),
-        "no sqrt r": lambda nb, s, r, k: _detection_probability(nb, s, np.ones_like(r), k),
-        "r not sqrt": lambda nb, s, r, k: _detection_probability(nb, s, r**2, k),
-        "not flagging": lambda nb, s, r, k: 1 - _detection_probability(nb, s, r, k),
-        "divided by sqrt r": lambda nb, s, r, k: _detection_probability(nb, s, 1 / r, k),
+    "check_flag_probability": {
+        m: (lambda *a, m=m: _flag_probability(*a, mistake=m))
+        for m in ("no sigma_true", "mean by sigma_true", "variance", "one tail")
+    }
+    | {
+        "no sqrt r": lambda nb, s, t, r, k: _flag_probability(nb, s, t, np.ones_like(r), k),
+        "not flagging": lambda *a: 1 - _flag_probability(*a),
     },
     "check_bias_to_noise": {
         "the MDB": lambda r, d0: d0 / np.sqrt(r),
