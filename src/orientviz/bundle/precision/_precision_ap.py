@@ -10,10 +10,9 @@ the reduced system is bordered ::
 This module supplies the border's part:
 
 * :func:`border_inverse` — Y, Q_aa, Q_ca from two banded triangular solves with all q
-  columns at once (BLAS level 3, :func:`~orientviz.bundle.problem.band_forward_solve`
-  and :func:`~orientviz.bundle.problem.band_backward_solve`), and the correction
-  Y Q_aa Yᵀ of the 6 × 6 blocks of Q_cc that the precision needs (one product per image
-  row of blocks, never the dense 6m × 6m matrix);
+  columns at once (BLAS level 3 on views of the factor, :class:`._band.BandSolver`), and
+  the correction Y Q_aa Yᵀ of the 6 × 6 blocks of Q_cc that the precision needs (one
+  product per image row of blocks, never the dense 6m × 6m matrix);
 * :func:`point_terms` — the terms of the points and of the image rays. A point's
   coupling with the parameters (``H V⁻¹`` per (point, group) pair) is non-zero only in
   the columns of the groups its rays lie in, a ray's design only in its own group's
@@ -34,7 +33,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..problem._ap_normal import BorderE
-from ..problem._border import band_backward_solve, band_forward_solve
+from ._band import BandSolver
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -99,11 +98,12 @@ def banded_border(L: F64, perm: I64, E, pos: I64) -> tuple[F64, F64]:
         Eᵀ S⁻¹ E = ZᵀZ with Z = L⁻¹ E (symmetric by construction).
     """
     Ep = E.permuted(pos, np.float64) if isinstance(E, BorderE) else E[perm]
-    Z = band_forward_solve(L, Ep)
+    band = BandSolver(L)
+    Z = band.forward(Ep)
     del Ep
     C = scipy.linalg.blas.dsyrk(1.0, Z.T)  # upper triangle of ZᵀZ
     EtY = np.triu(C) + np.triu(C, 1).T
-    return band_backward_solve(L, Z), EtY
+    return band.backward(Z), EtY
 
 
 @dataclass
