@@ -419,32 +419,10 @@ def _banded_cofactors(sol: LinearSolution, groups: I64, chunk: int) -> F64 | Non
         return None
     from ..bundle.precision import banded_selected_inverse  # below us; loaded when used
 
-    # the entries of S⁻¹ the groups' blocks read (pairs of G's rows per group pair of columns)
-    parts = _group_pairs(groups, Gc.indptr, chunk)
-    ra = Gc.indices[np.concatenate([q[2] for q in parts])]
-    rb = Gc.indices[np.concatenate([q[3] for q in parts])]
-    z = banded_selected_inverse(cb, 48, at=(pos[ra], pos[rb])) * s[ra] * s[rb]
+    Zb = banded_selected_inverse(cb, 48)
+    ptr, rows, vals = Gc.indptr, Gc.indices, Gc.data
     out = np.zeros((g, k, k))
-    vals, start = Gc.data, 0
-    for s0, (gi, ab_, ia, ib, combo, n_combo) in zip(range(0, g, chunk), parts):
-        zz = z[start : start + ia.size]
-        start += ia.size
-        blk = np.bincount(combo, vals[ia] * zz * vals[ib], minlength=n_combo)
-        part = np.zeros((min(chunk, g - s0), k * k))
-        part[gi, ab_] = blk
-        out[s0 : s0 + chunk] = part.reshape(-1, k, k)
-    dinv = np.where(valid, 1.0 / sol.D[np.where(valid, groups, 0)], 0.0)
-    out += np.einsum("ga,ab->gab", dinv, np.eye(k))
-    return out
-
-
-def _group_pairs(groups: I64, ptr: I64, chunk: int) -> list[tuple]:
-    """Per chunk of groups: for every group and pair (a, b) of its columns of G (both
-    unknowns), every pair of their non-zeros: (group in the chunk, a·k + b, index of G's
-    non-zero in column a, in column b, the pair's combination, number of combinations)."""
-    g, k = groups.shape
     a_of, b_of = np.divmod(np.arange(k * k), k)
-    out = []
     for s0 in range(0, g, chunk):
         grp = groups[s0 : s0 + chunk]
         gi, ab_ = np.nonzero((grp[:, a_of] >= 0) & (grp[:, b_of] >= 0))
@@ -456,5 +434,13 @@ def _group_pairs(groups: I64, ptr: I64, chunk: int) -> list[tuple]:
         idx = np.arange(cnt.sum()) - first[combo]
         ia = ptr[ta][combo] + idx // nb_[combo]
         ib = ptr[tb][combo] + idx % nb_[combo]
-        out.append((gi, ab_, ia, ib, combo, ta.size))
+        ra, rb = rows[ia], rows[ib]
+        d = np.abs(pos[ra] - pos[rb])  # ≤ kd: the pairs are edges of the graph
+        z = Zb[np.minimum(pos[ra], pos[rb]), d] * s[ra] * s[rb]
+        blk = np.bincount(combo, vals[ia] * z * vals[ib], minlength=ta.size)
+        part = np.zeros((grp.shape[0], k * k))
+        part[gi, ab_] = blk
+        out[s0 : s0 + chunk] = part.reshape(-1, k, k)
+    dinv = np.where(valid, 1.0 / sol.D[np.where(valid, groups, 0)], 0.0)
+    out += np.einsum("ga,ab->gab", dinv, np.eye(k))
     return out
