@@ -320,8 +320,8 @@ def _fill_precision(res, prob, st, rw, Je, Jp, lin) -> None:
         Y3, EtY, row = inverse.border(E)  # S⁻¹E by the same factor (BLAS 3)
         Y3 = Y3[row]  # image order
         Faa = np.linalg.inv(F - EtY)  # Q_aa (of the whole border)
-        Zblk = Zblk + Y3[S.block_i] @ Faa @ Y3[S.block_k].transpose(0, 2, 1)
         Qca = -(Y3 @ Faa)  # (m, 6, nb)
+        Zblk = Zblk - Qca[S.block_i] @ Y3[S.block_k].transpose(0, 2, 1)  # + Y Q_aa Yᵀ
     Qcc_diag = Zblk[S.diag_block]
     # point cofactors: Vinv + Σ_ab T_aᵀ Q(i_a, i_b) T_b
     oi, ocol = prob.obs.image, prob.obs.column
