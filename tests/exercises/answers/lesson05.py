@@ -9,7 +9,6 @@ from __future__ import annotations
 import numpy as np
 
 import orientviz as ov
-from orientviz.adjust.gross import redundancy_numbers
 from orientviz.orientation import relative as rel
 
 
@@ -36,19 +35,19 @@ def _sol_parallax(xy1, xy2, b):
     return lam * (xy1[:, 1] - xy2[:, 1])
 
 
-def _sol_six_point_residuals(p, X, Y, Z, b, mistake=None):
-    A = _sol_design(X, Y, Z, b)
-    H = A @ np.linalg.solve(A.T @ A, A.T)  # the part of p that goes into the elements
-    v = H @ p - p
-    r = 1.0 - np.diag(H)
+def _sol_six_point_residuals(p, w, mistake=None):
+    # I − H projects onto the one direction w (wᵀA = 0): v = −w wᵀp / wᵀw, r_i = w_i² / wᵀw
+    ww = w @ w
+    v = -w * (w @ p) / ww
+    r = w * w / ww
     if mistake == "p - Ad":
         v = -v
     elif mistake == "hat diagonal":
-        r = np.diag(H)
+        r = 1.0 - r
     elif mistake == "mean share":
         r = np.full(6, (6 - 5) / 6)
-    elif mistake == "library":
-        r = redundancy_numbers(A, 1.0)
+    elif mistake == "no wTw":
+        v, r = -w * (w @ p), w * w
     return v, r
 
 
@@ -173,7 +172,7 @@ MUTANTS = {
     },
     "check_six_point_residuals": {
         k: (lambda *a, k=k: _sol_six_point_residuals(*a, mistake=k))
-        for k in ("p - Ad", "hat diagonal", "mean share", "library")
+        for k in ("p - Ad", "hat diagonal", "mean share", "no wTw")
     }
     | {"one array": lambda *a: _sol_six_point_residuals(*a)[0]},
     "check_condition": {
