@@ -17,7 +17,7 @@ def _band_matrix(n: int, kd: int, rng) -> np.ndarray:
     A = rng.standard_normal((n, n))
     i, j = np.indices((n, n))
     S = np.where(np.abs(i - j) <= kd, A + A.T, 0.0)
-    return S + (2.0 * kd + 2.0) * np.eye(n)  # beyond the band part's spectral radius
+    return S + np.diag(np.abs(S).sum(axis=1) + 1.0)  # diagonally dominant: definite
 
 
 CASES = [(50, 7, 5), (300, 40, 16), (101, 100, 48), (997, 23, 7), (40, 60, 48), (9, 2, 1)]
@@ -61,3 +61,22 @@ def test_the_band_solves_equal_dense_solves(n, kd, nb):
     np.testing.assert_allclose(band.forward(B), np.linalg.solve(L, B), **tol)
     np.testing.assert_allclose(band.backward(B.copy()), np.linalg.solve(L.T, B), **tol)
     np.testing.assert_allclose(band.solve(B[:, 0]), np.linalg.solve(S, B[:, 0]), **tol)
+
+
+@pytest.mark.parametrize(("n", "kd", "nb"), CASES)
+def test_the_selected_entries_asked_for(n, kd, nb):
+    """``at=(rows, cols)``: the entries Z[rows, cols] inside the band (either triangle),
+    read from the window as the recursion passes them; one outside the band raises."""
+    rng = np.random.default_rng(7 * n + kd)
+    kd = min(kd, n - 1)
+    S, cb = _factor(n, kd, rng)
+    Z = np.linalg.inv(S)
+    rows = rng.integers(0, n, 400)
+    cols = np.clip(rows + rng.integers(-kd, kd + 1, 400), 0, n - 1)
+    got = banded_selected_inverse(cb, nb, window=2, at=(rows.reshape(20, 20), cols.reshape(20, 20)))
+    np.testing.assert_allclose(
+        got, Z[rows, cols].reshape(20, 20), rtol=0, atol=1e-12 * np.abs(Z).max()
+    )
+    if kd + 1 < n:
+        with pytest.raises(ValueError, match="outside the band"):
+            banded_selected_inverse(cb, nb, at=(np.array([0]), np.array([kd + 1])))

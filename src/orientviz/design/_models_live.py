@@ -258,23 +258,21 @@ class LiveModels:
         """Q_XX at every tie's 3 × 3 block: D⁻¹ + Σ_ab g_aᵀ Z(j_a, j_b) g_b over the pairs
         of rows (a, b) of each tie, g the rows' columns of G = C D⁻¹ and Z = S⁻¹ inside
         the band."""
-        Zb = banded_selected_inverse(self._cb, TAKAHASHI_BLOCK)
         j, sc = self._rows
         su, D, pr = self.su, self._D, self._pairs
         g = self._C / D[sc][:, :, None]  # (k, 3, 7)
         a, bb = pr.a, pr.b
         # the 7 × 7 blocks of Z, once per pair of models (positions P, Q in the band, each
-        # model's parameters together): Z[7P + a, 7Q + b] = Zb[min, |difference|]
+        # model's parameters together): Z[7P + a, 7Q + b]
         n = self.n
         P, Qp = self._at[pr.pair // n], self._at[pr.pair % n]
         r7 = np.arange(7)
         u = 7 * P[:, None, None] + r7[None, :, None]
         v = 7 * Qp[:, None, None] + r7[None, None, :]
-        dist = np.abs(u - v)
-        if dist.max(initial=0) > self.kd:  # cannot be: models sharing a point are coupled
+        if np.abs(u - v).max(initial=0) > self.kd:  # cannot be: models sharing a point are coupled
             raise NotDeterminableError("models sharing a point lie outside the band", parameters=[])
         sm = self._scale.reshape(n, 7)  # the Jacobi scale of each model's parameters
-        Z = Zb[np.minimum(u, v), dist]
+        Z = banded_selected_inverse(self._cb, TAKAHASHI_BLOCK, at=(u, v))
         Z *= sm[pr.pair // n][:, :, None] * sm[pr.pair % n][:, None, :]  # (pairs of models, 7, 7)
         blk = g[a] @ Z[pr.inv] @ g[bb].transpose(0, 2, 1)  # (pairs of rows, 3, 3)
         Q = np.zeros((su.scalar.shape[0], 3, 3))

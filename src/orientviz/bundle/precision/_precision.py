@@ -56,7 +56,9 @@ def _strided(flat: F64, start: int, shape: tuple[int, int], row_stride: int) -> 
     )
 
 
-def banded_selected_inverse(cb: F64, nb: int = 96, window: int = 12) -> F64:
+def banded_selected_inverse(
+    cb: F64, nb: int = 96, window: int = 12, at: tuple[NDArray, NDArray] | None = None
+) -> F64:
     """Entries of S⁻¹ inside the band, from the banded Cholesky factor of S.
 
     Parameters
@@ -68,11 +70,16 @@ def banded_selected_inverse(cb: F64, nb: int = 96, window: int = 12) -> F64:
         Block size of the recursion.
     window : int
         Block rows per position of the sliding window (below).
+    at : (rows, cols) of int arrays (broadcast together), optional
+        Only these entries (inside the band, in the factor's order) are wanted: returned
+        in their broadcast shape, read from the window as the recursion passes them (the band itself
+        is not stored).
 
     Returns
     -------
-    ndarray, shape (n, kd + 1)
-        ``Zb[i, d] = (S⁻¹)[i, i + d]`` (upper band by rows; zero beyond n).
+    ndarray, shape (n, kd + 1) or the shape of ``at``
+        ``Zb[i, d] = (S⁻¹)[i, i + d]`` (upper band by rows; zero beyond n), or
+        ``(S⁻¹)[rows, cols]``.
 
     Notes
     -----
@@ -95,8 +102,18 @@ def banded_selected_inverse(cb: F64, nb: int = 96, window: int = 12) -> F64:
     W = buf.shape[1]
     bflat = buf.reshape(-1)
     off = max(n - T, 0)  # buffer index = global index − off
-    Zb = np.empty((n, kd + 1))
-    for i0 in reversed(range(0, n, nb)):
+    if at is None:
+        Zb = np.empty((n, kd + 1))
+    else:  # the wanted entries by their smaller index, i.e. by the block row that has them
+        at = np.broadcast_arrays(*(np.asarray(a, np.int64) for a in at))
+        r, c = (a.reshape(-1) for a in at)
+        r, c = np.minimum(r, c), np.maximum(r, c)
+        if np.any(c - r > kd):
+            raise ValueError("banded_selected_inverse: an entry asked for lies outside the band")
+        order = np.argsort(r, kind="stable")
+        cut = np.searchsorted(r[order], np.arange(0, n + nb, nb))
+        out = np.empty(r.size)
+    for k, i0 in reversed(list(enumerate(range(0, n, nb)))):
         i1 = min(i0 + nb, n)
         b1 = min(i1 + kd, n)
         ni, nbb = i1 - i0, b1 - i1
@@ -121,10 +138,13 @@ def banded_selected_inverse(cb: F64, nb: int = 96, window: int = 12) -> F64:
             buf[q : q + ni, q : q + ni] = LIIinv.T @ (LIIinv - LBIt @ ZIB.T)
         else:
             buf[q : q + ni, q : q + ni] = LIIinv.T @ LIIinv
-        # the band rows i0 … i1 − 1: Z[i, i + d] at buffer (q + r, q + r + d); beyond b1
-        # only for the last rows (b1 = n), which are written first, into the buffer's zeros
-        Zb[i0:i1] = _strided(bflat, q * W + q, (ni, kd + 1), W + 1)
-    return Zb
+        if at is None:  # the band rows i0 … i1 − 1: Z[i, i + d] at buffer (q + r, q + r + d);
+            # beyond b1 only for the last rows (b1 = n), written first, into the buffer's zeros
+            Zb[i0:i1] = _strided(bflat, q * W + q, (ni, kd + 1), W + 1)
+        else:  # the wanted entries of these rows (their columns lie in [i0, b1))
+            sel = order[cut[k] : cut[k + 1]]
+            out[sel] = buf[r[sel] - off, c[sel] - off]
+    return Zb if at is None else out.reshape(np.shape(at[0]))
 
 
 class ReducedInverse:
@@ -169,12 +189,10 @@ class ReducedInverse:
         if fac is None or fac.kind != "banded":
             fac = factor_reduced(st, blocks)
         self._fac = fac
-        Zb = banded_selected_inverse(fac.data, nb)
         p = st.pos_img
         rows = 6 * p[st.block_i][:, None, None] + r6[None, :, None]
         cols = 6 * p[st.block_k][:, None, None] + r6[None, None, :]
-        lo, hi = np.minimum(rows, cols), np.maximum(rows, cols)
-        self.blocks = Zb[lo, hi - lo]
+        self.blocks = banded_selected_inverse(fac.data, nb, at=(rows, cols))
 
     def border(self, E) -> tuple[F64, F64, NDArray[np.int64]]:
         """S⁻¹E and Eᵀ S⁻¹ E for a border E (6m, q): ``(Y3, EtY, row)``.
@@ -302,8 +320,8 @@ def _fill_precision(res, prob, st, rw, Je, Jp, lin) -> None:
         Y3, EtY, row = inverse.border(E)  # S⁻¹E by the same factor (BLAS 3)
         Y3 = Y3[row]  # image order
         Faa = np.linalg.inv(F - EtY)  # Q_aa (of the whole border)
-        Zblk = Zblk + Y3[S.block_i] @ Faa @ Y3[S.block_k].transpose(0, 2, 1)
         Qca = -(Y3 @ Faa)  # (m, 6, nb)
+        Zblk = Zblk - Qca[S.block_i] @ Y3[S.block_k].transpose(0, 2, 1)  # + Y Q_aa Yᵀ
     Qcc_diag = Zblk[S.diag_block]
     # point cofactors: Vinv + Σ_ab T_aᵀ Q(i_a, i_b) T_b
     oi, ocol = prob.obs.image, prob.obs.column
