@@ -15,6 +15,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import compileall  # noqa: E402
 import importlib.util  # noqa: E402
+import sys  # noqa: E402
 
 import pytest  # noqa: E402
 
@@ -33,6 +34,15 @@ from orientviz.io.jsonio import import_jsonschema  # noqa: E402
 # optional format checkers' packages (rfc3987_syntax builds a grammar at import: ~1.3 s CPU);
 # no schema validated here has a "format" keyword (orientviz's, nbformat's): nothing changes
 import_jsonschema()
+
+# pytest rewrites the asserts of every module of a distribution that ships a pytest plugin,
+# so hypothesis's ~130 modules too; where PYTHONDONTWRITEBYTECODE is set nothing keeps the
+# result and every run parsed and rewrote them anew (~0.6 s CPU). Their asserts are
+# hypothesis's own checks, not the tests' (the test modules are rewritten as before).
+for _hook in sys.meta_path:
+    if isinstance(getattr(_hook, "_must_rewrite", None), set):
+        _hook._must_rewrite.discard("hypothesis")
+        getattr(_hook, "_marked_for_rewrite_cache", {}).clear()
 
 try:  # property-based tests explore new inputs locally; CI replays a fixed sequence, so
     # that a landing run cannot turn red on an input nobody has seen (run the suite

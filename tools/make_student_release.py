@@ -12,7 +12,7 @@ otter-grader read them:
   (markers included) become one ``raise NotImplementedError`` at the marker's indentation;
 * the lines between ``### BEGIN HIDDEN TESTS`` and ``### END HIDDEN TESTS`` are removed
   (they run in the teacher's copy and when grading, the student never sees them); a code cell
-  left empty by that is dropped;
+  left empty by that says so in a comment;
 * in markdown cells, the text between ``<!-- BEGIN SOLUTION -->`` and
   ``<!-- END SOLUTION -->`` becomes ``*(your answer)*``.
 
@@ -20,7 +20,10 @@ Solution cells lose their ``hide-cell`` tag and ``source_hidden`` flag (the blan
 student to fill). The check cell after a blanked solution gets the tag ``raises-exception``,
 so that "Run All" (Jupyter Notebook, JupyterLab, nbclient, nbgrader's autograde) goes on past
 a check that answers "not written yet"; the lesson's later cells fall back to the library's
-result while the student's function is a blank. All outputs are cleared.
+result while the student's function is a blank. All outputs are cleared. The first code cell
+gets one call of ``orientviz.exercises.release_check`` with the checks the lesson calls and
+the commit the release is made from: a release run against another orientviz stops there
+with a message that says so.
 
 The installed package holds the checks only (``orientviz.exercises``); the solutions are in
 the lessons and in ``tests/exercises/answers``, neither of which is in the wheel.
@@ -30,6 +33,8 @@ from __future__ import annotations
 
 import json
 import pathlib
+import re
+import subprocess
 import sys
 from typing import Any
 
@@ -54,6 +59,9 @@ MD_END = "<!-- END SOLUTION -->"
 BLANK = "raise NotImplementedError"
 MD_BLANK = "*(your answer)*"
 CHECK_TAG = "raises-exception"
+HIDDEN_NOTE = (
+    "# (the teacher's hidden tests of the check above run here when the lesson is graded)\n"
+)
 
 
 def _blocks(source: str, begin: str, end: str, replacement: str | None) -> tuple[str, int]:
@@ -126,8 +134,45 @@ def _unhide(meta: dict[str, Any]) -> None:
             meta.pop("jupyter")
 
 
-def release_notebook(nb: dict[str, Any]) -> tuple[dict[str, Any], int]:
-    """Return the student copy of a notebook (a JSON dict) and the number of blocks blanked."""
+def _checks_called(nb: dict[str, Any]) -> list[str]:
+    """The ``check_*`` names the notebook's code cells call."""
+    names: set[str] = set()
+    other: set[str] = set()  # the lesson's own helpers and other packages' functions
+    for cell in nb.get("cells", []):
+        if cell.get("cell_type") == "code":
+            src = _source(cell)
+            names |= set(re.findall(r"\b(check_\w+)\(", src))
+            other |= set(re.findall(r"\bdef (check_\w+)\(", src))
+            for module, group, line in re.findall(
+                r"from\s+([\w.]+)\s+import\s+(?:\(([^)]*)\)|([^\n]*))", src
+            ):
+                if not module.startswith("orientviz.exercises"):
+                    other |= set(re.findall(r"\b(check_\w+)\b", group + line))
+    return sorted(names - other)
+
+
+def _guard(nb: dict[str, Any], lesson: str, made_with: str) -> None:
+    """Append the release check to the first code cell (no cell is added: numbers stay)."""
+    for cell in nb.get("cells", []):
+        if cell.get("cell_type") == "code":
+            text = _source(cell).rstrip("\n")
+            cell["source"] = (
+                f"{text}\n\nfrom orientviz.exercises import release_check  # the release matches"
+                f" the installed orientviz\nrelease_check({lesson!r}, {_checks_called(nb)!r},"
+                f" made_with={made_with!r})\n"
+            )
+            return
+
+
+def release_notebook(
+    nb: dict[str, Any], lesson: str | None = None, made_with: str = ""
+) -> tuple[dict[str, Any], int]:
+    """Return the student copy of a notebook (a JSON dict) and the number of blocks blanked.
+
+    With ``lesson`` (e.g. ``"05"``) the first code cell also calls
+    :func:`orientviz.exercises.release_check` with the checks the lesson calls and
+    ``made_with`` (the orientviz commit the release is made from).
+    """
     total = 0
     cells = []
     check_next = False
@@ -135,8 +180,8 @@ def release_notebook(nb: dict[str, Any]) -> tuple[dict[str, Any], int]:
         cell = json.loads(json.dumps(cell))  # a deep copy
         code = cell.get("cell_type") == "code"
         text, n = strip_source(_source(cell), markdown=not code)
-        if code and _source(cell).strip() and not text.strip():
-            continue  # a cell of hidden tests only: nothing of it is the student's
+        if code and _source(cell).strip() and not text.strip():  # a cell of hidden tests only
+            text = HIDDEN_NOTE
         meta = cell.setdefault("metadata", {})
         if text != _source(cell):
             cell["source"] = text
@@ -154,7 +199,21 @@ def release_notebook(nb: dict[str, Any]) -> tuple[dict[str, Any], int]:
         cells.append(cell)
     out = dict(nb)
     out["cells"] = cells
+    if lesson is not None:
+        _guard(out, lesson, made_with)
     return out, total
+
+
+def _commit(path: pathlib.Path) -> str:
+    """The short git commit of the repository holding ``path`` ("" outside a repository)."""
+    try:
+        out = subprocess.run(
+            ["git", "-C", str(path), "rev-parse", "--short", "HEAD"],
+            capture_output=True, text=True, check=True, timeout=10,
+        )  # fmt: skip
+    except (OSError, subprocess.SubprocessError):
+        return ""
+    return out.stdout.strip()
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -175,10 +234,12 @@ def main(argv: list[str] | None = None) -> int:
         print("release: OUTDIR must differ from the source folder", file=sys.stderr)
         return 1
     outdir.mkdir(parents=True, exist_ok=True)
+    made_with = _commit(paths[0].parent)
     for path in paths:
         try:
             nb = json.loads(path.read_text(encoding="utf-8"))
-            student, n = release_notebook(nb)
+            lesson = path.name[:2] if path.name[:2].isdigit() else None
+            student, n = release_notebook(nb, lesson, made_with)
         except (ValueError, json.JSONDecodeError) as exc:
             print(f"release: {path}: {exc}", file=sys.stderr)
             return 1

@@ -136,3 +136,30 @@ def test_a_failed_check_reads_with_a_cross_once():
     assert str(CheckFailed("v: wrong")) == "✗ v: wrong"
     assert str(CheckFailed("✗ v: wrong")) == "✗ v: wrong"
     assert str(NotWrittenError("f: not written yet")).startswith("✗ f: not written yet")
+
+
+def test_complex_step_is_exact_and_the_gate_names_finite_differences():
+    """The complex step gives derivatives to round-off; exact_derivatives passes them and names
+    a central difference, whatever its step."""
+    import numpy as np
+    import pytest
+
+    from orientviz.exercises._common import CheckFailed, complex_step, exact_derivatives
+
+    def f(x):  # (2,) → (2,), complex-safe
+        return np.array([x[0] ** 3 * np.sin(x[1]), np.exp(x[0]) / (1.0 + x[1] ** 2)])
+
+    x = np.array([0.7, -1.3])
+    exact = np.array(
+        [
+            [3 * x[0] ** 2 * np.sin(x[1]), x[0] ** 3 * np.cos(x[1])],
+            [np.exp(x[0]) / (1 + x[1] ** 2), -2 * x[1] * np.exp(x[0]) / (1 + x[1] ** 2) ** 2],
+        ]
+    )
+    J = complex_step(f, x)
+    assert np.abs(J - exact).max() < 1e-15 * np.abs(exact).max()
+    assert exact_derivatives("J", exact, J) < 1e-15
+    for h in (1e-3, 1e-5, 1e-7):
+        fd = np.stack([(f(x + e) - f(x - e)) / (2 * h) for e in np.eye(2) * h], axis=1)
+        with pytest.raises(CheckFailed, match="finite difference"):
+            exact_derivatives("J", fd, J)

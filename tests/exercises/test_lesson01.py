@@ -33,6 +33,7 @@ def test_lesson01_diagnoses_name_the_mistake():
             ("check_second_order", "along"): "ALONG the ray",
             ("check_second_order", "sign"): "convex",
             ("check_second_order", "exact"): "whole linearisation error",
+            ("check_second_order", "second difference, t 0.001"): "finite difference",
             ("check_group_sigma0", "n_g"): "number of observations",
             ("check_group_sigma0", "share"): "in proportion to the group's size",
             ("check_group_sigma0", "no_weights"): "weights are missing",

@@ -41,6 +41,7 @@ def test_diagnoses_name_the_mistake():
             ("check_relative_from_exterior", "not_scaled"): "not scaled",
             ("check_relative_from_exterior", "degrees"): "degrees",
             ("check_design", "Kovarik signs"): "Kovarik",
+            ("check_design", "own central differences"): "finite difference",
             ("check_design", "1 - Y^2/Z^2"): "sign inside the bracket",
             (
                 "check_design",
@@ -50,7 +51,7 @@ def test_diagnoses_name_the_mistake():
             ("check_six_point_residuals", "p - Ad"): "v = A d̂ − p",
             ("check_six_point_residuals", "hat diagonal"): "1 minus that",
             ("check_six_point_residuals", "mean share"): "the mean share",
-            ("check_six_point_residuals", "library"): "redundancy_numbers",
+            ("check_six_point_residuals", "no wTw"): "dividing by wᵀw",
             ("check_six_point_residuals", "one array"): "two arrays",
             ("check_parallax", "image difference"): "scale it to the model",
             ("check_condition", "flat form with relief"): "flat-terrain form",

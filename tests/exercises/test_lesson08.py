@@ -53,6 +53,8 @@ def test_diagnoses_name_the_mistake():
             ("check_model_jacobian", "sign"): "wrong sign",
             ("check_model_jacobian", "left increment"): "increment on the left",
             ("check_model_jacobian", "lambda column"): "λ column",
+            ("check_model_jacobian", "own central differences, h 1e-6"): "finite difference",
+            ("check_model_jacobian", "own central differences, h 1e-4"): "finite difference",
             ("check_adjust_models", "no weights"): "equal weights",
             ("check_adjust_models", "one step"): "not converged",
             ("check_adjust_models", "left update"): "not converged",

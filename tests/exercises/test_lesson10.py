@@ -22,6 +22,7 @@ def test_lesson10_diagnoses_name_the_mistake():
             ("check_ray_partials", "R_not_transposed"): "instead of Rᵀ",
             ("check_ray_partials", "no_quotient"): "quotient rule",
             ("check_ray_partials", "X0_sign"): "X0 enters as X − X0",
+            ("check_ray_partials", "own central differences"): "finite difference",
             ("check_my_bundle", "fixed_as_unknowns"): "held fixed (control) are no unknowns",
             ("check_my_bundle", "no_sqrt"): "square root is missing",
             ("check_point_covariance", "V_only"): "uncertainty of the orientations",

@@ -25,18 +25,18 @@ def test_ppi_image_without_h_is_named():
     assert exc is not None and "h is missing" in str(exc)
 
 
-def test_best_pair_misreadings_are_named():
+def test_steep_pair_misreadings_are_named():
     from mutants import assert_diagnoses
 
     assert_diagnoses(
         lesson14,
         answers,
         {
-            ("check_best_pair", "largest"): "LARGEST",
-            ("check_best_pair", "plan"): "plan position",
-            ("check_best_pair", "spread"): "farthest apart",
-            ("check_best_pair", "the stand-in"): "calls the library's best_pair_library",
-            ("check_best_pair", "3-D trace"): "best for the 3-D position",
+            ("check_steep_pair", "plan"): "geometric rule",
+            ("check_steep_pair", "far from the three"): "which rays change most",
+            ("check_steep_pair", "spread"): "farthest apart",
+            ("check_steep_pair", "the stand-in"): "calls the library's best_pair_library",
+            ("check_steep_pair", "trial"): "geometric rule",
         },
     )
 

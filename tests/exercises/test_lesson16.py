@@ -85,9 +85,15 @@ def test_control_update_check_refuses_solving_with_the_enlarged_n():
     )
 
 
-def test_best_candidate_by_the_rms_is_named():
+def test_after_worst_mistakes_are_named():
     from mutants import assert_diagnoses
 
     assert_diagnoses(
-        lesson16, answers, {("check_best_candidate", "RMS σ_Z of all points"): "smallest RMS σ_Z"}
+        lesson16,
+        answers,
+        {
+            ("check_after_worst", "itself"): "AFTERWARDS",
+            ("check_after_worst", "variance"): "variance",
+            ("check_after_worst", "before"): "BEFORE the control point",
+        },
     )

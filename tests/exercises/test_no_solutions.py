@@ -28,7 +28,10 @@ MODULES = sorted(p.stem for p in PACKAGE.glob("lesson[0-9][0-9].py"))
 #: (brute force, numerical derivatives, leave-one-out, Rodrigues rotations, numpy's lstsq);
 #: handed in, they pass — as any correct oracle would — but they are not the lesson's method.
 INDEPENDENT_ORACLES = {
-    "lesson01": {},
+    "lesson01": {
+        "_second_difference_exact": "a second difference in 50-digit decimal arithmetic, not the "
+        "derived closed form (a student who does that has left floating point on purpose)"
+    },
     "lesson02": {"_rodrigues_opk": "three Rodrigues rotations, not the written-out R_ω R_φ R_κ"},
     "lesson04": {"_numeric_design": "central differences of the collinearity equations"},
     "lesson07": {"_numeric_design": "central differences of the similarity"},

@@ -12,6 +12,7 @@ from release_tool import release
 
 BEGIN, END, MD_BEGIN, MD_END = release.BEGIN, release.END, release.MD_BEGIN, release.MD_END
 HIDDEN_BEGIN, HIDDEN_END = release.HIDDEN_BEGIN, release.HIDDEN_END
+HIDDEN_NOTE = release.HIDDEN_NOTE
 main, strip_source, release_notebook = release.main, release.strip_source, release.release_notebook
 
 ROOT = pathlib.Path(__file__).parents[2]
@@ -64,7 +65,27 @@ def test_hidden_tests_are_removed():
         strip_source(f"{HIDDEN_BEGIN}\nx\n")
 
 
-def test_a_cell_of_hidden_tests_only_is_dropped():
+def test_a_release_names_the_checks_it_needs_and_stops_on_another_orientviz():
+    from orientviz.exercises import CheckFailed, release_check
+
+    def code(s):
+        return {"cell_type": "code", "source": s, "metadata": {}, "outputs": [],
+                "execution_count": None}  # fmt: skip
+
+    nb = {"cells": [code("import numpy as np"), code("def check_mine(f):\n    pass"),
+                    code("from orientviz.simulate import check_errors\ncheck_errors(s, a)"),
+                    code("ex.check_condition(misclosure)\ncheck_mine(g)")],
+          "metadata": {}, "nbformat": 4, "nbformat_minor": 5}  # fmt: skip
+    student, _ = release_notebook(nb, "05", "abc1234")
+    first = student["cells"][0]["source"]
+    assert first.startswith("import numpy as np") and len(student["cells"]) == 4
+    assert "release_check('05', ['check_condition'], made_with='abc1234')" in first
+    release_check("05", ["check_condition"], "abc1234")  # present: no error
+    with pytest.raises(CheckFailed, match="check_six_point.*abc1234|abc1234.*check_six_point"):
+        release_check("05", ["check_condition", "check_six_point"], "abc1234")
+
+
+def test_a_cell_of_hidden_tests_only_says_so():
     def code(s):
         return {"cell_type": "code", "source": s, "metadata": {}, "outputs": [],
                 "execution_count": None}  # fmt: skip
@@ -73,7 +94,7 @@ def test_a_cell_of_hidden_tests_only_is_dropped():
     nb = {"cells": [code("a = 1"), code(hidden), code(""), code("b = 2")], "metadata": {},
           "nbformat": 4, "nbformat_minor": 5}  # fmt: skip
     student, _ = release_notebook(nb)
-    assert [c["source"] for c in student["cells"]] == ["a = 1", "", "b = 2"]
+    assert [c["source"] for c in student["cells"]] == ["a = 1", HIDDEN_NOTE, "", "b = 2"]
 
 
 def test_the_check_after_a_blank_may_raise():

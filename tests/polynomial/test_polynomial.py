@@ -80,3 +80,39 @@ def test_broken_strip_is_named():
     with pytest.raises(ov.NotDeterminableError) as exc:
         form_strips(b)
     assert "s00_000+s00_001" in str(exc.value) and "s00_001+s00_002" in str(exc.value)
+
+
+def _z_error(sim, res):
+    tie = sim.block.points.role == TIE
+    return np.sqrt(np.nanmean((res.points - sim.truth.points.xyz)[tie, 2] ** 2))
+
+
+def test_barely_determined_height_polynomials_are_named_with_their_sigma():
+    # 3 strips with perimeter control every 4 bases: third-degree height polynomials of the
+    # middle strip hang on two end controls and the ties (lesson 08's block app)
+    sim = ov.simulate_block(3, 8, rng=np.random.default_rng(5), extra=None,
+                            control="perimeter", control_spacing=4)  # fmt: skip
+    weak = polynomial_adjust(sim.block, degree_xy=3, degree_z=3)
+    s_xy, s_z = weak.sigma_strip
+    med, worst = weak.sigma_correction["height"]
+    assert worst > 100 * s_z and len(weak.weak) == 1 and "height" in weak.weak[0]
+    assert "degree_z" in weak.weak[0] and weak.weak[0] in weak.reason
+    # the predicted σ is of the size of the errors the simulation really has
+    err = _z_error(sim, weak)
+    assert err > 10.0 and med / 5 < err < 5 * worst
+    # planimetry stays determined: not named, σ of its corrections near a strip coordinate's
+    assert weak.sigma_correction["planimetry"][1] < 5 * s_xy
+    # a lower degree on the same block is no longer named, and its error is small
+    ok = polynomial_adjust(sim.block, degree_xy=1, degree_z=1)
+    assert ok.weak == [] and ok.reason == "linear adjustments (one step each)"
+    assert _z_error(sim, ok) < 1.0 and ok.sigma_correction["height"][1] < 100 * s_z
+
+
+def test_sigma_of_the_corrections_scales_with_the_strip_sigma():
+    sim = ov.simulate_block(1, 8, rng=np.random.default_rng(3), extra=None)
+    a = polynomial_adjust(sim.block, sigma_strip=(0.05, 0.10), iterations=1)
+    b = polynomial_adjust(sim.block, sigma_strip=(0.15, 0.30), iterations=1)
+    for part in ("planimetry", "height"):
+        np.testing.assert_allclose(b.sigma_correction[part], 3 * np.array(a.sigma_correction[part]),
+                                   rtol=1e-9)  # fmt: skip
+        assert 0 < a.sigma_correction[part][0] <= a.sigma_correction[part][1]

@@ -245,3 +245,39 @@ def test_structural_changes_with_auxiliary_data_follow_the_readings():
     st.move_image(2, st.block.images.X0[2, :2] + 100.0)
     ref = assess_block(st.block, st.spec, auxiliary=design_auxiliary(st.block, st.design))[1]
     np.testing.assert_allclose(st.quality.point_sigma, ref.point_sigma, rtol=1e-7)
+
+
+def test_structural_changes_under_models_update_the_bundle_when_it_is_shown():
+    """Under the models method an image removed or moved changes the block at once and the
+    models design of it; the bundle's update follows when the bundle is shown again (or a
+    control change needs it), equal to a new assessment then."""
+    from orientviz.design import assess_block, assess_models
+    from orientviz.viewer.studio_live import PendingDesign
+
+    st = Studio(FlightDesign(strips=3, images_per_strip=8, control_spacing=4))
+    bundle0 = st.live
+    st.set_method("models")
+    ends = [int(np.flatnonzero(st.block.images.strip == s)[-1]) for s in range(3)]
+    st.remove_images([ends[0]])
+    st.move_image(ends[1] - 1, st.block.images.X0[ends[1] - 1, :2] + [60.0, 0.0])
+    assert isinstance(st._live, PendingDesign) and st._live.base is bundle0
+    ref = assess_models(st.block, st.spec)
+    np.testing.assert_allclose(st.quality.point_sigma, ref.point_sigma, rtol=1e-8)
+    models = st._models
+    tie = np.flatnonzero(st.block.points.role == 0)
+    q = st.set_control(int(tie[len(tie) // 2]), 0.02)  # needs the bundle: applied now
+    assert not isinstance(st._live, PendingDesign) and st._models is models
+    ref = assess_models(st.block, st.spec)
+    np.testing.assert_allclose(q.point_sigma, ref.point_sigma, rtol=1e-8)
+    st.set_method("bundle")
+    ref = assess_block(st.block, st.spec)[1]
+    np.testing.assert_allclose(st.quality.point_sigma, ref.point_sigma, rtol=1e-7)
+    np.testing.assert_allclose(st.quality.redundancy, ref.redundancy, atol=1e-9)
+    st.set_method("models")
+    st.remove_images([ends[2] - 1])  # pending again; undone before it is applied
+    st.undo()
+    assert st._live is not None and not isinstance(st._live, PendingDesign)
+    st.undo()  # the control change
+    st.undo()  # the move: a pending change, applied by the control change
+    st.undo()
+    assert st.live is bundle0 and st.block.n_images == 24

@@ -47,38 +47,47 @@ def _normal(J, p: F64, r: F64):
 COND_LIMIT: float = 1e12
 
 
-def _well_conditioned(N: F64, factor: tuple[F64, bool]) -> bool:
+def _well_conditioned(N: F64, c: F64) -> tuple[bool, bool]:
     """Whether the Jacobi-scaled ``N`` has a 2-norm condition number below :data:`COND_LIMIT`
-    (``factor``: N's Cholesky factor). The singular values are computed only when the cheap
-    upper bound (:func:`~orientviz.adjust.rank.scaled_condition_bound`) is not below half
-    the limit (a margin far above the rounding error of either number at that size), so
-    the answer is the one ``np.linalg.cond`` of the scaled matrix gives."""
-    if scaled_condition_bound(N, factor) < 0.5 * COND_LIMIT:
-        return True
+    (``c``: N's upper Cholesky factor, lower triangle zero), and whether the cheap upper
+    bound (:func:`~orientviz.adjust.rank.scaled_condition_bound`) proved it. The singular
+    values are computed only when the bound is not below half the limit (a margin far
+    above the rounding error of either number at that size), so the answer is the one
+    ``np.linalg.cond`` of the scaled matrix gives."""
+    if scaled_condition_bound(N, (c, False)) < 0.5 * COND_LIMIT:
+        return True, True
     d = np.sqrt(np.abs(np.diag(N)))
     d[d == 0] = 1.0
-    return bool(np.linalg.cond(N / np.outer(d, d)) < COND_LIMIT)
+    return bool(np.linalg.cond(N / np.outer(d, d)) < COND_LIMIT), False
 
 
-def _solve(N, b: F64, names: list[str], context: str) -> F64:
+def _solve(N, b: F64, names: list[str], context: str, regular: bool = False) -> tuple[F64, bool]:
+    """Solve ``N x = b``; return x and whether the condition bound proved N regular.
+
+    ``regular``: N is known to be well-conditioned (the check is skipped). A dense N is
+    factored by LAPACK's Cholesky (dpotrf/dpotrs, as ``scipy.linalg.cho_factor`` and
+    ``cho_solve`` call them); a singular N raises :class:`NotDeterminableError`.
+    """
     if sp.issparse(N):
         from scipy.sparse.linalg import splu
 
         try:
-            return splu(sp.csc_matrix(N)).solve(b)
+            return splu(sp.csc_matrix(N)).solve(b), False
         except RuntimeError:
             raise_if_singular(N.toarray(), names, context)
             raise
-    try:
-        c, low = scipy.linalg.cho_factor(N, check_finite=False)
-        x = scipy.linalg.cho_solve((c, low), b, check_finite=False)
+    c, info = scipy.linalg.lapack.dpotrf(N, lower=0, clean=1)
+    if info == 0:
+        x, info = scipy.linalg.lapack.dpotrs(c, b, lower=0)
         # guard against near-singular matrices Cholesky happens to factor
-        if np.all(np.isfinite(x)) and _well_conditioned(N, (c, low)):
-            return x
-    except (np.linalg.LinAlgError, scipy.linalg.LinAlgError):
-        pass
+        if info == 0 and np.isfinite(x).all():
+            if regular:
+                return x, False
+            ok, by_bound = _well_conditioned(N, c)
+            if ok:
+                return x, by_bound
     raise_if_singular(N, names, context)
-    return np.linalg.lstsq(N, b, rcond=None)[0]
+    return np.linalg.lstsq(N, b, rcond=None)[0], False
 
 
 class _DenseProblem:
@@ -97,7 +106,7 @@ class _DenseProblem:
         f, J = self.equations(x)
         r = self.l - f
         cost = float(r @ (self.p * r))
-        return Evaluation(cost, bool(np.all(np.isfinite(f))), {"f": f, "J": J, "r": r})
+        return Evaluation(cost, bool(np.isfinite(f).all()), {"f": f, "J": J, "r": r})
 
     def solve(self, x: F64, ev: Evaluation, lam: float, iteration: int) -> Step:
         d = ev.data
@@ -107,12 +116,20 @@ class _DenseProblem:
                 N = d["N"]
                 dense = N.toarray() if sp.issparse(N) else N
                 if dense.shape[0] <= DENSE_LIMIT:
-                    raise_if_singular(dense, self.free_names, self.context)
+                    bound = raise_if_singular(dense, self.free_names, self.context)
+                    if bound < 0.5 * COND_LIMIT:
+                        d["regular_from"] = 0.0
         N, b = d["N"], d["b"]
         diagN = N.diagonal() if sp.issparse(N) else np.diag(N)
         if lam > 0:
             N = N + (sp.diags(lam * diagN) if sp.issparse(N) else np.diag(lam * diagN))
-        dxf = _solve(N, b, self.free_names, self.context)
+        # N (1 + λ) on the diagonal scales to (M + λ I) / (1 + λ), M the scaled undamped
+        # matrix: its condition number falls as λ grows, so a bound that proved N regular
+        # at some λ proves it at every larger λ of the same linearisation
+        regular = lam >= d.get("regular_from", np.inf)
+        dxf, by_bound = _solve(N, b, self.free_names, self.context, regular)
+        if by_bound:
+            d["regular_from"] = min(lam, d.get("regular_from", np.inf))
         dx = np.zeros(self.u_all)
         dx[self.free_idx] = dxf
         sig_apriori = 1.0 / np.sqrt(np.where(diagN > 0, diagN, np.inf))

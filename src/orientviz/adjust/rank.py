@@ -33,7 +33,10 @@ def scaled_condition_bound(
     N : ndarray, shape (u, u)
         Symmetric normal matrix JᵀPJ.
     factor : tuple (c, lower), optional
-        N's Cholesky factor as ``scipy.linalg.cho_factor`` returns it; computed if not given.
+        N's Cholesky factor with zeros in its unused triangle, as
+        ``scipy.linalg.lapack.dpotrf(N, lower, clean=1)`` returns it; computed if not
+        given. Other values in the unused triangle (``scipy.linalg.cho_factor`` leaves N's
+        there) only enlarge the bound: it stays an upper bound.
 
     Returns
     -------
@@ -44,16 +47,15 @@ def scaled_condition_bound(
     d = np.sqrt(np.abs(np.diag(N)))
     d[d == 0] = 1.0
     if factor is None:
-        try:
-            factor = scipy.linalg.cho_factor(N, check_finite=False)
-        except (np.linalg.LinAlgError, scipy.linalg.LinAlgError):
+        c, info = scipy.linalg.lapack.dpotrf(N, lower=0, clean=1)
+        if info != 0:
             return float("inf")
+        factor = (c, False)
     c, low = factor
     inv, info = scipy.linalg.lapack.dtrtri(c, lower=int(low))
     if info != 0:
         return float("inf")
-    # cho_factor leaves other data in the unused triangle: keep the factor's own
-    R_inv = np.tril(inv) * d[None, :] if low else np.triu(inv) * d[:, None]
+    R_inv = inv * d[None, :] if low else inv * d[:, None]
     with np.errstate(over="ignore", invalid="ignore"):
         return float(np.linalg.norm(N / np.outer(d, d))) * float(np.einsum("ij,ij->", R_inv, R_inv))
 
@@ -97,19 +99,25 @@ def describe_defect(names: list[str], null: NDArray[np.float64], max_names: int 
     return [names[i] for i in keep[:max_names]]
 
 
-def raise_if_singular(N: NDArray[np.float64], names: list[str], context: str = "") -> None:
+def raise_if_singular(N: NDArray[np.float64], names: list[str], context: str = "") -> float:
     """Raise :class:`NotDeterminableError` naming the parameters if ``N`` is singular
     (eigenvalues below :data:`RANK_TOLERANCE` of the largest, :func:`null_space_of_normal`).
 
     A matrix whose :func:`scaled_condition_bound` is below half of 1/RANK_TOLERANCE has
     no such eigenvalue (the margin is far above the rounding error of either number at
     that size), and its eigenvalues are not computed.
+
+    Returns
+    -------
+    float
+        N's :func:`scaled_condition_bound` (when N is not singular).
     """
-    if scaled_condition_bound(N) < 0.5 / RANK_TOLERANCE:
-        return
+    bound = scaled_condition_bound(N)
+    if bound < 0.5 / RANK_TOLERANCE:
+        return bound
     null = null_space_of_normal(N)
     if null.shape[1] == 0:
-        return
+        return bound
     involved = describe_defect(names, null)
     defect = null.shape[1]
     prefix = f"{context}: " if context else ""

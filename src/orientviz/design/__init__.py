@@ -9,7 +9,8 @@
   accuracy laws for the same layout (:func:`accuracy_law`);
 * :class:`LiveDesign` — one change (a control point added, removed, its σ changed;
   images added or removed) updates the quality by a low-rank formula on the design's
-  factorised normal equations, without forming them again;
+  factorised normal equations, without forming them again; :func:`check_structure` —
+  the determinability checks it makes of a changed block;
 * :func:`suggest_control` — the next control point that most reduces the worst σ;
 * :func:`cross_strip` (:func:`cross_strip_images`), :func:`add_images`,
   :func:`remove_images` — structural edits of a design block; :func:`design_from_block` — a design with the geometry of any block;
@@ -31,6 +32,7 @@ from ._extend import (
 )
 from ._layout import FlightDesign, design_auxiliary, design_block, set_control
 from ._live import Change, LiveDesign
+from ._live_parts import check_structure
 from ._methods import METHODS, assess_models
 from ._models_live import LiveModels
 from ._quality import DesignQuality, ellipsoids
@@ -57,6 +59,7 @@ __all__ = [
     "LiveModels",
     "Change",
     "LiveDesign",
+    "check_structure",
     "Suggestion",
     "suggest_control",
 ]

@@ -23,12 +23,11 @@ from __future__ import annotations
 from types import SimpleNamespace
 
 import numpy as np
-import scipy.linalg
 from numpy.typing import NDArray
 
 from ..block import Block
 from ..bundle import BundleOptions
-from ..bundle.precision import bundle_precision
+from ..bundle.precision import BandSolver, bundle_precision
 from ..bundle.problem import BundleProblem, BundleState, point_setup
 from ..bundle.reduced import factor_reduced
 from ..errors import InputError
@@ -86,7 +85,7 @@ class DesignBase:
         self.pcol = np.asarray(prob.points.column)  # base point → column of the problem
         self.na = prob.na
         self._cache: dict[tuple[str, int], tuple[F64, F64]] = {}
-        self._blocks: list | None = None  # the banded factor as dense blocks (on demand)
+        self._band: BandSolver | None = None  # solves with many columns (on demand)
         #: the border of the auxiliary offsets (E, F, P_g), made G = A⁻¹B and F̃⁻¹ by
         #: :meth:`_border` when columns are first asked for (a design that is only looked
         #: at does not pay for it)
@@ -115,31 +114,16 @@ class DesignBase:
         return res
 
     def solve(self, rhs: F64) -> F64:
-        """S⁻¹ rhs (6m, k): with a banded factor and many columns by block triangular
-        solves (BLAS level 3) on the factor's dense blocks, else by the factor's solve."""
+        """S⁻¹ rhs (6m, k): with a banded factor and many columns by block products on
+        views of the factor (:class:`orientviz.bundle.precision.BandSolver`, BLAS level
+        3), else by the factor's solve."""
         fac = self.fac
         if fac.kind != "banded" or rhs.shape[1] < 4:
             return fac.solve(rhs)
-        if self._blocks is None:
-            self._blocks = _dense_blocks(fac.data)
+        if self._band is None:
+            self._band = BandSolver(fac.data)
         p = fac.structure.scalar_perm
-        X = rhs[p]
-        parts = self._blocks
-        prev = None
-        for r0, r1, Lii, Lsub in parts:  # forward: L y = b
-            b = X[r0:r1]
-            if prev is not None:
-                b = b - Lsub @ prev
-            prev = X[r0:r1] = scipy.linalg.solve_triangular(Lii, b, lower=True, check_finite=False)
-        nxt = None
-        for k in reversed(range(len(parts))):  # backward: Lᵀ x = y
-            r0, r1, Lii, _ = parts[k]
-            b = X[r0:r1]
-            if nxt is not None:
-                b = b - parts[k + 1][3].T @ nxt
-            nxt = X[r0:r1] = scipy.linalg.solve_triangular(
-                Lii, b, lower=True, trans="T", check_finite=False
-            )
+        X = self._band.solve(rhs[p])
         out = np.empty_like(X)
         out[p] = X
         return out
@@ -216,32 +200,3 @@ class DesignBase:
         for g in border:  # an offset's column: −G F̃⁻¹ e_g, F̃⁻¹ e_g
             f = self.Faa[:, [g]]
             self._cache[("g", g)] = (-(self.Gc @ f), -(self.Gp @ f), f.copy())
-
-
-def _dense_blocks(cb: F64) -> list[tuple[int, int, F64, F64 | None]]:
-    """A lower banded factor (LAPACK storage ``cb[d, j] = L[j + d, j]``) as dense blocks
-    of kd + 1 rows: per block row (r0, r1, L_II, L_I,I−1); block I touches block I − 1
-    only (the band is kd wide).
-
-    Element (r, c) of L is ``cb[r − c, c]``: with nb zero rows above and below the band,
-    a block of L is a strided view of the padded storage (rows step by one band row,
-    columns by one column less one band row), copied out."""
-    kd, n = cb.shape[0] - 1, cb.shape[1]
-    nb = kd + 1
-    pad = np.zeros((kd + 1 + 2 * nb, n))
-    pad[nb : nb + kd + 1] = cb
-    flat = pad.reshape(-1)
-    e = flat.itemsize
-
-    def block(r0: int, r1: int, c0: int, c1: int) -> F64:
-        start = (nb + r0 - c0) * n + c0
-        view = np.lib.stride_tricks.as_strided(
-            flat[start:], shape=(r1 - r0, c1 - c0), strides=(n * e, e - n * e), writeable=False
-        )
-        return np.array(view)
-
-    out = []
-    for r0 in range(0, n, nb):
-        r1 = min(r0 + nb, n)
-        out.append((r0, r1, block(r0, r1, r0, r1), block(r0, r1, r0 - nb, r0) if r0 else None))
-    return out

@@ -12,11 +12,13 @@ number enters.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from ..blas import blas_threads
 from ..block import Block
 from ..bundle import BundleResult, bundle_adjust, ray_reliability
 from ..simulate import height_precision, planimetric_precision
@@ -94,6 +96,25 @@ def assess_block(
     return res, q
 
 
+@functools.lru_cache(maxsize=64)
+def _mu_xy(strips: int, models_per_strip: int, control_spacing: int) -> float:
+    """μ_xy/σ0 of Ebner's planimetric law for a layout (kept per layout: it depends on
+    nothing else; BLAS on one thread, as the designs' other work)."""
+    with blas_threads(1):
+        return planimetric_precision(
+            strips, models_per_strip=models_per_strip, control_spacing=control_spacing
+        ).mu
+
+
+@functools.lru_cache(maxsize=64)
+def _mu_z(chain_spacing: int, strips: int, models_per_strip: int) -> float:
+    """μ_z/σ0z of Ebner's height law for a layout (kept per layout; BLAS on one thread)."""
+    with blas_threads(1):
+        return height_precision(
+            chain_spacing, n_strips=strips, models_per_strip=models_per_strip
+        ).mu
+
+
 def accuracy_law(design: FlightDesign, spec: dict[str, Any]) -> dict[str, Any]:
     """Ebner's accuracy laws (independent models) for the design's layout, in m.
 
@@ -125,25 +146,19 @@ def accuracy_law(design: FlightDesign, spec: dict[str, Any]) -> dict[str, Any]:
     out: dict[str, Any] = {"sigma_xy": float("nan"), "sigma_z": float("nan")}
     notes = []
     if design.control in ("perimeter", "chains"):
-        pl = planimetric_precision(
-            design.strips, models_per_strip=design.images_per_strip - 1,
-            control_spacing=design.control_spacing,
-        )  # fmt: skip
-        out["sigma_xy"] = pl.mu * s0
+        mu = _mu_xy(design.strips, design.images_per_strip - 1, design.control_spacing)
+        out["sigma_xy"] = mu * s0
         notes.append(
-            f"μ_xy = {pl.mu:.2f} σ0, σ0 = σ·m_B = {s0 * 1e3:.0f} mm (perimeter every "
+            f"μ_xy = {mu:.2f} σ0, σ0 = σ·m_B = {s0 * 1e3:.0f} mm (perimeter every "
             f"{design.control_spacing} bases)"
         )
     else:
         notes.append(f"no planimetric law for control {design.control!r}")
     if design.control == "chains":
-        hz = height_precision(
-            design.chain_spacing, n_strips=design.strips,
-            models_per_strip=design.images_per_strip - 1,
-        )  # fmt: skip
-        out["sigma_z"] = hz.mu * s0z
+        mu = _mu_z(design.chain_spacing, design.strips, design.images_per_strip - 1)
+        out["sigma_z"] = mu * s0z
         notes.append(
-            f"μ_z = {hz.mu:.2f} σ0z, σ0z = √2·σ·m_B·H/B = {s0z * 1e3:.0f} mm (chains every "
+            f"μ_z = {mu:.2f} σ0z, σ0z = √2·σ·m_B·H/B = {s0z * 1e3:.0f} mm (chains every "
             f"{design.chain_spacing} bases; the law weights the projection centres like model "
             "heights, the designs better: the law is the more pessimistic the wider the chains)"
         )

@@ -91,6 +91,14 @@ def _check_rays(block: Block) -> None:
         )
 
 
+def check_structure(block: Block) -> None:
+    """Raise :class:`NotDeterminableError` for a design block a live design cannot take:
+    images that fall apart into groups sharing no point, tie points in fewer than two
+    images, images with fewer than three points (the bundle's rules)."""
+    _check_connected(block)
+    _check_rays(block)
+
+
 def _weights(sig) -> F64:
     s = np.asarray(sig, float)
     return np.where(np.isfinite(s), 1.0 / np.where(np.isfinite(s), s, 1.0) ** 2, 0.0)

@@ -31,6 +31,7 @@ number equals ``assess_models`` of the same block up to the convergence of its i
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -41,7 +42,8 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ..blas import blas_threads as _blas
 from ..block import Block
-from ..bundle.precision import banded_selected_inverse
+from ..bundle.precision import BandSolver, banded_selected_inverse
+from ..bundle.reduced import geometric_orderings
 from ..errors import NotDeterminableError
 from ..rotation import skew
 from ..stereo_models import (
@@ -64,6 +66,11 @@ I64 = NDArray[np.int64]
 MAX_STEPS: int = 40
 #: Scaled pivots of the band factor below this count as singular.
 PIVOT_TOLERANCE: float = 1e-12
+#: The Jacobi-scaled reduced border F̃ of the offsets counts as singular beyond this
+#: condition: an undeterminable offset leaves F̃ singular up to the rounding of the band
+#: solve F − Eᵀ S⁻¹ E (measured 1e13–1e14 for free height offsets, a few hundred when
+#: they are held).
+BORDER_COND_LIMIT: float = 1e10
 #: What a factorisation sets (restored when a change fails).
 _FACTOR_STATE = ("_D", "_G", "_scale", "_perm", "_at", "_cb", "kd", "_H", "_Fi", "_quality")
 
@@ -149,6 +156,8 @@ class LiveModels:
             self._aux = (Cg.T.copy(), Jg.T @ (Jg * a.w[:, None]))
         self._Ublk = Ublk
         self.su, self.ms, self.n = su, ms, n
+        self._pairs = _pair_structure(su.row_point, j, n)
+        self._centres = b.images.X0[ms.models].mean(axis=1)  # of the models, for the order
         self._tie_of = np.full(b.n_points, -1, np.int64)
         self._tie_of[su.tie_points] = np.arange(su.tie_points.size)
         self._sigma = b.points.sigma.copy()  # the control the terms belong to
@@ -162,37 +171,35 @@ class LiveModels:
         self._quality = self._assemble()
 
     def _factor(self) -> None:
-        """S = U − C D⁻¹ Cᵀ of the current weights, ordered by reverse Cuthill-McKee and
-        factored as a band (Jacobi-scaled)."""
+        """S = U − C D⁻¹ Cᵀ of the current weights by 7 × 7 blocks of pairs of models,
+        ordered for the narrowest band (:func:`_model_order`) and factored as a band
+        (Jacobi-scaled)."""
         j, sc = self._rows
-        n, ns = self.n, self._D0.size
+        n = self.n
         D = self._D0 + self.su.prior_w
-        k = j.size
-        rows = np.broadcast_to((7 * j)[:, None, None] + np.arange(7), (k, 3, 7)).ravel()
-        cols = np.repeat(sc.ravel(), 7)
-        C = sp.csr_matrix((self._C.ravel(), (rows, cols)), shape=(7 * n, ns))
-        G = sp.csr_matrix(C.multiply(1.0 / D[None, :]))
-        r7 = np.arange(7)
-        ui = (7 * np.arange(n)[:, None, None] + r7[:, None] + 0 * r7[None, :]).ravel()
-        uj = (7 * np.arange(n)[:, None, None] + 0 * r7[:, None] + r7[None, :]).ravel()
-        U = sp.csr_matrix((self._Ublk.ravel(), (ui, uj)), shape=(7 * n, 7 * n))
-        S = (U - G @ C.T).tocoo()  # canonical: no duplicate entries
-        s = 1.0 / np.sqrt(S.diagonal())
+        pr = self._pairs
+        a, bb = pr.a, pr.b
+        # Σ over the rows' shared coordinates of C_aᵀ D⁻¹ C_b, summed per pair of models
+        prod = (self._C[a] / D[sc[a]][:, :, None]).transpose(0, 2, 1) @ self._C[bb]
+        S = -(pr.summed @ prod.reshape(-1, 49)).reshape(-1, 7, 7)  # (pairs of models, 7, 7)
+        P, Q = pr.pair // n, pr.pair % n
+        diag = P == Q
+        S[diag] += self._Ublk[P[diag]]
+        s = np.zeros((n, 7))
+        s[P[diag]] = 1.0 / np.sqrt(np.einsum("kii->ki", S[diag]))
+        S *= s[P][:, :, None] * s[Q][:, None, :]
         # ordered by models (each model's 7 parameters together, so that the band holds
         # whole 7 × 7 blocks of every pair of coupled models)
-        mr, mc = S.row // 7, S.col // 7
-        Sm = sp.csr_matrix((np.ones(mr.size), (mr, mc)), shape=(n, n))
-        pm = reverse_cuthill_mckee(Sm, symmetric_mode=True).astype(np.int64)
-        at = np.empty_like(pm)
-        at[pm] = np.arange(n)
-        kd = 7 * int(np.max(np.abs(at[mr] - at[mc]), initial=0)) + 6
+        pm, at = _model_order(n, P, Q, self._centres)
+        kd = 7 * int(np.max(np.abs(at[P] - at[Q]), initial=0)) + 6
         perm = (7 * pm[:, None] + np.arange(7)).ravel()
-        pos = np.empty_like(perm)
-        pos[perm] = np.arange(perm.size)
-        pr, pc = pos[S.row], pos[S.col]
-        low = pr >= pc
+        low = at[P] >= at[Q]
+        r7 = np.arange(7)
+        R = 7 * at[P][low][:, None, None] + r7[None, :, None]
+        R, Cc = np.broadcast_arrays(R, 7 * at[Q][low][:, None, None] + r7[None, None, :])
+        keep = R >= Cc
         ab = np.zeros((kd + 1, 7 * n))  # the Jacobi-scaled S[perm][:, perm], lower band
-        ab[pr[low] - pc[low], pc[low]] = (S.data * s[S.row] * s[S.col])[low]
+        ab[(R - Cc)[keep], Cc[keep]] = S[low][keep]
         try:
             cb = scipy.linalg.cholesky_banded(ab, lower=True, check_finite=False)
         except np.linalg.LinAlgError:
@@ -203,18 +210,19 @@ class LiveModels:
                 "connected models)",
                 parameters=[],
             )
-        self._D, self._G, self._scale = D, G, s
+        self._D, self._G, self._scale = D, None, s.reshape(-1)
         # band position of each model (its 7 parameters from 7·at on)
         self._perm, self._at, self._cb, self.kd = perm, at, cb, kd
         self._H = self._Fi = None
         if self._aux is not None:  # the offsets' border: E = −Gθ Cgᵀ, F = Σ w aᵀa − Cg D⁻¹ Cgᵀ
+            G = self._gmat()
             Cg, Faux = self._aux
             Gg = Cg / D[None, :]
             E = -(G @ Cg.T)
             Y = self._solve(E)
             Ft = Faux - Gg @ Cg.T - E.T @ Y  # F̃ = F − Eᵀ A⁻¹ E
             Ft = 0.5 * (Ft + Ft.T)
-            if not np.isfinite(Ft).all() or np.linalg.cond(Ft) > COND_LIMIT:
+            if not _regular(Ft):
                 raise NotDeterminableError(
                     "the offsets of the auxiliary data are not determinable by this models design",
                     parameters=[],
@@ -223,10 +231,25 @@ class LiveModels:
             self._H = (G.T @ Y).T - Gg
             self._Fi = np.linalg.inv(Ft)
 
+    def _gmat(self) -> sp.csr_matrix:
+        """G = C D⁻¹ (7n, n_scalar) of the current weights (formed when first needed)."""
+        if self._G is None:
+            j, sc = self._rows
+            k, n = j.size, self.n
+            rows = np.broadcast_to((7 * j)[:, None, None] + np.arange(7), (k, 3, 7)).ravel()
+            cols = np.repeat(sc.ravel(), 7)
+            vals = (self._C / self._D[sc][:, :, None]).ravel()
+            self._G = sp.csr_matrix((vals, (rows, cols)), shape=(7 * n, self._D.size))
+        return self._G
+
     def _solve(self, rhs: F64) -> F64:
         """S⁻¹ rhs for rhs (7n, r), with the band factor."""
         s, p = self._scale[:, None], self._perm
-        z = scipy.linalg.cho_solve_banded((self._cb, True), (rhs * s)[p], check_finite=False)
+        b = (rhs * s)[p]
+        if b.shape[1] >= 4:  # many columns: block products on views of the factor
+            z = BandSolver(self._cb).solve(b)
+        else:
+            z = scipy.linalg.cho_solve_banded((self._cb, True), b, check_finite=False)
         out = np.empty_like(z)
         out[p] = z
         return out * s
@@ -235,35 +258,25 @@ class LiveModels:
         """Q_XX at every tie's 3 × 3 block: D⁻¹ + Σ_ab g_aᵀ Z(j_a, j_b) g_b over the pairs
         of rows (a, b) of each tie, g the rows' columns of G = C D⁻¹ and Z = S⁻¹ inside
         the band."""
-        Zb = banded_selected_inverse(self._cb, TAKAHASHI_BLOCK)
         j, sc = self._rows
-        su, D = self.su, self._D
+        su, D, pr = self.su, self._D, self._pairs
         g = self._C / D[sc][:, :, None]  # (k, 3, 7)
-        order = np.argsort(su.row_point, kind="stable")
-        tp = su.row_point[order]
-        first = np.flatnonzero(np.r_[True, tp[1:] != tp[:-1]])
-        size = np.diff(np.r_[first, tp.size])
-        st, c = np.repeat(first, size), np.repeat(size, size)  # per sorted row: its group
-        A = np.repeat(np.arange(tp.size), c)
-        off = np.arange(c.sum()) - np.repeat(np.cumsum(c) - c, c)
-        a, bb = order[A], order[np.repeat(st, c) + off]
+        a, bb = pr.a, pr.b
         # the 7 × 7 blocks of Z, once per pair of models (positions P, Q in the band, each
-        # model's parameters together): Z[7P + a, 7Q + b] = Zb[min, |difference|]
+        # model's parameters together): Z[7P + a, 7Q + b]
         n = self.n
-        pair, inv = np.unique(j[a] * n + j[bb], return_inverse=True)
-        P, Qp = self._at[pair // n], self._at[pair % n]
+        P, Qp = self._at[pr.pair // n], self._at[pr.pair % n]
         r7 = np.arange(7)
         u = 7 * P[:, None, None] + r7[None, :, None]
         v = 7 * Qp[:, None, None] + r7[None, None, :]
-        dist = np.abs(u - v)
-        if dist.max(initial=0) > self.kd:  # cannot be: models sharing a point are coupled
+        if np.abs(u - v).max(initial=0) > self.kd:  # cannot be: models sharing a point are coupled
             raise NotDeterminableError("models sharing a point lie outside the band", parameters=[])
         sm = self._scale.reshape(n, 7)  # the Jacobi scale of each model's parameters
-        Z = Zb[np.minimum(u, v), dist]
-        Z *= sm[pair // n][:, :, None] * sm[pair % n][:, None, :]  # (pairs of models, 7, 7)
-        blk = g[a] @ Z[inv.reshape(-1)] @ g[bb].transpose(0, 2, 1)  # (pairs of rows, 3, 3)
+        Z = banded_selected_inverse(self._cb, TAKAHASHI_BLOCK, at=(u, v))
+        Z *= sm[pr.pair // n][:, :, None] * sm[pr.pair % n][:, None, :]  # (pairs of models, 7, 7)
+        blk = g[a] @ Z[pr.inv] @ g[bb].transpose(0, 2, 1)  # (pairs of rows, 3, 3)
         Q = np.zeros((su.scalar.shape[0], 3, 3))
-        np.add.at(Q, su.row_point[a], blk)
+        Q[pr.points] = np.add.reduceat(blk, pr.point_starts, axis=0)
         Q += np.einsum("ta,ab->tab", 1.0 / D[su.scalar], np.eye(3))
         if self._H is not None:
             Ht = self._H.T[su.scalar]  # (nt, 3, na)
@@ -273,7 +286,7 @@ class LiveModels:
     # ------------------------------------------------------------------ updates
     def _columns(self, s3: I64) -> F64:
         """The current Q_XX at the columns of scalar unknowns ``s3``: (n_scalar, r)."""
-        G = self._G
+        G = self._gmat()
         Gs = G[:, s3].toarray()
         col = G.T @ self._solve(Gs)
         col[s3, np.arange(s3.size)] += 1.0 / self._D[s3]
@@ -368,3 +381,71 @@ class LiveModels:
             self.block, self.spec, self._Q[:nb], su.tie_points, self._Q[nb:],
             su.centre_images, self.level,
         )  # fmt: skip
+
+
+def _model_order(n: int, P: I64, Q: I64, centres: F64) -> tuple[I64, I64]:
+    """The models' order of the narrowest band: reverse Cuthill-McKee on the graph of the
+    coupled pairs of models (P, Q) or a numbering across the strips
+    (:func:`orientviz.bundle.reduced.geometric_orderings` on the models' centres, m):
+    (order, position of each model)."""
+    graph = sp.csr_matrix((np.ones(P.size), (P, Q)), shape=(n, n))
+    best = None
+    for perm in [reverse_cuthill_mckee(graph, symmetric_mode=True)] + geometric_orderings(
+        centres, (P, Q)
+    ):
+        perm = np.asarray(perm, np.int64)
+        at = np.empty_like(perm)
+        at[perm] = np.arange(n)
+        bw = int(np.max(np.abs(at[P] - at[Q]), initial=0))
+        if best is None or bw < best[0]:
+            best = (bw, perm, at)
+    return best[1], best[2]
+
+
+def _regular(F: F64) -> bool:
+    """Whether the reduced border F̃ (offsets) is regular: finite, positive diagonal and
+    the condition of its Jacobi-scaled form below :data:`BORDER_COND_LIMIT`."""
+    d = np.diag(F)
+    if not np.isfinite(F).all() or np.any(d <= 0):
+        return False
+    s = 1.0 / np.sqrt(d)
+    return bool(np.linalg.cond(F * s[:, None] * s[None, :]) < BORDER_COND_LIMIT)
+
+
+@dataclass(frozen=True)
+class _Pairs:
+    """The ordered pairs (a, b) of rows of the same tie (or centre), grouped by tie, and
+    their pairs of models: ``pair`` (unique codes P·n + Q), ``inv`` (each row pair's
+    pair of models), ``summed`` (the sparse sum of the row pairs' terms per pair of
+    models), ``points``/``point_starts`` (the ties and where their run of row pairs
+    starts)."""
+
+    a: I64
+    b: I64
+    pair: I64
+    inv: I64
+    summed: sp.csr_matrix
+    points: I64
+    points: I64
+    point_starts: I64
+
+
+def _pair_structure(row_point: I64, row_model: I64, n: int) -> _Pairs:
+    """The :class:`_Pairs` of a models design's rows (tie of each row, model of each row;
+    n models)."""
+    order = np.argsort(row_point, kind="stable")
+    tp = row_point[order]
+    first = np.flatnonzero(np.r_[True, tp[1:] != tp[:-1]])
+    size = np.diff(np.r_[first, tp.size])
+    st, c = np.repeat(first, size), np.repeat(size, size)  # per sorted row: its group
+    A = np.repeat(np.arange(tp.size), c)
+    off = np.arange(c.sum()) - np.repeat(np.cumsum(c) - c, c)
+    a, b = order[A], order[np.repeat(st, c) + off]
+    pair, inv = np.unique(row_model[a] * n + row_model[b], return_inverse=True)
+    inv = inv.reshape(-1)
+    summed = sp.csr_matrix(
+        (np.ones(inv.size), (inv, np.arange(inv.size))), shape=(pair.size, inv.size)
+    )
+    pts = row_point[a]  # sorted: the pairs come grouped by tie
+    point_starts = np.flatnonzero(np.r_[True, pts[1:] != pts[:-1]])
+    return _Pairs(a, b, pair, inv, summed, pts[point_starts], point_starts)

@@ -26,7 +26,8 @@ enforces the notebook side):
   with an error cell.
 * Student copies: ``python tools/make_student_release.py notebooks/ OUTDIR`` (in the
   repository) replaces every solution body by ``raise NotImplementedError``, drops hidden
-  tests, unhides the cell and tags the check after it ``raises-exception``.
+  tests, unhides the cell and tags the check after it ``raises-exception``; its first code cell
+  calls :func:`release_check`, which stops a copy made from another orientviz at once.
 * A lesson decorates a "your version" function that later cells use with
   :func:`stand_in` (the library's equivalent): while the blank is empty, those cells get
   the library's result and say so; the checks unwrap it and answer "not written yet".
@@ -50,6 +51,14 @@ This package is core: it imports numpy and scipy only (no matplotlib, no widgets
 from __future__ import annotations
 
 from ._common import CheckFailed, NotWrittenError, rejection, show_mistake
+from ._release import release_check
 from ._standin import stand_in
 
-__all__ = ["CheckFailed", "NotWrittenError", "rejection", "show_mistake", "stand_in"]
+__all__ = [
+    "CheckFailed",
+    "NotWrittenError",
+    "rejection",
+    "release_check",
+    "show_mistake",
+    "stand_in",
+]

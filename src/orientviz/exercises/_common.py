@@ -35,7 +35,9 @@ __all__ = [
     "angle_unit_diagnosis",
     "call",
     "compare",
+    "complex_step",
     "diagnose",
+    "exact_derivatives",
     "is_sign_flip",
     "is_transpose",
     "own_work",
@@ -571,6 +573,75 @@ def compare(
     msg = f"{name}: wrong (relative difference {err:.3g}, allowed {rtol:.1g})"
     msg += (f" — {text}" + ("" if text.endswith(("?", ".")) else ".")) if text else "."
     raise CheckFailed(msg + detail, error=err, tolerance=rtol)
+
+
+def complex_step(
+    f: Callable[[NDArray[np.complex128]], ArrayLike], x: ArrayLike
+) -> NDArray[np.float64]:
+    """Derivatives of ``f`` at ``x`` by the complex step, exact to round-off.
+
+    ``Im f(x + i h e_k) / h`` with h = 1e-30 has no truncation error worth the name (h²) and,
+    unlike a finite difference, no cancellation: the derivative comes out to about 1e-16
+    relative. ``f`` must be written with operations that accept complex numbers (no ``abs``,
+    no ``np.linalg.norm``, no casts to float).
+
+    Parameters
+    ----------
+    f : callable
+        Maps an array of the shape of ``x`` (complex) to an array (complex).
+    x : array_like
+        The point (real).
+
+    Returns
+    -------
+    ndarray, shape ``f(x).shape + x.shape``
+        ∂f/∂x, in f's units per x's units.
+    """
+    x = np.asarray(x, dtype=float)
+    h = 1e-30
+    cols = []
+    for k in range(x.size):
+        step = np.zeros(x.size, dtype=complex)
+        step[k] = 1j * h
+        cols.append(np.imag(np.asarray(f(x + step.reshape(x.shape)))) / h)
+    out = np.stack(cols, axis=-1)
+    return out.reshape(out.shape[:-1] + x.shape)
+
+
+def exact_derivatives(name: str, got: ArrayLike, exact: ArrayLike, rtol: float = 1e-13) -> float:
+    """After a check against finite differences passed: demand round-off agreement.
+
+    A derivation gives partial derivatives that agree with exact ones (complex step, extended
+    precision or a closed form) to about 1e-15 of their size. A finite difference — the
+    numeric shortcut that skips the derivation — is off by 1e-10 or more whatever its step
+    (truncation against cancellation). So an answer that passed the comparison with central
+    differences but misses here by more than ``rtol`` is numeric, and is named as such.
+
+    Parameters
+    ----------
+    name : str
+        What is compared (used in the message).
+    got, exact : array_like
+        The answer and the exact derivatives, one shape.
+    rtol : float
+        Allowed ``max|got - exact| / max|exact|``.
+
+    Returns
+    -------
+    float
+        The relative error found (≤ ``rtol``).
+    """
+    err = relative_error(got, exact)
+    if err <= rtol:
+        return err
+    raise CheckFailed(
+        f"{name}: right to {err:.0e} of their size, but not to round-off (allowed {rtol:.0e}) — "
+        "the signature of a finite difference (numeric derivatives, whatever the step), not of "
+        "derived ones, which agree with the exact derivatives to about 1e-15. The exercise is the "
+        "derivation: write the partials out.",
+        error=err,
+        tolerance=rtol,
+    )
 
 
 def rejection(check: Callable[[Any], Any], answer: Any) -> CheckFailed | None:

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from ..rotation import matrix_from_opk
 from ..simulate import simulate_block
 from ..stereo_models import form_models, independent_models, solve_rows, tie_setup
-from ._common import CheckFailed, call, compare, own_work, success
+from ._common import CheckFailed, call, compare, complex_step, exact_derivatives, own_work, success
 
 F64 = NDArray[np.float64]
 
@@ -30,7 +30,7 @@ __all__ = ["check_model_jacobian", "check_adjust_models", "model_jacobian_numeri
 
 def _cross(v: F64) -> F64:
     """[v]× for rows v (k, 3) → (k, 3, 3), written out."""
-    out = np.zeros(v.shape[:-1] + (3, 3))
+    out = np.zeros(v.shape[:-1] + (3, 3), dtype=np.result_type(v, float))
     out[..., 0, 1], out[..., 0, 2], out[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
     out[..., 1, 0], out[..., 2, 0], out[..., 2, 1] = v[..., 2], -v[..., 1], v[..., 0]
     return out
@@ -120,7 +120,18 @@ def check_model_jacobian(fn: Callable) -> None:
         "∂(λ R exp([θ]×) m + T)/∂(θ, λ, T) of five points, (5, 3, 7)",
         got, want, rtol=1e-6, scale=float(np.max(np.abs(want))), wrong=wrong,
     )  # fmt: skip
-    success("the partials of λ R exp([θ]×) m + T agree with central differences of the similarity")
+
+    def similarity(p: np.ndarray) -> np.ndarray:  # p (k, 7): θ, a change of λ, T; complex
+        K = _cross(p[:, :3])
+        E = np.eye(3) + K + K @ K / 2.0  # exp([θ]×) for the complex step's tiny θ
+        return (lam + p[:, 3])[:, None] * np.einsum("kij,kjl,kl->ki", R, E, m) + p[:, 4:]
+
+    exact = np.einsum("iaij->iaj", complex_step(similarity, np.zeros((k, 7))))
+    exact_derivatives("∂(λ R exp([θ]×) m + T)/∂(θ, λ, T)", got, exact)
+    success(
+        "the partials of λ R exp([θ]×) m + T agree with central differences of the similarity"
+        " and, to round-off, with its complex-step derivatives"
+    )
 
 
 def _check_block(rng: np.random.Generator):

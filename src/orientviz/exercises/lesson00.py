@@ -1,4 +1,4 @@
-"""Checkers for lesson 00, the tour: σ̂0, redundancy, the critical value of n tests, a prediction.
+"""Checkers for lesson 00, the tour: σ̂0, redundancy, false alarms of the w-test, a prediction.
 
 Oracles (never :mod:`orientviz.adjust` or :mod:`orientviz.block`):
 
@@ -6,8 +6,7 @@ Oracles (never :mod:`orientviz.adjust` or :mod:`orientviz.block`):
   and on a block counted by hand;
 * the prediction for doubled σ checked by the experiment: the fit adjusted again with σ
   doubled (σ̂0, redundancy numbers from a QR factorisation of √P·A, normalised residuals);
-* the critical value of n tests: the probability of at least one false alarm evaluated from
-  :func:`scipy.stats.norm.sf` and solved for k by bracketing.
+* the expected number of false alarms: n times the normal density integrated beyond ±k.
 
 Units: residuals and σ in mm (any unit, the same for both).
 """
@@ -18,13 +17,13 @@ from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import brentq
+from scipy.integrate import quad
 from scipy.stats import norm
 
 from ._common import CheckFailed, call, compare, rng_for, success
 
 __all__ = [
-    "check_family_critical",
+    "check_false_alarms",
     "check_after_doubling",
     "check_redundancy",
     "check_sigma0",
@@ -91,34 +90,27 @@ def check_redundancy(redundancy: Callable[..., int]) -> None:
     success("redundancy r = 2·rays − 6·images − 3·tie points, fixed or weighted control alike")
 
 
-def check_family_critical(critical_w: Callable[[float, int], float]) -> None:
-    """``critical_w(alpha_family, n)`` must return k such that n independent clean standard
-    normal w_i give P(at least one abs(w_i) > k) = alpha_family (two-sided per observation).
+def check_false_alarms(false_alarms: Callable[[int, float], float]) -> None:
+    """``false_alarms(n, k)`` must return the expected number of n clean observations, each with
+    a standard normal normalised residual, that the w-test abs(w) > k flags.
 
-    Oracle: that probability, 1 − (1 − 2Φ(−k))ⁿ, evaluated from scipy's normal tail and solved
-    for k by bracketing (brentq) — not the closed form the student writes.
+    Oracle: n times the normal density integrated beyond ±k (scipy's quad), not the tail
+    function the student uses.
     """
-    for alpha_f, n in ((0.05, 2042), (0.3, 5), (0.5, 2), (0.01, 40)):
-
-        def family(k: float, n: int = n, alpha_f: float = alpha_f) -> float:
-            return float(-np.expm1(n * np.log1p(-2.0 * norm.sf(k)))) - alpha_f
-
-        truth = float(brentq(family, 0.01, 40.0, xtol=1e-14))
+    for n, k in ((2042, 3.29), (40, 2.5), (500, 1.96), (7, 0.8)):
+        tail = quad(norm.pdf, k, np.inf)[0] + quad(norm.pdf, -np.inf, -k)[0]
+        truth = n * tail
         wrong = [
-            ("one-sided: |w_i| > k has half of each observation's α in each tail",
-             float(norm.isf(1.0 - (1.0 - alpha_f) ** (1.0 / n)))),
-            ("n is left out: this is the k of ONE observation at α = α_F",
-             float(norm.isf(alpha_f / 2.0))),
-            ("α_F/n per observation is Bonferroni's bound; for n independent tests "
-             "1 − (1 − α)ⁿ = α_F gives α exactly", float(norm.isf(alpha_f / (2.0 * n)))),
-            ("α_F·n per observation: the more observations, the SMALLER each one's α must be",
-             float(norm.isf(min(alpha_f * n, 0.999) / 2.0))),
-            ("α is a fraction (0.05 = 5 %), not a percentage",
-             float(norm.isf((1.0 - (1.0 - alpha_f) ** (1.0 / n)) / 200.0))),
+            ("one tail only: |w| > k counts both w > k and w < −k", n * tail / 2),
+            ("that is the probability for ONE observation; the question is the number among n",
+             tail),
+            ("the probability that a clean observation PASSES, times n", n * (1 - tail)),
+            ("1 − (1 − α)ⁿ is the chance of at least one false alarm, not their expected number",
+             1 - (1 - tail) ** n),
         ]  # fmt: skip
-        got = float(call(critical_w, alpha_f, n, what="critical_w"))
-        compare(f"k for α_F = {alpha_f}, n = {n}", got, truth, rtol=1e-6, wrong=wrong)
-    success("critical value of n tests: 4.21 for one false alarm in 20 blocks of 2042 observations")
+        got = float(call(false_alarms, n, k, what="false_alarms"))
+        compare(f"false alarms among n = {n} at k = {k}", got, truth, rtol=1e-8, wrong=wrong)
+    success("false alarms: n · P(|w| > k) — about 2 among the tour's 2042 observations at k = 3.29")
 
 
 def _adjusted(A: F64, l: F64, sigma: F64) -> tuple[float, F64, F64]:

@@ -8,12 +8,13 @@ distance by central second differences; the line fit from the normal equations w
 
 from __future__ import annotations
 
+import decimal
 import math
 
 import numpy as np
 
 from ..adjust.engine import gauss_newton  # forbidden inside the student's line_fit
-from ._common import CheckFailed, call, compare, own_work, rng_for, success
+from ._common import CheckFailed, call, compare, exact_derivatives, own_work, rng_for, success
 
 # --------------------------------------------------------------------- precision of a mean
 
@@ -246,9 +247,28 @@ def check_second_order(fn) -> None:
                  s(x + dx) - dist - along),
             ],
         )  # fmt: skip
+        exact_derivatives(
+            "second-order term [m]", got, _second_difference_exact(x, station, dx), rtol=1e-11
+        )
     success(
         "e = |dx_⊥|²/(2s): the linearisation error grows with the square of the offset across the ray"
     )
+
+
+def _second_difference_exact(x: np.ndarray, station: np.ndarray, dx: np.ndarray) -> float:
+    """½ d²s(x + t·dx)/dt² at t = 0 to about 1e-17: a central second difference (t = 1e-15)
+    in 50-digit decimal arithmetic, where neither truncation nor cancellation is felt."""
+    with decimal.localcontext() as ctx:
+        ctx.prec = 50
+        X, S, D = ([decimal.Decimal(float(v)) for v in a] for a in (x, station, dx))
+        t = decimal.Decimal("1e-15")
+
+        def s(k: int) -> decimal.Decimal:
+            return sum(
+                ((X[i] + k * t * D[i] - S[i]) ** 2 for i in range(2)), decimal.Decimal(0)
+            ).sqrt()
+
+        return float((s(1) - 2 * s(0) + s(-1)) / (2 * t * t))
 
 
 # --------------------------------------------------------------------- the weighted line fit

@@ -17,7 +17,16 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..camera import project  # forbidden inside the student's functions (own_work)
 from ..rotation import matrix_from_opk
-from ._common import CheckFailed, call, compare, own_work, rng_for, success
+from ._common import (
+    CheckFailed,
+    call,
+    compare,
+    complex_step,
+    exact_derivatives,
+    own_work,
+    rng_for,
+    success,
+)
 
 __all__ = [
     "check_collinearity",
@@ -261,6 +270,8 @@ def check_vertical_partials(vertical_partials: Callable[[F64, float], ArrayLike]
         scale=float(np.abs(truth).max()),
         wrong=wrong,
     )
+    exact = complex_step(lambda e: image(_rodrigues_opk(*e, unit=1.0)), np.zeros(3))
+    exact_derivatives("∂(x, y)/∂(ω, φ, κ)", got, exact)
     success("∂(x, y)/∂(ω, φ, κ) of a vertical image: your closed forms = central differences")
 
 

@@ -7,8 +7,8 @@ Oracles (never :mod:`orientviz.orientation.relative` or :mod:`~orientviz.orienta
   p_y = Y_left − Y_right is read where the rays meet in the XZ projection;
 * the design matrix: central differences of that rigorous parallax at the normal case;
 * rays built with a known Y gap (the parallax is then known exactly);
-* the left null vector w of the design of six points (the condition): every residual vector
-  of the six-point solution is a multiple of w, and the redundancy numbers are w_i²/wᵀw;
+* the six-point solution by least squares from the checker's own design (residuals and
+  redundancy numbers), against which an answer from the condition's coefficients alone is judged;
 * a pair of exterior orientations built from known elements of the dependent pair (the right
   projection centre and rotation put where the elements say), which must come back.
 
@@ -23,7 +23,6 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from ..adjust.gross import redundancy_numbers as library_redundancy_numbers
 from ..camera import project
 
 # the library's relative orientation: forbidden in the checks (own_work), never an oracle
@@ -31,7 +30,16 @@ from ..orientation.relative import design_dependent as library_design_dependent
 from ..orientation.relative import relative_orientation, y_parallax_jacobian
 from ..orientation.relative import y_parallax as library_y_parallax
 from ..rotation import matrix_from_opk
-from ._common import CheckFailed, call, compare, own_work, rng_for, success
+from ._common import (
+    CheckFailed,
+    call,
+    compare,
+    complex_step,
+    exact_derivatives,
+    own_work,
+    rng_for,
+    success,
+)
 from .lesson02 import _rodrigues_opk
 
 __all__ = [
@@ -111,6 +119,8 @@ def check_design(design_dependent: Callable[[F64, F64, F64, float], F64]) -> Non
     wrong.append(("the ω column is −Z(1 − Y²/Z²): the sign inside the bracket is +, −Z(1 + Y²/Z²)",
                   omega_minus))  # fmt: skip
     compare("∂p_y/∂(by, bz, ω, φ, κ)", got, truth, rtol=1e-5, wrong=wrong)
+    exact = complex_step(lambda e: _rigorous_parallax(P, e, b), np.zeros(5))
+    exact_derivatives("∂p_y/∂(by, bz, ω, φ, κ)", got, exact)
     success("design matrix: each column is the derivative of the rigorous y-parallax")
 
 
@@ -220,38 +230,31 @@ def _gruber(b: float, d: float, h: float) -> F64:
 
 
 def check_six_point_residuals(
-    six_point_residuals: Callable[[F64, F64, F64, F64, float], tuple[F64, F64]],
+    six_point_residuals: Callable[[F64, F64], tuple[F64, F64]],
 ) -> None:
-    """``six_point_residuals(p, X, Y, Z, b)`` must return (v, r) of Gruber's six points.
+    """``six_point_residuals(p, w) -> (v, r)`` of Gruber's six points from the parallaxes and
+    the condition's coefficients alone.
 
     v = A d̂ − p are the residuals of the least-squares elements (model mm) and r the
-    redundancy numbers, both shape (6,). Oracle: the left null vector w of the checker's
-    central-difference design (wᵀA = 0). With one redundancy every residual vector is a
-    multiple of w, v = −w (wᵀp)/(wᵀw), and r_i = w_i²/(wᵀw) — no hat matrix is formed. Flat
-    ground and a model with 30 % relief (where r is no longer 1/3, 1/3, 1/12, …); one
-    parallax misread by 50 µm. The library's ``redundancy_numbers`` is refused.
+    redundancy numbers, both shape (6,); ``w`` (6,) spans the left null space of the design
+    (wᵀA = 0), scaled as the check likes (not to unit length). Oracle: the elements solved by
+    least squares from the checker's central-difference design, and r = 1 − diag(A A⁺) — not the
+    condition vector. Flat ground and a model with 30 % relief; one parallax misread by 50 µm.
     """
     rng = rng_for("lesson05.check_six_point_residuals")
-    for b, d, h, relief in ((92.0, 100.0, 152.7, 0.0), (220.7, 110.0, 366.0, 0.3)):
+    for b, d, h, relief, scale in (
+        (92.0, 100.0, 152.7, 0.0, 2.0),
+        (220.7, 110.0, 366.0, 0.3, -0.7),
+    ):
         P = _gruber_relief(rng, b, d, h, relief)
         A = _numeric_design(P, b)
         w = np.linalg.svd(A.T)[2][-1]
+        w = w * scale / w[0]  # first coefficient 2 (the lesson's scaling), then another
         p = A @ np.r_[rng.uniform(-0.5, 0.5, 2), rng.uniform(-0.01, 0.01, 3)]
         p[rng.integers(6)] += 0.05  # one parallax misread by 50 µm
-        v_true = -w * (w @ p) / (w @ w)
-        r_true = w * w / (w @ w)
-        with own_work(
-            "the exercise asks for r from your own design matrix",
-            redundancy_numbers=library_redundancy_numbers,
-            relative_orientation=relative_orientation,
-        ):
-            got = call(
-                six_point_residuals,
-                p.copy(),
-                *(P.T.copy()),
-                b,
-                what="six_point_residuals",
-            )
+        v_true = A @ np.linalg.lstsq(A, p, rcond=None)[0] - p
+        r_true = 1.0 - np.diag(A @ np.linalg.pinv(A))
+        got = call(six_point_residuals, p.copy(), w.copy(), what="six_point_residuals")
         try:
             v, r = got
         except (TypeError, ValueError):
@@ -259,6 +262,7 @@ def check_six_point_residuals(
                 "six_point_residuals must return two arrays (v, r), each of shape (6,)."
             ) from None
         where = "flat ground" if relief == 0.0 else "30 % relief"
+        wn = w / np.linalg.norm(w)
         compare(
             f"residuals v [model mm] ({where})",
             v,
@@ -268,6 +272,8 @@ def check_six_point_residuals(
                 ("this is p − A d̂; the lesson's residuals are v = A d̂ − p (computed − observed)",
                  -v_true),
                 ("these are the parallaxes p themselves, not what the solution leaves of them", p),
+                ("w (wᵀp) without dividing by wᵀw: w is not a unit vector here",
+                 -w * (w @ p)),
             ],
         )  # fmt: skip
         compare(
@@ -281,11 +287,15 @@ def check_six_point_residuals(
                  "the elements; r_i is what is left, 1 minus that", 1.0 - r_true),
                 ("every point got (n − u)/n = 1/6, the mean share; r_i differs from point to point",
                  np.full(6, 1.0 / 6.0)),
-                ("these sum to 6 − 5 = 1 but are |w_i|/Σ|w|: r_i is quadratic in the condition's "
+                ("these sum to 1 but are |w_i|/Σ|w|: r_i is quadratic in the condition's "
                  "coefficients", np.abs(w) / np.abs(w).sum()),
+                ("w_i² without dividing by wᵀw: w is not a unit vector here", w * w),
+                ("w_i/|w|: the diagonal of a projector onto w is quadratic in w", np.abs(wn)),
             ],
         )  # fmt: skip
-    success("six points: residuals and redundancy numbers right, on flat ground and with relief")
+    success(
+        "six points: residuals and redundancy numbers from the condition alone, flat and with relief"
+    )
 
 
 def _gruber_relief(rng: np.random.Generator, b: float, d: float, h: float, relief: float) -> F64:

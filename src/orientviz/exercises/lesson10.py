@@ -27,7 +27,18 @@ from ..bundle.sparsity import (
 )
 from ..rotation import matrix_derivatives, matrix_from_opk
 from ..simulate import simulate_block
-from ._common import CheckFailed, NotWrittenError, call, compare, own_work, rng_for, success
+from ._common import (
+    CheckFailed,
+    NotWrittenError,
+    call,
+    compare,
+    complex_step,
+    exact_derivatives,
+    own_work,
+    rng_for,
+    success,
+)
+from .lesson02 import _rodrigues_opk
 from .sliders import answer_value
 
 
@@ -251,7 +262,22 @@ def check_ray_partials(fn) -> None:
     compare("∂(x, y)/∂(ω, φ, κ) [mm/rad]", dang, numeric("ang"), rtol=1e-6, wrong=[
         ("the sign is wrong: ∂x/∂ω = −c/w (∂u/∂ω − (u/w) ∂w/∂ω)", -numeric("ang")),
     ])  # fmt: skip
-    success("xy and all 9 partial derivatives of 5 rays agree with central differences")
+
+    def proj_c(X_, X0_, ang_):  # the same equations, complex-safe (Rodrigues), for the complex step
+        R_ = np.stack([_rodrigues_opk(*a, unit=1.0) for a in ang_])
+        uvw = np.einsum("nki,nk->ni", R_, X_ - X0_)
+        return -c[:, None] * uvw[:, :2] / uvw[:, 2:]
+
+    for name, g, exact in (
+        ("∂(x, y)/∂X", dX, complex_step(lambda q: proj_c(q, X0, ang), X)),
+        ("∂(x, y)/∂X0", dX0, complex_step(lambda q: proj_c(X, q, ang), X0)),
+        ("∂(x, y)/∂(ω, φ, κ)", dang, complex_step(lambda q: proj_c(X, X0, q), ang)),
+    ):
+        exact_derivatives(name, g, np.einsum("iaib->iab", exact))
+    success(
+        "xy and all 9 partial derivatives of 5 rays agree with central differences and, to "
+        "round-off, with their complex-step derivatives"
+    )
 
 
 _LIBRARY_BUNDLE = {

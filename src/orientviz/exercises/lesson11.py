@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+from scipy.integrate import quad
 from scipy.stats import binom
 
 from orientviz.adjust import gauss_newton
@@ -37,6 +38,52 @@ def _points(rng: np.random.Generator, n: int) -> np.ndarray:
 def _radial(xy: np.ndarray, k: np.ndarray) -> np.ndarray:
     r2 = np.sum(xy**2, axis=1)
     return xy * (k[0] * r2 + (k[1] * r2**2 if len(k) > 1 else 0.0))[:, None]
+
+
+def check_k1_alone_format(fn: Callable) -> None:
+    """Check ``fn(K, rho) -> K1``: the K1 a one-term fit returns when the points fill a round
+    format of radius ``rho`` (mm) evenly and the lens is exactly Δ = (K1 r² + K2 r⁴ + K3 r⁶) z.
+
+    Oracle: the sums of the one-term normal equation as integrals over the disc,
+    ∫₀^ρ f(r) 2πr dr, by adaptive quadrature (scipy's quad) — not the closed form. A fit to
+    sampled points or a coarse numerical integral comes close but not to 1e-10, and is named.
+    """
+    for K, rho in (((4.6e-3, -4.5e-5, -2.1e-6), 3.6), ((-2.3e-3, 3.1e-4, 1.2e-5), 2.2)):
+        K = np.array(K)
+
+        def moment(n: int, rho: float = rho) -> float:
+            return quad(lambda r: r**n * 2.0 * np.pi * r, 0.0, rho, epsabs=0.0, epsrel=1e-13)[0]
+
+        want = (K[0] * moment(6) + K[1] * moment(8) + K[2] * moment(10)) / moment(6)
+        got = call(fn, K.copy(), rho, what="k1_alone_format")
+        try:
+            got = float(got)
+        except (TypeError, ValueError):
+            raise CheckFailed(f"k1_alone_format: expected one number, got {got!r}") from None
+        u = 1e-3
+        err = abs(got - want) / abs(want)
+        wrong = [
+            ("the area element is missing: points spread evenly over the AREA, so the sums "
+             "become ∫ f(r) 2πr dr, not ∫ f(r) dr",
+             (K[0] + K[1] * 7 / 9 * rho**2 + K[2] * 7 / 11 * rho**4) / u),
+            ("every point at the rim (r = ρ): the points fill the format from its centre",
+             (K[0] + K[1] * rho**2 + K[2] * rho**4) / u),
+            ("the lens's own K1: alone, K1 also takes over what K2 and K3 describe", K[0] / u),
+        ]  # fmt: skip
+        if 1e-10 < err < 1e-3 and not any(abs(got / u - w) < 1e-9 * abs(w) for _, w in wrong):
+            raise CheckFailed(
+                f"k1_alone_format for K = {K.tolist()}, ρ = {rho} mm: right to {err:.0e} but not "
+                "exactly — a fit to sampled points or a numerical integral? Points spread evenly "
+                "turn the sums of your normal equation into integrals ∫₀^ρ … 2πr dr, and those "
+                "have closed forms.",
+                error=err,
+                tolerance=1e-10,
+            )
+        compare(f"K1 of one term on a format of radius {rho} mm [1e-3 mm⁻²] for K = {K.tolist()}",
+                got / u, want / u, rtol=1e-10, wrong=wrong)  # fmt: skip
+    success(
+        "K1 of a one-term fit on a round format filled evenly: right for both lenses and formats"
+    )
 
 
 def check_fit_k1(fn: Callable) -> None:

@@ -12,7 +12,16 @@ from collections.abc import Callable
 
 import numpy as np
 
-from orientviz.exercises._common import CheckFailed, call, compare, own_work, rng_for, success
+from orientviz.exercises._common import (
+    INVERTERS,
+    CheckFailed,
+    call,
+    compare,
+    own_work,
+    rng_for,
+    small_matrices,
+    success,
+)
 from orientviz.radar.ppi import sphere_radius
 
 
@@ -202,24 +211,41 @@ def best_pair_library(C: np.ndarray, X0: np.ndarray, tri: list[int]) -> tuple[in
     """The lesson's stand-in for ``best_pair`` while the student's blank is empty: the two
     points of ``C`` (n, 3) m not in ``tri`` whose ranges, added to those of ``tri``, give the
     station ``X0`` (3,) m the smallest σ_Z (never shown in the lesson, so that the pair is
-    not printed before the student finds it; :func:`check_best_pair` refuses it)."""
+    not printed before the student answers; :func:`check_steep_pair` refuses it)."""
     free = [k for k in range(len(C)) if k not in tri]
     pairs = [(a, b) for n, a in enumerate(free) for b in free[n + 1 :]]
     return min(pairs, key=lambda pr: float(_station_sigma(C, X0, list(tri) + list(pr))[2]))
 
 
+_NO_TRIAL = {
+    **INVERTERS,
+    "np.linalg.det": np.linalg.det,
+    "np.linalg.eig": np.linalg.eig,
+    "np.linalg.eigh": np.linalg.eigh,
+    "np.linalg.svd": np.linalg.svd,
+    "np.linalg.cond": np.linalg.cond,
+}
+
+
 @own_work(
-    "that is the stand-in; the exercise is the search over the pairs, written by you",
+    "that is the stand-in, a search over all pairs; the exercise is a rule you reason out",
     best_pair_library=best_pair_library,
 )
-def check_best_pair(fn: Callable) -> None:
-    """Check ``fn(C, X0, tri) -> (i, j)``: the two points (not in ``tri``) whose ranges, added to
-    those of the three points ``tri``, give the station the smallest σ_Z.
+@small_matrices(
+    0,
+    "this exercise asks for a geometric rule, not a trial of the pairs' precision — which rays "
+    "fix a height?",
+    **_NO_TRIAL,
+)
+def check_steep_pair(fn: Callable) -> None:
+    """Check ``fn(C, X0, tri) -> (i, j)``: two points (not in ``tri``) chosen by a geometric rule
+    — no matrix inverse, determinant or decomposition — whose ranges, added to those of ``tri``,
+    give the station a σ_Z within 10 % of the best pair's.
 
-    Oracle: every pair tried, σ from (JᵀJ)⁻¹ with J the unit vectors station − point, on a
-    scene the student has not seen (a station 12 km above 20 points spread over ±40 km).
+    Oracle: every pair tried, σ from (JᵀJ)⁻¹ with J the unit vectors station − point, on two
+    scenes the student has not seen (a station 12 km above 20 points spread over ±40 km).
     """
-    for salt in (0, 2):  # scene 2: the 3-D criterion (trace of (JᵀJ)⁻¹) picks another pair
+    for salt in (0, 2):  # scene 2: the 3-D criterion (trace of (JᵀJ)⁻¹) is 23 % worse in σ_Z
         rng = rng_for("lesson14.check_best_pair", salt)
         C = np.column_stack([rng.uniform(-40e3, 40e3, 20), rng.uniform(-40e3, 40e3, 20),
                              rng.uniform(-600.0, 600.0, 20)])  # fmt: skip
@@ -231,31 +257,37 @@ def check_best_pair(fn: Callable) -> None:
         ]
         sig = {pr: _station_sigma(C, X0, tri + list(pr)) for pr in pairs}
         best = min(pairs, key=lambda pr: sig[pr][2])
-        got = call(fn, C.copy(), X0.copy(), list(tri), what="best_pair")
+        got = call(fn, C.copy(), X0.copy(), list(tri), what="steep_pair")
         try:
             g = tuple(sorted(int(k) for k in got))
         except (TypeError, ValueError):
-            raise CheckFailed(f"best_pair: expected two point indices, got {got!r}") from None
+            raise CheckFailed(f"steep_pair: expected two point indices, got {got!r}") from None
         if len(g) != 2 or g[0] == g[1]:
-            raise CheckFailed(f"best_pair: expected two different point indices, got {got!r}")
-        if g == best:
+            raise CheckFailed(f"steep_pair: expected two different point indices, got {got!r}")
+        if g not in sig:
+            raise CheckFailed(
+                f"steep_pair: {g} — one of them is already among the three, or an index is out "
+                "of range"
+            )
+        ratio = float(sig[g][2] / sig[best][2])
+        if ratio <= 1.10:
             continue
         names = {
-            max(pairs, key=lambda pr: sig[pr][2]): "the pair with the LARGEST σ_Z",
-            min(pairs, key=lambda pr: np.hypot(*sig[pr][:2])): (
-                "the pair best for the plan position (σ_X, σ_Y); the question is the height"),
-            min(pairs, key=lambda pr: np.sum(sig[pr] ** 2)): (
-                "the pair best for the 3-D position (the trace of (JᵀJ)⁻¹); the question is the "
-                "height alone, σ_Z"),
             max(pairs, key=lambda pr: np.linalg.norm(C[pr[0], :2] - C[pr[1], :2])): (
                 "the two points farthest apart: spread helps the plan, the height needs steep "
                 "rays"),
+            min(pairs, key=lambda pr: np.hypot(*sig[pr][:2])): (
+                "a pair good for the plan position; the question is the height"),
+            min(pairs, key=lambda pr: np.sum(sig[pr] ** 2)): (
+                "the pair best for the 3-D position (the trace); the question is the height alone"),
         }  # fmt: skip
-        if g not in sig:
-            why = "one of them is already among the three, or an index is out of range"
-        else:
-            why = names.get(
-                g, f"σ_Z {sig[g][2]:.2f} σ_s, but another pair gives {sig[best][2]:.2f} σ_s"
-            )
-        raise CheckFailed(f"best_pair: {g} — {why}", error=np.inf, tolerance=0.0)
-    success("σ_Z of the station smallest with your pair in two scenes (not the pair best in 3-D)")
+        why = names.get(g, "which rays change most with the station's height?")
+        raise CheckFailed(
+            f"steep_pair: {g} gives σ_Z {sig[g][2]:.2f} range-σ, {ratio:.2f} times the best pair's "
+            f"{sig[best][2]:.2f} — {why}",
+            error=np.inf,
+            tolerance=0.0,
+        )
+    success(
+        "σ_Z of the station within 10 % of the best pair in two scenes, by a rule without trials"
+    )

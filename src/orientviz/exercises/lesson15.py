@@ -26,6 +26,19 @@ from orientviz.exercises._common import (
 from orientviz.exercises.sliders import answer_value
 
 
+def residual_pattern_library(xy: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """The lesson's stand-in for ``residual_pattern`` while the student's blank is empty: the
+    4-parameter pattern (shift (2,) mm, scale, rotation rad) fitted to the misclosures ``w``
+    (n, 2) mm at ``xy`` (n, 2) mm by the engine (kept here, not in the lesson, so that the blank's
+    cell does not show the design matrix; :func:`check_residual_pattern` refuses it)."""
+    A4 = np.zeros((2 * len(xy), 4))
+    A4[0::2, 0], A4[1::2, 1] = 1.0, 1.0
+    A4[0::2, 2], A4[1::2, 2] = xy[:, 0], xy[:, 1]
+    A4[0::2, 3], A4[1::2, 3] = -xy[:, 1], xy[:, 0]
+    p = gauss_newton(lambda q: (A4 @ q, A4), np.zeros(4), np.ravel(w), 0.005).x
+    return p[:2], float(p[2]), float(p[3])
+
+
 def check_residual_pattern(fn: Callable) -> None:
     """Check ``fn(xy, v) -> (shift (2,), scale, rotation)`` for v = t + λ·xy + ρ·(−y, x)."""
     rng = rng_for("lesson15.check_residual_pattern")

@@ -207,15 +207,6 @@ def _worst_after(Q: np.ndarray, j: int, sigma: float) -> float:
     return float(np.delete(sz, j).max())
 
 
-def _rms_after(Q: np.ndarray, j: int, sigma: float, others: bool) -> float:
-    """RMS σ_Z (m) after making ``j`` control, of the other points or of all points."""
-    u = Q.shape[0]
-    E = np.zeros((3, u))
-    E[np.arange(3), [3 * j, 3 * j + 1, 3 * j + 2]] = 1.0
-    var = np.diag(np.linalg.inv(np.linalg.inv(Q) + E.T @ E / sigma**2))[2::3]
-    return float(np.sqrt(np.mean(np.delete(var, j) if others else var)))
-
-
 def _candidate_case(rng: np.random.Generator, p: int) -> tuple[np.ndarray, list[int]]:
     """Point cofactors (3p × 3p) of a chain of points tied to their neighbours, and the
     candidates, drawn until the point with the largest σ_Z is *not* the best candidate."""
@@ -237,56 +228,72 @@ def _candidate_case(rng: np.random.Generator, p: int) -> tuple[np.ndarray, list[
             return Q, cand
 
 
-def check_best_candidate(fn: Callable) -> None:
-    """Check ``fn(Q, candidates, sigma) -> j``: the candidate point that, made XYZ control
-    with σ ``sigma`` (m), leaves the smallest largest σ_Z of the other points.
+def _after(Q: np.ndarray, j: int, sigma: float) -> np.ndarray:
+    """σ_Z (m) of every point after making ``j`` control — by the inverse of the enlarged normal
+    matrix (the oracle)."""
+    u = Q.shape[0]
+    E = np.zeros((3, u))
+    E[np.arange(3), [3 * j, 3 * j + 1, 3 * j + 2]] = 1.0
+    return np.sqrt(np.diag(np.linalg.inv(np.linalg.inv(Q) + E.T @ E / sigma**2))[2::3])
 
-    ``Q`` (3p, 3p) are the cofactors of the points' coordinates (X, Y, Z of point 0, …).
+
+def check_after_worst(fn: Callable) -> None:
+    """Check ``fn(Q, sigma) -> (k, sigma_z)``: make the point with the largest σ_Z control (XYZ,
+    σ ``sigma`` m); return the point whose σ_Z is then the largest of the others, and that σ_Z (m).
+
+    ``Q`` (3p, 3p) are the cofactors of the points' coordinates (X, Y, Z of point 0, …). Oracle:
+    the inverse of the enlarged normal matrix, on chains of points drawn so that the worst point
+    is not the best place for control.
     """
-    rng = rng_for("lesson16.check_best_candidate")
+    rng = rng_for("lesson16.check_after_worst")
     cases = [_candidate_case(rng, 9), _candidate_case(rng, 12)]
-    # a third chain in which the candidate best for the RMS σ_Z is another one
-    cases.append(_candidate_case(rng_for("lesson16.check_best_candidate", 7), 15))
-    for Q, cand in cases:
-        worst = [_worst_after(Q, j, 0.05) for j in cand]
-        best = cand[int(np.argmin(worst))]
-        got = call(fn, Q.copy(), list(cand), 0.05, what="best_candidate")
+    for Q, _ in cases:
+        sz = np.sqrt(np.diag(Q)[2::3])
+        j = int(np.argmax(sz))
+        after = _after(Q, j, 0.05)
+        others = np.delete(np.arange(len(sz)), j)
+        k = int(others[np.argmax(after[others])])
+        got = call(fn, Q.copy(), 0.05, what="after_worst")
         try:
-            j = int(got)
-        except (TypeError, ValueError):
-            raise CheckFailed("return one point index (an int from candidates)") from None
-        if j not in cand:
-            raise CheckFailed(f"point {j} is not among the candidates {cand}")
-        if j != best:
-            sz = np.sqrt(np.diag(Q)[2::3])
-            rms = {
-                k: min(cand, key=lambda c, k=k: _rms_after(Q, c, 0.05, others=k))
-                for k in (True, False)
-            }
-            if j == cand[int(np.argmax(sz[cand]))]:
-                why = (
-                    " — the point with the largest σ_Z itself: control there helps it, but "
-                    "not necessarily the worst of the others"
-                )
-            elif j in rms.values():
-                why = (
-                    " — the candidate with the smallest RMS σ_Z: the question is the LARGEST "
-                    "σ_Z of the other points (the worst spot of the block)"
-                )
-            else:
-                why = ""
+            gk, gs = int(got[0]), float(got[1])
+        except (TypeError, ValueError, IndexError):
+            raise CheckFailed("after_worst: return (point index, σ_Z in m)") from None
+        if gk == j:
             raise CheckFailed(
-                f"candidate {j} leaves a largest σ_Z of {worst[cand.index(j)]:.4f} m, "
-                f"candidate {best} {worst[cand.index(best)]:.4f} m{why}"
+                f"after_worst: point {gk} is the one made control — the question is where the "
+                "block is worst AFTERWARDS, among the other points"
             )
-    success("the best candidate by trying each one — what suggest_control does")
+        if gk != k:
+            second = int(others[np.argmax(sz[others])])
+            why = (
+                " — that was the second worst BEFORE; the update changes the others too, "
+                "each by its covariance with the new control point"
+                if gk == second
+                else ""
+            )
+            raise CheckFailed(
+                f"after_worst: point {gk} has σ_Z {after[gk]:.4f} m afterwards, point {k} "
+                f"{after[k]:.4f} m{why}"
+            )
+        compare(
+            "σ_Z of the worst point afterwards [m]",
+            gs,
+            after[k],
+            rtol=1e-6,
+            wrong=[
+                ("this is its variance σ_Z² (m²): take the square root", after[k] ** 2),
+                ("this is its σ_Z BEFORE the control point was added: update Q first",
+                 sz[k]),
+            ],
+        )  # fmt: skip
+    success("the worst spot after control at the worst point: found, with its σ_Z")
 
 
 __all__ = [
     "FEWEST",
     "TARGET_SIGMA_Z",
     "TASK",
-    "check_best_candidate",
+    "check_after_worst",
     "check_by_hand",
     "check_control_update",
     "check_largest_scale",

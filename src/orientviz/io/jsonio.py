@@ -336,12 +336,14 @@ def import_jsonschema():
 
 @cache
 def validator_for(name: str):
-    """A Draft 2020-12 validator for schema file ``name`` (with ``$ref`` resolution)."""
+    """A Draft 2020-12 validator for schema file ``name`` (with ``$ref`` resolution).
+
+    The shipped schemas are package data, checked against the Draft 2020-12 meta-schema
+    by the test suite (tests/io/test_problem_files.py), not at every start.
+    """
     Draft202012Validator = import_jsonschema().Draft202012Validator
 
-    schema = load_schema(name)
-    Draft202012Validator.check_schema(schema)
-    return Draft202012Validator(schema, registry=_registry())
+    return Draft202012Validator(load_schema(name), registry=_registry())
 
 
 def _json_type(value: Any) -> str:

@@ -48,6 +48,9 @@ F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
 #: Length unit of the polynomial variables u, v (m).
 L_M: float = 1000.0
+#: A part is called weakly determined when the largest σ of its corrections at the strips'
+#: points exceeds this many σ of a strip coordinate (the polynomials extrapolate).
+WEAK_FACTOR: float = 100.0
 
 
 @dataclass
@@ -66,6 +69,15 @@ class PolynomialResult(BlockAdjustment):
         A-priori σ of strip coordinates (planimetry, height), m.
     point_index : ndarray of int
         Block index of each point unknown (the ``"points"`` block of x).
+    sigma_correction : dict of str to tuple of float
+        ``"planimetry"`` and ``"height"`` → (median, largest) a-priori σ of the polynomial
+        corrections at the strips' own points, m (from the cofactors of the strip
+        coefficients, the tie points eliminated). Far above σ of a strip coordinate
+        (:attr:`sigma_strip`) means the control and the ties barely determine the
+        polynomials there: the corrections extrapolate.
+    weak : list of str
+        One sentence per part whose largest σ of the correction exceeds
+        :data:`WEAK_FACTOR` times σ of a strip coordinate (empty when none does).
     """
 
     strips: list = field(default_factory=list)
@@ -75,6 +87,8 @@ class PolynomialResult(BlockAdjustment):
     sigma0_z: float = math.nan
     sigma_strip: tuple[float, float] = (math.nan, math.nan)
     point_index: I64 | None = None
+    sigma_correction: dict = field(default_factory=dict)
+    weak: list = field(default_factory=list)
 
 
 @dataclass
@@ -300,6 +314,8 @@ def _adjust_once(block, strips, target, degree_xy, degree_z, sigma_strip, base) 
         X[:, c] = np.bincount(pt[used], x[used, c], minlength=block.n_points) / np.maximum(cnt, 1)
     X = np.where(ctrl, np.nan_to_num(pts.xyz_known), X)
     results = {}
+    sigma_corr: dict[str, tuple[float, float]] = {}
+    weak: list[str] = []
     for part, coords in (("planimetry", (0, 1)), ("height", (2,))):
         free = np.zeros((block.n_points, len(coords)), bool)
         free[tie] = ~ctrl[tie][:, list(coords)]
@@ -331,6 +347,16 @@ def _adjust_once(block, strips, target, degree_xy, degree_z, sigma_strip, base) 
                 parameters=exc.parameters,
                 defect=exc.defect,
             ) from None
+        sig = _correction_sigma(sol.factor, J, rows, ns, npar)
+        s_row = s_xy if part == "planimetry" else s_z
+        sigma_corr[part] = (float(np.median(sig)), float(sig.max()))
+        if sig.max() > WEAK_FACTOR * s_row:
+            degree = "degree_xy" if part == "planimetry" else "degree_z"
+            weak.append(
+                f"the {part} polynomials are barely determined by the control and the ties: "
+                f"σ of their correction reaches {sig.max():.3g} m ({sig.max() / s_row:.0f}× a "
+                f"strip coordinate's σ); give more control there or a lower {degree}"
+            )
         for i, c in enumerate(coords):
             has = sc[:, i] >= 0
             X[has, c] += sol.dX[sc[has, i]]
@@ -372,9 +398,23 @@ def _adjust_once(block, strips, target, degree_xy, degree_z, sigma_strip, base) 
     )
     return PolynomialResult(
         x=xvec, names=names, sigma0=s0, redundancy=int(dof), residuals=resid,
-        sigma_obs=1.0 / np.sqrt(wts), converged=True, reason="linear adjustments (one step each)",
+        sigma_obs=1.0 / np.sqrt(wts), converged=True,
+        reason="; ".join(["linear adjustments (one step each)", *weak]),
         history=[], groups={"planimetry": slice(0, n1), "height": slice(n1, n1 + n2), "points": slice(n1 + n2, xvec.size)},
         points=xyz, check_points=check_points_of(block, xyz), strips=strips, degree_xy=degree_xy,
         degree_z=degree_z, sigma0_xy=s0_part["planimetry"], sigma0_z=s0_part["height"],
         sigma_strip=(s_xy, s_z), point_index=tie, adjusted=(int(resid.size), int(n_unknown)),
+        sigma_correction=sigma_corr, weak=weak,
     )  # fmt: skip
+
+
+def _correction_sigma(factor, J: F64, rows: I64, ns: int, npar: int) -> F64:
+    """σ (m) of the polynomial correction ``J_i · θ_j`` of each row, from Q_θθ of the strips.
+
+    Q_θθ is the inverse of the reduced normal matrix (tie points eliminated), so the
+    values include the uncertainty the tie points carry; weights 1/σ² make them metres.
+    """
+    Q = factor.solve(np.eye(ns * npar)).reshape(ns, npar, ns, npar)
+    Qd = Q[np.arange(ns), :, np.arange(ns), :]  # (ns, npar, npar) per-strip blocks
+    var = np.einsum("na,nab,nb->n", J, Qd[rows], J)
+    return np.sqrt(np.maximum(var, 0.0))

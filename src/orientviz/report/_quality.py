@@ -179,10 +179,9 @@ class QualitySections:
                 C[:, np.arange(nb), np.arange(nb)] = 1.0
                 i, j = np.triu_indices(nb, k=1)
                 kk, pp = np.nonzero(np.abs(C[:, i, j]) > thr)
-                for k, q in zip(kk, pp):
-                    pairs.append(
-                        (names[k * nb + i[q]], names[k * nb + j[q]], float(C[k, i[q], j[q]]))
-                    )
+                first = [names[a] for a in (kk * nb + i[pp]).tolist()]
+                second = [names[b] for b in (kk * nb + j[pp]).tolist()]
+                pairs.extend(zip(first, second, C[kk, i[pp], j[pp]].tolist()))
                 active = np.flatnonzero(fb.sum(axis=1) >= 2)
                 if active.size:
                     with np.errstate(all="ignore"):

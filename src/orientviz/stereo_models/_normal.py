@@ -42,6 +42,9 @@ I64 = NDArray[np.int64]
 DENSE_LIMIT: int = 2500
 #: Scaled pivots below this count as a singular reduced system.
 PIVOT_TOLERANCE: float = 1e-12
+#: :func:`scalar_cofactors` takes the banded selected inverse when the half-band of the
+#: reduced system (reverse Cuthill-McKee) is at most this fraction of its size.
+BAND_FRACTION: float = 0.125
 
 
 @dataclass
@@ -175,6 +178,7 @@ class LinearSolution:
     w: F64 | None = None
     sign: F64 | None = None  # (n,) coefficient of the scalar unknown of each row
     prior_w: F64 | None = None  # (n_scalar,) weights of the scalar pseudo-observations
+    S: sp.csr_matrix | None = None  # the reduced matrix (for :func:`scalar_cofactors`)
 
     def resolve(self, r: F64, prior_e: F64 | None = None) -> tuple[F64, F64]:
         """Corrections (dθ, dX) for other misclosures with the same factorisation.
@@ -283,7 +287,12 @@ def solve_rows(
 def scalar_cofactors(sol: LinearSolution, groups: I64, chunk: int = 512) -> F64:
     """Cofactor blocks of groups of scalar unknowns (e.g. the X, Y, Z of each point).
 
-    Q_XX = D⁻¹ + G ᵀ S⁻¹ G restricted to the groups.
+    Q_XX = D⁻¹ + G ᵀ S⁻¹ G restricted to the groups. A group's block needs S⁻¹ only
+    between the parameters of the models that hold its unknowns, which are coupled in S:
+    for a large S whose band (reverse Cuthill-McKee) is narrow (:data:`BAND_FRACTION`)
+    these entries come from the banded selected inverse
+    (:func:`orientviz.bundle.precision.banded_selected_inverse`, two band
+    factorisations' work), else from solves with the columns of G.
 
     Parameters
     ----------
@@ -298,6 +307,10 @@ def scalar_cofactors(sol: LinearSolution, groups: I64, chunk: int = 512) -> F64:
     ndarray, shape (g, k, k)
     """
     g, k = groups.shape
+    if sol.S is not None and sol.S.shape[0] > DENSE_LIMIT:
+        out = _banded_cofactors(sol, groups, chunk)
+        if out is not None:
+            return out
     out = np.zeros((g, k, k))
     Gc = sp.csc_matrix(sol.G)
     for s0 in range(0, g, chunk):
@@ -369,4 +382,65 @@ def solve_sparse(
     fac = factor_spd(S, names, context)
     dt = fac.solve(bt - G @ bX)
     dX = (bX - C.T @ dt) / D
-    return LinearSolution(dt, dX, fac, G, D, C, JaW, row_scalar, w, sign, prior_w)
+    return LinearSolution(dt, dX, fac, G, D, C, JaW, row_scalar, w, sign, prior_w, S)
+
+
+def _banded_cofactors(sol: LinearSolution, groups: I64, chunk: int) -> F64 | None:
+    """:func:`scalar_cofactors` by the banded selected inverse of S, ordered by reverse
+    Cuthill-McKee on S's pattern and the pairs of reduced unknowns a group's block reads
+    (so that all lie in the band); None when the band is wide."""
+    s = sol.factor.scale  # Jacobi scale: S⁻¹ = s (s S s)⁻¹ s
+    Ss = sp.csr_matrix(sol.S.multiply(s[:, None]).multiply(s[None, :]))
+    n = Ss.shape[0]
+    Gc = sp.csc_matrix(sol.G)
+    g, k = groups.shape
+    # the entries needed: S's and those between the unknowns of a group's columns of G
+    valid = groups >= 0
+    member = sp.csr_matrix(
+        (np.ones(int(valid.sum())), (groups[valid], np.nonzero(valid)[0])), shape=(Gc.shape[1], g)
+    )
+    H = abs(Gc) @ member  # (n, g): the reduced unknowns each group's block reads
+    graph = (abs(Ss) + H @ H.T).tocsr()
+    perm = reverse_cuthill_mckee(graph, symmetric_mode=True).astype(np.int64)
+    pos = np.empty_like(perm)
+    pos[perm] = np.arange(n)
+    Pg = graph.tocoo()
+    kd = int(np.max(np.abs(pos[Pg.row] - pos[Pg.col]), initial=0))
+    if kd > BAND_FRACTION * n:
+        return None
+    P = Ss.tocoo()
+    pr, pc = pos[P.row], pos[P.col]
+    low = pr >= pc
+    ab = np.zeros((kd + 1, n))
+    ab[pr[low] - pc[low], pc[low]] = P.data[low]
+    try:
+        cb = scipy.linalg.cholesky_banded(ab, lower=True, overwrite_ab=True, check_finite=False)
+    except (np.linalg.LinAlgError, scipy.linalg.LinAlgError):
+        return None
+    from ..bundle.precision import banded_selected_inverse  # below us; loaded when used
+
+    Zb = banded_selected_inverse(cb, 48)
+    ptr, rows, vals = Gc.indptr, Gc.indices, Gc.data
+    out = np.zeros((g, k, k))
+    a_of, b_of = np.divmod(np.arange(k * k), k)
+    for s0 in range(0, g, chunk):
+        grp = groups[s0 : s0 + chunk]
+        gi, ab_ = np.nonzero((grp[:, a_of] >= 0) & (grp[:, b_of] >= 0))
+        ta, tb = grp[gi, a_of[ab_]], grp[gi, b_of[ab_]]
+        na, nb_ = ptr[ta + 1] - ptr[ta], ptr[tb + 1] - ptr[tb]
+        cnt = na * nb_
+        combo = np.repeat(np.arange(ta.size), cnt)
+        first = np.cumsum(cnt) - cnt
+        idx = np.arange(cnt.sum()) - first[combo]
+        ia = ptr[ta][combo] + idx // nb_[combo]
+        ib = ptr[tb][combo] + idx % nb_[combo]
+        ra, rb = rows[ia], rows[ib]
+        d = np.abs(pos[ra] - pos[rb])  # ≤ kd: the pairs are edges of the graph
+        z = Zb[np.minimum(pos[ra], pos[rb]), d] * s[ra] * s[rb]
+        blk = np.bincount(combo, vals[ia] * z * vals[ib], minlength=ta.size)
+        part = np.zeros((grp.shape[0], k * k))
+        part[gi, ab_] = blk
+        out[s0 : s0 + chunk] = part.reshape(-1, k, k)
+    dinv = np.where(valid, 1.0 / sol.D[np.where(valid, groups, 0)], 0.0)
+    out += np.einsum("ga,ab->gab", dinv, np.eye(k))
+    return out

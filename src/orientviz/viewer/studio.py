@@ -45,6 +45,8 @@ from ..design import (
 )
 from .quality import STOPS
 from .shapes import ramp
+from .studio_live import PendingDesign, deferred, images_added, images_removed
+from .studio_text import summary_markdown
 
 F64 = NDArray[np.float64]
 
@@ -206,11 +208,31 @@ class Studio:
         return cls(block=b, spec=spec, title=str(target))
 
     # ------------------------------------------------------------------ state
+    @property
+    def live(self) -> LiveDesign:
+        """The bundle's live design of the block (structural changes made under the
+        models method are applied now: :mod:`orientviz.viewer.studio_live`)."""
+        if isinstance(self._live, PendingDesign):
+            made = self._live.block
+            self._live = self._live.apply()
+            if self._models is not None and self._models.block is made:
+                self._models.block = self._live.block  # the same block, made twice
+        return self._live
+
+    @live.setter
+    def live(self, live: LiveDesign | PendingDesign) -> None:
+        self._live = live
+
+    def _now(self) -> LiveDesign | PendingDesign:
+        """The live design a structural change starts from: as it is under the models
+        method (its update waits until the bundle is shown), else applied."""
+        return deferred(self._live) if self.method == "models" else self.live
+
     def _state(self) -> tuple:
-        return (self.design, self.live, self.spec, self.law, self._models)
+        return (self.design, self._live, self.spec, self.law, self._models)
 
     def _restore(self, state: tuple) -> None:
-        self.design, self.live, self.spec, self.law, self._models = state
+        self.design, self._live, self.spec, self.law, self._models = state
 
     def _set_plan(self, design: FlightDesign) -> None:
         self.design = design
@@ -227,8 +249,7 @@ class Studio:
         if self.design is None:
             self.law = {"sigma_xy": float("nan"), "sigma_z": float("nan"), "note": LAW_NONE}
         else:  # images added or removed: the law still describes the regular plan
-            self.law = dict(accuracy_law(self.design, spec))
-            self.law["note"] += "; for the plan without the images added or removed since"
+            self.law = self._law_of_plan(accuracy_law(self.design, spec))
         self._models = None
 
     def _structural(self, label: str, change) -> DesignQuality:
@@ -256,13 +277,23 @@ class Studio:
             lambda: self._set_plan(design),
         )
 
-    def _set_live(self, live: LiveDesign) -> None:
-        """The design after a structural change updated by the live design."""
+    def _set_live(self, live: LiveDesign | PendingDesign) -> None:
+        """The design after a structural change updated by the live design (or, under
+        the models method, to be updated when the bundle's quality is asked for)."""
         self.live = live
         if self.design is not None:  # the law still describes the regular plan
-            self.law = dict(accuracy_law(self.design, self.spec))
-            self.law["note"] += "; for the plan without the images added or removed since"
+            self.law = self._law_of_plan(self.law)
         self._models = None
+
+    @staticmethod
+    def _law_of_plan(law: dict) -> dict:
+        """The plan's accuracy law after images were added or removed: the same values
+        (the law describes the regular plan; computed once per plan), said so."""
+        note = "; for the plan without the images added or removed since"
+        out = dict(law)
+        if not out["note"].endswith(note):
+            out["note"] += note
+        return out
 
     def _aux_of(self):
         """The plan's auxiliary data of a changed block (their rows follow the images)."""
@@ -271,7 +302,7 @@ class Studio:
 
     def _images_added(self, label: str, X0, angles, strip, ids=None) -> DesignQuality:
         """Add images by the live design's update (auxiliary rows of the new images too)."""
-        new = self.live.add_images(X0, angles, strip=strip, ids=ids, auxiliary=self._aux_of())
+        new = images_added(self._now(), X0, angles, strip=strip, ids=ids, auxiliary=self._aux_of())
         return self._structural(label, lambda: self._set_live(new))
 
     @_locked
@@ -287,7 +318,7 @@ class Studio:
         idx = np.atleast_1d(np.asarray(images, np.int64))
         names = [self.block.images.ids[i] for i in idx]
         label = what or ("image " + ", ".join(names) + " removed")
-        new = self.live.remove_images(idx, label, auxiliary=self._aux_of())
+        new = images_removed(self._now(), idx, label, auxiliary=self._aux_of())
         return self._structural(label, lambda: self._set_live(new))
 
     @_locked
@@ -318,8 +349,8 @@ class Studio:
         ang = I.angles[image][None].copy()
         label = f"image {name} moved to X {xy[0]:,.0f} m, Y {xy[1]:,.0f} m"
         aux = self._aux_of()
-        new = self.live.remove_images([image], label, auxiliary=aux)
-        new = new.add_images(X0, ang, strip=strip, ids=[name], auxiliary=aux)
+        new = images_removed(self._now(), [image], label, auxiliary=aux)
+        new = images_added(new, X0, ang, strip=strip, ids=[name], auxiliary=aux)
         return self._structural(label, lambda: self._set_live(new))
 
     @_locked
@@ -382,7 +413,7 @@ class Studio:
     @property
     def block(self):
         """The current design block."""
-        return self.live.block
+        return self._live.block
 
     @property
     @_locked
@@ -392,7 +423,7 @@ class Studio:
             return self.live.quality()
         # one factorisation per structure (block), control changes by updates
         if self._models is None or self._models.block is not self.block:
-            self._models = LiveModels(self.block, self.spec, auxiliary=self.live.auxiliary)
+            self._models = LiveModels(self.block, self.spec, auxiliary=self._live.auxiliary)
         return self._models.sync()
 
     def point_index(self, name: str) -> int:
@@ -428,65 +459,11 @@ class Studio:
 
     @_locked
     def summary_markdown(self) -> str:
-        """The block's figures next to the accuracy law's values, the weak spots."""
-        s = self.quality.summary
-        law = self.law
-        mm = 1e3
-
-        def lawv(key):
-            v = law.get(key, float("nan"))
-            return "–" if not np.isfinite(v) else f"{v * mm:.1f}"
-
-        d = self.design
-        if d is not None:
-            head = (
-                f"**{d.strips} strips × {d.images_per_strip} images**, 1:{d.scale:,.0f}, "
-                f"p = {d.forward_overlap:.0%}, q = {d.side_overlap:.0%}, σ image "
-                f"{d.sigma_image_mm * 1e3:.1f} µm, control σ {d.sigma_control * 100:.0f} cm"
-                + (f", GNSS σ {d.sigma_gnss:.2f} m" if d.sigma_gnss else "")
-                + (" (shift per strip)" if d.sigma_gnss and d.gnss_offsets else "")
-                + (f", statoscope σ {d.sigma_statoscope:.2f} m" if d.sigma_statoscope else "")
-                + (f", APR σ {d.sigma_apr:.2f} m" if d.sigma_apr else "")
-            )
-        else:
-            head = f"**{self.title or 'a block'}**"
-        b = self.block
-        extra = b.n_images - (d.strips * d.images_per_strip if d is not None else b.n_images)
-        head += (
-            f"; {b.n_images} images"
-            + (f" ({extra:+d} by cross strips / removals)" if extra else "")
-            + f", {b.n_points} points, {s['n_control']} control points"
+        """The block's figures next to the accuracy law's values, the weak spots
+        (:func:`orientviz.viewer.studio_text.summary_markdown`)."""
+        return summary_markdown(
+            self.quality, self.block, self.design, self.law, self.method, self.title
         )
-        note = self.method_note()
-        lines = [
-            head,
-            "",
-            f"Method: **{METHODS[self.method][0]}**" + (f" — {note}" if note else ""),
-            "",
-            "| | median | RMS | max | law (RMS) |",
-            "| --- | --- | --- | --- | --- |",
-            f"| σ_XY mm | {s['sigma_xy_median'] * mm:.1f} | {s['sigma_xy_rms'] * mm:.1f} | "
-            f"{s['sigma_xy_max'] * mm:.1f} | {lawv('sigma_xy')} |",
-            f"| σ_Z mm | {s['sigma_z_median'] * mm:.1f} | {s['sigma_z_rms'] * mm:.1f} | "
-            f"{s['sigma_z_max'] * mm:.1f} | {lawv('sigma_z')} |",
-            "",
-        ]
-        if np.isfinite(s["redundancy_mean"]):
-            lines.append(
-                f"mean redundancy number {s['redundancy_mean']:.2f}; largest MDB "
-                f"{s['mdb_max_mm'] * 1e3:.0f} µm; largest δ̄0 {s['external_max']:.1f}; "
-                f"{s['untestable_rays']} rays not testable.  "
-            )
-        else:
-            lines.append(
-                "Reliability (redundancy, MDB, δ̄0 of the image rays) is not defined for "
-                "independent models: the models have no image rays.  "
-            )
-        lines.append(f"Law: {law.get('note', '')}")
-        spots = self.quality.weak_spots
-        if spots:
-            lines += ["", "**Weak spots**"] + [f"- {w}" for w in spots]
-        return "\n".join(lines)
 
     def changes_markdown(self) -> str:
         """The list of changes (control, plan, images, strips, method) in order."""

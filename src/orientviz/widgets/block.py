@@ -38,15 +38,17 @@ class BlockState:
     rms: np.ndarray  # RMS error X, Y, Z (m) of the tie points
     sigma0: float
     seconds: float
+    weak: tuple[str, ...] = ()  # the method's own words on weakly determined parts
 
     def summary(self) -> str:
         s = self.sim.spec
-        return (
+        text = (
             f"{self.method}: {s['strips']} × {s['images_per_strip']} images, q = "
             f"{100 * s['side_overlap']:.0f} %, control {s['control']}\n"
             f"RMS error of the tie points: X {self.rms[0]:.3f} m, Y {self.rms[1]:.3f} m, "
             f"Z {self.rms[2]:.3f} m  (σ̂0 = {self.sigma0:.2f}, {self.seconds:.2f} s)"
         )
+        return "\n".join([text, *(f"weak: {w}" for w in self.weak)])
 
 
 def block_state(
@@ -100,7 +102,8 @@ def block_state(
     tie = sim.block.points.role == TIE
     e = (xyz - sim.truth.points.xyz)[tie]
     rms = np.sqrt(np.nanmean(e**2, axis=0))
-    return BlockState(sim, method, xyz, rms, float(res.sigma0), dt)
+    weak = tuple(getattr(res, "weak", ()))
+    return BlockState(sim, method, xyz, rms, float(res.sigma0), dt, weak)
 
 
 def block_app():

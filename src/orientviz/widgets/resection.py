@@ -97,7 +97,9 @@ def resection_app():
     """ipywidgets app around :func:`resection_state`; returns the widget box."""
     import ipywidgets as W
 
-    n = W.IntSlider(value=8, min=3, max=40, description="points", continuous_update=False)
+    # from 4 points: with 3 the resection has up to four solutions and no redundancy, and the σ
+    # printed would belong to whichever solution was found (lesson 04, "three points")
+    n = W.IntSlider(value=8, min=4, max=40, description="points", continuous_update=False)
     relief = W.FloatSlider(value=80.0, min=0.0, max=600.0, step=10.0, description="relief [m]",
                            continuous_update=False)  # fmt: skip
     sig = W.FloatSlider(value=5.0, min=1.0, max=30.0, description="σ [µm]", continuous_update=False)

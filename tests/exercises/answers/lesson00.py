@@ -19,9 +19,8 @@ def _sol_redundancy(n_images, n_tie, n_control, n_rays, weighted_control=False):
     return 2 * n_rays + extra - 6 * n_images - 3 * n_tie - extra
 
 
-def _sol_critical(alpha_family, n):
-    alpha = 1.0 - (1.0 - alpha_family) ** (1.0 / n)  # per observation
-    return norm.isf(alpha / 2)
+def _sol_false_alarms(n, k):
+    return n * 2 * norm.sf(k)  # both tails
 
 
 def _sol_after_doubling(sigma0, r_i, w):
@@ -31,7 +30,7 @@ def _sol_after_doubling(sigma0, r_i, w):
 SOLUTIONS = {
     "check_sigma0": _sol_sigma0,
     "check_redundancy": _sol_redundancy,
-    "check_family_critical": _sol_critical,
+    "check_false_alarms": _sol_false_alarms,
     "check_after_doubling": _sol_after_doubling,
 }
 
@@ -49,12 +48,12 @@ MUTANTS = {
         "weighted: unknowns only": lambda m, t, k, n, w: 2 * n - 6 * m - 3 * (t + (k if w else 0)),
         "weighted: observations only": lambda m, t, k, n, w: 2 * n + 3 * k * w - 6 * m - 3 * t,
     },
-    "check_family_critical": {
-        "one-sided": lambda a, n: norm.isf(1 - (1 - a) ** (1 / n)),
-        "no n": lambda a, n: norm.isf(a / 2),
-        "Bonferroni": lambda a, n: norm.isf(a / (2 * n)),
-        "times n": lambda a, n: norm.isf(min(a * n, 0.999) / 2),
-        "percent": lambda a, n: _sol_critical(a / 100, n),
+    "check_false_alarms": {
+        "one-sided": lambda n, k: n * norm.sf(k),
+        "one observation": lambda n, k: 2 * norm.sf(k),
+        "passes": lambda n, k: n * (1 - 2 * norm.sf(k)),
+        "at least one": lambda n, k: 1 - (1 - 2 * norm.sf(k)) ** n,
+        "fixed 0.001": lambda n, k: n * 0.001,
     },
     "check_after_doubling": {
         "sigma0 doubled": lambda s, r, w: (2 * s, r, w / 2),

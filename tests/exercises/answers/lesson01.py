@@ -42,6 +42,12 @@ def _weakest(stations, x, sigma, mistake=None):
     return V[:, 0]
 
 
+def _second_difference(x, station, dx, t):
+    """The numeric shortcut: ½ (s(x + t dx) − 2 s(x) + s(x − t dx)) / t² in floating point."""
+    s = lambda q: np.linalg.norm(q - station)  # noqa: E731
+    return 0.5 * (s(x + t * dx) - 2 * s(x) + s(x - t * dx)) / t**2
+
+
 def _second_order(x, station, dx, mistake=None):
     d = x - station
     s = np.linalg.norm(d)
@@ -110,5 +116,9 @@ MUTANTS = {
     "check_second_order": {
         k: (lambda x, st, dx, k=k: _second_order(x, st, dx, k))
         for k in ("whole dx", "no half", "along", "sign", "exact")
+    }
+    | {
+        f"second difference, t {t:g}": (lambda x, st, dx, t=t: _second_difference(x, st, dx, t))
+        for t in (1e-2, 1e-3)
     },
 }

@@ -48,6 +48,19 @@ def _sol_vertical(xy, c):
     return J
 
 
+def _vertical_fd(xy, c, h=1e-6):
+    """The numeric shortcut: points on the rays, turned by ±h, central differences."""
+    from orientviz.rotation import matrix_from_opk
+
+    d = np.column_stack([xy, np.full(len(xy), -c)]) * 10.0  # points on the rays (X0 = 0, R = I)
+
+    def image(a):
+        uvw = d @ matrix_from_opk(*a)
+        return -c * uvw[:, :2] / uvw[:, 2:]
+
+    return np.stack([(image(e) - image(-e)) / (2 * h) for e in np.eye(3) * h], axis=2)
+
+
 def _without_one(xy, c):
     J = _sol_vertical(xy, c)
     J[:, 0, 1] -= c
@@ -112,6 +125,7 @@ MUTANTS = {
         "per gon": lambda xy, c: _sol_vertical(xy, c) * np.pi / 200,
         "rows swapped": lambda xy, c: _sol_vertical(xy, c)[:, ::-1],
         "only omega phi kappa of x": lambda xy, c: _sol_vertical(xy, c) * [[1], [0]],
+        "own central differences": _vertical_fd,
     },
     "check_relief_displacement": {
         "foot's factor": lambda r, h, H: r * h / (H - h),

@@ -9,7 +9,6 @@ from __future__ import annotations
 import numpy as np
 
 import orientviz as ov
-from orientviz.adjust.gross import redundancy_numbers
 from orientviz.orientation import relative as rel
 
 
@@ -18,24 +17,37 @@ def _sol_design(X, Y, Z, b):
     return np.column_stack([np.ones_like(X), -q, -Z * (1 + q * q), -(b - X) * q, -(b - X)])
 
 
+def _design_fd(X, Y, Z, b, h=1e-7):
+    """The numeric shortcut: central differences of one's own rigorous parallax."""
+    P = np.column_stack([X, Y, Z])
+
+    def parallax(e):
+        xy1 = -152.7 * P[:, :2] / P[:, 2:]
+        uvw = (P - np.array([b, e[0], e[1]])) @ ov.matrix_from_opk(*e[2:])
+        xy2 = -152.7 * uvw[:, :2] / uvw[:, 2:]
+        return b / (xy1[:, 0] - xy2[:, 0]) * (xy1[:, 1] - xy2[:, 1])
+
+    return np.column_stack([(parallax(e) - parallax(-e)) / (2 * h) for e in np.eye(5) * h])
+
+
 def _sol_parallax(xy1, xy2, b):
     lam = b / (xy1[:, 0] - xy2[:, 0])
     return lam * (xy1[:, 1] - xy2[:, 1])
 
 
-def _sol_six_point_residuals(p, X, Y, Z, b, mistake=None):
-    A = _sol_design(X, Y, Z, b)
-    H = A @ np.linalg.solve(A.T @ A, A.T)  # the part of p that goes into the elements
-    v = H @ p - p
-    r = 1.0 - np.diag(H)
+def _sol_six_point_residuals(p, w, mistake=None):
+    # I − H projects onto the one direction w (wᵀA = 0): v = −w wᵀp / wᵀw, r_i = w_i² / wᵀw
+    ww = w @ w
+    v = -w * (w @ p) / ww
+    r = w * w / ww
     if mistake == "p - Ad":
         v = -v
     elif mistake == "hat diagonal":
-        r = np.diag(H)
+        r = 1.0 - r
     elif mistake == "mean share":
         r = np.full(6, (6 - 5) / 6)
-    elif mistake == "library":
-        r = redundancy_numbers(A, 1.0)
+    elif mistake == "no wTw":
+        v, r = -w * (w @ p), w * w
     return v, r
 
 
@@ -144,6 +156,7 @@ MUTANTS = {
         "phi and kappa swapped": lambda X, Y, Z, b: _sol_design(X, Y, Z, b)[:, [0, 1, 2, 4, 3]],
         "Kovarik signs": lambda X, Y, Z, b: _sol_design(X, Y, Z, b) * [1, -1, 1, 1, -1],
         "the stand-in (the library's)": rel.design_dependent,
+        "own central differences": _design_fd,
         "1 - Y^2/Z^2": lambda X, Y, Z, b: (
             _sol_design(X, Y, Z, b)
             - np.column_stack([0 * X, 0 * X, -2 * Z * (Y / Z) ** 2, 0 * X, 0 * X])
@@ -159,7 +172,7 @@ MUTANTS = {
     },
     "check_six_point_residuals": {
         k: (lambda *a, k=k: _sol_six_point_residuals(*a, mistake=k))
-        for k in ("p - Ad", "hat diagonal", "mean share", "library")
+        for k in ("p - Ad", "hat diagonal", "mean share", "no wTw")
     }
     | {"one array": lambda *a: _sol_six_point_residuals(*a)[0]},
     "check_condition": {

@@ -136,6 +136,22 @@ def _model_jacobian(lam, R, m, mistake=None):
     return J
 
 
+def _model_jacobian_fd(lam, R, m, h):
+    """The student's own central differences of λ R exp([θ]×) m + T (the numeric shortcut)."""
+    from orientviz.rotation import matrix_from_rotvec
+
+    def f(p):
+        E = matrix_from_rotvec(p[:, :3])
+        return (lam + p[:, 3])[:, None] * np.einsum("kij,kjl,kl->ki", R, E, m) + p[:, 4:]
+
+    J = np.zeros((len(m), 3, 7))
+    for j in range(7):
+        e = np.zeros((len(m), 7))
+        e[:, j] = h
+        J[:, :, j] = (f(e) - f(-e)) / (2 * h)
+    return J
+
+
 def _adjust_models(m, model, point, X, free, sigma, R, T, mistake=None):
     """The independent-model adjustment (Gauss-Newton, dense normal equations)."""
     from orientviz.rotation import matrix_from_rotvec
@@ -218,6 +234,8 @@ MUTANTS = {
         for m in ("degree", "no tilt", "tilt to d", "tilt too low", "sign", "full control only")
     },
     "check_model_jacobian": {
+        "own central differences, h 1e-6": lambda *a: _model_jacobian_fd(*a, 1e-6),
+        "own central differences, h 1e-4": lambda *a: _model_jacobian_fd(*a, 1e-4),
         "sign": lambda *a: _model_jacobian(*a, mistake="sign"),
         "left increment": lambda *a: _model_jacobian(*a, mistake="left"),
         "lambda column": lambda *a: _model_jacobian(*a, mistake="lambda column"),

@@ -79,6 +79,29 @@ def _schur_step(nb, mode="ok"):
 
 
 # ---- your bundle (lesson 10's last section); the same code as the notebook's solution cells
+def _ray_partials_fd(X, X0, R, dR, c, h=1e-6):
+    """The numeric shortcut: central differences of the projection (angles along dR)."""
+
+    def proj(X, X0, R):
+        uvw = np.einsum("nki,nk->ni", R, X - X0)
+        return -c[:, None] * uvw[:, :2] / uvw[:, 2:]
+
+    out = []
+    for which in ("X0", "ang", "X"):
+        J = np.zeros((len(X), 2, 3))
+        for k in range(3):
+            e = np.zeros_like(X)
+            e[:, k] = h
+            if which == "X":
+                J[:, :, k] = (proj(X + e, X0, R) - proj(X - e, X0, R)) / (2 * h)
+            elif which == "X0":
+                J[:, :, k] = (proj(X, X0 + e, R) - proj(X, X0 - e, R)) / (2 * h)
+            else:
+                J[:, :, k] = (proj(X, X0, R + h * dR[k]) - proj(X, X0, R - h * dR[k])) / (2 * h)
+        out.append(J)
+    return (proj(X, X0, R), *out)
+
+
 def _ray_partials(X, X0, R, dR, c, mistake=None):
     d = X - X0
     u, v, w = np.einsum("nki,nk->ni", R, d).T  # Rᵀ (X − X0), ray by ray
@@ -192,7 +215,8 @@ MUTANTS = {
     "check_ray_partials": {
         k: (lambda *a, k=k: _ray_partials(*a, mistake=k))
         for k in ("R_not_transposed", "no_quotient", "X0_sign")
-    },
+    }
+    | {"own central differences": _ray_partials_fd},
     "check_my_bundle": {
         k: (lambda *a, k=k: _my_bundle(*a, mistake=k))
         for k in ("no_weights", "fixed_as_unknowns", "no_sqrt", "no_control", "control_not_counted")

@@ -43,7 +43,24 @@ def _k1_x_only(xy, d):
     return k1, np.sqrt(v @ v / (d.size - 1))
 
 
+def _k1_alone_format(K, rho, mistake=None):
+    if mistake == "no area element":
+        return K[0] + K[1] * 7 / 9 * rho**2 + K[2] * 7 / 11 * rho**4
+    if mistake == "rim":
+        return K[0] + K[1] * rho**2 + K[2] * rho**4
+    if mistake == "sampled":  # the numeric shortcut: fit one term to many points drawn evenly
+        g = np.random.default_rng(5)
+        r = rho * np.sqrt(g.uniform(0.0, 1.0, 200_000))
+        return _k1_alone(K, r)
+    if mistake == "grid":  # a numerical integral on 2000 rings (midpoint rule)
+        r = (np.arange(2000) + 0.5) * rho / 2000
+        w = 2 * np.pi * r
+        return (K[0] * w @ r**6 + K[1] * w @ r**8 + K[2] * w @ r**10) / (w @ r**6)
+    return K[0] + 0.8 * K[1] * rho**2 + 2.0 / 3.0 * K[2] * rho**4
+
+
 SOLUTIONS = {
+    "check_k1_alone_format": _k1_alone_format,
     "check_fit_k1": _fit_k1,
     "check_k1_alone": _k1_alone,
     "check_inflation": _inflation,
@@ -52,6 +69,11 @@ SOLUTIONS = {
 }
 
 MUTANTS = {
+    "check_k1_alone_format": {
+        m: (lambda K, rho, m=m: _k1_alone_format(K, rho, m))
+        for m in ("no area element", "rim", "sampled", "grid")
+    }
+    | {"the lens's K1": lambda K, rho: K[0]},
     "check_k1_alone": {
         "the lens's K1": lambda K, r: K[0],
         "K3 forgotten": lambda K, r: K[0] + K[1] * np.sum(r**8) / np.sum(r**6),

@@ -51,26 +51,29 @@ def _station_sigma(C, X0, idx):
     return np.sqrt(np.diag(np.linalg.inv(J.T @ J)))
 
 
-def _best_pair(C, X0, tri, mistake=None):
-    pairs = [
-        (a, b) for a in range(len(C)) for b in range(a + 1, len(C)) if a not in tri and b not in tri
-    ]
-    if mistake == "largest":
-        return max(pairs, key=lambda pr: _station_sigma(C, X0, list(tri) + list(pr))[2])
-    if mistake == "plan":
-        return min(pairs, key=lambda pr: np.hypot(*_station_sigma(C, X0, list(tri) + list(pr))[:2]))
+def _steep_pair(C, X0, tri, mistake=None):
+    """The two points (not in tri) with the steepest rays from the station: nearest its nadir."""
+    free = [k for k in range(len(C)) if k not in tri]
+    pairs = [(a, b) for n, a in enumerate(free) for b in free[n + 1 :]]
     if mistake == "spread":
         return max(pairs, key=lambda pr: np.linalg.norm(C[pr[0], :2] - C[pr[1], :2]))
-    if mistake == "3-D trace":
-        return min(pairs, key=lambda pr: np.sum(_station_sigma(C, X0, list(tri) + list(pr)) ** 2))
-    return min(pairs, key=lambda pr: _station_sigma(C, X0, list(tri) + list(pr))[2])
+    if mistake == "plan":
+        return min(pairs, key=lambda pr: np.hypot(*_station_sigma(C, X0, list(tri) + list(pr))[:2]))
+    if mistake == "far from the three":
+        centre = C[list(tri), :2].mean(axis=0)
+        return tuple(sorted(free, key=lambda k: -np.hypot(*(C[k, :2] - centre)))[:2])
+    if mistake == "trial":  # the search the exercise replaces by a rule: refused
+        return min(pairs, key=lambda pr: _station_sigma(C, X0, list(tri) + list(pr))[2])
+    h = np.hypot(*(C[free, :2] - X0[:2]).T)
+    i, j = (free[k] for k in np.argsort(h)[:2])
+    return i, j
 
 
 SOLUTIONS = {
     "check_ppi_image": _ppi_image,
     "check_radius_change": _radius_change,
     "check_trilaterate": _trilaterate,
-    "check_best_pair": _best_pair,
+    "check_steep_pair": _steep_pair,
 }
 
 MUTANTS = {
@@ -90,10 +93,10 @@ MUTANTS = {
         "swapped": lambda C, r: _trilaterate(C, r)[::-1],
         "one root": lambda C, r: (_trilaterate(C, r)[1], _trilaterate(C, r)[1]),
     },
-    "check_best_pair": {
+    "check_steep_pair": {
         **{
-            k: (lambda C, X0, tri, k=k: _best_pair(C, X0, tri, k))
-            for k in ("largest", "plan", "spread", "3-D trace")
+            k: (lambda C, X0, tri, k=k: _steep_pair(C, X0, tri, k))
+            for k in ("spread", "plan", "far from the three", "trial")
         },
         "the stand-in": best_pair_library,
     },

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.stats import chi2
 
-from orientviz.exercises.lesson15 import expected_rms_library
+from orientviz.exercises.lesson15 import expected_rms_library, residual_pattern_library
 
 
 def _pattern(xy, v):
@@ -58,6 +58,7 @@ SOLUTIONS = {
 
 MUTANTS = {
     "check_residual_pattern": {
+        "the stand-in": residual_pattern_library,
         "rotation sign": lambda xy, v: (lambda t, s, r: (t, s, -r))(*_pattern(xy, v)),
         "swapped": lambda xy, v: (lambda t, s, r: (t, r, s))(*_pattern(xy, v)),
         "x only": lambda xy, v: (

@@ -35,30 +35,27 @@ def _by_hand():
     return ["g02_004", "g04_006"]
 
 
-def _best_candidate(Q, candidates, sigma):
-    worst = []
-    for j in candidates:
-        idx = [3 * j, 3 * j + 1, 3 * j + 2]
-        Qn = _control_update(Q, idx, [sigma] * 3)
-        sz = np.sqrt(np.diag(Qn)[2::3])
-        worst.append(np.delete(sz, j).max())
-    return candidates[int(np.argmin(worst))]
-
-
-def _best_by(score):
-    def fn(Q, candidates, sigma):
-        vals = []
-        for j in candidates:
-            idx = [3 * j, 3 * j + 1, 3 * j + 2]
-            sz = np.sqrt(np.diag(_control_update(Q, idx, [sigma] * 3))[2::3])
-            vals.append(score(np.delete(sz, j)))
-        return candidates[int(np.argmin(vals))]
-
-    return fn
+def _after_worst(Q, sigma, mistake=None):
+    sz = np.sqrt(np.diag(Q)[2::3])
+    j = int(np.argmax(sz))
+    Qn = _control_update(Q, [3 * j, 3 * j + 1, 3 * j + 2], [sigma] * 3)
+    after = np.sqrt(np.diag(Qn)[2::3])
+    others = np.delete(np.arange(len(sz)), j)
+    if mistake == "second before":
+        k = int(others[np.argmax(sz[others])])
+    elif mistake == "itself":
+        return j, after[j]
+    else:
+        k = int(others[np.argmax(after[others])])
+    if mistake == "variance":
+        return k, after[k] ** 2
+    if mistake == "before":
+        return k, sz[k]
+    return k, after[k]
 
 
 SOLUTIONS = {
-    "check_best_candidate": _best_candidate,
+    "check_after_worst": _after_worst,
     "check_control_update": _control_update,
     "check_largest_scale": _largest_scale,
     "check_by_hand": _by_hand,
@@ -74,16 +71,9 @@ def _update_with(inner, sign=-1.0):
 
 
 MUTANTS = {
-    "check_best_candidate": {
-        "where σ_Z is largest": lambda Q, c, s: c[int(np.argmax(np.sqrt(np.diag(Q)[2::3])[c]))],
-        "the first candidate": lambda Q, c, s: c[0],
-        "the mean σ_Z instead of the largest": _best_by(np.mean),
-        "RMS σ_Z of all points": lambda Q, c, s: min(
-            c,
-            key=lambda j: np.sqrt(
-                np.mean(np.diag(_control_update(Q, [3 * j, 3 * j + 1, 3 * j + 2], [s] * 3))[2::3])
-            ),
-        ),
+    "check_after_worst": {
+        m: (lambda Q, sg, m=m: _after_worst(Q, sg, m))
+        for m in ("second before", "itself", "variance", "before")
     },
     "check_control_update": {
         "P instead of P⁻¹": _update_with(lambda s: np.diag(1 / s**2)),

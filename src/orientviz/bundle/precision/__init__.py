@@ -5,11 +5,20 @@
   (:func:`banded_selected_inverse` for a band), redundancy numbers and normalised
   residuals;
 * :mod:`._precision_ap` — the same with a border of additional parameters;
+* :mod:`._band` — :class:`BandSolver`: solves with a band factor and many right-hand
+  sides (the border S⁻¹E) by products on views of the factor;
 * :mod:`._reliability` — internal and external reliability per ray
   (:func:`ray_reliability` → :class:`RayReliability`).
 """
 
+from ._band import BandSolver
 from ._precision import banded_selected_inverse, bundle_precision
 from ._reliability import RayReliability, ray_reliability
 
-__all__ = ["banded_selected_inverse", "bundle_precision", "RayReliability", "ray_reliability"]
+__all__ = [
+    "BandSolver",
+    "banded_selected_inverse",
+    "bundle_precision",
+    "RayReliability",
+    "ray_reliability",
+]

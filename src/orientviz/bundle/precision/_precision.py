@@ -47,7 +47,18 @@ from ._precision_ap import banded_border, border_inverse, point_terms
 F64 = NDArray[np.float64]
 
 
-def banded_selected_inverse(cb: F64, nb: int = 96) -> F64:
+def _strided(flat: F64, start: int, shape: tuple[int, int], row_stride: int) -> F64:
+    """A read-only (rows, cols) view of ``flat`` from element ``start``: rows step by
+    ``row_stride`` elements, columns by one (what BLAS reads in place)."""
+    e = flat.itemsize
+    return np.lib.stride_tricks.as_strided(
+        flat[start:], shape=shape, strides=(row_stride * e, e), writeable=False
+    )
+
+
+def banded_selected_inverse(
+    cb: F64, nb: int = 96, window: int = 12, at: tuple[NDArray, NDArray] | None = None
+) -> F64:
     """Entries of S⁻¹ inside the band, from the banded Cholesky factor of S.
 
     Parameters
@@ -57,67 +68,83 @@ def banded_selected_inverse(cb: F64, nb: int = 96) -> F64:
         lower=True)``: ``cb[d, j] = L[j + d, j]``.
     nb : int
         Block size of the recursion.
+    window : int
+        Block rows per position of the sliding window (below).
+    at : (rows, cols) of int arrays (broadcast together), optional
+        Only these entries (inside the band, in the factor's order) are wanted: returned
+        in their broadcast shape, read from the window as the recursion passes them (the band itself
+        is not stored).
 
     Returns
     -------
-    ndarray, shape (n, kd + 1)
-        ``Zb[i, d] = (S⁻¹)[i, i + d]`` (upper band by rows; zero beyond n).
+    ndarray, shape (n, kd + 1) or the shape of ``at``
+        ``Zb[i, d] = (S⁻¹)[i, i + d]`` (upper band by rows; zero beyond n), or
+        ``(S⁻¹)[rows, cols]``.
+
+    Notes
+    -----
+    No block is copied before BLAS reads it: L is copied once into band storage with
+    ``nb`` zero rows below each column (column stride kd + 1 + nb), so that L_BIᵀ and
+    L_IIᵀ of every block row are strided views (row stride kd + nb, unit column stride),
+    the zero rows standing for the entries beyond the band and above the diagonal; Z
+    lives in a square window that slides up the diagonal of one buffer, so that the Z_BB
+    a block row reads is the part its predecessor wrote; every ``window`` block rows the
+    window is moved back to the buffer's end (one copy of Z_BB).
     """
-    kd = cb.shape[0] - 1
-    n = cb.shape[1]
-    Zb = np.zeros((n, kd + 1))
-    # L as skewed views of the band storage padded with nb zero rows on both sides:
-    # element (r, c) of a block of L is cbp[pad + row − col, col], an affine address
-    pad = nb
-    cbp = np.zeros((kd + 1 + 2 * pad, n))
-    cbp[pad : pad + kd + 1] = cb
-    s0, s1 = cbp.strides
-
-    def L_block(r0: int, r1: int, c0: int, c1: int) -> F64:
-        start = (pad + r0 - c0) * s0 + c0 * s1
-        view = np.lib.stride_tricks.as_strided(
-            cbp[start // s0 :].reshape(-1)[(start % s0) // cbp.itemsize :],
-            shape=(r1 - r0, c1 - c0),
-            strides=(s0, s1 - s0),
-            writeable=False,
-        )
-        return view
-
-    # Z over the rows/columns [i0, b1) of the current block row and its band, kept dense
-    # (with kd + 1 zero columns on the right, so that the band rows are a strided view);
-    # the next block row (above) finds its Z_BB as the leading part of this window.
-    # Two buffers take turns (the extra columns stay zero: they are never written).
-    size = nb + kd
-    bufs = [np.zeros((size, size + kd + 1)), np.zeros((size, size + kd + 1))]
-    win = bufs[1][:0, :0]
-    for k, i0 in enumerate(reversed(range(0, n, nb))):
+    kd, n = cb.shape[0] - 1, cb.shape[1]
+    nb = max(1, min(nb, n))
+    C = kd + 1 + nb  # column stride of the padded factor
+    pad = np.zeros((n + 1, C))  # a leading zero column: L_IIᵀ of the first block reads it
+    pad[1:, : kd + 1] = cb.T
+    flat = pad.reshape(-1)
+    T = max(1, window) * nb + kd + nb  # the window buffer's size
+    buf = np.zeros((T, T + kd + 1))
+    W = buf.shape[1]
+    bflat = buf.reshape(-1)
+    off = max(n - T, 0)  # buffer index = global index − off
+    if at is None:
+        Zb = np.empty((n, kd + 1))
+    else:  # the wanted entries by their smaller index, i.e. by the block row that has them
+        at = np.broadcast_arrays(*(np.asarray(a, np.int64) for a in at))
+        r, c = (a.reshape(-1) for a in at)
+        r, c = np.minimum(r, c), np.maximum(r, c)
+        if np.any(c - r > kd):
+            raise ValueError("banded_selected_inverse: an entry asked for lies outside the band")
+        order = np.argsort(r, kind="stable")
+        cut = np.searchsorted(r[order], np.arange(0, n + nb, nb))
+        out = np.empty(r.size)
+    for k, i0 in reversed(list(enumerate(range(0, n, nb)))):
         i1 = min(i0 + nb, n)
-        b1 = min(i1 - 1 + kd, n - 1) + 1
+        b1 = min(i1 + kd, n)
         ni, nbb = i1 - i0, b1 - i1
-        # L_II (lower triangular; entries above the diagonal or beyond the band read
-        # the zero padding) and L_BI
-        LII = np.tril(L_block(i0, i1, i0, i1))
-        LBI = L_block(i1, b1, i0, i1)
-        LIIinv = scipy.linalg.solve_triangular(LII, np.eye(ni), lower=True)
-        w = ni + nbb
-        buf = bufs[k % 2]
-        new = buf[:w, : w + kd + 1]
+        if i0 < off:  # move the window (its Z_BB) back to the buffer's end
+            new = max(b1 - T, 0)
+            s, t = i1 - off, i1 - new
+            buf[t : t + nbb, t : t + nbb] = buf[s : s + nbb, s : s + nbb].copy()
+            off = new
+        q = i0 - off
+        # L_IIᵀ (upper triangular) starts at L[i0, i0]: element (j + 1)·C + d is L[j + d, j]
+        LIIt = _strided(flat, (i0 + 1) * C, (ni, ni), C - 1)
+        LIIinv = scipy.linalg.solve_triangular(
+            LIIt, np.eye(ni), lower=False, trans="T", check_finite=False
+        )  # L_II⁻¹ = (L_IIᵀ)⁻ᵀ
         if nbb:
-            ZBB = win[:nbb, :nbb]
-            ZIB = -LIIinv.T @ (LBI.T @ ZBB)
-            new[ni:w, ni:w] = ZBB
-            new[:ni, ni:w] = ZIB
-            new[ni:w, :ni] = ZIB.T
-            new[:ni, :ni] = LIIinv.T @ (LIIinv - LBI.T @ ZIB.T)
+            LBIt = _strided(flat, (i0 + 1) * C + ni, (ni, nbb), C - 1)  # L_BIᵀ
+            ZBB = buf[q + ni : q + ni + nbb, q + ni : q + ni + nbb]
+            ZIB = LIIinv.T @ (LBIt @ ZBB)
+            np.negative(ZIB, out=ZIB)
+            buf[q : q + ni, q + ni : q + ni + nbb] = ZIB
+            buf[q + ni : q + ni + nbb, q : q + ni] = ZIB.T
+            buf[q : q + ni, q : q + ni] = LIIinv.T @ (LIIinv - LBIt @ ZIB.T)
         else:
-            new[:ni, :ni] = LIIinv.T @ LIIinv
-        win = new
-        buf[:ni, w : ni + kd + 1] = 0.0  # read by the band view below (stale otherwise)
-        st0, st1 = buf.strides
-        Zb[i0:i1] = np.lib.stride_tricks.as_strided(
-            buf, shape=(ni, kd + 1), strides=(st0 + st1, st1)
-        )
-    return Zb
+            buf[q : q + ni, q : q + ni] = LIIinv.T @ LIIinv
+        if at is None:  # the band rows i0 … i1 − 1: Z[i, i + d] at buffer (q + r, q + r + d);
+            # beyond b1 only for the last rows (b1 = n), written first, into the buffer's zeros
+            Zb[i0:i1] = _strided(bflat, q * W + q, (ni, kd + 1), W + 1)
+        else:  # the wanted entries of these rows (their columns lie in [i0, b1))
+            sel = order[cut[k] : cut[k + 1]]
+            out[sel] = buf[r[sel] - off, c[sel] - off]
+    return Zb if at is None else out.reshape(np.shape(at[0]))
 
 
 class ReducedInverse:
@@ -162,12 +189,10 @@ class ReducedInverse:
         if fac is None or fac.kind != "banded":
             fac = factor_reduced(st, blocks)
         self._fac = fac
-        Zb = banded_selected_inverse(fac.data, nb)
         p = st.pos_img
         rows = 6 * p[st.block_i][:, None, None] + r6[None, :, None]
         cols = 6 * p[st.block_k][:, None, None] + r6[None, None, :]
-        lo, hi = np.minimum(rows, cols), np.maximum(rows, cols)
-        self.blocks = Zb[lo, hi - lo]
+        self.blocks = banded_selected_inverse(fac.data, nb, at=(rows, cols))
 
     def border(self, E) -> tuple[F64, F64, NDArray[np.int64]]:
         """S⁻¹E and Eᵀ S⁻¹ E for a border E (6m, q): ``(Y3, EtY, row)``.
@@ -295,8 +320,8 @@ def _fill_precision(res, prob, st, rw, Je, Jp, lin) -> None:
         Y3, EtY, row = inverse.border(E)  # S⁻¹E by the same factor (BLAS 3)
         Y3 = Y3[row]  # image order
         Faa = np.linalg.inv(F - EtY)  # Q_aa (of the whole border)
-        Zblk = Zblk + Y3[S.block_i] @ Faa @ Y3[S.block_k].transpose(0, 2, 1)
         Qca = -(Y3 @ Faa)  # (m, 6, nb)
+        Zblk = Zblk - Qca[S.block_i] @ Y3[S.block_k].transpose(0, 2, 1)  # + Y Q_aa Yᵀ
     Qcc_diag = Zblk[S.diag_block]
     # point cofactors: Vinv + Σ_ab T_aᵀ Q(i_a, i_b) T_b
     oi, ocol = prob.obs.image, prob.obs.column

@@ -10,10 +10,9 @@ the reduced system is bordered ::
 This module supplies the border's part:
 
 * :func:`border_inverse` — Y, Q_aa, Q_ca from two banded triangular solves with all q
-  columns at once (BLAS level 3, :func:`~orientviz.bundle.problem.band_forward_solve`
-  and :func:`~orientviz.bundle.problem.band_backward_solve`), and the correction
-  Y Q_aa Yᵀ of the 6 × 6 blocks of Q_cc that the precision needs (one product per image
-  row of blocks, never the dense 6m × 6m matrix);
+  columns at once (BLAS level 3 on views of the factor, :class:`._band.BandSolver`), and
+  the correction Y Q_aa Yᵀ of the 6 × 6 blocks of Q_cc that the precision needs (one
+  product per image row of blocks, never the dense 6m × 6m matrix);
 * :func:`point_terms` — the terms of the points and of the image rays. A point's
   coupling with the parameters (``H V⁻¹`` per (point, group) pair) is non-zero only in
   the columns of the groups its rays lie in, a ray's design only in its own group's
@@ -34,7 +33,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..problem._ap_normal import BorderE
-from ..problem._border import band_backward_solve, band_forward_solve
+from ._band import BandSolver
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -99,11 +98,12 @@ def banded_border(L: F64, perm: I64, E, pos: I64) -> tuple[F64, F64]:
         Eᵀ S⁻¹ E = ZᵀZ with Z = L⁻¹ E (symmetric by construction).
     """
     Ep = E.permuted(pos, np.float64) if isinstance(E, BorderE) else E[perm]
-    Z = band_forward_solve(L, Ep)
+    band = BandSolver(L)
+    Z = band.forward(Ep)
     del Ep
     C = scipy.linalg.blas.dsyrk(1.0, Z.T)  # upper triangle of ZᵀZ
     EtY = np.triu(C) + np.triu(C, 1).T
-    return band_backward_solve(L, Z), EtY
+    return band.backward(Z), EtY
 
 
 @dataclass
@@ -113,20 +113,28 @@ class RayGroupPairs:
     The rays of an image in their own group are handled in the per-image padded layout
     of :class:`~orientviz.bundle.problem._ap_normal.APStructure` (``pad``, (m, L)): ``slot`` is
     each ray's place in it (i·L + column), ``sum_own`` sums the padded slots by the own
-    (point, group) pair of their ray. The rays whose point also lies in *other* groups
-    (``APStructure.e_obs``, ``e_pg``) are summed by ``sum_e_ray`` (into all n rays) and
-    ``sum_e_pg`` (into the pairs); ``sum_f`` sums the (point, group) pairs of one point
-    (``APStructure.f_1``, ``f_2``) by ``f_1``; ``by_group``/``group_starts``: the rays
-    ordered by group.
+    (point, group) pair of their ray. The (ray, pair of another group of its point)
+    products (``APStructure.e_obs``, ``e_pg``) are summed by ray and by pair in
+    :func:`_pair_sums`, from ``by_ray``/``ray_starts`` and ``by_pg``/``pg_starts`` (the
+    products in row order and where each row's begin); ``sum_f`` sums the (point, group)
+    pairs of one point (``APStructure.f_1``, ``f_2``) by ``f_1``; ``by_group``/
+    ``group_starts``: the rays ordered by group.
     """
 
     slot: I64
     sum_own: sp.csr_matrix
-    sum_e_ray: sp.csr_matrix
-    sum_e_pg: sp.csr_matrix
+    by_ray: I64
+    ray_starts: I64
+    by_pg: I64
+    pg_starts: I64
     sum_f: sp.csr_matrix
     by_group: I64
     group_starts: I64
+
+
+#: Products of (ray, other pair) handled at once by :func:`_pair_sums` (about 1–2 MB
+#: per temporary): the gathers and products stay in cache and reuse their memory.
+PAIR_CHUNK: int = 8192
 
 
 def _summation(rows: I64, n_rows: int) -> sp.csr_matrix:
@@ -134,6 +142,42 @@ def _summation(rows: I64, n_rows: int) -> sp.csr_matrix:
     return sp.csr_matrix(
         (np.ones(rows.size), (rows, np.arange(rows.size))), shape=(n_rows, rows.size)
     )
+
+
+def _row_order(rows: I64, n_rows: int) -> tuple[I64, I64]:
+    """The entries ordered by ``rows`` (stable: ascending entry within a row) and where
+    each row's entries begin (``n_rows + 1``): the column order of :func:`_summation`'s
+    matrix, whose rows add their entries in that order."""
+    order = np.argsort(rows, kind="stable")
+    starts = np.zeros(n_rows + 1, np.int64)
+    np.cumsum(np.bincount(rows, minlength=n_rows), out=starts[1:])
+    return order, starts
+
+
+def _pair_sums(out: F64, order: I64, starts: I64, product) -> None:
+    """``out[r] += Σ product(e)`` over the entries e of each row r, in chunks of about
+    :data:`PAIR_CHUNK` entries (whole rows).
+
+    ``product(entries)`` returns the entries' terms (len, …) with ``out``'s trailing
+    shape. Each row adds its terms from zero in ascending entry order (a sparse 0/1
+    matrix's product, as :func:`_summation`'s over all entries at once: the same sums).
+    """
+    n_rows = starts.size - 1
+    width = int(np.prod(out.shape[1:]))
+    flat = out.reshape(n_rows, width)
+    r0 = 0
+    while r0 < n_rows:
+        r1 = int(np.searchsorted(starts, starts[r0] + PAIR_CHUNK, side="right")) - 1
+        r1 = min(max(r1, r0 + 1), n_rows)
+        a, b = starts[r0], starts[r1]
+        if b > a:
+            local = sp.csr_matrix(
+                (np.ones(b - a), np.arange(b - a), starts[r0 : r1 + 1] - a), shape=(r1 - r0, b - a)
+            )
+            flat[r0:r1] += local @ product(order[a:b]).reshape(b - a, width)
+        else:
+            flat[r0:r1] += 0.0  # as a product of empty rows adds (−0.0 becomes 0.0)
+        r0 = r1
 
 
 def ray_group_pairs(prob) -> RayGroupPairs:
@@ -154,11 +198,15 @@ def ray_group_pairs(prob) -> RayGroupPairs:
     go = prob.ap.group[prob.obs.image]
     by_group = np.argsort(go, kind="stable")
     group_starts = np.searchsorted(go[by_group], np.arange(prob.ap.G + 1))
+    by_ray, ray_starts = _row_order(A.e_obs, n)
+    by_pg, pg_starts = _row_order(A.e_pg, npg)
     out = RayGroupPairs(
         slot[:n],
         sum_own,
-        _summation(A.e_obs, n),
-        _summation(A.e_pg, npg),
+        by_ray,
+        ray_starts,
+        by_pg,
+        pg_starts,
         _summation(A.f_1, npg),
         by_group,
         group_starts,
@@ -194,7 +242,7 @@ def point_terms(prob, ne, Qaa: F64, Qca3: F64, Qcp: F64, Jew: F64, Jpw: F64):
     A = prob.ap.structure
     R = ray_group_pairs(prob)
     G, k, m = prob.ap.G, prob.ap.k, prob.m
-    n, L = prob.obs.image.size, A.pad.shape[1]
+    L = A.pad.shape[1]
     Vinv, T = ne.Vinv, ne.T
     HV = ne.ap.H @ Vinv[A.pg_pt]  # (npg, k, 3): H V⁻¹, the point's coupling with group g
     Qca4 = Qca3.reshape(m, 6, G, k)
@@ -208,18 +256,23 @@ def point_terms(prob, ne, Qaa: F64, Qca3: F64, Qcp: F64, Jew: F64, Jpw: F64):
     Tp = np.concatenate([T, np.zeros((1, 6, 3))])[A.pad]  # (m, L, 6, 3)
     # Q_cp(i_a, j) −= Σ_e Q_ca(i_a, g_e) HV_e: own group ...
     t = np.matmul(Qca_own[:, None], HVp).reshape(m * L, 6, 3)[R.slot]
-    # ... and the other groups of the ray's point
-    Qg = Qca4[oi[A.e_obs], :, A.pg_grp[A.e_pg], :]  # (pairs, 6, k)
-    if A.e_obs.size:
-        t += (R.sum_e_ray @ (Qg @ HV[A.e_pg]).reshape(A.e_obs.size, -1)).reshape(n, 6, 3)
+    # ... and the other groups of the ray's point: Q_ca(i_a, g_e) per (ray, pair) from
+    # the (image, group) blocks of Q_ca, (m·G, 6, k)
+    Qig = np.ascontiguousarray(Qca4.transpose(0, 2, 1, 3)).reshape(m * G, 6, k)
+    e_obs, e_pg = A.e_obs, A.e_pg
+    e_rows = oi[e_obs] * G + A.pg_grp[e_pg]
+    if e_obs.size:
+        _pair_sums(t, R.by_ray, R.ray_starts, lambda e: Qig[e_rows[e]] @ HV[e_pg[e]])
     vo = prob.obs.var_rays  # rays of point unknowns in point order (a slice when they come first)
     Qcp[vo] -= t[vo]
     # Q_ap,e = −(Σ_b Q_ca(i_b, g_e)ᵀ T_b + Σ_e' Q_aa(g_e, g_e') HV_e'): own group ...
     t = np.matmul(Qca_own.transpose(0, 2, 1)[:, None], Tp).reshape(m * L, k * 3)
     Qap = R.sum_own @ t
     # ... and the pairs of other groups
-    if A.e_obs.size:
-        Qap += R.sum_e_pg @ (Qg.transpose(0, 2, 1) @ T[A.e_obs]).reshape(A.e_obs.size, -1)
+    if e_obs.size:
+        _pair_sums(
+            Qap, R.by_pg, R.pg_starts, lambda e: Qig[e_rows[e]].transpose(0, 2, 1) @ T[e_obs[e]]
+        )
     Qap = Qap.reshape(-1, k, 3)
     # the second sum: one product per pair of groups (g_e, g_e') over all its pairs
     # (transposed: (HV_e'ᵀ Q_aa(g_e', g_e)) (3 × k) per pair, all pairs of (g1, g2) in one

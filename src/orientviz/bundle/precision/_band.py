@@ -1,0 +1,86 @@
+"""Solves with a banded Cholesky factor by BLAS on views of the factor (many columns).
+
+:class:`BandSolver` keeps a factor L (S = L Lᵀ, LAPACK's lower band storage
+``cb[d, j] = L[j + d, j]``) once in band storage with ``nb`` zero rows below each column
+(column stride kd + 1 + nb). A block L[r0:r1, c0:c1] within the band is then a strided
+view (rows step one element, columns kd + nb elements) that matrix products read in
+place, the zero rows standing for the entries beyond the band and above the diagonal.
+S⁻¹B is the forward solve by row blocks of ``nb`` rows,
+
+    X_I = L_II⁻¹ (B_I − L_I,[I−kd, I) X_[I−kd, I)),
+
+then the backward solve X_I = L_II⁻ᵀ (X_I − L_[I, I+kd),Iᵀ X_[I, I+kd)): per block one
+product with all columns of B (BLAS level 3) and one small triangular solve.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import NDArray
+
+F64 = NDArray[np.float64]
+
+
+class BandSolver:
+    """Solves S X = B with the banded Cholesky factor of S.
+
+    Parameters
+    ----------
+    cb : ndarray, shape (kd + 1, n)
+        Lower banded Cholesky factor (``scipy.linalg.cholesky_banded(..., lower=True)``).
+    nb : int
+        Rows per block of the solves.
+    """
+
+    def __init__(self, cb: F64, nb: int = 64) -> None:
+        kd, n = cb.shape[0] - 1, cb.shape[1]
+        self.kd, self.n, self.nb = kd, n, max(1, min(nb, n))
+        self.C = C = kd + 1 + self.nb
+        pad = np.zeros((n + 1, C))  # a leading zero column (read above L[0, 0])
+        pad[1:, : kd + 1] = cb.T
+        self._flat = pad.reshape(-1)
+        self._diag = [
+            np.array(self._L(i0, min(i0 + self.nb, n), i0, min(i0 + self.nb, n)))
+            for i0 in range(0, n, self.nb)
+        ]
+
+    def _L(self, r0: int, r1: int, c0: int, c1: int) -> F64:
+        """L[r0:r1, c0:c1] (inside the band, or its zeros) as a read-only view."""
+        e = self._flat.itemsize
+        start = (c0 + 1) * self.C + (r0 - c0)
+        return np.lib.stride_tricks.as_strided(
+            self._flat[start:], shape=(r1 - r0, c1 - c0), strides=(e, (self.C - 1) * e),
+            writeable=False,
+        )  # fmt: skip
+
+    def forward(self, B: F64) -> F64:
+        """L⁻¹ B for B (n, k) (rows in the factor's order), a new C-ordered array."""
+        kd, n, nb = self.kd, self.n, self.nb
+        X = np.array(B, dtype=float, order="C").reshape(n, -1)
+        for k, i0 in enumerate(range(0, n, nb)):
+            i1, c0 = min(i0 + nb, n), max(i0 - kd, 0)
+            if i0 > c0:
+                X[i0:i1] -= self._L(i0, i1, c0, i0) @ X[c0:i0]
+            X[i0:i1] = scipy.linalg.solve_triangular(
+                self._diag[k], X[i0:i1], lower=True, check_finite=False
+            )
+        return X
+
+    def backward(self, Y: F64) -> F64:
+        """L⁻ᵀ Y for Y (n, k), in place when Y is C-ordered float (returned)."""
+        kd, n, nb = self.kd, self.n, self.nb
+        X = np.asarray(Y, dtype=float, order="C").reshape(n, -1)
+        for k in reversed(range(len(self._diag))):
+            i0 = k * nb
+            i1, b1 = min(i0 + nb, n), min(i0 + nb + kd, n)
+            if b1 > i1:
+                X[i0:i1] -= self._L(i1, b1, i0, i1).T @ X[i1:b1]
+            X[i0:i1] = scipy.linalg.solve_triangular(
+                self._diag[k], X[i0:i1], lower=True, trans="T", check_finite=False
+            )
+        return X
+
+    def solve(self, B: F64) -> F64:
+        """S⁻¹ B for B (n,) or (n, k) (rows in the factor's order)."""
+        return self.backward(self.forward(B)).reshape(np.shape(B))
