@@ -80,7 +80,7 @@ def _solve(N, b: F64, names: list[str], context: str, regular: bool = False) -> 
     if info == 0:
         x, info = scipy.linalg.lapack.dpotrs(c, b, lower=0)
         # guard against near-singular matrices Cholesky happens to factor
-        if info == 0 and np.all(np.isfinite(x)):
+        if info == 0 and np.isfinite(x).all():
             if regular:
                 return x, False
             ok, by_bound = _well_conditioned(N, c)
@@ -106,7 +106,7 @@ class _DenseProblem:
         f, J = self.equations(x)
         r = self.l - f
         cost = float(r @ (self.p * r))
-        return Evaluation(cost, bool(np.all(np.isfinite(f))), {"f": f, "J": J, "r": r})
+        return Evaluation(cost, bool(np.isfinite(f).all()), {"f": f, "J": J, "r": r})
 
     def solve(self, x: F64, ev: Evaluation, lam: float, iteration: int) -> Step:
         d = ev.data

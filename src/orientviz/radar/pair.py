@@ -282,8 +282,12 @@ def relative_equations(image1: RadarImage, approx2: RadarImage, free: Sequence[s
     k = len(idx)
     seq = approx2.sequence
     full0 = approx2.vector()
-    rows = np.arange(n)
-    cols = k + 3 * rows[:, None] + np.arange(3)[None, :]
+    # row of image coordinate c of point i: 2i + c (image 1), 2n + 2i + c (image 2); the
+    # point's columns k + 3i … k + 3i + 2: index arrays shaped like the Jacobians' blocks
+    rows1 = (2 * np.arange(n)[:, None] + np.arange(2)[None, :])[:, :, None]  # (n, 2, 1)
+    rows2 = rows1 + 2 * n
+    cols = (k + 3 * np.arange(n)[:, None] + np.arange(3)[None, :])[:, None, :]  # (n, 1, 3)
+    own = np.arange(k)[None, None, :]
 
     def equations(u: F64):
         p = full0.copy()
@@ -292,10 +296,9 @@ def relative_equations(image1: RadarImage, approx2: RadarImage, free: Sequence[s
         xa, _, Ja = project_with_jacobian(X, image1, image_terms=False)
         xb, Jib, Jb = project_with_jacobian(X, RadarImage.from_vector(p, seq))
         J = np.zeros((4 * n, k + 3 * n))
-        for c in range(2):
-            J[2 * rows[:, None] + c, cols] = Ja[:, c, :]
-            J[2 * n + 2 * rows + c, :k] = Jib[:, c, idx]
-            J[2 * n + 2 * rows[:, None] + c, cols] = Jb[:, c, :]
+        J[rows1, cols] = Ja
+        J[rows2, own] = Jib[:, :, idx]
+        J[rows2, cols] = Jb
         return np.concatenate([xa.reshape(-1), xb.reshape(-1)]), J
 
     return equations

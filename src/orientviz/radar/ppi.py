@@ -36,6 +36,7 @@ direction of the antenna, the paper's α0 ("Verkantung") of the calibration.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -89,7 +90,7 @@ class RadarImage:
     def __post_init__(self) -> None:
         check_sequence(self.sequence)
         v = self.vector()
-        if not np.all(np.isfinite(v)):
+        if not np.isfinite(v).all():
             raise InputError("expected finite radar image parameters, got NaN or inf")
         if self.m <= 0:
             raise InputError(f"expected an image scale m > 0, got {self.m}")
@@ -112,13 +113,29 @@ class RadarImage:
         """A copy with some parameters changed."""
         return replace(self, **changes)
 
-    @property
+    @cached_property
     def R(self) -> F64:
-        """Rotation matrix (image → object), columns i, j, k; k is the antenna axis."""
+        """Rotation matrix (image → object), columns i, j, k; k is the antenna axis
+        (computed once per image, read-only)."""
         order = SEQUENCES[check_sequence(self.sequence)]
         ang = {0: self.omega, 1: self.phi, 2: self.kappa}
         E = [_elem(a, np.cos(ang[a]), np.sin(ang[a])) for a in order]
-        return E[0] @ E[1] @ E[2]
+        return _read_only(E[0] @ E[1] @ E[2])
+
+    @cached_property
+    def _rotation_derivatives(self) -> tuple[F64, F64, F64]:
+        """∂R/∂φ, ∂R/∂ω, ∂R/∂κ (same convention as :mod:`orientviz.rotation`; computed once
+        per image, read-only)."""
+        ang = {0: self.omega, 1: self.phi, 2: self.kappa}
+        order = SEQUENCES[check_sequence(self.sequence)]
+        cs = {a: (np.cos(ang[a]), np.sin(ang[a])) for a in order}
+        E = [_elem(a, *cs[a]) for a in order]
+        out = {}
+        for pos, a in enumerate(order):
+            f = list(E)
+            f[pos] = _delem(a, *cs[a])
+            out[a] = _read_only(f[0] @ f[1] @ f[2])
+        return out[1], out[0], out[2]
 
     @property
     def axis(self) -> F64:
@@ -133,7 +150,7 @@ def check_points(points: ArrayLike, name: str = "points") -> F64:
         P = P[None, :]
     if P.ndim != 2 or P.shape[1] != 3:
         raise InputError(f"expected {name} of shape (n, 3), got {P.shape}")
-    if not np.all(np.isfinite(P)):
+    if not np.isfinite(P).all():
         raise InputError(f"expected finite {name}, got NaN or inf")
     return P
 
@@ -145,7 +162,7 @@ def check_image_points(xy: ArrayLike, name: str = "image points") -> F64:
         P = P[None, :]
     if P.ndim != 2 or P.shape[1] != 2:
         raise InputError(f"expected {name} of shape (n, 2), got {P.shape}")
-    if not np.all(np.isfinite(P)):
+    if not np.isfinite(P).all():
         raise InputError(f"expected finite {name}, got NaN or inf")
     return P
 
@@ -225,12 +242,12 @@ def project_with_jacobian(
     a, b, c = u[:, 0], u[:, 1], u[:, 2]
     rho2 = a * a + b * b
     se2 = rho2 + c * c - image.h**2
-    if np.any(rho2 <= 0):
+    if (rho2 <= 0).any():
         raise InputError(
             f"points {np.flatnonzero(rho2 <= 0).tolist()} lie on the rotation axis: "
             "their azimuth is undefined"
         )
-    if np.any(se2 < 0):
+    if (se2 < 0).any():
         raise InputError(
             f"points {np.flatnonzero(se2 < 0).tolist()} are closer to the station than "
             f"h = {image.h:g} m: no image"
@@ -238,10 +255,12 @@ def project_with_jacobian(
     rho = np.sqrt(rho2)
     se = np.sqrt(se2)
     g = image.m * se / rho
-    xy = np.column_stack([image.x0 + g * a, image.y0 + g * b])
+    n = P.shape[0]
+    xy = np.empty((n, 2))
+    xy[:, 0] = image.x0 + g * a
+    xy[:, 1] = image.y0 + g * b
     if not jacobian:
         return xy, None, None
-    n = P.shape[0]
     se_safe = np.where(se > 0, se, np.inf)
     # derivatives of g = m s_e / ρ
     t = image.m * (image.h**2 - c * c) / (se_safe * rho2 * rho)
@@ -266,7 +285,7 @@ def project_with_jacobian(
     Ji[:, 0, 2], Ji[:, 1, 2] = a * g_h, b * g_h
     Ji[:, 0, 3], Ji[:, 1, 3] = a * g_m, b * g_m
     Ji[:, :, 4:7] = -J_points
-    for col, dR in zip((7, 8, 9), _rotation_derivatives(image)):
+    for col, dR in zip((7, 8, 9), image._rotation_derivatives):
         Ji[:, :, col] = np.einsum("nij,nj->ni", Ju, d @ dR)
     return xy, Ji, J_points
 
@@ -288,18 +307,9 @@ def _delem(axis: int, c: float, s: float) -> F64:
     return np.array([[-s, -c, 0.0], [c, -s, 0.0], [0.0, 0.0, 0.0]])
 
 
-def _rotation_derivatives(image: RadarImage) -> tuple[F64, F64, F64]:
-    """∂R/∂φ, ∂R/∂ω, ∂R/∂κ of one image (same convention as :mod:`orientviz.rotation`)."""
-    ang = {0: image.omega, 1: image.phi, 2: image.kappa}
-    order = SEQUENCES[check_sequence(image.sequence)]
-    cs = {a: (np.cos(ang[a]), np.sin(ang[a])) for a in order}
-    E = [_elem(a, *cs[a]) for a in order]
-    out = {}
-    for pos, a in enumerate(order):
-        f = list(E)
-        f[pos] = _delem(a, *cs[a])
-        out[a] = f[0] @ f[1] @ f[2]
-    return out[1], out[0], out[2]
+def _read_only(a: F64) -> F64:
+    a.flags.writeable = False
+    return a
 
 
 def image_vector(xy: ArrayLike, image: RadarImage) -> F64:
