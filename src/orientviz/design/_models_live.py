@@ -272,7 +272,10 @@ class LiveModels:
         if np.abs(u - v).max(initial=0) > self.kd:  # cannot be: models sharing a point are coupled
             raise NotDeterminableError("models sharing a point lie outside the band", parameters=[])
         sm = self._scale.reshape(n, 7)  # the Jacobi scale of each model's parameters
-        Z = banded_selected_inverse(self._cb, TAKAHASHI_BLOCK, at=(u, v))
+        # the whole band, then the blocks (asking for the 49 entries of every pair of
+        # models with at= reads them one by one: slower for this narrow band)
+        Zb = banded_selected_inverse(self._cb, TAKAHASHI_BLOCK)
+        Z = Zb[np.minimum(u, v), np.abs(u - v)]
         Z *= sm[pr.pair // n][:, :, None] * sm[pr.pair % n][:, None, :]  # (pairs of models, 7, 7)
         blk = g[a] @ Z[pr.inv] @ g[bb].transpose(0, 2, 1)  # (pairs of rows, 3, 3)
         Q = np.zeros((su.scalar.shape[0], 3, 3))
