@@ -109,7 +109,7 @@ def _latency(page, setter, values) -> float:
     return statistics.median(out)
 
 
-def worker(task: str, name: str | None, free: bool) -> dict:
+def worker(task: str, name: str | None, free: bool, solution: bool = True) -> dict:
     t0 = time.perf_counter()
     from playwright.sync_api import sync_playwright
 
@@ -120,7 +120,13 @@ def worker(task: str, name: str | None, free: bool) -> dict:
         content = resolve_content(name or "radar", opts, background=True)
     except TypeError:  # a tree from before the background solve
         content = resolve_content(name or "radar", opts)
-    app = ViewerApp(content, host="127.0.0.1", port=0, verbose=False)
+    try:  # as `orientviz view` starts it: a background solve waits for the first browser
+        from orientviz.viewer.background import FIRST_BROWSER_WAIT
+
+        wait = {"first_browser_wait": FIRST_BROWSER_WAIT}
+    except ImportError:  # a tree from before that wait
+        wait = {}
+    app = ViewerApp(content, host="127.0.0.1", port=0, verbose=False, **wait)
     ready, cpu = time.perf_counter() - t0, time.process_time()
     out = {"process_s": ready, "process_cpu_s": cpu}
     profile = tempfile.mkdtemp(prefix="orientviz-bench-browser-")
@@ -137,7 +143,7 @@ def worker(task: str, name: str | None, free: bool) -> dict:
             first, settled = _settle(page, t1)
             out.update(first_s=first, settled_s=settled, total_s=ready + settled)
             job = getattr(app, "background", None)
-            if job is not None:  # the solution replaces the start values: settled again
+            if job is not None and solution:  # the solution replaces the start values
                 job.wait(600)
                 out["solved_s"] = ready + _settle(page, t1)[1]
                 out["solved_cpu_s"] = time.process_time()
@@ -179,10 +185,14 @@ def main() -> None:
     ap.add_argument("--free", action="store_true")
     ap.add_argument("--tree", action="append", default=[])
     ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument(
+        "--no-solution", action="store_true",
+        help="open: stop after the first settled picture (no wait for a background solve)",
+    )  # fmt: skip
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.worker:
-        print(json.dumps(worker(a.task, a.name, a.free)))
+        print(json.dumps(worker(a.task, a.name, a.free, not a.no_solution)))
         return
     trees = a.tree or ["."]
     results: dict[str, list[dict]] = {t: [] for t in trees}
@@ -191,6 +201,7 @@ def main() -> None:
             env = dict(os.environ, PYTHONPATH=os.path.join(os.path.abspath(tree), "src"))
             cmd = [sys.executable, os.path.abspath(__file__), a.task]
             cmd += ([a.name] if a.name else []) + (["--free"] if a.free else []) + ["--worker"]
+            cmd += ["--no-solution"] if a.no_solution else []
             done = subprocess.run(
                 cmd, env=env, capture_output=True, text=True, cwd=tempfile.gettempdir()
             )

@@ -200,3 +200,34 @@ def test_a_hold_pauses_the_solve_at_its_next_iteration():
     free = BackgroundSolve(lambda callback: None, shown=1.0)
     free._progress("it", None)  # no hold: goes on at once
     assert free.iteration == "it"
+
+
+def test_orientviz_view_begins_the_solve_after_a_first_browser_has_had_its_picture():
+    """``first_browser_wait``: the solve begins when the hold of a browser that connected
+    meanwhile has passed, or after the wait if none comes."""
+    began = threading.Event()
+    order: list[str] = []
+
+    def solve(callback):
+        order.append("solve")
+        began.set()
+
+    job = BackgroundSolve(solve, shown=1.0)
+    job.start(lambda j: None, wait=60.0)
+    assert not began.wait(0.3)  # no browser yet: waiting
+    order.append("browser")
+    job.hold(0.2)  # a browser connects: its picture first
+    assert began.wait(30) and order == ["browser", "solve"]
+    assert job.wait(30)
+
+    alone = BackgroundSolve(solve, shown=1.0)  # nobody comes: it begins after the wait
+    began.clear()
+    alone.start(lambda j: None, wait=0.1)
+    assert began.wait(30) and alone.wait(30)
+
+    stopped = BackgroundSolve(solve, shown=1.0)  # stopping the viewer while it waits
+    began.clear()
+    stopped.start(lambda j: None, wait=60.0)
+    stopped.cancel()
+    stopped._thread.join(30)
+    assert not stopped._thread.is_alive() and not began.is_set()

@@ -144,3 +144,22 @@ def test_scene_frame_keeps_float32_precision():
     local = f.to_scene(P).astype(np.float32)
     np.testing.assert_allclose(local.astype(float) + f.origin, P, atol=1e-3)
     assert f.size == pytest.approx(2000.0)
+
+
+def test_ray_segment_distances_match_a_dense_search(rng):
+    o, d = rng.normal(size=3), rng.normal(size=3)
+    seg = rng.normal(size=(40, 2, 3)) * 2.0
+    seg[0] = [o - d, o - 3 * d]  # on the line behind the origin: distance |o - (o - d)|
+    seg[1] = [o + 2 * d + [0.0, 0.0, 0.5], o + 4 * d + [0.0, 0.0, 0.5]]  # parallel, 0.5 off
+    got = g.ray_segment_distances(o, d, seg)
+    s = np.linspace(0.0, 12.0, 1201)[:, None]
+    t = np.linspace(0.0, 1.0, 201)[:, None]
+    P = o + s * d
+    ref = np.array(
+        [np.linalg.norm(P[:, None] - (a + t * (b - a))[None], axis=2).min() for a, b in seg]
+    )
+    assert np.all(got <= ref + 1e-12)  # never above a point actually reached
+    np.testing.assert_allclose(got, ref, atol=0.01 * np.linalg.norm(d) + 0.02)
+    assert got[0] == pytest.approx(np.linalg.norm(d), rel=1e-12)
+    off = 0.5 * np.linalg.norm(np.cross(d, [0.0, 0.0, 1.0])) / np.linalg.norm(d)
+    assert got[1] == pytest.approx(off, rel=1e-9)  # the offset across the line

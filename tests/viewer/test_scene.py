@@ -1,5 +1,7 @@
 """Scene building on a real (browserless) viser server: names, positions, updates."""
 
+from types import SimpleNamespace
+
 import numpy as np
 
 import orientviz as ov
@@ -127,3 +129,35 @@ def test_large_blocks_batch_frustums_per_strip(server, block, monkeypatch):
     seg0 = np.asarray(sc.strip_frustums[0][0].points, dtype=float) + sc.geo.frame.origin
     np.testing.assert_allclose(seg0[0, 0], st.block.images.X0[0], atol=1e-3)
     np.testing.assert_array_equal(np.asarray(sc.strip_frustums[1][0].points), before1)
+
+    # a click into the scene selects the image whose frustum the clicked ray passes
+    clicked = []
+    sc.on_image_click = clicked.append
+    frame = sc.geo.frame
+    for k in (4, 0, 5, 3):
+        apex = frame.to_scene(st.block.images.X0[k])
+        eye = apex + np.array([30.0, -400.0, 250.0])  # looking at the apex from aside
+        sc.scene_clicked(SimpleNamespace(ray_origin=tuple(eye), ray_direction=tuple(apex - eye)))
+        # a ray that passes 15 % of the distance beside it (the background) selects nothing
+        aside = apex + 0.15 * np.linalg.norm(apex - eye) * np.array([1.0, 0.0, 0.0])
+        sc.scene_clicked(SimpleNamespace(ray_origin=tuple(eye), ray_direction=tuple(aside - eye)))
+    assert clicked == [4, 0, 5, 3]
+
+
+def test_a_role_without_points_gets_its_node_when_it_has_some(server, block):
+    block.points.role[block.points.role == 2] = 0  # no check points
+    sc = build(server, block)
+    assert "points/check" not in sc.nodes  # no empty node (the page would compile its shader)
+    assert server.scene.get_handle_by_name("/block/points/check") is None
+    sc.set_visible("points", False)
+    block = sc.geo.state.block
+    block.points.role[7] = 2  # a point becomes a check point
+    sc.update()
+    node = sc.nodes["points/check"]
+    np.testing.assert_allclose(
+        np.asarray(node.points, dtype=float) + sc.geo.frame.origin, block.points.xyz[[7]], atol=1e-3
+    )
+    assert not node.visible  # made while the points are hidden: hidden too
+    assert len(np.asarray(sc.nodes["points/tie"].points)) == np.count_nonzero(
+        block.points.role == 0
+    )

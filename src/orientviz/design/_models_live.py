@@ -10,7 +10,8 @@ from the models' normal equations linearised once at the design's geometry:
   ``independent_models`` sets them by default); control coordinates weighted with
   1/σ² (``points.sigma``);
 * the point part is diagonal (D) and eliminated: S = U − C D⁻¹ Cᵀ over the 7 parameters
-  of every model, ordered by reverse Cuthill-McKee and factored as a band;
+  of every model, formed by 7 × 7 blocks of pairs of models, ordered for the narrowest band
+  (reverse Cuthill-McKee or a numbering across the strips) and factored as a band;
 * Q_XX = D⁻¹ + Gᵀ S⁻¹ G (G = C D⁻¹) at each point's 3 × 3 block needs S⁻¹ only at pairs of
   models that share a point, which lie inside the band: the banded selected inverse
   (:func:`orientviz.bundle.precision.banded_selected_inverse`) gives them, so the base costs
@@ -272,7 +273,10 @@ class LiveModels:
         if np.abs(u - v).max(initial=0) > self.kd:  # cannot be: models sharing a point are coupled
             raise NotDeterminableError("models sharing a point lie outside the band", parameters=[])
         sm = self._scale.reshape(n, 7)  # the Jacobi scale of each model's parameters
-        Z = banded_selected_inverse(self._cb, TAKAHASHI_BLOCK, at=(u, v))
+        # the whole band, then the blocks (asking for the 49 entries of every pair of
+        # models with at= reads them one by one: slower for this narrow band)
+        Zb = banded_selected_inverse(self._cb, TAKAHASHI_BLOCK)
+        Z = Zb[np.minimum(u, v), np.abs(u - v)]
         Z *= sm[pr.pair // n][:, :, None] * sm[pr.pair % n][:, None, :]  # (pairs of models, 7, 7)
         blk = g[a] @ Z[pr.inv] @ g[bb].transpose(0, 2, 1)  # (pairs of rows, 3, 3)
         Q = np.zeros((su.scalar.shape[0], 3, 3))

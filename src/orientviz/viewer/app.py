@@ -26,6 +26,7 @@ from ..block import Block
 from ..errors import InputError, OrientvizError
 from ..io.safeio import write_atomic
 from ..io.solve import failure
+from .background import FIRST_BROWSER_WAIT
 from .block_geometry import BlockGeometry
 from .demo import Demo
 from .demos import DEMOS, demo_from_block, load_demo
@@ -123,6 +124,11 @@ class ViewerApp:
         A message to show at start (e.g. why a file could not be loaded).
     verbose : bool
         Print the URL to open.
+    first_browser_wait : float
+        Seconds a solve that runs in the background (a large imported model) waits for
+        a first browser before it begins; a browser connecting meanwhile gets its first
+        picture first (``orientviz view``:
+        :data:`~orientviz.viewer.background.FIRST_BROWSER_WAIT`; default 0: at once).
 
     Raises
     ------
@@ -138,6 +144,7 @@ class ViewerApp:
         port: int = 8080,
         error: str | None = None,
         verbose: bool = True,
+        first_browser_wait: float = 0.0,
     ) -> None:
         import viser
 
@@ -160,6 +167,7 @@ class ViewerApp:
         #: the solve started at opening (:mod:`orientviz.viewer.background`), or None
         self.background: Any = None
         self.messages: list[str] = []
+        self.first_browser_wait = float(first_browser_wait)
         self._message_md = self.server.gui.add_markdown("")
         self._message_md.visible = False
         if error:
@@ -208,9 +216,9 @@ class ViewerApp:
         self.background = demo.background if self.panel is not None else None
         if self.background is not None:  # the solve runs while the start values are shown
             self.panel.show_pending(self.background)
-            self.background.start(self.take_background, self.panel.show_pending)
-            job = self.background  # a browser's first picture first, then the solve again
+            job = self.background  # a browser's first picture first, then the solve
             self.server.on_client_connect(lambda _c: job.hold() if job.running else None)
+            job.start(self.take_background, self.panel.show_pending, self.first_browser_wait)
 
     def take_background(self, job: Any) -> None:
         """The solve started at opening has ended: show its solution (or its error).
@@ -436,7 +444,9 @@ def run_from_cli(args: argparse.Namespace) -> int:
         return 0
     app = None
     try:
-        app = ViewerApp(content, host=args.host, port=args.port)
+        app = ViewerApp(
+            content, host=args.host, port=args.port, first_browser_wait=FIRST_BROWSER_WAIT
+        )
         while True:
             time.sleep(0.5)
     except InputError as exc:

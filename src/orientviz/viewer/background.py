@@ -20,6 +20,10 @@ from typing import Any
 #: page's first picture gets the CPU (software WebGL shares the two cores with the solve).
 FIRST_PICTURE_HOLD: float = 3.0
 
+#: Seconds ``orientviz view``'s background solve waits for a first browser before it
+#: begins anyway (a browser connecting meanwhile gets :data:`FIRST_PICTURE_HOLD` first).
+FIRST_BROWSER_WAIT: float = 5.0
+
 
 class Cancelled(Exception):
     """Raised inside the solve's iteration callback to stop a background solve."""
@@ -58,10 +62,24 @@ class BackgroundSolve:
         self._cancel = threading.Event()
         self._thread: threading.Thread | None = None
         self._hold_until = 0.0
+        self._held = False
 
     def hold(self, seconds: float = FIRST_PICTURE_HOLD) -> None:
-        """Let the solve wait at its next iteration until ``seconds`` from now."""
+        """Let the solve wait at its next iteration (or before it begins, see
+        :meth:`start`) until ``seconds`` from now."""
         self._hold_until = max(self._hold_until, time.monotonic() + seconds)
+        self._held = True
+
+    def _begin(self, wait: float) -> None:
+        """Wait before the solve begins: until a hold (a browser's) has passed, or
+        ``wait`` seconds if no hold comes."""
+        deadline = time.monotonic() + wait
+        while not self._cancel.is_set():
+            now = time.monotonic()
+            if now >= (self._hold_until if self._held else deadline):
+                return
+            self._cancel.wait(0.05)
+        raise Cancelled("the viewer was stopped")
 
     def _progress(self, iteration: Any, on_iteration: Callable[[Any], None] | None) -> None:
         while not self._cancel.is_set() and time.monotonic() < self._hold_until:
@@ -82,12 +100,17 @@ class BackgroundSolve:
         self,
         on_done: Callable[[BackgroundSolve], None],
         on_iteration: Callable[[BackgroundSolve], None] | None = None,
+        wait: float = 0.0,
     ) -> None:
         """Solve in a daemon thread; ``on_done(self)`` when it ends (result or error set),
-        ``on_iteration(self)`` after each iteration."""
+        ``on_iteration(self)`` after each iteration. ``wait`` (s): the thread begins the
+        solve after a :meth:`hold` made meanwhile has passed, or after ``wait`` seconds
+        without one (0: at once)."""
 
         def work() -> None:
             try:
+                if wait > 0 or self._held:
+                    self._begin(wait)
                 self.result = self.solve(lambda it: self._progress(it, on_iteration))
             except Cancelled:
                 return

@@ -368,6 +368,33 @@ def closest_points_of_rays(
     return O1 + t1[:, None] * d1, O2 + t2[:, None] * d2
 
 
+def ray_segment_distances(origin: ArrayLike, direction: ArrayLike, segments: ArrayLike) -> F64:
+    """Shortest distances (n,) in m from the ray origin + s·direction (s ≥ 0, a click into
+    the scene) to each of ``segments`` (n, 2, 3).
+
+    The minimum of |o + s·d − a − t·(b − a)|² over s ≥ 0, 0 ≤ t ≤ 1 is the free
+    stationary point if it lies in that range, else the smallest of the minima along
+    the edges s = 0, t = 0 and t = 1.
+    """
+    o, d = np.asarray(origin, float).reshape(3), np.asarray(direction, float).reshape(3)
+    seg = np.asarray(segments, float).reshape(-1, 2, 3)
+    a, u = seg[:, 0], seg[:, 1] - seg[:, 0]
+    w = a - o
+    A, B, C = d @ d, u @ d, np.maximum(np.einsum("ij,ij->i", u, u), 1e-300)
+    D, E = w @ d, np.einsum("ij,ij->i", u, w)
+    den = np.where(np.abs(A * C - B * B) > 1e-12 * A * C, A * C - B * B, np.nan)
+    cand = [((D * C - B * E) / den, (B * D - A * E) / den)]  # free stationary point
+    t0 = np.clip(-E / C, 0.0, 1.0)
+    cand += [(np.zeros_like(t0), t0)]  # s = 0: the nearest point of the segment to o
+    cand += [(np.maximum(0.0, (D + t * B) / A), np.full_like(B, t)) for t in (0.0, 1.0)]
+    best = np.full(len(seg), np.inf)
+    for s, t in cand:
+        ok = np.isfinite(s) & (s >= 0) & (t >= 0) & (t <= 1)
+        r = o + s[:, None] * d - a - t[:, None] * u
+        best = np.where(ok, np.minimum(best, np.einsum("ij,ij->i", r, r)), best)
+    return np.sqrt(best)
+
+
 # --------------------------------------------------------------------------- strips
 def polyline_segments(points: ArrayLike, groups: ArrayLike) -> F64:
     """Segments joining consecutive points of each group (in the given order).

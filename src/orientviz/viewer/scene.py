@@ -34,8 +34,16 @@ from .block_geometry import COLORS, BlockGeometry
 from .geometry import frustum_segments
 from .precision_view import confidence_factor, neighbour_correlations
 
-#: Blocks with more images draw their frustums batched per strip, not one node per image.
-FRUSTUM_NODE_LIMIT = 500
+#: Blocks with more images draw their frustums batched per strip, not one node per image:
+#: every node costs the page's start (one draw call, one scene object each; in software
+#: WebGL about 10 ms per frustum node, benchmarks/README.md). A click into the scene then
+#: selects the image whose frustum passes nearest to the clicked ray
+#: (:meth:`BlockScene.image_nearest_to_ray`).
+FRUSTUM_NODE_LIMIT = 40
+
+#: A click selects a batched frustum that its ray passes within this angle (rad) of,
+#: seen from the eye: about 9 px of an 800 px high view with a 50° field of view.
+CLICK_TOLERANCE = 0.01
 
 #: A redraw after an adjustment moves a frustum node only if its apex moved by more than
 #: this fraction of the frustum depth or its quaternion by more than this (≈ 0.2 mrad):
@@ -101,6 +109,8 @@ class BlockScene:
             "factor": 1.0,
         }
         self.ellipsoids_visible = True
+        #: whether the points are shown (a role's node made later takes it)
+        self.points_visible = True
         #: frustum colours (m, 3) uint8 as last drawn by :meth:`colour_images`
         self.image_colours: np.ndarray | None = None
         #: functions called after every redraw (e.g. parallax arrows, deformation)
@@ -117,21 +127,10 @@ class BlockScene:
             self._build_image_nodes(names)
         else:
             self._build_strip_frustums()
-        ps = geo.point_size
-        shapes = {"tie": ("circle", 1.0), "control": ("diamond", 2.0), "check": ("diamond", 2.0)}
-        for role, P in geo.points_by_role().items():
-            shape, f = shapes[role]
-            self.nodes[f"points/{role}"] = sc.add_point_cloud(
-                f"{r}/points/{role}",
-                P.astype(np.float32),
-                COLORS[role],
-                point_size=ps * f,
-                point_shape=shape,
-                precision="float32",
-            )
+        self._draw_points()
         self.nodes["rays/all"] = sc.add_line_segments(
             f"{r}/rays/all",
-            geo.rays(),
+            np.zeros((1, 2, 3), np.float32),  # hidden: its rays are drawn when shown (set_rays)
             COLORS["ray"],
             thickness=0.6,
             thickness_units="screen",
@@ -169,6 +168,22 @@ class BlockScene:
         self.update_ellipsoids()
         return self
 
+    def _draw_points(self) -> None:
+        """Point nodes by role; a role without points gets its node when it has some
+        (an empty node would still cost the page a shader of its own)."""
+        shapes = {"tie": ("circle", 1.0), "control": ("diamond", 2.0), "check": ("diamond", 2.0)}
+        for role, P in self.geo.points_by_role().items():
+            node = self.nodes.get(f"points/{role}")
+            if node is not None:
+                node.points = P.astype(np.float32)
+            elif len(P):
+                shape, f = shapes[role]
+                self.nodes[f"points/{role}"] = self.scene.add_point_cloud(
+                    f"{self.root}/points/{role}", P.astype(np.float32), COLORS[role],
+                    point_size=self.geo.point_size * f, point_shape=shape, precision="float32",
+                    visible=self.points_visible,
+                )  # fmt: skip
+
     def _build_image_nodes(self, names: list[str]) -> None:
         """One clickable frustum node per image (small and medium blocks)."""
         geo, b = self.geo, self.geo.state.block
@@ -196,6 +211,24 @@ class BlockScene:
                 thickness=WIDTH["frustum"], thickness_units="screen",
             )  # fmt: skip
             self.strip_frustums[int(s)] = (h, idx)
+        # viser's line segments take no clicks: the scene's own click finds the frustum
+        self.scene.on_click()(self.scene_clicked)
+
+    def image_nearest_to_ray(self, origin: Any, direction: Any) -> int | None:
+        """The image whose frustum the ray (scene frame, m) passes within
+        :data:`CLICK_TOLERANCE` of (the nearest such), or None."""
+        seg = self._frustum_segments(np.arange(self.geo.state.block.n_images))
+        dist = g.ray_segment_distances(origin, direction, seg)
+        eye = np.linalg.norm(seg.mean(axis=1) - np.asarray(origin, float), axis=1)
+        angle = (dist / np.maximum(eye, 1e-9)).reshape(-1, 8).min(axis=1)
+        k = int(np.argmin(angle))
+        return k if angle[k] <= CLICK_TOLERANCE else None
+
+    def scene_clicked(self, event: Any) -> None:
+        """A click into the scene (batched frustums): select the frustum it hit."""
+        k = self.image_nearest_to_ray(event.ray_origin, event.ray_direction)
+        if k is not None and self.on_image_click is not None:
+            self.on_image_click(k)
 
     def _frustum_segments(self, images: np.ndarray) -> np.ndarray:
         return frustum_segments(self.geo.frustum_corners(images)).astype(np.float32)
@@ -248,8 +281,7 @@ class BlockScene:
         if self.nodes["rays/all"].visible:  # hidden: drawn anew when shown (set_rays)
             self.nodes["rays/all"].points = geo.rays().astype(np.float32)
         if images is None:
-            for role, P in geo.points_by_role().items():
-                self.nodes[f"points/{role}"].points = P.astype(np.float32)
+            self._draw_points()
             if "strips" in self.nodes:
                 self.nodes["strips"].points = geo.strip_lines().astype(np.float32)
         self.last_scores, self.score_kind = scores, kind
@@ -430,6 +462,8 @@ class BlockScene:
             for h in self.image_nodes + [h for h, _ in self.strip_frustums.values()]:
                 h.visible = visible
             return
+        if key == "points":
+            self.points_visible = visible
         names = (key, "scale_bar", "labels/scale_bar") if key == "residuals" else (key,)
         for name, h in self.nodes.items():
             if name in names or name.startswith(key + "/"):

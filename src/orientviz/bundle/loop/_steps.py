@@ -53,12 +53,19 @@ F64 = NDArray[np.float64]
 #: errors, lies in a worse basin: ½Σρ 6 089 against 6 076 from the start). From a poorer
 #: start (a strip from approximations: σ0 1 500, then 28 after one step) least-squares
 #: steps come first — Cauchy there down-weighted the wrong rays — until σ0 falls below
-#: this. The convex losses (Huber, soft-L1) always start from least-squares steps: on
-#: Ladybug they reach a lower Σρ in fewer steps so (Huber 89 steps against > 120) …
+#: this. The convex losses (Huber, soft-L1) always start from least-squares steps …
 LOSS_SIGMA0: float = 10.0
-#: … and every loss is switched on at the latest after a least-squares step that lowers
-#: vᵀPv by at most this fraction of its value, or corrects by less than 1 σ.
+#: … and a redescending loss is switched on at the latest after a least-squares step that
+#: lowers vᵀPv by at most this fraction of its value, or corrects by less than 1 σ …
 LOSS_SWITCH: float = 1e-2
+#: … a convex loss after a least-squares step that lowers vᵀPv by at most this fraction
+#: (or corrects by less than 1 σ). Ladybug with 2 % gross errors of 20–50 px (bench_sfm
+#: ``--robust``, scale 1 px): its first least-squares step lowers vᵀPv by ~20 % and the
+#: loss comes on after it; Huber then takes 82 steps to ½Σρ 26 766.2, soft-L1 50 steps to
+#: 25 555.9, where least-squares steps until a step lowers vᵀPv by ≤ 1 % (4 of them) led
+#: in 87 and 53 steps to 26 784.1 and 25 572.1 (more steps pulled by the gross errors, a
+#: worse basin), and the loss from the start took > 120 steps (Huber, 26 906.7).
+LOSS_SWITCH_CONVEX: float = 0.3
 
 
 class _Linearisation(tuple):
@@ -399,7 +406,7 @@ class BundleSteps:
             drop = (previous.cost - self.pending_cost) / previous.cost if previous.cost > 0 else 0.0
             if (
                 (self.loss.redescending and not self._poor_sigma0(self.pending_cost))
-                or drop <= LOSS_SWITCH
+                or drop <= (LOSS_SWITCH if self.loss.redescending else LOSS_SWITCH_CONVEX)
                 or step.max_correction < 1.0
             ):
                 self.loss_on = self.switch_pending = True
