@@ -10,7 +10,8 @@ from the models' normal equations linearised once at the design's geometry:
   ``independent_models`` sets them by default); control coordinates weighted with
   1/σ² (``points.sigma``);
 * the point part is diagonal (D) and eliminated: S = U − C D⁻¹ Cᵀ over the 7 parameters
-  of every model, ordered by reverse Cuthill-McKee and factored as a band;
+  of every model, formed by 7 × 7 blocks of pairs of models, ordered for the narrowest band
+  (reverse Cuthill-McKee or a numbering across the strips) and factored as a band;
 * Q_XX = D⁻¹ + Gᵀ S⁻¹ G (G = C D⁻¹) at each point's 3 × 3 block needs S⁻¹ only at pairs of
   models that share a point, which lie inside the band: the banded selected inverse
   (:func:`orientviz.bundle.precision.banded_selected_inverse`) gives them, so the base costs

@@ -98,7 +98,11 @@ def block(folder=None):
     principal point at (px, −py), σ = 1 px; stations from the prior EO; points by
     forward intersection of the lens-corrected rays.
     """
-    d = read_roma(folder)
+    return _block(read_roma(folder))
+
+
+def _block(d: dict[str, Any]):
+    """:func:`block` from the files as :func:`read_roma` returns them."""
     p = d["pixel_mm"]
     ids = list(d["images"])
     m = d["marks"]
@@ -134,7 +138,7 @@ def adjust():
     """
     d = read_roma()
     lens = LensModel("backward", free=LENS_FREE, values={"K1": d["K"][0], "K2": d["K"][1]})
-    res = bundle_adjust(block(), additional=lens, tol=TOL, max_iter=50)
+    res = bundle_adjust(_block(d), additional=lens, tol=TOL, max_iter=50)
     return res, list(d["images"]), d
 
 

@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ..adjust.rank import raise_if_singular
+from ..bundle.precision import banded_selected_inverse
 from ..errors import NotDeterminableError, parameter_words
 
 F64 = NDArray[np.float64]
@@ -417,8 +418,6 @@ def _banded_cofactors(sol: LinearSolution, groups: I64, chunk: int) -> F64 | Non
         cb = scipy.linalg.cholesky_banded(ab, lower=True, overwrite_ab=True, check_finite=False)
     except (np.linalg.LinAlgError, scipy.linalg.LinAlgError):
         return None
-    from ..bundle.precision import banded_selected_inverse  # below us; loaded when used
-
     Zb = banded_selected_inverse(cb, 48)
     ptr, rows, vals = Gc.indptr, Gc.indices, Gc.data
     out = np.zeros((g, k, k))

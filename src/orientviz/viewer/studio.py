@@ -8,8 +8,13 @@ control or tie, change its σ, accept the suggested point) and of the images (ad
 move an image; cross strips and removed strips, which are new designs when the step would
 be too wide) goes through :class:`orientviz.design.LiveDesign` (a low-rank update, no new
 factorisation); changes of the plan (strips, images per strip, overlaps, image σ, control
-σ, GNSS) build the design again. The scene and the panel (:mod:`orientviz.viewer.studio_panel`) show the legend, the summary next
-to Ebner's accuracy laws, the weak spots in words, the list of changes and undo.
+σ, GNSS) build the design again, Ebner's accuracy law only for a new layout. Under the
+independent-models method (:class:`orientviz.design.LiveModels`, one factorisation per
+structure) the bundle's update of a structural change waits until the bundle is shown
+(:mod:`orientviz.viewer.studio_live`). The scene and the panel
+(:mod:`orientviz.viewer.studio_panel`) show the legend, the summary next to Ebner's
+accuracy laws (:mod:`orientviz.viewer.studio_text`), the weak spots in words, the list of
+changes and undo.
 
 Scene tree::
 

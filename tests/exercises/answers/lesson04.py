@@ -112,6 +112,17 @@ def _rho_x0_phi(xy, c, H, how="Q"):
     return Q[0, 1] if how == "cofactor" else Q[0, 1] / np.sqrt(Q[0, 0] * Q[1, 1])
 
 
+def _sigma_X_library(x1, B, H, c, s):
+    """The lesson's comparison: the library's adjusted intersection of the point (refused)."""
+    X = x1 * H / c
+    X0 = np.array([[0.0, 0.0, H], [B, 0.0, H]])
+    R = np.stack([np.eye(3), np.eye(3)])
+    xy = ov.project(np.array([[X, 0.0, 0.0]]), X0[0], R[0], c)
+    xy = np.vstack([xy, ov.project(np.array([[X, 0.0, 0.0]]), X0[1], R[1], c)])
+    res = ov.intersect_points(xy, [0, 1], [0, 0], X0, R, c, sigma=s)
+    return float(res.std(a_posteriori=False)[0, 0])
+
+
 SOLUTIONS = {
     "check_rho_x0_phi": _rho_x0_phi,
     "check_best_extra_point": _sol_best_extra_point,
@@ -167,5 +178,8 @@ MUTANTS = {
         how: (lambda x1, B, H, c, s, how=how: _sol_sigma_X(x1, B, H, c, s, how))
         for how in ("midway", "independent", "one image", "sum")
     }
-    | {"micrometres": lambda x1, B, H, c, s: _sol_sigma_X(x1, B, H, c, s * 1000)},
+    | {
+        "micrometres": lambda x1, B, H, c, s: _sol_sigma_X(x1, B, H, c, s * 1000),
+        "the library": lambda x1, B, H, c, s: _sigma_X_library(x1, B, H, c, s),
+    },
 }
