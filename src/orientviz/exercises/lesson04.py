@@ -28,7 +28,16 @@ from scipy.optimize import least_squares
 from ..camera import project  # forbidden in design_X0 (own_work): the stand-in differentiates it
 from ..orientation.intersection import intersect_points, intersect_rays  # forbidden inside the
 from ..orientation.resection import resection  # student's functions (own_work), never an oracle
-from ._common import CheckFailed, call, compare, own_work, rng_for, success
+from ._common import (
+    CheckFailed,
+    call,
+    compare,
+    complex_step,
+    exact_derivatives,
+    own_work,
+    rng_for,
+    success,
+)
 from .lesson02 import _rodrigues_opk
 
 __all__ = [
@@ -212,7 +221,12 @@ def check_design_X0(design_X0: Callable[[F64, F64, F64, float], F64]) -> None:
         ("the columns are by R instead of Rᵀ", _numeric_design(X, X0, R.T, float(c))),
     ]
     compare("∂(x, y)/∂X0 [mm/m]", got, truth, rtol=1e-6, wrong=wrong)
-    success("design matrix for X0, Y0, Z0 agrees with numerical derivatives")
+    exact = complex_step(lambda q: _project(X, q, R, float(c)).ravel(), X0)
+    exact_derivatives("∂(x, y)/∂X0", got, exact)
+    success(
+        "design matrix for X0, Y0, Z0 agrees with numerical derivatives and, to round-off, "
+        "with exact ones"
+    )
 
 
 def _normal_case_cov(t: float, B: float, H: float, c: float, sx: float) -> F64:

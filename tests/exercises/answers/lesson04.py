@@ -167,6 +167,16 @@ MUTANTS = {
         "sign of the cross term": lambda X01, d1, X02, d2: _two_rays_plus(X01, d1, X02, d2),
     },
     "check_design_X0": {
+        "own central differences": lambda X, X0, R, c: np.column_stack(
+            [
+                (
+                    (-c * ((X - X0 - e) @ R)[:, :2] / ((X - X0 - e) @ R)[:, 2:])
+                    - (-c * ((X - X0 + e) @ R)[:, :2] / ((X - X0 + e) @ R)[:, 2:])
+                ).ravel()
+                / 2e-3
+                for e in np.eye(3) * 1e-3
+            ]
+        ),
         "the stand-in (numeric_X0)": _numeric_X0,
         "by X, not X0": lambda X, X0, R, c: -_sol_design_X0(X, X0, R, c),
         "R^T": lambda X, X0, R, c: _sol_design_X0(X, X0, R.T, c),
