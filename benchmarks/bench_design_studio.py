@@ -35,7 +35,7 @@ from contextlib import nullcontext
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from orientviz.design import FlightDesign, _design, assess_block, design_auxiliary
+from orientviz.design import FlightDesign, _design, _layout, assess_block, design_auxiliary
 from orientviz.viewer.studio import Studio
 
 
@@ -88,10 +88,11 @@ def _kinds(st: Studio, plan: FlightDesign, tag: str, R: int, kind) -> None:
     kind(f"plan: image σ 4 µm (a new design){tag}", nothing,
          lambda k: st.set_plan(plan.with_(sigma_image_mm=0.004 + 1e-4 * k)), undo)  # fmt: skip
 
-    def new_layout(k):  # the law of a layout not seen before: computed, not kept from before
+    def new_layout(k):  # a layout not seen before: its block and law made, not kept ones
         for f in (getattr(_design, "_mu_xy", None), getattr(_design, "_mu_z", None)):
             if f is not None:  # (a checkout without the kept laws computes them anyway)
                 f.cache_clear()
+        getattr(_layout, "_PLANNED", {}).clear()
 
     kind(f"plan: control every 3 bases (a new design and law){tag}", new_layout,
          lambda k: st.set_plan(plan.with_(control_spacing=3, sigma_image_mm=0.005 + 1e-4 * k)),

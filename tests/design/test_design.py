@@ -152,3 +152,27 @@ def test_more_control_never_worsens_sigma(small):
 def test_design_rejects_fixed_control():
     with pytest.raises(InputError, match="sigma_control"):
         design_block(FlightDesign(sigma_control=0.0))
+
+
+@pytest.mark.parametrize(
+    "layout", [{}, {"control": "chains", "control_kind": "xy+z", "relief": 50.0, "extra": "grid"}]
+)
+def test_a_plan_whose_sigma_changed_has_the_block_made_anew(layout):
+    """design_block keeps the planned geometry of recent layouts and sets the plan's σ: the
+    block equals the one the simulator makes for that σ, and a caller changing its block
+    does not change the next one."""
+    from orientviz.design import _layout
+
+    d1 = FlightDesign(strips=3, images_per_strip=6, **layout)
+    d2 = d1.with_(sigma_image_mm=0.0123, sigma_control=0.077, sigma_gnss=0.5)
+    b1, _ = design_block(d1)
+    b1.points.xyz[:] = 0.0  # the caller's copy
+    b1.observations.sigma[:] = 9.0
+    b2, s2 = design_block(d2)  # from the kept geometry
+    _layout._PLANNED.clear()
+    ref, sref = design_block(d2)  # made anew by the simulator
+    assert s2 == sref and s2["sigma_image_mm"] == 0.0123 and s2["control_sigma"] == 0.077
+    for table in ("images", "points", "observations", "cameras"):
+        for name, v in vars(getattr(ref, table)).items():
+            if isinstance(v, np.ndarray) and v.dtype.kind in "fiub":
+                np.testing.assert_array_equal(getattr(getattr(b2, table), name), v)

@@ -163,3 +163,12 @@ def test_ray_segment_distances_match_a_dense_search(rng):
     assert got[0] == pytest.approx(np.linalg.norm(d), rel=1e-12)
     off = 0.5 * np.linalg.norm(np.cross(d, [0.0, 0.0, 1.0])) / np.linalg.norm(d)
     assert got[1] == pytest.approx(off, rel=1e-9)  # the offset across the line
+
+
+def test_vertex_colours_decode_srgb():
+    from orientviz.viewer.shapes import vertex_colours
+
+    got = vertex_colours([[0, 10, 128], [255, 188, 40]])
+    # sRGB → linear (IEC 61966-2-1): 10 → 0.0030 (linear part), 128 → 0.2159, 188 → 0.5029
+    np.testing.assert_array_equal(got, [[0, 1, 55], [255, 128, 5]])
+    assert got.dtype == np.uint8

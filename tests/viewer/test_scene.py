@@ -5,7 +5,7 @@ from types import SimpleNamespace
 import numpy as np
 
 import orientviz as ov
-from orientviz.viewer.block_geometry import BlockGeometry
+from orientviz.viewer.block_geometry import COLORS, BlockGeometry
 from orientviz.viewer.geometry import FLIP, matrix_from_wxyz
 from orientviz.viewer.scene import BlockScene, image_node_name
 from orientviz.viewer.state import BlockState
@@ -129,6 +129,22 @@ def test_large_blocks_batch_frustums_per_strip(server, block, monkeypatch):
     seg0 = np.asarray(sc.strip_frustums[0][0].points, dtype=float) + sc.geo.frame.origin
     np.testing.assert_allclose(seg0[0, 0], st.block.images.X0[0], atol=1e-3)
     np.testing.assert_array_equal(np.asarray(sc.strip_frustums[1][0].points), before1)
+
+    # colours always per vertex (a node switched from one colour to per-vertex colours is
+    # drawn without them), decoded from sRGB as the page takes vertex colours
+    from orientviz.viewer.shapes import vertex_colours
+
+    col = np.asarray(h1.colors)
+    assert col.shape == (3 * 8, 2, 3)
+    np.testing.assert_array_equal(
+        col, np.broadcast_to(vertex_colours(COLORS["frustum"]), col.shape)
+    )
+    rgb = np.tile(np.array(COLORS["frustum"], np.uint8), (block.n_images, 1))
+    rgb[4] = (220, 40, 40)
+    sc.colour_images(rgb)
+    col = np.asarray(h1.colors).reshape(3, 16, 3)  # images 3, 4, 5: 16 vertices each
+    np.testing.assert_array_equal(col[1], np.tile(vertex_colours((220, 40, 40)), (16, 1)))
+    np.testing.assert_array_equal(col[0], np.tile(vertex_colours(COLORS["frustum"]), (16, 1)))
 
     # a click into the scene selects the image whose frustum the clicked ray passes
     clicked = []

@@ -125,21 +125,51 @@ def design_block(design: FlightDesign) -> tuple[Block, dict[str, Any]]:
         )
     if design.sigma_gnss is not None and not design.sigma_gnss > 0:
         raise InputError(f"sigma_gnss: expected σ > 0 m or None, got {design.sigma_gnss}")
-    sim = simulate_block(
-        design.strips, design.images_per_strip, rng=np.random.default_rng(design.terrain_seed),
-        camera=design.camera, scale=design.scale, forward_overlap=design.forward_overlap,
-        side_overlap=design.side_overlap, relief=design.relief, extra=design.extra,
-        control=design.control, control_spacing=design.control_spacing,
-        chain_spacing=design.chain_spacing, control_kind=design.control_kind,
-        control_sigma=design.sigma_control, sigma_image_mm=design.sigma_image_mm,
-        start_error=None, flight_jitter=(0.0, 0.0, 0.0, 0.0), **design.options,
-    )  # fmt: skip
-    block = sim.truth.copy()
+    truth, spec = _planned(design)
+    block = truth.copy()
+    # the σ of the plan: the same geometry for every σ (only these fields depend on them)
+    block.observations.sigma[:] = design.sigma_image_mm
+    given = np.isfinite(block.points.sigma)
+    block.points.sigma[given] = design.sigma_control
+    spec.update(sigma_image_mm=design.sigma_image_mm, control_sigma=design.sigma_control)
     block.meta = {"source": "orientviz.design.design_block"}
     if design.sigma_gnss is not None and not design.gnss_offsets:
         block.images.X0_obs[:] = block.images.X0
         block.images.X0_sigma[:] = design.sigma_gnss
-    return block, dict(sim.spec)
+    return block, spec
+
+
+#: The planned blocks of the last few layouts (the studio changes a σ of the plan often).
+_PLANNED: dict[str, tuple[Block, dict[str, Any]]] = {}
+_PLANNED_KEEP: int = 4
+
+
+def _planned(design: FlightDesign) -> tuple[Block, dict[str, Any]]:
+    """The simulator's planned block of a design's layout (kept for the last
+    :data:`_PLANNED_KEEP` layouts: everything but the σ of image coordinates and control)
+    and its geometry; the block is not to be changed (copy it)."""
+    key = repr(
+        (design.strips, design.images_per_strip, design.camera, design.scale,
+         design.forward_overlap, design.side_overlap, design.relief, design.control,
+         design.control_spacing, design.chain_spacing, design.control_kind, design.extra,
+         design.terrain_seed, sorted(design.options.items()))
+    )  # fmt: skip
+    if key not in _PLANNED:
+        sim = simulate_block(
+            design.strips, design.images_per_strip,
+            rng=np.random.default_rng(design.terrain_seed), camera=design.camera,
+            scale=design.scale, forward_overlap=design.forward_overlap,
+            side_overlap=design.side_overlap, relief=design.relief, extra=design.extra,
+            control=design.control, control_spacing=design.control_spacing,
+            chain_spacing=design.chain_spacing, control_kind=design.control_kind,
+            control_sigma=design.sigma_control, sigma_image_mm=design.sigma_image_mm,
+            start_error=None, flight_jitter=(0.0, 0.0, 0.0, 0.0), **design.options,
+        )  # fmt: skip
+        while len(_PLANNED) >= _PLANNED_KEEP:
+            _PLANNED.pop(next(iter(_PLANNED)))
+        _PLANNED[key] = (sim.truth, dict(sim.spec))
+    truth, spec = _PLANNED[key]
+    return truth, dict(spec)
 
 
 def set_control(block: Block, point: int, sigma_xyz) -> Block:

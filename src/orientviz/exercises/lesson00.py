@@ -23,7 +23,7 @@ from scipy.stats import norm
 from ._common import CheckFailed, call, compare, rng_for, success
 
 __all__ = [
-    "check_false_alarms",
+    "check_flagged_clean",
     "check_after_doubling",
     "check_redundancy",
     "check_sigma0",
@@ -90,8 +90,8 @@ def check_redundancy(redundancy: Callable[..., int]) -> None:
     success("redundancy r = 2·rays − 6·images − 3·tie points, fixed or weighted control alike")
 
 
-def check_false_alarms(false_alarms: Callable[[int, float], float]) -> None:
-    """``false_alarms(n, k)`` must return the expected number of n clean observations, each with
+def check_flagged_clean(flagged_clean: Callable[[int, float], float]) -> None:
+    """``flagged_clean(n, k)`` must return the expected number of n clean observations, each with
     a standard normal normalised residual, that the w-test abs(w) > k flags.
 
     Oracle: n times the normal density integrated beyond ±k (scipy's quad), not the tail
@@ -108,7 +108,7 @@ def check_false_alarms(false_alarms: Callable[[int, float], float]) -> None:
             ("1 − (1 − α)ⁿ is the chance of at least one false alarm, not their expected number",
              1 - (1 - tail) ** n),
         ]  # fmt: skip
-        got = float(call(false_alarms, n, k, what="false_alarms"))
+        got = float(call(flagged_clean, n, k, what="flagged_clean"))
         compare(f"false alarms among n = {n} at k = {k}", got, truth, rtol=1e-8, wrong=wrong)
     success("false alarms: n · P(|w| > k) — about 2 among the tour's 2042 observations at k = 3.29")
 

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..camera import project  # forbidden inside the student's functions (own_work)
-from ..rotation import matrix_from_opk
+from ..rotation import matrix_from_opk, opk_from_matrix
 from ._common import (
     CheckFailed,
     call,
@@ -155,6 +155,7 @@ def check_gimbal_pok(locked_phi: Callable[[float, float, float], float]) -> None
     success("at ω = ±100 gon in φ-ω-κ only φ ∓ κ counts: φ and κ turn about one axis")
 
 
+@own_work(opk_from_matrix=opk_from_matrix)
 def check_opk_from_matrix(angles_from_R: Callable[[F64], ArrayLike]) -> None:
     """``angles_from_R(R)`` must return (ω, φ, κ) in gon with R = R_ω R_φ R_κ, abs(φ) < 100 gon."""
     rng = rng_for("lesson02.check_opk_from_matrix")

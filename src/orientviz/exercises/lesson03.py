@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..orientation.dlt import dlt, dlt_to_orientation  # forbidden in the derivations (own_work)
 from ..orientation.interior import fiducial_transformation  # forbidden in affine_fit
 from ..rotation import matrix_from_opk
 from ._common import CheckFailed, call, compare, own_work, rng_for, success
@@ -97,6 +98,11 @@ def _viewing_cases(rng):
     return out
 
 
+@own_work(
+    "the exercise is the derivation from L; the library's decomposition skips it",
+    dlt_to_orientation=dlt_to_orientation,
+    dlt=dlt,
+)
 def check_viewing_direction(fn) -> None:
     """``fn(L) -> v``: the unit vector (object frame) along which the camera of the eleven DLT
     parameters looks, from its projection centre towards the scene."""
@@ -149,6 +155,11 @@ def _interior_swapped(L):
     return np.array([np.sqrt(m1 @ m1 / q - y0 * y0), x0, y0])
 
 
+@own_work(
+    "the exercise is the derivation from L; the library's decomposition skips it",
+    dlt_to_orientation=dlt_to_orientation,
+    dlt=dlt,
+)
 def check_interior_from_dlt(fn) -> None:
     """``fn(L) -> (c, x0, y0)`` in mm from the DLT of a camera with square pixels and no
     shear (then the two affine parameters are zero)."""

@@ -26,9 +26,18 @@ from numpy.typing import NDArray
 from scipy.optimize import least_squares
 
 from ..camera import project  # forbidden in design_X0 (own_work): the stand-in differentiates it
-from ..orientation.intersection import intersect_rays  # forbidden inside the student's
-from ..orientation.resection import resection  # functions (own_work), never an oracle
-from ._common import CheckFailed, call, compare, own_work, rng_for, success
+from ..orientation.intersection import intersect_points, intersect_rays  # forbidden inside the
+from ..orientation.resection import resection  # student's functions (own_work), never an oracle
+from ._common import (
+    CheckFailed,
+    call,
+    compare,
+    complex_step,
+    exact_derivatives,
+    own_work,
+    rng_for,
+    success,
+)
 from .lesson02 import _rodrigues_opk
 
 __all__ = [
@@ -212,7 +221,12 @@ def check_design_X0(design_X0: Callable[[F64, F64, F64, float], F64]) -> None:
         ("the columns are by R instead of Rᵀ", _numeric_design(X, X0, R.T, float(c))),
     ]
     compare("∂(x, y)/∂X0 [mm/m]", got, truth, rtol=1e-6, wrong=wrong)
-    success("design matrix for X0, Y0, Z0 agrees with numerical derivatives")
+    exact = complex_step(lambda q: _project(X, q, R, float(c)).ravel(), X0)
+    exact_derivatives("∂(x, y)/∂X0", got, exact)
+    success(
+        "design matrix for X0, Y0, Z0 agrees with numerical derivatives and, to round-off, "
+        "with exact ones"
+    )
 
 
 def _normal_case_cov(t: float, B: float, H: float, c: float, sx: float) -> F64:
@@ -251,7 +265,12 @@ def check_sigma_X(sigma_X: Callable[[float, float, float, float, float], float])
         )
         x1 = c * t * B / H
         truth = float(np.sqrt(_normal_case_cov(t, B, H, c, sx)[0, 0]))
-        got = call(sigma_X, x1, B, H, c, sx, what="sigma_X")
+        with own_work(
+            "the exercise is the derivation; the library's adjusted intersection skips it",
+            intersect_points=intersect_points,
+            intersect_rays=intersect_rays,
+        ):
+            got = call(sigma_X, x1, B, H, c, sx, what="sigma_X")
         g = H / c * sx  # the ground size of σ_x
         sz = np.sqrt(2.0) * H / B * H / c * sx
         wrong = [

@@ -29,6 +29,12 @@ from ..camera import project
 from ..orientation.relative import design_dependent as library_design_dependent
 from ..orientation.relative import relative_orientation, y_parallax_jacobian
 from ..orientation.relative import y_parallax as library_y_parallax
+from ..orientation.schemes import (
+    condition_equation,
+    condition_misclosure,
+    influence,
+    scheme_precision,
+)
 from ..rotation import matrix_from_opk
 from ._common import (
     CheckFailed,
@@ -134,6 +140,12 @@ def _kovarik_nine(b: float, d: float, Z: F64) -> F64:
     return np.column_stack([X, Y, Z])
 
 
+@own_work(
+    "G is the influence matrix of your design_dependent (write that first: the library's stands "
+    "in only while your blank is empty)",
+    influence=influence,
+    design_dependent=library_design_dependent,
+)
 def check_middle_users(fn: Callable) -> None:
     """Check ``fn(X, Y, Z, b) -> names``: the elements (of "by", "bz", "omega", "phi", "kappa")
     on which Kovarik's middle profile (the last three of nine points) has an influence, i.e. a
@@ -305,6 +317,11 @@ def _gruber_relief(rng: np.random.Generator, b: float, d: float, h: float, relie
     return P
 
 
+@own_work(
+    "the exercise is the condition from your own design matrix",
+    condition_misclosure=condition_misclosure,
+    condition_equation=condition_equation,
+)
 def check_condition(misclosure: Callable[[F64, F64, F64, F64, float], float]) -> None:
     """``misclosure(p, X, Y, Z, b)`` for Gruber's six points must return w = wᵀp, w in the left null space of A, w₁ = 2."""
     rng = rng_for("lesson05.check_condition")
@@ -366,9 +383,11 @@ def _gruber_sigmas(b: float, d: float, h: float, sigma: float, how: str = "right
 
 
 @own_work(
-    "the checker's oracle is not an answer",
+    "the checker's oracle and the library's scheme precision are not an answer",
     _gruber_sigmas=_gruber_sigmas,
     _numeric_design=_numeric_design,
+    scheme_precision=scheme_precision,
+    influence=influence,
 )
 def check_scheme_sigma(scheme_sigmas: Callable[[float, float, float, float], F64]) -> None:
     """``scheme_sigmas(d, sigma, b, h)``: σ of (by, bz, ω, φ, κ) [model mm, rad] of Gruber's six
@@ -397,7 +416,13 @@ def check_scheme_sigma(scheme_sigmas: Callable[[float, float, float, float], F64
     success("σ of the five elements of Gruber's six points, three schemes (numerical design)")
 
 
-@own_work(relative_orientation=relative_orientation)
+@own_work(
+    "the iteration is yours, with your rigorous parallax and your design_dependent (write "
+    "that first: the library's stands in only while your blank is empty)",
+    relative_orientation=relative_orientation,
+    y_parallax=library_y_parallax,
+    design_dependent=library_design_dependent,
+)
 def check_kovarik_iteration(fn: Callable) -> None:
     """``fn(xy1, xy2, c, b) -> (elements, steps)``: the whole iteration of the dependent relative
     orientation — rigorous y-parallaxes of the current pair, the five corrections by least

@@ -23,7 +23,16 @@ from ..orientation.absolute import (  # forbidden inside the student's functions
     similarity_closed_form,
     similarity_transform,
 )
-from ._common import CheckFailed, call, compare, own_work, rng_for, success
+from ._common import (
+    CheckFailed,
+    call,
+    compare,
+    complex_step,
+    exact_derivatives,
+    own_work,
+    rng_for,
+    success,
+)
 from ._standin import student_function
 from .lesson02 import _axis_rotation
 
@@ -195,7 +204,18 @@ def check_design(design: Callable[[F64, float, F64], F64]) -> None:
         ),
     ]
     compare("design matrix", got, truth, rtol=1e-6, wrong=wrong)
-    success("design matrix of the similarity agrees with numerical derivatives")
+
+    def similarity(q: F64) -> F64:  # X = T + m R(α) R x with R(α) ≈ I + K + K²/2 (tiny complex α)
+        a = q[3:6]
+        K = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+        return (q[:3] + q[6] * x @ ((np.eye(3) + K + K @ K / 2) @ R).T).ravel()
+
+    exact = complex_step(similarity, np.r_[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, m])
+    exact_derivatives("design matrix", got, exact)
+    success(
+        "design matrix of the similarity agrees with numerical derivatives and, to "
+        "round-off, with exact ones"
+    )
 
 
 def check_free_axis(free_axis: Callable[[F64], F64]) -> None:

@@ -28,6 +28,7 @@ from ..bundle.sparsity import (
 from ..rotation import matrix_derivatives, matrix_from_opk
 from ..simulate import simulate_block
 from ._common import (
+    INVERTERS,
     CheckFailed,
     NotWrittenError,
     call,
@@ -36,6 +37,7 @@ from ._common import (
     exact_derivatives,
     own_work,
     rng_for,
+    small_matrices,
     success,
 )
 from .lesson02 import _rodrigues_opk
@@ -173,11 +175,20 @@ def check_fill_in_start(answer: object, strips: int = 4, lo: int = 3, hi: int = 
 def check_schur_step(fn) -> None:
     """``fn(nb) -> (dc, dp)``: one Gauss-Newton step of a bundle by reduction to the
     orientation unknowns (``nb`` from :func:`orientviz.bundle.sparsity.bundle_normal_blocks`)."""
-    # 3 strips of 4 images: W is 72 × 66, so a transposed W cannot pass unnoticed
+    # 3 strips of 4 images with a grid of extra points: W is 72 × (3q), 3q > 72 (the whole V is
+    # larger than S, so small_matrices tells them apart) and a transposed W cannot pass unnoticed
     seed = int(rng_for("lesson10.check_schur_step").integers(1000))
-    sim = simulate_block(3, 4, rng=seed, extra=None)
+    sim = simulate_block(3, 4, rng=seed, extra="grid", extra_spacing_mm=60.0)
     nb = bundle_normal_blocks(sim.block)
-    with own_work(**{"nb.dense (the whole system solved densely)": BundleNormal.dense}):
+    with (
+        own_work(**{"nb.dense (the whole system solved densely)": BundleNormal.dense}),
+        small_matrices(
+            6 * nb.n_images,
+            "the exercise eliminates the points block by block: only S (6m × 6m) and the 3 × 3 "
+            "blocks of V are to be inverted or solved with, never the whole V or the whole N",
+            **INVERTERS,
+        ),
+    ):
         got = call(fn, nb, what="schur_step")
     if not isinstance(got, tuple) or len(got) != 2:
         raise CheckFailed("schur_step: return the pair (dc, dp)")
@@ -383,7 +394,13 @@ def check_point_covariance(fn) -> None:
     N = np.block([[U, W], [W.T, Vf]])
     j = 4
     want = np.linalg.inv(N)[6 * m + 3 * j : 6 * m + 3 * j + 3, 6 * m + 3 * j : 6 * m + 3 * j + 3]
-    got = call(fn, U.copy(), W.copy(), V.copy(), j, what="point_covariance")
+    with small_matrices(
+        6 * m,
+        "that is the whole N inverted; the exercise needs only S (6m × 6m) and the point's own "
+        "3 × 3 block",
+        **INVERTERS,
+    ):
+        got = call(fn, U.copy(), W.copy(), V.copy(), j, what="point_covariance")
     compare("Q of point j", got, want, rtol=1e-9, wrong=[
         ("V_j⁻¹ alone ignores the uncertainty of the orientations: add V_j⁻¹ W_jᵀ S⁻¹ W_j V_j⁻¹",
          np.linalg.inv(V[j])),

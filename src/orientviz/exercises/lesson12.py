@@ -13,7 +13,7 @@ from collections.abc import Callable
 import numpy as np
 from scipy.stats import chi2, ncx2, norm
 
-from orientviz.adjust.gross import reliability
+from orientviz.adjust.gross import redundancy_numbers, reliability
 from orientviz.exercises._common import CheckFailed, call, compare, own_work, rng_for, success
 
 
@@ -50,7 +50,11 @@ def check_normalized(fn: Callable) -> None:
     rng = rng_for("lesson12.check_normalized")
     A, l, sigma = _line(rng)
     v, r, w = _oracle_w(A, l, sigma)
-    out = call(fn, A.copy(), l.copy(), sigma.copy(), what="normalized")
+    with own_work(
+        "the redundancy numbers are the core of your version: from your own Q_vv P",
+        redundancy_numbers=redundancy_numbers,
+    ):
+        out = call(fn, A.copy(), l.copy(), sigma.copy(), what="normalized")
     try:
         v_got, r_got, w_got = (np.asarray(a, float) for a in out)
     except (TypeError, ValueError):

@@ -19,11 +19,14 @@ from orientviz.exercises._common import (
     CheckFailed,
     call,
     compare,
+    complex_step,
+    exact_derivatives,
     own_work,
     rng_for,
     small_matrices,
     success,
 )
+from orientviz.exercises.lesson02 import _rodrigues_opk
 from orientviz.rotation import matrix_derivatives, matrix_from_opk
 
 #: Factorisations and triangular solves: with :data:`INVERTERS` they are the routes to solve a
@@ -264,7 +267,14 @@ def check_gnss_lever_rows(fn: Callable) -> None:
                     ("∂R/∂κ = R[e_Z]×: κ is the last rotation, about the camera's z axis, not "
                      "the object's Z", kappa_left),
                 ])  # fmt: skip
-    success("the GNSS rows with a lever arm agree with numerical derivatives at two attitudes")
+        exact = np.zeros((3, 6))
+        exact[:, :3] = np.eye(3)
+        exact[:, 3:] = complex_step(lambda a, e=e: _rodrigues_opk(*a, unit=1.0) @ e, angles)
+        exact_derivatives("∂g/∂(X0, Y0, Z0, ω, φ, κ)", got, exact)
+    success(
+        "the GNSS rows with a lever arm agree with numerical derivatives at two attitudes "
+        "and, to round-off, with exact ones"
+    )
 
 
 def check_difference_covariance(fn: Callable) -> None:

@@ -22,7 +22,9 @@ from orientviz.exercises._common import (
     small_matrices,
     success,
 )
+from orientviz.radar.orientation import station_by_trilateration
 from orientviz.radar.ppi import sphere_radius
+from orientviz.radar.scene import trilateration_scene
 
 
 def _rodrigues(axis, angle: float) -> np.ndarray:
@@ -163,6 +165,11 @@ def _mirror(C: np.ndarray, X: np.ndarray) -> np.ndarray:
     return X - 2 * ((X - C[0]) @ n) * n
 
 
+@own_work(
+    "the exercise is the intersection of three spheres, written by you",
+    trilateration_scene=trilateration_scene,
+    station_by_trilateration=station_by_trilateration,
+)
 def check_trilaterate(fn: Callable) -> None:
     """Check ``fn(C, r) -> (below, above)``: both points at distances r from the centres C."""
     rng = rng_for("lesson14.check_trilaterate")

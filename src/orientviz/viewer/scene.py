@@ -33,6 +33,7 @@ from . import geometry as g
 from .block_geometry import COLORS, BlockGeometry
 from .geometry import frustum_segments
 from .precision_view import confidence_factor, neighbour_correlations
+from .shapes import vertex_colours
 
 #: Blocks with more images draw their frustums batched per strip, not one node per image:
 #: every node costs the page's start (one draw call, one scene object each; in software
@@ -206,9 +207,10 @@ class BlockScene:
         for s in np.unique(b.images.strip):
             idx = np.flatnonzero(b.images.strip == s)
             group = f"strip_{int(s)}" if s >= 0 else "images"
+            rgb = np.tile(np.asarray(COLORS["frustum"], np.uint8), (idx.size, 1))
             h = self.scene.add_line_segments(
-                f"{self.root}/{group}/frustums", self._frustum_segments(idx), COLORS["frustum"],
-                thickness=WIDTH["frustum"], thickness_units="screen",
+                f"{self.root}/{group}/frustums", self._frustum_segments(idx),
+                self._frustum_colours(rgb), thickness=WIDTH["frustum"], thickness_units="screen",
             )  # fmt: skip
             self.strip_frustums[int(s)] = (h, idx)
         # viser's line segments take no clicks: the scene's own click finds the frustum
@@ -229,6 +231,13 @@ class BlockScene:
         k = self.image_nearest_to_ray(event.ray_origin, event.ray_direction)
         if k is not None and self.on_image_click is not None:
             self.on_image_click(k)
+
+    @staticmethod
+    def _frustum_colours(rgb: np.ndarray) -> np.ndarray:
+        """Per-vertex colours (k·8, 2, 3) of k batched frustums of colours ``rgb`` (k, 3):
+        always per vertex (viser's page draws a node that switches from one colour to
+        per-vertex colours without them), decoded as :func:`vertex_colours` says."""
+        return np.repeat(vertex_colours(rgb), 16, axis=0).reshape(-1, 2, 3)
 
     def _frustum_segments(self, images: np.ndarray) -> np.ndarray:
         return frustum_segments(self.geo.frustum_corners(images)).astype(np.float32)
@@ -409,7 +418,7 @@ class BlockScene:
             if last is None or not np.array_equal(last[k], rgb[k]):
                 h.color = tuple(int(c) for c in rgb[k])
         for h, idx in self.strip_frustums.values():
-            h.colors = np.repeat(rgb[idx], 8, axis=0)[:, None, :].repeat(2, axis=1)
+            h.colors = self._frustum_colours(rgb[idx])
         self.image_colours = rgb
 
     def colour_points(self, rgb: np.ndarray | None) -> None:

@@ -13,6 +13,19 @@ F64 = NDArray[np.float64]
 
 
 # --------------------------------------------------------------------------- colours
+def vertex_colours(rgb: ArrayLike) -> NDArray[np.uint8]:
+    """sRGB colours (..., 3) uint8 as viser's per-vertex colours take them.
+
+    viser's page takes a node's single colour as sRGB but per-vertex colours as linear,
+    and encodes what it draws as sRGB; without this a per-vertex colour is drawn lighter
+    than the same colour given once (and than the legend's swatch). This decodes sRGB to
+    linear (IEC 61966-2-1).
+    """
+    c = np.asarray(rgb, dtype=float) / 255.0
+    lin = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    return np.round(255.0 * lin).astype(np.uint8)
+
+
 def ramp(values: ArrayLike, vmax: float, stops: ArrayLike | None = None) -> NDArray[np.uint8]:
     """Map values in [0, vmax] to RGB (uint8) along a colour ramp (default green→amber→red).
 

@@ -19,7 +19,7 @@ def _sol_redundancy(n_images, n_tie, n_control, n_rays, weighted_control=False):
     return 2 * n_rays + extra - 6 * n_images - 3 * n_tie - extra
 
 
-def _sol_false_alarms(n, k):
+def _sol_flagged_clean(n, k):
     return n * 2 * norm.sf(k)  # both tails
 
 
@@ -30,7 +30,7 @@ def _sol_after_doubling(sigma0, r_i, w):
 SOLUTIONS = {
     "check_sigma0": _sol_sigma0,
     "check_redundancy": _sol_redundancy,
-    "check_false_alarms": _sol_false_alarms,
+    "check_flagged_clean": _sol_flagged_clean,
     "check_after_doubling": _sol_after_doubling,
 }
 
@@ -48,7 +48,7 @@ MUTANTS = {
         "weighted: unknowns only": lambda m, t, k, n, w: 2 * n - 6 * m - 3 * (t + (k if w else 0)),
         "weighted: observations only": lambda m, t, k, n, w: 2 * n + 3 * k * w - 6 * m - 3 * t,
     },
-    "check_false_alarms": {
+    "check_flagged_clean": {
         "one-sided": lambda n, k: n * norm.sf(k),
         "one observation": lambda n, k: 2 * norm.sf(k),
         "passes": lambda n, k: n * (1 - 2 * norm.sf(k)),

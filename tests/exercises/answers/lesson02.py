@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+import orientviz as ov
 from orientviz.exercises.lesson02 import F64, GON
 
 
@@ -109,6 +110,7 @@ MUTANTS = {
         "kappa forgotten": lambda p, k, w: p,
     },
     "check_opk_from_matrix": {
+        "the library": lambda R: np.array(ov.opk_from_matrix(R)) / GON,
         "radians": lambda R: _sol_opk(R) * GON,
         "degrees": lambda R: _sol_opk(R) * 0.9,
         "transpose": lambda R: _sol_opk(R.T),

@@ -12,6 +12,7 @@ from orientviz.exercises.lesson03 import (
     _interior_no_x0,
     _interior_unnormalised,
 )
+from orientviz.orientation.dlt import dlt_to_orientation
 
 
 def _shift_origin(L, t, how="right"):
@@ -85,10 +86,12 @@ MUTANTS = {
         "m3 as it is": lambda L: _viewing(L, "plus"),
         "minus m3": lambda L: _viewing(L, "minus"),
         "reversed": lambda L: -_viewing(L),
+        "the library": lambda L: -dlt_to_orientation(L).R[:, 2],
     },
     "check_interior_from_dlt": {
         "unnormalised": _interior_unnormalised,
         "no_x0": _interior_no_x0,
         "swapped": _interior_swapped,
+        "the library": lambda L: (lambda o: np.array([o.c, o.x0, o.y0]))(dlt_to_orientation(L)),
     },
 }

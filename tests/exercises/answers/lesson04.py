@@ -112,6 +112,17 @@ def _rho_x0_phi(xy, c, H, how="Q"):
     return Q[0, 1] if how == "cofactor" else Q[0, 1] / np.sqrt(Q[0, 0] * Q[1, 1])
 
 
+def _sigma_X_library(x1, B, H, c, s):
+    """The lesson's comparison: the library's adjusted intersection of the point (refused)."""
+    X = x1 * H / c
+    X0 = np.array([[0.0, 0.0, H], [B, 0.0, H]])
+    R = np.stack([np.eye(3), np.eye(3)])
+    xy = ov.project(np.array([[X, 0.0, 0.0]]), X0[0], R[0], c)
+    xy = np.vstack([xy, ov.project(np.array([[X, 0.0, 0.0]]), X0[1], R[1], c)])
+    res = ov.intersect_points(xy, [0, 1], [0, 0], X0, R, c, sigma=s)
+    return float(res.std(a_posteriori=False)[0, 0])
+
+
 SOLUTIONS = {
     "check_rho_x0_phi": _rho_x0_phi,
     "check_best_extra_point": _sol_best_extra_point,
@@ -156,6 +167,16 @@ MUTANTS = {
         "sign of the cross term": lambda X01, d1, X02, d2: _two_rays_plus(X01, d1, X02, d2),
     },
     "check_design_X0": {
+        "own central differences": lambda X, X0, R, c: np.column_stack(
+            [
+                (
+                    (-c * ((X - X0 - e) @ R)[:, :2] / ((X - X0 - e) @ R)[:, 2:])
+                    - (-c * ((X - X0 + e) @ R)[:, :2] / ((X - X0 + e) @ R)[:, 2:])
+                ).ravel()
+                / 2e-3
+                for e in np.eye(3) * 1e-3
+            ]
+        ),
         "the stand-in (numeric_X0)": _numeric_X0,
         "by X, not X0": lambda X, X0, R, c: -_sol_design_X0(X, X0, R, c),
         "R^T": lambda X, X0, R, c: _sol_design_X0(X, X0, R.T, c),
@@ -167,5 +188,8 @@ MUTANTS = {
         how: (lambda x1, B, H, c, s, how=how: _sol_sigma_X(x1, B, H, c, s, how))
         for how in ("midway", "independent", "one image", "sum")
     }
-    | {"micrometres": lambda x1, B, H, c, s: _sol_sigma_X(x1, B, H, c, s * 1000)},
+    | {
+        "micrometres": lambda x1, B, H, c, s: _sol_sigma_X(x1, B, H, c, s * 1000),
+        "the library": lambda x1, B, H, c, s: _sigma_X_library(x1, B, H, c, s),
+    },
 }

@@ -10,6 +10,7 @@ import numpy as np
 
 import orientviz as ov
 from orientviz.orientation import relative as rel
+from orientviz.orientation import schemes as sch
 
 
 def _sol_design(X, Y, Z, b):
@@ -126,6 +127,19 @@ def _middle_users(X, Y, Z, b, mistake=None):
     return {n for j, n in enumerate(names) if np.abs(G[j, rows]).max() > 1e-9 * np.abs(G[j]).max()}
 
 
+def _kovarik_library_loop(xy1, xy2, c, b, tol=1e-9, max_iter=20):
+    """The iteration around the library's rigorous parallax and design matrix (refused)."""
+    e, steps = np.zeros(5), []
+    for _ in range(max_iter):
+        p, pts = rel.y_parallax(xy1, xy2, c, rel.PairState.from_elements(e, b))
+        A = rel.design_dependent(pts[:, 0], pts[:, 1], pts[:, 2], b)
+        d = np.linalg.lstsq(A, p, rcond=None)[0]
+        e, steps = e + d, steps + [np.abs(d).max()]
+        if steps[-1] < tol:
+            break
+    return e, steps
+
+
 SOLUTIONS = {
     "check_middle_users": _middle_users,
     "check_relative_from_exterior": _sol_relative_from_exterior,
@@ -139,6 +153,11 @@ SOLUTIONS = {
 
 MUTANTS = {
     "check_middle_users": {
+        "the library's G": lambda X, Y, Z, b: {
+            n
+            for n, row in zip(rel.DEPENDENT, sch.influence(rel.design_dependent(X, Y, Z, b)))
+            if np.abs(row[6:]).max() > 1e-9 * np.abs(row).max()
+        },
         "design": lambda *a: _middle_users(*a, mistake="design"),
         "first three": lambda *a: _middle_users(*a, mistake="first three"),
         "flat answer": lambda *a: {"by", "bz", "omega"},
@@ -150,7 +169,8 @@ MUTANTS = {
     "check_kovarik_iteration": {
         k: (lambda *a, k=k: _kovarik_iteration(*a, mistake=k))
         for k in ("one_step", "sign", "R_transposed")
-    },
+    }
+    | {"around the library's parallax": _kovarik_library_loop},
     "check_design": {
         "y'' - y'": lambda X, Y, Z, b: -_sol_design(X, Y, Z, b),
         "phi and kappa swapped": lambda X, Y, Z, b: _sol_design(X, Y, Z, b)[:, [0, 1, 2, 4, 3]],
@@ -176,6 +196,7 @@ MUTANTS = {
     }
     | {"one array": lambda *a: _sol_six_point_residuals(*a)[0]},
     "check_condition": {
+        "the library": lambda p, X, Y, Z, b: sch.condition_misclosure(p, X, Y, Z, b)[0],
         "flat form with relief": lambda p, X, Y, Z, b: (
             np.array([2.0, -2.0, -1.0, 1.0, -1.0, 1.0]) @ p
         ),
@@ -185,5 +206,8 @@ MUTANTS = {
         how: (lambda d, s, b, h, how=how: _sol_scheme_sigma(d, s, b, h, how))
         for how in ("inverse of the diagonal", "variances", "spread")
     }
-    | {"sigma squared": lambda d, s, b, h: s * _sol_scheme_sigma(d, s, b, h)},
+    | {
+        "sigma squared": lambda d, s, b, h: s * _sol_scheme_sigma(d, s, b, h),
+        "the library": lambda d, s, b, h: sch.scheme_precision("gruber6", b, d, -h, sigma=s)[0],
+    },
 }

@@ -90,6 +90,17 @@ def _similarity_gn(x, X, sigma, observed, start, tol=1e-10, max_iter=20, mistake
     return m, R, T, s0
 
 
+def _design_fd(x, m, R, h=1e-6):
+    """The numeric shortcut: central differences of X = T + m R(α) R x (Rodrigues)."""
+    from orientviz.rotation import matrix_from_rotvec
+
+    def f(q):
+        return (q[:3] + q[6] * x @ (matrix_from_rotvec(q[3:6]) @ R).T).ravel()
+
+    q0 = np.r_[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, m]
+    return np.column_stack([(f(q0 + e) - f(q0 - e)) / (2 * h) for e in np.eye(7) * h])
+
+
 SOLUTIONS = {
     "check_similarity_gn": _similarity_gn,
     "check_similarity": _sol_similarity,
@@ -117,6 +128,7 @@ MUTANTS = {
         "T forgotten": lambda X, m, R, T: X @ R / m,
     },
     "check_design": {
+        "own central differences": lambda x, m, R: _design_fd(x, m, R),
         "sign of the rotation columns": lambda x, m, R: (
             _sol_design(x, m, R) * np.r_[1, 1, 1, -1, -1, -1, 1]
         ),

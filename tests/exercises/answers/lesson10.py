@@ -201,6 +201,34 @@ def _point_covariance(U, W, V, j, mistake=None):
     return Vi[j] + T.T @ np.linalg.solve(S, T)
 
 
+def _dense_covariance(U, W, V, j):
+    """The lesson's stand-in: the whole N inverted (refused: small_matrices)."""
+    from scipy.linalg import block_diag
+
+    N = np.block([[U, W], [W.T, block_diag(*V)]])
+    k = U.shape[0] + 3 * j
+    return np.linalg.inv(N)[k : k + 3, k : k + 3]
+
+
+def _dense_step(nb):
+    """The whole system built from the blocks and solved at once (refused)."""
+    from scipy.linalg import block_diag
+
+    N = np.block([[block_diag(*nb.U), nb.W], [nb.W.T, block_diag(*nb.V)]])
+    x = np.linalg.solve(N, np.r_[nb.bc, nb.bp])
+    return x[: 6 * nb.n_images], x[6 * nb.n_images :]
+
+
+def _schur_whole_V(nb):
+    """The Schur step with the whole V inverted at once (refused)."""
+    from scipy.linalg import block_diag
+
+    Vi = np.linalg.inv(block_diag(*nb.V))
+    S = block_diag(*nb.U) - nb.W @ Vi @ nb.W.T
+    dc = np.linalg.solve(S, nb.bc - nb.W @ Vi @ nb.bp)
+    return dc, Vi @ (nb.bp - nb.W.T @ dc)
+
+
 SOLUTIONS = {
     "check_ray_partials": _ray_partials,
     "check_my_bundle": _my_bundle,
@@ -227,8 +255,11 @@ MUTANTS = {
     },
     "check_point_covariance": {
         k: (lambda U, W, V, j, k=k: _point_covariance(U, W, V, j, k)) for k in ("V_only", "minus")
-    },
+    }
+    | {"the whole N inverted": _dense_covariance},
     "check_schur_step": {
+        "the whole system solved densely": _dense_step,
+        "the whole V inverted": _schur_whole_V,
         "plus": lambda nb: _schur_step(nb, "plus"),
         "no_coupling": lambda nb: _schur_step(nb, "no_coupling"),
         "W_transposed": lambda nb: _schur_step(nb, "W_transposed"),

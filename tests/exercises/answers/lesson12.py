@@ -9,6 +9,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.stats import norm
 
+from orientviz.adjust.gross import redundancy_numbers
+
 
 def _normalized(A, l, sigma):
     P = np.diag(1 / sigma**2)
@@ -69,6 +71,9 @@ MUTANTS = {
         for m in ("all at once", "no abs", "one round")
     },
     "check_normalized": {
+        "the library's r": lambda A, l, s: (lambda v, r: (v, r, v / (s * np.sqrt(r))))(
+            _normalized(A, l, s)[0], redundancy_numbers(A, s)
+        ),
         "no sqrt r": lambda A, l, s: (lambda v, r, w: (v, r, v / s))(*_normalized(A, l, s)),
         "r not sqrt": lambda A, l, s: (lambda v, r, w: (v, r, v / (s * r)))(*_normalized(A, l, s)),
         "1 - r": lambda A, l, s: (lambda v, r, w: (v, 1 - r, w))(*_normalized(A, l, s)),

@@ -11,6 +11,7 @@ from collections.abc import Callable
 import numpy as np
 import scipy.linalg
 
+import orientviz as ov
 from orientviz.exercises.lesson13 import statoscope_normals_library, statoscope_row_library
 from orientviz.rotation import matrix_derivatives, matrix_from_opk
 
@@ -135,6 +136,17 @@ MUTANTS = {
         "the stand-in": statoscope_normals_library,
     },
     "check_gnss_lever_rows": {
+        "own central differences": lambda a, e: np.hstack(
+            [
+                np.eye(3),
+                np.column_stack(
+                    [
+                        (ov.matrix_from_opk(*(a + d)) @ e - ov.matrix_from_opk(*(a - d)) @ e) / 2e-6
+                        for d in np.eye(3) * 1e-6
+                    ]
+                ),
+            ]
+        ),
         **{
             k: (lambda a, e, k=k: _gnss_lever_rows(a, e, k))
             for k in ("no arm", "transposed", "sign", "kappa left")

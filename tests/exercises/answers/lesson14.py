@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from orientviz.exercises.lesson14 import best_pair_library
+from orientviz.radar.scene import trilateration_scene
 
 
 def _ppi_image(P, X0, R, h, m, x0, y0):
@@ -90,6 +91,7 @@ MUTANTS = {
         for k in ("s_e", "sign", "relative", "s/s_e", "exact")
     },
     "check_trilaterate": {
+        "the library": lambda C, r: tuple(trilateration_scene(C, r)["candidates"]),
         "swapped": lambda C, r: _trilaterate(C, r)[::-1],
         "one root": lambda C, r: (_trilaterate(C, r)[1], _trilaterate(C, r)[1]),
     },
