@@ -287,8 +287,9 @@ def add_precision(result: Adjustment, Jf, p: F64, free_idx: NDArray[np.int64], u
     Q = np.zeros((u_all, u_all))
     Q[np.ix_(free_idx, free_idx)] = Qf
     result.cofactor = Q
-    # redundancy numbers r_i = 1 − p_i (J Q Jᵀ)_ii
-    h = np.einsum("ij,jk,ik->i", Jd, Qf, Jd) * p
+    # redundancy numbers r_i = 1 − p_i (J Q Jᵀ)_ii, the diagonal from the rows of J Q (one
+    # matrix product) instead of a three-operand sum over every (j, k) pair
+    h = np.einsum("ij,ij->i", Jd @ Qf, Jd) * p
     rn = np.clip(1.0 - h, 0.0, 1.0)
     result.redundancy_numbers = rn
     with np.errstate(divide="ignore", invalid="ignore"):
