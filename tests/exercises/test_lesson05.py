@@ -32,6 +32,7 @@ def test_diagnoses_name_the_mistake():
             ("check_middle_users", "design"): "influence matrix G",
             ("check_middle_users", "first three"): "points 7, 8, 9",
             ("check_kovarik_iteration", "one_step"): "one linear solution is not the iteration",
+            ("check_kovarik_iteration", "pok"): "φ-ω-κ sequence of the plotter",
             ("check_kovarik_iteration", "sign"): "runs away",
             ("check_kovarik_iteration", "R_transposed"): "runs away",
             ("check_design", "y'' - y'"): "opposite sign",

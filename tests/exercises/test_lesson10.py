@@ -26,6 +26,7 @@ def test_lesson10_diagnoses_name_the_mistake():
             ("check_my_bundle", "fixed_as_unknowns"): "held fixed (control) are no unknowns",
             ("check_my_bundle", "no_sqrt"): "square root is missing",
             ("check_point_covariance", "V_only"): "uncertainty of the orientations",
+            ("check_coupled", "diagonal only where an unknown point is seen"): "only fixed points",
             ("check_point_covariance", "the whole N inverted"): "the whole N inverted",
             ("check_schur_step", "the whole system solved densely"): "never the whole V",
             ("check_schur_step", "the whole V inverted"): "never the whole V",

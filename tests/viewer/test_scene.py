@@ -80,6 +80,12 @@ def test_update_moves_frustum_and_redraws_residuals(server, block):
     changed = np.any(np.abs(after - before) > 1e-6, axis=(1, 2))
     np.testing.assert_array_equal(changed, st.block.observations.image == 1)
     assert stats["sigma0"] > 0
+    # the quality colours go to the page decoded from sRGB, as it takes per-vertex colours
+    from orientviz.viewer.shapes import vertex_colours
+
+    col = sc.geo.residuals(50.0)[1]
+    assert len(np.unique(col.reshape(-1, 3), axis=0)) > 1  # not all one colour
+    np.testing.assert_array_equal(np.asarray(sc.nodes["residuals"].colors), vertex_colours(col))
 
 
 def test_rays_of_selected_image(server, block):

@@ -35,7 +35,7 @@ from ..orientation.schemes import (
     influence,
     scheme_precision,
 )
-from ..rotation import matrix_from_opk
+from ..rotation import matrix_from_opk, opk_from_matrix
 from ._common import (
     CheckFailed,
     call,
@@ -464,9 +464,12 @@ def check_kovarik_iteration(fn: Callable) -> None:
             "is tiny (< 1e-6)"
         )
     compare("by, bz [mm] of an error-free pair", e[:2], truth[:2], rtol=1e-8, scale=1.0)
+    pok = np.asarray(opk_from_matrix(matrix_from_opk(*truth[2:]), "pok"), dtype=float)
     compare(
-        "ω, φ, κ [rad] of an error-free pair", e[2:], truth[2:], rtol=1e-8, scale=0.01, unit="rad"
-    )
+        "ω, φ, κ [rad] of an error-free pair", e[2:], truth[2:], rtol=1e-8, scale=0.01, unit="rad",
+        wrong=[("the φ-ω-κ sequence of the plotter: the pair here is built with ω-φ-κ, "
+                "R = R_ω R_φ R_κ (`ov.matrix_from_opk(ω, φ, κ)`)", pok)],
+    )  # fmt: skip
     success(f"the error-free pair's elements come back after {len(steps)} steps "
             f"(last correction {steps[-1]:.1e})")  # fmt: skip
 

@@ -473,6 +473,8 @@ def check_coupled(fn) -> None:
     first, last = (image == 0) & (point >= h), (image == m - 1) & (point >= 0) & (point < h)
     point[first], point[last] = point[first] % h, h + point[last] % (q - h)
     image, point = np.r_[image, 0, m - 1], np.r_[point, -1, -1]  # … but both see a fixed point
+    point[image == 3] = -1  # image 3 sees fixed points only: it couples nothing, but U_3 is there
+    image, point = np.r_[image, 3], np.r_[point, -1]
     U = np.zeros((6 * m, 6 * m))
     W = np.zeros((6 * m, 3 * q))
     V = np.zeros((3 * q, 3 * q))
@@ -503,6 +505,8 @@ def check_coupled(fn) -> None:
     with_fixed[image, point] = True  # −1 lands in the last column
     wrong = {
         "the diagonal blocks U_i are never zero (every image that has a ray)": no_diag,
+        "the diagonal: U_i = Σ AᵀPA is there for every image, even one that sees only fixed "
+        "points (image 3 here)": want & ~np.eye(m, dtype=bool) | np.diag(seen.any(axis=1)),
         "a fixed point (−1) is no unknown: it couples nothing": (with_fixed.astype(int) @ with_fixed.T.astype(int)) > 0,
         "only one triangle: S is symmetric": np.triu(want),
     }  # fmt: skip

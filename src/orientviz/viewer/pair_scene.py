@@ -43,6 +43,7 @@ from .demo import Demo
 from .epipolar_picture import normalised_picture
 from .legend import swatch
 from .pair_rays import normalised_pair, plane_mesh, point_rays
+from .shapes import vertex_colours
 from .sliders import Sliders
 
 F64 = NDArray[np.float64]
@@ -400,7 +401,7 @@ class PairView:
             np.repeat(np.abs(geo["parallax"]), 3), max(np.abs(geo["parallax"]).max(), 1e-9)
         )
         self.nodes["parallax"].points = f.to_scene(arrows).astype(np.float32)
-        self.nodes["parallax"].colors = np.repeat(col[:, None, :], 2, axis=1)
+        self.nodes["parallax"].colors = np.repeat(vertex_colours(col)[:, None, :], 2, axis=1)
         err = self.plotter.error
         rms = float(np.sqrt(np.mean(geo["parallax"] ** 2)))
         self.h["stats"].content = (

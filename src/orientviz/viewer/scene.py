@@ -143,8 +143,9 @@ class BlockScene:
         )  # fmt: skip
         seg, col = geo.residuals(self.exaggeration)
         self.nodes["residuals"] = sc.add_line_segments(
-            f"{r}/residuals", seg, col, thickness=WIDTH["residual"], thickness_units="screen"
-        )
+            f"{r}/residuals", seg, vertex_colours(col), thickness=WIDTH["residual"],
+            thickness_units="screen",
+        )  # fmt: skip
         self._scale_bar()
         strips = geo.strip_lines()
         if strips.shape[0]:
@@ -283,7 +284,7 @@ class BlockScene:
         seg, col = geo.residuals(self.exaggeration, e, scores)
         self._move_frustums(images)
         self.nodes["residuals"].points = seg.astype(np.float32)
-        self.nodes["residuals"].colors = col
+        self.nodes["residuals"].colors = vertex_colours(col)
         self.nodes["selected"].points = self._selected_segments().astype(np.float32)
         if self.rays_mode == "selected image":
             self.nodes["rays/selected"].points = geo.rays(self.selected).astype(np.float32)
@@ -327,7 +328,7 @@ class BlockScene:
         self.exaggeration = float(k)
         seg, col = self.geo.residuals(self.exaggeration)
         self.nodes["residuals"].points = seg.astype(np.float32)
-        self.nodes["residuals"].colors = col
+        self.nodes["residuals"].colors = vertex_colours(col)
         if changed:
             self._scale_bar()
 

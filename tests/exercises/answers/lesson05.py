@@ -79,10 +79,11 @@ def _kovarik_iteration(xy1, xy2, c, b, tol=1e-9, max_iter=20, mistake=None):
         # 1. the rigorous y-parallaxes of the pair as it stands: rays meet in X and Z
         B = np.array([b, e[0], e[1]])
         d1 = np.column_stack([xy1, np.full(len(xy1), -c)])
+        seq = "pok" if mistake == "pok" else "opk"
         d2 = np.column_stack([xy2, np.full(len(xy2), -c)]) @ (
-            ov.matrix_from_opk(*e[2:])
+            ov.matrix_from_opk(*e[2:], seq)
             if mistake == "R_transposed"
-            else ov.matrix_from_opk(*e[2:]).T
+            else ov.matrix_from_opk(*e[2:], seq).T
         )
         det = -d1[:, 0] * d2[:, 2] + d2[:, 0] * d1[:, 2]
         lam1 = (-B[0] * d2[:, 2] + d2[:, 0] * B[2]) / det
@@ -170,7 +171,10 @@ MUTANTS = {
         k: (lambda *a, k=k: _kovarik_iteration(*a, mistake=k))
         for k in ("one_step", "sign", "R_transposed")
     }
-    | {"around the library's parallax": _kovarik_library_loop},
+    | {
+        "around the library's parallax": _kovarik_library_loop,
+        "pok": lambda *a: _kovarik_iteration(*a, mistake="pok"),
+    },
     "check_design": {
         "y'' - y'": lambda X, Y, Z, b: -_sol_design(X, Y, Z, b),
         "phi and kappa swapped": lambda X, Y, Z, b: _sol_design(X, Y, Z, b)[:, [0, 1, 2, 4, 3]],

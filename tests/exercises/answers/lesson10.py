@@ -20,6 +20,11 @@ def _coupled(image, point, m, mistake=None):
         P[np.ix_(ims, ims)] = True
     if mistake == "no diagonal":
         P &= ~np.eye(m, dtype=bool)
+    if mistake == "diagonal only where an unknown point is seen":
+        P = np.zeros((m, m), dtype=bool)
+        for j in np.unique(point[point >= 0]):
+            ims = np.unique(image[point == j])
+            P[np.ix_(ims, ims)] = True
     return np.triu(P) if mistake == "one triangle" else P
 
 
@@ -266,7 +271,12 @@ MUTANTS = {
     },
     "check_coupled": {
         k: (lambda i, p, m, k=k: _coupled(i, p, m, k))
-        for k in ("no diagonal", "fixed", "one triangle")
+        for k in (
+            "no diagonal",
+            "fixed",
+            "one triangle",
+            "diagonal only where an unknown point is seen",
+        )
     },
     "check_fill_pattern": {
         k: (lambda P, k=k: _fill_pattern(P, k)) for k in ("no fill", "envelope")
