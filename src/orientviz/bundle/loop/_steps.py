@@ -9,7 +9,9 @@ hand on. Its knobs are fields of the problem's
 * a robust loss (``options.loss``, :mod:`._loss`): Σρ is the cost, each step's rays are
   weighted by √ρ′ of the iterate (set in the problem's ray weights before its normal
   equations are formed); least-squares steps come first for Huber and soft-L1, and for
-  Cauchy from a start with σ0 ≥ :data:`LOSS_SIGMA0`;
+  Cauchy from a start with σ0 ≥ :data:`LOSS_SIGMA0`; in the run's tail the steps are
+  over-relaxed (:data:`ROBUST_OVERRELAX`) and a convex loss's model takes the curvature
+  along down-weighted rays' misclosures closer to the true one (:data:`ROBUST_TAIL_FLOOR`);
 * the additional parameters are held at their values in the first step from a poor
   start; their border E, F is reused in the next iteration when the last step moved
   nothing by more than ``ap_reuse`` (the Jacobians then change by about as little, less
