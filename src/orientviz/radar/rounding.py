@@ -116,12 +116,12 @@ def rounding_draws(
     out.own = {t: {q: np.full(n, np.nan) for q in TASKS[t]} for t in tasks}
     with blas_threads(1):
         for j, s in enumerate(surfaces):
-            _collect(run_surface(s, stopping=stopping, tasks=tasks), tasks, surfaces, j,
-                     out.own, None)  # fmt: skip
+            _collect(run_surface(s, stopping=stopping, tasks=tasks, diagnose=False), tasks,
+                     surfaces, j, out.own, None)  # fmt: skip
         for i in range(int(draws)):
             off = rng.uniform(-0.5, 0.5, (3, 2))
             for j, s in enumerate(surfaces):
-                res = run_surface(s, offsets=off, stopping=stopping, tasks=tasks)
+                res = run_surface(s, offsets=off, stopping=stopping, tasks=tasks, diagnose=False)
                 _collect(res, tasks, surfaces, j, out.draws, i)
     return out
 

@@ -61,7 +61,7 @@ def run_choice(kw: dict) -> dict:
     if kw.pop("_radians", False):
         kw["truth"] = _truth_in_radians()
     with blas_threads(1):
-        res = {c: fig8.run_surface(c, **kw) for c in G.COLUMNS}
+        res = {c: fig8.run_surface(c, diagnose=False, **kw) for c in G.COLUMNS}
     if sign != 1.0:
         for per_task in res.values():
             for o in per_task.values():

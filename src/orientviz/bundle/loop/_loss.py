@@ -21,9 +21,10 @@ modern synthesis", applies only where ρ″ > 0). ρ is concave, ρ(s) ≤ ρ(s�
 least squares inside each step, sound far from the solution too), and the model has the
 gradient of Σ ρ, so a step that leaves the iterate
 unchanged is a stationary point of the robust cost; near it the convergence is linear,
-the faster the fewer rays are down-weighted. (A second-order model, curvature
-ρ′ + 2sρ″ along each misclosure, was tried: from start values where most rays lie
-beyond the scale its steps decreased Σ ρ by a fraction of what these do.)
+the faster the fewer rays are down-weighted. A second-order model, curvature
+ρ′ + 2sρ″ along each misclosure, serves only in a convex loss's tail
+(:data:`orientviz.bundle.loop._steps.ROBUST_TAIL_FLOOR`): from start values where most
+rays lie beyond the scale its steps decreased Σ ρ by a fraction of what these do.
 """
 
 from __future__ import annotations
