@@ -42,6 +42,7 @@ def test_diagnoses_name_the_mistake():
             ("check_gimbal_pok", "the opk rule"): "ω-φ-κ rule",
             ("check_opk_from_matrix", "degrees"): "degrees instead of gon",
             ("check_vertical_partials", "all signs"): "every sign is reversed",
+            ("check_opk_from_matrix", "arctan"): "arctan loses the quadrant",
             ("check_vertical_partials", "own central differences"): "finite difference",
             ("check_vertical_partials", "1 forgotten"): "the 1 in c(1 + x²/c²)",
             ("check_vertical_partials", "omega phi swapped"): "ω and φ columns are swapped",

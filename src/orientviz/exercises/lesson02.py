@@ -159,8 +159,12 @@ def check_gimbal_pok(locked_phi: Callable[[float, float, float], float]) -> None
 def check_opk_from_matrix(angles_from_R: Callable[[F64], ArrayLike]) -> None:
     """``angles_from_R(R)`` must return (ω, φ, κ) in gon with R = R_ω R_φ R_κ, abs(φ) < 100 gon."""
     rng = rng_for("lesson02.check_opk_from_matrix")
-    for _ in range(3):
-        truth = np.array([rng.uniform(-180, 180), rng.uniform(-90, 90), rng.uniform(-180, 180)])
+    cases = [
+        np.array([rng.uniform(-180, 180), rng.uniform(-90, 90), rng.uniform(-180, 180)])
+        for _ in range(3)
+    ]
+    cases.append(np.array([152.0, 31.0, -171.0]))  # cos ω < 0 and cos κ < 0: the quadrant matters
+    for truth in cases:
         R = _rodrigues_opk(*truth)
         got = call(angles_from_R, R, what="angles_from_R")
         g = np.asarray(got, dtype=float)
@@ -175,10 +179,20 @@ def check_opk_from_matrix(angles_from_R: Callable[[F64], ArrayLike]) -> None:
                     err,
                     1e-9,
                 )
+        quadrant = np.array(
+            [
+                np.arctan(-R[1, 2] / R[2, 2]) / GON,
+                np.arcsin(np.clip(R[0, 2], -1.0, 1.0)) / GON,
+                np.arctan(-R[0, 1] / R[0, 0]) / GON,
+            ]
+        )
         wrong = [
             ("the sign of ω is wrong", truth * [-1, 1, 1]),
             ("the sign of κ is wrong", truth * [1, 1, -1]),
-        ]
+            ("the sign of φ is wrong", truth * [1, -1, 1]),
+            ("arctan loses the quadrant (here cos ω < 0 and cos κ < 0): use arctan2 of the two "
+             "elements, not arctan of their ratio", quadrant),
+        ]  # fmt: skip
         compare("(ω, φ, κ) [gon]", got, truth, rtol=1e-9, unit="gon", wrong=wrong, scale=200.0)
     success("ω, φ, κ read back from R (in gon)")
 

@@ -111,6 +111,12 @@ MUTANTS = {
     },
     "check_opk_from_matrix": {
         "the library": lambda R: np.array(ov.opk_from_matrix(R)) / GON,
+        "arctan": lambda R: (
+            np.array(
+                [np.arctan(-R[1, 2] / R[2, 2]), np.arcsin(R[0, 2]), np.arctan(-R[0, 1] / R[0, 0])]
+            )
+            / GON
+        ),
         "radians": lambda R: _sol_opk(R) * GON,
         "degrees": lambda R: _sol_opk(R) * 0.9,
         "transpose": lambda R: _sol_opk(R.T),
