@@ -11,6 +11,7 @@ pytest.importorskip("viser")
 pytest.importorskip("matplotlib")
 
 import orientviz as ov
+from orientviz.block import CONTROL
 from orientviz.viewer.inline import scene_figure, show_inline  # noqa: E402
 
 
@@ -30,6 +31,26 @@ def test_scene_figure_draws_cameras_points_and_residuals(block):
     assert len(segs[0].get_segments()) == 8 * block.n_images  # frustum edges
     assert len(segs[1].get_segments()) == block.n_observations  # one vector per ray
     assert "×1,000" in ax.get_title()
+    plt.close(fig)
+
+
+def test_scene_figure_axes_read_object_coordinates(block):
+    import matplotlib.pyplot as plt
+
+    fig = scene_figure(block)
+    ax = fig.axes[0]
+    b = block
+    # the heights of the points and of the projection centres lie inside the Z axis' range
+    z_lo, z_hi = ax.get_zlim()
+    assert z_lo <= b.points.xyz[:, 2].min() + 1.0 and b.images.X0[:, 2].max() - 1.0 <= z_hi
+    x_lo, x_hi = ax.get_xlim()
+    assert x_lo <= b.images.X0[:, 0].min() and b.images.X0[:, 0].max() <= x_hi
+    # the control points are drawn where they are
+    ctrl = [c for c in ax.collections if c.get_label() == "control points"]
+    assert len(ctrl) == 1
+    xs, ys, zs = ctrl[0]._offsets3d
+    known = b.points.xyz[b.points.role == CONTROL]
+    np.testing.assert_allclose(np.sort(np.asarray(zs)), np.sort(known[:, 2]), atol=1e-6)
     plt.close(fig)
 
 

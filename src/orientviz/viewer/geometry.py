@@ -372,7 +372,7 @@ def ray_segment_distances(origin: ArrayLike, direction: ArrayLike, segments: Arr
     """Shortest distances (n,) in m from the ray origin + s·direction (s ≥ 0, a click into
     the scene) to each of ``segments`` (n, 2, 3).
 
-    The minimum of |o + s·d − a − t·(b − a)|² over s ≥ 0, 0 ≤ t ≤ 1 is the free
+    The minimum of ‖o + s·d − a − t·(b − a)‖² over s ≥ 0, 0 ≤ t ≤ 1 is the free
     stationary point if it lies in that range, else the smallest of the minima along
     the edges s = 0, t = 0 and t = 1.
     """

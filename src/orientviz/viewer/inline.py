@@ -38,6 +38,8 @@ def scene_figure(
 ) -> Any:
     """A static 3D picture (matplotlib) of what the viewer shows for ``content``.
 
+    The axes read object coordinates (m), not the viewer's scene frame centred on the block.
+
     Parameters
     ----------
     content : Block, (Block, Adjustment) or demo name
@@ -69,21 +71,24 @@ def scene_figure(
         ax = fig.add_subplot(projection="3d")
     fig = ax.figure
     rgb = {k: np.array(v) / 255.0 for k, v in COLORS.items()}
+    # the viewer draws in a frame centred on the block; the picture reads object coordinates
+    o = np.asarray(geo.frame.origin, float)
     ax.add_collection3d(
         Line3DCollection(
-            g_segments(geo), colors=to_hex(rgb["frustum"]), linewidths=0.8, label="cameras"
+            g_segments(geo) + o, colors=to_hex(rgb["frustum"]), linewidths=0.8, label="cameras"
         )
     )
     for name, pts in geo.points_by_role().items():
         if len(pts):
             size = 3 if name == "tie" else 30
             marker = "." if name == "tie" else "^"
-            ax.scatter(*pts.T, s=size, c=[rgb[name]], marker=marker, label=f"{name} points",
-                       depthshade=False)  # fmt: skip
+            ax.scatter(*(pts + o).T, s=size, c=[rgb[name]], marker=marker,
+                       label=f"{name} points", depthshade=False)  # fmt: skip
     k = geo.auto_exaggeration() if exaggeration is None else float(exaggeration)
     seg, col = geo.residuals(k)
+    seg = seg + o
     ax.add_collection3d(Line3DCollection(seg, colors=col[:, 0] / 255.0, linewidths=1.2))
-    allp = np.vstack([seg.reshape(-1, 3), geo.frustum_corners().reshape(-1, 3)])
+    allp = np.vstack([seg.reshape(-1, 3), geo.frustum_corners().reshape(-1, 3) + o])
     lo, hi = np.nanmin(allp, axis=0), np.nanmax(allp, axis=0)
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
