@@ -209,22 +209,9 @@ def run(args, label: str) -> list[tuple[str, list[float], list[float]]]:
     return rows
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--strips", type=int, default=20)
-    ap.add_argument("--images", type=int, default=50)
-    ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--threads", choices=("both", "default", "1"), default="both")
-    ap.add_argument("--forced", action="store_true", help="also force strips through the update")
-    ap.add_argument(
-        "--models-peer", action="store_true",
-        help="also time assess_models once (≈ 14 s CPU on the 1 000-image block)",
-    )  # fmt: skip
-    ap.add_argument(
-        "--uncapped", action="store_true",
-        help="LiveDesign(blas_threads=None): the design's BLAS on the process's threads",
-    )  # fmt: skip
-    args = ap.parse_args()
+def print_thread_tables(run, args) -> None:
+    """Run ``run(args, title)`` per BLAS-thread setting of ``args.threads`` ("both", "default"
+    or "1") and print one markdown table: per change, wall median / max and CPU median (ms)."""
     settings = {"both": ("default", "1"), "default": ("default",), "1": ("1",)}[args.threads]
     tables = {}
     for s in settings:
@@ -242,6 +229,25 @@ def main() -> None:
                 f"{1e3 * np.median(ts):.0f} / {1e3 * max(ts):.0f}, {1e3 * np.median(cs):.0f}"
             )
         print(f"| {name} | " + " | ".join(cells) + " |")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--strips", type=int, default=20)
+    ap.add_argument("--images", type=int, default=50)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--threads", choices=("both", "default", "1"), default="both")
+    ap.add_argument("--forced", action="store_true", help="also force strips through the update")
+    ap.add_argument(
+        "--models-peer", action="store_true",
+        help="also time assess_models once (≈ 14 s CPU on the 1 000-image block)",
+    )  # fmt: skip
+    ap.add_argument(
+        "--uncapped", action="store_true",
+        help="LiveDesign(blas_threads=None): the design's BLAS on the process's threads",
+    )  # fmt: skip
+    args = ap.parse_args()
+    print_thread_tables(run, args)
 
 
 if __name__ == "__main__":

@@ -30,10 +30,9 @@ import argparse
 import functools
 import os
 import time
-from contextlib import nullcontext
 
 import numpy as np
-from threadpoolctl import threadpool_limits
+from bench_design import print_thread_tables  # a sibling script (benchmarks/ is on sys.path)
 
 from orientviz.design import FlightDesign, _design, _layout, assess_block, design_auxiliary
 from orientviz.viewer.studio import Studio
@@ -143,23 +142,7 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--threads", choices=("both", "default", "1"), default="both")
     args = ap.parse_args()
-    settings = {"both": ("default", "1"), "default": ("default",), "1": ("1",)}[args.threads]
-    tables = {}
-    for s in settings:
-        ctx = threadpool_limits(1, "blas") if s == "1" else nullcontext()
-        with ctx:
-            tables[s] = run(args, f"BLAS threads: {s}")
-    head = " | ".join(f"{s} thread(s): wall median / max, CPU median ms" for s in settings)
-    print(f"\n| change | {head} |")
-    print("| --- |" + " --- |" * len(settings))
-    for i, (name, *_) in enumerate(tables[settings[0]]):
-        cells = []
-        for s in settings:
-            _, ts, cs = tables[s][i]
-            cells.append(
-                f"{1e3 * np.median(ts):.0f} / {1e3 * max(ts):.0f}, {1e3 * np.median(cs):.0f}"
-            )
-        print(f"| {name} | " + " | ".join(cells) + " |")
+    print_thread_tables(run, args)
 
 
 if __name__ == "__main__":
