@@ -36,8 +36,8 @@ from .precision_view import confidence_factor, neighbour_correlations
 from .shapes import vertex_colours
 
 #: Blocks with more images draw their frustums batched per strip, not one node per image:
-#: every node costs the page's start (one draw call, one scene object each; in software
-#: WebGL about 10 ms per frustum node, benchmarks/README.md). A click into the scene then
+#: every node costs the page's start (one draw call, one scene object each; measured in
+#: benchmarks/README.md). A click into the scene then
 #: selects the image whose frustum passes nearest to the clicked ray
 #: (:meth:`BlockScene.image_nearest_to_ray`).
 FRUSTUM_NODE_LIMIT = 40
