@@ -3,7 +3,9 @@
 A :class:`orientviz.viewer.studio.Studio` on a design of ``--strips`` × ``--images`` images
 (default 20 × 50 = 1 000; perimeter control every 4 bases), and the same with statoscope
 and APR readings (offsets per strip). Each kind is a call of the studio's own method, as
-its panel makes it, followed by the studio's undo (not timed), ``--repeat`` times:
+its panel makes it, and what the panel then shows (:func:`shown`: the colour of every
+point, the legend, the summary next to the accuracy law and the list of changes; not
+viser's sending), followed by the studio's undo (not timed), ``--repeat`` times:
 
 * the method switched to independent models (the first switch: the models design of the
   block is made; later switches of the same block reuse it);
@@ -35,7 +37,16 @@ import numpy as np
 from bench_design import print_thread_tables  # a sibling script (benchmarks/ is on sys.path)
 
 from orientviz.design import FlightDesign, _design, _layout, assess_block, design_auxiliary
-from orientviz.viewer.studio import Studio
+from orientviz.viewer.studio import Studio, legend_html, scale_of
+
+
+def shown(st: Studio) -> tuple:
+    """What the studio's panel computes after a change (``StudioView.redraw`` and
+    ``StudioPanel.refresh`` without the scene): the colours, the legend, the summary and
+    the list of changes."""
+    vals = st.values()
+    scale = scale_of(vals, st.measure)
+    return scale.colours(vals), legend_html(scale), st.summary_markdown(), st.changes_markdown()
 
 
 def _timed(f) -> tuple[float, float]:
@@ -44,8 +55,13 @@ def _timed(f) -> tuple[float, float]:
     return time.perf_counter() - t, time.process_time() - c
 
 
-def _kinds(st: Studio, plan: FlightDesign, tag: str, R: int, kind) -> None:
-    """Time every kind of change on the studio ``st`` (``kind(name, setup, change, undo)``)."""
+def _kinds(st: Studio, plan: FlightDesign, tag: str, R: int, timed_kind) -> None:
+    """Time every kind of change on the studio ``st`` and what it shows then
+    (``timed_kind(name, setup, change, undo)``)."""
+
+    def kind(name, setup, change, undo=None):
+        timed_kind(name, setup, lambda k: (change(k), shown(st)), undo)
+
     b = st.block
     I = b.images
     ends = [int(np.flatnonzero(I.strip == s)[-1]) for s in range(plan.strips)]
@@ -97,7 +113,7 @@ def _kinds(st: Studio, plan: FlightDesign, tag: str, R: int, kind) -> None:
          lambda k: st.set_plan(plan.with_(control_spacing=3, sigma_image_mm=0.005 + 1e-4 * k)),
          undo)  # fmt: skip
     aux = design_auxiliary(b, plan) if st.live.auxiliary else None
-    kind(f"peer: new bundle assessment (assess_block){tag}", nothing,
+    timed_kind(f"peer: new bundle assessment (assess_block){tag}", nothing,
          lambda k: assess_block(st.block, st.spec, auxiliary=aux))  # fmt: skip
 
 

@@ -144,8 +144,7 @@ def test_brown_and_gruen44_sets_reach_the_view_as_solve_estimates_them(name, tmp
     lists and draws: σ̂0, the parameter names and values of ``solve``, and the correction
     field of that set's own model at the estimates."""
     pytest.importorskip("viser")
-    from orientviz.bundle import ap_set
-    from orientviz.io.kinds.block import bundle_camera_options
+    from orientviz.bundle import ap_set, block_camera_options
     from orientviz.io.solve import load_named, solve_problem
     from orientviz.viewer.app import ViewerApp
     from orientviz.viewer.panel_camera import ap_distortion_vectors
@@ -154,7 +153,7 @@ def test_brown_and_gruen44_sets_reach_the_view_as_solve_estimates_them(name, tmp
     problem = load_named(str(path))
     ref = solve_problem(problem).adjustment
     sl = ref.groups["additional"]
-    aps = bundle_camera_options(problem.data)["additional"]  # the set as solve builds it
+    aps = block_camera_options(problem.data)["additional"]  # the set as solve builds it
     assert aps.name == name and list(aps.names) == list(ap_set(name).names)
     app = ViewerApp(str(path), port=0, verbose=False)
     try:

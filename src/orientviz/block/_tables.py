@@ -100,7 +100,7 @@ class Cameras:
     #: name of the additional-parameter set per camera ("" = none)
     ap_set: list[str] = field(default_factory=list)
     #: per camera what a problem file says the bundle estimates of it ({} = nothing):
-    #: a lens model or an additional-parameter set (:mod:`orientviz.io.kinds._cameras`)
+    #: a lens model or an additional-parameter set (:mod:`orientviz.bundle._block_cameras`)
     model: list[dict] = field(default_factory=list)
 
     def __len__(self) -> int:

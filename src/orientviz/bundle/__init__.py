@@ -9,7 +9,9 @@ The face of the bundle's house. What a user calls:
   the :class:`AdditionalParameters` protocol), :func:`analyse` → :class:`APAnalysis`,
   :func:`self_calibrate` → :class:`SelfCalibration`; the camera itself (c, principal
   point, affinity, shear, radial and decentring distortion, backward or forward) inside
-  the projection: :class:`LensModel` → ``result.camera`` (:class:`LensEstimates`);
+  the projection: :class:`LensModel` → ``result.camera`` (:class:`LensEstimates`); a
+  block's own camera models (``block.cameras.model``, as a problem file or an import
+  states them) as :func:`bundle_adjust`'s keywords: :func:`block_camera_options`;
 * gross errors: :func:`clean_block`, :func:`bundle_solver`, :func:`cleaned_block`,
   :func:`ray_labels`; reliability per ray: :func:`ray_reliability` →
   :class:`RayReliability`;
@@ -31,7 +33,7 @@ The rooms behind it (each a sub-package with its own door):
 * ``precision`` — cofactor blocks, redundancy numbers, reliability per ray.
 
 Beside them: ``reference`` with ``_reference_data`` (the textbook iteration), ``_result``
-(the typed result), ``_options`` (:class:`BundleOptions`), ``_selfcal``, ``_cleaning``,
+(the typed result), ``_options`` (:class:`BundleOptions`), ``_block_cameras`` (the block's camera models), ``_selfcal``, ``_cleaning``,
 ``_alternation`` (procedures built on :func:`bundle_adjust`) and ``sparsity`` (the
 sparsity of the normal equations drawn for the lessons). ``__all__`` is the public face;
 the numerical building blocks are reached through the rooms' doors
@@ -40,6 +42,7 @@ the numerical building blocks are reached through the rooms' doors
 """
 
 from ._alternation import AuxiliaryResult, adjust_with_auxiliary
+from ._block_cameras import block_camera_options
 from ._cleaning import bundle_solver, clean_block, cleaned_block, ray_labels
 from ._options import BundleOptions
 from ._result import BundleResult, ExteriorPairs, RayGains
@@ -73,6 +76,7 @@ __all__ = [
     "APAnalysis",
     "LensModel",
     "LensEstimates",
+    "block_camera_options",
     "lens_model",
     "Brown",
     "Ebner12",

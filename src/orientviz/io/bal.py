@@ -230,8 +230,8 @@ def read_bal(
     -------
     Block
         One camera per BAL camera (ids ``cam0``, ``cam1``, …) with its lens spec in
-        ``cameras.model`` (what ``orientviz solve`` estimates; in the library pass
-        :func:`orientviz.io.kinds._cameras.bundle_camera_options` to ``bundle_adjust``),
+        ``cameras.model`` (what ``orientviz solve`` and ``bundle_adjust(block)`` estimate;
+        :func:`orientviz.bundle.block_camera_options`),
         image coordinates in mm (y up, origin at the image centre), X0 and points in the
         file's length unit, angles in rad.
 

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..io.kinds.block import bundle_camera_options
+from ..bundle import block_camera_options
 from ..lens import BackwardLens, backward_ideal
 from .legend import swatch
 
@@ -187,7 +187,7 @@ class CameraControls:
             return
         lo, hi = xy.min(axis=0), xy.max(axis=0)
         if ap:  # an additional-parameter set of the file: its correction field
-            opts = bundle_camera_options(b)
+            opts = block_camera_options(b)
             a = ap_group_values(self.state.result, int(opts["ap_group"][k]))
             if a is None:
                 return

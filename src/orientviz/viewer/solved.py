@@ -39,10 +39,11 @@ from numpy.typing import NDArray
 
 from ..blas import blas_threads
 from ..block import Block
+from ..bundle import block_camera_options
 from ..bundle.problem import BundleProblem, BundleState, point_setup
 from ..errors import InputError
 from ..io.datasets import dataset_path
-from ..io.kinds.block import adjust_block, bundle_camera_options
+from ..io.kinds.block import adjust_block
 from ..io.problem import Units, problem_from_block
 from ..io.solve import load_named, solve_problem
 from ..reproduce import dbat_roma as roma
@@ -195,7 +196,7 @@ class CameraTerms:
     @classmethod
     def of(cls, problem: Any, block: Block) -> CameraTerms | None:
         """The camera terms of ``problem`` (None if its cameras have no model)."""
-        opts = bundle_camera_options(block)
+        opts = block_camera_options(block)
         if not opts:
             return None
         return cls(opts, str(problem.options.get("control", "fixed")))
@@ -203,7 +204,7 @@ class CameraTerms:
     def _problem(self, block: Block) -> Any:
         key = (id(block.observations), block.n_images, block.n_points)
         if self._cache is None or self._cache[0] != key:
-            opts = bundle_camera_options(block)  # ap groups of this (sub-)block
+            opts = block_camera_options(block)  # ap groups of this (sub-)block
             setup = point_setup(block, self.control)
             self._cache = (key, BundleProblem(block, setup, **opts))
         return self._cache[1]

@@ -45,6 +45,7 @@ from ...adjust.result import Iteration
 from ...blas import blas_threads
 from ...block import Block
 from ...errors import InputError, NotDeterminableError
+from .._block_cameras import camera_keywords
 from .._options import BundleOptions
 from .._result import BundleResult
 from ..problem import BundleProblem, BundleState, point_setup
@@ -101,10 +102,15 @@ def bundle_adjust(
         observed coordinates): ``x_obs + v = project(...) + A(x_obs)·a``.
         A set's name (``"ebner12"``, ``"brown"``, ``"gruen44"``) stands for
         ``ap_set(name)``; a :class:`LensModel` estimates the camera's own parameters.
+        None (default): the models the block's cameras state (``block.cameras.model``,
+        e.g. a COLMAP import's free focal length; :func:`~orientviz.bundle.block_camera_options`),
+        none if they state none; ``False``: none, whatever the cameras state.
     ap_group : array_like of int, shape (m,), optional
-        Group of each image for the additional parameters (default: one group).
+        Group of each image for the additional parameters (default: one group; with
+        the block's camera models one per camera).
     ap_sigma : float or array_like (k,), optional
-        σ of the pseudo-observations a = 0 (units of the parameters); None = free.
+        σ of the pseudo-observations a = 0 (units of the parameters); None = free (or
+        what the block's cameras state).
     precision : bool
         Compute per-image 6×6 and per-point 3×3 cofactor blocks, redundancy numbers and
         normalised residuals (:mod:`orientviz.bundle.precision`).
@@ -153,6 +159,8 @@ def bundle_adjust(
     if given:
         opts = opts.replace(**given)
     max_iter, tol, ftol = opts.max_iter, opts.tol, opts.ftol
+    # the block's camera models unless the caller gave additional (.._block_cameras)
+    additional, ap_group, ap_sigma = camera_keywords(block, additional, ap_group, ap_sigma)
     if opts.loss != "none":  # reweighted steps converge linearly (._loss)
         max_iter *= ROBUST_ITER_FACTOR
         ftol = ftol or ROBUST_FTOL

@@ -15,7 +15,8 @@ hand on. Its knobs are fields of the problem's
 * the additional parameters are held at their values in the first step from a poor
   start; their border E, F is reused in the next iteration when the last step moved
   nothing by more than ``ap_reuse`` (the Jacobians then change by about as little, less
-  than the tolerance of the border's solve);
+  than the tolerance of the border's solve) — until a step meets the stopping rule
+  (see below);
 * from a poor start (σ0 ≥ ``local_sigma0``, last correction ≥ ``local_min_correction``)
   steps rotate the image frames (:mod:`orientviz.bundle.model._local_rotation`);
 * *chord* steps: a plain bundle without precision solves the step after a small one
@@ -26,6 +27,16 @@ hand on. Its knobs are fields of the problem's
   solved in full at the same iterate. A factor of a step in frame rotations serves steps
   in ω, φ, κ through the map A of :func:`~orientviz.bundle.model.angle_map`
   (J_θ = J_δ·A per image).
+
+Why a step on a reused border may not stop the run: it solves with E, F of an earlier
+iterate, δ̃ = Ñ⁻¹ g, and where the border's Schur complement Fs = F − Eᵀ S⁻¹ E is nearly
+singular (free parameters per strip) a relative change of E, F far below ``ap_reuse``
+changes Fs by much more: ‖Ñ⁻¹ N − I‖ need not be small, and a small δ̃ does not bound the
+distance to the optimum. Such a step may meet the tolerance but not stop the run; from
+then on the border is formed at every iterate, and the run stops on a step solved on the
+border of its own iterate. That step is inexact only by the conjugate gradients'
+tolerance (``pcg_tol``, relative to the step): it reads the distance to the optimum
+within that factor, as an exact Newton step does.
 
 Why the stopping rule may judge a chord step: at one iterate the chord correction
 δ_c = N_old⁻¹ g and the Newton correction δ_N = N⁻¹ g satisfy δ_N = N⁻¹ N_old δ_c, so with
@@ -165,6 +176,11 @@ class BundleSteps:
         # with additional parameters, else the median ray of the first iterate that asks
         self.ray_length: float | None = prob.ap.ray_length if prob.q else None
         self.last_rel, self.last_local = np.inf, False  # of the last solved step
+        # the last solved step used a reused border E, F (it may not stop the run), and
+        # whether a step has met the tolerance (the border is then formed anew at every
+        # iterate: the run ends on a step solved on its own iterate's border)
+        self.last_reused = False
+        self.border_fresh = False
         self.robust_tail = False  # the last robust step lowered Σρ by < ROBUST_TAIL
 
     def start(self, st: BundleState) -> Evaluation:
@@ -356,13 +372,18 @@ class BundleSteps:
         self.lin = None  # released before the next normal equations are built
 
     def may_stop(self) -> bool:
-        """Whether the run may stop: not before a robust loss is switched on."""
+        """Whether the run may stop: not before a robust loss is switched on, nor after a
+        step solved on a reused border E, F (see the module docstring)."""
+        if self.last_reused:
+            return False
         return self.loss is None or (self.loss_on and not self.switch_pending)
 
     def stops(self, tol: float) -> bool:
         """Whether the last solved step meets the stopping rule (``tol``) once accepted:
         the state it leads to then needs no derivatives (without the precision)."""
-        return self.last_rel < tol and not (self.prob.run.border.hold or self.last_local)
+        return self.last_rel < tol and not (
+            self.prob.run.border.hold or self.last_local or self.last_reused
+        )
 
     def solve(self, st: BundleState, ev: Evaluation, lam: float, iteration: int) -> Step:
         prob = self.prob
@@ -400,6 +421,7 @@ class BundleSteps:
             dpa[prob.points.unknown] = dp
             dx = np.concatenate([dc.ravel(), dpa.ravel(), da[: prob.q]])
         self.last_rel, self.last_local = rel, local
+        self.last_reused = chord is None and bool(getattr(ne.ap, "reused", False))
         self.chord_pending = None
         if self.chord_allowed and lam == 0:
             if self.chord_step:  # the factor served: it may serve the next step too
@@ -499,8 +521,12 @@ class BundleSteps:
         if self.precision and lam == 0 and not (prob.q or prob.aux or local):
             self.lin = (ne, fac, previous.data[1], previous.data[2])
         if prob.q:
+            # after a step that meets the tolerance the border is formed at every iterate
+            # (the run ends on a step solved on its own border, see the module docstring)
+            self.border_fresh = self.border_fresh or step.max_correction < prob.options.tol
             prob.run.border.reuse = (
                 not prob.run.border.hold
+                and not self.border_fresh
                 and prob.ap.lens is None  # a lens model's design moves with its parameters
                 and self._relative_move(None, dc, dp) < prob.options.ap_reuse  # (scale set)
             )

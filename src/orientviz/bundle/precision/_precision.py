@@ -147,6 +147,11 @@ def banded_selected_inverse(
     return Zb if at is None else out.reshape(np.shape(at[0]))
 
 
+#: Bands of the inverse up to this many entries (8 bytes each) are computed whole and
+#: read by one gather; larger ones give only the wanted entries (``at=``: no band stored).
+BAND_GATHER_LIMIT: int = 4_000_000
+
+
 class ReducedInverse:
     """The inverse of the reduced system S where the precision needs it.
 
@@ -192,7 +197,11 @@ class ReducedInverse:
         p = st.pos_img
         rows = 6 * p[st.block_i][:, None, None] + r6[None, :, None]
         cols = 6 * p[st.block_k][:, None, None] + r6[None, None, :]
-        self.blocks = banded_selected_inverse(fac.data, nb, at=(rows, cols))
+        if fac.data.size <= BAND_GATHER_LIMIT:  # the whole band, then one gather (faster)
+            Zb = banded_selected_inverse(fac.data, nb)
+            self.blocks = Zb[np.minimum(rows, cols), np.abs(rows - cols)]
+        else:  # only the wanted entries (the band is not stored)
+            self.blocks = banded_selected_inverse(fac.data, nb, at=(rows, cols))
 
     def border(self, E) -> tuple[F64, F64, NDArray[np.int64]]:
         """S⁻¹E and Eᵀ S⁻¹ E for a border E (6m, q): ``(Y3, EtY, row)``.

@@ -22,15 +22,17 @@ Units: c, x0, y0, their σ and ``r0`` in the file's image unit; the lens terms i
 photogrammetric image frame (y up) and mm (backward K1 mm⁻², K2 mm⁻⁴, K3 mm⁻⁶, P1, P2
 mm⁻¹ as DBAT and PhotoModeler print them; forward terms unitless, OpenCV's p1 with the
 opposite sign because OpenCV's y points down), whatever ``units.image`` is.
+
+:func:`read_camera_models` gives each row's spec in internal units; the block carries
+them (``block.cameras.model``) and :func:`orientviz.bundle.bundle_adjust` estimates
+what they state (:mod:`orientviz.bundle._block_cameras`), in the library as in
+``orientviz solve``.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
-from ...errors import InputError
 from ..problem import Units
 from ..solution import Parameter
 from ..tables import Table
@@ -125,27 +127,6 @@ def _additional_spec(t: Table, i: int, add: str) -> dict[str, Any]:
             "free": None if free is None else [str(k) for k in free], "sigma": sigma}  # fmt: skip
 
 
-#: σ (µm) that holds a fixed additional parameter at 0.
-FIXED_SIGMA_UM = 1e-6
-
-
-def additional_sigmas(spec: dict[str, Any], names: list[str]) -> np.ndarray:
-    """σ (µm) of the pseudo-observations p = 0 of each parameter of an additional set:
-    its ``sigma`` if given; with ``free``, inf (free) for the listed and
-    :data:`FIXED_SIGMA_UM` (held at 0) for the others; else ``additional_sigma`` or inf."""
-    sig, free = spec.get("sigma") or {}, spec.get("free")
-    default = spec.get("additional_sigma")
-    out = []
-    for k in names:
-        if k in sig:
-            out.append(float(sig[k]))
-        elif free is not None:
-            out.append(np.inf if k in free else FIXED_SIGMA_UM)
-        else:
-            out.append(np.inf if default is None else float(default))
-    return np.array(out)
-
-
 def camera_model_cells(models: list[dict[str, Any]], units: Units) -> dict[str, list[Any]]:
     """The model columns of the cameras table in ``units`` (inverse of the reader)."""
     I = units.mm_per_image
@@ -161,63 +142,6 @@ def camera_model_cells(models: list[dict[str, Any]], units: Units) -> dict[str, 
                 v = v / I
             cols[k].append(v)
     return {k: v for k, v in cols.items() if any(x is not None and x != {} for x in v)}
-
-
-def bundle_camera_options(block) -> dict[str, Any]:
-    """``bundle_adjust`` keywords for the block's camera models (empty without any).
-
-    Every camera must state the same model (kind, free and weighted parameters) or the
-    same additional-parameter set; each camera is its own parameter group.
-    """
-    models = list(getattr(block.cameras, "model", None) or [])
-    if not any(models):
-        return {}
-    from ...bundle import LensModel, ap_set  # the solver stack: only when adjusting
-
-    ids = block.cameras.ids
-    first = models[0]
-    key = _shape(first)
-    for cid, spec in zip(ids, models):
-        if _shape(spec) != key:
-            raise InputError(
-                f"camera {cid!r}: every camera of a block must state the same model "
-                f"({_describe(first)} for camera {ids[0]!r}, {_describe(spec)} here)"
-            )
-    group = np.asarray(block.images.camera, np.int64)
-    if "additional" in first:
-        cam = block.cameras
-        opts = {"b": float(np.min(cam.format_mm[0])) * 0.4} if first["additional"] != "brown" else {
-            "c": float(cam.c[0]), "r0": float(np.hypot(*cam.format_mm[0])) / 4}  # fmt: skip
-        aps = ap_set(first["additional"], **opts)
-        return {"additional": aps, "ap_group": group,
-                "ap_sigma": additional_sigmas(first, list(aps.names))}  # fmt: skip
-    values = {}
-    for k in sorted({k for s in models for k in s["values"]}):
-        values[k] = [s["values"].get(k, 0.0) for s in models]
-    free = first["free"]
-    model = LensModel(first["model"], free=None if free is None else tuple(free),
-                      prior=dict(first["sigma"]), values=values,
-                      r0=first["r0"])  # fmt: skip
-    return {"additional": model, "ap_group": group}
-
-
-def _shape(spec: dict[str, Any]) -> tuple:
-    if "additional" in spec:
-        free = None if spec.get("free") is None else tuple(spec["free"])
-        return ("additional", spec["additional"], spec.get("additional_sigma"), free,
-                tuple(sorted((spec.get("sigma") or {}).items())))  # fmt: skip
-    if not spec:
-        return ("none",)
-    free = None if spec["free"] is None else tuple(spec["free"])
-    return ("model", spec["model"], free, tuple(sorted(spec["sigma"].items())))
-
-
-def _describe(spec: dict[str, Any]) -> str:
-    if not spec:
-        return "no model"
-    if "additional" in spec:
-        return f"additional {spec['additional']!r}"
-    return f"model {spec['model']!r} free {spec['free']} sigma {spec['sigma']}"
 
 
 def camera_notes(block, adj, units: Units) -> list[str]:

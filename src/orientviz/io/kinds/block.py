@@ -28,7 +28,7 @@ from ...errors import InputError
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
 from ..solution import Solution
-from ._cameras import bundle_camera_options, camera_notes, camera_parameters
+from ._cameras import camera_notes, camera_parameters
 from ._diverge import divergence_note
 from ._frame import block_from_tables, read_frame_tables, require_finite, tables_from_block
 
@@ -284,7 +284,6 @@ def adjust_block(problem: Problem, block: Block, **overrides: Any) -> tuple[Any,
         loop.update(loss=loss.kind, loss_scale=loss.scale)
     if loop:
         opts["options"] = BundleOptions(**loop)
-    opts.update(bundle_camera_options(block))  # cameras[].model / additional
     opts.update(overrides)
     run_block = with_check_rays(block) if check_mode(problem) == "rays" else block
     adj = _call(bundle_adjust, run_block, opts)
