@@ -231,3 +231,87 @@ def test_orientviz_view_begins_the_solve_after_a_first_browser_has_had_its_pictu
     stopped.cancel()
     stopped._thread.join(30)
     assert not stopped._thread.is_alive() and not began.is_set()
+
+
+class _Served:
+    """``orientviz view``'s viewers and loop, recorded: each ViewerApp made, the apps at
+    the moment the model was evaluated, and Ctrl-C once the loop waits."""
+
+    def __init__(self, monkeypatch):
+        from orientviz.viewer import opening
+
+        self.apps: list[ViewerApp] = []
+        self.at_evaluation: list[int] = []
+        recorder = self
+
+        class Recorded(ViewerApp):
+            def __init__(self, *a, **k):
+                super().__init__(*a, **k)
+                recorder.apps.append(self)
+
+        def evaluated(problem):
+            self.at_evaluation.append(len(self.apps))
+            return evaluate(problem)
+
+        def ctrl_c(seconds):
+            raise KeyboardInterrupt
+
+        evaluate = opening.start_values
+        monkeypatch.setattr(app_module, "ViewerApp", Recorded)
+        monkeypatch.setattr(opening, "start_values", evaluated)
+        monkeypatch.setattr(app_module.time, "sleep", ctrl_c)
+
+
+def test_orientviz_view_serves_a_large_model_before_evaluating_it(model, small_limit,
+                                                                  monkeypatch, capsys):  # fmt: skip
+    """The server starts (and prints its address) before the evaluation at the start
+    values; the page then gets what the ordinary path shows."""
+    from orientviz.viewer import opening
+
+    ordinary = resolve_content(model, {"free": True}, background=True)
+    assert opening.opens_before_evaluation(load_named(model)) is False  # no --free: defect
+    served = _Served(monkeypatch)
+    assert main(["view", model, "--free", "--port", "0"]) == 0
+    out = capsys.readouterr()
+    assert "open http://127.0.0.1:" in out.out and "stopped" in out.err
+    assert served.at_evaluation == [1], "the model was evaluated before the server started"
+    app = served.apps[0]
+    st, ref = app.panel.state, ordinary.state
+    assert st.pending and app.background is not None and not app.messages
+    assert st.sigma0() == ref.sigma0()
+    np.testing.assert_array_equal(st.block.points.xyz, ref.block.points.xyz)
+    np.testing.assert_array_equal(st.result.residuals, ref.result.residuals)
+    assert app._head.content == f"### {ordinary.title}\n{ordinary.description}"
+    assert not app.background._thread.is_alive() or app.background._cancel.is_set()
+
+
+def test_a_large_model_that_solve_refuses_gets_solves_line_with_or_without_a_server(
+    model, small_limit, monkeypatch, capsys
+):
+    """Without ``--free`` (a datum defect) no server starts, as for every file; an
+    evaluation that fails after the server started ends with solve's line and code."""
+    import viser
+
+    from orientviz.viewer import opening
+
+    assert main(["solve", model]) == 3
+    err_solve = capsys.readouterr().err
+    real = viser.ViserServer
+    monkeypatch.setattr(viser, "ViserServer", lambda *a, **k: pytest.fail("server started"))
+    assert main(["view", model, "--port", "0"]) == 3
+    assert capsys.readouterr().err.replace("view:", "solve:") == err_solve
+    monkeypatch.setattr(viser, "ViserServer", real)
+    served = _Served(monkeypatch)
+
+    def fails(problem):
+        raise AdjustmentError("reduced normal equations singular")
+
+    monkeypatch.setattr(opening, "start_values", fails)
+    assert main(["view", model, "--free", "--port", "0"]) == 3
+    err = capsys.readouterr().err
+    assert (
+        err
+        == f"orientviz view: {model}: adjustment impossible: reduced normal equations singular\n"
+    )
+    app = served.apps[0]
+    assert app_module.port_is_free("127.0.0.1", app.port)  # the server has stopped
