@@ -234,8 +234,9 @@ class ViewerApp:
         if self.background is not None:  # the solve runs while the start values are shown
             self.panel.show_pending(self.background)
             job = self.background  # a browser's first picture first, then the solve
-            # (viser runs it for a browser already connected while the model was evaluated)
             self.server.on_client_connect(lambda _c: job.hold() if job.running else None)
+            if self.server.get_clients():  # connected while the model was evaluated
+                job.hold()
             job.start(self.take_background, self.panel.show_pending, self.first_browser_wait)
 
     def take_background(self, job: Any) -> None:
