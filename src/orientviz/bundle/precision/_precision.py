@@ -221,6 +221,21 @@ class ReducedInverse:
         return Yp.reshape(m, 6, -1), EtY, st.pos_img
 
 
+#: Blocks of S corrected at once by :func:`_with_border` (its gathers ≈ 2 MB each).
+BORDER_CHUNK: int = 1024
+
+
+def _with_border(Zblk: F64, Qca: F64, Y3: F64, bi, bk) -> F64:
+    """Zblk − Qca[i] Y3[k]ᵀ at every block (i, k) of S, in chunks of :data:`BORDER_CHUNK`
+    blocks (a new array; the same products as at once, without (blocks, 6, nb) gathers of
+    many MB in fresh memory)."""
+    out = np.empty_like(Zblk)
+    for s0 in range(0, Zblk.shape[0], BORDER_CHUNK):
+        sl = slice(s0, s0 + BORDER_CHUNK)
+        out[sl] = Zblk[sl] - Qca[bi[sl]] @ Y3[bk[sl]].transpose(0, 2, 1)
+    return out
+
+
 def _block_lookup(st: ReducedStructure, ca, cb_):
     """Index of block (min, max) for image pairs and whether it must be transposed."""
     m = st.n_cam
@@ -330,7 +345,7 @@ def _fill_precision(res, prob, st, rw, Je, Jp, lin) -> None:
         Y3 = Y3[row]  # image order
         Faa = np.linalg.inv(F - EtY)  # Q_aa (of the whole border)
         Qca = -(Y3 @ Faa)  # (m, 6, nb)
-        Zblk = Zblk - Qca[S.block_i] @ Y3[S.block_k].transpose(0, 2, 1)  # + Y Q_aa Yᵀ
+        Zblk = _with_border(Zblk, Qca, Y3, S.block_i, S.block_k)  # + Y Q_aa Yᵀ
     Qcc_diag = Zblk[S.diag_block]
     # point cofactors: Vinv + Σ_ab T_aᵀ Q(i_a, i_b) T_b
     oi, ocol = prob.obs.image, prob.obs.column
