@@ -75,11 +75,9 @@ def changed_share(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.mean(np.abs(a - b).max(axis=2) > 40))
 
 
-def open_demo(page, app, min_drawn: float = 0.01, goto: bool = True) -> np.ndarray:
-    """Load the viewer page (``goto``; False: the page is open already), wait until the
-    scene is drawn; return its screenshot."""
-    if goto:
-        page.goto(app.url)
+def open_demo(page, app, min_drawn: float = 0.01) -> np.ndarray:
+    """Load the viewer page, wait until the scene is drawn; return its screenshot."""
+    page.goto(app.url)
     page.wait_for_selector("canvas", timeout=60_000)
     assert wait_for(lambda: len(app.server.get_clients()) > 0, 60), "the page never connected"
     # the "software WebGL" notice is about this headless machine, not the viewer

@@ -10,10 +10,8 @@ FILE --free``):
   43 889 image points written by ``write_colmap`` and read back by ``orientviz
   import-colmap`` (COLMAP's objective, focal length and distortion free).
 
-Ladybug opens as ``orientviz view`` opens it: the page is open (and says what is being
-evaluated) before the model is evaluated at the file's start values; then the scene arrives
-while the solve runs in the background (the page shows the start's σ0 and says so, then
-the solution's).
+Ladybug opens as ``orientviz view`` opens it, at the file's start values while the solve
+runs in the background (the page shows the start's σ0 and says so, then the solution's).
 In each the scene draws, the panel shows σ̂0 of the solve and says that the precision
 waits for a request (above the viewer's limit), the worst images by |v|/σ are listed and
 one is flown to from the page, and switching that image off re-solves and undo restores it.
@@ -28,8 +26,6 @@ import pytest
 
 from orientviz.cli import main
 from orientviz.viewer.app import ViewerApp, demo_from_file
-from orientviz.viewer.opening import LargeModel, opens_before_evaluation
-from orientviz.viewer.solved import load_target
 
 from .browser import changed_share, gui_control, open_demo, wait_for, wait_for_picture
 
@@ -38,25 +34,16 @@ pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
 @pytest.fixture(scope="module")
 def ladybug_app(tmp_path_factory):
-    """Opened as ``orientviz view`` opens it: the server first, the model evaluated at the
-    file's start values once the page has connected (``app.evaluate()``), then solved in
-    the background (held at ``app.gate`` until the test has seen the page)."""
+    """Opened as ``orientviz view`` opens it: at the file's start values while it is
+    solved in the background (held at ``app.gate`` until the test has seen the page)."""
     path = tmp_path_factory.mktemp("bal") / "ladybug.json"
     assert main(["import-bal", "ladybug", "-o", str(path)]) == 0
-    problem = load_target(str(path), {"free": True})
-    assert opens_before_evaluation(problem)  # 31 843 image points, every start value given
-    model = LargeModel(problem, str(path))
-    app = ViewerApp(None, port=0, verbose=False)
-    app.show_loading(model.loading_text())
-    gate = threading.Event()
-
-    def evaluate():
-        demo = model.demo()
-        solve = demo.background.solve
-        demo.background.solve = lambda callback: gate.wait(120) and solve(callback)
-        app.load_shown(demo)
-
-    app.gate, app.evaluate = gate, evaluate
+    demo = demo_from_file(str(path), {"free": True}, background=True)
+    assert demo.background is not None  # 31 843 image points, every start value given
+    gate, solve = threading.Event(), demo.background.solve
+    demo.background.solve = lambda callback: gate.wait(120) and solve(callback)
+    app = ViewerApp(demo, port=0, verbose=False)
+    app.gate = gate
     yield app
     with app.panel._lock:  # let the callbacks finish before the server stops
         pass
@@ -90,16 +77,10 @@ def test_a_colmap_model_of_the_issues_size_debugged_in_the_page(module_browser, 
 def debugged_in_the_page(browser, app, size: tuple[int, int]) -> None:
     """Colours by |v|/σ, the worst image chosen in the page and flown to, off and undo."""
     page = browser.new_page()
-    early = getattr(app, "evaluate", None) is not None
-    if early:  # the page is there before the model has been evaluated
-        page.goto(app.url)
-        assert wait_for(lambda: "at the file's start values" in page.inner_text("body"), 60)
-        assert app.panel is None and len(app.server.get_clients()) == 1
-        app.evaluate()
     st, q = app.panel.state, app.panel.quality
     b = st.block
     assert (b.n_images, b.n_points) == size and not app.messages
-    img = open_demo(page, app, min_drawn=0.004, goto=not early)
+    img = open_demo(page, app, min_drawn=0.004)
     if getattr(app, "gate", None) is not None:  # opened while the solve runs
         start = f"{st.history[0].sigma0:.10g}"
         body = page.inner_text("body")

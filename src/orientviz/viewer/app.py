@@ -32,7 +32,6 @@ from .demo import Demo
 from .demos import DEMOS, demo_from_block, load_demo
 from .geometry import VIEW_FOV
 from .keys import keep_arrow_keys_on_sliders
-from .opening import LargeModel, opens_before_evaluation
 from .panel import BlockPanel
 from .scene import BlockScene
 from .snapshot import panel_markdown, with_panel
@@ -41,9 +40,7 @@ from .solved import (
     block_description,
     finite_state,
     last_finite_record,
-    load_target,
     solution_demo,
-    solve_loaded,
     solve_target,
 )
 
@@ -171,13 +168,20 @@ class ViewerApp:
         self.background: Any = None
         self.messages: list[str] = []
         self.first_browser_wait = float(first_browser_wait)
-        self._head: Any = None
         self._message_md = self.server.gui.add_markdown("")
         self._message_md.visible = False
         if error:
             self.report(error)
         if content is not None:
-            self.load_shown(content)
+            try:
+                self.load(content)
+            except KeyboardInterrupt:  # Ctrl-C while building: leave no server thread behind
+                self.server.stop()
+                raise
+            except Exception as exc:  # any load failure is shown; the server keeps running
+                self.report(
+                    str(exc) if isinstance(exc, OrientvizError) else f"{type(exc).__name__}: {exc}"
+                )
         if verbose:
             print(f"orientviz viewer: open {self.url} in a browser (Ctrl-C to stop)", flush=True)
 
@@ -191,32 +195,11 @@ class ViewerApp:
         """Build the scene and GUI for ``content`` (see the class docstring)."""
         demo = resolve_content(content, background=True)  # a live viewer: see resolve_content
         self.demo = demo
-        with self.server.atomic():  # a page already open gets the scene in one piece
-            self._build(demo)
-
-    def load_shown(self, content: Any) -> None:
-        """:meth:`load`; a failure is shown in the panel (the server keeps running)."""
-        try:
-            self.load(content)
-        except KeyboardInterrupt:  # Ctrl-C while building: leave no server thread behind
-            self.server.stop()
-            raise
-        except Exception as exc:  # any load failure is shown; the server keeps running
-            self.report(
-                str(exc) if isinstance(exc, OrientvizError) else f"{type(exc).__name__}: {exc}"
-            )
-
-    def show_loading(self, markdown: str) -> None:
-        """Show ``markdown`` at the top of the panel until :meth:`load` replaces it."""
-        self._head = self.server.gui.add_markdown(markdown)
+        self._build(demo)
 
     def _build(self, demo: Any) -> None:
         gui = self.server.gui
-        head = f"### {demo.title}\n{demo.description}"
-        if self._head is None:
-            self._head = gui.add_markdown(head)
-        else:  # the text shown while loading (:meth:`show_loading`)
-            self._head.content = head
+        self._head = gui.add_markdown(f"### {demo.title}\n{demo.description}")
         if demo.message:
             self.report(demo.message)
         if demo.state is not None:
@@ -234,7 +217,6 @@ class ViewerApp:
         if self.background is not None:  # the solve runs while the start values are shown
             self.panel.show_pending(self.background)
             job = self.background  # a browser's first picture first, then the solve
-            # (viser runs it for a browser already connected while the model was evaluated)
             self.server.on_client_connect(lambda _c: job.hold() if job.running else None)
             job.start(self.take_background, self.panel.show_pending, self.first_browser_wait)
 
@@ -427,10 +409,7 @@ def run_from_cli(args: argparse.Namespace) -> int:
     ``orientviz view design FILE``: the design studio on a problem file's geometry.
 
     A file or data set that cannot be solved gets ``orientviz solve``'s one line and exit
-    code before any server starts. A large imported model whose checks pass
-    (:mod:`~orientviz.viewer.opening`) is served before it is evaluated at its start values:
-    the page loads meanwhile; an evaluation that fails then ends the command with the same
-    line and code. Returns the exit code.
+    code before any server starts. Returns the exit code.
     """
     target = args.target or DEFAULT_DEMO
     options = {k: getattr(args, k) for k in ("fix", "free", "max_iter")
@@ -439,22 +418,15 @@ def run_from_cli(args: argparse.Namespace) -> int:
     if plan_from and target != "design":
         print(f"{PROG}: a second argument (FILE) goes with `design` only", file=sys.stderr)
         return 2
-    live = not getattr(args, "export", None)
     try:
         if plan_from:  # the design studio on a problem file's geometry
             from .demos import design_from_file  # the design studio: for its demo only
 
             content, target = design_from_file(plan_from), plan_from
-        elif live and target not in DEMOS:
+        else:
             # a bad file: refused before a server; a large imported model opens at its
-            # start values while it is solved, the server started before its evaluation
-            problem = load_target(target, options)
-            content = (
-                LargeModel(problem, target)
-                if opens_before_evaluation(problem)
-                else solution_demo(solve_loaded(problem, background=True))
-            )
-        else:  # a snapshot shows the solution
+            # start values while it is solved (not for a snapshot, which shows the solution)
+            live = not getattr(args, "export", None)
             content = resolve_content(target, options, background=live)
     except Exception as exc:
         failed = failure(PROG, target, exc)
@@ -472,22 +444,9 @@ def run_from_cli(args: argparse.Namespace) -> int:
         return 0
     app = None
     try:
-        large = content if isinstance(content, LargeModel) else None
         app = ViewerApp(
-            None if large else content, host=args.host, port=args.port,
-            first_browser_wait=FIRST_BROWSER_WAIT,
-        )  # fmt: skip
-        if large is not None:  # evaluated while the browser loads the page
-            app.show_loading(large.loading_text())
-            try:
-                demo = large.demo()
-            except Exception as exc:
-                failed = failure(PROG, target, exc)
-                if failed is None:
-                    raise
-                print(failed[0], file=sys.stderr)
-                return failed[1]
-            app.load_shown(demo)
+            content, host=args.host, port=args.port, first_browser_wait=FIRST_BROWSER_WAIT
+        )
         while True:
             time.sleep(0.5)
     except InputError as exc:

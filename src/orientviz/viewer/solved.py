@@ -8,9 +8,8 @@ additional parameters, units. The viewer then shows the block the solve started 
 (``Solution.start``) and replays the solve's own iterations (``adjustment.history``);
 σ̂0 in the panel is the solution's.
 
-A problem that cannot be loaded or solved raises here, before any server starts (a large
-imported model is evaluated after the server has started: :mod:`orientviz.viewer.opening`);
-the command prints :func:`orientviz.io.solve.failure`'s one line and exit code. A solve that
+A problem that cannot be loaded or solved raises here, before any server starts; the
+command prints :func:`orientviz.io.solve.failure`'s one line and exit code. A solve that
 does not converge is shown with its message and its last state.
 
 The viewer's actions (a ray, an image or a control point off and on) re-solve with
@@ -123,37 +122,14 @@ def solve_target(
     InputError, AdjustmentError, …
         What ``orientviz solve`` reports (:func:`orientviz.io.solve.failure`).
     """
-    return solve_loaded(load_target(target, options), background)
-
-
-def load_target(target: str, options: dict[str, Any] | None = None) -> Any:
-    """Load ``target`` (a path, a shipped data set's name or ``dbat_roma``) as ``solve``
-    loads it, with ``options`` overriding the file's; the problem, not yet solved.
-
-    Raises
-    ------
-    InputError
-        What ``orientviz solve`` reports for a file it cannot read.
-    """
     problem = VIEWER_NAMES[target]() if target in VIEWER_NAMES else load_named(target)
     if options:
         problem.options = dict(problem.options, **options)
-    return problem
-
-
-def solve_loaded(problem: Any, background: bool = False) -> Solved:
-    """:func:`solve_target` on a loaded problem (:func:`load_target`)."""
     if background and opens_before_solve(problem):
-        return start_values(problem)
+        with blas_threads(1):
+            start = solve_problem(problem, precision=False, history_x=True, max_iter=0)
+        return Solved(problem, start, pending=True)
     return Solved(problem, solve_problem_as_viewer(problem))
-
-
-def start_values(problem: Any) -> Solved:
-    """The problem evaluated at its file's start values by the solve's own model, datum
-    and checks, no step taken (``pending``: the solve itself is still to run)."""
-    with blas_threads(1):
-        start = solve_problem(problem, precision=False, history_x=True, max_iter=0)
-    return Solved(problem, start, pending=True)
 
 
 def roma_problem() -> Any:
