@@ -20,7 +20,10 @@ viser's sending), followed by the studio's undo (not timed), ``--repeat`` times:
 Peer in the same run: a new bundle assessment of the block (:func:`orientviz.design.assess_block`).
 With ``--threads both`` everything runs with the default BLAS threads, then with one
 (``threadpoolctl``), in the same process; wall and process CPU time (all threads) are
-printed, medians and maxima.
+printed, medians and maxima. ``--heap viewer`` (default) first keeps large arrays on the
+C heap as ``orientviz view design`` does when it builds the studio's view
+(:func:`orientviz.viewer.studio_memory.keep_large_arrays_on_heap`); ``--heap glibc`` leaves
+glibc's adaptive thresholds (a process setting: compare in two runs).
 
     python benchmarks/bench_design_studio.py                  # 1 000 images, both settings
     python benchmarks/bench_design_studio.py --strips 4 --images 10 --threads 1
@@ -38,6 +41,7 @@ from bench_design import print_thread_tables  # a sibling script (benchmarks/ is
 
 from orientviz.design import FlightDesign, _design, _layout, assess_block, design_auxiliary
 from orientviz.viewer.studio import Studio, legend_html, scale_of
+from orientviz.viewer.studio_memory import keep_large_arrays_on_heap
 
 
 def shown(st: Studio) -> tuple:
@@ -157,7 +161,10 @@ def main() -> None:
     ap.add_argument("--images", type=int, default=50)
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--threads", choices=("both", "default", "1"), default="both")
+    ap.add_argument("--heap", choices=("viewer", "glibc"), default="viewer")
     args = ap.parse_args()
+    if args.heap == "viewer":
+        print("large arrays on the heap (as the viewer):", keep_large_arrays_on_heap())
     print_thread_tables(run, args)
 
 
