@@ -3,7 +3,9 @@
 A :class:`orientviz.viewer.studio.Studio` on a design of ``--strips`` × ``--images`` images
 (default 20 × 50 = 1 000; perimeter control every 4 bases), and the same with statoscope
 and APR readings (offsets per strip). Each kind is a call of the studio's own method, as
-its panel makes it, followed by the studio's undo (not timed), ``--repeat`` times:
+its panel makes it, and what the panel then shows (:func:`shown`: the colour of every
+point, the legend, the summary next to the accuracy law and the list of changes; not
+viser's sending), followed by the studio's undo (not timed), ``--repeat`` times:
 
 * the method switched to independent models (the first switch: the models design of the
   block is made; later switches of the same block reuse it);
@@ -18,7 +20,10 @@ its panel makes it, followed by the studio's undo (not timed), ``--repeat`` time
 Peer in the same run: a new bundle assessment of the block (:func:`orientviz.design.assess_block`).
 With ``--threads both`` everything runs with the default BLAS threads, then with one
 (``threadpoolctl``), in the same process; wall and process CPU time (all threads) are
-printed, medians and maxima.
+printed, medians and maxima. ``--heap viewer`` (default) first keeps large arrays on the
+C heap as ``orientviz view design`` does when it builds the studio's view
+(:func:`orientviz.viewer.studio_memory.keep_large_arrays_on_heap`); ``--heap glibc`` leaves
+glibc's adaptive thresholds (a process setting: compare in two runs).
 
     python benchmarks/bench_design_studio.py                  # 1 000 images, both settings
     python benchmarks/bench_design_studio.py --strips 4 --images 10 --threads 1
@@ -35,7 +40,17 @@ import numpy as np
 from bench_design import print_thread_tables  # a sibling script (benchmarks/ is on sys.path)
 
 from orientviz.design import FlightDesign, _design, _layout, assess_block, design_auxiliary
-from orientviz.viewer.studio import Studio
+from orientviz.viewer.studio import Studio, legend_html, scale_of
+from orientviz.viewer.studio_memory import keep_large_arrays_on_heap
+
+
+def shown(st: Studio) -> tuple:
+    """What the studio's panel computes after a change (``StudioView.redraw`` and
+    ``StudioPanel.refresh`` without the scene): the colours, the legend, the summary and
+    the list of changes."""
+    vals = st.values()
+    scale = scale_of(vals, st.measure)
+    return scale.colours(vals), legend_html(scale), st.summary_markdown(), st.changes_markdown()
 
 
 def _timed(f) -> tuple[float, float]:
@@ -44,8 +59,13 @@ def _timed(f) -> tuple[float, float]:
     return time.perf_counter() - t, time.process_time() - c
 
 
-def _kinds(st: Studio, plan: FlightDesign, tag: str, R: int, kind) -> None:
-    """Time every kind of change on the studio ``st`` (``kind(name, setup, change, undo)``)."""
+def _kinds(st: Studio, plan: FlightDesign, tag: str, R: int, timed_kind) -> None:
+    """Time every kind of change on the studio ``st`` and what it shows then
+    (``timed_kind(name, setup, change, undo)``)."""
+
+    def kind(name, setup, change, undo=None):
+        timed_kind(name, setup, lambda k: (change(k), shown(st)), undo)
+
     b = st.block
     I = b.images
     ends = [int(np.flatnonzero(I.strip == s)[-1]) for s in range(plan.strips)]
@@ -97,7 +117,7 @@ def _kinds(st: Studio, plan: FlightDesign, tag: str, R: int, kind) -> None:
          lambda k: st.set_plan(plan.with_(control_spacing=3, sigma_image_mm=0.005 + 1e-4 * k)),
          undo)  # fmt: skip
     aux = design_auxiliary(b, plan) if st.live.auxiliary else None
-    kind(f"peer: new bundle assessment (assess_block){tag}", nothing,
+    timed_kind(f"peer: new bundle assessment (assess_block){tag}", nothing,
          lambda k: assess_block(st.block, st.spec, auxiliary=aux))  # fmt: skip
 
 
@@ -141,7 +161,10 @@ def main() -> None:
     ap.add_argument("--images", type=int, default=50)
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--threads", choices=("both", "default", "1"), default="both")
+    ap.add_argument("--heap", choices=("viewer", "glibc"), default="viewer")
     args = ap.parse_args()
+    if args.heap == "viewer":
+        print("large arrays on the heap (as the viewer):", keep_large_arrays_on_heap())
     print_thread_tables(run, args)
 
 

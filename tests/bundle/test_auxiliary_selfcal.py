@@ -350,6 +350,42 @@ def test_precision_without_parameters_equals_the_dense_inverse(case, kind):
     assert res.cofactor_groups["auxiliary"].shape == (len(dense.gnames),) * 2
 
 
+def test_points_and_rays_with_offsets_alone_equal_the_dense_inverse(case):
+    """Statoscope + APR without self-calibration: the border's terms are computed only at
+    the points an offset couples (APR ground points, orientviz.bundle.precision.
+    _border_points); every point's cofactors, every ray's redundancy numbers and gains
+    still equal the dense inverse, and the offsets couple some points but not all."""
+    sim, block, auxs = case
+    aux = auxs["stat+apr"]
+    res = ov.bundle_adjust(block, auxiliary=aux, tol=1e-9)
+    dense = Dense(block, aux, None, None)
+    r, J = dense.system(_bundle_x_plain(res, dense))
+    Q = np.linalg.inv(J.T @ J)
+    m, u = block.n_images, dense.used
+    o = 6 * m + 3 * np.arange(dense.var.size)
+    pts = np.stack([Q[a : a + 3, a : a + 3] for a in o])
+    got = res.cofactor_groups["points"][dense.var]
+    np.testing.assert_allclose(got, pts, rtol=1e-9, atol=1e-9 * np.abs(pts).max())
+    ref_r = 1.0 - np.einsum("ij,jk,ik->i", J, Q, J)
+    rimg = res.redundancy_numbers[: 2 * block.n_observations].reshape(-1, 2)[u].reshape(-1)
+    np.testing.assert_allclose(rimg, ref_r[: 2 * u.size], rtol=0, atol=1e-9)
+    QJ = np.stack([Q @ J[2 * k : 2 * k + 2].T for k in range(u.size)])  # (rays, unknowns, 2)
+    obs = block.observations
+    c = dense.col[obs.point[u]]
+    v = c >= 0
+    ip = 6 * m + 3 * c[v][:, None] + np.arange(3)
+    ref_p = np.take_along_axis(QJ[v], ip[:, :, None], axis=1)
+    got_p = res.ray_gains.points[u][v]
+    np.testing.assert_allclose(got_p, ref_p, rtol=0, atol=1e-9 * np.abs(ref_p).max())
+    ie = 6 * obs.image[u][:, None] + np.arange(6)
+    ref_e = np.take_along_axis(QJ, ie[:, :, None], axis=1)
+    got_e = res.ray_gains.exterior[u]
+    np.testing.assert_allclose(got_e, ref_e, rtol=0, atol=1e-9 * np.abs(ref_e).max())
+    apr = next(a for a in aux if a.kind == "apr")
+    coupled = np.isin(dense.var, apr.index)
+    assert 0 < coupled.sum() < dense.var.size
+
+
 def _bundle_x_plain(res, dense):
     gd = {}
     for kind, arr in res.auxiliary.offsets.items():

@@ -184,14 +184,20 @@ def _cross_scale(Q, i, j):
     return d[i][:, None] * d[j][None, :]
 
 
-@pytest.mark.parametrize("path", ["dense", "banded"])
-def test_precision_with_strip_parameters_equals_dense_inverse(path):
+@pytest.mark.parametrize("path", ["dense", "banded", "banded-at"])
+def test_precision_with_strip_parameters_equals_dense_inverse(path, monkeypatch):
     """Ebner's 12 parameters per strip (3 strips): the sparse-by-group parameter terms and,
-    with ``path="banded"``, the banded border solves against the full dense inverse."""
+    with ``path="banded"``, the banded border solves against the full dense inverse (the
+    band's blocks by one gather from the whole band, or with ``"banded-at"`` only the
+    wanted entries, as for a band above ``BAND_GATHER_LIMIT``)."""
     from orientviz.bundle import BundleOptions, ap_set
+    from orientviz.bundle.precision import _precision
+
+    if path == "banded-at":
+        monkeypatch.setattr(_precision, "BAND_GATHER_LIMIT", 0)
 
     # "banded": the banded selected inverse and banded solves even when small
-    opts = BundleOptions(dense_inverse_limit=0 if path == "banded" else 3000)
+    opts = BundleOptions(dense_inverse_limit=0 if path != "dense" else 3000)
     sim = ov.simulate_block(3, 5, rng=21, extra=6, n_check=2)
     block = sim.block
     aps = ap_set("ebner12")

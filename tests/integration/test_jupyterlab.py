@@ -1,15 +1,21 @@
-"""A lesson, for real: JupyterLab on 127.0.0.1, the notebook run in headless Chromium,
-a slider moved with the keyboard, and the figure seen to change.
+"""Lessons, for real: JupyterLab on 127.0.0.1, each notebook run in headless Chromium.
 
-The server runs in a temporary root holding a copy of lesson 02, with its own config,
-data, runtime, settings and workspace directories (nothing of the user's Jupyter setup is
-read or written). JupyterLab is asked to expose its application object
-(``--LabApp.expose_app_in_browser``) so that the test can wait on the kernel's state and
-run "Run All Cells" as a command instead of hunting for menu labels.
+Lesson 02: a slider moved with the keyboard, and the figure seen to change. Lesson 05: the
+live viewer (a viser server in the lesson's kernel, an IFrame of it in the output) seen
+drawing its scene in the notebook.
+
+One JupyterLab server serves this module: a temporary root holding copies of the two
+lessons, with its own config, data, runtime, settings and workspace directories (nothing
+of the user's Jupyter setup is read or written). Each test opens its lesson in a fresh
+browser context (no cookies, storage or cache of the other test), runs it in a kernel of
+its own and shuts that kernel down at its end. JupyterLab is asked to expose its
+application object (``--LabApp.expose_app_in_browser``) so that the tests can wait on the
+kernel's state and run "Run All Cells" as a command instead of hunting for menu labels.
 """
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import pathlib
@@ -20,14 +26,19 @@ import time
 import urllib.error
 import urllib.request
 
+import numpy as np
 import pytest
 
 from conftest import free_port
 
 ROOT = pathlib.Path(__file__).parents[2]
 LESSON = "02_rotations_and_collinearity.ipynb"
-OVERALL_S = 180.0  # generous: a cold start on a busy 2-core machine
+LIVE_LESSON = "05_relative_orientation.ipynb"  # its last section shows the live viewer
+START_S = 120.0  # the server's start: generous, a cold start on a busy 2-core machine
+OVERALL_S = 180.0  # lesson 02 opened, run and its slider moved
+LIVE_OVERALL_S = 300.0  # lesson 05 runs ~10-30 s, then its viewer draws
 STEP_MS = 120_000
+TOKEN = "orientviz-test-token"
 
 # JS helpers; ``window.jupyterapp`` exists because of --LabApp.expose_app_in_browser
 _NOTEBOOK = "() => window.jupyterapp && window.jupyterapp.shell.currentWidget"
@@ -127,31 +138,63 @@ def _remaining_ms(deadline: float) -> float:
     return max(1000.0, (deadline - time.monotonic()) * 1000.0)
 
 
+@pytest.fixture(scope="module")
+def lab(tmp_path_factory):
+    """One JupyterLab server for this module's tests: ``(url, token, process)``; its root
+    holds copies of both lessons."""
+    pytest.importorskip("jupyterlab", reason="JupyterLab is not installed (pip install .[all])")
+    pytest.importorskip("ipykernel", reason="ipykernel is not installed")
+    base = tmp_path_factory.mktemp("jupyterlab")
+    root = base / "root"
+    root.mkdir()
+    for name in (LESSON, LIVE_LESSON):
+        (root / name).write_bytes((ROOT / "notebooks" / name).read_bytes())
+    port = free_port()
+    log = base / "jupyterlab.log"
+    server = _start_lab(root, port, TOKEN, log)
+    url = f"http://127.0.0.1:{port}"
+    try:
+        _wait_http(f"{url}/api/status?token={TOKEN}", server, time.monotonic() + START_S, log)
+        yield url, TOKEN, server
+    finally:
+        _stop_lab(server)
+
+
+def _shutdown_kernels(url: str, token: str) -> None:
+    """End every session and kernel of the server (the next test's lesson starts its own)."""
+    for kind in ("sessions", "kernels"):
+        with urllib.request.urlopen(f"{url}/api/{kind}?token={token}", timeout=10) as r:
+            ids = [item["id"] for item in json.loads(r.read())]
+        for id_ in ids:
+            req = urllib.request.Request(f"{url}/api/{kind}/{id_}?token={token}", method="DELETE")
+            with urllib.request.urlopen(req, timeout=30):
+                pass
+
+
+def _run_all(page, url: str, token: str, lesson: str, deadline: float) -> None:
+    """Open ``lesson`` in JupyterLab, wait for its kernel, "Run All Cells", wait for the end;
+    no cell may raise."""
+    page.set_default_timeout(STEP_MS)
+    # ?reset: a workspace of its own (JupyterLab would reopen the other test's notebook)
+    page.goto(f"{url}/lab/tree/{lesson}?reset&token={token}")
+    page.wait_for_function(_NOTEBOOK, timeout=_remaining_ms(deadline))
+    page.wait_for_function(_KERNEL_IDLE, timeout=_remaining_ms(deadline), polling=250)
+    page.evaluate("() => window.jupyterapp.commands.execute('notebook:run-all-cells')")
+    page.wait_for_function(_ALL_RUN, timeout=_remaining_ms(deadline), polling=250)
+    assert page.evaluate(_ERRORS) == [], f"{lesson} raised in JupyterLab"
+
+
 @pytest.mark.browser
 @pytest.mark.slow
-def test_lesson_runs_in_jupyterlab_and_slider_redraws(browser_page, tmp_path):
-    pytest.importorskip("jupyterlab", reason="JupyterLab is not installed (pip install .[all])")
+def test_lesson_runs_in_jupyterlab_and_slider_redraws(lab, browser_page, tmp_path):
     pytest.importorskip(
         "jupyterlab_widgets", reason="the ipywidgets JupyterLab extension is missing"
     )
-    pytest.importorskip("ipykernel", reason="ipykernel is not installed")
+    url, token, _ = lab
     deadline = time.monotonic() + OVERALL_S
-    root = tmp_path / "root"
-    root.mkdir()
-    (root / LESSON).write_bytes((ROOT / "notebooks" / LESSON).read_bytes())
-    port, token = free_port(), "orientviz-test-token"
-    log = tmp_path / "jupyterlab.log"
-    lab = _start_lab(root, port, token, log)
     page = browser_page
     try:
-        _wait_http(f"http://127.0.0.1:{port}/api/status?token={token}", lab, deadline, log)
-        page.set_default_timeout(STEP_MS)
-        page.goto(f"http://127.0.0.1:{port}/lab/tree/{LESSON}?token={token}")
-        page.wait_for_function(_NOTEBOOK, timeout=_remaining_ms(deadline))
-        page.wait_for_function(_KERNEL_IDLE, timeout=_remaining_ms(deadline), polling=250)
-        page.evaluate("() => window.jupyterapp.commands.execute('notebook:run-all-cells')")
-        page.wait_for_function(_ALL_RUN, timeout=_remaining_ms(deadline), polling=250)
-        assert page.evaluate(_ERRORS) == [], "the lesson raised in JupyterLab"
+        _run_all(page, url, token, LESSON, deadline)
 
         # the rotation app: sliders for ω, φ, κ beside an Output widget with the figure
         app = page.locator(".widget-hbox", has=page.locator(".widget-hslider")).first
@@ -187,4 +230,56 @@ def test_lesson_runs_in_jupyterlab_and_slider_redraws(browser_page, tmp_path):
             f"{time.monotonic() - moved:.0f} s (screenshot {tmp_path / 'jupyterlab.png'})"
         )
     finally:
-        _stop_lab(lab)
+        _shutdown_kernels(url, token)
+
+
+@pytest.mark.browser
+@pytest.mark.slow
+def test_lesson_shows_the_live_viewer_in_jupyterlab(lab, browser_page, tmp_path):
+    """Lesson 05's last section calls ``orientviz.viewer.live.show_live``: a viser server
+    in the lesson's kernel on 127.0.0.1 and an IFrame of it in the output. The test finds
+    that IFrame in the output area, waits for the viewer's WebGL canvas inside it and its
+    panel ("Your passes", the five dials), and checks that the canvas shows a scene: many
+    non-background pixels of several colours."""
+    pytest.importorskip("viser", reason="viser is not installed (pip install .[viewer])")
+    from PIL import Image
+
+    url, token, _ = lab
+    deadline = time.monotonic() + LIVE_OVERALL_S
+    page = browser_page
+    shot = tmp_path / "jupyterlab_viewer.png"
+    try:
+        _run_all(page, url, token, LIVE_LESSON, deadline)
+
+        # the IFrame of the live viewer, inside a cell's output area
+        frame_el = page.locator(".jp-OutputArea-output iframe").first
+        frame_el.scroll_into_view_if_needed(timeout=_remaining_ms(deadline))
+        src = frame_el.get_attribute("src") or ""
+        assert src.startswith("http://127.0.0.1:"), f"the viewer is not served locally: {src!r}"
+        viewer = page.frame_locator(".jp-OutputArea-output iframe").first
+        canvas = viewer.locator("canvas").first
+        canvas.wait_for(state="visible", timeout=_remaining_ms(deadline))
+        viewer.get_by_text("Your passes").first.wait_for(timeout=_remaining_ms(deadline))
+        viewer.get_by_text("Dials of the right projector").first.wait_for(
+            timeout=_remaining_ms(deadline)
+        )
+
+        # the scene arrives over the websocket and is drawn (software WebGL): poll the pixels
+        drawn, share, colours = False, 0.0, 0
+        while time.monotonic() < deadline:
+            rgb = np.asarray(Image.open(io.BytesIO(canvas.screenshot())).convert("RGB"), int)
+            background = np.median(rgb.reshape(-1, 3), axis=0)
+            differs = np.abs(rgb - background).sum(axis=2) > 60
+            share = float(differs.mean())
+            colours = len({tuple(c // 32) for c in rgb[differs][:: max(1, differs.sum() // 4000)]})
+            if share > 0.01 and colours >= 4:
+                drawn = True
+                break
+            time.sleep(1.0)
+        page.screenshot(path=str(shot), full_page=False)
+        assert drawn, (
+            f"the viewer's canvas in the notebook stays blank: {share:.2%} of its pixels differ "
+            f"from the background, {colours} colour groups (screenshot {shot})"
+        )
+    finally:
+        _shutdown_kernels(url, token)

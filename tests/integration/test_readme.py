@@ -25,6 +25,7 @@ CI_RUN = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
 
 MAIN_JOB = 'pip install -e ".[viewer]" && orientviz view'
 TEST_COMMAND = 'pip install -e ".[all]" && python -m pytest'
+REPORT_COMMAND = "orientviz solve block_strip --report report.html"
 
 #: command → (test file that runs it, text that file must contain)
 BY_TESTS = {
@@ -47,11 +48,12 @@ BY_TESTS = {
         "test_the_main_job_line_in_a_fresh_venv",
     ),
     MAIN_JOB: ("tests/integration/test_readme.py", "test_the_main_job_line_in_a_fresh_venv"),
+    # run in the fresh venv after the main job's install (its output checked there as here)
+    REPORT_COMMAND: ("tests/integration/test_readme.py", "test_the_main_job_line_in_a_fresh_venv"),
 }
 #: commands run here (no server, quick)
 HERE = (
     "orientviz solve block_strip --json",
-    "orientviz solve block_strip --report report.html",
     "orientviz reproduce",
 )
 #: commands CI runs: verbatim, or as the same pytest run with other output options
@@ -147,7 +149,8 @@ def test_the_main_job_line_in_a_fresh_venv(tmp_path):
     A venv of its own (no system packages): pip takes numpy, SciPy, viser, … from its
     cache or the index, as on a new machine. `orientviz view` itself serves until
     Ctrl-C (tests/viewer/test_cli.py runs that); here the same install writes a static
-    page and an HTML report.
+    page and the README's HTML report (:data:`REPORT_COMMAND`, checked as
+    :func:`test_readme_cli_commands` checks the README's other commands).
     """
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
     env["PIP_DISABLE_PIP_VERSION_CHECK"] = "1"
@@ -161,7 +164,7 @@ def test_the_main_job_line_in_a_fresh_venv(tmp_path):
         # CPU (about 11 of 22 s) and tests nothing of ours
         + f" -q --no-compile && cd {shlex.quote(str(tmp_path))}"
         " && orientviz view radar --export radar.html"
-        " && orientviz solve block_strip --report report.html > /dev/null"
+        f" && {REPORT_COMMAND} > solve.out 2> solve.err"
         " && python -c 'import orientviz, sys; print(orientviz.__file__, sys.prefix)'"
     )
     t0 = time.monotonic()
@@ -172,5 +175,9 @@ def test_the_main_job_line_in_a_fresh_venv(tmp_path):
     where, prefix = r.stdout.strip().splitlines()[-1].split()
     assert Path(prefix) == tmp_path / ".venv" and Path(where).is_relative_to(ROOT / "src")
     assert (tmp_path / "radar.html").stat().st_size > 10_000
-    assert "<img" in (tmp_path / "report.html").read_text(encoding="utf-8")  # figures: matplotlib
+    report = (tmp_path / "report.html").read_text(encoding="utf-8")
+    assert report.startswith("<!DOCTYPE html>")
+    assert "<img" in report  # figures: matplotlib
+    assert (tmp_path / "solve.out").read_text(encoding="utf-8").strip()
+    assert "wrote report.html" in (tmp_path / "solve.err").read_text(encoding="utf-8")
     print(f"main-job install + view --export + report in a fresh venv: {elapsed:.0f} s")

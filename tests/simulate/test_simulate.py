@@ -171,3 +171,17 @@ def test_block_take_keeps_rows_and_renumbers_the_observations():
     np.testing.assert_array_equal(sub.observations.xy, o.xy[obs])
     sub.points.xyz[0] += 1.0  # a copy: the whole block is untouched
     assert not np.array_equal(sub.points.xyz[0], b.points.xyz[points[0]])
+
+
+def test_flat_terrain_is_its_base_height_and_draws_the_hills_alike():
+    """relief 0: every height is the base height (no hills summed), and the random
+    stream is used as with relief (the rest of a simulation stays the same)."""
+    from orientviz.simulate._terrain import Terrain
+
+    ext = (0.0, 5000.0, 0.0, 3000.0)
+    r0, r1 = np.random.default_rng(4), np.random.default_rng(4)
+    flat, hilly = Terrain(r0, ext, 0.0, 250.0), Terrain(r1, ext, 80.0, 250.0)
+    x = np.linspace(0.0, 5000.0, 7)
+    assert np.array_equal(flat(x, x[::-1]), np.full(7, 250.0))
+    assert np.ptp(hilly(x, x[::-1])) > 1.0
+    assert r0.random() == r1.random()

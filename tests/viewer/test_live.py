@@ -1,6 +1,6 @@
 """The viewer live in a lesson (orientviz.viewer.live): what the notebook gets, headless.
 
-No browser here (tests/integration/test_jupyterlab_viewer.py opens a lesson in JupyterLab
+No browser here (tests/integration/test_jupyterlab.py opens a lesson in JupyterLab
 and sees the scene); these tests check the output a lesson cell displays, that the server
 listens on 127.0.0.1 only, and that the lesson scenes hold the student's states.
 """

@@ -25,6 +25,7 @@ from ..errors import InputError
 from .reduce import original_path, reduce_document
 from .safeio import decode_text, read_input_bytes
 from .safeio import write_atomic as _write
+from .schema_check import conforms
 
 #: Base URI of the schemas shipped in ``orientviz/io/schema`` (used for ``$ref`` only,
 #: nothing is fetched).
@@ -412,15 +413,21 @@ def _order(error) -> tuple:
     return (tuple(key), rank)
 
 
-def validate(doc: Any, schema_name: str, source: str) -> None:
+def validate(
+    doc: Any, schema_name: str, source: str, reduced: tuple[Any, dict] | None = None
+) -> None:
     """Validate ``doc`` against a shipped schema; raise one :class:`InputError` if invalid.
 
     The first error in document order is reported, as ``"<source>: <path>: <problem>"``.
     Long arrays are first reduced to representative items
-    (:func:`orientviz.io.reduce.reduce_document`, exact for the keywords our schemas use),
-    so that a block of 10⁵ observations validates in about a second.
+    (:func:`orientviz.io.reduce.reduce_document`, exact for the keywords our schemas use;
+    ``reduced``: that reduction when the caller has it already, for several schemas).
+    A valid document is recognised by :func:`orientviz.io.schema_check.conforms`
+    without importing jsonschema; jsonschema judges the rest and words the error.
     """
-    reduced, maps = reduce_document(doc)
+    reduced, maps = reduced if reduced is not None else reduce_document(doc)
+    if conforms(reduced, schema_name):
+        return
     errors = list(validator_for(schema_name).iter_errors(reduced))
     if not errors:
         return
@@ -431,6 +438,10 @@ def validate(doc: Any, schema_name: str, source: str) -> None:
 
 
 # --------------------------------------------------------------------------- writing
+#: Types of JSON scalars as parsed or written (a list of only these is flat).
+_SCALARS = frozenset({float, int, str, bool, type(None)})
+
+
 def _is_flat(node: Any) -> bool:
     """Scalars, arrays of scalars (or of short arrays) and objects of those: one line."""
     if isinstance(node, dict):  # a row: scalars and short arrays (a columnar table is not)
@@ -439,6 +450,8 @@ def _is_flat(node: Any) -> bool:
             for v in node.values()
         )
     if isinstance(node, list):
+        if _SCALARS.issuperset(map(type, node)):  # a column: one pass in C
+            return True
         return all(
             not isinstance(v, (dict, list))
             or (

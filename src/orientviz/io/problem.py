@@ -35,6 +35,7 @@ from ..errors import InputError
 from ..rotation import check_sequence
 from ..units import RHO
 from .jsonio import _json_type, dumps_json, parse_json, read_json_file, validate, write_atomic
+from .reduce import reduce_document
 from .registry import get_kind
 
 #: The format string this version reads and writes.
@@ -181,9 +182,10 @@ def problem_from_document(doc: Any, source: str = "<document>") -> Problem:
             "format",
         )
     doc = dms_document(doc, source)
-    validate(doc, "envelope.json", source)
+    reduced = reduce_document(doc)  # once for both schemas
+    validate(doc, "envelope.json", source, reduced)
     kind = get_kind(doc["kind"], source)
-    validate(doc, kind.schema, source)
+    validate(doc, kind.schema, source, reduced)
     u = doc["units"]
     units = Units(length=u["length"], angle=u["angle"], image=u.get("image", "mm"),
                   pixel_size=u.get("pixel_size"))  # fmt: skip

@@ -170,7 +170,7 @@ def adjusted_problem(problem: Problem, solution: Solution) -> Problem:
         i = pt[ident]
         if block.points.role[i] == TIE and np.all(np.isfinite(solution.xyz[k])):
             block.points.xyz[i] = solution.xyz[k]
-    _adjusted_cameras(block, getattr(solution.adjustment, "camera", None))
+    adjusted_cameras(block, getattr(solution.adjustment, "camera", None))
     out = Problem(**{**problem.__dict__, "data": block})
     adj = solution.adjustment
     mark = (
@@ -182,9 +182,10 @@ def adjusted_problem(problem: Problem, solution: Solution) -> Problem:
     return out
 
 
-def _adjusted_cameras(block, cam) -> None:
+def adjusted_cameras(block, cam) -> None:
     """Put a lens model's estimates (``adj.camera``, one group per camera) into the
-    block's cameras: c, x0, y0 and the estimated terms of ``cameras.model``."""
+    block's cameras, in place: c, x0, y0 and the estimated terms of ``cameras.model``
+    (nothing without a camera model or estimates)."""
     models = list(getattr(block.cameras, "model", None) or [])
     if cam is None or not models or cam.value.shape[0] != len(models):
         return

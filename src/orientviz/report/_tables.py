@@ -27,6 +27,7 @@ from ..block import ROLES, Block
 from ..errors import InputError
 from ..io.control import csv_rows
 from ..io.safeio import open_input_text, write_atomic
+from ..io.solve import adjusted_cameras
 from ..units import from_rad
 
 F64 = NDArray[np.float64]
@@ -111,7 +112,8 @@ def _cell(v) -> str:
 
 
 def adjusted_block(block: Block, adj: Adjustment) -> Block:
-    """Copy of ``block`` with the adjusted orientations and points of a bundle result.
+    """Copy of ``block`` with the adjusted orientations, points and cameras (a lens
+    model's estimates, :func:`~orientviz.io.solve.adjusted_cameras`) of a bundle result.
 
     Parameters
     ----------
@@ -130,6 +132,7 @@ def adjusted_block(block: Block, adj: Adjustment) -> Block:
         xyz = adj.x[adj.groups["points"]].reshape(block.n_points, 3)
         ok = np.all(np.isfinite(xyz), axis=1)
         out.points.xyz = np.where(ok[:, None], xyz, block.points.xyz)
+    adjusted_cameras(out, getattr(adj, "camera", None))
     return out
 
 

@@ -146,9 +146,9 @@ def planimetric_precision(
     rows = scalar[pt].ravel()
     sol = solve_rows(
         np.repeat(j, 2), J.reshape(2 * k, 4), rows, np.ones(2 * k), np.zeros(2 * k),
-        models.shape[0], 2 * free.size, context="planimetric block",
+        models.shape[0], 2 * free.size, context="planimetric block", solve=False,
     )  # fmt: skip
-    Q = scalar_cofactors(sol, scalar[free])
+    Q = scalar_cofactors(sol, scalar[free], centres=cen)
     sd = np.sqrt(np.einsum("nii->ni", Q))
     out = BlockPrecision(
         "planimetry", n_strips, int(models.shape[0]), control_spacing,
@@ -230,9 +230,9 @@ def height_precision(
     n_sc = free.size + 3 * nc
     jr = np.concatenate([jj, jm, jm])
     args = (jr, J, rows, np.ones(jr.size))
-    sol = solve_rows(*args, np.zeros(jr.size), nmod, n_sc, context="height block")
+    sol = solve_rows(*args, np.zeros(jr.size), nmod, n_sc, context="height block", solve=False)
     groups = np.arange(free.size)[:, None]
-    sd = np.sqrt(scalar_cofactors(sol, groups)[:, 0, 0])
+    sd = np.sqrt(scalar_cofactors(sol, groups, centres=cen)[:, 0, 0])
     out = BlockPrecision(
         "height", n_strips, int(nmod), chain_spacing, float(np.sqrt(np.mean(sd**2))),
         float(sd.max()), sd, P[free, :2], P[zc, :2],

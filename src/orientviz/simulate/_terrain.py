@@ -31,11 +31,14 @@ class Terrain:
         self.cy = rng.uniform(ymin, ymax, n)
         self.w = rng.uniform(700.0, 2500.0, n)
         self.a = rng.normal(0.0, 1.0, n)
+        if relief_m <= 0:  # a plane at base_m (the hills are drawn all the same)
+            self.scale, self.offset = 0.0, float(base_m)
+            return
         gx, gy = np.meshgrid(np.linspace(xmin, xmax, 80), np.linspace(ymin, ymax, 80))
         self.scale, self.offset = 1.0, 0.0
         h = self._raw(gx.ravel(), gy.ravel())
         lo, hi = float(h.min()), float(h.max())
-        self.scale = relief_m / max(hi - lo, 1e-12) if relief_m > 0 else 0.0
+        self.scale = relief_m / max(hi - lo, 1e-12)
         self.offset = base_m - 0.5 * (hi + lo) * self.scale
 
     def _raw(self, x: F64, y: F64) -> F64:
@@ -50,4 +53,6 @@ class Terrain:
 
     def __call__(self, x, y) -> F64:
         """Terrain height Z in m at (x, y) in m."""
+        if self.scale == 0.0:
+            return np.full(np.shape(x), self.offset)
         return self.offset + self.scale * self._raw(np.asarray(x, float), np.asarray(y, float))

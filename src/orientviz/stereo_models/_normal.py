@@ -35,6 +35,8 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 from ..adjust.rank import raise_if_singular
 from ..bundle.precision import banded_selected_inverse
 from ..errors import NotDeterminableError, parameter_words
+from ._banded import band_order as _band_order
+from ._banded import group_products as _group_products
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -159,6 +161,43 @@ def factor_spd(S: sp.spmatrix, names: list[str], context: str = "", solver: str 
     return Factor("banded", c, s, perm)
 
 
+class DeferredFactor:
+    """:func:`factor_spd` of S made at the first solve (for a system whose cofactors may
+    come from elsewhere, :func:`scalar_cofactors`). ``scale`` (the Jacobi scale) and the
+    check for parameters without any observation are there at once."""
+
+    def __init__(self, S: sp.spmatrix, names: list[str], context: str = "") -> None:
+        d = np.sqrt(np.abs(S.diagonal()))
+        if np.any(d == 0):
+            factor_spd(S, names, context)  # raises: parameters without any observation
+        self.scale = 1.0 / d
+        self._args = (S, names, context)
+        self._factor: Factor | None = None
+
+    @property
+    def factor(self) -> Factor:
+        """The factor (made now if not yet)."""
+        if self._factor is None:
+            self._factor = factor_spd(*self._args)
+        return self._factor
+
+    @property
+    def kind(self) -> str:
+        return self.factor.kind
+
+    @property
+    def data(self) -> object:
+        return self.factor.data
+
+    @property
+    def perm(self) -> I64 | None:
+        return self.factor.perm
+
+    def solve(self, rhs: F64) -> F64:
+        """Solve S x = rhs (:meth:`Factor.solve`)."""
+        return self.factor.solve(rhs)
+
+
 @dataclass
 class LinearSolution:
     """Corrections and the pieces needed for precision and for :meth:`resolve`.
@@ -168,9 +207,9 @@ class LinearSolution:
     with the same factorisation.
     """
 
-    dtheta: F64  # (n_models, p) or flat (n_reduced,)
-    dX: F64  # (n_scalar,)
-    factor: Factor
+    dtheta: F64 | None  # (n_models, p) or flat (n_reduced,); None: not solved
+    dX: F64 | None  # (n_scalar,)
+    factor: Factor | DeferredFactor
     G: sp.csr_matrix  # C · D⁻¹, (n_reduced, n_scalar)
     D: F64  # (n_scalar,) diagonal of the point part, prior weights included
     C: sp.csr_matrix | None = None
@@ -200,7 +239,8 @@ class LinearSolution:
         Returns
         -------
         dtheta : ndarray
-            Reduced corrections, shaped like :attr:`dtheta`.
+            Reduced corrections, shaped like :attr:`dtheta` (flat when made without a
+            solve, ``solve=False``).
         dX : ndarray, shape (n_scalar,)
             Corrections of the scalar unknowns.
 
@@ -219,7 +259,8 @@ class LinearSolution:
         if prior_e is not None and self.prior_w is not None:
             bX = bX - self.prior_w * np.asarray(prior_e, dtype=float)
         dt = self.factor.solve(-(self.JmW @ r) - self.G @ bX)
-        return dt.reshape(self.dtheta.shape), (bX - self.C.T @ dt) / self.D
+        dX = (bX - self.C.T @ dt) / self.D
+        return (dt if self.dtheta is None else dt.reshape(self.dtheta.shape)), dX
 
 
 def _scalar_rhs(row_scalar: I64, sign: F64, w: F64, r: F64, n_scalar: int) -> F64:
@@ -241,6 +282,7 @@ def solve_rows(
     prior_e: F64 | None = None,
     names: list[str] | None = None,
     context: str = "",
+    solve: bool = True,
 ) -> LinearSolution:
     """Least-squares corrections for rows ``v = r + J dθ_j − dX_t`` (see module docstring).
 
@@ -265,6 +307,10 @@ def solve_rows(
         Names of the n_models·p parameters (for singularity messages).
     context : str
         Prefix for error messages.
+    solve : bool
+        False: the normal equations only, for cofactors (:func:`scalar_cofactors`) and
+        :meth:`LinearSolution.resolve`; ``dtheta`` and ``dX`` are None and S is factored
+        when first solved with (:class:`DeferredFactor`).
 
     Returns
     -------
@@ -279,13 +325,16 @@ def solve_rows(
         Jm, row_scalar, -np.ones(n), w, r, n_scalar,
         prior_w=prior_w, prior_e=prior_e,
         names=names or [f"model{k // p}.p{k % p}" for k in range(nt)],
-        context=context,
+        context=context, solve=solve,
     )  # fmt: skip
-    sol.dtheta = sol.dtheta.reshape(n_models, p)
+    if sol.dtheta is not None:
+        sol.dtheta = sol.dtheta.reshape(n_models, p)
     return sol
 
 
-def scalar_cofactors(sol: LinearSolution, groups: I64, chunk: int = 512) -> F64:
+def scalar_cofactors(
+    sol: LinearSolution, groups: I64, chunk: int = 512, *, centres: F64 | None = None
+) -> F64:
     """Cofactor blocks of groups of scalar unknowns (e.g. the X, Y, Z of each point).
 
     Q_XX = D⁻¹ + G ᵀ S⁻¹ G restricted to the groups. A group's block needs S⁻¹ only
@@ -302,6 +351,11 @@ def scalar_cofactors(sol: LinearSolution, groups: I64, chunk: int = 512) -> F64:
         Scalar unknown indices per group (−1 = not an unknown, gives 0 rows/columns).
     chunk : int
         Groups solved at once.
+    centres : ndarray, shape (n_models, 2), optional
+        Positions (m) of the models whose parameters are the reduced unknowns (p each,
+        consecutive, as :func:`solve_rows` numbers them): the band's order is then also
+        sought across the strips (:func:`orientviz.bundle.reduced.geometric_orderings`),
+        the narrowest taken.
 
     Returns
     -------
@@ -309,7 +363,7 @@ def scalar_cofactors(sol: LinearSolution, groups: I64, chunk: int = 512) -> F64:
     """
     g, k = groups.shape
     if sol.S is not None and sol.S.shape[0] > DENSE_LIMIT:
-        out = _banded_cofactors(sol, groups, chunk)
+        out = _banded_cofactors(sol, groups, chunk, centres)
         if out is not None:
             return out
     out = np.zeros((g, k, k))
@@ -342,6 +396,7 @@ def solve_sparse(
     prior_e: F64 | None = None,
     names: list[str] | None = None,
     context: str = "",
+    solve: bool = True,
 ) -> LinearSolution:
     """Least-squares corrections for rows ``v = r + Ja[i] · da + sign_i · dX_t``.
 
@@ -351,6 +406,8 @@ def solve_sparse(
     coordinate t (``row_scalar``, −1 none) with coefficient ``sign`` (−1 for model rows,
     +1 for direct observations of a coordinate), so the point part stays diagonal and is
     eliminated.
+
+    With ``solve`` False only the normal equations are formed (as :func:`solve_rows`).
 
     Returns
     -------
@@ -380,16 +437,21 @@ def solve_sparse(
     G = sp.csr_matrix(C.multiply(1.0 / D[None, :]))
     S = U - G @ C.T
     names = names or [f"u{k}" for k in range(na)]
+    if not solve:
+        fac = DeferredFactor(S, names, context)
+        return LinearSolution(None, None, fac, G, D, C, JaW, row_scalar, w, sign, prior_w, S)
     fac = factor_spd(S, names, context)
     dt = fac.solve(bt - G @ bX)
     dX = (bX - C.T @ dt) / D
     return LinearSolution(dt, dX, fac, G, D, C, JaW, row_scalar, w, sign, prior_w, S)
 
 
-def _banded_cofactors(sol: LinearSolution, groups: I64, chunk: int) -> F64 | None:
-    """:func:`scalar_cofactors` by the banded selected inverse of S, ordered by reverse
-    Cuthill-McKee on S's pattern and the pairs of reduced unknowns a group's block reads
-    (so that all lie in the band); None when the band is wide."""
+def _banded_cofactors(
+    sol: LinearSolution, groups: I64, chunk: int, centres: F64 | None = None
+) -> F64 | None:
+    """:func:`scalar_cofactors` by the banded selected inverse of S, ordered (:func:`_band_order`)
+    on S's pattern and the pairs of reduced unknowns a group's block reads (so that all lie
+    in the band); None when the band is wide."""
     s = sol.factor.scale  # Jacobi scale: S⁻¹ = s (s S s)⁻¹ s
     Ss = sp.csr_matrix(sol.S.multiply(s[:, None]).multiply(s[None, :]))
     n = Ss.shape[0]
@@ -402,11 +464,7 @@ def _banded_cofactors(sol: LinearSolution, groups: I64, chunk: int) -> F64 | Non
     )
     H = abs(Gc) @ member  # (n, g): the reduced unknowns each group's block reads
     graph = (abs(Ss) + H @ H.T).tocsr()
-    perm = reverse_cuthill_mckee(graph, symmetric_mode=True).astype(np.int64)
-    pos = np.empty_like(perm)
-    pos[perm] = np.arange(n)
-    Pg = graph.tocoo()
-    kd = int(np.max(np.abs(pos[Pg.row] - pos[Pg.col]), initial=0))
+    pos, kd = _band_order(graph, centres)
     if kd > BAND_FRACTION * n:
         return None
     P = Ss.tocoo()
@@ -418,28 +476,12 @@ def _banded_cofactors(sol: LinearSolution, groups: I64, chunk: int) -> F64 | Non
         cb = scipy.linalg.cholesky_banded(ab, lower=True, overwrite_ab=True, check_finite=False)
     except (np.linalg.LinAlgError, scipy.linalg.LinAlgError):
         return None
+    if np.min(cb[0] ** 2) < PIVOT_TOLERANCE:  # numerically singular: the factor says why
+        return None
     Zb = banded_selected_inverse(cb, 48)
-    ptr, rows, vals = Gc.indptr, Gc.indices, Gc.data
     out = np.zeros((g, k, k))
-    a_of, b_of = np.divmod(np.arange(k * k), k)
     for s0 in range(0, g, chunk):
-        grp = groups[s0 : s0 + chunk]
-        gi, ab_ = np.nonzero((grp[:, a_of] >= 0) & (grp[:, b_of] >= 0))
-        ta, tb = grp[gi, a_of[ab_]], grp[gi, b_of[ab_]]
-        na, nb_ = ptr[ta + 1] - ptr[ta], ptr[tb + 1] - ptr[tb]
-        cnt = na * nb_
-        combo = np.repeat(np.arange(ta.size), cnt)
-        first = np.cumsum(cnt) - cnt
-        idx = np.arange(cnt.sum()) - first[combo]
-        ia = ptr[ta][combo] + idx // nb_[combo]
-        ib = ptr[tb][combo] + idx % nb_[combo]
-        ra, rb = rows[ia], rows[ib]
-        d = np.abs(pos[ra] - pos[rb])  # ≤ kd: the pairs are edges of the graph
-        z = Zb[np.minimum(pos[ra], pos[rb]), d] * s[ra] * s[rb]
-        blk = np.bincount(combo, vals[ia] * z * vals[ib], minlength=ta.size)
-        part = np.zeros((grp.shape[0], k * k))
-        part[gi, ab_] = blk
-        out[s0 : s0 + chunk] = part.reshape(-1, k, k)
+        out[s0 : s0 + chunk] = _group_products(Gc, groups[s0 : s0 + chunk], Zb, pos, s)
     dinv = np.where(valid, 1.0 / sol.D[np.where(valid, groups, 0)], 0.0)
     out += np.einsum("ga,ab->gab", dinv, np.eye(k))
     return out

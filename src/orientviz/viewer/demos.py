@@ -22,12 +22,7 @@ import numpy as np
 from ..adjust import Adjustment
 from ..block import Block
 from ..errors import InputError
-from ..simulate import simulate_block
-from ..simulate.systematic import typical
-from .deformation import deformation_extra
 from .demo import Demo
-from .pair_scene import pair_demo as build_pair
-from .radar_scene import radar_demo as build_radar
 from .state import BlockState
 
 #: default seed of the demos (deterministic scenes)
@@ -48,6 +43,10 @@ def block_demo(
     rng: np.random.Generator | int = SEED, strips: int = 3, images_per_strip: int = 8
 ) -> Demo:
     """A simulated block with blunders and systematic image errors."""
+    from ..simulate import simulate_block  # a demo's own stack: not for a problem file
+    from ..simulate.systematic import typical  # a demo's own stack: not for a problem file
+    from .deformation import deformation_extra  # a demo's own stack: not for a problem file
+
     sim = simulate_block(
         strips,
         images_per_strip,
@@ -74,6 +73,9 @@ def block_demo(
 def _systematic_twin(sim: Any, rng: Any, strips: int, images_per_strip: int) -> Block | None:
     """The demo block's observations with only their systematic errors (the same seed
     without random errors and blunders; σ as in the demo), or None for a Generator seed."""
+    from ..simulate import simulate_block  # a demo's own stack: not for a problem file
+    from ..simulate.systematic import typical  # a demo's own stack: not for a problem file
+
     if not isinstance(rng, int | np.integer):
         return None
     twin = simulate_block(
@@ -90,11 +92,15 @@ def _systematic_twin(sim: Any, rng: Any, strips: int, images_per_strip: int) -> 
 
 def pair_demo(rng: np.random.Generator | int = SEED) -> Demo:
     """A stereo pair with y-parallaxes (Kovarik's camera, right image misoriented)."""
+    from .pair_scene import pair_demo as build_pair  # a demo's own stack: not for a problem file
+
     return build_pair(rng)
 
 
 def radar_demo() -> Demo:
     """Geier's radar panorama test geometry."""
+    from .radar_scene import radar_demo as build_radar  # a demo's own stack: not for a file
+
     return build_radar()
 
 

@@ -42,6 +42,7 @@ from .studio import (
     legend_html,
     scale_of,
 )
+from .studio_memory import keep_large_arrays_on_heap
 
 LABELS = {key: v[0] for key, v in MEASURES.items()}
 METHOD_LABELS = {key: v[0] for key, v in METHODS.items()}
@@ -272,6 +273,7 @@ class StudioView:
     """The studio's scene (nodes under ``/design``) and its panel."""
 
     def __init__(self, app: Any, studio: Studio | None = None) -> None:
+        keep_large_arrays_on_heap()  # the designs' large temporaries (studio_memory)
         self.app = app
         self.studio = studio or Studio()
         self.nodes: dict[str, Any] = {}

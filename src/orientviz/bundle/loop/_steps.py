@@ -12,10 +12,14 @@ hand on. Its knobs are fields of the problem's
   Cauchy from a start with σ0 ≥ :data:`LOSS_SIGMA0`; in the run's tail the steps are
   over-relaxed (:data:`ROBUST_OVERRELAX`) and a convex loss's model takes the curvature
   along down-weighted rays' misclosures closer to the true one (:data:`ROBUST_TAIL_FLOOR`);
+  an over-relaxed step the loop rejects is retried as the model's own step (ω = 1, kept
+  from its solve: no new solve, whatever λ the loop asks), and a step rejected again is
+  solved at the loop's λ without the over-relaxation and the tail's model;
 * the additional parameters are held at their values in the first step from a poor
   start; their border E, F is reused in the next iteration when the last step moved
   nothing by more than ``ap_reuse`` (the Jacobians then change by about as little, less
-  than the tolerance of the border's solve);
+  than the tolerance of the border's solve) — until a step meets the stopping rule
+  (see below);
 * from a poor start (σ0 ≥ ``local_sigma0``, last correction ≥ ``local_min_correction``)
   steps rotate the image frames (:mod:`orientviz.bundle.model._local_rotation`);
 * *chord* steps: a plain bundle without precision solves the step after a small one
@@ -26,6 +30,16 @@ hand on. Its knobs are fields of the problem's
   solved in full at the same iterate. A factor of a step in frame rotations serves steps
   in ω, φ, κ through the map A of :func:`~orientviz.bundle.model.angle_map`
   (J_θ = J_δ·A per image).
+
+Why a step on a reused border may not stop the run: it solves with E, F of an earlier
+iterate, δ̃ = Ñ⁻¹ g, and where the border's Schur complement Fs = F − Eᵀ S⁻¹ E is nearly
+singular (free parameters per strip) a relative change of E, F far below ``ap_reuse``
+changes Fs by much more: ‖Ñ⁻¹ N − I‖ need not be small, and a small δ̃ does not bound the
+distance to the optimum. Such a step may meet the tolerance but not stop the run; from
+then on the border is formed at every iterate, and the run stops on a step solved on the
+border of its own iterate. That step is inexact only by the conjugate gradients'
+tolerance (``pcg_tol``, relative to the step): it reads the distance to the optimum
+within that factor, as an exact Newton step does.
 
 Why the stopping rule may judge a chord step: at one iterate the chord correction
 δ_c = N_old⁻¹ g and the Newton correction δ_N = N⁻¹ g satisfy δ_N = N⁻¹ N_old δ_c, so with
@@ -77,7 +91,8 @@ LOSS_SWITCH_CONVEX: float = 0.3
 #: 1 − ωμ instead of 1 − μ (μ the model's share of the true step); ω = 1.5 keeps a component
 #: the model gets right (μ = 1) converging (|1 − ω| = 0.5; ω = 2 stalled one: ½Σρ 27 220
 #: instead of 26 735 when used from the loss's first step), and a step that raises Σρ is
-#: rejected and damped as any. The fixed point is the same (δ = 0 there). Measured on the
+#: rejected; its retry is the model's own step δ (see the module docstring), then damped
+#: as any. The fixed point is the same (δ = 0 there). Measured on the
 #: stage-2 problems of ``bench_sfm.py --robust`` (one thread): Huber 79 → 65 steps, ½Σρ
 #: 26 734.830 → 26 734.527; soft-L1 50 → 41, 25 525.978 → 25 525.837; Cauchy 43 → 34,
 #: 6 041.5805 → 6 041.5694 (ω = 1.8: 61, 38, 32 steps).
@@ -165,7 +180,16 @@ class BundleSteps:
         # with additional parameters, else the median ray of the first iterate that asks
         self.ray_length: float | None = prob.ap.ray_length if prob.q else None
         self.last_rel, self.last_local = np.inf, False  # of the last solved step
+        # the last solved step used a reused border E, F (it may not stop the run), and
+        # whether a step has met the tolerance (the border is then formed anew at every
+        # iterate: the run ends on a step solved on its own iterate's border)
+        self.last_reused = False
+        self.border_fresh = False
         self.robust_tail = False  # the last robust step lowered Σρ by < ROBUST_TAIL
+        # the state of the last solve: a solve at the same state again is a retry of a
+        # rejected step (the tail's over-relaxation and model are then left out)
+        self._solved_at: BundleState | None = None
+        self._unrelaxed: Step | None = None  # the model's own step of an over-relaxed one
 
     def start(self, st: BundleState) -> Evaluation:
         """Evaluate the start once (the loop asks for it again: no second evaluation)."""
@@ -288,6 +312,7 @@ class BundleSteps:
         prob, loss = self.prob, self.loss
         if (
             not self.robust_tail
+            or self._retry
             or scale is None
             or loss.redescending
             or (prob.q and prob.ap.lens is None)
@@ -356,16 +381,27 @@ class BundleSteps:
         self.lin = None  # released before the next normal equations are built
 
     def may_stop(self) -> bool:
-        """Whether the run may stop: not before a robust loss is switched on."""
+        """Whether the run may stop: not before a robust loss is switched on, nor after a
+        step solved on a reused border E, F (see the module docstring)."""
+        if self.last_reused:
+            return False
         return self.loss is None or (self.loss_on and not self.switch_pending)
 
     def stops(self, tol: float) -> bool:
         """Whether the last solved step meets the stopping rule (``tol``) once accepted:
         the state it leads to then needs no derivatives (without the precision)."""
-        return self.last_rel < tol and not (self.prob.run.border.hold or self.last_local)
+        return self.last_rel < tol and not (
+            self.prob.run.border.hold or self.last_local or self.last_reused
+        )
 
     def solve(self, st: BundleState, ev: Evaluation, lam: float, iteration: int) -> Step:
         prob = self.prob
+        self._retry = st is self._solved_at  # the loop rejected the step from st
+        self._solved_at = st
+        kept, self._unrelaxed = self._unrelaxed, None
+        if self._retry and kept is not None:  # a rejected over-relaxed step: ω = 1 first
+            self.last_rel, self.last_reused, self.chord_pending = kept.max_correction, False, None
+            return kept
         if self.switch_pending:  # the loss is switched on: the loop's evaluation at st too
             self.switch_pending = False
             robust = self._evaluate(st, True, self.is_local(ev))
@@ -391,15 +427,14 @@ class BundleSteps:
         finally:
             if design is not None:  # the camera model's own design again (a retry, the end)
                 prob.run.ap = design.with_design(design.A, prob.obs.weight)
-        if self.robust_tail and self.loss_on and not self.switch_pending:  # over-relaxed
-            dc, dp, da = dc * ROBUST_OVERRELAX, dp * ROBUST_OVERRELAX, da * ROBUST_OVERRELAX
-            rel *= ROBUST_OVERRELAX
-        dx = None
-        if self.keep_x:  # same layout as x: zeros for fixed points
-            dpa = np.zeros((prob.block.n_points, 3))
-            dpa[prob.points.unknown] = dp
-            dx = np.concatenate([dc.ravel(), dpa.ravel(), da[: prob.q]])
+        if self.robust_tail and not self._retry and self.loss_on and not self.switch_pending:
+            w = ROBUST_OVERRELAX
+            self._unrelaxed = Step(rel, self._dx(dc, dp, da), (dc, dp, da, None, None, local))
+            dc, dp, da = dc * w, dp * w, da * w
+            rel *= w
+        dx = self._dx(dc, dp, da)
         self.last_rel, self.last_local = rel, local
+        self.last_reused = chord is None and bool(getattr(ne.ap, "reused", False))
         self.chord_pending = None
         if self.chord_allowed and lam == 0:
             if self.chord_step:  # the factor served: it may serve the next step too
@@ -412,6 +447,14 @@ class BundleSteps:
         if not (self.precision and lam == 0 and not (prob.q or prob.aux or local)):
             ne = fac = None
         return Step(rel, dx, (dc, dp, da, fac, ne, local))
+
+    def _dx(self, dc: F64, dp: F64, da: F64) -> F64 | None:
+        """The correction in the layout of x (zeros for fixed points), if kept."""
+        if not self.keep_x:
+            return None
+        dpa = np.zeros((self.prob.block.n_points, 3))
+        dpa[self.prob.points.unknown] = dp
+        return np.concatenate([dc.ravel(), dpa.ravel(), da[: self.prob.q]])
 
     def _correction(self, ne, dc: F64, dp: F64, da: F64) -> float:
         """The largest correction in units of its conditional σ (the stopping measure)."""
@@ -496,11 +539,15 @@ class BundleSteps:
         self.last_cost, self.local_step = self.pending_cost, local
         self.chord_factor, self.chord_pending = self.chord_pending, None
         # the precision may reuse this linearisation when it is the converged one
-        if self.precision and lam == 0 and not (prob.q or prob.aux or local):
+        if self.precision and lam == 0 and ne is not None and not (prob.q or prob.aux or local):
             self.lin = (ne, fac, previous.data[1], previous.data[2])
         if prob.q:
+            # after a step that meets the tolerance the border is formed at every iterate
+            # (the run ends on a step solved on its own border, see the module docstring)
+            self.border_fresh = self.border_fresh or step.max_correction < prob.options.tol
             prob.run.border.reuse = (
                 not prob.run.border.hold
+                and not self.border_fresh
                 and prob.ap.lens is None  # a lens model's design moves with its parameters
                 and self._relative_move(None, dc, dp) < prob.options.ap_reuse  # (scale set)
             )

@@ -157,6 +157,7 @@ class LensModel:
         cams = block.cameras
         theta0 = np.zeros((G, 10))
         r0 = np.zeros(G)
+        ray_group = group[image]  # a ray is in group g where its image is
         for g in range(G):
             members = np.flatnonzero(group == g)
             if members.size == 0:
@@ -179,7 +180,7 @@ class LensModel:
             if self.r0 is not None:
                 r0[g] = self.r0
             else:
-                sel = np.isin(image, members)
+                sel = ray_group == g
                 d = xy[sel] - theta0[g, 1:3]
                 rms = float(np.sqrt(np.mean(np.sum(d * d, axis=1)))) if sel.any() else 0.0
                 r0[g] = float(f"{rms:.2g}") if rms > 0 else theta0[g, 0] / 2
@@ -386,20 +387,21 @@ class BoundLens:
         self.model, self.kind = model, model.kind
         self.theta0, self.r0 = theta0, r0
         self.est = np.array([model.all_names.index(k) for k in model.names], np.int64)
-        G = theta0.shape[0]
-        self.scale = np.empty((G, self.est.size))
-        for g in range(G):
-            self.scale[g] = self._ring_scale(theta0[g], r0[g])
+        self.scale = self._ring_scale(theta0, np.asarray(r0, dtype=float))
         prior = np.array([model.prior.get(k, np.inf) for k in model.names])
         self.sigma = prior[None, :] / self.scale
 
-    def _ring_scale(self, th: F64, r0: float) -> F64:
+    def _ring_scale(self, th: F64, r0: F64) -> F64:
+        """Per group (G, k): 1 µm over the largest image shift per unit of each estimated
+        parameter on the ring of radius r0 (16 points), all groups in one evaluation."""
         t = np.linspace(0.0, 2 * np.pi, 16, endpoint=False)
         u = np.column_stack([np.cos(t), np.sin(t)])
-        nrm = r0 * u / th[0]
-        m = th[1:3] + r0 * u
-        _, _, D = evaluate_lens(self.kind, np.tile(th, (t.size, 1)), nrm, m)
-        big = np.max(np.linalg.norm(D, axis=1), axis=0)[self.est]
+        ru = r0[:, None, None] * u  # (G, 16, 2)
+        nrm = (ru / th[:, None, 0, None]).reshape(-1, 2)
+        m = (th[:, None, 1:3] + ru).reshape(-1, 2)
+        _, _, D = evaluate_lens(self.kind, np.repeat(th, t.size, axis=0), nrm, m)
+        big = np.max(np.linalg.norm(D, axis=1).reshape(th.shape[0], t.size, -1), axis=1)
+        big = big[:, self.est]
         return np.where(big > 0, UM / np.where(big > 0, big, 1.0), UM)
 
     @property

@@ -22,6 +22,18 @@ from numpy.typing import NDArray
 F64 = NDArray[np.float64]
 
 
+def padded_band(cb: F64, nb: int) -> F64:
+    """The factor in band storage with ``nb`` zero rows below each column, shape
+    (n + 1, kd + 1 + nb): row j + 1 holds column j of L from its diagonal (``cb[:, j]``),
+    row 0 is a zero column (read above L[0, 0]). Read by :class:`BandSolver` and
+    :func:`orientviz.bundle.precision.banded_selected_inverse` with block sizes up to
+    ``nb`` (one copy for both)."""
+    kd, n = cb.shape[0] - 1, cb.shape[1]
+    pad = np.zeros((n + 1, kd + 1 + nb))
+    pad[1:, : kd + 1] = cb.T
+    return pad
+
+
 class BandSolver:
     """Solves S X = B with the banded Cholesky factor of S.
 
@@ -31,15 +43,18 @@ class BandSolver:
         Lower banded Cholesky factor (``scipy.linalg.cholesky_banded(..., lower=True)``).
     nb : int
         Rows per block of the solves.
+    padded : ndarray, optional
+        The factor as :func:`padded_band` gives it with at least ``nb`` zero rows (used
+        in place, not copied); made here when not given.
     """
 
-    def __init__(self, cb: F64, nb: int = 64) -> None:
+    def __init__(self, cb: F64, nb: int = 64, padded: F64 | None = None) -> None:
         kd, n = cb.shape[0] - 1, cb.shape[1]
         self.kd, self.n, self.nb = kd, n, max(1, min(nb, n))
-        self.C = C = kd + 1 + self.nb
-        pad = np.zeros((n + 1, C))  # a leading zero column (read above L[0, 0])
-        pad[1:, : kd + 1] = cb.T
-        self._flat = pad.reshape(-1)
+        if padded is None or padded.shape[1] < kd + 1 + self.nb:
+            padded = padded_band(cb, self.nb)
+        self.C = padded.shape[1]
+        self._flat = padded.reshape(-1)
         self._diag = [
             np.array(self._L(i0, min(i0 + self.nb, n), i0, min(i0 + self.nb, n)))
             for i0 in range(0, n, self.nb)

@@ -42,6 +42,8 @@ from ...blas import blas_threads
 from .._result import ExteriorPairs, RayGains
 from ..problem._ap_normal import dense
 from ..reduced import DENSE_CHUNK_BYTES, ReducedStructure, dense_matrix, factor_reduced
+from ._band import padded_band
+from ._border_points import border_point_terms
 from ._precision_ap import banded_border, border_inverse, point_terms
 
 F64 = NDArray[np.float64]
@@ -57,8 +59,9 @@ def _strided(flat: F64, start: int, shape: tuple[int, int], row_stride: int) -> 
 
 
 def banded_selected_inverse(
-    cb: F64, nb: int = 96, window: int = 12, at: tuple[NDArray, NDArray] | None = None
-) -> F64:
+    cb: F64, nb: int = 96, window: int = 12, at: tuple[NDArray, NDArray] | None = None,
+    padded: F64 | None = None,
+) -> F64:  # fmt: skip
     """Entries of S⁻¹ inside the band, from the banded Cholesky factor of S.
 
     Parameters
@@ -74,6 +77,9 @@ def banded_selected_inverse(
         Only these entries (inside the band, in the factor's order) are wanted: returned
         in their broadcast shape, read from the window as the recursion passes them (the band itself
         is not stored).
+    padded : ndarray, optional
+        The factor as :func:`orientviz.bundle.precision._band.padded_band` gives it with at
+        least ``nb`` zero rows (read in place); made here when not given.
 
     Returns
     -------
@@ -93,10 +99,10 @@ def banded_selected_inverse(
     """
     kd, n = cb.shape[0] - 1, cb.shape[1]
     nb = max(1, min(nb, n))
-    C = kd + 1 + nb  # column stride of the padded factor
-    pad = np.zeros((n + 1, C))  # a leading zero column: L_IIᵀ of the first block reads it
-    pad[1:, : kd + 1] = cb.T
-    flat = pad.reshape(-1)
+    if padded is None or padded.shape[1] < kd + 1 + nb:
+        padded = padded_band(cb, nb)  # a leading zero column: L_IIᵀ of the first block reads it
+    C = padded.shape[1]  # column stride of the padded factor
+    flat = padded.reshape(-1)
     T = max(1, window) * nb + kd + nb  # the window buffer's size
     buf = np.zeros((T, T + kd + 1))
     W = buf.shape[1]
@@ -147,6 +153,14 @@ def banded_selected_inverse(
     return Zb if at is None else out.reshape(np.shape(at[0]))
 
 
+#: Rows per block of the border's solves S⁻¹E (:class:`orientviz.bundle.precision.BandSolver`).
+BORDER_SOLVE_BLOCK: int = 64
+
+#: Bands of the inverse up to this many entries (8 bytes each) are computed whole and
+#: read by one gather; larger ones give only the wanted entries (``at=``: no band stored).
+BAND_GATHER_LIMIT: int = 4_000_000
+
+
 class ReducedInverse:
     """The inverse of the reduced system S where the precision needs it.
 
@@ -163,7 +177,7 @@ class ReducedInverse:
     ) -> None:
         n = st.n_reduced
         r6 = np.arange(6)
-        self._Z = self._fac = None
+        self._Z = self._fac = self._padded = None
         self._m = st.n_cam
         if n <= dense_limit or st.solver != "banded":
             if n > dense_limit and st.solver != "dense":
@@ -189,10 +203,16 @@ class ReducedInverse:
         if fac is None or fac.kind != "banded":
             fac = factor_reduced(st, blocks)
         self._fac = fac
+        # one padded copy of the factor for the inverse and the border's solves
+        pad = self._padded = padded_band(fac.data, max(nb, BORDER_SOLVE_BLOCK))
         p = st.pos_img
         rows = 6 * p[st.block_i][:, None, None] + r6[None, :, None]
         cols = 6 * p[st.block_k][:, None, None] + r6[None, None, :]
-        self.blocks = banded_selected_inverse(fac.data, nb, at=(rows, cols))
+        if fac.data.size <= BAND_GATHER_LIMIT:  # the whole band, then one gather (faster)
+            Zb = banded_selected_inverse(fac.data, nb, padded=pad)
+            self.blocks = Zb[np.minimum(rows, cols), np.abs(rows - cols)]
+        else:  # only the wanted entries (the band is not stored)
+            self.blocks = banded_selected_inverse(fac.data, nb, at=(rows, cols), padded=pad)
 
     def border(self, E) -> tuple[F64, F64, NDArray[np.int64]]:
         """S⁻¹E and Eᵀ S⁻¹ E for a border E (6m, q): ``(Y3, EtY, row)``.
@@ -208,8 +228,25 @@ class ReducedInverse:
             EtY = E.T @ Y
             return Y.reshape(m, 6, -1), 0.5 * (EtY + EtY.T), np.arange(m)
         st = self._fac.structure
-        Yp, EtY = banded_border(self._fac.data, st.scalar_perm, E, st.pos_img)
+        Yp, EtY = banded_border(
+            self._fac.data, st.scalar_perm, E, st.pos_img, BORDER_SOLVE_BLOCK, self._padded
+        )
         return Yp.reshape(m, 6, -1), EtY, st.pos_img
+
+
+#: Blocks of S corrected at once by :func:`_with_border` (its gathers ≈ 2 MB each).
+BORDER_CHUNK: int = 1024
+
+
+def _with_border(Zblk: F64, Qca: F64, Y3: F64, bi, bk) -> F64:
+    """Zblk − Qca[i] Y3[k]ᵀ at every block (i, k) of S, in chunks of :data:`BORDER_CHUNK`
+    blocks (a new array; the same products as at once, without (blocks, 6, nb) gathers of
+    many MB in fresh memory)."""
+    out = np.empty_like(Zblk)
+    for s0 in range(0, Zblk.shape[0], BORDER_CHUNK):
+        sl = slice(s0, s0 + BORDER_CHUNK)
+        out[sl] = Zblk[sl] - Qca[bi[sl]] @ Y3[bk[sl]].transpose(0, 2, 1)
+    return out
 
 
 def _block_lookup(st: ReducedStructure, ca, cb_):
@@ -321,7 +358,7 @@ def _fill_precision(res, prob, st, rw, Je, Jp, lin) -> None:
         Y3 = Y3[row]  # image order
         Faa = np.linalg.inv(F - EtY)  # Q_aa (of the whole border)
         Qca = -(Y3 @ Faa)  # (m, 6, nb)
-        Zblk = Zblk - Qca[S.block_i] @ Y3[S.block_k].transpose(0, 2, 1)  # + Y Q_aa Yᵀ
+        Zblk = _with_border(Zblk, Qca, Y3, S.block_i, S.block_k)  # + Y Q_aa Yᵀ
     Qcc_diag = Zblk[S.diag_block]
     # point cofactors: Vinv + Σ_ab T_aᵀ Q(i_a, i_b) T_b
     oi, ocol = prob.obs.image, prob.obs.column
@@ -352,17 +389,14 @@ def _fill_precision(res, prob, st, rw, Je, Jp, lin) -> None:
             cols = g[:, None] * prob.ap.k + np.arange(prob.ap.k)
             np.add.at(hb, (ocol[vo][:, None], cols), Tap)
         aux.point_border(prob, ne, hb)
-        Qcp[vo] -= Qca[oi[vo]] @ hb[ocol[vo]]
-    # Q_pp,j = V_j⁻¹ − Σ_b T_bᵀ Q_cp(i_b, j) − h_jᵀ Q_ap,j
-    Qpp = Vinv + np.add.reduceat(T[vo].transpose(0, 2, 1) @ (-Qcp[vo]), S.pt_starts, axis=0)
+        # Q_cp −= Q_ca h_j, Q_pp,j −= h_jᵀ Q_ap,j with Q_ap,j = −(Σ_b Q_ca(i_b)ᵀ T_b + Q_aa h_j)
+        # at the points the border couples (every point with additional parameters)
+        vo_idx = np.arange(n_used)[vo]
+        Qpp, Qap = border_point_terms(S, oi, vo_idx, ocol, T, Qca, Faa, hb, Qcp, Vinv, bool(q))
+    if not nb or fast_ap:  # Q_pp,j = V_j⁻¹ − Σ_b T_bᵀ Q_cp(i_b, j)
+        Qpp = Vinv + np.add.reduceat(T[vo].transpose(0, 2, 1) @ (-Qcp[vo]), S.pt_starts, axis=0)
     if fast_ap:
         Qpp -= dQpp
-    elif nb:
-        # Q_ap,j = −(Σ_b Q_ca(i_b)ᵀ T_b + Q_aa h_j)   (nb, 3) per point
-        Qap = -(
-            np.add.reduceat(Qca[oi[vo]].transpose(0, 2, 1) @ T[vo], S.pt_starts, axis=0) + Faa @ hb
-        )
-        Qpp -= hb.transpose(0, 2, 1) @ Qap
     # gains of each ray on its own image and point, K = Q_(·, ray) Jwᵀ: the change of the
     # estimates per σ-normalised change of the ray's x, y (external reliability); first
     # without the parameters' terms

@@ -77,7 +77,9 @@ def border_inverse(inverse, E: F64, F: F64, st) -> tuple[F64, F64, F64]:
     return Qaa, Qca3, dQ
 
 
-def banded_border(L: F64, perm: I64, E, pos: I64) -> tuple[F64, F64]:
+def banded_border(
+    L: F64, perm: I64, E, pos: I64, nb: int = 64, padded: F64 | None = None
+) -> tuple[F64, F64]:
     """S⁻¹ E and Eᵀ S⁻¹ E from the banded Cholesky factor L of S (rows permuted).
 
     Parameters
@@ -89,6 +91,9 @@ def banded_border(L: F64, perm: I64, E, pos: I64) -> tuple[F64, F64]:
     E : ndarray, shape (n, q), or orientviz.bundle.problem._ap_normal.BorderE
     pos : ndarray of int, shape (m,)
         Position of each image in the factor's order (``perm`` by images).
+    nb, padded : int, ndarray, optional
+        Rows per block of the solves and the padded factor
+        (:class:`orientviz.bundle.precision.BandSolver`).
 
     Returns
     -------
@@ -98,7 +103,7 @@ def banded_border(L: F64, perm: I64, E, pos: I64) -> tuple[F64, F64]:
         Eᵀ S⁻¹ E = ZᵀZ with Z = L⁻¹ E (symmetric by construction).
     """
     Ep = E.permuted(pos, np.float64) if isinstance(E, BorderE) else E[perm]
-    band = BandSolver(L)
+    band = BandSolver(L, nb, padded)
     Z = band.forward(Ep)
     del Ep
     C = scipy.linalg.blas.dsyrk(1.0, Z.T)  # upper triangle of ZᵀZ

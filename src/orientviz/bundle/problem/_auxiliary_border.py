@@ -162,5 +162,5 @@ def auxiliary_redundancy(aux, Qcc: F64, Qpp: F64, Qcb: F64, Qbp: F64, Qbb: F64) 
     for k in range(2):
         ok = r.gcol[:, k] >= 0
         j[np.flatnonzero(ok), q + r.gcol[ok, k]] += r.gcoef[ok, k]
-    qii = Qtt + 2.0 * np.sum(Qtb * j, axis=1) + np.einsum("na,ab,nb->n", j, Qbb, j)
+    qii = Qtt + 2.0 * np.sum(Qtb * j, axis=1) + np.sum((j @ Qbb) * j, axis=1)
     return 1.0 - r.w * qii

@@ -31,6 +31,7 @@ from ..solution import Solution
 from ._cameras import camera_notes, camera_parameters
 from ._diverge import divergence_note
 from ._frame import block_from_tables, read_frame_tables, require_finite, tables_from_block
+from ._labels import ObservationLabels
 
 # The solvers (SciPy, the bundle, approximate values) are imported inside the functions
 # that adjust: reading and writing a block file (import-bal, import-colmap) never loads them.
@@ -296,14 +297,13 @@ def _labels(
     slices: dict | None = None,
     control: str = "weighted",
     more: dict[str, list[str]] | None = None,
-) -> list[str]:
+) -> ObservationLabels:
     """A label per residual in the user's ids: ``image/point/x``, ``point/X`` (control
     coordinates), ``image/X0_obs``…, ``image/omega_obs``…, names of the additional
-    parameters or auxiliary rows given in ``more`` (never an internal index)."""
+    parameters or auxiliary rows given in ``more`` (never an internal index); the image
+    observations' labels are formed when read (:class:`._labels.ObservationLabels`)."""
     obs = block.observations
-    im, pt = block.images.ids, block.points.ids
-    base = [f"{im[i]}/{pt[p]}" for i, p in zip(obs.image, obs.point)]
-    labels = [f"{b}/{a}" for b in base for a in "xy"]
+    im = block.images.ids
     slices = slices or {}
     imgs = block.images
     named = {
@@ -314,7 +314,8 @@ def _labels(
                        for c, n_ in enumerate(("omega", "phi", "kappa")) if imgs.angles_sigma[i, c] > 0],
         **(more or {}),
     }  # fmt: skip
-    out = labels[:n] + [""] * max(n - len(labels), 0)
+    n_img = 2 * obs.image.size  # the image observations' labels: formed when read (None here)
+    out: list[str | None] = [None] * min(n, n_img) + [""] * max(n - n_img, 0)
     for name, sl in slices.items():
         if name == "image" or not isinstance(sl, slice):
             continue
@@ -324,7 +325,7 @@ def _labels(
             words = {"control": "control coordinate", "additional": "additional parameter"}
             mine = [f"{words.get(name, name)} no. {j + 1} of {k}" for j in range(k)]
         out[sl] = mine
-    return [lab or f"observation no. {j + 1}" for j, lab in enumerate(out)]
+    return ObservationLabels(im, block.points.ids, obs.image, obs.point, out)
 
 
 def _control_labels(block: Block, control: str) -> list[str]:

@@ -1,0 +1,121 @@
+"""The quick schema check (io.schema_check.conforms) says "valid" only where jsonschema does.
+
+Compared with jsonschema's verdict on every shipped problem file in both table forms,
+and on seeded random mutations of their reductions (what validate checks: a value
+replaced, a key removed or added, an array emptied, shortened or given a duplicate),
+against the envelope and the file's kind schema.
+"""
+
+from __future__ import annotations
+
+import copy
+import functools
+import json
+import zlib
+
+import numpy as np
+import pytest
+
+from orientviz.io.datasets import list_datasets, load_dataset
+from orientviz.io.jsonio import validator_for
+from orientviz.io.problem import dumps_problem
+from orientviz.io.reduce import reduce_document
+from orientviz.io.registry import get_kind
+from orientviz.io.schema_check import conforms
+
+NAMES = list_datasets()
+VALUES = [
+    None, True, False, 0, 1, -1, 0.0, 1.0, 2.5, -0.5, 1e308, "", "x", "opk", "block",
+    "fixed", "tie", [], {}, [1.0], [1.0, 2.0], [None, None, None], [1.0, 2.0, 3.0],
+    {"id": "p"}, ["a", "a"], [1, 1.0], [True, 1],
+]  # fmt: skip
+
+
+@functools.cache
+def _docs(name: str) -> list[dict]:
+    """The shipped file in both table forms."""
+    problem = load_dataset(name)
+    return [json.loads(dumps_problem(problem, columnar=c)) for c in (True, False)]
+
+
+def _paths(node, prefix=()):
+    out = [prefix]
+    if isinstance(node, dict):
+        for k, v in node.items():
+            out += _paths(v, prefix + (k,))
+    elif isinstance(node, list):  # long arrays: their first three and last two items
+        n = len(node)
+        for i in [0, 1, 2, n - 2, n - 1] if n > 5 else range(n):
+            out += _paths(node[i], prefix + (i,))
+    return out
+
+
+def _parent(doc, path):
+    for p in path[:-1]:
+        doc = doc[p]
+    return doc
+
+
+def _mutate(doc: dict, rng: np.random.Generator) -> dict:
+    """One random change of a copy of ``doc``."""
+    out = copy.deepcopy(doc)
+    paths = [p for p in _paths(out) if p]
+    path = paths[rng.integers(len(paths))]
+    parent, key = _parent(out, path), path[-1]
+    what = rng.integers(6)
+    if what == 0 and isinstance(parent, dict):
+        del parent[key]
+    elif what == 1 and isinstance(parent, dict):
+        parent[str(rng.choice(["extra", "X", "sigma", "model", "free", "id"]))] = VALUES[
+            rng.integers(len(VALUES))
+        ]
+    elif what == 2 and isinstance(parent[key], list) and parent[key]:
+        parent[key] = parent[key][: int(rng.integers(len(parent[key])))]
+    elif what == 3 and isinstance(parent[key], list) and parent[key]:
+        parent[key].append(copy.deepcopy(parent[key][int(rng.integers(len(parent[key])))]))
+    else:
+        parent[key] = copy.deepcopy(VALUES[rng.integers(len(VALUES))])
+    return out
+
+
+def _jsonschema_valid(doc, schema: str) -> bool:
+    return not any(True for _ in validator_for(schema).iter_errors(doc))
+
+
+def _agree(doc, kind_schema: str) -> None:
+    for schema in ("envelope.json", kind_schema):
+        want = _jsonschema_valid(doc, schema)
+        got = conforms(doc, schema)
+        assert not got or want, f"conforms says valid, jsonschema does not ({schema})"
+        assert got == want, f"conforms {got}, jsonschema {want} ({schema})"
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_conforms_agrees_with_jsonschema_on_shipped_files(name):
+    for doc in _docs(name):
+        schema = get_kind(doc["kind"]).schema
+        _agree(doc, schema)
+        _agree(reduce_document(doc)[0], schema)
+        assert conforms(doc, schema)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_conforms_agrees_with_jsonschema_on_mutated_files(name):
+    rng = np.random.default_rng(zlib.crc32(name.encode()))
+    docs = [reduce_document(d)[0] for d in _docs(name)]  # what validate checks
+    schema = get_kind(docs[0]["kind"]).schema
+    rejected = 0
+    for i in range(120):
+        bad = _mutate(docs[i % len(docs)], rng)
+        _agree(bad, schema)
+        rejected += not conforms(bad, schema)
+    assert rejected > 30  # the mutations do reach the schema's rules
+
+
+def test_unknown_keyword_or_reference_is_left_to_jsonschema(monkeypatch):
+    from orientviz.io import schema_check
+
+    monkeypatch.setattr(schema_check, "_schema", lambda name: {"pattern": "^a"})
+    assert not conforms("a", "x.json")
+    monkeypatch.setattr(schema_check, "_schema", lambda name: {"$ref": "https://x/y.json"})
+    assert not conforms("a", "x.json")
