@@ -24,6 +24,10 @@ Headless Chromium (/usr/bin/chromium, the test suite's flags: software WebGL, no
   ``toggle_first_s`` the same for a one-node change (the projection circles shown or
   hidden): the page's floor.
 
+The screenshots polled here make the software renderer draw frames and so slow the page they
+time; the first picture of ``orientviz view`` as a user waits for it is measured without them
+by ``bench_viewer_command.py``.
+
 Run:  python benchmarks/bench_viewer_browser.py open dbat_roma --tree .
       python benchmarks/bench_viewer_browser.py cap --tree /path/to/old --tree . --repeat 2
 Never asserted; report the command and ``uptime`` with the numbers.

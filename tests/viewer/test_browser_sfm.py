@@ -13,8 +13,8 @@ FILE --free``):
 Ladybug opens as ``orientviz view`` opens it, at the file's start values while the solve
 runs in the background (the page shows the start's σ0 and says so, then the solution's).
 In each the scene draws, the panel shows σ̂0 of the solve and says that the precision
-waits for a request (above the viewer's limit), the worst images by |v|/σ are listed and
-one is flown to from the page, and switching that image off re-solves and undo restores it.
+waits for a request (above the viewer's limit), the worst images and points by |v|/σ are
+listed and the worst of each is chosen (flown to) from the page, and switching that image off re-solves and undo restores it.
 """
 
 from __future__ import annotations
@@ -116,4 +116,12 @@ def debugged_in_the_page(browser, app, size: tuple[int, int]) -> None:
     with app.panel._lock:
         pass
     assert st.edits.image_on[worst] and f"{st.result.sigma0:.10g}" == sigma0
+    # the worst points: the first entry is the point of the largest |v|/σ, chosen in the page
+    point = q.worst_points[0]
+    assert q.quality.point[point] == np.nanmax(q.quality.point)
+    gui_control(page, "worst points", "input").click()
+    page.get_by_role("option", name=f"1. {b.points.ids[point]} ").click()
+    assert wait_for(lambda: app.scene.selected_point == point, 60), "the point was not chosen"
+    with app.panel._lock:  # the flight to it has ended before the page goes
+        pass
     page.close()
