@@ -14,6 +14,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import compileall  # noqa: E402
+import gc  # noqa: E402
 import importlib.util  # noqa: E402
 import sys  # noqa: E402
 
@@ -54,6 +55,15 @@ try:  # property-based tests explore new inputs locally; CI replays a fixed sequ
         _hyp_settings.load_profile("ci")
 except ImportError:  # hypothesis is a test dependency; tests that need it import it
     pass
+
+
+def pytest_collection_finish(session):
+    """Freeze what exists once the tests are collected (the imported modules, the test
+    items and their parameters: they live to the end of the run), so that the cyclic
+    garbage collector's full collections stop walking them again. Objects the tests make
+    are collected as before; the thresholds stay Python's defaults."""
+    gc.freeze()
+
 
 CHROMIUM = os.environ.get("ORIENTVIZ_CHROMIUM", "/usr/bin/chromium")
 CHROMIUM_FLAGS = [
