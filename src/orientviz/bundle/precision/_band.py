@@ -16,10 +16,27 @@ product with all columns of B (BLAS level 3) and one small triangular solve.
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg
 from numpy.typing import NDArray
+from scipy.linalg.lapack import dtrtrs
 
 F64 = NDArray[np.float64]
+
+
+def tri_solve(a: F64, b: F64, lower: bool, trans: int) -> F64:
+    """X with op(a) X = b for a triangular float64 ``a`` (op: none for ``trans`` 0, the
+    transpose for 1): LAPACK's dtrtrs on ``a`` as given, the call that
+    ``scipy.linalg.solve_triangular`` makes for the transpose of a C-ordered triangle,
+    without its checks and wrapping (a new array; ``b`` is not changed).
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If a diagonal element of ``a`` is zero.
+    """
+    x, info = dtrtrs(a, b, lower=int(lower), trans=trans)
+    if info > 0:
+        raise np.linalg.LinAlgError(f"singular matrix: resolution failed at diagonal {info - 1}")
+    return x
 
 
 def padded_band(cb: F64, nb: int) -> F64:
@@ -29,8 +46,10 @@ def padded_band(cb: F64, nb: int) -> F64:
     :func:`orientviz.bundle.precision.banded_selected_inverse` with block sizes up to
     ``nb`` (one copy for both)."""
     kd, n = cb.shape[0] - 1, cb.shape[1]
-    pad = np.zeros((n + 1, kd + 1 + nb))
+    pad = np.empty((n + 1, kd + 1 + nb))
+    pad[0] = 0.0
     pad[1:, : kd + 1] = cb.T
+    pad[1:, kd + 1 :] = 0.0
     return pad
 
 
@@ -64,10 +83,10 @@ class BandSolver:
         """L[r0:r1, c0:c1] (inside the band, or its zeros) as a read-only view."""
         e = self._flat.itemsize
         start = (c0 + 1) * self.C + (r0 - c0)
-        return np.lib.stride_tricks.as_strided(
-            self._flat[start:], shape=(r1 - r0, c1 - c0), strides=(e, (self.C - 1) * e),
-            writeable=False,
-        )  # fmt: skip
+        v = np.ndarray((r1 - r0, c1 - c0), self._flat.dtype, self._flat, start * e,
+                       (e, (self.C - 1) * e))  # fmt: skip
+        v.flags.writeable = False
+        return v
 
     def forward(self, B: F64) -> F64:
         """L⁻¹ B for B (n, k) (rows in the factor's order), a new C-ordered array."""
@@ -77,9 +96,7 @@ class BandSolver:
             i1, c0 = min(i0 + nb, n), max(i0 - kd, 0)
             if i0 > c0:
                 X[i0:i1] -= self._L(i0, i1, c0, i0) @ X[c0:i0]
-            X[i0:i1] = scipy.linalg.solve_triangular(
-                self._diag[k], X[i0:i1], lower=True, check_finite=False
-            )
+            X[i0:i1] = tri_solve(self._diag[k].T, X[i0:i1], False, 1)  # L_II⁻¹ X_I
         return X
 
     def backward(self, Y: F64) -> F64:
@@ -91,9 +108,7 @@ class BandSolver:
             i1, b1 = min(i0 + nb, n), min(i0 + nb + kd, n)
             if b1 > i1:
                 X[i0:i1] -= self._L(i1, b1, i0, i1).T @ X[i1:b1]
-            X[i0:i1] = scipy.linalg.solve_triangular(
-                self._diag[k], X[i0:i1], lower=True, trans="T", check_finite=False
-            )
+            X[i0:i1] = tri_solve(self._diag[k].T, X[i0:i1], False, 0)  # L_II⁻ᵀ X_I
         return X
 
     def solve(self, B: F64) -> F64:

@@ -42,7 +42,7 @@ from ...blas import blas_threads
 from .._result import ExteriorPairs, RayGains
 from ..problem._ap_normal import dense
 from ..reduced import DENSE_CHUNK_BYTES, ReducedStructure, dense_matrix, factor_reduced
-from ._band import padded_band
+from ._band import padded_band, tri_solve
 from ._border_points import border_point_terms
 from ._precision_ap import banded_border, border_inverse, point_terms
 
@@ -52,10 +52,10 @@ F64 = NDArray[np.float64]
 def _strided(flat: F64, start: int, shape: tuple[int, int], row_stride: int) -> F64:
     """A read-only (rows, cols) view of ``flat`` from element ``start``: rows step by
     ``row_stride`` elements, columns by one (what BLAS reads in place)."""
-    e = flat.itemsize
-    return np.lib.stride_tricks.as_strided(
-        flat[start:], shape=shape, strides=(row_stride * e, e), writeable=False
-    )
+    e = flat.itemsize  # np.ndarray on the buffer: the same view as as_strided, made faster
+    v = np.ndarray(shape, flat.dtype, flat, start * e, (row_stride * e, e))
+    v.flags.writeable = False
+    return v
 
 
 def banded_selected_inverse(
@@ -131,9 +131,7 @@ def banded_selected_inverse(
         q = i0 - off
         # L_IIᵀ (upper triangular) starts at L[i0, i0]: element (j + 1)·C + d is L[j + d, j]
         LIIt = _strided(flat, (i0 + 1) * C, (ni, ni), C - 1)
-        LIIinv = scipy.linalg.solve_triangular(
-            LIIt, np.eye(ni), lower=False, trans="T", check_finite=False
-        )  # L_II⁻¹ = (L_IIᵀ)⁻ᵀ
+        LIIinv = tri_solve(LIIt.T, np.eye(ni), True, 0)  # L_II⁻¹ = (L_IIᵀ)⁻ᵀ
         if nbb:
             LBIt = _strided(flat, (i0 + 1) * C + ni, (ni, nbb), C - 1)  # L_BIᵀ
             ZBB = buf[q + ni : q + ni + nbb, q + ni : q + ni + nbb]
@@ -210,7 +208,8 @@ class ReducedInverse:
         cols = 6 * p[st.block_k][:, None, None] + r6[None, None, :]
         if fac.data.size <= BAND_GATHER_LIMIT:  # the whole band, then one gather (faster)
             Zb = banded_selected_inverse(fac.data, nb, padded=pad)
-            self.blocks = Zb[np.minimum(rows, cols), np.abs(rows - cols)]
+            flat = np.minimum(rows, cols) * Zb.shape[1] + np.abs(rows - cols)
+            self.blocks = Zb.reshape(-1).take(flat)
         else:  # only the wanted entries (the band is not stored)
             self.blocks = banded_selected_inverse(fac.data, nb, at=(rows, cols), padded=pad)
 
