@@ -5,10 +5,11 @@ FILE --free``):
 
 * the shipped BAL problem (Ladybug, 49 images, 7 776 points, 31 843 image points: a real
   SfM reconstruction; ``orientviz import-bal ladybug``);
-* a COLMAP model of the issue's size generated here (no real COLMAP model of 40+ images
-  and 10⁴+ points ships: licence): a simulated 4 × 12 block with 16 830 points and
-  43 889 image points written by ``write_colmap`` and read back by ``orientviz
-  import-colmap`` (COLMAP's objective, focal length and distortion free).
+* the shipped COLMAP model ``axe`` (52 photographs of a Bronze Age axe, CC BY 4.0:
+  src/orientviz/datasets/axe/MANIFEST.json; 10 089 points, 42 727 image points after the
+  import leaves out 65 repeated observations; a real SfM reconstruction with a RADIAL
+  camera), read by ``orientviz import-colmap`` as a user does (COLMAP's objective, focal
+  length and distortion free).
 
 Ladybug opens as ``orientviz view`` opens it, at the file's start values while the solve
 runs in the background (the page shows the start's σ0 and says so, then the solution's).
@@ -52,13 +53,10 @@ def ladybug_app(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def colmap_app(tmp_path_factory):
-    from orientviz.io.colmap import write_colmap
-    from orientviz.simulate import simulate_block
+    from orientviz.datasets.sfm import axe_model
 
-    folder = tmp_path_factory.mktemp("colmap")
-    write_colmap(simulate_block(4, 12, rng=1, extra_spacing_mm=7.0).block, folder / "model")
-    path = folder / "model.json"
-    assert main(["import-colmap", str(folder / "model"), "-o", str(path)]) == 0
+    path = tmp_path_factory.mktemp("colmap") / "axe.json"
+    assert main(["import-colmap", str(axe_model()), "-o", str(path)]) == 0
     app = ViewerApp(demo_from_file(str(path), {"free": True}), port=0, verbose=False)
     yield app
     with app.panel._lock:  # let the callbacks finish before the server stops
@@ -70,8 +68,8 @@ def test_a_real_bal_model_debugged_in_the_page(module_browser, ladybug_app):
     debugged_in_the_page(module_browser, ladybug_app, (49, 7776))
 
 
-def test_a_colmap_model_of_the_issues_size_debugged_in_the_page(module_browser, colmap_app):
-    debugged_in_the_page(module_browser, colmap_app, (48, 16830))
+def test_a_real_colmap_model_debugged_in_the_page(module_browser, colmap_app):
+    debugged_in_the_page(module_browser, colmap_app, (52, 10089))
 
 
 def debugged_in_the_page(browser, app, size: tuple[int, int]) -> None:
