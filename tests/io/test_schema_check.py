@@ -119,3 +119,70 @@ def test_unknown_keyword_or_reference_is_left_to_jsonschema(monkeypatch):
     assert not conforms("a", "x.json")
     monkeypatch.setattr(schema_check, "_schema", lambda name: {"$ref": "https://x/y.json"})
     assert not conforms("a", "x.json")
+
+
+# Keyword by keyword: _valid on small schemas against jsonschema's Draft 2020-12 verdict on
+# instances that sit on each keyword's edge (bool vs number, 1 vs 1.0, equal-looking
+# containers, both branches of if/then/else, unevaluatedProperties behind each combinator).
+KEYWORD_SCHEMAS = [
+    {"enum": [1, "a", [1, 2], {"k": 1}, None, True]},
+    {"const": [1, {"k": [True]}]},
+    {"const": {"a": 1, "b": 2}},
+    {"const": False},
+    {"type": ["integer", "null"]},
+    {"type": "boolean"},
+    {"exclusiveMinimum": 0, "exclusiveMaximum": 2},
+    {"minimum": -1, "maximum": 1},
+    {"minLength": 2},
+    {"uniqueItems": True},
+    {"items": {"type": "number"}, "minItems": 1, "maxItems": 2},
+    {"anyOf": [{"type": "string"}, {"minimum": 5}]},
+    {"oneOf": [{"type": "number"}, {"type": "integer"}]},
+    {"if": {"type": "number"}, "then": {"minimum": 1}, "else": {"type": "string"}},
+    {"if": {"type": "object", "required": ["a"]}, "then": {"properties": {"a": {"type": "number"}}},
+     "else": {"properties": {"b": {"type": "string"}}}, "unevaluatedProperties": False},
+    {"anyOf": [{"properties": {"a": {}}, "required": ["a"]}, {"properties": {"b": {}}}],
+     "unevaluatedProperties": False},
+    {"oneOf": [{"properties": {"a": {"type": "string"}}}, {"properties": {"a": {"type": "number"}}}],
+     "unevaluatedProperties": {"type": "boolean"}},
+    {"allOf": [{"properties": {"a": {}}}], "additionalProperties": {"type": "number"},
+     "unevaluatedProperties": False},
+    {"not": {"type": "string"}},  # a keyword it does not know: refused, never judged
+]  # fmt: skip
+EDGE_VALUES = VALUES + [
+    [1, 2], [1.0, 2.0], [2, 1], {"k": 1}, {"k": 1.0}, {"k": True}, [1, {"k": [True]}],
+    [1.0, {"k": [1]}], {"a": 1, "b": 2}, {"b": 2, "a": 1.0}, {"a": 1}, {"b": "s"}, {"b": 1},
+    {"a": "s", "c": True}, {"a": 1, "c": 3}, {"c": 1.5}, 5, 4.5, 2, 1.5, "ab", [["x"], ["x"]],
+    [{"a": 1}, {"a": 1}], ["a", 1],
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("schema", KEYWORD_SCHEMAS, ids=lambda s: ",".join(sorted(s)))
+def test_each_keyword_judged_as_jsonschema_judges_it(schema):
+    import jsonschema
+
+    from orientviz.io.schema_check import _Unknown, _valid
+
+    reference = jsonschema.Draft202012Validator(schema)
+    judged = 0
+    for value in EDGE_VALUES:
+        try:
+            verdict = _valid(value, schema, "block.json")
+        except _Unknown:
+            continue  # left to jsonschema, as conforms does
+        assert verdict == reference.is_valid(value), (schema, value)
+        judged += 1
+    if "not" in schema:
+        assert judged == 0
+    else:
+        assert judged >= len(EDGE_VALUES) // 2, "most edge values must be judged here"
+
+
+def test_references_outside_the_shipped_files_are_left_to_jsonschema():
+    from orientviz.io.schema_check import _Unknown, _valid
+
+    for ref in ("https://example.org/s.json", "../x.json", "block.json#/no/such/node"):
+        with pytest.raises(_Unknown):
+            _valid(1, {"$ref": ref}, "block.json")
+    with pytest.raises(_Unknown):
+        _valid(1, ["not", "a", "schema"], "block.json")

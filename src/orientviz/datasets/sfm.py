@@ -3,7 +3,7 @@
 * ``axe`` — a COLMAP model (text) of 52 photographs of a Bronze Age socketed axe
   (MicroPasts, CC BY 4.0), reconstructed by COLMAP (pycolmap) with one RADIAL camera;
   ``datasets/axe/MANIFEST.json`` gives its source, licence, sha256, units and frame,
-  :mod:`orientviz.datasets.make_axe` the script that wrote it.
+  ``tools/make_axe_model.py`` in the repository the script that wrote it.
 * ``ladybug`` — the BAL problem 49-7776 (``datasets/bal``; :func:`orientviz.io.bal.shipped_bal`;
   its MANIFEST says what is known of its licence).
 

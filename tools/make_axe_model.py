@@ -8,13 +8,14 @@ by all photographs, then COLMAP's bundle adjustment refining f, k1, k2 (:func:`r
 — and writes the model as COLMAP text files with only the keypoints that observe a 3D
 point::
 
-    python -m orientviz.datasets.make_axe PHOTOS_DIR MASKS_DIR [OUT_DIR]
+    python tools/make_axe_model.py PHOTOS_DIR MASKS_DIR [OUT_DIR]
 
 MASKS_DIR holds MicroPasts' masks of the axe (``masks/IMG_8835_mask.JPG``); they are
 written as COLMAP reads masks (:func:`colmap_masks`): the object was turned on a table in
 front of a fixed camera, so only its own features may be matched.
 
-pycolmap (``pip install pycolmap``) is needed here only; orientviz reads the written
+It lives in tools/, not in the package: it needs the photographs (not shipped) and pycolmap
+(``pip install pycolmap``), which orientviz itself does not use; orientviz reads the written
 model with :func:`orientviz.io.colmap.read_colmap`. The numbers of the shipped model
 (images, points, observations, the camera) are in its MANIFEST.
 """
