@@ -115,7 +115,9 @@ def read_block(directory: Path, control: list[int]):
     from orientviz.block import CONTROL
     from orientviz.io.colmap import read_colmap
 
-    block = read_colmap(directory, sigma_px=SIGMA_PX)
+    # intrinsics constant, as in pycolmap's run: a PINHOLE camera has nothing to undistort,
+    # so "undistort" gives the plain collinearity model with the camera held
+    block = read_colmap(directory, sigma_px=SIGMA_PX, lens="undistort")
     index = {pid: k for k, pid in enumerate(block.points.ids)}
     sel = np.array([index[str(c)] for c in control])
     block.points.role[sel] = CONTROL
