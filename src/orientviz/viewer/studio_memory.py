@@ -4,9 +4,9 @@ Every new design of a 1 000-image block allocates and frees arrays of 1–30 MB 
 of the inverse, its index arrays, the rays' terms). glibc serves an allocation above its
 *mmap threshold* with fresh pages from the kernel, which are zeroed at their first touch,
 and gives freed memory above the *trim threshold* back at once. The threshold adapts to
-what the process freed before, so how long a design takes depended on what ran before it
-in the same process (about 15 % of a new design's CPU; benchmarks/README.md, "session
-13"). :func:`keep_large_arrays_on_heap` fixes both thresholds for the process: arrays up to
+what the process freed before, so how long a design takes depends on what ran before it
+in the same process (the measurements are in benchmarks/README.md, the design studio).
+:func:`keep_large_arrays_on_heap` fixes both thresholds for the process: arrays up to
 32 MB come from the heap, and up to :data:`TRIM_BYTES` of freed heap stay with the
 process for the next design. ``orientviz view design`` sets it when the studio's view is
 built (:class:`orientviz.viewer.studio_panel.StudioView`); it is a setting of the whole

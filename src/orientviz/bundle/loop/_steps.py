@@ -75,12 +75,9 @@ LOSS_SIGMA0: float = 10.0
 #: lowers vᵀPv by at most this fraction of its value, or corrects by less than 1 σ …
 LOSS_SWITCH: float = 1e-2
 #: … a convex loss after a least-squares step that lowers vᵀPv by at most this fraction
-#: (or corrects by less than 1 σ). Ladybug with 2 % gross errors of 20–50 px (bench_sfm
-#: ``--robust``, scale 1 px): its first least-squares step lowers vᵀPv by ~20 % and the
-#: loss comes on after it; Huber then takes 82 steps to ½Σρ 26 766.2, soft-L1 50 steps to
-#: 25 555.9, where least-squares steps until a step lowers vᵀPv by ≤ 1 % (4 of them) led
-#: in 87 and 53 steps to 26 784.1 and 25 572.1 (more steps pulled by the gross errors, a
-#: worse basin), and the loss from the start took > 120 steps (Huber, 26 906.7).
+#: (or corrects by less than 1 σ): one least-squares step takes the start's largest
+#: misclosures out before the loss weighs them, and more such steps let the gross errors
+#: pull the solution into a worse basin (benchmarks/README.md, robust losses on Ladybug).
 LOSS_SWITCH_CONVEX: float = 0.3
 #: In a robust run's tail — the last step lowered Σρ by less than :data:`ROBUST_TAIL` of its
 #: value — the step is taken :data:`ROBUST_OVERRELAX` times (over-relaxed reweighting). The
@@ -89,13 +86,10 @@ LOSS_SWITCH_CONVEX: float = 0.3
 #: by a factor that changes little from step to step: Σρ then falls linearly, each decrease
 #: ~5 % below the last (Ladybug with 2 % gross errors). A step ω·δ shrinks such an error by
 #: 1 − ωμ instead of 1 − μ (μ the model's share of the true step); ω = 1.5 keeps a component
-#: the model gets right (μ = 1) converging (|1 − ω| = 0.5; ω = 2 stalled one: ½Σρ 27 220
-#: instead of 26 735 when used from the loss's first step), and a step that raises Σρ is
-#: rejected; its retry is the model's own step δ (see the module docstring), then damped
-#: as any. The fixed point is the same (δ = 0 there). Measured on the
-#: stage-2 problems of ``bench_sfm.py --robust`` (one thread): Huber 79 → 65 steps, ½Σρ
-#: 26 734.830 → 26 734.527; soft-L1 50 → 41, 25 525.978 → 25 525.837; Cauchy 43 → 34,
-#: 6 041.5805 → 6 041.5694 (ω = 1.8: 61, 38, 32 steps).
+#: the model gets right (μ = 1) converging (|1 − ω| = 0.5; ω = 2 can stall it), and a step
+#: that raises Σρ is rejected; its retry is the model's own step δ (see the module
+#: docstring), then damped as any. The fixed point is the same (δ = 0 there). Steps and
+#: optima with and without it: benchmarks/README.md, robust losses on Ladybug.
 ROBUST_TAIL: float = 1e-3
 ROBUST_OVERRELAX: float = 1.5
 #: In the tail a convex loss's model also takes the curvature along each beyond-scale ray's
@@ -103,13 +97,9 @@ ROBUST_OVERRELAX: float = 1.5
 #: floored at this fraction of ρ′ (a 2 × 2 per-ray model, Triggs et al. 2000: rows P½J
 #: of the ray turned into (I − (1 − √c) r̂r̂ᵀ) P½J, its misclosure divided by √c, with
 #: c the floored ratio: the gradient unchanged, the curvature along r̂ c·ρ′ instead of ρ′).
-#: Only in the tail: from a poorer iterate its steps went wrong (the loss's first steps:
-#: Huber 99 steps to ½Σρ 26 818.6 instead of 87 to 26 784.1, κ = 0.1). Measured in the tail
-#: (bench_sfm's stage-2 problems, with ROBUST_OVERRELAX): Huber 65 → 33 steps, ½Σρ
-#: 26 734.527 → 26 734.250; soft-L1 41 → 23, 25 525.837 → 25 525.665 (floor 0.2: 45 steps,
-#: 0.5: 47, without over-relaxation 0.3: 44 — all fewer than 65). Not for a camera set
-#: whose design is linear (its weighted design is re-weighted from the last one), nor for
-#: a redescending loss.
+#: Only in the tail: from a poorer iterate its steps go wrong. Not for a camera set whose
+#: design is linear (its weighted design is re-weighted from the last one), nor for a
+#: redescending loss. Steps and optima with other floors: benchmarks/README.md.
 ROBUST_TAIL_FLOOR: float = 0.3
 
 
