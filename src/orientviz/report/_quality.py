@@ -14,6 +14,7 @@ import numpy as np
 
 from ..block import CHECK, CONTROL
 from ..errors import parameter_words
+from ..plausibility import is_aerial
 from ..units import RHO
 from ._document import (
     FEW_POINTS,
@@ -276,10 +277,16 @@ class QualitySections:
             small = np.flatnonzero(np.isfinite(ang) & (ang < SMALL_ANGLE_GON))
             self.plot.setdefault("geometry", {})["angles_gon"] = ang
             if small.size:
+                # aerial: the photogrammetrist's gon and "height"; else the file's angle
+                # unit and the depth along the rays (a reconstruction's axes point anywhere)
+                aerial = is_aerial(blk, s.units.length)
+                au = "deg" if not aerial and s.units.angle == "deg" else "gon"
+                f = RHO[au] / RHO["gon"]
                 self.warn.append(
                     f"{small.size} point(s) with intersection angle below "
-                    f"{SMALL_ANGLE_GON:g} gon: weak height ("
-                    + self._names(blk.points.ids, small, ang, "gon")
+                    f"{SMALL_ANGLE_GON * f:.3g} {au}: "
+                    + ("weak height (" if aerial else "weak depth along the rays (")
+                    + self._names(blk.points.ids, small, ang * f, au)
                     + ")"
                 )
         if s.image_ids and len(s.image_ids) == blk.n_images:

@@ -209,7 +209,7 @@ class _Builder(PrecisionSections, QualitySections):
         items.append(
             (
                 "units of the file",
-                f"length {u_.length}, image {u_.image}, angle "
+                f"length {u_.length_name}, image {u_.image}, angle "
                 f"{u_.angle}; rotation sequence {s.sequence}",
             )
         )
