@@ -55,7 +55,7 @@ class Finding:
     level : {"warning", "error"}
         ``"error"``: the adjustment cannot be meaningful (see :func:`raise_for`).
     check : str
-        ``"empty"``, ``"image-outside"``, ``"far-away"``, ``"behind"``,
+        ``"empty"``, ``"image-outside"``, ``"model-control"``, ``"far-away"``, ``"behind"``,
         ``"weak-intersection"``, ``"few-observations"``.
     message : str
         One line in the user's ids, saying what to do.
@@ -156,6 +156,20 @@ def check_block(
                     outside.size,
                     place(k),
                     2,
+                )
+            )
+        # --- control in a file without scale -----------------------------------------
+        n_ctl = int(np.sum(pts.role == CONTROL))
+        if length == MODEL_UNIT and n_ctl:
+            out.append(
+                Finding(
+                    "warning",
+                    "model-control",
+                    f"{n_ctl} control point(s) in a file whose lengths are model units (the "
+                    "arbitrary scale of a reconstruction): their coordinates are read in model "
+                    'units too; if they are metric, give the file "length": "m"',
+                    n_ctl,
+                    "units.length",
                 )
             )
         # --- coordinates far from the block -----------------------------------------

@@ -102,3 +102,14 @@ def test_an_imported_reconstruction_is_reported_in_model_units(tmp_path, capsys)
     assert "[m]" not in text
     assert "intersection angle below 9 deg: weak depth along the rays (" in text
     assert "weak height" not in text and " gon" not in text
+
+
+def test_control_in_a_file_of_model_units_is_a_warning():
+    """Metric control in a model-unit file is a contradiction: said, not silently read."""
+    block = ov.simulate_block(1, 4, rng=3).block  # has control points
+    n = int(np.sum(block.points.role == ov.CONTROL))
+    assert n > 0
+    said = [f for f in check_block(block, length="model") if f.check == "model-control"]
+    assert len(said) == 1 and said[0].level == "warning" and said[0].count == n
+    assert f"{n} control point(s)" in said[0].message and '"length": "m"' in said[0].message
+    assert not [f for f in check_block(block) if f.check == "model-control"]  # metres: fine
