@@ -264,7 +264,9 @@ COMMANDS: dict[str, Command] = {
                 action="store_true",
                 default=None,
                 help="free network: control and check points become tie points; datum by "
-                "minimum constraints, or by --fix (options.free)",
+                "minimum constraints (the image pair with the most shared points times base "
+                "length: one image held, one base component of the other), or by --fix; "
+                "sigmas refer to that datum, the optimum does not depend on it (options.free)",
             ),
             arg(
                 "--solver",
