@@ -113,3 +113,31 @@ def test_control_in_a_file_of_model_units_is_a_warning():
     assert len(said) == 1 and said[0].level == "warning" and said[0].count == n
     assert f"{n} control point(s)" in said[0].message and '"length": "m"' in said[0].message
     assert not [f for f in check_block(block) if f.check == "model-control"]  # metres: fine
+
+
+def test_an_imported_model_that_does_not_fit_says_so(tmp_path, capsys):
+    """A reconstruction whose lens is held without the distortion its pixels carry
+    (``import-bal --fix-lens``, k1 left out of the file): σ0 ≫ 1 with most image
+    coordinates flagged, so ``solve`` says the model does not fit and exits 4 (COLMAP's
+    case: tests/io/test_colmap_objective.py)."""
+    from orientviz.cli import main
+
+    rng = np.random.default_rng(4)
+    pts = rng.uniform([-5, -5, -2], [5, 5, 2], (60, 3))
+    X0 = np.array([[-6, 0.0, 30.0], [6, 0.1, 30.0], [0.0, -6, 31.0], [0.1, 6, 29.0], [0, 0, 30]])
+    bal = _bal(tmp_path / "d.bal", X0, pts)
+    lines = bal.read_text().splitlines()
+    for i in range(1, 1 + len(X0) * len(pts)):  # pixels with k1 = 3 (r in units of f)
+        c, p, x, y = lines[i].split()
+        d = 1 + 3.0 * (float(x) ** 2 + float(y) ** 2) / 1000.0**2
+        lines[i] = f"{c} {p} {float(x) * d:.6f} {float(y) * d:.6f}"
+    bal.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "d.json"
+    assert main(["import-bal", str(bal), "--fix-lens", "-o", str(out)]) == 0
+    capsys.readouterr()
+    # the iteration limit reached first (exit 3): the message says the model does not fit
+    assert main(["solve", str(out), "--free"]) == 3
+    assert "BUT THE MODEL DOES NOT FIT THE DATA" in capsys.readouterr().err
+    assert main(["solve", str(out), "--free", "--max-iter", "200"]) == 4
+    said = capsys.readouterr()
+    assert "the model does not fit the data" in said.out and "lens distortion" in said.err
