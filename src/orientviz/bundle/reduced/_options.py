@@ -59,8 +59,8 @@ class ReducedOptions:
     rate_banded: float = 1.5
     rate_sparse: float = 2.0
     front_cost: float = 1.5e6
-    pair_ns: float = 250.0
-    dense_flop_ns: float = 0.025
+    pair_ns: float = 105.0
+    dense_flop_ns: float = 0.0375
     strip_band: float = 0.5
     sparse_clear_win: float = 0.25
     dense_max: int = 8000
