@@ -70,9 +70,11 @@ def check_geometry(problem: Problem) -> list:
         place = lambda k: f"observations.x[{k}]"  # noqa: E731
     else:
         place = lambda k: f"observations[{k}]"  # noqa: E731
+    u = problem.units
     findings = check_block(
-        problem.data, exterior_unknown=problem.kind != "intersection", place=place
-    )
+        problem.data, exterior_unknown=problem.kind != "intersection", place=place,
+        length=u.length, pixel_mm=u.pixel_size if u.image == "px" else None,
+    )  # fmt: skip
     return raise_for(findings, problem.source)
 
 
