@@ -108,6 +108,17 @@ def test_an_imported_reconstruction_is_reported_in_model_units(tmp_path, capsys)
     assert "[m]" not in text
     assert "intersection angle below 9 deg: weak depth along the rays (" in text
     assert "weak height" not in text and " gon" not in text
+    # the HTML report: residuals and σ0 in the file's pixels, a plan view, no terrain
+    import html
+    import re
+
+    page = tmp_path / "r.html"
+    assert main(["solve", str(out), "--free", "--report", str(page)]) == 0
+    words = html.unescape(re.sub(r"<[^>]+>", " ", re.sub(r"<img[^>]*>", "", page.read_text())))
+    assert "v [px]" in words and "σ0 a posteriori in the image" in words
+    assert "Plan view on the X-Y plane" in words and "model units" in words
+    for foreign in ("µm", "[m]", " gon", "terrain height", "weak height"):
+        assert foreign not in words, foreign
 
 
 def test_control_in_a_file_of_model_units_is_a_warning():
