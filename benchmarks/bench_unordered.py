@@ -4,6 +4,7 @@
     python benchmarks/bench_unordered.py --large            # adds 600 images
     python benchmarks/bench_unordered.py --sizes 150 --poor-only
     python benchmarks/bench_unordered.py --sizes 30 --peers pyceres --no-poor
+    python benchmarks/bench_unordered.py --sizes 150 --peers "" --no-poor --lens undistort,fixed
 
 The networks come from ``pycolmap.synthesize_dataset`` (one PINHOLE camera, 1024 × 768 px,
 f = 1280 px; 0.7 px Gaussian noise on the image points, ``synthesize_noise``):
@@ -110,14 +111,18 @@ def generate(
     return sorted(int(i) for i in rng.choice(ids, N_CONTROL, replace=False))
 
 
-def read_block(directory: Path, control: list[int]):
-    """The COLMAP model as an orientviz Block (σ = 0.7 px) with the control points fixed."""
+def read_block(directory: Path, control: list[int], lens: str = "undistort"):
+    """The COLMAP model as an orientviz Block (σ = 0.7 px) with the control points fixed.
+
+    Intrinsics constant, as in pycolmap's run: a PINHOLE camera has nothing to
+    undistort, so ``lens="undistort"`` gives the plain collinearity model with the camera
+    held; ``lens="fixed"`` keeps COLMAP's pixels with the camera as a held lens model
+    without distortion (the same model: ``bundle_adjust`` solves it as the plain one).
+    """
     from orientviz.block import CONTROL
     from orientviz.io.colmap import read_colmap
 
-    # intrinsics constant, as in pycolmap's run: a PINHOLE camera has nothing to undistort,
-    # so "undistort" gives the plain collinearity model with the camera held
-    block = read_colmap(directory, sigma_px=SIGMA_PX, lens="undistort")
+    block = read_colmap(directory, sigma_px=SIGMA_PX, lens=lens)
     index = {pid: k for k, pid in enumerate(block.points.ids)}
     sel = np.array([index[str(c)] for c in control])
     block.points.role[sel] = CONTROL
@@ -165,12 +170,12 @@ def _peak_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def worker_orientviz(directory: Path, control: list[int], reps: int) -> dict:
+def worker_orientviz(directory: Path, control: list[int], reps: int, lens: str) -> dict:
     from orientviz.bundle import bundle_adjust
 
     walls, cpus = [], []
     for _ in range(reps):
-        block = read_block(directory, control)
+        block = read_block(directory, control, lens)
         t0, c0 = time.perf_counter(), time.process_time()
         res = bundle_adjust(block, precision=False)
         walls.append(time.perf_counter() - t0)
@@ -350,12 +355,18 @@ def main() -> None:
         help="peers besides orientviz (pycolmap always; gtsam, pyceres through the shared "
         "bench's solvers; pyceres's costs are Python callbacks: small networks only)",
     )
+    ap.add_argument(
+        "--lens",
+        default="undistort",
+        help="comma-separated read_colmap lens modes for orientviz's rows: undistort (the "
+        "plain model), fixed (COLMAP's pixels, a held lens model without distortion)",
+    )
     a = ap.parse_args()
     if a.worker:
         solver, d, ctrl = a.worker
         control = [int(c) for c in ctrl.split(",")]
-        if solver == "orientviz":
-            out = worker_orientviz(Path(d), control, a.reps)
+        if solver.startswith("orientviz"):  # "orientviz" or "orientviz:LENS"
+            out = worker_orientviz(Path(d), control, a.reps, (solver + ":undistort").split(":")[1])
         elif solver in ("gtsam", "pyceres"):
             out = worker_peer(solver, Path(d), control, a.reps)
         else:
@@ -382,9 +393,10 @@ def main() -> None:
                 if a.poor_only and not poor:
                     continue
                 peers = ["pycolmap"] + [p for p in a.peers.split(",") if p and p != "pycolmap"]
-                res = {
-                    s: run_worker(s, d, control, a.reps, a.max_iters) for s in peers + ["orientviz"]
-                }
+                ours = [
+                    "orientviz" if m == "undistort" else f"orientviz:{m}" for m in a.lens.split(",")
+                ]
+                res = {s: run_worker(s, d, control, a.reps, a.max_iters) for s in peers + ours}
                 n_obs = res["pycolmap"].get("n_obs")
                 for s, r in res.items():
                     if "wall_s" not in r:

@@ -20,6 +20,7 @@ import argparse
 import importlib
 import json
 import math
+import os
 import sys
 import textwrap
 from collections.abc import Sequence
@@ -263,7 +264,9 @@ COMMANDS: dict[str, Command] = {
                 action="store_true",
                 default=None,
                 help="free network: control and check points become tie points; datum by "
-                "minimum constraints, or by --fix (options.free)",
+                "minimum constraints (the image pair with the most shared points times base "
+                "length: one image held, one base component of the other), or by --fix; "
+                "sigmas refer to that datum, the optimum does not depend on it (options.free)",
             ),
             arg(
                 "--solver",
@@ -668,6 +671,26 @@ def _dispatch(args: argparse.Namespace) -> int:
     return int(getattr(mod, cmd.function)(args))
 
 
+#: OpenBLAS's idle wait of a command (``OPENBLAS_THREAD_TIMEOUT``: 2**N CPU cycles, N in
+#: 4 … 30; OpenBLAS's own default is 2**28, about 0.1 s).
+BLAS_THREAD_TIMEOUT: str = "4"
+
+
+def quiet_blas_workers() -> None:
+    """Let OpenBLAS's worker threads sleep as soon as they are idle, in this process.
+
+    An OpenBLAS worker busy-waits for new work for ``OPENBLAS_THREAD_TIMEOUT`` (2**28
+    cycles by default) after it starts and after each product. A command loads two
+    OpenBLAS libraries (NumPy's and SciPy's) and runs bundles of up to 500 images on one
+    BLAS thread (:mod:`orientviz.blas`), so on a machine with more than one core those
+    workers mostly spin without work. Sets :data:`BLAS_THREAD_TIMEOUT` unless the
+    environment has its own value; effective only before NumPy is imported (``import
+    orientviz`` loads no NumPy). The results do not change: the setting only decides
+    when a worker without work goes to sleep.
+    """
+    os.environ.setdefault("OPENBLAS_THREAD_TIMEOUT", BLAS_THREAD_TIMEOUT)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``orientviz`` command; returns the exit code (0, 2 or 3).
 
@@ -675,6 +698,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     on stderr. An error nobody foresaw is reported in one line too (exit 3, "internal
     error"), with the traceback only under ``--debug``.
     """
+    quiet_blas_workers()
     parser = _parser()
     args = parser.parse_args(argv)
     if args.command not in COMMANDS:

@@ -11,12 +11,20 @@ import numpy as np
 import pytest
 
 import orientviz as ov
+import orientviz.bundle.loop._adjust as adjust_module
 from orientviz.bundle import LensModel, block_camera_options
+from orientviz.bundle._block_cameras import held_plain_camera
+from orientviz.bundle.model import BoundLens
 from orientviz.errors import InputError
+from orientviz.io.colmap_lens import forward_camera
 from orientviz.io.problem import problem_from_block
 
 #: What ``read_colmap`` states for a SIMPLE_PINHOLE camera (COLMAP refines f).
 FREE_C = {"model": "forward", "free": ["c"], "sigma": {}, "values": {}, "r0": None}
+#: What ``read_colmap(..., lens="fixed")`` states for a PINHOLE camera with fx = fy: a
+#: forward lens model, nothing free, as = 0 (the values of c, x0, y0 are the block's).
+HELD = forward_camera("PINHOLE", {"fx": 1280.0, "fy": 1280.0, "cx": 512.0, "cy": 384.0},
+                      0.01, "fixed")[3]  # fmt: skip
 EBNER = {"additional": "ebner12", "additional_sigma": None, "free": None, "sigma": {}}
 
 
@@ -82,3 +90,66 @@ def test_cameras_that_state_different_models_are_refused():
     block.images.camera[5:] = 1
     with pytest.raises(InputError, match="camera 'b': every camera of a block must state"):
         ov.bundle_adjust(block)
+
+
+def _count_lens_projections(monkeypatch) -> list:
+    """Record every projection through a lens model (the lens path's only way to
+    predict a ray)."""
+    calls: list = []
+    real = BoundLens.evaluate
+
+    def spy(self, *args, **kwargs):
+        calls.append(self.model.kind)
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(BoundLens, "evaluate", spy)
+    return calls
+
+
+def test_a_held_lens_without_distortion_is_solved_as_the_plain_model(plain, monkeypatch):
+    assert HELD["free"] == [] and set(HELD["values"].values()) == {0.0}
+    block = _block(HELD, 0.02)
+    calls = _count_lens_projections(monkeypatch)
+    res = ov.bundle_adjust(block)
+    assert calls == []  # no ray went through the lens model
+    np.testing.assert_array_equal(res.x, plain.x)  # the plain run, bit for bit
+    assert (res.iterations, res.sigma0, res.redundancy) == (
+        plain.iterations, plain.sigma0, plain.redundancy)  # fmt: skip
+    # `orientviz solve` takes the same path
+    sol = ov.solve_problem(problem_from_block(block)).adjustment
+    assert calls == []
+    np.testing.assert_array_equal(sol.x, plain.x)
+    # the camera is still reported, as the lens model's own run reports it
+    monkeypatch.setattr(adjust_module, "held_plain_camera", lambda *args: None)
+    lens = ov.bundle_adjust(block)
+    assert calls and set(calls) == {"forward"}  # this run did take the lens path
+    for field in ("value", "sigma", "estimated", "r0"):
+        np.testing.assert_array_equal(getattr(res.camera, field), getattr(lens.camera, field))
+    np.testing.assert_array_equal(sol.camera.value, lens.camera.value)
+    assert not res.camera.estimated.any() and res.camera.value[0, 0] == block.cameras.c[0]
+    # ... and the two are one model: the same optimum to rounding (8e-11 m on coordinates
+    # of 4.7 km, 1e-14 relative, when measured)
+    assert lens.iterations == res.iterations
+    assert lens.sigma0 == pytest.approx(res.sigma0, rel=1e-12)
+    np.testing.assert_allclose(lens.exterior[:, :3], res.exterior[:, :3], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(lens.exterior[:, 3:], res.exterior[:, 3:], rtol=0, atol=1e-13)
+    np.testing.assert_allclose(lens.points, res.points, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    "model",
+    [
+        LensModel("forward", free=(), values={"k1": 1e-3}),  # distortion held, not zero
+        LensModel("forward", free=(), values={"as": 1e-4}),  # an affinity
+        LensModel("backward", free=(), values={"sk": 1e-4}),
+        LensModel("forward", free=("k1",)),  # something estimated
+        LensModel("forward", free=(), prior={"c": 0.01}),  # a weighted c
+        LensModel("forward", free=(), values={"c": 152.0}),  # another c than the camera's
+    ],
+)
+def test_a_lens_model_that_is_not_the_plain_one_keeps_the_lens_path(model):
+    block = _block(None, 0.02)
+    used = np.ones(block.observations.image.size, bool)
+    assert held_plain_camera(block, model, None, used) is None
+    zero = LensModel(model.kind, free=())
+    assert held_plain_camera(block, zero, None, used) is not None  # the same kind, held at 0

@@ -16,6 +16,12 @@ camera, ``{}`` = nothing):
 :func:`camera_keywords` is how :func:`~orientviz.bundle.bundle_adjust` applies them:
 keywords given by the caller win over the block's models. The problem file's
 ``cameras[]`` rows are read into these dicts by :mod:`orientviz.io.kinds._cameras`.
+
+A lens model that estimates nothing and whose every term (as, sk, the distortion) is 0
+at the cameras' own c, x0, y0 predicts f = (x0, y0) + c·n, the plain collinearity
+equations (e.g. a COLMAP PINHOLE camera read with ``lens="fixed"``):
+:func:`held_plain_camera` recognises it, and :func:`~orientviz.bundle.bundle_adjust`
+then runs the plain model and reports the held camera as the lens path would.
 """
 
 from __future__ import annotations
@@ -26,7 +32,7 @@ import numpy as np
 
 from ..block import Block
 from ..errors import InputError
-from .model import LensModel, ap_set
+from .model import BoundLens, LensModel, ap_set
 
 #: σ (µm) that holds a fixed additional parameter at 0.
 FIXED_SIGMA_UM = 1e-6
@@ -124,6 +130,55 @@ def camera_keywords(block: Block, additional: Any, ap_group: Any, ap_sigma: Any)
         opts["ap_group"] if ap_group is None else ap_group,
         opts.get("ap_sigma") if ap_sigma is None else ap_sigma,
     )
+
+
+def held_plain_camera(
+    block: Block, additional: Any, ap_group: Any, used_obs: np.ndarray
+) -> BoundLens | None:
+    """``additional`` bound to the block if it is exactly the plain collinearity model.
+
+    That is a :class:`~orientviz.bundle.LensModel` (either kind) that estimates no
+    parameter (none free, none with a prior), whose given as, sk and distortion terms
+    are 0 in every group, and whose c, x0, y0 (mm) are those of each image's own
+    camera: its projection f = (x0, y0) + c·n is the one of the plain model.
+
+    Parameters
+    ----------
+    block : Block
+        The block to adjust.
+    additional : object
+        The bundle's ``additional`` (after :func:`camera_keywords`).
+    ap_group : array_like of int, shape (m,), optional
+        Parameter group of each image (default: one per camera, as for any lens model).
+    used_obs : ndarray of bool, shape (n,)
+        The rays that enter the adjustment (they give the reference radius ``r0`` of
+        :meth:`~orientviz.bundle.LensModel.bind`, as in the lens model's own run).
+
+    Returns
+    -------
+    BoundLens or None
+        The bound model (its :meth:`~orientviz.bundle.model.BoundLens.estimates` at no
+        correction is the held camera the lens path reports), or None if ``additional``
+        is anything else.
+    """
+    if not isinstance(additional, LensModel) or additional.names:
+        return None
+    group = block.images.camera if ap_group is None else np.asarray(ap_group, np.int64)
+    if group.shape != (block.n_images,) or group.size == 0 or group.min() < 0:
+        return None  # the lens path reports the error
+    obs = block.observations
+    used = np.flatnonzero(used_obs)
+    try:
+        bound = additional.bind(block, obs.xy[used], obs.image[used], group)
+    except InputError:
+        return None  # the lens path reports it
+    th = bound.theta0
+    cams = block.cameras
+    cam = block.images.camera
+    own = np.column_stack([cams.c[cam], cams.x0[cam], cams.y0[cam]])
+    if np.any(th[:, 3:] != 0.0) or not np.array_equal(th[group, :3], own):
+        return None
+    return bound
 
 
 def _shape(spec: dict[str, Any]) -> tuple:

@@ -10,9 +10,13 @@ Without them the datum comes from the control points (and observed orientations)
   coordinates. Fixing one image's six parameters and one coordinate of a second image's
   centre is the classic datum of a block without control.
 * ``free``: a free network. Control and check points become tie points (their given
-  coordinates are only approximations) and the datum is the minimum: the orientation of
-  the first image of the best-connected pair and the largest base component to the
-  second image, held at their approximate values. Estimates and σ refer to that datum.
+  coordinates are only approximations) and the datum is the minimum: of the pair of
+  images whose number of shared points times base length is largest, the first image's
+  orientation and the largest base component to the second image, held at their
+  approximate values (a long base holds the scale firmly: a pair that shares many
+  points but stands almost at one place would hang the scale on a few centimetres, and
+  Gauss-Newton then creeps). The optimum does not depend on the datum; estimates and σ
+  refer to it.
 
 Units: m, rad (the block's).
 """
@@ -146,8 +150,10 @@ def free_network(block: Block) -> tuple[Block, str]:
 
 
 def minimum_datum(block: Block) -> tuple[Block, str]:
-    """Hold 7 parameters at their approximations: the best-connected pair's first image
-    (6) and the largest base component to its second image (1). Returns the block and a note."""
+    """Hold 7 parameters at their approximations: of the image pair whose shared points
+    times base length (m) is largest, the first image (6) and the largest base component
+    to the second image (1); with no base at all (every centre at one place), the pair
+    sharing the most points. Returns the block and a note."""
     obs = block.observations
     m, p = block.n_images, block.n_points
     M = sp.csr_matrix((np.ones(obs.image.size), (obs.image, obs.point)), shape=(m, p))
@@ -158,9 +164,14 @@ def minimum_datum(block: Block) -> tuple[Block, str]:
         raise InputError(
             "a free network needs two images that share points", block.meta.get("source")
         )
-    best = int(np.argmax(np.where(off, common.data, -1)))
+    X0 = block.images.X0
+    length = np.linalg.norm(X0[common.col] - X0[common.row], axis=1)
+    score = np.where(off, common.data * np.nan_to_num(length), -1.0)
+    if not score.max() > 0:
+        score = np.where(off, common.data, -1.0)
+    best = int(np.argmax(score))
     a, b = int(common.row[best]), int(common.col[best])
-    base = block.images.X0[b] - block.images.X0[a]
+    base = X0[b] - X0[a]
     c = int(np.argmax(np.abs(base)))
     ida, idb = block.images.ids[a], block.images.ids[b]
     out = apply_fix(block, [(ida, ()), (idb, (IMAGE_PARTS[c],))])

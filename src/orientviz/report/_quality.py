@@ -3,7 +3,7 @@ warnings on geometry.
 
 A mixin of the report builder (:mod:`orientviz.report._sections`); it uses the
 builder's ``p``, ``s``, ``adj``, ``block``, ``used``, ``largest``, ``correlation``,
-``warn``, ``plot`` and ``coverage()``.
+``warn``, ``plot`` and ``coverage_below()``.
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ import numpy as np
 
 from ..block import CHECK, CONTROL
 from ..errors import parameter_words
+from ..plausibility import is_aerial
 from ..units import RHO
 from ._document import (
     FEW_POINTS,
@@ -39,8 +40,9 @@ class QualitySections:
         w = adj.normalized_residuals
         k = self.largest
         img_q = s.observation_quantity == "image"
-        vu = "µm" if img_q else s.unit_name(s.observation_quantity)
-        vf = 1000.0 if img_q else s.factor(s.observation_quantity)
+        um = img_q and s.units.image != "px"  # image residuals in µm; a pixel file's in px
+        vu = "µm" if um else s.unit_name(s.observation_quantity)
+        vf = 1000.0 if um else s.factor(s.observation_quantity)
         vd = 2 if img_q else 4  # decimals of v and σ
         blk = self.block
         block_obs = (
@@ -137,72 +139,9 @@ class QualitySections:
 
     # .................................................................. correlations
     def correlations(self) -> Section:
-        adj, thr = self.adj, self.correlation
-        pairs: list[tuple[str, str, float]] = []
-        scope = ""
-        near: list[tuple[str, float]] = []
-        free = np.isfinite(adj.std()) & (adj.std() > 0)
-        if adj.cofactor is not None:
-            scope = "all pairs of parameters"
-            idx = np.flatnonzero(free)
-            if idx.size:
-                C = correlation_matrix(adj.cofactor[np.ix_(idx, idx)])
-                i, j = np.triu_indices_from(C, k=1)
-                sel = np.abs(C[i, j]) > thr
-                pairs = sorted(
-                    (
-                        (adj.names[idx[a]], adj.names[idx[b]], float(C[a, b]))
-                        for a, b in zip(i[sel], j[sel])
-                    ),
-                    key=lambda t: -abs(t[2]),
-                )
-                cond = condition_number(C)
-                if cond > NEAR_SINGULAR:
-                    near.append(("all parameters", cond))
-        else:
-            scope = (
-                "pairs within one image's or one point's parameters (the full cofactor "
-                "matrix is not formed for blocks)"
-            )
-            for bname, Q in adj.cofactor_groups.items():
-                if bname not in adj.groups or Q.ndim != 3:
-                    continue
-                names = adj.names[adj.groups[bname]]
-                nb = Q.shape[1]
-                fb = free[adj.groups[bname]].reshape(-1, nb)
-                # parameters without a σ (fixed points) get unit variance and no correlation
-                d = np.sqrt(np.clip(np.einsum("kii->ki", Q), 0.0, None))
-                d = np.where(fb & (d > 0), d, 1.0)
-                C = np.where(
-                    fb[:, :, None] & fb[:, None, :], Q / (d[:, :, None] * d[:, None, :]), 0.0
-                )
-                C[:, np.arange(nb), np.arange(nb)] = 1.0
-                i, j = np.triu_indices(nb, k=1)
-                kk, pp = np.nonzero(np.abs(C[:, i, j]) > thr)
-                first = [names[a] for a in (kk * nb + i[pp]).tolist()]
-                second = [names[b] for b in (kk * nb + j[pp]).tolist()]
-                pairs.extend(zip(first, second, C[kk, i[pp], j[pp]].tolist()))
-                active = np.flatnonzero(fb.sum(axis=1) >= 2)
-                if active.size:
-                    with np.errstate(all="ignore"):
-                        ev = np.linalg.eigvalsh(C[active])
-                    cond = np.where(
-                        ev[:, 0] > 0, ev[:, -1] / np.where(ev[:, 0] > 0, ev[:, 0], 1.0), np.inf
-                    )
-                    for k in active[np.flatnonzero(~(cond <= NEAR_SINGULAR))]:
-                        near.append(
-                            (
-                                names[k * nb].rpartition(".")[0],
-                                float(cond[np.searchsorted(active, k)]),
-                            )
-                        )
-            pairs.sort(key=lambda t: -abs(t[2]))
-        for what, cond in near[:10]:
-            self.warn.append(
-                f"near-singular: the correlation matrix of {what} has condition "
-                f"number {cond:.3g} (> {NEAR_SINGULAR:.0e}); parameters nearly "
-                "undetermined"
-            )
+        thr = self.correlation
+        pairs, scope, near = self._correlation_checks(with_pairs=True)
+        self._near_singular_warnings(near)
         rows = [  # in the user's words: "image s00_003 (Y0)", not "s00_003.Y0"
             [parameter_words([a]), parameter_words([b]), f"{r:+.4f}"]
             for a, b, r in pairs[:MAX_ROWS]
@@ -237,16 +176,97 @@ class QualitySections:
             ]
         return sec
 
+    def _correlation_checks(
+        self, with_pairs: bool
+    ) -> tuple[list[tuple[str, str, float]], str, list[tuple[str, float]]]:
+        """The pairs of parameters with ``|ρ|`` above the threshold (sorted by ``|ρ|``;
+        none unless ``with_pairs``), the scope of the check and the near-singular
+        correlation matrices (what, condition number)."""
+        adj, thr = self.adj, self.correlation
+        pairs: list[tuple[str, str, float]] = []
+        scope = ""
+        near: list[tuple[str, float]] = []
+        free = np.isfinite(adj.std()) & (adj.std() > 0)
+        if adj.cofactor is not None:
+            scope = "all pairs of parameters"
+            idx = np.flatnonzero(free)
+            if idx.size:
+                C = correlation_matrix(adj.cofactor[np.ix_(idx, idx)])
+                if with_pairs:
+                    i, j = np.triu_indices_from(C, k=1)
+                    sel = np.abs(C[i, j]) > thr
+                    pairs = sorted(
+                        (
+                            (adj.names[idx[a]], adj.names[idx[b]], float(C[a, b]))
+                            for a, b in zip(i[sel], j[sel])
+                        ),
+                        key=lambda t: -abs(t[2]),
+                    )
+                cond = condition_number(C)
+                if cond > NEAR_SINGULAR:
+                    near.append(("all parameters", cond))
+        else:
+            scope = (
+                "pairs within one image's or one point's parameters (the full cofactor "
+                "matrix is not formed for blocks)"
+            )
+            for bname, Q in adj.cofactor_groups.items():
+                if bname not in adj.groups or Q.ndim != 3:
+                    continue
+                names = adj.names[adj.groups[bname]]
+                nb = Q.shape[1]
+                fb = free[adj.groups[bname]].reshape(-1, nb)
+                # parameters without a σ (fixed points) get unit variance and no correlation
+                d = np.sqrt(np.clip(np.einsum("kii->ki", Q), 0.0, None))
+                d = np.where(fb & (d > 0), d, 1.0)
+                C = np.where(
+                    fb[:, :, None] & fb[:, None, :], Q / (d[:, :, None] * d[:, None, :]), 0.0
+                )
+                C[:, np.arange(nb), np.arange(nb)] = 1.0
+                if with_pairs:
+                    i, j = np.triu_indices(nb, k=1)
+                    kk, pp = np.nonzero(np.abs(C[:, i, j]) > thr)
+                    first = [names[a] for a in (kk * nb + i[pp]).tolist()]
+                    second = [names[b] for b in (kk * nb + j[pp]).tolist()]
+                    pairs.extend(zip(first, second, C[kk, i[pp], j[pp]].tolist()))
+                active = np.flatnonzero(fb.sum(axis=1) >= 2)
+                if active.size:
+                    with np.errstate(all="ignore"):
+                        ev = np.linalg.eigvalsh(C[active])
+                    cond = np.where(
+                        ev[:, 0] > 0, ev[:, -1] / np.where(ev[:, 0] > 0, ev[:, 0], 1.0), np.inf
+                    )
+                    for k in active[np.flatnonzero(~(cond <= NEAR_SINGULAR))]:
+                        near.append(
+                            (
+                                names[k * nb].rpartition(".")[0],
+                                float(cond[np.searchsorted(active, k)]),
+                            )
+                        )
+            pairs.sort(key=lambda t: -abs(t[2]))
+        return pairs, scope, near
+
+    def _near_singular_warnings(self, near: list[tuple[str, float]]) -> None:
+        for what, cond in near[:10]:
+            self.warn.append(
+                f"near-singular: the correlation matrix of {what} has condition "
+                f"number {cond:.3g} (> {NEAR_SINGULAR:.0e}); parameters nearly "
+                "undetermined"
+            )
+
     # .................................................................. warnings
     def warnings(self) -> Section:
         given = [n[len("warning: ") :] for n in self.s.notes if n.startswith("warning: ")]
         msgs = list(dict.fromkeys(given + self.warn))
         sec = Section("warnings", "Warnings on geometry and quality", values={"messages": msgs})
         sec.items = [("warnings", str(len(msgs)) if msgs else "none")]
+        small = f"{SMALL_ANGLE_GON:g} gon"
+        if self.block is not None and not is_aerial(self.block, self.s.units.length):
+            small = f"{SMALL_ANGLE_GON * 0.9:g} deg"  # 10 gon
         sec.text = [
             f"Checked: convergence, global test, |w| above the critical value, redundancy "
             f"numbers below {R_LOW:g}, tie/check points with fewer than 3 rays, intersection "
-            f"angles below {SMALL_ANGLE_GON:g} gon, images with fewer than {FEW_POINTS} points or "
+            f"angles below {small}, images with fewer than {FEW_POINTS} points or "
             f"points covering less than {POOR_COVERAGE:.0%} of the format, near-singular "
             f"correlation matrices (condition number above {NEAR_SINGULAR:.0e})."
         ]
@@ -276,10 +296,16 @@ class QualitySections:
             small = np.flatnonzero(np.isfinite(ang) & (ang < SMALL_ANGLE_GON))
             self.plot.setdefault("geometry", {})["angles_gon"] = ang
             if small.size:
+                # aerial: the photogrammetrist's gon and "height"; else the file's angle
+                # unit and the depth along the rays (a reconstruction's axes point anywhere)
+                aerial = is_aerial(blk, s.units.length)
+                au = "deg" if not aerial and s.units.angle == "deg" else "gon"
+                f = RHO[au] / RHO["gon"]
                 self.warn.append(
                     f"{small.size} point(s) with intersection angle below "
-                    f"{SMALL_ANGLE_GON:g} gon: weak height ("
-                    + self._names(blk.points.ids, small, ang, "gon")
+                    f"{SMALL_ANGLE_GON * f:.3g} {au}: "
+                    + ("weak height (" if aerial else "weak depth along the rays (")
+                    + self._names(blk.points.ids, small, ang * f, au)
                     + ")"
                 )
         if s.image_ids and len(s.image_ids) == blk.n_images:
@@ -290,8 +316,8 @@ class QualitySections:
                     f"{few.size} image(s) measured in fewer than {FEW_POINTS} "
                     "points (" + self._names(blk.images.ids, few, npts, "points") + ")"
                 )
-            cov = self.coverage()
-            poor = np.flatnonzero((cov < POOR_COVERAGE) & (npts >= 3))
+            below, cov = self.coverage_below(POOR_COVERAGE)
+            poor = np.flatnonzero(below & (npts >= 3))
             if poor.size:
                 self.warn.append(
                     f"{poor.size} image(s) whose points cover less than "

@@ -24,10 +24,13 @@ import os
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..block import CHECK, CONTROL, TIE, block_layout
 from ..io.problem import Problem
 from ..io.solution import Solution
+from ..plausibility import is_aerial
+from ._coverage import coverage_below
 from ._document import (
     R_LOW,
     Report,
@@ -50,6 +53,13 @@ from ._stats import (
 )
 
 __all__ = ["Report", "Section", "Table", "build_report", "chi2_test", "intersection_angles"]
+
+#: Caption of the overview of a block that was not flown (a reconstruction's frame has no
+#: up and no terrain: the plan view is its X-Y plane, without footprints).
+CAPTION_PLAN = (
+    "Plan view on the X-Y plane of the block's frame: projection centres, tie, control and "
+    "check points (the block is not aerial: no image footprints on a terrain)."
+)
 
 
 # --------------------------------------------------------------------------- the builder
@@ -87,6 +97,20 @@ def build_report(
     return b.run()
 
 
+def verdict_sections(
+    problem: Problem, solution: Solution, *, alpha: float = 0.05, correlation: float = 0.9
+) -> Report:
+    """The sections ``sigma0``, ``residuals`` and ``warnings`` of :func:`build_report`.
+
+    Their content equals that of the whole report's sections (the same warnings in the
+    same order); the sections that only show numbers (summary, parameters, images,
+    points, check points, the list of high correlations) are not formed, and the
+    images' coverage is computed only where it may be below the warning's threshold.
+    """
+    b = _Builder(problem, solution, 10, correlation, alpha, 10)
+    return b.run_verdict()
+
+
 class _Builder(PrecisionSections, QualitySections):
     def __init__(self, problem, solution, largest, correlation, alpha, worst):
         self.p, self.s, self.adj = problem, solution, solution.adjustment
@@ -101,6 +125,13 @@ class _Builder(PrecisionSections, QualitySections):
         if not hasattr(self, "_coverage"):
             self._coverage = image_coverage(self.block)
         return self._coverage
+
+    def coverage_below(self, threshold: float) -> tuple[NDArray[np.bool_], F64]:
+        """Which images' coverage is below ``threshold`` and the coverage (exact where it
+        is below; :func:`coverage_below` unless :meth:`coverage` was computed)."""
+        if hasattr(self, "_coverage"):
+            return self._coverage < threshold, self._coverage
+        return coverage_below(self.block, threshold)
 
     # .................................................................. driver
     def run(self) -> Report:
@@ -123,7 +154,26 @@ class _Builder(PrecisionSections, QualitySections):
         sub = f"{self.s.kind} · {self.s.method}" + (f" · {self.p.source}" if self.p.source else "")
         return Report(title=title, subtitle=sub, sections=secs, plot=self.plot)
 
+    def run_verdict(self) -> Report:
+        """The sections of :func:`verdict_sections`, their warnings as :meth:`run` forms them."""
+        self.convergence_warning()
+        secs = [self.sigma0()]
+        self.redundancy()
+        secs.append(self.residuals())
+        self._near_singular_warnings(self._correlation_checks(with_pairs=False)[2])
+        self.geometry_warnings()
+        secs.append(self.warnings())
+        return Report(title="", subtitle="", sections=secs, plot=self.plot)
+
     # .................................................................. summary
+    def convergence_warning(self) -> None:
+        adj = self.adj
+        if not adj.converged:
+            self.warn.append(
+                f"the adjustment did not converge ({adj.reason}); the numbers "
+                "below describe the last iteration"
+            )
+
     def summary(self) -> Section:
         adj, s, p = self.adj, self.s, self.p
         counts = s.counts()  # n − u = r, as in the text and JSON outputs
@@ -209,20 +259,18 @@ class _Builder(PrecisionSections, QualitySections):
         items.append(
             (
                 "units of the file",
-                f"length {u_.length}, image {u_.image}, angle "
+                f"length {u_.length_name}, image {u_.image}, angle "
                 f"{u_.angle}; rotation sequence {s.sequence}",
             )
         )
-        if not adj.converged:
-            self.warn.append(
-                f"the adjustment did not converge ({adj.reason}); the numbers "
-                "below describe the last iteration"
-            )
+        self.convergence_warning()
         sec = Section("summary", "Project summary", items=items, values=v)
         sec.text = [n for n in s.notes if not n.startswith(("check points", "block:"))]
         if blk is not None:
             sec.figures = ["overview"]
             self._overview_data()
+            if not self.plot["overview"]["aerial"]:
+                sec.values["captions"] = {"overview": CAPTION_PLAN}
         return sec
 
     def datum(self) -> str:
@@ -263,11 +311,13 @@ class _Builder(PrecisionSections, QualitySections):
             s_img = float(np.median(adj.sigma_obs[img])) * 1000.0
             v["sigma_image_um"] = s_img
             v["sigma0_image_um"] = float(adj.sigma0) * s_img
+            u = self.s.units  # a pixel file: in its pixels, not the nominal pixel size's µm
+            f, iu = (1e-3 / u.pixel_size, "px") if u.image == "px" and u.pixel_size else (1.0, "µm")
             items.append(
                 (
                     "σ0 a posteriori in the image",
-                    f"{fmt(adj.sigma0 * s_img, 2)} µm "
-                    f"(a priori σ of an image coordinate {fmt(s_img, 2)} µm)",
+                    f"{fmt(adj.sigma0 * s_img * f, 2)} {iu} "
+                    f"(a priori σ of an image coordinate {fmt(s_img * f, 2)} {iu})",
                 )
             )
         if t["accepted"] is None:
@@ -396,7 +446,8 @@ class _Builder(PrecisionSections, QualitySections):
         ok_img = np.all(np.isfinite(b2.images.X0), axis=1) & np.all(
             np.isfinite(b2.images.angles), axis=1
         )
-        if ok_img.all() and np.any(np.isfinite(b2.points.xyz[:, 2])):
+        aerial = is_aerial(b2, s.units.length)  # footprints on a terrain: a flown block's
+        if aerial and ok_img.all() and np.any(np.isfinite(b2.points.xyz[:, 2])):
             with np.errstate(all="ignore"):
                 Z = float(np.nanmean(b2.points.xyz[:, 2]))
                 foot = block_layout(b2, height=Z).footprints
@@ -406,4 +457,6 @@ class _Builder(PrecisionSections, QualitySections):
             "xy": b2.points.xyz[:, :2],
             "role": np.asarray(blk.points.role),
             "ids_images": list(blk.images.ids),
+            "length_unit": s.units.length_name,
+            "aerial": aerial,
         }

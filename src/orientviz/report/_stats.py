@@ -118,16 +118,25 @@ def intersection_angles(block: Block, X0: F64, xyz: F64) -> F64:
     return out
 
 
-def image_coverage(block: Block) -> F64:
-    """Area of the convex hull of each image's measured points over the format area (0…1)."""
-    from scipy.spatial import ConvexHull, QhullError
+def image_coverage(block: Block, only: NDArray[np.bool_] | None = None) -> F64:
+    """Area of the convex hull of each image's measured points over the format area (0…1).
+
+    ``only``: compute it for these images (boolean mask over the images); the others
+    are NaN.
+    """
+    cov = np.zeros(block.n_images)
+    todo = range(block.n_images) if only is None else np.flatnonzero(only).tolist()
+    if only is not None:
+        cov[~np.asarray(only, bool)] = np.nan
+    if not todo:
+        return cov
+    from scipy.spatial import ConvexHull, QhullError  # only where a hull is computed
 
     obs = block.observations
-    cov = np.zeros(block.n_images)
     fmt_area = np.prod(block.cameras.format_mm[block.images.camera], axis=1)
     order = np.argsort(obs.image, kind="stable")
     starts = np.searchsorted(obs.image[order], np.arange(block.n_images + 1))
-    for i in range(block.n_images):
+    for i in todo:
         xy = obs.xy[order[starts[i] : starts[i + 1]]]
         xy = xy[np.all(np.isfinite(xy), axis=1)]
         if xy.shape[0] < 3 or not fmt_area[i] > 0:

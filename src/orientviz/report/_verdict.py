@@ -1,6 +1,7 @@
 """The verdict of an adjustment: global test, flagged observations and warnings.
 
-One function, :func:`verdict`, reads them off the report (:func:`build_report`), so that
+One function, :func:`verdict`, reads them off the report's sections (formed as
+:func:`build_report` forms them, without the sections that only show numbers), so that
 ``orientviz solve`` on the terminal, its ``--json`` and the text and HTML reports say
 the same: the χ² test of σ̂0 of section "σ0 a posteriori and global test", the count of
 normalised residuals above the critical value of section "Largest normalised residuals"
@@ -14,7 +15,7 @@ from typing import Any
 
 from ..io.problem import Problem
 from ..io.solution import Solution
-from ._sections import build_report
+from ._sections import verdict_sections
 
 
 def verdict(problem: Problem, solution: Solution, alpha: float = 0.05) -> dict[str, Any]:
@@ -38,7 +39,7 @@ def verdict(problem: Problem, solution: Solution, alpha: float = 0.05) -> dict[s
         ``r`` and ``reason`` (one phrase); ``flagged``: the number of observations
         with ``|w|`` above the critical value; ``warnings``: the report's list of warnings.
     """
-    report = build_report(problem, solution, alpha=alpha)
+    report = verdict_sections(problem, solution, alpha=alpha)
     t = dict(report.section("sigma0").values["test"])
     accepted = t.pop("accepted")
     sigma0 = float(solution.adjustment.sigma0)

@@ -45,7 +45,7 @@ from ...adjust.result import Iteration
 from ...blas import blas_threads
 from ...block import Block
 from ...errors import InputError, NotDeterminableError
-from .._block_cameras import camera_keywords
+from .._block_cameras import camera_keywords, held_plain_camera
 from .._options import BundleOptions
 from .._result import BundleResult
 from ..problem import BundleProblem, BundleState, point_setup
@@ -104,7 +104,10 @@ def bundle_adjust(
         ``ap_set(name)``; a :class:`LensModel` estimates the camera's own parameters.
         None (default): the models the block's cameras state (``block.cameras.model``,
         e.g. a COLMAP import's free focal length; :func:`~orientviz.bundle.block_camera_options`),
-        none if they state none; ``False``: none, whatever the cameras state.
+        none if they state none; ``False``: none, whatever the cameras state. A lens
+        model that estimates nothing and has no distortion at the cameras' c, x0, y0 is
+        the plain model and is solved as such (``result.camera`` still reports it;
+        :func:`~orientviz.bundle._block_cameras.held_plain_camera`).
     ap_group : array_like of int, shape (m,), optional
         Group of each image for the additional parameters (default: one group; with
         the block's camera models one per camera).
@@ -178,6 +181,11 @@ def bundle_adjust(
             block, setup, control=control, additional=additional, ap_group=ap_group,
             ap_sigma=ap_sigma, precision=precision, callback=callback, options=opts,
         )  # fmt: skip
+    # a held lens model without distortion is the plain model: solved as such, its camera
+    # reported as the lens model's run would (.._block_cameras)
+    held = held_plain_camera(block, additional, ap_group, setup.used_obs)
+    if held is not None:
+        additional = None
     one_thread = block.n_images <= ONE_BLAS_THREAD_MAX_IMAGES
     with blas_threads(1 if one_thread else None):  # many small products: one BLAS thread
         prob = BundleProblem(
@@ -271,7 +279,10 @@ def bundle_adjust(
                     "approximations, e.g. with orientviz.approximate.approximate_values"
                 )
         end = RunEnd(st, rw, Je, Jp, cost, history, converged, reason, precision, lin, obs_sigma)
-        return finish_result(prob, end)
+        res = finish_result(prob, end)
+    if held is not None:
+        res.camera = held.estimates(np.zeros(0), None, res.sigma0)
+    return res
 
 
 def robust_end(prob: BundleProblem, steps: BundleSteps, st: BundleState):
