@@ -7,6 +7,8 @@ import numpy as np
 import orientviz as ov
 from orientviz.plausibility import check_block
 
+PIXEL_MM = 0.01  # the importers' nominal pixel size
+
 
 def _behind_message(block):
     found = [f for f in check_block(block) if f.check == "behind"]
@@ -66,15 +68,21 @@ def test_only_a_real_frame_looking_down_is_aerial():
     assert not is_aerial(block)
 
 
-def _bal(path, X0, points, f=1000.0):
-    """A BAL file of cameras at ``X0`` looking along −z (R = I) with exact observations."""
+def _bal(path, X0, points, f=1000.0, rotvec=(0.0, 0.0, 0.0)):
+    """A BAL file of cameras at ``X0``, all turned by ``rotvec`` (default R = I: looking
+    along −z), with exact observations (P = R (X − X0), x = −f P_x / P_z)."""
+    from orientviz.rotation import matrix_from_rotvec
+
+    R = matrix_from_rotvec(np.asarray(rotvec, dtype=float))
     obs = [(c, p) for c in range(len(X0)) for p in range(len(points))]
     lines = [f"{len(X0)} {len(points)} {len(obs)}"]
     for c, p in obs:
-        P = points[p] - X0[c]  # P = R X + t with R = I, t = −X0
+        P = R @ (points[p] - X0[c])  # P = R X + t with t = −R X0
         lines.append(f"{c} {p} {-f * P[0] / P[2]:.9f} {-f * P[1] / P[2]:.9f}")
     for x in X0:
-        lines += ["0.0"] * 3 + [repr(float(-v)) for v in x] + [repr(f), "0.0", "0.0"]
+        t = -R @ x
+        lines += [repr(float(v)) for v in rotvec] + [repr(float(v)) for v in t]
+        lines += [repr(f), "0.0", "0.0"]
     lines += [repr(float(v)) for v in np.ravel(points)]
     path.write_text("\n".join(lines) + "\n")
     return path
@@ -102,6 +110,29 @@ def test_an_imported_reconstruction_is_reported_in_model_units(tmp_path, capsys)
     assert "[m]" not in text
     assert "intersection angle below 9 deg: weak depth along the rays (" in text
     assert "weak height" not in text and " gon" not in text
+    # the HTML report: residuals and σ0 in the file's pixels, a plan view, no terrain
+    import html
+    import re
+
+    page = tmp_path / "r.html"
+    assert main(["solve", str(out), "--free", "--report", str(page)]) == 0
+    words = html.unescape(re.sub(r"<[^>]+>", " ", re.sub(r"<img[^>]*>", "", page.read_text())))
+    assert "v [px]" in words and "σ0 a posteriori in the image" in words
+    assert "Plan view on the X-Y plane" in words and "model units" in words
+    for foreign in ("µm", "[m]", " gon", "terrain height", "weak height"):
+        assert foreign not in words, foreign
+    # export: adjusted.json keeps the file's units, the CSV tables label them
+    from orientviz.report import image_table
+
+    assert main(["export", str(out), "-d", str(tmp_path / "x"), "--no-adjust"]) == 0
+    again = load_problem(tmp_path / "x" / "adjusted.json")
+    assert (again.units.length, again.units.image, again.units.angle) == ("model", "px", "deg")
+    head = (tmp_path / "x" / "images.csv").read_text().splitlines()[0]
+    assert "X0[model]" in head and "rms_vx[px]" in head and "[m]" not in head
+    block = load_problem(out).data
+    px = image_table(block, length="model", pixel_mm=PIXEL_MM).columns["rms_vx"]
+    um = image_table(block).columns["rms_vx"]  # the same residuals in µm of 0.01 mm pixels
+    np.testing.assert_allclose(px, um / 10.0, rtol=1e-12)
 
 
 def test_control_in_a_file_of_model_units_is_a_warning():
@@ -141,3 +172,37 @@ def test_an_imported_model_that_does_not_fit_says_so(tmp_path, capsys):
     assert main(["solve", str(out), "--free", "--max-iter", "200"]) == 4
     said = capsys.readouterr()
     assert "the model does not fit the data" in said.out and "lens distortion" in said.err
+    # a pixel file: its lens held at import can be wrong, a pixel size cannot
+    assert "--fix-lens" in said.err and "pixel size" not in said.err
+
+
+def test_solving_an_import_without_a_datum_names_both_ways(tmp_path, capsys):
+    """``solve`` of a reconstruction without ``--free``: exit 3, the message names
+    ``--free`` and ``--fix`` and speaks of shifts, rotations and scale, not of
+    planimetric and height control; an aerial block keeps its control advice."""
+    import json
+
+    from orientviz.cli import main
+    from orientviz.io.datasets import dataset_path
+
+    rng = np.random.default_rng(4)
+    pts = rng.uniform([-5, -2, -5], [5, 2, 5], (30, 3))
+    X0 = np.array([[-6, 30.0, 0.0], [6, 30.0, 0.1], [0.0, 31.0, -6]])
+    bal = _bal(tmp_path / "m.bal", X0, pts, rotvec=(np.pi / 2, 0.0, 0.0))  # looking along −Y
+    out = tmp_path / "m.json"
+    assert main(["import-bal", str(bal), "-o", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["solve", str(out)]) == 3
+    err = capsys.readouterr().err
+    assert f"orientviz solve {out} --free" in err and "--fix IMAGE --fix IMAGE2:X0" in err
+    assert "the 3 shifts, the 3 rotations and the scale" in err
+    assert "planimetric" not in err and "height" not in err and "tilt" not in err
+    doc = json.loads(dataset_path("block_strip").read_text(encoding="utf-8"))
+    for p in doc["points"]:  # an aerial strip without its control
+        if p["role"] == "control":
+            p["role"] = "tie"
+            p.pop("sigma", None)
+    (tmp_path / "strip.json").write_text(json.dumps(doc), encoding="utf-8")
+    assert main(["solve", str(tmp_path / "strip.json")]) == 3
+    err = capsys.readouterr().err
+    assert "≥ 2 planimetric control points" in err and "--free" in err
