@@ -237,14 +237,46 @@ def json_number(value: float, digits: int = 15) -> float | None:
     return float(f"{v:.{digits}g}")
 
 
+#: Exact powers of ten as doubles (10**0 … 10**22): a significand divided by one of them
+#: is the double nearest to the decimal number, as ``float()`` of its text.
+_POW10 = np.array([10.0**k for k in range(23)])
+
+
 def json_numbers(values, digits: int = 15) -> list[float | None]:
-    """:func:`json_number` over a 1-D array (formatted in one C-level pass)."""
+    """:func:`json_number` over a 1-D array (the same floats; mostly without text).
+
+    With 15 digits, a value v in [1e-8, 1e15) is scaled to its 15-digit significand
+    s = v · 10**k (k = 14 − ⌊log10 v⌋ ≤ 22, so 10**k is exact). The product is rounded
+    to a multiple of at most 1/8 below 1e15, on a grid that holds the half-integers, and
+    rounding is monotone: unless the rounded s is a half-integer it lies on the same
+    side of every half-integer as the exact product, so rint(s) is the significand that
+    ``"%.15g"`` writes, and rint(s) / 10**k, one correctly rounded division, is the
+    double that ``float()`` reads back from that text. The other values (a half-integer
+    s, outside that range, zeros, other ``digits``) go through the text as
+    :func:`json_number` does.
+    """
     arr = np.asarray(values, dtype=float).reshape(-1)
     if arr.size == 0:
         return []
-    fmt = f"%.{int(digits)}g\n"
-    out: list[float | None] = list(map(float, ((fmt * arr.size) % tuple(arr.tolist())).split()))
-    bad = np.flatnonzero(~np.isfinite(arr))
-    for i in bad:
-        out[i] = None
-    return out
+    out = np.full(arr.size, np.nan)
+    slow = np.isfinite(arr)
+    if digits == 15:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            a = np.abs(arr)
+            k = 14 - np.floor(np.log10(a))
+            ok = slow & (k >= 0) & (k <= 22)
+            kk = np.where(ok, k, 0).astype(np.intp)
+            sig = a * _POW10[kk]
+            r = np.rint(sig)
+            ok &= (sig >= 1e14) & (sig < 1e15) & (sig - np.floor(sig) != 0.5)
+            out[ok] = np.copysign(r[ok] / _POW10[kk[ok]], arr[ok])
+        slow &= ~ok
+    idx = np.flatnonzero(slow)
+    if idx.size:
+        fmt = f"%.{int(digits)}g\n"
+        text = (fmt * idx.size) % tuple(arr[idx].tolist())
+        out[idx] = np.array(text.split(), dtype=float)
+    res: list[float | None] = out.tolist()
+    for i in np.flatnonzero(~np.isfinite(arr)).tolist():
+        res[i] = None
+    return res
