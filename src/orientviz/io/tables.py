@@ -72,11 +72,16 @@ class Table:
 
     def strings(self, field: str) -> list[str]:
         """A column of ids/names as ``str``."""
-        return [str(v) for v in self.columns[field]]
+        col = self.columns[field]
+        if _only(col, str):  # as read from JSON: already str
+            return list(col)
+        return [str(v) for v in col]
 
     def floats(self, field: str, scale: float = 1.0) -> NDArray[np.float64]:
         """A number column as floats times ``scale``; JSON ``null`` becomes NaN."""
         col = self.columns[field]
+        if _only(col, float):  # the usual column: one conversion in C
+            return np.array(col, dtype=float) * scale
         return np.array([np.nan if v is None else float(v) for v in col], dtype=float) * scale
 
     def ints(self, field: str, missing: int = -1) -> NDArray[np.int64]:
@@ -102,8 +107,11 @@ class Table:
 
         A single number is broadcast to all ``size`` components; null gives NaN.
         """
+        col = self.columns[field]
+        if _only(col, float):  # one number per cell (the usual σ column): broadcast
+            return np.repeat(np.array(col, dtype=float)[:, None], size, axis=1) * scale
         out = np.full((self.n, size), np.nan)
-        for i, v in enumerate(self.columns[field]):
+        for i, v in enumerate(col):
             if v is None:
                 continue
             if isinstance(v, list):
@@ -116,8 +124,12 @@ class Table:
 
     def index(self, field: str = "id", what: str | None = None) -> dict[str, int]:
         """Map the ids in ``field`` to row numbers, rejecting duplicates with their place."""
-        seen: dict[str, int] = {}
-        for i, key in enumerate(self.strings(field)):
+        keys = self.strings(field)
+        seen = dict(zip(keys, range(len(keys))))
+        if len(seen) == len(keys) and max(map(len, keys), default=0) <= MAX_ID_LENGTH:
+            return seen  # unique and short: the loop below would give the same map
+        seen = {}
+        for i, key in enumerate(keys):
             if len(key) > MAX_ID_LENGTH:
                 raise self.fail(
                     i, field, f"an id of {len(key)} characters, expected at most {MAX_ID_LENGTH}"
@@ -133,13 +145,22 @@ class Table:
 
     def lookup(self, field: str, ids: dict[str, int], what: str) -> NDArray[np.int64]:
         """Indices of the ids in column ``field`` in ``ids``; unknown ids name their place."""
+        keys = self.strings(field)
+        found = list(map(ids.get, keys))
+        if None not in found:
+            return np.array(found, dtype=np.int64).reshape(self.n)
         out = np.empty(self.n, dtype=np.int64)
-        for i, key in enumerate(self.strings(field)):
+        for i, key in enumerate(keys):
             j = ids.get(key)
             if j is None:
                 raise self.fail(i, field, f"unknown {what} id {key!r}")
             out[i] = j
         return out
+
+
+def _only(col: list, kind: type) -> bool:
+    """Whether every cell of a column is exactly of type ``kind`` (bool is not int)."""
+    return set(map(type, col)) <= {kind}
 
 
 def read_table(
