@@ -45,6 +45,7 @@ def _collapse(page: Any, *folders: str) -> None:
     """Fold GUI folders (click their titles) so that the panel shows what matters."""
     for name in folders:
         page.get_by_text(name, exact=True).first.click(timeout=120_000, force=True)
+        time.sleep(0.5)  # the panel's layout settles before the next title is found
 
 
 def block_scenario(app: Any, page: Any) -> None:

@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from .block import CONTROL, Block
 from .errors import AdjustmentError, InputError
 from .rotation import matrix_from_opk
+from .units import MODEL_UNIT, length_name
 
 log = logging.getLogger("orientviz")
 log.addHandler(logging.NullHandler())  # a library logs; the application decides where to
@@ -54,7 +55,7 @@ class Finding:
     level : {"warning", "error"}
         ``"error"``: the adjustment cannot be meaningful (see :func:`raise_for`).
     check : str
-        ``"empty"``, ``"image-outside"``, ``"far-away"``, ``"behind"``,
+        ``"empty"``, ``"image-outside"``, ``"model-control"``, ``"far-away"``, ``"behind"``,
         ``"weak-intersection"``, ``"few-observations"``.
     message : str
         One line in the user's ids, saying what to do.
@@ -91,6 +92,8 @@ def check_block(
     exterior_unknown: bool = True,
     place: Callable[[int], str] | None = None,
     min_angle_deg: float = MIN_ANGLE_DEG,
+    length: str = "m",
+    pixel_mm: float | None = None,
 ) -> list[Finding]:
     """Find geometry that cannot be right in a block (vectorised, no adjustment).
 
@@ -106,6 +109,12 @@ def check_block(
         ``place(k) -> "observations[k]"``: how the file names observation ``k``.
     min_angle_deg : float
         Rays of a tie or check point all within this angle (degrees) are reported.
+    length : str
+        The file's length unit, for the messages (``"model"``: a reconstruction's
+        arbitrary scale, named "model units"; the block's lengths are read 1 : 1).
+    pixel_mm : float, optional
+        mm per pixel of a file whose image coordinates are pixels: the messages give
+        image coordinates in px (default: mm).
 
     Returns
     -------
@@ -133,17 +142,34 @@ def check_block(
             k = int(outside[0])
             axis = "x" if not abs(dx[k, 0]) <= IMAGE_FACTOR * half[cam[k]] else "y"
             value = obs.xy[k, 0 if axis == "x" else 1]
+            # a pixel file's own numbers (y down) and unit; else mm
+            f, iu = (1.0 / pixel_mm, "px") if pixel_mm else (1.0, "mm")
+            value = value * f * (-1.0 if pixel_mm and axis == "y" else 1.0)
             out.append(
                 Finding(
                     "error",
                     "image-outside",
-                    f"{axis} = {value:.6g} mm of point {pts.ids[obs.point[k]]!r} in image "
+                    f"{axis} = {value:.6g} {iu} of point {pts.ids[obs.point[k]]!r} in image "
                     f"{im.ids[obs.image[k]]!r} lies far outside the image (half format "
-                    f"{half[cam[k]]:.4g} mm); correct the value or its unit"
+                    f"{half[cam[k]] * f:.6g} {iu}); correct the value or its unit"
                     + (f" ({outside.size} such observations)" if outside.size > 1 else ""),
                     outside.size,
                     place(k),
                     2,
+                )
+            )
+        # --- control in a file without scale -----------------------------------------
+        n_ctl = int(np.sum(pts.role == CONTROL))
+        if length == MODEL_UNIT and n_ctl:
+            out.append(
+                Finding(
+                    "warning",
+                    "model-control",
+                    f"{n_ctl} control point(s) in a file whose lengths are model units (the "
+                    "arbitrary scale of a reconstruction): their coordinates are read in model "
+                    'units too; if they are metric, give the file "length": "m"',
+                    n_ctl,
+                    "units.length",
                 )
             )
         # --- coordinates far from the block -----------------------------------------
@@ -154,6 +180,7 @@ def check_block(
             centre = np.median(allc[fin], axis=0)
             lo, hi = np.percentile(allc[fin], [10, 90], axis=0)
             size = max(float(np.max(hi - lo)), 1.0)
+            unit = length_name(length)
             dist = np.max(np.abs(allc - centre), axis=1)
             far = np.flatnonzero(fin & (dist > EXTENT_FACTOR * size))
             if far.size:
@@ -166,9 +193,9 @@ def check_block(
                     Finding(
                         "error" if absurd else "warning",
                         "far-away",
-                        f"{', '.join(names)}{more} lie(s) {dist[far[0]]:.3g} m from the "
-                        f"block's centre, far outside its extent of about {size:.3g} m; "
-                        "check the coordinates and their unit",
+                        f"{', '.join(names)}{more} lie(s) {dist[far[0]]:.3g} {unit} from "
+                        f"the block's centre, far outside its extent of about {size:.3g} "
+                        f"{unit}; check the coordinates and their unit",
                         far.size,
                         "",
                         2,
@@ -193,7 +220,7 @@ def check_block(
                     f"{_names(im.ids, imgs)}): the camera looks along its −z axis"
                     + (
                         "; check the heights, the flying height and the angles (Z up)"
-                        if _aerial(R)
+                        if length != MODEL_UNIT and _aerial(R)
                         else "; check the angles of those images and the points' coordinates"
                     ),
                     n_b,
@@ -260,6 +287,19 @@ def check_block(
 
 #: A block is aerial when at least this share of its images looks down (within 45° of −Z).
 AERIAL_SHARE: float = 0.8
+
+
+def is_aerial(block: Block, length: str = "m") -> bool:
+    """Whether messages about ``block`` may speak of heights, flying height and Z up.
+
+    True when its frame has a real length unit (not the ``"model"`` units of a
+    reconstruction, whose axes point anywhere) and at least :data:`AERIAL_SHARE` of its
+    images look down (viewing direction within 45° of −Z).
+    """
+    if length == MODEL_UNIT or block.n_images == 0:
+        return False
+    with np.errstate(all="ignore"):
+        return _aerial(_rotations(block))
 
 
 def _aerial(R: np.ndarray) -> bool:

@@ -137,3 +137,14 @@ def format_angle(value_rad: float, unit: str = "gon", digits: int | None = None)
 
 #: Micrometres per millimetre (image residuals are usually reported in µm).
 UM_PER_MM: float = 1000.0
+
+#: The length unit of a model whose scale is arbitrary (a reconstruction from images
+#: alone, without control: COLMAP, BAL): its lengths are numbers in the model's own unit,
+#: read 1 : 1 where metres are expected, but never named metres.
+MODEL_UNIT: str = "model"
+
+
+def length_name(unit: str) -> str:
+    """How a text names the length unit ``unit`` (a problem file's ``units.length``):
+    ``"model units"`` for :data:`MODEL_UNIT`, else the unit itself (``"m"``, ``"ft"``, …)."""
+    return "model units" if unit == MODEL_UNIT else unit

@@ -122,3 +122,20 @@ def test_precision_is_the_same_whatever_solved_and_formed_the_reduced_system():
     for name in ("exterior", "points"):
         a, b = dense.cofactor_groups[name], banded.cofactor_groups[name]
         np.testing.assert_allclose(a, b, rtol=0, atol=1e-9 * np.abs(b).max())
+
+
+@pytest.mark.parametrize(
+    "m, n_pt, n_pairs, want",
+    [
+        (23, 1443, 17683, "pairs"),  # COLMAP bart: dense 3.3 ms, pairs 1.9 ms per formation
+        (16, 22106, 253764, "pairs"),  # BAL 16-22106: dense 49 ms, pairs 25 ms
+        (177, 4217, 3627841, "dense"),  # COLMAP soft (long tracks): dense 352 ms, pairs 873 ms
+    ],
+)
+def test_formation_follows_the_measured_costs(m, n_pt, n_pairs, want):
+    """The cost model picks the formation that was faster on real models (1 BLAS thread;
+    benchmarks/README.md, session 14); a banded or sparse S is always formed by pairs."""
+    from orientviz.bundle.reduced._choice import choose_formation
+
+    assert choose_formation("dense", m, n_pt, n_pairs) == want
+    assert choose_formation("banded", m, n_pt, n_pairs) == "pairs"

@@ -190,7 +190,7 @@ def test_tie_point_with_one_ray():
 def test_unknown_unit():
     doc = _doc()
     doc["units"]["length"] = "furlong"  # ft and us-ft are lengths since issue 29
-    err = _fail(doc, 'expected one of "m", "mm", "ft", "us-ft", got "furlong"')
+    err = _fail(doc, 'expected one of "m", "mm", "ft", "us-ft", "model", got "furlong"')
     assert err.where == "units.length"
 
 

@@ -144,7 +144,9 @@ def test_cli_import_with_control_then_export(tmp_path, capsys):
         )
         == 0
     )
-    block = ov.load_problem(out).data
+    problem = ov.load_problem(out)
+    block = problem.data
+    assert problem.units.length == "m"  # control gives the model its scale (no "model" units)
     assert np.sum(block.points.role == CONTROL) == len(read_control(ex.control).ids)
     assert np.allclose(block.observations.sigma, 0.005)
     # the misplaced image stops the bundle: exit 3, nothing written

@@ -14,12 +14,14 @@ FILE --free``):
 Ladybug opens as ``orientviz view`` opens it, at the file's start values while the solve
 runs in the background (the page shows the start's σ0 and says so, then the solution's).
 In each the scene draws, the panel shows σ̂0 of the solve and says that the precision
-waits for a request (above the viewer's limit), the worst images and points by |v|/σ are
+waits for a request (above the viewer's limit), names the file's units (model units,
+degrees, pixels; no metres, gon, µm or aerial words: :func:`speaks_as_the_file`), the worst images and points by |v|/σ are
 listed and the worst of each is chosen (flown to) from the page, and switching that image off re-solves and undo restores it.
 """
 
 from __future__ import annotations
 
+import re
 import threading
 
 import numpy as np
@@ -27,8 +29,16 @@ import pytest
 
 from orientviz.cli import main
 from orientviz.viewer.app import ViewerApp, demo_from_file
+from orientviz.viewer.block_geometry import COLORS
 
-from .browser import changed_share, gui_control, open_demo, wait_for, wait_for_picture
+from .browser import (
+    changed_share,
+    colour_count,
+    gui_control,
+    open_demo,
+    wait_for,
+    wait_for_picture,
+)
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
@@ -72,6 +82,22 @@ def test_a_real_colmap_model_debugged_in_the_page(module_browser, colmap_app):
     debugged_in_the_page(module_browser, colmap_app, (52, 10089))
 
 
+#: Words and units that have no place in the page of a reconstruction: its scale is
+#: arbitrary (no m, mm, km), its pixels are not micrometres, its file's angles are degrees,
+#: and it was not flown (no strips, flying height or heights above ground).
+FOREIGN = re.compile(r"\b(?:m|mm|cm|km|µm|um|gon|strips?|flying|height)\b|Z up")
+
+
+def speaks_as_the_file(body: str) -> None:
+    """The page of an imported reconstruction (model units, pixels, degrees) names its
+    units as the file does: positions in model units, angles in degrees, the residuals'
+    scale bar in model units at the object and px in the image, the camera in px."""
+    assert FOREIGN.findall(body) == [], FOREIGN.findall(body)
+    assert "X0 [model units]" in body and "omega [deg]" in body
+    assert re.search(r"bar = [\d.e+-]+ model units at the object ≈ [\d.e+-]+ px in the image", body)
+    assert re.search(r"\bc = [\d.]+ .*px\b", body)  # the principal distance in pixels
+
+
 def debugged_in_the_page(browser, app, size: tuple[int, int]) -> None:
     """Colours by |v|/σ, the worst image chosen in the page and flown to, off and undo."""
     page = browser.new_page()
@@ -79,6 +105,10 @@ def debugged_in_the_page(browser, app, size: tuple[int, int]) -> None:
     b = st.block
     assert (b.n_images, b.n_points) == size and not app.messages
     img = open_demo(page, app, min_drawn=0.004)
+    # the first view shows the cameras as frustums, not dots (the scene's 0.1 %; a view
+    # that frames only the points or frustums sized for an aerial block: 0–150 px)
+    frustums = colour_count(img, COLORS["frustum"])
+    assert frustums > 0.001 * img.shape[0] * img.shape[1], f"frustums hardly seen: {frustums} px"
     if getattr(app, "gate", None) is not None:  # opened while the solve runs
         start = f"{st.history[0].sigma0:.10g}"
         body = page.inner_text("body")
@@ -93,6 +123,7 @@ def debugged_in_the_page(browser, app, size: tuple[int, int]) -> None:
     sigma0 = f"{app.demo.solution.adjustment.sigma0:.10g}"
     body = page.inner_text("body")
     assert sigma0 in body and "precision not computed" in body
+    speaks_as_the_file(body)
     # the worst images by |v|/σ: choose the measure, then the worst image in the page
     gui_control(page, "colour by", "input").click()
     page.get_by_role("option", name="RMS of residuals |v|/σ (no precision needed)").click()

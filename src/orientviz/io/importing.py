@@ -15,6 +15,7 @@ import numpy as np
 
 from ..block import CONTROL, Block
 from ..errors import InputError
+from ..units import MODEL_UNIT
 from .control import apply_control, read_control
 from .problem import Units, write_problem
 
@@ -58,7 +59,9 @@ def import_to_problem(
         options = dict(SFM_OPTIONS if pixel_units else {}, **(options or {}))
         if np.any(np.nan_to_num(block.points.sigma) > 0):
             options["control"] = "weighted"
-        units = Units(angle="deg", image="px", pixel_size=px) if pixel_units else None
+        # without control the model's scale is arbitrary: its lengths are model units
+        length = "m" if control else MODEL_UNIT
+        units = Units(length, "deg", "px", px) if pixel_units else Units(length)
         write_problem(
             {"kind": "block", "block": block, "name": name, "options": options, "units": units},
             args.output,

@@ -33,7 +33,7 @@ from typing import Any
 
 from ..errors import InputError
 from ..rotation import check_sequence
-from ..units import RHO
+from ..units import MODEL_UNIT, RHO, length_name
 from .jsonio import _json_type, dumps_json, parse_json, read_json_file, validate, write_atomic
 from .reduce import reduce_document
 from .registry import get_kind
@@ -41,7 +41,9 @@ from .registry import get_kind
 #: The format string this version reads and writes.
 FORMAT = "orientviz/1"
 #: Object-space length units → metres per unit.
-LENGTH_UNITS: dict[str, float] = {"m": 1.0, "mm": 1e-3, "ft": 0.3048, "us-ft": 1200.0 / 3937.0}
+LENGTH_UNITS: dict[str, float] = {
+    "m": 1.0, "mm": 1e-3, "ft": 0.3048, "us-ft": 1200.0 / 3937.0, MODEL_UNIT: 1.0,
+}  # fmt: skip
 #: Image-coordinate units → millimetres per unit.
 IMAGE_UNITS: dict[str, float] = {"mm": 1.0, "um": 1e-3}
 #: Kinds that read image coordinates in pixels (``units.image = "px"``).
@@ -56,9 +58,11 @@ class Units:
 
     Attributes
     ----------
-    length : {"m", "mm", "ft", "us-ft"}
+    length : {"m", "mm", "ft", "us-ft", "model"}
         Object-space coordinates and their σ (``ft``: the international foot, 0.3048 m;
-        ``us-ft``: the US survey foot, 1200/3937 m).
+        ``us-ft``: the US survey foot, 1200/3937 m; ``model``: the arbitrary scale of a
+        reconstruction without control, read 1 : 1 inside and named "model units" in
+        reports, :data:`orientviz.units.MODEL_UNIT`).
     angle : {"rad", "deg", "gon", "c", "cc"}
         Orientation angles and their σ. A file may say ``"dms"``: its angles are then
         strings of degrees, minutes and seconds (``"-1°02'03.5\""``, ``"-1 02 03.5"``)
@@ -76,6 +80,11 @@ class Units:
     angle: str = "gon"
     image: str = "mm"
     pixel_size: float | None = None
+
+    @property
+    def length_name(self) -> str:
+        """The length unit as texts name it ("model units" for ``"model"``)."""
+        return length_name(self.length)
 
     @property
     def m_per_length(self) -> float:

@@ -168,7 +168,7 @@ class Solution:
 
     def unit_name(self, quantity: str) -> str:
         u = self.units
-        return {"length": u.length, "angle": u.angle, "image": u.image, "1": ""}[quantity]
+        return {"length": u.length_name, "angle": u.angle, "image": u.image, "1": ""}[quantity]
 
     def label(self, i: int) -> str:
         labels = self.adjustment.obs_labels
@@ -275,7 +275,7 @@ class Solution:
             f"sigma0 = {adj.sigma0:.4g} (a-posteriori, unit weight)",
             f"{self.n_iterations} iterations, "
             f"{'converged' if adj.converged else 'NOT CONVERGED'}: {adj.reason}",
-            f"units of the file: length {u.length}, image {u.image}, angle {u.angle}; "
+            f"units of the file: length {u.length_name}, image {u.image}, angle {u.angle}; "
             f"rotation sequence {self.sequence}",
         ]
         if self.parameters:
@@ -291,7 +291,7 @@ class Solution:
         if self.image_ids:
             lines.append("")
             lines.append(
-                f"images (X0 Y0 Z0 ± σ [{u.length}], omega phi kappa ± σ [{u.angle}], "
+                f"images (X0 Y0 Z0 ± σ [{u.length_name}], omega phi kappa ± σ [{u.angle}], "
                 f"sequence {self.sequence}):"
             )
             for k, ident in enumerate(self.image_ids):
@@ -302,7 +302,7 @@ class Solution:
                     lines.append(f"  {'':10s} " + " ".join(_pm(a[j], sa[j], 5) for j in range(3)))
         if self.point_ids:
             lines.append("")
-            lines.append(f"points (X Y Z ± σ [{u.length}]):")
+            lines.append(f"points (X Y Z ± σ [{u.length_name}]):")
             shown = min(len(self.point_ids), 30)
             for k in range(shown):
                 X, s = self.xyz[k] * L, self.xyz_sigma[k] * L

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from ..block import TIE, Block
-from ..errors import AdjustmentError, InputError
+from ..errors import AdjustmentError, DatumDefectError, InputError
 from ..plausibility import check_block, check_magnitudes, raise_for
 from .datasets import dataset_path, list_datasets
 from .problem import Problem, load_problem
@@ -70,9 +70,11 @@ def check_geometry(problem: Problem) -> list:
         place = lambda k: f"observations.x[{k}]"  # noqa: E731
     else:
         place = lambda k: f"observations[{k}]"  # noqa: E731
+    u = problem.units
     findings = check_block(
-        problem.data, exterior_unknown=problem.kind != "intersection", place=place
-    )
+        problem.data, exterior_unknown=problem.kind != "intersection", place=place,
+        length=u.length, pixel_mm=u.pixel_size if u.image == "px" else None,
+    )  # fmt: skip
     return raise_for(findings, problem.source)
 
 
@@ -94,6 +96,13 @@ def failure(prog: str, file: str, exc: BaseException) -> tuple[str, int] | None:
         return f"{prog}: {exc.one_line()}", 2
     if isinstance(exc, ModuleNotFoundError):  # a solver module of this kind is not there (yet)
         return f"{prog}: {file}: not yet available in this version ({exc.name})", 2
+    if isinstance(exc, DatumDefectError) and exc.defect == 7:  # no datum at all: both ways
+        return (
+            f"{prog}: {file}: adjustment impossible: {exc}; solve it as a free network "
+            f"({prog} {file} --free) or hold images or points at their given values (--fix "
+            "IMAGE --fix IMAGE2:X0: one image and the scale)",
+            3,
+        )
     if isinstance(exc, AdjustmentError):
         return f"{prog}: {file}: adjustment impossible: {exc}", 3
     if isinstance(exc, ValueError | TypeError | KeyError):  # a library check without InputError

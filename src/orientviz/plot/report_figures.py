@@ -68,7 +68,8 @@ def overview_figure(
     ----------
     overview : dict
         ``X0`` (m, 3) m, ``footprints`` (m, 4, 2) m or None, ``xy`` (p, 2) m, ``role``
-        (p,), ``ids_images``.
+        (p,), ``ids_images``; optional ``length_unit`` (axis labels, default m) and
+        ``aerial`` (False: a plan view of a block that was not flown, default True).
     check : dict, optional
         ``xy`` (k, 2) and ``d`` (k, 3) differences estimated − given in m; drawn as
         exaggerated planimetric vectors with a scale arrow, ΔZ written beside them.
@@ -216,9 +217,15 @@ def overview_figure(
                     )
     ax.set_aspect("equal", adjustable="datalim")
     ax.autoscale_view()
-    ax.set_xlabel("X [m]")
-    ax.set_ylabel("Y [m]")
-    ax.set_title("Block overview: image footprints, projection centres, points", fontsize=11)
+    unit = overview.get("length_unit", "m")
+    ax.set_xlabel(f"X [{unit}]")
+    ax.set_ylabel(f"Y [{unit}]")
+    ax.set_title(
+        "Block overview: image footprints, projection centres, points"
+        if overview.get("aerial", True)
+        else "Plan view (X, Y): projection centres, points",
+        fontsize=11,
+    )
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     ax.grid(True, lw=0.3, alpha=0.5)
     return fig
@@ -277,6 +284,7 @@ def point_precision_figure(data: dict[str, Any], *, max_points: int = 8000):
     xy = np.asarray(data["xy"], float)
     s = np.asarray(data["sigma"], float)
     unit = data["unit"]
+    xu = unit if unit == "model units" else "m"  # the positions: m, or a model's own units
     k = _thin(xy.shape[0], max_points)
     xy, s = xy[k], s[k]
     fig = _figure(10.0, 4.4)
@@ -287,10 +295,10 @@ def point_precision_figure(data: dict[str, Any], *, max_points: int = 8000):
         sc = ax.scatter(xy[:, 0], xy[:, 1], c=val, s=size, cmap="viridis", lw=0)
         fig.colorbar(sc, ax=ax, label=f"{name.split(' ')[0]} [{unit}]", shrink=0.9)
         ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel("X [m]")
+        ax.set_xlabel(f"X [{xu}]")
         ax.set_title(name, fontsize=10)
         ax.grid(True, lw=0.3, alpha=0.5)
-    axs[0].set_ylabel("Y [m]")
+    axs[0].set_ylabel(f"Y [{xu}]")
     fig.suptitle("Precision of the estimated points (a posteriori)", fontsize=11)
     return fig
 

@@ -157,10 +157,13 @@ def length_unit(sigmas_m: ArrayLike, file_unit: str = "m") -> tuple[str, float]:
     """``("mm", 1000)`` when every finite σ is below 1 m, else ``("m", 1)``.
 
     A file in feet (``file_unit`` ``"ft"`` or ``"us-ft"``) gets its own unit and factor
-    (per m) instead: its lengths are labelled as the file gives them.
+    (per m) instead: its lengths are labelled as the file gives them; a file in model
+    units (``"model"``, a reconstruction's arbitrary scale) gets ``("model units", 1)``.
     """
     if file_unit in ("ft", "us-ft"):
         return file_unit, 1.0 / LENGTH_UNITS[file_unit]
+    if file_unit == "model":  # an arbitrary scale: no mm or m to switch to
+        return "model units", 1.0
     a = np.asarray(sigmas_m, float)
     a = a[np.isfinite(a)]
     return ("mm", 1000.0) if a.size == 0 or np.max(a) < 1.0 else ("m", 1.0)
@@ -178,5 +181,8 @@ def angle_unit(file_unit: str) -> tuple[str, float]:
 
 
 def decimals(scale_unit: str) -> int:
-    """Decimals for σ in ``scale_unit``: 1 for the small units (mm, mgon, …), else 3."""
+    """Decimals for σ in ``scale_unit``: 1 for the small units (mm, mgon, …), 4 for model
+    units (no smaller unit to switch to), else 3."""
+    if scale_unit == "model units":
+        return 4
     return 1 if scale_unit in ("mm", "mgon", "cc", "arcsec", "mrad", "µm") else 3

@@ -137,12 +137,14 @@ def _section(sec: Section, number: int, images: dict[str, bytes], fig_note: str)
         out.append(_table(t))
     for p in sec.text:
         out.append(f'<p class="text">{_e(p)}</p>')
+    captions = sec.values.get("captions", {})  # a section's own (e.g. a block not flown)
     for name in sec.figures:
         if name in images:
             b64 = base64.b64encode(images[name]).decode("ascii")
             out.append(
                 f'<figure><img alt="{_e(name)}" src="data:image/png;base64,{b64}">'
-                f"<figcaption>{_e(CAPTIONS.get(name, ''))}</figcaption></figure>"
+                f"<figcaption>{_e(captions.get(name) or CAPTIONS.get(name, ''))}</figcaption>"
+                "</figure>"
             )
         elif fig_note:
             out.append(f'<p class="note">[figure {_e(name)} omitted: {_e(fig_note)}]</p>')

@@ -62,7 +62,7 @@ class PrecisionSections:
         rank = np.argsort(-np.nan_to_num(np.linalg.norm(sX, axis=1), nan=-1.0))
         shown = rank[:MAX_ROWS] if m > MAX_ROWS else np.arange(m)
         rows = []
-        dl = 3 if s.units.length == "m" else 1
+        dl = 3 if s.units.length in ("m", "model") else 1
         for k in shown:
             X = s.X0[k] * L
             a = s.angles[k] * A
@@ -80,9 +80,9 @@ class PrecisionSections:
         t = Table(
             [
                 "image",
-                f"X0 [{s.units.length}]",
-                f"Y0 [{s.units.length}]",
-                f"Z0 [{s.units.length}]",
+                f"X0 [{s.units.length_name}]",
+                f"Y0 [{s.units.length_name}]",
+                f"Z0 [{s.units.length_name}]",
                 f"σX0 [{lu}]",
                 f"σY0 [{lu}]",
                 f"σZ0 [{lu}]",
@@ -189,9 +189,9 @@ class PrecisionSections:
             [
                 "point",
                 "role",
-                f"X [{s.units.length}]",
-                f"Y [{s.units.length}]",
-                f"Z [{s.units.length}]",
+                f"X [{s.units.length_name}]",
+                f"Y [{s.units.length_name}]",
+                f"Z [{s.units.length_name}]",
                 f"σX [{lu}]",
                 f"σY [{lu}]",
                 f"σZ [{lu}]",

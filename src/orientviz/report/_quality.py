@@ -14,6 +14,7 @@ import numpy as np
 
 from ..block import CHECK, CONTROL
 from ..errors import parameter_words
+from ..plausibility import is_aerial
 from ..units import RHO
 from ._document import (
     FEW_POINTS,
@@ -39,8 +40,9 @@ class QualitySections:
         w = adj.normalized_residuals
         k = self.largest
         img_q = s.observation_quantity == "image"
-        vu = "µm" if img_q else s.unit_name(s.observation_quantity)
-        vf = 1000.0 if img_q else s.factor(s.observation_quantity)
+        um = img_q and s.units.image != "px"  # image residuals in µm; a pixel file's in px
+        vu = "µm" if um else s.unit_name(s.observation_quantity)
+        vf = 1000.0 if um else s.factor(s.observation_quantity)
         vd = 2 if img_q else 4  # decimals of v and σ
         blk = self.block
         block_obs = (
@@ -258,10 +260,13 @@ class QualitySections:
         msgs = list(dict.fromkeys(given + self.warn))
         sec = Section("warnings", "Warnings on geometry and quality", values={"messages": msgs})
         sec.items = [("warnings", str(len(msgs)) if msgs else "none")]
+        small = f"{SMALL_ANGLE_GON:g} gon"
+        if self.block is not None and not is_aerial(self.block, self.s.units.length):
+            small = f"{SMALL_ANGLE_GON * 0.9:g} deg"  # 10 gon
         sec.text = [
             f"Checked: convergence, global test, |w| above the critical value, redundancy "
             f"numbers below {R_LOW:g}, tie/check points with fewer than 3 rays, intersection "
-            f"angles below {SMALL_ANGLE_GON:g} gon, images with fewer than {FEW_POINTS} points or "
+            f"angles below {small}, images with fewer than {FEW_POINTS} points or "
             f"points covering less than {POOR_COVERAGE:.0%} of the format, near-singular "
             f"correlation matrices (condition number above {NEAR_SINGULAR:.0e})."
         ]
@@ -291,10 +296,16 @@ class QualitySections:
             small = np.flatnonzero(np.isfinite(ang) & (ang < SMALL_ANGLE_GON))
             self.plot.setdefault("geometry", {})["angles_gon"] = ang
             if small.size:
+                # aerial: the photogrammetrist's gon and "height"; else the file's angle
+                # unit and the depth along the rays (a reconstruction's axes point anywhere)
+                aerial = is_aerial(blk, s.units.length)
+                au = "deg" if not aerial and s.units.angle == "deg" else "gon"
+                f = RHO[au] / RHO["gon"]
                 self.warn.append(
                     f"{small.size} point(s) with intersection angle below "
-                    f"{SMALL_ANGLE_GON:g} gon: weak height ("
-                    + self._names(blk.points.ids, small, ang, "gon")
+                    f"{SMALL_ANGLE_GON * f:.3g} {au}: "
+                    + ("weak height (" if aerial else "weak depth along the rays (")
+                    + self._names(blk.points.ids, small, ang * f, au)
                     + ")"
                 )
         if s.image_ids and len(s.image_ids) == blk.n_images:

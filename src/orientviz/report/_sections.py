@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 from ..block import CHECK, CONTROL, TIE, block_layout
 from ..io.problem import Problem
 from ..io.solution import Solution
+from ..plausibility import is_aerial
 from ._coverage import coverage_below
 from ._document import (
     R_LOW,
@@ -52,6 +53,13 @@ from ._stats import (
 )
 
 __all__ = ["Report", "Section", "Table", "build_report", "chi2_test", "intersection_angles"]
+
+#: Caption of the overview of a block that was not flown (a reconstruction's frame has no
+#: up and no terrain: the plan view is its X-Y plane, without footprints).
+CAPTION_PLAN = (
+    "Plan view on the X-Y plane of the block's frame: projection centres, tie, control and "
+    "check points (the block is not aerial: no image footprints on a terrain)."
+)
 
 
 # --------------------------------------------------------------------------- the builder
@@ -251,7 +259,7 @@ class _Builder(PrecisionSections, QualitySections):
         items.append(
             (
                 "units of the file",
-                f"length {u_.length}, image {u_.image}, angle "
+                f"length {u_.length_name}, image {u_.image}, angle "
                 f"{u_.angle}; rotation sequence {s.sequence}",
             )
         )
@@ -261,6 +269,8 @@ class _Builder(PrecisionSections, QualitySections):
         if blk is not None:
             sec.figures = ["overview"]
             self._overview_data()
+            if not self.plot["overview"]["aerial"]:
+                sec.values["captions"] = {"overview": CAPTION_PLAN}
         return sec
 
     def datum(self) -> str:
@@ -301,11 +311,13 @@ class _Builder(PrecisionSections, QualitySections):
             s_img = float(np.median(adj.sigma_obs[img])) * 1000.0
             v["sigma_image_um"] = s_img
             v["sigma0_image_um"] = float(adj.sigma0) * s_img
+            u = self.s.units  # a pixel file: in its pixels, not the nominal pixel size's µm
+            f, iu = (1e-3 / u.pixel_size, "px") if u.image == "px" and u.pixel_size else (1.0, "µm")
             items.append(
                 (
                     "σ0 a posteriori in the image",
-                    f"{fmt(adj.sigma0 * s_img, 2)} µm "
-                    f"(a priori σ of an image coordinate {fmt(s_img, 2)} µm)",
+                    f"{fmt(adj.sigma0 * s_img * f, 2)} {iu} "
+                    f"(a priori σ of an image coordinate {fmt(s_img * f, 2)} {iu})",
                 )
             )
         if t["accepted"] is None:
@@ -434,7 +446,8 @@ class _Builder(PrecisionSections, QualitySections):
         ok_img = np.all(np.isfinite(b2.images.X0), axis=1) & np.all(
             np.isfinite(b2.images.angles), axis=1
         )
-        if ok_img.all() and np.any(np.isfinite(b2.points.xyz[:, 2])):
+        aerial = is_aerial(b2, s.units.length)  # footprints on a terrain: a flown block's
+        if aerial and ok_img.all() and np.any(np.isfinite(b2.points.xyz[:, 2])):
             with np.errstate(all="ignore"):
                 Z = float(np.nanmean(b2.points.xyz[:, 2]))
                 foot = block_layout(b2, height=Z).footprints
@@ -444,4 +457,6 @@ class _Builder(PrecisionSections, QualitySections):
             "xy": b2.points.xyz[:, :2],
             "role": np.asarray(blk.points.role),
             "ids_images": list(blk.images.ids),
+            "length_unit": s.units.length_name,
+            "aerial": aerial,
         }

@@ -207,7 +207,7 @@ class ViewerApp:
             self.scene = BlockScene(self.server.scene, geo).build()
             self.panel = BlockPanel(self.server, self.scene, self.report).build()
             self.panel.title = demo.title
-            self._set_camera(*geo.default_camera(), geo.frame.size)
+            self._set_camera(*geo.default_camera(), geo.frame.size, up=geo.up)
         if demo.extra is not None:
             self.extra = demo.extra(self) or {}
             cam = self.extra.get("camera")
@@ -245,11 +245,13 @@ class ViewerApp:
         if not adj.converged:
             self.report(f"the adjustment did not converge: {adj.reason}")
 
-    def _set_camera(self, position: Any, look_at: Any, size: float) -> None:
+    def _set_camera(
+        self, position: Any, look_at: Any, size: float, up: Any = (0.0, 0.0, 1.0)
+    ) -> None:
         cam = self.server.initial_camera
         cam.position = tuple(float(v) for v in position)
         cam.look_at = tuple(float(v) for v in look_at)
-        cam.up = (0.0, 0.0, 1.0)
+        cam.up = tuple(float(v) for v in up)
         cam.fov = VIEW_FOV
         cam.near = max(size * 1e-4, 1e-3)
         cam.far = size * 50.0

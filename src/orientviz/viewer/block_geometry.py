@@ -17,6 +17,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..block import CHECK, CONTROL, TIE
+from ..plausibility import is_aerial
+from . import block_scale as bs
 from . import geometry as g
 from . import precision_view as pv
 from .state import BlockState
@@ -46,6 +48,9 @@ ROLE_NODES = {TIE: "tie", CONTROL: "control", CHECK: "check"}
 #: ``|w|`` (or ``|v|/σ``) at which the residual colour ramp saturates (red).
 SCORE_RED: float = 4.0
 
+#: The smallest frustum depth of a non-aerial block, as a share of the scene's size.
+FRUSTUM_MIN: float = 0.015
+
 #: Level of detail of large blocks: at most this many residual vectors are drawn (those
 #: with the largest scores; thick lines cost a renderer without GPU most of a frame) ...
 RESIDUAL_LIMIT: int = 5_000
@@ -66,10 +71,20 @@ class BlockGeometry:
     Attributes
     ----------
     frame : SceneFrame
+    aerial : bool
+        The block is aerial (a real length unit, images looking down,
+        :func:`orientviz.plausibility.is_aerial`).
     spacing : float
         Typical distance between neighbouring object points (m); sets point sizes.
     height : float
-        Typical height of the cameras above the points (m); sets the frustum depth.
+        Typical distance from the cameras to the points (m): an aerial block's height
+        above the points, else the median depth of the observed points along the
+        cameras' axes (:func:`~orientviz.viewer.block_scale.viewing_depth`); sets the
+        frustum depth, the sliders' range and the scale bar's image scale.
+    up, view : ndarray, shape (3,)
+        The scene's up direction and the first view's direction (unit vectors; Z and an
+        oblique view from the south for an aerial block,
+        :mod:`orientviz.viewer.block_scale`).
     frustum_depth : float
         Drawn depth of the frustums (m).
     point_size : float
@@ -79,17 +94,30 @@ class BlockGeometry:
     def __init__(self, state: BlockState, frame: g.SceneFrame | None = None) -> None:
         self.state = state
         b = state.block
+        R = b.rotations()
+        #: an aerial block (real unit, images looking down): Z up, heights above ground
+        self.aerial = is_aerial(b, state.units.length)
         both = np.vstack([b.points.xyz, b.images.X0]) if b.n_points else b.images.X0
         self.frame = frame or g.SceneFrame.around(both)
         self.spacing = g.typical_spacing(b.points.xyz) if b.n_points > 1 else self.frame.size / 10
-        if b.n_points and b.n_images:
+        #: the scene's up (3,) and the first view's direction (3,), unit vectors
+        self.up = bs.up_direction(R, self.aerial)
+        self.view = np.array([0.3, 0.85, -0.65]) if self.aerial else bs.view_direction(self.up, R)
+        if self.aerial:
             h = float(np.median(b.images.X0[:, 2]) - np.median(b.points.xyz[:, 2]))
-        else:
-            h = 0.0
+            cam_sp = g.typical_spacing(b.images.X0) if b.n_images > 1 else h
+        else:  # any frame: the depth of the points along the cameras' axes
+            h = bs.viewing_depth(b, R) if b.n_points and b.n_images else float("nan")
+            cam_sp = bs.camera_spacing(b.images.X0)
         self.height = h if h > 0 else self.frame.size / 5
-        # about a quarter of the base between neighbouring cameras, never larger than H/4
-        cam_sp = g.typical_spacing(b.images.X0) if b.n_images > 1 else self.height
-        self.frustum_depth = float(min(0.25 * self.height, 0.6 * cam_sp))
+        cam_sp = cam_sp if cam_sp > 0 else self.height
+        # about a quarter of the base between neighbouring cameras, never larger than H/4;
+        # a reconstruction's cameras close together (a walk, a drive): at least 1.5 % of
+        # the scene, so that the first view shows frustums, not dots
+        depth = min(0.25 * self.height, 0.6 * cam_sp)
+        if not self.aerial:
+            depth = min(max(depth, FRUSTUM_MIN * self.frame.size), 0.25 * self.height)
+        self.frustum_depth = float(depth)
         self.point_size = float(np.clip(0.12 * self.spacing, 1e-6, None))
         n = b.n_observations
         #: (drawn, all) residual vectors and rays of "all rays" (level of detail)
@@ -152,15 +180,25 @@ class BlockGeometry:
     # ------------------------------------------------------------------ residuals
     def residual_offsets(self, misclosure: F64 | None = None, keep: object = slice(None)) -> F64:
         """Object-space offsets (k, 3) in m of the observed rays from their points (the
-        observations ``keep``, default all; ``misclosure`` (k, 2) mm of those)."""
+        observations ``keep``, default all; ``misclosure`` (k, 2) mm of those).
+
+        An aerial block: at each point's depth. Other blocks, whose points lie at depths
+        that differ by orders (a reconstruction's far points): at the typical depth
+        :attr:`height` for every point, so that a vector's length is its image residual
+        at one scale, as the scale bar says.
+        """
         b = self.state.block
         o = b.observations
         e = self.state.misclosure()[keep] if misclosure is None else misclosure
         im = o.image[keep]
-        return g.residual_offsets(
-            b.points.xyz[o.point[keep]], b.images.X0[im], b.rotations()[im],
-            b.cameras.c[b.images.camera[im]], e,
-        )  # fmt: skip
+        P, X0, R = b.points.xyz[o.point[keep]], b.images.X0[im], b.rotations()[im]
+        off = g.residual_offsets(P, X0, R, b.cameras.c[b.images.camera[im]], e)
+        if self.aerial:
+            return off
+        depth = -np.einsum("ni,ni->n", P - X0, R[:, :, 2])  # along the camera's axis
+        with np.errstate(divide="ignore", invalid="ignore"):
+            f = np.where(depth > 0, self.height / depth, 1.0)
+        return off * f[:, None]
 
     def residuals(
         self, exaggeration: float, misclosure: F64 | None = None, scores: F64 | None = None
@@ -211,9 +249,11 @@ class BlockGeometry:
     def scale_bar(self, exaggeration: float) -> tuple[F64, F64, str]:
         """The residuals' scale bar: segments (k, 2, 3), label position (3,) and text.
 
-        The bar stands for a round object-space offset (1, 2 or 5 × 10ⁿ m) drawn at
-        ``exaggeration``, about two point spacings long, in front of the points (scene
-        frame); the label also gives the offset in the image at the median image scale.
+        The bar stands for a round object-space offset (1, 2 or 5 × 10ⁿ m, or model
+        units) drawn at ``exaggeration``, about two point spacings long, in front of the
+        points (scene frame); the label also gives the offset in the image at the median
+        image scale (µm, or px for a pixel file: :class:`~orientviz.viewer.view_units.
+        ViewUnits`).
         """
         b = self.state.block
         target = 2.0 * self.spacing / max(float(exaggeration), 1e-300)
@@ -230,8 +270,12 @@ class BlockGeometry:
         seg = np.array([[start, end], [start - tick, start + tick], [end - tick, end + tick]])
         depth = self.height if b.n_images else 1.0
         c = float(np.median(b.cameras.c)) if b.cameras.c.size else 1.0
-        image_um = value * c / depth * 1e3  # m at the object → µm in the image
-        text = f"residuals ×{exaggeration:.3g}: bar = {_length(value)} at the object ≈ {image_um:.3g} µm in the image"
+        u = self.state.units
+        image = u.image_text(value * c / depth)  # object length → mm → µm or px in the image
+        text = (
+            f"residuals ×{exaggeration:.3g}: bar = {u.length_text(value)} at the object "
+            f"≈ {image} in the image"
+        )
         return seg, (start + end) / 2 - 2 * tick, text
 
     # ------------------------------------------------------------------ strips, models
@@ -334,13 +378,9 @@ class BlockGeometry:
         """(position, look_at) in the scene frame: an oblique view that frames the points
         and the cameras left of the GUI panel (:func:`~orientviz.viewer.geometry.framing`)."""
         b = self.state.block
-        P = self.frame.to_scene(np.vstack([b.points.xyz, b.images.X0]))
-        return g.framing(P)
-
-
-def _length(metres: float) -> str:
-    """A length in m as it reads best (µm, mm, cm, m, km)."""
-    for unit, f in (("km", 1e3), ("m", 1.0), ("cm", 1e-2), ("mm", 1e-3), ("µm", 1e-6)):
-        if abs(metres) >= f:
-            return f"{metres / f:g} {unit}"
-    return f"{metres:.3g} m"
+        if self.aerial:
+            P = self.frame.to_scene(np.vstack([b.points.xyz, b.images.X0]))
+            return g.framing(P)
+        # the points without far strays and every camera (few, and what is debugged)
+        P = np.vstack([g.core_points(b.points.xyz), g.core_points(b.images.X0)])
+        return g.framing(self.frame.to_scene(P), self.view, up=self.up, strays=False)

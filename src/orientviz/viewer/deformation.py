@@ -287,7 +287,8 @@ def lens_deformation_extra(problem: Any, state: BlockState):
             d = np.linalg.norm(rms(A))
             ctl["info"].content = (
                 f"each point adjusted **without** the {terms} (t = 0) against **with** them "
-                f"(t = 1, the solution): RMS {d:.3g} m, drawn ×{k:.3g}, t = {t:.2f}  \n"
+                f"(t = 1, the solution): RMS {d:.3g} {state.units.length_name}, drawn ×{k:.3g}, "
+                f"t = {t:.2f}  \n"
                 f"σ̂0 without {field['sigma0']:.4g}, with {sigma_with:.4g}"
             )
 

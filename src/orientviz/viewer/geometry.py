@@ -444,16 +444,17 @@ def loop_segments(polygons: ArrayLike) -> F64:
 
 
 def typical_spacing(points: ArrayLike) -> float:
-    """A typical distance between neighbouring points (m): √(horizontal area / count)
-    (far strays left out, :func:`core_points`)."""
+    """A typical distance between neighbouring points (m): √(area / count), the area
+    spanned by the two largest extents of their bounding box (a block: the horizontal
+    one; a façade or an object photographed from the side: its own), far strays left out
+    (:func:`core_points`)."""
     P = core_points(points)
     if P.shape[0] < 2:
         return 1.0
-    ext = P.max(axis=0) - P.min(axis=0)
-    area = max(ext[0], 1e-9) * max(ext[1], 1e-9)
+    ext = np.sort(P.max(axis=0) - P.min(axis=0))[::-1]
     if ext[0] < 1e-9 or ext[1] < 1e-9:
         return float(max(ext.max(), 1e-3) / P.shape[0])
-    return float(np.sqrt(area / P.shape[0]))
+    return float(np.sqrt(ext[0] * ext[1] / P.shape[0]))
 
 
 #: Vertical field of view of the viewer's camera (rad) and the share of the window
@@ -469,17 +470,21 @@ def framing(
     aspect: float = 1.6,
     visible: float = VISIBLE_WIDTH,
     margin: float = 1.1,
+    up: ArrayLike = (0.0, 0.0, 1.0),
+    strays: bool = True,
 ) -> tuple[F64, F64]:
     """Camera (position, look_at) that shows all ``points`` (but far strays,
-    :func:`core_points`) left of the GUI panel.
+    :func:`core_points`, unless ``strays`` is False: then every finite point) left of
+    the GUI panel.
 
     The bounding sphere of the points (about their bounding box's centre) fits the
     vertical field of view ``fov`` (rad) and the visible width (share ``visible`` of a
     window of ``aspect`` = width / height) with ``margin``; the camera looks along
-    ``direction`` (Z up) and is shifted sideways so that the object sits in the middle
-    of the part of the window the panel leaves free.
+    ``direction`` (its screen's up towards ``up``, default Z) and is shifted sideways so
+    that the object sits in the middle of the part of the window the panel leaves free.
     """
-    P = core_points(points)
+    P = np.asarray(points, dtype=float).reshape(-1, 3)
+    P = core_points(P) if strays else P[np.all(np.isfinite(P), axis=1)]
     if P.shape[0] == 0:
         return np.array([0.0, -3.0, 2.0]), np.zeros(3)
     centre = (P.min(axis=0) + P.max(axis=0)) / 2
@@ -489,7 +494,7 @@ def framing(
     t = np.tan(fov / 2)
     half = min(np.arctan(t), np.arctan(aspect * visible * t))  # the narrower half-angle
     dist = margin * r / np.sin(half)
-    right = np.cross(d, [0.0, 0.0, 1.0])
+    right = np.cross(d, np.asarray(up, dtype=float))
     right = right / (np.linalg.norm(right) or 1.0)
     shift = (1.0 - visible) * dist * aspect * t * right
     return centre - dist * d + shift, centre + shift

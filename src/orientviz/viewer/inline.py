@@ -38,7 +38,8 @@ def scene_figure(
 ) -> Any:
     """A static 3D picture (matplotlib) of what the viewer shows for ``content``.
 
-    The axes read object coordinates (m), not the viewer's scene frame centred on the block.
+    The axes read object coordinates (m, or a reconstruction's model units), not the
+    viewer's scene frame centred on the block.
 
     Parameters
     ----------
@@ -95,9 +96,10 @@ def scene_figure(
     ax.set_zlim(lo[2], hi[2])
     ax.set_box_aspect((hi - lo) / max(hi[0] - lo[0], 1e-9))
     ax.view_init(elev=elev, azim=azim)
-    ax.set_xlabel("X [m]")
-    ax.set_ylabel("Y [m]")
-    ax.set_zlabel("Z [m]")
+    unit = demo.state.units.length_name  # m, or a reconstruction's model units
+    ax.set_xlabel(f"X [{unit}]")
+    ax.set_ylabel(f"Y [{unit}]")
+    ax.set_zlabel(f"Z [{unit}]")
     kind = demo.state.scores()[1]
     ax.set_title(title or f"{demo.title}: residual vectors ×{k:,.0f}, colour = {kind} (red ≥ 4)")
     ax.legend(loc="upper left", fontsize=10)

@@ -1,6 +1,8 @@
 """The GUI panel of a block: orientation sliders, adjustment buttons, scrubber, residual list.
 
-All angles on the panel are in gon (slider steps of 1 c = 0.01 gon), positions in m.
+Angles on the panel are in gon (slider steps of 1 c = 0.01 gon), or in degrees for a
+problem file in degrees; positions in m, or in model units for a reconstruction whose
+scale is arbitrary (:class:`~orientviz.viewer.view_units.ViewUnits`).
 Rotations follow the block's sequence (ω-φ-κ by default, R = R_ω R_φ R_κ). Every
 callback runs through :meth:`BlockPanel.guard`, which turns an exception into a message
 in the panel and on the terminal instead of stopping the server.
@@ -28,6 +30,18 @@ from .snapshot import panel_text, view_png
 ANGLES = ("omega", "phi", "kappa")
 POSITIONS = ("X0", "Y0", "Z0")
 RAY_MODES = ("none", "selected image", "all")
+
+
+def position_span(height: float, arbitrary_scale: bool = False) -> tuple[float, float]:
+    """Range ± span and step of the position sliders: 3 % of the cameras' distance to
+    the points rounded to a power of ten. In metres at least 1 m (1, 10, 100 m) in steps
+    of 0.1 m; in a reconstruction's model units (an arbitrary scale) no floor, in steps
+    of a hundredth of the span."""
+    h = 0.03 * height if height > 0 else 1.0
+    if arbitrary_scale:
+        span = float(10 ** np.round(np.log10(h)))
+        return span, span / 100
+    return float(10 ** np.round(np.log10(max(h, 1.0)))), 0.1
 
 
 class BlockPanel:
@@ -72,7 +86,9 @@ class BlockPanel:
     # ------------------------------------------------------------------ building
     def build(self) -> BlockPanel:
         gui, b, h = self.server.gui, self.state.block, self.handles
-        geo = self.scene.geo
+        geo, u = self.scene.geo, self.state.units
+        #: where a flight puts the camera from its target, per unit of distance
+        self._back = np.array([-0.3, -1.0, 0.9]) if geo.aerial else -1.38 * geo.view
         with gui.add_folder("Legend"):
             h["legend"] = gui.add_markdown("")
         sliders = self.sliders = Sliders(gui, h)  # the server sets these too
@@ -80,16 +96,16 @@ class BlockPanel:
             m = b.n_images
             sliders.add("image", folder, "image #", 0, max(m - 1, 1), 1, 0, disabled=m < 2)
             h["image_id"] = gui.add_markdown("")
-            span = float(10 ** np.round(np.log10(max(0.03 * geo.height, 1.0))))  # 1, 10, 100 m
+            span, step = position_span(geo.height, u.arbitrary_scale)
             for name in POSITIONS:
                 sliders.add(
-                    name, folder, f"{name} [m]", -span, span, 0.1, 0.0,
+                    name, folder, f"{name} [{u.length_name}]", -span, span, step, 0.0,
                     hint="position of the projection centre",
                 )  # fmt: skip
             for name in ANGLES:
                 sliders.add(
-                    name, folder, f"{name} [gon]", -2.0, 2.0, 0.01, 0.0,
-                    hint="slider step 1 c = 0.01 gon",
+                    name, folder, f"{name} [{u.angle}]", -2.0, 2.0, 0.01, 0.0,
+                    hint=f"slider step 0.01 {u.angle}" + (" = 1 c" if u.angle == "gon" else ""),
                 )  # fmt: skip
         with gui.add_folder("Adjustment") as folder:
             h["step"] = gui.add_button("one iteration")
@@ -115,11 +131,13 @@ class BlockPanel:
                 hint="the picture as you see it, the legend and σ̂0 beside it (a download)",
             )
             h["rays"] = gui.add_dropdown("rays", RAY_MODES, initial_value="selected image")
+            flown = bool(np.any(b.images.strip >= 0))  # strips and models: a flown block's
             for key, on in (
                 ("frustums", True), ("points", True), ("residuals", True),
                 ("strips", True), ("models", False), ("ellipsoids", True),
             ):  # fmt: skip
-                h[f"show_{key}"] = gui.add_checkbox(key, on)
+                shown = flown or key not in ("strips", "models")
+                h[f"show_{key}"] = gui.add_checkbox(key, on, visible=shown)
 
         self.quality = QualityControls(self).build()
         self.precision = PrecisionControls(self).build()
@@ -169,7 +187,11 @@ class BlockPanel:
                 self.sliders.set(name, 0.0)
         finally:
             self._syncing = False
-        ang = from_rad(b.images.angles[k], "gon")
+        u = self.state.units
+        ang = from_rad(b.images.angles[k], u.angle)
+        X0 = b.images.X0[k]
+        h = self.scene.geo.height  # decimals: 1 in m, ~3 significant in model units
+        d = max(1, 2 - int(np.floor(np.log10(h)))) if u.arbitrary_scale and h > 0 else 1
         if getattr(self, "act", None) is not None:
             self.act.refresh()
             self.precision.refresh()
@@ -177,8 +199,8 @@ class BlockPanel:
             self.camera.refresh()
         self.handles["image_id"].content = (
             f"**{self.state.image_label(k)}** — sliders are changes of "
-            f"X0 = ({b.images.X0[k, 0]:.1f}, {b.images.X0[k, 1]:.1f}, {b.images.X0[k, 2]:.1f}) m, "
-            f"ω φ κ = ({ang[0]:.4f}, {ang[1]:.4f}, {ang[2]:.4f}) gon"
+            f"X0 = ({X0[0]:.{d}f}, {X0[1]:.{d}f}, {X0[2]:.{d}f}) {u.length_name}, "
+            f"ω φ κ = ({ang[0]:.4f}, {ang[1]:.4f}, {ang[2]:.4f}) {u.angle}"
         )
 
     def apply_sliders(self) -> None:
@@ -187,7 +209,9 @@ class BlockPanel:
         k = self.scene.selected
         X0, ang = self._base
         dX = np.array([float(self.handles[n].value) for n in POSITIONS])
-        dA = to_rad(np.array([float(self.handles[n].value) for n in ANGLES]), "gon")
+        dA = to_rad(
+            np.array([float(self.handles[n].value) for n in ANGLES]), self.state.units.angle
+        )
         self.state.set_exterior(k, X0 + dX, ang + dA)
         self.scene.update([k])
         self.refresh(full=False)
@@ -352,12 +376,10 @@ class BlockPanel:
         """Select image ``i`` and fly the camera to its projection centre's footprint."""
         b = self.state.block
         self.sliders.set("image", int(i))
-        target = self.scene.geo.frame.to_scene(b.images.X0[i]) - [
-            0.0,
-            0.0,
-            0.5 * self.scene.geo.height,
-        ]
-        self.fly_to(target, 1.5 * self.scene.geo.height)
+        geo = self.scene.geo
+        axis = -b.rotations()[i][:, 2]  # the camera's viewing direction (aerial: down)
+        target = geo.frame.to_scene(b.images.X0[i]) + 0.5 * geo.height * axis
+        self.fly_to(target, 1.5 * geo.height)
 
     def fly_to_point(self, k: int) -> None:
         """Select point ``k`` (marked, with its rays) and fly the camera to it."""
@@ -375,7 +397,7 @@ class BlockPanel:
         for client in self.server.get_clients().values():
             start_pos = np.asarray(client.camera.position, dtype=float)
             start_look = np.asarray(client.camera.look_at, dtype=float)
-            end_pos = target + np.array([-0.3, -1.0, 0.9]) * d
+            end_pos = target + self._back * d
             for t in np.linspace(0.0, 1.0, 12)[1:]:
                 s = t * t * (3 - 2 * t)
                 with client.atomic():

@@ -9,8 +9,9 @@ as arrows from the measured to the corrected image point, exaggerated
 (:func:`distortion_segments`; an additional-parameter set's field is −A(m)·a,
 :func:`ap_distortion_vectors`).
 
-Units: c, x0, y0 in mm; the lens terms in the units :class:`orientviz.bundle.LensEstimates`
-states (mm⁻², mm⁻⁴, …); the arrows in mm of the image, drawn × the factor in the panel.
+Units: c, x0, y0 in mm (in px for a problem file in pixels); the lens terms in the units
+:class:`orientviz.bundle.LensEstimates` states (mm⁻², mm⁻⁴, …); the arrows in mm of the
+image, drawn × the factor in the panel (their size given in µm, or px).
 """
 
 from __future__ import annotations
@@ -30,12 +31,19 @@ F64 = NDArray[np.float64]
 DISTORTION_COLOUR = (120, 40, 160)
 
 
-def camera_table(cam: Any, group: int = 0, strongest: int = 3) -> str:
+def camera_table(
+    cam: Any, group: int = 0, strongest: int = 3, pixel_mm: float | None = None
+) -> str:
     """Markdown lines: value ± σ of each parameter of ``cam`` (LensEstimates), then the
-    ``strongest`` correlations among the estimated parameters (largest abs(ρ) first)."""
+    ``strongest`` correlations among the estimated parameters (largest abs(ρ) first).
+
+    ``pixel_mm`` (a problem file in pixels): c, x0, y0 in px as the file gives them
+    (y0 in the pixel frame, y down), not in the importer's nominal millimetres."""
     lines = []
     for j, name in enumerate(cam.names):
         v, s, unit = cam.value[group, j], cam.sigma[group, j], cam.units[j]
+        if pixel_mm and unit == "mm":
+            v, s, unit = (-v if name == "y0" else v) / pixel_mm + 0.0, s / pixel_mm, "px"
         unit = "" if unit == "1" else f" {unit}"
         if cam.estimated[j]:
             sig = f"± {s:.2g}" if np.isfinite(s) else "(σ after the precision pass)"
@@ -53,7 +61,7 @@ def camera_table(cam: Any, group: int = 0, strongest: int = 3) -> str:
     if pairs:
         lines.append(
             "strongest correlations: "
-            + ", ".join(f"{a}~{b} ρ = {r:+.2f}" for _, a, b, r in pairs[:strongest])
+            + ", ".join(f"{a}\\~{b} ρ = {r:+.2f}" for _, a, b, r in pairs[:strongest])
         )
     return "  \n".join(lines)
 
@@ -75,7 +83,7 @@ def additional_table(result: Any, strongest: int = 3) -> str:
         order = np.argsort(-np.abs(R[iu]))[:strongest]
         lines.append(
             "strongest correlations: "
-            + ", ".join(f"{names[iu[0][k]]}~{names[iu[1][k]]} ρ = {R[iu][k]:+.2f}" for k in order)
+            + ", ".join(f"{names[iu[0][k]]}\\~{names[iu[1][k]]} ρ = {R[iu][k]:+.2f}" for k in order)
         )
     return "  \n".join(lines)
 
@@ -163,7 +171,7 @@ class CameraControls:
         has_ap = res is not None and "additional" in res.groups
         h["folder"].visible = cam is not None or has_ap
         if cam is not None:
-            self.text = camera_table(cam)
+            self.text = camera_table(cam, pixel_mm=self.state.units.pixel_mm)
         elif has_ap:
             self.text = additional_table(res)
         else:
@@ -211,10 +219,11 @@ class CameraControls:
             f"{scene.root}/distortion", scene.geo.frame.to_scene(seg).astype(np.float32),
             DISTORTION_COLOUR, thickness=2.0, thickness_units="screen",
         )  # fmt: skip
+        largest = self.state.units.image_text(big)
         self.handles["table"].content = (
-            self.text + f"  \ndistortion arrows ×{factor:.3g} (largest {big * 1e3:.1f} µm)"
+            self.text + f"  \ndistortion arrows ×{factor:.3g} (largest {largest})"
         )
         scene.legend_extra = [
             f"{swatch(DISTORTION_COLOUR, '→')} {what} of the selected image "
-            f"(×{factor:.3g}, largest {big * 1e3:.0f} µm)"
+            f"(×{factor:.3g}, largest {largest})"
         ]

@@ -9,6 +9,7 @@ it (the image in the orientation panel, the point with its rays).
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -80,7 +81,8 @@ class QualityControls:
         sc.colour_images(rgb)
         sc.colour_points(q.colours(q.point))
         h["legend_bar"].image = colour_bar(q)
-        text = legend_text(q)
+        # a length measure in the file's length unit (a reconstruction: model units)
+        text = legend_text(replace(q, unit=st.units.length_name) if q.unit == "m" else q)
         if not st.at_result:
             text += "  \n*(no adjustment at this state: run one to see the measure)*"
         h["legend"].content = text

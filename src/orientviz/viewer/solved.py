@@ -52,6 +52,7 @@ from .deformation import lens_deformation_extra
 from .demo import Demo
 from .geometry import framing
 from .state import BlockState
+from .view_units import ViewUnits
 
 F64 = NDArray[np.float64]
 
@@ -242,8 +243,9 @@ def solution_demo(solved: Solved, title: str | None = None) -> Demo:
     if problem.kind == "block" and sol.start is not None and "exterior" in adj.groups:
         block = sol.start
         state = BlockState(
-            block, adj, adjuster=FileAdjuster(problem), camera=CameraTerms.of(problem, block)
-        )
+            block, adj, adjuster=FileAdjuster(problem), camera=CameraTerms.of(problem, block),
+            units=ViewUnits.of(problem.units),
+        )  # fmt: skip
         if not finite_state(state):  # the last state has NaN: show the last finite record
             state.replay(last_finite_record(state))
         desc = block_description(solved)
@@ -258,7 +260,9 @@ def solution_demo(solved: Solved, title: str | None = None) -> Demo:
         return demo
     if isinstance(problem.data, Block):
         block = _solved_block(problem.data, sol)
-        state = BlockState(block, adjuster=_not_stepped(problem.kind))
+        state = BlockState(
+            block, adjuster=_not_stepped(problem.kind), units=ViewUnits.of(problem.units)
+        )
         state.history[0].sigma0 = float(adj.sigma0)  # the solution's, not recomputed
         desc = f"{head}; σ̂0 = {adj.sigma0:.10g}. {block.summary()}."
         return Demo("file", name, desc, state, None, message, sol)

@@ -32,6 +32,7 @@ from ..errors import InputError
 from .adjuster import Adjuster, default_adjuster, image_normalized_residuals
 from .edits import Edits, Mapping, effective_block, expand_result
 from .history import Change, Snapshot
+from .view_units import ViewUnits
 
 F64 = NDArray[np.float64]
 
@@ -54,6 +55,9 @@ class BlockState:
         ``camera.misclosure(block, ap) -> (n, 2)`` mm: the misclosures through the file's
         camera model with the camera terms ``ap`` (:class:`orientviz.viewer.solved.
         CameraTerms`); None: the block's pinhole projection.
+    units : ViewUnits, optional
+        How the panel names lengths, angles and image quantities (a problem file's
+        units, :meth:`ViewUnits.of`); default m, gon, µm.
     """
 
     def __init__(
@@ -62,7 +66,10 @@ class BlockState:
         result: Adjustment | None = None,
         adjuster: Adjuster | None = None,
         camera: Any = None,
+        units: ViewUnits | None = None,
     ) -> None:
+        #: how the panel names lengths, angles and image quantities (the file's units)
+        self.units = units or ViewUnits()
         self.block0 = block.copy()
         self.block = block.copy()
         self.adjuster = adjuster or default_adjuster()
@@ -348,7 +355,8 @@ class BlockState:
             e.known[k] = np.where(given, new, e.known[k])
 
         label = (
-            f"control {self.block.points.ids[k]} moved by ({d[0]:.3f}, {d[1]:.3f}, {d[2]:.3f}) m"
+            f"control {self.block.points.ids[k]} moved by ({d[0]:.3f}, {d[1]:.3f}, {d[2]:.3f}) "
+            f"{self.units.length_name}"
         )
         return self.act(label, edit, **kw)
 

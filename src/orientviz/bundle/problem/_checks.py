@@ -17,6 +17,7 @@ from scipy.sparse.csgraph import connected_components
 
 from ...block import CHECK, CONTROL, Block
 from ...errors import DatumDefectError, InputError, NotDeterminableError
+from ...plausibility import is_aerial
 
 F64 = NDArray[np.float64]
 
@@ -279,10 +280,20 @@ def check_datum(block: Block, setup: PointSetup) -> None:
     """Raise if control and observed centres leave the datum free, or an image is free.
 
     :class:`NotDeterminableError` from :func:`check_image_conditions` first (the count of
-    conditions per image), then :class:`DatumDefectError` if the datum is free.
+    conditions per image), then :class:`DatumDefectError` if the datum is free (naming
+    the planimetric and height control an aerial block lacks; a block that is not aerial
+    and has nothing at all — a reconstruction as imported — is told so without heights).
     """
     check_image_conditions(block, setup)
     free, missing = _datum_elements(block, setup)
+    if len(free) == 7 and not is_aerial(block):  # nothing given, not flown: no aerial words
+        raise DatumDefectError(
+            "7 datum parameter(s) are free: add control or fix them — the block has no "
+            "control points and no observed projection centres (undetermined: the 3 shifts, "
+            "the 3 rotations and the scale)",
+            parameters=[f"datum: {f}" for f in free],
+            defect=7,
+        )
     if free:
         raise DatumDefectError(
             f"{len(free)} datum parameter(s) are free: add control or fix them — missing "

@@ -36,6 +36,7 @@ from ._ap_normal import ap_normal, point_ap_term
 from ._auxiliary import BundleAuxiliary, auxiliary_rows
 from ._border import solve_border
 from ._checks import PointSetup
+from ._damping import image_damping, scene_centres
 from ._names import ParameterNames
 from ._parts import (
     AdditionalBlock,
@@ -119,6 +120,12 @@ class BundleProblem:
             options=self.options.reduced,
         )
         self.obs = with_var_rays(obs, self.reduced)
+        #: "trust" damping: the images' blocks are damped in the frame of their scene (._damping)
+        self.scene_centres = (
+            scene_centres(obs.image, obs.point, block.points.xyz, block.images.X0)
+            if self.options.damping == "trust"
+            else None
+        )
         r = self.reduced
         #: the images' Gram matrices (U and the reduced rhs in normal())
         self.image_gram = ImageGram(
@@ -281,6 +288,8 @@ class BundleProblem:
         if not (self.q and not self.run.border.hold):  # the weighted Jacobians: border only
             del Jew, Jpw  # (frees them before S is formed: the peak of a large block)
         U = np.ascontiguousarray(G[:, :6, :6])
+        trust = lam > 0 and self.scene_centres is not None
+        U_rays = U.copy() if trust else None  # the rays' part (the "trust" damping's metric)
         red = G[:, :6, 6].copy()
         U[:, [0, 1, 2], [0, 1, 2]] += self.exterior.X0_w
         red[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
@@ -290,7 +299,10 @@ class BundleProblem:
             self.aux.add_images(U, red, st.X0, st.xyz, st.g)
         Ud = U.reshape(-1, 36)[:, ::7]  # the diagonals (a view)
         diagU = Ud.copy()
-        if lam > 0:
+        if trust:  # the rays' part in the scene's frame (._damping), the rest × (1 + λ)
+            Ud += lam * (Ud - U_rays.reshape(-1, 36)[:, ::7])
+            image_damping(U, lam, st.X0, st.angles, self.scene_centres, self.block.sequence, U_rays)
+        elif lam > 0:
             Ud *= 1.0 + lam
         r = tg.rays
         out = NormalEquations(

@@ -182,10 +182,11 @@ def choose_formation(
 
     Only a dense S can be formed densely; it is when (6m)²·3p/2 multiply-adds at BLAS
     speed cost less than the pairs of rays one by one (``options.dense_flop_ns``,
-    ``options.pair_ns``).
+    ``options.dense_size_ns``, ``options.pair_ns``).
     """
     o = ReducedOptions() if options is None else options
     if solver != "dense":
         return "pairs"
-    dense_ns = o.dense_flop_ns * 2.0 * 54.0 * float(m) ** 2 * n_pt
+    per_flop = o.dense_flop_ns + o.dense_size_ns / (6.0 * max(m, 1))
+    dense_ns = per_flop * 2.0 * 54.0 * float(m) ** 2 * n_pt
     return "dense" if dense_ns < o.pair_ns * n_pairs else "pairs"

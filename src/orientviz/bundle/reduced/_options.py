@@ -22,9 +22,10 @@ class ReducedOptions:
     front_cost : float
         Fixed cost of one front of the multifrontal factorisation, in dense-flop
         equivalents (its extend-adds and LAPACK/BLAS calls from Python).
-    pair_ns, dense_flop_ns : float
-        Nanoseconds per pair of rays of the pair-wise Schur formation and per
-        multiply-add of the dense one (:func:`~orientviz.bundle.reduced._choice.choose_formation`).
+    pair_ns, dense_flop_ns, dense_size_ns : float
+        Nanoseconds per pair of rays of the pair-wise Schur formation, and per multiply-add
+        of the dense one ``dense_flop_ns + dense_size_ns / 6m`` (BLAS's speed grows with
+        the size of S) (:func:`~orientviz.bundle.reduced._choice.choose_formation`).
     strip_band : float
         A band with half-bandwidth + 1 ≤ ``strip_band`` · 6m is a block of strips: banded,
         unless the sparse factor is clearly cheaper.
@@ -59,8 +60,9 @@ class ReducedOptions:
     rate_banded: float = 1.5
     rate_sparse: float = 2.0
     front_cost: float = 1.5e6
-    pair_ns: float = 250.0
-    dense_flop_ns: float = 0.025
+    pair_ns: float = 105.0
+    dense_flop_ns: float = 0.0223
+    dense_size_ns: float = 2.44
     strip_band: float = 0.5
     sparse_clear_win: float = 0.25
     dense_max: int = 8000

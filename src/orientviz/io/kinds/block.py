@@ -461,7 +461,7 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
         adj.reason = f"{adj.reason}; BUT THE MODEL DOES NOT FIT THE DATA (see the warning)"
     if block.meta.get("alignment"):
         notes.insert(0, block.meta["alignment"])
-    moved = divergence_note(block, adj, problem.units.m_per_length, problem.units.length)
+    moved = divergence_note(block, adj, problem.units.m_per_length, problem.units.length_name)
     if moved:
         notes.insert(0, moved)
     if np.any(block.points.role == CHECK):
