@@ -119,7 +119,9 @@ def test_a_calibration_without_its_lens_terms_does_not_fit_and_says_so(
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 4  # not 0: the estimates of a model that does not fit are no result
     assert len(err) == 1 and "the model does not fit the data" in err[0]
-    assert "lens distortion" in err[0] and "pixel size" in err[0] and str(path) in err[0]
+    # a file in pixels: the causes named are the lens and c, not a pixel size (c is in px too)
+    assert "lens distortion" in err[0] and "principal distance" in err[0] and str(path) in err[0]
+    assert "pixel size" not in err[0]
     assert not (tmp_path / "out.json").exists()
     assert main(["solve", "dbat_camcal"]) == 0  # with its model the same data fit
 

@@ -7,6 +7,8 @@ import numpy as np
 import orientviz as ov
 from orientviz.plausibility import check_block
 
+PIXEL_MM = 0.01  # the importers' nominal pixel size
+
 
 def _behind_message(block):
     found = [f for f in check_block(block) if f.check == "behind"]
@@ -119,6 +121,18 @@ def test_an_imported_reconstruction_is_reported_in_model_units(tmp_path, capsys)
     assert "Plan view on the X-Y plane" in words and "model units" in words
     for foreign in ("µm", "[m]", " gon", "terrain height", "weak height"):
         assert foreign not in words, foreign
+    # export: adjusted.json keeps the file's units, the CSV tables label them
+    from orientviz.report import image_table
+
+    assert main(["export", str(out), "-d", str(tmp_path / "x"), "--no-adjust"]) == 0
+    again = load_problem(tmp_path / "x" / "adjusted.json")
+    assert (again.units.length, again.units.image, again.units.angle) == ("model", "px", "deg")
+    head = (tmp_path / "x" / "images.csv").read_text().splitlines()[0]
+    assert "X0[model]" in head and "rms_vx[px]" in head and "[m]" not in head
+    block = load_problem(out).data
+    px = image_table(block, length="model", pixel_mm=PIXEL_MM).columns["rms_vx"]
+    um = image_table(block).columns["rms_vx"]  # the same residuals in µm of 0.01 mm pixels
+    np.testing.assert_allclose(px, um / 10.0, rtol=1e-12)
 
 
 def test_control_in_a_file_of_model_units_is_a_warning():
@@ -158,6 +172,8 @@ def test_an_imported_model_that_does_not_fit_says_so(tmp_path, capsys):
     assert main(["solve", str(out), "--free", "--max-iter", "200"]) == 4
     said = capsys.readouterr()
     assert "the model does not fit the data" in said.out and "lens distortion" in said.err
+    # a pixel file: its lens held at import can be wrong, a pixel size cannot
+    assert "--fix-lens" in said.err and "pixel size" not in said.err
 
 
 def test_solving_an_import_without_a_datum_names_both_ways(tmp_path, capsys):

@@ -7,9 +7,10 @@ the observations that belong to it: the tables one looks at to debug an adjustme
 :func:`write_csv` exports. Without an adjustment the tables hold the block's values and
 the misclosures at these values (no σ, no normalised residuals).
 
-Units: object coordinates and their σ in m, angles and their σ in ``angle_unit``
-(default gon), residuals in µm (image), ``max_w`` is the largest abs(normalised
-residual) w of the item's observations (NaN where not available).
+Units: object coordinates and their σ in m (a reconstruction without scale: labelled
+``model``, values 1 : 1), angles and their σ in ``angle_unit`` (default gon), residuals in
+µm (image; px for a file in pixels), ``max_w`` is the largest abs(normalised residual) w
+of the item's observations (NaN where not available).
 """
 
 from __future__ import annotations
@@ -169,8 +170,20 @@ def _std(adj: Adjustment | None, block_name: str, shape: tuple[int, int]) -> F64
     return np.asarray(adj.std()[adj.groups[block_name]], dtype=float).reshape(shape)
 
 
+def _units(length: str, pixel_mm: float | None) -> tuple[str, float, str]:
+    """(length label, factor µm → residual unit, residual label): ``"model"`` for a
+    reconstruction's model units (values 1 : 1), px for a pixel file, else m and µm."""
+    label = "model" if length == "model" else "m"
+    return (label, 1e-3 / pixel_mm, "px") if pixel_mm else (label, 1.0, "um")
+
+
 def image_table(
-    block: Block, adj: Adjustment | None = None, *, angle_unit: str = "gon"
+    block: Block,
+    adj: Adjustment | None = None,
+    *,
+    angle_unit: str = "gon",
+    length: str = "m",
+    pixel_mm: float | None = None,
 ) -> ResultTable:
     """One row per image: orientation, its σ, residuals of the image's observations.
 
@@ -182,6 +195,11 @@ def image_table(
         Its bundle adjustment; None tabulates the block as it is (misclosures).
     angle_unit : str
         Unit of ω, φ, κ and their σ (see :mod:`orientviz.units`).
+    length : str
+        The file's length unit: ``"model"`` labels the coordinates of a reconstruction
+        without scale (values unchanged), anything else m.
+    pixel_mm : float, optional
+        mm per pixel of a file in pixels: the residuals in px (default µm).
 
     Returns
     -------
@@ -191,38 +209,49 @@ def image_table(
     """
     b = block if adj is None else adjusted_block(block, adj)
     m = b.n_images
+    lu, vf, vu = _units(length, pixel_mm)
     v, w = _observation_stats(block, adj)
-    n_obs, rx, ry, mw = _group(b.observations.image, m, v, w)
+    n_obs, rx, ry, mw = _group(b.observations.image, m, v * vf, w)
     s = _std(adj, "exterior", (m, 6))
     ang = from_rad(b.images.angles, angle_unit)
     sang = from_rad(s[:, 3:], angle_unit)
     cols = {"id": np.array(b.images.ids, dtype=str), "strip": b.images.strip.copy(), "n_obs": n_obs}
     units = {"id": "", "strip": "", "n_obs": ""}
     for k, name in enumerate(("X0", "Y0", "Z0")):
-        cols[name], units[name] = b.images.X0[:, k].copy(), "m"
+        cols[name], units[name] = b.images.X0[:, k].copy(), lu
     for k, name in enumerate(("omega", "phi", "kappa")):
         cols[name], units[name] = ang[:, k], angle_unit
     for k, name in enumerate(("sX0", "sY0", "sZ0")):
-        cols[name], units[name] = s[:, k], "m"
+        cols[name], units[name] = s[:, k], lu
     for k, name in enumerate(("somega", "sphi", "skappa")):
         cols[name], units[name] = sang[:, k], angle_unit
     cols.update(rms_vx=rx, rms_vy=ry, max_w=mw)
-    units.update(rms_vx="um", rms_vy="um", max_w="")
+    units.update(rms_vx=vu, rms_vy=vu, max_w="")
     return ResultTable("images", cols, units)
 
 
-def point_table(block: Block, adj: Adjustment | None = None) -> ResultTable:
+def point_table(
+    block: Block,
+    adj: Adjustment | None = None,
+    *,
+    length: str = "m",
+    pixel_mm: float | None = None,
+) -> ResultTable:
     """One row per point: coordinates, their σ, residuals of the point's rays.
+
+    ``length`` and ``pixel_mm`` as in :func:`image_table`.
 
     Returns
     -------
     ResultTable
-        Columns ``id role n_rays X Y Z sX sY sZ rms_vx rms_vy max_w`` (m, µm).
+        Columns ``id role n_rays X Y Z sX sY sZ rms_vx rms_vy max_w`` (m or model units,
+        µm or px).
     """
     b = block if adj is None else adjusted_block(block, adj)
     p = b.n_points
+    lu, vf, vu = _units(length, pixel_mm)
     v, w = _observation_stats(block, adj)
-    n_obs, rx, ry, mw = _group(b.observations.point, p, v, w)
+    n_obs, rx, ry, mw = _group(b.observations.point, p, v * vf, w)
     s = _std(adj, "points", (p, 3))
     cols = {
         "id": np.array(b.points.ids, dtype=str),
@@ -231,11 +260,11 @@ def point_table(block: Block, adj: Adjustment | None = None) -> ResultTable:
     }
     units = {"id": "", "role": "", "n_rays": ""}
     for k, name in enumerate("XYZ"):
-        cols[name], units[name] = b.points.xyz[:, k].copy(), "m"
+        cols[name], units[name] = b.points.xyz[:, k].copy(), lu
     for k, name in enumerate(("sX", "sY", "sZ")):
-        cols[name], units[name] = s[:, k], "m"
+        cols[name], units[name] = s[:, k], lu
     cols.update(rms_vx=rx, rms_vy=ry, max_w=mw)
-    units.update(rms_vx="um", rms_vy="um", max_w="")
+    units.update(rms_vx=vu, rms_vy=vu, max_w="")
     return ResultTable("points", cols, units)
 
 

@@ -29,7 +29,7 @@ from ..bundle import bundle_adjust
 from ..errors import AdjustmentError, InputError
 from ..io.colmap import write_colmap
 from ..io.kinds.block import approximate
-from ..io.problem import write_problem
+from ..io.problem import Units, write_problem
 from ..io.safeio import prepare_output_dir
 from ..io.solve import check_geometry, load_named
 from ._tables import adjusted_block, image_table, point_table
@@ -45,6 +45,7 @@ def export_results(
     formats: tuple[str, ...] | list[str] = FORMATS,
     name: str = "",
     angle_unit: str = "gon",
+    units: Units | None = None,
 ) -> dict[str, Path]:
     """Write the results of ``block`` (adjusted by ``adj``) in ``formats`` into ``directory``.
 
@@ -62,6 +63,10 @@ def export_results(
         Name stored in the problem file.
     angle_unit : str
         Unit of the angles in the CSV tables (default gon).
+    units : Units, optional
+        The problem file's units: ``adjusted.json`` is written in them (default m, gon,
+        mm) and the CSV tables label a reconstruction's model units and give a pixel
+        file's residuals in px.
 
     Returns
     -------
@@ -78,13 +83,15 @@ def export_results(
     written: dict[str, Path] = {}
     if "json" in formats:
         doc = {"kind": "block", "block": out, "name": name or str(block.meta.get("name", ""))}
-        write_problem(doc, d / "adjusted.json")
+        write_problem(doc, d / "adjusted.json", units=units)
         written["json"] = d / "adjusted.json"
     if "csv" in formats:
-        written["images_csv"] = image_table(block, adj, angle_unit=angle_unit).to_csv(
+        px = units.pixel_size if units is not None and units.image == "px" else None
+        lu = {"length": units.length if units is not None else "m", "pixel_mm": px}
+        written["images_csv"] = image_table(block, adj, angle_unit=angle_unit, **lu).to_csv(
             d / "images.csv"
         )
-        written["points_csv"] = point_table(block, adj).to_csv(d / "points.csv")
+        written["points_csv"] = point_table(block, adj, **lu).to_csv(d / "points.csv")
     if "colmap" in formats:
         write_colmap(out, d / "colmap")
         written["colmap"] = d / "colmap"
@@ -113,7 +120,9 @@ def run_from_cli(args: argparse.Namespace) -> int:
                 )
                 return 3
         formats = [f.strip() for f in args.format.split(",") if f.strip()]
-        written = export_results(block, adj, args.directory, formats=formats, name=problem.name)
+        written = export_results(
+            block, adj, args.directory, formats=formats, name=problem.name, units=problem.units
+        )
     except InputError as exc:
         print(f"{prog}: {exc.one_line()}", file=sys.stderr)
         return 2

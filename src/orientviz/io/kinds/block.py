@@ -345,13 +345,17 @@ MISFIT_SIGMA0: float = 3.0
 MISFIT_FLAGGED: float = 0.2
 
 
-def misfit_warning(adj, n_image: int, critical: float, block: Block | None = None) -> str | None:
+def misfit_warning(
+    adj, n_image: int, critical: float, block: Block | None = None, pixels: bool = False
+) -> str | None:
     """A warning when σ0 ≫ 1 and a large share of the image coordinates is flagged.
 
     Such a solve "converges" to the best fit of a model that does not hold. If one
     observation explains the misfit (:func:`single_gross_error`), the warning names it
     as a gross error and its remedy; otherwise it names the likely causes of a model
-    that does not fit (lens, units, principal distance, σ).
+    that does not fit (lens, units, principal distance, σ). ``pixels``: the file's image
+    coordinates are pixels (an imported reconstruction): a pixel size cannot be wrong
+    there (c is in pixels too), a lens held at import (``--fix-lens``) can.
     """
     if adj.normalized_residuals is None:  # no redundancy numbers (e.g. not converged)
         return None
@@ -369,6 +373,13 @@ def misfit_warning(adj, n_image: int, critical: float, block: Block | None = Non
     gross = single_gross_error(adj, n_image, block)
     if gross is not None:
         return f"{head} {gross}"
+    if pixels:
+        return (
+            f"{head} Likely causes: lens distortion or other interior-orientation terms "
+            "missing from the model or held at wrong values (an import with --fix-lens holds "
+            "them), a wrong principal distance, or σ of the image coordinates far too small. "
+            "The estimates are the best fit of a model that does not hold"
+        )
     return (
         f"{head} Likely causes: "
         "lens distortion or other interior-orientation terms missing from the model, image "
@@ -455,7 +466,8 @@ def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: 
         xyz, sxyz = block.points.xyz, np.full((p, 3), np.nan)
     notes = check_note(problem, block, xyz)
     critical = float(problem.options.get("critical", W_CRITICAL))
-    misfit = misfit_warning(adj, len(block.observations), critical, block)
+    px = problem.units.image == "px"
+    misfit = misfit_warning(adj, len(block.observations), critical, block, pixels=px)
     if misfit:
         notes.insert(0, misfit)
         adj.reason = f"{adj.reason}; BUT THE MODEL DOES NOT FIT THE DATA (see the warning)"
