@@ -94,6 +94,19 @@ class RobustLoss:
         root = np.sqrt(1.0 + s / b)  # soft_l1
         return 2.0 * b * (root - 1.0), 1.0 / root
 
+    def along(self, s: F64) -> F64:
+        """(ρ′ + 2sρ″)/ρ′ per squared norm ``s`` (dimensionless, ≥ 0): Σρ's Gauss-Newton
+        curvature along a ray's misclosure over the reweighted model's ρ′ (across the
+        misclosure both are ρ′). Huber 1 within the scale and 0 beyond it, soft-L1
+        1/(1 + s/b), Cauchy (1 − s/b)/(1 + s/b) clipped at 0 (b = a²)."""
+        s = np.asarray(s, float)
+        b = self.scale * self.scale
+        if self.kind == "huber":
+            return np.where(s > b, 0.0, 1.0)
+        if self.kind == "soft_l1":
+            return 1.0 / (1.0 + s / b)
+        return np.maximum((1.0 - s / b) / (1.0 + s / b), 0.0)
+
     def weights(self, s: F64) -> F64:
         """ρ′(s): the weight factor of each ray (its σ becomes σ/√ρ′)."""
         return self(s)[1]

@@ -14,7 +14,10 @@ hand on. Its knobs are fields of the problem's
   along down-weighted rays' misclosures closer to the true one (:data:`ROBUST_TAIL_FLOOR`);
   an over-relaxed step the loop rejects is retried as the model's own step (ω = 1, kept
   from its solve: no new solve, whatever λ the loop asks), and a step rejected again is
-  solved at the loop's λ without the over-relaxation and the tail's model;
+  solved at the loop's λ without the over-relaxation and the tail's model; in every
+  robust step of a convex loss the points with a ray beyond the scale get their own
+  Newton correction given the images' one, and each point keeps the correction (the
+  joint step's or a Newton one) that lowers the Σρ of its rays most (:mod:`._tail`);
 * the additional parameters are held at their values in the first step from a poor
   start; their border E, F is reused in the next iteration when the last step moved
   nothing by more than ``ap_reuse`` (the Jacobians then change by about as little, less
@@ -61,6 +64,7 @@ from ...adjust.loop import Evaluation, Step
 from ..model import angle_map
 from ..problem import BundleProblem, BundleState
 from ._loss import RobustLoss
+from ._tail import point_newton, point_search, tail_model
 
 F64 = NDArray[np.float64]
 #: A redescending loss (Cauchy) is on from the start when the start's σ0 (of least
@@ -180,6 +184,8 @@ class BundleSteps:
         # rejected step (the tail's over-relaxation and model are then left out)
         self._solved_at: BundleState | None = None
         self._unrelaxed: Step | None = None  # the model's own step of an over-relaxed one
+        self._sigma = None  # diagonals (U, V, F) of the last solve (the stopping measure)
+        self.points_moved = 0  # points the last search moved otherwise than the joint step
 
     def start(self, st: BundleState) -> Evaluation:
         """Evaluate the start once (the loop asks for it again: no second evaluation)."""
@@ -308,31 +314,7 @@ class BundleSteps:
             or (prob.q and prob.ap.lens is None)
         ):
             return rw, Je, Jp, None
-        s = np.einsum("ij,ij->i", rw, rw) / (scale * scale)
-        b = loss.scale * loss.scale
-        out = np.flatnonzero(s > b)
-        if not out.size:
-            return rw, Je, Jp, None
-        exact = np.zeros(out.size) if loss.kind == "huber" else 1.0 / (1.0 + s[out] / b)
-        c = np.maximum(exact, ROBUST_TAIL_FLOOR)
-        sw = prob.obs.weight[out][:, :, None]
-        u = rw[out] / np.linalg.norm(rw[out], axis=1)[:, None]  # r̂
-        f = (1.0 - np.sqrt(c))[:, None, None] * u[:, :, None]
-
-        def turn(X: F64) -> F64:  # unweighted rows X: (1/sw) (I − f r̂ᵀ) (sw X)
-            Y = X * sw
-            return (Y - f * np.einsum("ni,nij->nj", u, Y)[:, None, :]) / sw
-
-        rw, Je, Jp = rw.copy(), Je.copy(), Jp.copy()
-        Je[out], Jp[out] = turn(Je[out]), turn(Jp[out])
-        rw[out] /= np.sqrt(c)[:, None]
-        design = None
-        if prob.q:  # a camera model's design at this linearisation: turned for this solve
-            design = prob.run.ap
-            A = design.A.copy()
-            A[out] = turn(A[out])
-            prob.run.ap = design.with_design(A, prob.obs.weight)
-        return rw, Je, Jp, design
+        return tail_model(prob, loss, rw, Je, Jp, scale, ROBUST_TAIL_FLOOR)
 
     def weigh(self, ev: Evaluation) -> None:
         """Set the rays' weights to those of ``ev``'s linearisation (a robust loss; the
@@ -391,6 +373,8 @@ class BundleSteps:
         kept, self._unrelaxed = self._unrelaxed, None
         if self._retry and kept is not None:  # a rejected over-relaxed step: ω = 1 first
             self.last_rel, self.last_reused, self.chord_pending = kept.max_correction, False, None
+            dc, dp, da = kept.data[:3]
+            kept.data = kept.data[:6] + (self._point_newton(st, ev, dc, dp, da, lam),)
             return kept
         if self.switch_pending:  # the loss is switched on: the loop's evaluation at st too
             self.switch_pending = False
@@ -417,11 +401,13 @@ class BundleSteps:
         finally:
             if design is not None:  # the camera model's own design again (a retry, the end)
                 prob.run.ap = design.with_design(design.A, prob.obs.weight)
+        self._sigma = (ne.diagU, ne.diagV, ne.diagF if prob.q or prob.na else None)
         if self.robust_tail and not self._retry and self.loss_on and not self.switch_pending:
             w = ROBUST_OVERRELAX
-            self._unrelaxed = Step(rel, self._dx(dc, dp, da), (dc, dp, da, None, None, local))
+            self._unrelaxed = Step(rel, self._dx(dc, dp, da), (dc, dp, da, None, None, local, None))
             dc, dp, da = dc * w, dp * w, da * w
             rel *= w
+        points = self._point_newton(st, ev, dc, dp, da, lam)
         dx = self._dx(dc, dp, da)
         self.last_rel, self.last_local = rel, local
         self.last_reused = chord is None and bool(getattr(ne.ap, "reused", False))
@@ -436,7 +422,35 @@ class BundleSteps:
         # point's Jacobians are formed (the peak memory of a large block)
         if not (self.precision and lam == 0 and not (prob.q or prob.aux or local)):
             ne = fac = None
-        return Step(rel, dx, (dc, dp, da, fac, ne, local))
+        return Step(rel, dx, (dc, dp, da, fac, ne, local, points))
+
+    def _point_newton(self, st: BundleState, ev: Evaluation, dc: F64, dp: F64, da: F64, lam: float):
+        """The Newton corrections of the points with a ray beyond the scale given the step's
+        ``dc``, ``da`` (:func:`._tail.point_newton`) for a convex loss's robust steps; None
+        otherwise (least-squares steps, a redescending loss, steps in frame rotations or
+        with auxiliary data)."""
+        prob = self.prob
+        scale = getattr(ev.data, "scale", None)
+        if (
+            not self.loss_on
+            or self.switch_pending
+            or self.loss.redescending
+            or scale is None
+            or prob.aux
+            or self.is_local(ev)
+        ):
+            return None
+        rw, Je, Jp = ev.data
+        return point_newton(prob, self.loss, self.base_weight, st, (rw, Je, Jp, scale), dc, da, lam)
+
+    def _sigma_correction(self, dc: F64, dp: F64, da: F64) -> float:
+        """:meth:`_correction` by the diagonals of the last solve's normal equations."""
+        dU, dV, dF = self._sigma
+        return max(
+            float(np.max(np.abs(dc) * np.sqrt(dU), initial=0.0)),
+            float(np.max(np.abs(dp) * np.sqrt(dV), initial=0.0)),
+            float(np.max(np.abs(da) * np.sqrt(dF), initial=0.0)) if dF is not None else 0.0,
+        )
 
     def _dx(self, dc: F64, dp: F64, da: F64) -> F64 | None:
         """The correction in the layout of x (zeros for fixed points), if kept."""
@@ -503,7 +517,15 @@ class BundleSteps:
 
     def apply(self, st: BundleState, step: Step) -> BundleState:
         dc, dp, da = step.data[:3]
-        local = step.data[5]
+        local, newton = step.data[5], step.data[6]
+        if newton is not None:  # each point's correction by its own search (._tail)
+            dp, self.points_moved = point_search(
+                self.prob, self.loss, self.base_weight, st, dc, da, dp, newton
+            )
+            step.data = (dc, dp, da) + step.data[3:6] + (None,)
+            step.max_correction = self.last_rel = self._sigma_correction(dc, dp, da)
+            if step.dx is not None:
+                step.dx = self._dx(dc, dp, da)
         new = self.prob.apply(st, dc, dp, da, local=local)
         if local and step.dx is not None:  # the history records the change of the angles
             step.dx.reshape(-1)[: 6 * self.prob.m].reshape(-1, 6)[:, 3:] = new.angles - st.angles
@@ -514,7 +536,7 @@ class BundleSteps:
 
     def accepted(self, it: int, step: Step, lam: float, previous: Evaluation) -> None:
         prob = self.prob
-        dc, dp, _, fac, ne, local = step.data
+        dc, dp, _, fac, ne, local, _ = step.data
         if self.loss_on and not self.switch_pending and previous.cost > 0:  # a robust step
             self.robust_tail = (previous.cost - self.pending_cost) < ROBUST_TAIL * previous.cost
         if self.loss is not None and not self.loss_on:  # no longer poor, or settled?

@@ -1,0 +1,285 @@
+"""A robust run's rays beyond the scale: the joint step's model, and each point's search.
+
+The reweighted model of a ray (its rows scaled by √ρ′, :mod:`._loss`) has the curvature
+ρ′ along the ray's misclosure where Σρ has ρ′ + 2sρ″ — for Huber beyond its scale 0.
+Two remedies act for the convex losses (Huber, soft-L1):
+
+* :func:`tail_model` — in the run's tail (:data:`orientviz.bundle.loop._steps.ROBUST_TAIL`)
+  the joint step's rays beyond the scale with the curvature along their misclosure
+  lowered towards the true one, floored (a 2 × 2 per-ray model, Triggs et al. 2000);
+* :func:`point_newton` and :func:`point_search` — in every robust step, the correction
+  of each point with a ray beyond the scale sought anew.
+
+Why the points: given the images' parameters Σρ is a sum over the points, each a
+function of three coordinates. Where most of a point's rays lie beyond the scale — a
+two-ray point with one gross error, whose misclosure splits between its two rays; a
+point with two gross errors among four rays — Σρ is nearly flat along some direction of
+the point until one ray's misclosure reaches the scale, and the reweighted steps creep
+along it by a fraction of the way per step (a linear tail of tens of steps; the ratio of
+true to modelled curvature of such points goes down to 0.04, while the images'
+ratios after the points are eliminated stay ≥ 0.45; measurements: benchmarks/README.md,
+issue 28 pt 3). :func:`point_newton` gives each such point its Newton correction under
+the true Gauss-Newton model of its rays (the curvature ρ′ + 2sρ″ along each misclosure,
+ρ′ across it, plus :data:`NEWTON_FLOOR` times the reweighted model) given the images'
+correction of the step, and the fraction of it at which a ray first reaches the scale
+from beyond (the end of the flat stretch, linearised). :func:`point_search` ranks per
+point the Newton candidates (up to that breakpoint, :data:`FRACTIONS` of it) by the
+linearised rays, and keeps the first-ranked one where the true misclosures at the
+step's new image parameters give the point's rays (and prior) a lower Σρ than the joint
+step's own correction. The points do not interact given the images, so the trial's Σρ
+is at most the joint step's: the loop's test of the step is unchanged. The cost: two
+evaluations of the misclosures without derivatives, per-ray products over the active
+points' rays and a 3 × 3 system per point.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..problem import BundleProblem, BundleState
+from ._loss import RobustLoss
+
+F64 = NDArray[np.float64]
+I64 = NDArray[np.int64]
+
+#: :func:`point_newton`: the true model's curvature plus this times the reweighted one
+#: (a point whose rays all lie beyond Huber's scale may have a flat direction).
+NEWTON_FLOOR: float = 0.01
+#: :func:`point_search`: the fractions of the Newton correction ranked per point beside
+#: the one up to the first breakpoint (the nearly flat direction ends where a ray's
+#: misclosure reaches the scale: the full correction may overshoot it).
+FRACTIONS: tuple[float, ...] = (1.0, 0.5, 0.25, 0.125)
+#: Upper-triangle index pairs of a symmetric 3 × 3 block (6 entries).
+_UPPER = (np.array([0, 0, 0, 1, 1, 2]), np.array([0, 1, 2, 1, 2, 2]))
+
+
+def tail_model(
+    prob: BundleProblem, loss: RobustLoss, rw: F64, Je: F64, Jp: F64, scale: F64, floor: float
+):
+    """The rays beyond the scale with their curvature along the misclosure c·ρ′
+    (c = max((ρ′ + 2sρ″)/ρ′, ``floor``)) — rows (I − (1 − √c) r̂r̂ᵀ) P½J (Je, Jp, a
+    camera model's design) and misclosure P½r/√c: the gradient unchanged.
+
+    ``rw``: P½r with the weights 1/σ·√ρ′ (``scale`` = √ρ′ per ray), ``Je``, ``Jp``
+    unweighted (the normal equations weight them by the problem's ray weights). Returns
+    (rw, Je, Jp, design to restore after the solve or None); the inputs unchanged when no
+    ray lies beyond the scale.
+    """
+    s = np.einsum("ij,ij->i", rw, rw) / (scale * scale)
+    b = loss.scale * loss.scale
+    out = np.flatnonzero(s > b)
+    if not out.size:
+        return rw, Je, Jp, None
+    c = np.maximum(loss.along(s[out]), floor)
+    sw = prob.obs.weight[out][:, :, None]
+    u = rw[out] / np.linalg.norm(rw[out], axis=1)[:, None]  # r̂
+    f = (1.0 - np.sqrt(c))[:, None, None] * u[:, :, None]
+
+    def turn(X: F64) -> F64:  # unweighted rows X: (1/sw) (I − f r̂ᵀ) (sw X)
+        Y = X * sw
+        return (Y - f * np.einsum("ni,nij->nj", u, Y)[:, None, :]) / sw
+
+    rw, Je, Jp = rw.copy(), Je.copy(), Jp.copy()
+    Je[out], Jp[out] = turn(Je[out]), turn(Jp[out])
+    rw[out] /= np.sqrt(c)[:, None]
+    design = None
+    if prob.q:  # a camera model's design at this linearisation: turned for this solve
+        design = prob.run.ap
+        A = design.A.copy()
+        A[out] = turn(A[out])
+        prob.run.ap = design.with_design(A, prob.obs.weight)
+    return rw, Je, Jp, design
+
+
+def _by_point(prob: BundleProblem, X: F64) -> F64:
+    """Sums per point unknown (p_var, k) of rows ``X`` (n_var, k) in the tracks' ray order."""
+    return np.asarray(prob.reduced.tracks.by_point @ X)
+
+
+@dataclass
+class PointNewton:
+    """The Newton corrections of a step's active points and what their search needs.
+
+    Attributes
+    ----------
+    active : ndarray of int, shape (a,)
+        The point unknowns with a ray beyond the loss's scale (the others' reweighted
+        model is their true one, for Huber exactly).
+    rays : ndarray of int, shape (m,)
+        Their rays (positions in the tracks' ray order), point by point.
+    starts : ndarray of int, shape (a,)
+        The first of each active point's rays in ``rays``.
+    dp : ndarray, shape (a, 3)
+        The Newton corrections, m (0 for a point whose model is singular).
+    first : ndarray, shape (a,)
+        The fraction of ``dp`` at which a ray of the point first reaches the loss's scale
+        from beyond it (linearised; 1 where none does before ``dp``).
+    r : ndarray, shape (m, 2)
+        The rays' misclosures (1/σ-weighted) after the images' correction, linearised.
+    J : ndarray, shape (m, 2, 3)
+        The rays' 1/σ-weighted derivatives by their point.
+    """
+
+    active: I64
+    rays: I64
+    starts: I64
+    dp: F64
+    first: F64
+    r: F64
+    J: F64
+
+    def sums(self, X: F64) -> F64:
+        """Sums per active point of per-ray rows ``X`` (m, …)."""
+        return np.add.reduceat(X, self.starts, axis=0)
+
+    def candidates(self, dp: F64) -> F64:
+        """(c, a, 3): the joint step's ``dp`` of the active points, the Newton correction
+        up to the first breakpoint, and :data:`FRACTIONS` of the Newton correction."""
+        cands = [dp[self.active], self.first[:, None] * self.dp]
+        return np.stack(cands + [f * self.dp for f in FRACTIONS])
+
+
+def point_newton(
+    prob: BundleProblem,
+    loss: RobustLoss,
+    base_weight: F64,
+    st: BundleState,
+    lin: tuple,
+    dc: F64,
+    da: F64,
+    lam: float,
+) -> PointNewton | None:
+    """The Newton corrections of the points with a ray beyond the loss's scale, given the
+    images' correction ``dc`` (m, 6) and the additional parameters' ``da`` (see the
+    module docstring); None when no point has such a ray.
+
+    The model: each point's rays' Σρ at the new image parameters with the misclosures
+    linearised, r − J δ (r = the misclosure at ``st`` less the images' share of the
+    step), to second order in δ with the Gauss-Newton curvature ρ′ + 2sρ″ along r and ρ′
+    across it, at r.
+
+    ``lin``: (rw, Je, Jp, scale) at ``st`` — misclosures weighted by 1/σ·√ρ′, the
+    unweighted Jacobians, √ρ′ per ray; ``base_weight`` (n, 2): 1/σ of the rays (1/mm);
+    ``lam``: the step's damping (λ times the diagonal of the reweighted point blocks is
+    added, as in the joint step).
+    """
+    rw, Je, Jp, scale = lin
+    tg, pts = prob.reduced.tracks, prob.points
+    bsc = loss.scale * loss.scale
+    sc_all = tg.take(scale)
+    rw_t = tg.take(rw)
+    beyond = (rw_t * rw_t).sum(axis=1) > bsc * sc_all * sc_all  # s > a² (s = ‖rw‖²/ρ′)
+    bp = tg.by_point
+    active = np.flatnonzero(bp @ beyond.astype(float) > 0)
+    if not active.size:
+        return None
+    sub = bp[active]
+    rays = sub.indices
+    starts = sub.indptr[:-1]
+    obs_rays = np.asarray(tg.rows)[rays] if not tg.in_order else rays
+    w = base_weight[obs_rays]
+    sc = sc_all[rays]
+    J = Jp[obs_rays] * w[:, :, None]  # (m, 2, 3), weighted by 1/σ
+    # the misclosures (1/σ) after the images' correction, linearised: r − u
+    u = (Je[obs_rays] * dc[tg.ray_image[rays]][:, None, :]).sum(axis=2)
+    if prob.q:
+        rows_a = np.stack([2 * obs_rays, 2 * obs_rays + 1], axis=1).ravel()
+        u += (prob.ap.A_csr[rows_a] @ da[: prob.q]).reshape(-1, 2)
+    u *= w
+    r = rw[obs_rays] / sc[:, None] - u
+    s = (r * r).sum(axis=1)
+    rho1 = loss(s)[1]
+    k = 1.0 - loss.along(s)  # the share of ρ′ the true model lacks along the misclosure
+    norm = np.sqrt(s)
+    rhat = r / np.where(norm > 0, norm, np.inf)[:, None]
+    # per ray at the linearised misclosure r: the gradient Jᵀρ′r, the reweighted block
+    # ρ′JᵀJ and the part the true model lacks ρ′k (Jᵀr̂)(Jᵀr̂)ᵀ
+    t = r * rho1[:, None]
+    J0, J1 = J[:, 0, :], J[:, 1, :]
+    q = J0 * rhat[:, :1] + J1 * rhat[:, 1:]
+    a, b = _UPPER
+    rows = np.empty((r.shape[0], 15))
+    rows[:, :3] = J0 * t[:, :1] + J1 * t[:, 1:]
+    rows[:, 3:9] = (J0[:, a] * J0[:, b] + J1[:, a] * J1[:, b]) * rho1[:, None]
+    rows[:, 9:] = q[:, a] * q[:, b] * (rho1 * k)[:, None]
+    sums = np.add.reduceat(rows, starts, axis=0)
+    pw = pts.prior_w[active]
+    g = sums[:, :3] + pw * (pts.prior_obs[active] - st.xyz[pts.unknown[active]])
+    VM = np.empty((active.size, 3, 3))
+    VQ = np.empty_like(VM)
+    VM[:, a, b] = VM[:, b, a] = sums[:, 3:9]
+    VQ[:, a, b] = VQ[:, b, a] = sums[:, 9:]
+    ii = np.arange(3)
+    VM[:, ii, ii] += pw
+    N = (1.0 + NEWTON_FLOOR) * VM - VQ
+    N[:, ii, ii] += lam * VM[:, ii, ii]
+    # a point whose model is singular (rays without weight, a point at infinity) stays
+    tr = N[:, 0, 0] + N[:, 1, 1] + N[:, 2, 2]
+    bad = ~(np.abs(np.linalg.det(N)) > 1e-12 * np.maximum(tr, 1e-300) ** 3)
+    if bad.any():
+        N[bad] = np.eye(3)
+        g[bad] = 0.0
+    dp = np.linalg.solve(N, g[:, :, None])[:, :, 0]
+    # the first breakpoint along dp: a ray beyond the scale reaches it (linearised:
+    # ‖r − α J dp‖² = a², the smaller root where r·J dp > 0)
+    owner = np.repeat(np.arange(active.size), np.diff(sub.indptr))
+    up = (J * dp[owner][:, None, :]).sum(axis=2)
+    A2 = (up * up).sum(axis=1)
+    B = (r * up).sum(axis=1)
+    C = s - bsc
+    disc = B * B - A2 * C
+    ok = (C > 0) & (B > 0) & (disc >= 0) & (A2 > 0)
+    alpha = np.full(r.shape[0], np.inf)
+    alpha[ok] = (B[ok] - np.sqrt(disc[ok])) / A2[ok]
+    first = np.minimum(np.minimum.reduceat(alpha, starts), 1.0)
+    return PointNewton(active, rays, starts, dp, first, r, J)
+
+
+def point_search(
+    prob: BundleProblem,
+    loss: RobustLoss,
+    base_weight: F64,
+    st: BundleState,
+    dc: F64,
+    da: F64,
+    dp: F64,
+    newton: PointNewton,
+) -> tuple[F64, int]:
+    """Per point the correction with the lowest Σρ of its rays (and prior) at the new
+    image parameters: ``dp`` (the joint step's) or, for an active point, the candidate of
+    ``newton`` that its linearised rays rank first (:meth:`PointNewton.candidates`) —
+    the choice between the two made by their true misclosures; returns (corrections
+    (p_var, 3) m, number of points not at ``dp``). Sets the problem's ray weights to
+    ``base_weight`` (1/σ)."""
+    pts = prob.points
+    act = newton.active
+    cands = newton.candidates(dp)  # (c, a, 3)
+    owner = np.repeat(np.arange(act.size), np.diff(np.append(newton.starts, newton.rays.size)))
+    moved = cands[:, owner]  # (c, m, 3)
+    J = newton.J
+    rr = np.broadcast_to(newton.r, (len(cands),) + newton.r.shape).copy()
+    for j in range(3):
+        rr -= J[None, :, :, j] * moved[:, :, None, j]
+    rho = loss((rr * rr).sum(axis=2))[0]
+    x0 = st.xyz[pts.unknown[act]]
+    v = pts.prior_obs[act] - x0 - cands
+    lin = newton.sums(rho.T).T + np.sum(pts.prior_w[act] * v * v, axis=2)
+    lin[~np.isfinite(lin)] = np.inf
+    pick = np.argmin(lin[1:], axis=0)  # the Newton candidate the linearised rays prefer
+    alt = dp.copy()
+    alt[act] = cands[1:][pick, np.arange(act.size)]
+    prob.obs.weight[...] = base_weight
+    tg = prob.reduced.tracks
+    true = []
+    for d in (dp, alt):
+        rw = tg.take(prob.residuals(prob.apply(st, dc, d, da), jac=False)[0])
+        rho = loss((rw * rw).sum(axis=1))[0][newton.rays]
+        vv = pts.prior_obs[act] - x0 - d[act]
+        true.append(newton.sums(rho) + np.sum(pts.prior_w[act] * vv * vv, axis=1))
+    better = true[1] < true[0]  # ties and NaN: the joint step's own
+    out = dp.copy()
+    out[act[better]] = alt[act[better]]
+    return out, int(np.count_nonzero(better))
