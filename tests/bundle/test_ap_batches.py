@@ -114,3 +114,18 @@ def test_a_batch_map_adds_every_block_once(per_image, monkeypatch):
     # F: one (pair, pair) block of one point into (g_e, g_e'): as many as such pairs
     per_group_pair = np.bincount(A.f_key.repeat(np.diff(A.f_bounds)), minlength=G * G)
     assert np.array_equal(np.bincount(f_block, minlength=G * G), per_group_pair)
+
+
+def test_a_small_dense_system_forms_the_border_exactly(per_image, monkeypatch):
+    """A dense S with a group per image: Fs formed exactly in every step (no conjugate
+    gradients), the same optimum as the conjugate gradients' path and the reference."""
+    import orientviz.bundle.problem._border as border_module
+
+    block, group, ref = per_image
+    exact = _solve(block, group)
+    assert set(exact.reduced_info["ap_border"]) - {"held"} == {"Fs formed (dense S)"}
+    assert_same_optimum(exact, ref, block)
+    monkeypatch.setattr(border_module, "DENSE_EXACT_MAX", 0.0)
+    cg = _solve(block, group)
+    assert any(s.startswith("cg") for s in cg.reduced_info["ap_border"])
+    assert_same_optimum(cg, ref, block)

@@ -72,11 +72,16 @@ class Table:
 
     def strings(self, field: str) -> list[str]:
         """A column of ids/names as ``str``."""
-        return [str(v) for v in self.columns[field]]
+        col = self.columns[field]
+        if _only(col, str):  # as read from JSON: already str
+            return list(col)
+        return [str(v) for v in col]
 
     def floats(self, field: str, scale: float = 1.0) -> NDArray[np.float64]:
         """A number column as floats times ``scale``; JSON ``null`` becomes NaN."""
         col = self.columns[field]
+        if _only(col, float):  # the usual column: one conversion in C
+            return np.array(col, dtype=float) * scale
         return np.array([np.nan if v is None else float(v) for v in col], dtype=float) * scale
 
     def ints(self, field: str, missing: int = -1) -> NDArray[np.int64]:
@@ -102,8 +107,11 @@ class Table:
 
         A single number is broadcast to all ``size`` components; null gives NaN.
         """
+        col = self.columns[field]
+        if _only(col, float):  # one number per cell (the usual σ column): broadcast
+            return np.repeat(np.array(col, dtype=float)[:, None], size, axis=1) * scale
         out = np.full((self.n, size), np.nan)
-        for i, v in enumerate(self.columns[field]):
+        for i, v in enumerate(col):
             if v is None:
                 continue
             if isinstance(v, list):
@@ -116,8 +124,12 @@ class Table:
 
     def index(self, field: str = "id", what: str | None = None) -> dict[str, int]:
         """Map the ids in ``field`` to row numbers, rejecting duplicates with their place."""
-        seen: dict[str, int] = {}
-        for i, key in enumerate(self.strings(field)):
+        keys = self.strings(field)
+        seen = dict(zip(keys, range(len(keys))))
+        if len(seen) == len(keys) and max(map(len, keys), default=0) <= MAX_ID_LENGTH:
+            return seen  # unique and short: the loop below would give the same map
+        seen = {}
+        for i, key in enumerate(keys):
             if len(key) > MAX_ID_LENGTH:
                 raise self.fail(
                     i, field, f"an id of {len(key)} characters, expected at most {MAX_ID_LENGTH}"
@@ -133,13 +145,22 @@ class Table:
 
     def lookup(self, field: str, ids: dict[str, int], what: str) -> NDArray[np.int64]:
         """Indices of the ids in column ``field`` in ``ids``; unknown ids name their place."""
+        keys = self.strings(field)
+        found = list(map(ids.get, keys))
+        if None not in found:
+            return np.array(found, dtype=np.int64).reshape(self.n)
         out = np.empty(self.n, dtype=np.int64)
-        for i, key in enumerate(self.strings(field)):
+        for i, key in enumerate(keys):
             j = ids.get(key)
             if j is None:
                 raise self.fail(i, field, f"unknown {what} id {key!r}")
             out[i] = j
         return out
+
+
+def _only(col: list, kind: type) -> bool:
+    """Whether every cell of a column is exactly of type ``kind`` (bool is not int)."""
+    return set(map(type, col)) <= {kind}
 
 
 def read_table(
@@ -237,14 +258,46 @@ def json_number(value: float, digits: int = 15) -> float | None:
     return float(f"{v:.{digits}g}")
 
 
+#: Exact powers of ten as doubles (10**0 … 10**22): a significand divided by one of them
+#: is the double nearest to the decimal number, as ``float()`` of its text.
+_POW10 = np.array([10.0**k for k in range(23)])
+
+
 def json_numbers(values, digits: int = 15) -> list[float | None]:
-    """:func:`json_number` over a 1-D array (formatted in one C-level pass)."""
+    """:func:`json_number` over a 1-D array (the same floats; mostly without text).
+
+    With 15 digits, a value v in [1e-8, 1e15) is scaled to its 15-digit significand
+    s = v · 10**k (k = 14 − ⌊log10 v⌋ ≤ 22, so 10**k is exact). The product is rounded
+    to a multiple of at most 1/8 below 1e15, on a grid that holds the half-integers, and
+    rounding is monotone: unless the rounded s is a half-integer it lies on the same
+    side of every half-integer as the exact product, so rint(s) is the significand that
+    ``"%.15g"`` writes, and rint(s) / 10**k, one correctly rounded division, is the
+    double that ``float()`` reads back from that text. The other values (a half-integer
+    s, outside that range, zeros, other ``digits``) go through the text as
+    :func:`json_number` does.
+    """
     arr = np.asarray(values, dtype=float).reshape(-1)
     if arr.size == 0:
         return []
-    fmt = f"%.{int(digits)}g\n"
-    out: list[float | None] = list(map(float, ((fmt * arr.size) % tuple(arr.tolist())).split()))
-    bad = np.flatnonzero(~np.isfinite(arr))
-    for i in bad:
-        out[i] = None
-    return out
+    out = np.full(arr.size, np.nan)
+    slow = np.isfinite(arr)
+    if digits == 15:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            a = np.abs(arr)
+            k = 14 - np.floor(np.log10(a))
+            ok = slow & (k >= 0) & (k <= 22)
+            kk = np.where(ok, k, 0).astype(np.intp)
+            sig = a * _POW10[kk]
+            r = np.rint(sig)
+            ok &= (sig >= 1e14) & (sig < 1e15) & (sig - np.floor(sig) != 0.5)
+            out[ok] = np.copysign(r[ok] / _POW10[kk[ok]], arr[ok])
+        slow &= ~ok
+    idx = np.flatnonzero(slow)
+    if idx.size:
+        fmt = f"%.{int(digits)}g\n"
+        text = (fmt * idx.size) % tuple(arr[idx].tolist())
+        out[idx] = np.array(text.split(), dtype=float)
+    res: list[float | None] = out.tolist()
+    for i in np.flatnonzero(~np.isfinite(arr)).tolist():
+        res[i] = None
+    return res

@@ -51,8 +51,18 @@ def _shoelace(x: F64, y: F64) -> F64:
     return 0.5 * (x * np.roll(y, -1, axis=-1) - np.roll(x, -1, axis=-1) * y).sum(axis=-1)
 
 
-def _cross(o, a, b) -> float:
-    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+def _chain(points: list) -> list:
+    """One half of Andrew's monotone chain: the points (sorted) that turn left."""
+    out: list = []
+    for p in points:
+        px, py = p
+        while len(out) >= 2:
+            (ax, ay), (bx, by) = out[-2], out[-1]
+            if (bx - ax) * (py - ay) - (by - ay) * (px - ax) > 0:
+                break
+            out.pop()
+        out.append(p)
+    return out
 
 
 def hull_area(xy: F64, octagon: F64) -> float:
@@ -65,16 +75,7 @@ def hull_area(xy: F64, octagon: F64) -> float:
     inside = np.all((side > 0) | ~real[None, :], axis=1) & real.any()
     cand = np.concatenate([xy[~inside], octagon])
     cand = cand[np.lexsort((cand[:, 1], cand[:, 0]))].tolist()  # by x, then y
-    lower: list = []
-    for p in cand:
-        while len(lower) >= 2 and _cross(lower[-2], lower[-1], p) <= 0:
-            lower.pop()
-        lower.append(p)
-    upper: list = []
-    for p in reversed(cand):
-        while len(upper) >= 2 and _cross(upper[-2], upper[-1], p) <= 0:
-            upper.pop()
-        upper.append(p)
+    lower, upper = _chain(cand), _chain(cand[::-1])
     hull = np.array(lower[:-1] + upper[:-1])
     if len(hull) < 3:
         return 0.0
