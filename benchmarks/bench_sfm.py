@@ -374,7 +374,8 @@ def main(argv: list[str] | None = None) -> int:
         if "cli_cpu" in r and a.cli_rounds > 1:
             cli += f", medians of {a.cli_rounds} (library {r['cli_lib_cpu']:.2f})"
         if "cli_cpu_compiling" in r:
-            cli += f"; compiling: {r['cli_cpu_compiling']:.2f} ({r['cli_cpu_compiling'] / o['cpu']:.2f}×)"
+            c = r["cli_cpu_compiling"]
+            cli += f"; compiling: {c:.2f} ({c / r.get('cli_lib_cpu', o['cpu']):.2f}×)"
         print(f"| {r['model']} | {r['threads']} | {o['iterations']} / {o['cpu']:.2f} / {o['cost']:.3f} / "
               f"{o['peak_rss_mb']:.0f} | {p['iterations']} / {p['cpu']:.2f} / {p['cost']:.3f} / "
               f"{p['peak_rss_mb']:.0f} | {(o['cost'] - p['cost']) / p['cost']:+.1e} | "
