@@ -9,7 +9,8 @@ a telling state (block: run to convergence, the residual scale fitted anew, colo
 largest normalised residual; pair: the rays, gap and epipolar plane of point 5 with the
 normalised images; radar: Geier's construction of target 15 in image 3 with the legend;
 dbat_camcal: the shipped DBAT camera calibration as ``orientviz solve`` solves it, with
-the estimated camera, its distortion field and the legend).
+the estimated camera, its distortion field and the legend; axe: the shipped COLMAP model
+imported and solved ``--free``, coloured by |v|/σ, in model units, degrees and pixels).
 Written to ``book/_static/viewer/<demo>.png`` as palette PNGs (helpers of
 ``make_readme_figures.py``: at most 400 KB each, checked).
 """
@@ -69,6 +70,35 @@ def camcal_scenario(app: Any, page: Any) -> None:
     app.panel.update_legend()
 
 
+def axe_scenario(app: Any, page: Any) -> None:
+    """The shipped COLMAP model axe as imported: coloured by |v|/σ, the panel in model
+    units, degrees and pixels (the orientation folder and the legend open)."""
+    q = app.panel.quality
+    with app.panel._lock:
+        q.handles["measure"].value = "RMS of residuals |v|/σ (no precision needed)"
+    _wait(lambda: q.quality is not None)
+    _collapse(page, "Adjustment", "Largest residuals", "Display", "Act on the adjustment")
+    page.get_by_text("Legend", exact=True).first.scroll_into_view_if_needed()  # panel's top
+    time.sleep(0.5)
+
+
+def axe_content() -> Any:
+    """``orientviz import-colmap`` of the shipped model axe, solved with ``--free``."""
+    import contextlib
+    import io
+    import tempfile
+
+    from orientviz.cli import main
+    from orientviz.datasets.sfm import axe_model
+    from orientviz.viewer.app import demo_from_file
+
+    path = pathlib.Path(tempfile.mkdtemp(prefix="orientviz-axe-")) / "axe.json"
+    with contextlib.redirect_stdout(io.StringIO()):
+        if main(["import-colmap", str(axe_model()), "-o", str(path)]) != 0:
+            raise SystemExit("import-colmap of the shipped model axe failed")
+    return demo_from_file(str(path), {"free": True})
+
+
 def pair_scenario(app: Any, page: Any) -> None:
     """Point 5 selected (rays, gap, epipolar plane) and the normalised images shown."""
     pv = app.extra["pair"]
@@ -86,7 +116,10 @@ SCENARIOS: dict[str, Callable[[Any, Any], None]] = {
     "pair": pair_scenario,
     "radar": radar_scenario,
     "dbat_camcal": camcal_scenario,
+    "axe": axe_scenario,
 }
+#: Scenarios whose content is not a demo name: how to make it.
+CONTENT: dict[str, Callable[[], Any]] = {"axe": axe_content}
 
 
 def screenshot(name: str, path: pathlib.Path, settle_s: float = 5.0) -> None:
@@ -95,7 +128,8 @@ def screenshot(name: str, path: pathlib.Path, settle_s: float = 5.0) -> None:
 
     from orientviz.viewer.app import resolve_content
 
-    with mrf.viewer_page(resolve_content(name), VIEWPORT, settle_s) as (app, page):
+    content = CONTENT[name]() if name in CONTENT else resolve_content(name)
+    with mrf.viewer_page(content, VIEWPORT, settle_s) as (app, page):
         SCENARIOS[name](app, page)
         time.sleep(settle_s)
         png = page.screenshot()

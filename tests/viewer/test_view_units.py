@@ -106,3 +106,21 @@ def test_an_aerial_block_keeps_its_heights_and_metres():
         or " cm at the object" in (geo.scale_bar(10.0)[2])
     )
     assert position_span(geo.height)[1] == 0.1
+
+
+def test_a_drone_model_without_scale_looks_down_its_own_up():
+    """A nadir block flown back and forth, turned into an arbitrary frame and read in
+    model units (a drone survey imported from COLMAP without control): its images' y axes
+    cancel, so up is against their common viewing direction — the turned Z."""
+    from orientviz.rotation import matrix_from_rotvec
+
+    b = ov.simulate_block(2, 5, rng=3).block
+    Q = matrix_from_rotvec(np.array([0.4, -1.1, 0.7]))  # object frame → an arbitrary one
+    R = np.einsum("ij,njk->nik", Q, b.rotations())
+    b.images.X0 = b.images.X0 @ Q.T
+    b.points.xyz = b.points.xyz @ Q.T
+    b.images.angles = np.column_stack(opk_from_matrix(R))
+    assert np.linalg.norm(R[:, :, 1].mean(axis=0)) < 0.3  # strips back and forth
+    geo = BlockGeometry(BlockState(b, units=SFM))
+    assert not geo.aerial
+    np.testing.assert_allclose(geo.up, Q @ [0.0, 0.0, 1.0], atol=0.05)

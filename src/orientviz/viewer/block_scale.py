@@ -10,7 +10,8 @@ sliders fit the data at any scale:
   measured along its axis (an aerial block: about the flying height);
 * :func:`camera_spacing` — the typical distance between neighbouring cameras;
 * :func:`up_direction` — Z for an aerial block, else the mean "up" of the images (their
-  image y axis in the object frame: photographs are held upright);
+  image y axis in the object frame: photographs are held upright), or against their
+  common viewing direction (a drone's nadir images in a frame of its own);
 * :func:`view_direction` — the first view's direction: obliquely down onto the block,
   from behind the cameras when they look one way.
 
@@ -70,13 +71,19 @@ def camera_spacing(X0: F64) -> float:
 
 def up_direction(rotations: F64, aerial: bool) -> F64:
     """The scene's up (3,): Z for an aerial block, else the mean image y axis in the
-    object frame (photographs are taken upright), or Z when the images disagree."""
+    object frame (photographs are taken upright); when the images disagree on that (a
+    drone's strips flown back and forth) but look one way, against their viewing
+    direction (they look down); else Z."""
     z = np.array([0.0, 0.0, 1.0])
     if aerial or rotations.shape[0] == 0:
         return z
-    y = np.nanmean(rotations[:, :, 1], axis=0)
-    norm = float(np.linalg.norm(y)) if np.all(np.isfinite(y)) else 0.0
-    return y / norm if norm > 0.3 else z
+    # the image y axis (upright photographs), then the image z axis = against the view
+    for axis, least in ((1, 0.3), (2, 0.7)):
+        m = np.nanmean(rotations[:, :, axis], axis=0)
+        norm = float(np.linalg.norm(m)) if np.all(np.isfinite(m)) else 0.0
+        if norm > least:
+            return m / norm
+    return z
 
 
 def view_direction(up: F64, rotations: F64) -> F64:

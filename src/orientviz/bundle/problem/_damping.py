@@ -14,6 +14,9 @@ Marquardt damping diag × (1 + λ) in the coordinates z = (τ, ω, φ, κ) with 
 ω, φ, κ) — with c the centroid of the image's points at the start
 (:func:`scene_centres`): near the scene whatever the datum's origin (a geodetic frame's
 origin lies far away). The steps' fixed point is unchanged: only the damped steps differ.
+A step whose Jacobian is by rotations of the image frames (a poor start without a camera
+model, :mod:`orientviz.bundle.model._local_rotation`) is damped with the same map T of
+ω, φ, κ: positive definite as any such damping, but not exactly the scene frame's.
 """
 
 from __future__ import annotations
