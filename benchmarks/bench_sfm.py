@@ -29,8 +29,9 @@ stop on the same function tolerance, so on a flat optimum they stop at different
 environment as a user has it and Ceres num_threads −1 (all cores). Unless
 ``--skip-cli``: ``orientviz import-* … && orientviz solve … --free`` end to end (CPU of
 both commands, children's rusage) against orientviz's library solve measured in the
-same run (``--cli-rounds N``: both N times in turn, the ratio of their medians), with Python's compiled modules kept (PYTHONPYCACHEPREFIX in the working folder,
-filled by a first run: as an installed package has them); where the environment sets
+same run (``--cli-rounds N``: both N times in turn, the ratio of their medians), with
+Python's compiled modules kept (PYTHONPYCACHEPREFIX in the working folder, filled by a
+first run: as an installed package has them); where the environment sets
 PYTHONDONTWRITEBYTECODE, also as it runs (orientviz's modules compiled at every start).
 Both solvers stop with Ceres's default function tolerance (1e-6 relative).
 
