@@ -117,10 +117,12 @@ class PointNewton:
     first : ndarray, shape (a,)
         The fraction of ``dp`` at which a ray of the point first reaches the loss's scale
         from beyond it (linearised; 1 where none does before ``dp``).
+    owner : ndarray of int, shape (m,)
+        The active point (index into ``active``) of each ray.
     r : ndarray, shape (m, 2)
         The rays' misclosures (1/σ-weighted) after the images' correction, linearised.
-    J : ndarray, shape (m, 2, 3)
-        The rays' 1/σ-weighted derivatives by their point.
+    up : ndarray, shape (m, 2)
+        The rays' 1/σ-weighted change by ``dp`` of their point, linearised (J dp).
     """
 
     active: I64
@@ -128,18 +130,19 @@ class PointNewton:
     starts: I64
     dp: F64
     first: F64
+    owner: I64
     r: F64
-    J: F64
+    up: F64
 
-    def sums(self, X: F64) -> F64:
-        """Sums per active point of per-ray rows ``X`` (m, …)."""
-        return np.add.reduceat(X, self.starts, axis=0)
+    def sums(self, x: F64) -> F64:
+        """Sums per active point of per-ray values ``x`` (m,)."""
+        return np.add.reduceat(x, self.starts)
 
-    def candidates(self, dp: F64) -> F64:
-        """(c, a, 3): the joint step's ``dp`` of the active points, the Newton correction
-        up to the first breakpoint, and :data:`FRACTIONS` of the Newton correction."""
-        cands = [dp[self.active], self.first[:, None] * self.dp]
-        return np.stack(cands + [f * self.dp for f in FRACTIONS])
+    def fractions(self) -> F64:
+        """(c, a): the fractions of ``dp`` tried per point — up to the first breakpoint,
+        and :data:`FRACTIONS`."""
+        rest = np.broadcast_to(np.asarray(FRACTIONS)[:, None], (len(FRACTIONS), self.first.size))
+        return np.vstack([self.first[None, :], rest])
 
 
 def point_newton(
@@ -184,10 +187,9 @@ def point_newton(
     sc = sc_all[rays]
     J = Jp[obs_rays] * w[:, :, None]  # (m, 2, 3), weighted by 1/σ
     # the misclosures (1/σ) after the images' correction, linearised: r − u
-    u = (Je[obs_rays] * dc[tg.ray_image[rays]][:, None, :]).sum(axis=2)
+    u = np.einsum("nij,nj->ni", Je[obs_rays], dc[tg.ray_image[rays]])
     if prob.q:
-        rows_a = np.stack([2 * obs_rays, 2 * obs_rays + 1], axis=1).ravel()
-        u += (prob.ap.A_csr[rows_a] @ da[: prob.q]).reshape(-1, 2)
+        u += (prob.ap.A_csr @ da[: prob.q]).reshape(-1, 2)[obs_rays]
     u *= w
     r = rw[obs_rays] / sc[:, None] - u
     s = (r * r).sum(axis=1)
@@ -235,7 +237,7 @@ def point_newton(
     alpha = np.full(r.shape[0], np.inf)
     alpha[ok] = (B[ok] - np.sqrt(disc[ok])) / A2[ok]
     first = np.minimum(np.minimum.reduceat(alpha, starts), 1.0)
-    return PointNewton(active, rays, starts, dp, first, r, J)
+    return PointNewton(active, rays, starts, dp, first, owner, r, up)
 
 
 def point_search(
@@ -250,27 +252,25 @@ def point_search(
 ) -> tuple[F64, int]:
     """Per point the correction with the lowest Σρ of its rays (and prior) at the new
     image parameters: ``dp`` (the joint step's) or, for an active point, the candidate of
-    ``newton`` that its linearised rays rank first (:meth:`PointNewton.candidates`) —
+    ``newton`` that its linearised rays rank first (:meth:`PointNewton.fractions`) —
     the choice between the two made by their true misclosures; returns (corrections
     (p_var, 3) m, number of points not at ``dp``). Sets the problem's ray weights to
     ``base_weight`` (1/σ)."""
     pts = prob.points
     act = newton.active
-    cands = newton.candidates(dp)  # (c, a, 3)
-    owner = np.repeat(np.arange(act.size), np.diff(np.append(newton.starts, newton.rays.size)))
-    moved = cands[:, owner]  # (c, m, 3)
-    J = newton.J
-    rr = np.broadcast_to(newton.r, (len(cands),) + newton.r.shape).copy()
-    for j in range(3):
-        rr -= J[None, :, :, j] * moved[:, :, None, j]
-    rho = loss((rr * rr).sum(axis=2))[0]
     x0 = st.xyz[pts.unknown[act]]
-    v = pts.prior_obs[act] - x0 - cands
-    lin = newton.sums(rho.T).T + np.sum(pts.prior_w[act] * v * v, axis=2)
+    f = newton.fractions()  # (c, a)
+    lin = np.empty(f.shape)
+    for i, fi in enumerate(f):  # the linearised rays' Σρ of each point at fi · dp
+        rr = newton.r - fi[newton.owner][:, None] * newton.up
+        v = pts.prior_obs[act] - x0 - fi[:, None] * newton.dp
+        lin[i] = newton.sums(loss((rr * rr).sum(axis=1))[0]) + np.sum(
+            pts.prior_w[act] * v * v, axis=1
+        )
     lin[~np.isfinite(lin)] = np.inf
-    pick = np.argmin(lin[1:], axis=0)  # the Newton candidate the linearised rays prefer
+    best = f[np.argmin(lin, axis=0), np.arange(act.size)]
     alt = dp.copy()
-    alt[act] = cands[1:][pick, np.arange(act.size)]
+    alt[act] = best[:, None] * newton.dp
     prob.obs.weight[...] = base_weight
     tg = prob.reduced.tracks
     true = []
