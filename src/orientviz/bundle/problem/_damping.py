@@ -11,7 +11,7 @@ on COLMAP's and BAL's cam_from_world translation t = −Rᵀ X0 with c the world
 
 :func:`image_damping` damps each image's 6 × 6 block U by λ·Tᵀ diag(T⁻ᵀ U T⁻¹) T — the
 Marquardt damping diag × (1 + λ) in the coordinates z = (τ, ω, φ, κ) with dz = T d(X0,
-ω, φ, κ) — with c the centroid of the image's points at the start
+ω, φ, κ) — with c the median of the image's points at the start
 (:func:`scene_centres`): near the scene whatever the datum's origin (a geodetic frame's
 origin lies far away). The steps' fixed point is unchanged: only the damped steps differ.
 A step whose Jacobian is by rotations of the image frames (a poor start without a camera
@@ -31,9 +31,11 @@ I64 = NDArray[np.int64]
 
 
 def scene_centres(image: I64, point: I64, xyz: F64, X0: F64) -> F64:
-    """The centroid of each image's observed points (m, 3), m; an image without points
-    with finite coordinates gets its projection centre (its damping is then that of
-    the centre's coordinates turned into the camera frame).
+    """The median of each image's observed points (m, 3), per coordinate, m — a point of
+    the scene the image sees, unmoved by a few far points (points near infinity, gross
+    errors of a start); an image without points with finite coordinates gets its
+    projection centre (its damping is then that of the centre's coordinates turned into
+    the camera frame).
 
     Parameters
     ----------
@@ -47,11 +49,18 @@ def scene_centres(image: I64, point: I64, xyz: F64, X0: F64) -> F64:
     m = X0.shape[0]
     P = xyz[point]
     ok = np.all(np.isfinite(P), axis=1)
-    cnt = np.bincount(image[ok], minlength=m).astype(float)
-    c = np.stack([np.bincount(image[ok], P[ok, k], minlength=m) for k in range(3)], axis=1)
-    has = cnt > 0
+    img, P = image[ok], P[ok]
     out = X0.copy()
-    out[has] = c[has] / cnt[has, None]
+    if not img.size:
+        return out
+    cnt = np.bincount(img, minlength=m)
+    first = np.cumsum(cnt) - cnt
+    has = cnt > 0
+    lo = first[has] + (cnt[has] - 1) // 2  # the middle one (two for an even count)
+    hi = first[has] + cnt[has] // 2
+    for k in range(3):
+        v = P[np.lexsort((P[:, k], img)), k]  # by image, then by value
+        out[has, k] = 0.5 * (v[lo] + v[hi])
     return out
 
 
