@@ -135,8 +135,8 @@ class PointNewton:
     up: F64
 
     def sums(self, x: F64) -> F64:
-        """Sums per active point of per-ray values ``x`` (m,)."""
-        return np.add.reduceat(x, self.starts)
+        """Sums per active point of per-ray values ``x`` (m, …)."""
+        return np.add.reduceat(x, self.starts, axis=0)
 
     def fractions(self) -> F64:
         """(c, a): the fractions of ``dp`` tried per point — up to the first breakpoint,
@@ -175,13 +175,15 @@ def point_newton(
     sc_all = tg.take(scale)
     rw_t = tg.take(rw)
     beyond = (rw_t * rw_t).sum(axis=1) > bsc * sc_all * sc_all  # s > a² (s = ‖rw‖²/ρ′)
-    bp = tg.by_point
-    active = np.flatnonzero(bp @ beyond.astype(float) > 0)
+    bp = tg.by_point  # its rows list each point's rays (columns: the tracks' ray order)
+    hit = bp @ beyond.astype(float) > 0
+    active = np.flatnonzero(hit)
     if not active.size:
         return None
-    sub = bp[active]
-    rays = sub.indices
-    starts = sub.indptr[:-1]
+    counts = np.diff(bp.indptr)
+    rays = bp.indices[np.repeat(hit, counts)]
+    n_rays = counts[active]
+    starts = np.concatenate(([0], np.cumsum(n_rays)[:-1]))
     obs_rays = np.asarray(tg.rows)[rays] if not tg.in_order else rays
     w = base_weight[obs_rays]
     sc = sc_all[rays]
@@ -227,7 +229,7 @@ def point_newton(
     dp = np.linalg.solve(N, g[:, :, None])[:, :, 0]
     # the first breakpoint along dp: a ray beyond the scale reaches it (linearised:
     # ‖r − α J dp‖² = a², the smaller root where r·J dp > 0)
-    owner = np.repeat(np.arange(active.size), np.diff(sub.indptr))
+    owner = np.repeat(np.arange(active.size), n_rays)
     up = (J * dp[owner][:, None, :]).sum(axis=2)
     A2 = (up * up).sum(axis=1)
     B = (r * up).sum(axis=1)
@@ -260,13 +262,13 @@ def point_search(
     act = newton.active
     x0 = st.xyz[pts.unknown[act]]
     f = newton.fractions()  # (c, a)
-    lin = np.empty(f.shape)
-    for i, fi in enumerate(f):  # the linearised rays' Σρ of each point at fi · dp
-        rr = newton.r - fi[newton.owner][:, None] * newton.up
-        v = pts.prior_obs[act] - x0 - fi[:, None] * newton.dp
-        lin[i] = newton.sums(loss((rr * rr).sum(axis=1))[0]) + np.sum(
-            pts.prior_w[act] * v * v, axis=1
-        )
+    # the linearised rays' Σρ of each point at each fraction of dp: ‖r − f·J dp‖²
+    fo = f[:, newton.owner]  # (c, m)
+    r, up = newton.r, newton.up
+    s = (r * r).sum(axis=1) - 2.0 * fo * (r * up).sum(axis=1) + fo * fo * (up * up).sum(axis=1)
+    v = (pts.prior_obs[act] - x0)[None] - f[:, :, None] * newton.dp[None]
+    lin = newton.sums(loss(np.maximum(s, 0.0).T)[0]).T
+    lin += np.sum(pts.prior_w[act] * v * v, axis=2)
     lin[~np.isfinite(lin)] = np.inf
     best = f[np.argmin(lin, axis=0), np.arange(act.size)]
     alt = dp.copy()
