@@ -30,10 +30,16 @@ F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
 
 
+#: :func:`scene_centres` takes the median of at most 2 × this many rays of an image
+#: (every k-th of a longer list).
+SCENE_SAMPLE: int = 256
+
+
 def scene_centres(image: I64, point: I64, xyz: F64, X0: F64) -> F64:
     """The median of each image's observed points (m, 3), per coordinate, m — a point of
     the scene the image sees, unmoved by a few far points (points near infinity, gross
-    errors of a start); an image without points with finite coordinates gets its
+    errors of a start); of every k-th point of an image with more than 2 ×
+    :data:`SCENE_SAMPLE`. An image without points with finite coordinates gets its
     projection centre (its damping is then that of the centre's coordinates turned into
     the camera frame).
 
@@ -47,20 +53,27 @@ def scene_centres(image: I64, point: I64, xyz: F64, X0: F64) -> F64:
         Projection centres (m).
     """
     m = X0.shape[0]
-    P = xyz[point]
-    ok = np.all(np.isfinite(P), axis=1)
-    img, P = image[ok], P[ok]
     out = X0.copy()
+    cnt = np.bincount(image, minlength=m)
+    order = np.argsort(image, kind="stable")
+    pos = np.arange(image.size) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    # every k-th ray of an image with more than 2 × SCENE_SAMPLE (a scale, not a statistic)
+    keep = pos % np.repeat(np.maximum(cnt // SCENE_SAMPLE, 1), cnt) == 0
+    sel = order[keep]
+    P = xyz[point[sel]]
+    ok = np.all(np.isfinite(P), axis=1)
+    img, P = image[sel[ok]], P[ok]  # by image
     if not img.size:
         return out
     cnt = np.bincount(img, minlength=m)
-    first = np.cumsum(cnt) - cnt
-    has = cnt > 0
-    lo = first[has] + (cnt[has] - 1) // 2  # the middle one (two for an even count)
-    hi = first[has] + cnt[has] // 2
-    for k in range(3):
-        v = P[np.lexsort((P[:, k], img)), k]  # by image, then by value
-        out[has, k] = 0.5 * (v[lo] + v[hi])
+    pos = np.arange(img.size) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    # each image's points side by side, padded with +inf, sorted per coordinate
+    Q = np.full((3, m, int(cnt.max())), np.inf)
+    Q[:, img, pos] = P.T
+    Q.sort(axis=2)
+    has = np.flatnonzero(cnt)
+    lo, hi = (cnt[has] - 1) // 2, cnt[has] // 2  # the middle one (two for an even count)
+    out[has] = 0.5 * (Q[:, has, lo] + Q[:, has, hi]).T
     return out
 
 
