@@ -55,6 +55,8 @@ ENV = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_TH
 #: Ceres's own default stopping rule (ceres::Solver::Options), and a tight one.
 CERES_DEFAULT = dict(function_tolerance=1e-6, gradient_tolerance=1e-10, parameter_tolerance=1e-8,
                      max_num_iterations=500)  # fmt: skip
+#: orientviz's tight run (the library, ``BundleOptions`` through the problem's options).
+TIGHT = {"ftol": 1e-13, "max_iter": 300}
 CERES_TIGHT = dict(function_tolerance=1e-12, gradient_tolerance=0.0, parameter_tolerance=0.0,
                    max_num_iterations=300)  # fmt: skip
 
@@ -201,7 +203,7 @@ def solve_row(problem: Path, work: Path) -> dict:
     cp = orientviz("solve", problem.name, "--free", "--json", "-o", out.name, cwd=work)
     res = json.loads(cp.stdout) if cp.stdout.strip().startswith("{") else {}
     lib = library(problem)
-    tight = library(problem, {"ftol": 1e-13, "max_iter": 300})
+    tight = library(problem, TIGHT)
     s0, r = res.get("sigma0", np.nan), res.get("redundancy", 0)
     return dict(
         solve_rc=cp.returncode,
@@ -312,7 +314,10 @@ def main(argv: list[str] | None = None) -> int:
     g.add_argument("--colmap", help="COLMAP sparse model directory")
     ap.add_argument("--dir", default=None, help="working folder (default: a temporary one)")
     ap.add_argument("--json", default=None, help="append the row (JSON lines) to this file")
+    ap.add_argument("--tight-steps", type=int, default=300,
+                    help="steps of both tight runs at most (default 300)")  # fmt: skip
     a = ap.parse_args(argv)
+    CERES_TIGHT["max_num_iterations"] = TIGHT["max_iter"] = a.tight_steps
     with tempfile.TemporaryDirectory(prefix="ov-verify-") as tmp:
         work = Path(a.dir or tmp)
         work.mkdir(parents=True, exist_ok=True)

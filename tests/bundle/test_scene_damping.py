@@ -54,9 +54,10 @@ def test_marquardt_damping_in_the_scene_frame(sequence):
 
 
 def test_scene_centres_and_images_without_points():
-    xyz = np.array([[0.0, 0, 0], [2, 0, 0], [0, 4, 0], [np.nan, 0, 0]])
-    image = np.array([0, 0, 1, 1, 2])
-    point = np.array([0, 1, 2, 3, 3])
-    X0 = np.arange(9.0).reshape(3, 3)
+    xyz = np.array([[0.0, 0, 0], [2, 0, 0], [0, 4, 0], [np.nan, 0, 0], [1e9, -1e9, 3e9]])
+    image = np.array([3, 0, 0, 1, 1, 2, 3, 3])
+    point = np.array([1, 0, 1, 2, 3, 3, 2, 4])
+    X0 = np.arange(12.0).reshape(4, 3)
     c = scene_centres(image, point, xyz, X0)
-    np.testing.assert_array_equal(c, [[1, 0, 0], [0, 4, 0], X0[2]])
+    # the median per coordinate: image 3's far point (near infinity) does not move it
+    np.testing.assert_array_equal(c, [[1, 0, 0], [0, 4, 0], X0[2], [2, 0, 0]])

@@ -82,6 +82,8 @@ LOSS_SWITCH: float = 1e-2
 #: (or corrects by less than 1 σ): one least-squares step takes the start's largest
 #: misclosures out before the loss weighs them, and more such steps let the gross errors
 #: pull the solution into a worse basin (benchmarks/README.md, robust losses on Ladybug).
+#: A decrease between :data:`LOSS_SWITCH` and this fraction counts only after a step that
+#: lowered vᵀPv by more: a damped first step that barely moves has not taken them out.
 LOSS_SWITCH_CONVEX: float = 0.3
 #: In a robust run's tail — the last step lowered Σρ by less than :data:`ROBUST_TAIL` of its
 #: value — the step is taken :data:`ROBUST_OVERRELAX` times (over-relaxed reweighting). The
@@ -152,6 +154,7 @@ class BundleSteps:
         # settle (see accepted); the loop's current evaluation is then made robust
         self.loss_on = False
         self.switch_pending = False
+        self._ls_dropped = False  # a least-squares step lowered vᵀPv by > LOSS_SWITCH_CONVEX
         self.keep_x, self.precision = keep_x, precision
         # a camera model's trial points are evaluated without derivatives (:meth:`evaluate`):
         # its Jacobians and design cost ~5× its projection, and a rejected step needs none
@@ -541,9 +544,13 @@ class BundleSteps:
             self.robust_tail = (previous.cost - self.pending_cost) < ROBUST_TAIL * previous.cost
         if self.loss is not None and not self.loss_on:  # no longer poor, or settled?
             drop = (previous.cost - self.pending_cost) / previous.cost if previous.cost > 0 else 0.0
+            settled = drop <= (LOSS_SWITCH if self.loss.redescending else LOSS_SWITCH_CONVEX)
+            if not self.loss.redescending and drop > LOSS_SWITCH and not self._ls_dropped:
+                settled = False  # a first decrease of 1–30 %: the start's misclosures not yet out
+            self._ls_dropped = self._ls_dropped or drop > LOSS_SWITCH_CONVEX
             if (
                 (self.loss.redescending and not self._poor_sigma0(self.pending_cost))
-                or drop <= (LOSS_SWITCH if self.loss.redescending else LOSS_SWITCH_CONVEX)
+                or settled
                 or step.max_correction < 1.0
             ):
                 self.loss_on = self.switch_pending = True

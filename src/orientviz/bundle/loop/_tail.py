@@ -117,10 +117,12 @@ class PointNewton:
     first : ndarray, shape (a,)
         The fraction of ``dp`` at which a ray of the point first reaches the loss's scale
         from beyond it (linearised; 1 where none does before ``dp``).
+    owner : ndarray of int, shape (m,)
+        The active point (index into ``active``) of each ray.
     r : ndarray, shape (m, 2)
         The rays' misclosures (1/σ-weighted) after the images' correction, linearised.
-    J : ndarray, shape (m, 2, 3)
-        The rays' 1/σ-weighted derivatives by their point.
+    up : ndarray, shape (m, 2)
+        The rays' 1/σ-weighted change by ``dp`` of their point, linearised (J dp).
     """
 
     active: I64
@@ -128,18 +130,19 @@ class PointNewton:
     starts: I64
     dp: F64
     first: F64
+    owner: I64
     r: F64
-    J: F64
+    up: F64
 
-    def sums(self, X: F64) -> F64:
-        """Sums per active point of per-ray rows ``X`` (m, …)."""
-        return np.add.reduceat(X, self.starts, axis=0)
+    def sums(self, x: F64) -> F64:
+        """Sums per active point of per-ray values ``x`` (m, …)."""
+        return np.add.reduceat(x, self.starts, axis=0)
 
-    def candidates(self, dp: F64) -> F64:
-        """(c, a, 3): the joint step's ``dp`` of the active points, the Newton correction
-        up to the first breakpoint, and :data:`FRACTIONS` of the Newton correction."""
-        cands = [dp[self.active], self.first[:, None] * self.dp]
-        return np.stack(cands + [f * self.dp for f in FRACTIONS])
+    def fractions(self) -> F64:
+        """(c, a): the fractions of ``dp`` tried per point — up to the first breakpoint,
+        and :data:`FRACTIONS`."""
+        rest = np.broadcast_to(np.asarray(FRACTIONS)[:, None], (len(FRACTIONS), self.first.size))
+        return np.vstack([self.first[None, :], rest])
 
 
 def point_newton(
@@ -172,22 +175,23 @@ def point_newton(
     sc_all = tg.take(scale)
     rw_t = tg.take(rw)
     beyond = (rw_t * rw_t).sum(axis=1) > bsc * sc_all * sc_all  # s > a² (s = ‖rw‖²/ρ′)
-    bp = tg.by_point
-    active = np.flatnonzero(bp @ beyond.astype(float) > 0)
+    bp = tg.by_point  # its rows list each point's rays (columns: the tracks' ray order)
+    hit = bp @ beyond.astype(float) > 0
+    active = np.flatnonzero(hit)
     if not active.size:
         return None
-    sub = bp[active]
-    rays = sub.indices
-    starts = sub.indptr[:-1]
+    counts = np.diff(bp.indptr)
+    rays = bp.indices[np.repeat(hit, counts)]
+    n_rays = counts[active]
+    starts = np.concatenate(([0], np.cumsum(n_rays)[:-1]))
     obs_rays = np.asarray(tg.rows)[rays] if not tg.in_order else rays
     w = base_weight[obs_rays]
     sc = sc_all[rays]
     J = Jp[obs_rays] * w[:, :, None]  # (m, 2, 3), weighted by 1/σ
     # the misclosures (1/σ) after the images' correction, linearised: r − u
-    u = (Je[obs_rays] * dc[tg.ray_image[rays]][:, None, :]).sum(axis=2)
+    u = np.einsum("nij,nj->ni", Je[obs_rays], dc[tg.ray_image[rays]])
     if prob.q:
-        rows_a = np.stack([2 * obs_rays, 2 * obs_rays + 1], axis=1).ravel()
-        u += (prob.ap.A_csr[rows_a] @ da[: prob.q]).reshape(-1, 2)
+        u += (prob.ap.A_csr @ da[: prob.q]).reshape(-1, 2)[obs_rays]
     u *= w
     r = rw[obs_rays] / sc[:, None] - u
     s = (r * r).sum(axis=1)
@@ -225,7 +229,7 @@ def point_newton(
     dp = np.linalg.solve(N, g[:, :, None])[:, :, 0]
     # the first breakpoint along dp: a ray beyond the scale reaches it (linearised:
     # ‖r − α J dp‖² = a², the smaller root where r·J dp > 0)
-    owner = np.repeat(np.arange(active.size), np.diff(sub.indptr))
+    owner = np.repeat(np.arange(active.size), n_rays)
     up = (J * dp[owner][:, None, :]).sum(axis=2)
     A2 = (up * up).sum(axis=1)
     B = (r * up).sum(axis=1)
@@ -235,7 +239,7 @@ def point_newton(
     alpha = np.full(r.shape[0], np.inf)
     alpha[ok] = (B[ok] - np.sqrt(disc[ok])) / A2[ok]
     first = np.minimum(np.minimum.reduceat(alpha, starts), 1.0)
-    return PointNewton(active, rays, starts, dp, first, r, J)
+    return PointNewton(active, rays, starts, dp, first, owner, r, up)
 
 
 def point_search(
@@ -250,27 +254,25 @@ def point_search(
 ) -> tuple[F64, int]:
     """Per point the correction with the lowest Σρ of its rays (and prior) at the new
     image parameters: ``dp`` (the joint step's) or, for an active point, the candidate of
-    ``newton`` that its linearised rays rank first (:meth:`PointNewton.candidates`) —
+    ``newton`` that its linearised rays rank first (:meth:`PointNewton.fractions`) —
     the choice between the two made by their true misclosures; returns (corrections
     (p_var, 3) m, number of points not at ``dp``). Sets the problem's ray weights to
     ``base_weight`` (1/σ)."""
     pts = prob.points
     act = newton.active
-    cands = newton.candidates(dp)  # (c, a, 3)
-    owner = np.repeat(np.arange(act.size), np.diff(np.append(newton.starts, newton.rays.size)))
-    moved = cands[:, owner]  # (c, m, 3)
-    J = newton.J
-    rr = np.broadcast_to(newton.r, (len(cands),) + newton.r.shape).copy()
-    for j in range(3):
-        rr -= J[None, :, :, j] * moved[:, :, None, j]
-    rho = loss((rr * rr).sum(axis=2))[0]
     x0 = st.xyz[pts.unknown[act]]
-    v = pts.prior_obs[act] - x0 - cands
-    lin = newton.sums(rho.T).T + np.sum(pts.prior_w[act] * v * v, axis=2)
+    f = newton.fractions()  # (c, a)
+    # the linearised rays' Σρ of each point at each fraction of dp: ‖r − f·J dp‖²
+    fo = f[:, newton.owner]  # (c, m)
+    r, up = newton.r, newton.up
+    s = (r * r).sum(axis=1) - 2.0 * fo * (r * up).sum(axis=1) + fo * fo * (up * up).sum(axis=1)
+    v = (pts.prior_obs[act] - x0)[None] - f[:, :, None] * newton.dp[None]
+    lin = newton.sums(loss(np.maximum(s, 0.0).T)[0]).T
+    lin += np.sum(pts.prior_w[act] * v * v, axis=2)
     lin[~np.isfinite(lin)] = np.inf
-    pick = np.argmin(lin[1:], axis=0)  # the Newton candidate the linearised rays prefer
+    best = f[np.argmin(lin, axis=0), np.arange(act.size)]
     alt = dp.copy()
-    alt[act] = cands[1:][pick, np.arange(act.size)]
+    alt[act] = best[:, None] * newton.dp
     prob.obs.weight[...] = base_weight
     tg = prob.reduced.tracks
     true = []

@@ -11,7 +11,7 @@ on COLMAP's and BAL's cam_from_world translation t = −Rᵀ X0 with c the world
 
 :func:`image_damping` damps each image's 6 × 6 block U by λ·Tᵀ diag(T⁻ᵀ U T⁻¹) T — the
 Marquardt damping diag × (1 + λ) in the coordinates z = (τ, ω, φ, κ) with dz = T d(X0,
-ω, φ, κ) — with c the centroid of the image's points at the start
+ω, φ, κ) — with c the median of the image's points at the start
 (:func:`scene_centres`): near the scene whatever the datum's origin (a geodetic frame's
 origin lies far away). The steps' fixed point is unchanged: only the damped steps differ.
 A step whose Jacobian is by rotations of the image frames (a poor start without a camera
@@ -30,10 +30,18 @@ F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
 
 
+#: :func:`scene_centres` takes the median of at most 2 × this many rays of an image
+#: (every k-th of a longer list).
+SCENE_SAMPLE: int = 256
+
+
 def scene_centres(image: I64, point: I64, xyz: F64, X0: F64) -> F64:
-    """The centroid of each image's observed points (m, 3), m; an image without points
-    with finite coordinates gets its projection centre (its damping is then that of
-    the centre's coordinates turned into the camera frame).
+    """The median of each image's observed points (m, 3), per coordinate, m — a point of
+    the scene the image sees, unmoved by a few far points (points near infinity, gross
+    errors of a start); of every k-th point of an image with more than 2 ×
+    :data:`SCENE_SAMPLE`. An image without points with finite coordinates gets its
+    projection centre (its damping is then that of the centre's coordinates turned into
+    the camera frame).
 
     Parameters
     ----------
@@ -45,13 +53,27 @@ def scene_centres(image: I64, point: I64, xyz: F64, X0: F64) -> F64:
         Projection centres (m).
     """
     m = X0.shape[0]
-    P = xyz[point]
-    ok = np.all(np.isfinite(P), axis=1)
-    cnt = np.bincount(image[ok], minlength=m).astype(float)
-    c = np.stack([np.bincount(image[ok], P[ok, k], minlength=m) for k in range(3)], axis=1)
-    has = cnt > 0
     out = X0.copy()
-    out[has] = c[has] / cnt[has, None]
+    cnt = np.bincount(image, minlength=m)
+    order = np.argsort(image, kind="stable")
+    pos = np.arange(image.size) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    # every k-th ray of an image with more than 2 × SCENE_SAMPLE (a scale, not a statistic)
+    keep = pos % np.repeat(np.maximum(cnt // SCENE_SAMPLE, 1), cnt) == 0
+    sel = order[keep]
+    P = xyz[point[sel]]
+    ok = np.all(np.isfinite(P), axis=1)
+    img, P = image[sel[ok]], P[ok]  # by image
+    if not img.size:
+        return out
+    cnt = np.bincount(img, minlength=m)
+    pos = np.arange(img.size) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    # each image's points side by side, padded with +inf, sorted per coordinate
+    Q = np.full((3, m, int(cnt.max())), np.inf)
+    Q[:, img, pos] = P.T
+    Q.sort(axis=2)
+    has = np.flatnonzero(cnt)
+    lo, hi = (cnt[has] - 1) // 2, cnt[has] // 2  # the middle one (two for an even count)
+    out[has] = 0.5 * (Q[:, has, lo] + Q[:, has, hi]).T
     return out
 
 
