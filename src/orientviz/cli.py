@@ -11,7 +11,9 @@ could not be done (datum defect, not determinable, no convergence).
 Every command ends with one of them and one line on stderr, never a traceback (unless
 ``--debug``). Numbers on the command line are checked by the parser
 (:func:`finite_float`, :func:`positive_float`), input files by
-:mod:`orientviz.io.safeio` (regular files under ``--max-size``).
+:mod:`orientviz.io.safeio` (regular files under ``--max-size``). The command sets
+``OPENBLAS_THREAD_TIMEOUT=4`` unless the environment sets it (:func:`quiet_blas_workers`;
+``OPENBLAS_THREAD_TIMEOUT=28`` is OpenBLAS's own default).
 """
 
 from __future__ import annotations
