@@ -262,7 +262,7 @@ def tables_from_block(block: Block, units: Units, columnar: bool) -> dict[str, A
     }
     xyz = np.where((pt.role > 0)[:, None], pt.xyz_known, pt.xyz)
     sig_cells: list[Any] = []
-    for r, s in zip(pt.role, pt.sigma):
+    for r, s in zip(pt.role.tolist(), pt.sigma):
         if r != CONTROL:  # σ of tie (unknown) and check (not used) points has no meaning
             sig_cells.append(None)
         else:
@@ -270,7 +270,7 @@ def tables_from_block(block: Block, units: Units, columnar: bool) -> dict[str, A
             sig_cells.append(vals[0] if len(set(vals)) == 1 else vals)
     points = {
         "id": list(pt.ids),
-        "role": [ROLES[r] for r in pt.role],
+        "role": [ROLES[r] for r in pt.role.tolist()],
         "X": json_numbers(xyz[:, 0] / L),
         "Y": json_numbers(xyz[:, 1] / L),
         "Z": json_numbers(xyz[:, 2] / L),
@@ -279,8 +279,8 @@ def tables_from_block(block: Block, units: Units, columnar: bool) -> dict[str, A
     sv = json_numbers(np.asarray(ob.sigma, float).reshape(-1, 2) / I)  # (σx, σy) per row
     osig = [a if a == b else [a, b] for a, b in zip(sv[0::2], sv[1::2])]
     observations = {
-        "image": [im.ids[i] for i in ob.image],
-        "point": [pt.ids[p] for p in ob.point],
+        "image": [im.ids[i] for i in ob.image.tolist()],
+        "point": [pt.ids[p] for p in ob.point.tolist()],
         "x": json_numbers(ob.xy[:, 0] / I),
         "y": json_numbers(ob.xy[:, 1] / Y),
         "sigma": osig,

@@ -335,8 +335,9 @@ def _control_labels(block: Block, control: str) -> list[str]:
 
     setup = point_setup(block, control)
     pt = block.points.ids
-    return [f"{pt[p]}/{'XYZ'[c]}" for p in np.flatnonzero(setup.unknown) for c in range(3)
-            if np.isfinite(setup.prior_sigma[p, c])]  # fmt: skip
+    unknown = np.flatnonzero(setup.unknown)
+    row, col = np.nonzero(np.isfinite(setup.prior_sigma[unknown]))  # point by point, X Y Z
+    return [f"{pt[p]}/{'XYZ'[c]}" for p, c in zip(unknown[row].tolist(), col.tolist())]
 
 
 #: "The model does not fit the data" when σ0 exceeds this and …
