@@ -300,9 +300,8 @@ def solve_bordered_pcg(
 #: A dense S with a group of parameters per image (the border's per-point terms formed in
 #: batches, :mod:`._ap_batches`: SfM cameras): Fs is formed exactly (:func:`solve_bordered`)
 #: when (6m)²·q is at most this — its one multi-column solve with S costs less than the
-#: conjugate gradients' ~10 steps of single solves and block products (bart, 23 images,
-#: q = 46: 0.22 against 1.40 ms; Ladybug, 49 images, q = 147: 2.2 against 3.6 ms), and the
-#: step is exact.
+#: conjugate gradients' ~10 steps of single solves and block products (measured on the real
+#: SfM models, benchmarks/README.md), and the step is exact.
 DENSE_EXACT_MAX: float = 2e7
 
 
