@@ -77,51 +77,15 @@ if kind == "orientviz":
                converged=bool(adj.converged))
 else:
     import pycolmap
+    from _pycolmap_models import bal_reconstruction, drop_repeated_observations
     if kind == "pycolmap-bal":
-        from orientviz.io.bal import read_bal_arrays
-        obs, cams, pts = read_bal_arrays(model)
-        from orientviz.rotation import matrix_from_rotvec
-        F = np.diag([1.0, 1.0, -1.0])
-        rec = pycolmap.Reconstruction()
-        ci, pi = obs[:, 0].astype(int), obs[:, 1].astype(int)
-        order = np.argsort(ci, kind="stable")
-        oc, op, uv = ci[order], pi[order], obs[order, 2:4]
-        starts = np.searchsorted(oc, np.arange(len(cams) + 1))
-        Rb = matrix_from_rotvec(cams[:, :3])
-        for i in range(len(cams)):
-            cam = pycolmap.Camera(model="RADIAL", width=2000, height=2000, camera_id=i + 1,
-                                  params=[cams[i, 6], 0.0, 0.0, cams[i, 7], cams[i, 8]])
-            rec.add_camera_with_trivial_rig(cam)
-            pose = pycolmap.Rigid3d(pycolmap.Rotation3d(F @ Rb[i] @ F), F @ cams[i, 3:6])
-            img = pycolmap.Image(name=f"img{i}", keypoints=uv[starts[i]:starts[i + 1]],
-                                 camera_id=i + 1, image_id=i + 1)
-            rec.add_image_with_trivial_frame(img, pose)
-        pidx = np.arange(len(oc)) - starts[oc]
-        by_pt = np.argsort(op, kind="stable")
-        ps = np.searchsorted(op[by_pt], np.arange(len(pts) + 1))
-        for j in range(len(pts)):
-            tr = pycolmap.Track()
-            for k in by_pt[ps[j]:ps[j + 1]]:
-                tr.add_element(int(oc[k]) + 1, int(pidx[k]))
-            rec.add_point3D(F @ pts[j], tr)
-        image_ids = range(1, len(cams) + 1)
+        rec = bal_reconstruction(model)
+        image_ids = sorted(rec.reg_image_ids())
     else:
         rec = pycolmap.Reconstruction(model)
         image_ids = sorted(rec.reg_image_ids())
-        # a point seen twice in one image: its first keypoint (lowest POINT2D_IDX) kept, as
-        # orientviz's import-colmap keeps it — both solvers then minimise the same ½Σr²
-        repeated = 0
-        for pid in list(rec.point3D_ids()):
-            if not rec.exists_point3D(pid):
-                continue
-            seen = set()
-            track = sorted((e.image_id, e.point2D_idx) for e in rec.point3D(pid).track.elements)
-            for image_id, idx in track:  # (a track of two loses its point: COLMAP's rule)
-                if image_id in seen and rec.exists_point3D(pid):
-                    rec.delete_observation(image_id, idx)
-                    repeated += 1
-                seen.add(image_id)
-        out["repeated_left_out"] = repeated
+        # a point seen twice in one image: the same rule as import-colmap (same ½Σr²)
+        out["repeated_left_out"] = drop_repeated_observations(rec)
     opts = pycolmap.BundleAdjustmentOptions()
     opts.refine_focal_length = True
     opts.refine_principal_point = False
@@ -151,8 +115,13 @@ print(json.dumps(out))
 """
 
 
+#: This folder: the workers import the peer's model builders (:mod:`_pycolmap_models`) from it.
+HERE = Path(__file__).resolve().parent
+
+
 def _env(threads: str) -> dict:
     env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(HERE), env.get("PYTHONPATH")) if p)
     if threads == "1":
         env.update(OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
     return env

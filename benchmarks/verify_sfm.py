@@ -50,7 +50,8 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-ENV = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
+ENV = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1",
+           PYTHONPATH=os.pathsep.join(p for p in (str(HERE), os.environ.get("PYTHONPATH")) if p))
 
 #: Ceres's own default stopping rule (ceres::Solver::Options), and a tight one.
 CERES_DEFAULT = dict(function_tolerance=1e-6, gradient_tolerance=1e-10, parameter_tolerance=1e-8,
@@ -65,46 +66,13 @@ import json, sys
 import numpy as np
 import pycolmap
 kind, model, tol = sys.argv[1], sys.argv[2], json.loads(sys.argv[3])
-F = np.diag([1.0, 1.0, -1.0])
+from _pycolmap_models import bal_reconstruction, drop_repeated_observations
 if kind == "bal":
-    from orientviz.io.bal import read_bal_arrays
-    from orientviz.rotation import matrix_from_rotvec
-    obs, cams, pts = read_bal_arrays(model)
-    rec = pycolmap.Reconstruction()
-    ci, pi = obs[:, 0].astype(int), obs[:, 1].astype(int)
-    order = np.argsort(ci, kind="stable")
-    oc, op, uv = ci[order], pi[order], obs[order, 2:4]
-    starts = np.searchsorted(oc, np.arange(len(cams) + 1))
-    Rb = matrix_from_rotvec(cams[:, :3])
-    for i in range(len(cams)):
-        cam = pycolmap.Camera(model="RADIAL", width=2000, height=2000, camera_id=i + 1,
-                              params=[cams[i, 6], 0.0, 0.0, cams[i, 7], cams[i, 8]])
-        rec.add_camera_with_trivial_rig(cam)
-        pose = pycolmap.Rigid3d(pycolmap.Rotation3d(F @ Rb[i] @ F), F @ cams[i, 3:6])
-        img = pycolmap.Image(name=f"img{i}", keypoints=uv[starts[i]:starts[i + 1]],
-                             camera_id=i + 1, image_id=i + 1)
-        rec.add_image_with_trivial_frame(img, pose)
-    pidx = np.arange(len(oc)) - starts[oc]
-    by_pt = np.argsort(op, kind="stable")
-    ps = np.searchsorted(op[by_pt], np.arange(len(pts) + 1))
-    for j in range(len(pts)):
-        tr = pycolmap.Track()
-        for k in by_pt[ps[j]:ps[j + 1]]:
-            tr.add_element(int(oc[k]) + 1, int(pidx[k]))
-        rec.add_point3D(F @ pts[j], tr)
+    rec = bal_reconstruction(model)
     removed = 0
 else:
     rec = pycolmap.Reconstruction(model)
-    removed = 0
-    for iid in list(rec.reg_image_ids()):  # a point seen twice in one image: keep the first
-        seen = set()
-        for k, p in enumerate(rec.images[iid].points2D):
-            if p.has_point3D():
-                if p.point3D_id in seen:
-                    rec.delete_observation(iid, k)
-                    removed += 1
-                else:
-                    seen.add(p.point3D_id)
+    removed = drop_repeated_observations(rec)
 opts = pycolmap.BundleAdjustmentOptions()
 opts.refine_focal_length = True
 opts.refine_principal_point = False
