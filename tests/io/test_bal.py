@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -132,6 +133,21 @@ def test_lens_is_refined_per_camera_by_default(tmp_path):
         assert par[f"cam{c}.k2"] == pytest.approx(0.01, abs=1e-5)
     with pytest.raises(ov.InputError, match="lens"):
         read_bal(path, lens="undistort")
+
+
+def test_the_report_prints_the_lens_terms_as_pure_numbers(tmp_path, capsys):
+    """The text report's camera line gives c in the file's pixels and k1, k2 bare (no unit "1")."""
+    from orientviz.cli import main
+
+    prob = tmp_path / "four.json"
+    assert main(["import-bal", str(_four_cameras(tmp_path)), "-o", str(prob)]) == 0
+    capsys.readouterr()
+    assert main(["solve", str(prob), "--free"]) == 0
+    line = next(s for s in capsys.readouterr().out.splitlines() if s.startswith("camera cam0 "))
+    assert re.search(r"\bc [0-9.]+ ± \S+ px,", line), line
+    for term in ("k1", "k2"):
+        assert re.search(rf"\b{term} -?[0-9.e+-]+ ± [0-9.e+-]+(,|$)", line), line
+    assert "y0 0 (fixed)" in line, line  # the y flip of a zero principal point is no "-0"
 
 
 def test_write_read_round_trip(tmp_path):

@@ -159,12 +159,13 @@ def camera_notes(block, adj, units: Units) -> list[str]:
         for j, name in enumerate(cam.names):
             f = scale.get(name, 1.0)
             unit = units.image if name in scale else cam.units[j]
+            unit = "" if unit in ("", "1") else f" {unit}"  # a pure number is printed bare
             if cam.estimated[j]:
                 parts.append(
-                    f"{name} {cam.value[g, j] / f:.7g} ± {cam.sigma[g, j] / abs(f):.2g} {unit}"
+                    f"{name} {cam.value[g, j] / f + 0.0:.7g} ± {cam.sigma[g, j] / abs(f):.2g}{unit}"
                 )
             else:
-                parts.append(f"{name} {cam.value[g, j] / f:.7g} (fixed)")
+                parts.append(f"{name} {cam.value[g, j] / f + 0.0:.7g} (fixed)")  # + 0.0: no "-0"
         lines.append(f"camera {cid} ({cam.kind} model): " + ", ".join(parts))
     pairs = cam.high_correlations(0.9)
     if pairs:
