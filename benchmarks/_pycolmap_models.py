@@ -68,3 +68,25 @@ def drop_repeated_observations(rec: pycolmap.Reconstruction) -> int:
                 repeated += 1
             seen.add(image_id)
     return repeated
+
+
+def full_model_options(num_threads: int) -> pycolmap.BundleAdjustmentOptions:
+    """pycolmap's bundle adjustment of orientviz's full model: f and the distortion terms
+    refined per camera, the principal point held; no summary printed."""
+    opts = pycolmap.BundleAdjustmentOptions()
+    opts.refine_focal_length = True
+    opts.refine_principal_point = False
+    opts.refine_extra_params = True
+    opts.print_summary = False
+    opts.ceres.solver_options.num_threads = num_threads
+    return opts
+
+
+def adjuster(rec: pycolmap.Reconstruction, opts: pycolmap.BundleAdjustmentOptions):
+    """The default bundle adjuster over every registered image, the gauge held by two
+    cameras (COLMAP's ``TWO_CAMS_FROM_WORLD``)."""
+    config = pycolmap.BundleAdjustmentConfig()
+    for i in sorted(rec.reg_image_ids()):
+        config.add_image(i)
+    config.fix_gauge(pycolmap.BundleAdjustmentGauge.TWO_CAMS_FROM_WORLD)
+    return pycolmap.create_default_bundle_adjuster(opts, config, rec)

@@ -77,34 +77,24 @@ if kind == "orientviz":
                converged=bool(adj.converged))
 else:
     import pycolmap
-    from _pycolmap_models import bal_reconstruction, drop_repeated_observations
+    from _pycolmap_models import (
+        adjuster, bal_reconstruction, drop_repeated_observations, full_model_options)
     if kind == "pycolmap-bal":
         rec = bal_reconstruction(model)
-        image_ids = sorted(rec.reg_image_ids())
     else:
         rec = pycolmap.Reconstruction(model)
-        image_ids = sorted(rec.reg_image_ids())
         # a point seen twice in one image: the same rule as import-colmap (same ½Σr²)
         out["repeated_left_out"] = drop_repeated_observations(rec)
-    opts = pycolmap.BundleAdjustmentOptions()
-    opts.refine_focal_length = True
-    opts.refine_principal_point = False
-    opts.refine_extra_params = True
-    opts.print_summary = False
+    opts = full_model_options(1 if threads == "1" else -1)
     so = opts.ceres.solver_options
-    so.num_threads = 1 if threads == "1" else -1
     so.function_tolerance = 1e-6
     if loss != "none":
         opts.ceres.loss_function_type = getattr(pycolmap.LossFunctionType, loss.upper())
         opts.ceres.loss_function_scale = 1.0
         so.max_num_iterations = 500  # robust runs take hundreds of steps (pycolmap: 100)
-    config = pycolmap.BundleAdjustmentConfig()
-    for i in image_ids:
-        config.add_image(i)
-    config.fix_gauge(pycolmap.BundleAdjustmentGauge.TWO_CAMS_FROM_WORLD)
-    adjuster = pycolmap.create_default_bundle_adjuster(opts, config, rec)
+    ba = adjuster(rec, opts)
     t, w = time.process_time(), time.perf_counter()
-    s = adjuster.solve()
+    s = ba.solve()
     cs = getattr(s, "ceres_summary", s)
     out.update(cpu=time.process_time() - t, wall=time.perf_counter() - w,
                iterations=cs.num_successful_steps + cs.num_unsuccessful_steps,

@@ -66,28 +66,18 @@ import json, sys
 import numpy as np
 import pycolmap
 kind, model, tol = sys.argv[1], sys.argv[2], json.loads(sys.argv[3])
-from _pycolmap_models import bal_reconstruction, drop_repeated_observations
+from _pycolmap_models import (
+    adjuster, bal_reconstruction, drop_repeated_observations, full_model_options)
 if kind == "bal":
     rec = bal_reconstruction(model)
     removed = 0
 else:
     rec = pycolmap.Reconstruction(model)
     removed = drop_repeated_observations(rec)
-opts = pycolmap.BundleAdjustmentOptions()
-opts.refine_focal_length = True
-opts.refine_principal_point = False
-opts.refine_extra_params = True
-opts.print_summary = False
-so = opts.ceres.solver_options
-so.num_threads = 1
+opts = full_model_options(1)
 for k, v in tol.items():
-    setattr(so, k, v)
-config = pycolmap.BundleAdjustmentConfig()
-for i in sorted(rec.reg_image_ids()):
-    config.add_image(i)
-config.fix_gauge(pycolmap.BundleAdjustmentGauge.TWO_CAMS_FROM_WORLD)
-adjuster = pycolmap.create_default_bundle_adjuster(opts, config, rec)
-s = adjuster.solve()
+    setattr(opts.ceres.solver_options, k, v)
+s = adjuster(rec, opts).solve()
 cs = getattr(s, "ceres_summary", s)
 behind = 0
 for iid in rec.reg_image_ids():

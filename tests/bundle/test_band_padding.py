@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
+from band_storage import lower_band
 from orientviz.bundle.precision import BandSolver, banded_selected_inverse
 from orientviz.bundle.precision._band import padded_band, tri_solve
 
@@ -21,9 +22,7 @@ def _factor(n: int, kd: int, rng) -> tuple[np.ndarray, np.ndarray]:
     i, j = np.indices((n, n))
     S = np.where(np.abs(i - j) <= kd, A + A.T, 0.0)
     S = S + np.diag(np.abs(S).sum(axis=1) + 1.0)  # diagonally dominant: definite
-    ab = np.zeros((kd + 1, n))
-    for d in range(kd + 1):
-        ab[d, : n - d] = np.diagonal(S, -d)
+    ab = lower_band(S, kd)
     return S, scipy.linalg.cholesky_banded(ab, lower=True)
 
 

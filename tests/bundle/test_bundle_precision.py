@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import orientviz as ov
+from band_storage import lower_band
 from orientviz.bundle.precision import banded_selected_inverse
 from orientviz.camera import collinearity_jacobian
 
@@ -135,9 +136,7 @@ def test_banded_selected_inverse_matches_dense(nb):
         A[np.arange(d, n), np.arange(n - d)] = v
     S = A @ A.T + n * np.eye(n)  # banded with half-bandwidth 2·kd
     kd2 = 2 * kd
-    ab = np.zeros((kd2 + 1, n))
-    for d in range(kd2 + 1):
-        ab[d, : n - d] = np.diagonal(S, -d)
+    ab = lower_band(S, kd2)
     import scipy.linalg
 
     cb = scipy.linalg.cholesky_banded(ab, lower=True)

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
+from band_storage import lower_band
 from orientviz.bundle.precision import BandSolver, banded_selected_inverse
 
 
@@ -26,9 +27,7 @@ CASES = [(50, 7, 5), (300, 40, 16), (101, 100, 48), (997, 23, 7), (40, 60, 48), 
 def _factor(n: int, kd: int, rng) -> tuple[np.ndarray, np.ndarray]:
     """A band matrix S and its lower band Cholesky factor."""
     S = _band_matrix(n, kd, rng)
-    ab = np.zeros((kd + 1, n))
-    for d in range(kd + 1):
-        ab[d, : n - d] = np.diagonal(S, -d)
+    ab = lower_band(S, kd)
     return S, scipy.linalg.cholesky_banded(ab, lower=True)
 
 
