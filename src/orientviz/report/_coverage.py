@@ -3,8 +3,8 @@
 The report's warning names the images whose points' convex hull covers less than a
 share of the image format (:func:`orientviz.report._stats.image_coverage`, SciPy's
 Qhull). :func:`coverage_below` answers the same question and gives the same printed
-values while computing few hulls and, mostly, none with Qhull (whose import costs a
-command about 0.03 s):
+values while computing few hulls and, mostly, none with Qhull (so a command need not
+import scipy.spatial):
 
 1. an octagon inside each image's hull (the points farthest in eight directions, 45°
    apart) clears the images whose octagon already covers more than the threshold;
