@@ -39,6 +39,7 @@ from ..reduced import (
     point_products,
     ray_couplings,
     schur_blocks,
+    schur_buffer_size,
 )
 from ._border import _not_determinable
 from ._damping import image_damping
@@ -97,25 +98,38 @@ class CameraBlocks:
         return self.blocks.shape[1]
 
 
+def _work(ws: dict, name: str, shape: tuple) -> F64:
+    """The work array ``name`` of ``shape`` from ``ws`` (formed on first use)."""
+    a = ws.get(name)
+    if a is None or a.shape != shape:
+        a = ws[name] = np.empty(shape)
+    return a
+
+
 def camera_normal(prob, st, rw: F64, Je: F64, Jp: F64, lam: float) -> NormalEquations:
     """The normal equations with the cameras inside the images' blocks (see the module
     docstring); the same arguments as :meth:`BundleProblem.normal`. ``ne.ext`` holds
     the :class:`CameraBlocks`; ``ne.blocks``, ``ne.rhs``, ``ne.Wr``, ``ne.Tr`` are their
-    exterior parts and ``ne.ap`` a :class:`CameraBorder`."""
+    exterior parts and ``ne.ap`` a :class:`CameraBorder`.
+
+    W and T are the run's work arrays (``prob.run.work``): they hold this system's until
+    the next call in the run, which overwrites them (the loop solves each system before
+    forming the next)."""
     S, ap = prob.reduced, prob.ap
     tg = S.tracks
     k = ap.k
     d = 6 + k
     grp = ap.group
-    n = Je.shape[0]
+    n, nv = Je.shape[0], tg.rays.size
     sw = prob.obs.weight[:, :, None]
+    ws = prob.run.work
     # [P½J_e | P½A | r'] per ray and a zero row: the images' Gram matrices
-    Jz = np.empty((n + 1, 2, d + 1))
+    Jz = _work(ws, "Jz", (n + 1, 2, d + 1))
     Jz[n] = 0.0
     np.multiply(Je, sw, out=Jz[:n, :, :6])
     Jz[:n, :, 6:d] = ap.Aw
     Jpw = Jp * sw
-    Wr, V, bp = point_products(tg, Jz[:n, :, :d], Jpw, rw, S.n_pt)
+    Wr, V, bp = point_products(tg, Jz[:n, :, :d], Jpw, rw, S.n_pt, _work(ws, "W", (nv, d, 3)))
     pts = prob.points
     Vd = V.reshape(-1, 9)[:, ::4]
     Vd += pts.prior_w
@@ -125,7 +139,7 @@ def camera_normal(prob, st, rw: F64, Je: F64, Jp: F64, lam: float) -> NormalEqua
     if lam > 0:
         Vd *= 1.0 + lam
     Vinv = inv3(V)
-    Tr = ray_couplings(tg, Wr, Vinv)
+    Tr = ray_couplings(tg, Wr, Vinv, _work(ws, "T", (nv, d, 3)))
     y = np.take(np.einsum("nij,nj->ni", Vinv, bp), tg.ray_point, axis=0)
     Jpr = tg.take(Jpw)
     Jy = Jpr[:, :, 0] * y[:, 0, None]
@@ -154,7 +168,8 @@ def camera_normal(prob, st, rw: F64, Je: F64, Jp: F64, lam: float) -> NormalEqua
         image_damping(U6, lam, st.X0, st.angles, prob.scene_centres, prob.block.sequence, U_rays)
     elif lam > 0:
         U[:, _I6, _I6] = diagU * (1.0 + lam)
-    blocks = schur_blocks(S, U, Tr, Wr)
+    buf = _work(ws, "products", (schur_buffer_size(tg, d),))
+    blocks = schur_blocks(S, U, Tr, Wr, buf)
     ik = 6 + np.arange(k)
     dg = blocks[S.diag_block]
     Fd = dg[:, ik, ik]  # (m, k): the diagonal blocks are in image order

@@ -190,7 +190,7 @@ def _sum_rays(X: F64) -> F64:
     return out
 
 
-def point_products(tg: TrackGroups, Jew: F64, Jpw: F64, rw: F64, n_pt: int):
+def point_products(tg: TrackGroups, Jew: F64, Jpw: F64, rw: F64, n_pt: int, out: F64 | None = None):
     """W = J_eᵀ P J_p per ray and the point blocks V = Σ J_pᵀ P J_p, b_p = Σ J_pᵀ P (l − f).
 
     Parameters
@@ -204,6 +204,8 @@ def point_products(tg: TrackGroups, Jew: F64, Jpw: F64, rw: F64, n_pt: int):
         Weighted misclosures P½ (l − f).
     n_pt : int
         Number of point unknowns.
+    out : ndarray, shape (n_var, d, 3), optional
+        Where W is written (default: a new array).
 
     Returns
     -------
@@ -219,7 +221,7 @@ def point_products(tg: TrackGroups, Jew: F64, Jpw: F64, rw: F64, n_pt: int):
     (−J_pᵀ P J_p: the derivatives by X0 are those by X negated), not formed again.
     """
     nv = tg.rays.size
-    Wr = np.empty((nv, Jew.shape[2], 3))
+    Wr = np.empty((nv, Jew.shape[2], 3)) if out is None else out
     V = np.empty((n_pt, 3, 3))
     bp = np.empty((n_pt, 3))
     p0 = 0  # points done
@@ -243,11 +245,12 @@ def point_products(tg: TrackGroups, Jew: F64, Jpw: F64, rw: F64, n_pt: int):
     return Wr, V, bp
 
 
-def ray_couplings(tg: TrackGroups, W: F64, Vinv: F64) -> F64:
+def ray_couplings(tg: TrackGroups, W: F64, Vinv: F64, out: F64 | None = None) -> F64:
     """T = W V⁻¹ per ray (n_var, d, 3) in ``tg.rays`` order, from W (same order) and the
     point blocks' inverses V⁻¹ (p_var, 3, 3): per point one (dk × 3)(3 × 3) product of
-    its k rays stacked (no per-ray gather of V⁻¹; the same sums as per ray)."""
-    T = np.empty_like(W)
+    its k rays stacked (no per-ray gather of V⁻¹; the same sums as per ray). ``out``: where T
+    is written (default: a new array)."""
+    T = np.empty_like(W) if out is None else out
     d = W.shape[1]
     p0 = 0
     for k, r0, n in tg.groups:
@@ -272,7 +275,12 @@ def point_sums_wt(tg: TrackGroups, W: F64, dc: F64) -> F64:
     return out
 
 
-def schur_blocks(st, U: F64, T: F64, W: F64) -> F64:
+def schur_buffer_size(tg: TrackGroups, d: int = 6) -> int:
+    """Doubles of the work space of :func:`schur_blocks` for d unknowns per image."""
+    return max((d * d * k * k * n for k, _, n in tg.groups), default=0)
+
+
+def schur_blocks(st, U: F64, T: F64, W: F64, buf: F64 | None = None) -> F64:
     """The blocks (i ≤ k) of S = U − Σ_j T_j W_jᵀ from per-ray T, W in track order.
 
     Parameters
@@ -283,6 +291,9 @@ def schur_blocks(st, U: F64, T: F64, W: F64) -> F64:
         Image blocks (d = 6: the exterior orientation; more: an image's own camera too).
     T, W : ndarray, shape (n_var, d, 3)
         W V⁻¹ and W per ray, in ``st.tracks.rays`` order.
+    buf : ndarray, optional
+        Work space for the products, at least :func:`schur_buffer_size` doubles (default:
+        a new array).
 
     Returns
     -------
@@ -294,7 +305,8 @@ def schur_blocks(st, U: F64, T: F64, W: F64) -> F64:
     maps = tg.maps(st.block_i * st.n_cam + st.block_k, st.n_cam, d)
     out = np.zeros((d * st.n_blocks, d))
     # one buffer for the products of every chunk: reused memory (no fresh pages per call)
-    buf = np.empty(max((d * d * k * k * n for k, _, n in tg.groups), default=0))
+    if buf is None:
+        buf = np.empty(schur_buffer_size(tg, d))
     for (k, r0, n), M in zip(tg.groups, maps):
         r1 = r0 + n * k
         Tk = T[r0:r1].reshape(n, d * k, 3)
