@@ -43,6 +43,14 @@ def _summation(keys: I64) -> tuple[sp.csr_matrix, I64]:
     return M, uk
 
 
+def _stable_order(keys: I64, m: int) -> I64:
+    """``np.argsort(keys, kind="stable")`` for keys in [0, m): as 16-bit keys (NumPy's
+    radix sort, O(n)) when m allows; a stable order is unique, so the same indices."""
+    if m <= np.iinfo(np.int16).max:
+        return np.argsort(keys.astype(np.int16), kind="stable")
+    return np.argsort(keys, kind="stable")
+
+
 def _zero_row(X: F64) -> F64:
     """X with a row of zeros appended (the target of padding indices), in one pass."""
     out = np.empty((X.shape[0] + 1,) + X.shape[1:])
@@ -84,7 +92,7 @@ class APStructure:
         n = oi.size
         go = grp[oi]
         # observations by group (direct F and ba terms)
-        self.grp_present = np.unique(go)
+        self.grp_present = np.flatnonzero(np.bincount(go, minlength=G))  # = np.unique(go)
         # the direct F term Σ Aᵀ P A: one product per group over its rays (:meth:`refresh`)
         self._by_group = np.argsort(go, kind="stable")
         self._group_bounds = np.searchsorted(go[self._by_group], self.grp_present.tolist() + [G])
@@ -105,7 +113,7 @@ class APStructure:
         # group's E block is then one small matrix product per image (BLAS)
         m = grp.size
         cnt = np.bincount(oi, minlength=m)
-        order = np.argsort(oi, kind="stable")
+        order = _stable_order(oi, m)
         pos = np.arange(n) - np.repeat(np.cumsum(cnt) - cnt, cnt)
         self.pad = np.full((m, max(int(cnt.max(initial=0)), 1)), n, np.int64)
         self.pad[oi[order], pos] = order
@@ -122,7 +130,7 @@ class APStructure:
         self.image_rows = 2 * np.r_[0, np.cumsum(cnt)]
         # (point, group) pair of each ray's own group (npg: none, fixed point)
         self.own_pg = np.full(n, npg, np.int64)
-        self.own_pg[vo] = np.searchsorted(uk, pgkey)
+        self.own_pg[vo] = inv  # the index of each ray's pair key in uk
         # H = Σ Aᵀ P J_p per pair as one sparse product with the (2n, 3) weighted point
         # Jacobian: Mᵀ (2n, npg·k) holds in row 2·ray + coordinate the ray's weighted
         # design at the columns of its own pair (k per row: CSR formed directly); M = Mᵀ.T
