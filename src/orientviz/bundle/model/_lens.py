@@ -158,8 +158,11 @@ class LensModel:
         theta0 = np.zeros((G, 10))
         r0 = np.zeros(G)
         ray_group = group[image]  # a ray is in group g where its image is
+        # images and rays by group (stable: each group's in their own order), once
+        by_group, img_bounds = _grouped(group, G)
+        rays_by_group, ray_bounds = _grouped(ray_group, G)
         for g in range(G):
-            members = np.flatnonzero(group == g)
+            members = by_group[img_bounds[g] : img_bounds[g + 1]]
             if members.size == 0:
                 raise InputError(f"lens model: parameter group {g} has no image")
             cam = np.unique(block.images.camera[members])
@@ -180,11 +183,20 @@ class LensModel:
             if self.r0 is not None:
                 r0[g] = self.r0
             else:
-                sel = ray_group == g
+                sel = rays_by_group[ray_bounds[g] : ray_bounds[g + 1]]
                 d = xy[sel] - theta0[g, 1:3]
-                rms = float(np.sqrt(np.mean(np.sum(d * d, axis=1)))) if sel.any() else 0.0
+                rms = float(np.sqrt(np.mean(np.sum(d * d, axis=1)))) if sel.size else 0.0
                 r0[g] = float(f"{rms:.2g}") if rms > 0 else theta0[g, 0] / 2
         return BoundLens(self, theta0, r0)
+
+
+def _grouped(keys: NDArray[np.int64], G: int) -> tuple[NDArray[np.int64], list[int]]:
+    """The indices of ``keys`` (in [0, G)) sorted stably by key and where each key's run
+    begins (G + 1 bounds): ``order[b[g]:b[g + 1]]`` = ``np.flatnonzero(keys == g)``."""
+    k = keys.astype(np.int16) if G <= np.iinfo(np.int16).max else keys  # radix sort
+    order = np.argsort(k, kind="stable")
+    bounds = np.concatenate([[0], np.cumsum(np.bincount(keys, minlength=G))]).tolist()
+    return order, bounds
 
 
 def _affinity_apply(a: F64, s: F64, v: F64) -> tuple[F64, F64]:
