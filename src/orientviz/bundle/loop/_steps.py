@@ -567,6 +567,7 @@ class BundleSteps:
         prob = self.prob
         dc, dp, _, fac, ne, local, _ = step.data
         self.poor_step = self._poor_step(step, previous)
+        self._gain_from = None  # (its start state: not kept beyond the step)
         if self.loss_on and not self.switch_pending and previous.cost > 0:  # a robust step
             self.robust_tail = (previous.cost - self.pending_cost) < ROBUST_TAIL * previous.cost
         if self.loss is not None and not self.loss_on:  # no longer poor, or settled?
