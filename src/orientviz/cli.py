@@ -152,6 +152,27 @@ IMPORT_OPTIONS: tuple[Arg, ...] = (
         help="a-priori sigma of the image coordinates in pixels (default 1)"),
 )  # fmt: skip
 
+#: The datum options of ``solve`` and ``export`` (``options.fix`` / ``options.free`` of the file)
+DATUM_OPTIONS: tuple[Arg, ...] = (
+    arg(
+        "--fix",
+        action="append",
+        default=None,
+        metavar="ID[:PARTS]",
+        help="datum: hold image ID (all six, or PARTS of X0,Y0,Z0,omega,phi,kappa) or "
+        "point ID (X,Y,Z) at its given values; repeatable (overrides options.fix)",
+    ),
+    arg(
+        "--free",
+        action="store_true",
+        default=None,
+        help="free network: control and check points become tie points; datum by "
+        "minimum constraints (the image pair with the most shared points times base "
+        "length: one image held, one base component of the other), or by --fix; "
+        "sigmas refer to that datum, the optimum does not depend on it (options.free)",
+    ),
+)
+
 #: name → Command; the order is the order of ``orientviz --help``
 COMMANDS: dict[str, Command] = {
     "solve": Command(
@@ -253,23 +274,7 @@ COMMANDS: dict[str, Command] = {
                 help="scale of the robust loss in units of the observations' sigma (default "
                 "1.345 huber and soft_l1, 2.385 cauchy)",
             ),
-            arg(
-                "--fix",
-                action="append",
-                default=None,
-                metavar="ID[:PARTS]",
-                help="datum: hold image ID (all six, or PARTS of X0,Y0,Z0,omega,phi,kappa) or "
-                "point ID (X,Y,Z) at its given values; repeatable (overrides options.fix)",
-            ),
-            arg(
-                "--free",
-                action="store_true",
-                default=None,
-                help="free network: control and check points become tie points; datum by "
-                "minimum constraints (the image pair with the most shared points times base "
-                "length: one image held, one base component of the other), or by --fix; "
-                "sigmas refer to that datum, the optimum does not depend on it (options.free)",
-            ),
+            *DATUM_OPTIONS,
             arg(
                 "--solver",
                 choices=["auto", "banded", "dense", "sparse", "reference"],
@@ -309,8 +314,10 @@ COMMANDS: dict[str, Command] = {
             ("orientviz view", "the default demo on http://127.0.0.1:8080"),
             ("orientviz view pair --port 8081", "the relative-orientation demo, another port"),
             ("orientviz view block.json", "a block problem file"),
-            ("orientviz view block.json --free --export free.html",
-             "a model without control (an imported COLMAP/BAL model) as a free network"),
+            (
+                "orientviz view block.json --free --export free.html",
+                "a model without control (an imported COLMAP/BAL model) as a free network",
+            ),
             ("orientviz view radar --export radar.html", "write a static page, no server"),
             (
                 "orientviz view design block_strip --export design.html",
@@ -328,13 +335,27 @@ COMMANDS: dict[str, Command] = {
             arg("--host", default="127.0.0.1", help="interface to serve on (default 127.0.0.1)"),
             arg("--port", type=port_number, default=8080, help="port (default 8080)"),
             arg("--export", metavar="FILE.html", default=None, help="write a static HTML page"),
-            arg("--fix", action="append", default=None, metavar="ID[:PARTS]",
-                help="datum of a problem file, as in solve (overrides options.fix)"),
-            arg("--free", action="store_true", default=None,
+            arg(
+                "--fix",
+                action="append",
+                default=None,
+                metavar="ID[:PARTS]",
+                help="datum of a problem file, as in solve (overrides options.fix)",
+            ),
+            arg(
+                "--free",
+                action="store_true",
+                default=None,
                 help="free network, as in solve (options.free): e.g. an imported COLMAP or BAL "
-                "model"),
-            arg("--max-iter", type=iteration_count, default=None, metavar="N",
-                help="maximum number of iterations, as in solve (overrides options.max_iter)"),
+                "model",
+            ),
+            arg(
+                "--max-iter",
+                type=iteration_count,
+                default=None,
+                metavar="N",
+                help="maximum number of iterations, as in solve (overrides options.max_iter)",
+            ),
         ),
     ),
     "import-bal": Command(
@@ -485,12 +506,17 @@ COMMANDS: dict[str, Command] = {
         "orientviz.report.export",
         "run_from_cli",
         help="adjust a block problem file and export the results (JSON, CSV, COLMAP text)",
-        description="Adjust a block problem file by the bundle method and write into DIR: "
-        "adjusted.json (the problem with the adjusted values), images.csv and points.csv "
-        "(values, standard deviations, residuals per image and point) and colmap/ (COLMAP "
-        "text model). --no-adjust exports the file's own values.",
+        description="Adjust a block problem file by the bundle method, as `orientviz solve` "
+        "does (the file's options; datum by its control, --free or --fix), and write into "
+        "DIR: adjusted.json (the problem with the adjusted values), images.csv and "
+        "points.csv (values, standard deviations, residuals per image and point) and colmap/ "
+        "(COLMAP text model). --no-adjust exports the file's own values.",
         examples=(
             ("orientviz export block_strip -d results", "adjust a shipped example, write all"),
+            (
+                "orientviz export block.json -d results --free",
+                "a model without control (an imported COLMAP or BAL model) as a free network",
+            ),
             (
                 "orientviz export block.json -d results --format csv --no-adjust",
                 "only the CSV tables of the file's values",
@@ -505,6 +531,7 @@ COMMANDS: dict[str, Command] = {
                 help="comma-separated: json, csv, colmap (default all)",
             ),
             arg("--no-adjust", action="store_true", help="export the values as they are"),
+            *DATUM_OPTIONS,
         ),
     ),
     "reproduce": Command(

@@ -83,12 +83,13 @@ def load_named(name: str) -> Problem:
     return load_problem(_resolve(name))
 
 
-def failure(prog: str, file: str, exc: BaseException) -> tuple[str, int] | None:
+def failure(prog: str, file: str, exc: BaseException, rest: str = "") -> tuple[str, int] | None:
     """The one-line message and exit code of a problem that cannot be loaded or solved.
 
-    What ``orientviz solve`` prints (and ``orientviz view`` before any server starts):
-    2 bad input, 3 adjustment impossible. None for an exception that is not one of these
-    (a bug: the caller re-raises it).
+    What ``orientviz solve`` and ``orientviz export`` print (and ``orientviz view`` before
+    any server starts): 2 bad input, 3 adjustment impossible. None for an exception that
+    is not one of these (a bug: the caller re-raises it). ``rest``: the command's further
+    arguments after FILE, repeated in the hint on the datum (e.g. ``" -d DIR"``).
     """
     if isinstance(exc, InputError):
         if not exc.source:  # a solver's check: the file is the user's
@@ -99,7 +100,7 @@ def failure(prog: str, file: str, exc: BaseException) -> tuple[str, int] | None:
     if isinstance(exc, DatumDefectError) and exc.defect == 7:  # no datum at all: both ways
         return (
             f"{prog}: {file}: adjustment impossible: {exc}; solve it as a free network "
-            f"({prog} {file} --free) or hold images or points at their given values (--fix "
+            f"({prog} {file}{rest} --free) or hold images or points at their given values (--fix "
             "IMAGE --fix IMAGE2:X0: one image and the scale)",
             3,
         )

@@ -11,8 +11,9 @@
   (:func:`~orientviz.io.colmap.write_colmap`).
 
 ``orientviz export FILE -d DIR`` does the same from the command line: it adjusts a
-problem file by the bundle method and writes the results (``--no-adjust`` exports the
-file's values without σ).
+problem file by the bundle method as ``orientviz solve`` does (the file's options; the
+datum by its control, or ``--free`` / ``--fix`` as in ``solve``) and writes the results
+(``--no-adjust`` exports the file's values without σ).
 """
 
 from __future__ import annotations
@@ -25,13 +26,13 @@ import numpy as np
 
 from ..adjust.result import Adjustment
 from ..block import Block
-from ..bundle import bundle_adjust
-from ..errors import AdjustmentError, InputError
+from ..errors import InputError
 from ..io.colmap import write_colmap
-from ..io.kinds.block import approximate
+from ..io.kinds.block import adjust_block, prepare
 from ..io.problem import Units, write_problem
 from ..io.safeio import prepare_output_dir
-from ..io.solve import check_geometry, load_named
+from ..io.solve import check_geometry, failure, limit_hint, load_named
+from ..units import RHO
 from ._tables import adjusted_block, image_table, point_table
 
 FORMATS = ("json", "csv", "colmap")
@@ -99,38 +100,51 @@ def export_results(
 
 
 def run_from_cli(args: argparse.Namespace) -> int:
-    """``orientviz export FILE -d DIR [--format json,csv,colmap] [--no-adjust]``."""
+    """``orientviz export FILE -d DIR [--format json,csv,colmap] [--no-adjust] [--free]
+    [--fix ID[:PARTS]]``: the bundle adjustment as ``orientviz solve`` runs it (the file's
+    options, its datum or the command line's ``--free`` / ``--fix``), then
+    :func:`export_results`. Exit 0 written, 2 bad input, 3 adjustment impossible or not
+    converged (nothing written)."""
     prog = "orientviz export"
     try:
         problem = load_named(args.file)  # a path, or the name of a shipped example
         if not isinstance(problem.data, Block):
             raise InputError(f"expected a block problem, got kind {problem.kind!r}", args.file)
+        for name in ("fix", "free"):
+            if getattr(args, name, None) is not None:  # the command line wins over the file
+                problem.options = dict(problem.options, **{name: getattr(args, name)})
         block = problem.data
-        adj = None
+        adj, notes = None, []
         if not args.no_adjust:
             for f in check_geometry(problem):  # errors raise; warnings are printed
                 print(f"{prog}: warning: {args.file}: {f.message}", file=sys.stderr)
-            block = approximate(block)
-            control = problem.options.get("control", "fixed")
-            adj = bundle_adjust(block, control=control)
+            block, notes = prepare(problem)  # approximate values, the datum (--free, --fix)
+            with np.errstate(all="ignore"):
+                adj, _ = adjust_block(problem, block)
             if not adj.converged:
+                at_limit = str(adj.reason).startswith("reached the maximum")
                 print(
-                    f"{prog}: {args.file}: the adjustment did not converge: {adj.reason}",
+                    f"{prog}: {args.file}: the adjustment did not converge: {adj.reason}"
+                    + (limit_hint(problem, None) if at_limit else ""),
                     file=sys.stderr,
                 )
                 return 3
         formats = [f.strip() for f in args.format.split(",") if f.strip()]
+        u = problem.units  # the CSV's angles in the file's unit (a "dms" file: degrees)
         written = export_results(
-            block, adj, args.directory, formats=formats, name=problem.name, units=problem.units
-        )
-    except InputError as exc:
-        print(f"{prog}: {exc.one_line()}", file=sys.stderr)
-        return 2
-    except (AdjustmentError, ArithmeticError, np.linalg.LinAlgError) as exc:
-        print(f"{prog}: {args.file}: adjustment impossible: {exc}", file=sys.stderr)
-        return 3
+            block, adj, args.directory, formats=formats, name=problem.name, units=u,
+            angle_unit=u.angle if u.angle in RHO else "deg",
+        )  # fmt: skip
+    except Exception as exc:  # one line and an exit code, never a traceback
+        failed = failure(prog, args.file, exc, rest=f" -d {args.directory}")
+        if failed is None:
+            raise
+        print(failed[0], file=sys.stderr)
+        return failed[1]
     for path in written.values():
         print(f"wrote {path}")
     if adj is not None:
         print(f"σ0 = {adj.sigma0:.3f}, redundancy {adj.redundancy}")
+    for note in notes:  # the datum the σ refer to
+        print(note)
     return 0

@@ -35,6 +35,7 @@ from ..reduced import (
 from ._ap_normal import ap_normal, point_ap_term
 from ._auxiliary import BundleAuxiliary, auxiliary_rows
 from ._border import solve_border
+from ._camera_blocks import camera_blocks_apply, camera_normal, camera_solve
 from ._checks import PointSetup
 from ._damping import image_damping, scene_centres
 from ._names import ParameterNames
@@ -155,6 +156,8 @@ class BundleProblem:
         self.n_eq = 2 * self.obs.n + n_pseudo + (self.aux.rows.n if self.aux else 0)
         self.n_unknowns = 6 * self.m + 3 * self.points.n + self.q + self.na
         self.redundancy = self.n_eq - self.n_unknowns
+        #: per-image cameras inside the images' blocks of the reduced system (._camera_blocks)
+        self.camera_blocks = camera_blocks_apply(self)
 
     def new_run(self) -> BundleRun:
         """Start a fresh :class:`BundleRun` (the problem may be adjusted again)."""
@@ -251,6 +254,8 @@ class BundleProblem:
         """Blocks of the normal equations and the Schur complement (see bundle.reduced)."""
         S = self.reduced
         self.design_at(st)
+        if self.camera_blocks and not self.run.border.hold:
+            return camera_normal(self, st, rw, Je, Jp, lam)
         sw = self.obs.weight[:, :, None]
         # [P½J_e | r'] per ray (r' below) and a zero row: the images' Gram matrices
         n = Je.shape[0]
@@ -398,6 +403,8 @@ class BundleProblem:
         ``ne``'s S (a *chord* step, ``ne`` from :meth:`chord_normal`; plain bundles only:
         no border).
         """
+        if ne.ext is not None:
+            return camera_solve(self, ne, names)
         if fac is not None:
             if self.aux or self.q:
                 raise ValueError("a chord step needs a bundle without border unknowns")

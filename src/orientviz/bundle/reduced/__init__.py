@@ -49,6 +49,7 @@ from ._tracks import (
     point_sums_wt,
     ray_couplings,
     schur_blocks,
+    schur_buffer_size,
 )
 
 __all__ = [
@@ -63,6 +64,7 @@ __all__ = [
     "ray_couplings",
     "ImageGram",
     "schur_blocks",
+    "schur_buffer_size",
     "dense_schur",
     "NormalEquations",
     "APBorder",

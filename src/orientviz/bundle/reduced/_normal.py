@@ -118,6 +118,10 @@ class NormalEquations:
     S : ndarray, shape (6m, 6m), or None
         S as a dense matrix (lower triangle) when it was formed densely
         (:func:`orientviz.bundle.reduced._schur.dense_schur`); the factorisation consumes it.
+    ext : object or None
+        The system in blocks of an image's exterior and camera unknowns when the cameras
+        are per image (:class:`orientviz.bundle.problem._camera_blocks.CameraBlocks`);
+        then ``blocks``, ``rhs``, ``Wr``, ``Tr`` are its exterior parts.
     """
 
     blocks: F64 | None
@@ -136,6 +140,7 @@ class NormalEquations:
     Fs: F64 | None = None
     Fs_aux: F64 | None = None
     S: F64 | None = field(default=None, repr=False)
+    ext: object | None = field(default=None, repr=False)
     _W: F64 | None = field(default=None, repr=False)
     _T: F64 | None = field(default=None, repr=False)
 

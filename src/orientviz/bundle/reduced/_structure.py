@@ -138,7 +138,7 @@ class ReducedStructure:
         """Drop the Schur formation's sparse maps and the sparse factor's work arena
         (formed again when needed)."""
         if self._tracks is not None:
-            self._tracks._maps = None
+            self._tracks._maps = {}
         if getattr(self, "fronts", None) is not None:
             self.fronts.arena = None
 

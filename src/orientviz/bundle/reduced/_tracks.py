@@ -59,7 +59,7 @@ class TrackGroups:
     by_image: sp.csr_matrix
     by_point: sp.csr_matrix
     in_order: bool = False
-    _maps: list | None = field(default=None, repr=False)
+    _maps: dict = field(default_factory=dict, repr=False)
 
     @property
     def rows(self) -> slice | I64:
@@ -70,21 +70,22 @@ class TrackGroups:
         """The rows of ``a`` (per observation) of the rays in this order."""
         return a[: self.rays.size] if self.in_order else np.take(a, self.rays, axis=0)
 
-    def maps(self, keys: I64, m: int) -> list:
-        """Per group a CSC matrix (6 · n_blocks, n_points · 6k · k): −1 where row r of the
+    def maps(self, keys: I64, m: int, d: int = 6) -> list:
+        """Per group a CSC matrix (d · n_blocks, n_points · dk · k): −1 where row r of the
         product block (a, b) of a point (image(a) ≤ image(b)) adds into row r of S's
         block (image(a), image(b)); ``keys`` = block_i · m + block_k of S's blocks
-        (sorted). Formed on first use (one 6-element row per pair of rays: Σ k(k+1)/2 · 6
-        entries)."""
-        if self._maps is None:
+        (sorted); ``d`` unknowns per image (6: the exterior orientation). Formed on first
+        use per ``d`` (one d-element row per pair of rays: Σ k(k+1)/2 · d entries)."""
+        if d not in self._maps:
             lookup = _block_lookup(keys, m)
-            self._maps = []
+            maps = []
             for k, r0, n in self.groups:
                 img = self.ray_image[r0 : r0 + n * k].reshape(n, k)
                 ascending = k > 1 and bool(np.all(img[:, 1:] > img[:, :-1]))
                 build = _ascending_group_map if ascending else _group_map
-                self._maps.append(build(img, lookup, keys.size))
-        return self._maps
+                maps.append(build(img, lookup, keys.size, d))
+            self._maps[d] = maps
+        return self._maps[d]
 
 
 def _block_lookup(keys: I64, m: int):
@@ -100,26 +101,26 @@ def _block_lookup(keys: I64, m: int):
     return lambda a, b: table[a, b - a]
 
 
-def _group_map(img: I64, lookup, n_blocks: int) -> sp.csc_matrix:
+def _group_map(img: I64, lookup, n_blocks: int, d: int = 6) -> sp.csc_matrix:
     """The map of one group (n points × k images, ``img``) into the rows of S's blocks
-    (``lookup``: :func:`_block_lookup`)."""
+    (``lookup``: :func:`_block_lookup`) of d × d."""
     n, k = img.shape
     # pairs (n, a, b) of rays of a point with image(a) ≤ image(b), and their blocks
     keep = img[:, :, None] <= img[:, None, :]
     blk = np.zeros((n, k, k), np.int32)
     ia, ib = np.broadcast_arrays(img[:, :, None], img[:, None, :])
     blk[keep] = lookup(ia[keep], ib[keep])
-    # the product's rows (n, a, r, b) of the (n, 6k, 6k) products viewed as (·, 6): one
+    # the product's rows (n, a, r, b) of the (n, dk, dk) products viewed as (·, d): one
     # CSC column each, holding the row r of block blk[n, a, b] where kept
-    keep6 = np.broadcast_to(keep[:, :, None, :], (n, k, 6, k)).reshape(-1)
-    rows6 = 6 * blk[:, :, None, :] + np.arange(6, dtype=np.int32)[None, None, :, None]
+    keep6 = np.broadcast_to(keep[:, :, None, :], (n, k, d, k)).reshape(-1)
+    rows6 = d * blk[:, :, None, :] + np.arange(d, dtype=np.int32)[None, None, :, None]
     rows = rows6.reshape(-1)[keep6]
     indptr = np.zeros(keep6.size + 1, np.int32)
     np.cumsum(keep6, out=indptr[1:])
-    return sp.csc_matrix((np.full(rows.size, -1.0), rows, indptr), shape=(6 * n_blocks, keep6.size))
+    return sp.csc_matrix((np.full(rows.size, -1.0), rows, indptr), shape=(d * n_blocks, keep6.size))
 
 
-def _ascending_group_map(img: I64, lookup, n_blocks: int) -> sp.csc_matrix:
+def _ascending_group_map(img: I64, lookup, n_blocks: int, d: int = 6) -> sp.csc_matrix:
     """:func:`_group_map` for points whose rays are in ascending image order (as the
     bundle's set-up orders them): the kept pairs are a ≤ b for every point, so the map
     is one point's pattern repeated (no masks over all n·6k² product rows; the same
@@ -130,16 +131,16 @@ def _ascending_group_map(img: I64, lookup, n_blocks: int) -> sp.csc_matrix:
     pair[iu, ju] = np.arange(iu.size)
     blk = lookup(img[:, iu], img[:, ju]).astype(np.int32)  # (n, pairs)
     a, r, b = (
-        x.reshape(-1) for x in np.meshgrid(np.arange(k), np.arange(6), np.arange(k), indexing="ij")
+        x.reshape(-1) for x in np.meshgrid(np.arange(k), np.arange(d), np.arange(k), indexing="ij")
     )
-    kept = a <= b  # product rows (a, r, b) of one point, row-major in its (6k × 6k)
-    rows = 6 * blk[:, pair[a[kept], b[kept]]] + r[kept].astype(np.int32)
+    kept = a <= b  # product rows (a, r, b) of one point, row-major in its (dk × dk)
+    rows = d * blk[:, pair[a[kept], b[kept]]] + r[kept].astype(np.int32)
     per_point = int(kept.sum())
     before = (np.cumsum(kept) - kept).astype(np.int32)  # kept rows before each product row
     indptr = np.empty(n * kept.size + 1, np.int32)
     indptr[:-1] = (per_point * np.arange(n, dtype=np.int32)[:, None] + before).reshape(-1)
     indptr[-1] = n * per_point
-    shape = (6 * n_blocks, n * kept.size)
+    shape = (d * n_blocks, n * kept.size)
     return sp.csc_matrix((np.full(rows.size, -1.0), rows.reshape(-1), indptr), shape=shape)
 
 
@@ -189,22 +190,26 @@ def _sum_rays(X: F64) -> F64:
     return out
 
 
-def point_products(tg: TrackGroups, Jew: F64, Jpw: F64, rw: F64, n_pt: int):
+def point_products(tg: TrackGroups, Jew: F64, Jpw: F64, rw: F64, n_pt: int, out: F64 | None = None):
     """W = J_eᵀ P J_p per ray and the point blocks V = Σ J_pᵀ P J_p, b_p = Σ J_pᵀ P (l − f).
 
     Parameters
     ----------
     tg : TrackGroups
-    Jew, Jpw : ndarray, shapes (n, 2, 6), (n, 2, 3)
-        Weighted Jacobians (P½ J) of all observations.
+    Jew, Jpw : ndarray, shapes (n, 2, d), (n, 2, 3)
+        Weighted Jacobians (P½ J) of all observations: by the d unknowns of the ray's
+        image (the exterior orientation X0, Y0, Z0, ω, φ, κ first, then any of its
+        camera's), by the point.
     rw : ndarray, shape (n, 2)
         Weighted misclosures P½ (l − f).
     n_pt : int
         Number of point unknowns.
+    out : ndarray, shape (n_var, d, 3), optional
+        Where W is written (default: a new array).
 
     Returns
     -------
-    Wr : ndarray, shape (n_var, 6, 3)
+    Wr : ndarray, shape (n_var, d, 3)
         In ``tg.rays`` order.
     V, bp : ndarray, shapes (p_var, 3, 3), (p_var, 3)
         In point-unknown order.
@@ -216,7 +221,7 @@ def point_products(tg: TrackGroups, Jew: F64, Jpw: F64, rw: F64, n_pt: int):
     (−J_pᵀ P J_p: the derivatives by X0 are those by X negated), not formed again.
     """
     nv = tg.rays.size
-    Wr = np.empty((nv, 6, 3))
+    Wr = np.empty((nv, Jew.shape[2], 3)) if out is None else out
     V = np.empty((n_pt, 3, 3))
     bp = np.empty((n_pt, 3))
     p0 = 0  # points done
@@ -240,63 +245,76 @@ def point_products(tg: TrackGroups, Jew: F64, Jpw: F64, rw: F64, n_pt: int):
     return Wr, V, bp
 
 
-def ray_couplings(tg: TrackGroups, W: F64, Vinv: F64) -> F64:
-    """T = W V⁻¹ per ray (n_var, 6, 3) in ``tg.rays`` order, from W (same order) and the
-    point blocks' inverses V⁻¹ (p_var, 3, 3): per point one (6k × 3)(3 × 3) product of
-    its k rays stacked (no per-ray gather of V⁻¹; the same sums as per ray)."""
-    T = np.empty_like(W)
+def ray_couplings(tg: TrackGroups, W: F64, Vinv: F64, out: F64 | None = None) -> F64:
+    """T = W V⁻¹ per ray (n_var, d, 3) in ``tg.rays`` order, from W (same order) and the
+    point blocks' inverses V⁻¹ (p_var, 3, 3): per point one (dk × 3)(3 × 3) product of
+    its k rays stacked (no per-ray gather of V⁻¹; the same sums as per ray). ``out``: where T
+    is written (default: a new array)."""
+    T = np.empty_like(W) if out is None else out
+    d = W.shape[1]
     p0 = 0
     for k, r0, n in tg.groups:
         r1 = r0 + n * k
         Vk = np.take(Vinv, tg.points[p0 : p0 + n], axis=0)
-        np.matmul(W[r0:r1].reshape(n, 6 * k, 3), Vk, out=T[r0:r1].reshape(n, 6 * k, 3))
+        np.matmul(W[r0:r1].reshape(n, d * k, 3), Vk, out=T[r0:r1].reshape(n, d * k, 3))
         p0 += n
     return T
 
 
 def point_sums_wt(tg: TrackGroups, W: F64, dc: F64) -> F64:
-    """Σ over each point's rays of W_rayᵀ dc_image (p_var, 3), W (n_var, 6, 3) in
-    ``tg.rays`` order, dc (m, 6) per image: per point one (1 × 6k)(6k × 3) product."""
+    """Σ over each point's rays of W_rayᵀ dc_image (p_var, 3), W (n_var, d, 3) in
+    ``tg.rays`` order, dc (m, d) per image: per point one (1 × dk)(dk × 3) product."""
     out = np.empty((tg.points.size, 3))
+    d = W.shape[1]
     p0 = 0
     for k, r0, n in tg.groups:
         r1 = r0 + n * k
-        g = np.take(dc, tg.ray_image[r0:r1], axis=0).reshape(n, 1, 6 * k)
-        out[tg.points[p0 : p0 + n]] = (g @ W[r0:r1].reshape(n, 6 * k, 3))[:, 0, :]
+        g = np.take(dc, tg.ray_image[r0:r1], axis=0).reshape(n, 1, d * k)
+        out[tg.points[p0 : p0 + n]] = (g @ W[r0:r1].reshape(n, d * k, 3))[:, 0, :]
         p0 += n
     return out
 
 
-def schur_blocks(st, U: F64, T: F64, W: F64) -> F64:
+def schur_buffer_size(tg: TrackGroups, d: int = 6) -> int:
+    """Doubles of the work space of :func:`schur_blocks` for d unknowns per image."""
+    return max((d * d * k * k * n for k, _, n in tg.groups), default=0)
+
+
+def schur_blocks(st, U: F64, T: F64, W: F64, buf: F64 | None = None) -> F64:
     """The blocks (i ≤ k) of S = U − Σ_j T_j W_jᵀ from per-ray T, W in track order.
 
     Parameters
     ----------
     st : orientviz.bundle.reduced.ReducedStructure
         The structure (its blocks and :attr:`~ReducedStructure.tracks`).
-    U : ndarray, shape (m, 6, 6)
-        Image blocks.
-    T, W : ndarray, shape (n_var, 6, 3)
+    U : ndarray, shape (m, d, d)
+        Image blocks (d = 6: the exterior orientation; more: an image's own camera too).
+    T, W : ndarray, shape (n_var, d, 3)
         W V⁻¹ and W per ray, in ``st.tracks.rays`` order.
+    buf : ndarray, optional
+        Work space for the products, at least :func:`schur_buffer_size` doubles (default:
+        a new array).
 
     Returns
     -------
-    ndarray, shape (n_blocks, 6, 6)
+    ndarray, shape (n_blocks, d, d)
         In the order of ``st.block_i``, ``st.block_k``.
     """
     tg = st.tracks
-    maps = tg.maps(st.block_i * st.n_cam + st.block_k, st.n_cam)
-    out = np.zeros((6 * st.n_blocks, 6))
+    d = U.shape[1]
+    maps = tg.maps(st.block_i * st.n_cam + st.block_k, st.n_cam, d)
+    out = np.zeros((d * st.n_blocks, d))
     # one buffer for the products of every chunk: reused memory (no fresh pages per call)
-    buf = np.empty(max((36 * k * k * n for k, _, n in tg.groups), default=0))
+    if buf is None:
+        buf = np.empty(schur_buffer_size(tg, d))
     for (k, r0, n), M in zip(tg.groups, maps):
         r1 = r0 + n * k
-        Tk = T[r0:r1].reshape(n, 6 * k, 3)
-        Wk = W[r0:r1].reshape(n, 6 * k, 3)
-        P = buf[: 36 * k * k * n].reshape(n, 6 * k, 6 * k)
+        Tk = T[r0:r1].reshape(n, d * k, 3)
+        Wk = W[r0:r1].reshape(n, d * k, 3)
+        P = buf[: d * d * k * k * n].reshape(n, d * k, d * k)
         np.matmul(Tk, Wk.transpose(0, 2, 1), out=P)  # all k² blocks of each point
-        out += M @ P.reshape(-1, 6)
-    blocks = out.reshape(st.n_blocks, 6, 6)
+        out += M @ P.reshape(-1, d)
+    blocks = out.reshape(st.n_blocks, d, d)
     blocks[st.diag_block] += U
     return blocks
 
@@ -312,11 +330,11 @@ def back_substitute(
         The ray order of ``W``.
     Vinv : ndarray, shape (p_var, 3, 3)
         Inverse point blocks.
-    W : ndarray, shape (n_var, 6, 3)
+    W : ndarray, shape (n_var, d, 3)
         Per ray J_cᵀ P J_p, in ``tg.rays`` order.
     bp : ndarray, shape (p_var, 3)
         The points' right-hand sides.
-    dc : ndarray, shape (m, 6)
+    dc : ndarray, shape (m, d)
         The image corrections.
     border : ndarray, shape (p_var, 3), optional
         t_j, the term of a border's corrections (e.g. the additional parameters').
