@@ -19,6 +19,7 @@ Every command ends with one of them and one line on stderr, never a traceback (u
 from __future__ import annotations
 
 import argparse
+import atexit
 import importlib
 import json
 import math
@@ -27,7 +28,7 @@ import sys
 import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NoReturn
 
 from . import __version__
 from .errors import OrientvizError, printable
@@ -725,8 +726,38 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     Bad input ends with exit code 2, an impossible adjustment with 3, each with one line
     on stderr. An error nobody foresaw is reported in one line too (exit 3, "internal
-    error"), with the traceback only under ``--debug``.
+    error"), with the traceback only under ``--debug``. Without ``argv`` (the command
+    itself, its arguments from ``sys.argv``) the process ends here (:func:`end_process`);
+    with ``argv`` (a call from Python) the exit code is returned.
     """
+    code = _main(argv)
+    if argv is None:
+        end_process(code)
+    return code
+
+
+def end_process(code: int) -> NoReturn:
+    """End the process with exit ``code`` once its output is out, without the
+    interpreter's teardown.
+
+    Runs the exit handlers (:mod:`atexit`: logging's flush among them) and flushes
+    standard output and error, then leaves by :func:`os._exit`: the freeing of every
+    loaded module (NumPy's and SciPy's, about a thousand) is work a finished command
+    does not need (benchmarks/README.md). Files are written and closed before this
+    (:func:`orientviz.io.safeio.write_atomic`).
+    """
+    atexit._run_exitfuncs()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):  # a closed pipe (`| head`) or a closed stream
+            pass
+    os._exit(code)
+
+
+def _main(argv: Sequence[str] | None) -> int:
+    """The work of :func:`main`: parse, dispatch, and turn every failure into one line
+    and an exit code."""
     quiet_blas_workers()
     parser = _parser()
     args = parser.parse_args(argv)

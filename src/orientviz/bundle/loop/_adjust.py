@@ -68,6 +68,17 @@ ROBUST_FTOL: float = 1e-6
 #: wait for each other, and the adjustment runs BLAS on one thread (threadpoolctl).
 ONE_BLAS_THREAD_MAX_IMAGES: int = 500
 
+#: The first λ of the ``"trust"`` damping (the SfM imports; ``"fallback"`` starts undamped)
+#: for least squares: the damping is scaled per image in its scene's frame
+#: (:mod:`orientviz.bundle.problem._damping`), so a small λ already holds back the weak
+#: motions of narrow-angle images; ten times less (1e-6) lets Ladybug's first steps run
+#: into another basin.
+TRUST_LAMBDA0: float = 1e-5
+#: … and with a robust loss: its first steps are least-squares steps pulled by the gross
+#: errors before the loss is switched on (``_steps``); damped ten times more they keep the
+#: basins measured for the losses (at 1e-5 BAL 16-22106 ends 0.5 % higher, Huber and soft-L1).
+TRUST_LAMBDA0_ROBUST: float = 1e-4
+
 
 def bundle_adjust(
     block: Block,
@@ -226,7 +237,7 @@ def bundle_adjust(
             redundancy=dof,
             damping=Damping(
                 opts.damping,
-                lambda0=1e-4,
+                lambda0=TRUST_LAMBDA0 if loss is None else TRUST_LAMBDA0_ROBUST,
                 poor_start_sigma0=opts.poor_start_sigma0,
                 first=2 if hold_first else 1,
             ),  # fmt: skip
