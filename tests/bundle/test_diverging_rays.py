@@ -2,10 +2,10 @@
 
 Six BAL cameras in a row see 60 points 8–15 units away and one point whose three rays
 meet 500 units *behind* the cameras (observations of the homogeneous point (d, −1/500),
-0.5 px noise). In front of the cameras its least-squares cost falls ∝ 1/distance towards
-an infimum at infinity: the point recedes step by step. A damped step that barely lowers
-vᵀPv (its gain ratio ≈ 0.007) once stopped the run by ``ftol`` 2.6e-5 above the infimum;
-the infimum here is computed independently (scipy, the point as a direction).
+0.5 px noise; it starts 100 units out). In front of the cameras its least-squares cost
+falls ∝ 1/distance towards an infimum at infinity: the point recedes step by step. A
+damped step that barely lowered vᵀPv (a poor gain ratio) stopped the run by ``ftol``
+3.3e-5 above the infimum, computed here independently (scipy, the point as a direction).
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ def _project(rotvec, t, f, k1, k2, H):
 
 @pytest.fixture(scope="module")
 def scene(tmp_path_factory):
-    rng = np.random.default_rng(7)
+    rng = np.random.default_rng(5)
     C = np.column_stack([np.arange(M) * 1.0, rng.normal(0, 0.1, M), rng.normal(0, 0.1, M)])
     rv = rng.normal(0, 0.02, (M, 3))
     t = -np.einsum("mij,mj->mi", matrix_from_rotvec(rv), C)
@@ -50,7 +50,7 @@ def scene(tmp_path_factory):
     obs += [(0, N), (2, N), (4, N)]
     ci, pi = np.array(obs).T
     uv = _project(rv[ci], t[ci], F, 0.0, 0.0, H[pi]) + rng.normal(0, 0.5, (len(obs), 2))
-    start = np.r_[X.ravel(), 30 * d]  # the diverging point starts 30 units out
+    start = np.r_[X.ravel(), 100 * d]  # the diverging point starts 100 units out
     lines = [f"{M} {N + 1} {len(obs)}"]
     lines += [f"{c} {p} {x!r} {y!r}" for c, p, (x, y) in zip(ci.tolist(), pi.tolist(), uv.tolist())]
     lines += [repr(float(v)) for i in range(M) for v in (*rv[i], *t[i], F, 0.0, 0.0)]
@@ -94,7 +94,7 @@ def test_the_default_stop_is_within_1e_6_of_the_infimum_and_the_point_is_kept(sc
     cost = res["sigma0"] ** 2 * res["redundancy"]  # Σr², σ = 1 px
     best = _infimum(scene)
     # above the infimum (no finite position reaches it), and by less than point 1's 1e-6
-    # (the stop on the poor step: 2.6e-5)
+    # (the stop on the poor step: 3.3e-5)
     assert 0.0 < (cost - best) / best < 1e-6
     # kept in the adjustment and reported; it has receded along its rays
     assert any("near infinity" in n and "pt60" in n for n in res["notes"])
