@@ -141,8 +141,9 @@ def test_first_breakpoint_is_where_a_ray_reaches_the_scale(calls):
 
 def test_search_keeps_no_point_worse_than_the_joint_step(calls):
     """Given the images' new parameters each point's rays (and prior) have a Σρ at most
-    that of the joint step's own correction, and some points move otherwise."""
-    (prob, loss, bw, st, dc, da, dp, pn), (out, moved) = calls["search"]
+    that of the joint step's own correction, some points move otherwise, and the search
+    reports what they saved."""
+    (prob, loss, bw, st, dc, da, dp, pn), (out, moved, gain) = calls["search"]
     assert moved > 0
 
     def per_point(d):
@@ -157,6 +158,7 @@ def test_search_keeps_no_point_worse_than_the_joint_step(calls):
     before, after = per_point(dp), per_point(out)
     assert np.all(after <= before + 1e-9 * np.abs(before))
     assert np.sum(after < before) == moved
+    assert gain == pytest.approx(np.sum(before - after), rel=1e-9)
 
 
 @pytest.mark.parametrize("loss", ["huber", "soft_l1"])

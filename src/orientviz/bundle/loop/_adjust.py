@@ -263,14 +263,18 @@ def bundle_adjust(
             on_iteration=steps.begin,
         )
         st, history, converged, reason = run.state, run.history, run.converged, run.reason
-        if getattr(run.evaluation.data, "deferred", False):  # the loop asked for derivatives
-            steps.resolve(st, run.evaluation)
+        if loss is None and getattr(run.evaluation.data, "deferred", False):
+            steps.resolve(st, run.evaluation)  # the loop asked for derivatives (robust: below)
         prob.reduced.release_maps()  # the Schur formation's maps: not held through the precision
         steps.chord_factor = steps.chord_pending = None
         rw, Je, Jp = run.evaluation.data
         cost, obs_sigma = run.evaluation.cost, None
         if loss is not None:  # the result refers to the rays' σ/√ρ′ at the last iterate
-            rw, Je, Jp, cost, obs_sigma = robust_end(prob, steps, st)
+            # the Jacobians: for the precision, the check of a damped start, auxiliary data,
+            # and a camera model's design at the last iterate (formed with them, below)
+            need = precision or run.damped_start or prob.aux is not None
+            need = need or (prob.ap.lens is not None and bool(prob.q))
+            rw, Je, Jp, cost, obs_sigma = robust_end(prob, steps, st, jacobian=need)
             steps.lin = None
         elif steps.is_local(run.evaluation):  # the precision needs the derivatives by ω, φ, κ
             rw, Je, Jp = prob.residuals(st, jac=True)
@@ -296,11 +300,12 @@ def bundle_adjust(
     return res
 
 
-def robust_end(prob: BundleProblem, steps: BundleSteps, st: BundleState):
+def robust_end(prob: BundleProblem, steps: BundleSteps, st: BundleState, jacobian: bool = True):
     """The last iterate of a robust run as a weighted least-squares solution: each ray's
     weight factor w = ρ′(s) there, its σ/√w, vᵀPv with those weights (the pseudo-
     observations' unchanged), and the weighted misclosures and Jacobians the precision
-    reads (the problem's ray weights are set to 1/σ·√w).
+    reads (the problem's ray weights are set to 1/σ·√w; without ``jacobian`` Je = Jp =
+    None: a result without precision reads only the misclosures).
 
     Returns
     -------
@@ -315,7 +320,7 @@ def robust_end(prob: BundleProblem, steps: BundleSteps, st: BundleState):
     w = steps.loss.weights(s)
     weight *= np.sqrt(w)[:, None]
     steps.reweigh_design()
-    rw, Je, Jp = prob.residuals(st, jac=True)
+    rw, Je, Jp = prob.residuals(st, jac=jacobian)
     cost = float(np.dot(w, s)) + prob.cost(st, rw[:0])
     obs_sigma = prob.block.observations.sigma.copy()
     obs_sigma[prob.obs.index] /= np.sqrt(w)[:, None]

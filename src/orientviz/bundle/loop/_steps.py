@@ -17,7 +17,9 @@ hand on. Its knobs are fields of the problem's
   solved at the loop's λ without the over-relaxation and the tail's model; in every
   robust step of a convex loss the points with a ray beyond the scale get their own
   Newton correction given the images' one, and each point keeps the correction (the
-  joint step's or a Newton one) that lowers the Σρ of its rays most (:mod:`._tail`);
+  joint step's or a Newton one) that lowers the Σρ of its rays most (:mod:`._tail`) —
+  in a small block only until a search adds little to its step's decrease
+  (:data:`SEARCH_GAIN`);
 * the additional parameters are held at their values in the first step from a poor
   start; their border E, F is reused in the next iteration when the last step moved
   nothing by more than ``ap_reuse`` (the Jacobians then change by about as little, less
@@ -111,6 +113,16 @@ ROBUST_OVERRELAX: float = 1.5
 #: design is linear (its weighted design is re-weighted from the last one), nor for a
 #: redescending loss. Steps and optima with other floors: benchmarks/README.md.
 ROBUST_TAIL_FLOOR: float = 0.3
+#: The points' own search (:mod:`._tail`) is left out for the rest of a run after an
+#: accepted step whose search lowered Σρ by less than this fraction of the step's
+#: decrease, in a block of at most :data:`SEARCH_GATE_RAYS` rays: there its fixed cost
+#: (some hundred array operations: the points' 3 × 3 systems, one evaluation of their
+#: rays at two corrections) weighs as much as a step, and such shares do not come with
+#: fewer steps (DBAT camcal: 0.03–2.7 % in every step). In larger blocks it costs a few
+#: per cent of a step and is kept: a small share there may precede large ones (BAL 21
+#: soft-L1: 0.9 %, then 16–40 % per step). Shares per step: benchmarks/README.md.
+SEARCH_GAIN: float = 0.02
+SEARCH_GATE_RAYS: int = 10_000
 
 
 class _Linearisation(tuple):
@@ -193,6 +205,8 @@ class BundleSteps:
         self._unrelaxed: Step | None = None  # the model's own step of an over-relaxed one
         self._sigma = None  # diagonals (U, V, F) of the last solve (the stopping measure)
         self.points_moved = 0  # points the last search moved otherwise than the joint step
+        self.search_gain = None  # … and the decrease of Σρ it added (None: no search)
+        self.search_off = False  # the searches stopped paying (SEARCH_GAIN)
         # the start of the last solved step and its additional parameters' design (the
         # step's predicted decrease, ._gain), and whether the last accepted least-squares
         # step was a poor one whose decrease met ftol (it may not stop the run)
@@ -464,6 +478,7 @@ class BundleSteps:
             not self.loss_on
             or self.switch_pending
             or self.loss.redescending
+            or self.search_off
             or scale is None
             or prob.aux
             or self.is_local(ev)
@@ -548,7 +563,7 @@ class BundleSteps:
         dc, dp, da = step.data[:3]
         local, newton = step.data[5], step.data[6]
         if newton is not None:  # each point's correction by its own search (._tail)
-            dp, self.points_moved = point_search(
+            dp, self.points_moved, self.search_gain = point_search(
                 self.prob, self.loss, self.base_weight, st, dc, da, dp, newton
             )
             step.data = (dc, dp, da) + step.data[3:6] + (None,)
@@ -570,6 +585,11 @@ class BundleSteps:
         self._gain_from = None  # (its start state: not kept beyond the step)
         if self.loss_on and not self.switch_pending and previous.cost > 0:  # a robust step
             self.robust_tail = (previous.cost - self.pending_cost) < ROBUST_TAIL * previous.cost
+            if self.search_gain is not None:  # the points' search: did it pay?
+                gain, self.search_gain = self.search_gain, None
+                self.search_off = prob.obs.xy.shape[
+                    0
+                ] <= SEARCH_GATE_RAYS and gain < SEARCH_GAIN * (previous.cost - self.pending_cost)
         if self.loss is not None and not self.loss_on:  # no longer poor, or settled?
             drop = (previous.cost - self.pending_cost) / previous.cost if previous.cost > 0 else 0.0
             settled = drop <= (LOSS_SWITCH if self.loss.redescending else LOSS_SWITCH_CONVEX)

@@ -27,9 +27,9 @@ point the Newton candidates (up to that breakpoint, :data:`FRACTIONS` of it) by 
 linearised rays, and keeps the first-ranked one where the true misclosures at the
 step's new image parameters give the point's rays (and prior) a lower Σρ than the joint
 step's own correction. The points do not interact given the images, so the trial's Σρ
-is at most the joint step's: the loop's test of the step is unchanged. The cost: two
-evaluations of the misclosures without derivatives, per-ray products over the active
-points' rays and a 3 × 3 system per point.
+is at most the joint step's: the loop's test of the step is unchanged. The cost: one
+evaluation of the active points' rays at both corrections (:func:`ray_misclosures`),
+per-ray products over them and a 3 × 3 system per point (by cofactors).
 """
 
 from __future__ import annotations
@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..model import RayProjection, normalised_block
 from ..problem import BundleProblem, BundleState
 from ._loss import RobustLoss
 
@@ -52,8 +53,32 @@ NEWTON_FLOOR: float = 0.01
 #: the one up to the first breakpoint (the nearly flat direction ends where a ray's
 #: misclosure reaches the scale: the full correction may overshoot it).
 FRACTIONS: tuple[float, ...] = (1.0, 0.5, 0.25, 0.125)
-#: Upper-triangle index pairs of a symmetric 3 × 3 block (6 entries).
+#: Upper-triangle index pairs of a symmetric 3 × 3 block (6 entries) …
 _UPPER = (np.array([0, 0, 0, 1, 1, 2]), np.array([0, 1, 2, 1, 2, 2]))
+#: … and the positions of its diagonal among them.
+_DIAG = np.array([0, 3, 5])
+
+
+def _solve3(N: F64, g: F64) -> tuple[F64, F64]:
+    """x = N⁻¹ g of symmetric 3 × 3 systems given by their upper triangles ``N`` (a, 6),
+    in :data:`_UPPER` order, and ``g`` (a, 3) — by cofactors; returns (x (a, 3), det N
+    (a,)). Rows with det N = 0 give inf/NaN (the caller tests det)."""
+    n00, n01, n02, n11, n12, n22 = N.T
+    c00 = n11 * n22 - n12 * n12
+    c01 = n02 * n12 - n01 * n22
+    c02 = n01 * n12 - n02 * n11
+    c11 = n00 * n22 - n02 * n02
+    c12 = n01 * n02 - n00 * n12
+    c22 = n00 * n11 - n01 * n01
+    det = n00 * c00 + n01 * c01 + n02 * c02
+    g0, g1, g2 = g.T
+    x = np.empty_like(g)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = 1.0 / det
+        x[:, 0] = (c00 * g0 + c01 * g1 + c02 * g2) * inv
+        x[:, 1] = (c01 * g0 + c11 * g1 + c12 * g2) * inv
+        x[:, 2] = (c02 * g0 + c12 * g1 + c22 * g2) * inv
+    return x, det
 
 
 def tail_model(
@@ -110,6 +135,8 @@ class PointNewton:
         model is their true one, for Huber exactly).
     rays : ndarray of int, shape (m,)
         Their rays (positions in the tracks' ray order), point by point.
+    obs_rays : ndarray of int, shape (m,)
+        The same rays as rows of the problem's observations.
     starts : ndarray of int, shape (a,)
         The first of each active point's rays in ``rays``.
     dp : ndarray, shape (a, 3)
@@ -127,6 +154,7 @@ class PointNewton:
 
     active: I64
     rays: I64
+    obs_rays: I64
     starts: I64
     dp: F64
     first: F64
@@ -172,21 +200,21 @@ def point_newton(
     rw, Je, Jp, scale = lin
     tg, pts = prob.reduced.tracks, prob.points
     bsc = loss.scale * loss.scale
-    sc_all = tg.take(scale)
-    rw_t = tg.take(rw)
-    beyond = (rw_t * rw_t).sum(axis=1) > bsc * sc_all * sc_all  # s > a² (s = ‖rw‖²/ρ′)
-    bp = tg.by_point  # its rows list each point's rays (columns: the tracks' ray order)
-    hit = bp @ beyond.astype(float) > 0
+    beyond = np.einsum("ij,ij->i", rw, rw) > bsc * scale * scale  # s > a² (s = ‖rw‖²/ρ′)
+    col = prob.obs.column[beyond]  # the point unknown of each such ray (−1: none)
+    hit = np.zeros(pts.unknown.size, dtype=bool)
+    hit[col[col >= 0]] = True
     active = np.flatnonzero(hit)
     if not active.size:
         return None
+    bp = tg.by_point  # its rows list each point's rays (columns: the tracks' ray order)
     counts = np.diff(bp.indptr)
     rays = bp.indices[np.repeat(hit, counts)]
     n_rays = counts[active]
     starts = np.concatenate(([0], np.cumsum(n_rays)[:-1]))
     obs_rays = np.asarray(tg.rows)[rays] if not tg.in_order else rays
     w = base_weight[obs_rays]
-    sc = sc_all[rays]
+    sc = scale[obs_rays]
     J = Jp[obs_rays] * w[:, :, None]  # (m, 2, 3), weighted by 1/σ
     # the misclosures (1/σ) after the images' correction, linearised: r − u
     u = np.einsum("nij,nj->ni", Je[obs_rays], dc[tg.ray_image[rays]])
@@ -200,7 +228,7 @@ def point_newton(
     norm = np.sqrt(s)
     rhat = r / np.where(norm > 0, norm, np.inf)[:, None]
     # per ray at the linearised misclosure r: the gradient Jᵀρ′r, the reweighted block
-    # ρ′JᵀJ and the part the true model lacks ρ′k (Jᵀr̂)(Jᵀr̂)ᵀ
+    # ρ′JᵀJ and the part the true model lacks ρ′k (Jᵀr̂)(Jᵀr̂)ᵀ (upper triangles, _UPPER)
     t = r * rho1[:, None]
     J0, J1 = J[:, 0, :], J[:, 1, :]
     q = J0 * rhat[:, :1] + J1 * rhat[:, 1:]
@@ -212,21 +240,16 @@ def point_newton(
     sums = np.add.reduceat(rows, starts, axis=0)
     pw = pts.prior_w[active]
     g = sums[:, :3] + pw * (pts.prior_obs[active] - st.xyz[pts.unknown[active]])
-    VM = np.empty((active.size, 3, 3))
-    VQ = np.empty_like(VM)
-    VM[:, a, b] = VM[:, b, a] = sums[:, 3:9]
-    VQ[:, a, b] = VQ[:, b, a] = sums[:, 9:]
-    ii = np.arange(3)
-    VM[:, ii, ii] += pw
-    N = (1.0 + NEWTON_FLOOR) * VM - VQ
-    N[:, ii, ii] += lam * VM[:, ii, ii]
+    # N = (1 + floor)·M − Q + λ diag(M), M = the reweighted block + the prior: upper triangle
+    M = sums[:, 3:9]
+    M[:, _DIAG] += pw
+    N = (1.0 + NEWTON_FLOOR) * M - sums[:, 9:]
+    N[:, _DIAG] += lam * M[:, _DIAG]
+    dp, det = _solve3(N, g)
     # a point whose model is singular (rays without weight, a point at infinity) stays
-    tr = N[:, 0, 0] + N[:, 1, 1] + N[:, 2, 2]
-    bad = ~(np.abs(np.linalg.det(N)) > 1e-12 * np.maximum(tr, 1e-300) ** 3)
-    if bad.any():
-        N[bad] = np.eye(3)
-        g[bad] = 0.0
-    dp = np.linalg.solve(N, g[:, :, None])[:, :, 0]
+    tr = N[:, 0] + N[:, 3] + N[:, 5]
+    bad = ~(np.abs(det) > 1e-12 * np.maximum(tr, 1e-300) ** 3)
+    dp[bad] = 0.0
     # the first breakpoint along dp: a ray beyond the scale reaches it (linearised:
     # ‖r − α J dp‖² = a², the smaller root where r·J dp > 0)
     owner = np.repeat(np.arange(active.size), n_rays)
@@ -239,7 +262,7 @@ def point_newton(
     alpha = np.full(r.shape[0], np.inf)
     alpha[ok] = (B[ok] - np.sqrt(disc[ok])) / A2[ok]
     first = np.minimum(np.minimum.reduceat(alpha, starts), 1.0)
-    return PointNewton(active, rays, starts, dp, first, owner, r, up)
+    return PointNewton(active, rays, obs_rays, starts, dp, first, owner, r, up)
 
 
 def point_search(
@@ -251,13 +274,14 @@ def point_search(
     da: F64,
     dp: F64,
     newton: PointNewton,
-) -> tuple[F64, int]:
+) -> tuple[F64, int, float]:
     """Per point the correction with the lowest Σρ of its rays (and prior) at the new
     image parameters: ``dp`` (the joint step's) or, for an active point, the candidate of
     ``newton`` that its linearised rays rank first (:meth:`PointNewton.fractions`) —
     the choice between the two made by their true misclosures; returns (corrections
-    (p_var, 3) m, number of points not at ``dp``). Sets the problem's ray weights to
-    ``base_weight`` (1/σ)."""
+    (p_var, 3) m, number of points not at ``dp``, the decrease of Σρ (+ the points'
+    priors' vᵀPv) against the joint step's correction, ≥ 0). Sets the problem's ray
+    weights to ``base_weight`` (1/σ)."""
     pts = prob.points
     act = newton.active
     x0 = st.xyz[pts.unknown[act]]
@@ -274,14 +298,42 @@ def point_search(
     alt = dp.copy()
     alt[act] = best[:, None] * newton.dp
     prob.obs.weight[...] = base_weight
-    tg = prob.reduced.tracks
+    # the true misclosures of the active points' rays at both corrections, in one pass
+    rays, owner = newton.obs_rays, newton.owner
+    xyz = st.xyz[prob.obs.point[rays]]
+    both = np.concatenate((rays, rays))
+    at = np.concatenate((xyz + dp[act][owner], xyz + alt[act][owner]))
+    rw = ray_misclosures(prob, st.X0 + dc[:, :3], st.angles + dc[:, 3:], st.ap + da, both, at)
+    rho = loss((rw * rw).sum(axis=1))[0]
     true = []
-    for d in (dp, alt):
-        rw = tg.take(prob.residuals(prob.apply(st, dc, d, da), jac=False)[0])
-        rho = loss((rw * rw).sum(axis=1))[0][newton.rays]
+    for k, d in enumerate((dp, alt)):
         vv = pts.prior_obs[act] - x0 - d[act]
-        true.append(newton.sums(rho) + np.sum(pts.prior_w[act] * vv * vv, axis=1))
+        true.append(newton.sums(rho[k * rays.size : (k + 1) * rays.size]))
+        true[-1] += np.sum(pts.prior_w[act] * vv * vv, axis=1)
     better = true[1] < true[0]  # ties and NaN: the joint step's own
     out = dp.copy()
     out[act[better]] = alt[act[better]]
-    return out, int(np.count_nonzero(better))
+    gain = float(np.sum(true[0][better] - true[1][better]))
+    return out, int(np.count_nonzero(better)), gain
+
+
+def ray_misclosures(
+    prob: BundleProblem, X0: F64, angles: F64, ap: F64, obs_rays: I64, xyz: F64
+) -> F64:
+    """Misclosures (k, 2) weighted by the problem's ray weights of the observations
+    ``obs_rays`` (k,) with their points at ``xyz`` (k, 3) m, given the images' ``X0`` (m),
+    ``angles`` (rad) and the additional parameters ``ap``: the rows ``obs_rays`` of
+    :meth:`BundleProblem.residuals` at that state, evaluated for these rays only (an
+    observation may appear more than once, with other points). Not for auxiliary data."""
+    obs = prob.obs
+    img = obs.image[obs_rays]
+    seq = prob.block.sequence
+    if prob.ap.lens is not None:
+        nrm = normalised_block(X0, angles, img, xyz, seq, False)[0]
+        f = prob.ap.lens.evaluate(ap, prob.ap.group[img], nrm, obs.xy[obs_rays], False)[0]
+    else:
+        io = prob.interior
+        f = RayProjection(X0, angles, io.c, io.x0, io.y0, img, xyz, seq).xy
+        if prob.q:
+            f = f + (prob.ap.A_csr @ ap).reshape(-1, 2)[obs_rays]
+    return (obs.xy[obs_rays] - f) * obs.weight[obs_rays]

@@ -44,6 +44,7 @@ from ..problem._ap_normal import dense
 from ..reduced import DENSE_CHUNK_BYTES, ReducedStructure, dense_matrix, factor_reduced
 from ._band import padded_band, tri_solve
 from ._border_points import border_point_terms
+from ._camera import camera_precision
 from ._precision_ap import banded_border, border_inverse, point_terms
 
 F64 = NDArray[np.float64]
@@ -339,6 +340,9 @@ def _fill_precision(res, prob, st, rw, Je, Jp, lin) -> None:
         ne, fac, Je, Jp = lin
     else:
         ne = prob.normal(st, rw, Je, Jp)
+    if ne.ext is not None:  # the cameras inside the images' blocks: their own form
+        camera_precision(res, prob, ne, Je, Jp)
+        return
     blocks = ne.blocks
     opts = prob.options
     inverse = ReducedInverse(S, blocks, fac, opts.dense_inverse_limit, opts.takahashi_block)

@@ -43,6 +43,14 @@ def _summation(keys: I64) -> tuple[sp.csr_matrix, I64]:
     return M, uk
 
 
+def _stable_order(keys: I64, m: int) -> I64:
+    """``np.argsort(keys, kind="stable")`` for keys in [0, m): as 16-bit keys (NumPy's
+    radix sort, O(n)) when m allows; a stable order is unique, so the same indices."""
+    if m <= np.iinfo(np.int16).max:
+        return np.argsort(keys.astype(np.int16), kind="stable")
+    return np.argsort(keys, kind="stable")
+
+
 def _zero_row(X: F64) -> F64:
     """X with a row of zeros appended (the target of padding indices), in one pass."""
     out = np.empty((X.shape[0] + 1,) + X.shape[1:])
@@ -84,7 +92,7 @@ class APStructure:
         n = oi.size
         go = grp[oi]
         # observations by group (direct F and ba terms)
-        self.grp_present = np.unique(go)
+        self.grp_present = np.flatnonzero(np.bincount(go, minlength=G))  # = np.unique(go)
         # the direct F term Σ Aᵀ P A: one product per group over its rays (:meth:`refresh`)
         self._by_group = np.argsort(go, kind="stable")
         self._group_bounds = np.searchsorted(go[self._by_group], self.grp_present.tolist() + [G])
@@ -105,7 +113,7 @@ class APStructure:
         # group's E block is then one small matrix product per image (BLAS)
         m = grp.size
         cnt = np.bincount(oi, minlength=m)
-        order = np.argsort(oi, kind="stable")
+        order = _stable_order(oi, m)
         pos = np.arange(n) - np.repeat(np.cumsum(cnt) - cnt, cnt)
         self.pad = np.full((m, max(int(cnt.max(initial=0)), 1)), n, np.int64)
         self.pad[oi[order], pos] = order
@@ -115,9 +123,14 @@ class APStructure:
         # per-ray array through it needs no appended zero row, where the partner (the
         # reduced design, gathered through ``pad``) is zero for padded slots
         self.pad0 = np.where(self.pad < n, self.pad, 0)
+        # the rays image by image in the same order, unpadded, and where each image's
+        # rows (2 per ray) begin and end: the own group's E block as one product per image
+        # over its own rays (:func:`ap_normal`)
+        self.by_image = order
+        self.image_rows = 2 * np.r_[0, np.cumsum(cnt)]
         # (point, group) pair of each ray's own group (npg: none, fixed point)
         self.own_pg = np.full(n, npg, np.int64)
-        self.own_pg[vo] = np.searchsorted(uk, pgkey)
+        self.own_pg[vo] = inv  # the index of each ray's pair key in uk
         # H = Σ Aᵀ P J_p per pair as one sparse product with the (2n, 3) weighted point
         # Jacobian: Mᵀ (2n, npg·k) holds in row 2·ray + coordinate the ray's weighted
         # design at the columns of its own pair (k per row: CSR formed directly); M = Mᵀ.T
@@ -344,7 +357,7 @@ def ap_normal(
     # E: per image, its own group's block Σ_a (J_eᵀ P A − T Hᵀ) = Σ_a J_eᵀ P½ Ã with the
     # reduced design Ã = P½ (A − J_p V⁻¹ Hᵀ) of each ray (T = J_eᵀ P J_p V⁻¹, H of the
     # ray's own (point, group) pair)
-    n, L = Jew.shape[0], A.L
+    n = Jew.shape[0]
     VHt = np.empty((H.shape[0] + 1, 3, k))  # V⁻¹ Hᵀ = (H V⁻¹)ᵀ (V⁻¹ symmetric), and a zero
     VHt[:-1] = HV.transpose(0, 2, 1)
     VHt[-1] = 0.0
@@ -356,9 +369,15 @@ def ap_normal(
         # summed by image (the images' ray counts differ: padding them costs more)
         JA = np.matmul(Jew.transpose(0, 2, 1), At[:-1]).reshape(n, 6 * k)
         own = (A.sum_img @ JA).reshape(m, 6, k)
-    else:  # one (6 × 2L)(2L × k) product per image over its rays padded to L
-        Jpad = Jew[A.pad0].reshape(m, 2 * L, 6)  # padded slots: any ray, times a zero ray
-        own = np.matmul(Jpad.transpose(0, 2, 1), At[A.pad].reshape(m, 2 * L, k))
+    else:  # one (6 × 2c)(2c × k) product per image over its c rays (the same sums as
+        # over its rays padded to the largest count with zero rays, without the padding)
+        Js = np.take(Jew, A.by_image, axis=0).reshape(-1, 6)
+        As = np.take(At, A.by_image, axis=0).reshape(-1, k)
+        own = np.empty((m, 6, k))
+        rows = A.image_rows.tolist()
+        for i in range(m):
+            a, b = rows[i], rows[i + 1]
+            own[i] = Js[a:b].T @ As[a:b]
     # ... and the blocks of the other groups that its points reach (− Σ T_a H_eᵀ); F:
     # direct term (constant for a linear set; refreshed for a lens model) − Σ H V⁻¹ Hᵀ
     # over the pairs (e, e') of one point

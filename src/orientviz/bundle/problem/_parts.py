@@ -21,6 +21,7 @@ All parts are constant over the iterations; the iterate is a
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -159,6 +160,37 @@ class BorderSolver:
     log: list[str] = field(default_factory=list)
 
 
+class _Terms:
+    """What the design's sparse form and the border's index orders are formed from, shared
+    by an :class:`AdditionalBlock` and the blocks it makes (:meth:`AdditionalBlock.with_design`);
+    both are formed on first use (the cameras inside the images' blocks,
+    :mod:`._camera_blocks`, need neither while they iterate).
+
+    ``Aw`` is the weighted design of the last block made (the structure's values are
+    those of the latest design, as if refreshed at every :meth:`~AdditionalBlock.with_design`).
+    """
+
+    def __init__(self, cols: I64, shape: tuple[int, int], args: tuple, Aw: F64) -> None:
+        self.cols, self.shape, self.args, self.Aw = cols, shape, args, Aw
+        self.structure: APStructure | None = None
+
+    def csr(self, A: F64) -> sp.csr_matrix:
+        """The design A (n, 2, k) as a (2n, q) CSR matrix (k entries per row)."""
+        k = A.shape[2]
+        indptr = np.arange(0, A.shape[0] * 2 * k + 1, k)
+        return sp.csr_matrix((A.reshape(-1), self.cols, indptr), shape=self.shape)
+
+    def get_structure(self) -> APStructure:
+        if self.structure is None:
+            self.structure = APStructure(*self.args, self.Aw)
+        return self.structure
+
+    def refresh(self, Aw: F64) -> None:
+        self.Aw = Aw
+        if self.structure is not None:
+            self.structure.refresh(Aw)
+
+
 @dataclass(frozen=True)
 class AdditionalBlock:
     """Self-calibration parameters: k per group, G groups, q = G·k unknowns.
@@ -171,19 +203,21 @@ class AdditionalBlock:
         Group of each image.
     A : ndarray, shape (n, 2, k)
         Design at the observed coordinates (mm per unit), ``Aw`` weighted by 1/σ.
-    A_csr : scipy.sparse.csr_matrix, shape (2n, q)
-        A of all rays as one sparse matrix (the model term A·a in one product).
     w : ndarray, shape (q,)
         Weights of the pseudo-observations a = 0 (0 = free).
     names : list of str
         ``"<name>@g<group>"``.
-    structure : APStructure or None
-        Index orders of the border's terms.
     ray_length : float
         Median ray length, m (the scale of the reuse test of E, F).
     lens : BoundLens or None
         An exact camera model (:mod:`orientviz.bundle.model._lens`): then A, Aw, A_csr are the
         design at the current iterate (:meth:`AdditionalBlock.with_design`).
+    terms : _Terms or None
+        What :attr:`A_csr` and :attr:`structure` are formed from (on first use).
+
+    Properties :attr:`A_csr` (A of all rays as one (2n, q) sparse matrix: the model term
+    A·a in one product) and :attr:`structure` (the border's index orders,
+    :class:`APStructure`) are formed when first read.
     """
 
     k: int = 0
@@ -191,27 +225,34 @@ class AdditionalBlock:
     group: I64 | None = None
     A: F64 | None = None
     Aw: F64 | None = None
-    A_csr: sp.csr_matrix | None = None
     w: F64 | None = None
     names: list[str] = field(default_factory=list)
-    structure: APStructure | None = None
     ray_length: float = 1.0
     lens: BoundLens | None = None
+    terms: _Terms | None = None
 
     @property
     def q(self) -> int:
         """Number of parameters, G·k."""
         return self.k * self.G
 
+    @cached_property
+    def A_csr(self) -> sp.csr_matrix | None:
+        """A of all rays as one (2n, q) CSR matrix (formed on first use)."""
+        return None if self.terms is None else self.terms.csr(self.A)
+
+    @property
+    def structure(self) -> APStructure | None:
+        """Index orders of the border's terms (formed on first use, shared by the blocks
+        :meth:`with_design` makes)."""
+        return None if self.terms is None else self.terms.get_structure()
+
     def with_design(self, A: F64, weight: F64) -> AdditionalBlock:
         """This block with the design ``A`` (n, 2, k) mm per unit (rays weighted by
         ``weight`` (n, 2), 1/mm); the structure's value terms are refreshed in place."""
         Aw = A * weight[:, :, None]
-        A_csr = sp.csr_matrix(
-            (A.reshape(-1), self.A_csr.indices, self.A_csr.indptr), shape=self.A_csr.shape
-        )
-        self.structure.refresh(Aw)
-        return replace(self, A=A, Aw=Aw, A_csr=A_csr)
+        self.terms.refresh(Aw)
+        return replace(self, A=A, Aw=Aw)
 
 
 def image_observations(block: Block, setup: PointSetup, pt_col: I64) -> ImageObservations:
@@ -328,9 +369,6 @@ def additional_block(
     k = A.shape[2]
     Aw = A * obs.weight[:, :, None]
     cols = (np.repeat(grp[obs.image], 2)[:, None] * k + np.arange(k)).ravel()
-    A_csr = sp.csr_matrix(  # k entries per row, in column order: CSR directly
-        (A.reshape(-1), cols, np.arange(0, 2 * n * k + 1, k)), shape=(2 * n, G * k)
-    )
     s = np.inf if ap_sigma is None else ap_sigma
     s = np.asarray(s, dtype=float)
     s = (
@@ -340,7 +378,11 @@ def additional_block(
     )
     w = np.where(np.isfinite(s) & (s > 0), 1.0 / s**2, 0.0)
     names = [f"{nm}@g{g}" for g in range(G) for nm in additional.names]
-    structure = APStructure(obs.image, obs.column, struct.pt_obs, points.n, grp, G, Aw)
+    # the design's sparse form (k entries per row, in column order: CSR directly) and the
+    # border's index orders, formed on first use
+    terms = _Terms(
+        cols, (2 * n, G * k), (obs.image, obs.column, struct.pt_obs, points.n, grp, G), Aw
+    )
     d = block.points.xyz[obs.point] - block.images.X0[obs.image]
     ray_length = float(np.nanmedian(np.linalg.norm(d, axis=1))) if d.size else 1.0
-    return AdditionalBlock(k, G, grp, A, Aw, A_csr, w, names, structure, ray_length, lens)
+    return AdditionalBlock(k, G, grp, A, Aw, w, names, ray_length, lens, terms)

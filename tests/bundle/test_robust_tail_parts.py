@@ -1,0 +1,107 @@
+"""Parts of a robust run's point search (:mod:`orientviz.bundle.loop._tail`): the
+misclosures of a subset of rays, and the gate that leaves the search out where it does
+not pay (:data:`orientviz.bundle.loop._steps.SEARCH_GAIN`)."""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pytest
+
+import orientviz as ov
+from orientviz.bundle import LensModel, ap_set
+from orientviz.bundle.loop import _steps
+from orientviz.bundle.loop._tail import ray_misclosures
+from orientviz.bundle.problem import BundleProblem, BundleState, point_setup
+from orientviz.datasets import __path__ as DATASETS
+from orientviz.io.kinds.block import adjust_block, prepare
+from orientviz.io.problem import load_problem
+from orientviz.simulate import simulate_calibration
+
+
+def _problems():
+    """A pinhole block, one with linear additional parameters per strip, one with a
+    camera model (forward lens)."""
+    sim = ov.simulate_block(2, 5, rng=8)
+    yield "pinhole", BundleProblem(sim.block, point_setup(sim.block, "fixed"))
+    sim = ov.simulate_block(3, 5, rng=21, extra=6, control_sigma=0.05)
+    b = sim.block
+    yield "ebner12", BundleProblem(
+        b, point_setup(b, "weighted"), additional=ap_set("ebner12"), ap_group=b.images.strip,
+        ap_sigma=10.0,
+    )  # fmt: skip
+    cal = simulate_calibration(np.random.default_rng(15), kind="forward", sigma_mm=3e-4)
+    b = cal.block
+    yield "lens", BundleProblem(b, point_setup(b, "fixed"), additional=LensModel("forward"))
+
+
+@pytest.mark.parametrize("case", ["pinhole", "ebner12", "lens"])
+def test_ray_misclosures_are_the_rows_of_the_residuals(case):
+    prob = dict(_problems())[case]
+    b, rng = prob.block, np.random.default_rng(4)
+    ap = rng.normal(0.0, 1e-2, prob.q) if prob.q else np.zeros(0)
+    st = BundleState(b.images.X0.copy(), b.images.angles.copy(), b.points.xyz.copy(), ap)
+    moved = BundleState(
+        st.X0 + rng.normal(0.0, 0.05, st.X0.shape),
+        st.angles + rng.normal(0.0, 1e-3, st.angles.shape),
+        st.xyz + rng.normal(0.0, 0.05, st.xyz.shape),
+        ap,
+    )
+    n = prob.obs.xy.shape[0]
+    rays = rng.choice(n, n // 3, replace=False)
+    both = np.concatenate((rays, rays))  # each ray twice: at st's points and at moved's
+    xyz = np.concatenate((st.xyz[prob.obs.point[rays]], moved.xyz[prob.obs.point[rays]]))
+    got = ray_misclosures(prob, moved.X0, moved.angles, moved.ap, both, xyz)
+    want_at_st_points = prob.residuals(
+        BundleState(moved.X0, moved.angles, st.xyz, moved.ap), jac=False
+    )[0][rays]
+    want = prob.residuals(moved, jac=False)[0][rays]
+    np.testing.assert_allclose(got[: rays.size], want_at_st_points, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(got[rays.size :], want, rtol=1e-12, atol=1e-12)
+    assert np.abs(want - want_at_st_points).max() > 1e-3  # the points' positions act
+
+
+def _camcal():
+    """DBAT camcal (a camera model, 2 074 rays) with 2 % of its rays moved by 20–50 σ."""
+    prob = load_problem(f"{DATASETS[0]}/dbat/dbat_camcal.json")
+    block, _ = prepare(prob)
+    obs = block.observations
+    rng = np.random.default_rng(28)
+    k = rng.choice(obs.xy.shape[0], int(round(0.02 * obs.xy.shape[0])), replace=False)
+    ang, mag = rng.uniform(0, 2 * np.pi, k.size), rng.uniform(20, 50, k.size)
+    obs.xy[k, 0] += mag * np.cos(ang) * obs.sigma[k, 0]
+    obs.xy[k, 1] += mag * np.sin(ang) * obs.sigma[k, 1]
+    prob.options.update(robust="huber")
+    return prob, block
+
+
+def _run(prob, block, monkeypatch):
+    searches = []
+    real = _steps.point_search
+
+    def search(*a, **k):
+        out = real(*a, **k)
+        searches.append(out[1:])
+        return out
+
+    monkeypatch.setattr(_steps, "point_search", search)
+    adj, _ = adjust_block(copy.deepcopy(prob), copy.deepcopy(block), precision=False)
+    return adj, searches
+
+
+def test_search_left_out_after_a_step_it_did_not_pay(monkeypatch):
+    """camcal: the first search lowers Σρ by less than SEARCH_GAIN of its step's decrease;
+    the search is then left out, and the run ends at the optimum of runs that search in
+    every step (½Σρ within 1e-6) in as many steps; with the gate's block size below
+    camcal's the search runs in every robust step."""
+    prob, block = _camcal()
+    gated, searches = _run(prob, block, monkeypatch)
+    assert len(searches) == 1 and searches[0][0] > 0  # it moved points, but saved little
+    monkeypatch.setattr(_steps, "SEARCH_GATE_RAYS", 0)
+    every, searches_all = _run(prob, block, monkeypatch)
+    assert len(searches_all) >= 6
+    assert gated.converged and every.converged
+    assert len(gated.history) <= len(every.history)
+    best = every.history[-1].cost
+    assert abs(gated.history[-1].cost - best) <= 1e-6 * best
