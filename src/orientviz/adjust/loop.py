@@ -19,13 +19,15 @@ viewer's scrubber, a notebook's live plot). Damping policies (:class:`Damping`):
 
 * ``"none"`` — pure Gauss-Newton: every step is taken;
 * ``"lm"`` — Levenberg-Marquardt from λ0: λ × 10 until vᵀPv decreases, then λ / 10;
-* ``"trust"`` — Levenberg-Marquardt as a trust region (Ceres's schedule): λ starts at
-  λ0 (1e-4), a step that decreases vᵀPv is taken and λ shrinks by 3 (never below
-  1e-16: the damping stays, so a weakly determined far point moves only as far as its
-  rays' misclosures pull it in one step); a step that does not is retried with λ × ν,
-  ν doubling (2, 4, 8, …) until it does (λ > 1e16: damping exhausted). A system that
-  is singular after the first iteration (numerically: weak parameters, down-weighted
-  rays) is a rejected step too, retried with λ at least λ0;
+* ``"trust"`` — Levenberg-Marquardt as a trust region (Ceres's schedule for steps that
+  realise their model's decrease: Ceres shrinks λ by max(1/3, 1 − (2ρ − 1)³), ρ the gain
+  ratio, this loop by 3 whatever ρ): λ starts at λ0 (1e-4), a step that decreases vᵀPv
+  is taken and λ shrinks by 3 (never below 1e-16: the damping stays, so a weakly
+  determined far point moves only as far as its rays' misclosures pull it in one step);
+  a step that does not is retried with λ × ν, ν doubling (2, 4, 8, …) until it does
+  (λ > 1e16: damping exhausted). A system that is singular after the first iteration
+  (numerically: weak parameters, down-weighted rays) is a rejected step too, retried
+  with λ at least λ0;
 * ``"fallback"`` — Gauss-Newton while vᵀPv does not increase; a step that would
   increase it is retried with λ = max(10 λ, 1e-4) until it does not (λ > 1e8: damping
   exhausted), and λ goes back by / 10 per accepted step (to 0 below 1e-6). A singular

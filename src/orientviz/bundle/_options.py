@@ -82,12 +82,17 @@ class BundleOptions:
     damping : {"fallback", "trust"}
         The loop's damping (:class:`orientviz.adjust.Damping`): ``"fallback"``
         Gauss-Newton, damped only where a step would raise vᵀPv; ``"trust"``
-        Levenberg-Marquardt with Ceres's trust-region schedule (λ0 = 1e-4, never 0),
-        which keeps weakly determined far points near their rays' meeting point in each
-        step (what imported SfM models use).
+        Levenberg-Marquardt with a trust-region schedule (λ0 = 1e-4, ÷ 3 per accepted
+        step, never 0; the images' blocks damped in their scene's frame), which moves
+        weakly determined far points only as far as their rays pull them in each step
+        (what imported SfM models use). A point whose rays diverge (they meet behind
+        the cameras) recedes along them step by step: its vᵀPv falls towards its value
+        at infinity.
     ftol : float
         Also stop when a step lowers vᵀPv by less than ``ftol`` of its value (Ceres's
-        function tolerance, dimensionless; 0 = off).
+        function tolerance, dimensionless; 0 = off) — in least squares not on a poor
+        step: one that realised less than ¼ of the decrease its linear model predicted,
+        that prediction above ``ftol`` (:mod:`orientviz.bundle.loop._gain`).
     loss : {"none", "huber", "cauchy", "soft_l1"}
         Robust loss ρ of each ray's squared standardised misclosure, minimised inside
         the loop (each step's rays weighted by √ρ′; :mod:`orientviz.bundle.loop._loss`);

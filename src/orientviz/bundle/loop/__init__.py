@@ -6,6 +6,8 @@
   (damping, chord steps, rotations of the image frames, reuse of the border);
 * :mod:`._loss` — :class:`RobustLoss`: Huber, Cauchy and soft-L1 losses of a ray,
   minimised inside the loop (``BundleOptions.loss``);
+* :mod:`._gain` — the decrease of vᵀPv a step's linear model predicts (a poor step's
+  decrease does not stop the run by ``ftol``);
 * :mod:`._tail` — a robust run's rays beyond the scale: the tail's per-ray model and
   each point's own Newton correction and search;
 * :mod:`._finish` — the :class:`~orientviz.bundle.BundleResult` at the last iterate

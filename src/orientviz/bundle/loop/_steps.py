@@ -25,6 +25,9 @@ hand on. Its knobs are fields of the problem's
   nothing by more than ``ap_reuse`` (the Jacobians then change by about as little, less
   than the tolerance of the border's solve) — until a step meets the stopping rule
   (see below);
+* ``options.ftol`` does not stop a least-squares run on a poor step: one whose decrease
+  of vᵀPv meets it but is less than ¼ of the decrease its linear model predicted, that
+  prediction above ftol (:mod:`._gain`; a point whose rays diverge, receding along them);
 * from a poor start (σ0 ≥ ``local_sigma0``, last correction ≥ ``local_min_correction``)
   steps rotate the image frames (:mod:`orientviz.bundle.model._local_rotation`);
 * *chord* steps: a plain bundle without precision solves the step after a small one
@@ -65,6 +68,7 @@ from numpy.typing import NDArray
 from ...adjust.loop import Evaluation, Step
 from ..model import angle_map
 from ..problem import BundleProblem, BundleState
+from ._gain import POOR_GAIN, predicted_decrease
 from ._loss import RobustLoss
 from ._tail import point_newton, point_search, tail_model
 
@@ -203,6 +207,11 @@ class BundleSteps:
         self.points_moved = 0  # points the last search moved otherwise than the joint step
         self.search_gain = None  # … and the decrease of Σρ it added (None: no search)
         self.search_off = False  # the searches stopped paying (SEARCH_GAIN)
+        # the start of the last solved step and its additional parameters' design (the
+        # step's predicted decrease, ._gain), and whether the last accepted least-squares
+        # step was a poor one whose decrease met ftol (it may not stop the run)
+        self._gain_from: tuple | None = None
+        self.poor_step = False
 
     def start(self, st: BundleState) -> Evaluation:
         """Evaluate the start once (the loop asks for it again: no second evaluation)."""
@@ -372,7 +381,7 @@ class BundleSteps:
     def may_stop(self) -> bool:
         """Whether the run may stop: not before a robust loss is switched on, nor after a
         step solved on a reused border E, F (see the module docstring)."""
-        if self.last_reused:
+        if self.last_reused or self.poor_step:
             return False
         return self.loss is None or (self.loss_on and not self.switch_pending)
 
@@ -439,7 +448,24 @@ class BundleSteps:
         # point's Jacobians are formed (the peak memory of a large block)
         if not (self.precision and lam == 0 and not (prob.q or prob.aux or local)):
             ne = fac = None
+        self._gain_from = (st, prob.run.ap.A_csr if prob.q else None)
         return Step(rel, dx, (dc, dp, da, fac, ne, local, points))
+
+    def _poor_step(self, step: Step, previous: Evaluation) -> bool:
+        """Whether an accepted least-squares step whose decrease of vᵀPv meets
+        ``options.ftol`` realised less than :data:`._gain.POOR_GAIN` of the decrease its
+        linear model predicted, that prediction itself above ftol (:mod:`._gain`): such a
+        step does not show that vᵀPv has stopped falling."""
+        ftol, before = self.prob.options.ftol, previous.cost
+        if self.loss is not None or not ftol > 0 or self._gain_from is None:
+            return False
+        actual = before - self.pending_cost
+        if actual > ftol * before:
+            return False
+        st, design = self._gain_from
+        dc, dp, da, local = step.data[0], step.data[1], step.data[2], step.data[5]
+        pred = predicted_decrease(self.prob, st, tuple(previous.data), (dc, dp, da), design, local)
+        return pred > ftol * before and actual < POOR_GAIN * pred
 
     def _point_newton(self, st: BundleState, ev: Evaluation, dc: F64, dp: F64, da: F64, lam: float):
         """The Newton corrections of the points with a ray beyond the scale given the step's
@@ -555,6 +581,8 @@ class BundleSteps:
     def accepted(self, it: int, step: Step, lam: float, previous: Evaluation) -> None:
         prob = self.prob
         dc, dp, _, fac, ne, local, _ = step.data
+        self.poor_step = self._poor_step(step, previous)
+        self._gain_from = None  # (its start state: not kept beyond the step)
         if self.loss_on and not self.switch_pending and previous.cost > 0:  # a robust step
             self.robust_tail = (previous.cost - self.pending_cost) < ROBUST_TAIL * previous.cost
             if self.search_gain is not None:  # the points' search: did it pay?

@@ -45,6 +45,7 @@ from ..reduced import DENSE_CHUNK_BYTES, ReducedStructure, dense_matrix, factor_
 from ._band import padded_band, tri_solve
 from ._border_points import border_point_terms
 from ._camera import camera_precision
+from ._far import mark_far, placed_state
 from ._precision_ap import banded_border, border_inverse, point_terms
 
 F64 = NDArray[np.float64]
@@ -334,15 +335,26 @@ def bundle_precision(res, prob, st, rw, Je, Jp, lin=None) -> None:
 
 def _fill_precision(res, prob, st, rw, Je, Jp, lin) -> None:
     """The work of :func:`bundle_precision` (same arguments)."""
-    S = prob.reduced
-    fac = None
+    fac, far = None, None
     if lin is not None:
         ne, fac, Je, Jp = lin
-    else:
-        ne = prob.normal(st, rw, Je, Jp)
+    else:  # points near infinity: placed where their depth is defined (._far)
+        st_p, far = placed_state(prob, st)
+        if far.size:
+            rw, Je, Jp = prob.residuals(st_p, jac=True)
+        ne = prob.normal(st_p, rw, Je, Jp)
     if ne.ext is not None:  # the cameras inside the images' blocks: their own form
         camera_precision(res, prob, ne, Je, Jp)
-        return
+    else:
+        _fill_from(res, prob, ne, fac, Je, Jp)
+    if far is not None:
+        mark_far(res, prob, far)
+
+
+def _fill_from(res, prob, ne, fac, Je, Jp) -> None:
+    """The precision from the normal equations ``ne`` at the solution (``fac``: the
+    factor of its reduced system when there is one); the rest as :func:`_fill_precision`."""
+    S = prob.reduced
     blocks = ne.blocks
     opts = prob.options
     inverse = ReducedInverse(S, blocks, fac, opts.dense_inverse_limit, opts.takahashi_block)

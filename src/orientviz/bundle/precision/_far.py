@@ -1,0 +1,96 @@
+"""Points near infinity in the precision: placed where their depth is defined.
+
+A point whose rays meet at less than :data:`HELD_PARALLAX` (rad) has no determined depth:
+its normal block V has an eigenvalue along the mean ray that is zero to rounding, and the
+reduced system S = U − Σ W V⁻¹ Wᵀ formed with it is not positive definite in floating
+point (its Cholesky fails, or its cofactors carry the noise of V⁻¹). For the precision
+such a point is moved along its mean ray to the distance at which its rays meet at
+:data:`PLACED_PARALLAX` (its rays' directions, and so what they tell about the images'
+rotations, are kept; its depth becomes weakly determined instead of undetermined), and
+the rays' Jacobians are taken there. The images', the cameras' and the other points'
+cofactors and every ray's redundancy number are then finite; what the placed depth adds
+to them is of the order of the images' base over that distance. The point's own
+cofactors and its rays' point gains are reported as NaN (its depth is not determined).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+F64 = NDArray[np.float64]
+I64 = NDArray[np.int64]
+
+#: Rays of a point meeting at less than this angle (rad): the point is near infinity for
+#: the precision (the loop's own limit, ``bundle.loop.FAR_PARALLAX``).
+HELD_PARALLAX: float = 1e-5
+
+
+def far_columns(prob, st) -> tuple[I64, F64]:
+    """Columns of the point unknowns whose rays meet at less than :data:`HELD_PARALLAX`
+    (the largest angle between a ray and the point's mean ray direction), not weighted
+    by a coordinate observation, with at least two rays; and their mean ray directions
+    (unit vectors, (far, 3))."""
+    vo = prob.obs.var_rays
+    col = prob.obs.column[vo]
+    p_var = prob.points.n
+    if not col.size:
+        return np.zeros(0, np.int64), np.zeros((0, 3))
+    d = st.xyz[prob.points.unknown[col]] - st.X0[prob.obs.image[vo]]
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    mean = np.zeros((p_var, 3))
+    np.add.at(mean, col, d)
+    mean /= np.linalg.norm(mean, axis=1)[:, None]
+    # the angle from the cross product: accurate where arccos of a dot product is not
+    sin = np.linalg.norm(np.cross(d, mean[col]), axis=1)
+    par = np.zeros(p_var)
+    np.maximum.at(par, col, sin)
+    rays = np.bincount(col, minlength=p_var)
+    free = ~np.any(prob.points.prior_w > 0, axis=1)
+    cols = np.flatnonzero((par < np.sin(HELD_PARALLAX)) & (rays >= 2) & free)
+    return cols, mean[cols]
+
+
+#: The angle (rad) at which a point's rays meet where the precision places a point near
+#: infinity (its V then has a condition number of about 1/PLACED_PARALLAX²).
+PLACED_PARALLAX: float = 1e-4
+
+
+def placed_state(prob, st):
+    """``(st, cols)``: ``st`` with the points near infinity placed along their mean rays
+    at the distance where their rays meet at :data:`PLACED_PARALLAX` (a new state; ``st``
+    itself when there are none), and those points' columns."""
+    cols, d = far_columns(prob, st)
+    if not cols.size:
+        return st, cols
+    vo = prob.obs.var_rays
+    col = prob.obs.column[vo]
+    img = prob.obs.image[vo]
+    pos = -np.ones(prob.points.n, np.int64)
+    pos[cols] = np.arange(cols.size)
+    sel = pos[col] >= 0
+    k = pos[col[sel]]
+    X0 = st.X0[img[sel]]
+    centre = np.zeros((cols.size, 3))
+    np.add.at(centre, k, X0)
+    centre /= np.bincount(k, minlength=cols.size)[:, None]
+    spread = np.zeros(cols.size)
+    np.maximum.at(spread, k, np.linalg.norm(X0 - centre[k], axis=1))
+    keep = spread > 0  # rays from one centre: nothing to place by
+    xyz = st.xyz.copy()
+    pts = prob.points.unknown[cols[keep]]
+    xyz[pts] = centre[keep] + (spread[keep] / PLACED_PARALLAX)[:, None] * d[keep]
+    return replace(st, xyz=xyz), cols
+
+
+def mark_far(res, prob, cols: I64) -> None:
+    """The far points' cofactors and their rays' point gains in ``res``: NaN (their depth
+    is not determined)."""
+    if not cols.size:
+        return
+    res.cofactor_groups["points"][prob.points.unknown[cols]] = np.nan
+    vo = prob.obs.var_rays
+    rays = np.arange(prob.obs.image.size)[vo][np.isin(prob.obs.column[vo], cols)]
+    res.ray_gains.points[prob.obs.index[rays]] = np.nan
