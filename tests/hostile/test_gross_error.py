@@ -48,3 +48,22 @@ def test_a_misfit_of_many_observations_keeps_the_model_causes(tmp_path, capsys):
     assert main(["solve", str(path)]) == 4
     err = capsys.readouterr().err
     assert "One gross error" not in err and "lens distortion" in err
+
+
+def test_no_single_gross_error_is_named_when_w_squared_exceeds_vtpv():
+    """w_i² ≤ vᵀPv = r σ̂0² holds for the linearised model; redundancy numbers that break
+    it (nearly singular normal equations at a wrong minimum) name no observation."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from orientviz.io.kinds.block import single_gross_error
+
+    def adj(w_max):
+        w = np.r_[w_max, np.full(99, 0.5)]
+        return SimpleNamespace(normalized_residuals=w, redundancy=50, sigma0=30.0, obs_labels=None)
+
+    omega = 50 * 30.0**2  # vᵀPv = 45 000
+    named = single_gross_error(adj(np.sqrt(omega) * 0.9999), 50)
+    assert named is not None and "observation no. 1" in named
+    assert single_gross_error(adj(np.sqrt(omega) * 1.01), 50) is None

@@ -22,16 +22,13 @@ import argparse
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from ..adjust.result import Adjustment
 from ..block import Block
 from ..errors import InputError
 from ..io.colmap import write_colmap
-from ..io.kinds.block import adjust_block, prepare
 from ..io.problem import Units, write_problem
 from ..io.safeio import prepare_output_dir
-from ..io.solve import check_geometry, failure, limit_hint, load_named
+from ..io.solve import MISFIT_EXIT, failure, limit_hint, load_named, misfit, solve_problem
 from ..units import RHO
 from ._tables import adjusted_block, image_table, point_table
 
@@ -104,7 +101,8 @@ def run_from_cli(args: argparse.Namespace) -> int:
     [--fix ID[:PARTS]]``: the bundle adjustment as ``orientviz solve`` runs it (the file's
     options, its datum or the command line's ``--free`` / ``--fix``), then
     :func:`export_results`. Exit 0 written, 2 bad input, 3 adjustment impossible or not
-    converged (nothing written)."""
+    converged, 4 the model does not fit the data (as ``solve``'s exit 4); nothing written
+    unless 0."""
     prog = "orientviz export"
     try:
         problem = load_named(args.file)  # a path, or the name of a shipped example
@@ -115,12 +113,10 @@ def run_from_cli(args: argparse.Namespace) -> int:
                 problem.options = dict(problem.options, **{name: getattr(args, name)})
         block = problem.data
         adj, notes = None, []
-        if not args.no_adjust:
-            for f in check_geometry(problem):  # errors raise; warnings are printed
-                print(f"{prog}: warning: {args.file}: {f.message}", file=sys.stderr)
-            block, notes = prepare(problem)  # approximate values, the datum (--free, --fix)
-            with np.errstate(all="ignore"):
-                adj, _ = adjust_block(problem, block)
+        if not args.no_adjust:  # as `orientviz solve` adjusts it (approximations, datum)
+            solution = solve_problem(problem, "bundle")
+            adj, block = solution.adjustment, solution.start
+            notes = [n for n in solution.notes if n.startswith(("free network", "datum"))]
             if not adj.converged:
                 at_limit = str(adj.reason).startswith("reached the maximum")
                 print(
@@ -129,6 +125,13 @@ def run_from_cli(args: argparse.Namespace) -> int:
                     file=sys.stderr,
                 )
                 return 3
+            for note in solution.notes:  # the geometry's and the fit's warnings, as solve's
+                if note.startswith("warning: "):
+                    print(f"{prog}: warning: {args.file}: {note[9:]}", file=sys.stderr)
+            if misfit(solution):  # the estimates are not a result: nothing written
+                print(f"{prog}: {args.file}: nothing written (the model does not fit the data; "
+                      f"orientviz solve {args.file} prints the report)", file=sys.stderr)  # fmt: skip
+                return MISFIT_EXIT
         formats = [f.strip() for f in args.format.split(",") if f.strip()]
         u = problem.units  # the CSV's angles in the file's unit (a "dms" file: degrees)
         written = export_results(

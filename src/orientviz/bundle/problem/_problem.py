@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from ...block import Block
 from .._options import BundleOptions
-from ..model._kernel import RayProjection, normalised_block, ray_jacobians
+from ..model._kernel import RayProjection, ray_jacobians
 from ..model._local_rotation import apply_local
 from ..reduced import (
     ImageGram,
@@ -217,11 +217,26 @@ class BundleProblem:
 
     def _lens_residuals(self, st: BundleState, jac: bool):
         """Misclosures and Jacobians through the camera model (:mod:`._lens`); with
-        ``jac`` the design of its parameters at ``st`` becomes the problem's."""
-        obs, lens = self.obs, self.ap.lens
-        nrm, Je, Jp = normalised_block(
-            st.X0, st.angles, obs.image, st.xyz[obs.point], self.block.sequence, jac
-        )
+        ``jac`` the design of its parameters at ``st`` becomes the problem's.
+
+        The normalised projection of a call without ``jac`` is kept until the next call:
+        the Jacobians at the same ``st`` (a trial point accepted) are formed from it, the
+        rays are not projected again (the same values as :func:`normalised_block`)."""
+        obs, lens, run = self.obs, self.ap.lens, self.run
+        kept, run.projection = run.projection, None
+        seq = self.block.sequence
+        if kept is not None and kept[0] is st:
+            proj = kept[1]
+        else:
+            one, zero = np.ones(self.m), np.zeros(self.m)
+            xyz = st.xyz[obs.point]
+            proj = RayProjection(st.X0, st.angles, one, zero, zero, obs.image, xyz, seq)
+        nrm = proj.xy
+        if jac:
+            Je, Jp = ray_jacobians(proj, st.angles, seq)
+        else:
+            Je = Jp = None
+            run.projection = (st, proj)
         f, M, A = lens.evaluate(st.ap, self.ap.group[obs.image], nrm, obs.xy, jac)
         if jac:
             Je, Jp = M @ Je, M @ Jp

@@ -401,7 +401,9 @@ def single_gross_error(adj, n_image: int, block: Block | None = None) -> str | N
     (σ_i √r_i), a-priori σ0 = 1), so σ̂0 without it is √((r σ̂0² − w_i²) / (r − 1)).
     When that is at most :data:`GROSS_SIGMA0` for the largest ``|w|``, one gross error
     explains the misfit; observations whose ``|w|`` equals the largest (within 1 %) cannot
-    be told apart from it and are named too.
+    be told apart from it and are named too. A largest ``w_i²`` above ``r σ̂0²`` breaks
+    that identity of the linearised model (redundancy numbers of nearly singular normal
+    equations): then no observation is named.
 
     Returns
     -------
@@ -418,6 +420,10 @@ def single_gross_error(adj, n_image: int, block: Block | None = None) -> str | N
     aw = np.where(np.isfinite(w), np.abs(w), 0.0)
     i = int(np.argmax(aw))
     omega = r * float(adj.sigma0) ** 2
+    if aw[i] ** 2 > omega * (1.0 + 1e-6):
+        # w_i² ≤ vᵀPv holds for the linearised model; beyond rounding its failure means the
+        # redundancy numbers are not reliable here (e.g. nearly singular normal equations)
+        return None
     rest = max(omega - aw[i] ** 2, 0.0)
     s0 = float(np.sqrt(rest / (r - 1)))
     if s0 > GROSS_SIGMA0:
