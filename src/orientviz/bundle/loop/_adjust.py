@@ -263,24 +263,24 @@ def bundle_adjust(
             on_iteration=steps.begin,
         )
         st, history, converged, reason = run.state, run.history, run.converged, run.reason
-        if loss is None and getattr(run.evaluation.data, "deferred", False):
+        # the derivatives and a camera model's design at the last iterate are read by the
+        # precision, the check of a damped start and auxiliary data only
+        need = precision or run.damped_start or prob.aux is not None
+        if need and loss is None and getattr(run.evaluation.data, "deferred", False):
             steps.resolve(st, run.evaluation)  # the loop asked for derivatives (robust: below)
         prob.reduced.release_maps()  # the Schur formation's maps: not held through the precision
         steps.chord_factor = steps.chord_pending = None
         rw, Je, Jp = run.evaluation.data
         cost, obs_sigma = run.evaluation.cost, None
         if loss is not None:  # the result refers to the rays' σ/√ρ′ at the last iterate
-            # the Jacobians: for the precision, the check of a damped start, auxiliary data,
-            # and a camera model's design at the last iterate (formed with them, below)
-            need = precision or run.damped_start or prob.aux is not None
-            need = need or (prob.ap.lens is not None and bool(prob.q))
             rw, Je, Jp, cost, obs_sigma = robust_end(prob, steps, st, jacobian=need)
             steps.lin = None
-        elif steps.is_local(run.evaluation):  # the precision needs the derivatives by ω, φ, κ
+        elif need and steps.is_local(run.evaluation):  # derivatives by ω, φ, κ are needed
             rw, Je, Jp = prob.residuals(st, jac=True)
         damped_start, lin = run.damped_start, steps.lin
         prob.run.border.hold = prob.run.border.reuse = False
-        prob.design_at(st)  # a lens model: its design at the final iterate (precision)
+        if need:
+            prob.design_at(st)  # a lens model: its design at the final iterate
         if not converged:
             lin = None
         if damped_start:  # a start that needed damping: prove the solution is determinable

@@ -123,6 +123,14 @@ ROBUST_TAIL_FLOOR: float = 0.3
 #: soft-L1: 0.9 %, then 16–40 % per step). Shares per step: benchmarks/README.md.
 SEARCH_GAIN: float = 0.02
 SEARCH_GATE_RAYS: int = 10_000
+#: No ftol stop after a least-squares step damped by a λ of at least this that does not
+#: meet the tolerance (the damping then at least equals the curvature on the normal
+#: matrix's diagonal, the step is shortened by half or more): its small decrease of vᵀPv
+#: is the damping's. From a misplaced image (σ0 1e4) "trust" reached λ 1e6 in its 4th
+#: step and stopped there on ftol at σ0 8 473, "converged". A step below the tolerance may
+#: still stop the run (at an optimum reached to rounding, undamped steps are rejected by
+#: the rounding of vᵀPv and λ grows while the corrections vanish).
+STOP_MAX_LAMBDA: float = 1.0
 
 
 class _Linearisation(tuple):
@@ -212,6 +220,7 @@ class BundleSteps:
         # step was a poor one whose decrease met ftol (it may not stop the run)
         self._gain_from: tuple | None = None
         self.poor_step = False
+        self.damped_step = False  # the last accepted step was damped by λ ≥ STOP_MAX_LAMBDA
 
     def start(self, st: BundleState) -> Evaluation:
         """Evaluate the start once (the loop asks for it again: no second evaluation)."""
@@ -380,8 +389,10 @@ class BundleSteps:
 
     def may_stop(self) -> bool:
         """Whether the run may stop: not before a robust loss is switched on, nor after a
-        step solved on a reused border E, F (see the module docstring)."""
-        if self.last_reused or self.poor_step:
+        step solved on a reused border E, F (see the module docstring), nor by ftol after
+        a least-squares step damped by λ ≥ :data:`STOP_MAX_LAMBDA` (its small decrease is
+        the damping's, not the optimum's)."""
+        if self.last_reused or self.poor_step or self.damped_step:
             return False
         return self.loss is None or (self.loss_on and not self.switch_pending)
 
@@ -582,6 +593,14 @@ class BundleSteps:
         prob = self.prob
         dc, dp, _, fac, ne, local, _ = step.data
         self.poor_step = self._poor_step(step, previous)
+        # a least-squares step shortened by its damping that does not meet the tolerance:
+        # its small decrease of vᵀPv is the damping's (no ftol stop; the tol stop is not
+        # affected: a step below the tolerance may stop the run)
+        self.damped_step = (
+            self.loss is None
+            and lam >= STOP_MAX_LAMBDA
+            and not step.max_correction < prob.options.tol
+        )
         self._gain_from = None  # (its start state: not kept beyond the step)
         if self.loss_on and not self.switch_pending and previous.cost > 0:  # a robust step
             self.robust_tail = (previous.cost - self.pending_cost) < ROBUST_TAIL * previous.cost
