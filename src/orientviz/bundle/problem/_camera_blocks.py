@@ -112,9 +112,10 @@ def camera_normal(prob, st, rw: F64, Je: F64, Jp: F64, lam: float) -> NormalEqua
     the :class:`CameraBlocks`; ``ne.blocks``, ``ne.rhs``, ``ne.Wr``, ``ne.Tr`` are their
     exterior parts and ``ne.ap`` a :class:`CameraBorder`.
 
-    W and T are the run's work arrays (``prob.run.work``): they hold this system's until
-    the next call in the run, which overwrites them (the loop solves each system before
-    forming the next)."""
+    W and T are work arrays kept between iterations (``reduced.tracks.work``, released with
+    the Schur formation's maps after the iterations): they hold this system's until the
+    next call, which overwrites them (the loop solves each system before forming the
+    next)."""
     S, ap = prob.reduced, prob.ap
     tg = S.tracks
     k = ap.k
@@ -122,7 +123,7 @@ def camera_normal(prob, st, rw: F64, Je: F64, Jp: F64, lam: float) -> NormalEqua
     grp = ap.group
     n, nv = Je.shape[0], tg.rays.size
     sw = prob.obs.weight[:, :, None]
-    ws = prob.run.work
+    ws = tg.work
     # [P½J_e | P½A | r'] per ray and a zero row: the images' Gram matrices
     Jz = _work(ws, "Jz", (n + 1, 2, d + 1))
     Jz[n] = 0.0

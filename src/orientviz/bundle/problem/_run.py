@@ -35,10 +35,6 @@ class BundleRun:
         (iterate, image coordinates (n, 2) mm of the adjusted rays without additional
         parameters) of the last evaluation by the collinearity kernel (the result's
         residuals reuse them).
-    work : dict
-        Work arrays of the normal equations with the cameras in the images' blocks
-        (:mod:`._camera_blocks`), kept from one iteration to the next: arrays of a few MB
-        formed anew in every iteration cost their page faults again.
     """
 
     ap: AdditionalBlock
@@ -46,4 +42,3 @@ class BundleRun:
     border: BorderSolver = field(default_factory=BorderSolver)
     projection: tuple | None = None
     projected: tuple | None = None
-    work: dict = field(default_factory=dict)

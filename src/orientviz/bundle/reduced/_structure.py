@@ -135,10 +135,11 @@ class ReducedStructure:
         return self._tracks
 
     def release_maps(self) -> None:
-        """Drop the Schur formation's sparse maps and the sparse factor's work arena
-        (formed again when needed)."""
+        """Drop the Schur formation's sparse maps and work arrays and the sparse factor's
+        work arena (formed again when needed)."""
         if self._tracks is not None:
             self._tracks._maps = {}
+            self._tracks.work = {}
         if getattr(self, "fronts", None) is not None:
             self.fronts.arena = None
 

@@ -25,6 +25,9 @@ I64 = NDArray[np.int64]
 
 #: Largest product array (doubles) of one batched call; bigger groups are split.
 CHUNK_DOUBLES: int = 2**20
+#: Largest product array (doubles) of one batched call of :func:`schur_blocks` with more
+#: than the 6 exterior unknowns per image (:meth:`TrackGroups.chunks`).
+BLOCK_CHUNK_DOUBLES: int = 2**18
 
 
 @dataclass
@@ -49,6 +52,10 @@ class TrackGroups:
         ``rays`` is 0, 1, …, n_var − 1: the observations are in this order (the bundle's
         are, :func:`orientviz.bundle.problem._parts.image_observations`), per-ray arrays are
         slices of the observations' arrays.
+    work : dict
+        Work arrays of a formation in this ray order kept from one iteration to the next
+        (arrays of a few MB formed anew in every iteration cost their page faults again;
+        :mod:`orientviz.bundle.problem._camera_blocks`); released with the maps.
     """
 
     rays: I64
@@ -60,6 +67,7 @@ class TrackGroups:
     by_point: sp.csr_matrix
     in_order: bool = False
     _maps: dict = field(default_factory=dict, repr=False)
+    work: dict = field(default_factory=dict, repr=False)
 
     @property
     def rows(self) -> slice | I64:
@@ -70,6 +78,18 @@ class TrackGroups:
         """The rows of ``a`` (per observation) of the rays in this order."""
         return a[: self.rays.size] if self.in_order else np.take(a, self.rays, axis=0)
 
+    def chunks(self, d: int = 6) -> list:
+        """The groups as :func:`schur_blocks` forms them with d unknowns per image:
+        ``groups`` for d = 6; for other d split into chunks of whole points whose products
+        hold at most :data:`BLOCK_CHUNK_DOUBLES` entries (a smaller work space)."""
+        if d == 6:
+            return self.groups
+        out = []
+        for k, r0, n in self.groups:
+            step = max(1, BLOCK_CHUNK_DOUBLES // (d * d * k * k))
+            out += [(k, r0 + k * c0, min(step, n - c0)) for c0 in range(0, n, step)]
+        return out
+
     def maps(self, keys: I64, m: int, d: int = 6) -> list:
         """Per group a CSC matrix (d · n_blocks, n_points · dk · k): −1 where row r of the
         product block (a, b) of a point (image(a) ≤ image(b)) adds into row r of S's
@@ -79,7 +99,7 @@ class TrackGroups:
         if d not in self._maps:
             lookup = _block_lookup(keys, m)
             maps = []
-            for k, r0, n in self.groups:
+            for k, r0, n in self.chunks(d):
                 img = self.ray_image[r0 : r0 + n * k].reshape(n, k)
                 ascending = k > 1 and bool(np.all(img[:, 1:] > img[:, :-1]))
                 build = _ascending_group_map if ascending else _group_map
@@ -277,7 +297,7 @@ def point_sums_wt(tg: TrackGroups, W: F64, dc: F64) -> F64:
 
 def schur_buffer_size(tg: TrackGroups, d: int = 6) -> int:
     """Doubles of the work space of :func:`schur_blocks` for d unknowns per image."""
-    return max((d * d * k * k * n for k, _, n in tg.groups), default=0)
+    return max((d * d * k * k * n for k, _, n in tg.chunks(d)), default=0)
 
 
 def schur_blocks(st, U: F64, T: F64, W: F64, buf: F64 | None = None) -> F64:
@@ -307,7 +327,7 @@ def schur_blocks(st, U: F64, T: F64, W: F64, buf: F64 | None = None) -> F64:
     # one buffer for the products of every chunk: reused memory (no fresh pages per call)
     if buf is None:
         buf = np.empty(schur_buffer_size(tg, d))
-    for (k, r0, n), M in zip(tg.groups, maps):
+    for (k, r0, n), M in zip(tg.chunks(d), maps):
         r1 = r0 + n * k
         Tk = T[r0:r1].reshape(n, d * k, 3)
         Wk = W[r0:r1].reshape(n, d * k, 3)
