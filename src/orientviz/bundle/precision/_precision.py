@@ -39,14 +39,15 @@ import scipy.linalg
 from numpy.typing import NDArray
 
 from ...blas import blas_threads
-from .._result import ExteriorPairs, RayGains
 from ..problem._ap_normal import dense
 from ..reduced import DENSE_CHUNK_BYTES, ReducedStructure, dense_matrix, factor_reduced
 from ._band import padded_band, tri_solve
 from ._border_points import border_point_terms
 from ._camera import camera_precision
 from ._far import mark_far, placed_state
+from ._pairs import cofactors_by_pairs
 from ._precision_ap import banded_border, border_inverse, point_terms
+from ._store import ray_blocks, store_precision
 
 F64 = NDArray[np.float64]
 
@@ -250,34 +251,6 @@ def _with_border(Zblk: F64, Qca: F64, Y3: F64, bi, bk) -> F64:
     return out
 
 
-def _block_lookup(st: ReducedStructure, ca, cb_):
-    """Index of block (min, max) for image pairs and whether it must be transposed."""
-    m = st.n_cam
-    keys = st.block_i * m + st.block_k
-    lo, hi = np.minimum(ca, cb_), np.maximum(ca, cb_)
-    idx = np.searchsorted(keys, lo * m + hi)
-    return idx, ca > cb_
-
-
-def _cofactors_by_pairs(S, Zblk: F64, T: F64, oi, Qcp: F64) -> None:
-    """Q_cp for each observation a: −Σ_b Q(i_a, i_b) T_b over the rays b of its point, by
-    pairs of rays, in batches of whole a-groups of about 4096 pairs: the (pairs, 6, 6)
-    gather of a batch (~1.2 MB) and its products stay in the processor's cache."""
-    a, b = S.all_pairs
-    # blocks and their transposes side by side: one gather per pair, no masked transpose
-    Zboth = np.concatenate([Zblk, Zblk.transpose(0, 2, 1)])
-    seg = np.append(S.all_pairs_starts, a.size)
-    s0, chunk = 0, 4096
-    while s0 < S.all_pairs_starts.size:
-        s1 = max(int(np.searchsorted(seg, seg[s0] + chunk, side="right")) - 1, s0 + 1)
-        sl = slice(seg[s0], seg[s1])
-        idx, tr = _block_lookup(S, oi[a[sl]], oi[b[sl]])
-        Qab = Zboth[idx + tr * Zblk.shape[0]]
-        QT = Qab @ T[b[sl]]  # Q(i_a, i_b) T_b
-        Qcp[S.pt_obs[s0:s1]] = -np.add.reduceat(QT, S.all_pairs_starts[s0:s1] - seg[s0], axis=0)
-        s0 = s1
-
-
 def cofactors_image_point(S, Z: F64, T: F64, oi, ocol, Qcp: F64) -> bool:
     """Q_cp of each ray by products with the dense inverse Z = S⁻¹: for a chunk of points,
     Z (n × n) times their T_b placed at the rows of their images (n × 3p_chunk), read at
@@ -386,7 +359,7 @@ def _fill_from(res, prob, ne, fac, Je, Jp) -> None:
     if dense_qcp:  # dense S formed densely: Q_cp by products with the dense inverse
         dense_qcp = cofactors_image_point(S, inverse._Z, T, oi, ocol, Qcp)
     if not dense_qcp:
-        _cofactors_by_pairs(S, Zblk, T, oi, Qcp)
+        cofactors_by_pairs(S, Zblk, T, oi, Qcp)
     Vinv = ne.Vinv
     vo = (
         prob.obs.var_rays
@@ -416,15 +389,9 @@ def _fill_from(res, prob, ne, fac, Je, Jp) -> None:
     # estimates per σ-normalised change of the ray's x, y (external reliability); first
     # without the parameters' terms
     Jpv = Jpw[vo]
-    JewT, JpvT = Jew.transpose(0, 2, 1), Jpv.transpose(0, 2, 1)
-    Ke = Qcc_diag[oi] @ JewT
-    Ke[vo] += Qcp[vo] @ JpvT
-    Kp = np.zeros((n_used, 3, 2))
-    Kp[vo] = Qcp[vo].transpose(0, 2, 1) @ JewT[vo] + Qpp[ocol[vo]] @ JpvT
     # 2×2 block of P½ J Q Jᵀ P½ per image observation = Jw K (batched products, no full
     # Q): redundancy numbers r = 1 − diagonal, off-diagonal of P½ Q_vv P½ = −(J Q Jᵀ)_xy
-    H = Jew @ Ke
-    H[vo] += Jpv @ Kp[vo]
+    Ke, Kp, H = ray_blocks(Qcc_diag[oi], Qcp, Qpp, Jew, Jpv, vo, ocol[vo])
     if fast_ap:
         H += Hray
     elif q:  # the parameters' terms of the rays, from the dense border cofactors
@@ -448,50 +415,14 @@ def _fill_from(res, prob, ne, fac, Je, Jp) -> None:
         Ke += Qca_o @ AwT
         Kp[vo] += Qpa_o @ AwT[vo]
     r_xy = -0.5 * (H[:, 0, 1] + H[:, 1, 0])
-    n = prob.block.n_observations
-    rn = np.full((n, 2), np.nan)
-    rn[prob.obs.index] = r_img
-    out_r = [rn.reshape(-1)]
-    # pseudo-observations
-    w = prob.points.prior_w > 0
-    pdiag = np.einsum("nii->ni", Qpp)
-    out_r.append((1.0 - prob.points.prior_w * pdiag)[w])
-    cdiag = np.einsum("nii->ni", Qcc_diag)
-    w = prob.exterior.X0_w > 0
-    out_r.append((1.0 - prob.exterior.X0_w * cdiag[:, :3])[w])
-    w = prob.exterior.angles_w > 0
-    out_r.append((1.0 - prob.exterior.angles_w * cdiag[:, 3:])[w])
-    if q:
-        w = prob.ap.w > 0
-        out_r.append((1.0 - prob.ap.w * np.diag(Faa)[:q])[w])
-    rall = np.concatenate(out_r)
-    res.redundancy_numbers = rall
-    with np.errstate(divide="ignore", invalid="ignore"):
-        wres = res.residuals / (res.sigma_obs * np.sqrt(rall))
-    res.normalized_residuals = np.where(rall > 1e-10, wres, np.nan)
-    # cofactor blocks by result block
-    p = prob.block.n_points
-    Qp_all = np.zeros((p, 3, 3))
-    Qp_all[prob.points.unknown] = Qpp
-    Qp_all[prob.block.points.role == 2] = np.nan
-    res.cofactor_groups["exterior"] = Qcc_diag
-    # Q_cc of every image pair (i ≤ k) that shares a point: key i·m + k (sorted), blocks
-    res.exterior_pairs = ExteriorPairs(S.block_i * m + S.block_k, Zblk)
-    res.cofactor_groups["points"] = Qp_all
-    if q:
-        res.cofactor_groups["additional"] = Faa[:q, :q]
+    faa = Faa[:q, :q] if q else None
+    auxiliary = None
     if aux:  # redundancy numbers of the auxiliary rows, cofactors of the offsets
         if not nb:
             Qca, Qap, Faa = np.zeros((m, 6, 0)), np.zeros((S.n_pt, 0, 3)), np.zeros((0, 0))
-        aux.precision(res, Qcc_diag, Qpp, Qca, Qap, Faa)
-    res.redundancy_check = float(np.nansum(rall))
-    # off-diagonal (x, y) element of P½ Q_vv P½ per image observation: with the diagonal
-    # (the redundancy numbers) the 2×2 block of a ray for 2-D outlier tests
-    rxy = np.full(n, np.nan)
-    rxy[prob.obs.index] = r_xy
-    res.redundancy_xy = rxy
-    gain_e = np.full((n, 6, 2), np.nan)
-    gain_e[prob.obs.index] = Ke
-    gain_p = np.full((n, 3, 2), np.nan)
-    gain_p[prob.obs.index] = Kp
-    res.ray_gains = RayGains(gain_e, gain_p)
+        aux_args = (res, Qcc_diag, Qpp, Qca, Qap, Faa)
+        auxiliary = lambda: aux.precision(*aux_args)  # noqa: E731
+    store_precision(
+        res, prob, r_img=r_img, r_xy=r_xy, Qpp=Qpp, Qext=Qcc_diag, pairs=Zblk, Faa=faa, Ke=Ke,
+        Kp=Kp, auxiliary=auxiliary,
+    )  # fmt: skip

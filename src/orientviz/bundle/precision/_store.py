@@ -1,0 +1,129 @@
+"""What every precision path hands to the bundle result.
+
+:func:`ray_blocks` forms each ray's gains and its 2 × 2 block of P½ J Q Jᵀ P½ from the
+cofactors; :func:`store_precision` turns a path's cofactors and ray blocks into the result's fields:
+the redundancy numbers of the image coordinates and of the pseudo-observations (weighted
+points, observed projection centres and attitudes, additional parameters), the normalised
+residuals, the cofactor groups, the image pairs' blocks and the rays' gains.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .._result import ExteriorPairs, RayGains
+
+F64 = NDArray[np.float64]
+
+
+def ray_blocks(Qc: F64, Qcp: F64, Qpp: F64, Jc: F64, Jpv: F64, vo, pcol) -> tuple[F64, F64, F64]:
+    """The rays' gains and their blocks of P½ J Q Jᵀ P½, from the cofactors.
+
+    Parameters
+    ----------
+    Qc : ndarray, shape (n, d, d)
+        The cofactor block of each ray's image unknowns (d = 6, or 6 + k with its camera).
+    Qcp : ndarray, shape (n, d, 3)
+        Q_cp of each ray (its image with its point; rows of fixed points unused).
+    Qpp : ndarray, shape (p_var, 3, 3)
+        Cofactors of the point unknowns.
+    Jc : ndarray, shape (n, 2, d)
+        The rays' weighted design by their image unknowns.
+    Jpv : ndarray, shape (n_var, 2, 3)
+        The weighted point Jacobians of the rays of point unknowns (``vo``).
+    vo : slice or ndarray of int
+        The rays of point unknowns; ``pcol`` their point unknowns.
+
+    Returns
+    -------
+    (Kc, Kp, H) : ndarrays, shapes (n, d, 2), (n, 3, 2), (n, 2, 2)
+        The gains K = Q J_wᵀ of each ray on its image unknowns and its point, and
+        J_w K (the ray's 2 × 2 block of P½ J Q Jᵀ P½).
+    """
+    JcT, JpvT = Jc.transpose(0, 2, 1), Jpv.transpose(0, 2, 1)
+    Kc = Qc @ JcT
+    Kc[vo] += Qcp[vo] @ JpvT
+    Kp = np.zeros((Jc.shape[0], 3, 2))
+    Kp[vo] = Qcp[vo].transpose(0, 2, 1) @ JcT[vo] + Qpp[pcol] @ JpvT
+    H = Jc @ Kc
+    H[vo] += Jpv @ Kp[vo]
+    return Kc, Kp, H
+
+
+def store_precision(
+    res, prob, *, r_img: F64, r_xy: F64, Qpp: F64, Qext: F64, pairs: F64, Faa: F64 | None,
+    Ke: F64, Kp: F64, auxiliary: Callable[[], None] | None = None,
+) -> None:  # fmt: skip
+    """Fill ``res`` from a precision path's results.
+
+    Parameters
+    ----------
+    res : Adjustment
+        The bundle result (residual order as in :mod:`orientviz.bundle._result`).
+    prob : BundleProblem
+    r_img : ndarray, shape (n_used, 2)
+        Redundancy numbers of the used rays' x, y.
+    r_xy : ndarray, shape (n_used,)
+        Off-diagonal (x, y) element of P½ Q_vv P½ per used ray.
+    Qpp : ndarray, shape (p_var, 3, 3)
+        Cofactors of the point unknowns (m²).
+    Qext : ndarray, shape (m, 6, 6)
+        Each image's exterior cofactor block (m², m·rad, rad²).
+    pairs : ndarray, shape (blocks, 6, 6)
+        The exterior blocks of the image pairs (i ≤ k) of the reduced structure.
+    Faa : ndarray, shape (q, q), or None
+        Cofactors of the additional parameters (None without them).
+    Ke, Kp : ndarray, shapes (n_used, 6, 2), (n_used, 3, 2)
+        The rays' gains on their image's exterior orientation and on their point.
+    auxiliary : callable, optional
+        Called after the cofactor groups are set and before the redundancy's sum is taken
+        (the auxiliary data's rows and offsets).
+    """
+    S = prob.reduced
+    n = prob.block.n_observations
+    rn = np.full((n, 2), np.nan)
+    rn[prob.obs.index] = r_img
+    out_r = [rn.reshape(-1)]
+    # pseudo-observations
+    w = prob.points.prior_w > 0
+    pdiag = np.einsum("nii->ni", Qpp)
+    out_r.append((1.0 - prob.points.prior_w * pdiag)[w])
+    cdiag = np.einsum("nii->ni", Qext)
+    w = prob.exterior.X0_w > 0
+    out_r.append((1.0 - prob.exterior.X0_w * cdiag[:, :3])[w])
+    w = prob.exterior.angles_w > 0
+    out_r.append((1.0 - prob.exterior.angles_w * cdiag[:, 3:])[w])
+    if Faa is not None:
+        w = prob.ap.w > 0
+        out_r.append((1.0 - prob.ap.w * np.diag(Faa))[w])
+    rall = np.concatenate(out_r)
+    res.redundancy_numbers = rall
+    with np.errstate(divide="ignore", invalid="ignore"):
+        wres = res.residuals / (res.sigma_obs * np.sqrt(rall))
+    res.normalized_residuals = np.where(rall > 1e-10, wres, np.nan)
+    # cofactor blocks by result block
+    Qp_all = np.zeros((prob.block.n_points, 3, 3))
+    Qp_all[prob.points.unknown] = Qpp
+    Qp_all[prob.block.points.role == 2] = np.nan
+    res.cofactor_groups["exterior"] = Qext
+    # Q_cc of every image pair (i ≤ k) that shares a point: key i·m + k (sorted), blocks
+    res.exterior_pairs = ExteriorPairs(S.block_i * prob.m + S.block_k, pairs)
+    res.cofactor_groups["points"] = Qp_all
+    if Faa is not None:
+        res.cofactor_groups["additional"] = Faa
+    if auxiliary is not None:
+        auxiliary()
+    res.redundancy_check = float(np.nansum(rall))
+    # off-diagonal (x, y) element of P½ Q_vv P½ per image observation: with the diagonal
+    # (the redundancy numbers) the 2×2 block of a ray for 2-D outlier tests
+    rxy = np.full(n, np.nan)
+    rxy[prob.obs.index] = r_xy
+    res.redundancy_xy = rxy
+    gain_e = np.full((n, 6, 2), np.nan)
+    gain_e[prob.obs.index] = Ke
+    gain_p = np.full((n, 3, 2), np.nan)
+    gain_p[prob.obs.index] = Kp
+    res.ray_gains = RayGains(gain_e, gain_p)
