@@ -94,8 +94,11 @@ class APStructure:
         # observations by group (direct F and ba terms)
         self.grp_present = np.flatnonzero(np.bincount(go, minlength=G))  # = np.unique(go)
         # the direct F term Σ Aᵀ P A: one product per group over its rays (:meth:`refresh`)
-        self._by_group = np.argsort(go, kind="stable")
-        self._group_bounds = np.searchsorted(go[self._by_group], self.grp_present.tolist() + [G])
+        by_group = np.argsort(go, kind="stable")
+        self._group_bounds = np.searchsorted(go[by_group], self.grp_present.tolist() + [G])
+        # None: the rays are in group order already (one group)
+        in_order = np.array_equal(by_group, np.arange(n))
+        self._by_group = None if in_order else by_group
 
         # (point, group) pairs: rays of one point in images of one group
         vo = pt_obs
@@ -272,7 +275,8 @@ class APStructure:
         (:class:`orientviz.bundle.LensModel`) at every linearisation.
         """
         order, bounds = self._by_group, self._group_bounds
-        Ao = Aw[order].reshape(-1, Aw.shape[2])
+        # the rays by group (no copy when they are in that order already: one group)
+        Ao = (Aw if order is None else Aw[order]).reshape(-1, Aw.shape[2])
         self.F_direct = np.stack(
             [Ao[2 * a : 2 * b].T @ Ao[2 * a : 2 * b] for a, b in zip(bounds[:-1], bounds[1:])]
         )
@@ -362,7 +366,19 @@ def ap_normal(
     VHt[:-1] = HV.transpose(0, 2, 1)
     VHt[-1] = 0.0
     At = np.empty((n + 1, 2, k))  # the reduced design and a zero ray for the padding
-    np.matmul(Jpw, VHt[A.own_pg], out=At[:-1])
+    tg = prob.reduced.tracks
+    if A.pg_pt.size == prob.points.n and tg.in_order:  # one pair per point (one group):
+        # per point one (2k × 3)(3 × k) product of its k rays (the same sums as per ray,
+        # without gathering V⁻¹Hᵀ per ray)
+        p0 = 0
+        for kk, r0, npt in tg.groups:
+            r1 = r0 + npt * kk
+            Vp = VHt[tg.points[p0 : p0 + npt]]
+            np.matmul(Jpw[r0:r1].reshape(npt, 2 * kk, 3), Vp, out=At[r0:r1].reshape(npt, 2 * kk, k))
+            p0 += npt
+        At[tg.rays.size : n] = 0.0  # rays of fixed points
+    else:
+        np.matmul(Jpw, VHt[A.own_pg], out=At[:-1])
     np.subtract(prob.ap.Aw, At[:-1], out=At[:-1])
     At[-1] = 0.0
     if A.batched:  # a group per image: one (6 × 2)(2 × k) product per ray,
