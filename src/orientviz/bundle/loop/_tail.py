@@ -249,7 +249,8 @@ def point_newton(
     # a point whose model is singular (rays without weight, a point at infinity) stays
     tr = N[:, 0] + N[:, 3] + N[:, 5]
     bad = ~(np.abs(det) > 1e-12 * np.maximum(tr, 1e-300) ** 3)
-    dp[bad] = 0.0
+    if bad.any():
+        dp[bad] = 0.0
     # the first breakpoint along dp: a ray beyond the scale reaches it (linearised:
     # ‖r − α J dp‖² = a², the smaller root where r·J dp > 0)
     owner = np.repeat(np.arange(active.size), n_rays)
@@ -283,36 +284,38 @@ def point_search(
     priors' vᵀPv) against the joint step's correction, ≥ 0). Sets the problem's ray
     weights to ``base_weight`` (1/σ)."""
     pts = prob.points
-    act = newton.active
-    x0 = st.xyz[pts.unknown[act]]
+    act, owner = newton.active, newton.owner
+    pw = pts.prior_w[act]
+    prior = bool(pw.any())  # points with a prior: its vᵀPv joins their rays' Σρ
+    x0p = pts.prior_obs[act] - st.xyz[pts.unknown[act]]
     f = newton.fractions()  # (c, a)
     # the linearised rays' Σρ of each point at each fraction of dp: ‖r − f·J dp‖²
-    fo = f[:, newton.owner]  # (c, m)
+    fo = f[:, owner]  # (c, m)
     r, up = newton.r, newton.up
     s = (r * r).sum(axis=1) - 2.0 * fo * (r * up).sum(axis=1) + fo * fo * (up * up).sum(axis=1)
-    v = (pts.prior_obs[act] - x0)[None] - f[:, :, None] * newton.dp[None]
     lin = newton.sums(loss(np.maximum(s, 0.0).T)[0]).T
-    lin += np.sum(pts.prior_w[act] * v * v, axis=2)
+    if prior:
+        v = x0p[None] - f[:, :, None] * newton.dp[None]
+        lin += np.sum(pw * v * v, axis=2)
     lin[~np.isfinite(lin)] = np.inf
     best = f[np.argmin(lin, axis=0), np.arange(act.size)]
-    alt = dp.copy()
-    alt[act] = best[:, None] * newton.dp
+    cand = (dp[act], best[:, None] * newton.dp)  # the joint step's and the ranked one
     prob.obs.weight[...] = base_weight
     # the true misclosures of the active points' rays at both corrections, in one pass
-    rays, owner = newton.obs_rays, newton.owner
+    rays = newton.obs_rays
     xyz = st.xyz[prob.obs.point[rays]]
     both = np.concatenate((rays, rays))
-    at = np.concatenate((xyz + dp[act][owner], xyz + alt[act][owner]))
+    at = np.concatenate((xyz + cand[0][owner], xyz + cand[1][owner]))
     rw = ray_misclosures(prob, st.X0 + dc[:, :3], st.angles + dc[:, 3:], st.ap + da, both, at)
     rho = loss((rw * rw).sum(axis=1))[0]
-    true = []
-    for k, d in enumerate((dp, alt)):
-        vv = pts.prior_obs[act] - x0 - d[act]
-        true.append(newton.sums(rho[k * rays.size : (k + 1) * rays.size]))
-        true[-1] += np.sum(pts.prior_w[act] * vv * vv, axis=1)
+    true = np.add.reduceat(rho.reshape(2, -1), newton.starts, axis=1)  # (2, a)
+    if prior:
+        for k, d in enumerate(cand):
+            vv = x0p - d
+            true[k] += np.sum(pw * vv * vv, axis=1)
     better = true[1] < true[0]  # ties and NaN: the joint step's own
     out = dp.copy()
-    out[act[better]] = alt[act[better]]
+    out[act[better]] = cand[1][better]
     gain = float(np.sum(true[0][better] - true[1][better]))
     return out, int(np.count_nonzero(better)), gain
 
