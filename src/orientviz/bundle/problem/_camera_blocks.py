@@ -35,15 +35,11 @@ from ..reduced import (
     NormalEquations,
     back_substitute,
     factor_reduced,
-    inv3,
-    point_products,
-    ray_couplings,
     schur_blocks,
     schur_buffer_size,
 )
 from ._border import _not_determinable
-from ._damping import image_damping
-from ._state import wrap
+from ._eliminate import eliminate_points, image_blocks, work_array
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -98,14 +94,6 @@ class CameraBlocks:
         return self.blocks.shape[1]
 
 
-def _work(ws: dict, name: str, shape: tuple) -> F64:
-    """The work array ``name`` of ``shape`` from ``ws`` (formed on first use)."""
-    a = ws.get(name)
-    if a is None or a.shape != shape:
-        a = ws[name] = np.empty(shape)
-    return a
-
-
 def camera_normal(prob, st, rw: F64, Je: F64, Jp: F64, lam: float) -> NormalEquations:
     """The normal equations with the cameras inside the images' blocks (see the module
     docstring); the same arguments as :meth:`BundleProblem.normal`. ``ne.ext`` holds
@@ -121,55 +109,18 @@ def camera_normal(prob, st, rw: F64, Je: F64, Jp: F64, lam: float) -> NormalEqua
     k = ap.k
     d = 6 + k
     grp = ap.group
-    n, nv = Je.shape[0], tg.rays.size
+    n = Je.shape[0]
     sw = prob.obs.weight[:, :, None]
     ws = tg.work
-    # [P½J_e | P½A | r'] per ray and a zero row: the images' Gram matrices
-    Jz = _work(ws, "Jz", (n + 1, 2, d + 1))
+    # [P½J_e | P½A | r'] per ray (r': ._eliminate) and a zero row: the Gram matrices
+    Jz = work_array(ws, "Jz", (n + 1, 2, d + 1))
     Jz[n] = 0.0
     np.multiply(Je, sw, out=Jz[:n, :, :6])
     Jz[:n, :, 6:d] = ap.Aw
     Jpw = Jp * sw
-    Wr, V, bp = point_products(tg, Jz[:n, :, :d], Jpw, rw, S.n_pt, _work(ws, "W", (nv, d, 3)))
-    pts = prob.points
-    Vd = V.reshape(-1, 9)[:, ::4]
-    Vd += pts.prior_w
-    xyz = np.take(st.xyz, pts.unknown, axis=0)
-    bp += pts.prior_w * (pts.prior_obs - xyz)
-    diagV = Vd.copy()
-    if lam > 0:
-        Vd *= 1.0 + lam
-    Vinv = inv3(V)
-    Tr = ray_couplings(tg, Wr, Vinv, _work(ws, "T", (nv, d, 3)))
-    y = np.take(np.einsum("nij,nj->ni", Vinv, bp), tg.ray_point, axis=0)
-    Jpr = tg.take(Jpw)
-    Jy = Jpr[:, :, 0] * y[:, 0, None]
-    Jy += Jpr[:, :, 1] * y[:, 1, None]
-    Jy += Jpr[:, :, 2] * y[:, 2, None]
-    Jz[:n, :, d] = rw
-    Jz[tg.rows, :, d] -= Jy
-    G = prob.image_gram.grams(Jz)
-    del Jz, y, Jy, Jpr
-    U = np.ascontiguousarray(G[:, :d, :d])
-    red = G[:, :d, d].copy()
-    ext = prob.exterior
-    trust = lam > 0 and prob.scene_centres is not None
-    U_rays = np.ascontiguousarray(U[:, :6, :6]) if trust else None
-    U[:, _I3, _I3] += ext.X0_w
-    red[:, :3] += ext.X0_w * (ext.X0_obs - st.X0)
-    U[:, _I3 + 3, _I3 + 3] += ext.angles_w
-    red[:, 3:6] += ext.angles_w * wrap(ext.angles_obs - st.angles)
-    wg = ap.w.reshape(-1, k)[grp]  # the cameras' pseudo-observations a = 0, per image
-    U[:, 6 + np.arange(k), 6 + np.arange(k)] += wg
-    red[:, 6:] -= wg * st.ap.reshape(-1, k)[grp]
-    diagU = U[:, _I6, _I6]
-    if trust:  # the exterior damped as in BundleProblem.normal
-        U[:, _I6, _I6] = diagU + lam * (diagU - U_rays[:, _I6, _I6])
-        U6 = U[:, :6, :6]
-        image_damping(U6, lam, st.X0, st.angles, prob.scene_centres, prob.block.sequence, U_rays)
-    elif lam > 0:
-        U[:, _I6, _I6] = diagU * (1.0 + lam)
-    buf = _work(ws, "products", (schur_buffer_size(tg, d),))
+    Wr, V, Vinv, Tr, bp, diagV, G = eliminate_points(prob, st, Jz, Jpw, rw, lam, ws)
+    U, red, diagU = image_blocks(prob, st, G, lam)
+    buf = work_array(ws, "products", (schur_buffer_size(tg, d),))
     blocks = schur_blocks(S, U, Tr, Wr, buf)
     ik = 6 + np.arange(k)
     dg = blocks[S.diag_block]

@@ -27,9 +27,6 @@ from ..reduced import (
     back_substitute,
     dense_schur,
     factor_reduced,
-    inv3,
-    point_products,
-    ray_couplings,
     schur_blocks,
 )
 from ._ap_normal import ap_normal, point_ap_term
@@ -37,7 +34,8 @@ from ._auxiliary import BundleAuxiliary, auxiliary_rows
 from ._border import solve_border
 from ._camera_blocks import camera_blocks_apply, camera_normal, camera_solve
 from ._checks import PointSetup
-from ._damping import image_damping, scene_centres
+from ._damping import scene_centres
+from ._eliminate import eliminate_points, image_blocks
 from ._names import ParameterNames
 from ._parts import (
     AdditionalBlock,
@@ -272,58 +270,18 @@ class BundleProblem:
         if self.camera_blocks and not self.run.border.hold:
             return camera_normal(self, st, rw, Je, Jp, lam)
         sw = self.obs.weight[:, :, None]
-        # [P½J_e | r'] per ray (r' below) and a zero row: the images' Gram matrices
+        # [P½J_e | r'] per ray (r': ._eliminate) and a zero row: the images' Gram matrices
         n = Je.shape[0]
         Jz = np.empty((n + 1, 2, 7))
         Jz[n] = 0.0
         Jew = np.multiply(Je, sw, out=Jz[:n, :, :6])
         Jpw = Jp * sw
-        # point rays in the order of their track lengths (._tracks); sums per point and
-        # per image by products with constant sparse incidences
-        tg = S.tracks
-        Wr, V, bp = point_products(tg, Jew, Jpw, rw, S.n_pt)
-        Vd = V.reshape(-1, 9)[:, ::4]  # the diagonals (a view)
-        Vd += self.points.prior_w
-        xyz = np.take(st.xyz, self.points.unknown, axis=0)
-        bp += self.points.prior_w * (self.points.prior_obs - xyz)
-        if self.aux:
-            self.aux.add_points(V, bp, st.X0, st.xyz, st.g)
-        diagV = Vd.copy()
-        if lam > 0:
-            Vd *= 1.0 + lam
-        Vinv = inv3(V)
-        Tr = ray_couplings(tg, Wr, Vinv)
-        # image blocks and the reduced right-hand side b_c − Σ T b_p = Σ P½J_eᵀ r' with
-        # r' = P½(l − f) − P½J_p V⁻¹ b_p per ray: one Gram matrix per image of
-        # [P½J_e | r'] (n, 2, 7) gathered by image — U and, in its last column, the rhs
-        y = np.take(np.einsum("nij,nj->ni", Vinv, bp), tg.ray_point, axis=0)
-        Jpr = tg.take(Jpw)
-        Jy = Jpr[:, :, 0] * y[:, 0, None]  # P½J_p y per ray by columns (no tiny products)
-        Jy += Jpr[:, :, 1] * y[:, 1, None]
-        Jy += Jpr[:, :, 2] * y[:, 2, None]
-        Jz[:n, :, 6] = rw
-        Jz[tg.rows, :, 6] -= Jy
-        G = self.image_gram.grams(Jz)
-        del Jz, y, Jy, Jpr
+        Wr, V, Vinv, Tr, bp, diagV, G = eliminate_points(self, st, Jz, Jpw, rw, lam)
+        del Jz
         if not (self.q and not self.run.border.hold):  # the weighted Jacobians: border only
             del Jew, Jpw  # (frees them before S is formed: the peak of a large block)
-        U = np.ascontiguousarray(G[:, :6, :6])
-        trust = lam > 0 and self.scene_centres is not None
-        U_rays = U.copy() if trust else None  # the rays' part (the "trust" damping's metric)
-        red = G[:, :6, 6].copy()
-        U[:, [0, 1, 2], [0, 1, 2]] += self.exterior.X0_w
-        red[:, :3] += self.exterior.X0_w * (self.exterior.X0_obs - st.X0)
-        U[:, [3, 4, 5], [3, 4, 5]] += self.exterior.angles_w
-        red[:, 3:] += self.exterior.angles_w * wrap(self.exterior.angles_obs - st.angles)
-        if self.aux:
-            self.aux.add_images(U, red, st.X0, st.xyz, st.g)
-        Ud = U.reshape(-1, 36)[:, ::7]  # the diagonals (a view)
-        diagU = Ud.copy()
-        if trust:  # the rays' part in the scene's frame (._damping), the rest × (1 + λ)
-            Ud += lam * (Ud - U_rays.reshape(-1, 36)[:, ::7])
-            image_damping(U, lam, st.X0, st.angles, self.scene_centres, self.block.sequence, U_rays)
-        elif lam > 0:
-            Ud *= 1.0 + lam
+        U, red, diagU = image_blocks(self, st, G, lam)
+        tg = S.tracks
         r = tg.rays
         out = NormalEquations(
             blocks=None,
