@@ -151,11 +151,17 @@ class APStructure:
         # E correction in the *other* groups of a ray's point (rays of points in the
         # overlap of two groups): its blocks (image, group) = the pattern of (image ×
         # point) · (point × group) without each image's own group
-        inc_img = sp.csr_matrix((np.ones(vo.size), (oi[vo], ocol[vo])), shape=(m, n_pt))
-        inc_grp = sp.csr_matrix((np.ones(npg), (self.pg_pt, self.pg_grp)), shape=(n_pt, G))
-        reach = (inc_img @ inc_grp).tocoo()
-        key = reach.row.astype(np.int64) * G + reach.col
-        self.e_key = np.unique(key[reach.col != grp[reach.row]])
+        if G == 1:  # one group: no other group's blocks, one coupled group pair
+            self.e_key = np.zeros(0, np.int64)
+            n_coupled = int(npg > 0)
+        else:
+            inc_img = sp.csr_matrix((np.ones(vo.size), (oi[vo], ocol[vo])), shape=(m, n_pt))
+            inc_grp = sp.csr_matrix((np.ones(npg), (self.pg_pt, self.pg_grp)), shape=(n_pt, G))
+            reach = (inc_img @ inc_grp).tocoo()
+            key = reach.row.astype(np.int64) * G + reach.col
+            self.e_key = np.unique(key[reach.col != grp[reach.row]])
+            # the coupled group pairs (g1, g2): two groups that share a point
+            n_coupled = (inc_grp.T @ inc_grp).nnz
         # block sums of E @ v and Eᵀ @ y: other blocks → their image, images and other
         # blocks → their group
         K, ki, gi = self.e_key.size, self.e_key // G, self.e_key % G
@@ -164,8 +170,6 @@ class APStructure:
         self.sum_img_grp = sp.csr_matrix((np.ones(m), (grp, np.arange(m))), shape=(G, m))
         # (point, group) pairs by group (ba correction); observations by point
         self.sum_pgg, self.pgg_present = _summation(self.pg_grp)
-        # the coupled group pairs (g1, g2): two groups that share a point
-        n_coupled = (inc_grp.T @ inc_grp).nnz
         self._lists = (oi, go, vo, ocol, first, count)
         self._pairs: dict[str, NDArray] | None = None
         self._sum_e: sp.csr_matrix | None = None
