@@ -147,9 +147,13 @@ def collinearity_block(
     return (p.xy, *ray_jacobians(p, angles, sequence, local))
 
 
-def ray_jacobians(p: RayProjection, angles: F64, sequence: str, local: bool = False):
+def ray_jacobians(
+    p: RayProjection, angles: F64, sequence: str, local: bool = False, contiguous: bool = True
+):
     """J_exterior (n, 2, 6) and J_point (n, 2, 3) of the rays of a :class:`RayProjection`
-    (see :func:`collinearity_block`; ``angles`` those of the projection).
+    (see :func:`collinearity_block`; ``angles`` those of the projection); without
+    ``contiguous`` as strided views of one array (for a caller that maps them at once,
+    e.g. through a camera model's 2 × 2 Jacobian: no copies).
 
     Notes
     -----
@@ -188,6 +192,8 @@ def ray_jacobians(p: RayProjection, angles: F64, sequence: str, local: bool = Fa
         E[1, 3 + k] += bv * dw
     np.negative(E[:, 6:], out=E[:, :3])
     J = E.transpose(2, 0, 1)
+    if not contiguous:
+        return J[:, :, :6], J[:, :, 6:]
     return np.ascontiguousarray(J[:, :, :6]), np.ascontiguousarray(J[:, :, 6:])
 
 

@@ -230,8 +230,8 @@ class BundleProblem:
             xyz = st.xyz[obs.point]
             proj = RayProjection(st.X0, st.angles, one, zero, zero, obs.image, xyz, seq)
         nrm = proj.xy
-        if jac:
-            Je, Jp = ray_jacobians(proj, st.angles, seq)
+        if jac:  # views, mapped through the camera model below
+            Je, Jp = ray_jacobians(proj, st.angles, seq, contiguous=False)
         else:
             Je = Jp = None
             run.projection = (st, proj)
