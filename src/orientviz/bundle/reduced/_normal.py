@@ -145,6 +145,13 @@ class NormalEquations:
     _T: F64 | None = field(default=None, repr=False)
 
     def _by_observation(self, A: F64) -> F64:
+        """``A`` (per ray of a point unknown, ``rays`` order) per observation, zero for
+        fixed points: ``A`` itself when those rays are all the observations in their own
+        order (read only)."""
+        r = self.rays
+        if r.size == self.n_obs and (r.size == 0 or (r[0] == 0 and r[-1] == r.size - 1)):
+            if np.array_equal(r, np.arange(r.size)):
+                return A
         out = np.zeros((self.n_obs,) + A.shape[1:])
         out[self.rays] = A
         return out
