@@ -98,12 +98,13 @@ class TrackGroups:
         use per ``d`` (one d-element row per pair of rays: Σ k(k+1)/2 · d entries)."""
         if d not in self._maps:
             lookup = _block_lookup(keys, m)
+            minus = _MinusOnes()  # the maps' values, one array shared by them
             maps = []
             for k, r0, n in self.chunks(d):
                 img = self.ray_image[r0 : r0 + n * k].reshape(n, k)
                 ascending = k > 1 and bool(np.all(img[:, 1:] > img[:, :-1]))
                 build = _ascending_group_map if ascending else _group_map
-                maps.append(build(img, lookup, keys.size, d))
+                maps.append(build(img, lookup, keys.size, d, minus))
             self._maps[d] = maps
         return self._maps[d]
 
@@ -121,7 +122,21 @@ def _block_lookup(keys: I64, m: int):
     return lambda a, b: table[a, b - a]
 
 
-def _group_map(img: I64, lookup, n_blocks: int, d: int = 6) -> sp.csc_matrix:
+class _MinusOnes:
+    """Views of one array of −1.0 (grown when asked for more): the maps' values, shared
+    instead of an array of −1 per map (the sparse products read them only; scipy copies
+    a view given to its constructor, so the maps take theirs after it)."""
+
+    def __init__(self) -> None:
+        self.a = np.zeros(0)
+
+    def __call__(self, size: int) -> F64:
+        if size > self.a.size:
+            self.a = np.full(max(size, 2 * self.a.size), -1.0)
+        return self.a[:size]
+
+
+def _group_map(img: I64, lookup, n_blocks: int, d: int = 6, minus=None) -> sp.csc_matrix:
     """The map of one group (n points × k images, ``img``) into the rows of S's blocks
     (``lookup``: :func:`_block_lookup`) of d × d."""
     n, k = img.shape
@@ -137,10 +152,13 @@ def _group_map(img: I64, lookup, n_blocks: int, d: int = 6) -> sp.csc_matrix:
     rows = rows6.reshape(-1)[keep6]
     indptr = np.zeros(keep6.size + 1, np.int32)
     np.cumsum(keep6, out=indptr[1:])
-    return sp.csc_matrix((np.full(rows.size, -1.0), rows, indptr), shape=(d * n_blocks, keep6.size))
+    M = sp.csc_matrix((np.full(rows.size, -1.0), rows, indptr), shape=(d * n_blocks, keep6.size))
+    if minus is not None:
+        M.data = minus(rows.size)
+    return M
 
 
-def _ascending_group_map(img: I64, lookup, n_blocks: int, d: int = 6) -> sp.csc_matrix:
+def _ascending_group_map(img: I64, lookup, n_blocks: int, d: int = 6, minus=None) -> sp.csc_matrix:
     """:func:`_group_map` for points whose rays are in ascending image order (as the
     bundle's set-up orders them): the kept pairs are a ≤ b for every point, so the map
     is one point's pattern repeated (no masks over all n·6k² product rows; the same
@@ -161,7 +179,10 @@ def _ascending_group_map(img: I64, lookup, n_blocks: int, d: int = 6) -> sp.csc_
     indptr[:-1] = (per_point * np.arange(n, dtype=np.int32)[:, None] + before).reshape(-1)
     indptr[-1] = n * per_point
     shape = (d * n_blocks, n * kept.size)
-    return sp.csc_matrix((np.full(rows.size, -1.0), rows.reshape(-1), indptr), shape=shape)
+    M = sp.csc_matrix((np.full(rows.size, -1.0), rows.reshape(-1), indptr), shape=shape)
+    if minus is not None:  # its own −1s (freed at once) for a view of the shared ones
+        M.data = minus(rows.size)
+    return M
 
 
 def track_groups(st) -> TrackGroups:
