@@ -42,10 +42,6 @@ from ._border import _not_determinable
 from ._eliminate import eliminate_points, image_blocks, work_array
 
 F64 = NDArray[np.float64]
-I64 = NDArray[np.int64]
-
-_I3 = np.arange(3)
-_I6 = np.arange(6)
 
 
 def camera_blocks_apply(prob) -> bool:
