@@ -1,7 +1,8 @@
 """Real SfM data: orientviz's bundle against pycolmap's (Ceres) on the same model.
 
 ``python benchmarks/bench_sfm.py [--bal FILE] [--colmap DIR ...] [--skip-bal] [--skip-axe]
-[--threads 1,default] [--skip-cli] [--cli-rounds N] [--robust LOSSES] [--dir DIR]``
+[--threads 1,default] [--skip-cli] [--cli-rounds N] [--cli-command CMD] [--robust LOSSES]
+[--dir DIR]``
 
 Models (each measurement runs in its own fresh process: honest peak RSS):
 
@@ -33,6 +34,9 @@ same run (``--cli-rounds N``: both N times in turn, the ratio of their medians),
 Python's compiled modules kept (PYTHONPYCACHEPREFIX in the working folder, filled by a
 first run: as an installed package has them); where the environment sets
 PYTHONDONTWRITEBYTECODE, also as it runs (orientviz's modules compiled at every start).
+The two commands run as ``--cli-command`` (default: the ``orientviz`` console script next to
+this Python, as a virtual environment puts it on PATH; ``--cli-command orientviz`` takes the
+one on PATH, e.g. a pyenv shim, which adds its own start-up to each command).
 Both solvers stop with Ceres's default function tolerance (1e-6 relative).
 
 ``--robust huber,soft_l1,cauchy`` (instead of the table above, first thread setting
@@ -231,13 +235,15 @@ def ov(args: list[str], check: bool = True) -> None:
 
 
 def cli_end_to_end(
-    import_cmd: list[str], json_path: Path, threads: str, pycache: Path | None = None
-) -> float:
+    import_cmd: list[str], json_path: Path, threads: str, pycache: Path | None = None,
+    exe: str = "orientviz",
+) -> float:  # fmt: skip
     """CPU (s) of ``orientviz import-* … && orientviz solve … --free`` (both processes).
 
     ``pycache``: Python keeps the compiled modules there (PYTHONPYCACHEPREFIX, one run
     before the measured one fills it) as an installed package has them; None: as the
     environment says (PYTHONDONTWRITEBYTECODE=1 compiles orientviz's modules every run).
+    ``exe``: the orientviz command (a path, or a name looked up on PATH).
     """
     env = _env(threads)
     if pycache is not None:
@@ -246,10 +252,8 @@ def cli_end_to_end(
     runs = 2 if pycache is not None else 1
     for _ in range(runs):  # the last one is measured
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
-        subprocess.run(["orientviz", *import_cmd], check=True, capture_output=True, env=env)
-        subprocess.run(
-            ["orientviz", "solve", str(json_path), "--free"], capture_output=True, env=env
-        )
+        subprocess.run([exe, *import_cmd], check=True, capture_output=True, env=env)
+        subprocess.run([exe, "solve", str(json_path), "--free"], capture_output=True, env=env)
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
@@ -263,6 +267,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--skip-bal", action="store_true", help="without the BAL problem")
     ap.add_argument("--threads", default="1,default")
     ap.add_argument("--skip-cli", action="store_true")
+    beside = Path(sys.executable).with_name("orientviz")  # what a venv puts on PATH
+    ap.add_argument("--cli-command", default=str(beside) if beside.exists() else "orientviz",
+                    help="the orientviz command of the CLI rows (default: the console script "
+                    "next to this Python)")  # fmt: skip
     ap.add_argument("--cli-rounds", type=int, default=1,
                     help="library solve and CLI end to end measured N times in turn (medians)")  # fmt: skip
     ap.add_argument("--robust", default="", help="losses (huber,soft_l1,cauchy): see below")
@@ -313,15 +321,20 @@ def main(argv: list[str] | None = None) -> int:
                        cpu_ratio=o["cpu"] / p["cpu"], rss_ratio=o["peak_rss_mb"] / p["peak_rss_mb"])  # fmt: skip
             if not a.skip_cli:
                 lib = [o["cpu"]]
-                cli = [cli_end_to_end(import_cmd, Path(ov_model), threads, work / "pyc")]
+                exe = a.cli_command
+                cli = [cli_end_to_end(import_cmd, Path(ov_model), threads, work / "pyc", exe)]
                 for _ in range(a.cli_rounds - 1):  # the two in turn: medians on a busy machine
                     lib.append(run_worker("orientviz", ov_model, threads)["cpu"])
-                    cli.append(cli_end_to_end(import_cmd, Path(ov_model), threads, work / "pyc"))
+                    cli.append(
+                        cli_end_to_end(import_cmd, Path(ov_model), threads, work / "pyc", exe)
+                    )
                 row["cli_cpu"], row["cli_lib_cpu"] = statistics.median(cli), statistics.median(lib)
                 row["cli_ratio"] = row["cli_cpu"] / row["cli_lib_cpu"]
                 row["cli_rounds"] = dict(library=lib, cli=cli)
                 if os.environ.get("PYTHONDONTWRITEBYTECODE"):  # and as this environment runs it
-                    row["cli_cpu_compiling"] = cli_end_to_end(import_cmd, Path(ov_model), threads)
+                    row["cli_cpu_compiling"] = cli_end_to_end(
+                        import_cmd, Path(ov_model), threads, exe=exe
+                    )
             rows.append(row)
             print(json.dumps(row))
     print()
