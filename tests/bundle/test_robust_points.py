@@ -10,22 +10,8 @@ import pytest
 
 from orientviz.bundle.loop import _steps, _tail
 from orientviz.bundle.loop._loss import RobustLoss
-from orientviz.datasets import __path__ as DATASETS
-from orientviz.io.kinds.block import adjust_block, prepare
-from orientviz.io.problem import load_problem
-
-
-def _planted():
-    """DBAT sxb with 2 % of its rays moved by 20–50 σ in a random direction (rng 28)."""
-    prob = load_problem(f"{DATASETS[0]}/dbat/dbat_sxb.json")
-    block, _ = prepare(prob)
-    obs = block.observations
-    rng = np.random.default_rng(28)
-    k = rng.choice(obs.xy.shape[0], int(round(0.02 * obs.xy.shape[0])), replace=False)
-    ang, mag = rng.uniform(0, 2 * np.pi, k.size), rng.uniform(20, 50, k.size)
-    obs.xy[k, 0] += mag * np.cos(ang) * obs.sigma[k, 0]
-    obs.xy[k, 1] += mag * np.sin(ang) * obs.sigma[k, 1]
-    return prob, block
+from orientviz.io.kinds.block import adjust_block
+from planted_outliers import planted_dbat
 
 
 def _solve(prob, block, loss, **options):
@@ -37,7 +23,7 @@ def _solve(prob, block, loss, **options):
 
 @pytest.fixture(scope="module")
 def planted():
-    return _planted()
+    return planted_dbat("dbat_sxb")
 
 
 @pytest.fixture(scope="module")

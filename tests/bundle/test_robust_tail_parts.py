@@ -14,10 +14,9 @@ from orientviz.bundle import LensModel, ap_set
 from orientviz.bundle.loop import _steps
 from orientviz.bundle.loop._tail import ray_misclosures
 from orientviz.bundle.problem import BundleProblem, BundleState, point_setup
-from orientviz.datasets import __path__ as DATASETS
-from orientviz.io.kinds.block import adjust_block, prepare
-from orientviz.io.problem import load_problem
+from orientviz.io.kinds.block import adjust_block
 from orientviz.simulate import simulate_calibration
+from planted_outliers import planted_dbat
 
 
 def _problems():
@@ -64,14 +63,7 @@ def test_ray_misclosures_are_the_rows_of_the_residuals(case):
 
 def _camcal():
     """DBAT camcal (a camera model, 2 074 rays) with 2 % of its rays moved by 20–50 σ."""
-    prob = load_problem(f"{DATASETS[0]}/dbat/dbat_camcal.json")
-    block, _ = prepare(prob)
-    obs = block.observations
-    rng = np.random.default_rng(28)
-    k = rng.choice(obs.xy.shape[0], int(round(0.02 * obs.xy.shape[0])), replace=False)
-    ang, mag = rng.uniform(0, 2 * np.pi, k.size), rng.uniform(20, 50, k.size)
-    obs.xy[k, 0] += mag * np.cos(ang) * obs.sigma[k, 0]
-    obs.xy[k, 1] += mag * np.sin(ang) * obs.sigma[k, 1]
+    prob, block = planted_dbat("dbat_camcal")
     prob.options.update(robust="huber")
     return prob, block
 
