@@ -50,8 +50,8 @@ def blas_threads(n: int | None = 1) -> contextlib.AbstractContextManager:
 class _BlasController(ThreadpoolController):
     """A :class:`~threadpoolctl.ThreadpoolController` that inspects, among the loaded
     libraries, only those whose file name is a BLAS library's (threadpoolctl's own
-    prefixes): its scan resolves the path of every loaded library (~80 in a solve, 6 ms
-    of file-system calls) before it looks at the name. On other platforms, or a
+    prefixes): its scan resolves the path of every loaded library (about 80 in a solve,
+    each by file-system calls) before it looks at the name. On other platforms, or a
     threadpoolctl without this hook, the full scan runs."""
 
     def _find_libraries_with_linux(self) -> None:
