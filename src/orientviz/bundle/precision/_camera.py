@@ -73,7 +73,7 @@ def camera_precision(res, prob, ne, Je: F64, Jp: F64) -> None:
     Jd = np.empty((n_used, 2, d))
     np.multiply(Je, sw, out=Jd[:, :, :6])
     Jd[:, :, 6:] = ap.Aw
-    Kd, Kp, H = ray_blocks(Qcc[oi], Qcp, Qpp, Jd, Jp[vo] * sw[vo], vo, ocol[vo])
+    Kd, Kp, H = ray_blocks(Qcc, oi, Qcp, Qpp, Jd, Jp[vo] * sw[vo], vo, ocol[vo])
     # P½ J Q Jᵀ P½ per ray: redundancy numbers 1 − diagonal, and the off-diagonal
     r_img = np.clip(1.0 - np.stack([H[:, 0, 0], H[:, 1, 1]], 1), 0.0, 1.0)
     r_xy = -0.5 * (H[:, 0, 1] + H[:, 1, 0])

@@ -391,7 +391,7 @@ def _fill_from(res, prob, ne, fac, Je, Jp) -> None:
     Jpv = Jpw[vo]
     # 2×2 block of P½ J Q Jᵀ P½ per image observation = Jw K (batched products, no full
     # Q): redundancy numbers r = 1 − diagonal, off-diagonal of P½ Q_vv P½ = −(J Q Jᵀ)_xy
-    Ke, Kp, H = ray_blocks(Qcc_diag[oi], Qcp, Qpp, Jew, Jpv, vo, ocol[vo])
+    Ke, Kp, H = ray_blocks(Qcc_diag, oi, Qcp, Qpp, Jew, Jpv, vo, ocol[vo])
     if fast_ap:
         H += Hray
     elif q:  # the parameters' terms of the rays, from the dense border cofactors

@@ -19,13 +19,18 @@ from .._result import ExteriorPairs, RayGains
 F64 = NDArray[np.float64]
 
 
-def ray_blocks(Qc: F64, Qcp: F64, Qpp: F64, Jc: F64, Jpv: F64, vo, pcol) -> tuple[F64, F64, F64]:
+def ray_blocks(
+    Qimg: F64, img, Qcp: F64, Qpp: F64, Jc: F64, Jpv: F64, vo, pcol
+) -> tuple[F64, F64, F64]:
     """The rays' gains and their blocks of P½ J Q Jᵀ P½, from the cofactors.
 
     Parameters
     ----------
-    Qc : ndarray, shape (n, d, d)
-        The cofactor block of each ray's image unknowns (d = 6, or 6 + k with its camera).
+    Qimg : ndarray, shape (m, d, d)
+        The cofactor block of each image's unknowns (d = 6, or 6 + k with its camera).
+    img : ndarray of int, shape (n,)
+        Each ray's image: its block ``Qimg[img]`` is gathered only for the one product
+        that reads it (an (n, d, d) array is the largest of this step).
     Qcp : ndarray, shape (n, d, 3)
         Q_cp of each ray (its image with its point; rows of fixed points unused).
     Qpp : ndarray, shape (p_var, 3, 3)
@@ -44,7 +49,7 @@ def ray_blocks(Qc: F64, Qcp: F64, Qpp: F64, Jc: F64, Jpv: F64, vo, pcol) -> tupl
         J_w K (the ray's 2 × 2 block of P½ J Q Jᵀ P½).
     """
     JcT, JpvT = Jc.transpose(0, 2, 1), Jpv.transpose(0, 2, 1)
-    Kc = Qc @ JcT
+    Kc = Qimg[img] @ JcT
     Kc[vo] += Qcp[vo] @ JpvT
     Kp = np.zeros((Jc.shape[0], 3, 2))
     Kp[vo] = Qcp[vo].transpose(0, 2, 1) @ JcT[vo] + Qpp[pcol] @ JpvT
