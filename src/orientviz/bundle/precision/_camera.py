@@ -24,7 +24,7 @@ import scipy.linalg
 from numpy.typing import NDArray
 
 from ..problem._camera_blocks import dense_blocks
-from ._pairs import cofactors_by_pairs
+from ._pairs import cofactors_by_pairs, point_cofactors
 from ._store import ray_blocks, store_precision
 
 F64 = NDArray[np.float64]
@@ -66,7 +66,7 @@ def camera_precision(res, prob, ne, Je: F64, Jp: F64) -> None:
     Qcp = np.zeros((n_used, d, 3))
     cofactors_by_pairs(S, Zblk, T, oi, Qcp)
     vo = prob.obs.var_rays  # the rays of point unknowns, in point order
-    Qpp = ne.Vinv + np.add.reduceat(T[vo].transpose(0, 2, 1) @ (-Qcp[vo]), S.pt_starts, axis=0)
+    Qpp = point_cofactors(ne.Vinv, T, Qcp, vo, S.pt_starts)
     # the rays' weighted design [P½ J_e | P½ A] (n, 2, d) and P½ J_p; the gains K of each
     # ray on its image's unknowns (d × 2) and on its point (3 × 2)
     sw = prob.obs.weight[:, :, None]
@@ -74,14 +74,11 @@ def camera_precision(res, prob, ne, Je: F64, Jp: F64) -> None:
     np.multiply(Je, sw, out=Jd[:, :, :6])
     Jd[:, :, 6:] = ap.Aw
     Kd, Kp, H = ray_blocks(Qcc, oi, Qcp, Qpp, Jd, Jp[vo] * sw[vo], vo, ocol[vo])
-    # P½ J Q Jᵀ P½ per ray: redundancy numbers 1 − diagonal, and the off-diagonal
-    r_img = np.clip(1.0 - np.stack([H[:, 0, 0], H[:, 1, 1]], 1), 0.0, 1.0)
-    r_xy = -0.5 * (H[:, 0, 1] + H[:, 1, 0])
     # the cameras' cofactors in the border's order (group g: image i with group[i] = g)
     at = np.empty(m, np.int64)
     at[ap.group] = own
     Faa = Z4[at][:, 6:, :, 6:][:, :, at].reshape(m * k, m * k)
     store_precision(
-        res, prob, r_img=r_img, r_xy=r_xy, Qpp=Qpp, Qext=np.ascontiguousarray(Qcc[:, :6, :6]),
+        res, prob, H=H, Qpp=Qpp, Qext=np.ascontiguousarray(Qcc[:, :6, :6]),
         pairs=Zblk[:, :6, :6], Faa=Faa, Ke=Kd[:, :6], Kp=Kp,
     )  # fmt: skip

@@ -41,3 +41,10 @@ def cofactors_by_pairs(S, Zblk: F64, T: F64, oi, Qcp: F64) -> None:
         QT = Qab @ T[b[sl]]  # Q(i_a, i_b) T_b
         Qcp[S.pt_obs[s0:s1]] = -np.add.reduceat(QT, S.all_pairs_starts[s0:s1] - seg[s0], axis=0)
         s0 = s1
+
+
+def point_cofactors(Vinv: F64, T: F64, Qcp: F64, vo, pt_starts) -> F64:
+    """Q_pp,j = V_j⁻¹ − Σ_b T_bᵀ Q_cp(i_b, j) over the rays b of each point unknown j
+    (``vo``: the rays of point unknowns in point order, ``pt_starts`` each point's first);
+    shape (p_var, 3, 3)."""
+    return Vinv + np.add.reduceat(T[vo].transpose(0, 2, 1) @ (-Qcp[vo]), pt_starts, axis=0)

@@ -45,7 +45,7 @@ from ._band import padded_band, tri_solve
 from ._border_points import border_point_terms
 from ._camera import camera_precision
 from ._far import mark_far, placed_state
-from ._pairs import cofactors_by_pairs
+from ._pairs import cofactors_by_pairs, point_cofactors
 from ._precision_ap import banded_border, border_inverse, point_terms
 from ._store import ray_blocks, store_precision
 
@@ -382,7 +382,7 @@ def _fill_from(res, prob, ne, fac, Je, Jp) -> None:
         vo_idx = np.arange(n_used)[vo]
         Qpp, Qap = border_point_terms(S, oi, vo_idx, ocol, T, Qca, Faa, hb, Qcp, Vinv, bool(q))
     if not nb or fast_ap:  # Q_pp,j = V_j⁻¹ − Σ_b T_bᵀ Q_cp(i_b, j)
-        Qpp = Vinv + np.add.reduceat(T[vo].transpose(0, 2, 1) @ (-Qcp[vo]), S.pt_starts, axis=0)
+        Qpp = point_cofactors(Vinv, T, Qcp, vo, S.pt_starts)
     if fast_ap:
         Qpp -= dQpp
     # gains of each ray on its own image and point, K = Q_(·, ray) Jwᵀ: the change of the
@@ -406,7 +406,6 @@ def _fill_from(res, prob, ne, fac, Je, Jp) -> None:
         Qpa_o = np.take_along_axis(Qpa, np.repeat(sl[vo][:, None, :], 3, 1), axis=2)
         C = (Jpv @ Qpa_o) @ AwT[vo]
         H[vo] += C + C.transpose(0, 2, 1)
-    r_img = np.clip(1.0 - np.stack([H[:, 0, 0], H[:, 1, 1]], 1), 0.0, 1.0)
     if q:  # the gains' terms of Q_ca, Q_pa in the ray's own group's k columns
         if fast_ap:
             Qca_o = Qca3.reshape(m, 6, prob.ap.G, prob.ap.k)[np.arange(m), :, prob.ap.group, :][oi]
@@ -414,7 +413,6 @@ def _fill_from(res, prob, ne, fac, Je, Jp) -> None:
             AwT = prob.ap.Aw.transpose(0, 2, 1)
         Ke += Qca_o @ AwT
         Kp[vo] += Qpa_o @ AwT[vo]
-    r_xy = -0.5 * (H[:, 0, 1] + H[:, 1, 0])
     faa = Faa[:q, :q] if q else None
     auxiliary = None
     if aux:  # redundancy numbers of the auxiliary rows, cofactors of the offsets
@@ -423,6 +421,6 @@ def _fill_from(res, prob, ne, fac, Je, Jp) -> None:
         aux_args = (res, Qcc_diag, Qpp, Qca, Qap, Faa)
         auxiliary = lambda: aux.precision(*aux_args)  # noqa: E731
     store_precision(
-        res, prob, r_img=r_img, r_xy=r_xy, Qpp=Qpp, Qext=Qcc_diag, pairs=Zblk, Faa=faa, Ke=Ke,
+        res, prob, H=H, Qpp=Qpp, Qext=Qcc_diag, pairs=Zblk, Faa=faa, Ke=Ke,
         Kp=Kp, auxiliary=auxiliary,
     )  # fmt: skip

@@ -59,7 +59,7 @@ def ray_blocks(
 
 
 def store_precision(
-    res, prob, *, r_img: F64, r_xy: F64, Qpp: F64, Qext: F64, pairs: F64, Faa: F64 | None,
+    res, prob, *, H: F64, Qpp: F64, Qext: F64, pairs: F64, Faa: F64 | None,
     Ke: F64, Kp: F64, auxiliary: Callable[[], None] | None = None,
 ) -> None:  # fmt: skip
     """Fill ``res`` from a precision path's results.
@@ -69,10 +69,9 @@ def store_precision(
     res : Adjustment
         The bundle result (residual order as in :mod:`orientviz.bundle._result`).
     prob : BundleProblem
-    r_img : ndarray, shape (n_used, 2)
-        Redundancy numbers of the used rays' x, y.
-    r_xy : ndarray, shape (n_used,)
-        Off-diagonal (x, y) element of P½ Q_vv P½ per used ray.
+    H : ndarray, shape (n_used, 2, 2)
+        Each used ray's block of P½ J Q Jᵀ P½: its x, y redundancy numbers are
+        1 − the diagonal, the off-diagonal of P½ Q_vv P½ is −(the off-diagonal).
     Qpp : ndarray, shape (p_var, 3, 3)
         Cofactors of the point unknowns (m²).
     Qext : ndarray, shape (m, 6, 6)
@@ -88,6 +87,8 @@ def store_precision(
         (the auxiliary data's rows and offsets).
     """
     S = prob.reduced
+    r_img = np.clip(1.0 - np.stack([H[:, 0, 0], H[:, 1, 1]], 1), 0.0, 1.0)
+    r_xy = -0.5 * (H[:, 0, 1] + H[:, 1, 0])
     n = prob.block.n_observations
     rn = np.full((n, 2), np.nan)
     rn[prob.obs.index] = r_img
