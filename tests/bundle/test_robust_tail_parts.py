@@ -97,3 +97,67 @@ def test_search_left_out_after_a_step_it_did_not_pay(monkeypatch):
     assert len(gated.history) <= len(every.history)
     best = every.history[-1].cost
     assert abs(gated.history[-1].cost - best) <= 1e-6 * best
+
+
+@pytest.mark.parametrize("kind", ["huber", "soft_l1", "cauchy"])
+def test_loss_parts_are_the_values_of_the_full_call(kind):
+    """RobustLoss.rho and newton_terms give exactly ρ, ρ′ and the curvature ratio of the
+    full call and :meth:`along` (within, at and beyond the scale)."""
+    from orientviz.bundle.loop._loss import RobustLoss
+
+    loss = RobustLoss.named(kind, 1.345)
+    b = 1.345**2
+    s = np.concatenate(
+        ([0.0, b, np.nextafter(b, 0), np.nextafter(b, 10)], np.geomspace(1e-6, 1e4, 41))
+    )
+    rho, rho1 = loss(s)
+    assert np.array_equal(loss.rho(s), rho)
+    got1, along = loss.newton_terms(s)
+    assert np.array_equal(got1, rho1) and np.array_equal(along, loss.along(s))
+
+
+def _planted_sxb():
+    prob, block = planted_dbat("dbat_sxb")
+    prob.options.update(robust="huber")
+    return prob, block
+
+
+def test_switch_and_end_reuse_give_the_values_of_a_new_evaluation(monkeypatch):
+    """sxb, Huber, with the precision: where the loss is switched on, the robust
+    evaluation built on the least-squares one (its Jacobians, the rays weighted anew)
+    equals a new evaluation there; the run's end read from the last evaluation equals
+    the end evaluated anew (misclosures, Jacobians, vᵀPv, σ of the rays)."""
+    from orientviz.bundle.loop import _adjust
+
+    seen = {"switch": 0, "end": 0}
+    real_switch = _steps.BundleSteps._switch_evaluation
+
+    def switch(self, st, ev):
+        out = real_switch(self, st, ev)
+        fresh = self._evaluate(st, True, self.is_local(ev))
+        assert out.cost == fresh.cost
+        assert np.array_equal(out.data.scale, fresh.data.scale)
+        for a, b in zip(out.data, fresh.data):
+            assert np.array_equal(a, b)
+        seen["switch"] += 1
+        return out
+
+    real_end = _adjust.robust_end
+
+    def end(prob, steps, st, jacobian=True, last=None):
+        assert getattr(last.data, "terms", None) is not None  # the path under test is taken
+        anew = real_end(prob, steps, st, jacobian, None)
+        w = prob.obs.weight.copy()
+        out = real_end(prob, steps, st, jacobian, last)
+        assert np.array_equal(prob.obs.weight, w)
+        assert out[3] == anew[3]
+        for a, b in zip(out[:3] + out[4:], anew[:3] + anew[4:]):
+            assert np.array_equal(a, b)
+        seen["end"] += 1
+        return out
+
+    monkeypatch.setattr(_steps.BundleSteps, "_switch_evaluation", switch)
+    monkeypatch.setattr(_adjust, "robust_end", end)
+    prob, block = _planted_sxb()
+    adj, _ = adjust_block(copy.deepcopy(prob), copy.deepcopy(block), precision=True)
+    assert adj.converged and seen == {"switch": 1, "end": 1}

@@ -40,7 +40,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ...adjust.loop import Damping, StopRule, iterate
+from ...adjust.loop import Damping, Evaluation, StopRule, iterate
 from ...adjust.result import Iteration
 from ...blas import blas_threads
 from ...block import Block
@@ -273,7 +273,9 @@ def bundle_adjust(
         rw, Je, Jp = run.evaluation.data
         cost, obs_sigma = run.evaluation.cost, None
         if loss is not None:  # the result refers to the rays' σ/√ρ′ at the last iterate
-            rw, Je, Jp, cost, obs_sigma = robust_end(prob, steps, st, jacobian=need)
+            rw, Je, Jp, cost, obs_sigma = robust_end(
+                prob, steps, st, jacobian=need, last=run.evaluation
+            )
             steps.lin = None
         elif need and steps.is_local(run.evaluation):  # derivatives by ω, φ, κ are needed
             rw, Je, Jp = prob.residuals(st, jac=True)
@@ -300,12 +302,22 @@ def bundle_adjust(
     return res
 
 
-def robust_end(prob: BundleProblem, steps: BundleSteps, st: BundleState, jacobian: bool = True):
+def robust_end(
+    prob: BundleProblem,
+    steps: BundleSteps,
+    st: BundleState,
+    jacobian: bool = True,
+    last: Evaluation | None = None,
+):
     """The last iterate of a robust run as a weighted least-squares solution: each ray's
     weight factor w = ρ′(s) there, its σ/√w, vᵀPv with those weights (the pseudo-
     observations' unchanged), and the weighted misclosures and Jacobians the precision
     reads (the problem's ray weights are set to 1/σ·√w; without ``jacobian`` Je = Jp =
     None: a result without precision reads only the misclosures).
+
+    ``last``: the loop's evaluation at ``st``; where it holds a pinhole's robust
+    linearisation (s, ρ′ and the Jacobians by ω, φ, κ) these are taken from it — the
+    values the evaluation below forms.
 
     Returns
     -------
@@ -315,12 +327,20 @@ def robust_end(prob: BundleProblem, steps: BundleSteps, st: BundleState, jacobia
     """
     weight = prob.obs.weight
     weight[...] = steps.base_weight
-    rw = prob.residuals(st, jac=False, keep=True)[0]
-    s = np.einsum("ij,ij->i", rw, rw)
-    w = steps.loss.weights(s)
-    weight *= np.sqrt(w)[:, None]
-    steps.reweigh_design()
-    rw, Je, Jp = prob.residuals(st, jac=jacobian)
+    data = None if last is None else last.data
+    terms = getattr(data, "terms", None)
+    if terms is not None and prob.ap.lens is None and not data.local and data[1] is not None:
+        s, w = terms
+        weight *= np.sqrt(w)[:, None]
+        steps.reweigh_design()
+        rw, Je, Jp = data if jacobian else (data[0], None, None)
+    else:
+        rw = prob.residuals(st, jac=False, keep=True)[0]
+        s = np.einsum("ij,ij->i", rw, rw)
+        w = steps.loss.weights(s)
+        weight *= np.sqrt(w)[:, None]
+        steps.reweigh_design()
+        rw, Je, Jp = prob.residuals(st, jac=jacobian)
     cost = float(np.dot(w, s)) + prob.cost(st, rw[:0])
     obs_sigma = prob.block.observations.sigma.copy()
     obs_sigma[prob.obs.index] /= np.sqrt(w)[:, None]

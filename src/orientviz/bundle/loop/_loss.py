@@ -94,6 +94,32 @@ class RobustLoss:
         root = np.sqrt(1.0 + s / b)  # soft_l1
         return 2.0 * b * (root - 1.0), 1.0 / root
 
+    def rho(self, s: F64) -> F64:
+        """ρ(s) alone (the values of ``self(s)[0]``)."""
+        s = np.asarray(s, float)
+        b = self.scale * self.scale
+        if self.kind == "huber":
+            out = s > b
+            return np.where(out, 2.0 * self.scale * np.sqrt(np.where(out, s, 1.0)) - b, s)
+        if self.kind == "cauchy":
+            return b * np.log1p(s / b)
+        return 2.0 * b * (np.sqrt(1.0 + s / b) - 1.0)
+
+    def newton_terms(self, s: F64) -> tuple[F64, F64]:
+        """ρ′(s) and (ρ′ + 2sρ″)/ρ′ together (the values of ``self(s)[1]`` and
+        :meth:`along`)."""
+        s = np.asarray(s, float)
+        b = self.scale * self.scale
+        if self.kind == "huber":
+            out = s > b
+            return np.where(out, self.scale / np.sqrt(np.where(out, s, 1.0)), 1.0), np.where(
+                out, 0.0, 1.0
+            )
+        if self.kind == "soft_l1":
+            t = 1.0 + s / b
+            return 1.0 / np.sqrt(t), 1.0 / t
+        return self(s)[1], self.along(s)
+
     def along(self, s: F64) -> F64:
         """(ρ′ + 2sρ″)/ρ′ per squared norm ``s`` (dimensionless, ≥ 0): Σρ's Gauss-Newton
         curvature along a ray's misclosure over the reweighted model's ρ′ (across the

@@ -136,16 +136,23 @@ STOP_MAX_LAMBDA: float = 1.0
 class _Linearisation(tuple):
     """(rw, Je, Jp) of an evaluation; ``local``: Je by rotations of the image frames;
     ``scale``: √ρ′ per ray of a robust loss (None: least squares) — rw and the weights
-    of Je, Jp are scaled by it; ``deferred``: the derivatives were asked for but not yet
+    of Je, Jp are scaled by it; ``terms``: (s, ρ′) per ray with it (s the squared
+    1/σ-weighted misclosure); ``deferred``: the derivatives were asked for but not yet
     formed (Je = Jp = None; :meth:`BundleSteps.resolve` forms them, by ``local``)."""
 
     def __new__(
-        cls, data: tuple, local: bool = False, scale: F64 | None = None, deferred: bool = False
+        cls,
+        data: tuple,
+        local: bool = False,
+        scale: F64 | None = None,
+        deferred: bool = False,
+        terms: tuple[F64, F64] | None = None,
     ):
         out = super().__new__(cls, data)
         out.local = local
         out.scale = scale
         out.deferred = deferred
+        out.terms = terms
         return out
 
 
@@ -304,7 +311,8 @@ class BundleSteps:
         weight[...] = self.base_weight
         lens = jacobian and prob.ap.lens is not None
         if lens and rw_base is not None:  # the weights first: the design is formed once
-            rho, rho1 = self.loss(np.einsum("ij,ij->i", rw_base, rw_base))
+            s = np.einsum("ij,ij->i", rw_base, rw_base)
+            rho, rho1 = self.loss(s)
             cost = float(np.sum(rho)) + prob.cost(st, rw_base[:0])
             if np.isfinite(cost):
                 self.pending_cost = cost
@@ -312,7 +320,8 @@ class BundleSteps:
                 weight *= scale[:, None]
                 _, Je, Jp = prob.residuals(st, jac=True)  # (Je, Jp: unweighted)
                 rw = rw_base * scale[:, None]  # as the path below forms it
-                return Evaluation(cost, True, _Linearisation((rw, Je, Jp), local, scale))
+                lin = _Linearisation((rw, Je, Jp), local, scale, terms=(s, rho1))
+                return Evaluation(cost, True, lin)
             weight[...] = self.base_weight
         # a camera model is evaluated once, with its derivatives (its design is then
         # re-weighted); a pinhole's projection is kept for the Jacobians' pass
@@ -331,7 +340,30 @@ class BundleSteps:
                     prob.run.ap = prob.ap.with_design(prob.ap.A, weight)
             else:
                 rw, Je, Jp = prob.residuals(st, jac=True, local=local)
-        return Evaluation(cost, bool(np.isfinite(cost)), _Linearisation((rw, Je, Jp), local, scale))
+        lin = _Linearisation((rw, Je, Jp), local, scale, terms=None if scale is None else (s, rho1))
+        return Evaluation(cost, bool(np.isfinite(cost)), lin)
+
+    def _switch_evaluation(self, st: BundleState, ev: Evaluation) -> Evaluation:
+        """The robust evaluation at ``st`` where the loss is switched on, ``ev`` the least-
+        squares one there: a pinhole's Jacobians (unweighted) are ``ev``'s, its misclosures
+        are weighted anew (the values :meth:`_evaluate` forms)."""
+        prob = self.prob
+        rw, Je, Jp = ev.data
+        local = self.is_local(ev)
+        if Je is None or prob.ap.lens is not None:
+            return self._evaluate(st, True, local)
+        weight = prob.obs.weight
+        weight[...] = self.base_weight
+        s = np.einsum("ij,ij->i", rw, rw)  # rw: weighted by 1/σ (least squares)
+        rho, rho1 = self.loss(s)
+        cost = float(np.sum(rho)) + prob.cost(st, rw[:0])
+        self.pending_cost = cost
+        if not np.isfinite(cost):
+            return Evaluation(cost, False, _Linearisation((rw, None, None), local))
+        scale = np.sqrt(rho1)
+        weight *= scale[:, None]
+        rw = prob.residuals(st, jac=False)[0]
+        return Evaluation(cost, True, _Linearisation((rw, Je, Jp), local, scale, terms=(s, rho1)))
 
     def _tail_model(self, rw: F64, Je: F64, Jp: F64, scale: F64 | None):
         """In a convex loss's tail (:data:`ROBUST_TAIL_FLOOR`): the rays beyond the scale
@@ -413,9 +445,10 @@ class BundleSteps:
             dc, dp, da = kept.data[:3]
             kept.data = kept.data[:6] + (self._point_newton(st, ev, dc, dp, da, lam),)
             return kept
-        if self.switch_pending:  # the loss is switched on: the loop's evaluation at st too
+        switched = self.switch_pending
+        if switched:  # the loss is switched on: the loop's evaluation at st too
             self.switch_pending = False
-            robust = self._evaluate(st, True, self.is_local(ev))
+            robust = self._switch_evaluation(st, ev)
             ev.cost, ev.finite, ev.data = robust.cost, robust.finite, robust.data
             self.last_cost = robust.cost
         if ev.data[1] is None:  # evaluated without derivatives (deferred, or a stop was expected)
@@ -425,7 +458,13 @@ class BundleSteps:
         self.weigh(ev)
         rw, Je, Jp, design = self._tail_model(rw, Je, Jp, getattr(ev.data, "scale", None))
         chord = None  # a chord step in ω, φ, κ, or in frame rotations by such a factor
-        if self.chord_factor is not None and lam == 0 and (self.chord_factor[2] or not local):
+        # (not where the loss was just switched on: the factor is of the unweighted rays)
+        if (
+            self.chord_factor is not None
+            and lam == 0
+            and not switched
+            and (self.chord_factor[2] or not local)
+        ):
             chord = self._chord(st, rw, Je, Jp, local)  # None: it would not contract enough
         self.chord_step = chord is not None
         try:

@@ -81,6 +81,11 @@ def _solve3(N: F64, g: F64) -> tuple[F64, F64]:
     return x, det
 
 
+def _sum3(x: F64) -> F64:
+    """x[..., 0] + x[..., 1] + x[..., 2] (the sum over a last axis of length 3, in that order)."""
+    return x[..., 0] + x[..., 1] + x[..., 2]
+
+
 def tail_model(
     prob: BundleProblem, loss: RobustLoss, rw: F64, Je: F64, Jp: F64, scale: F64, floor: float
 ):
@@ -150,6 +155,8 @@ class PointNewton:
         The rays' misclosures (1/σ-weighted) after the images' correction, linearised.
     up : ndarray, shape (m, 2)
         The rays' 1/σ-weighted change by ``dp`` of their point, linearised (J dp).
+    rr, rup, upup : ndarray, shape (m,)
+        Per ray r·r, r·up and up·up (the linearised ‖r − α up‖² of any fraction α).
     """
 
     active: I64
@@ -161,6 +168,9 @@ class PointNewton:
     owner: I64
     r: F64
     up: F64
+    rr: F64
+    rup: F64
+    upup: F64
 
     def sums(self, x: F64) -> F64:
         """Sums per active point of per-ray values ``x`` (m, …)."""
@@ -169,8 +179,10 @@ class PointNewton:
     def fractions(self) -> F64:
         """(c, a): the fractions of ``dp`` tried per point — up to the first breakpoint,
         and :data:`FRACTIONS`."""
-        rest = np.broadcast_to(np.asarray(FRACTIONS)[:, None], (len(FRACTIONS), self.first.size))
-        return np.vstack([self.first[None, :], rest])
+        f = np.empty((len(FRACTIONS) + 1, self.first.size))
+        f[0] = self.first
+        f[1:] = np.asarray(FRACTIONS)[:, None]
+        return f
 
 
 def point_newton(
@@ -211,24 +223,28 @@ def point_newton(
     counts = np.diff(bp.indptr)
     rays = bp.indices[np.repeat(hit, counts)]
     n_rays = counts[active]
-    starts = np.concatenate(([0], np.cumsum(n_rays)[:-1]))
-    obs_rays = np.asarray(tg.rows)[rays] if not tg.in_order else rays
-    w = base_weight[obs_rays]
-    sc = scale[obs_rays]
-    J = Jp[obs_rays] * w[:, :, None]  # (m, 2, 3), weighted by 1/σ
+    starts = np.zeros(active.size, dtype=np.intp)
+    np.cumsum(n_rays[:-1], out=starts[1:])
+    obs_rays = rays if tg.in_order else tg.rays[rays]
+    w = base_weight.take(obs_rays, axis=0)
+    J = Jp.take(obs_rays, axis=0)
+    J *= w[:, :, None]  # (m, 2, 3), weighted by 1/σ
     # the misclosures (1/σ) after the images' correction, linearised: r − u
-    u = np.einsum("nij,nj->ni", Je[obs_rays], dc[tg.ray_image[rays]])
+    u = np.einsum("nij,nj->ni", Je.take(obs_rays, axis=0), dc.take(tg.ray_image[rays], axis=0))
     if prob.q:
         u += (prob.ap.A_csr @ da[: prob.q]).reshape(-1, 2)[obs_rays]
     u *= w
-    r = rw[obs_rays] / sc[:, None] - u
-    s = (r * r).sum(axis=1)
-    rho1 = loss(s)[1]
-    k = 1.0 - loss.along(s)  # the share of ρ′ the true model lacks along the misclosure
+    r = rw.take(obs_rays, axis=0)
+    r /= scale.take(obs_rays)[:, None]
+    r -= u
+    r0, r1 = r[:, 0], r[:, 1]
+    s = r0 * r0 + r1 * r1
+    rho1, along = loss.newton_terms(s)
     norm = np.sqrt(s)
     rhat = r / np.where(norm > 0, norm, np.inf)[:, None]
     # per ray at the linearised misclosure r: the gradient Jᵀρ′r, the reweighted block
-    # ρ′JᵀJ and the part the true model lacks ρ′k (Jᵀr̂)(Jᵀr̂)ᵀ (upper triangles, _UPPER)
+    # ρ′JᵀJ and the part the true model lacks ρ′k (Jᵀr̂)(Jᵀr̂)ᵀ (upper triangles, _UPPER),
+    # k = 1 − (ρ′ + 2sρ″)/ρ′ the share of ρ′ the true model lacks along the misclosure
     t = r * rho1[:, None]
     J0, J1 = J[:, 0, :], J[:, 1, :]
     q = J0 * rhat[:, :1] + J1 * rhat[:, 1:]
@@ -236,7 +252,7 @@ def point_newton(
     rows = np.empty((r.shape[0], 15))
     rows[:, :3] = J0 * t[:, :1] + J1 * t[:, 1:]
     rows[:, 3:9] = (J0[:, a] * J0[:, b] + J1[:, a] * J1[:, b]) * rho1[:, None]
-    rows[:, 9:] = q[:, a] * q[:, b] * (rho1 * k)[:, None]
+    rows[:, 9:] = q[:, a] * q[:, b] * (rho1 * (1.0 - along))[:, None]
     sums = np.add.reduceat(rows, starts, axis=0)
     pw = pts.prior_w[active]
     g = sums[:, :3] + pw * (pts.prior_obs[active] - st.xyz[pts.unknown[active]])
@@ -254,16 +270,18 @@ def point_newton(
     # the first breakpoint along dp: a ray beyond the scale reaches it (linearised:
     # ‖r − α J dp‖² = a², the smaller root where r·J dp > 0)
     owner = np.repeat(np.arange(active.size), n_rays)
-    up = (J * dp[owner][:, None, :]).sum(axis=2)
-    A2 = (up * up).sum(axis=1)
-    B = (r * up).sum(axis=1)
+    do = dp.take(owner, axis=0)[:, None, :]
+    up = J[:, :, 0] * do[:, :, 0] + J[:, :, 1] * do[:, :, 1] + J[:, :, 2] * do[:, :, 2]
+    u0, u1 = up[:, 0], up[:, 1]
+    A2 = u0 * u0 + u1 * u1
+    B = r0 * u0 + r1 * u1
     C = s - bsc
     disc = B * B - A2 * C
     ok = (C > 0) & (B > 0) & (disc >= 0) & (A2 > 0)
     alpha = np.full(r.shape[0], np.inf)
     alpha[ok] = (B[ok] - np.sqrt(disc[ok])) / A2[ok]
     first = np.minimum(np.minimum.reduceat(alpha, starts), 1.0)
-    return PointNewton(active, rays, obs_rays, starts, dp, first, owner, r, up)
+    return PointNewton(active, rays, obs_rays, starts, dp, first, owner, r, up, s, B, A2)
 
 
 def point_search(
@@ -286,17 +304,17 @@ def point_search(
     pts = prob.points
     act, owner = newton.active, newton.owner
     pw = pts.prior_w[act]
-    prior = bool(pw.any())  # points with a prior: its vᵀPv joins their rays' Σρ
-    x0p = pts.prior_obs[act] - st.xyz[pts.unknown[act]]
+    held = np.flatnonzero(pw.any(axis=1))  # points with a prior: its vᵀPv joins their Σρ
     f = newton.fractions()  # (c, a)
     # the linearised rays' Σρ of each point at each fraction of dp: ‖r − f·J dp‖²
     fo = f[:, owner]  # (c, m)
-    r, up = newton.r, newton.up
-    s = (r * r).sum(axis=1) - 2.0 * fo * (r * up).sum(axis=1) + fo * fo * (up * up).sum(axis=1)
-    lin = newton.sums(loss(np.maximum(s, 0.0).T)[0]).T
-    if prior:
-        v = x0p[None] - f[:, :, None] * newton.dp[None]
-        lin += np.sum(pw * v * v, axis=2)
+    s = newton.rr - 2.0 * fo * newton.rup + fo * fo * newton.upup
+    lin = np.add.reduceat(loss.rho(np.maximum(s, 0.0)), newton.starts, axis=1)
+    if held.size:
+        x0p = pts.prior_obs[act[held]] - st.xyz[pts.unknown[act[held]]]
+        pwh = pw[held]
+        v = x0p[None] - f[:, held, None] * newton.dp[held][None]
+        lin[:, held] += _sum3(pwh * v * v)
     lin[~np.isfinite(lin)] = np.inf
     best = f[np.argmin(lin, axis=0), np.arange(act.size)]
     cand = (dp[act], best[:, None] * newton.dp)  # the joint step's and the ranked one
@@ -307,12 +325,11 @@ def point_search(
     both = np.concatenate((rays, rays))
     at = np.concatenate((xyz + cand[0][owner], xyz + cand[1][owner]))
     rw = ray_misclosures(prob, st.X0 + dc[:, :3], st.angles + dc[:, 3:], st.ap + da, both, at)
-    rho = loss((rw * rw).sum(axis=1))[0]
+    rho = loss.rho(rw[:, 0] * rw[:, 0] + rw[:, 1] * rw[:, 1])
     true = np.add.reduceat(rho.reshape(2, -1), newton.starts, axis=1)  # (2, a)
-    if prior:
-        for k, d in enumerate(cand):
-            vv = x0p - d
-            true[k] += np.sum(pw * vv * vv, axis=1)
+    for k, d in enumerate(cand) if held.size else ():
+        vv = x0p - d[held]
+        true[k, held] += _sum3(pwh * vv * vv)
     better = true[1] < true[0]  # ties and NaN: the joint step's own
     out = dp.copy()
     out[act[better]] = cand[1][better]
