@@ -24,6 +24,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..reduced import APBorder, ImageRays
+from ..reduced._structure import stable_order
 from ._ap_batches import PointBatch, batched_terms, point_batches
 
 F64 = NDArray[np.float64]
@@ -41,14 +42,6 @@ def _summation(keys: I64) -> tuple[sp.csr_matrix, I64]:
         (np.ones(keys.size), (inv.ravel(), np.arange(keys.size))), shape=(uk.size, keys.size)
     )
     return M, uk
-
-
-def _stable_order(keys: I64, m: int) -> I64:
-    """``np.argsort(keys, kind="stable")`` for keys in [0, m): as 16-bit keys (NumPy's
-    radix sort, O(n)) when m allows; a stable order is unique, so the same indices."""
-    if m <= np.iinfo(np.int16).max:
-        return np.argsort(keys.astype(np.int16), kind="stable")
-    return np.argsort(keys, kind="stable")
 
 
 def _zero_row(X: F64) -> F64:
@@ -116,7 +109,7 @@ class APStructure:
         # group's E block is then one small matrix product per image (BLAS)
         m = grp.size
         cnt = np.bincount(oi, minlength=m)
-        order = _stable_order(oi, m)
+        order = stable_order(oi, m)
         pos = np.arange(n) - np.repeat(np.cumsum(cnt) - cnt, cnt)
         self.pad = np.full((m, max(int(cnt.max(initial=0)), 1)), n, np.int64)
         self.pad[oi[order], pos] = order
