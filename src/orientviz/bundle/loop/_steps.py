@@ -498,7 +498,7 @@ class BundleSteps:
         # point's Jacobians are formed (the peak memory of a large block)
         if not (self.precision and lam == 0 and not (prob.q or prob.aux or local)):
             ne = fac = None
-        self._gain_from = (st, prob.run.ap.A_csr if prob.q else None)
+        self._gain_from = (st, prob.run.ap if prob.q else None)  # (its A_csr: read if needed)
         return Step(rel, dx, (dc, dp, da, fac, ne, local, points))
 
     def _poor_step(self, step: Step, previous: Evaluation) -> bool:
@@ -512,7 +512,8 @@ class BundleSteps:
         actual = before - self.pending_cost
         if actual > ftol * before:
             return False
-        st, design = self._gain_from
+        st, ap = self._gain_from
+        design = None if ap is None else ap.A_csr
         dc, dp, da, local = step.data[0], step.data[1], step.data[2], step.data[5]
         pred = predicted_decrease(self.prob, st, tuple(previous.data), (dc, dp, da), design, local)
         return pred > ftol * before and actual < POOR_GAIN * pred
