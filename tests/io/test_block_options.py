@@ -14,12 +14,12 @@ import orientviz as ov
 from orientviz.block import TIE
 from orientviz.bundle.loop import RobustLoss
 from orientviz.cli import main
+from orientviz.io.datasets import resolve_name
 from orientviz.io.problem import Units, problem_from_block
-from orientviz.io.solve import _resolve
 
 
 def _doc(name: str = "block_strip") -> dict:
-    return json.loads(Path(_resolve(name)).read_text())
+    return json.loads(Path(resolve_name(name)).read_text())
 
 
 def _write(tmp_path, doc, name="p.json") -> str:
@@ -90,7 +90,7 @@ def test_robust_scale_and_command_line_equal_the_file_options(tmp_path, capsys):
 
 
 def test_free_network_residuals_do_not_depend_on_the_datum(tmp_path):
-    path = str(_resolve("block_strip"))
+    path = str(resolve_name("block_strip"))
     problem, a = _solve(path, free=True)
     block = problem.data
     _, b = _solve(path, free=True, fix=[block.images.ids[-1], f"{block.images.ids[0]}:Y0"])

@@ -8,7 +8,7 @@ import pytest
 
 import orientviz as ov
 from orientviz.cli import main
-from orientviz.io.solve import _resolve
+from orientviz.io.datasets import resolve_name
 
 
 def run(capsys, *argv: str) -> tuple[int, str, str]:
@@ -55,7 +55,7 @@ def test_bad_report_path_is_one_line_and_exit_2(tmp_path, capsys, target):
 
 
 def test_not_converged_still_writes_the_report_and_exits_3(tmp_path, capsys):
-    problem = ov.load_problem(_resolve("block_compact"))
+    problem = ov.load_problem(resolve_name("block_compact"))
     problem.options["max_iter"] = 1
     src = ov.save_problem(problem, tmp_path / "one_step.json")
     report = tmp_path / "r.txt"

@@ -37,10 +37,11 @@ from numpy.typing import NDArray
 from ..block import Block
 from ..errors import InputError
 from ..rotation import matrix_from_opk, matrix_from_rotvec, opk_from_matrix, rotvec_from_matrix
+from .colmap_scan import parse_numbers
+from .datasets import resolve_name
 from .importing import import_to_problem
 from .problem import load_problem
 from .safeio import decode_text, read_input_bytes, read_input_text, write_atomic
-from .solve import _resolve
 
 F64 = NDArray[np.float64]
 #: Pixel size (mm) assumed when none is given: 10 µm, as in the peer bench.
@@ -55,20 +56,34 @@ class _Tokens:
     """All whitespace-separated fields of a BAL file, with the 1-based line of each.
 
     One reader for every section (observations, cameras, points): it hands out the next
-    fields as numbers and names the line of the first bad one.
+    fields as numbers and names the line of the first bad one. ``values``: every field
+    already read as a number (a plain file, :func:`_plain_fields`), else each section's
+    fields are read when taken.
     """
 
-    def __init__(self, lines: list[str], source: str) -> None:
+    def __init__(
+        self, text: str, counts: NDArray[np.int64], source: str, values: F64 | None = None
+    ) -> None:
         self.source = source
-        self.lines = lines
-        self.n_lines = len(lines)
-        self.words = "\n".join(lines).split()  # the fields of every line, in order
+        self.text = text
+        self.counts = counts  # fields per line
+        self.n_lines = counts.size
+        self.values = values
+        self.n_words = int(counts.sum())
+        self._words: list[str] | None = None
         self.pos = 0
+
+    @property
+    def words(self) -> list[str]:
+        """The fields of every line, in order (split on first use)."""
+        if self._words is None:
+            self._words = self.text.split()
+        return self._words
 
     def fail(self, message: str, k: int | None = None) -> InputError:
         """An InputError at the line of field ``k`` (default: the last line of the file)."""
-        if k is not None and k < len(self.words):  # the line of each field (only to fail)
-            line = np.repeat(np.arange(1, self.n_lines + 1), [len(ln.split()) for ln in self.lines])
+        if k is not None and k < self.n_words:  # the line of each field (only to fail)
+            line = np.repeat(np.arange(1, self.n_lines + 1), self.counts)
             no = int(line[k])
         else:
             no = self.n_lines
@@ -84,22 +99,26 @@ class _Tokens:
     def take(self, count: int, what: str) -> F64:
         """The next ``count`` fields as finite floats."""
         first = self.pos
-        if first + count > len(self.words):
+        if first + count > self.n_words:
             raise self.fail(
-                f"expected {count} numbers for {what}, the file ends after "
-                f"{len(self.words) - first}"
+                f"expected {count} numbers for {what}, the file ends after {self.n_words - first}"
             )
-        out = self.words[first : first + count]
         self.pos += count
-        try:
-            arr = np.array(out, dtype=float)
-        except ValueError:
-            bad = np.array([not _is_float(t) for t in out])
-            self.first_bad(bad, first, 1, lambda i: f"expected a number in {what}, got {out[i]!r}")
-            raise  # pragma: no cover - numpy and float() disagree
+        if self.values is not None:
+            arr = self.values[first : first + count]
+        else:
+            out = self.words[first : first + count]
+            try:
+                arr = np.array(out, dtype=float)
+            except ValueError:
+                bad = np.array([not _is_float(t) for t in out])
+                self.first_bad(
+                    bad, first, 1, lambda i: f"expected a number in {what}, got {out[i]!r}"
+                )
+                raise  # pragma: no cover - numpy and float() disagree
         self.first_bad(
             ~np.isfinite(arr), first, 1,
-            lambda i: f"expected a finite number in {what}, got {out[i]!r}",
+            lambda i: f"expected a finite number in {what}, got {self.words[first + i]!r}",
         )  # fmt: skip
         return arr
 
@@ -112,10 +131,46 @@ def _is_float(t: str) -> bool:
     return True
 
 
-def _parse(lines: list[str], source: str) -> tuple[F64, F64, F64]:
+def _plain_fields(text: str) -> tuple[NDArray[np.int64], F64 | None] | None:
+    """The number of fields on each line of ``text`` (its lines as ``str.splitlines``
+    gives them) and every field as a number, in one pass over its bytes
+    (:func:`~orientviz.io.colmap_scan.parse_numbers`, correctly rounded as ``float``
+    reads them; None for the numbers when a field is not one).
+
+    None unless the text is ASCII with only spaces, tabs, ``\\n`` and ``\\r\\n``
+    between its fields.
+    """
+    if not text.isascii():
+        return None
+    u = np.frombuffer(text.encode("ascii"), dtype=np.uint8)
+    sep = u <= 32
+    ctrl = u[sep]
+    ctrl = ctrl[ctrl != 32]
+    if ctrl.size and not np.all((ctrl == 9) | (ctrl == 10) | (ctrl == 13)):
+        return None
+    cr = np.flatnonzero(u == 13)
+    if cr.size and (cr[-1] + 1 == u.size or np.any(u[cr + 1] != 10)):
+        return None  # a lone CR breaks a line for splitlines
+    newline = np.flatnonzero(u == 10)
+    n_lines = newline.size + int(u.size > 0 and u[-1] != 10)
+    word = ~sep
+    start = np.flatnonzero(word & np.concatenate(([True], sep[:-1])))
+    end = np.flatnonzero(word & np.concatenate((sep[1:], [True]))) + 1
+    counts = np.bincount(np.searchsorted(newline, start), minlength=n_lines)
+    values, bad = parse_numbers(u, start, end, exact=True)
+    return counts, (None if bad.size else values)
+
+
+def _parse(text: str, source: str) -> tuple[F64, F64, F64]:
     """Check and split a BAL file: observations (n, 4), camera parameters (m, 9), xyz (p, 3)."""
-    tok = _Tokens(lines, source)
-    head = lines[0].split() if lines else []
+    plain = _plain_fields(text)
+    if plain is None:  # other line breaks or blanks: line by line
+        counts = np.array([len(ln.split()) for ln in text.splitlines()], dtype=np.int64)
+        tok = _Tokens(text, counts, source)
+    else:
+        counts, values = plain
+        tok = _Tokens(text, counts, source, values)
+    head = text.split(None, int(counts[0]))[: counts[0]] if counts.size else []
     try:
         nc, npt, nobs = (int(v) for v in head)
     except ValueError:
@@ -129,9 +184,9 @@ def _parse(lines: list[str], source: str) -> tuple[F64, F64, F64]:
     if max(nc, npt, nobs) > 10**9:
         raise InputError("expected counts below 10^9 in the header", source, "line 1")
     tok.pos = 3
-    if len(lines) < 1 + nobs:
-        raise tok.fail(f"expected {nobs} observation lines, the file ends at line {len(lines)}")
-    counts = np.array([len(ln.split()) for ln in lines[1 : 1 + nobs]], dtype=np.int64)
+    if counts.size < 1 + nobs:
+        raise tok.fail(f"expected {nobs} observation lines, the file ends at line {counts.size}")
+    counts = counts[1 : 1 + nobs]
     wrong = np.flatnonzero(counts != 4)
     if wrong.size:
         k = int(wrong[0])
@@ -164,10 +219,10 @@ def _parse(lines: list[str], source: str) -> tuple[F64, F64, F64]:
         np.any(np.abs(pts) > MAX_VALUE, axis=1), first_cam + 9 * nc, 3,
         lambda i: f"point {i}: a coordinate beyond ±{MAX_VALUE:g}",
     )  # fmt: skip
-    if tok.pos < len(tok.words):
+    if tok.pos < tok.n_words:
         raise tok.fail(
             f"expected {tok.pos} numbers for the counts {nc} {npt} {nobs} of the header, "
-            f"the file has {len(tok.words) - tok.pos} more",
+            f"the file has {tok.n_words - tok.pos} more",
             tok.pos,
         )
     tok.first_bad(
@@ -187,7 +242,7 @@ def read_bal_arrays(path: str | os.PathLike[str]) -> tuple[F64, F64, F64]:
         ``obs`` (n, 4): camera index, point index, x, y (px, BAL's signs); ``cams``
         (m, 9): angle-axis rotation (rad), translation, f (px), k1, k2; ``pts`` (p, 3).
     """
-    return _parse(_read_lines(path), str(path))
+    return _parse(_read_text(path), str(path))
 
 
 #: What :func:`read_bal` does with each camera's f, k1, k2.
@@ -247,8 +302,7 @@ def read_bal(
         raise InputError(f"expected an image σ > 0 px, got {sigma_px}", source)
     if lens not in LENS_MODES:
         raise InputError(f"lens: expected one of {', '.join(LENS_MODES)}, got {lens!r}", source)
-    lines = _read_lines(path)
-    obs, cams, pts = _parse(lines, source)
+    obs, cams, pts = _parse(_read_text(path), source)
     nc, npt = cams.shape[0], pts.shape[0]
     ci, pi = obs[:, 0].astype(np.int64), obs[:, 1].astype(np.int64)
     Rb = matrix_from_rotvec(cams[:, :3])
@@ -302,10 +356,10 @@ def shipped_bal(name: str = "ladybug") -> Path:
     return Path(str(resources.files("orientviz.datasets").joinpath("bal", SHIPPED[name])))
 
 
-def _read_lines(path: str | os.PathLike[str]) -> list[str]:
-    """The lines of a BAL text file, plain or bz2-compressed (``*.bz2``)."""
+def _read_text(path: str | os.PathLike[str]) -> str:
+    """The text of a BAL file, plain or bz2-compressed (``*.bz2``)."""
     if not str(path).endswith(".bz2"):
-        return read_input_text(path, "a BAL text file").splitlines()
+        return read_input_text(path, "a BAL text file")
     import bz2
 
     raw = read_input_bytes(path, "a bz2-compressed BAL file")
@@ -318,7 +372,7 @@ def _read_lines(path: str | os.PathLike[str]) -> list[str]:
         raise InputError(
             f"the bz2 data expand beyond {MAX_BZ2_BYTES} bytes or are truncated", str(path)
         )
-    return decode_text(data, str(path), "a BAL text file").splitlines()
+    return decode_text(data, str(path), "a BAL text file")
 
 
 def bal_cameras(block: Block, pixel_size_mm: float) -> F64:
@@ -412,7 +466,7 @@ def run_export(args: argparse.Namespace) -> int:
 
     prog = "orientviz export-bal"
     try:
-        problem = load_problem(_resolve(args.file))
+        problem = load_problem(resolve_name(args.file))
         if problem.kind != "block":
             raise InputError(f"expected a block problem, got kind {problem.kind!r}", args.file)
         u = problem.units

@@ -188,10 +188,20 @@ def strided(first: I64, count: I64, offset: int, step: int) -> I64:
 
 
 def _fallback(buf, start, end, idx, conv) -> tuple[NDArray, I64]:
-    """Convert the tokens ``idx`` with Python (``conv``); return values and the failed ones."""
+    """Convert the tokens ``idx`` with Python (``conv``); return values and the failed ones.
+
+    ``conv`` reads each token's bytes (for bytes as for their ASCII text: a byte above
+    127 fails either way). All tokens at once first; one at a time only when one fails.
+    """
+    data = buf.tobytes()
+    texts = [data[a:b] for a, b in zip(start[idx].tolist(), end[idx].tolist())]
+    try:
+        vals = np.array(list(map(conv, texts)), dtype=np.int64 if conv is int else np.float64)
+        return vals, np.zeros(0, dtype=np.int64)
+    except (ValueError, OverflowError):  # a token that is no number (or beyond int64)
+        pass
     vals, bad = [], []
-    for i in idx:
-        text = bytes(buf[start[i] : end[i]]).decode("ascii", "replace")
+    for i, text in zip(idx.tolist(), texts):
         try:
             v = conv(text)
             if conv is int and not -(2**63) <= v < 2**63:
@@ -249,7 +259,7 @@ def _plain_decimals(
 
 
 def parse_numbers(
-    buf: NDArray[np.uint8], start: I64, end: I64, *, integer: bool = False
+    buf: NDArray[np.uint8], start: I64, end: I64, *, integer: bool = False, exact: bool = False
 ) -> tuple[NDArray, I64]:
     """Numbers of the tokens ``buf[start:end]``; returns (values, indices of bad tokens).
 
@@ -259,7 +269,8 @@ def parse_numbers(
     significant digits, within one unit in the last place beyond. Other tokens
     (exponents, longer ones, ``nan``) are converted by Python; tokens that are not
     numbers are returned in the second array (their value is 0). Integers reject a
-    decimal point.
+    decimal point. ``exact``: every value is the correctly rounded one (as Python's
+    ``float`` reads the token): mantissas above 2**53 go to Python too.
     """
     n = start.size
     out = np.zeros(n, dtype=np.int64 if integer else np.float64)
@@ -281,6 +292,8 @@ def parse_numbers(
             out[rows] = mant
         else:
             out[rows] = mant / _P10F[frac]
+            if exact:  # both operands exact up to 2**53: one correctly rounded division
+                bad |= mant > 2**53
         slow[rows[bad]] = True
     np.negative(out, out=out, where=neg)
     idx = np.flatnonzero(slow)

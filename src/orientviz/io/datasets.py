@@ -12,6 +12,7 @@ units, frame and licence (:func:`dataset_info`).
 from __future__ import annotations
 
 import json
+import os
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
@@ -92,3 +93,24 @@ def dataset_path(name: str) -> Path:
 def load_dataset(name: str) -> Problem:
     """Load dataset ``name`` as a :class:`~orientviz.io.problem.Problem`."""
     return load_problem(dataset_path(name))
+
+
+def resolve_name(name: str) -> str:
+    """A path as given, or the file of a shipped dataset if no such path exists.
+
+    Raises
+    ------
+    InputError
+        When ``name`` is no file, no shipped dataset and does not look like a path
+        (no separator, no ``.json``): the message lists the shipped datasets.
+    """
+    if os.path.exists(name):
+        return name
+    if name in list_datasets():
+        return str(dataset_path(name))
+    if os.sep not in name and not name.endswith(".json"):
+        raise InputError(
+            f"no such file, and no shipped example of that name ({', '.join(list_datasets())})",
+            name,
+        )
+    return name

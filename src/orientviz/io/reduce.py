@@ -120,11 +120,16 @@ def _keep_rows(items: list) -> set[int]:
     return out
 
 
-def _first_duplicate(items: list) -> set[int]:
+def _first_duplicate(items: list, types: set | None = None) -> set[int]:
     """Scalars only: the first pair of equal items in JSON's sense (1 == 1.0, True != 1).
 
     Keeping such a pair makes ``uniqueItems`` judge the reduced array as the original.
+    ``types``: the items' types when known; an array of only strings or only floats
+    without any equal pair is recognised by one set (Python's equality is JSON's there).
     """
+    if types is not None and (types == {str} or types == {float}):
+        if len(set(items)) == len(items):
+            return set()
     seen: dict[tuple, int] = {}
     for i, v in enumerate(items):
         if isinstance(v, bool) or v is None:
@@ -148,7 +153,7 @@ def _keep(items: list) -> list[int]:
     """
     types = set(map(type, items))
     if types <= {int, float, str, bool, type(None)}:
-        return sorted(set(_keep_scalars(items, types)) | _first_duplicate(items))
+        return sorted(set(_keep_scalars(items, types)) | _first_duplicate(items, types))
     if types == {dict}:
         return sorted(_keep_rows(items))
     return _keep_generic(items)

@@ -8,7 +8,6 @@ reports, is :mod:`orientviz.report.solve`.
 
 from __future__ import annotations
 
-import os
 from typing import Any
 
 import numpy as np
@@ -16,7 +15,7 @@ import numpy as np
 from ..block import TIE, Block
 from ..errors import AdjustmentError, DatumDefectError, InputError
 from ..plausibility import check_block, check_magnitudes, raise_for
-from .datasets import dataset_path, list_datasets
+from .datasets import resolve_name
 from .problem import Problem, load_problem
 from .registry import get_kind
 from .solution import Solution
@@ -80,7 +79,7 @@ def check_geometry(problem: Problem) -> list:
 
 def load_named(name: str) -> Problem:
     """Load a problem file, or a shipped data set by its name (``dbat_sxb``, …)."""
-    return load_problem(_resolve(name))
+    return load_problem(resolve_name(name))
 
 
 def failure(prog: str, file: str, exc: BaseException, rest: str = "") -> tuple[str, int] | None:
@@ -208,18 +207,3 @@ def adjusted_cameras(block, cam) -> None:
                 getattr(block.cameras, name)[g] = v
             elif spec:
                 spec.setdefault("values", {})[name] = v
-
-
-def _resolve(name: str) -> str:
-    """A path as given, or the file of a shipped dataset if no such path exists."""
-    if os.path.exists(name):
-        return name
-
-    if name in list_datasets():
-        return str(dataset_path(name))
-    if os.sep not in name and not name.endswith(".json"):
-        raise InputError(
-            f"no such file, and no shipped example of that name ({', '.join(list_datasets())})",
-            name,
-        )
-    return name
