@@ -28,6 +28,25 @@ def test_image_grams_are_the_sums_over_each_images_rays(pad_max):
     np.testing.assert_allclose(layout.grams(Jz), want, rtol=1e-13, atol=1e-13)
 
 
+@pytest.mark.parametrize("pad_max", [0.5, 0.0])
+def test_the_grams_rays_by_image_are_each_images_rays_in_order(pad_max):
+    # what the border's own-group E blocks read instead of gathering J_e again
+    rng = np.random.default_rng(4)
+    m = 6
+    image = rng.permutation(np.repeat(np.arange(m), [7, 0, 9, 5, 11, 6]))  # image 1: none
+    n = image.size
+    layout = ImageGram(*_segments(image, m), m, n, pad_max=pad_max)
+    assert (layout.slots is None) == (pad_max == 0.0)
+    Jz = np.concatenate([rng.standard_normal((n, 2, 7)), np.zeros((1, 2, 7))])
+    rays = []
+    G = layout.grams(Jz, rays)
+    np.testing.assert_array_equal(G, layout.grams(Jz))
+    got = rays[0].of_images()
+    assert [i for i, _ in got] == [0, 2, 3, 4, 5]
+    for i, R in got:
+        np.testing.assert_array_equal(R, Jz[:n][image == i].reshape(-1, 7))
+
+
 @pytest.mark.parametrize("k", [1, 2, 3, SUM_BY_ADDS_MAX_K, SUM_BY_ADDS_MAX_K + 1])
 def test_sums_over_a_points_rays_equal_numpys(k):
     X = np.random.default_rng(k).standard_normal((11, k, 3, 3))

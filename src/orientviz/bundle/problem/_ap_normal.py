@@ -23,7 +23,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ..reduced import APBorder
+from ..reduced import APBorder, ImageRays
 from ._ap_batches import PointBatch, batched_terms, point_batches
 
 F64 = NDArray[np.float64]
@@ -319,6 +319,7 @@ def ap_normal(
     bp: F64,
     lam: float,
     border: tuple[F64, F64] | None = None,
+    rays: ImageRays | None = None,
 ) -> APBorder:
     """Border of the normal equations: E (6m, q), F (q, q), ba (q,) and helpers.
 
@@ -342,6 +343,9 @@ def ap_normal(
     border : (E, F0), optional
         E and the undamped F of an earlier iteration to use instead of forming them (the
         right-hand side ``ba`` and ``H`` are always of this iteration).
+    rays : ImageRays, optional
+        The rays sorted by image as the images' Gram matrices read them, P½J_e in their
+        first 6 columns (then ``Jew`` is not read for the own-group blocks of E).
 
     Returns
     -------
@@ -365,7 +369,7 @@ def ap_normal(
     # E: per image, its own group's block Σ_a (J_eᵀ P A − T Hᵀ) = Σ_a J_eᵀ P½ Ã with the
     # reduced design Ã = P½ (A − J_p V⁻¹ Hᵀ) of each ray (T = J_eᵀ P J_p V⁻¹, H of the
     # ray's own (point, group) pair)
-    n = Jew.shape[0]
+    n = Jpw.shape[0]
     VHt = np.empty((H.shape[0] + 1, 3, k))  # V⁻¹ Hᵀ = (H V⁻¹)ᵀ (V⁻¹ symmetric), and a zero
     VHt[:-1] = HV.transpose(0, 2, 1)
     VHt[-1] = 0.0
@@ -391,13 +395,20 @@ def ap_normal(
         own = (A.sum_img @ JA).reshape(m, 6, k)
     else:  # one (6 × 2c)(2c × k) product per image over its c rays (the same sums as
         # over its rays padded to the largest count with zero rays, without the padding)
-        Js = np.take(Jew, A.by_image, axis=0).reshape(-1, 6)
         As = np.take(At, A.by_image, axis=0).reshape(-1, k)
-        own = np.empty((m, 6, k))
         rows = A.image_rows.tolist()
-        for i in range(m):
-            a, b = rows[i], rows[i + 1]
-            own[i] = Js[a:b].T @ As[a:b]
+        if rays is not None and (
+            rays.gram.order is A.by_image or np.array_equal(rays.gram.order, A.by_image)
+        ):  # the Gram matrices' rays (the same order): J_e is not gathered again
+            own = np.zeros((m, 6, k))
+            for i, R in rays.of_images():
+                own[i] = R[:, :6].T @ As[rows[i] : rows[i + 1]]
+        else:
+            Js = np.take(Jew, A.by_image, axis=0).reshape(-1, 6)
+            own = np.empty((m, 6, k))
+            for i in range(m):
+                a, b = rows[i], rows[i + 1]
+                own[i] = Js[a:b].T @ As[a:b]
     # ... and the blocks of the other groups that its points reach (− Σ T_a H_eᵀ); F:
     # direct term (constant for a linear set; refreshed for a lens model) − Σ H V⁻¹ Hᵀ
     # over the pairs (e, e') of one point

@@ -39,7 +39,16 @@ def work_array(work: dict | None, name: str, shape: tuple) -> F64 | None:
     return a
 
 
-def eliminate_points(prob, st, Jz: F64, Jpw: F64, rw: F64, lam: float, work: dict | None = None):
+def eliminate_points(
+    prob,
+    st,
+    Jz: F64,
+    Jpw: F64,
+    rw: F64,
+    lam: float,
+    work: dict | None = None,
+    rays: list | None = None,
+):
     """The point elimination of one linearisation (see the module docstring).
 
     Parameters
@@ -58,6 +67,9 @@ def eliminate_points(prob, st, Jz: F64, Jpw: F64, rw: F64, lam: float, work: dic
         Damping of the point blocks.
     work : dict, optional
         Where W and T are kept between calls.
+    rays : list, optional
+        A list to which the rays of ``Jz`` sorted by image are appended
+        (:class:`~orientviz.bundle.reduced.ImageRays`: the images' Gram matrices' operand).
 
     Returns
     -------
@@ -93,7 +105,7 @@ def eliminate_points(prob, st, Jz: F64, Jpw: F64, rw: F64, lam: float, work: dic
     Jy += Jpr[:, :, 2] * y[:, 2, None]
     Jz[:n, :, d] = rw
     Jz[tg.rows, :, d] -= Jy
-    G = prob.image_gram.grams(Jz)
+    G = prob.image_gram.grams(Jz, rays)
     return Wr, V, Vinv, Tr, bp, diagV, G
 
 

@@ -173,12 +173,15 @@ class _Terms:
     def __init__(self, cols: I64, shape: tuple[int, int], args: tuple, Aw: F64) -> None:
         self.cols, self.shape, self.args, self.Aw = cols, shape, args, Aw
         self.structure: APStructure | None = None
+        self._indptr: I64 | None = None
 
     def csr(self, A: F64) -> sp.csr_matrix:
-        """The design A (n, 2, k) as a (2n, q) CSR matrix (k entries per row)."""
-        k = A.shape[2]
-        indptr = np.arange(0, A.shape[0] * 2 * k + 1, k)
-        return sp.csr_matrix((A.reshape(-1), self.cols, indptr), shape=self.shape)
+        """The design A (n, 2, k) as a (2n, q) CSR matrix (k entries per row; its index
+        arrays are shared by the matrices of every design)."""
+        if self._indptr is None:
+            k = A.shape[2]
+            self._indptr = np.arange(0, A.shape[0] * 2 * k + 1, k, dtype=self.cols.dtype)
+        return sp.csr_matrix((A.reshape(-1), self.cols, self._indptr), shape=self.shape)
 
     def get_structure(self) -> APStructure:
         if self.structure is None:
@@ -367,8 +370,13 @@ def additional_block(
     if A.ndim != 3 or A.shape[:2] != (n, 2):
         raise InputError(f"additional.design: expected shape (n, 2, k), got {A.shape}")
     k = A.shape[2]
-    Aw = A * obs.weight[:, :, None]
-    cols = (np.repeat(grp[obs.image], 2)[:, None] * k + np.arange(k)).ravel()
+    # a camera model's design is set at each linearisation: zeros until then (untouched)
+    Aw = np.zeros(A.shape) if lens is not None else A * obs.weight[:, :, None]
+    # the design's column indices (k per row), of the index type the sparse form keeps
+    it = np.int32 if max(2 * n * k, G * k) < 2**31 else np.int64
+    cols = np.empty((n, 2, k), it)
+    cols[:] = (grp[obs.image].astype(it) * it(k))[:, None, None] + np.arange(k, dtype=it)
+    cols = cols.reshape(-1)
     s = np.inf if ap_sigma is None else ap_sigma
     s = np.asarray(s, dtype=float)
     s = (

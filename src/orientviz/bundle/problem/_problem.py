@@ -28,6 +28,7 @@ from ..reduced import (
     dense_schur,
     factor_reduced,
     schur_blocks,
+    schur_buffer_size,
 )
 from ._ap_normal import ap_normal, point_ap_term
 from ._auxiliary import BundleAuxiliary, auxiliary_rows
@@ -35,7 +36,7 @@ from ._border import solve_border
 from ._camera_blocks import camera_blocks_apply, camera_normal, camera_solve
 from ._checks import PointSetup
 from ._damping import scene_centres
-from ._eliminate import eliminate_points, image_blocks
+from ._eliminate import eliminate_points, image_blocks, work_array
 from ._names import ParameterNames
 from ._parts import (
     AdditionalBlock,
@@ -270,14 +271,26 @@ class BundleProblem:
         if self.camera_blocks and not self.run.border.hold:
             return camera_normal(self, st, rw, Je, Jp, lam)
         sw = self.obs.weight[:, :, None]
+        bd = self.run.border
+        # with a border, the work arrays are kept between iterations (the loop keeps no
+        # normal equations of such a bundle past the next formation: no chord steps, no
+        # linearisation kept for the precision, ..loop._steps): arrays of a few MB formed
+        # anew in every iteration cost their page faults again
+        ws = S.tracks.work if self.q and not bd.hold else None
         # [P½J_e | r'] per ray (r': ._eliminate) and a zero row: the images' Gram matrices
         n = Je.shape[0]
         Jz = np.empty((n + 1, 2, 7))
         Jz[n] = 0.0
         Jew = np.multiply(Je, sw, out=Jz[:n, :, :6])
         Jpw = Jp * sw
-        Wr, V, Vinv, Tr, bp, diagV, G = eliminate_points(self, st, Jz, Jpw, rw, lam)
+        # E formed here (not held, not reused): its own-group blocks read the rays sorted
+        # by image (._ap_normal)
+        border_e = self.q and not bd.hold and not (bd.reuse and bd.border is not None)
+        rays = [] if border_e and not self.ap.structure.batched else None
+        Wr, V, Vinv, Tr, bp, diagV, G = eliminate_points(self, st, Jz, Jpw, rw, lam, ws, rays)
         del Jz
+        if rays:  # ... as the images' Gram matrices had them: not J_e again
+            rays, Jew = rays[0], None
         if not (self.q and not self.run.border.hold):  # the weighted Jacobians: border only
             del Jew, Jpw  # (frees them before S is formed: the peak of a large block)
         U, red, diagU = image_blocks(self, st, G, lam)
@@ -295,19 +308,21 @@ class BundleProblem:
             diagU=diagU,
             diagV=diagV,
         )
-        if S.formation == "dense":
-            out.blocks, out.S = dense_schur(S, U, Wr, V)
-        else:
-            out.blocks = schur_blocks(S, U, Tr, Wr)
-        if self.q:
+        if self.q:  # (before S: the rays sorted by image are freed first)
             if self.run.border.hold:
                 out.diagF = np.ones(self.q)
             else:
                 border = self.run.border.border if self.run.border.reuse else None
-                out.ap = ap_normal(self, st, rw, Jew, Jpw, out.T, Vinv, bp, lam, border)
+                out.ap = ap_normal(self, st, rw, Jew, Jpw, out.T, Vinv, bp, lam, border, rays)
                 out.ap.reused = border is not None
                 out.diagF = np.diag(out.ap.F0).copy()
                 self.run.border.border = (out.ap.E_border, out.ap.F0)
+                del Jew, Jpw, rays
+        if S.formation == "dense":
+            out.blocks, out.S = dense_schur(S, U, Wr, V)
+        else:
+            buf = work_array(ws, "products", (schur_buffer_size(tg),))
+            out.blocks = schur_blocks(S, U, Tr, Wr, buf)
         if self.aux:
             self.aux.normal(self, st, out, lam)
         return out

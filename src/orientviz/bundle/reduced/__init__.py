@@ -40,7 +40,7 @@ from ._factor import Factor, dense_matrix, factor_reduced, raise_not_determinabl
 from ._normal import APBorder, AuxBorder, NormalEquations
 from ._options import ReducedOptions
 from ._orderings import geometric_orderings
-from ._schur import DENSE_CHUNK_BYTES, ImageGram, dense_schur, inv3
+from ._schur import DENSE_CHUNK_BYTES, ImageGram, ImageRays, dense_schur, inv3
 from ._structure import ReducedStructure
 from ._tracks import (
     TrackGroups,
@@ -63,6 +63,7 @@ __all__ = [
     "inv3",
     "ray_couplings",
     "ImageGram",
+    "ImageRays",
     "schur_blocks",
     "schur_buffer_size",
     "dense_schur",

@@ -111,20 +111,53 @@ class ImageGram:
             self.slots = np.full(self.present.size * kmax, self.n)
             self.slots[seg * kmax + rank] = self.order
 
-    def grams(self, Jz: F64) -> F64:
+    def grams(self, Jz: F64, rays: list | None = None) -> F64:
         """Σ JᵀJ per image (m, c, c) from ``Jz`` (n + 1, 2, c): the rays in their own
-        order, then a zero row."""
+        order, then a zero row. ``rays``: a list to which the rays sorted by image are
+        appended (:class:`ImageRays`, the array the products were formed from)."""
         c = Jz.shape[2]
         if self.slots is None:
             J = np.take(Jz[: self.n], self.order, axis=0)
+            if rays is not None:
+                counts = np.diff(np.append(self.starts, self.n))
+                rays.append(ImageRays(J.reshape(-1, c), 2 * self.starts, 2 * counts, self))
             return gram_by_segments(J, self.starts, self.present, self.m)
         P = np.take(Jz, self.slots, axis=0).reshape(self.present.size, -1, c)
+        if rays is not None:
+            counts = np.diff(np.append(self.starts, self.n))
+            starts = P.shape[1] * np.arange(self.present.size)
+            rays.append(ImageRays(P.reshape(-1, c), starts, 2 * counts, self))
         G = np.matmul(P.transpose(0, 2, 1), P)
         if self.present.size == self.m:
             return G
         out = np.zeros((self.m, c, c))
         out[self.present] = G
         return out
+
+
+@dataclass
+class ImageRays:
+    """The rays of :meth:`ImageGram.grams` sorted by image: each image's rows (2 per ray,
+    in the order of :attr:`ImageGram.order`) are consecutive rows of one array.
+
+    Attributes
+    ----------
+    rows : ndarray, shape (N, c)
+        The rows (padded images: each image's block followed by zero rows).
+    first, count : ndarray of int
+        Per non-empty image (``gram.present``) where its rows begin and how many.
+    gram : ImageGram
+    """
+
+    rows: F64
+    first: I64
+    count: I64
+    gram: ImageGram
+
+    def of_images(self) -> list[tuple[int, F64]]:
+        """(image, its rows (2·rays, c): a view) of every image that has rays."""
+        r, f, c = self.rows, self.first.tolist(), self.count.tolist()
+        return [(i, r[a : a + k]) for i, a, k in zip(self.gram.present.tolist(), f, c)]
 
 
 def whitening_factors(V: F64) -> F64:

@@ -15,6 +15,7 @@ point and per image are products with constant sparse incidence matrices.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 import scipy.sparse as sp
@@ -136,6 +137,21 @@ class _MinusOnes:
         return self.a[:size]
 
 
+def _csc(rows, indptr, shape: tuple[int, int], minus) -> sp.csc_matrix:
+    """The CSC matrix of −1 values at ``rows`` with column pointers ``indptr``: its
+    values a view of the shared −1s (``minus``: :class:`_MinusOnes`; None: its own)."""
+    if minus is None or max(shape) >= 2**31:  # (the constructor picks the index type)
+        M = sp.csc_matrix((np.full(rows.size, -1.0), rows, indptr), shape=shape)
+        if minus is not None:
+            M.data = minus(rows.size)
+        return M
+    # formed empty and given its arrays (the constructor would copy a view of the
+    # shared values: an array of −1 per map again)
+    M = sp.csc_matrix(shape)
+    M.indices, M.indptr, M.data = rows, indptr, minus(rows.size)
+    return M
+
+
 def _group_map(img: I64, lookup, n_blocks: int, d: int = 6, minus=None) -> sp.csc_matrix:
     """The map of one group (n points × k images, ``img``) into the rows of S's blocks
     (``lookup``: :func:`_block_lookup`) of d × d."""
@@ -152,37 +168,48 @@ def _group_map(img: I64, lookup, n_blocks: int, d: int = 6, minus=None) -> sp.cs
     rows = rows6.reshape(-1)[keep6]
     indptr = np.zeros(keep6.size + 1, np.int32)
     np.cumsum(keep6, out=indptr[1:])
-    M = sp.csc_matrix((np.full(rows.size, -1.0), rows, indptr), shape=(d * n_blocks, keep6.size))
-    if minus is not None:
-        M.data = minus(rows.size)
-    return M
+    return _csc(rows, indptr, (d * n_blocks, keep6.size), minus)
+
+
+@lru_cache(maxsize=64)
+def _point_pattern(k: int, d: int) -> tuple:
+    """One point's pattern of :func:`_ascending_group_map` for k rays and d unknowns per
+    image: the pairs (iu, ju) of rays a ≤ b, and of its (dk × dk) product's rows (a, r,
+    b), row-major, the kept ones' pair and row r within the block, and the kept rows
+    before each row. Read only (shared by the maps of every group of k rays)."""
+    iu, ju = np.triu_indices(k)
+    a, r, b = (x.reshape(-1) for x in np.indices((k, d, k)))
+    kept = a <= b
+    pair = np.zeros((k, k), np.int64)
+    pair[iu, ju] = np.arange(iu.size)
+    sel, r_kept = pair[a[kept], b[kept]], r[kept].astype(np.int32)
+    before = (np.cumsum(kept) - kept).astype(np.int32)
+    out = (iu, ju, sel, r_kept, before)
+    for x in out:
+        x.flags.writeable = False
+    return out
 
 
 def _ascending_group_map(img: I64, lookup, n_blocks: int, d: int = 6, minus=None) -> sp.csc_matrix:
     """:func:`_group_map` for points whose rays are in ascending image order (as the
     bundle's set-up orders them): the kept pairs are a ≤ b for every point, so the map
-    is one point's pattern repeated (no masks over all n·6k² product rows; the same
-    matrix)."""
+    is one point's pattern (:func:`_point_pattern`) repeated (no masks over all n·dk²
+    product rows; the same matrix)."""
     n, k = img.shape
-    iu, ju = np.triu_indices(k)
-    pair = np.zeros((k, k), np.int64)
-    pair[iu, ju] = np.arange(iu.size)
-    blk = lookup(img[:, iu], img[:, ju]).astype(np.int32)  # (n, pairs)
-    a, r, b = (
-        x.reshape(-1) for x in np.meshgrid(np.arange(k), np.arange(d), np.arange(k), indexing="ij")
+    iu, ju, sel, r_kept, before = _point_pattern(k, d)
+    blk = lookup(img[:, iu], img[:, ju])  # (n, pairs)
+    rows = blk[:, sel].astype(np.int32, copy=False)
+    rows *= np.int32(d)
+    rows += r_kept
+    per_point, width = sel.size, before.size
+    indptr = np.empty(n * width + 1, np.int32)
+    np.add(
+        per_point * np.arange(n, dtype=np.int32)[:, None],
+        before,
+        out=indptr[:-1].reshape(n, width),
     )
-    kept = a <= b  # product rows (a, r, b) of one point, row-major in its (dk × dk)
-    rows = d * blk[:, pair[a[kept], b[kept]]] + r[kept].astype(np.int32)
-    per_point = int(kept.sum())
-    before = (np.cumsum(kept) - kept).astype(np.int32)  # kept rows before each product row
-    indptr = np.empty(n * kept.size + 1, np.int32)
-    indptr[:-1] = (per_point * np.arange(n, dtype=np.int32)[:, None] + before).reshape(-1)
     indptr[-1] = n * per_point
-    shape = (d * n_blocks, n * kept.size)
-    M = sp.csc_matrix((np.full(rows.size, -1.0), rows.reshape(-1), indptr), shape=shape)
-    if minus is not None:  # its own −1s (freed at once) for a view of the shared ones
-        M.data = minus(rows.size)
-    return M
+    return _csc(rows.reshape(-1), indptr, (d * n_blocks, n * width), minus)
 
 
 def track_groups(st) -> TrackGroups:
