@@ -161,3 +161,27 @@ def test_switch_and_end_reuse_give_the_values_of_a_new_evaluation(monkeypatch):
     prob, block = _planted_sxb()
     adj, _ = adjust_block(copy.deepcopy(prob), copy.deepcopy(block), precision=True)
     assert adj.converged and seen == {"switch": 1, "end": 1}
+
+
+def test_expected_last_step_is_evaluated_without_derivatives(monkeypatch):
+    """sxb, Huber: the last trial point (its step expected to meet ftol) is evaluated
+    without derivatives, and the run is the one that forms them at every trial point
+    (every iterate, the points and the residuals equal)."""
+    prob, block = _planted_sxb()
+    asked = []
+    real = _steps.BundleSteps.evaluate
+
+    def evaluate(self, st, jacobian):
+        asked.append(jacobian)
+        return real(self, st, jacobian)
+
+    monkeypatch.setattr(_steps.BundleSteps, "evaluate", evaluate)
+    lean, _ = adjust_block(copy.deepcopy(prob), copy.deepcopy(block), precision=False)
+    assert lean.converged and asked[-1] is False and all(asked[:-1])
+    monkeypatch.setattr(_steps.BundleSteps, "expects_stop", lambda self, ftol: False)
+    asked.clear()
+    full, _ = adjust_block(copy.deepcopy(prob), copy.deepcopy(block), precision=False)
+    assert all(asked)
+    assert [h.cost for h in lean.history] == [h.cost for h in full.history]
+    for name in ("exterior", "points", "residuals"):
+        assert np.array_equal(getattr(lean, name), getattr(full, name))

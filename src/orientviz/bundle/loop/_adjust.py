@@ -251,9 +251,10 @@ def bundle_adjust(
             max_iter=max_iter,
             # derivatives at the new state: for the next iteration, the precision or the
             # check of a damped start (not after the last step of a screening run, nor after
-            # a step that meets the stopping rule: the loop stops there once it is accepted)
+            # a step that meets the stopping rule or, robust, is expected to meet ftol: the
+            # loop stops there once it is accepted)
             jacobian_after=lambda it, run: (
-                (it < max_iter and not steps.stops(tol))
+                (it < max_iter and not steps.stops(tol) and not steps.expects_stop(ftol))
                 or precision
                 or run.damped_start
                 or prob.aux is not None

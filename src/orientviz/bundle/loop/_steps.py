@@ -222,6 +222,7 @@ class BundleSteps:
         self.points_moved = 0  # points the last search moved otherwise than the joint step
         self.search_gain = None  # … and the decrease of Σρ it added (None: no search)
         self.search_off = False  # the searches stopped paying (SEARCH_GAIN)
+        self._drops = (0.0, 0.0)  # the decreases of Σρ of the last two robust steps
         # the start of the last solved step and its additional parameters' design (the
         # step's predicted decrease, ._gain), and whether the last accepted least-squares
         # step was a poor one whose decrease met ftol (it may not stop the run)
@@ -263,7 +264,10 @@ class BundleSteps:
             ev.data = _Linearisation(ev.data, local, deferred=True)
             ev.data.robust = self.loss_on  # its misclosures: weighted by 1/σ only
             return ev
-        return self._evaluate(st, jacobian, local)
+        # a robust trial point without derivatives (its step expected to stop the run,
+        # :meth:`expects_stop`): the projection is kept for the run's end or the
+        # derivatives if the run goes on (the next evaluation at another point drops it)
+        return self._evaluate(st, jacobian, local, keep=not jacobian and self.loss_on)
 
     def resolve(self, st: BundleState, ev: Evaluation) -> None:
         """Give ``ev`` (at ``st``, evaluated without derivatives) its linearisation, in
@@ -428,6 +432,17 @@ class BundleSteps:
             return False
         return self.loss is None or (self.loss_on and not self.switch_pending)
 
+    def expects_stop(self, ftol: float) -> bool:
+        """Whether the step being taken is expected to meet ``ftol`` (a robust run's
+        relative decrease of Σρ): its decrease extrapolated from the last two robust steps'
+        d₁, d₂ as d₂²/d₁ (their linear convergence) below ftol·Σρ. Its trial point then
+        is evaluated without derivatives (formed from the kept projection if the run goes
+        on: the same values, :meth:`resolve`)."""
+        d1, d2 = self._drops
+        if not (self.loss_on and not self.switch_pending and ftol > 0 and d1 > 0 and d2 >= 0):
+            return False
+        return d2 * d2 / d1 < ftol * self.last_cost
+
     def stops(self, tol: float) -> bool:
         """Whether the last solved step meets the stopping rule (``tol``) once accepted:
         the state it leads to then needs no derivatives (without the precision)."""
@@ -498,7 +513,7 @@ class BundleSteps:
         # point's Jacobians are formed (the peak memory of a large block)
         if not (self.precision and lam == 0 and not (prob.q or prob.aux or local)):
             ne = fac = None
-        self._gain_from = (st, prob.run.ap.A_csr if prob.q else None)
+        self._gain_from = (st, prob.run.ap if prob.q else None)  # (its A_csr: read if needed)
         return Step(rel, dx, (dc, dp, da, fac, ne, local, points))
 
     def _poor_step(self, step: Step, previous: Evaluation) -> bool:
@@ -512,7 +527,8 @@ class BundleSteps:
         actual = before - self.pending_cost
         if actual > ftol * before:
             return False
-        st, design = self._gain_from
+        st, ap = self._gain_from
+        design = None if ap is None else ap.A_csr
         dc, dp, da, local = step.data[0], step.data[1], step.data[2], step.data[5]
         pred = predicted_decrease(self.prob, st, tuple(previous.data), (dc, dp, da), design, local)
         return pred > ftol * before and actual < POOR_GAIN * pred
@@ -643,6 +659,7 @@ class BundleSteps:
         self._gain_from = None  # (its start state: not kept beyond the step)
         if self.loss_on and not self.switch_pending and previous.cost > 0:  # a robust step
             self.robust_tail = (previous.cost - self.pending_cost) < ROBUST_TAIL * previous.cost
+            self._drops = (self._drops[-1], previous.cost - self.pending_cost)
             if self.search_gain is not None:  # the points' search: did it pay?
                 gain, self.search_gain = self.search_gain, None
                 self.search_off = prob.obs.xy.shape[

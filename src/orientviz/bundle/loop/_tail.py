@@ -57,27 +57,28 @@ FRACTIONS: tuple[float, ...] = (1.0, 0.5, 0.25, 0.125)
 _UPPER = (np.array([0, 0, 0, 1, 1, 2]), np.array([0, 1, 2, 1, 2, 2]))
 #: … and the positions of its diagonal among them.
 _DIAG = np.array([0, 3, 5])
+#: The cofactors c00, c01, c02, c11, c12, c22 of such a block as N[p]·N[q] − N[r]·N[s]
+#: (rows p, q, r, s of positions in :data:`_UPPER` order) …
+_COF = np.array([[3, 2, 1, 0, 1, 0], [5, 4, 4, 5, 2, 3], [4, 1, 2, 2, 0, 1], [4, 5, 3, 2, 4, 1]])
+#: … and the adjugate (3 × 3) from them.
+_ADJ = np.array([[0, 1, 2], [1, 3, 4], [2, 4, 5]])
 
 
 def _solve3(N: F64, g: F64) -> tuple[F64, F64]:
     """x = N⁻¹ g of symmetric 3 × 3 systems given by their upper triangles ``N`` (a, 6),
     in :data:`_UPPER` order, and ``g`` (a, 3) — by cofactors; returns (x (a, 3), det N
     (a,)). Rows with det N = 0 give inf/NaN (the caller tests det)."""
-    n00, n01, n02, n11, n12, n22 = N.T
-    c00 = n11 * n22 - n12 * n12
-    c01 = n02 * n12 - n01 * n22
-    c02 = n01 * n12 - n02 * n11
-    c11 = n00 * n22 - n02 * n02
-    c12 = n01 * n02 - n00 * n12
-    c22 = n00 * n11 - n01 * n01
-    det = n00 * c00 + n01 * c01 + n02 * c02
-    g0, g1, g2 = g.T
-    x = np.empty_like(g)
+    C = N[:, _COF[0]] * N[:, _COF[1]] - N[:, _COF[2]] * N[:, _COF[3]]  # c00 c01 c02 c11 c12 c22
+    det = N[:, 0] * C[:, 0] + N[:, 1] * C[:, 1] + N[:, 2] * C[:, 2]
+    adj = C[:, _ADJ]  # (a, 3, 3), the adjugate
     with np.errstate(divide="ignore", invalid="ignore"):
         inv = 1.0 / det
-        x[:, 0] = (c00 * g0 + c01 * g1 + c02 * g2) * inv
-        x[:, 1] = (c01 * g0 + c11 * g1 + c12 * g2) * inv
-        x[:, 2] = (c02 * g0 + c12 * g1 + c22 * g2) * inv
+        x = (
+            adj[:, :, 0] * g[:, 0, None]
+            + adj[:, :, 1] * g[:, 1, None]
+            + adj[:, :, 2] * g[:, 2, None]
+        )
+        x *= inv[:, None]
     return x, det
 
 
@@ -105,12 +106,16 @@ def tail_model(
         return rw, Je, Jp, None
     c = np.maximum(loss.along(s[out]), floor)
     sw = prob.obs.weight[out][:, :, None]
-    u = rw[out] / np.linalg.norm(rw[out], axis=1)[:, None]  # r̂
+    ro = rw[out]
+    u = ro / np.sqrt(ro[:, 0] * ro[:, 0] + ro[:, 1] * ro[:, 1])[:, None]  # r̂
     f = (1.0 - np.sqrt(c))[:, None, None] * u[:, :, None]
+    u0, u1 = u[:, 0, None], u[:, 1, None]
 
     def turn(X: F64) -> F64:  # unweighted rows X: (1/sw) (I − f r̂ᵀ) (sw X)
         Y = X * sw
-        return (Y - f * np.einsum("ni,nij->nj", u, Y)[:, None, :]) / sw
+        Y -= f * (u0 * Y[:, 0, :] + u1 * Y[:, 1, :])[:, None, :]
+        Y /= sw
+        return Y
 
     rw, Je, Jp = rw.copy(), Je.copy(), Jp.copy()
     Je[out], Jp[out] = turn(Je[out]), turn(Jp[out])
@@ -304,7 +309,8 @@ def point_search(
     pts = prob.points
     act, owner = newton.active, newton.owner
     pw = pts.prior_w[act]
-    held = np.flatnonzero(pw.any(axis=1))  # points with a prior: its vᵀPv joins their Σρ
+    # points with a prior: its vᵀPv joins their Σρ
+    held = np.flatnonzero((pw[:, 0] != 0) | (pw[:, 1] != 0) | (pw[:, 2] != 0))
     f = newton.fractions()  # (c, a)
     # the linearised rays' Σρ of each point at each fraction of dp: ‖r − f·J dp‖²
     fo = f[:, owner]  # (c, m)
@@ -321,9 +327,11 @@ def point_search(
     prob.obs.weight[...] = base_weight
     # the true misclosures of the active points' rays at both corrections, in one pass
     rays = newton.obs_rays
-    xyz = st.xyz[prob.obs.point[rays]]
+    xyz = st.xyz.take(prob.obs.point[rays], axis=0)
     both = np.concatenate((rays, rays))
-    at = np.concatenate((xyz + cand[0][owner], xyz + cand[1][owner]))
+    at = np.empty((2 * rays.size, 3))
+    np.add(xyz, cand[0].take(owner, axis=0), out=at[: rays.size])
+    np.add(xyz, cand[1].take(owner, axis=0), out=at[rays.size :])
     rw = ray_misclosures(prob, st.X0 + dc[:, :3], st.angles + dc[:, 3:], st.ap + da, both, at)
     rho = loss.rho(rw[:, 0] * rw[:, 0] + rw[:, 1] * rw[:, 1])
     true = np.add.reduceat(rho.reshape(2, -1), newton.starts, axis=1)  # (2, a)
