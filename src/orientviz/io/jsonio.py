@@ -164,6 +164,15 @@ def _suspect(node: Any) -> bool:
     t = type(node)
     if t is list:
         values: Iterable[Any] = node
+        if len(node) > 16:  # a long column: judged in C when it holds one type
+            kinds = set(map(type, node))
+            if kinds == {float}:  # the sum is inf or NaN when an item is (or it overflows)
+                total = sum(node)
+                return total - total != 0.0
+            if kinds == {str}:
+                return not "".join(node).isascii() or max(map(len, node)) > MAX_TEXT_LENGTH
+            if kinds == {int}:
+                return not (-1e308 < min(node) and max(node) < 1e308)
     elif t is dict:
         for k in node:
             if not k.isascii() or len(k) > 1000:

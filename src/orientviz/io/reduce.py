@@ -35,6 +35,8 @@ import numpy as np
 MIN_LENGTH: int = 64
 #: Distinct string values kept per place (enums must have fewer values than this).
 DISTINCT: int = 16
+#: Items looked at one by one for an equal pair before a whole column is set against itself.
+DUPLICATE_SCAN: int = 256
 
 
 def _features(node: Any, path: tuple, out: list) -> None:
@@ -125,13 +127,14 @@ def _first_duplicate(items: list, types: set | None = None) -> set[int]:
 
     Keeping such a pair makes ``uniqueItems`` judge the reduced array as the original.
     ``types``: the items' types when known; an array of only strings or only floats
-    without any equal pair is recognised by one set (Python's equality is JSON's there).
+    whose first :data:`DUPLICATE_SCAN` items are all different is then recognised by
+    one set when it has no equal pair at all (Python's equality is JSON's there).
     """
-    if types is not None and (types == {str} or types == {float}):
-        if len(set(items)) == len(items):
-            return set()
+    one_set = types is not None and (types == {str} or types == {float})
     seen: dict[tuple, int] = {}
     for i, v in enumerate(items):
+        if i == DUPLICATE_SCAN and one_set and len(set(items)) == len(items):
+            return set()
         if isinstance(v, bool) or v is None:
             key: tuple = ("lit", v)
         elif isinstance(v, (int, float)):

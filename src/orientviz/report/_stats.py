@@ -107,12 +107,16 @@ def intersection_angles(block: Block, X0: F64, xyz: F64) -> F64:
     kmax = int(counts.max(initial=0))
     best = np.full(block.n_points, -np.inf)
     for off in range(1, kmax):
-        same = pt[:-off] == pt[off:]
-        if not same.any():
+        same = np.flatnonzero(pt[:-off] == pt[off:])
+        if not same.size:
             break
-        cosang = np.clip(np.einsum("ij,ij->i", d[:-off][same], d[off:][same]), -1.0, 1.0)
+        cosang = np.clip(np.einsum("ij,ij->i", d[same], d[same + off]), -1.0, 1.0)
         ang = np.arccos(cosang)
-        np.maximum.at(best, pt[:-off][same], ang)
+        # the pairs of one point are adjacent (pt is sorted): the largest of each run
+        p = pt[same]
+        run = np.flatnonzero(np.r_[True, p[1:] != p[:-1]])
+        first = p[run]
+        best[first] = np.maximum(best[first], np.maximum.reduceat(ang, run))
     ok = np.isfinite(best)
     out[ok] = best[ok]
     return out
