@@ -185,3 +185,29 @@ def test_expected_last_step_is_evaluated_without_derivatives(monkeypatch):
     assert [h.cost for h in lean.history] == [h.cost for h in full.history]
     for name in ("exterior", "points", "residuals"):
         assert np.array_equal(getattr(lean, name), getattr(full, name))
+
+
+def test_switch_of_a_camera_model_gives_the_values_of_a_new_evaluation(monkeypatch):
+    """camcal (a camera model), Huber: where the loss is switched on, the robust
+    evaluation from the deferred least-squares misclosures equals a new evaluation
+    there (cost, weighted misclosures, Jacobians, √ρ′, the camera model's weighted design)."""
+    seen = []
+    real = _steps.BundleSteps._switch_evaluation
+
+    def switch(self, st, ev):
+        assert getattr(ev.data, "deferred", False)  # the path under test is taken
+        out = real(self, st, ev)
+        design = self.prob.run.ap.Aw.copy()
+        fresh = self._evaluate(st, True, self.is_local(ev))
+        assert out.cost == fresh.cost
+        assert np.array_equal(out.data.scale, fresh.data.scale)
+        for a, b in zip(out.data, fresh.data):
+            assert np.array_equal(a, b)
+        assert np.array_equal(design, self.prob.run.ap.Aw)
+        seen.append(True)
+        return out
+
+    monkeypatch.setattr(_steps.BundleSteps, "_switch_evaluation", switch)
+    prob, block = _camcal()
+    adj, _ = adjust_block(copy.deepcopy(prob), copy.deepcopy(block), precision=False)
+    assert adj.converged and seen == [True]

@@ -160,3 +160,49 @@ def test_numbers_are_parsed_like_python():
     ints, bad = parse_numbers(buf, t.start, t.end, integer=True)
     assert set(bad.tolist()) == {k for k, w in enumerate(words) if not w.lstrip("+-").isdigit()}
     assert ints[-3] == 7 and ints[-4] == 3
+
+
+def test_long_decimals_are_read_as_float_reads_them():
+    # COLMAP writes doubles with 17 significant digits: a token of up to 19 bytes has a
+    # mantissa beyond 2**53, where one division of the mantissa is no longer exact
+    rng = np.random.default_rng(11)
+    vals = np.concatenate([rng.uniform(0, 1, 3000), rng.uniform(-4000, 4000, 3000)])
+    words = [f"{v:.17g}" for v in vals] + [repr(float(v)) for v in vals]
+    words = [w for w in words if len(w) <= 19 and "e" not in w]
+    assert len(words) > 5000
+    text = (" ".join(words) + "\n").encode()
+    buf = np.frombuffer(text, np.uint8)
+    t = tokenize(buf)
+    got, bad = parse_numbers(buf, t.start, t.end)
+    assert bad.size == 0
+    want = np.array([float(w) for w in words])
+    assert np.array_equal(got.view(np.int64), want.view(np.int64))
+
+
+def test_the_shipped_model_is_read_bit_for_bit_as_colmap_wrote_it():
+    # every keypoint and point coordinate of axe's text files equals float() of its token
+    from orientviz.datasets.sfm import axe_model
+
+    d = axe_model()
+    model = read_text_model(d)
+    pts = {}
+    for line in (d / "points3D.txt").read_text().splitlines():
+        if line and not line.startswith("#"):
+            f = line.split()
+            pts[int(f[0])] = [float(v) for v in f[1:4]]
+    xyz = np.array([pts[int(i)] for i in model.point_ids])
+    assert np.array_equal(model.xyz.view(np.int64), xyz.view(np.int64))
+    lines = [ln for ln in (d / "images.txt").read_text().splitlines() if not ln.startswith("#")]
+    rows = []  # image id, point id, x, y of every matched keypoint, as the file has them
+    for head, keys in zip(lines[0::2], lines[1::2]):
+        f = keys.split()
+        for x, y, p in zip(f[0::3], f[1::3], f[2::3]):
+            if p != "-1":
+                rows.append((int(head.split()[0]), int(p), float(x), float(y)))
+    want = np.array(rows)
+    got = np.column_stack(
+        [model.image_ids[model.obs_image], model.point_ids[model.obs_point], model.obs_uv]
+    )
+    assert got.shape == want.shape
+    got, want = (a[np.lexsort(a.T[::-1])] for a in (got, want))
+    assert np.array_equal(got.view(np.int64), want.view(np.int64))

@@ -157,7 +157,7 @@ def _plain_fields(text: str) -> tuple[NDArray[np.int64], F64 | None] | None:
     start = np.flatnonzero(word & np.concatenate(([True], sep[:-1])))
     end = np.flatnonzero(word & np.concatenate((sep[1:], [True]))) + 1
     counts = np.bincount(np.searchsorted(newline, start), minlength=n_lines)
-    values, bad = parse_numbers(u, start, end, exact=True)
+    values, bad = parse_numbers(u, start, end)
     return counts, (None if bad.size else values)
 
 

@@ -4,10 +4,10 @@ A file is read once, in chunks of whole lines (:func:`line_chunks`); each chunk 
 into tokens by numpy (:func:`tokenize`: one comparison and one ``flatnonzero`` over the
 bytes), and only the tokens a reader keeps are converted to numbers
 (:func:`parse_numbers`: digits summed per token as int64, then one division by a power
-of ten — the correctly rounded result for up to 15 significant digits, within one unit
-in the last place beyond). Tokens in exponent notation or
-otherwise unusual fall back to Python's ``float``/``int``. Nothing here knows COLMAP;
-:mod:`orientviz.io.colmap_text` builds on it.
+of ten — exact operands up to 2**53, so the correctly rounded result, the double
+Python's ``float`` reads). Tokens with a longer significand, in exponent notation or
+otherwise unusual fall back to Python's ``float``/``int``. Nothing here knows COLMAP or
+BAL; :mod:`orientviz.io.colmap_text` and :mod:`orientviz.io.bal` build on it.
 """
 
 from __future__ import annotations
@@ -258,19 +258,42 @@ def _plain_decimals(
     return mant, frac, bad
 
 
+#: A float type whose 64-bit significand holds every mantissa of up to 19 digits, when
+#: the platform has one (x86's extended precision; None where long double is a double).
+_LONG = np.longdouble if np.finfo(np.longdouble).nmant >= 63 else None
+_P10L = 10 ** np.arange(19, dtype=np.int64)
+
+
+def _wide_quotients(mant: I64, frac: I64) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """mant / 10**frac correctly rounded to doubles for mantissas beyond 2**53, and the
+    ones it cannot promise (True: to be read by ``float``).
+
+    In the 64-bit significand the mantissa and 10**frac (frac ≤ 18 < 28) are exact, so
+    the quotient q is the exact value rounded once. Every midpoint between two doubles
+    has 54 bits and so is a long double: unless q is one, the exact value lies on q's
+    side of every midpoint and rounds to the same double as q.
+    """
+    if _LONG is None:
+        return np.zeros(mant.size), np.ones(mant.size, dtype=bool)
+    q = mant.astype(_LONG) / _P10L[frac].astype(_LONG)
+    d = q.astype(np.float64)
+    r = q - d.astype(_LONG)  # exact: below half a double's unit in the last place
+    gap = np.nextafter(d, np.where(r > 0, np.inf, -np.inf)) - d
+    return d, (r != 0) & (2 * r == gap.astype(_LONG))
+
+
 def parse_numbers(
-    buf: NDArray[np.uint8], start: I64, end: I64, *, integer: bool = False, exact: bool = False
+    buf: NDArray[np.uint8], start: I64, end: I64, *, integer: bool = False
 ) -> tuple[NDArray, I64]:
     """Numbers of the tokens ``buf[start:end]``; returns (values, indices of bad tokens).
 
     Plain decimals ``[+-]digits[.digits]`` of up to 19 bytes are converted vectorised,
     one group of equally long tokens at a time (:func:`_plain_decimals`): the mantissa
-    as int64 divided once by a power of ten, the correctly rounded result for up to 15
-    significant digits, within one unit in the last place beyond. Other tokens
-    (exponents, longer ones, ``nan``) are converted by Python; tokens that are not
-    numbers are returned in the second array (their value is 0). Integers reject a
-    decimal point. ``exact``: every value is the correctly rounded one (as Python's
-    ``float`` reads the token): mantissas above 2**53 go to Python too.
+    as int64 divided once by a power of ten. Both are exact when the mantissa is at most
+    2**53, so the quotient is the correctly rounded value, the double ``float`` reads
+    from the token. Other tokens (a longer mantissa, exponents, longer ones, ``nan``)
+    are converted by Python; tokens that are not numbers are returned in the second
+    array (their value is 0). Integers reject a decimal point.
     """
     n = start.size
     out = np.zeros(n, dtype=np.int64 if integer else np.float64)
@@ -292,8 +315,11 @@ def parse_numbers(
             out[rows] = mant
         else:
             out[rows] = mant / _P10F[frac]
-            if exact:  # both operands exact up to 2**53: one correctly rounded division
-                bad |= mant > 2**53
+            wide = mant > 2**53  # the mantissa not exact as a double
+            if wide.any():
+                at = np.flatnonzero(wide)
+                out[rows[at]], tie = _wide_quotients(mant[at], frac[at])
+                bad[at[tie]] = True  # a halfway case (or no wide float here): Python's float
         slow[rows[bad]] = True
     np.negative(out, out=out, where=neg)
     idx = np.flatnonzero(slow)

@@ -350,10 +350,15 @@ class BundleSteps:
     def _switch_evaluation(self, st: BundleState, ev: Evaluation) -> Evaluation:
         """The robust evaluation at ``st`` where the loss is switched on, ``ev`` the least-
         squares one there: a pinhole's Jacobians (unweighted) are ``ev``'s, its misclosures
-        are weighted anew (the values :meth:`_evaluate` forms)."""
+        are weighted anew; a camera model's deferred misclosures (1/σ) are ``ev``'s (the
+        values :meth:`_evaluate` forms)."""
         prob = self.prob
         rw, Je, Jp = ev.data
         local = self.is_local(ev)
+        if prob.ap.lens is not None and getattr(ev.data, "deferred", False):
+            # a camera model's deferred evaluation: its misclosures (1/σ) are known, the
+            # design is formed once, with the robust weights (:meth:`_evaluate_robust`)
+            return self._evaluate(st, True, local, rw_base=rw)
         if Je is None or prob.ap.lens is not None:
             return self._evaluate(st, True, local)
         weight = prob.obs.weight
