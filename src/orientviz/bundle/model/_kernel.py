@@ -183,8 +183,14 @@ def ray_jacobians(
     """
     Om_table = _axial_table(angles, sequence, local)
     n = p.u.shape[0]
+    chunks = _chunks(n)
+    if len(chunks) == 1:  # the products are the results (no copies)
+        J = _jacobian_rows(p, Om_table, 0, n).transpose(2, 0, 1)
+        if M is None:
+            return np.ascontiguousarray(J[:, :, :6]), np.ascontiguousarray(J[:, :, 6:])
+        return M @ J[:, :, :6], M @ J[:, :, 6:]
     Je, Jp = np.empty((n, 2, 6)), np.empty((n, 2, 3))
-    for s, e in _chunks(n):
+    for s, e in chunks:
         E = _jacobian_rows(p, Om_table, s, e)
         J = E.transpose(2, 0, 1)  # (rays, x/y, 9)
         if M is None:

@@ -110,15 +110,7 @@ class APStructure:
         m = grp.size
         cnt = np.bincount(oi, minlength=m)
         order = stable_order(oi, m)
-        pos = np.arange(n) - np.repeat(np.cumsum(cnt) - cnt, cnt)
-        self.pad = np.full((m, max(int(cnt.max(initial=0)), 1)), n, np.int64)
-        self.pad[oi[order], pos] = order
-        L = self.pad.shape[1]
-        self.L = L
-        # the same slots pointing at ray 0 instead of the padding ray: a gather of a
-        # per-ray array through it needs no appended zero row, where the partner (the
-        # reduced design, gathered through ``pad``) is zero for padded slots
-        self.pad0 = np.where(self.pad < n, self.pad, 0)
+        self._pad: tuple | None = None  # (pad, pad0): formed on first use (the precision)
         # the rays image by image in the same order, unpadded, and where each image's
         # rows (2 per ray) begin and end: the own group's E block as one product per image
         # over its own rays (:func:`ap_normal`)
@@ -137,9 +129,10 @@ class APStructure:
         cols = self.own_pg[var].astype(it)[:, None, None] * it(k) + np.arange(k, dtype=it)
         indptr = np.zeros(2 * n + 1, it)
         np.cumsum(np.repeat(np.where(var, k, 0).astype(it), 2), out=indptr[1:])
-        self._var = var
+        self._var = None if nvar == n else var  # None: every ray
         self._h_index = (np.broadcast_to(cols, (nvar, 2, k)).reshape(-1), indptr)
         self._h_shape = (2 * n, npg * k)
+        self.H_design: sp.csc_matrix | None = None
         self.refresh(Aw)
         # E correction in the *other* groups of a ray's point (rays of points in the
         # overlap of two groups): its blocks (image, group) = the pattern of (image ×
@@ -277,8 +270,40 @@ class APStructure:
         self.F_direct = np.stack(
             [Ao[2 * a : 2 * b].T @ Ao[2 * a : 2 * b] for a, b in zip(bounds[:-1], bounds[1:])]
         )
-        Mt = sp.csr_matrix((Aw[self._var].reshape(-1), *self._h_index), shape=self._h_shape)
-        self.H_design = Mt.T
+        data = (np.array(Aw) if self._var is None else Aw[self._var]).reshape(-1)
+        if self.H_design is None:
+            Mt = sp.csr_matrix((data, *self._h_index), shape=self._h_shape)
+            self.H_design = Mt.T
+        else:  # the same pattern: its values replaced
+            self.H_design.data = data
+
+    @property
+    def pad(self) -> I64:
+        """(m, L) each image's rays side by side, padded with the zero ray n (formed on
+        first use)."""
+        return self._padded()[0]
+
+    @property
+    def pad0(self) -> I64:
+        """:attr:`pad` with the padding slots pointing at ray 0 instead: a gather of a
+        per-ray array through it needs no appended zero row, where the partner (the
+        reduced design, gathered through ``pad``) is zero for padded slots."""
+        return self._padded()[1]
+
+    @property
+    def L(self) -> int:
+        """The largest number of rays of an image (:attr:`pad`'s width)."""
+        return self._padded()[0].shape[1]
+
+    def _padded(self) -> tuple:
+        if self._pad is None:
+            oi, order, n = self._lists[0], self.by_image, self._h_shape[0] // 2
+            cnt = np.diff(self.image_rows) // 2
+            pos = np.arange(n) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+            pad = np.full((cnt.size, max(int(cnt.max(initial=0)), 1)), n, np.int64)
+            pad[oi[order], pos] = order
+            self._pad = (pad, np.where(pad < n, pad, 0))
+        return self._pad
 
 
 #: Up to this many coupled group pairs (g1, g2) the F term is one product per pair
