@@ -1,6 +1,8 @@
-"""Parts of a robust run's point search (:mod:`orientviz.bundle.loop._tail`): the
-misclosures of a subset of rays, and the gate that leaves the search out where it does
-not pay (:data:`orientviz.bundle.loop._steps.SEARCH_GAIN`)."""
+"""Parts of a robust run (:mod:`orientviz.bundle.loop`): the point search's misclosures of
+a subset of rays, the gate that leaves the search out where it does not pay
+(:data:`orientviz.bundle.loop._steps.SEARCH_GAIN`), the loss's partial evaluations, and the
+evaluations built on others (where the loss is switched on, at the run's end, a last trial
+point without derivatives) against new ones."""
 
 from __future__ import annotations
 

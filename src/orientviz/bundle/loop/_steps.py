@@ -504,7 +504,7 @@ class BundleSteps:
             dc, dp, da = dc * w, dp * w, da * w
             rel *= w
         points = self._point_newton(st, ev, dc, dp, da, lam)
-        dx = self._dx(dc, dp, da)
+        dx = self._dx(dc, dp, da) if points is None else None  # (the search's: in apply)
         self.last_rel, self.last_local = rel, local
         self.last_reused = chord is None and bool(getattr(ne.ap, "reused", False))
         self.chord_pending = None
@@ -639,8 +639,7 @@ class BundleSteps:
             )
             step.data = (dc, dp, da) + step.data[3:6] + (None,)
             step.max_correction = self.last_rel = self._sigma_correction(dc, dp, da)
-            if step.dx is not None:
-                step.dx = self._dx(dc, dp, da)
+            step.dx = self._dx(dc, dp, da)
         new = self.prob.apply(st, dc, dp, da, local=local)
         if local and step.dx is not None:  # the history records the change of the angles
             step.dx.reshape(-1)[: 6 * self.prob.m].reshape(-1, 6)[:, 3:] = new.angles - st.angles
