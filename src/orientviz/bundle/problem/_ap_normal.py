@@ -275,7 +275,8 @@ class APStructure:
         self.F_direct = np.stack(
             [Ao[2 * a : 2 * b].T @ Ao[2 * a : 2 * b] for a, b in zip(bounds[:-1], bounds[1:])]
         )
-        data = (np.array(Aw) if self._var is None else Aw[self._var]).reshape(-1)
+        # (every ray: a view of the design, which is never changed in place)
+        data = (Aw if self._var is None else Aw[self._var]).reshape(-1)
         if self.H_design is None:
             Mt = sp.csr_matrix((data, *self._h_index), shape=self._h_shape)
             self.H_design = Mt.T
