@@ -82,6 +82,8 @@ class RayProjection:
         Image coordinates in mm.
     table : ndarray, shape (15, m)
         Per image R (row-major), X0, c, x0, y0 (each ray's rows are gathered by chunk).
+    G : ndarray, shape (15, n) or None
+        The table's rows of every ray, kept when the rays are one chunk.
     u, v, w : ndarray, shape (n,)
         Rᵀ (X − X0) per ray in m.
     a : ndarray, shape (n,)
@@ -95,7 +97,9 @@ class RayProjection:
         n = obs_image.shape[0]
         u, v, w, a = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
         xy = np.empty((n, 2))
-        for s, e in _chunks(n):
+        chunks = _chunks(n)
+        G = None
+        for s, e in chunks:
             G = T.take(obs_image[s:e], axis=1)
             _image_vectors(G, xyz[s:e], u[s:e], v[s:e], w[s:e])
             np.divide(-G[12], w[s:e], out=a[s:e])
@@ -105,6 +109,8 @@ class RayProjection:
             xy[s:e, 1] += G[14]
         self.xy, self.table, self.u, self.v, self.w, self.a = xy, T, u, v, w, a
         self.obs_image = obs_image
+        #: the rows gathered per ray when the rays are one chunk (the Jacobians reuse them)
+        self.G = G if len(chunks) == 1 else None
 
 
 def project_block(
@@ -204,7 +210,7 @@ def ray_jacobians(
 def _jacobian_rows(p: RayProjection, Om_table: F64, s: int, e: int) -> F64:
     """Rows x, y of both Jacobians of rays s:e as (e − s,) columns of one (2, 9, e − s)
     array: X0, Y0, Z0, the three angles, then X, Y, Z (:func:`ray_jacobians`)."""
-    G = p.table.take(p.obs_image[s:e], axis=1)
+    G = p.G if p.G is not None else p.table.take(p.obs_image[s:e], axis=1)
     Om = Om_table.take(p.obs_image[s:e], axis=1)
     u, v, w, a = p.u[s:e], p.v[s:e], p.w[s:e], p.a[s:e]
     bu = a * u

@@ -87,17 +87,22 @@ class APStructure:
         # observations by group (direct F and ba terms)
         self.grp_present = np.flatnonzero(np.bincount(go, minlength=G))  # = np.unique(go)
         # the direct F term Σ Aᵀ P A: one product per group over its rays (:meth:`refresh`)
-        by_group = np.argsort(go, kind="stable")
-        self._group_bounds = np.searchsorted(go[by_group], self.grp_present.tolist() + [G])
-        # None: the rays are in group order already (one group)
-        in_order = np.array_equal(by_group, np.arange(n))
-        self._by_group = None if in_order else by_group
+        if G == 1:  # the rays are in group order (None)
+            self._by_group, self._group_bounds = None, np.array([0, n])
+        else:
+            by_group = np.argsort(go, kind="stable")
+            self._group_bounds = np.searchsorted(go[by_group], self.grp_present.tolist() + [G])
+            in_order = np.array_equal(by_group, np.arange(n))
+            self._by_group = None if in_order else by_group
 
         # (point, group) pairs: rays of one point in images of one group
         vo = pt_obs
         pgkey = ocol[vo] * G + go[vo]
-        uk, inv = np.unique(pgkey, return_inverse=True)
-        inv = inv.ravel()
+        if G == 1:  # a pair per point (every point unknown has rays): its own index
+            uk, inv = np.arange(n_pt), pgkey
+        else:
+            uk, inv = np.unique(pgkey, return_inverse=True)
+            inv = inv.ravel()
         k = Aw.shape[2]
         self.pg_pt, self.pg_grp = uk // G, uk % G
         npg = uk.size
@@ -270,7 +275,8 @@ class APStructure:
         self.F_direct = np.stack(
             [Ao[2 * a : 2 * b].T @ Ao[2 * a : 2 * b] for a, b in zip(bounds[:-1], bounds[1:])]
         )
-        data = (np.array(Aw) if self._var is None else Aw[self._var]).reshape(-1)
+        # (every ray: a view of the design, which is never changed in place)
+        data = (Aw if self._var is None else Aw[self._var]).reshape(-1)
         if self.H_design is None:
             Mt = sp.csr_matrix((data, *self._h_index), shape=self._h_shape)
             self.H_design = Mt.T
