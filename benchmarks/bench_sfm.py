@@ -1,8 +1,8 @@
 """Real SfM data: orientviz's bundle against pycolmap's (Ceres) on the same model.
 
 ``python benchmarks/bench_sfm.py [--bal FILE] [--colmap DIR ...] [--skip-bal] [--skip-axe]
-[--threads 1,default] [--skip-cli] [--cli-rounds N] [--cli-command CMD] [--robust LOSSES]
-[--dir DIR]``
+[--threads 1,default] [--rounds N] [--skip-cli] [--cli-rounds N] [--cli-command CMD]
+[--robust LOSSES] [--dir DIR]``
 
 Models (each measurement runs in its own fresh process: honest peak RSS):
 
@@ -25,7 +25,8 @@ Models (each measurement runs in its own fresh process: honest peak RSS):
 
 Per solver and thread setting: the solve's CPU and wall time (s; on a shared machine
 the CPU time is the steadier number), iterations, final ½Σr² (px²), the process's peak
-RSS (MB); "Δ½Σr²" is orientviz's final ½Σr² minus pycolmap's, relative to pycolmap's (both
+RSS (MB) (``--rounds N``: both solvers N times in turn, the medians of the times, the median
+of the rounds' CPU ratios and their range, the largest peak RSS); "Δ½Σr²" is orientviz's final ½Σr² minus pycolmap's, relative to pycolmap's (both
 stop on the same function tolerance, so on a flat optimum they stop at different points). ``1``: OPENBLAS/OMP_NUM_THREADS=1 and Ceres num_threads 1; ``default``: the
 environment as a user has it and Ceres num_threads −1 (all cores). Unless
 ``--skip-cli``: ``orientviz import-* … && orientviz solve … --free`` end to end (CPU of
@@ -37,7 +38,9 @@ PYTHONDONTWRITEBYTECODE, also as it runs (orientviz's modules compiled at every 
 The two commands run as ``--cli-command`` (default: the ``orientviz`` console script next to
 this Python, as a virtual environment puts it on PATH; ``--cli-command orientviz`` takes the
 one on PATH, e.g. a pyenv shim, which adds its own start-up to each command).
-Both solvers stop with Ceres's default function tolerance (1e-6 relative).
+Both solvers stop with Ceres's default function tolerance (1e-6 relative). pycolmap's
+timed solve starts with its bundle adjuster built (the Ceres problem set up); that set-up's
+CPU is printed below the table (orientviz's timed solve includes its own set-up).
 
 ``--robust huber,soft_l1,cauchy`` (instead of the table above, first thread setting
 only): the stripped BAL problem with 2 % of its observations moved by 20–50 px (rng 28),
@@ -96,7 +99,9 @@ else:
         opts.ceres.loss_function_type = getattr(pycolmap.LossFunctionType, loss.upper())
         opts.ceres.loss_function_scale = 1.0
         so.max_num_iterations = 500  # robust runs take hundreds of steps (pycolmap: 100)
+    t = time.process_time()
     ba = adjuster(rec, opts)
+    out["setup_cpu"] = time.process_time() - t  # the problem's set-up: not in "cpu"
     t, w = time.process_time(), time.perf_counter()
     s = ba.solve()
     cs = getattr(s, "ceres_summary", s)
@@ -266,6 +271,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--skip-axe", action="store_true", help="without the shipped COLMAP model axe")
     ap.add_argument("--skip-bal", action="store_true", help="without the BAL problem")
     ap.add_argument("--threads", default="1,default")
+    ap.add_argument("--rounds", type=int, default=1,
+                    help="the library solves of both solvers N times in turn (medians)")  # fmt: skip
     ap.add_argument("--skip-cli", action="store_true")
     beside = Path(sys.executable).with_name("orientviz")  # what a venv puts on PATH
     ap.add_argument("--cli-command", default=str(beside) if beside.exists() else "orientviz",
@@ -315,10 +322,16 @@ def main(argv: list[str] | None = None) -> int:
     rows = []
     for name, ov_model, peer, peer_model, import_cmd in models:
         for threads in a.threads.split(","):
-            o = run_worker("orientviz", ov_model, threads)
-            p = run_worker(peer, peer_model, threads)
+            runs = []  # the two in turn (--rounds): medians on a busy machine
+            for _ in range(a.rounds):
+                runs.append((run_worker("orientviz", ov_model, threads),
+                             run_worker(peer, peer_model, threads)))  # fmt: skip
+            o, p = _median_run([r[0] for r in runs]), _median_run([r[1] for r in runs])
+            pair = [x["cpu"] / y["cpu"] for x, y in runs]
             row = dict(model=name, threads=threads, orientviz=o, pycolmap=p,
-                       cpu_ratio=o["cpu"] / p["cpu"], rss_ratio=o["peak_rss_mb"] / p["peak_rss_mb"])  # fmt: skip
+                       cpu_ratio=statistics.median(pair), rss_ratio=o["peak_rss_mb"] / p["peak_rss_mb"])  # fmt: skip
+            if a.rounds > 1:
+                row["cpu_ratios"] = pair
             if not a.skip_cli:
                 lib = [o["cpu"]]
                 exe = a.cli_command
@@ -349,11 +362,32 @@ def main(argv: list[str] | None = None) -> int:
         if "cli_cpu_compiling" in r:
             c = r["cli_cpu_compiling"]
             cli += f"; compiling: {c:.2f} ({c / r.get('cli_lib_cpu', o['cpu']):.2f}×)"
-        print(f"| {r['model']} | {r['threads']} | {o['iterations']} / {o['cpu']:.2f} / {o['cost']:.3f} / "
-              f"{o['peak_rss_mb']:.0f} | {p['iterations']} / {p['cpu']:.2f} / {p['cost']:.3f} / "
+        ratio = f"{r['cpu_ratio']:.2f}"
+        if "cpu_ratios" in r:
+            ratio += f" ({min(r['cpu_ratios']):.2f}–{max(r['cpu_ratios']):.2f})"
+        print(f"| {r['model']} | {r['threads']} | {o['iterations']} / {o['cpu']:.3f} / {o['cost']:.3f} / "
+              f"{o['peak_rss_mb']:.0f} | {p['iterations']} / {p['cpu']:.3f} / {p['cost']:.3f} / "
               f"{p['peak_rss_mb']:.0f} | {(o['cost'] - p['cost']) / p['cost']:+.1e} | "
-              f"{r['cpu_ratio']:.2f} | {r['rss_ratio']:.2f} | {cli} |")  # fmt: skip
+              f"{ratio} | {r['rss_ratio']:.2f} | {cli} |")  # fmt: skip
+    if a.rounds > 1:
+        print(f"\nCPU: medians of {a.rounds} rounds (the two solvers in turn); CPU ratio: the median "
+              "of the rounds' ratios (range); peak MB: the largest.")  # fmt: skip
+    print("pycolmap's problem set-up (its bundle adjuster built, before its timed solve; "
+          "orientviz's solve includes its own), CPU s: "
+          + ", ".join(f"{r['model']} ({r['threads']}) {r['pycolmap'].get('setup_cpu', float('nan')):.3f}"
+                      for r in rows))  # fmt: skip
     return 0
+
+
+def _median_run(runs: list[dict]) -> dict:
+    """One solver's runs as one: the first run's iterations and ½Σr², the medians of the
+    times, the largest peak RSS."""
+    out = dict(runs[0])
+    for k in ("cpu", "wall", "setup_cpu"):
+        if k in out:
+            out[k] = statistics.median(r[k] for r in runs)
+    out["peak_rss_mb"] = max(r["peak_rss_mb"] for r in runs)
+    return out
 
 
 if __name__ == "__main__":

@@ -59,6 +59,36 @@ def test_kernel_jacobian_matches_finite_differences(sequence):
         np.testing.assert_allclose(Jp[:, :, k], fd, rtol=1e-6, atol=1e-7)
 
 
+def test_kernel_in_chunks_gives_the_numbers_of_one_chunk(monkeypatch):
+    # 2·5 + 1 rays in chunks of 5: no chunk of a single ray (joined to the one before);
+    # every operation is per ray, so the chunks change no number, mapped through M or not
+    import orientviz.bundle.model._kernel as kernel
+
+    rng = np.random.default_rng(5)
+    m, n = 3, 11
+    X0 = np.column_stack([rng.uniform(0, 900, m), rng.uniform(0, 900, m), np.full(m, 1500.0)])
+    ang = rng.normal(0, 0.05, (m, 3))
+    oi = rng.integers(0, m, n)
+    xyz = np.column_stack([rng.uniform(0, 900, n), rng.uniform(0, 900, n), rng.uniform(0, 90, n)])
+    c, z = np.full(m, 152.0), np.zeros(m)
+    M = rng.standard_normal((n, 2, 2))
+
+    def run():
+        p = kernel.RayProjection(X0, ang, c, z, z, oi, xyz, "opk")
+        return (
+            p.xy,
+            *kernel.ray_jacobians(p, ang, "opk"),
+            *kernel.ray_jacobians(p, ang, "opk", M=M),
+        )
+
+    one = run()
+    monkeypatch.setattr(kernel, "KERNEL_CHUNK", 5)
+    assert kernel._chunks(n) == [(0, 5), (5, 11)]
+    for a, b in zip(one, run()):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_allclose(one[3], M @ one[1], rtol=1e-14, atol=1e-12)
+
+
 def test_noise_free_block_returns_truth():
     sim = ov.simulate_block(3, 6, rng=21, sigma_image_mm=0.0)
     res = ov.bundle_adjust(sim.block, precision=False)

@@ -204,3 +204,12 @@ def test_the_scene_is_lit_without_an_environment_map(monkeypatch):
         assert ("env", None) in calls and ("lights", True, False) in calls
     finally:
         app.stop()
+
+
+def test_a_panel_callback_after_stop_does_nothing(app):
+    runs = []
+    callback = app.guard(lambda: runs.append(app.panel.refresh()))
+    callback()
+    app.stop()
+    callback()
+    assert len(runs) == 1 and app.panel._closed

@@ -281,3 +281,28 @@ def test_structural_changes_under_models_update_the_bundle_when_it_is_shown():
     st.undo()  # the move: a pending change, applied by the control change
     st.undo()
     assert st.live is bundle0 and st.block.n_images == 24
+
+
+def test_a_callback_after_stop_sends_nothing_to_the_stopped_server():
+    """A redraw that a click started can arrive after the viewer stopped: it does nothing,
+    so viser never warns of a message queued on a closed connection."""
+    import warnings
+
+    app = ViewerApp(None, port=0, verbose=False)
+    sv = StudioView(app, Studio(FlightDesign(strips=2, images_per_strip=4)))
+    sv.build()
+    runs = []
+
+    def redraw():
+        runs.append(1)
+        sv.redraw()
+
+    callback = app.guard(redraw)
+    callback()
+    assert runs == [1]
+    app.stop()
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        callback()
+    assert runs == [1] and app.stopped
+    assert not [w for w in seen if "closed connection" in str(w.message)]

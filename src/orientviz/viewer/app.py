@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import socket
 import sys
+import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -167,6 +168,9 @@ class ViewerApp:
         #: the solve started at opening (:mod:`orientviz.viewer.background`), or None
         self.background: Any = None
         self.messages: list[str] = []
+        #: set by :meth:`stop`: a GUI callback that arrives later does nothing
+        self.stopped = False
+        self._callback_lock = threading.RLock()
         self.first_browser_wait = float(first_browser_wait)
         self._message_md = self.server.gui.add_markdown("")
         self._message_md.visible = False
@@ -258,15 +262,19 @@ class ViewerApp:
 
     # ------------------------------------------------------------------ messages
     def guard(self, fn: Any) -> Any:
-        """Wrap a GUI callback so that an exception is reported, not raised."""
+        """Wrap a GUI callback: an exception is reported, not raised; callbacks run one at
+        a time, and not at all once the viewer is stopped (:meth:`stop`)."""
         if self.panel is not None:
             return self.panel.guard(fn)
 
         def wrapped(*args: Any) -> None:
-            try:
-                fn(*args)
-            except Exception as exc:  # shown to the user, the server keeps running
-                self.report(f"{type(exc).__name__}: {exc}")
+            with self._callback_lock:
+                if self.stopped:
+                    return
+                try:
+                    fn(*args)
+                except Exception as exc:  # shown to the user, the server keeps running
+                    self.report(f"{type(exc).__name__}: {exc}")
 
         return wrapped
 
@@ -316,9 +324,17 @@ class ViewerApp:
         return frame
 
     def stop(self) -> None:
-        """Stop the server (and a solve still running in the background)."""
+        """Stop the server (and a solve still running in the background).
+
+        A GUI callback still running (a redraw after a click) ends first, and any that
+        arrives later does nothing: nothing is sent to a server that has stopped.
+        """
         if self.background is not None:
             self.background.cancel()
+        with self._callback_lock:
+            self.stopped = True
+        if self.panel is not None:
+            self.panel.close()
         self.server.stop()
 
     def wait(self) -> None:

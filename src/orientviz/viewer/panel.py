@@ -64,24 +64,32 @@ class BlockPanel:
         self.report = report
         self.handles: dict[str, Any] = {}
         self._syncing = False
+        self._closed = False
         self._lock = threading.RLock()
         #: wall-clock seconds of the last slider-driven redraw (state change to nodes sent)
         self.last_redraw_s = float("nan")
 
     # ------------------------------------------------------------------ helpers
     def guard(self, fn: Callable[..., Any]) -> Callable[..., Any]:
-        """Wrap a callback: exceptions become a reported message; re-entry while syncing is ignored."""
+        """Wrap a callback: exceptions become a reported message; re-entry while syncing is
+        ignored, and so is every call after :meth:`close`."""
 
         def wrapped(*args: Any) -> None:
             if self._syncing:
                 return
             try:
                 with self._lock:
-                    fn(*args)
+                    if not self._closed:
+                        fn(*args)
             except Exception as exc:  # shown to the user, the server keeps running
                 self.report(f"{type(exc).__name__}: {exc}")
 
         return wrapped
+
+    def close(self) -> None:
+        """Wait for a callback still running, then ignore every later one (the server stops)."""
+        with self._lock:
+            self._closed = True
 
     # ------------------------------------------------------------------ building
     def build(self) -> BlockPanel:

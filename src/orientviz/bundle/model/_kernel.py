@@ -40,21 +40,37 @@ def _axial_table(angles: F64, sequence: str, local: bool) -> F64:
     return np.ascontiguousarray(omega.reshape(omega.shape[0], 9).T)
 
 
-def _image_vectors(G: F64, xyz: F64) -> tuple[F64, F64, F64]:
-    """(u, v, w) = Rᵀ (X − X0) per ray from the gathered table ``G`` (k, n)."""
+#: Rays per chunk of the kernel's per-ray work: its temporaries stay small (in the cache,
+#: no fresh pages of a large array per call); every operation is per ray, so the numbers
+#: do not depend on the chunks.
+KERNEL_CHUNK: int = 8192
+
+
+def _chunks(n: int) -> list[tuple[int, int]]:
+    """Bounds of the kernel's chunks of ``n`` rays; none of a single ray unless n = 1 (a
+    stacked product of one 2 × 2 matrix reaches BLAS by another path than of two or
+    more: its rounding could differ)."""
+    b = list(range(0, n, KERNEL_CHUNK)) + [n]
+    if len(b) > 2 and b[-1] - b[-2] == 1:
+        del b[-2]
+    return list(zip(b[:-1], b[1:]))
+
+
+def _image_vectors(G: F64, xyz: F64, u: F64, v: F64, w: F64) -> None:
+    """(u, v, w) = Rᵀ (X − X0) per ray from the gathered table ``G`` (k, n), written to
+    ``u``, ``v``, ``w`` (n,)."""
     dx = xyz[:, 0] - G[9]
     dy = xyz[:, 1] - G[10]
     dz = xyz[:, 2] - G[11]
-    u = G[0] * dx
+    np.multiply(G[0], dx, out=u)
     u += G[3] * dy
     u += G[6] * dz
-    v = G[1] * dx
+    np.multiply(G[1], dx, out=v)
     v += G[4] * dy
     v += G[7] * dz
-    w = G[2] * dx
+    np.multiply(G[2], dx, out=w)
     w += G[5] * dy
     w += G[8] * dz
-    return u, v, w
 
 
 class RayProjection:
@@ -64,8 +80,10 @@ class RayProjection:
     ----------
     xy : ndarray, shape (n, 2)
         Image coordinates in mm.
-    G : ndarray, shape (15, n)
-        The per-image rows of each ray (R row-major, X0, c, x0, y0).
+    table : ndarray, shape (15, m)
+        Per image R (row-major), X0, c, x0, y0 (each ray's rows are gathered by chunk).
+    G : ndarray, shape (15, n) or None
+        The table's rows of every ray, kept when the rays are one chunk.
     u, v, w : ndarray, shape (n,)
         Rᵀ (X − X0) per ray in m.
     a : ndarray, shape (n,)
@@ -75,16 +93,24 @@ class RayProjection:
     """
 
     def __init__(self, X0, angles, c, x0, y0, obs_image, xyz, sequence: str) -> None:
-        G = _image_table(X0, angles, c, x0, y0, sequence).take(obs_image, axis=1)
-        u, v, w = _image_vectors(G, xyz)
-        a = -G[12] / w
-        xy = np.empty((obs_image.shape[0], 2))
-        np.multiply(a, u, out=xy[:, 0])
-        xy[:, 0] += G[13]
-        np.multiply(a, v, out=xy[:, 1])
-        xy[:, 1] += G[14]
-        self.xy, self.G, self.u, self.v, self.w, self.a = xy, G, u, v, w, a
+        T = _image_table(X0, angles, c, x0, y0, sequence)
+        n = obs_image.shape[0]
+        u, v, w, a = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        xy = np.empty((n, 2))
+        chunks = _chunks(n)
+        G = None
+        for s, e in chunks:
+            G = T.take(obs_image[s:e], axis=1)
+            _image_vectors(G, xyz[s:e], u[s:e], v[s:e], w[s:e])
+            np.divide(-G[12], w[s:e], out=a[s:e])
+            np.multiply(a[s:e], u[s:e], out=xy[s:e, 0])
+            xy[s:e, 0] += G[13]
+            np.multiply(a[s:e], v[s:e], out=xy[s:e, 1])
+            xy[s:e, 1] += G[14]
+        self.xy, self.table, self.u, self.v, self.w, self.a = xy, T, u, v, w, a
         self.obs_image = obs_image
+        #: the rows gathered per ray when the rays are one chunk (the Jacobians reuse them)
+        self.G = G if len(chunks) == 1 else None
 
 
 def project_block(
@@ -148,30 +174,52 @@ def collinearity_block(
 
 
 def ray_jacobians(
-    p: RayProjection, angles: F64, sequence: str, local: bool = False, contiguous: bool = True
+    p: RayProjection, angles: F64, sequence: str, local: bool = False, M: F64 | None = None
 ):
     """J_exterior (n, 2, 6) and J_point (n, 2, 3) of the rays of a :class:`RayProjection`
-    (see :func:`collinearity_block`; ``angles`` those of the projection); without
-    ``contiguous`` as strided views of one array (for a caller that maps them at once,
-    e.g. through a camera model's 2 × 2 Jacobian: no copies).
+    (see :func:`collinearity_block`; ``angles`` those of the projection); with ``M`` (n,
+    2, 2) mapped through it, M·J (e.g. a camera model's Jacobian by the normalised image
+    point), chunk by chunk without the unmapped ones.
 
     Notes
     -----
     With a = −c/w, b = c·(u, v)/w²: ∂(x, y)/∂(u, v, w) = [[a, 0, b_u], [0, a, b_v]],
     ∂(u, v, w)/∂X = Rᵀ (rows of Rᵀ: columns of R) and ∂(u, v, w)/∂θ = ω_θ × (u, v, w).
+    Formed in chunks of :data:`KERNEL_CHUNK` rays.
     """
-    G, u, v, w, a = p.G, p.u, p.v, p.w, p.a
-    Om = _axial_table(angles, sequence, local).take(p.obs_image, axis=1)
-    n = u.shape[0]
+    Om_table = _axial_table(angles, sequence, local)
+    n = p.u.shape[0]
+    chunks = _chunks(n)
+    if len(chunks) == 1:  # the products are the results (no copies)
+        J = _jacobian_rows(p, Om_table, 0, n).transpose(2, 0, 1)
+        if M is None:
+            return np.ascontiguousarray(J[:, :, :6]), np.ascontiguousarray(J[:, :, 6:])
+        return M @ J[:, :, :6], M @ J[:, :, 6:]
+    Je, Jp = np.empty((n, 2, 6)), np.empty((n, 2, 3))
+    for s, e in chunks:
+        E = _jacobian_rows(p, Om_table, s, e)
+        J = E.transpose(2, 0, 1)  # (rays, x/y, 9)
+        if M is None:
+            Je[s:e], Jp[s:e] = J[:, :, :6], J[:, :, 6:]
+        else:  # (a product into ``out`` takes a slower path here: copied instead)
+            Je[s:e] = M[s:e] @ J[:, :, :6]
+            Jp[s:e] = M[s:e] @ J[:, :, 6:]
+    return Je, Jp
+
+
+def _jacobian_rows(p: RayProjection, Om_table: F64, s: int, e: int) -> F64:
+    """Rows x, y of both Jacobians of rays s:e as (e − s,) columns of one (2, 9, e − s)
+    array: X0, Y0, Z0, the three angles, then X, Y, Z (:func:`ray_jacobians`)."""
+    G = p.G if p.G is not None else p.table.take(p.obs_image[s:e], axis=1)
+    Om = Om_table.take(p.obs_image[s:e], axis=1)
+    u, v, w, a = p.u[s:e], p.v[s:e], p.w[s:e], p.a[s:e]
     bu = a * u
     bu /= w
     bu *= -1.0  # c u / w²
     bv = a * v
     bv /= w
     bv *= -1.0
-    # rows k = 0 (x), 1 (y) of each Jacobian as (n,) columns of one (2, 9, n) array:
-    # X0, Y0, Z0, the three angles, then X, Y, Z
-    E = np.empty((2, 9, n))
+    E = np.empty((2, 9, e - s))
     for j in range(3):  # ∂/∂X_j: a·R[j, 0 or 1] + b·R[j, 2]
         r2 = G[3 * j + 2]
         np.multiply(a, G[3 * j], out=E[0, 6 + j])
@@ -191,10 +239,7 @@ def ray_jacobians(
         np.multiply(a, dv, out=E[1, 3 + k])
         E[1, 3 + k] += bv * dw
     np.negative(E[:, 6:], out=E[:, :3])
-    J = E.transpose(2, 0, 1)
-    if not contiguous:
-        return J[:, :, :6], J[:, :, 6:]
-    return np.ascontiguousarray(J[:, :, :6]), np.ascontiguousarray(J[:, :, 6:])
+    return E
 
 
 def normalised_block(

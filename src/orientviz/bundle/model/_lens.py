@@ -160,7 +160,10 @@ class LensModel:
         ray_group = group[image]  # a ray is in group g where its image is
         # images and rays by group (stable: each group's in their own order), once
         by_group, img_bounds = _grouped(group, G)
-        rays_by_group, ray_bounds = _grouped(ray_group, G)
+        if G == 1:  # every ray, in its order
+            rays_by_group, ray_bounds = slice(None), [0, ray_group.size]
+        else:
+            rays_by_group, ray_bounds = _grouped(ray_group, G)
         for g in range(G):
             members = by_group[img_bounds[g] : img_bounds[g + 1]]
             if members.size == 0:
@@ -183,9 +186,9 @@ class LensModel:
             if self.r0 is not None:
                 r0[g] = self.r0
             else:
-                sel = rays_by_group[ray_bounds[g] : ray_bounds[g + 1]]
+                sel = rays_by_group[ray_bounds[g] : ray_bounds[g + 1]] if G > 1 else slice(None)
                 d = xy[sel] - theta0[g, 1:3]
-                rms = float(np.sqrt(np.mean(np.sum(d * d, axis=1)))) if sel.size else 0.0
+                rms = float(np.sqrt(np.mean(np.sum(d * d, axis=1)))) if d.size else 0.0
                 r0[g] = float(f"{rms:.2g}") if rms > 0 else theta0[g, 0] / 2
         return BoundLens(self, theta0, r0)
 

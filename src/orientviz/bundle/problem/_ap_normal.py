@@ -24,6 +24,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..reduced import APBorder, ImageRays
+from ..reduced._structure import stable_order
 from ._ap_batches import PointBatch, batched_terms, point_batches
 
 F64 = NDArray[np.float64]
@@ -41,14 +42,6 @@ def _summation(keys: I64) -> tuple[sp.csr_matrix, I64]:
         (np.ones(keys.size), (inv.ravel(), np.arange(keys.size))), shape=(uk.size, keys.size)
     )
     return M, uk
-
-
-def _stable_order(keys: I64, m: int) -> I64:
-    """``np.argsort(keys, kind="stable")`` for keys in [0, m): as 16-bit keys (NumPy's
-    radix sort, O(n)) when m allows; a stable order is unique, so the same indices."""
-    if m <= np.iinfo(np.int16).max:
-        return np.argsort(keys.astype(np.int16), kind="stable")
-    return np.argsort(keys, kind="stable")
 
 
 def _zero_row(X: F64) -> F64:
@@ -94,17 +87,22 @@ class APStructure:
         # observations by group (direct F and ba terms)
         self.grp_present = np.flatnonzero(np.bincount(go, minlength=G))  # = np.unique(go)
         # the direct F term Σ Aᵀ P A: one product per group over its rays (:meth:`refresh`)
-        by_group = np.argsort(go, kind="stable")
-        self._group_bounds = np.searchsorted(go[by_group], self.grp_present.tolist() + [G])
-        # None: the rays are in group order already (one group)
-        in_order = np.array_equal(by_group, np.arange(n))
-        self._by_group = None if in_order else by_group
+        if G == 1:  # the rays are in group order (None)
+            self._by_group, self._group_bounds = None, np.array([0, n])
+        else:
+            by_group = np.argsort(go, kind="stable")
+            self._group_bounds = np.searchsorted(go[by_group], self.grp_present.tolist() + [G])
+            in_order = np.array_equal(by_group, np.arange(n))
+            self._by_group = None if in_order else by_group
 
         # (point, group) pairs: rays of one point in images of one group
         vo = pt_obs
         pgkey = ocol[vo] * G + go[vo]
-        uk, inv = np.unique(pgkey, return_inverse=True)
-        inv = inv.ravel()
+        if G == 1:  # a pair per point (every point unknown has rays): its own index
+            uk, inv = np.arange(n_pt), pgkey
+        else:
+            uk, inv = np.unique(pgkey, return_inverse=True)
+            inv = inv.ravel()
         k = Aw.shape[2]
         self.pg_pt, self.pg_grp = uk // G, uk % G
         npg = uk.size
@@ -116,16 +114,8 @@ class APStructure:
         # group's E block is then one small matrix product per image (BLAS)
         m = grp.size
         cnt = np.bincount(oi, minlength=m)
-        order = _stable_order(oi, m)
-        pos = np.arange(n) - np.repeat(np.cumsum(cnt) - cnt, cnt)
-        self.pad = np.full((m, max(int(cnt.max(initial=0)), 1)), n, np.int64)
-        self.pad[oi[order], pos] = order
-        L = self.pad.shape[1]
-        self.L = L
-        # the same slots pointing at ray 0 instead of the padding ray: a gather of a
-        # per-ray array through it needs no appended zero row, where the partner (the
-        # reduced design, gathered through ``pad``) is zero for padded slots
-        self.pad0 = np.where(self.pad < n, self.pad, 0)
+        order = stable_order(oi, m)
+        self._pad: tuple | None = None  # (pad, pad0): formed on first use (the precision)
         # the rays image by image in the same order, unpadded, and where each image's
         # rows (2 per ray) begin and end: the own group's E block as one product per image
         # over its own rays (:func:`ap_normal`)
@@ -144,9 +134,10 @@ class APStructure:
         cols = self.own_pg[var].astype(it)[:, None, None] * it(k) + np.arange(k, dtype=it)
         indptr = np.zeros(2 * n + 1, it)
         np.cumsum(np.repeat(np.where(var, k, 0).astype(it), 2), out=indptr[1:])
-        self._var = var
+        self._var = None if nvar == n else var  # None: every ray
         self._h_index = (np.broadcast_to(cols, (nvar, 2, k)).reshape(-1), indptr)
         self._h_shape = (2 * n, npg * k)
+        self.H_design: sp.csc_matrix | None = None
         self.refresh(Aw)
         # E correction in the *other* groups of a ray's point (rays of points in the
         # overlap of two groups): its blocks (image, group) = the pattern of (image ×
@@ -284,8 +275,41 @@ class APStructure:
         self.F_direct = np.stack(
             [Ao[2 * a : 2 * b].T @ Ao[2 * a : 2 * b] for a, b in zip(bounds[:-1], bounds[1:])]
         )
-        Mt = sp.csr_matrix((Aw[self._var].reshape(-1), *self._h_index), shape=self._h_shape)
-        self.H_design = Mt.T
+        # (every ray: a view of the design, which is never changed in place)
+        data = (Aw if self._var is None else Aw[self._var]).reshape(-1)
+        if self.H_design is None:
+            Mt = sp.csr_matrix((data, *self._h_index), shape=self._h_shape)
+            self.H_design = Mt.T
+        else:  # the same pattern: its values replaced
+            self.H_design.data = data
+
+    @property
+    def pad(self) -> I64:
+        """(m, L) each image's rays side by side, padded with the zero ray n (formed on
+        first use)."""
+        return self._padded()[0]
+
+    @property
+    def pad0(self) -> I64:
+        """:attr:`pad` with the padding slots pointing at ray 0 instead: a gather of a
+        per-ray array through it needs no appended zero row, where the partner (the
+        reduced design, gathered through ``pad``) is zero for padded slots."""
+        return self._padded()[1]
+
+    @property
+    def L(self) -> int:
+        """The largest number of rays of an image (:attr:`pad`'s width)."""
+        return self._padded()[0].shape[1]
+
+    def _padded(self) -> tuple:
+        if self._pad is None:
+            oi, order, n = self._lists[0], self.by_image, self._h_shape[0] // 2
+            cnt = np.diff(self.image_rows) // 2
+            pos = np.arange(n) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+            pad = np.full((cnt.size, max(int(cnt.max(initial=0)), 1)), n, np.int64)
+            pad[oi[order], pos] = order
+            self._pad = (pad, np.where(pad < n, pad, 0))
+        return self._pad
 
 
 #: Up to this many coupled group pairs (g1, g2) the F term is one product per pair

@@ -35,7 +35,7 @@ I64 = NDArray[np.int64]
 SCENE_SAMPLE: int = 256
 
 
-def scene_centres(image: I64, point: I64, xyz: F64, X0: F64) -> F64:
+def scene_centres(image: I64, point: I64, xyz: F64, X0: F64, order: I64 | None = None) -> F64:
     """The median of each image's observed points (m, 3), per coordinate, m — a point of
     the scene the image sees, unmoved by a few far points (points near infinity, gross
     errors of a start); of every k-th point of an image with more than 2 ×
@@ -51,11 +51,14 @@ def scene_centres(image: I64, point: I64, xyz: F64, X0: F64) -> F64:
         Point coordinates (m).
     X0 : ndarray, shape (m, 3)
         Projection centres (m).
+    order : ndarray of int, shape (n,), optional
+        ``np.argsort(image, kind="stable")`` if known.
     """
     m = X0.shape[0]
     out = X0.copy()
     cnt = np.bincount(image, minlength=m)
-    order = np.argsort(image, kind="stable")
+    if order is None:
+        order = np.argsort(image, kind="stable")
     pos = np.arange(image.size) - np.repeat(np.cumsum(cnt) - cnt, cnt)
     # every k-th ray of an image with more than 2 × SCENE_SAMPLE (a scale, not a statistic)
     keep = pos % np.repeat(np.maximum(cnt // SCENE_SAMPLE, 1), cnt) == 0

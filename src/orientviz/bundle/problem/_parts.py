@@ -391,6 +391,8 @@ def additional_block(
     terms = _Terms(
         cols, (2 * n, G * k), (obs.image, obs.column, struct.pt_obs, points.n, grp, G), Aw
     )
-    d = block.points.xyz[obs.point] - block.images.X0[obs.image]
-    ray_length = float(np.nanmedian(np.linalg.norm(d, axis=1))) if d.size else 1.0
+    d = np.take(block.points.xyz, obs.point, axis=0)
+    d -= np.take(block.images.X0, obs.image, axis=0)
+    r = np.linalg.norm(d, axis=1)
+    ray_length = float(np.nanmedian(r) if np.isnan(r).any() else np.median(r)) if r.size else 1.0
     return AdditionalBlock(k, G, grp, A, Aw, w, names, ray_length, lens, terms)

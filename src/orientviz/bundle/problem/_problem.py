@@ -122,7 +122,9 @@ class BundleProblem:
         self.obs = with_var_rays(obs, self.reduced)
         #: "trust" damping: the images' blocks are damped in the frame of their scene (._damping)
         self.scene_centres = (
-            scene_centres(obs.image, obs.point, block.points.xyz, block.images.X0)
+            scene_centres(
+                obs.image, obs.point, block.points.xyz, block.images.X0, self.reduced.cam_order
+            )
             if self.options.damping == "trust"
             else None
         )
@@ -231,14 +233,12 @@ class BundleProblem:
             xyz = st.xyz[obs.point]
             proj = RayProjection(st.X0, st.angles, one, zero, zero, obs.image, xyz, seq)
         nrm = proj.xy
-        if jac:  # views, mapped through the camera model below
-            Je, Jp = ray_jacobians(proj, st.angles, seq, contiguous=False)
-        else:
-            Je = Jp = None
+        if not jac:
             run.projection = (st, proj)
         f, M, A = lens.evaluate(st.ap, self.ap.group[obs.image], nrm, obs.xy, jac)
-        if jac:
-            Je, Jp = M @ Je, M @ Jp
+        Je = Jp = None
+        if jac:  # the pinhole's Jacobians mapped through the camera model's
+            Je, Jp = ray_jacobians(proj, st.angles, seq, M=M)
             if self.q:
                 self.run.ap = self.ap.with_design(A, obs.weight)
                 self.run.design_at = st

@@ -27,9 +27,17 @@ F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
 
 
+def stable_order(keys: I64, n: int) -> I64:
+    """``np.argsort(keys, kind="stable")`` for keys in [0, n): as 16-bit keys (NumPy's
+    radix sort, O(len)) when n allows; a stable order is unique, so the same indices."""
+    if n <= np.iinfo(np.int16).max:
+        return np.argsort(keys.astype(np.int16), kind="stable")
+    return np.argsort(keys, kind="stable")
+
+
 def _segments(keys: I64, n: int) -> tuple[I64, I64, I64]:
     """Stable order by ``keys`` and the start of each non-empty segment, plus its key."""
-    order = np.argsort(keys, kind="stable")
+    order = stable_order(keys, n)
     counts = np.bincount(keys, minlength=n)
     present = np.flatnonzero(counts)
     starts = (np.cumsum(counts) - counts)[present]

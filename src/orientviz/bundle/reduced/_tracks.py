@@ -46,9 +46,6 @@ class TrackGroups:
         Point unknown of each point in this order (its first ray: ``rays[first]``).
     groups : list of (k, first ray, number of points)
         The groups (chunks of at most :data:`CHUNK_DOUBLES` product entries).
-    by_image, by_point : scipy.sparse.csr_matrix
-        (m, n_var) and (p_var, n_var) incidences of image and ray, point and ray (sums
-        per image and per point by one sparse product).
     in_order : bool
         ``rays`` is 0, 1, …, n_var − 1: the observations are in this order (the bundle's
         are, :func:`orientviz.bundle.problem._parts.image_observations`), per-ray arrays are
@@ -57,6 +54,12 @@ class TrackGroups:
         Work arrays of a formation in this ray order kept from one iteration to the next
         (arrays of a few MB formed anew in every iteration cost their page faults again;
         :mod:`orientviz.bundle.problem._camera_blocks`); released with the maps.
+    n_images, n_points : int
+        m and p_var.
+
+    Properties :attr:`by_image` and :attr:`by_point` (the (m, n_var) and (p_var, n_var)
+    incidences of image and ray, point and ray: sums per image and per point by one
+    sparse product) are formed when first read.
     """
 
     rays: I64
@@ -64,11 +67,30 @@ class TrackGroups:
     ray_image: I64
     points: I64
     groups: list
-    by_image: sp.csr_matrix
-    by_point: sp.csr_matrix
     in_order: bool = False
+    n_images: int = 0
+    n_points: int = 0
     _maps: dict = field(default_factory=dict, repr=False)
     work: dict = field(default_factory=dict, repr=False)
+    _incidence: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def by_image(self) -> sp.csr_matrix:
+        """(m, n_var) incidence of image and ray (formed on first read)."""
+        return self._incidences("image", self.ray_image, self.n_images)
+
+    @property
+    def by_point(self) -> sp.csr_matrix:
+        """(p_var, n_var) incidence of point and ray (formed on first read)."""
+        return self._incidences("point", self.ray_point, self.n_points)
+
+    def _incidences(self, name: str, of_ray: I64, rows: int) -> sp.csr_matrix:
+        M = self._incidence.get(name)
+        if M is None:
+            ones, ray = np.ones(self.rays.size), np.arange(self.rays.size)
+            M = sp.csr_matrix((ones, (of_ray, ray)), shape=(rows, self.rays.size))
+            self._incidence[name] = M
+        return M
 
     @property
     def rows(self) -> slice | I64:
@@ -217,10 +239,11 @@ def track_groups(st) -> TrackGroups:
     m = st.n_cam
     k_pt = np.diff(np.append(st.pt_starts, st.pt_obs.size))
     order = np.argsort(k_pt, kind="stable")  # points by track length
+    k_sorted = k_pt[order]
     rays_all, groups = [], []
     n0 = 0
     for k in np.unique(k_pt).tolist():
-        pts_k = order[k_pt[order] == k]
+        pts_k = order[np.searchsorted(k_sorted, k) : np.searchsorted(k_sorted, k, "right")]
         step = max(1, CHUNK_DOUBLES // (36 * k * k))
         for c0 in range(0, pts_k.size, step):
             pts = pts_k[c0 : c0 + step]
@@ -229,13 +252,10 @@ def track_groups(st) -> TrackGroups:
             n0 += rays_all[-1].size
     rays = np.concatenate(rays_all) if rays_all else np.zeros(0, np.int64)
     ray_point, ray_image = st.obs_pt[rays], st.obs_cam[rays]
-    ones, ray = np.ones(rays.size), np.arange(rays.size)
-    by_image = sp.csr_matrix((ones, (ray_image, ray)), shape=(m, rays.size))
-    by_point = sp.csr_matrix((ones, (ray_point, ray)), shape=(st.n_pt, rays.size))
     first = [r0 + k * np.arange(n) for k, r0, n in groups]  # first ray of each point
     points = ray_point[np.concatenate(first)] if groups else rays
     in_order = bool(np.array_equal(rays, np.arange(rays.size)))
-    return TrackGroups(rays, ray_point, ray_image, points, groups, by_image, by_point, in_order)
+    return TrackGroups(rays, ray_point, ray_image, points, groups, in_order, m, st.n_pt)
 
 
 #: Rays per chunk of :func:`point_products` (its temporaries stay in the cache).
