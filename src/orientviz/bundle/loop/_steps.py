@@ -19,7 +19,7 @@ hand on. Its knobs are fields of the problem's
   Newton correction given the images' one, and each point keeps the correction (the
   joint step's or a Newton one) that lowers the Σρ of its rays most (:mod:`._tail`) —
   in a small block left out after a search that adds little to its step's decrease
-  (:data:`SEARCH_GAIN`) until the run slows down (:data:`SEARCH_REARM`);
+  (:data:`SEARCH_GAIN`) until the run's tail (:data:`ROBUST_TAIL`);
 * the additional parameters are held at their values in the first step from a poor
   start; their border E, F is reused in the next iteration when the last step moved
   nothing by more than ``ap_reuse`` (the Jacobians then change by about as little, less
@@ -115,9 +115,12 @@ ROBUST_OVERRELAX: float = 1.5
 #: design is linear (its weighted design is re-weighted from the last one), nor for a
 #: redescending loss. Steps and optima with other floors: benchmarks/README.md.
 ROBUST_TAIL_FLOOR: float = 0.3
-#: The points' own search (:mod:`._tail`) is left out for the rest of a run after an
-#: accepted step whose search lowered Σρ by less than this fraction of the step's
-#: decrease, in a block of at most :data:`SEARCH_GATE_RAYS` rays: there its fixed cost
+#: The points' own search (:mod:`._tail`) is left out until the run's tail (a step that
+#: lowers Σρ by less than :data:`ROBUST_TAIL`) after an accepted step whose search lowered
+#: Σρ by less than this fraction of the step's decrease, in a block of at most
+#: :data:`SEARCH_GATE_RAYS` rays; in the tail it runs in every step (the slow linear tail
+#: is what it removes: small simulated aerial blocks with gross errors crawled 50–120 steps
+#: or stopped 1e-4 above their optimum when it stayed out there). There its fixed cost
 #: (some hundred array operations: the points' 3 × 3 systems, one evaluation of their
 #: rays at two corrections) weighs as much as a step, and such shares do not come with
 #: fewer steps (DBAT camcal: 0.03–2.7 % in every step). In larger blocks it costs a few
@@ -125,11 +128,6 @@ ROBUST_TAIL_FLOOR: float = 0.3
 #: soft-L1: 0.9 %, then 16–40 % per step). Shares per step: benchmarks/README.md.
 SEARCH_GAIN: float = 0.02
 SEARCH_GATE_RAYS: int = 10_000
-#: … and tried again after a robust step whose decrease of Σρ exceeds this fraction of the
-#: decrease of the step before: the run has slowed down to the linear tail the search
-#: removes (a search that paid little in an early step may pay there: simulated aerial
-#: blocks of 15 images with 8 gross errors crawled 100–120 steps without it, 14–37 with it).
-SEARCH_REARM: float = 0.5
 #: No ftol stop after a least-squares step damped by a λ of at least this that does not
 #: meet the tolerance (the damping then at least equals the curvature on the normal
 #: matrix's diagonal, the step is shortened by half or more): its small decrease of vᵀPv
@@ -676,8 +674,8 @@ class BundleSteps:
                 self.search_off = prob.obs.xy.shape[
                     0
                 ] <= SEARCH_GATE_RAYS and gain < SEARCH_GAIN * (previous.cost - self.pending_cost)
-            elif self.search_off and self._drops[1] > SEARCH_REARM * self._drops[0] > 0:
-                self.search_off = False  # the run slows down: the search is tried again
+            if self.robust_tail:  # in the run's tail the search runs in every step
+                self.search_off = False
         if self.loss is not None and not self.loss_on:  # no longer poor, or settled?
             drop = (previous.cost - self.pending_cost) / previous.cost if previous.cost > 0 else 0.0
             settled = drop <= (LOSS_SWITCH if self.loss.redescending else LOSS_SWITCH_CONVEX)
