@@ -9,7 +9,8 @@ COLMAP model ``axe``, at one BLAS thread and at the default threads. Per round, 
 * the floor: CPU of ``python -c "import numpy; os._exit(0)"`` (what an import command
   needs before its own work) plus ``python -c "import numpy, scipy.linalg, scipy.sparse,
   scipy.sparse.csgraph, scipy.special; os._exit(0)"`` (what ``solve`` needs); both leave
-  without the interpreter's teardown, as the commands do (``cli.end_process``);
+  without the interpreter's teardown and with OpenBLAS's idle workers asleep, as the
+  commands do (``cli.end_process``, ``cli.quiet_blas_workers``);
 * the library solve (``bench_sfm.py``'s worker: ``adjust_block(precision=False)`` of the
   loaded problem, the clock around the adjustment only);
 * each command as a user runs it (the console script next to this Python, compiled
@@ -101,7 +102,12 @@ print(json.dumps(out))
 
 
 def _env(src: str, threads: str, pycache: str) -> dict:
+    """The environment of every process of a round: the source tree, compiled modules
+    kept, the BLAS threads; OpenBLAS's idle workers sleep at once, as the commands set it
+    before NumPy loads (``cli.quiet_blas_workers``), so the floor and the stages' worker
+    pay what the commands pay (the library solve is ``bench_sfm.py``'s own worker)."""
     env = dict(os.environ)
+    env.setdefault("OPENBLAS_THREAD_TIMEOUT", "4")  # cli.BLAS_THREAD_TIMEOUT
     env["PYTHONPATH"] = os.pathsep.join([str(HERE), src])
     env.pop("PYTHONDONTWRITEBYTECODE", None)
     env["PYTHONPYCACHEPREFIX"] = pycache  # compiled modules kept, as an installed package
@@ -136,11 +142,14 @@ def one_round(src: str, model: str, threads: str, work: Path) -> dict:
         "import process": _cpu([exe, *imp], env),
         "solve process": _cpu([exe, *solve], env),
     }
+    lib_env = dict(env)
+    if "OPENBLAS_THREAD_TIMEOUT" not in os.environ:  # bench_sfm's yardstick as it runs it
+        lib_env.pop("OPENBLAS_THREAD_TIMEOUT")
     lib = subprocess.run(
         [py, "-c", "import bench_sfm, json, sys; "
          "print(json.dumps(bench_sfm.run_worker('orientviz', sys.argv[1], sys.argv[2])))",
          out_json, threads],
-        env=env, capture_output=True, text=True, check=True,
+        env=lib_env, capture_output=True, text=True, check=True,
     )  # fmt: skip
     row["library solve"] = json.loads(lib.stdout.strip().splitlines()[-1])["cpu"]
     for cmd, prefix in ((imp, "import: "), (solve, "solve: ")):
