@@ -100,10 +100,13 @@ def _keep_strings(items: list) -> set[int]:
     """Strings only: the first shortest and the first of the first DISTINCT values."""
     lengths = np.fromiter(map(len, items), dtype=np.int64, count=len(items))
     out = {int(np.argmin(lengths))}
-    for k, value in enumerate(dict.fromkeys(items)):
-        if k >= DISTINCT:
-            break
-        out.add(items.index(value))
+    first: dict[str, int] = {}  # the first DISTINCT values and where each first appears
+    for i, value in enumerate(items):
+        if value not in first:
+            first[value] = i
+            if len(first) == DISTINCT:
+                break
+    out.update(first.values())
     return out
 
 
