@@ -86,14 +86,15 @@ def _run(prob, block, monkeypatch):
 
 def test_search_left_out_after_a_step_it_did_not_pay(monkeypatch):
     """camcal: the first search lowers Σρ by less than SEARCH_GAIN of its step's decrease;
-    the search is then left out until the run's tail (ROBUST_TAIL), runs in every tail
-    step, and the run ends at the optimum of runs that search in every step (½Σρ within
-    1e-6) in as many steps; with the gate's block size below camcal's the search runs in
-    every robust step."""
+    the search is then left out until the run's tail (ROBUST_TAIL), runs there once more,
+    gains less than ftol·Σρ and is left out for good; the run ends at the optimum of runs
+    that search in every step (½Σρ within 1e-6) in as many steps; with the gate's block
+    size below camcal's the search runs in every robust step."""
     prob, block = _camcal()
     gated, searches = _run(prob, block, monkeypatch)
     assert searches[0][0] > 0 and searches[0][1] > 0  # it moved points, but saved little
     n_gated = len(searches)
+    assert n_gated == 2 and searches[1][1] < 1e-6 * gated.history[-1].cost
     monkeypatch.setattr(_steps, "SEARCH_GATE_RAYS", 0)
     every, searches_all = _run(prob, block, monkeypatch)
     assert len(searches_all) >= 6 and 1 < n_gated < len(searches_all)
