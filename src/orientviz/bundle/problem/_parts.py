@@ -32,7 +32,7 @@ from ...errors import InputError
 from ..model._additional import ap_set
 from ..model._lens import BoundLens, LensModel
 from ..reduced import ReducedStructure
-from ._ap_normal import APStructure
+from ._ap_structure import APStructure
 from ._checks import PointSetup
 
 F64 = NDArray[np.float64]
