@@ -69,3 +69,18 @@ def test_couplings_and_back_substitution_sums_per_point_equal_the_per_ray_ones()
     want = np.zeros((p, 3))
     np.add.at(want, tg.ray_point, np.einsum("nij,ni->nj", W, dc[tg.ray_image]))
     np.testing.assert_allclose(point_sums_wt(tg, W, dc), want, rtol=1e-12, atol=1e-12)
+
+
+def test_the_rays_track_order_by_two_radix_sorts_is_lexsorts():
+    # rays by (track length, point unknown), then image, then their order; fixed points' last
+    from orientviz.bundle.problem._parts import _track_order
+
+    rng = np.random.default_rng(11)
+    for _ in range(50):
+        n_var, m, n = int(rng.integers(1, 200)), int(rng.integers(1, 30)), int(rng.integers(1, 900))
+        col = rng.integers(-1, n_var, n)
+        var = col >= 0
+        oi = rng.integers(0, m, n)
+        k = np.bincount(col[var], minlength=n_var)
+        key = np.where(var, k[np.where(var, col, 0)] * n_var + col, np.iinfo(np.int64).max)
+        np.testing.assert_array_equal(_track_order(k, col, var, oi, m), np.lexsort((oi, key)))

@@ -59,6 +59,71 @@ def _nice(x: float) -> float:
     return float(10**e)
 
 
+#: A point farther from the points' centre than this many times their radius
+#: (:func:`framed`), or a projection centre so far from the other centres, is left out of
+#: the overview's frame and counted in its legend: a far point (rays that meet near
+#: infinity, a wrong coordinate) would otherwise shrink the whole block to a dot.
+OUTSIDE_FRAME = 5.0
+
+#: Coordinates of this size or more are outside every frame: no length unit gives them a
+#: meaning, and a plot's axis cannot be ticked across them.
+HUGE_COORDINATE = 1e100
+
+
+def framed(xy: np.ndarray) -> np.ndarray:
+    """Which of the planimetric positions ``xy`` (n, 2) lie inside their own frame.
+
+    The centre is the positions' median; their radius is the 95th percentile of their
+    distances from it, but at most four times the median distance (so a few wild
+    positions among few do not set it); a position is inside when its distance is at most
+    :data:`OUTSIDE_FRAME` radii. Non-finite positions and coordinates of
+    :data:`HUGE_COORDINATE` or more are outside.
+
+    Parameters
+    ----------
+    xy : ndarray, shape (n, 2)
+        Positions in the block's length unit.
+
+    Returns
+    -------
+    ndarray of bool, shape (n,)
+    """
+    xy = np.asarray(xy, float).reshape(-1, 2)
+    ok = np.all(np.abs(xy) < HUGE_COORDINATE, axis=1)  # False for nan and inf too
+    inside = np.zeros(xy.shape[0], bool)
+    if not ok.any():
+        return inside
+    offset = xy[ok] - np.median(xy[ok], axis=0)
+    d = np.hypot(offset[:, 0], offset[:, 1])
+    radius, median = np.percentile(d, 95), np.median(d)
+    if median > 0:
+        radius = min(radius, 4.0 * median)
+    inside[ok] = d <= OUTSIDE_FRAME * radius if radius > 0 else d == 0
+    return inside
+
+
+def _overview_frame(
+    X0: np.ndarray, foot: np.ndarray | None, xy: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Which projection centres (m,) and which points (p,) the overview draws.
+
+    The centres are framed among themselves and the points among themselves
+    (:func:`framed`): cameras around an object lie far outside the points' own frame, and
+    are drawn. A point within the box of the drawn centres and their footprints is drawn.
+    """
+    in_X0 = framed(X0[:, :2])
+    in_xy = framed(xy)
+    if in_X0.any():
+        box = [X0[in_X0, :2]]
+        if foot is not None:
+            f = foot[in_X0].reshape(-1, 2)
+            box.append(f[np.all(np.abs(f) < HUGE_COORDINATE, axis=1)])
+        box = np.vstack(box)
+        lo, hi = box.min(axis=0), box.max(axis=0)
+        in_xy |= np.all((xy >= lo) & (xy <= hi), axis=1)
+    return in_X0, in_xy
+
+
 def overview_figure(
     overview: dict[str, Any], check: dict[str, Any] | None = None, *, max_points: int = 20000
 ):
@@ -86,9 +151,15 @@ def overview_figure(
     ax = fig.add_subplot()
     foot = overview.get("footprints")
     X0 = np.asarray(overview["X0"], float)
-    many = X0.shape[0] > 60
+    xy = np.asarray(overview["xy"], float)
+    role = np.asarray(overview["role"])
+    m = X0.shape[0]
+    cxy = np.asarray(check["xy"], float).reshape(-1, 2) if check is not None else np.empty((0, 2))
+    in_X0, inside = _overview_frame(X0, foot, np.vstack([xy, cxy]))
+    in_xy, in_check = inside[: len(xy)], inside[len(xy) :]
+    many = m > 60
     if foot is not None:
-        ok = np.all(np.isfinite(foot), axis=(1, 2))
+        ok = np.all(np.isfinite(foot), axis=(1, 2)) & in_X0
         ax.add_collection(
             PolyCollection(
                 foot[ok],
@@ -97,9 +168,7 @@ def overview_figure(
                 linewidth=0.4 if many else 0.7,
             )
         )
-    xy = np.asarray(overview["xy"], float)
-    role = np.asarray(overview["role"])
-    good = np.all(np.isfinite(xy), axis=1)
+    good = in_xy
     tie = np.flatnonzero(good & (role == 0))
     tie = tie[_thin(tie.size, max_points)]
     ax.scatter(
@@ -136,7 +205,7 @@ def overview_figure(
         label=f"check points ({chk.size})",
         zorder=4,
     )
-    okc = np.all(np.isfinite(X0[:, :2]), axis=1)
+    okc = in_X0
     ax.scatter(
         X0[okc, 0],
         X0[okc, 1],
@@ -158,12 +227,28 @@ def overview_figure(
                 fontsize=8,
                 color=BLUE,
             )
-    allxy = np.vstack([xy[good], X0[okc, :2]] + ([foot.reshape(-1, 2)] if foot is not None else []))
+    out_xy = np.all(np.isfinite(xy), axis=1) & ~in_xy
+    out_X0 = np.all(np.isfinite(X0[:, :2]), axis=1) & ~in_X0
+    if out_xy.any() or out_X0.any():
+        what = [
+            f"{int(n)} {w}"
+            for n, w in ((out_xy.sum(), "point(s)"), (out_X0.sum(), "centre(s)"))
+            if n
+        ]
+        drawn = np.vstack([X0[in_X0, :2], xy[in_xy]])
+        centre = np.median(drawn, axis=0) if len(drawn) else np.zeros(2)
+        far = np.vstack([xy[out_xy], X0[out_X0, :2]]) - centre
+        reach = f"{float(np.max(np.abs(far))):.2g} {overview.get('length_unit', 'm')}"
+        label = f"{' and '.join(what)} outside this frame\n(up to {reach} from the centre)"
+        ax.plot([], [], ls="none", label=label)
+    allxy = np.vstack(
+        [xy[good], X0[okc, :2]] + ([foot[in_X0].reshape(-1, 2)] if foot is not None else [])
+    )
     allxy = allxy[np.all(np.isfinite(allxy), axis=1)]
     extent = float(np.max(np.ptp(allxy, axis=0))) if allxy.size else 1.0
     if check is not None:
-        cxy, d = np.asarray(check["xy"], float), np.asarray(check["d"], float)
-        ok = np.all(np.isfinite(d[:, :2]), axis=1) & np.all(np.isfinite(cxy), axis=1)
+        d = np.asarray(check["d"], float)
+        ok = np.isfinite(np.hypot(d[:, 0], d[:, 1])) & in_check
         if ok.any():
             dmax = float(np.max(np.hypot(d[ok, 0], d[ok, 1])))
             ex = _nice(0.12 * extent / dmax) if dmax > 0 else 1.0

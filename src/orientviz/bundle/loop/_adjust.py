@@ -231,6 +231,7 @@ def bundle_adjust(
         hold_first = bool(prob.q) and s0(ev0.cost) >= opts.poor_start_sigma0
         del ev0  # the loop takes it over (and releases it after the first step)
         steps.hold_first = hold_first
+        steps.stop_ftol = ftol or 0.0
         run = iterate(
             steps,
             st,

@@ -19,7 +19,8 @@ hand on. Its knobs are fields of the problem's
   Newton correction given the images' one, and each point keeps the correction (the
   joint step's or a Newton one) that lowers the Σρ of its rays most (:mod:`._tail`) —
   in a small block left out after a search that adds little to its step's decrease
-  (:data:`SEARCH_GAIN`) until the run slows down (:data:`SEARCH_REARM`);
+  (:data:`SEARCH_GAIN`) until the run's tail (:data:`ROBUST_TAIL`), there until a search
+  gains less than the run's ftol;
 * the additional parameters are held at their values in the first step from a poor
   start; their border E, F is reused in the next iteration when the last step moved
   nothing by more than ``ap_reuse`` (the Jacobians then change by about as little, less
@@ -115,9 +116,14 @@ ROBUST_OVERRELAX: float = 1.5
 #: design is linear (its weighted design is re-weighted from the last one), nor for a
 #: redescending loss. Steps and optima with other floors: benchmarks/README.md.
 ROBUST_TAIL_FLOOR: float = 0.3
-#: The points' own search (:mod:`._tail`) is left out for the rest of a run after an
-#: accepted step whose search lowered Σρ by less than this fraction of the step's
-#: decrease, in a block of at most :data:`SEARCH_GATE_RAYS` rays: there its fixed cost
+#: The points' own search (:mod:`._tail`) is left out until the run's tail (a step that
+#: lowers Σρ by less than :data:`ROBUST_TAIL`) after an accepted step whose search lowered
+#: Σρ by less than this fraction of the step's decrease, in a block of at most
+#: :data:`SEARCH_GATE_RAYS` rays; in the tail it runs in every step (the slow linear tail
+#: is what it removes: small simulated aerial blocks with gross errors crawled 50–120 steps
+#: or stopped 1e-4 above their optimum when it stayed out there) until a tail search
+#: lowers Σρ by less than the run's ftol·Σρ (it can no longer move where the run stops:
+#: then it is left out for the rest of the run). Outside the tail its fixed cost
 #: (some hundred array operations: the points' 3 × 3 systems, one evaluation of their
 #: rays at two corrections) weighs as much as a step, and such shares do not come with
 #: fewer steps (DBAT camcal: 0.03–2.7 % in every step). In larger blocks it costs a few
@@ -125,11 +131,6 @@ ROBUST_TAIL_FLOOR: float = 0.3
 #: soft-L1: 0.9 %, then 16–40 % per step). Shares per step: benchmarks/README.md.
 SEARCH_GAIN: float = 0.02
 SEARCH_GATE_RAYS: int = 10_000
-#: … and tried again after a robust step whose decrease of Σρ exceeds this fraction of the
-#: decrease of the step before: the run has slowed down to the linear tail the search
-#: removes (a search that paid little in an early step may pay there: simulated aerial
-#: blocks of 15 images with 8 gross errors crawled 100–120 steps without it, 14–37 with it).
-SEARCH_REARM: float = 0.5
 #: No ftol stop after a least-squares step damped by a λ of at least this that does not
 #: meet the tolerance (the damping then at least equals the curvature on the normal
 #: matrix's diagonal, the step is shortened by half or more): its small decrease of vᵀPv
@@ -229,6 +230,9 @@ class BundleSteps:
         self.points_moved = 0  # points the last search moved otherwise than the joint step
         self.search_gain = None  # … and the decrease of Σρ it added (None: no search)
         self.search_off = False  # the searches stopped paying (SEARCH_GAIN)
+        self.stop_ftol = 0.0  # the run's ftol (set by the caller; a robust run's own)
+        self._tail_search = False  # the next step searches because the run is in its tail
+        self._search_spent = False  # a tail search gained less than stop_ftol·Σρ
         self._drops = (0.0, 0.0)  # the decreases of Σρ of the last two robust steps
         # the start of the last solved step and its additional parameters' design (the
         # step's predicted decrease, ._gain), and whether the last accepted least-squares
@@ -671,13 +675,16 @@ class BundleSteps:
         if self.loss_on and not self.switch_pending and previous.cost > 0:  # a robust step
             self.robust_tail = (previous.cost - self.pending_cost) < ROBUST_TAIL * previous.cost
             self._drops = (self._drops[-1], previous.cost - self.pending_cost)
+            small = prob.obs.xy.shape[0] <= SEARCH_GATE_RAYS
             if self.search_gain is not None:  # the points' search: did it pay?
                 gain, self.search_gain = self.search_gain, None
-                self.search_off = prob.obs.xy.shape[
-                    0
-                ] <= SEARCH_GATE_RAYS and gain < SEARCH_GAIN * (previous.cost - self.pending_cost)
-            elif self.search_off and self._drops[1] > SEARCH_REARM * self._drops[0] > 0:
-                self.search_off = False  # the run slows down: the search is tried again
+                if self._tail_search:  # below ftol·Σρ it can no longer move the run's stop
+                    self._search_spent = small and gain < self.stop_ftol * previous.cost
+                self.search_off = small and gain < SEARCH_GAIN * (previous.cost - self.pending_cost)
+            # in the run's tail the search runs in every step (until spent)
+            self._tail_search = self.robust_tail and not self._search_spent
+            if self._tail_search:
+                self.search_off = False
         if self.loss is not None and not self.loss_on:  # no longer poor, or settled?
             drop = (previous.cost - self.pending_cost) / previous.cost if previous.cost > 0 else 0.0
             settled = drop <= (LOSS_SWITCH if self.loss.redescending else LOSS_SWITCH_CONVEX)

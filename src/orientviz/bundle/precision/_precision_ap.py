@@ -116,7 +116,7 @@ class RayGroupPairs:
     """Index maps of the sparse parameter terms (constant for a problem).
 
     The rays of an image in their own group are handled in the per-image padded layout
-    of :class:`~orientviz.bundle.problem._ap_normal.APStructure` (``pad``, (m, L)): ``slot`` is
+    of :class:`~orientviz.bundle.problem._ap_structure.APStructure` (``pad``, (m, L)): ``slot`` is
     each ray's place in it (i·L + column), ``sum_own`` sums the padded slots by the own
     (point, group) pair of their ray. The (ray, pair of another group of its point)
     products (``APStructure.e_obs``, ``e_pg``) are summed by ray and by pair in

@@ -252,7 +252,7 @@ class CameraBorder:
     @property
     def H(self) -> F64:
         """Σ Aᵀ P J_p per (point, group) pair (pairs, k, 3) in the order of
-        :class:`~orientviz.bundle.problem._ap_normal.APStructure`."""
+        :class:`~orientviz.bundle.problem._ap_structure.APStructure`."""
         if self._H is None:
             prob = self._prob
             A = prob.ap.structure

@@ -18,6 +18,7 @@ from scipy.sparse.csgraph import connected_components
 from ...block import CHECK, CONTROL, Block
 from ...errors import DatumDefectError, InputError, NotDeterminableError
 from ...plausibility import is_aerial
+from ..reduced._structure import stable_order
 
 F64 = NDArray[np.float64]
 
@@ -116,9 +117,14 @@ def check_connected(block: Block, setup: PointSetup) -> None:
     obs = block.observations
     m, p = block.n_images, block.n_points
     u = setup.used_obs
-    g = sp.coo_matrix(
-        (np.ones(int(u.sum())), (obs.image[u], m + obs.point[u])), shape=(m + p, m + p)
-    )
+    # the graph of images and points: one row per image listing its points (m + point),
+    # formed as CSR directly (no sort of a COO matrix's entries)
+    img, pt = obs.image[u], obs.point[u]
+    order = stable_order(img, m)
+    indptr = np.zeros(m + p + 1, np.int64)
+    np.cumsum(np.bincount(img, minlength=m), out=indptr[1 : m + 1])
+    indptr[m + 1 :] = indptr[m]
+    g = sp.csr_matrix((np.ones(img.size), m + pt[order], indptr), shape=(m + p, m + p))
     ncomp, labels = connected_components(g, directed=False)
     img_labels = labels[:m]
     comps = np.unique(img_labels)

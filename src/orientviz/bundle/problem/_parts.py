@@ -32,7 +32,7 @@ from ...errors import InputError
 from ..model._additional import ap_set
 from ..model._lens import BoundLens, LensModel
 from ..reduced import ReducedStructure
-from ._ap_normal import APStructure
+from ._ap_structure import APStructure
 from ._checks import PointSetup
 
 F64 = NDArray[np.float64]
@@ -270,12 +270,28 @@ def image_observations(block: Block, setup: PointSetup, pt_col: I64) -> ImageObs
     var = col >= 0
     n_var = int(pt_col.max(initial=-1)) + 1
     k = np.bincount(col[var], minlength=n_var)  # track length of each point unknown
-    key = np.where(var, np.take(k, col, mode="clip") * n_var + col, np.iinfo(np.int64).max)
-    order = np.lexsort((oi, key))
+    order = _track_order(k, col, var, oi, block.n_images)
     uobs = np.take(uobs, order)
     take = lambda a: np.take(a, order, axis=0)  # noqa: E731
     xy, sigma = np.take(obs.xy, uobs, axis=0), np.take(obs.sigma, uobs, axis=0)
     return ImageObservations(uobs, take(oi), take(opt), xy, 1.0 / sigma, take(col), slice(0))
+
+
+def _track_order(k: I64, col: I64, var, oi: I64, m: int) -> I64:
+    """The rays by (track length, point unknown) of their point, then by image, then in
+    their order; the rays of fixed points last, by image: ``np.lexsort((oi, key))`` with
+    key = k·n_var + point. As two stable 16-bit sorts (NumPy's radix sort: by image, then
+    by the points' rank in that order) when the counts allow; the same order."""
+    n_var = k.size
+    if max(n_var, m) >= np.iinfo(np.int16).max:
+        key = np.where(var, np.take(k, col, mode="clip") * n_var + col, np.iinfo(np.int64).max)
+        return np.lexsort((oi, key))
+    rank = np.empty(n_var + 1, np.int16)  # of each point unknown by (k, point); fixed: last
+    rank[np.argsort(k, kind="stable")] = np.arange(n_var, dtype=np.int16)
+    rank[n_var] = n_var
+    by_image = np.argsort(oi.astype(np.int16), kind="stable")
+    key = rank[np.where(var, col, n_var)[by_image]]
+    return by_image[np.argsort(key, kind="stable")]
 
 
 def with_var_rays(obs: ImageObservations, struct: ReducedStructure) -> ImageObservations:
