@@ -32,3 +32,22 @@ def test_small_lens_terms_are_not_rounded_away():
 def test_values_without_sigma_keep_six_decimals_and_missing_values_a_dash():
     assert _value_to_sigma(1.23456789, 0.0) == "1.234568"
     assert _value_to_sigma(float("nan"), 0.1) == "—"
+
+
+def test_without_redundancy_numbers_nothing_is_said_to_be_flagged():
+    """No w, no test: the report says "not tested", not "flagged: none" (the independent
+    models method gives no redundancy numbers; a bundle whose precision could not be computed —
+    e.g. points near infinity at a state the precision cannot invert — neither)."""
+    import orientviz as ov
+
+    models = ov.solve_problem(ov.load_dataset("block_strip"), method="models").as_text()
+    assert "flagged (|w| > 3.29): not tested (no redundancy numbers)" in models
+    assert "no redundancy numbers: this method gives none" in models
+    sol = ov.solve_problem(ov.load_dataset("block_strip"))
+    assert "flagged (|w| > 3.29): not tested" not in sol.as_text()
+    sol.adjustment.normalized_residuals = None  # as bundle/loop/_finish leaves it then
+    sol.adjustment.precision_error = "no precision at the last state: …"
+    text = sol.as_text()
+    assert "flagged (|w| > 3.29): not tested (no redundancy numbers)" in text
+    assert "no redundancy numbers: the precision was not computed" in text
+    assert "flagged (|w| > 3.29): none" not in text

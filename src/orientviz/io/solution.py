@@ -319,9 +319,12 @@ class Solution:
         if idx.size:
             lines.append("")
             if adj.normalized_residuals is None:
-                lines.append(
-                    f"largest residuals (v [{qu}]; this method gives no redundancy numbers):"
+                why = (
+                    "the precision was not computed"  # e.g. points near infinity
+                    if getattr(adj, "precision_error", None)
+                    else "this method gives none"
                 )
+                lines.append(f"largest residuals (v [{qu}]; no redundancy numbers: {why}):")
             else:
                 lines.append(f"largest normalised residuals (v [{qu}], w = v / (σ √r)):")
             w = adj.normalized_residuals
@@ -336,6 +339,8 @@ class Solution:
             lines.append(f"flagged (|w| > {self.critical:g}): {len(flagged)} observation(s)")
             for item in flagged[:20]:
                 lines.append(f"  {item['label']:24s} w = {item['w']}")
+        elif adj.normalized_residuals is None:  # no w: nothing was tested
+            lines.append(f"flagged (|w| > {self.critical:g}): not tested (no redundancy numbers)")
         else:
             lines.append(f"flagged (|w| > {self.critical:g}): none")
         if self.verdict is not None:
