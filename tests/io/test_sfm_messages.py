@@ -206,3 +206,23 @@ def test_solving_an_import_without_a_datum_names_both_ways(tmp_path, capsys):
     assert main(["solve", str(tmp_path / "strip.json")]) == 3
     err = capsys.readouterr().err
     assert "≥ 2 planimetric control points" in err and "--free" in err
+
+
+def test_a_reconstruction_looking_along_its_minus_z_is_not_told_of_heights(tmp_path, capsys):
+    """A reconstruction's axes point anywhere: cameras that happen to look along −Z of
+    its frame (BAL's Dubrovnik and Trafalgar problems do) are no aerial block. ``solve``
+    without ``--free`` names the 3 shifts, rotations and the scale, not planimetric and
+    height control (the file's length unit is "model")."""
+    from orientviz.cli import main
+
+    rng = np.random.default_rng(4)
+    pts = rng.uniform([-5, -5, -2], [5, 5, 2], (30, 3))
+    X0 = np.array([[-6, 0.0, 30.0], [6, 0.1, 30.0], [0.0, -6, 31.0]])
+    bal = _bal(tmp_path / "d.bal", X0, pts)  # R = I: every camera looks along −Z
+    out = tmp_path / "d.json"
+    assert main(["import-bal", str(bal), "-o", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["solve", str(out)]) == 3
+    err = capsys.readouterr().err
+    assert "the 3 shifts, the 3 rotations and the scale" in err and "--free" in err
+    assert "planimetric" not in err and "height" not in err and "tilt" not in err

@@ -289,10 +289,13 @@ def check_datum(block: Block, setup: PointSetup) -> None:
     conditions per image), then :class:`DatumDefectError` if the datum is free (naming
     the planimetric and height control an aerial block lacks; a block that is not aerial
     and has nothing at all — a reconstruction as imported — is told so without heights).
+    A block read from a file in model units (``block.meta["units"]["length"]``) is never
+    aerial, wherever its cameras look (:func:`orientviz.plausibility.is_aerial`).
     """
     check_image_conditions(block, setup)
     free, missing = _datum_elements(block, setup)
-    if len(free) == 7 and not is_aerial(block):  # nothing given, not flown: no aerial words
+    length = block.meta.get("units", {}).get("length", "m")  # a file's unit (io/kinds/_frame)
+    if len(free) == 7 and not is_aerial(block, length):  # nothing given, not flown: no aerial words
         raise DatumDefectError(
             "7 datum parameter(s) are free: add control or fix them — the block has no "
             "control points and no observed projection centres (undetermined: the 3 shifts, "
