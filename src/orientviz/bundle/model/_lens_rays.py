@@ -88,8 +88,14 @@ def lens_rays(
         ∂f/∂(scaled parameters), mm per scaled unit.
     """
     estimated = set(int(j) for j in est)
-    idle = [not (j in estimated or np.any(theta[:, j] != 0.0)) for j in range(10)]
-    par = [None if idle[j] else _per_ray(theta[:, j], ray_group) for j in range(10)]
+    nonzero = np.any(theta != 0.0, axis=0).tolist()
+    same = np.all(theta == theta[:1], axis=0).tolist()  # one value in every group
+    par = []  # per ray (:func:`_per_ray`, from two tests of the whole table)
+    for j in range(10):
+        if not (j in estimated or nonzero[j]):
+            par.append(None)  # idle: zero in every group and not estimated
+        else:
+            par.append(float(theta[0, j]) if same[j] else np.take(theta[:, j], ray_group))
     c, x0, y0, a, s = par[:5]
     K1, K2, K3 = par[5:8]
     # Brown's P1 (the r² + 2x² term of x) and P2: OpenCV's p2 and p1 in the forward model
