@@ -358,18 +358,18 @@ def misfit_warning(
     coordinates are pixels (an imported reconstruction): a pixel size cannot be wrong
     there (c is in pixels too), a lens held at import (``--fix-lens``) can.
     """
-    if adj.normalized_residuals is None:  # no redundancy numbers (e.g. not converged)
+    if not adj.sigma0 > MISFIT_SIGMA0:
         return None
-    w = np.asarray(adj.normalized_residuals, dtype=float)[: 2 * n_image]
+    w, basis = misfit_residuals(adj, n_image)
     w = w[np.isfinite(w)]
-    if w.size == 0 or not adj.sigma0 > MISFIT_SIGMA0:
+    if w.size == 0:
         return None
     share = float(np.mean(np.abs(w) > critical))
     if share < MISFIT_FLAGGED:
         return None
     head = (
         f"warning: the model does not fit the data: sigma0 = {adj.sigma0:.4g} with "
-        f"{share:.0%} of the image coordinates flagged (|w| > {critical:g})."
+        f"{share:.0%} of the image coordinates flagged (|w| > {critical:g}{basis})."
     )
     gross = single_gross_error(adj, n_image, block)
     if gross is not None:
@@ -388,6 +388,34 @@ def misfit_warning(
         "distance, or σ of the image coordinates far too small. The estimates are the best "
         "fit of a model that does not hold"
     )
+
+
+def misfit_residuals(adj, n_image: int) -> tuple[np.ndarray, str]:
+    """The image coordinates' normalised residuals w for the misfit verdict, and a note.
+
+    Baarda's w_i = v_i / (σ_i √r_i) where the redundancy numbers r_i exist. Without them
+    (the precision failed, e.g. nearly singular reduced normal equations) each r_i is
+    replaced by the average redundancy number r̄ = r / n, and the note says so; with no
+    redundancy at all the array is empty.
+
+    Returns
+    -------
+    w : ndarray, shape (2 n_image,) or (0,)
+        Dimensionless (a-priori σ0 = 1).
+    basis : str
+        "" for Baarda's w, else a parenthetical remark for the warning.
+    """
+    if adj.normalized_residuals is not None:
+        return np.asarray(adj.normalized_residuals, dtype=float)[: 2 * n_image], ""
+    n, r = adj.n_observations, int(adj.redundancy)
+    if n == 0 or r <= 0:
+        return np.empty(0), ""
+    r_mean = r / n
+    v = np.asarray(adj.residuals, dtype=float)[: 2 * n_image]
+    s = np.asarray(adj.sigma_obs, dtype=float)[: 2 * n_image]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w = v / (s * np.sqrt(r_mean))
+    return w, f"; w with the average redundancy number r/n = {r_mean:.2f}: no precision"
 
 
 #: One observation "explains" a misfit when leaving it out brings σ0 to this or below.
