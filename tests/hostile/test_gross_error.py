@@ -67,29 +67,3 @@ def test_no_single_gross_error_is_named_when_w_squared_exceeds_vtpv():
     named = single_gross_error(adj(np.sqrt(omega) * 0.9999), 50)
     assert named is not None and "observation no. 1" in named
     assert single_gross_error(adj(np.sqrt(omega) * 1.01), 50) is None
-
-
-def _without_precision(monkeypatch):
-    """The precision fails at the converged state, as it can with points near infinity."""
-    import numpy as np
-
-    from orientviz.bundle.loop import _finish
-
-    def fail(*_args, **_kw):
-        raise np.linalg.LinAlgError("leading minor not positive definite")
-
-    monkeypatch.setattr(_finish, "bundle_precision", fail)
-    monkeypatch.setattr(_finish, "_far_points", lambda prob, st: np.array([0]))
-
-
-def test_a_misfit_is_told_without_redundancy_numbers(tmp_path, capsys, monkeypatch):
-    """No precision, so no Baarda w: the verdict uses the average redundancy number."""
-    test_a_misfit_of_many_observations_keeps_the_model_causes(tmp_path, capsys)  # with w
-    _without_precision(monkeypatch)
-    assert main(["solve", str(tmp_path / "distorted.json")]) == 4
-    err = capsys.readouterr().err
-    assert "does not fit the data" in err and "average redundancy number r/n = " in err
-    assert "lens distortion" in err and "One gross error" not in err
-    # a block that fits stays quiet without its redundancy numbers too
-    assert main(["solve", str(dataset_path("block_strip"))]) == 0
-    assert "does not fit" not in capsys.readouterr().err
