@@ -67,6 +67,41 @@ def _intersect_check_points(
 #: along the rays is not determined (:func:`ray_parallax`).
 FAR_PARALLAX: float = 1e-5
 
+#: A point closer to a projection centre that sees it than this share of the block's
+#: median ray length lies at that centre: the direction of its ray, and so the image
+#: coordinates' derivatives (∝ 1/distance), are not determined (:func:`points_at_centres`).
+AT_CENTRE: float = 1e-6
+
+
+def points_at_centres(
+    block, X0: F64, xyz: F64, points: NDArray[np.int64]
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """The rays of ``points`` (indices of the block's points) whose point lies at the
+    projection centre of their image: length below :data:`AT_CENTRE` of the median ray.
+
+    Parameters
+    ----------
+    block : Block
+        The block (its observations' point and image indices).
+    X0 : ndarray, shape (m, 3)
+        Projection centres, in the block's length unit.
+    xyz : ndarray, shape (p, 3)
+        Object points, in the same unit.
+    points : ndarray of int
+        The points to look at (the point unknowns).
+
+    Returns
+    -------
+    point, image : ndarray of int
+        Point and image index of each such ray.
+    """
+    obs = block.observations
+    length = np.linalg.norm(xyz[obs.point] - X0[obs.image], axis=1)
+    mine = np.zeros(block.n_points, bool)
+    mine[points] = True
+    short = mine[obs.point] & (length < AT_CENTRE * np.nanmedian(length))
+    return obs.point[short], obs.image[short]
+
 
 def ray_parallax(block, X0: F64, xyz: F64) -> F64:
     """The largest angle (rad) between a point's rays and their mean direction, per
@@ -216,8 +251,19 @@ def finish_result(prob: BundleProblem, end: RunEnd) -> BundleResult:
             # values leave singular or non-finite point blocks): keep the result, say why
             # it carries no precision instead of letting a numerical error escape
             far = _far_points(prob, st)
-            if far.size:  # points that went to infinity (a robust loss lets them): kept
-                converged_note = "" if converged else " (not converged)"
+            at, at_image = points_at_centres(block, st.X0, st.xyz, prob.points.unknown)
+            converged_note = "" if converged else " (not converged)"
+            if at.size:  # a point that converged onto a camera: its ray has no direction
+                ids = ", ".join(
+                    f"{block.points.ids[j]} at {block.images.ids[i]}"
+                    for j, i in zip(at[:5], at_image[:5], strict=True)
+                )
+                res.precision_error = (
+                    f"no precision at the last{converged_note} state: {at.size} ray(s) end at "
+                    f"their own projection centre ({ids}{' …' if at.size > 5 else ''}): the "
+                    "point lies on the camera, its ray's direction is not determined"
+                )
+            elif far.size:  # points that went to infinity (a robust loss lets them): kept
                 ids = ", ".join(str(block.points.ids[j]) for j in far[:5])
                 res.precision_error = (
                     f"no precision at the last{converged_note} state: {far.size} point(s) "
