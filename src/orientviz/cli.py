@@ -430,13 +430,15 @@ COMMANDS: dict[str, Command] = {
         "sigma0 reads as the pixel RMS; --fix-lens holds the cameras, --undistort writes "
         "undistorted observations of distortion-free cameras instead. A point matched "
         "twice in one image keeps its first keypoint (the count is printed). --control "
-        "adds control points from a CSV keyed by POINT3D_ID.",
+        "adds control points from a CSV keyed by POINT3D_ID. DIRECTORY may be `axe`: the "
+        "shipped COLMAP model of an axe photographed on a turntable (52 images).",
         examples=(
             ("orientviz import-colmap sparse/0 -o block.json", "convert"),
+            ("orientviz import-colmap axe -o axe.json", "the shipped real COLMAP model"),
             ("orientviz import-colmap sparse/0 --fix-lens -o block.json", "cameras held"),
         ),
         arguments=(
-            arg("directory", help="folder of the COLMAP text model"),
+            arg("directory", help="folder of the COLMAP model (text or binary), or `axe`"),
             arg(
                 "--fix-lens",
                 action="store_true",

@@ -226,3 +226,16 @@ def test_a_reconstruction_looking_along_its_minus_z_is_not_told_of_heights(tmp_p
     err = capsys.readouterr().err
     assert "the 3 shifts, the 3 rotations and the scale" in err and "--free" in err
     assert "planimetric" not in err and "height" not in err and "tilt" not in err
+
+
+def test_the_shipped_colmap_model_imports_by_name(tmp_path, monkeypatch, capsys):
+    """`import-colmap axe`, as `import-bal ladybug`: the shipped model where no such folder is."""
+    import json
+
+    from orientviz.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["import-colmap", "axe", "-o", "axe.json"]) == 0
+    doc = json.loads((tmp_path / "axe.json").read_text(encoding="utf-8"))
+    assert len(doc["images"]["id"]) == 52 and "--free" in capsys.readouterr().out
+    assert main(["import-colmap", "nothing-here", "-o", "x.json"]) == 2

@@ -420,8 +420,25 @@ def _point3d_ids(block: Block) -> list[int]:
     return list(range(1, block.n_points + 1))
 
 
+#: The COLMAP model shipped with orientviz (``orientviz import-colmap axe``): its folder
+#: in ``orientviz/datasets`` (see its MANIFEST.json).
+SHIPPED = {"axe": "axe"}
+
+
+def shipped_colmap(name: str = "axe") -> Path:
+    """Folder of a COLMAP text model shipped in ``orientviz/datasets``."""
+    from importlib import resources
+
+    if name not in SHIPPED:
+        raise InputError(f"no shipped COLMAP model {name!r} (shipped: {', '.join(SHIPPED)})")
+    return Path(str(resources.files("orientviz.datasets").joinpath(SHIPPED[name])))
+
+
 def run_from_cli(args: argparse.Namespace) -> int:
-    """``orientviz import-colmap DIR -o OUT.json [--fix-lens | --undistort] [--control CSV]``."""
+    """``orientviz import-colmap DIR -o OUT.json [--fix-lens | --undistort] [--control CSV]``;
+    DIR ``axe`` (no such folder here) is the shipped model."""
+    if not Path(args.directory).exists() and args.directory in SHIPPED:
+        args.directory = str(shipped_colmap(args.directory))
     lens = "undistort" if getattr(args, "undistort", False) else (
         "fixed" if getattr(args, "fix_lens", False) else "refine")  # fmt: skip
     notes = {
