@@ -47,6 +47,10 @@ BY_TESTS = {
         "tests/integration/test_readme.py",
         "test_the_main_job_line_in_a_fresh_venv",
     ),
+    "orientviz view axe.json --free": (
+        "tests/viewer/test_browser_sfm.py",
+        'ViewerApp(demo_from_file(str(path), {"free": True})',
+    ),
     MAIN_JOB: ("tests/integration/test_readme.py", "test_the_main_job_line_in_a_fresh_venv"),
     # run in the fresh venv after the main job's install (its output checked there as here)
     REPORT_COMMAND: ("tests/integration/test_readme.py", "test_the_main_job_line_in_a_fresh_venv"),
@@ -55,6 +59,13 @@ BY_TESTS = {
 HERE = (
     "orientviz solve block_strip --json",
     "orientviz reproduce",
+)
+#: the README's lines on one's own reconstruction, run in order in one folder
+SFM = (
+    "orientviz import-colmap axe -o axe.json",
+    "orientviz solve axe.json --free -o solved.json",
+    "orientviz import-bal ladybug -o lb.json",
+    "orientviz solve lb.json --free -o lb_solved.json && orientviz export-bal lb_solved.json -o lb_solved.bal",
 )
 #: commands CI runs: verbatim, or as the same pytest run with other output options
 BY_CI = (
@@ -85,7 +96,7 @@ def test_the_readme_opens_with_the_main_job_and_the_ci_test_command():
 
 
 def test_every_readme_command_is_run_somewhere():
-    known = set(BY_TESTS) | set(HERE) | set(BY_CI)
+    known = set(BY_TESTS) | set(HERE) | set(BY_CI) | set(SFM)
     unknown = [c for c in readme_commands() if c not in known]
     assert not unknown, f"README commands nobody runs: {unknown}"
     for command, (path, marker) in BY_TESTS.items():
@@ -111,6 +122,20 @@ def test_readme_cli_commands(tmp_path, command):
     if "--report" in argv:
         assert (tmp_path / argv[-1]).read_text(encoding="utf-8").startswith("<!DOCTYPE html>")
         assert f"wrote {argv[-1]}" in r.stderr
+
+
+def test_the_readme_sfm_lines_in_order(tmp_path):
+    """Import, solve and export the shipped COLMAP and BAL models as the README shows."""
+    env = dict(os.environ, MPLBACKEND="Agg")
+    for line in SFM:
+        for command in line.split(" && "):
+            r = subprocess.run(
+                [sys.executable, "-m", "orientviz.cli", *shlex.split(command)[1:]],
+                capture_output=True, text=True, cwd=tmp_path, env=env, timeout=600,
+            )  # fmt: skip
+            assert r.returncode == 0, (command, r.stderr)
+    assert (tmp_path / "solved.json").is_file()
+    assert (tmp_path / "lb_solved.bal").read_text(encoding="utf-8").startswith("49 7776 31843")
 
 
 def test_the_notebooks_and_book_extras_hold_what_they_need():
