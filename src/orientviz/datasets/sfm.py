@@ -15,12 +15,11 @@
 from __future__ import annotations
 
 import json
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
 from ..block import Block
-from ..io.colmap import read_colmap
+from ..io.colmap import read_colmap, shipped_colmap
 
 #: Pixel pitch of the axe's camera (Canon EOS 600D: 22.3 mm over 5184 px), mm.
 AXE_PIXEL_MM: float = 22.3 / 5184
@@ -28,7 +27,7 @@ AXE_PIXEL_MM: float = 22.3 / 5184
 
 def axe_model() -> Path:
     """Folder of the shipped COLMAP model ``axe`` (cameras.txt, images.txt, points3D.txt)."""
-    return Path(str(resources.files("orientviz.datasets").joinpath("axe")))
+    return shipped_colmap("axe")
 
 
 def axe_manifest() -> dict[str, Any]:

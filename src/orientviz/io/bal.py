@@ -37,7 +37,7 @@ from numpy.typing import NDArray
 from ..block import Block
 from ..errors import InputError
 from ..rotation import matrix_from_opk, matrix_from_rotvec, opk_from_matrix, rotvec_from_matrix
-from .colmap_scan import parse_numbers
+from .colmap_scan import parse_numbers, tokenize
 from .datasets import resolve_name
 from .importing import import_to_problem
 from .problem import load_problem
@@ -151,13 +151,11 @@ def _plain_fields(text: str) -> tuple[NDArray[np.int64], F64 | None] | None:
     cr = np.flatnonzero(u == 13)
     if cr.size and (cr[-1] + 1 == u.size or np.any(u[cr + 1] != 10)):
         return None  # a lone CR breaks a line for splitlines
-    newline = np.flatnonzero(u == 10)
-    n_lines = newline.size + int(u.size > 0 and u[-1] != 10)
-    word = ~sep
-    start = np.flatnonzero(word & np.concatenate(([True], sep[:-1])))
-    end = np.flatnonzero(word & np.concatenate((sep[1:], [True]))) + 1
-    counts = np.bincount(np.searchsorted(newline, start), minlength=n_lines)
-    values, bad = parse_numbers(u, start, end)
+    if u.size and u[-1] != 10:  # tokenize reads complete lines
+        u = np.append(u, np.uint8(10))
+    tok = tokenize(u)
+    counts = np.bincount(tok.line, minlength=tok.n_lines).astype(np.int64)
+    values, bad = parse_numbers(u, tok.start, tok.end)
     return counts, (None if bad.size else values)
 
 

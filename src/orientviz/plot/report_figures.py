@@ -153,11 +153,10 @@ def overview_figure(
     X0 = np.asarray(overview["X0"], float)
     xy = np.asarray(overview["xy"], float)
     role = np.asarray(overview["role"])
-    m = X0.shape[0]
     cxy = np.asarray(check["xy"], float).reshape(-1, 2) if check is not None else np.empty((0, 2))
     in_X0, inside = _overview_frame(X0, foot, np.vstack([xy, cxy]))
     in_xy, in_check = inside[: len(xy)], inside[len(xy) :]
-    many = m > 60
+    many = X0.shape[0] > 60
     if foot is not None:
         ok = np.all(np.isfinite(foot), axis=(1, 2)) & in_X0
         ax.add_collection(
@@ -168,8 +167,7 @@ def overview_figure(
                 linewidth=0.4 if many else 0.7,
             )
         )
-    good = in_xy
-    tie = np.flatnonzero(good & (role == 0))
+    tie = np.flatnonzero(in_xy & (role == 0))
     tie = tie[_thin(tie.size, max_points)]
     ax.scatter(
         xy[tie, 0],
@@ -181,7 +179,7 @@ def overview_figure(
         label=f"tie points ({int(np.sum(role == 0))})",
         zorder=2,
     )
-    ctl = np.flatnonzero(good & (role == 1))
+    ctl = np.flatnonzero(in_xy & (role == 1))
     ax.scatter(
         xy[ctl, 0],
         xy[ctl, 1],
@@ -193,7 +191,7 @@ def overview_figure(
         label=f"control points ({ctl.size})",
         zorder=4,
     )
-    chk = np.flatnonzero(good & (role == 2))
+    chk = np.flatnonzero(in_xy & (role == 2))
     ax.scatter(
         xy[chk, 0],
         xy[chk, 1],
@@ -205,20 +203,19 @@ def overview_figure(
         label=f"check points ({chk.size})",
         zorder=4,
     )
-    okc = in_X0
     ax.scatter(
-        X0[okc, 0],
-        X0[okc, 1],
+        X0[in_X0, 0],
+        X0[in_X0, 1],
         s=3 if many else 14,
         c=BLUE,
         marker="o",
         lw=0,
-        label=f"projection centres ({int(okc.sum())})",
+        label=f"projection centres ({int(in_X0.sum())})",
         zorder=3,
     )
     ids = overview.get("ids_images") or []
     if 0 < len(ids) <= 24:
-        for k in np.flatnonzero(okc):
+        for k in np.flatnonzero(in_X0):
             ax.annotate(
                 plain_text(ids[k]),
                 X0[k, :2],
@@ -242,7 +239,7 @@ def overview_figure(
         label = f"{' and '.join(what)} outside this frame\n(up to {reach} from the centre)"
         ax.plot([], [], ls="none", label=label)
     allxy = np.vstack(
-        [xy[good], X0[okc, :2]] + ([foot[in_X0].reshape(-1, 2)] if foot is not None else [])
+        [xy[in_xy], X0[in_X0, :2]] + ([foot[in_X0].reshape(-1, 2)] if foot is not None else [])
     )
     allxy = allxy[np.all(np.isfinite(allxy), axis=1)]
     extent = float(np.max(np.ptp(allxy, axis=0))) if allxy.size else 1.0
