@@ -64,7 +64,7 @@ def camera_precision(res, prob, ne, Je: F64, Jp: F64) -> None:
     T = np.zeros((n_used, d, 3))
     T[ne.rays] = cb.T
     Qcp = np.zeros((n_used, d, 3))
-    cofactors_by_pairs(S, Zblk, T, oi, Qcp)
+    cofactors_by_pairs(S, Zblk, T, Qcp)
     vo = prob.obs.var_rays  # the rays of point unknowns, in point order
     Qpp = point_cofactors(ne.Vinv, T, Qcp, vo, S.pt_starts)
     # the rays' weighted design [P½ J_e | P½ A] (n, 2, d) and P½ J_p; the gains K of each

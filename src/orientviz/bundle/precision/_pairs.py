@@ -2,7 +2,10 @@
 
 The blocks Q_cc of the image pairs that share a point (the reduced structure's pairs
 i ≤ k, d × d each) and T_b = W_b V_j⁻¹ (d × 3) per ray; for each ray a of a point j the
-sum over the point's rays b, formed by pairs of rays in batches.
+sum over the point's rays b. The points are taken by track length k (the structure's
+:attr:`~orientviz.bundle.reduced.ReducedStructure.tracks`): for each ray b one product
+of the k blocks Q_cc(i_a, i_b) stacked (kd × d) with T_b, then the sums over b for all
+points of a chunk at once (:func:`segment_sum`).
 """
 
 from __future__ import annotations
@@ -12,35 +15,113 @@ from numpy.typing import NDArray
 
 F64 = NDArray[np.float64]
 
+#: Up to this many doubles the blocks of Q_cc are laid out for every ordered image pair
+#: (m² d² doubles, 16 MB): a pair's block is then found by i·m + k, without a search.
+FULL_PAIRS_DOUBLES: int = 2**21
 
-def _block_lookup(st, ca, cb_):
-    """Index of block (min, max) for image pairs and whether it must be transposed."""
-    m = st.n_cam
-    keys = st.block_i * m + st.block_k
-    lo, hi = np.minimum(ca, cb_), np.maximum(ca, cb_)
-    idx = np.searchsorted(keys, lo * m + hi)
-    return idx, ca > cb_
+#: Doubles of the gathered blocks per chunk of points in :func:`cofactors_by_pairs`
+#: (1 MB: the gather and its products stay in the processor's cache).
+PAIR_CHUNK_DOUBLES: int = 2**17
+
+#: numpy's pairwise summation: blocks of this many elements are summed by 8 accumulators
+#: (``PW_BLOCKSIZE`` in numpy's ``loops_utils.h.src``).
+PAIRWISE_BLOCK: int = 128
 
 
-def cofactors_by_pairs(S, Zblk: F64, T: F64, oi, Qcp: F64) -> None:
-    """Q_cp for each observation a into ``Qcp`` (n, d, 3): −Σ_b Q(i_a, i_b) T_b over the
-    rays b of its point, by pairs of rays (``Zblk`` (blocks, d, d), ``T`` (n, d, 3): d = 6,
-    or 6 + k with the cameras in the images' blocks), in batches of whole a-groups of about
-    4096 pairs: the (pairs, d, d) gather of a batch (~1.2 MB for d = 6) and its products
-    stay in the processor's cache."""
-    a, b = S.all_pairs
-    # blocks and their transposes side by side: one gather per pair, no masked transpose
+def _pairwise(X: F64, lo: int, n: int) -> F64:
+    """Σ X[:, lo : lo + n] over axis 1, added in the order of numpy's pairwise summation
+    (a new array; n ≥ 1)."""
+    if n < 8:  # one accumulator (numpy starts from −0.0: −0.0 + x is x)
+        out = X[:, lo].copy()
+        for i in range(lo + 1, lo + n):
+            out += X[:, i]
+        return out
+    if n <= PAIRWISE_BLOCK:  # eight accumulators, their tree, then the rest in turn
+        r = [X[:, lo + j].copy() for j in range(8)]
+        end = n - n % 8
+        for i in range(8, end, 8):
+            for j in range(8):
+                r[j] += X[:, lo + i + j]
+        out = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
+        for i in range(end, n):
+            out += X[:, lo + i]
+        return out
+    n2 = n // 2
+    n2 -= n2 % 8
+    return _pairwise(X, lo, n2) + _pairwise(X, lo + n2, n - n2)
+
+
+def segment_sum(X: F64) -> F64:
+    """Σ over axis 1 of X (rows, k, …) as ``np.add.reduceat`` sums a segment of k
+    elements along its axis: the first plus the pairwise sum of the others
+    (:func:`_pairwise`), each addition an array operation over all rows. The same
+    additions in the same order, so the same numbers to the last bit, as
+    ``np.add.reduceat(X.reshape(-1, …), starts, axis=0)`` with segments of k."""
+    k = X.shape[1]
+    if k == 1:
+        return X[:, 0].copy()
+    return X[:, 0] + _pairwise(X, 1, k - 1)
+
+
+def _ordered_blocks(S, Zblk: F64):
+    """The blocks of Z at ordered image pairs (i, k): ``(Zs, index)``, ``Zs[index(i, k)]``
+    = Z(i, k): the stored block (i ≤ k) or the transpose of block (k, i) (a pair i = k
+    takes its block as stored). Laid out for all m² pairs when that is small
+    (:data:`FULL_PAIRS_DOUBLES`), else the blocks and their transposes side by side,
+    found by a search in the structure's sorted keys."""
+    m, nb, d = S.n_cam, Zblk.shape[0], Zblk.shape[1]
     Zboth = np.concatenate([Zblk, Zblk.transpose(0, 2, 1)])
-    seg = np.append(S.all_pairs_starts, a.size)
-    s0, chunk = 0, 4096
-    while s0 < S.all_pairs_starts.size:
-        s1 = max(int(np.searchsorted(seg, seg[s0] + chunk, side="right")) - 1, s0 + 1)
-        sl = slice(seg[s0], seg[s1])
-        idx, tr = _block_lookup(S, oi[a[sl]], oi[b[sl]])
-        Qab = Zboth[idx + tr * Zblk.shape[0]]
-        QT = Qab @ T[b[sl]]  # Q(i_a, i_b) T_b
-        Qcp[S.pt_obs[s0:s1]] = -np.add.reduceat(QT, S.all_pairs_starts[s0:s1] - seg[s0], axis=0)
-        s0 = s1
+    if m * m * d * d <= FULL_PAIRS_DOUBLES:
+        at = np.zeros((m, m), np.int64)
+        at[S.block_k, S.block_i] = nb + np.arange(nb)  # the transposes first: (i, i) stays
+        at[S.block_i, S.block_k] = np.arange(nb)
+        return Zboth[at.reshape(-1)], lambda i, k: i * m + k
+    keys = S.block_i * m + S.block_k
+
+    def index(i, k):
+        return np.searchsorted(keys, np.minimum(i, k) * m + np.maximum(i, k)) + (i > k) * nb
+
+    return Zboth, index
+
+
+def cofactors_by_pairs(S, Zblk: F64, T: F64, Qcp: F64) -> None:
+    """Q_cp of each ray of a point unknown into ``Qcp`` (n, d, 3): −Σ_b Q(i_a, i_b) T_b
+    over the rays b of its point.
+
+    Parameters
+    ----------
+    S : orientviz.bundle.reduced.ReducedStructure
+        The structure (its blocks and :attr:`tracks`).
+    Zblk : ndarray, shape (n_blocks, d, d)
+        Q_cc at the structure's blocks (i ≤ k); d = 6, or 6 + k with the cameras in the
+        images' blocks.
+    T : ndarray, shape (n, d, 3)
+        T = W V⁻¹ per observation.
+    Qcp : ndarray, shape (n, d, 3)
+        Written at the rays of point unknowns.
+
+    Notes
+    -----
+    Per chunk of points of one track length k: the blocks of every pair gathered as
+    (points, b, a) — for each ray b its k blocks Q(i_a, i_b) one (kd × d) matrix — times
+    T_b (one product per ray b, each entry the same d-term product as a (d × d)(d × 3)
+    product per pair), then summed over b by :func:`segment_sum` in the order of a
+    reduction per ray a: the numbers of a product per pair of rays summed by
+    ``np.add.reduceat``.
+    """
+    tg = S.tracks
+    d = Zblk.shape[1]
+    Zs, index = _ordered_blocks(S, Zblk)
+    for k, r0, n in tg.groups:
+        step = max(1, PAIR_CHUNK_DOUBLES // (d * d * k * k))
+        for c0 in range(0, n, step):
+            c1 = min(c0 + step, n)
+            sl = slice(r0 + k * c0, r0 + k * c1)
+            rays = tg.rays[sl]
+            img = tg.ray_image[sl].reshape(-1, k)
+            Zg = Zs[index(img[:, None, :], img[:, :, None])]  # (points, b, a, d, d)
+            QT = np.matmul(Zg.reshape(-1, k * d, d), T[rays])  # (points · b, a · d, 3)
+            Qcp[rays] = -segment_sum(QT.reshape(c1 - c0, k, k, d, 3)).reshape(-1, d, 3)
 
 
 def point_cofactors(Vinv: F64, T: F64, Qcp: F64, vo, pt_starts) -> F64:

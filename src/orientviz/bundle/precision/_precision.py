@@ -359,7 +359,7 @@ def _fill_from(res, prob, ne, fac, Je, Jp) -> None:
     if dense_qcp:  # dense S formed densely: Q_cp by products with the dense inverse
         dense_qcp = cofactors_image_point(S, inverse._Z, T, oi, ocol, Qcp)
     if not dense_qcp:
-        cofactors_by_pairs(S, Zblk, T, oi, Qcp)
+        cofactors_by_pairs(S, Zblk, T, Qcp)
     Vinv = ne.Vinv
     vo = (
         prob.obs.var_rays

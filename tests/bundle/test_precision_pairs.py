@@ -1,0 +1,79 @@
+"""The image–point cofactors by pairs of rays (orientviz.bundle.precision._pairs) against
+the per-pair formula: one (d × d)(d × 3) product per pair of rays of a point, summed per
+ray by ``np.add.reduceat`` — the same numbers to the last bit."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from orientviz.bundle.precision import _pairs
+from orientviz.bundle.reduced import ReducedStructure
+
+
+@pytest.mark.parametrize("k", [1, 2, 3, 7, 8, 9, 16, 17, 128, 129, 130, 300, 301])
+def test_segment_sum_adds_as_reduceat(k):
+    rng = np.random.default_rng(k)
+    # magnitudes over many decades: a different order of the additions shows in the bits
+    X = rng.standard_normal((5, k, 4, 3)) * 10.0 ** rng.integers(-8, 9, (5, k, 4, 3))
+    X[0, :, 0, 0] = -0.0  # a sum of negative zeros stays −0.0 (numpy starts from −0.0)
+    want = np.add.reduceat(X.reshape(-1, 4, 3), np.arange(0, 5 * k, k), axis=0)
+    got = _pairs.segment_sum(X)
+    assert got.tobytes() == want.tobytes()
+
+
+def _network(rng, m, n_pt, rays_per_point, repeat_image=False):
+    """Observations (image, point) of n_pt points seen in random images; with
+    ``repeat_image`` the third point (three rays) has two in one image."""
+    oc, op = [], []
+    for j in range(n_pt):
+        k = int(rays_per_point[j % len(rays_per_point)])
+        imgs = rng.choice(m, size=k, replace=False)
+        if repeat_image and j == 2:
+            imgs[1] = imgs[0]
+        oc += imgs.tolist()
+        op += [j] * k
+    oc, op = np.array(oc), np.array(op)
+    fixed = rng.choice(m, size=3)  # rays of a fixed point (−1): no Q_cp
+    order = rng.permutation(oc.size + 3)
+    return np.r_[oc, fixed][order], np.r_[op, [-1, -1, -1]][order]
+
+
+def _per_pair(S, Zblk, T, n):
+    """Q_cp by the formula: for each ray a of a point, the product Q(i_a, i_b) T_b with
+    each ray b of its point (the stored block, or the transpose of block (i_b, i_a)),
+    summed by ``np.add.reduceat`` over b in the point's ray order."""
+    m = S.n_cam
+    keys = list(S.block_i * m + S.block_k)
+    Q = np.zeros((n, Zblk.shape[1], 3))
+    starts = np.append(S.pt_starts, S.pt_obs.size)
+    for j in range(S.n_pt):
+        rays = S.pt_obs[starts[j] : starts[j + 1]]
+        for a in rays:
+            prods = []
+            for b in rays:
+                ia, ib = S.obs_cam[a], S.obs_cam[b]
+                blk = Zblk[keys.index(min(ia, ib) * m + max(ia, ib))]
+                prods.append((blk.T if ia > ib else blk) @ T[b])
+            Q[a] = -np.add.reduceat(np.stack(prods), [0], axis=0)[0]
+    return Q
+
+
+@pytest.mark.parametrize("d", [6, 9])
+@pytest.mark.parametrize("full", [True, False])
+def test_cofactors_by_pairs_equal_the_per_pair_formula(d, full, monkeypatch):
+    if not full:  # the blocks found by a search in the structure's keys
+        monkeypatch.setattr(_pairs, "FULL_PAIRS_DOUBLES", 0)
+    # small chunks: the points of one track length split over several
+    monkeypatch.setattr(_pairs, "PAIR_CHUNK_DOUBLES", 4 * d * d)
+    rng = np.random.default_rng(d)
+    m = 14
+    oc, op = _network(rng, m, 60, [1, 2, 3, 5, 9, 12], repeat_image=True)
+    S = ReducedStructure(oc, op, m, 60, solver="dense")
+    Zblk = rng.standard_normal((S.n_blocks, d, d))  # not symmetric: a wrong transpose shows
+    T = rng.standard_normal((oc.size, d, 3))
+    got = np.full((oc.size, d, 3), np.nan)
+    got[op < 0] = 0.0
+    _pairs.cofactors_by_pairs(S, Zblk, T, got)
+    want = _per_pair(S, Zblk, T, oc.size)
+    assert got.tobytes() == want.tobytes()
