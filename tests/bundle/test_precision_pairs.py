@@ -77,3 +77,27 @@ def test_cofactors_by_pairs_equal_the_per_pair_formula(d, full, monkeypatch):
     _pairs.cofactors_by_pairs(S, Zblk, T, got)
     want = _per_pair(S, Zblk, T, oc.size)
     assert got.tobytes() == want.tobytes()
+
+
+def test_point_cofactors_equal_the_per_point_formula():
+    rng = np.random.default_rng(7)
+    m, d = 12, 6
+    oc, op = _network(rng, m, 40, [2, 3, 4, 11])
+    S = ReducedStructure(oc, op, m, 40, solver="dense")
+    T = rng.standard_normal((oc.size, d, 3))
+    Qcp = rng.standard_normal((oc.size, d, 3))
+    Vinv = rng.standard_normal((40, 3, 3))
+    got = _pairs.point_cofactors(Vinv, T, Qcp, S)
+    # per point j in point order: V_j⁻¹ + Σ_b T_bᵀ (−Q_cp,b) by np.add.reduceat
+    vo = S.pt_obs
+    want = Vinv + np.add.reduceat(T[vo].transpose(0, 2, 1) @ (-Qcp[vo]), S.pt_starts, axis=0)
+    assert got.tobytes() == want.tobytes()
+
+
+def test_var_rows_are_the_rays_of_point_unknowns():
+    class Obs:
+        column = np.array([3, 0, 2, -1, -1])
+
+    assert _pairs.var_rows(Obs) == slice(0, 3)
+    Obs.column = np.array([3, -1, 2, 0, -1])
+    np.testing.assert_array_equal(_pairs.var_rows(Obs), [0, 2, 3])

@@ -270,7 +270,8 @@ def bundle_adjust(
         need = precision or run.damped_start or prob.aux is not None
         if need and loss is None and getattr(run.evaluation.data, "deferred", False):
             steps.resolve(st, run.evaluation)  # the loop asked for derivatives (robust: below)
-        prob.reduced.release_maps()  # the Schur formation's maps: not held through the precision
+        if not precision:  # the Schur formation's maps and work arrays: not held after the loop
+            prob.reduced.release_maps()
         steps.chord_factor = steps.chord_pending = None
         rw, Je, Jp = run.evaluation.data
         cost, obs_sigma = run.evaluation.cost, None
@@ -287,6 +288,8 @@ def bundle_adjust(
             prob.design_at(st)  # a lens model: its design at the final iterate
         if not converged:
             lin = None
+        if precision and lin is not None:  # the precision reuses the last factor: not held
+            prob.reduced.release_maps()  # (else it forms S at the solution with them)
         if damped_start:  # a start that needed damping: prove the solution is determinable
             try:
                 prob.solve(prob.normal(st, rw, Je, Jp), red_names)

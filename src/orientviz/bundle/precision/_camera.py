@@ -24,7 +24,7 @@ import scipy.linalg
 from numpy.typing import NDArray
 
 from ..problem._camera_blocks import dense_blocks
-from ._pairs import cofactors_by_pairs, point_cofactors
+from ._pairs import cofactors_by_pairs, point_cofactors, var_rows
 from ._store import ray_blocks, store_precision
 
 F64 = NDArray[np.float64]
@@ -65,8 +65,8 @@ def camera_precision(res, prob, ne, Je: F64, Jp: F64) -> None:
     T[ne.rays] = cb.T
     Qcp = np.zeros((n_used, d, 3))
     cofactors_by_pairs(S, Zblk, T, Qcp)
-    vo = prob.obs.var_rays  # the rays of point unknowns, in point order
-    Qpp = point_cofactors(ne.Vinv, T, Qcp, vo, S.pt_starts)
+    Qpp = point_cofactors(ne.Vinv, T, Qcp, S)
+    vo = var_rows(prob.obs)  # the rays of point unknowns
     # the rays' weighted design [P½ J_e | P½ A] (n, 2, d) and P½ J_p; the gains K of each
     # ray on its image's unknowns (d × 2) and on its point (3 × 2)
     sw = prob.obs.weight[:, :, None]

@@ -124,8 +124,25 @@ def cofactors_by_pairs(S, Zblk: F64, T: F64, Qcp: F64) -> None:
             Qcp[rays] = -segment_sum(QT.reshape(c1 - c0, k, k, d, 3)).reshape(-1, d, 3)
 
 
-def point_cofactors(Vinv: F64, T: F64, Qcp: F64, vo, pt_starts) -> F64:
-    """Q_pp,j = V_j⁻¹ − Σ_b T_bᵀ Q_cp(i_b, j) over the rays b of each point unknown j
-    (``vo``: the rays of point unknowns in point order, ``pt_starts`` each point's first);
-    shape (p_var, 3, 3)."""
-    return Vinv + np.add.reduceat(T[vo].transpose(0, 2, 1) @ (-Qcp[vo]), pt_starts, axis=0)
+def point_cofactors(Vinv: F64, T: F64, Qcp: F64, S) -> F64:
+    """Q_pp,j = V_j⁻¹ − Σ_b T_bᵀ Q_cp(i_b, j) over the rays b of each point unknown j,
+    shape (p_var, 3, 3): per track group one product per ray and the sums over each
+    point's rays as ``np.add.reduceat`` adds them (:func:`segment_sum`)."""
+    tg = S.tracks
+    out = np.empty_like(Vinv)
+    p0 = 0
+    for k, r0, n in tg.groups:
+        rays = slice(r0, r0 + n * k) if tg.in_order else tg.rays[r0 : r0 + n * k]
+        P = T[rays].transpose(0, 2, 1) @ (-Qcp[rays])  # (n k, 3, 3)
+        pts = tg.points[p0 : p0 + n]
+        out[pts] = Vinv[pts] + segment_sum(P.reshape(n, k, 3, 3))
+        p0 += n
+    return out
+
+
+def var_rows(obs) -> slice | NDArray[np.int64]:
+    """The rays of point unknowns in the rays' own order: a slice when they come first
+    (the bundle's track order), else their indices."""
+    var = obs.column >= 0
+    nv = int(np.count_nonzero(var))
+    return slice(0, nv) if bool(var[:nv].all()) else np.flatnonzero(var)

@@ -45,7 +45,7 @@ from ._band import padded_band, tri_solve
 from ._border_points import border_point_terms
 from ._camera import camera_precision
 from ._far import mark_far, placed_state
-from ._pairs import cofactors_by_pairs, point_cofactors
+from ._pairs import cofactors_by_pairs, point_cofactors, var_rows
 from ._precision_ap import banded_border, border_inverse, point_terms
 from ._store import ray_blocks, store_precision
 
@@ -361,9 +361,8 @@ def _fill_from(res, prob, ne, fac, Je, Jp) -> None:
     if not dense_qcp:
         cofactors_by_pairs(S, Zblk, T, Qcp)
     Vinv = ne.Vinv
-    vo = (
-        prob.obs.var_rays
-    )  # the rays of point unknowns in point order (a slice when they come first)
+    vo = prob.obs.var_rays  # the rays of point unknowns in point order (the border's sums)
+    rv = var_rows(prob.obs)  # the same rays in their own order (per-ray products)
     sw = prob.obs.weight
     Jew = Je * sw[:, :, None]
     Jpw = Jp * sw[:, :, None]
@@ -382,16 +381,16 @@ def _fill_from(res, prob, ne, fac, Je, Jp) -> None:
         vo_idx = np.arange(n_used)[vo]
         Qpp, Qap = border_point_terms(S, oi, vo_idx, ocol, T, Qca, Faa, hb, Qcp, Vinv, bool(q))
     if not nb or fast_ap:  # Q_pp,j = V_j⁻¹ − Σ_b T_bᵀ Q_cp(i_b, j)
-        Qpp = point_cofactors(Vinv, T, Qcp, vo, S.pt_starts)
+        Qpp = point_cofactors(Vinv, T, Qcp, S)
     if fast_ap:
         Qpp -= dQpp
     # gains of each ray on its own image and point, K = Q_(·, ray) Jwᵀ: the change of the
     # estimates per σ-normalised change of the ray's x, y (external reliability); first
     # without the parameters' terms
-    Jpv = Jpw[vo]
+    Jpv = Jpw[rv]
     # 2×2 block of P½ J Q Jᵀ P½ per image observation = Jw K (batched products, no full
     # Q): redundancy numbers r = 1 − diagonal, off-diagonal of P½ Q_vv P½ = −(J Q Jᵀ)_xy
-    Ke, Kp, H = ray_blocks(Qcc_diag, oi, Qcp, Qpp, Jew, Jpv, vo, ocol[vo])
+    Ke, Kp, H = ray_blocks(Qcc_diag, oi, Qcp, Qpp, Jew, Jpv, rv, ocol[rv])
     if fast_ap:
         H += Hray
     elif q:  # the parameters' terms of the rays, from the dense border cofactors
@@ -402,17 +401,17 @@ def _fill_from(res, prob, ne, fac, Je, Jp) -> None:
         AwT = Aw.transpose(0, 2, 1)
         C = (Jew @ Qca_o) @ AwT
         H += (Aw @ Qaa_o) @ AwT + C + C.transpose(0, 2, 1)
-        Qpa = Qap.transpose(0, 2, 1)[ocol[vo]]  # (nv, 3, nb)
-        Qpa_o = np.take_along_axis(Qpa, np.repeat(sl[vo][:, None, :], 3, 1), axis=2)
-        C = (Jpv @ Qpa_o) @ AwT[vo]
-        H[vo] += C + C.transpose(0, 2, 1)
+        Qpa = Qap.transpose(0, 2, 1)[ocol[rv]]  # (nv, 3, nb)
+        Qpa_o = np.take_along_axis(Qpa, np.repeat(sl[rv][:, None, :], 3, 1), axis=2)
+        C = (Jpv @ Qpa_o) @ AwT[rv]
+        H[rv] += C + C.transpose(0, 2, 1)
     if q:  # the gains' terms of Q_ca, Q_pa in the ray's own group's k columns
         if fast_ap:
             Qca_o = Qca3.reshape(m, 6, prob.ap.G, prob.ap.k)[np.arange(m), :, prob.ap.group, :][oi]
-            Qpa_o = Qap_pg[prob.ap.structure.own_pg[vo]].transpose(0, 2, 1)
+            Qpa_o = Qap_pg[prob.ap.structure.own_pg[rv]].transpose(0, 2, 1)
             AwT = prob.ap.Aw.transpose(0, 2, 1)
         Ke += Qca_o @ AwT
-        Kp[vo] += Qpa_o @ AwT[vo]
+        Kp[rv] += Qpa_o @ AwT[rv]
     faa = Faa[:q, :q] if q else None
     auxiliary = None
     if aux:  # redundancy numbers of the auxiliary rows, cofactors of the offsets

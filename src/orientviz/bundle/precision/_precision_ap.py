@@ -34,6 +34,7 @@ from numpy.typing import NDArray
 
 from ..problem._ap_normal import BorderE
 from ._band import BandSolver
+from ._pairs import var_rows
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -268,7 +269,7 @@ def point_terms(prob, ne, Qaa: F64, Qca3: F64, Qcp: F64, Jew: F64, Jpw: F64):
     e_rows = oi[e_obs] * G + A.pg_grp[e_pg]
     if e_obs.size:
         _pair_sums(t, R.by_ray, R.ray_starts, lambda e: Qig[e_rows[e]] @ HV[e_pg[e]])
-    vo = prob.obs.var_rays  # rays of point unknowns in point order (a slice when they come first)
+    vo = var_rows(prob.obs)  # the rays of point unknowns (a slice when they come first)
     Qcp[vo] -= t[vo]
     # Q_ap,e = −(Σ_b Q_ca(i_b, g_e)ᵀ T_b + Σ_e' Q_aa(g_e, g_e') HV_e'): own group ...
     t = np.matmul(Qca_own.transpose(0, 2, 1)[:, None], Tp).reshape(m * L, k * 3)

@@ -40,7 +40,8 @@ def ray_blocks(
     Jpv : ndarray, shape (n_var, 2, 3)
         The weighted point Jacobians of the rays of point unknowns (``vo``).
     vo : slice or ndarray of int
-        The rays of point unknowns; ``pcol`` their point unknowns.
+        The rays of point unknowns (any order; a slice reads views); ``pcol`` their
+        point unknowns.
 
     Returns
     -------
@@ -50,9 +51,10 @@ def ray_blocks(
     """
     JcT, JpvT = Jc.transpose(0, 2, 1), Jpv.transpose(0, 2, 1)
     Kc = Qimg[img] @ JcT
-    Kc[vo] += Qcp[vo] @ JpvT
+    Qv = Qcp[vo]
+    Kc[vo] += Qv @ JpvT
     Kp = np.zeros((Jc.shape[0], 3, 2))
-    Kp[vo] = Qcp[vo].transpose(0, 2, 1) @ JcT[vo] + Qpp[pcol] @ JpvT
+    Kp[vo] = Qv.transpose(0, 2, 1) @ JcT[vo] + Qpp[pcol] @ JpvT
     H = Jc @ Kc
     H[vo] += Jpv @ Kp[vo]
     return Kc, Kp, H

@@ -102,37 +102,8 @@ class ReducedStructure:
         self.block_i, self.block_k, self.n_pairs = image_blocks(oc, op, m, self.n_pt)
         self.n_blocks = self.block_i.size
         self.diag_block = np.searchsorted(self.block_i * m + self.block_k, np.arange(m) * (m + 1))
-        self._pairs = None
         self._tracks = None
         self._setup_solver()
-
-    # ------------------------------------------------------------ pairs of rays
-    def _form_pairs(self) -> None:
-        """All ordered pairs of rays of the same point, grouped by the first ray (in
-        ``pt_obs`` order; formed on first use — the precision's image–point cofactors:
-        Σ k_j² of them)."""
-        s = self.pt_starts
-        k = np.diff(np.append(s, self.pt_obs.size))
-        g = np.repeat(np.arange(self.n_pt), k)  # point of each sorted obs
-        rep = k[g]
-        A = np.repeat(np.arange(self.pt_obs.size), rep)
-        off = np.arange(A.size) - np.repeat(np.cumsum(rep) - rep, rep)
-        B = s[g[A]] + off
-        del g, off
-        self._pairs = dict(
-            all_pairs=(self.pt_obs[A], self.pt_obs[B]),
-            all_pairs_starts=np.cumsum(rep) - rep,  # start of each a-group, pt_obs order
-        )
-
-    def _pair(self, name: str):
-        if self._pairs is None:
-            self._form_pairs()
-        return self._pairs[name]
-
-    all_pairs = property(lambda self: self._pair("all_pairs"), doc="All ordered pairs (a, b).")
-    all_pairs_starts = property(
-        lambda self: self._pair("all_pairs_starts"), doc="Start of each a-group."
-    )
 
     @property
     def tracks(self):
