@@ -214,4 +214,4 @@ def test_a_panel_callback_after_stop_does_nothing(app):
     callback()
     app.stop()
     callback()
-    assert len(runs) == 1 and app.panel._closed
+    assert len(runs) == 1 and app.panel.gate.closed and app.panel.gate is app.gate

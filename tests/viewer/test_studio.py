@@ -304,5 +304,5 @@ def test_a_callback_after_stop_sends_nothing_to_the_stopped_server():
     with warnings.catch_warnings(record=True) as seen:
         warnings.simplefilter("always")
         callback()
-    assert runs == [1] and app.stopped
+    assert runs == [1] and app.gate.closed
     assert not [w for w in seen if "closed connection" in str(w.message)]

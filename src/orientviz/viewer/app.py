@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import socket
 import sys
-import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -29,6 +28,7 @@ from ..io.safeio import write_atomic
 from ..io.solve import failure
 from .background import FIRST_BROWSER_WAIT
 from .block_geometry import BlockGeometry
+from .callbacks import CallbackGate
 from .demo import Demo
 from .demos import DEMOS, demo_from_block, load_demo
 from .geometry import VIEW_FOV
@@ -168,9 +168,8 @@ class ViewerApp:
         #: the solve started at opening (:mod:`orientviz.viewer.background`), or None
         self.background: Any = None
         self.messages: list[str] = []
-        #: set by :meth:`stop`: a GUI callback that arrives later does nothing
-        self.stopped = False
-        self._callback_lock = threading.RLock()
+        #: every GUI callback of this viewer runs through it; closed by :meth:`stop`
+        self.gate = CallbackGate(self.report)
         self.first_browser_wait = float(first_browser_wait)
         self._message_md = self.server.gui.add_markdown("")
         self._message_md.visible = False
@@ -209,7 +208,7 @@ class ViewerApp:
         if demo.state is not None:
             geo = BlockGeometry(demo.state)
             self.scene = BlockScene(self.server.scene, geo).build()
-            self.panel = BlockPanel(self.server, self.scene, self.report).build()
+            self.panel = BlockPanel(self.server, self.scene, self.report, self.gate).build()
             self.panel.title = demo.title
             self._set_camera(*geo.default_camera(), geo.frame.size, up=geo.up)
         if demo.extra is not None:
@@ -264,19 +263,9 @@ class ViewerApp:
     def guard(self, fn: Any) -> Any:
         """Wrap a GUI callback: an exception is reported, not raised; callbacks run one at
         a time, and not at all once the viewer is stopped (:meth:`stop`)."""
-        if self.panel is not None:
+        if self.panel is not None:  # the panel's own slider echoes are skipped too
             return self.panel.guard(fn)
-
-        def wrapped(*args: Any) -> None:
-            with self._callback_lock:
-                if self.stopped:
-                    return
-                try:
-                    fn(*args)
-                except Exception as exc:  # shown to the user, the server keeps running
-                    self.report(f"{type(exc).__name__}: {exc}")
-
-        return wrapped
+        return self.gate.wrap(fn)
 
     def report(self, message: str) -> None:
         """Show an error in the panel, as a notification and on the terminal."""
@@ -331,10 +320,7 @@ class ViewerApp:
         """
         if self.background is not None:
             self.background.cancel()
-        with self._callback_lock:
-            self.stopped = True
-        if self.panel is not None:
-            self.panel.close()
+        self.gate.close()
         self.server.stop()
 
     def wait(self) -> None:

@@ -4,13 +4,13 @@ Angles on the panel are in gon (slider steps of 1 c = 0.01 gon), or in degrees f
 problem file in degrees; positions in m, or in model units for a reconstruction whose
 scale is arbitrary (:class:`~orientviz.viewer.view_units.ViewUnits`).
 Rotations follow the block's sequence (ω-φ-κ by default, R = R_ω R_φ R_κ). Every
-callback runs through :meth:`BlockPanel.guard`, which turns an exception into a message
+callback runs through :meth:`BlockPanel.guard` (the viewer's
+:class:`~orientviz.viewer.callbacks.CallbackGate`), which turns an exception into a message
 in the panel and on the terminal instead of stopping the server.
 """
 
 from __future__ import annotations
 
-import threading
 import time
 from collections.abc import Callable
 from typing import Any
@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..units import from_rad, to_rad
+from .callbacks import CallbackGate
 from .legend import block_legend
 from .panel_act import ActControls
 from .panel_camera import CameraControls
@@ -55,41 +56,38 @@ class BlockPanel:
         The scene the controls act on (and its state).
     report : callable
         ``report(message)``: shows an error message (panel, notification, terminal).
+    gate : CallbackGate, optional
+        The viewer's gate for GUI callbacks (one for the whole viewer); a new one with
+        ``report`` if not given.
     """
 
-    def __init__(self, server: Any, scene: BlockScene, report: Callable[[str], None]) -> None:
+    def __init__(
+        self,
+        server: Any,
+        scene: BlockScene,
+        report: Callable[[str], None],
+        gate: CallbackGate | None = None,
+    ) -> None:
         self.server = server
         self.scene = scene
         self.state = scene.geo.state
         self.report = report
+        self.gate = gate if gate is not None else CallbackGate(report)
         self.handles: dict[str, Any] = {}
         self._syncing = False
-        self._closed = False
-        self._lock = threading.RLock()
         #: wall-clock seconds of the last slider-driven redraw (state change to nodes sent)
         self.last_redraw_s = float("nan")
 
     # ------------------------------------------------------------------ helpers
     def guard(self, fn: Callable[..., Any]) -> Callable[..., Any]:
-        """Wrap a callback: exceptions become a reported message; re-entry while syncing is
-        ignored, and so is every call after :meth:`close`."""
-
-        def wrapped(*args: Any) -> None:
-            if self._syncing:
-                return
-            try:
-                with self._lock:
-                    if not self._closed:
-                        fn(*args)
-            except Exception as exc:  # shown to the user, the server keeps running
-                self.report(f"{type(exc).__name__}: {exc}")
-
-        return wrapped
+        """Wrap a callback through the viewer's gate: exceptions become a reported message,
+        calls run one at a time and not at all after :meth:`close`; a call while the panel
+        sets its own sliders (an echo) is ignored."""
+        return self.gate.wrap(fn, skip=lambda: self._syncing)
 
     def close(self) -> None:
         """Wait for a callback still running, then ignore every later one (the server stops)."""
-        with self._lock:
-            self._closed = True
+        self.gate.close()
 
     # ------------------------------------------------------------------ building
     def build(self) -> BlockPanel:
@@ -242,14 +240,14 @@ class BlockPanel:
 
     def show_pending(self, job: Any) -> None:
         """The line on the solve running in the background (``job``; None: remove it)."""
-        with self._lock:
+        with self.gate.lock:
             self._pending_line = None if job is None else job.status()
             self.refresh(full=False)
 
     def take_result(self, result: Any) -> None:
         """Show the solve that ran in the background (the state adopts it); the residual
         scale stays, so the vectors shrink from the start values to the solution."""
-        with self._lock:
+        with self.gate.lock:
             self.state.adopt(result)
             self._pending_line = None
             self.scene.update()
