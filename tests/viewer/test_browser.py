@@ -82,7 +82,7 @@ def test_viewer_renders_and_slider_updates_python(browser_page, block):
         assert arrived, (
             f"the pasted 0.5 was dropped (Python: {app.panel.handles['X0'].value}, box: {shown!r})"
         )
-        with app.panel._lock:  # let the button's callback finish before the server stops
+        with app.gate.lock:  # let the button's callback finish before the server stops
             pass
     finally:
         app.stop()

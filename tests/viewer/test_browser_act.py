@@ -30,7 +30,7 @@ def test_ray_off_in_the_page_resolves_and_undo_restores(browser_page):
         wait_for_picture(page, adjusted, lambda a: changed_share(adjusted, a) > 0.0005)
         page.get_by_role("button", name="undo").click()
         assert wait_for(lambda: st.change_cursor == 1, 60), "undo did not arrive"
-        with app.panel._lock:  # let the callbacks finish
+        with app.gate.lock:  # let the callbacks finish
             pass
         assert st.edits.obs_on[j] and st.result is before.result
         np.testing.assert_array_equal(st.block.points.xyz, before.xyz)

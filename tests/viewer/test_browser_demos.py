@@ -108,5 +108,5 @@ def test_block_demo_converges_and_colours_by_quality(browser_page):
         page.get_by_role("option", name="largest normalised residual |w|").click()
         assert wait_for(lambda: q.key == "max_w" and q.quality is not None, 60)
         wait_for_picture(page, after_run, lambda a: changed_share(after_run, a) > 0.001, 60)
-        with app.panel._lock:  # let the callbacks finish before the server stops
+        with app.gate.lock:  # let the callbacks finish before the server stops
             pass

@@ -46,7 +46,7 @@ pytestmark = [pytest.mark.browser, pytest.mark.slow]
 @pytest.fixture(scope="module")
 def ladybug_app(tmp_path_factory):
     """Opened as ``orientviz view`` opens it: at the file's start values while it is
-    solved in the background (held at ``app.gate`` until the test has seen the page)."""
+    solved in the background (held at ``app.solve_gate`` until the test has seen the page)."""
     path = tmp_path_factory.mktemp("bal") / "ladybug.json"
     assert main(["import-bal", "ladybug", "-o", str(path)]) == 0
     demo = demo_from_file(str(path), {"free": True}, background=True)
@@ -54,9 +54,9 @@ def ladybug_app(tmp_path_factory):
     gate, solve = threading.Event(), demo.background.solve
     demo.background.solve = lambda callback: gate.wait(120) and solve(callback)
     app = ViewerApp(demo, port=0, verbose=False)
-    app.gate = gate
+    app.solve_gate = gate
     yield app
-    with app.panel._lock:  # let the callbacks finish before the server stops
+    with app.gate.lock:  # let the callbacks finish before the server stops
         pass
     app.stop()
 
@@ -69,7 +69,7 @@ def colmap_app(tmp_path_factory):
     assert main(["import-colmap", str(axe_model()), "-o", str(path)]) == 0
     app = ViewerApp(demo_from_file(str(path), {"free": True}), port=0, verbose=False)
     yield app
-    with app.panel._lock:  # let the callbacks finish before the server stops
+    with app.gate.lock:  # let the callbacks finish before the server stops
         pass
     app.stop()
 
@@ -109,12 +109,12 @@ def debugged_in_the_page(browser, app, size: tuple[int, int]) -> None:
     # that frames only the points or frustums sized for an aerial block: 0–150 px)
     frustums = colour_count(img, COLORS["frustum"])
     assert frustums > 0.001 * img.shape[0] * img.shape[1], f"frustums hardly seen: {frustums} px"
-    if getattr(app, "gate", None) is not None:  # opened while the solve runs
+    if getattr(app, "solve_gate", None) is not None:  # opened while the solve runs
         start = f"{st.history[0].sigma0:.10g}"
         body = page.inner_text("body")
         assert "solving in the background" in body and start in body
         assert app.background._hold_until > 0  # the page's connection held the solve
-        app.gate.set()
+        app.solve_gate.set()
         assert app.background.wait(300)
         solution = f"{app.demo.solution.adjustment.sigma0:.10g}"
         assert wait_for(lambda: solution in page.inner_text("body"), 60)
@@ -142,7 +142,7 @@ def debugged_in_the_page(browser, app, size: tuple[int, int]) -> None:
     wait_for_picture(page, coloured, lambda a: changed_share(coloured, a) > 0.0005, 60)
     page.get_by_role("button", name="undo").click()
     assert wait_for(lambda: st.change_cursor == 0, 60), "undo did not arrive"
-    with app.panel._lock:
+    with app.gate.lock:
         pass
     assert st.edits.image_on[worst] and f"{st.result.sigma0:.10g}" == sigma0
     # the worst points: the first entry is the point of the largest |v|/σ, chosen in the page
@@ -151,6 +151,6 @@ def debugged_in_the_page(browser, app, size: tuple[int, int]) -> None:
     gui_control(page, "worst points", "input").click()
     page.get_by_role("option", name=f"1. {b.points.ids[point]} ").click()
     assert wait_for(lambda: app.scene.selected_point == point, 60), "the point was not chosen"
-    with app.panel._lock:  # the flight to it has ended before the page goes
+    with app.gate.lock:  # the flight to it has ended before the page goes
         pass
     page.close()
