@@ -77,7 +77,7 @@ def test_the_border_form_of_the_camera_blocks_is_the_borders(per_image, monkeypa
     monkeypatch.setattr(
         problem_module.BundleProblem,
         "normal",
-        lambda self, *a: captured.append((self, a)) or real(self, *a),
+        lambda self, *a, **k: captured.append((self, a)) or real(self, *a, **k),
     )
     _solve(block, group, precision=False)
     prob, (st, rw, Je, Jp, *_) = captured[1]

@@ -500,7 +500,7 @@ class BundleSteps:
         self.chord_step = chord is not None
         try:
             if chord is None:
-                ne = prob.normal(st, rw, Je, Jp, lam)
+                ne = prob.normal(st, rw, Je, Jp, lam, hold=True)
                 dc, dp, da, fac = prob.solve(ne, self.red_names)
                 rel = self._correction(ne, dc, dp, da)
             else:
@@ -700,8 +700,15 @@ class BundleSteps:
         self.last_correction = step.max_correction
         self.last_cost, self.local_step = self.pending_cost, local
         self.chord_factor, self.chord_pending = self.chord_pending, None
-        # the precision may reuse this linearisation when it is the converged one
-        if self.precision and lam == 0 and ne is not None and not (prob.q or prob.aux or local):
+        # the precision may reuse this linearisation when it is the converged one (not one
+        # that held points: the precision places them where their depth is defined)
+        if (
+            self.precision
+            and lam == 0
+            and ne is not None
+            and not (prob.q or prob.aux or local)
+            and ne.held is None
+        ):
             self.lin = (ne, fac, previous.data[1], previous.data[2])
         if prob.q:
             # after a step that meets the tolerance the border is formed at every iterate

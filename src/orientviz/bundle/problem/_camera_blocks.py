@@ -90,11 +90,14 @@ class CameraBlocks:
         return self.blocks.shape[1]
 
 
-def camera_normal(prob, st, rw: F64, Je: F64, Jp: F64, lam: float) -> NormalEquations:
+def camera_normal(
+    prob, st, rw: F64, Je: F64, Jp: F64, lam: float, hold: bool = False
+) -> NormalEquations:
     """The normal equations with the cameras inside the images' blocks (see the module
     docstring); the same arguments as :meth:`BundleProblem.normal`. ``ne.ext`` holds
     the :class:`CameraBlocks`; ``ne.blocks``, ``ne.rhs``, ``ne.Wr``, ``ne.Tr`` are their
-    exterior parts and ``ne.ap`` a :class:`CameraBorder`.
+    exterior parts and ``ne.ap`` a :class:`CameraBorder` (``hold``: as
+    :meth:`BundleProblem.normal`).
 
     W and T are work arrays kept between iterations (``reduced.tracks.work``, released with
     the Schur formation's maps after the iterations): they hold this system's until the
@@ -114,7 +117,9 @@ def camera_normal(prob, st, rw: F64, Je: F64, Jp: F64, lam: float) -> NormalEqua
     np.multiply(Je, sw, out=Jz[:n, :, :6])
     Jz[:n, :, 6:d] = ap.Aw
     Jpw = Jp * sw
-    Wr, V, Vinv, Tr, bp, diagV, G = eliminate_points(prob, st, Jz, Jpw, rw, lam, ws)
+    Wr, V, Vinv, Tr, bp, diagV, G, held = eliminate_points(
+        prob, st, Jz, Jpw, rw, lam, ws, hold=hold
+    )
     U, red, diagU = image_blocks(prob, st, G, lam)
     buf = work_array(ws, "products", (schur_buffer_size(tg, d),))
     blocks = schur_blocks(S, U, Tr, Wr, buf)
@@ -140,7 +145,7 @@ def camera_normal(prob, st, rw: F64, Je: F64, Jp: F64, lam: float) -> NormalEqua
         diagV=diagV,
         diagF=diagF.reshape(-1),
     )
-    out.ext = cb
+    out.ext, out.held = cb, held
     out.ap = CameraBorder(prob, cb)
     return out
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..reduced import inv3, point_products, ray_couplings
+from ..reduced import inv3, inv3_held, point_products, ray_couplings
 from ._damping import image_damping
 from ._state import wrap
 
@@ -48,6 +48,7 @@ def eliminate_points(
     lam: float,
     work: dict | None = None,
     rays: list | None = None,
+    hold: bool = False,
 ):
     """The point elimination of one linearisation (see the module docstring).
 
@@ -70,12 +71,17 @@ def eliminate_points(
     rays : list, optional
         A list to which the rays of ``Jz`` sorted by image are appended
         (:class:`~orientviz.bundle.reduced.ImageRays`: the images' Gram matrices' operand).
+    hold : bool
+        A step's system: a point whose block V is numerically singular is held along its
+        weak directions (:func:`~orientviz.bundle.reduced.inv3_held`: V⁺ for V⁻¹);
+        False: every V inverted (the precision places such points first).
 
     Returns
     -------
-    Wr, V, Vinv, Tr, bp, diagV, G
+    Wr, V, Vinv, Tr, bp, diagV, G, held
         W (n_var, d, 3), the damped V (p, 3, 3), V⁻¹, T (n_var, d, 3) in the track order,
-        b_p (p, 3), V's undamped diagonal (p, 3), the images' Gram matrices (m, d + 1, d + 1).
+        b_p (p, 3), V's undamped diagonal (p, 3), the images' Gram matrices (m, d + 1,
+        d + 1), the held points (:class:`~orientviz.bundle.reduced.HeldDepths`, or None).
     """
     S = prob.reduced
     tg = S.tracks
@@ -95,7 +101,11 @@ def eliminate_points(
     diagV = Vd.copy()
     if lam > 0:
         Vd *= 1.0 + lam
-    Vinv = inv3(V)
+    held = None
+    if hold:
+        Vinv, held = inv3_held(V)
+    else:
+        Vinv = inv3(V)
     Tr = ray_couplings(tg, Wr, Vinv, work_array(work, "T", (nv, d, 3)))
     # the reduced right-hand side b_c − Σ T b_p = Σ P½J_cᵀ r' per ray: the last column
     y = np.take(np.einsum("nij,nj->ni", Vinv, bp), tg.ray_point, axis=0)
@@ -106,7 +116,7 @@ def eliminate_points(
     Jz[:n, :, d] = rw
     Jz[tg.rows, :, d] -= Jy
     G = prob.image_gram.grams(Jz, rays)
-    return Wr, V, Vinv, Tr, bp, diagV, G
+    return Wr, V, Vinv, Tr, bp, diagV, G, held
 
 
 def image_blocks(prob, st, G: F64, lam: float) -> tuple[F64, F64, F64]:

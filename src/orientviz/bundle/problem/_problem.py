@@ -263,13 +263,16 @@ class BundleProblem:
 
     # ----------------------------------------------------------------- normal equations
     def normal(
-        self, st: BundleState, rw: F64, Je: F64, Jp: F64, lam: float = 0.0
+        self, st: BundleState, rw: F64, Je: F64, Jp: F64, lam: float = 0.0, hold: bool = False
     ) -> NormalEquations:
-        """Blocks of the normal equations and the Schur complement (see bundle.reduced)."""
+        """Blocks of the normal equations and the Schur complement (see bundle.reduced).
+
+        ``hold``: a step's system — a point whose block V is numerically singular is held
+        along its weak directions (``ne.held``; :func:`~orientviz.bundle.reduced.inv3_held`)."""
         S = self.reduced
         self.design_at(st)
         if self.camera_blocks and not self.run.border.hold:
-            return camera_normal(self, st, rw, Je, Jp, lam)
+            return camera_normal(self, st, rw, Je, Jp, lam, hold)
         sw = self.obs.weight[:, :, None]
         bd = self.run.border
         # with a border, the work arrays are kept between iterations (the loop keeps no
@@ -287,7 +290,9 @@ class BundleProblem:
         # by image (._ap_normal)
         border_e = self.q and not bd.hold and not (bd.reuse and bd.border is not None)
         rays = [] if border_e and not self.ap.structure.batched else None
-        Wr, V, Vinv, Tr, bp, diagV, G = eliminate_points(self, st, Jz, Jpw, rw, lam, ws, rays)
+        Wr, V, Vinv, Tr, bp, diagV, G, held = eliminate_points(
+            self, st, Jz, Jpw, rw, lam, ws, rays, hold
+        )
         del Jz
         if rays:  # ... as the images' Gram matrices had them: not J_e again
             rays, Jew = rays[0], None
@@ -307,6 +312,7 @@ class BundleProblem:
             bp=bp,
             diagU=diagU,
             diagV=diagV,
+            held=held,
         )
         if self.q:  # (before S: the rays sorted by image are freed first)
             if self.run.border.hold:
@@ -319,7 +325,7 @@ class BundleProblem:
                 self.run.border.border = (out.ap.E_border, out.ap.F0)
                 del Jew, Jpw, rays
         if S.formation == "dense":
-            out.blocks, out.S = dense_schur(S, U, Wr, V)
+            out.blocks, out.S = dense_schur(S, U, Wr, V, held)
         else:
             buf = work_array(ws, "products", (schur_buffer_size(tg),))
             out.blocks = schur_blocks(S, U, Tr, Wr, buf)
@@ -382,6 +388,7 @@ class BundleProblem:
             bp=bp,
             diagU=diagU,
             diagV=ne.diagV,
+            held=ne.held,
         )
 
     def solve(self, ne: NormalEquations, names: list[str], fac=None):

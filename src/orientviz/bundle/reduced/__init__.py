@@ -24,7 +24,8 @@ The door of this room, stage by stage:
   sparse — nested dissection and a multifrontal Cholesky — otherwise), with the
   band-minimising image order (:func:`geometric_orderings`);
 * form (per iteration): :func:`point_products` (V, W, bp per point),
-  :func:`inv3` (V⁻¹), :func:`ray_couplings` (T = W V⁻¹), :class:`ImageGram` (U and
+  :func:`inv3` (V⁻¹; :func:`inv3_held` in the iterations: a numerically singular
+  point block is held for the step), :func:`ray_couplings` (T = W V⁻¹), :class:`ImageGram` (U and
   the reduced right-hand side), :func:`schur_blocks` or :func:`dense_schur` (S), all
   held by :class:`NormalEquations`;
 * factor: :func:`factor_reduced` → :class:`Factor` (a singular S raises
@@ -40,7 +41,16 @@ from ._factor import Factor, dense_matrix, factor_reduced, raise_not_determinabl
 from ._normal import APBorder, AuxBorder, NormalEquations
 from ._options import ReducedOptions
 from ._orderings import geometric_orderings
-from ._schur import DENSE_CHUNK_BYTES, ImageGram, ImageRays, dense_schur, inv3
+from ._schur import (
+    DENSE_CHUNK_BYTES,
+    SINGULAR_REL_EIG,
+    HeldDepths,
+    ImageGram,
+    ImageRays,
+    dense_schur,
+    inv3,
+    inv3_held,
+)
 from ._structure import ReducedStructure
 from ._tracks import (
     TrackGroups,
@@ -61,6 +71,9 @@ __all__ = [
     "geometric_orderings",
     "point_products",
     "inv3",
+    "inv3_held",
+    "SINGULAR_REL_EIG",
+    "HeldDepths",
     "ray_couplings",
     "ImageGram",
     "ImageRays",

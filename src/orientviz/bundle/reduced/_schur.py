@@ -34,11 +34,82 @@ DENSE_CHUNK_BYTES: int = 32 * 2**20
 DENSE_INDEX_KEEP: int = 2**21
 
 
+#: A point's block V (symmetric positive semi-definite, 3 × 3) is numerically singular in
+#: the directions whose eigenvalue is at most this fraction of its largest: the inverse
+#: along them carries a relative error of ε/this (ε = 2.2e-16) and more — a point whose
+#: rays have become parallel (receding to infinity along them; Ladybug's points that a
+#: Cauchy loss lets recede reach it at ~1e10 model units), or seen only by rays a loss has
+#: down-weighted to nothing. A well-determined point's smallest eigenvalue is 1e-4 to 1/3
+#: of its largest.
+SINGULAR_REL_EIG: float = 1e-12
+
+
 def inv3(A: F64) -> F64:
     """Vectorised inverse of symmetric 3×3 matrices (n, 3, 3) by the adjugate.
 
     Raises ``ZeroDivisionError``-free: singular blocks give inf/NaN that callers check.
     """
+    return _inv3(A)[0]
+
+
+@dataclass
+class HeldDepths:
+    """The points whose block V is numerically singular (:data:`SINGULAR_REL_EIG`) and
+    are held along their weak directions in a step.
+
+    Attributes
+    ----------
+    points : ndarray of int, shape (h,)
+        Their indices (point unknowns).
+    factors : ndarray, shape (h, 3, 3)
+        F with F Fᵀ = V⁺ (the inverse on the well-determined eigenvectors, 0 along the
+        weak ones): the whitening factor :func:`dense_schur` uses for them.
+    """
+
+    points: I64
+    factors: F64
+
+
+def inv3_held(A: F64, rel_eig: float = SINGULAR_REL_EIG) -> tuple[F64, HeldDepths | None]:
+    """:func:`inv3` of positive semi-definite blocks, where a block is numerically
+    singular (an eigenvalue ≤ ``rel_eig`` times its largest) its inverse on the other
+    eigenvectors instead, V⁺ = Σ vvᵀ/λ over the eigenvalues kept (0 along the weak
+    ones). A point with V⁺ in place of V⁻¹ is held along its weak directions in the
+    step (the elimination of the point reparametrised on the kept eigenvectors: T = W V⁺,
+    its correction V⁺(…) has no component along them); its other coordinates are solved
+    as any point's. Returns (the inverses (n, 3, 3), the held points or None).
+
+    The blocks tested by eigenvalues are those with det ≤ ``rel_eig``/4·tr³ (λ₁λ₂ ≤
+    tr²/4: no block with a weak eigenvalue passes it); the others keep :func:`inv3`'s
+    values."""
+    out, det = _inv3(A)
+    tr = A[:, 0, 0] + A[:, 1, 1] + A[:, 2, 2]
+    with np.errstate(over="ignore", invalid="ignore"):
+        screen = np.flatnonzero(~(det > 0.25 * rel_eig * (tr * tr * tr)))
+    if not screen.size:
+        return out, None
+    B = A[screen]
+    finite = np.all(np.isfinite(B), axis=(1, 2))
+    lam = np.zeros((screen.size, 3))
+    vec = np.zeros((screen.size, 3, 3))
+    if finite.any():
+        lam[finite], vec[finite] = np.linalg.eigh(B[finite])
+    top = lam[:, 2:]
+    keep = lam > rel_eig * top  # (finite blocks; a zero or non-finite block keeps none)
+    weak = ~np.all(keep, axis=1)
+    if not weak.any():
+        return out, None
+    pts = screen[weak]
+    lam, vec, keep = lam[weak], vec[weak], keep[weak]
+    with np.errstate(divide="ignore"):
+        root = np.where(keep, 1.0 / np.sqrt(np.where(keep, lam, 1.0)), 0.0)
+    F = vec * root[:, None, :]  # columns v/√λ, 0 for the weak ones
+    out[pts] = F @ F.transpose(0, 2, 1)
+    return out, HeldDepths(pts, F)
+
+
+def _inv3(A: F64) -> tuple[F64, F64]:
+    """(:func:`inv3` of ``A``, the determinants)."""
     a, b, c = A[:, 0, 0], A[:, 0, 1], A[:, 0, 2]
     d, e, f = A[:, 1, 1], A[:, 1, 2], A[:, 2, 2]
     c00 = d * f - e * e
@@ -54,7 +125,7 @@ def inv3(A: F64) -> F64:
         out[:, 1, 1] = (a * f - c * c) * r
         out[:, 1, 2] = out[:, 2, 1] = (b * c - a * e) * r
         out[:, 2, 2] = (a * d - b * b) * r
-    return out
+    return out, det
 
 
 def gram_by_segments(J: F64, starts: I64, present: I64, m: int) -> F64:
@@ -183,7 +254,7 @@ def whitening_factors(V: F64) -> F64:
     return F
 
 
-def dense_schur(st, U: F64, W: F64, V: F64) -> tuple[F64, F64]:
+def dense_schur(st, U: F64, W: F64, V: F64, held: HeldDepths | None = None) -> tuple[F64, F64]:
     """S formed densely by chunks of points: S = U − Σ_chunks Y Yᵀ (lower triangle).
 
     Y_a = W_a F_j per ray (F_j = L_j⁻ᵀ, :func:`whitening_factors`: one stacked 6 × 3 · 3 × 3
@@ -201,6 +272,9 @@ def dense_schur(st, U: F64, W: F64, V: F64) -> tuple[F64, F64]:
         W_a = J_eᵀ P J_p per ray of a point unknown, in ``st.tracks.rays`` order.
     V : ndarray, shape (p_var, 3, 3)
         Point blocks (damped).
+    held : HeldDepths, optional
+        Points held along their weak directions in this step (:func:`inv3_held`): their
+        factor F Fᵀ = V⁺.
 
     Returns
     -------
@@ -213,7 +287,10 @@ def dense_schur(st, U: F64, W: F64, V: F64) -> tuple[F64, F64]:
     n = 6 * st.n_cam
     lay = _dense_layout(st)
     tg = st.tracks
-    Y = W @ np.take(whitening_factors(V), tg.ray_point, axis=0)
+    F = whitening_factors(V)
+    if held is not None:
+        F[held.points] = held.factors
+    Y = W @ np.take(F, tg.ray_point, axis=0)
     S = np.zeros((n, n), order="F")
     S.reshape(-1, order="F")[lay.diag] = U.reshape(-1)
     for p0, p1, idx in lay.chunks():

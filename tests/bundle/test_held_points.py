@@ -1,0 +1,96 @@
+"""Points whose block V is numerically singular are held along their weak directions in a
+step (:func:`orientviz.bundle.reduced.inv3_held`), not inverted into NaN.
+
+A point whose rays have become parallel — receding to infinity, as points seen only by
+rays a Cauchy loss has down-weighted do on Ladybug — has a block V whose smallest
+eigenvalue is below the rounding of the others: its adjugate inverse is noise, inf or NaN,
+and T = W V⁻¹ carried it into S ("invalid value encountered in matmul", a NaN step).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import orientviz as ov
+from orientviz.bundle import BundleOptions, bundle_adjust
+from orientviz.bundle.reduced import SINGULAR_REL_EIG, inv3, inv3_held
+
+
+def _blocks(rng, n):
+    """n random well-conditioned symmetric positive definite 3 × 3 blocks."""
+    J = rng.normal(size=(n, 6, 3))
+    return J.transpose(0, 2, 1) @ J
+
+
+def test_regular_blocks_keep_the_adjugate_inverse():
+    """Blocks without a weak eigenvalue: :func:`inv3`'s values bit for bit, nothing held."""
+    V = _blocks(np.random.default_rng(1), 500)
+    out, held = inv3_held(V)
+    assert held is None
+    assert np.array_equal(out, inv3(V))
+
+
+@pytest.mark.parametrize("weak", [0.0, 1e-17, 0.5 * SINGULAR_REL_EIG])
+def test_a_weak_direction_is_left_out_of_the_inverse(weak):
+    """V = λ₁aaᵀ + λ₂bbᵀ + weak·λ₁nnᵀ (orthonormal a, b, n), weak ≤ SINGULAR_REL_EIG: held;
+    its inverse is the pseudo-inverse on a, b (V⁺n = 0, V V⁺ a = a), the regular blocks
+    beside it keep their inverses."""
+    rng = np.random.default_rng(2)
+    Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    a, b, n = Q.T
+    lam1, lam2 = 4.0e-20, 1.5e-20  # a point at ~1e10 model units: tiny blocks
+    Vw = lam1 * np.outer(a, a) + lam2 * np.outer(b, b) + weak * lam1 * np.outer(n, n)
+    V = np.concatenate([_blocks(rng, 4), Vw[None], _blocks(rng, 3)])
+    out, held = inv3_held(V)
+    assert held is not None and held.points.tolist() == [4]
+    P = out[4]
+    assert np.all(np.isfinite(P))
+    assert np.allclose(P, P.T, rtol=0, atol=1e-9 * np.abs(P).max())
+    assert np.linalg.norm(P @ n) <= 1e-9 * np.linalg.norm(P)
+    assert np.allclose(Vw @ P @ a, a, atol=1e-9)
+    assert np.allclose(Vw @ P @ b, b, atol=1e-9)
+    assert np.allclose(held.factors[0] @ held.factors[0].T, P, rtol=0, atol=1e-9 * np.abs(P).max())
+    keep = np.r_[0:4, 5:8]
+    assert np.array_equal(out[keep], inv3(V[keep]))
+
+
+def _far_point_block(distance: float):
+    """A small simulated block with one two-ray tie point moved ``distance`` times its
+    distance from one of its images along that ray (its rays nearly parallel there)."""
+    b = ov.simulate_block(2, 5, rng=3, start_error=None).block
+    obs = b.observations
+    counts = np.bincount(obs.point, minlength=b.n_points)
+    j = int(np.flatnonzero((b.points.role == 0) & (counts == 2))[0])
+    X0 = b.images.X0[obs.image[np.flatnonzero(obs.point == j)[0]]].copy()
+    b.points.xyz[j] = X0 + distance * (b.points.xyz[j] - X0)
+    return b, j, X0
+
+
+@pytest.mark.parametrize("loss", ["none", "cauchy"])
+def test_a_step_holds_a_point_whose_block_is_singular(loss):
+    """A point at 1e9 times its distance along one of its rays (V's depth eigenvalue ~1e-18
+    of the others): the step is finite, without NaN warnings, and moves that point across
+    its ray only; the rest of the block moves as a step does (finite, the cost lower;
+    the robust run: its least-squares steps, max_iter times ROBUST_ITER_FACTOR).
+    Before: V⁻¹ non-finite, "invalid value encountered in matmul", and least squares ended
+    in an internal error (a NaN rotation)."""
+    block, j, X0 = _far_point_block(1e9)
+    start = block.points.xyz[j].copy()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        res = bundle_adjust(
+            block,
+            options=BundleOptions(loss=loss, damping="fallback", max_iter=1, history_x=True),
+            precision=False,
+        )
+    assert len(res.history) >= 2 and all(h.damping == 0.0 for h in res.history)
+    assert all(b.cost < a.cost for a, b in zip(res.history, res.history[1:]))
+    assert np.all(np.isfinite(res.exterior)) and np.all(np.isfinite(res.points))
+    u = (start - X0) / np.linalg.norm(start - X0)
+    m = block.n_images
+    first = res.history[1].x[6 * m : 6 * m + 3 * block.n_points].reshape(-1, 3)
+    move = first[j] - start  # in the first step
+    assert abs(move @ u) <= 1e-6 * max(np.linalg.norm(move), 1e-3)
