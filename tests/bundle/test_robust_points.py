@@ -129,7 +129,7 @@ def test_search_keeps_no_point_worse_than_the_joint_step(calls):
     """Given the images' new parameters each point's rays (and prior) have a Σρ at most
     that of the joint step's own correction, some points move otherwise, and the search
     reports what they saved."""
-    (prob, loss, bw, st, dc, da, dp, pn), (out, moved, gain) = calls["search"]
+    (prob, loss, bw, st, dc, da, dp, pn, *_), (out, moved, gain) = calls["search"]
     assert moved > 0
 
     def per_point(d):

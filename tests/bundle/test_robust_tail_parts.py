@@ -264,3 +264,36 @@ def test_search_in_the_tail_reaches_the_optimum():
     assert robust.converged and tight.converged
     best = tight.history[-1].cost
     assert 0.0 <= robust.history[-1].cost - best <= 2e-5 * best
+
+
+def test_the_search_table_serves_the_new_iterate(monkeypatch):
+    """The point search projects its rays at the step's new image parameters; the
+    evaluation of the new iterate takes that per-image table instead of forming it again,
+    and the loss's switch reweighs the least-squares evaluation's projection (no two
+    formations in a row of the same images' table during the iterations; the result's
+    projection of the rays left out of the adjustment, last, may repeat it), with the same
+    results."""
+    from orientviz.bundle.model import _kernel
+
+    prob, block = planted_dbat("dbat_sxb")
+    prob.options.update(robust="huber")
+    want, _ = adjust_block(copy.deepcopy(prob), copy.deepcopy(block), precision=False)
+    formed = []
+    real = _kernel._image_table
+
+    def table(X0, angles, *a):
+        formed.append((X0.copy(), angles.copy()))
+        return real(X0, angles, *a)
+
+    monkeypatch.setattr(_kernel, "_image_table", table)
+    searched = []
+    search = _steps.point_search
+    monkeypatch.setattr(_steps, "point_search", lambda *a: searched.append(True) or search(*a))
+    got, _ = adjust_block(copy.deepcopy(prob), copy.deepcopy(block), precision=False)
+    assert len(searched) >= 3
+    again = [
+        np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
+        for a, b in zip(formed[:-1], formed[1:-1])
+    ]
+    assert not any(again)
+    assert np.array_equal(got.x, want.x) and len(got.history) == len(want.history)

@@ -382,7 +382,7 @@ class BundleSteps:
             return Evaluation(cost, False, _Linearisation((rw, None, None), local))
         scale = np.sqrt(rho1)
         weight *= scale[:, None]
-        rw = prob.residuals(st, jac=False)[0]
+        rw = prob.reweighted(st)  # (from the least-squares evaluation's projection)
         return Evaluation(cost, True, _Linearisation((rw, Je, Jp), local, scale, terms=(s, rho1)))
 
     def _tail_model(self, rw: F64, Je: F64, Jp: F64, scale: F64 | None):
@@ -644,14 +644,18 @@ class BundleSteps:
     def apply(self, st: BundleState, step: Step) -> BundleState:
         dc, dp, da = step.data[:3]
         local, newton = step.data[5], step.data[6]
+        images = None
         if newton is not None:  # each point's correction by its own search (._tail)
+            # the new image parameters formed once: the search's projection table of them
+            # serves the evaluation of the new iterate (prob.run.image_table)
+            images = (st.X0 + dc[:, :3], st.angles + dc[:, 3:])
             dp, self.points_moved, self.search_gain = point_search(
-                self.prob, self.loss, self.base_weight, st, dc, da, dp, newton
+                self.prob, self.loss, self.base_weight, st, dc, da, dp, newton, images
             )
             step.data = (dc, dp, da) + step.data[3:6] + (None,)
             step.max_correction = self.last_rel = self._sigma_correction(dc, dp, da)
             step.dx = self._dx(dc, dp, da)
-        new = self.prob.apply(st, dc, dp, da, local=local)
+        new = self.prob.apply(st, dc, dp, da, local=local, images=images)
         if local and step.dx is not None:  # the history records the change of the angles
             step.dx.reshape(-1)[: 6 * self.prob.m].reshape(-1, 6)[:, 3:] = new.angles - st.angles
         return new

@@ -298,6 +298,7 @@ def point_search(
     da: F64,
     dp: F64,
     newton: PointNewton,
+    images: tuple[F64, F64] | None = None,
 ) -> tuple[F64, int, float]:
     """Per point the correction with the lowest Σρ of its rays (and prior) at the new
     image parameters: ``dp`` (the joint step's) or, for an active point, the candidate of
@@ -305,7 +306,10 @@ def point_search(
     the choice between the two made by their true misclosures; returns (corrections
     (p_var, 3) m, number of points not at ``dp``, the decrease of Σρ (+ the points'
     priors' vᵀPv) against the joint step's correction, ≥ 0). Sets the problem's ray
-    weights to ``base_weight`` (1/σ)."""
+    weights to ``base_weight`` (1/σ). ``images``: (X0, angles) of the step's new image
+    parameters, st.X0 + dc[:, :3] and st.angles + dc[:, 3:] (formed here without); a
+    pinhole's table of them is left in ``prob.run.image_table`` for the evaluation of
+    the iterate made of these arrays."""
     pts = prob.points
     act, owner = newton.active, newton.owner
     pw = pts.prior_w[act]
@@ -332,7 +336,8 @@ def point_search(
     at = np.empty((2 * rays.size, 3))
     np.add(xyz, cand[0].take(owner, axis=0), out=at[: rays.size])
     np.add(xyz, cand[1].take(owner, axis=0), out=at[rays.size :])
-    rw = ray_misclosures(prob, st.X0 + dc[:, :3], st.angles + dc[:, 3:], st.ap + da, both, at)
+    X0, angles = (st.X0 + dc[:, :3], st.angles + dc[:, 3:]) if images is None else images
+    rw = ray_misclosures(prob, X0, angles, st.ap + da, both, at, keep=True)
     rho = loss.rho(rw[:, 0] * rw[:, 0] + rw[:, 1] * rw[:, 1])
     true = np.add.reduceat(rho.reshape(2, -1), newton.starts, axis=1)  # (2, a)
     for k, d in enumerate(cand) if held.size else ():
@@ -346,13 +351,21 @@ def point_search(
 
 
 def ray_misclosures(
-    prob: BundleProblem, X0: F64, angles: F64, ap: F64, obs_rays: I64, xyz: F64
+    prob: BundleProblem,
+    X0: F64,
+    angles: F64,
+    ap: F64,
+    obs_rays: I64,
+    xyz: F64,
+    keep: bool = False,
 ) -> F64:
     """Misclosures (k, 2) weighted by the problem's ray weights of the observations
     ``obs_rays`` (k,) with their points at ``xyz`` (k, 3) m, given the images' ``X0`` (m),
     ``angles`` (rad) and the additional parameters ``ap``: the rows ``obs_rays`` of
     :meth:`BundleProblem.residuals` at that state, evaluated for these rays only (an
-    observation may appear more than once, with other points). Not for auxiliary data."""
+    observation may appear more than once, with other points). Not for auxiliary data.
+    ``keep``: a pinhole's per-image table of ``X0``, ``angles`` is kept for the
+    evaluation of an iterate made of these arrays (``prob.run.image_table``)."""
     obs = prob.obs
     img = obs.image[obs_rays]
     seq = prob.block.sequence
@@ -361,7 +374,10 @@ def ray_misclosures(
         f = prob.ap.lens.evaluate(ap, prob.ap.group[img], nrm, obs.xy[obs_rays], False)[0]
     else:
         io = prob.interior
-        f = RayProjection(X0, angles, io.c, io.x0, io.y0, img, xyz, seq).xy
+        proj = RayProjection(X0, angles, io.c, io.x0, io.y0, img, xyz, seq)
+        if keep:
+            prob.run.image_table = (X0, angles, proj.table)
+        f = proj.xy
         if prob.q:
             f = f + (prob.ap.A_csr @ ap).reshape(-1, 2)[obs_rays]
     return (obs.xy[obs_rays] - f) * obs.weight[obs_rays]

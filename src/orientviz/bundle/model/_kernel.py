@@ -90,10 +90,15 @@ class RayProjection:
         −c/w per ray in mm/m.
     obs_image : ndarray of int, shape (n,)
         Image of each ray.
+
+    ``table``: the per-image table of these X0, angles, c, x0, y0 when it is known (the
+    values :func:`_image_table` forms).
     """
 
-    def __init__(self, X0, angles, c, x0, y0, obs_image, xyz, sequence: str) -> None:
-        T = _image_table(X0, angles, c, x0, y0, sequence)
+    def __init__(
+        self, X0, angles, c, x0, y0, obs_image, xyz, sequence: str, table: F64 | None = None
+    ) -> None:
+        T = _image_table(X0, angles, c, x0, y0, sequence) if table is None else table
         n = obs_image.shape[0]
         u, v, w, a = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
         xy = np.empty((n, 2))

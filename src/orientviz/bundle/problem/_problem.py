@@ -203,7 +203,11 @@ class BundleProblem:
         else:
             io = self.interior
             xyz = np.take(st.xyz, self.obs.point, axis=0)
-            proj = RayProjection(st.X0, st.angles, io.c, io.x0, io.y0, self.obs.image, xyz, seq)
+            tab, run.image_table = run.image_table, None
+            table = tab[2] if tab is not None and tab[0] is st.X0 and tab[1] is st.angles else None
+            proj = RayProjection(
+                st.X0, st.angles, io.c, io.x0, io.y0, self.obs.image, xyz, seq, table
+            )
         f = proj.xy
         run.projected = (st, f)
         if jac:
@@ -215,6 +219,18 @@ class BundleProblem:
         if self.q:
             f = f + (self.ap.A_csr @ st.ap).reshape(-1, 2)
         return (self.obs.xy - f) * self.obs.weight, Je, Jp
+
+    def reweighted(self, st: BundleState) -> F64:
+        """The misclosures at ``st`` weighted by the current ray weights, as
+        :meth:`residuals` without ``jac`` forms them — from the last evaluation's projection
+        when it was of ``st`` (a pinhole; the same numbers: no second projection)."""
+        done = self.run.projected
+        if self.ap.lens is not None or done is None or done[0] is not st:
+            return self.residuals(st, jac=False)[0]
+        f = done[1]
+        if self.q:
+            f = f + (self.ap.A_csr @ st.ap).reshape(-1, 2)
+        return (self.obs.xy - f) * self.obs.weight
 
     def _lens_residuals(self, st: BundleState, jac: bool):
         """Misclosures and Jacobians through the camera model (:mod:`._lens`); with
@@ -430,10 +446,22 @@ class BundleProblem:
             self.exterior.angles_w > 0
         )
 
-    def apply(self, st: BundleState, dc: F64, dp: F64, da: F64, local: bool = False) -> BundleState:
-        """The next iterate; ``local``: dc[:, 3:] are rotations δ of the image frames."""
+    def apply(
+        self,
+        st: BundleState,
+        dc: F64,
+        dp: F64,
+        da: F64,
+        local: bool = False,
+        images: tuple[F64, F64] | None = None,
+    ) -> BundleState:
+        """The next iterate; ``local``: dc[:, 3:] are rotations δ of the image frames;
+        ``images``: (X0, angles) of the next iterate, formed already as st.X0 + dc[:, :3],
+        st.angles + dc[:, 3:] (a plain step: not ``local``, no auxiliary data)."""
         xyz = st.xyz.copy()
         xyz[self.points.unknown] = np.take(xyz, self.points.unknown, axis=0) + dp
+        if images is not None and not (local or self.aux):
+            return BundleState(images[0], images[1], xyz, st.ap + da, st.g)
         if local:
             angles = apply_local(st.angles, dc[:, 3:], self.block.sequence)
             return BundleState(st.X0 + dc[:, :3], angles, xyz, st.ap + da, st.g)

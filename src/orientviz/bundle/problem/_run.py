@@ -35,6 +35,11 @@ class BundleRun:
         (iterate, image coordinates (n, 2) mm of the adjusted rays without additional
         parameters) of the last evaluation by the collinearity kernel (the result's
         residuals reuse them).
+    image_table : tuple or None
+        (X0, angles, the kernel's per-image table of them) formed for some rays of an
+        iterate not yet evaluated (a robust step's point search, at the step's new image
+        parameters): :meth:`BundleProblem.residuals` of an iterate with these very arrays
+        takes the table instead of forming it again.
     """
 
     ap: AdditionalBlock
@@ -42,3 +47,4 @@ class BundleRun:
     border: BorderSolver = field(default_factory=BorderSolver)
     projection: tuple | None = None
     projected: tuple | None = None
+    image_table: tuple | None = None
