@@ -266,6 +266,21 @@ def test_search_in_the_tail_reaches_the_optimum():
     assert 0.0 <= robust.history[-1].cost - best <= 2e-5 * best
 
 
+def test_points_reach_a_breakpoint_beyond_their_newton_correction():
+    """The 15-image block of seed 3 (8 rays moved by ~30 σ), Huber: two-ray points crept
+    along their flat stretch by ~0.01 m a step (the floored Newton correction falls short of
+    the breakpoint, where a ray reaches the scale) — 23 steps, the last ones each lowering
+    ½Σρ by ~1e-3 of a unit. With the breakpoint ranked up to BREAKPOINT_MAX times the
+    correction the run converges in at most 18 steps, within 1e-7 of a tight run's optimum."""
+    run = _simulated(3, False)
+    robust = run("huber")
+    tight = run("huber", ftol=1e-12, tol=1e-10, max_iter=100)
+    assert robust.converged and tight.converged
+    assert len(robust.history) - 1 <= 18
+    best = tight.history[-1].cost
+    assert 0.0 <= robust.history[-1].cost - best <= 1e-7 * best
+
+
 def test_the_search_table_serves_the_new_iterate(monkeypatch):
     """The point search projects its rays at the step's new image parameters; the
     evaluation of the new iterate takes that per-image table instead of forming it again,

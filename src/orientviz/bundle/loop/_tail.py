@@ -53,6 +53,14 @@ NEWTON_FLOOR: float = 0.01
 #: the one up to the first breakpoint (the nearly flat direction ends where a ray's
 #: misclosure reaches the scale: the full correction may overshoot it).
 FRACTIONS: tuple[float, ...] = (1.0, 0.5, 0.25, 0.125)
+#: … and the breakpoint is ranked up to this multiple of the Newton correction: the floor
+#: (:data:`NEWTON_FLOOR`) makes the model's curvature along a flat direction positive, so
+#: the correction may also stop short of the breakpoint — a point that creeps along its
+#: flat stretch by about the same length in step after step (two-ray points of small
+#: aerial blocks: 10–15 tail steps that each lowered Σρ by ~1e-3). A breakpoint beyond it
+#: is ranked at it; with none (no ray reaches the scale) the full correction. Steps and
+#: optima with 1 (no extension), 4, 10 and 100: benchmarks/README.md, session 17.
+BREAKPOINT_MAX: float = 4.0
 #: Upper-triangle index pairs of a symmetric 3 × 3 block (6 entries) …
 _UPPER = (np.array([0, 0, 0, 1, 1, 2]), np.array([0, 1, 2, 1, 2, 2]))
 #: … and the positions of its diagonal among them.
@@ -153,7 +161,7 @@ class PointNewton:
         The Newton corrections, m (0 for a point whose model is singular).
     first : ndarray, shape (a,)
         The fraction of ``dp`` at which a ray of the point first reaches the loss's scale
-        from beyond it (linearised; 1 where none does before ``dp``).
+        from beyond it (linearised; at most :data:`BREAKPOINT_MAX`, 1 where no ray does).
     owner : ndarray of int, shape (m,)
         The active point (index into ``active``) of each ray.
     r : ndarray, shape (m, 2)
@@ -182,8 +190,8 @@ class PointNewton:
         return np.add.reduceat(x, self.starts, axis=0)
 
     def fractions(self) -> F64:
-        """(c, a): the fractions of ``dp`` tried per point — up to the first breakpoint,
-        and :data:`FRACTIONS`."""
+        """(c, a): the fractions of ``dp`` tried per point — up to the first breakpoint
+        (also beyond ``dp``, :data:`BREAKPOINT_MAX`), and :data:`FRACTIONS`."""
         f = np.empty((len(FRACTIONS) + 1, self.first.size))
         f[0] = self.first
         f[1:] = np.asarray(FRACTIONS)[:, None]
@@ -285,7 +293,8 @@ def point_newton(
     ok = (C > 0) & (B > 0) & (disc >= 0) & (A2 > 0)
     alpha = np.full(r.shape[0], np.inf)
     alpha[ok] = (B[ok] - np.sqrt(disc[ok])) / A2[ok]
-    first = np.minimum(np.minimum.reduceat(alpha, starts), 1.0)
+    first = np.minimum.reduceat(alpha, starts)
+    first = np.where(np.isfinite(first), np.minimum(first, BREAKPOINT_MAX), 1.0)
     return PointNewton(active, rays, obs_rays, starts, dp, first, owner, r, up, s, B, A2)
 
 
