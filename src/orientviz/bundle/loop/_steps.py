@@ -92,7 +92,11 @@ LOSS_SWITCH: float = 1e-2
 #: misclosures out before the loss weighs them, and more such steps let the gross errors
 #: pull the solution into a worse basin (benchmarks/README.md, robust losses on Ladybug).
 #: A decrease between :data:`LOSS_SWITCH` and this fraction counts only after a step that
-#: lowered vᵀPv by more: a damped first step that barely moves has not taken them out.
+#: lowered vᵀPv by more: a damped first step that barely moves has not taken them out. A
+#: step that lowered vᵀPv by more than this fraction switches the loss on too when its
+#: linear model predicted that decrease to within :data:`LOSS_SWITCH` of the new vᵀPv
+#: (:meth:`BundleSteps._modelled_warm_up`: the next least-squares step would be a settled
+#: one; DBAT sxb 2 warm-up steps → 1, Ladybug's damped steps miss it by 8 % and more).
 LOSS_SWITCH_CONVEX: float = 0.3
 #: In a robust run's tail — the last step lowered Σρ by less than :data:`ROBUST_TAIL` of its
 #: value — the step is taken :data:`ROBUST_OVERRELAX` times (over-relaxed reweighting). The
@@ -549,6 +553,30 @@ class BundleSteps:
         pred = predicted_decrease(self.prob, st, tuple(previous.data), (dc, dp, da), design, local)
         return pred > ftol * before and actual < POOR_GAIN * pred
 
+    def _modelled_warm_up(self, step: Step, previous: Evaluation) -> bool:
+        """Whether an accepted least-squares step of a convex loss's warm-up lowered vᵀPv by
+        more than :data:`LOSS_SWITCH_CONVEX` and as its linear model predicted, to within
+        :data:`LOSS_SWITCH` of the new vᵀPv (:mod:`._gain`): it reached the least-squares
+        optimum but for the nonlinearity it did not model, and a next least-squares step
+        would lower vᵀPv by about that — a settled one (the loss is switched on now, not
+        after that step)."""
+        if (
+            self.loss is None
+            or self.loss_on
+            or self.loss.redescending
+            or self._gain_from is None
+            or not previous.cost > 0
+        ):
+            return False
+        actual = previous.cost - self.pending_cost
+        if not actual > LOSS_SWITCH_CONVEX * previous.cost:
+            return False
+        st, ap = self._gain_from
+        design = None if ap is None else ap.A_csr
+        dc, dp, da, local = step.data[0], step.data[1], step.data[2], step.data[5]
+        pred = predicted_decrease(self.prob, st, tuple(previous.data), (dc, dp, da), design, local)
+        return abs(actual - pred) <= LOSS_SWITCH * self.pending_cost
+
     def _point_newton(self, st: BundleState, ev: Evaluation, dc: F64, dp: F64, da: F64, lam: float):
         """The Newton corrections of the points with a ray beyond the scale given the step's
         ``dc``, ``da`` (:func:`._tail.point_newton`) for a convex loss's robust steps; None
@@ -675,6 +703,7 @@ class BundleSteps:
             and lam >= STOP_MAX_LAMBDA
             and not step.max_correction < prob.options.tol
         )
+        modelled = self._modelled_warm_up(step, previous)
         self._gain_from = None  # (its start state: not kept beyond the step)
         if self.loss_on and not self.switch_pending and previous.cost > 0:  # a robust step
             self.robust_tail = (previous.cost - self.pending_cost) < ROBUST_TAIL * previous.cost
@@ -698,6 +727,7 @@ class BundleSteps:
             if (
                 (self.loss.redescending and not self._poor_sigma0(self.pending_cost))
                 or settled
+                or modelled
                 or step.max_correction < 1.0
             ):
                 self.loss_on = self.switch_pending = True
