@@ -22,6 +22,7 @@ from importlib import resources
 from typing import Any
 
 from ..errors import InputError
+from .float_text import MIN_BULK, float_column_json
 from .reduce import original_path, reduce_document
 from .safeio import decode_text, read_input_bytes
 from .safeio import write_atomic as _write
@@ -475,6 +476,8 @@ def _is_flat(node: Any) -> bool:
 
 def _dump(node: Any, level: int, indent: int) -> str:
     one = lambda v: json.dumps(v, ensure_ascii=False, allow_nan=False)  # noqa: E731
+    if type(node) is list and len(node) >= MIN_BULK and set(map(type, node)) == {float}:
+        return float_column_json(node)  # a column of numbers: the same text, in bulk
     if _is_flat(node):
         return one(node)
     pad, inner = " " * (indent * level), " " * (indent * (level + 1))
