@@ -22,7 +22,6 @@ from importlib import resources
 from typing import Any
 
 from ..errors import InputError
-from .float_text import MIN_BULK, float_column_json
 from .reduce import original_path, reduce_document
 from .safeio import decode_text, read_input_bytes
 from .safeio import write_atomic as _write
@@ -476,7 +475,9 @@ def _is_flat(node: Any) -> bool:
 
 def _dump(node: Any, level: int, indent: int) -> str:
     one = lambda v: json.dumps(v, ensure_ascii=False, allow_nan=False)  # noqa: E731
-    if type(node) is list and len(node) >= MIN_BULK and set(map(type, node)) == {float}:
+    if type(node) is list and node and type(node[0]) is float and set(map(type, node)) == {float}:
+        from .float_text import float_column_json  # only when writing: reading never loads it
+
         return float_column_json(node)  # a column of numbers: the same text, in bulk
     if _is_flat(node):
         return one(node)

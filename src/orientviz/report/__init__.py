@@ -24,14 +24,33 @@ Examples
 
 from __future__ import annotations
 
-from ..io.solution import Parameter, Solution
-from ._document import Report, Section, Table
-from ._html import FORMATS, html_report, report_format, write_report
-from ._sections import build_report
-from ._stats import chi2_test, image_coverage, intersection_angles
-from ._tables import ResultTable, adjusted_block, image_table, point_table, read_csv_table
-from ._text import text_report
-from ._verdict import verdict
+import importlib
+from typing import TYPE_CHECKING, Any
+
+#: The face's names and the modules they live in, loaded on first use (``orientviz
+#: solve`` needs the verdict, not the HTML writer or the CSV tables).
+_FACE: dict[str, str] = {
+    "Parameter": "..io.solution",
+    "Solution": "..io.solution",
+    "Report": "._document",
+    "Section": "._document",
+    "Table": "._document",
+    "FORMATS": "._html",
+    "html_report": "._html",
+    "report_format": "._html",
+    "write_report": "._html",
+    "build_report": "._sections",
+    "chi2_test": "._stats",
+    "image_coverage": "._stats",
+    "intersection_angles": "._stats",
+    "ResultTable": "._tables",
+    "adjusted_block": "._tables",
+    "image_table": "._tables",
+    "point_table": "._tables",
+    "read_csv_table": "._tables",
+    "text_report": "._text",
+    "verdict": "._verdict",
+}
 
 __all__ = [
     "FORMATS",
@@ -55,3 +74,27 @@ __all__ = [
     "verdict",
     "write_report",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    module = _FACE.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value  # later look-ups skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    return list(__all__)
+
+
+if TYPE_CHECKING:  # for type checkers and editors; nothing is imported at run time
+    from ..io.solution import Parameter, Solution
+    from ._document import Report, Section, Table
+    from ._html import FORMATS, html_report, report_format, write_report
+    from ._sections import build_report
+    from ._stats import chi2_test, image_coverage, intersection_angles
+    from ._tables import ResultTable, adjusted_block, image_table, point_table, read_csv_table
+    from ._text import text_report
+    from ._verdict import verdict

@@ -29,7 +29,6 @@ from ..io.solve import (
     misfit,
     solve_problem,
 )
-from ._html import report_format, write_report
 from ._verdict import verdict
 
 
@@ -41,6 +40,8 @@ def run_from_cli(args: argparse.Namespace) -> int:
     report_path = getattr(args, "report", None)
     try:
         if report_path:
+            from ._html import report_format  # the report writer: only with --report
+
             report_format(report_path)  # a wrong suffix fails before the adjustment
         problem = load_named(args.file)
         for name in ("max_iter", "tol", "ftol", "solver", "robust", "robust_scale", "fix", "free"):
@@ -72,6 +73,8 @@ def run_from_cli(args: argparse.Namespace) -> int:
             print(f"{prog}: {exc.one_line()}", file=sys.stderr)
             return 2
     if report_path:
+        from ._html import write_report  # the report writer: only with --report
+
         try:
             with np.errstate(all="ignore"):
                 write_report(problem, solution, report_path)

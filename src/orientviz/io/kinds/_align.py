@@ -19,7 +19,6 @@ import numpy as np
 
 from ...block import CONTROL, Block
 from ...errors import InputError
-from ...orientation.absolute import similarity_closed_form
 from ...orientation.intersection import intersect_points
 from ...rotation import opk_from_matrix
 
@@ -89,6 +88,8 @@ def align_to_control(block: Block) -> tuple[Block, Alignment]:
                 block.meta.get("source"),
             )
         return block, Alignment(False)
+    from ...orientation.absolute import similarity_closed_form  # only a block with control
+
     T = similarity_closed_form(approx, known)
     after = float(np.sqrt(np.mean(np.sum((T.apply(approx) - known) ** 2, axis=1))))
     if scale_ok or misfit < 3 * after:
