@@ -145,10 +145,12 @@ class Table:
 
     def lookup(self, field: str, ids: dict[str, int], what: str) -> NDArray[np.int64]:
         """Indices of the ids in column ``field`` in ``ids``; unknown ids name their place."""
+        col = self.columns[field]
+        try:  # every cell one of the ids (so a str): one pass in C
+            return np.fromiter(map(ids.get, col), np.int64, len(col)).reshape(self.n)
+        except TypeError:  # an unknown id (None), a cell that is not a string
+            pass
         keys = self.strings(field)
-        found = list(map(ids.get, keys))
-        if None not in found:
-            return np.array(found, dtype=np.int64).reshape(self.n)
         out = np.empty(self.n, dtype=np.int64)
         for i, key in enumerate(keys):
             j = ids.get(key)

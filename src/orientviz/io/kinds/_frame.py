@@ -217,6 +217,13 @@ def require_finite(table: Table, values: np.ndarray, fields: tuple[str, ...], wh
         raise table.fail(row, fields[col], f"{what} is required here")
 
 
+def _ids_at(ids: list[str], index: np.ndarray) -> list[str]:
+    """``[ids[i] for i in index]`` (the same objects), gathered in C."""
+    table = np.empty(len(ids), dtype=object)
+    table[:] = ids
+    return table[index].tolist()
+
+
 def _vec_cells(obs: np.ndarray, sig: np.ndarray, scale: float) -> tuple[list, list]:
     vals, sigs = [], []
     for o, s in zip(obs, sig):
@@ -277,10 +284,11 @@ def tables_from_block(block: Block, units: Units, columnar: bool) -> dict[str, A
         "sigma": sig_cells,
     }
     sv = json_numbers(np.asarray(ob.sigma, float).reshape(-1, 2) / I)  # (σx, σy) per row
-    osig = [a if a == b else [a, b] for a, b in zip(sv[0::2], sv[1::2])]
+    sx, sy = sv[0::2], sv[1::2]
+    osig = sx if sx == sy else [a if a == b else [a, b] for a, b in zip(sx, sy)]
     observations = {
-        "image": [im.ids[i] for i in ob.image.tolist()],
-        "point": [pt.ids[p] for p in ob.point.tolist()],
+        "image": _ids_at(im.ids, ob.image),
+        "point": _ids_at(pt.ids, ob.point),
         "x": json_numbers(ob.xy[:, 0] / I),
         "y": json_numbers(ob.xy[:, 1] / Y),
         "sigma": osig,
