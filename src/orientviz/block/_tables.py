@@ -411,7 +411,13 @@ class Block:
         """Deep copy of all tables."""
         import copy
 
-        return copy.deepcopy(self)
+        # lists of ids copied as lists (their str items are immutable: what deepcopy
+        # gives, without its per-item dispatch)
+        memo: dict[int, Any] = {}
+        for ids in (self.cameras.ids, self.images.ids, self.points.ids):
+            if type(ids) is list and set(map(type, ids)) <= {str}:
+                memo[id(ids)] = list(ids)
+        return copy.deepcopy(self, memo)
 
     def with_(self, **changes: Any) -> Block:
         """Shallow copy with some tables replaced (``dataclasses.replace``)."""
