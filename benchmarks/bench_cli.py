@@ -15,6 +15,10 @@ COLMAP model ``axe``, at one BLAS thread and at the default threads. Per round, 
   loaded problem, the clock around the adjustment only);
 * each command as a user runs it (the console script next to this Python, compiled
   modules kept), CPU of the whole process;
+* the cold library script (:data:`LIBRARY_SCRIPT`): what a user of the library runs
+  instead of the two commands, ``python lib.py`` that imports orientviz, loads the
+  problem file and solves it as ``solve --free`` does (the precision included, no report),
+  CPU of the whole process (the interpreter's teardown included, as a script has it);
 * each command once more inside one fresh process with clocks around its stages
   (:data:`STAGES`): NumPy's, SciPy's and orientviz's imports, reading, building the
   block, the adjustment without its precision, the precision, the verdict, the rest
@@ -66,6 +70,15 @@ STAGES = {
         ("write", "orientviz.io.importing", "write_problem"),
     ],
 }
+
+#: The cold library script: ``python lib.py FILE`` solving FILE as ``solve FILE --free``.
+LIBRARY_SCRIPT = """
+import sys
+import orientviz as ov
+problem = ov.load_problem(sys.argv[1])
+problem.options = dict(problem.options, free=True)
+solution = ov.solve_problem(problem)
+"""
 
 WORKER = r"""
 import importlib, json, sys, time
@@ -141,6 +154,7 @@ def one_round(src: str, model: str, threads: str, work: Path) -> dict:
         "floor solve": _cpu([py, "-c", f"import numpy, os, {SCIPY}; os._exit(0)"], env),
         "import process": _cpu([exe, *imp], env),
         "solve process": _cpu([exe, *solve], env),
+        "cold library script": _cpu([py, "-c", LIBRARY_SCRIPT, out_json], env),
     }
     lib_env = dict(env)
     if "OPENBLAS_THREAD_TIMEOUT" not in os.environ:  # bench_sfm's yardstick as it runs it
@@ -172,6 +186,8 @@ def derived(r: dict) -> dict:
     d["floor ÷ library"] = d["floor"] / r["library solve"]
     d["(floor + library) ÷ library"] = (d["floor"] + r["library solve"]) / r["library solve"]
     d["orientviz's own part"] = d["pair"] - d["floor"] - r["library solve"]
+    d["cold library script ÷ library"] = r["cold library script"] / r["library solve"]
+    d["pair ÷ cold library script"] = d["pair"] / r["cold library script"]
     d["solve: adjust without precision"] = r["solve: adjust"] - r.get("solve: precision", 0.0)
     staged = sum(r.get("solve: " + k, 0.0) for k in ("read", "block", "adjust", "verdict"))
     d["solve: rest of the command"] = r["solve: command"] - staged
@@ -184,6 +200,7 @@ ROWS = [
     "floor import", "floor solve", "floor", "library solve",
     "import process", "solve process", "pair", "pair ÷ library", "floor ÷ library",
     "(floor + library) ÷ library", "orientviz's own part",
+    "cold library script", "cold library script ÷ library", "pair ÷ cold library script",
     "import: numpy", "import: orientviz imports", "import: read", "import: write",
     "import: rest of the command",
     "solve: numpy", "solve: scipy", "solve: orientviz imports", "solve: read", "solve: block",
