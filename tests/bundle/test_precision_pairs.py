@@ -101,3 +101,31 @@ def test_var_rows_are_the_rays_of_point_unknowns():
     assert _pairs.var_rows(Obs) == slice(0, 3)
     Obs.column = np.array([3, -1, 2, 0, -1])
     np.testing.assert_array_equal(_pairs.var_rows(Obs), [0, 2, 3])
+
+
+@pytest.mark.parametrize("d", [6, 9])
+def test_ray_cofactors_equal_the_three_steps(d, monkeypatch):
+    """The one-pass Q_pp, gains and 2 × 2 blocks equal Q_cp by pairs, Q_pp per point and
+    the rays' blocks formed one after the other (rays of fixed points included)."""
+    from orientviz.bundle.precision._store import ray_blocks
+
+    monkeypatch.setattr(_pairs, "PAIR_CHUNK_DOUBLES", 4 * d * d)
+    rng = np.random.default_rng(11)
+    m, n_pt = 14, 50
+    oc, op = _network(rng, m, n_pt, [1, 2, 3, 6, 10], repeat_image=True)
+    S = ReducedStructure(oc, op, m, n_pt, solver="dense")
+    n = oc.size
+    Zblk = rng.standard_normal((S.n_blocks, d, d))
+    T = rng.standard_normal((n, d, 3))
+    T[op < 0] = 0.0
+    Vinv = rng.standard_normal((n_pt, 3, 3))
+    Qimg = rng.standard_normal((m, d, d))
+    Jc, Jp = rng.standard_normal((n, 2, d)), rng.standard_normal((n, 2, 3))
+    got = _pairs.ray_cofactors(S, Zblk, T, Vinv, Qimg, oc, Jc, Jp)
+    Qcp = np.zeros((n, d, 3))
+    _pairs.cofactors_by_pairs(S, Zblk, T, Qcp)
+    Qpp = _pairs.point_cofactors(Vinv, T, Qcp, S)
+    vo = np.flatnonzero(op >= 0)
+    want = (Qpp, *ray_blocks(Qimg, oc, Qcp, Qpp, Jc, Jp[vo], vo, op[vo]))
+    for g, w in zip(got, want, strict=True):
+        assert g.tobytes() == w.tobytes()

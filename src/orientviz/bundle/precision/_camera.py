@@ -24,8 +24,8 @@ import scipy.linalg
 from numpy.typing import NDArray
 
 from ..problem._camera_blocks import dense_blocks
-from ._pairs import cofactors_by_pairs, point_cofactors, var_rows
-from ._store import ray_blocks, store_precision
+from ._pairs import ray_cofactors
+from ._store import store_precision
 
 F64 = NDArray[np.float64]
 
@@ -59,21 +59,20 @@ def camera_precision(res, prob, ne, Je: F64, Jp: F64) -> None:
     own = np.arange(m)
     Qcc = Z4[own, :, own, :]  # (m, d, d)
     # per ray (observation order): T = W V⁻¹ (d × 3), zero for rays of fixed points
-    oi, ocol = prob.obs.image, prob.obs.column
+    oi = prob.obs.image
     n_used = oi.size
-    T = np.zeros((n_used, d, 3))
-    T[ne.rays] = cb.T
-    Qcp = np.zeros((n_used, d, 3))
-    cofactors_by_pairs(S, Zblk, T, Qcp)
-    Qpp = point_cofactors(ne.Vinv, T, Qcp, S)
-    vo = var_rows(prob.obs)  # the rays of point unknowns
-    # the rays' weighted design [P½ J_e | P½ A] (n, 2, d) and P½ J_p; the gains K of each
-    # ray on its image's unknowns (d × 2) and on its point (3 × 2)
+    if ne.rays.size == n_used and np.array_equal(ne.rays, np.arange(n_used)):
+        T = cb.T  # the track order is the rays' order (read only here)
+    else:
+        T = np.zeros((n_used, d, 3))
+        T[ne.rays] = cb.T
+    # the rays' weighted design [P½ J_e | P½ A] (n, 2, d) and P½ J_p; Q_pp and the gains K
+    # of each ray on its image's unknowns (d × 2) and on its point (3 × 2)
     sw = prob.obs.weight[:, :, None]
     Jd = np.empty((n_used, 2, d))
     np.multiply(Je, sw, out=Jd[:, :, :6])
     Jd[:, :, 6:] = ap.Aw
-    Kd, Kp, H = ray_blocks(Qcc, oi, Qcp, Qpp, Jd, Jp[vo] * sw[vo], vo, ocol[vo])
+    Qpp, Kd, Kp, H = ray_cofactors(S, Zblk, T, ne.Vinv, Qcc, oi, Jd, Jp * sw)
     # the cameras' cofactors in the border's order (group g: image i with group[i] = g)
     at = np.empty(m, np.int64)
     at[ap.group] = own

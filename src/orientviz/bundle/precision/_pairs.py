@@ -5,7 +5,8 @@ i ≤ k, d × d each) and T_b = W_b V_j⁻¹ (d × 3) per ray; for each ray a of
 sum over the point's rays b. The points are taken by track length k (the structure's
 :attr:`~orientviz.bundle.reduced.ReducedStructure.tracks`): for each ray b one product
 of the k blocks Q_cc(i_a, i_b) stacked (kd × d) with T_b, then the sums over b for all
-points of a chunk at once (:func:`segment_sum`).
+points of a chunk at once (:func:`segment_sum`). Without a border the point cofactors
+and the rays' blocks follow chunk by chunk in the same pass (:func:`ray_cofactors`).
 """
 
 from __future__ import annotations
@@ -84,6 +85,31 @@ def _ordered_blocks(S, Zblk: F64):
     return Zboth, index
 
 
+def _chunks(S, d: int):
+    """The points by track length in chunks of at most :data:`PAIR_CHUNK_DOUBLES` gathered
+    block entries: ``(k, rays, first point, points)`` (``rays`` a slice in the bundle's
+    track order)."""
+    tg = S.tracks
+    p0 = 0
+    for k, r0, n in tg.groups:
+        step = max(1, PAIR_CHUNK_DOUBLES // (d * d * k * k))
+        for c0 in range(0, n, step):
+            c1 = min(c0 + step, n)
+            a, b = r0 + k * c0, r0 + k * c1
+            yield k, (slice(a, b) if tg.in_order else tg.rays[a:b]), p0 + c0, c1 - c0
+        p0 += n
+
+
+def _pair_products(S, Zs, index, T: F64, k: int, rays) -> F64:
+    """Q_cp = −Σ_b Q(i_a, i_b) T_b of the rays of one chunk of points with k rays each
+    (:func:`cofactors_by_pairs`), shape (rays, d, 3)."""
+    d = T.shape[1]
+    img = S.obs_cam[rays].reshape(-1, k)
+    Zg = Zs[index(img[:, None, :], img[:, :, None])]  # (points, b, a, d, d)
+    QT = np.matmul(Zg.reshape(-1, k * d, d), T[rays])  # (points · b, a · d, 3)
+    return -segment_sum(QT.reshape(-1, k, k, d, 3)).reshape(-1, d, 3)
+
+
 def cofactors_by_pairs(S, Zblk: F64, T: F64, Qcp: F64) -> None:
     """Q_cp of each ray of a point unknown into ``Qcp`` (n, d, 3): −Σ_b Q(i_a, i_b) T_b
     over the rays b of its point.
@@ -109,19 +135,58 @@ def cofactors_by_pairs(S, Zblk: F64, T: F64, Qcp: F64) -> None:
     reduction per ray a: the numbers of a product per pair of rays summed by
     ``np.add.reduceat``.
     """
-    tg = S.tracks
     d = Zblk.shape[1]
     Zs, index = _ordered_blocks(S, Zblk)
-    for k, r0, n in tg.groups:
-        step = max(1, PAIR_CHUNK_DOUBLES // (d * d * k * k))
-        for c0 in range(0, n, step):
-            c1 = min(c0 + step, n)
-            sl = slice(r0 + k * c0, r0 + k * c1)
-            rays = tg.rays[sl]
-            img = tg.ray_image[sl].reshape(-1, k)
-            Zg = Zs[index(img[:, None, :], img[:, :, None])]  # (points, b, a, d, d)
-            QT = np.matmul(Zg.reshape(-1, k * d, d), T[rays])  # (points · b, a · d, 3)
-            Qcp[rays] = -segment_sum(QT.reshape(c1 - c0, k, k, d, 3)).reshape(-1, d, 3)
+    for k, rays, _, _ in _chunks(S, d):
+        Qcp[rays] = _pair_products(S, Zs, index, T, k, rays)
+
+
+def ray_cofactors(S, Zblk: F64, T: F64, Vinv: F64, Qimg: F64, img, Jc: F64, Jp: F64):
+    """Q_pp and the rays' gains and 2 × 2 blocks of a bundle without a border, chunk by
+    chunk of points: :func:`cofactors_by_pairs`, :func:`point_cofactors` and
+    :func:`orientviz.bundle.precision._store.ray_blocks` in one pass (Q_cp of a chunk is
+    used while it is in the cache and never stored whole; every entry the same
+    operations in the same order as theirs).
+
+    Parameters
+    ----------
+    S, Zblk, T : as :func:`cofactors_by_pairs`.
+    Vinv : ndarray, shape (p_var, 3, 3)
+        Inverse point blocks.
+    Qimg : ndarray, shape (m, d, d)
+        Q_cc of each image.
+    img : ndarray of int, shape (n,)
+        Each ray's image.
+    Jc, Jp : ndarray, shapes (n, 2, d), (n, 2, 3)
+        Weighted designs of the rays by their image's unknowns and by their point.
+
+    Returns
+    -------
+    Qpp : ndarray, shape (p_var, 3, 3)
+    Kc, Kp, H : ndarray, shapes (n, d, 2), (n, 3, 2), (n, 2, 2)
+        As :func:`~orientviz.bundle.precision._store.ray_blocks` (``Kp`` zero for rays of
+        fixed points).
+    """
+    d = Zblk.shape[1]
+    tg = S.tracks
+    Zs, index = _ordered_blocks(S, Zblk)
+    JcT = Jc.transpose(0, 2, 1)
+    Kc = Qimg[img] @ JcT
+    Kp = np.zeros((Jc.shape[0], 3, 2))
+    Qpp = np.empty_like(Vinv)
+    for k, rays, p0, n in _chunks(S, d):
+        Qc = _pair_products(S, Zs, index, T, k, rays)
+        P = T[rays].transpose(0, 2, 1) @ (-Qc)  # (n k, 3, 3)
+        pts = tg.points[p0 : p0 + n]
+        Qp = Vinv[pts] + segment_sum(P.reshape(n, k, 3, 3))
+        Qpp[pts] = Qp
+        JpT = Jp[rays].transpose(0, 2, 1)
+        Kc[rays] += Qc @ JpT
+        Kp[rays] = Qc.transpose(0, 2, 1) @ JcT[rays] + np.repeat(Qp, k, axis=0) @ JpT
+    H = Jc @ Kc
+    vo = var_rows_of(S.obs_pt)
+    H[vo] += Jp[vo] @ Kp[vo]
+    return Qpp, Kc, Kp, H
 
 
 def point_cofactors(Vinv: F64, T: F64, Qcp: F64, S) -> F64:
@@ -143,6 +208,11 @@ def point_cofactors(Vinv: F64, T: F64, Qcp: F64, S) -> F64:
 def var_rows(obs) -> slice | NDArray[np.int64]:
     """The rays of point unknowns in the rays' own order: a slice when they come first
     (the bundle's track order), else their indices."""
-    var = obs.column >= 0
+    return var_rows_of(obs.column)
+
+
+def var_rows_of(column) -> slice | NDArray[np.int64]:
+    """:func:`var_rows` from each ray's point unknown (−1: a fixed point)."""
+    var = column >= 0
     nv = int(np.count_nonzero(var))
     return slice(0, nv) if bool(var[:nv].all()) else np.flatnonzero(var)

@@ -45,7 +45,7 @@ from ._band import padded_band, tri_solve
 from ._border_points import border_point_terms
 from ._camera import camera_precision
 from ._far import mark_far, placed_state
-from ._pairs import cofactors_by_pairs, point_cofactors, var_rows
+from ._pairs import cofactors_by_pairs, point_cofactors, ray_cofactors, var_rows
 from ._precision_ap import banded_border, border_inverse, point_terms
 from ._store import ray_blocks, store_precision
 
@@ -352,45 +352,47 @@ def _fill_from(res, prob, ne, fac, Je, Jp) -> None:
     oi, ocol = prob.obs.image, prob.obs.column
     T = ne.T
     n_used = oi.size
-    # Q_cp for each observation a: −Σ_b Q(i_a, i_b) T_b  (then add the AP part);
-    # in batches of whole a-groups to bound the memory of the (pairs, 6, 6) gathers
-    Qcp = np.zeros((n_used, 6, 3))
-    dense_qcp = inverse._Z is not None and not nb and S.formation == "dense"
-    if dense_qcp:  # dense S formed densely: Q_cp by products with the dense inverse
-        dense_qcp = cofactors_image_point(S, inverse._Z, T, oi, ocol, Qcp)
-    if not dense_qcp:
-        cofactors_by_pairs(S, Zblk, T, Qcp)
+    # Q_cp for each observation a: −Σ_b Q(i_a, i_b) T_b  (then add the AP part)
     Vinv = ne.Vinv
     vo = prob.obs.var_rays  # the rays of point unknowns in point order (the border's sums)
     rv = var_rows(prob.obs)  # the same rays in their own order (per-ray products)
     sw = prob.obs.weight
     Jew = Je * sw[:, :, None]
     Jpw = Jp * sw[:, :, None]
-    if fast_ap:  # the parameters' terms, sparse by (ray, group) and (point, group) pairs
-        dQpp, Qap_pg, Hray = point_terms(prob, ne, Faa, Qca3, Qcp, Jew, Jpw)
-    elif nb:
-        hb = np.zeros((S.n_pt, nb, 3))  # Σ_b Tap_b placed in its group columns
-        if q:
-            Tap = (prob.ap.Aw[vo].transpose(0, 2, 1) @ Jpw[vo]) @ Vinv[ocol[vo]]
-            g = prob.ap.group[oi[vo]]
-            cols = g[:, None] * prob.ap.k + np.arange(prob.ap.k)
-            np.add.at(hb, (ocol[vo][:, None], cols), Tap)
-        aux.point_border(prob, ne, hb)
-        # Q_cp −= Q_ca h_j, Q_pp,j −= h_jᵀ Q_ap,j with Q_ap,j = −(Σ_b Q_ca(i_b)ᵀ T_b + Q_aa h_j)
-        # at the points the border couples (every point with additional parameters)
-        vo_idx = np.arange(n_used)[vo]
-        Qpp, Qap = border_point_terms(S, oi, vo_idx, ocol, T, Qca, Faa, hb, Qcp, Vinv, bool(q))
-    if not nb or fast_ap:  # Q_pp,j = V_j⁻¹ − Σ_b T_bᵀ Q_cp(i_b, j)
-        Qpp = point_cofactors(Vinv, T, Qcp, S)
-    if fast_ap:
-        Qpp -= dQpp
-    # gains of each ray on its own image and point, K = Q_(·, ray) Jwᵀ: the change of the
-    # estimates per σ-normalised change of the ray's x, y (external reliability); first
-    # without the parameters' terms
-    Jpv = Jpw[rv]
-    # 2×2 block of P½ J Q Jᵀ P½ per image observation = Jw K (batched products, no full
-    # Q): redundancy numbers r = 1 − diagonal, off-diagonal of P½ Q_vv P½ = −(J Q Jᵀ)_xy
-    Ke, Kp, H = ray_blocks(Qcc_diag, oi, Qcp, Qpp, Jew, Jpv, rv, ocol[rv])
+    dense_qcp = inverse._Z is not None and not nb and S.formation == "dense"
+    if dense_qcp:  # dense S formed densely: Q_cp by products with the dense inverse
+        Qcp = np.zeros((n_used, 6, 3))
+        dense_qcp = cofactors_image_point(S, inverse._Z, T, oi, ocol, Qcp)
+    if not nb and not dense_qcp:  # no border: Q_cp, Q_pp and the rays' blocks in one pass
+        Qpp, Ke, Kp, H = ray_cofactors(S, Zblk, T, Vinv, Qcc_diag, oi, Jew, Jpw)
+    else:
+        if not dense_qcp:
+            Qcp = np.zeros((n_used, 6, 3))
+            cofactors_by_pairs(S, Zblk, T, Qcp)
+        if fast_ap:  # the parameters' terms, sparse by (ray, group) and (point, group) pairs
+            dQpp, Qap_pg, Hray = point_terms(prob, ne, Faa, Qca3, Qcp, Jew, Jpw)
+        elif nb:
+            hb = np.zeros((S.n_pt, nb, 3))  # Σ_b Tap_b placed in its group columns
+            if q:
+                Tap = (prob.ap.Aw[vo].transpose(0, 2, 1) @ Jpw[vo]) @ Vinv[ocol[vo]]
+                g = prob.ap.group[oi[vo]]
+                cols = g[:, None] * prob.ap.k + np.arange(prob.ap.k)
+                np.add.at(hb, (ocol[vo][:, None], cols), Tap)
+            aux.point_border(prob, ne, hb)
+            # Q_cp −= Q_ca h_j, Q_pp,j −= h_jᵀ Q_ap,j with Q_ap,j = −(Σ_b Q_ca(i_b)ᵀ T_b + Q_aa h_j)
+            # at the points the border couples (every point with additional parameters)
+            vo_idx = np.arange(n_used)[vo]
+            Qpp, Qap = border_point_terms(S, oi, vo_idx, ocol, T, Qca, Faa, hb, Qcp, Vinv, bool(q))
+        if not nb or fast_ap:  # Q_pp,j = V_j⁻¹ − Σ_b T_bᵀ Q_cp(i_b, j)
+            Qpp = point_cofactors(Vinv, T, Qcp, S)
+        if fast_ap:
+            Qpp -= dQpp
+        # gains of each ray on its own image and point, K = Q_(·, ray) Jwᵀ: the change of
+        # the estimates per σ-normalised change of the ray's x, y (external reliability);
+        # first without the parameters' terms; 2×2 block of P½ J Q Jᵀ P½ per image
+        # observation = Jw K (batched products, no full Q): redundancy numbers r = 1 −
+        # diagonal, off-diagonal of P½ Q_vv P½ = −(J Q Jᵀ)_xy
+        Ke, Kp, H = ray_blocks(Qcc_diag, oi, Qcp, Qpp, Jew, Jpw[rv], rv, ocol[rv])
     if fast_ap:
         H += Hray
     elif q:  # the parameters' terms of the rays, from the dense border cofactors
@@ -403,7 +405,7 @@ def _fill_from(res, prob, ne, fac, Je, Jp) -> None:
         H += (Aw @ Qaa_o) @ AwT + C + C.transpose(0, 2, 1)
         Qpa = Qap.transpose(0, 2, 1)[ocol[rv]]  # (nv, 3, nb)
         Qpa_o = np.take_along_axis(Qpa, np.repeat(sl[rv][:, None, :], 3, 1), axis=2)
-        C = (Jpv @ Qpa_o) @ AwT[rv]
+        C = (Jpw[rv] @ Qpa_o) @ AwT[rv]
         H[rv] += C + C.transpose(0, 2, 1)
     if q:  # the gains' terms of Q_ca, Q_pa in the ray's own group's k columns
         if fast_ap:
