@@ -254,14 +254,11 @@ def point_terms(prob, ne, Qaa: F64, Qca3: F64, Qcp: F64, Jew: F64, Jpw: F64):
     Qca4 = Qca3.reshape(m, 6, G, k)
     Qca_own = Qca4[np.arange(m), :, prob.ap.group, :]  # (m, 6, k): each image's own group
     oi = prob.obs.image
-    # own group, per image in the padded layout (Q_ca,own of the image broadcast over
-    # its rays; zero rows for padding and fixed points)
+    # own group, per ray (Q_ca,own of its image; zero HV rows for rays of fixed points)
     HVz = np.concatenate([HV, np.zeros((1, k, 3))])
-    own_ext = np.r_[A.own_pg, HV.shape[0]]
-    HVp = HVz[own_ext[A.pad]]  # (m, L, k, 3)
-    Tp = np.concatenate([T, np.zeros((1, 6, 3))])[A.pad]  # (m, L, 6, 3)
+    Qo = Qca_own[oi]  # (n, 6, k)
     # Q_cp(i_a, j) −= Σ_e Q_ca(i_a, g_e) HV_e: own group ...
-    t = np.matmul(Qca_own[:, None], HVp).reshape(m * L, 6, 3)[R.slot]
+    t = Qo @ HVz[A.own_pg]
     # ... and the other groups of the ray's point: Q_ca(i_a, g_e) per (ray, pair) from
     # the (image, group) blocks of Q_ca, (m·G, 6, k)
     Qig = np.ascontiguousarray(Qca4.transpose(0, 2, 1, 3)).reshape(m * G, 6, k)
@@ -272,7 +269,8 @@ def point_terms(prob, ne, Qaa: F64, Qca3: F64, Qcp: F64, Jew: F64, Jpw: F64):
     vo = var_rows(prob.obs)  # the rays of point unknowns (a slice when they come first)
     Qcp[vo] -= t[vo]
     # Q_ap,e = −(Σ_b Q_ca(i_b, g_e)ᵀ T_b + Σ_e' Q_aa(g_e, g_e') HV_e'): own group ...
-    t = np.matmul(Qca_own.transpose(0, 2, 1)[:, None], Tp).reshape(m * L, k * 3)
+    t = np.zeros((m * L, k * 3))  # in the padded layout, summed by slot
+    t[R.slot] = (Qo.transpose(0, 2, 1) @ T).reshape(-1, k * 3)
     Qap = R.sum_own @ t
     # ... and the pairs of other groups
     if e_obs.size:
