@@ -170,9 +170,8 @@ def ray_cofactors(S, Zblk: F64, T: F64, Vinv: F64, Qimg: F64, img, Jc: F64, Jp: 
     d = Zblk.shape[1]
     tg = S.tracks
     Zs, index = _ordered_blocks(S, Zblk)
-    JcT = Jc.transpose(0, 2, 1)
-    Kc = Qimg[img] @ JcT
-    Kp = np.zeros((Jc.shape[0], 3, 2))
+    n_rays = Jc.shape[0]
+    Kc, Kp, H = np.empty((n_rays, d, 2)), np.zeros((n_rays, 3, 2)), np.empty((n_rays, 2, 2))
     Qpp = np.empty_like(Vinv)
     for k, rays, p0, n in _chunks(S, d):
         Qc = _pair_products(S, Zs, index, T, k, rays)
@@ -180,12 +179,18 @@ def ray_cofactors(S, Zblk: F64, T: F64, Vinv: F64, Qimg: F64, img, Jc: F64, Jp: 
         pts = tg.points[p0 : p0 + n]
         Qp = Vinv[pts] + segment_sum(P.reshape(n, k, 3, 3))
         Qpp[pts] = Qp
-        JpT = Jp[rays].transpose(0, 2, 1)
-        Kc[rays] += Qc @ JpT
-        Kp[rays] = Qc.transpose(0, 2, 1) @ JcT[rays] + np.repeat(Qp, k, axis=0) @ JpT
-    H = Jc @ Kc
-    vo = var_rows_of(S.obs_pt)
-    H[vo] += Jp[vo] @ Kp[vo]
+        Jcr, Jpr = Jc[rays], Jp[rays]
+        JcT, JpT = Jcr.transpose(0, 2, 1), Jpr.transpose(0, 2, 1)
+        Kcr = Qimg[img[rays]] @ JcT
+        Kcr += Qc @ JpT
+        Kpr = Qc.transpose(0, 2, 1) @ JcT + np.repeat(Qp, k, axis=0) @ JpT
+        Hr = Jcr @ Kcr
+        Hr += Jpr @ Kpr
+        Kc[rays], Kp[rays], H[rays] = Kcr, Kpr, Hr
+    fixed = np.flatnonzero(S.obs_pt < 0)  # rays of fixed points: their image's term only
+    if fixed.size:
+        Kc[fixed] = Qimg[img[fixed]] @ Jc[fixed].transpose(0, 2, 1)
+        H[fixed] = Jc[fixed] @ Kc[fixed]
     return Qpp, Kc, Kp, H
 
 
