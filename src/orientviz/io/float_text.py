@@ -46,13 +46,15 @@ def _tables() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     return pow10, chunks.view(np.uint32)[:, 0], trailing, keep.view(np.uint64)
 
 
-def float_column_json(values: list[float]) -> str:
+def float_column_json(values: list[float], array: np.ndarray | None = None) -> str:
     """``json.dumps(values, allow_nan=False)`` for a list of Python floats.
 
     Parameters
     ----------
     values : list of float
         Every item exactly a ``float`` (no int, bool or None).
+    array : ndarray, optional
+        ``np.array(values)`` when the caller has it.
 
     Returns
     -------
@@ -67,7 +69,7 @@ def float_column_json(values: list[float]) -> str:
     n = len(values)
     if n < MIN_BULK:
         return json.dumps(values, allow_nan=False)
-    v = np.array(values, dtype=float)
+    v = np.array(values, dtype=float) if array is None else array
     first = values[0]
     if math.isfinite(first) and (v == first).all() and (np.signbit(v) == np.signbit(first)).all():
         return "[" + ", ".join([repr(first)] * n) + "]"  # one value (a column of σ)

@@ -22,6 +22,7 @@ from importlib import resources
 from typing import Any
 
 from ..errors import InputError
+from .columns import float_values, item_types
 from .reduce import original_path, reduce_document
 from .safeio import decode_text, read_input_bytes
 from .safeio import write_atomic as _write
@@ -165,7 +166,7 @@ def _suspect(node: Any) -> bool:
     if t is list:
         values: Iterable[Any] = node
         if len(node) > 16:  # a long column: judged in C when it holds one type
-            kinds = set(map(type, node))
+            kinds = item_types(node)
             if kinds == {float}:  # the sum is inf or NaN when an item is (or it overflows)
                 total = sum(node)
                 return total - total != 0.0
@@ -459,7 +460,7 @@ def _is_flat(node: Any) -> bool:
             for v in node.values()
         )
     if isinstance(node, list):
-        if _SCALARS.issuperset(map(type, node)):  # a column: one pass in C
+        if item_types(node) <= _SCALARS:  # a column: one pass in C
             return True
         return all(
             not isinstance(v, (dict, list))
@@ -475,10 +476,10 @@ def _is_flat(node: Any) -> bool:
 
 def _dump(node: Any, level: int, indent: int) -> str:
     one = lambda v: json.dumps(v, ensure_ascii=False, allow_nan=False)  # noqa: E731
-    if type(node) is list and node and type(node[0]) is float and set(map(type, node)) == {float}:
+    if type(node) is list and node and type(node[0]) is float and item_types(node) == {float}:
         from .float_text import float_column_json  # only when writing: reading never loads it
 
-        return float_column_json(node)  # a column of numbers: the same text, in bulk
+        return float_column_json(node, float_values(node))  # a column of numbers, in bulk
     if _is_flat(node):
         return one(node)
     pad, inner = " " * (indent * level), " " * (indent * (level + 1))

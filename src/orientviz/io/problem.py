@@ -34,6 +34,7 @@ from typing import Any
 from ..errors import InputError
 from ..rotation import check_sequence
 from ..units import MODEL_UNIT, RHO, length_name
+from .columns import shared_columns
 from .jsonio import _json_type, dumps_json, parse_json, read_json_file, validate, write_atomic
 from .reduce import reduce_document
 from .registry import get_kind
@@ -303,7 +304,8 @@ def dms_document(doc: Any, source: str) -> Any:
 def loads_problem(text: str, source: str = "<string>") -> Problem:
     """Parse and load a problem from JSON text (see :func:`load_problem`)."""
     try:
-        return problem_from_document(parse_json(text, source), source)
+        with shared_columns():
+            return problem_from_document(parse_json(text, source), source)
     except RecursionError:
         raise InputError("nested too deeply for a problem file", source) from None
 
@@ -328,7 +330,8 @@ def load_problem(path: str | os.PathLike[str]) -> Problem:
         as ``observations[12].x``, or line and column of malformed JSON) and the problem.
     """
     try:
-        return problem_from_document(read_json_file(path), str(path))
+        with shared_columns():
+            return problem_from_document(read_json_file(path), str(path))
     except RecursionError:
         raise InputError("nested too deeply for a problem file", str(path)) from None
 
@@ -360,9 +363,10 @@ def problem_to_document(problem: Problem, *, columnar: bool | None = None) -> di
 
 def dumps_problem(problem: Problem, *, columnar: bool | None = None, indent: int | None = 1) -> str:
     """The problem as JSON text (validated against its schema before it is returned)."""
-    doc = problem_to_document(problem, columnar=columnar)
-    validate(doc, get_kind(problem.kind).schema, "<written document>")
-    return dumps_json(doc, indent=indent)
+    with shared_columns():
+        doc = problem_to_document(problem, columnar=columnar)
+        validate(doc, get_kind(problem.kind).schema, "<written document>")
+        return dumps_json(doc, indent=indent)
 
 
 def save_problem(

@@ -31,6 +31,8 @@ from typing import Any
 
 import numpy as np
 
+from .columns import float_values, item_types
+
 #: Arrays up to this many items are validated as they are.
 MIN_LENGTH: int = 64
 #: Distinct string values kept per place (enums must have fewer values than this).
@@ -85,7 +87,7 @@ def _keep_generic(items: list) -> list[int]:
 
 def _keep_numbers(items: list) -> set[int]:
     """Numbers only: the first minimum and maximum of the integral and the other values."""
-    arr = np.asarray(items, dtype=float)
+    arr = float_values(items)
     out: set[int] = set()
     integral = np.isfinite(arr) & (arr == np.round(arr))
     for mask in (integral, ~integral):
@@ -157,7 +159,7 @@ def _keep(items: list) -> list[int]:
     set of features as :func:`_keep_generic`, which handles everything else. For arrays
     of scalars the first pair of equal items is kept too (for ``uniqueItems``).
     """
-    types = set(map(type, items))
+    types = item_types(items)
     if types <= {int, float, str, bool, type(None)}:
         return sorted(set(_keep_scalars(items, types)) | _first_duplicate(items, types))
     if types == {dict}:

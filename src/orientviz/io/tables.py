@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InputError
+from .columns import float_values, item_types
 
 #: Marker for a field without default (it must be present).
 REQUIRED = object()
@@ -81,7 +82,7 @@ class Table:
         """A number column as floats times ``scale``; JSON ``null`` becomes NaN."""
         col = self.columns[field]
         if _only(col, float):  # the usual column: one conversion in C
-            return np.array(col, dtype=float) * scale
+            return float_values(col) * scale
         return np.array([np.nan if v is None else float(v) for v in col], dtype=float) * scale
 
     def ints(self, field: str, missing: int = -1) -> NDArray[np.int64]:
@@ -109,7 +110,7 @@ class Table:
         """
         col = self.columns[field]
         if _only(col, float):  # one number per cell (the usual σ column): broadcast
-            return np.repeat(np.array(col, dtype=float)[:, None], size, axis=1) * scale
+            return np.repeat(float_values(col)[:, None], size, axis=1) * scale
         out = np.full((self.n, size), np.nan)
         for i, v in enumerate(col):
             if v is None:
@@ -162,7 +163,7 @@ class Table:
 
 def _only(col: list, kind: type) -> bool:
     """Whether every cell of a column is exactly of type ``kind`` (bool is not int)."""
-    return set(map(type, col)) <= {kind}
+    return item_types(col) <= {kind}
 
 
 def read_table(
@@ -222,7 +223,7 @@ def read_table(
         cols = {}
         for f, default in fields.items():
             if f in node:
-                cols[f] = list(node[f])
+                cols[f] = node[f]  # the document's list (tables do not change their columns)
             elif default is REQUIRED:
                 raise InputError(f"missing column {f!r}", source, name)
             else:

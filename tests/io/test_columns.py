@@ -1,0 +1,41 @@
+"""io.columns: answers about a long column kept inside one load or write, fresh outside."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from orientviz.io.columns import MIN_SHARED, float_values, item_types, shared_columns
+
+
+def test_answers_equal_inside_and_outside():
+    col = [float(i) / 7 for i in range(200)]
+    outside = (item_types(col), float_values(col))
+    with shared_columns():
+        inside = (item_types(col), float_values(col))
+    assert outside[0] == inside[0] == {float}
+    assert np.array_equal(outside[1], inside[1])
+
+
+def test_kept_inside_one_block_only():
+    col = [1.5] * 100 + [2]
+    with shared_columns():
+        first = float_values(col)
+        assert float_values(col) is first  # worked out once
+        assert not first.flags.writeable  # callers copy to change it
+        assert item_types(col) == {float, int}
+    a, b = float_values(col), float_values(col)
+    assert a is not b and a.flags.writeable  # outside: afresh each call
+    col[0] = "x"  # a list changed between two loads is seen as it is now
+    with shared_columns():
+        assert item_types(col) == {float, int, str}
+
+
+def test_short_lists_and_nesting():
+    short = [1.0] * (MIN_SHARED - 1)
+    long = [1.0] * MIN_SHARED
+    with shared_columns():
+        assert float_values(short) is not float_values(short)
+        kept = float_values(long)
+        with shared_columns():  # an inner block shares the outer one's answers
+            assert float_values(long) is kept
+        assert float_values(long) is kept
