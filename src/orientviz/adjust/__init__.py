@@ -6,9 +6,11 @@ No plotting, no I/O and nothing of blocks or bundles here (dependencies point do
 returns an :class:`~orientviz.adjust.result.Adjustment`.
 """
 
-from typing import Any
+from __future__ import annotations
 
-from .loop import Damping, Evaluation, IterativeProblem, Run, Step, StopRule, iterate
+import importlib
+from typing import TYPE_CHECKING, Any
+
 from .result import Adjustment, Iteration
 
 __all__ = [
@@ -24,12 +26,34 @@ __all__ = [
     "iterate",
 ]
 
+#: Names loaded on first use: the tables of a block (``orientviz.block`` imports
+#: :mod:`.result`) and the file importers need neither the loop nor :mod:`.engine`
+#: (which loads SciPy).
+_LAZY = {
+    "Damping": ".loop",
+    "Evaluation": ".loop",
+    "IterativeProblem": ".loop",
+    "Run": ".loop",
+    "Step": ".loop",
+    "StopRule": ".loop",
+    "iterate": ".loop",
+    "gauss_newton": ".engine",
+}
+
 
 def __getattr__(name: str) -> Any:
-    """``gauss_newton`` on first use: :mod:`.engine` loads SciPy, which the tables of a
-    block (``orientviz.block`` imports :mod:`.result`) and the file importers never need."""
-    if name == "gauss_newton":
-        from .engine import gauss_newton  # SciPy only when the dense engine is used
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value  # later look-ups skip this function
+    return value
 
-        return gauss_newton
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+def __dir__() -> list[str]:
+    return list(__all__)
+
+
+if TYPE_CHECKING:  # for type checkers and editors; nothing is imported at run time
+    from .engine import gauss_newton
+    from .loop import Damping, Evaluation, IterativeProblem, Run, Step, StopRule, iterate
