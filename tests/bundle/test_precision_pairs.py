@@ -103,10 +103,12 @@ def test_var_rows_are_the_rays_of_point_unknowns():
     np.testing.assert_array_equal(_pairs.var_rows(Obs), [0, 2, 3])
 
 
+@pytest.mark.parametrize("border", [False, True])
 @pytest.mark.parametrize("d", [6, 9])
-def test_ray_cofactors_equal_the_three_steps(d, monkeypatch):
+def test_ray_cofactors_equal_the_three_steps(d, border, monkeypatch):
     """The one-pass Q_pp, gains and 2 × 2 blocks equal Q_cp by pairs, Q_pp per point and
-    the rays' blocks formed one after the other (rays of fixed points included)."""
+    the rays' blocks formed one after the other (rays of fixed points included; with a
+    border's terms subtracted from Q_cp and Q_pp in between)."""
     from orientviz.bundle.precision._store import ray_blocks
 
     monkeypatch.setattr(_pairs, "PAIR_CHUNK_DOUBLES", 4 * d * d)
@@ -121,11 +123,17 @@ def test_ray_cofactors_equal_the_three_steps(d, monkeypatch):
     Vinv = rng.standard_normal((n_pt, 3, 3))
     Qimg = rng.standard_normal((m, d, d))
     Jc, Jp = rng.standard_normal((n, 2, d)), rng.standard_normal((n, 2, 3))
-    got = _pairs.ray_cofactors(S, Zblk, T, Vinv, Qimg, oc, Jc, Jp)
+    dQcp = rng.standard_normal((n, d, 3)) if border else None
+    dQpp = rng.standard_normal((n_pt, 3, 3)) if border else None
+    got = _pairs.ray_cofactors(S, Zblk, T, Vinv, Qimg, oc, Jc, Jp, dQcp, dQpp)
     Qcp = np.zeros((n, d, 3))
     _pairs.cofactors_by_pairs(S, Zblk, T, Qcp)
-    Qpp = _pairs.point_cofactors(Vinv, T, Qcp, S)
     vo = np.flatnonzero(op >= 0)
+    if border:
+        Qcp[vo] -= dQcp[vo]
+    Qpp = _pairs.point_cofactors(Vinv, T, Qcp, S)
+    if border:
+        Qpp -= dQpp
     want = (Qpp, *ray_blocks(Qimg, oc, Qcp, Qpp, Jc, Jp[vo], vo, op[vo]))
     for g, w in zip(got, want, strict=True):
         assert g.tobytes() == w.tobytes()

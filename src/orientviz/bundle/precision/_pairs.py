@@ -141,9 +141,10 @@ def cofactors_by_pairs(S, Zblk: F64, T: F64, Qcp: F64) -> None:
         Qcp[rays] = _pair_products(S, Zs, index, T, k, rays)
 
 
-def ray_cofactors(S, Zblk: F64, T: F64, Vinv: F64, Qimg: F64, img, Jc: F64, Jp: F64):
-    """Q_pp and the rays' gains and 2 × 2 blocks of a bundle without a border, chunk by
-    chunk of points: :func:`cofactors_by_pairs`, :func:`point_cofactors` and
+def ray_cofactors(
+    S, Zblk: F64, T: F64, Vinv: F64, Qimg: F64, img, Jc: F64, Jp: F64, dQcp=None, dQpp=None
+):
+    """Q_pp and the rays' gains and 2 × 2 blocks, chunk by chunk of points: :func:`cofactors_by_pairs`, :func:`point_cofactors` and
     :func:`orientviz.bundle.precision._store.ray_blocks` in one pass (Q_cp of a chunk is
     used while it is in the cache and never stored whole; every entry the same
     operations in the same order as theirs).
@@ -159,6 +160,10 @@ def ray_cofactors(S, Zblk: F64, T: F64, Vinv: F64, Qimg: F64, img, Jc: F64, Jp: 
         Each ray's image.
     Jc, Jp : ndarray, shapes (n, 2, d), (n, 2, 3)
         Weighted designs of the rays by their image's unknowns and by their point.
+    dQcp, dQpp : ndarray, shapes (n, d, 3), (p_var, 3, 3), optional
+        A border's terms, subtracted from Q_cp of each ray and from Q_pp of each point
+        before the rays' blocks are formed (the parameters' terms of
+        :func:`orientviz.bundle.precision._precision_ap.point_terms`).
 
     Returns
     -------
@@ -175,9 +180,13 @@ def ray_cofactors(S, Zblk: F64, T: F64, Vinv: F64, Qimg: F64, img, Jc: F64, Jp: 
     Qpp = np.empty_like(Vinv)
     for k, rays, p0, n in _chunks(S, d):
         Qc = _pair_products(S, Zs, index, T, k, rays)
+        if dQcp is not None:
+            Qc -= dQcp[rays]
         P = T[rays].transpose(0, 2, 1) @ (-Qc)  # (n k, 3, 3)
         pts = tg.points[p0 : p0 + n]
         Qp = Vinv[pts] + segment_sum(P.reshape(n, k, 3, 3))
+        if dQpp is not None:
+            Qp -= dQpp[pts]
         Qpp[pts] = Qp
         Jcr, Jpr = Jc[rays], Jp[rays]
         JcT, JpT = Jcr.transpose(0, 2, 1), Jpr.transpose(0, 2, 1)

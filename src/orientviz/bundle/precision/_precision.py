@@ -363,15 +363,16 @@ def _fill_from(res, prob, ne, fac, Je, Jp) -> None:
     if dense_qcp:  # dense S formed densely: Q_cp by products with the dense inverse
         Qcp = np.zeros((n_used, 6, 3))
         dense_qcp = cofactors_image_point(S, inverse._Z, T, oi, ocol, Qcp)
-    if not nb and not dense_qcp:  # no border: Q_cp, Q_pp and the rays' blocks in one pass
-        Qpp, Ke, Kp, H = ray_cofactors(S, Zblk, T, Vinv, Qcc_diag, oi, Jew, Jpw)
+    if fast_ap:  # the parameters' terms, sparse by (ray, group) and (point, group) pairs
+        dQcp, dQpp, Qap_pg, Hray = point_terms(prob, ne, Faa, Qca3, Jew, Jpw)
+    if (not nb or fast_ap) and not dense_qcp:  # Q_cp, Q_pp and the rays' blocks in one pass
+        minus = (dQcp, dQpp) if fast_ap else (None, None)
+        Qpp, Ke, Kp, H = ray_cofactors(S, Zblk, T, Vinv, Qcc_diag, oi, Jew, Jpw, *minus)
     else:
         if not dense_qcp:
             Qcp = np.zeros((n_used, 6, 3))
             cofactors_by_pairs(S, Zblk, T, Qcp)
-        if fast_ap:  # the parameters' terms, sparse by (ray, group) and (point, group) pairs
-            dQpp, Qap_pg, Hray = point_terms(prob, ne, Faa, Qca3, Qcp, Jew, Jpw)
-        elif nb:
+        if nb:
             hb = np.zeros((S.n_pt, nb, 3))  # Σ_b Tap_b placed in its group columns
             if q:
                 Tap = (prob.ap.Aw[vo].transpose(0, 2, 1) @ Jpw[vo]) @ Vinv[ocol[vo]]
@@ -383,10 +384,8 @@ def _fill_from(res, prob, ne, fac, Je, Jp) -> None:
             # at the points the border couples (every point with additional parameters)
             vo_idx = np.arange(n_used)[vo]
             Qpp, Qap = border_point_terms(S, oi, vo_idx, ocol, T, Qca, Faa, hb, Qcp, Vinv, bool(q))
-        if not nb or fast_ap:  # Q_pp,j = V_j⁻¹ − Σ_b T_bᵀ Q_cp(i_b, j)
+        else:  # Q_pp,j = V_j⁻¹ − Σ_b T_bᵀ Q_cp(i_b, j)
             Qpp = point_cofactors(Vinv, T, Qcp, S)
-        if fast_ap:
-            Qpp -= dQpp
         # gains of each ray on its own image and point, K = Q_(·, ray) Jwᵀ: the change of
         # the estimates per σ-normalised change of the ray's x, y (external reliability);
         # first without the parameters' terms; 2×2 block of P½ J Q Jᵀ P½ per image

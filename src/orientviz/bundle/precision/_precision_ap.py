@@ -220,7 +220,7 @@ def ray_group_pairs(prob) -> RayGroupPairs:
     return out
 
 
-def point_terms(prob, ne, Qaa: F64, Qca3: F64, Qcp: F64, Jew: F64, Jpw: F64):
+def point_terms(prob, ne, Qaa: F64, Qca3: F64, Jew: F64, Jpw: F64):
     """The parameter terms of the point cofactors and of the rays' 2 × 2 blocks.
 
     Parameters
@@ -230,14 +230,14 @@ def point_terms(prob, ne, Qaa: F64, Qca3: F64, Qcp: F64, Jew: F64, Jpw: F64):
         Normal equations at the solution (``H``, ``Vinv``, ``T``).
     Qaa : ndarray, shape (q, q)
     Qca3 : ndarray, shape (m, 6, q)
-    Qcp : ndarray, shape (n, 6, 3)
-        Q_cp per ray (rows of point unknowns) without the parameter term; **updated in
-        place** (the term −Q_ca h is subtracted).
     Jew, Jpw : ndarray, shapes (n, 2, 6), (n, 2, 3)
         Weighted Jacobians at the solution.
 
     Returns
     -------
+    dQcp : ndarray, shape (n, 6, 3)
+        To subtract from Q_cp of each ray of a point unknown: Σ_e Q_ca(i_a, g_e) HV_e over
+        its point's (point, group) pairs (rows of other rays not meaningful).
     dQpp : ndarray, shape (p_var, 3, 3)
         To subtract from Q_pp: Σ over a point's (point, group) pairs of HV_eᵀ Q_ap,e.
     Qap : ndarray, shape (npg, k, 3)
@@ -266,8 +266,7 @@ def point_terms(prob, ne, Qaa: F64, Qca3: F64, Qcp: F64, Jew: F64, Jpw: F64):
     e_rows = oi[e_obs] * G + A.pg_grp[e_pg]
     if e_obs.size:
         _pair_sums(t, R.by_ray, R.ray_starts, lambda e: Qig[e_rows[e]] @ HV[e_pg[e]])
-    vo = var_rows(prob.obs)  # the rays of point unknowns (a slice when they come first)
-    Qcp[vo] -= t[vo]
+    dQcp = t
     # Q_ap,e = −(Σ_b Q_ca(i_b, g_e)ᵀ T_b + Σ_e' Q_aa(g_e, g_e') HV_e'): own group ...
     t = np.zeros((m * L, k * 3))  # in the padded layout, summed by slot
     t[R.slot] = (Qo.transpose(0, 2, 1) @ T).reshape(-1, k * 3)
@@ -303,9 +302,10 @@ def point_terms(prob, ne, Qaa: F64, Qca3: F64, Qcp: F64, Jew: F64, Jpw: F64):
             AQ[idx] = (Aw[idx].reshape(-1, k) @ Fg).reshape(-1, 2, k)
     Jpad = Jew[A.pad0].reshape(m, 2 * L, 6)  # J_e Q_ca,own per image, then per ray
     JQ = np.matmul(Jpad, Qca_own).reshape(m * L, 2, k)[R.slot]
+    vo = var_rows(prob.obs)  # the rays of point unknowns (a slice when they come first)
     JQ[vo] += Jpw[vo] @ Qap[A.own_pg[vo]].transpose(0, 2, 1)
     AwT = Aw.transpose(0, 2, 1)
     C = JQ @ AwT
     AQ += JQ  # (A Q_aa + J Q) Aᵀ + (J Q Aᵀ)ᵀ
     Hray = AQ @ AwT + C.transpose(0, 2, 1)
-    return dQpp, Qap, Hray
+    return dQcp, dQpp, Qap, Hray
