@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from orientviz.io.columns import MIN_SHARED, float_values, item_types, shared_columns
+from orientviz.io.columns import (
+    MIN_SHARED,
+    float_values,
+    item_types,
+    shared_columns,
+    str_lengths,
+)
 
 
 def test_answers_equal_inside_and_outside():
@@ -14,6 +20,11 @@ def test_answers_equal_inside_and_outside():
         inside = (item_types(col), float_values(col))
     assert outside[0] == inside[0] == {float}
     assert np.array_equal(outside[1], inside[1])
+    ids = [f"p{i}" * (i % 3 + 1) for i in range(100)]
+    with shared_columns():
+        kept = str_lengths(ids)
+        assert str_lengths(ids) is kept
+    assert kept.tolist() == [len(s) for s in ids] == str_lengths(ids).tolist()
 
 
 def test_kept_inside_one_block_only():

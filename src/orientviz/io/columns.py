@@ -3,8 +3,8 @@
 Loading a problem file asks of each long column (a list of ~10⁴–10⁵ numbers or ids)
 the same questions several times: the types of its items (the strict checks of
 :mod:`orientviz.io.jsonio`, the schema's reduction in :mod:`orientviz.io.reduce`, the
-tables of :mod:`orientviz.io.tables`) and, for numbers, their values as an array (the
-reduction and the tables); writing one asks them again (the schema check before the
+tables of :mod:`orientviz.io.tables`), for numbers their values as an array (the strict
+checks, the reduction and the tables), for strings their lengths; writing one asks them again (the schema check before the
 text, the text). Inside :func:`shared_columns` — one load or one write — the answers are
 kept per list object (the lists are not changed there); outside it each call works them
 out afresh. The kept lists are held until the block ends, so an id names one list.
@@ -39,13 +39,14 @@ def shared_columns() -> Iterator[None]:
 
 
 def _kept(col: list) -> list | None:
-    """The record [list, item types, float values] of ``col`` when answers are kept."""
+    """The record [list, item types, float values, string lengths] of ``col`` when
+    answers are kept."""
     kept = _KEPT.get()
     if kept is None or len(col) < MIN_SHARED:
         return None
     record = kept.get(id(col))
     if record is None or record[0] is not col:
-        record = kept[id(col)] = [col, None, None]
+        record = kept[id(col)] = [col, None, None, None]
     return record
 
 
@@ -57,6 +58,18 @@ def item_types(col: list) -> frozenset[type]:
     if record[1] is None:
         record[1] = frozenset(map(type, col))
     return record[1]
+
+
+def str_lengths(col: list[str]) -> NDArray[np.int64]:
+    """The lengths of the strings of ``col``; read-only when kept."""
+    record = _kept(col)
+    if record is None:
+        return np.fromiter(map(len, col), dtype=np.int64, count=len(col))
+    if record[3] is None:
+        lengths = np.fromiter(map(len, col), dtype=np.int64, count=len(col))
+        lengths.flags.writeable = False
+        record[3] = lengths
+    return record[3]
 
 
 def float_values(col: list) -> NDArray[np.float64]:

@@ -21,8 +21,10 @@ from functools import cache
 from importlib import resources
 from typing import Any
 
+import numpy as np
+
 from ..errors import InputError
-from .columns import float_values, item_types
+from .columns import float_values, item_types, str_lengths
 from .reduce import original_path, reduce_document
 from .safeio import decode_text, read_input_bytes
 from .safeio import write_atomic as _write
@@ -167,11 +169,10 @@ def _suspect(node: Any) -> bool:
         values: Iterable[Any] = node
         if len(node) > 16:  # a long column: judged in C when it holds one type
             kinds = item_types(node)
-            if kinds == {float}:  # the sum is inf or NaN when an item is (or it overflows)
-                total = sum(node)
-                return total - total != 0.0
+            if kinds == {float}:  # (the values are read again by the tables)
+                return not np.isfinite(float_values(node)).all()
             if kinds == {str}:
-                return not "".join(node).isascii() or max(map(len, node)) > MAX_TEXT_LENGTH
+                return not "".join(node).isascii() or str_lengths(node).max() > MAX_TEXT_LENGTH
             if kinds == {int}:
                 return not (-1e308 < min(node) and max(node) < 1e308)
     elif t is dict:

@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from .columns import float_values, item_types
+from .columns import float_values, item_types, str_lengths
 
 #: Arrays up to this many items are validated as they are.
 MIN_LENGTH: int = 64
@@ -100,7 +100,7 @@ def _keep_numbers(items: list) -> set[int]:
 
 def _keep_strings(items: list) -> set[int]:
     """Strings only: the first shortest and the first of the first DISTINCT values."""
-    lengths = np.fromiter(map(len, items), dtype=np.int64, count=len(items))
+    lengths = str_lengths(items)
     out = {int(np.argmin(lengths))}
     first: dict[str, int] = {}  # the first DISTINCT values and where each first appears
     for i, value in enumerate(items):
