@@ -313,8 +313,9 @@ def _fill_precision(res, prob, st, rw, Je, Jp, lin) -> None:
         ne, fac, Je, Jp = lin
     else:  # points near infinity: placed where their depth is defined (._far)
         st_p, far = placed_state(prob, st)
-        if far.size:
-            rw, Je, Jp = prob.residuals(st_p, jac=True)
+        if far.size:  # their rays at the placed points (the others' as they are)
+            rays = np.flatnonzero(np.isin(prob.obs.column, far))
+            rw, Je, Jp = prob.residuals_of_rays(st_p, rays, rw, Je, Jp)
         ne = prob.normal(st_p, rw, Je, Jp)
     if ne.ext is not None:  # the cameras inside the images' blocks: their own form
         camera_precision(res, prob, ne, Je, Jp)

@@ -260,6 +260,36 @@ class BundleProblem:
                 self.run.design_at = st
         return (obs.xy - f) * obs.weight, Je, Jp
 
+    def residuals_of_rays(self, st: BundleState, rays, rw: F64, Je: F64, Jp: F64):
+        """:meth:`residuals` ``(st, jac=True)`` where ``rw, Je, Jp`` are that evaluation at a
+        state that differs from ``st`` only in points seen by ``rays`` alone: those rays are
+        evaluated again, the others' rows taken over (new arrays); with a camera model its
+        design becomes the one at ``st`` too. Each ray's numbers are its own arithmetic, so
+        they are a full evaluation's at ``st``."""
+        obs, seq, run = self.obs, self.block.sequence, self.run
+        run.projection = None
+        img, xyz, xy = obs.image[rays], st.xyz[obs.point[rays]], obs.xy[rays]
+        if self.ap.lens is not None:
+            one, zero = np.ones(self.m), np.zeros(self.m)
+            proj = RayProjection(st.X0, st.angles, one, zero, zero, img, xyz, seq)
+            f, M, A = self.ap.lens.evaluate(st.ap, self.ap.group[img], proj.xy, xy, True)
+            je, jp = ray_jacobians(proj, st.angles, seq, M=M)
+            if self.q:
+                design = self.ap.A.copy()
+                design[rays] = A
+                run.ap = self.ap.with_design(design, obs.weight)
+                run.design_at = st
+        else:
+            io = self.interior
+            proj = RayProjection(st.X0, st.angles, io.c, io.x0, io.y0, img, xyz, seq)
+            je, jp = ray_jacobians(proj, st.angles, seq)
+            f = proj.xy
+            if self.q:
+                f = f + (self.ap.A_csr @ st.ap).reshape(-1, 2)[rays]
+        rw, Je, Jp = rw.copy(), Je.copy(), Jp.copy()
+        rw[rays], Je[rays], Jp[rays] = (xy - f) * obs.weight[rays], je, jp
+        return rw, Je, Jp
+
     def design_at(self, st: BundleState) -> None:
         """Make the camera model's design the one at ``st`` (no-op for linear sets)."""
         if self.ap.lens is not None and self.q and self.run.design_at is not st:
