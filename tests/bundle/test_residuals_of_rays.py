@@ -33,7 +33,9 @@ def test_residuals_of_rays_equal_a_full_evaluation(make):
     block, prob = make()
     rng = np.random.default_rng(5)
     ap = 1e-3 * rng.standard_normal(prob.q)
-    st = BundleState(block.images.X0.copy(), block.images.angles.copy(), block.points.xyz.copy(), ap)
+    st = BundleState(
+        block.images.X0.copy(), block.images.angles.copy(), block.points.xyz.copy(), ap
+    )
     rw, Je, Jp = prob.residuals(st, jac=True)
     # two point unknowns moved along (a little and far)
     cols = np.array([1, 4])
