@@ -53,10 +53,10 @@ default. See :mod:`orientviz.units`, :mod:`orientviz.rotation`, :mod:`orientviz.
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING, Any
 
 from .errors import AdjustmentError, InputError, NotDeterminableError, OrientvizError
+from .faces import lazy_names
 from .version import __version__
 
 #: name on the face → the module (relative to this package) that defines it
@@ -173,13 +173,7 @@ def view(
     return open_viewer(content, host=host, port=port, **options)
 
 
-def __getattr__(name: str) -> Any:
-    module = _FACE.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(module, __name__), name)
-    globals()[name] = value  # later look-ups skip this function
-    return value
+__getattr__ = lazy_names(__name__, _FACE, globals())
 
 
 def __dir__() -> list[str]:

@@ -68,7 +68,7 @@ def test_import_orientviz_loads_only_the_face():
         "print(' '.join(sorted(k for k in sys.modules\n"
         "    if k.split('.')[0] in ('orientviz', 'numpy', 'scipy', 'matplotlib', 'viser', 'ipywidgets'))))\n"
     ).split()
-    assert loaded == ["orientviz", "orientviz.errors", "orientviz.version"]
+    assert loaded == ["orientviz", "orientviz.errors", "orientviz.faces", "orientviz.version"]
 
 
 def test_face_names_load_no_gui_and_view_imports_the_viewer_only_when_called():
@@ -134,7 +134,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("block",),  # the block's data model
     ("adjust", "camera"),  # the engine; the frame camera
     ("rotation", "lens"),
-    ("units", "errors", "version", "blas"),
+    ("units", "errors", "version", "blas", "faces"),
 ]
 #: Packages whose modules may import other packages' private modules (none).
 PRIVATE_OK: set[str] = set()

@@ -7,31 +7,27 @@ The common entry points are importable from here (loaded on first use)::
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from ..faces import lazy_names
 
 #: name → submodule that defines it
 _EXPORTS = {
-    "Problem": "problem",
-    "Units": "problem",
-    "load_problem": "problem",
-    "loads_problem": "problem",
-    "save_problem": "problem",
-    "write_problem": "problem",
-    "dumps_problem": "problem",
-    "problem_from_block": "problem",
-    "solve_problem": "solve",
-    "list_datasets": "datasets",
-    "load_dataset": "datasets",
-    "dataset_path": "datasets",
-    "dataset_info": "datasets",
-    "available_kinds": "registry",
+    "Problem": ".problem",
+    "Units": ".problem",
+    "load_problem": ".problem",
+    "loads_problem": ".problem",
+    "save_problem": ".problem",
+    "write_problem": ".problem",
+    "dumps_problem": ".problem",
+    "problem_from_block": ".problem",
+    "solve_problem": ".solve",
+    "list_datasets": ".datasets",
+    "load_dataset": ".datasets",
+    "dataset_path": ".datasets",
+    "dataset_info": ".datasets",
+    "available_kinds": ".registry",
 }
 
 __all__ = sorted(_EXPORTS)
 
 
-def __getattr__(name: str) -> Any:
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(f"{__name__}.{_EXPORTS[name]}"), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_names(__name__, _EXPORTS, globals())
