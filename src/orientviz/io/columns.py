@@ -4,8 +4,8 @@ Loading a problem file asks of each long column (a list of ~10⁴–10⁵ number
 the same questions several times: the types of its items (the strict checks of
 :mod:`orientviz.io.jsonio`, the schema's reduction in :mod:`orientviz.io.reduce`, the
 tables of :mod:`orientviz.io.tables`), for numbers their values as an array (the strict
-checks, the reduction and the tables), for strings their lengths; writing one asks them again (the schema check before the
-text, the text). Inside :func:`shared_columns` — one load or one write — the answers are
+checks, the reduction and the tables), for strings their lengths; writing one asks them
+again (the schema check before the text, the text). Inside :func:`shared_columns` — one load or one write — the answers are
 kept per list object (the lists are not changed there); outside it each call works them
 out afresh. The kept lists are held until the block ends, so an id names one list.
 """

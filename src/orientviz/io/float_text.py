@@ -2,7 +2,7 @@
 
 ``json.dumps`` writes a float as ``repr`` does: the shortest decimal that reads back as
 the same double, in fixed notation from 1e-4 up to 1e16, with ``.0`` added to whole
-numbers, at 0.2–0.4 µs a number. :func:`float_column_json` writes the same text for a
+numbers, one number at a time. :func:`float_column_json` writes the same text for a
 whole column in a few array operations, and leaves to ``repr`` the numbers where it
 cannot show that the text is the same.
 

@@ -547,10 +547,7 @@ class BundleSteps:
         actual = before - self.pending_cost
         if actual > ftol * before:
             return False
-        st, ap = self._gain_from
-        design = None if ap is None else ap.A_csr
-        dc, dp, da, local = step.data[0], step.data[1], step.data[2], step.data[5]
-        pred = predicted_decrease(self.prob, st, tuple(previous.data), (dc, dp, da), design, local)
+        pred = self._predicted(step, previous)
         return pred > ftol * before and actual < POOR_GAIN * pred
 
     def _modelled_warm_up(self, step: Step, previous: Evaluation) -> bool:
@@ -571,11 +568,15 @@ class BundleSteps:
         actual = previous.cost - self.pending_cost
         if not actual > LOSS_SWITCH_CONVEX * previous.cost:
             return False
+        return abs(actual - self._predicted(step, previous)) <= LOSS_SWITCH * self.pending_cost
+
+    def _predicted(self, step: Step, previous: Evaluation) -> float:
+        """The decrease of vᵀPv the step's linear model predicts from the state it started
+        at (:func:`._gain.predicted_decrease`)."""
         st, ap = self._gain_from
         design = None if ap is None else ap.A_csr
         dc, dp, da, local = step.data[0], step.data[1], step.data[2], step.data[5]
-        pred = predicted_decrease(self.prob, st, tuple(previous.data), (dc, dp, da), design, local)
-        return abs(actual - pred) <= LOSS_SWITCH * self.pending_cost
+        return predicted_decrease(self.prob, st, tuple(previous.data), (dc, dp, da), design, local)
 
     def _point_newton(self, st: BundleState, ev: Evaluation, dc: F64, dp: F64, da: F64, lam: float):
         """The Newton corrections of the points with a ray beyond the scale given the step's

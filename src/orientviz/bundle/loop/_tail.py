@@ -57,9 +57,8 @@ FRACTIONS: tuple[float, ...] = (1.0, 0.5, 0.25, 0.125)
 #: (:data:`NEWTON_FLOOR`) makes the model's curvature along a flat direction positive, so
 #: the correction may also stop short of the breakpoint — a point that creeps along its
 #: flat stretch by about the same length in step after step (two-ray points of small
-#: aerial blocks: 10–15 tail steps that each lowered Σρ by ~1e-3). A breakpoint beyond it
-#: is ranked at it; with none (no ray reaches the scale) the full correction. Steps and
-#: optima with 1 (no extension), 4, 10 and 100: benchmarks/README.md, session 17.
+#: aerial blocks). A breakpoint beyond it is ranked at it; with none (no ray reaches the
+#: scale) the full correction.
 BREAKPOINT_MAX: float = 4.0
 #: Upper-triangle index pairs of a symmetric 3 × 3 block (6 entries) …
 _UPPER = (np.array([0, 0, 0, 1, 1, 2]), np.array([0, 1, 2, 1, 2, 2]))

@@ -14,6 +14,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ._store import ray_blocks
+
 F64 = NDArray[np.float64]
 
 #: Up to this many doubles the blocks of Q_cc are laid out for every ordered image pair
@@ -144,7 +146,8 @@ def cofactors_by_pairs(S, Zblk: F64, T: F64, Qcp: F64) -> None:
 def ray_cofactors(
     S, Zblk: F64, T: F64, Vinv: F64, Qimg: F64, img, Jc: F64, Jp: F64, dQcp=None, dQpp=None
 ):
-    """Q_pp and the rays' gains and 2 × 2 blocks, chunk by chunk of points: :func:`cofactors_by_pairs`, :func:`point_cofactors` and
+    """Q_pp and the rays' gains and 2 × 2 blocks, chunk by chunk of points:
+    :func:`cofactors_by_pairs`, :func:`point_cofactors` and
     :func:`orientviz.bundle.precision._store.ray_blocks` in one pass (Q_cp of a chunk is
     used while it is in the cache and never stored whole; every entry the same
     operations in the same order as theirs).
@@ -188,14 +191,10 @@ def ray_cofactors(
         if dQpp is not None:
             Qp -= dQpp[pts]
         Qpp[pts] = Qp
-        Jcr, Jpr = Jc[rays], Jp[rays]
-        JcT, JpT = Jcr.transpose(0, 2, 1), Jpr.transpose(0, 2, 1)
-        Kcr = Qimg[img[rays]] @ JcT
-        Kcr += Qc @ JpT
-        Kpr = Qc.transpose(0, 2, 1) @ JcT + np.repeat(Qp, k, axis=0) @ JpT
-        Hr = Jcr @ Kcr
-        Hr += Jpr @ Kpr
-        Kc[rays], Kp[rays], H[rays] = Kcr, Kpr, Hr
+        each = np.repeat(np.arange(n), k)  # each ray's point in the chunk
+        Kc[rays], Kp[rays], H[rays] = ray_blocks(
+            Qimg, img[rays], Qc, Qp, Jc[rays], Jp[rays], slice(None), each
+        )
     fixed = np.flatnonzero(S.obs_pt < 0)  # rays of fixed points: their image's term only
     if fixed.size:
         Kc[fixed] = Qimg[img[fixed]] @ Jc[fixed].transpose(0, 2, 1)
@@ -220,13 +219,9 @@ def point_cofactors(Vinv: F64, T: F64, Qcp: F64, S) -> F64:
 
 
 def var_rows(obs) -> slice | NDArray[np.int64]:
-    """The rays of point unknowns in the rays' own order: a slice when they come first
-    (the bundle's track order), else their indices."""
-    return var_rows_of(obs.column)
-
-
-def var_rows_of(column) -> slice | NDArray[np.int64]:
-    """:func:`var_rows` from each ray's point unknown (−1: a fixed point)."""
-    var = column >= 0
+    """The rays of point unknowns (``obs.column`` ≥ 0; −1: a fixed point) in the rays'
+    own order: a slice when they come first (the bundle's track order), else their
+    indices."""
+    var = obs.column >= 0
     nv = int(np.count_nonzero(var))
     return slice(0, nv) if bool(var[:nv].all()) else np.flatnonzero(var)

@@ -121,7 +121,8 @@ class NormalEquations:
     ext : object or None
         The system in blocks of an image's exterior and camera unknowns when the cameras
         are per image (:class:`orientviz.bundle.problem._camera_blocks.CameraBlocks`);
-        then ``blocks``, ``rhs``, ``Wr``, ``Tr`` are its exterior parts.    held : HeldDepths or None
+        then ``blocks``, ``rhs``, ``Wr``, ``Tr`` are its exterior parts.
+    held : HeldDepths or None
         Points held along their weak directions in this step: their block V is
         numerically singular (:func:`~orientviz.bundle.reduced.inv3_held`; ``Vinv`` holds
         V⁺ for them). None: every V inverted.
