@@ -108,6 +108,35 @@ def test_image_blocks_are_the_pairs_of_images_sharing_a_point():
     assert n_pairs == 6 + 3 + 1  # k(k + 1)/2 for tracks of 3, 2, 1 rays
 
 
+@pytest.mark.parametrize("seed", [0, 1])
+def test_image_blocks_dense_and_sparse_products_give_the_same_pattern(monkeypatch, seed):
+    from orientviz.bundle.reduced import _choice
+
+    rng = np.random.default_rng(seed)
+    m, n_pt = 30, 400
+    ks = rng.integers(1, 7, n_pt)
+    cam = np.concatenate([rng.choice(m, k, replace=False) for k in ks])
+    pt = np.repeat(np.arange(n_pt), ks)
+    pt[rng.random(pt.size) < 0.05] = -1  # rays of fixed points couple nothing
+    got = {}
+    for name, per_pair in (("dense", np.inf), ("sparse", 1e-300)):
+        monkeypatch.setattr(_choice, "DENSE_PATTERN_FLOPS_PER_PAIR", per_pair)
+        got[name] = image_blocks(cam, pt, m, n_pt)
+    var = pt >= 0
+    keys = {
+        (min(a, b), max(a, b))
+        for j in range(n_pt)
+        for a in cam[var][pt[var] == j]
+        for b in cam[var][pt[var] == j]
+    } | {(i, i) for i in range(m)}
+    k = np.bincount(pt[var], minlength=n_pt)
+    for bi, bk, n_pairs in got.values():
+        assert set(zip(bi.tolist(), bk.tolist())) == keys
+        assert n_pairs == int(np.sum(k * (k + 1) // 2))
+    np.testing.assert_array_equal(got["dense"][0], got["sparse"][0])
+    np.testing.assert_array_equal(got["dense"][1], got["sparse"][1])
+
+
 def test_precision_is_the_same_whatever_solved_and_formed_the_reduced_system():
     block, _ = close_range_network(start_error=0.05)
     dense = ov.bundle_adjust(block)  # S formed densely, Q_cp from the dense inverse

@@ -61,12 +61,22 @@ class SolverChoice:
     costs: dict
 
 
+#: :func:`image_blocks`: the dense product BᵀB costs m²·p multiply-adds at BLAS speed, the
+#: sparse one about this many of them per pair of rays of a point (Σ k²): measured 500–1000
+#: (m = 20 … 400 images, p = 1500 … 100 000 points, tracks of 3–8 rays, one thread).
+DENSE_PATTERN_FLOPS_PER_PAIR: float = 500.0
+#: :func:`image_blocks` forms B densely (float32) only up to this many entries (32 MB).
+DENSE_PATTERN_MAX_ENTRIES: int = 2**23
+
+
 def image_blocks(obs_cam: I64, obs_pt: I64, n_cam: int, n_pt: int) -> tuple[I64, I64, int]:
     """Blocks (i ≤ k) of S: pairs of images that share an unknown point, and the diagonal.
 
     Formed from the point–image incidence B (p × m) as the pattern of BᵀB, by a sparse
     product (cost ≈ Σ_j k_j², k_j the rays of point j) or, when that is larger, a dense
-    single-precision one (m²·p flops at BLAS speed).
+    single-precision one (m²·p flops at BLAS speed; :data:`DENSE_PATTERN_FLOPS_PER_PAIR`,
+    at most :data:`DENSE_PATTERN_MAX_ENTRIES` entries of B). Both give the same pattern
+    (B's entries are 0 and 1; BᵀB counts shared points exactly in single precision).
 
     Returns
     -------
@@ -81,7 +91,8 @@ def image_blocks(obs_cam: I64, obs_pt: I64, n_cam: int, n_pt: int) -> tuple[I64,
     c, p = obs_cam[var], obs_pt[var]
     k = np.bincount(p, minlength=n_pt).astype(np.int64)
     n_pairs = int(np.sum(k * (k + 1) // 2))
-    if n_pt and float(m) * m * n_pt / 30.0 < float(np.sum(k * k)):
+    dense = float(m) * m * n_pt / DENSE_PATTERN_FLOPS_PER_PAIR < float(np.sum(k * k))
+    if n_pt and dense and m * n_pt <= DENSE_PATTERN_MAX_ENTRIES:
         B = np.zeros((n_pt, m), np.float32)
         B[p, c] = 1.0
         G = B.T @ B
