@@ -186,3 +186,18 @@ def test_references_outside_the_shipped_files_are_left_to_jsonschema():
             _valid(1, {"$ref": ref}, "block.json")
     with pytest.raises(_Unknown):
         _valid(1, ["not", "a", "schema"], "block.json")
+
+
+def test_each_reference_is_resolved_once_and_to_the_same_node():
+    from orientviz.io import schema_check
+
+    doc = json.loads(dumps_problem(load_dataset("dbat_sxb")))
+    reduced, _ = reduce_document(doc)
+    assert conforms(reduced, "block.json")
+    first = schema_check._resolve.cache_info()
+    assert first.currsize > 0  # the block schema is made of references
+    assert conforms(reduced, "block.json")
+    again = schema_check._resolve.cache_info()
+    assert again.misses == first.misses and again.hits > first.hits
+    node, file = schema_check._resolve("frame.json#/$defs/points", "block.json")
+    assert node is schema_check._schema("frame.json")["$defs"]["points"] and file == "frame.json"

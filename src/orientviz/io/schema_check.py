@@ -48,9 +48,10 @@ def _schema(name: str) -> dict[str, Any]:
     return json.loads(res.read_text(encoding="utf-8"))
 
 
+@cache
 def _resolve(ref: str, base: str) -> tuple[Any, str]:
     """The subschema a ``$ref`` names (``file.json#/$defs/x``, ``#/$defs/x``, ``file.json``)
-    and the file it lies in."""
+    and the file it lies in (found once per reference: the shipped schemas do not change)."""
     file, _, pointer = ref.partition("#")
     file = file or base
     if "/" in file or ":" in file:  # only the shipped files, by their plain names
