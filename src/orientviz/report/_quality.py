@@ -28,7 +28,13 @@ from ._document import (
     fmt,
     fmt_g,
 )
-from ._stats import condition_number, correlation_matrix, intersection_angles, split_label
+from ._stats import (
+    condition_number,
+    conditioned_below,
+    correlation_matrix,
+    intersection_angles,
+    split_label,
+)
 
 
 class QualitySections:
@@ -230,6 +236,8 @@ class QualitySections:
                     second = [names[b] for b in (kk * nb + j[pp]).tolist()]
                     pairs.extend(zip(first, second, C[kk, i[pp], j[pp]].tolist()))
                 active = np.flatnonzero(fb.sum(axis=1) >= 2)
+                if nb == 3 and active.size:  # the eigenvalues only where they may exceed it
+                    active = active[~conditioned_below(C[active], NEAR_SINGULAR)]
                 if active.size:
                     with np.errstate(all="ignore"):
                         ev = np.linalg.eigvalsh(C[active])

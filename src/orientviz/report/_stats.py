@@ -165,6 +165,28 @@ def condition_number(C: F64) -> float:
     return float(ev[-1] / ev[0]) if ev[0] > 0 else float("inf")
 
 
+def conditioned_below(C: F64, limit: float) -> NDArray[np.bool_]:
+    """Which 3 × 3 correlation matrices of the stack ``C`` (k, 3, 3) certainly have a
+    condition number below ``limit``, without their eigenvalues.
+
+    ``C`` has a unit diagonal. It is positive definite when its leading minors
+    1 − ρ₀₁² and det C are (Sylvester); then its largest eigenvalue is at most
+    h = maxᵢ (1 + Σⱼ≠ᵢ |ρᵢⱼ|) (Gershgorin), its middle one too, so the smallest is at
+    least det C / h² and the condition number at most h³ / det C. A matrix is certified
+    when h³ / det C lies below ``limit`` by a relative 1e-6: the minors, formed from
+    entries of size ≤ 1, and the eigenvalues of a symmetric solver are both within a few
+    10⁻¹⁶ of exact, far inside that margin for det C ≥ 10⁻⁸ · h³ ≥ 10⁻⁸ (``limit`` =
+    10⁸), so ``eigvalsh`` would find these condition numbers below ``limit`` as well.
+    False for the others (near-singular, indefinite, NaN): those need their eigenvalues.
+    """
+    a, b, c = C[:, 0, 1], C[:, 0, 2], C[:, 1, 2]
+    with np.errstate(invalid="ignore"):
+        minor = 1.0 - a * a
+        det = 1.0 + 2.0 * a * b * c - a * a - b * b - c * c
+        h = 1.0 + np.max(np.abs(C).sum(axis=2) - np.abs(np.diagonal(C, axis1=1, axis2=2)), axis=1)
+        return (minor > 1e-12) & (det * limit >= h**3 * (1.0 + 1e-6))
+
+
 def correlation_matrix(Q: F64) -> F64:
     """ρ_ij = Q_ij / sqrt(Q_ii Q_jj) of a cofactor matrix."""
     d = np.sqrt(np.clip(np.diag(Q), 1e-300, None))
