@@ -109,3 +109,23 @@ def test_coverage_below_equals_the_hulls_verdict(strip, seed):
     # the screen computes hulls only where needed: at a low threshold the discs clear it
     below, cov = coverage_below(blk, 0.01)
     assert np.isnan(cov).sum() >= blk.n_images // 3
+
+
+@pytest.mark.parametrize("seed", [28, 29, 30])
+def test_coverage_below_gives_the_first_values_asked_for(strip, seed):
+    rng = np.random.default_rng(seed)
+    kinds = ["disc", "disc", "sliver", "line", "two", "disc", "sliver"]
+    blk = _cloud_block(strip, rng, kinds[seed % 3 :] + kinds[: seed % 3])
+    exact = image_coverage(blk)
+    among = np.arange(blk.n_images) % 3 != 1
+    for thr in (0.05, 0.25, 0.6):
+        for first in (1, 3, 6):
+            below, cov = coverage_below(blk, thr, first=first, among=among)
+            np.testing.assert_array_equal(below, exact < thr)
+            named = np.flatnonzero(below & among)[:first]
+            np.testing.assert_allclose(cov[named], exact[named], rtol=1e-12, atol=0)
+            assert [f"{100 * c:.3g}" for c in cov[named]] == [f"{100 * c:.3g}" for c in exact[named]]
+    # the points' boxes put the discs below a high threshold without their hulls
+    below, cov = coverage_below(blk, 0.6, first=0)
+    np.testing.assert_array_equal(below, exact < 0.6)
+    assert np.isnan(cov[below]).sum() >= 1

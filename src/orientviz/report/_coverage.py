@@ -8,9 +8,11 @@ import scipy.spatial):
 
 1. an octagon inside each image's hull (the points farthest in eight directions, 45°
    apart) clears the images whose octagon already covers more than the threshold;
-2. the others get their hull by Andrew's monotone chain on the points outside the
+2. the points' bounding box, which holds the hull, puts below the threshold the images
+   whose box already covers less (their hull is computed only if its value is printed);
+3. the others get their hull by Andrew's monotone chain on the points outside the
    octagon (the points inside it are not hull vertices) and its shoelace area;
-3. an image whose hull area is within the two areas' rounding (1e-9 relative, more for
+4. an image whose hull area is within the two areas' rounding (1e-9 relative, more for
    points far from the origin) of the threshold, whose value in percent could print
    otherwise at the warning's digits, or whose points (nearly) lie on a line, is left to
    Qhull.
@@ -83,8 +85,29 @@ def hull_area(xy: F64, octagon: F64) -> float:
     return float(_shoelace(hull[:, 0], hull[:, 1]))
 
 
+def _coverage(pts: F64, octagon: F64, fmt_area: float, threshold: float, digits: int):
+    """The coverage of one image from its points' hull (:func:`hull_area`), and whether
+    Qhull must give it instead (points (nearly) on a line, a value within rounding of
+    the threshold or of a change of its printed digits); NaN when it must."""
+    a = hull_area(pts, octagon)
+    extent = np.ptp(pts, axis=0)
+    if not a > MARGIN * float(extent[0] * extent[1]):  # (nearly) on a line
+        return np.nan, True
+    # Qhull's rounding grows with the squared distance of the points from the origin
+    # over the area: the margin does too
+    tol = MARGIN + 1e-13 * float(np.max(np.sum(pts * pts, axis=1))) / a
+    c = a / fmt_area
+    shown = {f"{100 * c * f:.{digits}g}" for f in (1 - tol, 1 + tol)}
+    return c, bool(abs(c - threshold) <= tol * threshold or len(shown) > 1)
+
+
 def coverage_below(
-    block: Block, threshold: float, digits: int = 3
+    block: Block,
+    threshold: float,
+    digits: int = 3,
+    *,
+    first: int | None = None,
+    among: NDArray[np.bool_] | None = None,
 ) -> tuple[NDArray[np.bool_], F64]:
     """Which images' :func:`~orientviz.report._stats.image_coverage` is below ``threshold``.
 
@@ -95,15 +118,22 @@ def coverage_below(
         Share of the format area (0…1).
     digits : int
         Significant digits of the coverage in percent as the warning prints it.
+    first : int, optional
+        Give the coverage of only the first ``first`` images below the threshold (in
+        image order) among ``among``: the values a message prints. Default: of every
+        image below.
+    among : ndarray of bool, shape (m,), optional
+        The images ``first`` counts (default: all).
 
     Returns
     -------
     below : ndarray of bool, shape (m,)
         ``image_coverage(block) < threshold``, exactly.
     coverage : ndarray, shape (m,)
-        The coverage where it was computed (every image that is below), within 1e-9
-        relative of ``image_coverage`` and printed in percent with ``digits``
-        significant digits the same; NaN for the images the octagon cleared.
+        The coverage where it was computed (every image below, or the ``first`` of
+        them), within 1e-9 relative of ``image_coverage`` and printed in percent with
+        ``digits`` significant digits the same; NaN for the images the octagon cleared
+        and for those below whose value was not asked for.
     """
     obs = block.observations
     m = block.n_images
@@ -119,31 +149,39 @@ def coverage_below(
     count = np.diff(starts)
     seen = np.flatnonzero(count > 0)
     octagon = np.zeros((m, 8, 2))
-    area = np.zeros(m)
+    area, box, far = np.zeros(m), np.zeros(m), np.zeros(m)
     if seen.size:
         octagon[seen] = _octagons(xy, starts[seen], count[seen])
         area[seen] = _shoelace(octagon[seen, :, 0], octagon[seen, :, 1])
+        # the octagon's vertices are the points of least and largest x and y
+        ext = octagon[seen].max(axis=1) - octagon[seen].min(axis=1)
+        box[seen] = ext[:, 0] * ext[:, 1]
+        far[seen] = np.maximum.reduceat(np.sum(xy * xy, axis=1), starts[seen])
     cov = np.full(m, np.nan)
     qhull = np.zeros(m, bool)
     with np.errstate(divide="ignore", invalid="ignore"):
         usable = (count >= 3) & (fmt_area > 0)
         cov[~usable] = 0.0  # as image_coverage: no hull of fewer than 3 points
         todo = usable & ~(area / fmt_area > threshold * (1.0 + MARGIN))
-    for i in np.flatnonzero(todo):
+        # the box holds the hull: below when the box is, beyond Qhull's rounding of the
+        # hull's area (_coverage's margin with the octagon's area, which is smaller)
+        tol = MARGIN + 1e-13 * far / area
+        boxed = todo & (box / fmt_area < threshold * (1.0 - tol))
+    for i in np.flatnonzero(todo & ~boxed):
         pts = xy[starts[i] : starts[i + 1]]
-        a = hull_area(pts, octagon[i])
-        extent = np.ptp(pts, axis=0)
-        if not a > MARGIN * float(extent[0] * extent[1]):  # (nearly) on a line
-            qhull[i] = True
-            continue
-        # Qhull's rounding grows with the squared distance of the points from the origin
-        # over the area: the margin does too
-        tol = MARGIN + 1e-13 * float(np.max(np.sum(pts * pts, axis=1))) / a
-        c = a / fmt_area[i]
-        shown = {f"{100 * c * f:.{digits}g}" for f in (1 - tol, 1 + tol)}
-        if abs(c - threshold) <= tol * threshold or len(shown) > 1:
-            qhull[i] = True
-        cov[i] = c
+        cov[i], qhull[i] = _coverage(pts, octagon[i], fmt_area[i], threshold, digits)
     if qhull.any():
         cov[qhull] = image_coverage(block, qhull)[qhull]
-    return np.isfinite(cov) & (cov < threshold), cov
+    below = boxed | (np.isfinite(cov) & (cov < threshold))
+    asked = boxed
+    if first is not None:  # the values printed: of the first images below
+        listed = np.zeros(m, bool)
+        listed[np.flatnonzero(below if among is None else below & among)[:first]] = True
+        asked = boxed & listed
+    qhull[:] = False
+    for i in np.flatnonzero(asked):
+        pts = xy[starts[i] : starts[i + 1]]
+        cov[i], qhull[i] = _coverage(pts, octagon[i], fmt_area[i], threshold, digits)
+    if qhull.any():
+        cov[qhull] = image_coverage(block, qhull)[qhull]
+    return below, cov

@@ -37,6 +37,10 @@ from ._stats import (
 )
 
 
+#: How many items a warning names (with their values), the rest as "…".
+NAMED = 6
+
+
 class QualitySections:
     """``residuals``, ``correlations`` and ``warnings`` sections and the geometry checks."""
 
@@ -324,8 +328,9 @@ class QualitySections:
                     f"{few.size} image(s) measured in fewer than {FEW_POINTS} "
                     "points (" + self._names(blk.images.ids, few, npts, "points") + ")"
                 )
-            below, cov = self.coverage_below(POOR_COVERAGE)
-            poor = np.flatnonzero(below & (npts >= 3))
+            measured = npts >= 3
+            below, cov = self.coverage_below(POOR_COVERAGE, first=NAMED, among=measured)
+            poor = np.flatnonzero(below & measured)
             if poor.size:
                 self.warn.append(
                     f"{poor.size} image(s) whose points cover less than "
@@ -347,6 +352,6 @@ class QualitySections:
             )
 
     @staticmethod
-    def _names(ids, idx, val=None, unit="", k: int = 6) -> str:
+    def _names(ids, idx, val=None, unit="", k: int = NAMED) -> str:
         parts = [ids[i] + (f" {val[i]:.3g} {unit}" if val is not None else "") for i in idx[:k]]
         return ", ".join(parts) + (", …" if len(idx) > k else "")

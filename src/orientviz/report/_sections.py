@@ -126,12 +126,15 @@ class _Builder(PrecisionSections, QualitySections):
             self._coverage = image_coverage(self.block)
         return self._coverage
 
-    def coverage_below(self, threshold: float) -> tuple[NDArray[np.bool_], F64]:
+    def coverage_below(
+        self, threshold: float, first: int | None = None, among: NDArray[np.bool_] | None = None
+    ) -> tuple[NDArray[np.bool_], F64]:
         """Which images' coverage is below ``threshold`` and the coverage (exact where it
-        is below; :func:`coverage_below` unless :meth:`coverage` was computed)."""
+        is below, or for the ``first`` of them among ``among``; :func:`coverage_below`
+        unless :meth:`coverage` was computed)."""
         if hasattr(self, "_coverage"):
             return self._coverage < threshold, self._coverage
-        return coverage_below(self.block, threshold)
+        return coverage_below(self.block, threshold, first=first, among=among)
 
     # .................................................................. driver
     def run(self) -> Report:
