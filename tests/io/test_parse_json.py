@@ -60,3 +60,25 @@ def test_late_overflow_is_reported_with_its_token_and_path():
     with pytest.raises(InputError, match="1e999 is not a finite number") as info:
         parse_json(text, "t.json")
     assert info.value.where == "x[500]"
+
+
+@pytest.mark.parametrize("rows", [250_000, 400_000])
+def test_a_file_of_dense_structure_is_refused_with_its_count(tmp_path, rows):
+    from orientviz.io.jsonio import read_json_file
+
+    text = '{"a": [' + ",".join(["[{}]"] * rows) + "]}"
+    path = tmp_path / "dense.json"
+    path.write_text(text, encoding="utf-8")
+    n = text.count("{") + text.count("[")
+    with pytest.raises(InputError, match=f"^.*{n} JSON objects/arrays in {len(text)} bytes"):
+        read_json_file(path)
+
+
+def test_a_large_file_of_numbers_passes_the_structure_check(tmp_path):
+    from orientviz.io.jsonio import read_json_file
+
+    values = [0.125 * k for k in range(200_000)]
+    path = tmp_path / "numbers.json"
+    path.write_text(json.dumps({"x": values}), encoding="utf-8")
+    assert path.stat().st_size > 2**20
+    assert read_json_file(path) == {"x": values}
