@@ -601,7 +601,10 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: {message} (see {self.prog} --help)\n")
 
 
-def _parser() -> argparse.ArgumentParser:
+def _parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The parser of the command line; ``only``: the command named first on it, the one
+    subparser built (a command's arguments never reach another's; ``--help`` and every
+    other first word get all of them)."""
     p = _Parser(
         prog="orientviz",
         description="Learn, teach and visually debug photogrammetric orientation.",
@@ -615,7 +618,7 @@ def _parser() -> argparse.ArgumentParser:
         help="one of the commands below",
         parser_class=_Parser,
     )
-    for name, cmd in COMMANDS.items():
+    for name, cmd in COMMANDS.items() if only not in COMMANDS else [(only, COMMANDS[only])]:
         s = sub.add_parser(
             name,
             description=textwrap.fill(cmd.description, 88),
@@ -784,8 +787,9 @@ def _main(argv: Sequence[str] | None, own_process: bool = False) -> int:
     """The work of :func:`main`: parse, dispatch, and turn every failure into one line
     and an exit code (``own_process``: the command's own process, :func:`pause_collector`)."""
     quiet_blas_workers()
-    parser = _parser()
-    args = parser.parse_args(argv)
+    words = sys.argv[1:] if argv is None else list(argv)
+    parser = _parser(words[0] if words else None)
+    args = parser.parse_args(words)
     if args.command not in COMMANDS:
         parser.print_help()
         return 0
