@@ -94,3 +94,23 @@ def test_a_step_holds_a_point_whose_block_is_singular(loss):
     first = res.history[1].x[6 * m : 6 * m + 3 * block.n_points].reshape(-1, 3)
     move = first[j] - start  # in the first step
     assert abs(move @ u) <= 1e-6 * max(np.linalg.norm(move), 1e-3)
+
+
+@pytest.mark.parametrize("loss", ["none", "huber"])
+def test_a_held_point_reaches_the_optimum_of_its_rays(loss):
+    """The point moved 1e9 times its distance along one of its rays: a tight run brings it
+    back to where its rays meet and ends at the optimum of the block solved from the
+    unmoved point (the depth of a held point is sought alone after each step,
+    :mod:`orientviz.bundle.loop._depth`). Before: the held depth never moved; the run
+    ended with the point at ~1e12 and vᵀPv 1.5e5 times the optimum (Huber: Σρ 135 times)."""
+    opts = BundleOptions(loss=loss, ftol=1e-14, tol=1e-12, max_iter=200)
+    block, j, X0 = _far_point_block(1.0)
+    ref = bundle_adjust(block, options=opts, precision=False)
+    far, _, _ = _far_point_block(1e9)
+    res = bundle_adjust(far, options=opts, precision=False)
+    assert res.converged
+    c, c_ref = res.history[-1].cost, ref.history[-1].cost
+    assert abs(c - c_ref) <= 1e-10 * c_ref
+    assert np.linalg.norm(res.points[j] - ref.points[j]) <= 1e-6 * np.linalg.norm(
+        ref.points[j] - X0
+    )

@@ -21,6 +21,9 @@ hand on. Its knobs are fields of the problem's
   in a small block left out after a search that adds little to its step's decrease
   (:data:`SEARCH_GAIN`) until the run's tail (:data:`ROBUST_TAIL`), there until a search
   gains less than the run's ftol;
+* a point the step held along its depth (its block V numerically singular,
+  :func:`~orientviz.bundle.reduced.inv3_held`) has its depth sought alone after the step,
+  given the step's new image parameters (:mod:`._depth`);
 * the additional parameters are held at their values in the first step from a poor
   start; their border E, F is reused in the next iteration when the last step moved
   nothing by more than ``ap_reuse`` (the Jacobians then change by about as little, less
@@ -71,6 +74,7 @@ from numpy.typing import NDArray
 from ...adjust.loop import Evaluation, Step
 from ..model import angle_map
 from ..problem import BundleProblem, BundleState
+from ._depth import depth_search
 from ._gain import POOR_GAIN, predicted_decrease
 from ._loss import RobustLoss
 from ._tail import point_newton, point_search, tail_model
@@ -232,6 +236,8 @@ class BundleSteps:
         self._unrelaxed: Step | None = None  # the model's own step of an over-relaxed one
         self._sigma = None  # diagonals (U, V, F) of the last solve (the stopping measure)
         self.points_moved = 0  # points the last search moved otherwise than the joint step
+        self._held = None  # the point unknowns the last solved step held (._depth)
+        self.depths_moved = 0  # held points whose depth the last step's search moved
         self.search_gain = None  # … and the decrease of Σρ it added (None: no search)
         self.search_off = False  # the searches stopped paying (SEARCH_GAIN)
         self.stop_ftol = 0.0  # the run's ftol (set by the caller; a robust run's own)
@@ -513,6 +519,7 @@ class BundleSteps:
             if design is not None:  # the camera model's own design again (a retry, the end)
                 prob.run.ap = design.with_design(design.A, prob.obs.weight)
         self._sigma = (ne.diagU, ne.diagV, ne.diagF if prob.q or prob.na else None)
+        self._held = None if ne.held is None else ne.held.points
         if self.robust_tail and not self._retry and self.loss_on and not self.switch_pending:
             w = ROBUST_OVERRELAX
             self._unrelaxed = Step(rel, self._dx(dc, dp, da), (dc, dp, da, None, None, local, None))
@@ -684,6 +691,20 @@ class BundleSteps:
             step.data = (dc, dp, da) + step.data[3:6] + (None,)
             step.max_correction = self.last_rel = self._sigma_correction(dc, dp, da)
             step.dx = self._dx(dc, dp, da)
+        self.depths_moved = 0
+        if self._held is not None and not (local or self.prob.aux):
+            # the held points' depths sought alone (._depth): the move applied, the step's
+            # own dp kept for its model and stopping measure (the depth is no unknown of
+            # the held step)
+            if images is None:
+                images = (st.X0 + dc[:, :3], st.angles + dc[:, 3:])
+            weight = self.base_weight if self.loss is not None else self.prob.obs.weight
+            loss = self.loss if self.loss_on else None
+            dp, self.depths_moved, _ = depth_search(
+                self.prob, loss, weight, st, dc, da, dp, self._held, images
+            )
+            if self.depths_moved and step.dx is not None:
+                step.dx = self._dx(dc, dp, da)
         new = self.prob.apply(st, dc, dp, da, local=local, images=images)
         if local and step.dx is not None:  # the history records the change of the angles
             step.dx.reshape(-1)[: 6 * self.prob.m].reshape(-1, 6)[:, 3:] = new.angles - st.angles
