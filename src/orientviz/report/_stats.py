@@ -171,7 +171,7 @@ def conditioned_below(C: F64, limit: float) -> NDArray[np.bool_]:
 
     ``C`` has a unit diagonal. It is positive definite when its leading minors
     1 − ρ₀₁² and det C are (Sylvester); then its largest eigenvalue is at most
-    h = maxᵢ (1 + Σⱼ≠ᵢ |ρᵢⱼ|) (Gershgorin), its middle one too, so the smallest is at
+    h = maxᵢ (1 + Σⱼ≠ᵢ ``|ρᵢⱼ|``) (Gershgorin), its middle one too, so the smallest is at
     least det C / h² and the condition number at most h³ / det C. A matrix is certified
     when h³ / det C lies below ``limit`` by a relative 1e-6: the minors, formed from
     entries of size ≤ 1, and the eigenvalues of a symmetric solver are both within a few

@@ -15,7 +15,7 @@ rays of a far point are nearly linear: with C̄ the mean of the point's images' 
 centres and a = X − C̄ (X the point after the step), the point C̄ + a/u (u > 0; u = 1 the
 step's own, u → 0 the point at infinity in the direction of a) is seen from the centre
 C_i along a + u (C̄ − C_i), so each misclosure is r_i(u) ≈ r_i∞ + u c_i to second order in
-u |C̄ − C_i| / |a|. The misclosures at u = 1 and u = ½ give r∞ and c; the model's
+u ‖C̄ − C_i‖ / ‖a‖. The misclosures at u = 1 and u = ½ give r∞ and c; the model's
 minimiser u* (for a robust loss the best of a grid in u, :data:`DEPTH_GRID`) is taken
 within [:data:`DEPTH_MIN_U`, :data:`DEPTH_MAX_U`] — a point that the model sends to or
 beyond infinity recedes by a factor 1/:data:`DEPTH_MIN_U` per step, where its rays' Σρ
