@@ -1,6 +1,7 @@
 """The viewer application without a browser: CLI, errors, export, panel actions."""
 
 import argparse
+import contextlib
 import socket
 
 import numpy as np
@@ -215,3 +216,62 @@ def test_a_panel_callback_after_stop_does_nothing(app):
     app.stop()
     callback()
     assert len(runs) == 1 and app.panel.gate.closed and app.panel.gate is app.gate
+
+
+def test_an_imported_model_opens_without_scipy_special(tmp_path):
+    """Up to the address of ``orientviz view FILE``, nothing loads scipy.special (with
+    scipy's array-API layer it is ~0.2 s of the command's start, benchmarks/README.md
+    "Session 18: the viewer's first picture"): the viewer's and the solver's modules and the
+    evaluation of an imported model at its start values leave it to the first use."""
+    import subprocess
+    import sys
+
+    from orientviz.cli import main
+
+    path = tmp_path / "axe.json"
+    assert main(["import-colmap", "axe", "-o", str(path)]) == 0
+    code = (
+        "import sys\n"
+        "from orientviz.viewer.app import resolve_content\n"
+        f"demo = resolve_content({str(path)!r}, {{'free': True}}, background=True)\n"
+        "assert demo.background is not None  # opens at the start values, solved later\n"
+        "print('scipy.special' in sys.modules)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+
+
+def test_the_address_comes_before_the_scene_which_a_page_gets_whole(monkeypatch, capsys):
+    """The page starts loading while the scene and the panel are built: the address is
+    printed first, and the build runs inside the server's atomic block, so a page that
+    connects meanwhile gets the scene and the panel in one batch, never half of them."""
+    import viser
+
+    from orientviz.viewer.scene import BlockScene
+
+    seen = []
+    build, atomic = BlockScene.build, viser.ViserServer.atomic
+    depth = [0]
+
+    def counted(self):
+        depth[0] += 1
+        try:
+            with atomic(self):
+                yield
+        finally:
+            depth[0] -= 1
+
+    def recorded(scene):
+        seen.append((capsys.readouterr().out, depth[0]))
+        return build(scene)
+
+    monkeypatch.setattr(viser.ViserServer, "atomic", contextlib.contextmanager(counted))
+    monkeypatch.setattr(BlockScene, "build", recorded)
+    app = ViewerApp("block", port=0, verbose=True)
+    try:
+        assert len(seen) == 1 and app.scene is not None
+        printed, inside = seen[0]
+        assert f"open {app.url}" in printed and inside == 1
+        assert depth[0] == 0  # the batch is sent once the panel is built too
+    finally:
+        app.stop()

@@ -35,7 +35,6 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.special import ndtri
 
 from ..errors import AdjustmentError, InputError, NotDeterminableError
 from .engine import gauss_newton
@@ -62,6 +61,8 @@ def critical_value(alpha0: float = 0.001) -> float:
     """Critical value of the two-sided w-test, ``k = z(1 − α0/2)`` (α0 = 0.001 → 3.29)."""
     if not 0.0 < alpha0 < 1.0:
         raise InputError(f"expected a significance level 0 < alpha0 < 1, got {alpha0}")
+    from scipy.special import ndtri  # ~0.2 s of imports: not at the package's import
+
     return float(ndtri(1.0 - alpha0 / 2.0))
 
 
@@ -77,6 +78,8 @@ def noncentrality(alpha0: float = 0.001, beta0: float = 0.80) -> float:
     """
     if not 0.0 < beta0 < 1.0:
         raise InputError(f"expected a power 0 < beta0 < 1, got {beta0}")
+    from scipy.special import ndtri
+
     return critical_value(alpha0) + float(ndtri(beta0))
 
 

@@ -25,7 +25,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.special import ndtri
 
 from ..adjust.result import Adjustment
 from ..block import Block
@@ -199,6 +198,8 @@ def self_calibrate(
     """
     aps = default_set(additional, block) if isinstance(additional, str) else additional
     if keep_t is None:
+        from scipy.special import ndtri  # ~0.2 s of imports: only when the rule is asked
+
         keep_t = float(ndtri(1 - alpha / 2)) if isinstance(aps, LensModel) else 10.0
     if ap_sigma is None:
         ap_sigma = default_ap_sigma(aps, block)

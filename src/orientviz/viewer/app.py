@@ -27,15 +27,11 @@ from ..errors import InputError, OrientvizError
 from ..io.safeio import write_atomic
 from ..io.solve import failure
 from .background import FIRST_BROWSER_WAIT
-from .block_geometry import BlockGeometry
 from .callbacks import CallbackGate
 from .demo import Demo
 from .demos import DEMOS, demo_from_block, load_demo
 from .geometry import VIEW_FOV
 from .keys import keep_arrow_keys_on_sliders
-from .panel import BlockPanel
-from .scene import BlockScene
-from .snapshot import panel_markdown, with_panel
 from .solved import (
     Solved,
     block_description,
@@ -175,9 +171,12 @@ class ViewerApp:
         self._message_md.visible = False
         if error:
             self.report(error)
+        if verbose:  # the page loads while the scene is built (a browser gets it whole)
+            print(f"orientviz viewer: open {self.url} in a browser (Ctrl-C to stop)", flush=True)
         if content is not None:
             try:
-                self.load(content)
+                with self.server.atomic():
+                    self.load(content)
             except KeyboardInterrupt:  # Ctrl-C while building: leave no server thread behind
                 self.server.stop()
                 raise
@@ -185,8 +184,6 @@ class ViewerApp:
                 self.report(
                     str(exc) if isinstance(exc, OrientvizError) else f"{type(exc).__name__}: {exc}"
                 )
-        if verbose:
-            print(f"orientviz viewer: open {self.url} in a browser (Ctrl-C to stop)", flush=True)
 
     # ------------------------------------------------------------------ content
     @property
@@ -201,6 +198,11 @@ class ViewerApp:
         self._build(demo)
 
     def _build(self, demo: Any) -> None:
+        # the scene's and the panel's modules load here, after the address is printed
+        from .block_geometry import BlockGeometry
+        from .panel import BlockPanel
+        from .scene import BlockScene
+
         gui = self.server.gui
         self._head = gui.add_markdown(f"### {demo.title}\n{demo.description}")
         if demo.message:
@@ -287,6 +289,8 @@ class ViewerApp:
         recorded scene embedded (GUI controls are not part of a static snapshot), with
         the panel's read-out (σ̂0, state, largest residual) and legend in a box.
         """
+        from .snapshot import panel_markdown, with_panel
+
         title = self.demo.title if self.demo is not None else ""
         page = with_panel(self.server.scene.as_html(), title, panel_markdown(self))
         return write_atomic(path, page)
