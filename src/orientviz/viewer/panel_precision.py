@@ -87,7 +87,6 @@ class PrecisionControls:
         p, h = self.panel, self.handles
         sc, st = p.scene, p.state
         opt = sc.ellipsoid_options
-        k = confidence_factor(opt["level"])
         res = st.result if st.at_result else None
         b = st.block
         missing = res is not None and res.normalized_residuals is None
@@ -109,6 +108,7 @@ class PrecisionControls:
                 "*compute the precision*"
             )
         else:
+            k = confidence_factor(opt["level"])
             n_pts = (
                 int(np.asarray(sc.nodes["ellipsoids"].vertices).shape[0] // 42)
                 if ("ellipsoids" in sc.nodes)

@@ -40,6 +40,17 @@ def confidence_factor(level: float, dof: int = 3) -> float:
     return float(np.sqrt(chdtri(dof, 1.0 - level)))  # χ²_dof quantile at ``level``
 
 
+def has_covariances(result) -> bool:
+    """True if ``result`` carries cofactors that ellipsoids are drawn from (its precision):
+    the dense cofactor or the stored point or exterior blocks."""
+    if result is None:
+        return False
+    groups = getattr(result, "cofactor_groups", None) or {}
+    return (
+        getattr(result, "cofactor", None) is not None or "points" in groups or "exterior" in groups
+    )
+
+
 def _s0(result) -> float:
     ok = result is not None and np.isfinite(result.sigma0) and result.redundancy > 0
     return float(result.sigma0) if ok else 1.0

@@ -32,7 +32,7 @@ import numpy as np
 from . import geometry as g
 from .block_geometry import COLORS, BlockGeometry
 from .geometry import frustum_segments
-from .precision_view import confidence_factor, neighbour_correlations
+from .precision_view import confidence_factor, has_covariances, neighbour_correlations
 from .shapes import vertex_colours
 
 #: Blocks with more images draw their frustums batched per strip, not one node per image:
@@ -380,6 +380,8 @@ class BlockScene:
                 old.remove()
         if self.geo.state.result is None or not self.geo.state.at_result:
             return None  # ellipsoids belong to the adjusted state (not to a replayed one)
+        if not has_covariances(self.geo.state.result):
+            return None  # solved without the precision (a large block at opening): none to draw
         k = confidence_factor(opt["level"])
         if new_gain or not getattr(self, "auto_ellipsoid_gain", None):
             self.auto_ellipsoid_gain = self.geo.ellipsoid_gain(k)
