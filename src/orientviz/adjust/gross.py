@@ -78,7 +78,7 @@ def noncentrality(alpha0: float = 0.001, beta0: float = 0.80) -> float:
     """
     if not 0.0 < beta0 < 1.0:
         raise InputError(f"expected a power 0 < beta0 < 1, got {beta0}")
-    from scipy.special import ndtri
+    from scipy.special import ndtri  # as in critical_value
 
     return critical_value(alpha0) + float(ndtri(beta0))
 

@@ -139,6 +139,6 @@ def critical_values_2d(alpha0: float = 0.001, beta0: float = 0.80) -> dict[int, 
 
 def level_2d(alpha0: float = 0.001, beta0: float = 0.80) -> float:
     """Significance level of the 2-D test under the B-method (0.1 %, 80 % → 0.28 %)."""
-    from scipy.special import chdtrc
+    from scipy.special import chdtrc  # as in critical_values_2d
 
     return float(chdtrc(2, critical_values_2d(alpha0, beta0)[2]))

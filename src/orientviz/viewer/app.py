@@ -32,6 +32,7 @@ from .demo import Demo
 from .demos import DEMOS, demo_from_block, load_demo
 from .geometry import VIEW_FOV
 from .keys import keep_arrow_keys_on_sliders
+from .snapshot import panel_markdown, with_panel
 from .solved import (
     Solved,
     block_description,
@@ -198,10 +199,9 @@ class ViewerApp:
         self._build(demo)
 
     def _build(self, demo: Any) -> None:
-        # the scene's and the panel's modules load here, after the address is printed
-        from .block_geometry import BlockGeometry
-        from .panel import BlockPanel
-        from .scene import BlockScene
+        from .block_geometry import BlockGeometry  # after the address: the page loads meanwhile
+        from .panel import BlockPanel  # after the address, as BlockGeometry
+        from .scene import BlockScene  # after the address, as BlockGeometry
 
         gui = self.server.gui
         self._head = gui.add_markdown(f"### {demo.title}\n{demo.description}")
@@ -289,8 +289,6 @@ class ViewerApp:
         recorded scene embedded (GUI controls are not part of a static snapshot), with
         the panel's read-out (σ̂0, state, largest residual) and legend in a box.
         """
-        from .snapshot import panel_markdown, with_panel
-
         title = self.demo.title if self.demo is not None else ""
         page = with_panel(self.server.scene.as_html(), title, panel_markdown(self))
         return write_atomic(path, page)
