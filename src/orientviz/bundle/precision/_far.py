@@ -28,6 +28,12 @@ I64 = NDArray[np.int64]
 HELD_PARALLAX: float = 1e-5
 
 
+def _norms(v: F64) -> F64:
+    """Euclidean norms of the rows of ``v`` (n, 3): the additions of
+    ``np.linalg.norm(v, axis=1)`` in its order, without its generic reduction."""
+    return np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2])
+
+
 def far_columns(prob, st) -> tuple[I64, F64]:
     """Columns of the point unknowns whose rays meet at less than :data:`HELD_PARALLAX`
     (the largest angle between a ray and the point's mean ray direction), not weighted
@@ -39,12 +45,17 @@ def far_columns(prob, st) -> tuple[I64, F64]:
     if not col.size:
         return np.zeros(0, np.int64), np.zeros((0, 3))
     d = st.xyz[prob.points.unknown[col]] - st.X0[prob.obs.image[vo]]
-    d /= np.linalg.norm(d, axis=1)[:, None]
-    mean = np.zeros((p_var, 3))
-    np.add.at(mean, col, d)
-    mean /= np.linalg.norm(mean, axis=1)[:, None]
+    d /= _norms(d)[:, None]
+    # each point's sum of its rays' directions, added in the rays' order (as np.add.at)
+    mean = np.stack([np.bincount(col, d[:, c], p_var) for c in range(3)], axis=1)
+    mean /= _norms(mean)[:, None]
     # the angle from the cross product: accurate where arccos of a dot product is not
-    sin = np.linalg.norm(np.cross(d, mean[col]), axis=1)
+    m = mean[col]
+    cross = np.empty_like(d)
+    cross[:, 0] = d[:, 1] * m[:, 2] - d[:, 2] * m[:, 1]
+    cross[:, 1] = d[:, 2] * m[:, 0] - d[:, 0] * m[:, 2]
+    cross[:, 2] = d[:, 0] * m[:, 1] - d[:, 1] * m[:, 0]
+    sin = _norms(cross)
     par = np.zeros(p_var)
     np.maximum.at(par, col, sin)
     rays = np.bincount(col, minlength=p_var)
