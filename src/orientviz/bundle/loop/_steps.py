@@ -10,8 +10,10 @@ hand on. Its knobs are fields of the problem's
   weighted by √ρ′ of the iterate (set in the problem's ray weights before its normal
   equations are formed); least-squares steps come first for Huber and soft-L1, and for
   Cauchy from a start with σ0 ≥ :data:`LOSS_SIGMA0`; in the run's tail the steps are
-  over-relaxed (:data:`ROBUST_OVERRELAX`) and a convex loss's model takes the curvature
-  along down-weighted rays' misclosures closer to the true one (:data:`ROBUST_TAIL_FLOOR`);
+  over-relaxed (:data:`ROBUST_OVERRELAX`; by the model's curvature ratio along an
+  established linear tail, :data:`OVERRELAX_MIN_RATIO`) and a convex loss's model takes the
+  curvature along down-weighted rays' misclosures closer to the true one
+  (:data:`ROBUST_TAIL_FLOOR`);
   an over-relaxed step the loop rejects is retried as the model's own step (ω = 1, kept
   from its solve: no new solve, whatever λ the loop asks), and a step rejected again is
   solved at the loop's λ without the over-relaxation and the tail's model; in every
@@ -115,6 +117,18 @@ LOSS_SWITCH_CONVEX: float = 0.3
 #: optima with and without it: benchmarks/README.md, robust losses on Ladybug.
 ROBUST_TAIL: float = 1e-3
 ROBUST_OVERRELAX: float = 1.5
+#: A convex loss's tail step is taken ω times where the model's curvature along the last two
+#: accepted tail steps exceeded the true one by more than :data:`OVERRELAX_MIN_RATIO` both
+#: times, the two ratios agreeing to within :data:`OVERRELAX_AGREE` (:meth:`BundleSteps.
+#: _curvature_ratio`: a linear tail along one mode the model holds far too stiff — Ladybug's
+#: Huber tail, a point and the cameras moving together, ratios ~300, 0.984 per step): ω is
+#: the smaller ratio, at most :data:`OVERRELAX_MAX`. Along such a mode the optimum lies that
+#: many model steps away; a step that raises Σρ is retried as the model's own (as any
+#: over-relaxed one). DBAT's tails (ratios 2–7) keep ω = 1.5. Measurements:
+#: benchmarks/README.md, Session 18, the loop.
+OVERRELAX_MIN_RATIO: float = 10.0
+OVERRELAX_AGREE: float = 0.25
+OVERRELAX_MAX: float = 64.0
 #: In the tail a convex loss's model also takes the curvature along each beyond-scale ray's
 #: misclosure closer to the true one: ρ′ + 2sρ″ (0 for Huber, ρ′/(1 + s/b) for soft-L1),
 #: floored at this fraction of ρ′ (a 2 × 2 per-ray model, Triggs et al. 2000: rows P½J
@@ -236,6 +250,7 @@ class BundleSteps:
         self._unrelaxed: Step | None = None  # the model's own step of an over-relaxed one
         self._sigma = None  # diagonals (U, V, F) of the last solve (the stopping measure)
         self.points_moved = 0  # points the last search moved otherwise than the joint step
+        self._ratios = (0.0, 0.0)  # _curvature_ratio of the last two accepted steps
         self._held = None  # the point unknowns the last solved step held (._depth)
         self.depths_moved = 0  # held points whose depth the last step's search moved
         self.search_gain = None  # … and the decrease of Σρ it added (None: no search)
@@ -521,7 +536,7 @@ class BundleSteps:
         self._sigma = (ne.diagU, ne.diagV, ne.diagF if prob.q or prob.na else None)
         self._held = None if ne.held is None else ne.held.points
         if self.robust_tail and not self._retry and self.loss_on and not self.switch_pending:
-            w = ROBUST_OVERRELAX
+            w = self._overrelaxation()
             self._unrelaxed = Step(rel, self._dx(dc, dp, da), (dc, dp, da, None, None, local, None))
             dc, dp, da = dc * w, dp * w, da * w
             rel *= w
@@ -542,6 +557,44 @@ class BundleSteps:
             ne = fac = None
         self._gain_from = (st, prob.run.ap if prob.q else None)  # (its A_csr: read if needed)
         return Step(rel, dx, (dc, dp, da, fac, ne, local, points))
+
+    def _overrelaxation(self) -> float:
+        """ω of a tail step: :data:`ROBUST_OVERRELAX`, or the smaller curvature ratio of the
+        last two accepted steps where both exceed :data:`OVERRELAX_MIN_RATIO` and agree to
+        within :data:`OVERRELAX_AGREE`, at most :data:`OVERRELAX_MAX`."""
+        a, b = self._ratios
+        if min(a, b) > OVERRELAX_MIN_RATIO and abs(a - b) <= OVERRELAX_AGREE * b:
+            return min(a, b, OVERRELAX_MAX)
+        return ROBUST_OVERRELAX
+
+    def _curvature_ratio(self, step: Step, previous: Evaluation, gain_from) -> float:
+        """The reweighted model's curvature along the accepted step s over the true one.
+
+        Along s the model is Σρ − 2α rᵀJs + α²‖Js‖² (r, J of ``previous``, weighted by
+        1/σ·√ρ′), the true Σρ − 2α rᵀJs + α²c (the same slope): the realised decrease d
+        at α = 1 gives c = 2 rᵀJs − d, and the ratio is ‖Js‖²/c — the multiple of s
+        at which the true quadratic along it is least, over the one the model would take
+        (1/ω of an over-relaxed s). inf where c ≤ 0 (the true Σρ not convex along s), 0
+        where it cannot be formed (no derivatives kept, a step in frame rotations). The
+        points' search makes d larger than the joint step's own: the ratio then errs high
+        (a step too long is rejected and retried, see :data:`OVERRELAX_MIN_RATIO`)."""
+        scale = getattr(previous.data, "scale", None)
+        rw, Je, Jp = previous.data
+        if scale is None or Je is None or gain_from is None or self.is_local(previous):
+            return 0.0
+        prob, obs = self.prob, self.prob.obs
+        dc, dp, da = step.data[0], step.data[1], step.data[2]
+        Jd = np.einsum("nij,nj->ni", Je, np.take(dc, obs.image, axis=0))
+        var = obs.column >= 0
+        Jd[var] += np.einsum("nij,nj->ni", Jp[var], np.take(dp, obs.column[var], axis=0))
+        ap = gain_from[1]
+        if ap is not None and prob.q:
+            Jd += (ap.A_csr @ da[: prob.q]).reshape(-1, 2)
+        Jd *= self.base_weight
+        Jd *= scale[:, None]
+        model = float(np.sum(Jd * Jd))
+        true = 2.0 * float(np.sum(rw * Jd)) - (previous.cost - self.pending_cost)
+        return model / true if true > 0 else np.inf
 
     def _poor_step(self, step: Step, previous: Evaluation) -> bool:
         """Whether an accepted least-squares step whose decrease of vᵀPv meets
@@ -726,9 +779,13 @@ class BundleSteps:
             and not step.max_correction < prob.options.tol
         )
         modelled = self._modelled_warm_up(step, previous)
-        self._gain_from = None  # (its start state: not kept beyond the step)
+        gain_from, self._gain_from = self._gain_from, None  # (not kept beyond the step)
         if self.loss_on and not self.switch_pending and previous.cost > 0:  # a robust step
             self.robust_tail = (previous.cost - self.pending_cost) < ROBUST_TAIL * previous.cost
+            ratio = 0.0  # (a redescending loss keeps ω = 1.5: its tails were not measured)
+            if self.robust_tail and not self.loss.redescending:
+                ratio = self._curvature_ratio(step, previous, gain_from)
+            self._ratios = (self._ratios[1], ratio)
             self._drops = (self._drops[-1], previous.cost - self.pending_cost)
             small = prob.obs.xy.shape[0] <= SEARCH_GATE_RAYS
             if self.search_gain is not None:  # the points' search: did it pay?
