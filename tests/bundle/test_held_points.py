@@ -16,7 +16,11 @@ import pytest
 
 import orientviz as ov
 from orientviz.bundle import BundleOptions, bundle_adjust
+from orientviz.bundle.loop._depth import DEPTH_FAR_SIZES
 from orientviz.bundle.reduced import SINGULAR_REL_EIG, inv3, inv3_held
+from orientviz.camera import project
+from orientviz.plausibility import check_block
+from orientviz.rotation import matrix_from_opk
 
 
 def _blocks(rng, n):
@@ -114,3 +118,41 @@ def test_a_held_point_reaches_the_optimum_of_its_rays(loss):
     assert np.linalg.norm(res.points[j] - ref.points[j]) <= 1e-6 * np.linalg.norm(
         ref.points[j] - X0
     )
+
+
+def _point_at_infinity_block():
+    """The small simulated block with one two-ray tie point whose second ray is made
+    parallel to its first (its observation in the second image: the direction from the
+    first image's centre to the point), so that the point's rays meet only at infinity;
+    the point starts 1e3 times its distance from the first image along that ray."""
+    block, j, X0 = _far_point_block(1e3)
+    obs, im = block.observations, block.images
+    rows = np.flatnonzero(obs.point == j)
+    a, b = obs.image[rows]
+    R = matrix_from_opk(im.angles[b, 0], im.angles[b, 1], im.angles[b, 2], block.sequence)
+    cam = im.camera[b]
+    d = block.points.xyz[j] - im.X0[a]
+    obs.xy[rows[1]] = project(im.X0[b] + d, im.X0[b], R, block.cameras.c[cam],
+                              block.cameras.x0[cam], block.cameras.y0[cam])  # fmt: skip
+    return block, j
+
+
+@pytest.mark.parametrize("loss", ["none", "cauchy"])
+def test_a_point_at_infinity_stays_a_readable_coordinate(loss):
+    """A point whose rays meet only at infinity recedes while the run is held, but no
+    farther than DEPTH_FAR_SIZES block sizes from its images: the result's coordinates
+    pass the plausibility check as a written file would (a warning, no error). Before: the
+    depth search took it 1000-fold out per step, to 1e17 and beyond (a written result was
+    refused when read again: "far outside", "a coordinate beyond ±1e+15")."""
+    block, j = _point_at_infinity_block()
+    opts = BundleOptions(loss=loss, ftol=1e-14, tol=1e-12, max_iter=60)
+    res = bundle_adjust(block, options=opts, precision=False)
+    size = float(np.max(np.ptp(block.images.X0, axis=0)))  # (the cameras move little)
+    centre = block.images.X0[block.observations.image[block.observations.point == j]].mean(axis=0)
+    dist = float(np.linalg.norm(res.points[j] - centre))
+    assert dist > 1e6 * size  # it did recede (held, its depth sought)
+    assert dist <= 1.01 * DEPTH_FAR_SIZES * size
+    solved = block.copy()
+    solved.points.xyz[:] = res.points
+    errors = [f for f in check_block(solved) if f.level == "error"]
+    assert not errors, errors

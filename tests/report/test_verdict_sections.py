@@ -93,12 +93,18 @@ def _cloud_block(strip, rng, kinds):
     return blk
 
 
-@pytest.mark.parametrize("seed", [28, 29, 30])
-def test_coverage_below_equals_the_hulls_verdict(strip, seed):
+def _mixed_block(strip, seed):
+    """A block whose images' points are discs, slivers, lines and pairs (in an order the
+    seed turns), and each image's coverage from its hull."""
     rng = np.random.default_rng(seed)
     kinds = ["disc", "disc", "sliver", "line", "two", "disc", "sliver"]
     blk = _cloud_block(strip, rng, kinds[seed % 3 :] + kinds[: seed % 3])
-    exact = image_coverage(blk)
+    return blk, image_coverage(blk)
+
+
+@pytest.mark.parametrize("seed", [28, 29, 30])
+def test_coverage_below_equals_the_hulls_verdict(strip, seed):
+    blk, exact = _mixed_block(strip, seed)
     thresholds = [0.05, 0.25, 0.6, *exact[np.isfinite(exact) & (exact > 0)][:6]]
     for thr in thresholds:  # also each image's own coverage: not below it
         below, cov = coverage_below(blk, thr)
@@ -113,10 +119,7 @@ def test_coverage_below_equals_the_hulls_verdict(strip, seed):
 
 @pytest.mark.parametrize("seed", [28, 29, 30])
 def test_coverage_below_gives_the_first_values_asked_for(strip, seed):
-    rng = np.random.default_rng(seed)
-    kinds = ["disc", "disc", "sliver", "line", "two", "disc", "sliver"]
-    blk = _cloud_block(strip, rng, kinds[seed % 3 :] + kinds[: seed % 3])
-    exact = image_coverage(blk)
+    blk, exact = _mixed_block(strip, seed)
     among = np.arange(blk.n_images) % 3 != 1
     for thr in (0.05, 0.25, 0.6):
         for first in (1, 3, 6):

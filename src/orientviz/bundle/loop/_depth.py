@@ -19,7 +19,10 @@ u ‖C̄ − C_i‖ / ‖a‖. The misclosures at u = 1 and u = ½ give r∞ and
 minimiser u* (for a robust loss the best of a grid in u, :data:`DEPTH_GRID`) is taken
 within [:data:`DEPTH_MIN_U`, :data:`DEPTH_MAX_U`] — a point that the model sends to or
 beyond infinity recedes by a factor 1/:data:`DEPTH_MIN_U` per step, where its rays' Σρ
-falls by about as much of what remains to the limit; one far off comes back by halves. Of
+falls by about as much of what remains to the limit, but never beyond the farthest
+distance (:data:`DEPTH_FAR_SIZES`, :data:`DEPTH_FAR_SHARE`: past it the rays do not change
+within their rounding, and a written result stays readable); one far off comes back by
+halves. Of
 u ∈ {1, ½, u*} each point keeps the one whose true misclosures give its rays the lowest Σρ,
 and moves only when that lowers them by more than :data:`DEPTH_GAIN` of their Σρ (below
 it the difference is rounding: a point at the limit is not pushed further from step to
@@ -33,6 +36,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ...plausibility import ABSURD_M
 from ..problem import BundleProblem, BundleState
 from ._loss import RobustLoss
 from ._tail import ray_misclosures
@@ -51,6 +55,13 @@ DEPTH_MAX_U: float = 2.0
 #: evenly in log u over [DEPTH_MIN_U, DEPTH_MAX_U] and at the least-squares u* (reweighted
 #: least squares creeps along u where a redescending loss has rays far beyond its scale).
 DEPTH_GRID: int = 48
+#: The farthest a held point is moved from its images' mean centre, in sizes of the block
+#: (the largest extent of its projection centres): there a baseline of a block's size
+#: subtends 1e-9 rad, so its rays are within that of their directions at infinity …
+DEPTH_FAR_SIZES: float = 1e9
+#: … and never beyond this share of :data:`orientviz.plausibility.ABSURD_M`, so that a
+#: written result is read again as coordinates (points found beyond it are not moved out).
+DEPTH_FAR_SHARE: float = 1e-2
 #: A point moves only when its rays' Σρ falls by more than this fraction of it (~64 ε:
 #: a smaller difference is the rounding of the sum).
 DEPTH_GAIN: float = 1e-14
@@ -113,6 +124,13 @@ def depth_search(
     X0, angles = images
     centre = np.add.reduceat(X0.take(prob.obs.image[obs_rays], axis=0), starts) / n_rays[:, None]
     a = st.xyz.take(pts.unknown[held], axis=0) + dp[held] - centre
+    # the least inverse depth: no farther than the farthest (DEPTH_FAR_SIZES, _SHARE); a
+    # point already beyond may only come closer
+    size = float(np.max(np.ptp(X0, axis=0))) if X0.shape[0] > 1 else 0.0
+    far = ABSURD_M * DEPTH_FAR_SHARE
+    if size > 0.0:
+        far = min(far, DEPTH_FAR_SIZES * size)
+    u_low = np.maximum(np.minimum(np.linalg.norm(a, axis=1) / far, 1.0), DEPTH_MIN_U)
     ap = st.ap + da
     prob.obs.weight[...] = weight
 
@@ -132,11 +150,11 @@ def depth_search(
     cc = np.sum(c * c, axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):  # the model's least-squares u*
         best = -np.add.reduceat(rc, starts) / np.add.reduceat(cc, starts)
-    best = np.clip(np.nan_to_num(best, nan=1.0), DEPTH_MIN_U, DEPTH_MAX_U)
+    best = np.clip(np.nan_to_num(best, nan=1.0), u_low, DEPTH_MAX_U)
     if loss is not None:  # a robust loss: the model's Σρ on a grid of u and at u*
         grid = np.concatenate(
             (
-                np.geomspace(DEPTH_MIN_U, DEPTH_MAX_U, DEPTH_GRID)[:, None].repeat(held.size, 1),
+                np.maximum(np.geomspace(DEPTH_MIN_U, DEPTH_MAX_U, DEPTH_GRID)[:, None], u_low),
                 best[None],
             )
         )
@@ -147,6 +165,7 @@ def depth_search(
     true = np.empty((3, held.size))
     true[:2] = costs(rw.reshape(-1, 2))
     true[2] = costs(ray_misclosures(prob, X0, angles, ap, obs_rays, at(best[None])))
+    true[1, u_low > 0.5] = np.inf  # half the inverse depth: beyond the farthest
     cand = np.array([np.ones(held.size), np.full(held.size, 0.5), best])
     k = np.argmin(np.where(np.isfinite(true), true, np.inf), axis=0)
     pick = np.arange(held.size)
