@@ -245,7 +245,8 @@ COMMANDS: dict[str, Command] = {
                 type=iteration_count,
                 default=None,
                 metavar="N",
-                help="maximum number of iterations (overrides options.max_iter of the file)",
+                help="maximum number of iterations (overrides options.max_iter of the file); a "
+                "robust run (--robust) may take 4 times as many, its reweighted steps included",  # ROBUST_ITER_FACTOR
             ),
             arg(
                 "--tol",

@@ -183,6 +183,7 @@ def check_block(
             unit = length_name(length)
             dist = np.max(np.abs(allc - centre), axis=1)
             far = np.flatnonzero(fin & (dist > EXTENT_FACTOR * size))
+            far = far[np.argsort(-dist[far], kind="stable")]  # the farthest named first
             if far.size:
                 absurd = bool(np.any(dist[far] > ABSURD_M))
                 n_p = pts.ids.__len__()
@@ -193,7 +194,7 @@ def check_block(
                     Finding(
                         "error" if absurd else "warning",
                         "far-away",
-                        f"{', '.join(names)}{more} lie(s) {dist[far[0]]:.3g} {unit} from "
+                        f"{', '.join(names)}{more} lie(s) up to {dist[far[0]]:.3g} {unit} from "
                         f"the block's centre, far outside its extent of about {size:.3g} "
                         f"{unit}; check the coordinates and their unit",
                         far.size,

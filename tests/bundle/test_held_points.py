@@ -156,3 +156,13 @@ def test_a_point_at_infinity_stays_a_readable_coordinate(loss):
     solved.points.xyz[:] = res.points
     errors = [f for f in check_block(solved) if f.level == "error"]
     assert not errors, errors
+
+
+def test_the_iteration_limit_help_names_the_robust_factor():
+    """``orientviz solve --max-iter``'s help says how many steps a robust run may take
+    (ROBUST_ITER_FACTOR times the limit)."""
+    from orientviz.bundle.loop._adjust import ROBUST_ITER_FACTOR
+    from orientviz.cli import COMMANDS
+
+    (arg,) = [a for a in COMMANDS["solve"].arguments if "--max-iter" in a.names]
+    assert f"{ROBUST_ITER_FACTOR} times as many" in arg.options["help"]

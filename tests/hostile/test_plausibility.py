@@ -103,3 +103,19 @@ def test_warnings_are_logged_and_errors_raised_in_order(sim, caplog):
     assert any(
         "far outside" in r.getMessage() and "f.json" in r.getMessage() for r in caplog.records
     )
+
+
+def test_far_points_are_named_farthest_first_with_the_largest_distance(sim):
+    """The message names the farthest point first and its distance ("up to"), not the
+    distance of whichever far point comes first in the file."""
+    b = sim.block.copy()
+    near, farther = np.flatnonzero(~np.isfinite(b.points.xyz_known).any(axis=1))[:2]
+    b.points.xyz[near] += 1e6
+    b.points.xyz[farther] += 1e8
+    f = _checks(b)["far-away"]
+    xyz = np.where(np.isfinite(b.points.xyz_known), b.points.xyz_known, b.points.xyz)
+    centre = np.median(np.concatenate([xyz, b.images.X0]), axis=0)
+    largest = float(np.max(np.abs(xyz[farther] - centre)))
+    ids = b.points.ids
+    assert f.message.startswith(f"point {ids[farther]!r}, point {ids[near]!r} lie(s) up to")
+    assert f"up to {largest:.3g} " in f.message
