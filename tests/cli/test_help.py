@@ -115,4 +115,3 @@ def test_affordable_examples_run(inputs, tmp_path, monkeypatch, capsys):
             assert (cwd / w).stat().st_size > 0, f"{invocation} did not write {w}"
         ran.append(invocation)
     assert len(ran) + len(NOT_RUN) == len(_examples())
-
