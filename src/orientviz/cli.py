@@ -754,10 +754,8 @@ def pause_collector(command: str) -> None:
 
     A command's process builds its objects once and keeps most of them to its end (the
     modules of NumPy, SciPy and orientviz, the problem file's document), so the
-    collector's passes over them find little: in ``solve`` of the Ladybug problem about
-    a hundred passes cost some 0.05 s CPU and a last collection would free about 1 300
-    objects held in reference cycles. Everything else is freed as before, by reference
-    counting; the process ends by :func:`end_process`. Called only in the command's own
+    collector's passes over them cost time and find few objects held in reference
+    cycles. Everything else is freed as before, by reference counting; the process ends by :func:`end_process`. Called only in the command's own
     process (:func:`main` without ``argv``), never for a call from Python.
     """
     cmd = COMMANDS.get(command)

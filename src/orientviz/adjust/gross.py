@@ -61,7 +61,7 @@ def critical_value(alpha0: float = 0.001) -> float:
     """Critical value of the two-sided w-test, ``k = z(1 − α0/2)`` (α0 = 0.001 → 3.29)."""
     if not 0.0 < alpha0 < 1.0:
         raise InputError(f"expected a significance level 0 < alpha0 < 1, got {alpha0}")
-    from scipy.special import ndtri  # ~0.2 s of imports: not at the package's import
+    from scipy.special import ndtri  # scipy.special loads many modules: not at the package's import
 
     return float(ndtri(1.0 - alpha0 / 2.0))
 

@@ -131,7 +131,7 @@ def critical_values_2d(alpha0: float = 0.001, beta0: float = 0.80) -> dict[int, 
     dict
         ``{0: inf, 1: k², 2: c2}``; the level of the 2-D test is ``chdtrc(2, c2)``.
     """
-    from scipy.special import chndtrix  # ~0.2 s of imports: not at the package's import
+    from scipy.special import chndtrix  # scipy.special loads many modules: not at the package's import
 
     lam0 = noncentrality(alpha0, beta0) ** 2
     return {0: float("inf"), 1: critical_value(alpha0) ** 2, 2: float(chndtrix(1 - beta0, 2, lam0))}

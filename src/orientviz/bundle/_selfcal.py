@@ -198,7 +198,7 @@ def self_calibrate(
     """
     aps = default_set(additional, block) if isinstance(additional, str) else additional
     if keep_t is None:
-        from scipy.special import ndtri  # ~0.2 s of imports: only when the rule is asked
+        from scipy.special import ndtri  # scipy.special loads many modules: only when the rule is asked
 
         keep_t = float(ndtri(1 - alpha / 2)) if isinstance(aps, LensModel) else 10.0
     if ap_sigma is None:

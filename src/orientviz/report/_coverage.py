@@ -158,7 +158,6 @@ def coverage_below(
         box[seen] = ext[:, 0] * ext[:, 1]
         far[seen] = np.maximum.reduceat(np.sum(xy * xy, axis=1), starts[seen])
     cov = np.full(m, np.nan)
-    qhull = np.zeros(m, bool)
     with np.errstate(divide="ignore", invalid="ignore"):
         usable = (count >= 3) & (fmt_area > 0)
         cov[~usable] = 0.0  # as image_coverage: no hull of fewer than 3 points
@@ -167,21 +166,21 @@ def coverage_below(
         # hull's area (_coverage's margin with the octagon's area, which is smaller)
         tol = MARGIN + 1e-13 * far / area
         boxed = todo & (box / fmt_area < threshold * (1.0 - tol))
-    for i in np.flatnonzero(todo & ~boxed):
-        pts = xy[starts[i] : starts[i + 1]]
-        cov[i], qhull[i] = _coverage(pts, octagon[i], fmt_area[i], threshold, digits)
-    if qhull.any():
-        cov[qhull] = image_coverage(block, qhull)[qhull]
+
+    def hulls(images: NDArray[np.bool_]) -> None:  # their coverage into cov, Qhull's where due
+        qhull = np.zeros(m, bool)
+        for i in np.flatnonzero(images):
+            pts = xy[starts[i] : starts[i + 1]]
+            cov[i], qhull[i] = _coverage(pts, octagon[i], fmt_area[i], threshold, digits)
+        if qhull.any():
+            cov[qhull] = image_coverage(block, qhull)[qhull]
+
+    hulls(todo & ~boxed)
     below = boxed | (np.isfinite(cov) & (cov < threshold))
     asked = boxed
     if first is not None:  # the values printed: of the first images below
         listed = np.zeros(m, bool)
         listed[np.flatnonzero(below if among is None else below & among)[:first]] = True
         asked = boxed & listed
-    qhull[:] = False
-    for i in np.flatnonzero(asked):
-        pts = xy[starts[i] : starts[i + 1]]
-        cov[i], qhull[i] = _coverage(pts, octagon[i], fmt_area[i], threshold, digits)
-    if qhull.any():
-        cov[qhull] = image_coverage(block, qhull)[qhull]
+    hulls(asked)
     return below, cov

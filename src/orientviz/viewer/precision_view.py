@@ -35,7 +35,7 @@ def confidence_factor(level: float, dof: int = 3) -> float:
     """k = √χ²(level; dof): the scale of the ellipsoid holding a point with ``level``."""
     if not 0.0 < level < 1.0:
         raise ValueError(f"a confidence level lies between 0 and 1, got {level}")
-    from scipy.special import chdtri  # ~0.2 s of imports: only once a precision is drawn
+    from scipy.special import chdtri  # scipy.special loads many modules: only once a precision is drawn
 
     return float(np.sqrt(chdtri(dof, 1.0 - level)))  # χ²_dof quantile at ``level``
 

@@ -125,7 +125,7 @@ ROBUST_OVERRELAX: float = 1.5
 #: the smaller ratio, at most :data:`OVERRELAX_MAX`. Along such a mode the optimum lies that
 #: many model steps away; a step that raises Σρ is retried as the model's own (as any
 #: over-relaxed one). DBAT's tails (ratios 2–7) keep ω = 1.5. Measurements:
-#: benchmarks/README.md, Session 18, the loop.
+#: benchmarks/README.md, the loop's over-relaxation by the curvature ratio.
 OVERRELAX_MIN_RATIO: float = 10.0
 OVERRELAX_AGREE: float = 0.25
 OVERRELAX_MAX: float = 64.0

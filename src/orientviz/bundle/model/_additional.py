@@ -392,7 +392,7 @@ def analyse(
     d = np.sqrt(np.clip(np.diag(Qa), 1e-300, None))
     sigma = s0 * d
     t = np.abs(value) / sigma
-    from scipy.special import ndtri  # scipy.special: ~0.2 s of imports, needed here only
+    from scipy.special import ndtri  # scipy.special loads many modules: needed here only
 
     sig = t > float(ndtri(1 - alpha / 2))
     R = Qa / np.outer(d, d)

@@ -62,7 +62,7 @@ class SolverChoice:
 
 
 #: :func:`image_blocks`: the dense product BᵀB costs m²·p multiply-adds at BLAS speed, the
-#: sparse one about this many of them per pair of rays of a point (Σ k²): measured 500–1000
+#: sparse one about this many of them per pair of rays of a point (Σ k²): between 500 and 1000
 #: (m = 20 … 400 images, p = 1500 … 100 000 points, tracks of 3–8 rays, one thread).
 DENSE_PATTERN_FLOPS_PER_PAIR: float = 500.0
 #: :func:`image_blocks` forms B densely (float32) only up to this many entries (32 MB).
