@@ -194,7 +194,7 @@ def check_block(
                     Finding(
                         "error" if absurd else "warning",
                         "far-away",
-                        f"{', '.join(names)}{more} lie(s) up to {dist[far[0]]:.3g} {unit} from "
+                        f"{', '.join(names)}{more} {'lies' if far.size == 1 else 'lie'} up to {dist[far[0]]:.3g} {unit} from "
                         f"the block's centre, far outside its extent of about {size:.3g} "
                         f"{unit}; check the coordinates and their unit",
                         far.size,

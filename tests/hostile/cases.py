@@ -618,7 +618,8 @@ def geometry() -> list[Case]:
         p["X"] = p.get("X", 0.0) + 1e6
 
     def warned_in_report(folder: Path) -> None:
-        assert "far outside its extent" in (folder / "r.txt").read_text(encoding="utf-8")
+        text = " ".join((folder / "r.txt").read_text(encoding="utf-8").split())  # lines wrap
+        assert "far outside its extent" in text and "in the file's values: point" in text
 
     c.append(Case("solve/geometry/check-point-far-away",
                   _block_edit(check_far, ("--report", "r.txt")), 0, warns=True,

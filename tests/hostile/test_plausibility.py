@@ -117,5 +117,20 @@ def test_far_points_are_named_farthest_first_with_the_largest_distance(sim):
     centre = np.median(np.concatenate([xyz, b.images.X0]), axis=0)
     largest = float(np.max(np.abs(xyz[farther] - centre)))
     ids = b.points.ids
-    assert f.message.startswith(f"point {ids[farther]!r}, point {ids[near]!r} lie(s) up to")
+    assert f.message.startswith(f"point {ids[farther]!r}, point {ids[near]!r} lie up to")
     assert f"up to {largest:.3g} " in f.message
+
+
+def test_one_far_point_lies_and_the_solve_says_the_check_saw_the_file(sim):
+    """One far point: "lies" (singular). In a solution's notes the input checks say that
+    they looked at the file's values, not at the solution listed beside them."""
+    from orientviz.io.solve import solve_problem
+    from orientviz.io.problem import dumps_problem, loads_problem, problem_from_block
+
+    b = sim.block.copy()
+    k = int(np.flatnonzero(~np.isfinite(b.points.xyz_known).any(axis=1))[0])
+    b.points.xyz[k] += 1e6
+    assert f"point {b.points.ids[k]!r} lies up to" in _checks(b)["far-away"].message
+    sol = solve_problem(loads_problem(dumps_problem(problem_from_block(b)), "f.json"), "bundle")
+    far = [n for n in sol.notes if "far outside" in n]
+    assert far and far[0].startswith(f"warning: in the file's values: point {b.points.ids[k]!r} lies")

@@ -53,7 +53,8 @@ def solve_problem(problem: Problem, method: str | None = None, **bundle: Any) ->
     warnings = check_geometry(problem)
     with np.errstate(all="ignore"):
         solution = kind.solve(problem, method, **bundle) if bundle else kind.solve(problem, method)
-    solution.notes.extend(f"warning: {f.message}" for f in warnings)
+    # the checks saw the file's values, not the solution's: say so where both are listed
+    solution.notes.extend(f"warning: in the file's values: {f.message}" for f in warnings)
     return solution
 
 
