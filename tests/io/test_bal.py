@@ -165,6 +165,23 @@ def test_write_read_round_trip(tmp_path):
     assert np.all(b2.observations.sigma == 0.005)
 
 
+def test_a_principal_point_is_written_into_the_observations(tmp_path):
+    """BAL has no principal point: a camera with one (a COLMAP import) is written with its
+    observations measured from it, so the BAL file projects exactly as the block does."""
+    pts, X0, rot, ts, obs = _scene()
+    path = tmp_path / "a.bal"
+    path.write_text(_bal_text(rot, ts, 15200.0, pts, obs, k=(-0.12, 0.03)))
+    b = read_bal(path)  # cameras with x0 = y0 = 0 and the forward lens model
+    shifted = b.copy()
+    pp = np.array([[1.3, -0.7], [-0.4, 2.1]])  # mm, one principal point per camera
+    shifted.cameras.x0, shifted.cameras.y0 = pp[:, 0], pp[:, 1]
+    shifted.observations.xy = b.observations.xy + pp[b.images.camera[b.observations.image]]
+    write_bal(shifted, tmp_path / "s.bal")
+    back = read_bal(tmp_path / "s.bal")
+    np.testing.assert_allclose(back.observations.xy, b.observations.xy, atol=1e-11)
+    assert back.cameras.model == b.cameras.model  # f, k1, k2 as they were
+
+
 @pytest.mark.parametrize(
     "text, where",
     [

@@ -51,3 +51,16 @@ def test_without_redundancy_numbers_nothing_is_said_to_be_flagged():
     assert "flagged (|w| > 3.29): not tested (no redundancy numbers)" in text
     assert "no redundancy numbers: the precision was not computed" in text
     assert "flagged (|w| > 3.29): none" not in text
+
+
+def test_one_iteration_is_singular(tmp_path):
+    """A solved file solved again stops after one step: "1 iteration", not "1 iterations"."""
+    from orientviz.cli import main
+    from orientviz.io.problem import load_problem
+    from orientviz.io.solve import solve_problem
+
+    out = tmp_path / "s.json"
+    assert main(["solve", "block_strip", "-o", str(out)]) == 0
+    text = solve_problem(load_problem(out)).as_text()
+    assert "1 iteration, converged: corrections below" in text and "after 1 iteration\n" in text
+    assert "iterations" not in text.split("\n")[2]

@@ -133,6 +133,11 @@ class Damping:
             )
 
 
+def _iterations(n: int) -> str:
+    """``"1 iteration"``, ``"n iterations"``."""
+    return f"{n} iteration" if n == 1 else f"{n} iterations"
+
+
 @dataclass
 class StopRule:
     """When the loop stops: a custom rule, a per-step test or max correction < tol.
@@ -151,7 +156,7 @@ class StopRule:
     step_test : callable, optional
         ``step_test(step) -> bool`` (e.g. absolute thresholds per parameter).
     step_reason : str
-        Reason for ``step_test`` (``{it}`` = the iteration).
+        Reason for ``step_test`` (``{it}`` = the iteration, ``{iterations}`` = "1 iteration", "n iterations").
     may_stop : callable, optional
         ``may_stop(iteration) -> bool``: whether a stop is allowed after this
         iteration (e.g. not while parameters are held).
@@ -161,7 +166,7 @@ class StopRule:
     ftol: float = 0.0
     custom: Callable[[Iteration, Iteration], bool] | None = None
     step_test: Callable[[Step], bool] | None = None
-    step_reason: str = "all corrections below xtol after {it} iterations"
+    step_reason: str = "all corrections below xtol after {iterations}"
     may_stop: Callable[[int], bool] | None = None
 
     def met(self, history: list[Iteration], step: Step, it: int) -> str | None:
@@ -170,12 +175,12 @@ class StopRule:
             return None
         if self.custom is not None:
             if self.custom(history[-2], history[-1]):
-                return f"the custom stopping rule was met after {it} iterations"
+                return f"the custom stopping rule was met after {_iterations(it)}"
             return None
         if self.step_test is not None:
-            return self.step_reason.format(it=it) if self.step_test(step) else None
+            return self.step_reason.format(it=it, iterations=_iterations(it)) if self.step_test(step) else None
         if step.max_correction < self.tol:
-            return f"corrections below {self.tol:g} σ after {it} iterations"
+            return f"corrections below {self.tol:g} σ after {_iterations(it)}"
         if self.ftol > 0 and len(history) >= 2:
             before, after = history[-2].cost, history[-1].cost
             if before - after <= self.ftol * before:

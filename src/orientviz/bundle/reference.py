@@ -314,8 +314,9 @@ def reference_bundle(
         out.converged = rel < tol
     out.X0, out.angles, out.xyz, out.ap = X0, angles, xyz, ap
     n_it = len(out.max_correction)
+    its = "iteration" if n_it == 1 else "iterations"
     out.reason = (
-        f"corrections below {tol:g} σ after {n_it} iterations" if out.converged
+        f"corrections below {tol:g} σ after {n_it} {its}" if out.converged
         else f"no convergence in {max_iter} iterations (last correction {rel:.3g} σ)"
     )  # fmt: skip
     return out

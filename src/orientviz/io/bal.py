@@ -18,9 +18,11 @@ camera looking along −z. This *is* the photogrammetric camera of
 * X0 = −R_balᵀ t (m, or whatever length unit the file uses),
 * c = f · pixel size (mm), image coordinates x_mm = x_px · pixel size.
 
-A BAL file carries no pixel size; the default 0.010 mm (10 µm) is the bench's. Radial
-distortion (k1, k2 ≠ 0) is removed from the observations at import (iteratively,
-normalised coordinates), so the block holds distortion-free coordinates. BAL has no
+A BAL file carries no pixel size; the default 0.010 mm (10 µm) is the bench's. f, k1
+and k2 become each camera's forward lens model (:mod:`orientviz.bundle.model._lens`),
+refined per camera as a BAL problem defines it or held (``lens="fixed"``); the
+observations stay the file's distorted pixels. BAL has no principal point: a block
+written back measures its observations from its cameras' principal points. BAL has no
 control points: an imported block is a free network (7 datum parameters) until control
 is added.
 """
@@ -260,7 +262,7 @@ def read_bal(
     """Read a BAL file into a :class:`~orientviz.block.Block` (all points tie points).
 
     Each BAL camera becomes its own camera with the forward lens model of
-    :mod:`orientviz.bundle._lens` (the distortion of the ideal point, as BAL defines it):
+    :mod:`orientviz.bundle.model._lens` (the distortion of the ideal point, as BAL defines it):
     c = f · pixel size (mm), x0 = y0 = 0, k1 and k2 as in the file. The observations are
     the file's pixels (distorted) in mm, so the residuals are BAL's reprojection errors.
 
@@ -377,16 +379,14 @@ def bal_cameras(block: Block, pixel_size_mm: float) -> F64:
     """The nine BAL parameters (r, t, f, k1, k2) per image of ``block``, shape (m, 9).
 
     R_bal = Rᵀ as angle-axis, t = −R_bal X0, f = c / pixel size; k1, k2 from the image's
-    camera's forward lens model (``cameras.model``; 0 without one). A camera BAL cannot
-    express (principal point ≠ 0, a backward model, other forward terms ≠ 0) is refused.
+    camera's forward lens model (``cameras.model``; 0 without one). The principal point is
+    not a BAL parameter: :func:`write_bal` measures the observations from it. A camera BAL
+    cannot express (a backward model, other forward terms ≠ 0) is refused.
     """
     cams = block.cameras
     models = list(getattr(cams, "model", None) or [{}] * len(cams))
     k = np.zeros((len(cams), 2))
     for i, spec in enumerate(models):
-        if cams.x0[i] != 0 or cams.y0[i] != 0:
-            raise InputError(f"camera {cams.ids[i]!r}: BAL has no principal point: expected "
-                             f"x0 = y0 = 0, got {cams.x0[i]:g}, {cams.y0[i]:g} mm")  # fmt: skip
         if not spec:
             continue
         if spec.get("model") != "forward":
@@ -413,14 +413,18 @@ def write_bal(
 ) -> Path:
     """Write a block as a BAL file, the inverse of :func:`read_bal`.
 
-    Image coordinates mm → px (y up, origin at the centre), cameras by
-    :func:`bal_cameras` (k1, k2 from the cameras' forward lens models, else 0).
+    Image coordinates mm → px, y up, measured from each camera's principal point
+    (x − x0, y − y0: BAL's origin; the forward lens model distorts about that point, so a
+    COLMAP camera with its principal point anywhere keeps its projection exactly). Cameras
+    by :func:`bal_cameras` (k1, k2 from the cameras' forward lens models, else 0).
     ``pixel_size_mm`` defaults to the block's ``meta["pixel_size_mm"]``, else 0.010 mm.
     """
     p = float(pixel_size_mm or block.meta.get("pixel_size_mm") or DEFAULT_PIXEL_MM)
     params = bal_cameras(block, p)
     obs = block.observations
-    xy = obs.xy / p
+    cam = block.images.camera[obs.image]
+    pp = np.column_stack([block.cameras.x0, block.cameras.y0])[cam]
+    xy = obs.xy / p if not pp.any() else (obs.xy - pp) / p
     text = "".join(
         [
             f"{block.n_images} {block.n_points} {block.n_observations}\n",

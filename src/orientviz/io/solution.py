@@ -273,7 +273,7 @@ class Solution:
         lines = [
             f"{self.kind} ({self.method}): {self.counts_text()}",
             f"sigma0 = {adj.sigma0:.4g} (a-posteriori, unit weight)",
-            f"{self.n_iterations} iterations, "
+            f"{self.n_iterations} iteration{'' if self.n_iterations == 1 else 's'}, "
             f"{'converged' if adj.converged else 'NOT CONVERGED'}: {adj.reason}",
             f"units of the file: length {u.length_name}, image {u.image}, angle {u.angle}; "
             f"rotation sequence {self.sequence}",

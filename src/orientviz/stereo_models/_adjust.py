@@ -187,7 +187,7 @@ def independent_models(
     else:
         converged, reason, sol, history = _run(
             PatmSteps(su, w_c, s_xy), su, (lam, R, T), tol, s_xy, max_iter,
-            "planimetry/height iteration converged after {it} iterations",
+            "planimetry/height iteration converged after {iterations}",
             f"reached the maximum of {max_iter} planimetry/height iterations",
         )  # fmt: skip
     return _result(

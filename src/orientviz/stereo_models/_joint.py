@@ -268,7 +268,7 @@ def rigorous_joint(su, js, lam, R, T, w_c, s_xy, tol, max_iter, names):
     steps = JointSteps(su, js, w_c, s_xy, names)
     run = iterate(
         steps, (lam, R, T, p, g_aux), redundancy=joint_redundancy(su, js), max_iter=max_iter,
-        stop=stop_rule(tol * s_xy, f"corrections below {tol:g} σ_xy after {{it}} iterations"),
+        stop=stop_rule(tol * s_xy, f"corrections below {tol:g} σ_xy after {{iterations}}"),
     )  # fmt: skip
     return run.converged, run.reason, steps.last, p, g_aux, run.history
 
