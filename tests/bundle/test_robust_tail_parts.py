@@ -270,8 +270,8 @@ def test_points_reach_a_breakpoint_beyond_their_newton_correction():
     """The 15-image block of seed 3 (8 rays moved by ~30 σ), Huber: two-ray points crept
     along their flat stretch by ~0.01 m a step (the floored Newton correction falls short of
     the breakpoint, where a ray reaches the scale) — 23 steps, the last ones each lowering
-    ½Σρ by ~1e-3 of a unit. With the breakpoint ranked up to BREAKPOINT_MAX times the
-    correction the run converges in at most 18 steps, within 1e-7 of a tight run's optimum."""
+    ½Σρ by ~1e-3 of a unit. With the breakpoint ranked beyond the correction the run
+    converges in at most 18 steps, within 1e-7 of a tight run's optimum."""
     run = _simulated(3, False)
     robust = run("huber")
     tight = run("huber", ftol=1e-12, tol=1e-10, max_iter=100)
@@ -279,6 +279,34 @@ def test_points_reach_a_breakpoint_beyond_their_newton_correction():
     assert len(robust.history) - 1 <= 18
     best = tight.history[-1].cost
     assert 0.0 <= robust.history[-1].cost - best <= 1e-7 * best
+
+
+def test_a_point_reaches_its_breakpoint_however_far():
+    """A 15-image block with the default tie grid, 3 % of its rays moved by +30 σ in x and
+    y, Huber: a two-ray point with both rays beyond the scale (20 σ and 8 σ) lies on a
+    nearly flat stretch whose end — the second ray at the scale — was ~100 floored Newton
+    corrections away. Ranked at no more than 4 corrections, the point crept ~0.009 m a step
+    with Σρ falling by the same amount each step: the tight run took 114 steps and the
+    default stop ended 4e-6 above the optimum. Ranked where it lies, the breakpoint is
+    reached at once."""
+    from orientviz.bundle import BundleOptions
+    from orientviz.bundle.loop._adjust import bundle_adjust
+
+    b = ov.simulate_block(3, 5, rng=2, control_sigma=0.05).block
+    n = b.observations.xy.shape[0]
+    k = np.random.default_rng(2).choice(n, round(0.03 * n), replace=False)
+    b.observations.xy[k] += 30.0 * b.observations.sigma[k]
+
+    def run(**options):
+        opts = BundleOptions(loss="huber", **options)
+        return bundle_adjust(b, control="weighted", options=opts, precision=False)
+
+    robust = run()
+    tight = run(ftol=1e-14, tol=1e-10, max_iter=300)
+    assert robust.converged and tight.converged
+    assert len(tight.history) - 1 <= 40
+    best = tight.history[-1].cost
+    assert 0.0 <= robust.history[-1].cost - best <= 2e-6 * best
 
 
 def test_the_search_table_serves_the_new_iterate(monkeypatch):
