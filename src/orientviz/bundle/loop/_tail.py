@@ -96,8 +96,8 @@ def tail_model(
     prob: BundleProblem, loss: RobustLoss, rw: F64, Je: F64, Jp: F64, scale: F64, floor: float
 ):
     """The rays beyond the scale with their curvature along the misclosure c·ρ′
-    (c = max((ρ′ + 2sρ″)/ρ′, ``floor``)) — rows (I − (1 − √c) r̂r̂ᵀ) P½J (Je, Jp, a
-    camera model's design) and misclosure P½r/√c: the gradient unchanged.
+    (c = max((ρ′ + 2sρ″)/ρ′, ``floor``)) — rows (I − (1 − √c) r̂r̂ᵀ) P½J (Je, Jp, the
+    additional parameters' design) and misclosure P½r/√c: the gradient unchanged.
 
     ``rw``: P½r with the weights 1/σ·√ρ′ (``scale`` = √ρ′ per ray), ``Je``, ``Jp``
     unweighted (the normal equations weight them by the problem's ray weights). Returns
@@ -126,7 +126,7 @@ def tail_model(
     Je[out], Jp[out] = turn(Je[out]), turn(Jp[out])
     rw[out] /= np.sqrt(c)[:, None]
     design = None
-    if prob.q:  # a camera model's design at this linearisation: turned for this solve
+    if prob.q:  # the additional parameters' design at this linearisation: turned for this solve
         design = prob.run.ap
         A = design.A.copy()
         A[out] = turn(A[out])
