@@ -66,13 +66,17 @@ def camera_precision(res, prob, ne, Je: F64, Jp: F64) -> None:
     else:
         T = np.zeros((n_used, d, 3))
         T[ne.rays] = cb.T
-    # the rays' weighted design [P½ J_e | P½ A] (n, 2, d) and P½ J_p; Q_pp and the gains K
-    # of each ray on its image's unknowns (d × 2) and on its point (3 × 2)
-    sw = prob.obs.weight[:, :, None]
-    Jd = np.empty((n_used, 2, d))
-    np.multiply(Je, sw, out=Jd[:, :, :6])
-    Jd[:, :, 6:] = ap.Aw
-    Qpp, Kd, Kp, H = ray_cofactors(S, Zblk, T, ne.Vinv, Qcc, oi, Jd, Jp * sw)
+    # the rays' weighted design [P½J_e | P½A] (n, 2, d) and P½J_p as the normal equations
+    # were formed from them; Q_pp and the gains K of each ray on its image's unknowns
+    # (d × 2) and on its point (3 × 2)
+    Jd, Jpw = cb.Jc, cb.Jp
+    if Jd is None:
+        sw = prob.obs.weight[:, :, None]
+        Jd = np.empty((n_used, 2, d))
+        np.multiply(Je, sw, out=Jd[:, :, :6])
+        Jd[:, :, 6:] = ap.Aw
+        Jpw = Jp * sw
+    Qpp, Kd, Kp, H = ray_cofactors(S, Zblk, T, ne.Vinv, Qcc, oi, Jd, Jpw)
     # the cameras' cofactors in the border's order (group g: image i with group[i] = g)
     at = np.empty(m, np.int64)
     at[ap.group] = own
