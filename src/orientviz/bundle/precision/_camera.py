@@ -54,7 +54,9 @@ def camera_precision(res, prob, ne, Je: F64, Jp: F64) -> None:
     # the structure's image pairs (i ≤ l) and at each image itself
     N = dense_blocks(S, cb.blocks)
     c = scipy.linalg.cho_factor(N, lower=True, overwrite_a=True, check_finite=False)
-    Z4 = scipy.linalg.cho_solve(c, np.eye(d * m), check_finite=False).reshape(m, d, m, d)
+    eye = np.eye(d * m, order="F")  # (LAPACK's layout: solved in place, not copied first)
+    Z = scipy.linalg.cho_solve(c, eye, overwrite_b=True, check_finite=False)
+    Z4 = Z.reshape(m, d, m, d)
     Zblk = Z4[S.block_i, :, S.block_k, :]  # (blocks, d, d)
     own = np.arange(m)
     Qcc = Z4[own, :, own, :]  # (m, d, d)

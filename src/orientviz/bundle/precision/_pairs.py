@@ -78,7 +78,7 @@ def _ordered_blocks(S, Zblk: F64):
         at = np.zeros((m, m), np.int64)
         at[S.block_k, S.block_i] = nb + np.arange(nb)  # the transposes first: (i, i) stays
         at[S.block_i, S.block_k] = np.arange(nb)
-        return Zboth[at.reshape(-1)], lambda i, k: i * m + k
+        return np.take(Zboth, at.reshape(-1), axis=0), lambda i, k: i * m + k
     keys = S.block_i * m + S.block_k
 
     def index(i, k):

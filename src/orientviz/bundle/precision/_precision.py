@@ -196,7 +196,8 @@ class ReducedInverse:
                     c = (fac.data, True)
                 else:
                     c = scipy.linalg.cho_factor(dense_matrix(st, blocks), lower=True)
-                Z = self._Z = scipy.linalg.cho_solve(c, np.eye(n))
+                eye = np.eye(n, order="F")  # (LAPACK's layout: solved in place, not copied)
+                Z = self._Z = scipy.linalg.cho_solve(c, eye, overwrite_b=True)
                 rows = 6 * st.block_i[:, None, None] + r6[None, :, None]
                 cols = 6 * st.block_k[:, None, None] + r6[None, None, :]
                 self.blocks = Z[rows, cols]
