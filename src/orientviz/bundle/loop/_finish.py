@@ -19,13 +19,11 @@ from numpy.typing import NDArray
 
 from ...block import CHECK, check_points_of
 from ...errors import NotDeterminableError
-from ...orientation.intersection import intersect_points
 from ...rotation import matrix_from_opk
 from .._result import BundleResult
 from ..model import normalised_block, project_block
 from ..precision import bundle_precision
 from ..problem import BundleProblem, BundleState, wrap
-from ..problem._auxiliary import finish_bundle
 from ..reduced import raise_not_determinable
 
 F64 = NDArray[np.float64]
@@ -55,6 +53,8 @@ def _intersect_check_points(
         image = np.arange(sel.size)  # one "image" per ray carries its ray's c, x0, y0
         X0, angles = X0[obs.image[sel]], angles[obs.image[sel]]
         io = (io_ray[:, 0], io_ray[:, 1], io_ray[:, 2])
+    from ...orientation.intersection import intersect_points  # only a block with check points
+
     res = intersect_points(
         xy, image, col[obs.point[sel]], X0,
         matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2], block.sequence),
@@ -284,6 +284,8 @@ def finish_result(prob: BundleProblem, end: RunEnd) -> BundleResult:
                     f"no precision at the last (not converged) state: {type(exc).__name__}: {exc}"
                 )
     if prob.aux:
+        from ..problem._auxiliary import finish_bundle  # only a block with auxiliary data
+
         finish_bundle(res, prob, st, rw, Je, Jp)
     if prob.ap.lens is not None:
         Q = res.cofactor_groups.get("additional") if prob.q else None

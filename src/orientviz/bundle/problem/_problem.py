@@ -31,7 +31,6 @@ from ..reduced import (
     schur_buffer_size,
 )
 from ._ap_normal import ap_normal, point_ap_term
-from ._auxiliary import BundleAuxiliary, auxiliary_rows
 from ._border import solve_border
 from ._camera_blocks import camera_blocks_apply, camera_normal, camera_solve
 from ._checks import PointSetup
@@ -147,6 +146,8 @@ class BundleProblem:
         self.run = BundleRun(self.ap0)
         self.aux: BundleAuxiliary | None = None
         if auxiliary:
+            from ._auxiliary import BundleAuxiliary, auxiliary_rows  # only a block with auxiliary data
+
             self.aux = BundleAuxiliary(auxiliary_rows(auxiliary, block), self.points.column)
         n_pseudo = int(
             (self.points.prior_w > 0).sum()
