@@ -13,6 +13,8 @@ the engine's (:func:`orientviz.adjust.engine.iterate`).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -48,6 +50,9 @@ from ._parts import (
 )
 from ._run import BundleRun
 from ._state import BundleState, wrap
+
+if TYPE_CHECKING:  # annotations only
+    from ._auxiliary import BundleAuxiliary
 
 F64 = NDArray[np.float64]
 
@@ -146,7 +151,7 @@ class BundleProblem:
         self.run = BundleRun(self.ap0)
         self.aux: BundleAuxiliary | None = None
         if auxiliary:
-            from ._auxiliary import BundleAuxiliary, auxiliary_rows  # only a block with auxiliary data
+            from ._auxiliary import BundleAuxiliary, auxiliary_rows  # only with auxiliary data
 
             self.aux = BundleAuxiliary(auxiliary_rows(auxiliary, block), self.points.column)
         n_pseudo = int(

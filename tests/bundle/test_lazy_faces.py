@@ -1,8 +1,9 @@
-"""The bundle's package faces load their names on first use (orientviz.faces.lazy_names).
+"""The bundle's (and the block's) package faces load names on first use (faces.lazy_names).
 
 A name on a face is the very object of the module that defines it, whether it was
-loaded eagerly or on first use; and a plain solve (no self-calibration set, no auxiliary
-data, no check points, no cleaning) imports none of the modules it does not run.
+loaded eagerly or on first use; an import command loads no solver and no solution
+types, and a plain solve (no self-calibration set, no auxiliary data, no check points,
+no cleaning) imports none of the modules it does not run.
 """
 
 from __future__ import annotations
@@ -19,10 +20,21 @@ import pytest
 from orientviz.rotation import matrix_from_rotvec
 
 FACES = [
+    "orientviz.block",
     "orientviz.bundle",
     "orientviz.bundle.model",
     "orientviz.bundle.precision",
     "orientviz.bundle.problem",
+]
+
+#: Modules (prefixes) an import command never runs.
+NOT_IN_AN_IMPORT = [
+    "orientviz.adjust",
+    "orientviz.block._result",
+    "orientviz.bundle",
+    "orientviz.io.control",
+    "orientviz.io.solution",
+    "scipy",
 ]
 
 #: Modules a plain solve of an imported BAL problem never runs.
@@ -93,10 +105,11 @@ def _bal_file(path) -> None:
     path.write_text("\n".join(lines) + "\n")
 
 
-def test_a_plain_solve_imports_no_module_it_does_not_run(tmp_path):
-    """``import-bal`` then ``solve --free`` in a fresh interpreter: neither command imports
-    self-calibration sets, cleaning, gross-error tests, reliability, auxiliary data, the
-    reference iteration or the forward intersection (none of them runs here)."""
+def test_import_and_a_plain_solve_import_no_module_they_do_not_run(tmp_path):
+    """``import-bal`` then ``solve --free`` in a fresh interpreter: the import loads no
+    solver, no solution types and no control reader; the solve no self-calibration sets,
+    cleaning, gross-error tests, reliability, auxiliary data, the reference iteration or
+    the forward intersection (none of them runs here)."""
     _bal_file(tmp_path / "p.bal")
     script = (
         "import io, contextlib, json, sys\n"
@@ -104,8 +117,9 @@ def test_a_plain_solve_imports_no_module_it_does_not_run(tmp_path):
         "out = io.StringIO()\n"
         "with contextlib.redirect_stdout(out), contextlib.redirect_stderr(out):\n"
         "    a = main(['import-bal', sys.argv[1], '-o', sys.argv[2]])\n"
+        "    imported = sorted(sys.modules)\n"
         "    b = main(['solve', sys.argv[2], '--free', '--json'])\n"
-        "print(json.dumps({'codes': [a, b], 'modules': sorted(sys.modules)}))\n"
+        "print(json.dumps({'codes': [a, b], 'import': imported, 'modules': sorted(sys.modules)}))\n"
     )
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
     run = subprocess.run(
@@ -114,5 +128,7 @@ def test_a_plain_solve_imports_no_module_it_does_not_run(tmp_path):
     )  # fmt: skip
     got = json.loads(run.stdout.strip().splitlines()[-1])
     assert got["codes"] == [0, 0]
+    assert "orientviz.io.bal" in got["import"]
+    assert [m for m in got["import"] if m.startswith(tuple(NOT_IN_AN_IMPORT))] == []
     assert "orientviz.bundle.loop._adjust" in got["modules"]  # it did solve
     assert [m for m in NOT_IN_A_PLAIN_SOLVE if m in got["modules"]] == []
