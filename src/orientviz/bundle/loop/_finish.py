@@ -112,12 +112,22 @@ def ray_parallax(block, X0: F64, xyz: F64) -> F64:
     d = xyz[obs.point] - X0[obs.image]
     with np.errstate(invalid="ignore", divide="ignore"):
         d /= np.linalg.norm(d, axis=1)[:, None]
-        mean = np.zeros((block.n_points, 3))
-        np.add.at(mean, obs.point, d)
+        # each point's sum of its rays, added ray by ray in order (as np.add.at adds them)
+        mean = np.column_stack(
+            [np.bincount(obs.point, weights=d[:, k], minlength=block.n_points) for k in range(3)]
+        )
         mean /= np.linalg.norm(mean, axis=1)[:, None]
-        cos = np.clip(np.einsum("ij,ij->i", d, mean[obs.point]), -1.0, 1.0)
-        # the angle by its sine from the cross product: exact for tiny angles
-        ang = np.arctan2(np.linalg.norm(np.cross(d, mean[obs.point]), axis=1), cos)
+        m = mean[obs.point]
+        cos = np.clip(np.einsum("ij,ij->i", d, m), -1.0, 1.0)
+        # the angle by its sine from the cross product d × m: exact for tiny angles
+        cross = np.column_stack(
+            [
+                d[:, 1] * m[:, 2] - d[:, 2] * m[:, 1],
+                d[:, 2] * m[:, 0] - d[:, 0] * m[:, 2],
+                d[:, 0] * m[:, 1] - d[:, 1] * m[:, 0],
+            ]
+        )
+        ang = np.arctan2(np.linalg.norm(cross, axis=1), cos)
     out = np.full(block.n_points, -np.inf)
     np.maximum.at(out, obs.point, np.nan_to_num(ang, nan=np.inf))
     out[np.bincount(obs.point, minlength=block.n_points) < 2] = np.nan
