@@ -574,7 +574,11 @@ class BundleSteps:
         (1/ω of an over-relaxed s). inf where c ≤ 0 (the true Σρ not convex along s), 0
         where it cannot be formed (no derivatives kept, a step in frame rotations). The
         points' search makes d larger than the joint step's own: the ratio then errs high
-        (a step too long is rejected and retried, see :data:`OVERRELAX_MIN_RATIO`)."""
+        (a step too long is rejected and retried, see :data:`OVERRELAX_MIN_RATIO`). The
+        pseudo-observations (weighted control, the additional parameters' σ, a given
+        exterior orientation) are not in the model's slope and curvature here, while d
+        includes their change: with such priors the ratio is not the model's (it reads
+        inf or far too high, and two rarely agree)."""
         scale = getattr(previous.data, "scale", None)
         rw, Je, Jp = previous.data
         if scale is None or Je is None or gain_from is None or self.is_local(previous):
