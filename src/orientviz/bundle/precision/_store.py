@@ -20,9 +20,9 @@ F64 = NDArray[np.float64]
 
 #: Stacked products over fewer terms than this give the same numbers whether a factor is a
 #: transposed view or a contiguous copy of it (OpenBLAS's small-matrix kernels add an
-#: entry's products in order either way; benchmarks/README.md, "Session 19: the
-#: precision"); the precision multiplies such factors as contiguous copies, which BLAS
-#: reads faster, and keeps the views beyond.
+#: entry's products in order either way; the sweeps are in benchmarks/README.md, the
+#: precision's layouts); the precision multiplies such factors as contiguous copies,
+#: which BLAS reads faster, and keeps the views beyond.
 LAYOUT_FREE_TERMS: int = 16
 
 
