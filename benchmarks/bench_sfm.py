@@ -72,6 +72,7 @@ kind, model, threads = sys.argv[1], sys.argv[2], sys.argv[3]
 loss = sys.argv[4] if len(sys.argv) > 4 else "none"
 out = {}
 if kind == "orientviz":
+    from orientviz.bundle import BundleOptions, bundle_adjust  # the solver's modules before the clock
     from orientviz.io.kinds.block import adjust_block, prepare
     from orientviz.io.problem import load_problem
     prob = load_problem(model)

@@ -137,3 +137,34 @@ def test_ray_cofactors_equal_the_three_steps(d, border, monkeypatch):
     want = (Qpp, *ray_blocks(Qimg, oc, Qcp, Qpp, Jc, Jp[vo], vo, op[vo]))
     for g, w in zip(got, want, strict=True):
         assert g.tobytes() == w.tobytes()
+
+
+@pytest.mark.parametrize("d", [6, 7, 9, 16, 18])
+def test_ray_blocks_equal_their_products_on_the_transposed_views(d):
+    """ray_blocks multiplies by contiguous copies of the transposed designs where products
+    over d terms give the same numbers in either layout (faster; _store.fast_layout), by
+    the views beyond: each gain and 2 × 2 block equals the same products on the transposed
+    views to the last bit."""
+    from orientviz.bundle.precision._store import ray_blocks
+
+    rng = np.random.default_rng(d)
+    m, n, p = 7, 400, 90
+
+    def wide(*shape):  # magnitudes over many decades: another order of sums shows
+        return rng.standard_normal(shape) * 10.0 ** rng.integers(-6, 7, shape)
+
+    img, pcol = rng.integers(0, m, n), rng.integers(0, p, n)
+    Qimg, Qcp, Qpp = wide(m, d, d), wide(n, d, 3), wide(p, 3, 3)
+    Jc = wide(n + 1, 2, d + 1)[:n, :, :d]  # a strided view, as the camera blocks hand it
+    Jp = wide(n, 2, 3)
+    vo = np.flatnonzero(rng.random(n) < 0.8)
+    JcT, JpT = Jc.transpose(0, 2, 1), Jp[vo].transpose(0, 2, 1)
+    Kc = Qimg[img] @ JcT
+    Kc[vo] += Qcp[vo] @ JpT
+    Kp = np.zeros((n, 3, 2))
+    Kp[vo] = Qcp[vo].transpose(0, 2, 1) @ JcT[vo] + Qpp[pcol[vo]] @ JpT
+    H = Jc @ Kc
+    H[vo] += Jp[vo] @ Kp[vo]
+    got = ray_blocks(Qimg, img, Qcp, Qpp, Jc, Jp[vo], vo, pcol[vo])
+    for g, w in zip(got, (Kc, Kp, H), strict=True):
+        assert g.tobytes() == w.tobytes()

@@ -50,3 +50,24 @@ def test_short_lists_and_nesting():
         with shared_columns():  # an inner block shares the outer one's answers
             assert float_values(long) is kept
         assert float_values(long) is kept
+
+
+def test_a_writers_floats_are_known_as_the_list_would_answer():
+    """json_numbers records its list's item types and values: the answers equal those
+    worked out from the list itself (None where a value is not finite, -0.0 kept)."""
+    from orientviz.io.tables import json_numbers
+
+    rng = np.random.default_rng(3)
+    arrays = [
+        rng.normal(size=300) * 1e3,
+        np.r_[rng.normal(size=150), np.nan, np.inf, -np.inf, -0.0, 0.0, 1e300, 1e-300],
+        np.full(100, np.nan),
+    ]
+    for arr in arrays:
+        with shared_columns():
+            col = json_numbers(arr)
+            known_types, known_values = item_types(col), float_values(col)
+        assert known_types == frozenset(map(type, col))
+        fresh = np.array(col, dtype=float)
+        assert np.array_equal(known_values, fresh, equal_nan=True)
+        assert np.array_equal(np.signbit(known_values), np.signbit(fresh))

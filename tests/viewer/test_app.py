@@ -46,6 +46,24 @@ def test_port_in_use_is_one_line_and_exit_2(capsys):
     )
 
 
+def test_a_port_left_in_time_wait_is_free_again():
+    """A viewer stopped a moment ago leaves its browser's connections in TIME_WAIT (about a
+    minute): `orientviz view` run again on the same port must not be refused for that."""
+    with socket.socket() as listener:
+        listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as viser's server
+        listener.bind(("127.0.0.1", 0))
+        listener.listen(1)
+        port = listener.getsockname()[1]
+        client = socket.create_connection(("127.0.0.1", port))
+        conn, _ = listener.accept()
+        conn.close()  # the server closes first: its end of the connection enters TIME_WAIT
+        client.close()
+    with socket.socket() as plain:  # the state the probe must see through
+        with pytest.raises(OSError):
+            plain.bind(("127.0.0.1", port))
+    assert port_is_free("127.0.0.1", port)
+
+
 def test_bad_file_is_reported_in_viewer_not_raised(tmp_path, capsys):
     bad = tmp_path / "broken.json"
     bad.write_text("{ not json")

@@ -17,9 +17,11 @@ The adjustments live elsewhere: :mod:`orientviz.bundle`, :mod:`orientviz.stereo_
 :mod:`orientviz.approximate`, simulated blocks from :mod:`orientviz.simulate`.
 """
 
-from ._auxiliary import KINDS, Auxiliary, strip_time
-from ._layout import CONTROL_LAYOUTS, BlockLayout, block_layout, control_positions
-from ._result import AuxiliaryEstimates, BlockAdjustment, CheckPoints, check_points_of
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from ..faces import lazy_names
 from ._tables import (
     CHECK,
     CONTROL,
@@ -62,3 +64,31 @@ __all__ = [
     "index_ids",
     "strip_time",
 ]
+
+#: Names loaded on first use: reading and writing a block's files needs its tables only,
+#: not its layout, its auxiliary data or what an adjustment of it returns.
+_LAZY = {
+    "KINDS": "._auxiliary",
+    "Auxiliary": "._auxiliary",
+    "strip_time": "._auxiliary",
+    "CONTROL_LAYOUTS": "._layout",
+    "BlockLayout": "._layout",
+    "block_layout": "._layout",
+    "control_positions": "._layout",
+    "AuxiliaryEstimates": "._result",
+    "BlockAdjustment": "._result",
+    "CheckPoints": "._result",
+    "check_points_of": "._result",
+}
+
+__getattr__ = lazy_names(__name__, _LAZY, globals())
+
+
+def __dir__() -> list[str]:
+    return list(__all__)
+
+
+if TYPE_CHECKING:  # for type checkers and editors; nothing is imported at run time
+    from ._auxiliary import KINDS, Auxiliary, strip_time
+    from ._layout import CONTROL_LAYOUTS, BlockLayout, block_layout, control_positions
+    from ._result import AuxiliaryEstimates, BlockAdjustment, CheckPoints, check_points_of

@@ -41,27 +41,11 @@ the numerical building blocks are reached through the rooms' doors
 ``orientviz.bundle.precision``, ``orientviz.bundle.loop``).
 """
 
-from ._alternation import AuxiliaryResult, adjust_with_auxiliary
-from ._block_cameras import block_camera_options
-from ._cleaning import bundle_solver, clean_block, cleaned_block, ray_labels
-from ._options import BundleOptions
-from ._result import BundleResult, ExteriorPairs, RayGains
-from ._selfcal import SelfCalibration, self_calibrate
-from .loop import bundle_adjust
-from .model import (
-    AdditionalParameters,
-    APAnalysis,
-    Brown,
-    Ebner12,
-    Gruen44,
-    LensEstimates,
-    LensModel,
-    analyse,
-    ap_set,
-    lens_model,
-)
-from .precision import RayReliability, ray_reliability
-from .reduced import ReducedOptions
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from ..faces import lazy_names
 
 __all__ = [
     # the adjustment, its options and its result
@@ -96,3 +80,65 @@ __all__ = [
     "AuxiliaryResult",
     "adjust_with_auxiliary",
 ]
+
+#: Public name → the module holding it; each loads on first use, so a solve imports
+#: neither self-calibration, cleaning nor the alternation (nor their dependencies).
+_FACE = {
+    "AuxiliaryResult": "._alternation",
+    "adjust_with_auxiliary": "._alternation",
+    "block_camera_options": "._block_cameras",
+    "bundle_solver": "._cleaning",
+    "clean_block": "._cleaning",
+    "cleaned_block": "._cleaning",
+    "ray_labels": "._cleaning",
+    "BundleOptions": "._options",
+    "BundleResult": "._result",
+    "ExteriorPairs": "._result",
+    "RayGains": "._result",
+    "SelfCalibration": "._selfcal",
+    "self_calibrate": "._selfcal",
+    "bundle_adjust": ".loop",
+    "AdditionalParameters": ".model",
+    "APAnalysis": ".model",
+    "Brown": ".model",
+    "Ebner12": ".model",
+    "Gruen44": ".model",
+    "LensEstimates": ".model",
+    "LensModel": ".model",
+    "analyse": ".model",
+    "ap_set": ".model",
+    "lens_model": ".model",
+    "RayReliability": ".precision",
+    "ray_reliability": ".precision",
+    "ReducedOptions": ".reduced",
+}
+
+__getattr__ = lazy_names(__name__, _FACE, globals())
+
+
+def __dir__() -> list[str]:
+    return list(__all__)
+
+
+if TYPE_CHECKING:  # for type checkers and editors; nothing is imported at run time
+    from ._alternation import AuxiliaryResult, adjust_with_auxiliary
+    from ._block_cameras import block_camera_options
+    from ._cleaning import bundle_solver, clean_block, cleaned_block, ray_labels
+    from ._options import BundleOptions
+    from ._result import BundleResult, ExteriorPairs, RayGains
+    from ._selfcal import SelfCalibration, self_calibrate
+    from .loop import bundle_adjust
+    from .model import (
+        AdditionalParameters,
+        APAnalysis,
+        Brown,
+        Ebner12,
+        Gruen44,
+        LensEstimates,
+        LensModel,
+        analyse,
+        ap_set,
+        lens_model,
+    )
+    from .precision import RayReliability, ray_reliability
+    from .reduced import ReducedOptions

@@ -32,7 +32,7 @@ import numpy as np
 
 from ..block import Block
 from ..errors import InputError
-from .model import BoundLens, LensModel, ap_set
+from .model import BoundLens, LensModel
 
 #: σ (µm) that holds a fixed additional parameter at 0.
 FIXED_SIGMA_UM = 1e-6
@@ -96,6 +96,8 @@ def block_camera_options(block: Block) -> dict[str, Any]:
         cam = block.cameras
         opts = {"b": float(np.min(cam.format_mm[0])) * 0.4} if first["additional"] != "brown" else {
             "c": float(cam.c[0]), "r0": float(np.hypot(*cam.format_mm[0])) / 4}  # fmt: skip
+        from .model import ap_set  # the additional-parameter sets: only when a camera names one
+
         aps = ap_set(first["additional"], **opts)
         return {"additional": aps, "ap_group": group,
                 "ap_sigma": additional_sigmas(first, list(aps.names))}  # fmt: skip

@@ -82,3 +82,18 @@ def float_values(col: list) -> NDArray[np.float64]:
         values.flags.writeable = False
         record[2] = values
     return record[2]
+
+
+def made_floats(col: list, values: NDArray[np.float64]) -> None:
+    """Record a list that the caller has just made from ``values``: its floats, and None
+    where ``values`` is NaN. Its item types and float values are then known, not worked
+    out from the list again (when answers are kept; ``values`` becomes read-only).
+    """
+    record = _kept(col)
+    if record is None:
+        return
+    n_none = len(col) - int(np.count_nonzero(np.isfinite(values)))
+    types = ({float} if n_none < len(col) else set()) | ({type(None)} if n_none else set())
+    record[1] = frozenset(types)
+    values.flags.writeable = False
+    record[2] = values

@@ -16,7 +16,6 @@ import numpy as np
 from ..block import CONTROL, Block
 from ..errors import InputError
 from ..units import MODEL_UNIT
-from .control import apply_control, read_control
 from .problem import Units, write_problem
 
 #: Solver options written into an imported SfM model (BAL, COLMAP): Levenberg-Marquardt
@@ -55,6 +54,8 @@ def import_to_problem(
         block = read(px, sig)
         control = getattr(args, "control", None)
         if control:
+            from .control import apply_control, read_control  # only with --control
+
             block = apply_control(block, read_control(control))
         options = dict(SFM_OPTIONS if pixel_units else {}, **(options or {}))
         if np.any(np.nan_to_num(block.points.sigma) > 0):

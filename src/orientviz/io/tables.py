@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InputError
-from .columns import float_values, item_types
+from .columns import float_values, item_types, made_floats
 
 #: Marker for a field without default (it must be present).
 REQUIRED = object()
@@ -238,12 +238,17 @@ def write_table(columns: dict[str, list[Any]], columnar: bool) -> list[dict] | d
     Parameters
     ----------
     columns : dict of str to list
-        Equal-length columns of JSON values (numbers, strings, lists, None).
+        Equal-length columns of JSON values (numbers, strings, lists, None). In the
+        compact form the node holds these lists themselves, not copies.
     columnar : bool
         Write the compact form (object of arrays) instead of one object per row.
     """
-    if columnar:
-        return {k: list(v) for k, v in columns.items() if any(e is not None for e in v)}
+    if columnar:  # the lists themselves: what the writer recorded of them stays theirs
+        return {
+            k: v if type(v) is list else list(v)
+            for k, v in columns.items()
+            if any(e is not None for e in v)
+        }
     n = len(next(iter(columns.values()))) if columns else 0
     return [{k: v[i] for k, v in columns.items() if v[i] is not None} for i in range(n)]
 
@@ -303,4 +308,5 @@ def json_numbers(values, digits: int = 15) -> list[float | None]:
     res: list[float | None] = out.tolist()
     for i in np.flatnonzero(~np.isfinite(arr)).tolist():
         res[i] = None
+    made_floats(res, out)  # a writer's checks and text need not read the list again
     return res

@@ -66,10 +66,16 @@ def check_host(host: str) -> None:
 
 
 def port_is_free(host: str, port: int) -> bool:
-    """True if a TCP server could bind ``(host, port)`` now (port 0 is always free)."""
+    """True if a TCP server could bind ``(host, port)`` now (port 0 is always free).
+
+    The probe binds as viser's server does, with ``SO_REUSEADDR``: the closed connections
+    of a viewer stopped a moment ago (TCP's TIME_WAIT, about a minute) do not hold the
+    port, while a server still listening on it does.
+    """
     if port == 0:
         return True
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         try:
             s.bind((host, port))
         except OSError:

@@ -52,7 +52,6 @@ from ..problem import BundleProblem, BundleState, point_setup
 from ..problem._checks import check_connected, check_datum, check_determinable
 from ._finish import RunEnd, finish_result
 from ._loss import RobustLoss
-from ._reference_result import reference_result
 from ._steps import BundleSteps
 
 #: A robust loss (``BundleOptions.loss``) allows this many times ``max_iter`` steps: its
@@ -188,6 +187,8 @@ def bundle_adjust(
             raise InputError("solver='reference' takes no auxiliary data (GNSS, statoscope, APR)")
         if opts.loss != "none":
             raise InputError("solver='reference' is least squares only (no robust loss)")
+        from ._reference_result import reference_result  # the textbook iteration: only when asked
+
         return reference_result(
             block, setup, control=control, additional=additional, ap_group=ap_group,
             ap_sigma=ap_sigma, precision=precision, callback=callback, options=opts,

@@ -19,13 +19,11 @@ from numpy.typing import NDArray
 
 from ...block import CHECK, check_points_of
 from ...errors import NotDeterminableError
-from ...orientation.intersection import intersect_points
 from ...rotation import matrix_from_opk
 from .._result import BundleResult
 from ..model import normalised_block, project_block
 from ..precision import bundle_precision
 from ..problem import BundleProblem, BundleState, wrap
-from ..problem._auxiliary import finish_bundle
 from ..reduced import raise_not_determinable
 
 F64 = NDArray[np.float64]
@@ -55,6 +53,8 @@ def _intersect_check_points(
         image = np.arange(sel.size)  # one "image" per ray carries its ray's c, x0, y0
         X0, angles = X0[obs.image[sel]], angles[obs.image[sel]]
         io = (io_ray[:, 0], io_ray[:, 1], io_ray[:, 2])
+    from ...orientation.intersection import intersect_points  # only a block with check points
+
     res = intersect_points(
         xy, image, col[obs.point[sel]], X0,
         matrix_from_opk(angles[:, 0], angles[:, 1], angles[:, 2], block.sequence),
@@ -112,12 +112,22 @@ def ray_parallax(block, X0: F64, xyz: F64) -> F64:
     d = xyz[obs.point] - X0[obs.image]
     with np.errstate(invalid="ignore", divide="ignore"):
         d /= np.linalg.norm(d, axis=1)[:, None]
-        mean = np.zeros((block.n_points, 3))
-        np.add.at(mean, obs.point, d)
+        # each point's sum of its rays, added ray by ray in order (as np.add.at adds them)
+        mean = np.column_stack(
+            [np.bincount(obs.point, weights=d[:, k], minlength=block.n_points) for k in range(3)]
+        )
         mean /= np.linalg.norm(mean, axis=1)[:, None]
-        cos = np.clip(np.einsum("ij,ij->i", d, mean[obs.point]), -1.0, 1.0)
-        # the angle by its sine from the cross product: exact for tiny angles
-        ang = np.arctan2(np.linalg.norm(np.cross(d, mean[obs.point]), axis=1), cos)
+        m = mean[obs.point]
+        cos = np.clip(np.einsum("ij,ij->i", d, m), -1.0, 1.0)
+        # the angle by its sine from the cross product d × m: exact for tiny angles
+        cross = np.column_stack(
+            [
+                d[:, 1] * m[:, 2] - d[:, 2] * m[:, 1],
+                d[:, 2] * m[:, 0] - d[:, 0] * m[:, 2],
+                d[:, 0] * m[:, 1] - d[:, 1] * m[:, 0],
+            ]
+        )
+        ang = np.arctan2(np.linalg.norm(cross, axis=1), cos)
     out = np.full(block.n_points, -np.inf)
     np.maximum.at(out, obs.point, np.nan_to_num(ang, nan=np.inf))
     out[np.bincount(obs.point, minlength=block.n_points) < 2] = np.nan
@@ -284,6 +294,8 @@ def finish_result(prob: BundleProblem, end: RunEnd) -> BundleResult:
                     f"no precision at the last (not converged) state: {type(exc).__name__}: {exc}"
                 )
     if prob.aux:
+        from ..problem._auxiliary import finish_bundle  # only a block with auxiliary data
+
         finish_bundle(res, prob, st, rw, Je, Jp)
     if prob.ap.lens is not None:
         Q = res.cofactor_groups.get("additional") if prob.q else None

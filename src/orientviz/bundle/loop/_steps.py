@@ -21,8 +21,8 @@ hand on. Its knobs are fields of the problem's
   Newton correction given the images' one, and each point keeps the correction (the
   joint step's or a Newton one) that lowers the Σρ of its rays most (:mod:`._tail`) —
   in a small block left out after a search that adds little to its step's decrease
-  (:data:`SEARCH_GAIN`) until the run's tail (:data:`ROBUST_TAIL`), there until a search
-  gains less than the run's ftol;
+  (:data:`SEARCH_GAIN`) until the run's tail (:data:`ROBUST_TAIL`), there until two
+  searches in a row each gain less than the run's ftol;
 * a point the step held along its depth (its block V numerically singular,
   :func:`~orientviz.bundle.reduced.inv3_held`) has its depth sought alone after the step,
   given the step's new image parameters (:mod:`._depth`);
@@ -134,18 +134,20 @@ OVERRELAX_MAX: float = 64.0
 #: floored at this fraction of ρ′ (a 2 × 2 per-ray model, Triggs et al. 2000: rows P½J
 #: of the ray turned into (I − (1 − √c) r̂r̂ᵀ) P½J, its misclosure divided by √c, with
 #: c the floored ratio: the gradient unchanged, the curvature along r̂ c·ρ′ instead of ρ′).
-#: Only in the tail: from a poorer iterate its steps go wrong. Not for a camera set whose
-#: design is linear (its weighted design is re-weighted from the last one), nor for a
-#: redescending loss. Steps and optima with other floors: benchmarks/README.md.
+#: Only in the tail: from a poorer iterate its steps go wrong. For every camera set (a
+#: linear set's weighted design is turned for the solve and restored after it, as a
+#: camera model's), not for a redescending loss. Steps and optima with other floors, and
+#: of linear sets with and without it: benchmarks/README.md.
 ROBUST_TAIL_FLOOR: float = 0.3
 #: The points' own search (:mod:`._tail`) is left out until the run's tail (a step that
 #: lowers Σρ by less than :data:`ROBUST_TAIL`) after an accepted step whose search lowered
 #: Σρ by less than this fraction of the step's decrease, in a block of at most
 #: :data:`SEARCH_GATE_RAYS` rays; in the tail it runs in every step (the slow linear tail
 #: is what it removes: small simulated aerial blocks with gross errors crawled 50–120 steps
-#: or stopped 1e-4 above their optimum when it stayed out there) until a tail search
-#: lowers Σρ by less than the run's ftol·Σρ (it can no longer move where the run stops:
-#: then it is left out for the rest of the run). Outside the tail its fixed cost
+#: or stopped 1e-4 above their optimum when it stayed out there) until two tail searches
+#: in a row each lower Σρ by less than the run's ftol·Σρ (it can no longer move where the
+#: run stops: then it is left out for the rest of the run; one such search alone may come
+#: before the tail model's steps move points again). Outside the tail its fixed cost
 #: (some hundred array operations: the points' 3 × 3 systems, one evaluation of their
 #: rays at two corrections) weighs as much as a step, and such shares do not come with
 #: fewer steps (DBAT camcal: 0.03–2.7 % in every step). In larger blocks it costs a few
@@ -257,7 +259,8 @@ class BundleSteps:
         self.search_off = False  # the searches stopped paying (SEARCH_GAIN)
         self.stop_ftol = 0.0  # the run's ftol (set by the caller; a robust run's own)
         self._tail_search = False  # the next step searches because the run is in its tail
-        self._search_spent = False  # a tail search gained less than stop_ftol·Σρ
+        self._search_spent = False  # two tail searches in a row gained < stop_ftol·Σρ each
+        self._search_low = False  # … and whether the last one did
         self._drops = (0.0, 0.0)  # the decreases of Σρ of the last two robust steps
         # the start of the last solved step and its additional parameters' design (the
         # step's predicted decrease, ._gain), and whether the last accepted least-squares
@@ -413,18 +416,12 @@ class BundleSteps:
     def _tail_model(self, rw: F64, Je: F64, Jp: F64, scale: F64 | None):
         """In a convex loss's tail (:data:`ROBUST_TAIL_FLOOR`): the rays beyond the scale
         with their curvature along the misclosure c·ρ′ (c = max((ρ′ + 2sρ″)/ρ′, floor))
-        — rows (I − (1 − √c) r̂r̂ᵀ) P½J (Je, Jp, a camera model's design) and misclosure
+        — rows (I − (1 − √c) r̂r̂ᵀ) P½J (Je, Jp, the additional parameters' design) and misclosure
         P½r/√c. ``rw``: P½r with the weights 1/σ·√ρ′ (``scale`` = √ρ′ per ray), ``Je``,
         ``Jp`` unweighted (the normal equations weight them). Returns (rw, Je, Jp, design
         to restore after the solve or None); unchanged outside the tail."""
         prob, loss = self.prob, self.loss
-        if (
-            not self.robust_tail
-            or self._retry
-            or scale is None
-            or loss.redescending
-            or (prob.q and prob.ap.lens is None)
-        ):
+        if not self.robust_tail or self._retry or scale is None or loss.redescending:
             return rw, Je, Jp, None
         return tail_model(prob, loss, rw, Je, Jp, scale, ROBUST_TAIL_FLOOR)
 
@@ -531,7 +528,7 @@ class BundleSteps:
             else:
                 rel, ne, dc, dp, da, fac = chord
         finally:
-            if design is not None:  # the camera model's own design again (a retry, the end)
+            if design is not None:  # the parameters' own design again (a retry, the end)
                 prob.run.ap = design.with_design(design.A, prob.obs.weight)
         self._sigma = (ne.diagU, ne.diagV, ne.diagF if prob.q or prob.na else None)
         self._held = None if ne.held is None else ne.held.points
@@ -577,7 +574,11 @@ class BundleSteps:
         (1/ω of an over-relaxed s). inf where c ≤ 0 (the true Σρ not convex along s), 0
         where it cannot be formed (no derivatives kept, a step in frame rotations). The
         points' search makes d larger than the joint step's own: the ratio then errs high
-        (a step too long is rejected and retried, see :data:`OVERRELAX_MIN_RATIO`)."""
+        (a step too long is rejected and retried, see :data:`OVERRELAX_MIN_RATIO`). The
+        pseudo-observations (weighted control, the additional parameters' σ, a given
+        exterior orientation) are not in the model's slope and curvature here, while d
+        includes their change: with such priors the ratio is not the model's (it reads
+        inf or far too high, and two rarely agree)."""
         scale = getattr(previous.data, "scale", None)
         rw, Je, Jp = previous.data
         if scale is None or Je is None or gain_from is None or self.is_local(previous):
@@ -791,7 +792,8 @@ class BundleSteps:
             if self.search_gain is not None:  # the points' search: did it pay?
                 gain, self.search_gain = self.search_gain, None
                 if self._tail_search:  # below ftol·Σρ it can no longer move the run's stop
-                    self._search_spent = small and gain < self.stop_ftol * previous.cost
+                    low = small and gain < self.stop_ftol * previous.cost
+                    self._search_spent, self._search_low = low and self._search_low, low
                 self.search_off = small and gain < SEARCH_GAIN * (previous.cost - self.pending_cost)
             # in the run's tail the search runs in every step (until spent)
             self._tail_search = self.robust_tail and not self._search_spent

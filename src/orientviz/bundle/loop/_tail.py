@@ -50,16 +50,14 @@ I64 = NDArray[np.int64]
 #: (a point whose rays all lie beyond Huber's scale may have a flat direction).
 NEWTON_FLOOR: float = 0.01
 #: :func:`point_search`: the fractions of the Newton correction ranked per point beside
-#: the one up to the first breakpoint (the nearly flat direction ends where a ray's
-#: misclosure reaches the scale: the full correction may overshoot it).
+#: the first breakpoint (the nearly flat direction ends where a ray's misclosure reaches
+#: the scale: the full correction may overshoot it). The breakpoint is ranked wherever it
+#: lies along the correction, also far beyond it: the floor (:data:`NEWTON_FLOOR`) makes
+#: the model's curvature along a flat direction positive, so the correction may stop short
+#: of the breakpoint by any factor, and a point held to a multiple of it creeps along its
+#: flat stretch (Σρ linear there) by about the same length in step after step. With no
+#: breakpoint (no ray reaches the scale) the full correction is ranked twice.
 FRACTIONS: tuple[float, ...] = (1.0, 0.5, 0.25, 0.125)
-#: … and the breakpoint is ranked up to this multiple of the Newton correction: the floor
-#: (:data:`NEWTON_FLOOR`) makes the model's curvature along a flat direction positive, so
-#: the correction may also stop short of the breakpoint — a point that creeps along its
-#: flat stretch by about the same length in step after step (two-ray points of small
-#: aerial blocks). A breakpoint beyond it is ranked at it; with none (no ray reaches the
-#: scale) the full correction.
-BREAKPOINT_MAX: float = 4.0
 #: Upper-triangle index pairs of a symmetric 3 × 3 block (6 entries) …
 _UPPER = (np.array([0, 0, 0, 1, 1, 2]), np.array([0, 1, 2, 1, 2, 2]))
 #: … and the positions of its diagonal among them.
@@ -98,8 +96,8 @@ def tail_model(
     prob: BundleProblem, loss: RobustLoss, rw: F64, Je: F64, Jp: F64, scale: F64, floor: float
 ):
     """The rays beyond the scale with their curvature along the misclosure c·ρ′
-    (c = max((ρ′ + 2sρ″)/ρ′, ``floor``)) — rows (I − (1 − √c) r̂r̂ᵀ) P½J (Je, Jp, a
-    camera model's design) and misclosure P½r/√c: the gradient unchanged.
+    (c = max((ρ′ + 2sρ″)/ρ′, ``floor``)) — rows (I − (1 − √c) r̂r̂ᵀ) P½J (Je, Jp, the
+    additional parameters' design) and misclosure P½r/√c: the gradient unchanged.
 
     ``rw``: P½r with the weights 1/σ·√ρ′ (``scale`` = √ρ′ per ray), ``Je``, ``Jp``
     unweighted (the normal equations weight them by the problem's ray weights). Returns
@@ -128,7 +126,7 @@ def tail_model(
     Je[out], Jp[out] = turn(Je[out]), turn(Jp[out])
     rw[out] /= np.sqrt(c)[:, None]
     design = None
-    if prob.q:  # a camera model's design at this linearisation: turned for this solve
+    if prob.q:  # the additional parameters' design at this linearisation: turned for this solve
         design = prob.run.ap
         A = design.A.copy()
         A[out] = turn(A[out])
@@ -160,7 +158,7 @@ class PointNewton:
         The Newton corrections, m (0 for a point whose model is singular).
     first : ndarray, shape (a,)
         The fraction of ``dp`` at which a ray of the point first reaches the loss's scale
-        from beyond it (linearised; at most :data:`BREAKPOINT_MAX`, 1 where no ray does).
+        from beyond it (linearised; 1 where no ray does).
     owner : ndarray of int, shape (m,)
         The active point (index into ``active``) of each ray.
     r : ndarray, shape (m, 2)
@@ -190,7 +188,7 @@ class PointNewton:
 
     def fractions(self) -> F64:
         """(c, a): the fractions of ``dp`` tried per point — up to the first breakpoint
-        (also beyond ``dp``, :data:`BREAKPOINT_MAX`), and :data:`FRACTIONS`."""
+        (also beyond ``dp``), and :data:`FRACTIONS`."""
         f = np.empty((len(FRACTIONS) + 1, self.first.size))
         f[0] = self.first
         f[1:] = np.asarray(FRACTIONS)[:, None]
@@ -293,7 +291,7 @@ def point_newton(
     alpha = np.full(r.shape[0], np.inf)
     alpha[ok] = (B[ok] - np.sqrt(disc[ok])) / A2[ok]
     first = np.minimum.reduceat(alpha, starts)
-    first = np.where(np.isfinite(first), np.minimum(first, BREAKPOINT_MAX), 1.0)
+    first = np.where(np.isfinite(first), first, 1.0)
     return PointNewton(active, rays, obs_rays, starts, dp, first, owner, r, up, s, B, A2)
 
 

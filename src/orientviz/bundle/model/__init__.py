@@ -16,16 +16,11 @@
   and the six image deformations of the exterior orientation (:func:`eo_deformations`).
 """
 
-from ._additional import (
-    AdditionalParameters,
-    APAnalysis,
-    Brown,
-    Ebner12,
-    Gruen44,
-    analyse,
-    ap_set,
-    eo_deformations,
-)
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from ...faces import lazy_names
 from ._kernel import (
     RayProjection,
     collinearity_block,
@@ -69,3 +64,34 @@ __all__ = [
     "apply_local",
     "frame_axials",
 ]
+
+#: Names loaded on first use: a bundle without additional-parameter sets never loads them.
+_LAZY = {
+    "AdditionalParameters": "._additional",
+    "APAnalysis": "._additional",
+    "Brown": "._additional",
+    "Ebner12": "._additional",
+    "Gruen44": "._additional",
+    "analyse": "._additional",
+    "ap_set": "._additional",
+    "eo_deformations": "._additional",
+}
+
+__getattr__ = lazy_names(__name__, _LAZY, globals())
+
+
+def __dir__() -> list[str]:
+    return list(__all__)
+
+
+if TYPE_CHECKING:  # for type checkers and editors; nothing is imported at run time
+    from ._additional import (
+        AdditionalParameters,
+        APAnalysis,
+        Brown,
+        Ebner12,
+        Gruen44,
+        analyse,
+        ap_set,
+        eo_deformations,
+    )

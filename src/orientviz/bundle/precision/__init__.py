@@ -11,9 +11,13 @@
   (:func:`ray_reliability` → :class:`RayReliability`).
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from ...faces import lazy_names
 from ._band import BandSolver
 from ._precision import banded_selected_inverse, bundle_precision
-from ._reliability import RayReliability, ray_reliability
 
 __all__ = [
     "BandSolver",
@@ -22,3 +26,20 @@ __all__ = [
     "RayReliability",
     "ray_reliability",
 ]
+
+#: Names loaded on first use: the reliability per ray (and the tests of
+#: :mod:`orientviz.adjust.gross` it builds on) only when asked for.
+_LAZY = {
+    "RayReliability": "._reliability",
+    "ray_reliability": "._reliability",
+}
+
+__getattr__ = lazy_names(__name__, _LAZY, globals())
+
+
+def __dir__() -> list[str]:
+    return list(__all__)
+
+
+if TYPE_CHECKING:  # for type checkers and editors; nothing is imported at run time
+    from ._reliability import RayReliability, ray_reliability

@@ -54,7 +54,9 @@ def camera_precision(res, prob, ne, Je: F64, Jp: F64) -> None:
     # the structure's image pairs (i ≤ l) and at each image itself
     N = dense_blocks(S, cb.blocks)
     c = scipy.linalg.cho_factor(N, lower=True, overwrite_a=True, check_finite=False)
-    Z4 = scipy.linalg.cho_solve(c, np.eye(d * m), check_finite=False).reshape(m, d, m, d)
+    eye = np.eye(d * m, order="F")  # (LAPACK's layout: solved in place, not copied first)
+    Z = scipy.linalg.cho_solve(c, eye, overwrite_b=True, check_finite=False)
+    Z4 = Z.reshape(m, d, m, d)
     Zblk = Z4[S.block_i, :, S.block_k, :]  # (blocks, d, d)
     own = np.arange(m)
     Qcc = Z4[own, :, own, :]  # (m, d, d)
@@ -66,13 +68,17 @@ def camera_precision(res, prob, ne, Je: F64, Jp: F64) -> None:
     else:
         T = np.zeros((n_used, d, 3))
         T[ne.rays] = cb.T
-    # the rays' weighted design [P½ J_e | P½ A] (n, 2, d) and P½ J_p; Q_pp and the gains K
-    # of each ray on its image's unknowns (d × 2) and on its point (3 × 2)
-    sw = prob.obs.weight[:, :, None]
-    Jd = np.empty((n_used, 2, d))
-    np.multiply(Je, sw, out=Jd[:, :, :6])
-    Jd[:, :, 6:] = ap.Aw
-    Qpp, Kd, Kp, H = ray_cofactors(S, Zblk, T, ne.Vinv, Qcc, oi, Jd, Jp * sw)
+    # the rays' weighted design [P½J_e | P½A] (n, 2, d) and P½J_p as the normal equations
+    # were formed from them; Q_pp and the gains K of each ray on its image's unknowns
+    # (d × 2) and on its point (3 × 2)
+    Jd, Jpw = cb.Jc, cb.Jp
+    if Jd is None:
+        sw = prob.obs.weight[:, :, None]
+        Jd = np.empty((n_used, 2, d))
+        np.multiply(Je, sw, out=Jd[:, :, :6])
+        Jd[:, :, 6:] = ap.Aw
+        Jpw = Jp * sw
+    Qpp, Kd, Kp, H = ray_cofactors(S, Zblk, T, ne.Vinv, Qcc, oi, Jd, Jpw)
     # the cameras' cofactors in the border's order (group g: image i with group[i] = g)
     at = np.empty(m, np.int64)
     at[ap.group] = own

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ._store import ray_blocks
+from ._store import LAYOUT_FREE_TERMS, ray_blocks
 
 F64 = NDArray[np.float64]
 
@@ -78,7 +78,7 @@ def _ordered_blocks(S, Zblk: F64):
         at = np.zeros((m, m), np.int64)
         at[S.block_k, S.block_i] = nb + np.arange(nb)  # the transposes first: (i, i) stays
         at[S.block_i, S.block_k] = np.arange(nb)
-        return Zboth[at.reshape(-1)], lambda i, k: i * m + k
+        return np.take(Zboth, at.reshape(-1), axis=0), lambda i, k: i * m + k
     keys = S.block_i * m + S.block_k
 
     def index(i, k):
@@ -107,7 +107,7 @@ def _pair_products(S, Zs, index, T: F64, k: int, rays) -> F64:
     (:func:`cofactors_by_pairs`), shape (rays, d, 3)."""
     d = T.shape[1]
     img = S.obs_cam[rays].reshape(-1, k)
-    Zg = Zs[index(img[:, None, :], img[:, :, None])]  # (points, b, a, d, d)
+    Zg = np.take(Zs, index(img[:, None, :], img[:, :, None]), axis=0)  # (points, b, a, d, d)
     QT = np.matmul(Zg.reshape(-1, k * d, d), T[rays])  # (points · b, a · d, 3)
     return -segment_sum(QT.reshape(-1, k, k, d, 3)).reshape(-1, d, 3)
 
@@ -181,20 +181,26 @@ def ray_cofactors(
     n_rays = Jc.shape[0]
     Kc, Kp, H = np.empty((n_rays, d, 2)), np.zeros((n_rays, 3, 2)), np.empty((n_rays, 2, 2))
     Qpp = np.empty_like(Vinv)
+    # the transposed designs once for all chunks, where ray_blocks reads them contiguous
+    JcT = np.ascontiguousarray(Jc.transpose(0, 2, 1)) if d < LAYOUT_FREE_TERMS else None
+    JpT = np.ascontiguousarray(Jp.transpose(0, 2, 1))
     for k, rays, p0, n in _chunks(S, d):
         Qc = _pair_products(S, Zs, index, T, k, rays)
         if dQcp is not None:
             Qc -= dQcp[rays]
         P = T[rays].transpose(0, 2, 1) @ (-Qc)  # (n k, 3, 3)
         pts = tg.points[p0 : p0 + n]
-        Qp = Vinv[pts] + segment_sum(P.reshape(n, k, 3, 3))
+        Qp = np.take(Vinv, pts, axis=0) + segment_sum(P.reshape(n, k, 3, 3))
         if dQpp is not None:
             Qp -= dQpp[pts]
         Qpp[pts] = Qp
         each = np.repeat(np.arange(n), k)  # each ray's point in the chunk
-        Kc[rays], Kp[rays], H[rays] = ray_blocks(
-            Qimg, img[rays], Qc, Qp, Jc[rays], Jp[rays], slice(None), each
-        )
+        args = (Qimg, img[rays], Qc, Qp, Jc[rays], Jp[rays], slice(None), each)
+        args += (None if JcT is None else JcT[rays], JpT[rays])
+        if tg.in_order:  # written in place (views)
+            ray_blocks(*args, out=(Kc[rays], Kp[rays], H[rays]))
+        else:
+            Kc[rays], Kp[rays], H[rays] = ray_blocks(*args)
     fixed = np.flatnonzero(S.obs_pt < 0)  # rays of fixed points: their image's term only
     if fixed.size:
         Kc[fixed] = Qimg[img[fixed]] @ Jc[fixed].transpose(0, 2, 1)

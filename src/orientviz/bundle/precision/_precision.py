@@ -47,7 +47,7 @@ from ._camera import camera_precision
 from ._far import mark_far, placed_state
 from ._pairs import cofactors_by_pairs, point_cofactors, ray_cofactors, var_rows
 from ._precision_ap import banded_border, border_inverse, point_terms
-from ._store import ray_blocks, store_precision
+from ._store import LAYOUT_FREE_TERMS, fast_layout, ray_blocks, store_precision
 
 F64 = NDArray[np.float64]
 
@@ -196,7 +196,8 @@ class ReducedInverse:
                     c = (fac.data, True)
                 else:
                     c = scipy.linalg.cho_factor(dense_matrix(st, blocks), lower=True)
-                Z = self._Z = scipy.linalg.cho_solve(c, np.eye(n))
+                eye = np.eye(n, order="F")  # (LAPACK's layout: solved in place, not copied)
+                Z = self._Z = scipy.linalg.cho_solve(c, eye, overwrite_b=True)
                 rows = 6 * st.block_i[:, None, None] + r6[None, :, None]
                 cols = 6 * st.block_k[:, None, None] + r6[None, None, :]
                 self.blocks = Z[rows, cols]
@@ -410,8 +411,12 @@ def _fill_from(res, prob, ne, fac, Je, Jp) -> None:
     if q:  # the gains' terms of Q_ca, Q_pa in the ray's own group's k columns
         if fast_ap:
             Qca_o = Qca3.reshape(m, 6, prob.ap.G, prob.ap.k)[np.arange(m), :, prob.ap.group, :][oi]
-            Qpa_o = Qap_pg[prob.ap.structure.own_pg[rv]].transpose(0, 2, 1)
-            AwT = prob.ap.Aw.transpose(0, 2, 1)
+            own, k = prob.ap.structure.own_pg[rv], prob.ap.k
+            if k < LAYOUT_FREE_TERMS:  # contiguous: the same numbers, read faster (fast_layout)
+                Qpa_o = np.ascontiguousarray(Qap_pg.transpose(0, 2, 1))[own]
+            else:
+                Qpa_o = Qap_pg[own].transpose(0, 2, 1)
+            AwT = fast_layout(prob.ap.Aw.transpose(0, 2, 1), k)
         Ke += Qca_o @ AwT
         Kp[rv] += Qpa_o @ AwT[rv]
     faa = Faa[:q, :q] if q else None

@@ -35,6 +35,7 @@ from numpy.typing import NDArray
 from ..problem._ap_normal import BorderE
 from ._band import BandSolver
 from ._pairs import var_rows
+from ._store import fast_layout
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -303,8 +304,11 @@ def point_terms(prob, ne, Qaa: F64, Qca3: F64, Jew: F64, Jpw: F64):
     Jpad = Jew[A.pad0].reshape(m, 2 * L, 6)  # J_e Q_ca,own per image, then per ray
     JQ = np.matmul(Jpad, Qca_own).reshape(m * L, 2, k)[R.slot]
     vo = var_rows(prob.obs)  # the rays of point unknowns (a slice when they come first)
-    JQ[vo] += Jpw[vo] @ Qap[A.own_pg[vo]].transpose(0, 2, 1)
-    AwT = Aw.transpose(0, 2, 1)
+    # the transposed right-hand factors as contiguous copies where that gives the same
+    # numbers (read faster: ._store.fast_layout)
+    QapT = fast_layout(Qap.transpose(0, 2, 1), 3)
+    JQ[vo] += Jpw[vo] @ QapT[A.own_pg[vo]]
+    AwT = fast_layout(Aw.transpose(0, 2, 1), k)
     C = JQ @ AwT
     AQ += JQ  # (A Q_aa + J Q) Aᵀ + (J Q Aᵀ)ᵀ
     Hray = AQ @ AwT + C.transpose(0, 2, 1)

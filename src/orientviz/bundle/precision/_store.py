@@ -18,10 +18,24 @@ from .._result import ExteriorPairs, RayGains
 
 F64 = NDArray[np.float64]
 
+#: Stacked products over fewer terms than this give the same numbers whether a factor is a
+#: transposed view or a contiguous copy of it (OpenBLAS's small-matrix kernels add an
+#: entry's products in order either way; the sweeps are in benchmarks/README.md, the
+#: precision's layouts); the precision multiplies such factors as contiguous copies,
+#: which BLAS reads faster, and keeps the views beyond.
+LAYOUT_FREE_TERMS: int = 16
+
+
+def fast_layout(B: F64, terms: int) -> F64:
+    """``B`` as a contiguous array when products over ``terms`` terms give the same
+    numbers in either layout (:data:`LAYOUT_FREE_TERMS`), else ``B`` itself."""
+    return np.ascontiguousarray(B) if terms < LAYOUT_FREE_TERMS else B
+
 
 def ray_blocks(
-    Qimg: F64, img, Qcp: F64, Qpp: F64, Jc: F64, Jpv: F64, vo, pcol
-) -> tuple[F64, F64, F64]:
+    Qimg: F64, img, Qcp: F64, Qpp: F64, Jc: F64, Jpv: F64, vo, pcol, JcT: F64 | None = None,
+    JpvT: F64 | None = None, out: tuple[F64, F64, F64] | None = None,
+) -> tuple[F64, F64, F64]:  # fmt: skip
     """The rays' gains and their blocks of P½ J Q Jᵀ P½, from the cofactors.
 
     Parameters
@@ -42,6 +56,10 @@ def ray_blocks(
     vo : slice or ndarray of int
         The rays of point unknowns (any order; a slice reads views); ``pcol`` their
         point unknowns.
+    JcT, JpvT : ndarray, shapes (n, d, 2), (n_var, 3, 2), optional
+        ``Jc`` and ``Jpv`` transposed (:func:`fast_layout`; made here when not given).
+    out : tuple of ndarray, optional
+        Where ``(Kc, Kp, H)`` are written (``Kp`` zero at the rays outside ``vo``).
 
     Returns
     -------
@@ -49,13 +67,21 @@ def ray_blocks(
         The gains K = Q J_wᵀ of each ray on its image unknowns and its point, and
         J_w K (the ray's 2 × 2 block of P½ J Q Jᵀ P½).
     """
-    JcT, JpvT = Jc.transpose(0, 2, 1), Jpv.transpose(0, 2, 1)
-    Kc = Qimg[img] @ JcT
+    # the transposed designs as contiguous copies where a stored factor multiplies them
+    # (the same numbers, read faster: fast_layout), as views where a transposed one does
+    if JcT is None:
+        JcT = fast_layout(Jc.transpose(0, 2, 1), Jc.shape[2])
+    if JpvT is None:
+        JpvT = fast_layout(Jpv.transpose(0, 2, 1), 3)
+    if out is None:
+        n = Jc.shape[0]
+        out = np.empty((n, Jc.shape[2], 2)), np.zeros((n, 3, 2)), np.empty((n, 2, 2))
+    Kc, Kp, H = out
+    np.matmul(np.take(Qimg, img, axis=0), JcT, out=Kc)  # (np.take: a faster gather)
     Qv = Qcp[vo]
     Kc[vo] += Qv @ JpvT
-    Kp = np.zeros((Jc.shape[0], 3, 2))
-    Kp[vo] = Qv.transpose(0, 2, 1) @ JcT[vo] + Qpp[pcol] @ JpvT
-    H = Jc @ Kc
+    Kp[vo] = Qv.transpose(0, 2, 1) @ Jc.transpose(0, 2, 1)[vo] + np.take(Qpp, pcol, axis=0) @ JpvT
+    np.matmul(Jc, Kc, out=H)
     H[vo] += Jpv @ Kp[vo]
     return Kc, Kp, H
 
@@ -92,8 +118,11 @@ def store_precision(
     r_img = np.clip(1.0 - np.stack([H[:, 0, 0], H[:, 1, 1]], 1), 0.0, 1.0)
     r_xy = -0.5 * (H[:, 0, 1] + H[:, 1, 0])
     n = prob.block.n_observations
-    rn = np.full((n, 2), np.nan)
-    rn[prob.obs.index] = r_img
+    idx = prob.obs.index
+    # per observation, NaN for the unused ones (none: every row is written)
+    blank = np.empty if idx.size == n else (lambda shape: np.full(shape, np.nan))
+    rn = blank((n, 2))
+    rn[idx] = r_img
     out_r = [rn.reshape(-1)]
     # pseudo-observations
     w = prob.points.prior_w > 0
@@ -127,11 +156,11 @@ def store_precision(
     res.redundancy_check = float(np.nansum(rall))
     # off-diagonal (x, y) element of P½ Q_vv P½ per image observation: with the diagonal
     # (the redundancy numbers) the 2×2 block of a ray for 2-D outlier tests
-    rxy = np.full(n, np.nan)
-    rxy[prob.obs.index] = r_xy
+    rxy = blank(n)
+    rxy[idx] = r_xy
     res.redundancy_xy = rxy
-    gain_e = np.full((n, 6, 2), np.nan)
-    gain_e[prob.obs.index] = Ke
-    gain_p = np.full((n, 3, 2), np.nan)
-    gain_p[prob.obs.index] = Kp
+    gain_e = blank((n, 6, 2))
+    gain_e[idx] = Ke
+    gain_p = blank((n, 3, 2))
+    gain_p[idx] = Kp
     res.ray_gains = RayGains(gain_e, gain_p)

@@ -14,7 +14,11 @@
   with their offsets/drifts.
 """
 
-from ._auxiliary import AuxRows, BundleAuxiliary, auxiliary_rows
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from ...faces import lazy_names
 from ._border import (
     band_backward_solve,
     band_forward_solve,
@@ -61,3 +65,21 @@ __all__ = [
     "BundleState",
     "wrap",
 ]
+
+#: Names loaded on first use: auxiliary data (GNSS, statoscope, APR) only in a block
+#: that has them.
+_LAZY = {
+    "AuxRows": "._auxiliary",
+    "BundleAuxiliary": "._auxiliary",
+    "auxiliary_rows": "._auxiliary",
+}
+
+__getattr__ = lazy_names(__name__, _LAZY, globals())
+
+
+def __dir__() -> list[str]:
+    return list(__all__)
+
+
+if TYPE_CHECKING:  # for type checkers and editors; nothing is imported at run time
+    from ._auxiliary import AuxRows, BundleAuxiliary, auxiliary_rows

@@ -75,6 +75,9 @@ class CameraBlocks:
         Undamped diagonal of each image's camera block (points eliminated).
     lam : float
         The damping λ of this system.
+    Jc, Jp : ndarray, shapes (n, 2, d), (n, 2, 3), optional
+        The rays' weighted designs [P½J_e | P½A] and P½J_p it was formed from (views of
+        work arrays, like ``W`` and ``T``).
     """
 
     blocks: F64
@@ -83,6 +86,8 @@ class CameraBlocks:
     T: F64
     F_diag: F64
     lam: float
+    Jc: F64 | None = None
+    Jp: F64 | None = None
 
     @property
     def d(self) -> int:
@@ -99,10 +104,10 @@ def camera_normal(
     exterior parts and ``ne.ap`` a :class:`CameraBorder` (``hold``: as
     :meth:`BundleProblem.normal`).
 
-    W and T are work arrays kept between iterations (``reduced.tracks.work``, released with
-    the Schur formation's maps after the iterations): they hold this system's until the
-    next call, which overwrites them (the loop solves each system before forming the
-    next)."""
+    W, T and the weighted designs are work arrays kept between iterations
+    (``reduced.tracks.work``, released with the Schur formation's maps after the
+    iterations): they hold this system's until the next call, which overwrites them (the
+    loop solves each system before forming the next)."""
     S, ap = prob.reduced, prob.ap
     tg = S.tracks
     k = ap.k
@@ -116,7 +121,7 @@ def camera_normal(
     Jz[n] = 0.0
     np.multiply(Je, sw, out=Jz[:n, :, :6])
     Jz[:n, :, 6:d] = ap.Aw
-    Jpw = Jp * sw
+    Jpw = np.multiply(Jp, sw, out=work_array(ws, "Jpw", (n, 2, 3)))
     Wr, V, Vinv, Tr, bp, diagV, G, held = eliminate_points(
         prob, st, Jz, Jpw, rw, lam, ws, hold=hold
     )
@@ -131,7 +136,7 @@ def camera_normal(
         blocks[S.diag_block] = dg
     diagF = np.empty((ap.G, k))
     diagF[grp] = Fd
-    cb = CameraBlocks(blocks, red, Wr, Tr, Fd, lam)
+    cb = CameraBlocks(blocks, red, Wr, Tr, Fd, lam, Jz[:n, :, :d], Jpw)
     out = NormalEquations(
         blocks=blocks[:, :6, :6],
         rhs=red[:, :6].reshape(-1),

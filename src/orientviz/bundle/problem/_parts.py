@@ -29,7 +29,6 @@ from numpy.typing import NDArray
 
 from ...block import Block
 from ...errors import InputError
-from ..model._additional import ap_set
 from ..model._lens import BoundLens, LensModel
 from ..reduced import ReducedStructure
 from ._ap_structure import APStructure
@@ -356,6 +355,8 @@ def additional_block(
     if additional is None:
         return AdditionalBlock()
     if isinstance(additional, str):  # a set's name, as on the command line
+        from ..model._additional import ap_set  # the sets: only when one is named
+
         additional = ap_set(additional)
     elif not isinstance(additional, LensModel) and not (
         callable(getattr(additional, "design", None)) and hasattr(additional, "names")

@@ -13,6 +13,8 @@ the engine's (:func:`orientviz.adjust.engine.iterate`).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -31,7 +33,6 @@ from ..reduced import (
     schur_buffer_size,
 )
 from ._ap_normal import ap_normal, point_ap_term
-from ._auxiliary import BundleAuxiliary, auxiliary_rows
 from ._border import solve_border
 from ._camera_blocks import camera_blocks_apply, camera_normal, camera_solve
 from ._checks import PointSetup
@@ -49,6 +50,9 @@ from ._parts import (
 )
 from ._run import BundleRun
 from ._state import BundleState, wrap
+
+if TYPE_CHECKING:  # annotations only
+    from ._auxiliary import BundleAuxiliary
 
 F64 = NDArray[np.float64]
 
@@ -147,6 +151,8 @@ class BundleProblem:
         self.run = BundleRun(self.ap0)
         self.aux: BundleAuxiliary | None = None
         if auxiliary:
+            from ._auxiliary import BundleAuxiliary, auxiliary_rows  # only with auxiliary data
+
             self.aux = BundleAuxiliary(auxiliary_rows(auxiliary, block), self.points.column)
         n_pseudo = int(
             (self.points.prior_w > 0).sum()

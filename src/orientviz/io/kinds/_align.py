@@ -19,7 +19,6 @@ import numpy as np
 
 from ...block import CONTROL, Block
 from ...errors import InputError
-from ...orientation.intersection import intersect_points
 from ...rotation import opk_from_matrix
 
 #: The frames differ when the control misfits the approximations by more than this share
@@ -51,6 +50,8 @@ class Alignment:
 def intersect_from_orientations(block: Block, points: np.ndarray) -> np.ndarray:
     """XYZ (p, 3) m of the points ``points`` (bool mask) intersected from the block's given
     orientations (NaN where fewer than two rays or parallel ones)."""
+    from ...orientation.intersection import intersect_points  # only for points without coordinates
+
     obs = block.observations
     sel = points[obs.point]
     cam = block.images.camera

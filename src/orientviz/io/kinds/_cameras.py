@@ -34,7 +34,6 @@ from __future__ import annotations
 from typing import Any
 
 from ..problem import Units
-from ..solution import Parameter
 from ..tables import Table
 
 #: The lens terms a camera row may give (both models).
@@ -178,6 +177,8 @@ def camera_parameters(block, adj, units: Units) -> list:
     """The estimated cameras as report parameters (``Solution.parameters``): c, x0, y0 as
     image quantities (y0 in the file's frame: pixels count downwards), the terms as
     pure numbers in their own units (named ``"<camera>.K1 [mm⁻²]"``); fixed ones left out."""
+    from ..solution import Parameter  # a solution's types: only when solving
+
     cam = getattr(adj, "camera", None)
     if cam is None:
         return []

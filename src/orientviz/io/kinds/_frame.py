@@ -224,15 +224,18 @@ def _ids_at(ids: list[str], index: np.ndarray) -> list[str]:
     return table[index].tolist()
 
 
+def _pairs(values: list) -> list[list]:
+    """``values`` in consecutive pairs."""
+    return [values[i : i + 2] for i in range(0, len(values), 2)]
+
+
 def _vec_cells(obs: np.ndarray, sig: np.ndarray, scale: float) -> tuple[list, list]:
-    vals, sigs = [], []
-    for o, s in zip(obs, sig):
-        if np.all(np.isnan(o)):
-            vals.append(None)
-            sigs.append(None)
-        else:
-            vals.append(json_numbers(o / scale))
-            sigs.append(json_numbers(s / scale))
+    """Cells of a vector per row (None where every entry is NaN) and of its σ."""
+    vals: list[Any] = [None] * len(obs)
+    sigs: list[Any] = [None] * len(obs)
+    for i in np.flatnonzero(~np.all(np.isnan(obs), axis=1)).tolist():
+        vals[i] = json_numbers(obs[i] / scale)
+        sigs[i] = json_numbers(sig[i] / scale)
     return vals, sigs
 
 
@@ -246,7 +249,7 @@ def tables_from_block(block: Block, units: Units, columnar: bool) -> dict[str, A
         "c": json_numbers(cam.c / I),
         "x0": json_numbers(cam.x0 / I),
         "y0": json_numbers(cam.y0 / Y),
-        "format": [json_numbers(f / I) for f in cam.format_mm],
+        "format": _pairs(json_numbers(np.ravel(cam.format_mm / I))),
     }
     if any(cam.model):
         cameras.update(camera_model_cells(cam.model, units))
@@ -268,13 +271,11 @@ def tables_from_block(block: Block, units: Units, columnar: bool) -> dict[str, A
         "angles_obs_sigma": asig,
     }
     xyz = np.where((pt.role > 0)[:, None], pt.xyz_known, pt.xyz)
-    sig_cells: list[Any] = []
-    for r, s in zip(pt.role.tolist(), pt.sigma):
-        if r != CONTROL:  # σ of tie (unknown) and check (not used) points has no meaning
-            sig_cells.append(None)
-        else:
-            vals = json_numbers(s / L)
-            sig_cells.append(vals[0] if len(set(vals)) == 1 else vals)
+    # σ of tie (unknown) and check (not used) points has no meaning
+    sig_cells: list[Any] = [None] * len(pt.role)
+    for i in np.flatnonzero(pt.role == CONTROL).tolist():
+        vals = json_numbers(pt.sigma[i] / L)
+        sig_cells[i] = vals[0] if len(set(vals)) == 1 else vals
     points = {
         "id": list(pt.ids),
         "role": [ROLES[r] for r in pt.role.tolist()],

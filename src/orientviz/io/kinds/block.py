@@ -18,23 +18,24 @@ for ``--method polynomial`` ``degree_xy``, ``degree_z``. Methods: ``bundle`` (de
 from __future__ import annotations
 
 import inspect
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ...adjust.result import W_CRITICAL
 from ...block import CHECK, CONTROL, ROLES, TIE, Block
 from ...errors import InputError
 from ..problem import Problem, Units
 from ..registry import Kind, register_kind
-from ..solution import Solution
 from ._cameras import camera_notes, camera_parameters
 from ._diverge import divergence_note
 from ._frame import block_from_tables, read_frame_tables, require_finite, tables_from_block
 from ._labels import ObservationLabels
 
 # The solvers (SciPy, the bundle, approximate values) are imported inside the functions
-# that adjust: reading and writing a block file (import-bal, import-colmap) never loads them.
+# that adjust, a solution's types inside those that make one: reading and writing a block
+# file (import-bal, import-colmap) never loads them.
+if TYPE_CHECKING:  # annotations only
+    from ..solution import Solution
 
 METHODS = ("bundle", "models", "polynomial")
 
@@ -482,6 +483,9 @@ def single_gross_error(adj, n_image: int, block: Block | None = None) -> str | N
 
 def solution_from_block_adjustment(problem: Problem, block: Block, adj, method: str) -> Solution:
     """Turn a block adjustment (blocks ``exterior`` (m, 6) and ``points`` (p, 3)) into a report."""
+    from ...adjust.result import W_CRITICAL  # a solution's types: only when solving
+    from ..solution import Solution  # a solution's types: only when solving
+
     m, p = block.n_images, block.n_points
     if adj.obs_labels is None or len(adj.obs_labels) != adj.n_observations:
         more = {}
@@ -562,6 +566,9 @@ def solution_from_points(problem: Problem, block: Block, adj, method: str, func)
     Points come from ``points`` (all block points), their σ from the ``"points"``
     block where the method computed cofactors (else not available); no image orientation.
     """
+    from ...adjust.result import W_CRITICAL  # a solution's types: only when solving
+    from ..solution import Solution  # a solution's types: only when solving
+
     p = block.n_points
     xyz_sigma = np.full((p, 3), np.nan)
     if "points" in adj.groups and getattr(adj, "point_index", None) is not None:
@@ -599,6 +606,9 @@ def solution_from_models(problem: Problem, block: Block, adj) -> Solution:
     The models' own orientations are not image orientations, so ω, φ, κ of the images
     are not reported (null); residuals are model coordinates in m.
     """
+    from ...adjust.result import W_CRITICAL  # a solution's types: only when solving
+    from ..solution import Solution  # a solution's types: only when solving
+
     m, p = block.n_images, block.n_points
     std = adj.std()
     tie_std = std[adj.groups["points"]].reshape(-1, 3)
