@@ -173,6 +173,7 @@ def test_panel_actions_undo_and_rewind(app):
     h["toggle_image"].value = None
     assert not st.edits.image_on[1]
     assert tuple(app.scene.image_nodes[1].color) == (175, 175, 175)  # drawn grey
+    assert "switched off: 1 ray, 1 image, 0 control points" in h["act_info"].content  # not "1 images"
     assert tuple(app.scene.image_nodes[0].color) == (40, 70, 160)
     h["weight"].value = 0.25
     p.handles["image"].value = 3

@@ -239,17 +239,22 @@ class ActControls:
             p._syncing = False
         n_off = int(np.count_nonzero(~e.obs_on))
         lines = [
-            f"switched off: {n_off} rays, {int(np.count_nonzero(~e.image_on))} images, "
-            f"{int(np.count_nonzero(~e.control_on))} control points",
+            f"switched off: {_count(n_off, 'ray')}, {_count(np.count_nonzero(~e.image_on), 'image')}, "
+            f"{_count(np.count_nonzero(~e.control_on), 'control point')}",
         ]
         mp = st.mapping
         if mp is not None and (mp.dropped_images.size or mp.dropped_points.size):
             lines.append(
-                f"left out for lack of rays: {mp.dropped_images.size} images, "
-                f"{mp.dropped_points.size} points"
+                f"left out for lack of rays: {_count(mp.dropped_images.size, 'image')}, "
+                f"{_count(mp.dropped_points.size, 'point')}"
             )
         t = self.last_timing
         if "answer" in t:
             more = f", with precision {1000 * t['with precision']:.0f} ms" if len(t) > 1 else ""
             lines.append(f"last action: answer {1000 * t['answer']:.0f} ms{more}")
         h["act_info"].content = "  \n".join(lines)
+
+
+def _count(n: int | np.integer, noun: str) -> str:
+    """``n`` and ``noun``, plural unless ``n`` is 1 ("1 image", "0 rays")."""
+    return f"{int(n)} {noun}" + ("" if int(n) == 1 else "s")
