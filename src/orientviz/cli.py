@@ -29,7 +29,7 @@ import sys
 import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, NoReturn
+from typing import Any, NoReturn, TextIO
 
 from . import __version__
 from .errors import OrientvizError, printable
@@ -782,6 +782,36 @@ def end_process(code: int) -> NoReturn:
     os._exit(code)
 
 
+class _ClosedPipeDrops:
+    """Standard output whose reader may leave early (``orientviz … | head -1``): once the
+    pipe is closed, the rest of the output goes to the null device and the command runs
+    to its end (its files written, its exit code kept) instead of failing on a write."""
+
+    def __init__(self, stream: TextIO) -> None:
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            self._to_null()
+            return len(text)
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            self._to_null()
+
+    def _to_null(self) -> None:
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, self._stream.fileno())  # the buffered rest is written there too
+        os.close(null)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
+
+
 def _main(argv: Sequence[str] | None, own_process: bool = False) -> int:
     """The work of :func:`main`: parse, dispatch, and turn every failure into one line
     and an exit code (``own_process``: the command's own process, :func:`pause_collector`)."""
@@ -794,6 +824,8 @@ def _main(argv: Sequence[str] | None, own_process: bool = False) -> int:
         return 0
     if own_process:
         pause_collector(args.command)
+        if not isinstance(sys.stdout, _ClosedPipeDrops):
+            sys.stdout = _ClosedPipeDrops(sys.stdout)
     debug = bool(getattr(args, "debug", False))
     prog = f"orientviz {args.command}"
     try:
