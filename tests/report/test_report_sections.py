@@ -227,3 +227,39 @@ def test_core_report_does_not_import_matplotlib(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert (tmp_path / "r.txt").read_text(encoding="utf-8").count("Check-point statistics") == 1
+
+
+@pytest.mark.parametrize(
+    "options, expected",
+    [
+        ({"free": True}, "free network: minimum constraints (7 parameters held, named below)"),
+        (
+            {"free": True, "fix": ["s00_000", "s00_003:X0"]},
+            "free network: s00_000, s00_003:X0 held at their given values",
+        ),
+    ],
+)
+def test_the_datum_row_of_a_free_network_names_no_control_points(options, expected):
+    """`solve --free [--fix …] --report`: control points are tie points there, so the summary's
+    datum row must not count them as the datum (it said 'control points (fixed): 4 fixed …')."""
+    problem = ov.load_problem(dataset_path("block_strip"))
+    problem.options.update(options)
+    text = text_report(build_report(problem, ov.solve_problem(problem)))
+    assert item(text, "datum") == expected
+    assert "datum by minimum constraints" in text or "held at the given values" in text
+
+
+def test_the_datum_row_names_the_held_images_of_a_model_without_control(tmp_path):
+    """`solve model.json --fix A --fix B:X0 --report` on an imported model: the held images
+    are the datum, not '0 fixed and 0 weighted' control coordinates."""
+    from orientviz.cli import main
+    from orientviz.io.colmap import write_colmap
+
+    block = ov.simulate_block(1, 5, rng=7, control="full").block
+    write_colmap(block, tmp_path / "sparse", pixel_size_mm=0.01)
+    assert main(["import-colmap", str(tmp_path / "sparse"), "-o", str(tmp_path / "m.json")]) == 0
+    problem = ov.load_problem(tmp_path / "m.json")
+    a, b = list(problem.data.images.ids)[:2]
+    problem.options["fix"] = [a, f"{b}:X0"]
+    text = text_report(build_report(problem, ov.solve_problem(problem)))
+    assert item(text, "datum") == f"{a}, {b}:X0 held at their given values"

@@ -279,15 +279,26 @@ class _Builder(PrecisionSections, QualitySections):
     def datum(self) -> str:
         blk, s = self.block, self.s
         if s.kind == "block" and blk is not None:
+            free = bool(self.p.options.get("free", False))
+            fix = self.p.options.get("fix") or []
+            held = ", ".join([fix] if isinstance(fix, str) else map(str, fix))
+            if free:  # control points are tie points: the datum is the held parameters
+                if held:
+                    return f"free network: {held} held at their given values"
+                return "free network: minimum constraints (7 parameters held, named below)"
             sig = blk.points.sigma[blk.points.role == CONTROL]
             fixed = int(np.sum(sig == 0))
             weighted = int(np.sum(sig > 0))
             mode = self.p.options.get("control", "fixed")
-            txt = f"control points ({mode}): {fixed} fixed and {weighted} weighted coordinates"
+            parts = [f"control points ({mode}): {fixed} fixed and {weighted} weighted coordinates"]
+            if held and not fixed + weighted:
+                parts = []
             n_gnss = int(np.sum(np.isfinite(blk.images.X0_sigma) & (blk.images.X0_sigma > 0)))
             if n_gnss:
-                txt += f"; {n_gnss} observed projection-centre coordinates"
-            return txt
+                parts.append(f"{n_gnss} observed projection-centre coordinates")
+            if held:
+                parts.append(f"{held} held at their given values")
+            return "; ".join(parts)
         return {
             "resection": "control points errorless (σ = 0)",
             "intersection": "image orientations held fixed as given",
