@@ -239,3 +239,22 @@ def test_the_shipped_colmap_model_imports_by_name(tmp_path, monkeypatch, capsys)
     doc = json.loads((tmp_path / "axe.json").read_text(encoding="utf-8"))
     assert len(doc["images"]["id"]) == 52 and "--free" in capsys.readouterr().out
     assert main(["import-colmap", "nothing-here", "-o", "x.json"]) == 2
+
+
+def test_an_imported_pixel_model_is_not_told_of_a_pixel_size(tmp_path, capsys):
+    """`import-bal` / `import-colmap` of a model in pixels: neither file has a pixel size, so
+    the summary does not give one (it said '(pixel size 0.01 mm)', a nominal number the user
+    never set); the datum hint's example reads as options, not as an ':X0:' syntax."""
+    from orientviz.cli import main
+    from orientviz.io.bal import write_bal
+    from orientviz.io.colmap import write_colmap
+
+    block = ov.simulate_block(1, 5, rng=7, control="full").block
+    write_colmap(block, tmp_path / "sparse", pixel_size_mm=PIXEL_MM)
+    write_bal(block, tmp_path / "p.bal", pixel_size_mm=PIXEL_MM)
+    for cmd in (["import-colmap", str(tmp_path / "sparse")], ["import-bal", str(tmp_path / "p.bal")]):
+        capsys.readouterr()
+        assert main([*cmd, "-o", str(tmp_path / "m.json")]) == 0
+        summary, hint = capsys.readouterr().out.splitlines()[:2]
+        assert "(image coordinates in px)" in summary and "pixel size" not in summary
+        assert ":X0 — one image and the scale" in hint and ":X0:" not in hint

@@ -76,7 +76,8 @@ def import_to_problem(
         print(f"{prog}: {exc.one_line()}", file=sys.stderr)
         return 2
     note = lens_note_of() if lens_note_of is not None else lens_note
-    print(f"wrote {args.output}: {block.summary()} (pixel size {px} mm){note}")
+    scale = "image coordinates in px" if pixel_units else f"pixel size {px} mm"
+    print(f"wrote {args.output}: {block.summary()} ({scale}){note}")
     hint = datum_hint(block, args.output)
     if hint:
         print(hint)
@@ -97,5 +98,5 @@ def datum_hint(block: Block, output: str) -> str:
     return (
         f"datum: no control points — solve it as a free network (orientviz solve {output} "
         f"--free), or hold images or points at their given values (e.g. --fix {ids[0]} "
-        f"--fix {ids[1]}:X0: one image and the scale), or add control at import (--control CSV)"
+        f"--fix {ids[1]}:X0 — one image and the scale), or add control at import (--control CSV)"
     )

@@ -101,7 +101,7 @@ def failure(prog: str, file: str, exc: BaseException, rest: str = "") -> tuple[s
         return (
             f"{prog}: {file}: adjustment impossible: {exc}; solve it as a free network "
             f"({prog} {file}{rest} --free) or hold images or points at their given values (--fix "
-            "IMAGE --fix IMAGE2:X0: one image and the scale)",
+            "IMAGE --fix IMAGE2:X0 — one image and the scale)",
             3,
         )
     if isinstance(exc, AdjustmentError):
