@@ -50,6 +50,37 @@ def test_level_of_detail_draws_the_largest_residuals_and_one_ray_in_k(noisy, mon
     assert geo.rays(0).shape[0] == int(np.count_nonzero(noisy.observations.image == 0))
 
 
+def test_the_selected_image_draws_one_ray_in_k_and_the_legend_says_so(noisy, monkeypatch):
+    """A dense image's rays would paint a solid fan over its points: at most
+    SELECTED_RAY_LIMIT of them are drawn, every k-th, and the legend names k and n."""
+    from orientviz.viewer.legend import block_legend
+
+    o = noisy.observations
+    n0 = int(np.count_nonzero(o.image == 0))
+    monkeypatch.setattr(block_geometry, "SELECTED_RAY_LIMIT", 4)
+    geo = BlockGeometry(BlockState(noisy))
+    k = int(np.ceil(n0 / 4))
+    assert n0 > 4 and geo.selected_ray_step(0) == (k, n0)
+    seg = geo.rays(0)
+    want = np.flatnonzero(o.image == 0)[::k]
+    assert seg.shape[0] == want.size <= 4
+    np.testing.assert_allclose(seg[:, 1], geo.frame.to_scene(noisy.points.xyz[o.point[want]]))
+
+    class Node:
+        visible = True
+
+    class Scene:  # what block_legend reads of a BlockScene
+        nodes = {"rays/selected": Node()}
+        selected = 0
+        ellipsoids_visible = False
+        selected_point = None
+
+    Scene.geo = geo
+    assert f"the selected image and its rays (one in {k} of its {n0:,}" in block_legend(Scene())
+    monkeypatch.setattr(block_geometry, "SELECTED_RAY_LIMIT", 10_000)
+    assert "one in" not in block_legend(Scene()) and geo.rays(0).shape[0] == n0
+
+
 def test_rms_v_quality_needs_no_precision(noisy):
     st = BlockState(noisy)
     res = st.step(20, precision=False)

@@ -56,6 +56,10 @@ FRUSTUM_MIN: float = 0.015
 RESIDUAL_LIMIT: int = 5_000
 #: ... and at most this many rays when all rays are shown (every k-th ray).
 RAY_LIMIT: int = 20_000
+#: ... and at most this many rays of the selected image (every k-th of its rays): the
+#: thousands of rays of one image of a dense reconstruction would paint a solid fan
+#: over its points.
+SELECTED_RAY_LIMIT: int = 300
 
 
 class BlockGeometry:
@@ -167,12 +171,23 @@ class BlockGeometry:
         return {name: P[b.points.role == r] for r, name in ROLE_NODES.items()}
 
     # ------------------------------------------------------------------ rays
+    def selected_ray_step(self, image: int) -> tuple[int, int]:
+        """(k, n): every k-th of the n rays of ``image`` is drawn (at most
+        :data:`SELECTED_RAY_LIMIT`)."""
+        n = int(np.count_nonzero(self.state.block.observations.image == image))
+        return max(1, int(np.ceil(n / SELECTED_RAY_LIMIT))), n
+
     def rays(self, image: int | None = None) -> F64:
         """Ray segments projection centre → point (k, 2, 3), of one image or all (every
-        :attr:`ray_step`-th ray of a block with more than :data:`RAY_LIMIT` rays)."""
+        :attr:`ray_step`-th ray of a block with more than :data:`RAY_LIMIT` rays; every
+        :meth:`selected_ray_step`-th ray of an image with more than
+        :data:`SELECTED_RAY_LIMIT`)."""
         b = self.state.block
         o = b.observations
-        sel = slice(None, None, self.ray_step) if image is None else (o.image == image)
+        if image is None:
+            sel = slice(None, None, self.ray_step)
+        else:
+            sel = np.flatnonzero(o.image == image)[:: self.selected_ray_step(image)[0]]
         return self.frame.to_scene(
             g.ray_segments(b.images.X0[o.image[sel]], b.points.xyz[o.point[sel]])
         )

@@ -26,13 +26,18 @@ def block_legend(scene: Any) -> str:
     st = scene.geo.state
     b = st.block
     kind = st.scores()[1] if b.n_observations else "|v|/σ"
-    lines = [f"{swatch(COLORS['frustum'], '△')} images, {swatch(COLORS['selected'], '△')} "
-             f"the selected image and its rays"]  # fmt: skip
-    role = b.points.role
-    pts = []
 
     def shown(key: str) -> bool:
         return key in scene.nodes and bool(scene.nodes[key].visible)
+
+    lines = [f"{swatch(COLORS['frustum'], '△')} images, {swatch(COLORS['selected'], '△')} "
+             f"the selected image and its rays"]  # fmt: skip
+    if shown("rays/selected") and getattr(scene, "selected", None) is not None:
+        step, n_sel = scene.geo.selected_ray_step(scene.selected)
+        if step > 1:
+            lines[0] += f" (one in {step} of its {n_sel:,}: level of detail)"
+    role = b.points.role
+    pts = []
 
     for r, name, shape in ((TIE, "tie", "●"), (CONTROL, "control", "◆"), (CHECK, "check", "◆")):
         if np.any(role == r) and shown(f"points/{name}"):

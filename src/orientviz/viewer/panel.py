@@ -208,6 +208,8 @@ class BlockPanel:
             f"X0 = ({X0[0]:.{d}f}, {X0[1]:.{d}f}, {X0[2]:.{d}f}) {u.length_name}, "
             f"ω φ κ = ({ang[0]:.4f}, {ang[1]:.4f}, {ang[2]:.4f}) {u.angle}"
         )
+        if "legend" in self.handles:  # the selected image's rays: how many are drawn
+            self.update_legend()
 
     def apply_sliders(self) -> None:
         """Set the selected image's orientation from the sliders and redraw at once."""
