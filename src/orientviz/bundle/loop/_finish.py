@@ -23,6 +23,7 @@ from ...rotation import matrix_from_opk
 from .._result import BundleResult
 from ..model import normalised_block, project_block
 from ..precision import bundle_precision
+from ..precision._far import rays_about_their_mean, row_norms
 from ..problem import BundleProblem, BundleState, wrap
 from ..reduced import raise_not_determinable
 
@@ -111,23 +112,10 @@ def ray_parallax(block, X0: F64, xyz: F64) -> F64:
     obs = block.observations
     d = xyz[obs.point] - X0[obs.image]
     with np.errstate(invalid="ignore", divide="ignore"):
-        d /= np.linalg.norm(d, axis=1)[:, None]
-        # each point's sum of its rays, added ray by ray in order (as np.add.at adds them)
-        mean = np.column_stack(
-            [np.bincount(obs.point, weights=d[:, k], minlength=block.n_points) for k in range(3)]
-        )
-        mean /= np.linalg.norm(mean, axis=1)[:, None]
-        m = mean[obs.point]
+        d /= row_norms(d)[:, None]
+        _, m, cross = rays_about_their_mean(obs.point, d, block.n_points)
         cos = np.clip(np.einsum("ij,ij->i", d, m), -1.0, 1.0)
-        # the angle by its sine from the cross product d × m: exact for tiny angles
-        cross = np.column_stack(
-            [
-                d[:, 1] * m[:, 2] - d[:, 2] * m[:, 1],
-                d[:, 2] * m[:, 0] - d[:, 0] * m[:, 2],
-                d[:, 0] * m[:, 1] - d[:, 1] * m[:, 0],
-            ]
-        )
-        ang = np.arctan2(np.linalg.norm(cross, axis=1), cos)
+        ang = np.arctan2(row_norms(cross), cos)  # by its sine: exact for tiny angles
     out = np.full(block.n_points, -np.inf)
     np.maximum.at(out, obs.point, np.nan_to_num(ang, nan=np.inf))
     out[np.bincount(obs.point, minlength=block.n_points) < 2] = np.nan

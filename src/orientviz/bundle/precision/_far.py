@@ -28,10 +28,28 @@ I64 = NDArray[np.int64]
 HELD_PARALLAX: float = 1e-5
 
 
-def _norms(v: F64) -> F64:
+def row_norms(v: F64) -> F64:
     """Euclidean norms of the rows of ``v`` (n, 3): the additions of
     ``np.linalg.norm(v, axis=1)`` in its order, without its generic reduction."""
     return np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2])
+
+
+def rays_about_their_mean(point: I64, d: F64, n_points: int) -> tuple[F64, F64, F64]:
+    """Unit rays ``d`` (n, 3) of points ``point`` (n,) about each point's mean ray.
+
+    Returns each point's mean direction (n_points, 3: its rays summed in their order, as
+    ``np.add.at`` adds them, and normalised), that mean at each ray (n, 3), and each ray's
+    cross product d × mean (n, 3), whose norm is the sine of the ray's angle to the mean
+    (accurate for tiny angles, where the arccos of a dot product is not).
+    """
+    mean = np.stack([np.bincount(point, d[:, c], n_points) for c in range(3)], axis=1)
+    mean /= row_norms(mean)[:, None]
+    m = mean[point]
+    cross = np.empty_like(d)
+    cross[:, 0] = d[:, 1] * m[:, 2] - d[:, 2] * m[:, 1]
+    cross[:, 1] = d[:, 2] * m[:, 0] - d[:, 0] * m[:, 2]
+    cross[:, 2] = d[:, 0] * m[:, 1] - d[:, 1] * m[:, 0]
+    return mean, m, cross
 
 
 def far_columns(prob, st) -> tuple[I64, F64]:
@@ -45,17 +63,9 @@ def far_columns(prob, st) -> tuple[I64, F64]:
     if not col.size:
         return np.zeros(0, np.int64), np.zeros((0, 3))
     d = st.xyz[prob.points.unknown[col]] - st.X0[prob.obs.image[vo]]
-    d /= _norms(d)[:, None]
-    # each point's sum of its rays' directions, added in the rays' order (as np.add.at)
-    mean = np.stack([np.bincount(col, d[:, c], p_var) for c in range(3)], axis=1)
-    mean /= _norms(mean)[:, None]
-    # the angle from the cross product: accurate where arccos of a dot product is not
-    m = mean[col]
-    cross = np.empty_like(d)
-    cross[:, 0] = d[:, 1] * m[:, 2] - d[:, 2] * m[:, 1]
-    cross[:, 1] = d[:, 2] * m[:, 0] - d[:, 0] * m[:, 2]
-    cross[:, 2] = d[:, 0] * m[:, 1] - d[:, 1] * m[:, 0]
-    sin = _norms(cross)
+    d /= row_norms(d)[:, None]
+    mean, _, cross = rays_about_their_mean(col, d, p_var)
+    sin = row_norms(cross)
     par = np.zeros(p_var)
     np.maximum.at(par, col, sin)
     rays = np.bincount(col, minlength=p_var)
